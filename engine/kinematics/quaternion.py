@@ -1,0 +1,168 @@
+"""Quaternion helpers, batched, for numpy arrays and torch tensors alike.
+
+Quaternions are ``(..., 4)`` arrays in ``(w, x, y, z)`` order. The heavy lifting is
+upc-pymotion's (``pymotion.rotations.quat_np`` / ``quat_torch``); this module picks
+the right backend from the argument type and adds the few operations the project
+needs that pymotion lacks (heading extraction, geodesic angle, mirroring).
+"""
+
+from __future__ import annotations
+
+from typing import TypeVar
+
+import numpy as np
+import pymotion.rotations.quat_np as _qnp
+import pymotion.rotations.quat_torch as _qt
+import torch
+
+Array = TypeVar("Array", np.ndarray, torch.Tensor)
+
+
+def _backend(x):
+    return _qt if isinstance(x, torch.Tensor) else _qnp
+
+
+def mul(q0: Array, q1: Array) -> Array:
+    """Hamilton product ``q0 * q1``; shapes broadcast, ``(..., 4)``."""
+    if isinstance(q0, torch.Tensor):
+        w0, x0, y0, z0 = q0.unbind(-1)
+        w1, x1, y1, z1 = q1.unbind(-1)
+        return torch.stack(
+            (
+                w0 * w1 - x0 * x1 - y0 * y1 - z0 * z1,
+                w0 * x1 + x0 * w1 + y0 * z1 - z0 * y1,
+                w0 * y1 - x0 * z1 + y0 * w1 + z0 * x1,
+                w0 * z1 + x0 * y1 - y0 * x1 + z0 * w1,
+            ),
+            dim=-1,
+        )
+    q0, q1 = np.broadcast_arrays(q0, q1)
+    return _qnp.mul(np.ascontiguousarray(q0), np.ascontiguousarray(q1))
+
+
+def rotate(q: Array, v: Array) -> Array:
+    """Rotate vectors ``v (..., 3)`` by quaternions ``q (..., 4)``."""
+    w = q[..., :1]
+    u = q[..., 1:]
+    if isinstance(q, torch.Tensor):
+        shape = torch.broadcast_shapes(u.shape, v.shape)
+        u, v, w = u.expand(shape), v.expand(shape), w.expand(shape[:-1] + (1,))
+        t = 2.0 * torch.linalg.cross(u, v, dim=-1)
+        return v + w * t + torch.linalg.cross(u, t, dim=-1)
+    t = 2.0 * np.cross(u, v)
+    return v + w * t + np.cross(u, t)
+
+
+def conjugate(q: Array) -> Array:
+    """Inverse of a unit quaternion."""
+    if isinstance(q, torch.Tensor):
+        return q * torch.tensor([1.0, -1.0, -1.0, -1.0], dtype=q.dtype, device=q.device)
+    return q * np.array([1.0, -1.0, -1.0, -1.0])
+
+
+inverse = conjugate
+
+
+def normalize(q: Array, eps: float = 1e-8) -> Array:
+    if isinstance(q, torch.Tensor):
+        return q / torch.linalg.vector_norm(q, dim=-1, keepdim=True).clamp_min(eps)
+    return q / np.maximum(np.linalg.norm(q, axis=-1, keepdims=True), eps)
+
+
+def canonicalize(q: Array) -> Array:
+    """Pick the representative with ``w >= 0`` (q and -q are the same rotation)."""
+    if isinstance(q, torch.Tensor):
+        return torch.where(q[..., :1] < 0, -q, q)
+    return np.where(q[..., :1] < 0, -q, q)
+
+
+def identity(shape: tuple[int, ...] = (), like: Array | None = None) -> Array:
+    if isinstance(like, torch.Tensor):
+        out = torch.zeros(shape + (4,), dtype=like.dtype, device=like.device)
+        out[..., 0] = 1.0
+        return out
+    out = np.zeros(shape + (4,))
+    out[..., 0] = 1.0
+    return out
+
+
+def from_euler(euler_rad: np.ndarray, order: np.ndarray) -> np.ndarray:
+    """Euler angles (radians) ``(..., J, 3)`` with per-joint ``order (..., J, 3)`` of 'x'/'y'/'z'."""
+    return _qnp.from_euler(euler_rad, order=order)
+
+
+def to_euler(q: np.ndarray, order: np.ndarray) -> np.ndarray:
+    """Inverse of :func:`from_euler` (radians)."""
+    return _qnp.to_euler(q, order=order)
+
+
+def from_axis_angle(axis: Array, angle: Array) -> Array:
+    """Rotation of ``angle (...,)`` radians about unit ``axis (..., 3)``."""
+    if isinstance(axis, torch.Tensor):
+        half = 0.5 * angle
+        return torch.cat((torch.cos(half)[..., None], torch.sin(half)[..., None] * axis), dim=-1)
+    half = 0.5 * np.asarray(angle)
+    return np.concatenate((np.cos(half)[..., None], np.sin(half)[..., None] * axis), axis=-1)
+
+
+def from_to(v0: np.ndarray, v1: np.ndarray) -> np.ndarray:
+    """Shortest rotation taking direction ``v0 (..., 3)`` onto ``v1 (..., 3)`` (numpy)."""
+    return _qnp.from_to(np.asarray(v0, dtype=float), np.asarray(v1, dtype=float))
+
+
+def from_matrix(m: Array) -> Array:
+    """Rotation matrices ``(..., 3, 3)`` to quaternions."""
+    return _backend(m).from_matrix(m)
+
+
+def to_matrix(q: Array) -> Array:
+    """Quaternions to rotation matrices ``(..., 3, 3)``."""
+    return _backend(q).to_matrix(q)
+
+
+def angle(q0: Array, q1: Array) -> Array:
+    """Geodesic angle (radians) between two rotations, ``(...,)``; in [0, pi]."""
+    if isinstance(q0, torch.Tensor):
+        d = (q0 * q1).sum(-1).abs().clamp(max=1.0)
+        return 2.0 * torch.arccos(d)
+    d = np.clip(np.abs((q0 * q1).sum(-1)), 0.0, 1.0)
+    return 2.0 * np.arccos(d)
+
+
+def heading(q: Array, forward: Array | None = None) -> Array:
+    """Yaw-only part of a rotation: rotation about +Z that turns the rest forward (-Y)
+    onto the horizontal projection of ``q``'s forward. Shape ``(..., 4)``."""
+    is_t = isinstance(q, torch.Tensor)
+    f = (
+        torch.tensor([0.0, -1.0, 0.0], dtype=q.dtype, device=q.device)
+        if is_t
+        else np.array([0.0, -1.0, 0.0])
+    )
+    fw = rotate(q, f.expand(q.shape[:-1] + (3,)) if is_t else np.broadcast_to(f, q.shape[:-1] + (3,)))
+    # yaw angle of the projected forward relative to -Y, about +Z
+    if is_t:
+        yaw = torch.atan2(fw[..., 0], -fw[..., 1])
+        half = 0.5 * yaw
+        z = torch.zeros_like(half)
+        return torch.stack((torch.cos(half), z, z, torch.sin(half)), dim=-1)
+    yaw = np.arctan2(fw[..., 0], -fw[..., 1])
+    half = 0.5 * yaw
+    z = np.zeros_like(half)
+    return np.stack((np.cos(half), z, z, np.sin(half)), axis=-1)
+
+
+def unroll(q: np.ndarray, axis: int = 0) -> np.ndarray:
+    """Flip signs along ``axis`` (time) so consecutive quaternions stay in one hemisphere."""
+    return _qnp.unroll(q, axis=axis)
+
+
+def mirror_x(q: Array) -> Array:
+    """Conjugate a rotation by the reflection ``x -> -x`` (the left/right mirror)."""
+    if isinstance(q, torch.Tensor):
+        return q * torch.tensor([1.0, 1.0, -1.0, -1.0], dtype=q.dtype, device=q.device)
+    return q * np.array([1.0, 1.0, -1.0, -1.0])
+
+
+def slerp(q0: np.ndarray, q1: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Spherical interpolation, ``t`` broadcast against ``(...,)``."""
+    return _qnp.slerp(q0, q1, t)

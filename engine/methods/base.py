@@ -1,0 +1,101 @@
+"""The interface every reconstruction method implements (DragPoser, IK, autoencoder...).
+
+A method is fed one :class:`SensorFrame` per frame and returns a :class:`FrameResult`.
+It keeps whatever temporal state it needs between frames; :meth:`Method.reset`
+starts a new clip.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from engine import skeleton as sk
+
+
+@dataclass(frozen=True)
+class SensorReading:
+    """One tracker sample in world space.
+
+    Attributes
+    ----------
+    joint : str
+        Canonical joint the sensor is attached to (``upperneck`` = head,
+        ``lwrist``/``rwrist`` = hands, ``lankle``/``rankle`` = feet, ``root`` = hips).
+    position : ndarray (3,)
+        Metres, world (Z-up).
+    rotation : ndarray (4,)
+        World rotation of the joint (w, x, y, z).
+    dof : int
+        6 (position + rotation) or 3 (position only).
+    connected : bool
+        False while the sensor is lost; its position/rotation must then be ignored.
+    """
+
+    joint: str
+    position: np.ndarray
+    rotation: np.ndarray
+    dof: int = 6
+    connected: bool = True
+
+
+@dataclass(frozen=True)
+class SensorFrame:
+    """All sensor readings of one frame, keyed by joint name."""
+
+    frame: int
+    readings: dict[str, SensorReading]
+
+    def connected(self) -> dict[str, SensorReading]:
+        return {k: r for k, r in self.readings.items() if r.connected}
+
+
+@dataclass
+class FrameResult:
+    """What a method produced for one frame.
+
+    Attributes
+    ----------
+    local_rot : ndarray (22, 4)
+        Local joint rotations; row 0 is the root's world rotation.
+    root_pos : ndarray (3,)
+        Root world position, metres.
+    positions : ndarray (22, 3)
+        World joint positions (FK of the above), metres.
+    iterations : int
+        Optimizer iterations spent on this frame (0 for non-iterative methods).
+    losses : list of dict
+        Per iteration, the value of every loss term by name plus ``"total"``.
+    latent : ndarray (24,) or None
+        Latent vector of the pose (latent-space methods only).
+    ms : float
+        Wall-clock time spent on the frame, milliseconds.
+    warnings : list of str
+        Problems met on this frame (e.g. a NaN target that was ignored).
+    """
+
+    local_rot: np.ndarray
+    root_pos: np.ndarray
+    positions: np.ndarray
+    iterations: int = 0
+    losses: list[dict[str, float]] = field(default_factory=list)
+    latent: np.ndarray | None = None
+    ms: float = 0.0
+    warnings: list[str] = field(default_factory=list)
+
+
+class Method(ABC):
+    """A reconstruction method: sensors in, full-body pose out, one frame at a time."""
+
+    #: Short name used on the command line (``--method NAME``) and in the GUI.
+    name: str = "method"
+
+    @abstractmethod
+    def reset(self, skeleton: sk.Skeleton, fps: float = sk.FPS) -> None:
+        """Start a new clip for a subject with the given skeleton."""
+
+    @abstractmethod
+    def step(self, sensors: SensorFrame) -> FrameResult:
+        """Reconstruct the next frame from its sensor readings."""

@@ -1,0 +1,52 @@
+"""``dragposer-studio data prepare``: build training shards from BVH folders."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from engine.errors import UserError
+
+REPO = Path(__file__).resolve().parents[2]
+DEFAULT_DATA = REPO.parent / "shared" / "data"
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    data = sub.add_parser("data", help="prepare motion data for training")
+    dsub = data.add_subparsers(dest="data_command", metavar="ACTION")
+    p = dsub.add_parser(
+        "prepare",
+        help="retarget, mirror and split BVH files into training shards",
+        description="Read every BVH under the given folders (default: ../shared/data), retarget "
+        "it to the canonical skeleton, add mirrored copies, split train/val by file, compute "
+        "normalisation statistics and write shards + manifest.json to --out. Unchanged inputs "
+        "are not reprocessed.",
+    )
+    p.add_argument("inputs", nargs="*", type=Path, help="BVH files or folders (default: ../shared/data)")
+    p.add_argument("--out", type=Path, default=Path("prepared"), help="output folder (default: prepared)")
+    p.add_argument(
+        "--eval-only",
+        action="append",
+        metavar="GLOB",
+        help="files matching GLOB (relative path) are kept out of training, split 'test' "
+        "(default: dragposer/*, AMASS-derived, non-commercial licence)",
+    )
+    p.add_argument("--no-mirror", action="store_true", help="do not add left/right mirrored copies")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=_prepare)
+    data.set_defaults(func=lambda args: data.print_help() or 0)
+
+
+def _prepare(args: argparse.Namespace) -> int:
+    from engine.data.prepare import prepare
+
+    inputs = args.inputs or [DEFAULT_DATA]
+    if not args.inputs and not DEFAULT_DATA.is_dir():
+        raise UserError(f"no input given and the default data folder {DEFAULT_DATA} does not exist")
+    res = prepare(inputs, args.out, eval_only=args.eval_only, mirror=not args.no_mirror, progress=not args.quiet)
+    state = "unchanged" if res.unchanged else "updated"
+    print(f"{res.out}/manifest.json {state}: {res.written} shards written, {res.reused} reused, "
+          f"{len(res.failed)} files failed")
+    for path, reason in res.failed:
+        print(f"  failed: {path}: {reason}")
+    return 1 if res.failed and not (res.written or res.reused) else 0

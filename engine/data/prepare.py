@@ -1,0 +1,250 @@
+"""``data prepare``: BVH folders -> retargeted, mirrored training shards + statistics.
+
+Output layout (``--out DIR``)::
+
+    DIR/manifest.json          inputs (path, sha256, rig, split, frames...), stats, hash
+    DIR/shards/<name>.npz      one clip each: local_rot (F,22,4), root_pos (F,3), offsets (22,3)
+
+* **Split** (deterministic, by file): inside every source folder, files are sorted by
+  path and every 8th one (positions 3, 11, 19, ...) goes to ``val``, the rest to
+  ``train``. Files matching an ``--eval-only`` pattern (default ``dragposer/*``: those
+  clips derive from AMASS, whose licence is non-commercial) go to ``test`` and are
+  never used for training or statistics.
+* **Mirroring**: every train/val clip also gets a left/right mirrored copy.
+* **Statistics**: mean/std of the encoder's root-space dual quaternions and of the
+  root displacement over the train shards, accumulated as running sums, so memory does
+  not grow with the corpus; the files are streamed one at a time.
+* **Incremental**: a shard whose source hash and settings are unchanged is not rebuilt;
+  a re-run with unchanged inputs rewrites nothing.
+"""
+
+from __future__ import annotations
+
+import fnmatch
+import hashlib
+import json
+import os
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+from engine.errors import UserError
+from engine.kinematics.features import encoder_input, mirror_motion, pose_from_motion
+from engine.motion import Motion
+from engine.retarget import load_with_report, manifest_fps
+
+FORMAT = 1
+VAL_EVERY, VAL_PHASE = 8, 3
+
+
+@dataclass
+class PrepareResult:
+    out: Path
+    written: int = 0
+    reused: int = 0
+    failed: list[tuple[str, str]] = field(default_factory=list)
+    unchanged: bool = False
+
+
+def sha256_file(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def atomic_write_bytes(path: Path, data: bytes) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _save_npz(path: Path, **arrays: np.ndarray) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=".npz")
+    os.close(fd)
+    try:
+        np.savez(tmp, **arrays)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def discover(inputs: list[Path]) -> list[tuple[Path, str]]:
+    """All BVH files under ``inputs`` as (absolute path, path relative to its input root)."""
+    found = []
+    for root in inputs:
+        if root.is_file():
+            found.append((root.resolve(), root.name))
+            continue
+        if not root.is_dir():
+            raise UserError(f"{root}: no such file or folder")
+        for p in sorted(root.rglob("*.bvh")):
+            found.append((p.resolve(), p.relative_to(root).as_posix()))
+    return found
+
+
+def assign_splits(rel_paths: list[str], eval_only: list[str]) -> dict[str, str]:
+    """Deterministic train/val/test split by file (see module docs)."""
+    splits: dict[str, str] = {}
+    groups: dict[str, list[str]] = {}
+    for rel in rel_paths:
+        if any(fnmatch.fnmatch(rel, pat) or fnmatch.fnmatch(rel, f"*/{pat}") for pat in eval_only):
+            splits[rel] = "test"
+            continue
+        groups.setdefault(_source_folder(rel), []).append(rel)
+    for members in groups.values():
+        for i, rel in enumerate(sorted(members)):
+            splits[rel] = "val" if i % VAL_EVERY == VAL_PHASE else "train"
+    return splits
+
+
+def _source_folder(rel: str) -> str:
+    """The source a file belongs to: its first folder (below ``mocap/`` when present)."""
+    parts = rel.split("/")
+    if parts[0] == "mocap" and len(parts) > 2:
+        return parts[1]
+    return parts[0] if len(parts) > 1 else ""
+
+
+def _shard_name(rel: str, mirrored: bool) -> str:
+    stem = rel[:-4] if rel.lower().endswith(".bvh") else rel
+    return stem.replace("/", "__") + ("__mirror" if mirrored else "") + ".npz"
+
+
+def _feature_sums(motion: Motion) -> dict[str, list]:
+    rot, disp = pose_from_motion(motion.local_rot, motion.root_pos)
+    dq = encoder_input(rot, disp, motion.skeleton.offsets)
+    return {
+        "n": int(dq.shape[0]),
+        "dq_sum": dq.sum(0).tolist(),
+        "dq_sq": (dq**2).sum(0).tolist(),
+        "disp_sum": disp.sum(0).tolist(),
+        "disp_sq": (disp**2).sum(0).tolist(),
+    }
+
+
+def _stats(entries: list[dict]) -> dict[str, list]:
+    train = [e for e in entries if e["split"] == "train"]
+    if not train:
+        raise UserError("no training files: every input failed or is marked eval-only")
+    n = sum(e["sums"]["n"] for e in train)
+    out = {}
+    for key in ("dq", "disp"):
+        s = sum(np.asarray(e["sums"][f"{key}_sum"]) for e in train)
+        sq = sum(np.asarray(e["sums"][f"{key}_sq"]) for e in train)
+        mean = s / n
+        std = np.sqrt(np.maximum(sq / n - mean**2, 0.0))
+        out[f"{key}_mean"] = mean.tolist()
+        out[f"{key}_std"] = np.maximum(std, 1e-4).tolist()
+    out["frames"] = n
+    return out
+
+
+def prepare(
+    inputs: list[Path],
+    out: Path,
+    eval_only: list[str] | None = None,
+    mirror: bool = True,
+    progress: bool = True,
+) -> PrepareResult:
+    """Run the whole preparation (see module docs). Returns what was done."""
+    eval_only = ["dragposer/*"] if eval_only is None else eval_only
+    files = discover(inputs)
+    if not files:
+        raise UserError(f"no .bvh files found under {', '.join(map(str, inputs))}")
+    splits = assign_splits([rel for _, rel in files], eval_only)
+    settings = {"format": FORMAT, "mirror": mirror, "eval_only": eval_only}
+    man_path = out / "manifest.json"
+    old = {}
+    if man_path.is_file():
+        try:
+            prev = json.loads(man_path.read_text())
+            if prev.get("settings") == settings:
+                old = {e["source"] + ("#m" if e["mirrored"] else ""): e for e in prev.get("files", [])}
+        except (OSError, json.JSONDecodeError, KeyError):
+            old = {}
+
+    result = PrepareResult(out=out)
+    entries: list[dict] = []
+    bar = tqdm(files, desc="data prepare", unit="file", disable=not progress)
+    for path, rel in bar:
+        bar.set_postfix_str(rel[-40:])
+        try:
+            digest = sha256_file(path)
+            variants = [False, True] if (mirror and splits[rel] != "test") else [False]
+            cached = [old.get(rel + ("#m" if m else "")) for m in variants]
+            if all(c and c["sha256"] == digest and (out / c["shard"]).is_file() for c in cached):
+                entries.extend(cached)  # type: ignore[arg-type]
+                result.reused += len(cached)
+                continue
+            motion, report = load_with_report(path, manifest_fps(path))
+            if len(motion) < 8:
+                raise UserError(f"{path}: only {len(motion)} frames after retargeting")
+            for m in variants:
+                clip = motion
+                if m:
+                    rot, pos, off = mirror_motion(motion.local_rot, motion.root_pos, motion.skeleton.offsets)
+                    clip = Motion(rot, pos, type(motion.skeleton)(off), motion.fps, motion.name + "_mirror")
+                shard = "shards/" + _shard_name(rel, m)
+                _save_npz(
+                    out / shard,
+                    local_rot=clip.local_rot.astype(np.float32),
+                    root_pos=clip.root_pos.astype(np.float32),
+                    offsets=clip.skeleton.offsets.astype(np.float32),
+                )
+                entries.append(
+                    {
+                        "source": rel,
+                        "path": str(path),
+                        "sha256": digest,
+                        "rig": report.rig,
+                        "split": splits[rel],
+                        "mirrored": m,
+                        "shard": shard,
+                        "frames": len(clip),
+                        "source_fps": report.source_fps,
+                        "scale": report.scale,
+                        "sums": _feature_sums(clip),
+                    }
+                )
+                result.written += 1
+        except UserError as exc:
+            result.failed.append((str(path), str(exc)))
+            tqdm.write(f"skipped {path}: {exc}")
+        except (ValueError, KeyError, IndexError, FloatingPointError) as exc:
+            result.failed.append((str(path), f"{type(exc).__name__}: {exc}"))
+            tqdm.write(f"skipped {path}: {type(exc).__name__}: {exc}")
+
+    stats = _stats(entries)
+    digest = hashlib.sha256(
+        json.dumps([settings, sorted((e["shard"], e["sha256"]) for e in entries)]).encode()
+    ).hexdigest()[:16]
+    manifest = {
+        "format": FORMAT,
+        "fps": 60,
+        "settings": settings,
+        "hash": digest,
+        "split_rule": f"per source folder, sorted by path: every {VAL_EVERY}th file from index "
+        f"{VAL_PHASE} is val; eval-only patterns {eval_only} are test",
+        "files": entries,
+        "failed": [{"path": p, "reason": r} for p, r in result.failed],
+        "stats": stats,
+    }
+    text = json.dumps(manifest, indent=1)
+    if man_path.is_file() and man_path.read_text() == text:
+        result.unchanged = True
+    else:
+        atomic_write_bytes(man_path, text.encode())
+    return result

@@ -37,6 +37,8 @@ from engine.motion import Motion
 from engine.retarget import load_with_report, manifest_fps
 
 FORMAT = 1
+#: Bumped whenever the feature definition changes, so cached statistics are recomputed.
+FEATURES_VERSION = 2
 VAL_EVERY, VAL_PHASE = 8, 3
 
 
@@ -165,7 +167,7 @@ def prepare(
     if not files:
         raise UserError(f"no .bvh files found under {', '.join(map(str, inputs))}")
     splits = assign_splits([rel for _, rel in files], eval_only)
-    settings = {"format": FORMAT, "mirror": mirror, "eval_only": eval_only}
+    settings = {"format": FORMAT, "features": FEATURES_VERSION, "mirror": mirror, "eval_only": eval_only}
     man_path = out / "manifest.json"
     old = {}
     if man_path.is_file():

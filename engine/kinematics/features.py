@@ -11,6 +11,8 @@ increment and displacement with respect to the previous pose. We make that preci
   root-relative rotations would lose) and its yaw increment. ``disp (..., 3)`` is the
   root displacement ``H(t-1)^-1 (p(t) - p(t-1))`` in metres. At t = 0 the previous
   frame is the frame itself.
+* Quaternions are given with ``w >= 0`` (rotations of one joint rarely pass 180 degrees,
+  so this sign choice is continuous in practice).
 * **Encoder input** ``(..., J, 8)``: slot 0 is the dual quaternion of ``(rot[0], disp)``;
   slot j is the dual quaternion of joint j's rotation and position *relative to the
   root joint* (root-space), which tells the encoder the skeleton's dimensions.
@@ -57,7 +59,7 @@ def pose_from_motion(local_rot, root_pos):
     disp = Q.rotate(h_inv, root_pos - prev_pos)
     rot = local_rot.clone() if isinstance(local_rot, torch.Tensor) else local_rot.copy()
     rot[:, 0] = rot0
-    return rot, disp
+    return Q.canonicalize(rot), disp
 
 
 def motion_from_pose(rot, disp, start_root_rot=None, start_pos=None):
@@ -117,15 +119,18 @@ def root_space_fk(rot, offsets):
 
 
 def encoder_input(rot, disp, offsets):
-    """Root-space dual quaternions ``(..., J, 8)`` fed to the pose encoder (see module doc)."""
+    """Root-space dual quaternions ``(..., J, 8)`` fed to the pose encoder (see module doc).
+
+    Each dual quaternion is given the sign whose real part has ``w >= 0`` (``q`` and
+    ``-q`` are the same transform), so the network never sees both."""
     pos, grot = root_space_fk(rot, offsets)
     if isinstance(rot, torch.Tensor):
         grot = torch.cat((rot[..., :1, :], grot[..., 1:, :]), dim=-2)
         pos = torch.cat((disp[..., None, :], pos[..., 1:, :]), dim=-2)
-        return _dq_t.from_rotation_translation(grot, pos)
+        return _dq_t.from_rotation_translation(Q.canonicalize(grot), pos)
     grot = np.concatenate((rot[..., :1, :], grot[..., 1:, :]), axis=-2)
     pos = np.concatenate((disp[..., None, :], pos[..., 1:, :]), axis=-2)
-    return _dq_np.from_rotation_translation(grot, pos)
+    return _dq_np.from_rotation_translation(Q.canonicalize(grot), pos)
 
 
 def heights(local_rot, root_pos, offsets, joints=sk.HEIGHT_JOINTS):

@@ -1,0 +1,428 @@
+"""The engine thread: commands in through a queue, immutable snapshots out.
+
+:class:`EngineWorker` is a plain :class:`threading.Thread` (no Qt), so it is tested
+headless. It owns the reconstruction method and copies of everything the session
+describes; the session sends changes as the small command dataclasses below. After
+each solved frame it publishes a :class:`Snapshot` of plain, read-only numpy arrays:
+readers keep the newest one (``worker.latest``) or get called back (``listeners``, on
+the engine thread). Playback advances by elapsed time x fps x speed and never waits on
+compute: when a solve is slower than real time, frames are skipped. A method that
+raises or returns NaN never kills the thread; the error is reported in the snapshot.
+"""
+
+from __future__ import annotations
+
+import queue
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from engine import skeleton as sk
+from engine.methods.base import FrameResult, Method, SensorFrame
+from engine.motion import Motion
+from engine.session import SensorConfig
+from engine.worker_methods import apply_constraints, apply_sensor_weights, apply_settings, make_method
+from engine.worker_sensors import SensorSource
+
+
+# -- commands ------------------------------------------------------------------------
+@dataclass(frozen=True)
+class SetMotion:
+    motion: Motion
+
+
+@dataclass(frozen=True)
+class SetSensors:
+    sensors: tuple[SensorConfig, ...]
+
+
+@dataclass(frozen=True)
+class SetConstraints:
+    constraints: tuple[dict, ...]
+
+
+@dataclass(frozen=True)
+class SetSettings:
+    values: dict
+
+
+@dataclass(frozen=True)
+class SetMethod:
+    name: str
+    ghosts: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class Seek:
+    frame: int
+
+
+@dataclass(frozen=True)
+class Play:
+    speed: float = 1.0
+    loop: bool = True
+
+
+@dataclass(frozen=True)
+class Pause:
+    pass
+
+
+@dataclass(frozen=True)
+class Step:
+    delta: int = 1
+
+
+@dataclass(frozen=True)
+class DecodeLatent:
+    """Decode ``latent`` (L,) with the method's decoder; the optimizer is paused meanwhile."""
+
+    latent: np.ndarray
+
+
+@dataclass(frozen=True)
+class Stop:
+    pass
+
+
+def _ro(a: Any) -> Any:
+    if isinstance(a, np.ndarray):
+        a = a.copy()
+        a.flags.writeable = False
+    return a
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """One solved frame, as plain read-only numpy data.
+
+    Attributes
+    ----------
+    seq : int
+        Increases with every snapshot (cheap change detection for readers).
+    frame, num_frames : int
+        Frame index shown and clip length.
+    positions : ndarray (22, 3)
+        World joint positions of the reconstruction, metres.
+    ground_truth : ndarray (22, 3)
+        World joint positions of the loaded clip at ``frame``.
+    ghosts : dict of str to ndarray (22, 3)
+        Other methods' reconstructions of the same frame.
+    target_joints : tuple of str
+        Sensors sent to the method, in order; ``target_positions`` (S, 3),
+        ``target_rotations`` (S, 4) and ``target_connected`` (S,) bool follow it.
+    losses : tuple of dict
+        Per optimizer iteration, every loss term by name plus ``"total"``.
+    latent : ndarray (L,) or None
+        The method's latent vector for this frame.
+    iterations : int
+        Optimizer iterations spent on the frame; ``ms`` wall time of the solve.
+    warnings : int
+        Warnings counted since the clip was loaded; ``messages`` holds this frame's.
+    error : str
+        Non-empty when the method failed on this frame (the pose is the last good one).
+    engine_fps : float
+        Solved frames per second (moving average).
+    decoded : ndarray (22, 3) or None
+        Pose decoded from a latent sent with :class:`DecodeLatent` (debug mode).
+    """
+
+    seq: int
+    frame: int
+    num_frames: int
+    positions: np.ndarray
+    ground_truth: np.ndarray
+    ghosts: dict[str, np.ndarray] = field(default_factory=dict)
+    target_joints: tuple[str, ...] = ()
+    target_positions: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    target_rotations: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))
+    target_connected: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
+    gizmos: tuple[tuple[str, dict], ...] = ()
+    losses: tuple[dict[str, float], ...] = ()
+    latent: np.ndarray | None = None
+    iterations: int = 0
+    ms: float = 0.0
+    warnings: int = 0
+    messages: tuple[str, ...] = ()
+    error: str = ""
+    engine_fps: float = 0.0
+    playing: bool = False
+    method: str = ""
+    can_decode: bool = False
+    decoded: np.ndarray | None = None
+
+
+class EngineWorker(threading.Thread):
+    """Runs the reconstruction off the GUI thread; see the module docstring.
+
+    Parameters
+    ----------
+    method_factory : callable, optional
+        ``factory(name) -> Method``; defaults to :func:`engine.worker_methods.make_method`.
+    """
+
+    def __init__(self, method_factory: Callable[[str], Method] | None = None) -> None:
+        super().__init__(name="dragposer-engine", daemon=True)
+        self._queue: queue.Queue[Any] = queue.Queue()
+        self._factory = method_factory or make_method
+        self.latest: Snapshot | None = None
+        self.listeners: list[Callable[[Snapshot], None]] = []
+        self._source = SensorSource()
+        self._method_name, self._ghost_names = "", ()
+        self._method: Method | None = None
+        self._ghosts: dict[str, Method] = {}
+        self._constraints: tuple[dict, ...] = ()
+        self._settings: dict = {}
+        self._frame, self._last_solved = 0, -2
+        self._playing, self._speed, self._loop = False, 1.0, True
+        self._clock = (0.0, 0)  # (monotonic time, frame) playback started from
+        self._dirty = False
+        self._seq = 0
+        self._warnings = 0
+        self._fps = 0.0
+        self._last_pose = np.zeros((sk.NUM_JOINTS, 3))
+        self._last_result: FrameResult | None = None
+        self._decoded: np.ndarray | None = None
+        self._stopping = False
+
+    # -- public API (any thread) --------------------------------------------------------
+    def submit(self, command: Any) -> None:
+        """Queue a command; returns at once."""
+        self._queue.put(command)
+
+    def stop(self, timeout: float = 5.0) -> None:
+        """Ask the loop to finish and join it."""
+        self._queue.put(Stop())
+        if self.is_alive():
+            self.join(timeout)
+
+    # -- loop -----------------------------------------------------------------------
+    def run(self) -> None:
+        while not self._stopping:
+            self._drain(self._wait_time())
+            if self._stopping:
+                break
+            if self._source.motion is None:
+                continue
+            target = self._playback_frame() if self._playing else self._frame
+            if target != self._last_solved or self._dirty:
+                self._dirty = False
+                self._solve(target)
+
+    def _wait_time(self) -> float | None:
+        """How long the queue may block: until the next frame is due, or forever."""
+        if self._dirty:
+            return 0.0
+        if not self._playing or self._source.motion is None:
+            return None
+        t0, f0 = self._clock
+        fps = self._source.fps * self._speed
+        due = t0 + (self._last_solved - f0 + 1) / max(fps, 1e-6)
+        return max(0.0, due - time.monotonic())
+
+    def _drain(self, timeout: float | None) -> None:
+        try:
+            cmd = self._queue.get(timeout=timeout) if timeout != 0.0 else self._queue.get_nowait()
+        except queue.Empty:
+            return
+        while True:
+            self._apply(cmd)
+            try:
+                cmd = self._queue.get_nowait()
+            except queue.Empty:
+                return
+
+    def _apply(self, cmd: Any) -> None:
+        self._dirty = True
+        if isinstance(cmd, Stop):
+            self._stopping = True
+        elif isinstance(cmd, SetMotion):
+            self._source.set_motion(cmd.motion)
+            self._frame, self._warnings, self._playing = 0, 0, False
+            self._reset_methods()
+        elif isinstance(cmd, SetSensors):
+            self._source.sensors = cmd.sensors
+            self._configure_all()
+        elif isinstance(cmd, SetConstraints):
+            self._constraints = cmd.constraints
+            self._configure_all()
+        elif isinstance(cmd, SetSettings):
+            self._settings = {**self._settings, **cmd.values}
+            self._configure_all()
+        elif isinstance(cmd, SetMethod):
+            self._method_name, self._ghost_names = cmd.name, tuple(cmd.ghosts)
+            self._method, self._ghosts = None, {}
+            self._reset_methods()
+        elif isinstance(cmd, Seek):
+            self._frame = self._clamp(cmd.frame)
+            self._clock = (time.monotonic(), self._frame)
+            self._decoded = None
+        elif isinstance(cmd, Step):
+            self._playing = False
+            self._frame = self._clamp(self._frame + cmd.delta)
+        elif isinstance(cmd, Play):
+            self._playing, self._speed, self._loop = True, cmd.speed, cmd.loop
+            self._clock = (time.monotonic(), self._frame)
+            self._decoded = None
+        elif isinstance(cmd, Pause):
+            self._playing = False
+        elif isinstance(cmd, DecodeLatent):
+            self._decode(cmd.latent)
+
+    def _clamp(self, frame: int) -> int:
+        return int(np.clip(frame, 0, max(self._source.num_frames - 1, 0)))
+
+    def _playback_frame(self) -> int:
+        t0, f0 = self._clock
+        n = self._source.num_frames
+        f = f0 + int((time.monotonic() - t0) * self._source.fps * self._speed)
+        if f >= n:
+            if self._loop:
+                self._clock = (time.monotonic(), 0)
+                self._reset_methods()
+                f = 0
+            else:
+                self._playing, f = False, n - 1
+        self._frame = f
+        return f
+
+    # -- methods --------------------------------------------------------------------
+    def _build(self, name: str) -> Method | None:
+        try:
+            m = self._factory(name)
+        except Exception as exc:
+            self._report_error(f"method {name!r}: {exc}")
+            return None
+        return m
+
+    def _reset_methods(self) -> None:
+        if self._method is None and self._method_name:
+            self._method = self._build(self._method_name)
+        for g in self._ghost_names:
+            if g not in self._ghosts and (m := self._build(g)) is not None:
+                self._ghosts[g] = m
+        motion = self._source.motion
+        for m in [self._method, *self._ghosts.values()]:
+            if m is None or motion is None:
+                continue
+            try:
+                m.reset(motion.skeleton, motion.fps)
+            except Exception as exc:
+                self._report_error(f"{m.name}.reset: {exc}")
+        self._configure_all()
+        self._last_solved = -2
+
+    def _configure_all(self) -> None:
+        for m in [self._method, *self._ghosts.values()]:
+            if m is None:
+                continue
+            for problem in (
+                apply_settings(m, self._settings)
+                + apply_constraints(m, self._constraints)
+                + apply_sensor_weights(m, self._source.sensors)
+            ):
+                self._report_error(problem)
+
+    def _report_error(self, message: str) -> None:
+        self._warnings += 1
+        self._pending_error = message
+
+    def _step(self, method: Method, sf: SensorFrame) -> FrameResult:
+        res = method.step(sf)
+        if not np.all(np.isfinite(res.positions)):
+            raise FloatingPointError("method returned a non-finite pose")
+        return res
+
+    def _solve(self, frame: int) -> None:
+        if frame not in (self._last_solved, self._last_solved + 1):
+            self._reset_methods()  # temporal state is meaningless across a jump
+        sf = self._source.frame(frame)
+        error = getattr(self, "_pending_error", "")
+        self._pending_error = ""
+        t0 = time.perf_counter()
+        res = None
+        if self._method is not None:
+            try:
+                res = self._step(self._method, sf)
+                self._last_pose, self._last_result = res.positions, res
+                self._warnings += len(res.warnings)
+            except Exception as exc:  # never let a method kill the engine thread
+                error = f"{self._method_name} at frame {frame}: {type(exc).__name__}: {exc}"
+                self._warnings += 1
+                self._reset_methods()
+        ms = (time.perf_counter() - t0) * 1000.0
+        ghosts = {}
+        for name, m in self._ghosts.items():
+            try:
+                ghosts[name] = self._step(m, sf).positions
+            except Exception as exc:
+                error = error or f"{name} at frame {frame}: {exc}"
+        dt = max(ms / 1000.0, 1e-4)
+        self._fps = 1.0 / dt if self._fps == 0 else 0.9 * self._fps + 0.1 / dt
+        self._last_solved = frame
+        self._publish(frame, sf, res, ms, error, ghosts)
+
+    def _decode(self, latent: np.ndarray) -> None:
+        decode = getattr(self._method, "decode_latent", None)
+        if decode is None:
+            self._report_error(f"{self._method_name}: cannot decode latents")
+            return
+        self._playing = False
+        try:
+            self._decoded = np.asarray(decode(np.asarray(latent, float)), float).reshape(sk.NUM_JOINTS, 3)
+        except Exception as exc:
+            self._report_error(f"decode latent: {exc}")
+
+    def _publish(self, frame: int, sf: SensorFrame, res: FrameResult | None, ms: float,
+                 error: str, ghosts: dict[str, np.ndarray]) -> None:  # fmt: skip
+        joints = tuple(sf.readings)
+        readings = [sf.readings[j] for j in joints]
+        last = res or self._last_result
+        self._seq += 1
+        snap = Snapshot(
+            seq=self._seq,
+            frame=frame,
+            num_frames=self._source.num_frames,
+            positions=_ro(self._last_pose),
+            ground_truth=_ro(self._source.gt_positions[frame]),
+            ghosts={k: _ro(v) for k, v in ghosts.items()},
+            target_joints=joints,
+            target_positions=_ro(np.array([r.position for r in readings]).reshape(-1, 3)),
+            target_rotations=_ro(np.array([r.rotation for r in readings]).reshape(-1, 4)),
+            target_connected=_ro(np.array([r.connected for r in readings], bool)),
+            gizmos=self._gizmos(),
+            losses=tuple(dict(d) for d in (res.losses if res else ())),
+            latent=_ro(last.latent) if last is not None and last.latent is not None else None,
+            iterations=res.iterations if res else 0,
+            ms=ms,
+            warnings=self._warnings,
+            messages=tuple(res.warnings) if res else (),
+            error=error,
+            engine_fps=self._fps,
+            playing=self._playing,
+            method=self._method_name,
+            can_decode=hasattr(self._method, "decode_latent"),
+            decoded=_ro(self._decoded) if self._decoded is not None else None,
+        )
+        self.latest = snap
+        for cb in list(self.listeners):
+            cb(snap)
+
+    def _gizmos(self) -> tuple[tuple[str, dict], ...]:
+        if not self._constraints:
+            return ()
+        from engine.constraints.base import from_dict
+
+        out = []
+        for d in self._constraints:
+            try:
+                c = from_dict(dict(d))
+                if c.enabled:
+                    out.append((c.name, c.gizmo()))
+            except Exception:  # a bad gizmo is cosmetic; the constraint itself reports
+                continue
+        return tuple(out)

@@ -1,0 +1,126 @@
+"""How the engine thread builds methods and pushes the studio's edits into them.
+
+Methods differ in what they accept (DragPoser takes constraints and optimizer settings,
+classical IK takes neither), so each edit is applied only where the method offers the
+matching hook; the functions return readable problems instead of raising, and the
+worker reports them in its snapshots.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from typing import Any
+
+import numpy as np
+
+from engine import skeleton as sk
+from engine.kinematics import quaternion as Q
+from engine.kinematics.fk import fk
+from engine.methods.base import FrameResult, Method, SensorFrame
+
+
+def make_method(name: str) -> Method:
+    """A method from :func:`engine.methods.get_method`, or :class:`RestPoseMethod`.
+
+    The rest-pose method stands in only while no method registry is installed.
+    """
+    try:
+        from engine.methods import get_method  # type: ignore[attr-defined]
+    except ImportError:
+        return RestPoseMethod()
+    return get_method(name)
+
+
+def apply_settings(method: Method, values: dict[str, Any]) -> list[str]:
+    """Set optimizer parameters on ``method.settings`` (a dataclass) or ``configure()``."""
+    if not values:
+        return []
+    configure = getattr(method, "configure", None)
+    if callable(configure):
+        try:
+            configure(**values)
+        except Exception as exc:
+            return [f"{method.name}: settings rejected ({exc})"]
+        return []
+    settings = getattr(method, "settings", None)
+    if settings is None:
+        return []
+    known = {f.name for f in dataclasses.fields(settings)} if dataclasses.is_dataclass(settings) else set()
+    for key, value in values.items():
+        if key in known:
+            setattr(settings, key, value)
+    return []
+
+
+def apply_constraints(method: Method, constraints: tuple[dict, ...]) -> list[str]:
+    """Replace the method's constraints with fresh copies of ``constraints`` (to_dict form)."""
+    setter = getattr(method, "set_constraints", None)
+    add = getattr(method, "add_constraint", None)
+    if setter is None and add is None:
+        return [f"{method.name} ignores constraints"] if constraints else []
+    from engine.constraints.base import from_dict
+
+    problems, objs = [], []
+    for d in constraints:
+        try:
+            objs.append(from_dict(dict(d)))
+        except Exception as exc:
+            problems.append(f"constraint {d.get('name', '?')}: {exc}")
+    try:
+        if setter is not None:
+            setter(objs)
+        else:
+            for c in list(getattr(method, "constraints", [])):
+                method.remove_constraint(c.name)  # type: ignore[attr-defined]
+            for c in objs:
+                add(c)
+    except Exception as exc:
+        problems.append(f"{method.name}: constraints rejected ({exc})")
+    return problems
+
+
+def apply_sensor_weights(method: Method, sensors: tuple) -> list[str]:
+    """Pass per-sensor weights to methods that weight their tracker terms."""
+    setter = getattr(method, "set_sensor_weight", None)
+    if setter is None:
+        return []
+    try:
+        for s in sensors:
+            setter(s.joint, float(s.weight))
+    except Exception as exc:
+        return [f"{method.name}: sensor weights rejected ({exc})"]
+    return []
+
+
+class RestPoseMethod(Method):
+    """Placeholder: the rest pose carried by the hip (or head) tracker.
+
+    Only used when :mod:`engine.methods` has no registry yet, so the studio runs end to
+    end. Its loss terms are the squared position errors of every connected tracker.
+    """
+
+    name = "rest"
+
+    def reset(self, skeleton: sk.Skeleton, fps: float = sk.FPS) -> None:
+        self._offsets = skeleton.offsets
+        self._rest = skeleton.rest_positions()
+        self._root = np.array([0.0, 0.0, -self._rest[:, 2].min() + 0.05])
+        self._rot = np.array([1.0, 0.0, 0.0, 0.0])
+
+    def step(self, sensors: SensorFrame) -> FrameResult:
+        t0 = time.perf_counter()
+        conn = sensors.connected()
+        if "root" in conn:
+            self._root = np.asarray(conn["root"].position, float)
+            if conn["root"].dof == 6:
+                self._rot = np.asarray(conn["root"].rotation, float)
+        elif "upperneck" in conn:
+            head = self._rest[sk.JOINT_INDEX["upperneck"]]
+            self._root = np.asarray(conn["upperneck"].position, float) - Q.rotate(self._rot, head)
+        local = np.tile(np.array([1.0, 0.0, 0.0, 0.0]), (sk.NUM_JOINTS, 1))
+        local[0] = self._rot
+        pos, _ = fk(local, self._root, self._offsets)
+        losses = {f"pos:{j}": float(np.sum((pos[sk.JOINT_INDEX[j]] - r.position) ** 2)) for j, r in conn.items()}
+        losses["total"] = float(sum(losses.values()))
+        return FrameResult(local, self._root.copy(), pos, 1, [losses], None, (time.perf_counter() - t0) * 1e3)

@@ -1,0 +1,125 @@
+"""Engine thread: commands in, snapshots out, headless and without Qt."""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from engine import worker as w
+from engine.methods.base import FrameResult, Method
+from engine.session import Session
+
+
+def wait_for(predicate, timeout=10.0):
+    """Poll a condition set by the engine thread (a condition variable would hide hangs)."""
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        if predicate():
+            return True
+        time.sleep(0.005)
+    raise AssertionError("condition not reached in time")
+
+
+@pytest.fixture
+def engine(synthetic_motion):
+    worker = w.EngineWorker()
+    worker.start()
+    session = Session()
+    session.set_motion(synthetic_motion)
+    session.attach(worker.submit)
+    yield session, worker
+    worker.stop()
+    assert not worker.is_alive()
+
+
+def newest(worker, after=0):
+    wait_for(lambda: worker.latest is not None and worker.latest.seq > after)
+    return worker.latest
+
+
+def test_snapshot_is_plain_readonly_numpy(engine):
+    session, worker = engine
+    snap = newest(worker)
+    assert snap.positions.shape == (22, 3) and snap.ground_truth.shape == (22, 3)
+    assert len(snap.target_joints) == len(session.sensors)
+    with pytest.raises(ValueError):
+        snap.positions[0, 0] = 1.0
+
+
+def test_toggling_a_sensor_changes_the_loss_terms(engine):
+    session, worker = engine
+    wait_for(lambda: worker.latest is not None and worker.latest.losses)
+    joint = next(iter(session.sensors))
+    terms = set(worker.latest.losses[-1])
+    seq = worker.latest.seq
+    session.update_sensor(joint, enabled=False)
+    snap = newest(worker, seq)
+    assert joint not in snap.target_joints
+    assert set(snap.losses[-1]) != terms
+
+
+def test_dragging_the_hip_target_moves_the_pose(engine):
+    session, worker = engine
+    session.set_preset(next(p for p, j in w_presets().items() if "root" in j))
+    snap = newest(worker)
+    seq, before = snap.seq, snap.positions.copy()
+    session.drag_target("root", session.tracked_position("root", 0) + [0.0, 0.0, 0.3])
+    wait_for(lambda: worker.latest.seq > seq and worker.latest.target_positions.size and
+             abs(worker.latest.positions[0, 2] - before[0, 2] - 0.3) < 0.05)
+
+
+def w_presets():
+    from engine.session import sensor_presets
+
+    return sensor_presets()
+
+
+def test_playback_advances_with_time_and_seek_wins(engine):
+    session, worker = engine
+    newest(worker)
+    session.play()
+    wait_for(lambda: worker.latest.frame > 5)
+    session.pause()
+    session.seek(100)
+    wait_for(lambda: worker.latest.frame == 100 and not worker.latest.playing)
+
+
+class Exploding(Method):
+    name = "exploding"
+
+    def reset(self, skeleton, fps=60.0):
+        self.n = 0
+
+    def step(self, sensors):
+        self.n += 1
+        if sensors.frame == 3:
+            raise RuntimeError("boom")
+        pos = np.full((22, 3), np.nan if sensors.frame == 4 else 0.0)
+        return FrameResult(np.zeros((22, 4)), np.zeros(3), pos)
+
+
+def test_a_failing_method_never_kills_the_thread(synthetic_motion):
+    worker = w.EngineWorker(method_factory=lambda name: Exploding())
+    worker.start()
+    try:
+        worker.submit(w.SetMethod("exploding"))
+        worker.submit(w.SetMotion(synthetic_motion))
+        for f, expect in ((3, "boom"), (4, "non-finite"), (5, "")):
+            worker.submit(w.Seek(f))
+            wait_for(lambda: worker.latest is not None and worker.latest.frame == f)
+            assert expect in worker.latest.error and (expect == "" or worker.latest.error)
+            assert np.all(np.isfinite(worker.latest.positions))
+        assert worker.latest.warnings >= 2 and worker.is_alive()
+    finally:
+        worker.stop()
+
+
+def test_stop_joins_and_leaves_no_thread():
+    before = threading.active_count()
+    worker = w.EngineWorker()
+    worker.start()
+    worker.stop()
+    assert not worker.is_alive() and threading.active_count() == before

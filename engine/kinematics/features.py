@@ -76,29 +76,20 @@ def motion_from_pose(rot, disp, start_root_rot=None, start_pos=None):
         World root position of the frame before the first one. Default: origin.
     """
     is_t = isinstance(rot, torch.Tensor)
-    n = rot.shape[0]
-    roots, poss = [], []
-    prev_rot = start_root_rot
+    # Without a predecessor the first frame is its own: rot[0, 0] then has zero yaw relative
+    # to its own heading, so the clip is anchored at zero yaw at the origin.
+    prev_rot = start_root_rot if start_root_rot is not None else Q.identity((), like=rot if is_t else None)
     prev_pos = start_pos if start_pos is not None else (torch.zeros(3, dtype=rot.dtype) if is_t else np.zeros(3))
-    for t in range(n):
-        if prev_rot is None:
-            # the first frame is its own predecessor: its heading is the heading of H^-1 R = rot0
-            # composed with H, which is H itself; solve with the yaw of rot0 being relative to H.
-            h = Q.heading(rot[0, 0])
-            # rot0 = H^-1 R with H = heading(R)  =>  R = H rot0 and heading(rot0) = identity,
-            # so any H works; we anchor the clip at zero yaw.
-            h = Q.identity((), like=rot) if is_t else Q.identity(())
-        else:
-            h = Q.heading(prev_rot)
-        r = Q.mul(h, rot[t, 0])
-        p = prev_pos + Q.rotate(h, disp[t])
-        roots.append(r)
-        poss.append(p)
-        prev_rot, prev_pos = r, p
-    local = rot.clone() if is_t else rot.copy()
+    roots, poss = [], []
+    for t in range(rot.shape[0]):
+        h = Q.heading(prev_rot)
+        prev_rot = Q.mul(h, rot[t, 0])
+        prev_pos = prev_pos + Q.rotate(h, disp[t])
+        roots.append(prev_rot)
+        poss.append(prev_pos)
     if is_t:
-        local = torch.cat((torch.stack(roots)[:, None], rot[:, 1:]), dim=1)
-        return local, torch.stack(poss)
+        return torch.cat((torch.stack(roots)[:, None], rot[:, 1:]), dim=1), torch.stack(poss)
+    local = rot.copy()
     local[:, 0] = np.stack(roots)
     return local, np.stack(poss)
 

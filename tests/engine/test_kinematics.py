@@ -1,0 +1,121 @@
+"""Kinematics against upc-pymotion and against poses computed by hand."""
+
+from __future__ import annotations
+
+import numpy as np
+import pymotion.rotations.dual_quat_np as pm_dq
+import pymotion.rotations.quat_np as pm_q
+import torch
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+from pymotion.ops import skeleton_np
+
+from engine import skeleton as sk
+from engine.kinematics import features as Fe
+from engine.kinematics import quaternion as Q
+from engine.kinematics.fk import fk, local_from_global
+
+RNG = np.random.default_rng(3)
+PARENTS_PM = np.array([0] + list(sk.PARENTS[1:]))
+
+
+def _random_quats(*shape):
+    return Q.normalize(RNG.normal(size=shape + (4,)))
+
+
+def test_rotate_matches_matrix_and_pymotion():
+    q = _random_quats(50)
+    v = RNG.normal(size=(50, 3))
+    by_matrix = np.einsum("nij,nj->ni", Q.to_matrix(q), v)
+    np.testing.assert_allclose(Q.rotate(q, v), by_matrix, atol=1e-12)
+    np.testing.assert_allclose(Q.rotate(q, v), pm_q.mul_vec(q, v), atol=1e-12)
+    qt, vt = torch.tensor(q), torch.tensor(v)
+    np.testing.assert_allclose(Q.rotate(qt, vt).numpy(), by_matrix, atol=1e-12)
+
+
+def test_mul_matches_pymotion_numpy_and_torch():
+    a, b = _random_quats(30), _random_quats(30)
+    np.testing.assert_allclose(Q.mul(a, b), pm_q.mul(a, b), atol=1e-12)
+    np.testing.assert_allclose(Q.mul(torch.tensor(a), torch.tensor(b)).numpy(), pm_q.mul(a, b), atol=1e-12)
+
+
+def test_hand_computed_quarter_turn():
+    q = Q.from_axis_angle(np.array([0.0, 0.0, 1.0]), np.pi / 2)  # +90 deg about Z
+    np.testing.assert_allclose(Q.rotate(q, np.array([1.0, 0, 0])), [0, 1, 0], atol=1e-12)
+    np.testing.assert_allclose(np.degrees(Q.angle(q, Q.identity(()))), 90.0)
+
+
+def test_heading_keeps_only_yaw():
+    yaw = Q.from_axis_angle(np.array([0.0, 0, 1]), 0.7)
+    tilt = Q.from_axis_angle(np.array([1.0, 0, 0]), 0.3)
+    h = Q.heading(Q.mul(yaw, tilt))
+    np.testing.assert_allclose(Q.canonicalize(h), Q.canonicalize(yaw), atol=1e-9)
+
+
+def test_fk_matches_pymotion_numpy_and_torch():
+    rot = _random_quats(7, sk.NUM_JOINTS)
+    root = RNG.normal(size=(7, 3))
+    ours, grot = fk(rot, root, sk.REST_OFFSETS)
+    theirs, _ = skeleton_np.fk(rot, root, sk.REST_OFFSETS, PARENTS_PM)
+    np.testing.assert_allclose(ours, theirs, atol=1e-6)
+    ours_t, _ = fk(torch.tensor(rot), torch.tensor(root), sk.REST_OFFSETS)
+    np.testing.assert_allclose(ours_t.numpy(), ours, atol=1e-12)
+    np.testing.assert_allclose(local_from_global(grot), rot * np.sign(rot[..., :1] * local_from_global(grot)[..., :1]), atol=1e-9)
+
+
+def test_fk_hand_computed_elbow_bend():
+    """Rest pose plus a 90 degree elbow bend about Z: the wrist moves from +X to -Y of the elbow."""
+    rot = Q.identity((sk.NUM_JOINTS,))
+    rot[sk.JOINT_INDEX["lelbow"]] = Q.from_axis_angle(np.array([0.0, 0, 1]), -np.pi / 2)
+    pos, _ = fk(rot, np.zeros(3), sk.REST_OFFSETS)
+    e, w = sk.JOINT_INDEX["lelbow"], sk.JOINT_INDEX["lwrist"]
+    off = sk.REST_OFFSETS[w]
+    np.testing.assert_allclose(pos[w] - pos[e], [off[1], -off[0], off[2]], atol=1e-12)
+    rest = sk.Skeleton.canonical().rest_positions()
+    np.testing.assert_allclose(pos[: sk.JOINT_INDEX["lwrist"]], rest[: sk.JOINT_INDEX["lwrist"]], atol=1e-12)
+
+
+def test_encoder_input_matches_pymotion_root_dual_quat():
+    rot = _random_quats(5, sk.NUM_JOINTS)
+    disp = RNG.normal(size=(5, 3)) * 0.01
+    dq = Fe.encoder_input(rot, disp, sk.REST_OFFSETS)
+    ref = skeleton_np.to_root_dual_quat(rot, np.zeros((5, 3)), PARENTS_PM, sk.REST_OFFSETS)
+    # pymotion's root-space DQ for joints 1..; slot 0 is ours (root increment + displacement)
+    ref = np.where(ref[..., :1] < 0, -ref, ref)
+    np.testing.assert_allclose(dq[:, 1:], ref[:, 1:], atol=1e-6)
+    r0, t0 = pm_dq.to_rotation_translation(dq[:, 0])
+    np.testing.assert_allclose(np.abs((r0 * Q.canonicalize(rot[:, 0])).sum(-1)), 1.0, atol=1e-9)
+    np.testing.assert_allclose(t0, disp, atol=1e-9)
+    assert (dq[..., 0] >= 0).all()
+    np.testing.assert_allclose(Fe.encoder_input(torch.tensor(rot), torch.tensor(disp), sk.REST_OFFSETS).numpy(), dq, atol=1e-9)
+
+
+def test_pose_round_trip_recovers_motion(synthetic_motion):
+    m = synthetic_motion
+    rot, disp = Fe.pose_from_motion(m.local_rot, m.root_pos)
+    local, root = Fe.motion_from_pose(rot[1:], disp[1:], start_root_rot=m.local_rot[0, 0], start_pos=m.root_pos[0])
+    np.testing.assert_allclose(root, m.root_pos[1:], atol=1e-9)
+    ang = Q.angle(local, m.local_rot[1:])
+    assert ang.max() < 1e-6
+
+
+def test_mirror_twice_is_identity_and_swaps_sides(synthetic_motion):
+    m = synthetic_motion
+    rot, pos, off = Fe.mirror_motion(m.local_rot, m.root_pos, m.skeleton.offsets)
+    p_m, _ = fk(rot, pos, off)
+    p, _ = fk(m.local_rot, m.root_pos, m.skeleton.offsets)
+    idx = list(sk.MIRROR_INDEX)
+    np.testing.assert_allclose(p_m, p[:, idx] * np.array([-1.0, 1, 1]), atol=1e-9)
+    rot2, pos2, off2 = Fe.mirror_motion(rot, pos, off)
+    np.testing.assert_allclose(rot2, m.local_rot, atol=1e-12)
+    np.testing.assert_allclose(off2, m.skeleton.offsets)
+
+
+@settings(max_examples=50, deadline=None)
+@given(arrays(np.float64, (4,), elements=st.floats(-1, 1)).filter(lambda a: np.linalg.norm(a) > 0.1))
+def test_canonicalize_same_rotation(q):
+    q = Q.normalize(q)
+    c = Q.canonicalize(q)
+    assert c[0] >= 0
+    np.testing.assert_allclose(Q.to_matrix(c), Q.to_matrix(q), atol=1e-9)

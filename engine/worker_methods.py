@@ -124,3 +124,32 @@ class RestPoseMethod(Method):
         losses = {f"pos:{j}": float(np.sum((pos[sk.JOINT_INDEX[j]] - r.position) ** 2)) for j, r in conn.items()}
         losses["total"] = float(sum(losses.values()))
         return FrameResult(local, self._root.copy(), pos, 1, [losses], None, (time.perf_counter() - t0) * 1e3)
+
+
+def reconstruct_clip(motion: Any, sensors: tuple, constraints: tuple[dict, ...], settings: dict[str, Any],
+                     method_name: str, factory: Any = None,
+                     progress: Any = None) -> Any:  # fmt: skip
+    """Run a fresh method over every frame of ``motion`` with the studio's sensor edits.
+
+    Returns the reconstruction as a :class:`engine.motion.Motion` (same skeleton and fps).
+    ``progress(frame)`` is called after each frame and may return True to cancel.
+    """
+    from engine.motion import Motion
+    from engine.worker_sensors import SensorSource
+
+    source = SensorSource()
+    source.set_motion(motion)
+    source.sensors = tuple(sensors)
+    method = (factory or make_method)(method_name)
+    method.reset(motion.skeleton, motion.fps)
+    apply_settings(method, settings)
+    apply_constraints(method, constraints)
+    apply_sensor_weights(method, source.sensors)
+    rots, roots = [], []
+    for f in range(len(motion)):
+        res = method.step(source.frame(f))
+        rots.append(np.asarray(res.local_rot, float))
+        roots.append(np.asarray(res.root_pos, float))
+        if progress is not None and progress(f):
+            break
+    return Motion(np.array(rots), np.array(roots), motion.skeleton, motion.fps, f"{motion.name} ({method_name})")

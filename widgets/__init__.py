@@ -1,0 +1,1 @@
+"""Qt widgets of the studio: viewport adapters, panels, plots. Never imports torch."""

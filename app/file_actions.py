@@ -1,0 +1,181 @@
+"""File menu of the studio: open, recent files, save BVH / scene, screenshots.
+
+Every failure shows a message box and leaves the session as it was. Files are written to
+a temporary name and renamed, so nothing is ever half written.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import threading
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from PyQt6.QtCore import QPoint, QTimer
+from PyQt6.QtGui import QImage, QPainter, QPixmap
+from PyQt6.QtWidgets import QFileDialog
+
+from engine.errors import UserError
+
+if TYPE_CHECKING:
+    from app.main_window import MainWindow
+
+MAX_RECENT = 8
+
+
+def _atomic_write_text(path: Path, text: str) -> None:
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(text)
+    os.replace(tmp, path)
+
+
+class FileActions:
+    """Holds the window's file operations (kept apart so the window stays about wiring)."""
+
+    def __init__(self, window: "MainWindow") -> None:
+        self.w = window
+        self._export: threading.Thread | None = None
+        self._export_result: tuple[str, str] | None = None
+        self._poll = QTimer(window, interval=100)
+        self._poll.timeout.connect(self._check_export)
+
+    # -- opening ------------------------------------------------------------------------
+    def open_dialog(self) -> None:
+        start = str(Path(self.recent()[0]).parent) if self.recent() else ""
+        path, _ = QFileDialog.getOpenFileName(self.w, "Open motion", start, "BVH motion (*.bvh)")
+        if path:
+            self.open_path(path)
+
+    def open_path(self, path: str | Path) -> bool:
+        """Load ``path``; on error show a dialog and keep the current clip."""
+        try:
+            self.w.session.open(path)
+        except UserError as exc:
+            self.w.show_error("Cannot open motion", str(exc))
+            return False
+        self.add_recent(str(path))
+        self.w.setWindowTitle(f"DragPoser Studio - {Path(path).name}")
+        self.w.statusBar().showMessage(f"Loaded {path} ({self.w.session.num_frames} frames)", 5000)
+        return True
+
+    def recent(self) -> list[str]:
+        value = self.w.settings.value("recent_files", [])
+        return [str(v) for v in (value if isinstance(value, list) else [value] if value else [])]
+
+    def add_recent(self, path: str) -> None:
+        items = [path] + [p for p in self.recent() if p != path]
+        self.w.settings.setValue("recent_files", items[:MAX_RECENT])
+        self.refresh_recent()
+
+    def refresh_recent(self) -> None:
+        menu = self.w.recent_menu
+        menu.clear()
+        for p in self.recent():
+            menu.addAction(p, lambda p=p: self.open_path(p))
+        menu.setEnabled(bool(self.recent()))
+
+    # -- saving ---------------------------------------------------------------------
+    def save_reconstruction(self, path: str | None = None) -> None:
+        """Reconstruct the whole clip off the GUI thread, then write it as BVH."""
+        s = self.w.session
+        if s.motion is None:
+            return self.w.show_error("Nothing to save", "Open a motion first.")
+        if self._export is not None:
+            return self.w.statusBar().showMessage("An export is already running", 3000)
+        if path is None:
+            path, _ = QFileDialog.getSaveFileName(self.w, "Save reconstruction", "", "BVH motion (*.bvh)")
+            if not path:
+                return None
+        args = (s.motion, tuple(s.sensors.values()), tuple(c.to_dict() for c in s.constraints),
+                dict(s.settings), s.method, path)  # fmt: skip
+        self._export = threading.Thread(target=self._export_run, args=args, name="bvh-export", daemon=True)
+        self._export.start()
+        self._poll.start()
+        self.w.statusBar().showMessage(f"Reconstructing {s.num_frames} frames with {s.method}...")
+        return None
+
+    def _export_run(self, motion: Any, sensors: tuple, constraints: tuple, settings: dict,
+                    method: str, path: str) -> None:  # fmt: skip
+        try:
+            from engine.bvh import save_motion_bvh
+            from engine.worker_methods import reconstruct_clip
+
+            result = reconstruct_clip(motion, sensors, constraints, settings, method)
+            save_motion_bvh(path, result)
+            self._export_result = ("ok", f"Saved {len(result)} frames to {path}")
+        except ImportError as exc:
+            self._export_result = ("error", f"BVH writing is not available yet ({exc})")
+        except Exception as exc:
+            self._export_result = ("error", f"{path}: {type(exc).__name__}: {exc}")
+
+    def _check_export(self) -> None:
+        if self._export is None or self._export.is_alive():
+            return
+        self._poll.stop()
+        self._export = None
+        kind, message = self._export_result or ("error", "export stopped")
+        if kind == "ok":
+            self.w.statusBar().showMessage(message, 8000)
+        else:
+            self.w.show_error("Cannot save reconstruction", message)
+
+    def shutdown(self) -> None:
+        self._poll.stop()
+        if self._export is not None:
+            self._export.join(timeout=30)
+
+    # -- scenes ---------------------------------------------------------------------
+    def save_scene(self, path: str | None = None) -> bool:
+        if path is None:
+            path, _ = QFileDialog.getSaveFileName(self.w, "Save scene", "", "Studio scene (*.json)")
+            if not path:
+                return False
+        try:
+            _atomic_write_text(Path(path), json.dumps(self.w.session.to_scene(), indent=2))
+        except OSError as exc:
+            self.w.show_error("Cannot save scene", f"{path}: {exc}")
+            return False
+        return True
+
+    def load_scene(self, path: str | None = None) -> bool:
+        if path is None:
+            path, _ = QFileDialog.getOpenFileName(self.w, "Load scene", "", "Studio scene (*.json)")
+            if not path:
+                return False
+        try:
+            scene = json.loads(Path(path).read_text())
+            clip = scene.get("clip")
+            if clip and (self.w.session.path is None or Path(clip) != self.w.session.path):
+                self.w.session.open(clip)
+            self.w.session.apply_scene(scene)
+        except (OSError, ValueError, UserError) as exc:
+            self.w.show_error("Cannot load scene", f"{path}: {exc}")
+            return False
+        return True
+
+    # -- screenshots ------------------------------------------------------------------
+    def grab_window(self) -> QPixmap:
+        """The whole window with the 3D view composited in (grab() may leave it black)."""
+        pix = self.w.grab()
+        vp = self.w.viewport
+        img: QImage = vp.grab_image()
+        ratio = pix.devicePixelRatio()
+        pos = vp.mapTo(self.w, QPoint(0, 0))
+        painter = QPainter(pix)
+        painter.drawImage(pos, img.scaled(int(vp.width() * ratio), int(vp.height() * ratio)))
+        painter.end()
+        return pix
+
+    def export_screenshot(self, path: str | None = None) -> bool:
+        if path is None:
+            path, _ = QFileDialog.getSaveFileName(self.w, "Export screenshot", "", "PNG image (*.png)")
+            if not path:
+                return False
+        target = Path(path)
+        tmp = target.with_name(target.stem + ".tmp" + (target.suffix or ".png"))
+        if not self.grab_window().save(str(tmp)):
+            self.w.show_error("Cannot export screenshot", f"{path}: could not write the image")
+            return False
+        os.replace(tmp, target)
+        return True

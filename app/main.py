@@ -1,0 +1,74 @@
+"""Entry point of ``dragposer-studio gui``: build the window, optionally take a screenshot."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from PyQt6.QtCore import QTimer
+from PyQt6.QtWidgets import QApplication
+
+from app.main_window import MainWindow
+
+REPO = Path(__file__).resolve().parents[1]
+EXAMPLE_CLIP = REPO / "assets" / "clips" / "example.bvh"
+SCREENSHOT_TIMEOUT_S = 120.0
+
+
+def open_initial(window: MainWindow, path: str | None, preset: str | None) -> None:
+    """Open ``path``, else the bundled example, else a procedural walk (with a message)."""
+    from app.demo import demo_walk
+
+    if preset:
+        window.settings.setValue("last_preset", preset)
+    ok = False
+    if path:
+        ok = window.files.open_path(path)
+    elif EXAMPLE_CLIP.is_file():
+        ok = window.files.open_path(EXAMPLE_CLIP)
+    if not ok:
+        window.session.set_motion(demo_walk())
+        window.statusBar().showMessage("No clip loaded: showing a procedural walk (File > Open a BVH)", 10000)
+    last = window.settings.value("last_preset")
+    if last:
+        try:
+            window.session.set_preset(str(last))
+        except Exception as exc:  # a stale preset name from an older version
+            window.statusBar().showMessage(str(exc), 8000)
+
+
+def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
+        screenshot: str | None = None, after_frames: int = 60) -> int:  # fmt: skip
+    """Show the studio; with ``screenshot``, play ``after_frames`` frames, save and exit."""
+    app = QApplication.instance() or QApplication(sys.argv[:1])
+    app.setApplicationName("DragPoser Studio")
+    window = MainWindow(method=method)
+    open_initial(window, path, sensors)
+    window.show()
+    if screenshot is None:
+        return app.exec()
+    status = {"code": 1}
+    start = window.session.frame
+
+    def check(frame: int) -> None:
+        if window.session.playing and frame - start < after_frames:
+            return
+        window.snapshotDrawn.disconnect(check)
+        window.session.pause()
+        QTimer.singleShot(200, finish)
+
+    def finish() -> None:
+        status["code"] = 0 if window.files.export_screenshot(screenshot) else 1
+        window.close()
+        app.quit()
+
+    def timeout() -> None:
+        print(f"error: the engine did not reach frame {after_frames} in time", file=sys.stderr)
+        finish()
+
+    window.snapshotDrawn.connect(check)
+    window.session.set_playback(loop=False)
+    QTimer.singleShot(300, window.session.play)
+    QTimer.singleShot(int(SCREENSHOT_TIMEOUT_S * 1000), timeout)
+    app.exec()
+    return status["code"]

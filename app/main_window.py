@@ -1,0 +1,265 @@
+"""The studio's main window: wires the session, the engine thread and the widgets.
+
+Data flow: widgets emit requests -> the window calls :class:`engine.session.Session`
+methods -> the session forwards commands to :class:`engine.worker.EngineWorker`. The
+worker publishes snapshots; a display-rate QTimer draws only the newest one, so the GUI
+never waits on the engine. Session events refresh the panels.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+from PyQt6.QtCore import QSettings, Qt, QTimer, pyqtSignal
+from PyQt6.QtGui import QAction, QKeySequence
+from PyQt6.QtWidgets import QDockWidget, QLabel, QMainWindow, QMessageBox, QTabWidget, QVBoxLayout, QWidget
+
+from app.file_actions import FileActions
+from app.schema import constraint_schema, load_constraint_kinds
+from engine.errors import UserError
+from engine.session import Session, sensor_presets
+from engine.worker import DecodeLatent, EngineWorker
+from widgets.constraint_panel import ConstraintPanel
+from widgets.latent_inspector import LatentInspector
+from widgets.optimizer_panel import OptimizerPanel
+from widgets.plots import LossPlots
+from widgets.sensor_panel import SensorPanel
+from widgets.timeline import Timeline
+from widgets.viewport import Viewport
+
+METHODS = ("ik", "dragposer", "autoencoder")
+DRAW_INTERVAL_MS = 16  # at most ~60 redraws per second
+PLOT_EVERY = 3  # plots redraw every third frame drawn (they cost more than VTK)
+
+
+class MainWindow(QMainWindow):
+    """The studio. ``snapshotDrawn(int)`` fires after each drawn snapshot (its frame)."""
+
+    snapshotDrawn = pyqtSignal(int)
+
+    def __init__(self, method: str = "ik", settings: QSettings | None = None) -> None:
+        super().__init__()
+        self.setWindowTitle("DragPoser Studio")
+        self.setAcceptDrops(True)
+        self.settings = settings or QSettings("dragposer-studio", "studio")
+        self.kinds = load_constraint_kinds()
+        self.session = Session(method=method)
+        self.worker = EngineWorker()
+        self.worker.start()
+        self.session.attach(self.worker.submit)
+        self._build_widgets()
+        self.files = FileActions(self)
+        self._build_menus()
+        self._unsubscribe = self.session.subscribe(self._on_session)
+        self._refresh_panels()
+        self._drawn_seq, self._draws, self._draw_rate, self._rate_t0 = -1, 0, 0.0, time.monotonic()
+        self.timer = QTimer(self, interval=DRAW_INTERVAL_MS)
+        self.timer.timeout.connect(self._draw)
+        self.timer.start()
+        geometry = self.settings.value("geometry")
+        if geometry is not None:
+            self.restoreGeometry(geometry)
+        else:
+            self.resize(1600, 980)
+
+    # -- layout -----------------------------------------------------------------------
+    def _build_widgets(self) -> None:
+        self.viewport = Viewport(self)
+        self.timeline = Timeline(self)
+        central = QWidget()
+        col = QVBoxLayout(central)
+        col.setContentsMargins(0, 0, 0, 0)
+        col.setSpacing(0)
+        col.addWidget(self.viewport, 1)
+        col.addWidget(self.timeline)
+        self.setCentralWidget(central)
+        self.sensor_panel = SensorPanel(sensor_presets())
+        self.constraint_panel = ConstraintPanel(constraint_schema(self.kinds))
+        self.optimizer_panel = OptimizerPanel(list(METHODS))
+        tabs = QTabWidget()
+        tabs.addTab(self.sensor_panel, "Sensors")
+        tabs.addTab(self.constraint_panel, "Constraints")
+        tabs.addTab(self.optimizer_panel, "Optimizer")
+        self.latent = LatentInspector()
+        self.plots = LossPlots()
+        self._dock("Scene", tabs, Qt.DockWidgetArea.RightDockWidgetArea)
+        self._dock("Latent", self.latent, Qt.DockWidgetArea.RightDockWidgetArea)
+        self._dock("Optimizer plots", self.plots, Qt.DockWidgetArea.BottomDockWidgetArea)
+        self.status_engine = QLabel()
+        self.status_gui = QLabel()
+        self.status_warnings = QLabel()
+        for w in (self.status_engine, self.status_gui, self.status_warnings):
+            self.statusBar().addPermanentWidget(w)
+        self._connect_widgets()
+
+    def _dock(self, title: str, widget: QWidget, area: Qt.DockWidgetArea) -> QDockWidget:
+        dock = QDockWidget(title, self)
+        dock.setObjectName(title)
+        dock.setWidget(widget)
+        self.addDockWidget(area, dock)
+        return dock
+
+    def _connect_widgets(self) -> None:
+        s = self.session
+        t = self.timeline
+        t.playToggled.connect(lambda on: s.play() if on else s.pause())
+        t.stepRequested.connect(s.step)
+        t.seekRequested.connect(s.seek)
+        t.speedChanged.connect(lambda v: s.set_playback(speed=v))
+        t.loopChanged.connect(lambda v: s.set_playback(loop=v))
+        sp = self.sensor_panel
+        sp.presetChanged.connect(self._guard(self._set_preset))
+        sp.sensorChanged.connect(self._guard(lambda j, ch: s.update_sensor(j, **ch)))
+        sp.failureRequested.connect(self._guard(s.simulate_failure))
+        sp.resetRequested.connect(lambda j: s.reset_offsets(j or None))
+        cp = self.constraint_panel
+        cp.addRequested.connect(self._guard(self._add_constraint))
+        cp.removeRequested.connect(s.remove_constraint)
+        cp.changed.connect(self._guard(lambda n, ch: s.update_constraint(n, **ch)))
+        op = self.optimizer_panel
+        op.settingChanged.connect(s.set_setting)
+        op.methodChanged.connect(lambda m: s.set_method(m))
+        op.ghostsChanged.connect(lambda g: s.set_method(s.method, g))
+        self.viewport.targetDragged.connect(self._guard(s.drag_target))
+        self.viewport.gizmoEdited.connect(self._guard(lambda n, ch: s.update_constraint(n, **ch)))
+        self.latent.decodeRequested.connect(lambda z: self.worker.submit(DecodeLatent(z)))
+        self.latent.debugToggled.connect(lambda on: s.pause() if on else None)
+
+    def _build_menus(self) -> None:
+        f = self.files
+        file_menu = self.menuBar().addMenu("&File")
+        self._action(file_menu, "&Open BVH...", f.open_dialog, QKeySequence.StandardKey.Open)
+        self.recent_menu = file_menu.addMenu("Open &recent")
+        f.refresh_recent()
+        file_menu.addSeparator()
+        self._action(file_menu, "&Save reconstruction as BVH...", f.save_reconstruction, QKeySequence.StandardKey.Save)
+        self._action(file_menu, "Save s&cene...", f.save_scene, "Ctrl+Shift+S")
+        self._action(file_menu, "&Load scene...", f.load_scene, "Ctrl+L")
+        self._action(file_menu, "Export screens&hot...", f.export_screenshot, "Ctrl+E")
+        file_menu.addSeparator()
+        self._action(file_menu, "&Quit", self.close, QKeySequence.StandardKey.Quit)
+        play = self.menuBar().addMenu("&Playback")
+        self._action(play, "Play / pause", self.toggle_play, "Space")
+        self._action(play, "Next frame", lambda: self.session.step(1), "Right")
+        self._action(play, "Previous frame", lambda: self.session.step(-1), "Left")
+        view = self.menuBar().addMenu("&View")
+        self._toggle(view, "Follow character", True, lambda v: setattr(self.viewport, "follow", v))
+        self._toggle(view, "Ground truth", True, lambda v: setattr(self.viewport, "show_ground_truth", v))
+        self._toggle(view, "Ghosts", True, lambda v: setattr(self.viewport, "show_ghosts", v))
+        self._action(view, "Reset camera", lambda: self.viewport.reset_camera(self._hips()), "Home")
+
+    def _action(self, menu: Any, text: str, slot: Any, shortcut: Any = None) -> QAction:
+        act = QAction(text, self)
+        if shortcut is not None:
+            act.setShortcut(QKeySequence(shortcut))
+            act.setShortcutContext(Qt.ShortcutContext.WindowShortcut)
+        act.triggered.connect(lambda _=False: slot())
+        menu.addAction(act)
+        return act
+
+    def _toggle(self, menu: Any, text: str, on: bool, slot: Any) -> None:
+        act = QAction(text, self, checkable=True, checked=on)
+        act.toggled.connect(slot)
+        menu.addAction(act)
+
+    # -- session -> widgets -------------------------------------------------------------
+    def _on_session(self, event: str, data: Any) -> None:
+        if event == "frame":
+            self.timeline.set_frame(int(data))
+        elif event == "playing":
+            self.timeline.set_playing(bool(data))
+        elif event == "motion":
+            self.timeline.set_range(self.session.num_frames, data.fps)
+            self.plots.clear()
+            self.viewport.reset_camera(data.root_pos[0])
+        if event in ("sensors", "constraints", "settings", "method", "motion"):
+            self._refresh_panels()
+
+    def _refresh_panels(self) -> None:
+        s = self.session
+        self.sensor_panel.set_sensors(s.preset, s.sensors)
+        self.constraint_panel.set_constraints([c.to_dict() for c in s.constraints])
+        self.optimizer_panel.set_state(s.method, s.ghosts, s.settings)
+
+    def _guard(self, fn: Any) -> Any:
+        """Wrap a request so a user error shows a dialog instead of escaping into Qt."""
+
+        def call(*args: Any) -> None:
+            try:
+                fn(*args)
+            except UserError as exc:
+                self.show_error("Cannot apply the change", str(exc))
+
+        return call
+
+    def show_error(self, title: str, message: str) -> None:
+        QMessageBox.critical(self, title, message)
+
+    def _set_preset(self, name: str) -> None:
+        self.session.set_preset(name)
+        self.settings.setValue("last_preset", name)
+
+    def _add_constraint(self, kind: str) -> None:
+        cls = self.kinds.get(kind)
+        if cls is None:
+            raise UserError(f"unknown constraint kind {kind!r}")
+        try:
+            constraint = cls()
+        except TypeError as exc:
+            raise UserError(f"{kind}: cannot create with default parameters ({exc})") from exc
+        self.session.add_constraint(constraint)
+
+    def toggle_play(self) -> None:
+        self.session.pause() if self.session.playing else self.session.play()
+
+    def _hips(self) -> Any:
+        snap = self.worker.latest
+        return None if snap is None else snap.positions[0]
+
+    # -- drawing --------------------------------------------------------------------
+    def _draw(self) -> None:
+        snap = self.worker.latest
+        now = time.monotonic()
+        if now - self._rate_t0 >= 1.0:
+            self._draw_rate, self._draws, self._rate_t0 = self._draws / (now - self._rate_t0), 0, now
+            self.status_gui.setText(f"GUI {self._draw_rate:4.0f} draws/s")
+        if snap is None or snap.seq == self._drawn_seq:
+            return
+        self._drawn_seq = snap.seq
+        self._draws += 1
+        self.viewport.show_snapshot(snap)
+        if self._draws % PLOT_EVERY == 0 or not snap.playing:
+            self.plots.update_snapshot(snap)
+            self.latent.update_snapshot(snap)
+        self.session.note_frame(snap.frame)
+        if self.session.playing and not snap.playing:  # reached the end without looping
+            self.session.playing = False
+            self.timeline.set_playing(False)
+        self.status_engine.setText(f"engine {snap.engine_fps:5.1f} frames/s   {snap.ms:6.1f} ms/frame   "
+                                   f"{snap.iterations} it")  # fmt: skip
+        self.status_warnings.setText(f"warnings {snap.warnings}")
+        self.status_warnings.setToolTip(snap.error or "\n".join(snap.messages))
+        if snap.error:
+            self.statusBar().showMessage(snap.error, 5000)
+        self.snapshotDrawn.emit(snap.frame)
+
+    # -- Qt events ------------------------------------------------------------------
+    def dragEnterEvent(self, event: Any) -> None:
+        if any(u.toLocalFile().lower().endswith(".bvh") for u in event.mimeData().urls()):
+            event.acceptProposedAction()
+
+    def dropEvent(self, event: Any) -> None:
+        for url in event.mimeData().urls():
+            if url.toLocalFile().lower().endswith(".bvh"):
+                self.files.open_path(url.toLocalFile())
+                break
+
+    def closeEvent(self, event: Any) -> None:
+        self.timer.stop()
+        self.settings.setValue("geometry", self.saveGeometry())
+        self._unsubscribe()
+        self.worker.stop()
+        self.files.shutdown()
+        self.viewport.close()
+        super().closeEvent(event)

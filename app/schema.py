@@ -1,0 +1,62 @@
+"""Describe the engine's constraint kinds as plain editor schemas for the widgets."""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib
+import pkgutil
+from typing import Any
+
+import numpy as np
+
+_BASE = ("name", "weight", "enabled")
+
+
+def load_constraint_kinds() -> dict[str, type]:
+    """Import every module of :mod:`engine.constraints` so each kind registers itself."""
+    import engine.constraints as pkg
+    from engine.constraints.base import REGISTRY
+
+    for info in pkgutil.iter_modules(pkg.__path__):
+        try:
+            importlib.import_module(f"engine.constraints.{info.name}")
+        except Exception:  # a half-written kind must not stop the studio
+            continue
+    return dict(REGISTRY)
+
+
+def _tag(name: str, default: Any) -> str:
+    if isinstance(default, bool):
+        return "bool"
+    if isinstance(default, int):
+        return "int"
+    if isinstance(default, float):
+        return "float"
+    if isinstance(default, str):
+        return "joint" if "joint" in name or name in ("target_joint", "end_effector") else "str"
+    if isinstance(default, (np.ndarray, tuple, list)) and np.asarray(default).size == 3:
+        return "vec3"
+    return "other"
+
+
+def _default(f: dataclasses.Field) -> Any:
+    if f.default is not dataclasses.MISSING:
+        return f.default
+    if f.default_factory is not dataclasses.MISSING:  # type: ignore[misc]
+        return f.default_factory()  # type: ignore[misc]
+    return None
+
+
+def constraint_schema(kinds: dict[str, type] | None = None) -> dict[str, list[tuple[str, str, Any]]]:
+    """kind -> [(field, tag, default)] for :class:`widgets.constraint_panel.ConstraintPanel`."""
+    kinds = load_constraint_kinds() if kinds is None else kinds
+    out = {}
+    for kind, cls in kinds.items():
+        fields = []
+        for f in dataclasses.fields(cls):
+            if f.name in _BASE:
+                continue
+            d = _default(f)
+            fields.append((f.name, _tag(f.name, d), d))
+        out[kind] = fields
+    return out

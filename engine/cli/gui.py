@@ -1,0 +1,26 @@
+"""``dragposer-studio gui``: open the desktop studio (Qt is imported only when it runs)."""
+
+from __future__ import annotations
+
+import argparse
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    p = subparsers.add_parser(
+        "gui",
+        help="open the studio window",
+        description="Open the studio on FILE (or the bundled example clip). With --screenshot, "
+        "play --after-frames frames, save a PNG of the whole window and exit.",
+    )
+    p.add_argument("file", nargs="?", metavar="FILE.bvh", help="motion to open")
+    p.add_argument("--method", default="ik", help="reconstruction method (default: ik)")
+    p.add_argument("--sensors", metavar="PRESET", help="sensor preset name")
+    p.add_argument("--screenshot", metavar="OUT.png", help="save a screenshot and exit")
+    p.add_argument("--after-frames", type=int, default=60, metavar="N", help="frames to play first (60)")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from app.main import run as run_app  # Qt stays out of engine/ imports
+
+    return run_app(args.file, args.method, args.sensors, args.screenshot, args.after_frames)

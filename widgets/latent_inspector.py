@@ -1,0 +1,111 @@
+"""Latent inspector: the current latent vector, its history, and a decoding debugger.
+
+Debug mode pauses playback; then one latent dimension can be scrubbed, or two stored
+latents (A and B, captured from any frames) interpolated, and each change asks the
+engine to decode the edited latent (``decodeRequested``). Methods without a decoder
+leave the debugger disabled, with a tooltip saying why.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from typing import Any
+
+import numpy as np
+import pyqtgraph as pg
+from PyQt6.QtCore import Qt, pyqtSignal
+from PyQt6.QtWidgets import QCheckBox, QGridLayout, QLabel, QPushButton, QSlider, QSpinBox, QVBoxLayout, QWidget
+
+HISTORY = 300
+NO_DECODER = "The current method has no latent decoder (choose dragposer when it is available)."
+
+
+class LatentInspector(QWidget):
+    """Signals ``decodeRequested(ndarray)`` and ``debugToggled(bool)``."""
+
+    decodeRequested = pyqtSignal(object)
+    debugToggled = pyqtSignal(bool)
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        layout = QVBoxLayout(self)
+        layout.setContentsMargins(0, 0, 0, 0)
+        self.bars_plot = pg.PlotWidget(title="Latent (this frame)")
+        self.bars_plot.setMinimumHeight(110)
+        self.bars = pg.BarGraphItem(x=np.arange(24), height=np.zeros(24), width=0.8, brush="#4da3ff")
+        self.bars_plot.addItem(self.bars)
+        self.strip_plot = pg.PlotWidget(title="Latent history (frames x dims)")
+        self.strip_plot.setMinimumHeight(90)
+        self.strip = pg.ImageItem()
+        self.strip.setColorMap(pg.colormap.get("CET-D1"))
+        self.strip_plot.addItem(self.strip)
+        layout.addWidget(self.bars_plot, 2)
+        layout.addWidget(self.strip_plot, 1)
+        self.debug_box = QWidget()
+        grid = QGridLayout(self.debug_box)
+        self.debug = QCheckBox("Debug: pause optimizer and decode edited latents")
+        self.debug.toggled.connect(self._debug_toggled)
+        self.dim = QSpinBox(minimum=0, maximum=23, prefix="dim ")
+        self.value = QSlider(Qt.Orientation.Horizontal, minimum=-300, maximum=300, toolTip="value x 100")
+        self.value.valueChanged.connect(self._scrub)
+        self.capture_a = QPushButton("Store as A")
+        self.capture_b = QPushButton("Store as B")
+        self.capture_a.clicked.connect(lambda: self._store("a"))
+        self.capture_b.clicked.connect(lambda: self._store("b"))
+        self.mix = QSlider(Qt.Orientation.Horizontal, minimum=0, maximum=100, toolTip="A to B")
+        self.mix.valueChanged.connect(self._interpolate)
+        grid.addWidget(self.debug, 0, 0, 1, 4)
+        grid.addWidget(self.dim, 1, 0)
+        grid.addWidget(self.value, 1, 1, 1, 3)
+        grid.addWidget(self.capture_a, 2, 0)
+        grid.addWidget(self.capture_b, 2, 1)
+        grid.addWidget(QLabel("A → B"), 2, 2)
+        grid.addWidget(self.mix, 2, 3)
+        layout.addWidget(self.debug_box)
+        self.set_decodable(False)
+        self._history: deque[np.ndarray] = deque(maxlen=HISTORY)
+        self.latent: np.ndarray | None = None
+        self.stored: dict[str, np.ndarray] = {}
+        self._seq = -1
+
+    def set_decodable(self, ok: bool) -> None:
+        self.debug_box.setEnabled(ok)
+        self.debug_box.setToolTip("" if ok else NO_DECODER)
+        if not ok and self.debug.isChecked():
+            self.debug.setChecked(False)
+
+    def update_snapshot(self, snap: Any) -> None:
+        if snap.seq == self._seq:
+            return
+        self._seq = snap.seq
+        if self.debug_box.isEnabled() != bool(snap.can_decode):
+            self.set_decodable(bool(snap.can_decode))
+        if snap.latent is None or self.debug.isChecked():
+            return
+        z = np.asarray(snap.latent, float).ravel()
+        self.latent = z
+        self.bars.setOpts(x=np.arange(len(z)), height=z, brush=["#ff8a1f" if v > 0 else "#4da3ff" for v in z])
+        self._history.append(z)
+        hist = np.array(self._history)
+        lim = max(float(np.abs(hist).max()), 1e-6)
+        self.strip.setImage(hist, levels=(-lim, lim))
+
+    def _debug_toggled(self, on: bool) -> None:
+        self.debugToggled.emit(on)
+        if on and self.latent is not None:
+            self.value.setValue(int(round(self.latent[self.dim.value()] * 100)))
+
+    def _scrub(self, v: int) -> None:
+        if self.debug.isChecked() and self.latent is not None:
+            z = self.latent.copy()
+            z[self.dim.value()] = v / 100.0
+            self.decodeRequested.emit(z)
+
+    def _store(self, slot: str) -> None:
+        if self.latent is not None:
+            self.stored[slot] = self.latent.copy()
+
+    def _interpolate(self, v: int) -> None:
+        if self.debug.isChecked() and {"a", "b"} <= set(self.stored):
+            t = v / 100.0
+            self.decodeRequested.emit((1 - t) * self.stored["a"] + t * self.stored["b"])

@@ -1,0 +1,81 @@
+"""Optimizer settings: method, ghosts, mode, iterations, learning rate, temporal prior."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from PyQt6.QtCore import pyqtSignal
+from PyQt6.QtWidgets import QCheckBox, QComboBox, QDoubleSpinBox, QFormLayout, QHBoxLayout, QSpinBox, QWidget
+
+#: name -> (label, kind, min, max, step); kinds: "mode", "int", "float".
+FIELDS: dict[str, tuple[str, str, float, float, float]] = {
+    "mode": ("Mode", "mode", 0, 0, 0),
+    "iterations": ("Iterations / frame", "int", 1, 200, 1),
+    "lr": ("Learning rate", "float", 1e-4, 1.0, 0.005),
+    "temporal_weight": ("Temporal prior weight", "float", 0.0, 10.0, 0.1),
+}
+
+
+class OptimizerPanel(QWidget):
+    """Signals ``settingChanged(name, value)``, ``methodChanged(str)``, ``ghostsChanged(tuple)``."""
+
+    settingChanged = pyqtSignal(str, object)
+    methodChanged = pyqtSignal(str)
+    ghostsChanged = pyqtSignal(tuple)
+
+    def __init__(self, methods: list[str], parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        form = QFormLayout(self)
+        self.method = QComboBox()
+        self.method.addItems(methods)
+        self.method.currentTextChanged.connect(lambda m: None if self._updating else self.methodChanged.emit(m))
+        form.addRow("Method", self.method)
+        ghosts = QHBoxLayout()
+        self.ghost_boxes: dict[str, QCheckBox] = {}
+        for m in methods:
+            box = QCheckBox(m, toolTip=f"Also run {m} and draw it as a ghost")
+            box.toggled.connect(self._ghosts_edited)
+            ghosts.addWidget(box)
+            self.ghost_boxes[m] = box
+        holder = QWidget()
+        holder.setLayout(ghosts)
+        form.addRow("Ghosts", holder)
+        self.editors: dict[str, QWidget] = {}
+        for name, (label, kind, lo, hi, step) in FIELDS.items():
+            if kind == "mode":
+                w: Any = QComboBox()
+                w.addItems(["realtime", "offline"])
+                w.currentTextChanged.connect(lambda v, n=name: self._edit(n, v))
+            elif kind == "int":
+                w = QSpinBox(minimum=int(lo), maximum=int(hi), singleStep=int(step))
+                w.valueChanged.connect(lambda v, n=name: self._edit(n, int(v)))
+            else:
+                w = QDoubleSpinBox(minimum=lo, maximum=hi, singleStep=step, decimals=4)
+                w.valueChanged.connect(lambda v, n=name: self._edit(n, float(v)))
+            self.editors[name] = w
+            form.addRow(label, w)
+        self._updating = False
+
+    def _edit(self, name: str, value: Any) -> None:
+        if not self._updating:
+            self.settingChanged.emit(name, value)
+
+    def _ghosts_edited(self) -> None:
+        if not self._updating:
+            self.ghostsChanged.emit(tuple(m for m, b in self.ghost_boxes.items() if b.isChecked()))
+
+    def set_state(self, method: str, ghosts: tuple[str, ...], settings: dict[str, Any]) -> None:
+        """Show the session's method, ghosts and settings without emitting."""
+        self._updating = True
+        try:
+            self.method.setCurrentText(method)
+            for m, box in self.ghost_boxes.items():
+                box.setChecked(m in ghosts)
+                box.setEnabled(m != method)
+            for name, w in self.editors.items():
+                if name not in settings:
+                    continue
+                v = settings[name]
+                w.setCurrentText(str(v)) if isinstance(w, QComboBox) else w.setValue(v)
+        finally:
+            self._updating = False

@@ -1,0 +1,123 @@
+"""Live optimizer plots (pyqtgraph): this frame's loss per iteration, costs and history.
+
+* **Loss / iteration**: total and every term for the frame on screen (log y).
+* **Cost / frame**: milliseconds and iterations of each solved frame over time.
+* **Loss history**: every term's final value per solved frame (log y).
+
+Click a legend entry to hide or show that term (pyqtgraph's legend does the toggling).
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from typing import Any
+
+import numpy as np
+import pyqtgraph as pg
+from PyQt6.QtWidgets import QHBoxLayout, QVBoxLayout, QWidget
+
+from widgets import style
+
+HISTORY = 600  # solved frames kept
+_FLOOR = 1e-10  # log axes cannot show zero
+
+
+def _plot(title: str, log_y: bool, x_label: str) -> pg.PlotWidget:
+    w = pg.PlotWidget(title=title)
+    w.setLogMode(y=log_y)
+    w.showGrid(x=True, y=True, alpha=0.2)
+    w.setLabel("bottom", x_label)
+    w.addLegend(offset=(-5, 5), labelTextSize="8pt")
+    w.setMinimumHeight(120)
+    return w
+
+
+class _Curves:
+    """Curves by term name in one plot, created on first sight with a stable colour."""
+
+    def __init__(self, plot: pg.PlotWidget, colours: dict[str, str]) -> None:
+        self.plot, self.colours, self.items = plot, colours, {}
+
+    def get(self, name: str) -> pg.PlotDataItem:
+        if name not in self.items:
+            colour = self.colours.setdefault(name, style.TERM_CYCLE[len(self.colours) % len(style.TERM_CYCLE)])
+            width = 2.5 if name == "total" else 1.5
+            self.items[name] = self.plot.plot(name=name, pen=pg.mkPen(colour, width=width))
+        return self.items[name]
+
+    def reset(self) -> None:
+        self.plot.clear()
+        if self.plot.plotItem.legend is not None:
+            self.plot.plotItem.legend.clear()
+        self.items = {}
+
+
+class LossPlots(QWidget):
+    """Feed it snapshots with :meth:`update_snapshot`; it redraws only on new data."""
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        pg.setConfigOptions(antialias=True, background="#171a21", foreground="#c8ccd4")
+        colours: dict[str, str] = {"total": "#ffffff"}
+        self.iteration_plot = _plot("Loss per iteration (this frame)", True, "iteration")
+        self.cost_plot = _plot("Cost per frame", False, "frame")
+        self.history_plot = _plot("Loss history", True, "frame")
+        self.iter_curves = _Curves(self.iteration_plot, colours)
+        self.history_curves = _Curves(self.history_plot, colours)
+        self.ms_curve = self.cost_plot.plot(name="ms", pen=pg.mkPen("#ff8a1f", width=1.5))
+        self.iter_curve = self.cost_plot.plot(name="iterations", pen=pg.mkPen("#4da3ff", width=1.5))
+        layout = QVBoxLayout(self)
+        layout.setContentsMargins(0, 0, 0, 0)
+        layout.addWidget(self.iteration_plot, 1)
+        row = QHBoxLayout()
+        row.addWidget(self.cost_plot, 1)
+        row.addWidget(self.history_plot, 1)
+        layout.addLayout(row, 1)
+        self._frames: deque[int] = deque(maxlen=HISTORY)
+        self._ms: deque[float] = deque(maxlen=HISTORY)
+        self._iters: deque[float] = deque(maxlen=HISTORY)
+        self._terms: dict[str, deque[float]] = {}
+        self._seq = -1
+        self._last_frame = -1
+
+    def clear(self) -> None:
+        self._frames.clear(), self._ms.clear(), self._iters.clear()
+        self._terms = {}
+        self.history_curves.reset()
+        self.iter_curves.reset()
+
+    def update_snapshot(self, snap: Any) -> None:
+        if snap.seq == self._seq:
+            return
+        self._seq = snap.seq
+        if snap.frame < self._last_frame:  # looped or sought back: start a fresh history
+            self.clear()
+        self._last_frame = snap.frame
+        self._record(snap)
+        losses = snap.losses
+        if losses:
+            its = np.arange(1, len(losses) + 1)
+            names = list(losses[-1])
+            for name in names:
+                vals = np.array([max(float(d.get(name, np.nan)), _FLOOR) for d in losses])
+                self.iter_curves.get(name).setData(its, vals)
+            for name, item in self.iter_curves.items.items():
+                if name not in names:
+                    item.setData([], [])
+        x = np.fromiter(self._frames, float)
+        self.ms_curve.setData(x, np.fromiter(self._ms, float))
+        self.iter_curve.setData(x, np.fromiter(self._iters, float))
+        for name, values in self._terms.items():
+            self.history_curves.get(name).setData(x[-len(values):], np.fromiter(values, float))
+
+    def _record(self, snap: Any) -> None:
+        self._frames.append(snap.frame)
+        self._ms.append(snap.ms)
+        self._iters.append(snap.iterations)
+        last = snap.losses[-1] if snap.losses else {}
+        n = len(self._frames)
+        for name in set(self._terms) | set(last):
+            series = self._terms.setdefault(name, deque(maxlen=HISTORY))
+            series.append(max(float(last.get(name, np.nan)), _FLOOR))
+            while len(series) > n:
+                series.popleft()

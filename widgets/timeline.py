@@ -1,0 +1,90 @@
+"""Timeline: play/pause, step, scrub, speed, loop and a frame counter."""
+
+from __future__ import annotations
+
+from PyQt6.QtCore import Qt, pyqtSignal
+from PyQt6.QtWidgets import QCheckBox, QComboBox, QHBoxLayout, QLabel, QSlider, QToolButton, QWidget
+
+SPEEDS = (0.25, 0.5, 1.0, 2.0)
+
+
+class Timeline(QWidget):
+    """Playback controls; it only emits requests; the session decides.
+
+    Signals
+    -------
+    playToggled(bool), stepRequested(int), seekRequested(int), speedChanged(float),
+    loopChanged(bool)
+    """
+
+    playToggled = pyqtSignal(bool)
+    stepRequested = pyqtSignal(int)
+    seekRequested = pyqtSignal(int)
+    speedChanged = pyqtSignal(float)
+    loopChanged = pyqtSignal(bool)
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        row = QHBoxLayout(self)
+        row.setContentsMargins(6, 2, 6, 2)
+        self.play_button = QToolButton(text="▶", toolTip="Play / pause (Space)")
+        self.play_button.setCheckable(True)
+        self.play_button.toggled.connect(self._on_play)
+        back = QToolButton(text="◀|", toolTip="Previous frame (Left)")
+        back.clicked.connect(lambda: self.stepRequested.emit(-1))
+        fwd = QToolButton(text="|▶", toolTip="Next frame (Right)")
+        fwd.clicked.connect(lambda: self.stepRequested.emit(1))
+        self.slider = QSlider(Qt.Orientation.Horizontal, toolTip="Scrub")
+        self.slider.setRange(0, 0)
+        self.slider.valueChanged.connect(self._on_slider)
+        self.counter = QLabel("0 / 0")
+        self.counter.setMinimumWidth(110)
+        self.counter.setAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
+        self.speed = QComboBox(toolTip="Playback speed")
+        for s in SPEEDS:
+            self.speed.addItem(f"{s:g}x", s)
+        self.speed.setCurrentIndex(SPEEDS.index(1.0))
+        self.speed.currentIndexChanged.connect(lambda i: self.speedChanged.emit(float(self.speed.itemData(i))))
+        self.loop = QCheckBox("Loop", checked=True)
+        self.loop.toggled.connect(self.loopChanged.emit)
+        for w in (back, self.play_button, fwd):
+            row.addWidget(w)
+        row.addWidget(self.slider, 1)
+        for w in (self.counter, self.speed, self.loop):
+            row.addWidget(w)
+        self._updating = False
+        self._fps = 60.0
+
+    def _on_play(self, playing: bool) -> None:
+        self.play_button.setText("⏸" if playing else "▶")
+        if not self._updating:
+            self.playToggled.emit(playing)
+
+    def _on_slider(self, value: int) -> None:
+        self._show_counter(value)
+        if not self._updating:
+            self.seekRequested.emit(value)
+
+    def _show_counter(self, frame: int) -> None:
+        self.counter.setText(f"{frame} / {self.slider.maximum()}  {frame / self._fps:5.2f}s")
+
+    def set_range(self, num_frames: int, fps: float = 60.0) -> None:
+        self._fps = fps
+        self._updating = True
+        self.slider.setRange(0, max(num_frames - 1, 0))
+        self._updating = False
+        self._show_counter(self.slider.value())
+
+    def set_frame(self, frame: int) -> None:
+        """Show the engine's frame without emitting a seek (unless the user is dragging)."""
+        if self.slider.isSliderDown():
+            return
+        self._updating = True
+        self.slider.setValue(frame)
+        self._updating = False
+        self._show_counter(frame)
+
+    def set_playing(self, playing: bool) -> None:
+        self._updating = True
+        self.play_button.setChecked(playing)
+        self._updating = False

@@ -1,0 +1,141 @@
+"""Constraint gizmos: points, boxes (bounds) and lines (distance, look-at) in the viewport.
+
+Each enabled constraint describes itself with ``Constraint.gizmo()``, a plain dict:
+
+* ``{"type": "point", "position": (3,)}`` - a target; a sphere widget when editable
+* ``{"type": "box", "min": (3,), "max": (3,)}`` - bounds; a box widget when editable
+* ``{"type": "line", "points": (N, 3)}`` (or ``"start"``/``"end"``) - distance, look-at
+
+An optional ``"edit"`` key names the constraint field(s) a drag writes back (a string
+for a point, a pair ``(min_field, max_field)`` for a box). Gizmos are rebuilt only when
+the set of constraints changes; otherwise their geometry is moved in place.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+import pyvista as pv
+
+from widgets import style
+
+EditCallback = Callable[[str, dict[str, Any]], None]
+
+
+def _vec(g: dict, *keys: str) -> np.ndarray | None:
+    for k in keys:
+        if k in g and g[k] is not None:
+            return np.asarray(g[k], float)
+    return None
+
+
+def _line_points(g: dict) -> np.ndarray:
+    pts = _vec(g, "points")
+    if pts is None:
+        pts = np.array([_vec(g, "start", "from", "a"), _vec(g, "end", "to", "b")], float)
+    return pts.reshape(-1, 3)
+
+
+class _Gizmo:
+    def __init__(self, plotter: pv.Plotter, name: str, g: dict, on_edit: EditCallback) -> None:
+        self.plotter, self.name, self.on_edit = plotter, name, on_edit
+        self.kind = g.get("type", "")
+        self.actors: list = []
+        self.widget = None
+        self.dragging = False
+        edit = g.get("edit")
+        if self.kind == "point":
+            p = _vec(g, "position", "center", "target")
+            if edit:
+                self.widget = plotter.add_sphere_widget(
+                    self._point_moved, center=tuple(p), radius=0.04, color=style.GIZMO,
+                    interaction_event="always", test_callback=False, style="wireframe",
+                )  # fmt: skip
+                self._track(self.widget)
+            else:
+                self.mesh = pv.PolyData(p[None])
+                self.actors.append(plotter.add_mesh(self.mesh, color=style.GIZMO, point_size=14,
+                                                    render_points_as_spheres=True, reset_camera=False))  # fmt: skip
+        elif self.kind == "box":
+            lo, hi = _vec(g, "min", "lower"), _vec(g, "max", "upper")
+            self.mesh = pv.Box(bounds=(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2])).outline()
+            self.actors.append(plotter.add_mesh(self.mesh, color=style.GIZMO, line_width=2, reset_camera=False))
+            if edit:
+                self.widget = plotter.add_box_widget(
+                    self._box_moved, bounds=(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]), factor=1.0,
+                    rotation_enabled=False, color=style.GIZMO, interaction_event="end",
+                )  # fmt: skip
+        elif self.kind == "line":
+            pts = _line_points(g)
+            self.mesh = pv.lines_from_points(pts)
+            self.actors.append(plotter.add_mesh(self.mesh, color=style.GIZMO, line_width=3, reset_camera=False))
+        self.edit = edit
+
+    def _track(self, widget: Any) -> None:
+        widget.AddObserver("StartInteractionEvent", lambda *_: setattr(self, "dragging", True))
+        widget.AddObserver("EndInteractionEvent", lambda *_: setattr(self, "dragging", False))
+
+    def _point_moved(self, center: np.ndarray) -> None:
+        if self.dragging:
+            self.on_edit(self.name, {str(self.edit): np.asarray(center, float)})
+
+    def _box_moved(self, box: pv.PolyData) -> None:
+        b = np.asarray(box.bounds, float)
+        lo_field, hi_field = self.edit if isinstance(self.edit, (tuple, list)) else ("min", "max")
+        self.on_edit(self.name, {lo_field: b[0::2], hi_field: b[1::2]})
+
+    def update(self, g: dict) -> None:
+        if self.kind == "point":
+            p = _vec(g, "position", "center", "target")
+            if self.widget is not None:
+                if not self.dragging:
+                    self.widget.SetCenter(*p)
+            else:
+                self.mesh.points[:] = p[None]
+                self.mesh.GetPoints().Modified()
+        elif self.kind == "box":
+            lo, hi = _vec(g, "min", "lower"), _vec(g, "max", "upper")
+            self.mesh.copy_from(pv.Box(bounds=(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2])).outline())
+        elif self.kind == "line":
+            pts = _line_points(g)
+            if pts.shape == self.mesh.points.shape:
+                self.mesh.points[:] = pts
+                self.mesh.GetPoints().Modified()
+
+    def remove(self) -> None:
+        if self.widget is not None:
+            self.widget.Off()
+        if self.actors:
+            self.plotter.remove_actor(self.actors, render=False)
+
+
+class ConstraintGizmos:
+    """All gizmos of the enabled constraints, keyed by constraint name."""
+
+    def __init__(self, plotter: pv.Plotter, on_edit: EditCallback) -> None:
+        self._plotter = plotter
+        self._on_edit = on_edit
+        self.items: dict[str, _Gizmo] = {}
+        self._layout: tuple = ()
+
+    def update(self, gizmos: tuple[tuple[str, dict], ...]) -> None:
+        """Draw ``(constraint name, gizmo dict)`` pairs; unknown or empty gizmos are skipped."""
+        gizmos = tuple((n, g) for n, g in gizmos if g and g.get("type") in ("point", "box", "line"))
+        layout = tuple((n, g["type"], bool(g.get("edit"))) for n, g in gizmos)
+        try:
+            if layout != self._layout:
+                self.clear()
+                self.items = {n: _Gizmo(self._plotter, n, g, self._on_edit) for n, g in gizmos}
+                self._layout = layout
+            else:
+                for n, g in gizmos:
+                    self.items[n].update(g)
+        except (TypeError, ValueError, IndexError):  # a malformed gizmo is cosmetic: skip it
+            self.clear()
+
+    def clear(self) -> None:
+        for item in self.items.values():
+            item.remove()
+        self.items, self._layout = {}, ()

@@ -1,0 +1,122 @@
+"""The 3D viewport widget: holds a pyvistaqt interactor and the drawable adapters."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from PyQt6.QtCore import pyqtSignal
+from PyQt6.QtGui import QImage
+from PyQt6.QtWidgets import QVBoxLayout, QWidget
+from pyvistaqt import QtInteractor
+
+from widgets import style
+from widgets.viewport.floor import FloorGrid
+from widgets.viewport.gizmos import ConstraintGizmos
+from widgets.viewport.sensors import SensorMarkers
+from widgets.viewport.skeleton import SkeletonActor
+
+#: Default camera: front-left of a character facing -Y, looking at the hips (metres).
+HOME_OFFSET = np.array([2.2, -3.6, 0.75])
+HOME_FOCUS_HEIGHT = 0.85
+
+
+class Viewport(QWidget):
+    """Draws snapshots: reconstruction, ground truth, ghosts, sensors, gizmos, floor.
+
+    Signals
+    -------
+    targetDragged(str, object)
+        A sensor target was dragged to a new world position (ndarray (3,), metres).
+    gizmoEdited(str, object)
+        A constraint gizmo was dragged; ``dict`` of field name -> new value.
+    """
+
+    targetDragged = pyqtSignal(str, object)
+    gizmoEdited = pyqtSignal(str, object)
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        layout = QVBoxLayout(self)
+        layout.setContentsMargins(0, 0, 0, 0)
+        self.plotter = QtInteractor(self, auto_update=False, multi_samples=4)
+        layout.addWidget(self.plotter)
+        p = self.plotter
+        p.set_background(style.BACKGROUND_BOTTOM, top=style.BACKGROUND_TOP)
+        p.enable_anti_aliasing("ssaa") if hasattr(p, "enable_anti_aliasing") else None
+        self.floor = FloorGrid(p)
+        self.ground_truth = SkeletonActor(p, style.GROUND_TRUTH, opacity=0.45, bone_width=5,
+                                          joint_size=8, name="ground-truth")  # fmt: skip
+        self.reconstruction = SkeletonActor(p, style.RECONSTRUCTION, name="reconstruction")
+        self.decoded = SkeletonActor(p, "#ffffff", opacity=0.8, bone_width=4, joint_size=7, name="decoded")
+        self.decoded.set_visible(False)
+        self.ghosts: dict[str, SkeletonActor] = {}
+        self.sensors = SensorMarkers(p, lambda j, pos: self.targetDragged.emit(j, pos))
+        self.gizmos = ConstraintGizmos(p, lambda n, changes: self.gizmoEdited.emit(n, changes))
+        self._label = p.add_text("", position="upper_left", font_size=9, color="#d0d4dc")
+        self.follow = True
+        self.show_ground_truth = True
+        self.show_ghosts = True
+        self._focus = np.array([0.0, 0.0, HOME_FOCUS_HEIGHT])
+        self.reset_camera()
+
+    # -- camera ---------------------------------------------------------------------
+    def reset_camera(self, focus: np.ndarray | None = None) -> None:
+        """Look at ``focus`` (default: the current hips) from the front-left."""
+        if focus is not None:
+            self._focus = np.array([focus[0], focus[1], HOME_FOCUS_HEIGHT])
+        cam = self.plotter.camera
+        cam.focal_point = tuple(self._focus)
+        cam.position = tuple(self._focus + HOME_OFFSET)
+        cam.up = (0.0, 0.0, 1.0)
+        cam.view_angle = 35.0
+        self.plotter.reset_camera_clipping_range()
+
+    def _follow(self, root: np.ndarray) -> None:
+        """Slide camera and focus horizontally with the hips, keeping the user's angle."""
+        goal = np.array([root[0], root[1], self._focus[2]])
+        delta = 0.2 * (goal - self._focus)
+        if np.linalg.norm(delta) < 1e-5:
+            return
+        cam = self.plotter.camera
+        self._focus = self._focus + delta
+        cam.focal_point = tuple(np.asarray(cam.focal_point) + delta)
+        cam.position = tuple(np.asarray(cam.position) + delta)
+        self.plotter.reset_camera_clipping_range()
+
+    # -- drawing --------------------------------------------------------------------
+    def show_snapshot(self, snap: Any) -> None:
+        """Draw an engine snapshot (duck-typed: see ``engine.worker.Snapshot``)."""
+        self.reconstruction.update(snap.positions)
+        self.ground_truth.update(snap.ground_truth if self.show_ground_truth else None)
+        for i, (name, pos) in enumerate(snap.ghosts.items()):
+            if name not in self.ghosts:
+                self.ghosts[name] = SkeletonActor(self.plotter, style.ghost_color(name, i), opacity=0.55,
+                                                  bone_width=5, joint_size=8, name=f"ghost-{name}")  # fmt: skip
+            self.ghosts[name].update(pos if self.show_ghosts else None)
+        for name, actor in self.ghosts.items():
+            if name not in snap.ghosts:
+                actor.set_visible(False)
+        self.decoded.update(snap.decoded)
+        self.sensors.update(snap.target_joints, snap.target_positions, snap.target_rotations,
+                            snap.target_connected)  # fmt: skip
+        self.gizmos.update(snap.gizmos)
+        ghosts = "".join(f"   {n} (ghost)" for n in snap.ghosts) if self.show_ghosts else ""
+        gt = "   ground truth (green)" if self.show_ground_truth else ""
+        self._label.SetText(2, f"{snap.method or 'method'} (orange){gt}{ghosts}")
+        if self.follow and np.all(np.isfinite(snap.positions[0])):
+            self._follow(snap.positions[0])
+        self.plotter.render()
+
+    def grab_image(self) -> QImage:
+        """The render window's current image (QWidget.grab() may miss OpenGL content)."""
+        img = np.ascontiguousarray(self.plotter.screenshot(return_img=True))
+        h, w = img.shape[:2]
+        return QImage(img.data, w, h, 3 * w, QImage.Format.Format_RGB888).copy()
+
+    def close(self) -> bool:
+        """Release widgets and the VTK interactor (no interactor may outlive the view)."""
+        self.sensors.clear()
+        self.gizmos.clear()
+        self.plotter.close()
+        return super().close()

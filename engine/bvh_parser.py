@@ -1,0 +1,310 @@
+"""Syntax of BVH files: a strict tokenizer and parser that names the line at fault.
+
+Used by :func:`engine.bvh.load_bvh`; nothing here builds joint arrays. The header is
+split into tokens that remember their line, then read by an iterative descent parser
+(deep hierarchies cannot hit Python's recursion limit); the motion rows are checked
+line by line before numpy converts them in one go.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from engine.errors import BVHError
+
+#: Largest accepted absolute OFFSET component, in the file's units (cm, m, inches...).
+MAX_OFFSET = 1e4
+
+_AXES = "xyz"
+_CHANNEL = re.compile(r"^([xyz])(position|rotation)$", re.IGNORECASE)
+_TOKEN = re.compile(r"[{}]|[^\s{}]+")
+_FRAMES = re.compile(r"^\s*frames\s*:\s*(\S*)\s*$", re.IGNORECASE)
+_FRAME_TIME = re.compile(r"^\s*frame\s+time\s*:\s*(\S*)\s*$", re.IGNORECASE)
+
+
+class _Tokens:
+    """Header tokens with their 1-based line numbers and a read cursor."""
+
+    def __init__(self, path: str, lines: list[str], stop: int):
+        self.path = path
+        self.items: list[tuple[str, int]] = []
+        for n, line in enumerate(lines[:stop], start=1):
+            self.items.extend((t, n) for t in _TOKEN.findall(line))
+        self.i = 0
+        if stop < len(lines):
+            self.end = ("reached MOTION", stop + 1)
+        else:
+            self.end = ("unexpected end of file (file truncated?)", max(stop, 1))
+
+    def error(self, message: str, line: int | None) -> BVHError:
+        return BVHError(self.path, message, line)
+
+    def peek(self) -> tuple[str, int] | None:
+        return self.items[self.i] if self.i < len(self.items) else None
+
+    def next(self, what: str) -> tuple[str, int]:
+        tok = self.peek()
+        if tok is None:
+            raise self.error(f"{self.end[0]} but expected {what}", self.end[1])
+        self.i += 1
+        return tok
+
+    def rest_of_line(self, line: int) -> list[str]:
+        """Consume and return the non-brace tokens left on ``line``."""
+        out = []
+        while (tok := self.peek()) is not None and tok[1] == line and tok[0] not in "{}":
+            out.append(tok[0])
+            self.i += 1
+        return out
+
+    def expect(self, text: str, where: str) -> int:
+        tok, line = self.next(f"'{text}' {where}")
+        if tok.upper() != text.upper():
+            raise self.error(f"expected '{text}' {where}, found '{tok}'", line)
+        return line
+
+
+def _number(tokens: _Tokens, text: str, line: int, what: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise tokens.error(f"{what}: '{text}' is not a number", line) from None
+    if not math.isfinite(value):
+        raise tokens.error(f"{what}: value {text} is not finite", line)
+    return value
+
+
+class _Hierarchy:
+    """Recursive-descent parse of the HIERARCHY section (iterative: no recursion limit)."""
+
+    def __init__(self, tokens: _Tokens):
+        self.t = tokens
+        self.names: list[str] = []
+        self.lines: list[int] = []
+        self.parents: list[int] = []
+        self.offsets: list[list[float]] = []
+        self.channels: list[tuple[str, ...]] = []
+        self.end_sites: dict[int, np.ndarray] = {}
+
+    def parse(self) -> None:
+        t = self.t
+        tok = t.peek()
+        if tok is None or tok[0].upper() != "HIERARCHY":
+            raise t.error("missing HIERARCHY: a BVH file starts with the word HIERARCHY", tok[1] if tok else 1)
+        t.i += 1
+        tok, line = t.next("ROOT")
+        if tok.upper() != "ROOT":
+            raise t.error(f"missing ROOT: expected 'ROOT <name>' after HIERARCHY, found '{tok}'", line)
+        stack = [self._open_joint(line, -1)]
+        while stack:
+            tok, line = t.next(f"'}}' closing joint '{self.names[stack[-1]]}' (line {self.lines[stack[-1]]})")
+            word = tok.upper()
+            if tok == "}":
+                stack.pop()
+            elif word == "JOINT":
+                stack.append(self._open_joint(line, stack[-1]))
+            elif word == "END":
+                self._end_site(line, stack[-1])
+            elif tok == "{":
+                raise t.error("unbalanced braces: '{' without a JOINT or End Site before it", line)
+            elif word in ("ROOT", "MOTION"):
+                raise t.error(
+                    f"unbalanced braces: '{tok}' inside joint '{self.names[stack[-1]]}' "
+                    f"opened on line {self.lines[stack[-1]]} (missing '}}')",
+                    line,
+                )
+            else:
+                raise t.error(f"unexpected '{tok}' in joint '{self.names[stack[-1]]}'", line)
+        tok = t.peek()
+        if tok is not None:
+            if tok[0] == "}":
+                raise t.error("unbalanced braces: '}' after the ROOT joint was closed", tok[1])
+            if tok[0].upper() == "ROOT":
+                raise t.error("more than one ROOT is not supported", tok[1])
+            raise t.error(f"expected MOTION after the hierarchy, found '{tok[0]}'", tok[1])
+
+    def _open_joint(self, line: int, parent: int) -> int:
+        t = self.t
+        name = " ".join(t.rest_of_line(line))
+        if not name:
+            raise t.error("joint without a name", line)
+        if name in self.names:
+            first = self.lines[self.names.index(name)]
+            raise t.error(f"duplicated joint name '{name}' (first defined on line {first})", line)
+        t.expect("{", f"after joint '{name}'")
+        self.names.append(name)
+        self.lines.append(line)
+        self.parents.append(parent)
+        self.offsets.append(self._offset(f"joint '{name}'"))
+        self.channels.append(self._channels(name, line))
+        return len(self.names) - 1
+
+    def _offset(self, owner: str) -> list[float]:
+        t = self.t
+        tok, line = t.next(f"OFFSET of {owner}")
+        if tok.upper() != "OFFSET":
+            raise t.error(f"expected 'OFFSET x y z' for {owner}, found '{tok}'", line)
+        values = t.rest_of_line(line)
+        if len(values) != 3:
+            raise t.error(f"OFFSET of {owner} needs 3 numbers, got {len(values)}", line)
+        xyz = [_number(t, v, line, f"OFFSET of {owner}") for v in values]
+        if max(abs(v) for v in xyz) > MAX_OFFSET:
+            raise t.error(f"OFFSET of {owner} is implausibly large ({values}; limit {MAX_OFFSET:g})", line)
+        return xyz
+
+    def _channels(self, name: str, joint_line: int) -> tuple[str, ...]:
+        t = self.t
+        tok, line = t.next(f"CHANNELS of joint '{name}'")
+        if tok.upper() != "CHANNELS":
+            raise t.error(f"expected 'CHANNELS n ...' for joint '{name}', found '{tok}'", line)
+        words = t.rest_of_line(line)
+        if not words or words[0] not in ("3", "6"):
+            got = words[0] if words else "nothing"
+            raise t.error(f"CHANNELS of joint '{name}' must be 3 or 6, got {got}", line)
+        count = int(words[0])
+        names = words[1:]
+        if len(names) != count:
+            raise t.error(f"CHANNELS {count} of joint '{name}' lists {len(names)} channel names", line)
+        parsed = [_CHANNEL.match(c) for c in names]
+        for c, m in zip(names, parsed):
+            if m is None:
+                raise t.error(f"unknown channel '{c}' in joint '{name}' (expected X/Y/Z position/rotation)", line)
+        kinds = [(m.group(1).lower(), m.group(2).lower()) for m in parsed]
+        rots = [a for a, k in kinds if k == "rotation"]
+        poss = [a for a, k in kinds if k == "position"]
+        if sorted(rots) != list(_AXES) or (count == 6 and sorted(poss) != list(_AXES)):
+            raise t.error(
+                f"joint '{name}' must have one rotation channel per axis"
+                + (" and one position channel per axis" if count == 6 else "")
+                + f", got {' '.join(names)}",
+                line,
+            )
+        return tuple(f"{a.upper()}{k}" for a, k in kinds)
+
+    def _end_site(self, line: int, joint: int) -> None:
+        t = self.t
+        tok, line2 = t.next("'Site' after 'End'")
+        if tok.upper() != "SITE":
+            raise t.error(f"expected 'End Site', found 'End {tok}'", line2)
+        if joint in self.end_sites:
+            raise t.error(f"joint '{self.names[joint]}' has a second End Site", line)
+        t.expect("{", "after End Site")
+        self.end_sites[joint] = np.array(self._offset(f"the End Site of '{self.names[joint]}'"))
+        t.expect("}", f"closing the End Site of '{self.names[joint]}'")
+
+
+def _motion_header(path: str, lines: list[str], start: int) -> tuple[int, float, int, int]:
+    """Parse ``Frames:`` and ``Frame Time:`` after the MOTION line (0-based ``start``).
+
+    Returns the frame count, the frame time (s), the 0-based index of the first data
+    line and the 1-based line of ``Frames:``.
+    """
+    values = []
+    i = start + 1
+    for pattern, label in ((_FRAMES, "Frames: <count>"), (_FRAME_TIME, "Frame Time: <seconds>")):
+        while i < len(lines) and not lines[i].strip():
+            i += 1
+        if i >= len(lines):
+            raise BVHError(path, f"unexpected end of file, expected '{label}' (file truncated?)", len(lines))
+        m = pattern.match(lines[i])
+        if m is None:
+            raise BVHError(path, f"expected '{label}', found '{lines[i].strip()[:60]}'", i + 1)
+        values.append((m.group(1), i + 1))
+        i += 1
+    (frames_text, frames_line), (time_text, time_line) = values
+    if not frames_text.isdigit():
+        raise BVHError(path, f"Frames must be a whole number, got '{frames_text}'", frames_line)
+    if int(frames_text) == 0:
+        raise BVHError(path, "the file has zero frames", frames_line)
+    try:
+        frame_time = float(time_text)
+    except ValueError:
+        raise BVHError(path, f"Frame Time '{time_text}' is not a number", time_line) from None
+    if not math.isfinite(frame_time) or frame_time <= 0:
+        raise BVHError(path, f"Frame Time must be a positive number of seconds, got {time_text}", time_line)
+    return int(frames_text), frame_time, i, frames_line
+
+
+def _motion_data(path: str, lines: list[str], first: int, columns: int, frames: int, frames_line: int) -> np.ndarray:
+    """Parse the data rows into an array (F, columns); every row is checked."""
+    rows: list[list[str]] = []
+    numbers: list[int] = []  # 1-based line of each row
+    for n in range(first, len(lines)):
+        parts = lines[n].split()
+        if not parts:
+            continue
+        if len(parts) != columns:
+            raise BVHError(
+                path, f"wrong number of values on frame {len(rows) + 1}: expected {columns}, got {len(parts)}", n + 1
+            )
+        rows.append(parts)
+        numbers.append(n + 1)
+        if len(rows) > frames:
+            raise BVHError(path, f"more data rows than the header's Frames: {frames} (line {frames_line})", n + 1)
+    if len(rows) < frames:
+        raise BVHError(
+            path,
+            f"header says Frames: {frames} but only {len(rows)} data rows follow (file truncated?)",
+            frames_line,
+        )
+    try:
+        data = np.array(rows, dtype=np.float64)
+    except ValueError:
+        data = None
+    if data is None or not np.isfinite(data).all():
+        for row, n in zip(rows, numbers):  # slow path, only to name the culprit
+            for text in row:
+                try:
+                    value = float(text)
+                except ValueError:
+                    raise BVHError(path, f"'{text}' is not a number", n) from None
+                if not math.isfinite(value):
+                    raise BVHError(path, f"value {text} is not finite", n)
+        raise BVHError(path, "unreadable motion data", numbers[0])  # numpy and float() disagree
+    return data
+
+
+
+
+@dataclass(frozen=True)
+class ParsedBVH:
+    """What a BVH file says, checked but not yet turned into per-joint arrays.
+
+    Attributes
+    ----------
+    names, parents, offsets, channels, end_sites
+        The hierarchy in file order (see :class:`engine.bvh.RawBVH`); ``offsets`` is a
+        list of J ``[x, y, z]`` in file units.
+    frame_time : float
+        Seconds per frame, > 0.
+    data : ndarray (F, C)
+        Every channel value of every frame, finite, C = total channel count.
+    """
+
+    names: list[str]
+    parents: list[int]
+    offsets: list[list[float]]
+    channels: list[tuple[str, ...]]
+    end_sites: dict[int, np.ndarray]
+    frame_time: float
+    data: np.ndarray
+
+
+def parse_bvh_text(path: str, text: str) -> ParsedBVH:
+    """Parse and validate the text of a BVH file; raise :class:`BVHError` naming the line."""
+    lines = text.splitlines()
+    motion_at = next((n for n, s in enumerate(lines) if s.split()[:1] and s.split()[0].upper() == "MOTION"), len(lines))
+    hier = _Hierarchy(_Tokens(path, lines, motion_at))
+    hier.parse()
+    if motion_at == len(lines):
+        raise BVHError(path, "missing MOTION section after the hierarchy", len(lines) or 1)
+    if len(lines[motion_at].split()) != 1:
+        raise BVHError(path, "MOTION must be alone on its line", motion_at + 1)
+    frames, frame_time, first, frames_line = _motion_header(path, lines, motion_at)
+    columns = sum(len(c) for c in hier.channels)
+    data = _motion_data(path, lines, first, columns, frames, frames_line)
+    return ParsedBVH(hier.names, hier.parents, hier.offsets, hier.channels, hier.end_sites, frame_time, data)

@@ -29,5 +29,5 @@ def demo_walk(seconds: float = 6.0, fps: float = sk.FPS) -> Motion:
         rot[:, j[f"{side}elbow"]] = _axis(np.full_like(t, -sign * 0.35), (0, 0, 1))
     rot[:, j["chest"]] = _axis(0.06 * np.sin(phase), (0, 0, 1))
     rot[:, 0] = _axis(0.05 * np.sin(phase), (0, 0, 1))
-    root = np.stack([0.03 * np.sin(phase), -1.1 * t, 0.94 + 0.02 * np.cos(2 * phase)], axis=-1)
+    root = np.stack([0.03 * np.sin(phase), -1.1 * t, 1.0 + 0.02 * np.cos(2 * phase)], axis=-1)
     return Motion(rot, root, sk.Skeleton.canonical(), fps, "demo walk")

@@ -44,6 +44,8 @@ def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
     app.setApplicationName("DragPoser Studio")
     window = MainWindow(method=method)
     open_initial(window, path, sensors)
+    if screenshot is not None:
+        window.resize(1600, 980)  # a reproducible layout, whatever geometry was saved
     window.show()
     if screenshot is None:
         return app.exec()
@@ -51,7 +53,9 @@ def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
     start = window.session.frame
 
     def check(frame: int) -> None:
-        if window.session.playing and frame - start < after_frames:
+        snap = window.worker.latest
+        ended = snap is not None and snap.seq > 0 and not snap.playing and frame > start
+        if frame - start < after_frames and not ended:
             return
         window.snapshotDrawn.disconnect(check)
         window.session.pause()

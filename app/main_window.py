@@ -30,7 +30,7 @@ from widgets.viewport import Viewport
 
 METHODS = ("ik", "dragposer", "autoencoder")
 DRAW_INTERVAL_MS = 16  # at most ~60 redraws per second
-PLOT_EVERY = 3  # plots redraw every third frame drawn (they cost more than VTK)
+PLOT_INTERVAL_S = 0.12  # plots cost more than the 3D view: redraw them at ~8 Hz
 
 
 class MainWindow(QMainWindow):
@@ -54,6 +54,7 @@ class MainWindow(QMainWindow):
         self._unsubscribe = self.session.subscribe(self._on_session)
         self._refresh_panels()
         self._drawn_seq, self._draws, self._draw_rate, self._rate_t0 = -1, 0, 0.0, time.monotonic()
+        self._plotted_at = 0.0
         self.timer = QTimer(self, interval=DRAW_INTERVAL_MS)
         self.timer.timeout.connect(self._draw)
         self.timer.start()
@@ -229,7 +230,8 @@ class MainWindow(QMainWindow):
         self._drawn_seq = snap.seq
         self._draws += 1
         self.viewport.show_snapshot(snap)
-        if self._draws % PLOT_EVERY == 0 or not snap.playing:
+        if now - self._plotted_at >= PLOT_INTERVAL_S or not snap.playing:
+            self._plotted_at = now
             self.plots.update_snapshot(snap)
             self.latent.update_snapshot(snap)
         self.session.note_frame(snap.frame)
@@ -237,7 +239,7 @@ class MainWindow(QMainWindow):
             self.session.playing = False
             self.timeline.set_playing(False)
         self.status_engine.setText(f"engine {snap.engine_fps:5.1f} frames/s   {snap.ms:6.1f} ms/frame   "
-                                   f"{snap.iterations} it")  # fmt: skip
+                                   f"{snap.iterations} it   ")  # fmt: skip
         self.status_warnings.setText(f"warnings {snap.warnings}")
         self.status_warnings.setToolTip(snap.error or "\n".join(snap.messages))
         if snap.error:

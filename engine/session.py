@@ -65,14 +65,33 @@ def load_clip(path: str | Path) -> Motion:
         raise UserError(f"{path}: no such file")
     try:
         from engine.retarget import load_motion
-    except ImportError as exc:  # the BVH reader has not landed yet
-        raise UserError(f"{path}: BVH loading is not available ({exc})") from exc
+    except ImportError:  # the BVH reader has not landed yet: canonical-rig files only
+        load_motion = _load_canonical_bvh
     try:
         return load_motion(path)
     except UserError:
         raise
     except Exception as exc:  # a malformed file must never take the studio down
         raise UserError(f"{path}: cannot read ({type(exc).__name__}: {exc})") from exc
+
+
+def _load_canonical_bvh(path: Path) -> Motion:
+    """Stand-in reader for BVH files already on the canonical rig (pymotion, no retarget)."""
+    from pymotion.io.bvh import BVH
+
+    bvh = BVH()
+    bvh.load(str(path))
+    names = tuple(str(n) for n in bvh.data["names"])
+    if names != sk.JOINT_NAMES:
+        raise UserError(f"{path}: not on the canonical rig (joints {', '.join(names[:4])}...)")
+    rot, pos, _, offsets, _, _ = bvh.get_data()
+    step = max(int(round(1.0 / float(bvh.data["frame_time"]) / sk.FPS)), 1)
+    rot, root = rot[::step], pos[::step, 0].copy()
+    motion = Motion(rot, root, sk.Skeleton(np.asarray(offsets, float)), sk.FPS, path.stem)
+    p = motion.positions()
+    toes = p[:, [sk.JOINT_INDEX["ltoe"], sk.JOINT_INDEX["rtoe"]], 2].min(axis=1)
+    motion.root_pos[:, 2] -= np.percentile(toes, 2) - 0.045  # same re-flooring rule as retarget
+    return motion
 
 
 @dataclass(frozen=True)

@@ -404,7 +404,7 @@ class EngineWorker(threading.Thread):
             error=error,
             engine_fps=self._fps,
             playing=self._playing,
-            method=self._method_name,
+            method=getattr(self._method, "name", self._method_name),
             can_decode=hasattr(self._method, "decode_latent"),
             decoded=_ro(self._decoded) if self._decoded is not None else None,
         )

@@ -16,6 +16,8 @@ import pyqtgraph as pg
 from PyQt6.QtCore import Qt, pyqtSignal
 from PyQt6.QtWidgets import QCheckBox, QGridLayout, QLabel, QPushButton, QSlider, QSpinBox, QVBoxLayout, QWidget
 
+from widgets import plots  # noqa: F401  (applies the shared pyqtgraph look)
+
 HISTORY = 300
 NO_DECODER = "The current method has no latent decoder (choose dragposer when it is available)."
 
@@ -39,8 +41,13 @@ class LatentInspector(QWidget):
         self.strip = pg.ImageItem()
         self.strip.setColorMap(pg.colormap.get("CET-D1"))
         self.strip_plot.addItem(self.strip)
+        self.placeholder = QLabel("This method has no latent space (DragPoser's is 24-D).")
+        self.placeholder.setAlignment(Qt.AlignmentFlag.AlignCenter)
+        self.placeholder.setStyleSheet("color: #8a93a6;")
+        layout.addWidget(self.placeholder)
         layout.addWidget(self.bars_plot, 2)
         layout.addWidget(self.strip_plot, 1)
+        self._show_plots(False)
         self.debug_box = QWidget()
         grid = QGridLayout(self.debug_box)
         self.debug = QCheckBox("Debug: pause optimizer and decode edited latents")
@@ -68,6 +75,11 @@ class LatentInspector(QWidget):
         self.stored: dict[str, np.ndarray] = {}
         self._seq = -1
 
+    def _show_plots(self, on: bool) -> None:
+        self.placeholder.setVisible(not on)
+        self.bars_plot.setVisible(on)
+        self.strip_plot.setVisible(on)
+
     def set_decodable(self, ok: bool) -> None:
         self.debug_box.setEnabled(ok)
         self.debug_box.setToolTip("" if ok else NO_DECODER)
@@ -80,6 +92,8 @@ class LatentInspector(QWidget):
         self._seq = snap.seq
         if self.debug_box.isEnabled() != bool(snap.can_decode):
             self.set_decodable(bool(snap.can_decode))
+        if (snap.latent is not None) != self.bars_plot.isVisible():
+            self._show_plots(snap.latent is not None)
         if snap.latent is None or self.debug.isChecked():
             return
         z = np.asarray(snap.latent, float).ravel()

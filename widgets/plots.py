@@ -18,6 +18,8 @@ from PyQt6.QtWidgets import QHBoxLayout, QVBoxLayout, QWidget
 
 from widgets import style
 
+pg.setConfigOptions(antialias=False, background=style.PLOT_BACKGROUND, foreground=style.PLOT_FOREGROUND)
+
 HISTORY = 600  # solved frames kept
 _FLOOR = 1e-10  # log axes cannot show zero
 
@@ -38,11 +40,12 @@ class _Curves:
     def __init__(self, plot: pg.PlotWidget, colours: dict[str, str]) -> None:
         self.plot, self.colours, self.items = plot, colours, {}
 
-    def get(self, name: str) -> pg.PlotDataItem:
+    def get(self, name: str, symbols: bool = False) -> pg.PlotDataItem:
         if name not in self.items:
             colour = self.colours.setdefault(name, style.TERM_CYCLE[len(self.colours) % len(style.TERM_CYCLE)])
             width = 2.5 if name == "total" else 1.5
-            self.items[name] = self.plot.plot(name=name, pen=pg.mkPen(colour, width=width))
+            marks = dict(symbol="o", symbolSize=5, symbolBrush=colour, symbolPen=None) if symbols else {}
+            self.items[name] = self.plot.plot(name=name, pen=pg.mkPen(colour, width=width), **marks)
         return self.items[name]
 
     def reset(self) -> None:
@@ -57,7 +60,6 @@ class LossPlots(QWidget):
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
-        pg.setConfigOptions(antialias=True, background="#171a21", foreground="#c8ccd4")
         colours: dict[str, str] = {"total": "#ffffff"}
         self.iteration_plot = _plot("Loss per iteration (this frame)", True, "iteration")
         self.cost_plot = _plot("Cost per frame", False, "frame")
@@ -100,7 +102,7 @@ class LossPlots(QWidget):
             names = list(losses[-1])
             for name in names:
                 vals = np.array([max(float(d.get(name, np.nan)), _FLOOR) for d in losses])
-                self.iter_curves.get(name).setData(its, vals)
+                self.iter_curves.get(name, symbols=True).setData(its, vals)
             for name, item in self.iter_curves.items.items():
                 if name not in names:
                     item.setData([], [])

@@ -5,7 +5,7 @@ from __future__ import annotations
 #: Reconstruction of the selected method.
 RECONSTRUCTION = "#ff8a1f"
 #: Ground truth of the loaded clip (green, as in the DragPoser paper's figures).
-GROUND_TRUTH = "#4cd964"
+GROUND_TRUTH = "#3fae55"
 #: Other methods drawn as ghosts, by name; unknown names cycle through GHOST_CYCLE.
 GHOSTS = {"ik": "#4da3ff", "autoencoder": "#c77dff", "dragposer": "#ff8a1f"}
 GHOST_CYCLE = ("#4da3ff", "#c77dff", "#ffd60a", "#ff5fa2")
@@ -14,7 +14,10 @@ SENSOR_LOST = "#ff3b30"
 GIZMO = "#00e5ff"
 BACKGROUND_TOP = "#2b2f3a"
 BACKGROUND_BOTTOM = "#12141a"
-FLOOR = "#8a93a6"
+FLOOR = "#3a4150"
+FLOOR_PLANE = "#1b1e25"
+PLOT_BACKGROUND = "#171a21"
+PLOT_FOREGROUND = "#c8ccd4"
 #: Loss-term curves, in order of first appearance.
 TERM_CYCLE = (
     "#ff8a1f", "#4da3ff", "#4cd964", "#c77dff", "#ffd60a", "#ff5fa2", "#00e5ff",

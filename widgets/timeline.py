@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from PyQt6.QtCore import Qt, pyqtSignal
-from PyQt6.QtWidgets import QCheckBox, QComboBox, QHBoxLayout, QLabel, QSlider, QToolButton, QWidget
+from PyQt6.QtWidgets import QCheckBox, QComboBox, QHBoxLayout, QLabel, QSlider, QStyle, QToolButton, QWidget
 
 SPEEDS = (0.25, 0.5, 1.0, 2.0)
 
@@ -27,18 +27,20 @@ class Timeline(QWidget):
         super().__init__(parent)
         row = QHBoxLayout(self)
         row.setContentsMargins(6, 2, 6, 2)
-        self.play_button = QToolButton(text="▶", toolTip="Play / pause (Space)")
+        icon = self.style().standardIcon
+        self._icons = (icon(QStyle.StandardPixmap.SP_MediaPlay), icon(QStyle.StandardPixmap.SP_MediaPause))
+        self.play_button = QToolButton(icon=self._icons[0], toolTip="Play / pause (Space)")
         self.play_button.setCheckable(True)
         self.play_button.toggled.connect(self._on_play)
-        back = QToolButton(text="◀|", toolTip="Previous frame (Left)")
+        back = QToolButton(icon=icon(QStyle.StandardPixmap.SP_MediaSkipBackward), toolTip="Previous frame (Left)")
         back.clicked.connect(lambda: self.stepRequested.emit(-1))
-        fwd = QToolButton(text="|▶", toolTip="Next frame (Right)")
+        fwd = QToolButton(icon=icon(QStyle.StandardPixmap.SP_MediaSkipForward), toolTip="Next frame (Right)")
         fwd.clicked.connect(lambda: self.stepRequested.emit(1))
         self.slider = QSlider(Qt.Orientation.Horizontal, toolTip="Scrub")
         self.slider.setRange(0, 0)
         self.slider.valueChanged.connect(self._on_slider)
         self.counter = QLabel("0 / 0")
-        self.counter.setMinimumWidth(110)
+        self.counter.setFixedWidth(150)  # a changing width would relayout the row every frame
         self.counter.setAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
         self.speed = QComboBox(toolTip="Playback speed")
         for s in SPEEDS:
@@ -56,7 +58,7 @@ class Timeline(QWidget):
         self._fps = 60.0
 
     def _on_play(self, playing: bool) -> None:
-        self.play_button.setText("⏸" if playing else "▶")
+        self.play_button.setIcon(self._icons[1] if playing else self._icons[0])
         if not self._updating:
             self.playToggled.emit(playing)
 

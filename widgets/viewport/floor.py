@@ -1,4 +1,8 @@
-"""Floor drawable: a static grid on z = 0 (metres), built once."""
+"""Floor drawable: a static grid on z = 0 (metres), built once.
+
+Lines only and opaque on purpose: a filled or translucent floor costs more than the
+whole skeleton on software GL (llvmpipe under Xvfb).
+"""
 
 from __future__ import annotations
 
@@ -20,7 +24,5 @@ class FloorGrid:
         pts = np.array(segs, float)
         lines = np.hstack([[2, i, i + 1] for i in range(0, len(pts), 2)])
         self.mesh = pv.PolyData(pts, lines=lines)
-        self.plane = plotter.add_mesh(pv.Plane(i_size=size, j_size=size), color=style.BACKGROUND_BOTTOM,
-                                      opacity=0.6, pickable=False, reset_camera=False, name="floor-plane")  # fmt: skip
-        self.grid = plotter.add_mesh(self.mesh, color=style.FLOOR, opacity=0.35, line_width=1,
+        self.grid = plotter.add_mesh(self.mesh, color=style.FLOOR, line_width=1,
                                      pickable=False, reset_camera=False, name="floor-grid")  # fmt: skip

@@ -39,16 +39,15 @@ class Viewport(QWidget):
         super().__init__(parent)
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
-        self.plotter = QtInteractor(self, auto_update=False, multi_samples=4)
+        self.plotter = QtInteractor(self, auto_update=False, multi_samples=0)
         layout.addWidget(self.plotter)
         p = self.plotter
-        p.set_background(style.BACKGROUND_BOTTOM, top=style.BACKGROUND_TOP)
-        p.enable_anti_aliasing("ssaa") if hasattr(p, "enable_anti_aliasing") else None
+        p.set_background(style.BACKGROUND_TOP)
         self.floor = FloorGrid(p)
-        self.ground_truth = SkeletonActor(p, style.GROUND_TRUTH, opacity=0.45, bone_width=5,
+        self.ground_truth = SkeletonActor(p, style.GROUND_TRUTH, bone_width=4,
                                           joint_size=8, name="ground-truth")  # fmt: skip
         self.reconstruction = SkeletonActor(p, style.RECONSTRUCTION, name="reconstruction")
-        self.decoded = SkeletonActor(p, "#ffffff", opacity=0.8, bone_width=4, joint_size=7, name="decoded")
+        self.decoded = SkeletonActor(p, "#ffffff", bone_width=4, joint_size=7, name="decoded")
         self.decoded.set_visible(False)
         self.ghosts: dict[str, SkeletonActor] = {}
         self.sensors = SensorMarkers(p, lambda j, pos: self.targetDragged.emit(j, pos))
@@ -91,7 +90,7 @@ class Viewport(QWidget):
         self.ground_truth.update(snap.ground_truth if self.show_ground_truth else None)
         for i, (name, pos) in enumerate(snap.ghosts.items()):
             if name not in self.ghosts:
-                self.ghosts[name] = SkeletonActor(self.plotter, style.ghost_color(name, i), opacity=0.55,
+                self.ghosts[name] = SkeletonActor(self.plotter, style.ghost_color(name, i),
                                                   bone_width=5, joint_size=8, name=f"ghost-{name}")  # fmt: skip
             self.ghosts[name].update(pos if self.show_ghosts else None)
         for name, actor in self.ghosts.items():

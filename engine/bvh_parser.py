@@ -36,9 +36,9 @@ class _Tokens:
             self.items.extend((t, n) for t in _TOKEN.findall(line))
         self.i = 0
         if stop < len(lines):
-            self.end = ("reached MOTION", stop + 1)
+            self.end = ("MOTION starts here", stop + 1)
         else:
-            self.end = ("unexpected end of file (file truncated?)", max(stop, 1))
+            self.end = ("the file ends here (truncated?)", max(stop, 1))
 
     def error(self, message: str, line: int | None) -> BVHError:
         return BVHError(self.path, message, line)
@@ -49,7 +49,7 @@ class _Tokens:
     def next(self, what: str) -> tuple[str, int]:
         tok = self.peek()
         if tok is None:
-            raise self.error(f"{self.end[0]} but expected {what}", self.end[1])
+            raise self.error(f"expected {what}, but {self.end[0]}", self.end[1])
         self.i += 1
         return tok
 
@@ -153,7 +153,10 @@ class _Hierarchy:
             raise t.error(f"OFFSET of {owner} needs 3 numbers, got {len(values)}", line)
         xyz = [_number(t, v, line, f"OFFSET of {owner}") for v in values]
         if max(abs(v) for v in xyz) > MAX_OFFSET:
-            raise t.error(f"OFFSET of {owner} is implausibly large ({values}; limit {MAX_OFFSET:g})", line)
+            raise t.error(
+                f"OFFSET of {owner} is implausibly large ({' '.join(values)}; limit {MAX_OFFSET:g} in any unit)",
+                line,
+            )
         return xyz
 
     def _channels(self, name: str, joint_line: int) -> tuple[str, ...]:

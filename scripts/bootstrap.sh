@@ -95,7 +95,10 @@ ensure_project_installed() {
     fi
     say "installing the project into $VENV (pyproject.toml changed or first run)"
     # No --upgrade: torch stays at the pinned CPU wheel that pip's own config finds on disk.
-    "$VENV/bin/python" -m pip install -q -e '.[dev]' || die "pip install -e '.[dev]' failed"
+    # pip warns once per missing folder of the machine's local index; that is not news.
+    "$VENV/bin/python" -m pip install -q -e '.[dev]' \
+        2> >(grep -v "is ignored: it is neither a file nor a directory" >&2) ||
+        die "pip install -e '.[dev]' failed"
     printf '%s\n' "$want" >"$STAMP"
 }
 

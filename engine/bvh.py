@@ -109,12 +109,11 @@ class RawBVH:
         rad = np.radians(self.rotations_deg)
         q = None
         for k in range(3):
-            axis = _UNIT[["xyz".index(a) for a in self.rot_order[:, k]]]  # (J, 3)
+            axis = _UNIT[[_AXES.index(a) for a in self.rot_order[:, k]]]  # (J, 3)
             axis = np.broadcast_to(axis, rad.shape)
             qk = _qnp.from_angle_axis(rad[..., k : k + 1], axis)
             q = qk if q is None else _qnp.mul(q, qk)
         return Q.normalize(q)
-
 
 
 def load_bvh(path: str | Path) -> RawBVH:

@@ -215,6 +215,7 @@ def test_mutated_files_raise_only_bvh_errors(tmp_path):
         assert isinstance(raw, RawBVH)
         assert np.isfinite(raw.rotations_deg).all() and np.isfinite(raw.positions).all()
         assert raw.rotations_deg.shape == raw.positions.shape == (raw.frames, len(raw.names), 3)
+        assert np.isfinite(raw.local_quaternions()).all()
 
     throw()
     assert sum(outcomes.values()) >= 200

@@ -14,13 +14,13 @@ Writing
 -------
 :func:`save_motion_bvh` writes a canonical :class:`engine.motion.Motion` through
 upc-pymotion's ``BVH.save`` into a temporary file beside the target, then renames it
-over the target, so a crash never leaves a half-written file. See ``docs/bvh.md``.
+over the target (:mod:`engine.atomic`), so a crash never leaves a half-written file.
+See ``docs/bvh.md``.
 """
 
 from __future__ import annotations
 
 import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -29,6 +29,7 @@ from pymotion.io.bvh import BVH as _PymotionBVH
 from pymotion.rotations import quat_np as _qnp
 
 from engine import skeleton as sk
+from engine.atomic import atomic_path
 from engine.bvh_parser import MAX_OFFSET, parse_bvh_text
 from engine.errors import BVHError
 from engine.kinematics import quaternion as Q
@@ -191,13 +192,14 @@ def save_motion_bvh(path: str | Path, motion: Motion) -> None:
     ``1 / motion.fps``.
 
     The file is written to a temporary file in the target's directory and moved over
-    ``path`` with :func:`os.replace`: readers see the old file or the complete new one,
+    ``path`` with :func:`os.replace` (:func:`engine.atomic.atomic_path`): readers see the old file or the complete new one,
     never part of one, and an exception leaves no temporary file behind.
 
     Parameters
     ----------
     path : str or Path
-        Output file; its directory must exist.
+        Output file; missing parent folders are created. It gets the permissions a
+        plain ``open(path, "w")`` would give.
     motion : Motion
         F frames of local rotations (F, 22, 4) and root positions (F, 3), metres.
 
@@ -234,13 +236,7 @@ def save_motion_bvh(path: str | Path, motion: Motion) -> None:
         "rotations": euler,
         "frame_time": 1.0 / float(motion.fps),
     }
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
-    os.close(fd)
-    try:
-        writer.save(tmp)
+    with atomic_path(path) as tmp:
+        writer.save(str(tmp))
         with open(tmp, "rb+") as fh:
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+            os.fsync(fh.fileno())  # the rename must not land before the data

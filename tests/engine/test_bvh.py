@@ -237,6 +237,9 @@ def test_save_round_trip_synthetic(tmp_path, synthetic_motion):
     assert raw.fps == pytest.approx(60.0, rel=1e-4)
     np.testing.assert_allclose(_fk_of(raw), synthetic_motion.positions(), atol=1e-4)
     assert sorted(raw.end_sites) == sorted(sk.JOINT_INDEX[n] for n in sk.END_SITES)
+    umask = os.umask(0)
+    os.umask(umask)
+    assert path.stat().st_mode & 0o777 == 0o666 & ~umask  # not mkstemp's owner-only 0600
 
 
 def test_saved_channel_layout_is_blender_style(tmp_path, synthetic_motion):

@@ -1,0 +1,117 @@
+"""Reconstruction methods behind one interface, and a registry to build them by name.
+
+``register_method(name, factory)`` adds a method; ``get_method(name, **kwargs)`` builds
+one (keyword arguments such as ``mode`` or ``iterations`` go to the factory, which may
+ignore them). :func:`run_method` runs a method over a whole simulated clip.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from engine import skeleton as sk
+from engine.errors import UserError
+from engine.methods.base import FrameResult, Method, SensorFrame, SensorReading
+
+if TYPE_CHECKING:
+    from engine.motion import Motion
+    from engine.tracking.simulate import Tracking
+
+__all__ = [
+    "FrameResult", "Method", "SensorFrame", "SensorReading",
+    "available_methods", "get_method", "register_method", "run_method",
+]  # fmt: skip
+
+_FACTORIES: dict[str, Callable[..., Method]] = {}
+
+
+def register_method(name: str, factory: Callable[..., Method]) -> None:
+    """Make ``factory(**kwargs) -> Method`` available as ``name`` (replaces an old entry)."""
+    _FACTORIES[name] = factory
+
+
+def available_methods() -> tuple[str, ...]:
+    """Registered method names, sorted."""
+    return tuple(sorted(_FACTORIES))
+
+
+def get_method(name: str, **kwargs: Any) -> Method:
+    """Build the method registered as ``name``.
+
+    Raises
+    ------
+    UserError
+        For an unknown name; the message lists the registered ones.
+    """
+    if name not in _FACTORIES:
+        raise UserError(f"unknown method {name!r}; available: {', '.join(available_methods())}")
+    return _FACTORIES[name](**kwargs)
+
+
+def run_method(
+    method: Method,
+    tracking: Tracking,
+    skeleton: sk.Skeleton,
+    progress: bool = True,
+    reference: Motion | None = None,
+    desc: str | None = None,
+) -> tuple[Motion, list[FrameResult]]:
+    """Reconstruct a whole clip, frame by frame, as a realtime caller would.
+
+    Parameters
+    ----------
+    method : Method
+        Reset here for the clip.
+    tracking : Tracking
+        Simulated sensor stream (F frames).
+    skeleton : Skeleton
+        The subject's skeleton (the ground truth's, as in RPM's calibrated setup).
+    progress : bool
+        Show a tqdm progress bar (on stderr).
+    reference : Motion, optional
+        Ground truth, passed to ``reset`` only if ``method.needs_ground_truth``.
+    desc : str, optional
+        Progress-bar label.
+
+    Returns
+    -------
+    motion : Motion
+        The reconstruction (F frames, ``tracking.fps``).
+    results : list of FrameResult
+        One per frame; ``ms`` is filled with the measured step time when the method
+        left it at 0.
+    """
+    from tqdm import tqdm
+
+    from engine.motion import Motion
+
+    if method.needs_ground_truth:
+        if reference is None:
+            raise UserError(f"method {method.name!r} needs the ground-truth clip")
+        method.reset(skeleton, tracking.fps, reference=reference)
+    else:
+        method.reset(skeleton, tracking.fps)
+    results: list[FrameResult] = []
+    for i in tqdm(range(len(tracking)), desc=desc or method.name, unit="frame",
+                  disable=not progress, leave=False):
+        t0 = time.perf_counter()
+        res = method.step(tracking.frame(i))
+        if not res.ms:
+            res.ms = 1000.0 * (time.perf_counter() - t0)
+        results.append(res)
+    local = np.stack([r.local_rot for r in results]) if results else np.zeros((0, sk.NUM_JOINTS, 4))
+    root = np.stack([r.root_pos for r in results]) if results else np.zeros((0, 3))
+    return Motion(local, root, skeleton, tracking.fps, getattr(reference, "name", "")), results
+
+
+def _register_builtin() -> None:
+    from engine.methods.ik import IKMethod
+
+    register_method("ik", IKMethod)
+
+
+_register_builtin()

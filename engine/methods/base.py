@@ -9,10 +9,14 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from engine import skeleton as sk
+
+if TYPE_CHECKING:
+    from engine.motion import Motion
 
 
 @dataclass(frozen=True)
@@ -92,9 +96,17 @@ class Method(ABC):
     #: Short name used on the command line (``--method NAME``) and in the GUI.
     name: str = "method"
 
+    #: True for methods that need the ground-truth clip (e.g. the autoencoder upper
+    #: bound); callers then pass it to :meth:`reset` as ``reference``.
+    needs_ground_truth: bool = False
+
     @abstractmethod
-    def reset(self, skeleton: sk.Skeleton, fps: float = sk.FPS) -> None:
-        """Start a new clip for a subject with the given skeleton."""
+    def reset(self, skeleton: sk.Skeleton, fps: float = sk.FPS, *, reference: Motion | None = None) -> None:
+        """Start a new clip for a subject with the given skeleton.
+
+        ``reference`` is the ground-truth clip; it is passed only to methods with
+        :attr:`needs_ground_truth` set, so other methods may omit the keyword.
+        """
 
     @abstractmethod
     def step(self, sensors: SensorFrame) -> FrameResult:

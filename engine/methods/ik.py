@@ -1,0 +1,364 @@
+"""Classical IK baseline (the FinalIK role in DragPoser's comparisons).
+
+Per frame, from whatever sensors are connected:
+
+1. **Root.** Position and rotation from the hip sensor. A 3-DoF hip gets only a heading,
+   estimated from the head's yaw (6-DoF head) or from the left-right spread of the feet
+   and hands. Without a hip sensor the root is placed below the head sensor by the rest
+   root-to-head offset, turned by the head's heading.
+2. **Spine.** The swing that takes the rest root-to-head chord onto the head sensor is
+   spread evenly over lowerback, upperback, chest and lowerneck (a few refinement
+   passes, since the joints pivot at different points); the head (``upperneck``) takes
+   the head sensor's rotation.
+3. **Limbs.** Analytic two-bone IK: shoulder-elbow-wrist and hip-knee-ankle, with the
+   bend plane set by a pole vector (elbows down and back in the chest frame; knees
+   forward along the pelvis heading, blended with the foot's forward for a 6-DoF foot).
+   Wrists and ankles take their 6-DoF sensor rotations; 3-DoF ankles stay level. A hand
+   out of reach turns its clavicle (up to 30 degrees) towards the target; an estimated
+   root is pulled towards tracked feet the legs could not reach.
+4. **Missing sensors.** A limb whose sensor is lost keeps its last solved pose; one never
+   tracked keeps its rest pose, except legs, which hang straight down under the hips.
+
+Bone lengths are those of the skeleton, so they are preserved by construction; targets
+out of reach are approached along the straight limb.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any
+
+import numpy as np
+
+from engine import skeleton as sk
+from engine.methods.base import FrameResult, Method, SensorFrame, SensorReading
+from engine.motion import Motion
+
+J = sk.JOINT_INDEX
+SPINE = (J["lowerback"], J["upperback"], J["chest"], J["lowerneck"])
+HEAD = J["upperneck"]
+#: (upper, middle, end, sensor joint) of each limb.
+ARMS = ((J["lshoulder"], J["lelbow"], J["lwrist"]), (J["rshoulder"], J["relbow"], J["rwrist"]))
+LEGS = ((J["lhip"], J["lknee"], J["lankle"]), (J["rhip"], J["rknee"], J["rankle"]))
+#: Rest-pose pole directions (world = root frame at rest): elbows down and back (+Y is
+#: back), knees forward (-Y).
+ARM_POLE = np.array([0.0, 0.5, -1.0]) / math.sqrt(1.25)
+LEG_POLE = np.array([0.0, -1.0, 0.0])
+SPINE_PASSES = 4
+#: Largest clavicle turn used to bring an out-of-reach hand target closer, radians.
+CLAVICLE_MAX = math.radians(30.0)
+IDENTITY = np.array([1.0, 0.0, 0.0, 0.0])
+
+
+# -- single-quaternion helpers (plain numpy on (4,) arrays: cheap per frame) ------------
+def _mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    w0, x0, y0, z0 = a
+    w1, x1, y1, z1 = b
+    return np.array([
+        w0 * w1 - x0 * x1 - y0 * y1 - z0 * z1,
+        w0 * x1 + x0 * w1 + y0 * z1 - z0 * y1,
+        w0 * y1 - x0 * z1 + y0 * w1 + z0 * x1,
+        w0 * z1 + x0 * y1 - y0 * x1 + z0 * w1,
+    ])  # fmt: skip
+
+
+def _conj(q: np.ndarray) -> np.ndarray:
+    return q * np.array([1.0, -1.0, -1.0, -1.0])
+
+
+def _rot(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    # v + 2w (u x v) + 2 u x (u x v), written out: np.cross costs ~50x more on (3,) arrays
+    w, x, y, z = q.tolist()
+    a, b, c = v.tolist()
+    tx, ty, tz = 2.0 * (y * c - z * b), 2.0 * (z * a - x * c), 2.0 * (x * b - y * a)
+    return np.array([a + w * tx + y * tz - z * ty, b + w * ty + z * tx - x * tz, c + w * tz + x * ty - y * tx])
+
+
+def _axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
+    n = np.linalg.norm(axis)
+    if n < 1e-12 or abs(angle) < 1e-12:
+        return IDENTITY.copy()
+    return np.concatenate([[math.cos(angle / 2)], math.sin(angle / 2) * axis / n])
+
+
+def _from_to(v0: np.ndarray, v1: np.ndarray) -> np.ndarray:
+    """Shortest rotation taking the direction of ``v0`` onto that of ``v1``."""
+    a = v0 / max(np.linalg.norm(v0), 1e-12)
+    b = v1 / max(np.linalg.norm(v1), 1e-12)
+    c = float(np.clip(a @ b, -1.0, 1.0))
+    axis = np.cross(a, b)
+    if np.linalg.norm(axis) < 1e-9:
+        if c > 0:
+            return IDENTITY.copy()
+        axis = np.cross(a, [1.0, 0, 0] if abs(a[0]) < 0.9 else [0, 1.0, 0])
+    return _axis_angle(axis, math.acos(c))
+
+
+def _pow(q: np.ndarray, t: float) -> np.ndarray:
+    """``q`` scaled to ``t`` of its angle (shortest arc)."""
+    q = q if q[0] >= 0 else -q
+    angle = 2.0 * math.acos(min(1.0, q[0]))
+    return _axis_angle(q[1:], t * angle)
+
+
+def _yaw(angle: float) -> np.ndarray:
+    return np.array([math.cos(angle / 2), 0.0, 0.0, math.sin(angle / 2)])
+
+
+def _heading_of(q: np.ndarray) -> np.ndarray:
+    """Yaw-only part of ``q``: turns the rest forward (-Y) onto q's horizontal forward."""
+    f = _rot(q, np.array([0.0, -1.0, 0.0]))
+    return _yaw(math.atan2(f[0], -f[1]))
+
+
+def _basis_rotation(u0: np.ndarray, w0: np.ndarray, u1: np.ndarray, w1: np.ndarray) -> np.ndarray:
+    """Rotation taking direction ``u0`` onto ``u1`` and the plane (u0, w0) onto (u1, w1)."""
+
+    def frame(u: np.ndarray, w: np.ndarray) -> np.ndarray:
+        x = u / np.linalg.norm(u)
+        y = w - (w @ x) * x
+        if np.linalg.norm(y) < 1e-9:
+            y = np.cross(x, [0.0, 0.0, 1.0] if abs(x[2]) < 0.9 else [1.0, 0.0, 0.0])
+        y /= np.linalg.norm(y)
+        return np.stack([x, y, np.cross(x, y)], axis=1)
+
+    m = frame(u1, w1) @ frame(u0, w0).T
+    # matrix -> quaternion (m is orthonormal); pick the numerically safest branch
+    tr = np.trace(m)
+    if tr > 0:
+        s = 2.0 * math.sqrt(1.0 + tr)
+        q = [0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s]
+    else:
+        i = int(np.argmax(np.diag(m)))
+        j, k = (i + 1) % 3, (i + 2) % 3
+        s = 2.0 * math.sqrt(max(1e-12, 1.0 + m[i, i] - m[j, j] - m[k, k]))
+        q = [0.0, 0.0, 0.0, 0.0]
+        q[0] = (m[k, j] - m[j, k]) / s
+        q[1 + i] = 0.25 * s
+        q[1 + j] = (m[j, i] + m[i, j]) / s
+        q[1 + k] = (m[k, i] + m[i, k]) / s
+    q = np.asarray(q)
+    return q / np.linalg.norm(q)
+
+
+def two_bone_mid(start: np.ndarray, target: np.ndarray, a: float, b: float, pole: np.ndarray) -> np.ndarray:
+    """Middle-joint position of a two-bone chain reaching for ``target``.
+
+    Parameters
+    ----------
+    start, target : ndarray (3,)
+        Chain root (shoulder / hip) and the end target (wrist / ankle), metres.
+    a, b : float
+        Upper and lower bone lengths, metres.
+    pole : ndarray (3,)
+        Direction the middle joint (elbow / knee) should point to, world.
+
+    Returns
+    -------
+    ndarray (3,)
+        Middle-joint position; the reach is clamped to ``[|a-b|, a+b]``.
+    """
+    d_vec = target - start
+    d = float(np.linalg.norm(d_vec))
+    n = d_vec / d if d > 1e-9 else np.array([0.0, 0.0, -1.0])
+    d = min(max(d, abs(a - b) + 1e-6), a + b - 1e-6)
+    cos_a = (a * a + d * d - b * b) / (2.0 * a * d)
+    sin_a = math.sqrt(max(0.0, 1.0 - cos_a * cos_a))
+    m = pole - (pole @ n) * n
+    if np.linalg.norm(m) < 1e-9:  # pole along the reach: any perpendicular will do
+        m = np.cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0])
+    m /= np.linalg.norm(m)
+    return start + a * (cos_a * n + sin_a * m)
+
+
+class IKMethod(Method):
+    """Analytic IK from the sensors; works for every preset (see module docs)."""
+
+    name = "ik"
+
+    def __init__(self, **_ignored: Any) -> None:
+        # mode / iterations are the learned methods' knobs; IK has none
+        self.reset(sk.Skeleton.canonical())
+
+    def reset(self, skeleton: sk.Skeleton, fps: float = sk.FPS, *, reference: Motion | None = None) -> None:
+        self.skeleton = skeleton
+        self.fps = fps
+        self.offsets = np.asarray(skeleton.offsets, dtype=np.float64)
+        self.rest = skeleton.rest_positions()
+        self.root_height = float(-self.rest[:, 2].min())  # rest root above the lowest joint
+        self._last: np.ndarray | None = None  # last frame's local rotations (22, 4)
+        self._seen: set[str] = set()  # sensors tracked at least once
+        self._root_pos = np.array([0.0, 0.0, self.root_height])
+        self._heading = IDENTITY.copy()
+
+    # -- kinematics -----------------------------------------------------------------
+    def _fk(self, local: np.ndarray, root_pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        pos = np.empty((sk.NUM_JOINTS, 3))
+        rot = np.empty((sk.NUM_JOINTS, 4))
+        pos[0], rot[0] = root_pos, local[0]
+        for j in range(1, sk.NUM_JOINTS):
+            p = sk.PARENTS[j]
+            rot[j] = _mul(rot[p], local[j])
+            pos[j] = pos[p] + _rot(rot[p], self.offsets[j])
+        return pos, rot
+
+    # -- root ---------------------------------------------------------------------------
+    def _estimate_heading(self, s: dict[str, SensorReading]) -> np.ndarray:
+        head = s.get("upperneck")
+        if head is not None and head.dof == 6:
+            return _heading_of(head.rotation)
+        left = np.zeros(3)
+        for lj, rj in (("lankle", "rankle"), ("lwrist", "rwrist")):
+            if lj in s and rj in s:
+                left += s[lj].position - s[rj].position
+        if math.hypot(left[0], left[1]) > 1e-3:  # rest left (+X) turned onto `left`
+            return _yaw(math.atan2(left[1], left[0]))
+        return self._heading
+
+    def _solve_root(self, s: dict[str, SensorReading]) -> tuple[np.ndarray, np.ndarray]:
+        hip, head = s.get("root"), s.get("upperneck")
+        if hip is not None and hip.dof == 6:
+            rot = np.asarray(hip.rotation, float)
+            self._heading = _heading_of(rot)
+        else:
+            rot = self._heading = self._estimate_heading(s)
+        if hip is not None:
+            pos = np.asarray(hip.position, float)
+        elif head is not None:
+            pos = head.position - _rot(rot, self.rest[HEAD] - self.rest[0])
+        elif s:
+            mean = np.mean([r.position for r in s.values()], axis=0)
+            pos = np.array([mean[0], mean[1], self._root_pos[2]])
+        else:
+            pos = self._root_pos
+        self._root_pos = pos
+        return pos, rot / np.linalg.norm(rot)
+
+    # -- body parts ---------------------------------------------------------------------
+    def _solve_spine(self, local: np.ndarray, root: np.ndarray, head: SensorReading) -> None:
+        n = len(SPINE)
+        for _ in range(SPINE_PASSES):
+            pos, rot = self._fk(local, root)
+            swing = _from_to(pos[HEAD] - pos[SPINE[0]], head.position - pos[SPINE[0]])
+            if 1.0 - abs(swing[0]) < 1e-12:
+                break
+            step = _pow(swing, 1.0 / n)
+            for j in SPINE:  # each segment turns one more step than the one below it
+                pr = rot[sk.PARENTS[j]]
+                local[j] = _mul(_mul(_conj(pr), _mul(step, pr)), local[j])
+        if head.dof == 6:
+            _, rot = self._fk(local, root)
+            local[HEAD] = _mul(_conj(rot[sk.PARENTS[HEAD]]), head.rotation)
+
+    def _reach_with_clavicle(self, local: np.ndarray, root: np.ndarray, chain: tuple[int, int, int],
+                             target: np.ndarray) -> None:
+        """Turn the clavicle (up to :data:`CLAVICLE_MAX`) when the hand is out of reach."""
+        up, mid, end = chain
+        clav = sk.PARENTS[up]
+        pos, rot = self._fk(local, root)
+        reach = float(np.linalg.norm(self.offsets[mid]) + np.linalg.norm(self.offsets[end]))
+        if np.linalg.norm(target - pos[up]) <= reach:
+            return
+        swing = _from_to(pos[up] - pos[clav], target - pos[clav])
+        angle = 2.0 * math.acos(min(1.0, abs(swing[0])))
+        if angle > CLAVICLE_MAX:
+            swing = _pow(swing, CLAVICLE_MAX / angle)
+        pr = rot[sk.PARENTS[clav]]
+        local[clav] = _mul(_mul(_conj(pr), _mul(swing, pr)), local[clav])
+
+    def _pull_root_to_feet(self, root: np.ndarray, root_rot: np.ndarray,
+                           s: dict[str, SensorReading]) -> np.ndarray:
+        """Move an estimated root towards tracked feet it could not reach otherwise."""
+        for _ in range(2):
+            for (hip, knee, ankle) in LEGS:
+                r = s.get(sk.JOINT_NAMES[ankle])
+                if r is None:
+                    continue
+                leg = np.linalg.norm(self.offsets[knee]) + np.linalg.norm(self.offsets[ankle])
+                hip_pos = root + _rot(root_rot, self.offsets[hip])
+                d = r.position - hip_pos
+                excess = float(np.linalg.norm(d)) - 0.999 * leg
+                if excess > 0:
+                    root = root + excess * d / np.linalg.norm(d)
+        return root
+
+    def _solve_limb(self, local: np.ndarray, root: np.ndarray, chain: tuple[int, int, int],
+                    target: np.ndarray, pole: np.ndarray, rest_pole: np.ndarray,
+                    end_rot: np.ndarray | None) -> None:
+        up, mid, end = chain
+        pos, rot = self._fk(local, root)
+        a = float(np.linalg.norm(self.offsets[mid]))
+        b = float(np.linalg.norm(self.offsets[end]))
+        elbow = two_bone_mid(pos[up], target, a, b, pole)
+        bend = pole - (pole @ (target - pos[up])) * (target - pos[up]) / max(
+            float(np.sum((target - pos[up]) ** 2)), 1e-12)
+        g_up = _basis_rotation(self.offsets[mid], rest_pole, elbow - pos[up], bend)
+        local[up] = _mul(_conj(rot[sk.PARENTS[up]]), g_up)
+        lower = _rot(g_up, self.offsets[end])
+        g_mid = _mul(_from_to(lower, target - elbow), g_up)
+        local[mid] = _mul(_conj(g_up), g_mid)
+        local[end] = IDENTITY if end_rot is None else _mul(_conj(g_mid), end_rot)
+
+    def _keep_or_rest(self, local: np.ndarray, joints: tuple[int, ...], sensor: str) -> bool:
+        """Keep a lost limb's last pose; return False if it was never tracked."""
+        if sensor in self._seen and self._last is not None:
+            local[list(joints)] = self._last[list(joints)]
+            return True
+        return False
+
+    def step(self, sensors: SensorFrame) -> FrameResult:
+        t0 = time.perf_counter()
+        warnings: list[str] = []
+        s: dict[str, SensorReading] = {}
+        for j, r in sensors.connected().items():
+            if np.all(np.isfinite(r.position)) and (r.dof == 3 or np.all(np.isfinite(r.rotation))):
+                s[j] = r
+            else:
+                warnings.append(f"sensor {j}: non-finite reading ignored")
+        self._seen |= set(s)
+        root_pos, root_rot = self._solve_root(s)
+        if "root" not in s:
+            root_pos = self._root_pos = self._pull_root_to_feet(root_pos, root_rot, s)
+        local = np.tile(IDENTITY, (sk.NUM_JOINTS, 1))
+        local[0] = root_rot
+
+        if "upperneck" in s:
+            self._solve_spine(local, root_pos, s["upperneck"])
+        else:
+            self._keep_or_rest(local, SPINE + (HEAD,), "upperneck")
+
+        _, rot = self._fk(local, root_pos)
+        chest = rot[J["chest"]]
+        for chain in ARMS:
+            joint = sk.JOINT_NAMES[chain[2]]
+            r = s.get(joint)
+            if r is None:
+                self._keep_or_rest(local, chain, joint)
+                continue
+            end_rot = np.asarray(r.rotation, float) if r.dof == 6 else None
+            self._reach_with_clavicle(local, root_pos, chain, np.asarray(r.position, float))
+            self._solve_limb(local, root_pos, chain, r.position, _rot(chest, ARM_POLE), ARM_POLE, end_rot)
+
+        forward = _rot(root_rot, LEG_POLE)
+        level = _heading_of(root_rot)
+        for chain in LEGS:
+            joint = sk.JOINT_NAMES[chain[2]]
+            r = s.get(joint)
+            if r is None and self._keep_or_rest(local, chain, joint):
+                continue
+            pos, _ = self._fk(local, root_pos)
+            if r is None:  # never tracked: hang straight down under the hip
+                reach = np.linalg.norm(self.rest[chain[2]] - self.rest[chain[0]])
+                target, pole, end_rot = pos[chain[0]] - [0.0, 0.0, reach], forward, level
+            elif r.dof == 6:
+                foot_fwd = _rot(np.asarray(r.rotation, float), LEG_POLE)
+                target, pole, end_rot = r.position, forward + foot_fwd, np.asarray(r.rotation, float)
+            else:
+                target, pole, end_rot = r.position, forward, level
+            self._solve_limb(local, root_pos, chain, np.asarray(target, float), pole, LEG_POLE, end_rot)
+
+        pos, _ = self._fk(local, root_pos)
+        self._last = local.copy()
+        return FrameResult(local_rot=local, root_pos=root_pos.copy(), positions=pos,
+                           ms=1000.0 * (time.perf_counter() - t0), warnings=warnings)

@@ -19,17 +19,17 @@ def _bone_lengths(pos: np.ndarray) -> np.ndarray:
     return np.linalg.norm(pos[:, 1:] - pos[:, list(sk.PARENTS[1:])], axis=-1)
 
 
-def _check_reaches(gt, rec, tracking, min_reachable: float = 0.5) -> None:
+def _check_reaches(gt, rec, tracking) -> None:
+    """Tracked hands/feet within 1 cm of their target, plus what is out of the limb's reach."""
     g, p = gt.positions(), rec.positions()
     off = gt.skeleton.offsets
     for up, mid, end in LIMBS:
         if sk.JOINT_NAMES[end] not in tracking.joints:
             continue
         reach = np.linalg.norm(off[mid]) + np.linalg.norm(off[end])
-        ok = np.linalg.norm(g[:, end] - p[:, up], axis=-1) < 0.995 * reach
-        assert ok.mean() >= min_reachable and ok.any(), sk.JOINT_NAMES[end]
-        err = np.linalg.norm(g[ok, end] - p[ok, end], axis=-1)
-        assert err.max() < 0.01, sk.JOINT_NAMES[end]  # within 1 cm when reachable
+        overshoot = np.maximum(0.0, np.linalg.norm(g[:, end] - p[:, up], axis=-1) - reach)
+        err = np.linalg.norm(g[:, end] - p[:, end], axis=-1)
+        assert (err <= overshoot + 0.01).all(), sk.JOINT_NAMES[end]
 
 
 def test_registry():
@@ -109,4 +109,4 @@ def test_real_clip(shared_mocap):
     rec, _ = run_method(get_method("ik"), tr, clip.skeleton, progress=False)
     assert np.isfinite(rec.positions()).all()
     np.testing.assert_allclose(_bone_lengths(rec.positions()), _bone_lengths(clip.positions()), atol=1e-9)
-    _check_reaches(clip, rec, tr, min_reachable=0.0)  # stretched arms can be out of reach
+    _check_reaches(clip, rec, tr)

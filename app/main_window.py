@@ -8,6 +8,7 @@ never waits on the engine. Session events refresh the panels.
 
 from __future__ import annotations
 
+import gc
 import time
 from typing import Any
 
@@ -28,9 +29,23 @@ from widgets.sensor_panel import SensorPanel
 from widgets.timeline import Timeline
 from widgets.viewport import Viewport
 
-METHODS = ("ik", "dragposer", "autoencoder")
+
+
+def method_names(current: str) -> list[str]:
+    """Registered methods (plus ``current``, so an unknown one is shown, not hidden)."""
+    try:
+        from engine.methods import available_methods
+    except ImportError:
+        names: list[str] = []
+    else:
+        names = list(available_methods())
+    return names + ([current] if current not in names else [])
+
 DRAW_INTERVAL_MS = 16  # at most ~60 redraws per second
-PLOT_INTERVAL_S = 0.12  # plots cost more than the 3D view: redraw them at ~8 Hz
+MAX_DRAW_INTERVAL_MS = 150  # never fewer than ~6 redraws per second
+#: Plots, status bar and other chrome redraw at ~8 Hz while playing: under Xvfb a
+#: widget repaint costs more than the whole 3D view.
+PLOT_INTERVAL_S = 0.12
 
 
 class MainWindow(QMainWindow):
@@ -54,10 +69,14 @@ class MainWindow(QMainWindow):
         self._unsubscribe = self.session.subscribe(self._on_session)
         self._refresh_panels()
         self._drawn_seq, self._draws, self._draw_rate, self._rate_t0 = -1, 0, 0.0, time.monotonic()
-        self._plotted_at = 0.0
+        self._plotted_at, self._panel_seq, self._last_was_view = 0.0, -1, False
+        self._last_tick = time.perf_counter()
         self.timer = QTimer(self, interval=DRAW_INTERVAL_MS)
         self.timer.timeout.connect(self._draw)
         self.timer.start()
+        # Everything imported so far (torch, VTK, Qt: ~10^6 objects) never dies; freezing it
+        # keeps the cyclic GC's full passes from pausing the GUI for 100+ ms at a time.
+        gc.freeze()
         geometry = self.settings.value("geometry")
         if geometry is not None:
             self.restoreGeometry(geometry)
@@ -77,7 +96,7 @@ class MainWindow(QMainWindow):
         self.setCentralWidget(central)
         self.sensor_panel = SensorPanel(sensor_presets())
         self.constraint_panel = ConstraintPanel(constraint_schema(self.kinds))
-        self.optimizer_panel = OptimizerPanel(list(METHODS))
+        self.optimizer_panel = OptimizerPanel(method_names(self.session.method))
         tabs = QTabWidget()
         tabs.addTab(self.sensor_panel, "Sensors")
         tabs.addTab(self.constraint_panel, "Constraints")
@@ -90,7 +109,8 @@ class MainWindow(QMainWindow):
         self.status_engine = QLabel()
         self.status_gui = QLabel()
         self.status_warnings = QLabel()
-        for w in (self.status_engine, self.status_gui, self.status_warnings):
+        for w, width in ((self.status_engine, 330), (self.status_gui, 120), (self.status_warnings, 110)):
+            w.setFixedWidth(width)  # text changes must not relayout the window every frame
             self.statusBar().addPermanentWidget(w)
         self._connect_widgets()
 
@@ -220,31 +240,60 @@ class MainWindow(QMainWindow):
 
     # -- drawing --------------------------------------------------------------------
     def _draw(self) -> None:
+        """One display tick: draw the 3D view *or* refresh the panels, never both.
+
+        Splitting the work keeps every tick short (on software GL a full redraw of view,
+        plots and labels exceeds 50 ms), and the interval stretches with the measured
+        cost so drawing never takes more than about two thirds of the event loop.
+        """
+        t0 = time.perf_counter()
         snap = self.worker.latest
         now = time.monotonic()
         if now - self._rate_t0 >= 1.0:
             self._draw_rate, self._draws, self._rate_t0 = self._draws / (now - self._rate_t0), 0, now
-            self.status_gui.setText(f"GUI {self._draw_rate:4.0f} draws/s")
-        if snap is None or snap.seq == self._drawn_seq:
+        if snap is None:
             return
-        self._drawn_seq = snap.seq
-        self._draws += 1
-        self.viewport.show_snapshot(snap)
-        if now - self._plotted_at >= PLOT_INTERVAL_S or not snap.playing:
-            self._plotted_at = now
-            self.plots.update_snapshot(snap)
-            self.latent.update_snapshot(snap)
+        panels_due = snap.seq != self._panel_seq and (now - self._plotted_at >= PLOT_INTERVAL_S or not snap.playing)
+        if snap.seq != self._drawn_seq and not (panels_due and self._last_was_view):
+            self._drawn_seq = snap.seq
+            self._draws += 1
+            self.viewport.show_snapshot(snap)
+            self._last_was_view = True
+            self.snapshotDrawn.emit(snap.frame)
+        elif panels_due:
+            self._plotted_at, self._panel_seq, self._last_was_view = now, snap.seq, False
+            self._update_panels(snap)
+        self._pace(t0, (time.perf_counter() - t0) * 1000.0)
+
+    def _pace(self, t0: float, cost_ms: float) -> None:
+        """Stretch the draw interval when the event loop is saturated, relax it after.
+
+        Much of a redraw's cost is paid after this method returns (Qt composites the
+        window), so the tick-to-tick period is the honest measure of the loop's load.
+        """
+        period_ms = (t0 - self._last_tick) * 1000.0
+        self._last_tick = t0
+        interval = self.timer.interval()
+        if period_ms > 1.2 * interval or 1.5 * cost_ms > interval:
+            interval = min(MAX_DRAW_INTERVAL_MS, int(1.3 * max(period_ms, cost_ms)))
+        else:
+            interval = max(DRAW_INTERVAL_MS, int(0.9 * interval))
+        self.timer.setInterval(interval)
+
+    def _update_panels(self, snap: Any) -> None:
         self.session.note_frame(snap.frame)
+        self.plots.update_snapshot(snap)
+        self.latent.update_snapshot(snap)
         if self.session.playing and not snap.playing:  # reached the end without looping
             self.session.playing = False
             self.timeline.set_playing(False)
         self.status_engine.setText(f"engine {snap.engine_fps:5.1f} frames/s   {snap.ms:6.1f} ms/frame   "
-                                   f"{snap.iterations} it   ")  # fmt: skip
+                                   f"{snap.iterations} it")  # fmt: skip
+        self.status_gui.setText(f"GUI {self._draw_rate:4.0f} draws/s")
         self.status_warnings.setText(f"warnings {snap.warnings}")
         self.status_warnings.setToolTip(snap.error or "\n".join(snap.messages))
         if snap.error:
             self.statusBar().showMessage(snap.error, 5000)
-        self.snapshotDrawn.emit(snap.frame)
 
     # -- Qt events ------------------------------------------------------------------
     def dragEnterEvent(self, event: Any) -> None:

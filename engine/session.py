@@ -52,6 +52,15 @@ def sensor_presets() -> dict[str, tuple[str, ...]]:
     return dict(FALLBACK_PRESETS)
 
 
+def _preset_dofs(name: str) -> dict[str, int]:
+    """Degrees of freedom per joint of a preset (6 unless the tracking module says 3)."""
+    try:
+        from engine.tracking import PRESET_SENSORS  # type: ignore[attr-defined]
+    except ImportError:
+        return {}
+    return {spec.joint: int(spec.dof) for spec in PRESET_SENSORS.get(name, ())}
+
+
 def load_clip(path: str | Path) -> Motion:
     """Load any supported BVH onto the canonical skeleton (60 fps, floor at z = 0).
 
@@ -221,7 +230,8 @@ class Session:
         if name not in presets:
             raise UserError(f"unknown sensor preset {name!r}; known: {', '.join(presets)}")
         self.preset = name
-        self.sensors = {j: SensorConfig(j) for j in presets[name]}
+        dofs = _preset_dofs(name)
+        self.sensors = {j: SensorConfig(j, dof=dofs.get(j, 6)) for j in presets[name]}
         self._sensors_changed()
 
     def update_sensor(self, joint: str, **changes: Any) -> None:

@@ -12,7 +12,9 @@ raises or returns NaN never kills the thread; the error is reported in the snaps
 
 from __future__ import annotations
 
+import os
 import queue
+import sys
 import threading
 import time
 from collections.abc import Callable
@@ -156,6 +158,20 @@ class Snapshot:
     decoded: np.ndarray | None = None
 
 
+def _losses(res: FrameResult | None, sf: SensorFrame) -> tuple[dict[str, float], ...]:
+    """The method's per-iteration losses; for methods without any (classical IK), one
+    "iteration" of squared position errors to every connected target, so the plots and
+    tests can compare methods on the same terms."""
+    if res is None:
+        return ()
+    if res.losses:
+        return tuple(dict(d) for d in res.losses)
+    errs = {f"pos:{j}": float(np.sum((res.positions[sk.JOINT_INDEX[j]] - r.position) ** 2))
+            for j, r in sf.connected().items()}  # fmt: skip
+    errs["total"] = float(sum(errs.values()))
+    return (errs,)
+
+
 class EngineWorker(threading.Thread):
     """Runs the reconstruction off the GUI thread; see the module docstring.
 
@@ -202,6 +218,9 @@ class EngineWorker(threading.Thread):
 
     # -- loop -----------------------------------------------------------------------
     def run(self) -> None:
+        torch = sys.modules.get("torch")
+        if torch is not None:  # leave a core to the GUI thread (and VTK) on small machines
+            torch.set_num_threads(max(1, (os.cpu_count() or 2) - 1))
         while not self._stopping:
             self._drain(self._wait_time())
             if self._stopping:
@@ -310,7 +329,10 @@ class EngineWorker(threading.Thread):
             if m is None or motion is None:
                 continue
             try:
-                m.reset(motion.skeleton, motion.fps)
+                if getattr(m, "needs_ground_truth", False):  # e.g. an oracle baseline
+                    m.reset(motion.skeleton, motion.fps, reference=motion)  # type: ignore[call-arg]
+                else:
+                    m.reset(motion.skeleton, motion.fps)
             except Exception as exc:
                 self._report_error(f"{m.name}.reset: {exc}")
         self._configure_all()
@@ -395,7 +417,7 @@ class EngineWorker(threading.Thread):
             target_rotations=_ro(np.array([r.rotation for r in readings]).reshape(-1, 4)),
             target_connected=_ro(np.array([r.connected for r in readings], bool)),
             gizmos=self._gizmos(),
-            losses=tuple(dict(d) for d in (res.losses if res else ())),
+            losses=_losses(res, sf),
             latent=_ro(last.latent) if last is not None and last.latent is not None else None,
             iterations=res.iterations if res else 0,
             ms=ms,

@@ -98,7 +98,7 @@ class LatentInspector(QWidget):
             return
         z = np.asarray(snap.latent, float).ravel()
         self.latent = z
-        self.bars.setOpts(x=np.arange(len(z)), height=z, brush=["#ff8a1f" if v > 0 else "#4da3ff" for v in z])
+        self.bars.setOpts(x=np.arange(len(z)), height=z, brushes=["#ff8a1f" if v > 0 else "#4da3ff" for v in z])
         self._history.append(z)
         hist = np.array(self._history)
         lim = max(float(np.abs(hist).max()), 1e-6)

@@ -1,0 +1,31 @@
+"""The ``studio`` fixture: a main window on a synthetic clip that must clean up after itself."""
+
+from __future__ import annotations
+
+import threading
+
+import pytest
+
+from tests.widgets.conftest import pytest_collection_modifyitems  # noqa: F401  (skip gui offscreen)
+
+
+@pytest.fixture
+def studio(qtbot, tmp_path, synthetic_motion):
+    from PyQt6.QtCore import QSettings
+    from PyQt6.QtWidgets import QApplication
+
+    from app.main_window import MainWindow
+
+    threads_before = threading.active_count()
+    settings = QSettings(str(tmp_path / "studio.ini"), QSettings.Format.IniFormat)
+    window = MainWindow(settings=settings)
+    window.session.set_motion(synthetic_motion)
+    window.resize(1280, 800)
+    window.show()
+    qtbot.waitUntil(lambda: window.worker.latest is not None, timeout=10000)
+    yield window
+    window.close()
+    QApplication.processEvents()
+    assert not window.worker.is_alive(), "engine thread outlived the window"
+    assert threading.active_count() == threads_before, "a thread leaked"
+    window.deleteLater()

@@ -1,0 +1,94 @@
+"""Panels and plots (no VTK): edits become signals, state shown without echoing back."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from PyQt6.QtCore import Qt
+
+from engine.session import SensorConfig
+from widgets.constraint_panel import ConstraintPanel
+from widgets.latent_inspector import LatentInspector
+from widgets.plots import LossPlots
+from widgets.sensor_panel import SensorPanel
+from widgets.timeline import Timeline
+
+
+def test_timeline_scrub_emits_and_engine_frames_do_not(qtbot):
+    t = Timeline()
+    qtbot.addWidget(t)
+    t.set_range(120)
+    seen = []
+    t.seekRequested.connect(seen.append)
+    t.set_frame(30)
+    assert seen == [] and t.slider.value() == 30
+    with qtbot.waitSignal(t.seekRequested) as sig:
+        t.slider.setValue(80)
+    assert sig.args == [80] and t.counter.text().startswith("80 / 119")
+
+
+def test_sensor_panel_toggle_and_dof(qtbot):
+    p = SensorPanel({"two": ("root", "lwrist")})
+    qtbot.addWidget(p)
+    p.set_sensors("two", {"root": SensorConfig("root"), "lwrist": SensorConfig("lwrist", dof=3)})
+    assert p.rows["lwrist"]["dof"].currentText() == "3-DoF"
+    with qtbot.waitSignal(p.sensorChanged) as sig:
+        p.rows["root"]["enabled"].setChecked(False)
+    assert sig.args == ["root", {"enabled": False}]
+    with qtbot.waitSignal(p.failureRequested) as sig:
+        p.rows["lwrist"]["fail"].click()
+    assert sig.args == ["lwrist", 60]
+
+
+SCHEMA = {
+    "pin": [("joint", "joint", "lwrist"), ("target", "vec3", np.zeros(3)), ("radius", "float", 0.1)],
+    "floor": [("margin", "float", 0.0)],
+}
+
+
+def test_constraint_panel_builds_editors_from_the_schema(qtbot):
+    p = ConstraintPanel(SCHEMA)
+    qtbot.addWidget(p)
+    with qtbot.waitSignal(p.addRequested) as sig:
+        p.kinds.setCurrentText("pin")
+        p.add_button.click()
+    assert sig.args == ["pin"]
+    p.set_constraints([{"kind": "pin", "name": "pin1", "weight": 1.0, "enabled": True,
+                        "joint": "lwrist", "target": [0.0, 0.0, 1.0], "radius": 0.1}])  # fmt: skip
+    editor = p.editor
+    assert editor is not None and editor.inputs["joint"].currentText() == "lwrist"
+    with qtbot.waitSignal(p.changed) as sig:
+        editor.inputs["target"].spins[2].setValue(1.5)
+    assert sig.args[0] == "pin1" and np.allclose(sig.args[1]["target"], [0, 0, 1.5])
+    with qtbot.waitSignal(p.changed) as sig:
+        p.list.item(0).setCheckState(Qt.CheckState.Unchecked)
+    assert sig.args == ["pin1", {"enabled": False}]
+    with qtbot.waitSignal(p.removeRequested) as sig:
+        p.remove_button.click()
+    assert sig.args == ["pin1"]
+
+
+def test_plots_follow_snapshots_and_restart_on_loop(qtbot, fake_snapshot):
+    p = LossPlots()
+    qtbot.addWidget(p)
+    for i in range(5):
+        p.update_snapshot(fake_snapshot(seq=i + 1, frame=i))
+    total = p.iter_curves.items["total"]  # xData/yData: before the log-axis transform
+    assert list(total.xData) == [1, 2] and np.allclose(total.yData, [1.0, 0.1])
+    assert len(p.history_curves.items["pos:root"].xData) == 5
+    p.update_snapshot(fake_snapshot(seq=9, frame=0))
+    assert len(p.history_curves.items["pos:root"].xData) == 1
+
+
+@pytest.mark.parametrize("can_decode", [False, True])
+def test_latent_debugger_needs_a_decoder(qtbot, fake_snapshot, can_decode):
+    w = LatentInspector()
+    qtbot.addWidget(w)
+    w.update_snapshot(fake_snapshot(latent=np.linspace(-1, 1, 24), can_decode=can_decode))
+    assert w.debug_box.isEnabled() == can_decode
+    assert ("decoder" in w.debug_box.toolTip()) != can_decode
+    if can_decode:
+        w.debug.setChecked(True)
+        with qtbot.waitSignal(w.decodeRequested) as sig:
+            w.value.setValue(250)
+        assert sig.args[0][0] == pytest.approx(2.5)

@@ -1,0 +1,184 @@
+"""``dragposer-studio evaluate PATH...``: metrics of a method on simulated trackers.
+
+Every clip is loaded onto the canonical skeleton, trackers are simulated from it
+(:func:`engine.tracking.simulate`), the method reconstructs it frame by frame and the
+metrics of :mod:`engine.metrics` (see ``docs/metrics.md``) compare the result with the
+clip. One table row per file plus a frame-weighted total; ``--json`` writes the same
+numbers atomically.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import tempfile
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from engine.errors import UserError
+
+#: Columns of the printed table: (metric key, header, format).
+COLUMNS = (
+    ("frames", "frames", "{:>7d}"),
+    ("pos_cm", "Pos cm", "{:>7.2f}"),
+    ("rot_deg", "Rot deg", "{:>7.2f}"),
+    ("vel_cms", "Vel cm/s", "{:>8.2f}"),
+    ("ee_cm", "EE cm", "{:>7.2f}"),
+    ("jitter", "Jitter", "{:>7.2f}"),
+    ("gt_jitter", "GT jit", "{:>7.2f}"),
+    ("ms_per_frame", "ms/frame", "{:>8.2f}"),
+)
+GAP_COLUMNS = (("pj", "PJ", "{:>7.2f}"), ("auj", "AUJ", "{:>8.1f}"))
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "evaluate",
+        help="reconstruct clips from simulated trackers and report Pos/Rot/Vel/EE/Jitter",
+        description="Simulate trackers from each clip, reconstruct it with a method and compare "
+        "with the clip. Metrics are defined in docs/metrics.md.",
+    )
+    p.add_argument("paths", nargs="+", type=Path, metavar="PATH", help="BVH files or folders (searched for *.bvh)")
+    p.add_argument("--method", default="ik", help="reconstruction method (default: ik)")
+    p.add_argument("--sensors", default="6", help="sensor preset or list, e.g. 6, 4, root,lwrist:3 (default: 6)")
+    p.add_argument("--faulty", type=float, default=0.0, metavar="P",
+                   help="per-frame probability that one sensor fails for 100 frames (DragPoser: 0.01)")
+    p.add_argument("--gaps", action="store_true", help="simulate RPM's hand-tracking gaps; adds PJ/AUJ")
+    p.add_argument("--noise-pos", type=float, default=0.0, metavar="M", help="position noise std, metres")
+    p.add_argument("--noise-rot", type=float, default=0.0, metavar="DEG", help="rotation noise std, degrees")
+    p.add_argument("--mode", choices=("realtime", "offline"), default="realtime", help="passed to the method")
+    p.add_argument("--iterations", type=int, metavar="N", help="optimizer iterations per frame (passed to the method)")
+    p.add_argument("--max-frames", type=int, metavar="N", help="evaluate only the first N frames of each clip")
+    p.add_argument("--seed", type=int, default=0, help="seed of the tracker simulation (default: 0)")
+    p.add_argument("--json", type=Path, metavar="OUT.json", help="also write the results as JSON")
+    p.add_argument("--no-progress", action="store_true", help="hide the progress bars")
+    p.set_defaults(func=_evaluate)
+
+
+def find_clips(paths: Iterable[Path]) -> list[Path]:
+    """BVH files named directly or found (recursively) in folders, in a stable order."""
+    out: list[Path] = []
+    for p in paths:
+        if p.is_dir():
+            found = sorted(f for f in p.rglob("*") if f.is_file() and f.suffix.lower() == ".bvh")
+            if not found:
+                raise UserError(f"{p}: no .bvh files in this folder")
+            out.extend(found)
+        elif p.is_file():
+            out.append(p)
+        else:
+            raise UserError(f"{p}: no such file or folder")
+    return list(dict.fromkeys(out))
+
+
+def evaluate_clip(motion: Any, method: Any, preset: str, *, faulty: float = 0.0, gaps: bool = False,
+                  noise_pos_m: float = 0.0, noise_rot_deg: float = 0.0, seed: int = 0,
+                  progress: bool = True, desc: str | None = None) -> dict[str, float | int]:
+    """Metrics of ``method`` on one canonical clip (what the command runs per file).
+
+    Returns
+    -------
+    dict
+        The keys of :func:`engine.metrics.evaluate_motion` plus ``iterations_mean`` and
+        ``ms_per_frame``; PJ / AUJ keys only when trackers can be lost (``gaps`` or
+        ``faulty``).
+    """
+    from engine.methods import run_method
+    from engine.metrics import evaluate_motion
+    from engine.tracking import simulate
+
+    tracking = simulate(motion, preset, noise_pos_m=noise_pos_m, noise_rot_deg=noise_rot_deg,
+                        faulty=faulty, gaps=gaps, seed=seed)
+    rec, results = run_method(method, tracking, motion.skeleton, progress=progress,
+                              reference=motion, desc=desc)
+    lossy = gaps or faulty > 0
+    out = evaluate_motion(motion, rec, tracking.connected if lossy else None)
+    out["iterations_mean"] = float(np.mean([r.iterations for r in results]))
+    out["ms_per_frame"] = float(np.mean([r.ms for r in results]))
+    return out
+
+
+def _write_atomic(path: Path, text: str) -> None:
+    """Write to a temporary file beside ``path``, then rename: never a half-written file."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(text)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+
+
+def _json_safe(d: dict[str, Any]) -> dict[str, Any]:
+    """NaN / inf become null: strict JSON readers reject the bare tokens."""
+    return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in d.items()}
+
+
+def format_table(per_file: dict[str, dict[str, Any]], total: dict[str, Any], lossy: bool) -> str:
+    cols = COLUMNS + (GAP_COLUMNS if lossy else ())
+    width = max([len("total"), *(len(k) for k in per_file)])
+    lines = [f"{'clip':<{width}}  " + " ".join(f"{h:>{len(fmt.format(0))}}" for _, h, fmt in cols)]
+
+    def row(name: str, m: dict[str, Any]) -> str:
+        cells = []
+        for key, _, fmt in cols:
+            v = m.get(key)
+            w = len(fmt.format(0))
+            cells.append(f"{'-':>{w}}" if v is None or (isinstance(v, float) and math.isnan(v)) else fmt.format(v))
+        return f"{name:<{width}}  " + " ".join(cells)
+
+    lines += [row(k, v) for k, v in per_file.items()]
+    lines.append(row("total", total))
+    return "\n".join(lines)
+
+
+def _evaluate(args: argparse.Namespace) -> int:
+    from engine.methods import get_method
+    from engine.metrics import summarize
+    from engine.retarget import load_motion
+    from engine.tracking import parse_sensors
+
+    parse_sensors(args.sensors)  # fail before loading anything
+    if args.faulty < 0 or args.faulty > 1:
+        raise UserError(f"--faulty must be a probability in [0, 1], got {args.faulty}")
+    if args.max_frames is not None and args.max_frames < 4:
+        raise UserError("--max-frames must be at least 4 (jitter needs 4 frames)")
+    clips = find_clips(args.paths)
+    kwargs: dict[str, Any] = {"mode": args.mode}
+    if args.iterations is not None:
+        kwargs["iterations"] = args.iterations
+    method = get_method(args.method, **kwargs)
+    per_file: dict[str, dict[str, Any]] = {}
+    for path in clips:
+        motion = load_motion(path)
+        if args.max_frames:
+            motion = motion.slice(0, args.max_frames)
+        if len(motion) < 4:
+            raise UserError(f"{path}: only {len(motion)} frames; at least 4 are needed")
+        per_file[str(path)] = evaluate_clip(
+            motion, method, args.sensors, faulty=args.faulty, gaps=args.gaps,
+            noise_pos_m=args.noise_pos, noise_rot_deg=args.noise_rot, seed=args.seed,
+            progress=not args.no_progress, desc=path.name,
+        )
+    total = summarize(per_file)
+    lossy = args.gaps or args.faulty > 0
+    print(format_table(per_file, total, lossy))
+    if args.json:
+        doc = {
+            "method": args.method,
+            "preset": args.sensors,
+            "mode": args.mode,
+            "total": _json_safe(total),
+            "files": {k: _json_safe(v) for k, v in per_file.items()},
+        }
+        _write_atomic(args.json, json.dumps(doc, indent=2) + "\n")
+        print(f"wrote {args.json}")
+    return 0

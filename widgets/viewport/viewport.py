@@ -17,7 +17,7 @@ from widgets.viewport.sensors import SensorMarkers
 from widgets.viewport.skeleton import SkeletonActor
 
 #: Default camera: front-left of a character facing -Y, looking at the hips (metres).
-HOME_OFFSET = np.array([2.2, -3.6, 0.75])
+HOME_OFFSET = np.array([1.7, -2.9, 0.55])
 HOME_FOCUS_HEIGHT = 0.85
 
 

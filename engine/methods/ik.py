@@ -102,6 +102,14 @@ def _pow(q: np.ndarray, t: float) -> np.ndarray:
     return _axis_angle(q[1:], t * angle)
 
 
+def _twist(q: np.ndarray, axis: np.ndarray) -> np.ndarray:
+    """Twist part of ``q`` about ``axis`` (swing-twist decomposition)."""
+    a = axis / np.linalg.norm(axis)
+    t = np.concatenate([[q[0]], (q[1:] @ a) * a])
+    n = np.linalg.norm(t)
+    return t / n if n > 1e-9 else IDENTITY.copy()
+
+
 def _yaw(angle: float) -> np.ndarray:
     return np.array([math.cos(angle / 2), 0.0, 0.0, math.sin(angle / 2)])
 
@@ -285,7 +293,7 @@ class IKMethod(Method):
 
     def _solve_limb(self, local: np.ndarray, root: np.ndarray, chain: tuple[int, int, int],
                     target: np.ndarray, pole: np.ndarray, rest_pole: np.ndarray,
-                    end_rot: np.ndarray | None) -> None:
+                    end_rot: np.ndarray | None, twist_mid: bool = False) -> None:
         up, mid, end = chain
         pos, rot = self._fk(local, root)
         a = float(np.linalg.norm(self.offsets[mid]))
@@ -297,6 +305,9 @@ class IKMethod(Method):
         local[up] = _mul(_conj(rot[sk.PARENTS[up]]), g_up)
         lower = _rot(g_up, self.offsets[end])
         g_mid = _mul(_from_to(lower, target - elbow), g_up)
+        if end_rot is not None and twist_mid:
+            # the forearm carries the hand's twist (pronation), the wrist only the swing
+            g_mid = _mul(g_mid, _twist(_mul(_conj(g_mid), end_rot), self.offsets[end]))
         local[mid] = _mul(_conj(g_up), g_mid)
         local[end] = IDENTITY if end_rot is None else _mul(_conj(g_mid), end_rot)
 
@@ -338,7 +349,8 @@ class IKMethod(Method):
                 continue
             end_rot = np.asarray(r.rotation, float) if r.dof == 6 else None
             self._reach_with_clavicle(local, root_pos, chain, np.asarray(r.position, float))
-            self._solve_limb(local, root_pos, chain, r.position, _rot(chest, ARM_POLE), ARM_POLE, end_rot)
+            self._solve_limb(local, root_pos, chain, r.position, _rot(chest, ARM_POLE), ARM_POLE, end_rot,
+                             twist_mid=True)
 
         forward = _rot(root_rot, LEG_POLE)
         level = _heading_of(root_rot)

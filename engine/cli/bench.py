@@ -1,0 +1,108 @@
+"""``dragposer-studio bench``: how fast each method reconstructs, frame by frame.
+
+Speed targets are measured here and reported, never asserted by timing tests: the
+numbers depend on the machine. The report names the machine (cores, torch threads).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import time
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[2]
+DEFAULT_CLIP = REPO / "assets" / "clips" / "example.bvh"
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "bench",
+        help="measure milliseconds per frame of reconstruction methods",
+        description="Simulate trackers from a clip and time each method's per-frame step "
+        "(after a warm-up). Prints mean / median / 95th percentile ms per frame and "
+        "iterations per frame.",
+    )
+    p.add_argument("file", nargs="?", type=Path, default=DEFAULT_CLIP, help="BVH clip (default: bundled example)")
+    p.add_argument("--method", action="append", help="method to time; repeat for several (default: every method)")
+    p.add_argument("--sensors", default="6", help="sensor preset or list (default: 6)")
+    p.add_argument("--mode", choices=("realtime", "offline"), default="realtime", help="optimizer mode")
+    p.add_argument("--iterations", type=int, help="optimizer iterations per frame (realtime mode)")
+    p.add_argument("--frames", type=int, default=300, help="frames to time (default: 300)")
+    p.add_argument("--warmup", type=int, default=10, help="untimed frames first (default: 10)")
+    p.add_argument("--json", type=Path, metavar="OUT", help="also write the results as JSON")
+    p.set_defaults(func=_bench)
+
+
+def bench_method(name: str, motion, tracking, frames: int, warmup: int, **kwargs) -> dict:
+    """Time ``frames`` steps of method ``name`` after ``warmup`` untimed ones."""
+    from engine.methods import get_method
+
+    method = get_method(name, **kwargs)
+    if getattr(method, "needs_ground_truth", False):
+        method.reset(motion.skeleton, motion.fps, reference=motion)
+    else:
+        method.reset(motion.skeleton, motion.fps)
+    n = min(len(tracking), warmup + frames)
+    times, iters = [], []
+    for i in range(n):
+        t0 = time.perf_counter()
+        res = method.step(tracking.frame(i))
+        dt = 1000.0 * (time.perf_counter() - t0)
+        if i >= warmup:
+            times.append(dt)
+            iters.append(res.iterations)
+    t = np.asarray(times)
+    return {
+        "method": name,
+        "frames": int(t.size),
+        "ms_mean": float(t.mean()),
+        "ms_median": float(np.median(t)),
+        "ms_p95": float(np.percentile(t, 95)),
+        "fps": float(1000.0 / t.mean()),
+        "iterations_mean": float(np.mean(iters)),
+    }
+
+
+def _bench(args: argparse.Namespace) -> int:
+    import torch
+
+    from engine.atomic import write_text
+    from engine.errors import UserError
+    from engine.methods import available_methods
+    from engine.retarget import load_motion
+    from engine.tracking import simulate
+
+    motion = load_motion(args.file)
+    if args.warmup + 1 > len(motion):
+        raise UserError(f"{args.file}: only {len(motion)} frames, fewer than the warm-up")
+    tracking = simulate(motion, args.sensors)
+    names = args.method or list(available_methods())
+    kwargs = {"mode": args.mode}
+    if args.iterations:
+        kwargs["iterations"] = args.iterations
+    machine = {
+        "cpu_count": os.cpu_count(),
+        "torch_threads": torch.get_num_threads(),
+        "torch": torch.__version__,
+        "cuda": torch.cuda.is_available(),
+        "platform": platform.platform(),
+    }
+    rows = []
+    for name in names:
+        kw = kwargs if name not in ("ik",) else {}
+        rows.append(bench_method(name, motion, tracking, args.frames, args.warmup, **kw))
+    print(f"{args.file.name}: sensors {args.sensors}, mode {args.mode}, "
+          f"{machine['cpu_count']} cores, torch {machine['torch_threads']} threads")
+    print(f"{'method':<12} {'frames':>6} {'ms mean':>8} {'median':>8} {'p95':>8} {'fps':>7} {'iters':>6}")
+    for r in rows:
+        print(f"{r['method']:<12} {r['frames']:>6d} {r['ms_mean']:>8.2f} {r['ms_median']:>8.2f} "
+              f"{r['ms_p95']:>8.2f} {r['fps']:>7.1f} {r['iterations_mean']:>6.1f}")
+    if args.json:
+        out = {"file": str(args.file), "sensors": args.sensors, "mode": args.mode, "machine": machine, "methods": rows}
+        write_text(args.json, json.dumps(out, indent=1))
+    return 0

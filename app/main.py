@@ -9,18 +9,21 @@ from PyQt6.QtCore import QTimer
 from PyQt6.QtWidgets import QApplication
 
 from app.main_window import MainWindow
+from engine.errors import UserError
 
 REPO = Path(__file__).resolve().parents[1]
 EXAMPLE_CLIP = REPO / "assets" / "clips" / "example.bvh"
 SCREENSHOT_TIMEOUT_S = 120.0
 
 
-def open_initial(window: MainWindow, path: str | None, preset: str | None) -> None:
-    """Open ``path``, else the bundled example, else a procedural walk (with a message)."""
+def open_initial(window: MainWindow, path: str | None, sensors: str | None) -> None:
+    """Open ``path``, else the bundled example, else a procedural walk (with a message).
+
+    ``sensors`` (a preset or a ``--sensors`` list) wins over the preset remembered from
+    the last session.
+    """
     from app.demo import demo_walk
 
-    if preset:
-        window.settings.setValue("last_preset", preset)
     ok = False
     if path:
         ok = window.files.open_path(path)
@@ -29,11 +32,14 @@ def open_initial(window: MainWindow, path: str | None, preset: str | None) -> No
     if not ok:
         window.session.set_motion(demo_walk())
         window.statusBar().showMessage("No clip loaded: showing a procedural walk (File > Open a BVH)", 10000)
+    if sensors:
+        window.session.set_sensor_text(sensors)
+        return
     last = window.settings.value("last_preset")
     if last:
         try:
             window.session.set_preset(str(last))
-        except Exception as exc:  # a stale preset name from an older version
+        except UserError as exc:  # a preset name from an older version
             window.statusBar().showMessage(str(exc), 8000)
 
 
@@ -43,7 +49,11 @@ def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
     app = QApplication.instance() or QApplication(sys.argv[:1])
     app.setApplicationName("DragPoser Studio")
     window = MainWindow(method=method)
-    open_initial(window, path, sensors)
+    try:
+        open_initial(window, path, sensors)
+    except UserError:
+        window.close()
+        raise
     if screenshot is not None:
         window.resize(1600, 980)  # a reproducible layout, whatever geometry was saved
     window.show()

@@ -234,6 +234,20 @@ class Session:
         self.sensors = {j: SensorConfig(j, dof=dofs.get(j, 6)) for j in presets[name]}
         self._sensors_changed()
 
+    def set_sensor_text(self, text: str) -> None:
+        """A preset name or a ``--sensors`` list such as ``"root,lwrist:3,rwrist"``."""
+        if text in sensor_presets():
+            self.set_preset(text)
+            return
+        try:
+            from engine.tracking import parse_sensors  # type: ignore[attr-defined]
+        except ImportError as exc:
+            raise UserError(f"unknown sensor preset {text!r}") from exc
+        specs = parse_sensors(text)
+        self.preset = ""
+        self.sensors = {sp.joint: SensorConfig(sp.joint, dof=int(sp.dof)) for sp in specs}
+        self._sensors_changed()
+
     def update_sensor(self, joint: str, **changes: Any) -> None:
         """Change fields of one tracker (``enabled``, ``dof``, ``weight``, ``offset``...)."""
         if joint not in self.sensors:

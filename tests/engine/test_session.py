@@ -77,3 +77,10 @@ def test_scene_round_trip(session):
     other.apply_scene(scene)
     assert other.sensors == session.sensors
     assert other.settings["lr"] == 0.05
+
+
+def test_sensor_text_accepts_presets_and_joint_lists(session):
+    session.set_sensor_text("root,lwrist:3")
+    assert list(session.sensors) == ["root", "lwrist"] and session.sensors["lwrist"].dof == 3
+    with pytest.raises(UserError):
+        session.set_sensor_text("root,nose")

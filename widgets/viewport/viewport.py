@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from typing import Any
 
 import numpy as np
@@ -17,8 +18,9 @@ from widgets.viewport.sensors import SensorMarkers
 from widgets.viewport.skeleton import SkeletonActor
 
 #: Default camera: front-left of a character facing -Y, looking at the hips (metres).
-HOME_OFFSET = np.array([1.7, -2.9, 0.55])
-HOME_FOCUS_HEIGHT = 0.85
+HOME_OFFSET = np.array([2.0, -3.4, 0.5])
+HOME_FOCUS_HEIGHT = 0.9
+FOLLOW_TIME_S = 0.25  # camera-follow time constant, seconds
 
 
 class Viewport(QWidget):
@@ -57,6 +59,7 @@ class Viewport(QWidget):
         self.show_ground_truth = True
         self.show_ghosts = True
         self._focus = np.array([0.0, 0.0, HOME_FOCUS_HEIGHT])
+        self._followed_at = time.monotonic()
         self.reset_camera()
 
     # -- camera ---------------------------------------------------------------------
@@ -73,8 +76,11 @@ class Viewport(QWidget):
 
     def _follow(self, root: np.ndarray) -> None:
         """Slide camera and focus horizontally with the hips, keeping the user's angle."""
+        now = time.monotonic()
+        dt, self._followed_at = now - self._followed_at, now
         goal = np.array([root[0], root[1], self._focus[2]])
-        delta = 0.2 * (goal - self._focus)
+        # time-based smoothing: the same glide at 60 or 5 redraws per second
+        delta = (1.0 - np.exp(-dt / FOLLOW_TIME_S)) * (goal - self._focus)
         if np.linalg.norm(delta) < 1e-5:
             return
         cam = self.plotter.camera

@@ -9,6 +9,7 @@ never waits on the engine. Session events refresh the panels.
 from __future__ import annotations
 
 import gc
+import sys
 import time
 from typing import Any
 
@@ -61,9 +62,9 @@ class MainWindow(QMainWindow):
         self.kinds = load_constraint_kinds()
         self.session = Session(method=method)
         self.worker = EngineWorker()
-        self.worker.start()
-        self.session.attach(self.worker.submit)
         self._build_widgets()
+        self.worker.start()  # after the widgets: the thread's first imports would compete
+        self.session.attach(self.worker.submit)
         self.files = FileActions(self)
         self._build_menus()
         self._unsubscribe = self.session.subscribe(self._on_session)
@@ -77,6 +78,11 @@ class MainWindow(QMainWindow):
         # Everything imported so far (torch, VTK, Qt: ~10^6 objects) never dies; freezing it
         # keeps the cyclic GC's full passes from pausing the GUI for 100+ ms at a time.
         gc.freeze()
+        # The engine thread runs Python between its numpy/torch calls; every GIL-releasing
+        # Qt or VTK call here then waits up to the switch interval to get the GIL back
+        # (5 ms by default), which adds up to whole blocked frames. 0.5 ms keeps the GUI
+        # thread's waits short at a small cost in engine throughput.
+        sys.setswitchinterval(min(sys.getswitchinterval(), 0.0005))
         geometry = self.settings.value("geometry")
         if geometry is not None:
             self.restoreGeometry(geometry)

@@ -147,3 +147,13 @@ def test_screenshot_shows_the_skeleton(studio, qtbot, tmp_path):
     arr = np.frombuffer(img.constBits().asstring(img.sizeInBytes()), np.uint8)
     arr = arr.reshape(img.height(), img.bytesPerLine())[:, : img.width() * 3].reshape(img.height(), img.width(), 3)
     assert orange_fraction(arr) > 0.001
+
+
+def test_save_reconstruction_writes_a_bvh_off_the_gui_thread(studio, qtbot, tmp_path):
+    pytest.importorskip("engine.bvh")
+    out = tmp_path / "recon.bvh"
+    studio.files.save_reconstruction(str(out))
+    qtbot.waitUntil(lambda: studio.files._export is None, timeout=30000)
+    from engine.retarget import load_motion
+
+    assert len(load_motion(out)) == studio.session.num_frames

@@ -265,13 +265,13 @@ class EngineWorker(threading.Thread):
             self._reset_methods()
         elif isinstance(cmd, SetSensors):
             self._source.sensors = cmd.sensors
-            self._configure_all()
+            self._configure_all("sensors")
         elif isinstance(cmd, SetConstraints):
             self._constraints = cmd.constraints
-            self._configure_all()
+            self._configure_all("constraints")
         elif isinstance(cmd, SetSettings):
             self._settings = {**self._settings, **cmd.values}
-            self._configure_all()
+            self._configure_all("settings")
         elif isinstance(cmd, SetMethod):
             self._method_name, self._ghost_names = cmd.name, tuple(cmd.ghosts)
             self._method, self._ghosts = None, {}
@@ -319,11 +319,13 @@ class EngineWorker(threading.Thread):
         return m
 
     def _reset_methods(self) -> None:
-        if self._method is None and self._method_name:
+        fresh = self._method is None and bool(self._method_name)
+        if fresh:
             self._method = self._build(self._method_name)
         for g in self._ghost_names:
             if g not in self._ghosts and (m := self._build(g)) is not None:
                 self._ghosts[g] = m
+                fresh = True
         motion = self._source.motion
         for m in [self._method, *self._ghosts.values()]:
             if m is None or motion is None:
@@ -335,18 +337,24 @@ class EngineWorker(threading.Thread):
                     m.reset(motion.skeleton, motion.fps)
             except Exception as exc:
                 self._report_error(f"{m.name}.reset: {exc}")
-        self._configure_all()
+        self._configure_all(report=fresh)  # methods may drop their settings on reset
         self._last_solved = -2
 
-    def _configure_all(self) -> None:
+    def _configure_all(self, what: str = "all", report: bool = True) -> None:
+        """Push the studio's edits into the methods: ``settings``, ``constraints``,
+        ``sensors`` or ``all``. Only the changed aspect is re-applied, so a problem (such
+        as a method that ignores constraints) is reported once per edit."""
         for m in [self._method, *self._ghosts.values()]:
             if m is None:
                 continue
-            for problem in (
-                apply_settings(m, self._settings)
-                + apply_constraints(m, self._constraints)
-                + apply_sensor_weights(m, self._source.sensors)
-            ):
+            problems = []
+            if what in ("all", "settings"):
+                problems += apply_settings(m, self._settings)
+            if what in ("all", "constraints"):
+                problems += apply_constraints(m, self._constraints)
+            if what in ("all", "sensors"):
+                problems += apply_sensor_weights(m, self._source.sensors)
+            for problem in problems if report else ():
                 self._report_error(problem)
 
     def _report_error(self, message: str) -> None:

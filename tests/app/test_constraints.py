@@ -1,0 +1,63 @@
+"""Constraint editing end to end with a stand-in kind (until the real kinds land)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import ClassVar
+
+import numpy as np
+import pytest
+
+from engine import skeleton as sk
+from engine.constraints.base import REGISTRY, Constraint
+
+pytestmark = pytest.mark.gui
+
+
+@pytest.fixture
+def pin_kind():
+    import torch
+
+    @dataclass
+    class StudioTestPin(Constraint):
+        kind: ClassVar[str] = "studio_test_pin"
+        joint: str = "lwrist"
+        target: np.ndarray = field(default_factory=lambda: np.array([0.3, -0.2, 1.2]))
+
+        def loss(self, state):
+            t = torch.as_tensor(self.target, dtype=state.positions.dtype)
+            return ((state.positions[sk.JOINT_INDEX[self.joint]] - t) ** 2).sum()
+
+        def gizmo(self):
+            return {"type": "point", "position": np.asarray(self.target), "edit": "target"}
+
+    yield StudioTestPin.kind
+    REGISTRY.pop(StudioTestPin.kind, None)  # keep the registry as other tests expect it
+
+
+def test_add_edit_drag_disable_and_remove_a_constraint(pin_kind, studio, qtbot):
+    panel, session = studio.constraint_panel, studio.session
+    panel.kinds.setCurrentText(pin_kind)
+    panel.add_button.click()
+    name = session.constraints[0].name
+    qtbot.waitUntil(lambda: name in studio.viewport.gizmos.items)
+
+    widget = studio.viewport.gizmos.items[name].widget
+    widget.InvokeEvent("StartInteractionEvent")
+    widget.SetCenter(0.5, 0.0, 1.0)
+    widget.InvokeEvent("InteractionEvent")
+    widget.InvokeEvent("EndInteractionEvent")
+    assert np.allclose(session.constraints[0].target, [0.5, 0.0, 1.0])
+    qtbot.waitUntil(lambda: np.allclose(dict(studio.worker.latest.gizmos)[name]["position"], [0.5, 0, 1]))
+
+    panel.editor.inputs["target"].spins[2].setValue(1.4)
+    panel.editor.inputs["weight"].setValue(3.0)
+    assert session.constraints[0].target[2] == pytest.approx(1.4) and session.constraints[0].weight == 3.0
+
+    from PyQt6.QtCore import Qt
+
+    panel.list.item(0).setCheckState(Qt.CheckState.Unchecked)
+    assert session.constraints[0].enabled is False
+    qtbot.waitUntil(lambda: name not in dict(studio.worker.latest.gizmos))
+    panel.remove_button.click()
+    assert session.constraints == [] and panel.list.count() == 0

@@ -152,6 +152,7 @@ class MainWindow(QMainWindow):
         op.methodChanged.connect(lambda m: s.set_method(m))
         op.ghostsChanged.connect(lambda g: s.set_method(s.method, g))
         self.viewport.targetDragged.connect(self._guard(s.drag_target))
+        self.viewport.jointDragged.connect(self._guard(self._drag_joint))
         self.viewport.gizmoEdited.connect(self._guard(lambda n, ch: s.update_constraint(n, **ch)))
         self.latent.decodeRequested.connect(lambda z: self.worker.submit(DecodeLatent(z)))
         self.latent.debugToggled.connect(lambda on: s.pause() if on else None)
@@ -239,6 +240,28 @@ class MainWindow(QMainWindow):
         except TypeError as exc:
             raise UserError(f"{kind}: cannot create with default parameters ({exc})") from exc
         self.session.add_constraint(constraint)
+
+    def _drag_joint(self, joint: str, position: Any) -> None:
+        """Ctrl-drag on a joint: move its sensor target, else pin it with a point constraint."""
+        s = self.session
+        if joint in s.sensors:
+            s.drag_target(joint, position)
+            return
+        schema = constraint_schema(self.kinds)
+        pin = next(((k, f) for k, fields in schema.items() if any(n == "joint" for n, _, _ in fields)
+                    for f, tag, _ in fields if tag == "vec3" and f in ("target", "position", "point")), None)  # fmt: skip
+        if pin is None:
+            self.statusBar().showMessage(f"No sensor on {joint} and no point-constraint kind to pin it", 5000)
+            return
+        kind, field = pin
+        name = f"drag {joint}"
+        if any(c.name == name for c in s.constraints):
+            s.update_constraint(name, **{field: position})
+            return
+        constraint = self.kinds[kind]()
+        constraint.name, constraint.joint = name, joint
+        setattr(constraint, field, position)
+        s.add_constraint(constraint)
 
     def toggle_play(self) -> None:
         self.session.pause() if self.session.playing else self.session.play()

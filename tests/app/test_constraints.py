@@ -61,3 +61,11 @@ def test_add_edit_drag_disable_and_remove_a_constraint(pin_kind, studio, qtbot):
     qtbot.waitUntil(lambda: name not in dict(studio.worker.latest.gizmos))
     panel.remove_button.click()
     assert session.constraints == [] and panel.list.count() == 0
+
+
+def test_ctrl_dragging_a_joint_without_sensor_pins_it(pin_kind, studio, qtbot):
+    studio.viewport.jointDragged.emit("lelbow", np.array([0.4, 0.0, 1.3]))
+    (pin,) = studio.session.constraints
+    assert pin.kind == pin_kind and pin.joint == "lelbow" and np.allclose(pin.target, [0.4, 0, 1.3])
+    studio.viewport.jointDragged.emit("lelbow", np.array([0.5, 0.0, 1.3]))
+    assert len(studio.session.constraints) == 1 and np.allclose(pin.target, [0.5, 0, 1.3])

@@ -56,3 +56,51 @@ def test_gizmos_follow_constraints(viewport, fake_snapshot):
     assert set(viewport.gizmos.items) == {"pin", "bounds", "look"}
     viewport.show_snapshot(fake_snapshot(seq=2, gizmos=gizmos[1:]))
     assert set(viewport.gizmos.items) == {"bounds", "look"}
+
+
+def test_ctrl_drag_on_a_joint_moves_it_on_a_camera_facing_plane(viewport, qtbot, fake_snapshot):
+    snap = fake_snapshot()
+    viewport.show_snapshot(snap)
+    dragger = viewport.joints
+    j = 17  # lwrist
+    x, y = dragger._to_display(snap.positions[j : j + 1])[0]
+    assert dragger.press(x + 3, y - 2) and dragger.joint == j
+    with qtbot.waitSignal(viewport.jointDragged) as sig:
+        dragger.move(x + 40, y)
+    name, pos = sig.args
+    cam = viewport.plotter.camera
+    normal = np.asarray(cam.focal_point) - np.asarray(cam.position)
+    assert name == "lwrist"
+    assert abs((pos - snap.positions[j]) @ normal) < 1e-6  # stays on the plane
+    assert np.linalg.norm(pos - snap.positions[j]) > 0.05
+    assert not dragger.press(1, 1)  # far from every joint: the camera keeps the click
+
+
+def test_plain_left_drag_still_rotates_the_camera(viewport, fake_snapshot):
+    viewport.show_snapshot(fake_snapshot())
+    iren = viewport.plotter.iren.interactor
+    before = np.array(viewport.plotter.camera.position)
+    w, h = viewport.plotter.ren_win.GetSize()
+    iren.SetEventInformation(w // 2, h // 2, 0, 0)
+    iren.InvokeEvent("LeftButtonPressEvent")
+    iren.SetEventInformation(w // 2 + 80, h // 2, 0, 0)
+    iren.InvokeEvent("MouseMoveEvent")
+    iren.InvokeEvent("LeftButtonReleaseEvent")
+    assert viewport.joints.joint is None
+    assert np.linalg.norm(np.array(viewport.plotter.camera.position) - before) > 1e-3
+
+
+def test_ctrl_press_on_a_joint_takes_the_drag_from_the_camera(viewport, qtbot, fake_snapshot):
+    snap = fake_snapshot()
+    viewport.show_snapshot(snap)
+    x, y = (int(round(v)) for v in viewport.joints._to_display(snap.positions[13:14])[0])
+    iren = viewport.plotter.iren.interactor
+    before = np.array(viewport.plotter.camera.position)
+    iren.SetEventInformation(x, y, 1, 0)  # ctrl held
+    iren.InvokeEvent("LeftButtonPressEvent")
+    with qtbot.waitSignal(viewport.jointDragged) as sig:
+        iren.SetEventInformation(x, y + 30, 1, 0)
+        iren.InvokeEvent("MouseMoveEvent")
+    iren.InvokeEvent("LeftButtonReleaseEvent")
+    assert sig.args[0] == "upperneck" and viewport.joints.joint is None
+    assert np.allclose(viewport.plotter.camera.position, before)

@@ -14,6 +14,7 @@ from pyvistaqt import QtInteractor
 from widgets import style
 from widgets.viewport.floor import FloorGrid
 from widgets.viewport.gizmos import ConstraintGizmos
+from widgets.viewport.picking import JointDragger
 from widgets.viewport.sensors import SensorMarkers
 from widgets.viewport.skeleton import SkeletonActor
 
@@ -30,11 +31,14 @@ class Viewport(QWidget):
     -------
     targetDragged(str, object)
         A sensor target was dragged to a new world position (ndarray (3,), metres).
+    jointDragged(str, object)
+        Ctrl + drag on a joint of the reconstruction: joint name and world position.
     gizmoEdited(str, object)
         A constraint gizmo was dragged; ``dict`` of field name -> new value.
     """
 
     targetDragged = pyqtSignal(str, object)
+    jointDragged = pyqtSignal(str, object)
     gizmoEdited = pyqtSignal(str, object)
 
     def __init__(self, parent: QWidget | None = None) -> None:
@@ -53,6 +57,7 @@ class Viewport(QWidget):
         self.decoded.set_visible(False)
         self.ghosts: dict[str, SkeletonActor] = {}
         self.sensors = SensorMarkers(p, lambda j, pos: self.targetDragged.emit(j, pos))
+        self.joints = JointDragger(p, lambda j, pos: self.jointDragged.emit(j, pos))
         self.gizmos = ConstraintGizmos(p, lambda n, changes: self.gizmoEdited.emit(n, changes))
         self._label = p.add_text("", position="upper_left", font_size=9, color="#d0d4dc")
         self.follow = True
@@ -93,6 +98,7 @@ class Viewport(QWidget):
     def show_snapshot(self, snap: Any) -> None:
         """Draw an engine snapshot (duck-typed: see ``engine.worker.Snapshot``)."""
         self.reconstruction.update(snap.positions)
+        self.joints.positions = np.asarray(snap.positions)
         self.ground_truth.update(snap.ground_truth if self.show_ground_truth else None)
         for i, (name, pos) in enumerate(snap.ghosts.items()):
             if name not in self.ghosts:

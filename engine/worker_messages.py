@@ -1,0 +1,142 @@
+"""Messages of the engine thread: the commands it accepts and the snapshots it publishes.
+
+Commands are small frozen dataclasses queued by :class:`engine.session.Session`;
+a :class:`Snapshot` is one solved frame as plain, read-only numpy data.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from engine.motion import Motion
+from engine.session import SensorConfig
+
+
+# -- commands ------------------------------------------------------------------------
+@dataclass(frozen=True)
+class SetMotion:
+    motion: Motion
+
+
+@dataclass(frozen=True)
+class SetSensors:
+    sensors: tuple[SensorConfig, ...]
+
+
+@dataclass(frozen=True)
+class SetConstraints:
+    constraints: tuple[dict, ...]
+
+
+@dataclass(frozen=True)
+class SetSettings:
+    values: dict
+
+
+@dataclass(frozen=True)
+class SetMethod:
+    name: str
+    ghosts: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class Seek:
+    frame: int
+
+
+@dataclass(frozen=True)
+class Play:
+    speed: float = 1.0
+    loop: bool = True
+
+
+@dataclass(frozen=True)
+class Pause:
+    pass
+
+
+@dataclass(frozen=True)
+class Step:
+    delta: int = 1
+
+
+@dataclass(frozen=True)
+class DecodeLatent:
+    """Decode ``latent`` (L,) with the method's decoder; the optimizer is paused meanwhile."""
+
+    latent: np.ndarray
+
+
+@dataclass(frozen=True)
+class Stop:
+    pass
+
+
+def _ro(a: Any) -> Any:
+    if isinstance(a, np.ndarray):
+        a = a.copy()
+        a.flags.writeable = False
+    return a
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """One solved frame, as plain read-only numpy data.
+
+    Attributes
+    ----------
+    seq : int
+        Increases with every snapshot (cheap change detection for readers).
+    frame, num_frames : int
+        Frame index shown and clip length.
+    positions : ndarray (22, 3)
+        World joint positions of the reconstruction, metres.
+    ground_truth : ndarray (22, 3)
+        World joint positions of the loaded clip at ``frame``.
+    ghosts : dict of str to ndarray (22, 3)
+        Other methods' reconstructions of the same frame.
+    target_joints : tuple of str
+        Sensors sent to the method, in order; ``target_positions`` (S, 3),
+        ``target_rotations`` (S, 4) and ``target_connected`` (S,) bool follow it.
+    losses : tuple of dict
+        Per optimizer iteration, every loss term by name plus ``"total"``.
+    latent : ndarray (L,) or None
+        The method's latent vector for this frame.
+    iterations : int
+        Optimizer iterations spent on the frame; ``ms`` wall time of the solve.
+    warnings : int
+        Warnings counted since the clip was loaded; ``messages`` holds this frame's.
+    error : str
+        Non-empty when the method failed on this frame (the pose is the last good one).
+    engine_fps : float
+        Solved frames per second (moving average).
+    decoded : ndarray (22, 3) or None
+        Pose decoded from a latent sent with :class:`DecodeLatent` (debug mode).
+    """
+
+    seq: int
+    frame: int
+    num_frames: int
+    positions: np.ndarray
+    ground_truth: np.ndarray
+    ghosts: dict[str, np.ndarray] = field(default_factory=dict)
+    target_joints: tuple[str, ...] = ()
+    target_positions: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    target_rotations: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))
+    target_connected: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
+    gizmos: tuple[tuple[str, dict], ...] = ()
+    losses: tuple[dict[str, float], ...] = ()
+    latent: np.ndarray | None = None
+    iterations: int = 0
+    ms: float = 0.0
+    warnings: int = 0
+    messages: tuple[str, ...] = ()
+    error: str = ""
+    engine_fps: float = 0.0
+    playing: bool = False
+    method: str = ""
+    can_decode: bool = False
+    decoded: np.ndarray | None = None

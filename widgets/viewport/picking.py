@@ -1,0 +1,96 @@
+"""Ctrl + left-drag on a joint of the reconstruction moves it on a camera-facing plane.
+
+The press is tested against the joints' screen positions (within ``PICK_RADIUS_PX``); on
+a hit the camera interaction is suspended until release, and every mouse move is turned
+into a world position: the mouse ray intersected with the plane through the grabbed
+joint that faces the camera. Without Ctrl, or off every joint, the camera behaves as
+usual.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+import pyvista as pv
+
+from engine.skeleton import JOINT_NAMES
+
+PICK_RADIUS_PX = 14.0
+
+
+class JointDragger:
+    """Emits ``on_drag(joint name, world position (3,) metres)`` while dragging."""
+
+    def __init__(self, plotter: pv.Plotter, on_drag: Callable[[str, np.ndarray], None]) -> None:
+        self._plotter = plotter
+        self._on_drag = on_drag
+        self.positions: np.ndarray | None = None
+        self.joint: int | None = None
+        self._origin = np.zeros(3)
+        iren = plotter.iren.interactor
+        self._style = iren.GetInteractorStyle()
+        # pyvista's style handles press/release in its own observers; ours run first
+        # (priority 10) and abort the event when they take it. A style observer on
+        # MouseMoveEvent replaces the style's handler (VTK's HandleObservers rule), so
+        # mouse moves are forwarded explicitly when no joint is held.
+        self._commands = {}
+        for event in ("LeftButtonPressEvent", "MouseMoveEvent", "LeftButtonReleaseEvent"):
+            tag = self._style.AddObserver(event, self._handle, 10.0)
+            self._commands[event] = self._style.GetCommand(tag)
+
+    def _take(self, event: str) -> None:
+        self._commands[event].SetAbortFlag(1)
+
+    def _handle(self, obj: object, event: str) -> None:
+        iren = self._plotter.iren.interactor
+        x, y = iren.GetEventPosition()
+        if event == "LeftButtonPressEvent":
+            if iren.GetControlKey() and self.press(x, y):
+                self._take(event)
+        elif event == "MouseMoveEvent":
+            if self.joint is not None:
+                self.move(x, y)
+            else:
+                self._style.OnMouseMove()
+        elif event == "LeftButtonReleaseEvent" and self.joint is not None:
+            self.joint = None
+            self._take(event)
+
+    def _to_display(self, points: np.ndarray) -> np.ndarray:
+        ren = self._plotter.renderer
+        out = []
+        for p in points:
+            ren.SetWorldPoint(*p, 1.0)
+            ren.WorldToDisplay()
+            out.append(ren.GetDisplayPoint()[:2])
+        return np.array(out)
+
+    def press(self, x: float, y: float) -> bool:
+        """Grab the joint under display pixel (x, y); True on a hit."""
+        if self.positions is None:
+            return False
+        dist = np.linalg.norm(self._to_display(self.positions) - [x, y], axis=1)
+        j = int(np.argmin(dist))
+        if dist[j] > PICK_RADIUS_PX:
+            return False
+        self.joint, self._origin = j, self.positions[j].copy()
+        return True
+
+    def move(self, x: float, y: float) -> None:
+        """Drag the grabbed joint to display pixel (x, y)."""
+        ren = self._plotter.renderer
+        ends = []
+        for z in (0.0, 1.0):
+            ren.SetDisplayPoint(x, y, z)
+            ren.DisplayToWorld()
+            w = np.array(ren.GetWorldPoint())
+            ends.append(w[:3] / w[3])
+        cam = self._plotter.camera
+        normal = np.asarray(cam.focal_point) - np.asarray(cam.position)
+        direction = ends[1] - ends[0]
+        denom = float(direction @ normal)
+        if abs(denom) < 1e-12 or self.joint is None:
+            return
+        t = float((self._origin - ends[0]) @ normal) / denom
+        self._on_drag(JOINT_NAMES[self.joint], ends[0] + t * direction)

@@ -24,14 +24,12 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.methods.base import FrameResult, Method, SensorFrame
-from engine.worker_methods import apply_constraints, apply_sensor_weights, apply_settings, make_method
-from engine.worker_sensors import SensorSource
-
-
 from engine.worker_messages import (  # noqa: F401  (re-exported: the worker's API)
     DecodeLatent, Pause, Play, Seek, SetConstraints, SetMethod, SetMotion, SetSensors,
     SetSettings, Snapshot, Step, Stop, _ro,
 )  # fmt: skip
+from engine.worker_methods import apply_constraints, apply_sensor_weights, apply_settings, make_method
+from engine.worker_sensors import SensorSource
 
 
 def _losses(res: FrameResult | None, sf: SensorFrame) -> tuple[dict[str, float], ...]:

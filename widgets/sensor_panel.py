@@ -47,6 +47,7 @@ class SensorPanel(QWidget):
         top.addWidget(self.preset, 1)
         outer.addLayout(top)
         self.grid = QGridLayout()
+        self.grid.setColumnStretch(2, 1)  # the weight slider takes the spare width
         outer.addLayout(self.grid)
         fail = QHBoxLayout()
         fail.addWidget(QLabel("Failure length"))
@@ -105,6 +106,7 @@ class SensorPanel(QWidget):
             weight = QLabeledDoubleSlider(Qt.Orientation.Horizontal)
             weight.setRange(0.0, 5.0)
             weight.setValue(1.0)
+            weight.setMinimumWidth(110)
             fail = QPushButton("Fail", toolTip="Simulate losing this tracker from the current frame")
             reset = QPushButton("Reset", toolTip="Reset drag offset and simulated failures")
             enabled.toggled.connect(lambda v, j=j: self._edit(j, enabled=bool(v)))

@@ -1,0 +1,66 @@
+"""``dragposer-studio train vae|predictor``: train the models on prepared data.
+
+Settings come from the dataclass defaults, then ``--config FILE.toml``, then
+``--set key=value`` (repeatable), then the common flags. Runs unchanged under
+``torchrun --nproc_per_node=N`` (DistributedDataParallel; gloo on CPU, nccl on CUDA).
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+
+def _common(p: argparse.ArgumentParser, out_default: str) -> None:
+    p.add_argument("--data", type=Path, default=Path("prepared"), help="output of `data prepare` (default: prepared)")
+    p.add_argument("--out", type=Path, default=Path(out_default), help=f"run folder (default: {out_default})")
+    p.add_argument("--config", type=Path, help="TOML file with settings")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override one setting")
+    p.add_argument("--epochs", type=int, help="maximum epochs")
+    p.add_argument("--batch-size", type=int, dest="batch_size", help="batch size per process")
+    p.add_argument("--lr", type=float, help="peak learning rate")
+    p.add_argument("--minutes", type=float, help="wall-clock budget; stops cleanly after the epoch that reaches it")
+    p.add_argument("--seed", type=int, help="random seed")
+    p.add_argument("--resume", action="store_true", help="continue from OUT/last.pt")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("train", help="train the pose VAE or the temporal predictor")
+    tsub = p.add_subparsers(dest="train_command", metavar="MODEL")
+    v = tsub.add_parser("vae", help="train the pose VAE", description=__doc__)
+    _common(v, "runs/vae")
+    v.set_defaults(func=_train_vae)
+    q = tsub.add_parser("predictor", help="train the temporal predictor", description=__doc__)
+    _common(q, "runs/predictor")
+    q.add_argument("--vae", type=Path, default=Path("runs/vae/vae.pt"), help="trained VAE weights")
+    q.set_defaults(func=_train_predictor)
+    p.set_defaults(func=lambda args: p.print_help() or 0)
+
+
+def _direct(args: argparse.Namespace) -> dict:
+    return {k: getattr(args, k) for k in ("epochs", "batch_size", "lr", "minutes", "seed")}
+
+
+def _train_vae(args: argparse.Namespace) -> int:
+    from engine.training.common import load_config
+    from engine.training.vae import VAETrainConfig, train_vae
+
+    cfg = load_config(VAETrainConfig, args.config, args.set, **_direct(args))
+    meta = train_vae(args.data, args.out, cfg, resume=args.resume, progress=not args.quiet)
+    if meta:
+        print(f"{args.out}/vae.pt: {meta.get('epochs')} epochs, {meta.get('minutes')} min, "
+              f"val {meta.get('val_pos_cm', float('nan')):.2f} cm / {meta.get('val_rot_deg', float('nan')):.2f} deg")
+    return 0
+
+
+def _train_predictor(args: argparse.Namespace) -> int:
+    from engine.training.common import load_config
+    from engine.training.predictor import PredictorTrainConfig, train_predictor
+
+    cfg = load_config(PredictorTrainConfig, args.config, args.set, **_direct(args))
+    meta = train_predictor(args.data, args.vae, args.out, cfg, resume=args.resume, progress=not args.quiet)
+    if meta:
+        print(f"{args.out}/predictor.pt: {meta.get('epochs')} epochs, {meta.get('minutes')} min, "
+              f"val latent MSE {meta.get('val_mse', float('nan')):.4g}")
+    return 0

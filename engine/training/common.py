@@ -1,0 +1,161 @@
+"""What every training command shares: config files with overrides, seeding, process
+groups for ``torchrun``, checkpoints and loss curves."""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import io
+import os
+import random
+import tomllib
+import typing
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+import torch.distributed as dist
+
+from engine.atomic import atomic_path, write_bytes
+from engine.errors import UserError
+
+
+def load_config(cls: type, path: Path | None = None, overrides: list[str] | None = None, **direct: Any):
+    """Build dataclass ``cls`` from defaults, then a TOML file, then ``key=value`` overrides,
+    then ``direct`` keyword values that are not None. Errors name the file and field."""
+    values: dict[str, Any] = {}
+    if path is not None:
+        try:
+            values.update(tomllib.loads(Path(path).read_text()))
+        except (OSError, tomllib.TOMLDecodeError) as exc:
+            raise UserError(f"{path}: cannot read config: {exc}") from exc
+    hints = typing.get_type_hints(cls)
+    for item in overrides or []:
+        if "=" not in item:
+            raise UserError(f"--set {item!r}: expected key=value")
+        key, raw = item.split("=", 1)
+        if key not in hints:
+            raise UserError(f"--set {key}: unknown setting; known: {', '.join(sorted(hints))}")
+        values[key] = _convert(key, raw, hints[key])
+    values.update({k: v for k, v in direct.items() if v is not None})
+    unknown = set(values) - set(hints)
+    if unknown:
+        raise UserError(f"{path or 'config'}: unknown settings {sorted(unknown)}")
+    for key, val in values.items():
+        if isinstance(val, list):
+            values[key] = tuple(val)
+    return cls(**values)
+
+
+def _convert(key: str, raw: str, hint: Any) -> Any:
+    try:
+        if hint is bool:
+            if raw.lower() not in ("true", "false", "1", "0"):
+                raise ValueError(raw)
+            return raw.lower() in ("true", "1")
+        if hint in (int, float, str):
+            return hint(raw)
+        return tomllib.loads(f"v = {raw}")["v"]
+    except (ValueError, tomllib.TOMLDecodeError) as exc:
+        raise UserError(f"--set {key}={raw}: not a valid {getattr(hint, '__name__', hint)}") from exc
+
+
+def config_dict(cfg: Any) -> dict:
+    out = dataclasses.asdict(cfg)
+    return {k: list(v) if isinstance(v, tuple) else v for k, v in out.items()}
+
+
+def seed_everything(seed: int) -> None:
+    random.seed(seed)
+    np.random.seed(seed)
+    torch.manual_seed(seed)
+
+
+class Distributed:
+    """Process-group facts; a single process when not launched by ``torchrun``."""
+
+    def __init__(self) -> None:
+        self.world = int(os.environ.get("WORLD_SIZE", "1"))
+        self.rank = int(os.environ.get("RANK", "0"))
+        self.local_rank = int(os.environ.get("LOCAL_RANK", "0"))
+        self.device = torch.device("cpu")
+        if torch.cuda.is_available():
+            self.device = torch.device("cuda", self.local_rank)
+            torch.cuda.set_device(self.device)
+        if self.world > 1 and not dist.is_initialized():
+            dist.init_process_group("nccl" if torch.cuda.is_available() else "gloo")
+        if self.device.type == "cpu":
+            cores = os.cpu_count() or 1
+            torch.set_num_threads(max(1, cores // self.world))
+
+    @property
+    def main(self) -> bool:
+        return self.rank == 0
+
+    def barrier(self) -> None:
+        if self.world > 1:
+            dist.barrier()
+
+    def mean(self, value: float) -> float:
+        if self.world == 1:
+            return value
+        t = torch.tensor([value], dtype=torch.float64)
+        dist.all_reduce(t)
+        return float(t.item()) / self.world
+
+    def close(self) -> None:
+        if self.world > 1 and dist.is_initialized():
+            dist.destroy_process_group()
+
+
+def save_checkpoint(path: Path, payload: dict) -> None:
+    """``torch.save`` atomically."""
+    with atomic_path(path, suffix=".pt") as tmp:
+        torch.save(payload, tmp)
+
+
+class CurveLog:
+    """Per-epoch losses written as CSV and a PNG plot beside the checkpoints."""
+
+    def __init__(self, out_dir: Path, rows: list[dict] | None = None):
+        self.out_dir = Path(out_dir)
+        self.rows: list[dict] = list(rows or [])
+
+    def append(self, row: dict) -> None:
+        self.rows.append(row)
+        self.write()
+
+    def write(self) -> None:
+        if not self.rows:
+            return
+        keys = list(dict.fromkeys(k for r in self.rows for k in r))
+        buf = io.StringIO()
+        w = csv.DictWriter(buf, fieldnames=keys)
+        w.writeheader()
+        w.writerows(self.rows)
+        write_bytes(self.out_dir / "losses.csv", buf.getvalue().encode())
+        self._plot(keys)
+
+    def _plot(self, keys: list[str]) -> None:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        series = [k for k in keys if k not in ("epoch", "step", "minutes")]
+        fig, ax = plt.subplots(figsize=(8, 4.5))
+        epochs = [r.get("epoch", i) for i, r in enumerate(self.rows)]
+        for k in series:
+            vals = [r.get(k) for r in self.rows]
+            if all(v is not None and v > 0 for v in vals):
+                ax.plot(epochs, vals, label=k)
+        ax.set_yscale("log")
+        ax.set_xlabel("epoch")
+        ax.set_ylabel("loss / error")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7)
+        fig.tight_layout()
+        with atomic_path(self.out_dir / "losses.png", suffix=".png") as tmp:
+            fig.savefig(tmp, dpi=90)
+        plt.close(fig)

@@ -1,0 +1,201 @@
+"""Training of the pose VAE (DragPoser sec. 4.3 and 5, "Training details").
+
+Loss = w_rot L_Q + w_fk L_FK + w_kl L_KLD + w_cont L_C with the paper's weights
+(1, 100, 0.001, 1). L_C, the continuity loss, takes one gradient step in latent space
+from pose i towards pose i+1 and asks the decoder to land on pose i+1 (paper eqs. 11-13);
+the inner gradient is taken with ``create_graph=True`` so the step itself is trained.
+Every term is computed inside one ``forward`` so DistributedDataParallel sees exactly
+one forward and one backward per step.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import torch
+from torch import nn
+from tqdm import tqdm
+
+from engine.kinematics import quaternion as Q
+from engine.kinematics.features import root_space_fk
+from engine.models.vae import PoseVAE, VAEConfig, pose_distance
+from engine.training.common import CurveLog, Distributed, config_dict, save_checkpoint, seed_everything
+from engine.training.data import PoseData, load_split, read_manifest
+
+FORMAT_VERSION = 1
+
+
+@dataclass
+class VAETrainConfig:
+    """Everything a VAE run depends on; every field can be set with ``--set key=value``."""
+
+    latent: int = 24
+    channels: tuple[int, int, int, int] = (32, 48, 64, 96)
+    w_rot: float = 1.0
+    w_fk: float = 100.0
+    w_kl: float = 0.001
+    w_cont: float = 1.0
+    batch_size: int = 256
+    lr: float = 1e-3
+    lr_final: float = 5e-5
+    weight_decay: float = 1e-4
+    epochs: int = 30
+    minutes: float = 50.0
+    seed: int = 0
+    val_max_frames: int = 20000
+
+    def model_config(self) -> VAEConfig:
+        return VAEConfig(latent=self.latent, channels=tuple(self.channels))
+
+
+class VAEObjective(nn.Module):
+    """Wraps the VAE; ``forward`` returns the weighted total and each term."""
+
+    def __init__(self, vae: PoseVAE, cfg: VAETrainConfig):
+        super().__init__()
+        self.vae, self.cfg = vae, cfg
+
+    def forward(self, b: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
+        vae, cfg = self.vae, self.cfg
+        mu, logvar = vae.encode(b["dq"])
+        z = mu + torch.randn_like(mu) * torch.exp(0.5 * logvar)
+        rot, disp = vae.decode(z)
+        l_rot = pose_distance(rot, disp, b["rot"], b["disp"], vae.disp_std).mean()
+        pos, _ = root_space_fk(rot, b["offsets"])
+        l_fk = ((pos - b["pos"]) ** 2).mean()
+        l_kl = (-0.5 * (1 + logvar - mu**2 - logvar.exp()).sum(-1)).mean()
+        out = {"rot": l_rot, "fk": l_fk, "kl": l_kl}
+        total = cfg.w_rot * l_rot + cfg.w_fk * l_fk + cfg.w_kl * l_kl
+        if cfg.w_cont > 0:
+            inner = pose_distance(rot, disp, b["rot_next"], b["disp_next"], vae.disp_std).sum()
+            (grad,) = torch.autograd.grad(inner, z, create_graph=True)
+            rot2, disp2 = vae.decode(z - grad)
+            l_c = pose_distance(rot2, disp2, b["rot_next"], b["disp_next"], vae.disp_std).mean()
+            out["cont"] = l_c
+            total = total + cfg.w_cont * l_c
+        out["total"] = total
+        return out
+
+
+def batch_of(data: PoseData, idx: torch.Tensor) -> dict[str, torch.Tensor]:
+    nxt = idx + 1
+    return {
+        "dq": data.dq[idx], "rot": data.rot[idx], "disp": data.disp[idx], "pos": data.pos[idx],
+        "offsets": data.offsets[idx], "rot_next": data.rot[nxt], "disp_next": data.disp[nxt],
+    }  # fmt: skip
+
+
+@torch.no_grad()
+def reconstruction_error(vae: PoseVAE, data: PoseData, max_frames: int | None = None, batch: int = 4096) -> dict:
+    """Encode (mean) -> decode every frame; mean joint position error (cm, root space) and
+    mean local joint rotation error (degrees, joints 1-21) against the ground truth."""
+    vae.eval()
+    n = len(data) if max_frames is None else min(len(data), max_frames)
+    pos_err, rot_err, count = 0.0, 0.0, 0
+    for s in range(0, n, batch):
+        idx = torch.arange(s, min(n, s + batch))
+        mu, _ = vae.encode(data.dq[idx])
+        rot, _ = vae.decode(mu)
+        pos, _ = root_space_fk(rot, data.offsets[idx])
+        pos_err += torch.linalg.vector_norm(pos - data.pos[idx], dim=-1).mean(-1).sum().item()
+        rot_err += Q.angle(rot[:, 1:], data.rot[idx, 1:]).mean(-1).sum().item()
+        count += idx.numel()
+    return {"val_pos_cm": 100.0 * pos_err / count, "val_rot_deg": math.degrees(rot_err / count)}
+
+
+def weights_payload(vae: PoseVAE, cfg: VAETrainConfig, meta: dict) -> dict:
+    return {
+        "format_version": FORMAT_VERSION,
+        "kind": "vae",
+        "config": vae.config.to_dict(),
+        "state_dict": {k: v.detach().cpu() for k, v in vae.state_dict().items()},
+        "train_config": config_dict(cfg),
+        "meta": meta,
+    }
+
+
+def train_vae(data_dir: Path, out_dir: Path, cfg: VAETrainConfig, resume: bool = False, progress: bool = True) -> dict:
+    """Train (or resume) a VAE; writes ``last.pt``, ``best.pt``, ``vae.pt``, ``losses.csv/png``.
+
+    Returns the final metadata (epochs, minutes, validation errors)."""
+    ddp = Distributed()
+    out_dir = Path(out_dir)
+    if ddp.main:
+        out_dir.mkdir(parents=True, exist_ok=True)
+    seed_everything(cfg.seed)
+    manifest = read_manifest(data_dir)
+    train = load_split(data_dir, "train")
+    val = load_split(data_dir, "val")
+    vae = PoseVAE(cfg.model_config(), manifest["stats"]).to(ddp.device)
+    objective: nn.Module = VAEObjective(vae, cfg)
+    if ddp.world > 1:
+        objective = nn.parallel.DistributedDataParallel(objective)
+    opt = torch.optim.AdamW(vae.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
+    pairs = torch.nonzero(train.has_next).squeeze(1)
+    steps_per_epoch = max(1, len(pairs) // (cfg.batch_size * ddp.world))
+    total_steps = steps_per_epoch * cfg.epochs
+    sched = torch.optim.lr_scheduler.LambdaLR(
+        opt, lambda s: (cfg.lr_final + (cfg.lr - cfg.lr_final) * 0.5 * (1 + math.cos(math.pi * min(1.0, s / total_steps)))) / cfg.lr
+    )
+    start_epoch, minutes_before, best = 0, 0.0, float("inf")
+    log = CurveLog(out_dir)
+    last = out_dir / "last.pt"
+    if resume and last.is_file():
+        ck = torch.load(last, map_location="cpu", weights_only=False)
+        vae.load_state_dict(ck["state_dict"])
+        opt.load_state_dict(ck["optimizer"])
+        sched.load_state_dict(ck["scheduler"])
+        start_epoch, minutes_before, best = ck["epoch"], ck["minutes"], ck["best"]
+        log = CurveLog(out_dir, ck["curve"])
+        torch.set_rng_state(ck["rng"])
+    t0 = time.monotonic()
+    meta: dict = {"data_hash": manifest.get("hash"), "train_frames": len(train), "val_frames": len(val)}
+    for epoch in range(start_epoch, cfg.epochs):
+        vae.train()
+        gen = torch.Generator().manual_seed(cfg.seed * 1000 + epoch)
+        perm = pairs[torch.randperm(len(pairs), generator=gen)]
+        sums: dict[str, float] = {}
+        bar = tqdm(range(steps_per_epoch), desc=f"vae epoch {epoch + 1}/{cfg.epochs}", disable=not (progress and ddp.main),
+                   leave=False)  # fmt: skip
+        for step in bar:
+            lo = (step * ddp.world + ddp.rank) * cfg.batch_size
+            idx = perm[lo : lo + cfg.batch_size]
+            losses = objective(batch_of(train, idx))
+            opt.zero_grad(set_to_none=True)
+            losses["total"].backward()
+            opt.step()
+            sched.step()
+            for k, v in losses.items():
+                sums[k] = sums.get(k, 0.0) + float(v.detach())
+            if step % 10 == 0:
+                bar.set_postfix({k: f"{v / (step + 1):.2e}" for k, v in sums.items()})
+        row = {"epoch": epoch + 1, **{k: ddp.mean(v / steps_per_epoch) for k, v in sums.items()}}
+        minutes = minutes_before + (time.monotonic() - t0) / 60.0
+        if ddp.main:
+            row.update(reconstruction_error(vae, val, cfg.val_max_frames))
+            row["minutes"] = round(minutes, 2)
+            log.append(row)
+            if progress:
+                tqdm.write(" ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}" for k, v in row.items()))
+            meta.update(epochs=epoch + 1, minutes=round(minutes, 2), val_pos_cm=row["val_pos_cm"],
+                        val_rot_deg=row["val_rot_deg"])  # fmt: skip
+            if row["val_pos_cm"] < best:
+                best = row["val_pos_cm"]
+                save_checkpoint(out_dir / "best.pt", weights_payload(vae, cfg, dict(meta)))
+            save_checkpoint(last, {
+                "state_dict": vae.state_dict(), "optimizer": opt.state_dict(), "scheduler": sched.state_dict(),
+                "epoch": epoch + 1, "minutes": minutes, "best": best, "curve": log.rows, "rng": torch.get_rng_state(),
+            })  # fmt: skip
+        ddp.barrier()
+        if cfg.minutes and minutes >= cfg.minutes:
+            if ddp.main and progress:
+                tqdm.write(f"time budget of {cfg.minutes} min reached after epoch {epoch + 1}")
+            break
+    if ddp.main:
+        meta["finished"] = True
+        save_checkpoint(out_dir / "vae.pt", weights_payload(vae, cfg, meta))
+    ddp.close()
+    return meta

@@ -5,18 +5,25 @@ flag, and a differentiable :meth:`Constraint.loss` of the current :class:`PoseSt
 The optimizer sums ``weight * loss`` over enabled constraints. Parameters can change
 between frames (the GUI does this live). Each kind registers itself by its ``kind``
 string, so a scene can be saved to JSON and loaded back (:func:`from_dict`).
+
+Array parameters are numpy arrays; in JSON they are lists, with non-finite entries
+written as ``null`` (a NaN position means "not set yet", e.g. a pin that captures the
+joint's position on first use).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
+from collections.abc import Callable
 from typing import Any, ClassVar
 
 import numpy as np
 import torch
 
+from engine import skeleton as sk
 from engine.errors import UserError
 
 #: kind string -> constraint class; filled by subclasses as they are defined.
@@ -41,6 +48,11 @@ class PoseState:
         The previous frame's solved positions (for pins and foot contact).
     frame : int
         Frame index in the clip.
+    prediction : Tensor (L,) or None
+        The temporal predictor's latent for this frame, if it has one.
+    rotation_matrices : Tensor (22, 3, 3) or None
+        The world rotations as matrices, when the producer has them (the optimizer
+        does); :func:`world_rotation_matrix` falls back to ``rotations``.
     """
 
     positions: torch.Tensor
@@ -49,11 +61,59 @@ class PoseState:
     latent: torch.Tensor
     previous_positions: torch.Tensor | None = None
     frame: int = 0
+    prediction: torch.Tensor | None = None
+    rotation_matrices: torch.Tensor | None = None
+
+
+def quat_to_matrix(q: torch.Tensor) -> torch.Tensor:
+    """Unit quaternions ``(..., 4)`` (w, x, y, z) to rotation matrices ``(..., 3, 3)``."""
+    w, x, y, z = q.unbind(-1)
+    m = torch.stack(
+        (1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),
+         2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
+         2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)),
+        dim=-1,
+    )  # fmt: skip
+    return m.reshape(q.shape[:-1] + (3, 3))
+
+
+def world_rotation_matrix(state: PoseState, joint: int) -> torch.Tensor:
+    """World rotation ``(3, 3)`` of one joint, from whichever form the state carries."""
+    if state.rotation_matrices is not None:
+        return state.rotation_matrices[joint]
+    return quat_to_matrix(state.rotations[joint])
+
+
+def rotation_distance(state: PoseState, joint: int, target: np.ndarray) -> torch.Tensor:
+    """``1 - <q, q_target>^2 = sin^2(angle / 2)`` between a joint's world rotation and a
+    target quaternion ``(4,)``, computed as ``(3 - trace(R_t^T R)) / 4``; scalar in [0, 1]."""
+    r = world_rotation_matrix(state, joint)
+    t = np.asarray(target, dtype=np.float64)
+    rt = quat_to_matrix(vec(t / max(np.linalg.norm(t), 1e-12), r))
+    return ((3.0 - (rt * r).sum()) * 0.25).clamp(0.0, 1.0)
+
+
+def joint_index(name: str, field: str = "joint", kind: str = "") -> int:
+    """Index of a canonical joint; a :class:`UserError` names the field otherwise."""
+    try:
+        return sk.JOINT_INDEX[name]
+    except (KeyError, TypeError):
+        where = f"constraint {kind!r}: " if kind else ""
+        raise UserError(f"{where}field {field!r}: unknown joint {name!r}") from None
+
+
+def vec(x: Any, like: torch.Tensor) -> torch.Tensor:
+    """A numpy parameter as a tensor of ``like``'s dtype and device (no gradient)."""
+    return torch.as_tensor(np.asarray(x, dtype=np.float64), dtype=like.dtype, device=like.device)
 
 
 @dataclass
 class Constraint(ABC):
-    """Base class. Subclasses are dataclasses whose extra fields are their parameters."""
+    """Base class. Subclasses are dataclasses whose extra fields are their parameters.
+
+    Subclasses check their parameters in :meth:`check` (called on construction and by
+    :func:`from_dict`), raising :class:`UserError` naming the field.
+    """
 
     kind: ClassVar[str] = ""
     #: Human label shown in the GUI and loss plots (unique within a scene).
@@ -66,6 +126,29 @@ class Constraint(ABC):
         if cls.kind:
             REGISTRY[cls.kind] = cls
 
+    def __post_init__(self) -> None:
+        if not self.name:
+            self.name = self.kind
+        try:
+            self.weight = float(self.weight)
+        except (TypeError, ValueError):
+            raise UserError(f"constraint {self.kind!r}: field 'weight' must be a number") from None
+        if not math.isfinite(self.weight) or self.weight < 0:
+            raise UserError(f"constraint {self.kind!r}: field 'weight' must be finite and >= 0")
+        for f in dataclasses.fields(self):
+            default = _default(f)
+            if isinstance(default, np.ndarray):
+                value = np.asarray(getattr(self, f.name), dtype=np.float64)
+                if value.shape != default.shape:
+                    raise UserError(
+                        f"constraint {self.kind!r}: field {f.name!r} needs {default.size} numbers, got {value.size}"
+                    )
+                setattr(self, f.name, value)
+        self.check()
+
+    def check(self) -> None:
+        """Validate parameters (override); raise :class:`UserError` naming the field."""
+
     @abstractmethod
     def loss(self, state: PoseState) -> torch.Tensor:
         """Scalar, non-negative; zero when the constraint is satisfied."""
@@ -74,20 +157,51 @@ class Constraint(ABC):
         """Whether the offline optimizer may stop on this constraint's account."""
         return True
 
-    def gizmo(self) -> dict[str, Any]:
-        """Plain-numpy description for the viewport (e.g. ``{"type": "point", "position": ...}``)."""
+    @classmethod
+    def batch(cls, items: "list[Constraint]", like: torch.Tensor) -> "Callable[[PoseState], torch.Tensor] | None":
+        """Optional fast path: one function giving the losses of many constraints of this
+        kind at once, ``(len(items),)``, equal to ``[c.loss(state) for c in items]``.
+
+        The optimizer calls it once per frame (parameters are frozen for the frame's
+        solve) and then once per iteration, which saves graph nodes and Python work
+        when a kind has many instances (sensors). ``None`` means "no fast path".
+        """
+        return None
+
+    def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
+        """Plain-numpy description for the viewport (e.g. ``{"type": "point", "position": ...}``).
+
+        ``positions (22, 3)``, the current world joint positions in metres, lets kinds
+        that relate joints (distance, look-at) draw lines; without it they draw what
+        they can from their parameters alone (possibly nothing: ``{}``).
+        """
         return {}
 
     def to_dict(self) -> dict[str, Any]:
+        """Plain-JSON form: ``kind`` plus every field; arrays as lists, NaN as ``None``."""
         out: dict[str, Any] = {"kind": self.kind}
         for f in dataclasses.fields(self):
             v = getattr(self, f.name)
-            out[f.name] = v.tolist() if isinstance(v, np.ndarray) else v
+            if isinstance(v, np.ndarray):
+                v = [float(x) if math.isfinite(x) else None for x in v.ravel().tolist()]
+            elif isinstance(v, tuple):
+                v = list(v)
+            out[f.name] = v
         return out
+
+
+def _default(f: dataclasses.Field) -> Any:
+    if f.default is not dataclasses.MISSING:
+        return f.default
+    if f.default_factory is not dataclasses.MISSING:  # type: ignore[misc]
+        return f.default_factory()  # type: ignore[misc]
+    return None
 
 
 def from_dict(data: dict[str, Any]) -> Constraint:
     """Rebuild a constraint saved with :meth:`Constraint.to_dict`; errors name the field."""
+    if not isinstance(data, dict):
+        raise UserError(f"constraint: expected an object, got {type(data).__name__}")
     kind = data.get("kind")
     if kind not in REGISTRY:
         raise UserError(f"unknown constraint kind {kind!r}; known: {', '.join(sorted(REGISTRY))}")
@@ -99,12 +213,23 @@ def from_dict(data: dict[str, Any]) -> Constraint:
             continue
         if key not in names:
             raise UserError(f"constraint {kind!r}: unknown field {key!r}")
-        default = names[key].default
-        if isinstance(default, np.ndarray) or (
-            names[key].default_factory is not dataclasses.MISSING  # type: ignore[misc]
-            and isinstance(names[key].default_factory(), np.ndarray)  # type: ignore[misc]
-        ):
-            value = np.asarray(value, dtype=float)
+        default = _default(names[key])
+        if isinstance(default, np.ndarray):
+            try:
+                value = np.array([np.nan if v is None else v for v in np.ravel(value)], dtype=np.float64)
+            except (TypeError, ValueError):
+                raise UserError(f"constraint {kind!r}: field {key!r} must be a list of numbers") from None
+        elif isinstance(default, tuple):
+            value = tuple(value) if isinstance(value, (list, tuple)) else value
+        elif isinstance(default, bool):
+            if not isinstance(value, bool):
+                raise UserError(f"constraint {kind!r}: field {key!r} must be true or false")
+        elif isinstance(default, (int, float)):
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise UserError(f"constraint {kind!r}: field {key!r} must be a number")
+            value = type(default)(value)
+        elif isinstance(default, str) and not isinstance(value, str):
+            raise UserError(f"constraint {kind!r}: field {key!r} must be a string")
         kwargs[key] = value
     try:
         return cls(**kwargs)

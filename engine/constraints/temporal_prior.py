@@ -1,0 +1,26 @@
+"""``temporal_prior``: stay near the temporal predictor's latent (DragPoser Algorithm 1).
+
+Loss: mean squared difference between the latent being optimised and the predictor's
+latent for the frame (``PoseState.prediction``); zero when there is no prediction yet.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar
+
+import torch
+
+from engine.constraints.base import Constraint, PoseState
+
+
+@dataclass
+class TemporalPriorConstraint(Constraint):
+    """MSE between the latent and the temporal predictor's latent (no parameters)."""
+
+    kind: ClassVar[str] = "temporal_prior"
+
+    def loss(self, state: PoseState) -> torch.Tensor:
+        if state.prediction is None:
+            return state.latent.new_zeros(())
+        return ((state.latent - state.prediction.detach()) ** 2).mean()

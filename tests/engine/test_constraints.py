@@ -1,0 +1,191 @@
+"""Constraint kinds: losses fall towards satisfaction, hand-built states, JSON, errors."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+import torch
+
+from engine import skeleton as sk
+from engine.constraints import REGISTRY, from_dict
+from engine.constraints import (
+    BalanceConstraint, BoundsConstraint, DistanceConstraint, EndEffectorConstraint, FloorConstraint,
+    LookAtConstraint, PinConstraint, SensorConstraint, TemporalPriorConstraint,
+)  # fmt: skip
+from engine.constraints.base import PoseState
+from engine.errors import UserError
+from engine.kinematics import quaternion as Q
+from engine.optimizer_pose import LevelFK
+
+J = sk.JOINT_INDEX
+FK = LevelFK(sk.REST_OFFSETS, dtype=torch.float64)
+REST = sk.Skeleton.canonical().rest_positions()
+STAND = np.array([0.0, 0.0, 1.0])  # root height with the toes just above the floor
+
+
+def state_of(local: torch.Tensor, root: torch.Tensor, latent=None, prediction=None, previous=None) -> PoseState:
+    pos, rot = FK(Q.normalize(local), root)
+    lat = torch.zeros(4, dtype=torch.float64) if latent is None else latent
+    return PoseState(pos, rot, local, lat, previous, 0, prediction)
+
+
+def rest_state(root=STAND, **kw) -> PoseState:
+    return state_of(Q.identity((22,), like=torch.zeros(1, dtype=torch.float64)),
+                    torch.as_tensor(root, dtype=torch.float64), **kw)  # fmt: skip
+
+
+def descend(constraint, steps: int = 40, lr: float = 0.02, previous=None):
+    """Adam on local rotations and root position; returns the loss before and after."""
+    torch.manual_seed(0)
+    local = (Q.identity((22,), like=torch.zeros(1, dtype=torch.float64))
+             + 0.05 * torch.randn(22, 4, dtype=torch.float64)).requires_grad_(True)  # fmt: skip
+    root = torch.tensor(STAND, dtype=torch.float64, requires_grad=True)
+    opt = torch.optim.Adam([local, root], lr=lr)
+    first = None
+    for _ in range(steps):
+        loss = constraint.loss(state_of(local, root, previous=previous))
+        first = float(loss.detach()) if first is None else first
+        opt.zero_grad()
+        loss.backward()
+        opt.step()
+    return first, float(constraint.loss(state_of(local, root, previous=previous)))
+
+
+CASES = [
+    SensorConstraint(joint="lwrist", position=REST[J["lwrist"]] + STAND + [0.1, -0.2, 0.1],
+                     rotation=Q.from_axis_angle(np.array([0.0, 0.0, 1.0]), 0.6)),
+    SensorConstraint(joint="rankle", dof=3, position=REST[J["rankle"]] + STAND + [0.0, -0.15, 0.1]),
+    EndEffectorConstraint(joint="rwrist", position=REST[J["rwrist"]] + STAND + [0.1, -0.25, 0.0]),
+    EndEffectorConstraint(joint="lwrist", position=REST[J["lwrist"]] + STAND, use_rotation=True,
+                          rotation=Q.from_axis_angle(np.array([1.0, 0.0, 0.0]), 0.5)),
+    LookAtConstraint(target=np.array([1.5, -1.0, 1.2])),
+    FloorConstraint(clearance=0.1),
+    BalanceConstraint(tolerance=0.0),
+    BalanceConstraint(mode="com_over_feet", tolerance=0.0),
+    DistanceConstraint(distance=0.5),
+    BoundsConstraint(joint="lwrist", box_min=np.array([-0.2, -0.5, 1.0]), box_max=np.array([0.5, 0.5, 1.2])),
+    PinConstraint(joint="rwrist", position=REST[J["rwrist"]] + STAND + [0.0, -0.1, -0.1]),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("c", CASES, ids=lambda c: c.kind)
+def test_loss_falls_when_the_pose_moves_towards_satisfying_it(c):
+    before, after = descend(c)
+    assert math.isfinite(before) and before > 0
+    assert after < 0.5 * before
+
+
+def test_floor_sliding_term_pulls_a_planted_foot_back():
+    prev = rest_state().positions.detach().clone()
+    prev[J["ltoe"], :2] += torch.tensor([0.05, 0.0], dtype=torch.float64)
+    c = FloorConstraint(joints=("ltoe",), clearance=-1.0, contact_height=1.5)  # only sliding counts
+    before, after = descend(c, previous=prev)
+    assert after < 0.2 * before
+
+
+def test_hand_built_satisfied_and_unsatisfied_states():
+    s = rest_state()
+    wrist = s.positions[J["lwrist"]].detach().numpy()
+    assert float(SensorConstraint(joint="lwrist", position=wrist).loss(s)) < 1e-12
+    assert SensorConstraint(joint="lwrist", position=wrist).satisfied(s)
+    far = SensorConstraint(joint="lwrist", position=wrist + [0.0, 0.0, 0.1])
+    assert float(far.loss(s)) == pytest.approx(0.01) and not far.satisfied(s)
+    turned = SensorConstraint(joint="lwrist", position=wrist,
+                              rotation=Q.from_axis_angle(np.array([0.0, 0.0, 1.0]), math.radians(60)))
+    assert float(turned.loss(s)) == pytest.approx(0.1 * math.sin(math.radians(30)) ** 2)
+    assert not turned.satisfied(s)
+    assert float(SensorConstraint(joint="lwrist", connected=False, position=wrist + 1).loss(s)) == 0.0
+
+    head = s.positions[J["upperneck"]].detach().numpy()
+    assert float(LookAtConstraint(target=head + [0, -2.0, 0]).loss(s)) < 1e-12  # rest head faces -Y
+    assert float(LookAtConstraint(target=head + [0, 2.0, 0]).loss(s)) == pytest.approx(2.0)
+    assert float(FloorConstraint().loss(s)) == 0.0  # toes above the floor
+    assert float(FloorConstraint().loss(rest_state(root=[0, 0, 0.9]))) > 0
+    assert float(BoundsConstraint(joint="root", box_min=np.array([-1, -1, 0.5]), box_max=np.array([1, 1, 1.5])).loss(s)) == 0
+    assert float(BoundsConstraint(joint="root", box_min=np.array([-1, -1, 1.1]), box_max=np.array([1, 1, 1.5])).loss(s)) \
+        == pytest.approx(0.01)  # fmt: skip
+    span = float(np.linalg.norm(REST[J["lwrist"]] - REST[J["rwrist"]]))
+    assert float(DistanceConstraint(distance=span).loss(s)) < 1e-12
+    assert float(DistanceConstraint(distance=span - 0.1).loss(s)) == pytest.approx(0.01)
+    lean = float(np.linalg.norm(REST[J["upperneck"], :2]))
+    assert float(BalanceConstraint(tolerance=lean + 0.001).loss(s)) == 0.0
+    assert float(BalanceConstraint(tolerance=0.0).loss(s)) == pytest.approx(lean**2)
+
+
+def test_temporal_prior_is_the_latent_mse_and_zero_without_prediction():
+    z = torch.tensor([1.0, 2.0, 3.0, 4.0], dtype=torch.float64)
+    c = TemporalPriorConstraint()
+    assert float(c.loss(rest_state(latent=z))) == 0.0
+    assert float(c.loss(rest_state(latent=z, prediction=torch.zeros(4, dtype=torch.float64)))) == pytest.approx(7.5)
+
+
+def test_pin_captures_the_previous_position_and_follow_previous_tracks_it():
+    s = rest_state()
+    prev = s.positions.detach() + torch.tensor([0.0, 0.1, 0.0], dtype=torch.float64)
+    pin = PinConstraint(joint="lankle")
+    assert not np.isfinite(pin.position).any() and pin.gizmo() == {}
+    s.previous_positions = prev
+    assert float(pin.loss(s)) == pytest.approx(0.01)
+    assert np.allclose(pin.position, prev[J["lankle"]].numpy())
+    assert pin.gizmo()["type"] == "point"
+    follow = PinConstraint(joint="lankle", follow_previous=True)
+    assert float(follow.loss(s)) == pytest.approx(0.01)
+
+
+def test_sensor_batch_equals_the_single_losses():
+    s = rest_state()
+    s.rotation_matrices = None
+    items = [c for c in CASES if c.kind == "sensor"] + [SensorConstraint(joint="root", connected=False)]
+    batched = SensorConstraint.batch(items, s.positions)(s)
+    single = torch.stack([c.loss(s) for c in items])
+    assert torch.allclose(batched, single, atol=1e-10)
+
+
+@pytest.mark.parametrize("kind", sorted(REGISTRY))
+def test_every_kind_survives_a_json_round_trip(kind):
+    c = REGISTRY[kind](name=f"my {kind}", weight=2.5, enabled=False)
+    text = json.dumps(c.to_dict(), allow_nan=False)
+    back = from_dict(json.loads(text))
+    assert type(back) is type(c) and back.to_dict() == c.to_dict()
+    assert isinstance(c.gizmo(), dict) and isinstance(c.gizmo(REST), dict)
+
+
+def test_gizmos_use_the_viewport_types():
+    for c in CASES:
+        g = c.gizmo(REST)
+        assert g == {} or g["type"] in ("point", "box", "line")
+
+
+@pytest.mark.parametrize(
+    "data, field",
+    [
+        ({"kind": "sensor", "joint": "tail"}, "joint"),
+        ({"kind": "sensor", "dof": 4}, "dof"),
+        ({"kind": "bounds", "box_min": [0, 0]}, "box_min"),
+        ({"kind": "distance", "joint_b": "nose"}, "joint_b"),
+        ({"kind": "pin", "colour": "red"}, "colour"),
+        ({"kind": "end_effector", "weight": "heavy"}, "weight"),
+        ({"kind": "look_at", "enabled": "yes"}, "enabled"),
+        ({"kind": "floor", "joints": ["lankle", "hoof"]}, "joints"),
+        ({"kind": "balance", "mode": "tiptoe"}, "mode"),
+    ],
+)
+def test_bad_fields_are_named(data, field):
+    with pytest.raises(UserError, match=field):
+        from_dict(data)
+
+
+def test_unknown_kind_lists_the_known_ones():
+    with pytest.raises(UserError, match="end_effector"):
+        from_dict({"kind": "teleport"})
+
+
+def test_nan_targets_give_non_finite_losses_not_exceptions():
+    s = rest_state()
+    for c in (SensorConstraint(joint="lwrist", position=np.full(3, np.nan)),
+              EndEffectorConstraint(position=np.array([np.inf, 0, 0])),
+              LookAtConstraint(target=np.full(3, np.nan))):  # fmt: skip
+        assert not torch.isfinite(c.loss(s))

@@ -51,7 +51,7 @@ def descend(constraint, steps: int = 40, lr: float = 0.02, previous=None):
         opt.zero_grad()
         loss.backward()
         opt.step()
-    return first, float(constraint.loss(state_of(local, root, previous=previous)))
+    return first, float(constraint.loss(state_of(local, root, previous=previous)).detach())
 
 
 CASES = [

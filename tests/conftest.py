@@ -1,4 +1,6 @@
-"""Shared fixtures: where the shared mocap data lives, and tiny synthetic motions."""
+"""Shared fixtures: where the shared mocap data lives, tiny synthetic motions, and the
+display: pytest-xvfb starts Xvfb so the VTK viewport really renders; without any display
+Qt falls back to offscreen and the tests marked ``gui`` (VTK) are skipped, saying why."""
 
 from __future__ import annotations
 
@@ -11,6 +13,22 @@ import pytest
 REPO = Path(__file__).resolve().parents[1]
 SHARED_DATA = Path(os.environ.get("DRAGPOSER_SHARED_DATA", REPO.parent / "shared" / "data"))
 MOCAP = SHARED_DATA / "mocap"
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_configure(config):
+    # after pytest-xvfb has (or has not) set DISPLAY
+    if not os.environ.get("DISPLAY"):
+        os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+
+
+def pytest_collection_modifyitems(config, items):
+    if os.environ.get("DISPLAY") and os.environ.get("QT_QPA_PLATFORM") != "offscreen":
+        return
+    skip = pytest.mark.skip(reason="VTK viewport needs a display: install xvfb (pytest-xvfb starts it)")
+    for item in items:
+        if "gui" in item.keywords:
+            item.add_marker(skip)
 
 
 @pytest.fixture(scope="session")

@@ -6,7 +6,6 @@ import threading
 
 import pytest
 
-from tests.widgets.conftest import pytest_collection_modifyitems  # noqa: F401  (skip gui offscreen)
 
 
 @pytest.fixture

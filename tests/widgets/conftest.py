@@ -1,24 +1,13 @@
-"""GUI test helpers: fake snapshots and a skip for VTK tests without a real display."""
+"""GUI test helpers: fake snapshots (the display handling lives in tests/conftest.py)."""
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass, field
 
 import numpy as np
 import pytest
 
 from engine import skeleton as sk
-
-
-def pytest_collection_modifyitems(config, items):
-    offscreen = os.environ.get("QT_QPA_PLATFORM") == "offscreen" or not os.environ.get("DISPLAY")
-    if not offscreen:
-        return
-    skip = pytest.mark.skip(reason="VTK viewport needs a display (run under Xvfb / pytest-xvfb)")
-    for item in items:
-        if "gui" in item.keywords:
-            item.add_marker(skip)
 
 
 @dataclass

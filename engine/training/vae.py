@@ -43,7 +43,7 @@ class VAETrainConfig:
     lr_final: float = 5e-5
     weight_decay: float = 1e-4
     epochs: int = 30
-    minutes: float = 50.0
+    minutes: float = 45.0
     seed: int = 0
     val_max_frames: int = 20000
 
@@ -106,6 +106,17 @@ def reconstruction_error(vae: PoseVAE, data: PoseData, max_frames: int | None = 
     return {"val_pos_cm": 100.0 * pos_err / count, "val_rot_deg": math.degrees(rot_err / count)}
 
 
+def cosine_lr(cfg: VAETrainConfig, step_fraction: float, minutes: float) -> float:
+    """Cosine decay from ``lr`` to ``lr_final`` over whichever runs out first: the planned
+    steps or the wall-clock budget (so a run cut by ``--minutes`` still ends annealed).
+    Runs are deterministic when the budget does not bind."""
+    frac = step_fraction
+    if cfg.minutes:
+        frac = max(frac, minutes / cfg.minutes)
+    frac = min(1.0, frac)
+    return cfg.lr_final + (cfg.lr - cfg.lr_final) * 0.5 * (1.0 + math.cos(math.pi * frac))
+
+
 def weights_payload(vae: PoseVAE, cfg: VAETrainConfig, meta: dict) -> dict:
     return {
         "format_version": FORMAT_VERSION,
@@ -137,18 +148,15 @@ def train_vae(data_dir: Path, out_dir: Path, cfg: VAETrainConfig, resume: bool =
     pairs = torch.nonzero(train.has_next).squeeze(1)
     steps_per_epoch = max(1, len(pairs) // (cfg.batch_size * ddp.world))
     total_steps = steps_per_epoch * cfg.epochs
-    sched = torch.optim.lr_scheduler.LambdaLR(
-        opt, lambda s: (cfg.lr_final + (cfg.lr - cfg.lr_final) * 0.5 * (1 + math.cos(math.pi * min(1.0, s / total_steps)))) / cfg.lr
-    )
-    start_epoch, minutes_before, best = 0, 0.0, float("inf")
+    start_epoch, minutes_before, best, global_step = 0, 0.0, float("inf"), 0
     log = CurveLog(out_dir)
     last = out_dir / "last.pt"
     if resume and last.is_file():
         ck = torch.load(last, map_location="cpu", weights_only=False)
         vae.load_state_dict(ck["state_dict"])
         opt.load_state_dict(ck["optimizer"])
-        sched.load_state_dict(ck["scheduler"])
         start_epoch, minutes_before, best = ck["epoch"], ck["minutes"], ck["best"]
+        global_step = ck["step"]
         log = CurveLog(out_dir, ck["curve"])
         torch.set_rng_state(ck["rng"])
     t0 = time.monotonic()
@@ -163,11 +171,14 @@ def train_vae(data_dir: Path, out_dir: Path, cfg: VAETrainConfig, resume: bool =
         for step in bar:
             lo = (step * ddp.world + ddp.rank) * cfg.batch_size
             idx = perm[lo : lo + cfg.batch_size]
+            minutes = minutes_before + (time.monotonic() - t0) / 60.0
+            for group in opt.param_groups:
+                group["lr"] = cosine_lr(cfg, global_step / total_steps, minutes)
             losses = objective(batch_of(train, idx))
             opt.zero_grad(set_to_none=True)
             losses["total"].backward()
             opt.step()
-            sched.step()
+            global_step += 1
             for k, v in losses.items():
                 sums[k] = sums.get(k, 0.0) + float(v.detach())
             if step % 10 == 0:
@@ -186,7 +197,7 @@ def train_vae(data_dir: Path, out_dir: Path, cfg: VAETrainConfig, resume: bool =
                 best = row["val_pos_cm"]
                 save_checkpoint(out_dir / "best.pt", weights_payload(vae, cfg, dict(meta)))
             save_checkpoint(last, {
-                "state_dict": vae.state_dict(), "optimizer": opt.state_dict(), "scheduler": sched.state_dict(),
+                "state_dict": vae.state_dict(), "optimizer": opt.state_dict(), "step": global_step,
                 "epoch": epoch + 1, "minutes": minutes, "best": best, "curve": log.rows, "rng": torch.get_rng_state(),
             })  # fmt: skip
         ddp.barrier()

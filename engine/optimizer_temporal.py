@@ -1,0 +1,109 @@
+"""When the temporal predictor runs and which of its latents guides which frame.
+
+DragPoser (Ponton et al. 2024, sec. 4.3 and Algorithm 1) runs the predictor every
+``n`` frames (n = 4). With the predictor index ``j = ceil(i / n)`` of frame ``i``, a new
+prediction block starts at every frame ``i = n * p`` with ``p % W_f == 0``: the encoder
+sees the latents of the past ``W_p`` predictor steps (frames ``n * k``, ``p - W_p <= k
+< p``) with their conditioning, and the decoder, started from the latest solved latent,
+rolls out ``W_f`` latents for steps ``p + 1 .. p + W_f``. Frame ``i`` is guided by the
+latent of step ``j``, so the frames ``n(j-1)+1 .. n*j`` share one target.
+
+Two practical details the paper leaves open:
+
+* the block's first latent should be ``z(n * p)``, which is the frame being solved;
+  we use the latest solved latent ``z(n * p - 1)`` instead;
+* at the start of a clip (or after a failed prediction) there is no block covering
+  step ``j``; one is started at once from whatever history exists (the oldest entry is
+  repeated to fill ``W_p``). Frame 0 has no history and hence no prediction.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from typing import Protocol
+
+import torch
+
+
+class LatentPredictor(Protocol):
+    """What the optimizer needs from the temporal predictor."""
+
+    def predict(self, past_latents: torch.Tensor, past_cond: torch.Tensor, first: torch.Tensor,
+                steps: int) -> torch.Tensor:  # fmt: skip
+        """``past_latents (B, W_p, L)``, ``past_cond (B, W_p, C)``, ``first (B, L)`` ->
+        the next ``steps`` latents ``(B, steps, L)``."""
+        ...
+
+
+class TemporalSchedule:
+    """Predictor bookkeeping for one clip (see the module doc).
+
+    Parameters
+    ----------
+    every : int
+        ``n``: frames between predictor steps.
+    past : int
+        ``W_p``: past predictor steps given to the encoder.
+    """
+
+    def __init__(self, every: int = 4, past: int = 16) -> None:
+        self.every = every
+        self.past = past
+        self.reset()
+
+    def reset(self) -> None:
+        self.history: deque[tuple[torch.Tensor, torch.Tensor]] = deque(maxlen=self.past)
+        self.cache: dict[int, torch.Tensor] = {}
+        self.last: torch.Tensor | None = None
+
+    def configure(self, every: int, past: int) -> None:
+        """Apply new ``n`` / ``W_p``; history is kept when only its length changes."""
+        if every != self.every:
+            self.every = every
+            self.cache.clear()
+        if past != self.past:
+            self.past = past
+            self.history = deque(self.history, maxlen=past)
+
+    def record(self, frame: int, latent: torch.Tensor, cond: torch.Tensor) -> None:
+        """Remember frame ``frame``'s solved ``latent (L,)`` and conditioning ``cond (C,)``."""
+        self.last = latent.detach()
+        if frame % self.every == 0:
+            self.history.append((latent.detach(), cond.detach()))
+
+    def step_of(self, frame: int) -> int:
+        return math.ceil(frame / self.every)
+
+    def prediction(self, frame: int, predictor: LatentPredictor | None, future: int) -> tuple[torch.Tensor | None, str]:
+        """Latent guiding ``frame`` and a warning ('' if none); runs the predictor if due.
+
+        Call once per frame, before solving it and after recording the previous frame.
+        """
+        if predictor is None or not self.history or self.last is None:
+            return None, ""
+        j = self.step_of(frame)
+        for k in [k for k in self.cache if k < j]:
+            del self.cache[k]
+        warning = ""
+        if frame % self.every == 0 and j % future == 0:
+            warning = self._run(predictor, j + 1, future)
+        if j not in self.cache and not warning:
+            warning = self._run(predictor, j, future)
+        return self.cache.get(j), warning
+
+    def _run(self, predictor: LatentPredictor, first_step: int, future: int) -> str:
+        hist = list(self.history)
+        hist = [hist[0]] * (self.past - len(hist)) + hist
+        past = torch.stack([h[0] for h in hist])[None]
+        cond = torch.stack([h[1] for h in hist])[None]
+        try:
+            with torch.no_grad():
+                out = predictor.predict(past, cond, self.last[None], future)
+        except Exception as exc:  # a broken predictor must not stop the reconstruction
+            return f"temporal predictor failed ({exc}); no prior this frame"
+        if out.shape[-2:] != (future, past.shape[-1]) or not bool(torch.isfinite(out).all()):
+            return "temporal predictor returned an unusable prediction; no prior this frame"
+        for s in range(future):
+            self.cache[first_step + s] = out[0, s].detach()
+        return ""

@@ -112,6 +112,15 @@ def _register_builtin() -> None:
     from engine.methods.ik import IKMethod
 
     register_method("ik", IKMethod)
+    register_method("dragposer", _dragposer)
+
+
+def _dragposer(**kwargs: Any) -> Method:
+    # imported on use: DragPoser pulls in torch and the models, which the CLI's other
+    # commands should not pay for at start-up
+    from engine.methods.dragposer import create
+
+    return create(**kwargs)
 
 
 _register_builtin()

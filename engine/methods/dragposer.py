@@ -1,0 +1,316 @@
+"""DragPoser (Ponton et al. 2024): full-body pose by latent-space optimisation.
+
+Every frame, each sensor reading becomes (or updates) a ``sensor`` constraint named
+``sensor:<joint>`` (enabled while connected, weighted by :meth:`set_sensor_weight`),
+the temporal predictor proposes a latent (:mod:`engine.optimizer_temporal`), and
+:class:`engine.optimizer.PoseOptimizer` moves the latent until the sensors, the
+temporal prior and the user's constraints agree. User constraints are edited between
+frames with :meth:`add_constraint`, :meth:`remove_constraint`, :meth:`set_weight`,
+:meth:`set_enabled` or :meth:`set_constraints`; settings with :meth:`configure`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections.abc import Iterable
+from typing import Any
+
+import numpy as np
+import torch
+
+from engine import skeleton as sk
+from engine.constraints import Constraint, SensorConstraint, TemporalPriorConstraint
+from engine.errors import UserError
+from engine.kinematics import quaternion as Q
+from engine.methods.base import FrameResult, Method, SensorFrame, SensorReading
+from engine.motion import Motion
+from engine.optimizer import FrameContext, LatentDecoder, OptimizerSettings, PoseOptimizer
+from engine.optimizer_pose import RootFrame, RootOverride
+from engine.optimizer_temporal import LatentPredictor, TemporalSchedule
+
+_HEIGHT_IDX = [sk.JOINT_INDEX[j] for j in sk.HEIGHT_JOINTS]
+#: Sensor count from which the predictor looks one step ahead only (DragPoser sec. 4.3).
+FULL_SET = 6
+SPARSE_FUTURE = 16
+
+
+class DragPoserMethod(Method):
+    """Latent-space pose optimisation guided by a temporal predictor.
+
+    Parameters
+    ----------
+    decoder : LatentDecoder
+        Frozen pose decoder (``PoseVAE`` or a stand-in with ``decode``).
+    predictor : LatentPredictor, optional
+        Temporal predictor; without it there is no temporal prior.
+    settings : OptimizerSettings, optional
+    latent_dim : int
+        Size of the latent (24 in DragPoser).
+    **overrides
+        Settings fields (``mode``, ``iterations``, ``lr``...) applied on top.
+    """
+
+    name = "dragposer"
+
+    def __init__(self, decoder: LatentDecoder, predictor: LatentPredictor | None = None,
+                 settings: OptimizerSettings | None = None, latent_dim: int = 24, **overrides: Any) -> None:  # fmt: skip
+        self.decoder = decoder
+        if isinstance(decoder, torch.nn.Module):
+            decoder.eval().requires_grad_(False)
+        if isinstance(predictor, torch.nn.Module):
+            predictor.eval().requires_grad_(False)
+        self.predictor = predictor
+        self.settings = settings or OptimizerSettings()
+        self.latent_dim = latent_dim
+        self.constraints: list[Constraint] = []
+        self.sensor_weights: dict[str, float] = {}
+        self.configure(**overrides)
+        self.reset(sk.Skeleton.canonical())
+
+    # -- editing (between frames) ----------------------------------------------------
+
+    def configure(self, **values: Any) -> None:
+        """Change settings by name; applied from the next frame. Unknown names raise
+        :class:`UserError` after the known ones are applied."""
+        known = {f.name for f in dataclasses.fields(OptimizerSettings)}
+        new = dataclasses.replace(self.settings, **{k: v for k, v in values.items() if k in known})
+        self.settings.__dict__.update(new.__dict__)  # keep the object: callers may hold it
+        unknown = sorted(set(values) - known)
+        if unknown:
+            raise UserError(f"unknown optimizer setting(s): {', '.join(unknown)}")
+
+    def add_constraint(self, constraint: Constraint) -> None:
+        if any(c.name == constraint.name for c in self.constraints):
+            raise UserError(f"a constraint named {constraint.name!r} exists already")
+        self.constraints.append(constraint)
+
+    def remove_constraint(self, name: str) -> None:
+        self.get_constraint(name)
+        self.constraints = [c for c in self.constraints if c.name != name]
+
+    def get_constraint(self, name: str) -> Constraint:
+        for c in self.constraints:
+            if c.name == name:
+                return c
+        raise UserError(f"no constraint named {name!r}")
+
+    def set_constraints(self, constraints: Iterable[Constraint]) -> None:
+        """Replace all user constraints (names must be unique)."""
+        items = list(constraints)
+        names = [c.name for c in items]
+        if len(set(names)) != len(names):
+            raise UserError("constraint names must be unique")
+        self.constraints = items
+
+    def set_weight(self, name: str, weight: float) -> None:
+        if not weight >= 0:
+            raise UserError(f"constraint {name!r}: weight must be >= 0, got {weight!r}")
+        self.get_constraint(name).weight = float(weight)
+
+    def set_enabled(self, name: str, enabled: bool) -> None:
+        self.get_constraint(name).enabled = bool(enabled)
+
+    def set_sensor_weight(self, joint: str, weight: float) -> None:
+        """Weight of the tracker on ``joint`` (applies to its ``sensor`` constraint)."""
+        if joint not in sk.JOINT_INDEX:
+            raise UserError(f"unknown joint {joint!r}")
+        self.sensor_weights[joint] = float(weight)
+        if joint in self.sensors:
+            self.sensors[joint].weight = float(weight)
+
+    # -- running ---------------------------------------------------------------------
+
+    def reset(self, skeleton: sk.Skeleton, fps: float = sk.FPS, *, reference: Motion | None = None) -> None:
+        self.skeleton = skeleton
+        self.fps = fps
+        self.optimizer = PoseOptimizer(self.decoder, skeleton.offsets, self.settings)
+        self.schedule = TemporalSchedule(self.settings.predictor_every, self.settings.past_window)
+        self.sensors: dict[str, SensorConstraint] = {}
+        self.prior = TemporalPriorConstraint(name="temporal_prior")
+        self._frame = 0
+        self._latent = torch.zeros(self.latent_dim)
+        self._root: RootFrame | None = None
+        self._positions: torch.Tensor | None = None
+        self._last: FrameResult | None = None
+
+    def step(self, sensors: SensorFrame) -> FrameResult:
+        threads = torch.get_num_threads()
+        if self.settings.threads:
+            torch.set_num_threads(self.settings.threads)
+        try:
+            return self._step(sensors)
+        finally:
+            torch.set_num_threads(threads)
+
+    def _step(self, sensors: SensorFrame) -> FrameResult:
+        t0 = time.perf_counter()
+        s = self.settings
+        warnings = self._update_sensors(sensors)
+        self.schedule.configure(s.predictor_every, s.past_window)
+        override = self._root_override()
+        if self._root is None:
+            self._root = self._initial_root()
+        n_connected = sum(c.enabled for c in self.sensors.values())
+        future = s.future_window or (1 if n_connected >= FULL_SET else SPARSE_FUTURE)
+        prediction, warn = self.schedule.prediction(self._frame, self.predictor, future)
+        if warn:
+            warnings.append(warn)
+        start = prediction if prediction is not None and s.init_from_prediction else self._latent
+        self.prior.weight = s.temporal_weight
+        ctx = FrameContext(self._root, override, self._positions, prediction, self._frame)
+        terms = [*self.sensors.values(), self.prior, *self.constraints]
+        if self._frame == 0:  # no history to start from: solve the first pose offline
+            self.optimizer.settings = dataclasses.replace(s, mode="offline")
+        try:
+            sol = self.optimizer.solve(start, terms, ctx)
+        finally:
+            self.optimizer.settings = s
+        warnings += sol.warnings
+        state = sol.state
+        if not (torch.isfinite(state.positions).all() and torch.isfinite(state.local_rot).all()):
+            warnings.append("decoded pose is not finite; previous pose repeated")
+            return self._repeat_last(warnings, sol.losses, sol.iterations, t0)
+        self._advance(sol.latent, state.local_rot[0], state.positions)
+        result = FrameResult(
+            local_rot=state.local_rot.double().numpy(),
+            root_pos=state.positions[0].double().numpy(),
+            positions=state.positions.double().numpy(),
+            iterations=sol.iterations,
+            losses=sol.losses,
+            latent=sol.latent.double().numpy(),
+            ms=1000.0 * (time.perf_counter() - t0),
+            warnings=warnings,
+        )
+        self._last = result
+        return result
+
+    def decode_latent(self, latent: np.ndarray) -> np.ndarray:
+        """World joint positions ``(22, 3)`` of ``latent (L,)``, placed at the current root."""
+        z = torch.as_tensor(np.asarray(latent, dtype=np.float32).reshape(self.latent_dim))
+        root = self._root or self._initial_root()
+        with torch.no_grad():
+            state = self.optimizer.decode(z, FrameContext(root))
+        return state.positions.double().numpy()
+
+    # -- internals -------------------------------------------------------------------
+
+    def _update_sensors(self, frame: SensorFrame) -> list[str]:
+        warnings: list[str] = []
+        s = self.settings
+        for c in self.sensors.values():
+            c.enabled = False  # readings absent this frame are not used
+        for joint, r in frame.readings.items():
+            c = self.sensors.get(joint)
+            if c is None or c.dof != r.dof:
+                c = SensorConstraint(name=f"sensor:{joint}", joint=joint, dof=r.dof,
+                                     weight=self.sensor_weights.get(joint, 1.0))  # fmt: skip
+                self.sensors[joint] = c
+            ok = _finite(r)
+            if r.connected and not ok:
+                warnings.append(f"sensor {joint}: non-finite reading ignored")
+            c.rotation_weight = s.sensor_rotation_weight
+            c.position_tolerance, c.rotation_tolerance = s.position_tolerance, s.rotation_tolerance
+            if r.connected and ok:
+                c.set_target(r.position, r.rotation if r.dof == 6 else None, True)
+            c.connected = c.enabled = bool(r.connected and ok)
+        return warnings
+
+    def _root_override(self) -> RootOverride | None:
+        c = self.sensors.get("root")
+        if c is None or not c.enabled:
+            return None
+        pos = torch.as_tensor(c.position, dtype=torch.float32)
+        rot = torch.as_tensor(Q.normalize(c.rotation), dtype=torch.float32) if c.dof == 6 else None
+        return RootOverride(pos, rot)
+
+    def _initial_root(self) -> RootFrame:
+        """Where the first frame's root is relative to: the hip sensor, else below the
+        head sensor by the rest root-to-head offset, else at rest height under the
+        trackers' mean, facing their heading (or -Y)."""
+        rest = self.skeleton.rest_positions()
+        rot = np.array([1.0, 0.0, 0.0, 0.0])
+        live = {j: c for j, c in self.sensors.items() if c.enabled}
+        if "root" in live:
+            pos = live["root"].position.copy()
+            if live["root"].dof == 6:
+                rot = Q.heading(live["root"].rotation)
+        elif "upperneck" in live:
+            head = live["upperneck"]
+            if head.dof == 6:
+                rot = Q.heading(head.rotation)
+            pos = head.position - Q.rotate(rot, rest[sk.JOINT_INDEX["upperneck"]])
+        elif live:
+            pos = np.mean([c.position for c in live.values()], axis=0)
+            pos[2] = -rest[:, 2].min()
+        else:
+            pos = np.array([0.0, 0.0, -rest[:, 2].min()])
+        return RootFrame(torch.as_tensor(rot, dtype=torch.float32), torch.as_tensor(pos, dtype=torch.float32))
+
+    def _advance(self, latent: torch.Tensor, root_rot: torch.Tensor, positions: torch.Tensor) -> None:
+        prev = self._root
+        assert prev is not None
+        disp = Q.rotate(Q.conjugate(prev.heading()), positions[0] - prev.position)
+        cond = torch.cat((disp, positions[_HEIGHT_IDX, 2])).float()
+        self.schedule.record(self._frame, latent, cond)
+        self._latent = latent
+        self._root = RootFrame(root_rot.detach().clone(), positions[0].detach().clone())
+        self._positions = positions.detach().clone()
+        self._frame += 1
+
+    def _repeat_last(self, warnings: list[str], losses: list, iterations: int, t0: float) -> FrameResult:
+        if self._last is not None:
+            res = dataclasses.replace(self._last, losses=losses, iterations=iterations, warnings=warnings)
+        else:
+            local = Q.identity((sk.NUM_JOINTS,))
+            root = self._root.position.double().numpy() if self._root else np.zeros(3)
+            from engine.kinematics.fk import fk
+
+            pos, _ = fk(local, root, self.skeleton.offsets)
+            res = FrameResult(local, root, pos, iterations, losses, self._latent.double().numpy(), 0.0, warnings)
+        self._frame += 1
+        res.ms = 1000.0 * (time.perf_counter() - t0)
+        return res
+
+
+def _finite(r: SensorReading) -> bool:
+    ok = bool(np.all(np.isfinite(r.position)))
+    if r.dof == 6:
+        ok = ok and bool(np.all(np.isfinite(r.rotation))) and float(np.linalg.norm(r.rotation)) > 1e-6
+    return ok
+
+
+def create(mode: str = "realtime", iterations: int | None = None, lr: float | None = None,
+           **overrides: Any) -> DragPoserMethod:  # fmt: skip
+    """Registry factory: DragPoser with the shipped models (``engine.models``).
+
+    Raises
+    ------
+    UserError
+        When the models cannot be loaded (the message says why).
+    """
+    try:
+        from engine.models import load_default_models  # type: ignore[attr-defined]
+    except ImportError as exc:
+        raise UserError(f"dragposer: the model loader is not available yet ({exc})") from exc
+    models = load_default_models()
+    decoder, predictor = _unpack_models(models)
+    values: dict[str, Any] = {"mode": mode, **overrides}
+    if iterations is not None:
+        values["iterations" if mode == "realtime" else "max_iterations"] = iterations
+    if lr is not None:
+        values["lr"] = lr
+    return DragPoserMethod(decoder, predictor, latent_dim=_latent_dim(decoder), **values)
+
+
+def _unpack_models(models: Any) -> tuple[Any, Any]:
+    if isinstance(models, tuple):
+        return models[0], models[1] if len(models) > 1 else None
+    if isinstance(models, dict):
+        return models.get("vae") or models.get("decoder"), models.get("predictor")
+    return getattr(models, "vae", None) or getattr(models, "decoder"), getattr(models, "predictor", None)
+
+
+def _latent_dim(decoder: Any) -> int:
+    cfg = getattr(decoder, "config", None)
+    return int(getattr(cfg, "latent", 24))

@@ -1,0 +1,104 @@
+"""Optimizer scenes: a constraint list plus optimizer settings, as JSON.
+
+Format (``docs/optimizer.md``)::
+
+    {"format": "dragposer-scene", "version": 1,
+     "settings": {"mode": "offline", "lr": 0.05, ...},
+     "constraints": [{"kind": "look_at", "name": "look", "weight": 1.0, ...}, ...]}
+
+Unknown settings and malformed constraints are errors naming the file and the field.
+The studio's session may add its own keys (clip, sensors, frame); they are ignored here.
+Files are written atomically (temporary file, then rename).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Any
+
+import engine.constraints  # noqa: F401  (registers every kind)
+from engine.atomic import write_text
+from engine.constraints.base import Constraint, from_dict
+from engine.errors import UserError
+from engine.optimizer import OptimizerSettings
+
+FORMAT = "dragposer-scene"
+VERSION = 1
+
+
+def scene_to_dict(constraints: Iterable[Constraint], settings: OptimizerSettings | dict[str, Any] | None) -> dict:
+    """Plain-JSON form of a scene."""
+    if dataclasses.is_dataclass(settings):
+        settings = dataclasses.asdict(settings)
+    return {
+        "format": FORMAT,
+        "version": VERSION,
+        "settings": dict(settings or {}),
+        "constraints": [c.to_dict() for c in constraints],
+    }
+
+
+def save_scene(path: str | Path, constraints: Iterable[Constraint],
+               settings: OptimizerSettings | dict[str, Any] | None = None) -> None:  # fmt: skip
+    """Write the scene to ``path`` as JSON (atomically)."""
+    doc = scene_to_dict(constraints, settings)
+    write_text(path, json.dumps(doc, indent=2, allow_nan=False) + "\n")
+
+
+def load_scene(path: str | Path) -> tuple[list[Constraint], OptimizerSettings]:
+    """Read a scene: its constraints and settings (defaults for settings not given).
+
+    Raises
+    ------
+    UserError
+        Unreadable file, invalid JSON (with line), unknown settings, bad constraints;
+        the message names the file and the field.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise UserError(f"{path}: cannot read scene ({exc.strerror or exc})") from exc
+    try:
+        doc = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise UserError(f"{path}:{exc.lineno}: invalid JSON ({exc.msg})") from exc
+    return scene_from_dict(doc, str(path))
+
+
+def scene_from_dict(doc: Any, where: str = "scene") -> tuple[list[Constraint], OptimizerSettings]:
+    """Inverse of :func:`scene_to_dict`; ``where`` prefixes error messages."""
+    if not isinstance(doc, dict):
+        raise UserError(f"{where}: a scene is a JSON object")
+    if doc.get("format", FORMAT) != FORMAT:
+        raise UserError(f"{where}: field 'format' is {doc.get('format')!r}, expected {FORMAT!r}")
+    if doc.get("version", VERSION) != VERSION:
+        raise UserError(f"{where}: field 'version' is {doc.get('version')!r}; this build reads {VERSION}")
+    raw = doc.get("settings", {}) or {}
+    if not isinstance(raw, dict):
+        raise UserError(f"{where}: field 'settings' must be an object")
+    known = {f.name for f in dataclasses.fields(OptimizerSettings)}
+    unknown = sorted(set(raw) - known)
+    if unknown:
+        raise UserError(f"{where}: settings: unknown field(s) {', '.join(unknown)}")
+    try:
+        settings = OptimizerSettings(**raw)
+    except UserError as exc:
+        raise UserError(f"{where}: settings: {exc}") from exc
+    items = doc.get("constraints", []) or []
+    if not isinstance(items, list):
+        raise UserError(f"{where}: field 'constraints' must be a list")
+    constraints = []
+    for i, item in enumerate(items):
+        try:
+            constraints.append(from_dict(item))
+        except UserError as exc:
+            raise UserError(f"{where}: constraints[{i}]: {exc}") from exc
+    names = [c.name for c in constraints]
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise UserError(f"{where}: constraints: duplicate name(s) {', '.join(dup)}")
+    return constraints, settings

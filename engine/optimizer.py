@@ -194,7 +194,8 @@ class PoseOptimizer:
     Parameters
     ----------
     decoder : LatentDecoder
-        Frozen; its parameters are not touched (only ``z`` gets gradients).
+        Frozen: a torch module is put in eval mode with ``requires_grad`` off, so only
+        ``z`` gets gradients.
     offsets : array (22, 3)
         Bone offsets of the subject, metres.
     settings : OptimizerSettings
@@ -203,6 +204,8 @@ class PoseOptimizer:
 
     def __init__(self, decoder: LatentDecoder, offsets: np.ndarray, settings: OptimizerSettings | None = None):
         self.decoder = decoder
+        if isinstance(decoder, torch.nn.Module):  # frozen: no gradients for its weights
+            decoder.eval().requires_grad_(False)
         self.settings = settings or OptimizerSettings()
         self.fk = LevelFK(offsets)
 

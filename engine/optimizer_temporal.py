@@ -102,8 +102,9 @@ class TemporalSchedule:
                 out = predictor.predict(past, cond, self.last[None], future)
         except Exception as exc:  # a broken predictor must not stop the reconstruction
             return f"temporal predictor failed ({exc}); no prior this frame"
-        if out.shape[-2:] != (future, past.shape[-1]) or not bool(torch.isfinite(out).all()):
+        # a predictor trained for a shorter horizon may return fewer than ``future`` steps
+        if out.ndim != 3 or out.shape[1] < 1 or out.shape[2] != past.shape[-1] or not bool(torch.isfinite(out).all()):
             return "temporal predictor returned an unusable prediction; no prior this frame"
-        for s in range(future):
+        for s in range(min(future, out.shape[1])):
             self.cache[first_step + s] = out[0, s].detach()
         return ""

@@ -133,6 +133,7 @@ class DragPoserMethod(Method):
         self._root: RootFrame | None = None
         self._positions: torch.Tensor | None = None
         self._last: FrameResult | None = None
+        self._disps: list[torch.Tensor] = []
 
     def step(self, sensors: SensorFrame) -> FrameResult:
         threads = torch.get_num_threads()
@@ -251,7 +252,11 @@ class DragPoserMethod(Method):
         prev = self._root
         assert prev is not None
         disp = Q.rotate(Q.conjugate(prev.heading()), positions[0] - prev.position)
-        cond = torch.cat((disp, positions[_HEIGHT_IDX, 2])).float()
+        # predictor conditioning: displacement summed over the last n frames (each in its
+        # previous heading frame), then the heights of HEIGHT_JOINTS (engine.models.predictor)
+        self._disps.append(disp.detach())
+        del self._disps[: -self.settings.predictor_every]
+        cond = torch.cat((torch.stack(self._disps).sum(0), positions[_HEIGHT_IDX, 2])).float()
         self.schedule.record(self._frame, latent, cond)
         self._latent = latent
         self._root = RootFrame(root_rot.detach().clone(), positions[0].detach().clone())
@@ -304,11 +309,10 @@ def create(mode: str = "realtime", iterations: int | None = None, lr: float | No
 
 
 def _unpack_models(models: Any) -> tuple[Any, Any]:
+    """``(decoder, predictor)`` from ``engine.models.ModelBundle`` (``.vae``, ``.predictor``)."""
     if isinstance(models, tuple):
         return models[0], models[1] if len(models) > 1 else None
-    if isinstance(models, dict):
-        return models.get("vae") or models.get("decoder"), models.get("predictor")
-    return getattr(models, "vae", None) or getattr(models, "decoder"), getattr(models, "predictor", None)
+    return models.vae, getattr(models, "predictor", None)
 
 
 def _latent_dim(decoder: Any) -> int:

@@ -149,3 +149,16 @@ def test_registry_knows_dragposer():
     from engine.methods import available_methods
 
     assert "dragposer" in available_methods()
+
+
+def test_runs_with_the_real_model_classes(clip):
+    """Untrained PoseVAE and TemporalPredictor: the interfaces fit (weights do not matter)."""
+    vae = pytest.importorskip("engine.models.vae")
+    pred = pytest.importorskip("engine.models.predictor")
+    torch.manual_seed(0)
+    m = DragPoserMethod(vae.PoseVAE(), pred.TemporalPredictor(), iterations=2, max_iterations=5)
+    tr = simulate(clip, "4")
+    m.reset(clip.skeleton)
+    out = [m.step(tr.frame(i)) for i in range(10)]
+    assert all(np.isfinite(r.positions).all() and not r.warnings for r in out)
+    assert "temporal_prior" in out[-1].losses[0]

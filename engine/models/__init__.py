@@ -1,11 +1,27 @@
 """Learned models: the pose VAE (:mod:`engine.models.vae`, skeletal layers in
-:mod:`engine.models.skeletal`) and the temporal predictor.
+:mod:`engine.models.skeletal`), the temporal predictor (:mod:`engine.models.predictor`)
+and the checked loading of weights files (:mod:`engine.models.loading`).
 
-NOTE for whoever works on the models: ``vae.py``, ``skeletal.py`` and the VAE training
-(``engine/training/{common,data,vae}.py``, ``engine/cli/train.py``) are written and the
-default VAE is training now from them (``runs/vae``, started 07:45 by the lead). Please
-do not rewrite or rename them: the shipped weights must load with this code. Build the
-temporal predictor (``predictor.py``, ``engine/training/predictor.py``), loading
-(``load_default_models``) and the autoencoder method against ``PoseVAE.encode(dq) ->
-(mu, logvar)`` and ``PoseVAE.decode(z) -> (rot, disp)``.
+The shipped weights in ``assets/models`` must keep loading with this code: changing a
+layer's name or shape in ``vae.py``/``skeletal.py``/``predictor.py`` means retraining.
+``PoseVAE.encode(dq) -> (mu, logvar)``, ``PoseVAE.decode(z) -> (rot, disp)`` and
+``TemporalPredictor.predict(past, cond, first, steps)`` are the interfaces the rest of
+the engine uses.
 """
+
+from engine.models.loading import (
+    DEFAULT_PREDICTOR,
+    DEFAULT_VAE,
+    ModelBundle,
+    load_default_models,
+    load_models,
+    load_predictor,
+    load_vae,
+)
+from engine.models.predictor import PredictorConfig, TemporalPredictor
+from engine.models.vae import PoseVAE, VAEConfig
+
+__all__ = [
+    "DEFAULT_PREDICTOR", "DEFAULT_VAE", "ModelBundle", "PoseVAE", "PredictorConfig",
+    "TemporalPredictor", "VAEConfig", "load_default_models", "load_models", "load_predictor", "load_vae",
+]  # fmt: skip

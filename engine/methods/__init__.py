@@ -113,6 +113,13 @@ def _register_builtin() -> None:
 
     register_method("ik", IKMethod)
     register_method("dragposer", _dragposer)
+    register_method("autoencoder", _autoencoder)
+
+
+def _autoencoder(**kwargs: Any) -> Method:
+    from engine.methods.autoencoder import AutoencoderMethod
+
+    return AutoencoderMethod(**kwargs)
 
 
 def _dragposer(**kwargs: Any) -> Method:

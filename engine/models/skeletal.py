@@ -62,9 +62,13 @@ class SkeletalLinear(nn.Module):
         self.n, self.c_in, self.c_out = n, c_in, c_out
         neigh = [np.nonzero(node_mask[i])[0].tolist() for i in range(n)]
         k = max(len(v) for v in neigh)
-        # pad with index n, a zero node appended in forward
-        idx = torch.tensor([v + [n] * (k - len(v)) for v in neigh], dtype=torch.long)
-        self.register_buffer("index", idx)
+        # one-hot gather matrix (N*K, N): a matmul's backward is a deterministic product,
+        # where indexing's backward accumulates in an order that varies between threads
+        gather = torch.zeros(n * k, n)
+        for i, v in enumerate(neigh):
+            for slot, j in enumerate(v):
+                gather[i * k + slot, j] = 1.0
+        self.register_buffer("gather", gather, persistent=False)  # structure, rebuilt from the skeleton
         self.k = k
         self.weight = nn.Parameter(torch.empty(n, k * c_in, c_out))
         self.bias = nn.Parameter(torch.zeros(n, c_out))
@@ -74,10 +78,14 @@ class SkeletalLinear(nn.Module):
             with torch.no_grad():
                 self.weight[i, len(v) * c_in :] = 0.0  # padding slots read zeros anyway
 
+    def _load_from_state_dict(self, state_dict, prefix, *args, **kwargs):
+        # weights files from before the gather matrix stored an index buffer; it is structure
+        state_dict.pop(prefix + "index", None)
+        super()._load_from_state_dict(state_dict, prefix, *args, **kwargs)
+
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         b = x.shape[0]
-        padded = torch.cat((x, x.new_zeros(b, 1, self.c_in)), dim=1)
-        gathered = padded[:, self.index].reshape(b, self.n, self.k * self.c_in)  # (B, N, K*C)
+        gathered = torch.matmul(self.gather, x).reshape(b, self.n, self.k * self.c_in)  # (B, N, K*C)
         y = torch.bmm(gathered.transpose(0, 1), self.weight).transpose(0, 1)  # (B, N, C_out)
         return y + self.bias
 

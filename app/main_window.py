@@ -248,7 +248,9 @@ class MainWindow(QMainWindow):
             s.drag_target(joint, position)
             return
         schema = constraint_schema(self.kinds)
-        pin = next(((k, f) for k, fields in schema.items() if any(n == "joint" for n, _, _ in fields)
+        # the engine's "pin" kind first; else any kind with a joint and a point to drag
+        order = sorted(schema.items(), key=lambda kv: kv[0] != "pin")
+        pin = next(((k, f) for k, fields in order if any(n == "joint" for n, _, _ in fields)
                     for f, tag, _ in fields if tag == "vec3" and f in ("target", "position", "point")), None)  # fmt: skip
         if pin is None:
             self.statusBar().showMessage(f"No sensor on {joint} and no point-constraint kind to pin it", 5000)

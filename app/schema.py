@@ -9,6 +9,8 @@ from typing import Any
 
 import numpy as np
 
+from engine.constraints.base import field_default
+
 _BASE = ("name", "weight", "enabled")
 
 
@@ -39,14 +41,6 @@ def _tag(name: str, default: Any) -> str:
     return "other"
 
 
-def _default(f: dataclasses.Field) -> Any:
-    if f.default is not dataclasses.MISSING:
-        return f.default
-    if f.default_factory is not dataclasses.MISSING:  # type: ignore[misc]
-        return f.default_factory()  # type: ignore[misc]
-    return None
-
-
 def constraint_schema(kinds: dict[str, type] | None = None) -> dict[str, list[tuple[str, str, Any]]]:
     """kind -> [(field, tag, default)] for :class:`widgets.constraint_panel.ConstraintPanel`."""
     kinds = load_constraint_kinds() if kinds is None else kinds
@@ -56,7 +50,7 @@ def constraint_schema(kinds: dict[str, type] | None = None) -> dict[str, list[tu
         for f in dataclasses.fields(cls):
             if f.name in _BASE:
                 continue
-            d = _default(f)
+            d = field_default(f)
             fields.append((f.name, _tag(f.name, d), d))
         out[kind] = fields
     return out

@@ -136,7 +136,7 @@ class Constraint(ABC):
         if not math.isfinite(self.weight) or self.weight < 0:
             raise UserError(f"constraint {self.kind!r}: field 'weight' must be finite and >= 0")
         for f in dataclasses.fields(self):
-            default = _default(f)
+            default = field_default(f)
             if isinstance(default, np.ndarray):
                 value = np.asarray(getattr(self, f.name), dtype=np.float64)
                 if value.shape != default.shape:
@@ -190,7 +190,8 @@ class Constraint(ABC):
         return out
 
 
-def _default(f: dataclasses.Field) -> Any:
+def field_default(f: dataclasses.Field) -> Any:
+    """The default value of a dataclass field (calling its factory), or None."""
     if f.default is not dataclasses.MISSING:
         return f.default
     if f.default_factory is not dataclasses.MISSING:  # type: ignore[misc]
@@ -213,7 +214,7 @@ def from_dict(data: dict[str, Any]) -> Constraint:
             continue
         if key not in names:
             raise UserError(f"constraint {kind!r}: unknown field {key!r}")
-        default = _default(names[key])
+        default = field_default(names[key])
         if isinstance(default, np.ndarray):
             try:
                 value = np.array([np.nan if v is None else v for v in np.ravel(value)], dtype=np.float64)

@@ -1,4 +1,4 @@
-"""Constraint editing end to end with a stand-in kind (until the real kinds land)."""
+"""Constraint editing end to end: a stand-in kind for the editor mechanics, the real pin for Ctrl-drag."""
 
 from __future__ import annotations
 
@@ -63,9 +63,9 @@ def test_add_edit_drag_disable_and_remove_a_constraint(pin_kind, studio, qtbot):
     assert session.constraints == [] and panel.list.count() == 0
 
 
-def test_ctrl_dragging_a_joint_without_sensor_pins_it(pin_kind, studio, qtbot):
+def test_ctrl_dragging_a_joint_without_sensor_pins_it(studio, qtbot):
     studio.viewport.jointDragged.emit("lelbow", np.array([0.4, 0.0, 1.3]))
     (pin,) = studio.session.constraints
-    assert pin.kind == pin_kind and pin.joint == "lelbow" and np.allclose(pin.target, [0.4, 0, 1.3])
+    assert pin.kind == "pin" and pin.joint == "lelbow" and np.allclose(pin.position, [0.4, 0, 1.3])
     studio.viewport.jointDragged.emit("lelbow", np.array([0.5, 0.0, 1.3]))
-    assert len(studio.session.constraints) == 1 and np.allclose(pin.target, [0.5, 0, 1.3])
+    assert len(studio.session.constraints) == 1 and np.allclose(pin.position, [0.5, 0, 1.3])

@@ -63,6 +63,14 @@ class SensorConfig:
         return any(a <= frame < b for a, b in self.failures)
 
 
+def default_settings() -> dict[str, Any]:
+    """The optimizer's own defaults (one source of truth: ``OptimizerSettings``)."""
+    from engine.optimizer import OptimizerSettings
+
+    d = OptimizerSettings()
+    return {"mode": d.mode, "iterations": d.iterations, "lr": d.lr, "temporal_weight": d.temporal_weight}
+
+
 @dataclass
 class Session:
     """Everything the studio shows and edits; see the module docstring.
@@ -88,9 +96,7 @@ class Session:
     preset: str = ""
     sensors: dict[str, SensorConfig] = field(default_factory=dict)
     constraints: list[Any] = field(default_factory=list)
-    settings: dict[str, Any] = field(
-        default_factory=lambda: {"mode": "realtime", "iterations": 1, "lr": 0.01, "temporal_weight": 1.0}
-    )
+    settings: dict[str, Any] = field(default_factory=lambda: default_settings())
     method: str = "ik"
     ghosts: tuple[str, ...] = ()
     frame: int = 0

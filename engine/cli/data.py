@@ -34,6 +34,15 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-mirror", action="store_true", help="do not add left/right mirrored copies")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_prepare)
+    ls = dsub.add_parser(
+        "list",
+        help="print the source files of a split (e.g. to evaluate on the validation files)",
+        description="Print one source BVH path per line for the given split of a prepared "
+        "folder (original clips only, not mirrored copies).",
+    )
+    ls.add_argument("--data", type=Path, default=Path("prepared"), help="prepared folder (default: prepared)")
+    ls.add_argument("--split", choices=("train", "val", "test"), default="val", help="split (default: val)")
+    ls.set_defaults(func=_list)
     data.set_defaults(func=lambda args: data.print_help() or 0)
 
 
@@ -50,3 +59,12 @@ def _prepare(args: argparse.Namespace) -> int:
     for path, reason in res.failed:
         print(f"  failed: {path}: {reason}")
     return 1 if res.failed and not (res.written or res.reused) else 0
+
+
+def _list(args: argparse.Namespace) -> int:
+    from engine.training.data import read_manifest
+
+    for entry in read_manifest(args.data)["files"]:
+        if entry["split"] == args.split and not entry["mirrored"]:
+            print(entry["path"])
+    return 0

@@ -53,6 +53,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--noise-rot", type=float, default=0.0, metavar="DEG", help="rotation noise std, degrees")
     p.add_argument("--mode", choices=("realtime", "offline"), default="realtime", help="passed to the method")
     p.add_argument("--iterations", type=int, metavar="N", help="optimizer iterations per frame (passed to the method)")
+    p.add_argument("--lr", type=float, help="optimizer learning rate (latent-space methods)")
     p.add_argument("--max-frames", type=int, metavar="N", help="evaluate only the first N frames of each clip")
     p.add_argument("--seed", type=int, default=0, help="seed of the tracker simulation (default: 0)")
     p.add_argument("--json", type=Path, metavar="OUT.json", help="also write the results as JSON")
@@ -155,6 +156,8 @@ def _evaluate(args: argparse.Namespace) -> int:
     kwargs: dict[str, Any] = {"mode": args.mode}
     if args.iterations is not None:
         kwargs["iterations"] = args.iterations
+    if args.lr is not None:
+        kwargs["lr"] = args.lr
     method = get_method(args.method, **kwargs)
     per_file: dict[str, dict[str, Any]] = {}
     for path in clips:

@@ -3,6 +3,14 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
+
+SHIPPED_VAE = Path(__file__).resolve().parents[2] / "assets" / "models" / "vae.pt"
+
+
+def default_method() -> str:
+    """DragPoser with the shipped model; the IK baseline when no weights are installed."""
+    return "dragposer" if SHIPPED_VAE.is_file() else "ik"
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -13,7 +21,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "play --after-frames frames, save a PNG of the whole window and exit.",
     )
     p.add_argument("file", nargs="?", metavar="FILE.bvh", help="motion to open")
-    p.add_argument("--method", default="ik", help="reconstruction method (default: ik)")
+    p.add_argument("--method", help="reconstruction method (default: dragposer with the shipped model, "
+                   "ik when no weights are installed)")
     p.add_argument("--sensors", metavar="PRESET", help="sensor preset name")
     p.add_argument("--screenshot", metavar="OUT.png", help="save a screenshot and exit")
     p.add_argument("--after-frames", type=int, default=60, metavar="N", help="frames to play first (60)")
@@ -23,4 +32,4 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from app.main import run as run_app  # Qt stays out of engine/ imports
 
-    return run_app(args.file, args.method, args.sensors, args.screenshot, args.after_frames)
+    return run_app(args.file, args.method or default_method(), args.sensors, args.screenshot, args.after_frames)

@@ -23,6 +23,7 @@ from __future__ import annotations
 import fnmatch
 import hashlib
 import json
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -204,10 +205,10 @@ def prepare(
                 result.written += 1
         except UserError as exc:
             result.failed.append((str(path), str(exc)))
-            tqdm.write(f"skipped {path}: {exc}")
+            tqdm.write(f"skipped {path}: {exc}", file=sys.stderr)
         except (ValueError, KeyError, IndexError, FloatingPointError) as exc:
             result.failed.append((str(path), f"{type(exc).__name__}: {exc}"))
-            tqdm.write(f"skipped {path}: {type(exc).__name__}: {exc}")
+            tqdm.write(f"skipped {path}: {type(exc).__name__}: {exc}", file=sys.stderr)
 
     stats = _stats(entries)
     digest = hashlib.sha256(

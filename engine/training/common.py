@@ -86,8 +86,9 @@ class Distributed:
         if self.world > 1 and not dist.is_initialized():
             dist.init_process_group("nccl" if torch.cuda.is_available() else "gloo")
         if self.device.type == "cpu":
+            # share the cores between processes; never raise an explicit OMP_NUM_THREADS
             cores = os.cpu_count() or 1
-            torch.set_num_threads(max(1, cores // self.world))
+            torch.set_num_threads(min(torch.get_num_threads(), max(1, cores // self.world)))
 
     @property
     def main(self) -> bool:

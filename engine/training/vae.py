@@ -46,6 +46,9 @@ class VAETrainConfig:
     minutes: float = 45.0
     seed: int = 0
     val_max_frames: int = 20000
+    #: Stop after this many epochs in this invocation (0: no limit); resume continues the
+    #: same schedule, so a run can be trained in chunks.
+    stop_after: int = 0
 
     def model_config(self) -> VAEConfig:
         return VAEConfig(latent=self.latent, channels=tuple(self.channels))
@@ -104,6 +107,17 @@ def reconstruction_error(vae: PoseVAE, data: PoseData, max_frames: int | None = 
         rot_err += Q.angle(rot[:, 1:], data.rot[idx, 1:]).mean(-1).sum().item()
         count += idx.numel()
     return {"val_pos_cm": 100.0 * pos_err / count, "val_rot_deg": math.degrees(rot_err / count)}
+
+
+def state_hash(model: nn.Module) -> str:
+    """SHA-256 of a model's parameters and buffers (to compare processes or runs)."""
+    import hashlib
+
+    h = hashlib.sha256()
+    for k, v in sorted(model.state_dict().items()):
+        h.update(k.encode())
+        h.update(v.detach().cpu().contiguous().numpy().tobytes())
+    return h.hexdigest()
 
 
 def cosine_lr(cfg: VAETrainConfig, step_fraction: float, minutes: float) -> float:
@@ -201,10 +215,14 @@ def train_vae(data_dir: Path, out_dir: Path, cfg: VAETrainConfig, resume: bool =
                 "epoch": epoch + 1, "minutes": minutes, "best": best, "curve": log.rows, "rng": torch.get_rng_state(),
             })  # fmt: skip
         ddp.barrier()
+        if cfg.stop_after and epoch + 1 - start_epoch >= cfg.stop_after and epoch + 1 < cfg.epochs:
+            return meta
         if cfg.minutes and minutes >= cfg.minutes:
             if ddp.main and progress:
                 tqdm.write(f"time budget of {cfg.minutes} min reached after epoch {epoch + 1}")
             break
+    if ddp.world > 1:  # every rank records its weights: they must agree
+        (out_dir / f"weights_rank{ddp.rank}.sha256").write_text(state_hash(vae) + "\n")
     if ddp.main:
         meta["finished"] = True
         save_checkpoint(out_dir / "vae.pt", weights_payload(vae, cfg, meta))

@@ -95,3 +95,11 @@ def test_info_works_on_every_shared_file(shared_mocap):
         motion, rep = load_with_report(path, None)
         assert len(motion) > 10, path
         assert np.isfinite(motion.positions()).all(), path
+
+
+def test_data_list_prints_the_split(small_corpus, tmp_path, capsys):
+    out = tmp_path / "prep"
+    prepare([small_corpus], out, progress=False)
+    assert main(["data", "list", "--data", str(out), "--split", "test"]) == 0
+    lines = capsys.readouterr().out.split()
+    assert lines == [str((small_corpus / "dragposer/example_3.bvh").resolve())]

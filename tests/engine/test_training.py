@@ -1,0 +1,127 @@
+"""Training on tiny synthetic data: determinism, resume, predictor, and a 2-process DDP run."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import torch
+
+from engine import skeleton as sk
+from engine.bvh import save_motion_bvh
+from engine.data.prepare import prepare
+from engine.kinematics import quaternion as Q
+from engine.motion import Motion
+from engine.training.common import load_config
+from engine.training.vae import VAETrainConfig, state_hash, train_vae
+
+TINY_VAE = ["channels=[8, 8, 12, 16]", "batch_size=32", "val_max_frames=200", "minutes=0.0"]
+
+
+def _motion(seed: int, frames: int = 80) -> Motion:
+    rng = np.random.default_rng(seed)
+    t = np.arange(frames) / 60.0
+    amp = rng.uniform(0.05, 0.4, size=(sk.NUM_JOINTS, 3))
+    phase = rng.uniform(0, 2 * np.pi, size=(sk.NUM_JOINTS, 3))
+    aa = amp[None] * np.sin(2 * np.pi * rng.uniform(0.5, 1.5) * t[:, None, None] + phase[None])
+    ang = np.linalg.norm(aa, axis=-1)
+    rot = Q.from_axis_angle(aa / np.maximum(ang[..., None], 1e-9), ang)
+    root = np.stack([0.2 * t, -1.0 * t, 0.95 + 0.02 * np.sin(4 * np.pi * t)], axis=-1)
+    return Motion(rot, root, sk.Skeleton.canonical(), 60.0, f"synth{seed}")
+
+
+@pytest.fixture(scope="module")
+def tiny_data(tmp_path_factory):
+    root = tmp_path_factory.mktemp("tiny")
+    for i in range(9):
+        save_motion_bvh(root / "src" / "synth" / f"{i:02d}.bvh", _motion(i))
+    prepare([root / "src"], root / "prepared", progress=False)
+    return root / "prepared"
+
+
+def _cfg(**kw) -> VAETrainConfig:
+    return load_config(VAETrainConfig, None, TINY_VAE, **kw)
+
+
+def _weights(path):
+    return torch.load(path, map_location="cpu", weights_only=True)["state_dict"]
+
+
+def _same(a, b) -> bool:
+    wa, wb = _weights(a), _weights(b)
+    return all(torch.equal(wa[k], wb[k]) for k in wa)
+
+
+@pytest.fixture(scope="module")
+def run_a(tiny_data, tmp_path_factory):
+    out = tmp_path_factory.mktemp("run_a")
+    meta = train_vae(tiny_data, out, _cfg(epochs=2, seed=3), progress=False)
+    return out, meta
+
+
+def test_vae_training_writes_its_outputs_and_is_deterministic(tiny_data, run_a, tmp_path):
+    out, meta = run_a
+    for name in ("vae.pt", "best.pt", "last.pt", "losses.csv", "losses.png"):
+        assert (out / name).is_file(), name
+    assert meta["epochs"] == 2 and np.isfinite(meta["val_pos_cm"])
+    assert (out / "losses.csv").read_text().count("\n") == 3  # header + 2 epochs
+    train_vae(tiny_data, tmp_path / "b", _cfg(epochs=2, seed=3), progress=False)
+    assert _same(out / "vae.pt", tmp_path / "b/vae.pt"), "same seed, same data: same weights"
+    train_vae(tiny_data, tmp_path / "c", _cfg(epochs=1, seed=4), progress=False)
+    wc, wa = _weights(tmp_path / "c/vae.pt"), _weights(out / "best.pt")
+    assert not all(torch.equal(wa[k], wc[k]) for k in wa), "the seed must matter"
+
+
+def test_resume_continues_exactly(tiny_data, run_a, tmp_path):
+    train_vae(tiny_data, tmp_path / "r", _cfg(epochs=2, seed=3, stop_after=1), progress=False)
+    assert torch.load(tmp_path / "r/last.pt", weights_only=False)["epoch"] == 1
+    assert not (tmp_path / "r/vae.pt").exists()
+    train_vae(tiny_data, tmp_path / "r", _cfg(epochs=2, seed=3), resume=True, progress=False)
+    assert torch.load(tmp_path / "r/last.pt", weights_only=False)["epoch"] == 2
+    assert _same(run_a[0] / "vae.pt", tmp_path / "r/vae.pt"), "stop + resume must equal the straight run"
+
+
+def test_config_file_and_overrides(tmp_path):
+    from engine.errors import UserError
+
+    f = tmp_path / "c.toml"
+    f.write_text("epochs = 7\nlr = 0.01\n")
+    cfg = load_config(VAETrainConfig, f, ["batch_size=8", "channels=[4, 4, 4, 4]"], lr=0.02)
+    assert (cfg.epochs, cfg.batch_size, cfg.lr, cfg.channels) == (7, 8, 0.02, (4, 4, 4, 4))
+    with pytest.raises(UserError, match="nope"):
+        load_config(VAETrainConfig, None, ["nope=1"])
+    with pytest.raises(UserError, match="batch_size"):
+        load_config(VAETrainConfig, None, ["batch_size=abc"])
+
+
+def test_predictor_trains_on_vae_latents(tiny_data, run_a, tmp_path):
+    from engine.models.loading import load_predictor
+    from engine.training.predictor import PredictorTrainConfig, train_predictor
+
+    cfg = PredictorTrainConfig(d_model=16, heads=2, encoder_layers=1, decoder_layers=1, feedforward=32,
+                               past=4, future=4, stride=2, batch_size=8, steps_per_epoch=5, epochs=2, minutes=0.0)  # fmt: skip
+    meta = train_predictor(tiny_data, run_a[0] / "vae.pt", tmp_path / "pred", cfg, progress=False)
+    assert meta["epochs"] == 2 and np.isfinite(meta["val_mse"]) and np.isfinite(meta["val_rollout_mse"])
+    model, pmeta = load_predictor(tmp_path / "pred/predictor.pt")
+    assert pmeta["finished"] and model.config.past == 4
+
+
+@pytest.mark.slow
+def test_two_process_ddp_ranks_agree(tiny_data, tmp_path):
+    out = tmp_path / "ddp"
+    env = {**os.environ, "OMP_NUM_THREADS": "1"}
+    cmd = [sys.executable, "-m", "torch.distributed.run", "--standalone", "--nproc_per_node=2",
+           "-m", "engine.cli.main", "train", "vae", "--data", str(tiny_data), "--out", str(out),
+           "--epochs", "1", "--quiet"] + [a for s in TINY_VAE for a in ("--set", s)]  # fmt: skip
+    proc = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=240)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    h0 = (out / "weights_rank0.sha256").read_text()
+    h1 = (out / "weights_rank1.sha256").read_text()
+    assert h0 == h1
+    from engine.models.loading import load_vae
+
+    vae, _ = load_vae(out / "vae.pt")
+    assert state_hash(vae) + "\n" == h0

@@ -241,8 +241,19 @@ class EngineWorker(threading.Thread):
             raise FloatingPointError("method returned a non-finite pose")
         return res
 
+    def _is_jump(self, frame: int) -> bool:
+        """A seek backwards or more than 2 s ahead. Playback skipping a few frames because
+        the solver is slower than real time is not a jump: resetting then would make every
+        frame a first frame (solved offline, slower still) and the solver would never
+        catch up."""
+        if self._last_solved < 0:
+            return True
+        motion = self._source.motion
+        fps = motion.fps if motion is not None else 60.0
+        return frame < self._last_solved or frame - self._last_solved > 2 * fps
+
     def _solve(self, frame: int) -> None:
-        if frame not in (self._last_solved, self._last_solved + 1):
+        if self._is_jump(frame):
             self._reset_methods()  # temporal state is meaningless across a jump
         sf = self._source.frame(frame)
         error = getattr(self, "_pending_error", "")

@@ -123,3 +123,15 @@ def test_stop_joins_and_leaves_no_thread():
     worker.start()
     worker.stop()
     assert not worker.is_alive() and threading.active_count() == before
+
+
+def test_playback_skipping_a_few_frames_keeps_the_methods_temporal_state():
+    """A solver slower than real time makes playback skip frames; resetting the method then
+    would make every frame a first frame (solved offline, slower still)."""
+    worker = w.EngineWorker()  # not started: only the jump rule is exercised
+    assert worker._is_jump(0)  # nothing solved yet
+    worker._last_solved = 100
+    assert not worker._is_jump(101)
+    assert not worker._is_jump(105)  # a few frames skipped by playback
+    assert worker._is_jump(99)  # seek backwards (or a loop)
+    assert worker._is_jump(100 + 121)  # more than 2 s ahead at 60 fps

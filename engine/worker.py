@@ -336,8 +336,8 @@ class EngineWorker(threading.Thread):
         for d in self._constraints:
             try:
                 c = from_dict(dict(d))
-                if c.enabled:
-                    out.append((c.name, c.gizmo()))
+                if c.enabled:  # current joints let distance/balance/look-at draw their lines
+                    out.append((c.name, c.gizmo(self._last_pose)))
             except Exception:  # a bad gizmo is cosmetic; the constraint itself reports
                 continue
         return tuple(out)

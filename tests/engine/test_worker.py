@@ -135,3 +135,14 @@ def test_playback_skipping_a_few_frames_keeps_the_methods_temporal_state():
     assert not worker._is_jump(105)  # a few frames skipped by playback
     assert worker._is_jump(99)  # seek backwards (or a loop)
     assert worker._is_jump(100 + 121)  # more than 2 s ahead at 60 fps
+
+
+def test_gizmos_that_relate_joints_get_the_current_pose(engine):
+    from engine.constraints.distance import DistanceConstraint
+
+    session, worker = engine
+    session.add_constraint(DistanceConstraint(name="hands", joint_a="lwrist", joint_b="rwrist", distance=0.3))
+    session.play()
+    wait_for(lambda: worker.latest is not None and dict(worker.latest.gizmos).get("hands"))
+    giz = dict(worker.latest.gizmos)["hands"]
+    assert giz["type"] == "line" and np.asarray(giz["points"]).shape == (2, 3)

@@ -28,7 +28,7 @@ def pin_kind():
             t = torch.as_tensor(self.target, dtype=state.positions.dtype)
             return ((state.positions[sk.JOINT_INDEX[self.joint]] - t) ** 2).sum()
 
-        def gizmo(self):
+        def gizmo(self, positions=None):
             return {"type": "point", "position": np.asarray(self.target), "edit": "target"}
 
     yield StudioTestPin.kind

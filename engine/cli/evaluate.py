@@ -12,14 +12,13 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
-import tempfile
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from engine.atomic import write_text
 from engine.errors import UserError
 
 #: Columns of the printed table: (metric key, header, format).
@@ -104,20 +103,6 @@ def evaluate_clip(motion: Any, method: Any, preset: str, *, faulty: float = 0.0,
     return out
 
 
-def _write_atomic(path: Path, text: str) -> None:
-    """Write to a temporary file beside ``path``, then rename: never a half-written file."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-
-
 def _json_safe(d: dict[str, Any]) -> dict[str, Any]:
     """NaN / inf become null: strict JSON readers reject the bare tokens."""
     return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in d.items()}
@@ -182,6 +167,6 @@ def _evaluate(args: argparse.Namespace) -> int:
             "total": _json_safe(total),
             "files": {k: _json_safe(v) for k, v in per_file.items()},
         }
-        _write_atomic(args.json, json.dumps(doc, indent=2) + "\n")
+        write_text(args.json, json.dumps(doc, indent=2) + "\n")
         print(f"wrote {args.json}")
     return 0

@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from engine import skeleton as sk
+from engine.kinematics import quaternion as Q
 from engine.methods.base import FrameResult, Method, SensorFrame, SensorReading
 from engine.motion import Motion
 
@@ -116,8 +117,7 @@ def _yaw(angle: float) -> np.ndarray:
 
 def _heading_of(q: np.ndarray) -> np.ndarray:
     """Yaw-only part of ``q``: turns the rest forward (-Y) onto q's horizontal forward."""
-    f = _rot(q, np.array([0.0, -1.0, 0.0]))
-    return _yaw(math.atan2(f[0], -f[1]))
+    return Q.heading(q)
 
 
 def _basis_rotation(u0: np.ndarray, w0: np.ndarray, u1: np.ndarray, w1: np.ndarray) -> np.ndarray:
@@ -202,6 +202,7 @@ class IKMethod(Method):
 
     # -- kinematics -----------------------------------------------------------------
     def _fk(self, local: np.ndarray, root_pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        # scalar loop on purpose: engine.kinematics.fk is batched and ~8x slower for one frame
         pos = np.empty((sk.NUM_JOINTS, 3))
         rot = np.empty((sk.NUM_JOINTS, 4))
         pos[0], rot[0] = root_pos, local[0]

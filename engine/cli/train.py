@@ -43,7 +43,7 @@ def _direct(args: argparse.Namespace) -> dict:
 
 
 def _train_vae(args: argparse.Namespace) -> int:
-    from engine.training.common import load_config
+    from engine.config import load_config
     from engine.training.vae import VAETrainConfig, train_vae
 
     cfg = load_config(VAETrainConfig, args.config, args.set, **_direct(args))
@@ -55,7 +55,7 @@ def _train_vae(args: argparse.Namespace) -> int:
 
 
 def _train_predictor(args: argparse.Namespace) -> int:
-    from engine.training.common import load_config
+    from engine.config import load_config
     from engine.training.predictor import PredictorTrainConfig, train_predictor
 
     cfg = load_config(PredictorTrainConfig, args.config, args.set, **_direct(args))

@@ -8,8 +8,6 @@ import dataclasses
 import io
 import os
 import random
-import tomllib
-import typing
 from pathlib import Path
 from typing import Any
 
@@ -18,47 +16,6 @@ import torch
 import torch.distributed as dist
 
 from engine.atomic import atomic_path, write_bytes
-from engine.errors import UserError
-
-
-def load_config(cls: type, path: Path | None = None, overrides: list[str] | None = None, **direct: Any):
-    """Build dataclass ``cls`` from defaults, then a TOML file, then ``key=value`` overrides,
-    then ``direct`` keyword values that are not None. Errors name the file and field."""
-    values: dict[str, Any] = {}
-    if path is not None:
-        try:
-            values.update(tomllib.loads(Path(path).read_text()))
-        except (OSError, tomllib.TOMLDecodeError) as exc:
-            raise UserError(f"{path}: cannot read config: {exc}") from exc
-    hints = typing.get_type_hints(cls)
-    for item in overrides or []:
-        if "=" not in item:
-            raise UserError(f"--set {item!r}: expected key=value")
-        key, raw = item.split("=", 1)
-        if key not in hints:
-            raise UserError(f"--set {key}: unknown setting; known: {', '.join(sorted(hints))}")
-        values[key] = _convert(key, raw, hints[key])
-    values.update({k: v for k, v in direct.items() if v is not None})
-    unknown = set(values) - set(hints)
-    if unknown:
-        raise UserError(f"{path or 'config'}: unknown settings {sorted(unknown)}")
-    for key, val in values.items():
-        if isinstance(val, list):
-            values[key] = tuple(val)
-    return cls(**values)
-
-
-def _convert(key: str, raw: str, hint: Any) -> Any:
-    try:
-        if hint is bool:
-            if raw.lower() not in ("true", "false", "1", "0"):
-                raise ValueError(raw)
-            return raw.lower() in ("true", "1")
-        if hint in (int, float, str):
-            return hint(raw)
-        return tomllib.loads(f"v = {raw}")["v"]
-    except (ValueError, tomllib.TOMLDecodeError) as exc:
-        raise UserError(f"--set {key}={raw}: not a valid {getattr(hint, '__name__', hint)}") from exc
 
 
 def config_dict(cfg: Any) -> dict:

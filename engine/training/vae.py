@@ -20,7 +20,7 @@ from torch import nn
 from tqdm import tqdm
 
 from engine.kinematics import quaternion as Q
-from engine.kinematics.features import root_space_fk
+from engine.kinematics.features import encoder_input, root_space_fk
 from engine.models.vae import PoseVAE, VAEConfig, pose_distance
 from engine.training.common import CurveLog, Distributed, config_dict, save_checkpoint, seed_everything
 from engine.training.data import PoseData, load_split, read_manifest
@@ -46,6 +46,10 @@ class VAETrainConfig:
     minutes: float = 45.0
     seed: int = 0
     val_max_frames: int = 20000
+    #: Limb-mix augmentation: probability that a training pose gets one limb (arm or leg
+    #: chain) from another random training frame, so the model sees new combinations of
+    #: limb poses (the validation dances are new combinations of familiar limb poses).
+    limb_mix: float = 0.0
     #: Stop after this many epochs in this invocation (0: no limit); resume continues the
     #: same schedule, so a run can be trained in chunks.
     stop_after: int = 0
@@ -83,12 +87,42 @@ class VAEObjective(nn.Module):
         return out
 
 
-def batch_of(data: PoseData, idx: torch.Tensor) -> dict[str, torch.Tensor]:
+#: Joints of each limb chain swapped by the limb-mix augmentation (hip/clavicle outwards).
+LIMBS: tuple[tuple[int, ...], ...] = ((1, 2, 3, 4), (5, 6, 7, 8), (14, 15, 16, 17), (18, 19, 20, 21))
+
+
+def batch_of(data: PoseData, idx: torch.Tensor, limb_mix: float = 0.0,
+             generator: torch.Generator | None = None, pairs: torch.Tensor | None = None) -> dict[str, torch.Tensor]:
+    """Training batch of frames ``idx`` and their successors.
+
+    With ``limb_mix > 0`` each pose, with that probability, takes one limb's local
+    rotations from another frame drawn from ``pairs`` (and its successor from that frame's
+    successor, so the pair stays a motion); encoder input and positions are recomputed
+    by FK."""
     nxt = idx + 1
-    return {
+    b = {
         "dq": data.dq[idx], "rot": data.rot[idx], "disp": data.disp[idx], "pos": data.pos[idx],
         "offsets": data.offsets[idx], "rot_next": data.rot[nxt], "disp_next": data.disp[nxt],
     }  # fmt: skip
+    if limb_mix <= 0 or pairs is None:
+        return b
+    n = idx.numel()
+    chosen = torch.rand(n, generator=generator) < limb_mix
+    if not bool(chosen.any()):
+        return b
+    donor = pairs[torch.randint(len(pairs), (n,), generator=generator)]
+    limb = torch.randint(len(LIMBS), (n,), generator=generator)
+    mask = torch.zeros(n, data.rot.shape[1], dtype=torch.bool)
+    for li, joints in enumerate(LIMBS):
+        rows = chosen & (limb == li)
+        mask[rows.nonzero().squeeze(1)[:, None], torch.tensor(joints)] = True
+    m = mask[..., None]
+    rot = torch.where(m, data.rot[donor], b["rot"])
+    b["rot_next"] = torch.where(m, data.rot[donor + 1], b["rot_next"])
+    b["rot"] = rot
+    b["pos"], _ = root_space_fk(rot, b["offsets"])
+    b["dq"] = encoder_input(rot, b["disp"], b["offsets"])
+    return b
 
 
 @torch.no_grad()
@@ -188,7 +222,7 @@ def train_vae(data_dir: Path, out_dir: Path, cfg: VAETrainConfig, resume: bool =
             minutes = minutes_before + (time.monotonic() - t0) / 60.0
             for group in opt.param_groups:
                 group["lr"] = cosine_lr(cfg, global_step / total_steps, minutes)
-            losses = objective(batch_of(train, idx))
+            losses = objective(batch_of(train, idx, cfg.limb_mix, gen, pairs))
             opt.zero_grad(set_to_none=True)
             losses["total"].backward()
             opt.step()

@@ -15,7 +15,7 @@ from engine.bvh import save_motion_bvh
 from engine.data.prepare import prepare
 from engine.kinematics import quaternion as Q
 from engine.motion import Motion
-from engine.training.common import load_config
+from engine.config import load_config
 from engine.training.vae import VAETrainConfig, state_hash, train_vae
 
 TINY_VAE = ["channels=[8, 8, 12, 16]", "batch_size=32", "val_max_frames=200", "minutes=0.0"]
@@ -125,3 +125,28 @@ def test_two_process_ddp_ranks_agree(tiny_data, tmp_path):
 
     vae, _ = load_vae(out / "vae.pt")
     assert state_hash(vae) + "\n" == h0
+
+
+def test_limb_mix_swaps_one_limb_and_recomputes_the_features(tiny_data):
+    from engine.kinematics.features import encoder_input, root_space_fk
+    from engine.training.data import load_split
+    from engine.training.vae import LIMBS, batch_of
+
+    data = load_split(tiny_data, "train")
+    pairs = torch.nonzero(data.has_next).squeeze(1)
+    idx = pairs[:64]
+    plain = batch_of(data, idx)
+    mixed = batch_of(data, idx, 1.0, torch.Generator().manual_seed(0), pairs)
+    changed = ~torch.isclose(mixed["rot"], plain["rot"], atol=1e-6).all(-1)  # (B, J)
+    limb_sets = [set(j) for j in LIMBS]
+    for row in changed:
+        joints = set(torch.nonzero(row).squeeze(1).tolist())
+        assert any(joints <= limb for limb in limb_sets), f"changed joints {joints} are not one limb"
+    assert changed.any(-1).float().mean() > 0.8, "with limb_mix=1 (almost) every pose is mixed"
+    # the successor's limb comes from the donor's successor: where rot changed, so did rot_next
+    changed_next = ~torch.isclose(mixed["rot_next"], plain["rot_next"], atol=1e-6).all(-1)
+    assert bool((changed_next | ~changed).all())
+    pos, _ = root_space_fk(mixed["rot"], mixed["offsets"])
+    assert torch.allclose(mixed["pos"], pos) and not torch.allclose(mixed["pos"], plain["pos"])
+    assert torch.allclose(mixed["dq"], encoder_input(mixed["rot"], mixed["disp"], mixed["offsets"]))
+    assert torch.equal(batch_of(data, idx, 0.0, None, pairs)["rot"], plain["rot"])

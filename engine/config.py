@@ -1,0 +1,60 @@
+"""Settings dataclasses from TOML files and ``--set key=value`` overrides (no torch)."""
+
+from __future__ import annotations
+
+import tomllib
+import typing
+from pathlib import Path
+from typing import Any
+
+from engine.errors import UserError
+
+
+def load_config(cls: type, path: Path | None = None, overrides: list[str] | None = None, **direct: Any):
+    """Build dataclass ``cls`` from defaults, then a TOML file, then ``key=value`` overrides,
+    then ``direct`` keyword values that are not None. Errors name the file and field."""
+    values: dict[str, Any] = {}
+    if path is not None:
+        try:
+            values.update(tomllib.loads(Path(path).read_text()))
+        except (OSError, tomllib.TOMLDecodeError) as exc:
+            raise UserError(f"{path}: cannot read config: {exc}") from exc
+    hints = typing.get_type_hints(cls)
+    values.update(parse_overrides(cls, overrides))
+    values.update({k: v for k, v in direct.items() if v is not None})
+    unknown = set(values) - set(hints)
+    if unknown:
+        raise UserError(f"{path or 'config'}: unknown settings {sorted(unknown)}")
+    for key, val in values.items():
+        if isinstance(val, list):
+            values[key] = tuple(val)
+    return cls(**values)
+
+
+def parse_overrides(cls: type, overrides: list[str] | None) -> dict[str, Any]:
+    """``["key=value", ...]`` -> ``{key: value}`` typed by the fields of dataclass ``cls``;
+    an unknown key or a value of the wrong type raises :class:`UserError` naming it."""
+    hints = typing.get_type_hints(cls)
+    values: dict[str, Any] = {}
+    for item in overrides or []:
+        if "=" not in item:
+            raise UserError(f"--set {item!r}: expected key=value")
+        key, raw = item.split("=", 1)
+        key = key.strip()
+        if key not in hints:
+            raise UserError(f"--set {key}: unknown setting; known: {', '.join(sorted(hints))}")
+        values[key] = _convert(key, raw.strip(), hints[key])
+    return values
+
+
+def _convert(key: str, raw: str, hint: Any) -> Any:
+    try:
+        if hint is bool:
+            if raw.lower() not in ("true", "false", "1", "0"):
+                raise ValueError(raw)
+            return raw.lower() in ("true", "1")
+        if hint in (int, float, str):
+            return hint(raw)
+        return tomllib.loads(f"v = {raw}")["v"]
+    except (ValueError, tomllib.TOMLDecodeError) as exc:
+        raise UserError(f"--set {key}={raw}: not a valid {getattr(hint, '__name__', hint)}") from exc

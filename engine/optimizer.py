@@ -29,11 +29,15 @@ from typing import Protocol
 import numpy as np
 import torch
 
+from engine import skeleton as sk
 from engine.constraints.base import Constraint, PoseState
 from engine.errors import UserError
-from engine.optimizer_pose import DecodedPose, LevelFK, RootFrame, RootOverride, world_root
+from engine.optimizer_pose import DecodedPose, LevelFK, RootAnchor, RootFrame, RootOverride, world_root
 
 MODES = ("realtime", "offline")
+#: Latent update rules: plain gradient steps (DragPoser eq. in sec. 4.4), Adam restarted every
+#: frame, or Adam whose moment estimates carry over from frame to frame.
+OPTIMIZERS = ("sgd", "adam", "adam-carry")
 
 
 class LatentDecoder(Protocol):
@@ -87,6 +91,11 @@ class OptimizerSettings:
     divergence_factor : float
         A final loss above ``divergence_factor`` times the starting loss (plus 1e-6)
         counts as divergence; the frame falls back to its starting latent.
+    root_anchor : str
+        Without a connected hip tracker, the joint whose tracker places the body
+        (``upperneck``, the head, by default; any joint name), or ``none`` to integrate
+        the decoded root displacement from frame to frame (drifts without a hip tracker:
+        tens of centimetres over a clip with head and hands only).
     threads : int
         Torch intra-op threads while solving (0 = leave torch's setting). The tensors
         are tiny, so one thread is fastest; on a busy 2-core machine, torch's default
@@ -108,6 +117,8 @@ class OptimizerSettings:
     patience: int = 10
     min_improvement: float = 1e-4
     divergence_factor: float = 100.0
+    root_anchor: str = "upperneck"
+    optimizer: str = "adam"
     threads: int = 1
 
     def __post_init__(self) -> None:
@@ -131,6 +142,10 @@ class OptimizerSettings:
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
                 raise UserError(f"optimizer setting {name!r} must be a finite number >= 0, got {v!r}")
             setattr(self, name, float(v))
+        if self.optimizer not in OPTIMIZERS:
+            raise UserError(f"optimizer setting 'optimizer' must be one of {', '.join(OPTIMIZERS)}, got {self.optimizer!r}")
+        if self.root_anchor != "none" and self.root_anchor not in sk.JOINT_INDEX:
+            raise UserError(f"optimizer setting 'root_anchor' must be a joint name or 'none', got {self.root_anchor!r}")
         if self.lr <= 0:
             raise UserError("optimizer setting 'lr' must be > 0")
 
@@ -148,6 +163,8 @@ class FrameContext:
         The previous frame's solved root (heading and position reference).
     root_override : RootOverride or None
         Connected hip sensor, which dictates the root.
+    root_anchor : RootAnchor or None
+        Without a hip sensor: the joint (head) whose tracker places the body.
     previous_positions : Tensor (22, 3) or None
         Previous frame's solved joint positions, metres.
     prediction : Tensor (L,) or None
@@ -158,6 +175,7 @@ class FrameContext:
 
     previous_root: RootFrame
     root_override: RootOverride | None = None
+    root_anchor: RootAnchor | None = None
     previous_positions: torch.Tensor | None = None
     prediction: torch.Tensor | None = None
     frame: int = 0
@@ -210,6 +228,7 @@ class PoseOptimizer:
             decoder.eval().requires_grad_(False)
         self.settings = settings or OptimizerSettings()
         self.fk = LevelFK(offsets)
+        self._carry: dict = {}
 
     def decode(self, z: torch.Tensor, ctx: FrameContext) -> DecodedPose:
         """World pose of latent ``z (L,)`` in the context of a frame (differentiable)."""
@@ -218,6 +237,8 @@ class PoseOptimizer:
         root_rot, root_pos = world_root(rot[0], disp, ctx.previous_root, ctx.root_override)
         local = torch.cat((root_rot[None], rot[1:]), dim=0)
         pos, mats = self.fk.matrices(local, root_pos)
+        if ctx.root_anchor is not None and ctx.root_override is None:
+            pos = ctx.root_anchor.apply(pos)
         return DecodedPose(self.fk, pos, mats, local, z, ctx.previous_positions, ctx.frame, ctx.prediction)
 
     def _evaluate(self, terms: Sequence[Constraint], state: PoseState) -> torch.Tensor:
@@ -264,7 +285,7 @@ class PoseOptimizer:
         values = evaluate(state)
         names = [c.name for c in terms]
         weights = torch.tensor([c.weight for c in terms], dtype=values.dtype)
-        opt = torch.optim.Adam([z], lr=s.lr)
+        opt = self._make_optimizer(z)
         losses: list[dict[str, float]] = []
         cap, offline = s.steps_cap(), s.mode == "offline"
         best, since_best, steps = math.inf, 0, 0
@@ -297,7 +318,18 @@ class PoseOptimizer:
         if losses[-1]["total"] > s.divergence_factor * losses[0]["total"] + 1e-6:
             return self._fall_back(start, ctx, losses, steps, warnings, "loss diverged")
         final = z.detach().clone()
+        if s.optimizer == "adam-carry":
+            self._carry = {k: (v.detach().clone() if torch.is_tensor(v) else v) for k, v in opt.state[z].items()}
         return Solution(final, _detached(state, final), losses, steps, warnings)
+
+    def _make_optimizer(self, z: torch.Tensor) -> torch.optim.Optimizer:
+        s = self.settings
+        if s.optimizer == "sgd":
+            return torch.optim.SGD([z], lr=s.lr)
+        opt = torch.optim.Adam([z], lr=s.lr)
+        if s.optimizer == "adam-carry" and self._carry:
+            opt.state[z] = {k: (v.clone() if torch.is_tensor(v) else v) for k, v in self._carry.items()}
+        return opt
 
     def _fall_back(self, start: torch.Tensor, ctx: FrameContext, losses: list[dict[str, float]],
                    steps: int, warnings: list[str], why: str) -> Solution:  # fmt: skip

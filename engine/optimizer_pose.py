@@ -11,10 +11,17 @@ Root handling (see ``docs/optimizer.md``):
 * **hip sensor connected**: the root's world position is the sensor's; its world
   rotation is the sensor's for a 6-DoF tracker (DragPoser's joint adjustment). A 3-DoF
   hip keeps the decoded rotation, integrated as below.
-* **otherwise** the root is integrated from the decoded pose: slot 0 of ``rot`` is the
-  root rotation in the previous frame's heading frame ``H``, ``disp`` the displacement in
-  it, so ``R = H * rot[0]`` and ``p = p_prev + H * disp``. The gradients of every
-  constraint then reach the root through the decoder.
+* **otherwise** the root rotation is integrated from the decoded pose: slot 0 of ``rot``
+  is the root rotation in the previous frame's heading frame ``H``, so ``R = H * rot[0]``.
+  The root position is
+
+  - **anchored to the head** (:class:`RootAnchor`, the default when a head tracker is
+    connected): the whole body is translated so the decoded head lands on the head
+    tracker, ``p = head_target - (FK_head(R, rot) - p)``. The decoded torso decides how
+    far below the head the hips are; nothing accumulates from frame to frame.
+  - **integrated** otherwise: ``p = p_prev + H * disp`` with ``disp`` the decoded
+    displacement in ``H``. The gradients of every constraint then reach the root through
+    the decoder, and errors accumulate (drift) when no tracker pins the body.
 """
 
 from __future__ import annotations
@@ -139,6 +146,26 @@ class RootOverride:
 
     position: torch.Tensor
     rotation: torch.Tensor | None = None
+
+
+@dataclass
+class RootAnchor:
+    """Without a hip tracker: translate the body so ``joint`` sits at ``position``.
+
+    Attributes
+    ----------
+    joint : int
+        Joint index (the head, ``upperneck``, for DragPoser's trackers).
+    position : Tensor (3,)
+        World target of that joint, metres.
+    """
+
+    joint: int
+    position: torch.Tensor
+
+    def apply(self, positions: torch.Tensor) -> torch.Tensor:
+        """``positions (..., J, 3)`` shifted so row ``joint`` equals ``position``."""
+        return positions + (self.position - positions[..., self.joint, :])[..., None, :]
 
 
 def world_root(rot0: torch.Tensor, disp: torch.Tensor, prev: RootFrame,

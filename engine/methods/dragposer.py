@@ -26,7 +26,7 @@ from engine.kinematics import quaternion as Q
 from engine.methods.base import FrameResult, Method, SensorFrame, SensorReading
 from engine.motion import Motion
 from engine.optimizer import FrameContext, LatentDecoder, OptimizerSettings, PoseOptimizer
-from engine.optimizer_pose import RootFrame, RootOverride
+from engine.optimizer_pose import RootAnchor, RootFrame, RootOverride
 from engine.optimizer_temporal import LatentPredictor, TemporalSchedule
 
 _HEIGHT_IDX = [sk.JOINT_INDEX[j] for j in sk.HEIGHT_JOINTS]
@@ -159,7 +159,8 @@ class DragPoserMethod(Method):
             warnings.append(warn)
         start = prediction if prediction is not None and s.init_from_prediction else self._latent
         self.prior.weight = s.temporal_weight
-        ctx = FrameContext(self._root, override, self._positions, prediction, self._frame)
+        anchor = self._root_anchor() if override is None else None
+        ctx = FrameContext(self._root, override, anchor, self._positions, prediction, self._frame)
         terms = [*self.sensors.values(), self.prior, *self.constraints]
         if self._frame == 0:  # no history to start from: solve the first pose offline
             self.optimizer.settings = dataclasses.replace(s, mode="offline")
@@ -224,6 +225,16 @@ class DragPoserMethod(Method):
         pos = torch.as_tensor(c.position, dtype=torch.float32)
         rot = torch.as_tensor(Q.normalize(c.rotation), dtype=torch.float32) if c.dof == 6 else None
         return RootOverride(pos, rot)
+
+    def _root_anchor(self) -> RootAnchor | None:
+        """The head tracker places the body when there is no hip tracker (setting
+        ``root_anchor``; ``none`` integrates the decoded displacement instead)."""
+        if self.settings.root_anchor == "none":
+            return None
+        c = self.sensors.get(self.settings.root_anchor)
+        if c is None or not c.enabled:
+            return None
+        return RootAnchor(sk.JOINT_INDEX[c.joint], torch.as_tensor(c.position, dtype=torch.float32))
 
     def _initial_root(self) -> RootFrame:
         """Where the first frame's root is relative to: the hip sensor, else below the

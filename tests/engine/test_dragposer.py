@@ -79,6 +79,21 @@ def test_disconnected_sensors_are_disabled_and_the_root_is_integrated(clip):
     assert np.isfinite(r[-1].root_pos).all()
 
 
+def test_without_hip_the_head_tracker_places_the_body_unless_told_otherwise(clip):
+    tr = simulate(clip, "3-head-hands")
+    head = tr.joints.index("upperneck")
+    anchored, free = make(), make(root_anchor="none")
+    for m in (anchored, free):
+        m.reset(clip.skeleton)
+    ra = [anchored.step(tr.frame(i)) for i in range(len(clip))]
+    rf = [free.step(tr.frame(i)) for i in range(len(clip))]
+    target = tr.positions[:, head]
+    err_a = np.linalg.norm(np.array([r.positions[sk.JOINT_INDEX["upperneck"]] for r in ra]) - target, axis=-1)
+    err_f = np.linalg.norm(np.array([r.positions[sk.JOINT_INDEX["upperneck"]] for r in rf]) - target, axis=-1)
+    assert err_a.max() < 1e-4, "anchored: the head sits on its tracker every frame"
+    assert err_f.max() > 10 * err_a.max(), "integrated: the head only approaches its tracker"
+
+
 def test_constraint_editing_between_frames(clip):
     m = make()
     tr = simulate(clip, "4")

@@ -14,7 +14,7 @@ from engine.errors import UserError
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk
 from engine.optimizer import FrameContext, OptimizerSettings, PoseOptimizer
-from engine.optimizer_pose import LevelFK, RootFrame, RootOverride
+from engine.optimizer_pose import LevelFK, RootAnchor, RootFrame, RootOverride
 from engine.optimizer_temporal import TemporalSchedule
 from tests.engine.test_optimizer_standins import CountingPredictor, MLPDecoder, NaNBeyond
 
@@ -61,6 +61,45 @@ def test_root_follows_a_hip_sensor_or_integrates_the_decoded_displacement():
         held = opt.decode(z, FrameContext(prev, hip))
         assert torch.allclose(held.positions[0], hip.position) and torch.allclose(held.local_rot[0], hip.rotation)
         assert torch.allclose(held.local_rot[1:], free.local_rot[1:])
+
+
+def test_without_hip_sensor_the_head_anchor_places_the_body():
+    opt = PoseOptimizer(MLPDecoder(), OFFSETS)
+    z = torch.randn(24) * 0.3
+    head = torch.tensor([3.0, -1.0, 1.6])
+    anchor = RootAnchor(J["upperneck"], head)
+    with torch.no_grad():
+        free = opt.decode(z, ctx())
+        held = opt.decode(z, ctx(root_anchor=anchor))
+        assert torch.allclose(held.positions[J["upperneck"]], head, atol=1e-6)
+        shift = held.positions - free.positions  # a rigid translation of the decoded pose
+        assert torch.allclose(shift, shift[:1].expand_as(shift), atol=1e-5)
+        assert torch.allclose(held.local_rot, free.local_rot)
+        hip = RootOverride(torch.tensor([5.0, 5.0, 1.0]))
+        both = opt.decode(z, ctx(root_override=hip, root_anchor=anchor))
+        assert torch.allclose(both.positions[0], hip.position), "a hip sensor takes precedence"
+    # the anchored body stays put however far the decoded displacement would carry it
+    zs = torch.zeros(24, requires_grad=True)
+    s1 = opt.decode(zs, ctx(root_anchor=anchor))
+    s1.positions[J["upperneck"]].sum().backward()
+    assert zs.grad.abs().max() < 1e-5, "the head's position no longer depends on the latent"
+
+
+def test_sgd_takes_the_papers_plain_gradient_step_and_adam_carry_keeps_its_moments():
+    z0 = torch.randn(24) * 0.2
+    opt = PoseOptimizer(MLPDecoder(), OFFSETS, OptimizerSettings(optimizer="sgd", lr=0.3, iterations=1))
+    c = ctx()
+    terms = targets_from(opt, torch.zeros(24), c, ("lwrist",))
+    z = z0.clone().requires_grad_(True)
+    terms[0].loss(opt.decode(z, c)).backward()
+    sol = opt.solve(z0, terms, c)
+    assert torch.allclose(sol.latent, z0 - 0.3 * z.grad, atol=1e-6)
+    carry = PoseOptimizer(MLPDecoder(), OFFSETS, OptimizerSettings(optimizer="adam-carry", iterations=3))
+    fresh = PoseOptimizer(MLPDecoder(), OFFSETS, OptimizerSettings(optimizer="adam", iterations=3))
+    first = [o.solve(z0, terms, c).latent for o in (carry, fresh)]
+    assert torch.allclose(first[0], first[1]), "the first frame has nothing to carry"
+    second = [o.solve(first[0], terms, c).latent for o in (carry, fresh)]
+    assert not torch.allclose(second[0], second[1]), "carried moments change the next frame's steps"
 
 
 def test_without_hip_sensor_other_constraints_move_the_root():
@@ -144,7 +183,8 @@ def test_temporal_prior_pulls_towards_the_prediction():
 
 
 @pytest.mark.parametrize("field, value", [("mode", "turbo"), ("iterations", 0), ("lr", -1.0), ("lr", math.nan),
-                                          ("max_iterations", 2.5)])  # fmt: skip
+                                          ("max_iterations", 2.5), ("optimizer", "lbfgs"),
+                                          ("root_anchor", "tail")])  # fmt: skip
 def test_bad_settings_name_the_field(field, value):
     with pytest.raises(UserError, match=field):
         OptimizerSettings(**{field: value})

@@ -37,6 +37,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--faulty", type=float, default=0.0, metavar="P",
                    help="per-frame probability that one sensor fails for 100 frames (DragPoser: 0.01)")
     p.add_argument("--gaps", action="store_true", help="simulate hand-tracking gaps (RPM)")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="optimizer setting, repeatable, e.g. root_anchor=none (names in docs/optimizer.md)")
     p.add_argument("--max-frames", type=int, metavar="N", help="reconstruct only the first N frames")
     p.add_argument("--scene", type=Path, metavar="SCENE.json", help="constraints and optimizer settings to add")
     p.add_argument("--seed", type=int, default=0, help="seed of the tracker simulation (default: 0)")
@@ -59,6 +61,7 @@ def _reconstruct(args: argparse.Namespace) -> int:
     import dataclasses
 
     from engine.bvh import save_motion_bvh
+    from engine.cli.evaluate import apply_settings
     from engine.methods import get_method, run_method
     from engine.retarget import load_motion
     from engine.tracking import parse_sensors, simulate
@@ -95,6 +98,7 @@ def _reconstruct(args: argparse.Namespace) -> int:
         given |= {"iterations", "max_iterations"} if args.iterations is not None else set()
         given |= {"lr"} if args.lr is not None else set()
         configure(**{k: v for k, v in scene_settings.items() if k not in given})
+    apply_settings(method, args.method, args.set)
     if constraints:
         method.set_constraints(constraints)  # type: ignore[attr-defined]
     tracking = simulate(motion, args.sensors, faulty=args.faulty, gaps=args.gaps, seed=args.seed)

@@ -74,6 +74,9 @@ def test_cli_matches_the_function_underneath(clip_dir, tmp_path):
     (["--method", "nope"], "unknown method"),
     (["--sensors", "7"], "valid presets"),
     (["--faulty", "2"], "--faulty"),
+    (["--set", "lr=0.1"], "no optimizer settings"),
+    (["--set", "warp=9"], "--set warp: unknown setting"),
+    (["--set", "iterations=many"], "--set iterations=many: not a valid int"),
 ])
 def test_cli_user_errors(clip_dir, capsys, argv, message):
     assert main(["evaluate", str(clip_dir), "--no-progress", *argv]) == 2
@@ -91,3 +94,17 @@ def test_find_clips_recurses_and_dedups(clip_dir):
     files = find_clips([clip_dir, next(clip_dir.rglob("walk.bvh"))])
     assert sorted(f.name for f in files) == ["short.BVH", "walk.bvh"]
     assert np.unique([str(f) for f in files]).size == 2
+
+
+def test_set_reaches_the_method(monkeypatch):
+    from engine.cli.evaluate import apply_settings
+
+    seen = {}
+
+    class Configurable:
+        def configure(self, **values):
+            seen.update(values)
+
+    assert apply_settings(Configurable(), "x", ["optimizer=sgd", "lr=0.3", "root_anchor=none"]) == seen
+    assert seen == {"optimizer": "sgd", "lr": 0.3, "root_anchor": "none"}
+    assert apply_settings(object(), "ik", []) == {}

@@ -18,7 +18,7 @@ from PyQt6.QtGui import QAction, QKeySequence
 from PyQt6.QtWidgets import QDockWidget, QLabel, QMainWindow, QMessageBox, QTabWidget, QVBoxLayout, QWidget
 
 from app.file_actions import FileActions
-from app.schema import constraint_schema, load_constraint_kinds
+from app.schema import constraint_schema, load_constraint_kinds, optimizer_choices
 from engine.errors import UserError
 from engine.session import Session, sensor_presets
 from engine.worker import DecodeLatent, EngineWorker
@@ -102,7 +102,8 @@ class MainWindow(QMainWindow):
         self.setCentralWidget(central)
         self.sensor_panel = SensorPanel(sensor_presets())
         self.constraint_panel = ConstraintPanel(constraint_schema(self.kinds))
-        self.optimizer_panel = OptimizerPanel(method_names(self.session.method))
+        choices, self._optimizer_defaults = optimizer_choices()
+        self.optimizer_panel = OptimizerPanel(method_names(self.session.method), choices)
         tabs = QTabWidget()
         tabs.addTab(self.sensor_panel, "Sensors")
         tabs.addTab(self.constraint_panel, "Constraints")
@@ -211,7 +212,8 @@ class MainWindow(QMainWindow):
         s = self.session
         self.sensor_panel.set_sensors(s.preset, s.sensors)
         self.constraint_panel.set_constraints([c.to_dict() for c in s.constraints])
-        self.optimizer_panel.set_state(s.method, s.ghosts, s.settings)
+        # settings the session has not set yet show the engine's defaults
+        self.optimizer_panel.set_state(s.method, s.ghosts, {**self._optimizer_defaults, **s.settings})
 
     def _guard(self, fn: Any) -> Any:
         """Wrap a request so a user error shows a dialog instead of escaping into Qt."""

@@ -54,3 +54,32 @@ def constraint_schema(kinds: dict[str, type] | None = None) -> dict[str, list[tu
             fields.append((f.name, _tag(f.name, d), d))
         out[kind] = fields
     return out
+
+
+#: Anchors offered for ``root_anchor``: the head tracker, or integrating the decoded root.
+ROOT_ANCHORS = ("upperneck", "none")
+
+
+def optimizer_choices() -> tuple[dict[str, tuple[str, ...]], dict[str, Any]]:
+    """Values of the optimizer's choice settings, and every setting's default.
+
+    Only fields :class:`engine.optimizer.OptimizerSettings` really has are offered, so
+    the panel never shows a control the engine would reject.
+
+    Returns
+    -------
+    choices : dict
+        ``mode``, ``optimizer`` (the latent update rule) and ``root_anchor`` -> values.
+    defaults : dict
+        Field name -> default value, shown until the session sets the field.
+    """
+    from engine import optimizer as opt
+
+    defaults = dataclasses.asdict(opt.OptimizerSettings())
+    choices = {"mode": tuple(opt.MODES)}
+    if "optimizer" in defaults and hasattr(opt, "OPTIMIZERS"):
+        choices["optimizer"] = tuple(opt.OPTIMIZERS)
+    if "root_anchor" in defaults:
+        anchor = str(defaults["root_anchor"])
+        choices["root_anchor"] = ROOT_ANCHORS if anchor in ROOT_ANCHORS else (anchor, *ROOT_ANCHORS)
+    return choices, defaults

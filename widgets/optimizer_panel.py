@@ -1,30 +1,49 @@
-"""Optimizer settings: method, ghosts, mode, iterations, learning rate, temporal prior."""
+"""Optimizer settings: method, ghosts, mode, iterations, learning rate, temporal prior,
+latent update rule and root anchor."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 from PyQt6.QtCore import pyqtSignal
 from PyQt6.QtWidgets import QCheckBox, QComboBox, QDoubleSpinBox, QFormLayout, QHBoxLayout, QSpinBox, QWidget
 
-#: name -> (label, kind, min, max, step); kinds: "mode", "int", "float".
+#: name -> (label, kind, min, max, step); kinds: "choice", "int", "float". A choice
+#: field's values come from the engine (``choices``), so this module needs no torch.
 FIELDS: dict[str, tuple[str, str, float, float, float]] = {
-    "mode": ("Mode", "mode", 0, 0, 0),
+    "mode": ("Mode", "choice", 0, 0, 0),
     "iterations": ("Iterations / frame", "int", 1, 200, 1),
     "lr": ("Learning rate", "float", 1e-4, 1.0, 0.005),
+    "optimizer": ("Latent update", "choice", 0, 0, 0),
     "temporal_weight": ("Temporal prior weight", "float", 0.0, 10.0, 0.1),
+    "root_anchor": ("Root anchor (no hip tracker)", "choice", 0, 0, 0),
 }
+#: Values of the choice fields when the caller gives none.
+DEFAULT_CHOICES: dict[str, tuple[str, ...]] = {"mode": ("realtime", "offline")}
 
 
 class OptimizerPanel(QWidget):
-    """Signals ``settingChanged(name, value)``, ``methodChanged(str)``, ``ghostsChanged(tuple)``."""
+    """Signals ``settingChanged(name, value)``, ``methodChanged(str)``, ``ghostsChanged(tuple)``.
+
+    Parameters
+    ----------
+    methods : list of str
+        Method names for the method combo and the ghost checkboxes.
+    choices : mapping, optional
+        Values of each choice field (``mode``, ``optimizer``, ``root_anchor``), given by
+        the engine; a choice field without values gets no control, so the panel only
+        offers settings the engine knows.
+    """
 
     settingChanged = pyqtSignal(str, object)
     methodChanged = pyqtSignal(str)
     ghostsChanged = pyqtSignal(tuple)
 
-    def __init__(self, methods: list[str], parent: QWidget | None = None) -> None:
+    def __init__(self, methods: list[str], choices: Mapping[str, Sequence[str]] | None = None,
+                 parent: QWidget | None = None) -> None:  # fmt: skip
         super().__init__(parent)
+        choices = {**DEFAULT_CHOICES, **(choices or {})}
         form = QFormLayout(self)
         self.method = QComboBox()
         self.method.addItems(methods)
@@ -42,9 +61,11 @@ class OptimizerPanel(QWidget):
         form.addRow("Ghosts", holder)
         self.editors: dict[str, QWidget] = {}
         for name, (label, kind, lo, hi, step) in FIELDS.items():
-            if kind == "mode":
+            if kind == "choice":
+                if not choices.get(name):
+                    continue
                 w: Any = QComboBox()
-                w.addItems(["realtime", "offline"])
+                w.addItems([str(v) for v in choices[name]])
                 w.currentTextChanged.connect(lambda v, n=name: self._edit(n, v))
             elif kind == "int":
                 w = QSpinBox(minimum=int(lo), maximum=int(hi), singleStep=int(step))
@@ -76,6 +97,11 @@ class OptimizerPanel(QWidget):
                 if name not in settings:
                     continue
                 v = settings[name]
-                w.setCurrentText(str(v)) if isinstance(w, QComboBox) else w.setValue(v)
+                if isinstance(w, QComboBox):
+                    if w.findText(str(v)) < 0:  # e.g. another anchor joint from a scene file
+                        w.addItem(str(v))
+                    w.setCurrentText(str(v))
+                else:
+                    w.setValue(v)
         finally:
             self._updating = False

@@ -92,3 +92,32 @@ def test_latent_debugger_needs_a_decoder(qtbot, fake_snapshot, can_decode):
         with qtbot.waitSignal(w.decodeRequested) as sig:
             w.value.setValue(250)
         assert sig.args[0][0] == pytest.approx(2.5)
+
+
+def test_optimizer_panel_offers_the_engine_choices_and_emits_edits(qtbot):
+    from widgets.optimizer_panel import OptimizerPanel
+
+    choices = {"optimizer": ("sgd", "adam", "adam-carry"), "root_anchor": ("upperneck", "none")}
+    p = OptimizerPanel(["ik", "dragposer"], choices)
+    qtbot.addWidget(p)
+    opt, anchor = p.editors["optimizer"], p.editors["root_anchor"]
+    assert [opt.itemText(i) for i in range(opt.count())] == ["sgd", "adam", "adam-carry"]
+    seen = []
+    p.settingChanged.connect(lambda n, v: seen.append((n, v)))
+    p.set_state("dragposer", (), {"optimizer": "adam", "root_anchor": "lwrist", "iterations": 7})
+    assert seen == [] and opt.currentText() == "adam" and p.editors["iterations"].value() == 7
+    assert anchor.currentText() == "lwrist"  # a joint from a scene file is shown, not dropped
+    opt.setCurrentText("adam-carry")
+    anchor.setCurrentText("none")
+    p.editors["lr"].setValue(0.2)
+    assert seen == [("optimizer", "adam-carry"), ("root_anchor", "none"), ("lr", pytest.approx(0.2))]
+
+
+def test_optimizer_panel_hides_choices_the_engine_does_not_offer(qtbot):
+    from widgets.optimizer_panel import OptimizerPanel
+
+    p = OptimizerPanel(["ik"])
+    qtbot.addWidget(p)
+    assert "optimizer" not in p.editors and "root_anchor" not in p.editors
+    assert p.editors["mode"].count() == 2
+

@@ -156,7 +156,7 @@ class MainWindow(QMainWindow):
         self.viewport.jointDragged.connect(self._guard(self._drag_joint))
         self.viewport.gizmoEdited.connect(self._guard(lambda n, ch: s.update_constraint(n, **ch)))
         self.latent.decodeRequested.connect(lambda z: self.worker.submit(DecodeLatent(z)))
-        self.latent.debugToggled.connect(lambda on: s.pause() if on else None)
+        self.latent.debugToggled.connect(self._latent_debug)
 
     def _build_menus(self) -> None:
         f = self.files
@@ -266,6 +266,13 @@ class MainWindow(QMainWindow):
         constraint.name, constraint.joint = name, joint
         setattr(constraint, field, position)
         s.add_constraint(constraint)
+
+    def _latent_debug(self, on: bool) -> None:
+        """Debug on pauses playback; off solves the frame again, which drops the decoded pose."""
+        if on:
+            self.session.pause()
+        else:
+            self.session.seek(self.session.frame)
 
     def toggle_play(self) -> None:
         self.session.pause() if self.session.playing else self.session.play()

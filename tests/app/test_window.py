@@ -1,4 +1,5 @@
-"""The window around the engine: optimizer settings reach the method."""
+"""The window around the engine: optimizer settings reach the method, the latent debugger
+decodes and draws."""
 
 from __future__ import annotations
 
@@ -68,4 +69,19 @@ def test_optimizer_settings_from_the_panel_reach_the_method(studio, qtbot, laten
     # the worker passes the method every setting made so far, then solves the frame again
     qtbot.waitUntil(lambda: any(wanted.items() <= c.items() for c in latent_method.configured))
     qtbot.waitUntil(lambda: studio.worker.latest.seq > seq)
+
+
+def test_latent_debugger_decodes_an_edited_latent_and_draws_it(studio, qtbot, latent_method):
+    inspector = studio.latent
+    qtbot.waitUntil(lambda: inspector.debug_box.isEnabled() and inspector.latent is not None)
+    assert np.allclose(inspector.bars.opts["height"], np.linspace(-1, 1, 24))
+    studio.session.play()
+    inspector.debug.setChecked(True)
+    assert not studio.session.playing
+    inspector.dim.setValue(0)
+    inspector.value.setValue(150)  # z[0] = 1.5: the stand-in shifts the pose 1.5 m along x
+    qtbot.waitUntil(lambda: studio.worker.latest.decoded is not None and studio.viewport.decoded.visible)
+    assert np.allclose(studio.viewport.decoded.mesh.points[0, 0], 1.5)
+    inspector.debug.setChecked(False)
+    qtbot.waitUntil(lambda: studio.worker.latest.decoded is None and not studio.viewport.decoded.visible)
 

@@ -39,6 +39,7 @@ class _Curves:
 
     def __init__(self, plot: pg.PlotWidget, colours: dict[str, str]) -> None:
         self.plot, self.colours, self.items = plot, colours, {}
+        self.hidden: set[str] = set()  # terms hidden from the legend stay hidden after a reset
 
     def get(self, name: str, symbols: bool = False) -> pg.PlotDataItem:
         if name not in self.items:
@@ -46,9 +47,11 @@ class _Curves:
             width = 2.5 if name == "total" else 1.5
             marks = dict(symbol="o", symbolSize=5, symbolBrush=colour, symbolPen=None) if symbols else {}
             self.items[name] = self.plot.plot(name=name, pen=pg.mkPen(colour, width=width), **marks)
+            self.items[name].setVisible(name not in self.hidden)
         return self.items[name]
 
     def reset(self) -> None:
+        self.hidden = (self.hidden - set(self.items)) | {n for n, it in self.items.items() if not it.isVisible()}
         self.plot.clear()
         if self.plot.plotItem.legend is not None:
             self.plot.plotItem.legend.clear()

@@ -121,3 +121,19 @@ def test_optimizer_panel_hides_choices_the_engine_does_not_offer(qtbot):
     assert "optimizer" not in p.editors and "root_anchor" not in p.editors
     assert p.editors["mode"].count() == 2
 
+
+def test_clicking_a_legend_entry_hides_the_term_and_a_restart_keeps_it_hidden(qtbot, fake_snapshot):
+    p = LossPlots()
+    qtbot.addWidget(p)
+    p.resize(800, 500)
+    p.show()
+    qtbot.waitExposed(p)
+    p.update_snapshot(fake_snapshot(seq=1, frame=5))
+    view = p.iteration_plot
+    sample = next(s for s, label in view.plotItem.legend.items if label.text == "pos:root")
+    curve = p.iter_curves.items["pos:root"]
+    centre = view.mapFromScene(sample.mapToScene(sample.boundingRect().center()))
+    qtbot.mouseClick(view.viewport(), Qt.MouseButton.LeftButton, pos=centre)
+    assert not curve.isVisible() and p.iter_curves.items["total"].isVisible()
+    p.update_snapshot(fake_snapshot(seq=2, frame=0))  # sought back: curves are rebuilt
+    assert not p.iter_curves.items["pos:root"].isVisible() and p.iter_curves.items["total"].isVisible()

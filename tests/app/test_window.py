@@ -1,10 +1,13 @@
-"""The window around the engine: optimizer settings reach the method, the latent debugger
-decodes and draws."""
+"""The window around the engine: optimizer settings, latent debugger, status bar,
+shortcuts, drag-and-drop, recent files and remembered settings."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
+from PyQt6.QtCore import QMimeData, QPoint, QPointF, Qt, QUrl
+from PyQt6.QtGui import QDragEnterEvent, QDropEvent
+from PyQt6.QtWidgets import QApplication, QFileDialog
 
 from engine import skeleton as sk
 from engine.worker_methods import RestPoseMethod
@@ -85,3 +88,73 @@ def test_latent_debugger_decodes_an_edited_latent_and_draws_it(studio, qtbot, la
     inspector.debug.setChecked(False)
     qtbot.waitUntil(lambda: studio.worker.latest.decoded is None and not studio.viewport.decoded.visible)
 
+
+def test_status_bar_shows_engine_rate_cost_draw_rate_and_warnings(studio, qtbot):
+    studio.session.play()
+    qtbot.waitUntil(lambda: "frames/s" in studio.status_engine.text() and "ms/frame" in studio.status_engine.text())
+    qtbot.waitUntil(lambda: not studio.status_gui.text().startswith("GUI    0"), timeout=10000)
+    studio.session.pause()
+    assert float(studio.status_gui.text().split()[1]) > 0  # "GUI <rate> draws/s"
+    before = studio.worker.latest.warnings
+    # the default method (IK) takes no constraints: the engine counts one warning and says why
+    studio.constraint_panel.kinds.setCurrentText("pin")
+    studio.constraint_panel.add_button.click()
+    qtbot.waitUntil(lambda: studio.status_warnings.text() == f"warnings {before + 1}")
+    assert "constraints" in studio.status_warnings.toolTip()
+
+
+def test_keyboard_shortcuts(studio, qtbot, monkeypatch):
+    from PyQt6.QtTest import QTest
+
+    asked = []
+    monkeypatch.setattr(QFileDialog, "getOpenFileName", lambda *a, **k: (asked.append("open"), ("", ""))[1])
+    monkeypatch.setattr(QFileDialog, "getSaveFileName", lambda *a, **k: (asked.append("save"), ("", ""))[1])
+    studio.windowHandle().requestActivate()  # window shortcuts need the active window
+    qtbot.waitUntil(lambda: QApplication.activeWindow() is studio)
+    target = studio.viewport
+    QTest.keyClick(target, Qt.Key.Key_Space)
+    assert studio.session.playing
+    QTest.keyClick(target, Qt.Key.Key_Space)
+    assert not studio.session.playing
+    studio.session.seek(10)
+    QTest.keyClick(target, Qt.Key.Key_Right)
+    assert studio.session.frame == 11
+    QTest.keyClick(target, Qt.Key.Key_Left)
+    QTest.keyClick(target, Qt.Key.Key_Left)
+    assert studio.session.frame == 9
+    QTest.keyClick(target, Qt.Key.Key_O, Qt.KeyboardModifier.ControlModifier)
+    QTest.keyClick(target, Qt.Key.Key_S, Qt.KeyboardModifier.ControlModifier)
+    assert asked == ["open", "save"]
+
+
+def _drag_and_drop(window, path) -> bool:
+    """Drag ``path`` onto the window and drop it; returns whether the drag was accepted."""
+    mime = QMimeData()
+    mime.setUrls([QUrl.fromLocalFile(str(path))])
+    buttons, mods = Qt.MouseButton.NoButton, Qt.KeyboardModifier.NoModifier
+    enter = QDragEnterEvent(QPoint(20, 20), Qt.DropAction.CopyAction, mime, buttons, mods)
+    QApplication.sendEvent(window, enter)  # Qt delivers a drop only to the widget that took the drag
+    if enter.isAccepted():
+        QApplication.sendEvent(window, QDropEvent(QPointF(20, 20), Qt.DropAction.CopyAction, mime, buttons, mods))
+    return enter.isAccepted()
+
+
+def test_dropped_bvh_opens_is_remembered_and_the_preset_comes_back(studio, qtbot, tmp_path, synthetic_motion):
+    from app.main import open_initial
+    from engine.bvh import save_motion_bvh
+
+    clip = tmp_path / "dropped.bvh"
+    save_motion_bvh(clip, synthetic_motion.slice(0, 40))
+    (tmp_path / "notes.txt").write_text("not a motion")
+    assert not _drag_and_drop(studio, tmp_path / "notes.txt")
+    assert _drag_and_drop(studio, clip)
+    assert studio.session.num_frames == 40 and "dropped.bvh" in studio.windowTitle()
+    assert [a.text() for a in studio.recent_menu.actions()][0] == str(clip)
+    assert studio.settings.value("recent_files")[0] == str(clip)
+
+    chosen = "3-head-hands"
+    studio.sensor_panel.preset.setCurrentText(chosen)  # the user's choice is stored...
+    assert studio.settings.value("last_preset") == chosen
+    studio.session.set_preset("6")
+    open_initial(studio, str(clip), None)  # ...and restored when the studio opens next time
+    assert studio.session.preset == chosen

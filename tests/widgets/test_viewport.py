@@ -104,3 +104,41 @@ def test_ctrl_press_on_a_joint_takes_the_drag_from_the_camera(viewport, qtbot, f
     iren.InvokeEvent("LeftButtonReleaseEvent")
     assert sig.args[0] == "upperneck" and viewport.joints.joint is None
     assert np.allclose(viewport.plotter.camera.position, before)
+
+
+def test_a_line_gizmo_with_an_edit_field_has_a_draggable_end(viewport, qtbot, fake_snapshot):
+    """A look-at draws a line from the head to its target; the target end is a handle."""
+    look = ("look", {"type": "line", "points": [[0, 0, 1.6], [0, -2, 1.6]], "edit": "target"})
+    viewport.show_snapshot(fake_snapshot(gizmos=(look,)))
+    widget = viewport.gizmos.items["look"].widget
+    assert widget is not None and np.allclose(widget.GetCenter(), [0, -2, 1.6])
+    with qtbot.waitSignal(viewport.gizmoEdited) as sig:
+        widget.InvokeEvent("StartInteractionEvent")
+        widget.SetCenter(1.0, -2.0, 1.5)
+        widget.InvokeEvent("InteractionEvent")
+        widget.InvokeEvent("EndInteractionEvent")
+    assert sig.args[0] == "look" and np.allclose(sig.args[1]["target"], [1.0, -2.0, 1.5])
+    moved = ("look", {**look[1], "points": [[0, 0, 1.6], [1.0, -2.0, 1.5]]})
+    viewport.show_snapshot(fake_snapshot(seq=2, gizmos=(moved,)))
+    assert np.allclose(viewport.gizmos.items["look"].mesh.points[-1], [1.0, -2.0, 1.5])
+
+
+def test_box_gizmo_drags_and_follows_edits_made_elsewhere(viewport, qtbot, fake_snapshot):
+    import pyvista as pv
+
+    edits = []
+    viewport.gizmoEdited.connect(lambda n, ch: edits.append((n, ch)))
+    box = {"type": "box", "min": [-1, -1, 0], "max": [1, 1, 2], "edit": ("box_min", "box_max")}
+    viewport.show_snapshot(fake_snapshot(gizmos=(("bounds", box),)))
+    assert edits == []  # building the box widget is not an edit
+    gizmo = viewport.gizmos.items["bounds"]
+    with qtbot.waitSignal(viewport.gizmoEdited) as sig:  # the user drags a face of the box
+        gizmo.widget.PlaceWidget((-1, 1.5, -1, 1, 0, 2))
+        gizmo.widget.InvokeEvent("EndInteractionEvent")
+    assert sig.args[0] == "bounds" and np.allclose(sig.args[1]["box_max"], [1.5, 1, 2])
+    viewport.show_snapshot(fake_snapshot(seq=2, gizmos=(("bounds", {**box, "max": [2, 1, 2]}),)))
+    assert viewport.gizmos.items["bounds"] is gizmo  # moved in place, not rebuilt
+    handles = pv.PolyData()
+    gizmo.widget.GetPolyData(handles)
+    assert np.allclose(handles.bounds[:2], [-1, 2]) and np.allclose(gizmo.mesh.bounds[:2], [-1, 2])
+

@@ -7,7 +7,8 @@ Each enabled constraint describes itself with ``Constraint.gizmo()``, a plain di
 * ``{"type": "line", "points": (N, 3)}`` (or ``"start"``/``"end"``) - distance, look-at
 
 An optional ``"edit"`` key names the constraint field(s) a drag writes back (a string
-for a point, a pair ``(min_field, max_field)`` for a box). Gizmos are rebuilt only when
+for a point or for a line's last point, such as a look-at target; a pair
+``(min_field, max_field)`` for a box). Gizmos are rebuilt only when
 the set of constraints changes; otherwise their geometry is moved in place.
 """
 
@@ -45,7 +46,8 @@ class _Gizmo:
         self.actors: list = []
         self.widget = None
         self.dragging = False
-        edit = g.get("edit")
+        self.edit = edit = g.get("edit")
+        self._bounds = self._box_bounds(g) if self.kind == "box" else None
         if self.kind == "point":
             p = _vec(g, "position", "center", "target")
             if edit:
@@ -59,19 +61,28 @@ class _Gizmo:
                 self.actors.append(plotter.add_mesh(self.mesh, color=style.GIZMO, point_size=14,
                                                     render_points_as_spheres=True, reset_camera=False))  # fmt: skip
         elif self.kind == "box":
-            lo, hi = _vec(g, "min", "lower"), _vec(g, "max", "upper")
-            self.mesh = pv.Box(bounds=(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2])).outline()
+            self.mesh = pv.Box(bounds=self._bounds).outline()
             self.actors.append(plotter.add_mesh(self.mesh, color=style.GIZMO, line_width=2, reset_camera=False))
             if edit:
                 self.widget = plotter.add_box_widget(
-                    self._box_moved, bounds=(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]), factor=1.0,
+                    self._box_moved, bounds=self._bounds, factor=1.0,
                     rotation_enabled=False, color=style.GIZMO, interaction_event="end",
                 )  # fmt: skip
         elif self.kind == "line":
             pts = _line_points(g)
             self.mesh = pv.lines_from_points(pts)
             self.actors.append(plotter.add_mesh(self.mesh, color=style.GIZMO, line_width=3, reset_camera=False))
-        self.edit = edit
+            if edit:  # the line's end is a handle (e.g. the point a look-at aims at)
+                self.widget = plotter.add_sphere_widget(
+                    self._point_moved, center=tuple(pts[-1]), radius=0.04, color=style.GIZMO,
+                    interaction_event="always", test_callback=False, style="wireframe",
+                )  # fmt: skip
+                self._track(self.widget)
+
+    @staticmethod
+    def _box_bounds(g: dict) -> tuple[float, ...]:
+        lo, hi = _vec(g, "min", "lower"), _vec(g, "max", "upper")
+        return (lo[0], hi[0], lo[1], hi[1], lo[2], hi[2])
 
     def _track(self, widget: Any) -> None:
         widget.AddObserver("StartInteractionEvent", lambda *_: setattr(self, "dragging", True))
@@ -83,6 +94,8 @@ class _Gizmo:
 
     def _box_moved(self, box: pv.PolyData) -> None:
         b = np.asarray(box.bounds, float)
+        if np.allclose(b, self._bounds):  # pyvista calls back once on creation; nothing moved
+            return
         lo_field, hi_field = self.edit if isinstance(self.edit, (tuple, list)) else ("min", "max")
         self.on_edit(self.name, {lo_field: b[0::2], hi_field: b[1::2]})
 
@@ -96,13 +109,19 @@ class _Gizmo:
                 self.mesh.points[:] = p[None]
                 self.mesh.GetPoints().Modified()
         elif self.kind == "box":
-            lo, hi = _vec(g, "min", "lower"), _vec(g, "max", "upper")
-            self.mesh.copy_from(pv.Box(bounds=(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2])).outline())
+            bounds = self._box_bounds(g)
+            if bounds != self._bounds:  # edited in the panel or by a drag: move the handles too
+                self._bounds = bounds
+                self.mesh.copy_from(pv.Box(bounds=bounds).outline())
+                if self.widget is not None:
+                    self.widget.PlaceWidget(bounds)
         elif self.kind == "line":
             pts = _line_points(g)
             if pts.shape == self.mesh.points.shape:
                 self.mesh.points[:] = pts
                 self.mesh.GetPoints().Modified()
+            if self.widget is not None and not self.dragging:
+                self.widget.SetCenter(*pts[-1])
 
     def remove(self) -> None:
         if self.widget is not None:

@@ -210,6 +210,7 @@ class MainWindow(QMainWindow):
 
     def _refresh_panels(self) -> None:
         s = self.session
+        self.viewport.oriented = frozenset(j for j, c in s.sensors.items() if c.dof == 6)
         self.sensor_panel.set_sensors(s.preset, s.sensors)
         self.constraint_panel.set_constraints([c.to_dict() for c in s.constraints])
         # settings the session has not set yet show the engine's defaults

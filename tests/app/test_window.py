@@ -158,3 +158,14 @@ def test_dropped_bvh_opens_is_remembered_and_the_preset_comes_back(studio, qtbot
     studio.session.set_preset("6")
     open_initial(studio, str(clip), None)  # ...and restored when the studio opens next time
     assert studio.session.preset == chosen
+
+
+def test_a_sensor_switched_to_3_dof_loses_its_orientation_axes(studio, qtbot):
+    joint = next(iter(studio.session.sensors))
+    studio.sensor_panel.rows[joint]["dof"].setCurrentText("3-DoF")
+    assert joint not in studio.viewport.oriented
+    seq = studio.worker.latest.seq
+    qtbot.waitUntil(lambda: studio._drawn_seq > seq)
+    i = studio.viewport.sensors.joints.index(joint)
+    tips = studio.viewport.sensors._axes_mesh.points.reshape(-1, 3, 2, 3)
+    assert np.allclose(tips[i, :, 1], tips[i, :, 0]) and not np.allclose(tips[i - 1, :, 1], tips[i - 1, :, 0])

@@ -142,3 +142,11 @@ def test_box_gizmo_drags_and_follows_edits_made_elsewhere(viewport, qtbot, fake_
     gizmo.widget.GetPolyData(handles)
     assert np.allclose(handles.bounds[:2], [-1, 2]) and np.allclose(gizmo.mesh.bounds[:2], [-1, 2])
 
+
+def test_three_dof_sensors_get_no_orientation_axes(viewport, fake_snapshot):
+    snap = fake_snapshot(target_rotations=np.tile([np.sqrt(0.5), np.sqrt(0.5), 0, 0], (2, 1)))
+    viewport.oriented = frozenset({"root"})  # lwrist is a 3-DoF tracker here
+    viewport.show_snapshot(snap)
+    tips = viewport.sensors._axes_mesh.points.reshape(2, 3, 2, 3)
+    lengths = np.linalg.norm(tips[:, :, 1] - tips[:, :, 0], axis=-1)
+    assert np.allclose(lengths[0], 0.12) and np.allclose(lengths[1], 0.0)

@@ -63,6 +63,8 @@ class Viewport(QWidget):
         self.follow = True
         self.show_ground_truth = True
         self.show_ghosts = True
+        #: Joints whose tracker has an orientation (6-DoF); None draws axes on every target.
+        self.oriented: frozenset[str] | None = None
         self._focus = np.array([0.0, 0.0, HOME_FOCUS_HEIGHT])
         self._followed_at = time.monotonic()
         self.reset_camera()
@@ -109,8 +111,10 @@ class Viewport(QWidget):
             if name not in snap.ghosts:
                 actor.set_visible(False)
         self.decoded.update(snap.decoded)
+        # a 3-DoF tracker has no orientation: axes on it would show a made-up one
+        axes = None if self.oriented is None else tuple(j in self.oriented for j in snap.target_joints)
         self.sensors.update(snap.target_joints, snap.target_positions, snap.target_rotations,
-                            snap.target_connected)  # fmt: skip
+                            snap.target_connected, axes)  # fmt: skip
         self.gizmos.update(snap.gizmos)
         ghosts = "".join(f"   {n} (ghost)" for n in snap.ghosts) if self.show_ghosts else ""
         gt = "   ground truth (green)" if self.show_ground_truth else ""

@@ -28,16 +28,23 @@ def test_toggling_a_sensor_in_the_panel_changes_the_losses(studio, qtbot):
     assert set(snap.losses[-1]) != set(first.losses[-1])
 
 
-def test_dragging_a_target_moves_the_pose(studio, qtbot):
-    studio.session.set_preset(next(p for p in studio.sensor_panel.preset.itemText(i)
-                                   for i in range(studio.sensor_panel.preset.count())) if False else studio.session.preset)
+def test_dragging_a_target_moves_the_pose_and_the_offset_stays_until_reset(studio, qtbot):
     joint = "root" if "root" in studio.session.sensors else next(iter(studio.session.sensors))
     before = snap_after(studio, qtbot, lambda s: True)
-    goal = studio.session.tracked_position(joint, before.frame) + [0.0, 0.0, 0.25]
+    lift = np.array([0.0, 0.0, 0.25])
+    goal = studio.session.tracked_position(joint, before.frame) + lift
     studio.viewport.targetDragged.emit(joint, goal)
     i = list(before.target_joints).index(joint)
     snap = snap_after(studio, qtbot, lambda s: np.allclose(s.target_positions[i], goal, atol=1e-6))
     assert np.linalg.norm(snap.positions - before.positions) > 0.05
+    assert studio.sensor_panel.rows[joint]["reset"].isEnabled()
+    # later frames keep the offset from the recorded motion...
+    studio.session.seek(before.frame + 30)
+    later = studio.session.tracked_position(joint, before.frame + 30)
+    snap_after(studio, qtbot, lambda s: s.frame == before.frame + 30 and np.allclose(s.target_positions[i], later + lift))
+    # ...until the panel's Reset puts the target back on the recording
+    studio.sensor_panel.rows[joint]["reset"].click()
+    snap_after(studio, qtbot, lambda s: np.allclose(s.target_positions[i], later, atol=1e-6))
 
 
 def test_scrubbing_the_timeline_seeks_the_engine(studio, qtbot):
@@ -67,17 +74,29 @@ def test_scene_save_and_load(studio, qtbot, tmp_path):
     assert studio.sensor_panel.rows[joint]["dof"].currentText() == "3-DoF"
 
 
-def test_every_constraint_kind_can_be_added_and_removed(studio, qtbot):
-    if not studio.kinds:
-        pytest.skip("no constraint kinds registered yet")
+def test_every_constraint_kind_can_be_added_weighted_disabled_drawn_and_removed(studio, qtbot):
+    from PyQt6.QtCore import Qt
+
+    panel, session = studio.constraint_panel, studio.session
+    assert {"look_at", "floor", "balance", "distance", "bounds", "pin"} <= set(studio.kinds)
     for kind in studio.kinds:
-        studio.constraint_panel.kinds.setCurrentText(kind)
-        studio.constraint_panel.add_button.click()
-        assert studio.session.constraints[-1].kind == kind
-    assert studio.constraint_panel.list.count() == len(studio.kinds)
-    while studio.session.constraints:
-        studio.constraint_panel.remove_button.click()
-    assert studio.constraint_panel.list.count() == 0
+        panel.kinds.setCurrentText(kind)
+        panel.add_button.click()
+        assert session.constraints[-1].kind == kind
+    assert panel.list.count() == len(studio.kinds)
+    pose = snap_after(studio, qtbot, lambda s: True).positions
+    drawn = {c.name for c in session.constraints if c.gizmo(pose).get("type") in ("point", "box", "line")}
+    assert {c.name for c in session.constraints if c.kind in ("look_at", "bounds")} <= drawn
+    qtbot.waitUntil(lambda: set(studio.viewport.gizmos.items) == drawn)
+    for row, c in enumerate(list(session.constraints)):
+        panel.list.setCurrentRow(row)
+        panel.editor.inputs["weight"].setValue(2.5)
+        panel.list.item(row).setCheckState(Qt.CheckState.Unchecked)
+        assert session.constraints[row].weight == 2.5 and session.constraints[row].enabled is False, c.kind
+    qtbot.waitUntil(lambda: not studio.viewport.gizmos.items)  # disabled constraints draw nothing
+    while session.constraints:
+        panel.remove_button.click()
+    assert panel.list.count() == 0
 
 
 class SlowMethod:

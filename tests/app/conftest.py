@@ -1,4 +1,5 @@
-"""The ``studio`` fixture: a main window on a synthetic clip that must clean up after itself."""
+"""The ``studio`` fixture: a main window on a synthetic clip that must clean up after itself
+(no thread, VTK interactor or visible window may outlive a test)."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ import pytest
 
 @pytest.fixture
 def studio(qtbot, tmp_path, synthetic_motion):
-    from PyQt6.QtCore import QSettings
+    from PyQt6.QtCore import QEvent, QSettings
     from PyQt6.QtWidgets import QApplication
 
     from app.main_window import MainWindow
@@ -27,4 +28,8 @@ def studio(qtbot, tmp_path, synthetic_motion):
     QApplication.processEvents()
     assert not window.worker.is_alive(), "engine thread outlived the window"
     assert threading.active_count() == threads_before, "a thread leaked"
+    assert window.viewport.plotter._closed, "the VTK interactor outlived the window"
     window.deleteLater()
+    QApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete.value)
+    leaked = [type(w).__name__ for w in QApplication.topLevelWidgets() if w.isVisible()]
+    assert not leaked, f"widgets left open: {leaked}"

@@ -53,6 +53,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--mode", choices=("realtime", "offline"), default="realtime", help="passed to the method")
     p.add_argument("--iterations", type=int, metavar="N", help="optimizer iterations per frame (passed to the method)")
     p.add_argument("--lr", type=float, help="optimizer learning rate (latent-space methods)")
+    p.add_argument("--vae", type=Path, metavar="VAE.pt", help="user-trained VAE weights (default: the shipped model)")
+    p.add_argument("--predictor", type=Path, metavar="PRED.pt", help="its temporal predictor (with --vae)")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="optimizer setting of a latent-space method, repeatable, e.g. temporal_weight=0.1 "
                    "(names in docs/optimizer.md)")
@@ -103,7 +105,8 @@ def evaluate_clip(motion: Any, method: Any, preset: str, *, faulty: float = 0.0,
     -------
     dict
         The keys of :func:`engine.metrics.evaluate_motion` plus ``iterations_mean`` and
-        ``ms_per_frame``; PJ / AUJ keys only when trackers can be lost (``gaps`` or
+        ``ms_per_frame``; ``latent_step`` (mean distance between consecutive frames'
+        latents) for latent-space methods; PJ / AUJ keys only when trackers can be lost (``gaps`` or
         ``faulty``).
     """
     from engine.methods import run_method
@@ -118,6 +121,10 @@ def evaluate_clip(motion: Any, method: Any, preset: str, *, faulty: float = 0.0,
     out = evaluate_motion(motion, rec, tracking.connected if lossy else None)
     out["iterations_mean"] = float(np.mean([r.iterations for r in results]))
     out["ms_per_frame"] = float(np.mean([r.ms for r in results]))
+    latents = [r.latent for r in results]
+    if len(latents) > 1 and all(z is not None for z in latents):
+        z = np.asarray(latents, dtype=np.float64)
+        out["latent_step"] = float(np.linalg.norm(np.diff(z, axis=0), axis=-1).mean())
     return out
 
 
@@ -161,6 +168,10 @@ def _evaluate(args: argparse.Namespace) -> int:
         kwargs["iterations"] = args.iterations
     if args.lr is not None:
         kwargs["lr"] = args.lr
+    if args.vae is not None:
+        kwargs["vae_path"] = args.vae
+    if args.predictor is not None:
+        kwargs["predictor_path"] = args.predictor
     method = get_method(args.method, **kwargs)
     apply_settings(method, args.method, args.set)
     per_file: dict[str, dict[str, Any]] = {}

@@ -32,6 +32,8 @@ class AutoencoderMethod(Method):
     ----------
     vae : PoseVAE, optional
         The model (``engine.models.PoseVAE``); default: the shipped one.
+    vae_path : path, optional
+        Load the model from this weights file instead.
     batch : int
         Frames encoded per forward pass in :meth:`reset`.
     **_unused
@@ -42,7 +44,11 @@ class AutoencoderMethod(Method):
     name = "autoencoder"
     needs_ground_truth = True
 
-    def __init__(self, vae: Any = None, batch: int = 4096, **_unused: Any) -> None:
+    def __init__(self, vae: Any = None, batch: int = 4096, vae_path: Any = None, **_unused: Any) -> None:
+        if vae is None and vae_path is not None:
+            from engine.models import load_models
+
+            vae = load_models(vae_path).vae
         if vae is None:
             from engine.models import load_default_models
 

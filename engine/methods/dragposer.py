@@ -297,8 +297,9 @@ def _finite(r: SensorReading) -> bool:
 
 
 def create(mode: str = "realtime", iterations: int | None = None, lr: float | None = None,
-           **overrides: Any) -> DragPoserMethod:  # fmt: skip
-    """Registry factory: DragPoser with the shipped models (``engine.models``).
+           vae_path: Any = None, predictor_path: Any = None, **overrides: Any) -> DragPoserMethod:  # fmt: skip
+    """Registry factory: DragPoser with the shipped models (``engine.models``), or with a
+    user-trained VAE (``vae_path``) and, optionally, its predictor (``predictor_path``).
 
     Raises
     ------
@@ -309,7 +310,14 @@ def create(mode: str = "realtime", iterations: int | None = None, lr: float | No
         from engine.models import load_default_models  # type: ignore[attr-defined]
     except ImportError as exc:
         raise UserError(f"dragposer: the model loader is not available yet ({exc})") from exc
-    models = load_default_models()
+    if vae_path is not None:
+        from engine.models import load_models
+
+        models = load_models(vae_path, predictor_path)
+    elif predictor_path is not None:
+        raise UserError("a predictor path needs the VAE it was trained on (vae_path)")
+    else:
+        models = load_default_models()
     decoder, predictor = _unpack_models(models)
     values: dict[str, Any] = {"mode": mode, **overrides}
     if iterations is not None:

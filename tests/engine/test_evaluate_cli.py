@@ -21,6 +21,18 @@ def test_evaluate_clip_without_files(synthetic_motion):
     assert m["frames"] == 120 and m["ee_cm"] < 2.0 and m["iterations_mean"] == 0.0
     lossy = evaluate_clip(synthetic_motion, get_method("ik"), "4", faulty=0.05, seed=1, progress=False)
     assert {"pj", "auj", "pj_ts", "auj_st"} <= set(lossy)
+    assert "latent_step" not in m, "IK has no latent"
+
+
+def test_latent_methods_report_their_latent_step(synthetic_motion):
+    import torch
+
+    from engine.methods.dragposer import DragPoserMethod
+    from tests.engine.test_optimizer_standins import MLPDecoder
+
+    torch.manual_seed(0)
+    m = evaluate_clip(synthetic_motion.slice(0, 20), DragPoserMethod(MLPDecoder(), iterations=2), "6", progress=False)
+    assert m["latent_step"] > 0 and np.isfinite(m["latent_step"])
 
 
 @pytest.fixture
@@ -75,6 +87,8 @@ def test_cli_matches_the_function_underneath(clip_dir, tmp_path):
     (["--sensors", "7"], "valid presets"),
     (["--faulty", "2"], "--faulty"),
     (["--set", "lr=0.1"], "no optimizer settings"),
+    (["--method", "dragposer", "--predictor", "p.pt"], "needs the VAE"),
+    (["--method", "autoencoder", "--vae", "missing.pt"], "missing.pt"),
     (["--set", "warp=9"], "--set warp: unknown setting"),
     (["--set", "iterations=many"], "--set iterations=many: not a valid int"),
 ])

@@ -21,7 +21,25 @@ from widgets import style
 pg.setConfigOptions(antialias=False, background=style.PLOT_BACKGROUND, foreground=style.PLOT_FOREGROUND)
 
 HISTORY = 600  # solved frames kept
-_FLOOR = 1e-10  # log axes cannot show zero
+LEGEND_COLUMNS = 4
+
+
+def _loggable(value: float) -> float:
+    """``value``, or NaN (a gap) when a log axis cannot show it.
+
+    A term that is exactly zero (the hip sensor's position while the hip tracker sets
+    the root) drawn at a tiny floor instead would stretch the axis over ten decades and
+    squash every other curve into one line.
+    """
+    return value if value > 0 else np.nan
+
+
+def _set_curve(item: pg.PlotDataItem, x: np.ndarray, y: np.ndarray) -> None:
+    """Set a curve's data; one with nothing drawable is emptied (pyqtgraph warns on all-NaN)."""
+    if np.isfinite(y).any():
+        item.setData(x, y)
+    else:
+        item.setData([], [])
 
 
 def _plot(title: str, log_y: bool, x_label: str) -> pg.PlotWidget:
@@ -29,7 +47,11 @@ def _plot(title: str, log_y: bool, x_label: str) -> pg.PlotWidget:
     w.setLogMode(y=log_y)
     w.showGrid(x=True, y=True, alpha=0.2)
     w.setLabel("bottom", x_label)
-    w.addLegend(offset=(-5, 5), labelTextSize="8pt")
+    # rows of four: a one-entry-per-row legend of ~8 terms is taller than the plot and
+    # cut off, which left most terms impossible to click; a half-clear backdrop keeps
+    # the labels readable over the curves without hiding them
+    backdrop = (*style.hex_to_rgb(style.PLOT_BACKGROUND), 160)
+    w.addLegend(offset=(-5, 5), labelTextSize="8pt", colCount=LEGEND_COLUMNS, brush=backdrop)
     w.setMinimumHeight(120)
     return w
 
@@ -104,8 +126,8 @@ class LossPlots(QWidget):
             its = np.arange(1, len(losses) + 1)
             names = list(losses[-1])
             for name in names:
-                vals = np.array([max(float(d.get(name, np.nan)), _FLOOR) for d in losses])
-                self.iter_curves.get(name, symbols=True).setData(its, vals)
+                vals = np.array([_loggable(float(d.get(name, np.nan))) for d in losses])
+                _set_curve(self.iter_curves.get(name, symbols=True), its, vals)
             for name, item in self.iter_curves.items.items():
                 if name not in names:
                     item.setData([], [])
@@ -113,7 +135,7 @@ class LossPlots(QWidget):
         self.ms_curve.setData(x, np.fromiter(self._ms, float))
         self.iter_curve.setData(x, np.fromiter(self._iters, float))
         for name, values in self._terms.items():
-            self.history_curves.get(name).setData(x[-len(values):], np.fromiter(values, float))
+            _set_curve(self.history_curves.get(name), x[-len(values):], np.fromiter(values, float))
 
     def _record(self, snap: Any) -> None:
         self._frames.append(snap.frame)
@@ -123,6 +145,6 @@ class LossPlots(QWidget):
         n = len(self._frames)
         for name in set(self._terms) | set(last):
             series = self._terms.setdefault(name, deque(maxlen=HISTORY))
-            series.append(max(float(last.get(name, np.nan)), _FLOOR))
+            series.append(_loggable(float(last.get(name, np.nan))))
             while len(series) > n:
                 series.popleft()

@@ -137,3 +137,33 @@ def test_clicking_a_legend_entry_hides_the_term_and_a_restart_keeps_it_hidden(qt
     assert not curve.isVisible() and p.iter_curves.items["total"].isVisible()
     p.update_snapshot(fake_snapshot(seq=2, frame=0))  # sought back: curves are rebuilt
     assert not p.iter_curves.items["pos:root"].isVisible() and p.iter_curves.items["total"].isVisible()
+
+
+def test_a_zero_loss_term_leaves_a_gap_instead_of_stretching_the_log_axis(qtbot, fake_snapshot):
+    p = LossPlots()
+    qtbot.addWidget(p)
+    p.show()
+    losses = ({"total": 1.0, "pos:root": 0.0}, {"total": 0.1, "pos:root": 0.0})
+    p.update_snapshot(fake_snapshot(losses=losses))
+    p.grab()  # painting all-NaN curves on log axes must not warn (warnings are errors here)
+    def drawn(curve) -> bool:
+        return curve.yData is not None and bool(np.isfinite(np.asarray(curve.yData, float)).any())
+
+    assert not drawn(p.iter_curves.items["pos:root"]) and not drawn(p.history_curves.items["pos:root"])
+    assert p.iter_curves.items["total"].dataBounds(1)[0] == pytest.approx(-1.0)  # log10(0.1)
+    assert len(p.iteration_plot.plotItem.legend.items) == 2  # the term stays in the legend
+
+
+def test_the_legend_of_eight_terms_fits_in_a_short_plot(qtbot, fake_snapshot):
+    p = LossPlots()
+    qtbot.addWidget(p)
+    p.resize(1400, 300)  # the plots dock of a 1600 x 980 window
+    p.show()
+    qtbot.waitExposed(p)
+    terms = {"total": 1.0, **{f"sensor:{j}": 0.1 for j in ("root", "upperneck", "lwrist", "rwrist", "lankle", "rankle")},
+             "temporal_prior": 0.01}  # fmt: skip
+    p.update_snapshot(fake_snapshot(losses=(terms, terms)))
+    legend, view = p.iteration_plot.plotItem.legend, p.iteration_plot.plotItem.vb
+    qtbot.waitUntil(lambda: legend.boundingRect().height() > 0)
+    assert len(legend.items) == 8
+    assert legend.sceneBoundingRect().height() < view.sceneBoundingRect().height()

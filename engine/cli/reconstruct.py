@@ -37,6 +37,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--faulty", type=float, default=0.0, metavar="P",
                    help="per-frame probability that one sensor fails for 100 frames (DragPoser: 0.01)")
     p.add_argument("--gaps", action="store_true", help="simulate hand-tracking gaps (RPM)")
+    p.add_argument("--vae", type=Path, metavar="VAE.pt", help="user-trained VAE weights (default: the shipped model)")
+    p.add_argument("--predictor", type=Path, metavar="PRED.pt", help="its temporal predictor (with --vae)")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="optimizer setting, repeatable, e.g. root_anchor=none (names in docs/optimizer.md)")
     p.add_argument("--max-frames", type=int, metavar="N", help="reconstruct only the first N frames")
@@ -54,6 +56,10 @@ def _method_kwargs(args: argparse.Namespace, scene_settings: dict[str, Any]) -> 
         kw["iterations"] = args.iterations
     if args.lr is not None:
         kw["lr"] = args.lr
+    if args.vae is not None:
+        kw["vae_path"] = args.vae
+    if args.predictor is not None:
+        kw["predictor_path"] = args.predictor
     return kw
 
 

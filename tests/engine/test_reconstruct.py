@@ -72,6 +72,7 @@ def test_scene_adds_constraints_and_settings_but_flags_win(standin_dragposer, cl
     (["--sensors", "tail"], "tail"),
     (["--faulty", "2"], "faulty"),
     (["--iterations", "0"], "iterations"),
+    (["--set", "optimizer=lbfgs"], "optimizer"),
 ])  # fmt: skip
 def test_bad_options_are_user_errors(standin_dragposer, clip_path, tmp_path, capsys, flags, message):
     assert main(["reconstruct", str(clip_path), "--out", str(tmp_path / "o.bvh"), *flags]) == 2
@@ -85,3 +86,12 @@ def test_bad_scene_names_the_file(standin_dragposer, clip_path, tmp_path, capsys
     assert main(["reconstruct", str(clip_path), "--out", str(tmp_path / "o.bvh"), "--scene", str(scene)]) == 2
     err = capsys.readouterr().err
     assert "bad.json" in err and "joint" in err
+
+
+def test_set_flags_reach_the_optimizer(standin_dragposer, clip_path, tmp_path):
+    out = tmp_path / "o.bvh"
+    argv = ["reconstruct", str(clip_path), "--out", str(out), "--max-frames", "6", "--no-progress",
+            "--set", "optimizer=adam-carry", "--set", "root_anchor=none"]
+    assert main(argv) == 0 and out.is_file()
+    s = standin_dragposer[0].settings
+    assert (s.optimizer, s.root_anchor) == ("adam-carry", "none")

@@ -37,7 +37,9 @@ from engine.optimizer_pose import DecodedPose, LevelFK, RootAnchor, RootFrame, R
 MODES = ("realtime", "offline")
 #: Latent update rules: plain gradient steps (DragPoser eq. in sec. 4.4), Adam restarted every
 #: frame, or Adam whose moment estimates carry over from frame to frame.
-OPTIMIZERS = ("sgd", "adam", "adam-carry")
+OPTIMIZERS = ("auto", "sgd", "adam", "adam-carry")
+#: Connected sensors from which ``auto`` uses Adam (and the predictor looks one step ahead).
+FULL_SET = 6
 
 
 class LatentDecoder(Protocol):
@@ -62,6 +64,16 @@ class OptimizerSettings:
         Cap on Adam steps per frame in offline mode.
     lr : float
         Adam learning rate (latent units per step, roughly).
+    optimizer : str
+        Latent update rule: ``sgd`` (plain gradient steps of ``step_size``, the paper's
+        update), ``adam`` (restarted every frame), ``adam-carry`` (moments kept across
+        frames) or ``auto``: Adam with six or more connected sensors, plain steps with
+        fewer (Adam moves every latent dimension by about ``lr`` per step, so with few
+        trackers the unconstrained body parts wander; see docs/optimizer.md).
+    step_size : float
+        Step of the ``sgd`` rule: ``z -= step_size * gradient``.
+    momentum : float
+        Nesterov momentum of the ``sgd`` rule within a frame (0 = none).
     position_tolerance : float
         Metres; a sensor is satisfied when its position error is below it (offline).
     rotation_tolerance : float
@@ -118,7 +130,9 @@ class OptimizerSettings:
     min_improvement: float = 1e-4
     divergence_factor: float = 100.0
     root_anchor: str = "upperneck"
-    optimizer: str = "adam"
+    optimizer: str = "auto"
+    step_size: float = 0.3
+    momentum: float = 0.0
     threads: int = 1
 
     def __post_init__(self) -> None:
@@ -136,7 +150,7 @@ class OptimizerSettings:
                 raise UserError(f"optimizer setting {name!r} must be a positive integer, got {v!r}")
             setattr(self, name, int(v))
         floats = ("lr", "position_tolerance", "rotation_tolerance", "sensor_rotation_weight", "temporal_weight",
-                  "min_improvement", "divergence_factor")  # fmt: skip
+                  "min_improvement", "divergence_factor", "momentum", "step_size")  # fmt: skip
         for name in floats:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
@@ -146,8 +160,12 @@ class OptimizerSettings:
             raise UserError(f"optimizer setting 'optimizer' must be one of {', '.join(OPTIMIZERS)}, got {self.optimizer!r}")
         if self.root_anchor != "none" and self.root_anchor not in sk.JOINT_INDEX:
             raise UserError(f"optimizer setting 'root_anchor' must be a joint name or 'none', got {self.root_anchor!r}")
+        if self.momentum >= 1:
+            raise UserError(f"optimizer setting 'momentum' must be below 1, got {self.momentum!r}")
         if self.lr <= 0:
             raise UserError("optimizer setting 'lr' must be > 0")
+        if self.step_size <= 0:
+            raise UserError("optimizer setting 'step_size' must be > 0")
 
     def steps_cap(self) -> int:
         return self.iterations if self.mode == "realtime" else self.max_iterations
@@ -285,7 +303,8 @@ class PoseOptimizer:
         values = evaluate(state)
         names = [c.name for c in terms]
         weights = torch.tensor([c.weight for c in terms], dtype=values.dtype)
-        opt = self._make_optimizer(z)
+        rule = self.update_rule(terms)
+        opt = self._make_optimizer(z, rule)
         losses: list[dict[str, float]] = []
         cap, offline = s.steps_cap(), s.mode == "offline"
         best, since_best, steps = math.inf, 0, 0
@@ -318,16 +337,25 @@ class PoseOptimizer:
         if losses[-1]["total"] > s.divergence_factor * losses[0]["total"] + 1e-6:
             return self._fall_back(start, ctx, losses, steps, warnings, "loss diverged")
         final = z.detach().clone()
-        if s.optimizer == "adam-carry":
+        if rule == "adam-carry":
             self._carry = {k: (v.detach().clone() if torch.is_tensor(v) else v) for k, v in opt.state[z].items()}
         return Solution(final, _detached(state, final), losses, steps, warnings)
 
-    def _make_optimizer(self, z: torch.Tensor) -> torch.optim.Optimizer:
+    def update_rule(self, terms: Sequence[Constraint]) -> str:
+        """The rule ``solve`` uses with these enabled ``terms``: ``auto`` is Adam with at
+        least :data:`FULL_SET` sensors, plain gradient steps with fewer."""
+        rule = self.settings.optimizer
+        if rule == "auto":
+            sensors = sum(1 for c in terms if getattr(c, "kind", "") == "sensor")
+            rule = "adam" if sensors >= FULL_SET else "sgd"
+        return rule
+
+    def _make_optimizer(self, z: torch.Tensor, rule: str) -> torch.optim.Optimizer:
         s = self.settings
-        if s.optimizer == "sgd":
-            return torch.optim.SGD([z], lr=s.lr)
+        if rule == "sgd":
+            return torch.optim.SGD([z], lr=s.step_size, momentum=s.momentum, nesterov=s.momentum > 0)
         opt = torch.optim.Adam([z], lr=s.lr)
-        if s.optimizer == "adam-carry" and self._carry:
+        if rule == "adam-carry" and self._carry:
             opt.state[z] = {k: (v.clone() if torch.is_tensor(v) else v) for k, v in self._carry.items()}
         return opt
 

@@ -14,8 +14,9 @@ from PyQt6.QtWidgets import QCheckBox, QComboBox, QDoubleSpinBox, QFormLayout, Q
 FIELDS: dict[str, tuple[str, str, float, float, float]] = {
     "mode": ("Mode", "choice", 0, 0, 0),
     "iterations": ("Iterations / frame", "int", 1, 200, 1),
-    "lr": ("Learning rate", "float", 1e-4, 1.0, 0.005),
     "optimizer": ("Latent update", "choice", 0, 0, 0),
+    "lr": ("Adam learning rate", "float", 1e-4, 1.0, 0.005),
+    "step_size": ("Gradient step size", "float", 1e-3, 5.0, 0.05),
     "temporal_weight": ("Temporal prior weight", "float", 0.0, 10.0, 0.1),
     "root_anchor": ("Root anchor (no hip tracker)", "choice", 0, 0, 0),
 }

@@ -25,13 +25,11 @@ from engine.errors import UserError
 from engine.kinematics import quaternion as Q
 from engine.methods.base import FrameResult, Method, SensorFrame, SensorReading
 from engine.motion import Motion
-from engine.optimizer import FrameContext, LatentDecoder, OptimizerSettings, PoseOptimizer
+from engine.optimizer import FULL_SET, FrameContext, LatentDecoder, OptimizerSettings, PoseOptimizer
 from engine.optimizer_pose import RootAnchor, RootFrame, RootOverride
 from engine.optimizer_temporal import LatentPredictor, TemporalSchedule
 
 _HEIGHT_IDX = [sk.JOINT_INDEX[j] for j in sk.HEIGHT_JOINTS]
-#: Sensor count from which the predictor looks one step ahead only (DragPoser sec. 4.3).
-FULL_SET = 6
 SPARSE_FUTURE = 16
 
 

@@ -87,7 +87,7 @@ def test_without_hip_sensor_the_head_anchor_places_the_body():
 
 def test_sgd_takes_the_papers_plain_gradient_step_and_adam_carry_keeps_its_moments():
     z0 = torch.randn(24) * 0.2
-    opt = PoseOptimizer(MLPDecoder(), OFFSETS, OptimizerSettings(optimizer="sgd", lr=0.3, iterations=1))
+    opt = PoseOptimizer(MLPDecoder(), OFFSETS, OptimizerSettings(optimizer="sgd", step_size=0.3, iterations=1))
     c = ctx()
     terms = targets_from(opt, torch.zeros(24), c, ("lwrist",))
     z = z0.clone().requires_grad_(True)
@@ -100,6 +100,16 @@ def test_sgd_takes_the_papers_plain_gradient_step_and_adam_carry_keeps_its_momen
     assert torch.allclose(first[0], first[1]), "the first frame has nothing to carry"
     second = [o.solve(first[0], terms, c).latent for o in (carry, fresh)]
     assert not torch.allclose(second[0], second[1]), "carried moments change the next frame's steps"
+
+
+def test_auto_uses_adam_with_six_sensors_and_plain_steps_with_fewer():
+    opt = PoseOptimizer(MLPDecoder(), OFFSETS)
+    six = targets_from(opt, torch.zeros(24), ctx())
+    assert opt.settings.optimizer == "auto"
+    assert opt.update_rule(six) == "adam" and opt.update_rule(six[:4]) == "sgd"
+    assert opt.update_rule(six[:4] + [TemporalPriorConstraint()]) == "sgd", "only sensors count"
+    opt.settings.optimizer = "adam"
+    assert opt.update_rule(six[:1]) == "adam"
 
 
 def test_without_hip_sensor_other_constraints_move_the_root():

@@ -65,4 +65,5 @@ class LookAtConstraint(Constraint):
         if positions is None:
             return {"type": "point", "position": target, "edit": "target"}
         start = np.asarray(positions, float)[joint_index(self.joint, "joint", self.kind)]
-        return {"type": "line", "points": np.stack([start, target])}
+        # the line's end (the target) stays draggable once a pose exists
+        return {"type": "line", "points": np.stack([start, target]), "edit": "target"}

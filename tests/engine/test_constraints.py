@@ -157,6 +157,11 @@ def test_gizmos_use_the_viewport_types():
     for c in CASES:
         g = c.gizmo(REST)
         assert g == {} or g["type"] in ("point", "box", "line")
+        if g and "edit" in g:  # an editable gizmo names fields the constraint has
+            fields = g["edit"] if isinstance(g["edit"], tuple) else (g["edit"],)
+            assert all(f in c.to_dict() for f in fields), (c.kind, g["edit"])
+    look = next(c for c in CASES if c.kind == "look_at")
+    assert look.gizmo(REST)["edit"] == "target", "the look-at target stays draggable with a pose"
 
 
 @pytest.mark.parametrize(

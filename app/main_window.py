@@ -338,6 +338,10 @@ class MainWindow(QMainWindow):
         self.status_warnings.setToolTip(snap.error or "\n".join(snap.messages))
         if snap.error:
             self.statusBar().showMessage(snap.error, 5000)
+        if snap.method_error:  # the engine kept its method: show it, then say why
+            self.session.method = snap.method
+            self._refresh_panels()
+            self.show_error("Cannot switch method", snap.method_error)
 
     # -- Qt events ------------------------------------------------------------------
     def dragEnterEvent(self, event: Any) -> None:

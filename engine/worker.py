@@ -77,6 +77,9 @@ class EngineWorker(threading.Thread):
         self._last_pose = np.zeros((sk.NUM_JOINTS, 3))
         self._last_result: FrameResult | None = None
         self._decoded: np.ndarray | None = None
+        self._last_ghosts: dict[str, np.ndarray] = {}
+        self._pending_error = ""
+        self._method_error = ""
         self._stopping = False
 
     # -- public API (any thread) --------------------------------------------------------
@@ -147,9 +150,15 @@ class EngineWorker(threading.Thread):
             self._settings = {**self._settings, **cmd.values}
             self._configure_all("settings")
         elif isinstance(cmd, SetMethod):
+            new = self._build(cmd.name) if cmd.name else None
+            if cmd.name and new is None and self._method is not None:
+                # a method that cannot be built (e.g. a broken weights file) leaves the
+                # session as it was; the window shows why
+                self._method_error = self._pending_error
+                return
             self._method_name, self._ghost_names = cmd.name, tuple(cmd.ghosts)
-            self._method, self._ghosts = None, {}
-            self._reset_methods()
+            self._method, self._ghosts = new, {}
+            self._reset_methods(built=new is not None)
         elif isinstance(cmd, Seek):
             self._frame = self._clamp(cmd.frame)
             self._clock = (time.monotonic(), self._frame)
@@ -164,7 +173,13 @@ class EngineWorker(threading.Thread):
         elif isinstance(cmd, Pause):
             self._playing = False
         elif isinstance(cmd, DecodeLatent):
+            # debug mode: decode and show, without solving the frame again (which would
+            # move the method's temporal state on)
+            self._dirty = False
             self._decode(cmd.latent)
+            if self._source.motion is not None and self._last_solved >= 0:
+                self._publish(self._last_solved, self._source.frame(self._last_solved), None, 0.0,
+                              self._pending_error, self._last_ghosts)  # fmt: skip
 
     def _clamp(self, frame: int) -> int:
         return int(np.clip(frame, 0, max(self._source.num_frames - 1, 0)))
@@ -192,8 +207,8 @@ class EngineWorker(threading.Thread):
             return None
         return m
 
-    def _reset_methods(self) -> None:
-        fresh = self._method is None and bool(self._method_name)
+    def _reset_methods(self, built: bool = False) -> None:
+        fresh = built or (self._method is None and bool(self._method_name))
         if fresh:
             self._method = self._build(self._method_name)
         for g in self._ghost_names:
@@ -256,7 +271,7 @@ class EngineWorker(threading.Thread):
         if self._is_jump(frame):
             self._reset_methods()  # temporal state is meaningless across a jump
         sf = self._source.frame(frame)
-        error = getattr(self, "_pending_error", "")
+        error = self._pending_error
         self._pending_error = ""
         t0 = time.perf_counter()
         res = None
@@ -279,6 +294,7 @@ class EngineWorker(threading.Thread):
         dt = max(ms / 1000.0, 1e-4)
         self._fps = 1.0 / dt if self._fps == 0 else 0.9 * self._fps + 0.1 / dt
         self._last_solved = frame
+        self._last_ghosts = ghosts
         self._publish(frame, sf, res, ms, error, ghosts)
 
     def _decode(self, latent: np.ndarray) -> None:
@@ -317,12 +333,14 @@ class EngineWorker(threading.Thread):
             warnings=self._warnings,
             messages=tuple(res.warnings) if res else (),
             error=error,
+            method_error=self._method_error,
             engine_fps=self._fps,
             playing=self._playing,
             method=getattr(self._method, "name", self._method_name),
             can_decode=hasattr(self._method, "decode_latent"),
             decoded=_ro(self._decoded) if self._decoded is not None else None,
         )
+        self._method_error = ""
         self.latest = snap
         for cb in list(self.listeners):
             cb(snap)

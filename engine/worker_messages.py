@@ -111,6 +111,9 @@ class Snapshot:
         Warnings counted since the clip was loaded; ``messages`` holds this frame's.
     error : str
         Non-empty when the method failed on this frame (the pose is the last good one).
+    method_error : str
+        Non-empty (once) when a requested method could not be built; the engine kept the
+        method it had, which ``method`` names.
     engine_fps : float
         Solved frames per second (moving average).
     decoded : ndarray (22, 3) or None
@@ -135,6 +138,7 @@ class Snapshot:
     warnings: int = 0
     messages: tuple[str, ...] = ()
     error: str = ""
+    method_error: str = ""
     engine_fps: float = 0.0
     playing: bool = False
     method: str = ""

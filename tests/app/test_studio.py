@@ -63,6 +63,18 @@ def test_opening_a_bad_file_shows_a_dialog_and_keeps_the_clip(studio, qtbot, tmp
     assert shown and "broken.bvh" in shown[0] and studio.session.motion is motion
 
 
+def test_a_method_that_cannot_load_shows_a_dialog_and_keeps_the_old_one(studio, qtbot, monkeypatch):
+    shown = []
+    monkeypatch.setattr(QMessageBox, "critical", lambda *a, **k: shown.append(a[2]))
+    before = studio.session.method
+    snap_after(studio, qtbot, lambda s: s.method == before)
+    studio.session.set_method("no-such-method")
+    qtbot.waitUntil(lambda: bool(shown), timeout=10000)
+    assert "no-such-method" in shown[0]
+    assert studio.session.method == before and studio.optimizer_panel.method.currentText() == before
+    assert studio.worker.latest.method == before
+
+
 def test_scene_save_and_load(studio, qtbot, tmp_path):
     joint = next(iter(studio.session.sensors))
     studio.session.update_sensor(joint, dof=3, weight=2.0)

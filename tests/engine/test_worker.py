@@ -146,3 +146,63 @@ def test_gizmos_that_relate_joints_get_the_current_pose(engine):
     wait_for(lambda: worker.latest is not None and dict(worker.latest.gizmos).get("hands"))
     giz = dict(worker.latest.gizmos)["hands"]
     assert giz["type"] == "line" and np.asarray(giz["points"]).shape == (2, 3)
+
+
+class Counting(Method):
+    """Counts its steps; decodes any latent to a pose lifted by latent[0] metres."""
+
+    name = "counting"
+
+    def __init__(self):
+        self.steps = 0
+
+    def reset(self, skeleton, fps=60.0, **kw):
+        pass
+
+    def step(self, sensors):
+        self.steps += 1
+        return FrameResult(np.tile([1.0, 0, 0, 0], (22, 1)), np.zeros(3), np.zeros((22, 3)), latent=np.zeros(4))
+
+    def decode_latent(self, latent):
+        return np.full((22, 3), float(latent[0]))
+
+
+def test_a_method_that_cannot_be_built_leaves_the_old_one_and_says_why(synthetic_motion):
+    def factory(name):
+        if name == "broken":
+            raise ValueError("assets/models/vae.pt: not a weights file")
+        return Counting()
+
+    worker = w.EngineWorker(method_factory=factory)
+    worker.start()
+    try:
+        worker.submit(w.SetMethod("counting"))
+        worker.submit(w.SetMotion(synthetic_motion))
+        first = newest(worker)
+        worker.submit(w.SetMethod("broken"))
+        snap = newest(worker, first.seq)
+        assert "vae.pt" in snap.method_error and snap.method == "counting"
+        worker.submit(w.Seek(5))
+        wait_for(lambda: worker.latest.frame == 5)
+        assert worker.latest.method_error == "" and worker.latest.method == "counting", "said once, kept"
+    finally:
+        worker.stop()
+
+
+def test_decoding_a_latent_shows_the_pose_without_solving_again(synthetic_motion):
+    method = Counting()
+    worker = w.EngineWorker(method_factory=lambda name: method)
+    worker.start()
+    try:
+        worker.submit(w.SetMethod("counting"))
+        worker.submit(w.SetMotion(synthetic_motion))
+        first = newest(worker)
+        steps = method.steps
+        for k, value in enumerate((0.5, 0.7, 0.9)):
+            worker.submit(w.DecodeLatent(np.array([value, 0, 0, 0])))
+            snap = newest(worker, first.seq + k)
+            wait_for(lambda: worker.latest.decoded is not None and worker.latest.decoded[0, 0] == value)
+        assert method.steps == steps, "scrubbing a latent must not advance the solver"
+        assert worker.latest.frame == first.frame
+    finally:
+        worker.stop()

@@ -17,6 +17,7 @@ import queue
 import sys
 import threading
 import time
+from collections import deque
 from collections.abc import Callable
 from typing import Any
 
@@ -25,8 +26,8 @@ import numpy as np
 from engine import skeleton as sk
 from engine.methods.base import FrameResult, Method, SensorFrame
 from engine.worker_messages import (  # noqa: F401  (re-exported: the worker's API)
-    DecodeLatent, Pause, Play, Seek, SetConstraints, SetMethod, SetMotion, SetSensors,
-    SetSettings, Snapshot, Step, Stop, _ro,
+    HISTORY, DecodeLatent, FrameRecord, Pause, Play, Seek, SetConstraints, SetMethod,
+    SetMotion, SetSensors, SetSettings, Snapshot, Step, Stop, _ro,
 )  # fmt: skip
 from engine.worker_methods import apply_constraints, apply_sensor_weights, apply_settings, make_method
 from engine.worker_sensors import SensorSource
@@ -78,6 +79,7 @@ class EngineWorker(threading.Thread):
         self._last_result: FrameResult | None = None
         self._decoded: np.ndarray | None = None
         self._last_ghosts: dict[str, np.ndarray] = {}
+        self._history: deque[FrameRecord] = deque(maxlen=HISTORY)
         self._pending_error = ""
         self._method_error = ""
         self._stopping = False
@@ -270,6 +272,7 @@ class EngineWorker(threading.Thread):
     def _solve(self, frame: int) -> None:
         if self._is_jump(frame):
             self._reset_methods()  # temporal state is meaningless across a jump
+            self._history.clear()
         sf = self._source.frame(frame)
         error = self._pending_error
         self._pending_error = ""
@@ -295,6 +298,10 @@ class EngineWorker(threading.Thread):
         self._fps = 1.0 / dt if self._fps == 0 else 0.9 * self._fps + 0.1 / dt
         self._last_solved = frame
         self._last_ghosts = ghosts
+        if res is not None:
+            final = dict(res.losses[-1]) if res.losses else dict(_losses(res, sf)[-1])
+            latent = _ro(res.latent) if res.latent is not None else None
+            self._history.append(FrameRecord(frame, res.iterations, ms, final, latent))
         self._publish(frame, sf, res, ms, error, ghosts)
 
     def _decode(self, latent: np.ndarray) -> None:
@@ -339,6 +346,7 @@ class EngineWorker(threading.Thread):
             method=getattr(self._method, "name", self._method_name),
             can_decode=hasattr(self._method, "decode_latent"),
             decoded=_ro(self._decoded) if self._decoded is not None else None,
+            history=tuple(self._history),
         )
         self._method_error = ""
         self.latest = snap

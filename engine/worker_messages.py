@@ -82,6 +82,32 @@ def _ro(a: Any) -> Any:
     return a
 
 
+HISTORY = 600  # solved frames a snapshot carries in ``history``
+
+
+@dataclass(frozen=True)
+class FrameRecord:
+    """What the plots keep of one solved frame.
+
+    Attributes
+    ----------
+    frame : int
+        Frame index.
+    iterations : int
+        Optimizer iterations spent; ``ms`` the solve's wall time in milliseconds.
+    losses : dict of str to float
+        Every loss term's value after the last iteration (plus ``"total"``).
+    latent : ndarray (L,) or None
+        The frame's latent vector, for methods that have one.
+    """
+
+    frame: int
+    iterations: int
+    ms: float
+    losses: dict[str, float]
+    latent: np.ndarray | None = None
+
+
 @dataclass(frozen=True)
 class Snapshot:
     """One solved frame, as plain read-only numpy data.
@@ -118,6 +144,10 @@ class Snapshot:
         Solved frames per second (moving average).
     decoded : ndarray (22, 3) or None
         Pose decoded from a latent sent with :class:`DecodeLatent` (debug mode).
+    history : tuple of FrameRecord
+        The last :data:`HISTORY` solved frames, oldest first, including frames whose
+        snapshots a reader skipped (the GUI draws only the newest one); cleared when
+        playback jumps (seek back, loop, new clip or method).
     """
 
     seq: int
@@ -144,3 +174,4 @@ class Snapshot:
     method: str = ""
     can_decode: bool = False
     decoded: np.ndarray | None = None
+    history: tuple[FrameRecord, ...] = ()

@@ -8,7 +8,6 @@ leave the debugger disabled, with a tooltip saying why.
 
 from __future__ import annotations
 
-from collections import deque
 from typing import Any
 
 import numpy as np
@@ -70,7 +69,6 @@ class LatentInspector(QWidget):
         grid.addWidget(self.mix, 2, 3)
         layout.addWidget(self.debug_box)
         self.set_decodable(False)
-        self._history: deque[np.ndarray] = deque(maxlen=HISTORY)
         self.latent: np.ndarray | None = None
         self.stored: dict[str, np.ndarray] = {}
         self._seq = -1
@@ -99,8 +97,9 @@ class LatentInspector(QWidget):
         z = np.asarray(snap.latent, float).ravel()
         self.latent = z
         self.bars.setOpts(x=np.arange(len(z)), height=z, brushes=["#ff8a1f" if v > 0 else "#4da3ff" for v in z])
-        self._history.append(z)
-        hist = np.array(self._history)
+        # the engine's record covers frames this view never drew (it draws the newest only)
+        recorded = [r.latent for r in getattr(snap, "history", ())[-HISTORY:] if r.latent is not None]
+        hist = np.array([np.ravel(v) for v in recorded if np.size(v) == z.size] or [z], float)
         lim = max(float(np.abs(hist).max()), 1e-6)
         self.strip.setImage(hist, levels=(-lim, lim))
 

@@ -9,7 +9,6 @@ Click a legend entry to hide or show that term (pyqtgraph's legend does the togg
 
 from __future__ import annotations
 
-from collections import deque
 from typing import Any
 
 import numpy as np
@@ -20,7 +19,6 @@ from widgets import style
 
 pg.setConfigOptions(antialias=False, background=style.PLOT_BACKGROUND, foreground=style.PLOT_FOREGROUND)
 
-HISTORY = 600  # solved frames kept
 LEGEND_COLUMNS = 4
 
 
@@ -100,27 +98,24 @@ class LossPlots(QWidget):
         row.addWidget(self.cost_plot, 1)
         row.addWidget(self.history_plot, 1)
         layout.addLayout(row, 1)
-        self._frames: deque[int] = deque(maxlen=HISTORY)
-        self._ms: deque[float] = deque(maxlen=HISTORY)
-        self._iters: deque[float] = deque(maxlen=HISTORY)
-        self._terms: dict[str, deque[float]] = {}
         self._seq = -1
-        self._last_frame = -1
 
     def clear(self) -> None:
-        self._frames.clear(), self._ms.clear(), self._iters.clear()
-        self._terms = {}
+        self.ms_curve.setData([], [])
+        self.iter_curve.setData([], [])
         self.history_curves.reset()
         self.iter_curves.reset()
 
     def update_snapshot(self, snap: Any) -> None:
+        """Draw ``snap``: its iterations, and the engine's record of recent frames.
+
+        The history comes from the engine (``snap.history``), so frames whose snapshots
+        were never drawn still appear; it restarts when playback jumps or loops.
+        """
         if snap.seq == self._seq:
             return
         self._seq = snap.seq
-        if snap.frame < self._last_frame:  # looped or sought back: start a fresh history
-            self.clear()
-        self._last_frame = snap.frame
-        self._record(snap)
+        history = tuple(getattr(snap, "history", ()))
         losses = snap.losses
         if losses:
             its = np.arange(1, len(losses) + 1)
@@ -131,20 +126,13 @@ class LossPlots(QWidget):
             for name, item in self.iter_curves.items.items():
                 if name not in names:
                     item.setData([], [])
-        x = np.fromiter(self._frames, float)
-        self.ms_curve.setData(x, np.fromiter(self._ms, float))
-        self.iter_curve.setData(x, np.fromiter(self._iters, float))
-        for name, values in self._terms.items():
-            _set_curve(self.history_curves.get(name), x[-len(values):], np.fromiter(values, float))
-
-    def _record(self, snap: Any) -> None:
-        self._frames.append(snap.frame)
-        self._ms.append(snap.ms)
-        self._iters.append(snap.iterations)
-        last = snap.losses[-1] if snap.losses else {}
-        n = len(self._frames)
-        for name in set(self._terms) | set(last):
-            series = self._terms.setdefault(name, deque(maxlen=HISTORY))
-            series.append(_loggable(float(last.get(name, np.nan))))
-            while len(series) > n:
-                series.popleft()
+        x = np.array([r.frame for r in history], float)
+        self.ms_curve.setData(x, np.array([r.ms for r in history], float))
+        self.iter_curve.setData(x, np.array([r.iterations for r in history], float))
+        names = dict.fromkeys(n for r in history for n in r.losses)
+        for name in names:
+            y = np.array([_loggable(float(r.losses.get(name, np.nan))) for r in history])
+            _set_curve(self.history_curves.get(name), x, y)
+        for name, item in self.history_curves.items.items():
+            if name not in names:
+                item.setData([], [])

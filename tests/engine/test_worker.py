@@ -206,3 +206,21 @@ def test_decoding_a_latent_shows_the_pose_without_solving_again(synthetic_motion
         assert worker.latest.frame == first.frame
     finally:
         worker.stop()
+
+
+def test_snapshots_carry_every_solved_frame_and_a_jump_restarts_the_record(engine):
+    """The GUI draws only the newest snapshot, so the per-frame record travels with it."""
+    session, worker = engine
+    for _ in range(5):
+        seq = newest(worker).seq
+        session.step(1)
+        newest(worker, seq)
+    wait_for(lambda: len(worker.latest.history) >= 5)
+    hist = worker.latest.history
+    frames = [r.frame for r in hist]
+    assert frames == sorted(frames) and frames[-1] == worker.latest.frame
+    assert all(set(r.losses) >= {"total"} and r.iterations >= 0 and r.ms >= 0 for r in hist)
+    seq = worker.latest.seq
+    session.seek(0)  # backwards: temporal state and the record start again
+    wait_for(lambda: worker.latest.seq > seq and worker.latest.frame == 0)
+    assert [r.frame for r in worker.latest.history] == [0]

@@ -10,6 +10,17 @@ import pytest
 from engine import skeleton as sk
 
 
+@dataclass(frozen=True)
+class FakeRecord:
+    """The fields widgets read from ``engine.worker_messages.FrameRecord``."""
+
+    frame: int
+    iterations: int
+    ms: float
+    losses: dict
+    latent: np.ndarray | None = None
+
+
 @dataclass
 class FakeSnapshot:
     """Just the fields widgets read from ``engine.worker.Snapshot`` (no torch needed)."""
@@ -37,6 +48,12 @@ class FakeSnapshot:
     method: str = "fake"
     can_decode: bool = False
     decoded: np.ndarray | None = None
+    history: tuple | None = None  # None: just this frame's record
+
+    def __post_init__(self) -> None:
+        if self.history is None:
+            last = self.losses[-1] if self.losses else {}
+            self.history = (FakeRecord(self.frame, self.iterations, self.ms, dict(last), self.latent),)
 
 
 @pytest.fixture

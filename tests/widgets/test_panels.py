@@ -68,16 +68,42 @@ def test_constraint_panel_builds_editors_from_the_schema(qtbot):
     assert sig.args == ["pin1"]
 
 
-def test_plots_follow_snapshots_and_restart_on_loop(qtbot, fake_snapshot):
+def _records(frames, losses=None):
+    from tests.widgets.conftest import FakeRecord
+
+    return tuple(FakeRecord(f, 2, 3.0 + f, dict(losses or {"total": 0.1, "pos:root": 0.05 * (f + 1)})) for f in frames)
+
+
+def test_plots_draw_the_engines_history_and_restart_with_it(qtbot, fake_snapshot):
     p = LossPlots()
     qtbot.addWidget(p)
     for i in range(5):
-        p.update_snapshot(fake_snapshot(seq=i + 1, frame=i))
+        p.update_snapshot(fake_snapshot(seq=i + 1, frame=i, history=_records(range(i + 1))))
     total = p.iter_curves.items["total"]  # xData/yData: before the log-axis transform
     assert list(total.xData) == [1, 2] and np.allclose(total.yData, [1.0, 0.1])
-    assert len(p.history_curves.items["pos:root"].xData) == 5
-    p.update_snapshot(fake_snapshot(seq=9, frame=0))
-    assert len(p.history_curves.items["pos:root"].xData) == 1
+    root = p.history_curves.items["pos:root"]
+    assert list(root.xData) == [0, 1, 2, 3, 4] and np.allclose(root.yData, [0.05, 0.1, 0.15, 0.2, 0.25])
+    assert list(p.ms_curve.yData) == [3.0, 4.0, 5.0, 6.0, 7.0]
+    p.update_snapshot(fake_snapshot(seq=9, frame=0, history=_records([0])))  # the engine looped
+    assert list(p.history_curves.items["pos:root"].xData) == [0]
+
+
+def test_frames_whose_snapshots_were_never_drawn_still_reach_the_history(qtbot, fake_snapshot):
+    """The GUI draws only the newest snapshot; the engine's record fills the gaps."""
+    p = LossPlots()
+    qtbot.addWidget(p)
+    p.update_snapshot(fake_snapshot(seq=1, frame=0, history=_records([0])))
+    p.update_snapshot(fake_snapshot(seq=40, frame=39, history=_records(range(40))))
+    assert len(p.history_curves.items["pos:root"].xData) == 40
+    assert len(p.iter_curve.xData) == 40
+    w = LatentInspector()
+    qtbot.addWidget(w)
+    from tests.widgets.conftest import FakeRecord
+
+    recs = tuple(FakeRecord(f, 1, 1.0, {}, np.full(24, f / 10)) for f in range(30))
+    w.update_snapshot(fake_snapshot(seq=2, frame=29, latent=recs[-1].latent, history=recs))
+    image = w.strip.image
+    assert image.shape == (30, 24) and image[0, 0] == 0.0 and image[-1, 0] == pytest.approx(2.9)
 
 
 @pytest.mark.parametrize("can_decode", [False, True])

@@ -80,6 +80,7 @@ class EngineWorker(threading.Thread):
         self._decoded: np.ndarray | None = None
         self._last_ghosts: dict[str, np.ndarray] = {}
         self._history: deque[FrameRecord] = deque(maxlen=HISTORY)
+        self._last_ms = 0.0
         self._pending_error = ""
         self._method_error = ""
         self._stopping = False
@@ -106,10 +107,13 @@ class EngineWorker(threading.Thread):
                 break
             if self._source.motion is None:
                 continue
+            was_playing = self._playing
             target = self._playback_frame() if self._playing else self._frame
             if target != self._last_solved or self._dirty:
                 self._dirty = False
                 self._solve(target)
+            elif was_playing and not self._playing:
+                self._republish()  # the end was reached on a solved frame: say playback stopped
 
     def _wait_time(self) -> float | None:
         """How long the queue may block: until the next frame is due, or forever."""
@@ -179,9 +183,14 @@ class EngineWorker(threading.Thread):
             # move the method's temporal state on)
             self._dirty = False
             self._decode(cmd.latent)
-            if self._source.motion is not None and self._last_solved >= 0:
-                self._publish(self._last_solved, self._source.frame(self._last_solved), None, 0.0,
-                              self._pending_error, self._last_ghosts)  # fmt: skip
+            self._republish()
+
+    def _republish(self) -> None:
+        """Publish the last solved frame again (its pose, losses and timing) with the
+        current playback state and debug pose, without solving it again."""
+        if self._source.motion is not None and self._last_solved >= 0:
+            self._publish(self._last_solved, self._source.frame(self._last_solved), self._last_result,
+                          self._last_ms, self._pending_error, self._last_ghosts)  # fmt: skip
 
     def _clamp(self, frame: int) -> int:
         return int(np.clip(frame, 0, max(self._source.num_frames - 1, 0)))
@@ -297,7 +306,7 @@ class EngineWorker(threading.Thread):
         dt = max(ms / 1000.0, 1e-4)
         self._fps = 1.0 / dt if self._fps == 0 else 0.9 * self._fps + 0.1 / dt
         self._last_solved = frame
-        self._last_ghosts = ghosts
+        self._last_ghosts, self._last_ms = ghosts, ms
         if res is not None:
             final = dict(res.losses[-1]) if res.losses else dict(_losses(res, sf)[-1])
             latent = _ro(res.latent) if res.latent is not None else None

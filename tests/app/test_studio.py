@@ -189,3 +189,24 @@ def test_save_reconstruction_writes_a_bvh_off_the_gui_thread(studio, qtbot, tmp_
     from engine.retarget import load_motion
 
     assert len(load_motion(out)) == studio.session.num_frames
+
+
+def test_speed_and_loop_from_the_timeline_reach_the_engine(studio, qtbot):
+    n = studio.session.num_frames
+    t = studio.timeline
+    t.loop.setChecked(False)
+    t.speed.setCurrentIndex(t.speed.findData(2.0))
+    assert studio.session.speed == 2.0 and not studio.session.loop
+    studio.session.seek(n - 20)
+    t.play_button.click()
+    qtbot.waitUntil(lambda: studio.worker._playing and studio.worker._speed == 2.0)
+    # without loop, playback stops on the last frame and the play button comes back up
+    snap_after(studio, qtbot, lambda s: s.frame == n - 1 and not s.playing)
+    qtbot.waitUntil(lambda: not t.play_button.isChecked() and not studio.session.playing)
+    # with loop, it wraps to the start and keeps playing
+    t.loop.setChecked(True)
+    studio.session.seek(n - 20)
+    t.play_button.click()
+    snap_after(studio, qtbot, lambda s: s.playing and s.frame < n - 20, timeout=20000)
+    assert t.play_button.isChecked()
+    t.play_button.click()

@@ -224,3 +224,15 @@ def test_snapshots_carry_every_solved_frame_and_a_jump_restarts_the_record(engin
     session.seek(0)  # backwards: temporal state and the record start again
     wait_for(lambda: worker.latest.seq > seq and worker.latest.frame == 0)
     assert [r.frame for r in worker.latest.history] == [0]
+
+
+def test_playback_without_loop_ends_on_the_last_frame_and_says_so(engine):
+    """Even when the last frame was solved while still playing, a snapshot reports the stop."""
+    session, worker = engine
+    newest(worker)
+    n = session.num_frames
+    session.set_playback(speed=4.0, loop=False)
+    session.seek(n - 30)
+    session.play()
+    wait_for(lambda: worker.latest.frame == n - 1 and not worker.latest.playing)
+    assert not worker._playing

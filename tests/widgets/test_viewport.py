@@ -150,3 +150,44 @@ def test_three_dof_sensors_get_no_orientation_axes(viewport, fake_snapshot):
     tips = viewport.sensors._axes_mesh.points.reshape(2, 3, 2, 3)
     lengths = np.linalg.norm(tips[:, :, 1] - tips[:, :, 0], axis=-1)
     assert np.allclose(lengths[0], 0.12) and np.allclose(lengths[1], 0.0)
+
+
+def test_ghosts_get_their_own_colour_and_follow_the_ghosts_toggle(viewport, fake_snapshot):
+    snap = fake_snapshot()
+    ik = snap.positions + [1.0, 0, 0]
+    viewport.show_snapshot(fake_snapshot(seq=2, ghosts={"ik": ik}))
+    ghost = viewport.ghosts["ik"]
+    assert ghost.visible and np.allclose(ghost.mesh.points, ik)
+    colour = ghost.bones.GetProperty().GetColor()
+    assert not np.allclose(colour, viewport.reconstruction.bones.GetProperty().GetColor())
+    assert not np.allclose(colour, viewport.ground_truth.bones.GetProperty().GetColor())
+    viewport.show_ghosts = False
+    viewport.show_snapshot(fake_snapshot(seq=3, ghosts={"ik": ik}))
+    assert not ghost.visible
+    viewport.show_ghosts = True
+    viewport.show_snapshot(fake_snapshot(seq=4, ghosts={"ik": ik}))
+    assert ghost.visible
+    viewport.show_snapshot(fake_snapshot(seq=5))  # the method left the ghost list
+    assert not ghost.visible
+
+
+def test_follow_camera_glides_with_the_hips_and_holds_still_when_off(viewport, fake_snapshot):
+    import time
+
+    snap = fake_snapshot()
+    moved = snap.positions + [2.0, 0, 0]
+    focus_x = viewport.plotter.camera.focal_point[0]
+    viewport._followed_at = time.monotonic()
+    viewport.show_snapshot(fake_snapshot(seq=2, positions=moved))  # ~no time passed: barely moves
+    assert viewport.plotter.camera.focal_point[0] - focus_x < 0.5
+    for seq in range(3, 6):
+        viewport._followed_at = time.monotonic() - 0.5  # as if half a second passed per redraw
+        viewport.show_snapshot(fake_snapshot(seq=seq, positions=moved))
+    cam = viewport.plotter.camera
+    assert cam.focal_point[0] == pytest.approx(moved[0, 0], abs=0.01)
+    offset = np.subtract(cam.position, cam.focal_point)
+    viewport.follow = False
+    viewport._followed_at = time.monotonic() - 1.0
+    viewport.show_snapshot(fake_snapshot(seq=9, positions=moved + [3.0, 0, 0]))
+    assert cam.focal_point[0] == pytest.approx(moved[0, 0], abs=0.01)
+    assert np.allclose(np.subtract(cam.position, cam.focal_point), offset)  # the user's angle is kept

@@ -210,3 +210,21 @@ def test_speed_and_loop_from_the_timeline_reach_the_engine(studio, qtbot):
     snap_after(studio, qtbot, lambda s: s.playing and s.frame < n - 20, timeout=20000)
     assert t.play_button.isChecked()
     t.play_button.click()
+
+
+def test_simulated_failure_disconnects_the_sensor_for_the_chosen_frames(studio, qtbot):
+    panel = studio.sensor_panel
+    joint = "lwrist" if "lwrist" in panel.rows else next(iter(panel.rows))
+    studio.session.seek(10)
+    snap_after(studio, qtbot, lambda s: s.frame == 10)
+    panel.fail_frames.setValue(20)
+    panel.rows[joint]["fail"].click()
+
+    def connected(s, frame):
+        return s.frame == frame and bool(s.target_connected[list(s.target_joints).index(joint)])
+
+    snap_after(studio, qtbot, lambda s: s.frame == 10 and not connected(s, 10))
+    studio.session.seek(29)
+    snap_after(studio, qtbot, lambda s: s.frame == 29 and not connected(s, 29))
+    studio.session.seek(30)  # the failure covers frames 10..29
+    snap_after(studio, qtbot, lambda s: connected(s, 30))

@@ -236,3 +236,32 @@ def test_playback_without_loop_ends_on_the_last_frame_and_says_so(engine):
     session.play()
     wait_for(lambda: worker.latest.frame == n - 1 and not worker.latest.playing)
     assert not worker._playing
+
+
+class CountingResets(Counting):
+    def __init__(self):
+        super().__init__()
+        self.resets = 0
+
+    def reset(self, skeleton, fps=60.0, **kw):
+        self.resets += 1
+
+
+def test_a_load_or_a_jump_resets_the_method_once(synthetic_motion):
+    method = CountingResets()
+    worker = w.EngineWorker(method_factory=lambda name: method)
+    worker.start()
+    try:
+        worker.submit(w.SetMethod("counting"))
+        worker.submit(w.SetMotion(synthetic_motion))
+        first = newest(worker)
+        assert method.resets == 1  # the load; the first solve is not a second "jump"
+        worker.submit(w.Seek(40))
+        snap = newest(worker, first.seq)
+        wait_for(lambda: worker.latest.frame == 40)
+        assert method.resets == 1  # 40 frames ahead is playback-like, not a jump
+        worker.submit(w.Seek(3))
+        wait_for(lambda: worker.latest.frame == 3 and worker.latest.seq > snap.seq)
+        assert method.resets == 2
+    finally:
+        worker.stop()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import threading
 import time
 
@@ -189,23 +190,30 @@ def test_a_method_that_cannot_be_built_leaves_the_old_one_and_says_why(synthetic
         worker.stop()
 
 
-def test_decoding_a_latent_shows_the_pose_without_solving_again(synthetic_motion):
-    method = Counting()
+@contextlib.contextmanager
+def running(method, motion):
+    """An engine thread whose every method is ``method``, loaded with ``motion``."""
     worker = w.EngineWorker(method_factory=lambda name: method)
     worker.start()
     try:
-        worker.submit(w.SetMethod("counting"))
-        worker.submit(w.SetMotion(synthetic_motion))
+        worker.submit(w.SetMethod(method.name))
+        worker.submit(w.SetMotion(motion))
+        yield worker
+    finally:
+        worker.stop()
+
+
+def test_decoding_a_latent_shows_the_pose_without_solving_again(synthetic_motion):
+    method = Counting()
+    with running(method, synthetic_motion) as worker:
         first = newest(worker)
         steps = method.steps
         for k, value in enumerate((0.5, 0.7, 0.9)):
             worker.submit(w.DecodeLatent(np.array([value, 0, 0, 0])))
-            snap = newest(worker, first.seq + k)
+            newest(worker, first.seq + k)
             wait_for(lambda: worker.latest.decoded is not None and worker.latest.decoded[0, 0] == value)
         assert method.steps == steps, "scrubbing a latent must not advance the solver"
         assert worker.latest.frame == first.frame
-    finally:
-        worker.stop()
 
 
 def test_snapshots_carry_every_solved_frame_and_a_jump_restarts_the_record(engine):
@@ -249,11 +257,7 @@ class CountingResets(Counting):
 
 def test_a_load_or_a_jump_resets_the_method_once(synthetic_motion):
     method = CountingResets()
-    worker = w.EngineWorker(method_factory=lambda name: method)
-    worker.start()
-    try:
-        worker.submit(w.SetMethod("counting"))
-        worker.submit(w.SetMotion(synthetic_motion))
+    with running(method, synthetic_motion) as worker:
         first = newest(worker)
         assert method.resets == 1  # the load; the first solve is not a second "jump"
         worker.submit(w.Seek(40))
@@ -263,5 +267,3 @@ def test_a_load_or_a_jump_resets_the_method_once(synthetic_motion):
         worker.submit(w.Seek(3))
         wait_for(lambda: worker.latest.frame == 3 and worker.latest.seq > snap.seq)
         assert method.resets == 2
-    finally:
-        worker.stop()

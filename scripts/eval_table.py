@@ -3,6 +3,7 @@ files, sensor presets 6, 4, 3-hip-hands and 3-head-hands, realtime and offline.
 
     .venv/bin/python scripts/eval_table.py OUT_DIR [--jobs 2] [--realtime-frames 300]
                                                    [--offline-frames 120] [--table-only]
+                                                   [--methods dragposer ik]
 
 Each run is one ``dragposer-studio evaluate`` call (its JSON lands in OUT_DIR, runs that
 already have a JSON are skipped); the markdown table of the totals is printed at the end.
@@ -59,13 +60,15 @@ def main() -> int:
     ap.add_argument("--realtime-frames", type=int, default=300)
     ap.add_argument("--offline-frames", type=int, default=120)
     ap.add_argument("--table-only", action="store_true")
+    ap.add_argument("--methods", nargs="+", default=list(METHODS), choices=METHODS,
+                    help="run only these methods (e.g. ik while the models are still training)")
     args = ap.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     if not args.table_only:
         files = subprocess.run([CLI, "data", "list", "--split", "val"], capture_output=True, text=True,
                                check=True).stdout.split()  # fmt: skip
         jobs = [(m, p, mode, args.realtime_frames if mode == "realtime" else args.offline_frames)
-                for p in PRESETS for mode in MODES for m in METHODS]  # fmt: skip
+                for p in PRESETS for mode in MODES for m in args.methods]  # fmt: skip
         jobs.sort(key=lambda j: (j[0] == "ik", j[2] == "realtime"))  # slowest first
         with ThreadPoolExecutor(args.jobs) as pool:
             for msg in pool.map(lambda j: run(args.out, files, *j), jobs):

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 import pyqtgraph as pg
-from PyQt6.QtCore import Qt, pyqtSignal
+from PyQt6.QtCore import QRectF, Qt, pyqtSignal
 from PyQt6.QtWidgets import QCheckBox, QGridLayout, QLabel, QPushButton, QSlider, QSpinBox, QVBoxLayout, QWidget
 
 from widgets import plots  # noqa: F401  (applies the shared pyqtgraph look)
@@ -35,8 +35,9 @@ class LatentInspector(QWidget):
         self.bars_plot.setMinimumHeight(110)
         self.bars = pg.BarGraphItem(x=np.arange(24), height=np.zeros(24), width=0.8, brush="#4da3ff")
         self.bars_plot.addItem(self.bars)
-        self.strip_plot = pg.PlotWidget(title="Latent history (frames x dims)")
+        self.strip_plot = pg.PlotWidget(title="Latent history (dimension over frame)")
         self.strip_plot.setMinimumHeight(90)
+        self.strip_plot.setLabel("bottom", "frame")
         self.strip = pg.ImageItem()
         self.strip.setColorMap(pg.colormap.get("CET-D1"))
         self.strip_plot.addItem(self.strip)
@@ -98,10 +99,16 @@ class LatentInspector(QWidget):
         self.latent = z
         self.bars.setOpts(x=np.arange(len(z)), height=z, brushes=["#ff8a1f" if v > 0 else "#4da3ff" for v in z])
         # the engine's record covers frames this view never drew (it draws the newest only)
-        recorded = [r.latent for r in getattr(snap, "history", ())[-HISTORY:] if r.latent is not None]
-        hist = np.array([np.ravel(v) for v in recorded if np.size(v) == z.size] or [z], float)
+        recorded = [r for r in getattr(snap, "history", ())[-HISTORY:]
+                    if r.latent is not None and np.size(r.latent) == z.size]  # fmt: skip
+        hist = np.array([np.ravel(r.latent) for r in recorded] or [z], float)
+        frames = [r.frame for r in recorded] or [snap.frame]
         lim = max(float(np.abs(hist).max()), 1e-6)
         self.strip.setImage(hist, levels=(-lim, lim))
+        # x in clip frames, like the other history plots (a slow solver skips frames, so
+        # the rows are not one per frame)
+        span = max(frames[-1] - frames[0], 1)
+        self.strip.setRect(QRectF(frames[0], 0.0, span, hist.shape[1]))
 
     def _debug_toggled(self, on: bool) -> None:
         self.debugToggled.emit(on)

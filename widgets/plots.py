@@ -1,7 +1,7 @@
 """Live optimizer plots (pyqtgraph): this frame's loss per iteration, costs and history.
 
 * **Loss / iteration**: total and every term for the frame on screen (log y).
-* **Cost / frame**: milliseconds and iterations of each solved frame over time.
+* **Cost / frame**: milliseconds and iterations of each solved frame over time (log y).
 * **Loss history**: every term's final value per solved frame (log y).
 
 Click a legend entry to hide or show that term (pyqtgraph's legend does the toggling).
@@ -85,7 +85,9 @@ class LossPlots(QWidget):
         super().__init__(parent)
         colours: dict[str, str] = {"total": "#ffffff"}
         self.iteration_plot = _plot("Loss per iteration (this frame)", True, "iteration")
-        self.cost_plot = _plot("Cost per frame", False, "frame")
+        # log y: the first frame of a clip is solved offline (seconds) and would flatten
+        # the steady per-frame cost (tens of ms) on a linear axis
+        self.cost_plot = _plot("Cost per frame (ms, iterations)", True, "frame")
         self.history_plot = _plot("Loss history", True, "frame")
         self.iter_curves = _Curves(self.iteration_plot, colours)
         self.history_curves = _Curves(self.history_plot, colours)
@@ -127,8 +129,8 @@ class LossPlots(QWidget):
                 if name not in names:
                     item.setData([], [])
         x = np.array([r.frame for r in history], float)
-        self.ms_curve.setData(x, np.array([r.ms for r in history], float))
-        self.iter_curve.setData(x, np.array([r.iterations for r in history], float))
+        _set_curve(self.ms_curve, x, np.array([_loggable(r.ms) for r in history], float))
+        _set_curve(self.iter_curve, x, np.array([_loggable(r.iterations) for r in history], float))
         names = dict.fromkeys(n for r in history for n in r.losses)
         for name in names:
             y = np.array([_loggable(float(r.losses.get(name, np.nan))) for r in history])

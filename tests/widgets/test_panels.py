@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from PyQt6.QtCore import Qt
+from PyQt6.QtCore import QPointF, Qt
 
 from engine.session import SensorConfig
 from widgets.constraint_panel import ConstraintPanel
@@ -100,10 +100,13 @@ def test_frames_whose_snapshots_were_never_drawn_still_reach_the_history(qtbot, 
     qtbot.addWidget(w)
     from tests.widgets.conftest import FakeRecord
 
-    recs = tuple(FakeRecord(f, 1, 1.0, {}, np.full(24, f / 10)) for f in range(30))
-    w.update_snapshot(fake_snapshot(seq=2, frame=29, latent=recs[-1].latent, history=recs))
+    # a solver slower than the clip solves every third frame: the strip's x is still frames
+    recs = tuple(FakeRecord(3 * k, 1, 1.0, {}, np.full(24, k / 10)) for k in range(30))
+    w.update_snapshot(fake_snapshot(seq=2, frame=87, latent=recs[-1].latent, history=recs))
     image = w.strip.image
     assert image.shape == (30, 24) and image[0, 0] == 0.0 and image[-1, 0] == pytest.approx(2.9)
+    left, right = w.strip.mapToParent(QPointF(0, 0)).x(), w.strip.mapToParent(QPointF(30, 0)).x()
+    assert left == pytest.approx(0.0) and right == pytest.approx(87.0)
 
 
 @pytest.mark.parametrize("can_decode", [False, True])

@@ -67,9 +67,9 @@ class OptimizerSettings:
     optimizer : str
         Latent update rule: ``sgd`` (plain gradient steps of ``step_size``, the paper's
         update), ``adam`` (restarted every frame), ``adam-carry`` (moments kept across
-        frames) or ``auto``: Adam with six or more connected sensors, plain steps with
-        fewer (Adam moves every latent dimension by about ``lr`` per step, so with few
-        trackers the unconstrained body parts wander; see docs/optimizer.md).
+        frames) or ``auto``: ``adam-carry`` with six or more connected sensors, plain
+        steps with fewer (Adam moves every latent dimension by about ``lr`` per step, so
+        with few trackers the unconstrained body parts wander; see docs/optimizer.md).
     step_size : float
         Step of the ``sgd`` rule: ``z -= step_size * gradient``.
     momentum : float
@@ -337,17 +337,20 @@ class PoseOptimizer:
         if losses[-1]["total"] > s.divergence_factor * losses[0]["total"] + 1e-6:
             return self._fall_back(start, ctx, losses, steps, warnings, "loss diverged")
         final = z.detach().clone()
-        if rule == "adam-carry":
-            self._carry = {k: (v.detach().clone() if torch.is_tensor(v) else v) for k, v in opt.state[z].items()}
+        # moments from before a stretch under another rule (a tracker was lost) describe
+        # a different problem: start them afresh
+        self._carry = ({k: (v.detach().clone() if torch.is_tensor(v) else v) for k, v in opt.state[z].items()}
+                       if rule == "adam-carry" else {})  # fmt: skip
         return Solution(final, _detached(state, final), losses, steps, warnings)
 
     def update_rule(self, terms: Sequence[Constraint]) -> str:
-        """The rule ``solve`` uses with these enabled ``terms``: ``auto`` is Adam with at
-        least :data:`FULL_SET` sensors, plain gradient steps with fewer."""
+        """The rule ``solve`` uses with these enabled ``terms``: ``auto`` is Adam with
+        carried moments with at least :data:`FULL_SET` sensors, plain gradient steps with
+        fewer."""
         rule = self.settings.optimizer
         if rule == "auto":
             sensors = sum(1 for c in terms if getattr(c, "kind", "") == "sensor")
-            rule = "adam" if sensors >= FULL_SET else "sgd"
+            rule = "adam-carry" if sensors >= FULL_SET else "sgd"
         return rule
 
     def _make_optimizer(self, z: torch.Tensor, rule: str) -> torch.optim.Optimizer:

@@ -102,11 +102,23 @@ def test_sgd_takes_the_papers_plain_gradient_step_and_adam_carry_keeps_its_momen
     assert not torch.allclose(second[0], second[1]), "carried moments change the next frame's steps"
 
 
-def test_auto_uses_adam_with_six_sensors_and_plain_steps_with_fewer():
+def test_carried_moments_are_dropped_after_frames_under_another_rule():
+    """auto switches to plain steps while a tracker is lost; Adam starts afresh after."""
+    z0 = torch.randn(24) * 0.2
+    opt = PoseOptimizer(MLPDecoder(), OFFSETS, OptimizerSettings(iterations=3))
+    c = ctx()
+    six = targets_from(opt, torch.zeros(24), c)
+    opt.solve(z0, six, c)
+    assert opt._carry, "six sensors: Adam's moments are kept for the next frame"
+    opt.solve(z0, six[:5], c)
+    assert opt._carry == {}, "a frame of plain steps leaves nothing to carry"
+
+
+def test_auto_uses_carried_adam_with_six_sensors_and_plain_steps_with_fewer():
     opt = PoseOptimizer(MLPDecoder(), OFFSETS)
     six = targets_from(opt, torch.zeros(24), ctx())
     assert opt.settings.optimizer == "auto"
-    assert opt.update_rule(six) == "adam" and opt.update_rule(six[:4]) == "sgd"
+    assert opt.update_rule(six) == "adam-carry" and opt.update_rule(six[:4]) == "sgd"
     assert opt.update_rule(six[:4] + [TemporalPriorConstraint()]) == "sgd", "only sensors count"
     opt.settings.optimizer = "adam"
     assert opt.update_rule(six[:1]) == "adam"

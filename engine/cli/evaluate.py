@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from engine.atomic import write_text
+from engine.cli.method_options import add_model_options, apply_settings, method_kwargs
 from engine.errors import UserError
 
 #: Columns of the printed table: (metric key, header, format).
@@ -53,31 +54,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--mode", choices=("realtime", "offline"), default="realtime", help="passed to the method")
     p.add_argument("--iterations", type=int, metavar="N", help="optimizer iterations per frame (passed to the method)")
     p.add_argument("--lr", type=float, help="optimizer learning rate (latent-space methods)")
-    p.add_argument("--vae", type=Path, metavar="VAE.pt", help="user-trained VAE weights (default: the shipped model)")
-    p.add_argument("--predictor", type=Path, metavar="PRED.pt", help="its temporal predictor (with --vae)")
-    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                   help="optimizer setting of a latent-space method, repeatable, e.g. temporal_weight=0.1 "
-                   "(names in docs/optimizer.md)")
+    add_model_options(p)
     p.add_argument("--max-frames", type=int, metavar="N", help="evaluate only the first N frames of each clip")
     p.add_argument("--seed", type=int, default=0, help="seed of the tracker simulation (default: 0)")
     p.add_argument("--json", type=Path, metavar="OUT.json", help="also write the results as JSON")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bars")
     p.set_defaults(func=_evaluate)
-
-
-def apply_settings(method: Any, name: str, items: list[str]) -> dict[str, Any]:
-    """Apply ``--set key=value`` optimizer settings to ``method``; returns them."""
-    if not items:
-        return {}
-    from engine.config import parse_overrides
-    from engine.optimizer import OptimizerSettings
-
-    values = parse_overrides(OptimizerSettings, items)
-    configure = getattr(method, "configure", None)
-    if configure is None:
-        raise UserError(f"method {name!r} has no optimizer settings; --set applies to latent-space methods")
-    configure(**values)
-    return values
 
 
 def find_clips(paths: Iterable[Path]) -> list[Path]:
@@ -163,16 +145,7 @@ def _evaluate(args: argparse.Namespace) -> int:
     if args.max_frames is not None and args.max_frames < 4:
         raise UserError("--max-frames must be at least 4 (jitter needs 4 frames)")
     clips = find_clips(args.paths)
-    kwargs: dict[str, Any] = {"mode": args.mode}
-    if args.iterations is not None:
-        kwargs["iterations"] = args.iterations
-    if args.lr is not None:
-        kwargs["lr"] = args.lr
-    if args.vae is not None:
-        kwargs["vae_path"] = args.vae
-    if args.predictor is not None:
-        kwargs["predictor_path"] = args.predictor
-    method = get_method(args.method, **kwargs)
+    method = get_method(args.method, **method_kwargs(args, args.mode))
     apply_settings(method, args.method, args.set)
     per_file: dict[str, dict[str, Any]] = {}
     for path in clips:

@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from engine.cli.method_options import add_model_options, apply_settings, method_kwargs
 from engine.errors import UserError
 
 
@@ -37,10 +38,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--faulty", type=float, default=0.0, metavar="P",
                    help="per-frame probability that one sensor fails for 100 frames (DragPoser: 0.01)")
     p.add_argument("--gaps", action="store_true", help="simulate hand-tracking gaps (RPM)")
-    p.add_argument("--vae", type=Path, metavar="VAE.pt", help="user-trained VAE weights (default: the shipped model)")
-    p.add_argument("--predictor", type=Path, metavar="PRED.pt", help="its temporal predictor (with --vae)")
-    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                   help="optimizer setting, repeatable, e.g. root_anchor=none (names in docs/optimizer.md)")
+    add_model_options(p)
     p.add_argument("--max-frames", type=int, metavar="N", help="reconstruct only the first N frames")
     p.add_argument("--scene", type=Path, metavar="SCENE.json", help="constraints and optimizer settings to add")
     p.add_argument("--seed", type=int, default=0, help="seed of the tracker simulation (default: 0)")
@@ -49,25 +47,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=_reconstruct)
 
 
-def _method_kwargs(args: argparse.Namespace, scene_settings: dict[str, Any]) -> dict[str, Any]:
-    mode = args.mode or scene_settings.get("mode", "realtime")
-    kw: dict[str, Any] = {"mode": mode}
-    if args.iterations is not None:
-        kw["iterations"] = args.iterations
-    if args.lr is not None:
-        kw["lr"] = args.lr
-    if args.vae is not None:
-        kw["vae_path"] = args.vae
-    if args.predictor is not None:
-        kw["predictor_path"] = args.predictor
-    return kw
-
-
 def _reconstruct(args: argparse.Namespace) -> int:
     import dataclasses
 
     from engine.bvh import save_motion_bvh
-    from engine.cli.evaluate import apply_settings
     from engine.methods import get_method, run_method
     from engine.retarget import load_motion
     from engine.tracking import parse_sensors, simulate
@@ -94,7 +77,7 @@ def _reconstruct(args: argparse.Namespace) -> int:
         motion = motion.slice(0, args.max_frames)
     if len(motion) == 0:
         raise UserError(f"{args.input}: the clip has no frames")
-    kwargs = _method_kwargs(args, scene_settings)
+    kwargs = method_kwargs(args, args.mode or scene_settings.get("mode", "realtime"))
     method = get_method(args.method, **kwargs)
     if scene_settings:
         configure = getattr(method, "configure", None)

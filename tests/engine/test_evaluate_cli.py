@@ -111,7 +111,7 @@ def test_find_clips_recurses_and_dedups(clip_dir):
 
 
 def test_set_reaches_the_method(monkeypatch):
-    from engine.cli.evaluate import apply_settings
+    from engine.cli.method_options import apply_settings
 
     seen = {}
 

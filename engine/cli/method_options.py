@@ -1,0 +1,43 @@
+"""Options that choose the models and tune the method, shared by ``evaluate`` and
+``reconstruct``: ``--vae``, ``--predictor`` and ``--set KEY=VALUE``."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+from engine.errors import UserError
+
+
+def add_model_options(p: argparse.ArgumentParser) -> None:
+    """Add ``--vae``, ``--predictor`` and the repeatable ``--set`` to a subcommand."""
+    p.add_argument("--vae", type=Path, metavar="VAE.pt", help="user-trained VAE weights (default: the shipped model)")
+    p.add_argument("--predictor", type=Path, metavar="PRED.pt", help="its temporal predictor (with --vae)")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="optimizer setting of a latent-space method, repeatable, e.g. root_anchor=none "
+                   "(names in docs/optimizer.md)")  # fmt: skip
+
+
+def method_kwargs(args: argparse.Namespace, mode: str) -> dict[str, Any]:
+    """Keywords for ``engine.methods.get_method`` from ``--iterations``, ``--lr``,
+    ``--vae`` and ``--predictor`` (only those given)."""
+    kw: dict[str, Any] = {"mode": mode}
+    given = {"iterations": args.iterations, "lr": args.lr, "vae_path": args.vae, "predictor_path": args.predictor}
+    kw.update({k: v for k, v in given.items() if v is not None})
+    return kw
+
+
+def apply_settings(method: Any, name: str, items: list[str]) -> dict[str, Any]:
+    """Apply ``--set key=value`` optimizer settings to ``method``; returns them."""
+    if not items:
+        return {}
+    from engine.config import parse_overrides
+    from engine.optimizer import OptimizerSettings
+
+    values = parse_overrides(OptimizerSettings, items)
+    configure = getattr(method, "configure", None)
+    if configure is None:
+        raise UserError(f"method {name!r} has no optimizer settings; --set applies to latent-space methods")
+    configure(**values)
+    return values

@@ -81,7 +81,6 @@ class EngineWorker(threading.Thread):
         self._last_ghosts: dict[str, np.ndarray] = {}
         self._history: deque[FrameRecord] = deque(maxlen=HISTORY)
         self._last_ms = 0.0
-        self._just_reset = False
         self._pending_error = ""
         self._method_error = ""
         self._stopping = False
@@ -239,8 +238,7 @@ class EngineWorker(threading.Thread):
             except Exception as exc:
                 self._report_error(f"{m.name}.reset: {exc}")
         self._configure_all(report=fresh)  # methods may drop their settings on reset
-        self._last_solved = -2
-        self._just_reset = True  # the next solve starts clean: no second reset for its "jump"
+        self._last_solved = -2  # nothing solved since: the next solve starts clean
 
     def _configure_all(self, what: str = "all", report: bool = True) -> None:
         """Push the studio's edits into the methods: ``settings``, ``constraints``,
@@ -282,10 +280,9 @@ class EngineWorker(threading.Thread):
 
     def _solve(self, frame: int) -> None:
         if self._is_jump(frame):
-            if not self._just_reset:
+            if self._last_solved >= 0:  # after a load, loop or method change it is done already
                 self._reset_methods()  # temporal state is meaningless across a jump
             self._history.clear()
-        self._just_reset = False
         sf = self._source.frame(frame)
         error = self._pending_error
         self._pending_error = ""

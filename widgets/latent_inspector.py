@@ -99,7 +99,7 @@ class LatentInspector(QWidget):
         self.latent = z
         self.bars.setOpts(x=np.arange(len(z)), height=z, brushes=["#ff8a1f" if v > 0 else "#4da3ff" for v in z])
         # the engine's record covers frames this view never drew (it draws the newest only)
-        recorded = [r for r in getattr(snap, "history", ())[-HISTORY:]
+        recorded = [r for r in snap.history[-HISTORY:]
                     if r.latent is not None and np.size(r.latent) == z.size]  # fmt: skip
         hist = np.array([np.ravel(r.latent) for r in recorded] or [z], float)
         frames = [r.frame for r in recorded] or [snap.frame]

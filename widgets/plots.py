@@ -117,7 +117,7 @@ class LossPlots(QWidget):
         if snap.seq == self._seq:
             return
         self._seq = snap.seq
-        history = tuple(getattr(snap, "history", ()))
+        history = tuple(snap.history)
         losses = snap.losses
         if losses:
             its = np.arange(1, len(losses) + 1)

@@ -51,11 +51,7 @@ class _Gizmo:
         if self.kind == "point":
             p = _vec(g, "position", "center", "target")
             if edit:
-                self.widget = plotter.add_sphere_widget(
-                    self._point_moved, center=tuple(p), radius=0.04, color=style.GIZMO,
-                    interaction_event="always", test_callback=False, style="wireframe",
-                )  # fmt: skip
-                self._track(self.widget)
+                self._add_handle(plotter, p)
             else:
                 self.mesh = pv.PolyData(p[None])
                 self.actors.append(plotter.add_mesh(self.mesh, color=style.GIZMO, point_size=14,
@@ -73,11 +69,15 @@ class _Gizmo:
             self.mesh = pv.lines_from_points(pts)
             self.actors.append(plotter.add_mesh(self.mesh, color=style.GIZMO, line_width=3, reset_camera=False))
             if edit:  # the line's end is a handle (e.g. the point a look-at aims at)
-                self.widget = plotter.add_sphere_widget(
-                    self._point_moved, center=tuple(pts[-1]), radius=0.04, color=style.GIZMO,
-                    interaction_event="always", test_callback=False, style="wireframe",
-                )  # fmt: skip
-                self._track(self.widget)
+                self._add_handle(plotter, pts[-1])
+
+    def _add_handle(self, plotter: Any, center: np.ndarray) -> None:
+        """A draggable sphere at ``center`` that writes the ``edit`` field back."""
+        self.widget = plotter.add_sphere_widget(
+            self._point_moved, center=tuple(center), radius=0.04, color=style.GIZMO,
+            interaction_event="always", test_callback=False, style="wireframe",
+        )  # fmt: skip
+        self._track(self.widget)
 
     @staticmethod
     def _box_bounds(g: dict) -> tuple[float, ...]:

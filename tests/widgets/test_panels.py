@@ -164,7 +164,8 @@ def test_clicking_a_legend_entry_hides_the_term_and_a_restart_keeps_it_hidden(qt
     centre = view.mapFromScene(sample.mapToScene(sample.boundingRect().center()))
     qtbot.mouseClick(view.viewport(), Qt.MouseButton.LeftButton, pos=centre)
     assert not curve.isVisible() and p.iter_curves.items["total"].isVisible()
-    p.update_snapshot(fake_snapshot(seq=2, frame=0))  # sought back: curves are rebuilt
+    p.clear()  # a new clip: the curves are rebuilt (a seek or loop keeps them)
+    p.update_snapshot(fake_snapshot(seq=2, frame=0))
     assert not p.iter_curves.items["pos:root"].isVisible() and p.iter_curves.items["total"].isVisible()
 
 

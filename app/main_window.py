@@ -14,10 +14,10 @@ import time
 from typing import Any
 
 from PyQt6.QtCore import QSettings, Qt, QTimer, pyqtSignal
-from PyQt6.QtGui import QAction, QKeySequence
 from PyQt6.QtWidgets import QDockWidget, QLabel, QMainWindow, QMessageBox, QTabWidget, QVBoxLayout, QWidget
 
 from app.file_actions import FileActions
+from app.menus import build_menus
 from app.schema import constraint_schema, load_constraint_kinds, optimizer_choices
 from engine.errors import UserError
 from engine.session import Session, sensor_presets
@@ -66,7 +66,7 @@ class MainWindow(QMainWindow):
         self.worker.start()  # after the widgets: the thread's first imports would compete
         self.session.attach(self.worker.submit)
         self.files = FileActions(self)
-        self._build_menus()
+        build_menus(self)
         self._unsubscribe = self.session.subscribe(self._on_session)
         self._refresh_panels()
         self._drawn_seq, self._draws, self._draw_rate, self._rate_t0 = -1, 0, 0.0, time.monotonic()
@@ -157,43 +157,7 @@ class MainWindow(QMainWindow):
         self.viewport.gizmoEdited.connect(self._guard(lambda n, ch: s.update_constraint(n, **ch)))
         self.latent.decodeRequested.connect(lambda z: self.worker.submit(DecodeLatent(z)))
         self.latent.debugToggled.connect(self._latent_debug)
-
-    def _build_menus(self) -> None:
-        f = self.files
-        file_menu = self.menuBar().addMenu("&File")
-        self._action(file_menu, "&Open BVH...", f.open_dialog, QKeySequence.StandardKey.Open)
-        self.recent_menu = file_menu.addMenu("Open &recent")
-        f.refresh_recent()
-        file_menu.addSeparator()
-        self._action(file_menu, "&Save reconstruction as BVH...", f.save_reconstruction, QKeySequence.StandardKey.Save)
-        self._action(file_menu, "Save s&cene...", f.save_scene, "Ctrl+Shift+S")
-        self._action(file_menu, "&Load scene...", f.load_scene, "Ctrl+L")
-        self._action(file_menu, "Export screens&hot...", f.export_screenshot, "Ctrl+E")
-        file_menu.addSeparator()
-        self._action(file_menu, "&Quit", self.close, QKeySequence.StandardKey.Quit)
-        play = self.menuBar().addMenu("&Playback")
-        self._action(play, "Play / pause", self.toggle_play, "Space")
-        self._action(play, "Next frame", lambda: self.session.step(1), "Right")
-        self._action(play, "Previous frame", lambda: self.session.step(-1), "Left")
-        view = self.menuBar().addMenu("&View")
-        self._toggle(view, "Follow character", True, lambda v: setattr(self.viewport, "follow", v))
-        self._toggle(view, "Ground truth", True, lambda v: setattr(self.viewport, "show_ground_truth", v))
-        self._toggle(view, "Ghosts", True, lambda v: setattr(self.viewport, "show_ghosts", v))
-        self._action(view, "Reset camera", lambda: self.viewport.reset_camera(self._hips()), "Home")
-
-    def _action(self, menu: Any, text: str, slot: Any, shortcut: Any = None) -> QAction:
-        act = QAction(text, self)
-        if shortcut is not None:
-            act.setShortcut(QKeySequence(shortcut))
-            act.setShortcutContext(Qt.ShortcutContext.WindowShortcut)
-        act.triggered.connect(lambda _=False: slot())
-        menu.addAction(act)
-        return act
-
-    def _toggle(self, menu: Any, text: str, on: bool, slot: Any) -> None:
-        act = QAction(text, self, checkable=True, checked=on)
-        act.toggled.connect(slot)
-        menu.addAction(act)
+        self.viewport.filesDropped.connect(self._open_dropped)
 
     # -- session -> widgets -------------------------------------------------------------
     def _on_session(self, event: str, data: Any) -> None:
@@ -278,7 +242,8 @@ class MainWindow(QMainWindow):
     def toggle_play(self) -> None:
         self.session.pause() if self.session.playing else self.session.play()
 
-    def _hips(self) -> Any:
+    def hips(self) -> Any:
+        """The hips of the newest snapshot (3,) metres, or None before the first one."""
         snap = self.worker.latest
         return None if snap is None else snap.positions[0]
 
@@ -348,11 +313,16 @@ class MainWindow(QMainWindow):
         if any(u.toLocalFile().lower().endswith(".bvh") for u in event.mimeData().urls()):
             event.acceptProposedAction()
 
+    def _open_dropped(self, paths: list[str]) -> None:
+        """Open the first .bvh of a drop (on the window or the 3D view)."""
+        bvh = next((p for p in paths if p.lower().endswith(".bvh")), None)
+        if bvh is None:
+            self.statusBar().showMessage("Only .bvh motion files can be opened by dropping them", 5000)
+        else:
+            self.files.open_path(bvh)
+
     def dropEvent(self, event: Any) -> None:
-        for url in event.mimeData().urls():
-            if url.toLocalFile().lower().endswith(".bvh"):
-                self.files.open_path(url.toLocalFile())
-                break
+        self._open_dropped([u.toLocalFile() for u in event.mimeData().urls() if u.isLocalFile()])
 
     def closeEvent(self, event: Any) -> None:
         self.timer.stop()

@@ -156,9 +156,9 @@ def test_ghosts_get_their_own_colour_and_follow_the_ghosts_toggle(viewport, fake
     snap = fake_snapshot()
     ik = snap.positions + [1.0, 0, 0]
     viewport.show_snapshot(fake_snapshot(seq=2, ghosts={"ik": ik}))
-    ghost = viewport.ghosts["ik"]
+    ghost = viewport.ghosts.items["ik"]
     assert ghost.visible and np.allclose(ghost.mesh.points, ik)
-    colour = ghost.bones.GetProperty().GetColor()
+    colour = ghost.actors[0].GetProperty().GetColor()
     assert not np.allclose(colour, viewport.reconstruction.bones.GetProperty().GetColor())
     assert not np.allclose(colour, viewport.ground_truth.bones.GetProperty().GetColor())
     viewport.show_ghosts = False
@@ -191,3 +191,102 @@ def test_follow_camera_glides_with_the_hips_and_holds_still_when_off(viewport, f
     viewport.show_snapshot(fake_snapshot(seq=9, positions=moved + [3.0, 0, 0]))
     assert cam.focal_point[0] == pytest.approx(moved[0, 0], abs=0.01)
     assert np.allclose(np.subtract(cam.position, cam.focal_point), offset)  # the user's angle is kept
+
+
+def blue_fraction(img: np.ndarray) -> float:
+    """Share of pixels tinted by the ik ghost's blue (#4da3ff), blended or not."""
+    r, g, b = (img[..., i].astype(int) for i in range(3))
+    return float(np.mean((b > 150) & (b > r + 60) & (b > g + 10)))
+
+
+def test_ghosts_are_thin_translucent_and_show_through_the_reconstruction(viewport, fake_snapshot):
+    """A ghost on the same pose as the reconstruction used to vanish inside its thicker,
+    opaque figure; now it is a thin translucent overlay drawn over it."""
+    snap = fake_snapshot(ground_truth=None)
+    viewport.show_ground_truth = False
+    viewport.show_snapshot(fake_snapshot(seq=2, ghosts={"ik": snap.positions.copy()}))
+    bones = viewport.ghosts.items["ik"].actors[0].GetProperty()
+    assert bones.GetOpacity() < 0.8
+    assert bones.GetLineWidth() < viewport.reconstruction.bones.GetProperty().GetLineWidth()
+    img = viewport.plotter.screenshot(return_img=True)
+    assert blue_fraction(img) > 0.0005, "the ghost is hidden under the reconstruction"
+
+
+def test_ghost_colour_comes_from_the_layer_colour_function(viewport, fake_snapshot):
+    viewport.ghosts.color_of = lambda name, i: "#ff0000" if name == "mine" else "#00ff00"
+    snap = fake_snapshot()
+    viewport.show_snapshot(fake_snapshot(seq=2, ghosts={"mine": snap.positions + [1, 0, 0]}))
+    assert np.allclose(viewport.ghosts.items["mine"].actors[0].GetProperty().GetColor(), (1, 0, 0))
+
+
+def test_body_view_draws_shaded_capsules_updated_in_place(viewport, fake_snapshot):
+    snap = fake_snapshot()
+    viewport.set_display("body")
+    viewport.show_snapshot(snap)
+    body = viewport.body
+    mesh = body.mesh
+    assert body.visible and not viewport.reconstruction.visible
+    # every capsule surrounds its bone: the mesh spans the skeleton plus the radii
+    lo, hi = snap.positions.min(0), snap.positions.max(0)
+    assert np.all(mesh.points.min(0) < lo) and np.all(mesh.points.max(0) > hi)
+    assert np.all(mesh.points.min(0) > lo - 0.2)
+    img = viewport.plotter.screenshot(return_img=True)
+    assert orange_fraction(img) > 0.01  # a filled body covers far more pixels than sticks
+    viewport.show_snapshot(fake_snapshot(seq=2, positions=snap.positions + [0.5, 0, 0]))
+    assert viewport.body.mesh is mesh
+    assert mesh.points[:, 0].min() == pytest.approx(body._points(snap.positions)[0][:, 0].min() + 0.5)
+    # the shadow sits on the floor under the body
+    shadow = body.shadow_mesh.points
+    assert np.allclose(shadow[:, 2], shadow[0, 2]) and 0 < shadow[0, 2] < 0.01
+    assert shadow[0, 0] == pytest.approx(snap.positions[:, 0].mean() + 0.5)
+    viewport.set_display("stick")
+    viewport.show_snapshot(fake_snapshot(seq=3))
+    assert viewport.reconstruction.visible and not body.visible
+
+
+def test_capsule_normals_point_out_of_their_bone(viewport):
+    from engine import skeleton as sk
+
+    pose = sk.Skeleton.canonical().rest_positions() + [0, 0, 1.0]
+    pts, normals = viewport.body._points(pose)
+    assert np.allclose(np.linalg.norm(normals, axis=1), 1.0)
+    t = len(viewport.body._dirs)
+    p, j = viewport.body.bones[7]
+    a, b = pose[p], pose[j]
+    seg = pts[7 * t : 8 * t]
+    # distance from each vertex to the bone segment equals the capsule radius
+    u = np.clip(((seg - a) @ (b - a)) / ((b - a) @ (b - a)), 0, 1)
+    dist = np.linalg.norm(seg - (a + u[:, None] * (b - a)), axis=1)
+    assert np.allclose(dist, viewport.body.radius[7], atol=1e-9)
+
+
+@pytest.mark.parametrize("preset, axis, sign", [("front", 1, -1), ("side", 0, 1), ("top", 2, 1)])
+def test_camera_presets_look_at_the_character_from_their_side(viewport, fake_snapshot, preset, axis, sign):
+    viewport.set_camera(preset, np.array([1.0, 2.0, 0.9]))
+    cam = viewport.plotter.camera
+    offset = np.subtract(cam.position, cam.focal_point)
+    assert np.allclose(cam.focal_point[:2], [1.0, 2.0])
+    assert sign * offset[axis] > 0.9 * np.linalg.norm(offset)
+    with pytest.raises(ValueError, match="known"):
+        viewport.set_camera("bottom")
+
+
+def test_a_bvh_dropped_on_the_3d_view_is_offered_to_the_window(viewport, qtbot, tmp_path):
+    from PyQt6.QtCore import QMimeData, QPointF, Qt, QUrl
+    from PyQt6.QtGui import QDragEnterEvent, QDropEvent
+    from PyQt6.QtWidgets import QApplication
+
+    path = tmp_path / "walk.bvh"
+    path.write_text("HIERARCHY\n")
+    mime = QMimeData()
+    mime.setUrls([QUrl.fromLocalFile(str(path))])
+    target = viewport.plotter  # the VTK widget fills the view: it is what a drop lands on
+    enter = QDragEnterEvent(target.rect().center(), Qt.DropAction.CopyAction, mime,
+                            Qt.MouseButton.NoButton, Qt.KeyboardModifier.NoModifier)
+    QApplication.sendEvent(target, enter)
+    assert enter.isAccepted()
+    drop = QDropEvent(QPointF(target.rect().center()), Qt.DropAction.CopyAction, mime,
+                      Qt.MouseButton.NoButton, Qt.KeyboardModifier.NoModifier)
+    with qtbot.waitSignal(viewport.filesDropped, timeout=1000) as sig:
+        QApplication.sendEvent(target, drop)
+    assert sig.args[0] == [str(path)]

@@ -6,22 +6,25 @@ import time
 from typing import Any
 
 import numpy as np
-from PyQt6.QtCore import pyqtSignal
+from PyQt6.QtCore import QEvent, QObject, pyqtSignal
 from PyQt6.QtGui import QImage
 from PyQt6.QtWidgets import QVBoxLayout, QWidget
 from pyvistaqt import QtInteractor
 
 from widgets import style
+from widgets.viewport.body import BodyActor
+from widgets.viewport.camera import CAMERA_PRESETS, place_camera
 from widgets.viewport.floor import FloorGrid
+from widgets.viewport.ghosts import GhostLayer
 from widgets.viewport.gizmos import ConstraintGizmos
 from widgets.viewport.picking import JointDragger
 from widgets.viewport.sensors import SensorMarkers
 from widgets.viewport.skeleton import SkeletonActor
 
-#: Default camera: front-left of a character facing -Y, looking at the hips (metres).
-HOME_OFFSET = np.array([2.0, -3.4, 0.5])
 HOME_FOCUS_HEIGHT = 0.9
 FOLLOW_TIME_S = 0.25  # camera-follow time constant, seconds
+#: How the reconstruction is drawn: a stick figure, or a shaded capsule mannequin.
+DISPLAY_MODES = ("stick", "body")
 
 
 class Viewport(QWidget):
@@ -35,17 +38,23 @@ class Viewport(QWidget):
         Ctrl + drag on a joint of the reconstruction: joint name and world position.
     gizmoEdited(str, object)
         A constraint gizmo was dragged; ``dict`` of field name -> new value.
+    filesDropped(list)
+        Local file paths dropped on the 3D view.
     """
 
     targetDragged = pyqtSignal(str, object)
     jointDragged = pyqtSignal(str, object)
     gizmoEdited = pyqtSignal(str, object)
+    filesDropped = pyqtSignal(list)
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         self.plotter = QtInteractor(self, auto_update=False, multi_samples=0)
+        # pyvistaqt accepts any dropped file and tries to read it as a mesh; take the
+        # drops here instead so a .bvh dropped on the view opens like one on the window
+        self.plotter.installEventFilter(self)
         layout.addWidget(self.plotter)
         p = self.plotter
         p.set_background(style.BACKGROUND_TOP)
@@ -53,16 +62,19 @@ class Viewport(QWidget):
         self.ground_truth = SkeletonActor(p, style.GROUND_TRUTH, bone_width=4,
                                           joint_size=8, name="ground-truth")  # fmt: skip
         self.reconstruction = SkeletonActor(p, style.RECONSTRUCTION, name="reconstruction")
+        self.body = BodyActor(p, style.RECONSTRUCTION, name="body")
+        self.body.set_visible(False)
+        self.display = "stick"
         self.decoded = SkeletonActor(p, "#ffffff", bone_width=4, joint_size=7, name="decoded")
         self.decoded.set_visible(False)
-        self.ghosts: dict[str, SkeletonActor] = {}
+        self.ghosts = GhostLayer(p)
         self.sensors = SensorMarkers(p, lambda j, pos: self.targetDragged.emit(j, pos))
         self.joints = JointDragger(p, lambda j, pos: self.jointDragged.emit(j, pos))
         self.gizmos = ConstraintGizmos(p, lambda n, changes: self.gizmoEdited.emit(n, changes))
         self._label = p.add_text("", position="upper_left", font_size=9, color="#d0d4dc")
         self.follow = True
         self.show_ground_truth = True
-        self.show_ghosts = True
+        self.camera_preset = "home"
         #: Joints whose tracker has an orientation (6-DoF); None draws axes on every target.
         self.oriented: frozenset[str] | None = None
         self._focus = np.array([0.0, 0.0, HOME_FOCUS_HEIGHT])
@@ -70,16 +82,38 @@ class Viewport(QWidget):
         self.reset_camera()
 
     # -- camera ---------------------------------------------------------------------
+    @property
+    def show_ghosts(self) -> bool:
+        return self.ghosts.visible
+
+    @show_ghosts.setter
+    def show_ghosts(self, on: bool) -> None:
+        self.ghosts.visible = bool(on)
+
     def reset_camera(self, focus: np.ndarray | None = None) -> None:
         """Look at ``focus`` (default: the current hips) from the front-left."""
+        self.set_camera("home", focus)
+
+    def set_camera(self, preset: str, focus: np.ndarray | None = None) -> None:
+        """Place the camera at a preset (``home``, ``front``, ``side``, ``top``) around
+        ``focus`` (default: the followed hips); see :mod:`widgets.viewport.camera`."""
+        if preset not in CAMERA_PRESETS:
+            raise ValueError(f"unknown camera preset {preset!r}; known: {', '.join(CAMERA_PRESETS)}")
         if focus is not None:
             self._focus = np.array([focus[0], focus[1], HOME_FOCUS_HEIGHT])
-        cam = self.plotter.camera
-        cam.focal_point = tuple(self._focus)
-        cam.position = tuple(self._focus + HOME_OFFSET)
-        cam.up = (0.0, 0.0, 1.0)
-        cam.view_angle = 35.0
+        self.camera_preset = preset
+        place_camera(self.plotter.camera, preset, self._focus)
         self.plotter.reset_camera_clipping_range()
+
+    def set_display(self, mode: str) -> None:
+        """Draw the reconstruction as a ``stick`` figure or a shaded ``body``."""
+        if mode not in DISPLAY_MODES:
+            raise ValueError(f"unknown display mode {mode!r}; known: {', '.join(DISPLAY_MODES)}")
+        self.display = mode
+        if mode == "stick":
+            self.body.set_visible(False)
+        else:
+            self.reconstruction.set_visible(False)
 
     def _follow(self, root: np.ndarray) -> None:
         """Slide camera and focus horizontally with the hips, keeping the user's angle."""
@@ -99,17 +133,10 @@ class Viewport(QWidget):
     # -- drawing --------------------------------------------------------------------
     def show_snapshot(self, snap: Any) -> None:
         """Draw an engine snapshot (duck-typed: see ``engine.worker.Snapshot``)."""
-        self.reconstruction.update(snap.positions)
+        (self.body if self.display == "body" else self.reconstruction).update(snap.positions)
         self.joints.positions = np.asarray(snap.positions)
         self.ground_truth.update(snap.ground_truth if self.show_ground_truth else None)
-        for i, (name, pos) in enumerate(snap.ghosts.items()):
-            if name not in self.ghosts:
-                self.ghosts[name] = SkeletonActor(self.plotter, style.ghost_color(name, i),
-                                                  bone_width=5, joint_size=8, name=f"ghost-{name}")  # fmt: skip
-            self.ghosts[name].update(pos if self.show_ghosts else None)
-        for name, actor in self.ghosts.items():
-            if name not in snap.ghosts:
-                actor.set_visible(False)
+        self.ghosts.update(snap.ghosts)
         self.decoded.update(snap.decoded)
         # a 3-DoF tracker has no orientation: axes on it would show a made-up one
         axes = None if self.oriented is None else tuple(j in self.oriented for j in snap.target_joints)
@@ -129,9 +156,24 @@ class Viewport(QWidget):
         h, w = img.shape[:2]
         return QImage(img.data, w, h, 3 * w, QImage.Format.Format_RGB888).copy()
 
+    def eventFilter(self, obj: QObject | None, event: QEvent | None) -> bool:
+        """Take file drags and drops from the VTK widget (see ``__init__``)."""
+        if event is not None and event.type() in (QEvent.Type.DragEnter, QEvent.Type.DragMove, QEvent.Type.Drop):
+            paths = [u.toLocalFile() for u in event.mimeData().urls() if u.isLocalFile()]
+            if paths:
+                event.acceptProposedAction()
+                if event.type() == QEvent.Type.Drop:
+                    self.filesDropped.emit(paths)
+            else:
+                event.ignore()
+            return True
+        return super().eventFilter(obj, event)
+
     def close(self) -> bool:
         """Release widgets and the VTK interactor (no interactor may outlive the view)."""
+        self.plotter.removeEventFilter(self)
         self.sensors.clear()
         self.gizmos.clear()
+        self.ghosts.close()
         self.plotter.close()
         return super().close()

@@ -1,0 +1,43 @@
+"""Help ▸ Keyboard and mouse: every shortcut of the window, read from its actions."""
+
+from __future__ import annotations
+
+from PyQt6.QtWidgets import QDialog, QDialogButtonBox, QLabel, QTableWidget, QTableWidgetItem, QVBoxLayout, QWidget
+
+#: Mouse gestures of the 3D view (not actions, so listed here).
+MOUSE = (
+    ("Left drag", "Rotate the camera"),
+    ("Right drag / wheel", "Zoom"),
+    ("Middle drag", "Pan"),
+    ("Drag a yellow sphere", "Move that sensor's target (kept until Reset)"),
+    ("Ctrl + drag a joint", "Pin the joint there (a sensor's joint moves its target)"),
+    ("Drag a cyan handle", "Edit a constraint (point, box, look-at target)"),
+    ("Drop a .bvh file", "Open it"),
+)
+
+
+class HelpDialog(QDialog):
+    """A table of ``(keys, what)`` rows: the window's shortcuts, then the mouse."""
+
+    def __init__(self, shortcuts: list[tuple[str, str]], parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.setWindowTitle("Keyboard and mouse")
+        rows = [(keys, what) for keys, what in shortcuts if keys] + list(MOUSE)
+        self.table = QTableWidget(len(rows), 2)
+        self.table.setHorizontalHeaderLabels(["Keys", "Does"])
+        self.table.verticalHeader().setVisible(False)
+        for i, (keys, what) in enumerate(rows):
+            self.table.setItem(i, 0, QTableWidgetItem(keys))
+            self.table.setItem(i, 1, QTableWidgetItem(what))
+        self.table.resizeColumnsToContents()
+        self.table.horizontalHeader().setStretchLastSection(True)
+        buttons = QDialogButtonBox(QDialogButtonBox.StandardButton.Close)
+        buttons.rejected.connect(self.reject)
+        layout = QVBoxLayout(self)
+        layout.addWidget(QLabel("Shortcuts work anywhere in the window (not while typing in a field)."))
+        layout.addWidget(self.table)
+        layout.addWidget(buttons)
+        self.resize(520, 560)
+
+    def rows(self) -> list[tuple[str, str]]:
+        return [(self.table.item(i, 0).text(), self.table.item(i, 1).text()) for i in range(self.table.rowCount())]

@@ -113,8 +113,11 @@ class MainWindow(QMainWindow):
         scene = self._dock("Scene", tabs, Qt.DockWidgetArea.RightDockWidgetArea)
         latent = self._dock("Latent", self.latent, Qt.DockWidgetArea.RightDockWidgetArea)
         plots = self._dock("Optimizer plots", self.plots, Qt.DockWidgetArea.BottomDockWidgetArea)
+        # the right column runs the full height, so the latent dock has room for its
+        # 24-row history strip; the plots sit under the 3D view only
+        self.setCorner(Qt.Corner.BottomRightCorner, Qt.DockWidgetArea.RightDockWidgetArea)
         self.resizeDocks([scene, latent], [430, 430], Qt.Orientation.Horizontal)
-        self.resizeDocks([scene, latent], [420, 260], Qt.Orientation.Vertical)
+        self.resizeDocks([scene, latent], [480, 420], Qt.Orientation.Vertical)
         self.resizeDocks([plots], [300], Qt.Orientation.Vertical)
         self.status_engine = QLabel()
         self.status_gui = QLabel()

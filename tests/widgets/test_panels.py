@@ -151,22 +151,18 @@ def test_optimizer_panel_hides_choices_the_engine_does_not_offer(qtbot):
     assert p.editors["mode"].count() == 2
 
 
-def test_clicking_a_legend_entry_hides_the_term_and_a_restart_keeps_it_hidden(qtbot, fake_snapshot):
+def test_unticking_a_legend_term_hides_it_in_every_plot_and_a_restart_keeps_it_hidden(qtbot, fake_snapshot):
     p = LossPlots()
     qtbot.addWidget(p)
-    p.resize(800, 500)
-    p.show()
-    qtbot.waitExposed(p)
     p.update_snapshot(fake_snapshot(seq=1, frame=5))
-    view = p.iteration_plot
-    sample = next(s for s, label in view.plotItem.legend.items if label.text == "pos:root")
-    curve = p.iter_curves.items["pos:root"]
-    centre = view.mapFromScene(sample.mapToScene(sample.boundingRect().center()))
-    qtbot.mouseClick(view.viewport(), Qt.MouseButton.LeftButton, pos=centre)
-    assert not curve.isVisible() and p.iter_curves.items["total"].isVisible()
+    item = p.legend.findItems("pos:root", Qt.MatchFlag.MatchExactly)[0]
+    item.setCheckState(Qt.CheckState.Unchecked)
+    assert not p.iter_curves.items["pos:root"].isVisible() and not p.history_curves.items["pos:root"].isVisible()
+    assert p.iter_curves.items["total"].isVisible()
     p.clear()  # a new clip: the curves are rebuilt (a seek or loop keeps them)
     p.update_snapshot(fake_snapshot(seq=2, frame=0))
     assert not p.iter_curves.items["pos:root"].isVisible() and p.iter_curves.items["total"].isVisible()
+    assert p.legend.findItems("pos:root", Qt.MatchFlag.MatchExactly)[0].checkState() == Qt.CheckState.Unchecked
 
 
 def test_a_zero_loss_term_leaves_a_gap_instead_of_stretching_the_log_axis(qtbot, fake_snapshot):
@@ -181,19 +177,66 @@ def test_a_zero_loss_term_leaves_a_gap_instead_of_stretching_the_log_axis(qtbot,
 
     assert not drawn(p.iter_curves.items["pos:root"]) and not drawn(p.history_curves.items["pos:root"])
     assert p.iter_curves.items["total"].dataBounds(1)[0] == pytest.approx(-1.0)  # log10(0.1)
-    assert len(p.iteration_plot.plotItem.legend.items) == 2  # the term stays in the legend
+    assert p.legend.terms == ("total", "pos:root")  # the term stays in the legend
 
 
-def test_the_legend_of_eight_terms_fits_in_a_short_plot(qtbot, fake_snapshot):
+def _terms(joints):
+    return {"total": 1.0, **{f"{k}:{j}": 0.1 for j in joints for k in ("pos", "rot")}, "temporal_prior": 0.01}
+
+
+SIX = ("root", "upperneck", "lwrist", "rwrist", "lankle", "rankle")
+
+
+def test_every_term_is_listed_beside_the_plots_without_covering_them(qtbot, fake_snapshot):
+    """Six trackers make 14 terms; the in-plot legend showed 8 and covered the curves."""
     p = LossPlots()
     qtbot.addWidget(p)
     p.resize(1400, 300)  # the plots dock of a 1600 x 980 window
     p.show()
     qtbot.waitExposed(p)
-    terms = {"total": 1.0, **{f"sensor:{j}": 0.1 for j in ("root", "upperneck", "lwrist", "rwrist", "lankle", "rankle")},
-             "temporal_prior": 0.01}  # fmt: skip
+    terms = _terms(SIX)
     p.update_snapshot(fake_snapshot(losses=(terms, terms)))
-    legend, view = p.iteration_plot.plotItem.legend, p.iteration_plot.plotItem.vb
-    qtbot.waitUntil(lambda: legend.boundingRect().height() > 0)
-    assert len(legend.items) == 8
-    assert legend.sceneBoundingRect().height() < view.sceneBoundingRect().height()
+    assert p.legend.terms == tuple(terms) and p.legend.count() == 14
+    assert p.iteration_plot.plotItem.legend is None  # nothing drawn over the curves
+    for plot in (p.iteration_plot, p.history_plot):
+        assert plot.geometry().right() < p.legend.geometry().left()
+    # every entry can be reached (the list scrolls when it is taller than the dock)
+    p.legend.scrollToItem(p.legend.item(13))
+    assert p.legend.visualItemRect(p.legend.item(13)).bottom() <= p.legend.viewport().height()
+
+
+def test_terms_of_removed_sensors_leave_the_legend_and_the_plots(qtbot, fake_snapshot):
+    p = LossPlots()
+    qtbot.addWidget(p)
+    six = _terms(SIX)
+    p.update_snapshot(fake_snapshot(seq=1, frame=3, losses=(six, six)))
+    three = _terms(("upperneck", "lwrist", "rwrist"))  # the preset changed
+    p.update_snapshot(fake_snapshot(seq=2, frame=4, losses=(three, three)))
+    assert p.legend.terms == tuple(three)
+    assert set(p.iter_curves.items) == set(three) and set(p.history_curves.items) == set(three)
+    assert "pos:lankle" not in [p.legend.item(i).text() for i in range(p.legend.count())]
+
+
+def test_frame_axes_show_frames_not_thousands(qtbot, fake_snapshot):
+    """Past frame 1000 pyqtgraph rescaled the axis to read "frame (x0.001)"."""
+    p = LossPlots()
+    qtbot.addWidget(p)
+    p.show()
+    p.update_snapshot(fake_snapshot(seq=1, frame=2400, history=_records(range(2000, 2400))))
+    p.grab()
+    for plot in (p.cost_plot, p.history_plot):
+        axis = plot.getAxis("bottom")
+        assert axis.autoSIPrefixScale == 1.0 and "x0.001" not in axis.labelString()
+
+
+def test_latent_history_strip_gives_each_dimension_room(qtbot, fake_snapshot):
+    """The strip was about 20 px tall for 24 dimensions in the studio's latent dock."""
+    w = LatentInspector()
+    qtbot.addWidget(w)
+    w.resize(430, 330)  # the latent dock of a 1600 x 980 window
+    w.show()
+    qtbot.waitExposed(w)
+    w.update_snapshot(fake_snapshot(seq=2, latent=np.linspace(-1, 1, 24)))
+    qtbot.waitUntil(lambda: w.strip_plot.isVisible())
+    view = w.strip_plot.plotItem.vb.sceneBoundingRect()
+    assert view.height() >= 24 * 4, f"strip view {view.height():.0f} px for 24 dimensions"

@@ -19,6 +19,8 @@ SUBCOMMANDS = (
     "engine.cli.data",
     "engine.cli.train",
     "engine.cli.reconstruct",
+    "engine.cli.send",
+    "engine.cli.live",
     "engine.cli.evaluate",
     "engine.cli.bench",
     "engine.cli.gui",

@@ -1,4 +1,6 @@
-"""``dragposer-studio reconstruct IN.bvh --out OUT.bvh``: DragPoser on simulated trackers.
+"""``dragposer-studio reconstruct IN.bvh --out OUT.bvh``: DragPoser on simulated trackers;
+``reconstruct --trackers REC.jsonl --out OUT.bvh``: on recorded trackers
+(:mod:`engine.cli.reconstruct_trackers`).
 
 The clip is loaded onto the canonical skeleton, trackers are simulated from it
 (:func:`engine.tracking.simulate`: preset or joint list, optional faulty sensors and
@@ -17,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from engine.cli.method_options import add_model_options, apply_settings, method_kwargs
+from engine.cli.tracker_options import add_tracker_options
 from engine.errors import UserError
 
 
@@ -27,7 +30,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Simulate trackers from IN.bvh, reconstruct the full body with DragPoser "
         "(latent-space pose optimisation) and write OUT.bvh.",
     )
-    p.add_argument("input", type=Path, metavar="IN.bvh", help="source motion (any supported rig)")
+    p.add_argument("input", type=Path, nargs="?", metavar="IN.bvh", help="source motion (any supported rig)")
+    p.add_argument("--trackers", type=Path, metavar="REC.jsonl",
+                   help="reconstruct a tracker recording (from `live --record`; docs/trackers.md) instead of IN.bvh")
     p.add_argument("--out", type=Path, required=True, metavar="OUT.bvh", help="where to write the reconstruction")
     p.add_argument("--sensors", default="6", help="sensor preset or list, e.g. 6, 4, root,lwrist:3 (default: 6)")
     p.add_argument("--mode", choices=("realtime", "offline"), help="realtime: fixed iterations per frame; "
@@ -44,18 +49,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=int, default=0, help="seed of the tracker simulation (default: 0)")
     p.add_argument("--method", default="dragposer", help=argparse.SUPPRESS)
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    add_tracker_options(p)
     p.set_defaults(func=_reconstruct)
 
 
 def _reconstruct(args: argparse.Namespace) -> int:
-    import dataclasses
-
     from engine.bvh import save_motion_bvh
-    from engine.methods import get_method, run_method
+    from engine.methods import run_method
     from engine.retarget import load_motion
     from engine.tracking import parse_sensors, simulate
 
-    parse_sensors(args.sensors)  # fail before loading anything
     if not 0.0 <= args.faulty <= 1.0:
         raise UserError(f"--faulty must be a probability in [0, 1], got {args.faulty}")
     if args.iterations is not None and args.iterations < 1:
@@ -64,6 +67,42 @@ def _reconstruct(args: argparse.Namespace) -> int:
         raise UserError(f"--max-frames must be at least 1, got {args.max_frames}")
     if args.lr is not None and not args.lr > 0:
         raise UserError(f"--lr must be > 0, got {args.lr}")
+    if args.trackers is not None:
+        if args.input is not None:
+            raise UserError("give IN.bvh or --trackers REC.jsonl, not both (the clip can be --reference)")
+        from engine.cli.reconstruct_trackers import reconstruct_trackers
+
+        return reconstruct_trackers(args)
+    if args.input is None:
+        raise UserError("give IN.bvh or --trackers REC.jsonl")
+    for opt in ("calibrate", "reference", "json"):
+        if getattr(args, opt):
+            raise UserError(f"--{opt} applies to --trackers recordings")
+    if args.map:
+        raise UserError("--map applies to --trackers recordings")
+    parse_sensors(args.sensors)  # fail before loading anything
+    motion = load_motion(args.input)
+    if args.max_frames:
+        motion = motion.slice(0, args.max_frames)
+    if len(motion) == 0:
+        raise UserError(f"{args.input}: the clip has no frames")
+    method = build_method(args)
+    tracking = simulate(motion, args.sensors, faulty=args.faulty, gaps=args.gaps, seed=args.seed)
+    rec, results = run_method(method, tracking, motion.skeleton, progress=not args.no_progress,
+                              desc=args.input.name)  # fmt: skip
+    rec.name = f"{motion.name} ({args.method})"
+    save_motion_bvh(args.out, rec)
+    print(summary(results, tracking, rec, args.out))
+    return 0
+
+
+def build_method(args: argparse.Namespace) -> Any:
+    """The method of ``--method`` with ``--scene`` constraints and settings, ``--mode``,
+    ``--iterations``, ``--lr``, the models and ``--set`` applied (command line wins)."""
+    import dataclasses
+
+    from engine.methods import get_method
+
     constraints, scene_settings = [], {}
     if args.scene:
         from engine.optimizer import OptimizerSettings
@@ -72,11 +111,6 @@ def _reconstruct(args: argparse.Namespace) -> int:
         constraints, settings = load_scene(args.scene)
         defaults = dataclasses.asdict(OptimizerSettings())
         scene_settings = {k: v for k, v in dataclasses.asdict(settings).items() if v != defaults[k]}
-    motion = load_motion(args.input)
-    if args.max_frames:
-        motion = motion.slice(0, args.max_frames)
-    if len(motion) == 0:
-        raise UserError(f"{args.input}: the clip has no frames")
     kwargs = method_kwargs(args, args.mode or scene_settings.get("mode", "realtime"))
     method = get_method(args.method, **kwargs)
     if scene_settings:
@@ -90,13 +124,7 @@ def _reconstruct(args: argparse.Namespace) -> int:
     apply_settings(method, args.method, args.set)
     if constraints:
         method.set_constraints(constraints)  # type: ignore[attr-defined]
-    tracking = simulate(motion, args.sensors, faulty=args.faulty, gaps=args.gaps, seed=args.seed)
-    rec, results = run_method(method, tracking, motion.skeleton, progress=not args.no_progress,
-                              desc=args.input.name)  # fmt: skip
-    rec.name = f"{motion.name} ({args.method})"
-    save_motion_bvh(args.out, rec)
-    print(summary(results, tracking, rec, args.out))
-    return 0
+    return method
 
 
 def summary(results: list, tracking: Any, rec: Any, out: Path) -> str:

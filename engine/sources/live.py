@@ -1,0 +1,200 @@
+"""Realtime reconstruction from a live tracker stream, and its figures.
+
+:class:`LiveRun` takes the newest frame from a :class:`~engine.sources.receiver.VMCReceiver`,
+hands its :class:`~engine.methods.SensorFrame` to a reconstruction method (exactly what
+the method gets from simulated trackers) and times each solve from the arrival of the
+frame's packet to the solved pose. A solver slower than the stream skips to the newest
+frame; skipped frames are counted. An optional first window calibrates the wearer
+(:mod:`engine.sources.calibration`) before solving starts.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from engine import skeleton as sk
+from engine.methods import FrameResult, Method, SensorFrame
+from engine.motion import Motion
+from engine.sources.calibration import Calibration, calibrate
+from engine.sources.receiver import VMCReceiver
+
+
+@dataclass
+class LiveResult:
+    """What a live run produced.
+
+    Attributes
+    ----------
+    times : list of float
+        Stream time of every solved frame, seconds.
+    results : list of FrameResult
+    sensors : list of SensorFrame
+        The readings each solved frame was given.
+    latency_ms : list of float
+        Packet arrival to solved pose, per solved frame, milliseconds.
+    frames_received : int
+        Frames that arrived after calibration (the ones the solver was offered).
+    frames_skipped : int
+        Of those, frames superseded by a newer one while the solver was busy.
+    calibration : Calibration or None
+    calibration_frames : int
+        Frames spent calibrating.
+    """
+
+    times: list[float] = field(default_factory=list)
+    results: list[FrameResult] = field(default_factory=list)
+    sensors: list[SensorFrame] = field(default_factory=list)
+    latency_ms: list[float] = field(default_factory=list)
+    frames_received: int = 0
+    frames_skipped: int = 0
+    calibration: Calibration | None = None
+    calibration_frames: int = 0
+
+    @property
+    def frames_solved(self) -> int:
+        return len(self.results)
+
+
+class LiveRun:
+    """Solve a live stream frame by frame.
+
+    Parameters
+    ----------
+    receiver : VMCReceiver
+        Started by the caller.
+    method : Method
+        Reset here with ``skeleton`` (or the calibrated one).
+    skeleton : Skeleton
+        The wearer's skeleton when not calibrating.
+    fps : float
+        Nominal stream rate (the method's frame rate).
+    calibrate_s : float
+        Seconds of stream (by stream time) to calibrate from first; 0: no calibration.
+    calibration_pose : str
+        ``auto``, ``tpose`` or ``standing``.
+    """
+
+    def __init__(self, receiver: VMCReceiver, method: Method, skeleton: sk.Skeleton, fps: float = sk.FPS,
+                 calibrate_s: float = 0.0, calibration_pose: str = "auto") -> None:  # fmt: skip
+        self.receiver = receiver
+        self.method = method
+        self.skeleton = skeleton
+        self.fps = fps
+        self.calibrate_s = calibrate_s
+        self.calibration_pose = calibration_pose
+        self.stop_event = threading.Event()
+        self.result = LiveResult()  # filled while running, so an interrupt keeps it
+
+    def run(self, duration_s: float | None = None, idle_timeout_s: float | None = None,
+            on_frame: Callable[[LiveResult], None] | None = None) -> LiveResult:  # fmt: skip
+        """Run until ``duration_s`` (wall clock from the call), until no frame came for
+        ``idle_timeout_s`` after the stream started, or until :attr:`stop_event` is set."""
+        out = self.result = LiveResult()
+        window: list[SensorFrame] = []
+        cal_t0: float | None = None
+        calibrating = self.calibrate_s > 0
+        if not calibrating:
+            self.method.reset(self.skeleton, self.fps)
+        start = time.perf_counter()
+        last_index = 0
+        last_seen = None
+        while not self.stop_event.is_set():
+            now = time.perf_counter()
+            if duration_s is not None and now - start >= duration_s:
+                break
+            if idle_timeout_s is not None and last_seen is not None and now - last_seen >= idle_timeout_s:
+                break
+            f = self.receiver.wait_frame(last_index, timeout=0.1)
+            if f is None:
+                continue
+            last_seen = time.perf_counter()
+            missed = f.index - last_index - 1
+            last_index = f.index
+            if calibrating:
+                cal_t0 = f.t if cal_t0 is None else cal_t0
+                out.calibration_frames += 1 + missed
+                window.append(f.sensors)
+                if f.t - cal_t0 < self.calibrate_s:
+                    continue
+                # the window ends with the first frame at or past calibrate_s seconds
+                # (``calibration_window`` says the same for recordings)
+                out.calibration = calibrate(window, self.calibration_pose)
+                self.receiver.set_calibration(out.calibration)
+                self.method.reset(out.calibration.skeleton, self.fps)
+                calibrating = False
+                continue
+            out.frames_received += 1 + missed
+            out.frames_skipped += missed
+            res = self.method.step(f.sensors)
+            out.latency_ms.append(1000.0 * (time.perf_counter() - f.arrival))
+            out.times.append(f.t)
+            out.results.append(res)
+            out.sensors.append(f.sensors)
+            if on_frame is not None:
+                on_frame(out)
+        return out
+
+
+def calibration_window(times: Sequence[float], seconds: float) -> int:
+    """Frames a calibration of ``seconds`` takes from a stream with these frame times:
+    every frame less than ``seconds`` after the first, and the one that completes them."""
+    t = np.asarray(times, float)
+    if t.size == 0:
+        return 0
+    return min(int(np.searchsorted(t - t[0], seconds, side="left")) + 1, t.size)
+
+
+def to_motion(times: Sequence[float], results: Sequence[FrameResult], skeleton: sk.Skeleton,
+              fps: float, name: str = "") -> Motion:  # fmt: skip
+    """The solved frames on a regular timeline at ``fps`` from the first to the last
+    solved time; a frame that was not solved holds the pose solved before it."""
+    if not results:
+        return Motion(np.zeros((0, sk.NUM_JOINTS, 4)), np.zeros((0, 3)), skeleton, fps, name)
+    t = np.asarray(times, float)
+    slots = np.round((t - t[0]) * fps).astype(int)
+    n = int(slots.max()) + 1
+    pick = np.full(n, -1)
+    pick[slots] = np.arange(len(slots))
+    pick = np.maximum.accumulate(pick)
+    local = np.stack([r.local_rot for r in results])[pick]
+    root = np.stack([r.root_pos for r in results])[pick]
+    return Motion(local, root, skeleton, fps, name)
+
+
+def reference_error(times: Sequence[float], results: Sequence[FrameResult], reference: Motion | None) -> dict:
+    """Mean joint position error (22 joints, cm) of solved frames against the clip
+    frame at the same time (``round(t * fps)``), or a note that there is no ground truth."""
+    if reference is None:
+        return {"pos_cm": None, "note": "no ground truth: live trackers (give --reference CLIP.bvh to compare)"}
+    from engine.metrics import position_error_cm
+
+    gt = reference.positions()
+    idx = np.round(np.asarray(times, float) * reference.fps).astype(int)
+    keep = [k for k, i in enumerate(idx) if 0 <= i < len(gt)]
+    if not keep:
+        return {"pos_cm": None, "note": "no solved frame falls inside the reference clip's time range"}
+    rec = np.stack([results[k].positions for k in keep])
+    err = position_error_cm(gt[idx[keep]], rec)
+    return {"pos_cm": float(np.mean(err)), "frames_compared": len(keep)}
+
+
+def tracker_error_cm(results: Sequence[FrameResult], frames: Sequence[SensorFrame]) -> float | None:
+    """Mean distance, cm, from each connected tracker to its joint in the solved pose
+    (needs no ground truth)."""
+    errs = []
+    for res, f in zip(results, frames):
+        for j, r in f.connected().items():
+            errs.append(np.linalg.norm(res.positions[sk.JOINT_INDEX[j]] - r.position))
+    return 100.0 * float(np.mean(errs)) if errs else None
+
+
+def latency_summary(latency_ms: Sequence[float]) -> dict:
+    if not latency_ms:
+        return {"p50": None, "p95": None, "max": None}
+    a = np.asarray(latency_ms, float)
+    return {"p50": float(np.percentile(a, 50)), "p95": float(np.percentile(a, 95)), "max": float(a.max())}

@@ -110,6 +110,7 @@ def _live(args: argparse.Namespace) -> int:
         "frames_received": result.frames_received,
         "frames_solved": result.frames_solved,
         "frames_skipped": result.frames_skipped,
+        "frames_skipped_first_solve": result.frames_skipped_first_solve,
         "solved_fraction": result.frames_solved / result.frames_received if result.frames_received else None,
         "calibration_frames": result.calibration_frames,
         "latency_ms": latency_summary(result.latency_ms),
@@ -180,7 +181,8 @@ def _report(stats: dict, args: argparse.Namespace, result) -> str:
         lines.append(result.calibration.summary())
     lines.append(f"packets {stats['packets']} ({stats['malformed_packets']} malformed, {stats['duplicates']} duplicate, "
                  f"{stats['late']} late)  frames {stats['frames_received']} solved {stats['frames_solved']}"
-                 + (f" ({100 * frac:.1f} %)" if frac is not None else ""))  # fmt: skip
+                 + (f" ({100 * frac:.1f} %)" if frac is not None else "")
+                 + f", skipped {stats['frames_skipped']} ({stats['frames_skipped_first_solve']} during the first solve)")  # fmt: skip
     if lat["p50"] is not None:
         lines.append(f"latency p50 {lat['p50']:.1f} ms  p95 {lat['p95']:.1f} ms  max {lat['max']:.1f} ms")
     te = stats["tracker_error_cm"]

@@ -41,6 +41,9 @@ class LiveResult:
         Frames that arrived after calibration (the ones the solver was offered).
     frames_skipped : int
         Of those, frames superseded by a newer one while the solver was busy.
+    frames_skipped_first_solve : int
+        Of those, frames that arrived during the first solve (DragPoser solves its first
+        frame in offline mode, to convergence: a start-up cost, not a steady one).
     calibration : Calibration or None
     calibration_frames : int
         Frames spent calibrating.
@@ -52,6 +55,7 @@ class LiveResult:
     latency_ms: list[float] = field(default_factory=list)
     frames_received: int = 0
     frames_skipped: int = 0
+    frames_skipped_first_solve: int = 0
     calibration: Calibration | None = None
     calibration_frames: int = 0
 
@@ -102,17 +106,17 @@ class LiveRun:
             self.method.reset(self.skeleton, self.fps)
         start = time.perf_counter()
         last_index = 0
-        last_seen = None
         while not self.stop_event.is_set():
             now = time.perf_counter()
             if duration_s is not None and now - start >= duration_s:
                 break
-            if idle_timeout_s is not None and last_seen is not None and now - last_seen >= idle_timeout_s:
-                break
             f = self.receiver.wait_frame(last_index, timeout=0.1)
             if f is None:
+                # idle = nothing new arrived for a while (a slow solve is not idleness)
+                last = self.receiver.last_arrival
+                if idle_timeout_s is not None and last is not None and time.perf_counter() - last >= idle_timeout_s:
+                    break
                 continue
-            last_seen = time.perf_counter()
             missed = f.index - last_index - 1
             last_index = f.index
             if calibrating:
@@ -130,6 +134,8 @@ class LiveRun:
                 continue
             out.frames_received += 1 + missed
             out.frames_skipped += missed
+            if out.frames_solved == 1:
+                out.frames_skipped_first_solve = missed
             res = self.method.step(f.sensors)
             out.latency_ms.append(1000.0 * (time.perf_counter() - f.arrival))
             out.times.append(f.t)

@@ -27,6 +27,7 @@ from collections import deque
 from dataclasses import asdict, dataclass
 
 from engine.errors import UserError
+from engine.sources.coords import CONVENTIONS
 from engine.methods import SensorFrame
 from engine.sources.recording import RecordingWriter
 from engine.sources.trackers import DEFAULT_TIMEOUT_S, TrackerMapping, TrackerSample, TrackerState
@@ -112,6 +113,8 @@ class VMCReceiver:
     def __init__(self, host: str = "127.0.0.1", port: int = DEFAULT_PORT, mapping: TrackerMapping | None = None,
                  convention: str = "unity", timeout_s: float = DEFAULT_TIMEOUT_S,
                  recorder: RecordingWriter | None = None) -> None:  # fmt: skip
+        if convention not in CONVENTIONS:
+            raise UserError(f"unknown coordinate convention {convention!r}; known: {', '.join(CONVENTIONS)}")
         self.state = TrackerState(mapping, timeout_s)
         self.convention = convention
         self.recorder = recorder
@@ -184,6 +187,12 @@ class VMCReceiver:
             span = self._arrivals[-1] - self._arrivals[0]
             s.packet_rate_hz = (len(self._arrivals) - 1) / span if span > 0 else 0.0
         return s
+
+    @property
+    def last_arrival(self) -> float | None:
+        """``time.perf_counter()`` of the newest frame, or None before the first."""
+        f = self._frame
+        return None if f is None else f.arrival
 
     @property
     def unmapped_names(self) -> list[str]:

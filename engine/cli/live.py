@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from engine.cli.method_options import add_model_options, apply_settings, method_kwargs
+from engine.cli.method_options import add_model_options, build_method
 from engine.cli.tracker_options import (add_tracker_options, check_tracker_options, default_skeleton,
                                         load_reference, write_json)  # fmt: skip
 from engine.errors import UserError
@@ -64,7 +64,6 @@ def _check(args: argparse.Namespace) -> None:
 
 def _live(args: argparse.Namespace) -> int:
     from engine.bvh import save_motion_bvh
-    from engine.methods import get_method
     from engine.sources.live import LiveRun, latency_summary, reference_error, to_motion, tracker_error_cm
     from engine.sources.receiver import VMCReceiver, parse_listen
     from engine.sources.recording import RecordingWriter, header
@@ -74,8 +73,7 @@ def _live(args: argparse.Namespace) -> int:
     host, port = parse_listen(args.listen)
     mapping = TrackerMapping.parse(args.map)
     reference = load_reference(args)
-    method = get_method(args.method, **method_kwargs(args, args.mode))
-    apply_settings(method, args.method, args.set)
+    method = build_method(args)
     _warm_up(method, default_skeleton(reference), args.fps)
     recorder = None
     if args.record:

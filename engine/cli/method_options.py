@@ -1,5 +1,6 @@
-"""Options that choose the models and tune the method, shared by ``evaluate`` and
-``reconstruct``: ``--vae``, ``--predictor`` and ``--set KEY=VALUE``."""
+"""Options that choose the models and tune the method, shared by ``evaluate``,
+``reconstruct`` and ``live``: ``--vae``, ``--predictor`` and ``--set KEY=VALUE``, and
+:func:`build_method`, which also applies a ``--scene``."""
 
 from __future__ import annotations
 
@@ -41,3 +42,34 @@ def apply_settings(method: Any, name: str, items: list[str]) -> dict[str, Any]:
         raise UserError(f"method {name!r} has no optimizer settings; --set applies to latent-space methods")
     configure(**values)
     return values
+
+
+def build_method(args: argparse.Namespace) -> Any:
+    """The method of ``--method`` with ``--scene`` constraints and settings, ``--mode``,
+    ``--iterations``, ``--lr``, the models and ``--set`` applied (command line wins)."""
+    import dataclasses
+
+    from engine.methods import get_method
+
+    constraints, scene_settings = [], {}
+    if getattr(args, "scene", None):
+        from engine.optimizer import OptimizerSettings
+        from engine.scene import load_scene
+
+        constraints, settings = load_scene(args.scene)
+        defaults = dataclasses.asdict(OptimizerSettings())
+        scene_settings = {k: v for k, v in dataclasses.asdict(settings).items() if v != defaults[k]}
+    kwargs = method_kwargs(args, args.mode or scene_settings.get("mode", "realtime"))
+    method = get_method(args.method, **kwargs)
+    if scene_settings:
+        configure = getattr(method, "configure", None)
+        if configure is None:
+            raise UserError(f"method {args.method!r} takes no scene settings")
+        given = {"mode"} if args.mode else set()
+        given |= {"iterations", "max_iterations"} if args.iterations is not None else set()
+        given |= {"lr"} if args.lr is not None else set()
+        configure(**{k: v for k, v in scene_settings.items() if k not in given})
+    apply_settings(method, args.method, args.set)
+    if constraints:
+        method.set_constraints(constraints)  # type: ignore[attr-defined]
+    return method

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from engine.cli.method_options import add_model_options, apply_settings, method_kwargs
+from engine.cli.method_options import add_model_options, build_method
 from engine.cli.tracker_options import add_tracker_options
 from engine.errors import UserError
 
@@ -94,37 +94,6 @@ def _reconstruct(args: argparse.Namespace) -> int:
     save_motion_bvh(args.out, rec)
     print(summary(results, tracking, rec, args.out))
     return 0
-
-
-def build_method(args: argparse.Namespace) -> Any:
-    """The method of ``--method`` with ``--scene`` constraints and settings, ``--mode``,
-    ``--iterations``, ``--lr``, the models and ``--set`` applied (command line wins)."""
-    import dataclasses
-
-    from engine.methods import get_method
-
-    constraints, scene_settings = [], {}
-    if args.scene:
-        from engine.optimizer import OptimizerSettings
-        from engine.scene import load_scene
-
-        constraints, settings = load_scene(args.scene)
-        defaults = dataclasses.asdict(OptimizerSettings())
-        scene_settings = {k: v for k, v in dataclasses.asdict(settings).items() if v != defaults[k]}
-    kwargs = method_kwargs(args, args.mode or scene_settings.get("mode", "realtime"))
-    method = get_method(args.method, **kwargs)
-    if scene_settings:
-        configure = getattr(method, "configure", None)
-        if configure is None:
-            raise UserError(f"method {args.method!r} takes no scene settings")
-        given = {"mode"} if args.mode else set()
-        given |= {"iterations", "max_iterations"} if args.iterations is not None else set()
-        given |= {"lr"} if args.lr is not None else set()
-        configure(**{k: v for k, v in scene_settings.items() if k not in given})
-    apply_settings(method, args.method, args.set)
-    if constraints:
-        method.set_constraints(constraints)  # type: ignore[attr-defined]
-    return method
 
 
 def summary(results: list, tracking: Any, rec: Any, out: Path) -> str:

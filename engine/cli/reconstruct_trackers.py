@@ -21,7 +21,7 @@ def _slice(tracking: Any, start: int, stop: int | None = None) -> Any:
 
 def reconstruct_trackers(args: argparse.Namespace) -> int:
     from engine.bvh import save_motion_bvh
-    from engine.cli.reconstruct import build_method
+    from engine.cli.method_options import build_method
     from engine.methods import run_method
     from engine.sources.calibration import calibrate
     from engine.sources.live import calibration_window, reference_error, to_motion, tracker_error_cm

@@ -10,16 +10,13 @@ import json
 import os
 import threading
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from PyQt6.QtCore import QPoint, QTimer
 from PyQt6.QtGui import QImage, QPainter, QPixmap
-from PyQt6.QtWidgets import QFileDialog
+from PyQt6.QtWidgets import QFileDialog, QMainWindow
 
 from engine.errors import UserError
-
-if TYPE_CHECKING:
-    from app.main_window import MainWindow
 
 MAX_RECENT = 8
 
@@ -31,9 +28,14 @@ def _atomic_write_text(path: Path, text: str) -> None:
 
 
 class FileActions:
-    """Holds the window's file operations (kept apart so the window stays about wiring)."""
+    """Holds the window's file operations (kept apart so the window stays about wiring).
 
-    def __init__(self, window: "MainWindow") -> None:
+    ``window`` is the studio's main window; this class uses its ``session``,
+    ``settings``, ``viewport``, ``recent_menu``, ``show_error`` and status bar (it does
+    not import the window's module, which imports this one).
+    """
+
+    def __init__(self, window: QMainWindow) -> None:
         self.w = window
         self._export: threading.Thread | None = None
         self._export_result: tuple[str, str] | None = None
@@ -87,8 +89,7 @@ class FileActions:
             path, _ = QFileDialog.getSaveFileName(self.w, "Save reconstruction", "", "BVH motion (*.bvh)")
             if not path:
                 return None
-        args = (s.motion, tuple(s.sensors.values()), tuple(c.to_dict() for c in s.constraints),
-                dict(s.settings), s.method, path)  # fmt: skip
+        args = (s.motion, tuple(s.sensors.values()), tuple(s.constraints), dict(s.settings), s.method, path)
         self._export = threading.Thread(target=self._export_run, args=args, name="bvh-export", daemon=True)
         self._export.start()
         self._poll.start()
@@ -99,7 +100,7 @@ class FileActions:
                     method: str, path: str) -> None:  # fmt: skip
         try:
             from engine.bvh import save_motion_bvh
-            from engine.worker_methods import reconstruct_clip
+            from engine.studio.methods import reconstruct_clip
 
             result = reconstruct_clip(motion, sensors, constraints, settings, method)
             save_motion_bvh(path, result)
@@ -148,7 +149,7 @@ class FileActions:
             clip = scene.get("clip")
             if clip and (self.w.session.path is None or Path(clip) != self.w.session.path):
                 self.w.session.open(clip)
-            self.w.session.apply_scene(scene)
+            self.w.session.apply_scene(scene, str(path))
         except (OSError, ValueError, UserError) as exc:
             self.w.show_error("Cannot load scene", f"{path}: {exc}")
             return False

@@ -63,7 +63,7 @@ def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
     start = window.session.frame
 
     def check(frame: int) -> None:
-        snap = window.worker.latest
+        snap = window.session.latest
         ended = snap is not None and snap.seq > 0 and not snap.playing and frame > start
         if frame - start < after_frames and not ended:
             return

@@ -1,58 +1,20 @@
-"""Describe the engine's constraint kinds as plain editor schemas for the widgets."""
+"""Describe the session's constraint kinds and optimizer settings as plain editor schemas."""
 
 from __future__ import annotations
 
 import dataclasses
-import importlib
-import pkgutil
 from typing import Any
 
-import numpy as np
-
-from engine.constraints.base import field_default
-
-_BASE = ("name", "weight", "enabled")
+from engine.studio.session import Session
 
 
-def load_constraint_kinds() -> dict[str, type]:
-    """Import every module of :mod:`engine.constraints` so each kind registers itself."""
-    import engine.constraints as pkg
-    from engine.constraints.base import REGISTRY
-
-    for info in pkgutil.iter_modules(pkg.__path__):
-        try:
-            importlib.import_module(f"engine.constraints.{info.name}")
-        except Exception:  # a half-written kind must not stop the studio
-            continue
-    return dict(REGISTRY)
-
-
-def _tag(name: str, default: Any) -> str:
-    if isinstance(default, bool):
-        return "bool"
-    if isinstance(default, int):
-        return "int"
-    if isinstance(default, float):
-        return "float"
-    if isinstance(default, str):
-        return "joint" if "joint" in name or name in ("target_joint", "end_effector") else "str"
-    if isinstance(default, (np.ndarray, tuple, list)) and np.asarray(default).size == 3:
-        return "vec3"
-    return "other"
-
-
-def constraint_schema(kinds: dict[str, type] | None = None) -> dict[str, list[tuple[str, str, Any]]]:
-    """kind -> [(field, tag, default)] for :class:`widgets.constraint_panel.ConstraintPanel`."""
-    kinds = load_constraint_kinds() if kinds is None else kinds
+def constraint_schema() -> dict[str, list[tuple[str, str, Any]]]:
+    """kind -> [(field, tag, default)] for :class:`widgets.constraint_panel.ConstraintPanel`,
+    from the session's catalog of user-facing kinds (``choice`` fields show as text until
+    the panel offers a list)."""
     out = {}
-    for kind, cls in kinds.items():
-        fields = []
-        for f in dataclasses.fields(cls):
-            if f.name in _BASE:
-                continue
-            d = field_default(f)
-            fields.append((f.name, _tag(f.name, d), d))
-        out[kind] = fields
+    for kind, spec in Session.constraint_catalog().items():
+        out[kind] = [(f.name, "str" if f.tag == "choice" else f.tag, f.default) for f in spec.fields]
     return out
 
 

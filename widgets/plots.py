@@ -127,7 +127,8 @@ class LossPlots(QWidget):
         self.legend.set_terms((), self.colours)
 
     def update_snapshot(self, snap: Any) -> None:
-        """Draw ``snap``: its iterations, and the engine's record of recent frames.
+        """Draw ``snap`` in all three plots (the window spreads them over display ticks
+        with :meth:`update_iterations`, :meth:`update_cost` and :meth:`update_history`).
 
         The history comes from the engine (``snap.history``), so frames whose snapshots
         were never drawn still appear; it restarts when playback jumps or loops. The
@@ -136,23 +137,46 @@ class LossPlots(QWidget):
         if snap.seq == self._seq:
             return
         self._seq = snap.seq
-        history = tuple(snap.history)
-        losses = snap.losses
+        self.update_iterations(snap)
+        self.update_cost(snap)
+        self.update_history(snap)
+
+    def _terms(self, snap: Any) -> list[str]:
+        """This frame's terms; the legend and curves follow them (rebuilt only when the
+        set changes, see :meth:`widgets.term_legend.TermLegend.set_terms`)."""
+        losses, history = snap.losses, snap.history
         names = list(losses[-1]) if losses else list(history[-1].losses) if history else []
-        current = set(names)
-        self.iter_curves.keep_only(current)
-        self.history_curves.keep_only(current)
-        for name in names:  # colours first, so the legend shows the curves' colours
-            self.iter_curves.get(name, symbols=True)
-        self.legend.set_terms(tuple(names), self.colours)
+        if tuple(names) != self.legend.terms:
+            current = set(names)
+            self.iter_curves.keep_only(current)
+            self.history_curves.keep_only(current)
+            for name in names:  # colours first, so the legend shows the curves' colours
+                self.iter_curves.get(name, symbols=True)
+            self.legend.set_terms(tuple(names), self.colours)
+        return names
+
+    def update_iterations(self, snap: Any) -> None:
+        """This frame's loss per iteration, every term."""
+        names = self._terms(snap)
+        losses = snap.losses
         if losses:
             its = np.arange(1, len(losses) + 1)
             for name in names:
                 vals = np.array([_loggable(float(d.get(name, np.nan))) for d in losses])
                 _set_curve(self.iter_curves.get(name, symbols=True), its, vals)
+
+    def update_cost(self, snap: Any) -> None:
+        """Milliseconds and iterations of the engine's recent solved frames."""
+        history = snap.history
         x = np.array([r.frame for r in history], float)
         _set_curve(self.ms_curve, x, np.array([_loggable(r.ms) for r in history], float))
         _set_curve(self.iter_curve, x, np.array([_loggable(r.iterations) for r in history], float))
+
+    def update_history(self, snap: Any) -> None:
+        """Every current term's final loss over the engine's recent solved frames."""
+        names = self._terms(snap)
+        history = snap.history
+        x = np.array([r.frame for r in history], float)
         for name in names:
             y = np.array([_loggable(float(r.losses.get(name, np.nan))) for r in history])
             _set_curve(self.history_curves.get(name), x, y)

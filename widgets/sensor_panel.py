@@ -66,7 +66,7 @@ class SensorPanel(QWidget):
             self.presetChanged.emit(name)
 
     def set_sensors(self, preset: str, sensors: dict[str, Any]) -> None:
-        """Show ``sensors`` (joint -> SensorConfig-like objects) without emitting."""
+        """Show ``sensors`` (joint -> ``engine.sensors.Sensor``) without emitting."""
         self._updating = True
         try:
             if preset and self.preset.currentText() != preset:

@@ -1,4 +1,4 @@
-"""Timeline: play/pause, step, scrub, speed, loop and a frame counter."""
+"""Timeline: play/pause, step, scrub, speed, loop, playback mode and a frame counter."""
 
 from __future__ import annotations
 
@@ -6,6 +6,11 @@ from PyQt6.QtCore import Qt, pyqtSignal
 from PyQt6.QtWidgets import QCheckBox, QComboBox, QHBoxLayout, QLabel, QSlider, QStyle, QToolButton, QWidget
 
 SPEEDS = (0.25, 0.5, 1.0, 2.0)
+#: Playback modes (value, label, tooltip); the session's names.
+MODES = (
+    ("every_frame", "Every frame", "Solve every clip frame; playback waits for the solver"),
+    ("real_time", "Real time", "Keep the clock; skip frames the solver has not reached"),
+)
 
 
 class Timeline(QWidget):
@@ -14,7 +19,7 @@ class Timeline(QWidget):
     Signals
     -------
     playToggled(bool), stepRequested(int), seekRequested(int), speedChanged(float),
-    loopChanged(bool)
+    loopChanged(bool), modeChanged(str)
     """
 
     playToggled = pyqtSignal(bool)
@@ -22,6 +27,7 @@ class Timeline(QWidget):
     seekRequested = pyqtSignal(int)
     speedChanged = pyqtSignal(float)
     loopChanged = pyqtSignal(bool)
+    modeChanged = pyqtSignal(str)
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -52,7 +58,12 @@ class Timeline(QWidget):
         for w in (back, self.play_button, fwd):
             row.addWidget(w)
         row.addWidget(self.slider, 1)
-        for w in (self.counter, self.speed, self.loop):
+        self.mode = QComboBox(toolTip="Playback mode: " + "; ".join(f"{lb}: {tip}" for _, lb, tip in MODES))
+        for value, label, tip in MODES:
+            self.mode.addItem(label, value)
+            self.mode.setItemData(self.mode.count() - 1, tip, Qt.ItemDataRole.ToolTipRole)
+        self.mode.currentIndexChanged.connect(self._on_mode)
+        for w in (self.counter, self.speed, self.mode, self.loop):
             row.addWidget(w)
         self._updating = False
         self._fps = 60.0
@@ -62,13 +73,25 @@ class Timeline(QWidget):
         if not self._updating:
             self.playToggled.emit(playing)
 
+    def _on_mode(self, index: int) -> None:
+        if not self._updating:
+            self.modeChanged.emit(str(self.mode.itemData(index)))
+
+    def set_mode(self, mode: str) -> None:
+        """Show the session's playback mode without emitting."""
+        self._updating = True
+        self.mode.setCurrentIndex(max(self.mode.findData(mode), 0))
+        self._updating = False
+
     def _on_slider(self, value: int) -> None:
         self._show_counter(value)
         if not self._updating:
             self.seekRequested.emit(value)
 
     def _show_counter(self, frame: int) -> None:
-        self.counter.setText(f"{frame} / {self.slider.maximum()}  {frame / self._fps:5.2f}s")
+        text = f"{frame} / {self.slider.maximum()}  {frame / self._fps:5.2f}s"
+        if text != self.counter.text():  # a label repaint is costly on software rendering
+            self.counter.setText(text)
 
     def set_range(self, num_frames: int, fps: float = 60.0) -> None:
         self._fps = fps
@@ -87,6 +110,8 @@ class Timeline(QWidget):
         self._show_counter(frame)
 
     def set_playing(self, playing: bool) -> None:
+        if playing == self.play_button.isChecked():
+            return
         self._updating = True
         self.play_button.setChecked(playing)
         self._updating = False

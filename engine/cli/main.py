@@ -1,7 +1,9 @@
 """``dragposer-studio`` command line: one module per subcommand.
 
 Each subcommand module exposes ``register(subparsers)``, which adds its parser and sets
-``func`` (taking the parsed args, returning an exit code). User-facing failures raise
+``func`` (taking the parsed args, returning an exit code). Packages outside the engine
+add subcommands through the ``dragposer_studio.subcommands`` entry-point group (the
+studio's ``gui`` comes from ``app.cli`` this way), so the engine never imports them. User-facing failures raise
 :class:`engine.errors.UserError`; they are printed without a traceback and exit 2.
 """
 
@@ -10,6 +12,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+from importlib.metadata import entry_points
 
 from engine.errors import UserError
 
@@ -23,8 +26,9 @@ SUBCOMMANDS = (
     "engine.cli.live",
     "engine.cli.evaluate",
     "engine.cli.bench",
-    "engine.cli.gui",
 )
+#: Entry-point group of subcommand modules other packages register.
+PLUGIN_GROUP = "dragposer_studio.subcommands"
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -42,6 +46,8 @@ def build_parser() -> argparse.ArgumentParser:
                 continue
             raise
         mod.register(sub)
+    for ep in sorted(entry_points(group=PLUGIN_GROUP), key=lambda e: e.name):
+        ep.load().register(sub)
     return parser
 
 

@@ -37,6 +37,7 @@ class BalanceConstraint(Constraint):
     """
 
     kind: ClassVar[str] = "balance"
+    choices: ClassVar[dict[str, tuple[str, ...]]] = {"mode": MODES}
     mode: str = "head_over_hip"
     tolerance: float = 0.05
 

@@ -116,6 +116,11 @@ class Constraint(ABC):
     """
 
     kind: ClassVar[str] = ""
+    #: False for kinds methods build themselves (sensors, the temporal prior): the
+    #: studio does not offer them to users.
+    user_facing: ClassVar[bool] = True
+    #: Field name -> the values it accepts, for fields that take one of a few strings.
+    choices: ClassVar[dict[str, tuple[str, ...]]] = {}
     #: Human label shown in the GUI and loss plots (unique within a scene).
     name: str = ""
     weight: float = 1.0

@@ -45,6 +45,7 @@ class SensorConstraint(Constraint):
     """
 
     kind: ClassVar[str] = "sensor"
+    user_facing: ClassVar[bool] = False  # built by methods from the sensor readings
     joint: str = "root"
     dof: int = 6
     position: np.ndarray = field(default_factory=lambda: np.zeros(3))

@@ -19,6 +19,7 @@ class TemporalPriorConstraint(Constraint):
     """MSE between the latent and the temporal predictor's latent (no parameters)."""
 
     kind: ClassVar[str] = "temporal_prior"
+    user_facing: ClassVar[bool] = False  # built by DragPoser from its predictor
 
     def loss(self, state: PoseState) -> torch.Tensor:
         if state.prediction is None:

@@ -15,14 +15,15 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.errors import UserError
-from engine.methods.base import FrameResult, Method, SensorFrame, SensorReading
+from engine.methods.base import FrameResult, Method
+from engine.sensors import Sensor, SensorFrame
 
 if TYPE_CHECKING:
     from engine.motion import Motion
     from engine.tracking.simulate import Tracking
 
 __all__ = [
-    "FrameResult", "Method", "SensorFrame", "SensorReading",
+    "FrameResult", "Method", "SensorFrame", "Sensor",
     "available_methods", "get_method", "register_method", "run_method",
 ]  # fmt: skip
 

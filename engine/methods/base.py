@@ -14,46 +14,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from engine import skeleton as sk
+from engine.sensors import SensorFrame
 
 if TYPE_CHECKING:
     from engine.motion import Motion
-
-
-@dataclass(frozen=True)
-class SensorReading:
-    """One tracker sample in world space.
-
-    Attributes
-    ----------
-    joint : str
-        Canonical joint the sensor is attached to (``upperneck`` = head,
-        ``lwrist``/``rwrist`` = hands, ``lankle``/``rankle`` = feet, ``root`` = hips).
-    position : ndarray (3,)
-        Metres, world (Z-up).
-    rotation : ndarray (4,)
-        World rotation of the joint (w, x, y, z).
-    dof : int
-        6 (position + rotation) or 3 (position only).
-    connected : bool
-        False while the sensor is lost; its position/rotation must then be ignored.
-    """
-
-    joint: str
-    position: np.ndarray
-    rotation: np.ndarray
-    dof: int = 6
-    connected: bool = True
-
-
-@dataclass(frozen=True)
-class SensorFrame:
-    """All sensor readings of one frame, keyed by joint name."""
-
-    frame: int
-    readings: dict[str, SensorReading]
-
-    def connected(self) -> dict[str, SensorReading]:
-        return {k: r for k, r in self.readings.items() if r.connected}
 
 
 @dataclass

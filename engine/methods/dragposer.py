@@ -23,7 +23,8 @@ from engine import skeleton as sk
 from engine.constraints import Constraint, SensorConstraint, TemporalPriorConstraint
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
-from engine.methods.base import FrameResult, Method, SensorFrame, SensorReading
+from engine.methods.base import FrameResult, Method
+from engine.sensors import Sensor, SensorFrame
 from engine.motion import Motion
 from engine.optimizer import FULL_SET, FrameContext, LatentDecoder, OptimizerSettings, PoseOptimizer
 from engine.optimizer_pose import RootAnchor, RootFrame, RootOverride
@@ -287,7 +288,7 @@ class DragPoserMethod(Method):
         return res
 
 
-def _finite(r: SensorReading) -> bool:
+def _finite(r: Sensor) -> bool:
     ok = bool(np.all(np.isfinite(r.position)))
     if r.dof == 6:
         ok = ok and bool(np.all(np.isfinite(r.rotation))) and float(np.linalg.norm(r.rotation)) > 1e-6

@@ -33,7 +33,8 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
-from engine.methods.base import FrameResult, Method, SensorFrame, SensorReading
+from engine.methods.base import FrameResult, Method
+from engine.sensors import Sensor, SensorFrame
 from engine.motion import Motion
 
 J = sk.JOINT_INDEX
@@ -213,7 +214,7 @@ class IKMethod(Method):
         return pos, rot
 
     # -- root ---------------------------------------------------------------------------
-    def _estimate_heading(self, s: dict[str, SensorReading]) -> np.ndarray:
+    def _estimate_heading(self, s: dict[str, Sensor]) -> np.ndarray:
         head = s.get("upperneck")
         if head is not None and head.dof == 6:
             return _heading_of(head.rotation)
@@ -225,7 +226,7 @@ class IKMethod(Method):
             return _yaw(math.atan2(left[1], left[0]))
         return self._heading
 
-    def _solve_root(self, s: dict[str, SensorReading]) -> tuple[np.ndarray, np.ndarray]:
+    def _solve_root(self, s: dict[str, Sensor]) -> tuple[np.ndarray, np.ndarray]:
         hip, head = s.get("root"), s.get("upperneck")
         if hip is not None and hip.dof == 6:
             rot = np.asarray(hip.rotation, float)
@@ -245,7 +246,7 @@ class IKMethod(Method):
         return pos, rot / np.linalg.norm(rot)
 
     # -- body parts ---------------------------------------------------------------------
-    def _solve_spine(self, local: np.ndarray, root: np.ndarray, head: SensorReading) -> None:
+    def _solve_spine(self, local: np.ndarray, root: np.ndarray, head: Sensor) -> None:
         n = len(SPINE)
         for _ in range(SPINE_PASSES):
             pos, rot = self._fk(local, root)
@@ -277,7 +278,7 @@ class IKMethod(Method):
         local[clav] = _mul(_mul(_conj(pr), _mul(swing, pr)), local[clav])
 
     def _pull_root_to_feet(self, root: np.ndarray, root_rot: np.ndarray,
-                           s: dict[str, SensorReading]) -> np.ndarray:
+                           s: dict[str, Sensor]) -> np.ndarray:
         """Move an estimated root towards tracked feet it could not reach otherwise."""
         for _ in range(2):
             for (hip, knee, ankle) in LEGS:
@@ -322,7 +323,7 @@ class IKMethod(Method):
     def step(self, sensors: SensorFrame) -> FrameResult:
         t0 = time.perf_counter()
         warnings: list[str] = []
-        s: dict[str, SensorReading] = {}
+        s: dict[str, Sensor] = {}
         for j, r in sensors.connected().items():
             if np.all(np.isfinite(r.position)) and (r.dof == 3 or np.all(np.isfinite(r.rotation))):
                 s[j] = r

@@ -5,7 +5,7 @@
 ``from engine.tracking.simulate import ...``).
 """
 
-from engine.tracking.presets import PRESET_SENSORS, PRESETS, SensorSpec, parse_sensors
+from engine.tracking.presets import PRESET_SENSORS, PRESETS, parse_sensors
 from engine.tracking.simulate import Tracking, simulate
 
-__all__ = ["PRESETS", "PRESET_SENSORS", "SensorSpec", "Tracking", "parse_sensors", "simulate"]
+__all__ = ["PRESETS", "PRESET_SENSORS", "Tracking", "parse_sensors", "simulate"]

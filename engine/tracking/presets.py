@@ -26,47 +26,31 @@ paper's variant stays available as ``5-paper``.
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
 from pathlib import Path
 
 from engine import skeleton as sk
 from engine.errors import UserError
+from engine.sensors import Sensor
 
 #: Where the shipped presets live (repository ``assets/presets``).
 PRESETS_JSON = Path(__file__).resolve().parents[2] / "assets" / "presets" / "sensors.json"
 
 
-@dataclass(frozen=True)
-class SensorSpec:
-    """One tracker of a sensor set.
-
-    Attributes
-    ----------
-    joint : str
-        Canonical joint name the tracker is attached to.
-    dof : int
-        6 (position + rotation) or 3 (position only).
-    """
-
-    joint: str
-    dof: int = 6
-
-
 _SIX = ("root", "upperneck", "lwrist", "rwrist", "lankle", "rankle")
 
 #: The presets as code; ``assets/presets/sensors.json`` must agree (a test checks it).
-BUILTIN_PRESETS: dict[str, tuple[SensorSpec, ...]] = {
-    "6": tuple(SensorSpec(j) for j in _SIX),
-    "5": tuple(SensorSpec(j) for j in ("upperneck", "lwrist", "rwrist", "lankle", "rankle")),
-    "5-paper": tuple(SensorSpec(j) for j in ("root", "upperneck", "lwrist", "rwrist", "rankle")),
-    "4": tuple(SensorSpec(j) for j in ("root", "upperneck", "lwrist", "rwrist")),
-    "3-hip-hands": tuple(SensorSpec(j) for j in ("root", "lwrist", "rwrist")),
-    "3-head-hands": tuple(SensorSpec(j) for j in ("upperneck", "lwrist", "rwrist")),
-    "6x3dof": tuple(SensorSpec(j, 3) for j in _SIX),
+BUILTIN_PRESETS: dict[str, tuple[Sensor, ...]] = {
+    "6": tuple(Sensor(j) for j in _SIX),
+    "5": tuple(Sensor(j) for j in ("upperneck", "lwrist", "rwrist", "lankle", "rankle")),
+    "5-paper": tuple(Sensor(j) for j in ("root", "upperneck", "lwrist", "rwrist", "rankle")),
+    "4": tuple(Sensor(j) for j in ("root", "upperneck", "lwrist", "rwrist")),
+    "3-hip-hands": tuple(Sensor(j) for j in ("root", "lwrist", "rwrist")),
+    "3-head-hands": tuple(Sensor(j) for j in ("upperneck", "lwrist", "rwrist")),
+    "6x3dof": tuple(Sensor(j, dof=3) for j in _SIX),
 }
 
 
-def load_presets(path: str | Path = PRESETS_JSON) -> dict[str, tuple[SensorSpec, ...]]:
+def load_presets(path: str | Path = PRESETS_JSON) -> dict[str, tuple[Sensor, ...]]:
     """Read presets from a JSON file: ``{name: [{"joint": str, "dof": 3|6}, ...]}``.
 
     Falls back to :data:`BUILTIN_PRESETS` when the default file is absent (an install
@@ -84,7 +68,7 @@ def load_presets(path: str | Path = PRESETS_JSON) -> dict[str, tuple[SensorSpec,
         data = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, json.JSONDecodeError) as exc:
         raise UserError(f"{path}: cannot read sensor presets ({exc})") from exc
-    out: dict[str, tuple[SensorSpec, ...]] = {}
+    out: dict[str, tuple[Sensor, ...]] = {}
     for name, entries in data.items():
         specs = []
         for i, e in enumerate(entries):
@@ -96,12 +80,12 @@ def load_presets(path: str | Path = PRESETS_JSON) -> dict[str, tuple[SensorSpec,
     return out
 
 
-def _validated(joint: str, dof: int) -> SensorSpec:
+def _validated(joint: str, dof: int) -> Sensor:
     if joint not in sk.JOINT_INDEX:
         raise UserError(f"unknown joint {joint!r}; valid joints: {', '.join(sk.JOINT_NAMES)}")
     if dof not in (3, 6):
         raise UserError(f"sensor {joint!r}: dof must be 3 or 6, got {dof}")
-    return SensorSpec(joint, dof)
+    return Sensor(joint, dof=dof)
 
 
 def _unknown(what: str) -> UserError:
@@ -112,13 +96,13 @@ def _unknown(what: str) -> UserError:
 
 
 #: Preset name -> sensors, as loaded from ``assets/presets/sensors.json``.
-PRESET_SENSORS: dict[str, tuple[SensorSpec, ...]] = load_presets()
+PRESET_SENSORS: dict[str, tuple[Sensor, ...]] = load_presets()
 
 #: Preset name -> joint names (the form the studio's session lists).
 PRESETS: dict[str, tuple[str, ...]] = {n: tuple(s.joint for s in v) for n, v in PRESET_SENSORS.items()}
 
 
-def parse_sensors(text: str) -> tuple[SensorSpec, ...]:
+def parse_sensors(text: str) -> tuple[Sensor, ...]:
     """A preset name or a comma-separated joint list, e.g. ``"root,lwrist:3,rwrist"``.
 
     ``joint:3`` makes that tracker position-only; ``joint:6`` (the default) gives
@@ -133,7 +117,7 @@ def parse_sensors(text: str) -> tuple[SensorSpec, ...]:
     text = text.strip()
     if text in PRESET_SENSORS:
         return PRESET_SENSORS[text]
-    specs: list[SensorSpec] = []
+    specs: list[Sensor] = []
     for item in (t.strip() for t in text.split(",")):
         if not item:
             continue

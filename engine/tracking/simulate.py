@@ -30,9 +30,9 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
-from engine.methods.base import SensorFrame, SensorReading
 from engine.motion import Motion
-from engine.tracking.presets import SensorSpec, parse_sensors
+from engine.sensors import Sensor, SensorFrame
+from engine.tracking.presets import parse_sensors
 
 #: Frames a faulty sensor stays disconnected (DragPoser sec. 5.2).
 FAULTY_DOWN_FRAMES = 100
@@ -81,7 +81,7 @@ class Tracking:
     def frame(self, i: int) -> SensorFrame:
         """All sensor readings of frame ``i`` (0-based)."""
         readings = {
-            j: SensorReading(
+            j: Sensor(
                 joint=j,
                 position=self.positions[i, s].copy(),
                 rotation=self.rotations[i, s].copy(),
@@ -103,7 +103,7 @@ class Tracking:
         return [(int(fi) + 1, int(si), bool(c[fi + 1, si])) for fi, si in zip(f, s)]
 
 
-def _specs(sensors: str | Sequence[str | SensorSpec]) -> tuple[SensorSpec, ...]:
+def _specs(sensors: str | Sequence[str | Sensor]) -> tuple[Sensor, ...]:
     if isinstance(sensors, str):
         return parse_sensors(sensors)
     out = []
@@ -164,7 +164,7 @@ def _hold_last(values: np.ndarray, connected: np.ndarray) -> np.ndarray:
 
 def simulate(
     motion: Motion,
-    sensors: str | Sequence[str | SensorSpec],
+    sensors: str | Sequence[str | Sensor],
     noise_pos_m: float = 0.0,
     noise_rot_deg: float = 0.0,
     faulty: float = 0.0,
@@ -177,7 +177,7 @@ def simulate(
     ----------
     motion : Motion
         Ground-truth clip (F frames).
-    sensors : str or sequence of str / SensorSpec
+    sensors : str or sequence of str / Sensor
         A preset name, a ``--sensors`` list (``"root,lwrist:3"``) or specs.
     noise_pos_m : float
         Standard deviation of the Gaussian noise added to each position axis, metres.

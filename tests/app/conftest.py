@@ -22,11 +22,11 @@ def studio(qtbot, tmp_path, synthetic_motion):
     window.session.set_motion(synthetic_motion)
     window.resize(1280, 800)
     window.show()
-    qtbot.waitUntil(lambda: window.worker.latest is not None, timeout=10000)
+    qtbot.waitUntil(lambda: window.session.latest is not None, timeout=10000)
     yield window
     window.close()
     QApplication.processEvents()
-    assert not window.worker.is_alive(), "engine thread outlived the window"
+    assert not window.engine.is_alive(), "engine thread outlived the window"
     assert threading.active_count() == threads_before, "a thread leaked"
     assert window.viewport.plotter._closed, "the VTK interactor outlived the window"
     window.deleteLater()

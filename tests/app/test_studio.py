@@ -16,8 +16,8 @@ pytestmark = pytest.mark.gui
 
 def snap_after(window, qtbot, predicate, timeout=10000):
     """Wait until the newest snapshot satisfies ``predicate`` and return it."""
-    qtbot.waitUntil(lambda: window.worker.latest is not None and predicate(window.worker.latest), timeout=timeout)
-    return window.worker.latest
+    qtbot.waitUntil(lambda: window.session.latest is not None and predicate(window.session.latest), timeout=timeout)
+    return window.session.latest
 
 
 def test_toggling_a_sensor_in_the_panel_changes_the_losses(studio, qtbot):
@@ -72,7 +72,7 @@ def test_a_method_that_cannot_load_shows_a_dialog_and_keeps_the_old_one(studio, 
     qtbot.waitUntil(lambda: bool(shown), timeout=10000)
     assert "no-such-method" in shown[0]
     assert studio.session.method == before and studio.optimizer_panel.method.currentText() == before
-    assert studio.worker.latest.method == before
+    assert studio.session.latest.method == before
 
 
 def test_scene_save_and_load(studio, qtbot, tmp_path):
@@ -90,12 +90,12 @@ def test_every_constraint_kind_can_be_added_weighted_disabled_drawn_and_removed(
     from PyQt6.QtCore import Qt
 
     panel, session = studio.constraint_panel, studio.session
-    assert {"look_at", "floor", "balance", "distance", "bounds", "pin"} <= set(studio.kinds)
-    for kind in studio.kinds:
+    assert {"look_at", "floor", "balance", "distance", "bounds", "pin"} <= set(studio.session.constraint_catalog())
+    for kind in studio.session.constraint_catalog():
         panel.kinds.setCurrentText(kind)
         panel.add_button.click()
         assert session.constraints[-1].kind == kind
-    assert panel.list.count() == len(studio.kinds)
+    assert panel.list.count() == len(studio.session.constraint_catalog())
     pose = snap_after(studio, qtbot, lambda s: True).positions
     drawn = {c.name for c in session.constraints if c.gizmo(pose).get("type") in ("point", "box", "line")}
     assert {c.name for c in session.constraints if c.kind in ("look_at", "bounds")} <= drawn
@@ -138,11 +138,12 @@ def test_event_loop_stays_responsive_while_the_engine_is_busy(studio, qtbot, mon
     itself and says nothing about the engine. Redraw pacing is covered by the screenshot
     run and the status bar's draws/s.
     """
-    from engine import worker_methods
+    from engine.studio import methods as studio_methods
 
-    monkeypatch.setattr(worker_methods, "make_method", lambda name: SlowMethod(worker_methods.RestPoseMethod()))
-    studio.worker._factory = worker_methods.make_method
+    monkeypatch.setattr(studio_methods, "make_method", lambda name: SlowMethod(studio_methods.RestPoseMethod()))
+    studio.engine._factory = studio_methods.make_method
     studio.session.set_method("slow")
+    studio.session.set_playback(mode="real_time")
     gaps, last = [], [time.perf_counter()]
 
     def tick() -> None:
@@ -153,16 +154,16 @@ def test_event_loop_stays_responsive_while_the_engine_is_busy(studio, qtbot, mon
     timer = QTimer(interval=5)
     timer.timeout.connect(tick)
     studio.session.play()
-    qtbot.waitUntil(lambda: studio.worker.latest.method == "slow")
+    qtbot.waitUntil(lambda: studio.session.latest.method == "slow")
     studio.timer.stop()
     last[0] = time.perf_counter()
     timer.start()
-    first = studio.worker.latest.seq
-    qtbot.waitUntil(lambda: studio.worker.latest.seq > first + 8 and len(gaps) > 40, timeout=20000)
+    first = studio.session.latest.seq
+    qtbot.waitUntil(lambda: studio.session.latest.seq > first + 8 and len(gaps) > 40, timeout=20000)
     timer.stop()
     studio.timer.start()
     studio.session.pause()
-    frames = studio.worker.latest.frame
+    frames = studio.session.latest.frame
     assert frames > 8 * 3, "playback should skip frames rather than wait for the solver"
     steady = gaps[3:]  # the first ticks still flush a redraw queued before the pause
     assert np.percentile(steady, 95) < 0.050, f"event loop blocked {max(steady) * 1000:.0f} ms"
@@ -170,7 +171,7 @@ def test_event_loop_stays_responsive_while_the_engine_is_busy(studio, qtbot, mon
 
 def test_screenshot_shows_the_skeleton(studio, qtbot, tmp_path):
     snap_after(studio, qtbot, lambda s: True)
-    qtbot.waitUntil(lambda: studio._drawn_seq == studio.worker.latest.seq)
+    qtbot.waitUntil(lambda: studio.drawing._drawn_seq == studio.session.latest.seq)
     out = tmp_path / "shot.png"
     assert studio.files.export_screenshot(str(out))
     from PyQt6.QtGui import QImage
@@ -199,7 +200,7 @@ def test_speed_and_loop_from_the_timeline_reach_the_engine(studio, qtbot):
     assert studio.session.speed == 2.0 and not studio.session.loop
     studio.session.seek(n - 20)
     t.play_button.click()
-    qtbot.waitUntil(lambda: studio.worker._playing and studio.worker._speed == 2.0)
+    qtbot.waitUntil(lambda: studio.engine._playing and studio.engine._speed == 2.0)
     # without loop, playback stops on the last frame and the play button comes back up
     snap_after(studio, qtbot, lambda s: s.frame == n - 1 and not s.playing)
     qtbot.waitUntil(lambda: not t.play_button.isChecked() and not studio.session.playing)

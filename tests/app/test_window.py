@@ -10,7 +10,7 @@ from PyQt6.QtGui import QDragEnterEvent, QDropEvent
 from PyQt6.QtWidgets import QApplication, QFileDialog
 
 from engine import skeleton as sk
-from engine.worker_methods import RestPoseMethod
+from engine.studio.methods import RestPoseMethod
 
 pytestmark = pytest.mark.gui
 
@@ -40,7 +40,7 @@ class LatentStandIn(RestPoseMethod):
 def latent_method(studio, qtbot):
     """Switch the studio to :class:`LatentStandIn`; yields the instance the engine uses."""
     made: list[LatentStandIn] = []
-    inner = studio.worker._factory
+    inner = studio.engine._factory
 
     def factory(name):
         if name != "latent":
@@ -48,9 +48,9 @@ def latent_method(studio, qtbot):
         made.append(LatentStandIn())
         return made[-1]
 
-    studio.worker._factory = factory
+    studio.engine._factory = factory
     studio.session.set_method("latent")
-    qtbot.waitUntil(lambda: studio.worker.latest.method == "latent" and studio.worker.latest.latent is not None)
+    qtbot.waitUntil(lambda: studio.session.latest.method == "latent" and studio.session.latest.latent is not None)
     return made[-1]
 
 
@@ -62,7 +62,7 @@ def test_optimizer_settings_from_the_panel_reach_the_method(studio, qtbot, laten
     assert tuple(update.itemText(i) for i in range(update.count())) == tuple(OPTIMIZERS)
     assert {anchor.itemText(i) for i in range(anchor.count())} >= {"upperneck", "none"}
     assert update.currentText() == OptimizerSettings().optimizer  # the engine's default until set
-    seq = studio.worker.latest.seq
+    seq = studio.session.latest.seq
     rule = next(v for v in OPTIMIZERS if v != update.currentText())
     update.setCurrentText(rule)
     anchor.setCurrentText("none")
@@ -71,7 +71,7 @@ def test_optimizer_settings_from_the_panel_reach_the_method(studio, qtbot, laten
     assert {k: studio.session.settings[k] for k in wanted} == wanted
     # the worker passes the method every setting made so far, then solves the frame again
     qtbot.waitUntil(lambda: any(wanted.items() <= c.items() for c in latent_method.configured))
-    qtbot.waitUntil(lambda: studio.worker.latest.seq > seq)
+    qtbot.waitUntil(lambda: studio.session.latest.seq > seq)
 
 
 def test_latent_debugger_decodes_an_edited_latent_and_draws_it(studio, qtbot, latent_method):
@@ -83,19 +83,19 @@ def test_latent_debugger_decodes_an_edited_latent_and_draws_it(studio, qtbot, la
     assert not studio.session.playing
     inspector.dim.setValue(0)
     inspector.value.setValue(150)  # z[0] = 1.5: the stand-in shifts the pose 1.5 m along x
-    qtbot.waitUntil(lambda: studio.worker.latest.decoded is not None and studio.viewport.decoded.visible)
+    qtbot.waitUntil(lambda: studio.session.latest.decoded is not None and studio.viewport.decoded.visible)
     assert np.allclose(studio.viewport.decoded.mesh.points[0, 0], 1.5)
     inspector.debug.setChecked(False)
-    qtbot.waitUntil(lambda: studio.worker.latest.decoded is None and not studio.viewport.decoded.visible)
+    qtbot.waitUntil(lambda: studio.session.latest.decoded is None and not studio.viewport.decoded.visible)
 
 
 def test_status_bar_shows_engine_rate_cost_draw_rate_and_warnings(studio, qtbot):
     studio.session.play()
     qtbot.waitUntil(lambda: "frames/s" in studio.status_engine.text() and "ms/frame" in studio.status_engine.text())
-    qtbot.waitUntil(lambda: not studio.status_gui.text().startswith("GUI    0"), timeout=10000)
+    qtbot.waitUntil(lambda: not studio.status_gui.text().startswith("view    0"), timeout=10000)
     studio.session.pause()
-    assert float(studio.status_gui.text().split()[1]) > 0  # "GUI <rate> draws/s"
-    before = studio.worker.latest.warnings
+    assert float(studio.status_gui.text().split()[1]) > 0  # "view <rate> draws/s"
+    before = studio.session.latest.warnings
     # the default method (IK) takes no constraints: the engine counts one warning and says why
     studio.constraint_panel.kinds.setCurrentText("pin")
     studio.constraint_panel.add_button.click()
@@ -164,8 +164,8 @@ def test_a_sensor_switched_to_3_dof_loses_its_orientation_axes(studio, qtbot):
     joint = next(iter(studio.session.sensors))
     studio.sensor_panel.rows[joint]["dof"].setCurrentText("3-DoF")
     assert joint not in studio.viewport.oriented
-    seq = studio.worker.latest.seq
-    qtbot.waitUntil(lambda: studio._drawn_seq > seq)
+    seq = studio.session.latest.seq
+    qtbot.waitUntil(lambda: studio.drawing._drawn_seq > seq)
     i = studio.viewport.sensors.joints.index(joint)
     tips = studio.viewport.sensors._axes_mesh.points.reshape(-1, 3, 2, 3)
     assert np.allclose(tips[i, :, 1], tips[i, :, 0]) and not np.allclose(tips[i - 1, :, 1], tips[i - 1, :, 0])

@@ -11,7 +11,7 @@ import torch
 from engine import skeleton as sk
 from engine.constraints import LookAtConstraint, PinConstraint
 from engine.errors import UserError
-from engine.methods.base import SensorFrame, SensorReading
+from engine.sensors import Sensor, SensorFrame
 from engine.methods.dragposer import DragPoserMethod
 from engine.motion import Motion
 from engine.optimizer import OptimizerSettings
@@ -59,8 +59,8 @@ def test_nan_reading_warns_and_the_next_frame_recovers(clip):
         m.step(tr.frame(i))
     bad = tr.frame(4)
     readings = dict(bad.readings)
-    readings["lwrist"] = SensorReading("lwrist", np.full(3, np.nan), np.array([1.0, 0, 0, 0]))
-    readings["root"] = SensorReading("root", np.array([np.inf, 0, 1.0]), np.array([1.0, 0, 0, 0]))
+    readings["lwrist"] = Sensor("lwrist", np.full(3, np.nan), np.array([1.0, 0, 0, 0]))
+    readings["root"] = Sensor("root", np.array([np.inf, 0, 1.0]), np.array([1.0, 0, 0, 0]))
     r = m.step(SensorFrame(4, readings))
     assert len(r.warnings) == 2 and np.isfinite(r.positions).all() and np.isfinite(r.latent).all()
     nxt = m.step(tr.frame(5))

@@ -12,7 +12,7 @@ from engine.tracking import presets as P
 
 def test_json_matches_builtin_presets():
     data = json.loads(P.PRESETS_JSON.read_text())
-    as_specs = {n: tuple(P.SensorSpec(e["joint"], e["dof"]) for e in v) for n, v in data.items()}
+    as_specs = {n: tuple(P.Sensor(e["joint"], dof=e["dof"]) for e in v) for n, v in data.items()}
     assert as_specs == P.BUILTIN_PRESETS
     assert list(data) == list(P.BUILTIN_PRESETS)  # same order (the GUI lists them so)
     assert P.PRESET_SENSORS == P.BUILTIN_PRESETS
@@ -32,7 +32,7 @@ def test_issue_presets():
 def test_parse_custom_lists():
     assert P.parse_sensors("4") == P.PRESET_SENSORS["4"]
     assert P.parse_sensors(" root, lwrist:3 ,rwrist:6") == (
-        P.SensorSpec("root", 6), P.SensorSpec("lwrist", 3), P.SensorSpec("rwrist", 6)
+        P.Sensor("root", dof=6), P.Sensor("lwrist", dof=3), P.Sensor("rwrist", dof=6)
     )
 
 

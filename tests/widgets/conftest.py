@@ -12,7 +12,7 @@ from engine import skeleton as sk
 
 @dataclass(frozen=True)
 class FakeRecord:
-    """The fields widgets read from ``engine.worker_messages.FrameRecord``."""
+    """The fields widgets read from ``engine.studio.snapshot.FrameRecord``."""
 
     frame: int
     iterations: int
@@ -23,7 +23,7 @@ class FakeRecord:
 
 @dataclass
 class FakeSnapshot:
-    """Just the fields widgets read from ``engine.worker.Snapshot`` (no torch needed)."""
+    """Just the fields widgets read from ``engine.studio.snapshot.Snapshot`` (no torch needed)."""
 
     seq: int = 1
     frame: int = 0

@@ -27,4 +27,4 @@ def test_widgets_do_not_import_torch():
 
 def test_engine_studio_core_does_not_import_qt():
     banned = ("PyQt6", "pyvista", "pyvistaqt", "pyqtgraph", "superqt", "vtk")
-    assert _loaded_after(("engine.session", "engine.worker", "engine.cli.main", "engine.cli.gui"), banned) == []
+    assert _loaded_after(("engine.studio.session", "engine.studio.thread", "engine.cli.main", "app.cli"), banned) == []

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from PyQt6.QtCore import QPointF, Qt
 
-from engine.session import SensorConfig
+from engine.sensors import Sensor
 from widgets.constraint_panel import ConstraintPanel
 from widgets.latent_inspector import LatentInspector
 from widgets.plots import LossPlots
@@ -30,7 +30,7 @@ def test_timeline_scrub_emits_and_engine_frames_do_not(qtbot):
 def test_sensor_panel_toggle_and_dof(qtbot):
     p = SensorPanel({"two": ("root", "lwrist")})
     qtbot.addWidget(p)
-    p.set_sensors("two", {"root": SensorConfig("root"), "lwrist": SensorConfig("lwrist", dof=3)})
+    p.set_sensors("two", {"root": Sensor("root"), "lwrist": Sensor("lwrist", dof=3)})
     assert p.rows["lwrist"]["dof"].currentText() == "3-DoF"
     with qtbot.waitSignal(p.sensorChanged) as sig:
         p.rows["root"]["enabled"].setChecked(False)

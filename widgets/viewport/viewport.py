@@ -132,7 +132,7 @@ class Viewport(QWidget):
 
     # -- drawing --------------------------------------------------------------------
     def show_snapshot(self, snap: Any) -> None:
-        """Draw an engine snapshot (duck-typed: see ``engine.worker.Snapshot``)."""
+        """Draw an engine snapshot (typed against ``engine.studio.snapshot.Snapshot``)."""
         (self.body if self.display == "body" else self.reconstruction).update(snap.positions)
         self.joints.positions = np.asarray(snap.positions)
         self.ground_truth.update(snap.ground_truth if self.show_ground_truth else None)

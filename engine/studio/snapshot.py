@@ -1,7 +1,7 @@
-"""Messages of the engine thread: the commands it accepts and the snapshots it publishes.
+"""What the engine thread publishes: one solved frame as plain, read-only numpy data.
 
-Commands are small frozen dataclasses queued by :class:`engine.session.Session`;
-a :class:`Snapshot` is one solved frame as plain, read-only numpy data.
+Widgets are typed against :class:`Snapshot`; it holds numbers, strings and read-only
+arrays only, never an engine object.
 """
 
 from __future__ import annotations
@@ -11,71 +11,9 @@ from typing import Any
 
 import numpy as np
 
-from engine.motion import Motion
-from engine.session import SensorConfig
 
-
-# -- commands ------------------------------------------------------------------------
-@dataclass(frozen=True)
-class SetMotion:
-    motion: Motion
-
-
-@dataclass(frozen=True)
-class SetSensors:
-    sensors: tuple[SensorConfig, ...]
-
-
-@dataclass(frozen=True)
-class SetConstraints:
-    constraints: tuple[dict, ...]
-
-
-@dataclass(frozen=True)
-class SetSettings:
-    values: dict
-
-
-@dataclass(frozen=True)
-class SetMethod:
-    name: str
-    ghosts: tuple[str, ...] = ()
-
-
-@dataclass(frozen=True)
-class Seek:
-    frame: int
-
-
-@dataclass(frozen=True)
-class Play:
-    speed: float = 1.0
-    loop: bool = True
-
-
-@dataclass(frozen=True)
-class Pause:
-    pass
-
-
-@dataclass(frozen=True)
-class Step:
-    delta: int = 1
-
-
-@dataclass(frozen=True)
-class DecodeLatent:
-    """Decode ``latent`` (L,) with the method's decoder; the optimizer is paused meanwhile."""
-
-    latent: np.ndarray
-
-
-@dataclass(frozen=True)
-class Stop:
-    pass
-
-
-def _ro(a: Any) -> Any:
+def readonly(a: Any) -> Any:
+    """A read-only copy of an array (other values pass through)."""
     if isinstance(a, np.ndarray):
         a = a.copy()
         a.flags.writeable = False
@@ -144,6 +82,14 @@ class Snapshot:
         Solved frames per second (moving average).
     decoded : ndarray (22, 3) or None
         Pose decoded from a latent sent with :class:`DecodeLatent` (debug mode).
+    solved : int
+        Frames solved since the engine started (counts every solve, for rates).
+    frames_skipped : int
+        Clip frames playback passed over without solving them, since playback started
+        (always 0 in ``"every_frame"`` mode); ``mode`` is the playback mode.
+    timing : dict of str to float
+        The method's own timing of the frame's solve, milliseconds by name (e.g.
+        ``ms_per_iteration``), when it reports one.
     history : tuple of FrameRecord
         The last :data:`HISTORY` solved frames, oldest first, including frames whose
         snapshots a reader skipped (the GUI draws only the newest one); cleared when
@@ -175,3 +121,7 @@ class Snapshot:
     can_decode: bool = False
     decoded: np.ndarray | None = None
     history: tuple[FrameRecord, ...] = ()
+    solved: int = 0
+    frames_skipped: int = 0
+    mode: str = "every_frame"
+    timing: dict[str, float] = field(default_factory=dict)

@@ -3,11 +3,12 @@
 Methods differ in what they accept (DragPoser takes constraints and optimizer settings,
 classical IK takes neither), so each edit is applied only where the method offers the
 matching hook; the functions return readable problems instead of raising, and the
-worker reports them in its snapshots.
+engine thread reports them in its snapshots.
 """
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import time
 from typing import Any
@@ -17,18 +18,15 @@ import numpy as np
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk
-from engine.methods.base import FrameResult, Method, SensorFrame
+from engine.methods import get_method
+from engine.methods.base import FrameResult, Method
+from engine.motion import Motion
+from engine.sensors import Sensor, SensorFrame
+from engine.studio.source import ClipSource
 
 
 def make_method(name: str) -> Method:
-    """A method from :func:`engine.methods.get_method`, or :class:`RestPoseMethod`.
-
-    The rest-pose method stands in only while no method registry is installed.
-    """
-    try:
-        from engine.methods import get_method  # type: ignore[attr-defined]
-    except ImportError:
-        return RestPoseMethod()
+    """The registered method ``name`` (:func:`engine.methods.get_method`)."""
     return get_method(name)
 
 
@@ -53,20 +51,14 @@ def apply_settings(method: Method, values: dict[str, Any]) -> list[str]:
     return []
 
 
-def apply_constraints(method: Method, constraints: tuple[dict, ...]) -> list[str]:
-    """Replace the method's constraints with fresh copies of ``constraints`` (to_dict form)."""
+def apply_constraints(method: Method, constraints: tuple[Any, ...]) -> list[str]:
+    """Give ``method`` the session's constraint objects (shared, never copied: the
+    session replaces an object instead of editing it, see :mod:`engine.studio.commands`)."""
     setter = getattr(method, "set_constraints", None)
     add = getattr(method, "add_constraint", None)
     if setter is None and add is None:
         return [f"{method.name} ignores constraints"] if constraints else []
-    from engine.constraints.base import from_dict
-
-    problems, objs = [], []
-    for d in constraints:
-        try:
-            objs.append(from_dict(dict(d)))
-        except Exception as exc:
-            problems.append(f"constraint {d.get('name', '?')}: {exc}")
+    problems, objs = [], list(constraints)
     try:
         if setter is not None:
             setter(objs)
@@ -126,7 +118,7 @@ class RestPoseMethod(Method):
         return FrameResult(local, self._root.copy(), pos, 1, [losses], None, (time.perf_counter() - t0) * 1e3)
 
 
-def reconstruct_clip(motion: Any, sensors: tuple, constraints: tuple[dict, ...], settings: dict[str, Any],
+def reconstruct_clip(motion: Motion, sensors: tuple[Sensor, ...], constraints: tuple[Any, ...], settings: dict[str, Any],
                      method_name: str, factory: Any = None,
                      progress: Any = None) -> Any:  # fmt: skip
     """Run a fresh method over every frame of ``motion`` with the studio's sensor edits.
@@ -134,12 +126,9 @@ def reconstruct_clip(motion: Any, sensors: tuple, constraints: tuple[dict, ...],
     Returns the reconstruction as a :class:`engine.motion.Motion` (same skeleton and fps).
     ``progress(frame)`` is called after each frame and may return True to cancel.
     """
-    from engine.motion import Motion
-    from engine.worker_sensors import SensorSource
-
-    source = SensorSource()
-    source.set_motion(motion)
-    source.sensors = tuple(sensors)
+    source = ClipSource(motion)
+    source.set_sensors(tuple(sensors))
+    constraints = copy.deepcopy(tuple(constraints))  # a separate run: its own pin captures
     method = (factory or make_method)(method_name)
     method.reset(motion.skeleton, motion.fps)
     apply_settings(method, settings)

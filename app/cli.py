@@ -1,11 +1,16 @@
-"""``dragposer-studio gui``: open the desktop studio (Qt is imported only when it runs)."""
+"""``dragposer-studio gui``: open the desktop studio.
+
+Registered from the app side: ``pyproject.toml`` names this module in the
+``dragposer_studio.subcommands`` entry-point group, which :mod:`engine.cli.main` reads,
+so the engine's command line never imports the app. Qt is imported only when it runs.
+"""
 
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
 
-SHIPPED_VAE = Path(__file__).resolve().parents[2] / "assets" / "models" / "vae.pt"
+SHIPPED_VAE = Path(__file__).resolve().parents[1] / "assets" / "models" / "vae.pt"
 
 
 def default_method() -> str:
@@ -30,6 +35,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from app.main import run as run_app  # Qt stays out of engine/ imports
+    from app.main import run as run_app  # Qt loads only when the window opens
 
     return run_app(args.file, args.method or default_method(), args.sensors, args.screenshot, args.after_frames)

@@ -1,4 +1,4 @@
-"""Engine thread: commands in, snapshots out, headless and without Qt."""
+"""Engine thread (engine.studio.thread): commands in, snapshots out, headless and without Qt."""
 
 from __future__ import annotations
 
@@ -9,9 +9,10 @@ import time
 import numpy as np
 import pytest
 
-from engine import worker as w
 from engine.methods.base import FrameResult, Method
-from engine.session import Session
+from engine.studio import commands as w
+from engine.studio.session import Session
+from engine.studio.thread import EngineThread
 
 
 def wait_for(predicate, timeout=10.0):
@@ -26,11 +27,9 @@ def wait_for(predicate, timeout=10.0):
 
 @pytest.fixture
 def engine(synthetic_motion):
-    worker = w.EngineWorker()
-    worker.start()
     session = Session()
     session.set_motion(synthetic_motion)
-    session.attach(worker.submit)
+    worker = session.start_engine()
     yield session, worker
     worker.stop()
     assert not worker.is_alive()
@@ -73,9 +72,7 @@ def test_dragging_the_hip_target_moves_the_pose(engine):
 
 
 def w_presets():
-    from engine.session import sensor_presets
-
-    return sensor_presets()
+    return {name: tuple(s.joint for s in sensors) for name, sensors in Session.sensor_presets().items()}
 
 
 def test_playback_advances_with_time_and_seek_wins(engine):
@@ -103,7 +100,7 @@ class Exploding(Method):
 
 
 def test_a_failing_method_never_kills_the_thread(synthetic_motion):
-    worker = w.EngineWorker(method_factory=lambda name: Exploding())
+    worker = EngineThread(method_factory=lambda name: Exploding())
     worker.start()
     try:
         worker.submit(w.SetMethod("exploding"))
@@ -120,7 +117,7 @@ def test_a_failing_method_never_kills_the_thread(synthetic_motion):
 
 def test_stop_joins_and_leaves_no_thread():
     before = threading.active_count()
-    worker = w.EngineWorker()
+    worker = EngineThread()
     worker.start()
     worker.stop()
     assert not worker.is_alive() and threading.active_count() == before
@@ -129,7 +126,7 @@ def test_stop_joins_and_leaves_no_thread():
 def test_playback_skipping_a_few_frames_keeps_the_methods_temporal_state():
     """A solver slower than real time makes playback skip frames; resetting the method then
     would make every frame a first frame (solved offline, slower still)."""
-    worker = w.EngineWorker()  # not started: only the jump rule is exercised
+    worker = EngineThread()  # not started: only the jump rule is exercised
     assert worker._is_jump(0)  # nothing solved yet
     worker._last_solved = 100
     assert not worker._is_jump(101)
@@ -139,10 +136,8 @@ def test_playback_skipping_a_few_frames_keeps_the_methods_temporal_state():
 
 
 def test_gizmos_that_relate_joints_get_the_current_pose(engine):
-    from engine.constraints.distance import DistanceConstraint
-
     session, worker = engine
-    session.add_constraint(DistanceConstraint(name="hands", joint_a="lwrist", joint_b="rwrist", distance=0.3))
+    session.add_constraint("distance", name="hands", joint_a="lwrist", joint_b="rwrist", distance=0.3)
     session.play()
     wait_for(lambda: worker.latest is not None and dict(worker.latest.gizmos).get("hands"))
     giz = dict(worker.latest.gizmos)["hands"]
@@ -174,7 +169,7 @@ def test_a_method_that_cannot_be_built_leaves_the_old_one_and_says_why(synthetic
             raise ValueError("assets/models/vae.pt: not a weights file")
         return Counting()
 
-    worker = w.EngineWorker(method_factory=factory)
+    worker = EngineThread(method_factory=factory)
     worker.start()
     try:
         worker.submit(w.SetMethod("counting"))
@@ -193,7 +188,7 @@ def test_a_method_that_cannot_be_built_leaves_the_old_one_and_says_why(synthetic
 @contextlib.contextmanager
 def running(method, motion):
     """An engine thread whose every method is ``method``, loaded with ``motion``."""
-    worker = w.EngineWorker(method_factory=lambda name: method)
+    worker = EngineThread(method_factory=lambda name: method)
     worker.start()
     try:
         worker.submit(w.SetMethod(method.name))
@@ -267,3 +262,87 @@ def test_a_load_or_a_jump_resets_the_method_once(synthetic_motion):
         worker.submit(w.Seek(3))
         wait_for(lambda: worker.latest.frame == 3 and worker.latest.seq > snap.seq)
         assert method.resets == 2
+
+
+class Slow(Counting):
+    """Takes ``ms`` per frame, so playback at 60 fps outruns it; records what it solved."""
+
+    name = "slow"
+
+    def __init__(self, ms=30.0, first_ms=0.0):
+        super().__init__()
+        self.ms, self.first_ms, self.frames, self.fresh = ms, first_ms, [], True
+
+    def reset(self, skeleton, fps=60.0, **kw):
+        self.fresh = True
+
+    def step(self, sensors):
+        time.sleep((self.first_ms if self.fresh else self.ms) / 1000.0)
+        self.fresh = False
+        self.frames.append(sensors.frame)
+        return super().step(sensors)
+
+
+def test_every_frame_playback_solves_each_frame_in_order_and_waits_for_the_solver(synthetic_motion):
+    method = Slow(ms=30.0)  # 33 frames/s against a 60 fps clip
+    with running(method, synthetic_motion) as worker:
+        newest(worker)
+        worker.submit(w.Play(1.0, True, "every_frame"))
+        wait_for(lambda: worker.latest.frame >= 20)
+        worker.submit(w.Pause())
+        time.sleep(0.1)
+        played = method.frames[1:]
+        assert played == list(range(1, len(played) + 1)), "no clip frame skipped or repeated"
+        assert worker.latest.frames_skipped == 0 and worker.latest.mode == "every_frame"
+
+
+def test_real_time_playback_skips_frames_and_counts_them(synthetic_motion):
+    method = Slow(ms=30.0)
+    with running(method, synthetic_motion) as worker:
+        newest(worker)
+        worker.submit(w.Play(1.0, True, "real_time"))
+        wait_for(lambda: worker.latest.frame >= 40)
+        worker.submit(w.Pause())
+        snap = worker.latest
+        assert snap.frames_skipped > 5 and snap.mode == "real_time"
+        solved = len([f for f in method.frames if 0 < f <= snap.frame])
+        assert solved + snap.frames_skipped == snap.frame  # every frame is solved or counted
+
+
+@pytest.mark.parametrize("mode", ["every_frame", "real_time"])
+def test_looping_does_not_skip_the_start_of_the_clip(synthetic_motion, mode):
+    """The first solve after a loop is slow (offline); the clock restarts after it."""
+    method = Slow(ms=2.0, first_ms=400.0)
+    with running(method, synthetic_motion) as worker:
+        newest(worker)
+        n = len(synthetic_motion)
+        worker.submit(w.Seek(n - 5))
+        wait_for(lambda: worker.latest.frame == n - 5)
+        worker.submit(w.Play(1.0, True, mode))
+        wait_for(lambda: 0 < worker.latest.frame < n - 5 and worker.latest.frame >= 6, timeout=20)
+        worker.submit(w.Pause())
+        tail = method.frames[method.frames.index(n - 5):]
+        after_loop = tail[tail.index(0):]
+        assert after_loop[:6] == [0, 1, 2, 3, 4, 5], after_loop[:10]
+
+
+def test_a_sensor_source_that_fails_is_reported_not_replaced_by_perfect_trackers(synthetic_motion):
+    from engine.studio.source import SensorSource
+
+    class Broken(SensorSource):
+        fps, num_frames = 60.0, 10
+
+        def set_sensors(self, sensors):
+            raise OSError("tracker stream closed")
+
+        def frame(self, frame):
+            raise AssertionError("never read")
+
+    method = Counting()
+    with running(method, synthetic_motion) as worker:
+        first = newest(worker)
+        worker.submit(w.SetSource(Broken()))
+        worker.submit(w.Seek(2))
+        snap = newest(worker, first.seq)
+        wait_for(lambda: "tracker stream closed" in worker.latest.error or worker.latest.warnings > first.warnings)
+        assert worker._source.num_frames == len(synthetic_motion)  # the clip source stayed

@@ -1,12 +1,17 @@
 """The engine thread: commands in through a queue, immutable snapshots out.
 
-:class:`EngineWorker` is a plain :class:`threading.Thread` (no Qt), so it is tested
-headless. It owns the reconstruction method and copies of everything the session
-describes; the session sends changes as the small command dataclasses below. After
-each solved frame it publishes a :class:`Snapshot` of plain, read-only numpy arrays:
-readers keep the newest one (``worker.latest``) or get called back (``listeners``, on
-the engine thread). Playback advances by elapsed time x fps x speed and never waits on
-compute: when a solve is slower than real time, frames are skipped. A method that
+:class:`EngineThread` is a plain :class:`threading.Thread` (no Qt), so it is tested
+headless. It owns the reconstruction methods and the sensor source; the session sends
+changes as :mod:`engine.studio.commands`. After each solved frame it publishes a
+:class:`~engine.studio.snapshot.Snapshot` of plain, read-only numpy arrays: readers keep
+the newest one (``thread.latest``) or get called back (``listeners``, on this thread).
+
+Playback has two modes. ``"every_frame"`` (the default) solves every clip frame in
+order; the clock waits for the solver, so a slow solver plays slower than real time but
+the reconstruction never drifts off the trackers. ``"real_time"`` keeps the wall clock
+(elapsed time x fps x speed) and skips the frames the solver missed. Either way, after
+a reset (a new clip, a loop, a seek back) the clock restarts from the first solved
+frame, so the slow first solve does not skip the clip's first second. A method that
 raises or returns NaN never kills the thread; the error is reported in the snapshot.
 """
 
@@ -24,13 +29,12 @@ from typing import Any
 import numpy as np
 
 from engine import skeleton as sk
-from engine.methods.base import FrameResult, Method, SensorFrame
-from engine.worker_messages import (  # noqa: F401  (re-exported: the worker's API)
-    HISTORY, DecodeLatent, FrameRecord, Pause, Play, Seek, SetConstraints, SetMethod,
-    SetMotion, SetSensors, SetSettings, Snapshot, Step, Stop, _ro,
-)  # fmt: skip
-from engine.worker_methods import apply_constraints, apply_sensor_weights, apply_settings, make_method
-from engine.worker_sensors import SensorSource
+from engine.methods.base import FrameResult, Method
+from engine.sensors import SensorFrame
+from engine.studio import commands as cmd
+from engine.studio.methods import apply_constraints, apply_sensor_weights, apply_settings, make_method
+from engine.studio.snapshot import HISTORY, FrameRecord, Snapshot, readonly
+from engine.studio.source import ClipSource, SensorSource
 
 
 def _losses(res: FrameResult | None, sf: SensorFrame) -> tuple[dict[str, float], ...]:
@@ -47,13 +51,27 @@ def _losses(res: FrameResult | None, sf: SensorFrame) -> tuple[dict[str, float],
     return (errs,)
 
 
-class EngineWorker(threading.Thread):
+def _timing(res: FrameResult | None, ms: float) -> dict[str, float]:
+    """The solve's timing figures, ms: the method's own breakdown when it reports one
+    (a ``timing`` dict on its result), else wall time per frame and per iteration."""
+    if res is None:
+        return {}
+    out = {"ms_per_frame": float(ms)}
+    if res.iterations:
+        out["ms_per_iteration"] = float(ms) / res.iterations
+    own = getattr(res, "timing", None)
+    if isinstance(own, dict):
+        out.update({str(k): float(v) for k, v in own.items() if isinstance(v, (int, float))})
+    return out
+
+
+class EngineThread(threading.Thread):
     """Runs the reconstruction off the GUI thread; see the module docstring.
 
     Parameters
     ----------
     method_factory : callable, optional
-        ``factory(name) -> Method``; defaults to :func:`engine.worker_methods.make_method`.
+        ``factory(name) -> Method``; defaults to :func:`engine.studio.methods.make_method`.
     """
 
     def __init__(self, method_factory: Callable[[str], Method] | None = None) -> None:
@@ -62,18 +80,18 @@ class EngineWorker(threading.Thread):
         self._factory = method_factory or make_method
         self.latest: Snapshot | None = None
         self.listeners: list[Callable[[Snapshot], None]] = []
-        self._source = SensorSource()
+        self._source: SensorSource | None = None
+        self._sensors: tuple = ()
         self._method_name, self._ghost_names = "", ()
         self._method: Method | None = None
         self._ghosts: dict[str, Method] = {}
-        self._constraints: tuple[dict, ...] = ()
+        self._constraints: tuple[Any, ...] = ()
         self._settings: dict = {}
         self._frame, self._last_solved = 0, -2
-        self._playing, self._speed, self._loop = False, 1.0, True
-        self._clock = (0.0, 0)  # (monotonic time, frame) playback started from
+        self._playing, self._speed, self._loop, self._mode = False, 1.0, True, "every_frame"
+        self._clock = (0.0, 0)  # (monotonic time, frame) playback is timed from
         self._dirty = False
-        self._seq = 0
-        self._warnings = 0
+        self._seq = self._solved = self._skipped = self._warnings = 0
         self._fps = 0.0
         self._last_pose = np.zeros((sk.NUM_JOINTS, 3))
         self._last_result: FrameResult | None = None
@@ -92,7 +110,7 @@ class EngineWorker(threading.Thread):
 
     def stop(self, timeout: float = 5.0) -> None:
         """Ask the loop to finish and join it."""
-        self._queue.put(Stop())
+        self._queue.put(cmd.Stop())
         if self.is_alive():
             self.join(timeout)
 
@@ -105,7 +123,7 @@ class EngineWorker(threading.Thread):
             self._drain(self._wait_time())
             if self._stopping:
                 break
-            if self._source.motion is None:
+            if self._source is None or self._source.num_frames == 0:
                 continue
             was_playing = self._playing
             target = self._playback_frame() if self._playing else self._frame
@@ -115,97 +133,131 @@ class EngineWorker(threading.Thread):
             elif was_playing and not self._playing:
                 self._republish()  # the end was reached on a solved frame: say playback stopped
 
+    def _rate(self) -> float:
+        return max(self._source.fps * self._speed, 1e-6) if self._source is not None else 1.0
+
     def _wait_time(self) -> float | None:
         """How long the queue may block: until the next frame is due, or forever."""
         if self._dirty:
             return 0.0
-        if not self._playing or self._source.motion is None:
+        if not self._playing or self._source is None:
             return None
+        if self._mode == "every_frame" and self._frame != self._last_solved:
+            return 0.0  # the current frame still needs solving
         t0, f0 = self._clock
-        fps = self._source.fps * self._speed
-        due = t0 + (self._last_solved - f0 + 1) / max(fps, 1e-6)
+        due = t0 + (self._frame - f0 + 1) / self._rate()
         return max(0.0, due - time.monotonic())
 
     def _drain(self, timeout: float | None) -> None:
         try:
-            cmd = self._queue.get(timeout=timeout) if timeout != 0.0 else self._queue.get_nowait()
+            c = self._queue.get(timeout=timeout) if timeout != 0.0 else self._queue.get_nowait()
         except queue.Empty:
             return
         while True:
-            self._apply(cmd)
+            self._apply(c)
             try:
-                cmd = self._queue.get_nowait()
+                c = self._queue.get_nowait()
             except queue.Empty:
                 return
 
-    def _apply(self, cmd: Any) -> None:
-        self._dirty = True
-        if isinstance(cmd, Stop):
+    def _apply(self, c: Any) -> None:
+        was_dirty, self._dirty = self._dirty, True
+        if isinstance(c, cmd.Stop):
             self._stopping = True
-        elif isinstance(cmd, SetMotion):
-            self._source.set_motion(cmd.motion)
+        elif isinstance(c, (cmd.SetMotion, cmd.SetSource)):
+            source = ClipSource(c.motion) if isinstance(c, cmd.SetMotion) else c.source
+            try:
+                source.set_sensors(self._sensors)
+            except Exception as exc:  # reported, and the old source stays
+                self._report_error(f"sensor source: {exc}")
+                return
+            self._source = source
             self._frame, self._warnings, self._playing = 0, 0, False
             self._reset_methods()
-        elif isinstance(cmd, SetSensors):
-            self._source.sensors = cmd.sensors
+        elif isinstance(c, cmd.SetSensors):
+            self._sensors = c.sensors
+            if self._source is not None:
+                try:
+                    self._source.set_sensors(c.sensors)
+                except Exception as exc:
+                    self._report_error(f"sensor source: {exc}")
             self._configure_all("sensors")
-        elif isinstance(cmd, SetConstraints):
-            self._constraints = cmd.constraints
+        elif isinstance(c, cmd.SetConstraints):
+            self._constraints = c.constraints
             self._configure_all("constraints")
-        elif isinstance(cmd, SetSettings):
-            self._settings = {**self._settings, **cmd.values}
+        elif isinstance(c, cmd.SetSettings):
+            self._settings = {**self._settings, **c.values}
             self._configure_all("settings")
-        elif isinstance(cmd, SetMethod):
-            new = self._build(cmd.name) if cmd.name else None
-            if cmd.name and new is None and self._method is not None:
-                # a method that cannot be built (e.g. a broken weights file) leaves the
-                # session as it was; the window shows why
-                self._method_error = self._pending_error
-                return
-            self._method_name, self._ghost_names = cmd.name, tuple(cmd.ghosts)
-            self._method, self._ghosts = new, {}
-            self._reset_methods(built=new is not None)
-        elif isinstance(cmd, Seek):
-            self._frame = self._clamp(cmd.frame)
+        elif isinstance(c, cmd.SetMethod):
+            self._set_method(c)
+        elif isinstance(c, cmd.Seek):
+            self._frame = self._clamp(c.frame)
             self._clock = (time.monotonic(), self._frame)
             self._decoded = None
-        elif isinstance(cmd, Step):
+        elif isinstance(c, cmd.Step):
             self._playing = False
-            self._frame = self._clamp(self._frame + cmd.delta)
-        elif isinstance(cmd, Play):
-            self._playing, self._speed, self._loop = True, cmd.speed, cmd.loop
+            self._frame = self._clamp(self._frame + c.delta)
+        elif isinstance(c, cmd.Play):
+            self._playing, self._speed, self._loop, self._mode = True, c.speed, c.loop, c.mode
             self._clock = (time.monotonic(), self._frame)
             self._decoded = None
-        elif isinstance(cmd, Pause):
-            self._playing = False
-        elif isinstance(cmd, DecodeLatent):
+            self._dirty = was_dirty or self._frame != self._last_solved
+        elif isinstance(c, cmd.Pause):
+            # say so without solving the frame again (which would move temporal state on)
+            self._playing, self._dirty = False, was_dirty
+            self._republish()
+        elif isinstance(c, cmd.DecodeLatent):
             # debug mode: decode and show, without solving the frame again (which would
             # move the method's temporal state on)
             self._dirty = False
-            self._decode(cmd.latent)
+            self._decode(c.latent)
             self._republish()
+
+    def _set_method(self, c: cmd.SetMethod) -> None:
+        new = self._build(c.name) if c.name else None
+        if c.name and new is None and self._method is not None:
+            # a method that cannot be built (e.g. a broken weights file) leaves the
+            # session as it was; the window shows why
+            self._method_error = self._pending_error
+            return
+        self._method_name, self._ghost_names = c.name, tuple(c.ghosts)
+        self._method, self._ghosts = new, {}
+        self._reset_methods(built=new is not None)
 
     def _republish(self) -> None:
         """Publish the last solved frame again (its pose, losses and timing) with the
         current playback state and debug pose, without solving it again."""
-        if self._source.motion is not None and self._last_solved >= 0:
+        if self._source is not None and self._last_solved >= 0:
             self._publish(self._last_solved, self._source.frame(self._last_solved), self._last_result,
                           self._last_ms, self._pending_error, self._last_ghosts)  # fmt: skip
 
     def _clamp(self, frame: int) -> int:
-        return int(np.clip(frame, 0, max(self._source.num_frames - 1, 0)))
+        n = self._source.num_frames if self._source is not None else 0
+        return int(np.clip(frame, 0, max(n - 1, 0)))
 
     def _playback_frame(self) -> int:
+        """The frame playback is at now (see the module doc for the two modes)."""
         t0, f0 = self._clock
-        n = self._source.num_frames
-        f = f0 + int((time.monotonic() - t0) * self._source.fps * self._speed)
-        if f >= n:
+        now = time.monotonic()
+        rate = self._rate()
+        if self._mode == "every_frame":
+            if self._frame != self._last_solved:
+                return self._frame  # a seek or reset: solve where we are first
+            due = t0 + (self._frame + 1 - f0) / rate
+            if now < due:
+                return self._frame
+            f = self._frame + 1
+            if now - due > 1.0 / rate:  # the solver is behind the clock: the clock waits
+                self._clock = (now, f)
+        else:
+            f = f0 + int((now - t0) * rate)
+        if f >= self._source.num_frames:
             if self._loop:
-                self._clock = (time.monotonic(), 0)
+                self._clock = (now, 0)
                 self._reset_methods()
                 f = 0
             else:
-                self._playing, f = False, n - 1
+                self._playing, f = False, self._source.num_frames - 1
         self._frame = f
         return f
 
@@ -226,7 +278,7 @@ class EngineWorker(threading.Thread):
             if g not in self._ghosts and (m := self._build(g)) is not None:
                 self._ghosts[g] = m
                 fresh = True
-        motion = self._source.motion
+        motion = self._source.motion if self._source is not None else None
         for m in [self._method, *self._ghosts.values()]:
             if m is None or motion is None:
                 continue
@@ -253,7 +305,7 @@ class EngineWorker(threading.Thread):
             if what in ("all", "constraints"):
                 problems += apply_constraints(m, self._constraints)
             if what in ("all", "sensors"):
-                problems += apply_sensor_weights(m, self._source.sensors)
+                problems += apply_sensor_weights(m, self._sensors)
             for problem in problems if report else ():
                 self._report_error(problem)
 
@@ -274,15 +326,17 @@ class EngineWorker(threading.Thread):
         catch up."""
         if self._last_solved < 0:
             return True
-        motion = self._source.motion
-        fps = motion.fps if motion is not None else 60.0
+        fps = self._source.fps if self._source is not None else sk.FPS
         return frame < self._last_solved or frame - self._last_solved > 2 * fps
 
     def _solve(self, frame: int) -> None:
-        if self._is_jump(frame):
+        jump = self._is_jump(frame)
+        if jump:
             if self._last_solved >= 0:  # after a load, loop or method change it is done already
                 self._reset_methods()  # temporal state is meaningless across a jump
             self._history.clear()
+        elif self._playing and frame > self._last_solved + 1:
+            self._skipped += frame - self._last_solved - 1
         sf = self._source.frame(frame)
         error = self._pending_error
         self._pending_error = ""
@@ -307,10 +361,13 @@ class EngineWorker(threading.Thread):
         dt = max(ms / 1000.0, 1e-4)
         self._fps = 1.0 / dt if self._fps == 0 else 0.9 * self._fps + 0.1 / dt
         self._last_solved = frame
+        self._solved += 1
+        if jump and self._playing:  # the first solve after a reset is slow: time from here
+            self._clock = (time.monotonic(), frame)
         self._last_ghosts, self._last_ms = ghosts, ms
         if res is not None:
             final = dict(res.losses[-1]) if res.losses else dict(_losses(res, sf)[-1])
-            latent = _ro(res.latent) if res.latent is not None else None
+            latent = readonly(res.latent) if res.latent is not None else None
             self._history.append(FrameRecord(frame, res.iterations, ms, final, latent))
         self._publish(frame, sf, res, ms, error, ghosts)
 
@@ -335,16 +392,16 @@ class EngineWorker(threading.Thread):
             seq=self._seq,
             frame=frame,
             num_frames=self._source.num_frames,
-            positions=_ro(self._last_pose),
-            ground_truth=_ro(self._source.gt_positions[frame]),
-            ghosts={k: _ro(v) for k, v in ghosts.items()},
+            positions=readonly(self._last_pose),
+            ground_truth=readonly(self._source.ground_truth(frame)),
+            ghosts={k: readonly(v) for k, v in ghosts.items()},
             target_joints=joints,
-            target_positions=_ro(np.array([r.position for r in readings]).reshape(-1, 3)),
-            target_rotations=_ro(np.array([r.rotation for r in readings]).reshape(-1, 4)),
-            target_connected=_ro(np.array([r.connected for r in readings], bool)),
+            target_positions=readonly(np.array([r.position for r in readings]).reshape(-1, 3)),
+            target_rotations=readonly(np.array([r.rotation for r in readings]).reshape(-1, 4)),
+            target_connected=readonly(np.array([r.connected for r in readings], bool)),
             gizmos=self._gizmos(),
             losses=_losses(res, sf),
-            latent=_ro(last.latent) if last is not None and last.latent is not None else None,
+            latent=readonly(last.latent) if last is not None and last.latent is not None else None,
             iterations=res.iterations if res else 0,
             ms=ms,
             warnings=self._warnings,
@@ -355,8 +412,12 @@ class EngineWorker(threading.Thread):
             playing=self._playing,
             method=getattr(self._method, "name", self._method_name),
             can_decode=hasattr(self._method, "decode_latent"),
-            decoded=_ro(self._decoded) if self._decoded is not None else None,
+            decoded=readonly(self._decoded) if self._decoded is not None else None,
             history=tuple(self._history),
+            solved=self._solved,
+            frames_skipped=self._skipped,
+            mode=self._mode,
+            timing=_timing(res, ms),
         )
         self._method_error = ""
         self.latest = snap
@@ -364,16 +425,14 @@ class EngineWorker(threading.Thread):
             cb(snap)
 
     def _gizmos(self) -> tuple[tuple[str, dict], ...]:
-        if not self._constraints:
-            return ()
-        from engine.constraints.base import from_dict
-
+        """Viewport descriptions of the enabled constraints, posed on the last solve
+        (distance, balance and look-at draw lines between current joints)."""
         out = []
-        for d in self._constraints:
-            try:
-                c = from_dict(dict(d))
-                if c.enabled:  # current joints let distance/balance/look-at draw their lines
-                    out.append((c.name, c.gizmo(self._last_pose)))
-            except Exception:  # a bad gizmo is cosmetic; the constraint itself reports
+        for c in self._constraints:
+            if not c.enabled:
                 continue
+            try:
+                out.append((c.name, c.gizmo(self._last_pose)))
+            except Exception as exc:  # a constraint that cannot draw itself is reported, not hidden
+                self._report_error(f"constraint {c.name!r}: cannot draw its gizmo ({exc})")
         return tuple(out)

@@ -1,0 +1,160 @@
+"""What each display tick of the studio draws: the 3D view first, then one panel.
+
+The engine publishes snapshots at its own pace; a QTimer calls :meth:`DrawScheduler.tick`
+about 60 times a second. A tick draws the newest snapshot in the 3D view when there is
+one, then updates at most one *panel* that is due (timeline, the three plots, the
+latent view, the status bar), each at a rate it can afford while playing (plots a few
+times a second; a label repaint under software rendering can cost more than the whole
+3D view). No tick does everything, so the event loop is never blocked for long and the
+view never waits for the panels. Every update's cost is recorded per panel
+(:meth:`DrawScheduler.costs`) for ``gui --measure``.
+"""
+
+from __future__ import annotations
+
+import time
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+DRAW_INTERVAL_MS = 16  # at most ~60 redraws per second
+MAX_DRAW_INTERVAL_MS = 100  # never fewer than ~10 redraws per second
+#: After the view, a panel is updated only when the tick has spent less than this, ms.
+PANEL_BUDGET_MS = 12.0
+
+
+@dataclass
+class Panel:
+    """One widget refreshed from snapshots: ``update(snap)`` at most every
+    ``interval_s`` while playing (at once when paused)."""
+
+    name: str
+    update: Callable[[Any], None]
+    interval_s: float
+    seq: int = -1
+    at: float = 0.0
+    costs: deque = field(default_factory=lambda: deque(maxlen=2000))
+
+
+class DrawScheduler:
+    """Drives the window's drawing; see the module doc. ``window`` is the main window."""
+
+    def __init__(self, window: Any) -> None:
+        self.w = window
+        self.interval_ms = DRAW_INTERVAL_MS
+        self.view_costs: deque = deque(maxlen=2000)
+        self.draws = 0  # view draws since start (``gui --measure`` reads it)
+        self._drawn_seq = -1
+        self._rate_draws, self._draw_rate, self._rate_t0 = 0, 0.0, time.monotonic()
+        self._last_tick = time.perf_counter()
+        self._status_text: dict[str, str] = {}
+        w = window
+        self.panels = [
+            Panel("timeline", lambda s: w.session.note_frame(s.frame), 0.1),
+            Panel("plot:iterations", w.plots.update_iterations, 0.25),
+            Panel("plot:cost", w.plots.update_cost, 0.5),
+            Panel("plot:history", w.plots.update_history, 0.5),
+            Panel("latent", w.latent.update_snapshot, 0.25),
+            Panel("status", self._update_status, 0.5),
+        ]
+
+    @property
+    def draw_rate(self) -> float:
+        """View draws per second over the last whole second."""
+        return self._draw_rate
+
+    def tick(self) -> None:
+        t0 = time.perf_counter()
+        now = time.monotonic()
+        if now - self._rate_t0 >= 1.0:
+            self._draw_rate, self._rate_draws, self._rate_t0 = self._rate_draws / (now - self._rate_t0), 0, now
+        snap = self.w.session.latest
+        if snap is None:
+            return
+        self._mirror_engine(snap)
+        if snap.seq != self._drawn_seq:
+            self._drawn_seq = snap.seq
+            self.w.viewport.show_snapshot(snap)
+            self.draws += 1
+            self._rate_draws += 1
+            self.view_costs.append((time.perf_counter() - t0) * 1000.0)
+            self.w.snapshotDrawn.emit(snap.frame)
+        self._update_one_panel(snap, now, spent_ms=(time.perf_counter() - t0) * 1000.0)
+        self._pace(t0, (time.perf_counter() - t0) * 1000.0)
+
+    def _mirror_engine(self, snap: Any) -> None:
+        """Cheap state the session must know at once: the end of playback, a refused method."""
+        s = self.w.session
+        if s.playing and not snap.playing and snap.seq == self._drawn_seq:
+            s.note_frame(snap.frame)
+            s.note_stopped()  # reached the end without looping
+        if snap.method_error and snap.seq != self._drawn_seq:  # the engine kept its method
+            s.note_method(snap.method)
+            self.w.show_error("Cannot switch method", snap.method_error)
+
+    def _update_one_panel(self, snap: Any, now: float, spent_ms: float) -> None:
+        """Update the most overdue panel that has a newer snapshot than it showed.
+
+        After a costly view draw the panel waits for a later tick, unless it is overdue
+        by a whole interval (so a view drawing on every tick cannot starve the panels).
+        """
+        playing = snap.playing
+        due = [p for p in self.panels if p.seq != snap.seq and (not playing or now - p.at >= p.interval_s)]
+        if not due:
+            return
+        panel = min(due, key=lambda p: p.at)
+        if playing and spent_ms > PANEL_BUDGET_MS and now - panel.at < 2 * panel.interval_s:
+            return
+        t = time.perf_counter()
+        panel.update(snap)
+        panel.costs.append((time.perf_counter() - t) * 1000.0)
+        panel.seq, panel.at = snap.seq, now
+
+    def _update_status(self, snap: Any) -> None:
+        w = self.w
+        timing = snap.timing or {}
+        per_it = timing.get("ms_per_iteration")
+        solver = f"{per_it:5.2f} ms/it" if per_it is not None else ""
+        skipped = f"   skipped {snap.frames_skipped}" if snap.mode == "real_time" else ""
+        self._set_text(w.status_engine, f"engine {snap.engine_fps:5.1f} frames/s   {snap.ms:6.1f} ms/frame   "
+                                        f"{snap.iterations} it   {solver}{skipped}")  # fmt: skip
+        self._set_text(w.status_gui, f"view {self._draw_rate:4.0f} draws/s")
+        self._set_text(w.status_warnings, f"warnings {snap.warnings}")
+        tip = snap.error or "\n".join(snap.messages)
+        if tip != w.status_warnings.toolTip():
+            w.status_warnings.setToolTip(tip)
+        if snap.error:
+            w.statusBar().showMessage(snap.error, 5000)
+
+    @staticmethod
+    def _set_text(label: Any, text: str) -> None:
+        if label.text() != text:  # an unchanged label must not repaint
+            label.setText(text)
+
+    def _pace(self, t0: float, cost_ms: float) -> None:
+        """Stretch the draw interval when the event loop is saturated, relax it after.
+
+        Much of a redraw's cost is paid after the tick returns (Qt composites the
+        window), so the tick-to-tick period is the honest measure of the loop's load.
+        """
+        period_ms = (t0 - self._last_tick) * 1000.0
+        self._last_tick = t0
+        interval = self.w.timer.interval()
+        if period_ms > 1.2 * interval or 1.5 * cost_ms > interval:
+            interval = min(MAX_DRAW_INTERVAL_MS, int(1.3 * max(period_ms, cost_ms)))
+        else:
+            interval = max(DRAW_INTERVAL_MS, int(0.9 * interval))
+        self.w.timer.setInterval(interval)
+
+    def costs(self) -> dict[str, dict[str, float]]:
+        """Per panel (and ``view``): updates, mean, p99 and max cost in ms."""
+        out = {}
+        for name, values in [("view", self.view_costs)] + [(p.name, p.costs) for p in self.panels]:
+            a = np.asarray(values, float)
+            out[name] = {"updates": int(a.size), "mean_ms": float(a.mean()) if a.size else 0.0,
+                         "p99_ms": float(np.percentile(a, 99)) if a.size else 0.0,
+                         "max_ms": float(a.max()) if a.size else 0.0}  # fmt: skip
+        return out

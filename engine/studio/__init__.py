@@ -1,0 +1,16 @@
+"""The studio's Qt-free core: one contract between the window and the engine thread.
+
+* :mod:`engine.studio.session`: :class:`~engine.studio.session.Session`, the model. The GUI
+  changes the scene only through its methods; each change fires a typed event
+  (:mod:`engine.studio.events`) and becomes a command for the engine thread.
+* :mod:`engine.studio.commands`: those commands (frozen dataclasses).
+* :mod:`engine.studio.snapshot`: what the engine thread publishes, numpy only.
+* :mod:`engine.studio.thread`: the engine thread (commands in, snapshots out).
+* :mod:`engine.studio.source`: where sensor readings come from (a clip today; any
+  :class:`~engine.studio.source.SensorSource` later, e.g. live trackers).
+* :mod:`engine.studio.catalog`: the constraint kinds users may add, with their fields.
+* :mod:`engine.studio.methods`: building methods and pushing the scene into them.
+
+Layering (no loops): ``sensors`` < ``commands``, ``snapshot``, ``source``, ``catalog``,
+``methods`` < ``thread`` < ``session``.
+"""

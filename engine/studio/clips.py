@@ -1,0 +1,35 @@
+"""What the session loads: clips (any supported BVH rig) and named sensor sets."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from engine.errors import UserError
+from engine.motion import Motion
+from engine.retarget import load_motion
+from engine.sensors import Sensor
+from engine.tracking import PRESET_SENSORS
+
+
+def sensor_presets() -> dict[str, tuple[Sensor, ...]]:
+    """Preset name -> its sensors (``assets/presets/sensors.json``), in preset order."""
+    return dict(PRESET_SENSORS)
+
+
+def load_clip(path: str | Path) -> Motion:
+    """Load any supported BVH onto the canonical skeleton (60 fps, floor at z = 0).
+
+    Raises
+    ------
+    UserError
+        When the file is missing, malformed or of an unknown rig; the message names it.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise UserError(f"{path}: no such file")
+    try:
+        return load_motion(path)
+    except UserError:
+        raise
+    except Exception as exc:  # a malformed file must never take the studio down
+        raise UserError(f"{path}: cannot read ({type(exc).__name__}: {exc})") from exc

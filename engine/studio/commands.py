@@ -1,0 +1,93 @@
+"""Commands the session sends to the engine thread: small frozen dataclasses.
+
+They carry values, never live objects the GUI keeps changing: sensors are frozen
+:class:`~engine.sensors.Sensor` s and constraints are objects the session never modifies
+after publishing them (an edit replaces the object), so the engine thread uses them
+directly, without copies and without a lock.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from engine.motion import Motion
+from engine.sensors import Sensor
+
+
+@dataclass(frozen=True)
+class SetMotion:
+    motion: Motion
+
+
+@dataclass(frozen=True)
+class SetSensors:
+    sensors: tuple[Sensor, ...]
+
+
+@dataclass(frozen=True)
+class SetConstraints:
+    """The whole user constraint list (the session's own objects, see the module doc)."""
+
+    constraints: tuple[Any, ...]
+
+
+@dataclass(frozen=True)
+class SetSettings:
+    values: dict
+
+
+@dataclass(frozen=True)
+class SetMethod:
+    name: str
+    ghosts: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class Seek:
+    frame: int
+
+
+@dataclass(frozen=True)
+class Play:
+    """Start playback at ``speed`` x real time.
+
+    ``mode`` ``"every_frame"`` solves every clip frame in order and lets the clock wait
+    for the solver; ``"real_time"`` keeps the clock and skips frames the solver missed.
+    """
+
+    speed: float = 1.0
+    loop: bool = True
+    mode: str = "every_frame"
+
+
+@dataclass(frozen=True)
+class Pause:
+    pass
+
+
+@dataclass(frozen=True)
+class Step:
+    delta: int = 1
+
+
+@dataclass(frozen=True)
+class DecodeLatent:
+    """Decode ``latent`` (L,) with the method's decoder; the optimizer is paused meanwhile."""
+
+    latent: np.ndarray
+
+
+@dataclass(frozen=True)
+class Stop:
+    pass
+
+
+@dataclass(frozen=True)
+class SetSource:
+    """Read sensors from ``source`` (an :class:`engine.studio.source.SensorSource`)
+    instead of the clip; the session's sensor settings still apply."""
+
+    source: Any

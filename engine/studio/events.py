@@ -1,0 +1,115 @@
+"""Typed session events (psygnal signals, as napari's models use).
+
+Each signal of :class:`SessionEvents` carries one frozen payload that says what changed,
+with the old value where there is one, so a subscriber can update only what changed and
+an undo stack can record the inverse edit::
+
+    session.events.sensors.connect(lambda ev: print(ev.joint, ev.old, ev.new))
+
+All events fire on the thread that called the session method (the GUI thread).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+from psygnal import Signal, SignalGroup
+
+from engine.motion import Motion
+from engine.sensors import Sensor
+
+#: How playback advances: wait for every frame to be solved, or keep the wall clock.
+PlaybackMode = Literal["every_frame", "real_time"]
+PLAYBACK_MODES: tuple[str, ...] = ("every_frame", "real_time")
+
+
+@dataclass(frozen=True)
+class MotionChanged:
+    """A clip was loaded (``path`` None for a generated one)."""
+
+    motion: Motion
+    path: Path | None
+
+
+@dataclass(frozen=True)
+class SensorsChanged:
+    """The sensor set changed.
+
+    ``joint`` names the one tracker edited (``old`` -> ``new``, either None when it was
+    added or removed); ``joint`` None means the whole set was replaced (a preset), with
+    ``old_set``/``sensors`` before and after and ``old_preset``/``preset`` their names.
+    """
+
+    sensors: tuple[Sensor, ...]
+    preset: str
+    joint: str | None = None
+    old: Sensor | None = None
+    new: Sensor | None = None
+    old_set: tuple[Sensor, ...] = ()
+    old_preset: str = ""
+
+
+@dataclass(frozen=True)
+class ConstraintsChanged:
+    """The constraint list changed.
+
+    ``action`` is ``added``, ``removed``, ``updated`` (``old`` -> ``new``, same name) or
+    ``replaced`` (the whole list, e.g. a scene load; ``old_list`` holds the previous one).
+    ``index`` is the position of the added, removed or updated constraint. Constraint
+    objects are never modified after they are published: an update replaces the object,
+    so ``old`` stays a faithful record of the previous state.
+    """
+
+    action: Literal["added", "removed", "updated", "replaced"]
+    constraints: tuple[Any, ...]
+    name: str = ""
+    index: int = -1
+    old: Any = None
+    new: Any = None
+    old_list: tuple[Any, ...] = ()
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(c.name for c in self.constraints)
+
+
+@dataclass(frozen=True)
+class SettingsChanged:
+    """Optimizer settings changed: ``changed`` the new values, ``old`` the previous ones."""
+
+    changed: dict[str, Any]
+    old: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class MethodChanged:
+    """The reconstruction method or its ghosts changed."""
+
+    method: str
+    ghosts: tuple[str, ...]
+    old_method: str = ""
+    old_ghosts: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class PlaybackChanged:
+    """Play/pause, speed (x real time), loop or mode changed."""
+
+    playing: bool
+    speed: float
+    loop: bool
+    mode: str
+
+
+class SessionEvents(SignalGroup):
+    """The session's signals; connect with ``session.events.NAME.connect(callback)``."""
+
+    motion = Signal(MotionChanged)
+    sensors = Signal(SensorsChanged)
+    constraints = Signal(ConstraintsChanged)
+    settings = Signal(SettingsChanged)
+    method = Signal(MethodChanged)
+    frame = Signal(int)
+    playback = Signal(PlaybackChanged)

@@ -1,0 +1,461 @@
+"""The studio's Qt-free model: the clip, sensors, constraints, settings and playback.
+
+A :class:`Session` lives on the GUI thread. Views read its attributes and change it only
+through its methods; every change fires one typed event on :attr:`Session.events`
+(:mod:`engine.studio.events`) and, with an engine attached, becomes a command for the
+engine thread (:mod:`engine.studio.commands`). The engine thread never touches the
+session: commands carry frozen sensors and constraint objects the session never edits
+after publishing them (an edit replaces the object), so the engine uses the session's
+own constraints, without copies and without a lock.
+
+The window never builds engine objects: it calls :meth:`Session.start_engine`, reads
+:attr:`Session.latest` and edits through these methods.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from engine import skeleton as sk
+from engine.constraints.base import Constraint
+from engine.errors import UserError
+from engine.methods import available_methods
+from engine.motion import Motion
+from engine.sensors import Sensor
+from engine.studio import commands as cmd
+from engine.studio import events as ev
+from engine.studio.catalog import ConstraintKind, constraint_catalog
+from engine.studio.clips import load_clip, sensor_presets
+from engine.studio.scenes import default_settings, scene_from_dict, scene_to_dict
+from engine.studio.snapshot import Snapshot
+from engine.studio.thread import EngineThread
+
+#: Prefix of the pin constraints made by :meth:`Session.pin` (one per joint).
+PIN_PREFIX = "pin "
+
+
+class Session:
+    """Everything the studio shows and edits; see the module docstring.
+
+    Attributes
+    ----------
+    events : SessionEvents
+        Typed signals: ``motion``, ``sensors``, ``constraints``, ``settings``, ``method``,
+        ``frame``, ``playback``.
+    motion : Motion or None
+        Ground-truth clip the sensors are simulated from; ``path`` its file.
+    sensors : dict of str to Sensor
+        Active trackers by joint, in preset order; ``preset`` names the set ("" = custom).
+    constraints : list of Constraint
+        User constraints, in order. Treat them as read-only: edit through the methods.
+    settings : dict
+        Optimizer parameters by name (``mode``, ``iterations``, ``lr``...).
+    method : str
+        Reconstruction method; ``ghosts`` are other methods drawn alongside it.
+    frame : int
+        Current frame (the engine's while playing, mirrored by :meth:`note_frame`).
+    playing, speed, loop, mode
+        Playback state; ``mode`` is ``"every_frame"`` or ``"real_time"``.
+    """
+
+    def __init__(self, method: str = "ik") -> None:
+        self.events = ev.SessionEvents()
+        self.motion: Motion | None = None
+        self.path: Path | None = None
+        self.preset = ""
+        self.sensors: dict[str, Sensor] = {}
+        self.constraints: list[Constraint] = []
+        self.settings: dict[str, Any] = default_settings()
+        self.method = method
+        self.ghosts: tuple[str, ...] = ()
+        self.frame = 0
+        self.playing = False
+        self.speed = 1.0
+        self.loop = True
+        self.mode = "every_frame"
+        self.engine: EngineThread | None = None
+        self._sink: Callable[[Any], None] | None = None
+
+    # -- engine ------------------------------------------------------------------------
+    def start_engine(self, method_factory: Callable[[str], Any] | None = None) -> EngineThread:
+        """Start the engine thread and send it the whole session."""
+        self.engine = EngineThread(method_factory)
+        self.engine.start()
+        self.attach(self.engine.submit)
+        return self.engine
+
+    def shutdown(self) -> None:
+        """Stop the engine thread (if any) and wait for it."""
+        if self.engine is not None:
+            self.engine.stop()
+        self._sink = None
+
+    @property
+    def latest(self) -> Snapshot | None:
+        """The engine's newest snapshot (None before the first solve or without engine)."""
+        return None if self.engine is None else self.engine.latest
+
+    def attach(self, sink: Callable[[Any], None] | None) -> None:
+        """Send every change to ``sink`` (an engine's ``submit``) and sync it now."""
+        self._sink = sink
+        if sink is None:
+            return
+        sink(cmd.SetMethod(self.method, self.ghosts))
+        sink(cmd.SetSettings(dict(self.settings)))
+        sink(cmd.SetSensors(tuple(self.sensors.values())))
+        if self.motion is not None:
+            sink(cmd.SetMotion(self.motion))
+        sink(cmd.SetConstraints(tuple(self.constraints)))
+        sink(cmd.Seek(self.frame))
+
+    def _send(self, command: Any) -> None:
+        if self._sink is not None:
+            self._sink(command)
+
+    def decode_latent(self, latent: np.ndarray) -> None:
+        """Show the pose the method's decoder makes of ``latent`` (L,) (debug mode)."""
+        self._send(cmd.DecodeLatent(np.asarray(latent, float).copy()))
+
+    # -- clip ------------------------------------------------------------------------
+    @property
+    def num_frames(self) -> int:
+        return 0 if self.motion is None else len(self.motion)
+
+    def open(self, path: str | Path) -> None:
+        """Load a BVH; on failure raise :class:`UserError` and leave the session as it was."""
+        self.set_motion(load_clip(path), Path(path))
+
+    def set_motion(self, motion: Motion, path: Path | None = None) -> None:
+        self.motion, self.path, self.frame = motion, path, 0
+        self._send(cmd.SetMotion(motion))
+        self.events.motion.emit(ev.MotionChanged(motion, path))
+        self._send(cmd.Seek(0))
+        self.events.frame.emit(0)
+        if not self.sensors:
+            self.set_preset(next(iter(sensor_presets())))
+
+    # -- sensors ---------------------------------------------------------------------
+    @staticmethod
+    def sensor_presets() -> dict[str, tuple[Sensor, ...]]:
+        return sensor_presets()
+
+    def set_preset(self, name: str) -> None:
+        presets = sensor_presets()
+        if name not in presets:
+            raise UserError(f"unknown sensor preset {name!r}; known: {', '.join(presets)}")
+        self.set_sensors(presets[name], name)
+
+    def set_sensor_text(self, text: str) -> None:
+        """A preset name or a ``--sensors`` list such as ``"root,lwrist:3,rwrist"``."""
+        from engine.tracking import parse_sensors
+
+        self.set_sensors(parse_sensors(text), text if text in sensor_presets() else "")
+
+    def set_sensors(self, sensors: tuple[Sensor, ...] | list[Sensor], preset: str = "") -> None:
+        """Replace the whole sensor set (a preset, or an undo of one)."""
+        old_set, old_preset = tuple(self.sensors.values()), self.preset
+        self.sensors = {s.joint: s for s in sensors}
+        self.preset = preset
+        self._sensors_changed(old_set=old_set, old_preset=old_preset)
+
+    def update_sensor(self, joint: str, **changes: Any) -> None:
+        """Change settings of one tracker: ``enabled``, ``dof``, ``weight``, ``offset``,
+        ``failures`` (see :class:`~engine.sensors.Sensor`)."""
+        old = self.sensor(joint)
+        new = old.edited(**changes)
+        if new == old:
+            return
+        self.sensors[joint] = new
+        self._sensors_changed(joint=joint, old=old, new=new)
+
+    def add_sensor(self, joint: str, dof: int = 6) -> None:
+        if joint not in sk.JOINT_INDEX:
+            raise UserError(f"unknown joint {joint!r}")
+        if joint in self.sensors:
+            return
+        new = Sensor(joint).edited(dof=dof)
+        self.sensors[joint] = new
+        self.preset = ""
+        self._sensors_changed(joint=joint, new=new)
+
+    def remove_sensor(self, joint: str) -> None:
+        old = self.sensor(joint)
+        del self.sensors[joint]
+        self.preset = ""
+        self._sensors_changed(joint=joint, old=old)
+
+    def sensor(self, joint: str) -> Sensor:
+        if joint not in self.sensors:
+            raise UserError(f"no sensor on joint {joint!r}; active: {', '.join(self.sensors)}")
+        return self.sensors[joint]
+
+    def simulate_failure(self, joint: str, frames: int, start: int | None = None) -> None:
+        """Make ``joint``'s tracker lost for ``frames`` frames from ``start`` (default: now)."""
+        start = self.frame if start is None else int(start)
+        cfg = self.sensor(joint)
+        self.update_sensor(joint, failures=cfg.failures + ((start, start + int(frames)),))
+
+    def drag_target(self, joint: str, world_pos: np.ndarray) -> None:
+        """Move a tracker's target to ``world_pos`` (metres) by setting its drag offset."""
+        base = self.tracked_position(joint, self.frame)
+        self.update_sensor(joint, offset=np.asarray(world_pos, float) - base)
+
+    def reset_offsets(self, joint: str | None = None) -> None:
+        """Clear drag offsets and simulated failures of ``joint`` (None: every sensor)."""
+        if joint is not None:
+            self.update_sensor(joint, offset=(0.0, 0.0, 0.0), failures=())
+            return
+        cleared = [s.edited(offset=(0.0, 0.0, 0.0), failures=()) for s in self.sensors.values()]
+        self.set_sensors(cleared, self.preset)
+
+    def tracked_position(self, joint: str, frame: int) -> np.ndarray:
+        """Ground-truth position (3,) of ``joint`` at ``frame``, before any drag offset.
+
+        Read from the engine's newest snapshot when it shows ``frame`` (no kinematics on
+        the caller's thread); otherwise from the clip's forward kinematics of that frame.
+        """
+        snap = self.latest
+        j = sk.JOINT_INDEX[joint]
+        if snap is not None and snap.frame == frame and np.all(np.isfinite(snap.ground_truth[j])):
+            return np.array(snap.ground_truth[j])
+        if self.motion is None:
+            return np.zeros(3)
+        frame = int(np.clip(frame, 0, len(self.motion) - 1))
+        return self.motion.slice(frame, frame + 1).positions()[0, j]
+
+    def _sensors_changed(self, **change: Any) -> None:
+        sensors = tuple(self.sensors.values())
+        self._send(cmd.SetSensors(sensors))
+        self.events.sensors.emit(ev.SensorsChanged(sensors, self.preset, **change))
+
+    # -- constraints -----------------------------------------------------------------
+    @staticmethod
+    def constraint_catalog() -> dict[str, ConstraintKind]:
+        """The kinds users may add, with their fields (:mod:`engine.studio.catalog`)."""
+        return constraint_catalog()
+
+    def constraint(self, name: str) -> Constraint:
+        for c in self.constraints:
+            if c.name == name:
+                return c
+        raise UserError(f"no constraint named {name!r}")
+
+    def _index(self, name: str) -> int:
+        return next((i for i, c in enumerate(self.constraints) if c.name == name), -1)
+
+    def _unique_name(self, base: str) -> str:
+        names = {c.name for c in self.constraints}
+        if base and base not in names:
+            return base
+        i = 1
+        while f"{base}{i}" in names:
+            i += 1
+        return f"{base}{i}"
+
+    def add_constraint(self, kind: str, **params: Any) -> str:
+        """Add a constraint of a user-facing ``kind`` with ``params`` (others default);
+        returns its name (``params["name"]`` made unique, else the kind numbered).
+
+        Raises
+        ------
+        UserError
+            For an unknown or internal kind, an unknown field or a bad value.
+        """
+        catalog = constraint_catalog()
+        if kind not in catalog:
+            raise UserError(f"unknown constraint kind {kind!r}; known: {', '.join(catalog)}")
+        params = dict(params)
+        params["name"] = self._unique_name(str(params.get("name") or kind))
+        try:
+            constraint = catalog[kind].cls(**params)
+        except TypeError as exc:
+            raise UserError(f"constraint {kind!r}: {exc}") from exc
+        return self.insert_constraint(constraint)
+
+    def insert_constraint(self, constraint: Constraint, index: int | None = None) -> str:
+        """Put a constraint object back (undo of a removal) at ``index`` (default: last)."""
+        if self._index(constraint.name) >= 0:
+            raise UserError(f"a constraint named {constraint.name!r} exists already")
+        index = len(self.constraints) if index is None else int(np.clip(index, 0, len(self.constraints)))
+        self.constraints.insert(index, constraint)
+        self._constraints_changed("added", constraint.name, index, new=constraint)
+        return constraint.name
+
+    def remove_constraint(self, name: str) -> None:
+        i = self._index(name)
+        if i < 0:
+            raise UserError(f"no constraint named {name!r}")
+        old = self.constraints.pop(i)
+        self._constraints_changed("removed", name, i, old=old)
+
+    def update_constraint(self, name: str, **changes: Any) -> None:
+        """Set fields (``weight``, ``enabled`` or any parameter) of the named constraint.
+
+        The object is replaced by an edited copy (checked like a new one), never changed
+        in place, so the engine thread and undo records keep consistent objects.
+        """
+        i = self._index(name)
+        if i < 0:
+            raise UserError(f"no constraint named {name!r}")
+        old = self.constraints[i]
+        fields = {f.name for f in dataclasses.fields(old) if f.init}
+        for key in changes:
+            if key not in fields:
+                raise UserError(f"constraint {name!r} ({old.kind}) has no field {key!r}")
+        if "name" in changes and changes["name"] != name and self._index(changes["name"]) >= 0:
+            raise UserError(f"a constraint named {changes['name']!r} exists already")
+        try:
+            new = dataclasses.replace(old, **changes)
+        except (TypeError, ValueError) as exc:
+            raise UserError(f"constraint {name!r}: {exc}") from exc
+        self.constraints[i] = new
+        self._constraints_changed("updated", new.name, i, old=old, new=new)
+
+    def replace_constraint(self, constraint: Constraint) -> None:
+        """Put back a whole constraint object under its name (undo of an update)."""
+        i = self._index(constraint.name)
+        if i < 0:
+            raise UserError(f"no constraint named {constraint.name!r}")
+        old = self.constraints[i]
+        self.constraints[i] = constraint
+        self._constraints_changed("updated", constraint.name, i, old=old, new=constraint)
+
+    def set_constraints(self, constraints: list[Constraint]) -> None:
+        """Replace the whole list (a scene load, or its undo)."""
+        names = [c.name for c in constraints]
+        if len(set(names)) != len(names):
+            raise UserError("constraint names must be unique")
+        old_list = tuple(self.constraints)
+        self.constraints = list(constraints)
+        self._constraints_changed("replaced", old_list=old_list)
+
+    def pin(self, joint: str, position: np.ndarray) -> str:
+        """Pin ``joint`` at ``position`` (metres): the pin constraint of that joint is
+        created or moved; returns its name."""
+        if joint not in sk.JOINT_INDEX:
+            raise UserError(f"unknown joint {joint!r}")
+        name = PIN_PREFIX + joint
+        position = np.asarray(position, float)
+        if self._index(name) >= 0:
+            self.update_constraint(name, position=position)
+            return name
+        return self.add_constraint("pin", name=name, joint=joint, position=position)
+
+    def unpin(self, joint: str) -> None:
+        if self._index(PIN_PREFIX + joint) >= 0:
+            self.remove_constraint(PIN_PREFIX + joint)
+
+    def _constraints_changed(self, action: str, name: str = "", index: int = -1, **change: Any) -> None:
+        constraints = tuple(self.constraints)
+        self._send(cmd.SetConstraints(constraints))
+        self.events.constraints.emit(ev.ConstraintsChanged(action, constraints, name, index, **change))  # type: ignore[arg-type]
+
+    # -- optimizer, method ---------------------------------------------------------
+    def set_setting(self, name: str, value: Any) -> None:
+        self.set_settings({name: value})
+
+    def set_settings(self, values: dict[str, Any]) -> None:
+        old = {k: self.settings.get(k) for k in values}
+        self.settings.update(values)
+        self._send(cmd.SetSettings(dict(values)))
+        self.events.settings.emit(ev.SettingsChanged(dict(values), old))
+
+    def set_method(self, name: str, ghosts: tuple[str, ...] | None = None) -> None:
+        old, old_ghosts = self.method, self.ghosts
+        self.method = name
+        if ghosts is not None:
+            self.ghosts = tuple(g for g in ghosts if g != name)
+        self._send(cmd.SetMethod(name, self.ghosts))
+        self.events.method.emit(ev.MethodChanged(name, self.ghosts, old, old_ghosts))
+
+    @staticmethod
+    def available_methods() -> list[str]:
+        """Names of the registered reconstruction methods."""
+        return list(available_methods())
+
+    def set_ghosts(self, ghosts: tuple[str, ...]) -> None:
+        self.set_method(self.method, ghosts)
+
+    def note_method(self, name: str) -> None:
+        """Mirror the engine's method when it refused a change (no command is sent)."""
+        if name != self.method:
+            old = self.method
+            self.method = name
+            self.events.method.emit(ev.MethodChanged(name, self.ghosts, old, self.ghosts))
+
+    # -- playback --------------------------------------------------------------------
+    def seek(self, frame: int) -> None:
+        frame = int(np.clip(frame, 0, max(self.num_frames - 1, 0)))
+        self.frame = frame
+        self._send(cmd.Seek(frame))
+        self.events.frame.emit(frame)
+
+    def note_frame(self, frame: int) -> None:
+        """Mirror the engine's frame while playing (no command is sent back)."""
+        if frame != self.frame:
+            self.frame = frame
+            self.events.frame.emit(frame)
+
+    def step(self, delta: int = 1) -> None:
+        self.set_playing(False)
+        self.seek(self.frame + delta)
+
+    def play(self) -> None:
+        self.set_playing(True)
+
+    def pause(self) -> None:
+        self.set_playing(False)
+
+    def set_playing(self, playing: bool) -> None:
+        if bool(playing) == self.playing and not playing:
+            return
+        self.playing = bool(playing)
+        self._send(cmd.Play(self.speed, self.loop, self.mode) if self.playing else cmd.Pause())
+        self._playback_changed()
+
+    def note_stopped(self) -> None:
+        """Mirror the engine stopping at the clip's end (no command is sent back)."""
+        if self.playing:
+            self.playing = False
+            self._playback_changed()
+
+    def set_playback(self, speed: float | None = None, loop: bool | None = None, mode: str | None = None) -> None:
+        """Speed (x real time, > 0), loop, and mode (``every_frame`` or ``real_time``)."""
+        if mode is not None and mode not in ev.PLAYBACK_MODES:
+            raise UserError(f"playback mode must be one of {', '.join(ev.PLAYBACK_MODES)}, got {mode!r}")
+        if speed is not None and not float(speed) > 0:
+            raise UserError(f"playback speed must be > 0, got {speed}")
+        self.speed = self.speed if speed is None else float(speed)
+        self.loop = self.loop if loop is None else bool(loop)
+        self.mode = self.mode if mode is None else mode
+        if self.playing:
+            self._send(cmd.Play(self.speed, self.loop, self.mode))
+        self._playback_changed()
+
+    def _playback_changed(self) -> None:
+        self.events.playback.emit(ev.PlaybackChanged(self.playing, self.speed, self.loop, self.mode))
+
+    # -- scenes ----------------------------------------------------------------------
+    def to_scene(self) -> dict[str, Any]:
+        """Plain-JSON description of the sensors, constraints and settings."""
+        return scene_to_dict(self.path, self.method, self.preset, tuple(self.sensors.values()),
+                             self.constraints, self.settings, self.frame)  # fmt: skip
+
+    def apply_scene(self, scene: dict[str, Any], where: str = "scene") -> None:
+        """Restore :meth:`to_scene` output (the clip is loaded by the caller).
+
+        Everything is checked before anything changes; errors name ``where``.
+        """
+        parsed = scene_from_dict(scene, where)
+        self.set_settings(parsed["settings"])
+        self.set_sensors(parsed["sensors"], parsed["preset"] or "")
+        self.set_constraints(parsed["constraints"])
+        if parsed["method"] and parsed["method"] != self.method:
+            self.set_method(parsed["method"])
+        self.seek(parsed["frame"])
+

@@ -1,0 +1,187 @@
+"""Session: the Qt-free studio model fires typed events and forwards commands."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from engine.errors import UserError
+from engine.sensors import Sensor
+from engine.studio import commands as c
+from engine.studio import events as ev
+from engine.studio.session import PIN_PREFIX, Session
+
+
+@pytest.fixture
+def session(synthetic_motion):
+    s = Session()
+    s.set_motion(synthetic_motion)
+    return s
+
+
+def test_changes_fire_typed_events_and_become_commands(session):
+    seen, commands = [], []
+    session.events.sensors.connect(seen.append)
+    session.events.frame.connect(seen.append)
+    session.events.settings.connect(seen.append)
+    session.attach(commands.append)
+    commands.clear()
+    joint = next(iter(session.sensors))
+    old = session.sensors[joint]
+    session.update_sensor(joint, enabled=False)
+    session.seek(10)
+    session.set_setting("iterations", 5)
+    assert isinstance(seen[0], ev.SensorsChanged) and seen[0].joint == joint
+    assert seen[0].old == old and seen[0].new.enabled is False
+    assert seen[1] == 10
+    assert isinstance(seen[2], ev.SettingsChanged) and seen[2].changed == {"iterations": 5}
+    assert isinstance(commands[0], c.SetSensors) and not commands[0].sensors[0].enabled
+    assert commands[1] == c.Seek(10) and commands[2] == c.SetSettings({"iterations": 5})
+    session.events.frame.disconnect(seen.append)
+    session.seek(3)
+    assert 3 not in seen
+
+
+def test_an_unchanged_sensor_edit_fires_nothing(session):
+    seen = []
+    session.events.sensors.connect(seen.append)
+    joint = next(iter(session.sensors))
+    session.update_sensor(joint, enabled=True)
+    assert seen == []
+
+
+def test_preset_and_bad_sensor_edits(session):
+    name, sensors = list(session.sensor_presets().items())[-1]
+    seen = []
+    session.events.sensors.connect(seen.append)
+    before = tuple(session.sensors.values())
+    session.set_preset(name)
+    assert tuple(session.sensors.values()) == sensors
+    assert seen[-1].joint is None and seen[-1].old_set == before and seen[-1].preset == name
+    with pytest.raises(UserError, match="unknown sensor preset"):
+        session.set_preset("no such preset")
+    with pytest.raises(UserError, match="dof"):
+        session.update_sensor(sensors[0].joint, dof=4)
+    with pytest.raises(UserError, match="unknown field"):
+        session.update_sensor(sensors[0].joint, colour="red")
+
+
+def test_drag_target_sets_offset_from_the_tracked_position(session):
+    joint = next(iter(session.sensors))
+    base = session.tracked_position(joint, session.frame)
+    session.drag_target(joint, base + [0.1, 0.0, -0.2])
+    assert np.allclose(session.sensors[joint].offset, [0.1, 0.0, -0.2])
+    session.simulate_failure(joint, 30)
+    assert session.sensors[joint].lost_at(10) and not session.sensors[joint].lost_at(30)
+    session.reset_offsets()
+    assert session.sensors[joint].offset == (0.0, 0.0, 0.0) and not session.sensors[joint].failures
+
+
+def test_open_bad_file_leaves_session_unchanged(session, tmp_path):
+    bad = tmp_path / "bad.bvh"
+    bad.write_text("HIERARCHY\nROOT broken {\n")
+    before = session.motion
+    with pytest.raises(UserError, match="bad.bvh"):
+        session.open(bad)
+    with pytest.raises(UserError, match="no such file"):
+        session.open(tmp_path / "missing.bvh")
+    assert session.motion is before
+
+
+def test_scene_round_trip(session):
+    joint = next(iter(session.sensors))
+    session.update_sensor(joint, dof=3, weight=0.5, offset=(0.0, 0.1, 0.0))
+    session.set_setting("lr", 0.05)
+    session.add_constraint("distance", joint_a="lwrist", joint_b="rwrist", distance=0.4)
+    scene = json.loads(json.dumps(session.to_scene()))
+    other = Session()
+    other.set_motion(session.motion)
+    other.apply_scene(scene)
+    assert other.sensors == session.sensors
+    assert other.settings["lr"] == 0.05
+    assert [x.to_dict() for x in other.constraints] == [x.to_dict() for x in session.constraints]
+
+
+def test_a_bad_scene_names_the_entry_and_changes_nothing(session):
+    scene = session.to_scene()
+    scene["sensors"][1]["dof"] = 5
+    before = dict(session.sensors)
+    with pytest.raises(UserError, match=r"my.json: sensors\[1\].*dof"):
+        session.apply_scene(scene, "my.json")
+    assert session.sensors == before
+
+
+def test_sensor_text_accepts_presets_and_joint_lists(session):
+    session.set_sensor_text("root,lwrist:3")
+    assert list(session.sensors) == ["root", "lwrist"] and session.sensors["lwrist"].dof == 3
+    assert isinstance(session.sensors["root"], Sensor) and session.preset == ""
+    with pytest.raises(UserError):
+        session.set_sensor_text("root,nose")
+
+
+def test_catalog_offers_user_kinds_with_their_fields_but_not_internal_ones():
+    catalog = Session.constraint_catalog()
+    assert {"pin", "look_at", "distance", "bounds", "floor", "balance", "end_effector"} <= set(catalog)
+    assert "sensor" not in catalog and "temporal_prior" not in catalog
+    assert catalog["pin"].field("joint").tag == "joint" and catalog["pin"].field("position").tag == "vec3"
+    mode = catalog["balance"].field("mode")
+    assert mode.tag == "choice" and "com_over_feet" in mode.choices
+
+
+def test_constraints_are_added_by_kind_edited_by_replacement_and_removed(session):
+    seen, commands = [], []
+    session.events.constraints.connect(seen.append)
+    session.attach(commands.append)
+    name = session.add_constraint("distance", joint_a="lwrist", joint_b="rwrist", distance=0.3)
+    assert name == "distance" and seen[-1].action == "added" and seen[-1].index == 0
+    first = session.constraint(name)
+    assert commands[-1] == c.SetConstraints((first,))  # the session's own object, no copy
+    session.update_constraint(name, distance=0.5, weight=2.0)
+    second = session.constraint(name)
+    assert second is not first and first.distance == 0.3, "published objects are never edited"
+    assert second.distance == 0.5 and seen[-1].old is first and seen[-1].new is second
+    assert session.add_constraint("distance") == "distance1"
+    with pytest.raises(UserError, match="unknown constraint kind 'sensor'"):
+        session.add_constraint("sensor")
+    with pytest.raises(UserError, match="no field 'colour'"):
+        session.update_constraint(name, colour="red")
+    with pytest.raises(UserError, match="weight"):
+        session.update_constraint(name, weight=-1.0)
+    session.remove_constraint(name)
+    assert seen[-1].action == "removed" and seen[-1].old is second
+    session.insert_constraint(seen[-1].old, seen[-1].index)  # what an undo does
+    assert session.constraints[0] is second
+
+
+def test_pin_creates_then_moves_one_pin_per_joint(session):
+    name = session.pin("lelbow", np.array([0.1, 0.2, 1.0]))
+    assert name == PIN_PREFIX + "lelbow"
+    session.pin("lelbow", np.array([0.3, 0.2, 1.0]))
+    (pin,) = session.constraints
+    assert pin.kind == "pin" and pin.joint == "lelbow" and np.allclose(pin.position, [0.3, 0.2, 1.0])
+    session.unpin("lelbow")
+    assert session.constraints == []
+
+
+def test_playback_state_and_mode_go_through_the_session(session):
+    seen, commands = [], []
+    session.events.playback.connect(seen.append)
+    session.attach(commands.append)
+    assert session.mode == "every_frame"
+    session.set_playing(True)
+    assert commands[-1] == c.Play(1.0, True, "every_frame") and seen[-1].playing
+    session.set_playback(mode="real_time", speed=0.5)
+    assert commands[-1] == c.Play(0.5, True, "real_time") and seen[-1].mode == "real_time"
+    session.set_playing(False)
+    assert commands[-1] == c.Pause() and not seen[-1].playing
+    with pytest.raises(UserError, match="playback mode"):
+        session.set_playback(mode="fast")
+
+
+def test_method_changes_carry_the_previous_method(session):
+    seen = []
+    session.events.method.connect(seen.append)
+    session.set_method("dragposer", ghosts=("ik", "dragposer"))
+    assert seen[-1] == ev.MethodChanged("dragposer", ("ik",), "ik", ())

@@ -123,7 +123,7 @@ class DrawScheduler:
                                         f"{snap.iterations} it   {solver}{skipped}")  # fmt: skip
         self._set_text(w.status_gui, f"view {self._draw_rate:4.0f} draws/s")
         self._set_text(w.status_warnings, f"warnings {snap.warnings}")
-        tip = snap.error or "\n".join(snap.messages)
+        tip = "\n".join(snap.recent_errors + tuple(snap.messages))
         if tip != w.status_warnings.toolTip():
             w.status_warnings.setToolTip(tip)
         if snap.error:

@@ -90,6 +90,9 @@ class Snapshot:
     timing : dict of str to float
         The method's own timing of the frame's solve, milliseconds by name (e.g.
         ``ms_per_iteration``), when it reports one.
+    recent_errors : tuple of str
+        The last few problems reported since the clip was loaded, oldest first (``error``
+        holds only the one that arrived with this frame).
     history : tuple of FrameRecord
         The last :data:`HISTORY` solved frames, oldest first, including frames whose
         snapshots a reader skipped (the GUI draws only the newest one); cleared when
@@ -125,3 +128,4 @@ class Snapshot:
     frames_skipped: int = 0
     mode: str = "every_frame"
     timing: dict[str, float] = field(default_factory=dict)
+    recent_errors: tuple[str, ...] = ()

@@ -36,6 +36,10 @@ from engine.studio.methods import apply_constraints, apply_sensor_weights, apply
 from engine.studio.snapshot import HISTORY, FrameRecord, Snapshot, readonly
 from engine.studio.source import ClipSource, SensorSource
 
+#: Problems a snapshot repeats (newest last), so a reader that skipped the snapshot
+#: which first reported one still shows it.
+RECENT_ERRORS = 5
+
 
 def _losses(res: FrameResult | None, sf: SensorFrame) -> tuple[dict[str, float], ...]:
     """The method's per-iteration losses; for methods without any (classical IK), one
@@ -101,6 +105,7 @@ class EngineThread(threading.Thread):
         self._last_ms = 0.0
         self._pending_error = ""
         self._method_error = ""
+        self._recent_errors: deque[str] = deque(maxlen=RECENT_ERRORS)
         self._stopping = False
 
     # -- public API (any thread) --------------------------------------------------------
@@ -173,6 +178,7 @@ class EngineThread(threading.Thread):
                 return
             self._source = source
             self._frame, self._warnings, self._playing = 0, 0, False
+            self._recent_errors.clear()
             self._reset_methods()
         elif isinstance(c, cmd.SetSensors):
             self._sensors = c.sensors
@@ -312,6 +318,7 @@ class EngineThread(threading.Thread):
     def _report_error(self, message: str) -> None:
         self._warnings += 1
         self._pending_error = message
+        self._recent_errors.append(message)
 
     def _step(self, method: Method, sf: SensorFrame) -> FrameResult:
         res = method.step(sf)
@@ -350,6 +357,7 @@ class EngineThread(threading.Thread):
             except Exception as exc:  # never let a method kill the engine thread
                 error = f"{self._method_name} at frame {frame}: {type(exc).__name__}: {exc}"
                 self._warnings += 1
+                self._recent_errors.append(error)
                 self._reset_methods()
         ms = (time.perf_counter() - t0) * 1000.0
         ghosts = {}
@@ -358,6 +366,7 @@ class EngineThread(threading.Thread):
                 ghosts[name] = self._step(m, sf).positions
             except Exception as exc:
                 error = error or f"{name} at frame {frame}: {exc}"
+                self._recent_errors.append(f"{name} at frame {frame}: {exc}")
         dt = max(ms / 1000.0, 1e-4)
         self._fps = 1.0 / dt if self._fps == 0 else 0.9 * self._fps + 0.1 / dt
         self._last_solved = frame
@@ -418,6 +427,7 @@ class EngineThread(threading.Thread):
             frames_skipped=self._skipped,
             mode=self._mode,
             timing=_timing(res, ms),
+            recent_errors=tuple(self._recent_errors),
         )
         self._method_error = ""
         self.latest = snap

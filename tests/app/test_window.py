@@ -162,9 +162,9 @@ def test_dropped_bvh_opens_is_remembered_and_the_preset_comes_back(studio, qtbot
 
 def test_a_sensor_switched_to_3_dof_loses_its_orientation_axes(studio, qtbot):
     joint = next(iter(studio.session.sensors))
+    seq = studio.session.latest.seq  # before the edit: its snapshot may come at once
     studio.sensor_panel.rows[joint]["dof"].setCurrentText("3-DoF")
     assert joint not in studio.viewport.oriented
-    seq = studio.session.latest.seq
     qtbot.waitUntil(lambda: studio.drawing._drawn_seq > seq)
     i = studio.viewport.sensors.joints.index(joint)
     tips = studio.viewport.sensors._axes_mesh.points.reshape(-1, 3, 2, 3)

@@ -7,16 +7,14 @@ window and the help dialog can list it (:func:`shortcut_rows`).
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from PyQt6.QtCore import Qt
 from PyQt6.QtGui import QAction, QActionGroup, QKeySequence
-from PyQt6.QtWidgets import QMenu
+from PyQt6.QtWidgets import QMainWindow, QMenu
 
 from widgets.help_dialog import HelpDialog
 
-if TYPE_CHECKING:
-    from app.main_window import MainWindow
 
 #: View ▸ Camera entries: preset, label, shortcut (Blender's numpad digits).
 CAMERAS = (("home", "&Home (front-left)", "Home"), ("front", "&Front", "1"),
@@ -44,7 +42,7 @@ def toggle(window: Any, menu: QMenu, text: str, on: bool, slot: Callable[[bool],
     return act
 
 
-def build_menus(w: "MainWindow") -> None:
+def build_menus(w: QMainWindow) -> None:
     """Fill ``w``'s menu bar; actions the tests and the help need are kept on ``w.actions_by_name``."""
     f = w.files
     named: dict[str, QAction] = {}

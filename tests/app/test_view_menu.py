@@ -49,9 +49,9 @@ def test_camera_presets_and_display_mode_from_the_keyboard(studio, qtbot):
     assert not studio.viewport.follow and not studio.actions_by_name["follow"].isChecked()
     QTest.keyClick(studio.viewport, Qt.Key.Key_B)
     assert studio.viewport.display == "body"
-    seq = studio.worker.latest.seq
+    seq = studio.session.latest.seq
     studio.session.seek(5)
-    qtbot.waitUntil(lambda: studio._drawn_seq > seq)
+    qtbot.waitUntil(lambda: studio.drawing._drawn_seq > seq)
     assert studio.viewport.body.visible and not studio.viewport.reconstruction.visible
     QTest.keyClick(studio.viewport, Qt.Key.Key_S)
     assert studio.viewport.display == "stick"

@@ -10,6 +10,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from engine.errors import UserError
+
 SHIPPED_VAE = Path(__file__).resolve().parents[1] / "assets" / "models" / "vae.pt"
 
 
@@ -31,10 +33,19 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--sensors", metavar="PRESET", help="sensor preset name")
     p.add_argument("--screenshot", metavar="OUT.png", help="save a screenshot and exit")
     p.add_argument("--after-frames", type=int, default=60, metavar="N", help="frames to play first (60)")
+    p.add_argument("--mode", choices=("every_frame", "real_time"),
+                   help="playback: solve every frame (default) or keep real time, skipping frames")
+    p.add_argument("--measure", type=float, metavar="SECONDS",
+                   help="play SECONDS, write smoothness figures (draws/s, solved/s, event-loop "
+                   "lateness, per-panel cost) to --json and exit")
+    p.add_argument("--json", metavar="OUT.json", default="measure.json", help="where --measure writes")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     from app.main import run as run_app  # Qt loads only when the window opens
 
-    return run_app(args.file, args.method or default_method(), args.sensors, args.screenshot, args.after_frames)
+    if args.measure is not None and not args.measure > 0:
+        raise UserError(f"--measure: SECONDS must be > 0, got {args.measure}")
+    return run_app(args.file, args.method or default_method(), args.sensors, args.screenshot, args.after_frames,
+                   args.measure, args.json, args.mode)  # fmt: skip

@@ -9,6 +9,7 @@ from PyQt6.QtCore import QTimer
 from PyQt6.QtWidgets import QApplication
 
 from app.main_window import MainWindow
+from app.measure import Measurement
 from engine.errors import UserError
 
 REPO = Path(__file__).resolve().parents[1]
@@ -44,8 +45,11 @@ def open_initial(window: MainWindow, path: str | None, sensors: str | None) -> N
 
 
 def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
-        screenshot: str | None = None, after_frames: int = 60) -> int:  # fmt: skip
-    """Show the studio; with ``screenshot``, play ``after_frames`` frames, save and exit."""
+        screenshot: str | None = None, after_frames: int = 60, measure: float | None = None,
+        measure_json: str | None = None, mode: str | None = None) -> int:  # fmt: skip
+    """Show the studio; with ``screenshot``, play ``after_frames`` frames, save and exit;
+    with ``measure``, play that many seconds and write the figures to ``measure_json``
+    (:mod:`app.measure`). ``mode`` sets the playback mode (every_frame or real_time)."""
     app = QApplication.instance() or QApplication(sys.argv[:1])
     app.setApplicationName("DragPoser Studio")
     window = MainWindow(method=method)
@@ -54,9 +58,15 @@ def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
     except UserError:
         window.close()
         raise
+    if mode is not None:
+        window.session.set_playback(mode=mode)
     if screenshot is not None:
         window.resize(1600, 980)  # a reproducible layout, whatever geometry was saved
+    if measure is not None:
+        window.resize(1600, 1000)  # the layout the issue's targets are set for
     window.show()
+    if measure is not None:
+        return _measure(app, window, measure, measure_json)
     if screenshot is None:
         return app.exec()
     status = {"code": 1}
@@ -85,4 +95,22 @@ def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
     QTimer.singleShot(300, window.session.play)
     QTimer.singleShot(int(SCREENSHOT_TIMEOUT_S * 1000), timeout)
     app.exec()
+    return status["code"]
+
+
+def _measure(app: QApplication, window: MainWindow, seconds: float, out: str | None) -> int:
+    status = {"code": 1}
+
+    def done(code: int, message: str) -> None:
+        if message:
+            print(message, file=sys.stderr)
+        status["code"] = code
+        window.close()
+        app.quit()
+
+    measurement = Measurement(window, seconds, out or "measure.json", done)
+    QTimer.singleShot(300, measurement.begin)
+    app.exec()
+    if status["code"] == 0:
+        print(f"wrote {out}")
     return status["code"]

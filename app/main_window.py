@@ -184,9 +184,13 @@ class MainWindow(QMainWindow):
 
     def _show_sensors(self, event: ev.SensorsChanged | None) -> None:
         s = self.session
-        if event is None or event.joint is None or (event.old is None) != (event.new is None) or (
-                event.old.dof != event.new.dof):  # fmt: skip
-            self.viewport.oriented = frozenset(j for j, c in s.sensors.items() if c.dof == 6)
+        if event is not None and event.old is not None and event.new is not None:
+            # one tracker edited (a target drag sends one per mouse move): its row only
+            if event.old.dof != event.new.dof:
+                self.viewport.oriented = frozenset(j for j, c in s.sensors.items() if c.dof == 6)
+            self.sensor_panel.set_sensor(event.joint, event.new)
+            return
+        self.viewport.oriented = frozenset(j for j, c in s.sensors.items() if c.dof == 6)
         self.sensor_panel.set_sensors(s.preset, s.sensors)
 
     def _show_constraints(self, event: ev.ConstraintsChanged | None) -> None:

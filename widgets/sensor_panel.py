@@ -74,15 +74,35 @@ class SensorPanel(QWidget):
             if list(sensors) != list(self.rows):
                 self._build_rows(list(sensors))
             for j, cfg in sensors.items():
-                r = self.rows[j]
-                r["enabled"].setChecked(cfg.enabled)
-                r["dof"].setCurrentIndex(0 if cfg.dof == 6 else 1)
-                r["weight"].setValue(cfg.weight)
-                moved = any(abs(v) > 1e-9 for v in cfg.offset)
-                r["reset"].setEnabled(moved or bool(cfg.failures))
-                r["label"].setText(LABELS.get(j, j) + (" *" if moved else ""))
+                self._show_row(j, cfg)
         finally:
             self._updating = False
+
+    def set_sensor(self, joint: str, cfg: Any) -> None:
+        """Show one edited sensor (a drag moves one target many times a second)."""
+        if joint not in self.rows:
+            return
+        self._updating = True
+        try:
+            self._show_row(joint, cfg)
+        finally:
+            self._updating = False
+
+    def _show_row(self, j: str, cfg: Any) -> None:
+        """Set only what differs: each setter repaints, and a drag calls this per mouse move."""
+        r = self.rows[j]
+        if r["enabled"].isChecked() != cfg.enabled:
+            r["enabled"].setChecked(cfg.enabled)
+        if r["dof"].currentIndex() != (0 if cfg.dof == 6 else 1):
+            r["dof"].setCurrentIndex(0 if cfg.dof == 6 else 1)
+        if abs(r["weight"].value() - cfg.weight) > 1e-9:
+            r["weight"].setValue(cfg.weight)
+        moved = any(abs(v) > 1e-9 for v in cfg.offset)
+        if r["reset"].isEnabled() != (moved or bool(cfg.failures)):
+            r["reset"].setEnabled(moved or bool(cfg.failures))
+        label = LABELS.get(j, j) + (" *" if moved else "")
+        if r["label"].text() != label:
+            r["label"].setText(label)
 
     def _build_rows(self, joints: list[str]) -> None:
         while self.grid.count():

@@ -129,12 +129,12 @@ def _live(args: argparse.Namespace) -> int:
 
 def _warm_up(method, skeleton, fps: float) -> None:
     """One untimed solve so the first live frame does not pay for allocations."""
-    from engine.methods import SensorFrame, SensorReading
+    from engine.sensors import Sensor, SensorFrame
 
     from engine import skeleton as sk
 
     rest = skeleton.rest_positions()
-    readings = {j: SensorReading(j, rest[sk.JOINT_INDEX[j]] + [0.0, 0.0, 1.0], np.array([1.0, 0.0, 0.0, 0.0]))
+    readings = {j: Sensor(j, rest[sk.JOINT_INDEX[j]] + [0.0, 0.0, 1.0], np.array([1.0, 0.0, 0.0, 0.0]))
                 for j in ("upperneck", "lwrist", "rwrist")}  # fmt: skip
     method.reset(skeleton, fps)
     for k in range(2):

@@ -24,7 +24,7 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.errors import UserError
-from engine.methods import SensorFrame, SensorReading
+from engine.sensors import Sensor, SensorFrame
 
 if TYPE_CHECKING:
     from engine.sources.calibration import Calibration
@@ -187,7 +187,7 @@ class TrackerState:
         Trackers never seen are absent; a tracker that is invalid or older than the
         timeout reads as disconnected and holds its last valid value.
         """
-        readings: dict[str, SensorReading] = {}
+        readings: dict[str, Sensor] = {}
         for name, s in self.latest.items():
             joint = self.mapping.slot(name)
             if joint is None:
@@ -197,7 +197,7 @@ class TrackerState:
             if self.calibration is not None:
                 pos, rot = self.calibration.apply(joint, pos, rot, dof)
             connected = bool(self.valid.get(name, False)) and (t - s.t) <= self.timeout_s
-            readings[joint] = SensorReading(joint, np.array(pos, float),
-                                            np.array(rot if dof == 6 else (1.0, 0.0, 0.0, 0.0), float),
-                                            dof, connected)  # fmt: skip
+            readings[joint] = Sensor(joint, np.array(pos, float),
+                                     np.array(rot if dof == 6 else (1.0, 0.0, 0.0, 0.0), float),
+                                     dof, connected)  # fmt: skip
         return SensorFrame(index, readings)

@@ -69,17 +69,17 @@ def test_standing_pose_scales_by_height_and_leaves_the_hands(synthetic_motion):
 
 
 def test_calibration_errors():
-    from engine.methods import SensorFrame, SensorReading
+    from engine.sensors import Sensor, SensorFrame
 
     with pytest.raises(UserError, match="no tracker was connected"):
         calibrate([])
-    hand = SensorFrame(0, {"lwrist": SensorReading("lwrist", np.array([0.5, 0, 1.4]), Q.identity())})
+    hand = SensorFrame(0, {"lwrist": Sensor("lwrist", np.array([0.5, 0, 1.4]), Q.identity())})
     with pytest.raises(UserError, match="needs a head or a hip tracker"):
         calibrate([hand])
-    low = SensorFrame(0, {"upperneck": SensorReading("upperneck", np.array([0, 0, 0.3]), Q.identity())})
+    low = SensorFrame(0, {"upperneck": Sensor("upperneck", np.array([0, 0, 0.3]), Q.identity())})
     with pytest.raises(UserError, match="implausible size"):
         calibrate([low])
-    head = SensorFrame(0, {"upperneck": SensorReading("upperneck", np.array([0, 0, 1.6]), Q.identity())})
+    head = SensorFrame(0, {"upperneck": Sensor("upperneck", np.array([0, 0, 1.6]), Q.identity())})
     with pytest.raises(UserError, match="T-pose needs both hand trackers"):
         calibrate([head], pose="tpose")
 

@@ -39,62 +39,41 @@ from engine.errors import UserError
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk, local_from_global
 from engine.motion import Motion
-from engine.rigs import RigProfile, detect_rig
+from engine import retarget_frames as RF
+from engine.rigs import RigProfile, resolve_rig
 
 _AXIS = {"x": 0, "y": 1, "z": 2}
-
-# Bone-frame rules: canonical joint -> (primary (from, [to candidates]), secondary spec).
-# A secondary spec is ("vec", a, b) = b - a, or ("hinge", a, b, c) = (b - a) x (c - b).
-_RULES: dict[str, tuple] = {
-    "root": (("rhip", ["lhip"]), ("vec", "root", "lowerback")),
-    "lowerback": (("lowerback", ["upperback", "chest", "lowerneck"]), ("vec", "rhip", "lhip")),
-    "upperback": (("upperback", ["chest", "lowerneck"]), ("vec", "rshoulder", "lshoulder")),
-    "chest": (("chest", ["lowerneck", "upperneck"]), ("vec", "rshoulder", "lshoulder")),
-    "lowerneck": (("lowerneck", ["upperneck"]), ("vec", "r_eye", "l_eye")),
-    "upperneck": (("r_eye", ["l_eye"]), ("vec", "upperneck", "eyes_mid")),
-}
-for _s in ("l", "r"):
-    _RULES.update(
-        {
-            f"{_s}hip": ((f"{_s}hip", [f"{_s}knee"]), ("vec", f"{_s}ankle", f"{_s}_toe_tip")),
-            f"{_s}knee": ((f"{_s}knee", [f"{_s}ankle"]), ("vec", f"{_s}ankle", f"{_s}_toe_tip")),
-            f"{_s}ankle": ((f"{_s}ankle", [f"{_s}_toe_tip"]), ("vec", f"{_s}ankle", f"{_s}knee")),
-            f"{_s}toe": ((f"{_s}toe", [f"{_s}_toe_tip"]), ("vec", f"{_s}ankle", f"{_s}knee")),
-            f"{_s}clavicle": ((f"{_s}clavicle", [f"{_s}shoulder"]), ("vec", "chest", "lowerneck")),
-            f"{_s}shoulder": (
-                (f"{_s}shoulder", [f"{_s}elbow"]),
-                ("hinge", f"{_s}shoulder", f"{_s}elbow", f"{_s}wrist"),
-            ),
-            f"{_s}elbow": ((f"{_s}elbow", [f"{_s}wrist"]), ("vec", f"{_s}_pinky", f"{_s}_index")),
-            f"{_s}wrist": ((f"{_s}wrist", [f"{_s}_hand_mid"]), ("vec", f"{_s}_pinky", f"{_s}_index")),
-        }
-    )
-
-#: Canonical landmark offsets (metres, canonical rest pose) from their anchor joints.
-_CANON_LANDMARKS = {
-    "l_toe_tip": ("ltoe", sk.END_SITES["ltoe"]),
-    "r_toe_tip": ("rtoe", sk.END_SITES["rtoe"]),
-    "l_eye": ("upperneck", np.array([0.032, -0.09, 0.07])),
-    "r_eye": ("upperneck", np.array([-0.032, -0.09, 0.07])),
-    "l_index": ("lwrist", np.array([0.09, -0.025, 0.0])),
-    "l_pinky": ("lwrist", np.array([0.08, 0.03, 0.0])),
-    "r_index": ("rwrist", np.array([-0.09, -0.025, 0.0])),
-    "r_pinky": ("rwrist", np.array([-0.08, 0.03, 0.0])),
-}
-#: Elbow hinge axes in the canonical T-pose (the arm is straight there): elbows flex forward.
-_CANON_HINGE = {"lshoulder": np.array([0.0, 0.0, -1.0]), "rshoulder": np.array([0.0, 0.0, 1.0])}
 _TOE_HEIGHT = 0.045  # canonical toe joint height above the floor when standing (metres)
+_CANON_FRAMES = RF.canonical_frames()
+_LEG = [sk.JOINT_INDEX[n] for n in ("lknee", "lankle")]
 
 
 @dataclass
 class RetargetReport:
-    """What :func:`retarget` did, for ``info`` and the tests."""
+    """What :func:`retarget` did: for ``info``, the tests and writing back onto the source rig.
+
+    ``align`` holds, per canonical joint, the constant rotation ``R`` with
+    ``G_canonical = G_source R`` (None for joints the rig lacks); ``basis`` the matrix
+    taking source axes to canonical ones; ``floor_shift`` the height (metres) added to
+    the root when re-flooring."""
 
     rig: str
     source_joints: int
     source_frames: int
     source_fps: float
     scale: float
+    profile: RigProfile | None = None
+    align: list | None = None
+    basis: np.ndarray | None = None
+    floor_shift: float = 0.0
+    skip: int = 0
+    source_height_m: float = float("nan")
+    height_m: float = float("nan")
+
+    @property
+    def mapping(self) -> dict[str, str]:
+        """Canonical joint -> source joint."""
+        return dict(self.profile.joints) if self.profile else {}
 
 
 def _basis_change(up: str, forward: str) -> np.ndarray:
@@ -111,86 +90,88 @@ def _basis_change(up: str, forward: str) -> np.ndarray:
     return src.T  # orthonormal: inverse = transpose
 
 
-def _frame(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Rotation (as quaternion) whose x-axis is ``a`` and y-axis ``b`` made orthogonal.
-
-    Returns the quaternions ``(..., 4)`` and a reliability weight ``(...,)`` (squared
-    sine of the angle between a and b)."""
-    an = a / np.maximum(np.linalg.norm(a, axis=-1, keepdims=True), 1e-9)
-    bn = b / np.maximum(np.linalg.norm(b, axis=-1, keepdims=True), 1e-9)
-    y = bn - (bn * an).sum(-1, keepdims=True) * an
-    w = (y * y).sum(-1)
-    y = y / np.maximum(np.linalg.norm(y, axis=-1, keepdims=True), 1e-9)
-    z = np.cross(an, y)
-    m = np.stack([an, y, z], axis=-1)
-    return Q.normalize(Q.from_matrix(m)), w
-
-
-def _mean_rotation(q: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """Weighted mean of rotations ``(F, 4)`` that cluster together (sign-aligned average)."""
-    ref = q[np.argmax(w)]
-    q = np.where(((q * ref).sum(-1) < 0)[:, None], -q, q)
-    mean = (q * w[:, None]).sum(0)
-    return Q.normalize(mean)
-
-
 def _points(raw_pos: np.ndarray, raw: RawBVH, prof: RigProfile, world_rot: np.ndarray) -> dict[str, np.ndarray]:
     """Named source points (F, 3): mapped canonical joints and landmarks."""
     idx = {n: i for i, n in enumerate(raw.names)}
     pts = {c: raw_pos[:, idx[s]] for c, s in prof.joints.items()}
     for lm, spec in prof.landmarks.items():
         if spec.startswith("end:"):
-            j = idx[spec[4:]]
-            end = raw.end_sites.get(j)
+            j = idx.get(spec[4:])
+            end = raw.end_sites.get(j) if j is not None else None
             if end is None:
                 raise UserError(f"{raw.path}: rig {prof.name}: joint {spec[4:]} has no end site")
-            pts[lm] = raw_pos[:, j] + Q.rotate(world_rot[:, j], np.broadcast_to(end, raw_pos[:, j].shape))
-        else:
+            pts[lm] = raw_pos[:, j] + Q.rotate(world_rot[:, j], np.broadcast_to(end * prof.units_to_m, raw_pos[:, j].shape))
+        elif spec in idx:
             pts[lm] = raw_pos[:, idx[spec]]
+        else:
+            raise UserError(f"{raw.path}: rig {prof.name}: landmark {lm} names a joint not in the file: {spec}")
     return pts
 
 
-def _add_derived(pts: dict[str, np.ndarray]) -> None:
-    if "l_eye" in pts and "r_eye" in pts:
-        pts["eyes_mid"] = 0.5 * (pts["l_eye"] + pts["r_eye"])
-    for s in ("l", "r"):
-        if f"{s}_index" in pts and f"{s}_pinky" in pts:
-            pts[f"{s}_hand_mid"] = 0.5 * (pts[f"{s}_index"] + pts[f"{s}_pinky"])
-
-
-def _bone_frames(pts: dict[str, np.ndarray], hinge_default: dict[str, np.ndarray] | None = None):
-    """Bone frame (quaternion, weight) per canonical joint whose rule resolves in ``pts``."""
-    out = {}
-    for joint, ((a0, a1s), sec) in _RULES.items():
-        a1 = next((c for c in a1s if c in pts), None)
-        if a0 not in pts or a1 is None:
+def _world_rotations(prof: RigProfile, pts, wrot, idx, cq) -> tuple[np.ndarray, list]:
+    """Canonical world rotations (F, 22, 4) and the per-joint alignment ``R`` (or None)."""
+    n = wrot.shape[0]
+    glob = np.zeros((n, sk.NUM_JOINTS, 4))
+    frames = RF.bone_frames(pts) if prof.align else {}
+    limbs = RF.limb_alignments(pts, {c: wrot[:, idx[s]] for c, s in prof.joints.items()}) if prof.align else {}
+    tpose = Q.conjugate(cq)  # zero pose taken as the T-pose: G_c = C G_src C^-1 = G_s C^-1
+    align: list = [None] * sk.NUM_JOINTS
+    for j, name in enumerate(sk.JOINT_NAMES):
+        src = prof.joints.get(name)
+        if src is None:
+            glob[:, j] = glob[:, sk.PARENTS[j]]  # joint the rig lacks: identity local rotation
             continue
-        a = pts[a1] - pts[a0]
-        if sec[0] == "vec":
-            if sec[1] not in pts or sec[2] not in pts:
-                continue
-            b = pts[sec[2]] - pts[sec[1]]
-        else:  # hinge
-            if hinge_default is not None and joint in hinge_default:
-                b = np.broadcast_to(hinge_default[joint], a.shape)
-            elif all(k in pts for k in sec[1:]):
-                b = np.cross(pts[sec[2]] - pts[sec[1]], pts[sec[3]] - pts[sec[2]])
-            else:
-                continue
-        out[joint] = _frame(a, b)
-    return out
+        g = wrot[:, idx[src]]
+        if name in limbs:
+            r = limbs[name]
+        elif name in frames:
+            r = RF.alignment(g, frames[name], _CANON_FRAMES[name])
+        else:
+            r = tpose
+        align[j] = r
+        glob[:, j] = Q.mul(g, np.broadcast_to(r, g.shape))
+    return glob, align
 
 
-def _canonical_frames() -> dict[str, np.ndarray]:
-    rest = sk.Skeleton.canonical().rest_positions()
-    pts = {n: rest[i][None] for i, n in enumerate(sk.JOINT_NAMES)}
-    for lm, (anchor, off) in _CANON_LANDMARKS.items():
-        pts[lm] = (rest[sk.JOINT_INDEX[anchor]] + off)[None]
-    _add_derived(pts)
-    return {j: q[0] for j, (q, _) in _bone_frames(pts, _CANON_HINGE).items()}
+def measure_offsets(pts: dict[str, np.ndarray], glob: np.ndarray, leg_scale: float) -> np.ndarray:
+    """Per-clip bone offsets (22, 3), metres, measured along the source chain.
+
+    A mapped joint's offset is the mean, over the clip, of the vector from its nearest
+    mapped ancestor, expressed in that ancestor's canonical frame; canonical joints
+    the rig lacks between two mapped ones share that vector in proportion to their
+    canonical lengths (they have identity local rotations, so they share the frame);
+    a missing leaf (toes) gets the canonical offset times ``leg_scale``."""
+    off = sk.REST_OFFSETS * leg_scale
+    for j in range(1, sk.NUM_JOINTS):
+        name = sk.JOINT_NAMES[j]
+        if name not in pts:
+            continue
+        chain = [j]
+        a = sk.PARENTS[j]
+        while sk.JOINT_NAMES[a] not in pts:
+            chain.append(a)
+            a = sk.PARENTS[a]
+        v = pts[name] - pts[sk.JOINT_NAMES[a]]
+        local = Q.rotate(Q.conjugate(glob[:, a]), v).mean(0)
+        lengths = np.linalg.norm(sk.REST_OFFSETS[chain], axis=-1)
+        for k, length in zip(chain, lengths):
+            off[k] = local * (length / lengths.sum())
+    for side in ("l", "r"):  # no toe joint but a toe tip: the toe sits on the way to it
+        toe, tip, ankle = f"{side}toe", f"{side}_toe_tip", sk.JOINT_INDEX[f"{side}ankle"]
+        if toe not in pts and tip in pts and f"{side}ankle" in pts:
+            k = sk.JOINT_INDEX[toe]
+            v = Q.rotate(Q.conjugate(glob[:, ankle]), pts[tip] - pts[f"{side}ankle"]).mean(0)
+            a, b = np.linalg.norm(sk.REST_OFFSETS[k]), np.linalg.norm(sk.END_SITES[toe])
+            off[k] = v * a / (a + b)
+    off[0] = 0.0
+    return off
 
 
-_CANON_FRAMES = _canonical_frames()
+def standing_height(head: np.ndarray, lowest: np.ndarray, skeleton: sk.Skeleton) -> float:
+    """Height (m) of the subject: 95th percentile over frames of the head joint above the
+    lowest foot point, plus the skeleton's head top (the head's end site). Measured the
+    same way on the source and on the canonical clip, so the two compare like for like."""
+    return float(np.percentile(head - lowest, 95)) + float(sk.END_SITES["upperneck"][2] * skeleton.scale)
 
 
 def _resample(local_rot: np.ndarray, root: np.ndarray, fps: float, target: float = sk.FPS):
@@ -209,7 +190,8 @@ def _resample(local_rot: np.ndarray, root: np.ndarray, fps: float, target: float
     return Q.normalize(rot_out), root_out
 
 
-def retarget(raw: RawBVH, fps: float | None = None, profile: RigProfile | None = None) -> tuple[Motion, RetargetReport]:
+def retarget(raw: RawBVH, fps: float | None = None, profile: RigProfile | None = None,
+             rig_map: str | Path | None = None) -> tuple[Motion, RetargetReport]:
     """Canonical :class:`Motion` (60 fps, Z-up metres, floor at 0) from a parsed BVH.
 
     Parameters
@@ -220,8 +202,10 @@ def retarget(raw: RawBVH, fps: float | None = None, profile: RigProfile | None =
         True frame rate of the source; default: from its ``Frame Time`` header.
     profile : RigProfile, optional
         Force a rig profile instead of detecting it from the joint names.
+    rig_map : path, optional
+        A mapping file (``rig suggest`` writes one) that overrides detection.
     """
-    prof = profile or detect_rig(list(raw.names), raw.path)
+    prof = profile or resolve_rig(raw, rig_map)
     src_fps = float(fps) if fps else _snap_fps(raw.fps)
     if src_fps <= 0:
         raise UserError(f"{raw.path}: frame rate must be positive, got {src_fps}")
@@ -230,9 +214,7 @@ def retarget(raw: RawBVH, fps: float | None = None, profile: RigProfile | None =
     pos = raw.positions[skip:].copy()
     if prof.root_channels_relative_to_offset:
         pos[:, 0] += raw.offsets[0]
-    offsets = raw.offsets
-    parents = list(raw.parents)
-    wpos, wrot = fk(quats, pos[:, 0], offsets, parents)
+    wpos, wrot = fk(quats, pos[:, 0], raw.offsets, list(raw.parents))
 
     basis = _basis_change(prof.up, prof.forward)
     cq = Q.from_matrix(basis)
@@ -241,36 +223,37 @@ def retarget(raw: RawBVH, fps: float | None = None, profile: RigProfile | None =
 
     idx = {n: i for i, n in enumerate(raw.names)}
     pts = _points(wpos, raw, prof, wrot)
-    leg = np.linalg.norm(pts["lknee"][0] - pts["lhip"][0]) + np.linalg.norm(pts["lankle"][0] - pts["lknee"][0])
-    canon_leg = np.linalg.norm(sk.REST_OFFSETS[[2, 3]], axis=-1).sum()
-    scale = float(leg / canon_leg)
+    RF.add_derived(pts)
+    leg = sum(float(np.median(np.linalg.norm(pts[b] - pts[a], axis=-1)))
+              for a, b in (("lhip", "lknee"), ("lknee", "lankle")))  # fmt: skip
+    leg_scale = leg / float(np.linalg.norm(sk.REST_OFFSETS[_LEG], axis=-1).sum())
 
-    n = wpos.shape[0]
-    glob = np.zeros((n, sk.NUM_JOINTS, 4))
-    if prof.align:
-        _add_derived(pts)
-        frames = _bone_frames(pts)
-    for j, name in enumerate(sk.JOINT_NAMES):
-        src = prof.joints.get(name)
-        if src is None:
-            glob[:, j] = glob[:, sk.PARENTS[j]]  # joint the rig lacks: identity local rotation
-            continue
-        g = wrot[:, idx[src]]
-        if prof.align and name in frames:
-            f, w = frames[name]
-            a = _mean_rotation(Q.mul(Q.conjugate(g), f), w + 1e-6)
-            g = Q.mul(g, np.broadcast_to(Q.mul(a, Q.conjugate(_CANON_FRAMES[name])), g.shape))
-        elif prof.align:
-            g = glob[:, sk.PARENTS[j]] if j else g
-        glob[:, j] = g
+    glob, align = _world_rotations(prof, pts, wrot, idx, cq)
+    joint_pts = {n: pts[n] for n in [*sk.JOINT_NAMES, "l_toe_tip", "r_toe_tip"] if n in pts}
+    skel = sk.Skeleton(offsets=measure_offsets(joint_pts, glob, leg_scale))
     local = Q.unroll(Q.normalize(local_from_global(glob)), axis=0)
     root = pts["root"]
+    feet = [pts[k][:, 2] for k in ("lankle", "rankle", "ltoe", "rtoe", "l_toe_tip", "r_toe_tip") if k in pts]
+    src_height = standing_height(pts["upperneck"][:, 2], np.min(feet, axis=0), skel)
 
     local, root = _resample(local, root, src_fps)
-    skel = sk.Skeleton.canonical(scale)
     motion = Motion(local, root, skel, sk.FPS, Path(raw.path).stem)
-    _refloor(motion)
-    return motion, RetargetReport(prof.name, len(raw.names), raw.frames, src_fps, scale)
+    shift = _refloor(motion)
+    report = RetargetReport(prof.name, len(raw.names), raw.frames, src_fps, skel.scale, prof, align, basis,
+                            shift, skip, src_height, clip_height(motion, "l_toe_tip" in pts))  # fmt: skip
+    return motion, report
+
+
+def clip_height(motion: Motion, toe_tips: bool = True) -> float:
+    """:func:`standing_height` of a canonical clip; ``toe_tips``: count the toes' end sites
+    among the foot points (as when the source has toe tips)."""
+    pos, rot = motion.fk()
+    low = [pos[:, sk.JOINT_INDEX[j], 2] for j in ("lankle", "rankle", "ltoe", "rtoe")]
+    for j in ("ltoe", "rtoe") if toe_tips else ():
+        k = sk.JOINT_INDEX[j]
+        end = np.broadcast_to(sk.END_SITES[j] * motion.skeleton.scale, pos[:, k].shape)
+        low.append((pos[:, k] + Q.rotate(rot[:, k], end))[:, 2])
+    return standing_height(pos[:, sk.JOINT_INDEX["upperneck"], 2], np.min(low, axis=0), motion.skeleton)
 
 
 def _snap_fps(fps: float) -> float:
@@ -278,12 +261,14 @@ def _snap_fps(fps: float) -> float:
     return float(round(fps)) if abs(fps - round(fps)) < 1e-3 * fps else fps
 
 
-def _refloor(motion: Motion) -> None:
-    """Shift the clip vertically so its feet stand on z = 0."""
+def _refloor(motion: Motion) -> float:
+    """Shift the clip vertically so its feet stand on z = 0; returns the shift (metres)."""
     pos = motion.positions()
     toes = pos[:, [sk.JOINT_INDEX["ltoe"], sk.JOINT_INDEX["rtoe"]], 2].min(axis=1)
     ground = np.percentile(toes, 2.0)
-    motion.root_pos[:, 2] += _TOE_HEIGHT * motion.skeleton.scale - ground
+    shift = float(_TOE_HEIGHT * motion.skeleton.scale - ground)
+    motion.root_pos[:, 2] += shift
+    return shift
 
 
 def manifest_fps(path: Path) -> float | None:
@@ -306,14 +291,17 @@ def manifest_fps(path: Path) -> float | None:
     return None
 
 
-def load_motion(path: str | Path, fps: float | None = None) -> Motion:
-    """Load any supported BVH as a canonical motion (see module docs).
+def load_motion(path: str | Path, fps: float | None = None, rig_map: str | Path | None = None) -> Motion:
+    """Load any humanoid BVH as a canonical motion (see module docs).
 
     ``fps`` overrides the file's header; otherwise a ``manifest.json`` beside the data
-    (as in ``../shared/data/mocap``) gives the true rate, else the header does."""
-    return load_with_report(path, fps)[0]
+    (as in ``../shared/data/mocap``) gives the true rate, else the header does.
+    ``rig_map`` is a mapping file that overrides rig detection."""
+    return load_with_report(path, fps, rig_map)[0]
 
 
-def load_with_report(path: str | Path, fps: float | None = None) -> tuple[Motion, RetargetReport]:
+def load_with_report(path: str | Path, fps: float | None = None,
+                     rig_map: str | Path | None = None) -> tuple[Motion, RetargetReport]:
+    """:func:`load_motion` plus the :class:`RetargetReport`."""
     raw = load_bvh(path)
-    return retarget(raw, fps or manifest_fps(Path(path)))
+    return retarget(raw, fps or manifest_fps(Path(path)), rig_map=rig_map)

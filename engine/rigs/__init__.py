@@ -5,6 +5,11 @@ it lacks are left out), optional ``[landmarks]`` used to build bone frames, the 
 scale, the up and forward axes of the source's rest pose, whether rotations need a
 rest-pose alignment, whether root position channels are relative to the root OFFSET and
 how many leading frames to drop. Adding a rig means adding one ``.toml`` file here.
+
+Rigs without a profile are mapped automatically (:mod:`engine.rigs.automap`, with unit
+and up axis from :mod:`engine.rigs.infer`); a user's mapping file (``--rig-map``, the
+same format with every field but ``[joints]`` optional) overrides both. See
+:func:`resolve_rig` and ``docs/skeleton.md``.
 """
 
 from __future__ import annotations
@@ -12,6 +17,8 @@ from __future__ import annotations
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
+
+import numpy as np
 
 from engine import skeleton as sk
 from engine.errors import RigError, UserError
@@ -34,6 +41,10 @@ class RigProfile:
     joints: dict[str, str]
     landmarks: dict[str, str] = field(default_factory=dict)
     path: str = ""
+    #: Why each joint / field was chosen (automatic mappings only), for ``rig suggest``.
+    reasons: dict[str, str] = field(default_factory=dict)
+    #: Source joints folded into each canonical bone (automatic mappings only).
+    folded: dict[str, list[str]] = field(default_factory=dict)
 
     def required_names(self) -> set[str]:
         """Source joint names whose presence identifies this rig."""
@@ -42,11 +53,15 @@ class RigProfile:
         return names
 
 
-def _parse(path: Path) -> RigProfile:
+def _read_toml(path: Path, what: str) -> dict:
     try:
-        data = tomllib.loads(path.read_text())
-    except (OSError, tomllib.TOMLDecodeError) as exc:
-        raise UserError(f"{path}: cannot read rig profile: {exc}") from exc
+        return tomllib.loads(Path(path).read_text())
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise UserError(f"{path}: cannot read {what}: {exc}") from exc
+
+
+def _parse(path: Path, data: dict | None = None) -> RigProfile:
+    data = _read_toml(path, "rig profile") if data is None else data
     try:
         prof = RigProfile(
             name=str(data["name"]),
@@ -57,7 +72,7 @@ def _parse(path: Path) -> RigProfile:
             align=bool(data["align"]),
             root_channels_relative_to_offset=bool(data.get("root_channels_relative_to_offset", False)),
             skip_frames=int(data.get("skip_frames", 0)),
-            joints=dict(data["joints"]),
+            joints={str(k): str(v) for k, v in dict(data["joints"]).items()},
             landmarks=dict(data.get("landmarks", {})),
             path=str(path),
         )
@@ -102,3 +117,71 @@ def detect_rig(joint_names: list[str], source: str = "", profiles: list[RigProfi
                      f" (missing here: {', '.join(missing[:6])}{'...' if len(missing) > 6 else ''})")
     lines.append("Add a profile to engine/rigs/ to support a new rig.")
     raise RigError("\n".join(lines))
+
+
+def resolve_rig(raw, rig_map: str | Path | None = None, profiles: list[RigProfile] | None = None) -> RigProfile:
+    """The rig description for a parsed BVH (``engine.bvh.RawBVH``).
+
+    In order: the user's mapping file ``rig_map`` if given; a TOML profile of
+    ``engine/rigs/`` whose joints all appear in the file; otherwise an automatic
+    mapping. Unit, up axis and root convention a mapping file leaves out are inferred.
+    Raises :class:`RigError` (what was not found, and the file's joint names)."""
+    from engine.rigs.automap import automap, check_mapping
+
+    names = list(raw.names)
+    if rig_map is None:
+        profiles = profiles if profiles is not None else load_profiles()
+        matches = [p for p in profiles if p.required_names() <= set(names)]
+        if matches:
+            return max(matches, key=lambda p: len(p.required_names()))
+        auto = automap(names, raw.parents, raw.offsets, raw.end_sites, raw.path)
+        return _complete({"name": "auto", "joints": auto.joints, "landmarks": auto.landmarks}, raw,
+                         str(raw.path), auto.reasons, auto.folded)  # fmt: skip
+    data = _read_toml(Path(rig_map), "rig mapping")
+    if "joints" not in data or not isinstance(data["joints"], dict):
+        raise UserError(f"{rig_map}: rig mapping lacks a [joints] table (canonical joint = source joint)")
+    check_mapping(names, raw.parents, {str(k): str(v) for k, v in data["joints"].items()}, str(rig_map))
+    if "landmarks" not in data:
+        auto_lm = {}
+        try:
+            auto_lm = automap(names, raw.parents, raw.offsets, raw.end_sites, raw.path).landmarks
+        except RigError:
+            pass
+        data = {**data, "landmarks": auto_lm}
+    return _complete({"name": "map", **data}, raw, str(rig_map), {}, {})
+
+
+def _complete(data: dict, raw, path: str, reasons: dict, folded: dict) -> RigProfile:
+    """Fill unit, axes and root convention a mapping leaves out, then validate it as a profile."""
+    from engine.rigs.infer import infer_axes, infer_units
+
+    data = dict(data)
+    reasons = dict(reasons)
+    joints = data["joints"]
+    need = {"root", "lhip", "lknee", "lankle", "rhip", "rankle", "upperneck"}
+    if not need <= set(joints) and not {"units_to_m", "up", "forward"} <= set(data):
+        raise RigError(f"{path}: cannot infer unit and up axis without {', '.join(sorted(need - set(joints)))} "
+                       "in [joints]; give units_to_m, up and forward")  # fmt: skip
+    if "units_to_m" not in data:
+        data["units_to_m"], reasons["units_to_m"] = infer_units(_leg_length(raw, joints))
+    if "up" not in data or "forward" not in data:
+        up, fwd, rel, why = infer_axes(raw, joints)
+        data.setdefault("up", up)
+        data.setdefault("forward", fwd)
+        data.setdefault("root_channels_relative_to_offset", rel)
+        reasons["axes"] = why
+    data.setdefault("align", True)
+    data.setdefault("description", f"mapped {'automatically' if data['name'] == 'auto' else 'by ' + path}")
+    prof = _parse(Path(path), data)
+    return RigProfile(**{**prof.__dict__, "reasons": reasons, "folded": folded})
+
+
+def _leg_length(raw, joints: dict[str, str]) -> float:
+    """Hip-to-ankle length along the source chain (sum of OFFSET lengths), file units."""
+    idx = {n: i for i, n in enumerate(raw.names)}
+    j, stop = idx[joints["lankle"]], idx[joints["lhip"]]
+    total = 0.0
+    while j != stop and j >= 0:
+        total += float(np.linalg.norm(raw.offsets[j]))
+        j = raw.parents[j]
+    return total

@@ -42,6 +42,8 @@ from engine.motion import Motion
 from engine import retarget_frames as RF
 from engine.rigs import RigProfile, resolve_rig
 
+#: Bumped whenever retargeting gives different clips (prepared data is rebuilt then).
+RETARGET_VERSION = 2
 _AXIS = {"x": 0, "y": 1, "z": 2}
 _TOE_HEIGHT = 0.045  # canonical toe joint height above the floor when standing (metres)
 _CANON_FRAMES = RF.canonical_frames()
@@ -69,6 +71,8 @@ class RetargetReport:
     skip: int = 0
     source_height_m: float = float("nan")
     height_m: float = float("nan")
+    #: The source's toe tips as offsets (metres) in the canonical toe frames, by toe name.
+    toe_tips: dict | None = None
 
     @property
     def mapping(self) -> dict[str, str]:
@@ -235,25 +239,47 @@ def retarget(raw: RawBVH, fps: float | None = None, profile: RigProfile | None =
     root = pts["root"]
     feet = [pts[k][:, 2] for k in ("lankle", "rankle", "ltoe", "rtoe", "l_toe_tip", "r_toe_tip") if k in pts]
     src_height = standing_height(pts["upperneck"][:, 2], np.min(feet, axis=0), skel)
+    tips = _toe_tips(pts, local, root, skel)
 
     local, root = _resample(local, root, src_fps)
     motion = Motion(local, root, skel, sk.FPS, Path(raw.path).stem)
     shift = _refloor(motion)
     report = RetargetReport(prof.name, len(raw.names), raw.frames, src_fps, skel.scale, prof, align, basis,
-                            shift, skip, src_height, clip_height(motion, "l_toe_tip" in pts))  # fmt: skip
+                            shift, skip, src_height, clip_height(motion, tips), tips)  # fmt: skip
     return motion, report
 
 
-def clip_height(motion: Motion, toe_tips: bool = True) -> float:
-    """:func:`standing_height` of a canonical clip; ``toe_tips``: count the toes' end sites
-    among the foot points (as when the source has toe tips)."""
+def _toe_tips(pts, local, root, skel) -> dict[str, np.ndarray]:
+    """The source's toe tips in the canonical toe frames (mean over the clip)."""
+    pos, rot = fk(local, root, skel.offsets)
+    out = {}
+    for side in ("l", "r"):
+        if f"{side}_toe_tip" in pts:
+            k = sk.JOINT_INDEX[f"{side}toe"]
+            out[f"{side}toe"] = Q.rotate(Q.conjugate(rot[:, k]), pts[f"{side}_toe_tip"] - pos[:, k]).mean(0)
+    return out
+
+
+def clip_height(motion: Motion, toe_tips: dict[str, np.ndarray] | None = None) -> float:
+    """:func:`standing_height` of a canonical clip.
+
+    The foot points are the ankles, the toes and the toe tips: ``toe_tips`` (offsets in
+    the toe frames, as :func:`retarget` measures the source's) or, by default, the
+    skeleton's end sites."""
     pos, rot = motion.fk()
     low = [pos[:, sk.JOINT_INDEX[j], 2] for j in ("lankle", "rankle", "ltoe", "rtoe")]
-    for j in ("ltoe", "rtoe") if toe_tips else ():
+    if toe_tips is None:
+        toe_tips = {j: sk.END_SITES[j] * motion.skeleton.scale for j in ("ltoe", "rtoe")}
+    for j, off in toe_tips.items():
         k = sk.JOINT_INDEX[j]
-        end = np.broadcast_to(sk.END_SITES[j] * motion.skeleton.scale, pos[:, k].shape)
-        low.append((pos[:, k] + Q.rotate(rot[:, k], end))[:, 2])
+        low.append((pos[:, k] + Q.rotate(rot[:, k], np.broadcast_to(off, pos[:, k].shape)))[:, 2])
     return standing_height(pos[:, sk.JOINT_INDEX["upperneck"], 2], np.min(low, axis=0), motion.skeleton)
+
+
+def resample_motion(motion: Motion, fps: float) -> Motion:
+    """The same motion at another frame rate (slerp for rotations, linear for the root)."""
+    rot, root = _resample(motion.local_rot, motion.root_pos, motion.fps, fps)
+    return Motion(rot, root, motion.skeleton, float(fps), motion.name)
 
 
 def _snap_fps(fps: float) -> float:

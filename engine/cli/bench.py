@@ -15,6 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
+from engine.cli.rig_options import add_rig_map_option, rig_map_path
+
 REPO = Path(__file__).resolve().parents[2]
 DEFAULT_CLIP = REPO / "assets" / "clips" / "example.bvh"
 
@@ -35,6 +37,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--frames", type=int, default=300, help="frames to time (default: 300)")
     p.add_argument("--warmup", type=int, default=10, help="untimed frames first (default: 10)")
     p.add_argument("--json", type=Path, metavar="OUT", help="also write the results as JSON")
+    add_rig_map_option(p)
     p.set_defaults(func=_bench)
 
 
@@ -77,7 +80,7 @@ def _bench(args: argparse.Namespace) -> int:
     from engine.retarget import load_motion
     from engine.tracking import simulate
 
-    motion = load_motion(args.file)
+    motion = load_motion(args.file, rig_map=rig_map_path(args))
     if args.warmup + 1 > len(motion):
         raise UserError(f"{args.file}: only {len(motion)} frames, fewer than the warm-up")
     tracking = simulate(motion, args.sensors)

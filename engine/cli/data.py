@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from engine.cli.rig_options import add_rig_map_option, rig_map_path
 from engine.errors import UserError
 
 REPO = Path(__file__).resolve().parents[2]
@@ -33,6 +34,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--no-mirror", action="store_true", help="do not add left/right mirrored copies")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_rig_map_option(p)
     p.set_defaults(func=_prepare)
     ls = dsub.add_parser(
         "list",
@@ -52,7 +54,8 @@ def _prepare(args: argparse.Namespace) -> int:
     inputs = args.inputs or [DEFAULT_DATA]
     if not args.inputs and not DEFAULT_DATA.is_dir():
         raise UserError(f"no input given and the default data folder {DEFAULT_DATA} does not exist")
-    res = prepare(inputs, args.out, eval_only=args.eval_only, mirror=not args.no_mirror, progress=not args.quiet)
+    res = prepare(inputs, args.out, eval_only=args.eval_only, mirror=not args.no_mirror, progress=not args.quiet,
+                  rig_map=rig_map_path(args))
     state = "unchanged" if res.unchanged else "updated"
     print(f"{res.out}/manifest.json {state}: {res.written} shards written, {res.reused} reused, "
           f"{len(res.failed)} files failed")

@@ -20,6 +20,7 @@ import numpy as np
 
 from engine.atomic import write_text
 from engine.cli.method_options import add_model_options, apply_settings, method_kwargs
+from engine.cli.rig_options import add_rig_map_option, rig_map_path
 from engine.errors import UserError
 
 #: Columns of the printed table: (metric key, header, format).
@@ -59,6 +60,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=int, default=0, help="seed of the tracker simulation (default: 0)")
     p.add_argument("--json", type=Path, metavar="OUT.json", help="also write the results as JSON")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bars")
+    add_rig_map_option(p)
     p.set_defaults(func=_evaluate)
 
 
@@ -149,7 +151,7 @@ def _evaluate(args: argparse.Namespace) -> int:
     apply_settings(method, args.method, args.set)
     per_file: dict[str, dict[str, Any]] = {}
     for path in clips:
-        motion = load_motion(path)
+        motion = load_motion(path, rig_map=rig_map_path(args))
         if args.max_frames:
             motion = motion.slice(0, args.max_frames)
         if len(motion) < 4:

@@ -4,44 +4,74 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 from pathlib import Path
+
+from engine.cli.rig_options import add_rig_map_option, rig_map_path
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "info",
-        help="describe a BVH file: detected rig, frames, fps, canonical result",
-        description="Load a BVH file, detect its rig, retarget it to the canonical 22-joint "
-        "skeleton at 60 fps and print what was found.",
+        help="describe a BVH file: detected rig, joint mapping, frames, fps, heights",
+        description="Load a BVH file, detect or map its rig, retarget it to the canonical 22-joint "
+        "skeleton at 60 fps and print what was found. With --json one JSON object is printed, "
+        "with an \"error\" field when the file cannot be read.",
     )
     p.add_argument("file", type=Path, help="BVH file")
     p.add_argument("--fps", type=float, help="true source frame rate (overrides the header)")
+    add_rig_map_option(p)
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     p.set_defaults(func=_info)
 
 
-def _info(args: argparse.Namespace) -> int:
+def describe(path: Path, fps: float | None = None, rig_map: Path | None = None) -> dict:
+    """Everything ``info`` reports about a BVH file, as a JSON-ready dict."""
     from engine.retarget import load_with_report, manifest_fps
 
-    motion, rep = load_with_report(args.file, args.fps or manifest_fps(args.file))
-    out = {
-        "file": str(args.file),
+    motion, rep = load_with_report(path, fps or manifest_fps(path), rig_map)
+
+    def num(x: float, nd: int = 3):
+        return round(float(x), nd) if math.isfinite(x) else None
+
+    return {
+        "file": str(path),
         "rig": rep.rig,
+        "mapping": rep.mapping,
+        "folded": rep.profile.folded if rep.profile else {},
+        "up": rep.profile.up if rep.profile else None,
+        "units_to_m": rep.profile.units_to_m if rep.profile else None,
         "source_joints": rep.source_joints,
         "source_frames": rep.source_frames,
         "source_fps": rep.source_fps,
         "frames": len(motion),
         "fps": motion.fps,
         "joints": 22,
-        "height_m": round(motion.skeleton.height(), 3),
+        "height_m": num(rep.height_m),
+        "source_height_m": num(rep.source_height_m),
+        "rest_height_m": num(motion.skeleton.height()),
+        "scale": num(rep.scale),
     }
+
+
+def _info(args: argparse.Namespace) -> int:
     if args.json:
+        try:
+            out = describe(args.file, args.fps, rig_map_path(args))
+        except Exception as exc:  # noqa: BLE001 - --json promises one object whatever happens
+            print(json.dumps({"file": str(args.file), "error": str(exc) or type(exc).__name__}))
+            return 2
         print(json.dumps(out))
         return 0
+    out = describe(args.file, args.fps, rig_map_path(args))
     print(f"file          {out['file']}")
-    print(f"rig           {rep.rig}")
-    print(f"source        {rep.source_joints} joints, {rep.source_frames} frames at {rep.source_fps:g} fps "
-          f"({rep.source_frames / rep.source_fps:.2f} s)")
-    print(f"canonical     22 joints, {len(motion)} frames at {motion.fps:g} fps ({motion.duration:.2f} s)")
-    print(f"height        {out['height_m']:.2f} m (scale {rep.scale:.3f} of the canonical subject)")
+    print(f"rig           {out['rig']} (up {out['up']}, {out['units_to_m']:g} m per unit)")
+    print(f"source        {out['source_joints']} joints, {out['source_frames']} frames at {out['source_fps']:g} fps "
+          f"({out['source_frames'] / out['source_fps']:.2f} s)")
+    print(f"canonical     22 joints, {out['frames']} frames at {out['fps']:g} fps ({out['frames'] / out['fps']:.2f} s)")
+    print(f"height        {out['height_m']:.2f} m (source {out['source_height_m']:.2f} m; "
+          f"T-pose {out['rest_height_m']:.2f} m, legs {out['scale']:.3f} x the canonical subject's)")
+    print("mapping       " + ", ".join(f"{c}={s}" for c, s in out["mapping"].items()))
+    if out["folded"]:
+        print("folded in     " + ", ".join(f"{c}: {'+'.join(v)}" for c, v in out["folded"].items()))
     return 0

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from engine.cli.method_options import add_model_options, build_method
+from engine.cli.rig_options import add_rig_map_option
 from engine.cli.tracker_options import (add_tracker_options, check_tracker_options, default_skeleton,
                                         load_reference, write_json)  # fmt: skip
 from engine.errors import UserError
@@ -38,6 +39,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--timeout", type=float, default=0.25, metavar="S",
                    help="a tracker silent for S seconds reads as lost (default: 0.25)")  # fmt: skip
     add_tracker_options(p)
+    add_rig_map_option(p)  # for --reference REF.bvh
     p.add_argument("--method", default="dragposer", help="reconstruction method (default: dragposer)")
     p.add_argument("--mode", choices=("realtime", "offline"), default="realtime", help=argparse.SUPPRESS)
     p.add_argument("--iterations", type=int, metavar="N", help="optimizer iterations per frame")

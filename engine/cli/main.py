@@ -19,6 +19,8 @@ from engine.errors import UserError
 #: Subcommand modules, in the order ``--help`` lists them.
 SUBCOMMANDS = (
     "engine.cli.info",
+    "engine.cli.convert",
+    "engine.cli.rig",
     "engine.cli.data",
     "engine.cli.train",
     "engine.cli.reconstruct",

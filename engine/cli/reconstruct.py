@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from engine.cli.method_options import add_model_options, build_method
+from engine.cli.rig_options import add_rig_map_option, rig_map_path
 from engine.cli.tracker_options import add_tracker_options
 from engine.errors import UserError
 
@@ -34,6 +35,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--trackers", type=Path, metavar="REC.jsonl",
                    help="reconstruct a tracker recording (from `live --record`; docs/trackers.md) instead of IN.bvh")
     p.add_argument("--out", type=Path, required=True, metavar="OUT.bvh", help="where to write the reconstruction")
+    p.add_argument("--on-source-rig", action="store_true",
+                   help="write the result onto IN.bvh's own hierarchy (its joint names, offsets and "
+                   "channels; joints outside the 22 keep their rest rotation) instead of the canonical one")
+    add_rig_map_option(p)
     p.add_argument("--sensors", default="6", help="sensor preset or list, e.g. 6, 4, root,lwrist:3 (default: 6)")
     p.add_argument("--mode", choices=("realtime", "offline"), help="realtime: fixed iterations per frame; "
                    "offline: iterate until the sensor tolerances are met (default: realtime)")  # fmt: skip
@@ -55,8 +60,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _reconstruct(args: argparse.Namespace) -> int:
     from engine.bvh import save_motion_bvh
+    from engine.bvh import load_bvh
     from engine.methods import run_method
-    from engine.retarget import load_motion
+    from engine.retarget import manifest_fps, retarget
     from engine.tracking import parse_sensors, simulate
 
     if not 0.0 <= args.faulty <= 1.0:
@@ -70,6 +76,8 @@ def _reconstruct(args: argparse.Namespace) -> int:
     if args.trackers is not None:
         if args.input is not None:
             raise UserError("give IN.bvh or --trackers REC.jsonl, not both (the clip can be --reference)")
+        if args.on_source_rig:
+            raise UserError("--on-source-rig writes onto IN.bvh's rig; it does not apply to --trackers")
         from engine.cli.reconstruct_trackers import reconstruct_trackers
 
         return reconstruct_trackers(args)
@@ -81,7 +89,8 @@ def _reconstruct(args: argparse.Namespace) -> int:
     if args.map:
         raise UserError("--map applies to --trackers recordings")
     parse_sensors(args.sensors)  # fail before loading anything
-    motion = load_motion(args.input)
+    raw = load_bvh(args.input)
+    motion, report = retarget(raw, manifest_fps(args.input), rig_map=rig_map_path(args))
     if args.max_frames:
         motion = motion.slice(0, args.max_frames)
     if len(motion) == 0:
@@ -91,7 +100,12 @@ def _reconstruct(args: argparse.Namespace) -> int:
     rec, results = run_method(method, tracking, motion.skeleton, progress=not args.no_progress,
                               desc=args.input.name)  # fmt: skip
     rec.name = f"{motion.name} ({args.method})"
-    save_motion_bvh(args.out, rec)
+    if args.on_source_rig:
+        from engine.source_rig import save_on_source_rig
+
+        save_on_source_rig(args.out, rec, raw, report)
+    else:
+        save_motion_bvh(args.out, rec)
     print(summary(results, tracking, rec, args.out))
     return 0
 

@@ -34,7 +34,7 @@ from engine.atomic import atomic_path, write_bytes
 from engine.errors import UserError
 from engine.kinematics.features import encoder_input, mirror_motion, pose_from_motion
 from engine.motion import Motion
-from engine.retarget import load_with_report, manifest_fps
+from engine.retarget import RETARGET_VERSION, load_with_report, manifest_fps
 
 FORMAT = 1
 #: Bumped whenever the feature definition changes, so cached statistics are recomputed.
@@ -141,14 +141,18 @@ def prepare(
     eval_only: list[str] | None = None,
     mirror: bool = True,
     progress: bool = True,
+    rig_map: Path | None = None,
 ) -> PrepareResult:
-    """Run the whole preparation (see module docs). Returns what was done."""
+    """Run the whole preparation (see module docs). Returns what was done.
+
+    ``rig_map`` is a joint mapping file used for every input instead of rig detection."""
     eval_only = ["dragposer/*"] if eval_only is None else eval_only
     files = discover(inputs)
     if not files:
         raise UserError(f"no .bvh files found under {', '.join(map(str, inputs))}")
     splits = assign_splits([rel for _, rel in files], eval_only)
-    settings = {"format": FORMAT, "features": FEATURES_VERSION, "mirror": mirror, "eval_only": eval_only}
+    settings = {"format": FORMAT, "features": FEATURES_VERSION, "mirror": mirror, "eval_only": eval_only,
+                "retarget": RETARGET_VERSION, "rig_map": sha256_file(rig_map) if rig_map else None}
     man_path = out / "manifest.json"
     old = {}
     if man_path.is_file():
@@ -172,7 +176,7 @@ def prepare(
                 entries.extend(cached)  # type: ignore[arg-type]
                 result.reused += len(cached)
                 continue
-            motion, report = load_with_report(path, manifest_fps(path))
+            motion, report = load_with_report(path, manifest_fps(path), rig_map)
             if len(motion) < 8:
                 raise UserError(f"{path}: only {len(motion)} frames after retargeting")
             for m in variants:

@@ -43,12 +43,15 @@ def twist_deg(q: np.ndarray, axis: np.ndarray) -> np.ndarray:
     return np.degrees((ang + np.pi) % (2 * np.pi) - np.pi)
 
 
-def hinge_axis(q: np.ndarray) -> tuple[np.ndarray, float]:
+def hinge_axis(q: np.ndarray, about_zero: bool = False) -> tuple[np.ndarray, float]:
     """Dominant rotation axis (3,) of local rotations ``q (F, 4)`` and its share of the motion.
 
-    Returns the unit axis, in the joint's frame, and the fraction (0..1) of the
-    squared rotation-vector magnitude it explains (1 = a perfect hinge)."""
-    ref = _mean(q)
+    Rotation vectors are taken relative to the clip's mean rotation, or to the zero
+    rotation with ``about_zero`` (for a joint whose zero pose is straight, so that a
+    knee kept bent still shows its hinge). Returns the unit axis, in the joint's frame,
+    and the fraction (0..1) of the squared rotation-vector magnitude it explains (1 = a
+    perfect hinge)."""
+    ref = np.array([1.0, 0.0, 0.0, 0.0]) if about_zero else _mean(q)
     d = Q.mul(Q.conjugate(ref)[None], q)
     d = np.where(d[:, :1] < 0, -d, d)
     half = np.arccos(np.clip(d[:, 0], -1.0, 1.0))
@@ -71,7 +74,7 @@ def joint_report(local_rot: np.ndarray, offsets: np.ndarray) -> dict[str, dict[s
     for name in BONE_CHILD:
         j = sk.JOINT_INDEX[name]
         tw = twist_deg(local_rot[:, j], bone_axis(offsets, name))
-        axis, share = hinge_axis(local_rot[:, j])
+        axis, share = hinge_axis(local_rot[:, j], about_zero=True)
         out[name] = {
             "twist_median": float(np.median(tw)),
             "twist_abs_p90": float(np.percentile(np.abs(tw), 90)),
@@ -85,7 +88,8 @@ def limb_hinge(g_parent: np.ndarray, g_child: np.ndarray, bend: np.ndarray) -> t
     """Hinge axis of a limb joint (knee, elbow) in the parent's and in the child's frame.
 
     The axis is the dominant rotation axis of the child relative to the parent
-    (:func:`hinge_axis` of ``g_parent^-1 g_child``), in the child's frame; in the
+    (:func:`hinge_axis` of ``g_parent^-1 g_child`` about the zero rotation: rigs' zero
+    poses have straight limbs), in the child's frame; in the
     parent's frame it is that axis turned by the clip's mean relative rotation. Its
     sign is the one of the bend direction ``bend (F, 3)``, world vectors
     ``(p_b - p_a) x (p_c - p_b)`` (so that it agrees between rigs).
@@ -103,7 +107,7 @@ def limb_hinge(g_parent: np.ndarray, g_child: np.ndarray, bend: np.ndarray) -> t
         Unit axes.
     """
     rel = Q.mul(Q.conjugate(g_parent), g_child)
-    axis, _ = hinge_axis(rel)
+    axis, _ = hinge_axis(rel, about_zero=True)
     in_parent = Q.rotate(_mean(rel), axis)
     hp = Q.rotate(Q.conjugate(g_parent), bend).sum(0)
     if float(in_parent @ hp) < 0:

@@ -28,6 +28,7 @@ from __future__ import annotations
 import numpy as np
 
 from engine import skeleton as sk
+from engine.joint_stats import limb_hinge
 from engine.kinematics import quaternion as Q
 
 # canonical joint -> (primary (from, [to candidates]), [secondary specs tried in order]).
@@ -59,14 +60,14 @@ for _s in ("l", "r"):
 #: Knee/elbow hinge axes in the local frame of each limb joint, as DragPoser's own clips
 #: bend them: :func:`engine.joint_stats.limb_hinge`, mean over the three example clips.
 CANON_HINGE: dict[str, tuple[float, float, float]] = {
-    "lhip": (0.955, 0.232, 0.186),
-    "lknee": (0.970, 0.143, 0.198),
-    "lshoulder": (-0.058, -0.566, -0.822),
-    "lelbow": (-0.087, -0.567, -0.819),
-    "rhip": (0.993, -0.117, 0.013),
-    "rknee": (1.000, -0.003, 0.007),
-    "rshoulder": (-0.198, 0.500, 0.843),
-    "relbow": (-0.204, 0.510, 0.836),
+    "lhip": (0.936, 0.233, 0.264),
+    "lknee": (0.947, 0.194, 0.256),
+    "lshoulder": (-0.073, -0.580, -0.811),
+    "lelbow": (-0.080, -0.590, -0.804),
+    "rhip": (0.989, -0.112, -0.102),
+    "rknee": (0.994, -0.066, -0.089),
+    "rshoulder": (-0.185, 0.510, 0.840),
+    "relbow": (-0.187, 0.512, 0.838),
 }
 #: Limbs aligned by their hinge: (upper joint, lower joint, end joint).
 LIMBS = tuple((f"{s}hip", f"{s}knee", f"{s}ankle") for s in "lr") + tuple(
@@ -158,8 +159,6 @@ def limb_alignments(pts: dict[str, np.ndarray], g: dict[str, np.ndarray]) -> dic
     (:func:`engine.joint_stats.limb_hinge`) define a frame; the canonical frame is the
     canonical bone direction with :data:`CANON_HINGE`. Twist about the bone therefore
     comes only from the source's own motion about its hinge's frame."""
-    from engine.joint_stats import limb_hinge
-
     out = {}
     for a, b, c in LIMBS:
         if not all(k in pts for k in (a, b, c)):

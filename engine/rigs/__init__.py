@@ -22,6 +22,8 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.errors import RigError, UserError
+from engine.rigs.automap import automap, check_mapping
+from engine.rigs.infer import infer_axes, infer_units
 
 PROFILE_DIR = Path(__file__).resolve().parent
 LANDMARKS = ("l_toe_tip", "r_toe_tip", "l_eye", "r_eye", "l_index", "l_pinky", "r_index", "r_pinky")
@@ -126,8 +128,6 @@ def resolve_rig(raw, rig_map: str | Path | None = None, profiles: list[RigProfil
     ``engine/rigs/`` whose joints all appear in the file; otherwise an automatic
     mapping. Unit, up axis and root convention a mapping file leaves out are inferred.
     Raises :class:`RigError` (what was not found, and the file's joint names)."""
-    from engine.rigs.automap import automap, check_mapping
-
     names = list(raw.names)
     if rig_map is None:
         profiles = profiles if profiles is not None else load_profiles()
@@ -153,8 +153,6 @@ def resolve_rig(raw, rig_map: str | Path | None = None, profiles: list[RigProfil
 
 def _complete(data: dict, raw, path: str, reasons: dict, folded: dict) -> RigProfile:
     """Fill unit, axes and root convention a mapping leaves out, then validate it as a profile."""
-    from engine.rigs.infer import infer_axes, infer_units
-
     data = dict(data)
     reasons = dict(reasons)
     joints = data["joints"]

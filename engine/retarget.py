@@ -1,28 +1,26 @@
-"""Load any supported BVH rig onto the canonical skeleton.
+"""Load any humanoid BVH rig onto the canonical skeleton, keeping the subject's proportions.
 
-How it works
-------------
-1. The source file is read and validated (:func:`engine.bvh.load_bvh`), its rig detected
-   from its joint names (:func:`engine.rigs.detect_rig`).
+How it works (details and figures in ``docs/skeleton.md``)
+----------------------------------------------------------
+1. The source file is read and validated (:func:`engine.bvh.load_bvh`); its rig comes from
+   a mapping file, a TOML profile or the automatic mapping (:func:`engine.rigs.resolve_rig`).
 2. Source FK gives world positions and rotations of every source joint, converted to the
    canonical axes (Z-up, facing -Y) and metres.
-3. **Rest-pose alignment.** Rigs disagree on what zero rotation means (the iClone rig's
-   zero pose points every bone upwards) and on how a joint's axes sit on its bone. For
-   every canonical joint we build a *bone frame* from positions: its first axis along
-   the bone, its second from a bone-rigid reference (the foot's forward direction for
-   the legs, the eye line for the head, the index-pinky line for the hands, the elbow's
-   hinge for the upper arm). The same rule applied to the canonical T-pose gives the
-   canonical bone frame ``F_c``. The constant rotation ``A_j`` between a source joint's
-   axes and its bone frame is estimated over the whole clip (a weighted quaternion
-   mean, so frames where the reference is degenerate barely count), and the canonical
-   world rotation is ``G_c(t) = G_s(t) A_j F_c^-1``. Positions follow the source's bone
-   directions exactly; twist conventions become those of the canonical T-pose, so a
-   T-pose in any rig is the canonical T-pose. Canonical joints a rig lacks (Daz has no
-   toes or upper back) get identity local rotations.
-4. Bone lengths are the canonical ones scaled by the ratio of leg lengths (the subject's
-   size is kept, proportions are canonical); the root keeps the source trajectory.
-5. The clip is re-floored (the 2nd-percentile lowest toe sits at the canonical toe height)
-   and resampled to 60 fps (slerp for rotations, linear for the root).
+3. **Rotations with the canonical local axes.** Every canonical joint's world rotation is
+   the source joint's times one constant ``R`` per joint (``G_c = G_s R``), chosen so that
+   the joint's bone frame matches the canonical one (:mod:`engine.retarget_frames`):
+   limbs by their knee/elbow hinge as DragPoser's own clips bend them, the rest by
+   position-based bone frames averaged over the clip. The source's own motion, twist
+   included, is kept; only the axes convention changes. Canonical joints a rig lacks get
+   identity local rotations.
+4. **True proportions.** Bone offsets are measured per clip along the source chain
+   (:func:`measure_offsets`), so mapped joints land where the source's are and the clip's
+   height is the subject's (:func:`standing_height`); the root keeps the source trajectory.
+5. The clip is resampled to 60 fps (slerp for rotations, linear for the root) and
+   re-floored (the 2nd-percentile lowest toe sits at the canonical toe height).
+
+The :class:`RetargetReport` keeps what is needed to go back onto the source rig
+(:mod:`engine.source_rig`).
 """
 
 from __future__ import annotations

@@ -78,18 +78,26 @@ class FileActions:
         menu.setEnabled(bool(self.recent()))
 
     # -- saving ---------------------------------------------------------------------
-    def save_reconstruction(self, path: str | None = None) -> None:
-        """Reconstruct the whole clip off the GUI thread, then write it as BVH."""
+    def save_on_source_rig(self, path: str | None = None) -> None:
+        """Like :meth:`save_reconstruction`, written onto the opened file's own rig."""
+        self.save_reconstruction(path, on_source_rig=True)
+
+    def save_reconstruction(self, path: str | None = None, on_source_rig: bool = False) -> None:
+        """Reconstruct the whole clip off the GUI thread, then write it as BVH (canonical
+        skeleton, or with ``on_source_rig`` the hierarchy of the file it was opened from)."""
         s = self.w.session
         if s.motion is None:
             return self.w.show_error("Nothing to save", "Open a motion first.")
+        if on_source_rig and getattr(s, "path", None) is None:
+            return self.w.show_error("Nothing to save", "This clip was not opened from a BVH file.")
         if self._export is not None:
             return self.w.statusBar().showMessage("An export is already running", 3000)
         if path is None:
             path, _ = QFileDialog.getSaveFileName(self.w, "Save reconstruction", "", "BVH motion (*.bvh)")
             if not path:
                 return None
-        args = (s.motion, tuple(s.sensors.values()), tuple(s.constraints), dict(s.settings), s.method, path)
+        source = s.path if on_source_rig else None
+        args = (s.motion, tuple(s.sensors.values()), tuple(s.constraints), dict(s.settings), s.method, path, source)
         self._export = threading.Thread(target=self._export_run, args=args, name="bvh-export", daemon=True)
         self._export.start()
         self._poll.start()
@@ -97,13 +105,21 @@ class FileActions:
         return None
 
     def _export_run(self, motion: Any, sensors: tuple, constraints: tuple, settings: dict,
-                    method: str, path: str) -> None:  # fmt: skip
+                    method: str, path: str, source: Path | None = None) -> None:  # fmt: skip
         try:
             from engine.bvh import save_motion_bvh
             from engine.studio.methods import reconstruct_clip
 
             result = reconstruct_clip(motion, sensors, constraints, settings, method)
-            save_motion_bvh(path, result)
+            if source is None:
+                save_motion_bvh(path, result)
+            else:  # the source's own hierarchy (docs/skeleton.md, --on-source-rig)
+                from engine.bvh import load_bvh
+                from engine.retarget import manifest_fps, retarget
+                from engine.source_rig import save_on_source_rig
+
+                raw = load_bvh(source)
+                save_on_source_rig(path, result, raw, retarget(raw, manifest_fps(source))[1])
             self._export_result = ("ok", f"Saved {len(result)} frames to {path}")
         except ImportError as exc:
             self._export_result = ("error", f"BVH writing is not available yet ({exc})")

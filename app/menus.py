@@ -52,6 +52,7 @@ def build_menus(w: QMainWindow) -> None:
     f.refresh_recent()
     file_menu.addSeparator()
     action(w, file_menu, "&Save reconstruction as BVH...", f.save_reconstruction, QKeySequence.StandardKey.Save)
+    action(w, file_menu, "Save reconstruction onto the source &rig...", f.save_on_source_rig, "Ctrl+Alt+S")
     action(w, file_menu, "Save s&cene...", f.save_scene, "Ctrl+Shift+S")
     action(w, file_menu, "&Load scene...", f.load_scene, "Ctrl+L")
     action(w, file_menu, "Export screens&hot...", f.export_screenshot, "Ctrl+E")

@@ -191,6 +191,16 @@ def test_save_reconstruction_writes_a_bvh_off_the_gui_thread(studio, qtbot, tmp_
     assert len(load_motion(out)) == studio.session.num_frames
 
 
+def test_save_onto_the_source_rig_keeps_the_files_hierarchy(studio, qtbot, tmp_path):
+    from engine.bvh import load_bvh
+
+    out = tmp_path / "recon_src.bvh"
+    studio.files.save_on_source_rig(str(out))
+    qtbot.waitUntil(lambda: studio.files._export is None, timeout=30000)
+    back, src = load_bvh(out), load_bvh(studio.session.path)
+    assert back.names == src.names and back.frames == studio.session.num_frames
+
+
 def test_speed_and_loop_from_the_timeline_reach_the_engine(studio, qtbot):
     n = studio.session.num_frames
     t = studio.timeline

@@ -111,7 +111,7 @@ class MainWindow(QMainWindow):
         self.status_engine = QLabel()
         self.status_gui = QLabel()
         self.status_warnings = QLabel()
-        for w, width in ((self.status_engine, 330), (self.status_gui, 120), (self.status_warnings, 110)):
+        for w, width in ((self.status_engine, 480), (self.status_gui, 130), (self.status_warnings, 110)):
             w.setFixedWidth(width)  # text changes must not relayout the window every frame
             self.statusBar().addPermanentWidget(w)
         self._connect_widgets()

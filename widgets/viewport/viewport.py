@@ -9,7 +9,6 @@ import numpy as np
 from PyQt6.QtCore import QEvent, QObject, pyqtSignal
 from PyQt6.QtGui import QImage
 from PyQt6.QtWidgets import QVBoxLayout, QWidget
-from pyvistaqt import QtInteractor
 
 from widgets import style
 from widgets.viewport.body import BodyActor
@@ -17,6 +16,7 @@ from widgets.viewport.camera import CAMERA_PRESETS, place_camera
 from widgets.viewport.floor import FloorGrid
 from widgets.viewport.ghosts import GhostLayer
 from widgets.viewport.gizmos import ConstraintGizmos
+from widgets.viewport.native import make_plotter
 from widgets.viewport.picking import JointDragger
 from widgets.viewport.sensors import SensorMarkers
 from widgets.viewport.skeleton import SkeletonActor
@@ -51,7 +51,7 @@ class Viewport(QWidget):
         super().__init__(parent)
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
-        self.plotter = QtInteractor(self, auto_update=False, multi_samples=0)
+        self.plotter = make_plotter(self)
         # pyvistaqt accepts any dropped file and tries to read it as a mesh; take the
         # drops here instead so a .bvh dropped on the view opens like one on the window
         self.plotter.installEventFilter(self)

@@ -1,0 +1,38 @@
+"""On X11 the 3D view is a native child window, so the rest of the window stays raster.
+
+With pyvistaqt's QOpenGLWidget, Qt composites the whole window through (software) OpenGL
+whenever any widget in it repaints; a status-bar label then cost as much as a 3D frame.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+pytestmark = pytest.mark.gui
+
+
+def test_the_view_renders_in_a_native_window_on_x11_and_draws_the_skeleton(qtbot, fake_snapshot):
+    from PyQt6.QtCore import Qt
+    from PyQt6.QtGui import QGuiApplication
+    from PyQt6.QtOpenGLWidgets import QOpenGLWidget
+
+    from tests.widgets.test_viewport import orange_fraction
+    from widgets.viewport import Viewport
+    from widgets.viewport.native import NativeInteractor
+
+    if QGuiApplication.platformName() != "xcb":
+        pytest.skip("the native-window view is the X11 choice")
+    v = Viewport()
+    v.resize(640, 480)
+    v.show()
+    qtbot.waitExposed(v)
+    try:
+        assert isinstance(v.plotter, NativeInteractor) and not isinstance(v.plotter, QOpenGLWidget)
+        assert v.plotter.testAttribute(Qt.WidgetAttribute.WA_NativeWindow)
+        v.show_snapshot(fake_snapshot())
+        img = v.plotter.screenshot(return_img=True)
+        assert orange_fraction(np.asarray(img)) > 0.001
+    finally:
+        v.close()
+    assert v.plotter._closed

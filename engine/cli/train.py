@@ -1,4 +1,4 @@
-"""``dragposer-studio train vae|predictor``: train the models on prepared data.
+"""``dragposer-studio train vae|predictor|sparseposer|rpm``: train the models on prepared data.
 
 Settings come from the dataclass defaults, then ``--config FILE.toml``, then
 ``--set key=value`` (repeatable), then the common flags. Runs unchanged under
@@ -26,7 +26,7 @@ def _common(p: argparse.ArgumentParser, out_default: str) -> None:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("train", help="train the pose VAE or the temporal predictor")
+    p = sub.add_parser("train", help="train the pose VAE, the temporal predictor, SparsePoser or RPM")
     tsub = p.add_subparsers(dest="train_command", metavar="MODEL")
     v = tsub.add_parser("vae", help="train the pose VAE", description=__doc__)
     _common(v, "runs/vae")
@@ -35,6 +35,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     _common(q, "runs/predictor")
     q.add_argument("--vae", type=Path, default=Path("runs/vae/vae.pt"), help="trained VAE weights")
     q.set_defaults(func=_train_predictor)
+    s = tsub.add_parser("sparseposer", help="train SparsePoser (generator + learned IK, preset 6)",
+                        description=__doc__)
+    _common(s, "runs/sparseposer")
+    s.set_defaults(func=_train_sparseposer)
+    r = tsub.add_parser("rpm", help="train the Rolling Prediction Model (preset 3-head-hands)", description=__doc__)
+    _common(r, "runs/rpm")
+    r.set_defaults(func=_train_rpm)
     p.set_defaults(func=lambda args: p.print_help() or 0)
 
 
@@ -63,4 +70,29 @@ def _train_predictor(args: argparse.Namespace) -> int:
     if meta:
         print(f"{args.out}/predictor.pt: {meta.get('epochs')} epochs, {meta.get('minutes')} min, "
               f"val latent MSE {meta.get('val_mse', float('nan')):.4g}")
+    return 0
+
+
+def _train_sparseposer(args: argparse.Namespace) -> int:
+    from engine.config import load_config
+    from engine.training.sparseposer import SparsePoserTrainConfig, train_sparseposer
+
+    cfg = load_config(SparsePoserTrainConfig, args.config, args.set, **_direct(args))
+    meta = train_sparseposer(args.data, args.out, cfg, resume=args.resume, progress=not args.quiet)
+    if meta:
+        print(f"{args.out}/sparseposer.pt: {meta.get('epochs')} epochs, {meta.get('minutes')} min, "
+              f"val {meta.get('val_pos_cm', float('nan')):.2f} cm (generator alone "
+              f"{meta.get('val_gen_pos_cm', float('nan')):.2f} cm)")
+    return 0
+
+
+def _train_rpm(args: argparse.Namespace) -> int:
+    from engine.config import load_config
+    from engine.training.rpm import RPMTrainConfig, train_rpm
+
+    cfg = load_config(RPMTrainConfig, args.config, args.set, **_direct(args))
+    meta = train_rpm(args.data, args.out, cfg, resume=args.resume, progress=not args.quiet)
+    if meta:
+        print(f"{args.out}/rpm.pt: {meta.get('epochs')} epochs, {meta.get('minutes')} min, "
+              f"val {meta.get('val_pos_cm', float('nan')):.2f} cm")
     return 0

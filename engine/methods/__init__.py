@@ -115,6 +115,20 @@ def _register_builtin() -> None:
     register_method("ik", IKMethod)
     register_method("dragposer", _dragposer)
     register_method("autoencoder", _autoencoder)
+    register_method("sparseposer", _sparseposer)
+    register_method("rpm", _rpm)
+
+
+def _sparseposer(**kwargs: Any) -> Method:
+    from engine.methods.sparseposer import create
+
+    return create(**kwargs)
+
+
+def _rpm(**kwargs: Any) -> Method:
+    from engine.methods.rpm import create
+
+    return create(**kwargs)
 
 
 def _autoencoder(**kwargs: Any) -> Method:

@@ -1,7 +1,7 @@
 """Load model weights files, checking what they are before trusting them.
 
 A weights file is a dict saved with ``torch.save``: ``format_version``, ``kind``
-("vae" or "predictor"), ``config``, ``state_dict`` and ``meta`` (training data hash,
+("vae", "predictor", "sparseposer" or "rpm"), ``config``, ``state_dict`` and ``meta`` (training data hash,
 epochs, validation figures). Anything else is a :class:`ModelFileError` naming the file.
 """
 
@@ -22,6 +22,8 @@ FORMAT_VERSION = 1
 ASSETS = Path(__file__).resolve().parents[2] / "assets" / "models"
 DEFAULT_VAE = ASSETS / "vae.pt"
 DEFAULT_PREDICTOR = ASSETS / "predictor.pt"
+DEFAULT_SPARSEPOSER = ASSETS / "sparseposer.pt"
+DEFAULT_RPM = ASSETS / "rpm.pt"
 
 
 @dataclass
@@ -80,6 +82,38 @@ def load_predictor(path: Path | str) -> tuple[TemporalPredictor, dict]:
         raise ModelFileError(f"{path}: bad predictor config ({exc})") from exc
     model = TemporalPredictor(cfg)
     _load_state(model, payload, Path(path))
+    model.eval().requires_grad_(False)
+    return model, dict(payload.get("meta", {}))
+
+
+def load_sparseposer(path: Path | str | None = None):
+    """SparsePoser (generator + learned IK) from ``path`` (default: the shipped file)."""
+    from engine.models.sparseposer import SparsePoser, SparsePoserConfig
+
+    path = Path(path or DEFAULT_SPARSEPOSER)
+    payload = _read(path, "sparseposer")
+    try:
+        cfg = SparsePoserConfig.from_dict(payload["config"])
+    except (TypeError, KeyError) as exc:
+        raise ModelFileError(f"{path}: bad SparsePoser config ({exc})") from exc
+    model = SparsePoser(cfg)
+    _load_state(model, payload, path)
+    model.eval().requires_grad_(False)
+    return model, dict(payload.get("meta", {}))
+
+
+def load_rpm(path: Path | str | None = None):
+    """The Rolling Prediction Model from ``path`` (default: the shipped file)."""
+    from engine.models.rpm import RPM, RPMConfig
+
+    path = Path(path or DEFAULT_RPM)
+    payload = _read(path, "rpm")
+    try:
+        cfg = RPMConfig(**payload["config"])
+    except TypeError as exc:
+        raise ModelFileError(f"{path}: bad RPM config ({exc})") from exc
+    model = RPM(cfg)
+    _load_state(model, payload, path)
     model.eval().requires_grad_(False)
     return model, dict(payload.get("meta", {}))
 

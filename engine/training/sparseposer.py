@@ -135,7 +135,7 @@ def train_sparseposer(data_dir: Path, out_dir: Path, cfg: SparsePoserTrainConfig
         li.backward()
         average_gradients(ddp, model.ik.parameters())
         opt_ik.step()
-        return {"l_dq": float(lg), "l_s": float(l_s), "l_reg": float(l_reg)}
+        return {"l_dq": lg.item(), "l_s": l_s.item(), "l_reg": l_reg.item()}
 
     def validate() -> dict[str, float]:
         return validate_sparseposer(model, val, s_va, cfg.window)

@@ -108,6 +108,10 @@ class OptimizerSettings:
         (``upperneck``, the head, by default; any joint name), or ``none`` to integrate
         the decoded root displacement from frame to frame (drifts without a hip tracker:
         tens of centimetres over a clip with head and hands only).
+    sensor_blend : float
+        Seconds over which a tracker that disconnects or reconnects is blended out / in
+        (``engine/methods/sensor_blend.py``); 0 = the target jumps. Trackers that place
+        the body (hips, ``root_anchor``) are never blended.
     threads : int
         Torch intra-op threads while solving (0 = leave torch's setting). The tensors
         are tiny, so one thread is fastest; on a busy 2-core machine, torch's default
@@ -134,6 +138,7 @@ class OptimizerSettings:
     step_size: float = 0.3
     momentum: float = 0.0
     threads: int = 1
+    sensor_blend: float = 0.0
 
     def __post_init__(self) -> None:
         self.validate()
@@ -150,7 +155,7 @@ class OptimizerSettings:
                 raise UserError(f"optimizer setting {name!r} must be a positive integer, got {v!r}")
             setattr(self, name, int(v))
         floats = ("lr", "position_tolerance", "rotation_tolerance", "sensor_rotation_weight", "temporal_weight",
-                  "min_improvement", "divergence_factor", "momentum", "step_size")  # fmt: skip
+                  "min_improvement", "divergence_factor", "momentum", "step_size", "sensor_blend")  # fmt: skip
         for name in floats:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:

@@ -45,7 +45,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         "with the clip. Metrics are defined in docs/metrics.md.",
     )
     p.add_argument("paths", nargs="+", type=Path, metavar="PATH", help="BVH files or folders (searched for *.bvh)")
-    p.add_argument("--method", default="ik", help="reconstruction method (default: ik)")
+    p.add_argument("--method", default="ik",
+                   help="reconstruction method, or several separated by commas to compare them on the same "
+                   "simulated trackers, e.g. dragposer,ik,sparseposer,rpm (default: ik)")
     p.add_argument("--sensors", default="6", help="sensor preset or list, e.g. 6, 4, root,lwrist:3 (default: 6)")
     p.add_argument("--faulty", type=float, default=0.0, metavar="P",
                    help="per-frame probability that one sensor fails for 100 frames (DragPoser: 0.01)")
@@ -58,7 +60,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_model_options(p)
     p.add_argument("--max-frames", type=int, metavar="N", help="evaluate only the first N frames of each clip")
     p.add_argument("--seed", type=int, default=0, help="seed of the tracker simulation (default: 0)")
-    p.add_argument("--json", type=Path, metavar="OUT.json", help="also write the results as JSON")
+    p.add_argument("--json", type=Path, metavar="OUT.json",
+                   help="also write the results as JSON (several methods: an object per method name)")
+    p.add_argument("--markdown", type=Path, metavar="OUT.md", help="also write the table as Markdown")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bars")
     add_rig_map_option(p)
     p.set_defaults(func=_evaluate)
@@ -135,43 +139,103 @@ def format_table(per_file: dict[str, dict[str, Any]], total: dict[str, Any], los
     return "\n".join(lines)
 
 
-def _evaluate(args: argparse.Namespace) -> int:
+def format_markdown(rows: dict[str, dict[str, Any]], lossy: bool, first: str = "clip") -> str:
+    """The table as Markdown: one row per entry of ``rows`` (files or methods)."""
+    cols = COLUMNS + (GAP_COLUMNS if lossy else ())
+    out = [f"| {first} | " + " | ".join(h for _, h, _ in cols) + " |", "|---|" + "---:|" * len(cols)]
+    for name, m in rows.items():
+        cells = []
+        for key, _, fmt in cols:
+            v = m.get(key)
+            cells.append("-" if v is None or (isinstance(v, float) and math.isnan(v)) else fmt.format(v).strip())
+        out.append(f"| {name} | " + " | ".join(cells) + " |")
+    return "\n".join(out) + "\n"
+
+
+def method_names(spec: str) -> list[str]:
+    """``"dragposer, ik"`` -> ``["dragposer", "ik"]``; unknown or repeated names fail early."""
+    from engine.methods import available_methods
+
+    names = [n.strip() for n in spec.split(",") if n.strip()]
+    if not names:
+        raise UserError("--method: no method named")
+    for n in names:
+        if n not in available_methods():
+            raise UserError(f"--method: unknown method {n!r}; available: {', '.join(available_methods())}")
+    if len(set(names)) != len(names):
+        raise UserError(f"--method: a method is named twice in {spec!r}")
+    return names
+
+
+def run_method_on_clips(args: argparse.Namespace, name: str, motions: list[tuple[Path, Any]]) -> dict[str, Any]:
+    """Evaluate one method on the loaded clips: the single-method JSON object."""
     from engine.methods import get_method
     from engine.metrics import summarize
+
+    method = get_method(name, **method_kwargs(args, args.mode, name))
+    if getattr(method, "configure", None) is not None or len(args.method.split(",")) == 1:
+        apply_settings(method, name, args.set)
+    per_file = {
+        str(path): evaluate_clip(
+            motion, method, args.sensors, faulty=args.faulty, gaps=args.gaps,
+            noise_pos_m=args.noise_pos, noise_rot_deg=args.noise_rot, seed=args.seed,
+            progress=not args.no_progress, desc=f"{name} {path.name}",
+        )
+        for path, motion in motions
+    }  # fmt: skip
+    return {"method": name, "preset": args.sensors, "mode": args.mode, "total": summarize(per_file), "files": per_file}
+
+
+def _safe_doc(doc: dict[str, Any]) -> dict[str, Any]:
+    out = dict(doc)
+    if "total" in out:
+        out["total"] = _json_safe(out["total"])
+        out["files"] = {k: _json_safe(v) for k, v in out["files"].items()}
+    return out
+
+
+def _evaluate(args: argparse.Namespace) -> int:
     from engine.retarget import load_motion
     from engine.tracking import parse_sensors
 
     parse_sensors(args.sensors)  # fail before loading anything
+    names = method_names(args.method)
     if args.faulty < 0 or args.faulty > 1:
         raise UserError(f"--faulty must be a probability in [0, 1], got {args.faulty}")
     if args.max_frames is not None and args.max_frames < 4:
         raise UserError("--max-frames must be at least 4 (jitter needs 4 frames)")
-    clips = find_clips(args.paths)
-    method = get_method(args.method, **method_kwargs(args, args.mode))
-    apply_settings(method, args.method, args.set)
-    per_file: dict[str, dict[str, Any]] = {}
-    for path in clips:
+    motions = []
+    for path in find_clips(args.paths):
         motion = load_motion(path, rig_map=rig_map_path(args))
         if args.max_frames:
             motion = motion.slice(0, args.max_frames)
         if len(motion) < 4:
             raise UserError(f"{path}: only {len(motion)} frames; at least 4 are needed")
-        per_file[str(path)] = evaluate_clip(
-            motion, method, args.sensors, faulty=args.faulty, gaps=args.gaps,
-            noise_pos_m=args.noise_pos, noise_rot_deg=args.noise_rot, seed=args.seed,
-            progress=not args.no_progress, desc=path.name,
-        )
-    total = summarize(per_file)
+        motions.append((path, motion))
     lossy = args.gaps or args.faulty > 0
-    print(format_table(per_file, total, lossy))
+    if len(names) == 1:
+        doc = run_method_on_clips(args, names[0], motions)
+        print(format_table(doc["files"], doc["total"], lossy))
+        table_md = format_markdown({**{Path(k).name: v for k, v in doc["files"].items()}, "total": doc["total"]}, lossy)
+        out: dict[str, Any] = _safe_doc(doc)
+    else:
+        docs: dict[str, dict[str, Any]] = {}
+        for name in names:
+            try:
+                docs[name] = run_method_on_clips(args, name, motions)
+            except UserError as exc:  # e.g. a method that needs another sensor preset
+                docs[name] = {"method": name, "preset": args.sensors, "mode": args.mode, "error": str(exc)}
+        totals = {n: d.get("total", {}) for n, d in docs.items()}
+        print(format_table(totals, {}, lossy).rsplit("\n", 1)[0].replace("clip", "method", 1))
+        for n, d in docs.items():
+            if "error" in d:
+                print(f"{n}: not evaluated: {d['error']}")
+        table_md = format_markdown(totals, lossy, first="method")
+        out = {n: _safe_doc(d) for n, d in docs.items()}
+    if args.markdown:
+        write_text(args.markdown, table_md)
+        print(f"wrote {args.markdown}")
     if args.json:
-        doc = {
-            "method": args.method,
-            "preset": args.sensors,
-            "mode": args.mode,
-            "total": _json_safe(total),
-            "files": {k: _json_safe(v) for k, v in per_file.items()},
-        }
-        write_text(args.json, json.dumps(doc, indent=2) + "\n")
+        write_text(args.json, json.dumps(out, indent=2) + "\n")
         print(f"wrote {args.json}")
     return 0

@@ -24,6 +24,7 @@ from engine.constraints import Constraint, SensorConstraint, TemporalPriorConstr
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
 from engine.methods.base import FrameResult, Method
+from engine.methods.sensor_blend import SensorBlend
 from engine.sensors import Sensor, SensorFrame
 from engine.motion import Motion
 from engine.optimizer import FULL_SET, FrameContext, LatentDecoder, OptimizerSettings, PoseOptimizer
@@ -133,6 +134,7 @@ class DragPoserMethod(Method):
         self._positions: torch.Tensor | None = None
         self._last: FrameResult | None = None
         self._disps: list[torch.Tensor] = []
+        self._blends: dict[str, SensorBlend] = {}
 
     def step(self, sensors: SensorFrame) -> FrameResult:
         threads = torch.get_num_threads()
@@ -210,11 +212,17 @@ class DragPoserMethod(Method):
             ok = _finite(r)
             if r.connected and not ok:
                 warnings.append(f"sensor {joint}: non-finite reading ignored")
-            c.rotation_weight = s.sensor_rotation_weight
             c.position_tolerance, c.rotation_tolerance = s.position_tolerance, s.rotation_tolerance
-            if r.connected and ok:
-                c.set_target(r.position, r.rotation if r.dof == 6 else None, True)
-            c.connected = c.enabled = bool(r.connected and ok)
+            live = bool(r.connected and ok)
+            # trackers that place the body (hips, root anchor) are never blended
+            seconds = 0.0 if joint in ("root", s.root_anchor) else s.sensor_blend
+            prev = None if self._positions is None else self._positions[sk.JOINT_INDEX[joint]].double().numpy()
+            t = self._blends.setdefault(joint, SensorBlend()).update(r.position, live, prev, seconds, self.fps)
+            c.rotation_weight = s.sensor_rotation_weight * t.rotation_weight
+            c.weight = self.sensor_weights.get(joint, 1.0) * t.weight
+            if t.active:
+                c.set_target(t.position, r.rotation if live and r.dof == 6 else None, True)
+            c.connected = c.enabled = t.active
         return warnings
 
     def _root_override(self) -> RootOverride | None:

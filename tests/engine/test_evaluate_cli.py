@@ -122,3 +122,36 @@ def test_set_reaches_the_method(monkeypatch):
     assert apply_settings(Configurable(), "x", ["optimizer=sgd", "lr=0.3", "root_anchor=none"]) == seen
     assert seen == {"optimizer": "sgd", "lr": 0.3, "root_anchor": "none"}
     assert apply_settings(object(), "ik", []) == {}
+
+
+def test_several_methods_in_one_pass(clip_dir, tmp_path, capsys):
+    import torch
+
+    from engine.models.loading import FORMAT_VERSION
+    from engine.models.rpm import RPM, RPMConfig
+    from engine.models.sparseposer import SparsePoser, SparsePoserConfig
+
+    torch.manual_seed(0)
+    weights, sp_weights = tmp_path / "rpm.pt", tmp_path / "sp.pt"
+    for path, kind, model in ((weights, "rpm", RPM(RPMConfig(past_inputs=2, past_poses=2, window=3, hidden=16, blocks=1))),
+                              (sp_weights, "sparseposer", SparsePoser(SparsePoserConfig(window=8, channels=(4, 4, 4))))):
+        torch.save({"format_version": FORMAT_VERSION, "kind": kind, "config": model.config.to_dict(),
+                    "state_dict": model.state_dict(), "meta": {}}, path)  # fmt: skip
+    walk = next(clip_dir.rglob("walk.bvh"))
+    out, md = tmp_path / "multi.json", tmp_path / "table.md"
+    args = ["evaluate", str(walk), "--sensors", "3-head-hands", "--gaps", "--max-frames", "90", "--no-progress",
+            "--rpm-model", str(weights), "--sparseposer-model", str(sp_weights), "--json", str(out), "--markdown", str(md)]
+    assert main([*args, "--method", "ik,rpm,sparseposer"]) == 0
+    text = capsys.readouterr().out
+    assert text.splitlines()[0].startswith("method") and "sparseposer: not evaluated" in text and "'6'" in text
+    doc = json.loads(out.read_text())
+    assert set(doc) == {"ik", "rpm", "sparseposer"} and "error" in doc["sparseposer"]
+    single = tmp_path / "ik.json"
+    assert main([*args[:-6], "--method", "ik", "--json", str(single)]) == 0
+    assert doc["ik"]["total"] == json.loads(single.read_text())["total"] | {"ms_per_frame": doc["ik"]["total"]["ms_per_frame"]}
+    assert {"pj", "auj"} <= set(doc["rpm"]["total"]) and doc["rpm"]["files"]
+    lines = md.read_text().splitlines()
+    assert lines[0].startswith("| method |") and "PJ" in lines[0] and len(lines) == 5
+    capsys.readouterr()
+    assert main([*args, "--method", "ik,ik"]) != 0
+    assert "named twice" in capsys.readouterr().err

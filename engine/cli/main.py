@@ -28,6 +28,7 @@ SUBCOMMANDS = (
     "engine.cli.live",
     "engine.cli.evaluate",
     "engine.cli.bench",
+    "engine.cli.compare",
 )
 #: Entry-point group of subcommand modules other packages register.
 PLUGIN_GROUP = "dragposer_studio.subcommands"

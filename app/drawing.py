@@ -58,6 +58,7 @@ class DrawScheduler:
             Panel("plot:cost", w.plots.update_cost, 0.5),
             Panel("plot:history", w.plots.update_history, 0.5),
             Panel("latent", w.latent.update_snapshot, 0.25),
+            Panel("plot:methods", w.method_errors.update_snapshot, 0.25),
             Panel("status", self._update_status, 0.5),
         ]
 

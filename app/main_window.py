@@ -27,6 +27,7 @@ from engine.studio.session import Session
 from widgets.constraint_panel import ConstraintPanel
 from widgets.latent_inspector import LatentInspector
 from widgets.optimizer_panel import OptimizerPanel
+from widgets.method_errors import MethodErrorPlot
 from widgets.plots import LossPlots
 from widgets.sensor_panel import SensorPanel
 from widgets.timeline import Timeline
@@ -102,6 +103,9 @@ class MainWindow(QMainWindow):
         scene = self._dock("Scene", tabs, Qt.DockWidgetArea.RightDockWidgetArea)
         latent = self._dock("Latent", self.latent, Qt.DockWidgetArea.RightDockWidgetArea)
         plots = self._dock("Optimizer plots", self.plots, Qt.DockWidgetArea.BottomDockWidgetArea)
+        self.method_errors = MethodErrorPlot()  # each method's error against the clip, per frame
+        self.tabifyDockWidget(plots, self._dock("Method errors", self.method_errors, Qt.DockWidgetArea.BottomDockWidgetArea))
+        plots.raise_()
         # the right column runs the full height, so the latent dock has room for its
         # 24-row history strip; the plots sit under the 3D view only
         self.setCorner(Qt.Corner.BottomRightCorner, Qt.DockWidgetArea.RightDockWidgetArea)
@@ -180,6 +184,7 @@ class MainWindow(QMainWindow):
     def _show_motion(self, event: ev.MotionChanged) -> None:
         self.timeline.set_range(self.session.num_frames, event.motion.fps)
         self.plots.clear()
+        self.method_errors.clear()
         self.viewport.reset_camera(event.motion.root_pos[0])
 
     def _show_sensors(self, event: ev.SensorsChanged | None) -> None:

@@ -171,6 +171,21 @@ def test_ghosts_get_their_own_colour_and_follow_the_ghosts_toggle(viewport, fake
     assert not ghost.visible
 
 
+def test_ghost_legend_names_each_ghost_in_its_colour(viewport, fake_snapshot):
+    snap = fake_snapshot()
+    ghosts = {"sparseposer": snap.positions + [1.0, 0, 0], "rpm": snap.positions - [1.0, 0, 0]}
+    viewport.show_snapshot(fake_snapshot(seq=2, ghosts=ghosts))
+    labels = viewport.ghosts.labels
+    assert [labels[n].GetInput() for n in ghosts] == ["- sparseposer", "- rpm"]
+    for name in ghosts:
+        assert labels[name].GetVisibility()
+        assert np.allclose(labels[name].GetTextProperty().GetColor(),
+                           viewport.ghosts.items[name].actors[0].GetProperty().GetColor())
+    assert labels["sparseposer"].GetPosition()[1] > labels["rpm"].GetPosition()[1]  # listed top down
+    viewport.show_snapshot(fake_snapshot(seq=3, ghosts={"rpm": ghosts["rpm"]}))
+    assert not labels["sparseposer"].GetVisibility() and labels["rpm"].GetVisibility()
+
+
 def test_follow_camera_glides_with_the_hips_and_holds_still_when_off(viewport, fake_snapshot):
     import time
 

@@ -20,6 +20,7 @@ from widgets import style
 GHOST_OPACITY = 0.55
 GHOST_BONE_WIDTH = 3.0  # pixels; the reconstruction's are 7
 GHOST_JOINT_SIZE = 5.0
+LEGEND_ROW = 20  # pixels between legend lines
 
 
 def _hex(color: str) -> tuple[float, float, float]:
@@ -98,19 +99,42 @@ class GhostLayer:
         self.renderer.SetBackgroundAlpha(0.0)
         window.AddRenderer(self.renderer)
         self.items: dict[str, GhostSkeleton] = {}
+        self.labels: dict[str, vtk.vtkTextActor] = {}
         self.visible = True
 
     def update(self, ghosts: dict[str, np.ndarray]) -> None:
-        """Draw ``{method: positions (22, 3)}``; methods missing from it are hidden."""
+        """Draw ``{method: positions (22, 3)}``; methods missing from it are hidden.
+        The legend (top left) names each ghost shown, in its colour."""
         for i, (name, pos) in enumerate(ghosts.items()):
             if name not in self.items:
                 self.items[name] = GhostSkeleton(self.renderer, self.color_of(name, i))
+                self.labels[name] = self._label(name, self.items[name].color)
             self.items[name].update(pos if self.visible else None)
+        row, height = 0, self.renderer.GetSize()[1]
         for name, item in self.items.items():
             if name not in ghosts:
                 item.set_visible(False)
+            label = self.labels[name]
+            shown = name in ghosts and self.visible
+            label.SetVisibility(shown)
+            if shown:
+                label.SetDisplayPosition(12, max(0, height - 30 - LEGEND_ROW * row))  # top left, pixels
+                row += 1
+
+    def _label(self, name: str, color: str) -> vtk.vtkTextActor:
+        actor = vtk.vtkTextActor()
+        actor.SetInput(f"- {name}")
+        prop = actor.GetTextProperty()
+        prop.SetColor(*_hex(color))
+        prop.SetFontSize(15)
+        prop.BoldOn()
+        actor.PickableOff()
+        self.renderer.AddViewProp(actor)
+        return actor
 
     def close(self) -> None:
         for item in self.items.values():
             item.remove()
-        self.items = {}
+        for label in self.labels.values():
+            self.renderer.RemoveViewProp(label)
+        self.items, self.labels = {}, {}

@@ -1,0 +1,33 @@
+"""The per-method error plot: one curve per method on screen, in the ghosts' colours."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from widgets import style
+from widgets.method_errors import MethodErrorPlot, frame_error_cm
+
+
+def test_error_is_the_mean_joint_distance_in_cm():
+    a = np.zeros((22, 3))
+    assert abs(frame_error_cm(a + [0.03, 0.04, 0], a) - 5.0) < 1e-9
+    assert np.isnan(frame_error_cm(None, a))
+
+
+def test_one_curve_per_method_restarting_when_playback_jumps(qtbot, fake_snapshot):
+    p = MethodErrorPlot()
+    qtbot.addWidget(p)
+    base = fake_snapshot()
+    gt = base.ground_truth
+    for f in range(5):
+        ghosts = {"ik": gt + [0.01 * f, 0, 0], "rpm": gt + [0, 0.05, 0]}
+        p.update_snapshot(fake_snapshot(seq=f + 1, frame=f, positions=gt + [0.02, 0, 0], ghosts=ghosts,
+                                        ground_truth=gt, method="dragposer"))  # fmt: skip
+    assert set(p.curves) == {"dragposer", "ik", "rpm"}
+    x, y = p.curves["ik"].getData()
+    np.testing.assert_allclose(x, range(5))
+    np.testing.assert_allclose(y, [0, 1, 2, 3, 4], atol=1e-9)
+    assert p.curves["rpm"].opts["pen"].color().name() == style.ghost_color("rpm")
+    assert "rpm" in p.legend.text() and "5.0 cm" in p.legend.text()
+    p.update_snapshot(fake_snapshot(seq=9, frame=1, positions=gt, ground_truth=gt, method="dragposer"))
+    assert set(p.curves) == {"dragposer"} and len(p.curves["dragposer"].getData()[0]) == 1

@@ -65,8 +65,9 @@ def run_epochs(
     ``step()`` runs one optimisation step (backward and ``optimizer.step`` included) and
     returns its losses; ``validate()`` returns validation figures (rank 0 only);
     ``payload(meta)`` builds the weights-file dict. ``best_key`` (lower is better) picks
-    ``best.pt``. The final ``OUT/<name>.pt`` is written when the loop ends, by epochs or
-    by budget; its ``meta['finished']`` is True.
+    ``best.pt``. The minutes budget is checked before every step: when it runs out the
+    epoch ends early (it is still validated and saved). The final ``OUT/<name>.pt`` is
+    written when the loop ends, by epochs or by budget; its ``meta['finished']`` is True.
     """
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -91,21 +92,25 @@ def run_epochs(
         sums: dict[str, float] = {}
         bar = tqdm(range(sched.steps_per_epoch), desc=f"{name} epoch {epoch + 1}/{sched.epochs}",
                    disable=not (progress and ddp.main), leave=False)  # fmt: skip
+        done = 0
         for i in bar:
             minutes = minutes_before + (time.monotonic() - t0) / 60
+            if sched.minutes and minutes >= sched.minutes and done:
+                break  # the budget ends inside this epoch: validate and save what we have
             frac = max(step_total / total, minutes / sched.minutes if sched.minutes else 0.0)
             for opt in optimizers:
                 for g in opt.param_groups:
                     g["lr"] = cosine_lr(sched, frac)
             losses = step()
             step_total += 1
+            done += 1
             for k, v in losses.items():
                 sums[k] = sums.get(k, 0.0) + v
             if i % 10 == 0:
                 bar.set_postfix({k: f"{v / (i + 1):.4f}" for k, v in sums.items()})
         minutes = minutes_before + (time.monotonic() - t0) / 60
         row: dict[str, Any] = {"epoch": epoch + 1, "minutes": round(minutes, 2)}
-        row.update({k: ddp.mean(v / sched.steps_per_epoch) for k, v in sums.items()})
+        row.update({k: ddp.mean(v / max(1, done)) for k, v in sums.items()})
         if ddp.main:
             model.eval()
             with torch.no_grad():
@@ -125,7 +130,7 @@ def run_epochs(
                 "curve": log.rows, "gen": gen.get_state(), "meta": meta})  # fmt: skip
         ddp.barrier()
     if ddp.main:
-        meta["finished"] = True
+        meta["finished"], meta["steps"] = True, step_total
         save_checkpoint(out_dir / f"{name}.pt", payload(meta))
     ddp.close()
     return meta

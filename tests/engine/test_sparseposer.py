@@ -83,6 +83,7 @@ def test_budget_ends_the_run_cleanly(tiny_data, tmp_path):  # noqa: F811
     cfg = load_config(SparsePoserTrainConfig, None, TINY, epochs=50, minutes=1e-4)
     meta = train_sparseposer(tiny_data, tmp_path / "run", cfg, progress=False)
     assert meta["finished"] and meta["epochs"] == 1 and (tmp_path / "run" / "sparseposer.pt").is_file()
+    assert meta["steps"] == 1, "the budget ends the first epoch after its first step (3 per epoch)"
 
 
 def test_method_follows_the_hip_tracker_and_rejects_other_presets(synthetic_motion):

@@ -72,7 +72,7 @@ def build_method(args: argparse.Namespace) -> Any:
         constraints, settings = load_scene(args.scene)
         defaults = dataclasses.asdict(OptimizerSettings())
         scene_settings = {k: v for k, v in dataclasses.asdict(settings).items() if v != defaults[k]}
-    kwargs = method_kwargs(args, args.mode or scene_settings.get("mode", "realtime"))
+    kwargs = method_kwargs(args, args.mode or scene_settings.get("mode", "realtime"), args.method)
     method = get_method(args.method, **kwargs)
     if scene_settings:
         configure = getattr(method, "configure", None)

@@ -30,7 +30,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "iterations per frame.",
     )
     p.add_argument("file", nargs="?", type=Path, default=DEFAULT_CLIP, help="BVH clip (default: bundled example)")
-    p.add_argument("--method", action="append", help="method to time; repeat for several (default: every method)")
+    p.add_argument("--method", action="append", help="method to time; repeat for several (default: every method that works with --sensors)")
     p.add_argument("--sensors", default="6", help="sensor preset or list (default: 6)")
     p.add_argument("--mode", choices=("realtime", "offline"), default="realtime", help="optimizer mode")
     p.add_argument("--iterations", type=int, help="optimizer iterations per frame (realtime mode)")
@@ -95,16 +95,23 @@ def _bench(args: argparse.Namespace) -> int:
         "cuda": torch.cuda.is_available(),
         "platform": platform.platform(),
     }
-    rows = []
+    rows, skipped = [], []
     for name in names:
         kw = kwargs if name not in ("ik",) else {}
-        rows.append(bench_method(name, motion, tracking, args.frames, args.warmup, **kw))
+        try:
+            rows.append(bench_method(name, motion, tracking, args.frames, args.warmup, **kw))
+        except UserError as exc:
+            if args.method:  # named on the command line: its failure is the answer
+                raise
+            skipped.append(f"{name}: skipped: {exc}")  # e.g. needs another sensor preset
     print(f"{args.file.name}: sensors {args.sensors}, mode {args.mode}, "
           f"{machine['cpu_count']} cores, torch {machine['torch_threads']} threads")
     print(f"{'method':<12} {'frames':>6} {'ms mean':>8} {'median':>8} {'p95':>8} {'fps':>7} {'iters':>6}")
     for r in rows:
         print(f"{r['method']:<12} {r['frames']:>6d} {r['ms_mean']:>8.2f} {r['ms_median']:>8.2f} "
               f"{r['ms_p95']:>8.2f} {r['fps']:>7.1f} {r['iterations_mean']:>6.1f}")
+    for line in skipped:
+        print(line)
     if args.json:
         out = {"file": str(args.file), "sensors": args.sensors, "mode": args.mode, "machine": machine, "methods": rows}
         write_text(args.json, json.dumps(out, indent=1))

@@ -31,6 +31,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--method", help="reconstruction method (default: dragposer with the shipped model, "
                    "ik when no weights are installed)")
     p.add_argument("--sensors", metavar="PRESET", help="sensor preset name")
+    p.add_argument("--ghosts", metavar="A,B", help="other methods drawn as ghosts beside it, e.g. ik,sparseposer")
     p.add_argument("--screenshot", metavar="OUT.png", help="save a screenshot and exit")
     p.add_argument("--after-frames", type=int, default=60, metavar="N", help="frames to play first (60)")
     p.add_argument("--mode", choices=("every_frame", "real_time"),
@@ -47,5 +48,6 @@ def run(args: argparse.Namespace) -> int:
 
     if args.measure is not None and not args.measure > 0:
         raise UserError(f"--measure: SECONDS must be > 0, got {args.measure}")
+    ghosts = tuple(g.strip() for g in (args.ghosts or "").split(",") if g.strip())
     return run_app(args.file, args.method or default_method(), args.sensors, args.screenshot, args.after_frames,
-                   args.measure, args.json, args.mode)  # fmt: skip
+                   args.measure, args.json, args.mode, ghosts)  # fmt: skip

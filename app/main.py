@@ -46,15 +46,19 @@ def open_initial(window: MainWindow, path: str | None, sensors: str | None) -> N
 
 def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
         screenshot: str | None = None, after_frames: int = 60, measure: float | None = None,
-        measure_json: str | None = None, mode: str | None = None) -> int:  # fmt: skip
+        measure_json: str | None = None, mode: str | None = None, ghosts: tuple[str, ...] = ()) -> int:  # fmt: skip
     """Show the studio; with ``screenshot``, play ``after_frames`` frames, save and exit;
     with ``measure``, play that many seconds and write the figures to ``measure_json``
-    (:mod:`app.measure`). ``mode`` sets the playback mode (every_frame or real_time)."""
+    (:mod:`app.measure`). ``mode`` sets the playback mode (every_frame or real_time).
+    ``ghosts``: other methods drawn beside the reconstruction."""
     app = QApplication.instance() or QApplication(sys.argv[:1])
     app.setApplicationName("DragPoser Studio")
     window = MainWindow(method=method)
     try:
         open_initial(window, path, sensors)
+        if ghosts:  # comparing methods: show their errors rather than the optimizer's losses
+            window.session.set_method(window.session.method, ghosts)
+            window.method_errors_dock.raise_()
     except UserError:
         window.close()
         raise

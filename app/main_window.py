@@ -104,7 +104,8 @@ class MainWindow(QMainWindow):
         latent = self._dock("Latent", self.latent, Qt.DockWidgetArea.RightDockWidgetArea)
         plots = self._dock("Optimizer plots", self.plots, Qt.DockWidgetArea.BottomDockWidgetArea)
         self.method_errors = MethodErrorPlot()  # each method's error against the clip, per frame
-        self.tabifyDockWidget(plots, self._dock("Method errors", self.method_errors, Qt.DockWidgetArea.BottomDockWidgetArea))
+        self.method_errors_dock = self._dock("Method errors", self.method_errors, Qt.DockWidgetArea.BottomDockWidgetArea)
+        self.tabifyDockWidget(plots, self.method_errors_dock)
         plots.raise_()
         # the right column runs the full height, so the latent dock has room for its
         # 24-row history strip; the plots sit under the 3D view only

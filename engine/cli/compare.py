@@ -35,6 +35,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--blend", type=float, default=DEFAULT_BLEND_S, metavar="S",
                    help=f"DragPoser's blend time in the smoothed rows, seconds (default {DEFAULT_BLEND_S})")
     p.add_argument("--passes", default="1,2,3,4", help="which passes to run, e.g. 3,4 (default: all)")
+    p.add_argument("--only", metavar="A,B", help="run only these rows, e.g. dragposer,dragposer+blend (default: all)")
     p.add_argument("--table-only", action="store_true", help="only rebuild the document from the cache")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bars")
     p.set_defaults(func=_compare)
@@ -88,7 +89,7 @@ def _compare(args: argparse.Namespace) -> int:
                 continue
             for v in variants:
                 target = args.cache / _key(preset, gaps, v)
-                if target.is_file():
+                if target.is_file() or (args.only and v not in args.only.split(",")):
                     continue
                 print(f"pass {i}: {v} on preset {preset}{' with gaps' if gaps else ''}", flush=True)
                 write_text(target, json.dumps(_run(args, files, preset, gaps, v), indent=2) + "\n")

@@ -143,9 +143,9 @@ class Viewport(QWidget):
         self.sensors.update(snap.target_joints, snap.target_positions, snap.target_rotations,
                             snap.target_connected, axes)  # fmt: skip
         self.gizmos.update(snap.gizmos)
-        ghosts = "".join(f"   {n} (ghost)" for n in snap.ghosts) if self.show_ghosts else ""
+        # ghosts are listed below this line by the ghost layer, each in its own colour
         gt = "   ground truth (green)" if self.show_ground_truth else ""
-        self._label.SetText(2, f"{snap.method or 'method'} (orange){gt}{ghosts}")
+        self._label.SetText(2, f"{snap.method or 'method'} (orange){gt}")
         if self.follow and np.all(np.isfinite(snap.positions[0])):
             self._follow(snap.positions[0])
         self.plotter.render()

@@ -169,3 +169,13 @@ def test_a_sensor_switched_to_3_dof_loses_its_orientation_axes(studio, qtbot):
     i = studio.viewport.sensors.joints.index(joint)
     tips = studio.viewport.sensors._axes_mesh.points.reshape(-1, 3, 2, 3)
     assert np.allclose(tips[i, :, 1], tips[i, :, 0]) and not np.allclose(tips[i - 1, :, 1], tips[i - 1, :, 0])
+
+
+def test_ghost_methods_get_an_error_curve_each(studio, qtbot):
+    studio.session.set_method("ik", ("sparseposer",))
+    studio.method_errors_dock.raise_()
+    studio.session.play()
+    qtbot.waitUntil(lambda: {"ik", "sparseposer"} <= set(studio.method_errors.curves), timeout=30000)
+    studio.session.pause()
+    x, y = studio.method_errors.curves["sparseposer"].getData()
+    assert len(x) >= 1 and np.isfinite(y).all() and "sparseposer" in studio.method_errors.legend.text()

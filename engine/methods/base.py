@@ -14,7 +14,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from engine import skeleton as sk
-from engine.sensors import SensorFrame
+from engine.errors import UserError
+from engine.sensors import Sensor, SensorFrame
 
 if TYPE_CHECKING:
     from engine.motion import Motion
@@ -75,3 +76,12 @@ class Method(ABC):
     @abstractmethod
     def step(self, sensors: SensorFrame) -> FrameResult:
         """Reconstruct the next frame from its sensor readings."""
+
+
+def check_preset(readings: dict[str, Sensor], joints: tuple[str, ...], method: str, preset: str) -> None:
+    """Raise a clear error unless the sensors are exactly ``joints``, all 6-DoF."""
+    got = sorted(f"{j}:{r.dof}" for j, r in readings.items())
+    want = sorted(f"{j}:6" for j in joints)
+    if got != want:
+        raise UserError(f"method {method!r} works only with sensor preset {preset!r} "
+                        f"({', '.join(joints)}, 6-DoF); got {', '.join(got) or 'no sensors'}")  # fmt: skip

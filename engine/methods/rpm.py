@@ -22,8 +22,8 @@ import torch
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk
-from engine.methods.base import FrameResult, Method, SensorFrame, SensorReading
-from engine.methods.sparseposer import check_preset
+from engine.methods.base import FrameResult, Method, check_preset
+from engine.sensors import Sensor, SensorFrame
 from engine.models.rpm import RPM_JOINTS, blank_pose, roll, rolling_step, track_features, yaw_matrix
 from engine.motion import Motion
 
@@ -60,7 +60,7 @@ class RPMMethod(Method):
         self._pos: deque[np.ndarray] = deque(maxlen=n)
         self._rot: deque[np.ndarray] = deque(maxlen=n)
         self._flags: deque[np.ndarray] = deque(maxlen=n)
-        self._head: SensorReading | None = None
+        self._head: Sensor | None = None
         self._P: torch.Tensor | None = None
         self._ctx: torch.Tensor | None = None
 
@@ -76,10 +76,11 @@ class RPMMethod(Method):
                 r, ok = self._head, True
             if ok:
                 pos[k], rot[k], flags[k] = r.position, Q.normalize(np.asarray(r.rotation, dtype=np.float64)), True
-        if not self._pos:  # the history starts full, with copies of the first sample
-            for _ in range(self._pos.maxlen or 1):
-                self._pos.append(pos), self._rot.append(rot), self._flags.append(flags)
-        self._pos.append(pos), self._rot.append(rot), self._flags.append(flags)
+        # the history starts full, with copies of the first sample
+        for _ in range(1 if self._pos else self._pos.maxlen or 1):
+            self._pos.append(pos)
+            self._rot.append(rot)
+            self._flags.append(flags)
 
     def step(self, sensors: SensorFrame) -> FrameResult:
         t0 = time.perf_counter()

@@ -28,24 +28,15 @@ import pymotion.rotations.dual_quat_np as dq_np
 import torch
 
 from engine import skeleton as sk
-from engine.errors import UserError
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk
-from engine.methods.base import FrameResult, Method, SensorFrame, SensorReading
+from engine.methods.base import FrameResult, Method, check_preset
+from engine.sensors import Sensor, SensorFrame
 from engine.models.sparseposer import SPARSE_INDEX, SPARSE_JOINTS
 from engine.motion import Motion
 
 #: Decoder frames evaluated per step (the last output frame equals the full decode's).
 TAIL = 8
-
-
-def check_preset(readings: dict[str, SensorReading], joints: tuple[str, ...], method: str, preset: str) -> None:
-    """Raise a clear error unless the sensors are exactly ``joints``, all 6-DoF."""
-    got = sorted(f"{j}:{r.dof}" for j, r in readings.items())
-    want = sorted(f"{j}:6" for j in joints)
-    if got != want:
-        raise UserError(f"method {method!r} works only with sensor preset {preset!r} "
-                        f"({', '.join(joints)}, 6-DoF); got {', '.join(got) or 'no sensors'}")  # fmt: skip
 
 
 class SparsePoserMethod(Method):
@@ -77,10 +68,10 @@ class SparsePoserMethod(Method):
         self.offsets = np.asarray(skeleton.offsets, dtype=np.float64)
         self._off_t = torch.as_tensor(self.offsets, dtype=torch.float32)[None]
         self._frames: deque[np.ndarray] = deque(maxlen=self.window)
-        self._last: dict[str, SensorReading] = {}
+        self._last: dict[str, Sensor] = {}
         self._prev_root: tuple[np.ndarray, np.ndarray] | None = None
 
-    def _reading(self, frame: SensorFrame, joint: str) -> SensorReading:
+    def _reading(self, frame: SensorFrame, joint: str) -> Sensor:
         r = frame.readings[joint]
         ok = r.connected and np.all(np.isfinite(r.position)) and np.all(np.isfinite(r.rotation))
         if ok or joint not in self._last:

@@ -138,6 +138,9 @@ def render(res: dict[tuple[str, bool, str], dict[str, Any]], args: argparse.Name
         for v, doc in rows.items():
             if "error" in doc:
                 lines.append(f"- {v}: not evaluated: {doc['error']}")
+        missing = [v for v in variants if v not in rows]
+        if missing:
+            lines.append(f"- not run yet: {', '.join(missing)} (the same command fills them in; cached rows are kept)")
         lines.append("")
     lines += ["## Targets of issue 16", "", *(_targets(res, args.blend) or ["(results missing)"]), "", PAPERS]
     if files:

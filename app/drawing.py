@@ -118,7 +118,9 @@ class DrawScheduler:
         w = self.w
         timing = snap.timing or {}
         per_it = timing.get("ms_per_iteration")
-        solver = f"{per_it:5.2f} ms/it" if per_it is not None else ""
+        parts = [f"{k.replace('fk_losses', 'fk+loss')} {timing[k]:.2f}"
+                 for k in ("decoder", "fk_losses", "backward", "step") if k in timing]  # fmt: skip
+        solver = (f"{per_it:5.2f} ms/it" if per_it is not None else "") + (f" ({', '.join(parts)})" if parts else "")
         skipped = f"   skipped {snap.frames_skipped}" if snap.mode == "real_time" else ""
         self._set_text(w.status_engine, f"engine {snap.engine_fps:5.1f} frames/s   {snap.ms:6.1f} ms/frame   "
                                         f"{snap.iterations} it   {solver}{skipped}")  # fmt: skip

@@ -346,3 +346,25 @@ def test_a_sensor_source_that_fails_is_reported_not_replaced_by_perfect_trackers
         snap = newest(worker, first.seq)
         wait_for(lambda: "tracker stream closed" in worker.latest.error or worker.latest.warnings > first.warnings)
         assert worker._source.num_frames == len(synthetic_motion)  # the clip source stayed
+
+
+class Timed(Counting):
+    """Reports its own per-iteration breakdown, as DragPoser does (``FrameResult.timings``)."""
+
+    name = "timed"
+
+    def step(self, sensors):
+        res = super().step(sensors)
+        res.iterations = 4
+        res.timings = {"ms_per_iteration": 1.5, "decoder": 0.3, "fk_losses": 0.9, "backward": 0.2, "step": 0.1}
+        return res
+
+
+def test_snapshots_carry_the_solver_timing_figures(synthetic_motion):
+    with running(Timed(), synthetic_motion) as worker:
+        snap = newest(worker)
+        assert snap.timing["ms_per_iteration"] == 1.5 and snap.timing["fk_losses"] == 0.9
+        assert snap.timing["ms_per_frame"] >= 0
+    with running(Counting(), synthetic_motion) as worker:  # no breakdown: wall time only
+        snap = newest(worker)
+        assert set(snap.timing) == {"ms_per_frame"}

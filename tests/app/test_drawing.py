@@ -1,0 +1,32 @@
+"""The display scheduler's status bar: solver timing figures, labels set only on change."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+
+def test_status_shows_the_solver_breakdown_and_leaves_unchanged_labels_alone(qtbot):
+    from PyQt6.QtWidgets import QLabel, QStatusBar
+
+    from app.drawing import DrawScheduler
+    from tests.widgets.conftest import FakeSnapshot
+
+    bar = QStatusBar()
+    qtbot.addWidget(bar)
+    labels = {n: QLabel() for n in ("status_engine", "status_gui", "status_warnings")}
+    window = SimpleNamespace(plots=SimpleNamespace(update_iterations=None, update_cost=None, update_history=None),
+                             latent=SimpleNamespace(update_snapshot=None), statusBar=lambda: bar, **labels)  # fmt: skip
+    d = DrawScheduler(window)
+    snap = FakeSnapshot()
+    snap.timing = {"ms_per_frame": 12.0, "ms_per_iteration": 1.2, "decoder": 0.3, "fk_losses": 0.6,
+                   "backward": 0.2, "step": 0.1}  # fmt: skip
+    snap.frames_skipped, snap.mode, snap.recent_errors = 0, "every_frame", ("ik ignores constraints",)
+    d._update_status(snap)
+    text = labels["status_engine"].text()
+    assert "1.20 ms/it" in text and "decoder 0.30" in text and "fk+loss 0.60" in text
+    assert "skipped" not in text  # counted in real-time mode only
+    assert labels["status_warnings"].toolTip() == "ik ignores constraints"
+    changed = []
+    labels["status_engine"].setText = lambda t: changed.append(t)  # type: ignore[method-assign]
+    d._update_status(snap)
+    assert changed == [], "an unchanged label must not be set again"

@@ -15,7 +15,8 @@ def test_status_shows_the_solver_breakdown_and_leaves_unchanged_labels_alone(qtb
     qtbot.addWidget(bar)
     labels = {n: QLabel() for n in ("status_engine", "status_gui", "status_warnings")}
     window = SimpleNamespace(plots=SimpleNamespace(update_iterations=None, update_cost=None, update_history=None),
-                             latent=SimpleNamespace(update_snapshot=None), statusBar=lambda: bar, **labels)  # fmt: skip
+                             latent=SimpleNamespace(update_snapshot=None), method_errors=SimpleNamespace(update_snapshot=None),
+                             statusBar=lambda: bar, **labels)  # fmt: skip
     d = DrawScheduler(window)
     snap = FakeSnapshot()
     snap.timing = {"ms_per_frame": 12.0, "ms_per_iteration": 1.2, "decoder": 0.3, "fk_losses": 0.6,

@@ -32,19 +32,14 @@ import numpy as np
 import torch
 
 from engine import skeleton as sk
-from engine.constraints.base import PoseState, quat_to_matrix
+from engine.constraints.base import PoseState
 from engine.kinematics import quaternion as Q
-
-
-def _levels(parents: tuple[int, ...]) -> list[list[int]]:
-    depth = [0] * len(parents)
-    for j in range(1, len(parents)):
-        depth[j] = depth[parents[j]] + 1
-    return [[j for j in range(len(parents)) if depth[j] == d] for d in range(1, max(depth) + 1)]
+from engine.kinematics.fk import fk, fk_matrices
+from engine.kinematics.root import integrate_root
 
 
 class LevelFK:
-    """Batched forward kinematics by skeleton depth, with rotation matrices (torch only).
+    """The skeleton's offsets bound to :func:`engine.kinematics.fk.fk_matrices` (torch).
 
     Parameters
     ----------
@@ -57,40 +52,18 @@ class LevelFK:
     def __init__(self, offsets: np.ndarray, parents: tuple[int, ...] = sk.PARENTS,
                  dtype: torch.dtype = torch.float32) -> None:  # fmt: skip
         self.parents = tuple(parents)
-        self.levels = _levels(self.parents)
-        order = [0] + [j for lv in self.levels for j in lv]
-        slot = {j: i for i, j in enumerate(order)}  # joint -> row in level-ordered storage
-        self.parent_rows = [torch.tensor([slot[self.parents[j]] for j in lv]) for lv in self.levels]
-        self.joint_idx = [torch.tensor(lv) for lv in self.levels]
-        self.unorder = torch.tensor([slot[j] for j in range(len(self.parents))])
-        off = torch.as_tensor(np.asarray(offsets), dtype=dtype)
-        self.offsets = [off[lv][..., None] for lv in self.levels]
+        self.offsets = torch.as_tensor(np.asarray(offsets), dtype=dtype)
 
     def matrices(self, local_rot: torch.Tensor, root_pos: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """World positions ``(..., J, 3)`` and rotation matrices ``(..., J, 3, 3)``.
 
         ``local_rot (..., J, 4)``: row 0 is the root's world rotation; ``root_pos (..., 3)``.
         """
-        local = quat_to_matrix(local_rot)
-        g_rot = local[..., :1, :, :]
-        g_pos = root_pos[..., None, :]
-        for rows, idx, off in zip(self.parent_rows, self.joint_idx, self.offsets):
-            pr = g_rot.index_select(-3, rows)
-            step = (pr @ off.to(pr.dtype))[..., 0]
-            g_rot = torch.cat((g_rot, pr @ local.index_select(-3, idx)), dim=-3)
-            g_pos = torch.cat((g_pos, g_pos.index_select(-2, rows) + step), dim=-2)
-        return g_pos.index_select(-2, self.unorder), g_rot.index_select(-3, self.unorder)
+        return fk_matrices(Q.to_matrix(local_rot), root_pos, self.offsets, self.parents)
 
     def quaternions(self, local_rot: torch.Tensor) -> torch.Tensor:
         """World rotations as quaternions ``(..., J, 4)`` (slower; computed on demand)."""
-        g = local_rot[..., :1, :]
-        for rows, idx in zip(self.parent_rows, self.joint_idx):
-            g = torch.cat((g, Q.mul(g.index_select(-2, rows), local_rot.index_select(-2, idx))), dim=-2)
-        return g.index_select(-2, self.unorder)
-
-    def __call__(self, local_rot: torch.Tensor, root_pos: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-        """World positions ``(..., J, 3)`` and rotations ``(..., J, 4)``, like :func:`fk`."""
-        return self.matrices(local_rot, root_pos)[0], self.quaternions(local_rot)
+        return fk(local_rot, local_rot.new_zeros(local_rot.shape[:-2] + (3,)), self.offsets, self.parents)[1]
 
 
 class DecodedPose(PoseState):
@@ -183,13 +156,9 @@ def world_root(rot0: torch.Tensor, disp: torch.Tensor, prev: RootFrame,
     override : RootOverride, optional
         Hip sensor reading that takes precedence.
     """
-    h = prev.heading()
+    rotation, position = integrate_root(prev.rotation.expand_as(rot0), prev.position, rot0, disp)
     if override is not None and override.rotation is not None:
         rotation = override.rotation.expand_as(rot0)
-    else:
-        rotation = Q.mul(h.expand_as(rot0), rot0)
     if override is not None:
         position = override.position.expand_as(disp)
-    else:
-        position = prev.position + Q.rotate(h.expand_as(rot0), disp)
     return rotation, position

@@ -25,6 +25,7 @@ import torch
 
 from engine import skeleton as sk
 from engine.errors import UserError
+from engine.kinematics import quaternion as Q
 
 #: kind string -> constraint class; filled by subclasses as they are defined.
 REGISTRY: dict[str, type["Constraint"]] = {}
@@ -65,23 +66,11 @@ class PoseState:
     rotation_matrices: torch.Tensor | None = None
 
 
-def quat_to_matrix(q: torch.Tensor) -> torch.Tensor:
-    """Unit quaternions ``(..., 4)`` (w, x, y, z) to rotation matrices ``(..., 3, 3)``."""
-    w, x, y, z = q.unbind(-1)
-    m = torch.stack(
-        (1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),
-         2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
-         2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)),
-        dim=-1,
-    )  # fmt: skip
-    return m.reshape(q.shape[:-1] + (3, 3))
-
-
 def world_rotation_matrix(state: PoseState, joint: int) -> torch.Tensor:
     """World rotation ``(3, 3)`` of one joint, from whichever form the state carries."""
     if state.rotation_matrices is not None:
         return state.rotation_matrices[joint]
-    return quat_to_matrix(state.rotations[joint])
+    return Q.to_matrix(state.rotations[joint])
 
 
 def rotation_distance(state: PoseState, joint: int, target: np.ndarray) -> torch.Tensor:
@@ -89,7 +78,7 @@ def rotation_distance(state: PoseState, joint: int, target: np.ndarray) -> torch
     target quaternion ``(4,)``, computed as ``(3 - trace(R_t^T R)) / 4``; scalar in [0, 1]."""
     r = world_rotation_matrix(state, joint)
     t = np.asarray(target, dtype=np.float64)
-    rt = quat_to_matrix(vec(t / max(np.linalg.norm(t), 1e-12), r))
+    rt = Q.to_matrix(vec(t / max(np.linalg.norm(t), 1e-12), r))
     return ((3.0 - (rt * r).sum()) * 0.25).clamp(0.0, 1.0)
 
 

@@ -16,8 +16,9 @@ from typing import Any, ClassVar
 import numpy as np
 import torch
 
-from engine.constraints.base import Constraint, PoseState, joint_index, quat_to_matrix, rotation_distance, vec
+from engine.constraints.base import Constraint, PoseState, joint_index, rotation_distance, vec
 from engine.errors import UserError
+from engine.kinematics import quaternion as Q
 
 
 @dataclass
@@ -100,7 +101,7 @@ class SensorConstraint(Constraint):
         six = [k for k, c in enumerate(items) if c.dof == 6]
         rot_idx = idx[six]
         rot_w = vec([items[k].rotation_weight for k in six], like)
-        rot_t = quat_to_matrix(vec(np.stack([_unit(items[k].rotation) for k in six]).reshape(-1, 4), like))
+        rot_t = Q.to_matrix(vec(np.stack([_unit(items[k].rotation) for k in six]).reshape(-1, 4), like))
         six_t = torch.tensor(six, dtype=torch.long)
 
         def losses(state: PoseState) -> torch.Tensor:
@@ -125,4 +126,4 @@ def _unit(q: np.ndarray) -> np.ndarray:
 def _matrices(state: PoseState, idx: torch.Tensor) -> torch.Tensor:
     if state.rotation_matrices is not None:
         return state.rotation_matrices.index_select(0, idx)
-    return quat_to_matrix(state.rotations.index_select(0, idx))
+    return Q.to_matrix(state.rotations.index_select(0, idx))

@@ -28,6 +28,7 @@ import torch
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk
+from engine.kinematics.root import integrate_root, root_increment
 
 
 def _cat(xs, dim):
@@ -54,9 +55,7 @@ def pose_from_motion(local_rot, root_pos):
     root = local_rot[:, 0]
     prev_root = _cat([root[:1], root[:-1]], 0)
     prev_pos = _cat([root_pos[:1], root_pos[:-1]], 0)
-    h_inv = Q.conjugate(Q.heading(prev_root))
-    rot0 = Q.mul(h_inv, root)
-    disp = Q.rotate(h_inv, root_pos - prev_pos)
+    rot0, disp = root_increment(prev_root, prev_pos, root, root_pos)
     rot = local_rot.clone() if isinstance(local_rot, torch.Tensor) else local_rot.copy()
     rot[:, 0] = rot0
     return Q.canonicalize(rot), disp
@@ -82,9 +81,7 @@ def motion_from_pose(rot, disp, start_root_rot=None, start_pos=None):
     prev_pos = start_pos if start_pos is not None else (torch.zeros(3, dtype=rot.dtype) if is_t else np.zeros(3))
     roots, poss = [], []
     for t in range(rot.shape[0]):
-        h = Q.heading(prev_rot)
-        prev_rot = Q.mul(h, rot[t, 0])
-        prev_pos = prev_pos + Q.rotate(h, disp[t])
+        prev_rot, prev_pos = integrate_root(prev_rot, prev_pos, rot[t, 0], disp[t])
         roots.append(prev_rot)
         poss.append(prev_pos)
     if is_t:

@@ -1,10 +1,16 @@
-"""Forward kinematics for the canonical skeleton (pure, batched; numpy or torch).
+"""Forward kinematics: the one implementation, level-ordered and batched (numpy or torch).
 
-The loop over joints builds lists instead of writing into preallocated tensors, so
-autograd through FK (the optimizer's hot path) records no in-place copies.
+The skeleton is processed by depth: all joints at the same distance from the root are
+placed at once (7 levels for the 22-joint skeleton instead of 21 joints), so the work
+per call, and the autograd graph through it, stays small. Levels are built by
+concatenation rather than by writing into a preallocated array, so autograd records no
+in-place copies. Offsets are an argument (per clip, or per frame), never a global.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 import torch
@@ -13,45 +19,154 @@ from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
 
 
+@dataclass(frozen=True)
+class Levels:
+    """Joints grouped by depth, with the indices a level-ordered pass needs.
+
+    Attributes
+    ----------
+    joints : tuple of ndarray
+        ``joints[d]``: indices of the joints at depth ``d + 1``.
+    parent_rows : tuple of ndarray
+        Per level, the row of each joint's parent in level-ordered storage
+        (root first, then level 1, level 2, ...).
+    unorder : ndarray (J,)
+        Row of every joint in level-ordered storage (gather back to joint order).
+    """
+
+    joints: tuple[np.ndarray, ...]
+    parent_rows: tuple[np.ndarray, ...]
+    unorder: np.ndarray
+
+
+@lru_cache(maxsize=32)
+def levels(parents: tuple[int, ...]) -> Levels:
+    """Depth levels of a skeleton given by ``parents`` (root first; -1 or itself for the
+    root; every parent listed before its children, as in BVH)."""
+    depth = [0] * len(parents)
+    for j in range(1, len(parents)):
+        p = parents[j]
+        if not 0 <= p < j:
+            raise ValueError(f"joint {j}: parent {p} must come before it")
+        depth[j] = depth[p] + 1
+    lv = [[j for j in range(len(parents)) if depth[j] == d] for d in range(1, max(depth, default=0) + 1)]
+    order = [0] + [j for level in lv for j in level]
+    row = {j: i for i, j in enumerate(order)}
+    return Levels(
+        tuple(np.array(level) for level in lv),
+        tuple(np.array([row[parents[j]] for j in level]) for level in lv),
+        np.array([row[j] for j in range(len(parents))]),
+    )
+
+
+def _ops(x):
+    if isinstance(x, torch.Tensor):
+        return (lambda a, i, d: a.index_select(d, torch.as_tensor(i, device=a.device)),
+                lambda xs, d: torch.cat(xs, dim=d))  # fmt: skip
+    return (lambda a, i, d: np.take(a, i, axis=d)), (lambda xs, d: np.concatenate(xs, axis=d))
+
+
+def _offsets_like(offsets, like):
+    if isinstance(like, torch.Tensor) and not isinstance(offsets, torch.Tensor):
+        return torch.as_tensor(np.asarray(offsets), dtype=like.dtype, device=like.device)
+    return offsets
+
+
 def fk(local_rot, root_pos, offsets, parents=sk.PARENTS):
-    """World joint positions and rotations from local rotations.
+    """World joint positions and rotations from local rotations (quaternions).
 
     Parameters
     ----------
-    local_rot : array (..., J, 4)
+    local_rot : array or Tensor (..., J, 4)
         Local joint rotations (row 0 is the root's world rotation), unit quaternions.
-    root_pos : array (..., 3)
+    root_pos : array or Tensor (..., 3)
         World position of the root, metres.
     offsets : array (J, 3) or (..., J, 3)
-        Bone offsets from each joint's parent, metres.
+        Bone offsets from each joint's parent, metres (per clip: its true proportions).
     parents : sequence of int, length J
         Parent index per joint, -1 (or the joint itself) for the root.
 
     Returns
     -------
-    positions : array (..., J, 3)
+    positions : (..., J, 3)
         World joint positions, metres.
-    rotations : array (..., J, 4)
+    rotations : (..., J, 4)
         World joint rotations.
     """
-    is_t = isinstance(local_rot, torch.Tensor)
-    stack = (lambda xs: torch.stack(xs, dim=-2)) if is_t else (lambda xs: np.stack(xs, axis=-2))
-    if is_t and not isinstance(offsets, torch.Tensor):
-        offsets = torch.as_tensor(offsets, dtype=local_rot.dtype, device=local_rot.device)
-    n = local_rot.shape[-2]
-    g_rot = [local_rot[..., 0, :]]
-    g_pos = [root_pos]
-    for j in range(1, n):
-        p = parents[j]
-        g_rot.append(Q.mul(g_rot[p], local_rot[..., j, :]))
-        g_pos.append(g_pos[p] + Q.rotate(g_rot[p], offsets[..., j, :]))
-    return stack(g_pos), stack(g_rot)
+    lv = levels(tuple(int(p) for p in parents))
+    if not isinstance(local_rot, torch.Tensor):
+        return _fk_numpy(np.asarray(local_rot), np.asarray(root_pos), np.asarray(offsets), lv, parents)
+    take, cat = _ops(local_rot)
+    offsets = _offsets_like(offsets, local_rot)
+    g_rot = local_rot[..., :1, :]
+    g_pos = root_pos[..., None, :]
+    for idx, rows in zip(lv.joints, lv.parent_rows):
+        pr = take(g_rot, rows, -2)
+        g_pos = cat((g_pos, take(g_pos, rows, -2) + Q.rotate(pr, take(offsets, idx, -2))), -2)
+        g_rot = cat((g_rot, Q.mul(pr, take(local_rot, idx, -2))), -2)
+    return take(g_pos, lv.unorder, -2), take(g_rot, lv.unorder, -2)
+
+
+def _fk_numpy(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, lv: Levels,
+              parents) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """Numpy :func:`fk`: writes each level into preallocated arrays in joint order and
+    places joints with rotation matrices (one conversion for all joints), since numpy's
+    per-call overhead, not arithmetic, is the cost at one frame (IK calls this often)."""
+    shape = np.broadcast_shapes(local_rot.shape[:-2], root_pos.shape[:-1], offsets.shape[:-2])
+    local = np.broadcast_to(local_rot, shape + local_rot.shape[-2:])
+    mats = Q.to_matrix(local)
+    off = offsets[..., None]
+    par = np.array([0] + [int(p) for p in parents[1:]])
+    g_rot = np.empty(shape + local.shape[-2:])
+    g_mat = np.empty(shape + mats.shape[-3:])
+    g_pos = np.empty(shape + (local.shape[-2], 3))
+    g_rot[..., 0, :], g_mat[..., 0, :, :], g_pos[..., 0, :] = local[..., 0, :], mats[..., 0, :, :], root_pos
+    for idx in lv.joints:
+        p = par[idx]
+        pm = g_mat[..., p, :, :]
+        g_pos[..., idx, :] = g_pos[..., p, :] + (pm @ off[..., idx, :, :])[..., 0]
+        g_mat[..., idx, :, :] = pm @ mats[..., idx, :, :]
+        g_rot[..., idx, :] = Q.mul(g_rot[..., p, :], local[..., idx, :])
+    return g_pos, g_rot
+
+
+def fk_matrices(local_mat, root_pos, offsets, parents=sk.PARENTS):
+    """Like :func:`fk` with rotation matrices: cheaper when many calls are made
+    (the optimizer's inner loop, IK), and what rotation losses use.
+
+    Parameters
+    ----------
+    local_mat : array or Tensor (..., J, 3, 3)
+        Local joint rotations as matrices (row 0: the root's world rotation).
+    root_pos : (..., 3)
+        World root position, metres.
+    offsets : (J, 3) or (..., J, 3)
+        Bone offsets, metres.
+    parents : sequence of int, length J
+
+    Returns
+    -------
+    positions : (..., J, 3)
+        World joint positions, metres.
+    rotations : (..., J, 3, 3)
+        World joint rotation matrices.
+    """
+    lv = levels(tuple(int(p) for p in parents))
+    take, cat = _ops(local_mat)
+    offsets = _offsets_like(offsets, local_mat)
+    g_rot = local_mat[..., :1, :, :]
+    g_pos = root_pos[..., None, :]
+    for idx, rows in zip(lv.joints, lv.parent_rows):
+        pr = take(g_rot, rows, -3)
+        step = (pr @ take(offsets, idx, -2)[..., None])[..., 0]
+        g_pos = cat((g_pos, take(g_pos, rows, -2) + step), -2)
+        g_rot = cat((g_rot, pr @ take(local_mat, idx, -3)), -3)
+    return take(g_pos, lv.unorder, -2), take(g_rot, lv.unorder, -3)
 
 
 def local_from_global(global_rot, parents=sk.PARENTS):
     """Local rotations ``(..., J, 4)`` from world rotations ``(..., J, 4)``."""
-    is_t = isinstance(global_rot, torch.Tensor)
-    out = [global_rot[..., 0, :]]
-    for j in range(1, global_rot.shape[-2]):
-        out.append(Q.mul(Q.conjugate(global_rot[..., parents[j], :]), global_rot[..., j, :]))
-    return torch.stack(out, dim=-2) if is_t else np.stack(out, axis=-2)
+    par = np.array([0] + [int(p) for p in parents[1:]])
+    take, cat = _ops(global_rot)
+    rel = Q.mul(Q.conjugate(take(global_rot, par[1:], -2)), global_rot[..., 1:, :])
+    return cat((global_rot[..., :1, :], rel), -2)

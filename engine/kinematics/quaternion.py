@@ -15,6 +15,8 @@ import pymotion.rotations.quat_np as _qnp
 import pymotion.rotations.quat_torch as _qt
 import torch
 
+from engine.kinematics import quat_np as _np
+
 Array = TypeVar("Array", np.ndarray, torch.Tensor)
 
 
@@ -36,8 +38,7 @@ def mul(q0: Array, q1: Array) -> Array:
             ),
             dim=-1,
         )
-    q0, q1 = np.broadcast_arrays(q0, q1)
-    return _qnp.mul(np.ascontiguousarray(q0), np.ascontiguousarray(q1))
+    return _np.mul(q0, q1)
 
 
 def rotate(q: Array, v: Array) -> Array:
@@ -49,15 +50,14 @@ def rotate(q: Array, v: Array) -> Array:
         u, v, w = u.expand(shape), v.expand(shape), w.expand(shape[:-1] + (1,))
         t = 2.0 * torch.linalg.cross(u, v, dim=-1)
         return v + w * t + torch.linalg.cross(u, t, dim=-1)
-    t = 2.0 * np.cross(u, v)
-    return v + w * t + np.cross(u, t)
+    return _np.rotate(q, v)
 
 
 def conjugate(q: Array) -> Array:
     """Inverse of a unit quaternion."""
     if isinstance(q, torch.Tensor):
         return q * torch.tensor([1.0, -1.0, -1.0, -1.0], dtype=q.dtype, device=q.device)
-    return q * np.array([1.0, -1.0, -1.0, -1.0])
+    return _np.conjugate(q)
 
 
 inverse = conjugate
@@ -116,8 +116,17 @@ def from_matrix(m: Array) -> Array:
 
 
 def to_matrix(q: Array) -> Array:
-    """Quaternions to rotation matrices ``(..., 3, 3)``."""
-    return _backend(q).to_matrix(q)
+    """Unit quaternions ``(..., 4)`` (w, x, y, z) to rotation matrices ``(..., 3, 3)``."""
+    if not isinstance(q, torch.Tensor):
+        return _np.to_matrix(q)
+    w, x, y, z = q.unbind(-1)
+    m = torch.stack(
+        (1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),
+         2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
+         2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)),
+        dim=-1,
+    )  # fmt: skip
+    return m.reshape(q.shape[:-1] + (3, 3))
 
 
 def angle(q0: Array, q1: Array) -> Array:
@@ -129,26 +138,16 @@ def angle(q0: Array, q1: Array) -> Array:
     return 2.0 * np.arccos(d)
 
 
-def heading(q: Array, forward: Array | None = None) -> Array:
+def heading(q: Array) -> Array:
     """Yaw-only part of a rotation: rotation about +Z that turns the rest forward (-Y)
     onto the horizontal projection of ``q``'s forward. Shape ``(..., 4)``."""
-    is_t = isinstance(q, torch.Tensor)
-    f = (
-        torch.tensor([0.0, -1.0, 0.0], dtype=q.dtype, device=q.device)
-        if is_t
-        else np.array([0.0, -1.0, 0.0])
-    )
-    fw = rotate(q, f.expand(q.shape[:-1] + (3,)) if is_t else np.broadcast_to(f, q.shape[:-1] + (3,)))
-    # yaw angle of the projected forward relative to -Y, about +Z
-    if is_t:
-        yaw = torch.atan2(fw[..., 0], -fw[..., 1])
-        half = 0.5 * yaw
-        z = torch.zeros_like(half)
-        return torch.stack((torch.cos(half), z, z, torch.sin(half)), dim=-1)
-    yaw = np.arctan2(fw[..., 0], -fw[..., 1])
-    half = 0.5 * yaw
-    z = np.zeros_like(half)
-    return np.stack((np.cos(half), z, z, np.sin(half)), axis=-1)
+    if not isinstance(q, torch.Tensor):
+        return _np.heading(q)
+    f = torch.tensor([0.0, -1.0, 0.0], dtype=q.dtype, device=q.device)
+    fw = rotate(q, f.expand(q.shape[:-1] + (3,)))
+    half = 0.5 * torch.atan2(fw[..., 0], -fw[..., 1])
+    z = torch.zeros_like(half)
+    return torch.stack((torch.cos(half), z, z, torch.sin(half)), dim=-1)
 
 
 def unroll(q: np.ndarray, axis: int = 0) -> np.ndarray:

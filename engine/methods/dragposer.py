@@ -23,6 +23,7 @@ from engine import skeleton as sk
 from engine.constraints import Constraint, SensorConstraint, TemporalPriorConstraint
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
+from engine.kinematics.root import root_increment
 from engine.methods.base import FrameResult, Method
 from engine.methods.sensor_blend import SensorBlend
 from engine.sensors import Sensor, SensorFrame
@@ -269,7 +270,7 @@ class DragPoserMethod(Method):
     def _advance(self, latent: torch.Tensor, root_rot: torch.Tensor, positions: torch.Tensor) -> None:
         prev = self._root
         assert prev is not None
-        disp = Q.rotate(Q.conjugate(prev.heading()), positions[0] - prev.position)
+        _, disp = root_increment(prev.rotation, prev.position, root_rot, positions[0])
         # predictor conditioning: displacement summed over the last n frames (each in its
         # previous heading frame), then the heights of HEIGHT_JOINTS (engine.models.predictor)
         self._disps.append(disp.detach())

@@ -33,6 +33,7 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
+from engine.kinematics.fk import fk
 from engine.methods.base import FrameResult, Method
 from engine.sensors import Sensor, SensorFrame
 from engine.motion import Motion
@@ -51,30 +52,6 @@ SPINE_PASSES = 4
 #: Largest clavicle turn used to bring an out-of-reach hand target closer, radians.
 CLAVICLE_MAX = math.radians(30.0)
 IDENTITY = np.array([1.0, 0.0, 0.0, 0.0])
-
-
-# -- single-quaternion helpers (plain numpy on (4,) arrays: cheap per frame) ------------
-def _mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    w0, x0, y0, z0 = a
-    w1, x1, y1, z1 = b
-    return np.array([
-        w0 * w1 - x0 * x1 - y0 * y1 - z0 * z1,
-        w0 * x1 + x0 * w1 + y0 * z1 - z0 * y1,
-        w0 * y1 - x0 * z1 + y0 * w1 + z0 * x1,
-        w0 * z1 + x0 * y1 - y0 * x1 + z0 * w1,
-    ])  # fmt: skip
-
-
-def _conj(q: np.ndarray) -> np.ndarray:
-    return q * np.array([1.0, -1.0, -1.0, -1.0])
-
-
-def _rot(q: np.ndarray, v: np.ndarray) -> np.ndarray:
-    # v + 2w (u x v) + 2 u x (u x v), written out: np.cross costs ~50x more on (3,) arrays
-    w, x, y, z = q.tolist()
-    a, b, c = v.tolist()
-    tx, ty, tz = 2.0 * (y * c - z * b), 2.0 * (z * a - x * c), 2.0 * (x * b - y * a)
-    return np.array([a + w * tx + y * tz - z * ty, b + w * ty + z * tx - x * tz, c + w * tz + x * ty - y * tx])
 
 
 def _axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
@@ -114,11 +91,6 @@ def _twist(q: np.ndarray, axis: np.ndarray) -> np.ndarray:
 
 def _yaw(angle: float) -> np.ndarray:
     return np.array([math.cos(angle / 2), 0.0, 0.0, math.sin(angle / 2)])
-
-
-def _heading_of(q: np.ndarray) -> np.ndarray:
-    """Yaw-only part of ``q``: turns the rest forward (-Y) onto q's horizontal forward."""
-    return Q.heading(q)
 
 
 def _basis_rotation(u0: np.ndarray, w0: np.ndarray, u1: np.ndarray, w1: np.ndarray) -> np.ndarray:
@@ -203,21 +175,13 @@ class IKMethod(Method):
 
     # -- kinematics -----------------------------------------------------------------
     def _fk(self, local: np.ndarray, root_pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        # scalar loop on purpose: engine.kinematics.fk is batched and ~8x slower for one frame
-        pos = np.empty((sk.NUM_JOINTS, 3))
-        rot = np.empty((sk.NUM_JOINTS, 4))
-        pos[0], rot[0] = root_pos, local[0]
-        for j in range(1, sk.NUM_JOINTS):
-            p = sk.PARENTS[j]
-            rot[j] = _mul(rot[p], local[j])
-            pos[j] = pos[p] + _rot(rot[p], self.offsets[j])
-        return pos, rot
+        return fk(local, root_pos, self.offsets)
 
     # -- root ---------------------------------------------------------------------------
     def _estimate_heading(self, s: dict[str, Sensor]) -> np.ndarray:
         head = s.get("upperneck")
         if head is not None and head.dof == 6:
-            return _heading_of(head.rotation)
+            return Q.heading(head.rotation)
         left = np.zeros(3)
         for lj, rj in (("lankle", "rankle"), ("lwrist", "rwrist")):
             if lj in s and rj in s:
@@ -230,13 +194,13 @@ class IKMethod(Method):
         hip, head = s.get("root"), s.get("upperneck")
         if hip is not None and hip.dof == 6:
             rot = np.asarray(hip.rotation, float)
-            self._heading = _heading_of(rot)
+            self._heading = Q.heading(rot)
         else:
             rot = self._heading = self._estimate_heading(s)
         if hip is not None:
             pos = np.asarray(hip.position, float)
         elif head is not None:
-            pos = head.position - _rot(rot, self.rest[HEAD] - self.rest[0])
+            pos = head.position - Q.rotate(rot, self.rest[HEAD] - self.rest[0])
         elif s:
             mean = np.mean([r.position for r in s.values()], axis=0)
             pos = np.array([mean[0], mean[1], self._root_pos[2]])
@@ -256,10 +220,10 @@ class IKMethod(Method):
             step = _pow(swing, 1.0 / n)
             for j in SPINE:  # each segment turns one more step than the one below it
                 pr = rot[sk.PARENTS[j]]
-                local[j] = _mul(_mul(_conj(pr), _mul(step, pr)), local[j])
+                local[j] = Q.mul(Q.mul(Q.conjugate(pr), Q.mul(step, pr)), local[j])
         if head.dof == 6:
             _, rot = self._fk(local, root)
-            local[HEAD] = _mul(_conj(rot[sk.PARENTS[HEAD]]), head.rotation)
+            local[HEAD] = Q.mul(Q.conjugate(rot[sk.PARENTS[HEAD]]), head.rotation)
 
     def _reach_with_clavicle(self, local: np.ndarray, root: np.ndarray, chain: tuple[int, int, int],
                              target: np.ndarray) -> None:
@@ -275,7 +239,7 @@ class IKMethod(Method):
         if angle > CLAVICLE_MAX:
             swing = _pow(swing, CLAVICLE_MAX / angle)
         pr = rot[sk.PARENTS[clav]]
-        local[clav] = _mul(_mul(_conj(pr), _mul(swing, pr)), local[clav])
+        local[clav] = Q.mul(Q.mul(Q.conjugate(pr), Q.mul(swing, pr)), local[clav])
 
     def _pull_root_to_feet(self, root: np.ndarray, root_rot: np.ndarray,
                            s: dict[str, Sensor]) -> np.ndarray:
@@ -286,7 +250,7 @@ class IKMethod(Method):
                 if r is None:
                     continue
                 leg = np.linalg.norm(self.offsets[knee]) + np.linalg.norm(self.offsets[ankle])
-                hip_pos = root + _rot(root_rot, self.offsets[hip])
+                hip_pos = root + Q.rotate(root_rot, self.offsets[hip])
                 d = r.position - hip_pos
                 excess = float(np.linalg.norm(d)) - 0.999 * leg
                 if excess > 0:
@@ -304,14 +268,14 @@ class IKMethod(Method):
         bend = pole - (pole @ (target - pos[up])) * (target - pos[up]) / max(
             float(np.sum((target - pos[up]) ** 2)), 1e-12)
         g_up = _basis_rotation(self.offsets[mid], rest_pole, elbow - pos[up], bend)
-        local[up] = _mul(_conj(rot[sk.PARENTS[up]]), g_up)
-        lower = _rot(g_up, self.offsets[end])
-        g_mid = _mul(_from_to(lower, target - elbow), g_up)
+        local[up] = Q.mul(Q.conjugate(rot[sk.PARENTS[up]]), g_up)
+        lower = Q.rotate(g_up, self.offsets[end])
+        g_mid = Q.mul(_from_to(lower, target - elbow), g_up)
         if end_rot is not None and twist_mid:
             # the forearm carries the hand's twist (pronation), the wrist only the swing
-            g_mid = _mul(g_mid, _twist(_mul(_conj(g_mid), end_rot), self.offsets[end]))
-        local[mid] = _mul(_conj(g_up), g_mid)
-        local[end] = IDENTITY if end_rot is None else _mul(_conj(g_mid), end_rot)
+            g_mid = Q.mul(g_mid, _twist(Q.mul(Q.conjugate(g_mid), end_rot), self.offsets[end]))
+        local[mid] = Q.mul(Q.conjugate(g_up), g_mid)
+        local[end] = IDENTITY if end_rot is None else Q.mul(Q.conjugate(g_mid), end_rot)
 
     def _keep_or_rest(self, local: np.ndarray, joints: tuple[int, ...], sensor: str) -> bool:
         """Keep a lost limb's last pose; return False if it was never tracked."""
@@ -351,11 +315,11 @@ class IKMethod(Method):
                 continue
             end_rot = np.asarray(r.rotation, float) if r.dof == 6 else None
             self._reach_with_clavicle(local, root_pos, chain, np.asarray(r.position, float))
-            self._solve_limb(local, root_pos, chain, r.position, _rot(chest, ARM_POLE), ARM_POLE, end_rot,
+            self._solve_limb(local, root_pos, chain, r.position, Q.rotate(chest, ARM_POLE), ARM_POLE, end_rot,
                              twist_mid=True)
 
-        forward = _rot(root_rot, LEG_POLE)
-        level = _heading_of(root_rot)
+        forward = Q.rotate(root_rot, LEG_POLE)
+        level = Q.heading(root_rot)
         for chain in LEGS:
             joint = sk.JOINT_NAMES[chain[2]]
             r = s.get(joint)
@@ -366,7 +330,7 @@ class IKMethod(Method):
                 reach = np.linalg.norm(self.rest[chain[2]] - self.rest[chain[0]])
                 target, pole, end_rot = pos[chain[0]] - [0.0, 0.0, reach], forward, level
             elif r.dof == 6:
-                foot_fwd = _rot(np.asarray(r.rotation, float), LEG_POLE)
+                foot_fwd = Q.rotate(np.asarray(r.rotation, float), LEG_POLE)
                 target, pole, end_rot = r.position, forward + foot_fwd, np.asarray(r.rotation, float)
             else:
                 target, pole, end_rot = r.position, forward, level

@@ -18,16 +18,16 @@ from engine.constraints import (
 from engine.constraints.base import PoseState
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
-from engine.optimizer_pose import LevelFK
+from engine.kinematics.fk import fk
 
 J = sk.JOINT_INDEX
-FK = LevelFK(sk.REST_OFFSETS, dtype=torch.float64)
+
 REST = sk.Skeleton.canonical().rest_positions()
 STAND = np.array([0.0, 0.0, 1.0])  # root height with the toes just above the floor
 
 
 def state_of(local: torch.Tensor, root: torch.Tensor, latent=None, prediction=None, previous=None) -> PoseState:
-    pos, rot = FK(Q.normalize(local), root)
+    pos, rot = fk(Q.normalize(local), root, sk.REST_OFFSETS)
     lat = torch.zeros(4, dtype=torch.float64) if latent is None else latent
     return PoseState(pos, rot, local, lat, previous, 0, prediction)
 

@@ -14,7 +14,8 @@ from pymotion.ops import skeleton_np
 from engine import skeleton as sk
 from engine.kinematics import features as Fe
 from engine.kinematics import quaternion as Q
-from engine.kinematics.fk import fk, local_from_global
+from engine.kinematics.fk import fk, fk_matrices, local_from_global
+from engine.kinematics.root import integrate_root, root_increment
 
 RNG = np.random.default_rng(3)
 PARENTS_PM = np.array([0] + list(sk.PARENTS[1:]))
@@ -119,3 +120,38 @@ def test_canonicalize_same_rotation(q):
     c = Q.canonicalize(q)
     assert c[0] >= 0
     np.testing.assert_allclose(Q.to_matrix(c), Q.to_matrix(q), atol=1e-9)
+
+
+def test_fk_matrices_match_the_quaternion_fk_numpy_and_torch():
+    q = _random_quats(3, sk.NUM_JOINTS)
+    r = RNG.normal(size=(3, 3))
+    off = sk.REST_OFFSETS * RNG.uniform(0.8, 1.2, size=(3, sk.NUM_JOINTS, 1))  # per-frame proportions
+    p_ref, r_ref = fk(q, r, off)
+    p_np, m_np = fk_matrices(Q.to_matrix(q), r, off)
+    np.testing.assert_allclose(p_np, p_ref, atol=1e-12)
+    np.testing.assert_allclose(m_np, Q.to_matrix(r_ref), atol=1e-12)
+    p_t, m_t = fk_matrices(Q.to_matrix(torch.tensor(q)), torch.tensor(r), off)
+    np.testing.assert_allclose(p_t.numpy(), p_ref, atol=1e-12)
+    np.testing.assert_allclose(m_t.numpy(), Q.to_matrix(r_ref), atol=1e-12)
+
+
+def test_fk_by_levels_matches_a_joint_by_joint_loop():
+    q = _random_quats(4, sk.NUM_JOINTS)
+    r = RNG.normal(size=(4, 3))
+    pos, rot = fk(q, r, sk.REST_OFFSETS)
+    for j in range(1, sk.NUM_JOINTS):  # independent: world = parent world * local
+        p = sk.PARENTS[j]
+        np.testing.assert_allclose(rot[:, j], pm_q.mul(rot[:, p], q[:, j]), atol=1e-12)
+        np.testing.assert_allclose(pos[:, j], pos[:, p] + pm_q.mul_vec(rot[:, p], np.broadcast_to(
+            sk.REST_OFFSETS[j], (4, 3))), atol=1e-12)
+
+
+def test_root_integration_round_trips_numpy_and_torch():
+    prev_rot, rot = _random_quats(5), _random_quats(5)
+    prev_pos, pos = RNG.normal(size=(5, 3)), RNG.normal(size=(5, 3))
+    rot0, disp = root_increment(prev_rot, prev_pos, rot, pos)
+    back_rot, back_pos = integrate_root(prev_rot, prev_pos, rot0, disp)
+    np.testing.assert_allclose(back_pos, pos, atol=1e-12)
+    np.testing.assert_allclose(Q.canonicalize(back_rot), Q.canonicalize(rot), atol=1e-12)
+    t_rot, t_pos = integrate_root(*(torch.tensor(x) for x in (prev_rot, prev_pos, rot0, disp)))
+    np.testing.assert_allclose(t_pos.numpy(), pos, atol=1e-12)

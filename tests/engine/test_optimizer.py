@@ -14,7 +14,7 @@ from engine.errors import UserError
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk
 from engine.optimizer import FrameContext, OptimizerSettings, PoseOptimizer
-from engine.optimizer_pose import LevelFK, RootAnchor, RootFrame, RootOverride
+from engine.optimizer_pose import RootAnchor, RootFrame, RootOverride
 from engine.optimizer_temporal import TemporalSchedule
 from tests.engine.test_optimizer_standins import CountingPredictor, MLPDecoder, NaNBeyond
 
@@ -34,16 +34,6 @@ def targets_from(opt: PoseOptimizer, z: torch.Tensor, c: FrameContext, joints=("
         s = opt.decode(z, c)
     return [SensorConstraint(name=f"sensor:{j}", joint=j, position=s.positions[J[j]].double().numpy(),
                              rotation=s.rotations[J[j]].double().numpy()) for j in joints]  # fmt: skip
-
-
-def test_level_fk_matches_the_reference_fk():
-    q = Q.normalize(torch.randn(3, 22, 4, dtype=torch.float64))
-    r = torch.randn(3, 3, dtype=torch.float64)
-    p1, r1 = LevelFK(OFFSETS, dtype=torch.float64)(q, r)
-    p2, r2 = fk(q, r, OFFSETS)
-    assert torch.allclose(p1, p2, atol=1e-12) and torch.allclose(r1, r2, atol=1e-12)
-    _, mats = LevelFK(OFFSETS, dtype=torch.float64).matrices(q, r)
-    assert torch.allclose(mats, torch.as_tensor(Q.to_matrix(r2.numpy())), atol=1e-10)
 
 
 def test_root_follows_a_hip_sensor_or_integrates_the_decoded_displacement():

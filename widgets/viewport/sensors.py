@@ -12,17 +12,11 @@ from collections.abc import Callable
 import numpy as np
 import pyvista as pv
 
+from engine.kinematics.quat_np import rotate
 from widgets import style
 
 AXIS_LENGTH = 0.12  # metres
 _AXIS_RGB = np.array([[230, 60, 60], [60, 200, 80], [70, 130, 255]], np.uint8)
-
-
-def _rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Rotate vectors ``v (..., 3)`` by unit quaternions ``q (..., 4)`` (w, x, y, z)."""
-    w, u = q[..., :1], q[..., 1:]
-    t = 2.0 * np.cross(u, v)
-    return v + w * t + np.cross(u, t)
 
 
 class SensorMarkers:
@@ -97,7 +91,7 @@ class SensorMarkers:
         if not joints:
             return
         axes = np.eye(3) * AXIS_LENGTH
-        tips = _rotate(rotations[:, None, :], axes[None]) + positions[:, None, :]  # (S, 3, 3)
+        tips = rotate(rotations[:, None, :], axes[None]) + positions[:, None, :]  # (S, 3, 3)
         pts = np.empty((len(joints), 3, 2, 3))
         pts[:, :, 0] = positions[:, None, :]
         pts[:, :, 1] = tips

@@ -25,7 +25,7 @@ ROOT_ANCHORS = ("upperneck", "none")
 def optimizer_choices() -> tuple[dict[str, tuple[str, ...]], dict[str, Any]]:
     """Values of the optimizer's choice settings, and every setting's default.
 
-    Only fields :class:`engine.optimizer.OptimizerSettings` really has are offered, so
+    Only fields :class:`engine.solver.OptimizerSettings` really has are offered, so
     the panel never shows a control the engine would reject.
 
     Returns
@@ -35,7 +35,7 @@ def optimizer_choices() -> tuple[dict[str, tuple[str, ...]], dict[str, Any]]:
     defaults : dict
         Field name -> default value, shown until the session sets the field.
     """
-    from engine import optimizer as opt
+    from engine import solver as opt
 
     defaults = dataclasses.asdict(opt.OptimizerSettings())
     choices = {"mode": tuple(opt.MODES)}

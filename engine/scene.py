@@ -23,7 +23,7 @@ import engine.constraints  # noqa: F401  (registers every kind)
 from engine.atomic import write_text
 from engine.constraints.base import Constraint, from_dict
 from engine.errors import UserError
-from engine.optimizer import OptimizerSettings
+from engine.solver import OptimizerSettings
 
 FORMAT = "dragposer-scene"
 VERSION = 1

@@ -47,7 +47,7 @@ def apply_settings(method: Any, name: str, items: list[str]) -> dict[str, Any]:
     if not items:
         return {}
     from engine.config import parse_overrides
-    from engine.optimizer import OptimizerSettings
+    from engine.solver import OptimizerSettings
 
     values = parse_overrides(OptimizerSettings, items)
     configure = getattr(method, "configure", None)
@@ -66,7 +66,7 @@ def build_method(args: argparse.Namespace) -> Any:
 
     constraints, scene_settings = [], {}
     if getattr(args, "scene", None):
-        from engine.optimizer import OptimizerSettings
+        from engine.solver import OptimizerSettings
         from engine.scene import load_scene
 
         constraints, settings = load_scene(args.scene)

@@ -5,7 +5,7 @@ parameters of every kind.
 """
 
 from engine.constraints.balance import BalanceConstraint
-from engine.constraints.base import REGISTRY, Constraint, PoseState, from_dict
+from engine.constraints.base import REGISTRY, Constraint, from_dict
 from engine.constraints.bounds import BoundsConstraint
 from engine.constraints.distance import DistanceConstraint
 from engine.constraints.end_effector import EndEffectorConstraint

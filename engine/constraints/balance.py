@@ -16,8 +16,9 @@ import numpy as np
 import torch
 
 from engine import skeleton as sk
-from engine.constraints.base import Constraint, PoseState
+from engine.constraints.base import Constraint
 from engine.errors import UserError
+from engine.solver.state import PoseState
 
 MODES = ("head_over_hip", "com_over_feet")
 _HEAD, _ROOT = sk.JOINT_INDEX["upperneck"], sk.JOINT_INDEX["root"]

@@ -26,51 +26,17 @@ import torch
 from engine import skeleton as sk
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
+from engine.solver.state import PoseState
 
 #: kind string -> constraint class; filled by subclasses as they are defined.
 REGISTRY: dict[str, type["Constraint"]] = {}
-
-
-@dataclass
-class PoseState:
-    """The decoded pose a constraint judges (torch, differentiable w.r.t. the latent).
-
-    Attributes
-    ----------
-    positions : Tensor (22, 3)
-        World joint positions, metres (Z-up, floor at z = 0).
-    rotations : Tensor (22, 4)
-        World joint rotations (w, x, y, z).
-    local_rot : Tensor (22, 4)
-        Local joint rotations; row 0 is the root's world rotation.
-    latent : Tensor (L,)
-        The latent vector being optimised.
-    previous_positions : Tensor (22, 3) or None
-        The previous frame's solved positions (for pins and foot contact).
-    frame : int
-        Frame index in the clip.
-    prediction : Tensor (L,) or None
-        The temporal predictor's latent for this frame, if it has one.
-    rotation_matrices : Tensor (22, 3, 3) or None
-        The world rotations as matrices, when the producer has them (the optimizer
-        does); :func:`world_rotation_matrix` falls back to ``rotations``.
-    """
-
-    positions: torch.Tensor
-    rotations: torch.Tensor
-    local_rot: torch.Tensor
-    latent: torch.Tensor
-    previous_positions: torch.Tensor | None = None
-    frame: int = 0
-    prediction: torch.Tensor | None = None
-    rotation_matrices: torch.Tensor | None = None
 
 
 def world_rotation_matrix(state: PoseState, joint: int) -> torch.Tensor:
     """World rotation ``(3, 3)`` of one joint, from whichever form the state carries."""
     if state.rotation_matrices is not None:
         return state.rotation_matrices[joint]
-    return Q.to_matrix(state.rotations[joint])
+    return Q.to_matrix(state.world_rotations()[joint])
 
 
 def rotation_distance(state: PoseState, joint: int, target: np.ndarray) -> torch.Tensor:

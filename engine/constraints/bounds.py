@@ -11,8 +11,9 @@ from typing import Any, ClassVar
 import numpy as np
 import torch
 
-from engine.constraints.base import Constraint, PoseState, joint_index, vec
+from engine.constraints.base import Constraint, joint_index, vec
 from engine.errors import UserError
+from engine.solver.state import PoseState
 
 
 @dataclass

@@ -9,7 +9,8 @@ from typing import Any, ClassVar
 import numpy as np
 import torch
 
-from engine.constraints.base import Constraint, PoseState, joint_index, rotation_distance, vec
+from engine.constraints.base import Constraint, joint_index, rotation_distance, vec
+from engine.solver.state import PoseState
 
 
 @dataclass

@@ -16,9 +16,10 @@ from typing import Any, ClassVar
 import numpy as np
 import torch
 
-from engine.constraints.base import Constraint, PoseState, joint_index, rotation_distance, vec
+from engine.constraints.base import Constraint, joint_index, rotation_distance, vec
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
+from engine.solver.state import PoseState
 
 
 @dataclass
@@ -126,4 +127,4 @@ def _unit(q: np.ndarray) -> np.ndarray:
 def _matrices(state: PoseState, idx: torch.Tensor) -> torch.Tensor:
     if state.rotation_matrices is not None:
         return state.rotation_matrices.index_select(0, idx)
-    return Q.to_matrix(state.rotations.index_select(0, idx))
+    return Q.to_matrix(state.world_rotations().index_select(0, idx))

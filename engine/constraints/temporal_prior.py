@@ -11,7 +11,8 @@ from typing import ClassVar
 
 import torch
 
-from engine.constraints.base import Constraint, PoseState
+from engine.constraints.base import Constraint
+from engine.solver.state import PoseState
 
 
 @dataclass

@@ -2,8 +2,8 @@
 
 Every frame, each sensor reading becomes (or updates) a ``sensor`` constraint named
 ``sensor:<joint>`` (enabled while connected, weighted by :meth:`set_sensor_weight`),
-the temporal predictor proposes a latent (:mod:`engine.optimizer_temporal`), and
-:class:`engine.optimizer.PoseOptimizer` moves the latent until the sensors, the
+the temporal predictor proposes a latent (:mod:`engine.solver.temporal`), and
+:class:`engine.solver.PoseOptimizer` moves the latent until the sensors, the
 temporal prior and the user's constraints agree. User constraints are edited between
 frames with :meth:`add_constraint`, :meth:`remove_constraint`, :meth:`set_weight`,
 :meth:`set_enabled` or :meth:`set_constraints`; settings with :meth:`configure`.
@@ -28,9 +28,10 @@ from engine.methods.base import FrameResult, Method
 from engine.methods.sensor_blend import SensorBlend
 from engine.sensors import Sensor, SensorFrame
 from engine.motion import Motion
-from engine.optimizer import FULL_SET, FrameContext, LatentDecoder, OptimizerSettings, PoseOptimizer
-from engine.optimizer_pose import RootAnchor, RootFrame, RootOverride
-from engine.optimizer_temporal import LatentPredictor, TemporalSchedule
+from engine.solver import (
+    FULL_SET, FrameContext, LatentDecoder, LatentPredictor, OptimizerSettings, PoseOptimizer, RootAnchor, RootFrame,
+    RootOverride, TemporalSchedule,
+)  # fmt: skip
 
 _HEIGHT_IDX = [sk.JOINT_INDEX[j] for j in sk.HEIGHT_JOINTS]
 SPARSE_FUTURE = 16
@@ -48,6 +49,9 @@ class DragPoserMethod(Method):
     settings : OptimizerSettings, optional
     latent_dim : int
         Size of the latent (24 in DragPoser).
+    fast : bool
+        Let the solver take its fast path (hand-derived gradients) when it can; False
+        forces the autograd reference path (same results, slower; for tests).
     **overrides
         Settings fields (``mode``, ``iterations``, ``lr``...) applied on top.
     """
@@ -55,7 +59,8 @@ class DragPoserMethod(Method):
     name = "dragposer"
 
     def __init__(self, decoder: LatentDecoder, predictor: LatentPredictor | None = None,
-                 settings: OptimizerSettings | None = None, latent_dim: int = 24, **overrides: Any) -> None:  # fmt: skip
+                 settings: OptimizerSettings | None = None, latent_dim: int = 24, fast: bool = True,
+                 **overrides: Any) -> None:  # fmt: skip
         self.decoder = decoder
         if isinstance(decoder, torch.nn.Module):
             decoder.eval().requires_grad_(False)
@@ -64,6 +69,7 @@ class DragPoserMethod(Method):
         self.predictor = predictor
         self.settings = settings or OptimizerSettings()
         self.latent_dim = latent_dim
+        self.fast = fast
         self.constraints: list[Constraint] = []
         self.sensor_weights: dict[str, float] = {}
         self.configure(**overrides)
@@ -125,7 +131,7 @@ class DragPoserMethod(Method):
     def reset(self, skeleton: sk.Skeleton, fps: float = sk.FPS, *, reference: Motion | None = None) -> None:
         self.skeleton = skeleton
         self.fps = fps
-        self.optimizer = PoseOptimizer(self.decoder, skeleton.offsets, self.settings)
+        self.optimizer = PoseOptimizer(self.decoder, skeleton.offsets, self.settings, fast=self.fast)
         self.schedule = TemporalSchedule(self.settings.predictor_every, self.settings.past_window)
         self.sensors: dict[str, SensorConstraint] = {}
         self.prior = TemporalPriorConstraint(name="temporal_prior")

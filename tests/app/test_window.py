@@ -55,7 +55,7 @@ def latent_method(studio, qtbot):
 
 
 def test_optimizer_settings_from_the_panel_reach_the_method(studio, qtbot, latent_method):
-    from engine.optimizer import OPTIMIZERS, OptimizerSettings
+    from engine.solver import OPTIMIZERS, OptimizerSettings
 
     panel = studio.optimizer_panel
     update, anchor = panel.editors["optimizer"], panel.editors["root_anchor"]

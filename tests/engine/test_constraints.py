@@ -15,7 +15,7 @@ from engine.constraints import (
     BalanceConstraint, BoundsConstraint, DistanceConstraint, EndEffectorConstraint, FloorConstraint,
     LookAtConstraint, PinConstraint, SensorConstraint, TemporalPriorConstraint,
 )  # fmt: skip
-from engine.constraints.base import PoseState
+from engine.solver import PoseState
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk

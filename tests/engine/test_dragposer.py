@@ -14,7 +14,7 @@ from engine.errors import UserError
 from engine.sensors import Sensor, SensorFrame
 from engine.methods.dragposer import DragPoserMethod
 from engine.motion import Motion
-from engine.optimizer import OptimizerSettings
+from engine.solver import OptimizerSettings
 from engine.scene import load_scene, save_scene
 from engine.tracking import simulate
 from tests.engine.test_optimizer_standins import CountingPredictor, MLPDecoder

@@ -13,9 +13,7 @@ from engine.constraints import EndEffectorConstraint, SensorConstraint, Temporal
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk
-from engine.optimizer import FrameContext, OptimizerSettings, PoseOptimizer
-from engine.optimizer_pose import RootAnchor, RootFrame, RootOverride
-from engine.optimizer_temporal import TemporalSchedule
+from engine.solver import FrameContext, OptimizerSettings, PoseOptimizer, RootAnchor, RootFrame, RootOverride, TemporalSchedule
 from tests.engine.test_optimizer_standins import CountingPredictor, MLPDecoder, NaNBeyond
 
 J = sk.JOINT_INDEX
@@ -33,7 +31,7 @@ def targets_from(opt: PoseOptimizer, z: torch.Tensor, c: FrameContext, joints=("
     with torch.no_grad():
         s = opt.decode(z, c)
     return [SensorConstraint(name=f"sensor:{j}", joint=j, position=s.positions[J[j]].double().numpy(),
-                             rotation=s.rotations[J[j]].double().numpy()) for j in joints]  # fmt: skip
+                             rotation=s.world_rotations()[J[j]].double().numpy()) for j in joints]  # fmt: skip
 
 
 def test_root_follows_a_hip_sensor_or_integrates_the_decoded_displacement():

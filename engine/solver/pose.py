@@ -1,10 +1,7 @@
-"""Decoded latent -> world pose, for the pose optimizer's inner loop.
+"""Decoded latent -> world pose: the root rules and the reference (autograd) decode.
 
-Forward kinematics here processes the skeleton level by level (all joints at the same
-depth at once: 7 levels instead of 21 joints) with rotation matrices, which keeps the
-autograd graph, and the Python work per optimizer iteration, small (about 2.5x faster
-than the per-joint quaternion FK with its backward pass). It matches
-:func:`engine.kinematics.fk.fk` to float precision (tested).
+Forward kinematics is :func:`engine.kinematics.fk.fk_matrices` (level-ordered, rotation
+matrices, so rotation losses need no quaternion chain).
 
 Root handling (see ``docs/optimizer.md``):
 
@@ -28,69 +25,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
 import torch
 
-from engine import skeleton as sk
-from engine.constraints.base import PoseState
 from engine.kinematics import quaternion as Q
-from engine.kinematics.fk import fk, fk_matrices
 from engine.kinematics.root import integrate_root
-
-
-class LevelFK:
-    """The skeleton's offsets bound to :func:`engine.kinematics.fk.fk_matrices` (torch).
-
-    Parameters
-    ----------
-    offsets : array (J, 3)
-        Bone offsets, metres.
-    parents : sequence of int
-        Parent of every joint (root first, -1).
-    """
-
-    def __init__(self, offsets: np.ndarray, parents: tuple[int, ...] = sk.PARENTS,
-                 dtype: torch.dtype = torch.float32) -> None:  # fmt: skip
-        self.parents = tuple(parents)
-        self.offsets = torch.as_tensor(np.asarray(offsets), dtype=dtype)
-
-    def matrices(self, local_rot: torch.Tensor, root_pos: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-        """World positions ``(..., J, 3)`` and rotation matrices ``(..., J, 3, 3)``.
-
-        ``local_rot (..., J, 4)``: row 0 is the root's world rotation; ``root_pos (..., 3)``.
-        """
-        return fk_matrices(Q.to_matrix(local_rot), root_pos, self.offsets, self.parents)
-
-    def quaternions(self, local_rot: torch.Tensor) -> torch.Tensor:
-        """World rotations as quaternions ``(..., J, 4)`` (slower; computed on demand)."""
-        return fk(local_rot, local_rot.new_zeros(local_rot.shape[:-2] + (3,)), self.offsets, self.parents)[1]
-
-
-class DecodedPose(PoseState):
-    """A :class:`PoseState` whose quaternion ``rotations`` are computed on first access.
-
-    Most constraints need positions only, and rotation terms use ``rotation_matrices``,
-    so the optimizer rarely pays for the quaternion chain.
-    """
-
-    def __init__(self, fk: LevelFK, positions: torch.Tensor, rotation_matrices: torch.Tensor,
-                 local_rot: torch.Tensor, latent: torch.Tensor, previous_positions: torch.Tensor | None,
-                 frame: int, prediction: torch.Tensor | None) -> None:  # fmt: skip
-        self._fk = fk
-        self.positions = positions
-        self.rotation_matrices = rotation_matrices
-        self.local_rot = local_rot
-        self.latent = latent
-        self.previous_positions = previous_positions
-        self.frame = frame
-        self.prediction = prediction
-
-    def __getattr__(self, name: str):  # only called for attributes not set yet
-        if name == "rotations":
-            value = self._fk.quaternions(self.local_rot)
-            self.__dict__["rotations"] = value
-            return value
-        raise AttributeError(name)
 
 
 @dataclass
@@ -162,3 +100,4 @@ def world_root(rot0: torch.Tensor, disp: torch.Tensor, prev: RootFrame,
     if override is not None:
         position = override.position.expand_as(disp)
     return rotation, position
+

@@ -41,8 +41,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=_bench)
 
 
+PARTS = ("decoder", "fk_losses", "backward", "step")
+
+
 def bench_method(name: str, motion, tracking, frames: int, warmup: int, **kwargs) -> dict:
-    """Time ``frames`` steps of method ``name`` after ``warmup`` untimed ones."""
+    """Time ``frames`` steps of method ``name`` after ``warmup`` untimed ones.
+
+    Per frame: wall-clock milliseconds of ``step`` (everything the method does for the
+    frame). Per iteration (iterative methods): the solver's own milliseconds per
+    iteration on each frame (:attr:`FrameResult.timings`), and its parts.
+    """
     from engine.methods import get_method
 
     method = get_method(name, **kwargs)
@@ -51,7 +59,8 @@ def bench_method(name: str, motion, tracking, frames: int, warmup: int, **kwargs
     else:
         method.reset(motion.skeleton, motion.fps)
     n = min(len(tracking), warmup + frames)
-    times, iters = [], []
+    times, iters, per_iter = [], [], []
+    parts: dict[str, list[float]] = {k: [] for k in PARTS}
     for i in range(n):
         t0 = time.perf_counter()
         res = method.step(tracking.frame(i))
@@ -59,8 +68,12 @@ def bench_method(name: str, motion, tracking, frames: int, warmup: int, **kwargs
         if i >= warmup:
             times.append(dt)
             iters.append(res.iterations)
+            if res.timings:
+                per_iter.append(res.timings["ms_per_iteration"])
+                for k in PARTS:
+                    parts[k].append(res.timings[k])
     t = np.asarray(times)
-    return {
+    row = {
         "method": name,
         "frames": int(t.size),
         "ms_mean": float(t.mean()),
@@ -68,7 +81,23 @@ def bench_method(name: str, motion, tracking, frames: int, warmup: int, **kwargs
         "ms_p95": float(np.percentile(t, 95)),
         "fps": float(1000.0 / t.mean()),
         "iterations_mean": float(np.mean(iters)),
+        "ms_per_frame_median": float(np.median(t)),
+        "frames_per_s": float(1000.0 / t.mean()),
+        "ms_per_iteration_median": float(np.median(per_iter)) if per_iter else None,
+        "ms_per_iteration_p95": float(np.percentile(per_iter, 95)) if per_iter else None,
+        "breakdown_ms": {k: float(np.median(v)) for k, v in parts.items()} if per_iter else None,
+        "peak_rss_mb": _peak_rss_mb(),
     }
+    return row
+
+
+def _peak_rss_mb() -> float:
+    """Peak resident memory of this process so far, MiB (models included)."""
+    import resource
+    import sys
+
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return peak / (1024.0 * 1024.0) if sys.platform == "darwin" else peak / 1024.0
 
 
 def _bench(args: argparse.Namespace) -> int:
@@ -106,10 +135,14 @@ def _bench(args: argparse.Namespace) -> int:
             skipped.append(f"{name}: skipped: {exc}")  # e.g. needs another sensor preset
     print(f"{args.file.name}: sensors {args.sensors}, mode {args.mode}, "
           f"{machine['cpu_count']} cores, torch {machine['torch_threads']} threads")
-    print(f"{'method':<12} {'frames':>6} {'ms mean':>8} {'median':>8} {'p95':>8} {'fps':>7} {'iters':>6}")
+    print(f"{'method':<12} {'frames':>6} {'ms mean':>8} {'median':>8} {'p95':>8} {'fps':>7} {'iters':>6} "
+          f"{'ms/it':>7} {'it p95':>7}  breakdown ms/it (decoder fk+losses backward step)")
     for r in rows:
+        it = r["ms_per_iteration_median"]
+        extra = "" if it is None else (
+            f"{it:>7.3f} {r['ms_per_iteration_p95']:>7.3f}  " + " ".join(f"{v:.3f}" for v in r["breakdown_ms"].values()))
         print(f"{r['method']:<12} {r['frames']:>6d} {r['ms_mean']:>8.2f} {r['ms_median']:>8.2f} "
-              f"{r['ms_p95']:>8.2f} {r['fps']:>7.1f} {r['iterations_mean']:>6.1f}")
+              f"{r['ms_p95']:>8.2f} {r['fps']:>7.1f} {r['iterations_mean']:>6.1f} {extra}")
     for line in skipped:
         print(line)
     if args.json:

@@ -98,7 +98,7 @@ def _reconstruct(args: argparse.Namespace) -> int:
     method = build_method(args)
     tracking = simulate(motion, args.sensors, faulty=args.faulty, gaps=args.gaps, seed=args.seed)
     rec, results = run_method(method, tracking, motion.skeleton, progress=not args.no_progress,
-                              desc=args.input.name)  # fmt: skip
+                              desc=args.input.name, light=True)  # fmt: skip
     rec.name = f"{motion.name} ({args.method})"
     if args.on_source_rig:
         from engine.source_rig import save_on_source_rig

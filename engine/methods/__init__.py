@@ -60,6 +60,7 @@ def run_method(
     progress: bool = True,
     reference: Motion | None = None,
     desc: str | None = None,
+    light: bool = False,
 ) -> tuple[Motion, list[FrameResult]]:
     """Reconstruct a whole clip, frame by frame, as a realtime caller would.
 
@@ -77,6 +78,10 @@ def run_method(
         Ground truth, passed to ``reset`` only if ``method.needs_ground_truth``.
     desc : str, optional
         Progress-bar label.
+    light : bool
+        Keep only the final loss of each frame, and the poses in arrays allocated (and
+        written) up front, so memory stays flat over long clips (``reconstruct``,
+        ``evaluate``); the results' pose fields are then views into those arrays.
 
     Returns
     -------
@@ -97,15 +102,22 @@ def run_method(
     else:
         method.reset(skeleton, tracking.fps)
     results: list[FrameResult] = []
-    for i in tqdm(range(len(tracking)), desc=desc or method.name, unit="frame",
-                  disable=not progress, leave=False):
+    n = len(tracking)
+    # np.full writes every page now: the arrays' memory is taken at the start, not as frames arrive
+    local = np.full((n, sk.NUM_JOINTS, 4), np.nan)
+    root = np.full((n, 3), np.nan)
+    pos = np.full((n, sk.NUM_JOINTS, 3), np.nan) if light else None
+    for i in tqdm(range(n), desc=desc or method.name, unit="frame", disable=not progress, leave=False):
         t0 = time.perf_counter()
         res = method.step(tracking.frame(i))
         if not res.ms:
             res.ms = 1000.0 * (time.perf_counter() - t0)
+        local[i], root[i] = res.local_rot, res.root_pos
+        if pos is not None:
+            pos[i] = res.positions
+            res.local_rot, res.root_pos, res.positions = local[i], root[i], pos[i]
+            res.losses = res.losses[-1:]
         results.append(res)
-    local = np.stack([r.local_rot for r in results]) if results else np.zeros((0, sk.NUM_JOINTS, 4))
-    root = np.stack([r.root_pos for r in results]) if results else np.zeros((0, 3))
     return Motion(local, root, skeleton, tracking.fps, getattr(reference, "name", "")), results
 
 

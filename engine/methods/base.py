@@ -43,6 +43,10 @@ class FrameResult:
         Wall-clock time spent on the frame, milliseconds.
     warnings : list of str
         Problems met on this frame (e.g. a NaN target that was ignored).
+    timings : dict of str to float
+        Iterative methods: milliseconds per optimizer iteration on this frame,
+        ``ms_per_iteration`` and its parts ``decoder``, ``fk_losses``, ``backward``,
+        ``step`` (what ``bench`` reports and the studio's status bar can show).
     """
 
     local_rot: np.ndarray
@@ -53,6 +57,7 @@ class FrameResult:
     latent: np.ndarray | None = None
     ms: float = 0.0
     warnings: list[str] = field(default_factory=list)
+    timings: dict[str, float] = field(default_factory=dict)
 
 
 class Method(ABC):

@@ -191,6 +191,7 @@ class DragPoserMethod(Method):
             latent=sol.latent.double().numpy(),
             ms=1000.0 * (time.perf_counter() - t0),
             warnings=warnings,
+            timings=sol.timings.per_iteration() if sol.iterations else {},
         )
         self._last = result
         return result

@@ -14,6 +14,7 @@ from engine.constraints.look_at import LookAtConstraint
 from engine.constraints.pin import PinConstraint
 from engine.constraints.sensor import SensorConstraint
 from engine.constraints.temporal_prior import TemporalPriorConstraint
+from engine.solver.state import PoseState  # what every loss(state) receives
 
 __all__ = [
     "REGISTRY", "BalanceConstraint", "BoundsConstraint", "Constraint", "DistanceConstraint",

@@ -118,7 +118,7 @@ class GhostLayer:
             shown = name in ghosts and self.visible
             label.SetVisibility(shown)
             if shown:
-                label.SetDisplayPosition(12, max(0, height - 30 - LEGEND_ROW * row))  # top left, pixels
+                label.SetDisplayPosition(12, max(0, height - 46 - LEGEND_ROW * row))  # under the caption line
                 row += 1
 
     def _label(self, name: str, color: str) -> vtk.vtkTextActor:

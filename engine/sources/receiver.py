@@ -24,6 +24,7 @@ import socket
 import threading
 import time
 from collections import deque
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 
 from engine.errors import UserError
@@ -107,17 +108,22 @@ class VMCReceiver:
     timeout_s : float
         Seconds without a valid sample before a tracker reads as lost.
     recorder : RecordingWriter, optional
-        Every accepted sample is written to it (raw tracker pose, project frame).
+        Every accepted sample is written to it (raw tracker pose, project frame); may be
+        swapped while running (:attr:`recorder`).
+    on_frame : callable, optional
+        Called on the receiver thread with every new :class:`LiveFrame` (keep it short).
     """
 
     def __init__(self, host: str = "127.0.0.1", port: int = DEFAULT_PORT, mapping: TrackerMapping | None = None,
                  convention: str = "unity", timeout_s: float = DEFAULT_TIMEOUT_S,
-                 recorder: RecordingWriter | None = None) -> None:  # fmt: skip
+                 recorder: RecordingWriter | None = None,
+                 on_frame: Callable[[LiveFrame], None] | None = None) -> None:  # fmt: skip
         if convention not in CONVENTIONS:
             raise UserError(f"unknown coordinate convention {convention!r}; known: {', '.join(CONVENTIONS)}")
         self.state = TrackerState(mapping, timeout_s)
         self.convention = convention
         self.recorder = recorder
+        self.on_frame = on_frame
         self.stats = ReceiverStats()
         self._lock = threading.Condition()
         self._sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
@@ -262,6 +268,8 @@ class VMCReceiver:
                 st.frames += 1
                 self._frame = LiveFrame(st.frames, t, arrival, self.state.frame(st.frames, t))
                 self._lock.notify_all()
+                if self.on_frame is not None:
+                    self.on_frame(self._frame)
             elif accepted and self._frame is not None and t == self._max_t:
                 # the rest of a frame split over several datagrams: same frame, newer data
                 self._frame = LiveFrame(self._frame.index, t, arrival, self.state.frame(self._frame.index, t))

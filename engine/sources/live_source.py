@@ -65,6 +65,23 @@ class LiveStatus:
     calibration: str
 
 
+def with_studio_edits(readings: dict, sensors: tuple, frame: int) -> SensorFrame:
+    """``readings`` restricted to the studio's enabled sensors (all of them when it has
+    set none), with each sensor's DoF and drag offset applied."""
+    if not sensors:
+        return SensorFrame(frame, dict(readings))
+    out = {}
+    for s in sensors:
+        r = readings.get(s.joint)
+        if r is None or not getattr(s, "enabled", True):
+            continue
+        pos = np.asarray(r.position, float) + np.asarray(getattr(s, "offset", (0.0, 0.0, 0.0)), float)
+        dof = getattr(s, "dof", r.dof)
+        rot = r.rotation if dof == 6 else np.array([1.0, 0.0, 0.0, 0.0])
+        out[s.joint] = replace(r, position=pos, rotation=rot, dof=dof)
+    return SensorFrame(frame, out)
+
+
 class LiveSource:
     """Receive VMC on ``host:port`` and serve the frames to the studio.
 
@@ -136,19 +153,7 @@ class LiveSource:
             if not self._frames:
                 return SensorFrame(frame, {})
             f = self._frames[int(np.clip(frame - self._offset, 0, len(self._frames) - 1))]
-        readings = dict(f.sensors.readings)
-        if self.sensors:
-            out = {}
-            for s in self.sensors:
-                r = readings.get(s.joint)
-                if r is None or not getattr(s, "enabled", True):
-                    continue
-                pos = np.asarray(r.position, float) + np.asarray(getattr(s, "offset", (0.0, 0.0, 0.0)), float)
-                dof = getattr(s, "dof", r.dof)
-                rot = r.rotation if dof == 6 else np.array([1.0, 0.0, 0.0, 0.0])
-                out[s.joint] = replace(r, position=pos, rotation=rot, dof=dof)
-            readings = out
-        return SensorFrame(frame, readings)
+        return with_studio_edits(f.sensors.readings, self.sensors, frame)
 
     def arrival(self, frame: int) -> float | None:
         """``time.perf_counter()`` when ``frame`` arrived (for latency), if still kept."""

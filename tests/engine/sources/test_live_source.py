@@ -84,3 +84,21 @@ def test_a_failed_calibration_says_why(synthetic_motion):
     finally:
         src.close()
     assert "calibration failed" in src.status().calibration and src.skeleton_version == 0
+
+
+def test_a_recording_opens_like_a_clip(synthetic_motion, tmp_path):
+    from engine.sources.recording import write_recording
+    from engine.sources.recording_source import RecordingSource
+    from engine.sources.trackers import TrackerSample
+
+    plan = plan_stream(scaled_motion(synthetic_motion, 0.9), "6", tpose_s=1.0, hardware_offsets=True)
+    samples = [TrackerSample(float(plan.times[i]), n, p, r) for i in range(len(plan)) for n, p, r in plan.frame(i)]
+    write_recording(tmp_path / "r.jsonl", samples, 60.0)
+    src = RecordingSource(tmp_path / "r.jsonl", calibrate_s=0.8)
+    assert src.num_frames == len(plan) and src.fps == 60.0 and src.motion is None
+    assert set(src.frame(70).readings) == {"root", "upperneck", "lwrist", "rwrist", "lankle", "rankle"}
+    assert src.calibration.pose == "tpose"
+    true_h = synthetic_motion.skeleton.height() * 0.9
+    assert abs(src.skeleton.height() - true_h) / true_h < 0.02
+    src.set_sensors((make_sensor("lwrist"),))
+    assert set(src.frame(70).readings) == {"lwrist"}

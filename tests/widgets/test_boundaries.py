@@ -7,7 +7,7 @@ import sys
 
 WIDGET_MODULES = (
     "widgets.viewport", "widgets.timeline", "widgets.sensor_panel", "widgets.constraint_panel",
-    "widgets.plots", "widgets.latent_inspector", "widgets.optimizer_panel",
+    "widgets.plots", "widgets.latent_inspector", "widgets.optimizer_panel", "widgets.live_panel",
 )  # fmt: skip
 
 

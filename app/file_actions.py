@@ -86,6 +86,10 @@ class FileActions:
         """Reconstruct the whole clip off the GUI thread, then write it as BVH (canonical
         skeleton, or with ``on_source_rig`` the hierarchy of the file it was opened from)."""
         s = self.w.session
+        if s.source is not None:
+            return self.w.show_error("Not for tracker input", "Saving re-solves a clip. For trackers use "
+                                     "`dragposer-studio reconstruct --trackers REC.jsonl --out OUT.bvh` on a "
+                                     "recording (Live trackers > Record), or `live --out` (docs/trackers.md).")  # fmt: skip
         if s.motion is None:
             return self.w.show_error("Nothing to save", "Open a motion first.")
         if on_source_rig and getattr(s, "path", None) is None:

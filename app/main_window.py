@@ -19,6 +19,7 @@ from PyQt6.QtWidgets import QDockWidget, QLabel, QMainWindow, QMessageBox, QTabW
 
 from app.drawing import DrawScheduler
 from app.file_actions import FileActions
+from app.live_actions import LiveActions
 from app.menus import build_menus
 from app.schema import constraint_schema, optimizer_choices
 from engine.errors import UserError
@@ -56,6 +57,7 @@ class MainWindow(QMainWindow):
         # after the widgets: the thread's first imports would compete with theirs
         self.engine = self.session.start_engine()
         self.files = FileActions(self)
+        self.live = LiveActions(self)
         build_menus(self)
         self._connect_session()
         self._show_sensors(None)
@@ -267,6 +269,7 @@ class MainWindow(QMainWindow):
         self.timer.stop()
         self.settings.setValue("geometry", self.saveGeometry())
         self._disconnect_session()
+        self.live.close()
         self.session.shutdown()
         self.files.shutdown()
         self.viewport.close()

@@ -50,6 +50,8 @@ def build_menus(w: QMainWindow) -> None:
     action(w, file_menu, "&Open BVH...", f.open_dialog, QKeySequence.StandardKey.Open)
     w.recent_menu = file_menu.addMenu("Open &recent")
     f.refresh_recent()
+    named["connect_live"] = action(w, file_menu, "Connect &live source (VMC)...", w.live.connect_dialog)
+    named["open_recording"] = action(w, file_menu, "Open &tracker recording...", w.live.open_recording_dialog)
     file_menu.addSeparator()
     action(w, file_menu, "&Save reconstruction as BVH...", f.save_reconstruction, QKeySequence.StandardKey.Save)
     action(w, file_menu, "Save reconstruction onto the source &rig...", f.save_on_source_rig, "Ctrl+Alt+S")

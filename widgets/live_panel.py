@@ -134,8 +134,9 @@ class LivePanel(QWidget):
     def show_status(self, status: Any, latency_ms: float | None = None) -> None:
         """Show a status (``LiveStatus`` fields) and the latest latency, ms."""
         state = light_state(status)
-        self._set(self.light, "light", state)
-        self.light.setStyleSheet(f"background: {LIGHT[state]}; border-radius: 7px;")
+        if self._texts.get("light") != state:
+            self._texts["light"] = state
+            self.light.setStyleSheet(f"background: {LIGHT[state]}; border-radius: 7px;")
         self.light.setToolTip({"ok": "receiving", "stale": "no packet for a moment", "silent": "no packets",
                                "off": "not connected"}[state])  # fmt: skip
         connected = status is not None

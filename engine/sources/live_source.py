@@ -125,8 +125,9 @@ class LiveSource:
         return self
 
     def close(self) -> None:
-        """Stop receiving and finish a recording in progress."""
-        self.receiver.stop()
+        """Stop receiving and finish a recording in progress (the frames stay)."""
+        if self.receiver.running:
+            self.receiver.stop()
         self.stop_recording()
 
     # -- the sensor-source contract ---------------------------------------------------------

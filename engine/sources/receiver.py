@@ -195,6 +195,11 @@ class VMCReceiver:
         return s
 
     @property
+    def running(self) -> bool:
+        """True while the receiver thread reads the socket."""
+        return self._thread is not None and self._thread.is_alive() and not self._stop.is_set()
+
+    @property
     def last_arrival(self) -> float | None:
         """``time.perf_counter()`` of the newest frame, or None before the first."""
         f = self._frame

@@ -103,10 +103,22 @@ class PlaybackChanged:
     mode: str
 
 
+@dataclass(frozen=True)
+class SourceChanged:
+    """Sensors now come from ``source`` (a tracker recording or a live stream, see
+    :mod:`engine.sources`) instead of a clip; there is no ground truth. ``name`` says
+    which (a file name or an address); ``live`` is True for a stream that grows."""
+
+    source: Any
+    name: str
+    live: bool
+
+
 class SessionEvents(SignalGroup):
     """The session's signals; connect with ``session.events.NAME.connect(callback)``."""
 
     motion = Signal(MotionChanged)
+    source = Signal(SourceChanged)
     sensors = Signal(SensorsChanged)
     constraints = Signal(ConstraintsChanged)
     settings = Signal(SettingsChanged)

@@ -67,6 +67,7 @@ class Session:
         self.events = ev.SessionEvents()
         self.motion: Motion | None = None
         self.path: Path | None = None
+        self.source: Any = None  # a tracker recording or live stream instead of a clip
         self.preset = ""
         self.sensors: dict[str, Sensor] = {}
         self.constraints: list[Constraint] = []
@@ -90,10 +91,11 @@ class Session:
         return self.engine
 
     def shutdown(self) -> None:
-        """Stop the engine thread (if any) and wait for it."""
+        """Stop the engine thread (if any) and wait for it; close a live source."""
         if self.engine is not None:
             self.engine.stop()
         self._sink = None
+        self._close_source()
 
     @property
     def latest(self) -> Snapshot | None:
@@ -110,6 +112,8 @@ class Session:
         sink(cmd.SetSensors(tuple(self.sensors.values())))
         if self.motion is not None:
             sink(cmd.SetMotion(self.motion))
+        elif self.source is not None:
+            sink(cmd.SetSource(self.source))
         sink(cmd.SetConstraints(tuple(self.constraints)))
         sink(cmd.Seek(self.frame))
 
@@ -124,6 +128,8 @@ class Session:
     # -- clip ------------------------------------------------------------------------
     @property
     def num_frames(self) -> int:
+        if self.source is not None:
+            return int(self.source.num_frames)
         return 0 if self.motion is None else len(self.motion)
 
     def open(self, path: str | Path) -> None:
@@ -131,6 +137,7 @@ class Session:
         self.set_motion(load_clip(path), Path(path))
 
     def set_motion(self, motion: Motion, path: Path | None = None) -> None:
+        self._close_source()
         self.motion, self.path, self.frame = motion, path, 0
         self._send(cmd.SetMotion(motion))
         self.events.motion.emit(ev.MotionChanged(motion, path))
@@ -138,6 +145,26 @@ class Session:
         self.events.frame.emit(0)
         if not self.sensors:
             self.set_preset(next(iter(sensor_presets())))
+
+    def set_source(self, source: Any, name: str = "") -> None:
+        """Read sensors from ``source`` instead of a clip: a tracker recording
+        (:class:`engine.sources.recording_source.RecordingSource`) or a live stream
+        (:class:`engine.sources.live_source.LiveSource`), which the session now owns and
+        closes when another clip or source replaces it."""
+        self._close_source()
+        self.motion, self.path, self.frame = None, None, 0
+        self.source = source
+        self._send(cmd.SetSource(source))
+        self.events.source.emit(ev.SourceChanged(source, name, bool(getattr(source, "live", False))))
+        self._send(cmd.Seek(0))
+        self.events.frame.emit(0)
+        if not self.sensors:
+            self.set_preset(next(iter(sensor_presets())))
+
+    def _close_source(self) -> None:
+        source, self.source = self.source, None
+        if source is not None and hasattr(source, "close"):
+            source.close()
 
     # -- sensors ---------------------------------------------------------------------
     @staticmethod
@@ -223,6 +250,11 @@ class Session:
         j = sk.JOINT_INDEX[joint]
         if snap is not None and snap.frame == frame and np.all(np.isfinite(snap.ground_truth[j])):
             return np.array(snap.ground_truth[j])
+        if self.source is not None:  # no ground truth: the tracker's own reading
+            r = self.source.frame(frame).readings.get(joint)
+            if r is None:
+                return np.zeros(3)
+            return np.asarray(r.position, float) - np.asarray(self.sensors[joint].offset if joint in self.sensors else 0.0)
         if self.motion is None:
             return np.zeros(3)
         frame = int(np.clip(frame, 0, len(self.motion) - 1))

@@ -36,6 +36,9 @@ from engine.studio.methods import apply_constraints, apply_sensor_weights, apply
 from engine.studio.snapshot import HISTORY, FrameRecord, Snapshot, readonly
 from engine.studio.source import ClipSource, SensorSource
 
+#: How often playback of a live source looks for a newer frame, seconds.
+LIVE_POLL_S = 0.005
+
 #: Problems a snapshot repeats (newest last), so a reader that skipped the snapshot
 #: which first reported one still shows it.
 RECENT_ERRORS = 5
@@ -55,14 +58,17 @@ def _losses(res: FrameResult | None, sf: SensorFrame) -> tuple[dict[str, float],
     return (errs,)
 
 
-def _timing(res: FrameResult | None, ms: float) -> dict[str, float]:
+def _timing(res: FrameResult | None, ms: float, latency_ms: float | None = None) -> dict[str, float]:
     """The solve's timing figures, ms: wall time per frame and per iteration, overridden
     by the method's own per-iteration breakdown when its result carries one (a
     ``timings`` dict: ``ms_per_iteration``, ``decoder``, ``fk_losses``, ``backward``,
-    ``step``, as DragPoser reports them)."""
+    ``step``, as DragPoser reports them); for a live source ``latency_ms``, from the
+    frame's packet arriving to its solved pose."""
     if res is None:
         return {}
     out = {"ms_per_frame": float(ms)}
+    if latency_ms is not None:
+        out["latency_ms"] = float(latency_ms)
     if res.iterations:
         out["ms_per_iteration"] = float(ms) / res.iterations
     own = getattr(res, "timings", None)
@@ -109,6 +115,8 @@ class EngineThread(threading.Thread):
         self._method_error = ""
         self._recent_errors: deque[str] = deque(maxlen=RECENT_ERRORS)
         self._stopping = False
+        self._skeleton_version = 0
+        self._latency_ms: float | None = None
 
     # -- public API (any thread) --------------------------------------------------------
     def submit(self, command: Any) -> None:
@@ -132,6 +140,8 @@ class EngineThread(threading.Thread):
                 break
             if self._source is None or self._source.num_frames == 0:
                 continue
+            if getattr(self._source, "skeleton_version", 0) != self._skeleton_version:
+                self._reset_methods()  # a live source was calibrated: a new skeleton
             was_playing = self._playing
             target = self._playback_frame() if self._playing else self._frame
             if target != self._last_solved or self._dirty:
@@ -149,6 +159,8 @@ class EngineThread(threading.Thread):
             return 0.0
         if not self._playing or self._source is None:
             return None
+        if getattr(self._source, "live", False):
+            return LIVE_POLL_S  # frames arrive on the network's schedule, not a clock's
         if self._mode == "every_frame" and self._frame != self._last_solved:
             return 0.0  # the current frame still needs solving
         t0, f0 = self._clock
@@ -244,7 +256,11 @@ class EngineThread(threading.Thread):
         return int(np.clip(frame, 0, max(n - 1, 0)))
 
     def _playback_frame(self) -> int:
-        """The frame playback is at now (see the module doc for the two modes)."""
+        """The frame playback is at now (see the module doc for the two modes); a live
+        source's newest frame, whatever the mode."""
+        if getattr(self._source, "live", False):
+            self._frame = max(self._source.num_frames - 1, 0)
+            return self._frame
         t0, f0 = self._clock
         now = time.monotonic()
         rate = self._rate()
@@ -287,14 +303,19 @@ class EngineThread(threading.Thread):
                 self._ghosts[g] = m
                 fresh = True
         motion = self._source.motion if self._source is not None else None
+        # a tracker source has no clip, only the wearer's (perhaps calibrated) skeleton
+        skeleton = motion.skeleton if motion is not None else getattr(self._source, "skeleton", None)
+        self._skeleton_version = getattr(self._source, "skeleton_version", 0)
         for m in [self._method, *self._ghosts.values()]:
-            if m is None or motion is None:
+            if m is None or skeleton is None:
                 continue
             try:
                 if getattr(m, "needs_ground_truth", False):  # e.g. an oracle baseline
+                    if motion is None:
+                        raise ValueError("needs a ground-truth clip; tracker sources have none")
                     m.reset(motion.skeleton, motion.fps, reference=motion)  # type: ignore[call-arg]
                 else:
-                    m.reset(motion.skeleton, motion.fps)
+                    m.reset(skeleton, self._source.fps)
             except Exception as exc:
                 self._report_error(f"{m.name}.reset: {exc}")
         self._configure_all(report=fresh)  # methods may drop their settings on reset
@@ -362,6 +383,9 @@ class EngineThread(threading.Thread):
                 self._recent_errors.append(error)
                 self._reset_methods()
         ms = (time.perf_counter() - t0) * 1000.0
+        arrival = getattr(self._source, "arrival", None)
+        arrived = arrival(frame) if arrival is not None else None
+        self._latency_ms = None if arrived is None else (time.perf_counter() - arrived) * 1000.0
         ghosts = {}
         for name, m in self._ghosts.items():
             try:
@@ -428,7 +452,7 @@ class EngineThread(threading.Thread):
             solved=self._solved,
             frames_skipped=self._skipped,
             mode=self._mode,
-            timing=_timing(res, ms),
+            timing=_timing(res, ms, self._latency_ms),
             recent_errors=tuple(self._recent_errors),
         )
         self._method_error = ""

@@ -144,7 +144,8 @@ class Viewport(QWidget):
                             snap.target_connected, axes)  # fmt: skip
         self.gizmos.update(snap.gizmos)
         # ghosts are listed below this line by the ghost layer, each in its own colour
-        gt = "   ground truth (green)" if self.show_ground_truth else ""
+        has_gt = bool(np.all(np.isfinite(snap.ground_truth)))
+        gt = ("   ground truth (green)" if has_gt else "   no ground truth (tracker input)") if self.show_ground_truth else ""
         self._label.SetText(2, f"{snap.method or 'method'} (orange){gt}")
         if self.follow and np.all(np.isfinite(snap.positions[0])):
             self._follow(snap.positions[0])

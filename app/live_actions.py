@@ -1,0 +1,147 @@
+"""Live trackers in the studio: File > Connect live source, File > Open tracker
+recording, and the Live dock (status light, packet rate, latency, Record / Stop,
+Calibrate with a countdown). Kept apart from the window, which only creates it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from PyQt6.QtCore import Qt, QTimer
+from PyQt6.QtWidgets import QDialog, QDockWidget, QFileDialog, QMainWindow
+
+from engine.errors import UserError
+from engine.studio import events as ev
+from widgets.live_panel import ConnectDialog, LivePanel
+
+
+class LiveActions:
+    """The window's live-source operations; ``window`` is the studio's main window (its
+    ``session``, ``timeline``, ``plots``, ``viewport``, ``show_error``, ``_dock`` and
+    status bar are used)."""
+
+    def __init__(self, window: QMainWindow) -> None:
+        self.w = window
+        self.panel = LivePanel()
+        self.dock = window._dock("Live trackers", self.panel, Qt.DockWidgetArea.RightDockWidgetArea)
+        latent = window.findChild(QDockWidget, "Latent")
+        if latent is not None:  # a tab beside the latent view: room for the calibration text
+            window.tabifyDockWidget(latent, self.dock)
+            latent.raise_()
+        self.panel.recordRequested.connect(self.record)
+        self.panel.calibrateRequested.connect(self.calibrate)
+        self.panel.disconnectRequested.connect(self.disconnect)
+        self.timer = QTimer(window, interval=250)  # the status light: four times a second
+        self.timer.timeout.connect(self.refresh)
+        self.timer.start()
+        self._frames = -1
+        window.session.events.source.connect(self._show_source)
+
+    def close(self) -> None:
+        self.timer.stop()
+        self.w.session.events.source.disconnect(self._show_source)
+
+    @property
+    def live(self) -> Any:
+        """The session's live source, if it has one."""
+        src = self.w.session.source
+        return src if getattr(src, "live", False) else None
+
+    # -- File menu ----------------------------------------------------------------------
+    def connect_dialog(self) -> None:
+        dlg = ConnectDialog(self.w, port=int(self.w.settings.value("live_port", 39539)))
+        if dlg.exec() != QDialog.DialogCode.Accepted:
+            return
+        v = dlg.values()
+        self.connect(v["host"], v["port"], v["mapping"], v["convention"])
+
+    def connect(self, host: str, port: int, mapping: str = "", convention: str = "unity") -> bool:
+        """Listen on ``host:port`` and play the stream live; errors show a dialog."""
+        from engine.sources.live_source import LiveSource
+        from engine.sources.trackers import TrackerMapping
+
+        try:
+            src = LiveSource(host, port, TrackerMapping.parse(mapping), convention).start()
+        except UserError as exc:
+            self.w.show_error("Cannot connect live source", str(exc))
+            return False
+        self.w.settings.setValue("live_port", port)
+        self.w.session.set_source(src, f"live {src.receiver.host}:{src.receiver.port}")
+        self.w.session.play()
+        return True
+
+    def open_recording_dialog(self) -> None:
+        path, _ = QFileDialog.getOpenFileName(self.w, "Open tracker recording", "", "Tracker recording (*.jsonl)")
+        if path:
+            self.open_recording(path)
+
+    def open_recording(self, path: str | Path) -> bool:
+        from engine.sources.recording_source import RecordingSource
+
+        try:
+            src = RecordingSource(path)
+        except UserError as exc:
+            self.w.show_error("Cannot open tracker recording", str(exc))
+            return False
+        self.w.session.set_source(src, Path(path).name)
+        return True
+
+    # -- the Live dock --------------------------------------------------------------------
+    def _show_source(self, event: ev.SourceChanged) -> None:
+        self.w.timeline.set_range(max(event.source.num_frames, 1), event.source.fps)
+        self.w.plots.clear()
+        self.w.setWindowTitle(f"DragPoser Studio - {event.name}")
+        self._frames = -1
+        self.panel.set_recording(False)
+        if event.live:
+            self.dock.raise_()
+        self.refresh()
+
+    def refresh(self) -> None:
+        src = self.live
+        if src is None or not src.receiver.running:
+            self.panel.show_status(None)
+            return
+        snap = self.w.session.latest
+        latency = snap.timing.get("latency_ms") if snap is not None else None
+        self.panel.show_status(src.status(), latency)
+        n = src.num_frames
+        if n != self._frames:  # the timeline grows with the stream
+            self._frames = n
+            self.w.timeline.set_range(max(n, 1), src.fps)
+
+    def record(self, on: bool) -> None:
+        src = self.live
+        if src is None:
+            self.panel.set_recording(False)
+            return
+        if not on:
+            path = src.stop_recording()
+            if path is not None:
+                self.w.statusBar().showMessage(f"Wrote {path}", 8000)
+            return
+        path, _ = QFileDialog.getSaveFileName(self.w, "Record trackers to", "trackers.jsonl", "Tracker recording (*.jsonl)")
+        if not path:
+            self.panel.set_recording(False)
+            return
+        try:
+            src.start_recording(path)
+        except (OSError, UserError) as exc:
+            self.panel.set_recording(False)
+            self.w.show_error("Cannot record", str(exc))
+
+    def calibrate(self, countdown_s: float, window_s: float) -> None:
+        src = self.live
+        if src is not None:
+            src.start_calibration(countdown_s, window_s)
+
+    def disconnect(self) -> None:
+        """Stop listening (the received frames stay on the timeline)."""
+        src = self.live
+        if src is not None:
+            path = src.stop_recording()
+            src.close()
+            if path is not None:
+                self.w.statusBar().showMessage(f"Wrote {path}", 8000)
+        self.panel.set_recording(False)
+        self.refresh()

@@ -31,9 +31,10 @@ from pymotion.rotations import quat_np as _qnp
 from engine import skeleton as sk
 from engine.atomic import atomic_path
 from engine.bvh_parser import MAX_OFFSET, parse_bvh_text
-from engine.errors import BVHError
+from engine.errors import BVHError, UserError
 from engine.kinematics import quaternion as Q
 from engine.motion import Motion
+from engine.validation import read_input_bytes
 
 __all__ = ["MAX_OFFSET", "SAVE_ROT_ORDER", "RawBVH", "load_bvh", "save_motion_bvh"]
 
@@ -139,11 +140,10 @@ def load_bvh(path: str | Path) -> RawBVH:
         non-positive Frame Time, truncation.
     """
     path = str(path)
-    try:
-        with open(path, "rb") as fh:
-            text = fh.read().decode("utf-8", errors="replace")
-    except OSError as exc:
-        raise BVHError(path, f"cannot read file: {exc.strerror or exc}") from None
+    try:  # a regular file below the size limit, before reading (no FIFO, /dev/zero, loop)
+        text = read_input_bytes(path, "BVH file").decode("utf-8", errors="replace")
+    except UserError as exc:
+        raise BVHError(path, "cannot read file: " + str(exc).removeprefix(f"{path}: ")) from None
     p = parse_bvh_text(path, text)
     frames = p.data.shape[0]
     j = len(p.names)

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from engine.errors import BVHError
+from engine.validation import BVH_HEADER, check_value, shown
 
 #: Largest accepted absolute OFFSET component, in the file's units (cm, m, inches...).
 MAX_OFFSET = 1e4
@@ -220,16 +221,20 @@ def _motion_header(path: str, lines: list[str], start: int) -> tuple[int, float,
         i += 1
     (frames_text, frames_line), (time_text, time_line) = values
     if not frames_text.isdigit():
-        raise BVHError(path, f"Frames must be a whole number, got '{frames_text}'", frames_line)
-    if int(frames_text) == 0:
+        raise BVHError(path, f"Frames must be a whole number, got {shown(frames_text)}", frames_line)
+    if int(frames_text[:12]) == 0:
         raise BVHError(path, "the file has zero frames", frames_line)
+    frames = int(frames_text[:12]) if len(frames_text) <= 12 else 10**12  # no 5000-digit int()
     try:
         frame_time = float(time_text)
     except ValueError:
-        raise BVHError(path, f"Frame Time '{time_text}' is not a number", time_line) from None
+        raise BVHError(path, f"Frame Time {shown(time_text)} is not a number", time_line) from None
     if not math.isfinite(frame_time) or frame_time <= 0:
-        raise BVHError(path, f"Frame Time must be a positive number of seconds, got {time_text}", time_line)
-    return int(frames_text), frame_time, i, frames_line
+        raise BVHError(path, f"Frame Time must be a positive number of seconds, got {shown(time_text)}", time_line)
+    spec = BVH_HEADER["Frames"]
+    check_value(spec, frames, f"{path}:{frames_line}", "Frames")
+    check_value(BVH_HEADER["Frame Time"], frame_time, f"{path}:{time_line}", "Frame Time")
+    return frames, frame_time, i, frames_line
 
 
 def _motion_data(path: str, lines: list[str], first: int, columns: int, frames: int, frames_line: int) -> np.ndarray:

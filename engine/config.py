@@ -15,9 +15,12 @@ def load_config(cls: type, path: Path | None = None, overrides: list[str] | None
     then ``direct`` keyword values that are not None. Errors name the file and field."""
     values: dict[str, Any] = {}
     if path is not None:
+        from engine.validation import read_input_bytes
+
+        raw = read_input_bytes(Path(path), "config")
         try:
-            values.update(tomllib.loads(Path(path).read_text()))
-        except (OSError, tomllib.TOMLDecodeError) as exc:
+            values.update(tomllib.loads(raw.decode("utf-8")))
+        except (UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
             raise UserError(f"{path}: cannot read config: {exc}") from exc
     hints = typing.get_type_hints(cls)
     values.update(parse_overrides(cls, overrides))

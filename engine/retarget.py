@@ -25,7 +25,6 @@ The :class:`RetargetReport` keeps what is needed to go back onto the source rig
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -34,6 +33,7 @@ import numpy as np
 from engine import skeleton as sk
 from engine.bvh import RawBVH, load_bvh
 from engine.errors import UserError
+from engine.validation import SKELETON, check_manifest, check_value, read_json
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk, local_from_global
 from engine.motion import Motion
@@ -211,11 +211,14 @@ def retarget(raw: RawBVH, fps: float | None = None, profile: RigProfile | None =
     src_fps = float(fps) if fps else _snap_fps(raw.fps)
     if src_fps <= 0:
         raise UserError(f"{raw.path}: frame rate must be positive, got {src_fps}")
+    canonical = int(np.floor((raw.frames - 1) / src_fps * sk.FPS + 1e-9)) + 1
+    check_value(SKELETON["canonical frames"], canonical, f"{raw.path}: at {src_fps:g} frames/s", "frames at 60 fps")
     skip = prof.skip_frames if raw.frames > prof.skip_frames + 2 else 0
     quats = raw.local_quaternions()[skip:]
     pos = raw.positions[skip:].copy()
     if prof.root_channels_relative_to_offset:
         pos[:, 0] += raw.offsets[0]
+    _check_root(raw.path, pos[:, 0], prof.units_to_m)
     wpos, wrot = fk(quats, pos[:, 0], raw.offsets, list(raw.parents))
 
     basis = _basis_change(prof.up, prof.forward)
@@ -229,6 +232,7 @@ def retarget(raw: RawBVH, fps: float | None = None, profile: RigProfile | None =
     leg = sum(float(np.median(np.linalg.norm(pts[b] - pts[a], axis=-1)))
               for a, b in (("lhip", "lknee"), ("lknee", "lankle")))  # fmt: skip
     leg_scale = leg / float(np.linalg.norm(sk.REST_OFFSETS[_LEG], axis=-1).sum())
+    _check_height(raw.path, leg_scale)
 
     glob, align = _world_rotations(prof, pts, wrot, idx, cq)
     joint_pts = {n: pts[n] for n in [*sk.JOINT_NAMES, "l_toe_tip", "r_toe_tip"] if n in pts}
@@ -280,6 +284,20 @@ def resample_motion(motion: Motion, fps: float) -> Motion:
     return Motion(rot, root, motion.skeleton, float(fps), motion.name)
 
 
+def _check_height(path: str, scale: float) -> None:
+    """Refuse a subject no motion comes from (:data:`engine.validation.SKELETON`): a
+    standing height outside 0.5-3 m (all-zero or kilometre OFFSETs, a wrong unit)."""
+    height = sk.Skeleton.canonical(1.0).height() * scale if np.isfinite(scale) else scale
+    check_value(SKELETON["height"], round(height, 3), f"{path}: skeleton", "height")
+
+
+def _check_root(path: str, root: np.ndarray, units_to_m: float) -> None:
+    """Refuse root positions (file units) beyond +-10 km, which no solver can use."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        worst = float(np.abs(root).max()) * units_to_m if root.size else 0.0
+    check_value(SKELETON["root position"], worst, f"{path}: motion", "largest root coordinate")
+
+
 def _snap_fps(fps: float) -> float:
     """Headers store a rounded frame time (0.008333 s); snap to the whole rate it means."""
     return float(round(fps)) if abs(fps - round(fps)) < 1e-3 * fps else fps
@@ -296,18 +314,21 @@ def _refloor(motion: Motion) -> float:
 
 
 def manifest_fps(path: Path) -> float | None:
-    """True frame rate of ``path`` from a ``manifest.json`` in one of its parent folders."""
-    path = Path(path).resolve()
+    """True frame rate of ``path`` from a ``manifest.json`` in one of its parent folders.
+
+    A malformed manifest (not an object, ``files`` not a list, an fps outside 1-1000)
+    is a :class:`UserError` naming it and the entry (:func:`engine.validation.check_manifest`)."""
+    try:
+        path = Path(path).resolve()
+    except (OSError, RuntimeError):  # a symlink loop: load_bvh names it
+        return None
     for parent in list(path.parents)[:4]:
         man = parent / "manifest.json"
         if not man.is_file():
             continue
-        try:
-            data = json.loads(man.read_text())
-        except (OSError, json.JSONDecodeError):
-            return None
+        entries = check_manifest(read_json(man, "manifest"), str(man))
         rel = path.relative_to(parent).as_posix()
-        for entry in data.get("files", []):
+        for entry in entries:
             listed = str(entry.get("path", ""))
             # paths are relative to the manifest's folder or to the data folder above it
             if (listed == rel or listed.endswith("/" + rel)) and entry.get("fps"):

@@ -24,6 +24,7 @@ from engine.atomic import write_text
 from engine.constraints.base import Constraint, from_dict
 from engine.errors import UserError
 from engine.solver import OptimizerSettings
+from engine.validation import read_json, shown
 
 FORMAT = "dragposer-scene"
 VERSION = 1
@@ -58,14 +59,7 @@ def load_scene(path: str | Path) -> tuple[list[Constraint], OptimizerSettings]:
         the message names the file and the field.
     """
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise UserError(f"{path}: cannot read scene ({exc.strerror or exc})") from exc
-    try:
-        doc = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise UserError(f"{path}:{exc.lineno}: invalid JSON ({exc.msg})") from exc
+    doc = read_json(path, "scene")  # regular file, size, UTF-8, depth, number length
     return scene_from_dict(doc, str(path))
 
 
@@ -74,16 +68,16 @@ def scene_from_dict(doc: Any, where: str = "scene") -> tuple[list[Constraint], O
     if not isinstance(doc, dict):
         raise UserError(f"{where}: a scene is a JSON object")
     if doc.get("format", FORMAT) != FORMAT:
-        raise UserError(f"{where}: field 'format' is {doc.get('format')!r}, expected {FORMAT!r}")
+        raise UserError(f"{where}: field 'format' is {shown(doc.get('format'))}, expected {FORMAT!r}")
     if doc.get("version", VERSION) != VERSION:
-        raise UserError(f"{where}: field 'version' is {doc.get('version')!r}; this build reads {VERSION}")
+        raise UserError(f"{where}: field 'version' is {shown(doc.get('version'))}; this build reads {VERSION}")
     raw = doc.get("settings", {}) or {}
     if not isinstance(raw, dict):
         raise UserError(f"{where}: field 'settings' must be an object")
     known = {f.name for f in dataclasses.fields(OptimizerSettings)}
     unknown = sorted(set(raw) - known)
     if unknown:
-        raise UserError(f"{where}: settings: unknown field(s) {', '.join(unknown)}")
+        raise UserError(f"{where}: settings: unknown field(s) {', '.join(shown(u) for u in unknown)}")
     try:
         settings = OptimizerSettings(**raw)
     except UserError as exc:

@@ -108,7 +108,11 @@ def _bench(args: argparse.Namespace) -> int:
     from engine.methods import available_methods
     from engine.retarget import load_motion
     from engine.tracking import simulate
+    from engine.validation import check_args, check_output_path
 
+    check_args(args)
+    if args.json:
+        check_output_path(args.json, "--json")
     motion = load_motion(args.file, rig_map=rig_map_path(args))
     if args.warmup + 1 > len(motion):
         raise UserError(f"{args.file}: only {len(motion)} frames, fewer than the warm-up")

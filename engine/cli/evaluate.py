@@ -198,10 +198,13 @@ def _evaluate(args: argparse.Namespace) -> int:
     from engine.retarget import load_motion
     from engine.tracking import parse_sensors
 
+    from engine.validation import check_args, check_output_path
+
     parse_sensors(args.sensors)  # fail before loading anything
     names = method_names(args.method)
-    if args.faulty < 0 or args.faulty > 1:
-        raise UserError(f"--faulty must be a probability in [0, 1], got {args.faulty}")
+    check_args(args)
+    if args.json:
+        check_output_path(args.json, "--json")
     if args.max_frames is not None and args.max_frames < 4:
         raise UserError("--max-frames must be at least 4 (jitter needs 4 frames)")
     motions = []

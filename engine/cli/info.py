@@ -28,7 +28,10 @@ def register(sub: argparse._SubParsersAction) -> None:
 def describe(path: Path, fps: float | None = None, rig_map: Path | None = None) -> dict:
     """Everything ``info`` reports about a BVH file, as a JSON-ready dict."""
     from engine.retarget import load_with_report, manifest_fps
+    from engine.validation import CLI, check_value
 
+    if fps is not None:
+        fps = check_value(CLI["fps"], fps, "--fps", "value")
     motion, rep = load_with_report(path, fps or manifest_fps(path), rig_map)
 
     def num(x: float, nd: int = 3):

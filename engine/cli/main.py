@@ -13,8 +13,10 @@ import argparse
 import importlib
 import sys
 from importlib.metadata import entry_points
+from typing import NoReturn
 
-from engine.errors import UserError
+from engine.errors import UserError, shorten_words
+from engine.validation import one_line
 
 #: Subcommand modules, in the order ``--help`` lists them.
 SUBCOMMANDS = (
@@ -34,8 +36,16 @@ SUBCOMMANDS = (
 PLUGIN_GROUP = "dragposer_studio.subcommands"
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors: no usage block, bad tokens cut short (subcommand
+    parsers inherit the class)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {one_line(shorten_words(message, 60), 400)} (see --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="dragposer-studio",
         description="Full-body motion reconstruction from sparse trackers (DragPoser). "
         "Run a subcommand with --help for its options.",
@@ -63,7 +73,13 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return int(args.func(args) or 0)
     except UserError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        print(f"error: {one_line(str(exc))}", file=sys.stderr)
+        return 2
+    except RecursionError:
+        print("error: input nested too deeply to process", file=sys.stderr)
+        return 2
+    except MemoryError:
+        print("error: out of memory (input too large for this machine)", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)

@@ -64,15 +64,12 @@ def _reconstruct(args: argparse.Namespace) -> int:
     from engine.methods import run_method
     from engine.retarget import manifest_fps, retarget
     from engine.tracking import parse_sensors, simulate
+    from engine.validation import check_args, check_input_file, check_output_path
 
-    if not 0.0 <= args.faulty <= 1.0:
-        raise UserError(f"--faulty must be a probability in [0, 1], got {args.faulty}")
-    if args.iterations is not None and args.iterations < 1:
-        raise UserError(f"--iterations must be at least 1, got {args.iterations}")
-    if args.max_frames is not None and args.max_frames < 1:
-        raise UserError(f"--max-frames must be at least 1, got {args.max_frames}")
-    if args.lr is not None and not args.lr > 0:
-        raise UserError(f"--lr must be > 0, got {args.lr}")
+    check_args(args)  # every number in range, outputs writable: before any work
+    check_output_path(args.out, "--out")
+    if getattr(args, "json", None):
+        check_output_path(args.json, "--json")
     if args.trackers is not None:
         if args.input is not None:
             raise UserError("give IN.bvh or --trackers REC.jsonl, not both (the clip can be --reference)")
@@ -89,6 +86,7 @@ def _reconstruct(args: argparse.Namespace) -> int:
     if args.map:
         raise UserError("--map applies to --trackers recordings")
     parse_sensors(args.sensors)  # fail before loading anything
+    check_input_file(args.input)
     raw = load_bvh(args.input)
     motion, report = retarget(raw, manifest_fps(args.input), rig_map=rig_map_path(args))
     if args.max_frames:

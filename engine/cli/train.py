@@ -46,6 +46,10 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _direct(args: argparse.Namespace) -> dict:
+    from engine.validation import check_args, check_output_dir
+
+    check_args(args)
+    check_output_dir(args.out)
     return {k: getattr(args, k) for k in ("epochs", "batch_size", "lr", "minutes", "seed")}
 
 

@@ -27,6 +27,7 @@ from engine import skeleton as sk
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
 from engine.solver.state import PoseState
+from engine.validation import shown
 
 #: kind string -> constraint class; filled by subclasses as they are defined.
 REGISTRY: dict[str, type["Constraint"]] = {}
@@ -164,8 +165,8 @@ def from_dict(data: dict[str, Any]) -> Constraint:
     if not isinstance(data, dict):
         raise UserError(f"constraint: expected an object, got {type(data).__name__}")
     kind = data.get("kind")
-    if kind not in REGISTRY:
-        raise UserError(f"unknown constraint kind {kind!r}; known: {', '.join(sorted(REGISTRY))}")
+    if not isinstance(kind, str) or kind not in REGISTRY:
+        raise UserError(f"unknown constraint kind {shown(kind)}; known: {', '.join(sorted(REGISTRY))}")
     cls = REGISTRY[kind]
     names = {f.name: f for f in dataclasses.fields(cls)}
     kwargs = {}
@@ -173,13 +174,15 @@ def from_dict(data: dict[str, Any]) -> Constraint:
         if key == "kind":
             continue
         if key not in names:
-            raise UserError(f"constraint {kind!r}: unknown field {key!r}")
+            raise UserError(f"constraint {kind!r}: unknown field {shown(key)}")
         default = field_default(names[key])
         if isinstance(default, np.ndarray):
             try:
                 value = np.array([np.nan if v is None else v for v in np.ravel(value)], dtype=np.float64)
-            except (TypeError, ValueError):
+            except (TypeError, ValueError, OverflowError):
                 raise UserError(f"constraint {kind!r}: field {key!r} must be a list of numbers") from None
+            if np.isinf(value).any():
+                raise UserError(f"constraint {kind!r}: field {key!r} holds a number too large to use")
         elif isinstance(default, tuple):
             value = tuple(value) if isinstance(value, (list, tuple)) else value
         elif isinstance(default, bool):
@@ -188,7 +191,12 @@ def from_dict(data: dict[str, Any]) -> Constraint:
         elif isinstance(default, (int, float)):
             if isinstance(value, bool) or not isinstance(value, (int, float)):
                 raise UserError(f"constraint {kind!r}: field {key!r} must be a number")
-            value = type(default)(value)
+            if isinstance(default, int) and isinstance(value, float) and not value.is_integer():
+                raise UserError(f"constraint {kind!r}: field {key!r} must be a whole number, got {shown(value)}")
+            try:
+                value = type(default)(value)
+            except OverflowError:
+                raise UserError(f"constraint {kind!r}: field {key!r} = {shown(value)} is too large") from None
         elif isinstance(default, str) and not isinstance(value, str):
             raise UserError(f"constraint {kind!r}: field {key!r} must be a string")
         kwargs[key] = value

@@ -102,7 +102,8 @@ class SensorConstraint(Constraint):
         six = [k for k, c in enumerate(items) if c.dof == 6]
         rot_idx = idx[six]
         rot_w = vec([items[k].rotation_weight for k in six], like)
-        rot_t = Q.to_matrix(vec(np.stack([_unit(items[k].rotation) for k in six]).reshape(-1, 4), like))
+        quats = [_unit(items[k].rotation) for k in six]  # no 6-DoF sensor (e.g. 6x3dof): none
+        rot_t = Q.to_matrix(vec(np.stack(quats) if quats else np.zeros((0, 4)), like))
         six_t = torch.tensor(six, dtype=torch.long)
 
         def losses(state: PoseState) -> torch.Tensor:

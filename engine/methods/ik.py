@@ -123,6 +123,22 @@ def _basis_rotation(u0: np.ndarray, w0: np.ndarray, u1: np.ndarray, w1: np.ndarr
     return q / np.linalg.norm(q)
 
 
+#: Farthest a tracker may be from the origin, metres; beyond it a reading is ignored.
+MAX_TRACKER_DISTANCE = 1e4
+
+
+def usable_reading(r: Sensor) -> bool:
+    """A finite position within :data:`MAX_TRACKER_DISTANCE` and, for 6 DoF, a finite
+    non-zero quaternion (a zero quaternion has no rotation to normalise)."""
+    pos = np.asarray(r.position, float)
+    if not (np.isfinite(pos).all() and float(np.abs(pos).max()) <= MAX_TRACKER_DISTANCE):
+        return False
+    if r.dof == 6:
+        q = np.asarray(r.rotation, float)
+        return bool(np.isfinite(q).all()) and float(np.linalg.norm(q)) > 1e-6
+    return True
+
+
 def two_bone_mid(start: np.ndarray, target: np.ndarray, a: float, b: float, pole: np.ndarray) -> np.ndarray:
     """Middle-joint position of a two-bone chain reaching for ``target``.
 
@@ -288,11 +304,12 @@ class IKMethod(Method):
         t0 = time.perf_counter()
         warnings: list[str] = []
         s: dict[str, Sensor] = {}
+        prev_root = self._root_pos.copy()
         for j, r in sensors.connected().items():
-            if np.all(np.isfinite(r.position)) and (r.dof == 3 or np.all(np.isfinite(r.rotation))):
+            if usable_reading(r):
                 s[j] = r
             else:
-                warnings.append(f"sensor {j}: non-finite reading ignored")
+                warnings.append(f"sensor {j}: non-finite or implausible reading ignored")
         self._seen |= set(s)
         root_pos, root_rot = self._solve_root(s)
         if "root" not in s:
@@ -337,6 +354,11 @@ class IKMethod(Method):
             self._solve_limb(local, root_pos, chain, np.asarray(target, float), pole, LEG_POLE, end_rot)
 
         pos, _ = self._fk(local, root_pos)
+        if not (np.isfinite(local).all() and np.isfinite(pos).all()):  # guard, as DragPoser's
+            warnings.append("IK produced a non-finite pose; the previous pose is kept")
+            local = self._last.copy() if self._last is not None else np.tile(IDENTITY, (sk.NUM_JOINTS, 1))
+            root_pos = self._root_pos = prev_root
+            pos, _ = self._fk(local, root_pos)
         self._last = local.copy()
         return FrameResult(local_rot=local, root_pos=root_pos.copy(), positions=pos,
                            ms=1000.0 * (time.perf_counter() - t0), warnings=warnings)

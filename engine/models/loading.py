@@ -8,15 +8,20 @@ epochs, validation figures). Anything else is a :class:`ModelFileError` naming t
 from __future__ import annotations
 
 import pickle
+import re
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
+import numpy as np
 import torch
 
-from engine.errors import ModelFileError
+from engine.errors import ModelFileError, UserError
 from engine.models.predictor import PredictorConfig, TemporalPredictor
 from engine.models.vae import PoseVAE, VAEConfig
+from engine.validation import (PREDICTOR_CONFIG, VAE_CHANNEL, VAE_CONFIG, check_fields, check_input_file,
+                               check_value, one_line, shown)  # fmt: skip
 
 FORMAT_VERSION = 1
 ASSETS = Path(__file__).resolve().parents[2] / "assets" / "models"
@@ -24,6 +29,10 @@ DEFAULT_VAE = ASSETS / "vae.pt"
 DEFAULT_PREDICTOR = ASSETS / "predictor.pt"
 DEFAULT_SPARSEPOSER = ASSETS / "sparseposer.pt"
 DEFAULT_RPM = ASSETS / "rpm.pt"
+#: The only non-builtin types a checkpoint may hold besides tensors: numpy scalars that
+#: end up in loss curves and metadata.
+SAFE_GLOBALS = [np.dtype, np.float64, np.float32, np.int64, np.int32, np.bool_, type(np.dtype(np.float64)),
+                type(np.dtype(np.float32)), type(np.dtype(np.int64)), np._core.multiarray.scalar]  # fmt: skip
 
 
 @dataclass
@@ -36,38 +45,78 @@ class ModelBundle:
     predictor_meta: dict
 
 
-def _read(path: Path, kind: str) -> dict:
+def load_checkpoint(path: Path | str, what: str = "weights file") -> Any:
+    """``torch.load`` that can never run code: ``weights_only=True``, so only tensors and
+    plain values (dict, list, tuple, str, int, float, bool, None, and the numpy scalars
+    of :data:`SAFE_GLOBALS`) are rebuilt; anything else is refused.
+
+    The file is checked first (regular file, size limit: :mod:`engine.validation`).
+    Every failure is one :class:`ModelFileError` line naming the file, without torch's
+    advice to turn the protection off."""
     path = Path(path)
-    if not path.is_file():
-        raise ModelFileError(f"{path}: weights file not found")
     try:
-        payload = torch.load(path, map_location="cpu", weights_only=True)
-    except (pickle.UnpicklingError, zipfile.BadZipFile, RuntimeError, EOFError, ValueError) as exc:
-        raise ModelFileError(f"{path}: not a readable torch weights file ({type(exc).__name__}: {exc})") from exc
+        check_input_file(path, what)
+    except UserError as exc:
+        raise ModelFileError(str(exc)) from None
+    try:
+        with torch.serialization.safe_globals(SAFE_GLOBALS):
+            return torch.load(path, map_location="cpu", weights_only=True)
+    except pickle.UnpicklingError as exc:
+        hint = _refused_global(str(exc))
+        raise ModelFileError(
+            f"{path}: refused: the {what} holds {hint} (only tensors and plain values are loaded)"
+        ) from None
+    except (zipfile.BadZipFile, RuntimeError, EOFError, ValueError, OSError, AttributeError, TypeError) as exc:
+        first = one_line(str(exc).split(". ")[0], 160)
+        raise ModelFileError(f"{path}: not a readable torch {what} ({type(exc).__name__}: {first})") from None
+
+
+def _refused_global(message: str) -> str:
+    """What torch refused to unpickle, from its message (``GLOBAL os.system``...)."""
+    m = re.search(r"GLOBAL ([\w.]+)|Unsupported global: ([\w.]+)|unsupported ([\w.]+)", message)
+    if m:
+        return f"a Python object ({next(g for g in m.groups() if g)})"
+    return "something other than tensors and plain values"
+
+
+def _read(path: Path, kind: str) -> dict:
+    payload = load_checkpoint(path)
     if not isinstance(payload, dict) or "kind" not in payload or "state_dict" not in payload:
         raise ModelFileError(f"{path}: not a dragposer-studio weights file (no 'kind'/'state_dict')")
     if payload["kind"] != kind:
-        raise ModelFileError(f"{path}: holds a {payload['kind']!r} model, expected {kind!r}")
+        raise ModelFileError(f"{path}: holds a {shown(payload['kind'])} model, expected {kind!r}")
     version = payload.get("format_version")
     if version != FORMAT_VERSION:
-        raise ModelFileError(f"{path}: format_version {version!r}, this program reads {FORMAT_VERSION}")
+        raise ModelFileError(f"{path}: format_version {shown(version)}, this program reads {FORMAT_VERSION}")
+    if not isinstance(payload.get("config"), dict):
+        raise ModelFileError(f"{path}: field 'config' must be a dict of model sizes")
     return payload
 
 
 def _load_state(model: torch.nn.Module, payload: dict, path: Path) -> None:
+    state = payload["state_dict"]
+    if not isinstance(state, dict):
+        raise ModelFileError(f"{path}: field 'state_dict' must be a dict of tensors")
     try:
-        model.load_state_dict(payload["state_dict"])
-    except RuntimeError as exc:
+        model.load_state_dict(state)
+    except (RuntimeError, TypeError, AttributeError) as exc:
         first = str(exc).splitlines()[1:3]
-        raise ModelFileError(f"{path}: weights do not fit the model ({'; '.join(s.strip() for s in first)})") from exc
+        raise ModelFileError(f"{path}: weights do not fit the model ({'; '.join(s.strip() for s in first)})") from None
+    bad = [name for name, t in model.state_dict().items() if t.is_floating_point() and not bool(torch.isfinite(t).all())]
+    if bad:
+        more = f" and {len(bad) - 1} more" if len(bad) > 1 else ""
+        raise ModelFileError(f"{path}: weights hold NaN or infinite values (in {bad[0]}{more}); the file is damaged")
 
 
 def load_vae(path: Path | str) -> tuple[PoseVAE, dict]:
     payload = _read(Path(path), "vae")
     try:
-        cfg = VAEConfig.from_dict(payload["config"])
-    except (TypeError, KeyError) as exc:
-        raise ModelFileError(f"{path}: bad VAE config ({exc})") from exc
+        config = check_fields(VAE_CONFIG, payload["config"], f"{path}: config")
+        for i, c in enumerate(config.get("channels") or ()):
+            check_value(VAE_CHANNEL, c, f"{path}: config", f"channels[{i}]")
+        cfg = VAEConfig.from_dict(config)
+    except (TypeError, KeyError, ValueError) as exc:
+        raise ModelFileError(f"{path}: bad VAE config ({shown(str(exc), 120)})") from None
     vae = PoseVAE(cfg)
     _load_state(vae, payload, Path(path))
     vae.eval().requires_grad_(False)
@@ -77,9 +126,9 @@ def load_vae(path: Path | str) -> tuple[PoseVAE, dict]:
 def load_predictor(path: Path | str) -> tuple[TemporalPredictor, dict]:
     payload = _read(Path(path), "predictor")
     try:
-        cfg = PredictorConfig(**payload["config"])
-    except TypeError as exc:
-        raise ModelFileError(f"{path}: bad predictor config ({exc})") from exc
+        cfg = PredictorConfig(**check_fields(PREDICTOR_CONFIG, payload["config"], f"{path}: config"))
+    except (TypeError, ValueError) as exc:
+        raise ModelFileError(f"{path}: bad predictor config ({shown(str(exc), 120)})") from None
     model = TemporalPredictor(cfg)
     _load_state(model, payload, Path(path))
     model.eval().requires_grad_(False)

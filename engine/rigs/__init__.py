@@ -24,6 +24,7 @@ from engine import skeleton as sk
 from engine.errors import RigError, UserError
 from engine.rigs.automap import automap, check_mapping
 from engine.rigs.infer import infer_axes, infer_units
+from engine.validation import shown
 
 PROFILE_DIR = Path(__file__).resolve().parent
 LANDMARKS = ("l_toe_tip", "r_toe_tip", "l_eye", "r_eye", "l_index", "l_pinky", "r_index", "r_pinky")
@@ -111,14 +112,15 @@ def detect_rig(joint_names: list[str], source: str = "", profiles: list[RigProfi
     matches = [p for p in profiles if p.required_names() <= present]
     if matches:
         return max(matches, key=lambda p: len(p.required_names()))
-    lines = [f"{source or 'BVH'}: unknown skeleton ({len(joint_names)} joints, first: "
-             f"{', '.join(joint_names[:6])}). Known rigs and the joints they need:"]
-    for p in profiles:
-        missing = sorted(p.required_names() - present)
-        lines.append(f"  - {p.name} ({p.description}): needs {', '.join(sorted(p.required_names())[:8])}..."
-                     f" (missing here: {', '.join(missing[:6])}{'...' if len(missing) > 6 else ''})")
-    lines.append("Add a profile to engine/rigs/ to support a new rig.")
-    raise RigError("\n".join(lines))
+    first = ", ".join(shown(n, 24) for n in joint_names[:4])
+    closest = min(profiles, key=lambda p: len(p.required_names() - present), default=None)
+    hint = ""
+    if closest is not None:
+        missing = sorted(closest.required_names() - present)
+        hint = f"; closest known rig {closest.name} lacks {', '.join(missing[:4])}{'...' if len(missing) > 4 else ''}"
+    raise RigError(f"{source or 'BVH'}: unknown skeleton ({len(joint_names)} joints, first: {first}){hint}; "
+                   f"known rigs: {', '.join(p.name for p in profiles)} (see docs/bvh.md)")
+
 
 
 def resolve_rig(raw, rig_map: str | Path | None = None, profiles: list[RigProfile] | None = None) -> RigProfile:

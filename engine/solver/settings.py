@@ -9,6 +9,7 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.errors import UserError
+from engine.validation import SETTINGS, check_fields
 
 MODES = ("realtime", "offline")
 #: Latent update rules: plain gradient steps (DragPoser eq. in sec. 4.4), Adam restarted every
@@ -139,6 +140,7 @@ class OptimizerSettings:
             raise UserError("optimizer setting 'lr' must be > 0")
         if self.step_size <= 0:
             raise UserError("optimizer setting 'step_size' must be > 0")
+        check_fields(SETTINGS, vars(self), "optimizer settings")  # ranges (engine/validation.py)
 
     def steps_cap(self) -> int:
         return self.iterations if self.mode == "realtime" else self.max_iterations

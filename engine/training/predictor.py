@@ -30,7 +30,7 @@ from tqdm import tqdm
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
 from engine.kinematics.features import encoder_input
-from engine.models.loading import FORMAT_VERSION, load_vae
+from engine.models.loading import FORMAT_VERSION, load_checkpoint, load_vae
 from engine.models.predictor import PredictorConfig, TemporalPredictor
 from engine.models.vae import PoseVAE
 from engine.training.common import CurveLog, Distributed, config_dict, save_checkpoint, seed_everything
@@ -161,7 +161,7 @@ def train_predictor(data_dir: Path, vae_path: Path, out_dir: Path, cfg: Predicto
     a_tr, a_va = anchors(train, cfg), anchors(val, cfg)
     log, best, start, minutes_before, step_total = CurveLog(out_dir), float("inf"), 0, 0.0, 0
     if resume and (out_dir / "last.pt").is_file():
-        ck = torch.load(out_dir / "last.pt", map_location="cpu", weights_only=False)
+        ck = load_checkpoint(out_dir / "last.pt", "checkpoint")
         model.load_state_dict(ck["state_dict"])
         opt.load_state_dict(ck["optimizer"])
         start, minutes_before, best, step_total = ck["epoch"], ck["minutes"], ck["best"], ck["step"]

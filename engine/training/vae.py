@@ -21,6 +21,7 @@ from tqdm import tqdm
 
 from engine.kinematics import quaternion as Q
 from engine.kinematics.features import encoder_input, root_space_fk
+from engine.models.loading import load_checkpoint
 from engine.models.vae import PoseVAE, VAEConfig, pose_distance
 from engine.training.common import CurveLog, Distributed, config_dict, save_checkpoint, seed_everything
 from engine.training.data import PoseData, load_split, read_manifest
@@ -200,7 +201,7 @@ def train_vae(data_dir: Path, out_dir: Path, cfg: VAETrainConfig, resume: bool =
     log = CurveLog(out_dir)
     last = out_dir / "last.pt"
     if resume and last.is_file():
-        ck = torch.load(last, map_location="cpu", weights_only=False)
+        ck = load_checkpoint(last, "checkpoint")
         vae.load_state_dict(ck["state_dict"])
         opt.load_state_dict(ck["optimizer"])
         start_epoch, minutes_before, best = ck["epoch"], ck["minutes"], ck["best"]

@@ -110,3 +110,22 @@ def test_real_clip(shared_mocap):
     assert np.isfinite(rec.positions()).all()
     np.testing.assert_allclose(_bone_lengths(rec.positions()), _bone_lengths(clip.positions()), atol=1e-9)
     _check_reaches(clip, rec, tr)
+
+
+def test_non_finite_and_absurd_readings_never_give_a_nan_pose(synthetic_motion):
+    from engine.methods.base import SensorFrame, SensorReading
+
+    tracking = simulate(synthetic_motion, "6")
+    ik = IKMethod()
+    ik.reset(synthetic_motion.skeleton)
+    first = ik.step(tracking.frame(0))
+    frame = tracking.frame(1)
+    bad = dict(frame.readings)
+    bad["lwrist"] = SensorReading("lwrist", np.array([1e308, 0.0, 0.0]), bad["lwrist"].rotation, 6)
+    bad["root"] = SensorReading("root", bad["root"].position, np.zeros(4), 6)  # zero hip quaternion
+    res = ik.step(SensorFrame(frame.frame, bad))
+    assert np.isfinite(res.positions).all() and np.isfinite(res.local_rot).all()
+    assert any("lwrist" in w for w in res.warnings) and any("root" in w for w in res.warnings)
+    assert np.linalg.norm(res.positions[0] - first.positions[0]) < 0.5, "the body stays where it was"
+    nxt = ik.step(tracking.frame(2))  # and the next good frame is solved normally
+    assert np.isfinite(nxt.positions).all()

@@ -84,6 +84,25 @@ def test_resume_continues_exactly(tiny_data, run_a, tmp_path):
     assert _same(run_a[0] / "vae.pt", tmp_path / "r/vae.pt"), "stop + resume must equal the straight run"
 
 
+@pytest.mark.parametrize("model", ["vae", "predictor"])
+def test_resume_never_runs_code_from_a_planted_checkpoint(tiny_data, run_a, tmp_path, model):
+    from engine.errors import ModelFileError
+    from engine.training.predictor import PredictorTrainConfig, train_predictor
+    from tests.engine.test_checkpoint_security import plant
+
+    out, marker = tmp_path / "run", tmp_path / "pwned"
+    out.mkdir()
+    plant(out / "last.pt", marker)
+    with pytest.raises(ModelFileError, match="refused"):
+        if model == "vae":
+            train_vae(tiny_data, out, _cfg(epochs=1, seed=3), resume=True, progress=False)
+        else:
+            cfg = PredictorTrainConfig(d_model=16, heads=2, encoder_layers=1, decoder_layers=1, feedforward=32,
+                                       past=4, future=4, stride=2, batch_size=8, steps_per_epoch=1, epochs=1)  # fmt: skip
+            train_predictor(tiny_data, run_a[0] / "vae.pt", out, cfg, resume=True, progress=False)
+    assert not marker.exists(), "resuming ran code from the checkpoint"
+
+
 def test_config_file_and_overrides(tmp_path):
     from engine.errors import UserError
 

@@ -26,7 +26,7 @@ import threading
 from collections.abc import Iterator
 from pathlib import Path
 
-from engine.errors import UserError
+from engine.errors import OutputError
 
 #: Temporary files being written by this process (removed on SIGTERM/SIGHUP).
 _LIVE: set[Path] = set()
@@ -130,7 +130,7 @@ def atomic_path(path: str | Path, suffix: str = ".tmp") -> Iterator[Path]:
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f"{temp_prefix(path)}{os.getpid()}-", suffix=suffix)
         os.close(fd)
     except OSError as exc:
-        raise UserError(f"{path}: cannot write ({exc.strerror or exc})") from None
+        raise OutputError(f"{path}: cannot write ({exc.strerror or exc})") from None
     tmp_path = Path(tmp)
     with _LOCK:
         _LIVE.add(tmp_path)
@@ -140,7 +140,7 @@ def atomic_path(path: str | Path, suffix: str = ".tmp") -> Iterator[Path]:
             os.chmod(tmp_path, mode)
             os.replace(tmp_path, path)
         except OSError as exc:  # disk full, folder removed or made read-only meanwhile
-            raise UserError(f"{path}: cannot write ({exc.strerror or exc})") from exc
+            raise OutputError(f"{path}: cannot write ({exc.strerror or exc})") from exc
     finally:
         with _LOCK:
             _LIVE.discard(tmp_path)

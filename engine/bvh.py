@@ -30,11 +30,11 @@ from pymotion.rotations import quat_np as _qnp
 
 from engine import skeleton as sk
 from engine.atomic import atomic_path
-from engine.bvh_parser import MAX_OFFSET, parse_bvh_text
+from engine.bvh_parser import MAX_OFFSET, parse_bvh_lines
 from engine.errors import BVHError, UserError
 from engine.kinematics import quaternion as Q
 from engine.motion import Motion
-from engine.validation import read_input_bytes
+from engine.validation import check_input_file
 
 __all__ = ["MAX_OFFSET", "SAVE_ROT_ORDER", "RawBVH", "load_bvh", "save_motion_bvh"]
 
@@ -73,6 +73,8 @@ class RawBVH:
         Seconds per frame from the header (> 0).
     path : str
         The file read.
+    file_frames : int
+        Frames in the file; F is smaller when only the first frames were kept.
     """
 
     names: tuple[str, ...]
@@ -85,11 +87,17 @@ class RawBVH:
     rotations_deg: np.ndarray
     frame_time: float
     path: str
+    file_frames: int = 0
 
     @property
     def frames(self) -> int:
-        """Number of frames F."""
+        """Number of frames F held (all of the file's unless ``load_bvh(max_frames=)``)."""
         return int(self.rotations_deg.shape[0])
+
+    @property
+    def total_frames(self) -> int:
+        """Frames in the file (>= :attr:`frames`)."""
+        return max(self.file_frames, self.frames)
 
     @property
     def fps(self) -> float:
@@ -118,13 +126,16 @@ class RawBVH:
         return Q.normalize(q)
 
 
-def load_bvh(path: str | Path) -> RawBVH:
+def load_bvh(path: str | Path, max_frames: int | None = None) -> RawBVH:
     """Read and validate a BVH file.
 
     Parameters
     ----------
     path : str or Path
-        The file.
+        The file: a regular file of at most 1 GB (no FIFO, device or symlink loop).
+    max_frames : int, optional
+        Keep only the first ``max_frames`` frames (every row is still checked); the file
+        is streamed, so a long clip costs memory only for what is kept.
 
     Returns
     -------
@@ -140,11 +151,15 @@ def load_bvh(path: str | Path) -> RawBVH:
         non-positive Frame Time, truncation.
     """
     path = str(path)
-    try:  # a regular file below the size limit, before reading (no FIFO, /dev/zero, loop)
-        text = read_input_bytes(path, "BVH file").decode("utf-8", errors="replace")
-    except UserError as exc:
-        raise BVHError(path, "cannot read file: " + str(exc).removeprefix(f"{path}: ")) from None
-    p = parse_bvh_text(path, text)
+    try:  # a regular file below the size limit, before opening (no FIFO, /dev/zero, loop)
+        size = check_input_file(path, "BVH file").stat().st_size
+        with open(path, encoding="utf-8", errors="replace") as fh:
+            p = parse_bvh_lines(path, fh, max_frames, size)
+    except BVHError:
+        raise
+    except (UserError, OSError) as exc:
+        reason = exc.strerror if isinstance(exc, OSError) else str(exc).removeprefix(f"{path}: ")
+        raise BVHError(path, f"cannot read file: {reason or exc}") from None
     frames = p.data.shape[0]
     j = len(p.names)
     offsets = np.array(p.offsets, dtype=np.float64)
@@ -171,6 +186,7 @@ def load_bvh(path: str | Path) -> RawBVH:
         rotations_deg=rotations,
         frame_time=p.frame_time,
         path=path,
+        file_frames=p.frames,
     )
 
 

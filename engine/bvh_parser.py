@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
@@ -19,6 +20,10 @@ from engine.validation import BVH_HEADER, check_value, shown
 
 #: Largest accepted absolute OFFSET component, in the file's units (cm, m, inches...).
 MAX_OFFSET = 1e4
+#: Longest HIERARCHY section, characters (a 100-joint rig takes about 10,000).
+MAX_HEADER = 4_000_000
+#: Data rows converted at a time (bounds the memory of the text being converted).
+CHUNK = 2048
 
 _AXES = "xyz"
 _CHANNEL = re.compile(r"^([xyz])(position|rotation)$", re.IGNORECASE)
@@ -201,24 +206,39 @@ class _Hierarchy:
         t.expect("}", f"closing the End Site of '{self.names[joint]}'")
 
 
-def _motion_header(path: str, lines: list[str], start: int) -> tuple[int, float, int, int]:
-    """Parse ``Frames:`` and ``Frame Time:`` after the MOTION line (0-based ``start``).
+class _Lines:
+    """Numbered lines pulled one at a time from any iterable (a file streams)."""
 
-    Returns the frame count, the frame time (s), the 0-based index of the first data
-    line and the 1-based line of ``Frames:``.
+    def __init__(self, lines: Iterable[str]):
+        self._it = iter(lines)
+        self.count = 0  # 1-based number of the last line read
+
+    def next(self) -> str | None:
+        line = next(self._it, None)
+        if line is not None:
+            self.count += 1
+        return line
+
+    def next_nonblank(self) -> str | None:
+        while (line := self.next()) is not None and not line.strip():
+            pass
+        return line
+
+
+def _motion_header(path: str, lines: _Lines) -> tuple[int, float, int]:
+    """Parse ``Frames:`` and ``Frame Time:`` after the MOTION line.
+
+    Returns the frame count, the frame time (s) and the 1-based line of ``Frames:``.
     """
     values = []
-    i = start + 1
     for pattern, label in ((_FRAMES, "Frames: <count>"), (_FRAME_TIME, "Frame Time: <seconds>")):
-        while i < len(lines) and not lines[i].strip():
-            i += 1
-        if i >= len(lines):
-            raise BVHError(path, f"unexpected end of file, expected '{label}' (file truncated?)", len(lines))
-        m = pattern.match(lines[i])
+        line = lines.next_nonblank()
+        if line is None:
+            raise BVHError(path, f"unexpected end of file, expected '{label}' (file truncated?)", lines.count)
+        m = pattern.match(line)
         if m is None:
-            raise BVHError(path, f"expected '{label}', found '{lines[i].strip()[:60]}'", i + 1)
-        values.append((m.group(1), i + 1))
-        i += 1
+            raise BVHError(path, f"expected '{label}', found {shown(line.strip(), 60)}", lines.count)
+        values.append((m.group(1), lines.count))
     (frames_text, frames_line), (time_text, time_line) = values
     if not frames_text.isdigit():
         raise BVHError(path, f"Frames must be a whole number, got {shown(frames_text)}", frames_line)
@@ -231,34 +251,13 @@ def _motion_header(path: str, lines: list[str], start: int) -> tuple[int, float,
         raise BVHError(path, f"Frame Time {shown(time_text)} is not a number", time_line) from None
     if not math.isfinite(frame_time) or frame_time <= 0:
         raise BVHError(path, f"Frame Time must be a positive number of seconds, got {shown(time_text)}", time_line)
-    spec = BVH_HEADER["Frames"]
-    check_value(spec, frames, f"{path}:{frames_line}", "Frames")
+    check_value(BVH_HEADER["Frames"], frames, f"{path}:{frames_line}", "Frames")
     check_value(BVH_HEADER["Frame Time"], frame_time, f"{path}:{time_line}", "Frame Time")
-    return frames, frame_time, i, frames_line
+    return frames, frame_time, frames_line
 
 
-def _motion_data(path: str, lines: list[str], first: int, columns: int, frames: int, frames_line: int) -> np.ndarray:
-    """Parse the data rows into an array (F, columns); every row is checked."""
-    rows: list[list[str]] = []
-    numbers: list[int] = []  # 1-based line of each row
-    for n in range(first, len(lines)):
-        parts = lines[n].split()
-        if not parts:
-            continue
-        if len(parts) != columns:
-            raise BVHError(
-                path, f"wrong number of values on frame {len(rows) + 1}: expected {columns}, got {len(parts)}", n + 1
-            )
-        rows.append(parts)
-        numbers.append(n + 1)
-        if len(rows) > frames:
-            raise BVHError(path, f"more data rows than the header's Frames: {frames} (line {frames_line})", n + 1)
-    if len(rows) < frames:
-        raise BVHError(
-            path,
-            f"header says Frames: {frames} but only {len(rows)} data rows follow (file truncated?)",
-            frames_line,
-        )
+def _convert(path: str, rows: list[list[str]], numbers: list[int]) -> np.ndarray:
+    """One chunk of data rows as floats; every value finite, else the line at fault."""
     try:
         data = np.array(rows, dtype=np.float64)
     except ValueError:
@@ -269,13 +268,50 @@ def _motion_data(path: str, lines: list[str], first: int, columns: int, frames: 
                 try:
                     value = float(text)
                 except ValueError:
-                    raise BVHError(path, f"'{text}' is not a number", n) from None
+                    raise BVHError(path, f"{shown(text)} is not a number", n) from None
                 if not math.isfinite(value):
-                    raise BVHError(path, f"value {text} is not finite", n)
+                    raise BVHError(path, f"value {shown(text)} is not finite", n)
         raise BVHError(path, "unreadable motion data", numbers[0])  # numpy and float() disagree
     return data
 
 
+def _motion_data(path: str, lines: _Lines, columns: int, frames: int, frames_line: int,
+                 keep: int, room: int) -> np.ndarray:  # fmt: skip
+    """Parse the data rows, CHUNK at a time; every row is checked, the first ``keep`` kept.
+
+    ``room`` bounds the rows the rest of the file can hold (each value takes at least
+    two bytes), so a header claiming millions of frames allocates nothing it cannot fill.
+    Returns an array (min(F, keep), columns)."""
+    out = np.empty((min(frames, keep, room), columns))
+    rows: list[list[str]] = []
+    numbers: list[int] = []  # 1-based line of each row
+    done = 0
+    while True:
+        line = lines.next()
+        if line is not None:
+            parts = line.split()
+            if not parts:
+                continue
+            if len(parts) != columns:
+                raise BVHError(path, f"wrong number of values on frame {done + len(rows) + 1}: expected {columns}, "
+                                     f"got {len(parts)}", lines.count)  # fmt: skip
+            if done + len(rows) >= frames:
+                raise BVHError(path, f"more data rows than the header's Frames: {frames} (line {frames_line})",
+                               lines.count)  # fmt: skip
+            rows.append(parts)
+            numbers.append(lines.count)
+        if rows and (len(rows) == CHUNK or line is None):
+            data = _convert(path, rows, numbers)
+            take = max(0, min(len(rows), out.shape[0] - done))
+            out[done : done + take] = data[:take]
+            done += len(rows)
+            rows, numbers = [], []
+        if line is None:
+            break
+    if done < frames:
+        raise BVHError(path, f"header says Frames: {frames} but only {done} data rows follow (file truncated?)",
+                       frames_line)  # fmt: skip
+    return out
 
 
 @dataclass(frozen=True)
@@ -289,8 +325,10 @@ class ParsedBVH:
         list of J ``[x, y, z]`` in file units.
     frame_time : float
         Seconds per frame, > 0.
-    data : ndarray (F, C)
-        Every channel value of every frame, finite, C = total channel count.
+    data : ndarray (K, C)
+        Every channel value of the first K kept frames, finite, C = total channel count.
+    frames : int
+        Frames F in the file (all checked), K <= F.
     """
 
     names: list[str]
@@ -300,19 +338,43 @@ class ParsedBVH:
     end_sites: dict[int, np.ndarray]
     frame_time: float
     data: np.ndarray
+    frames: int = 0
 
 
-def parse_bvh_text(path: str, text: str) -> ParsedBVH:
+def parse_bvh_text(path: str, text: str, keep: int | None = None) -> ParsedBVH:
     """Parse and validate the text of a BVH file; raise :class:`BVHError` naming the line."""
-    lines = text.splitlines()
-    motion_at = next((n for n, s in enumerate(lines) if s.split()[:1] and s.split()[0].upper() == "MOTION"), len(lines))
-    hier = _Hierarchy(_Tokens(path, lines, motion_at))
+    return parse_bvh_lines(path, text.splitlines(), keep, len(text))
+
+
+def parse_bvh_lines(path: str, lines: Iterable[str], keep: int | None = None, size: int | None = None) -> ParsedBVH:
+    """Parse and validate a BVH file given as lines (an open text file streams).
+
+    Every row is checked, but only the first ``keep`` frames are kept (all by default):
+    ``info`` and ``reconstruct --max-frames`` read a 200,000-frame file in little memory.
+    ``size`` (bytes or characters of the file) bounds what the data can hold."""
+    src = _Lines(lines)
+    header: list[str] = []
+    chars = 0
+    motion_found = motion_alone = False
+    while (line := src.next()) is not None:
+        first = line.split(None, 1)[:1]
+        if first and first[0].upper() == "MOTION":
+            motion_found, motion_alone = True, len(line.split()) == 1
+            break
+        header.append(line)
+        chars += len(line)
+        if chars > MAX_HEADER:
+            raise BVHError(path, f"the HIERARCHY section is longer than {MAX_HEADER:,} characters", src.count)
+    tokens = _Tokens(path, header + (["MOTION"] if motion_found else []), len(header))
+    hier = _Hierarchy(tokens)
     hier.parse()
-    if motion_at == len(lines):
-        raise BVHError(path, "missing MOTION section after the hierarchy", len(lines) or 1)
-    if len(lines[motion_at].split()) != 1:
-        raise BVHError(path, "MOTION must be alone on its line", motion_at + 1)
-    frames, frame_time, first, frames_line = _motion_header(path, lines, motion_at)
+    if not motion_found:
+        raise BVHError(path, "missing MOTION section after the hierarchy", src.count or 1)
+    if not motion_alone:
+        raise BVHError(path, "MOTION must be alone on its line", src.count)
+    frames, frame_time, frames_line = _motion_header(path, src)
     columns = sum(len(c) for c in hier.channels)
-    data = _motion_data(path, lines, first, columns, frames, frames_line)
-    return ParsedBVH(hier.names, hier.parents, hier.offsets, hier.channels, hier.end_sites, frame_time, data)
+    room = frames if size is None else size // (2 * columns) + 1
+    data = _motion_data(path, src, columns, frames, frames_line, frames if keep is None else keep, room)
+    return ParsedBVH(hier.names, hier.parents, hier.offsets, hier.channels, hier.end_sites, frame_time, data,
+                     frames)  # fmt: skip

@@ -47,3 +47,8 @@ class RigError(UserError):
 
 class ModelFileError(UserError):
     """A weights file that is missing, corrupt or of the wrong shape/version."""
+
+
+class OutputError(UserError, OSError):
+    """An output that cannot be written (disk full, read-only folder); also an
+    :class:`OSError`, so callers that catch those keep working."""

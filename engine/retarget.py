@@ -25,6 +25,7 @@ The :class:`RetargetReport` keeps what is needed to go back onto the source rig
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -33,16 +34,21 @@ import numpy as np
 from engine import skeleton as sk
 from engine.bvh import RawBVH, load_bvh
 from engine.errors import UserError
-from engine.validation import SKELETON, check_manifest, check_value, read_json
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk, local_from_global
 from engine.motion import Motion
 from engine import retarget_frames as RF
 from engine.rigs import RigProfile, resolve_rig
+from engine.validation import SKELETON, check_manifest, check_value, read_json
 
 #: Bumped whenever retargeting gives different clips (prepared data is rebuilt then).
 RETARGET_VERSION = 2
 _AXIS = {"x": 0, "y": 1, "z": 2}
+#: Source frames kept at least when only the start of a clip is loaded (the rest-pose
+#: alignment and the heights are measured on them; every shared clip is shorter).
+ALIGN_FRAMES = 8192
+#: Highest source frame rate accepted (engine.validation.BVH_HEADER / MANIFEST / --fps).
+MAX_SOURCE_FPS = 1000
 _TOE_HEIGHT = 0.045  # canonical toe joint height above the floor when standing (metres)
 _CANON_FRAMES = RF.canonical_frames()
 _LEG = [sk.JOINT_INDEX[n] for n in ("lknee", "lankle")]
@@ -71,6 +77,8 @@ class RetargetReport:
     height_m: float = float("nan")
     #: The source's toe tips as offsets (metres) in the canonical toe frames, by toe name.
     toe_tips: dict | None = None
+    #: Canonical (60 fps) frames of the whole file, even when only its start was loaded.
+    frames: int = 0
 
     @property
     def mapping(self) -> dict[str, str]:
@@ -176,6 +184,13 @@ def standing_height(head: np.ndarray, lowest: np.ndarray, skeleton: sk.Skeleton)
     return float(np.percentile(head - lowest, 95)) + float(sk.END_SITES["upperneck"][2] * skeleton.scale)
 
 
+def _resampled_count(n: int, fps: float, target: float = sk.FPS) -> int:
+    """Frames :func:`_resample` makes of ``n`` frames at ``fps``."""
+    if abs(fps - target) < 1e-6 or n < 2:
+        return n
+    return int(np.floor((n - 1) / fps * target + 1e-9)) + 1
+
+
 def _resample(local_rot: np.ndarray, root: np.ndarray, fps: float, target: float = sk.FPS):
     n = local_rot.shape[0]
     if abs(fps - target) < 1e-6 or n < 2:
@@ -211,9 +226,9 @@ def retarget(raw: RawBVH, fps: float | None = None, profile: RigProfile | None =
     src_fps = float(fps) if fps else _snap_fps(raw.fps)
     if src_fps <= 0:
         raise UserError(f"{raw.path}: frame rate must be positive, got {src_fps}")
-    canonical = int(np.floor((raw.frames - 1) / src_fps * sk.FPS + 1e-9)) + 1
+    skip = prof.skip_frames if raw.total_frames > prof.skip_frames + 2 else 0
+    canonical = _resampled_count(raw.total_frames - skip, src_fps)
     check_value(SKELETON["canonical frames"], canonical, f"{raw.path}: at {src_fps:g} frames/s", "frames at 60 fps")
-    skip = prof.skip_frames if raw.frames > prof.skip_frames + 2 else 0
     quats = raw.local_quaternions()[skip:]
     pos = raw.positions[skip:].copy()
     if prof.root_channels_relative_to_offset:
@@ -246,8 +261,8 @@ def retarget(raw: RawBVH, fps: float | None = None, profile: RigProfile | None =
     local, root = _resample(local, root, src_fps)
     motion = Motion(local, root, skel, sk.FPS, Path(raw.path).stem)
     shift = _refloor(motion)
-    report = RetargetReport(prof.name, len(raw.names), raw.frames, src_fps, skel.scale, prof, align, basis,
-                            shift, skip, src_height, clip_height(motion, tips), tips)  # fmt: skip
+    report = RetargetReport(prof.name, len(raw.names), raw.total_frames, src_fps, skel.scale, prof, align, basis,
+                            shift, skip, src_height, clip_height(motion, tips), tips, canonical)  # fmt: skip
     return motion, report
 
 
@@ -336,17 +351,31 @@ def manifest_fps(path: Path) -> float | None:
     return None
 
 
-def load_motion(path: str | Path, fps: float | None = None, rig_map: str | Path | None = None) -> Motion:
+def load_motion(path: str | Path, fps: float | None = None, rig_map: str | Path | None = None,
+                max_frames: int | None = None) -> Motion:  # fmt: skip
     """Load any humanoid BVH as a canonical motion (see module docs).
 
     ``fps`` overrides the file's header; otherwise a ``manifest.json`` beside the data
     (as in ``../shared/data/mocap``) gives the true rate, else the header does.
-    ``rig_map`` is a mapping file that overrides rig detection."""
-    return load_with_report(path, fps, rig_map)[0]
+    ``rig_map`` is a mapping file that overrides rig detection. ``max_frames``
+    (canonical frames) reads only the start of a long file; see :func:`load_with_report`."""
+    motion = load_with_report(path, fps, rig_map, max_frames)[0]
+    return motion.slice(0, max_frames) if max_frames else motion
 
 
-def load_with_report(path: str | Path, fps: float | None = None,
-                     rig_map: str | Path | None = None) -> tuple[Motion, RetargetReport]:
-    """:func:`load_motion` plus the :class:`RetargetReport`."""
-    raw = load_bvh(path)
+def source_frames_needed(max_frames: int | None) -> int | None:
+    """Source frames to keep for ``max_frames`` canonical frames at any accepted source
+    rate (None: all), at least :data:`ALIGN_FRAMES`."""
+    if max_frames is None:
+        return None
+    return max(ALIGN_FRAMES, math.ceil(max_frames * MAX_SOURCE_FPS / sk.FPS) + 64)
+
+
+def load_with_report(path: str | Path, fps: float | None = None, rig_map: str | Path | None = None,
+                     max_frames: int | None = None) -> tuple[Motion, RetargetReport]:  # fmt: skip
+    """:func:`load_motion` plus the :class:`RetargetReport`. With ``max_frames``, only the
+    source frames those canonical frames need are kept (at least :data:`ALIGN_FRAMES`,
+    which the rest-pose alignment averages over); every row is still checked, and the
+    report's ``source_frames`` / ``frames`` describe the whole file."""
+    raw = load_bvh(path, source_frames_needed(max_frames))
     return retarget(raw, fps or manifest_fps(Path(path)), rig_map=rig_map)

@@ -209,9 +209,7 @@ def _evaluate(args: argparse.Namespace) -> int:
         raise UserError("--max-frames must be at least 4 (jitter needs 4 frames)")
     motions = []
     for path in find_clips(args.paths):
-        motion = load_motion(path, rig_map=rig_map_path(args))
-        if args.max_frames:
-            motion = motion.slice(0, args.max_frames)
+        motion = load_motion(path, rig_map=rig_map_path(args), max_frames=args.max_frames)  # reads only what is needed
         if len(motion) < 4:
             raise UserError(f"{path}: only {len(motion)} frames; at least 4 are needed")
         motions.append((path, motion))

@@ -32,7 +32,8 @@ def describe(path: Path, fps: float | None = None, rig_map: Path | None = None) 
 
     if fps is not None:
         fps = check_value(CLI["fps"], fps, "--fps", "value")
-    motion, rep = load_with_report(path, fps or manifest_fps(path), rig_map)
+    # only the start is kept (every row is still checked): a long file stays cheap
+    motion, rep = load_with_report(path, fps or manifest_fps(path), rig_map, max_frames=1)
 
     def num(x: float, nd: int = 3):
         return round(float(x), nd) if math.isfinite(x) else None
@@ -47,7 +48,7 @@ def describe(path: Path, fps: float | None = None, rig_map: Path | None = None) 
         "source_joints": rep.source_joints,
         "source_frames": rep.source_frames,
         "source_fps": rep.source_fps,
-        "frames": len(motion),
+        "frames": rep.frames,
         "fps": motion.fps,
         "joints": 22,
         "height_m": num(rep.height_m),

@@ -62,7 +62,7 @@ def _reconstruct(args: argparse.Namespace) -> int:
     from engine.bvh import save_motion_bvh
     from engine.bvh import load_bvh
     from engine.methods import run_method
-    from engine.retarget import manifest_fps, retarget
+    from engine.retarget import manifest_fps, retarget, source_frames_needed
     from engine.tracking import parse_sensors, simulate
     from engine.validation import check_args, check_input_file, check_output_path
 
@@ -87,7 +87,7 @@ def _reconstruct(args: argparse.Namespace) -> int:
         raise UserError("--map applies to --trackers recordings")
     parse_sensors(args.sensors)  # fail before loading anything
     check_input_file(args.input)
-    raw = load_bvh(args.input)
+    raw = load_bvh(args.input, source_frames_needed(args.max_frames))  # a long file: only its start
     motion, report = retarget(raw, manifest_fps(args.input), rig_map=rig_map_path(args))
     if args.max_frames:
         motion = motion.slice(0, args.max_frames)

@@ -294,3 +294,27 @@ def test_non_finite_motion_is_not_written(tmp_path, synthetic_motion):
     with pytest.raises(ValueError, match="NaN"):
         save_motion_bvh(tmp_path / "out.bvh", Motion(rot, synthetic_motion.root_pos))
     assert list(tmp_path.iterdir()) == []
+
+
+def test_only_the_kept_frames_are_held_but_every_row_is_checked(tmp_path):
+    from engine.bvh_parser import parse_bvh_text
+
+    lines = VALID.splitlines()
+    path = write(tmp_path, VALID)
+    full, head = load_bvh(path), load_bvh(path, max_frames=2)
+    assert head.frames == 2 and head.total_frames == full.frames == full.total_frames
+    assert np.array_equal(head.rotations_deg, full.rotations_deg[:2])
+    bad = "\n".join(lines[:-1] + ["0 " * (len(lines[-1].split()) - 1) + "oops"]) + "\n"
+    with pytest.raises(BVHError, match="'oops' is not a number"):
+        load_bvh(write(tmp_path, bad), max_frames=1)  # a bad last row fails even when not kept
+    claims = VALID.replace(f"Frames: {full.frames}", "Frames: 9000000")
+    with pytest.raises(BVHError, match="only .* data rows follow"):
+        parse_bvh_text("x.bvh", claims)  # allocates for what the text can hold, not for 9 million
+
+
+def test_a_huge_hierarchy_is_refused_before_tokenising(tmp_path, monkeypatch):
+    import engine.bvh_parser as bp
+
+    monkeypatch.setattr(bp, "MAX_HEADER", 100)
+    with pytest.raises(BVHError, match="HIERARCHY section is longer than 100"):
+        load_bvh(write(tmp_path, VALID))

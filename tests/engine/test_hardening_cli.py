@@ -269,3 +269,41 @@ def test_json_output_of_a_good_scene_still_loads(tmp_path, capsys):
     constraints, settings = load_scene(tmp_path / "s.json")
     assert settings.threads == 1 and constraints == []
     assert json.loads((tmp_path / "s.json").read_text())["format"] == "dragposer-scene"
+
+
+# -- 3: long files are streamed ----------------------------------------------------------------
+
+
+def _long_clip(tmp_path: Path, frames: int) -> Path:
+    def repeat(lines, m):
+        rows = [r for r in lines[m + 3 :] if r.strip()]
+        lines[m + 1] = f"Frames: {frames}"
+        return lines[: m + 3] + [rows[i % len(rows)] for i in range(frames)]
+
+    return _clip(tmp_path, "long.bvh", repeat)
+
+
+def test_info_and_reconstruct_keep_only_the_start_of_a_long_file(tmp_path, capsys, monkeypatch):
+    import engine.bvh
+    import engine.retarget as rt
+
+    kept = []
+    real = rt.load_bvh
+
+    def spy(path, max_frames=None):
+        raw = real(path, max_frames)
+        kept.append((raw.frames, raw.total_frames))
+        return raw
+
+    monkeypatch.setattr(rt, "load_bvh", spy)
+    monkeypatch.setattr(engine.bvh, "load_bvh", spy)
+    monkeypatch.setattr(rt, "ALIGN_FRAMES", 1000)
+    clip = _long_clip(tmp_path, 3000)
+    rc, out, err = run(["info", clip], capsys)
+    assert rc == 0, err
+    assert "3000 frames at 60 fps" in out
+    assert kept[-1] == (1000, 3000)
+    rc, out, err = run(["reconstruct", clip, "--out", tmp_path / "o.bvh", "--max-frames", "2", "--iterations", "1",
+                        "--method", "ik", "--no-progress"], capsys)  # fmt: skip
+    assert rc == 0, err
+    assert kept[-1] == (1000, 3000)

@@ -158,8 +158,9 @@ def load_bvh(path: str | Path, max_frames: int | None = None) -> RawBVH:
     except BVHError:
         raise
     except (UserError, OSError) as exc:
-        reason = exc.strerror if isinstance(exc, OSError) else str(exc).removeprefix(f"{path}: ")
-        raise BVHError(path, f"cannot read file: {reason or exc}") from None
+        if isinstance(exc, OSError):
+            raise BVHError(path, f"cannot read file: {exc.strerror or exc}") from None
+        raise BVHError(path, str(exc).removeprefix(f"{path}: ")) from None
     frames = p.data.shape[0]
     j = len(p.names)
     offsets = np.array(p.offsets, dtype=np.float64)

@@ -251,17 +251,18 @@ def check_input_file(path: str | Path, kind: str = "BVH file", max_bytes: int | 
     try:
         st = os.stat(path)
     except FileNotFoundError:
-        raise ValidationError(f"{path}: {kind} not found") from None
+        raise ValidationError(f"{path}: cannot read {kind}: not found") from None
     except OSError as exc:  # ELOOP, EACCES, ENAMETOOLONG...
-        raise ValidationError(f"{path}: cannot open {kind} ({exc.strerror or exc})") from None
+        raise ValidationError(f"{path}: cannot read {kind}: {exc.strerror or exc}") from None
     if stat.S_ISDIR(st.st_mode):
-        raise ValidationError(f"{path}: is a folder, expected a {kind}")
+        raise ValidationError(f"{path}: cannot read {kind}: is a folder")
     if not stat.S_ISREG(st.st_mode):
-        raise ValidationError(f"{path}: not a regular file (a pipe, device or socket); expected a {kind}")
+        raise ValidationError(f"{path}: cannot read {kind}: not a regular file (a pipe, device or socket)")
     if st.st_size > limit:
-        raise ValidationError(f"{path}: {kind} of {st.st_size:,} bytes is larger than the limit of {limit:,} bytes")
+        raise ValidationError(f"{path}: cannot read {kind}: {st.st_size:,} bytes is larger than the limit of "
+                              f"{limit:,} bytes")  # fmt: skip
     if not os.access(path, os.R_OK):
-        raise ValidationError(f"{path}: {kind} is not readable (permission denied)")
+        raise ValidationError(f"{path}: cannot read {kind}: permission denied")
     return path
 
 

@@ -52,7 +52,7 @@ def test_fifo_device_symlink_loop_folder_and_size_are_refused_before_reading(tmp
     big = tmp_path / "big.bvh"
     big.write_bytes(b"x" * 101)
     cases = {fifo: "not a regular file", zero: "not a regular file", tmp_path / "a.bvh": "symbolic links",
-             tmp_path: "is a folder", tmp_path / "none.bvh": "not found"}
+             tmp_path: "is a folder", tmp_path / "none.bvh": "cannot read BVH file: not found"}
     for path, reason in cases.items():
         with pytest.raises(ValidationError, match=reason):
             check_input_file(path)  # returns at once: nothing is opened

@@ -23,6 +23,11 @@ from engine.models.vae import PoseVAE, VAEConfig
 from engine.validation import (PREDICTOR_CONFIG, VAE_CHANNEL, VAE_CONFIG, check_fields, check_input_file,
                                check_value, one_line, shown)  # fmt: skip
 
+try:
+    from numpy._core.multiarray import scalar as _np_scalar
+except ImportError:  # numpy 1.x
+    from numpy.core.multiarray import scalar as _np_scalar
+
 FORMAT_VERSION = 1
 ASSETS = Path(__file__).resolve().parents[2] / "assets" / "models"
 DEFAULT_VAE = ASSETS / "vae.pt"
@@ -32,7 +37,7 @@ DEFAULT_RPM = ASSETS / "rpm.pt"
 #: The only non-builtin types a checkpoint may hold besides tensors: numpy scalars that
 #: end up in loss curves and metadata.
 SAFE_GLOBALS = [np.dtype, np.float64, np.float32, np.int64, np.int32, np.bool_, type(np.dtype(np.float64)),
-                type(np.dtype(np.float32)), type(np.dtype(np.int64)), np._core.multiarray.scalar]  # fmt: skip
+                type(np.dtype(np.float32)), type(np.dtype(np.int64)), _np_scalar]  # fmt: skip
 
 
 @dataclass

@@ -130,6 +130,8 @@ MAX_TRACKER_DISTANCE = 1e4
 def usable_reading(r: Sensor) -> bool:
     """A finite position within :data:`MAX_TRACKER_DISTANCE` and, for 6 DoF, a finite
     non-zero quaternion (a zero quaternion has no rotation to normalise)."""
+    if r.position is None or (r.dof == 6 and r.rotation is None):
+        return False
     pos = np.asarray(r.position, float)
     if not (np.isfinite(pos).all() and float(np.abs(pos).max()) <= MAX_TRACKER_DISTANCE):
         return False

@@ -113,7 +113,7 @@ def test_real_clip(shared_mocap):
 
 
 def test_non_finite_and_absurd_readings_never_give_a_nan_pose(synthetic_motion):
-    from engine.methods.base import SensorFrame, SensorReading
+    from engine.sensors import Sensor as SensorReading, SensorFrame
 
     tracking = simulate(synthetic_motion, "6")
     ik = IKMethod()

@@ -16,6 +16,7 @@ from typing import Any
 import torch
 from tqdm import tqdm
 
+from engine.models.loading import load_checkpoint
 from engine.training.common import CurveLog, Distributed, save_checkpoint
 
 
@@ -74,7 +75,7 @@ def run_epochs(
     meta = dict(meta or {})
     log, best, start, minutes_before, step_total = CurveLog(out_dir), float("inf"), 0, 0.0, 0
     if resume and (out_dir / "last.pt").is_file():
-        ck = torch.load(out_dir / "last.pt", map_location="cpu", weights_only=False)
+        ck = load_checkpoint(out_dir / "last.pt", "checkpoint")  # never runs code (weights_only)
         model.load_state_dict(ck["state_dict"])
         for opt, state in zip(optimizers, ck["optimizers"]):
             opt.load_state_dict(state)

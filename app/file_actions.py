@@ -8,14 +8,13 @@ from __future__ import annotations
 
 import json
 import os
-import threading
 from pathlib import Path
-from typing import Any
 
-from PyQt6.QtCore import QPoint, QTimer
+from PyQt6.QtCore import QPoint
 from PyQt6.QtGui import QImage, QPainter, QPixmap
 from PyQt6.QtWidgets import QFileDialog, QMainWindow
 
+from app.export import ReconstructionExport
 from engine.errors import UserError
 
 MAX_RECENT = 8
@@ -37,10 +36,8 @@ class FileActions:
 
     def __init__(self, window: QMainWindow) -> None:
         self.w = window
-        self._export: threading.Thread | None = None
-        self._export_result: tuple[str, str] | None = None
-        self._poll = QTimer(window, interval=100)
-        self._poll.timeout.connect(self._check_export)
+        self.export = ReconstructionExport(window)
+        self.export.finished.connect(self._export_finished)
 
     # -- opening ------------------------------------------------------------------------
     def open_dialog(self) -> None:
@@ -83,8 +80,9 @@ class FileActions:
         self.save_reconstruction(path, on_source_rig=True)
 
     def save_reconstruction(self, path: str | None = None, on_source_rig: bool = False) -> None:
-        """Reconstruct the whole clip off the GUI thread, then write it as BVH (canonical
-        skeleton, or with ``on_source_rig`` the hierarchy of the file it was opened from)."""
+        """Reconstruct the whole clip off the GUI thread (progress, Cancel), then write it as
+        BVH (canonical skeleton, or with ``on_source_rig`` the hierarchy of the file it was
+        opened from)."""
         s = self.w.session
         if s.source is not None:
             return self.w.show_error("Not for tracker input", "Saving re-solves a clip. For trackers use "
@@ -94,57 +92,27 @@ class FileActions:
             return self.w.show_error("Nothing to save", "Open a motion first.")
         if on_source_rig and getattr(s, "path", None) is None:
             return self.w.show_error("Nothing to save", "This clip was not opened from a BVH file.")
-        if self._export is not None:
+        if self.export.running:
             return self.w.statusBar().showMessage("An export is already running", 3000)
         if path is None:
             path, _ = QFileDialog.getSaveFileName(self.w, "Save reconstruction", "", "BVH motion (*.bvh)")
             if not path:
                 return None
         source = s.path if on_source_rig else None
-        args = (s.motion, tuple(s.sensors.values()), tuple(s.constraints), dict(s.settings), s.method, path, source)
-        self._export = threading.Thread(target=self._export_run, args=args, name="bvh-export", daemon=True)
-        self._export.start()
-        self._poll.start()
-        self.w.statusBar().showMessage(f"Reconstructing {s.num_frames} frames with {s.method}...")
+        self.export.start(s.motion, tuple(s.sensors.values()), tuple(s.constraints),
+                          dict(s.settings), s.method, path, source)  # fmt: skip
         return None
 
-    def _export_run(self, motion: Any, sensors: tuple, constraints: tuple, settings: dict,
-                    method: str, path: str, source: Path | None = None) -> None:  # fmt: skip
-        try:
-            from engine.bvh import save_motion_bvh
-            from engine.studio.methods import reconstruct_clip
-
-            result = reconstruct_clip(motion, sensors, constraints, settings, method)
-            if source is None:
-                save_motion_bvh(path, result)
-            else:  # the source's own hierarchy (docs/skeleton.md, --on-source-rig)
-                from engine.bvh import load_bvh
-                from engine.retarget import manifest_fps, retarget
-                from engine.source_rig import save_on_source_rig
-
-                raw = load_bvh(source)
-                save_on_source_rig(path, result, raw, retarget(raw, manifest_fps(source))[1])
-            self._export_result = ("ok", f"Saved {len(result)} frames to {path}")
-        except ImportError as exc:
-            self._export_result = ("error", f"BVH writing is not available yet ({exc})")
-        except Exception as exc:
-            self._export_result = ("error", f"{path}: {type(exc).__name__}: {exc}")
-
-    def _check_export(self) -> None:
-        if self._export is None or self._export.is_alive():
-            return
-        self._poll.stop()
-        self._export = None
-        kind, message = self._export_result or ("error", "export stopped")
-        if kind == "ok":
+    def _export_finished(self, ok: bool, message: str) -> None:
+        if ok:
             self.w.statusBar().showMessage(message, 8000)
+        elif not message:
+            self.w.statusBar().showMessage("Export cancelled: nothing was written", 5000)
         else:
             self.w.show_error("Cannot save reconstruction", message)
 
     def shutdown(self) -> None:
-        self._poll.stop()
-        if self._export is not None:
-            self._export.join(timeout=30)
+        self.export.shutdown()
 
     # -- scenes ---------------------------------------------------------------------
     def save_scene(self, path: str | None = None) -> bool:

@@ -185,7 +185,9 @@ def test_save_reconstruction_writes_a_bvh_off_the_gui_thread(studio, qtbot, tmp_
     pytest.importorskip("engine.bvh")
     out = tmp_path / "recon.bvh"
     studio.files.save_reconstruction(str(out))
-    qtbot.waitUntil(lambda: studio.files._export is None, timeout=30000)
+    assert studio.files.export.dialog.isVisible()  # progress, with a Cancel button
+    qtbot.waitUntil(lambda: not studio.files.export.running, timeout=30000)
+    assert studio.files.export.dialog is None and "Saved" in studio.statusBar().currentMessage()
     from engine.retarget import load_motion
 
     assert len(load_motion(out)) == studio.session.num_frames
@@ -196,7 +198,7 @@ def test_save_onto_the_source_rig_keeps_the_files_hierarchy(studio, qtbot, tmp_p
 
     out = tmp_path / "recon_src.bvh"
     studio.files.save_on_source_rig(str(out))
-    qtbot.waitUntil(lambda: studio.files._export is None, timeout=30000)
+    qtbot.waitUntil(lambda: not studio.files.export.running, timeout=30000)
     back, src = load_bvh(out), load_bvh(studio.session.path)
     assert back.names == src.names and back.frames == studio.session.num_frames
 

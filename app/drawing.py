@@ -89,6 +89,8 @@ class DrawScheduler:
     def _mirror_engine(self, snap: Any) -> None:
         """Cheap state the session must know at once: the end of playback, a refused method."""
         s = self.w.session
+        if self.w.busy.active:
+            self.w.busy.check(snap)
         if s.playing and not snap.playing and snap.seq == self._drawn_seq:
             s.note_frame(snap.frame)
             s.note_stopped()  # reached the end without looping

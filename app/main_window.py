@@ -17,6 +17,7 @@ from typing import Any
 from PyQt6.QtCore import QSettings, Qt, QTimer, pyqtSignal
 from PyQt6.QtWidgets import QDockWidget, QLabel, QMainWindow, QMessageBox, QTabWidget, QVBoxLayout, QWidget
 
+from app.busy import BusyNotice
 from app.drawing import DrawScheduler
 from app.file_actions import FileActions
 from app.live_actions import LiveActions
@@ -54,6 +55,8 @@ class MainWindow(QMainWindow):
         self.settings = settings or QSettings("dragposer-studio", "studio")
         self.session = Session(method=method)
         self._build_widgets()
+        self.busy = BusyNotice(self.viewport, self.statusBar())
+        self.busy.begin(method, -1, "Starting")
         # after the widgets: the thread's first imports would compete with theirs
         self.engine = self.session.start_engine()
         self.files = FileActions(self)
@@ -171,14 +174,28 @@ class MainWindow(QMainWindow):
         e.constraints.connect(self._show_constraints)
         e.settings.connect(self._show_optimizer)
         e.method.connect(self._show_optimizer)
+        e.method.connect(self._announce_method)
+        e.motion.connect(self._announce_motion)
 
     def _disconnect_session(self) -> None:
         e = self.session.events
         for signal, slot in ((e.frame, self.timeline.set_frame), (e.playback, self._show_playback),
                              (e.motion, self._show_motion), (e.sensors, self._show_sensors),
                              (e.constraints, self._show_constraints), (e.settings, self._show_optimizer),
-                             (e.method, self._show_optimizer)):  # fmt: skip
+                             (e.method, self._show_optimizer), (e.method, self._announce_method),
+                             (e.motion, self._announce_motion)):  # fmt: skip
             signal.disconnect(slot)
+
+    def _seq(self) -> int:
+        snap = self.session.latest
+        return -1 if snap is None else snap.seq
+
+    def _announce_method(self, event: ev.MethodChanged) -> None:
+        if event.method != event.old_method:
+            self.busy.begin(event.method, self._seq(), "Switching to")
+
+    def _announce_motion(self, event: ev.MotionChanged) -> None:
+        self.busy.begin(self.session.method, self._seq(), "Opening the clip with")
 
     def _show_playback(self, event: ev.PlaybackChanged) -> None:
         self.timeline.set_playing(event.playing)

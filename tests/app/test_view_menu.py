@@ -69,3 +69,26 @@ def test_help_lists_every_shortcut_of_the_menus(studio, qtbot):
         assert any("Ctrl + drag" in k for k in rows)
     finally:
         dialog.close()
+
+
+def test_a_notice_shows_while_a_method_loads_and_solves_its_first_frame(studio, qtbot):
+    """Loading a model and the offline first frame took 2-3 s with no word."""
+    import time
+
+    from engine.studio.methods import RestPoseMethod
+
+    class SlowToLoad(RestPoseMethod):
+        name = "slow"
+
+        def __init__(self) -> None:
+            time.sleep(0.8)  # as if loading networks
+
+    inner = studio.engine._factory
+    studio.engine._factory = lambda name: SlowToLoad() if name == "slow" else inner(name)
+    qtbot.waitUntil(lambda: not studio.busy.active, timeout=10000)  # the start-up notice went
+    studio.session.set_method("slow")
+    assert "slow" in studio.viewport.notice and "first frame" in studio.viewport.notice
+    assert "slow" in studio.statusBar().currentMessage()
+    qtbot.waitUntil(lambda: studio.session.latest.method == "slow", timeout=10000)
+    qtbot.waitUntil(lambda: studio.viewport.notice == "", timeout=5000)
+    assert "first frame" not in studio.statusBar().currentMessage()

@@ -72,6 +72,8 @@ class Viewport(QWidget):
         self.joints = JointDragger(p, lambda j, pos: self.jointDragged.emit(j, pos))
         self.gizmos = ConstraintGizmos(p, lambda n, changes: self.gizmoEdited.emit(n, changes))
         self._label = p.add_text("", position="upper_left", font_size=9, color="#d0d4dc")
+        self._notice = p.add_text("", position="lower_edge", font_size=12, color="#ffe14d")
+        self.notice = ""
         self.follow = True
         self.show_ground_truth = True
         self.camera_preset = "home"
@@ -150,6 +152,13 @@ class Viewport(QWidget):
         if self.follow and np.all(np.isfinite(snap.positions[0])):
             self._follow(snap.positions[0])
         self.plotter.render()
+
+    def set_notice(self, text: str) -> None:
+        """A line of text at the bottom of the view ("" removes it), e.g. while a model loads."""
+        if text != self.notice:
+            self.notice = text
+            self._notice.SetText(4, text)  # vtkCornerAnnotation.LowerEdge
+            self.plotter.render()
 
     def grab_image(self) -> QImage:
         """The render window's current image (QWidget.grab() may miss OpenGL content)."""

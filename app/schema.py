@@ -8,14 +8,21 @@ from typing import Any
 from engine.studio.session import Session
 
 
-def constraint_schema() -> dict[str, list[tuple[str, str, Any]]]:
-    """kind -> [(field, tag, default)] for :class:`widgets.constraint_panel.ConstraintPanel`,
-    from the session's catalog of user-facing kinds (``choice`` fields show as text until
-    the panel offers a list)."""
-    out = {}
-    for kind, spec in Session.constraint_catalog().items():
-        out[kind] = [(f.name, "str" if f.tag == "choice" else f.tag, f.default) for f in spec.fields]
-    return out
+def _editor_field(f: Any) -> tuple[Any, ...]:
+    """One catalog field as the panel's ``(name, tag, default[, choices])``."""
+    if f.tag == "choice":
+        return (f.name, "choice", f.default, tuple(f.choices))
+    d = f.default
+    if f.tag == "other" and "joint" in f.name and isinstance(d, (tuple, list)) and all(isinstance(v, str) for v in d):
+        return (f.name, "joints", tuple(d))  # e.g. the floor's feet
+    return (f.name, f.tag, d)
+
+
+def constraint_schema() -> dict[str, list[tuple[Any, ...]]]:
+    """kind -> [(field, tag, default[, choices])] for :class:`widgets.constraint_panel.ConstraintPanel`,
+    from the session's catalog of user-facing kinds (so ``sensor`` and ``temporal_prior``,
+    which methods build themselves, are not offered)."""
+    return {kind: [_editor_field(f) for f in spec.fields] for kind, spec in Session.constraint_catalog().items()}
 
 
 #: Anchors offered for ``root_anchor``: the head tracker, or integrating the decoded root.

@@ -1,32 +1,74 @@
 """Constraint panel: add, remove, enable and weight constraints; edit their parameters.
 
 The panel knows constraint kinds only through a *schema* (built by the app from the
-engine's registry, so this module stays free of torch): for each kind, a list of
-``(field name, tag, default)`` with tags ``float``, ``int``, ``bool``, ``joint``,
-``vec3``, ``str``. One editor per kind is built from its fields.
+engine's catalog, so this module stays free of torch): for each kind, a list of
+``(field name, tag, default[, choices])`` with tags ``float``, ``int``, ``bool``,
+``joint``, ``joints`` (several joints), ``choice`` (one of ``choices``), ``vec3``,
+``str``. The editor sits in a scroll area, so a kind with many fields never grows the
+window, and it follows edits made elsewhere (a gizmo drag, undo) without emitting.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 from PyQt6.QtCore import Qt, pyqtSignal
+from PyQt6.QtGui import QAction
 from PyQt6.QtWidgets import (
-    QCheckBox, QComboBox, QDoubleSpinBox, QFormLayout, QHBoxLayout, QLabel, QLineEdit,
-    QListWidget, QListWidgetItem, QPushButton, QSpinBox, QVBoxLayout, QWidget,
+    QCheckBox, QComboBox, QDoubleSpinBox, QFormLayout, QFrame, QHBoxLayout, QLabel, QLineEdit,
+    QListWidget, QListWidgetItem, QMenu, QPushButton, QScrollArea, QSizePolicy, QSpinBox,
+    QToolButton, QVBoxLayout, QWidget,
 )  # fmt: skip
 
 from engine.skeleton import JOINT_NAMES
 
-Schema = dict[str, list[tuple[str, str, Any]]]
+Schema = dict[str, list[Sequence[Any]]]
 _BASE_FIELDS = ("name", "weight", "enabled")
 
 
 def _spin(value: float, lo: float = -100.0, hi: float = 100.0, step: float = 0.01) -> QDoubleSpinBox:
     w = QDoubleSpinBox(minimum=lo, maximum=hi, singleStep=step, decimals=3)
-    w.setValue(float(value))
+    w.setValue(float(value) if np.isfinite(value) else 0.0)
+    w.setMinimumWidth(60)
     return w
+
+
+class JointsButton(QToolButton):
+    """Pick several joints from a menu of check boxes; ``picked(tuple)`` on every change."""
+
+    picked = pyqtSignal(tuple)
+
+    def __init__(self, joints: Sequence[str]) -> None:
+        super().__init__()
+        self.setPopupMode(QToolButton.ToolButtonPopupMode.InstantPopup)
+        self.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Fixed)
+        menu = QMenu(self)
+        self.actions_by_joint: dict[str, QAction] = {}
+        for j in JOINT_NAMES:
+            act = menu.addAction(j)
+            act.setCheckable(True)
+            act.toggled.connect(self._toggled)
+            self.actions_by_joint[j] = act
+        self.setMenu(menu)
+        self.set_joints(joints)
+
+    def joints(self) -> tuple[str, ...]:
+        return tuple(j for j, a in self.actions_by_joint.items() if a.isChecked())
+
+    def set_joints(self, joints: Sequence[str]) -> None:
+        """Tick exactly ``joints`` without emitting."""
+        self.blockSignals(True)
+        for j, act in self.actions_by_joint.items():
+            act.setChecked(j in joints)
+        self.blockSignals(False)
+        self.setText(", ".join(self.joints()) or "(none)")
+
+    def _toggled(self) -> None:
+        self.setText(", ".join(self.joints()) or "(none)")
+        if not self.signalsBlocked():
+            self.picked.emit(self.joints())
 
 
 class ConstraintEditor(QWidget):
@@ -34,22 +76,26 @@ class ConstraintEditor(QWidget):
 
     changed = pyqtSignal(dict)
 
-    def __init__(self, fields: list[tuple[str, str, Any]], values: dict[str, Any]) -> None:
+    def __init__(self, fields: list[Sequence[Any]], values: dict[str, Any]) -> None:
         super().__init__()
         form = QFormLayout(self)
         form.setContentsMargins(0, 0, 0, 0)
+        form.setRowWrapPolicy(QFormLayout.RowWrapPolicy.WrapLongRows)
         self.inputs: dict[str, Any] = {}
+        self.tags: dict[str, str] = {"weight": "float"}
         weight = _spin(values.get("weight", 1.0), 0.0, 1000.0, 0.1)
         weight.valueChanged.connect(lambda v: self.changed.emit({"weight": float(v)}))
         form.addRow("weight", weight)
         self.inputs["weight"] = weight
-        for name, tag, default in fields:
+        for spec in fields:
+            name, tag, default = spec[0], spec[1], spec[2]
             if name in _BASE_FIELDS:
                 continue
-            value = values.get(name, default)
-            form.addRow(name, self._make(name, tag, value))
+            choices = tuple(spec[3]) if len(spec) > 3 else ()
+            self.tags[name] = tag
+            form.addRow(name, self._make(name, tag, values.get(name, default), choices))
 
-    def _make(self, name: str, tag: str, value: Any) -> QWidget:
+    def _make(self, name: str, tag: str, value: Any, choices: tuple[str, ...]) -> QWidget:
         emit = lambda v, n=name: self.changed.emit({n: v})  # noqa: E731
         if tag == "float":
             w: Any = _spin(value)
@@ -60,15 +106,21 @@ class ConstraintEditor(QWidget):
         elif tag == "bool":
             w = QCheckBox(checked=bool(value))
             w.toggled.connect(lambda v: emit(bool(v)))
-        elif tag == "joint":
+        elif tag in ("joint", "choice"):
             w = QComboBox()
-            w.addItems(JOINT_NAMES)
+            w.addItems(JOINT_NAMES if tag == "joint" else choices)
+            if w.findText(str(value)) < 0:  # a value from a scene file is shown, not dropped
+                w.addItem(str(value))
             w.setCurrentText(str(value))
             w.currentTextChanged.connect(lambda v: emit(str(v)))
+        elif tag == "joints":
+            w = JointsButton(tuple(value))
+            w.picked.connect(lambda v: emit(tuple(v)))
         elif tag == "vec3":
             w = QWidget()
             row = QHBoxLayout(w)
             row.setContentsMargins(0, 0, 0, 0)
+            row.setSpacing(2)
             spins = [_spin(v) for v in np.asarray(value, float).reshape(3)]
             for s in spins:
                 row.addWidget(s)
@@ -77,10 +129,39 @@ class ConstraintEditor(QWidget):
         elif tag == "str":
             w = QLineEdit(str(value))
             w.editingFinished.connect(lambda: emit(w.text()))
-        else:
-            w = QLabel(repr(value))
+        else:  # shown, not editable here (e.g. a quaternion set by a sensor)
+            w = QLabel(np.array2string(np.asarray(value), precision=3) if isinstance(value, np.ndarray) else repr(value))
+            w.setWordWrap(True)
+            w.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Preferred)
         self.inputs[name] = w
         return w
+
+    def set_values(self, values: dict[str, Any]) -> None:
+        """Show ``values`` (edited elsewhere) without emitting ``changed``."""
+        for name, w in self.inputs.items():
+            if name not in values:
+                continue
+            v, tag = values[name], self.tags.get(name, "")
+            widgets = w.spins if tag == "vec3" else [w]
+            for x in widgets:
+                x.blockSignals(True)
+            try:
+                if tag in ("float", "int"):
+                    w.setValue(v)
+                elif tag == "bool":
+                    w.setChecked(bool(v))
+                elif tag in ("joint", "choice"):
+                    w.setCurrentText(str(v))
+                elif tag == "joints":
+                    w.set_joints(tuple(v))
+                elif tag == "vec3":
+                    for s, x in zip(w.spins, np.asarray(v, float).reshape(3)):
+                        s.setValue(float(x) if np.isfinite(x) else 0.0)
+                elif tag == "str" and not w.hasFocus():
+                    w.setText(str(v))
+            finally:
+                for x in widgets:
+                    x.blockSignals(False)
 
 
 class ConstraintPanel(QWidget):
@@ -112,19 +193,30 @@ class ConstraintPanel(QWidget):
         self.list.currentRowChanged.connect(lambda _r: self._show_editor())
         self.list.itemChanged.connect(self._item_toggled)
         outer.addWidget(self.list)
-        self.editor_holder = QVBoxLayout()
-        outer.addLayout(self.editor_holder)
-        outer.addStretch(1)
+        # the editor scrolls inside the dock: its size never reaches the window's layout
+        self.scroll = QScrollArea()
+        self.scroll.setWidgetResizable(True)
+        self.scroll.setFrameShape(QFrame.Shape.NoFrame)
+        self.scroll.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
+        self.scroll.setMinimumHeight(60)
+        outer.addWidget(self.scroll, 1)
         self.editor: ConstraintEditor | None = None
         self.constraints: list[dict[str, Any]] = []
         self._updating = False
 
     def set_constraints(self, constraints: list[dict[str, Any]]) -> None:
-        """Show the session's constraints (``to_dict`` form) without emitting."""
+        """Show the session's constraints (``to_dict`` form) without emitting.
+
+        A constraint that was not there before is selected (the one just added); the
+        open editor takes the new values of its constraint.
+        """
         selected = self.current_name()
+        before = {c["name"] for c in self.constraints}
         structure = [(c["name"], c["kind"]) for c in constraints]
         rebuild = structure != [(c["name"], c["kind"]) for c in self.constraints]
         self.constraints = [dict(c) for c in constraints]
+        names = [c["name"] for c in constraints]
+        added = [n for n in names if n not in before]
         self._updating = True
         try:
             if rebuild:
@@ -134,8 +226,8 @@ class ConstraintPanel(QWidget):
                     item.setData(Qt.ItemDataRole.UserRole, c["name"])
                     item.setFlags(item.flags() | Qt.ItemFlag.ItemIsUserCheckable)
                     self.list.addItem(item)
-                names = [c["name"] for c in constraints]
-                self.list.setCurrentRow(names.index(selected) if selected in names else len(names) - 1)
+                pick = added[-1] if added else selected
+                self.list.setCurrentRow(names.index(pick) if pick in names else len(names) - 1)
             for i, c in enumerate(constraints):
                 state = Qt.CheckState.Checked if c.get("enabled", True) else Qt.CheckState.Unchecked
                 self.list.item(i).setCheckState(state)
@@ -143,6 +235,10 @@ class ConstraintPanel(QWidget):
             self._updating = False
         if rebuild:
             self._show_editor()
+        elif self.editor is not None:
+            data = next((c for c in self.constraints if c["name"] == self.current_name()), None)
+            if data is not None:
+                self.editor.set_values(data)
 
     def current_name(self) -> str:
         item = self.list.currentItem()
@@ -150,6 +246,7 @@ class ConstraintPanel(QWidget):
 
     def _show_editor(self) -> None:
         if self.editor is not None:
+            self.scroll.takeWidget()
             self.editor.deleteLater()
             self.editor = None
         name = self.current_name()
@@ -158,7 +255,7 @@ class ConstraintPanel(QWidget):
             return
         self.editor = ConstraintEditor(self.schema.get(data["kind"], []), data)
         self.editor.changed.connect(lambda changes, n=name: self.changed.emit(n, changes))
-        self.editor_holder.addWidget(self.editor)
+        self.scroll.setWidget(self.editor)
 
     def _item_toggled(self, item: QListWidgetItem) -> None:
         if not self._updating:

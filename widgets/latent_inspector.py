@@ -98,9 +98,11 @@ class LatentInspector(QWidget):
             self.set_decodable(bool(snap.can_decode))
         if (snap.latent is not None) != self.bars_plot.isVisible():
             self._show_plots(snap.latent is not None)
-        if snap.latent is None or self.debug.isChecked():
+        if snap.latent is None:
             return
         z = np.asarray(snap.latent, float).ravel()
+        # in debug mode too: after a seek, "Store as B" must store the new frame's latent
+        # (it stored A's again); the engine's latent is unchanged by decoding requests
         self.latent = z
         self.bars.setOpts(x=np.arange(len(z)), height=z, brushes=["#ff8a1f" if v > 0 else "#4da3ff" for v in z])
         # the engine's record covers frames this view never drew (it draws the newest only)

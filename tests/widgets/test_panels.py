@@ -240,3 +240,87 @@ def test_latent_history_strip_gives_each_dimension_room(qtbot, fake_snapshot):
     qtbot.waitUntil(lambda: w.strip_plot.isVisible())
     view = w.strip_plot.plotItem.vb.sceneBoundingRect()
     assert view.height() >= 24 * 4, f"strip view {view.height():.0f} px for 24 dimensions"
+
+
+def _panel_in_window(qtbot, schema):
+    """The panel in a dock-sized window, shown, as the studio has it."""
+    p = ConstraintPanel(schema)
+    qtbot.addWidget(p)
+    p.resize(430, 420)
+    p.show()
+    qtbot.waitExposed(p)
+    return p
+
+
+def test_selecting_a_constraint_with_many_fields_does_not_grow_the_window(qtbot):
+    """An end_effector or sensor editor made the dock, and so the window, taller than the screen."""
+    from app.schema import constraint_schema
+
+    schema = constraint_schema()
+    p = _panel_in_window(qtbot, schema)
+    empty = p.minimumSizeHint()
+    for kind in ("end_effector", "look_at", "floor", "bounds"):
+        values = {"kind": kind, "name": f"{kind}1", "weight": 1.0, "enabled": True}
+        values.update({f[0]: f[2] for f in schema[kind]})
+        p.set_constraints([values])
+        assert p.editor is not None
+        hint = p.minimumSizeHint()
+        assert hint.height() <= empty.height() + 5, kind
+        assert hint.width() <= max(empty.width(), 430), kind
+
+
+def test_choice_and_joint_list_fields_are_edited_with_pickers(qtbot):
+    """Balance mode was free text and floor joints could not be edited at all."""
+    from app.schema import constraint_schema
+
+    schema = constraint_schema()
+    p = _panel_in_window(qtbot, schema)
+    p.set_constraints([{"kind": "balance", "name": "b", "weight": 1.0, "enabled": True,
+                        "mode": "head_over_hip", "tolerance": 0.05}])  # fmt: skip
+    mode = p.editor.inputs["mode"]
+    assert [mode.itemText(i) for i in range(mode.count())] == ["head_over_hip", "com_over_feet"]
+    with qtbot.waitSignal(p.changed) as sig:
+        mode.setCurrentText("com_over_feet")
+    assert sig.args == ["b", {"mode": "com_over_feet"}]
+    p.set_constraints([{"kind": "floor", "name": "f", "weight": 1.0, "enabled": True,
+                        "joints": ["lankle", "rankle"], "floor_height": 0.0}])  # fmt: skip
+    joints = p.editor.inputs["joints"]
+    assert joints.joints() == ("lankle", "rankle")
+    with qtbot.waitSignal(p.changed) as sig:
+        joints.actions_by_joint["ltoe"].setChecked(True)
+    assert sig.args == ["f", {"joints": ("lankle", "ltoe", "rankle")}]
+
+
+def test_the_editor_follows_edits_made_elsewhere_and_add_selects_the_new_constraint(qtbot):
+    p = _panel_in_window(qtbot, SCHEMA)
+    pin = {"kind": "pin", "name": "pin1", "weight": 1.0, "enabled": True, "joint": "lwrist",
+           "target": [0.0, 0.0, 1.0], "radius": 0.1}  # fmt: skip
+    p.set_constraints([pin])
+    seen = []
+    p.changed.connect(lambda n, ch: seen.append((n, ch)))
+    p.set_constraints([{**pin, "target": [0.5, 0.2, 1.0]}])  # a gizmo drag
+    assert seen == []
+    with qtbot.waitSignal(p.changed) as sig:  # the next edit keeps the drag's x and y
+        p.editor.inputs["target"].spins[2].setValue(1.4)
+    assert np.allclose(sig.args[1]["target"], [0.5, 0.2, 1.4])
+    other = {"kind": "floor", "name": "floor1", "weight": 1.0, "enabled": True, "margin": 0.0}
+    p.set_constraints([{**pin, "target": [0.5, 0.2, 1.4]}, other])  # Add: the new one is selected
+    assert p.current_name() == "floor1" and "margin" in p.editor.inputs
+    p.list.setCurrentRow(0)
+    p.set_constraints([{**pin, "target": [0.5, 0.2, 1.4]}, other, {**other, "name": "floor2"}])
+    assert p.current_name() == "floor2"
+
+
+def test_store_as_b_after_a_seek_in_debug_mode_stores_the_new_frames_latent(qtbot, fake_snapshot):
+    w = LatentInspector()
+    qtbot.addWidget(w)
+    a, b = np.linspace(-1, 1, 24), np.linspace(1, -1, 24)
+    w.update_snapshot(fake_snapshot(seq=1, frame=5, latent=a, can_decode=True))
+    w.debug.setChecked(True)
+    w.capture_a.click()
+    w.update_snapshot(fake_snapshot(seq=2, frame=40, latent=b, can_decode=True))  # a seek while debugging
+    w.capture_b.click()
+    assert np.allclose(w.stored["a"], a) and np.allclose(w.stored["b"], b)
+    with qtbot.waitSignal(w.decodeRequested) as sig:
+        w.mix.setValue(50)
+    assert np.allclose(sig.args[0], 0.5 * (a + b))

@@ -19,6 +19,7 @@ from PyQt6.QtWidgets import QDockWidget, QLabel, QMainWindow, QMessageBox, QTabW
 
 from app.busy import BusyNotice
 from app.drawing import DrawScheduler
+from app.constraint_placement import placed_params
 from app.file_actions import FileActions
 from app.live_actions import LiveActions
 from app.menus import build_menus
@@ -148,7 +149,7 @@ class MainWindow(QMainWindow):
         sp.failureRequested.connect(self._guard(s.simulate_failure))
         sp.resetRequested.connect(lambda j: s.reset_offsets(j or None))
         cp = self.constraint_panel
-        cp.addRequested.connect(self._guard(s.add_constraint))
+        cp.addRequested.connect(self._guard(self._add_constraint))
         cp.removeRequested.connect(self._guard(s.remove_constraint))
         cp.changed.connect(self._guard(lambda n, ch: s.update_constraint(n, **ch)))
         op = self.optimizer_panel
@@ -243,6 +244,13 @@ class MainWindow(QMainWindow):
     def _set_preset(self, name: str) -> None:
         self.session.set_preset(name)
         self.settings.setValue("last_preset", name)
+
+    def _add_constraint(self, kind: str) -> None:
+        """Add ``kind`` placed next to the character as it stands now (not at the origin)."""
+        spec = self.session.constraint_catalog().get(kind)
+        snap = self.session.latest
+        defaults = {} if spec is None else {f.name: f.default for f in spec.fields}
+        self.session.add_constraint(kind, **placed_params(kind, defaults, None if snap is None else snap.positions))
 
     def _drag_joint(self, joint: str, position: Any) -> None:
         """Ctrl-drag on a joint: move its sensor target, else pin the joint there."""

@@ -49,6 +49,10 @@ class PinConstraint(Constraint):
             return float(self.loss(state)) <= self.tolerance**2
 
     def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
+        """A draggable point labelled with the joint, tied to the joint by a line."""
         if not np.all(np.isfinite(self.position)):
             return {}
-        return {"type": "point", "position": self.position.copy(), "edit": "position"}
+        g = {"type": "point", "position": self.position.copy(), "edit": "position", "label": self.joint}
+        if positions is not None:
+            g["anchor"] = np.asarray(positions, float)[joint_index(self.joint, "joint", self.kind)].copy()
+        return g

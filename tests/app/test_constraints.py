@@ -70,3 +70,26 @@ def test_ctrl_dragging_a_joint_without_sensor_pins_it(studio, qtbot):
     studio.viewport.jointDragged.emit("lelbow", np.array([0.5, 0.0, 1.3]))
     (moved,) = studio.session.constraints  # an edit replaces the object (engine.studio.session)
     assert moved.name == pin.name and np.allclose(moved.position, [0.5, 0, 1.3])
+
+
+
+@pytest.mark.parametrize("kind", ["bounds", "look_at", "end_effector"])
+def test_a_new_constraint_starts_next_to_the_character(studio, qtbot, kind):
+    """Defaults were fixed numbers: a box at the origin, a look-at target at (0, -2, 1.6)."""
+    studio.session.seek(100)  # the synthetic walk is ~2 m from the origin by now
+    qtbot.waitUntil(lambda: studio.session.latest.frame == 100)
+    pose = studio.session.latest.positions
+    studio.constraint_panel.kinds.setCurrentText(kind)
+    studio.constraint_panel.add_button.click()
+    (c,) = studio.session.constraints
+    if kind == "bounds":
+        root = pose[sk.JOINT_INDEX["root"]]
+        assert np.all(c.box_min < root) and np.all(root < c.box_max)
+        assert np.all(c.box_max - c.box_min < 1.5)
+    elif kind == "look_at":
+        head = pose[sk.JOINT_INDEX[c.joint]]
+        assert 1.0 < np.linalg.norm(c.target - head) < 2.0
+        # in front of the face: the direction the hips face, give or take
+        assert np.isclose(c.target[2], head[2])
+    else:
+        assert np.linalg.norm(c.position - pose[sk.JOINT_INDEX[c.joint]]) < 0.3

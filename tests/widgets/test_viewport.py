@@ -305,3 +305,20 @@ def test_a_bvh_dropped_on_the_3d_view_is_offered_to_the_window(viewport, qtbot, 
     with qtbot.waitSignal(viewport.filesDropped, timeout=1000) as sig:
         QApplication.sendEvent(target, drop)
     assert sig.args[0] == [str(path)]
+
+
+def test_a_pin_shows_the_joint_it_holds_and_a_line_to_it(viewport, fake_snapshot):
+    """Nothing showed which joint a pin held."""
+    from engine.constraints.pin import PinConstraint
+
+    snap = fake_snapshot()
+    pin = PinConstraint(name="drag lelbow", joint="lelbow", position=np.array([0.5, -0.3, 1.4]))
+    viewport.show_snapshot(fake_snapshot(gizmos=(("drag lelbow", pin.gizmo(snap.positions)),)))
+    item = viewport.gizmos.items["drag lelbow"]
+    assert item.label is not None and item.label.GetInput() == "lelbow"
+    elbow = snap.positions[16]
+    assert np.allclose(item.tether.points, [elbow, [0.5, -0.3, 1.4]])
+    moved = snap.positions + [0.1, 0, 0]
+    viewport.show_snapshot(fake_snapshot(seq=2, positions=moved, gizmos=(("drag lelbow", pin.gizmo(moved)),)))
+    assert viewport.gizmos.items["drag lelbow"] is item  # moved in place
+    assert np.allclose(item.tether.points[0], moved[16])

@@ -6,7 +6,9 @@ Each enabled constraint describes itself with ``Constraint.gizmo()``, a plain di
 * ``{"type": "box", "min": (3,), "max": (3,)}`` - bounds; a box widget when editable
 * ``{"type": "line", "points": (N, 3)}`` (or ``"start"``/``"end"``) - distance, look-at
 
-An optional ``"edit"`` key names the constraint field(s) a drag writes back (a string
+A point may carry a ``"label"`` (drawn beside it, e.g. the joint a pin holds) and an
+``"anchor"`` (3,): a thin line from the anchor (the joint now) to the point shows the
+pull. An optional ``"edit"`` key names the constraint field(s) a drag writes back (a string
 for a point or for a line's last point, such as a look-at target; a pair
 ``(min_field, max_field)`` for a box). Gizmos are rebuilt only when
 the set of constraints changes; otherwise their geometry is moved in place.
@@ -19,6 +21,7 @@ from typing import Any
 
 import numpy as np
 import pyvista as pv
+import vtk
 
 from widgets import style
 
@@ -48,6 +51,7 @@ class _Gizmo:
         self.dragging = False
         self.edit = edit = g.get("edit")
         self._bounds = self._box_bounds(g) if self.kind == "box" else None
+        self.label = self.tether = None
         if self.kind == "point":
             p = _vec(g, "position", "center", "target")
             if edit:
@@ -56,6 +60,7 @@ class _Gizmo:
                 self.mesh = pv.PolyData(p[None])
                 self.actors.append(plotter.add_mesh(self.mesh, color=style.GIZMO, point_size=14,
                                                     render_points_as_spheres=True, reset_camera=False))  # fmt: skip
+            self._add_decorations(plotter, g, p)
         elif self.kind == "box":
             self.mesh = pv.Box(bounds=self._bounds).outline()
             self.actors.append(plotter.add_mesh(self.mesh, color=style.GIZMO, line_width=2, reset_camera=False))
@@ -78,6 +83,33 @@ class _Gizmo:
             interaction_event="always", test_callback=False, style="wireframe",
         )  # fmt: skip
         self._track(self.widget)
+
+    def _add_decorations(self, plotter: Any, g: dict, p: np.ndarray) -> None:
+        """The point's label and the line tying it to its anchor, when it has them."""
+        anchor = _vec(g, "anchor")
+        if anchor is not None:
+            self.tether = pv.lines_from_points(np.stack([anchor, p]))
+            self.actors.append(plotter.add_mesh(self.tether, color=style.GIZMO, line_width=1,
+                                                pickable=False, reset_camera=False))  # fmt: skip
+        if g.get("label"):
+            self.label = vtk.vtkBillboardTextActor3D()
+            self.label.SetInput(str(g["label"]))
+            self.label.SetPosition(*(p + [0.0, 0.0, 0.07]))
+            prop = self.label.GetTextProperty()
+            prop.SetFontSize(14)
+            prop.SetColor(*(c / 255 for c in style.hex_to_rgb(style.GIZMO)))
+            prop.SetJustificationToCentered()
+            self.label.PickableOff()
+            plotter.add_actor(self.label, reset_camera=False, render=False)
+            self.actors.append(self.label)
+
+    def _move_decorations(self, g: dict, p: np.ndarray) -> None:
+        anchor = _vec(g, "anchor")
+        if self.tether is not None and anchor is not None:
+            self.tether.points[:] = np.stack([anchor, p])
+            self.tether.GetPoints().Modified()
+        if self.label is not None:
+            self.label.SetPosition(*(p + [0.0, 0.0, 0.07]))
 
     @staticmethod
     def _box_bounds(g: dict) -> tuple[float, ...]:
@@ -105,9 +137,12 @@ class _Gizmo:
             if self.widget is not None:
                 if not self.dragging:
                     self.widget.SetCenter(*p)
+                else:
+                    p = np.asarray(self.widget.GetCenter(), float)
             else:
                 self.mesh.points[:] = p[None]
                 self.mesh.GetPoints().Modified()
+            self._move_decorations(g, p)
         elif self.kind == "box":
             bounds = self._box_bounds(g)
             if bounds != self._bounds:  # edited in the panel or by a drag: move the handles too
@@ -142,7 +177,7 @@ class ConstraintGizmos:
     def update(self, gizmos: tuple[tuple[str, dict], ...]) -> None:
         """Draw ``(constraint name, gizmo dict)`` pairs; unknown or empty gizmos are skipped."""
         gizmos = tuple((n, g) for n, g in gizmos if g and g.get("type") in ("point", "box", "line"))
-        layout = tuple((n, g["type"], bool(g.get("edit"))) for n, g in gizmos)
+        layout = tuple((n, g["type"], bool(g.get("edit")), g.get("label"), "anchor" in g) for n, g in gizmos)
         try:
             if layout != self._layout:
                 self.clear()

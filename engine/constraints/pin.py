@@ -1,5 +1,10 @@
 """``pin``: a joint stays where it was.
 
+Its default weight is 30, not 1: a pin is the user overriding the trackers, and at
+weight 1 six sensor terms of the same scale (squared metres) held a Ctrl-dragged elbow
+10-13 cm short of the pin with the shipped DragPoser; at 30 it stays within ~2 cm (at
+10, 3-5 cm); ``scripts/measure_pin.py`` measures it.
+
 With ``follow_previous`` the target is the joint's previous-frame position every frame
 (the joint resists motion). Otherwise the target is ``position``; while that is unset
 (NaN) it is captured from the previous frame's solved pose on first use (or, on the very
@@ -23,6 +28,7 @@ class PinConstraint(Constraint):
     """Keep ``joint`` at ``position`` (metres), see the module doc."""
 
     kind: ClassVar[str] = "pin"
+    weight: float = 30.0
     joint: str = "lankle"
     position: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))
     follow_previous: bool = False

@@ -11,23 +11,21 @@ import sys
 
 import numpy as np
 from engine import skeleton as sk
-from engine.session import Session, SensorConfig
-from engine.session_sources import load_clip, sensor_presets, _preset_dofs
-from engine.worker_methods import reconstruct_clip
+from engine.constraints import PinConstraint
+from engine.studio.clips import load_clip, sensor_presets
+from engine.studio.methods import reconstruct_clip
 
 motion = load_clip("assets/clips/example.bvh")
 start = int(sys.argv[1]) if len(sys.argv) > 1 else 200
 n = int(sys.argv[2]) if len(sys.argv) > 2 else 20
 clip = motion.slice(start, start + n)
-preset = "6"
-sensors = tuple(SensorConfig(j, dof=_preset_dofs(preset).get(j, 6)) for j in sensor_presets()[preset])
+sensors = sensor_presets()["6"]
 gt = clip.positions()
 J = sk.JOINT_INDEX["lelbow"]
 target = gt[0, J] + np.array([0.10, -0.10, 0.05])
 for mode in ("offline", "realtime"):
     for w in [float(x) for x in sys.argv[3:]] or [1.0, 10.0, 100.0]:
-        cons = ({"kind": "pin", "name": "drag lelbow", "weight": w, "enabled": True, "joint": "lelbow",
-                 "position": target.tolist()},)
+        cons = (PinConstraint(name="pin lelbow", weight=w, joint="lelbow", position=target.copy()),)
         res = reconstruct_clip(clip, sensors, cons, {"mode": mode}, "dragposer")
         p = res.positions()
         d = np.linalg.norm(p[:, J] - target, axis=1)

@@ -40,6 +40,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="play SECONDS, write smoothness figures (draws/s, solved/s, event-loop "
                    "lateness, per-panel cost) to --json and exit")
     p.add_argument("--json", metavar="OUT.json", default="measure.json", help="where --measure writes")
+    p.add_argument("--view", choices=("stick", "body"), default="stick",
+                   help="draw the reconstruction as a stick figure (default) or a shaded body")
     p.set_defaults(func=run)
 
 
@@ -50,4 +52,4 @@ def run(args: argparse.Namespace) -> int:
         raise UserError(f"--measure: SECONDS must be > 0, got {args.measure}")
     ghosts = tuple(g.strip() for g in (args.ghosts or "").split(",") if g.strip())
     return run_app(args.file, args.method or default_method(), args.sensors, args.screenshot, args.after_frames,
-                   args.measure, args.json, args.mode, ghosts)  # fmt: skip
+                   args.measure, args.json, args.mode, ghosts, args.view)  # fmt: skip

@@ -46,11 +46,13 @@ def open_initial(window: MainWindow, path: str | None, sensors: str | None) -> N
 
 def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
         screenshot: str | None = None, after_frames: int = 60, measure: float | None = None,
-        measure_json: str | None = None, mode: str | None = None, ghosts: tuple[str, ...] = ()) -> int:  # fmt: skip
+        measure_json: str | None = None, mode: str | None = None, ghosts: tuple[str, ...] = (),
+        view: str = "stick") -> int:  # fmt: skip
     """Show the studio; with ``screenshot``, play ``after_frames`` frames, save and exit;
     with ``measure``, play that many seconds and write the figures to ``measure_json``
     (:mod:`app.measure`). ``mode`` sets the playback mode (every_frame or real_time).
-    ``ghosts``: other methods drawn beside the reconstruction."""
+    ``ghosts``: other methods drawn beside the reconstruction; ``view`` draws the
+    reconstruction as a ``stick`` figure or a shaded ``body``."""
     app = QApplication.instance() or QApplication(sys.argv[:1])
     app.setApplicationName("DragPoser Studio")
     window = MainWindow(method=method)
@@ -64,6 +66,7 @@ def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
         raise
     if mode is not None:
         window.session.set_playback(mode=mode)
+    window.actions_by_name[f"display-{view}"].setChecked(True)
     if screenshot is not None:
         window.resize(1600, 980)  # a reproducible layout, whatever geometry was saved
     if measure is not None:

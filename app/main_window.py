@@ -18,12 +18,13 @@ from PyQt6.QtCore import QSettings, Qt, QTimer, pyqtSignal
 from PyQt6.QtWidgets import QDockWidget, QLabel, QMainWindow, QMessageBox, QTabWidget, QVBoxLayout, QWidget
 
 from app.busy import BusyNotice
-from app.drawing import DrawScheduler
 from app.constraint_placement import placed_params
+from app.drawing import DrawScheduler
 from app.file_actions import FileActions
 from app.live_actions import LiveActions
 from app.menus import build_menus
 from app.schema import constraint_schema, optimizer_choices
+from app.undo import SceneUndo
 from engine.errors import UserError
 from engine.studio import events as ev
 from engine.studio.session import Session
@@ -62,6 +63,7 @@ class MainWindow(QMainWindow):
         self.engine = self.session.start_engine()
         self.files = FileActions(self)
         self.live = LiveActions(self)
+        self.undo = SceneUndo(self.session, self)
         build_menus(self)
         self._connect_session()
         self._show_sensors(None)
@@ -295,6 +297,7 @@ class MainWindow(QMainWindow):
         self.settings.setValue("geometry", self.saveGeometry())
         self._disconnect_session()
         self.live.close()
+        self.undo.close()
         self.session.shutdown()
         self.files.shutdown()
         self.viewport.close()

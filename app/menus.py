@@ -1,4 +1,4 @@
-"""The studio's menus: File, Edit (undo), Playback, View (display, camera) and Help.
+"""The studio's menus: File, Edit (undo, redo), Playback, View (display, camera) and Help.
 
 Every entry is a QAction owned by the window, so its shortcut works anywhere in the
 window and the help dialog can list it (:func:`shortcut_rows`).
@@ -60,6 +60,15 @@ def build_menus(w: QMainWindow) -> None:
     action(w, file_menu, "Export screens&hot...", f.export_screenshot, "Ctrl+E")
     file_menu.addSeparator()
     action(w, file_menu, "&Quit", w.close, QKeySequence.StandardKey.Quit)
+    edit = w.menuBar().addMenu("&Edit")
+    undo = w.undo.stack.createUndoAction(w, "&Undo")
+    undo.setShortcut(QKeySequence.StandardKey.Undo)
+    redo = w.undo.stack.createRedoAction(w, "&Redo")
+    redo.setShortcuts([QKeySequence("Ctrl+Shift+Z"), QKeySequence("Ctrl+Y")])
+    for act in (undo, redo):
+        act.setShortcutContext(Qt.ShortcutContext.WindowShortcut)
+        edit.addAction(act)
+    named["undo"], named["redo"] = undo, redo
     play = w.menuBar().addMenu("&Playback")
     action(w, play, "Play / pause", w.toggle_play, "Space")
     action(w, play, "Next frame", lambda: w.session.step(1), "Right")

@@ -1,0 +1,150 @@
+"""Undo and redo of scene edits (Ctrl+Z / Ctrl+Shift+Z) on a QUndoStack.
+
+The stack listens to the session's typed events, so every edit is recorded however it
+was made (panel, 3D drag, Ctrl-drag pin, scene load) and no widget has to know about
+undo. A record holds the sensor set or the constraint list before and after the edit:
+both are small tuples of immutable objects (the session replaces a constraint object on
+every edit, never changes it in place), so undoing is one session call
+(``set_sensors`` / ``set_constraints``) that fires its event and reaches the engine
+like any other edit.
+
+A drag sends an edit per mouse move; consecutive edits of the same thing (one tracker's
+offset, one constraint's fields) within :data:`MERGE_S` merge into one step, and the
+move of a pin merges into the step that created it.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from PyQt6.QtGui import QUndoCommand, QUndoStack
+
+#: Edits of the same target closer together than this (seconds) are one undo step.
+MERGE_S = 0.6
+_MERGE_ID = 1201
+
+
+class StateCommand(QUndoCommand):
+    """Switch between two states of a part of the scene with ``apply(state)``.
+
+    ``key`` says what was edited (``("sensor", joint, fields)`` or
+    ``("constraint", name, fields)``); None never merges.
+    """
+
+    def __init__(self, text: str, apply: Callable[[Any], None], before: Any, after: Any,
+                 key: tuple | None = None) -> None:  # fmt: skip
+        super().__init__(text)
+        self.apply, self.before, self.after, self.key = apply, before, after, key
+        self.stamp = time.monotonic()
+        self._pushed = False
+
+    def id(self) -> int:
+        return _MERGE_ID if self.key is not None else -1
+
+    def mergeWith(self, other: QUndoCommand) -> bool:  # noqa: N802 (Qt's name)
+        if not isinstance(other, StateCommand) or other.key is None or self.key is None:
+            return False
+        same_target = other.key[:2] == self.key[:2]
+        fields_ok = other.key[2] == self.key[2] or self.key[2] == "added"
+        if not (same_target and fields_ok and other.stamp - self.stamp < MERGE_S):
+            return False
+        self.after, self.stamp = other.after, other.stamp
+        return True
+
+    def redo(self) -> None:
+        if self._pushed:  # QUndoStack.push calls redo; the edit has already happened
+            self.apply(self.after)
+        self._pushed = True
+
+    def undo(self) -> None:
+        self.apply(self.before)
+
+
+def _changed_fields(old: Any, new: Any) -> tuple[str, ...]:
+    import dataclasses
+
+    out = []
+    for f in dataclasses.fields(old):
+        a, b = getattr(old, f.name, None), getattr(new, f.name, None)
+        same = np.array_equal(np.asarray(a), np.asarray(b), equal_nan=True) if isinstance(a, np.ndarray) or isinstance(b, np.ndarray) else a == b
+        if not same:
+            out.append(f.name)
+    return tuple(out)
+
+
+class SceneUndo:
+    """Records sensor and constraint edits of ``session`` on :attr:`stack`."""
+
+    def __init__(self, session: Any, parent: Any = None) -> None:
+        self.session = session
+        self.stack = QUndoStack(parent)
+        self._sensors = (tuple(session.sensors.values()), session.preset)
+        self._constraints = tuple(session.constraints)
+        self._applying = False
+        session.events.sensors.connect(self._on_sensors)
+        session.events.constraints.connect(self._on_constraints)
+        session.events.motion.connect(self._on_motion)
+
+    def close(self) -> None:
+        self.session.events.sensors.disconnect(self._on_sensors)
+        self.session.events.constraints.disconnect(self._on_constraints)
+        self.session.events.motion.disconnect(self._on_motion)
+
+    def _on_motion(self, e: Any) -> None:
+        """A new clip starts a new history (offsets and failures were made for the old one)."""
+        self.stack.clear()
+
+    # -- recording ------------------------------------------------------------------
+    def _on_sensors(self, e: Any) -> None:
+        before, after = self._sensors, (tuple(e.sensors), e.preset)
+        self._sensors = after
+        if self._applying or not before[0]:  # the first sensor set is the start, not an edit
+            return
+        key = None
+        if e.joint is not None and e.old is not None and e.new is not None:
+            fields = _changed_fields(e.old, e.new)
+            key = ("sensor", e.joint, fields)
+            what = "Move" if fields == ("offset",) else "Edit"
+            text = f"{what} {e.joint} sensor" + ("" if what == "Move" else f" ({', '.join(fields)})")
+        elif e.joint is not None:
+            text = f"{'Add' if e.old is None else 'Remove'} {e.joint} sensor"
+        else:
+            text = f"Sensor preset {e.preset}" if e.preset else "Change sensors"
+        self.stack.push(StateCommand(text, self._apply_sensors, before, after, key))
+
+    def _on_constraints(self, e: Any) -> None:
+        before, after = self._constraints, tuple(e.constraints)
+        self._constraints = after
+        if self._applying:
+            return
+        key = None
+        if e.action == "updated" and e.old is not None and e.new is not None:
+            fields = _changed_fields(e.old, e.new)
+            key = ("constraint", e.name, fields)
+            text = f"Edit {e.name} ({', '.join(fields)})" if fields else f"Edit {e.name}"
+        elif e.action == "added":
+            key = ("constraint", e.name, "added")
+            text = f"Add {e.name}"
+        elif e.action == "removed":
+            text = f"Remove {e.name}"
+        else:
+            text = "Replace constraints"
+        self.stack.push(StateCommand(text, self._apply_constraints, before, after, key))
+
+    # -- applying ---------------------------------------------------------------------
+    def _apply_sensors(self, state: tuple) -> None:
+        self._applying = True
+        try:
+            self.session.set_sensors(state[0], state[1])
+        finally:
+            self._applying = False
+
+    def _apply_constraints(self, state: tuple) -> None:
+        self._applying = True
+        try:
+            self.session.set_constraints(list(state))
+        finally:
+            self._applying = False

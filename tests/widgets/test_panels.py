@@ -269,6 +269,15 @@ def test_selecting_a_constraint_with_many_fields_does_not_grow_the_window(qtbot)
         assert hint.width() <= max(empty.width(), 430), kind
 
 
+def test_the_panel_offers_only_user_facing_kinds():
+    """``sensor`` and ``temporal_prior`` are built by methods; offering them confused users."""
+    from app.schema import constraint_schema
+
+    kinds = set(constraint_schema())
+    assert {"pin", "bounds", "look_at", "balance", "floor"} <= kinds
+    assert not kinds & {"sensor", "temporal_prior"}
+
+
 def test_choice_and_joint_list_fields_are_edited_with_pickers(qtbot):
     """Balance mode was free text and floor joints could not be edited at all."""
     from app.schema import constraint_schema

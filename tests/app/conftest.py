@@ -8,13 +8,18 @@ import threading
 import pytest
 
 
-
 @pytest.fixture
-def studio(qtbot, tmp_path, synthetic_motion):
+def studio(qtbot, tmp_path, synthetic_motion, monkeypatch):
     from PyQt6.QtCore import QEvent, QSettings
-    from PyQt6.QtWidgets import QApplication
+    from PyQt6.QtWidgets import QApplication, QMessageBox
 
     from app.main_window import MainWindow
+
+    # A modal message box would block the test forever: record it instead and fail the
+    # test at teardown. Tests that expect a dialog patch QMessageBox themselves.
+    unexpected: list[str] = []
+    for name in ("critical", "warning", "information", "question"):
+        monkeypatch.setattr(QMessageBox, name, lambda *a, _n=name, **k: unexpected.append(f"{_n}: {a[1:3]}"))
 
     threads_before = threading.active_count()
     settings = QSettings(str(tmp_path / "studio.ini"), QSettings.Format.IniFormat)
@@ -25,6 +30,7 @@ def studio(qtbot, tmp_path, synthetic_motion):
     qtbot.waitUntil(lambda: window.session.latest is not None, timeout=10000)
     yield window
     window.close()
+    assert not unexpected, f"unexpected message boxes: {unexpected}"
     QApplication.processEvents()
     assert not window.engine.is_alive(), "engine thread outlived the window"
     assert threading.active_count() == threads_before, "a thread leaked"

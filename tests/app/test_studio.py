@@ -196,6 +196,11 @@ def test_save_reconstruction_writes_a_bvh_off_the_gui_thread(studio, qtbot, tmp_
 def test_save_onto_the_source_rig_keeps_the_files_hierarchy(studio, qtbot, tmp_path):
     from engine.bvh import load_bvh
 
+    from engine.bvh import save_motion_bvh
+
+    src_path = tmp_path / "source.bvh"
+    save_motion_bvh(src_path, studio.session.motion)
+    studio.session.open(src_path)  # a clip opened from a file has a source rig to write onto
     out = tmp_path / "recon_src.bvh"
     studio.files.save_on_source_rig(str(out))
     qtbot.waitUntil(lambda: not studio.files.export.running, timeout=30000)

@@ -3,6 +3,7 @@ path (autograd through the torch model), on the shipped VAE and the bundled clip
 
 from __future__ import annotations
 
+import copy
 from pathlib import Path
 
 import numpy as np
@@ -69,25 +70,27 @@ def test_latent_update_matches_torch_optimizers(rule):
 
 @pytest.mark.parametrize("preset, mode", [("6", "realtime"), ("3-head-hands", "realtime"), ("6", "offline")])
 def test_fast_and_reference_paths_give_the_same_poses(models, preset, mode):
-    """Same frames through both paths: positions within 1e-5 m, rotations within 1e-4 rad
-    (realtime). Offline solves take up to 30 Adam steps a frame (100 on frame 0), over
-    which float32 round-off (the fused decoder sums in another order) grows to ~1.2e-5 m
-    (measured), so that mode is held to 5e-5 m."""
-    tol = 1e-5 if mode == "realtime" else 5e-5
+    """Every frame is solved by both paths from the same state (latent history, carried
+    Adam moments, previous root): positions within 1e-5 m, rotations within 1e-4 rad.
+
+    The reference path starts each frame from a copy of the fast path's state, so what is
+    compared is one frame's solve, not 16 frames of float32 round-off fed back through
+    Adam (whose normalised steps amplify differences in near-zero gradients). Per frame
+    the paths agree to about 5e-7 m; the cold first frame (30 full Adam steps from the
+    mean latent) reaches 1.09e-5 m (measured), so it alone is held to 2e-5 m."""
     motion = load_motion(CLIP).slice(0, 16)
     tracking = simulate(motion, preset)
-    runs = {}
-    for fast in (True, False):
-        m = DragPoserMethod(models.vae, models.predictor, fast=fast, mode=mode, iterations=10, max_iterations=30)
-        m.reset(motion.skeleton, motion.fps)
-        runs[fast] = [m.step(tracking.frame(i)) for i in range(len(motion))]
-        used = m.optimizer._fast is not None
-        assert used == fast
-    for a, b in zip(runs[True], runs[False]):
+    fast = DragPoserMethod(models.vae, models.predictor, fast=True, mode=mode, iterations=10, max_iterations=30)
+    fast.reset(motion.skeleton, motion.fps)
+    for i in range(len(motion)):
+        ref = copy.deepcopy(fast)
+        ref.optimizer._fast = None  # the autograd path through the torch model
+        a, b = fast.step(tracking.frame(i)), ref.step(tracking.frame(i))
         assert a.iterations == b.iterations
-        np.testing.assert_allclose(a.positions, b.positions, atol=tol)
+        np.testing.assert_allclose(a.positions, b.positions, atol=2e-5 if i == 0 else 1e-5)
         assert _angle(a.local_rot, b.local_rot).max() < 1e-4
         assert a.losses[-1]["total"] == pytest.approx(b.losses[-1]["total"], rel=1e-3, abs=1e-7)
+    assert fast.optimizer._fast is not None
 
 
 def _angle(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -11,14 +11,16 @@ Latents are standardised with dataset statistics stored as buffers.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import torch
 from torch import nn
 
+from engine.models.config import ModelConfig
+
 
 @dataclass
-class PredictorConfig:
+class PredictorConfig(ModelConfig):
     latent: int = 24
     cond: int = 9
     d_model: int = 48
@@ -30,9 +32,6 @@ class PredictorConfig:
     past: int = 16  # Wp
     future: int = 16  # Wf used in training (max decoder length)
     stride: int = 4  # n
-
-    def to_dict(self) -> dict:
-        return asdict(self)
 
 
 class TemporalPredictor(nn.Module):

@@ -26,13 +26,14 @@ the head position"). States (``P`` and the pose context) are kept in world form
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import numpy as np
 import pymotion.rotations.ortho6d_torch as o6
 import torch
 from torch import nn
 
+from engine.models.config import ModelConfig
 from engine import skeleton as sk
 
 #: Tracked joints (preset ``3-head-hands``), in input order.
@@ -43,7 +44,7 @@ TRACK_DIM = len(RPM_JOINTS) * 10
 
 
 @dataclass
-class RPMConfig:
+class RPMConfig(ModelConfig):
     """Architecture: I + 1 tracking frames, M past poses, W predicted poses."""
 
     past_inputs: int = 10
@@ -51,9 +52,6 @@ class RPMConfig:
     window: int = 20
     hidden: int = 512
     blocks: int = 2
-
-    def to_dict(self) -> dict:
-        return asdict(self)
 
 
 def uncertainty(window: int) -> torch.Tensor:

@@ -18,13 +18,14 @@ buffers, so callers pass raw features.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import numpy as np
 import torch
 from torch import nn
 from torch.nn import functional as F
 
+from engine.models.config import ModelConfig
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
 from engine.kinematics.features import root_space_fk
@@ -51,7 +52,7 @@ _PARENT_OR_SELF = [max(p, 0) for p in sk.PARENTS]
 
 
 @dataclass
-class SparsePoserConfig:
+class SparsePoserConfig(ModelConfig):
     """Architecture. ``channels[i]``: features per node after encoder block i."""
 
     window: int = 64
@@ -60,17 +61,6 @@ class SparsePoserConfig:
     ik_hidden: int = 256
     neighbour_distance: int = 2
     negative_slope: float = 0.2
-
-    def to_dict(self) -> dict:
-        d = asdict(self)
-        d["channels"] = list(self.channels)
-        return d
-
-    @classmethod
-    def from_dict(cls, d: dict) -> "SparsePoserConfig":
-        d = dict(d)
-        d["channels"] = tuple(d["channels"])
-        return cls(**d)
 
 
 class SkeletalConv(nn.Module):

@@ -10,12 +10,13 @@ Normalisation statistics live in the model as buffers, so callers pass raw featu
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import numpy as np
 import torch
 from torch import nn
 
+from engine.models.config import ModelConfig
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
 from engine.models.skeletal import (
@@ -30,24 +31,13 @@ from engine.models.skeletal import (
 
 
 @dataclass
-class VAEConfig:
+class VAEConfig(ModelConfig):
     """Architecture of the pose VAE. ``channels[i]`` = features per node at level i."""
 
     latent: int = 24
     channels: tuple[int, int, int, int] = (32, 48, 64, 96)
     neighbour_distance: int = 2
     negative_slope: float = 0.2
-
-    def to_dict(self) -> dict:
-        d = asdict(self)
-        d["channels"] = list(self.channels)
-        return d
-
-    @classmethod
-    def from_dict(cls, d: dict) -> "VAEConfig":
-        d = dict(d)
-        d["channels"] = tuple(d["channels"])
-        return cls(**d)
 
 
 class PoseVAE(nn.Module):

@@ -187,22 +187,23 @@ def test_ghost_legend_names_each_ghost_in_its_colour(viewport, fake_snapshot):
 
 
 def test_follow_camera_glides_with_the_hips_and_holds_still_when_off(viewport, fake_snapshot):
-    import time
-
+    now = [100.0]  # the glide's clock, stepped by hand: drawing time must not count
+    viewport.clock = lambda: now[0]
+    viewport._followed_at = now[0]
     snap = fake_snapshot()
     moved = snap.positions + [2.0, 0, 0]
     focus_x = viewport.plotter.camera.focal_point[0]
-    viewport._followed_at = time.monotonic()
+    now[0] += 0.005
     viewport.show_snapshot(fake_snapshot(seq=2, positions=moved))  # ~no time passed: barely moves
     assert viewport.plotter.camera.focal_point[0] - focus_x < 0.5
     for seq in range(3, 6):
-        viewport._followed_at = time.monotonic() - 0.5  # as if half a second passed per redraw
+        now[0] += 0.5  # half a second per redraw
         viewport.show_snapshot(fake_snapshot(seq=seq, positions=moved))
     cam = viewport.plotter.camera
     assert cam.focal_point[0] == pytest.approx(moved[0, 0], abs=0.01)
     offset = np.subtract(cam.position, cam.focal_point)
     viewport.follow = False
-    viewport._followed_at = time.monotonic() - 1.0
+    now[0] += 1.0
     viewport.show_snapshot(fake_snapshot(seq=9, positions=moved + [3.0, 0, 0]))
     assert cam.focal_point[0] == pytest.approx(moved[0, 0], abs=0.01)
     assert np.allclose(np.subtract(cam.position, cam.focal_point), offset)  # the user's angle is kept

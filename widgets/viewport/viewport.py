@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -80,7 +81,9 @@ class Viewport(QWidget):
         #: Joints whose tracker has an orientation (6-DoF); None draws axes on every target.
         self.oriented: frozenset[str] | None = None
         self._focus = np.array([0.0, 0.0, HOME_FOCUS_HEIGHT])
-        self._followed_at = time.monotonic()
+        #: Seconds clock of the follow camera's glide (tests replace it).
+        self.clock: Callable[[], float] = time.monotonic
+        self._followed_at = self.clock()
         self.reset_camera()
 
     # -- camera ---------------------------------------------------------------------
@@ -119,7 +122,7 @@ class Viewport(QWidget):
 
     def _follow(self, root: np.ndarray) -> None:
         """Slide camera and focus horizontally with the hips, keeping the user's angle."""
-        now = time.monotonic()
+        now = self.clock()
         dt, self._followed_at = now - self._followed_at, now
         goal = np.array([root[0], root[1], self._focus[2]])
         # time-based smoothing: the same glide at 60 or 5 redraws per second

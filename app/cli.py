@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from engine.cli.rig_options import add_rig_map_option, rig_map_path
 from engine.errors import UserError
 
 SHIPPED_VAE = Path(__file__).resolve().parents[1] / "assets" / "models" / "vae.pt"
@@ -28,6 +29,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "play --after-frames frames, save a PNG of the whole window and exit.",
     )
     p.add_argument("file", nargs="?", metavar="FILE.bvh", help="motion to open")
+    add_rig_map_option(p)
     p.add_argument("--method", help="reconstruction method (default: dragposer with the shipped model, "
                    "ik when no weights are installed)")
     p.add_argument("--sensors", metavar="PRESET", help="sensor preset name")
@@ -52,4 +54,4 @@ def run(args: argparse.Namespace) -> int:
         raise UserError(f"--measure: SECONDS must be > 0, got {args.measure}")
     ghosts = tuple(g.strip() for g in (args.ghosts or "").split(",") if g.strip())
     return run_app(args.file, args.method or default_method(), args.sensors, args.screenshot, args.after_frames,
-                   args.measure, args.json, args.mode, ghosts, args.view)  # fmt: skip
+                   args.measure, args.json, args.mode, ghosts, args.view, rig_map_path(args))  # fmt: skip

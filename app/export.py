@@ -57,9 +57,10 @@ class ReconstructionExport(QObject):
         return self.thread is not None
 
     def start(self, motion: Any, sensors: tuple, constraints: tuple, settings: dict, method: str, path: str,
-              source: Path | None = None) -> None:  # fmt: skip
+              source: Path | None = None, rig_map: Path | None = None) -> None:  # fmt: skip
         """Solve ``motion`` with ``method`` and the studio's edits, then write ``path`` (onto
-        the hierarchy of the BVH ``source`` when given: docs/skeleton.md, --on-source-rig)."""
+        the hierarchy of the BVH ``source`` when given, mapped with the joint mapping file
+        ``rig_map`` if any: docs/skeleton.md, --on-source-rig)."""
         if self.running:
             raise RuntimeError("an export is already running")
         self.done, self.total, self._result = 0, len(motion), None
@@ -73,7 +74,7 @@ class ReconstructionExport(QObject):
         self.dialog.setAutoReset(False)
         self.dialog.canceled.connect(self.cancel)
         self.dialog.show()
-        args = (motion, sensors, constraints, settings, method, path, source)
+        args = (motion, sensors, constraints, settings, method, path, source, rig_map)
         self.thread = threading.Thread(target=self._run, args=args, name="bvh-export", daemon=True)
         self.thread.start()
         self._poll.start()
@@ -89,7 +90,7 @@ class ReconstructionExport(QObject):
         return self._cancel.is_set()
 
     def _run(self, motion: Any, sensors: tuple, constraints: tuple, settings: dict, method: str, path: str,
-             source: Path | None) -> None:  # fmt: skip
+             source: Path | None, rig_map: Path | None) -> None:  # fmt: skip
         try:
             from engine.bvh import save_motion_bvh
             from engine.studio.methods import reconstruct_clip
@@ -106,7 +107,7 @@ class ReconstructionExport(QObject):
                 from engine.source_rig import save_on_source_rig
 
                 raw = load_bvh(source)
-                save_on_source_rig(path, result, raw, retarget(raw, manifest_fps(source))[1])
+                save_on_source_rig(path, result, raw, retarget(raw, manifest_fps(source), rig_map=rig_map)[1])
             self._result = (True, f"Saved {len(result)} frames to {path}")
         except ExportCancelled:
             self._result = (False, "")

@@ -14,8 +14,9 @@ from PyQt6.QtCore import QPoint
 from PyQt6.QtGui import QImage, QPainter, QPixmap
 from PyQt6.QtWidgets import QFileDialog, QMainWindow
 
+from app import rig_maps
 from app.export import ReconstructionExport
-from engine.errors import UserError
+from engine.errors import RigError, UserError
 
 MAX_RECENT = 8
 
@@ -38,6 +39,11 @@ class FileActions:
         self.w = window
         self.export = ReconstructionExport(window)
         self.export.finished.connect(self._export_finished)
+        self.rig_maps = rig_maps.RigMaps(window.settings)
+        # dialogs, as attributes so tests can answer them without a modal box
+        self.ask_unmapped = rig_maps.ask_unmapped
+        self.pick_rig_map = rig_maps.pick_rig_map
+        self.tell = rig_maps.tell
 
     # -- opening ------------------------------------------------------------------------
     def open_dialog(self) -> None:
@@ -46,17 +52,51 @@ class FileActions:
         if path:
             self.open_path(path)
 
-    def open_path(self, path: str | Path) -> bool:
-        """Load ``path``; on error show a dialog and keep the current clip."""
+    def open_path(self, path: str | Path, rig_map: str | Path | None = None) -> bool:
+        """Load ``path`` (with the joint mapping file ``rig_map``, else the one remembered
+        for it); on error show a dialog and keep the current clip. A rig that cannot be
+        mapped leads to :meth:`_unmapped`."""
+        rig_map = rig_map or self.rig_maps.get(path)
         try:
-            self.w.session.open(path)
+            self.w.session.open(path, rig_map)
+        except RigError as exc:
+            return self._unmapped(path, exc)
         except UserError as exc:
             self.w.show_error("Cannot open motion", str(exc))
             return False
+        if rig_map:
+            self.rig_maps.remember(path, rig_map)
         self.add_recent(str(path))
         self.w.setWindowTitle(f"DragPoser Studio - {Path(path).name}")
-        self.w.statusBar().showMessage(f"Loaded {path} ({self.w.session.num_frames} frames)", 5000)
+        shown = f" with {Path(rig_map).name}" if rig_map else ""
+        self.w.statusBar().showMessage(f"Loaded {path}{shown} ({self.w.session.num_frames} frames)", 5000)
         return True
+
+    def _unmapped(self, path: str | Path, exc: RigError) -> bool:
+        """Offer a mapping file for a rig that is not recognised, or write a suggestion."""
+        choice = self.ask_unmapped(self.w, str(path), str(exc))
+        if choice == "pick":
+            chosen = self.pick_rig_map(self.w, str(Path(path).parent))
+            return self.open_path(path, chosen) if chosen else False
+        if choice == "suggest":
+            from engine.cli.rig import write_suggestion
+
+            out = rig_maps.suggestion_path(path)
+            try:
+                complete = write_suggestion(Path(path), out)
+            except (UserError, OSError) as err:
+                self.w.show_error("Cannot suggest a mapping", str(err))
+                return False
+            what = "the mapping guessed" if complete else "a template listing the file's joints"
+            self.w.statusBar().showMessage(f"Mapping suggestion written to {out}", 10000)
+            self.tell(self.w, "Mapping suggested", f"Wrote {what} to\n{out}\n\nCheck and complete it, then "
+                      "open the file again and choose 'Pick mapping file...' (or pass it as "
+                      "--rig-map to any dragposer-studio command).")  # fmt: skip
+        return False
+
+    def rig_map_of(self, path: str | Path | None) -> Path | None:
+        """The mapping file remembered for an opened BVH, if any."""
+        return None if path is None else self.rig_maps.get(path)
 
     def recent(self) -> list[str]:
         value = self.w.settings.value("recent_files", [])
@@ -100,7 +140,7 @@ class FileActions:
                 return None
         source = s.path if on_source_rig else None
         self.export.start(s.motion, tuple(s.sensors.values()), tuple(s.constraints),
-                          dict(s.settings), s.method, path, source)  # fmt: skip
+                          dict(s.settings), s.method, path, source, self.rig_map_of(source))  # fmt: skip
         return None
 
     def _export_finished(self, ok: bool, message: str) -> None:
@@ -136,7 +176,7 @@ class FileActions:
             scene = json.loads(Path(path).read_text())
             clip = scene.get("clip")
             if clip and (self.w.session.path is None or Path(clip) != self.w.session.path):
-                self.w.session.open(clip)
+                self.w.session.open(clip, self.rig_map_of(clip))
             self.w.session.apply_scene(scene, str(path))
         except (OSError, ValueError, UserError) as exc:
             self.w.show_error("Cannot load scene", f"{path}: {exc}")

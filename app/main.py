@@ -17,8 +17,9 @@ EXAMPLE_CLIP = REPO / "assets" / "clips" / "example.bvh"
 SCREENSHOT_TIMEOUT_S = 120.0
 
 
-def open_initial(window: MainWindow, path: str | None, sensors: str | None) -> None:
-    """Open ``path``, else the bundled example, else a procedural walk (with a message).
+def open_initial(window: MainWindow, path: str | None, sensors: str | None, rig_map: Path | None = None) -> None:
+    """Open ``path`` (with the joint mapping file ``rig_map``, ``--rig-map``), else the
+    bundled example, else a procedural walk (with a message).
 
     ``sensors`` (a preset or a ``--sensors`` list) wins over the preset remembered from
     the last session.
@@ -27,7 +28,7 @@ def open_initial(window: MainWindow, path: str | None, sensors: str | None) -> N
 
     ok = False
     if path:
-        ok = window.files.open_path(path)
+        ok = window.files.open_path(path, rig_map)
     elif EXAMPLE_CLIP.is_file():
         ok = window.files.open_path(EXAMPLE_CLIP)
     if not ok:
@@ -47,17 +48,18 @@ def open_initial(window: MainWindow, path: str | None, sensors: str | None) -> N
 def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
         screenshot: str | None = None, after_frames: int = 60, measure: float | None = None,
         measure_json: str | None = None, mode: str | None = None, ghosts: tuple[str, ...] = (),
-        view: str = "stick") -> int:  # fmt: skip
+        view: str = "stick", rig_map: Path | None = None) -> int:  # fmt: skip
     """Show the studio; with ``screenshot``, play ``after_frames`` frames, save and exit;
     with ``measure``, play that many seconds and write the figures to ``measure_json``
     (:mod:`app.measure`). ``mode`` sets the playback mode (every_frame or real_time).
     ``ghosts``: other methods drawn beside the reconstruction; ``view`` draws the
-    reconstruction as a ``stick`` figure or a shaded ``body``."""
+    reconstruction as a ``stick`` figure or a shaded ``body``; ``rig_map`` is the joint
+    mapping file for ``path`` (``--rig-map``)."""
     app = QApplication.instance() or QApplication(sys.argv[:1])
     app.setApplicationName("DragPoser Studio")
     window = MainWindow(method=method)
     try:
-        open_initial(window, path, sensors)
+        open_initial(window, path, sensors, rig_map)
         if ghosts:  # comparing methods: show their errors rather than the optimizer's losses
             window.session.set_method(window.session.method, ghosts)
             window.method_errors_dock.raise_()

@@ -87,20 +87,27 @@ def template_toml(names: list[str], reason: str) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _suggest(args: argparse.Namespace) -> int:
+def write_suggestion(bvh: Path, out: Path, rig_map: Path | None = None) -> bool:
+    """Write the mapping guessed for ``bvh`` to ``out`` (atomically); False when nothing could
+    be mapped and a template to fill in was written instead. Used by ``rig suggest`` and
+    the studio's Open dialog."""
     from engine.atomic import write_text
     from engine.bvh import load_bvh
     from engine.errors import RigError
     from engine.rigs import resolve_rig
 
-    raw = load_bvh(args.file)
-    status = 0
+    raw = load_bvh(bvh)
     try:
-        text = mapping_toml(resolve_rig(raw, rig_map_path(args)), list(raw.names))
+        text, ok = mapping_toml(resolve_rig(raw, rig_map), list(raw.names)), True
     except RigError as exc:
-        text, status = template_toml(list(raw.names), str(exc)), 1
-        print(f"could not map {args.file} automatically; wrote a template to fill in: {args.out}")
-    write_text(args.out, text)
-    if status == 0:
+        text, ok = template_toml(list(raw.names), str(exc)), False
+    write_text(out, text)
+    return ok
+
+
+def _suggest(args: argparse.Namespace) -> int:
+    if write_suggestion(args.file, args.out, rig_map_path(args)):
         print(f"wrote {args.out}")
-    return status
+        return 0
+    print(f"could not map {args.file} automatically; wrote a template to fill in: {args.out}")
+    return 1

@@ -16,8 +16,9 @@ def sensor_presets() -> dict[str, tuple[Sensor, ...]]:
     return dict(PRESET_SENSORS)
 
 
-def load_clip(path: str | Path) -> Motion:
-    """Load any supported BVH onto the canonical skeleton (60 fps, floor at z = 0).
+def load_clip(path: str | Path, rig_map: str | Path | None = None) -> Motion:
+    """Load any supported BVH onto the canonical skeleton (60 fps, floor at z = 0);
+    ``rig_map`` is a joint mapping file (``--rig-map``) used instead of rig detection.
 
     Raises
     ------
@@ -28,7 +29,7 @@ def load_clip(path: str | Path) -> Motion:
     if not path.is_file():
         raise UserError(f"{path}: no such file")
     try:
-        return load_motion(path)
+        return load_motion(path, rig_map=rig_map)
     except UserError:
         raise
     except Exception as exc:  # a malformed file must never take the studio down

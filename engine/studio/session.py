@@ -132,9 +132,10 @@ class Session:
             return int(self.source.num_frames)
         return 0 if self.motion is None else len(self.motion)
 
-    def open(self, path: str | Path) -> None:
-        """Load a BVH; on failure raise :class:`UserError` and leave the session as it was."""
-        self.set_motion(load_clip(path), Path(path))
+    def open(self, path: str | Path, rig_map: str | Path | None = None) -> None:
+        """Load a BVH (with the joint mapping file ``rig_map`` if given); on failure raise
+        :class:`UserError` and leave the session as it was."""
+        self.set_motion(load_clip(path, rig_map), Path(path))
 
     def set_motion(self, motion: Motion, path: Path | None = None) -> None:
         self._close_source()

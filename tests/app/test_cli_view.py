@@ -14,4 +14,24 @@ def test_view_and_ghost_options_are_passed_to_the_window(monkeypatch):
     cli.register(parser.add_subparsers())
     args = parser.parse_args(["gui", "--view", "body", "--ghosts", "ik,autoencoder", "--method", "ik"])
     args.func(args)
-    assert seen["args"][-2:] == (("ik", "autoencoder"), "body")
+    assert seen["args"][-3:] == (("ik", "autoencoder"), "body", None)
+
+
+def test_rig_map_option_reaches_the_window(monkeypatch, tmp_path):
+    import pytest
+
+    from app import cli
+    from engine.errors import UserError
+
+    seen = {}
+    monkeypatch.setattr("app.main.run", lambda *a: seen.setdefault("args", a) and 0)
+    parser = argparse.ArgumentParser()
+    cli.register(parser.add_subparsers())
+    rig_map = tmp_path / "map.toml"
+    rig_map.write_text("[joints]\n")
+    args = parser.parse_args(["gui", "clip.bvh", "--rig-map", str(rig_map)])
+    args.func(args)
+    assert seen["args"][0] == "clip.bvh" and seen["args"][-1] == rig_map
+    args = parser.parse_args(["gui", "clip.bvh", "--rig-map", str(tmp_path / "missing.toml")])
+    with pytest.raises(UserError, match="--rig-map: no such file"):
+        args.func(args)

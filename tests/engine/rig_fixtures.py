@@ -1,13 +1,23 @@
 """Synthetic BVH files on the rigs of the common naming families.
 
 Joint names and hierarchies are those of the real rigs (facts from their public BVH
-headers). OFFSETs: the CMU conversion rig's are copied from its public header (in
-CMU's ASF unit, 1/0.45 inch); the Mixamo spine's from a public Mixamo export; the
-others are adult proportions (:data:`_BONES`, metres) written in each family's unit
-and up axis, since what is tested is that names, units, axes and chains are read
-right. The motion is a synthetic walk in the rig's own zero pose (a T-pose): hips
-swing and knees bend about the lateral axis, elbows about the vertical one, the spine
-sways, the root walks forward and turns.
+headers). OFFSETs, family by family:
+
+* real, from public headers: ``cmu`` (the CMU conversion rig, in CMU's ASF unit of
+  1/0.45 inch), ``daz`` (the cgspeed "Daz-friendly" rig, :data:`rig_headers.DAZ`, with its
+  eyes and fingers) and ``lafan`` (the LAFAN1 header, :data:`rig_headers.LAFAN1`, whose
+  zero pose is not a T-pose); ``mixamo``: the spine from a public Mixamo export;
+* synthetic: the rest of ``mixamo`` and ``smpl``, ``joint_root``, ``iclone``, ``unreal``,
+  ``rokoko``, ``xsens`` are adult proportions (:data:`_BONES`, metres) written in each
+  family's unit and up axis. No public header with numbers for these rigs was found in
+  the indexed sources (SMPL's offsets come from the licensed model files; the others'
+  exports are not published as text); the names and hierarchies are still theirs.
+
+The motion is a synthetic walk from the rig's T-pose: hips swing and knees bend about
+the lateral axis, elbows about the vertical one, the spine sways, the root walks
+forward and turns. On a rig whose zero pose is not a T-pose (LAFAN1), each joint's
+rotation carries the bone frame that makes the T-pose (:func:`rig_headers.tpose_frames`),
+as the real files' rotations do.
 """
 
 from __future__ import annotations
@@ -16,6 +26,8 @@ import re
 from pathlib import Path
 
 import numpy as np
+
+from . import rig_headers
 
 # Adult proportions, Y-up, facing +Z, metres (T-pose): bone -> offset from its parent.
 _BONES = {
@@ -134,9 +146,8 @@ def family_rows(family: str):
                  ("mixamorig:Spine2", (0.0, 9.220757, -1.370642))]  # fmt: skip
         rows, ends = _humanoid(n, spine, 100.0)
         return rows, ends, 0.01, "y"
-    if family == "lafan":  # LAFAN1-style names (LeftToe, Spine2), cm
-        n = _table("", "Left", "Right", {**_MB, "toe": "{s}Toe"})
-        return (*_humanoid(n, _spine(["Spine", "Spine1", "Spine2"], 100.0), 100.0), 0.01, "y")
+    if family == "lafan":  # the LAFAN1 header (LeftToe, Spine2), cm, bone frames along x
+        return (*rig_headers.parse(rig_headers.LAFAN1), 0.01, "y")
     if family == "smpl":  # SMPL/AMASS joint names, metres
         pat = {"root": "pelvis", "neck": "neck", "head": "head", "clav": "{s}_collar", "upper": "{s}_shoulder",
                "fore": "{s}_elbow", "hand": "{s}_wrist", "thigh": "{s}_hip", "shin": "{s}_knee",
@@ -149,16 +160,8 @@ def family_rows(family: str):
                "foot": "Foot_{s}", "toe": "Toes_{s}"}  # fmt: skip
         n = _table("", "L", "R", pat)
         return (*_humanoid(n, _spine(["Spine", "Chest"], 100.0), 100.0, root_name="joint_Root"), 0.01, "y")
-    if family == "daz":  # Daz/Poser names, inches
-        pat = {"root": "hip", "neck": "neck", "head": "head", "clav": "{s}Collar", "upper": "{s}Shldr",
-               "fore": "{s}ForeArm", "hand": "{s}Hand", "thigh": "{s}Thigh", "shin": "{s}Shin", "foot": "{s}Foot",
-               "toe": ""}  # fmt: skip
-        n = _table("", "l", "r", pat)
-        rows, ends = _humanoid(n, _spine(["abdomen", "chest"], 1 / 0.0254), 1 / 0.0254)
-        for s in ("l", "r"):  # Daz's buttock joint sits between the hip and the thigh
-            rows = [(f"{s}Buttock", "hip", (0.0, 0.0, 0.0)) if r[0] == f"{s}Thigh" else r for r in rows] + [
-                (f"{s}Thigh", f"{s}Buttock", _o("hipL", s.upper(), 1 / 0.0254))]
-        return rows, ends, 0.0254, "y"
+    if family == "daz":  # the cgspeed Daz-friendly header (hip, lButtock, lThigh...), cm
+        return (*rig_headers.parse(rig_headers.DAZ), 0.01, "y")
     if family == "iclone":  # Character Creator CC_Base_ names with twist bones, cm
         pat = {"root": "Hip", "neck": "NeckTwist01", "head": "Head", "clav": "{s}_Clavicle", "upper": "{s}_Upperarm",
                "fore": "{s}_Forearm", "hand": "{s}_Hand", "thigh": "{s}_Thigh", "shin": "{s}_Calf",
@@ -242,6 +245,28 @@ def _motion(rows, frames: int, fps: float, up: str, units: float, seed: int) -> 
     return np.stack(data, axis=1)
 
 
+#: Families whose OFFSETs are in each joint's own bone frame (zero pose not a T-pose).
+LOCAL_FRAMES = ("lafan",)
+
+
+def _with_bone_frames(data: np.ndarray, rows) -> np.ndarray:
+    """The same motion on a rig whose joints rest in bone frames: each local rotation
+    ``L`` of the T-pose rig becomes ``G_parent^-1 L G_joint`` (:func:`rig_headers.tpose_frames`)."""
+    from engine.kinematics import quaternion as Q
+
+    frames = rig_headers.tpose_frames(rows)
+    g = {n: Q.from_matrix(m[None])[0] for n, m in frames.items()}
+    out = data.copy()
+    order = np.array(["z", "x", "y"])
+    for k, (name, parent, _) in enumerate(rows):
+        cols = slice(3 + 3 * k, 6 + 3 * k)
+        q = Q.from_euler(np.radians(data[:, cols]), np.broadcast_to(order, (len(data), 3)))
+        left = Q.conjugate(g[parent]) if parent is not None else np.array([1.0, 0.0, 0.0, 0.0])
+        q = Q.mul(Q.mul(np.broadcast_to(left, q.shape), q), np.broadcast_to(g[name], q.shape))
+        out[:, cols] = np.degrees(Q.to_euler(q, np.broadcast_to(order, (len(data), 3))))
+    return out
+
+
 def _turn_x90(data: np.ndarray) -> np.ndarray:
     """Channels of the same motion seen in axes turned +90 degrees about X (Y-up -> Z-up)."""
     from engine.kinematics import quaternion as Q
@@ -291,6 +316,8 @@ def write_family_bvh(path: Path, family: str, frames: int = 240, fps: float = 60
     emit(rows[0], 0)
     by_name = {r[0]: r for r in rows}
     data = _motion([by_name[n] for n in order], frames, fps, up, units, seed)
+    if family in LOCAL_FRAMES:
+        data = _with_bone_frames(data, [by_name[n] for n in order])
     if up == "z":  # Y-up motion written for a Z-up rig: turn the whole rig +90 degrees about X
         data = _turn_x90(data)
     lines += ["MOTION", f"Frames: {frames}", f"Frame Time: {1.0 / fps:.6f}"]

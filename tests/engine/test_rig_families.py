@@ -32,7 +32,8 @@ LACKS = {"cmu": {"upperback"}, "joint_root": {"upperback"}, "daz": {"upperback",
 def family(request, tmp_path_factory):
     path = write_family_bvh(tmp_path_factory.mktemp(request.param) / f"{request.param}.bvh", request.param)
     raw = load_bvh(path)
-    motion, report = retarget(raw)
+    # the automatic mapping, even where a shipped profile also matches (the real Daz header)
+    motion, report = retarget(raw, profile=resolve_rig(raw, profiles=[]))
     return request.param, path, raw, motion, report
 
 
@@ -53,6 +54,14 @@ def test_every_family_maps_without_a_profile(family):
     _, _, units, up = family_rows(name)
     assert prof.units_to_m == pytest.approx(units)
     assert prof.up == "+" + up
+
+
+def test_the_real_daz_header_is_the_shipped_cmu_daz_rig(tmp_path):
+    """The Daz fixture's header is the rig of ../shared/data's cmu_daz clips: its profile wins."""
+    raw = load_bvh(write_family_bvh(tmp_path / "daz.bvh", "daz", frames=30))
+    assert resolve_rig(raw).name == "cmu_daz"
+    auto = resolve_rig(raw, profiles=[])
+    assert {c: auto.joints[c] for c in resolve_rig(raw).joints} == resolve_rig(raw).joints
 
 
 def test_height_is_the_subjects(family):

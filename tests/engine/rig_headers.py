@@ -1,0 +1,165 @@
+"""Real rigs' joint names and OFFSETs, copied as numbers from public BVH headers.
+
+Each table lists ``JOINT PARENT X Y Z`` (``-`` for the root) and ``End JOINT X Y Z``
+for End Sites, in the file's own order, units and axes. :mod:`rig_fixtures` writes a
+synthetic motion on these hierarchies; the joint names and offsets are the real rigs'.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: Daz/Poser: the "Daz-friendly" rig of the cgspeed conversion of the CMU database (the
+#: rig of ../shared/data's cmu_daz clips; centimetres, Y-up, T-pose at zero rotation).
+#: Source: AmmarkoV/RGBDAcquisition, opengl_acquisition_shared_library/
+#: opengl_depth_and_color_renderer/Motions/DAZFriendlyCMU.bvh (commit cc47865).
+DAZ = """
+hip - 0 0 0
+abdomen hip 0 20.6881 -0.73152
+chest abdomen 0 11.7043 -0.48768
+neck chest 0 22.1894 -2.19456
+head neck -0.24384 7.07133 1.2192
+leftEye head 4.14528 8.04674 8.04672
+End leftEye 1 0 0
+rightEye head -3.6576 8.04674 8.04672
+End rightEye 1 0 0
+rCollar chest -2.68224 19.2634 -4.8768
+rShldr rCollar -8.77824 -1.95073 1.46304
+rForeArm rShldr -28.1742 -1.7115 0.48768
+rHand rForeArm -22.5879 0.773209 7.07136
+rThumb1 rHand -1.2192 -0.487915 3.41376
+rThumb2 rThumb1 -3.37035 -0.52449 3.41376
+End rThumb2 -1.78271 -1.18214 1.43049
+rIndex1 rHand -7.75947 0.938293 5.60832
+rIndex2 rIndex1 -2.54057 -0.884171 1.56538
+End rIndex2 -1.62519 -0.234802 1.16502
+rMid1 rHand -8.24714 1.18213 3.41376
+rMid2 rMid1 -3.10165 -0.590103 1.0647
+End rMid2 -2.48547 -0.328903 0.83742
+rRing1 rHand -8.82822 0.546677 1.51678
+rRing2 rRing1 -2.60934 -0.819778 -0.0198488
+End rRing2 -2.33842 -0.294052 0.168128
+rPinky1 rHand -8.27202 -0.0477905 -0.4584
+rPinky2 rPinky1 -1.82734 -0.647385 -0.700984
+End rPinky2 -1.69225 -0.51767 -0.607171
+lCollar chest 2.68224 19.2634 -4.8768
+lShldr lCollar 8.77824 -1.95073 1.46304
+lForeArm lShldr 28.1742 -1.7115 0.48768
+lHand lForeArm 22.5879 0.773209 7.07136
+lThumb1 lHand 1.2192 -0.487915 3.41376
+lThumb2 lThumb1 3.37035 -0.52449 3.41376
+End lThumb2 1.78271 -1.18214 1.43049
+lIndex1 lHand 7.75947 0.938293 5.60832
+lIndex2 lIndex1 2.54057 -0.884171 1.56538
+End lIndex2 1.62519 -0.234802 1.16502
+lMid1 lHand 8.24714 1.18213 3.41376
+lMid2 lMid1 3.10165 -0.590103 1.0647
+End lMid2 2.48547 -0.328903 0.83742
+lRing1 lHand 8.82822 0.546677 1.51678
+lRing2 lRing1 2.60934 -0.819778 -0.0198488
+End lRing2 2.33842 -0.294052 0.168128
+lPinky1 lHand 8.27202 -0.0477905 -0.4584
+lPinky2 lPinky1 1.82734 -0.647385 -0.700984
+End lPinky2 1.69225 -0.51767 -0.607171
+rButtock hip -8.77824 4.35084 1.2192
+rThigh rButtock 0 -1.70687 -2.19456
+rShin rThigh 0 -36.8199 0.73152
+rFoot rShin 0.73152 -45.1104 -5.12064
+End rFoot -1.1221 -3.69964 12.103
+lButtock hip 8.77824 4.35084 1.2192
+lThigh lButtock 0 -1.70687 -2.19456
+lShin lThigh 0 -36.8199 0.73152
+lFoot lShin -0.73152 -45.1104 -5.12064
+End lFoot 1.1221 -3.69964 12.103
+"""
+
+#: LAFAN1 (Ubisoft La Forge animation dataset): every file of the dataset shares this
+#: header (centimetres, Y-up). Its offsets lie along each joint's own x axis, so the zero
+#: rotation pose is not a T-pose: the clips' rotations carry the bone frames.
+#: Source: the header of the lafan1.zip BVH files (ubisoft/ubisoft-laforge-animation-dataset),
+#: as reproduced in public reimplementations of "Robust Motion In-betweening" (a
+#: ``Skeleton(offsets=..., parents=...)`` table with End Sites as zero rows, dropped here).
+LAFAN1 = """
+Hips - -42.198200 91.614723 -40.067841
+LeftUpLeg Hips 0.103456 1.857829 10.548506
+LeftLeg LeftUpLeg 43.499992 -0.000038 -0.000002
+LeftFoot LeftLeg 42.372192 0.000015 -0.000007
+LeftToe LeftFoot 17.299999 -0.000002 0.000003
+RightUpLeg Hips 0.103457 1.857829 -10.548503
+RightLeg RightUpLeg 43.500042 -0.000027 0.000008
+RightFoot RightLeg 42.372257 -0.000008 0.000014
+RightToe RightFoot 17.299992 -0.000005 0.000004
+Spine Hips 6.901968 -2.603733 -0.000001
+Spine1 Spine 12.588099 0.000002 0.000000
+Spine2 Spine1 12.343206 0.000000 -0.000001
+Neck Spine2 25.832886 -0.000004 0.000003
+Head Neck 11.766620 0.000005 -0.000001
+LeftShoulder Spine2 19.745899 -1.480370 6.000108
+LeftArm LeftShoulder 11.284125 -0.000009 -0.000018
+LeftForeArm LeftArm 33.000050 0.000004 0.000032
+LeftHand LeftForeArm 25.200008 0.000015 0.000008
+RightShoulder Spine2 19.746099 -1.480375 -6.000073
+RightArm RightShoulder 11.284138 -0.000015 -0.000012
+RightForeArm RightArm 33.000092 0.000017 0.000013
+RightHand RightForeArm 25.199780 0.000135 0.000422
+"""
+
+
+def parse(table: str) -> tuple[list[tuple[str, str | None, tuple]], dict[str, tuple]]:
+    """``(rows, end_sites)`` of a table: rows are ``(name, parent, offset)`` in file order."""
+    rows, ends = [], {}
+    for line in table.strip().splitlines():
+        a, b, *xyz = line.split()
+        off = tuple(float(v) for v in xyz)
+        if a == "End":
+            ends[b] = off
+        else:
+            rows.append((a, None if b == "-" else b, off))
+    return rows, ends
+
+
+def _frame(a1: np.ndarray, a2: np.ndarray) -> np.ndarray:
+    e1 = a1 / np.linalg.norm(a1)
+    e2 = a2 - e1 * (a2 @ e1)
+    e2 /= np.linalg.norm(e2)
+    return np.stack([e1, e2, np.cross(e1, e2)], axis=1)
+
+
+def _aim(child: str) -> np.ndarray:
+    """World direction (Y-up, facing +Z, left = +X) of the bone ending at ``child`` in a T-pose."""
+    if "Toe" in child:
+        return np.array([0.0, -0.4, 1.0]) / np.hypot(0.4, 1.0)
+    if "Leg" in child or "Foot" in child:
+        return np.array([0.0, -1.0, 0.0])
+    if any(k in child for k in ("Arm", "Hand")):
+        return np.array([1.0 if child.startswith("Left") else -1.0, 0.0, 0.0])
+    return np.array([0.0, 1.0, 0.0])  # spine, neck, head
+
+
+def tpose_frames(rows) -> dict[str, np.ndarray]:
+    """Global rotation (3, 3) of every joint that puts a local-frame rig (LAFAN1) in a T-pose.
+
+    A joint with one child turns by the least rotation that aims that bone as in a T-pose;
+    a joint with several (hips, upper spine) aims the central child up and its left child's
+    side at +X; a leaf keeps its parent's rotation.
+    """
+    kids: dict[str, list] = {}
+    for name, parent, off in rows:
+        kids.setdefault(parent, []).append((name, np.array(off, float)))
+    from engine.kinematics import quaternion as Q
+
+    glob: dict[str, np.ndarray] = {}
+    for name, parent, _ in rows:
+        ch = kids.get(name, [])
+        up = glob.get(parent, np.eye(3))
+        if len(ch) > 1:
+            mid = next(o for n, o in ch if not n.startswith(("Left", "Right")))
+            left = next(o for n, o in ch if n.startswith("Left")) - next(o for n, o in ch if n.startswith("Right"))
+            glob[name] = _frame(np.array([0.0, 1.0, 0.0]), np.array([1.0, 0.0, 0.0])) @ _frame(mid, left).T
+        elif ch:
+            child, off = ch[0]
+            turn = Q.to_matrix(Q.from_to((up @ off)[None], _aim(child)[None]))[0]
+            glob[name] = turn @ up
+        else:
+            glob[name] = up
+    return glob

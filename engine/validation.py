@@ -32,6 +32,7 @@ import math
 import os
 import stat
 import tempfile
+import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -49,7 +50,13 @@ MAX_BYTES = {
     "weights file": 1 << 30,
     "checkpoint": 4 << 30,
     "config": 1 << 20,
+    "tracker recording": 1 << 30,
+    "tracker mapping": 1 << 20,
+    "rig mapping": 1 << 20,
+    "rig profile": 1 << 20,
 }
+#: Longest line of a line-based text input (a tracker recording), bytes.
+MAX_LINE_BYTES = 1 << 16
 #: Deepest JSON nesting accepted (scenes are 3-4 levels deep).
 MAX_JSON_DEPTH = 64
 
@@ -305,6 +312,23 @@ def read_json(path: str | Path, kind: str) -> Any:
     except ValueError as exc:  # too many digits, NaN/Infinity
         reason = "a number with too many digits" if "digits" in str(exc) else one_line(str(exc), 120)
         raise ValidationError(f"{path}: invalid JSON in {kind} ({reason})") from None
+
+
+def read_toml(path: str | Path, kind: str) -> dict[str, Any]:
+    """Parse a TOML input file safely: size limit, UTF-8 (the bad byte's line), syntax (line
+    and column); every failure is one :class:`ValidationError` line naming the file."""
+    raw = read_input_bytes(path, kind)
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = raw[: exc.start].count(b"\n") + 1
+        raise ValidationError(f"{path}:{line}: {kind} is not UTF-8 text (byte 0x{raw[exc.start]:02x})") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ValidationError(f"{path}: invalid TOML in {kind} ({one_line(str(exc), 160)})") from None
+    except RecursionError:
+        raise ValidationError(f"{path}: {kind} is nested too deeply") from None
 
 
 def _no_constant(name: str) -> float:

@@ -14,7 +14,6 @@ same format with every field but ``[joints]`` optional) overrides both. See
 
 from __future__ import annotations
 
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -24,7 +23,7 @@ from engine import skeleton as sk
 from engine.errors import RigError, UserError
 from engine.rigs.automap import automap, check_mapping
 from engine.rigs.infer import infer_axes, infer_units
-from engine.validation import shown
+from engine.validation import Num, check_value, read_toml, shown
 
 PROFILE_DIR = Path(__file__).resolve().parent
 LANDMARKS = ("l_toe_tip", "r_toe_tip", "l_eye", "r_eye", "l_index", "l_pinky", "r_index", "r_pinky")
@@ -56,11 +55,40 @@ class RigProfile:
         return names
 
 
+#: Fields of a rig profile / mapping file and what each must hold.
+_TEXT_FIELDS = ("name", "description", "up", "forward")
+_BOOL_FIELDS = ("align", "root_channels_relative_to_offset")
+_TABLE_FIELDS = ("joints", "landmarks")
+_NUMBERS = {"units_to_m": Num(1e-6, 1e3, open_lo=True, unit="metres per file unit"),
+            "skip_frames": Num(0, 1_000_000, integer=True)}  # fmt: skip
+
+
 def _read_toml(path: Path, what: str) -> dict:
-    try:
-        return tomllib.loads(Path(path).read_text())
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
-        raise UserError(f"{path}: cannot read {what}: {exc}") from exc
+    """A profile or mapping file, read through the validation layer (size, type, UTF-8,
+    syntax) and its fields checked for type; errors name the file and the field."""
+    data = read_toml(path, what)
+    known = set(_TEXT_FIELDS) | set(_BOOL_FIELDS) | set(_TABLE_FIELDS) | set(_NUMBERS)
+    unknown = sorted(set(data) - known)
+    if unknown:
+        raise UserError(f"{path}: {what}: unknown field(s) {', '.join(shown(u) for u in unknown)}; "
+                        f"known: {', '.join(sorted(known))}")  # fmt: skip
+    for key in _TEXT_FIELDS:
+        if key in data and not isinstance(data[key], str):
+            raise UserError(f"{path}: {what}: field {key!r} must be a string, got {shown(data[key])}")
+    for key in _BOOL_FIELDS:
+        if key in data and not isinstance(data[key], bool):
+            raise UserError(f"{path}: {what}: field {key!r} must be true or false, got {shown(data[key])}")
+    for key, spec in _NUMBERS.items():
+        if key in data:
+            data[key] = check_value(spec, data[key], f"{path}: {what}", key)
+    for table in _TABLE_FIELDS:
+        if table in data and not isinstance(data[table], dict):
+            raise UserError(f"{path}: {what}: [{table}] must be a table of names (canonical = \"source\")")
+        for k, v in data.get(table, {}).items():
+            if not isinstance(v, str) or not v:
+                raise UserError(f"{path}: {what}: field '{table}.{k}' must be a joint name (a non-empty string), "
+                                f"got {shown(v)}")  # fmt: skip
+    return data
 
 
 def _parse(path: Path, data: dict | None = None) -> RigProfile:

@@ -28,7 +28,7 @@ import contextlib
 import json
 import math
 import threading
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -40,6 +40,7 @@ from engine.atomic import atomic_path
 from engine.errors import UserError
 from engine.sources.coords import CONVENTIONS, to_project
 from engine.sources.trackers import DEFAULT_TIMEOUT_S, TrackerMapping, TrackerSample, TrackerState
+from engine.validation import MAX_LINE_BYTES, check_input_file
 
 if TYPE_CHECKING:
     from engine.sources.calibration import Calibration
@@ -200,28 +201,23 @@ def read_recording(path: str | Path) -> Recording:
         For a missing file, a bad header or a bad sample; the message names the file,
         the line and the field.
     """
-    path = Path(path)
-    if not path.is_file():
-        raise UserError(f"{path}: no such file")
+    path = check_input_file(path, "tracker recording")  # regular file, size limit
     samples: list[TrackerSample] = []
     head: dict | None = None
     try:
-        fh = open(path, encoding="utf-8")
+        fh = open(path, "rb")
     except OSError as exc:
-        raise UserError(f"{path}: cannot read ({exc.strerror})") from None
+        raise UserError(f"{path}: cannot read tracker recording ({exc.strerror})") from None
     with fh:
-        try:
-            for lineno, line in enumerate(fh, start=1):
-                where = f"{path}:{lineno}"
-                if not line.strip():
-                    continue
-                if head is None:
-                    head = _parse_header(line, where)
-                    conv = head.get("convention", "project")
-                    continue
-                samples.append(_parse_sample(line, where, conv))
-        except UnicodeDecodeError:
-            raise UserError(f"{path}: not UTF-8 text") from None
+        for lineno, text in enumerate(_lines(fh, path), start=1):
+            where = f"{path}:{lineno}"
+            if not text.strip():
+                continue
+            if head is None:
+                head = _parse_header(text, where)
+                conv = head.get("convention", "project")
+                continue
+            samples.append(_parse_sample(text, where, conv))
     if head is None:
         raise UserError(f"{path}: empty file (expected a header line)")
     mapping = TrackerMapping()
@@ -233,6 +229,20 @@ def read_recording(path: str | Path) -> Recording:
         except (KeyError, TypeError, ValueError, AttributeError, UserError) as exc:
             raise UserError(f"{path}:1: field 'mapping': {exc}") from None
     return Recording(samples, mapping, float(head.get("fps", sk.FPS)), head, path)
+
+
+def _lines(fh, path: Path) -> Iterator[str]:
+    """The lines of a recording as text; a line that is too long, holds a NUL byte (a binary
+    file) or is not UTF-8 is an error naming the file and the line."""
+    for lineno, raw in enumerate(iter(lambda: fh.readline(MAX_LINE_BYTES + 1), b""), start=1):
+        if len(raw) > MAX_LINE_BYTES:
+            raise UserError(f"{path}:{lineno}: line longer than {MAX_LINE_BYTES:,} bytes; not a tracker recording")
+        if b"\0" in raw:
+            raise UserError(f"{path}:{lineno}: binary data (a NUL byte); a tracker recording is JSON Lines text")
+        try:
+            yield raw.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise UserError(f"{path}:{lineno}: not UTF-8 text (byte 0x{raw[exc.start]:02x})") from None
 
 
 def _parse_sample(line: str, where: str, conv: str) -> TrackerSample:

@@ -15,7 +15,6 @@ had.
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -25,6 +24,7 @@ import numpy as np
 from engine import skeleton as sk
 from engine.errors import UserError
 from engine.sensors import Sensor, SensorFrame
+from engine.validation import read_json
 
 if TYPE_CHECKING:
     from engine.sources.calibration import Calibration
@@ -130,11 +130,11 @@ class TrackerMapping:
     def load(cls, path: str | Path) -> "TrackerMapping":
         """Read a mapping file (JSON: ``{"slots": {name: joint}, "dof": {name: 3|6}}``)."""
         path = Path(path)
+        data = read_json(path, "tracker mapping")  # regular file, size, UTF-8, JSON syntax with line
         try:
-            data = json.loads(path.read_text(encoding="utf-8"))
             slots = {str(k): str(v) for k, v in data["slots"].items()}
             dof = {str(k): int(v) for k, v in data.get("dof", {}).items()}
-        except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:
+        except (ValueError, KeyError, TypeError, AttributeError) as exc:
             raise UserError(f"{path}: not a tracker mapping ({type(exc).__name__}: {exc}); "
                             'expected {"slots": {"head": "upperneck", ...}, "dof": {...}}') from exc  # fmt: skip
         try:

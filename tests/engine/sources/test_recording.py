@@ -83,7 +83,7 @@ def test_bad_headers(tmp_path):
     path.write_text("")
     with pytest.raises(UserError, match="empty file"):
         read_recording(path)
-    with pytest.raises(UserError, match="no such file"):
+    with pytest.raises(UserError, match="missing.jsonl: cannot read tracker recording: not found"):
         read_recording(tmp_path / "missing.jsonl")
 
 
@@ -139,3 +139,48 @@ def test_mapping_parse_and_errors(tmp_path):
     f.write_text("[]")
     with pytest.raises(UserError, match="map.json: not a tracker mapping"):
         TrackerMapping.parse(str(f))
+
+
+def _recording_text(n: int = 3) -> str:
+    lines = [json.dumps(header(60, TrackerMapping(), "x"))]
+    lines += [json.dumps({"t": i / 60, "tracker": "head", "pos": [0, 0, 1.6], "quat": [1, 0, 0, 0]}) for i in range(n)]
+    return "\n".join(lines) + "\n"
+
+
+def test_bad_files_are_refused_through_the_validation_layer(tmp_path, monkeypatch):
+    """Truncated, binary, not UTF-8, one huge line, too large, not a file: one line each,
+    naming the file (and the line)."""
+    from engine import validation
+
+    text = _recording_text()
+    cases = {
+        "cut.jsonl": (text[: len(text) - 20].encode(), r"cut.jsonl:4: not JSON"),
+        "bin.jsonl": (text.encode()[:80] + b"\0\x01\x02" + text.encode()[80:], r"bin.jsonl:1: binary data"),
+        "latin.jsonl": (text.encode() + '{"tracker": "tête"}\n'.encode("latin-1"), r"latin.jsonl:5: not UTF-8 text \(byte 0xea\)"),
+        "long.jsonl": (text.encode() + b"[" * (validation.MAX_LINE_BYTES + 10), r"long.jsonl:5: line longer than 65,536 bytes"),
+    }  # fmt: skip
+    for name, (data, message) in cases.items():
+        (tmp_path / name).write_bytes(data)
+        with pytest.raises(UserError, match=message):
+            read_recording(tmp_path / name)
+    monkeypatch.setitem(validation.MAX_BYTES, "tracker recording", 100)
+    (tmp_path / "big.jsonl").write_text(text)
+    with pytest.raises(UserError, match=r"big.jsonl: cannot read tracker recording: \d+ bytes is larger than the limit of 100"):
+        read_recording(tmp_path / "big.jsonl")
+    with pytest.raises(UserError, match=r": cannot read tracker recording: is a folder"):
+        read_recording(tmp_path)
+
+
+def test_tracker_mapping_files_go_through_the_validation_layer(tmp_path):
+    bad = tmp_path / "map.json"
+    bad.write_bytes(b'{"slots": {"head": "upperneck"},\n "dof": \xff}')
+    with pytest.raises(UserError, match=r"map.json:2: tracker mapping is not UTF-8"):
+        TrackerMapping.load(bad)
+    bad.write_text('{"slots": {"head": "upperneck"},\n "dof": [}')
+    with pytest.raises(UserError, match=r"map.json:2: invalid JSON in tracker mapping"):
+        TrackerMapping.load(bad)
+    bad.write_text('{"slots": ["head"]}')
+    with pytest.raises(UserError, match=r"map.json: not a tracker mapping"):
+        TrackerMapping.load(bad)
+    with pytest.raises(UserError, match=r"cannot read tracker mapping: not found"):
+        TrackerMapping.load(tmp_path / "none.json")

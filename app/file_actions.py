@@ -16,15 +16,11 @@ from PyQt6.QtWidgets import QFileDialog, QMainWindow
 
 from app import rig_maps
 from app.export import ReconstructionExport
+from engine.atomic import write_text
 from engine.errors import RigError, UserError
+from engine.validation import read_json
 
 MAX_RECENT = 8
-
-
-def _atomic_write_text(path: Path, text: str) -> None:
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
 
 
 class FileActions:
@@ -161,8 +157,8 @@ class FileActions:
             if not path:
                 return False
         try:
-            _atomic_write_text(Path(path), json.dumps(self.w.session.to_scene(), indent=2))
-        except OSError as exc:
+            write_text(path, json.dumps(self.w.session.to_scene(), indent=2, allow_nan=False) + "\n")
+        except (OSError, ValueError) as exc:
             self.w.show_error("Cannot save scene", f"{path}: {exc}")
             return False
         return True
@@ -173,8 +169,8 @@ class FileActions:
             if not path:
                 return False
         try:
-            scene = json.loads(Path(path).read_text())
-            clip = scene.get("clip")
+            scene = read_json(path, "scene")  # size, UTF-8, depth; errors name the file and line
+            clip = scene.get("clip") if isinstance(scene, dict) else None
             if clip and (self.w.session.path is None or Path(clip) != self.w.session.path):
                 self.w.session.open(clip, self.rig_map_of(clip))
             self.w.session.apply_scene(scene, str(path))

@@ -1,16 +1,22 @@
-"""The session's scene files: sensors, constraints, optimizer settings as plain JSON."""
+"""The session's scene files: one format with :mod:`engine.scene`, plus the studio's keys.
+
+A studio scene is an optimizer scene (``format``, ``version``, ``settings``,
+``constraints``: read and checked by :func:`engine.scene.scene_from_dict`, so the CLI's
+``--scene`` reads it too) with the studio's own keys: ``clip`` (path), ``method``,
+``preset``, ``sensors`` and ``frame``.
+"""
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-from engine.constraints.base import Constraint, from_dict
+from engine import scene as optimizer_scene
+from engine.constraints.base import Constraint
 from engine.errors import UserError
-from engine.optimizer import OptimizerSettings
 from engine.sensors import Sensor
+from engine.solver import OptimizerSettings
 
 
 def default_settings() -> dict[str, Any]:
@@ -22,42 +28,34 @@ def default_settings() -> dict[str, Any]:
 def scene_to_dict(path: Path | None, method: str, preset: str, sensors: Iterable[Sensor],
                   constraints: Iterable[Constraint], settings: dict[str, Any], frame: int) -> dict[str, Any]:  # fmt: skip
     """Plain-JSON description of a session's scene (the clip by path)."""
-    return {
+    doc = optimizer_scene.scene_to_dict(constraints, settings)
+    doc.update({
         "clip": str(path) if path else None,
         "method": method,
         "preset": preset,
         "sensors": [s.to_dict() for s in sensors],
-        "constraints": [c.to_dict() for c in constraints],
-        "settings": dict(settings),
         "frame": int(frame),
-    }
+    })  # fmt: skip
+    return doc
 
 
 def scene_from_dict(scene: Any, where: str = "scene") -> dict[str, Any]:
     """Check and convert :func:`scene_to_dict` output; errors name ``where`` and the entry.
 
     Returns a dict with ``method`` (str), ``preset`` (str), ``sensors`` (tuple of
-    Sensor), ``constraints`` (list of Constraint), ``settings`` (dict), ``frame`` (int).
+    Sensor), ``constraints`` (list of Constraint), ``settings`` (dict of the settings the
+    scene gives, checked against their ranges), ``frame`` (int).
     """
-    if not isinstance(scene, dict):
-        raise UserError(f"{where}: expected a JSON object")
-    sensors = tuple(Sensor.from_dict(s, f"{where}: sensors[{i}]") for i, s in enumerate(scene.get("sensors", [])))
-    constraints = []
-    for i, c in enumerate(scene.get("constraints", [])):
-        try:
-            constraints.append(from_dict(dict(c) if isinstance(c, dict) else c))
-        except UserError as exc:
-            raise UserError(f"{where}: constraints[{i}]: {exc}") from exc
-    settings = scene.get("settings", {})
-    if not isinstance(settings, dict):
-        raise UserError(f"{where}: field 'settings' must be an object")
-    known = {f.name for f in dataclasses.fields(OptimizerSettings)}
-    unknown = sorted(set(settings) - known)
-    if unknown:
-        raise UserError(f"{where}: settings: unknown field(s) {', '.join(unknown)}")
+    constraints, settings = optimizer_scene.scene_from_dict(scene, where)  # also checks it is an object
+    sensors = scene.get("sensors", [])
+    if not isinstance(sensors, list):
+        raise UserError(f"{where}: field 'sensors' must be a list")
+    sensors = tuple(Sensor.from_dict(s, f"{where}: sensors[{i}]") for i, s in enumerate(sensors))
+    given = scene.get("settings") or {}
     try:
         frame = int(scene.get("frame", 0))
     except (TypeError, ValueError):
         raise UserError(f"{where}: field 'frame' must be an integer") from None
     return {"method": str(scene.get("method") or ""), "preset": str(scene.get("preset") or ""),
-            "sensors": sensors, "constraints": constraints, "settings": dict(settings), "frame": frame}  # fmt: skip
+            "sensors": sensors, "constraints": constraints,
+            "settings": {k: getattr(settings, k) for k in given}, "frame": frame}  # fmt: skip

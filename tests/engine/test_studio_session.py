@@ -104,6 +104,28 @@ def test_scene_round_trip(session):
     assert [x.to_dict() for x in other.constraints] == [x.to_dict() for x in session.constraints]
 
 
+def test_studio_scenes_are_optimizer_scenes(session, tmp_path):
+    """One scene format and one parser (engine.scene): the CLI reads what the studio saves,
+    and the studio refuses what engine.scene refuses."""
+    from engine.scene import load_scene
+
+    session.set_setting("lr", 0.05)
+    session.add_constraint("distance", joint_a="lwrist", joint_b="rwrist", distance=0.4)
+    path = tmp_path / "studio.json"
+    path.write_text(json.dumps(session.to_scene()))
+    constraints, settings = load_scene(path)
+    assert settings.lr == 0.05 and [c.to_dict() for c in constraints] == [c.to_dict() for c in session.constraints]
+    for bad, message in (({"lr": 0}, r"s.json: settings: .*lr"), ({"colour": 1}, r"unknown field\(s\) 'colour'")):
+        scene = {**session.to_scene(), "settings": bad}
+        with pytest.raises(UserError, match=message):
+            session.apply_scene(scene, "s.json")
+    assert session.settings["lr"] == 0.05
+    scene = session.to_scene()
+    scene["constraints"] = scene["constraints"] * 2
+    with pytest.raises(UserError, match="duplicate name"):
+        session.apply_scene(scene, "s.json")
+
+
 def test_a_bad_scene_names_the_entry_and_changes_nothing(session):
     scene = session.to_scene()
     scene["sensors"][1]["dof"] = 5

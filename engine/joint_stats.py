@@ -113,3 +113,36 @@ def limb_hinge(g_parent: np.ndarray, g_child: np.ndarray, bend: np.ndarray) -> t
     if float(in_parent @ hp) < 0:
         axis, in_parent = -axis, -in_parent
     return in_parent, axis
+
+
+def reference_axes(reports: dict[str, dict]) -> dict[str, np.ndarray]:
+    """Mean hinge axis of each joint over the canonical clips (signs made to agree)."""
+    axes = {}
+    for joint in BONE_CHILD:
+        h = np.array([r[joint]["hinge"] for r in reports.values()], float)
+        h *= np.sign(h @ h[0])[:, None]
+        axes[joint] = h.mean(0) / np.linalg.norm(h.mean(0))
+    return axes
+
+
+def summarize(groups: dict[str, dict[str, dict]], canonical: str) -> dict[str, dict[str, dict]]:
+    """Compare groups of clips (``{group: {clip: joint_report}}``) with the canonical group.
+
+    Returns ``{joint: {group: {clips, twist_median: [lo, hi], twist_abs_p90_max,
+    hinge_alignment_min, hinge_alignment_median}}}``: the range of the clips' median twist
+    (degrees) and the |cos| between each clip's hinge axis and the canonical clips' mean one.
+    """
+    ref = reference_axes(groups[canonical])
+    table: dict[str, dict[str, dict]] = {}
+    for joint in BONE_CHILD:
+        for group, reports in groups.items():
+            med = [r[joint]["twist_median"] for r in reports.values()]
+            align = [abs(float(np.dot(r[joint]["hinge"], ref[joint]))) for r in reports.values()]
+            table.setdefault(joint, {})[group] = {
+                "clips": len(reports),
+                "twist_median": [round(min(med), 1), round(max(med), 1)],
+                "twist_abs_p90_max": round(max(r[joint]["twist_abs_p90"] for r in reports.values()), 1),
+                "hinge_alignment_min": round(min(align), 3),
+                "hinge_alignment_median": round(float(np.median(align)), 3),
+            }
+    return table

@@ -292,16 +292,22 @@ def read_input_bytes(path: str | Path, kind: str, max_bytes: int | None = None) 
     return data
 
 
+def read_input_text(path: str | Path, kind: str) -> str:
+    """The text of a checked input file (:func:`read_input_bytes`); not UTF-8 is an error
+    naming the file and the line of the bad byte."""
+    raw = read_input_bytes(path, kind)
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = raw[: exc.start].count(b"\n") + 1
+        raise ValidationError(f"{path}:{line}: {kind} is not UTF-8 text (byte 0x{raw[exc.start]:02x})") from None
+
+
 def read_json(path: str | Path, kind: str) -> Any:
     """Parse a JSON input file safely: size limit, UTF-8, nesting depth, number length.
 
     Every failure is one :class:`ValidationError` line naming the file (and the line)."""
-    raw = read_input_bytes(path, kind)
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        line = raw[: exc.start].count(b"\n") + 1
-        raise ValidationError(f"{path}:{line}: {kind} is not UTF-8 text (byte 0x{raw[exc.start]:02x})") from None
+    text = read_input_text(path, kind)
     depth = _max_depth(text)
     if depth > MAX_JSON_DEPTH:
         raise ValidationError(f"{path}: {kind} is nested {depth} levels deep; allowed: at most {MAX_JSON_DEPTH}")
@@ -317,12 +323,7 @@ def read_json(path: str | Path, kind: str) -> Any:
 def read_toml(path: str | Path, kind: str) -> dict[str, Any]:
     """Parse a TOML input file safely: size limit, UTF-8 (the bad byte's line), syntax (line
     and column); every failure is one :class:`ValidationError` line naming the file."""
-    raw = read_input_bytes(path, kind)
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        line = raw[: exc.start].count(b"\n") + 1
-        raise ValidationError(f"{path}:{line}: {kind} is not UTF-8 text (byte 0x{raw[exc.start]:02x})") from None
+    text = read_input_text(path, kind)
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

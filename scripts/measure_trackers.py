@@ -111,7 +111,11 @@ def main() -> int:
         print("\n| subject | true height | calibrated | error | pose |\n|---|---|---|---|---|")
         print("\n".join(cal_rows))
     if a.json:
-        a.json.write_text(json.dumps(report, indent=2))
+        sys.path.insert(0, str(REPO))  # engine importable even without PYTHONPATH
+        from engine.atomic import write_text
+
+        a.json.parent.mkdir(parents=True, exist_ok=True)
+        write_text(a.json, json.dumps(report, indent=2))
     return 0
 
 

@@ -18,6 +18,7 @@ from typing import Any
 
 from engine.atomic import write_text
 from engine.cli.comparison_doc import PASSES, render
+from engine.cli.rig_options import add_rig_map_option, rig_map_path
 from engine.errors import UserError
 
 DEFAULT_BLEND_S = 0.5
@@ -38,6 +39,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--only", metavar="A,B", help="run only these rows, e.g. dragposer,dragposer+blend (default: all)")
     p.add_argument("--table-only", action="store_true", help="only rebuild the document from the cache")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bars")
+    add_rig_map_option(p)
     p.set_defaults(func=_compare)
 
 
@@ -63,7 +65,7 @@ def _run(args: argparse.Namespace, files: list[Path], preset: str, gaps: bool, v
     )  # fmt: skip
     motions = []
     for f in files:
-        m = load_motion(f)
+        m = load_motion(f, rig_map=rig_map_path(args))
         motions.append((f, m.slice(0, args.max_frames) if args.max_frames else m))
     doc = _safe_doc(run_method_on_clips(ns, name, motions))
     doc.update(variant=variant, gaps=gaps, max_frames=args.max_frames, blend_s=blend)

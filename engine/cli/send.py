@@ -7,6 +7,7 @@ import argparse
 import math
 from pathlib import Path
 
+from engine.cli.rig_options import add_rig_map_option, rig_map_path
 from engine.errors import UserError
 
 
@@ -33,6 +34,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="axes to send in (VMC is unity; default: unity)")  # fmt: skip
     p.add_argument("--seed", type=int, default=0, help="seed of noise and drops (default: 0)")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    add_rig_map_option(p)
     p.set_defaults(func=_send)
 
 
@@ -65,7 +67,7 @@ def _send(args: argparse.Namespace) -> int:
 
     _check(args)
     host, port = parse_target(args.to)
-    motion = load_motion(args.input)
+    motion = load_motion(args.input, rig_map=rig_map_path(args))
     if args.max_frames:
         motion = motion.slice(0, args.max_frames)
     motion = scaled_motion(motion, args.scale)

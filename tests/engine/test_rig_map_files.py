@@ -74,3 +74,15 @@ def test_info_json_reports_a_bad_mapping_as_one_object(clip, tmp_path, capsys):
     assert main(["info", str(bvh), "--json", "--rig-map", str(bad)]) == 2
     out = json.loads(capsys.readouterr().out)
     assert "m.toml" in out["error"] and "joints.lknee" in out["error"]
+
+
+@pytest.mark.parametrize("command", [
+    ["info"], ["convert"], ["reconstruct"], ["evaluate"], ["bench"], ["data", "prepare"], ["live"], ["send"],
+    ["rig", "suggest"], ["compare"], ["gui"],
+])  # fmt: skip
+def test_every_command_that_reads_bvh_takes_a_rig_map(command, capsys):
+    from engine.cli.main import build_parser
+
+    with pytest.raises(SystemExit):
+        build_parser().parse_args([*command, "--help"])
+    assert "--rig-map MAP.toml" in capsys.readouterr().out

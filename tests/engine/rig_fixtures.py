@@ -5,9 +5,11 @@ headers). OFFSETs, family by family:
 
 * real, from public headers: ``cmu`` (the CMU conversion rig, in CMU's ASF unit of
   1/0.45 inch), ``daz`` (the cgspeed "Daz-friendly" rig, :data:`rig_headers.DAZ`, with its
-  eyes and fingers) and ``lafan`` (the LAFAN1 header, :data:`rig_headers.LAFAN1`, whose
-  zero pose is not a T-pose); ``mixamo``: the spine from a public Mixamo export;
-* synthetic: the rest of ``mixamo`` and ``smpl``, ``joint_root``, ``iclone``, ``unreal``,
+  eyes and fingers), ``lafan`` (the LAFAN1 header, :data:`rig_headers.LAFAN1`) and
+  ``joint_root`` (the Bandai Namco dataset's, :data:`rig_headers.BANDAI`), the last two
+  with bone frames along x, so their zero pose is not a T-pose; ``mixamo``: the spine
+  from a public Mixamo export;
+* synthetic: the rest of ``mixamo`` and ``smpl``, ``iclone``, ``unreal``,
   ``rokoko``, ``xsens`` are adult proportions (:data:`_BONES`, metres) written in each
   family's unit and up axis. No public header with numbers for these rigs was found in
   the indexed sources (SMPL's offsets come from the licensed model files; the others'
@@ -15,7 +17,7 @@ headers). OFFSETs, family by family:
 
 The motion is a synthetic walk from the rig's T-pose: hips swing and knees bend about
 the lateral axis, elbows about the vertical one, the spine sways, the root walks
-forward and turns. On a rig whose zero pose is not a T-pose (LAFAN1), each joint's
+forward and turns. On a rig whose zero pose is not a T-pose (LAFAN1, Bandai), each joint's
 rotation carries the bone frame that makes the T-pose (:func:`rig_headers.tpose_frames`),
 as the real files' rotations do.
 """
@@ -154,12 +156,8 @@ def family_rows(family: str):
                "foot": "{s}_ankle", "toe": "{s}_foot"}  # fmt: skip
         n = _table("", "left", "right", pat)
         return (*_humanoid(n, _spine(["spine1", "spine2", "spine3"], 1.0), 1.0), 1.0, "y")
-    if family == "joint_root":  # 22-joint game-studio rig under joint_Root, cm
-        pat = {"root": "Hips", "neck": "Neck", "head": "Head", "clav": "Shoulder_{s}", "upper": "UpperArm_{s}",
-               "fore": "LowerArm_{s}", "hand": "Hand_{s}", "thigh": "UpperLeg_{s}", "shin": "LowerLeg_{s}",
-               "foot": "Foot_{s}", "toe": "Toes_{s}"}  # fmt: skip
-        n = _table("", "L", "R", pat)
-        return (*_humanoid(n, _spine(["Spine", "Chest"], 100.0), 100.0, root_name="joint_Root"), 0.01, "y")
+    if family == "joint_root":  # the Bandai Namco dataset's 22-joint rig under joint_Root, cm
+        return (*rig_headers.parse(rig_headers.BANDAI), 0.01, "y")
     if family == "daz":  # the cgspeed Daz-friendly header (hip, lButtock, lThigh...), cm
         return (*rig_headers.parse(rig_headers.DAZ), 0.01, "y")
     if family == "iclone":  # Character Creator CC_Base_ names with twist bones, cm
@@ -246,7 +244,7 @@ def _motion(rows, frames: int, fps: float, up: str, units: float, seed: int) -> 
 
 
 #: Families whose OFFSETs are in each joint's own bone frame (zero pose not a T-pose).
-LOCAL_FRAMES = ("lafan",)
+LOCAL_FRAMES = ("lafan", "joint_root")
 
 
 def _with_bone_frames(data: np.ndarray, rows) -> np.ndarray:
@@ -264,6 +262,18 @@ def _with_bone_frames(data: np.ndarray, rows) -> np.ndarray:
         left = Q.conjugate(g[parent]) if parent is not None else np.array([1.0, 0.0, 0.0, 0.0])
         q = Q.mul(Q.mul(np.broadcast_to(left, q.shape), q), np.broadcast_to(g[name], q.shape))
         out[:, cols] = np.degrees(Q.to_euler(q, np.broadcast_to(order, (len(data), 3))))
+    return out
+
+
+def _root_under_hub(data: np.ndarray, hub_offset: np.ndarray) -> np.ndarray:
+    """Move a top node's position channels so that its child (the hips, ``hub_offset``
+    from it) walks where the clip's root walked."""
+    from engine.kinematics import quaternion as Q
+
+    order = np.broadcast_to(np.array(["z", "x", "y"]), (len(data), 3))
+    q = Q.from_euler(np.radians(data[:, 3:6]), order)
+    out = data.copy()
+    out[:, :3] -= Q.rotate(q, np.broadcast_to(hub_offset, (len(data), 3)))
     return out
 
 
@@ -318,6 +328,8 @@ def write_family_bvh(path: Path, family: str, frames: int = 240, fps: float = 60
     data = _motion([by_name[n] for n in order], frames, fps, up, units, seed)
     if family in LOCAL_FRAMES:
         data = _with_bone_frames(data, [by_name[n] for n in order])
+    if family == "joint_root":  # joint_Root sits under the hips: its channels place the hips' walk
+        data = _root_under_hub(data, np.array(by_name[order[1]][2], float))
     if up == "z":  # Y-up motion written for a Z-up rig: turn the whole rig +90 degrees about X
         data = _turn_x90(data)
     lines += ["MOTION", f"Frames: {frames}", f"Frame Time: {1.0 / fps:.6f}"]

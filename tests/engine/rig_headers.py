@@ -105,6 +105,42 @@ RightHand RightForeArm 25.199780 0.000135 0.000422
 """
 
 
+#: ``joint_``-prefixed game rig: the Bandai Namco Research Motion dataset (centimetres,
+#: Y-up; bone frames along each joint's x axis like LAFAN1, the right side's offsets
+#: negated; the files give every joint 6 channels, written here with 3 rotations).
+#: Source: BandaiNamcoResearchInc/Bandai-Namco-Research-Motiondataset,
+#: dataset/Bandai-Namco-Research-Motiondataset-1/data/dataset-1_bow_active_001.bvh (commit 3c23012).
+BANDAI = """
+joint_Root - 0 0 0
+Hips joint_Root 0.847027 93.984 -452.225
+Spine Hips 15.7357 0 0
+Chest Spine 8.98455 -0.406207 0
+Neck Chest 16.3773 0 0
+Head Neck 6.45672 0 0
+End Head 0 0 0
+Shoulder_L Chest 12.9942 -0.242716 4.98039
+UpperArm_L Shoulder_L 5.34809 0 0
+LowerArm_L UpperArm_L 24.3286 1.87007e-05 0
+Hand_L LowerArm_L 22.2916 0 0
+End Hand_L 0 0 0
+Shoulder_R Chest 12.9945 -0.242716 -4.98039
+UpperArm_R Shoulder_R -5.34813 0 0
+LowerArm_R UpperArm_R -24.3289 0.000322201 0
+Hand_R LowerArm_R -22.2915 -0.000108084 0
+End Hand_R 0 0 0
+UpperLeg_L Hips -2.19248 -6.46944 0
+LowerLeg_L UpperLeg_L 39.0811 0 -1.23785e-05
+Foot_L LowerLeg_L 40.9854 0 -1.26872e-05
+Toes_L Foot_L 11.7543 0 0
+End Toes_L 0 0 0
+UpperLeg_R Hips -2.19251 6.46944 0
+LowerLeg_R UpperLeg_R -39.0811 -0.00228153 -0.0401928
+Foot_R LowerLeg_R -40.9854 0 0
+Toes_R Foot_R -11.7543 0 0
+End Toes_R 0 0 0
+"""
+
+
 def parse(table: str) -> tuple[list[tuple[str, str | None, tuple]], dict[str, tuple]]:
     """``(rows, end_sites)`` of a table: rows are ``(name, parent, offset)`` in file order."""
     rows, ends = [], {}
@@ -125,6 +161,15 @@ def _frame(a1: np.ndarray, a2: np.ndarray) -> np.ndarray:
     return np.stack([e1, e2, np.cross(e1, e2)], axis=1)
 
 
+def _side(name: str) -> int:
+    """+1 for a left joint (``Left...``, ``..._L``), -1 for a right one, 0 on the midline."""
+    if name.startswith("Left") or name.endswith("_L"):
+        return 1
+    if name.startswith("Right") or name.endswith("_R"):
+        return -1
+    return 0
+
+
 def _aim(child: str) -> np.ndarray:
     """World direction (Y-up, facing +Z, left = +X) of the bone ending at ``child`` in a T-pose."""
     if "Toe" in child:
@@ -132,7 +177,7 @@ def _aim(child: str) -> np.ndarray:
     if "Leg" in child or "Foot" in child:
         return np.array([0.0, -1.0, 0.0])
     if any(k in child for k in ("Arm", "Hand")):
-        return np.array([1.0 if child.startswith("Left") else -1.0, 0.0, 0.0])
+        return np.array([float(_side(child)), 0.0, 0.0])
     return np.array([0.0, 1.0, 0.0])  # spine, neck, head
 
 
@@ -141,7 +186,8 @@ def tpose_frames(rows) -> dict[str, np.ndarray]:
 
     A joint with one child turns by the least rotation that aims that bone as in a T-pose;
     a joint with several (hips, upper spine) aims the central child up and its left child's
-    side at +X; a leaf keeps its parent's rotation.
+    side at +X; a leaf, or a top node above the hips (``joint_Root``), keeps its parent's
+    rotation.
     """
     kids: dict[str, list] = {}
     for name, parent, off in rows:
@@ -153,10 +199,10 @@ def tpose_frames(rows) -> dict[str, np.ndarray]:
         ch = kids.get(name, [])
         up = glob.get(parent, np.eye(3))
         if len(ch) > 1:
-            mid = next(o for n, o in ch if not n.startswith(("Left", "Right")))
-            left = next(o for n, o in ch if n.startswith("Left")) - next(o for n, o in ch if n.startswith("Right"))
+            mid = next(o for n, o in ch if _side(n) == 0)
+            left = next(o for n, o in ch if _side(n) > 0) - next(o for n, o in ch if _side(n) < 0)
             glob[name] = _frame(np.array([0.0, 1.0, 0.0]), np.array([1.0, 0.0, 0.0])) @ _frame(mid, left).T
-        elif ch:
+        elif ch and len(kids.get(ch[0][0], [])) < 2:
             child, off = ch[0]
             turn = Q.to_matrix(Q.from_to((up @ off)[None], _aim(child)[None]))[0]
             glob[name] = turn @ up

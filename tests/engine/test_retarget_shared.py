@@ -99,8 +99,10 @@ def test_every_shared_clip_keeps_its_height_and_rotates_like_the_canonical_clips
         motion, rep = load_with_report(path)
         assert abs(rep.height_m / rep.source_height_m - 1) < 0.03, (path, rep.height_m, rep.source_height_m)
         report = joint_report(motion.local_rot, motion.skeleton.offsets)
-        groups.setdefault(path.relative_to(shared_mocap).parts[0], {})[path.name] = report
+        rel = path.relative_to(shared_mocap)
+        groups.setdefault(rel.parts[0], {})[str(rel)] = report
     table = summarize(groups, "dragposer")
+    assert [table["lknee"][g]["clips"] for g in ("dragposer", "cmu_daz", "cmu_iclone")] == [3, 16, 59]
     for group in ("cmu_daz", "cmu_iclone"):
         for knee in ("lknee", "rknee"):  # the hinge of every clip, with DragPoser's few degrees of twist
             row = table[knee][group]

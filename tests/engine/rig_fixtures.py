@@ -3,17 +3,16 @@
 Joint names and hierarchies are those of the real rigs (facts from their public BVH
 headers). OFFSETs, family by family:
 
-* real, from public headers: ``cmu`` (the CMU conversion rig, in CMU's ASF unit of
-  1/0.45 inch), ``daz`` (the cgspeed "Daz-friendly" rig, :data:`rig_headers.DAZ`, with its
-  eyes and fingers), ``lafan`` (the LAFAN1 header, :data:`rig_headers.LAFAN1`) and
-  ``joint_root`` (the Bandai Namco dataset's, :data:`rig_headers.BANDAI`), the last two
-  with bone frames along x, so their zero pose is not a T-pose; ``mixamo``: the spine
-  from a public Mixamo export;
-* synthetic: the rest of ``mixamo`` and ``smpl``, ``iclone``, ``unreal``,
-  ``rokoko``, ``xsens`` are adult proportions (:data:`_BONES`, metres) written in each
-  family's unit and up axis. No public header with numbers for these rigs was found in
-  the indexed sources (SMPL's offsets come from the licensed model files; the others'
-  exports are not published as text); the names and hierarchies are still theirs.
+* real, from public headers (:mod:`rig_headers`, each with its source): ``cmu`` (the CMU
+  conversion rig, in CMU's ASF unit of 1/0.45 inch), ``mixamo`` (a Mixamo export,
+  ``mixamorig7:`` prefix), ``daz`` (the cgspeed "Daz-friendly" rig, with its eyes and
+  fingers), ``lafan`` (LAFAN1) and ``joint_root`` (the Bandai Namco dataset's rig), the
+  last two with bone frames along x, so their zero pose is not a T-pose;
+* synthetic: ``smpl``, ``iclone``, ``unreal``, ``rokoko``, ``xsens`` are adult proportions
+  (:data:`_BONES`, metres) written in each family's unit and up axis. No public header
+  with numbers for these rigs was found in the indexed sources (SMPL's offsets come from
+  the licensed model files; the others' exports are not published as text); the names
+  and hierarchies are still theirs.
 
 The motion is a synthetic walk from the rig's T-pose: hips swing and knees bend about
 the lateral axis, elbows about the vertical one, the spine sways, the root walks
@@ -99,11 +98,8 @@ _MB = {"root": "Hips", "neck": "Neck", "head": "Head", "clav": "{s}Shoulder", "u
        "toe": "{s}ToeBase"}  # fmt: skip
 
 
-def _spine(names: list[str], scale: float, first=None):
-    segs = [(nm, _o("spine", scale=scale)) for nm in names]
-    if first is not None:
-        segs[0] = (names[0], first)
-    return segs
+def _spine(names: list[str], scale: float):
+    return [(nm, _o("spine", scale=scale)) for nm in names]
 
 
 def cmu_rows():
@@ -142,12 +138,8 @@ def family_rows(family: str):
     if family == "cmu":
         rows, ends = cmu_rows()
         return rows, ends, 0.0254 / 0.45, "y"
-    if family == "mixamo":  # cm; spine OFFSETs from a public Mixamo export
-        n = _table("mixamorig:", "Left", "Right", _MB)
-        spine = [("mixamorig:Spine", (0.0, 10.181595, 0.131521)), ("mixamorig:Spine1", (0.0, 9.893959, -1.470711)),
-                 ("mixamorig:Spine2", (0.0, 9.220757, -1.370642))]  # fmt: skip
-        rows, ends = _humanoid(n, spine, 100.0)
-        return rows, ends, 0.01, "y"
+    if family == "mixamo":  # a real Mixamo export (mixamorig7: prefix, end joints), cm
+        return (*rig_headers.parse(rig_headers.MIXAMO), 0.01, "y")
     if family == "lafan":  # the LAFAN1 header (LeftToe, Spine2), cm, bone frames along x
         return (*rig_headers.parse(rig_headers.LAFAN1), 0.01, "y")
     if family == "smpl":  # SMPL/AMASS joint names, metres
@@ -196,8 +188,9 @@ FAMILIES = ("cmu", "mixamo", "lafan", "smpl", "joint_root", "daz", "iclone", "un
 EXPECTED = {
     "cmu": {"root": "Hips", "lhip": "LeftUpLeg", "lknee": "LeftLeg", "lclavicle": "LeftShoulder",
             "lshoulder": "LeftArm", "chest": "Spine1", "lowerneck": "Neck1", "upperneck": "Head"},
-    "mixamo": {"root": "mixamorig:Hips", "lhip": "mixamorig:LeftUpLeg", "ltoe": "mixamorig:LeftToeBase",
-               "lshoulder": "mixamorig:LeftArm", "chest": "mixamorig:Spine2", "upperback": "mixamorig:Spine1"},
+    "mixamo": {"root": "mixamorig7:Hips", "lhip": "mixamorig7:LeftUpLeg", "ltoe": "mixamorig7:LeftToeBase",
+               "lshoulder": "mixamorig7:LeftArm", "chest": "mixamorig7:Spine2", "upperback": "mixamorig7:Spine1",
+               "upperneck": "mixamorig7:Head"},
     "lafan": {"ltoe": "LeftToe", "chest": "Spine2", "lelbow": "LeftForeArm"},
     "smpl": {"root": "pelvis", "lhip": "left_hip", "lknee": "left_knee", "lankle": "left_ankle",
              "ltoe": "left_foot", "lclavicle": "left_collar", "lshoulder": "left_shoulder", "chest": "spine3"},

@@ -73,6 +73,51 @@ lFoot lShin -0.73152 -45.1104 -5.12064
 End lFoot 1.1221 -3.69964 12.103
 """
 
+#: Mixamo: a character exported from mixamo.com (prefix ``mixamorig7:``; centimetres,
+#: Y-up, T-pose at zero rotation; ``HeadTop_End`` and ``Toe_End`` are joints). Only the
+#: middle finger of each hand is kept of the fingers.
+#: Source: PeizhuoLi/ganimator, data/Joe/Walk-In-Circle.bvh (commit 81dd087).
+MIXAMO = """
+mixamorig7:Hips - 0 99.793892 0
+mixamorig7:Spine mixamorig7:Hips 0 9.694397 -1.109700
+mixamorig7:Spine1 mixamorig7:Spine 0 11.310143 -1.294687
+mixamorig7:Spine2 mixamorig7:Spine1 0 12.925888 -1.479643
+mixamorig7:Neck mixamorig7:Spine2 0 14.541641 -1.664600
+mixamorig7:Head mixamorig7:Neck 0 6.944305 1.982500
+mixamorig7:HeadTop_End mixamorig7:Head 0 22.789597 6.506100
+End mixamorig7:HeadTop_End 0 23.700119 0
+mixamorig7:LeftShoulder mixamorig7:Spine2 6.681300 12.786087 -1.621969
+mixamorig7:LeftArm mixamorig7:LeftShoulder 13.585576 -3.446136 0.085203
+mixamorig7:LeftForeArm mixamorig7:LeftArm 27.330299 0 -0.000001
+mixamorig7:LeftHand mixamorig7:LeftForeArm 20.888802 0 -0.000001
+mixamorig7:LeftHandMiddle1 mixamorig7:LeftHand 11.227951 0 -0.000001
+mixamorig7:LeftHandMiddle2 mixamorig7:LeftHandMiddle1 3.465431 0 0
+mixamorig7:LeftHandMiddle3 mixamorig7:LeftHandMiddle2 3.340118 0 0
+mixamorig7:LeftHandMiddle4 mixamorig7:LeftHandMiddle3 2.993599 0 0
+End mixamorig7:LeftHandMiddle4 2.993607 -0.000061 -0.003500
+mixamorig7:RightShoulder mixamorig7:Spine2 -6.681300 12.786102 -1.707222
+mixamorig7:RightArm mixamorig7:RightShoulder -13.585576 -3.446152 -0.085196
+mixamorig7:RightForeArm mixamorig7:RightArm -27.318214 0 0.000002
+mixamorig7:RightHand mixamorig7:RightForeArm -20.889801 0 0.000001
+mixamorig7:RightHandMiddle1 mixamorig7:RightHand -11.291573 0 0
+mixamorig7:RightHandMiddle2 mixamorig7:RightHandMiddle1 -3.513855 0 0
+mixamorig7:RightHandMiddle3 mixamorig7:RightHandMiddle2 -3.299538 0 0
+mixamorig7:RightHandMiddle4 mixamorig7:RightHandMiddle3 -2.888702 0 0
+End mixamorig7:RightHandMiddle4 -2.888702 -0.000076 -0.003599
+mixamorig7:LeftUpLeg mixamorig7:Hips 8.726300 -5.393196 -0.445400
+mixamorig7:LeftLeg mixamorig7:LeftUpLeg 0.203112 -40.995728 -2.240422
+mixamorig7:LeftFoot mixamorig7:LeftLeg -0.203116 -41.811745 -4.341125
+mixamorig7:LeftToeBase mixamorig7:LeftFoot 2.022961 -9.567262 15.917597
+mixamorig7:LeftToe_End mixamorig7:LeftToeBase 0.919500 0.587269 6.993709
+End mixamorig7:LeftToe_End 0.919500 0.587269 6.993710
+mixamorig7:RightUpLeg mixamorig7:Hips -8.726300 -5.393196 -0.458900
+mixamorig7:RightLeg mixamorig7:RightUpLeg -0.203119 -40.995686 -2.183443
+mixamorig7:RightFoot mixamorig7:RightLeg 0.203109 -41.812000 -3.686646
+mixamorig7:RightToeBase mixamorig7:RightFoot -2.022940 -9.566534 15.362668
+mixamorig7:RightToe_End mixamorig7:RightToeBase -0.919481 0.587567 7.048032
+End mixamorig7:RightToe_End -0.919481 0.587567 7.048031
+"""
+
 #: LAFAN1 (Ubisoft La Forge animation dataset): every file of the dataset shares this
 #: header (centimetres, Y-up). Its offsets lie along each joint's own x axis, so the zero
 #: rotation pose is not a T-pose: the clips' rotations carry the bone frames.

@@ -1,12 +1,22 @@
-"""The pose decoder as a few dense layers, with its input gradient derived by hand.
+"""The pose decoder as a few block-sparse layers, with its input gradient derived by hand.
 
 Every stage of :meth:`engine.models.vae.PoseVAE.decode` between two activations is
 affine: an unpooling copy followed by a skeletal linear layer (a gather and per-node
-weights). Each such stage is therefore exactly one dense matrix and bias, read off by
-feeding the stage the unit vectors (in float64, then stored in float32 like the model).
-The decoder becomes six matrix-vector products with LeakyReLU in between, and its
-gradient with respect to the latent is the same products transposed, which is what the
-solver needs per iteration; no autograd graph, no per-node gathers.
+weights). Each such stage is therefore exactly one matrix and bias, read off by feeding
+the stage the unit vectors (in float64, then stored in float32 like the model). The
+decoder becomes six matrix-vector products with LeakyReLU in between, and its gradient
+with respect to the latent is the same products transposed, which is what the solver
+needs per iteration; no autograd graph, no per-node gathers.
+
+Those matrices are mostly zeros (a node only reads its neighbours in the joint graph):
+of 1.77 M entries only 0.64 M are not. What costs time per iteration is reading the
+weights (twice: forward and backward), so each matrix is stored as a few dense
+rectangles: consecutive output nodes are grouped into *runs*, each run keeps only the
+contiguous range of input columns its nodes read, and a run is one BLAS product on
+slices (no gather, no copy). The grouping minimises ``entries stored + CALL_COST per
+run`` by dynamic programming over the node order (:func:`plan_runs`), once for the
+forward layout and once for the transposed (backward) layout. Entries outside every
+rectangle are exactly zero in the dense matrix, so the products are the same sums.
 
 The last stage folds in the quaternion identity bias and the displacement's
 de-normalisation, so its output is ``(q_raw (22*4), disp (3))`` in metres.
@@ -15,15 +25,88 @@ de-normalisation, so its output is ``(q_raw (22*4), disp (3))`` in metres.
 from __future__ import annotations
 
 import copy
+from dataclasses import dataclass
 
 import numpy as np
 import torch
 
 from engine.models.skeletal import level_sizes
 
+#: Cost of one more BLAS call in the run planner, in weight entries (about the
+#: entries one call's overhead could have read; measured, see docs/performance.md).
+CALL_COST = 8000
+
+
+@dataclass(frozen=True)
+class Run:
+    """One dense rectangle of a block-sparse matrix: ``y[r0:r1] = w @ x[c0:c1]``."""
+
+    r0: int
+    r1: int
+    c0: int
+    c1: int
+    w: np.ndarray  # (r1 - r0, c1 - c0) float32, C-contiguous
+
+
+def plan_runs(w: np.ndarray, rows: list[tuple[int, int]], cols: list[tuple[int, int]],
+              call_cost: float = CALL_COST) -> list[Run]:  # fmt: skip
+    """Cover the non-zero node blocks of ``w (out, in)`` by row runs (module doc).
+
+    Parameters
+    ----------
+    w : ndarray (out, in)
+    rows, cols : list of (start, stop)
+        Consecutive node partitions of the rows and the columns.
+    call_cost : float
+        Entries one more run must save to be worth its call.
+
+    Returns
+    -------
+    list of Run
+        Disjoint row ranges covering every row, in order.
+    """
+    mask = np.array([[np.any(w[r0:r1, c0:c1] != 0) for c0, c1 in cols] for r0, r1 in rows])
+    n = len(rows)
+    best, start = [0.0] + [np.inf] * n, [0] * (n + 1)
+
+    def span(s: int, e: int) -> tuple[int, int]:
+        used = np.nonzero(mask[s:e].any(0))[0]
+        if len(used) == 0:  # rows that read nothing: an empty product
+            return 0, 0
+        return cols[used[0]][0], cols[used[-1]][1]
+
+    for e in range(1, n + 1):
+        for s in range(e):
+            c0, c1 = span(s, e)
+            cost = best[s] + (rows[e - 1][1] - rows[s][0]) * (c1 - c0) + call_cost
+            if cost < best[e]:
+                best[e], start[e] = cost, s
+    runs, e = [], n
+    while e > 0:
+        s = start[e]
+        (r0, r1), (c0, c1) = (rows[s][0], rows[e - 1][1]), span(s, e)
+        runs.append(Run(r0, r1, c0, c1, np.ascontiguousarray(w[r0:r1, c0:c1], dtype=np.float32)))
+        e = s
+    return runs[::-1]
+
+
+def _matvec(runs: list[Run], x: np.ndarray, out: np.ndarray) -> np.ndarray:
+    """``out = W @ x`` for a matrix stored as :func:`plan_runs` rectangles."""
+    for r in runs:
+        if r.c1 > r.c0:
+            np.dot(r.w, x[r.c0:r.c1], out=out[r.r0:r.r1])
+        else:
+            out[r.r0:r.r1] = 0.0
+    return out
+
+
+def _nodes(count: int, width: int, start: int = 0) -> list[tuple[int, int]]:
+    return [(start + i * width, start + (i + 1) * width) for i in range(count)]
+
 
 class DenseDecoder:
-    """Dense, gradient-aware copy of a :class:`PoseVAE` decoder (numpy, one latent at a time).
+    """Gradient-aware copy of a :class:`PoseVAE` decoder (numpy, one latent at a time),
+    its matrices stored block-sparse (module doc).
 
     Parameters
     ----------
@@ -33,12 +116,15 @@ class DenseDecoder:
     Attributes
     ----------
     weights : list of ndarray (out, in), float32
+        The dense stage matrices (the exact reference; not used per iteration).
     biases : list of ndarray (out,), float32
+    forward_runs, backward_runs : list of list of Run
+        Per stage, the rectangles of the matrix and of its transpose.
     slope : float
         LeakyReLU negative slope (after every stage but the last).
     """
 
-    def __init__(self, vae) -> None:
+    def __init__(self, vae, call_cost: float = CALL_COST) -> None:
         m = copy.deepcopy(vae).double().eval()
         n = level_sizes()
         ch = m.config.channels
@@ -58,6 +144,9 @@ class DenseDecoder:
             (n[0] * ch[0], lambda x: m.dec[3](x.reshape(-1, n[0], ch[0])).flatten(1)),
             (n[0] * ch[0], last),
         ]
+        # node partitions of each stage's input and output (the latent is one node)
+        parts = [[(0, m.config.latent)], _nodes(n[3], ch[3]), _nodes(n[2], ch[2]), _nodes(n[1], ch[1]),
+                 _nodes(n[0], ch[0]), _nodes(n[0], ch[0]), _nodes(n[0], 4) + [(4 * n[0], 4 * n[0] + 3)]]  # fmt: skip
         self.weights, self.biases = [], []
         with torch.no_grad():
             for size, f in stages:
@@ -66,31 +155,44 @@ class DenseDecoder:
                 w = (f(eye) - bias).T  # (out, in)
                 self.weights.append(np.ascontiguousarray(w.numpy(), dtype=np.float32))
                 self.biases.append(bias.numpy().astype(np.float32))
+        self.forward_runs = [plan_runs(w, parts[i + 1], parts[i], call_cost) for i, w in enumerate(self.weights)]
+        self.backward_runs = [plan_runs(np.ascontiguousarray(w.T), parts[i], parts[i + 1], call_cost)
+                              for i, w in enumerate(self.weights)]  # fmt: skip
         self.slope = float(m.config.negative_slope)
         self.latent = int(m.config.latent)
-        self._gates: list[np.ndarray] = []
+        # per-stage buffers: pre-activations (kept for the backward gates) and gradients
+        self._pre = [np.empty(w.shape[0], np.float32) for w in self.weights]
+        self._act = [np.empty(w.shape[0], np.float32) for w in self.weights[:-1]]
+        self._grad = [np.empty(w.shape[1], np.float32) for w in self.weights]
+        self._gate = [np.empty(w.shape[0], np.float32) for w in self.weights[:-1]]
+
+    def stored_entries(self) -> tuple[int, int]:
+        """Weight entries read per forward and per backward pass (dense: all of them)."""
+        return (sum(r.w.size for runs in self.forward_runs for r in runs),
+                sum(r.w.size for runs in self.backward_runs for r in runs))  # fmt: skip
 
     def forward(self, z: np.ndarray) -> np.ndarray:
-        """``z (L,)`` float32 -> ``(q_raw (88,), disp (3,))`` concatenated, float32.
-
-        Remembers the activation slopes for the next :meth:`backward`."""
-        x = z
-        self._gates = []
+        """``z (L,)`` float32 -> ``(q_raw (88,), disp (3,))`` concatenated, float32 (a new
+        array). Remembers the activation slopes for the next :meth:`backward`."""
+        x = np.asarray(z, dtype=np.float32)
         last = len(self.weights) - 1
-        for i, (w, b) in enumerate(zip(self.weights, self.biases)):
-            x = w @ x + b
+        slope = np.float32(self.slope)
+        for i, runs in enumerate(self.forward_runs):
+            y = _matvec(runs, x, self._pre[i])
+            y += self.biases[i]
             if i < last:
-                gate = np.where(x > 0, np.float32(1.0), np.float32(self.slope))
-                self._gates.append(gate)
-                x = x * gate
-        return x
+                gate = self._gate[i]
+                np.copyto(gate, slope)
+                gate[y > 0] = 1.0
+                x = np.multiply(y, gate, out=self._act[i])
+        return self._pre[last].copy()
 
     def backward(self, grad_out: np.ndarray) -> np.ndarray:
         """Gradient w.r.t. the latent ``(L,)`` of a loss whose gradient w.r.t. the last
-        :meth:`forward` output is ``grad_out (91,)``."""
-        g = grad_out.astype(np.float32, copy=False)
+        :meth:`forward` output is ``grad_out (91,)`` (a new array)."""
+        g = np.asarray(grad_out, dtype=np.float32)
         for i in range(len(self.weights) - 1, -1, -1):
-            if i < len(self._gates):
-                g = g * self._gates[i]
-            g = g @ self.weights[i]
-        return g
+            if i < len(self._gate):
+                g = g * self._gate[i]
+            g = _matvec(self.backward_runs[i], g, self._grad[i])
+        return g.copy()

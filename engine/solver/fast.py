@@ -31,20 +31,28 @@ from engine.models.fused import DenseDecoder
 _EPS = 1e-8  # quaternion normalisation floor, as in engine.kinematics.quaternion.normalize
 
 
+def _levi_civita() -> np.ndarray:
+    e = np.zeros((3, 3, 3))
+    e[0, 1, 2] = e[1, 2, 0] = e[2, 0, 1] = 1.0
+    e[0, 2, 1] = e[2, 1, 0] = e[1, 0, 2] = -1.0
+    return e
+
+
+_EPS3 = _levi_civita()
+#: ``cross(a, b) = (a outer b).reshape(9) @ _CROSS``; ``axial(M) = M.reshape(9) @ _AXIAL``
+#: (``(M21 - M12, M02 - M20, M10 - M01)``): one matmul each instead of a dozen small ops.
+_CROSS = _EPS3.transpose(1, 2, 0).reshape(9, 3)
+_AXIAL = _EPS3.transpose(2, 1, 0).reshape(9, 3)
+
+
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Row-wise cross product of ``(N, 3)`` arrays (np.cross costs ~10x more at this size)."""
-    return a[:, _YZX] * b[:, _ZXY] - a[:, _ZXY] * b[:, _YZX]
+    return (a[:, :, None] * b[:, None, :]).reshape(-1, 9) @ _CROSS
 
 
-_YZX, _ZXY = np.array([1, 2, 0]), np.array([2, 0, 1])
-
-
-class _Level:
-    """One FK level: its joints and their parents."""
-
-    def __init__(self, joints: np.ndarray, parents: np.ndarray) -> None:
-        self.joints = joints
-        self.parents = parents
+def _axial(m: np.ndarray) -> np.ndarray:
+    """Axial vectors ``(N, 3)`` of the antisymmetric parts (times 2) of ``m (N, 3, 3)``."""
+    return m.reshape(-1, 9) @ _AXIAL
 
 
 class FastTerms:
@@ -60,7 +68,6 @@ class FastTerms:
         self.names = [c.name for c in sensors] + ([prior.name] if prior is not None else [])
         self.weights = np.array([c.weight for c in sensors] + ([weights_prior] if prior is not None else []))
         self.joint = np.array([sk.JOINT_INDEX[c.joint] for c in sensors], dtype=np.intp)
-        self.unique_joints = len(set(self.joint.tolist())) == len(self.joint)
         self.target = np.array([c.position for c in sensors], dtype=np.float64).reshape(-1, 3)
         self.on = np.array([float(c.connected) for c in sensors])
         six = [k for k, c in enumerate(sensors) if c.dof == 6]
@@ -79,6 +86,12 @@ class FastTerms:
 class FastPose:
     """Forward and reverse pass of decode -> root -> FK -> losses for one latent.
 
+    Joints are stored in level order (root, then depth 1, 2, ...; :func:`levels`), so
+    each FK level is one contiguous slice: a level's world rotations are one gather of
+    the parents and one stacked product written in place, and the positions follow for
+    all joints at once as ``root + ancestors @ (W_parent offset)``. The per-call numpy
+    overhead, not arithmetic, is what one 22-joint pose costs, hence few, larger calls.
+
     Parameters
     ----------
     decoder : DenseDecoder
@@ -88,22 +101,30 @@ class FastPose:
 
     def __init__(self, decoder: DenseDecoder, offsets: np.ndarray) -> None:
         self.decoder = decoder
-        self.offsets = np.asarray(offsets, dtype=np.float64)
+        n = self.n = sk.NUM_JOINTS
         lv = levels(sk.PARENTS)
-        par = np.array([0] + list(sk.PARENTS[1:]))
-        self.levels = [_Level(j, par[j]) for j in lv.joints]
-        self.off_col = self.offsets[:, :, None]  # (22, 3, 1)
-        self.n = sk.NUM_JOINTS
-        self.parent_index = par
-        # subtree[j, d] = 1 when d is j or one of its descendants
-        self.subtree = np.eye(self.n)
-        for d in range(1, self.n):
-            a = par[d]
-            while True:
-                self.subtree[a, d] = 1.0
-                if a == 0:
-                    break
-                a = par[a]
+        self.order = np.concatenate([[0], *lv.joints]).astype(np.intp)  # row -> joint
+        self.row = np.asarray(lv.unorder, dtype=np.intp)  # joint -> row
+        prow = np.concatenate([[0], *lv.parent_rows]).astype(np.intp)  # row -> parent's row (root: itself)
+        self.prow = prow
+        bounds = np.cumsum([1] + [len(j) for j in lv.joints])
+        self.level_slices = [(int(a), int(b), prow[a:b]) for a, b in zip(bounds[:-1], bounds[1:])]
+        self.q_index = (4 * self.order[:, None] + np.arange(4)).reshape(-1)  # decoder output -> level order
+        offsets = np.asarray(offsets, dtype=np.float64)
+        self.offsets = offsets
+        self.off_col = offsets[self.order][1:, :, None]  # (21, 3, 1), rows 1..
+        # chain[r, b]: 1 when bone b (the bone into row b + 1) lies on the path root -> row r;
+        # subtree[r, d]: 1 when row d is row r or below it
+        chain = np.zeros((n, n - 1))
+        for r in range(1, n):
+            a = r
+            while a != 0:
+                chain[r, a - 1] = 1.0
+                a = prow[a]
+        self.chain = chain
+        self.subtree = np.ones((n, n))
+        self.subtree[1:] = chain.T  # bone r - 1 ends at row r
+        self._out = np.zeros(4 * n + 3, dtype=np.float32)
 
     def setup(self, heading: np.ndarray, prev_pos: np.ndarray, override_pos: np.ndarray | None,
               override_rot: np.ndarray | None, anchor_joint: int | None, anchor_pos: np.ndarray | None,
@@ -114,55 +135,75 @@ class FastPose:
         self.prev_pos = prev_pos
         self.override_pos = override_pos
         self.override_rot = None if override_rot is None else QN.to_matrix(override_rot)
-        self.anchor = anchor_joint if override_pos is None else None
+        self.anchor = None if anchor_joint is None or override_pos is not None else int(self.row[anchor_joint])
         self.anchor_pos = anchor_pos
-        self.terms = terms
+        self.terms = t = terms
+        self.rows = self.row[t.joint]  # sensor rows
+        self.rows6 = self.rows[t.six]
+        w = t.weights[: t.n_sensors] * t.on
+        self.w2 = (2.0 * w)[:, None]
+        self.rot_coef = -0.25 * w[t.six] * t.rot_weight
+        # points whose position gradient is not zero: the sensors (and the anchor, which
+        # takes minus their sum), with the subtree columns of each
+        pts = self.rows if self.anchor is None else np.append(self.rows, self.anchor)
+        self.points = pts
+        self.sub_points = self.subtree[:, pts]
+        self.sub_rot = self.subtree[:, self.rows6]
 
     # -- forward -------------------------------------------------------------------
     def forward(self, z: np.ndarray) -> np.ndarray:
         """Per-term losses ``(K,)`` at latent ``z (L,)`` float32; keeps what :meth:`backward` needs."""
-        out = self.decoder.forward(z)
-        return self.after_decoder(z, out)
+        return self.after_decoder(z, self.decoder.forward(z))
 
     def after_decoder(self, z: np.ndarray, out: np.ndarray) -> np.ndarray:
         """The part of :meth:`forward` after the decoder (FK and losses)."""
-        n = self.n
-        q = out[: 4 * n].astype(np.float64).reshape(n, 4)
-        disp = out[4 * n:].astype(np.float64)
-        norm = np.maximum(np.sqrt((q * q).sum(-1, keepdims=True)), _EPS)
-        u = q / norm
-        sign = np.where(u[:, :1] < 0, -1.0, 1.0)
-        r = u * sign
-        local = QN.to_matrix(r)
-        self.q, self.norm, self.u, self.sign, self.r, self.local = q, norm, u, sign, r, local
+        n, t = self.n, self.terms
+        q = out[self.q_index].astype(np.float64).reshape(n, 4)
+        norm = np.sqrt(np.einsum("ij,ij->i", q, q))
+        np.maximum(norm, _EPS, out=norm)
+        u = q / norm[:, None]
+        local = QN.to_matrix(u)  # R(u) = R(-u): the canonical sign does not matter here
         world = np.empty((n, 3, 3))
-        pos = np.empty((n, 3))
         world[0] = self.override_rot if self.override_rot is not None else self.h @ local[0]
-        pos[0] = self.override_pos if self.override_pos is not None else self.prev_pos + self.h @ disp
-        for lv in self.levels:
-            pw = world[lv.parents]
-            pos[lv.joints] = pos[lv.parents] + (pw @ self.off_col[lv.joints])[..., 0]
-            world[lv.joints] = pw @ local[lv.joints]
-        if self.anchor is not None:
-            pos = pos + (self.anchor_pos - pos[self.anchor])
-        self.world, self.pos, self.z = world, pos, z
-        t = self.terms
-        self.err = pos[t.joint] - t.target
-        self.pos_loss = (self.err * self.err).sum(-1)
-        losses = self.pos_loss.copy()
+        for a, b, parents in self.level_slices:
+            np.matmul(world[parents], local[a:b], out=world[a:b])
+        bones = np.matmul(world[self.prow[1:]], self.off_col)[:, :, 0]  # (21, 3)
+        root = self.override_pos if self.override_pos is not None else self.prev_pos + self.h @ out[4 * n:]
+        pos = self.chain @ bones
+        pos += root if self.anchor is None else self.anchor_pos - pos[self.anchor]
+        self.norm, self.u, self.world_lo, self.pos_lo, self.z = norm, u, world, pos, z
+        self.err = pos[self.rows] - t.target
+        self.pos_loss = losses = np.einsum("ij,ij->i", self.err, self.err)
         if len(t.six):
-            c = (3.0 - (t.rot_target * world[t.joint[t.six]]).sum((-1, -2))) * 0.25
+            c = (3.0 - np.einsum("kij,kij->k", t.rot_target, world[self.rows6])) * 0.25
             self.rot_raw = c
             self.rot_loss = np.clip(c, 0.0, 1.0)
+            losses = losses.copy()
             losses[t.six] += t.rot_weight * self.rot_loss
-        losses *= t.on
+        losses = losses * t.on
         if t.has_prior:
             if t.prediction is None:
-                losses = np.append(losses, 0.0)
-            else:
-                d = z.astype(np.float64) - t.prediction
-                losses = np.append(losses, (d * d).mean())
+                return np.append(losses, 0.0)
+            d = z - t.prediction
+            return np.append(losses, np.dot(d, d) / len(d))
         return losses
+
+    # joint-order views of the last forward pass (for the frame's result)
+    @property
+    def pos(self) -> np.ndarray:
+        """World joint positions ``(22, 3)``, metres."""
+        return self.pos_lo[self.row]
+
+    @property
+    def world(self) -> np.ndarray:
+        """World joint rotation matrices ``(22, 3, 3)``."""
+        return self.world_lo[self.row]
+
+    @property
+    def r(self) -> np.ndarray:
+        """Local rotations ``(22, 4)``: unit quaternions with ``w >= 0`` (row 0 before the heading)."""
+        u = self.u[self.row]
+        return u * np.where(u[:, :1] < 0, -1.0, 1.0)
 
     # -- reverse -------------------------------------------------------------------
     def backward(self) -> np.ndarray:
@@ -173,40 +214,33 @@ class FastPose:
         its subtree: turning joint ``j`` by a small world-frame angle ``a`` moves every
         descendant ``d`` by ``a x (P_d - P_j)`` and turns its world rotation by ``a``.
         So the gradient w.r.t. that angle is ``tau_j = sum_{d in subtree(j)} (P_d x g_d
-        + w_d) - P_j x sum_{d in subtree(j)} g_d`` (``g_d`` position gradients, ``w_d``
-        the axial part of ``g_W_d W_d^T``): two products with the constant subtree
-        matrix. A local quaternion ``r_j`` turned by ``dr`` turns the joint by
-        ``W_parent 2 vec(dr r_j*)``, hence ``d loss / d r_j = 2 (0, W_parent^T tau_j) r_j``.
+        + w_d) - P_j x sum_{d in subtree(j)} g_d`` (``g_d`` position gradients, non-zero
+        only at the sensors and the anchor; ``w_d`` the axial part of ``g_W_d W_d^T``):
+        products with constant subtree columns. A local quaternion ``u_j`` turned by
+        ``du`` turns the joint by ``W_parent 2 vec(du u_j*)``, hence ``d loss / d u_j =
+        2 (0, W_parent^T tau_j) u_j``, tangent to the unit sphere, so the normalisation
+        only divides it by ``|q_j|`` (and the canonical sign drops out).
         """
-        n, t = self.n, self.terms
-        w = t.weights[: t.n_sensors] * t.on
-        pos = self.pos
-        g_pos = np.zeros((n, 3))
-        gp = (2.0 * w)[:, None] * self.err
-        if t.unique_joints:
-            g_pos[t.joint] = gp
-        else:
-            np.add.at(g_pos, t.joint, gp)
+        t, pos = self.terms, self.pos_lo
+        g = self.w2 * self.err  # (S, 3) position gradients at the sensor rows
         if self.anchor is not None:
-            g_pos[self.anchor] -= g_pos.sum(0)
-        moment = _cross(pos, g_pos)
+            g = np.concatenate((g, -g.sum(0, keepdims=True)))
+        tau = self.sub_points @ _cross(pos[self.points], g) - _cross(pos, self.sub_points @ g)
         if len(t.six):
             inside = (self.rot_raw >= 0.0) & (self.rot_raw <= 1.0)
-            coef = -0.25 * w[t.six] * t.rot_weight * inside
-            jj = t.joint[t.six]
-            m = (coef[:, None, None] * t.rot_target) @ self.world[jj].transpose(0, 2, 1)
-            axial = np.stack((m[:, 2, 1] - m[:, 1, 2], m[:, 0, 2] - m[:, 2, 0], m[:, 1, 0] - m[:, 0, 1]), axis=-1)
-            np.add.at(moment, jj, axial)
-        tau = self.subtree @ moment - _cross(pos, self.subtree @ g_pos)
-        frame = self.world[self.parent_index]
+            m = np.matmul(t.rot_target, self.world_lo[self.rows6].transpose(0, 2, 1))
+            tau += self.sub_rot @ (_axial(m) * (self.rot_coef * inside)[:, None])
+        frame = self.world_lo[self.prow]
         frame[0] = self.h
-        sigma = (frame.transpose(0, 2, 1) @ tau[:, :, None])[..., 0]
-        g_r = 2.0 * QN.mul(np.concatenate((np.zeros((n, 1)), sigma), axis=1), self.r)
+        sigma = np.matmul(tau[:, None, :], frame)[:, 0]  # W_parent^T tau
+        g_q = QN.mul(np.concatenate((np.zeros((self.n, 1)), sigma), axis=1), self.u)
+        g_q *= (2.0 / self.norm)[:, None]
         if self.override_rot is not None:
-            g_r[0] = 0.0
-        g_q = g_r * (self.sign / self.norm)  # tangent to r: the normalisation's projection is identity
-        g_disp = self.h.T @ g_pos.sum(0) if self.override_pos is None else np.zeros(3)
-        return np.concatenate((g_q.reshape(-1), g_disp)).astype(np.float32)
+            g_q[0] = 0.0
+        out = self._out
+        out[self.q_index] = g_q.reshape(-1)
+        out[4 * self.n:] = 0.0 if self.override_pos is not None else self.h.T @ g.sum(0)
+        return out
 
     def latent_gradient(self) -> np.ndarray:
         """Gradient of the weighted total w.r.t. ``z (L,)`` float32 (after :meth:`forward`)."""

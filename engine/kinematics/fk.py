@@ -130,6 +130,52 @@ def _fk_numpy(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, 
     return g_pos, g_rot
 
 
+def fk_joints(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, joints,
+              parents=sk.PARENTS) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """World position and rotation of a few joints of one pose: only their ancestors are
+    placed (scalar arithmetic), which is what IK asks for many times per frame.
+
+    Parameters
+    ----------
+    local_rot : array (J, 4)
+        Local rotations of one pose (row 0: the root's world rotation), unit quaternions.
+    root_pos : array (3,)
+        World root position, metres.
+    offsets : array (J, 3)
+        Bone offsets, metres.
+    joints : sequence of int
+        Joints wanted.
+    parents : sequence of int, length J
+
+    Returns
+    -------
+    positions : ndarray (len(joints), 3)
+        World positions, metres (equal to :func:`fk`'s rows for those joints).
+    rotations : ndarray (len(joints), 4)
+        World rotations.
+    """
+    local = local_rot.tolist() if isinstance(local_rot, np.ndarray) else local_rot
+    off = offsets.tolist() if isinstance(offsets, np.ndarray) else offsets
+    world: dict[int, tuple] = {0: (tuple(local[0]), tuple(float(v) for v in root_pos))}
+
+    def place(j: int) -> tuple:
+        if j not in world:
+            (w0, x0, y0, z0), (px, py, pz) = place(int(parents[j]))
+            w1, x1, y1, z1 = local[j]
+            ox, oy, oz = off[j]
+            # p + q o q*, with t = 2 (v x o): o + w t + v x t
+            tx, ty, tz = 2.0 * (y0 * oz - z0 * oy), 2.0 * (z0 * ox - x0 * oz), 2.0 * (x0 * oy - y0 * ox)
+            pos = (px + ox + w0 * tx + y0 * tz - z0 * ty, py + oy + w0 * ty + z0 * tx - x0 * tz,
+                   pz + oz + w0 * tz + x0 * ty - y0 * tx)  # fmt: skip
+            rot = (w0 * w1 - x0 * x1 - y0 * y1 - z0 * z1, w0 * x1 + x0 * w1 + y0 * z1 - z0 * y1,
+                   w0 * y1 - x0 * z1 + y0 * w1 + z0 * x1, w0 * z1 + x0 * y1 - y0 * x1 + z0 * w1)  # fmt: skip
+            world[j] = (rot, pos)
+        return world[j]
+
+    placed = [place(int(j)) for j in joints]
+    return np.array([p for _, p in placed]), np.array([r for r, _ in placed])
+
+
 def fk_matrices(local_mat, root_pos, offsets, parents=sk.PARENTS):
     """Like :func:`fk` with rotation matrices: cheaper when many calls are made
     (the optimizer's inner loop, IK), and what rotation losses use.

@@ -32,8 +32,8 @@ from typing import Any
 import numpy as np
 
 from engine import skeleton as sk
-from engine.kinematics import quaternion as Q
-from engine.kinematics.fk import fk
+from engine.kinematics import quat_np as Q  # numpy only: no torch dispatch per call
+from engine.kinematics.fk import fk_joints
 from engine.methods.base import FrameResult, Method
 from engine.sensors import Sensor, SensorFrame
 from engine.motion import Motion
@@ -41,6 +41,7 @@ from engine.motion import Motion
 J = sk.JOINT_INDEX
 SPINE = (J["lowerback"], J["upperback"], J["chest"], J["lowerneck"])
 HEAD = J["upperneck"]
+ALL = tuple(range(sk.NUM_JOINTS))
 #: (upper, middle, end, sensor joint) of each limb.
 ARMS = ((J["lshoulder"], J["lelbow"], J["lwrist"]), (J["rshoulder"], J["relbow"], J["rwrist"]))
 LEGS = ((J["lhip"], J["lknee"], J["lankle"]), (J["rhip"], J["rknee"], J["rankle"]))
@@ -54,8 +55,21 @@ CLAVICLE_MAX = math.radians(30.0)
 IDENTITY = np.array([1.0, 0.0, 0.0, 0.0])
 
 
+def _norm(v) -> float:
+    """Length of one short vector (np.linalg.norm's generic path costs ~10x more here)."""
+    v = np.asarray(v, dtype=float)
+    return math.sqrt(float(v @ v))
+
+
+def _cross(a, b) -> np.ndarray:
+    """Cross product of two 3-vectors (np.cross's generic path costs ~20x more here)."""
+    a0, a1, a2 = np.asarray(a, dtype=float).tolist()
+    b0, b1, b2 = np.asarray(b, dtype=float).tolist()
+    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
+
+
 def _axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
-    n = np.linalg.norm(axis)
+    n = _norm(axis)
     if n < 1e-12 or abs(angle) < 1e-12:
         return IDENTITY.copy()
     return np.concatenate([[math.cos(angle / 2)], math.sin(angle / 2) * axis / n])
@@ -63,14 +77,14 @@ def _axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
 
 def _from_to(v0: np.ndarray, v1: np.ndarray) -> np.ndarray:
     """Shortest rotation taking the direction of ``v0`` onto that of ``v1``."""
-    a = v0 / max(np.linalg.norm(v0), 1e-12)
-    b = v1 / max(np.linalg.norm(v1), 1e-12)
+    a = v0 / max(_norm(v0), 1e-12)
+    b = v1 / max(_norm(v1), 1e-12)
     c = float(np.clip(a @ b, -1.0, 1.0))
-    axis = np.cross(a, b)
-    if np.linalg.norm(axis) < 1e-9:
+    axis = _cross(a, b)
+    if _norm(axis) < 1e-9:
         if c > 0:
             return IDENTITY.copy()
-        axis = np.cross(a, [1.0, 0, 0] if abs(a[0]) < 0.9 else [0, 1.0, 0])
+        axis = _cross(a, [1.0, 0, 0] if abs(a[0]) < 0.9 else [0, 1.0, 0])
     return _axis_angle(axis, math.acos(c))
 
 
@@ -83,9 +97,9 @@ def _pow(q: np.ndarray, t: float) -> np.ndarray:
 
 def _twist(q: np.ndarray, axis: np.ndarray) -> np.ndarray:
     """Twist part of ``q`` about ``axis`` (swing-twist decomposition)."""
-    a = axis / np.linalg.norm(axis)
+    a = axis / _norm(axis)
     t = np.concatenate([[q[0]], (q[1:] @ a) * a])
-    n = np.linalg.norm(t)
+    n = _norm(t)
     return t / n if n > 1e-9 else IDENTITY.copy()
 
 
@@ -97,12 +111,12 @@ def _basis_rotation(u0: np.ndarray, w0: np.ndarray, u1: np.ndarray, w1: np.ndarr
     """Rotation taking direction ``u0`` onto ``u1`` and the plane (u0, w0) onto (u1, w1)."""
 
     def frame(u: np.ndarray, w: np.ndarray) -> np.ndarray:
-        x = u / np.linalg.norm(u)
+        x = u / _norm(u)
         y = w - (w @ x) * x
-        if np.linalg.norm(y) < 1e-9:
-            y = np.cross(x, [0.0, 0.0, 1.0] if abs(x[2]) < 0.9 else [1.0, 0.0, 0.0])
-        y /= np.linalg.norm(y)
-        return np.stack([x, y, np.cross(x, y)], axis=1)
+        if _norm(y) < 1e-9:
+            y = _cross(x, [0.0, 0.0, 1.0] if abs(x[2]) < 0.9 else [1.0, 0.0, 0.0])
+        y /= _norm(y)
+        return np.stack([x, y, _cross(x, y)], axis=1)
 
     m = frame(u1, w1) @ frame(u0, w0).T
     # matrix -> quaternion (m is orthonormal); pick the numerically safest branch
@@ -120,7 +134,7 @@ def _basis_rotation(u0: np.ndarray, w0: np.ndarray, u1: np.ndarray, w1: np.ndarr
         q[1 + j] = (m[j, i] + m[i, j]) / s
         q[1 + k] = (m[k, i] + m[i, k]) / s
     q = np.asarray(q)
-    return q / np.linalg.norm(q)
+    return q / _norm(q)
 
 
 #: Farthest a tracker may be from the origin, metres; beyond it a reading is ignored.
@@ -137,7 +151,7 @@ def usable_reading(r: Sensor) -> bool:
         return False
     if r.dof == 6:
         q = np.asarray(r.rotation, float)
-        return bool(np.isfinite(q).all()) and float(np.linalg.norm(q)) > 1e-6
+        return bool(np.isfinite(q).all()) and float(_norm(q)) > 1e-6
     return True
 
 
@@ -159,15 +173,15 @@ def two_bone_mid(start: np.ndarray, target: np.ndarray, a: float, b: float, pole
         Middle-joint position; the reach is clamped to ``[|a-b|, a+b]``.
     """
     d_vec = target - start
-    d = float(np.linalg.norm(d_vec))
+    d = float(_norm(d_vec))
     n = d_vec / d if d > 1e-9 else np.array([0.0, 0.0, -1.0])
     d = min(max(d, abs(a - b) + 1e-6), a + b - 1e-6)
     cos_a = (a * a + d * d - b * b) / (2.0 * a * d)
     sin_a = math.sqrt(max(0.0, 1.0 - cos_a * cos_a))
     m = pole - (pole @ n) * n
-    if np.linalg.norm(m) < 1e-9:  # pole along the reach: any perpendicular will do
-        m = np.cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0])
-    m /= np.linalg.norm(m)
+    if _norm(m) < 1e-9:  # pole along the reach: any perpendicular will do
+        m = _cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0])
+    m /= _norm(m)
     return start + a * (cos_a * n + sin_a * m)
 
 
@@ -184,6 +198,7 @@ class IKMethod(Method):
         self.skeleton = skeleton
         self.fps = fps
         self.offsets = np.asarray(skeleton.offsets, dtype=np.float64)
+        self._offsets_list = self.offsets.tolist()
         self.rest = skeleton.rest_positions()
         self.root_height = float(-self.rest[:, 2].min())  # rest root above the lowest joint
         self._last: np.ndarray | None = None  # last frame's local rotations (22, 4)
@@ -192,8 +207,10 @@ class IKMethod(Method):
         self._heading = IDENTITY.copy()
 
     # -- kinematics -----------------------------------------------------------------
-    def _fk(self, local: np.ndarray, root_pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return fk(local, root_pos, self.offsets)
+    def _at(self, local: np.ndarray, root_pos: np.ndarray, *joints: int) -> tuple[np.ndarray, np.ndarray]:
+        """World positions ``(k, 3)`` and rotations ``(k, 4)`` of ``joints`` (only their
+        ancestors are placed: IK asks for a few joints many times per frame)."""
+        return fk_joints(local, root_pos, self._offsets_list, joints)
 
     # -- root ---------------------------------------------------------------------------
     def _estimate_heading(self, s: dict[str, Sensor]) -> np.ndarray:
@@ -225,38 +242,37 @@ class IKMethod(Method):
         else:
             pos = self._root_pos
         self._root_pos = pos
-        return pos, rot / np.linalg.norm(rot)
+        return pos, rot / _norm(rot)
 
     # -- body parts ---------------------------------------------------------------------
     def _solve_spine(self, local: np.ndarray, root: np.ndarray, head: Sensor) -> None:
         n = len(SPINE)
         for _ in range(SPINE_PASSES):
-            pos, rot = self._fk(local, root)
-            swing = _from_to(pos[HEAD] - pos[SPINE[0]], head.position - pos[SPINE[0]])
+            pos, rot = self._at(local, root, HEAD, SPINE[0], *(sk.PARENTS[j] for j in SPINE))
+            swing = _from_to(pos[0] - pos[1], head.position - pos[1])
             if 1.0 - abs(swing[0]) < 1e-12:
                 break
             step = _pow(swing, 1.0 / n)
-            for j in SPINE:  # each segment turns one more step than the one below it
-                pr = rot[sk.PARENTS[j]]
+            for j, pr in zip(SPINE, rot[2:]):  # each segment turns one more step than the one below it
                 local[j] = Q.mul(Q.mul(Q.conjugate(pr), Q.mul(step, pr)), local[j])
         if head.dof == 6:
-            _, rot = self._fk(local, root)
-            local[HEAD] = Q.mul(Q.conjugate(rot[sk.PARENTS[HEAD]]), head.rotation)
+            _, rot = self._at(local, root, sk.PARENTS[HEAD])
+            local[HEAD] = Q.mul(Q.conjugate(rot[0]), head.rotation)
 
     def _reach_with_clavicle(self, local: np.ndarray, root: np.ndarray, chain: tuple[int, int, int],
                              target: np.ndarray) -> None:
         """Turn the clavicle (up to :data:`CLAVICLE_MAX`) when the hand is out of reach."""
         up, mid, end = chain
         clav = sk.PARENTS[up]
-        pos, rot = self._fk(local, root)
-        reach = float(np.linalg.norm(self.offsets[mid]) + np.linalg.norm(self.offsets[end]))
-        if np.linalg.norm(target - pos[up]) <= reach:
+        pos, rot = self._at(local, root, up, clav, sk.PARENTS[clav])
+        p_up, p_clav, pr = pos[0], pos[1], rot[2]
+        reach = float(_norm(self.offsets[mid]) + _norm(self.offsets[end]))
+        if _norm(target - p_up) <= reach:
             return
-        swing = _from_to(pos[up] - pos[clav], target - pos[clav])
+        swing = _from_to(p_up - p_clav, target - p_clav)
         angle = 2.0 * math.acos(min(1.0, abs(swing[0])))
         if angle > CLAVICLE_MAX:
             swing = _pow(swing, CLAVICLE_MAX / angle)
-        pr = rot[sk.PARENTS[clav]]
         local[clav] = Q.mul(Q.mul(Q.conjugate(pr), Q.mul(swing, pr)), local[clav])
 
     def _pull_root_to_feet(self, root: np.ndarray, root_rot: np.ndarray,
@@ -267,26 +283,25 @@ class IKMethod(Method):
                 r = s.get(sk.JOINT_NAMES[ankle])
                 if r is None:
                     continue
-                leg = np.linalg.norm(self.offsets[knee]) + np.linalg.norm(self.offsets[ankle])
+                leg = _norm(self.offsets[knee]) + _norm(self.offsets[ankle])
                 hip_pos = root + Q.rotate(root_rot, self.offsets[hip])
                 d = r.position - hip_pos
-                excess = float(np.linalg.norm(d)) - 0.999 * leg
+                excess = float(_norm(d)) - 0.999 * leg
                 if excess > 0:
-                    root = root + excess * d / np.linalg.norm(d)
+                    root = root + excess * d / _norm(d)
         return root
 
     def _solve_limb(self, local: np.ndarray, root: np.ndarray, chain: tuple[int, int, int],
                     target: np.ndarray, pole: np.ndarray, rest_pole: np.ndarray,
                     end_rot: np.ndarray | None, twist_mid: bool = False) -> None:
         up, mid, end = chain
-        pos, rot = self._fk(local, root)
-        a = float(np.linalg.norm(self.offsets[mid]))
-        b = float(np.linalg.norm(self.offsets[end]))
-        elbow = two_bone_mid(pos[up], target, a, b, pole)
-        bend = pole - (pole @ (target - pos[up])) * (target - pos[up]) / max(
-            float(np.sum((target - pos[up]) ** 2)), 1e-12)
-        g_up = _basis_rotation(self.offsets[mid], rest_pole, elbow - pos[up], bend)
-        local[up] = Q.mul(Q.conjugate(rot[sk.PARENTS[up]]), g_up)
+        (p_up, _), (_, r_parent) = self._at(local, root, up, sk.PARENTS[up])
+        a = float(_norm(self.offsets[mid]))
+        b = float(_norm(self.offsets[end]))
+        elbow = two_bone_mid(p_up, target, a, b, pole)
+        bend = pole - (pole @ (target - p_up)) * (target - p_up) / max(float(np.sum((target - p_up) ** 2)), 1e-12)
+        g_up = _basis_rotation(self.offsets[mid], rest_pole, elbow - p_up, bend)
+        local[up] = Q.mul(Q.conjugate(r_parent), g_up)
         lower = Q.rotate(g_up, self.offsets[end])
         g_mid = Q.mul(_from_to(lower, target - elbow), g_up)
         if end_rot is not None and twist_mid:
@@ -324,8 +339,7 @@ class IKMethod(Method):
         else:
             self._keep_or_rest(local, SPINE + (HEAD,), "upperneck")
 
-        _, rot = self._fk(local, root_pos)
-        chest = rot[J["chest"]]
+        chest = self._at(local, root_pos, J["chest"])[1][0]
         for chain in ARMS:
             joint = sk.JOINT_NAMES[chain[2]]
             r = s.get(joint)
@@ -344,10 +358,10 @@ class IKMethod(Method):
             r = s.get(joint)
             if r is None and self._keep_or_rest(local, chain, joint):
                 continue
-            pos, _ = self._fk(local, root_pos)
             if r is None:  # never tracked: hang straight down under the hip
-                reach = np.linalg.norm(self.rest[chain[2]] - self.rest[chain[0]])
-                target, pole, end_rot = pos[chain[0]] - [0.0, 0.0, reach], forward, level
+                reach = _norm(self.rest[chain[2]] - self.rest[chain[0]])
+                hip = self._at(local, root_pos, chain[0])[0][0]
+                target, pole, end_rot = hip - [0.0, 0.0, reach], forward, level
             elif r.dof == 6:
                 foot_fwd = Q.rotate(np.asarray(r.rotation, float), LEG_POLE)
                 target, pole, end_rot = r.position, forward + foot_fwd, np.asarray(r.rotation, float)
@@ -355,12 +369,12 @@ class IKMethod(Method):
                 target, pole, end_rot = r.position, forward, level
             self._solve_limb(local, root_pos, chain, np.asarray(target, float), pole, LEG_POLE, end_rot)
 
-        pos, _ = self._fk(local, root_pos)
+        pos, _ = self._at(local, root_pos, *ALL)
         if not (np.isfinite(local).all() and np.isfinite(pos).all()):  # guard, as DragPoser's
             warnings.append("IK produced a non-finite pose; the previous pose is kept")
             local = self._last.copy() if self._last is not None else np.tile(IDENTITY, (sk.NUM_JOINTS, 1))
             root_pos = self._root_pos = prev_root
-            pos, _ = self._fk(local, root_pos)
+            pos, _ = self._at(local, root_pos, *ALL)
         self._last = local.copy()
         return FrameResult(local_rot=local, root_pos=root_pos.copy(), positions=pos,
                            ms=1000.0 * (time.perf_counter() - t0), warnings=warnings)

@@ -14,7 +14,7 @@ from pymotion.ops import skeleton_np
 from engine import skeleton as sk
 from engine.kinematics import features as Fe
 from engine.kinematics import quaternion as Q
-from engine.kinematics.fk import fk, fk_matrices, local_from_global
+from engine.kinematics.fk import fk, fk_joints, fk_matrices, local_from_global
 from engine.kinematics.root import integrate_root, root_increment
 
 RNG = np.random.default_rng(3)
@@ -63,6 +63,19 @@ def test_fk_matches_pymotion_numpy_and_torch():
     ours_t, _ = fk(torch.tensor(rot), torch.tensor(root), sk.REST_OFFSETS)
     np.testing.assert_allclose(ours_t.numpy(), ours, atol=1e-12)
     np.testing.assert_allclose(local_from_global(grot), rot * np.sign(rot[..., :1] * local_from_global(grot)[..., :1]), atol=1e-9)
+
+
+def test_fk_joints_equals_the_rows_of_full_fk():
+    rot = _random_quats(1, sk.NUM_JOINTS)[0]
+    root = RNG.normal(size=3)
+    offsets = sk.REST_OFFSETS * 1.3
+    pos, grot = fk(rot, root, offsets)
+    joints = [sk.JOINT_INDEX["lwrist"], 0, sk.JOINT_INDEX["upperneck"], sk.JOINT_INDEX["rtoe"], 0]
+    p, r = fk_joints(rot, root, offsets, joints)
+    np.testing.assert_allclose(p, pos[joints], atol=1e-12)
+    np.testing.assert_allclose(r, grot[joints], atol=1e-12)
+    p_all, _ = fk_joints(rot, root, offsets, range(sk.NUM_JOINTS))
+    np.testing.assert_allclose(p_all, pos, atol=1e-12)
 
 
 def test_fk_hand_computed_elbow_bend():

@@ -31,7 +31,8 @@ def run(out: Path, files: list[str], method: str, preset: str, mode: str, frames
     if target.is_file():
         return f"kept {target.name}"
     cmd = [CLI, "evaluate", *files, "--method", method, "--sensors", preset, "--mode", mode,
-           "--max-frames", str(frames), "--no-progress", "--json", str(target)]  # fmt: skip
+           "--max-frames", str(frames), "--no-progress", "--json", str(target),
+           "--jobs", "1"]  # this script runs the evaluations side by side itself  # fmt: skip
     env = {**os.environ, "OMP_NUM_THREADS": "1"}
     res = subprocess.run(cmd, capture_output=True, text=True, env=env)
     (out / f"{method}-{preset}-{mode}.txt").write_text(" ".join(cmd) + "\n\n" + res.stdout + res.stderr)

@@ -4,7 +4,9 @@ Every clip is loaded onto the canonical skeleton, trackers are simulated from it
 (:func:`engine.tracking.simulate`), the method reconstructs it frame by frame and the
 metrics of :mod:`engine.metrics` (see ``docs/metrics.md``) compare the result with the
 clip. One table row per file plus a frame-weighted total; ``--json`` writes the same
-numbers atomically.
+numbers atomically. Files are evaluated in ``--jobs`` worker processes (default: one
+per core; :mod:`engine.cli.jobs`), each file by every method named, and the results
+are merged in file order: the same numbers as a serial run.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from engine.atomic import write_text
+from engine.cli.jobs import add_jobs_option, jobs_of, map_files
 from engine.cli.method_options import add_model_options, apply_settings, method_kwargs
 from engine.cli.rig_options import add_rig_map_option, rig_map_path
 from engine.errors import UserError
@@ -65,6 +68,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--markdown", type=Path, metavar="OUT.md", help="also write the table as Markdown")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bars")
     add_rig_map_option(p)
+    add_jobs_option(p)
     p.set_defaults(func=_evaluate)
 
 
@@ -167,23 +171,58 @@ def method_names(spec: str) -> list[str]:
     return names
 
 
-def run_method_on_clips(args: argparse.Namespace, name: str, motions: list[tuple[Path, Any]]) -> dict[str, Any]:
-    """Evaluate one method on the loaded clips: the single-method JSON object."""
+_METHODS: dict[str, Any] = {}  # this process's methods, built once for all its files
+
+
+def _method(args: argparse.Namespace, name: str) -> Any:
     from engine.methods import get_method
+
+    if name not in _METHODS:
+        method = get_method(name, **method_kwargs(args, args.mode, name))
+        if getattr(method, "configure", None) is not None or len(args.method.split(",")) == 1:
+            apply_settings(method, name, args.set)
+        _METHODS[name] = method
+    return _METHODS[name]
+
+
+def _evaluate_clip_with(args: argparse.Namespace, name: str, path: Path, motion: Any, progress: bool) -> dict:
+    return evaluate_clip(
+        motion, _method(args, name), args.sensors, faulty=args.faulty, gaps=args.gaps,
+        noise_pos_m=args.noise_pos, noise_rot_deg=args.noise_rot, seed=args.seed,
+        progress=progress, desc=f"{name} {path.name}",
+    )  # fmt: skip
+
+
+def _doc(args: argparse.Namespace, name: str, per_file: dict[str, Any]) -> dict[str, Any]:
     from engine.metrics import summarize
 
-    method = get_method(name, **method_kwargs(args, args.mode, name))
-    if getattr(method, "configure", None) is not None or len(args.method.split(",")) == 1:
-        apply_settings(method, name, args.set)
-    per_file = {
-        str(path): evaluate_clip(
-            motion, method, args.sensors, faulty=args.faulty, gaps=args.gaps,
-            noise_pos_m=args.noise_pos, noise_rot_deg=args.noise_rot, seed=args.seed,
-            progress=not args.no_progress, desc=f"{name} {path.name}",
-        )
-        for path, motion in motions
-    }  # fmt: skip
     return {"method": name, "preset": args.sensors, "mode": args.mode, "total": summarize(per_file), "files": per_file}
+
+
+def run_method_on_clips(args: argparse.Namespace, name: str, motions: list[tuple[Path, Any]]) -> dict[str, Any]:
+    """Evaluate one method on the loaded clips (in this process): the single-method JSON object."""
+    _METHODS.clear()
+    return _doc(args, name, {str(p): _evaluate_clip_with(args, name, p, m, not args.no_progress) for p, m in motions})
+
+
+def _evaluate_file(job: tuple[Path, argparse.Namespace, list[str], bool]) -> dict[str, Any]:
+    """Every method's metrics on one file, or ``{"error": message}`` for a method that
+    cannot run it (in this process or a ``--jobs`` worker)."""
+    from engine.retarget import load_motion
+
+    path, args, names, progress = job
+    motion = load_motion(path, rig_map=rig_map_path(args), max_frames=args.max_frames)  # reads only what is needed
+    if len(motion) < 4:
+        raise UserError(f"{path}: only {len(motion)} frames; at least 4 are needed")
+    out: dict[str, Any] = {}
+    for name in names:
+        try:
+            out[name] = _evaluate_clip_with(args, name, path, motion, progress)
+        except UserError as exc:  # e.g. a method that needs another sensor preset
+            if len(names) == 1:
+                raise
+            out[name] = {"error": str(exc)}
+    return out
 
 
 def _safe_doc(doc: dict[str, Any]) -> dict[str, Any]:
@@ -195,7 +234,6 @@ def _safe_doc(doc: dict[str, Any]) -> dict[str, Any]:
 
 
 def _evaluate(args: argparse.Namespace) -> int:
-    from engine.retarget import load_motion
     from engine.tracking import parse_sensors
 
     from engine.validation import check_args, check_output_path
@@ -207,25 +245,24 @@ def _evaluate(args: argparse.Namespace) -> int:
         check_output_path(args.json, "--json")
     if args.max_frames is not None and args.max_frames < 4:
         raise UserError("--max-frames must be at least 4 (jitter needs 4 frames)")
-    motions = []
-    for path in find_clips(args.paths):
-        motion = load_motion(path, rig_map=rig_map_path(args), max_frames=args.max_frames)  # reads only what is needed
-        if len(motion) < 4:
-            raise UserError(f"{path}: only {len(motion)} frames; at least 4 are needed")
-        motions.append((path, motion))
+    clips = find_clips(args.paths)
+    jobs = jobs_of(args)
+    progress = not args.no_progress and (jobs == 1 or len(clips) == 1)  # workers: one bar for the files
+    _METHODS.clear()
+    rows = map_files(_evaluate_file, [(path, args, names, progress) for path in clips], jobs,
+                     progress=not args.no_progress, desc="evaluate")  # fmt: skip
+    docs: dict[str, dict[str, Any]] = {}
+    for name in names:  # merged in file order; a method failing on any file: its first error
+        errors = [r[name]["error"] for r in rows if "error" in r[name]]
+        docs[name] = ({"method": name, "preset": args.sensors, "mode": args.mode, "error": errors[0]} if errors
+                      else _doc(args, name, {str(p): r[name] for p, r in zip(clips, rows)}))  # fmt: skip
     lossy = args.gaps or args.faulty > 0
     if len(names) == 1:
-        doc = run_method_on_clips(args, names[0], motions)
+        doc = docs[names[0]]
         print(format_table(doc["files"], doc["total"], lossy))
         table_md = format_markdown({**{Path(k).name: v for k, v in doc["files"].items()}, "total": doc["total"]}, lossy)
         out: dict[str, Any] = _safe_doc(doc)
     else:
-        docs: dict[str, dict[str, Any]] = {}
-        for name in names:
-            try:
-                docs[name] = run_method_on_clips(args, name, motions)
-            except UserError as exc:  # e.g. a method that needs another sensor preset
-                docs[name] = {"method": name, "preset": args.sensors, "mode": args.mode, "error": str(exc)}
         totals = {n: d.get("total", {}) for n, d in docs.items()}
         print(format_table(totals, {}, lossy).rsplit("\n", 1)[0].replace("clip", "method", 1))
         for n, d in docs.items():

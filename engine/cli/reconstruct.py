@@ -1,4 +1,6 @@
-"""``dragposer-studio reconstruct IN.bvh --out OUT.bvh``: DragPoser on simulated trackers;
+"""``dragposer-studio reconstruct IN.bvh --out OUT.bvh``: DragPoser on simulated trackers
+(several inputs: ``reconstruct A.bvh B.bvh ... --out-dir DIR [--jobs N]``, one worker
+process per file, see :mod:`engine.cli.jobs`);
 ``reconstruct --trackers REC.jsonl --out OUT.bvh``: on recorded trackers
 (:mod:`engine.cli.reconstruct_trackers`).
 
@@ -18,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from engine.cli.jobs import add_jobs_option, jobs_of, map_files
 from engine.cli.method_options import add_model_options, build_method
 from engine.cli.rig_options import add_rig_map_option, rig_map_path
 from engine.cli.tracker_options import add_tracker_options
@@ -31,10 +34,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Simulate trackers from IN.bvh, reconstruct the full body with DragPoser "
         "(latent-space pose optimisation) and write OUT.bvh.",
     )
-    p.add_argument("input", type=Path, nargs="?", metavar="IN.bvh", help="source motion (any supported rig)")
+    p.add_argument("input", type=Path, nargs="*", metavar="IN.bvh",
+                   help="source motion(s) (any supported rig); several need --out-dir")
     p.add_argument("--trackers", type=Path, metavar="REC.jsonl",
                    help="reconstruct a tracker recording (from `live --record`; docs/trackers.md) instead of IN.bvh")
-    p.add_argument("--out", type=Path, required=True, metavar="OUT.bvh", help="where to write the reconstruction")
+    p.add_argument("--out", type=Path, metavar="OUT.bvh", help="where to write the reconstruction (one input)")
+    p.add_argument("--out-dir", type=Path, metavar="DIR",
+                   help="write each input's reconstruction to DIR/<input name>.bvh (several inputs)")
     p.add_argument("--on-source-rig", action="store_true",
                    help="write the result onto IN.bvh's own hierarchy (its joint names, offsets and "
                    "channels; joints outside the 22 keep their rest rotation) instead of the canonical one")
@@ -55,57 +61,90 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--method", default="dragposer", help=argparse.SUPPRESS)
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     add_tracker_options(p)
+    add_jobs_option(p)
     p.set_defaults(func=_reconstruct)
 
 
 def _reconstruct(args: argparse.Namespace) -> int:
-    from engine.bvh import save_motion_bvh
-    from engine.bvh import load_bvh
-    from engine.methods import run_method
-    from engine.retarget import manifest_fps, retarget, source_frames_needed
-    from engine.tracking import parse_sensors, simulate
+    from engine.tracking import parse_sensors
     from engine.validation import check_args, check_input_file, check_output_path
 
     check_args(args)  # every number in range, outputs writable: before any work
-    check_output_path(args.out, "--out")
+    if args.out is not None:
+        check_output_path(args.out, "--out")
     if getattr(args, "json", None):
         check_output_path(args.json, "--json")
     if args.trackers is not None:
-        if args.input is not None:
+        if args.input:
             raise UserError("give IN.bvh or --trackers REC.jsonl, not both (the clip can be --reference)")
         if args.on_source_rig:
             raise UserError("--on-source-rig writes onto IN.bvh's rig; it does not apply to --trackers")
+        if args.out is None or args.out_dir is not None:
+            raise UserError("--trackers needs --out OUT.bvh (not --out-dir)")
         from engine.cli.reconstruct_trackers import reconstruct_trackers
 
         return reconstruct_trackers(args)
-    if args.input is None:
+    if not args.input:
         raise UserError("give IN.bvh or --trackers REC.jsonl")
+    if args.out is not None and args.out_dir is not None:
+        raise UserError("give --out (one input) or --out-dir, not both")
+    if args.out_dir is None and (args.out is None or len(args.input) > 1):
+        raise UserError("several inputs need --out-dir DIR" if len(args.input) > 1 else "give --out OUT.bvh or --out-dir DIR")
     for opt in ("calibrate", "reference", "json"):
         if getattr(args, opt):
             raise UserError(f"--{opt} applies to --trackers recordings")
     if args.map:
         raise UserError("--map applies to --trackers recordings")
     parse_sensors(args.sensors)  # fail before loading anything
-    check_input_file(args.input)
-    raw = load_bvh(args.input, source_frames_needed(args.max_frames))  # a long file: only its start
-    motion, report = retarget(raw, manifest_fps(args.input), rig_map=rig_map_path(args))
+    for path in args.input:
+        check_input_file(path)
+    outs = [args.out] if args.out is not None else [args.out_dir / f"{p.stem}.bvh" for p in args.input]
+    if len(set(outs)) != len(outs):
+        raise UserError("two inputs share a file name; their outputs in --out-dir would collide")
+    if args.out_dir is not None:
+        for out in outs:
+            check_output_path(out, "--out-dir")
+        args.out_dir.mkdir(parents=True, exist_ok=True)
+    jobs = jobs_of(args)
+    parallel = jobs > 1 and len(args.input) > 1
+    _METHOD.clear()
+    work = [(p, o, args, not args.no_progress and not parallel) for p, o in zip(args.input, outs)]
+    for text in map_files(_reconstruct_file, work, jobs, progress=not args.no_progress, desc="reconstruct"):
+        print(text)
+    return 0
+
+
+_METHOD: dict[str, Any] = {}  # this process's method, built once for all its files
+
+
+def _reconstruct_file(job: tuple[Path, Path, argparse.Namespace, bool]) -> str:
+    """Reconstruct one input and write it; returns the summary (in this process or a
+    ``--jobs`` worker)."""
+    from engine.bvh import load_bvh, save_motion_bvh
+    from engine.methods import run_method
+    from engine.retarget import manifest_fps, retarget, source_frames_needed
+    from engine.tracking import simulate
+
+    path, out, args, progress = job
+    raw = load_bvh(path, source_frames_needed(args.max_frames))  # a long file: only its start
+    motion, report = retarget(raw, manifest_fps(path), rig_map=rig_map_path(args))
     if args.max_frames:
         motion = motion.slice(0, args.max_frames)
     if len(motion) == 0:
-        raise UserError(f"{args.input}: the clip has no frames")
-    method = build_method(args)
+        raise UserError(f"{path}: the clip has no frames")
+    if "method" not in _METHOD:
+        _METHOD["method"] = build_method(args)
     tracking = simulate(motion, args.sensors, faulty=args.faulty, gaps=args.gaps, seed=args.seed)
-    rec, results = run_method(method, tracking, motion.skeleton, progress=not args.no_progress,
-                              desc=args.input.name, light=True)  # fmt: skip
+    rec, results = run_method(_METHOD["method"], tracking, motion.skeleton, progress=progress, desc=path.name,
+                              light=True)  # fmt: skip
     rec.name = f"{motion.name} ({args.method})"
     if args.on_source_rig:
         from engine.source_rig import save_on_source_rig
 
-        save_on_source_rig(args.out, rec, raw, report)
+        save_on_source_rig(out, rec, raw, report)
     else:
-        save_motion_bvh(args.out, rec)
-    print(summary(results, tracking, rec, args.out))
-    return 0
+        save_motion_bvh(out, rec)
+    return summary(results, tracking, rec, out)
 
 
 def summary(results: list, tracking: Any, rec: Any, out: Path) -> str:

@@ -108,7 +108,7 @@ def evaluate_clip(motion: Any, method: Any, preset: str, *, faulty: float = 0.0,
     tracking = simulate(motion, preset, noise_pos_m=noise_pos_m, noise_rot_deg=noise_rot_deg,
                         faulty=faulty, gaps=gaps, seed=seed)
     rec, results = run_method(method, tracking, motion.skeleton, progress=progress,
-                              reference=motion, desc=desc)
+                              reference=motion, desc=desc, light=True)
     lossy = gaps or faulty > 0
     out = evaluate_motion(motion, rec, tracking.connected if lossy else None)
     out["iterations_mean"] = float(np.mean([r.iterations for r in results]))

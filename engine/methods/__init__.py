@@ -8,7 +8,7 @@ ignore them). :func:`run_method` runs a method over a whole simulated clip.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -61,7 +61,7 @@ def run_method(
     reference: Motion | None = None,
     desc: str | None = None,
     light: bool = False,
-) -> tuple[Motion, list[FrameResult]]:
+) -> tuple[Motion, Sequence[FrameResult]]:
     """Reconstruct a whole clip, frame by frame, as a realtime caller would.
 
     Parameters
@@ -79,15 +79,17 @@ def run_method(
     desc : str, optional
         Progress-bar label.
     light : bool
-        Keep only the final loss of each frame, and the poses in arrays allocated (and
-        written) up front, so memory stays flat over long clips (``reconstruct``,
-        ``evaluate``); the results' pose fields are then views into those arrays.
+        Keep the results in arrays allocated (and written) up front
+        (:class:`~engine.methods.records.FrameRecords`: the frames' ``FrameResult`` are
+        built when read, their pose fields views into those arrays, their ``losses``
+        only the final total), so memory stays flat over long clips (``reconstruct``,
+        ``evaluate``).
 
     Returns
     -------
     motion : Motion
         The reconstruction (F frames, ``tracking.fps``).
-    results : list of FrameResult
+    results : list of FrameResult (a FrameRecords sequence when ``light``)
         One per frame; ``ms`` is filled with the measured step time when the method
         left it at 0.
     """
@@ -101,24 +103,26 @@ def run_method(
         method.reset(skeleton, tracking.fps, reference=reference)
     else:
         method.reset(skeleton, tracking.fps)
-    results: list[FrameResult] = []
     n = len(tracking)
-    # np.full writes every page now: the arrays' memory is taken at the start, not as frames arrive
-    local = np.full((n, sk.NUM_JOINTS, 4), np.nan)
-    root = np.full((n, 3), np.nan)
-    pos = np.full((n, sk.NUM_JOINTS, 3), np.nan) if light else None
+    if light:
+        from engine.methods.records import FrameRecords
+
+        records = FrameRecords(n)
+        local, root = records.local_rot, records.root_pos
+    else:
+        results: list[FrameResult] = []
+        local, root = np.full((n, sk.NUM_JOINTS, 4), np.nan), np.full((n, 3), np.nan)
     for i in tqdm(range(n), desc=desc or method.name, unit="frame", disable=not progress, leave=False):
         t0 = time.perf_counter()
         res = method.step(tracking.frame(i))
         if not res.ms:
             res.ms = 1000.0 * (time.perf_counter() - t0)
-        local[i], root[i] = res.local_rot, res.root_pos
-        if pos is not None:
-            pos[i] = res.positions
-            res.local_rot, res.root_pos, res.positions = local[i], root[i], pos[i]
-            res.losses = res.losses[-1:]
-        results.append(res)
-    return Motion(local, root, skeleton, tracking.fps, getattr(reference, "name", "")), results
+        if light:
+            records.store(i, res)
+        else:
+            local[i], root[i] = res.local_rot, res.root_pos
+            results.append(res)
+    return Motion(local, root, skeleton, tracking.fps, getattr(reference, "name", "")), records if light else results
 
 
 def _register_builtin() -> None:

@@ -154,7 +154,7 @@ CLI: Schema = {
     "warmup": Num(0, 100_000, integer=True),
 }
 
-#: Optimizer settings (``engine.optimizer.OptimizerSettings``), by field.
+#: Optimizer settings (``engine.solver.OptimizerSettings``), by field.
 SETTINGS: Schema = {
     "mode": Choice(("realtime", "offline")),
     "iterations": Num(1, 10_000, integer=True),

@@ -16,65 +16,35 @@ core), and for dragposer the per-iteration breakdown (wall clock).
 from __future__ import annotations
 
 import argparse
-import importlib
-import subprocess
-import sys
-import tarfile
 import tempfile
 import time
-from io import BytesIO
 from pathlib import Path
 
 import numpy as np
 import torch
 
-ROOT = Path(__file__).resolve().parents[1]
+from ab_versions import ROOT, EngineVersion, checkout
+
 CLIP = ROOT / "assets" / "clips" / "example.bvh"
-NEEDED = ("engine.methods.dragposer", "engine.methods.ik", "engine.models", "engine.retarget", "engine.tracking")
 
 
-def _import_engine(root: Path) -> dict:
-    """Import what a run needs from the ``engine`` package under ``root``; returns the
-    module objects and leaves ``sys.modules`` without any ``engine`` entry, so another
-    version can be imported next to it (modules keep their own globals)."""
-    for name in [m for m in sys.modules if m == "engine" or m.startswith("engine.")]:
-        del sys.modules[name]
-    sys.path.insert(0, str(root))
-    try:
-        mods = {name: importlib.import_module(name) for name in NEEDED}
-    finally:
-        sys.path.remove(str(root))
-        for name in [m for m in sys.modules if m == "engine" or m.startswith("engine.")]:
-            del sys.modules[name]
-    return mods
-
-
-def _checkout(rev: str, into: Path) -> Path:
-    data = subprocess.run(["git", "-C", str(ROOT), "archive", rev, "engine", "assets/models"], check=True,
-                          capture_output=True).stdout  # fmt: skip
-    with tarfile.open(fileobj=BytesIO(data)) as tar:
-        tar.extractall(into, filter="data")
-    return into
-
-
-def _build(mods: dict, method: str, a: argparse.Namespace, motion, **kw):
+def _build(v: EngineVersion, method: str, a: argparse.Namespace, motion, **kw):
     """A method instance of one engine version, reset for ``motion``."""
-    if method == "dragposer":
-        models = mods["engine.models"].load_default_models()
-        if a.mode != "realtime":
-            kw["mode"] = a.mode
-        m = mods["engine.methods.dragposer"].DragPoserMethod(models.vae, models.predictor, iterations=a.iterations,
-                                                             **kw)  # fmt: skip
-    else:
-        m = mods["engine.methods.ik"].IKMethod()
-    m.reset(motion.skeleton, motion.fps)
+    with v:
+        if method == "ik":
+            from engine.methods.ik import IKMethod
+
+            m = IKMethod()
+        else:
+            from engine.methods.dragposer import DragPoserMethod
+            from engine.models import load_default_models
+
+            models = load_default_models()
+            if a.mode != "realtime":
+                kw["mode"] = a.mode
+            m = DragPoserMethod(models.vae, models.predictor, iterations=a.iterations, **kw)
+        m.reset(motion.skeleton, motion.fps)
     return m
-
-
-def _versions(a: argparse.Namespace, tmp: Path) -> dict[str, dict]:
-    if a.baseline:
-        return {f"baseline {a.baseline}": _import_engine(_checkout(a.baseline, tmp)), "working tree": _import_engine(ROOT)}
-    return {"working tree": _import_engine(ROOT)}
 
 
 def main() -> None:
@@ -88,34 +58,45 @@ def main() -> None:
     a = ap.parse_args()
     torch.set_num_threads(1)
     with tempfile.TemporaryDirectory() as tmp:
-        versions = _versions(a, Path(tmp))
+        new = EngineVersion(ROOT, "working tree")
         runs = {}
-        tracking = None
-        for label, mods in versions.items():
-            motion = mods["engine.retarget"].load_motion(CLIP)
-            tracking = tracking or mods["engine.tracking"].simulate(motion, a.sensors)
-            if a.baseline:
-                runs[label] = (_build(mods, a.method, a, motion), [], [])
-            else:
-                for fast in (True, False):
-                    runs["fast" if fast else "reference"] = (_build(mods, "dragposer", a, motion, fast=fast), [], [])
-        _run(runs, tracking, a.frames)
+        if a.baseline:
+            old = EngineVersion(checkout(a.baseline, Path(tmp)), f"baseline {a.baseline}")
+            for v in (old, new):
+                motion, tracking = _clip(v, a.sensors)  # each version's own loader and simulation
+                runs[v.label] = (v, _build(v, a.method, a, motion), tracking, [], [])
+        else:
+            motion, tracking = _clip(new, a.sensors)
+            for fast in (True, False):
+                runs["fast" if fast else "reference"] = (new, _build(new, "dragposer", a, motion, fast=fast), tracking,
+                                                         [], [])  # fmt: skip
+        _run(runs, a.frames)
 
 
-def _run(runs: dict, tracking, frames: int) -> None:
+def _clip(v: EngineVersion, sensors: str):
+    with v:
+        from engine.retarget import load_motion
+        from engine.tracking import simulate
+
+        motion = load_motion(CLIP)
+        return motion, simulate(motion, sensors)
+
+
+def _run(runs: dict, frames: int) -> None:
     labels = list(runs)
-    n = min(frames, len(tracking))
+    n = min(frames, *(len(r[2]) for r in runs.values()))
     for i in range(n):
         for label in (labels if i % 2 else labels[::-1]):
-            m, frame_ms, iter_ms = runs[label]
-            t0, c0 = time.perf_counter(), time.thread_time()
-            res = m.step(tracking.frame(i))
+            v, m, tracking, frame_ms, iter_ms = runs[label]
+            with v:
+                t0, c0 = time.perf_counter(), time.thread_time()
+                res = m.step(tracking.frame(i))
             if i >= 10:
                 frame_ms.append((1000.0 * (time.perf_counter() - t0), 1000.0 * (time.thread_time() - c0)))
                 if getattr(res, "timings", None):
                     iter_ms.append(res.timings)
     for label in labels:
-        _, frame_ms, iter_ms = runs[label]
+        _, _, _, frame_ms, iter_ms = runs[label]
         f, cpu = np.array(frame_ms).T
         line = (f"{label:<22} frame ms median {np.median(f):7.2f} min {f.min():7.2f} "
                 f"(cpu median {np.median(cpu):7.2f} min {cpu.min():7.2f})")

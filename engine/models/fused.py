@@ -160,11 +160,18 @@ class DenseDecoder:
                               for i, w in enumerate(self.weights)]  # fmt: skip
         self.slope = float(m.config.negative_slope)
         self.latent = int(m.config.latent)
-        # per-stage buffers: pre-activations (kept for the backward gates) and gradients
-        self._pre = [np.empty(w.shape[0], np.float32) for w in self.weights]
-        self._act = [np.empty(w.shape[0], np.float32) for w in self.weights[:-1]]
-        self._grad = [np.empty(w.shape[1], np.float32) for w in self.weights]
-        self._gate = [np.empty(w.shape[0], np.float32) for w in self.weights[:-1]]
+        # Fixed buffers, and every product's operands as views into them, made once: a
+        # product is then one BLAS call with no slicing or allocation per iteration.
+        f32 = np.float32
+        self._z = np.empty(self.latent, f32)
+        self._pre = [np.empty(w.shape[0], f32) for w in self.weights]  # pre-activations
+        self._act = [np.empty(w.shape[0], f32) for w in self.weights[:-1]]
+        self._gate = [np.empty(w.shape[0], f32) for w in self.weights[:-1]]  # LeakyReLU slopes
+        self._gin = [np.empty(w.shape[0], f32) for w in self.weights]  # gradient at a stage's output
+        self._grad = [np.empty(w.shape[1], f32) for w in self.weights]  # ... and at its input
+        inputs = [self._z] + self._act
+        self._fwd = [_bind(runs, inputs[i], self._pre[i]) for i, runs in enumerate(self.forward_runs)]
+        self._bwd = [_bind(runs, self._gin[i], self._grad[i]) for i, runs in enumerate(self.backward_runs)]
 
     def stored_entries(self) -> tuple[int, int]:
         """Weight entries read per forward and per backward pass (dense: all of them)."""
@@ -174,25 +181,40 @@ class DenseDecoder:
     def forward(self, z: np.ndarray) -> np.ndarray:
         """``z (L,)`` float32 -> ``(q_raw (88,), disp (3,))`` concatenated, float32 (a new
         array). Remembers the activation slopes for the next :meth:`backward`."""
-        x = np.asarray(z, dtype=np.float32)
-        last = len(self.weights) - 1
-        slope = np.float32(self.slope)
-        for i, runs in enumerate(self.forward_runs):
-            y = _matvec(runs, x, self._pre[i])
+        self._z[:] = z
+        dot, last, slope = np.dot, len(self.weights) - 1, np.float32(self.slope)
+        for i, (products, empty) in enumerate(self._fwd):
+            for w, x, y in products:
+                dot(w, x, out=y)
+            for y in empty:
+                y[:] = 0.0
+            y = self._pre[i]
             y += self.biases[i]
             if i < last:
                 gate = self._gate[i]
                 np.copyto(gate, slope)
                 gate[y > 0] = 1.0
-                x = np.multiply(y, gate, out=self._act[i])
+                np.multiply(y, gate, out=self._act[i])
         return self._pre[last].copy()
 
     def backward(self, grad_out: np.ndarray) -> np.ndarray:
         """Gradient w.r.t. the latent ``(L,)`` of a loss whose gradient w.r.t. the last
         :meth:`forward` output is ``grad_out (91,)`` (a new array)."""
-        g = np.asarray(grad_out, dtype=np.float32)
-        for i in range(len(self.weights) - 1, -1, -1):
-            if i < len(self._gate):
-                g = g * self._gate[i]
-            g = _matvec(self.backward_runs[i], g, self._grad[i])
-        return g.copy()
+        dot, last = np.dot, len(self.weights) - 1
+        self._gin[last][:] = grad_out
+        for i in range(last, -1, -1):
+            if i < last:
+                np.multiply(self._grad[i + 1], self._gate[i], out=self._gin[i])
+            products, empty = self._bwd[i]
+            for w, x, y in products:
+                dot(w, x, out=y)
+            for y in empty:
+                y[:] = 0.0
+        return self._grad[0].copy()
+
+
+def _bind(runs: list[Run], x: np.ndarray, out: np.ndarray) -> tuple[list[tuple], list[np.ndarray]]:
+    """The products of ``out = W @ x`` as ``(w, x view, out view)`` triples, and the
+    output views of runs that read nothing (zero)."""
+    products = [(r.w, x[r.c0:r.c1], out[r.r0:r.r1]) for r in runs if r.c1 > r.c0]
+    return products, [out[r.r0:r.r1] for r in runs if r.c1 <= r.c0]

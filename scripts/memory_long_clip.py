@@ -3,7 +3,10 @@ repeated, each repeat continuing where the last ended), reconstructed by the rea
 a subprocess whose resident memory is read from /proc at every 500th frame (the frame
 count comes from the progress bar).
 
-    PYTHONPATH=. python scripts/memory_long_clip.py [--frames 10000] [--sensors 6]
+    PYTHONPATH=. python scripts/memory_long_clip.py [--frames 10000] [--sensors 6] [--iterations N]
+
+(``--iterations`` is passed to ``reconstruct``: fewer make a long run affordable on a busy
+machine while the same code paths and per-frame records are exercised.)
 
 Prints RSS (MiB) against frames and the growth after the first 1,000 frames.
 """
@@ -49,12 +52,13 @@ def main() -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("--frames", type=int, default=10000)
     ap.add_argument("--sensors", default="6")
+    ap.add_argument("--iterations", type=int, help="optimizer iterations per frame (reconstruct's default: 10)")
     a = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         clip = Path(tmp) / "long.bvh"
         long_clip(a.frames, clip)
         cmd = [sys.executable, "-m", "engine.cli.main", "reconstruct", str(clip), "--out", str(Path(tmp) / "out.bvh"),
-               "--sensors", a.sensors]  # fmt: skip
+               "--sensors", a.sensors] + (["--iterations", str(a.iterations)] if a.iterations else [])  # fmt: skip
         env = {**os.environ, "PYTHONPATH": str(REPO), "TQDM_MININTERVAL": "0"}
         proc = subprocess.Popen(cmd, stderr=subprocess.PIPE, stdout=subprocess.PIPE, env=env, text=True, bufsize=1)
         samples: dict[int, float] = {}

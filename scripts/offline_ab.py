@@ -1,11 +1,11 @@
 """Offline mode, old code against new, on the same validation files: speed and accuracy.
 
     PYTHONPATH=. python scripts/offline_ab.py [--baseline 8610963] [--prepared DIR] [--files N]
-        [--max-frames 300] [--sensors 6] [--mode offline] [--repeats 1] [FILE.bvh ...]
+        [--max-frames 300] [--sensors 6] [--mode offline] [--method dragposer] [--repeats 1] [FILE.bvh ...]
 
 Both versions of ``engine`` (the baseline revision via ``git archive``, and the working
 tree) are loaded in one process (:mod:`ab_versions`), each with its own shipped models,
-and run DragPoser through their own ``evaluate`` per-clip function on each file in turn,
+and run DragPoser (or ``--method``) through their own ``evaluate`` per-clip function on each file in turn,
 alternating which goes first, with one torch and one BLAS thread. Per file it prints
 each version's thread CPU time and wall time per frame and its metrics, then the
 speed-up (old / new, total CPU and wall time) and the metric differences. Files
@@ -46,7 +46,7 @@ def run_one(v: EngineVersion, path: str, a: argparse.Namespace) -> tuple[float, 
         motion = load_motion(path)
         if a.max_frames:
             motion = motion.slice(0, a.max_frames)
-        method = get_method("dragposer", mode=a.mode)
+        method = get_method(a.method, mode=a.mode)
         c0, t0 = time.thread_time(), time.perf_counter()
         m = evaluate_clip(motion, method, a.sensors, progress=False)
         return time.thread_time() - c0, time.perf_counter() - t0, {**m, "frames": len(motion)}
@@ -61,6 +61,7 @@ def main() -> int:
                     help="prepared data folder whose validation split is used (default: ./prepared)")
     ap.add_argument("--max-frames", type=int, default=300)
     ap.add_argument("--sensors", default="6")
+    ap.add_argument("--method", default="dragposer", help="method to run in both versions (default: dragposer)")
     ap.add_argument("--mode", default="offline", choices=("offline", "realtime"))
     ap.add_argument("--repeats", type=int, default=1, help="passes over the files (default: 1)")
     a = ap.parse_args()
@@ -90,7 +91,7 @@ def main() -> int:
         (oc, ow), (nc, nw) = total[old.label], total[new.label]
         print(f"\nspeed-up old/new: cpu {oc / nc:.2f}x  wall {ow / nw:.2f}x  "
               f"(cpu {oc:.1f} s vs {nc:.1f} s; {len(files)} files x {a.repeats}, mode {a.mode}, "
-              f"max {a.max_frames} frames, sensors {a.sensors})")
+              f"max {a.max_frames} frames, sensors {a.sensors}, {a.method})")
         for key in METRICS:
             o = np.array([m[key] for m in metrics[old.label]])
             n = np.array([m[key] for m in metrics[new.label]])

@@ -173,6 +173,10 @@ SETTINGS: Schema = {
     "step_size": Num(0, 100, open_lo=True),
     "momentum": Num(0, 0.999),
     "threads": Num(0, 64, integer=True),
+    "smooth_weight": Num(0, 1e6),
+    "ground_weight": Num(0, 1e6),
+    "tuning": Choice(("preset", "off")),
+    "heading": Choice(("previous", "anchor")),
 }
 
 #: One entry of ``manifest.json`` (``{"files": [{"path": ..., "fps": ...}, ...]}``).

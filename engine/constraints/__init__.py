@@ -10,14 +10,16 @@ from engine.constraints.bounds import BoundsConstraint
 from engine.constraints.distance import DistanceConstraint
 from engine.constraints.end_effector import EndEffectorConstraint
 from engine.constraints.floor import FloorConstraint
+from engine.constraints.ground import GroundConstraint
 from engine.constraints.look_at import LookAtConstraint
 from engine.constraints.pin import PinConstraint
 from engine.constraints.sensor import SensorConstraint
+from engine.constraints.smooth import SmoothConstraint
 from engine.constraints.temporal_prior import TemporalPriorConstraint
 from engine.solver.state import PoseState  # what every loss(state) receives
 
 __all__ = [
     "REGISTRY", "BalanceConstraint", "BoundsConstraint", "Constraint", "DistanceConstraint",
-    "EndEffectorConstraint", "FloorConstraint", "LookAtConstraint", "PinConstraint", "PoseState",
-    "SensorConstraint", "TemporalPriorConstraint", "from_dict",
+    "EndEffectorConstraint", "FloorConstraint", "GroundConstraint", "LookAtConstraint", "PinConstraint", "PoseState",
+    "SensorConstraint", "SmoothConstraint", "TemporalPriorConstraint", "from_dict",
 ]  # fmt: skip

@@ -20,7 +20,9 @@ import numpy as np
 import torch
 
 from engine import skeleton as sk
-from engine.constraints import Constraint, SensorConstraint, TemporalPriorConstraint
+from engine.constraints import (
+    Constraint, GroundConstraint, SensorConstraint, SmoothConstraint, TemporalPriorConstraint,
+)  # fmt: skip
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
 from engine.kinematics.root import root_increment
@@ -29,12 +31,14 @@ from engine.methods.sensor_blend import SensorBlend
 from engine.sensors import Sensor, SensorFrame
 from engine.motion import Motion
 from engine.solver import (
-    FULL_SET, FrameContext, LatentDecoder, LatentPredictor, OptimizerSettings, PoseOptimizer, RootAnchor, RootFrame,
+    FrameContext, LatentDecoder, LatentPredictor, OptimizerSettings, PoseOptimizer, RootAnchor, RootFrame,
     RootOverride, TemporalSchedule,
 )  # fmt: skip
+from engine.solver.limb_ik import LIMBS, reach
+from engine.solver.pose import adopt_rotations, clamp_heading
+from engine.solver.profiles import effective
 
 _HEIGHT_IDX = [sk.JOINT_INDEX[j] for j in sk.HEIGHT_JOINTS]
-SPARSE_FUTURE = 16
 
 
 class DragPoserMethod(Method):
@@ -68,6 +72,10 @@ class DragPoserMethod(Method):
             predictor.eval().requires_grad_(False)
         self.predictor = predictor
         self.settings = settings or OptimizerSettings()
+        # settings the caller chose (kept against the sensor-set profiles, engine/solver/profiles.py)
+        defaults = OptimizerSettings()
+        self.explicit: set[str] = {f.name for f in dataclasses.fields(OptimizerSettings)
+                                   if getattr(self.settings, f.name) != getattr(defaults, f.name)}  # fmt: skip
         self.latent_dim = latent_dim
         self.fast = fast
         self.constraints: list[Constraint] = []
@@ -83,6 +91,7 @@ class DragPoserMethod(Method):
         known = {f.name for f in dataclasses.fields(OptimizerSettings)}
         new = dataclasses.replace(self.settings, **{k: v for k, v in values.items() if k in known})
         self.settings.__dict__.update(new.__dict__)  # keep the object: callers may hold it
+        self.explicit |= set(values) & known
         unknown = sorted(set(values) - known)
         if unknown:
             raise UserError(f"unknown optimizer setting(s): {', '.join(unknown)}")
@@ -135,6 +144,9 @@ class DragPoserMethod(Method):
         self.schedule = TemporalSchedule(self.settings.predictor_every, self.settings.past_window)
         self.sensors: dict[str, SensorConstraint] = {}
         self.prior = TemporalPriorConstraint(name="temporal_prior")
+        self.smooth = SmoothConstraint(name="smooth")
+        self.ground = GroundConstraint(name="ground")
+        self._before: torch.Tensor | None = None  # positions two frames back (smooth term)
         self._frame = 0
         self._latent = torch.zeros(self.latent_dim)
         self._root: RootFrame | None = None
@@ -154,38 +166,47 @@ class DragPoserMethod(Method):
 
     def _step(self, sensors: SensorFrame) -> FrameResult:
         t0 = time.perf_counter()
-        s = self.settings
         warnings = self._update_sensors(sensors)
+        # the connected sensor set's profile fills the settings the caller left alone
+        s = effective(self.settings, [j for j, c in self.sensors.items() if c.enabled], self.explicit)
         self.schedule.configure(s.predictor_every, s.past_window)
         override = self._root_override()
         if self._root is None:
             self._root = self._initial_root()
-        n_connected = sum(c.enabled for c in self.sensors.values())
-        future = s.future_window or (1 if n_connected >= FULL_SET else SPARSE_FUTURE)
-        prediction, warn = self.schedule.prediction(self._frame, self.predictor, future)
+        prediction, warn = self.schedule.prediction(self._frame, self.predictor, max(1, s.future_window))
         if warn:
             warnings.append(warn)
         start = prediction if prediction is not None and s.init_from_prediction else self._latent
         self.prior.weight = s.temporal_weight
+        self.smooth.weight = s.smooth_weight
+        feet = any(self.sensors[j].enabled for j in ("lankle", "rankle") if j in self.sensors)
+        self.ground.weight = 0.0 if feet else s.ground_weight
+        self.smooth.set_history(*(None if p is None else p.double().numpy() for p in (self._positions, self._before)))
         anchor = self._root_anchor() if override is None else None
-        ctx = FrameContext(self._root, override, anchor, self._positions, prediction, self._frame)
-        terms = [*self.sensors.values(), self.prior, *self.constraints]
-        if self._frame == 0:  # no history to start from: solve the first pose offline
-            self.optimizer.settings = dataclasses.replace(s, mode="offline")
-        try:
+        root = self._reference_root(s, override)
+        ctx = FrameContext(root, override, anchor, self._positions, prediction, self._frame)
+        terms = [*self.sensors.values(), self.prior, self.smooth, self.ground, *self.constraints]
+        self.optimizer.settings = dataclasses.replace(s, mode="offline") if self._frame == 0 else s
+        try:  # frame 0 has no history to start from: it is solved offline
             sol = self.optimizer.solve(start, terms, ctx)
         finally:
-            self.optimizer.settings = s
+            self.optimizer.settings = self.settings
         warnings += sol.warnings
         state = sol.state
         if not (torch.isfinite(state.positions).all() and torch.isfinite(state.local_rot).all()):
             warnings.append("decoded pose is not finite; previous pose repeated")
             return self._repeat_last(warnings, sol.losses, sol.iterations, t0)
-        self._advance(sol.latent, state.local_rot[0], state.positions)
+        local_rot, positions = state.local_rot.double().numpy(), state.positions.double().numpy()
+        if s.reach:
+            local_rot, positions = self._reach(local_rot, positions)
+        if s.sensor_rotations:
+            local_rot, positions = self._adopt_sensor_rotations(local_rot, positions)
+        self._advance(sol.latent, root, torch.as_tensor(local_rot[0], dtype=torch.float32),
+                      torch.as_tensor(positions, dtype=torch.float32))  # fmt: skip
         result = FrameResult(
-            local_rot=state.local_rot.double().numpy(),
-            root_pos=state.positions[0].double().numpy(),
-            positions=state.positions.double().numpy(),
+            local_rot=local_rot,
+            root_pos=positions[0].copy(),
+            positions=positions,
             iterations=sol.iterations,
             losses=sol.losses,
             latent=sol.latent.double().numpy(),
@@ -241,6 +262,36 @@ class DragPoserMethod(Method):
         rot = torch.as_tensor(Q.normalize(c.rotation), dtype=torch.float32) if c.dof == 6 else None
         return RootOverride(pos, rot)
 
+    def _reach(self, local_rot: np.ndarray, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Tracked wrists and ankles onto their trackers by their limbs (setting ``reach``)."""
+        targets = {sk.JOINT_INDEX[j]: c.position for j, c in self.sensors.items()
+                   if c.enabled and c.connected and sk.JOINT_INDEX[j] in LIMBS}  # fmt: skip
+        if not targets:
+            return local_rot, positions
+        return reach(local_rot, positions[0], self.skeleton.offsets, targets)
+
+    def _adopt_sensor_rotations(self, local_rot: np.ndarray, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The head, hands and feet take their connected 6-DoF trackers' world rotations
+        (setting ``sensor_rotations``); the hips' is the tracker's already."""
+        targets = {sk.JOINT_INDEX[j]: c.rotation for j, c in self.sensors.items()
+                   if c.enabled and c.connected and c.dof == 6 and j != "root" and c.rotation_weight > 0}  # fmt: skip
+        if not targets:
+            return local_rot, positions
+        return adopt_rotations(local_rot, positions[0], self.skeleton.offsets, targets)
+
+    def _reference_root(self, s: OptimizerSettings, override: RootOverride | None) -> RootFrame:
+        """The root the decoded root pose is relative to: the previous solved root, whose
+        heading (setting ``heading = anchor``, no hip tracker) is kept within
+        :data:`engine.solver.pose.HEADING_LIMIT_DEG` of the anchor tracker's heading."""
+        assert self._root is not None
+        if override is not None or s.heading != "anchor" or s.root_anchor == "none":
+            return self._root
+        c = self.sensors.get(s.root_anchor)
+        if c is None or not c.enabled or c.dof != 6:
+            return self._root
+        rot = clamp_heading(self._root.rotation.double().numpy(), Q.normalize(c.rotation))
+        return RootFrame(torch.as_tensor(rot, dtype=torch.float32), self._root.position)
+
     def _root_anchor(self) -> RootAnchor | None:
         """The head tracker places the body when there is no hip tracker (setting
         ``root_anchor``; ``none`` integrates the decoded displacement instead)."""
@@ -274,9 +325,7 @@ class DragPoserMethod(Method):
             pos = np.array([0.0, 0.0, -rest[:, 2].min()])
         return RootFrame(torch.as_tensor(rot, dtype=torch.float32), torch.as_tensor(pos, dtype=torch.float32))
 
-    def _advance(self, latent: torch.Tensor, root_rot: torch.Tensor, positions: torch.Tensor) -> None:
-        prev = self._root
-        assert prev is not None
+    def _advance(self, latent: torch.Tensor, prev: RootFrame, root_rot: torch.Tensor, positions: torch.Tensor) -> None:
         _, disp = root_increment(prev.rotation, prev.position, root_rot, positions[0])
         # predictor conditioning: displacement summed over the last n frames (each in its
         # previous heading frame), then the heights of HEIGHT_JOINTS (engine.models.predictor)
@@ -286,6 +335,7 @@ class DragPoserMethod(Method):
         self.schedule.record(self._frame, latent, cond)
         self._latent = latent
         self._root = RootFrame(root_rot.detach().clone(), positions[0].detach().clone())
+        self._before = self._positions
         self._positions = positions.detach().clone()
         self._frame += 1
 

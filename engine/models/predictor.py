@@ -85,12 +85,16 @@ class TemporalPredictor(nn.Module):
 
     @torch.no_grad()
     def predict(self, past: torch.Tensor, cond: torch.Tensor, first: torch.Tensor, steps: int) -> torch.Tensor:
-        """Autoregressive prediction of ``steps`` latents ``(B, steps, L)`` after ``first (B, L)``."""
+        """Autoregressive prediction of ``steps`` latents ``(B, steps, L)`` after ``first (B, L)``.
+
+        Horizons beyond the trained decoder length (``config.future``; DragPoser runs up
+        to 60 steps with sparse sets) continue with a sliding window: the decoder sees
+        the last ``future`` tokens, at the positions it was trained on."""
         memory = self.encode_past(past, cond)
         tokens = first[:, None]
         outs = []
-        for _ in range(min(steps, self.config.future)):
-            nxt = self.decode_steps(tokens, memory)[:, -1]
+        for _ in range(steps):
+            nxt = self.decode_steps(tokens[:, -self.config.future :], memory)[:, -1]
             outs.append(nxt)
             tokens = torch.cat((tokens, nxt[:, None]), dim=1)
         return torch.stack(outs, dim=1)

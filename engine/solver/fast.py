@@ -13,6 +13,7 @@ Per iteration (``L`` latent size, ``S`` sensors)::
     P, W = FK by levels (matrices)             (22, 3), (22, 3, 3)
     P'   = P + (head_target - P[head])         when the head anchors the body
     loss = sum_s w_s (|P'[j_s] - t_s|^2 + rw_s (3 - <T_s, W[j_s]>) / 4) + w_p |z - z_pred|^2 / L
+           + sum_e w_e loss_e(P')            (whole-pose terms: ``smooth``, ``ground``; pose_terms.py)
 
 and the reverse pass is the closed form in :meth:`FastPose.backward`.
 """
@@ -27,6 +28,7 @@ from engine import skeleton as sk
 from engine.kinematics import quat_np as QN
 from engine.kinematics.fk import levels
 from engine.models.fused import DenseDecoder
+from engine.solver.pose_terms import PoseTerm
 
 _EPS = 1e-8  # quaternion normalisation floor, as in engine.kinematics.quaternion.normalize
 
@@ -64,9 +66,13 @@ class FastTerms:
         Term names in evaluation order (sensors first, then the prior if present).
     """
 
-    def __init__(self, sensors: list, prior, weights_prior: float, prediction: np.ndarray | None) -> None:
-        self.names = [c.name for c in sensors] + ([prior.name] if prior is not None else [])
-        self.weights = np.array([c.weight for c in sensors] + ([weights_prior] if prior is not None else []))
+    def __init__(self, sensors: list, prior, weights_prior: float, prediction: np.ndarray | None,
+                 extras: list[PoseTerm] | None = None) -> None:  # fmt: skip
+        self.extras = extras or []  # whole-pose terms (engine.solver.pose_terms), between sensors and prior
+        self.names = ([c.name for c in sensors] + [e.name for e in self.extras]
+                      + ([prior.name] if prior is not None else []))  # fmt: skip
+        self.weights = np.array([c.weight for c in sensors] + [e.weight for e in self.extras]
+                                + ([weights_prior] if prior is not None else []))  # fmt: skip
         self.joint = np.array([sk.JOINT_INDEX[c.joint] for c in sensors], dtype=np.intp)
         self.target = np.array([c.position for c in sensors], dtype=np.float64).reshape(-1, 3)
         self.on = np.array([float(c.connected) for c in sensors])
@@ -138,6 +144,7 @@ class FastPose:
         self.anchor = None if anchor_joint is None or override_pos is not None else int(self.row[anchor_joint])
         self.anchor_pos = anchor_pos
         self.terms = t = terms
+        n = self.n
         self.rows = self.row[t.joint]  # sensor rows
         self.rows6 = self.rows[t.six]
         w = t.weights[: t.n_sensors] * t.on
@@ -145,7 +152,8 @@ class FastPose:
         self.rot_coef = -0.25 * w[t.six] * t.rot_weight
         # points whose position gradient is not zero: the sensors (and the anchor, which
         # takes minus their sum), with the subtree columns of each
-        pts = self.rows if self.anchor is None else np.append(self.rows, self.anchor)
+        pts = self.rows if not t.extras else np.concatenate((self.rows, np.arange(n)))  # extras: every row
+        pts = pts if self.anchor is None else np.append(pts, self.anchor)
         self.points = pts
         self.sub_points = self.subtree[:, pts]
         self.sub_rot = self.subtree[:, self.rows6]
@@ -181,6 +189,9 @@ class FastPose:
             losses = losses.copy()
             losses[t.six] += t.rot_weight * self.rot_loss
         losses = losses * t.on
+        if t.extras:
+            pos_j = pos[self.row]  # joint order
+            losses = np.append(losses, [e.loss(pos_j) for e in t.extras])
         if t.has_prior:
             if t.prediction is None:
                 return np.append(losses, 0.0)
@@ -215,7 +226,7 @@ class FastPose:
         descendant ``d`` by ``a x (P_d - P_j)`` and turns its world rotation by ``a``.
         So the gradient w.r.t. that angle is ``tau_j = sum_{d in subtree(j)} (P_d x g_d
         + w_d) - P_j x sum_{d in subtree(j)} g_d`` (``g_d`` position gradients, non-zero
-        only at the sensors and the anchor; ``w_d`` the axial part of ``g_W_d W_d^T``):
+        only at the sensors and the anchor, or everywhere with whole-pose terms; ``w_d`` the axial part of ``g_W_d W_d^T``):
         products with constant subtree columns. A local quaternion ``u_j`` turned by
         ``du`` turns the joint by ``W_parent 2 vec(du u_j*)``, hence ``d loss / d u_j =
         2 (0, W_parent^T tau_j) u_j``, tangent to the unit sphere, so the normalisation
@@ -223,6 +234,12 @@ class FastPose:
         """
         t, pos = self.terms, self.pos_lo
         g = self.w2 * self.err  # (S, 3) position gradients at the sensor rows
+        if t.extras:  # whole-pose terms: a gradient at every row (engine.solver.pose_terms)
+            ge = np.zeros((self.n, 3))
+            pos_j = pos[self.row]
+            for e in t.extras:
+                e.add_gradient(ge, pos_j)
+            g = np.concatenate((g, ge[self.order]))
         if self.anchor is not None:
             g = np.concatenate((g, -g.sum(0, keepdims=True)))
         tau = self.sub_points @ _cross(pos[self.points], g) - _cross(pos, self.sub_points @ g)

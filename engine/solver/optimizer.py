@@ -44,6 +44,7 @@ from engine.kinematics.fk import fk_matrices
 from engine.models.fused import DenseDecoder
 from engine.models.vae import PoseVAE
 from engine.solver.fast import FastPose, FastTerms
+from engine.solver.pose_terms import POSE_TERMS
 from engine.solver.pose import RootAnchor, RootFrame, RootOverride, world_root
 from engine.solver.settings import FULL_SET, OptimizerSettings
 from engine.solver.state import PoseState
@@ -53,7 +54,7 @@ if TYPE_CHECKING:  # constraints import the pose state from this package
     from engine.constraints.base import Constraint
 
 #: Term kinds the fast path evaluates itself.
-FAST_KINDS = ("sensor", "temporal_prior")
+FAST_KINDS = ("sensor", "temporal_prior", *POSE_TERMS)
 _DENSE: "weakref.WeakKeyDictionary[torch.nn.Module, DenseDecoder]" = weakref.WeakKeyDictionary()
 _BLAS = ThreadpoolController()
 
@@ -241,7 +242,8 @@ class PoseOptimizer:
         sensors = [c for c in terms if c.kind == "sensor"]
         prior = next((c for c in terms if c.kind == "temporal_prior"), None)
         pred = None if ctx.prediction is None else ctx.prediction.detach().double().numpy()
-        ft = FastTerms(sensors, prior, prior.weight if prior is not None else 0.0, pred)
+        extras = [POSE_TERMS[c.kind](c) for c in terms if c.kind in POSE_TERMS]
+        ft = FastTerms(sensors, prior, prior.weight if prior is not None else 0.0, pred, extras)
         ov, anchor = ctx.root_override, ctx.root_anchor
         fp.setup(Q.heading(ctx.previous_root.rotation.detach().double().numpy()),
                  ctx.previous_root.position.detach().double().numpy(),

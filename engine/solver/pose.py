@@ -23,11 +23,16 @@ Root handling (see ``docs/optimizer.md``):
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
+import numpy as np
 import torch
 
+from engine import skeleton as sk
+from engine.kinematics import quat_np as QN
 from engine.kinematics import quaternion as Q
+from engine.kinematics.fk import fk as fk_np
 from engine.kinematics.root import integrate_root
 
 
@@ -101,3 +106,70 @@ def world_root(rot0: torch.Tensor, disp: torch.Tensor, prev: RootFrame,
         position = override.position.expand_as(disp)
     return rotation, position
 
+
+
+#: ``heading = anchor``: the reference heading stays within this many degrees of the
+#: anchor (head) tracker's heading. A head turns about 60-80 degrees against the hips at
+#: most; a reference beyond that is drift, or the start of a flip, and is pulled back.
+HEADING_LIMIT_DEG = 60.0
+#: Below this horizontal length of the tracker's forward axis (looking almost straight
+#: up or down) its heading is undefined and no limit is applied.
+_MIN_FORWARD = 0.3
+
+
+def clamp_heading(previous: np.ndarray, anchor_rotation: np.ndarray, limit_deg: float = HEADING_LIMIT_DEG) -> np.ndarray:
+    """The previous root rotation ``(4,)`` turned about +Z just enough that its heading
+    is within ``limit_deg`` of the heading of ``anchor_rotation (4,)`` (both world,
+    (w, x, y, z)); unchanged when it already is, or when the anchor's forward axis is
+    nearly vertical."""
+    fw = QN.rotate(anchor_rotation, np.array([0.0, -1.0, 0.0]))
+    if math.hypot(fw[0], fw[1]) < _MIN_FORWARD:
+        return previous
+    yaw_anchor = math.atan2(fw[0], -fw[1])
+    pf = QN.rotate(previous, np.array([0.0, -1.0, 0.0]))
+    yaw_prev = math.atan2(pf[0], -pf[1])
+    diff = math.remainder(yaw_prev - yaw_anchor, 2 * math.pi)
+    limit = math.radians(limit_deg)
+    if abs(diff) <= limit:
+        return previous
+    turn = math.copysign(limit, diff) - diff  # about +Z, onto the limit
+    qz = np.array([math.cos(turn / 2), 0.0, 0.0, math.sin(turn / 2)])
+    return QN.mul(qz, previous)
+
+
+def adopt_rotations(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray,
+                    targets: dict[int, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """Give joints exact world rotations by changing their local rotations only.
+
+    Parameters
+    ----------
+    local_rot : ndarray (22, 4)
+        Local rotations (row 0 the root's world rotation).
+    root_pos : ndarray (3,)
+        Root position, metres.
+    offsets : ndarray (22, 3)
+        Bone offsets, metres.
+    targets : dict
+        Joint index (not the root) -> world rotation ``(4,)`` (w, x, y, z).
+
+    Returns
+    -------
+    local_rot : ndarray (22, 4)
+        ``local[j] = world[parent(j)]^-1 * target_j`` for the target joints, else as given.
+    positions : ndarray (22, 3)
+        FK of the result: the target joints keep their positions, their descendants follow.
+    """
+    local = np.array(local_rot, dtype=np.float64)
+    world = np.empty_like(local)
+    world[0] = local[0]
+    for j in range(1, sk.NUM_JOINTS):  # parents come before children
+        p = sk.PARENTS[j]
+        if j in targets:
+            t = np.asarray(targets[j], dtype=np.float64)
+            t = t / max(float(np.linalg.norm(t)), 1e-12)
+            local[j] = QN.mul(QN.conjugate(world[p]), t)
+            if local[j, 0] < 0:
+                local[j] = -local[j]
+        world[j] = QN.mul(world[p], local[j])
+    positions, _ = fk_np(local, np.asarray(root_pos, dtype=np.float64), offsets)
+    return local, positions

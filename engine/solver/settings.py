@@ -15,6 +15,10 @@ MODES = ("realtime", "offline")
 #: Latent update rules: plain gradient steps (DragPoser eq. in sec. 4.4), Adam restarted every
 #: frame, or Adam whose moment estimates carry over from frame to frame.
 OPTIMIZERS = ("auto", "sgd", "adam", "adam-carry")
+#: ``tuning``: per-sensor-set profiles (engine/solver/profiles.py) or the values as set.
+TUNINGS = ("preset", "off")
+#: ``heading``: what the decoded root rotation is relative to without a hip tracker.
+HEADINGS = ("previous", "anchor")
 #: Connected sensors from which ``auto`` uses Adam (and the predictor looks one step ahead).
 FULL_SET = 6
 
@@ -81,6 +85,33 @@ class OptimizerSettings:
         Seconds over which a tracker that disconnects or reconnects is blended out / in
         (``engine/methods/sensor_blend.py``); 0 = the target jumps. Trackers that place
         the body (hips, ``root_anchor``) are never blended.
+    smooth_weight : float
+        Weight of the ``smooth`` term: every joint's squared deviation (m^2, mean over
+        joints) from the constant-velocity extrapolation of the previous two solved
+        poses; it damps frame-to-frame jitter without holding steady motion back.
+    ground_weight : float
+        Weight of the ``ground`` term (the lower ankle 5-14 cm above the floor at z = 0)
+        while no foot tracker is connected; it makes the legs reach the floor below
+        tracked hips or head.
+    tuning : str
+        ``preset``: the settings in :data:`engine.solver.profiles.TUNED` that were not
+        set explicitly take the values of the connected sensor set's profile
+        (``engine/solver/profiles.py``); ``off``: the values here are used as they are.
+    sensor_rotations : bool
+        After each solve, give every joint with a connected 6-DoF tracker (other than the
+        hips, which are always the tracker's) exactly the tracker's world rotation, by
+        setting its local rotation from its solved parent (DragPoser's joint adjustment,
+        applied to the head, hands and feet). Positions of those joints are unchanged;
+        their children (toes) follow the foot.
+    reach : bool
+        After each solve, put every tracked wrist and ankle exactly on its tracker by its
+        limb's two bones (``engine/solver/limb_ik.py``): the decoder alone leaves them
+        1-2 cm off in realtime.
+    heading : str
+        Without a hip tracker, the frame the decoded root rotation is relative to:
+        ``previous`` (the previous solved root's heading, integrated from frame to
+        frame) or ``anchor`` (the heading of the ``root_anchor`` joint's 6-DoF tracker
+        when there is one, so nothing accumulates; see docs/optimizer.md).
     threads : int
         Torch intra-op threads while solving (0 = leave torch's setting). The tensors
         are tiny, so one thread is fastest; on a busy 2-core machine, torch's default
@@ -108,6 +139,12 @@ class OptimizerSettings:
     momentum: float = 0.0
     threads: int = 1
     sensor_blend: float = 0.0
+    smooth_weight: float = 0.0
+    ground_weight: float = 0.0
+    tuning: str = "preset"
+    sensor_rotations: bool = True
+    reach: bool = True
+    heading: str = "anchor"
 
     def __post_init__(self) -> None:
         self.validate()
@@ -124,7 +161,8 @@ class OptimizerSettings:
                 raise UserError(f"optimizer setting {name!r} must be a positive integer, got {v!r}")
             setattr(self, name, int(v))
         floats = ("lr", "position_tolerance", "rotation_tolerance", "sensor_rotation_weight", "temporal_weight",
-                  "min_improvement", "divergence_factor", "momentum", "step_size", "sensor_blend")  # fmt: skip
+                  "min_improvement", "divergence_factor", "momentum", "step_size", "sensor_blend",
+                  "smooth_weight", "ground_weight")  # fmt: skip
         for name in floats:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
@@ -132,6 +170,13 @@ class OptimizerSettings:
             setattr(self, name, float(v))
         if self.optimizer not in OPTIMIZERS:
             raise UserError(f"optimizer setting 'optimizer' must be one of {', '.join(OPTIMIZERS)}, got {self.optimizer!r}")
+        if self.tuning not in TUNINGS:
+            raise UserError(f"optimizer setting 'tuning' must be one of {', '.join(TUNINGS)}, got {self.tuning!r}")
+        if self.heading not in HEADINGS:
+            raise UserError(f"optimizer setting 'heading' must be one of {', '.join(HEADINGS)}, got {self.heading!r}")
+        for name in ("sensor_rotations", "reach"):
+            if not isinstance(getattr(self, name), bool):
+                raise UserError(f"optimizer setting {name!r} must be true or false, got {getattr(self, name)!r}")
         if self.root_anchor != "none" and self.root_anchor not in sk.JOINT_INDEX:
             raise UserError(f"optimizer setting 'root_anchor' must be a joint name or 'none', got {self.root_anchor!r}")
         if self.momentum >= 1:

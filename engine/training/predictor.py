@@ -28,6 +28,7 @@ import torch
 from tqdm import tqdm
 
 from engine import skeleton as sk
+from engine.errors import UserError
 from engine.kinematics import quaternion as Q
 from engine.kinematics.features import encoder_input
 from engine.models.loading import FORMAT_VERSION, load_checkpoint, load_vae
@@ -53,6 +54,13 @@ class PredictorTrainConfig:
     stride: int = 4
     limb_noise_p: float = 0.1
     noise_copies: int = 2
+    #: Fraction of decoder input tokens (after the first) replaced by the model's own
+    #: prediction of them from a gradient-free teacher-forced pass, so training sees the
+    #: kind of input a free rollout feeds it (parallel scheduled sampling).
+    self_feed: float = 0.0
+    #: Checkpoint selection: ``val_mse`` (teacher-forced) or ``val_rollout_mse`` (free
+    #: Wf-step rollout, what sparse sensor sets use).
+    select: str = "val_mse"
     batch_size: int = 64
     lr: float = 1e-3
     lr_final: float = 5e-5
@@ -143,6 +151,10 @@ def _lr(cfg: PredictorTrainConfig, frac: float) -> float:
 def train_predictor(data_dir: Path, vae_path: Path, out_dir: Path, cfg: PredictorTrainConfig,
                     resume: bool = False, progress: bool = True) -> dict:  # fmt: skip
     """Train (or resume) the predictor; writes ``predictor.pt``, ``best.pt``, ``last.pt``, losses."""
+    if cfg.select not in ("val_mse", "val_rollout_mse"):
+        raise UserError(f"predictor setting 'select' must be val_mse or val_rollout_mse, got {cfg.select!r}")
+    if not 0.0 <= cfg.self_feed <= 1.0:
+        raise UserError(f"predictor setting 'self_feed' must be within [0, 1], got {cfg.self_feed!r}")
     ddp = Distributed()
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -184,6 +196,8 @@ def train_predictor(data_dir: Path, vae_path: Path, out_dir: Path, cfg: Predicto
             t = a_tr[pick[ddp.rank :: ddp.world]]
             past, cond, tokens, target = make_batch(t, z_tr, None, c_tr, noisy, flags, cfg, gen)
             memory = model.encode_past(past, cond)
+            if cfg.self_feed > 0:
+                tokens = self_fed(model, tokens, memory, cfg.self_feed, gen)
             pred = model.decode_steps(tokens, memory)
             loss = (((pred - target) / model.z_std) ** 2).mean()
             opt.zero_grad(set_to_none=True)
@@ -207,8 +221,8 @@ def train_predictor(data_dir: Path, vae_path: Path, out_dir: Path, cfg: Predicto
                 tqdm.write(" ".join(f"{k}={v:.4g}" for k, v in row.items()))
             meta.update(epochs=epoch + 1, minutes=round(minutes, 2), val_mse=row["val_mse"],
                         val_rollout_mse=row["val_rollout_mse"])  # fmt: skip
-            if row["val_mse"] < best:
-                best = row["val_mse"]
+            if row[cfg.select] < best:
+                best = row[cfg.select]
                 save_checkpoint(out_dir / "best.pt", payload(model, cfg, dict(meta)))
             save_checkpoint(out_dir / "last.pt", {"state_dict": model.state_dict(), "optimizer": opt.state_dict(),
                                                   "epoch": epoch + 1, "minutes": minutes, "best": best, "step": step_total,
@@ -221,6 +235,18 @@ def train_predictor(data_dir: Path, vae_path: Path, out_dir: Path, cfg: Predicto
         save_checkpoint(out_dir / "predictor.pt", payload(model, cfg, meta))
     ddp.close()
     return meta
+
+
+def self_fed(model: TemporalPredictor, tokens: torch.Tensor, memory: torch.Tensor, p: float,
+             gen: torch.Generator) -> torch.Tensor:  # fmt: skip
+    """``tokens (B, T, L)`` with each token after the first replaced, with probability
+    ``p``, by the model's own (gradient-free, teacher-forced) prediction of it."""
+    with torch.no_grad():
+        own = model.decode_steps(tokens, memory.detach())[:, :-1]  # predictions of tokens 1..T-1
+    pick = torch.rand(tokens.shape[:2], generator=gen) < p
+    pick[:, 0] = False
+    shifted = torch.cat((tokens[:, :1], own), dim=1)
+    return torch.where(pick[..., None], shifted, tokens)
 
 
 @torch.no_grad()

@@ -1,0 +1,72 @@
+"""Per-sensor-set solver settings (DragPoser sec. 4.3: the future window grows with the
+ambiguity of the sensor set; we tune the temporal weight, step sizes and smoothing too).
+
+Which profile a frame uses depends on its *connected* trackers, so a lost tracker
+switches the profile for as long as it is lost:
+
+========  =============================================  ==================================
+profile   connected trackers                             presets
+========  =============================================  ==================================
+``full``  hips and at least :data:`FULL_SET` in total    ``6``, ``6x3dof``
+``hip``   hips, fewer in total                           ``4``, ``3-hip-hands``, ``5-paper``
+``head``  no hips                                        ``3-head-hands``, ``5``
+========  =============================================  ==================================
+
+A profile only supplies the values of the settings the user left alone
+(:meth:`engine.methods.dragposer.DragPoserMethod.configure` records what was set);
+``tuning = "off"`` disables profiles altogether. The values were chosen on the
+validation files only; the sweeps are in ``docs/optimizer.md``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Collection
+from dataclasses import dataclass
+
+from engine.solver.settings import FULL_SET, OptimizerSettings
+
+
+@dataclass(frozen=True)
+class Profile:
+    """Settings a sensor set overrides (names as in :class:`OptimizerSettings`)."""
+
+    name: str
+    future_window: int
+    temporal_weight: float
+    step_size: float
+    lr: float
+    smooth_weight: float
+    ground_weight: float
+
+    def values(self) -> dict:
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name != "name"}
+
+
+PROFILES: dict[str, Profile] = {
+    "full": Profile("full", future_window=1, temporal_weight=0.01, step_size=0.3, lr=0.05, smooth_weight=5.0,
+                    ground_weight=0.0),
+    "hip": Profile("hip", future_window=16, temporal_weight=0.01, step_size=0.3, lr=0.05, smooth_weight=0.0,
+                   ground_weight=10.0),
+    "head": Profile("head", future_window=16, temporal_weight=0.01, step_size=0.3, lr=0.05, smooth_weight=0.0,
+                    ground_weight=10.0),
+}  # fmt: skip
+#: Settings a profile may supply.
+TUNED = tuple(f.name for f in dataclasses.fields(Profile) if f.name != "name")
+
+
+def profile_for(connected: Collection[str]) -> Profile:
+    """The profile of a frame whose connected trackers sit on the joints ``connected``."""
+    if "root" in connected:
+        return PROFILES["full" if len(connected) >= FULL_SET else "hip"]
+    return PROFILES["head"]
+
+
+def effective(settings: OptimizerSettings, connected: Collection[str], explicit: Collection[str]) -> OptimizerSettings:
+    """``settings`` with the profile's values for the tuned fields not in ``explicit``
+    (a new object; ``settings`` itself is unchanged). With ``tuning == "off"`` it is
+    ``settings`` itself."""
+    if settings.tuning == "off":
+        return settings
+    values = {k: v for k, v in profile_for(connected).values().items() if k not in explicit}
+    return dataclasses.replace(settings, **values) if values else settings

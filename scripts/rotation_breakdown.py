@@ -1,0 +1,86 @@
+"""Per-joint rotation error of a method on simulated trackers (where the Rot figure comes from).
+
+    .venv/bin/python scripts/rotation_breakdown.py FILE... [--method dragposer] [--sensors 6]
+        [--mode realtime] [--max-frames 300] [--set KEY=VALUE ...] [--vae V.pt --predictor P.pt]
+        [--twist]
+
+Prints, per joint, the mean geodesic error of its local rotation (degrees, as
+``rot_deg`` of ``evaluate``) and, with ``--twist``, how much of it is twist about the
+bone to the joint's child (swing-twist split of the error rotation), then the mean.
+``--method autoencoder`` gives the VAE's ceiling (the true pose encoded and decoded).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from engine import skeleton as sk  # noqa: E402
+from engine.kinematics import quaternion as Q  # noqa: E402
+
+
+def twist_angle(err: np.ndarray, axis: np.ndarray) -> np.ndarray:
+    """Twist part (degrees) of error rotations ``(..., 4)`` about unit ``axis (3,)``."""
+    proj = (err[..., 1:] @ axis)[..., None] * axis
+    tw = np.concatenate((err[..., :1], proj), axis=-1)
+    n = np.linalg.norm(tw, axis=-1)
+    return np.degrees(2.0 * np.arctan2(np.linalg.norm(proj, axis=-1), np.abs(err[..., 0]) + 1e-12)) * (n > 1e-9)
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("files", nargs="+")
+    ap.add_argument("--method", default="dragposer")
+    ap.add_argument("--sensors", default="6")
+    ap.add_argument("--mode", default="realtime")
+    ap.add_argument("--max-frames", type=int, default=300)
+    ap.add_argument("--set", action="append", default=[])
+    ap.add_argument("--vae")
+    ap.add_argument("--predictor")
+    ap.add_argument("--twist", action="store_true")
+    args = ap.parse_args()
+
+    from engine.methods import get_method, run_method
+    from engine.retarget import load_motion
+    from engine.tracking import simulate
+
+    kw = {"mode": args.mode}
+    if args.vae:
+        kw["vae_path"] = args.vae
+    if args.predictor:
+        kw["predictor_path"] = args.predictor
+    method = get_method(args.method, **kw)
+    if args.set:
+        from engine.config import parse_overrides
+        from engine.solver import OptimizerSettings
+
+        method.configure(**parse_overrides(OptimizerSettings, args.set))
+    errs, twists = [], []
+    children = {j: sk.children(j) for j in range(sk.NUM_JOINTS)}
+    for f in args.files:
+        motion = load_motion(f, max_frames=args.max_frames)
+        rec, _ = run_method(method, simulate(motion, args.sensors), motion.skeleton, progress=False, reference=motion)
+        gt, out = Q.normalize(motion.local_rot), Q.normalize(rec.local_rot)
+        errs.append(np.degrees(Q.angle(gt, out)))
+        err = Q.mul(Q.conjugate(gt), out)  # error in the joint's own frame
+        tw = np.zeros(errs[-1].shape)
+        for j in range(sk.NUM_JOINTS):
+            if children[j]:
+                axis = motion.skeleton.offsets[children[j][0]]
+                tw[:, j] = twist_angle(err[:, j], axis / np.linalg.norm(axis))
+        twists.append(tw)
+    e, t = np.concatenate(errs).mean(0), np.concatenate(twists).mean(0)
+    print(f"{'joint':<11} {'rot deg':>8}" + (f" {'twist deg':>9}" if args.twist else ""))
+    for j, name in enumerate(sk.JOINT_NAMES):
+        print(f"{name:<11} {e[j]:8.1f}" + (f" {t[j]:9.1f}" if args.twist and children[j] else ""))
+    print(f"{'mean':<11} {e.mean():8.2f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

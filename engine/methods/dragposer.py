@@ -34,8 +34,8 @@ from engine.solver import (
     FrameContext, LatentDecoder, LatentPredictor, OptimizerSettings, PoseOptimizer, RootAnchor, RootFrame,
     RootOverride, TemporalSchedule,
 )  # fmt: skip
-from engine.solver.limb_ik import LIMBS, reach
-from engine.solver.pose import adopt_rotations, clamp_heading
+from engine.solver.limb_ik import LIMBS, adopt_rotations, reach
+from engine.solver.pose import clamp_heading
 from engine.solver.profiles import effective
 
 _HEIGHT_IDX = [sk.JOINT_INDEX[j] for j in sk.HEIGHT_JOINTS]

@@ -1,4 +1,5 @@
-"""Two-bone reach after the latent solve: wrists and ankles onto their trackers (numpy).
+"""Exact steps after the latent solve (numpy): wrists and ankles onto their trackers
+(:func:`reach`) and tracked joints onto their trackers' rotations (:func:`adopt_rotations`).
 
 The decoder brings a tracked hand or foot within a centimetre or two of its tracker; the
 rest is beyond what a 24-d latent can express in ten iterations. This step closes the
@@ -49,16 +50,8 @@ def reach(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray,
           targets: dict[int, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """Move the tracked wrists / ankles onto their targets by their limbs' two bones.
 
-    Parameters
-    ----------
-    local_rot : ndarray (22, 4)
-        Local rotations (row 0 the root's world rotation).
-    root_pos : ndarray (3,)
-        Root position, metres.
-    offsets : ndarray (22, 3)
-        Bone offsets, metres.
-    targets : dict
-        End joint (a key of :data:`LIMBS`) -> world target position ``(3,)``, metres.
+    Parameters are those of :func:`adopt_rotations`, except that ``targets`` maps an end
+    joint (a key of :data:`LIMBS`) to a world target *position* ``(3,)``, metres.
 
     Returns
     -------
@@ -95,4 +88,42 @@ def reach(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray,
         local[c] = QN.mul(QN.conjugate(wb), world[c])  # the end joint keeps its world rotation
     local *= np.where(local[:, :1] < 0, -1.0, 1.0)
     positions, _ = fk(local, root_pos, offsets)
+    return local, positions
+
+
+def adopt_rotations(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray,
+                    targets: dict[int, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """Give joints exact world rotations by changing their local rotations only.
+
+    Parameters
+    ----------
+    local_rot : ndarray (22, 4)
+        Local rotations (row 0 the root's world rotation).
+    root_pos : ndarray (3,)
+        Root position, metres.
+    offsets : ndarray (22, 3)
+        Bone offsets, metres.
+    targets : dict
+        Joint index (not the root) -> world rotation ``(4,)`` (w, x, y, z).
+
+    Returns
+    -------
+    local_rot : ndarray (22, 4)
+        ``local[j] = world[parent(j)]^-1 * target_j`` for the target joints, else as given.
+    positions : ndarray (22, 3)
+        FK of the result: the target joints keep their positions, their descendants follow.
+    """
+    local = np.array(local_rot, dtype=np.float64)
+    world = np.empty_like(local)
+    world[0] = local[0]
+    for j in range(1, sk.NUM_JOINTS):  # parents come before children
+        p = sk.PARENTS[j]
+        if j in targets:
+            t = np.asarray(targets[j], dtype=np.float64)
+            t = t / max(float(np.linalg.norm(t)), 1e-12)
+            local[j] = QN.mul(QN.conjugate(world[p]), t)
+            if local[j, 0] < 0:
+                local[j] = -local[j]
+        world[j] = QN.mul(world[p], local[j])
+    positions, _ = fk(local, np.asarray(root_pos, dtype=np.float64), offsets)
     return local, positions

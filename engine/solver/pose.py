@@ -29,10 +29,8 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from engine import skeleton as sk
 from engine.kinematics import quat_np as QN
 from engine.kinematics import quaternion as Q
-from engine.kinematics.fk import fk as fk_np
 from engine.kinematics.root import integrate_root
 
 
@@ -135,41 +133,3 @@ def clamp_heading(previous: np.ndarray, anchor_rotation: np.ndarray, limit_deg: 
     turn = math.copysign(limit, diff) - diff  # about +Z, onto the limit
     qz = np.array([math.cos(turn / 2), 0.0, 0.0, math.sin(turn / 2)])
     return QN.mul(qz, previous)
-
-
-def adopt_rotations(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray,
-                    targets: dict[int, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
-    """Give joints exact world rotations by changing their local rotations only.
-
-    Parameters
-    ----------
-    local_rot : ndarray (22, 4)
-        Local rotations (row 0 the root's world rotation).
-    root_pos : ndarray (3,)
-        Root position, metres.
-    offsets : ndarray (22, 3)
-        Bone offsets, metres.
-    targets : dict
-        Joint index (not the root) -> world rotation ``(4,)`` (w, x, y, z).
-
-    Returns
-    -------
-    local_rot : ndarray (22, 4)
-        ``local[j] = world[parent(j)]^-1 * target_j`` for the target joints, else as given.
-    positions : ndarray (22, 3)
-        FK of the result: the target joints keep their positions, their descendants follow.
-    """
-    local = np.array(local_rot, dtype=np.float64)
-    world = np.empty_like(local)
-    world[0] = local[0]
-    for j in range(1, sk.NUM_JOINTS):  # parents come before children
-        p = sk.PARENTS[j]
-        if j in targets:
-            t = np.asarray(targets[j], dtype=np.float64)
-            t = t / max(float(np.linalg.norm(t)), 1e-12)
-            local[j] = QN.mul(QN.conjugate(world[p]), t)
-            if local[j, 0] < 0:
-                local[j] = -local[j]
-        world[j] = QN.mul(world[p], local[j])
-    positions, _ = fk_np(local, np.asarray(root_pos, dtype=np.float64), offsets)
-    return local, positions

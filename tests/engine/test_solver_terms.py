@@ -19,7 +19,8 @@ from engine.models import load_default_models
 from engine.retarget import load_motion
 from engine.constraints import GroundConstraint, SensorConstraint, SmoothConstraint
 from engine.solver import FrameContext, OptimizerSettings, PoseOptimizer, RootAnchor, RootFrame
-from engine.solver.pose import HEADING_LIMIT_DEG, adopt_rotations, clamp_heading
+from engine.solver.limb_ik import adopt_rotations
+from engine.solver.pose import HEADING_LIMIT_DEG, clamp_heading
 from engine.solver.profiles import PROFILES, effective, profile_for
 from engine.tracking import simulate
 

@@ -274,7 +274,7 @@ class DragPoserMethod(Method):
         """The head, hands and feet take their connected 6-DoF trackers' world rotations
         (setting ``sensor_rotations``); the hips' is the tracker's already."""
         targets = {sk.JOINT_INDEX[j]: c.rotation for j, c in self.sensors.items()
-                   if c.enabled and c.connected and c.dof == 6 and j != "root" and c.rotation_weight > 0}  # fmt: skip
+                   if c.enabled and c.connected and c.dof == 6 and j != "root"}  # fmt: skip
         if not targets:
             return local_rot, positions
         return adopt_rotations(local_rot, positions[0], self.skeleton.offsets, targets)

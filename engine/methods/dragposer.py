@@ -169,6 +169,10 @@ class DragPoserMethod(Method):
         warnings = self._update_sensors(sensors)
         # the connected sensor set's profile fills the settings the caller left alone
         s = effective(self.settings, [j for j, c in self.sensors.items() if c.enabled], self.explicit)
+        base = self.settings.sensor_rotation_weight
+        if s.sensor_rotation_weight != base and base > 0:  # the profile's rotation weight (blend kept)
+            for c in self.sensors.values():
+                c.rotation_weight *= s.sensor_rotation_weight / base
         self.schedule.configure(s.predictor_every, s.past_window)
         override = self._root_override()
         if self._root is None:

@@ -221,7 +221,8 @@ def main() -> int:
                 for p in args.presets for mode in MODES for m in args.methods]  # fmt: skip
         if not args.no_lossy:
             jobs += [(m, p, "realtime", args.realtime_frames, extra) for _, p, extra in LOSSY for m in args.methods]
-        jobs.sort(key=lambda j: (j[0] == "ik", j[2] == "realtime"))  # slowest first
+        # realtime DragPoser first (the figures the targets are about), then IK, offline last
+        jobs.sort(key=lambda j: (j[2] == "offline", bool(j[4]), j[0] == "ik"))
         with ThreadPoolExecutor(args.jobs) as pool:
             for msg in pool.map(lambda j: run(args.out, files, *j, models), jobs):
                 print(msg, flush=True)

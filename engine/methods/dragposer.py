@@ -268,8 +268,12 @@ class DragPoserMethod(Method):
 
     def _reach(self, local_rot: np.ndarray, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Tracked wrists and ankles onto their trackers by their limbs (setting ``reach``)."""
+        # a limb whose shoulder/elbow (hip/knee) a user constraint holds is left as solved
+        held = {sk.JOINT_INDEX[n] for c in self.constraints if c.enabled and c.weight > 0
+                for n in _joints_of(c) if n in sk.JOINT_INDEX}  # fmt: skip
         targets = {sk.JOINT_INDEX[j]: c.position for j, c in self.sensors.items()
-                   if c.enabled and c.connected and sk.JOINT_INDEX[j] in LIMBS}  # fmt: skip
+                   if c.enabled and c.connected and sk.JOINT_INDEX[j] in LIMBS
+                   and not held & set(LIMBS[sk.JOINT_INDEX[j]])}  # fmt: skip
         if not targets:
             return local_rot, positions
         return reach(local_rot, positions[0], self.skeleton.offsets, targets)
@@ -356,6 +360,13 @@ class DragPoserMethod(Method):
         self._frame += 1
         res.ms = 1000.0 * (time.perf_counter() - t0)
         return res
+
+
+def _joints_of(c: Constraint) -> list[str]:
+    """Joint names a constraint acts on (its ``joint``, ``joint_a``/``joint_b``, ``joints``)."""
+    names = [getattr(c, k, None) for k in ("joint", "joint_a", "joint_b")]
+    names += list(getattr(c, "joints", None) or [])
+    return [n for n in names if isinstance(n, str)]
 
 
 def _finite(r: Sensor) -> bool:

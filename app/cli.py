@@ -44,6 +44,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--json", metavar="OUT.json", default="measure.json", help="where --measure writes")
     p.add_argument("--view", choices=("stick", "body"), default="stick",
                    help="draw the reconstruction as a stick figure (default) or a shaded body")
+    p.add_argument("--engine", choices=("process", "thread"), default="process",
+                   help="run the solver in its own process (default: the window and the solver never "
+                   "wait for each other) or in a thread of the window's process")
     p.set_defaults(func=run)
 
 
@@ -54,4 +57,4 @@ def run(args: argparse.Namespace) -> int:
         raise UserError(f"--measure: SECONDS must be > 0, got {args.measure}")
     ghosts = tuple(g.strip() for g in (args.ghosts or "").split(",") if g.strip())
     return run_app(args.file, args.method or default_method(), args.sensors, args.screenshot, args.after_frames,
-                   args.measure, args.json, args.mode, ghosts, args.view, rig_map_path(args))  # fmt: skip
+                   args.measure, args.json, args.mode, ghosts, args.view, rig_map_path(args), args.engine)  # fmt: skip

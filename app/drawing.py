@@ -20,9 +20,14 @@ from typing import Any
 
 import numpy as np
 
-DRAW_INTERVAL_MS = 16  # at most ~60 redraws per second
-MAX_DRAW_INTERVAL_MS = 100  # never fewer than ~10 redraws per second
-#: After the view, a panel is updated only when the tick has spent less than this, ms.
+#: The display tick, ms: how soon a new snapshot is drawn (the tick itself costs ~0.1 ms).
+TICK_MS = 8
+#: After a view draw costing c ms the next one waits REST x c: at most ~80 % of the GUI
+#: thread goes to the 3D view when snapshots come faster than it can draw them, so
+#: input and the panels still get their turn.
+VIEW_REST = 0.25
+#: After the view, a panel is updated in the same tick only when the tick has spent less
+#: than this, ms (otherwise in a later tick, unless overdue by a whole interval).
 PANEL_BUDGET_MS = 12.0
 
 
@@ -44,21 +49,24 @@ class DrawScheduler:
 
     def __init__(self, window: Any) -> None:
         self.w = window
-        self.interval_ms = DRAW_INTERVAL_MS
+        self.interval_ms = TICK_MS
         self.view_costs: deque = deque(maxlen=2000)
         self.draws = 0  # view draws since start (``gui --measure`` reads it)
         self._drawn_seq = -1
         self._rate_draws, self._draw_rate, self._rate_t0 = 0, 0.0, time.monotonic()
-        self._last_tick = time.perf_counter()
+        self._next_view_at = 0.0  # perf_counter() time before which the view rests
         self._status_text: dict[str, str] = {}
+        self._failure = ""  # the engine process's failure, once shown
         w = window
         self.panels = [
+            # while playing: a plot's repaint (Qt paints it after the update) costs
+            # 10-25 ms on software rendering, so each plot changes once or twice a second
             Panel("timeline", lambda s: w.session.note_frame(s.frame), 0.1),
-            Panel("plot:iterations", w.plots.update_iterations, 0.25),
-            Panel("plot:cost", w.plots.update_cost, 0.5),
-            Panel("plot:history", w.plots.update_history, 0.5),
-            Panel("latent", w.latent.update_snapshot, 0.25),
-            Panel("plot:methods", w.method_errors.update_snapshot, 0.25),
+            Panel("plot:iterations", w.plots.update_iterations, 0.5),
+            Panel("plot:cost", w.plots.update_cost, 1.0),
+            Panel("plot:history", w.plots.update_history, 1.0),
+            Panel("latent", w.latent.update_snapshot, 0.5),
+            Panel("plot:methods", w.method_errors.update_snapshot, 0.5),
             Panel("status", self._update_status, 0.5),
         ]
 
@@ -72,19 +80,24 @@ class DrawScheduler:
         now = time.monotonic()
         if now - self._rate_t0 >= 1.0:
             self._draw_rate, self._rate_draws, self._rate_t0 = self._rate_draws / (now - self._rate_t0), 0, now
+        failure = getattr(self.w.session.engine, "failure", "")
+        if failure and failure != self._failure:
+            self._failure = failure
+            self.w.show_error("The engine stopped", failure)
         snap = self.w.session.latest
         if snap is None:
             return
         self._mirror_engine(snap)
-        if snap.seq != self._drawn_seq:
+        if snap.seq != self._drawn_seq and t0 >= self._next_view_at:
             self._drawn_seq = snap.seq
             self.w.viewport.show_snapshot(snap)
             self.draws += 1
             self._rate_draws += 1
-            self.view_costs.append((time.perf_counter() - t0) * 1000.0)
+            t1 = time.perf_counter()
+            self.view_costs.append((t1 - t0) * 1000.0)
+            self._next_view_at = t1 + VIEW_REST * (t1 - t0)
             self.w.snapshotDrawn.emit(snap.frame)
         self._update_one_panel(snap, now, spent_ms=(time.perf_counter() - t0) * 1000.0)
-        self._pace(t0, (time.perf_counter() - t0) * 1000.0)
 
     def _mirror_engine(self, snap: Any) -> None:
         """Cheap state the session must know at once: the end of playback, a refused method."""
@@ -117,49 +130,49 @@ class DrawScheduler:
         panel.seq, panel.at = snap.seq, now
 
     def _update_status(self, snap: Any) -> None:
+        """Short texts that fit the status bar at 1600 px; the details are in tooltips."""
         w = self.w
         timing = snap.timing or {}
         per_it = timing.get("ms_per_iteration")
-        parts = [f"{k.replace('fk_losses', 'fk+loss')} {timing[k]:.2f}"
-                 for k in ("decoder", "fk_losses", "backward", "step") if k in timing]  # fmt: skip
-        solver = (f"{per_it:5.2f} ms/it" if per_it is not None else "") + (f" ({', '.join(parts)})" if parts else "")
+        solver = f"   {per_it:.2f} ms/it" if per_it is not None else ""
         skipped = f"   skipped {snap.frames_skipped}" if snap.mode == "real_time" else ""
-        self._set_text(w.status_engine, f"engine {snap.engine_fps:5.1f} frames/s   {snap.ms:6.1f} ms/frame   "
-                                        f"{snap.iterations} it   {solver}{skipped}")  # fmt: skip
-        self._set_text(w.status_gui, f"view {self._draw_rate:4.0f} draws/s")
+        self._set_text(w.status_engine, f"solver {snap.engine_fps:4.0f} frames/s   {snap.ms:5.0f} ms/frame   "
+                                        f"{snap.iterations} it{solver}{skipped}")  # fmt: skip
+        parts = [f"{k.replace('fk_losses', 'fk+loss')} {timing[k]:.2f} ms"
+                 for k in ("decoder", "fk_losses", "backward", "step") if k in timing]  # fmt: skip
+        tip = [f"solver: {snap.engine_fps:.1f} frames solved per second (moving average)",
+               f"last frame: {snap.ms:.1f} ms, {snap.iterations} iterations"]  # fmt: skip
+        if per_it is not None:
+            tip.append(f"per iteration: {per_it:.2f} ms" + (f" ({', '.join(parts)})" if parts else ""))
+        if "latency_ms" in timing:
+            tip.append(f"live latency: {timing['latency_ms']:.0f} ms from packet to pose")
+        if snap.mode == "real_time":
+            tip.append(f"real-time playback skipped {snap.frames_skipped} clip frames the solver had not reached")
+        self._set_tip(w.status_engine, "\n".join(tip))
+        self._set_text(w.status_gui, f"view {self._draw_rate:3.0f} draws/s")
         self._set_text(w.status_warnings, f"warnings {snap.warnings}")
-        tip = "\n".join(snap.recent_errors + tuple(snap.messages))
-        if tip != w.status_warnings.toolTip():
-            w.status_warnings.setToolTip(tip)
+        self._set_tip(w.status_warnings, "\n".join(snap.recent_errors + tuple(snap.messages)))
         if snap.error:
             w.statusBar().showMessage(snap.error, 5000)
+
+    @staticmethod
+    def _set_tip(label: Any, text: str) -> None:
+        if label.toolTip() != text:
+            label.setToolTip(text)
 
     @staticmethod
     def _set_text(label: Any, text: str) -> None:
         if label.text() != text:  # an unchanged label must not repaint
             label.setText(text)
 
-    def _pace(self, t0: float, cost_ms: float) -> None:
-        """Stretch the draw interval when the event loop is saturated, relax it after.
-
-        Much of a redraw's cost is paid after the tick returns (Qt composites the
-        window), so the tick-to-tick period is the honest measure of the loop's load.
-        """
-        period_ms = (t0 - self._last_tick) * 1000.0
-        self._last_tick = t0
-        interval = self.w.timer.interval()
-        if period_ms > 1.2 * interval or 1.5 * cost_ms > interval:
-            interval = min(MAX_DRAW_INTERVAL_MS, int(1.3 * max(period_ms, cost_ms)))
-        else:
-            interval = max(DRAW_INTERVAL_MS, int(0.9 * interval))
-        self.w.timer.setInterval(interval)
-
     def costs(self) -> dict[str, dict[str, float]]:
         """Per panel (and ``view``): updates, mean, p99 and max cost in ms."""
-        out = {}
-        for name, values in [("view", self.view_costs)] + [(p.name, p.costs) for p in self.panels]:
-            a = np.asarray(values, float)
-            out[name] = {"updates": int(a.size), "mean_ms": float(a.mean()) if a.size else 0.0,
-                         "p99_ms": float(np.percentile(a, 99)) if a.size else 0.0,
-                         "max_ms": float(a.max()) if a.size else 0.0}  # fmt: skip
-        return out
+        return {name: cost_summary(values)
+                for name, values in [("view", self.view_costs)] + [(p.name, p.costs) for p in self.panels]}  # fmt: skip
+
+
+def cost_summary(values: Any) -> dict[str, float]:
+    """``updates``, ``mean_ms``, ``p99_ms`` and ``max_ms`` of costs in milliseconds."""
+    a = np.asarray(values, float)
+    return {"updates": int(a.size), "mean_ms": float(a.mean()) if a.size else 0.0,
+            "p99_ms": float(np.percentile(a, 99)) if a.size else 0.0, "max_ms": float(a.max()) if a.size else 0.0}  # fmt: skip

@@ -48,16 +48,17 @@ def open_initial(window: MainWindow, path: str | None, sensors: str | None, rig_
 def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
         screenshot: str | None = None, after_frames: int = 60, measure: float | None = None,
         measure_json: str | None = None, mode: str | None = None, ghosts: tuple[str, ...] = (),
-        view: str = "stick", rig_map: Path | None = None) -> int:  # fmt: skip
+        view: str = "stick", rig_map: Path | None = None, engine: str = "process") -> int:  # fmt: skip
     """Show the studio; with ``screenshot``, play ``after_frames`` frames, save and exit;
     with ``measure``, play that many seconds and write the figures to ``measure_json``
     (:mod:`app.measure`). ``mode`` sets the playback mode (every_frame or real_time).
     ``ghosts``: other methods drawn beside the reconstruction; ``view`` draws the
     reconstruction as a ``stick`` figure or a shaded ``body``; ``rig_map`` is the joint
-    mapping file for ``path`` (``--rig-map``)."""
+    mapping file for ``path`` (``--rig-map``); ``engine`` runs the solver in its own
+    ``process`` or in a ``thread`` of this one."""
     app = QApplication.instance() or QApplication(sys.argv[:1])
     app.setApplicationName("DragPoser Studio")
-    window = MainWindow(method=method)
+    window = MainWindow(method=method, engine=engine)
     try:
         open_initial(window, path, sensors, rig_map)
         if ghosts:  # comparing methods: show their errors rather than the optimizer's losses

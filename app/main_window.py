@@ -46,11 +46,16 @@ def method_names(current: str) -> list[str]:
 
 
 class MainWindow(QMainWindow):
-    """The studio. ``snapshotDrawn(int)`` fires after each drawn snapshot (its frame)."""
+    """The studio. ``snapshotDrawn(int)`` fires after each drawn snapshot (its frame).
+
+    ``engine="process"`` (the default) runs the solver in a child process
+    (:mod:`engine.studio.process`), ``"thread"`` in a thread of this one (tests use it to
+    reach the engine's internals).
+    """
 
     snapshotDrawn = pyqtSignal(int)
 
-    def __init__(self, method: str = "ik", settings: QSettings | None = None) -> None:
+    def __init__(self, method: str = "ik", settings: QSettings | None = None, engine: str = "process") -> None:
         super().__init__()
         self.setWindowTitle("DragPoser Studio")
         self.setAcceptDrops(True)
@@ -60,7 +65,7 @@ class MainWindow(QMainWindow):
         self.busy = BusyNotice(self.viewport, self.statusBar())
         self.busy.begin(method, -1, "Starting")
         # after the widgets: the thread's first imports would compete with theirs
-        self.engine = self.session.start_engine()
+        self.session.start_engine(process=engine == "process")
         self.files = FileActions(self)
         self.live = LiveActions(self)
         self.undo = SceneUndo(self.session, self)
@@ -86,6 +91,11 @@ class MainWindow(QMainWindow):
             self.restoreGeometry(geometry)
         else:
             self.resize(1600, 980)
+
+    @property
+    def engine(self) -> Any:
+        """The session's engine (a thread, or a process: see ``engine`` in ``__init__``)."""
+        return self.session.engine
 
     # -- layout -----------------------------------------------------------------------
     def _build_widgets(self) -> None:
@@ -124,8 +134,11 @@ class MainWindow(QMainWindow):
         self.status_engine = QLabel()
         self.status_gui = QLabel()
         self.status_warnings = QLabel()
-        for w, width in ((self.status_engine, 480), (self.status_gui, 130), (self.status_warnings, 110)):
-            w.setFixedWidth(width)  # text changes must not relayout the window every frame
+        # fixed widths that hold the longest texts (app/drawing.py sets short texts, details
+        # in tooltips): a text change must not relayout the window every frame
+        for w, longest in ((self.status_engine, "solver 9999 frames/s   99999 ms/frame   999 it   99.99 ms/it   skipped 99999"),
+                           (self.status_gui, "view 999 draws/s"), (self.status_warnings, "warnings 9999")):  # fmt: skip
+            w.setFixedWidth(w.fontMetrics().horizontalAdvance(longest) + 16)
             self.statusBar().addPermanentWidget(w)
         self._connect_widgets()
 

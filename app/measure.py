@@ -9,7 +9,9 @@ playback) and writes:
 * ``event_loop_ms``: lateness of a 10 ms timer on the GUI thread (``p50``, ``p99``,
   ``max``): how long the window can be unresponsive;
 * ``panels``: per panel (and the 3D ``view``) the number of updates and their mean, p99
-  and max cost in ms, as measured around each update on the GUI thread;
+  and max cost in ms, as measured around each update on the GUI thread, plus
+  ``paint:plots``: the repaints of every pyqtgraph view (the plots and the latent
+  panel), which Qt runs later, outside the updates;
 
 plus what was measured (clip, method, sensors, mode, window size, platform). The JSON
 is written to a temporary file and renamed.
@@ -27,6 +29,7 @@ import numpy as np
 from PyQt6.QtCore import Qt, QTimer
 from PyQt6.QtGui import QGuiApplication
 
+from app.drawing import cost_summary
 from engine.atomic import write_text
 
 PROBE_MS = 10  # the lateness probe's period
@@ -44,13 +47,33 @@ class Measurement:
         self._probe.timeout.connect(self._tick)
         self._last = 0.0
         self._start: dict[str, Any] = {}
+        self.paint_costs: list[float] = []
         self._t0 = time.monotonic()
         self._waiting = QTimer(window, interval=50)
         self._waiting.timeout.connect(self._maybe_start)
 
     def begin(self) -> None:
+        self._time_plot_paints()
         self.w.session.set_playing(True)
         self._waiting.start()
+
+    def _time_plot_paints(self) -> None:
+        """Time every pyqtgraph view's paint event (this process only measures, so the
+        class is patched for the rest of it)."""
+        import pyqtgraph as pg
+
+        costs = self.paint_costs = []
+        paint = pg.GraphicsView.paintEvent
+
+        def timed(view: Any, event: Any) -> Any:
+            t = time.perf_counter()
+            try:
+                return paint(view, event)
+            finally:
+                if self._start:
+                    costs.append((time.perf_counter() - t) * 1000.0)
+
+        pg.GraphicsView.paintEvent = timed
 
     def _maybe_start(self) -> None:
         """Start once playback has solved a frame (the load and first solve are not measured)."""
@@ -91,7 +114,7 @@ class Measurement:
             "frames_skipped": int(snap.frames_skipped - self._start["skipped"]),
             "event_loop_ms": {"p50": float(np.percentile(late, 50)), "p99": float(np.percentile(late, 99)),
                               "max": float(late.max()), "samples": int(late.size)},  # fmt: skip
-            "panels": self.w.drawing.costs(),
+            "panels": {**self.w.drawing.costs(), "paint:plots": cost_summary(self.paint_costs)},
             "clip": str(s.path) if s.path else "(generated)",
             "method": s.method,
             "sensors": [sn.joint for sn in s.sensors.values() if sn.enabled],
@@ -103,3 +126,4 @@ class Measurement:
         }
         write_text(self.out, json.dumps(result, indent=2) + "\n")
         self.done(0, "")
+

@@ -84,7 +84,7 @@ class MethodErrorPlot(QWidget):
         for i, (name, err) in enumerate(errors.items()):
             colour = self.colour(name, i - 1, name == main)
             if name not in self.curves:
-                self.curves[name] = self.plot.plot(pen=pg.mkPen(colour, width=1.5), name=name)
+                self.curves[name] = self.plot.plot(pen=pg.mkPen(colour, width=1), name=name)
             series = self.data.setdefault(name, {})
             series[snap.frame] = err
             if len(series) > KEEP:

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 import pyqtgraph as pg
-from PyQt6.QtWidgets import QHBoxLayout, QVBoxLayout, QWidget
+from PyQt6.QtWidgets import QGraphicsItem, QHBoxLayout, QVBoxLayout, QWidget
 
 from widgets import style
 from widgets.term_legend import TermLegend
@@ -51,6 +51,9 @@ def _plot(title: str, log_y: bool, x_label: str) -> pg.PlotWidget:
     # frames past 1000 would read "frame (x0.001)": axes here count frames and iterations
     for side in ("bottom", "left"):
         w.getAxis(side).enableAutoSIPrefix(False)
+        # a repaint of the curves then blits the axis (labels, grid) instead of drawing
+        # its text again; pyqtgraph redraws it when the range changes
+        w.getAxis(side).setCacheMode(QGraphicsItem.CacheMode.DeviceCoordinateCache)
     w.setMinimumHeight(120)
     return w
 
@@ -64,7 +67,9 @@ class _Curves:
     def get(self, name: str, symbols: bool = False) -> pg.PlotDataItem:
         if name not in self.items:
             colour = self.colours.setdefault(name, style.TERM_CYCLE[len(self.colours) % len(style.TERM_CYCLE)])
-            width = 2.5 if name == "total" else 1.5
+            # wide pens go through Qt's stroker: fine for a few points per iteration,
+            # costly for a long history, which uses 1 px lines (the total is white)
+            width = (2.5 if name == "total" else 1.5) if symbols else 1.0
             marks = dict(symbol="o", symbolSize=5, symbolBrush=colour, symbolPen=None) if symbols else {}
             self.items[name] = self.plot.plot(pen=pg.mkPen(colour, width=width), **marks)
             self.items[name].setVisible(self.legend.visible(name))
@@ -101,8 +106,8 @@ class LossPlots(QWidget):
         self.iter_curves = _Curves(self.iteration_plot, colours, self.legend)
         self.history_curves = _Curves(self.history_plot, colours, self.legend)
         self.legend.visibilityChanged.connect(self._set_visible)
-        self.ms_curve = self.cost_plot.plot(pen=pg.mkPen(MS_COLOUR, width=1.5))
-        self.iter_curve = self.cost_plot.plot(pen=pg.mkPen(ITERATIONS_COLOUR, width=1.5))
+        self.ms_curve = self.cost_plot.plot(pen=pg.mkPen(MS_COLOUR, width=1))
+        self.iter_curve = self.cost_plot.plot(pen=pg.mkPen(ITERATIONS_COLOUR, width=1))
         plots = QVBoxLayout()
         plots.addWidget(self.iteration_plot, 1)
         row = QHBoxLayout()

@@ -32,6 +32,7 @@ from engine.studio import events as ev
 from engine.studio.catalog import ConstraintKind, constraint_catalog
 from engine.studio.clips import load_clip, sensor_presets
 from engine.studio.scenes import default_settings, scene_from_dict, scene_to_dict
+from engine.studio.process import EngineProcess
 from engine.studio.snapshot import Snapshot
 from engine.studio.thread import EngineThread
 
@@ -79,16 +80,32 @@ class Session:
         self.speed = 1.0
         self.loop = True
         self.mode = "every_frame"
-        self.engine: EngineThread | None = None
+        self.engine: EngineThread | EngineProcess | None = None
         self._sink: Callable[[Any], None] | None = None
+        self._factory: Callable[[str], Any] | None = None
 
     # -- engine ------------------------------------------------------------------------
-    def start_engine(self, method_factory: Callable[[str], Any] | None = None) -> EngineThread:
-        """Start the engine thread and send it the whole session."""
-        self.engine = EngineThread(method_factory)
+    def start_engine(self, method_factory: Callable[[str], Any] | None = None,
+                     process: bool = False) -> EngineThread | EngineProcess:  # fmt: skip
+        """Start the engine and send it the whole session: a thread of this process, or
+        with ``process`` a child process (:mod:`engine.studio.process`; the solver and
+        the window then never wait for each other's interpreter lock)."""
+        self._factory = method_factory
+        self.engine = EngineProcess(method_factory) if process else EngineThread(method_factory)
         self.engine.start()
         self.attach(self.engine.submit)
         return self.engine
+
+    def _engine_in_thread(self) -> None:
+        """Move the engine from its process into a thread of this one (for a source that
+        cannot leave this process, such as a live tracker stream); the whole session is
+        sent to the new engine."""
+        old = self.engine
+        self.engine = EngineThread(self._factory)
+        self.engine.start()
+        if old is not None:
+            old.stop()
+        self.attach(self.engine.submit)
 
     def shutdown(self) -> None:
         """Stop the engine thread (if any) and wait for it; close a live source."""
@@ -155,7 +172,11 @@ class Session:
         self._close_source()
         self.motion, self.path, self.frame = None, None, 0
         self.source = source
-        self._send(cmd.SetSource(source))
+        command = cmd.SetSource(source)
+        if isinstance(self.engine, EngineProcess) and not self.engine.can_send(command):
+            self._engine_in_thread()  # sends the source with the rest of the session
+        else:
+            self._send(command)
         self.events.source.emit(ev.SourceChanged(source, name, bool(getattr(source, "live", False))))
         self._send(cmd.Seek(0))
         self.events.frame.emit(0)

@@ -84,11 +84,16 @@ class EngineThread(threading.Thread):
     ----------
     method_factory : callable, optional
         ``factory(name) -> Method``; defaults to :func:`engine.studio.methods.make_method`.
+    commands : queue, optional
+        Where commands arrive (anything with ``put``, ``get(timeout=)`` and
+        ``get_nowait()`` raising :class:`queue.Empty`, e.g. a ``multiprocessing`` queue
+        when the loop runs in its own process, :mod:`engine.studio.process`); a new
+        :class:`queue.Queue` by default.
     """
 
-    def __init__(self, method_factory: Callable[[str], Method] | None = None) -> None:
+    def __init__(self, method_factory: Callable[[str], Method] | None = None, commands: Any = None) -> None:
         super().__init__(name="dragposer-engine", daemon=True)
-        self._queue: queue.Queue[Any] = queue.Queue()
+        self._queue: Any = queue.Queue() if commands is None else commands
         self._factory = method_factory or make_method
         self.latest: Snapshot | None = None
         self.listeners: list[Callable[[Snapshot], None]] = []

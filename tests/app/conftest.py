@@ -23,7 +23,7 @@ def studio(qtbot, tmp_path, synthetic_motion, monkeypatch):
 
     threads_before = threading.active_count()
     settings = QSettings(str(tmp_path / "studio.ini"), QSettings.Format.IniFormat)
-    window = MainWindow(settings=settings)
+    window = MainWindow(settings=settings, engine="thread")  # tests reach into the engine
     window.session.set_motion(synthetic_motion)
     window.resize(1280, 800)
     window.show()

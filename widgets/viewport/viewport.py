@@ -75,6 +75,7 @@ class Viewport(QWidget):
         self._label = p.add_text("", position="upper_left", font_size=9, color="#d0d4dc")
         self._notice = p.add_text("", position="lower_edge", font_size=12, color="#ffe14d")
         self.notice = ""
+        self._caption = ""
         self.follow = True
         self.show_ground_truth = True
         self.camera_preset = "home"
@@ -151,7 +152,10 @@ class Viewport(QWidget):
         # ghosts are listed below this line by the ghost layer, each in its own colour
         has_gt = bool(np.all(np.isfinite(snap.ground_truth)))
         gt = ("   ground truth (green)" if has_gt else "   no ground truth (tracker input)") if self.show_ground_truth else ""
-        self._label.SetText(2, f"{snap.method or 'method'} (orange){gt}")
+        caption = f"{snap.method or 'method'} (orange){gt}"
+        if caption != self._caption:  # a text change re-renders its glyphs: only on change
+            self._caption = caption
+            self._label.SetText(2, caption)
         if self.follow and np.all(np.isfinite(snap.positions[0])):
             self._follow(snap.positions[0])
         self.plotter.render()

@@ -66,7 +66,7 @@ class DrawScheduler:
             Panel("plot:cost", w.plots.update_cost, 1.0),
             Panel("plot:history", w.plots.update_history, 1.0),
             Panel("latent", w.latent.update_snapshot, 0.5),
-            Panel("plot:methods", w.method_errors.update_snapshot, 0.5),
+            Panel("plot:methods", w.method_errors.update_snapshot, 0.25),  # samples the errors
             Panel("status", self._update_status, 0.5),
         ]
 

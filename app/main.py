@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
@@ -56,6 +57,9 @@ def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
     reconstruction as a ``stick`` figure or a shaded ``body``; ``rig_map`` is the joint
     mapping file for ``path`` (``--rig-map``); ``engine`` runs the solver in its own
     ``process`` or in a ``thread`` of this one."""
+    # Mesa's software rasterizer (llvmpipe: Xvfb, no GPU) starts a thread per core; on a
+    # small machine leave one core to the solver's process (set before the first GL context)
+    os.environ.setdefault("LP_NUM_THREADS", str(max(1, (os.cpu_count() or 2) - 1)))
     app = QApplication.instance() or QApplication(sys.argv[:1])
     app.setApplicationName("DragPoser Studio")
     window = MainWindow(method=method, engine=engine)

@@ -15,7 +15,7 @@ import pyqtgraph as pg
 from PyQt6.QtCore import QRectF, Qt, pyqtSignal
 from PyQt6.QtWidgets import QCheckBox, QGridLayout, QLabel, QPushButton, QSlider, QSpinBox, QVBoxLayout, QWidget
 
-from widgets import plots  # noqa: F401  (applies the shared pyqtgraph look)
+from widgets.plots import settle  # also applies the shared pyqtgraph look
 
 HISTORY = 300
 NO_DECODER = "The current method has no latent decoder (choose dragposer when it is available)."
@@ -116,6 +116,8 @@ class LatentInspector(QWidget):
         # the rows are not one per frame)
         span = max(frames[-1] - frames[0], 1)
         self.strip.setRect(QRectF(frames[0], 0.0, span, hist.shape[1]))
+        settle(self.bars_plot)
+        settle(self.strip_plot)
 
     def _debug_toggled(self, on: bool) -> None:
         self.debugToggled.emit(on)

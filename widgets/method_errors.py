@@ -17,6 +17,7 @@ import pyqtgraph as pg
 from PyQt6.QtWidgets import QHBoxLayout, QLabel, QVBoxLayout, QWidget
 
 from widgets import style
+from widgets.plots import settle
 
 #: Frames kept per curve (older ones scroll out).
 KEEP = 3000
@@ -97,3 +98,4 @@ class MethodErrorPlot(QWidget):
             rows.append(f"<span style='color:{colour}'>&#9644; {name}</span>: "
                         + ("-" if not np.isfinite(err) else f"{err:.1f} cm"))  # fmt: skip
         self.legend.setText("<br>".join(rows))
+        settle(self.plot)

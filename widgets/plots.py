@@ -23,6 +23,7 @@ from widgets.term_legend import TermLegend
 pg.setConfigOptions(antialias=False, background=style.PLOT_BACKGROUND, foreground=style.PLOT_FOREGROUND)
 
 MS_COLOUR, ITERATIONS_COLOUR = "#ff8a1f", "#4da3ff"
+AXIS_WIDTH = 44  # pixels for the y tick labels (log axes: "10^-3" and the like)
 
 
 def _loggable(value: float) -> float:
@@ -61,6 +62,9 @@ def _plot(title: str, log_y: bool, x_label: str) -> pg.PlotWidget:
     # frames past 1000 would read "frame (x0.001)": axes here count frames and iterations
     for side in ("bottom", "left"):
         w.getAxis(side).enableAutoSIPrefix(False)
+    # a fixed label column: tick labels of a new width would relayout the plot and paint
+    # it a second time
+    w.getAxis("left").setWidth(AXIS_WIDTH)
     w.setMinimumHeight(120)
     return w
 

@@ -333,3 +333,26 @@ def test_store_as_b_after_a_seek_in_debug_mode_stores_the_new_frames_latent(qtbo
     with qtbot.waitSignal(w.decodeRequested) as sig:
         w.mix.setValue(50)
     assert np.allclose(sig.args[0], 0.5 * (a + b))
+
+
+def test_a_plot_update_that_changes_the_range_paints_once(qtbot, fake_snapshot, monkeypatch):
+    """pyqtgraph fits an auto range in the paint, which then asked for a second paint of
+    the whole plot (each 5-35 ms under software rendering): the update settles it first."""
+    import pyqtgraph as pg
+
+    paints = []
+    paint = pg.GraphicsView.paintEvent
+    monkeypatch.setattr(pg.GraphicsView, "paintEvent", lambda view, ev: (paints.append(view), paint(view, ev))[1])
+    p = LossPlots()
+    qtbot.addWidget(p)
+    p.resize(900, 300)
+    p.show()
+    qtbot.waitExposed(p)
+    p.update_snapshot(fake_snapshot(seq=1))
+    qtbot.wait(100)
+    for scale in (10.0, 1000.0):  # each update moves the log axis by decades
+        paints.clear()
+        losses = tuple({k: v * scale for k, v in d.items()} for d in fake_snapshot().losses)
+        p.update_iterations(fake_snapshot(seq=2, losses=losses))
+        qtbot.wait(150)
+        assert paints.count(p.iteration_plot) == 1, f"{paints.count(p.iteration_plot)} paints for one update"

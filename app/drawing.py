@@ -104,7 +104,7 @@ class DrawScheduler:
         s = self.w.session
         if self.w.busy.active:
             self.w.busy.check(snap)
-        if s.playing and not snap.playing and snap.seq == self._drawn_seq:
+        if s.playing and not snap.playing and snap.seq == self._drawn_seq and snap.plays == s.plays:
             s.note_frame(snap.frame)
             s.note_stopped()  # reached the end without looping
         if snap.method_error and snap.seq != self._drawn_seq:  # the engine kept its method

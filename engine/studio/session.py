@@ -83,6 +83,9 @@ class Session:
         self.engine: EngineThread | EngineProcess | None = None
         self._sink: Callable[[Any], None] | None = None
         self._factory: Callable[[str], Any] | None = None
+        #: Play commands sent to the engine; a snapshot saying "stopped" counts only when
+        #: its ``plays`` is this (an older one predates the latest play request).
+        self.plays = 0
 
     # -- engine ------------------------------------------------------------------------
     def start_engine(self, method_factory: Callable[[str], Any] | None = None,
@@ -133,6 +136,9 @@ class Session:
             sink(cmd.SetSource(self.source))
         sink(cmd.SetConstraints(tuple(self.constraints)))
         sink(cmd.Seek(self.frame))
+        self.plays = 0  # a new engine has seen none
+        if self.playing:
+            self._send_play()
 
     def _send(self, command: Any) -> None:
         if self._sink is not None:
@@ -469,8 +475,15 @@ class Session:
         if bool(playing) == self.playing and not playing:
             return
         self.playing = bool(playing)
-        self._send(cmd.Play(self.speed, self.loop, self.mode) if self.playing else cmd.Pause())
+        if self.playing:
+            self._send_play()
+        else:
+            self._send(cmd.Pause())
         self._playback_changed()
+
+    def _send_play(self) -> None:
+        self.plays += 1
+        self._send(cmd.Play(self.speed, self.loop, self.mode))
 
     def note_stopped(self) -> None:
         """Mirror the engine stopping at the clip's end (no command is sent back)."""
@@ -488,7 +501,7 @@ class Session:
         self.loop = self.loop if loop is None else bool(loop)
         self.mode = self.mode if mode is None else mode
         if self.playing:
-            self._send(cmd.Play(self.speed, self.loop, self.mode))
+            self._send_play()
         self._playback_changed()
 
     def _playback_changed(self) -> None:

@@ -93,6 +93,9 @@ class Snapshot:
     recent_errors : tuple of str
         The last few problems reported since the clip was loaded, oldest first (``error``
         holds only the one that arrived with this frame).
+    plays : int
+        Play commands the engine has received; a reader tells a snapshot that reports
+        the end of playback from one that predates its latest play request.
     history : tuple of FrameRecord
         The last :data:`HISTORY` solved frames, oldest first, including frames whose
         snapshots a reader skipped (the GUI draws only the newest one); cleared when
@@ -129,3 +132,4 @@ class Snapshot:
     mode: str = "every_frame"
     timing: dict[str, float] = field(default_factory=dict)
     recent_errors: tuple[str, ...] = ()
+    plays: int = 0

@@ -108,7 +108,7 @@ class EngineThread(threading.Thread):
         self._playing, self._speed, self._loop, self._mode = False, 1.0, True, "every_frame"
         self._clock = (0.0, 0)  # (monotonic time, frame) playback is timed from
         self._dirty = False
-        self._seq = self._solved = self._skipped = self._warnings = 0
+        self._seq = self._solved = self._skipped = self._warnings = self._plays = 0
         self._fps = 0.0
         self._last_pose = np.zeros((sk.NUM_JOINTS, 3))
         self._last_result: FrameResult | None = None
@@ -223,6 +223,7 @@ class EngineThread(threading.Thread):
             self._playing = False
             self._frame = self._clamp(self._frame + c.delta)
         elif isinstance(c, cmd.Play):
+            self._plays += 1
             self._playing, self._speed, self._loop, self._mode = True, c.speed, c.loop, c.mode
             self._clock = (time.monotonic(), self._frame)
             self._decoded = None
@@ -459,6 +460,7 @@ class EngineThread(threading.Thread):
             mode=self._mode,
             timing=_timing(res, ms, self._latency_ms),
             recent_errors=tuple(self._recent_errors),
+            plays=self._plays,
         )
         self._method_error = ""
         self.latest = snap

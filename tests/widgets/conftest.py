@@ -49,6 +49,7 @@ class FakeSnapshot:
     can_decode: bool = False
     decoded: np.ndarray | None = None
     history: tuple | None = None  # None: just this frame's record
+    plays: int = 0
 
     def __post_init__(self) -> None:
         if self.history is None:

@@ -51,7 +51,8 @@ def settle(plot: pg.PlotWidget) -> None:
     asks for a second paint of the whole plot. Settling it right after the data changed
     makes one paint per update (a plot's paint costs 5-35 ms under software rendering).
     """
-    plot.getPlotItem().getViewBox().prepareForPaint()
+    if plot.isVisible():  # a hidden plot has no geometry to fit (and paints nothing)
+        plot.getPlotItem().getViewBox().prepareForPaint()
 
 
 def _plot(title: str, log_y: bool, x_label: str) -> pg.PlotWidget:

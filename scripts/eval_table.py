@@ -149,7 +149,7 @@ first {args.realtime_frames} frames of each file in realtime mode, first {args.o
 offline mode (offline costs up to 100 iterations per frame). `ms/frame` was measured with
 {args.jobs} evaluations sharing the two cores (idle-machine speed: `docs/performance.md`).
 The ground truth's own jitter on the realtime frames is {_f(gt.get('gt_jitter'), '.1f')}.
-
+{(chr(10) + "**Note.** " + args.note + chr(10)) if args.note else ""}
 ## All sensor sets
 
 {main_table(out, methods)}
@@ -211,6 +211,7 @@ def main() -> int:
     ap.add_argument("--vae", help="evaluate these models instead of the shipped ones (with --predictor)")
     ap.add_argument("--predictor")
     ap.add_argument("--doc", type=Path, help="write the whole Markdown document here (docs/evaluation.md)")
+    ap.add_argument("--note", help="a paragraph to state in the document (e.g. which runs are missing)")
     args = ap.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     files = subprocess.run([CLI, "data", "list", "--split", "val"], capture_output=True, text=True, check=True,

@@ -78,8 +78,12 @@ def test_sigterm_and_sigint_during_a_write_leave_no_temp_file(tmp_path):
     import sys
     import time
 
+    # The child sets Python's own Ctrl-C handler first: a suite started in the background by
+    # a non-interactive shell (`cmd &`, as a CI runner may do) passes SIGINT on as ignored,
+    # and Python then keeps it ignored, which would test the launcher rather than our code.
     script = (
-        "import sys, time\n"
+        "import signal, sys, time\n"
+        "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
         "from engine.atomic import atomic_path\n"
         "with atomic_path(sys.argv[1]) as tmp:\n"
         "    tmp.write_bytes(b'x' * 100000)\n"

@@ -82,6 +82,11 @@ class Method(ABC):
     def step(self, sensors: SensorFrame) -> FrameResult:
         """Reconstruct the next frame from its sensor readings."""
 
+    def between_frames(self) -> None:
+        """Work that can wait until the last frame's pose is out (a live loop calls it
+        while waiting for the next frame; :meth:`step` does it first if nobody did).
+        Results never depend on whether it was called. Nothing by default."""
+
 
 def check_preset(readings: dict[str, Sensor], joints: tuple[str, ...], method: str, preset: str) -> None:
     """Raise a clear error unless the sensors are exactly ``joints``, all 6-DoF."""

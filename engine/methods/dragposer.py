@@ -12,6 +12,7 @@ frames with :meth:`add_constraint`, :meth:`remove_constraint`, :meth:`set_weight
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 from collections.abc import Iterable
 from typing import Any
@@ -34,7 +35,7 @@ from engine.solver import (
     FrameContext, LatentDecoder, LatentPredictor, OptimizerSettings, PoseOptimizer, RootAnchor, RootFrame,
     RootOverride, TemporalSchedule,
 )  # fmt: skip
-from engine.solver.limb_ik import LIMBS, adopt_rotations, reach
+from engine.solver.limb_ik import LIMBS, finish
 from engine.solver.pose import clamp_heading
 from engine.solver.profiles import effective
 
@@ -150,9 +151,12 @@ class DragPoserMethod(Method):
         self._frame = 0
         self._latent = torch.zeros(self.latent_dim)
         self._root: RootFrame | None = None
-        self._positions: torch.Tensor | None = None
+        self._positions: torch.Tensor | None = None  # float32 (22, 3), the solver's view
+        self._pos64: np.ndarray | None = None  # the same values in float64 (numpy users)
+        self._before64: np.ndarray | None = None
         self._last: FrameResult | None = None
-        self._disps: list[torch.Tensor] = []
+        self._disps: list[np.ndarray] = []
+        self._effective: dict[tuple, OptimizerSettings] = {}
         self._blends: dict[str, SensorBlend] = {}
 
     def step(self, sensors: SensorFrame) -> FrameResult:
@@ -168,7 +172,7 @@ class DragPoserMethod(Method):
         t0 = time.perf_counter()
         warnings = self._update_sensors(sensors)
         # the connected sensor set's profile fills the settings the caller left alone
-        s = effective(self.settings, [j for j, c in self.sensors.items() if c.enabled], self.explicit)
+        s = self._effective_settings()
         base = self.settings.sensor_rotation_weight
         if s.sensor_rotation_weight != base and base > 0:  # the profile's rotation weight (blend kept)
             for c in self.sensors.values():
@@ -177,7 +181,8 @@ class DragPoserMethod(Method):
         override = self._root_override()
         if self._root is None:
             self._root = self._initial_root()
-        prediction, warn = self.schedule.prediction(self._frame, self.predictor, max(1, s.future_window))
+        # a predictor run for later frames waits for between_frames (engine/solver/temporal.py)
+        prediction, warn = self.schedule.prediction(self._frame, self.predictor, max(1, s.future_window), defer=True)
         if warn:
             warnings.append(warn)
         start = prediction if prediction is not None and s.init_from_prediction else self._latent
@@ -185,7 +190,7 @@ class DragPoserMethod(Method):
         self.smooth.weight = s.smooth_weight
         feet = any(self.sensors[j].enabled for j in ("lankle", "rankle") if j in self.sensors)
         self.ground.weight = 0.0 if feet else s.ground_weight
-        self.smooth.set_history(*(None if p is None else p.double().numpy() for p in (self._positions, self._before)))
+        self.smooth.set_history(self._pos64, self._before64)
         anchor = self._root_anchor() if override is None else None
         root = self._reference_root(s, override)
         ctx = FrameContext(root, override, anchor, self._positions, prediction, self._frame)
@@ -201,12 +206,11 @@ class DragPoserMethod(Method):
             warnings.append("decoded pose is not finite; previous pose repeated")
             return self._repeat_last(warnings, sol.losses, sol.iterations, t0)
         local_rot, positions = state.local_rot.double().numpy(), state.positions.double().numpy()
-        if s.reach:
-            local_rot, positions = self._reach(local_rot, positions)
-        if s.sensor_rotations:
-            local_rot, positions = self._adopt_sensor_rotations(local_rot, positions)
-        self._advance(sol.latent, root, torch.as_tensor(local_rot[0], dtype=torch.float32),
-                      torch.as_tensor(positions, dtype=torch.float32))  # fmt: skip
+        reach_to = self._reach_targets() if s.reach else {}
+        turn_to = self._rotation_targets() if s.sensor_rotations else {}
+        if reach_to or turn_to:  # one FK for both steps (engine/solver/limb_ik.py)
+            local_rot, positions = finish(local_rot, positions[0], self.skeleton.offsets, reach_to, turn_to)
+        self._advance(sol.latent, root, local_rot[0], positions)
         result = FrameResult(
             local_rot=local_rot,
             root_pos=positions[0].copy(),
@@ -220,6 +224,11 @@ class DragPoserMethod(Method):
         )
         self._last = result
         return result
+
+    def between_frames(self) -> None:
+        """Run the temporal predictor's deferred look-ahead (same latents as running it
+        during the next :meth:`step`, without adding to that frame's latency)."""
+        self.schedule.run_pending()
 
     def decode_latent(self, latent: np.ndarray) -> np.ndarray:
         """World joint positions ``(22, 3)`` of ``latent (L,)``, placed at the current root."""
@@ -249,7 +258,7 @@ class DragPoserMethod(Method):
             live = bool(r.connected and ok)
             # trackers that place the body (hips, root anchor) are never blended
             seconds = 0.0 if joint in ("root", s.root_anchor) else s.sensor_blend
-            prev = None if self._positions is None else self._positions[sk.JOINT_INDEX[joint]].double().numpy()
+            prev = None if self._pos64 is None else self._pos64[sk.JOINT_INDEX[joint]]
             t = self._blends.setdefault(joint, SensorBlend()).update(r.position, live, prev, seconds, self.fps)
             c.rotation_weight = s.sensor_rotation_weight * t.rotation_weight
             c.weight = self.sensor_weights.get(joint, 1.0) * t.weight
@@ -266,26 +275,20 @@ class DragPoserMethod(Method):
         rot = torch.as_tensor(Q.normalize(c.rotation), dtype=torch.float32) if c.dof == 6 else None
         return RootOverride(pos, rot)
 
-    def _reach(self, local_rot: np.ndarray, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Tracked wrists and ankles onto their trackers by their limbs (setting ``reach``)."""
-        # a limb whose shoulder/elbow (hip/knee) a user constraint holds is left as solved
+    def _reach_targets(self) -> dict[int, np.ndarray]:
+        """Tracked wrists and ankles -> their trackers' positions (setting ``reach``): a
+        limb whose shoulder/elbow (hip/knee) a user constraint holds is left as solved."""
         held = {sk.JOINT_INDEX[n] for c in self.constraints if c.enabled and c.weight > 0
                 for n in _joints_of(c) if n in sk.JOINT_INDEX}  # fmt: skip
-        targets = {sk.JOINT_INDEX[j]: c.position for j, c in self.sensors.items()
-                   if c.enabled and c.connected and sk.JOINT_INDEX[j] in LIMBS
-                   and not held & set(LIMBS[sk.JOINT_INDEX[j]])}  # fmt: skip
-        if not targets:
-            return local_rot, positions
-        return reach(local_rot, positions[0], self.skeleton.offsets, targets)
+        return {sk.JOINT_INDEX[j]: c.position for j, c in self.sensors.items()
+                if c.enabled and c.connected and sk.JOINT_INDEX[j] in LIMBS
+                and not held & set(LIMBS[sk.JOINT_INDEX[j]])}  # fmt: skip
 
-    def _adopt_sensor_rotations(self, local_rot: np.ndarray, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The head, hands and feet take their connected 6-DoF trackers' world rotations
+    def _rotation_targets(self) -> dict[int, np.ndarray]:
+        """The head, hands and feet -> their connected 6-DoF trackers' world rotations
         (setting ``sensor_rotations``); the hips' is the tracker's already."""
-        targets = {sk.JOINT_INDEX[j]: c.rotation for j, c in self.sensors.items()
-                   if c.enabled and c.connected and c.dof == 6 and j != "root"}  # fmt: skip
-        if not targets:
-            return local_rot, positions
-        return adopt_rotations(local_rot, positions[0], self.skeleton.offsets, targets)
+        return {sk.JOINT_INDEX[j]: c.rotation for j, c in self.sensors.items()
+                if c.enabled and c.connected and c.dof == 6 and j != "root"}  # fmt: skip
 
     def _reference_root(self, s: OptimizerSettings, override: RootOverride | None) -> RootFrame:
         """The root the decoded root pose is relative to: the previous solved root, whose
@@ -333,19 +336,37 @@ class DragPoserMethod(Method):
             pos = np.array([0.0, 0.0, -rest[:, 2].min()])
         return RootFrame(torch.as_tensor(rot, dtype=torch.float32), torch.as_tensor(pos, dtype=torch.float32))
 
-    def _advance(self, latent: torch.Tensor, prev: RootFrame, root_rot: torch.Tensor, positions: torch.Tensor) -> None:
-        _, disp = root_increment(prev.rotation, prev.position, root_rot, positions[0])
+    def _advance(self, latent: torch.Tensor, prev: RootFrame, root_rot: np.ndarray, positions: np.ndarray) -> None:
+        """Keep the solved frame as the next frame's history (stored in float32, as the
+        solver's tensors are; the root increment in float64 numpy on those values)."""
+        rot32, pos32 = np.asarray(root_rot, dtype=np.float32), np.asarray(positions, dtype=np.float32)
+        pos64 = pos32.astype(np.float64)
+        _, disp = root_increment(prev.rotation.double().numpy(), prev.position.double().numpy(),
+                                 rot32.astype(np.float64), pos64[0])  # fmt: skip
         # predictor conditioning: displacement summed over the last n frames (each in its
         # previous heading frame), then the heights of HEIGHT_JOINTS (engine.models.predictor)
-        self._disps.append(disp.detach())
+        self._disps.append(disp.astype(np.float32))
         del self._disps[: -self.settings.predictor_every]
-        cond = torch.cat((torch.stack(self._disps).sum(0), positions[_HEIGHT_IDX, 2])).float()
-        self.schedule.record(self._frame, latent, cond)
+        cond = np.concatenate((np.sum(self._disps, axis=0, dtype=np.float32), pos32[_HEIGHT_IDX, 2]))
+        self.schedule.record(self._frame, latent, torch.from_numpy(cond))
         self._latent = latent
-        self._root = RootFrame(root_rot.detach().clone(), positions[0].detach().clone())
-        self._before = self._positions
-        self._positions = positions.detach().clone()
+        self._root = RootFrame(torch.from_numpy(rot32), torch.from_numpy(pos32[0].copy()))
+        self._before, self._before64 = self._positions, self._pos64
+        self._positions, self._pos64 = torch.from_numpy(pos32), pos64
         self._frame += 1
+
+    def _effective_settings(self) -> OptimizerSettings:
+        """:func:`engine.solver.profiles.effective` for the connected sensors, kept per
+        (settings, sensor set): building and validating the settings object every frame
+        cost more than the lookup."""
+        live = tuple(j for j, c in self.sensors.items() if c.enabled)
+        key = (tuple(vars(self.settings).values()), live, frozenset(self.explicit))
+        s = self._effective.get(key)
+        if s is None:
+            if len(self._effective) > 64:
+                self._effective.clear()
+            s = self._effective[key] = effective(self.settings, live, self.explicit)
+        return s
 
     def _repeat_last(self, warnings: list[str], losses: list, iterations: int, t0: float) -> FrameResult:
         if self._last is not None:
@@ -370,10 +391,13 @@ def _joints_of(c: Constraint) -> list[str]:
 
 
 def _finite(r: Sensor) -> bool:
-    ok = bool(np.all(np.isfinite(r.position)))
+    pos = np.asarray(r.position, dtype=np.float64).tolist()
+    if not all(math.isfinite(v) for v in pos):
+        return False
     if r.dof == 6:
-        ok = ok and bool(np.all(np.isfinite(r.rotation))) and float(np.linalg.norm(r.rotation)) > 1e-6
-    return ok
+        q = np.asarray(r.rotation, dtype=np.float64).tolist()
+        return all(math.isfinite(v) for v in q) and math.sqrt(sum(v * v for v in q)) > 1e-6
+    return True
 
 
 def create(mode: str = "realtime", iterations: int | None = None, lr: float | None = None,

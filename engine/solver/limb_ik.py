@@ -8,8 +8,13 @@ solvers: the middle joint (elbow, knee) bends or straightens about its current b
 until the limb's length from its root joint (shoulder, hip) to the end joint equals the
 distance to the tracker, then the whole limb turns about its root joint onto the
 tracker. The limb keeps its plane and the end joint keeps its world rotation (the
-tracker's, when :func:`engine.solver.pose.adopt_rotations` runs after). Beyond reach the
-limb points straight at the tracker.
+tracker's, when :func:`adopt_rotations` runs after). Beyond reach the limb points
+straight at the tracker.
+
+Both steps run once per solved frame on one pose, so they work on Python floats: only
+the joints a limb or a target needs are placed (:func:`engine.kinematics.fk.fk_joints`),
+and the pose's positions are computed once at the end (:func:`finish`), since at this
+size numpy's per-call overhead costs 10-20x the arithmetic.
 """
 
 from __future__ import annotations
@@ -19,8 +24,7 @@ import math
 import numpy as np
 
 from engine import skeleton as sk
-from engine.kinematics import quat_np as QN
-from engine.kinematics.fk import fk
+from engine.kinematics.fk import fk_joints
 
 #: End joint -> (limb root, middle joint).
 LIMBS = {sk.JOINT_INDEX[c]: (sk.JOINT_INDEX[a], sk.JOINT_INDEX[b])
@@ -29,21 +33,113 @@ LIMBS = {sk.JOINT_INDEX[c]: (sk.JOINT_INDEX[a], sk.JOINT_INDEX[b])
 #: Keep the limb this far (metres) from fully straight or folded: the bend axis and the
 #: solution are ill-defined there.
 _SLACK = 1e-3
+_ALL = tuple(range(sk.NUM_JOINTS))
+
+# -- scalar 3-vectors and quaternions (tuples; (w, x, y, z)) ----------------------------
 
 
-def _axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
-    return np.concatenate(([math.cos(angle / 2)], math.sin(angle / 2) * axis))
+def _sub(a, b):
+    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
 
 
-def _between(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Smallest rotation (4,) taking direction ``u`` onto direction ``v``."""
-    u, v = u / np.linalg.norm(u), v / np.linalg.norm(v)
-    q = np.concatenate(([1.0 + float(u @ v)], np.cross(u, v)))
-    n = np.linalg.norm(q)
+def _dot(a, b) -> float:
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def _cross(a, b):
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+def _norm(a) -> float:
+    return math.sqrt(_dot(a, a))
+
+
+def _scale(a, s: float):
+    return tuple(s * x for x in a)
+
+
+def _qmul(q0, q1):
+    w0, x0, y0, z0 = q0
+    w1, x1, y1, z1 = q1
+    return (w0 * w1 - x0 * x1 - y0 * y1 - z0 * z1, w0 * x1 + x0 * w1 + y0 * z1 - z0 * y1,
+            w0 * y1 - x0 * z1 + y0 * w1 + z0 * x1, w0 * z1 + x0 * y1 - y0 * x1 + z0 * w1)  # fmt: skip
+
+
+def _conj(q):
+    return (q[0], -q[1], -q[2], -q[3])
+
+
+def _rotate(q, v):
+    w, x, y, z = q
+    a, b, c = v
+    tx, ty, tz = 2.0 * (y * c - z * b), 2.0 * (z * a - x * c), 2.0 * (x * b - y * a)
+    return (a + w * tx + y * tz - z * ty, b + w * ty + z * tx - x * tz, c + w * tz + x * ty - y * tx)
+
+
+def _axis_angle(axis, angle: float):
+    s = math.sin(angle / 2)
+    return (math.cos(angle / 2), s * axis[0], s * axis[1], s * axis[2])
+
+
+def _between(u, v):
+    """Smallest rotation taking direction ``u`` onto direction ``v``."""
+    u, v = _scale(u, 1.0 / _norm(u)), _scale(v, 1.0 / _norm(v))
+    c = _cross(u, v)
+    q = (1.0 + _dot(u, v), *c)
+    n = math.sqrt(q[0] * q[0] + _dot(c, c))
     if n < 1e-9:  # opposite: any perpendicular axis
-        perp = np.cross(u, [1.0, 0.0, 0.0] if abs(u[0]) < 0.9 else [0.0, 1.0, 0.0])
-        return _axis_angle(perp / np.linalg.norm(perp), math.pi)
-    return q / n
+        perp = _cross(u, (1.0, 0.0, 0.0) if abs(u[0]) < 0.9 else (0.0, 1.0, 0.0))
+        return _axis_angle(_scale(perp, 1.0 / _norm(perp)), math.pi)
+    return _scale(q, 1.0 / n)
+
+
+def _chain(j: int) -> list[int]:
+    """``j`` and its ancestors."""
+    out = [j]
+    while j > 0:
+        j = sk.PARENTS[j]
+        out.append(j)
+    return out
+
+
+# -- the steps ------------------------------------------------------------------------
+
+
+def reach_local(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray,
+                targets: dict[int, np.ndarray]) -> np.ndarray:  # fmt: skip
+    """The local rotations of :func:`reach` ``(22, 4)``, without the positions."""
+    local = np.array(local_rot, dtype=np.float64)
+    root_pos = np.asarray(root_pos, dtype=np.float64)
+    # limbs do not share joints, and none holds another's ancestors: one placement serves all
+    need = [j for c in targets for j in (sk.PARENTS[LIMBS[c][0]], *LIMBS[c], c)]
+    pos_all, rot_all = fk_joints(local, root_pos, offsets, need)
+    placed = {j: (tuple(p), tuple(r)) for j, p, r in zip(need, pos_all.tolist(), rot_all.tolist())}
+    for c, target in targets.items():
+        a, b = LIMBS[c]
+        parent = sk.PARENTS[a]
+        (pa, wa0), (pb, wb0), (pc, wc0) = placed[a], placed[b], placed[c]
+        t = tuple(float(x) for x in target)
+        l1, l2 = _norm(_sub(pb, pa)), _norm(_sub(pc, pb))
+        ta = _sub(t, pa)
+        d = min(max(_norm(ta), abs(l1 - l2) + _SLACK), l1 + l2 - _SLACK)
+        u, v = _sub(pa, pb), _sub(pc, pb)
+        n = _cross(u, v)
+        sin_uv = _norm(n)
+        if sin_uv < 1e-9:  # straight or folded: bend about the middle joint's x axis
+            n = _rotate(wb0, (1.0, 0.0, 0.0))
+        n = _scale(n, 1.0 / _norm(n))
+        current = math.atan2(sin_uv, _dot(u, v))
+        wanted = math.acos(min(max((l1 * l1 + l2 * l2 - d * d) / (2 * l1 * l2), -1.0), 1.0))
+        bend = _axis_angle(n, wanted - current)  # about n: u x v turns u towards v, so v away from u
+        wb = _qmul(bend, wb0)
+        pc_new = tuple(p + r for p, r in zip(pb, _rotate(bend, v)))
+        turn = _between(_sub(pc_new, pa), ta) if _norm(ta) > 1e-9 else (1.0, 0.0, 0.0, 0.0)
+        wa, wb = _qmul(turn, wa0), _qmul(turn, wb)
+        local[a] = _qmul(_conj(placed[parent][1]), wa)
+        local[b] = _qmul(_conj(wa), wb)
+        local[c] = _qmul(_conj(wb), wc0)  # the end joint keeps its world rotation
+    local *= np.where(local[:, :1] < 0, -1.0, 1.0)
+    return local
 
 
 def reach(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray,
@@ -57,38 +153,32 @@ def reach(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray,
     -------
     local_rot : ndarray (22, 4)
         Changed at each limb's root and middle joint and its end joint (which keeps its
-        world rotation); the rest as given.
+        world rotation); the rest as given, every row with ``w >= 0``.
     positions : ndarray (22, 3)
         FK of the result, metres.
     """
+    local = reach_local(local_rot, root_pos, offsets, targets)
+    return local, fk_joints(local, np.asarray(root_pos, dtype=np.float64), offsets, _ALL)[0]
+
+
+def adopt_local(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray,
+                targets: dict[int, np.ndarray]) -> np.ndarray:  # fmt: skip
+    """The local rotations of :func:`adopt_rotations` ``(22, 4)``, without the positions."""
     local = np.array(local_rot, dtype=np.float64)
     root_pos = np.asarray(root_pos, dtype=np.float64)
-    for c, target in targets.items():
-        a, b = LIMBS[c]
-        pos, world = fk(local, root_pos, offsets)
-        pa, pb, pc = pos[a], pos[b], pos[c]
-        t = np.asarray(target, dtype=np.float64)
-        l1, l2 = np.linalg.norm(pb - pa), np.linalg.norm(pc - pb)
-        d = float(np.clip(np.linalg.norm(t - pa), abs(l1 - l2) + _SLACK, l1 + l2 - _SLACK))
-        u, v = pa - pb, pc - pb
-        n = np.cross(u, v)
-        if np.linalg.norm(n) < 1e-9:  # straight or folded: bend about the middle joint's x axis
-            n = QN.rotate(world[b], np.array([1.0, 0.0, 0.0]))
-        n = n / np.linalg.norm(n)
-        current = math.atan2(float(np.linalg.norm(np.cross(u, v))), float(u @ v))
-        wanted = math.acos(float(np.clip((l1 * l1 + l2 * l2 - d * d) / (2 * l1 * l2), -1.0, 1.0)))
-        bend = _axis_angle(n, wanted - current)  # about n: u x v turns u towards v, so v away from u
-        wb = QN.mul(bend, world[b])
-        pc_new = pb + QN.rotate(bend, v)
-        turn = _between(pc_new - pa, t - pa) if np.linalg.norm(t - pa) > 1e-9 else np.array([1.0, 0, 0, 0])
-        wa, wb = QN.mul(turn, world[a]), QN.mul(turn, wb)
-        parent = sk.PARENTS[a]
-        local[a] = QN.mul(QN.conjugate(world[parent]), wa)
-        local[b] = QN.mul(QN.conjugate(wa), wb)
-        local[c] = QN.mul(QN.conjugate(wb), world[c])  # the end joint keeps its world rotation
-    local *= np.where(local[:, :1] < 0, -1.0, 1.0)
-    positions, _ = fk(local, root_pos, offsets)
-    return local, positions
+    order = sorted(targets)
+    parents = [sk.PARENTS[j] for j in order]
+    # one placement serves all unless a target lies above another's parent (then parents
+    # come before children: the lower target sees the new rotation of the upper)
+    nested = any(a in targets for p in parents for a in _chain(p))
+    world = None if nested else fk_joints(local, root_pos, offsets, parents)[1].tolist()
+    for k, j in enumerate(order):
+        parent_rot = fk_joints(local, root_pos, offsets, [parents[k]])[1][0] if nested else world[k]
+        t = [float(x) for x in targets[j]]
+        s = 1.0 / max(math.sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2] + t[3] * t[3]), 1e-12)
+        q = _qmul(_conj(parent_rot), (t[0] * s, t[1] * s, t[2] * s, t[3] * s))
+        local[j] = q if q[0] >= 0 else tuple(-x for x in q)
+    return local
 
 
 def adopt_rotations(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray,
@@ -113,17 +203,23 @@ def adopt_rotations(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.nda
     positions : ndarray (22, 3)
         FK of the result: the target joints keep their positions, their descendants follow.
     """
-    local = np.array(local_rot, dtype=np.float64)
-    world = np.empty_like(local)
-    world[0] = local[0]
-    for j in range(1, sk.NUM_JOINTS):  # parents come before children
-        p = sk.PARENTS[j]
-        if j in targets:
-            t = np.asarray(targets[j], dtype=np.float64)
-            t = t / max(float(np.linalg.norm(t)), 1e-12)
-            local[j] = QN.mul(QN.conjugate(world[p]), t)
-            if local[j, 0] < 0:
-                local[j] = -local[j]
-        world[j] = QN.mul(world[p], local[j])
-    positions, _ = fk(local, np.asarray(root_pos, dtype=np.float64), offsets)
+    return finish(local_rot, root_pos, offsets, {}, targets)
+
+
+def finish(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, reach_targets: dict[int, np.ndarray],
+           rotation_targets: dict[int, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """:func:`reach` onto ``reach_targets`` (positions), then :func:`adopt_rotations` of
+    ``rotation_targets``, with one forward kinematics pass for the positions.
+
+    Returns
+    -------
+    local_rot : ndarray (22, 4)
+    positions : ndarray (22, 3)
+        Metres.
+    """
+    local = reach_local(local_rot, root_pos, offsets, reach_targets) if reach_targets else local_rot
+    if rotation_targets:
+        local = adopt_local(local, root_pos, offsets, rotation_targets)
+    local = np.array(local, dtype=np.float64)
+    positions, _ = fk_joints(local, np.asarray(root_pos, dtype=np.float64), offsets, _ALL)
     return local, positions

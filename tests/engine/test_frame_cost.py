@@ -1,0 +1,198 @@
+"""The per-frame work outside DragPoser's iterations, rewritten for speed, gives what the
+previous code gave on real frames (the shipped models on the bundled clip):
+
+* the limb reach and tracker rotations (``engine/solver/limb_ik.py``: partial FK on Python
+  floats, one FK at the end) against the previous numpy implementation, kept below;
+* the predictor's conditioning from the root increment (numpy) against the torch formula;
+* the predictor's look-ahead deferred to ``between_frames`` against running it at once.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+
+from engine import skeleton as sk
+from engine.kinematics import quat_np as QN
+from engine.kinematics import quaternion as Q
+from engine.kinematics.fk import fk
+from engine.methods import dragposer as D
+from engine.models import load_default_models
+from engine.retarget import load_motion
+from engine.solver import limb_ik
+from engine.solver.temporal import TemporalSchedule
+from engine.tracking import simulate
+
+CLIP = Path(__file__).resolve().parents[2] / "assets" / "clips" / "example.bvh"
+FRAMES = 30
+
+
+# -- the previous implementation (numpy, a full FK per limb), the reference ----------------
+
+
+def _axis_angle(axis, angle):
+    return np.concatenate(([math.cos(angle / 2)], math.sin(angle / 2) * axis))
+
+
+def _between(u, v):
+    u, v = u / np.linalg.norm(u), v / np.linalg.norm(v)
+    q = np.concatenate(([1.0 + float(u @ v)], np.cross(u, v)))
+    n = np.linalg.norm(q)
+    if n < 1e-9:
+        perp = np.cross(u, [1.0, 0.0, 0.0] if abs(u[0]) < 0.9 else [0.0, 1.0, 0.0])
+        return _axis_angle(perp / np.linalg.norm(perp), math.pi)
+    return q / n
+
+
+def reach_reference(local_rot, root_pos, offsets, targets):
+    local = np.array(local_rot, dtype=np.float64)
+    for c, target in targets.items():
+        a, b = limb_ik.LIMBS[c]
+        pos, world = fk(local, root_pos, offsets)
+        pa, pb, pc = pos[a], pos[b], pos[c]
+        t = np.asarray(target, dtype=np.float64)
+        l1, l2 = np.linalg.norm(pb - pa), np.linalg.norm(pc - pb)
+        d = float(np.clip(np.linalg.norm(t - pa), abs(l1 - l2) + 1e-3, l1 + l2 - 1e-3))
+        u, v = pa - pb, pc - pb
+        n = np.cross(u, v)
+        if np.linalg.norm(n) < 1e-9:
+            n = QN.rotate(world[b], np.array([1.0, 0.0, 0.0]))
+        n = n / np.linalg.norm(n)
+        current = math.atan2(float(np.linalg.norm(np.cross(u, v))), float(u @ v))
+        wanted = math.acos(float(np.clip((l1 * l1 + l2 * l2 - d * d) / (2 * l1 * l2), -1.0, 1.0)))
+        bend = _axis_angle(n, wanted - current)
+        wb = QN.mul(bend, world[b])
+        pc_new = pb + QN.rotate(bend, v)
+        turn = _between(pc_new - pa, t - pa) if np.linalg.norm(t - pa) > 1e-9 else np.array([1.0, 0, 0, 0])
+        wa, wb = QN.mul(turn, world[a]), QN.mul(turn, wb)
+        local[a] = QN.mul(QN.conjugate(world[sk.PARENTS[a]]), wa)
+        local[b] = QN.mul(QN.conjugate(wa), wb)
+        local[c] = QN.mul(QN.conjugate(wb), world[c])
+    local *= np.where(local[:, :1] < 0, -1.0, 1.0)
+    return local, fk(local, root_pos, offsets)[0]
+
+
+def adopt_reference(local_rot, root_pos, offsets, targets):
+    local = np.array(local_rot, dtype=np.float64)
+    world = np.empty_like(local)
+    world[0] = local[0]
+    for j in range(1, sk.NUM_JOINTS):
+        p = sk.PARENTS[j]
+        if j in targets:
+            t = np.asarray(targets[j], dtype=np.float64)
+            t = t / max(float(np.linalg.norm(t)), 1e-12)
+            local[j] = QN.mul(QN.conjugate(world[p]), t)
+            if local[j, 0] < 0:
+                local[j] = -local[j]
+        world[j] = QN.mul(world[p], local[j])
+    return local, fk(local, root_pos, offsets)[0]
+
+
+# -- real frames ------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def models():
+    return load_default_models()
+
+
+@pytest.fixture(scope="module")
+def motion():
+    return load_motion(CLIP)
+
+
+@pytest.mark.parametrize("sensors", ["6", "3-head-hands"])
+def test_reach_and_rotations_equal_the_previous_code_on_real_frames(models, motion, sensors, monkeypatch):
+    calls = []
+    new_finish = limb_ik.finish
+
+    def spy(local, root, offsets, reach_to, turn_to):
+        got = new_finish(local, root, offsets, reach_to, turn_to)
+        want_local, want_pos = local, None
+        if reach_to:
+            want_local, want_pos = reach_reference(want_local, root, offsets, reach_to)
+        if turn_to:
+            want_local, want_pos = adopt_reference(want_local, root, offsets, turn_to)
+        calls.append((len(reach_to), len(turn_to)))
+        np.testing.assert_allclose(got[0], want_local, atol=1e-6, rtol=0)
+        np.testing.assert_allclose(got[1], want_pos, atol=1e-6, rtol=0)
+        return got
+
+    monkeypatch.setattr(D, "finish", spy)
+    m = D.DragPoserMethod(models.vae, models.predictor)
+    m.reset(motion.skeleton, motion.fps)
+    tr = simulate(motion, sensors)
+    for i in range(FRAMES):
+        m.step(tr.frame(i))
+    assert len(calls) == FRAMES
+    assert calls[-1] == ((4, 5) if sensors == "6" else (2, 3))  # wrists+ankles / head+hands
+
+
+def test_reach_and_rotations_equal_the_previous_code_on_random_poses():
+    rng = np.random.default_rng(3)
+    off = sk.Skeleton.canonical().offsets
+    for _ in range(20):
+        local = rng.normal(size=(22, 4))
+        local /= np.linalg.norm(local, axis=-1, keepdims=True)
+        root = rng.normal(0, 0.3, 3) + [0, 0, 1]
+        pos, _ = fk(local, root, off)
+        ends = [j for j in limb_ik.LIMBS if rng.random() < 0.7]
+        reach_to = {j: pos[j] + rng.normal(0, 0.1, 3) for j in ends}
+        turn_to = {j: rng.normal(size=4) for j in (3, 7, 13, 17, 21) if rng.random() < 0.7}
+        turn_to[4] = rng.normal(size=4)  # a toe below a turned ankle: the nested case
+        got = limb_ik.finish(local, root, off, reach_to, turn_to)
+        want = reach_reference(local, root, off, reach_to) if reach_to else (local, None)
+        want = adopt_reference(want[0], root, off, turn_to)
+        np.testing.assert_allclose(got[0], want[0], atol=1e-9)
+        np.testing.assert_allclose(got[1], want[1], atol=1e-9)
+
+
+def test_predictor_conditioning_equals_the_torch_root_increment(models, motion, monkeypatch):
+    m = D.DragPoserMethod(models.vae, models.predictor)
+    m.reset(motion.skeleton, motion.fps)
+    tr = simulate(motion, "6")
+    conds = []
+    record = m.schedule.record
+
+    def spy(frame, latent, cond):
+        conds.append(cond.clone())
+        record(frame, latent, cond)
+
+    monkeypatch.setattr(m.schedule, "record", spy)
+    roots, results = [], []
+    for i in range(FRAMES):
+        roots.append(m._root)
+        results.append(m.step(tr.frame(i)))
+    disps = []
+    for i in range(1, FRAMES):
+        # the hips are tracked: frame i's root is relative to the previous solved root as is
+        prev = roots[i]
+        pos = torch.as_tensor(results[i].positions, dtype=torch.float32)
+        h_inv = Q.conjugate(Q.heading(prev.rotation))
+        disps.append(Q.rotate(h_inv, pos[0] - prev.position))
+        want = torch.cat((torch.stack(disps[-4:]).sum(0), pos[D._HEIGHT_IDX, 2]))
+        np.testing.assert_allclose(conds[i].numpy(), want.numpy(), atol=1e-6)
+
+
+def test_deferred_predictor_runs_give_the_same_latents(models):
+    rng = np.random.default_rng(0)
+    latents = torch.as_tensor(rng.normal(0, 1, (40, 24)), dtype=torch.float32)
+    conds = torch.as_tensor(rng.normal(0, 0.1, (40, 9)), dtype=torch.float32)
+    for future in (1, 16):
+        got = {}
+        for defer in (False, True):
+            sched, out = TemporalSchedule(4, 16), []
+            for i in range(40):
+                z, warn = sched.prediction(i, models.predictor, future, defer=defer)
+                assert not warn
+                out.append(z)
+                sched.record(i, latents[i], conds[i])
+                if defer and i % 3:  # between frames, sometimes; the next frame runs it otherwise
+                    sched.run_pending()
+            got[defer] = out
+        for a, b in zip(got[False], got[True]):
+            assert (a is None and b is None) or torch.equal(a, b)

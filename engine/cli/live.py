@@ -43,6 +43,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--method", default="dragposer", help="reconstruction method (default: dragposer)")
     p.add_argument("--mode", choices=("realtime", "offline"), default="realtime", help=argparse.SUPPRESS)
     p.add_argument("--iterations", type=int, metavar="N", help="optimizer iterations per frame")
+    p.add_argument("--frame-budget", type=float, metavar="MS",
+                   help="milliseconds from a frame's arrival to its solved pose; the solver stops iterating "
+                        "to meet it (default: 60 %% of the frame period, 10 ms at 60 fps; 0: no budget, all "
+                        "iterations every frame)")  # fmt: skip
     p.add_argument("--lr", type=float, metavar="LR", help="Adam learning rate on the latent")
     add_model_options(p)
     p.add_argument("--no-progress", action="store_true", help="hide the status line")
@@ -58,6 +62,8 @@ def _check(args: argparse.Namespace) -> None:
         v = getattr(args, name)
         if v is not None and not (math.isfinite(v) and v > 0):
             raise UserError(f"--{name.replace('_', '-')} must be a positive number of seconds, got {v}")
+    if args.frame_budget is not None and not (math.isfinite(args.frame_budget) and args.frame_budget >= 0):
+        raise UserError(f"--frame-budget must be a number of milliseconds >= 0, got {args.frame_budget}")
     if args.iterations is not None and not 1 <= args.iterations <= 10000:
         raise UserError(f"--iterations must be in [1, 10000], got {args.iterations}")
     if args.lr is not None and not (math.isfinite(args.lr) and args.lr > 0):
@@ -66,7 +72,8 @@ def _check(args: argparse.Namespace) -> None:
 
 def _live(args: argparse.Namespace) -> int:
     from engine.bvh import save_motion_bvh
-    from engine.sources.live import LiveRun, latency_summary, reference_error, to_motion, tracker_error_cm
+    from engine.sources.live import (LiveRun, default_budget_ms, iteration_summary, latency_summary, reference_error,
+                                     to_motion, tracker_error_cm)  # fmt: skip
     from engine.sources.receiver import VMCReceiver, parse_listen
     from engine.sources.recording import RecordingWriter, header
     from engine.sources.trackers import TrackerMapping
@@ -81,7 +88,9 @@ def _live(args: argparse.Namespace) -> int:
     if args.record:
         recorder = RecordingWriter(args.record, header(args.fps, mapping, f"vmc udp {host}:{port}", convention_in=args.convention))
     receiver = VMCReceiver(host, port, mapping, args.convention, args.timeout, recorder)
-    run = LiveRun(receiver, method, default_skeleton(reference), args.fps, args.calibrate, args.calibration_pose)
+    budget = default_budget_ms(args.fps) if args.frame_budget is None else args.frame_budget
+    run = LiveRun(receiver, method, default_skeleton(reference), args.fps, args.calibrate, args.calibration_pose,
+                  budget if method.takes_deadline else 0.0)  # fmt: skip
     status = _Status(receiver, disabled=args.no_progress)
     print(f"listening on {receiver.host}:{receiver.port} (method {args.method})", file=sys.stderr, flush=True)
     t0 = time.perf_counter()
@@ -115,6 +124,8 @@ def _live(args: argparse.Namespace) -> int:
         "calibration_frames": result.calibration_frames,
         "latency_ms": latency_summary(result.latency_ms),
         "ms_per_frame_median": float(np.median([r.ms for r in result.results])) if result.results else None,
+        "frame_budget_ms": run.budget_s * 1000.0 if method.takes_deadline else None,
+        "iterations": iteration_summary(result.iterations),
         "tracker_error_cm": tracker_error_cm(result.results, result.sensors),
         "reference": reference_error(result.times, result.results, reference),
         "calibration": result.calibration.to_json() if result.calibration else None,
@@ -185,6 +196,10 @@ def _report(stats: dict, args: argparse.Namespace, result) -> str:
                  + f", skipped {stats['frames_skipped']} ({stats['frames_skipped_first_solve']} during the first solve)")  # fmt: skip
     if lat["p50"] is not None:
         lines.append(f"latency p50 {lat['p50']:.1f} ms  p95 {lat['p95']:.1f} ms  max {lat['max']:.1f} ms")
+    it = stats["iterations"]
+    if stats["frame_budget_ms"] and it["median"] is not None:
+        lines.append(f"frame budget {stats['frame_budget_ms']:.1f} ms: iterations per frame median {it['median']:.0f}, "
+                     f"mean {it['mean']:.1f}, min {it['min']}")  # fmt: skip
     te = stats["tracker_error_cm"]
     ref = stats["reference"]
     err = f"{ref['pos_cm']:.2f} cm" if ref.get("pos_cm") is not None else ref["note"]

@@ -70,6 +70,10 @@ class Method(ABC):
     #: bound); callers then pass it to :meth:`reset` as ``reference``.
     needs_ground_truth: bool = False
 
+    #: True for methods whose :meth:`step` takes ``deadline=`` (a ``time.perf_counter``
+    #: time) and cuts its iterations short to end by then (live input).
+    takes_deadline: bool = False
+
     @abstractmethod
     def reset(self, skeleton: sk.Skeleton, fps: float = sk.FPS, *, reference: Motion | None = None) -> None:
         """Start a new clip for a subject with the given skeleton.

@@ -62,6 +62,7 @@ class DragPoserMethod(Method):
     """
 
     name = "dragposer"
+    takes_deadline = True
 
     def __init__(self, decoder: LatentDecoder, predictor: LatentPredictor | None = None,
                  settings: OptimizerSettings | None = None, latent_dim: int = 24, fast: bool = True,
@@ -159,16 +160,20 @@ class DragPoserMethod(Method):
         self._effective: dict[tuple, OptimizerSettings] = {}
         self._blends: dict[str, SensorBlend] = {}
 
-    def step(self, sensors: SensorFrame) -> FrameResult:
+    def step(self, sensors: SensorFrame, deadline: float | None = None) -> FrameResult:
+        """Solve the next frame. ``deadline`` (a ``time.perf_counter()`` time; live input)
+        stops a realtime solve's iterations early enough to end by then (at least one
+        step; engine/solver/optimizer.py); the result's ``iterations`` says how many ran.
+        The first frame, solved offline, ignores it."""
         threads = torch.get_num_threads()
         if self.settings.threads:
             torch.set_num_threads(self.settings.threads)
         try:
-            return self._step(sensors)
+            return self._step(sensors, deadline)
         finally:
             torch.set_num_threads(threads)
 
-    def _step(self, sensors: SensorFrame) -> FrameResult:
+    def _step(self, sensors: SensorFrame, deadline: float | None = None) -> FrameResult:
         t0 = time.perf_counter()
         warnings = self._update_sensors(sensors)
         # the connected sensor set's profile fills the settings the caller left alone
@@ -193,7 +198,7 @@ class DragPoserMethod(Method):
         self.smooth.set_history(self._pos64, self._before64)
         anchor = self._root_anchor() if override is None else None
         root = self._reference_root(s, override)
-        ctx = FrameContext(root, override, anchor, self._positions, prediction, self._frame)
+        ctx = FrameContext(root, override, anchor, self._positions, prediction, self._frame, deadline)
         terms = [*self.sensors.values(), self.prior, self.smooth, self.ground, *self.constraints]
         self.optimizer.settings = dataclasses.replace(s, mode="offline") if self._frame == 0 else s
         try:  # frame 0 has no history to start from: it is solved offline

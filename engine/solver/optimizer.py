@@ -12,6 +12,12 @@ any user constraint). Two modes:
   sensors' position and rotation tolerances), the loss stops improving, or
   ``max_iterations`` is reached.
 
+A realtime frame may also carry a **deadline** (:attr:`FrameContext.deadline`, a
+``time.perf_counter`` time, set by a live loop): after each step the solver stops when
+one more step, at this frame's mean step time, would end past it; at least one step is
+always taken. Adam's moments carry over as usual, so the next frame continues from
+where this one stopped; :attr:`Solution.iterations` says how many steps were taken.
+
 Robustness: a constraint whose loss is NaN/inf at the starting latent is left out of
 this frame's solve (with a warning); a loss or latent that becomes non-finite, or a
 final loss far above the starting one (divergence), makes the frame fall back to its
@@ -85,6 +91,9 @@ class FrameContext:
         Temporal predictor's latent for this frame.
     frame : int
         Frame index.
+    deadline : float or None
+        ``time.perf_counter()`` time by which a realtime solve should end (module doc);
+        None: no limit. Offline solves ignore it.
     """
 
     previous_root: RootFrame
@@ -93,6 +102,7 @@ class FrameContext:
     previous_positions: torch.Tensor | None = None
     prediction: torch.Tensor | None = None
     frame: int = 0
+    deadline: float | None = None
 
 
 @dataclass
@@ -135,6 +145,8 @@ class Solution:
     fell_back : bool
         True when the solve was abandoned for the starting latent.
     timings : SolveTimings
+    cut : bool
+        True when the frame's deadline stopped the solve before ``iterations`` steps.
     """
 
     latent: torch.Tensor
@@ -144,6 +156,7 @@ class Solution:
     warnings: list[str] = field(default_factory=list)
     fell_back: bool = False
     timings: SolveTimings = field(default_factory=SolveTimings)
+    cut: bool = False
 
 
 class PoseOptimizer:
@@ -257,6 +270,7 @@ class PoseOptimizer:
         losses: list[dict[str, float]] = []
         cap, offline = s.steps_cap(), s.mode == "offline"
         best, since_best, steps, warnings = math.inf, 0, 0, []
+        deadline, cut, t_loop = None if offline else ctx.deadline, False, clock()
         while True:
             t0 = clock()
             out = fp.decoder.forward(z)
@@ -272,6 +286,9 @@ class PoseOptimizer:
             if not math.isfinite(total) or not np.isfinite(z).all():
                 return self._fall_back(z0, ctx, losses, steps, warnings, "loss became non-finite", timings)
             if steps >= cap:
+                break
+            if deadline is not None and steps and _past(deadline, t_loop, steps):
+                cut = True
                 break
             if offline:
                 if fp.satisfied():
@@ -291,8 +308,10 @@ class PoseOptimizer:
             steps += 1
         timings.iterations = steps
         _to_ms(timings)
-        return self._finish(z0, z, rule, upd, losses, steps, warnings, ctx, lambda lat: self._fast_state(lat, ctx),
-                            timings)  # fmt: skip
+        sol = self._finish(z0, z, rule, upd, losses, steps, warnings, ctx, lambda lat: self._fast_state(lat, ctx),
+                           timings)  # fmt: skip
+        sol.cut = cut
+        return sol
 
     def _fast_state(self, latent: torch.Tensor, ctx: FrameContext) -> PoseState:
         """The fast path's last evaluated pose as a (detached, float32) :class:`PoseState`."""
@@ -329,6 +348,7 @@ class PoseOptimizer:
         losses: list[dict[str, float]] = []
         cap, offline = s.steps_cap(), s.mode == "offline"
         best, since_best, steps = math.inf, 0, 0
+        deadline, cut, t_loop = None if offline else ctx.deadline, False, clock()
         while True:
             t0 = clock()
             rot, disp = self.decoder.decode(z[None])
@@ -343,6 +363,9 @@ class PoseOptimizer:
             if not math.isfinite(losses[-1]["total"]) or not bool(torch.isfinite(z).all()):
                 return self._fall_back(z0, ctx, losses, steps, warnings, "loss became non-finite", timings)
             if steps >= cap:
+                break
+            if deadline is not None and steps and _past(deadline, t_loop, steps):
+                cut = True
                 break
             if offline:
                 if all(c.satisfied(state) for c in terms):
@@ -363,8 +386,10 @@ class PoseOptimizer:
         timings.iterations = steps
         _to_ms(timings)
         final = state.detached()
-        return self._finish(z0, z.detach().numpy(), rule, upd, losses, steps, warnings, ctx,
-                            lambda lat: _with_latent(final, lat), timings)  # fmt: skip
+        sol = self._finish(z0, z.detach().numpy(), rule, upd, losses, steps, warnings, ctx,
+                           lambda lat: _with_latent(final, lat), timings)  # fmt: skip
+        sol.cut = cut
+        return sol
 
     def _fall_back(self, z0: np.ndarray, ctx: FrameContext, losses: list[dict[str, float]], steps: int,
                    warnings: list[str], why: str, timings: SolveTimings) -> Solution:  # fmt: skip
@@ -373,6 +398,13 @@ class PoseOptimizer:
         with torch.no_grad():
             state = self.decode(z, ctx)
         return Solution(z, state.detached(), losses, steps, warnings, fell_back=True, timings=timings)
+
+
+def _past(deadline: float, t_loop: float, steps: int) -> bool:
+    """Whether one more step, at the mean time of the ``steps`` taken since ``t_loop``,
+    would end after ``deadline`` (all ``time.perf_counter`` seconds)."""
+    now = time.perf_counter()
+    return now + (now - t_loop) / steps > deadline
 
 
 def _to_ms(t: SolveTimings) -> None:

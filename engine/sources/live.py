@@ -6,6 +6,14 @@ the method gets from simulated trackers) and times each solve from the arrival o
 frame's packet to the solved pose. A solver slower than the stream skips to the newest
 frame; skipped frames are counted. An optional first window calibrates the wearer
 (:mod:`engine.sources.calibration`) before solving starts.
+
+Real-time policy: with a frame budget, each frame's solve gets the deadline ``arrival +
+budget`` (methods with :attr:`~engine.methods.Method.takes_deadline`: DragPoser stops
+iterating when one more iteration would end past it, at least one iteration per frame),
+and the work that can wait (DragPoser's temporal predictor) runs after the pose is out,
+while the loop waits for the next frame. A frame that starts late, because that work or
+the previous solve ran long, gets fewer iterations instead of making the next frames
+late too.
 """
 
 from __future__ import annotations
@@ -44,6 +52,8 @@ class LiveResult:
     frames_skipped_first_solve : int
         Of those, frames that arrived during the first solve (DragPoser solves its first
         frame in offline mode, to convergence: a start-up cost, not a steady one).
+    iterations : list of int
+        Optimizer iterations of every solved frame (what the budget allowed).
     calibration : Calibration or None
     calibration_frames : int
         Frames spent calibrating.
@@ -56,6 +66,7 @@ class LiveResult:
     frames_received: int = 0
     frames_skipped: int = 0
     frames_skipped_first_solve: int = 0
+    iterations: list[int] = field(default_factory=list)
     calibration: Calibration | None = None
     calibration_frames: int = 0
 
@@ -81,16 +92,20 @@ class LiveRun:
         Seconds of stream (by stream time) to calibrate from first; 0: no calibration.
     calibration_pose : str
         ``auto``, ``tpose`` or ``standing``.
+    budget_ms : float
+        Per-frame budget from the frame's arrival to its solved pose, milliseconds
+        (module doc); 0: none, every frame gets all its iterations.
     """
 
     def __init__(self, receiver: VMCReceiver, method: Method, skeleton: sk.Skeleton, fps: float = sk.FPS,
-                 calibrate_s: float = 0.0, calibration_pose: str = "auto") -> None:  # fmt: skip
+                 calibrate_s: float = 0.0, calibration_pose: str = "auto", budget_ms: float = 0.0) -> None:  # fmt: skip
         self.receiver = receiver
         self.method = method
         self.skeleton = skeleton
         self.fps = fps
         self.calibrate_s = calibrate_s
         self.calibration_pose = calibration_pose
+        self.budget_s = budget_ms / 1000.0
         self.stop_event = threading.Event()
         self.result = LiveResult()  # filled while running, so an interrupt keeps it
 
@@ -136,13 +151,18 @@ class LiveRun:
             out.frames_skipped += missed
             if out.frames_solved == 1:
                 out.frames_skipped_first_solve = missed
-            res = self.method.step(f.sensors)
+            if self.budget_s > 0 and self.method.takes_deadline:
+                res = self.method.step(f.sensors, deadline=f.arrival + self.budget_s)  # type: ignore[call-arg]
+            else:
+                res = self.method.step(f.sensors)
             out.latency_ms.append(1000.0 * (time.perf_counter() - f.arrival))
             out.times.append(f.t)
             out.results.append(res)
             out.sensors.append(f.sensors)
+            out.iterations.append(res.iterations)
             if on_frame is not None:
                 on_frame(out)
+            self.method.between_frames()  # the pose is out: deferred work now
         return out
 
 
@@ -197,6 +217,22 @@ def tracker_error_cm(results: Sequence[FrameResult], frames: Sequence[SensorFram
         for j, r in f.connected().items():
             errs.append(np.linalg.norm(res.positions[sk.JOINT_INDEX[j]] - r.position))
     return 100.0 * float(np.mean(errs)) if errs else None
+
+
+def default_budget_ms(fps: float) -> float:
+    """The live frame budget when none is given: 60 % of the frame period (10 ms at 60
+    fps), which leaves the rest of the period for the work after the solve, the
+    predictor's runs between frames and the receiver thread (docs/trackers.md)."""
+    return 0.6 * 1000.0 / fps
+
+
+def iteration_summary(iterations: Sequence[int]) -> dict:
+    """Median, mean, 5th percentile and minimum of the iterations per solved frame."""
+    if not iterations:
+        return {"median": None, "mean": None, "p5": None, "min": None}
+    a = np.asarray(iterations, float)
+    return {"median": float(np.median(a)), "mean": float(a.mean()), "p5": float(np.percentile(a, 5)),
+            "min": int(a.min())}  # fmt: skip
 
 
 def latency_summary(latency_ms: Sequence[float]) -> dict:

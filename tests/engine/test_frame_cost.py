@@ -196,3 +196,69 @@ def test_deferred_predictor_runs_give_the_same_latents(models):
             got[defer] = out
         for a, b in zip(got[False], got[True]):
             assert (a is None and b is None) or torch.equal(a, b)
+
+
+# -- the live policy: a per-frame deadline ----------------------------------------------
+
+
+@pytest.mark.parametrize("fast", [True, False])
+def test_a_deadline_cuts_the_iterations_and_keeps_at_least_one(models, motion, fast):
+    import time
+
+    m = D.DragPoserMethod(models.vae, models.predictor, fast=fast, iterations=10)
+    m.reset(motion.skeleton, motion.fps)
+    tr = simulate(motion, "6")
+    first = m.step(tr.frame(0), deadline=time.perf_counter() - 1.0)
+    assert first.iterations > 1  # frame 0 is solved offline: no deadline
+    assert m.step(tr.frame(1), deadline=time.perf_counter() - 1.0).iterations == 1
+    assert m.step(tr.frame(2), deadline=time.perf_counter() + 60.0).iterations == 10
+    assert m.step(tr.frame(3)).iterations == 10
+    t0 = time.perf_counter()
+    cut = m.step(tr.frame(4), deadline=t0 + 0.002)
+    assert 1 <= cut.iterations < 10  # ten iterations take far more than 2 ms
+    assert np.isfinite(cut.positions).all()
+
+
+def test_live_run_gives_the_method_its_deadline_and_time_between_frames():
+    from engine.sensors import Sensor, SensorFrame
+    from engine.sources.live import LiveRun
+    from engine.sources.receiver import LiveFrame
+
+    class Stream:  # three frames, then nothing
+        def __init__(self):
+            self.frames = [LiveFrame(k + 1, k / 60.0, 100.0 + k, SensorFrame(k, {"root": Sensor("root", np.zeros(3))}))
+                           for k in range(3)]  # fmt: skip
+            self.last_arrival = None
+
+        def wait_frame(self, after, timeout):
+            nxt = [f for f in self.frames if f.index > after]
+            if nxt:
+                return nxt[0]
+            import time
+
+            self.last_arrival = time.perf_counter() - 10.0
+            return None
+
+    class Probe(D.Method):
+        takes_deadline = True
+
+        def __init__(self):
+            self.calls = []
+
+        def reset(self, skeleton, fps=60.0, *, reference=None):
+            pass
+
+        def step(self, sensors, deadline=None):
+            self.calls.append(("step", deadline))
+            from engine.methods import FrameResult
+
+            return FrameResult(np.tile([1.0, 0, 0, 0], (22, 1)), np.zeros(3), np.zeros((22, 3)), iterations=3)
+
+        def between_frames(self):
+            self.calls.append(("between", None))
+
+    probe = Probe()
+    out = LiveRun(Stream(), probe, sk.Skeleton.canonical(), 60.0, budget_ms=12.0).run(idle_timeout_s=1.0)
+    assert out.frames_solved == 3 and out.iterations == [3, 3, 3]
+    assert probe.calls == [("step", pytest.approx(100.012)), ("between", None), ("step", pytest.approx(101.012)),
+                           ("between", None), ("step", pytest.approx(102.012)), ("between", None)]  # fmt: skip

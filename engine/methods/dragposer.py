@@ -231,9 +231,16 @@ class DragPoserMethod(Method):
         return result
 
     def between_frames(self) -> None:
-        """Run the temporal predictor's deferred look-ahead (same latents as running it
-        during the next :meth:`step`, without adding to that frame's latency)."""
-        self.schedule.run_pending()
+        """One piece of the temporal predictor's deferred work (engine/solver/temporal.py):
+        the same latents as when the next :meth:`step` does it, without adding to that
+        frame's latency. Runs with the solver's torch thread count, as :meth:`step` does."""
+        threads = torch.get_num_threads()
+        if self.settings.threads:
+            torch.set_num_threads(self.settings.threads)
+        try:
+            self.schedule.run_pending()
+        finally:
+            torch.set_num_threads(threads)
 
     def decode_latent(self, latent: np.ndarray) -> np.ndarray:
         """World joint positions ``(22, 3)`` of ``latent (L,)``, placed at the current root."""

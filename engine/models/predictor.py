@@ -94,7 +94,15 @@ class TemporalPredictor(nn.Module):
         tokens = first[:, None]
         outs = []
         for _ in range(steps):
-            nxt = self.decode_steps(tokens[:, -self.config.future :], memory)[:, -1]
+            nxt = self.next_latent(tokens, memory)
             outs.append(nxt)
             tokens = torch.cat((tokens, nxt[:, None]), dim=1)
         return torch.stack(outs, dim=1)
+
+    @torch.no_grad()
+    def next_latent(self, tokens: torch.Tensor, memory: torch.Tensor) -> torch.Tensor:
+        """One step of :meth:`predict`: the latent ``(B, L)`` after ``tokens (B, T, L)``
+        (the first latent, then the predicted ones) given the encoder's ``memory``.
+        The solver's schedule calls :meth:`encode_past` and this step by step to spread a
+        run over the time between frames; the latents are those of :meth:`predict`."""
+        return self.decode_steps(tokens[:, -self.config.future :], memory)[:, -1]

@@ -178,24 +178,61 @@ def test_predictor_conditioning_equals_the_torch_root_increment(models, motion, 
         np.testing.assert_allclose(conds[i].numpy(), want.numpy(), atol=1e-6)
 
 
-def test_deferred_predictor_runs_give_the_same_latents(models):
+def test_predictor_runs_in_pieces_give_the_latents_of_one_run(models):
+    """Deferred blocks, run piece by piece between frames (sometimes) or by the frames
+    that need them, against the whole run at once through ``predict``: bit for bit."""
+
+    class Whole:  # the predictor without pieces
+        def predict(self, *args):
+            return models.predictor.predict(*args)
+
+    torch.set_num_threads(1)
     rng = np.random.default_rng(0)
-    latents = torch.as_tensor(rng.normal(0, 1, (40, 24)), dtype=torch.float32)
-    conds = torch.as_tensor(rng.normal(0, 0.1, (40, 9)), dtype=torch.float32)
+    latents = torch.as_tensor(rng.normal(0, 1, (80, 24)), dtype=torch.float32)
+    conds = torch.as_tensor(rng.normal(0, 0.1, (80, 9)), dtype=torch.float32)
     for future in (1, 16):
         got = {}
-        for defer in (False, True):
+        for pieces in (False, True):
             sched, out = TemporalSchedule(4, 16), []
-            for i in range(40):
-                z, warn = sched.prediction(i, models.predictor, future, defer=defer)
+            pred = models.predictor if pieces else Whole()
+            for i in range(80):
+                z, warn = sched.prediction(i, pred, future, defer=pieces)
                 assert not warn
                 out.append(z)
                 sched.record(i, latents[i], conds[i])
-                if defer and i % 3:  # between frames, sometimes; the next frame runs it otherwise
+                if pieces and i % 3:  # between frames, sometimes
                     sched.run_pending()
-            got[defer] = out
+            got[pieces] = out
+        assert sum(z is not None for z in got[True]) == 79
         for a, b in zip(got[False], got[True]):
             assert (a is None and b is None) or torch.equal(a, b)
+
+
+def test_between_frames_leaves_one_piece_per_gap(models, motion):
+    """Six trackers: the block due every fourth frame is one decoder step between two
+    frames, the encoder of the next block another; a frame then runs no predictor."""
+    m = D.DragPoserMethod(models.vae, models.predictor)
+    m.reset(motion.skeleton, motion.fps)
+    tr = simulate(motion, "6")
+    calls = []
+    enc, nxt = models.predictor.encode_past, models.predictor.next_latent
+    try:
+        models.predictor.encode_past = lambda *a: (calls.append("enc"), enc(*a))[1]
+        models.predictor.next_latent = lambda *a: (calls.append("dec"), nxt(*a))[1]
+        per_frame = []
+        for i in range(16):
+            calls.clear()
+            m.step(tr.frame(i))
+            in_step = list(calls)
+            calls.clear()
+            m.between_frames()
+            per_frame.append((in_step, list(calls)))
+    finally:
+        del models.predictor.encode_past, models.predictor.next_latent
+    for i, (in_step, between) in enumerate(per_frame[5:], start=5):
+        assert in_step == [], (i, in_step)
+        assert len(between) <= 1, (i, between)
+    assert sum(len(b) for _, b in per_frame[4:16]) == 6  # three blocks: encoder + one step each
 
 
 # -- the live policy: a per-frame deadline ----------------------------------------------

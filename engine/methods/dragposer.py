@@ -156,7 +156,7 @@ class DragPoserMethod(Method):
         self._pos64: np.ndarray | None = None  # the same values in float64 (numpy users)
         self._before64: np.ndarray | None = None
         self._last: FrameResult | None = None
-        self._disps: list[np.ndarray] = []
+        self._disps: list[torch.Tensor] = []
         self._effective: dict[tuple, OptimizerSettings] = {}
         self._blends: dict[str, SensorBlend] = {}
 
@@ -349,22 +349,22 @@ class DragPoserMethod(Method):
         return RootFrame(torch.as_tensor(rot, dtype=torch.float32), torch.as_tensor(pos, dtype=torch.float32))
 
     def _advance(self, latent: torch.Tensor, prev: RootFrame, root_rot: np.ndarray, positions: np.ndarray) -> None:
-        """Keep the solved frame as the next frame's history (stored in float32, as the
-        solver's tensors are; the root increment in float64 numpy on those values)."""
+        """Keep the solved frame as the next frame's history, in float32 as the solver's
+        tensors are (the root increment stays in torch float32: the predictor's
+        conditioning, and so every later frame, depends on its exact rounding)."""
         rot32, pos32 = np.asarray(root_rot, dtype=np.float32), np.asarray(positions, dtype=np.float32)
-        pos64 = pos32.astype(np.float64)
-        _, disp = root_increment(prev.rotation.double().numpy(), prev.position.double().numpy(),
-                                 rot32.astype(np.float64), pos64[0])  # fmt: skip
+        rot_t, pos_t = torch.from_numpy(rot32), torch.from_numpy(pos32)
+        _, disp = root_increment(prev.rotation, prev.position, rot_t, pos_t[0])
         # predictor conditioning: displacement summed over the last n frames (each in its
         # previous heading frame), then the heights of HEIGHT_JOINTS (engine.models.predictor)
-        self._disps.append(disp.astype(np.float32))
+        self._disps.append(disp)
         del self._disps[: -self.settings.predictor_every]
-        cond = np.concatenate((np.sum(self._disps, axis=0, dtype=np.float32), pos32[_HEIGHT_IDX, 2]))
-        self.schedule.record(self._frame, latent, torch.from_numpy(cond))
+        cond = torch.cat((torch.stack(self._disps).sum(0), pos_t[_HEIGHT_IDX, 2]))
+        self.schedule.record(self._frame, latent, cond)
         self._latent = latent
-        self._root = RootFrame(torch.from_numpy(rot32), torch.from_numpy(pos32[0].copy()))
+        self._root = RootFrame(rot_t, pos_t[0].clone())
         self._before, self._before64 = self._positions, self._pos64
-        self._positions, self._pos64 = torch.from_numpy(pos32), pos64
+        self._positions, self._pos64 = pos_t, pos32.astype(np.float64)
         self._frame += 1
 
     def _effective_settings(self) -> OptimizerSettings:

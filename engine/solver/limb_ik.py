@@ -11,10 +11,14 @@ tracker. The limb keeps its plane and the end joint keeps its world rotation (th
 tracker's, when :func:`adopt_rotations` runs after). Beyond reach the limb points
 straight at the tracker.
 
-Both steps run once per solved frame on one pose, so they work on Python floats: only
-the joints a limb or a target needs are placed (:func:`engine.kinematics.fk.fk_joints`),
-and the pose's positions are computed once at the end (:func:`finish`), since at this
-size numpy's per-call overhead costs 10-20x the arithmetic.
+Both steps run once per solved frame on one pose, so the per-limb arithmetic is on
+Python floats (at this size numpy's per-call overhead costs 10-20x the arithmetic), and
+forward kinematics runs twice in all (:func:`finish`): once for what the limbs need
+(limbs do not hold each other's joints, so one placement serves them all) and once for
+the result. Both passes are :func:`engine.kinematics.fk.fk` itself, whose rounding
+(rotation matrices of the slightly non-unit float32 rotations the decoder gives) the
+solver's history depends on: a different FK formula changes positions by ~1e-7 m, and
+the next frames, through their smoothing and predictor inputs, by more.
 """
 
 from __future__ import annotations
@@ -24,7 +28,7 @@ import math
 import numpy as np
 
 from engine import skeleton as sk
-from engine.kinematics.fk import fk_joints
+from engine.kinematics.fk import fk, fk_joints
 
 #: End joint -> (limb root, middle joint).
 LIMBS = {sk.JOINT_INDEX[c]: (sk.JOINT_INDEX[a], sk.JOINT_INDEX[b])
@@ -33,7 +37,6 @@ LIMBS = {sk.JOINT_INDEX[c]: (sk.JOINT_INDEX[a], sk.JOINT_INDEX[b])
 #: Keep the limb this far (metres) from fully straight or folded: the bend axis and the
 #: solution are ill-defined there.
 _SLACK = 1e-3
-_ALL = tuple(range(sk.NUM_JOINTS))
 
 # -- scalar 3-vectors and quaternions (tuples; (w, x, y, z)) ----------------------------
 
@@ -111,9 +114,9 @@ def reach_local(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray
     local = np.array(local_rot, dtype=np.float64)
     root_pos = np.asarray(root_pos, dtype=np.float64)
     # limbs do not share joints, and none holds another's ancestors: one placement serves all
-    need = [j for c in targets for j in (sk.PARENTS[LIMBS[c][0]], *LIMBS[c], c)]
-    pos_all, rot_all = fk_joints(local, root_pos, offsets, need)
-    placed = {j: (tuple(p), tuple(r)) for j, p, r in zip(need, pos_all.tolist(), rot_all.tolist())}
+    pos_all, rot_all = fk(local, root_pos, offsets)
+    pos_l, rot_l = pos_all.tolist(), rot_all.tolist()
+    placed = {j: (tuple(pos_l[j]), tuple(rot_l[j])) for c in targets for j in (sk.PARENTS[LIMBS[c][0]], *LIMBS[c], c)}
     for c, target in targets.items():
         a, b = LIMBS[c]
         parent = sk.PARENTS[a]
@@ -158,7 +161,7 @@ def reach(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray,
         FK of the result, metres.
     """
     local = reach_local(local_rot, root_pos, offsets, targets)
-    return local, fk_joints(local, np.asarray(root_pos, dtype=np.float64), offsets, _ALL)[0]
+    return local, fk(local, np.asarray(root_pos, dtype=np.float64), offsets)[0]
 
 
 def adopt_local(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray,
@@ -221,5 +224,5 @@ def finish(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, rea
     if rotation_targets:
         local = adopt_local(local, root_pos, offsets, rotation_targets)
     local = np.array(local, dtype=np.float64)
-    positions, _ = fk_joints(local, np.asarray(root_pos, dtype=np.float64), offsets, _ALL)
+    positions, _ = fk(local, np.asarray(root_pos, dtype=np.float64), offsets)
     return local, positions

@@ -118,8 +118,8 @@ def test_reach_and_rotations_equal_the_previous_code_on_real_frames(models, moti
         if turn_to:
             want_local, want_pos = adopt_reference(want_local, root, offsets, turn_to)
         calls.append((len(reach_to), len(turn_to)))
-        np.testing.assert_allclose(got[0], want_local, atol=1e-6, rtol=0)
-        np.testing.assert_allclose(got[1], want_pos, atol=1e-6, rtol=0)
+        np.testing.assert_allclose(got[0], want_local, atol=1e-9, rtol=0)
+        np.testing.assert_allclose(got[1], want_pos, atol=1e-9, rtol=0)
         return got
 
     monkeypatch.setattr(D, "finish", spy)

@@ -76,21 +76,25 @@ def main() -> int:
     ap.add_argument("--out-dir", type=Path, default=REPO / "runs" / "trackers")
     ap.add_argument("--json", type=Path)
     ap.add_argument("--only", choices=("clean", "lossy", "calibration"), action="append")
+    ap.add_argument("--frame-budget", type=float, metavar="MS", help="passed to live (default: live's own)")
     a = ap.parse_args()
     a.out_dir.mkdir(parents=True, exist_ok=True)
     only = set(a.only or ("clean", "lossy", "calibration"))
     ref = ["--reference", str(a.clip), "--method", a.method]
+    budget = [] if a.frame_budget is None else ["--frame-budget", str(a.frame_budget)]
     rows, report = [], {}
     for name, send_args in (("clean", []), ("lossy", ["--drop", "0.05", "--noise-pos", "0.02"])):
         if name not in only:
             continue
-        r = _live_and_send(a.out_dir, name, a.port, ref, send_args, a.clip)
+        r = _live_and_send(a.out_dir, name, a.port, ref + budget, send_args, a.clip)
         r["offline"] = _offline(a.out_dir, name, r["recording"], ref)
         live, off = r.get("live", {}), r["offline"]
         le, oe = live.get("reference", {}).get("pos_cm"), off["reference"]["pos_cm"]
+        it = live.get("iterations") or {}
+        its = f"{it['mean']:.1f} ({it['min']}, {live.get('frame_budget_ms') or 0:.1f} ms)" if it.get("mean") else "-"
         rows.append(f"| {name} | {live.get('frames_received')} | {100 * (live.get('solved_fraction') or 0):.1f} % | "
-                    f"{live['latency_ms']['p50']:.1f} / {live['latency_ms']['p95']:.1f} ms | {le:.2f} cm | {oe:.2f} cm | "
-                    f"{le - oe:+.2f} cm | exit {r['live_exit']}, stalled {r['stalled']} |")  # fmt: skip
+                    f"{live['latency_ms']['p50']:.1f} / {live['latency_ms']['p95']:.1f} ms | {its} | {le:.2f} cm | "
+                    f"{oe:.2f} cm | {le - oe:+.2f} cm | exit {r['live_exit']}, stalled {r['stalled']} |")  # fmt: skip
         report[name] = r
     cal_rows = []
     if "calibration" in only:
@@ -104,8 +108,9 @@ def main() -> int:
                             f"{r['live']['calibration']['pose']} |")  # fmt: skip
             report[name] = r
     if rows:
-        print("| run | frames | solved | latency p50 / p95 | live error | offline error | live - offline | end |")
-        print("|---|---|---|---|---|---|---|---|")
+        print("| run | frames | solved | latency p50 / p95 | iterations mean (min, budget) | live error | offline error "
+              "| live - offline | end |")  # fmt: skip
+        print("|---|---|---|---|---|---|---|---|---|")
         print("\n".join(rows))
     if cal_rows:
         print("\n| subject | true height | calibrated | error | pose |\n|---|---|---|---|---|")

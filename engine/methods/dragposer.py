@@ -36,7 +36,7 @@ from engine.solver import (
     RootOverride, TemporalSchedule,
 )  # fmt: skip
 from engine.solver.limb_ik import LIMBS, finish
-from engine.solver.pose import clamp_heading
+from engine.solver.pose import BODY_HEADING_LIMIT_DEG, body_facing, clamp_heading
 from engine.solver.profiles import effective
 
 _HEIGHT_IDX = [sk.JOINT_INDEX[j] for j in sk.HEIGHT_JOINTS]
@@ -159,6 +159,7 @@ class DragPoserMethod(Method):
         self._disps: list[torch.Tensor] = []
         self._effective: dict[tuple, OptimizerSettings] = {}
         self._blends: dict[str, SensorBlend] = {}
+        self._facing: np.ndarray | None = None  # this frame's body heading (4,), from its trackers
 
     def step(self, sensors: SensorFrame, deadline: float | None = None) -> FrameResult:
         """Solve the next frame. ``deadline`` (a ``time.perf_counter()`` time; live input)
@@ -176,6 +177,7 @@ class DragPoserMethod(Method):
     def _step(self, sensors: SensorFrame, deadline: float | None = None) -> FrameResult:
         t0 = time.perf_counter()
         warnings = self._update_sensors(sensors)
+        self._facing = body_facing({j: c.position for j, c in self.sensors.items() if c.enabled})
         # the connected sensor set's profile fills the settings the caller left alone
         s = self._effective_settings()
         base = self.settings.sensor_rotation_weight
@@ -304,9 +306,14 @@ class DragPoserMethod(Method):
 
     def _reference_root(self, s: OptimizerSettings, override: RootOverride | None) -> RootFrame:
         """The root the decoded root pose is relative to: the previous solved root, whose
-        heading (setting ``heading = anchor``, no hip tracker) is kept within
-        :data:`engine.solver.pose.HEADING_LIMIT_DEG` of the anchor tracker's heading."""
+        heading (setting ``heading = anchor``) is kept within
+        :data:`engine.solver.pose.HEADING_LIMIT_DEG` of the anchor tracker's heading when
+        there is no hip tracker, and within :data:`~engine.solver.pose.BODY_HEADING_LIMIT_DEG`
+        of the body heading of the feet and hands when the hip tracker gives no rotation."""
         assert self._root is not None
+        if override is not None and override.rotation is None and s.heading == "anchor" and self._facing is not None:
+            rot = clamp_heading(self._root.rotation.double().numpy(), self._facing, BODY_HEADING_LIMIT_DEG)
+            return RootFrame(torch.as_tensor(rot, dtype=torch.float32), self._root.position)
         if override is not None or s.heading != "anchor" or s.root_anchor == "none":
             return self._root
         c = self.sensors.get(s.root_anchor)
@@ -336,6 +343,8 @@ class DragPoserMethod(Method):
             pos = live["root"].position.copy()
             if live["root"].dof == 6:
                 rot = Q.heading(live["root"].rotation)
+            elif self._facing is not None:  # positions only: face the way the feet and hands say
+                rot = self._facing.copy()
         elif "upperneck" in live:
             head = live["upperneck"]
             if head.dof == 6:

@@ -133,3 +133,30 @@ def clamp_heading(previous: np.ndarray, anchor_rotation: np.ndarray, limit_deg: 
     turn = math.copysign(limit, diff) - diff  # about +Z, onto the limit
     qz = np.array([math.cos(turn / 2), 0.0, 0.0, math.sin(turn / 2)])
     return QN.mul(qz, previous)
+
+
+#: Left/right tracker pairs that say which way the body faces, with their weights: the
+#: feet count more (they stay beside each other more than the hands do).
+LATERAL_PAIRS = (("lankle", "rankle", 1.0), ("lwrist", "rwrist", 0.5))
+#: ``heading = anchor`` with a hip tracker that gives no rotation: the reference heading
+#: stays within this many degrees of the body heading read off the tracker pairs. That
+#: heading is a rough one (the line between the feet swings with each stride; 8-45 deg
+#: mean error on the validation clips), so it only bounds the drift of the integrated
+#: heading; the solver places the pelvis within the bound.
+BODY_HEADING_LIMIT_DEG = 45.0
+
+
+def body_facing(points: dict[str, np.ndarray]) -> np.ndarray | None:
+    """Heading rotation ``(4,)`` (about +Z) of a body whose tracked joints are at
+    ``points`` (joint name -> world position ``(3,)``, metres): the canonical body (left
+    = +X, forward = -Y) turned so its left-right axis lies along the weighted sum of the
+    horizontal left-minus-right vectors of :data:`LATERAL_PAIRS`. None without a pair."""
+    lateral, found = np.zeros(2), False
+    for left, right, w in LATERAL_PAIRS:
+        if left in points and right in points:
+            lateral += w * (np.asarray(points[left])[:2] - np.asarray(points[right])[:2])
+            found = True
+    if not found or math.hypot(*lateral) < 1e-6:
+        return None
+    yaw = math.atan2(lateral[1], lateral[0])
+    return np.array([math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)])

@@ -111,7 +111,10 @@ class OptimizerSettings:
         Without a hip tracker, the frame the decoded root rotation is relative to:
         ``previous`` (the previous solved root's heading, integrated from frame to
         frame) or ``anchor`` (the heading of the ``root_anchor`` joint's 6-DoF tracker
-        when there is one, so nothing accumulates; see docs/optimizer.md).
+        when there is one, so nothing accumulates; see docs/optimizer.md). With a hip
+        tracker that gives no rotation (3-DoF), ``anchor`` also keeps the reference within
+        45 degrees of the heading of the feet and hands trackers' left-right line, and the
+        first frame faces that way.
     threads : int
         Torch intra-op threads while solving (0 = leave torch's setting). The tensors
         are tiny, so one thread is fastest; on a busy 2-core machine, torch's default

@@ -20,7 +20,7 @@ from engine.retarget import load_motion
 from engine.constraints import GroundConstraint, SensorConstraint, SmoothConstraint
 from engine.solver import FrameContext, OptimizerSettings, PoseOptimizer, RootAnchor, RootFrame
 from engine.solver.limb_ik import adopt_rotations
-from engine.solver.pose import HEADING_LIMIT_DEG, clamp_heading
+from engine.solver.pose import HEADING_LIMIT_DEG, body_facing, clamp_heading
 from engine.solver.profiles import PROFILES, effective, profile_for
 from engine.tracking import simulate
 
@@ -176,3 +176,41 @@ def test_reach_puts_the_end_joint_on_a_reachable_target_and_keeps_its_rotation()
     _, far_pos = reach(local, root, skel.offsets, far)
     d = far_pos[wrist] - far_pos[sk.JOINT_INDEX["lshoulder"]]
     assert d[0] / np.linalg.norm(d) > 0.999
+
+
+def _about_z(deg: float) -> np.ndarray:
+    return np.array([math.cos(math.radians(deg) / 2), 0.0, 0.0, math.sin(math.radians(deg) / 2)])
+
+
+@pytest.mark.parametrize("yaw", [-100.0, 0.0, 35.0, 170.0])
+def test_body_facing_reads_the_heading_off_feet_and_hands(yaw):
+    rest = sk.Skeleton.canonical().rest_positions()
+    turned = QN.rotate(np.broadcast_to(_about_z(yaw), (22, 4)), rest)
+    points = {n: turned[sk.JOINT_INDEX[n]] for n in ("lankle", "rankle", "lwrist", "rwrist", "root")}
+    assert _yaw(body_facing(points)) == pytest.approx(yaw, abs=2.0)  # the rest pose's feet are ~1 deg off X
+    assert _yaw(body_facing({k: points[k] for k in ("lwrist", "rwrist")})) == pytest.approx(yaw, abs=2.0)
+    assert body_facing({k: points[k] for k in ("lankle", "root", "rwrist")}) is None  # no left-right pair
+
+
+@pytest.mark.parametrize("turn", [90.0, 180.0])
+def test_hip_without_rotation_turns_with_the_wearer(models, turn):
+    """6x3dof: the same motion turned about +Z is reconstructed turned the same way.
+    Before the body-heading rule the first frame faced -Y whatever the trackers said, so
+    the turned clip came out 60-90 deg off on validation clips."""
+    q = _about_z(turn)
+
+    def solve(m):
+        tracking = simulate(m, "6x3dof")
+        method = DragPoserMethod(models.vae, models.predictor, iterations=10)
+        method.reset(m.skeleton, m.fps)
+        return [method.step(tracking.frame(i)) for i in range(len(m))]
+
+    plain = load_motion(CLIP, max_frames=4)
+    turned = load_motion(CLIP, max_frames=4)
+    turned.local_rot[:, 0] = QN.mul(np.broadcast_to(q, (len(turned), 4)), turned.local_rot[:, 0])
+    turned.root_pos = QN.rotate(np.broadcast_to(q, (len(turned), 4)), turned.root_pos)
+    for i, (a, b) in enumerate(zip(solve(plain), solve(turned))):
+        err = math.remainder(math.radians(_yaw(b.local_rot[0]) - _yaw(a.local_rot[0]) - turn), 2 * math.pi)
+        assert abs(math.degrees(err)) < 2.0, f"frame {i}"
+        moved = QN.rotate(np.broadcast_to(q, (22, 4)), a.positions)
+        assert np.abs(b.positions - moved).max() < 0.01, f"frame {i}"

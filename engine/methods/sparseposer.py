@@ -3,8 +3,9 @@
 Per frame the trackers become root-space dual quaternions (the root slot holds the hip
 tracker's rotation in the previous frame's heading and its displacement), appended to a
 window of the last ``T`` frames (64; at the start of a clip the first frame is
-repeated). The generator decodes the window's last frame (only its tail is decoded,
-which gives the same last frame as a full decode), the learned IK moves each limb
+repeated). The generator decodes the window's last frame; a step feeds it only the
+frames that frame reads and decodes only the tail (the same last frame as a full
+decode of the whole window, see :mod:`engine.models.sparseposer_infer`), the learned IK moves each limb
 towards its tracker, and the root takes the hip tracker's position and rotation, as
 in the paper.
 
@@ -20,7 +21,6 @@ paper's method has no notion of tracking loss.
 from __future__ import annotations
 
 import time
-from collections import deque
 from typing import Any
 
 import numpy as np
@@ -33,6 +33,7 @@ from engine.kinematics.fk import fk
 from engine.methods.base import FrameResult, Method, check_preset
 from engine.sensors import Sensor, SensorFrame
 from engine.models.sparseposer import SPARSE_INDEX, SPARSE_JOINTS
+from engine.models.sparseposer_infer import DenseGenerator, StackedLimbIK, context_frames
 from engine.motion import Motion
 
 #: Decoder frames evaluated per step (the last output frame equals the full decode's).
@@ -48,26 +49,38 @@ class SparsePoserMethod(Method):
         Default: the shipped ``assets/models/sparseposer.pt``.
     sparseposer_path : path, optional
         Load the weights from this file instead.
+    threads : int
+        Torch intra-op threads during a step (0 = leave torch's setting). One is fastest:
+        a step is many small products, which a second thread slows down.
     **_unused
         Optimizer keywords meant for other methods (``mode``, ``iterations``...), ignored.
     """
 
     name = "sparseposer"
 
-    def __init__(self, model: Any = None, sparseposer_path: Any = None, **_unused: Any) -> None:
+    def __init__(self, model: Any = None, sparseposer_path: Any = None, threads: int = 1, **_unused: Any) -> None:
         if model is None:
             from engine.models.loading import load_sparseposer
 
             model, _ = load_sparseposer(sparseposer_path)
         self.model = model.eval().requires_grad_(False)
         self.window = model.config.window
+        self.context = context_frames(self.model)
+        self.generator = DenseGenerator(self.model)
+        self.limb_ik = StackedLimbIK(self.model)
+        self.threads = int(threads)
         self.reset(sk.Skeleton.canonical())
 
     def reset(self, skeleton: sk.Skeleton, fps: float = sk.FPS, *, reference: Motion | None = None) -> None:
         self.skeleton = skeleton
         self.offsets = np.asarray(skeleton.offsets, dtype=np.float64)
         self._off_t = torch.as_tensor(self.offsets, dtype=torch.float32)[None]
-        self._frames: deque[np.ndarray] = deque(maxlen=self.window)
+        with torch.inference_mode():
+            self._static = self.model.generator.static_features(self._off_t)
+        # the last ``context`` normalised sparse frames, written twice so that they are
+        # always one contiguous slice: frames[:, pos : pos + context]
+        self._frames = torch.zeros(1, 2 * self.context, sk.NUM_JOINTS, 8)
+        self._pos = -1  # no frame yet
         self._last: dict[str, Sensor] = {}
         self._prev_root: tuple[np.ndarray, np.ndarray] | None = None
 
@@ -81,31 +94,49 @@ class SparsePoserMethod(Method):
     def features(self, frame: SensorFrame) -> np.ndarray:
         """Raw root-space dual quaternions ``(22, 8)`` of this frame (zeros off the trackers)."""
         check_preset(frame.readings, SPARSE_JOINTS, self.name, "6")
-        rd = {j: self._reading(frame, j) for j in SPARSE_JOINTS}
-        r_rot = Q.normalize(np.asarray(rd["root"].rotation, dtype=np.float64))
-        r_pos = np.asarray(rd["root"].position, dtype=np.float64)
+        rd = [self._reading(frame, j) for j in SPARSE_JOINTS]
+        rot = Q.normalize(np.array([r.rotation for r in rd], dtype=np.float64))  # (6, 4)
+        pos = np.array([r.position for r in rd], dtype=np.float64)  # (6, 3)
+        r_rot, r_pos = rot[0], pos[0]
         prev_rot, prev_pos = self._prev_root or (r_rot, r_pos)
         self._prev_root = (r_rot, r_pos)
-        h_inv = Q.conjugate(Q.heading(prev_rot))
-        rots = np.zeros((len(SPARSE_JOINTS), 4))
-        poss = np.zeros((len(SPARSE_JOINTS), 3))
-        rots[0], poss[0] = Q.mul(h_inv, r_rot), Q.rotate(h_inv, r_pos - prev_pos)
-        inv = Q.conjugate(r_rot)
-        for k, j in enumerate(SPARSE_JOINTS[1:], start=1):
-            rots[k] = Q.mul(inv, Q.normalize(np.asarray(rd[j].rotation, dtype=np.float64)))
-            poss[k] = Q.rotate(inv, np.asarray(rd[j].position, dtype=np.float64) - r_pos)
+        # slot 0: the hip tracker in the previous frame's heading; others: in the hip's frame
+        inv = np.stack((Q.conjugate(Q.heading(prev_rot)), Q.conjugate(r_rot)))[[0] + [1] * (len(rd) - 1)]
+        rots = Q.mul(inv, np.concatenate((r_rot[None], rot[1:])))
+        poss = Q.rotate(inv, pos - np.concatenate((prev_pos[None], np.broadcast_to(r_pos, (len(rd) - 1, 3)))))
         out = np.zeros((sk.NUM_JOINTS, 8))
         out[list(SPARSE_INDEX)] = dq_np.from_rotation_translation(Q.canonicalize(rots), poss)
         return out
 
+    def _push(self, dq: np.ndarray) -> torch.Tensor:
+        """Append one frame's raw dq ``(22, 8)``; return the window ``(1, context, 22, 8)``
+        (normalised, zeros off the trackers; the first frame fills it at a clip's start)."""
+        x = self.model.sparse_input(torch.as_tensor(dq, dtype=torch.float32))
+        c = self.context
+        if self._pos < 0:
+            self._frames[0] = x
+            self._pos = 0
+        else:
+            self._frames[0, self._pos] = x
+            self._frames[0, self._pos + c] = x
+            self._pos = (self._pos + 1) % c
+        return self._frames[:, self._pos : self._pos + c]
+
     def step(self, sensors: SensorFrame) -> FrameResult:
         t0 = time.perf_counter()
-        self._frames.append(self.features(sensors))
-        frames = list(self._frames)
-        frames = [frames[0]] * (self.window - len(frames)) + frames
-        window = torch.as_tensor(np.stack(frames), dtype=torch.float32)[None]
-        with torch.no_grad():
-            local_ik, _ = self.model(window, self._off_t, tail=TAIL)
+        threads = torch.get_num_threads()
+        if self.threads:
+            torch.set_num_threads(self.threads)
+        try:
+            dq = self.features(sensors)
+            with torch.inference_mode():
+                window = self._push(dq)
+                out = self.generator(window[0], self._static, TAIL)[None]
+                local_gen = self.model.local_from_output(out)
+                target = torch.as_tensor(dq, dtype=torch.float32)[None]
+                local_ik = self.limb_ik(out, local_gen, self._off_t, target)
+        finally:
+            torch.set_num_threads(threads)
         local = Q.canonicalize(local_ik[0].double().numpy())
         root_rot, root_pos = self._prev_root  # this frame's hip tracker
         local[0] = root_rot

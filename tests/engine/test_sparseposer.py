@@ -99,3 +99,54 @@ def test_method_follows_the_hip_tracker_and_rejects_other_presets(synthetic_moti
     method.reset(synthetic_motion.skeleton)
     with pytest.raises(UserError, match="preset '6'"):
         method.step(simulate(synthetic_motion.slice(0, 5), "3-head-hands").frame(0))
+
+
+def _reference_poses(model: SparsePoser, motion, frames: int) -> np.ndarray:
+    """The method's pipeline written out plainly: the whole window (first frame
+    repeated at the start), full decode, the four limb networks one by one."""
+    feats = SparsePoserMethod(model=model)
+    feats.reset(motion.skeleton, motion.fps)
+    tracking = simulate(motion.slice(0, frames), "6")
+    off = torch.as_tensor(np.asarray(motion.skeleton.offsets), dtype=torch.float32)[None]
+    window, out = [], []
+    for i in range(frames):
+        window.append(feats.features(tracking.frame(i)))
+        win = window[-model.config.window :]
+        win = [win[0]] * (model.config.window - len(win)) + win
+        with torch.no_grad():
+            local_ik, _ = model(torch.as_tensor(np.stack(win), dtype=torch.float32)[None], off)
+        out.append(local_ik[0].numpy())
+    return np.stack(out)
+
+
+def test_realtime_step_matches_the_plain_full_window_pipeline_with_the_shipped_weights():
+    from engine.retarget import load_motion
+    from tests.engine.test_hardening_cli import EX
+
+    model, _ = load_sparseposer()  # trained limb networks: the stacked IK really changes poses
+    motion = load_motion(EX).slice(100, 190)
+    ref = _reference_poses(model, motion, 90)
+    method = SparsePoserMethod(model=model)
+    assert method.context < model.config.window  # the step reads a shorter window
+    method.reset(motion.skeleton, motion.fps)
+    tracking = simulate(motion.slice(0, 90), "6")
+    got = np.stack([method.step(tracking.frame(i)).local_rot for i in range(90)])
+    np.testing.assert_allclose(got[:, 1:], ref[:, 1:], atol=1e-5)
+
+
+def test_context_covers_the_receptive_field_of_the_last_frame():
+    from engine.models.sparseposer_infer import context_frames, receptive_field
+
+    m = SparsePoser(SparsePoserConfig(window=64)).eval()
+    rf = receptive_field(m)
+    assert 8 < rf < 64 and context_frames(m) == 32
+    dq = torch.randn(2, 64, 22, 8)
+    off = 0.1 * torch.randn(2, 22, 3)
+    with torch.no_grad():
+        full = m.generate(dq, off)[:, -1]
+        short = m.generate(dq[:, -context_frames(m) :], off, tail=8)[:, -1]
+        dq[:, : 64 - rf] += 5.0  # frames before the receptive field do not matter
+        moved = m.generate(dq, off)[:, -1]
+    torch.testing.assert_close(short, full, atol=1e-6, rtol=0)
+    torch.testing.assert_close(moved, full, atol=1e-6, rtol=0)
+    assert context_frames(_tiny_model(16)) == 16  # never more than the trained window

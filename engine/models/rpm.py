@@ -55,9 +55,12 @@ class RPMConfig(ModelConfig):
 
 
 def uncertainty(window: int) -> torch.Tensor:
-    """PCAF's ``U``: a cosine from 1 (the current pose) down towards 0 (the farthest)."""
+    """PCAF's ``U`` (RPM supp. Eq. B): ``u(tau) = 1 - cos((tau + 1) / W * pi / 2)`` at
+    distance ``tau`` frames from the present: small for the pose about to be output
+    (0.003 for W = 20), 1 for the farthest, so a pose takes its big changes while it is
+    far in the future and only small corrections near the present."""
     k = torch.arange(window, dtype=torch.float32)
-    return torch.cos(0.5 * math.pi * k / window)
+    return 1.0 - torch.cos(0.5 * math.pi * (k + 1.0) / window)
 
 
 class _Block(nn.Module):
@@ -82,10 +85,15 @@ class RPM(nn.Module):
         self.register_buffer("pose_std", torch.ones(POSE_DIM))
         self.register_buffer("track_mean", torch.zeros(TRACK_DIM))
         self.register_buffer("track_std", torch.ones(TRACK_DIM))
-        self.register_buffer("u", uncertainty(cfg.window))
+        # structure, rebuilt from the config (files from before the fix stored an inverted U)
+        self.register_buffer("u", uncertainty(cfg.window), persistent=False)
         if stats is not None:
             for k, v in stats.items():
                 getattr(self, k).copy_(torch.as_tensor(np.asarray(v), dtype=torch.float32))
+
+    def _load_from_state_dict(self, state_dict, prefix, *args, **kwargs):
+        state_dict.pop(prefix + "u", None)
+        super()._load_from_state_dict(state_dict, prefix, *args, **kwargs)
 
     def norm_pose(self, pose6: torch.Tensor) -> torch.Tensor:
         """``(..., 22, 3, 2)`` canonical poses -> ``(..., 132)`` normalised."""

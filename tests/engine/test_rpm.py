@@ -33,7 +33,19 @@ def test_pcaf_bounds_the_correction_by_the_uncertainty():
     assert torch.equal(m.pcaf(prev, prev), prev)
     step = m.pcaf(prev, prev + 100.0) - prev
     assert torch.allclose(step, m.u[None, :, None].expand_as(step), atol=1e-5)
-    assert m.u[0] == 1.0 and bool((m.u[1:] < m.u[:-1]).all())
+    # the paper's cosine (supp. Eq. B): small near the present, 1 at the far end
+    assert m.u[-1] == pytest.approx(1.0) and bool((m.u[1:] > m.u[:-1]).all())
+    assert 0.0 < float(m.u[0]) < 0.2
+
+
+def test_weights_files_with_the_stored_inverted_uncertainty_load_the_papers():
+    m = _tiny_model()
+    sd = m.state_dict()
+    assert "u" not in sd  # structure, rebuilt from the config
+    sd["u"] = torch.flip(m.u, [0])  # what files from before the fix hold
+    other = _tiny_model()
+    other.load_state_dict(sd)
+    assert torch.equal(other.u, m.u)
 
 
 def test_yaw_matrix_agrees_with_heading_and_frames_round_trip():

@@ -62,9 +62,16 @@ hand-tracking losses "HT"; jerk in 10^2 m/s^3 over the second after a transition
   body placed by the method: hips tracker for preset 6, head for 3-head-hands), not
   after root alignment; PJ/AUJ average all transitions, T-S and S-T split them.
 - **SparsePoser** runs its realtime variant only (the method interface is causal; see
-  `engine/methods/sparseposer.py`); L_DQ covers the last 16 frames of each window.
-- **RPM** uses an MLP for `f` (the paper's architecture is in its supplementary
-  material, not available here) and 0.5 s of free running during training (paper: 1 s).
+  `engine/methods/sparseposer.py`), with a smaller generator (kernel 3, 16/32/48
+  channels per node), whose last output frame reads only the last 23 frames of its
+  window; L_DQ covers only the last frames of each window (`assets/models/README.md`).
+  The paper's learned IK, like ours, leaves the spine alone: the head tracker is met
+  only as well as the generator meets it.
+- **RPM** uses an MLP for `f` instead of the paper's cross-attention and four
+  Transformer layers (supplementary sec. B), 0.5 s of free running during training
+  (paper: 1 s) and the paper's smooth setting W = 20 with its cosine uncertainty.
+- **DragPoser's blend** (`dragposer+blend`) is this project's addition (borrowed from
+  RPM's idea), not part of the DragPoser paper.
 """
 
 
@@ -90,11 +97,13 @@ def _targets(res: dict, blend: float) -> list[str]:
     dp, sp = res.get(("6", False, "dragposer")), res.get(("6", False, "sparseposer"))
     if dp and sp:
         r = _ratio(sp["total"]["pos_cm"], dp["total"]["pos_cm"])
-        ok = r is not None and r <= 1.25 and sp["total"]["ms_per_frame"] <= 5.0
-        out.append(f"- SparsePoser, preset 6: Pos {sp['total']['pos_cm']:.2f} cm against DragPoser's "
-                   f"{dp['total']['pos_cm']:.2f} cm ({fmt(r, '.2f')}x; target <= 1.25x), "
-                   f"{sp['total']['ms_per_frame']:.1f} ms per frame here (target <= 5 ms on the idle machine): "
-                   f"**{'met' if ok else 'not met'}**.")  # fmt: skip
+        out.append(f"- SparsePoser, preset 6, accuracy: Pos {sp['total']['pos_cm']:.2f} cm against DragPoser's "
+                   f"{dp['total']['pos_cm']:.2f} cm on the same frames ({fmt(r, '.2f')}x; target <= 1.25x): "
+                   f"**{'met' if r is not None and r <= 1.25 else 'not met'}**.")  # fmt: skip
+        out.append("- SparsePoser, speed (target <= 5 ms per frame): the ms/frame above come from the machine "
+                   "that ran this command, busy with other jobs; the target is judged on the idle machine with "
+                   "`dragposer-studio bench --method dragposer --method sparseposer --sensors 6 --frames 300` "
+                   "(figure and verdict in `assets/models/README.md`, SparsePoser, Speed).")  # fmt: skip
     dp, rpm = res.get(("3-head-hands", True, "dragposer")), res.get(("3-head-hands", True, "rpm"))
     if dp and rpm:
         pj, auj = (rpm["total"].get(k) for k in ("pj", "auj"))
@@ -107,8 +116,24 @@ def _targets(res: dict, blend: float) -> list[str]:
         r = _ratio(bl["total"].get("auj"), dp["total"].get("auj"))
         out.append(f"- DragPoser's AUJ with a {blend:g} s blend: {fmt(bl['total'].get('auj'), '.0f')} against "
                    f"{fmt(dp['total'].get('auj'), '.0f')} without ({fmt(r, '.2f')}x; target <= 0.5x): "
-                   f"**{'met' if r is not None and r <= 0.5 else 'not met'}**.")  # fmt: skip
+                   f"**{'met' if r is not None and r <= 0.5 else 'not met'}**; PJ "
+                   f"{fmt(bl['total'].get('pj'), '.1f')} against {fmt(dp['total'].get('pj'), '.1f')}.")  # fmt: skip
+        out.append(_auj_floor(dp, bl, rpm))
     return out
+
+
+def _auj_floor(dp: dict, bl: dict, rpm: dict | None) -> str:
+    """Why AUJ cannot halve: a 1-s window of smooth motion already sums fps x jitter."""
+    fps = 60.0
+    gt = dp["total"].get("gt_jitter")
+    rows = [("DragPoser", dp), ("DragPoser + blend", bl)] + ([("RPM", rpm)] if rpm else [])
+    parts = [f"{n} {fmt(d['total'].get('auj'), '.0f')} - {fmt(fps * d['total'].get('jitter', math.nan), '.0f')} = "
+             f"{fmt(d['total'].get('auj', math.nan) - fps * d['total'].get('jitter', math.nan), '.0f')}"
+             for n, d in rows]  # fmt: skip
+    return ("  AUJ sums the jerk of the whole second after a change, so it includes the motion's own jerk: "
+            f"the ground truth of these clips alone gives 60 x {fmt(gt, '.2f')} = {fmt(fps * (gt or math.nan), '.0f')} "
+            "per window, more than half of DragPoser's AUJ, and no blend can remove it. What a blend can remove is "
+            "the excess over the method's mean jerk level (AUJ - 60 x Jitter): " + "; ".join(parts) + ".")
 
 
 def render(res: dict[tuple[str, bool, str], dict[str, Any]], args: argparse.Namespace) -> str:

@@ -32,3 +32,18 @@ def test_compare_writes_the_document_and_reuses_its_cache(tmp_path, synthetic_mo
     assert "| ik | 123.00 |" in out.read_text(), "the table comes from the cache"
     assert main([*args[:-2], "--passes", "7"]) == 2
     assert "numbered 1-4" in capsys.readouterr().err
+
+
+def test_targets_say_what_is_met_and_why_auj_has_a_floor():
+    def row(**t):
+        return {"total": {"ms_per_frame": 9.0, "gt_jitter": 13.0, **t}}
+
+    res = {("6", False, "dragposer"): row(pos_cm=1.6), ("6", False, "sparseposer"): row(pos_cm=2.4),
+           ("3-head-hands", True, "dragposer"): row(pj=90.0, auj=1000.0, jitter=15.0),
+           ("3-head-hands", True, "dragposer+blend"): row(pj=50.0, auj=900.0, jitter=14.0),
+           ("3-head-hands", True, "rpm"): row(pj=40.0, auj=700.0, jitter=11.0)}  # fmt: skip
+    text = "\n".join(comparison_doc._targets(res, 0.5))
+    assert "2.40 cm against DragPoser's 1.60 cm on the same frames (1.50x; target <= 1.25x): **not met**" in text
+    assert "PJ 40.0 / AUJ 700 against DragPoser's 90.0 / 1000 without smoothing: **met**" in text
+    assert "900 against 1000 without (0.90x; target <= 0.5x): **not met**" in text
+    assert "60 x 13.00 = 780" in text and "DragPoser 1000 - 900 = 100" in text and "RPM 700 - 660 = 40" in text

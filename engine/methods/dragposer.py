@@ -163,9 +163,9 @@ class DragPoserMethod(Method):
 
     def step(self, sensors: SensorFrame, deadline: float | None = None) -> FrameResult:
         """Solve the next frame. ``deadline`` (a ``time.perf_counter()`` time; live input)
-        stops a realtime solve's iterations early enough to end by then (at least one
-        step; engine/solver/optimizer.py); the result's ``iterations`` says how many ran.
-        The first frame, solved offline, ignores it."""
+        stops the solve's iterations early enough to end by then (at least one step;
+        engine/solver/optimizer.py), the first frame's (solved offline, to convergence
+        otherwise) too; the result's ``iterations`` says how many ran."""
         threads = torch.get_num_threads()
         if self.settings.threads:
             torch.set_num_threads(self.settings.threads)

@@ -12,11 +12,13 @@ any user constraint). Two modes:
   sensors' position and rotation tolerances), the loss stops improving, or
   ``max_iterations`` is reached.
 
-A realtime frame may also carry a **deadline** (:attr:`FrameContext.deadline`, a
-``time.perf_counter`` time, set by a live loop): after each step the solver stops when
-one more step, at this frame's mean step time, would end past it; at least one step is
-always taken. Adam's moments carry over as usual, so the next frame continues from
-where this one stopped; :attr:`Solution.iterations` says how many steps were taken.
+A frame may also carry a **deadline** (:attr:`FrameContext.deadline`, a
+``time.perf_counter`` time, set by a live loop; in either mode): after each step the
+solver stops when one more step, at this frame's mean step time (gradient, update and evaluation), would
+end past it; at
+least one step is always taken. Adam's moments carry over as usual, so the next frame
+continues from where this one stopped; :attr:`Solution.iterations` says how many steps
+were taken. ``evaluate`` and ``reconstruct`` set no deadline.
 
 Robustness: a constraint whose loss is NaN/inf at the starting latent is left out of
 this frame's solve (with a warning); a loss or latent that becomes non-finite, or a
@@ -92,8 +94,8 @@ class FrameContext:
     frame : int
         Frame index.
     deadline : float or None
-        ``time.perf_counter()`` time by which a realtime solve should end (module doc);
-        None: no limit. Offline solves ignore it.
+        ``time.perf_counter()`` time by which the solve should end (module doc); None:
+        no limit.
     """
 
     previous_root: RootFrame
@@ -270,7 +272,7 @@ class PoseOptimizer:
         losses: list[dict[str, float]] = []
         cap, offline = s.steps_cap(), s.mode == "offline"
         best, since_best, steps, warnings = math.inf, 0, 0, []
-        deadline, cut, t_loop = None if offline else ctx.deadline, False, clock()
+        deadline, cut, t_loop = ctx.deadline, False, clock()
         while True:
             t0 = clock()
             out = fp.decoder.forward(z)
@@ -287,7 +289,9 @@ class PoseOptimizer:
                 return self._fall_back(z0, ctx, losses, steps, warnings, "loss became non-finite", timings)
             if steps >= cap:
                 break
-            if deadline is not None and steps and _past(deadline, t_loop, steps):
+            if steps == 0:
+                t_loop = clock()  # steps are timed from the first evaluation on
+            elif deadline is not None and _past(deadline, t_loop, steps):
                 cut = True
                 break
             if offline:
@@ -348,7 +352,7 @@ class PoseOptimizer:
         losses: list[dict[str, float]] = []
         cap, offline = s.steps_cap(), s.mode == "offline"
         best, since_best, steps = math.inf, 0, 0
-        deadline, cut, t_loop = None if offline else ctx.deadline, False, clock()
+        deadline, cut, t_loop = ctx.deadline, False, clock()
         while True:
             t0 = clock()
             rot, disp = self.decoder.decode(z[None])
@@ -364,7 +368,9 @@ class PoseOptimizer:
                 return self._fall_back(z0, ctx, losses, steps, warnings, "loss became non-finite", timings)
             if steps >= cap:
                 break
-            if deadline is not None and steps and _past(deadline, t_loop, steps):
+            if steps == 0:
+                t_loop = clock()  # steps are timed from the first evaluation on
+            elif deadline is not None and _past(deadline, t_loop, steps):
                 cut = True
                 break
             if offline:

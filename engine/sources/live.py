@@ -220,10 +220,10 @@ def tracker_error_cm(results: Sequence[FrameResult], frames: Sequence[SensorFram
 
 
 def default_budget_ms(fps: float) -> float:
-    """The live frame budget when none is given: 70 % of the frame period (11.7 ms at
+    """The live frame budget when none is given: 80 % of the frame period (13.3 ms at
     60 fps), which leaves the rest of the period for the work after the solve, a piece
     of the predictor between frames and the receiver thread (docs/trackers.md)."""
-    return 0.7 * 1000.0 / fps
+    return 0.8 * 1000.0 / fps
 
 
 def iteration_summary(iterations: Sequence[int]) -> dict:

@@ -7,6 +7,14 @@ status-bar label or a plot update costs as much as a 3D frame. VTK's own
 ``QVTKRenderWindowInteractor`` (``QWidget`` base) gives VTK a native window of its own;
 the rest of the window stays a plain raster window. This class puts pyvista's plotter
 API on that widget, the way pyvistaqt's ``QtInteractor`` does on its own.
+
+VTK (9.1 and later) renders into a framebuffer of its own and, at the end of each
+frame, copies it to the window. Its default copy (``BlitToHardware``) also writes the
+depth buffer to the window, through a full-screen shader: on Mesa's software rasterizer
+that costs about as much as the rest of the frame (measured on this view at 988 x 626:
+15 ms per render with it, 8 ms without). Nothing reads the window's depth (picking,
+screenshots and the widgets read VTK's own framebuffers), so this window copies the
+colour only (``BlitToCurrent``: the current draw buffer is the window's back buffer).
 """
 
 from __future__ import annotations
@@ -49,6 +57,7 @@ class NativeInteractor(QVTKRenderWindowInteractor, BasePlotter):
         self.interactor = self
         self.ren_win = self.GetRenderWindow()
         self.ren_win.SetMultiSamples(multi_samples)
+        self.ren_win.SetFrameBlitModeToBlitToCurrent()  # colour only (see the module doc)
         for renderer in self.renderers:
             renderer.view_isometric()
             self.ren_win.AddRenderer(renderer)

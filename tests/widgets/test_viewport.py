@@ -38,14 +38,48 @@ def test_snapshot_updates_geometry_in_place_and_is_visible(viewport, fake_snapsh
 
 
 def test_dragging_a_sensor_emits_its_new_position(viewport, qtbot, fake_snapshot):
-    viewport.show_snapshot(fake_snapshot())
-    widget = viewport.sensors.widgets["root"]
+    """A plain left-drag on a target sphere moves it on a camera-facing plane; the camera
+    stays, and snapshots arriving meanwhile do not pull the target back."""
+    snap = fake_snapshot()
+    viewport.show_snapshot(snap)
+    x, y = (int(round(v)) for v in viewport.joints._to_display(snap.target_positions[1:2])[0])  # lwrist
+    iren = viewport.plotter.iren.interactor
+    before = np.array(viewport.plotter.camera.position)
+    iren.SetEventInformation(x + 2, y - 2, 0, 0)
+    iren.InvokeEvent("LeftButtonPressEvent")
+    assert viewport.joints.target == "lwrist" and viewport.sensors.dragging == "lwrist"
     with qtbot.waitSignal(viewport.targetDragged) as sig:
-        widget.InvokeEvent("StartInteractionEvent")
-        widget.SetCenter(0.1, 0.2, 1.3)
-        widget.InvokeEvent("InteractionEvent")
-        widget.InvokeEvent("EndInteractionEvent")
-    assert sig.args[0] == "root" and np.allclose(sig.args[1], [0.1, 0.2, 1.3])
+        iren.SetEventInformation(x + 40, y, 0, 0)
+        iren.InvokeEvent("MouseMoveEvent")
+    name, pos = sig.args
+    assert name == "lwrist" and np.linalg.norm(pos - snap.target_positions[1]) > 0.05
+    viewport.show_snapshot(fake_snapshot(seq=2))  # the engine has not caught up yet
+    i = viewport.sensors.joints.index("lwrist")
+    assert np.allclose(viewport.sensors.positions[i], pos)
+    iren.InvokeEvent("LeftButtonReleaseEvent")
+    assert viewport.joints.target is None and viewport.sensors.dragging is None
+    assert np.allclose(viewport.plotter.camera.position, before)
+
+
+def test_sensor_targets_are_one_actor_moved_in_place(viewport, fake_snapshot):
+    """A VTK sphere widget per target re-ran its sphere source and cost a draw call per
+    target on every frame (~5 ms of a draw under software GL): one mesh, moved in place."""
+    snap = fake_snapshot()
+    viewport.show_snapshot(snap)
+    sensors = viewport.sensors
+    mesh = sensors.mesh
+    viewport.show_snapshot(fake_snapshot(seq=2, target_positions=snap.target_positions + [0, 0, 0.2]))
+    assert sensors.mesh is mesh and not viewport.plotter.widgets.sphere_widgets
+    per = mesh.n_points // 2
+    centre = mesh.points[per:].mean(axis=0)  # the second target's sphere
+    assert np.allclose(centre, snap.target_positions[1] + [0, 0, 0.2], atol=1e-6)
+    lost = mesh.point_data["rgb"][per]  # fake_snapshot: lwrist is not connected
+    assert tuple(lost) != tuple(mesh.point_data["rgb"][0])
+
+
+def test_a_press_off_every_target_leaves_the_camera_to_the_user(viewport, fake_snapshot):
+    viewport.show_snapshot(fake_snapshot())
+    assert viewport.sensors.pick(viewport.joints._to_display, 1, 1) is None
 
 
 def test_gizmos_follow_constraints(viewport, fake_snapshot):
@@ -207,6 +241,34 @@ def test_follow_camera_glides_with_the_hips_and_holds_still_when_off(viewport, f
     viewport.show_snapshot(fake_snapshot(seq=9, positions=moved + [3.0, 0, 0]))
     assert cam.focal_point[0] == pytest.approx(moved[0, 0], abs=0.01)
     assert np.allclose(np.subtract(cam.position, cam.focal_point), offset)  # the user's angle is kept
+
+
+def test_a_frame_renders_once_queries_the_bounds_once_and_runs_no_python_filter(viewport, fake_snapshot):
+    """What a drawn snapshot may cost: one render, one clipping-range (bounds) query, and
+    no pyvista Python algorithm between a moving mesh and its mapper (those re-ran on
+    every frame: smooth shading recomputed the target spheres' normals, the RGB arrays
+    went through a Python filter, and pyvista's camera setter queried the bounds again)."""
+    import vtk
+
+    now = [100.0]
+    viewport.clock = lambda: now[0]
+    viewport._followed_at = now[0]
+    renders, bounds = [], []
+    viewport.plotter.render_window.AddObserver("EndEvent", lambda *_: renders.append(1))
+    viewport.plotter.renderer.AddObserver("ResetCameraClippingRangeEvent", lambda *_: bounds.append(1))
+    snap = fake_snapshot()
+    viewport.show_snapshot(snap)
+    renders.clear(), bounds.clear()
+    now[0] += 0.1
+    viewport.show_snapshot(fake_snapshot(seq=2, positions=snap.positions + [0.5, 0, 0]))  # the camera follows
+    assert len(renders) == 1 and len(bounds) == 1
+    props = viewport.plotter.renderer.GetViewProps()
+    for i in range(props.GetNumberOfItems()):
+        actor = props.GetItemAsObject(i)
+        mapper = actor.GetMapper() if isinstance(actor, vtk.vtkActor) else None
+        while mapper is not None and mapper.GetNumberOfInputPorts() and mapper.GetNumberOfInputConnections(0):
+            mapper = mapper.GetInputConnection(0, 0).GetProducer()
+            assert isinstance(mapper, vtk.vtkTrivialProducer), f"{type(mapper).__name__} feeds a drawable"
 
 
 def blue_fraction(img: np.ndarray) -> float:

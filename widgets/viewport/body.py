@@ -13,6 +13,7 @@ import numpy as np
 import pyvista as pv
 
 from engine import skeleton as sk
+from widgets.viewport.actors import direct_colour_actor
 
 #: Capsule radius per bone, metres, keyed by the bone's child joint (SMPL-like build).
 BONE_RADIUS = {
@@ -91,8 +92,7 @@ class BodyActor:
         self.actor = plotter.add_mesh(self.mesh, color=color, opacity=opacity, smooth_shading=False,
                                       specular=0.25, pickable=False, reset_camera=False, name=f"{name}-mesh")  # fmt: skip
         self.shadow_mesh = self._shadow_disc()
-        self.shadow = plotter.add_mesh(self.shadow_mesh, scalars="rgba", rgba=True, lighting=False,
-                                       pickable=False, reset_camera=False, name=f"{name}-shadow")  # fmt: skip
+        self.shadow = direct_colour_actor(plotter, self.shadow_mesh, "rgba", name=f"{name}-shadow", lighting=False)
         self.visible = True
 
     def _points(self, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

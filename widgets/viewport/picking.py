@@ -1,15 +1,17 @@
-"""Ctrl + left-drag on a joint of the reconstruction moves it on a camera-facing plane.
+"""Dragging in the 3D view: Ctrl + left-drag on a joint of the reconstruction (a pin),
+plain left-drag on a tracker's target sphere (its offset).
 
-The press is tested against the joints' screen positions (within ``PICK_RADIUS_PX``); on
-a hit the camera interaction is suspended until release, and every mouse move is turned
-into a world position: the mouse ray intersected with the plane through the grabbed
-joint that faces the camera. Without Ctrl, or off every joint, the camera behaves as
-usual.
+The press is tested against the joints' screen positions (within ``PICK_RADIUS_PX``) or
+against the targets' on-screen spheres (:meth:`SensorMarkers.pick`); on a hit the camera
+interaction is suspended until release, and every mouse move is turned into a world
+position: the mouse ray intersected with the plane through the grabbed point that faces
+the camera. Off every joint and target, the camera behaves as usual.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import pyvista as pv
@@ -20,13 +22,18 @@ PICK_RADIUS_PX = 14.0
 
 
 class JointDragger:
-    """Emits ``on_drag(joint name, world position (3,) metres)`` while dragging."""
+    """Emits ``on_drag(joint name, world position (3,) metres)`` while a joint is dragged;
+    a target of ``sensors`` (:class:`widgets.viewport.sensors.SensorMarkers`), when given,
+    is dragged through its own ``begin_drag``/``drag``/``end_drag``."""
 
-    def __init__(self, plotter: pv.Plotter, on_drag: Callable[[str, np.ndarray], None]) -> None:
+    def __init__(self, plotter: pv.Plotter, on_drag: Callable[[str, np.ndarray], None],
+                 sensors: Any = None) -> None:  # fmt: skip
         self._plotter = plotter
         self._on_drag = on_drag
+        self._sensors = sensors
         self.positions: np.ndarray | None = None
         self.joint: int | None = None
+        self.target: str | None = None  # the tracker target being dragged
         self._origin = np.zeros(3)
         iren = plotter.iren.interactor
         self._style = iren.GetInteractorStyle()
@@ -46,15 +53,15 @@ class JointDragger:
         iren = self._plotter.iren.interactor
         x, y = iren.GetEventPosition()
         if event == "LeftButtonPressEvent":
-            if iren.GetControlKey() and self.press(x, y):
+            if self.press(x, y) if iren.GetControlKey() else self.press_target(x, y):
                 self._take(event)
         elif event == "MouseMoveEvent":
-            if self.joint is not None:
+            if self.joint is not None or self.target is not None:
                 self.move(x, y)
             else:
                 self._style.OnMouseMove()
-        elif event == "LeftButtonReleaseEvent" and self.joint is not None:
-            self.joint = None
+        elif event == "LeftButtonReleaseEvent" and (self.joint is not None or self.target is not None):
+            self.release()
             self._take(event)
 
     def _to_display(self, points: np.ndarray) -> np.ndarray:
@@ -77,8 +84,23 @@ class JointDragger:
         self.joint, self._origin = j, self.positions[j].copy()
         return True
 
+    def press_target(self, x: float, y: float) -> bool:
+        """Grab the tracker target whose sphere covers display pixel (x, y); True on a hit."""
+        hit = None if self._sensors is None else self._sensors.pick(self._to_display, x, y)
+        if hit is None:
+            return False
+        self.target, self._origin = hit
+        self._sensors.begin_drag(self.target)
+        return True
+
+    def release(self) -> None:
+        """Let go of the held joint or target."""
+        if self.target is not None:
+            self._sensors.end_drag()
+        self.joint = self.target = None
+
     def move(self, x: float, y: float) -> None:
-        """Drag the grabbed joint to display pixel (x, y)."""
+        """Drag the grabbed joint or target to display pixel (x, y)."""
         ren = self._plotter.renderer
         ends = []
         for z in (0.0, 1.0):
@@ -90,7 +112,11 @@ class JointDragger:
         normal = np.asarray(cam.focal_point) - np.asarray(cam.position)
         direction = ends[1] - ends[0]
         denom = float(direction @ normal)
-        if abs(denom) < 1e-12 or self.joint is None:
+        if abs(denom) < 1e-12 or (self.joint is None and self.target is None):
             return
         t = float((self._origin - ends[0]) @ normal) / denom
-        self._on_drag(JOINT_NAMES[self.joint], ends[0] + t * direction)
+        if self.target is not None:
+            self._sensors.drag(self.target, ends[0] + t * direction)
+            self._plotter.render()  # the sphere follows the mouse at once, as a widget's did
+        else:
+            self._on_drag(JOINT_NAMES[self.joint], ends[0] + t * direction)

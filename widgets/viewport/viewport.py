@@ -70,7 +70,7 @@ class Viewport(QWidget):
         self.decoded.set_visible(False)
         self.ghosts = GhostLayer(p)
         self.sensors = SensorMarkers(p, lambda j, pos: self.targetDragged.emit(j, pos))
-        self.joints = JointDragger(p, lambda j, pos: self.jointDragged.emit(j, pos))
+        self.joints = JointDragger(p, lambda j, pos: self.jointDragged.emit(j, pos), self.sensors)
         self.gizmos = ConstraintGizmos(p, lambda n, changes: self.gizmoEdited.emit(n, changes))
         self._label = p.add_text("", position="upper_left", font_size=9, color="#d0d4dc")
         self._notice = p.add_text("", position="lower_edge", font_size=12, color="#ffe14d")
@@ -132,8 +132,10 @@ class Viewport(QWidget):
             return
         cam = self.plotter.camera
         self._focus = self._focus + delta
-        cam.focal_point = tuple(np.asarray(cam.focal_point) + delta)
-        cam.position = tuple(np.asarray(cam.position) + delta)
+        # VTK's setters: pyvista's ``position`` setter resets the clipping range itself,
+        # and that bounds query over every actor would then run twice per frame
+        cam.SetFocalPoint(*(np.asarray(cam.GetFocalPoint()) + delta))
+        cam.SetPosition(*(np.asarray(cam.GetPosition()) + delta))
         self.plotter.reset_camera_clipping_range()
 
     # -- drawing --------------------------------------------------------------------

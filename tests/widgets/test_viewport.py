@@ -385,3 +385,12 @@ def test_a_pin_shows_the_joint_it_holds_and_a_line_to_it(viewport, fake_snapshot
     viewport.show_snapshot(fake_snapshot(seq=2, positions=moved, gizmos=(("drag lelbow", pin.gizmo(moved)),)))
     assert viewport.gizmos.items["drag lelbow"] is item  # moved in place
     assert np.allclose(item.tether.points[0], moved[16])
+
+
+def test_the_view_lights_with_the_headlight_and_the_key_light_only(viewport):
+    """Each lit pixel evaluates every light switched on: the kit's fill and back lights
+    cost software GL ~7 % of a draw for little visible change."""
+    lights = viewport.plotter.renderer.GetLights()
+    on = [lights.GetItemAsObject(i) for i in range(lights.GetNumberOfItems()) if lights.GetItemAsObject(i).GetSwitch()]
+    assert len(on) == 2 and sum(light.LightTypeIsHeadlight() for light in on) == 1
+    assert max(light.GetIntensity() for light in on) >= 0.5  # the key light

@@ -22,6 +22,7 @@ from __future__ import annotations
 import contextlib
 from typing import Any
 
+from PyQt6.QtCore import Qt
 from PyQt6.QtGui import QGuiApplication
 from pyvista import global_theme
 from pyvista.plotting.plotter import BasePlotter
@@ -35,6 +36,10 @@ def make_plotter(parent: Any) -> Any:
     pyvistaqt's ``QtInteractor`` (Wayland, macOS, Windows, offscreen), which needs no
     native window handle."""
     if QGuiApplication.platformName() == "xcb":
+        # by default Qt makes the siblings of a native widget native too (every widget
+        # along the way: dock tab bars, separators); such a window kept a stale position
+        # and showed a "Latent | Live trackers" tab bar over the 3D view
+        QGuiApplication.setAttribute(Qt.ApplicationAttribute.AA_DontCreateNativeWidgetSiblings)
         return NativeInteractor(parent, multi_samples=0)
     return QtInteractor(parent, auto_update=False, multi_samples=0)
 

@@ -214,3 +214,19 @@ def test_hip_without_rotation_turns_with_the_wearer(models, turn):
         assert abs(math.degrees(err)) < 2.0, f"frame {i}"
         moved = QN.rotate(np.broadcast_to(q, (22, 4)), a.positions)
         assert np.abs(b.positions - moved).max() < 0.01, f"frame {i}"
+
+
+def test_root_is_held_when_nothing_places_the_body(models):
+    """Only the hands connected (hips, head and feet lost, as ``--faulty`` can do): the
+    root must not run away on the integrated decoded displacement (it moved 3 m within
+    70 frames on a validation clip)."""
+    m = load_motion(CLIP, max_frames=70)
+    tracking = simulate(m, "6")
+    lost = [tracking.joints.index(j) for j in ("root", "upperneck", "lankle", "rankle")]
+    tracking.connected[10:, lost] = False
+    method = DragPoserMethod(models.vae, models.predictor, iterations=10)
+    method.reset(m.skeleton, m.fps)
+    res = [method.step(tracking.frame(i)) for i in range(len(m))]
+    drift = np.linalg.norm(res[-1].root_pos[:2] - m.root_pos[-1, :2])
+    assert drift < 0.15, f"root {drift:.2f} m from the truth after 60 frames without hips or head"
+    assert abs(res[-1].root_pos[2] - res[9].root_pos[2]) < 1e-4  # height held

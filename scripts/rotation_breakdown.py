@@ -1,4 +1,5 @@
-"""Per-joint rotation error of a method on simulated trackers (where the Rot figure comes from).
+"""Per-joint rotation and position error of a method on simulated trackers (where the Rot
+and Pos figures come from).
 
     .venv/bin/python scripts/rotation_breakdown.py FILE... [--method dragposer] [--sensors 6]
         [--mode realtime] [--max-frames 300] [--set KEY=VALUE ...] [--vae V.pt --predictor P.pt]
@@ -6,7 +7,9 @@
 
 Prints, per joint, the mean geodesic error of its local rotation (degrees, as
 ``rot_deg`` of ``evaluate``) and, with ``--twist``, how much of it is twist about the
-bone to the joint's child (swing-twist split of the error rotation), then the mean.
+bone to the joint's child (swing-twist split of the error rotation), the joint's world
+position error (cm, as ``pos_cm``), then the means and the share of the position error
+in the legs (hips, knees, ankles, toes).
 ``--method autoencoder`` gives the VAE's ceiling (the true pose encoded and decoded).
 """
 
@@ -60,13 +63,18 @@ def main() -> int:
         from engine.solver import OptimizerSettings
 
         method.configure(**parse_overrides(OptimizerSettings, args.set))
-    errs, twists = [], []
+    from engine.kinematics.fk import fk
+
+    errs, twists, pos_errs = [], [], []
     children = {j: sk.children(j) for j in range(sk.NUM_JOINTS)}
     for f in args.files:
         motion = load_motion(f, max_frames=args.max_frames)
         rec, _ = run_method(method, simulate(motion, args.sensors), motion.skeleton, progress=False, reference=motion)
         gt, out = Q.normalize(motion.local_rot), Q.normalize(rec.local_rot)
         errs.append(np.degrees(Q.angle(gt, out)))
+        gt_p, _ = fk(motion.local_rot, motion.root_pos, motion.skeleton.offsets)
+        rec_p, _ = fk(rec.local_rot, rec.root_pos, motion.skeleton.offsets)
+        pos_errs.append(100.0 * np.linalg.norm(gt_p - rec_p, axis=-1))
         err = Q.mul(Q.conjugate(gt), out)  # error in the joint's own frame
         tw = np.zeros(errs[-1].shape)
         for j in range(sk.NUM_JOINTS):
@@ -75,10 +83,13 @@ def main() -> int:
                 tw[:, j] = twist_angle(err[:, j], axis / np.linalg.norm(axis))
         twists.append(tw)
     e, t = np.concatenate(errs).mean(0), np.concatenate(twists).mean(0)
-    print(f"{'joint':<11} {'rot deg':>8}" + (f" {'twist deg':>9}" if args.twist else ""))
+    p = np.concatenate(pos_errs).mean(0)
+    print(f"{'joint':<11} {'rot deg':>8} {'pos cm':>7}" + (f" {'twist deg':>9}" if args.twist else ""))
     for j, name in enumerate(sk.JOINT_NAMES):
-        print(f"{name:<11} {e[j]:8.1f}" + (f" {t[j]:9.1f}" if args.twist and children[j] else ""))
-    print(f"{'mean':<11} {e.mean():8.2f}")
+        print(f"{name:<11} {e[j]:8.1f} {p[j]:7.2f}" + (f" {t[j]:9.1f}" if args.twist and children[j] else ""))
+    legs = [sk.JOINT_INDEX[n] for n in ("lhip", "lknee", "lankle", "ltoe", "rhip", "rknee", "rankle", "rtoe")]
+    print(f"{'mean':<11} {e.mean():8.2f} {p.mean():7.2f}")
+    print(f"legs: {100.0 * p[legs].sum() / p.sum():.0f} % of the position error ({len(legs)} of {sk.NUM_JOINTS} joints)")
     return 0
 
 

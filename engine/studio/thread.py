@@ -411,6 +411,14 @@ class EngineThread(threading.Thread):
             latent = readonly(res.latent) if res.latent is not None else None
             self._history.append(FrameRecord(frame, res.iterations, ms, final, latent))
         self._publish(frame, sf, res, ms, error, ghosts)
+        # the pose is out: work the methods deferred (DragPoser's predictor pieces) now,
+        # not inside the next frame's solve
+        for name, m in [(self._method_name, self._method), *self._ghosts.items()]:
+            if m is not None:
+                try:
+                    m.between_frames()
+                except Exception as exc:  # reported like a failing step, never fatal
+                    self._report_error(f"{name} between frames: {type(exc).__name__}: {exc}")
 
     def _decode(self, latent: np.ndarray) -> None:
         decode = getattr(self._method, "decode_latent", None)

@@ -368,3 +368,36 @@ def test_snapshots_carry_the_solver_timing_figures(synthetic_motion):
     with running(Counting(), synthetic_motion) as worker:  # no breakdown: wall time only
         snap = newest(worker)
         assert set(snap.timing) == {"ms_per_frame"}
+
+
+class Deferring(Counting):
+    """Records, at each between_frames call, how many snapshots had been published."""
+
+    name = "deferring"
+
+    def __init__(self, worker_box):
+        super().__init__()
+        self.box, self.calls = worker_box, []
+
+    def between_frames(self):
+        worker = self.box[0]
+        self.calls.append((self.steps, worker.latest.seq if worker.latest is not None else 0))
+
+
+def test_deferred_method_work_runs_after_each_frame_is_published(synthetic_motion):
+    box = []
+    method = Deferring(box)
+    worker = EngineThread(method_factory=lambda name: method)
+    box.append(worker)
+    worker.start()
+    try:
+        worker.submit(w.SetMethod(method.name))
+        worker.submit(w.SetMotion(synthetic_motion))
+        first = newest(worker)
+        worker.submit(w.Seek(3))
+        wait_for(lambda: worker.latest.seq > first.seq and len(method.calls) >= 2)
+    finally:
+        worker.stop()
+    assert all(seq >= 1 for _, seq in method.calls), "called after a snapshot was out"
+    assert [steps for steps, _ in method.calls] == sorted(steps for steps, _ in method.calls)
+    assert method.calls[-1][0] == method.steps  # once per solved frame, after its step

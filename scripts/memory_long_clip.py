@@ -42,7 +42,13 @@ def long_clip(frames: int, path: Path) -> None:
 
 
 def rss_mb(pid: int) -> float:
-    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+    """Resident memory of ``pid`` in MiB; NaN once the process has exited (the last
+    progress update can arrive after that)."""
+    try:
+        lines = Path(f"/proc/{pid}/status").read_text().splitlines()
+    except OSError:
+        return float("nan")
+    for line in lines:
         if line.startswith("VmRSS:"):
             return int(line.split()[1]) / 1024.0
     return float("nan")
@@ -78,9 +84,10 @@ def main() -> int:
                     print(f"frame {mark:>6d}  rss {samples[mark]:8.1f} MiB", flush=True)
         proc.wait()
         print(proc.stdout.read() if proc.stdout else "")
-    base = samples.get(1000)
-    if base and samples:
-        last = samples[max(samples)]
+    valid = {k: v for k, v in samples.items() if np.isfinite(v)}  # a process that had exited reads NaN
+    base = valid.get(1000)
+    if base and valid:
+        last = valid[max(valid)]
         print(f"growth after frame 1000: {100.0 * (last - base) / base:+.2f} % ({base:.1f} -> {last:.1f} MiB)")
     return proc.returncode
 

@@ -403,12 +403,14 @@ class DragPoserMethod(Method):
         (settings, sensor set): building and validating the settings object every frame
         cost more than the lookup."""
         live = tuple(j for j, c in self.sensors.items() if c.enabled)
-        key = (tuple(vars(self.settings).values()), live, frozenset(self.explicit))
+        hip = self.sensors.get("root")
+        hip_rotation = hip is None or hip.dof == 6
+        key = (tuple(vars(self.settings).values()), live, frozenset(self.explicit), hip_rotation)
         s = self._effective.get(key)
         if s is None:
             if len(self._effective) > 64:
                 self._effective.clear()
-            s = self._effective[key] = effective(self.settings, live, self.explicit)
+            s = self._effective[key] = effective(self.settings, live, self.explicit, hip_rotation)
         return s
 
     def _repeat_last(self, warnings: list[str], losses: list, iterations: int, t0: float) -> FrameResult:

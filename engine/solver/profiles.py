@@ -4,13 +4,14 @@ ambiguity of the sensor set; we tune the temporal weight, step sizes and smoothi
 Which profile a frame uses depends on its *connected* trackers, so a lost tracker
 switches the profile for as long as it is lost:
 
-========  =============================================  ==================================
-profile   connected trackers                             presets
-========  =============================================  ==================================
-``full``  hips and at least :data:`FULL_SET` in total    ``6``, ``6x3dof``
-``hip``   hips, fewer in total                           ``4``, ``3-hip-hands``, ``5-paper``
-``head``  no hips                                        ``3-head-hands``, ``5``
-========  =============================================  ==================================
+=========  ==============================================  ==================================
+profile    connected trackers                              presets
+=========  ==============================================  ==================================
+``full``   6-DoF hips and at least :data:`FULL_SET` in all  ``6``
+``full3``  3-DoF hips and at least :data:`FULL_SET` in all  ``6x3dof``
+``hip``    hips, fewer in total                            ``4``, ``3-hip-hands``, ``5-paper``
+``head``   no hips                                         ``3-head-hands``, ``5``
+=========  ==============================================  ==================================
 
 A profile only supplies the values of the settings the user left alone
 (:meth:`engine.methods.dragposer.DragPoserMethod.configure` records what was set);
@@ -47,6 +48,10 @@ class Profile:
 PROFILES: dict[str, Profile] = {
     "full": Profile("full", future_window=1, temporal_weight=0.01, step_size=0.3, lr=0.05, smooth_weight=5.0,
                     ground_weight=0.0, sensor_rotation_weight=0.03),
+    # positions only: the smoothing term made 6x3dof worse (3 validation files, 150
+    # frames: 3.97 -> 3.69 cm, 30.5 -> 28.2 deg without it; docs/optimizer.md)
+    "full3": Profile("full3", future_window=1, temporal_weight=0.01, step_size=0.3, lr=0.05, smooth_weight=0.0,
+                     ground_weight=0.0, sensor_rotation_weight=0.03),
     "hip": Profile("hip", future_window=16, temporal_weight=0.01, step_size=0.3, lr=0.05, smooth_weight=0.0,
                    ground_weight=10.0, sensor_rotation_weight=0.1),
     "head": Profile("head", future_window=16, temporal_weight=0.01, step_size=0.3, lr=0.05, smooth_weight=0.0,
@@ -56,18 +61,22 @@ PROFILES: dict[str, Profile] = {
 TUNED = tuple(f.name for f in dataclasses.fields(Profile) if f.name != "name")
 
 
-def profile_for(connected: Collection[str]) -> Profile:
-    """The profile of a frame whose connected trackers sit on the joints ``connected``."""
+def profile_for(connected: Collection[str], hip_rotation: bool = True) -> Profile:
+    """The profile of a frame whose connected trackers sit on the joints ``connected``
+    (``hip_rotation``: the hip tracker, if any, gives its rotation)."""
     if "root" in connected:
-        return PROFILES["full" if len(connected) >= FULL_SET else "hip"]
+        if len(connected) >= FULL_SET:
+            return PROFILES["full" if hip_rotation else "full3"]
+        return PROFILES["hip"]
     return PROFILES["head"]
 
 
-def effective(settings: OptimizerSettings, connected: Collection[str], explicit: Collection[str]) -> OptimizerSettings:
+def effective(settings: OptimizerSettings, connected: Collection[str], explicit: Collection[str],
+              hip_rotation: bool = True) -> OptimizerSettings:  # fmt: skip
     """``settings`` with the profile's values for the tuned fields not in ``explicit``
     (a new object; ``settings`` itself is unchanged). With ``tuning == "off"`` it is
     ``settings`` itself."""
     if settings.tuning == "off":
         return settings
-    values = {k: v for k, v in profile_for(connected).values().items() if k not in explicit}
+    values = {k: v for k, v in profile_for(connected, hip_rotation).values().items() if k not in explicit}
     return dataclasses.replace(settings, **values) if values else settings

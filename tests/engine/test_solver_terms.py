@@ -62,6 +62,7 @@ def test_pose_terms_fast_path_equals_reference(models, preset, ground):
 
 def test_profiles_follow_the_connected_set_and_keep_explicit_settings():
     assert profile_for(["root", "upperneck", "lwrist", "rwrist", "lankle", "rankle"]).name == "full"
+    assert profile_for(["root", "upperneck", "lwrist", "rwrist", "lankle", "rankle"], hip_rotation=False).name == "full3"
     assert profile_for(["root", "lwrist", "rwrist"]).name == "hip"
     assert profile_for(["upperneck", "lwrist", "rwrist"]).name == "head"
     s = OptimizerSettings(temporal_weight=0.123)

@@ -46,4 +46,5 @@ def test_targets_say_what_is_met_and_why_auj_has_a_floor():
     assert "2.40 cm against DragPoser's 1.60 cm on the same frames (1.50x; target <= 1.25x): **not met**" in text
     assert "PJ 40.0 / AUJ 700 against DragPoser's 90.0 / 1000 without smoothing: **met**" in text
     assert "900 against 1000 without (0.90x; target <= 0.5x): **not met**" in text
-    assert "60 x 13.00 = 780" in text and "DragPoser 1000 - 900 = 100" in text and "RPM 700 - 660 = 40" in text
+    assert "DragPoser 16.7 against 15.0" in text and "RPM 11.7 against 11.0" in text
+    assert "half of DragPoser's AUJ (500) is below the 780" in text

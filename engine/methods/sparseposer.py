@@ -5,9 +5,9 @@ tracker's rotation in the previous frame's heading and its displacement), append
 window of the last ``T`` frames (64; at the start of a clip the first frame is
 repeated). The generator decodes the window's last frame; a step feeds it only the
 frames that frame reads and decodes only the tail (the same last frame as a full
-decode of the whole window, see :mod:`engine.models.sparseposer_infer`), the learned IK moves each limb
-towards its tracker, and the root takes the hip tracker's position and rotation, as
-in the paper.
+decode of the whole window, see :mod:`engine.models.sparseposer_infer`), the learned
+IK moves each limb towards its tracker, and the root takes the hip tracker's position
+and rotation, as in the paper.
 
 **Future frames.** The paper's realtime variant (*Ours-0*) sees no future frames and an
 offline variant sees 7. Methods here are fed one frame at a time, so this is the

@@ -160,8 +160,8 @@ class DragPoserMethod(Method):
         self._effective: dict[tuple, OptimizerSettings] = {}
         self._blends: dict[str, SensorBlend] = {}
         self._facing: np.ndarray | None = None  # this frame's body heading (4,), from its trackers
-        self._last_points: dict[str, np.ndarray] = {}  # connected trackers' positions, previous frame
-        self._moved = np.zeros(3)  # their mean displacement since then
+        self._points: dict[str, np.ndarray] = {}  # connected trackers' positions, this frame
+        self._last_points: dict[str, np.ndarray] = {}  # ... and the previous one
 
     def step(self, sensors: SensorFrame, deadline: float | None = None) -> FrameResult:
         """Solve the next frame. ``deadline`` (a ``time.perf_counter()`` time; live input)
@@ -181,9 +181,7 @@ class DragPoserMethod(Method):
         warnings = self._update_sensors(sensors)
         points = {j: np.array(c.position, dtype=np.float64) for j, c in self.sensors.items() if c.enabled}
         self._facing = body_facing(points)
-        shared = [j for j in points if j in self._last_points]
-        self._moved = np.mean([points[j] - self._last_points[j] for j in shared], axis=0) if shared else np.zeros(3)
-        self._last_points = points
+        self._last_points, self._points = self._points, points
         # the connected sensor set's profile fills the settings the caller left alone
         s = self._effective_settings()
         base = self.settings.sensor_rotation_weight
@@ -341,7 +339,9 @@ class DragPoserMethod(Method):
         is solved as usual."""
         assert self._root is not None
         pos = self._root.position.double().numpy().copy()
-        pos[:2] += self._moved[:2]
+        shared = [j for j in self._points if j in self._last_points]
+        if shared:
+            pos[:2] += np.mean([self._points[j][:2] - self._last_points[j][:2] for j in shared], axis=0)
         return RootOverride(torch.as_tensor(pos, dtype=torch.float32), None)
 
     def _root_anchor(self) -> RootAnchor | None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 import pytest
@@ -110,6 +111,19 @@ def test_auto_uses_carried_adam_with_six_sensors_and_plain_steps_with_fewer():
     assert opt.update_rule(six[:4] + [TemporalPriorConstraint()]) == "sgd", "only sensors count"
     opt.settings.optimizer = "adam"
     assert opt.update_rule(six[:1]) == "adam"
+
+
+def test_a_deadline_takes_fresh_adam_moments_and_keeps_none():
+    """Live (a deadline): carried moments make steps too small for the 3-4 iterations a
+    frame gets, so ``auto`` starts Adam afresh each frame and carries nothing."""
+    opt = PoseOptimizer(MLPDecoder(), OFFSETS)
+    six = targets_from(opt, torch.zeros(24), ctx())
+    assert opt.update_rule(six, deadline=True) == "adam" and opt.update_rule(six[:4], deadline=True) == "sgd"
+    live = ctx(deadline=time.perf_counter() + 60.0)
+    opt.solve(torch.zeros(24), six, live)
+    assert opt._carry == {}
+    opt.settings.optimizer = "adam-carry"  # an explicit choice is kept
+    assert opt.update_rule(six, deadline=True) == "adam-carry"
 
 
 def test_without_hip_sensor_other_constraints_move_the_root():

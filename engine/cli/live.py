@@ -45,7 +45,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--iterations", type=int, metavar="N", help="optimizer iterations per frame")
     p.add_argument("--frame-budget", type=float, metavar="MS",
                    help="milliseconds from a frame's arrival to its solved pose; the solver stops iterating "
-                        "to meet it (default: 80 %% of the frame period, 13.3 ms at 60 fps; 0: no budget, all "
+                        "to meet it (default: 60 %% of the frame period, 10 ms at 60 fps; 0: no budget, all "
                         "iterations every frame)")  # fmt: skip
     p.add_argument("--lr", type=float, metavar="LR", help="Adam learning rate on the latent")
     add_model_options(p)

@@ -18,6 +18,7 @@ late too.
 
 from __future__ import annotations
 
+import gc
 import threading
 import time
 from collections.abc import Callable, Sequence
@@ -120,6 +121,22 @@ class LiveRun:
         if not calibrating:
             self.method.reset(self.skeleton, self.fps)
         start = time.perf_counter()
+        # Python's automatic full collections walk every object, the growing per-frame
+        # results included, and stalled a frame by 220-240 ms in two of three idle runs
+        # (12 frames skipped; docs/trackers.md). During the stream only the young
+        # generations are collected, between frames; full collections wait for the end.
+        automatic_gc = gc.isenabled()
+        gc.disable()
+        try:
+            self._loop(out, window, calibrating, cal_t0, start, duration_s, idle_timeout_s, on_frame)
+        finally:
+            if automatic_gc:
+                gc.enable()
+        return out
+
+    def _loop(self, out: LiveResult, window: list[SensorFrame], calibrating: bool, cal_t0: float | None,
+              start: float, duration_s: float | None, idle_timeout_s: float | None,
+              on_frame: Callable[[LiveResult], None] | None) -> None:  # fmt: skip
         last_index = 0
         while not self.stop_event.is_set():
             now = time.perf_counter()
@@ -163,7 +180,7 @@ class LiveRun:
             if on_frame is not None:
                 on_frame(out)
             self.method.between_frames()  # the pose is out: deferred work now
-        return out
+            gc.collect(1)  # young generations only (see run)
 
 
 def calibration_window(times: Sequence[float], seconds: float) -> int:

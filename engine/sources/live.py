@@ -115,10 +115,7 @@ class LiveRun:
         """Run until ``duration_s`` (wall clock from the call), until no frame came for
         ``idle_timeout_s`` after the stream started, or until :attr:`stop_event` is set."""
         out = self.result = LiveResult()
-        window: list[SensorFrame] = []
-        cal_t0: float | None = None
-        calibrating = self.calibrate_s > 0
-        if not calibrating:
+        if self.calibrate_s <= 0:
             self.method.reset(self.skeleton, self.fps)
         start = time.perf_counter()
         # Python's automatic full collections walk every object, the growing per-frame
@@ -128,15 +125,17 @@ class LiveRun:
         automatic_gc = gc.isenabled()
         gc.disable()
         try:
-            self._loop(out, window, calibrating, cal_t0, start, duration_s, idle_timeout_s, on_frame)
+            self._loop(out, start, duration_s, idle_timeout_s, on_frame)
         finally:
             if automatic_gc:
                 gc.enable()
         return out
 
-    def _loop(self, out: LiveResult, window: list[SensorFrame], calibrating: bool, cal_t0: float | None,
-              start: float, duration_s: float | None, idle_timeout_s: float | None,
+    def _loop(self, out: LiveResult, start: float, duration_s: float | None, idle_timeout_s: float | None,
               on_frame: Callable[[LiveResult], None] | None) -> None:  # fmt: skip
+        window: list[SensorFrame] = []
+        cal_t0: float | None = None
+        calibrating = self.calibrate_s > 0
         last_index = 0
         while not self.stop_event.is_set():
             now = time.perf_counter()

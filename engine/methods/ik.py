@@ -35,6 +35,7 @@ from engine import skeleton as sk
 from engine.kinematics import quat_np as Q  # numpy only: no torch dispatch per call
 from engine.kinematics.fk import fk_joints
 from engine.methods.base import FrameResult, Method
+from engine.solver.pose import body_facing
 from engine.sensors import Sensor, SensorFrame
 from engine.motion import Motion
 
@@ -49,6 +50,8 @@ LEGS = ((J["lhip"], J["lknee"], J["lankle"]), (J["rhip"], J["rknee"], J["rankle"
 #: back), knees forward (-Y).
 ARM_POLE = np.array([0.0, 0.5, -1.0]) / math.sqrt(1.25)
 LEG_POLE = np.array([0.0, -1.0, 0.0])
+#: IK's heading without a hip or head rotation: feet and hands count alike.
+_IK_LATERAL = (("lankle", "rankle", 1.0), ("lwrist", "rwrist", 1.0))
 SPINE_PASSES = 4
 #: Largest clavicle turn used to bring an out-of-reach hand target closer, radians.
 CLAVICLE_MAX = math.radians(30.0)
@@ -101,10 +104,6 @@ def _twist(q: np.ndarray, axis: np.ndarray) -> np.ndarray:
     t = np.concatenate([[q[0]], (q[1:] @ a) * a])
     n = _norm(t)
     return t / n if n > 1e-9 else IDENTITY.copy()
-
-
-def _yaw(angle: float) -> np.ndarray:
-    return np.array([math.cos(angle / 2), 0.0, 0.0, math.sin(angle / 2)])
 
 
 def _basis_rotation(u0: np.ndarray, w0: np.ndarray, u1: np.ndarray, w1: np.ndarray) -> np.ndarray:
@@ -217,13 +216,8 @@ class IKMethod(Method):
         head = s.get("upperneck")
         if head is not None and head.dof == 6:
             return Q.heading(head.rotation)
-        left = np.zeros(3)
-        for lj, rj in (("lankle", "rankle"), ("lwrist", "rwrist")):
-            if lj in s and rj in s:
-                left += s[lj].position - s[rj].position
-        if math.hypot(left[0], left[1]) > 1e-3:  # rest left (+X) turned onto `left`
-            return _yaw(math.atan2(left[1], left[0]))
-        return self._heading
+        facing = body_facing({j: r.position for j, r in s.items()}, _IK_LATERAL, min_length=1e-3)
+        return self._heading if facing is None else facing
 
     def _solve_root(self, s: dict[str, Sensor]) -> tuple[np.ndarray, np.ndarray]:
         hip, head = s.get("root"), s.get("upperneck")

@@ -146,17 +146,18 @@ LATERAL_PAIRS = (("lankle", "rankle", 1.0), ("lwrist", "rwrist", 0.5))
 BODY_HEADING_LIMIT_DEG = 45.0
 
 
-def body_facing(points: dict[str, np.ndarray]) -> np.ndarray | None:
+def body_facing(points: dict[str, np.ndarray], pairs=LATERAL_PAIRS, min_length: float = 1e-6) -> np.ndarray | None:
     """Heading rotation ``(4,)`` (about +Z) of a body whose tracked joints are at
     ``points`` (joint name -> world position ``(3,)``, metres): the canonical body (left
     = +X, forward = -Y) turned so its left-right axis lies along the weighted sum of the
-    horizontal left-minus-right vectors of :data:`LATERAL_PAIRS`. None without a pair."""
+    horizontal left-minus-right vectors of ``pairs`` (left, right, weight). None without
+    a pair or when that sum is shorter than ``min_length`` metres."""
     lateral, found = np.zeros(2), False
-    for left, right, w in LATERAL_PAIRS:
+    for left, right, w in pairs:
         if left in points and right in points:
             lateral += w * (np.asarray(points[left])[:2] - np.asarray(points[right])[:2])
             found = True
-    if not found or math.hypot(*lateral) < 1e-6:
+    if not found or math.hypot(*lateral) <= min_length:
         return None
     yaw = math.atan2(lateral[1], lateral[0])
     return np.array([math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)])

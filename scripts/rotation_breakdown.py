@@ -11,6 +11,13 @@ bone to the joint's child (swing-twist split of the error rotation), the joint's
 position error (cm, as ``pos_cm``), then the means and the share of the position error
 in the legs (hips, knees, ankles, toes).
 ``--method autoencoder`` gives the VAE's ceiling (the true pose encoded and decoded).
+
+``--per-file`` adds a table per file: the mean error and, for the joints named by
+``--joints``, the error and the mean angle of the ground truth's and the reconstruction's
+local rotation from identity (``truth/reconstruction``). Trackers do not say which of two
+rotation conventions a rig uses at joints they cannot see (e.g. the spine: the iClone
+rig's upper back sits about 80 degrees from identity, the Daz rig has none), so a large
+error with both angles far apart there is the solver choosing the other convention.
 """
 
 from __future__ import annotations
@@ -35,6 +42,16 @@ def twist_angle(err: np.ndarray, axis: np.ndarray) -> np.ndarray:
     return np.degrees(2.0 * np.arctan2(np.linalg.norm(proj, axis=-1), np.abs(err[..., 0]) + 1e-12)) * (n > 1e-9)
 
 
+def per_file_row(gt: np.ndarray, rec: np.ndarray, err_deg: np.ndarray, joints: list[int]):
+    """``(mean error, [(error, truth angle, reconstruction angle) per joint])`` in degrees
+    for one file: ``gt``/``rec`` local rotations ``(F, 22, 4)``, ``err_deg (F, 22)``; the
+    angles are each rotation's mean angle from identity."""
+    ident = np.array([1.0, 0.0, 0.0, 0.0])
+    a_gt, a_rec = np.degrees(Q.angle(gt, ident)), np.degrees(Q.angle(rec, ident))
+    return float(err_deg.mean()), [(float(err_deg[:, j].mean()), float(a_gt[:, j].mean()), float(a_rec[:, j].mean()))
+                                   for j in joints]
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("files", nargs="+")
@@ -46,7 +63,10 @@ def main() -> int:
     ap.add_argument("--vae")
     ap.add_argument("--predictor")
     ap.add_argument("--twist", action="store_true")
+    ap.add_argument("--per-file", action="store_true")
+    ap.add_argument("--joints", default="lowerback,upperback,chest,lshoulder,rshoulder,lwrist,rwrist")
     args = ap.parse_args()
+    joints = [sk.JOINT_INDEX[n] for n in args.joints.split(",")]
 
     from engine.methods import get_method, run_method
     from engine.retarget import load_motion
@@ -65,7 +85,7 @@ def main() -> int:
         method.configure(**parse_overrides(OptimizerSettings, args.set))
     from engine.kinematics.fk import fk
 
-    errs, twists, pos_errs = [], [], []
+    errs, twists, pos_errs, rows = [], [], [], []
     children = {j: sk.children(j) for j in range(sk.NUM_JOINTS)}
     for f in args.files:
         motion = load_motion(f, max_frames=args.max_frames)
@@ -82,6 +102,8 @@ def main() -> int:
                 axis = motion.skeleton.offsets[children[j][0]]
                 tw[:, j] = twist_angle(err[:, j], axis / np.linalg.norm(axis))
         twists.append(tw)
+        rows.append((Path(f).stem if len(Path(f).parts) < 2 else "/".join(Path(f).parts[-2:]),
+                     per_file_row(gt, out, errs[-1], joints)))
     e, t = np.concatenate(errs).mean(0), np.concatenate(twists).mean(0)
     p = np.concatenate(pos_errs).mean(0)
     print(f"{'joint':<11} {'rot deg':>8} {'pos cm':>7}" + (f" {'twist deg':>9}" if args.twist else ""))
@@ -90,6 +112,12 @@ def main() -> int:
     legs = [sk.JOINT_INDEX[n] for n in ("lhip", "lknee", "lankle", "ltoe", "rhip", "rknee", "rankle", "rtoe")]
     print(f"{'mean':<11} {e.mean():8.2f} {p.mean():7.2f}")
     print(f"legs: {100.0 * p[legs].sum() / p.sum():.0f} % of the position error ({len(legs)} of {sk.NUM_JOINTS} joints)")
+    if args.per_file:
+        names = [sk.JOINT_NAMES[j] for j in joints]
+        print("\nper file: mean rot deg; per joint: error deg (truth/reconstruction angle from identity)")
+        print(f"{'file':<22} {'mean':>5} " + " ".join(f"{n:>15}" for n in names))
+        for name, (mean, cols) in rows:
+            print(f"{name:<22} {mean:5.1f} " + " ".join(f"{e:5.1f} ({a:3.0f}/{b:3.0f})" for e, a, b in cols))
     return 0
 
 

@@ -34,17 +34,24 @@ def test_compare_writes_the_document_and_reuses_its_cache(tmp_path, synthetic_mo
     assert "numbered 1-4" in capsys.readouterr().err
 
 
-def test_targets_say_what_is_met_and_why_auj_has_a_floor():
+def test_targets_say_what_is_met_and_what_auj_measures():
     def row(**t):
-        return {"total": {"ms_per_frame": 9.0, "gt_jitter": 13.0, **t}}
+        return {"total": {"ms_per_frame": 9.0, "gt_jitter": 13.0, "gt_jerk": 30.0, **t}}
 
     res = {("6", False, "dragposer"): row(pos_cm=1.6), ("6", False, "sparseposer"): row(pos_cm=2.4),
-           ("3-head-hands", True, "dragposer"): row(pj=90.0, auj=1000.0, jitter=15.0),
-           ("3-head-hands", True, "dragposer+blend"): row(pj=50.0, auj=900.0, jitter=14.0),
-           ("3-head-hands", True, "rpm"): row(pj=40.0, auj=700.0, jitter=11.0)}  # fmt: skip
+           ("3-head-hands", True, "dragposer"): row(pj=90.0, auj=1000.0, auj_raw=1200.0),
+           ("3-head-hands", True, "dragposer+blend"): row(pj=50.0, auj=400.0, auj_raw=900.0),
+           ("3-head-hands", True, "rpm"): row(pj=40.0, auj=700.0)}  # fmt: skip
     text = "\n".join(comparison_doc._targets(res, 0.5))
     assert "2.40 cm against DragPoser's 1.60 cm on the same frames (1.50x; target <= 1.25x): **not met**" in text
     assert "PJ 40.0 / AUJ 700 against DragPoser's 90.0 / 1000 without smoothing: **met**" in text
-    assert "900 against 1000 without (0.90x; target <= 0.5x): **not met**" in text
-    assert "DragPoser 16.7 against 15.0" in text and "RPM 11.7 against 11.0" in text
-    assert "half of DragPoser's AUJ (500) is below the 780" in text
+    assert "400 against 1000 without (0.40x; target <= 0.5x): **met**" in text
+    assert "ground truth's mean jerk (30.0 here)" in text and "900 against 1200 (0.75x)" in text
+
+
+def test_a_cached_gap_pass_from_before_flowmdms_jerk_is_run_again(tmp_path):
+    f = tmp_path / "x.json"
+    f.write_text(json.dumps({"total": {"pj": 1.0, "auj": 2.0}}))
+    assert not compare._cached(f, gaps=True) and compare._cached(f, gaps=False)
+    f.write_text(json.dumps({"total": {"pj": 1.0, "auj": 2.0, "pj_raw": 3.0}}))
+    assert compare._cached(f, gaps=True) and not compare._cached(tmp_path / "missing.json", gaps=False)

@@ -182,8 +182,9 @@ def evaluate_motion(
     dict
         ``frames, pos_cm, pos_rootaligned_cm, rot_deg, vel_cms, ee_cm, jitter,
         gt_jitter, gt_jerk`` (+ the keys of :func:`transition_jerk` and
-        :func:`transition_jerk_raw`). ``gt_jerk`` is the ground truth's mean
-        :func:`peak_jerk_curve`, the reference level of AUJ.
+        :func:`transition_jerk_raw`, and ``gt_pj, gt_auj, gt_jerk_window_sum``: the
+        ground truth's own PJ / AUJ at the same changes, the floor of the figure).
+        ``gt_jerk`` is the ground truth's mean :func:`peak_jerk_curve`, AUJ's reference.
     """
     if len(gt) != len(rec):
         raise ValueError(f"ground truth has {len(gt)} frames, reconstruction {len(rec)}")
@@ -205,6 +206,8 @@ def evaluate_motion(
     }
     if connected is not None:
         out.update(transition_jerk(peak_jerk_curve(r_pos, rec.fps), connected, rec.fps, float(out["gt_jerk"])))
+        own = transition_jerk(peak_jerk_curve(g_pos, gt.fps), connected, gt.fps, float(out["gt_jerk"]))
+        out.update({"gt_" + k: own[k] for k in ("pj", "auj", "jerk_window_sum")})
         out.update(transition_jerk_raw(jerk_curve(r_pos, rec.fps), connected, rec.fps))
     return out
 
@@ -222,8 +225,8 @@ def summarize(per_file: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:
     Most metrics are weighted by each file's ``frames``; ``pj_raw`` / ``auj_raw`` are
     means over transitions, so they are weighted by the matching ``transitions*``
     count. PJ / AUJ are recomputed from the files' pooled ``jerk_window_sum*`` (one
-    mean curve over all the run's transitions) against the run's ``gt_jerk`` (the
-    frame-weighted mean of the files'). NaN values are left out.
+    mean curve over all the run's transitions; ``gt_pj`` / ``gt_auj`` likewise) against
+    the run's ``gt_jerk`` (the frame-weighted mean of the files'). NaN values are left out.
     """
     files = list(per_file.values())
     if not files:
@@ -242,8 +245,9 @@ def summarize(per_file: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:
         w = np.array([float(f.get(wk, f["frames"])) for f in files])
         ok = ~np.isnan(vals) & (w > 0)
         total[k] = float(np.average(vals[ok], weights=w[ok])) if ok.any() else float("nan")
-    for suffix, _ in _KINDS:
-        if "jerk_window_sum" + suffix in total and "gt_jerk" in total:
-            window_sum = np.asarray(total["jerk_window_sum" + suffix])
-            total.update(_peak_and_area(window_sum, total["transitions" + suffix], total["gt_jerk"], suffix))
+    for prefix, suffix in [("", x) for x, _ in _KINDS] + [("gt_", "")]:
+        if prefix + "jerk_window_sum" + suffix in total and "gt_jerk" in total:
+            window_sum = np.asarray(total[prefix + "jerk_window_sum" + suffix])
+            pa = _peak_and_area(window_sum, total["transitions" + suffix], total["gt_jerk"], suffix)
+            total.update({prefix + k: v for k, v in pa.items()})
     return total

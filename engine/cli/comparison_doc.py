@@ -130,7 +130,9 @@ def _auj_note(dp: dict, bl: dict) -> str:
     return ("  PJ / AUJ follow FlowMDM, as RPM uses them (docs/metrics.md): the 1-s windows after the "
             "changes are averaged into one curve of the largest joint jerk; PJ is its peak, AUJ its summed "
             f"distance from the ground truth's mean jerk ({fmt(gt, '.1f')} here), so motion as smooth as the "
-            "real one scores AUJ ~ 0. With the earlier plain sums (`PJ raw` / `AUJ raw`, which count the "
+            "real one scores AUJ ~ 0 up to the noise of averaging few windows: the ground truth itself, at the "
+            f"same changes, scores PJ {fmt(dp['total'].get('gt_pj'), '.1f')} / AUJ "
+            f"{fmt(dp['total'].get('gt_auj'), '.0f')}. With the earlier plain sums (`PJ raw` / `AUJ raw`, which count the "
             f"motion's own jerk too) the blend gives {fmt(bl['total'].get('auj_raw'), '.0f')} against "
             f"{fmt(dp['total'].get('auj_raw'), '.0f')} ({fmt(raw, '.2f')}x).")
 

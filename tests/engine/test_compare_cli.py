@@ -39,14 +39,14 @@ def test_targets_say_what_is_met_and_what_auj_measures():
         return {"total": {"ms_per_frame": 9.0, "gt_jitter": 13.0, "gt_jerk": 30.0, **t}}
 
     res = {("6", False, "dragposer"): row(pos_cm=1.6), ("6", False, "sparseposer"): row(pos_cm=2.4),
-           ("3-head-hands", True, "dragposer"): row(pj=90.0, auj=1000.0, auj_raw=1200.0),
+           ("3-head-hands", True, "dragposer"): row(pj=90.0, auj=1000.0, auj_raw=1200.0, gt_pj=9.0, gt_auj=99.0),
            ("3-head-hands", True, "dragposer+blend"): row(pj=50.0, auj=400.0, auj_raw=900.0),
            ("3-head-hands", True, "rpm"): row(pj=40.0, auj=700.0)}  # fmt: skip
     text = "\n".join(comparison_doc._targets(res, 0.5))
     assert "2.40 cm against DragPoser's 1.60 cm on the same frames (1.50x; target <= 1.25x): **not met**" in text
     assert "PJ 40.0 / AUJ 700 against DragPoser's 90.0 / 1000 without smoothing: **met**" in text
     assert "400 against 1000 without (0.40x; target <= 0.5x): **met**" in text
-    assert "ground truth's mean jerk (30.0 here)" in text and "900 against 1200 (0.75x)" in text
+    assert "ground truth's mean jerk (30.0 here)" in text and "PJ 9.0 / AUJ 99." in text and "900 against 1200 (0.75x)" in text
 
 
 def test_a_cached_gap_pass_from_before_flowmdms_jerk_is_run_again(tmp_path):

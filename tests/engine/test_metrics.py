@@ -146,6 +146,7 @@ def test_a_reconstruction_equal_to_a_constant_jerk_ground_truth_has_no_area():
     assert r["gt_jerk"] == pytest.approx(0.12) and r["transitions"] == 2
     assert r["pj"] == pytest.approx(0.12) and r["auj"] == pytest.approx(0.0, abs=1e-9)
     assert r["auj_raw"] == pytest.approx(60 * 0.12)  # the old sum counted the motion's own jerk
+    assert (r["gt_pj"], r["gt_auj"]) == (r["pj"], r["auj"])
 
 
 def test_a_step_after_a_transition_raises_peak_and_area(synthetic_motion):
@@ -157,6 +158,7 @@ def test_a_step_after_a_transition_raises_peak_and_area(synthetic_motion):
     assert step["pj"] > same["pj"] + 0.02 * 60**3 / 100 / 2
     assert step["auj"] > same["auj"] + 0.02 * 60**3 / 100
     assert step["pj_st"] > same["pj_st"] and step["pj_ts"] == pytest.approx(same["pj_ts"])
+    assert step["gt_auj"] == same["gt_auj"] == pytest.approx(same["auj"])  # the floor is the ground truth's
 
 
 def test_summarize_is_frame_weighted():
@@ -187,3 +189,6 @@ def test_summarize_pools_the_transition_windows_of_all_files():
     both = M.transition_jerk(np.r_[jerk, np.full(400, 0.2)], np.r_[conn, conn], 60.0, gt_jerk=0.2)
     for k in ("pj", "auj", "pj_ts", "auj_ts", "pj_st", "auj_st"):
         assert t[k] == pytest.approx(both[k]), k
+    a["gt_jerk_window_sum"], b["gt_jerk_window_sum"] = a["jerk_window_sum"], b["jerk_window_sum"]
+    t = M.summarize({"a": a, "b": b})
+    assert (t["gt_pj"], t["gt_auj"]) == pytest.approx((both["pj"], both["auj"]))

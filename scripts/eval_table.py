@@ -183,8 +183,10 @@ solver's steps after the solve, reach and tracker rotations, act on tracked limb
 ## Lost trackers (realtime)
 
 `--faulty 0.01`: every frame, with probability 1 %, one sensor fails for 100 frames
-(DragPoser sec. 5.2). `--gaps`: RPM's hand-tracking gaps. PJ / AUJ: peak and area of the
-jerk in the second after each tracking change (RPM sec. 4; [metrics.md](metrics.md)).
+(DragPoser sec. 5.2). `--gaps`: RPM's hand-tracking gaps. PJ / AUJ as FlowMDM defines them
+and RPM uses them (sec. 4; [metrics.md](metrics.md)): the peak of the largest joint's jerk in
+the second after a tracking change (averaged over the changes), and its summed distance from
+the ground truth's jerk level (real motion scores about 0).
 
 {lossy_table(out, methods)}
 

@@ -19,7 +19,7 @@ FIELDS: dict[str, tuple[str, str, float, float, float]] = {
     "step_size": ("Gradient step size", "float", 1e-3, 5.0, 0.05),
     "temporal_weight": ("Temporal prior weight", "float", 0.0, 10.0, 0.1),
     "root_anchor": ("Root anchor (no hip tracker)", "choice", 0, 0, 0),
-    "sensor_blend": ("Sensor blend in/out (s)", "float", 0.0, 2.0, 0.1),
+    "sensor_blend": ("Sensor blend-in (s)", "float", 0.0, 2.0, 0.1),
 }
 #: Values of the choice fields when the caller gives none.
 DEFAULT_CHOICES: dict[str, tuple[str, ...]] = {"mode": ("realtime", "offline")}

@@ -1,16 +1,26 @@
-"""Smooth hand-over when a tracker disconnects or reconnects (borrowed from RPM's idea
-that a returning signal should be blended in, not snapped to).
+"""Smooth hand-over when a tracker reconnects (borrowed from RPM's idea that a
+returning signal should be blended in, not snapped to).
 
 For one tracker, :class:`SensorBlend` turns the raw stream (reading, connected) into
 what the solver should use this frame:
 
-* **Blend out** (the tracker was lost): its last target stays in place and its weight
-  falls from 1 to 0 over ``seconds`` (smoothstep), instead of vanishing at once.
+* **Lost**: the tracker's term ends at once; the pose runs on the method's own
+  prediction from that frame on.
 * **Blend in** (the tracker returned): the target starts where the solved joint was on
   the frame before it returned and glides onto the tracker over ``seconds``: the
   target is ``tracker + (1 - s) * offset`` with ``offset`` the gap at reconnection and
   ``s`` a smoothstep from 0 to 1, so it follows the tracker's own motion meanwhile. The
   rotation term's weight rises with ``s``.
+
+Why no blend *out*: an earlier version held a lost tracker's last target while its
+weight fell to 0 over ``seconds``. DragPoser's limb reach (``engine/solver/limb_ik.py``)
+places a tracked wrist exactly on its target whatever the weight, so the wrist stayed
+pinned to the held point while the body moved on and was let go at the end of the fade:
+a jump inside the second after the loss. On 3-head-hands with ``--gaps`` (9 validation
+files, 300 frames, FlowMDM's PJ / AUJ, docs/metrics.md) that fade made the losses worse
+than no blending (PJ T-S 832 against 346, AUJ T-S 3927 against 2433); ending the term at
+once keeps the no-blend figures for losses and the blend-in's gain for returns
+(ablation in docs/comparison.md).
 
 ``seconds <= 0`` passes the stream through unchanged (the jump).
 """
@@ -57,7 +67,6 @@ class SensorBlend:
         self.connected: bool | None = None
         self.frames = 0  # since the last change of state
         self.offset = np.zeros(3)
-        self.held = np.zeros(3)
 
     def update(self, position: np.ndarray, connected: bool, solved: np.ndarray | None,
                seconds: float, fps: float) -> BlendedTarget:  # fmt: skip
@@ -71,7 +80,7 @@ class SensorBlend:
         solved : ndarray (3,) or None
             Where the solved joint was on the previous frame (None on the first frame).
         seconds : float
-            Blend time; <= 0 disables blending.
+            Blend-in time; <= 0 disables blending.
         fps : float
             Frames per second of the stream.
         """
@@ -84,11 +93,8 @@ class SensorBlend:
             if connected:
                 self.offset = (solved - position) if solved is not None else np.zeros(3)
         self.frames += 1
-        if connected:
-            self.held = position
         n = max(1.0, seconds * fps)
         s = smoothstep(self.frames / n) if seconds > 0 else 1.0
         if connected:
             return BlendedTarget(True, position + (1.0 - s) * self.offset, 1.0, s)
-        left = 1.0 - s
-        return BlendedTarget(left > 0.0, self.held.copy(), left, left)
+        return BlendedTarget(False, position, 0.0, 0.0)

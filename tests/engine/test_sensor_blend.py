@@ -23,15 +23,11 @@ def test_zero_seconds_passes_the_stream_through():
             np.testing.assert_allclose(t.position, pos)
 
 
-def test_blend_out_holds_the_target_while_its_weight_falls_to_zero():
-    stream = [([1, 2, 3], True, [0, 0, 0])] * 3 + [([9, 9, 9], False, [0, 0, 0])] * 8
-    out = _run(0.5, stream)  # 5 frames at 10 fps
-    lost = out[3:]
-    weights = [t.weight for t in lost]
-    assert all(a > b for a, b in zip(weights[:4], weights[1:5])) and weights[4] == 0.0
-    assert [t.active for t in lost] == [True] * 4 + [False] * 4
-    for t in lost[:4]:
-        np.testing.assert_allclose(t.position, [1, 2, 3])
+def test_a_lost_tracker_ends_at_once_even_with_a_blend_time():
+    stream = [([1, 2, 3], True, [0, 0, 0])] * 3 + [([9, 9, 9], False, [0, 0, 0])] * 4
+    out = _run(0.5, stream)
+    assert [t.active for t in out] == [True] * 3 + [False] * 4
+    assert all(t.weight == 0.0 and t.rotation_weight == 0.0 for t in out[3:])
 
 
 def test_blend_in_starts_at_the_solved_joint_and_glides_onto_the_tracker():

@@ -4,7 +4,7 @@ RPM and the IK baseline on the validation files.
 Four passes, each the same as ``evaluate --method A,B,...`` on the same simulated
 trackers: preset ``6`` and ``3-head-hands``, each without and with RPM's hand-tracking
 gaps (``--gaps``). In the passes with gaps DragPoser runs twice: with its trackers'
-targets jumping (``sensor_blend=0``) and blended out/in over ``--blend`` seconds.
+targets jumping (``sensor_blend=0``) and blended in over ``--blend`` seconds.
 Every (pass, method) result is kept as JSON in ``--cache`` and reused when present, so
 an interrupted run continues and the document can be rebuilt with ``--table-only``.
 """

@@ -20,7 +20,7 @@ a jump inside the second after the loss. On 3-head-hands with ``--gaps`` (9 vali
 files, 300 frames, FlowMDM's PJ / AUJ, docs/metrics.md) that fade made the losses worse
 than no blending (PJ T-S 832 against 346, AUJ T-S 3927 against 2433); ending the term at
 once keeps the no-blend figures for losses and the blend-in's gain for returns
-(ablation in docs/comparison.md).
+(ablation in docs/optimizer.md, "Trackers that are lost and found").
 
 ``seconds <= 0`` passes the stream through unchanged (the jump).
 """

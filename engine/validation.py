@@ -177,6 +177,8 @@ SETTINGS: Schema = {
     "ground_weight": Num(0, 1e6),
     "tuning": Choice(("preset", "off")),
     "heading": Choice(("previous", "anchor")),
+    "prior": Choice(("predictor", "trackers")),
+    "tracker_prior_weight": Num(0, 1e6),
 }
 
 #: One entry of ``manifest.json`` (``{"files": [{"path": ..., "fps": ...}, ...]}``).

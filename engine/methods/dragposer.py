@@ -38,6 +38,7 @@ from engine.solver import (
 from engine.solver.limb_ik import LIMBS, finish
 from engine.solver.pose import BODY_HEADING_LIMIT_DEG, body_facing, clamp_heading
 from engine.solver.profiles import effective
+from engine.solver.tracker_prior import PoseBank, TrackerHistory, default_bank
 
 _HEIGHT_IDX = [sk.JOINT_INDEX[j] for j in sk.HEIGHT_JOINTS]
 
@@ -66,13 +67,14 @@ class DragPoserMethod(Method):
 
     def __init__(self, decoder: LatentDecoder, predictor: LatentPredictor | None = None,
                  settings: OptimizerSettings | None = None, latent_dim: int = 24, fast: bool = True,
-                 **overrides: Any) -> None:  # fmt: skip
+                 bank: PoseBank | None = None, **overrides: Any) -> None:  # fmt: skip
         self.decoder = decoder
         if isinstance(decoder, torch.nn.Module):
             decoder.eval().requires_grad_(False)
         if isinstance(predictor, torch.nn.Module):
             predictor.eval().requires_grad_(False)
         self.predictor = predictor
+        self.bank = bank  # the tracker prior's training poses (engine/solver/tracker_prior.py)
         self.settings = settings or OptimizerSettings()
         # settings the caller chose (kept against the sensor-set profiles, engine/solver/profiles.py)
         defaults = OptimizerSettings()
@@ -162,6 +164,7 @@ class DragPoserMethod(Method):
         self._facing: np.ndarray | None = None  # this frame's body heading (4,), from its trackers
         self._points: dict[str, np.ndarray] = {}  # connected trackers' positions, this frame
         self._last_points: dict[str, np.ndarray] = {}  # ... and the previous one
+        self._tracks = TrackerHistory()  # recent 6-DoF readings for the tracker prior
 
     def step(self, sensors: SensorFrame, deadline: float | None = None) -> FrameResult:
         """Solve the next frame. ``deadline`` (a ``time.perf_counter()`` time; live input)
@@ -179,6 +182,8 @@ class DragPoserMethod(Method):
     def _step(self, sensors: SensorFrame, deadline: float | None = None) -> FrameResult:
         t0 = time.perf_counter()
         warnings = self._update_sensors(sensors)
+        self._tracks.push({j: (np.asarray(r.position, np.float64), np.asarray(r.rotation, np.float64))
+                           for j, r in sensors.readings.items() if r.connected and r.dof == 6 and _finite(r)})  # fmt: skip
         points = {j: np.array(c.position, dtype=np.float64) for j, c in self.sensors.items() if c.enabled}
         self._facing = body_facing(points)
         self._last_points, self._points = self._points, points
@@ -196,8 +201,13 @@ class DragPoserMethod(Method):
         prediction, warn = self.schedule.prediction(self._frame, self.predictor, max(1, s.future_window), defer=True)
         if warn:
             warnings.append(warn)
+        prior_weight = s.temporal_weight
+        if s.prior == "trackers" and self.bank is not None:
+            readings = self._tracks.arrays()
+            if readings is not None:  # hips or head among the 6-DoF trackers
+                prediction, prior_weight = self.bank.latent(*readings), s.tracker_prior_weight
         start = prediction if prediction is not None and s.init_from_prediction else self._latent
-        self.prior.weight = s.temporal_weight
+        self.prior.weight = prior_weight
         self.smooth.weight = s.smooth_weight
         feet = any(self.sensors[j].enabled for j in ("lankle", "rankle") if j in self.sensors)
         self.ground.weight = 0.0 if feet else s.ground_weight
@@ -468,12 +478,14 @@ def create(mode: str = "realtime", iterations: int | None = None, lr: float | No
     else:
         models = load_default_models()
     decoder, predictor = _unpack_models(models)
+    # the shipped pose bank holds the shipped VAE's latents: a user's VAE goes without it
+    bank = default_bank() if vae_path is None else None
     values: dict[str, Any] = {"mode": mode, **overrides}
     if iterations is not None:
         values["iterations" if mode == "realtime" else "max_iterations"] = iterations
     if lr is not None:
         values["lr"] = lr
-    return DragPoserMethod(decoder, predictor, latent_dim=_latent_dim(decoder), **values)
+    return DragPoserMethod(decoder, predictor, latent_dim=_latent_dim(decoder), bank=bank, **values)
 
 
 def _unpack_models(models: Any) -> tuple[Any, Any]:

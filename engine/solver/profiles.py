@@ -40,6 +40,7 @@ class Profile:
     smooth_weight: float
     ground_weight: float
     sensor_rotation_weight: float
+    prior: str = "predictor"
 
     def values(self) -> dict:
         return {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name != "name"}
@@ -53,9 +54,9 @@ PROFILES: dict[str, Profile] = {
     "full3": Profile("full3", future_window=1, temporal_weight=0.01, step_size=0.3, lr=0.05, smooth_weight=0.0,
                      ground_weight=0.0, sensor_rotation_weight=0.03),
     "hip": Profile("hip", future_window=16, temporal_weight=0.01, step_size=0.3, lr=0.05, smooth_weight=0.0,
-                   ground_weight=10.0, sensor_rotation_weight=0.1),
+                   ground_weight=10.0, sensor_rotation_weight=0.1, prior="trackers"),
     "head": Profile("head", future_window=16, temporal_weight=0.01, step_size=0.3, lr=0.05, smooth_weight=0.0,
-                    ground_weight=10.0, sensor_rotation_weight=0.1),
+                    ground_weight=10.0, sensor_rotation_weight=0.1, prior="trackers"),
 }  # fmt: skip
 #: Settings a profile may supply.
 TUNED = tuple(f.name for f in dataclasses.fields(Profile) if f.name != "name")

@@ -19,6 +19,8 @@ OPTIMIZERS = ("auto", "sgd", "adam", "adam-carry")
 TUNINGS = ("preset", "off")
 #: ``heading``: what the decoded root rotation is relative to without a hip tracker.
 HEADINGS = ("previous", "anchor")
+#: ``prior``: where the temporal prior's latent comes from (engine/solver/tracker_prior.py).
+PRIORS = ("predictor", "trackers")
 #: Connected sensors from which ``auto`` uses Adam (and the predictor looks one step ahead).
 FULL_SET = 6
 
@@ -56,6 +58,14 @@ class OptimizerSettings:
         position error (m^2).
     temporal_weight : float
         Weight of the temporal prior (MSE to the predictor's latent).
+    prior : str
+        ``predictor``: the temporal prior's latent is the temporal predictor's (the
+        paper); ``trackers``: the latent of the training poses whose trackers look like
+        this frame's (:mod:`engine.solver.tracker_prior`; beyond the paper), while the
+        connected trackers include hips or head and a pose bank is loaded, else the
+        predictor's. The ``hip`` and ``head`` profiles use ``trackers``.
+    tracker_prior_weight : float
+        Weight of the temporal prior while its latent comes from the trackers.
     init_from_prediction : bool
         Start each frame from the predictor's latent when there is one. Off by default:
         Algorithm 1 starts from the previous frame's latent and uses the prediction only
@@ -148,6 +158,8 @@ class OptimizerSettings:
     sensor_rotations: bool = True
     reach: bool = True
     heading: str = "anchor"
+    prior: str = "predictor"
+    tracker_prior_weight: float = 1.0
 
     def __post_init__(self) -> None:
         self.validate()
@@ -165,7 +177,7 @@ class OptimizerSettings:
             setattr(self, name, int(v))
         floats = ("lr", "position_tolerance", "rotation_tolerance", "sensor_rotation_weight", "temporal_weight",
                   "min_improvement", "divergence_factor", "momentum", "step_size", "sensor_blend",
-                  "smooth_weight", "ground_weight")  # fmt: skip
+                  "smooth_weight", "ground_weight", "tracker_prior_weight")  # fmt: skip
         for name in floats:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
@@ -175,6 +187,8 @@ class OptimizerSettings:
             raise UserError(f"optimizer setting 'optimizer' must be one of {', '.join(OPTIMIZERS)}, got {self.optimizer!r}")
         if self.tuning not in TUNINGS:
             raise UserError(f"optimizer setting 'tuning' must be one of {', '.join(TUNINGS)}, got {self.tuning!r}")
+        if self.prior not in PRIORS:
+            raise UserError(f"optimizer setting 'prior' must be one of {', '.join(PRIORS)}, got {self.prior!r}")
         if self.heading not in HEADINGS:
             raise UserError(f"optimizer setting 'heading' must be one of {', '.join(HEADINGS)}, got {self.heading!r}")
         for name in ("sensor_rotations", "reach"):

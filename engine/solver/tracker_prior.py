@@ -1,0 +1,241 @@
+"""A temporal prior that sees the trackers: the latents of training poses whose trackers
+look like this frame's (beyond the paper).
+
+DragPoser's temporal predictor guesses the next latent from past latents only. With a
+sparse sensor set those past latents are themselves guesses, and the untracked legs
+follow them: with a prior as good as the truth, presets ``4`` and ``3-hip-hands`` reach
+1.5-1.6 cm instead of 7.6-9.2 (``scripts/oracle_prior.py``, docs/accuracy.md). The
+:class:`PoseBank` gives a prior from what *is* measured. It holds, for every frame of the
+training clips, the world positions and rotations of the joints trackers sit on
+(:data:`BANK_JOINTS`) and the VAE encoder's latent of the true pose. For a frame being
+solved, the connected bank joints' readings are turned into :func:`features` (tracked
+joints relative to an anchor, hips or else head, in the anchor's heading frame; the
+anchor's height; the tracked rotations without heading; the anchor's displacement over
+the last :data:`LAG` frames), and the prior's target is the mean latent of the ``k``
+training frames with the nearest features (standardised Euclidean distance), a
+nearest-neighbour lookup in the spirit of motion matching. It reads only this frame's
+and earlier readings, so it works live. The solver then treats that latent exactly as it
+treats the predictor's (the ``temporal_prior`` term), so every other constraint still
+acts and can still be edited.
+
+The bank belongs to the VAE whose encoder made its latents: the shipped bank
+(``assets/models/pose_bank.npz``) goes with the shipped VAE only. Build one with
+``scripts/build_pose_bank.py``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from engine.kinematics import quaternion as Q
+
+#: Joints whose tracker readings the bank stores, in this order.
+BANK_JOINTS: tuple[str, ...] = ("root", "upperneck", "lwrist", "rwrist", "lankle", "rankle")
+#: Anchors (first one connected wins) and their slots in :attr:`PoseBank.prev_anchor`.
+ANCHORS: tuple[str, ...] = ("root", "upperneck")
+#: Frames over which the anchor's displacement is a feature.
+LAG = 4
+DEFAULT_BANK = Path(__file__).resolve().parents[2] / "assets" / "models" / "pose_bank.npz"
+_FORWARD = np.array([0.0, -1.0, 0.0])
+
+
+def features(pos: np.ndarray, rot: np.ndarray, anchor: int, prev_anchor: np.ndarray) -> np.ndarray:
+    """Tracker features of ``F`` frames.
+
+    Parameters
+    ----------
+    pos : ndarray (F, S, 3)
+        World positions of the ``S`` tracked joints, metres.
+    rot : ndarray (F, S, 4)
+        Their world rotations (w, x, y, z).
+    anchor : int
+        Index (in ``S``) of the anchor joint.
+    prev_anchor : ndarray (F, 3)
+        The anchor's position :data:`LAG` frames earlier (its first position at the start).
+
+    Returns
+    -------
+    ndarray (F, 3 (S - 1) + 1 + 6 S + 3)
+        Other joints relative to the anchor, the anchor's height, the first two columns of
+        each rotation matrix (halved), the anchor's displacement (doubled); everything
+        turned about the vertical so the anchor faces -Y: the features do not depend on
+        where the wearer stands or which way they face.
+    """
+    f = len(pos)
+    fwd = Q.rotate(rot[:, anchor], np.broadcast_to(_FORWARD, (f, 3)))
+    half = -0.5 * np.arctan2(fwd[:, 0], -fwd[:, 1])
+    unyaw = np.stack((np.cos(half), np.zeros(f), np.zeros(f), np.sin(half)), -1)
+    rel = Q.rotate(unyaw[:, None], pos - pos[:, anchor : anchor + 1])
+    others = [i for i in range(pos.shape[1]) if i != anchor]
+    mats = Q.to_matrix(Q.mul(np.broadcast_to(unyaw[:, None], rot.shape), rot))[..., :2].reshape(f, -1)
+    disp = Q.rotate(unyaw, pos[:, anchor] - prev_anchor)
+    return np.concatenate((rel[:, others].reshape(f, -1), pos[:, anchor, 2:3], 0.5 * mats, 2.0 * disp), -1)
+
+
+@dataclass
+class _Index:
+    mean: np.ndarray
+    std: np.ndarray
+    table: torch.Tensor  # (N, D) standardised features
+    norms: torch.Tensor  # (N,) their squared lengths
+
+
+@dataclass
+class PoseBank:
+    """Tracker readings and true latents of the training frames (see the module doc).
+
+    Attributes
+    ----------
+    positions : ndarray (N, 6, 3)
+        World positions of :data:`BANK_JOINTS`, metres.
+    rotations : ndarray (N, 6, 4)
+        Their world rotations.
+    prev_anchor : ndarray (N, 2, 3)
+        Positions of the two :data:`ANCHORS` :data:`LAG` frames earlier in the same clip.
+    latents : ndarray (N, L)
+        VAE encoder mean of each frame's true pose.
+    vae_sha256 : str
+        Hash of the VAE weights file the latents come from ("" = unknown).
+    k : int
+        Neighbours averaged per lookup.
+    """
+
+    positions: np.ndarray
+    rotations: np.ndarray
+    prev_anchor: np.ndarray
+    latents: np.ndarray
+    vae_sha256: str = ""
+    k: int = 8
+    _indexes: dict = field(default_factory=dict, repr=False)
+
+    def __post_init__(self) -> None:
+        n = len(self.latents)
+        shapes = {"positions": (n, len(BANK_JOINTS), 3), "rotations": (n, len(BANK_JOINTS), 4),
+                  "prev_anchor": (n, len(ANCHORS), 3)}  # fmt: skip
+        for name, shape in shapes.items():
+            if getattr(self, name).shape != shape:
+                raise ValueError(f"pose bank: {name} has shape {getattr(self, name).shape}, expected {shape}")
+        if n < self.k:
+            raise ValueError(f"pose bank: {n} frames, fewer than k = {self.k}")
+        self._latents = torch.as_tensor(np.asarray(self.latents, np.float32))
+
+    def __len__(self) -> int:
+        return len(self.latents)
+
+    def _index(self, joints: tuple[str, ...]) -> _Index:
+        idx = self._indexes.get(joints)
+        if idx is None:
+            cols = [BANK_JOINTS.index(j) for j in joints]
+            a = _anchor(joints)
+            x = features(self.positions[:, cols].astype(np.float64), self.rotations[:, cols].astype(np.float64), a,
+                         self.prev_anchor[:, ANCHORS.index(joints[a])].astype(np.float64))  # fmt: skip
+            mean, std = x.mean(0), x.std(0) + 1e-6
+            table = torch.as_tensor((x - mean) / std, dtype=torch.float32)
+            idx = self._indexes[joints] = _Index(mean, std, table, (table * table).sum(1))
+        return idx
+
+    def latent(self, joints: Sequence[str], pos: np.ndarray, rot: np.ndarray) -> torch.Tensor:
+        """Prior latent ``(L,)`` for readings of ``joints`` (a subset of :data:`BANK_JOINTS`
+        holding an anchor) over the last ``LAG + 1`` frames: ``pos (LAG+1, S, 3)``, ``rot
+        (LAG+1, S, 4)``, oldest first (repeat the first frame at the start of a clip)."""
+        joints = tuple(joints)
+        idx = self._index(joints)
+        a = _anchor(joints)
+        x = features(pos[-1:], rot[-1:], a, pos[:1, a])[0]
+        q = torch.as_tensor((x - idx.mean) / idx.std, dtype=torch.float32)
+        # |t - q|^2 = |t|^2 - 2 t.q + |q|^2; the last term is the same for every row
+        nearest = (idx.norms - 2.0 * (idx.table @ q)).topk(self.k, largest=False).indices
+        return self._latents[nearest].mean(0)
+
+    def save(self, path: str | Path) -> None:
+        """Write the bank (float16 arrays, compressed) atomically."""
+        from engine.atomic import atomic_path
+
+        with atomic_path(path, suffix=".npz") as tmp:
+            np.savez_compressed(tmp, positions=self.positions.astype(np.float16),
+                                rotations=self.rotations.astype(np.float16),
+                                prev_anchor=self.prev_anchor.astype(np.float16),
+                                latents=self.latents.astype(np.float16), vae_sha256=np.array(self.vae_sha256),
+                                k=np.array(self.k))  # fmt: skip
+
+    @classmethod
+    def load(cls, path: str | Path) -> "PoseBank":
+        """Read a bank written by :meth:`save` (plain arrays only, no pickles)."""
+        from engine.errors import UserError
+
+        try:
+            with np.load(Path(path), allow_pickle=False) as d:
+                return cls(d["positions"].astype(np.float64), d["rotations"].astype(np.float64),
+                           d["prev_anchor"].astype(np.float64), d["latents"].astype(np.float32),
+                           str(d["vae_sha256"]), int(d["k"]))  # fmt: skip
+        except (OSError, KeyError, ValueError) as exc:
+            raise UserError(f"{path}: not a pose bank ({exc})") from exc
+
+
+_DEFAULT: list = []
+
+
+def default_bank() -> PoseBank | None:
+    """The shipped bank (loaded once per process), or None when it is missing or was not
+    made with the shipped VAE's encoder (then the temporal predictor stays the prior)."""
+    if not _DEFAULT:
+        from engine.models.loading import DEFAULT_VAE
+
+        bank = None
+        if DEFAULT_BANK.is_file() and DEFAULT_VAE.is_file():
+            bank = PoseBank.load(DEFAULT_BANK)
+            if bank.vae_sha256 and bank.vae_sha256 != file_sha256(DEFAULT_VAE):
+                bank = None
+        _DEFAULT.append(bank)
+    return _DEFAULT[0]
+
+
+def _anchor(joints: Sequence[str]) -> int:
+    for a in ANCHORS:
+        if a in joints:
+            return list(joints).index(a)
+    raise ValueError(f"no anchor ({' or '.join(ANCHORS)}) among {joints}")
+
+
+def file_sha256(path: str | Path) -> str:
+    """Hex SHA-256 of a file (which VAE a bank belongs to)."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for chunk in iter(lambda: fh.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+class TrackerHistory:
+    """The last ``LAG + 1`` frames of readings of the bank joints, for :meth:`PoseBank.latent`."""
+
+    def __init__(self) -> None:
+        self.frames: list[dict[str, tuple[np.ndarray, np.ndarray]]] = []
+
+    def reset(self) -> None:
+        self.frames.clear()
+
+    def push(self, readings: dict[str, tuple[np.ndarray, np.ndarray]]) -> None:
+        """Add one frame: connected bank joints -> (position (3,), rotation (4,))."""
+        self.frames.append({j: r for j, r in readings.items() if j in BANK_JOINTS})
+        del self.frames[: -(LAG + 1)]
+
+    def arrays(self) -> tuple[tuple[str, ...], np.ndarray, np.ndarray] | None:
+        """``(joints, pos (LAG+1, S, 3), rot (LAG+1, S, 4))`` of the joints connected in
+        every kept frame (the first frame repeated to fill the window), or None without an
+        anchor among them or with fewer than two joints."""
+        if not self.frames:
+            return None
+        joints = tuple(j for j in BANK_JOINTS if all(j in f for f in self.frames))
+        if len(joints) < 2 or not any(a in joints for a in ANCHORS):
+            return None
+        frames = [self.frames[0]] * (LAG + 1 - len(self.frames)) + self.frames
+        pos = np.array([[f[j][0] for j in joints] for f in frames], dtype=np.float64)
+        rot = np.array([[f[j][1] for j in joints] for f in frames], dtype=np.float64)
+        return joints, pos, rot

@@ -1,0 +1,134 @@
+"""The tracker prior (engine/solver/tracker_prior.py): features, the bank lookup, its file,
+and DragPoser taking its latent as the temporal prior's for sparse sets."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from engine.errors import UserError
+from engine.kinematics import quaternion as Q
+from engine.methods.dragposer import DragPoserMethod
+from engine.solver.tracker_prior import ANCHORS, BANK_JOINTS, LAG, PoseBank, TrackerHistory, features
+from engine.tracking import simulate
+from tests.engine.test_optimizer_standins import CountingPredictor, MLPDecoder
+
+
+def _yaw(deg: float) -> np.ndarray:
+    return np.array([np.cos(np.radians(deg) / 2), 0.0, 0.0, np.sin(np.radians(deg) / 2)])
+
+
+def _random_readings(rng, f: int, s: int):
+    pos = rng.normal(size=(f, s, 3))
+    rot = Q.normalize(rng.normal(size=(f, s, 4)))
+    return pos, rot
+
+
+def test_features_ignore_where_the_wearer_stands_and_faces_but_see_the_pose():
+    rng = np.random.default_rng(0)
+    pos, rot = _random_readings(rng, 5, 4)
+    prev = pos[:, 0] - rng.normal(scale=0.05, size=(5, 3))
+    x = features(pos, rot, 0, prev)
+    assert x.shape == (5, 3 * 3 + 1 + 6 * 4 + 3)
+    turn = np.broadcast_to(_yaw(73.0), (5, 4, 4))
+    shift = np.array([2.0, -1.0, 0.0])  # horizontal only: the anchor's height is a feature
+    moved = features(Q.rotate(turn, pos) + shift, Q.mul(turn, rot), 0, Q.rotate(turn[:, 0], prev) + shift)
+    np.testing.assert_allclose(moved, x, atol=1e-9)
+    lifted = pos.copy()
+    lifted[:, 2] += 0.1  # a hand moved: the features change
+    assert np.abs(features(lifted, rot, 0, prev) - x).max() > 0.05
+
+
+def _bank(rng, n: int = 200, k: int = 3) -> PoseBank:
+    pos, rot = _random_readings(rng, n, len(BANK_JOINTS))
+    prev = pos[:, [BANK_JOINTS.index(a) for a in ANCHORS]] - 0.01
+    return PoseBank(pos, rot, prev, rng.normal(size=(n, 24)).astype(np.float32), "abc", k)
+
+
+def test_the_latent_is_the_mean_latent_of_the_nearest_training_frames():
+    rng = np.random.default_rng(1)
+    bank = _bank(rng)
+    joints = ("root", "lwrist", "rwrist")
+    cols = [BANK_JOINTS.index(j) for j in joints]
+    i = 57  # readings of training frame 57 (its anchor LAG frames back as the bank has it)
+    pos = np.repeat(bank.positions[i : i + 1, cols], LAG + 1, 0)
+    rot = np.repeat(bank.rotations[i : i + 1, cols], LAG + 1, 0)
+    pos[0, 0] = bank.prev_anchor[i, 0]
+    z = bank.latent(joints, pos, rot)
+    # brute force, independently: standardised distances over the whole bank
+    x = features(bank.positions[:, cols], bank.rotations[:, cols], 0, bank.prev_anchor[:, 0])
+    mu, sd = x.mean(0), x.std(0) + 1e-6
+    d = (((x - mu) / sd - (x[i] - mu) / sd) ** 2).sum(1)
+    near = np.argsort(d)[:3]
+    assert near[0] == i
+    np.testing.assert_allclose(z.numpy(), bank.latents[near].mean(0), atol=1e-5)
+
+
+def test_a_bank_survives_its_file_and_a_broken_file_is_a_user_error(tmp_path):
+    bank = _bank(np.random.default_rng(2))
+    bank.save(tmp_path / "b.npz")
+    back = PoseBank.load(tmp_path / "b.npz")
+    assert back.vae_sha256 == "abc" and back.k == 3 and len(back) == len(bank)
+    np.testing.assert_allclose(back.latents, bank.latents, atol=2e-3)  # stored as float16
+    (tmp_path / "bad.npz").write_bytes(b"not a bank")
+    with pytest.raises(UserError, match="bad.npz"):
+        PoseBank.load(tmp_path / "bad.npz")
+
+
+def test_history_keeps_joints_connected_throughout_and_needs_an_anchor():
+    h = TrackerHistory()
+    r = (np.zeros(3), np.array([1.0, 0, 0, 0]))
+    assert h.arrays() is None
+    h.push({"lwrist": r, "rwrist": r, "lelbow": r})
+    assert h.arrays() is None  # no hips or head
+    h.push({"root": r, "lwrist": r, "rwrist": r})
+    assert h.arrays() is None  # the hips were not there the frame before
+    for _ in range(LAG + 1):
+        h.push({"root": r, "lwrist": r, "rwrist": r})
+    joints, pos, rot = h.arrays()
+    assert joints == ("root", "lwrist", "rwrist") and pos.shape == (LAG + 1, 3, 3) and rot.shape == (LAG + 1, 3, 4)
+
+
+def test_dragposer_uses_the_bank_latent_with_a_sparse_set_and_the_predictor_with_six(clip):
+    rng = np.random.default_rng(3)
+    bank = _bank(rng, k=1)
+    bank.latents[:] = 0.5  # every neighbour answers 0.5 in every dimension
+    bank._latents = torch.as_tensor(bank.latents)
+    seen = []
+
+    def run(preset: str, **kw):
+        torch.manual_seed(0)
+        m = DragPoserMethod(MLPDecoder(), CountingPredictor(), iterations=2, bank=bank, **kw)
+        tr = simulate(clip, preset)
+        m.reset(clip.skeleton)
+        solve = m.optimizer.solve
+
+        def spy(start, terms, ctx):
+            pred = ctx.prediction
+            seen.append((m.prior.weight, None if pred is None else float(pred.mean())))
+            return solve(start, terms, ctx)
+
+        m.optimizer.solve = spy
+        for i in range(6):
+            m.step(tr.frame(i))
+        return m
+
+    run("4")
+    assert seen[-1] == (1.0, pytest.approx(0.5))  # profile hip: trackers, weight tracker_prior_weight
+    seen.clear()
+    run("4", prior="predictor")  # explicitly the paper's
+    assert seen[-1][0] == 0.01 and seen[-1][1] != pytest.approx(0.5)
+    seen.clear()
+    run("6")  # full profile: the predictor
+    assert seen[-1][0] == 0.01 and seen[-1][1] != pytest.approx(0.5)
+
+
+@pytest.fixture
+def clip():
+    from engine.motion import Motion
+
+    f = 24
+    t = np.arange(f) / 60.0
+    rot = np.tile(np.array([1.0, 0.0, 0.0, 0.0]), (f, 22, 1))
+    return Motion(rot, np.stack([0.2 * t, -0.8 * t, 1.0 + 0 * t], -1))

@@ -38,7 +38,8 @@ def optimizer_choices() -> tuple[dict[str, tuple[str, ...]], dict[str, Any]]:
     Returns
     -------
     choices : dict
-        ``mode``, ``optimizer`` (the latent update rule) and ``root_anchor`` -> values.
+        ``mode``, ``optimizer`` (the latent update rule), ``prior`` (where the temporal
+        prior's latent comes from) and ``root_anchor`` -> values.
     defaults : dict
         Field name -> default value, shown until the session sets the field.
     """
@@ -48,6 +49,8 @@ def optimizer_choices() -> tuple[dict[str, tuple[str, ...]], dict[str, Any]]:
     choices = {"mode": tuple(opt.MODES)}
     if "optimizer" in defaults and hasattr(opt, "OPTIMIZERS"):
         choices["optimizer"] = tuple(opt.OPTIMIZERS)
+    if "prior" in defaults and hasattr(opt, "PRIORS"):
+        choices["prior"] = tuple(opt.PRIORS)
     if "root_anchor" in defaults:
         anchor = str(defaults["root_anchor"])
         choices["root_anchor"] = ROOT_ANCHORS if anchor in ROOT_ANCHORS else (anchor, *ROOT_ANCHORS)

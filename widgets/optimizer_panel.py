@@ -1,5 +1,5 @@
-"""Optimizer settings: method, ghosts, mode, iterations, learning rate, temporal prior,
-latent update rule and root anchor."""
+"""Optimizer settings: method, ghosts, mode, iterations, learning rate, temporal prior
+(its weight and source), latent update rule and root anchor."""
 
 from __future__ import annotations
 
@@ -18,6 +18,8 @@ FIELDS: dict[str, tuple[str, str, float, float, float]] = {
     "lr": ("Adam learning rate", "float", 1e-4, 1.0, 0.005),
     "step_size": ("Gradient step size", "float", 1e-3, 5.0, 0.05),
     "temporal_weight": ("Temporal prior weight", "float", 0.0, 10.0, 0.1),
+    "prior": ("Prior from (sparse sets: trackers)", "choice", 0, 0, 0),
+    "tracker_prior_weight": ("Tracker prior weight", "float", 0.0, 10.0, 0.1),
     "root_anchor": ("Root anchor (no hip tracker)", "choice", 0, 0, 0),
     "sensor_blend": ("Sensor blend-in (s)", "float", 0.0, 2.0, 0.1),
 }

@@ -4,7 +4,7 @@ Public surface:
 
 * :class:`PoseOptimizer` — ``solve(start, constraints, ctx) -> Solution`` per frame;
   ``decode(z, ctx) -> PoseState``; fast and reference paths (see :mod:`.optimizer`).
-* :class:`OptimizerSettings` (validated), :data:`MODES`, :data:`OPTIMIZERS`, :data:`FULL_SET`.
+* :class:`OptimizerSettings` (validated), :data:`MODES`, :data:`OPTIMIZERS`, :data:`PRIORS`, :data:`FULL_SET`.
 * :class:`FrameContext`, :class:`RootFrame`, :class:`RootOverride`, :class:`RootAnchor`
   — what a frame's pose depends on besides the latent.
 * :class:`Solution`, :class:`SolveTimings` — the result and where its time went.
@@ -16,13 +16,13 @@ Public surface:
 
 from engine.solver.optimizer import FrameContext, LatentDecoder, PoseOptimizer, Solution, SolveTimings
 from engine.solver.pose import RootAnchor, RootFrame, RootOverride, world_root
-from engine.solver.settings import FULL_SET, MODES, OPTIMIZERS, OptimizerSettings
+from engine.solver.settings import FULL_SET, MODES, OPTIMIZERS, PRIORS, OptimizerSettings
 from engine.solver.state import PoseState
 from engine.solver.temporal import LatentPredictor, TemporalSchedule
 from engine.solver.update import LatentUpdate
 
 __all__ = [
-    "FULL_SET", "MODES", "OPTIMIZERS", "FrameContext", "LatentDecoder", "LatentPredictor", "LatentUpdate",
+    "FULL_SET", "MODES", "OPTIMIZERS", "PRIORS", "FrameContext", "LatentDecoder", "LatentPredictor", "LatentUpdate",
     "OptimizerSettings", "PoseOptimizer", "PoseState", "RootAnchor", "RootFrame", "RootOverride", "Solution",
     "SolveTimings", "TemporalSchedule", "world_root",
 ]  # fmt: skip

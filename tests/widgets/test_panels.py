@@ -126,7 +126,8 @@ def test_latent_debugger_needs_a_decoder(qtbot, fake_snapshot, can_decode):
 def test_optimizer_panel_offers_the_engine_choices_and_emits_edits(qtbot):
     from widgets.optimizer_panel import OptimizerPanel
 
-    choices = {"optimizer": ("sgd", "adam", "adam-carry"), "root_anchor": ("upperneck", "none")}
+    choices = {"optimizer": ("sgd", "adam", "adam-carry"), "root_anchor": ("upperneck", "none"),
+               "prior": ("predictor", "trackers")}  # fmt: skip
     p = OptimizerPanel(["ik", "dragposer"], choices)
     qtbot.addWidget(p)
     opt, anchor = p.editors["optimizer"], p.editors["root_anchor"]
@@ -139,7 +140,9 @@ def test_optimizer_panel_offers_the_engine_choices_and_emits_edits(qtbot):
     opt.setCurrentText("adam-carry")
     anchor.setCurrentText("none")
     p.editors["lr"].setValue(0.2)
-    assert seen == [("optimizer", "adam-carry"), ("root_anchor", "none"), ("lr", pytest.approx(0.2))]
+    p.editors["prior"].setCurrentText("trackers")
+    assert seen == [("optimizer", "adam-carry"), ("root_anchor", "none"), ("lr", pytest.approx(0.2)),
+                    ("prior", "trackers")]  # fmt: skip
 
 
 def test_optimizer_panel_hides_choices_the_engine_does_not_offer(qtbot):

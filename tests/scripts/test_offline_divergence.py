@@ -2,21 +2,13 @@
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[2]
+from .script_loader import ROOT, load_script
 
 
 def _script():
-    spec = importlib.util.spec_from_file_location("offline_divergence", ROOT / "scripts" / "offline_divergence.py")
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules["offline_divergence"] = mod
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script("offline_divergence")
 
 
 def test_resolving_recorded_inputs_reproduces_the_frame_and_swaps_change_it():

@@ -2,22 +2,15 @@
 
 from __future__ import annotations
 
-import importlib.util
 import sys
-from pathlib import Path
 
 import numpy as np
 
-
-ROOT = Path(__file__).resolve().parents[2]
+from .script_loader import ROOT, load_script
 
 
 def _script():
-    spec = importlib.util.spec_from_file_location("stability_check", ROOT / "scripts" / "stability_check.py")
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules["stability_check"] = mod
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script("stability_check")
 
 
 def _about(axis: int, deg: float) -> np.ndarray:

@@ -32,10 +32,13 @@ from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk
 from engine.methods.base import FrameResult, Method, check_preset
 from engine.sensors import Sensor, SensorFrame
-from engine.models.sparseposer import SPARSE_INDEX, SPARSE_JOINTS
+from engine.models.sparseposer import LIMB_EE, SPARSE_INDEX, SPARSE_JOINTS, local_rotations
 from engine.models.sparseposer_infer import DenseGenerator, StackedLimbIK, context_frames
+from engine.models.sparseposer_stream import streaming_generator
 from engine.motion import Motion
 
+#: Rows of the limbs' end effectors (ankles, wrists) in the tracked joints.
+_EE_ROWS = [SPARSE_INDEX.index(j) for j in LIMB_EE]
 #: Decoder frames evaluated per step (the last output frame equals the full decode's).
 TAIL = 8
 
@@ -68,6 +71,11 @@ class SparsePoserMethod(Method):
         self.context = context_frames(self.model)
         self.generator = DenseGenerator(self.model)
         self.limb_ik = StackedLimbIK(self.model)
+        # one new frame per step; None (a window per step) for kernels other than 3
+        self.stream = streaming_generator(self.model, self.generator, self.context, SPARSE_INDEX, TAIL)
+        sparse = list(SPARSE_INDEX)
+        self._sparse_mean, self._sparse_std = model.dq_mean[sparse], model.dq_std[sparse]
+        self._rot_mean, self._rot_std = model.dq_mean[:, :4].double().numpy(), model.dq_std[:, :4].double().numpy()
         self.threads = int(threads)
         self.reset(sk.Skeleton.canonical())
 
@@ -77,35 +85,41 @@ class SparsePoserMethod(Method):
         self._off_t = torch.as_tensor(self.offsets, dtype=torch.float32)[None]
         with torch.inference_mode():
             self._static = self.model.generator.static_features(self._off_t)
+        # the limb networks' offset inputs (x 10, as trained), constant per skeleton
+        self._limb_off = (self._off_t[0, self.limb_ik.limb] * 10.0).flatten(1).numpy()  # (4, 12)
         # the last ``context`` normalised sparse frames, written twice so that they are
-        # always one contiguous slice: frames[:, pos : pos + context]
+        # always one contiguous slice: frames[:, pos : pos + context] (kernels other than 3)
         self._frames = torch.zeros(1, 2 * self.context, sk.NUM_JOINTS, 8)
         self._pos = -1  # no frame yet
-        self._last: dict[str, Sensor] = {}
+        if self.stream is not None:
+            self.stream.reset(self._static)
+        self._last_rot, self._last_pos = np.zeros((len(SPARSE_JOINTS), 4)), np.zeros((len(SPARSE_JOINTS), 3))
+        self._seen = np.zeros(len(SPARSE_JOINTS), dtype=bool)
         self._prev_root: tuple[np.ndarray, np.ndarray] | None = None
 
-    def _reading(self, frame: SensorFrame, joint: str) -> Sensor:
-        r = frame.readings[joint]
-        ok = r.connected and np.all(np.isfinite(r.position)) and np.all(np.isfinite(r.rotation))
-        if ok or joint not in self._last:
-            self._last[joint] = r
-        return self._last[joint]
-
-    def features(self, frame: SensorFrame) -> np.ndarray:
-        """Raw root-space dual quaternions ``(22, 8)`` of this frame (zeros off the trackers)."""
+    def _sparse_features(self, frame: SensorFrame) -> np.ndarray:
+        """Raw root-space dual quaternions ``(6, 8)`` of the tracked joints (SPARSE_JOINTS)."""
         check_preset(frame.readings, SPARSE_JOINTS, self.name, "6")
-        rd = [self._reading(frame, j) for j in SPARSE_JOINTS]
-        rot = Q.normalize(np.array([r.rotation for r in rd], dtype=np.float64))  # (6, 4)
+        rd = [frame.readings[j] for j in SPARSE_JOINTS]
+        rot = np.array([r.rotation for r in rd], dtype=np.float64)  # (6, 4)
         pos = np.array([r.position for r in rd], dtype=np.float64)  # (6, 3)
-        r_rot, r_pos = rot[0], pos[0]
+        ok = np.array([r.connected for r in rd]) & np.isfinite(rot).all(1) & np.isfinite(pos).all(1)
+        take = ok | ~self._seen  # a lost tracker keeps its last good reading (the first is taken)
+        self._last_rot[take], self._last_pos[take], self._seen[take] = rot[take], pos[take], True
+        rot, pos = Q.normalize(self._last_rot), self._last_pos.copy()
+        r_rot, r_pos = rot[0].copy(), pos[0].copy()
         prev_rot, prev_pos = self._prev_root or (r_rot, r_pos)
         self._prev_root = (r_rot, r_pos)
         # slot 0: the hip tracker in the previous frame's heading; others: in the hip's frame
         inv = np.stack((Q.conjugate(Q.heading(prev_rot)), Q.conjugate(r_rot)))[[0] + [1] * (len(rd) - 1)]
-        rots = Q.mul(inv, np.concatenate((r_rot[None], rot[1:])))
-        poss = Q.rotate(inv, pos - np.concatenate((prev_pos[None], np.broadcast_to(r_pos, (len(rd) - 1, 3)))))
+        pos[0] -= prev_pos
+        pos[1:] -= r_pos
+        return dq_np.from_rotation_translation(Q.canonicalize(Q.mul(inv, rot)), Q.rotate(inv, pos))
+
+    def features(self, frame: SensorFrame) -> np.ndarray:
+        """Raw root-space dual quaternions ``(22, 8)`` of this frame (zeros off the trackers)."""
         out = np.zeros((sk.NUM_JOINTS, 8))
-        out[list(SPARSE_INDEX)] = dq_np.from_rotation_translation(Q.canonicalize(rots), poss)
+        out[list(SPARSE_INDEX)] = self._sparse_features(frame)
         return out
 
     def _push(self, dq: np.ndarray) -> torch.Tensor:
@@ -122,22 +136,33 @@ class SparsePoserMethod(Method):
             self._pos = (self._pos + 1) % c
         return self._frames[:, self._pos : self._pos + c]
 
+    def _generate(self, dq6: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Generator output (normalised dq, ``(22, 8)``) of the stream so far with this
+        frame's tracked dq ``(6, 8)``, and that frame normalised ``(6, 8)``."""
+        x = (torch.from_numpy(dq6).float() - self._sparse_mean) / self._sparse_std
+        if self.stream is not None:
+            return self.stream(x).numpy(), x.numpy()
+        dq = torch.zeros(sk.NUM_JOINTS, 8)
+        dq[list(SPARSE_INDEX)] = torch.from_numpy(dq6).float()
+        return self.generator(self._push(dq)[0], self._static, TAIL).numpy(), x.numpy()
+
     def step(self, sensors: SensorFrame) -> FrameResult:
         t0 = time.perf_counter()
         threads = torch.get_num_threads()
         if self.threads:
             torch.set_num_threads(self.threads)
         try:
-            dq = self.features(sensors)
+            dq6 = self._sparse_features(sensors)
             with torch.inference_mode():
-                window = self._push(dq)
-                out = self.generator(window[0], self._static, TAIL)[None]
-                local_gen = self.model.local_from_output(out)
-                target = torch.as_tensor(dq, dtype=torch.float32)[None]
-                local_ik = self.limb_ik(out, local_gen, self._off_t, target)
+                out, x = self._generate(dq6)
+                # learned IK: each limb's generator dq, offsets and normalised tracker dq
+                inp = np.concatenate((out[self.limb_ik.limb_index].reshape(4, -1), self._limb_off, x[_EE_ROWS]), axis=1)
+                delta = self.limb_ik.mlp(torch.from_numpy(inp)[:, None])[:, 0].numpy()
         finally:
             torch.set_num_threads(threads)
-        local = Q.canonicalize(local_ik[0].double().numpy())
+        local = local_rotations(out[:, :4] * self._rot_std + self._rot_mean)
+        limb = self.limb_ik.limb_index
+        local[limb] = Q.canonicalize(Q.normalize(local[limb] + delta.reshape(4, 4, 4)))
         root_rot, root_pos = self._prev_root  # this frame's hip tracker
         local[0] = root_rot
         pos, _ = fk(local, root_pos, self.offsets)

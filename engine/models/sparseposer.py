@@ -51,6 +51,19 @@ LIMB_EE = tuple(sk.JOINT_INDEX[j] for j in ("lankle", "rankle", "lwrist", "rwris
 _PARENT_OR_SELF = [max(p, 0) for p in sk.PARENTS]
 
 
+def local_rotations(g):
+    """Local rotations ``(..., 22, 4)`` (slot 0 identity, w >= 0) from root-space joint
+    rotations ``g (..., 22, 4)`` (raw real parts of the dual quaternions: normalised
+    here; slot 0 is ignored). Numpy arrays or tensors."""
+    g = Q.normalize(g)
+    if isinstance(g, torch.Tensor):
+        g = torch.cat((Q.identity(g.shape[:-2], like=g)[..., None, :], g[..., 1:, :]), dim=-2)
+    else:
+        g[..., 0, :] = Q.identity()
+    parent = g[..., _PARENT_OR_SELF, :]
+    return Q.canonicalize(Q.mul(Q.conjugate(parent), g))  # the root is its own parent: identity
+
+
 @dataclass
 class SparsePoserConfig(ModelConfig):
     """Architecture. ``channels[i]``: features per node after encoder block i."""
@@ -193,12 +206,7 @@ class SparsePoser(nn.Module):
     def local_from_output(self, out: torch.Tensor) -> torch.Tensor:
         """Local rotations ``(..., 22, 4)`` (slot 0 identity: root space) from normalised dq."""
         raw = out * self.dq_std + self.dq_mean
-        g = Q.normalize(raw[..., :4])
-        ident = Q.identity(g.shape[:-2], like=g)[..., None, :]
-        g = torch.cat((ident, g[..., 1:, :]), dim=-2)
-        parent = g[..., _PARENT_OR_SELF, :]
-        local = Q.mul(Q.conjugate(parent), g)  # the root is its own parent: identity
-        return Q.canonicalize(local)
+        return local_rotations(raw[..., :4])
 
     def refine(self, gen_out: torch.Tensor, local: torch.Tensor, offsets: torch.Tensor,
                target_dq: torch.Tensor) -> torch.Tensor:  # fmt: skip

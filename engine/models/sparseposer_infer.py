@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 import torch
 from torch.nn import functional as F
 
@@ -128,8 +130,18 @@ class StackedLimbIK:
         self.biases = [torch.stack([n[i].bias.detach() for n in nets])[:, None] for i in (0, 2, 4)]
         self.slope = nets[0][1].negative_slope
         self.limb = torch.tensor(LIMB_INDEX)  # (4 limbs, 4 joints)
+        self.limb_index = np.array(LIMB_INDEX)
         self.ee = torch.tensor(LIMB_EE)
         self.model = model
+
+    def mlp(self, x: torch.Tensor) -> torch.Tensor:
+        """The four networks on their inputs ``x (4 limbs, B, 52)`` -> ``(4, B, 16)``
+        rotation changes (the limb's generator dq, offsets x 10, normalised tracker dq)."""
+        for k, (w, bias) in enumerate(zip(self.weights, self.biases)):
+            x = torch.baddbmm(bias, x, w)
+            if k < 2:
+                x = F.leaky_relu(x, self.slope)
+        return x
 
     def __call__(self, gen_out: torch.Tensor, local: torch.Tensor, offsets: torch.Tensor,
                  target_dq: torch.Tensor) -> torch.Tensor:  # fmt: skip
@@ -139,12 +151,7 @@ class StackedLimbIK:
         b = gen_out.shape[0]
         target = self.model.normalise(target_dq)[:, self.ee]  # (B, 4, 8)
         x = torch.cat((gen_out[:, self.limb].flatten(2), offsets[:, self.limb].flatten(2) * 10.0, target), dim=-1)
-        h = x.transpose(0, 1)  # (4, B, 52)
-        for k, (w, bias) in enumerate(zip(self.weights, self.biases)):
-            h = torch.baddbmm(bias, h, w)
-            if k < 2:
-                h = F.leaky_relu(h, self.slope)
-        delta = h.transpose(0, 1).reshape(b, 4, 4, 4)
+        delta = self.mlp(x.transpose(0, 1)).transpose(0, 1).reshape(b, 4, 4, 4)
         new = Q.canonicalize(Q.normalize(local[:, self.limb] + delta))
         out = local.clone()
         out[:, self.limb.flatten()] = new.reshape(b, 16, 4)

@@ -27,6 +27,7 @@ from engine.models.sparseposer import LIMB_EE, LIMB_INDEX, SparsePoser, SparsePo
 from engine.training.common import Distributed, config_dict, seed_everything
 from engine.training.data import PoseData, load_split
 from engine.training.loop import Schedule, average_gradients, run_epochs
+from engine.training.sparseposer_ik import load_init, realtime_outputs
 
 _NON_EE = sorted({j for limb in LIMB_INDEX for j in limb} - set(LIMB_EE))
 
@@ -51,6 +52,10 @@ class SparsePoserTrainConfig:
     val_windows: int = 1024
     seed: int = 0
     max_clips: int = 0
+    #: False: keep the generator of ``init`` and train only the limb networks, on the
+    #: generator's realtime output at every training frame (engine/training/sparseposer_ik.py)
+    train_generator: bool = True
+    init: str = ""
 
     def model_config(self) -> SparsePoserConfig:
         return SparsePoserConfig(window=self.window, channels=self.channels, kernel=self.kernel,
@@ -111,6 +116,8 @@ def train_sparseposer(data_dir: Path, out_dir: Path, cfg: SparsePoserTrainConfig
     clips = cfg.max_clips or None
     train, val = load_split(data_dir, "train", clips), load_split(data_dir, "val", clips)
     model = SparsePoser(cfg.model_config(), manifest["stats"]).to(ddp.device)
+    if cfg.init:
+        load_init(model, cfg.init)
     opt_g = torch.optim.AdamW(model.generator.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
     opt_ik = torch.optim.AdamW(model.ik.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
     s_tr, s_va = window_starts(train, cfg.window), window_starts(val, cfg.window)
@@ -137,6 +144,22 @@ def train_sparseposer(data_dir: Path, out_dir: Path, cfg: SparsePoserTrainConfig
         opt_ik.step()
         return {"l_dq": lg.item(), "l_s": l_s.item(), "l_reg": l_reg.item()}
 
+    if not cfg.train_generator:
+        if not cfg.init:
+            load_init(model, "")  # the clear error
+        model.generator.requires_grad_(False)
+        cached = realtime_outputs(model.eval(), train, progress and ddp.main)
+
+        def ik_step() -> dict[str, float]:  # the limb networks only
+            b = torch.randint(len(train), (cfg.batch_size * ddp.world,), generator=gen)[ddp.rank :: ddp.world]
+            l_s, l_reg = ik_losses(model, cached[b], train.dq[b], train.offsets[b])
+            li = l_s + cfg.w_reg * l_reg
+            opt_ik.zero_grad(set_to_none=True)
+            li.backward()
+            average_gradients(ddp, model.ik.parameters())
+            opt_ik.step()
+            return {"l_s": l_s.item(), "l_reg": l_reg.item()}
+
     def validate() -> dict[str, float]:
         return validate_sparseposer(model, val, s_va, cfg.window)
 
@@ -146,7 +169,8 @@ def train_sparseposer(data_dir: Path, out_dir: Path, cfg: SparsePoserTrainConfig
                 "train_config": config_dict(cfg), "meta": meta}  # fmt: skip
 
     meta = {"data_hash": manifest.get("hash"), "train_windows": len(s_tr)}
-    return run_epochs("sparseposer", model, [opt_g, opt_ik], step, validate, payload, cfg.schedule(),
+    optimizers = [opt_g, opt_ik] if cfg.train_generator else [opt_ik]
+    return run_epochs("sparseposer", model, optimizers, step if cfg.train_generator else ik_step, validate, payload, cfg.schedule(),
                       out_dir, ddp, gen, "val_pos_cm", resume, progress, meta)  # fmt: skip
 
 

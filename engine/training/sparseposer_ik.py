@@ -1,0 +1,58 @@
+"""Training SparsePoser's learned IK on the frozen generator's realtime output.
+
+The paper trains the limb networks on the generator's pose with the generator frozen
+(sec. 5.3). The joint trainer (:mod:`engine.training.sparseposer`) updates both in
+turn, feeding the limb networks the generator's output on the last ``ik_frames`` frames
+of each window, which see ``ik_frames - 1`` future frames; the realtime method applies
+them to the last frame only, which sees none and is the worst. With ``train_generator
+= false`` and ``init = FILE`` the generator of ``FILE`` is kept and only the limb
+networks are trained, on exactly what the method gives them: the generator's realtime
+output at every training frame, computed once by streaming each clip from its first
+frame as the method does (:class:`~engine.models.sparseposer_stream.StreamingGenerator`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import torch
+from tqdm import tqdm
+
+from engine.errors import UserError
+from engine.models.sparseposer import SPARSE_INDEX, SparsePoser
+from engine.models.sparseposer_infer import DenseGenerator, context_frames
+from engine.models.sparseposer_stream import streaming_generator
+from engine.training.data import PoseData
+
+#: Decoder frames per level of the method's step (engine.methods.sparseposer.TAIL).
+_TAIL = 8
+
+
+@torch.no_grad()
+def realtime_outputs(model: SparsePoser, data: PoseData, progress: bool = True) -> torch.Tensor:
+    """The generator's output ``(N, 22, 8)`` (normalised dq) at every frame of ``data`` as
+    the realtime method computes it: each clip streamed from its first frame."""
+    stream = streaming_generator(model, DenseGenerator(model), context_frames(model), SPARSE_INDEX, _TAIL)
+    if stream is None:
+        raise UserError("train_generator = false needs kernel 3 and a window longer than the receptive field + 8")
+    sp = list(SPARSE_INDEX)
+    x = (data.dq[:, sp] - model.dq_mean[sp]) / model.dq_std[sp]
+    out = torch.empty(len(data), *data.dq.shape[1:])
+    clip = data.clip.tolist()
+    for i in tqdm(range(len(data)), desc="generator outputs", unit="frame", disable=not progress, leave=False):
+        if i == 0 or clip[i] != clip[i - 1]:
+            stream.reset(model.generator.static_features(data.offsets[i : i + 1]))
+        out[i] = stream(x[i])
+    return out
+
+
+def load_init(model: SparsePoser, path: str) -> None:
+    """Copy the weights of ``path`` (a SparsePoser file of the same architecture) into ``model``."""
+    from engine.models.loading import load_sparseposer
+
+    if not path:
+        raise UserError("train_generator = false needs init = a SparsePoser weights file (e.g. assets/models/sparseposer.pt)")
+    init, _ = load_sparseposer(Path(path))
+    if init.config.to_dict() != model.config.to_dict():
+        raise UserError(f"init {path}: architecture {init.config.to_dict()} differs from the settings' {model.config.to_dict()}")
+    model.load_state_dict(init.state_dict())

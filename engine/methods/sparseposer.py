@@ -141,7 +141,7 @@ class SparsePoserMethod(Method):
         frame's tracked dq ``(6, 8)``, and that frame normalised ``(6, 8)``."""
         x = (torch.from_numpy(dq6).float() - self._sparse_mean) / self._sparse_std
         if self.stream is not None:
-            return self.stream(x).numpy(), x.numpy()
+            return self.stream(x[None])[0].numpy(), x.numpy()
         dq = torch.zeros(sk.NUM_JOINTS, 8)
         dq[list(SPARSE_INDEX)] = torch.from_numpy(dq6).float()
         return self.generator(self._push(dq)[0], self._static, TAIL).numpy(), x.numpy()

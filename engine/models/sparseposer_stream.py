@@ -113,21 +113,21 @@ class StreamingGenerator:
 
     def reset(self, static: list[torch.Tensor] | None = None) -> None:
         """Forget the stream (a new clip starts); ``static``: the generator's static
-        features of the new skeleton (22, 14, 9 nodes; kept when not given)."""
+        features of the new skeletons (``(B, 22 | 14 | 9, C)``; kept when not given)."""
         self._hist: list[deque] | None = None
         if static is not None:
-            self._adds = [s.reshape(-1) for s in static[::-1]] + [None]
+            self._adds = [s.reshape(s.shape[0], 1, -1) for s in static[::-1]] + [None]
 
     def _encode(self, level: int) -> torch.Tensor:
         d, b, s = self.enc[level]
         h = self._hist[level]
-        x = torch.cat((h[-1 - 2 * s], h[-1 - s], h[-1]))[None]
-        return F.leaky_relu(torch.addmm(b, x, d), self.slope)[0]
+        return F.leaky_relu(torch.addmm(b, torch.cat((h[-1 - 2 * s], h[-1 - s], h[-1]), dim=1), d), self.slope)
 
     def __call__(self, x: torch.Tensor) -> torch.Tensor:
-        """Push frame ``x (len(sparse_index), 8)`` (normalised) and return the last output
-        frame ``(22, 8)`` (normalised dq)."""
-        x = x.reshape(-1)
+        """Push frame ``x (B, len(sparse_index), 8)`` (normalised; B streams at once, as
+        many as the static features given to :meth:`reset`) and return the last output
+        frame ``(B, 22, 8)`` (normalised dq)."""
+        x = x.reshape(x.shape[0], -1)
         if self._hist is None:  # the first frame stands for the whole past
             self._hist = [deque([x] * self.lengths[0], maxlen=self.lengths[0])]
             for level in range(len(self.enc)):
@@ -138,8 +138,9 @@ class StreamingGenerator:
             for level in range(len(self.enc)):
                 self._hist[level + 1].append(self._encode(level))
         deep = self._hist[-1]
-        h = torch.stack([deep[-1 - 8 * j] for j in self.deep])
+        h = torch.stack([deep[-1 - 8 * j] for j in self.deep], dim=1)  # (B, frames, nodes * C)
+        batch = h.shape[0]
         for (w, d, b, rows), s in zip(self.dec, self._adds):
-            y = torch.addmm(b, torch.mm(w, h).reshape(rows, -1), d)
+            y = torch.addmm(b, torch.matmul(w, h).reshape(batch * rows, -1), d).reshape(batch, rows, -1)
             h = y if s is None else F.leaky_relu(y, self.slope) + s
-        return h.reshape(22, -1)
+        return h.reshape(batch, 22, -1)

@@ -29,20 +29,36 @@ _TAIL = 8
 
 
 @torch.no_grad()
-def realtime_outputs(model: SparsePoser, data: PoseData, progress: bool = True) -> torch.Tensor:
+def realtime_outputs(model: SparsePoser, data: PoseData, chunk: int = 256, progress: bool = True) -> torch.Tensor:
     """The generator's output ``(N, 22, 8)`` (normalised dq) at every frame of ``data`` as
-    the realtime method computes it: each clip streamed from its first frame."""
-    stream = streaming_generator(model, DenseGenerator(model), context_frames(model), SPARSE_INDEX, _TAIL)
+    the realtime method computes it: each clip streamed from its first frame.
+
+    The clips are cut into ``chunk``-frame pieces streamed side by side (one batch). A
+    piece that does not start a clip is streamed from ``context`` frames earlier (its
+    first frame repeated before that, as at a clip's start): the last output frame reads
+    only the receptive field, shorter than ``context``, so its outputs are the whole
+    clip's."""
+    context = context_frames(model)
+    stream = streaming_generator(model, DenseGenerator(model), context, SPARSE_INDEX, _TAIL)
     if stream is None:
         raise UserError("train_generator = false needs kernel 3 and a window longer than the receptive field + 8")
     sp = list(SPARSE_INDEX)
     x = (data.dq[:, sp] - model.dq_mean[sp]) / model.dq_std[sp]
+    pieces = []  # (first streamed frame, first kept frame, end)
+    clip = data.clip
+    starts = [0] + (torch.nonzero(clip[1:] != clip[:-1])[:, 0] + 1).tolist() + [len(data)]
+    for c0, c1 in zip(starts[:-1], starts[1:]):
+        pieces += [(max(c0, s - context), s, min(s + chunk, c1)) for s in range(c0, c1, chunk)]
+    first = torch.tensor([p[0] for p in pieces])
+    ends = torch.tensor([p[2] for p in pieces])
+    stream.reset(model.generator.static_features(data.offsets[first]))
     out = torch.empty(len(data), *data.dq.shape[1:])
-    clip = data.clip.tolist()
-    for i in tqdm(range(len(data)), desc="generator outputs", unit="frame", disable=not progress, leave=False):
-        if i == 0 or clip[i] != clip[i - 1]:
-            stream.reset(model.generator.static_features(data.offsets[i : i + 1]))
-        out[i] = stream(x[i])
+    steps = int((ends - first).max())
+    for t in tqdm(range(steps), desc="generator outputs", unit="step", disable=not progress, leave=False):
+        frame = torch.minimum(first + t, ends - 1)  # a finished piece repeats its last frame (not kept)
+        y = stream(x[frame])
+        keep = [i for i, (f, s, e) in enumerate(pieces) if s <= f + t < e]
+        out[frame[keep]] = y[keep]
     return out
 
 

@@ -148,7 +148,7 @@ def train_sparseposer(data_dir: Path, out_dir: Path, cfg: SparsePoserTrainConfig
         if not cfg.init:
             load_init(model, "")  # the clear error
         model.generator.requires_grad_(False)
-        cached = realtime_outputs(model.eval(), train, progress and ddp.main)
+        cached = realtime_outputs(model.eval(), train, progress=progress and ddp.main)
 
         def ik_step() -> dict[str, float]:  # the limb networks only
             b = torch.randint(len(train), (cfg.batch_size * ddp.world,), generator=gen)[ddp.rank :: ddp.world]

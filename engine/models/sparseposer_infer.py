@@ -96,7 +96,8 @@ class DenseGenerator:
 
     def __init__(self, model: SparsePoser):
         g = model.generator
-        self.kernel = g.cfg.kernel
+        self.kernel = g.enc[0].kernel  # the encoder's (``kernel`` setting)
+        self.dec_kernel = g.out.kernel  # the decoder's (always 3)
         self.slope = g.act.negative_slope
         self.enc = [dense_conv(g.enc[0]), dense_conv(g.enc[1], g.pool0), dense_conv(g.enc[2], g.pool1)]
         self.dec = [dense_conv(g.dec[0], g.unpool2 @ g.pool2), dense_conv(g.dec[1], g.unpool1),
@@ -112,6 +113,7 @@ class DenseGenerator:
         k, h = self.kernel, x
         for (d, b), n in zip(self.enc, self.enc_nodes):
             h = F.leaky_relu(torch.addmm(b, unfold_frames(h, k, 2), d), self.slope).reshape(h.shape[0] // 2, n, -1)
+        k = self.dec_kernel
         for (d, b), n, s in zip(self.dec, self.dec_nodes, static[::-1]):
             h = _upsample2(h)[-tail:]
             h = F.leaky_relu(torch.addmm(b, unfold_frames(h, k, 1), d), self.slope).reshape(len(h), n, -1) + s[0]

@@ -92,6 +92,7 @@ class StreamingGenerator:
         n_frames = [context // 8]
         for _ in dense.dec:
             n_frames.append(min(tail, 2 * n_frames[-1]))
+        k = dense.dec_kernel
         maps = [_time_map(n_frames[i], k, tail) for i in range(len(dense.dec))] + [_time_map(n_frames[-1], k, None)]
         convs = list(dense.dec) + [dense.out]
         n_in = [dense.enc_nodes[-1]] + dense.dec_nodes

@@ -9,6 +9,7 @@ import torch
 from engine.config import load_config
 from engine.errors import UserError
 from engine.kinematics.features import encoder_input, pose_from_motion
+from engine.kinematics.fk import fk
 from engine.methods.sparseposer import SparsePoserMethod
 from engine.models.loading import load_sparseposer
 from engine.models.sparseposer import SparsePoser, SparsePoserConfig
@@ -130,8 +131,15 @@ def test_realtime_step_matches_the_plain_full_window_pipeline_with_the_shipped_w
     assert method.context < model.config.window  # the step reads a shorter window
     method.reset(motion.skeleton, motion.fps)
     tracking = simulate(motion.slice(0, 90), "6")
-    got = np.stack([method.step(tracking.frame(i)).local_rot for i in range(90)])
+    res = [method.step(tracking.frame(i)) for i in range(90)]
+    got = np.stack([r.local_rot for r in res])
     np.testing.assert_allclose(got[:, 1:], ref[:, 1:], atol=1e-5)
+    # the whole pose: the root from the hip tracker, the joints placed by FK
+    hip = tracking.joints.index("root")
+    ref[:, 0] = tracking.rotations[:, hip]
+    want, _ = fk(ref, tracking.positions[:, hip], np.asarray(motion.skeleton.offsets))
+    np.testing.assert_allclose(got[:, 0], ref[:, 0], atol=1e-9)
+    np.testing.assert_allclose(np.stack([r.positions for r in res]), want, atol=1e-5)
 
 
 def test_context_covers_the_receptive_field_of_the_last_frame():

@@ -3,11 +3,13 @@
 Per frame the trackers become root-space dual quaternions (the root slot holds the hip
 tracker's rotation in the previous frame's heading and its displacement), appended to a
 window of the last ``T`` frames (64; at the start of a clip the first frame is
-repeated). The generator decodes the window's last frame; a step feeds it only the
-frames that frame reads and decodes only the tail (the same last frame as a full
-decode of the whole window, see :mod:`engine.models.sparseposer_infer`), the learned
-IK moves each limb towards its tracker, and the root takes the hip tracker's position
-and rotation, as in the paper.
+repeated). The generator decodes the window's last frame, the learned IK moves each
+limb towards its tracker, and the root takes the hip tracker's position and rotation,
+as in the paper. A step computes only what changes from one frame to the next: the
+encoder's newest output per level and the decoder rows the last frame reads
+(:mod:`engine.models.sparseposer_stream`; the same last frame as a full decode of the
+whole window, to 1e-5 with the shipped weights), the four limb networks as one batched
+MLP, and the per-frame arithmetic on small arrays in numpy.
 
 **Future frames.** The paper's realtime variant (*Ours-0*) sees no future frames and an
 offline variant sees 7. Methods here are fed one frame at a time, so this is the
@@ -31,7 +33,7 @@ from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk
 from engine.methods.base import FrameResult, Method, check_preset
-from engine.sensors import Sensor, SensorFrame
+from engine.sensors import SensorFrame
 from engine.models.sparseposer import LIMB_EE, SPARSE_INDEX, SPARSE_JOINTS, local_rotations
 from engine.models.sparseposer_infer import DenseGenerator, StackedLimbIK, context_frames
 from engine.models.sparseposer_stream import streaming_generator

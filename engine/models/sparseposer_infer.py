@@ -83,7 +83,7 @@ def unfold_frames(x: torch.Tensor, kernel: int, stride: int) -> torch.Tensor:
     return w.permute(0, 1, 3, 2).reshape(w.shape[0], -1)
 
 
-def _upsample2(x: torch.Tensor) -> torch.Tensor:
+def upsample_frames(x: torch.Tensor) -> torch.Tensor:
     """Linear temporal upsampling ``(T, N, C) -> (2T, N, C)`` (as the generator's)."""
     t, n, c = x.shape
     y = F.interpolate(x.reshape(t, n * c).T[None], scale_factor=2, mode="linear", align_corners=False)[0]
@@ -115,7 +115,7 @@ class DenseGenerator:
             h = F.leaky_relu(torch.addmm(b, unfold_frames(h, k, 2), d), self.slope).reshape(h.shape[0] // 2, n, -1)
         k = self.dec_kernel
         for (d, b), n, s in zip(self.dec, self.dec_nodes, static[::-1]):
-            h = _upsample2(h)[-tail:]
+            h = upsample_frames(h)[-tail:]
             h = F.leaky_relu(torch.addmm(b, unfold_frames(h, k, 1), d), self.slope).reshape(len(h), n, -1) + s[0]
         d, b = self.out
         last = unfold_frames(h[-(k // 2 + 1) :], k, 1)[-1:]  # the last frame's taps (zero pad after it)

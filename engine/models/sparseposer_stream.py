@@ -31,7 +31,7 @@ from collections import deque
 import torch
 from torch.nn import functional as F
 
-from engine.models.sparseposer_infer import MARGIN, DenseGenerator, _upsample2, receptive_field, unfold_frames
+from engine.models.sparseposer_infer import MARGIN, DenseGenerator, receptive_field, unfold_frames, upsample_frames
 
 
 def streaming_generator(model, dense: DenseGenerator, context: int, sparse_index, tail: int):
@@ -56,7 +56,7 @@ def _time_map(frames: int, kernel: int, tail: int | None) -> torch.Tensor:
     if tail is None:
         taps = unfold_frames(eye[-(kernel // 2 + 1) :], kernel, 1)[-1:]
     else:
-        taps = unfold_frames(_upsample2(eye)[-tail:], kernel, 1)
+        taps = unfold_frames(upsample_frames(eye)[-tail:], kernel, 1)
     return taps.reshape(taps.shape[0], kernel, frames)
 
 

@@ -169,8 +169,8 @@ def train_sparseposer(data_dir: Path, out_dir: Path, cfg: SparsePoserTrainConfig
                 "train_config": config_dict(cfg), "meta": meta}  # fmt: skip
 
     meta = {"data_hash": manifest.get("hash"), "train_windows": len(s_tr)}
-    optimizers = [opt_g, opt_ik] if cfg.train_generator else [opt_ik]
-    return run_epochs("sparseposer", model, optimizers, step if cfg.train_generator else ik_step, validate, payload, cfg.schedule(),
+    optimizers, train_step = ([opt_g, opt_ik], step) if cfg.train_generator else ([opt_ik], ik_step)
+    return run_epochs("sparseposer", model, optimizers, train_step, validate, payload, cfg.schedule(),
                       out_dir, ddp, gen, "val_pos_cm", resume, progress, meta)  # fmt: skip
 
 

@@ -67,8 +67,10 @@ def load_init(model: SparsePoser, path: str) -> None:
     from engine.models.loading import load_sparseposer
 
     if not path:
-        raise UserError("train_generator = false needs init = a SparsePoser weights file (e.g. assets/models/sparseposer.pt)")
+        raise UserError("train_generator = false needs init = a SparsePoser weights file "
+                        "(e.g. assets/models/sparseposer.pt)")  # fmt: skip
     init, _ = load_sparseposer(Path(path))
     if init.config.to_dict() != model.config.to_dict():
-        raise UserError(f"init {path}: architecture {init.config.to_dict()} differs from the settings' {model.config.to_dict()}")
+        raise UserError(f"init {path}: architecture {init.config.to_dict()} differs from the "
+                        f"settings' {model.config.to_dict()}")  # fmt: skip
     model.load_state_dict(init.state_dict())

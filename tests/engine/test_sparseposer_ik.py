@@ -47,5 +47,5 @@ def test_limb_networks_alone_start_from_init_and_leave_the_generator(tiny_data, 
     assert all(torch.equal(a[k], b[k]) for k in a if k.startswith("generator."))
     assert not all(torch.equal(a[k], b[k]) for k in a if k.startswith("ik."))
     with pytest.raises(UserError, match="init"):
-        train_sparseposer(tiny_data, tmp_path / "no_init",
-                          load_config(SparsePoserTrainConfig, None, tiny + ["train_generator=false"]), progress=False)  # fmt: skip
+        no_init = load_config(SparsePoserTrainConfig, None, tiny + ["train_generator=false"])
+        train_sparseposer(tiny_data, tmp_path / "no_init", no_init, progress=False)

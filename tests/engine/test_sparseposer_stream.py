@@ -44,8 +44,8 @@ def test_streamed_generator_equals_the_windowed_one_with_the_shipped_weights():
             both = twice(torch.cat([x[t : t + 1, list(SPARSE_INDEX)]] * 2))
             torch.testing.assert_close(both[1], got, atol=1e-5, rtol=0)
         stream.reset()  # a new clip: its first frame is the whole past again
-        torch.testing.assert_close(stream(x[40:41, list(SPARSE_INDEX)])[0], dense(x[40].expand(ctx, -1, -1), static, TAIL),
-                                   atol=1e-5, rtol=0)  # fmt: skip
+        want = dense(x[40].expand(ctx, -1, -1), static, TAIL)
+        torch.testing.assert_close(stream(x[40:41, list(SPARSE_INDEX)])[0], want, atol=1e-5, rtol=0)
 
 
 def test_features_are_the_training_features():

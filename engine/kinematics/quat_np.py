@@ -6,6 +6,8 @@ Quaternions are ``(..., 4)`` arrays in ``(w, x, y, z)`` order; shapes broadcast.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 _CONJ = np.array([1.0, -1.0, -1.0, -1.0])
@@ -82,6 +84,10 @@ def heading(q: np.ndarray) -> np.ndarray:
     """Yaw-only part of ``q (..., 4)``: the rotation about +Z that turns the rest forward
     (-Y) onto the horizontal projection of ``q``'s forward, ``(..., 4)``."""
     q = np.asarray(q)
+    if q.ndim == 1:  # one quaternion: scalar arithmetic (numpy's per-call overhead dominates)
+        fx, fy, _ = rotate(q, (0.0, -1.0, 0.0)).tolist()
+        half = 0.5 * math.atan2(fx, -fy)
+        return np.array([math.cos(half), 0.0, 0.0, math.sin(half)])
     fw = rotate(q, np.broadcast_to(np.array([0.0, -1.0, 0.0]), q.shape[:-1] + (3,)))
     half = 0.5 * np.arctan2(fw[..., 0], -fw[..., 1])
     z = np.zeros_like(half)

@@ -26,7 +26,6 @@ import time
 from typing import Any
 
 import numpy as np
-import pymotion.rotations.dual_quat_np as dq_np
 import torch
 
 from engine import skeleton as sk
@@ -116,7 +115,14 @@ class SparsePoserMethod(Method):
         inv = np.stack((Q.conjugate(Q.heading(prev_rot)), Q.conjugate(r_rot)))[[0] + [1] * (len(rd) - 1)]
         pos[0] -= prev_pos
         pos[1:] -= r_pos
-        return dq_np.from_rotation_translation(Q.canonicalize(Q.mul(inv, rot)), Q.rotate(inv, pos))
+        # dual quaternions (r, 0.5 (0, t) r), as pymotion's from_rotation_translation
+        # (whose component-wise product costs more than the rest of the step's features)
+        out = np.empty((len(rd), 8))
+        out[:, :4] = Q.canonicalize(Q.mul(inv, rot))
+        t = np.zeros((len(rd), 4))
+        t[:, 1:] = Q.rotate(inv, pos)
+        out[:, 4:] = 0.5 * Q.mul(t, out[:, :4])
+        return out
 
     def features(self, frame: SensorFrame) -> np.ndarray:
         """Raw root-space dual quaternions ``(22, 8)`` of this frame (zeros off the trackers)."""

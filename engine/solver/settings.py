@@ -92,9 +92,10 @@ class OptimizerSettings:
         the decoded root displacement from frame to frame (drifts without a hip tracker:
         tens of centimetres over a clip with head and hands only).
     sensor_blend : float
-        Seconds over which a tracker that disconnects or reconnects is blended out / in
-        (``engine/methods/sensor_blend.py``); 0 = the target jumps. Trackers that place
-        the body (hips, ``root_anchor``) are never blended.
+        Seconds over which a tracker that reconnects is blended in
+        (``engine/methods/sensor_blend.py``); one that disconnects ends at once; 0 = the
+        target jumps. Trackers that place the body (hips, ``root_anchor``) are never
+        blended.
     smooth_weight : float
         Weight of the ``smooth`` term: every joint's squared deviation (m^2, mean over
         joints) from the constant-velocity extrapolation of the previous two solved

@@ -179,6 +179,7 @@ SETTINGS: Schema = {
     "heading": Choice(("previous", "anchor")),
     "prior": Choice(("predictor", "trackers")),
     "tracker_prior_weight": Num(0, 1e6),
+    "tracker_prior_neighbours": Num(0, 4096, integer=True),
 }
 
 #: One entry of ``manifest.json`` (``{"files": [{"path": ..., "fps": ...}, ...]}``).

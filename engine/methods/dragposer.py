@@ -205,7 +205,8 @@ class DragPoserMethod(Method):
         if s.prior == "trackers" and self.bank is not None:
             readings = self._tracks.arrays()
             if readings is not None:  # hips or head among the 6-DoF trackers
-                prediction, prior_weight = self.bank.latent(*readings), s.tracker_prior_weight
+                prediction = self.bank.latent(*readings, k=s.tracker_prior_neighbours)
+                prior_weight = s.tracker_prior_weight
         start = prediction if prediction is not None and s.init_from_prediction else self._latent
         self.prior.weight = prior_weight
         self.smooth.weight = s.smooth_weight

@@ -140,17 +140,19 @@ class PoseBank:
             idx = self._indexes[joints] = _Index(mean, std, table, (table * table).sum(1))
         return idx
 
-    def latent(self, joints: Sequence[str], pos: np.ndarray, rot: np.ndarray) -> torch.Tensor:
+    def latent(self, joints: Sequence[str], pos: np.ndarray, rot: np.ndarray, k: int = 0) -> torch.Tensor:
         """Prior latent ``(L,)`` for readings of ``joints`` (a subset of :data:`BANK_JOINTS`
         holding an anchor) over the last ``LAG + 1`` frames: ``pos (LAG+1, S, 3)``, ``rot
-        (LAG+1, S, 4)``, oldest first (repeat the first frame at the start of a clip)."""
+        (LAG+1, S, 4)``, oldest first (repeat the first frame at the start of a clip);
+        the mean of ``k`` neighbours (0: the bank's :attr:`k`)."""
         joints = tuple(joints)
         idx = self._index(joints)
         a = _anchor(joints)
         x = features(pos[-1:], rot[-1:], a, pos[:1, a])[0]
         q = torch.as_tensor((x - idx.mean) / idx.std, dtype=torch.float32)
         # |t - q|^2 = |t|^2 - 2 t.q + |q|^2; the last term is the same for every row
-        nearest = (idx.norms - 2.0 * (idx.table @ q)).topk(self.k, largest=False).indices
+        k = min(k or self.k, len(self))
+        nearest = (idx.norms - 2.0 * (idx.table @ q)).topk(k, largest=False).indices
         return self._latents[nearest].mean(0)
 
     def save(self, path: str | Path) -> None:

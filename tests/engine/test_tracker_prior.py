@@ -132,3 +132,15 @@ def clip():
     t = np.arange(f) / 60.0
     rot = np.tile(np.array([1.0, 0.0, 0.0, 0.0]), (f, 22, 1))
     return Motion(rot, np.stack([0.2 * t, -0.8 * t, 1.0 + 0 * t], -1))
+
+
+def test_the_neighbour_count_can_be_chosen_per_lookup():
+    rng = np.random.default_rng(4)
+    bank = _bank(rng, k=3)
+    joints = ("upperneck", "lwrist")
+    cols = [BANK_JOINTS.index(j) for j in joints]
+    pos = np.repeat(bank.positions[10:11, cols], LAG + 1, 0)
+    rot = np.repeat(bank.rotations[10:11, cols], LAG + 1, 0)
+    one, all_ = bank.latent(joints, pos, rot, k=1), bank.latent(joints, pos, rot, k=10_000)
+    assert torch.allclose(all_, torch.as_tensor(bank.latents).mean(0), atol=1e-5)  # capped at the bank's size
+    assert not torch.allclose(one, bank.latent(joints, pos, rot))  # 0 / default: the bank's k = 3

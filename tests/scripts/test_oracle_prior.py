@@ -2,21 +2,13 @@
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import torch
 
-ROOT = Path(__file__).resolve().parents[2]
+from .script_loader import load_script
 
 
 def _script():
-    spec = importlib.util.spec_from_file_location("oracle_prior", ROOT / "scripts" / "oracle_prior.py")
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules["oracle_prior"] = mod
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script("oracle_prior")
 
 
 def test_a_run_of_the_schedule_gets_the_true_latents_of_its_own_steps():

@@ -2,21 +2,13 @@
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[2]
+from .script_loader import load_script
 
 
 def _script():
-    spec = importlib.util.spec_from_file_location("rotation_breakdown", ROOT / "scripts" / "rotation_breakdown.py")
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules["rotation_breakdown"] = mod
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script("rotation_breakdown")
 
 
 def _about_x(deg: float) -> np.ndarray:

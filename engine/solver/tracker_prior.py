@@ -25,6 +25,7 @@ The bank belongs to the VAE whose encoder made its latents: the shipped bank
 
 from __future__ import annotations
 
+import functools
 import hashlib
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -42,7 +43,6 @@ ANCHORS: tuple[str, ...] = ("root", "upperneck")
 #: Frames over which the anchor's displacement is a feature.
 LAG = 4
 DEFAULT_BANK = Path(__file__).resolve().parents[2] / "assets" / "models" / "pose_bank.npz"
-_FORWARD = np.array([0.0, -1.0, 0.0])
 
 
 def features(pos: np.ndarray, rot: np.ndarray, anchor: int, prev_anchor: np.ndarray) -> np.ndarray:
@@ -68,9 +68,7 @@ def features(pos: np.ndarray, rot: np.ndarray, anchor: int, prev_anchor: np.ndar
         where the wearer stands or which way they face.
     """
     f = len(pos)
-    fwd = Q.rotate(rot[:, anchor], np.broadcast_to(_FORWARD, (f, 3)))
-    half = -0.5 * np.arctan2(fwd[:, 0], -fwd[:, 1])
-    unyaw = np.stack((np.cos(half), np.zeros(f), np.zeros(f), np.sin(half)), -1)
+    unyaw = Q.conjugate(Q.heading(rot[:, anchor]))  # turns the anchor to face -Y
     rel = Q.rotate(unyaw[:, None], pos - pos[:, anchor : anchor + 1])
     others = [i for i in range(pos.shape[1]) if i != anchor]
     mats = Q.to_matrix(Q.mul(np.broadcast_to(unyaw[:, None], rot.shape), rot))[..., :2].reshape(f, -1)
@@ -180,22 +178,18 @@ class PoseBank:
             raise UserError(f"{path}: not a pose bank ({exc})") from exc
 
 
-_DEFAULT: list = []
-
-
+@functools.cache
 def default_bank() -> PoseBank | None:
     """The shipped bank (loaded once per process), or None when it is missing or was not
     made with the shipped VAE's encoder (then the temporal predictor stays the prior)."""
-    if not _DEFAULT:
-        from engine.models.loading import DEFAULT_VAE
+    from engine.models.loading import DEFAULT_VAE
 
-        bank = None
-        if DEFAULT_BANK.is_file() and DEFAULT_VAE.is_file():
-            bank = PoseBank.load(DEFAULT_BANK)
-            if bank.vae_sha256 and bank.vae_sha256 != file_sha256(DEFAULT_VAE):
-                bank = None
-        _DEFAULT.append(bank)
-    return _DEFAULT[0]
+    if not (DEFAULT_BANK.is_file() and DEFAULT_VAE.is_file()):
+        return None
+    bank = PoseBank.load(DEFAULT_BANK)
+    if bank.vae_sha256 and bank.vae_sha256 != file_sha256(DEFAULT_VAE):
+        return None
+    return bank
 
 
 def _anchor(joints: Sequence[str]) -> int:

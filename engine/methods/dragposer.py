@@ -7,6 +7,7 @@ the temporal predictor proposes a latent (:mod:`engine.solver.temporal`), and
 temporal prior and the user's constraints agree. User constraints are edited between
 frames with :meth:`add_constraint`, :meth:`remove_constraint`, :meth:`set_weight`,
 :meth:`set_enabled` or :meth:`set_constraints`; settings with :meth:`configure`.
+Where the body is and which way it faces: :mod:`engine.methods.dragposer_root`.
 """
 
 from __future__ import annotations
@@ -27,16 +28,16 @@ from engine.constraints import (
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
 from engine.kinematics.root import root_increment
+from engine.methods import dragposer_root as roots
 from engine.methods.base import FrameResult, Method
 from engine.methods.sensor_blend import SensorBlend
 from engine.sensors import Sensor, SensorFrame
 from engine.motion import Motion
 from engine.solver import (
-    FrameContext, LatentDecoder, LatentPredictor, OptimizerSettings, PoseOptimizer, RootAnchor, RootFrame,
-    RootOverride, TemporalSchedule,
+    FrameContext, LatentDecoder, LatentPredictor, OptimizerSettings, PoseOptimizer, RootFrame, TemporalSchedule,
 )  # fmt: skip
 from engine.solver.limb_ik import LIMBS, finish
-from engine.solver.pose import BODY_HEADING_LIMIT_DEG, body_facing, clamp_heading
+from engine.solver.pose import body_facing
 from engine.solver.profiles import effective
 from engine.solver.tracker_prior import PoseBank, TrackerHistory, default_bank
 
@@ -194,9 +195,9 @@ class DragPoserMethod(Method):
             for c in self.sensors.values():
                 c.rotation_weight *= s.sensor_rotation_weight / base
         self.schedule.configure(s.predictor_every, s.past_window)
-        override = self._root_override()
+        override = roots.root_override(self.sensors)
         if self._root is None:
-            self._root = self._initial_root()
+            self._root = roots.initial_root(self.skeleton, self.sensors, self._facing)
         # a predictor run for later frames waits for between_frames (engine/solver/temporal.py)
         prediction, warn = self.schedule.prediction(self._frame, self.predictor, max(1, s.future_window), defer=True)
         if warn:
@@ -213,10 +214,10 @@ class DragPoserMethod(Method):
         feet = any(self.sensors[j].enabled for j in ("lankle", "rankle") if j in self.sensors)
         self.ground.weight = 0.0 if feet else s.ground_weight
         self.smooth.set_history(self._pos64, self._before64)
-        anchor = self._root_anchor() if override is None else None
+        anchor = roots.root_anchor(self.sensors, self.settings) if override is None else None
         if override is None and anchor is None and s.root_anchor != "none" and self._frame > 0:
-            override = self._held_root()
-        root = self._reference_root(s, override)
+            override = roots.held_root(self._root, self._points, self._last_points)
+        root = roots.reference_root(self._root, self.sensors, s, override, self._facing)
         ctx = FrameContext(root, override, anchor, self._positions, prediction, self._frame, deadline)
         terms = [*self.sensors.values(), self.prior, self.smooth, self.ground, *self.constraints]
         self.optimizer.settings = dataclasses.replace(s, mode="offline") if self._frame == 0 else s
@@ -264,7 +265,7 @@ class DragPoserMethod(Method):
     def decode_latent(self, latent: np.ndarray) -> np.ndarray:
         """World joint positions ``(22, 3)`` of ``latent (L,)``, placed at the current root."""
         z = torch.as_tensor(np.asarray(latent, dtype=np.float32).reshape(self.latent_dim))
-        root = self._root or self._initial_root()
+        root = self._root or roots.initial_root(self.skeleton, self.sensors, self._facing)
         with torch.no_grad():
             state = self.optimizer.decode(z, FrameContext(root))
         return state.positions.double().numpy()
@@ -298,14 +299,6 @@ class DragPoserMethod(Method):
             c.connected = c.enabled = t.active
         return warnings
 
-    def _root_override(self) -> RootOverride | None:
-        c = self.sensors.get("root")
-        if c is None or not c.enabled:
-            return None
-        pos = torch.as_tensor(c.position, dtype=torch.float32)
-        rot = torch.as_tensor(Q.normalize(c.rotation), dtype=torch.float32) if c.dof == 6 else None
-        return RootOverride(pos, rot)
-
     def _reach_targets(self) -> dict[int, np.ndarray]:
         """Tracked wrists and ankles -> their trackers' positions (setting ``reach``): a
         limb whose shoulder/elbow (hip/knee) a user constraint holds is left as solved."""
@@ -320,75 +313,6 @@ class DragPoserMethod(Method):
         (setting ``sensor_rotations``); the hips' is the tracker's already."""
         return {sk.JOINT_INDEX[j]: c.rotation for j, c in self.sensors.items()
                 if c.enabled and c.connected and c.dof == 6 and j != "root"}  # fmt: skip
-
-    def _reference_root(self, s: OptimizerSettings, override: RootOverride | None) -> RootFrame:
-        """The root the decoded root pose is relative to: the previous solved root, whose
-        heading (setting ``heading = anchor``) is kept within
-        :data:`engine.solver.pose.HEADING_LIMIT_DEG` of the anchor tracker's heading when
-        there is no hip tracker, and within :data:`~engine.solver.pose.BODY_HEADING_LIMIT_DEG`
-        of the body heading of the feet and hands when the hip tracker gives no rotation."""
-        assert self._root is not None
-        hip = self.sensors.get("root")
-        if (override is not None and override.rotation is None and s.heading == "anchor" and self._facing is not None
-                and hip is not None and hip.enabled):  # fmt: skip
-            rot = clamp_heading(self._root.rotation.double().numpy(), self._facing, BODY_HEADING_LIMIT_DEG)
-            return RootFrame(torch.as_tensor(rot, dtype=torch.float32), self._root.position)
-        if override is not None or s.heading != "anchor" or s.root_anchor == "none":
-            return self._root
-        c = self.sensors.get(s.root_anchor)
-        if c is None or not c.enabled or c.dof != 6:
-            return self._root
-        rot = clamp_heading(self._root.rotation.double().numpy(), Q.normalize(c.rotation))
-        return RootFrame(torch.as_tensor(rot, dtype=torch.float32), self._root.position)
-
-    def _held_root(self) -> RootOverride:
-        """Where the root goes when neither a hip tracker nor the anchor (head) tracker is
-        connected (e.g. only the hands, with ``--faulty``): nothing measures where the
-        body is, and integrating the decoded displacement ran away (3 m within 70 frames
-        on a validation clip). The root keeps its height and moves horizontally with the
-        mean of the trackers connected in this frame and the previous one; its rotation
-        is solved as usual."""
-        assert self._root is not None
-        pos = self._root.position.double().numpy().copy()
-        shared = [j for j in self._points if j in self._last_points]
-        if shared:
-            pos[:2] += np.mean([self._points[j][:2] - self._last_points[j][:2] for j in shared], axis=0)
-        return RootOverride(torch.as_tensor(pos, dtype=torch.float32), None)
-
-    def _root_anchor(self) -> RootAnchor | None:
-        """The head tracker places the body when there is no hip tracker (setting
-        ``root_anchor``; ``none`` integrates the decoded displacement instead)."""
-        if self.settings.root_anchor == "none":
-            return None
-        c = self.sensors.get(self.settings.root_anchor)
-        if c is None or not c.enabled:
-            return None
-        return RootAnchor(sk.JOINT_INDEX[c.joint], torch.as_tensor(c.position, dtype=torch.float32))
-
-    def _initial_root(self) -> RootFrame:
-        """Where the first frame's root is relative to: the hip sensor, else below the
-        head sensor by the rest root-to-head offset, else at rest height under the
-        trackers' mean, facing their heading (or -Y)."""
-        rest = self.skeleton.rest_positions()
-        rot = np.array([1.0, 0.0, 0.0, 0.0])
-        live = {j: c for j, c in self.sensors.items() if c.enabled}
-        if "root" in live:
-            pos = live["root"].position.copy()
-            if live["root"].dof == 6:
-                rot = Q.heading(live["root"].rotation)
-            elif self._facing is not None:  # positions only: face the way the feet and hands say
-                rot = self._facing.copy()
-        elif "upperneck" in live:
-            head = live["upperneck"]
-            if head.dof == 6:
-                rot = Q.heading(head.rotation)
-            pos = head.position - Q.rotate(rot, rest[sk.JOINT_INDEX["upperneck"]])
-        elif live:
-            pos = np.mean([c.position for c in live.values()], axis=0)
-            pos[2] = -rest[:, 2].min()
-        else:
-            pos = np.array([0.0, 0.0, -rest[:, 2].min()])
-        return RootFrame(torch.as_tensor(rot, dtype=torch.float32), torch.as_tensor(pos, dtype=torch.float32))
 
     def _advance(self, latent: torch.Tensor, prev: RootFrame, root_rot: np.ndarray, positions: np.ndarray) -> None:
         """Keep the solved frame as the next frame's history, in float32 as the solver's

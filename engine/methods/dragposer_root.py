@@ -17,7 +17,7 @@ from engine import skeleton as sk
 from engine.constraints import SensorConstraint
 from engine.kinematics import quaternion as Q
 from engine.solver import OptimizerSettings, RootAnchor, RootFrame, RootOverride
-from engine.solver.pose import BODY_HEADING_LIMIT_DEG, clamp_heading
+from engine.solver.pose import BODY_HEADING_LIMIT_DEG, clamp_heading, head_hands_facing
 
 Sensors = dict[str, SensorConstraint]
 
@@ -35,11 +35,13 @@ def root_override(sensors: Sensors) -> RootOverride | None:
 def reference_root(previous: RootFrame, sensors: Sensors, s: OptimizerSettings,
                    override: RootOverride | None, facing: np.ndarray | None) -> RootFrame:  # fmt: skip
     """The root the decoded root pose is relative to: the previous solved root
-    ``previous``, whose heading (setting ``heading = anchor``) is kept within
-    :data:`engine.solver.pose.HEADING_LIMIT_DEG` of the anchor tracker's heading when
-    there is no hip tracker, and within :data:`~engine.solver.pose.BODY_HEADING_LIMIT_DEG`
-    of the body heading ``facing (4,)`` of the feet and hands
-    (:func:`engine.solver.pose.body_facing`) when the hip tracker gives no rotation."""
+    ``previous``, whose heading (setting ``heading = anchor``) is kept, when there is no
+    hip tracker, within :data:`engine.solver.pose.HEADING_LIMIT_DEG` of the anchor
+    tracker's heading and then within ``hands_heading_limit`` of the facing of that
+    tracker and the hands (:func:`engine.solver.pose.head_hands_facing`); and within
+    :data:`~engine.solver.pose.BODY_HEADING_LIMIT_DEG` of the body heading ``facing
+    (4,)`` of the feet and hands (:func:`engine.solver.pose.body_facing`) when the hip
+    tracker gives no rotation."""
     hip = sensors.get("root")
     if (override is not None and override.rotation is None and s.heading == "anchor" and facing is not None
             and hip is not None and hip.enabled):  # fmt: skip
@@ -50,7 +52,13 @@ def reference_root(previous: RootFrame, sensors: Sensors, s: OptimizerSettings,
     c = sensors.get(s.root_anchor)
     if c is None or not c.enabled or c.dof != 6:
         return previous
-    rot = clamp_heading(previous.rotation.double().numpy(), Q.normalize(c.rotation))
+    head = Q.normalize(c.rotation)
+    rot = clamp_heading(previous.rotation.double().numpy(), head)
+    if s.hands_heading_limit < 180.0:
+        hands = {j: sensors[j].position for j in ("lwrist", "rwrist") if j in sensors and sensors[j].enabled}
+        body = head_hands_facing(head, hands)
+        if body is not None:
+            rot = clamp_heading(rot, body, s.hands_heading_limit)
     return RootFrame(torch.as_tensor(rot, dtype=torch.float32), previous.position)
 
 

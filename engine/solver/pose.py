@@ -161,3 +161,33 @@ def body_facing(points: dict[str, np.ndarray], pairs=LATERAL_PAIRS, min_length: 
         return None
     yaw = math.atan2(lateral[1], lateral[0])
     return np.array([math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)])
+
+
+#: :func:`head_hands_facing`: the head's facing counts as much as the line between two
+#: hands this many metres apart (about shoulder width: hands held close together say
+#: little about the body's heading, hands spread wide say a lot).
+HEAD_LATERAL_M = 0.5
+
+
+def head_hands_facing(head_rotation: np.ndarray, points: dict[str, np.ndarray],
+                      head_lateral_m: float = HEAD_LATERAL_M) -> np.ndarray | None:  # fmt: skip
+    """Heading rotation ``(4,)`` (about +Z) of the body from a head tracker's world
+    rotation ``head_rotation (4,)`` and the hands' positions in ``points`` (joint name ->
+    world position ``(3,)``, metres; ``lwrist`` and ``rwrist``): the sum of the hands'
+    horizontal left-minus-right vector and the head's horizontal left axis scaled to
+    ``head_lateral_m`` metres, as in :func:`body_facing`. The head alone when a hand is
+    missing; None when the sum vanishes (head looking straight up or down, no hands)."""
+    left = QN.rotate(np.asarray(head_rotation, dtype=np.float64), np.array([1.0, 0.0, 0.0]))
+    fw = QN.rotate(np.asarray(head_rotation, dtype=np.float64), np.array([0.0, -1.0, 0.0]))
+    # the head's facing from its forward axis (the head rolls less than it pitches), as a left vector
+    flat = np.array([-fw[1], fw[0]])
+    n = math.hypot(*flat)
+    if n < _MIN_FORWARD:  # looking up or down: its left axis still says which way it faces
+        flat, n = left[:2], math.hypot(*left[:2])
+    lateral = head_lateral_m * flat / n if n > 1e-9 else np.zeros(2)
+    if "lwrist" in points and "rwrist" in points:
+        lateral = lateral + (np.asarray(points["lwrist"])[:2] - np.asarray(points["rwrist"])[:2])
+    if math.hypot(*lateral) <= 1e-6:
+        return None
+    yaw = math.atan2(lateral[1], lateral[0])
+    return np.array([math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)])

@@ -130,6 +130,12 @@ class OptimizerSettings:
         tracker that gives no rotation (3-DoF), ``anchor`` also keeps the reference within
         45 degrees of the heading of the feet and hands trackers' left-right line, and the
         first frame faces that way.
+    hands_heading_limit : float
+        Degrees. With ``heading = anchor`` and no hip tracker, the reference heading is
+        also kept within this many degrees of the body's facing read off the head tracker
+        and the hands' left-right line (:func:`engine.solver.pose.head_hands_facing`): the
+        head's heading alone let the pelvis turn about 90 degrees away from the body
+        (docs/optimizer.md, "Stability with head and hands"). 180 = off.
     threads : int
         Torch intra-op threads while solving (0 = leave torch's setting). The tensors
         are tiny, so one thread is fastest; on a busy 2-core machine, torch's default
@@ -163,6 +169,7 @@ class OptimizerSettings:
     sensor_rotations: bool = True
     reach: bool = True
     heading: str = "anchor"
+    hands_heading_limit: float = 10.0
     prior: str = "predictor"
     tracker_prior_weight: float = 1.0
     tracker_prior_neighbours: int = 24
@@ -184,7 +191,7 @@ class OptimizerSettings:
             setattr(self, name, int(v))
         floats = ("lr", "position_tolerance", "rotation_tolerance", "sensor_rotation_weight", "temporal_weight",
                   "min_improvement", "divergence_factor", "momentum", "step_size", "sensor_blend",
-                  "smooth_weight", "ground_weight", "tracker_prior_weight")  # fmt: skip
+                  "smooth_weight", "ground_weight", "tracker_prior_weight", "hands_heading_limit")  # fmt: skip
         for name in floats:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:

@@ -42,7 +42,7 @@ from engine.rigs import RigProfile, resolve_rig
 from engine.validation import SKELETON, check_manifest, check_value, read_json
 
 #: Bumped whenever retargeting gives different clips (prepared data is rebuilt then).
-RETARGET_VERSION = 2
+RETARGET_VERSION = 3
 _AXIS = {"x": 0, "y": 1, "z": 2}
 #: Source frames kept at least when only the start of a clip is loaded (the rest-pose
 #: alignment and the heights are measured on them; every shared clip is shorter).

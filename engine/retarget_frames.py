@@ -16,8 +16,14 @@ The second direction decides the bone's twist, so it must be rigid with the bone
   :func:`engine.joint_stats.limb_hinge` on ``../shared/data/mocap/dragposer``; a test
   re-measures it), so a retargeted knee bends about the same local axis as in the
   clips the models learnt from, and the thigh carries no twist the shin undoes;
-* the pelvis uses the hip line and the lower back; the feet the shin; the head the
-  eye line; the hands the index-to-pinky line.
+* the torso joints (pelvis, lower and upper back, chest, clavicles) all use the line from the
+  pelvis to the neck and the hip or shoulder line, weighted towards frames where that
+  line is upright (:func:`upright_weight`): on every rig a subject standing upright then
+  has near-identity spine rotations, whatever the rig's spine segments look like
+  (retarget version 3; version 2 used each spine segment and gave the iClone rig an
+  80-deg upper-back bend that the Daz rig, lacking that joint, does not have, and
+  clavicles raised 20 deg more on the Daz rig than on the iClone one);
+* the feet use the shin; the head the eye line; the hands the index-to-pinky line.
 
 When a rule cannot be built (no eyes or fingers in the rig) the joint falls back to
 the source's own axes, assuming its zero pose is a T-pose like the canonical one.
@@ -33,11 +39,17 @@ from engine.kinematics import quaternion as Q
 
 # canonical joint -> (primary (from, [to candidates]), [secondary specs tried in order]).
 # A secondary spec is ("vec", a, b) = b - a, or ("hinge", a, b, c) = (b - a) x (c - b).
+# The torso joints (TORSO) share one up direction, pelvis to neck, instead of their own
+# spine segments: rigs place their spine joints differently (iClone's 5-cm Spine01 points
+# 20 deg forward where the canonical upper back bone leans 32 deg back), and a bone rule
+# there gave the iClone upper back an 80-deg bend that the chest undid, while the Daz rig,
+# which has no upper back, gave identity: two conventions the trackers cannot tell apart.
+_TORSO_UP = ("root", ["lowerneck", "upperneck"])
 RULES: dict[str, tuple] = {
-    "root": (("rhip", ["lhip"]), [("vec", "root", "lowerback"), ("vec", "root", "chest")]),
-    "lowerback": (("lowerback", ["upperback", "chest", "lowerneck"]), [("vec", "rhip", "lhip")]),
-    "upperback": (("upperback", ["chest", "lowerneck"]), [("vec", "rshoulder", "lshoulder")]),
-    "chest": (("chest", ["lowerneck", "upperneck"]), [("vec", "rshoulder", "lshoulder")]),
+    "root": (_TORSO_UP, [("vec", "rhip", "lhip")]),
+    "lowerback": (_TORSO_UP, [("vec", "rhip", "lhip")]),
+    "upperback": (_TORSO_UP, [("vec", "rshoulder", "lshoulder")]),
+    "chest": (_TORSO_UP, [("vec", "rshoulder", "lshoulder")]),
     "lowerneck": (("lowerneck", ["upperneck"]), [("vec", "r_eye", "l_eye")]),
     "upperneck": (("r_eye", ["l_eye"]), [("vec", "upperneck", "eyes_mid")]),
 }
@@ -50,12 +62,26 @@ for _s in ("l", "r"):
             f"{_s}knee": ((f"{_s}knee", [f"{_s}ankle"]), [_leg]),
             f"{_s}ankle": ((f"{_s}ankle", [f"{_s}_toe_tip", f"{_s}toe"]), [("vec", f"{_s}ankle", f"{_s}knee")]),
             f"{_s}toe": ((f"{_s}toe", [f"{_s}_toe_tip"]), [("vec", f"{_s}ankle", f"{_s}knee")]),
-            f"{_s}clavicle": ((f"{_s}clavicle", [f"{_s}shoulder"]), [("vec", "chest", "lowerneck")]),
+            f"{_s}clavicle": (_TORSO_UP, [("vec", "rshoulder", "lshoulder")]),
             f"{_s}shoulder": ((f"{_s}shoulder", [f"{_s}elbow"]), [_arm]),
             f"{_s}elbow": ((f"{_s}elbow", [f"{_s}wrist"]), [_arm]),
             f"{_s}wrist": ((f"{_s}wrist", [f"{_s}_hand_mid"]), [("vec", f"{_s}_pinky", f"{_s}_index")]),
         }
     )
+
+#: Joints whose bone frame is the torso's (pelvis-to-neck line), see the module docstring.
+TORSO = ("root", "lowerback", "upperback", "chest", "lclavicle", "rclavicle")
+#: Exponent on the cosine of the torso's tilt in :func:`upright_weight`: 0.76 at 15 deg,
+#: 0.32 at 30 deg, 0.06 at 45 deg.
+UPRIGHT_POWER = 8
+
+
+def upright_weight(up: np.ndarray) -> np.ndarray:
+    """Weight ``(...,)`` of a frame by how upright the torso line ``up`` ``(..., 3)`` is
+    (canonical world, Z up): ``cos(tilt) ** UPRIGHT_POWER``, 0 when it points down."""
+    c = up[..., 2] / np.maximum(np.linalg.norm(up, axis=-1), 1e-9)
+    return np.clip(c, 0.0, 1.0) ** UPRIGHT_POWER
+
 
 #: Knee/elbow hinge axes in the local frame of each limb joint, as DragPoser's own clips
 #: bend them: :func:`engine.joint_stats.limb_hinge`, mean over the three example clips.
@@ -123,7 +149,8 @@ def bone_frames(pts: dict[str, np.ndarray], hinge: dict[str, np.ndarray] | None 
         a = pts[a1] - pts[a0]
         for sec in secs:
             if sec[0] == "vec" and sec[1] in pts and sec[2] in pts:
-                out[joint] = frame(a, pts[sec[2]] - pts[sec[1]])
+                q, w = frame(a, pts[sec[2]] - pts[sec[1]])
+                out[joint] = (q, w * upright_weight(a)) if joint in TORSO else (q, w)
                 break
             if sec[0] == "hinge" and hinge is not None and joint in hinge:
                 out[joint] = frame(a, np.broadcast_to(hinge[joint], a.shape))

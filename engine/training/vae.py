@@ -21,7 +21,8 @@ from tqdm import tqdm
 
 from engine.kinematics import quaternion as Q
 from engine.kinematics.features import encoder_input, root_space_fk
-from engine.models.loading import load_checkpoint
+from engine.errors import UserError
+from engine.models.loading import load_checkpoint, load_vae
 from engine.models.vae import PoseVAE, VAEConfig, pose_distance
 from engine.training.common import CurveLog, Distributed, config_dict, save_checkpoint, seed_everything
 from engine.training.data import PoseData, load_split, read_manifest
@@ -54,6 +55,10 @@ class VAETrainConfig:
     #: Stop after this many epochs in this invocation (0: no limit); resume continues the
     #: same schedule, so a run can be trained in chunks.
     stop_after: int = 0
+    #: Start from the weights of this VAE file instead of at random (fine-tuning, e.g.
+    #: after a retargeting change); its architecture must match the settings'. The
+    #: prepared data's normalisation statistics replace the file's.
+    init: str = ""
 
     def model_config(self) -> VAEConfig:
         return VAEConfig(latent=self.latent, channels=tuple(self.channels))
@@ -144,6 +149,15 @@ def reconstruction_error(vae: PoseVAE, data: PoseData, max_frames: int | None = 
     return {"val_pos_cm": 100.0 * pos_err / count, "val_rot_deg": math.degrees(rot_err / count)}
 
 
+def load_init(vae: PoseVAE, path: str, stats: dict) -> None:
+    """Copy the weights of the VAE file ``path`` into ``vae``, then the data's ``stats``."""
+    init, _ = load_vae(Path(path))
+    if init.config.to_dict() != vae.config.to_dict():
+        raise UserError(f"init {path}: architecture {init.config} differs from the settings' {vae.config}")
+    vae.load_state_dict(init.state_dict())
+    vae.set_stats(stats)
+
+
 def state_hash(model: nn.Module) -> str:
     """SHA-256 of a model's parameters and buffers (to compare processes or runs)."""
     import hashlib
@@ -190,6 +204,9 @@ def train_vae(data_dir: Path, out_dir: Path, cfg: VAETrainConfig, resume: bool =
     train = load_split(data_dir, "train")
     val = load_split(data_dir, "val")
     vae = PoseVAE(cfg.model_config(), manifest["stats"]).to(ddp.device)
+    last = out_dir / "last.pt"
+    if cfg.init and not (resume and last.is_file()):
+        load_init(vae, cfg.init, manifest["stats"])
     objective: nn.Module = VAEObjective(vae, cfg)
     if ddp.world > 1:
         objective = nn.parallel.DistributedDataParallel(objective)
@@ -199,7 +216,6 @@ def train_vae(data_dir: Path, out_dir: Path, cfg: VAETrainConfig, resume: bool =
     total_steps = steps_per_epoch * cfg.epochs
     start_epoch, minutes_before, best, global_step = 0, 0.0, float("inf"), 0
     log = CurveLog(out_dir)
-    last = out_dir / "last.pt"
     if resume and last.is_file():
         ck = load_checkpoint(last, "checkpoint")
         vae.load_state_dict(ck["state_dict"])

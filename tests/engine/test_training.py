@@ -15,6 +15,7 @@ from engine.bvh import save_motion_bvh
 from engine.data.prepare import prepare
 from engine.kinematics import quaternion as Q
 from engine.motion import Motion
+from engine.errors import UserError
 from engine.config import load_config
 from engine.training.vae import VAETrainConfig, state_hash, train_vae
 
@@ -84,6 +85,16 @@ def test_resume_continues_exactly(tiny_data, run_a, tmp_path):
     assert _same(run_a[0] / "vae.pt", tmp_path / "r/vae.pt"), "stop + resume must equal the straight run"
 
 
+def test_init_starts_from_a_vae_file_and_checks_its_architecture(tiny_data, run_a, tmp_path):
+    frozen = dict(epochs=1, seed=5, lr=0.0, lr_final=0.0, weight_decay=0.0)
+    train_vae(tiny_data, tmp_path / "i", _cfg(init=str(run_a[0] / "vae.pt"), **frozen), progress=False)
+    assert _same(run_a[0] / "vae.pt", tmp_path / "i/vae.pt"), "no learning: the init weights come out unchanged"
+    train_vae(tiny_data, tmp_path / "n", _cfg(**frozen), progress=False)
+    assert not _same(run_a[0] / "vae.pt", tmp_path / "n/vae.pt"), "without init the start is random"
+    with pytest.raises(UserError, match="init .*architecture"):
+        train_vae(tiny_data, tmp_path / "x", _cfg(init=str(run_a[0] / "vae.pt"), latent=5, **frozen), progress=False)
+
+
 @pytest.mark.parametrize("model", ["vae", "predictor"])
 def test_resume_never_runs_code_from_a_planted_checkpoint(tiny_data, run_a, tmp_path, model):
     from engine.errors import ModelFileError
@@ -104,7 +115,6 @@ def test_resume_never_runs_code_from_a_planted_checkpoint(tiny_data, run_a, tmp_
 
 
 def test_config_file_and_overrides(tmp_path):
-    from engine.errors import UserError
 
     f = tmp_path / "c.toml"
     f.write_text("epochs = 7\nlr = 0.01\n")

@@ -16,11 +16,22 @@ import torch
 import torch.distributed as dist
 
 from engine.atomic import atomic_path, write_bytes
+from engine.errors import UserError
 
 
 def config_dict(cfg: Any) -> dict:
     out = dataclasses.asdict(cfg)
     return {k: list(v) if isinstance(v, tuple) else v for k, v in out.items()}
+
+
+def start_from(model: torch.nn.Module, path: str, loader: Any) -> None:
+    """Copy the weights of the file ``path`` (read by ``loader``, e.g. ``load_vae``) into
+    ``model`` for fine-tuning; the two architectures (``config.to_dict()``) must match."""
+    init, _ = loader(Path(path))
+    if init.config.to_dict() != model.config.to_dict():
+        raise UserError(f"init {path}: architecture {init.config.to_dict()} differs from the "
+                        f"settings' {model.config.to_dict()}")  # fmt: skip
+    model.load_state_dict(init.state_dict())
 
 
 def seed_everything(seed: int) -> None:

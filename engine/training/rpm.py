@@ -26,11 +26,11 @@ import pymotion.rotations.ortho6d_torch as o6
 import torch
 
 from engine.kinematics.fk import fk
-from engine.models.loading import FORMAT_VERSION
+from engine.models.loading import FORMAT_VERSION, load_rpm
 from engine.models.rpm import (
     RPM, RPM_INDEX, RPMConfig, blank_pose, fk_root_space, roll, rolling_step, to_frame, track_features, yaw_matrix,
 )  # fmt: skip
-from engine.training.common import Distributed, config_dict, seed_everything
+from engine.training.common import Distributed, config_dict, seed_everything, start_from
 from engine.training.data import PoseData, load_split
 from engine.training.loop import Schedule, average_gradients, run_epochs
 
@@ -56,6 +56,9 @@ class RPMTrainConfig:
     val_frames: int = 240
     seed: int = 0
     max_clips: int = 0
+    #: Start from the weights and normalisation of this RPM file instead of at random
+    #: (fine-tuning, e.g. after a retargeting change); its architecture must match.
+    init: str = ""
 
     def model_config(self) -> RPMConfig:
         return RPMConfig(self.past_inputs, self.past_poses, self.window, self.hidden, self.blocks)
@@ -163,6 +166,8 @@ def train_rpm(data_dir: Path, out_dir: Path, cfg: RPMTrainConfig, resume: bool =
     clips = cfg.max_clips or None
     train, val = Frames(load_split(data_dir, "train", clips)), Frames(load_split(data_dir, "val", clips))
     model = RPM(cfg.model_config(), stats(train, cfg)).to(ddp.device)
+    if cfg.init:  # a resumed run then loads its own last.pt over it
+        start_from(model, cfg.init, load_rpm)
     opt = torch.optim.AdamW(model.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
     before = max(cfg.past_inputs, cfg.past_poses)
     a_tr = train.anchors(before, cfg.free_run + cfg.window)

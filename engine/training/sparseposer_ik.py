@@ -13,7 +13,6 @@ frame as the method does (:class:`~engine.models.sparseposer_stream.StreamingGen
 
 from __future__ import annotations
 
-from pathlib import Path
 
 import torch
 from tqdm import tqdm
@@ -22,6 +21,7 @@ from engine.errors import UserError
 from engine.models.sparseposer import SPARSE_INDEX, SparsePoser
 from engine.models.sparseposer_infer import DenseGenerator, context_frames
 from engine.models.sparseposer_stream import streaming_generator
+from engine.training.common import start_from
 from engine.training.data import PoseData
 
 #: Decoder frames per level of the method's step (engine.methods.sparseposer.TAIL).
@@ -69,8 +69,4 @@ def load_init(model: SparsePoser, path: str) -> None:
     if not path:
         raise UserError("train_generator = false needs init = a SparsePoser weights file "
                         "(e.g. assets/models/sparseposer.pt)")  # fmt: skip
-    init, _ = load_sparseposer(Path(path))
-    if init.config.to_dict() != model.config.to_dict():
-        raise UserError(f"init {path}: architecture {init.config.to_dict()} differs from the "
-                        f"settings' {model.config.to_dict()}")  # fmt: skip
-    model.load_state_dict(init.state_dict())
+    start_from(model, path, load_sparseposer)

@@ -21,10 +21,9 @@ from tqdm import tqdm
 
 from engine.kinematics import quaternion as Q
 from engine.kinematics.features import encoder_input, root_space_fk
-from engine.errors import UserError
 from engine.models.loading import load_checkpoint, load_vae
 from engine.models.vae import PoseVAE, VAEConfig, pose_distance
-from engine.training.common import CurveLog, Distributed, config_dict, save_checkpoint, seed_everything
+from engine.training.common import CurveLog, Distributed, config_dict, save_checkpoint, seed_everything, start_from
 from engine.training.data import PoseData, load_split, read_manifest
 
 FORMAT_VERSION = 1
@@ -149,15 +148,6 @@ def reconstruction_error(vae: PoseVAE, data: PoseData, max_frames: int | None = 
     return {"val_pos_cm": 100.0 * pos_err / count, "val_rot_deg": math.degrees(rot_err / count)}
 
 
-def load_init(vae: PoseVAE, path: str, stats: dict) -> None:
-    """Copy the weights of the VAE file ``path`` into ``vae``, then the data's ``stats``."""
-    init, _ = load_vae(Path(path))
-    if init.config.to_dict() != vae.config.to_dict():
-        raise UserError(f"init {path}: architecture {init.config} differs from the settings' {vae.config}")
-    vae.load_state_dict(init.state_dict())
-    vae.set_stats(stats)
-
-
 def state_hash(model: nn.Module) -> str:
     """SHA-256 of a model's parameters and buffers (to compare processes or runs)."""
     import hashlib
@@ -206,7 +196,8 @@ def train_vae(data_dir: Path, out_dir: Path, cfg: VAETrainConfig, resume: bool =
     vae = PoseVAE(cfg.model_config(), manifest["stats"]).to(ddp.device)
     last = out_dir / "last.pt"
     if cfg.init and not (resume and last.is_file()):
-        load_init(vae, cfg.init, manifest["stats"])
+        start_from(vae, cfg.init, load_vae)
+        vae.set_stats(manifest["stats"])
     objective: nn.Module = VAEObjective(vae, cfg)
     if ddp.world > 1:
         objective = nn.parallel.DistributedDataParallel(objective)

@@ -91,6 +91,15 @@ def test_training_writes_weights_that_load(tiny_data, tmp_path):  # noqa: F811
     assert meta["finished"] and meta["epochs"] == 2 and np.isfinite(meta["val_pos_cm"])
     model, _ = load_rpm(tmp_path / "run" / "rpm.pt")
     assert model.config.window == 4 and float(model.pose_std.min()) > 0
+    frozen = dict(epochs=1, lr=0.0, lr_final=0.0, weight_decay=0.0, seed=7)
+    train_rpm(tiny_data, tmp_path / "ft", load_config(RPMTrainConfig, None, TINY, init=str(tmp_path / "run" / "rpm.pt"),
+                                                      **frozen), progress=False)  # fmt: skip
+    tuned, _ = load_rpm(tmp_path / "ft" / "rpm.pt")
+    a, b = model.state_dict(), tuned.state_dict()
+    assert all(torch.equal(a[k], b[k]) for k in a), "init with no learning gives the init weights back"
+    with pytest.raises(UserError, match="init .*architecture"):
+        train_rpm(tiny_data, tmp_path / "x", load_config(RPMTrainConfig, None, TINY, init=str(tmp_path / "run" / "rpm.pt"),
+                                                         hidden=8, **frozen), progress=False)  # fmt: skip
 
 
 def test_method_puts_the_head_on_its_tracker_through_a_gap(synthetic_motion):

@@ -159,6 +159,12 @@ def body_facing(points: dict[str, np.ndarray], pairs=LATERAL_PAIRS, min_length: 
             found = True
     if not found or math.hypot(*lateral) <= min_length:
         return None
+    return _facing_left(lateral)
+
+
+def _facing_left(lateral: np.ndarray) -> np.ndarray:
+    """Heading rotation ``(4,)`` (about +Z) that turns the canonical left (+X) onto the
+    horizontal vector ``lateral (2,)``."""
     yaw = math.atan2(lateral[1], lateral[0])
     return np.array([math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)])
 
@@ -189,5 +195,4 @@ def head_hands_facing(head_rotation: np.ndarray, points: dict[str, np.ndarray],
         lateral = lateral + (np.asarray(points["lwrist"])[:2] - np.asarray(points["rwrist"])[:2])
     if math.hypot(*lateral) <= 1e-6:
         return None
-    yaw = math.atan2(lateral[1], lateral[0])
-    return np.array([math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)])
+    return _facing_left(lateral)

@@ -194,8 +194,7 @@ def train_vae(data_dir: Path, out_dir: Path, cfg: VAETrainConfig, resume: bool =
     train = load_split(data_dir, "train")
     val = load_split(data_dir, "val")
     vae = PoseVAE(cfg.model_config(), manifest["stats"]).to(ddp.device)
-    last = out_dir / "last.pt"
-    if cfg.init and not (resume and last.is_file()):
+    if cfg.init:  # a resumed run then loads its own last.pt over it
         start_from(vae, cfg.init, load_vae)
         vae.set_stats(manifest["stats"])
     objective: nn.Module = VAEObjective(vae, cfg)
@@ -207,6 +206,7 @@ def train_vae(data_dir: Path, out_dir: Path, cfg: VAETrainConfig, resume: bool =
     total_steps = steps_per_epoch * cfg.epochs
     start_epoch, minutes_before, best, global_step = 0, 0.0, float("inf"), 0
     log = CurveLog(out_dir)
+    last = out_dir / "last.pt"
     if resume and last.is_file():
         ck = load_checkpoint(last, "checkpoint")
         vae.load_state_dict(ck["state_dict"])

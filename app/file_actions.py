@@ -18,7 +18,7 @@ from app import rig_maps
 from app.export import ReconstructionExport
 from engine.atomic import write_text
 from engine.errors import RigError, UserError
-from engine.validation import read_json
+from engine.input_files import read_json
 
 MAX_RECENT = 8
 

@@ -15,7 +15,7 @@ def load_config(cls: type, path: Path | None = None, overrides: list[str] | None
     then ``direct`` keyword values that are not None. Errors name the file and field."""
     values: dict[str, Any] = {}
     if path is not None:
-        from engine.validation import read_input_bytes
+        from engine.input_files import read_input_bytes
 
         raw = read_input_bytes(Path(path), "config")
         try:

@@ -34,12 +34,13 @@ import numpy as np
 from engine import skeleton as sk
 from engine.bvh import RawBVH, load_bvh
 from engine.errors import UserError
+from engine.input_files import read_json
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk, local_from_global
 from engine.motion import Motion
 from engine import retarget_frames as RF
 from engine.rigs import RigProfile, resolve_rig
-from engine.validation import SKELETON, check_manifest, check_value, read_json
+from engine.validation import SKELETON, check_manifest, check_value
 
 #: Bumped whenever retargeting gives different clips (prepared data is rebuilt then).
 RETARGET_VERSION = 3

@@ -23,8 +23,9 @@ import engine.constraints  # noqa: F401  (registers every kind)
 from engine.atomic import write_text
 from engine.constraints.base import Constraint, from_dict
 from engine.errors import UserError
+from engine.input_files import read_json
 from engine.solver import OptimizerSettings
-from engine.validation import read_json, shown
+from engine.validation import shown
 
 FORMAT = "dragposer-scene"
 VERSION = 1

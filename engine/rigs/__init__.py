@@ -21,9 +21,10 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.errors import RigError, UserError
+from engine.input_files import read_toml
 from engine.rigs.automap import automap, check_mapping
 from engine.rigs.infer import infer_axes, infer_units
-from engine.validation import Num, check_value, read_toml, shown
+from engine.validation import Num, check_value, shown
 
 PROFILE_DIR = Path(__file__).resolve().parent
 LANDMARKS = ("l_toe_tip", "r_toe_tip", "l_eye", "r_eye", "l_index", "l_pinky", "r_index", "r_pinky")

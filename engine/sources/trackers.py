@@ -23,8 +23,8 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.errors import UserError
+from engine.input_files import read_json
 from engine.sensors import Sensor, SensorFrame
-from engine.validation import read_json
 
 if TYPE_CHECKING:
     from engine.sources.calibration import Calibration

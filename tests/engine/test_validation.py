@@ -7,8 +7,9 @@ import os
 import pytest
 
 from engine.errors import UserError, shorten_words
+from engine.input_files import read_json
 from engine.validation import (CLI, SETTINGS, Num, ValidationError, check_fields, check_input_file,
-                               check_output_path, check_value, one_line, read_json)  # fmt: skip
+                               check_output_path, check_value, one_line)  # fmt: skip
 
 
 @pytest.mark.parametrize("spec, value, reason", [

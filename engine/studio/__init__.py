@@ -2,7 +2,9 @@
 
 * :mod:`engine.studio.session`: :class:`~engine.studio.session.Session`, the model. The GUI
   changes the scene only through its methods; each change fires a typed event
-  (:mod:`engine.studio.events`) and becomes a command for the engine thread.
+  (:mod:`engine.studio.events`) and becomes a command for the engine thread. Its
+  sensor and constraint edits live in :mod:`engine.studio.session_sensors` and
+  :mod:`engine.studio.session_constraints`.
 * :mod:`engine.studio.commands`: those commands (frozen dataclasses).
 * :mod:`engine.studio.snapshot`: what the engine thread publishes, numpy only.
 * :mod:`engine.studio.thread`: the engine thread (commands in, snapshots out).

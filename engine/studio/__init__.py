@@ -7,12 +7,15 @@
   :mod:`engine.studio.session_constraints`.
 * :mod:`engine.studio.commands`: those commands (frozen dataclasses).
 * :mod:`engine.studio.snapshot`: what the engine thread publishes, numpy only.
-* :mod:`engine.studio.thread`: the engine thread (commands in, snapshots out).
+* :mod:`engine.studio.thread`: the engine thread (commands in, snapshots out), with
+  its playback clock (:mod:`engine.studio.playback`) and the methods it runs on each
+  frame (:mod:`engine.studio.method_set`); :mod:`engine.studio.process` runs the same
+  loop in a child process.
 * :mod:`engine.studio.source`: where sensor readings come from (a clip today; any
   :class:`~engine.studio.source.SensorSource` later, e.g. live trackers).
 * :mod:`engine.studio.catalog`: the constraint kinds users may add, with their fields.
 * :mod:`engine.studio.methods`: building methods and pushing the scene into them.
 
 Layering (no loops): ``sensors`` < ``commands``, ``snapshot``, ``source``, ``catalog``,
-``methods`` < ``thread`` < ``session``.
+``methods``, ``playback`` < ``method_set`` < ``thread`` < ``process`` < ``session``.
 """

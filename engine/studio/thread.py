@@ -6,13 +6,10 @@ changes as :mod:`engine.studio.commands`. After each solved frame it publishes a
 :class:`~engine.studio.snapshot.Snapshot` of plain, read-only numpy arrays: readers keep
 the newest one (``thread.latest``) or get called back (``listeners``, on this thread).
 
-Playback has two modes. ``"every_frame"`` (the default) solves every clip frame in
-order; the clock waits for the solver, so a slow solver plays slower than real time but
-the reconstruction never drifts off the trackers. ``"real_time"`` keeps the wall clock
-(elapsed time x fps x speed) and skips the frames the solver missed. Either way, after
-a reset (a new clip, a loop, a seek back) the clock restarts from the first solved
-frame, so the slow first solve does not skip the clip's first second. A method that
-raises or returns NaN never kills the thread; the error is reported in the snapshot.
+Which frame is due when is the :class:`~engine.studio.playback.PlaybackClock`'s
+arithmetic (two modes: solve every frame, or keep real time and skip); the methods are
+a :class:`~engine.studio.method_set.MethodSet`. A method that raises or returns NaN
+never kills the thread; the error is reported in the snapshot.
 """
 
 from __future__ import annotations
@@ -32,7 +29,9 @@ from engine import skeleton as sk
 from engine.methods.base import FrameResult, Method
 from engine.sensors import SensorFrame
 from engine.studio import commands as cmd
-from engine.studio.methods import apply_constraints, apply_sensor_weights, apply_settings, make_method
+from engine.studio.method_set import MethodSet
+from engine.studio.methods import make_method
+from engine.studio.playback import ENDED, LOOPED, PlaybackClock
 from engine.studio.snapshot import HISTORY, FrameRecord, Snapshot, readonly
 from engine.studio.source import ClipSource, SensorSource
 
@@ -95,18 +94,14 @@ class EngineThread(threading.Thread):
         super().__init__(name="dragposer-engine", daemon=True)
         self._queue: Any = queue.Queue() if commands is None else commands
         self._factory = method_factory or make_method
+        # looked up at each build, so a factory swapped on a running engine takes effect
+        self._methods = MethodSet(lambda name: self._factory(name), self._report_error)
         self.latest: Snapshot | None = None
         self.listeners: list[Callable[[Snapshot], None]] = []
         self._source: SensorSource | None = None
-        self._sensors: tuple = ()
-        self._method_name, self._ghost_names = "", ()
-        self._method: Method | None = None
-        self._ghosts: dict[str, Method] = {}
-        self._constraints: tuple[Any, ...] = ()
-        self._settings: dict = {}
         self._frame, self._last_solved = 0, -2
-        self._playing, self._speed, self._loop, self._mode = False, 1.0, True, "every_frame"
-        self._clock = (0.0, 0)  # (monotonic time, frame) playback is timed from
+        self._playing = False
+        self._clock = PlaybackClock()
         self._dirty = False
         self._seq = self._solved = self._skipped = self._warnings = self._plays = 0
         self._fps = 0.0
@@ -120,7 +115,6 @@ class EngineThread(threading.Thread):
         self._method_error = ""
         self._recent_errors: deque[str] = deque(maxlen=RECENT_ERRORS)
         self._stopping = False
-        self._skeleton_version = 0
         self._latency_ms: float | None = None
 
     # -- public API (any thread) --------------------------------------------------------
@@ -145,7 +139,7 @@ class EngineThread(threading.Thread):
                 break
             if self._source is None or self._source.num_frames == 0:
                 continue
-            if getattr(self._source, "skeleton_version", 0) != self._skeleton_version:
+            if getattr(self._source, "skeleton_version", 0) != self._methods.skeleton_version:
                 self._reset_methods()  # a live source was calibrated: a new skeleton
             was_playing = self._playing
             target = self._playback_frame() if self._playing else self._frame
@@ -155,9 +149,6 @@ class EngineThread(threading.Thread):
             elif was_playing and not self._playing:
                 self._republish()  # the end was reached on a solved frame: say playback stopped
 
-    def _rate(self) -> float:
-        return max(self._source.fps * self._speed, 1e-6) if self._source is not None else 1.0
-
     def _wait_time(self) -> float | None:
         """How long the queue may block: until the next frame is due, or forever."""
         if self._dirty:
@@ -166,11 +157,7 @@ class EngineThread(threading.Thread):
             return None
         if getattr(self._source, "live", False):
             return LIVE_POLL_S  # frames arrive on the network's schedule, not a clock's
-        if self._mode == "every_frame" and self._frame != self._last_solved:
-            return 0.0  # the current frame still needs solving
-        t0, f0 = self._clock
-        due = t0 + (self._frame - f0 + 1) / self._rate()
-        return max(0.0, due - time.monotonic())
+        return self._clock.wait_time(self._frame, self._last_solved, self._source.fps)
 
     def _drain(self, timeout: float | None) -> None:
         try:
@@ -191,7 +178,7 @@ class EngineThread(threading.Thread):
         elif isinstance(c, (cmd.SetMotion, cmd.SetSource)):
             source = ClipSource(c.motion) if isinstance(c, cmd.SetMotion) else c.source
             try:
-                source.set_sensors(self._sensors)
+                source.set_sensors(self._methods.sensors)
             except Exception as exc:  # reported, and the old source stays
                 self._report_error(f"sensor source: {exc}")
                 return
@@ -200,32 +187,29 @@ class EngineThread(threading.Thread):
             self._recent_errors.clear()
             self._reset_methods()
         elif isinstance(c, cmd.SetSensors):
-            self._sensors = c.sensors
             if self._source is not None:
                 try:
                     self._source.set_sensors(c.sensors)
                 except Exception as exc:
                     self._report_error(f"sensor source: {exc}")
-            self._configure_all("sensors")
+            self._methods.set_sensors(c.sensors)
         elif isinstance(c, cmd.SetConstraints):
-            self._constraints = c.constraints
-            self._configure_all("constraints")
+            self._methods.set_constraints(c.constraints)
         elif isinstance(c, cmd.SetSettings):
-            self._settings = {**self._settings, **c.values}
-            self._configure_all("settings")
+            self._methods.set_settings(c.values)
         elif isinstance(c, cmd.SetMethod):
             self._set_method(c)
         elif isinstance(c, cmd.Seek):
             self._frame = self._clamp(c.frame)
-            self._clock = (time.monotonic(), self._frame)
+            self._clock.restart(self._frame)
             self._decoded = None
         elif isinstance(c, cmd.Step):
             self._playing = False
             self._frame = self._clamp(self._frame + c.delta)
         elif isinstance(c, cmd.Play):
             self._plays += 1
-            self._playing, self._speed, self._loop, self._mode = True, c.speed, c.loop, c.mode
-            self._clock = (time.monotonic(), self._frame)
+            self._playing = True
+            self._clock = PlaybackClock(c.speed, c.loop, c.mode, (time.monotonic(), self._frame))
             self._decoded = None
             self._dirty = was_dirty or self._frame != self._last_solved
         elif isinstance(c, cmd.Pause):
@@ -240,15 +224,12 @@ class EngineThread(threading.Thread):
             self._republish()
 
     def _set_method(self, c: cmd.SetMethod) -> None:
-        new = self._build(c.name) if c.name else None
-        if c.name and new is None and self._method is not None:
+        if not self._methods.select(c.name, c.ghosts):
             # a method that cannot be built (e.g. a broken weights file) leaves the
             # session as it was; the window shows why
             self._method_error = self._pending_error
             return
-        self._method_name, self._ghost_names = c.name, tuple(c.ghosts)
-        self._method, self._ghosts = new, {}
-        self._reset_methods(built=new is not None)
+        self._reset_methods(built=self._methods.method is not None)
 
     def _republish(self) -> None:
         """Publish the last solved frame again (its pose, losses and timing) with the
@@ -262,98 +243,28 @@ class EngineThread(threading.Thread):
         return int(np.clip(frame, 0, max(n - 1, 0)))
 
     def _playback_frame(self) -> int:
-        """The frame playback is at now (see the module doc for the two modes); a live
-        source's newest frame, whatever the mode."""
+        """The frame playback is at now (:meth:`PlaybackClock.advance`); a live source's
+        newest frame, whatever the mode."""
         if getattr(self._source, "live", False):
             self._frame = max(self._source.num_frames - 1, 0)
             return self._frame
-        t0, f0 = self._clock
-        now = time.monotonic()
-        rate = self._rate()
-        if self._mode == "every_frame":
-            if self._frame != self._last_solved:
-                return self._frame  # a seek or reset: solve where we are first
-            due = t0 + (self._frame + 1 - f0) / rate
-            if now < due:
-                return self._frame
-            f = self._frame + 1
-            if now - due > 1.0 / rate:  # the solver is behind the clock: the clock waits
-                self._clock = (now, f)
-        else:
-            f = f0 + int((now - t0) * rate)
-        if f >= self._source.num_frames:
-            if self._loop:
-                self._clock = (now, 0)
-                self._reset_methods()
-                f = 0
-            else:
-                self._playing, f = False, self._source.num_frames - 1
+        f, event = self._clock.advance(self._frame, self._last_solved, self._source.num_frames, self._source.fps)
+        if event == LOOPED:
+            self._reset_methods()
+        elif event == ENDED:
+            self._playing = False
         self._frame = f
         return f
 
     # -- methods --------------------------------------------------------------------
-    def _build(self, name: str) -> Method | None:
-        try:
-            m = self._factory(name)
-        except Exception as exc:
-            self._report_error(f"method {name!r}: {exc}")
-            return None
-        return m
-
     def _reset_methods(self, built: bool = False) -> None:
-        fresh = built or (self._method is None and bool(self._method_name))
-        if fresh:
-            self._method = self._build(self._method_name)
-        for g in self._ghost_names:
-            if g not in self._ghosts and (m := self._build(g)) is not None:
-                self._ghosts[g] = m
-                fresh = True
-        motion = self._source.motion if self._source is not None else None
-        # a tracker source has no clip, only the wearer's (perhaps calibrated) skeleton
-        skeleton = motion.skeleton if motion is not None else getattr(self._source, "skeleton", None)
-        self._skeleton_version = getattr(self._source, "skeleton_version", 0)
-        for m in [self._method, *self._ghosts.values()]:
-            if m is None or skeleton is None:
-                continue
-            try:
-                if getattr(m, "needs_ground_truth", False):  # e.g. an oracle baseline
-                    if motion is None:
-                        raise ValueError("needs a ground-truth clip; tracker sources have none")
-                    m.reset(motion.skeleton, motion.fps, reference=motion)  # type: ignore[call-arg]
-                else:
-                    m.reset(skeleton, self._source.fps)
-            except Exception as exc:
-                self._report_error(f"{m.name}.reset: {exc}")
-        self._configure_all(report=fresh)  # methods may drop their settings on reset
+        self._methods.reset(self._source, built)
         self._last_solved = -2  # nothing solved since: the next solve starts clean
-
-    def _configure_all(self, what: str = "all", report: bool = True) -> None:
-        """Push the studio's edits into the methods: ``settings``, ``constraints``,
-        ``sensors`` or ``all``. Only the changed aspect is re-applied, so a problem (such
-        as a method that ignores constraints) is reported once per edit."""
-        for m in [self._method, *self._ghosts.values()]:
-            if m is None:
-                continue
-            problems = []
-            if what in ("all", "settings"):
-                problems += apply_settings(m, self._settings)
-            if what in ("all", "constraints"):
-                problems += apply_constraints(m, self._constraints)
-            if what in ("all", "sensors"):
-                problems += apply_sensor_weights(m, self._sensors)
-            for problem in problems if report else ():
-                self._report_error(problem)
 
     def _report_error(self, message: str) -> None:
         self._warnings += 1
         self._pending_error = message
         self._recent_errors.append(message)
-
-    def _step(self, method: Method, sf: SensorFrame) -> FrameResult:
-        res = method.step(sf)
-        if not np.all(np.isfinite(res.positions)):
-            raise FloatingPointError("method returned a non-finite pose")
-        return res
 
     def _is_jump(self, frame: int) -> bool:
         """A seek backwards or more than 2 s ahead. Playback skipping a few frames because
@@ -378,13 +289,13 @@ class EngineThread(threading.Thread):
         self._pending_error = ""
         t0 = time.perf_counter()
         res = None
-        if self._method is not None:
+        if self._methods.method is not None:
             try:
-                res = self._step(self._method, sf)
+                res = self._methods.step(self._methods.method, sf)
                 self._last_pose, self._last_result = res.positions, res
                 self._warnings += len(res.warnings)
             except Exception as exc:  # never let a method kill the engine thread
-                error = f"{self._method_name} at frame {frame}: {type(exc).__name__}: {exc}"
+                error = f"{self._methods.name} at frame {frame}: {type(exc).__name__}: {exc}"
                 self._warnings += 1
                 self._recent_errors.append(error)
                 self._reset_methods()
@@ -393,9 +304,9 @@ class EngineThread(threading.Thread):
         arrived = arrival(frame) if arrival is not None else None
         self._latency_ms = None if arrived is None else (time.perf_counter() - arrived) * 1000.0
         ghosts = {}
-        for name, m in self._ghosts.items():
+        for name, m in self._methods.ghosts.items():
             try:
-                ghosts[name] = self._step(m, sf).positions
+                ghosts[name] = self._methods.step(m, sf).positions
             except Exception as exc:
                 error = error or f"{name} at frame {frame}: {exc}"
                 self._recent_errors.append(f"{name} at frame {frame}: {exc}")
@@ -404,7 +315,7 @@ class EngineThread(threading.Thread):
         self._last_solved = frame
         self._solved += 1
         if jump and self._playing:  # the first solve after a reset is slow: time from here
-            self._clock = (time.monotonic(), frame)
+            self._clock.restart(frame)
         self._last_ghosts, self._last_ms = ghosts, ms
         if res is not None:
             final = dict(res.losses[-1]) if res.losses else dict(_losses(res, sf)[-1])
@@ -413,17 +324,12 @@ class EngineThread(threading.Thread):
         self._publish(frame, sf, res, ms, error, ghosts)
         # the pose is out: work the methods deferred (DragPoser's predictor pieces) now,
         # not inside the next frame's solve
-        for name, m in [(self._method_name, self._method), *self._ghosts.items()]:
-            if m is not None:
-                try:
-                    m.between_frames()
-                except Exception as exc:  # reported like a failing step, never fatal
-                    self._report_error(f"{name} between frames: {type(exc).__name__}: {exc}")
+        self._methods.between_frames()
 
     def _decode(self, latent: np.ndarray) -> None:
-        decode = getattr(self._method, "decode_latent", None)
+        decode = getattr(self._methods.method, "decode_latent", None)
         if decode is None:
-            self._report_error(f"{self._method_name}: cannot decode latents")
+            self._report_error(f"{self._methods.name}: cannot decode latents")
             return
         self._playing = False
         try:
@@ -459,13 +365,13 @@ class EngineThread(threading.Thread):
             method_error=self._method_error,
             engine_fps=self._fps,
             playing=self._playing,
-            method=getattr(self._method, "name", self._method_name),
-            can_decode=hasattr(self._method, "decode_latent"),
+            method=getattr(self._methods.method, "name", self._methods.name),
+            can_decode=hasattr(self._methods.method, "decode_latent"),
             decoded=readonly(self._decoded) if self._decoded is not None else None,
             history=tuple(self._history),
             solved=self._solved,
             frames_skipped=self._skipped,
-            mode=self._mode,
+            mode=self._clock.mode,
             timing=_timing(res, ms, self._latency_ms),
             recent_errors=tuple(self._recent_errors),
             plays=self._plays,
@@ -479,7 +385,7 @@ class EngineThread(threading.Thread):
         """Viewport descriptions of the enabled constraints, posed on the last solve
         (distance, balance and look-at draw lines between current joints)."""
         out = []
-        for c in self._constraints:
+        for c in self._methods.constraints:
             if not c.enabled:
                 continue
             try:

@@ -218,7 +218,7 @@ def test_speed_and_loop_from_the_timeline_reach_the_engine(studio, qtbot):
     t.play_button.click()
     # the engine got the speed; whether it plays shows in the frames: from n - 20 the last
     # frame is reached only by playing (polling _playing raced with a playback this short)
-    qtbot.waitUntil(lambda: studio.engine._speed == 2.0)
+    qtbot.waitUntil(lambda: studio.engine._clock.speed == 2.0)
     # without loop, playback stops on the last frame and the play button comes back up
     snap_after(studio, qtbot, lambda s: s.frame == n - 1 and not s.playing)
     qtbot.waitUntil(lambda: not t.play_button.isChecked() and not studio.session.playing)

@@ -1,0 +1,160 @@
+"""The methods the engine thread runs on each frame: the one the studio shows and its ghosts.
+
+:class:`MethodSet` builds them by name, resets them for a clip (or for a tracker
+stream's skeleton) and gives them the studio's settings, constraints and sensor weights
+(:mod:`engine.studio.methods`), re-applying only the aspect an edit changed. It never
+raises: a method that cannot be built, reset or configured is reported through the
+``report`` callback as one readable line, and the others keep running.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from engine.methods.base import FrameResult, Method
+from engine.sensors import Sensor, SensorFrame
+from engine.studio.methods import apply_constraints, apply_sensor_weights, apply_settings
+
+
+class MethodSet:
+    """The shown method and its ghosts, with the studio's edits they were given.
+
+    Parameters
+    ----------
+    factory : callable
+        ``factory(name) -> Method``.
+    report : callable
+        ``report(message)``, called with each problem (one line).
+
+    Attributes
+    ----------
+    name : str
+        Requested method ("" = none); ``method`` the built one (None if it failed).
+    ghost_names : tuple of str
+        Requested ghosts; ``ghosts`` the built ones by name.
+    sensors, constraints, settings
+        The studio's current edits, pushed into every method.
+    skeleton_version : int
+        The source's ``skeleton_version`` at the last reset (a live source's
+        calibration makes a new skeleton).
+    """
+
+    def __init__(self, factory: Callable[[str], Method], report: Callable[[str], None]) -> None:
+        self._factory = factory
+        self._report = report
+        self.name = ""
+        self.ghost_names: tuple[str, ...] = ()
+        self.method: Method | None = None
+        self.ghosts: dict[str, Method] = {}
+        self.sensors: tuple[Sensor, ...] = ()
+        self.constraints: tuple[Any, ...] = ()
+        self.settings: dict[str, Any] = {}
+        self.skeleton_version = 0
+
+    def running(self) -> list[tuple[str, Method]]:
+        """``(name, method)`` of every built method, the shown one first."""
+        pairs = [(self.name, self.method), *self.ghosts.items()]
+        return [(name, m) for name, m in pairs if m is not None]
+
+    def build(self, name: str) -> Method | None:
+        """A new method ``name``, or None (reported) when the factory fails."""
+        try:
+            return self._factory(name)
+        except Exception as exc:
+            self._report(f"method {name!r}: {exc}")
+            return None
+
+    def select(self, name: str, ghosts: tuple[str, ...]) -> bool:
+        """Show method ``name`` (built now) with ``ghosts`` (built at the next reset).
+
+        Returns False, changing nothing, when ``name`` cannot be built while another
+        method runs: a broken weights file leaves the session as it was.
+        """
+        new = self.build(name) if name else None
+        if name and new is None and self.method is not None:
+            return False
+        self.name, self.ghost_names = name, tuple(ghosts)
+        self.method, self.ghosts = new, {}
+        return True
+
+    def reset(self, source: Any, built: bool = False) -> None:
+        """Reset every method for ``source``'s clip or skeleton, then configure them.
+
+        Builds the shown method anew when ``built`` (a new selection) or when it is
+        missing, and the ghosts not built yet; the settings problems of freshly built
+        methods are reported (a known method's were reported when they were edited).
+        """
+        fresh = built or (self.method is None and bool(self.name))
+        if fresh:
+            self.method = self.build(self.name)
+        for g in self.ghost_names:
+            if g not in self.ghosts and (m := self.build(g)) is not None:
+                self.ghosts[g] = m
+                fresh = True
+        motion = source.motion if source is not None else None
+        # a tracker source has no clip, only the wearer's (perhaps calibrated) skeleton
+        skeleton = motion.skeleton if motion is not None else getattr(source, "skeleton", None)
+        self.skeleton_version = getattr(source, "skeleton_version", 0)
+        for _, m in self.running():
+            if skeleton is None:
+                continue
+            try:
+                if getattr(m, "needs_ground_truth", False):  # e.g. an oracle baseline
+                    if motion is None:
+                        raise ValueError("needs a ground-truth clip; tracker sources have none")
+                    m.reset(motion.skeleton, motion.fps, reference=motion)  # type: ignore[call-arg]
+                else:
+                    m.reset(skeleton, source.fps)
+            except Exception as exc:
+                self._report(f"{m.name}.reset: {exc}")
+        self.configure(report=fresh)  # methods may drop their settings on reset
+
+    def set_settings(self, values: dict[str, Any]) -> None:
+        """Merge ``values`` into the settings and push them."""
+        self.settings = {**self.settings, **values}
+        self.configure("settings")
+
+    def set_constraints(self, constraints: tuple[Any, ...]) -> None:
+        """Replace the constraint list and push it."""
+        self.constraints = constraints
+        self.configure("constraints")
+
+    def set_sensors(self, sensors: tuple[Sensor, ...]) -> None:
+        """Replace the sensor set and push its weights."""
+        self.sensors = sensors
+        self.configure("sensors")
+
+    def configure(self, what: str = "all", report: bool = True) -> None:
+        """Push the studio's edits into the methods: ``settings``, ``constraints``,
+        ``sensors`` or ``all``. Only the changed aspect is re-applied, so a problem (such
+        as a method that ignores constraints) is reported once per edit."""
+        for _, m in self.running():
+            problems = []
+            if what in ("all", "settings"):
+                problems += apply_settings(m, self.settings)
+            if what in ("all", "constraints"):
+                problems += apply_constraints(m, self.constraints)
+            if what in ("all", "sensors"):
+                problems += apply_sensor_weights(m, self.sensors)
+            for problem in problems if report else ():
+                self._report(problem)
+
+    @staticmethod
+    def step(method: Method, sf: SensorFrame) -> FrameResult:
+        """``method.step(sf)``; a non-finite pose raises :class:`FloatingPointError`."""
+        res = method.step(sf)
+        if not np.all(np.isfinite(res.positions)):
+            raise FloatingPointError("method returned a non-finite pose")
+        return res
+
+    def between_frames(self) -> None:
+        """Let every method do the work it deferred until the pose was out (DragPoser's
+        predictor pieces); a failure is reported like a failing step, never fatal."""
+        for name, m in self.running():
+            try:
+                m.between_frames()
+            except Exception as exc:
+                self._report(f"{name} between frames: {type(exc).__name__}: {exc}")

@@ -109,8 +109,10 @@ def test_canonical_frame_count_is_limited_before_resampling(tmp_path, capsys, mo
     from engine import validation
 
     monkeypatch.setitem(validation.SKELETON, "canonical frames", validation.Num(1, 1000, integer=True))
-    rc, _, err = run(["info", "--fps", "1", EX], capsys)  # 557 frames at 1 fps = 33,361 at 60 fps
-    assert_one_line_error(rc, err, "example.bvh: at 1 frames/s", "frames at 60 fps = 33361")
+    frames = int(re.search(r"^Frames:\s*(\d+)", EX.read_text(), re.M).group(1))
+    canonical = (frames - 1) * 60 + 1  # frames - 1 seconds at 1 fps, sampled at 60 fps
+    rc, _, err = run(["info", "--fps", "1", EX], capsys)
+    assert_one_line_error(rc, err, "example.bvh: at 1 frames/s", f"frames at 60 fps = {canonical}")
 
 
 @pytest.mark.parametrize("args, needles", [

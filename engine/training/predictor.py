@@ -31,10 +31,10 @@ from engine import skeleton as sk
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
 from engine.kinematics.features import encoder_input
-from engine.models.loading import FORMAT_VERSION, load_checkpoint, load_vae
+from engine.models.loading import FORMAT_VERSION, load_checkpoint, load_predictor, load_vae
 from engine.models.predictor import PredictorConfig, TemporalPredictor
 from engine.models.vae import PoseVAE
-from engine.training.common import CurveLog, Distributed, config_dict, save_checkpoint, seed_everything
+from engine.training.common import CurveLog, Distributed, config_dict, save_checkpoint, seed_everything, start_from
 from engine.training.data import PoseData, load_split
 
 LIMBS = (("lhip", "lknee", "lankle", "ltoe"), ("rhip", "rknee", "rankle", "rtoe"),
@@ -69,6 +69,9 @@ class PredictorTrainConfig:
     epochs: int = 12
     minutes: float = 18.0
     seed: int = 0
+    #: A predictor file to start from (fine-tuning after the VAE moved a little); its
+    #: architecture must match. Its latent statistics are replaced by the new latents'.
+    init: str = ""
 
     def model_config(self) -> PredictorConfig:
         return PredictorConfig(d_model=self.d_model, heads=self.heads, encoder_layers=self.encoder_layers,
@@ -166,6 +169,8 @@ def train_predictor(data_dir: Path, vae_path: Path, out_dir: Path, cfg: Predicto
     c_tr, c_va = conditioning(train, cfg.stride), conditioning(val, cfg.stride)
     noisy, flags = noisy_latents(vae, train, cfg, gen)
     model = TemporalPredictor(cfg.model_config()).to(ddp.device)
+    if cfg.init:  # a resumed run then loads its own last.pt over it
+        start_from(model, cfg.init, load_predictor)
     model.set_stats(z_tr.mean(0), z_tr.std(0), c_tr.mean(0), c_tr.std(0))
     # gradients are averaged across processes by hand (the model is called through two
     # methods, encode_past and decode_steps, which a DDP wrapper's forward would not see)

@@ -175,6 +175,7 @@ SETTINGS: Schema = {
     "tuning": Choice(("preset", "off")),
     "heading": Choice(("previous", "anchor")),
     "hands_heading_limit": Num(0, 180),
+    "neck_twist_share": Num(0, 1),
     "prior": Choice(("predictor", "trackers")),
     "tracker_prior_weight": Num(0, 1e6),
     "tracker_prior_neighbours": Num(0, 4096, integer=True),

@@ -234,7 +234,8 @@ class DragPoserMethod(Method):
         reach_to = self._reach_targets() if s.reach else {}
         turn_to = self._rotation_targets() if s.sensor_rotations else {}
         if reach_to or turn_to:  # one FK for both steps (engine/solver/limb_ik.py)
-            local_rot, positions = finish(local_rot, positions[0], self.skeleton.offsets, reach_to, turn_to)
+            local_rot, positions = finish(local_rot, positions[0], self.skeleton.offsets, reach_to, turn_to,
+                                          s.neck_twist_share)  # fmt: skip
         self._advance(sol.latent, root, local_rot[0], positions)
         result = FrameResult(
             local_rot=local_rot,

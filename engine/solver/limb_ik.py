@@ -1,5 +1,6 @@
 """Exact steps after the latent solve (numpy): wrists and ankles onto their trackers
-(:func:`reach`) and tracked joints onto their trackers' rotations (:func:`adopt_rotations`).
+(:func:`reach`) and tracked joints onto their trackers' rotations (:func:`adopt_rotations`,
+with the head's turn about the neck shared with the lower neck: :func:`share_neck_twist`).
 
 The decoder brings a tracked hand or foot within a centimetre or two of its tracker; the
 rest is beyond what a 24-d latent can express in ten iterations. This step closes the
@@ -184,6 +185,65 @@ def adopt_local(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray
     return local
 
 
+#: The head tracker's joint and the neck joint below it (:func:`share_neck_twist`).
+HEAD, NECK = sk.JOINT_INDEX["upperneck"], sk.JOINT_INDEX["lowerneck"]
+
+
+def share_neck_twist(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, head_target: np.ndarray,
+                     share: float) -> np.ndarray:  # fmt: skip
+    """Give the lower neck ``share`` of the head's rotation correction about the neck.
+
+    :func:`adopt_local` turns the head (``upperneck``) onto its tracker alone, so a head
+    the decoder left turned too little about the neck gets all of the missing turn in
+    the head joint. In people the neck's axial turn is spread over the cervical spine
+    (about half of it between the first two vertebrae, the rest below), so here the part
+    of the correction ``target * head^-1`` that is a twist about the neck bone (lower
+    neck to head) is split: ``share`` of it turns the lower neck about that bone, which
+    moves no joint, and :func:`adopt_local` then gives the head the rest.
+
+    Parameters
+    ----------
+    local_rot : ndarray (22, 4)
+        Local rotations (row 0 the root's world rotation).
+    root_pos : ndarray (3,)
+        Root position, metres.
+    offsets : ndarray (22, 3)
+        Bone offsets, metres.
+    head_target : ndarray (4,)
+        The head tracker's world rotation (w, x, y, z).
+    share : float
+        In [0, 1]; 0 leaves ``local_rot`` as given.
+
+    Returns
+    -------
+    local_rot : ndarray (22, 4)
+        With a new lower-neck rotation; every other row as given.
+    """
+    local = np.array(local_rot, dtype=np.float64)
+    if share <= 0.0:
+        return local
+    _, rots = fk_joints(local, np.asarray(root_pos, dtype=np.float64), offsets, [NECK, HEAD])
+    neck, head = tuple(rots[0].tolist()), tuple(rots[1].tolist())
+    t = [float(x) for x in head_target]
+    n = math.sqrt(sum(x * x for x in t))
+    if not n > 1e-12:
+        return local
+    delta = _qmul(tuple(x / n for x in t), _conj(head))  # world correction of the head
+    axis = _rotate(neck, tuple(float(x) for x in offsets[HEAD]))
+    length = _norm(axis)
+    if length < 1e-9:
+        return local
+    axis = _scale(axis, 1.0 / length)
+    angle = 2.0 * math.atan2(_dot(delta[1:], axis), delta[0])  # signed twist, radians
+    angle = (angle + math.pi) % (2.0 * math.pi) - math.pi
+    turn = _axis_angle(axis, share * angle)
+    parent = _qmul(neck, _conj(tuple(local[NECK].tolist())))  # the chest's world rotation
+    q = _qmul(_conj(parent), _qmul(turn, neck))
+    n = math.sqrt(_dot(q[1:], q[1:]) + q[0] * q[0])
+    local[NECK] = tuple(x / n for x in (q if q[0] >= 0 else tuple(-x for x in q)))
+    return local
+
+
 def adopt_rotations(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray,
                     targets: dict[int, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """Give joints exact world rotations by changing their local rotations only.
@@ -210,8 +270,9 @@ def adopt_rotations(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.nda
 
 
 def finish(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, reach_targets: dict[int, np.ndarray],
-           rotation_targets: dict[int, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
-    """:func:`reach` onto ``reach_targets`` (positions), then :func:`adopt_rotations` of
+           rotation_targets: dict[int, np.ndarray], neck_twist_share: float = 0.0) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """:func:`reach` onto ``reach_targets`` (positions), then :func:`share_neck_twist`
+    (with a head target and ``neck_twist_share`` > 0) and :func:`adopt_rotations` of
     ``rotation_targets``, with one forward kinematics pass for the positions.
 
     Returns
@@ -222,6 +283,8 @@ def finish(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, rea
     """
     local = reach_local(local_rot, root_pos, offsets, reach_targets) if reach_targets else local_rot
     if rotation_targets:
+        if neck_twist_share > 0.0 and HEAD in rotation_targets:
+            local = share_neck_twist(local, root_pos, offsets, rotation_targets[HEAD], neck_twist_share)
         local = adopt_local(local, root_pos, offsets, rotation_targets)
     local = np.array(local, dtype=np.float64)
     positions, _ = fk(local, np.asarray(root_pos, dtype=np.float64), offsets)

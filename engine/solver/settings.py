@@ -118,6 +118,11 @@ class OptimizerSettings:
         setting its local rotation from its solved parent (DragPoser's joint adjustment,
         applied to the head, hands and feet). Positions of those joints are unchanged;
         their children (toes) follow the foot.
+    neck_twist_share : float
+        In [0, 1]. With a 6-DoF head tracker and ``sensor_rotations``, the part of the
+        head's rotation correction that is a twist about the neck is split: this share
+        turns the lower neck about the neck bone (no joint moves) and the head takes the
+        rest (``engine.solver.limb_ik.share_neck_twist``); 0 = all of it in the head.
     reach : bool
         After each solve, put every tracked wrist and ankle exactly on its tracker by its
         limb's two bones (``engine/solver/limb_ik.py``): the decoder alone leaves them
@@ -167,6 +172,7 @@ class OptimizerSettings:
     ground_weight: float = 0.0
     tuning: str = "preset"
     sensor_rotations: bool = True
+    neck_twist_share: float = 0.5
     reach: bool = True
     heading: str = "anchor"
     hands_heading_limit: float = 10.0
@@ -191,7 +197,7 @@ class OptimizerSettings:
             setattr(self, name, int(v))
         floats = ("lr", "position_tolerance", "rotation_tolerance", "sensor_rotation_weight", "temporal_weight",
                   "min_improvement", "divergence_factor", "momentum", "step_size", "sensor_blend",
-                  "smooth_weight", "ground_weight", "tracker_prior_weight", "hands_heading_limit")  # fmt: skip
+                  "smooth_weight", "ground_weight", "tracker_prior_weight", "hands_heading_limit", "neck_twist_share")  # fmt: skip
         for name in floats:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:

@@ -110,11 +110,13 @@ def test_reach_and_rotations_equal_the_previous_code_on_real_frames(models, moti
     calls = []
     new_finish = limb_ik.finish
 
-    def spy(local, root, offsets, reach_to, turn_to):
-        got = new_finish(local, root, offsets, reach_to, turn_to)
+    def spy(local, root, offsets, reach_to, turn_to, neck_twist_share=0.0):
+        got = new_finish(local, root, offsets, reach_to, turn_to, neck_twist_share)
         want_local, want_pos = local, None
         if reach_to:
             want_local, want_pos = reach_reference(want_local, root, offsets, reach_to)
+        if limb_ik.HEAD in turn_to:  # the step between the two (tests/engine/test_limb_ik.py)
+            want_local = limb_ik.share_neck_twist(want_local, root, offsets, turn_to[limb_ik.HEAD], neck_twist_share)
         if turn_to:
             want_local, want_pos = adopt_reference(want_local, root, offsets, turn_to)
         calls.append((len(reach_to), len(turn_to)))

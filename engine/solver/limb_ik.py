@@ -203,12 +203,8 @@ def share_neck_twist(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.nd
 
     Parameters
     ----------
-    local_rot : ndarray (22, 4)
-        Local rotations (row 0 the root's world rotation).
-    root_pos : ndarray (3,)
-        Root position, metres.
-    offsets : ndarray (22, 3)
-        Bone offsets, metres.
+    local_rot, root_pos, offsets
+        The pose, as for :func:`adopt_rotations`.
     head_target : ndarray (4,)
         The head tracker's world rotation (w, x, y, z).
     share : float

@@ -2,8 +2,9 @@
 
 Its default weight is 30, not 1: a pin is the user overriding the trackers, and at
 weight 1 six sensor terms of the same scale (squared metres) held a Ctrl-dragged elbow
-10-13 cm short of the pin with the shipped DragPoser; at 30 it stays within ~2 cm (at
-10, 3-5 cm); ``scripts/measure_pin.py`` measures it.
+10-13 cm short of the pin with the shipped DragPoser; at 30 it pulls the joint in over
+a few frames and holds it within ~2 cm; ``scripts/measure_pin.py`` measures it
+(docs/studio.md, "Pins").
 
 With ``follow_previous`` the target is the joint's previous-frame position every frame
 (the joint resists motion). Otherwise the target is ``position``; while that is unset

@@ -201,8 +201,9 @@ What differs in the protocol, so the columns are not strictly comparable:
 - **Data.** The paper trains on DanceDB and tests on HUMAN4D and SOMA (AMASS); we train
   on 66 CMU clips (retargeted, plus mirrors; about 25 minutes of motion) and test on 9
   held-out CMU clips of the same sources (dance, walks, basketball). Our VAE and predictor
-  are trained on 2 CPU cores (the VAE 56 minutes, then a 36-minute fine-tune after the
-  retargeting changed; the predictor 25), the paper's VAE for about a day on a GPU.
+  are trained on 2 CPU cores (the VAE 56 minutes, then fine-tunes of 36 and 50 minutes
+  after the retargeting changed; the predictor 25 minutes, then 16 to follow the last
+  fine-tune), the paper's VAE for about a day on a GPU.
 - **Skeleton.** Ours is the canonical 22-joint skeleton with each subject's bone lengths;
   the paper's is DanceDB's 22-joint rig.
 - **Metric.** The paper aligns the root before measuring Pos; compare its Pos with our

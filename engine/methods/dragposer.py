@@ -166,6 +166,7 @@ class DragPoserMethod(Method):
         self._points: dict[str, np.ndarray] = {}  # connected trackers' positions, this frame
         self._last_points: dict[str, np.ndarray] = {}  # ... and the previous one
         self._tracks = TrackerHistory()  # recent 6-DoF readings for the tracker prior
+        self._bank_prior = False  # the last frame's prior came from the pose bank
 
     def step(self, sensors: SensorFrame, deadline: float | None = None) -> FrameResult:
         """Solve the next frame. ``deadline`` (a ``time.perf_counter()`` time; live input)
@@ -198,16 +199,19 @@ class DragPoserMethod(Method):
         override = roots.root_override(self.sensors)
         if self._root is None:
             self._root = roots.initial_root(self.skeleton, self.sensors, self._facing)
-        # a predictor run for later frames waits for between_frames (engine/solver/temporal.py)
-        prediction, warn = self.schedule.prediction(self._frame, self.predictor, max(1, s.future_window), defer=True)
-        if warn:
-            warnings.append(warn)
-        prior_weight = s.temporal_weight
-        if s.prior == "trackers" and self.bank is not None:
-            readings = self._tracks.arrays()
-            if readings is not None:  # hips or head among the 6-DoF trackers
-                prediction = self.bank.latent(*readings, k=s.tracker_prior_neighbours)
-                prior_weight = s.tracker_prior_weight
+        readings = self._tracks.arrays() if s.prior == "trackers" and self.bank is not None else None
+        # the predictor runs only when its latent is the prior: while the bank answers
+        # (hips or head among the 6-DoF trackers) its runs would be thrown away
+        self._bank_prior = readings is not None
+        if self._bank_prior:
+            prediction = self.bank.latent(*readings, k=s.tracker_prior_neighbours)
+            prior_weight = s.tracker_prior_weight
+        else:  # a predictor run for later frames waits for between_frames (engine/solver/temporal.py)
+            prediction, warn = self.schedule.prediction(self._frame, self.predictor, max(1, s.future_window),
+                                                        defer=True)  # fmt: skip
+            if warn:
+                warnings.append(warn)
+            prior_weight = s.temporal_weight
         start = prediction if prediction is not None and s.init_from_prediction else self._latent
         self.prior.weight = prior_weight
         self.smooth.weight = s.smooth_weight
@@ -254,12 +258,14 @@ class DragPoserMethod(Method):
     def between_frames(self) -> None:
         """One piece of the temporal predictor's deferred work (engine/solver/temporal.py):
         the same latents as when the next :meth:`step` does it, without adding to that
-        frame's latency. Runs with the solver's torch thread count, as :meth:`step` does."""
+        frame's latency (nothing while the pose bank gives the prior). Runs with the solver's
+        torch thread count, as :meth:`step` does."""
         threads = torch.get_num_threads()
         if self.settings.threads:
             torch.set_num_threads(self.settings.threads)
         try:
-            self.schedule.run_pending()
+            if not self._bank_prior:
+                self.schedule.run_pending()
         finally:
             torch.set_num_threads(threads)
 

@@ -41,6 +41,7 @@ class Profile:
     ground_weight: float
     sensor_rotation_weight: float
     prior: str = "predictor"
+    tracker_prior_weight: float = 1.0
 
     def values(self) -> dict:
         return {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name != "name"}
@@ -53,7 +54,7 @@ PROFILES: dict[str, Profile] = {
     # 10.31 / 10.15 / 10.43 / 12.46 (session-9 models; session-8 models: 0.01 10.54, 0.03
     # 10.69, 0.1 11.92; docs/optimizer.md)
     "full": Profile("full", future_window=1, temporal_weight=0.01, step_size=0.3, lr=0.05, smooth_weight=5.0,
-                    ground_weight=0.0, sensor_rotation_weight=0.01),
+                    ground_weight=0.0, sensor_rotation_weight=0.01, prior="trackers", tracker_prior_weight=0.05),
     # positions only: the smoothing term made 6x3dof worse (3 validation files, 150
     # frames: 3.97 -> 3.69 cm, 30.5 -> 28.2 deg without it), and without rotations the
     # predictor's longer look-ahead helps (retarget 3, 9 validation files: 4.06 -> 3.59 cm,

@@ -90,7 +90,7 @@ def test_history_keeps_joints_connected_throughout_and_needs_an_anchor():
     assert joints == ("root", "lwrist", "rwrist") and pos.shape == (LAG + 1, 3, 3) and rot.shape == (LAG + 1, 3, 4)
 
 
-def test_dragposer_uses_the_bank_latent_with_a_sparse_set_and_the_predictor_with_six(clip):
+def test_dragposer_takes_the_bank_latent_when_6dof_trackers_give_one_and_else_runs_the_predictor(clip):
     rng = np.random.default_rng(3)
     bank = _bank(rng, k=1)
     bank.latents[:] = 0.5  # every neighbour answers 0.5 in every dimension
@@ -112,16 +112,23 @@ def test_dragposer_uses_the_bank_latent_with_a_sparse_set_and_the_predictor_with
         m.optimizer.solve = spy
         for i in range(6):
             m.step(tr.frame(i))
+            m.between_frames()
         return m
 
-    run("4")
+    m = run("4")
     assert seen[-1] == (1.0, pytest.approx(0.5))  # profile hip: trackers, weight tracker_prior_weight
+    assert m.predictor.calls == []  # its latents would be thrown away: it does not run
     seen.clear()
-    run("4", prior="predictor")  # explicitly the paper's
+    m = run("4", prior="predictor")  # explicitly the paper's
     assert seen[-1][0] == 0.01 and seen[-1][1] != pytest.approx(0.5)
+    assert m.predictor.calls
     seen.clear()
-    run("6")  # full profile: the predictor
-    assert seen[-1][0] == 0.01 and seen[-1][1] != pytest.approx(0.5)
+    m = run("6")  # full profile: trackers too, lighter
+    assert seen[-1] == (0.05, pytest.approx(0.5)) and m.predictor.calls == []
+    seen.clear()
+    m = run("6x3dof")  # no 6-DoF tracker to look the bank up with: the predictor
+    assert seen[-1][0] == 0.03 and seen[-1][1] != pytest.approx(0.5)
+    assert m.predictor.calls
 
 
 @pytest.fixture

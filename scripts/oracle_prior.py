@@ -92,7 +92,8 @@ def main() -> int:
     for w in (float(x) for x in args.weights.split(",")):
         for name in args.predictors.split(","):
             method = get_method("dragposer", mode=args.mode)
-            method.configure(temporal_weight=w, future_window=args.future)
+            # the predictor must be the prior: the profiles' tracker prior would replace it
+            method.configure(temporal_weight=w, future_window=args.future, prior="predictor")
             shipped = method.predictor
             rows = []
             for motion, lat in zip(clips, truths):

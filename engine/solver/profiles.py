@@ -52,7 +52,9 @@ PROFILES: dict[str, Profile] = {
     # the upper arm to meet a hand's rotation that its wrist cannot), lighter loses the
     # forearm's; 9 validation files, 150 frames, Rot deg for 0.003 / 0.01 / 0.02 / 0.03:
     # 10.31 / 10.15 / 10.43 / 12.46 (session-9 models; session-8 models: 0.01 10.54, 0.03
-    # 10.69, 0.1 11.92; docs/optimizer.md)
+    # 10.69, 0.1 11.92; docs/optimizer.md). The pose bank's latent as the prior, weight
+    # 0.05 (session 10): 1.18 cm / 10.15 deg -> 0.89 / 7.39; 0.03 0.89 / 7.56, 0.1 0.96 /
+    # 7.41, 0.3 1.18 / 7.67 (heavier pulls the hands off their trackers)
     "full": Profile("full", future_window=1, temporal_weight=0.01, step_size=0.3, lr=0.05, smooth_weight=5.0,
                     ground_weight=0.0, sensor_rotation_weight=0.01, prior="trackers", tracker_prior_weight=0.05),
     # positions only: the smoothing term made 6x3dof worse (3 validation files, 150

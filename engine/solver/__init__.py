@@ -7,14 +7,16 @@ Public surface:
 * :class:`OptimizerSettings` (validated), :data:`MODES`, :data:`OPTIMIZERS`, :data:`PRIORS`, :data:`FULL_SET`.
 * :class:`FrameContext`, :class:`RootFrame`, :class:`RootOverride`, :class:`RootAnchor`
   — what a frame's pose depends on besides the latent.
-* :class:`Solution`, :class:`SolveTimings` — the result and where its time went.
+* :class:`Solution`, :class:`SolveTimings` — the result and where its time went
+  (these and :class:`FrameContext`, :class:`LatentDecoder`: :mod:`.frame`).
 * :class:`PoseState` — the pose constraints judge.
 * :class:`TemporalSchedule` — when the temporal predictor runs (DragPoser sec. 4.3).
 * :class:`LatentUpdate` — the Adam / gradient-step rules on a latent.
 * Protocols :class:`LatentDecoder`, :class:`LatentPredictor`.
 """
 
-from engine.solver.optimizer import FrameContext, LatentDecoder, PoseOptimizer, Solution, SolveTimings
+from engine.solver.frame import FrameContext, LatentDecoder, Solution, SolveTimings
+from engine.solver.optimizer import PoseOptimizer
 from engine.solver.pose import RootAnchor, RootFrame, RootOverride, world_root
 from engine.solver.settings import FULL_SET, MODES, OPTIMIZERS, PRIORS, OptimizerSettings
 from engine.solver.state import PoseState

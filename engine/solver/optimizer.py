@@ -31,7 +31,9 @@ hand-derived gradients through a fused decoder, numpy) whenever every enabled te
 sensor or the temporal prior and the decoder is a :class:`~engine.models.PoseVAE`, and
 the **reference path** (autograd through the torch decoder and every constraint's
 ``loss``) otherwise, or when ``PoseOptimizer(..., fast=False)``. Both use the update
-rules of :mod:`engine.solver.update`.
+rules of :mod:`engine.solver.update`. What a solve takes and returns (:class:`FrameContext`,
+:class:`Solution`, :class:`SolveTimings`, the :class:`LatentDecoder` protocol) is
+:mod:`engine.solver.frame`.
 """
 
 from __future__ import annotations
@@ -40,8 +42,7 @@ import math
 import time
 import weakref
 from collections.abc import Sequence
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING
 
 import numpy as np
 import torch
@@ -52,8 +53,9 @@ from engine.kinematics.fk import fk_matrices
 from engine.models.fused import DenseDecoder
 from engine.models.vae import PoseVAE
 from engine.solver.fast import FastPose, FastTerms
+from engine.solver.frame import FrameContext, LatentDecoder, Solution, SolveTimings
 from engine.solver.pose_terms import POSE_TERMS
-from engine.solver.pose import RootAnchor, RootFrame, RootOverride, world_root
+from engine.solver.pose import world_root
 from engine.solver.settings import FULL_SET, OptimizerSettings
 from engine.solver.state import PoseState
 from engine.solver.update import LatentUpdate
@@ -65,100 +67,6 @@ if TYPE_CHECKING:  # constraints import the pose state from this package
 FAST_KINDS = ("sensor", "temporal_prior", *POSE_TERMS)
 _DENSE: "weakref.WeakKeyDictionary[torch.nn.Module, DenseDecoder]" = weakref.WeakKeyDictionary()
 _BLAS = ThreadpoolController()
-
-
-class LatentDecoder(Protocol):
-    """What the optimizer needs from the pose VAE (``engine.models.PoseVAE`` fits)."""
-
-    def decode(self, z: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-        """``z (B, L)`` -> unit quaternions ``rot (B, 22, 4)`` and ``disp (B, 3)`` metres."""
-        ...
-
-
-@dataclass
-class FrameContext:
-    """Everything about a frame the decoded pose depends on besides the latent.
-
-    Attributes
-    ----------
-    previous_root : RootFrame
-        The previous frame's solved root (heading and position reference).
-    root_override : RootOverride or None
-        Connected hip sensor, which dictates the root.
-    root_anchor : RootAnchor or None
-        Without a hip sensor: the joint (head) whose tracker places the body.
-    previous_positions : Tensor (22, 3) or None
-        Previous frame's solved joint positions, metres.
-    prediction : Tensor (L,) or None
-        Temporal predictor's latent for this frame.
-    frame : int
-        Frame index.
-    deadline : float or None
-        ``time.perf_counter()`` time by which the solve should end (module doc); None:
-        no limit.
-    """
-
-    previous_root: RootFrame
-    root_override: RootOverride | None = None
-    root_anchor: RootAnchor | None = None
-    previous_positions: torch.Tensor | None = None
-    prediction: torch.Tensor | None = None
-    frame: int = 0
-    deadline: float | None = None
-
-
-@dataclass
-class SolveTimings:
-    """Where one frame's solve spent its time, milliseconds summed over its iterations.
-
-    ``decoder`` is the decoder's forward pass, ``fk_losses`` the root, FK and loss terms,
-    ``backward`` the gradient, ``step`` the latent update; ``fast`` tells which path ran.
-    """
-
-    iterations: int = 0
-    decoder: float = 0.0
-    fk_losses: float = 0.0
-    backward: float = 0.0
-    step: float = 0.0
-    fast: bool = False
-
-    def per_iteration(self) -> dict[str, float]:
-        """Milliseconds per iteration: each part and their sum ``ms_per_iteration``."""
-        n = max(self.iterations, 1)
-        parts = {k: getattr(self, k) / n for k in ("decoder", "fk_losses", "backward", "step")}
-        return {"ms_per_iteration": sum(parts.values()), **parts}
-
-
-@dataclass
-class Solution:
-    """Result of one frame's optimisation (all detached).
-
-    Attributes
-    ----------
-    latent : Tensor (L,)
-    state : PoseState
-        Decoded pose of ``latent``.
-    losses : list of dict
-        ``losses[k]`` = every term (by constraint name) and ``"total"`` at the latent
-        after ``k`` steps; ``len(losses) == iterations + 1``.
-    iterations : int
-        Update steps taken.
-    warnings : list of str
-    fell_back : bool
-        True when the solve was abandoned for the starting latent.
-    timings : SolveTimings
-    cut : bool
-        True when the frame's deadline stopped the solve before ``iterations`` steps.
-    """
-
-    latent: torch.Tensor
-    state: PoseState
-    losses: list[dict[str, float]] = field(default_factory=list)
-    iterations: int = 0
-    warnings: list[str] = field(default_factory=list)
-    fell_back: bool = False
-    timings: SolveTimings = field(default_factory=SolveTimings)
-    cut: bool = False
 
 
 class PoseOptimizer:

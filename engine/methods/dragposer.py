@@ -4,10 +4,12 @@ Every frame, each sensor reading becomes (or updates) a ``sensor`` constraint na
 ``sensor:<joint>`` (enabled while connected, weighted by :meth:`set_sensor_weight`),
 the temporal predictor proposes a latent (:mod:`engine.solver.temporal`), and
 :class:`engine.solver.PoseOptimizer` moves the latent until the sensors, the
-temporal prior and the user's constraints agree. User constraints are edited between
-frames with :meth:`add_constraint`, :meth:`remove_constraint`, :meth:`set_weight`,
-:meth:`set_enabled` or :meth:`set_constraints`; settings with :meth:`configure`.
-Where the body is and which way it faces: :mod:`engine.methods.dragposer_root`.
+temporal prior and the user's constraints agree. This module holds the per-frame
+step (readings to terms, the solve, the exact after-solve steps, the frame's history)
+and the registry factory :func:`create`. Beside it: the edits between frames (settings
+with ``configure``, user constraints, tracker weights) and the settings a frame runs
+with, :mod:`engine.methods.dragposer_edits`; where the body is and which way it faces,
+:mod:`engine.methods.dragposer_root`.
 """
 
 from __future__ import annotations
@@ -15,7 +17,6 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
@@ -30,6 +31,7 @@ from engine.kinematics import quaternion as Q
 from engine.kinematics.root import root_increment
 from engine.methods import dragposer_root as roots
 from engine.methods.base import FrameResult, Method
+from engine.methods.dragposer_edits import DragPoserEdits
 from engine.methods.sensor_blend import SensorBlend
 from engine.sensors import Sensor, SensorFrame
 from engine.motion import Motion
@@ -38,13 +40,12 @@ from engine.solver import (
 )  # fmt: skip
 from engine.solver.limb_ik import LIMBS, finish
 from engine.solver.pose import body_facing
-from engine.solver.profiles import effective
 from engine.solver.tracker_prior import PoseBank, TrackerHistory, default_bank
 
 _HEIGHT_IDX = [sk.JOINT_INDEX[j] for j in sk.HEIGHT_JOINTS]
 
 
-class DragPoserMethod(Method):
+class DragPoserMethod(DragPoserEdits, Method):
     """Latent-space pose optimisation guided by a temporal predictor.
 
     Parameters
@@ -87,58 +88,6 @@ class DragPoserMethod(Method):
         self.sensor_weights: dict[str, float] = {}
         self.configure(**overrides)
         self.reset(sk.Skeleton.canonical())
-
-    # -- editing (between frames) ----------------------------------------------------
-
-    def configure(self, **values: Any) -> None:
-        """Change settings by name; applied from the next frame. Unknown names raise
-        :class:`UserError` after the known ones are applied."""
-        known = {f.name for f in dataclasses.fields(OptimizerSettings)}
-        new = dataclasses.replace(self.settings, **{k: v for k, v in values.items() if k in known})
-        self.settings.__dict__.update(new.__dict__)  # keep the object: callers may hold it
-        self.explicit |= set(values) & known
-        unknown = sorted(set(values) - known)
-        if unknown:
-            raise UserError(f"unknown optimizer setting(s): {', '.join(unknown)}")
-
-    def add_constraint(self, constraint: Constraint) -> None:
-        if any(c.name == constraint.name for c in self.constraints):
-            raise UserError(f"a constraint named {constraint.name!r} exists already")
-        self.constraints.append(constraint)
-
-    def remove_constraint(self, name: str) -> None:
-        self.get_constraint(name)
-        self.constraints = [c for c in self.constraints if c.name != name]
-
-    def get_constraint(self, name: str) -> Constraint:
-        for c in self.constraints:
-            if c.name == name:
-                return c
-        raise UserError(f"no constraint named {name!r}")
-
-    def set_constraints(self, constraints: Iterable[Constraint]) -> None:
-        """Replace all user constraints (names must be unique)."""
-        items = list(constraints)
-        names = [c.name for c in items]
-        if len(set(names)) != len(names):
-            raise UserError("constraint names must be unique")
-        self.constraints = items
-
-    def set_weight(self, name: str, weight: float) -> None:
-        if not weight >= 0:
-            raise UserError(f"constraint {name!r}: weight must be >= 0, got {weight!r}")
-        self.get_constraint(name).weight = float(weight)
-
-    def set_enabled(self, name: str, enabled: bool) -> None:
-        self.get_constraint(name).enabled = bool(enabled)
-
-    def set_sensor_weight(self, joint: str, weight: float) -> None:
-        """Weight of the tracker on ``joint`` (applies to its ``sensor`` constraint)."""
-        if joint not in sk.JOINT_INDEX:
-            raise UserError(f"unknown joint {joint!r}")
-        self.sensor_weights[joint] = float(weight)
-        if joint in self.sensors:
-            self.sensors[joint].weight = float(weight)
 
     # -- running ---------------------------------------------------------------------
 
@@ -339,21 +288,6 @@ class DragPoserMethod(Method):
         self._before, self._before64 = self._positions, self._pos64
         self._positions, self._pos64 = pos_t, pos32.astype(np.float64)
         self._frame += 1
-
-    def _effective_settings(self) -> OptimizerSettings:
-        """:func:`engine.solver.profiles.effective` for the connected sensors, kept per
-        (settings, sensor set): building and validating the settings object every frame
-        cost more than the lookup."""
-        live = tuple(j for j, c in self.sensors.items() if c.enabled)
-        hip = self.sensors.get("root")
-        hip_rotation = hip is None or hip.dof == 6
-        key = (tuple(vars(self.settings).values()), live, frozenset(self.explicit), hip_rotation)
-        s = self._effective.get(key)
-        if s is None:
-            if len(self._effective) > 64:
-                self._effective.clear()
-            s = self._effective[key] = effective(self.settings, live, self.explicit, hip_rotation)
-        return s
 
     def _repeat_last(self, warnings: list[str], losses: list, iterations: int, t0: float) -> FrameResult:
         if self._last is not None:

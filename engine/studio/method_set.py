@@ -53,6 +53,8 @@ class MethodSet:
         self.constraints: tuple[Any, ...] = ()
         self.settings: dict[str, Any] = {}
         self.skeleton_version = 0
+        # select() built (or tried to build) the shown method since the last reset
+        self._selected = False
 
     def running(self) -> list[tuple[str, Method]]:
         """``(name, method)`` of every built method, the shown one first."""
@@ -68,28 +70,38 @@ class MethodSet:
             return None
 
     def select(self, name: str, ghosts: tuple[str, ...]) -> bool:
-        """Show method ``name`` (built now) with ``ghosts`` (built at the next reset).
+        """Show method ``name`` with ``ghosts`` (those not built yet are built at the
+        next :meth:`reset`).
+
+        ``name`` is built now unless it is already the shown method (a ghost edit);
+        ghosts that stay are kept. Every method is built once per selection: building
+        one loads its models, seconds for DragPoser.
 
         Returns False, changing nothing, when ``name`` cannot be built while another
         method runs: a broken weights file leaves the session as it was.
         """
-        new = self.build(name) if name else None
+        keep = name == self.name and self.method is not None
+        new = self.method if keep else self.build(name) if name else None
         if name and new is None and self.method is not None:
             return False
         self.name, self.ghost_names = name, tuple(ghosts)
-        self.method, self.ghosts = new, {}
+        self.method = new
+        self.ghosts = {g: m for g, m in self.ghosts.items() if g in self.ghost_names}
+        self._selected = not keep
         return True
 
-    def reset(self, source: Any, built: bool = False) -> None:
+    def reset(self, source: Any) -> None:
         """Reset every method for ``source``'s clip or skeleton, then configure them.
 
-        Builds the shown method anew when ``built`` (a new selection) or when it is
-        missing, and the ghosts not built yet; the settings problems of freshly built
-        methods are reported (a known method's were reported when they were edited).
+        A shown method that is missing (its build failed at an earlier selection) is
+        tried again, but not right after :meth:`select` tried it; ghosts not built yet
+        are built. The settings problems of freshly built methods are reported (a known
+        method's were reported when they were edited).
         """
-        fresh = built or (self.method is None and bool(self.name))
-        if fresh:
+        fresh, self._selected = self._selected, False
+        if not fresh and self.method is None and self.name:
             self.method = self.build(self.name)
+            fresh = True
         for g in self.ghost_names:
             if g not in self.ghosts and (m := self.build(g)) is not None:
                 self.ghosts[g] = m

@@ -229,7 +229,7 @@ class EngineThread(threading.Thread):
             # session as it was; the window shows why
             self._method_error = self._pending_error
             return
-        self._reset_methods(built=self._methods.method is not None)
+        self._reset_methods()
 
     def _republish(self) -> None:
         """Publish the last solved frame again (its pose, losses and timing) with the
@@ -257,8 +257,8 @@ class EngineThread(threading.Thread):
         return f
 
     # -- methods --------------------------------------------------------------------
-    def _reset_methods(self, built: bool = False) -> None:
-        self._methods.reset(self._source, built)
+    def _reset_methods(self) -> None:
+        self._methods.reset(self._source)
         self._last_solved = -2  # nothing solved since: the next solve starts clean
 
     def _report_error(self, message: str) -> None:

@@ -1,0 +1,38 @@
+"""Choosing a method in the Optimizer tab builds it (loads its models) once."""
+
+from __future__ import annotations
+
+from collections import Counter
+
+import pytest
+
+pytestmark = pytest.mark.gui
+
+
+def test_choosing_a_method_and_a_ghost_builds_each_once(studio, qtbot):
+    """The real path: the panel's combo and ghost box -> window -> session -> engine
+    thread -> :class:`engine.studio.method_set.MethodSet` -> the method factory.
+
+    DragPoser used to be built twice per choice (``select`` built it, the reset after it
+    built it again), and ticking a ghost built the shown method and every ghost anew.
+    """
+    built: Counter[str] = Counter()
+    inner = studio.engine._factory  # looked up at each build (see EngineThread)
+
+    def counting(name):
+        built[name] += 1
+        return inner(name)
+
+    studio.engine._factory = counting
+    panel = studio.optimizer_panel
+    assert panel.method.currentText() == "ik"
+    panel.method.setCurrentText("dragposer")
+    qtbot.waitUntil(lambda: studio.session.latest.method == "dragposer" and bool(studio.session.latest.losses), timeout=30000)
+    assert built == {"dragposer": 1}
+
+    seq = studio.session.latest.seq
+    panel.ghost_boxes["ik"].click()  # as a user ticks it
+    assert studio.session.ghosts == ("ik",)
+    qtbot.waitUntil(lambda: studio.session.latest.seq > seq and "ik" in studio.session.latest.ghosts, timeout=30000)
+    assert built == {"dragposer": 1, "ik": 1}, "a ghost edit keeps the shown method"
+    assert not studio.session.latest.method_error

@@ -1,0 +1,51 @@
+"""MethodSet builds each method once per selection and reports a failing build once."""
+
+from __future__ import annotations
+
+from collections import Counter
+
+from engine.studio.method_set import MethodSet
+from engine.studio.methods import RestPoseMethod
+from engine.studio.source import ClipSource
+
+
+def _counting_set():
+    built: Counter[str] = Counter()
+    problems: list[str] = []
+
+    def factory(name):
+        built[name] += 1
+        if name == "broken":
+            raise ValueError("assets/models/vae.pt: not a weights file")
+        return RestPoseMethod()
+
+    return MethodSet(factory, problems.append), built, problems
+
+
+def test_a_selection_builds_the_method_once_and_a_ghost_edit_keeps_it(synthetic_motion):
+    methods, built, problems = _counting_set()
+    source = ClipSource(synthetic_motion)
+    assert methods.select("dragposer", ())
+    methods.reset(source)  # what the engine thread does after every selection
+    assert built == {"dragposer": 1}
+    shown = methods.method
+    assert methods.select("dragposer", ("ik",))  # ticking a ghost
+    methods.reset(source)
+    assert methods.select("dragposer", ("ik", "rpm"))
+    methods.reset(source)
+    assert built == {"dragposer": 1, "ik": 1, "rpm": 1}
+    assert methods.method is shown and set(methods.ghosts) == {"ik", "rpm"}
+    methods.reset(source)  # a new clip, a loop: resets, never builds
+    assert methods.select("ik", ("rpm",))  # another method: built anew, the ghost kept
+    methods.reset(source)
+    assert built == {"dragposer": 1, "ik": 2, "rpm": 1} and not problems
+
+
+def test_a_failing_first_build_is_reported_once_and_tried_again_with_the_next_clip(synthetic_motion):
+    methods, built, problems = _counting_set()
+    source = ClipSource(synthetic_motion)
+    assert methods.select("broken", ())  # nothing ran before: the selection stands
+    methods.reset(source)
+    assert built == {"broken": 1} and len(problems) == 1 and "vae.pt" in problems[0]
+    methods.reset(source)  # e.g. the user opens another clip
+    assert built == {"broken": 2} and methods.method is None

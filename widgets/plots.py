@@ -18,12 +18,15 @@ import pyqtgraph as pg
 from PyQt6.QtWidgets import QHBoxLayout, QVBoxLayout, QWidget
 
 from widgets import style
+from widgets.log_axis import LogAxis
 from widgets.term_legend import TermLegend
 
 pg.setConfigOptions(antialias=False, background=style.PLOT_BACKGROUND, foreground=style.PLOT_FOREGROUND)
 
 MS_COLOUR, ITERATIONS_COLOUR = "#ff8a1f", "#4da3ff"
-AXIS_WIDTH = 44  # pixels for the y tick labels (log axes: "10^-3" and the like)
+#: The widest y tick labels wanted on the log axes (:mod:`widgets.log_axis` picks only
+#: labels that fit): the axes are made as wide, one width for all three plots
+AXIS_LABELS = ("0.0000", "5·10⁻¹²")
 
 
 def _loggable(value: float) -> float:
@@ -56,7 +59,9 @@ def settle(plot: pg.PlotWidget) -> None:
 
 
 def _plot(title: str, log_y: bool, x_label: str) -> pg.PlotWidget:
-    w = pg.PlotWidget(title=title)
+    # pyqtgraph's own log axis labels every 1..9 multiple on a range of a decade or two,
+    # one label over the other: LogAxis labels only what fits (decades, 1-2-5, ...)
+    w = pg.PlotWidget(title=title, axisItems={"left": LogAxis("left")})
     w.setLogMode(y=log_y)
     # no grid: its translucent lines cost ~8 ms per repaint under software rendering
     w.setLabel("bottom", x_label)
@@ -65,7 +70,8 @@ def _plot(title: str, log_y: bool, x_label: str) -> pg.PlotWidget:
         w.getAxis(side).enableAutoSIPrefix(False)
     # a fixed label column: tick labels of a new width would relayout the plot and paint
     # it a second time
-    w.getAxis("left").setWidth(AXIS_WIDTH)
+    left = w.getAxis("left")
+    left.setWidth(left.width_for(AXIS_LABELS))
     w.setMinimumHeight(120)
     return w
 

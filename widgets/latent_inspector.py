@@ -18,6 +18,8 @@ from PyQt6.QtWidgets import QCheckBox, QGridLayout, QLabel, QPushButton, QSlider
 from widgets.plots import settle  # also applies the shared pyqtgraph look
 
 HISTORY = 300
+#: the smallest half range of the bars' y axis and of the strip's colour levels
+MIN_RANGE = 1e-6
 NO_DECODER = "The current method has no latent decoder (choose dragposer when it is available)."
 
 
@@ -31,8 +33,11 @@ class LatentInspector(QWidget):
         super().__init__(parent)
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
-        self.bars_plot = pg.PlotWidget(title="Latent (this frame)")
+        # no title either: at the studio's size its ~25 px left the bars ~40 px, too few
+        # for three y labels; the dock says "Latent", the strip below is the history
+        self.bars_plot = pg.PlotWidget()
         self.bars_plot.setMinimumHeight(90)
+        self.bars_plot.setToolTip("This frame's latent: one bar per dimension (orange > 0, blue <= 0)")
         self.bars = pg.BarGraphItem(x=np.arange(24), height=np.zeros(24), width=0.8, brush="#4da3ff")
         self.bars_plot.addItem(self.bars)
         # no title (its ~25 px go to the image): the axes say what it shows; at least
@@ -78,6 +83,7 @@ class LatentInspector(QWidget):
         self.latent: np.ndarray | None = None
         self.stored: dict[str, np.ndarray] = {}
         self._seq = -1
+        self._bars_range = 0.0
 
     def _show_plots(self, on: bool) -> None:
         self.placeholder.setVisible(not on)
@@ -104,20 +110,36 @@ class LatentInspector(QWidget):
         # in debug mode too: after a seek, "Store as B" must store the new frame's latent
         # (it stored A's again); the engine's latent is unchanged by decoding requests
         self.latent = z
-        self.bars.setOpts(x=np.arange(len(z)), height=z, brushes=["#ff8a1f" if v > 0 else "#4da3ff" for v in z])
+        self._draw_bars(z)
         # the engine's record covers frames this view never drew (it draws the newest only)
         recorded = [r for r in snap.history[-HISTORY:]
                     if r.latent is not None and np.size(r.latent) == z.size]  # fmt: skip
-        hist = np.array([np.ravel(r.latent) for r in recorded] or [z], float)
+        image, lim = strip_image([np.ravel(r.latent) for r in recorded] or [z])
         frames = [r.frame for r in recorded] or [snap.frame]
-        lim = max(float(np.abs(hist).max()), 1e-6)
-        self.strip.setImage(hist, levels=(-lim, lim))
+        self.strip.setImage(image, levels=(-lim, lim))
         # x in clip frames, like the other history plots (a slow solver skips frames, so
         # the rows are not one per frame)
         span = max(frames[-1] - frames[0], 1)
-        self.strip.setRect(QRectF(frames[0], 0.0, span, hist.shape[1]))
+        self.strip.setRect(QRectF(frames[0], 0.0, span, image.shape[1]))
         settle(self.bars_plot)
         settle(self.strip_plot)
+
+    def _draw_bars(self, z: np.ndarray) -> None:
+        """This frame's latent as bars on a symmetric y axis labelled -m, 0, m only.
+
+        pyqtgraph's own ticks put four labels (0.5 / 0 / -0.5 / -1.0) on the ~45 px the
+        plot has in the studio, one touching the next. The half range m steps through
+        1, 2, 5 x 10^k, so the axis does not change with every frame.
+        """
+        # a diverged solve's NaN/inf would make a bar without a rectangle: none is drawn
+        height = np.where(np.isfinite(z), z, 0.0)
+        brushes = ["#ff8a1f" if v > 0 else "#4da3ff" for v in height]
+        self.bars.setOpts(x=np.arange(len(z)), height=height, brushes=brushes)
+        m = nice_ceil(float(np.abs(height).max(initial=0.0)))
+        if m != self._bars_range:
+            self._bars_range = m
+            self.bars_plot.setYRange(-m, m, padding=0.15)  # room for the end labels
+            self.bars_plot.getAxis("left").setTicks([[(v, f"{v:g}") for v in (-m, 0.0, m)]])
 
     def _debug_toggled(self, on: bool) -> None:
         self.debugToggled.emit(on)
@@ -138,3 +160,37 @@ class LatentInspector(QWidget):
         if self.debug.isChecked() and {"a", "b"} <= set(self.stored):
             t = v / 100.0
             self.decodeRequested.emit((1 - t) * self.stored["a"] + t * self.stored["b"])
+
+
+def nice_ceil(x: float) -> float:
+    """The smallest of 1, 2, 5 x 10^k that is >= ``x`` (at least :data:`MIN_RANGE`)."""
+    x = max(x, MIN_RANGE)
+    base = 10.0 ** np.floor(np.log10(x))
+    return next(float(f * base) for f in (1, 2, 5, 10) if f * base >= x * (1 - 1e-12))
+
+
+def strip_image(rows: list[np.ndarray]) -> tuple[np.ndarray, float]:
+    """The latent history as the strip's pixels, and the half range of its colour levels.
+
+    Parameters
+    ----------
+    rows : list of ndarray (L,)
+        One latent per solved frame, oldest first.
+
+    Returns
+    -------
+    image : ndarray (F, L) float64
+        A new C-contiguous array that nobody else holds, made read-only: pyqtgraph keeps
+        it and renders from it whenever the plot repaints, so it must never change after
+        ``setImage``. NaN is 0 (the map's neutral middle) and +-inf saturate, so pyqtgraph
+        never takes its NaN path nor scales by a non-finite level.
+    lim : float
+        Largest finite magnitude (at least :data:`MIN_RANGE`); levels are ``(-lim, lim)``.
+    """
+    image = np.array(rows, dtype=np.float64, order="C")  # always a copy
+    finite = np.isfinite(image)
+    lim = max(float(np.abs(image[finite]).max(initial=0.0)), MIN_RANGE)
+    image[np.isnan(image)] = 0.0
+    np.clip(image, -lim, lim, out=image)
+    image.flags.writeable = False
+    return image, lim

@@ -60,3 +60,12 @@ class FakeSnapshot:
 @pytest.fixture
 def fake_snapshot():
     return FakeSnapshot
+
+
+def shown(qtbot, widget, width: int, height: int):
+    """``widget`` at ``width`` x ``height`` px, shown and exposed; closed after the test."""
+    qtbot.addWidget(widget)
+    widget.resize(width, height)
+    widget.show()
+    qtbot.waitExposed(widget)
+    return widget

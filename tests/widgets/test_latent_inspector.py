@@ -13,7 +13,7 @@ import warnings
 import numpy as np
 import pytest
 
-from tests.widgets.conftest import FakeRecord
+from tests.widgets.conftest import FakeRecord, shown
 from tests.widgets.test_log_axis import drawn_labels
 from widgets.latent_inspector import LatentInspector, nice_ceil, strip_image
 
@@ -27,12 +27,7 @@ def _readonly(a: np.ndarray) -> np.ndarray:
 @pytest.fixture
 def inspector(qtbot):
     """Shown at the size of the studio's latent dock (1600 x 980 window)."""
-    w = LatentInspector()
-    qtbot.addWidget(w)
-    w.resize(430, 330)
-    w.show()
-    qtbot.waitExposed(w)
-    return w
+    return shown(qtbot, LatentInspector(), 430, 330)
 
 
 def test_the_strip_gets_a_private_read_only_image_with_finite_levels(inspector, fake_snapshot):

@@ -8,6 +8,7 @@ import math
 import pytest
 from PyQt6.QtGui import QFontMetricsF, QPainter, QPicture
 
+from tests.widgets.conftest import shown
 from widgets.log_axis import label, labels
 from widgets.plots import LossPlots
 
@@ -46,12 +47,7 @@ def drawn_labels(plot):
 @pytest.fixture
 def plots(qtbot):
     """The three plots at about the size they have in the window (1600x980)."""
-    p = LossPlots()
-    qtbot.addWidget(p)
-    p.resize(640, 250)
-    p.show()
-    qtbot.waitExposed(p)
-    return p
+    return shown(qtbot, LossPlots(), 640, 250)
 
 
 def _losses(n: int = 11) -> tuple[dict, ...]:

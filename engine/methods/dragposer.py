@@ -166,7 +166,9 @@ class DragPoserMethod(DragPoserEdits, Method):
         self.smooth.weight = s.smooth_weight
         feet = any(self.sensors[j].enabled for j in ("lankle", "rankle") if j in self.sensors)
         self.ground.weight = 0.0 if feet else s.ground_weight
-        self.smooth.set_history(self._pos64, self._before64)
+        # frame 0 is solved offline from the mean latent, so the step from it to frame 1 is
+        # not a velocity: extrapolating it threw frames 2-4 of a head-and-hands clip 36 cm off
+        self.smooth.set_history(self._pos64, self._before64 if self._frame >= 3 else None)
         anchor = roots.root_anchor(self.sensors, self.settings) if override is None else None
         if override is None and anchor is None and s.root_anchor != "none" and self._frame > 0:
             override = roots.held_root(self._root, self._points, self._last_points)

@@ -177,3 +177,23 @@ def test_runs_with_the_real_model_classes(clip):
     out = [m.step(tr.frame(i)) for i in range(10)]
     assert all(np.isfinite(r.positions).all() and not r.warnings for r in out)
     assert "temporal_prior" in out[-1].losses[0]
+
+
+def test_smoothing_extrapolates_only_between_realtime_frames(clip):
+    """Frame 0 is solved offline, so the step from it to frame 1 is no velocity: the smooth
+    term starts at frame 3, from the two frames before it."""
+    m = make(smooth_weight=5.0)
+    tr = simulate(clip, "3-head-hands")
+    m.reset(clip.skeleton)
+    seen = []
+    solve = m.optimizer.solve
+
+    def spy(start, terms, ctx):
+        seen.append((m.smooth.active, m.smooth.target.copy()))
+        return solve(start, terms, ctx)
+
+    m.optimizer.solve = spy
+    poses = [m.step(tr.frame(i)).positions for i in range(5)]
+    assert [a for a, _ in seen] == [False, False, False, True, True]
+    np.testing.assert_allclose(seen[3][1], 2.0 * poses[2] - poses[1], atol=1e-6)
+    np.testing.assert_allclose(seen[4][1], 2.0 * poses[3] - poses[2], atol=1e-6)

@@ -106,7 +106,11 @@ def test_fast_and_reference_paths_give_the_same_poses(models, preset, mode):
     mean latent) amplifies round-off most: 1.09e-5 m with the session-8 models, 1.8e-4 m
     with the session-9 models at the six-tracker profile's rotation weight 0.01 (5.7e-7 m
     at 0.03; joint rotations then differ by up to 2.2e-3 rad), so it alone is held to
-    5e-4 m and 5e-3 rad; a wrong gradient term shows at the centimetre scale."""
+    5e-4 m and 5e-3 rad. Offline frames run 30 steps too: with the bank prior and the
+    smoothing starting at frame 3 (session 10), frame 12 of the offline run differs by
+    4.0e-5 m / 1.2e-3 rad (its total loss by 8e-4 relative) while the other 14 agree to
+    5e-7 m, so offline frames are held to 1e-4 m and 2e-3 rad; a wrong gradient term
+    shows at the centimetre scale."""
     motion = load_motion(CLIP).slice(0, 16)
     tracking = simulate(motion, preset)
     fast = DragPoserMethod(models.vae, models.predictor, fast=True, mode=mode, iterations=10, max_iterations=30)
@@ -116,8 +120,9 @@ def test_fast_and_reference_paths_give_the_same_poses(models, preset, mode):
         ref.optimizer._fast = None  # the autograd path through the torch model
         a, b = fast.step(tracking.frame(i)), ref.step(tracking.frame(i))
         assert a.iterations == b.iterations
-        np.testing.assert_allclose(a.positions, b.positions, atol=5e-4 if i == 0 else 1e-5)
-        assert _angle(a.local_rot, b.local_rot).max() < (5e-3 if i == 0 else 1e-4)
+        pos_tol, rot_tol = (5e-4, 5e-3) if i == 0 else (1e-4, 2e-3) if mode == "offline" else (1e-5, 1e-4)
+        np.testing.assert_allclose(a.positions, b.positions, atol=pos_tol)
+        assert _angle(a.local_rot, b.local_rot).max() < rot_tol
         assert a.losses[-1]["total"] == pytest.approx(b.losses[-1]["total"], rel=1e-3, abs=1e-7)
     assert fast.optimizer._fast is not None
 

@@ -42,7 +42,9 @@ def record(motion, preset: str, mode: str, noise: float, seed: int) -> dict:
     def solve(start, terms, ctx):
         inputs.append({"start": start.clone(), "ctx": ctx, "settings": opt.settings,
                        "targets": {c.name: (c.position.copy(), None if c.rotation is None else c.rotation.copy())
-                                   for c in terms if c.kind == "sensor"}})  # fmt: skip
+                                   for c in terms if c.kind == "sensor"},
+                       # the smoothing target moves with the history: keep this frame's
+                       "smooth": (method.smooth.weight, method.smooth.target.copy())})  # fmt: skip
         return real(start, terms, ctx)
 
     opt.solve = solve
@@ -60,6 +62,7 @@ def resolve(method, inputs: dict, start=None, ctx=None, targets=None, **settings
         c.position, rotation = (targets or inputs["targets"])[c.name]
         if rotation is not None:
             c.rotation = rotation
+    method.smooth.weight, method.smooth.target = inputs["smooth"][0], inputs["smooth"][1].copy()
     opt.settings = dataclasses.replace(inputs["settings"], **settings)
     try:
         sol = type(opt).solve(opt, inputs["start"] if start is None else start, terms,

@@ -102,32 +102,60 @@ def test_written_back_onto_the_source_rig_within_1cm(shared_mocap, tmp_path, rel
     assert err.max() < 0.01, f"{rel}: {100 * err.max():.2f} cm"
 
 
-@pytest.mark.slow
-def test_every_shared_clip_keeps_its_height_and_rotates_like_the_canonical_clips(shared_mocap):
-    """Items 3 and 4 of issue 17 on all 78 files: heights within 3 %, and per joint the
-    hinge axis and twist compared with DragPoser's own clips (``engine.joint_stats.summarize``,
-    the figures of docs/skeleton.md: ``scripts/joint_stats.py``)."""
+FAMILIES = ("cmu_daz", "cmu_daz_cgspeed", "cmu_iclone", "cmu_mb")
+
+
+@pytest.fixture(scope="module")
+def every_shared_clip(shared_mocap):
+    """Each file the manifest lists, loaded once: ``(per-folder file counts, heights, summary
+    table)``. The list comes from the manifest, so a folder added to the shared data is
+    covered without editing these tests."""
+    import json
+
     from engine.joint_stats import summarize
     from engine.retarget import load_with_report
 
+    listed = json.loads((shared_mocap / "manifest.json").read_text())["files"]
+    expected = sorted(entry["path"].removeprefix("mocap/") for entry in listed)
     files = sorted(shared_mocap.rglob("*.bvh"))
-    assert len(files) == 78
+    assert [str(p.relative_to(shared_mocap)) for p in files] == expected, "the shared data differs from its manifest"
+    counts: dict[str, int] = {}
+    heights: dict[str, tuple[float, float]] = {}
     groups: dict[str, dict] = {}
     for path in files:
-        motion, rep = load_with_report(path)
-        assert abs(rep.height_m / rep.source_height_m - 1) < 0.03, (path, rep.height_m, rep.source_height_m)
-        report = joint_report(motion.local_rot, motion.skeleton.offsets)
         rel = path.relative_to(shared_mocap)
-        groups.setdefault(rel.parts[0], {})[str(rel)] = report
-    table = summarize(groups, "dragposer")
-    assert [table["lknee"][g]["clips"] for g in ("dragposer", "cmu_daz", "cmu_iclone")] == [3, 16, 59]
-    for group in ("cmu_daz", "cmu_iclone"):
-        for knee in ("lknee", "rknee"):  # the hinge of every clip, with DragPoser's few degrees of twist
-            row = table[knee][group]
-            assert row["hinge_alignment_min"] > 0.9 and -25 < row["twist_median"][0] <= row["twist_median"][1] < 15, (
-                group, knee, row)  # fmt: skip
-        for elbow in ("lelbow", "relbow"):  # per family; the left elbows of iClone 007_* differ (docs)
-            row = table[elbow][group]
-            assert row["hinge_alignment_median"] > 0.9 and max(map(abs, row["twist_median"])) < 25, (group, elbow, row)
-        for thigh in ("lhip", "rhip"):  # no large twist the shin undoes (was +114/+61 degrees)
-            assert max(map(abs, table[thigh][group]["twist_median"])) < 35, (group, thigh, table[thigh][group])
+        counts[rel.parts[0]] = counts.get(rel.parts[0], 0) + 1
+        motion, rep = load_with_report(path)
+        heights[str(rel)] = (rep.height_m, rep.source_height_m)
+        groups.setdefault(rel.parts[0], {})[str(rel)] = joint_report(motion.local_rot, motion.skeleton.offsets)
+    return counts, heights, summarize(groups, "dragposer")
+
+
+@pytest.mark.slow
+def test_every_shared_clip_keeps_its_height(every_shared_clip):
+    counts, heights, table = every_shared_clip
+    assert set(counts) == {"dragposer", *FAMILIES}, "a new folder needs its family's rotation check below"
+    assert {g: table["lknee"][g]["clips"] for g in counts} == counts
+    off = {rel: h for rel, h in heights.items() if abs(h[0] / h[1] - 1) >= 0.03}
+    assert not off, f"heights more than 3 % from the source's (canonical, source in m): {off}"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("family", [
+    pytest.param(family, marks=pytest.mark.xfail(strict=True, reason=(
+        "09_10's knees carry a twist of about 150 degrees that its thighs undo: the rig's rest "
+        "pose still decides the twist of the legs"))) if family == "cmu_daz_cgspeed" else family
+    for family in FAMILIES])  # fmt: skip
+def test_every_shared_clip_rotates_like_the_canonical_clips(every_shared_clip, family):
+    """Per joint, the hinge axis and twist of each rig family against DragPoser's own clips
+    (``engine.joint_stats.summarize``, the figures of docs/skeleton.md: ``scripts/joint_stats.py``)."""
+    table = every_shared_clip[2]
+    for knee in ("lknee", "rknee"):  # the hinge of every clip, with DragPoser's few degrees of twist
+        row = table[knee][family]
+        assert row["hinge_alignment_min"] > 0.9 and -25 < row["twist_median"][0] <= row["twist_median"][1] < 15, (
+            family, knee, row)  # fmt: skip
+    for elbow in ("lelbow", "relbow"):  # per family; the left elbows of iClone 007_* differ (docs)
+        row = table[elbow][family]
+        assert row["hinge_alignment_median"] > 0.9 and max(map(abs, row["twist_median"])) < 25, (family, elbow, row)
+    for thigh in ("lhip", "rhip"):  # no large twist the shin undoes (was +114/+61 degrees)
+        assert max(map(abs, table[thigh][family]["twist_median"])) < 35, (family, thigh, table[thigh][family])

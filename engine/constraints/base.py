@@ -9,6 +9,11 @@ string, so a scene can be saved to JSON and loaded back (:func:`from_dict`).
 Array parameters are numpy arrays; in JSON they are lists, with non-finite entries
 written as ``null`` (a NaN position means "not set yet", e.g. a pin that captures the
 joint's position on first use).
+
+Every constraint may be limited to a frame range: ``frames = (start, end)`` (inclusive
+frame indices; ``None``, the default, is every frame), with ``blend_in`` frames before
+``start`` and ``blend_out`` frames after ``end`` over which its weight rises from and
+falls back to zero (:meth:`Constraint.activity`).
 """
 
 from __future__ import annotations
@@ -16,7 +21,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from abc import ABC, abstractmethod
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from collections.abc import Callable
 from typing import Any, ClassVar
 
@@ -81,6 +86,13 @@ class Constraint(ABC):
     name: str = ""
     weight: float = 1.0
     enabled: bool = True
+    #: Active frames ``(start, end)``, inclusive, or None for every frame. Keyword-only
+    #: so the kinds' own fields keep their positions.
+    frames: tuple[int, int] | None = field(default=None, kw_only=True)
+    #: Frames before ``start`` over which the weight rises from 0 to 1.
+    blend_in: int = field(default=0, kw_only=True)
+    #: Frames after ``end`` over which the weight falls from 1 to 0.
+    blend_out: int = field(default=0, kw_only=True)
 
     def __init_subclass__(cls, **kw: Any) -> None:
         super().__init_subclass__(**kw)
@@ -96,6 +108,7 @@ class Constraint(ABC):
             raise UserError(f"constraint {self.kind!r}: field 'weight' must be a number") from None
         if not math.isfinite(self.weight) or self.weight < 0:
             raise UserError(f"constraint {self.kind!r}: field 'weight' must be finite and >= 0")
+        self._check_frames()
         for f in dataclasses.fields(self):
             default = field_default(f)
             if isinstance(default, np.ndarray):
@@ -109,6 +122,65 @@ class Constraint(ABC):
 
     def check(self) -> None:
         """Validate parameters (override); raise :class:`UserError` naming the field."""
+
+    def _check_frames(self) -> None:
+        where = f"constraint {self.kind!r}"
+        for key in ("blend_in", "blend_out"):
+            v = getattr(self, key)
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 0:
+                raise UserError(f"{where}: field {key!r} must be a whole number of frames >= 0, got {shown(v)}")
+            setattr(self, key, int(v))
+        if self.frames is None:
+            return
+        r = self.frames
+        if (
+            not isinstance(r, (list, tuple))
+            or len(r) != 2
+            or any(isinstance(v, bool) or not isinstance(v, (int, np.integer)) for v in r)
+        ):
+            raise UserError(f"{where}: field 'frames' must be [start, end] (whole frame numbers) or null, got {shown(r)}")
+        start, end = int(r[0]), int(r[1])
+        if start < 0 or end < start:
+            raise UserError(f"{where}: field 'frames' needs 0 <= start <= end, got [{start}, {end}]")
+        self.frames = (start, end)
+
+    def activity(self, frame: int) -> float:
+        """How much the constraint acts at ``frame``: its weight is multiplied by this.
+
+        1 inside ``frames`` (and always when ``frames`` is None), 0 outside the range
+        and its blends; over the ``blend_in`` frames before ``start`` it rises, and
+        over the ``blend_out`` frames after ``end`` it falls, along a smoothstep (no
+        kink where the blend meets the range). ``enabled`` is not considered here.
+
+        Parameters
+        ----------
+        frame : int
+            Frame index of the clip or animation.
+
+        Returns
+        -------
+        float
+            In [0, 1].
+        """
+        if self.frames is None:
+            return 1.0
+        start, end = self.frames
+        if start <= frame <= end:
+            return 1.0
+        if frame < start:
+            gap, span = start - frame, self.blend_in
+        else:
+            gap, span = frame - end, self.blend_out
+        if gap > span:
+            return 0.0
+        t = 1.0 - gap / (span + 1)  # the frame next to the range is close to 1, never 1
+        return t * t * (3.0 - 2.0 * t)
+
+    def active_frames(self) -> tuple[int, int] | None:
+        """First and last frame with a non-zero :meth:`activity` (None: every frame)."""
+        if self.frames is None:
+            return None
+        return (max(0, self.frames[0] - self.blend_in), self.frames[1] + self.blend_out)
 
     @abstractmethod
     def loss(self, state: PoseState) -> torch.Tensor:
@@ -143,12 +215,18 @@ class Constraint(ABC):
         out: dict[str, Any] = {"kind": self.kind}
         for f in dataclasses.fields(self):
             v = getattr(self, f.name)
+            if f.name in FRAME_FIELDS and self.frames is None and not v:
+                continue  # an every-frame constraint reads as it always did
             if isinstance(v, np.ndarray):
                 v = [float(x) if math.isfinite(x) else None for x in v.ravel().tolist()]
             elif isinstance(v, tuple):
                 v = list(v)
             out[f.name] = v
         return out
+
+
+#: The frame-range fields every kind has (written only when a range is set).
+FRAME_FIELDS = ("frames", "blend_in", "blend_out")
 
 
 def field_default(f: dataclasses.Field) -> Any:

@@ -8,10 +8,12 @@ so the engine's command line never imports the app. Qt is imported only when it 
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from engine.cli.rig_options import add_rig_map_option, rig_map_path
 from engine.errors import UserError
+from engine.studio.events import PLAYBACK_PACES
 
 SHIPPED_VAE = Path(__file__).resolve().parents[1] / "assets" / "models" / "vae.pt"
 
@@ -36,8 +38,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--ghosts", metavar="A,B", help="other methods drawn as ghosts beside it, e.g. ik,sparseposer")
     p.add_argument("--screenshot", metavar="OUT.png", help="save a screenshot and exit")
     p.add_argument("--after-frames", type=int, default=60, metavar="N", help="frames to play first (60)")
-    p.add_argument("--mode", choices=("every_frame", "real_time"),
+    p.add_argument("--pace", choices=PLAYBACK_PACES,
                    help="playback: solve every frame (default) or keep real time, skipping frames")
+    # "mode" is the optimizer's realtime/offline elsewhere; the old spelling still works
+    p.add_argument("--mode", dest="old_pace", choices=PLAYBACK_PACES, help=argparse.SUPPRESS)
     p.add_argument("--measure", type=float, metavar="SECONDS",
                    help="play SECONDS, write smoothness figures (draws/s, solved/s, event-loop "
                    "lateness, per-panel cost) to --json and exit")
@@ -55,6 +59,8 @@ def run(args: argparse.Namespace) -> int:
 
     if args.measure is not None and not args.measure > 0:
         raise UserError(f"--measure: SECONDS must be > 0, got {args.measure}")
+    if args.old_pace is not None:
+        print("gui: --mode is deprecated, use --pace", file=sys.stderr)
     ghosts = tuple(g.strip() for g in (args.ghosts or "").split(",") if g.strip())
     return run_app(args.file, args.method or default_method(), args.sensors, args.screenshot, args.after_frames,
-                   args.measure, args.json, args.mode, ghosts, args.view, rig_map_path(args), args.engine)  # fmt: skip
+                   args.measure, args.json, args.pace or args.old_pace, ghosts, args.view, rig_map_path(args), args.engine)  # fmt: skip

@@ -135,7 +135,7 @@ class DrawScheduler:
         timing = snap.timing or {}
         per_it = timing.get("ms_per_iteration")
         solver = f"   {per_it:.2f} ms/it" if per_it is not None else ""
-        skipped = f"   skipped {snap.frames_skipped}" if snap.mode == "real_time" else ""
+        skipped = f"   skipped {snap.frames_skipped}" if snap.pace == "real_time" else ""
         self._set_text(w.status_engine, f"solver {snap.engine_fps:4.0f} frames/s   {snap.ms:5.0f} ms/frame   "
                                         f"{snap.iterations} it{solver}{skipped}")  # fmt: skip
         parts = [f"{k.replace('fk_losses', 'fk+loss')} {timing[k]:.2f} ms"
@@ -146,7 +146,7 @@ class DrawScheduler:
             tip.append(f"per iteration: {per_it:.2f} ms" + (f" ({', '.join(parts)})" if parts else ""))
         if "latency_ms" in timing:
             tip.append(f"live latency: {timing['latency_ms']:.0f} ms from packet to pose")
-        if snap.mode == "real_time":
+        if snap.pace == "real_time":
             tip.append(f"real-time playback skipped {snap.frames_skipped} clip frames the solver had not reached")
         self._set_tip(w.status_engine, "\n".join(tip))
         self._set_text(w.status_gui, f"view {self._draw_rate:3.0f} draws/s")

@@ -48,11 +48,11 @@ def open_initial(window: MainWindow, path: str | None, sensors: str | None, rig_
 
 def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
         screenshot: str | None = None, after_frames: int = 60, measure: float | None = None,
-        measure_json: str | None = None, mode: str | None = None, ghosts: tuple[str, ...] = (),
+        measure_json: str | None = None, pace: str | None = None, ghosts: tuple[str, ...] = (),
         view: str = "stick", rig_map: Path | None = None, engine: str = "process") -> int:  # fmt: skip
     """Show the studio; with ``screenshot``, play ``after_frames`` frames, save and exit;
     with ``measure``, play that many seconds and write the figures to ``measure_json``
-    (:mod:`app.measure`). ``mode`` sets the playback mode (every_frame or real_time).
+    (:mod:`app.measure`). ``pace`` sets the playback pace (every_frame or real_time).
     ``ghosts``: other methods drawn beside the reconstruction; ``view`` draws the
     reconstruction as a ``stick`` figure or a shaded ``body``; ``rig_map`` is the joint
     mapping file for ``path`` (``--rig-map``); ``engine`` runs the solver in its own
@@ -71,8 +71,8 @@ def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
     except UserError:
         window.close()
         raise
-    if mode is not None:
-        window.session.set_playback(mode=mode)
+    if pace is not None:
+        window.session.set_playback(pace=pace)
     window.actions_by_name[f"display-{view}"].setChecked(True)
     if screenshot is not None:
         window.resize(1600, 980)  # a reproducible layout, whatever geometry was saved

@@ -157,7 +157,7 @@ class MainWindow(QMainWindow):
         t.seekRequested.connect(s.seek)
         t.speedChanged.connect(lambda v: s.set_playback(speed=v))
         t.loopChanged.connect(lambda v: s.set_playback(loop=v))
-        t.modeChanged.connect(self._guard(lambda m: s.set_playback(mode=m)))
+        t.paceChanged.connect(self._guard(lambda p: s.set_playback(pace=p)))
         sp = self.sensor_panel
         sp.presetChanged.connect(self._guard(self._set_preset))
         sp.sensorChanged.connect(self._guard(lambda j, ch: s.update_sensor(j, **ch)))
@@ -215,7 +215,7 @@ class MainWindow(QMainWindow):
 
     def _show_playback(self, event: ev.PlaybackChanged) -> None:
         self.timeline.set_playing(event.playing)
-        self.timeline.set_mode(event.mode)
+        self.timeline.set_pace(event.pace)
 
     def _show_motion(self, event: ev.MotionChanged) -> None:
         self.timeline.set_range(self.session.num_frames, event.motion.fps)

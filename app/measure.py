@@ -5,7 +5,7 @@ playback) and writes:
 
 * ``draws_per_s``: 3D-view draws per second;
 * ``solved_per_s``: frames the engine solved per second;
-* ``frames_skipped``: clip frames playback passed over unsolved (0 in "every frame" mode);
+* ``frames_skipped``: clip frames playback passed over unsolved (0 at the "every frame" pace);
 * ``event_loop_ms``: lateness of a 10 ms timer on the GUI thread (``p50``, ``p99``,
   ``max``): how long the window can be unresponsive;
 * ``panels``: per panel (and the 3D ``view``) the number of updates and their mean, p99
@@ -13,7 +13,7 @@ playback) and writes:
   ``paint:plots``: the repaints of every pyqtgraph view (the plots and the latent
   panel), which Qt runs later, outside the updates;
 
-plus what was measured (clip, method, sensors, mode, window size, platform). The JSON
+plus what was measured (clip, method, sensors, pace, window size, platform). The JSON
 is written to a temporary file and renamed.
 """
 
@@ -118,7 +118,7 @@ class Measurement:
             "clip": str(s.path) if s.path else "(generated)",
             "method": s.method,
             "sensors": [sn.joint for sn in s.sensors.values() if sn.enabled],
-            "mode": s.mode,
+            "pace": s.pace,
             "window": [self.w.width(), self.w.height()],
             "platform": {"qt": QGuiApplication.platformName(), "display": os.environ.get("DISPLAY", ""),
                          "cpus": os.cpu_count(), "python": platform.python_version()},  # fmt: skip

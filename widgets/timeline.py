@@ -1,4 +1,4 @@
-"""Timeline: play/pause, step, scrub, speed, loop, playback mode and a frame counter."""
+"""Timeline: play/pause, step, scrub, speed, loop, playback pace and a frame counter."""
 
 from __future__ import annotations
 
@@ -6,8 +6,8 @@ from PyQt6.QtCore import Qt, pyqtSignal
 from PyQt6.QtWidgets import QCheckBox, QComboBox, QHBoxLayout, QLabel, QSlider, QStyle, QToolButton, QWidget
 
 SPEEDS = (0.25, 0.5, 1.0, 2.0)
-#: Playback modes (value, label, tooltip); the session's names.
-MODES = (
+#: Playback paces (value, label, tooltip); the session's names.
+PACES = (
     ("every_frame", "Every frame", "Solve every clip frame; playback waits for the solver"),
     ("real_time", "Real time", "Keep the clock; skip frames the solver has not reached"),
 )
@@ -19,7 +19,7 @@ class Timeline(QWidget):
     Signals
     -------
     playToggled(bool), stepRequested(int), seekRequested(int), speedChanged(float),
-    loopChanged(bool), modeChanged(str)
+    loopChanged(bool), paceChanged(str)
     """
 
     playToggled = pyqtSignal(bool)
@@ -27,7 +27,7 @@ class Timeline(QWidget):
     seekRequested = pyqtSignal(int)
     speedChanged = pyqtSignal(float)
     loopChanged = pyqtSignal(bool)
-    modeChanged = pyqtSignal(str)
+    paceChanged = pyqtSignal(str)
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -58,12 +58,12 @@ class Timeline(QWidget):
         for w in (back, self.play_button, fwd):
             row.addWidget(w)
         row.addWidget(self.slider, 1)
-        self.mode = QComboBox(toolTip="Playback mode: " + "; ".join(f"{lb}: {tip}" for _, lb, tip in MODES))
-        for value, label, tip in MODES:
-            self.mode.addItem(label, value)
-            self.mode.setItemData(self.mode.count() - 1, tip, Qt.ItemDataRole.ToolTipRole)
-        self.mode.currentIndexChanged.connect(self._on_mode)
-        for w in (self.counter, self.speed, self.mode, self.loop):
+        self.pace = QComboBox(toolTip="Playback pace: " + "; ".join(f"{lb}: {tip}" for _, lb, tip in PACES))
+        for value, label, tip in PACES:
+            self.pace.addItem(label, value)
+            self.pace.setItemData(self.pace.count() - 1, tip, Qt.ItemDataRole.ToolTipRole)
+        self.pace.currentIndexChanged.connect(self._on_pace)
+        for w in (self.counter, self.speed, self.pace, self.loop):
             row.addWidget(w)
         self._updating = False
         self._fps = 60.0
@@ -73,14 +73,14 @@ class Timeline(QWidget):
         if not self._updating:
             self.playToggled.emit(playing)
 
-    def _on_mode(self, index: int) -> None:
+    def _on_pace(self, index: int) -> None:
         if not self._updating:
-            self.modeChanged.emit(str(self.mode.itemData(index)))
+            self.paceChanged.emit(str(self.pace.itemData(index)))
 
-    def set_mode(self, mode: str) -> None:
-        """Show the session's playback mode without emitting."""
+    def set_pace(self, pace: str) -> None:
+        """Show the session's playback pace without emitting."""
         self._updating = True
-        self.mode.setCurrentIndex(max(self.mode.findData(mode), 0))
+        self.pace.setCurrentIndex(max(self.pace.findData(pace), 0))
         self._updating = False
 
     def _on_slider(self, value: int) -> None:

@@ -54,13 +54,13 @@ class Seek:
 class Play:
     """Start playback at ``speed`` x real time.
 
-    ``mode`` ``"every_frame"`` solves every clip frame in order and lets the clock wait
+    ``pace`` ``"every_frame"`` solves every clip frame in order and lets the clock wait
     for the solver; ``"real_time"`` keeps the clock and skips frames the solver missed.
     """
 
     speed: float = 1.0
     loop: bool = True
-    mode: str = "every_frame"
+    pace: str = "every_frame"
 
 
 @dataclass(frozen=True)

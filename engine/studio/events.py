@@ -21,8 +21,8 @@ from engine.motion import Motion
 from engine.sensors import Sensor
 
 #: How playback advances: wait for every frame to be solved, or keep the wall clock.
-PlaybackMode = Literal["every_frame", "real_time"]
-PLAYBACK_MODES: tuple[str, ...] = ("every_frame", "real_time")
+PlaybackPace = Literal["every_frame", "real_time"]
+PLAYBACK_PACES: tuple[str, ...] = ("every_frame", "real_time")
 
 
 @dataclass(frozen=True)
@@ -95,12 +95,12 @@ class MethodChanged:
 
 @dataclass(frozen=True)
 class PlaybackChanged:
-    """Play/pause, speed (x real time), loop or mode changed."""
+    """Play/pause, speed (x real time), loop or pace changed."""
 
     playing: bool
     speed: float
     loop: bool
-    mode: str
+    pace: str
 
 
 @dataclass(frozen=True)

@@ -1,6 +1,6 @@
 """The playback clock of the engine thread: which clip frame is due, and when.
 
-Playback has two modes. ``"every_frame"`` (the default) solves every clip frame in
+Playback has two paces. ``"every_frame"`` (the default) solves every clip frame in
 order; the clock waits for the solver, so a slow solver plays slower than real time but
 the reconstruction never drifts off the trackers. ``"real_time"`` keeps the wall clock
 (elapsed time x fps x speed) and skips the frames the solver missed. Either way the
@@ -34,7 +34,7 @@ class PlaybackClock:
         Multiple of real time (> 0).
     loop : bool
         Start again at frame 0 after the last frame, instead of stopping there.
-    mode : str
+    pace : str
         ``"every_frame"`` or ``"real_time"`` (see the module docstring).
     origin : tuple of (float, int)
         (seconds of :func:`time.monotonic`, frame) playback is timed from.
@@ -42,7 +42,7 @@ class PlaybackClock:
 
     speed: float = 1.0
     loop: bool = True
-    mode: str = "every_frame"
+    pace: str = "every_frame"
     origin: tuple[float, int] = (0.0, 0)
 
     def restart(self, frame: int) -> None:
@@ -55,8 +55,8 @@ class PlaybackClock:
 
     def wait_time(self, frame: int, last_solved: int, fps: float) -> float:
         """Seconds until the frame after ``frame`` is due (0 if it is already, or if
-        ``frame`` itself still needs solving in ``every_frame`` mode)."""
-        if self.mode == "every_frame" and frame != last_solved:
+        ``frame`` itself still needs solving in ``every_frame`` pace)."""
+        if self.pace == "every_frame" and frame != last_solved:
             return 0.0  # the current frame still needs solving
         t0, f0 = self.origin
         due = t0 + (frame - f0 + 1) / self.rate(fps)
@@ -66,13 +66,13 @@ class PlaybackClock:
         """The frame playback is at now, from ``frame`` (shown) and ``last_solved``.
 
         Returns the frame and :data:`LOOPED`, :data:`ENDED` or ``""``. In
-        ``every_frame`` mode it moves at most one frame on, and only once ``frame`` is
+        ``every_frame`` pace it moves at most one frame on, and only once ``frame`` is
         solved; when the solver is behind the clock, the clock waits (its origin moves).
         """
         t0, f0 = self.origin
         now = time.monotonic()
         rate = self.rate(fps)
-        if self.mode == "every_frame":
+        if self.pace == "every_frame":
             if frame != last_solved:
                 return frame, ""  # a seek or reset: solve where we are first
             due = t0 + (frame + 1 - f0) / rate

@@ -58,8 +58,8 @@ class Session(ConstraintEditing, SensorEditing):
         Reconstruction method; ``ghosts`` are other methods drawn alongside it.
     frame : int
         Current frame (the engine's while playing, mirrored by :meth:`note_frame`).
-    playing, speed, loop, mode
-        Playback state; ``mode`` is ``"every_frame"`` or ``"real_time"``.
+    playing, speed, loop, pace
+        Playback state; ``pace`` is ``"every_frame"`` or ``"real_time"``.
     """
 
     def __init__(self, method: str = "ik") -> None:
@@ -77,7 +77,7 @@ class Session(ConstraintEditing, SensorEditing):
         self.playing = False
         self.speed = 1.0
         self.loop = True
-        self.mode = "every_frame"
+        self.pace = "every_frame"
         self.engine: EngineThread | EngineProcess | None = None
         self._sink: Callable[[Any], None] | None = None
         self._factory: Callable[[str], Any] | None = None
@@ -260,7 +260,7 @@ class Session(ConstraintEditing, SensorEditing):
 
     def _send_play(self) -> None:
         self.plays += 1
-        self._send(cmd.Play(self.speed, self.loop, self.mode))
+        self._send(cmd.Play(self.speed, self.loop, self.pace))
 
     def note_stopped(self) -> None:
         """Mirror the engine stopping at the clip's end (no command is sent back)."""
@@ -268,21 +268,21 @@ class Session(ConstraintEditing, SensorEditing):
             self.playing = False
             self._playback_changed()
 
-    def set_playback(self, speed: float | None = None, loop: bool | None = None, mode: str | None = None) -> None:
-        """Speed (x real time, > 0), loop, and mode (``every_frame`` or ``real_time``)."""
-        if mode is not None and mode not in ev.PLAYBACK_MODES:
-            raise UserError(f"playback mode must be one of {', '.join(ev.PLAYBACK_MODES)}, got {mode!r}")
+    def set_playback(self, speed: float | None = None, loop: bool | None = None, pace: str | None = None) -> None:
+        """Speed (x real time, > 0), loop, and pace (``every_frame`` or ``real_time``)."""
+        if pace is not None and pace not in ev.PLAYBACK_PACES:
+            raise UserError(f"playback pace must be one of {', '.join(ev.PLAYBACK_PACES)}, got {pace!r}")
         if speed is not None and not float(speed) > 0:
             raise UserError(f"playback speed must be > 0, got {speed}")
         self.speed = self.speed if speed is None else float(speed)
         self.loop = self.loop if loop is None else bool(loop)
-        self.mode = self.mode if mode is None else mode
+        self.pace = self.pace if pace is None else pace
         if self.playing:
             self._send_play()
         self._playback_changed()
 
     def _playback_changed(self) -> None:
-        self.events.playback.emit(ev.PlaybackChanged(self.playing, self.speed, self.loop, self.mode))
+        self.events.playback.emit(ev.PlaybackChanged(self.playing, self.speed, self.loop, self.pace))
 
     # -- scenes ----------------------------------------------------------------------
     def to_scene(self) -> dict[str, Any]:

@@ -86,7 +86,7 @@ class Snapshot:
         Frames solved since the engine started (counts every solve, for rates).
     frames_skipped : int
         Clip frames playback passed over without solving them, since playback started
-        (always 0 in ``"every_frame"`` mode); ``mode`` is the playback mode.
+        (always 0 at the ``"every_frame"`` pace); ``pace`` is the playback pace.
     timing : dict of str to float
         The method's own timing of the frame's solve, milliseconds by name (e.g.
         ``ms_per_iteration``), when it reports one.
@@ -129,7 +129,7 @@ class Snapshot:
     history: tuple[FrameRecord, ...] = ()
     solved: int = 0
     frames_skipped: int = 0
-    mode: str = "every_frame"
+    pace: str = "every_frame"
     timing: dict[str, float] = field(default_factory=dict)
     recent_errors: tuple[str, ...] = ()
     plays: int = 0

@@ -7,7 +7,7 @@ changes as :mod:`engine.studio.commands`. After each solved frame it publishes a
 the newest one (``thread.latest``) or get called back (``listeners``, on this thread).
 
 Which frame is due when is the :class:`~engine.studio.playback.PlaybackClock`'s
-arithmetic (two modes: solve every frame, or keep real time and skip); the methods are
+arithmetic (two paces: solve every frame, or keep real time and skip); the methods are
 a :class:`~engine.studio.method_set.MethodSet`. A method that raises or returns NaN
 never kills the thread; the error is reported in the snapshot.
 """
@@ -209,7 +209,7 @@ class EngineThread(threading.Thread):
         elif isinstance(c, cmd.Play):
             self._plays += 1
             self._playing = True
-            self._clock = PlaybackClock(c.speed, c.loop, c.mode, (time.monotonic(), self._frame))
+            self._clock = PlaybackClock(c.speed, c.loop, c.pace, (time.monotonic(), self._frame))
             self._decoded = None
             self._dirty = was_dirty or self._frame != self._last_solved
         elif isinstance(c, cmd.Pause):
@@ -244,7 +244,7 @@ class EngineThread(threading.Thread):
 
     def _playback_frame(self) -> int:
         """The frame playback is at now (:meth:`PlaybackClock.advance`); a live source's
-        newest frame, whatever the mode."""
+        newest frame, whatever the pace."""
         if getattr(self._source, "live", False):
             self._frame = max(self._source.num_frames - 1, 0)
             return self._frame
@@ -371,7 +371,7 @@ class EngineThread(threading.Thread):
             history=tuple(self._history),
             solved=self._solved,
             frames_skipped=self._skipped,
-            mode=self._clock.mode,
+            pace=self._clock.pace,
             timing=_timing(res, ms, self._latency_ms),
             recent_errors=tuple(self._recent_errors),
             plays=self._plays,

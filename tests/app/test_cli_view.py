@@ -35,3 +35,17 @@ def test_rig_map_option_reaches_the_window(monkeypatch, tmp_path):
     args = parser.parse_args(["gui", "clip.bvh", "--rig-map", str(tmp_path / "missing.toml")])
     with pytest.raises(UserError, match="--rig-map: no such file"):
         args.func(args)
+
+
+def test_pace_reaches_the_window_and_the_old_mode_flag_still_works(monkeypatch, capsys):
+    from app import cli
+
+    seen = []
+    monkeypatch.setattr("app.main.run", lambda *a: seen.append(a) and 0)
+    parser = argparse.ArgumentParser()
+    cli.register(parser.add_subparsers())
+    for argv in (["gui", "--pace", "real_time"], ["gui", "--mode", "real_time"], ["gui"]):
+        args = parser.parse_args(argv)
+        args.func(args)
+    assert [a[7] for a in seen] == ["real_time", "real_time", None]  # the pace argument of app.main.run
+    assert "--mode is deprecated, use --pace" in capsys.readouterr().err

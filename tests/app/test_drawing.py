@@ -21,7 +21,7 @@ def test_status_shows_the_solver_breakdown_and_leaves_unchanged_labels_alone(qtb
     snap = FakeSnapshot()
     snap.timing = {"ms_per_frame": 12.0, "ms_per_iteration": 1.2, "decoder": 0.3, "fk_losses": 0.6,
                    "backward": 0.2, "step": 0.1}  # fmt: skip
-    snap.frames_skipped, snap.mode, snap.recent_errors = 0, "every_frame", ("ik ignores constraints",)
+    snap.frames_skipped, snap.pace, snap.recent_errors = 0, "every_frame", ("ik ignores constraints",)
     d._update_status(snap)
     text, tip = labels["status_engine"].text(), labels["status_engine"].toolTip()
     assert "1.20 ms/it" in text and "decoder" not in text  # short enough for the bar

@@ -26,7 +26,7 @@ def test_measure_plays_the_clip_and_writes_plausible_figures(tmp_path):
     assert {"draws_per_s", "solved_per_s", "frames_skipped", "event_loop_ms", "panels"} <= set(m)
     assert 2.5 <= m["seconds"] <= 10
     assert 0 < m["draws_per_s"] < 200 and 0 < m["solved_per_s"] < 1000
-    assert m["frames_skipped"] == 0 and m["mode"] == "every_frame"  # the default solves every frame
+    assert m["frames_skipped"] == 0 and m["pace"] == "every_frame"  # the default solves every frame
     late = m["event_loop_ms"]
     assert 0 <= late["p50"] <= late["p99"] <= late["max"] < 10_000 and late["samples"] > 0
     assert {"view", "timeline", "plot:iterations", "plot:cost", "plot:history", "latent", "status"} <= set(m["panels"])

@@ -143,7 +143,7 @@ def test_event_loop_stays_responsive_while_the_engine_is_busy(studio, qtbot, mon
     monkeypatch.setattr(studio_methods, "make_method", lambda name: SlowMethod(studio_methods.RestPoseMethod()))
     studio.engine._factory = studio_methods.make_method
     studio.session.set_method("slow")
-    studio.session.set_playback(mode="real_time", loop=False)
+    studio.session.set_playback(pace="real_time", loop=False)
     gaps, last = [], [time.perf_counter()]
 
     def tick() -> None:

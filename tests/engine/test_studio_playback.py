@@ -17,7 +17,7 @@ def now(monkeypatch):
 
 
 def test_every_frame_waits_for_the_solver_and_then_for_the_clock(now):
-    clock = PlaybackClock(speed=1.0, mode="every_frame")
+    clock = PlaybackClock(speed=1.0, pace="every_frame")
     clock.restart(10)
     assert clock.advance(10, last_solved=9, num_frames=100, fps=10) == (10, "")  # not solved yet
     assert clock.wait_time(10, last_solved=9, fps=10) == 0.0
@@ -29,7 +29,7 @@ def test_every_frame_waits_for_the_solver_and_then_for_the_clock(now):
 
 
 def test_every_frame_clock_waits_for_a_slow_solver_instead_of_skipping(now):
-    clock = PlaybackClock(speed=2.0, mode="every_frame")
+    clock = PlaybackClock(speed=2.0, pace="every_frame")
     clock.restart(0)
     now[0] += 5.0  # the solver took 5 s over frame 0
     assert clock.advance(0, last_solved=0, num_frames=100, fps=10) == (1, "")
@@ -37,13 +37,13 @@ def test_every_frame_clock_waits_for_a_slow_solver_instead_of_skipping(now):
 
 
 def test_real_time_skips_frames_and_loops_or_ends(now):
-    clock = PlaybackClock(speed=2.0, loop=True, mode="real_time")
+    clock = PlaybackClock(speed=2.0, loop=True, pace="real_time")
     clock.restart(0)
     now[0] += 1.0
     assert clock.advance(0, last_solved=0, num_frames=100, fps=10) == (20, "")
     now[0] += 10.0
     assert clock.advance(20, last_solved=20, num_frames=100, fps=10) == (0, LOOPED)
     assert clock.origin == (now[0], 0)
-    clock = PlaybackClock(speed=1.0, loop=False, mode="real_time", origin=(now[0], 95))
+    clock = PlaybackClock(speed=1.0, loop=False, pace="real_time", origin=(now[0], 95))
     now[0] += 1.0
     assert clock.advance(95, last_solved=95, num_frames=100, fps=10) == (99, ENDED)

@@ -61,7 +61,7 @@ def test_process_engine_plays_every_frame_and_rebuilds_the_history(proc_session)
     wait_for(lambda: engine.latest.frame >= 60, 60)
     snap = engine.latest
     assert snap.positions.shape == (22, 3) and not snap.positions.flags.writeable
-    assert snap.frames_skipped == 0 and snap.mode == "every_frame"
+    assert snap.frames_skipped == 0 and snap.pace == "every_frame"
     frames = [r.frame for r in snap.history]
     # sent as increments, rebuilt whole: every solved frame of this run, in order
     assert frames == list(range(frames[0], snap.frame + 1)) and len(frames) >= 50

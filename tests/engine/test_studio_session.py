@@ -187,19 +187,19 @@ def test_pin_creates_then_moves_one_pin_per_joint(session):
     assert session.constraints == []
 
 
-def test_playback_state_and_mode_go_through_the_session(session):
+def test_playback_state_and_pace_go_through_the_session(session):
     seen, commands = [], []
     session.events.playback.connect(seen.append)
     session.attach(commands.append)
-    assert session.mode == "every_frame"
+    assert session.pace == "every_frame"
     session.set_playing(True)
     assert commands[-1] == c.Play(1.0, True, "every_frame") and seen[-1].playing
-    session.set_playback(mode="real_time", speed=0.5)
-    assert commands[-1] == c.Play(0.5, True, "real_time") and seen[-1].mode == "real_time"
+    session.set_playback(pace="real_time", speed=0.5)
+    assert commands[-1] == c.Play(0.5, True, "real_time") and seen[-1].pace == "real_time"
     session.set_playing(False)
     assert commands[-1] == c.Pause() and not seen[-1].playing
-    with pytest.raises(UserError, match="playback mode"):
-        session.set_playback(mode="fast")
+    with pytest.raises(UserError, match="playback pace"):
+        session.set_playback(pace="fast")
 
 
 def test_method_changes_carry_the_previous_method(session):

@@ -293,7 +293,7 @@ def test_every_frame_playback_solves_each_frame_in_order_and_waits_for_the_solve
         time.sleep(0.1)
         played = method.frames[1:]
         assert played == list(range(1, len(played) + 1)), "no clip frame skipped or repeated"
-        assert worker.latest.frames_skipped == 0 and worker.latest.mode == "every_frame"
+        assert worker.latest.frames_skipped == 0 and worker.latest.pace == "every_frame"
 
 
 def test_real_time_playback_skips_frames_and_counts_them(synthetic_motion):
@@ -304,13 +304,13 @@ def test_real_time_playback_skips_frames_and_counts_them(synthetic_motion):
         wait_for(lambda: worker.latest.frame >= 40)
         worker.submit(w.Pause())
         snap = worker.latest
-        assert snap.frames_skipped > 5 and snap.mode == "real_time"
+        assert snap.frames_skipped > 5 and snap.pace == "real_time"
         solved = len([f for f in method.frames if 0 < f <= snap.frame])
         assert solved + snap.frames_skipped == snap.frame  # every frame is solved or counted
 
 
-@pytest.mark.parametrize("mode", ["every_frame", "real_time"])
-def test_looping_does_not_skip_the_start_of_the_clip(synthetic_motion, mode):
+@pytest.mark.parametrize("pace", ["every_frame", "real_time"])
+def test_looping_does_not_skip_the_start_of_the_clip(synthetic_motion, pace):
     """The first solve after a loop is slow (offline); the clock restarts after it."""
     method = Slow(ms=2.0, first_ms=400.0)
     with running(method, synthetic_motion) as worker:
@@ -318,7 +318,7 @@ def test_looping_does_not_skip_the_start_of_the_clip(synthetic_motion, mode):
         n = len(synthetic_motion)
         worker.submit(w.Seek(n - 5))
         wait_for(lambda: worker.latest.frame == n - 5)
-        worker.submit(w.Play(1.0, True, mode))
+        worker.submit(w.Play(1.0, True, pace))
         wait_for(lambda: 0 < worker.latest.frame < n - 5 and worker.latest.frame >= 6, timeout=20)
         worker.submit(w.Pause())
         tail = method.frames[method.frames.index(n - 5):]

@@ -40,7 +40,7 @@ from engine.solver import (
 )  # fmt: skip
 from engine.solver.limb_ik import LIMBS, finish
 from engine.solver.pose import body_facing
-from engine.solver.tracker_prior import PoseBank, TrackerHistory, default_bank
+from engine.solver.tracker_prior import PoseBank, TrackerHistory, combination, default_bank
 
 _HEIGHT_IDX = [sk.JOINT_INDEX[j] for j in sk.HEIGHT_JOINTS]
 
@@ -348,12 +348,23 @@ def create(mode: str = "realtime", iterations: int | None = None, lr: float | No
     decoder, predictor = _unpack_models(models)
     # the shipped pose bank holds the shipped VAE's latents: a user's VAE goes without it
     bank = default_bank() if vae_path is None else None
+    if bank is not None:  # the presets' lookups ready before their first frame (no cold start)
+        bank.prepare(preset_combinations())
     values: dict[str, Any] = {"mode": mode, **overrides}
     if iterations is not None:
         values["iterations" if mode == "realtime" else "max_iterations"] = iterations
     if lr is not None:
         values["lr"] = lr
     return DragPoserMethod(decoder, predictor, latent_dim=_latent_dim(decoder), bank=bank, **values)
+
+
+def preset_combinations() -> list[tuple[str, ...]]:
+    """The pose-bank combinations (:func:`engine.solver.tracker_prior.combination`) of the
+    shipped sensor presets' 6-DoF trackers."""
+    from engine.tracking.presets import PRESET_SENSORS
+
+    combos = (combination(s.joint for s in sensors if s.dof == 6) for sensors in PRESET_SENSORS.values())
+    return list(dict.fromkeys(c for c in combos if c is not None))
 
 
 def _unpack_models(models: Any) -> tuple[Any, Any]:

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -76,12 +76,38 @@ def features(pos: np.ndarray, rot: np.ndarray, anchor: int, prev_anchor: np.ndar
     return np.concatenate((rel[:, others].reshape(f, -1), pos[:, anchor, 2:3], 0.5 * mats, 2.0 * disp), -1)
 
 
+def feature_columns(joints: Sequence[str]) -> list[int]:
+    """Columns of :func:`features` of ``joints`` (any order, an anchor among them) within
+    the features of all :data:`BANK_JOINTS` around the same anchor (:func:`_anchor_of`),
+    in the order :func:`features` of ``joints`` writes them."""
+    anchor = _anchor_of(joints)
+    others = [j for j in BANK_JOINTS if j != anchor]  # the full layout's relative-position blocks
+    rel = [3 * others.index(j) + c for j in joints if j != anchor for c in range(3)]
+    height = 3 * len(others)
+    mats = [height + 1 + 6 * BANK_JOINTS.index(j) + c for j in joints for c in range(6)]
+    disp = height + 1 + 6 * len(BANK_JOINTS)
+    return [*rel, height, *mats, disp, disp + 1, disp + 2]
+
+
+@dataclass
+class _Table:
+    """Standardised features of every bank frame for all :data:`BANK_JOINTS` around one anchor."""
+
+    mean: np.ndarray  # (D,) float64
+    std: np.ndarray  # (D,) float64
+    table: torch.Tensor  # (N, D) float32
+
+
 @dataclass
 class _Index:
-    mean: np.ndarray
-    std: np.ndarray
-    table: torch.Tensor  # (N, D) standardised features
-    norms: torch.Tensor  # (N,) their squared lengths
+    """A tracker combination's view of its anchor's :class:`_Table`: the query is written
+    into the combination's columns of a zero vector, so ``table @ q`` sums over those
+    columns only and no per-combination copy of the table is kept."""
+
+    table: _Table
+    cols: np.ndarray  # (D_c,) its columns, in features(joints) order
+    norms: torch.Tensor  # (N,) squared lengths of the rows over those columns
+    full: bool  # cols is the whole table in order (the product is the table's own)
 
 
 @dataclass
@@ -111,6 +137,10 @@ class PoseBank:
     vae_sha256: str = ""
     k: int = 8
     _indexes: dict = field(default_factory=dict, repr=False)
+    _tables: dict = field(default_factory=dict, repr=False)
+    #: Index work done so far: anchor tables built plus combinations derived from them
+    #: (a live frame must find its combination ready: :meth:`prepare`).
+    index_builds: int = field(default=0, repr=False)
 
     def __post_init__(self) -> None:
         n = len(self.latents)
@@ -126,16 +156,37 @@ class PoseBank:
     def __len__(self) -> int:
         return len(self.latents)
 
+    def prepare(self, combinations: Sequence[Sequence[str]] = ()) -> "PoseBank":
+        """Build what lookups need ahead of the first frame: both anchors' tables (the
+        costly part, ~0.5 s each on the shipped bank) and the index of each of
+        ``combinations`` (tuples of bank joints, an anchor among them; a column sum each).
+        A combination not prepared is derived on its first lookup. Returns ``self``."""
+        for anchor in ANCHORS:
+            self._table(anchor)
+        for joints in combinations:
+            self._index(tuple(joints))
+        return self
+
+    def _table(self, anchor: str) -> _Table:
+        tab = self._tables.get(anchor)
+        if tab is None:
+            a = BANK_JOINTS.index(anchor)
+            x = features(self.positions.astype(np.float64), self.rotations.astype(np.float64), a,
+                         self.prev_anchor[:, ANCHORS.index(anchor)].astype(np.float64))  # fmt: skip
+            mean, std = x.mean(0), x.std(0) + 1e-6
+            tab = self._tables[anchor] = _Table(mean, std, torch.as_tensor((x - mean) / std, dtype=torch.float32))
+            self.index_builds += 1
+        return tab
+
     def _index(self, joints: tuple[str, ...]) -> _Index:
         idx = self._indexes.get(joints)
         if idx is None:
-            cols = [BANK_JOINTS.index(j) for j in joints]
-            a = _anchor(joints)
-            x = features(self.positions[:, cols].astype(np.float64), self.rotations[:, cols].astype(np.float64), a,
-                         self.prev_anchor[:, ANCHORS.index(joints[a])].astype(np.float64))  # fmt: skip
-            mean, std = x.mean(0), x.std(0) + 1e-6
-            table = torch.as_tensor((x - mean) / std, dtype=torch.float32)
-            idx = self._indexes[joints] = _Index(mean, std, table, (table * table).sum(1))
+            tab = self._table(_anchor_of(joints))
+            cols = np.asarray(feature_columns(joints), dtype=np.intp)
+            full = len(cols) == tab.table.shape[1] and bool((cols == np.arange(len(cols))).all())
+            sub = tab.table if full else tab.table[:, torch.from_numpy(cols)]
+            idx = self._indexes[joints] = _Index(tab, cols, (sub * sub).sum(1), full)
+            self.index_builds += 1
         return idx
 
     def latent(self, joints: Sequence[str], pos: np.ndarray, rot: np.ndarray, k: int = 0) -> torch.Tensor:
@@ -147,10 +198,16 @@ class PoseBank:
         idx = self._index(joints)
         a = _anchor(joints)
         x = features(pos[-1:], rot[-1:], a, pos[:1, a])[0]
-        q = torch.as_tensor((x - idx.mean) / idx.std, dtype=torch.float32)
+        tab = idx.table
+        q32 = ((x - tab.mean[idx.cols]) / tab.std[idx.cols]).astype(np.float32)
+        if idx.full:
+            q = torch.from_numpy(q32)
+        else:  # the other columns multiply zeros
+            q = torch.zeros(tab.table.shape[1])
+            q[torch.from_numpy(idx.cols)] = torch.from_numpy(q32)
         # |t - q|^2 = |t|^2 - 2 t.q + |q|^2; the last term is the same for every row
         k = min(k or self.k, len(self))
-        nearest = (idx.norms - 2.0 * (idx.table @ q)).topk(k, largest=False).indices
+        nearest = (idx.norms - 2.0 * (tab.table @ q)).topk(k, largest=False).indices
         return self._latents[nearest].mean(0)
 
     def save(self, path: str | Path) -> None:
@@ -189,7 +246,19 @@ def default_bank() -> PoseBank | None:
     bank = PoseBank.load(DEFAULT_BANK)
     if bank.vae_sha256 and bank.vae_sha256 != file_sha256(DEFAULT_VAE):
         return None
-    return bank
+    return bank.prepare()
+
+
+def combination(joints: Iterable[str]) -> tuple[str, ...] | None:
+    """The bank joints among ``joints`` (6-DoF trackers' joints), in :data:`BANK_JOINTS`
+    order, as lookups key them; None when they are fewer than two or hold no anchor."""
+    given = set(joints)
+    out = tuple(j for j in BANK_JOINTS if j in given)
+    return out if len(out) >= 2 and any(a in out for a in ANCHORS) else None
+
+
+def _anchor_of(joints: Sequence[str]) -> str:
+    return joints[_anchor(joints)]
 
 
 def _anchor(joints: Sequence[str]) -> int:
@@ -228,8 +297,8 @@ class TrackerHistory:
         anchor among them or with fewer than two joints."""
         if not self.frames:
             return None
-        joints = tuple(j for j in BANK_JOINTS if all(j in f for f in self.frames))
-        if len(joints) < 2 or not any(a in joints for a in ANCHORS):
+        joints = combination(j for j in BANK_JOINTS if all(j in f for f in self.frames))
+        if joints is None:
             return None
         frames = [self.frames[0]] * (LAG + 1 - len(self.frames)) + self.frames
         pos = np.array([[f[j][0] for j in joints] for f in frames], dtype=np.float64)

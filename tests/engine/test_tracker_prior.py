@@ -151,3 +151,44 @@ def test_the_neighbour_count_can_be_chosen_per_lookup():
     one, all_ = bank.latent(joints, pos, rot, k=1), bank.latent(joints, pos, rot, k=10_000)
     assert torch.allclose(all_, torch.as_tensor(bank.latents).mean(0), atol=1e-5)  # capped at the bank's size
     assert not torch.allclose(one, bank.latent(joints, pos, rot))  # 0 / default: the bank's k = 3
+
+
+@pytest.mark.parametrize("joints", [("root", "upperneck", "lwrist", "rwrist"), ("upperneck", "lwrist", "rankle"),
+                                    ("rwrist", "root", "lankle"), BANK_JOINTS])  # fmt: skip
+def test_a_combination_looks_up_what_a_table_of_its_own_features_finds(joints):
+    rng = np.random.default_rng(5)
+    bank = _bank(rng, n=300, k=4)
+    cols = [BANK_JOINTS.index(j) for j in joints]
+    a = next(joints.index(x) for x in ANCHORS if x in joints)
+    prev = bank.prev_anchor[:, ANCHORS.index(joints[a])]
+    x = features(bank.positions[:, cols], bank.rotations[:, cols], a, prev)
+    mu, sd = x.mean(0), x.std(0) + 1e-6
+    for i in (3, 150, 299):
+        pos = np.repeat(bank.positions[i : i + 1, cols], LAG + 1, 0) + rng.normal(scale=0.05, size=(LAG + 1, len(cols), 3))
+        rot = np.repeat(bank.rotations[i : i + 1, cols], LAG + 1, 0)
+        q = features(pos[-1:], rot[-1:], a, pos[:1, a])[0]
+        near = np.argsort((((x - mu) / sd - (q - mu) / sd) ** 2).sum(1))[:4]
+        np.testing.assert_allclose(bank.latent(joints, pos, rot).numpy(), bank.latents[near].mean(0), atol=1e-6)
+
+
+def test_the_first_frame_of_every_preset_finds_its_bank_index_built_when_the_models_load():
+    from engine.methods import get_method
+    from engine.motion import Motion
+    from engine.tracking.presets import PRESET_SENSORS
+
+    m = get_method("dragposer")
+    if m.bank is None:
+        pytest.skip("the shipped pose bank is not installed")
+    built = m.bank.index_builds
+    assert built >= len(ANCHORS)  # both anchor tables were built at load
+    f = 8
+    t = np.arange(f) / 60.0
+    clip = Motion(np.tile(np.array([1.0, 0.0, 0.0, 0.0]), (f, 22, 1)), np.stack([0.2 * t, -0.8 * t, 1.0 + 0 * t], -1))
+    looked_up = []
+    lookup = m.bank.latent
+    m.bank.latent = lambda *a, **kw: looked_up.append(a[0]) or lookup(*a, **kw)
+    for preset in PRESET_SENSORS:
+        m.reset(clip.skeleton)
+        m.step(simulate(clip, preset).frame(0))
+    assert len(looked_up) == len([p for p, s in PRESET_SENSORS.items() if sum(x.dof == 6 for x in s) >= 2])
+    assert m.bank.index_builds == built  # no frame built or derived an index

@@ -23,7 +23,7 @@ from app.drawing import DrawScheduler
 from app.file_actions import FileActions
 from app.live_actions import LiveActions
 from app.menus import build_menus
-from app.schema import constraint_schema, optimizer_choices
+from app.schema import constraint_schema, optimizer_fields
 from app.undo import SceneUndo
 from engine.errors import UserError
 from engine.studio import events as ev
@@ -110,8 +110,9 @@ class MainWindow(QMainWindow):
         self.setCentralWidget(central)
         self.sensor_panel = SensorPanel(Session.sensor_presets())
         self.constraint_panel = ConstraintPanel(constraint_schema())
-        choices, self._optimizer_defaults = optimizer_choices()
-        self.optimizer_panel = OptimizerPanel(method_names(self.session.method), choices)
+        fields = optimizer_fields()
+        self._optimizer_defaults = {f.name: f.default for f in fields}
+        self.optimizer_panel = OptimizerPanel(method_names(self.session.method), fields)
         tabs = QTabWidget()
         tabs.addTab(self.sensor_panel, "Sensors")
         tabs.addTab(self.constraint_panel, "Constraints")
@@ -168,7 +169,7 @@ class MainWindow(QMainWindow):
         cp.removeRequested.connect(self._guard(s.remove_constraint))
         cp.changed.connect(self._guard(lambda n, ch: s.update_constraint(n, **ch)))
         op = self.optimizer_panel
-        op.settingChanged.connect(s.set_setting)
+        op.settingChanged.connect(self._guard(s.set_setting))
         op.methodChanged.connect(lambda m: s.set_method(m))
         op.ghostsChanged.connect(s.set_ghosts)
         self.viewport.targetDragged.connect(self._guard(s.drag_target))

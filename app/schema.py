@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-import dataclasses
 from typing import Any
 
 from engine.studio.session import Session
+from widgets.optimizer_panel import SettingField
 
 
 def _editor_field(f: Any) -> tuple[Any, ...]:
@@ -25,33 +25,23 @@ def constraint_schema() -> dict[str, list[tuple[Any, ...]]]:
     return {kind: [_editor_field(f) for f in spec.fields] for kind, spec in Session.constraint_catalog().items()}
 
 
-#: Anchors offered for ``root_anchor``: the head tracker, or integrating the decoded root.
-ROOT_ANCHORS = ("upperneck", "none")
+def optimizer_fields() -> tuple[SettingField, ...]:
+    """The optimizer panel's fields, in order: the :class:`engine.solver.OptimizerSettings`
+    fields whose metadata marks them for the panel, with their labels, help, defaults,
+    ranges and choices as the engine validates them (plain data: the widgets need no torch)."""
+    from engine.solver import settings as schema
+    from engine.validation import Choice, Flag
 
-
-def optimizer_choices() -> tuple[dict[str, tuple[str, ...]], dict[str, Any]]:
-    """Values of the optimizer's choice settings, and every setting's default.
-
-    Only fields :class:`engine.solver.OptimizerSettings` really has are offered, so
-    the panel never shows a control the engine would reject.
-
-    Returns
-    -------
-    choices : dict
-        ``mode``, ``optimizer`` (the latent update rule), ``prior`` (where the temporal
-        prior's latent comes from) and ``root_anchor`` -> values.
-    defaults : dict
-        Field name -> default value, shown until the session sets the field.
-    """
-    from engine import solver as opt
-
-    defaults = dataclasses.asdict(opt.OptimizerSettings())
-    choices = {"mode": tuple(opt.MODES)}
-    if "optimizer" in defaults and hasattr(opt, "OPTIMIZERS"):
-        choices["optimizer"] = tuple(opt.OPTIMIZERS)
-    if "prior" in defaults and hasattr(opt, "PRIORS"):
-        choices["prior"] = tuple(opt.PRIORS)
-    if "root_anchor" in defaults:
-        anchor = str(defaults["root_anchor"])
-        choices["root_anchor"] = ROOT_ANCHORS if anchor in ROOT_ANCHORS else (anchor, *ROOT_ANCHORS)
-    return choices, defaults
+    out = []
+    for f, info in schema.fields():
+        if not info.panel:
+            continue
+        spec, common = info.spec, {"name": f.name, "label": info.label, "default": f.default, "help": info.help}
+        if isinstance(spec, Choice):
+            out.append(SettingField(kind="choice", choices=tuple(info.offered or spec.options), **common))
+        elif isinstance(spec, Flag):
+            out.append(SettingField(kind="bool", **common))
+        else:
+            out.append(SettingField(kind="int" if spec.integer else "float", lo=spec.lo, hi=spec.hi,
+                                    open_lo=spec.open_lo, step=info.step, unit=spec.unit, **common))
+    return tuple(out)

@@ -1,7 +1,7 @@
 """One declarative validation layer for everything that enters the program from outside.
 
 Every input kind has one *schema* here: a mapping from field name to a spec
-(:class:`Num`, :class:`Choice`). Commands, loaders and the studio call the ``check_*``
+(:class:`Num`, :class:`Choice`, :class:`Flag`). Commands, loaders and the studio call the ``check_*``
 functions at their edges, before any work starts; a failure is a
 :class:`ValidationError` (a :class:`~engine.errors.UserError`, so the CLI prints one
 line and exits with status 2) that names the file or flag, the field, the value (cut
@@ -10,11 +10,14 @@ short) and the allowed range.
 Schemas
 -------
 ``CLI``        command-line numbers (``--iterations``, ``--fps``, ``--seed``...)
-``SETTINGS``   optimizer settings (``--set KEY=VALUE`` and a scene's ``settings``)
 ``MANIFEST``   one entry of a ``manifest.json`` beside a clip
 ``BVH_HEADER`` ``Frames:`` / ``Frame Time:`` of a BVH file
 ``VAE_CONFIG`` / ``PREDICTOR_CONFIG``  the ``config`` stored in a weights file
 ``SKELETON``   plausibility of a retargeted subject (height, root travel)
+
+The optimizer settings' schema (``--set KEY=VALUE``, a scene's ``settings``, the
+studio's panel) is generated from the metadata of the settings' own fields:
+:data:`engine.solver.settings.SETTINGS`.
 
 Files
 -----
@@ -117,12 +120,14 @@ class Num:
 
 @dataclass(frozen=True)
 class Choice:
-    """One of a fixed set of strings."""
+    """One of a fixed set of strings (``summary`` replaces the list in messages when
+    the set is long, e.g. "a joint name or 'none'")."""
 
     options: tuple[str, ...]
+    summary: str = ""
 
     def describe(self) -> str:
-        return "one of " + ", ".join(self.options)
+        return self.summary or "one of " + ", ".join(self.options)
 
     def check(self, value: Any) -> str:
         if not isinstance(value, str) or value not in self.options:
@@ -130,7 +135,22 @@ class Choice:
         return value
 
 
-Spec = Num | Choice
+@dataclass(frozen=True)
+class Flag:
+    """``true`` or ``false`` (a bool; numbers and strings are refused)."""
+
+    def describe(self) -> str:
+        return "true or false"
+
+    def check(self, value: Any) -> bool:
+        if type(value).__module__ == "numpy" and hasattr(value, "item"):
+            value = value.item()
+        if not isinstance(value, bool):
+            raise ValueError("not a boolean")
+        return value
+
+
+Spec = Num | Choice | Flag
 Schema = Mapping[str, Spec]
 
 #: Command-line numbers, by argparse ``dest``.
@@ -149,36 +169,6 @@ CLI: Schema = {
     "repeats": Num(1, 100_000, integer=True),
     "frames": Num(1, 10_000_000, integer=True),
     "warmup": Num(0, 100_000, integer=True),
-}
-
-#: Optimizer settings (``engine.solver.OptimizerSettings``), by field.
-SETTINGS: Schema = {
-    "mode": Choice(("realtime", "offline")),
-    "iterations": Num(1, 10_000, integer=True),
-    "max_iterations": Num(1, 100_000, integer=True),
-    "lr": Num(0, 10, open_lo=True),
-    "position_tolerance": Num(0, 10, unit="m"),
-    "rotation_tolerance": Num(0, 180, unit="degrees"),
-    "sensor_rotation_weight": Num(0, 1e6),
-    "temporal_weight": Num(0, 1e6),
-    "future_window": Num(0, 256, integer=True),
-    "past_window": Num(1, 1024, integer=True),
-    "predictor_every": Num(1, 10_000, integer=True),
-    "patience": Num(1, 100_000, integer=True),
-    "min_improvement": Num(0, 1),
-    "divergence_factor": Num(1, 1e12),
-    "step_size": Num(0, 100, open_lo=True),
-    "momentum": Num(0, 0.999),
-    "threads": Num(0, 64, integer=True),
-    "smooth_weight": Num(0, 1e6),
-    "ground_weight": Num(0, 1e6),
-    "tuning": Choice(("preset", "off")),
-    "heading": Choice(("previous", "anchor")),
-    "hands_heading_limit": Num(0, 180),
-    "neck_twist_share": Num(0, 1),
-    "prior": Choice(("predictor", "trackers")),
-    "tracker_prior_weight": Num(0, 1e6),
-    "tracker_prior_neighbours": Num(0, 4096, integer=True),
 }
 
 #: One entry of ``manifest.json`` (``{"files": [{"path": ..., "fps": ...}, ...]}``).

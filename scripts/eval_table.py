@@ -26,10 +26,10 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 from engine.atomic import write_text  # noqa: E402
+from engine.solver.settings import MODES  # noqa: E402
 
 CLI = str(Path(sys.executable).parent / "dragposer-studio")
 PRESETS = ("6", "5", "4", "3-hip-hands", "3-head-hands", "6x3dof")
-MODES = ("realtime", "offline")
 METHODS = ("dragposer", "ik")
 #: The VAE's own ceiling (encode the ground truth, decode it): what no solver on this
 #: decoder can beat; one realtime run on preset 6 (the trackers do not matter to it).

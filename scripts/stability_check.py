@@ -37,6 +37,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from engine.atomic import write_text  # noqa: E402
+from engine.solver.settings import MODES  # noqa: E402
 
 FLIP_DEG = 90.0
 DIVERGED_CM = 50.0
@@ -106,7 +107,7 @@ def main() -> int:
     ap.add_argument("files", nargs="*", help="BVH files (default: the validation files)")
     ap.add_argument("--sensors", default="3-head-hands")
     ap.add_argument("--method", default="dragposer", help="dragposer (default), ik or autoencoder")
-    ap.add_argument("--modes", nargs="+", default=["realtime", "offline"], choices=("realtime", "offline"))
+    ap.add_argument("--modes", nargs="+", default=list(MODES), choices=MODES)
     ap.add_argument("--max-frames", type=int, default=300, help="first N frames of each file (0: whole files)")
     ap.add_argument("--noise", type=float, default=1e-6, help="tracker position perturbation, metres (default 1e-6)")
     ap.add_argument("--seeds", type=int, nargs="+", default=[1, 2])

@@ -1,30 +1,79 @@
-"""Optimizer settings: method, ghosts, mode, iterations, learning rate, temporal prior
-(its weight and source), latent update rule and root anchor."""
+"""Optimizer settings: method, ghosts, and the settings the engine's schema marks for
+the panel (mode, iterations, learning rate, temporal prior, update rule, root anchor...).
+
+The fields, their labels, ranges and choices come from the engine as plain
+:class:`SettingField` values (``app/schema.py`` builds them from
+:class:`engine.solver.OptimizerSettings`), so this module needs no torch and repeats no
+range.
+"""
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 from PyQt6.QtCore import pyqtSignal
 from PyQt6.QtWidgets import QCheckBox, QComboBox, QDoubleSpinBox, QFormLayout, QHBoxLayout, QSpinBox, QWidget
 
-#: name -> (label, kind, min, max, step); kinds: "choice", "int", "float". A choice
-#: field's values come from the engine (``choices``), so this module needs no torch.
-FIELDS: dict[str, tuple[str, str, float, float, float]] = {
-    "mode": ("Mode", "choice", 0, 0, 0),
-    "iterations": ("Iterations / frame", "int", 1, 200, 1),
-    "optimizer": ("Latent update", "choice", 0, 0, 0),
-    "lr": ("Adam learning rate", "float", 1e-4, 1.0, 0.005),
-    "step_size": ("Gradient step size", "float", 1e-3, 5.0, 0.05),
-    "temporal_weight": ("Temporal prior weight", "float", 0.0, 10.0, 0.1),
-    "prior": ("Prior from (sparse sets: trackers)", "choice", 0, 0, 0),
-    "tracker_prior_weight": ("Tracker prior weight", "float", 0.0, 10.0, 0.1),
-    "root_anchor": ("Root anchor (no hip tracker)", "choice", 0, 0, 0),
-    "sensor_blend": ("Sensor blend-in (s)", "float", 0.0, 2.0, 0.1),
-}
-#: Values of the choice fields when the caller gives none.
-DEFAULT_CHOICES: dict[str, tuple[str, ...]] = {"mode": ("realtime", "offline")}
+#: Decimals of a number field; an open lower bound shows as its smallest step above it.
+DECIMALS = 4
+
+
+@dataclass(frozen=True)
+class SettingField:
+    """One optimizer setting as the panel shows it.
+
+    Attributes
+    ----------
+    name, label, help : str
+        Field name (as the engine's), form label, tooltip.
+    kind : str
+        ``"choice"``, ``"int"``, ``"float"`` or ``"bool"``.
+    default : object
+        The engine's default, shown until the session sets the field.
+    lo, hi : float
+        Allowed range of a number, in ``unit``; ``open_lo``: ``lo`` itself is not allowed.
+    step : float
+        Spin-box step.
+    choices : tuple of str
+        Values of a choice field.
+    """
+
+    name: str
+    label: str
+    kind: str
+    default: Any
+    help: str = ""
+    lo: float = 0.0
+    hi: float = 0.0
+    open_lo: bool = False
+    step: float = 1.0
+    unit: str = ""
+    choices: tuple[str, ...] = ()
+
+    def minimum(self) -> float:
+        """The spin box's minimum: ``lo``, or one displayed step above an open ``lo``."""
+        if not self.open_lo:
+            return self.lo
+        return self.lo + (1 if self.kind == "int" else 10.0**-DECIMALS)
+
+
+def _editor(f: SettingField) -> Any:
+    """The control of one field (not yet connected)."""
+    if f.kind == "choice":
+        w: Any = QComboBox()
+        w.addItems([str(v) for v in f.choices])
+    elif f.kind == "bool":
+        w = QCheckBox()
+    elif f.kind == "int":
+        w = QSpinBox(minimum=int(f.minimum()), maximum=int(f.hi), singleStep=max(int(f.step), 1))
+    else:
+        w = QDoubleSpinBox(minimum=f.minimum(), maximum=f.hi, singleStep=f.step, decimals=DECIMALS)
+    if f.unit and f.kind in ("int", "float"):
+        w.setSuffix(f" {f.unit}")
+    w.setToolTip(f.help)
+    return w
 
 
 class OptimizerPanel(QWidget):
@@ -34,20 +83,19 @@ class OptimizerPanel(QWidget):
     ----------
     methods : list of str
         Method names for the method combo and the ghost checkboxes.
-    choices : mapping, optional
-        Values of each choice field (``mode``, ``optimizer``, ``root_anchor``), given by
-        the engine; a choice field without values gets no control, so the panel only
-        offers settings the engine knows.
+    fields : sequence of SettingField
+        The settings to show, in order, given by the engine; a choice field without
+        values gets no control, so the panel only offers settings the engine knows.
     """
 
     settingChanged = pyqtSignal(str, object)
     methodChanged = pyqtSignal(str)
     ghostsChanged = pyqtSignal(tuple)
 
-    def __init__(self, methods: list[str], choices: Mapping[str, Sequence[str]] | None = None,
+    def __init__(self, methods: list[str], fields: Sequence[SettingField] = (),
                  parent: QWidget | None = None) -> None:  # fmt: skip
         super().__init__(parent)
-        choices = {**DEFAULT_CHOICES, **(choices or {})}
+        self._updating = False
         form = QFormLayout(self)
         self.method = QComboBox()
         self.method.addItems(methods)
@@ -63,23 +111,20 @@ class OptimizerPanel(QWidget):
         holder = QWidget()
         holder.setLayout(ghosts)
         form.addRow("Ghosts", holder)
+        self.fields = {f.name: f for f in fields if f.kind != "choice" or f.choices}
         self.editors: dict[str, QWidget] = {}
-        for name, (label, kind, lo, hi, step) in FIELDS.items():
-            if kind == "choice":
-                if not choices.get(name):
-                    continue
-                w: Any = QComboBox()
-                w.addItems([str(v) for v in choices[name]])
+        for name, f in self.fields.items():
+            w = _editor(f)
+            if f.kind == "choice":
                 w.currentTextChanged.connect(lambda v, n=name: self._edit(n, v))
-            elif kind == "int":
-                w = QSpinBox(minimum=int(lo), maximum=int(hi), singleStep=int(step))
+            elif f.kind == "bool":
+                w.toggled.connect(lambda v, n=name: self._edit(n, bool(v)))
+            elif f.kind == "int":
                 w.valueChanged.connect(lambda v, n=name: self._edit(n, int(v)))
             else:
-                w = QDoubleSpinBox(minimum=lo, maximum=hi, singleStep=step, decimals=4)
                 w.valueChanged.connect(lambda v, n=name: self._edit(n, float(v)))
             self.editors[name] = w
-            form.addRow(label, w)
-        self._updating = False
+            form.addRow(f.label, w)
 
     def _edit(self, name: str, value: Any) -> None:
         if not self._updating:
@@ -105,6 +150,8 @@ class OptimizerPanel(QWidget):
                     if w.findText(str(v)) < 0:  # e.g. another anchor joint from a scene file
                         w.addItem(str(v))
                     w.setCurrentText(str(v))
+                elif isinstance(w, QCheckBox):
+                    w.setChecked(bool(v))
                 else:
                     w.setValue(v)
         finally:

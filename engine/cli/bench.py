@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from engine.cli.rig_options import add_rig_map_option, rig_map_path
+from engine.solver.settings import MODES
 
 REPO = Path(__file__).resolve().parents[2]
 DEFAULT_CLIP = REPO / "assets" / "clips" / "example.bvh"
@@ -32,7 +33,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("file", nargs="?", type=Path, default=DEFAULT_CLIP, help="BVH clip (default: bundled example)")
     p.add_argument("--method", action="append", help="method to time; repeat for several (default: every method that works with --sensors)")
     p.add_argument("--sensors", default="6", help="sensor preset or list (default: 6)")
-    p.add_argument("--mode", choices=("realtime", "offline"), default="realtime", help="optimizer mode")
+    p.add_argument("--mode", choices=MODES, default="realtime", help="optimizer mode")
     p.add_argument("--iterations", type=int, help="optimizer iterations per frame (realtime mode)")
     p.add_argument("--frames", type=int, default=300, help="frames to time (default: 300)")
     p.add_argument("--warmup", type=int, default=10, help="untimed frames first (default: 10)")

@@ -25,6 +25,7 @@ from engine.cli.jobs import add_jobs_option, jobs_of, map_files
 from engine.cli.method_options import add_model_options, apply_settings, method_kwargs
 from engine.cli.rig_options import add_rig_map_option, rig_map_path
 from engine.errors import UserError
+from engine.solver.settings import MODES
 
 #: Columns of the printed table: (metric key, header, format).
 COLUMNS = (
@@ -57,7 +58,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--gaps", action="store_true", help="simulate RPM's hand-tracking gaps; adds PJ/AUJ")
     p.add_argument("--noise-pos", type=float, default=0.0, metavar="M", help="position noise std, metres")
     p.add_argument("--noise-rot", type=float, default=0.0, metavar="DEG", help="rotation noise std, degrees")
-    p.add_argument("--mode", choices=("realtime", "offline"), default="realtime", help="passed to the method")
+    p.add_argument("--mode", choices=MODES, default="realtime", help="passed to the method")
     p.add_argument("--iterations", type=int, metavar="N", help="optimizer iterations per frame (passed to the method)")
     p.add_argument("--lr", type=float, help="optimizer learning rate (latent-space methods)")
     add_model_options(p)

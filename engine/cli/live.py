@@ -17,6 +17,7 @@ from engine.cli.rig_options import add_rig_map_option
 from engine.cli.tracker_options import (add_tracker_options, check_tracker_options, default_skeleton,
                                         load_reference, write_json)  # fmt: skip
 from engine.errors import UserError
+from engine.solver.settings import MODES
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -41,7 +42,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_tracker_options(p)
     add_rig_map_option(p)  # for --reference REF.bvh
     p.add_argument("--method", default="dragposer", help="reconstruction method (default: dragposer)")
-    p.add_argument("--mode", choices=("realtime", "offline"), default="realtime", help=argparse.SUPPRESS)
+    p.add_argument("--mode", choices=MODES, default="realtime", help=argparse.SUPPRESS)
     p.add_argument("--iterations", type=int, metavar="N", help="optimizer iterations per frame")
     p.add_argument("--frame-budget", type=float, metavar="MS",
                    help="milliseconds from a frame's arrival to its solved pose; the solver stops iterating "

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from engine.errors import UserError
+from engine.solver.settings import SETTINGS
 
 
 def add_model_options(p: argparse.ArgumentParser) -> None:
@@ -20,8 +21,8 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--rpm-model", type=Path, dest="rpm_path", metavar="RPM.pt",
                    help="RPM weights for --method rpm (default: the shipped model)")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                   help="optimizer setting of a latent-space method, repeatable, e.g. root_anchor=none "
-                   "(names in docs/optimizer.md)")  # fmt: skip
+                   help="optimizer setting of a latent-space method, repeatable, e.g. root_anchor=none; KEY is "
+                   f"one of {', '.join(SETTINGS)} (ranges and meanings: docs/optimizer.md)")  # fmt: skip
 
 
 #: Model-file keywords and the methods that take them (others must not receive them).

@@ -25,6 +25,7 @@ from engine.cli.method_options import add_model_options, build_method
 from engine.cli.rig_options import add_rig_map_option, rig_map_path
 from engine.cli.tracker_options import add_tracker_options
 from engine.errors import UserError
+from engine.solver.settings import MODES
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -46,7 +47,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "channels; joints outside the 22 keep their rest rotation) instead of the canonical one")
     add_rig_map_option(p)
     p.add_argument("--sensors", default="6", help="sensor preset or list, e.g. 6, 4, root,lwrist:3 (default: 6)")
-    p.add_argument("--mode", choices=("realtime", "offline"), help="realtime: fixed iterations per frame; "
+    p.add_argument("--mode", choices=MODES, help="realtime: fixed iterations per frame; "
                    "offline: iterate until the sensor tolerances are met (default: realtime)")  # fmt: skip
     p.add_argument("--iterations", type=int, metavar="N",
                    help="iterations per frame (realtime) or the cap per frame (offline)")

@@ -22,29 +22,36 @@ validation files only; the sweeps are in ``docs/optimizer.md``.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Collection
+from collections.abc import Collection, Mapping
 from dataclasses import dataclass
+from typing import Any
 
-from engine.solver.settings import FULL_SET, OptimizerSettings
+from engine.solver.settings import FULL_SET, OptimizerSettings, check_values
+
+#: Settings a profile may supply (each profile gives all of them; a value it leaves out is
+#: the :class:`OptimizerSettings` default).
+TUNED = ("future_window", "temporal_weight", "step_size", "lr", "smooth_weight", "ground_weight",
+         "sensor_rotation_weight", "prior", "tracker_prior_weight")
 
 
 @dataclass(frozen=True)
 class Profile:
-    """Settings a sensor set overrides (names as in :class:`OptimizerSettings`)."""
+    """The values a sensor set gives the :data:`TUNED` settings (checked against the
+    settings' schema when the profile is made, so a misspelt name fails at import)."""
 
     name: str
-    future_window: int
-    temporal_weight: float
-    step_size: float
-    lr: float
-    smooth_weight: float
-    ground_weight: float
-    sensor_rotation_weight: float
-    prior: str = "predictor"
-    tracker_prior_weight: float = 1.0
+    given: Mapping[str, Any]
 
-    def values(self) -> dict:
-        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name != "name"}
+    def __post_init__(self) -> None:
+        stray = sorted(set(self.given) - set(TUNED))
+        if stray:
+            raise ValueError(f"profile {self.name!r}: {', '.join(stray)} not in TUNED")
+        given, defaults = check_values(self.given, f"profile {self.name!r}"), OptimizerSettings()
+        object.__setattr__(self, "given", {k: given.get(k, getattr(defaults, k)) for k in TUNED})
+
+    def values(self) -> dict[str, Any]:
+        """Every :data:`TUNED` setting's value in this profile."""
+        return dict(self.given)
 
 
 PROFILES: dict[str, Profile] = {
@@ -55,24 +62,22 @@ PROFILES: dict[str, Profile] = {
     # 10.69, 0.1 11.92; docs/optimizer.md). The pose bank's latent as the prior, weight
     # 0.05 (session 10): 1.18 cm / 10.15 deg -> 0.89 / 7.39; 0.03 0.89 / 7.56, 0.1 0.96 /
     # 7.41, 0.3 1.18 / 7.67 (heavier pulls the hands off their trackers)
-    "full": Profile("full", future_window=1, temporal_weight=0.01, step_size=0.3, lr=0.05, smooth_weight=5.0,
-                    ground_weight=0.0, sensor_rotation_weight=0.01, prior="trackers", tracker_prior_weight=0.05),
+    "full": Profile("full", dict(future_window=1, temporal_weight=0.01, step_size=0.3, lr=0.05, smooth_weight=5.0,
+                    ground_weight=0.0, sensor_rotation_weight=0.01, prior="trackers", tracker_prior_weight=0.05)),
     # positions only: the smoothing term made 6x3dof worse (3 validation files, 150
     # frames: 3.97 -> 3.69 cm, 30.5 -> 28.2 deg without it), and without rotations the
     # predictor's longer look-ahead helps (retarget 3, 9 validation files: 4.06 -> 3.59 cm,
     # 21.9 -> 18.8 deg; docs/optimizer.md)
-    "full3": Profile("full3", future_window=16, temporal_weight=0.03, step_size=0.3, lr=0.05, smooth_weight=0.0,
-                     ground_weight=0.0, sensor_rotation_weight=0.03),
+    "full3": Profile("full3", dict(future_window=16, temporal_weight=0.03, step_size=0.3, lr=0.05, smooth_weight=0.0,
+                     ground_weight=0.0, sensor_rotation_weight=0.03)),
     # smoothing 5 on the sparse sets (session 10): jitter 20.4 / 20.7 / 19.7 -> 18.2 / 18.5 /
     # 16.4 (truth 13.0) for presets 4 / 3-hip-hands / 3-head-hands, Pos 4.99 / 5.02 / 7.67 ->
     # 4.97 / 5.03 / 7.71 cm; 10 and 20 smooth more but cost velocity error (docs/optimizer.md)
-    "hip": Profile("hip", future_window=16, temporal_weight=0.01, step_size=0.3, lr=0.05, smooth_weight=5.0,
-                   ground_weight=10.0, sensor_rotation_weight=0.1, prior="trackers"),
-    "head": Profile("head", future_window=16, temporal_weight=0.01, step_size=0.3, lr=0.05, smooth_weight=5.0,
-                    ground_weight=10.0, sensor_rotation_weight=0.1, prior="trackers"),
+    "hip": Profile("hip", dict(future_window=16, temporal_weight=0.01, step_size=0.3, lr=0.05, smooth_weight=5.0,
+                   ground_weight=10.0, sensor_rotation_weight=0.1, prior="trackers")),
+    "head": Profile("head", dict(future_window=16, temporal_weight=0.01, step_size=0.3, lr=0.05, smooth_weight=5.0,
+                    ground_weight=10.0, sensor_rotation_weight=0.1, prior="trackers")),
 }  # fmt: skip
-#: Settings a profile may supply.
-TUNED = tuple(f.name for f in dataclasses.fields(Profile) if f.name != "name")
 
 
 def profile_for(connected: Collection[str], hip_rotation: bool = True) -> Profile:

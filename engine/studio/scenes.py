@@ -19,10 +19,16 @@ from engine.sensors import Sensor
 from engine.solver import OptimizerSettings
 
 
+#: Settings a session sets from the start (at the optimizer's defaults); the others stay
+#: unset, so a method's sensor-set profile supplies them (``engine/solver/profiles.py``).
+SESSION_SETTINGS = ("mode", "iterations", "lr", "temporal_weight")
+
+
 def default_settings() -> dict[str, Any]:
-    """The optimizer's own defaults the panel starts from (one source of truth)."""
+    """The optimizer's own defaults of :data:`SESSION_SETTINGS`."""
     d = OptimizerSettings()
-    return {"mode": d.mode, "iterations": d.iterations, "lr": d.lr, "temporal_weight": d.temporal_weight}
+    return {name: getattr(d, name) for name in SESSION_SETTINGS}
+
 
 
 def scene_to_dict(path: Path | None, method: str, preset: str, sensors: Iterable[Sensor],

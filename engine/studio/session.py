@@ -27,6 +27,7 @@ from engine.errors import UserError
 from engine.methods import available_methods
 from engine.motion import Motion
 from engine.sensors import Sensor
+from engine.solver.settings import check_values
 from engine.studio import commands as cmd
 from engine.studio import events as ev
 from engine.studio.clips import load_clip, sensor_presets
@@ -197,6 +198,7 @@ class Session(ConstraintEditing, SensorEditing):
         self.set_settings({name: value})
 
     def set_settings(self, values: dict[str, Any]) -> None:
+        values = check_values(values)  # a bad name or value fails here, naming it, not in the engine
         old = {k: self.settings.get(k) for k in values}
         self.settings.update(values)
         self._send(cmd.SetSettings(dict(values)))

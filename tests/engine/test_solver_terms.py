@@ -69,7 +69,7 @@ def test_profiles_follow_the_connected_set_and_keep_explicit_settings():
     assert profile_for(["upperneck", "lwrist", "rwrist"]).name == "head"
     s = OptimizerSettings(temporal_weight=0.123)
     eff = effective(s, ["upperneck", "lwrist", "rwrist"], {"temporal_weight"})
-    assert eff.temporal_weight == 0.123 and eff.future_window == PROFILES["head"].future_window
+    assert eff.temporal_weight == 0.123 and eff.future_window == PROFILES["head"].values()["future_window"]
     assert effective(OptimizerSettings(tuning="off"), ["upperneck"], set()).future_window == 0
 
 

@@ -8,7 +8,8 @@ import pytest
 
 from engine.errors import UserError, shorten_words
 from engine.input_files import read_json
-from engine.validation import (CLI, SETTINGS, Num, ValidationError, check_fields, check_input_file,
+from engine.solver.settings import SETTINGS
+from engine.validation import (CLI, Num, ValidationError, check_fields, check_input_file,
                                check_output_path, check_value, one_line)  # fmt: skip
 
 

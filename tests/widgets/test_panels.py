@@ -123,35 +123,52 @@ def test_latent_debugger_needs_a_decoder(qtbot, fake_snapshot, can_decode):
         assert sig.args[0][0] == pytest.approx(2.5)
 
 
+def _fields():
+    from widgets.optimizer_panel import SettingField
+
+    return (SettingField("mode", "Mode", "choice", "realtime", choices=("realtime", "offline")),
+            SettingField("iterations", "Iterations", "int", 10, lo=1, hi=10_000),
+            SettingField("optimizer", "Update", "choice", "auto", choices=("sgd", "adam", "adam-carry")),
+            SettingField("lr", "Learning rate", "float", 0.05, lo=0, hi=10, open_lo=True, step=0.005),
+            SettingField("prior", "Prior", "choice", "predictor", choices=("predictor", "trackers")),
+            SettingField("root_anchor", "Anchor", "choice", "upperneck", choices=("upperneck", "none")),
+            SettingField("sensor_blend", "Blend", "float", 0.0, lo=0, hi=1e6, step=0.1, unit="s"),
+            SettingField("reach", "Reach", "bool", True))  # fmt: skip
+
+
 def test_optimizer_panel_offers_the_engine_choices_and_emits_edits(qtbot):
     from widgets.optimizer_panel import OptimizerPanel
 
-    choices = {"optimizer": ("sgd", "adam", "adam-carry"), "root_anchor": ("upperneck", "none"),
-               "prior": ("predictor", "trackers")}  # fmt: skip
-    p = OptimizerPanel(["ik", "dragposer"], choices)
+    p = OptimizerPanel(["ik", "dragposer"], _fields())
     qtbot.addWidget(p)
     opt, anchor = p.editors["optimizer"], p.editors["root_anchor"]
     assert [opt.itemText(i) for i in range(opt.count())] == ["sgd", "adam", "adam-carry"]
     seen = []
     p.settingChanged.connect(lambda n, v: seen.append((n, v)))
-    p.set_state("dragposer", (), {"optimizer": "adam", "root_anchor": "lwrist", "iterations": 7})
+    p.set_state("dragposer", (), {"optimizer": "adam", "root_anchor": "lwrist", "iterations": 7, "reach": False})
     assert seen == [] and opt.currentText() == "adam" and p.editors["iterations"].value() == 7
     assert anchor.currentText() == "lwrist"  # a joint from a scene file is shown, not dropped
+    assert not p.editors["reach"].isChecked()
     opt.setCurrentText("adam-carry")
     anchor.setCurrentText("none")
     p.editors["lr"].setValue(0.2)
     p.editors["prior"].setCurrentText("trackers")
+    p.editors["reach"].setChecked(True)
     assert seen == [("optimizer", "adam-carry"), ("root_anchor", "none"), ("lr", pytest.approx(0.2)),
-                    ("prior", "trackers")]  # fmt: skip
+                    ("prior", "trackers"), ("reach", True)]  # fmt: skip
 
 
-def test_optimizer_panel_hides_choices_the_engine_does_not_offer(qtbot):
-    from widgets.optimizer_panel import OptimizerPanel
+def test_optimizer_panel_shows_the_given_fields_with_their_ranges_and_units(qtbot):
+    from widgets.optimizer_panel import OptimizerPanel, SettingField
 
-    p = OptimizerPanel(["ik"])
+    fields = (*_fields(), SettingField("heading", "Heading", "choice", "anchor"))  # no values: no control
+    p = OptimizerPanel(["ik"], fields)
     qtbot.addWidget(p)
-    assert "optimizer" not in p.editors and "root_anchor" not in p.editors
-    assert p.editors["mode"].count() == 2
+    assert list(p.editors) == [f.name for f in _fields()]
+    lr, blend = p.editors["lr"], p.editors["sensor_blend"]
+    assert lr.minimum() == pytest.approx(1e-4) and lr.maximum() == 10  # (0, 10]: the smallest shown step above 0
+    assert blend.suffix() == " s" and p.editors["iterations"].maximum() == 10_000
+    assert OptimizerPanel(["ik"]).editors == {}
 
 
 def test_unticking_a_legend_term_hides_it_in_every_plot_and_a_restart_keeps_it_hidden(qtbot, fake_snapshot):

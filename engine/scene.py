@@ -1,10 +1,17 @@
-"""Optimizer scenes: a constraint list plus optimizer settings, as JSON.
+"""Scenes: a constraint list plus optimizer settings and, from version 2, an authored
+animation, as JSON.
 
-Format (``docs/optimizer.md``)::
+Version 1 (``docs/optimizer.md``)::
 
     {"format": "dragposer-scene", "version": 1,
      "settings": {"mode": "offline", "lr": 0.05, ...},
      "constraints": [{"kind": "look_at", "name": "look", "weight": 1.0, ...}, ...]}
+
+Version 2 (``docs/authoring.md``) adds ``character`` (``height``), ``animation``
+(``fps``, ``frames``, ``interpolation``) and ``keys`` (``frame``, ``targets`` by joint,
+optional ``latent``, ``root``, ``heading``); its constraints may carry ``frames`` ranges
+(which version 1 files may too: :mod:`engine.constraints.base`). Both versions load; a
+scene is written as version 2 only when it has something version 1 lacks.
 
 Unknown settings and malformed constraints are errors naming the file and the field.
 The studio's session may add its own keys (clip, sensors, frame); they are ignored here.
@@ -28,18 +35,21 @@ from engine.solver import OptimizerSettings
 from engine.validation import shown
 
 FORMAT = "dragposer-scene"
-VERSION = 1
+#: The newest version this build writes and reads; every version up to it loads.
+VERSION = 2
+VERSIONS = (1, 2)
 
 
 def scene_to_dict(constraints: Iterable[Constraint], settings: OptimizerSettings | dict[str, Any] | None) -> dict:
     """Plain-JSON form of a scene."""
     if dataclasses.is_dataclass(settings):
         settings = dataclasses.asdict(settings)
+    items = [c.to_dict() for c in constraints]
     return {
         "format": FORMAT,
-        "version": VERSION,
+        "version": 2 if any("frames" in c for c in items) else 1,
         "settings": dict(settings or {}),
-        "constraints": [c.to_dict() for c in constraints],
+        "constraints": items,
     }
 
 
@@ -70,8 +80,13 @@ def scene_from_dict(doc: Any, where: str = "scene") -> tuple[list[Constraint], O
         raise UserError(f"{where}: a scene is a JSON object")
     if doc.get("format", FORMAT) != FORMAT:
         raise UserError(f"{where}: field 'format' is {shown(doc.get('format'))}, expected {FORMAT!r}")
-    if doc.get("version", VERSION) != VERSION:
-        raise UserError(f"{where}: field 'version' is {shown(doc.get('version'))}; this build reads {VERSION}")
+    version = doc.get("version", 1)
+    if isinstance(version, bool) or version not in VERSIONS:
+        raise UserError(f"{where}: field 'version' is {shown(version)}; this build reads {', '.join(map(str, VERSIONS))}")
+    if version < 2:
+        late = [k for k in ("animation", "keys", "character") if k in doc]
+        if late:
+            raise UserError(f"{where}: field {late[0]!r} needs \"version\": 2")
     raw = doc.get("settings", {}) or {}
     if not isinstance(raw, dict):
         raise UserError(f"{where}: field 'settings' must be an object")

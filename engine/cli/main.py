@@ -31,6 +31,7 @@ SUBCOMMANDS = (
     "engine.cli.evaluate",
     "engine.cli.bench",
     "engine.cli.compare",
+    "engine.cli.bake",
 )
 #: Entry-point group of subcommand modules other packages register.
 PLUGIN_GROUP = "dragposer_studio.subcommands"

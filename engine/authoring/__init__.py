@@ -1,0 +1,12 @@
+"""Authoring: pose the character by joint targets, key a motion, re-solve a clip's range.
+
+* :mod:`engine.authoring.character`: the canonical character at a height, posed by
+  latent-space solves (grounded on the floor).
+* :mod:`engine.authoring.targets`: joint targets as solver terms.
+* :mod:`engine.authoring.keys`: keys and the in-between interpolation rules.
+* :mod:`engine.authoring.document`: authoring scene files (scene format version 2).
+* :mod:`engine.authoring.bake`: a scene to a motion; :mod:`engine.authoring.export`
+  writes it as BVH (the ``bake`` command and the studio's export).
+* :mod:`engine.authoring.pose_mode`: the continuous pose mode.
+* :mod:`engine.authoring.range_edit`: re-solve a frame range of a clip.
+"""

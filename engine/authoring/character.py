@@ -1,0 +1,223 @@
+"""The authored character: the canonical skeleton at a chosen height, standing on the floor,
+posed by latent-space solves against joint targets (DragPoser's pose optimizer, sec. 4.4,
+with the user's targets in place of trackers).
+
+Without trackers nothing measures where the body is. Two placements:
+
+* **grounded** (:meth:`Character.grounded`, offline key solves): the root's horizontal
+  position is given and :class:`Ground` lifts or lowers the body so that its lowest foot
+  stands on the floor. The shift is part of the differentiable pose, so the solver sees
+  that bending the knees lowers the whole body (a low target can be reached by
+  crouching). This runs on the solver's reference path.
+* **placed** (:meth:`Character.placed`, the continuous pose mode and in-betweens): the
+  root is held at a given position during the solve (the solver's fast path takes it
+  when every term is a target or the prior) and the solved pose is then shifted
+  vertically onto the floor (:meth:`Character.ground_shift`).
+
+After the latent solve, targeted wrists and ankles are put exactly on their targets by
+their limbs' two bones, and joints with a rotation target take it
+(:func:`engine.solver.limb_ik.finish`), as the ``dragposer`` method does for trackers.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+from engine import skeleton as sk
+from engine.constraints.base import Constraint
+from engine.constraints.temporal_prior import TemporalPriorConstraint
+from engine.errors import UserError
+from engine.kinematics.fk import fk
+from engine.solver import FrameContext, OptimizerSettings, PoseOptimizer, RootFrame, RootOverride
+from engine.solver.limb_ik import LIMBS, finish
+
+#: Joints whose lowest one stands on the floor.
+FOOT_JOINTS = tuple(sk.JOINT_INDEX[j] for j in ("lankle", "rankle", "ltoe", "rtoe"))
+#: Weight of the pull towards the starting (or interpolated) latent: keeps the pose near
+#: the learned manifold where the targets leave it free, as DragPoser's temporal prior does.
+PRIOR_WEIGHT = 0.01
+#: Height range accepted for a character, metres.
+HEIGHT_RANGE = (0.5, 2.5)
+
+
+def yaw_quaternion(yaw_deg: float) -> np.ndarray:
+    """Rotation ``(4,)`` (w, x, y, z) by ``yaw_deg`` degrees about +Z."""
+    h = np.radians(float(yaw_deg)) / 2.0
+    return np.array([np.cos(h), 0.0, 0.0, np.sin(h)])
+
+
+@dataclass
+class Ground:
+    """Root anchor of an authored pose: root at ``xy``, lowest foot on the floor.
+
+    Attributes
+    ----------
+    xy : Tensor (2,)
+        Root's horizontal world position, metres.
+    foot_heights : Tensor (4,)
+        Heights above the floor of :data:`FOOT_JOINTS` when the foot is flat (rest pose).
+    """
+
+    xy: torch.Tensor
+    foot_heights: torch.Tensor
+
+    def apply(self, positions: torch.Tensor) -> torch.Tensor:
+        """``positions (22, 3)`` shifted so the root is at ``xy`` and the lowest foot on z = 0."""
+        lift = (positions[list(FOOT_JOINTS), 2] - self.foot_heights).min()
+        shift = torch.cat((self.xy - positions[0, :2], -lift[None]))
+        return positions + shift
+
+
+@dataclass
+class Pose:
+    """One solved pose (numpy, float64).
+
+    Attributes
+    ----------
+    latent : ndarray (L,)
+    local_rot : ndarray (22, 4)
+        Local rotations; row 0 is the root's world rotation.
+    root_pos : ndarray (3,)
+        Root world position, metres.
+    positions : ndarray (22, 3)
+        World joint positions, metres.
+    iterations : int
+        Latent update steps the solve took.
+    decoded : ndarray (22, 3)
+        World joint positions of the latent itself, before the exact limb and rotation
+        steps, metres (equal to ``positions`` when no such step ran).
+    """
+
+    latent: np.ndarray
+    local_rot: np.ndarray
+    root_pos: np.ndarray
+    positions: np.ndarray
+    iterations: int = 0
+    decoded: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if self.decoded is None:
+            self.decoded = self.positions.copy()
+
+
+class Character:
+    """The canonical skeleton at ``height`` metres, posed through the frozen pose VAE.
+
+    Parameters
+    ----------
+    vae : engine.models.PoseVAE
+        The decoder (frozen by the optimizer).
+    height : float or None
+        Standing height, metres (None: the canonical skeleton's own).
+    """
+
+    def __init__(self, vae, height: float | None = None) -> None:
+        base = sk.Skeleton.canonical()
+        if height is not None:
+            if not (HEIGHT_RANGE[0] <= float(height) <= HEIGHT_RANGE[1]):
+                raise UserError(f"height must be within {HEIGHT_RANGE[0]}-{HEIGHT_RANGE[1]} m, got {height}")
+            base = sk.Skeleton.canonical(float(height) / base.height())
+        self.skeleton = base
+        self.height = base.height()
+        self.vae = vae
+        self.latent_dim = int(vae.config.latent)
+        rest = base.rest_positions()
+        toe_tip = rest[sk.JOINT_INDEX["ltoe"], 2] + sk.END_SITES["ltoe"][2] * base.scale
+        lowest = min(rest[:, 2].min(), toe_tip)
+        self.foot_heights = torch.tensor([rest[j, 2] - lowest for j in FOOT_JOINTS], dtype=torch.float32)
+        self.settings = OptimizerSettings(mode="offline", optimizer="adam", tuning="off", max_iterations=150,
+                                          lr=0.05, patience=15)  # fmt: skip
+        # Ground is not a joint anchor, which the fast path knows nothing of
+        self._grounded = PoseOptimizer(vae, base.offsets, self.settings, fast=False)
+        self._placed = PoseOptimizer(vae, base.offsets, self.settings, fast=True)
+
+    def mean_latent(self) -> np.ndarray:
+        """The VAE prior's mean, ``(L,)``: the character's neutral pose."""
+        return np.zeros(self.latent_dim, dtype=np.float32)
+
+    def grounded(self, xy=(0.0, 0.0), heading_deg: float = 0.0, frame: int = 0,
+                 previous: np.ndarray | None = None, prior: np.ndarray | None = None) -> FrameContext:  # fmt: skip
+        """Context of a grounded solve: root at ``xy (2,)`` metres, lowest foot on the floor,
+        facing ``heading_deg`` (about +Z from the canonical -Y); ``previous (22, 3)``
+        positions for contact and sliding terms; ``prior (L,)`` the latent pulled towards."""
+        ref = RootFrame(_f(yaw_quaternion(heading_deg)), _f([xy[0], xy[1], 0.0]))
+        anchor = Ground(_f(np.asarray(xy, float)[:2]), self.foot_heights)
+        return FrameContext(ref, None, anchor, _f_or_none(previous), _f_or_none(prior), frame)  # type: ignore[arg-type]
+
+    def placed(self, root: np.ndarray, heading_deg: float = 0.0, frame: int = 0,
+               previous: np.ndarray | None = None, prior: np.ndarray | None = None) -> FrameContext:  # fmt: skip
+        """Context of a placed solve: the root held at ``root (3,)`` metres during the
+        solve (then grounded, see the module doc); the rest as :meth:`grounded`."""
+        ref = RootFrame(_f(yaw_quaternion(heading_deg)), _f(root))
+        return FrameContext(ref, RootOverride(_f(root)), None, _f_or_none(previous), _f_or_none(prior), frame)
+
+    def ground_shift(self, positions: np.ndarray) -> float:
+        """Metres to add to z so the lowest foot of ``positions (22, 3)`` stands on the floor."""
+        feet = np.asarray(positions, float)[list(FOOT_JOINTS), 2] - self.foot_heights.double().numpy()
+        return float(-feet.min())
+
+    def decode(self, latent: np.ndarray, ctx: FrameContext) -> Pose:
+        """The grounded pose of ``latent (L,)`` without any solve."""
+        with torch.no_grad():
+            state = self._grounded.decode(torch.as_tensor(np.asarray(latent), dtype=torch.float32), ctx)
+        return self._pose(np.asarray(latent, np.float32), state, 0, ctx)
+
+    def solve(self, start: np.ndarray, constraints: list[Constraint], ctx: FrameContext,
+              reach: dict[int, np.ndarray] | None = None, rotations: dict[int, np.ndarray] | None = None,
+              iterations: int | None = None, prior_weight: float = PRIOR_WEIGHT, rule: str = "adam") -> Pose:  # fmt: skip
+        """Solve a pose from latent ``start (L,)``.
+
+        Parameters
+        ----------
+        constraints : list of Constraint
+            Every term of the solve (targets, the scene's rules); a prior towards
+            ``ctx.prediction`` is added with ``prior_weight`` when there is one.
+        reach : dict joint -> ndarray (3,)
+            Wrist / ankle targets put exactly by their limbs after the solve, metres.
+        rotations : dict joint -> ndarray (4,)
+            World rotations the joints take exactly after the solve.
+        iterations : int or None
+            A fixed step count (the continuous pose mode); None: offline, until the
+            terms are satisfied or stop improving.
+        rule : str
+            Latent update rule (``OptimizerSettings.optimizer``): ``adam`` reaches far
+            targets from the mean pose quickly; ``sgd`` moves only the latent directions
+            the terms constrain, so a pose that starts near its answer does not wander.
+        """
+        s = self.settings
+        s.optimizer = rule
+        s.mode, s.iterations = ("realtime", int(iterations)) if iterations is not None else ("offline", s.iterations)
+        terms = list(constraints)
+        if ctx.prediction is not None and prior_weight > 0:
+            terms.append(TemporalPriorConstraint(name="authoring prior", weight=prior_weight))
+        opt = self._grounded if isinstance(ctx.root_anchor, Ground) else self._placed
+        sol = opt.solve(torch.as_tensor(np.asarray(start), dtype=torch.float32), terms, ctx)
+        pose = self._pose(sol.latent.numpy().astype(np.float32), sol.state, sol.iterations, ctx)
+        limbs = {j: np.asarray(p, float) for j, p in (reach or {}).items() if j in LIMBS}
+        if limbs or rotations:
+            pose.local_rot, pose.positions = finish(pose.local_rot, pose.root_pos, self.skeleton.offsets, limbs,
+                                                    dict(rotations or {}))  # fmt: skip
+        return pose
+
+    def _pose(self, latent: np.ndarray, state, iterations: int, ctx: FrameContext) -> Pose:
+        # unit rotations in float64 and one FK pass: what is written (BVH) is what is measured
+        local = state.local_rot.detach().double().numpy()
+        local = local / np.linalg.norm(local, axis=-1, keepdims=True)
+        root = state.positions[0].detach().double().numpy().copy()
+        positions = fk(local, root, self.skeleton.offsets)[0]
+        if ctx.root_override is not None:
+            dz = self.ground_shift(positions)
+            root[2] += dz
+            positions[:, 2] += dz
+        return Pose(latent, local, root, positions, iterations)
+
+
+def _f(a) -> torch.Tensor:
+    return torch.as_tensor(np.asarray(a, dtype=np.float64), dtype=torch.float32)
+
+
+def _f_or_none(a) -> torch.Tensor | None:
+    return None if a is None else _f(a)

@@ -52,19 +52,16 @@ def bench_method(name: str, motion, tracking, frames: int, warmup: int, **kwargs
     frame). Per iteration (iterative methods): the solver's own milliseconds per
     iteration on each frame (:attr:`FrameResult.timings`), and its parts.
     """
-    from engine.methods import get_method
+    from engine.methods import driver, get_method
 
     method = get_method(name, **kwargs)
-    if getattr(method, "needs_ground_truth", False):
-        method.reset(motion.skeleton, motion.fps, reference=motion)
-    else:
-        method.reset(motion.skeleton, motion.fps)
+    driver.reset(method, motion.skeleton, motion.fps, reference=motion)
     n = min(len(tracking), warmup + frames)
     times, iters, per_iter = [], [], []
     parts: dict[str, list[float]] = {k: [] for k in PARTS}
     for i in range(n):
         t0 = time.perf_counter()
-        res = method.step(tracking.frame(i))
+        res = driver.step(method, tracking.frame(i))
         dt = 1000.0 * (time.perf_counter() - t0)
         if i >= warmup:
             times.append(dt)

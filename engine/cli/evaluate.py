@@ -176,11 +176,11 @@ _METHODS: dict[str, Any] = {}  # this process's methods, built once for all its 
 
 
 def _method(args: argparse.Namespace, name: str) -> Any:
-    from engine.methods import get_method
+    from engine.methods import Configurable, get_method
 
     if name not in _METHODS:
         method = get_method(name, **method_kwargs(args, args.mode, name))
-        if getattr(method, "configure", None) is not None or len(args.method.split(",")) == 1:
+        if isinstance(method, Configurable) or len(args.method.split(",")) == 1:
             apply_settings(method, name, args.set)
         _METHODS[name] = method
     return _METHODS[name]

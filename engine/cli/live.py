@@ -9,6 +9,7 @@ import math
 import sys
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -18,6 +19,10 @@ from engine.cli.tracker_options import (add_tracker_options, check_tracker_optio
                                         load_reference, write_json)  # fmt: skip
 from engine.errors import UserError
 from engine.solver.settings import MODES
+
+if TYPE_CHECKING:
+    from engine import skeleton as sk
+    from engine.methods.base import Method
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -141,18 +146,18 @@ def _live(args: argparse.Namespace) -> int:
     return 0
 
 
-def _warm_up(method, skeleton, fps: float) -> None:
+def _warm_up(method: Method, skeleton: sk.Skeleton, fps: float) -> None:
     """One untimed solve so the first live frame does not pay for allocations."""
-    from engine.sensors import Sensor, SensorFrame
-
     from engine import skeleton as sk
+    from engine.methods import driver
+    from engine.sensors import Sensor, SensorFrame
 
     rest = skeleton.rest_positions()
     readings = {j: Sensor(j, rest[sk.JOINT_INDEX[j]] + [0.0, 0.0, 1.0], np.array([1.0, 0.0, 0.0, 0.0]))
                 for j in ("upperneck", "lwrist", "rwrist")}  # fmt: skip
-    method.reset(skeleton, fps)
+    driver.reset(method, skeleton, fps)  # live trackers have no ground truth: such a method stops here
     for k in range(2):
-        method.step(SensorFrame(k, readings))
+        driver.step(method, SensorFrame(k, readings))
 
 
 class _Status:

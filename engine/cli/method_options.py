@@ -6,10 +6,13 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from engine.errors import UserError
 from engine.solver.settings import SETTINGS
+
+if TYPE_CHECKING:
+    from engine.methods.base import Method
 
 
 def add_model_options(p: argparse.ArgumentParser) -> None:
@@ -43,27 +46,26 @@ def method_kwargs(args: argparse.Namespace, mode: str, name: str | None = None) 
     return kw
 
 
-def apply_settings(method: Any, name: str, items: list[str]) -> dict[str, Any]:
+def apply_settings(method: Method, name: str, items: list[str]) -> dict[str, Any]:
     """Apply ``--set key=value`` optimizer settings to ``method``; returns them."""
     if not items:
         return {}
     from engine.config import parse_overrides
+    from engine.methods import driver
     from engine.solver import OptimizerSettings
 
     values = parse_overrides(OptimizerSettings, items)
-    configure = getattr(method, "configure", None)
-    if configure is None:
+    if not driver.configure(method, values):
         raise UserError(f"method {name!r} has no optimizer settings; --set applies to latent-space methods")
-    configure(**values)
     return values
 
 
-def build_method(args: argparse.Namespace) -> Any:
+def build_method(args: argparse.Namespace) -> Method:
     """The method of ``--method`` with ``--scene`` constraints and settings, ``--mode``,
     ``--iterations``, ``--lr``, the models and ``--set`` applied (command line wins)."""
     import dataclasses
 
-    from engine.methods import get_method
+    from engine.methods import driver, get_method
 
     constraints, scene_settings = [], {}
     if getattr(args, "scene", None):
@@ -76,14 +78,12 @@ def build_method(args: argparse.Namespace) -> Any:
     kwargs = method_kwargs(args, args.mode or scene_settings.get("mode", "realtime"), args.method)
     method = get_method(args.method, **kwargs)
     if scene_settings:
-        configure = getattr(method, "configure", None)
-        if configure is None:
-            raise UserError(f"method {args.method!r} takes no scene settings")
         given = {"mode"} if args.mode else set()
         given |= {"iterations", "max_iterations"} if args.iterations is not None else set()
         given |= {"lr"} if args.lr is not None else set()
-        configure(**{k: v for k, v in scene_settings.items() if k not in given})
+        if not driver.configure(method, {k: v for k, v in scene_settings.items() if k not in given}):
+            raise UserError(f"method {args.method!r} takes no scene settings")
     apply_settings(method, args.method, args.set)
-    if constraints:
-        method.set_constraints(constraints)  # type: ignore[attr-defined]
+    if constraints and not driver.set_constraints(method, constraints):
+        raise UserError(f"method {args.method!r} takes no constraints (--scene); they apply to latent-space methods")
     return method

@@ -15,7 +15,8 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.errors import UserError
-from engine.methods.base import FrameResult, Method
+from engine.methods import driver
+from engine.methods.base import Configurable, Constrainable, DecodesLatents, FrameResult, Method, SensorWeighted
 from engine.sensors import Sensor, SensorFrame
 
 if TYPE_CHECKING:
@@ -23,7 +24,7 @@ if TYPE_CHECKING:
     from engine.tracking.simulate import Tracking
 
 __all__ = [
-    "FrameResult", "Method", "SensorFrame", "Sensor",
+    "Configurable", "Constrainable", "DecodesLatents", "FrameResult", "Method", "SensorWeighted", "SensorFrame", "Sensor",
     "available_methods", "get_method", "register_method", "run_method",
 ]  # fmt: skip
 
@@ -75,7 +76,8 @@ def run_method(
     progress : bool
         Show a tqdm progress bar (on stderr).
     reference : Motion, optional
-        Ground truth, passed to ``reset`` only if ``method.needs_ground_truth``.
+        Ground truth, passed to ``reset`` only if ``method.needs_ground_truth``
+        (:func:`engine.methods.driver.reset`).
     desc : str, optional
         Progress-bar label.
     light : bool
@@ -92,17 +94,19 @@ def run_method(
     results : list of FrameResult (a FrameRecords sequence when ``light``)
         One per frame; ``ms`` is filled with the measured step time when the method
         left it at 0.
+
+    Raises
+    ------
+    UserError
+        When the method needs the ground truth and ``reference`` is None.
+    FloatingPointError
+        When the method returns a non-finite pose.
     """
     from tqdm import tqdm
 
     from engine.motion import Motion
 
-    if method.needs_ground_truth:
-        if reference is None:
-            raise UserError(f"method {method.name!r} needs the ground-truth clip")
-        method.reset(skeleton, tracking.fps, reference=reference)
-    else:
-        method.reset(skeleton, tracking.fps)
+    driver.reset(method, skeleton, tracking.fps, reference)
     n = len(tracking)
     if light:
         from engine.methods.records import FrameRecords
@@ -114,7 +118,7 @@ def run_method(
         local, root = np.full((n, sk.NUM_JOINTS, 4), np.nan), np.full((n, 3), np.nan)
     for i in tqdm(range(n), desc=desc or method.name, unit="frame", disable=not progress, leave=False):
         t0 = time.perf_counter()
-        res = method.step(tracking.frame(i))
+        res = driver.step(method, tracking.frame(i))
         if not res.ms:
             res.ms = 1000.0 * (time.perf_counter() - t0)
         if light:
@@ -122,7 +126,8 @@ def run_method(
         else:
             local[i], root[i] = res.local_rot, res.root_pos
             results.append(res)
-    return Motion(local, root, skeleton, tracking.fps, getattr(reference, "name", "")), records if light else results
+    name = reference.name if reference is not None else ""
+    return Motion(local, root, skeleton, tracking.fps, name), records if light else results
 
 
 def _register_builtin() -> None:

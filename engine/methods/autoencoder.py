@@ -95,7 +95,7 @@ class AutoencoderMethod(Method):
         self._ms = 1000.0 * (time.perf_counter() - t0) / max(1, len(reference))
         self._frame = 0
 
-    def step(self, sensors: SensorFrame) -> FrameResult:
+    def step(self, sensors: SensorFrame, deadline: float | None = None) -> FrameResult:
         """The reconstruction of frame ``sensors.frame`` (the sensors themselves are unused)."""
         if self._local is None or self._root is None:
             raise UserError("autoencoder method: reset(..., reference=clip) must be called first")

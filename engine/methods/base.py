@@ -3,13 +3,21 @@
 A method is fed one :class:`SensorFrame` per frame and returns a :class:`FrameResult`.
 It keeps whatever temporal state it needs between frames; :meth:`Method.reset`
 starts a new clip.
+
+What a method may offer beyond that is typed here, so callers check it with
+``isinstance`` instead of probing attribute names: :class:`Configurable` (optimizer
+settings by name), :class:`Constrainable` (the user's constraints),
+:class:`SensorWeighted` (a weight per tracker) and :class:`DecodesLatents` (a latent to a
+pose). The flags :attr:`Method.needs_ground_truth` and :attr:`Method.takes_deadline` say
+how :mod:`engine.methods.driver` resets and steps it.
 """
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Iterable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -18,6 +26,7 @@ from engine.errors import UserError
 from engine.sensors import Sensor, SensorFrame
 
 if TYPE_CHECKING:
+    from engine.constraints.base import Constraint
     from engine.motion import Motion
 
 
@@ -83,13 +92,58 @@ class Method(ABC):
         """
 
     @abstractmethod
-    def step(self, sensors: SensorFrame) -> FrameResult:
-        """Reconstruct the next frame from its sensor readings."""
+    def step(self, sensors: SensorFrame, deadline: float | None = None) -> FrameResult:
+        """Reconstruct the next frame from its sensor readings.
+
+        ``deadline`` (a ``time.perf_counter`` time) is given only to methods with
+        :attr:`takes_deadline` set; the others may ignore it.
+        """
 
     def between_frames(self) -> None:
         """Work that can wait until the last frame's pose is out (a live loop calls it
         while waiting for the next frame; :meth:`step` does it first if nobody did).
         Results never depend on whether it was called. Nothing by default."""
+
+
+@runtime_checkable
+class Configurable(Protocol):
+    """A method tuned by optimizer settings (:class:`engine.solver.OptimizerSettings` fields)."""
+
+    def configure(self, **values: Any) -> None:
+        """Change settings by name from the next frame; an unknown name raises
+        :class:`~engine.errors.UserError` after the known ones are applied."""
+        ...
+
+
+@runtime_checkable
+class Constrainable(Protocol):
+    """A method that takes the user's constraints (:mod:`engine.constraints`)."""
+
+    def set_constraints(self, constraints: Iterable[Constraint]) -> None:
+        """Replace all user constraints (names unique); never mutates them."""
+        ...
+
+    def add_constraint(self, constraint: Constraint) -> None:
+        """Add one constraint; a name in use raises :class:`~engine.errors.UserError`."""
+        ...
+
+
+@runtime_checkable
+class SensorWeighted(Protocol):
+    """A method that weights each tracker's term."""
+
+    def set_sensor_weight(self, joint: str, weight: float) -> None:
+        """Weight (>= 0, 1 = default) of the tracker on ``joint`` from the next frame."""
+        ...
+
+
+@runtime_checkable
+class DecodesLatents(Protocol):
+    """A latent-space method that can show the pose of any latent (the studio's debug view)."""
+
+    def decode_latent(self, latent: np.ndarray) -> np.ndarray:
+        """World joint positions ``(22, 3)``, metres, of ``latent (L,)`` at the current root."""
+        ...
 
 
 def check_preset(readings: dict[str, Sensor], joints: tuple[str, ...], method: str, preset: str) -> None:

@@ -1,9 +1,10 @@
 """The edits a user makes to DragPoser between frames, and the settings a frame runs with.
 
 :class:`DragPoserEdits` is the part of :class:`engine.methods.dragposer.DragPoserMethod`
-that the studio and the CLI call between frames (duck-typed, see
-:mod:`engine.studio.methods`): optimizer settings by name (:meth:`~DragPoserEdits.configure`),
-the user's constraints (:meth:`~DragPoserEdits.add_constraint`,
+that the studio and the CLI call between frames (the capabilities
+:class:`~engine.methods.base.Configurable`, :class:`~engine.methods.base.Constrainable`
+and :class:`~engine.methods.base.SensorWeighted`): optimizer settings by name
+(:meth:`~DragPoserEdits.configure`), the user's constraints (:meth:`~DragPoserEdits.add_constraint`,
 :meth:`~DragPoserEdits.remove_constraint`, :meth:`~DragPoserEdits.set_constraints`,
 :meth:`~DragPoserEdits.set_weight`, :meth:`~DragPoserEdits.set_enabled`) and each
 tracker's weight (:meth:`~DragPoserEdits.set_sensor_weight`). Every edit applies from the

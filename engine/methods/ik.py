@@ -311,7 +311,7 @@ class IKMethod(Method):
             return True
         return False
 
-    def step(self, sensors: SensorFrame) -> FrameResult:
+    def step(self, sensors: SensorFrame, deadline: float | None = None) -> FrameResult:
         t0 = time.perf_counter()
         warnings: list[str] = []
         s: dict[str, Sensor] = {}

@@ -82,7 +82,7 @@ class RPMMethod(Method):
             self._rot.append(rot)
             self._flags.append(flags)
 
-    def step(self, sensors: SensorFrame) -> FrameResult:
+    def step(self, sensors: SensorFrame, deadline: float | None = None) -> FrameResult:
         t0 = time.perf_counter()
         self._sample(sensors)
         cfg = self.model.config

@@ -154,7 +154,7 @@ class SparsePoserMethod(Method):
         dq[list(SPARSE_INDEX)] = torch.from_numpy(dq6).float()
         return self.generator(self._push(dq)[0], self._static, TAIL).numpy(), x.numpy()
 
-    def step(self, sensors: SensorFrame) -> FrameResult:
+    def step(self, sensors: SensorFrame, deadline: float | None = None) -> FrameResult:
         t0 = time.perf_counter()
         threads = torch.get_num_threads()
         if self.threads:

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from engine import skeleton as sk
-from engine.methods import FrameResult, Method, SensorFrame
+from engine.methods import FrameResult, Method, SensorFrame, driver
 from engine.motion import Motion
 from engine.sources.calibration import Calibration, calibrate
 from engine.sources.receiver import VMCReceiver
@@ -116,7 +116,7 @@ class LiveRun:
         ``idle_timeout_s`` after the stream started, or until :attr:`stop_event` is set."""
         out = self.result = LiveResult()
         if self.calibrate_s <= 0:
-            self.method.reset(self.skeleton, self.fps)
+            driver.reset(self.method, self.skeleton, self.fps)  # live trackers: no ground truth
         start = time.perf_counter()
         # Python's automatic full collections walk every object, the growing per-frame
         # results included, and stalled a frame by 220-240 ms in two of three idle runs
@@ -160,17 +160,14 @@ class LiveRun:
                 # (``calibration_window`` says the same for recordings)
                 out.calibration = calibrate(window, self.calibration_pose)
                 self.receiver.set_calibration(out.calibration)
-                self.method.reset(out.calibration.skeleton, self.fps)
+                driver.reset(self.method, out.calibration.skeleton, self.fps)
                 calibrating = False
                 continue
             out.frames_received += 1 + missed
             out.frames_skipped += missed
             if out.frames_solved == 1:
                 out.frames_skipped_first_solve = missed
-            if self.budget_s > 0 and self.method.takes_deadline:
-                res = self.method.step(f.sensors, deadline=f.arrival + self.budget_s)  # type: ignore[call-arg]
-            else:
-                res = self.method.step(f.sensors)
+            res = driver.step(self.method, f.sensors, f.arrival + self.budget_s if self.budget_s > 0 else None)
             out.latency_ms.append(1000.0 * (time.perf_counter() - f.arrival))
             out.times.append(f.t)
             out.results.append(res)

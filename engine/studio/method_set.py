@@ -12,8 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-import numpy as np
-
+from engine.methods import driver
 from engine.methods.base import FrameResult, Method
 from engine.sensors import Sensor, SensorFrame
 from engine.studio.methods import apply_constraints, apply_sensor_weights, apply_settings
@@ -114,12 +113,8 @@ class MethodSet:
             if skeleton is None:
                 continue
             try:
-                if getattr(m, "needs_ground_truth", False):  # e.g. an oracle baseline
-                    if motion is None:
-                        raise ValueError("needs a ground-truth clip; tracker sources have none")
-                    m.reset(motion.skeleton, motion.fps, reference=motion)  # type: ignore[call-arg]
-                else:
-                    m.reset(skeleton, source.fps)
+                # the clip is the ground truth of a method that needs one (an oracle baseline)
+                driver.reset(m, skeleton, source.fps, reference=motion)
             except Exception as exc:
                 self._report(f"{m.name}.reset: {exc}")
         self.configure(report=fresh)  # methods may drop their settings on reset
@@ -157,10 +152,7 @@ class MethodSet:
     @staticmethod
     def step(method: Method, sf: SensorFrame) -> FrameResult:
         """``method.step(sf)``; a non-finite pose raises :class:`FloatingPointError`."""
-        res = method.step(sf)
-        if not np.all(np.isfinite(res.positions)):
-            raise FloatingPointError("method returned a non-finite pose")
-        return res
+        return driver.step(method, sf)
 
     def between_frames(self) -> None:
         """Let every method do the work it deferred until the pose was out (DragPoser's

@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from engine import skeleton as sk
-from engine.methods.base import FrameResult, Method
+from engine.methods.base import DecodesLatents, FrameResult, Method
 from engine.sensors import SensorFrame
 from engine.studio import commands as cmd
 from engine.studio.method_set import MethodSet
@@ -70,9 +70,7 @@ def _timing(res: FrameResult | None, ms: float, latency_ms: float | None = None)
         out["latency_ms"] = float(latency_ms)
     if res.iterations:
         out["ms_per_iteration"] = float(ms) / res.iterations
-    own = getattr(res, "timings", None)
-    if isinstance(own, dict):
-        out.update({str(k): float(v) for k, v in own.items() if isinstance(v, (int, float))})
+    out.update({str(k): float(v) for k, v in res.timings.items() if isinstance(v, (int, float))})
     return out
 
 
@@ -327,13 +325,14 @@ class EngineThread(threading.Thread):
         self._methods.between_frames()
 
     def _decode(self, latent: np.ndarray) -> None:
-        decode = getattr(self._methods.method, "decode_latent", None)
-        if decode is None:
+        method = self._methods.method
+        if not isinstance(method, DecodesLatents):
             self._report_error(f"{self._methods.name}: cannot decode latents")
             return
         self._playing = False
         try:
-            self._decoded = np.asarray(decode(np.asarray(latent, float)), float).reshape(sk.NUM_JOINTS, 3)
+            decoded = method.decode_latent(np.asarray(latent, float))
+            self._decoded = np.asarray(decoded, float).reshape(sk.NUM_JOINTS, 3)
         except Exception as exc:
             self._report_error(f"decode latent: {exc}")
 
@@ -365,8 +364,8 @@ class EngineThread(threading.Thread):
             method_error=self._method_error,
             engine_fps=self._fps,
             playing=self._playing,
-            method=getattr(self._methods.method, "name", self._methods.name),
-            can_decode=hasattr(self._methods.method, "decode_latent"),
+            method=self._methods.method.name if self._methods.method is not None else self._methods.name,
+            can_decode=isinstance(self._methods.method, DecodesLatents),
             decoded=readonly(self._decoded) if self._decoded is not None else None,
             history=tuple(self._history),
             solved=self._solved,

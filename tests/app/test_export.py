@@ -6,7 +6,7 @@ import time
 
 import pytest
 
-from engine.studio.methods import RestPoseMethod
+from tests.stand_ins import RestPoseMethod
 
 pytestmark = pytest.mark.gui
 

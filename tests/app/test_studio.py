@@ -9,6 +9,7 @@ import pytest
 from PyQt6.QtCore import QTimer
 from PyQt6.QtWidgets import QMessageBox
 
+from tests.stand_ins import RestPoseMethod
 from tests.widgets.test_viewport import orange_fraction
 
 pytestmark = pytest.mark.gui
@@ -111,23 +112,17 @@ def test_every_constraint_kind_can_be_added_weighted_disabled_drawn_and_removed(
     assert panel.list.count() == 0
 
 
-class SlowMethod:
+class SlowMethod(RestPoseMethod):
     """Stands in for an expensive optimizer: ~60 ms of numpy work per frame."""
 
     name = "slow"
 
-    def __init__(self, inner):
-        self.inner = inner
-
-    def reset(self, skeleton, fps=60.0):
-        self.inner.reset(skeleton, fps)
-
-    def step(self, sensors):
+    def step(self, sensors, deadline=None):
         end = time.perf_counter() + 0.06
         a = np.random.default_rng(0).random((200, 200))
         while time.perf_counter() < end:
             a = np.tanh(a @ a.T / 200.0)
-        return self.inner.step(sensors)
+        return super().step(sensors)
 
 
 def test_event_loop_stays_responsive_while_the_engine_is_busy(studio, qtbot, monkeypatch):
@@ -140,7 +135,7 @@ def test_event_loop_stays_responsive_while_the_engine_is_busy(studio, qtbot, mon
     """
     from engine.studio import methods as studio_methods
 
-    monkeypatch.setattr(studio_methods, "make_method", lambda name: SlowMethod(studio_methods.RestPoseMethod()))
+    monkeypatch.setattr(studio_methods, "make_method", lambda name: SlowMethod())
     studio.engine._factory = studio_methods.make_method
     studio.session.set_method("slow")
     studio.session.set_playback(pace="real_time", loop=False)

@@ -75,7 +75,7 @@ def test_a_notice_shows_while_a_method_loads_and_solves_its_first_frame(studio, 
     """Loading a model and the offline first frame took 2-3 s with no word."""
     import time
 
-    from engine.studio.methods import RestPoseMethod
+    from tests.stand_ins import RestPoseMethod
 
     class SlowToLoad(RestPoseMethod):
         name = "slow"

@@ -10,7 +10,7 @@ from PyQt6.QtGui import QDragEnterEvent, QDropEvent
 from PyQt6.QtWidgets import QApplication, QFileDialog
 
 from engine import skeleton as sk
-from engine.studio.methods import RestPoseMethod
+from tests.stand_ins import RestPoseMethod
 
 pytestmark = pytest.mark.gui
 

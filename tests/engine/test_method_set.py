@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections import Counter
 
 from engine.studio.method_set import MethodSet
-from engine.studio.methods import RestPoseMethod
+from tests.stand_ins import RestPoseMethod
 from engine.studio.source import ClipSource
 
 

@@ -68,6 +68,15 @@ def test_scene_adds_constraints_and_settings_but_flags_win(standin_dragposer, cl
     assert m.get_constraint("look").kind == "look_at"
 
 
+def test_scene_constraints_for_a_method_without_constraints_are_a_user_error(clip_path, tmp_path, capsys):
+    scene = tmp_path / "scene.json"
+    scene.write_text(json.dumps({"constraints": [{"kind": "look_at", "name": "look", "target": [0, -3, 1.6]}]}))
+    out = tmp_path / "out.bvh"
+    assert main(["reconstruct", str(clip_path), "--out", str(out), "--scene", str(scene), "--method", "ik",
+                 "--max-frames", "5", "--no-progress"]) == 2  # fmt: skip
+    assert "'ik' takes no constraints" in capsys.readouterr().err and not out.exists()
+
+
 @pytest.mark.parametrize("flags, message", [
     (["--sensors", "tail"], "tail"),
     (["--faulty", "2"], "faulty"),

@@ -167,7 +167,8 @@ class Character:
 
     def solve(self, start: np.ndarray, constraints: list[Constraint], ctx: FrameContext,
               reach: dict[int, np.ndarray] | None = None, rotations: dict[int, np.ndarray] | None = None,
-              iterations: int | None = None, prior_weight: float = PRIOR_WEIGHT, rule: str = "adam") -> Pose:  # fmt: skip
+              iterations: int | None = None, prior_weight: float = PRIOR_WEIGHT, rule: str = "adam",
+              step_size: float = 0.3) -> Pose:  # fmt: skip
         """Solve a pose from latent ``start (L,)``.
 
         Parameters
@@ -186,9 +187,11 @@ class Character:
             Latent update rule (``OptimizerSettings.optimizer``): ``adam`` reaches far
             targets from the mean pose quickly; ``sgd`` moves only the latent directions
             the terms constrain, so a pose that starts near its answer does not wander.
+        step_size : float
+            Of the ``sgd`` rule, ``z -= step_size * gradient``.
         """
         s = self.settings
-        s.optimizer = rule
+        s.optimizer, s.step_size = rule, float(step_size)
         s.mode, s.iterations = ("realtime", int(iterations)) if iterations is not None else ("offline", s.iterations)
         terms = list(constraints)
         if ctx.prediction is not None and prior_weight > 0:

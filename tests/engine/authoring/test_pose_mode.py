@@ -1,0 +1,103 @@
+"""Pose mode driven programmatically: dragging targets, rotations, constraints, clip frames."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from engine import skeleton as sk
+from engine.authoring.pose_mode import PoseMode
+from engine.constraints import LookAtConstraint
+from engine.errors import UserError
+from engine.kinematics import quat_np as QN
+from engine.kinematics.fk import fk
+
+LW, RW = sk.JOINT_INDEX["lwrist"], sk.JOINT_INDEX["rwrist"]
+FEET = [sk.JOINT_INDEX[j] for j in ("lankle", "rankle", "ltoe", "rtoe")]
+
+
+def bones(positions: np.ndarray) -> np.ndarray:
+    return np.linalg.norm(positions[1:] - positions[list(sk.PARENTS[1:])], axis=-1)
+
+
+def drag(pm: PoseMode, joint: str, by, events: int = 30):
+    start = pm.pose.positions[sk.JOINT_INDEX[joint]].copy()
+    for k in range(1, events + 1):
+        pm.set_target(joint, start + np.asarray(by, float) * k / events)
+        pm.solve()
+    return start + np.asarray(by, float)
+
+
+def test_dragging_a_wrist_30_cm_keeps_it_on_target_bones_fixed_feet_on_the_floor(vae):
+    pm = PoseMode(vae, height=1.75)
+    assert pm.character.height == pytest.approx(1.75)
+    rest_bones = bones(pm.pose.positions)
+    target = drag(pm, "lwrist", [0.0, -0.3, 0.0])
+    p = pm.pose
+    assert np.linalg.norm(p.positions[LW] - target) < 0.01
+    assert np.abs(bones(p.positions) - rest_bones).max() < 1e-6
+    assert np.allclose(rest_bones, np.linalg.norm(pm.character.skeleton.offsets[1:], axis=-1), atol=1e-9)
+    assert p.positions[FEET, 2].min() >= 0.0 and p.positions[:, 2].min() >= 0.0
+    assert np.linalg.norm(p.decoded[LW] - target) < 0.03  # the latent itself follows, not only the limb step
+
+
+@pytest.mark.parametrize("by", [[0.3, 0.0, 0.0], [0.0, 0.0, -0.3], [0.0, 0.0, 0.3]])
+def test_after_the_drag_the_settled_pose_meets_the_target_in_every_direction(vae, by):
+    pm = PoseMode(vae, height=1.75)
+    rest_bones = bones(pm.pose.positions)
+    target = drag(pm, "lwrist", by, events=10)
+    p = pm.settle()
+    assert np.linalg.norm(p.positions[LW] - target) < 0.01
+    assert np.abs(bones(p.positions) - rest_bones).max() < 1e-6 and p.positions[:, 2].min() >= 0.0
+
+
+def test_a_rotation_target_turns_the_hand_and_weight_zero_or_disabled_releases_it(vae):
+    pm = PoseMode(vae)
+    q = QN.mul(np.array([np.cos(0.4), np.sin(0.4), 0.0, 0.0]), pm.pose.local_rot[0])
+    pm.set_target("lwrist", rotation=q)
+    pm.solve()
+    world = fk(pm.pose.local_rot, pm.pose.root_pos, pm.character.skeleton.offsets)[1][LW]
+    assert abs(float(world @ q)) == pytest.approx(1.0, abs=1e-9)
+    held = pm.pose.positions[LW].copy()
+    pm.set_target("lwrist", position=held + [0, 0, 0.2], weight=0.0)
+    pm.solve()
+    assert pm.pose.positions[LW, 2] < held[2] + 0.05  # a zero weight does not pull it up 20 cm
+    pm.clear_rotation("lwrist")
+    assert pm.targets["lwrist"].rotation is None
+    pm.clear_targets()
+    assert pm.targets == {}
+
+
+def test_other_constraint_kinds_act_in_pose_mode(vae):
+    pm = PoseMode(vae)
+    look = LookAtConstraint(name="look", joint="upperneck", target=np.array([3.0, 0.0, 1.6]), weight=5.0)
+    pm.constraints.append(look)
+    for _ in range(5):
+        pm.solve()
+    pm.settle()
+    head = fk(pm.pose.local_rot, pm.pose.root_pos, pm.character.skeleton.offsets)[1][sk.JOINT_INDEX["upperneck"]]
+    forward = QN.rotate(head, look.axis)
+    to_target = look.target - pm.pose.positions[sk.JOINT_INDEX["upperneck"]]
+    cos = forward @ to_target / np.linalg.norm(to_target) / np.linalg.norm(forward)
+    assert cos > 0.5  # the head turned towards +X from facing -Y (cos 0 at the start)
+
+
+@pytest.fixture(scope="module")
+def example_clip():
+    from engine.retarget import load_motion
+
+    return load_motion(Path(__file__).resolve().parents[3] / "assets" / "clips" / "example.bvh")
+
+
+def test_a_clip_frame_starts_the_pose_where_the_clip_stands(vae, example_clip):
+    pm = PoseMode.from_clip_frame(vae, example_clip, 10)
+    assert np.allclose(pm.pose.root_pos[:2], example_clip.root_pos[10, :2], atol=1e-6)
+    clip = example_clip.positions()[10]
+    rel = lambda p: p - p[0]  # noqa: E731
+    mean = PoseMode(vae).pose.positions
+    err = lambda p: np.linalg.norm(rel(p) - rel(clip), axis=-1).mean()  # noqa: E731
+    assert err(pm.pose.positions) < 0.7 * err(mean)  # the encoded pose, not the mean
+    with pytest.raises(UserError, match="frame 1000000"):
+        PoseMode.from_clip_frame(vae, example_clip, 10**6)

@@ -23,13 +23,14 @@ from PyQt6.QtWidgets import (
 )  # fmt: skip
 
 from engine.skeleton import JOINT_NAMES
+from widgets.field_editing import commit_only, is_editing
 
 Schema = dict[str, list[Sequence[Any]]]
 _BASE_FIELDS = ("name", "weight", "enabled")
 
 
 def _spin(value: float, lo: float = -100.0, hi: float = 100.0, step: float = 0.01) -> QDoubleSpinBox:
-    w = QDoubleSpinBox(minimum=lo, maximum=hi, singleStep=step, decimals=3)
+    w = commit_only(QDoubleSpinBox(minimum=lo, maximum=hi, singleStep=step, decimals=3))
     w.setValue(float(value) if np.isfinite(value) else 0.0)
     w.setMinimumWidth(60)
     return w
@@ -101,7 +102,7 @@ class ConstraintEditor(QWidget):
             w: Any = _spin(value)
             w.valueChanged.connect(lambda v: emit(float(v)))
         elif tag == "int":
-            w = QSpinBox(minimum=-100000, maximum=100000, value=int(value))
+            w = commit_only(QSpinBox(minimum=-100000, maximum=100000, value=int(value)))
             w.valueChanged.connect(lambda v: emit(int(v)))
         elif tag == "bool":
             w = QCheckBox(checked=bool(value))
@@ -137,9 +138,10 @@ class ConstraintEditor(QWidget):
         return w
 
     def set_values(self, values: dict[str, Any]) -> None:
-        """Show ``values`` (edited elsewhere) without emitting ``changed``."""
+        """Show ``values`` (edited elsewhere) without emitting ``changed``; a field the
+        user is editing keeps what is typed there."""
         for name, w in self.inputs.items():
-            if name not in values:
+            if name not in values or is_editing(w):
                 continue
             v, tag = values[name], self.tags.get(name, "")
             widgets = w.spins if tag == "vec3" else [w]
@@ -157,7 +159,7 @@ class ConstraintEditor(QWidget):
                 elif tag == "vec3":
                     for s, x in zip(w.spins, np.asarray(v, float).reshape(3)):
                         s.setValue(float(x) if np.isfinite(x) else 0.0)
-                elif tag == "str" and not w.hasFocus():
+                elif tag == "str":
                     w.setText(str(v))
             finally:
                 for x in widgets:

@@ -16,6 +16,8 @@ from typing import Any
 from PyQt6.QtCore import pyqtSignal
 from PyQt6.QtWidgets import QCheckBox, QComboBox, QDoubleSpinBox, QFormLayout, QHBoxLayout, QSpinBox, QWidget
 
+from widgets.field_editing import commit_only, is_editing
+
 #: Decimals of a number field; an open lower bound shows as its smallest step above it.
 DECIMALS = 4
 
@@ -67,9 +69,9 @@ def _editor(f: SettingField) -> Any:
     elif f.kind == "bool":
         w = QCheckBox()
     elif f.kind == "int":
-        w = QSpinBox(minimum=int(f.minimum()), maximum=int(f.hi), singleStep=max(int(f.step), 1))
+        w = commit_only(QSpinBox(minimum=int(f.minimum()), maximum=int(f.hi), singleStep=max(int(f.step), 1)))
     else:
-        w = QDoubleSpinBox(minimum=f.minimum(), maximum=f.hi, singleStep=f.step, decimals=DECIMALS)
+        w = commit_only(QDoubleSpinBox(minimum=f.minimum(), maximum=f.hi, singleStep=f.step, decimals=DECIMALS))
     if f.unit and f.kind in ("int", "float"):
         w.setSuffix(f" {f.unit}")
     w.setToolTip(f.help)
@@ -135,7 +137,8 @@ class OptimizerPanel(QWidget):
             self.ghostsChanged.emit(tuple(m for m, b in self.ghost_boxes.items() if b.isChecked()))
 
     def set_state(self, method: str, ghosts: tuple[str, ...], settings: dict[str, Any]) -> None:
-        """Show the session's method, ghosts and settings without emitting."""
+        """Show the session's method, ghosts and settings without emitting; a field the
+        user is editing keeps what is typed there (it is sent when committed)."""
         self._updating = True
         try:
             self.method.setCurrentText(method)
@@ -143,7 +146,7 @@ class OptimizerPanel(QWidget):
                 box.setChecked(m in ghosts)
                 box.setEnabled(m != method)
             for name, w in self.editors.items():
-                if name not in settings:
+                if name not in settings or is_editing(w):
                     continue
                 v = settings[name]
                 if isinstance(w, QComboBox):

@@ -42,9 +42,15 @@ class JointDragger:
         # MouseMoveEvent replaces the style's handler (VTK's HandleObservers rule), so
         # mouse moves are forwarded explicitly when no joint is held.
         self._commands = {}
-        for event in ("LeftButtonPressEvent", "MouseMoveEvent", "LeftButtonReleaseEvent"):
+        for event in ("LeftButtonPressEvent", "MouseMoveEvent"):
             tag = self._style.AddObserver(event, self._handle, 10.0)
             self._commands[event] = self._style.GetCommand(tag)
+        # The release is watched on the interactor, ahead of every widget (they observe
+        # it at priority 0.5): a VTK sphere widget that has never been grabbed takes the
+        # first release it sees, and one made during a drag (the pin a Ctrl-drag creates)
+        # would then leave the joint held, so every later mouse move dragged the pin.
+        tag = iren.AddObserver("LeftButtonReleaseEvent", self._handle, 100.0)
+        self._commands["LeftButtonReleaseEvent"] = iren.GetCommand(tag)
 
     def _take(self, event: str) -> None:
         self._commands[event].SetAbortFlag(1)

@@ -1,0 +1,97 @@
+"""Mouse on the 3D view of the real window: Qt mouse events on the view's native widget,
+under Xvfb, as a user's hand would send them."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from PyQt6.QtCore import QPointF, Qt
+from PyQt6.QtGui import QMouseEvent
+from PyQt6.QtWidgets import QApplication
+
+from engine import skeleton as sk
+
+pytestmark = pytest.mark.gui
+
+LEFT = Qt.MouseButton.LeftButton
+NONE = Qt.MouseButton.NoButton
+
+
+def _send(widget, kind, x, y, button, buttons, mods):
+    event = QMouseEvent(kind, QPointF(x, y), widget.mapToGlobal(QPointF(x, y)), button, buttons, mods)
+    QApplication.sendEvent(widget, event)
+
+
+def mouse_drag(view, start, end, ctrl: bool = False, steps: int = 6) -> None:
+    """Left-drag on the 3D view from ``start`` to ``end`` (VTK display pixels, y up)."""
+    widget = view.plotter
+    h = widget.height()
+    mods = Qt.KeyboardModifier.ControlModifier if ctrl else Qt.KeyboardModifier.NoModifier
+    (x0, y0), (x1, y1) = start, end
+    _send(widget, QMouseEvent.Type.MouseButtonPress, x0, h - 1 - y0, LEFT, LEFT, mods)
+    for t in np.linspace(0, 1, steps + 1)[1:]:
+        x, y = x0 + t * (x1 - x0), y0 + t * (y1 - y0)
+        _send(widget, QMouseEvent.Type.MouseMove, x, h - 1 - y, NONE, LEFT, mods)
+        QApplication.processEvents()
+    _send(widget, QMouseEvent.Type.MouseButtonRelease, x1, h - 1 - y1, LEFT, NONE, mods)
+    QApplication.processEvents()
+
+
+def pixel_of(view, point) -> tuple[float, float]:
+    x, y = view.joints._to_display(np.asarray(point, float)[None])[0]
+    return float(x), float(y)
+
+
+def paused_on_a_pose(studio, qtbot):
+    studio.session.pause()
+    qtbot.waitUntil(lambda: not studio.session.latest.playing, timeout=10000)
+    studio.viewport.show_snapshot(studio.session.latest)
+    return studio.session.latest
+
+
+def test_a_plain_drag_in_empty_space_orbits_after_a_pin_was_made(studio, qtbot):
+    view, s = studio.viewport, studio.session
+    snap = paused_on_a_pose(studio, qtbot)
+    elbow = snap.positions[sk.JOINT_INDEX["lelbow"]]
+    x, y = pixel_of(view, elbow)
+    mouse_drag(view, (x, y), (x + 40, y + 10), ctrl=True)
+    (pin,) = s.constraints
+    placed = pin.position.copy()
+    qtbot.waitUntil(lambda: any(n == pin.name for n, _ in s.latest.gizmos), timeout=5000)
+    view.show_snapshot(s.latest)  # the pin's gizmo is on screen now
+    steps = studio.undo.stack.count()
+    camera = np.array(view.plotter.camera.position)
+    w, h = view.plotter.width(), view.plotter.height()
+    mouse_drag(view, (w - 30, h - 30), (w - 150, h - 60))  # empty sky, top right
+    assert np.allclose(s.constraints[0].position, placed)
+    assert studio.undo.stack.count() == steps
+    assert np.linalg.norm(np.array(view.plotter.camera.position) - camera) > 1e-3
+    s.remove_constraint(pin.name)
+    mouse_drag(view, (w - 30, h - 30), (w - 150, h - 60))
+    assert s.constraints == []
+
+
+def test_the_look_at_target_drags_itself_not_a_pin(studio, qtbot):
+    view, s, panel = studio.viewport, studio.session, studio.constraint_panel
+    snap = paused_on_a_pose(studio, qtbot)
+    x, y = pixel_of(view, snap.positions[sk.JOINT_INDEX["relbow"]])
+    mouse_drag(view, (x, y), (x - 30, y), ctrl=True)  # a pin first, as a user would
+    (pin,) = s.constraints
+    panel.kinds.setCurrentText("look_at")
+    panel.add_button.click()
+    look = s.constraints[-1]
+    qtbot.waitUntil(lambda: any(n == look.name for n, _ in s.latest.gizmos), timeout=5000)
+    view.show_snapshot(s.latest)
+    handle = view.gizmos.items[look.name].widget
+    x, y = pixel_of(view, handle.GetCenter())
+    w, h = view.plotter.width(), view.plotter.height()
+    assert 0 < x < w and 0 < y < h, "the new target is in view"
+    start = np.array(look.target, float)
+    mouse_drag(view, (x, y), (x - 60, y + 30))
+    held, moved = s.constraints
+    assert np.allclose(held.position, pin.position), "the pin stays where it was"
+    assert moved.name == look.name and np.linalg.norm(np.asarray(moved.target) - start) > 0.05
+    camera = np.array(view.plotter.camera.position)
+    mouse_drag(view, (w - 30, h - 30), (w - 150, h - 60))  # empty space afterwards: orbit
+    assert np.allclose(s.constraints[1].target, moved.target)
+    assert np.linalg.norm(np.array(view.plotter.camera.position) - camera) > 1e-3

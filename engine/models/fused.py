@@ -173,6 +173,12 @@ class DenseDecoder:
         self._fwd = [_bind(runs, inputs[i], self._pre[i]) for i, runs in enumerate(self.forward_runs)]
         self._bwd = [_bind(runs, self._gin[i], self._grad[i]) for i, runs in enumerate(self.backward_runs)]
 
+    def __deepcopy__(self, memo: dict) -> "DenseDecoder":
+        """The same object: its weights are frozen and its scratch buffers are views of
+        one another, which a copy would split (a copy of a method's temporal state,
+        :mod:`engine.studio.method_state`, shares it like the network it came from)."""
+        return self
+
     def stored_entries(self) -> tuple[int, int]:
         """Weight entries read per forward and per backward pass (dense: all of them)."""
         return (sum(r.w.size for runs in self.forward_runs for r in runs),

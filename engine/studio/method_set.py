@@ -15,6 +15,7 @@ from typing import Any
 from engine.methods import driver
 from engine.methods.base import FrameResult, Method
 from engine.sensors import Sensor, SensorFrame
+from engine.studio.method_state import copy_state
 from engine.studio.methods import apply_constraints, apply_sensor_weights, apply_settings
 
 
@@ -54,6 +55,8 @@ class MethodSet:
         self.skeleton_version = 0
         # select() built (or tried to build) the shown method since the last reset
         self._selected = False
+        # the methods' state before the first edit of a paused frame (see keep_state)
+        self._kept: dict[str, Method] | None = None
 
     def running(self) -> list[tuple[str, Method]]:
         """``(name, method)`` of every built method, the shown one first."""
@@ -98,6 +101,7 @@ class MethodSet:
         method's were reported when they were edited).
         """
         fresh, self._selected = self._selected, False
+        self._kept = None
         if not fresh and self.method is None and self.name:
             self.method = self.build(self.name)
             fresh = True
@@ -118,6 +122,24 @@ class MethodSet:
             except Exception as exc:
                 self._report(f"{m.name}.reset: {exc}")
         self.configure(report=fresh)  # methods may drop their settings on reset
+
+    def keep_state(self) -> None:
+        """Solve from the same state again: the first call keeps a copy of every
+        method's state, each later one puts a fresh copy of it back (with the current
+        edits applied) until :meth:`drop_state`. The engine calls it before solving the
+        paused frame again after an edit (:mod:`engine.studio.method_state`)."""
+        if self._kept is None:
+            self._kept = {name: copy_state(m) for name, m in self.running()}
+            return
+        kept = self._kept
+        if self.method is not None and self.name in kept:
+            self.method = copy_state(kept[self.name])
+        self.ghosts = {g: copy_state(kept[g]) if g in kept else m for g, m in self.ghosts.items()}
+        self.configure(report=False)
+
+    def drop_state(self) -> None:
+        """Forget the state kept by :meth:`keep_state` (another frame, play, a reset)."""
+        self._kept = None
 
     def set_settings(self, values: dict[str, Any]) -> None:
         """Merge ``values`` into the settings and push them."""

@@ -276,6 +276,10 @@ class EngineThread(threading.Thread):
 
     def _solve(self, frame: int) -> None:
         jump = self._is_jump(frame)
+        if not self._playing and not jump and frame == self._last_solved:
+            self._methods.keep_state()  # an edit while paused: from the state before it
+        else:
+            self._methods.drop_state()
         if jump:
             if self._last_solved >= 0:  # after a load, loop or method change it is done already
                 self._reset_methods()  # temporal state is meaningless across a jump

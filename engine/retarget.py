@@ -6,12 +6,12 @@ How it works (details and figures in ``docs/skeleton.md``)
    a mapping file, a TOML profile or the automatic mapping (:func:`engine.rigs.resolve_rig`).
 2. Source FK gives world positions and rotations of every source joint, converted to the
    canonical axes (Z-up, facing -Y) and metres.
-3. **Rotations with the canonical local axes.** Every canonical joint's world rotation is
-   the source joint's times one constant ``R`` per joint (``G_c = G_s R``), chosen so that
-   the joint's bone frame matches the canonical one (:mod:`engine.retarget_frames`):
-   limbs by their knee/elbow hinge as DragPoser's own clips bend them, the rest by
-   position-based bone frames averaged over the clip. The source's own motion, twist
-   included, is kept; only the axes convention changes. Canonical joints a rig lacks get
+3. **Rotations defined by the body.** Limbs, hands, feet, neck and head get the rotation
+   of a bone frame built each frame from the body's positions (:mod:`engine.retarget_body`:
+   swing from the bone, twist from the bending plane, the knuckles, the foot, the eyes),
+   so the source rig's joint axes do not matter. The torso, and any joint whose defining
+   points the rig lacks, keep the source joint's rotation times one constant ``R``
+   (``G_c = G_s R``, :mod:`engine.retarget_frames`). Canonical joints a rig lacks get
    identity local rotations.
 4. **True proportions.** Bone offsets are measured per clip along the source chain
    (:func:`measure_offsets`), so mapped joints land where the source's are and the clip's
@@ -34,16 +34,24 @@ import numpy as np
 from engine import skeleton as sk
 from engine.bvh import RawBVH, load_bvh
 from engine.errors import UserError
-from engine.input_files import read_json
+from engine.input_files import read_json, read_toml
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk, local_from_global
 from engine.motion import Motion
+from engine import retarget_body as RB
 from engine import retarget_frames as RF
+from engine.retarget_rotations import rigid_hands, world_rotations
 from engine.rigs import RigProfile, resolve_rig
-from engine.validation import SKELETON, check_manifest, check_value
+from engine.validation import SKELETON, check_manifest, check_value, shown
 
 #: Bumped whenever retargeting gives different clips (prepared data is rebuilt then).
-RETARGET_VERSION = 3
+#: 4: limbs, hands, feet and head take their twist from the body (:mod:`engine.retarget_body`);
+#: 3: every joint keeps the source's rotation with one constant alignment per joint.
+RETARGET_VERSION = 4
+#: Definitions :func:`retarget` can still produce (models record the one they learnt).
+RETARGET_VERSIONS = (3, 4)
+#: Where the shipped models record the definition they learnt from (``retarget_version``).
+MODELS_DATA = Path(__file__).resolve().parents[1] / "assets" / "models" / "data.toml"
 _AXIS = {"x": 0, "y": 1, "z": 2}
 #: Source frames kept at least when only the start of a clip is loaded (the rest-pose
 #: alignment and the heights are measured on them; every shared clip is shorter).
@@ -51,7 +59,6 @@ ALIGN_FRAMES = 8192
 #: Highest source frame rate accepted (engine.validation.BVH_HEADER / MANIFEST / --fps).
 MAX_SOURCE_FPS = 1000
 _TOE_HEIGHT = 0.045  # canonical toe joint height above the floor when standing (metres)
-_CANON_FRAMES = RF.canonical_frames()
 _LEG = [sk.JOINT_INDEX[n] for n in ("lknee", "lankle")]
 
 
@@ -80,11 +87,36 @@ class RetargetReport:
     toe_tips: dict | None = None
     #: Canonical (60 fps) frames of the whole file, even when only its start was loaded.
     frames: int = 0
+    #: Retargeting definition used (:data:`RETARGET_VERSIONS`).
+    version: int = RETARGET_VERSION
+    #: Joints whose rotation the body defines; the other mapped joints keep the source's.
+    body_joints: list | None = None
+
+    @property
+    def source_twist_joints(self) -> list[str]:
+        """Mapped joints of :data:`engine.retarget_body.BODY_JOINTS` whose defining points
+        the rig lacks: they keep the source's rotation (one constant alignment)."""
+        if self.profile is None or self.body_joints is None:
+            return []
+        return [j for j in RB.BODY_JOINTS if j in self.profile.joints and j not in self.body_joints]
 
     @property
     def mapping(self) -> dict[str, str]:
         """Canonical joint -> source joint."""
         return dict(self.profile.joints) if self.profile else {}
+
+
+def models_version(path: Path = MODELS_DATA) -> int:
+    """The retargeting definition every command feeding the shipped models uses by default
+    (``retarget_version`` in :data:`MODELS_DATA`, beside the version they were trained on);
+    :data:`RETARGET_VERSION` when the file is absent."""
+    if not path.is_file():
+        return RETARGET_VERSION
+    version = read_toml(path, "model data card").get("retarget_version", RETARGET_VERSION)
+    if version not in RETARGET_VERSIONS:
+        raise UserError(f"{path}: retarget_version must be one of {', '.join(map(str, RETARGET_VERSIONS))}, "
+                        f"got {shown(version)}")  # fmt: skip
+    return int(version)
 
 
 def _basis_change(up: str, forward: str) -> np.ndarray:
@@ -117,31 +149,6 @@ def _points(raw_pos: np.ndarray, raw: RawBVH, prof: RigProfile, world_rot: np.nd
         else:
             raise UserError(f"{raw.path}: rig {prof.name}: landmark {lm} names a joint not in the file: {spec}")
     return pts
-
-
-def _world_rotations(prof: RigProfile, pts, wrot, idx, cq) -> tuple[np.ndarray, list]:
-    """Canonical world rotations (F, 22, 4) and the per-joint alignment ``R`` (or None)."""
-    n = wrot.shape[0]
-    glob = np.zeros((n, sk.NUM_JOINTS, 4))
-    frames = RF.bone_frames(pts) if prof.align else {}
-    limbs = RF.limb_alignments(pts, {c: wrot[:, idx[s]] for c, s in prof.joints.items()}) if prof.align else {}
-    tpose = Q.conjugate(cq)  # zero pose taken as the T-pose: G_c = C G_src C^-1 = G_s C^-1
-    align: list = [None] * sk.NUM_JOINTS
-    for j, name in enumerate(sk.JOINT_NAMES):
-        src = prof.joints.get(name)
-        if src is None:
-            glob[:, j] = glob[:, sk.PARENTS[j]]  # joint the rig lacks: identity local rotation
-            continue
-        g = wrot[:, idx[src]]
-        if name in limbs:
-            r = limbs[name]
-        elif name in frames:
-            r = RF.alignment(g, frames[name], _CANON_FRAMES[name])
-        else:
-            r = tpose
-        align[j] = r
-        glob[:, j] = Q.mul(g, np.broadcast_to(r, g.shape))
-    return glob, align
 
 
 def measure_offsets(pts: dict[str, np.ndarray], glob: np.ndarray, leg_scale: float) -> np.ndarray:
@@ -209,7 +216,7 @@ def _resample(local_rot: np.ndarray, root: np.ndarray, fps: float, target: float
 
 
 def retarget(raw: RawBVH, fps: float | None = None, profile: RigProfile | None = None,
-             rig_map: str | Path | None = None) -> tuple[Motion, RetargetReport]:
+             rig_map: str | Path | None = None, version: int | None = None) -> tuple[Motion, RetargetReport]:
     """Canonical :class:`Motion` (60 fps, Z-up metres, floor at 0) from a parsed BVH.
 
     Parameters
@@ -222,7 +229,15 @@ def retarget(raw: RawBVH, fps: float | None = None, profile: RigProfile | None =
         Force a rig profile instead of detecting it from the joint names.
     rig_map : path, optional
         A mapping file (``rig suggest`` writes one) that overrides detection.
+    version : int, optional
+        Retargeting definition (:data:`RETARGET_VERSIONS`); default: the one the shipped
+        models learnt from (:func:`models_version`), so that what feeds them looks like
+        what they learnt. ``convert``, ``info`` and ``data prepare`` ask for
+        :data:`RETARGET_VERSION`.
     """
+    version = models_version() if version is None else version
+    if version not in RETARGET_VERSIONS:
+        raise UserError(f"{raw.path}: retarget version {version} is not one of {', '.join(map(str, RETARGET_VERSIONS))}")
     prof = profile or resolve_rig(raw, rig_map)
     src_fps = float(fps) if fps else _snap_fps(raw.fps)
     if src_fps <= 0:
@@ -250,7 +265,7 @@ def retarget(raw: RawBVH, fps: float | None = None, profile: RigProfile | None =
     leg_scale = leg / float(np.linalg.norm(sk.REST_OFFSETS[_LEG], axis=-1).sum())
     _check_height(raw.path, leg_scale)
 
-    glob, align = _world_rotations(prof, pts, wrot, idx, cq)
+    glob, align, body_joints = world_rotations(prof, pts, wrot, idx, cq, version, rigid_hands(raw, prof))
     joint_pts = {n: pts[n] for n in [*sk.JOINT_NAMES, "l_toe_tip", "r_toe_tip"] if n in pts}
     skel = sk.Skeleton(offsets=measure_offsets(joint_pts, glob, leg_scale))
     local = Q.unroll(Q.normalize(local_from_global(glob)), axis=0)
@@ -263,7 +278,8 @@ def retarget(raw: RawBVH, fps: float | None = None, profile: RigProfile | None =
     motion = Motion(local, root, skel, sk.FPS, Path(raw.path).stem)
     shift = _refloor(motion)
     report = RetargetReport(prof.name, len(raw.names), raw.total_frames, src_fps, skel.scale, prof, align, basis,
-                            shift, skip, src_height, clip_height(motion, tips), tips, canonical)  # fmt: skip
+                            shift, skip, src_height, clip_height(motion, tips), tips, canonical, version,
+                            body_joints)  # fmt: skip
     return motion, report
 
 
@@ -353,14 +369,16 @@ def manifest_fps(path: Path) -> float | None:
 
 
 def load_motion(path: str | Path, fps: float | None = None, rig_map: str | Path | None = None,
-                max_frames: int | None = None) -> Motion:  # fmt: skip
+                max_frames: int | None = None, version: int | None = None) -> Motion:  # fmt: skip
     """Load any humanoid BVH as a canonical motion (see module docs).
 
     ``fps`` overrides the file's header; otherwise a ``manifest.json`` beside the data
     (as in ``../shared/data/mocap``) gives the true rate, else the header does.
     ``rig_map`` is a mapping file that overrides rig detection. ``max_frames``
-    (canonical frames) reads only the start of a long file; see :func:`load_with_report`."""
-    motion = load_with_report(path, fps, rig_map, max_frames)[0]
+    (canonical frames) reads only the start of a long file; see :func:`load_with_report`.
+    ``version`` is the retargeting definition (default: the shipped models', see
+    :func:`retarget`)."""
+    motion = load_with_report(path, fps, rig_map, max_frames, version)[0]
     return motion.slice(0, max_frames) if max_frames else motion
 
 
@@ -373,10 +391,11 @@ def source_frames_needed(max_frames: int | None) -> int | None:
 
 
 def load_with_report(path: str | Path, fps: float | None = None, rig_map: str | Path | None = None,
-                     max_frames: int | None = None) -> tuple[Motion, RetargetReport]:  # fmt: skip
+                     max_frames: int | None = None, version: int | None = None,
+                     ) -> tuple[Motion, RetargetReport]:  # fmt: skip
     """:func:`load_motion` plus the :class:`RetargetReport`. With ``max_frames``, only the
     source frames those canonical frames need are kept (at least :data:`ALIGN_FRAMES`,
     which the rest-pose alignment averages over); every row is still checked, and the
     report's ``source_frames`` / ``frames`` describe the whole file."""
     raw = load_bvh(path, source_frames_needed(max_frames))
-    return retarget(raw, fps or manifest_fps(Path(path)), rig_map=rig_map)
+    return retarget(raw, fps or manifest_fps(Path(path)), rig_map=rig_map, version=version)

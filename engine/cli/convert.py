@@ -26,11 +26,12 @@ def register(sub: argparse._SubParsersAction) -> None:
 def _convert(args: argparse.Namespace) -> int:
     from engine.bvh import save_motion_bvh
     from engine.errors import UserError
-    from engine.retarget import load_with_report, manifest_fps, resample_motion
+    from engine.retarget import RETARGET_VERSION, load_with_report, manifest_fps, resample_motion
 
     if args.fps is not None and not args.fps > 0:
         raise UserError(f"--fps must be > 0, got {args.fps}")
-    motion, rep = load_with_report(args.input, args.source_fps or manifest_fps(args.input), rig_map_path(args))
+    motion, rep = load_with_report(args.input, args.source_fps or manifest_fps(args.input), rig_map_path(args),
+                                   version=RETARGET_VERSION)
     if args.fps:
         motion = resample_motion(motion, args.fps)
     save_motion_bvh(args.out, motion)

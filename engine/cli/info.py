@@ -27,13 +27,14 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def describe(path: Path, fps: float | None = None, rig_map: Path | None = None) -> dict:
     """Everything ``info`` reports about a BVH file, as a JSON-ready dict."""
-    from engine.retarget import load_with_report, manifest_fps
+    from engine.retarget import RETARGET_VERSION, load_with_report, manifest_fps
     from engine.validation import CLI, check_value
 
     if fps is not None:
         fps = check_value(CLI["fps"], fps, "--fps", "value")
     # only the start is kept (every row is still checked): a long file stays cheap
-    motion, rep = load_with_report(path, fps or manifest_fps(path), rig_map, max_frames=1)
+    motion, rep = load_with_report(path, fps or manifest_fps(path), rig_map, max_frames=1,
+                                 version=RETARGET_VERSION)
 
     def num(x: float, nd: int = 3):
         return round(float(x), nd) if math.isfinite(x) else None
@@ -55,6 +56,10 @@ def describe(path: Path, fps: float | None = None, rig_map: Path | None = None) 
         "source_height_m": num(rep.source_height_m),
         "rest_height_m": num(motion.skeleton.height()),
         "scale": num(rep.scale),
+        "retarget_version": rep.version,
+        "skipped_frames": rep.skip,
+        "body_twist": rep.body_joints or [],
+        "source_twist": rep.source_twist_joints,
     }
 
 
@@ -76,6 +81,9 @@ def _info(args: argparse.Namespace) -> int:
     print(f"height        {out['height_m']:.2f} m (source {out['source_height_m']:.2f} m; "
           f"T-pose {out['rest_height_m']:.2f} m, legs {out['scale']:.3f} x the canonical subject's)")
     print("mapping       " + ", ".join(f"{c}={s}" for c, s in out["mapping"].items()))
+    if out["source_twist"]:
+        print("source twist  " + ", ".join(out["source_twist"]) + " (the rig lacks the points that define "
+              "their twist: docs/skeleton.md, Body-defined twist)")
     if out["folded"]:
         print("folded in     " + ", ".join(f"{c}: {'+'.join(v)}" for c, v in out["folded"].items()))
     return 0

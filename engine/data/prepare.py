@@ -176,7 +176,7 @@ def prepare(
                 entries.extend(cached)  # type: ignore[arg-type]
                 result.reused += len(cached)
                 continue
-            motion, report = load_with_report(path, manifest_fps(path), rig_map)
+            motion, report = load_with_report(path, manifest_fps(path), rig_map, version=RETARGET_VERSION)
             if len(motion) < 8:
                 raise UserError(f"{path}: only {len(motion)} frames after retargeting")
             for m in variants:

@@ -27,9 +27,9 @@ CLIPS = ("cmu_daz/martial/03.bvh", "cmu_daz/indian/04.bvh", "cmu_daz/salsa/01.bv
 
 
 def _load(mocap, rel):
-    from engine.retarget import load_with_report
+    from engine.retarget import RETARGET_VERSION, load_with_report
 
-    return load_with_report(mocap / rel)
+    return load_with_report(mocap / rel, version=RETARGET_VERSION)
 
 
 @pytest.mark.parametrize("rel", CLIPS)
@@ -80,11 +80,11 @@ def test_limbs_rotate_like_the_canonical_clips(shared_mocap, rel):
 @pytest.mark.parametrize("rel", ("cmu_iclone/007_02.bvh", "cmu_iclone/002_01.bvh", "cmu_daz/salsa/01.bvh"))
 def test_written_back_onto_the_source_rig_within_1cm(shared_mocap, tmp_path, rel):
     from engine.bvh import load_bvh
-    from engine.retarget import manifest_fps, retarget
+    from engine.retarget import RETARGET_VERSION, manifest_fps, retarget
     from engine.source_rig import save_on_source_rig
 
     raw = load_bvh(shared_mocap / rel)
-    motion, report = retarget(raw, manifest_fps(shared_mocap / rel))
+    motion, report = retarget(raw, manifest_fps(shared_mocap / rel), version=RETARGET_VERSION)
     assert report.source_fps == 60.0  # frames line up one to one
     save_on_source_rig(tmp_path / "back.bvh", motion, raw, report)
     back = load_bvh(tmp_path / "back.bvh")
@@ -113,7 +113,7 @@ def every_shared_clip(shared_mocap):
     import json
 
     from engine.joint_stats import summarize
-    from engine.retarget import load_with_report
+    from engine.retarget import RETARGET_VERSION, load_with_report
 
     listed = json.loads((shared_mocap / "manifest.json").read_text())["files"]
     expected = sorted(entry["path"].removeprefix("mocap/") for entry in listed)
@@ -125,7 +125,7 @@ def every_shared_clip(shared_mocap):
     for path in files:
         rel = path.relative_to(shared_mocap)
         counts[rel.parts[0]] = counts.get(rel.parts[0], 0) + 1
-        motion, rep = load_with_report(path)
+        motion, rep = load_with_report(path, version=RETARGET_VERSION)
         heights[str(rel)] = (rep.height_m, rep.source_height_m)
         groups.setdefault(rel.parts[0], {})[str(rel)] = joint_report(motion.local_rot, motion.skeleton.offsets)
     return counts, heights, summarize(groups, "dragposer")
@@ -141,11 +141,7 @@ def test_every_shared_clip_keeps_its_height(every_shared_clip):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("family", [
-    pytest.param(family, marks=pytest.mark.xfail(strict=True, reason=(
-        "09_10's knees carry a twist of about 150 degrees that its thighs undo: the rig's rest "
-        "pose still decides the twist of the legs"))) if family == "cmu_daz_cgspeed" else family
-    for family in FAMILIES])  # fmt: skip
+@pytest.mark.parametrize("family", FAMILIES)
 def test_every_shared_clip_rotates_like_the_canonical_clips(every_shared_clip, family):
     """Per joint, the hinge axis and twist of each rig family against DragPoser's own clips
     (``engine.joint_stats.summarize``, the figures of docs/skeleton.md: ``scripts/joint_stats.py``)."""

@@ -1,0 +1,212 @@
+"""Body-defined rotations: the same body motion gives the same canonical rotations on any rig.
+
+A synthetic canonical walk is written onto rigs that differ only in conventions (per-joint
+bone axes, an A-pose rest, twist axes turned half a turn, a twist the thigh and forearm
+carry and their children undo) and read back: the rotations agree within 1 degree."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from engine import skeleton as sk
+from engine.kinematics import quaternion as Q
+from engine.retarget_frames import CANON_LANDMARKS
+
+NAMES = {"root": "Hips", "lhip": "LeftUpLeg", "lknee": "LeftLeg", "lankle": "LeftFoot", "ltoe": "LeftToeBase",
+         "rhip": "RightUpLeg", "rknee": "RightLeg", "rankle": "RightFoot", "rtoe": "RightToeBase",
+         "lowerback": "Spine", "upperback": "Spine1", "chest": "Spine2", "lowerneck": "Neck", "upperneck": "Head",
+         "lclavicle": "LeftShoulder", "lshoulder": "LeftArm", "lelbow": "LeftForeArm", "lwrist": "LeftHand",
+         "rclavicle": "RightShoulder", "rshoulder": "RightArm", "relbow": "RightForeArm", "rwrist": "RightHand"}  # fmt: skip
+# landmark joints (children of their anchor, so they move rigidly with it)
+EXTRA = {"LeftEye": "l_eye", "RightEye": "r_eye", "LeftHandIndex1": "l_index", "LeftHandPinky1": "l_pinky",
+         "RightHandIndex1": "r_index", "RightHandPinky1": "r_pinky"}  # fmt: skip
+
+
+def _axis_angle(axis, deg):
+    return Q.from_axis_angle(np.broadcast_to(np.asarray(axis, float), np.shape(deg) + (3,)), np.radians(deg))
+
+
+def canonical_walk(frames: int = 180) -> tuple[np.ndarray, np.ndarray]:
+    """Local rotations (F, 22, 4) and root positions (F, 3) of a canonical walk whose knees
+    and elbows stay bent (at least 35 degrees) and whose hands, feet and head turn."""
+    t = np.arange(frames) / 60.0
+    ph = 2 * np.pi * 0.9 * t
+    rot = np.tile(np.array([1.0, 0, 0, 0]), (frames, sk.NUM_JOINTS, 1))
+
+    def put(name, q):
+        j = sk.JOINT_INDEX[name]
+        rot[:, j] = Q.mul(rot[:, j], q)
+
+    put("root", _axis_angle([0, 0, 1], 25 * np.sin(0.4 * ph)))
+    for s, sign in (("l", 1), ("r", -1)):
+        put(f"{s}hip", _axis_angle([1, 0, 0], 25 * sign * np.sin(ph)))
+        put(f"{s}hip", _axis_angle([0, 0, 1], 10 * np.sin(0.7 * ph + sign)))
+        put(f"{s}knee", _axis_angle([1, 0, 0], -(55 + 20 * np.sin(ph + sign))))
+        put(f"{s}ankle", _axis_angle([1, 0, 0], 15 * np.sin(ph)))
+        put(f"{s}ankle", _axis_angle([0, 1, 0], 10 * np.sin(0.5 * ph)))
+        put(f"{s}toe", _axis_angle([1, 0, 0], 10 * np.sin(ph)))
+        put(f"{s}shoulder", _axis_angle([0, 1, 0], sign * (60 + 10 * np.sin(ph))))
+        put(f"{s}shoulder", _axis_angle([1, 0, 0], 20 * np.sin(ph - sign)))
+        put(f"{s}elbow", _axis_angle([0, 0, 1], sign * (60 + 20 * np.sin(ph))))
+        put(f"{s}wrist", _axis_angle([1, 0, 0], 30 * np.sin(0.8 * ph)))
+        put(f"{s}wrist", _axis_angle([0, 0, 1], 20 * np.sin(0.6 * ph)))
+    put("lowerneck", _axis_angle([0, 0, 1], 20 * np.sin(0.5 * ph)))
+    put("upperneck", _axis_angle([1, 0, 0], 15 * np.sin(0.3 * ph)))
+    put("chest", _axis_angle([0, 0, 1], 8 * np.sin(ph)))
+    root = np.stack([0.05 * np.sin(ph), -1.2 * t, 0.95 + 0.02 * np.cos(2 * ph)], axis=-1)
+    return rot, root
+
+
+def _hierarchy(landmarks: bool = True):
+    """(name, parent index, offset (3,), end site or None) rows, canonical rest (T-pose),
+    metres; with ``landmarks``, eye and knuckle joints too."""
+    rows = []
+    for j, canon in enumerate(sk.JOINT_NAMES):
+        end = sk.END_SITES.get(canon)
+        rows.append([NAMES[canon], sk.PARENTS[j], sk.REST_OFFSETS[j].copy(), None if end is None else np.array(end)])
+    for name, lm in EXTRA.items() if landmarks else ():
+        anchor, off = CANON_LANDMARKS[lm]
+        rows.append([name, sk.JOINT_INDEX[anchor], np.asarray(off, float).copy(), np.array([0.0, -0.01, 0.0])])
+    return rows
+
+
+def write_rig(path, local, root, frames_c=None, twist=None, landmarks=True):
+    """Write the canonical motion onto a rig with per-joint constant frames ``frames_c``
+    (joint name -> quaternion ``C``: ``G_rig = G C``, OFFSETs and end sites re-expressed)
+    and ``twist`` (upper joint name -> degrees (F,)): that joint carries a twist about its
+    bone that its child undoes. World positions are the canonical ones."""
+    rows = _hierarchy(landmarks)
+    n, f = len(rows), len(local)
+    full = np.tile(np.array([1.0, 0, 0, 0]), (f, n, 1))
+    full[:, : sk.NUM_JOINTS] = local
+    c = np.tile(np.array([1.0, 0, 0, 0]), (n, 1))
+    for i, r in enumerate(rows):
+        if frames_c and r[0] in frames_c:
+            c[i] = frames_c[r[0]]
+    for name, deg in (twist or {}).items():
+        i = [r[0] for r in rows].index(name)
+        child = next(k for k, r in enumerate(rows) if r[1] == i)
+        t = _axis_angle(rows[child][2] / np.linalg.norm(rows[child][2]), deg)
+        full[:, i] = Q.mul(full[:, i], t)
+        full[:, child] = Q.mul(Q.conjugate(t), full[:, child])
+    out = np.empty_like(full)
+    for i, r in enumerate(rows):
+        cp = c[r[1]] if r[1] >= 0 else np.array([1.0, 0, 0, 0])
+        out[:, i] = Q.mul(Q.mul(np.broadcast_to(Q.conjugate(cp), (f, 4)), full[:, i]), np.broadcast_to(c[i], (f, 4)))
+    euler = np.degrees(Q.to_euler(Q.normalize(out), np.broadcast_to(np.array(["z", "y", "x"]), (f, n, 3))))
+    lines = ["HIERARCHY"]
+
+    def emit(i, depth):
+        r, pad = rows[i], "  " * depth
+        cp = c[r[1]] if r[1] >= 0 else np.array([1.0, 0, 0, 0])
+        off = Q.rotate(Q.conjugate(cp), r[2])
+        lines.append(f"{pad}{'ROOT' if r[1] < 0 else 'JOINT'} {r[0]}")
+        lines.append(f"{pad}{{")
+        lines.append(f"{pad}  OFFSET {off[0]:.6f} {off[1]:.6f} {off[2]:.6f}")
+        lines.append(f"{pad}  CHANNELS {'6 Xposition Yposition Zposition ' if r[1] < 0 else '3 '}"
+                     "Zrotation Yrotation Xrotation")  # fmt: skip
+        kids = [k for k, q in enumerate(rows) if q[1] == i]
+        for k in kids:
+            emit(k, depth + 1)
+        if not kids or r[3] is not None:
+            e = Q.rotate(Q.conjugate(c[i]), r[3] if r[3] is not None else np.array([0.0, 0.0, 0.05]))
+            lines.extend([f"{pad}  End Site", f"{pad}  {{", f"{pad}    OFFSET {e[0]:.6f} {e[1]:.6f} {e[2]:.6f}",
+                          f"{pad}  }}"])
+        lines.append(f"{pad}}}")
+
+    emit(0, 0)
+    order = []
+
+    def walk(i):
+        order.append(i)
+        for k, q in enumerate(rows):
+            if q[1] == i:
+                walk(k)
+
+    walk(0)
+    lines += ["MOTION", f"Frames: {f}", "Frame Time: 0.0166667"]
+    for t in range(f):
+        vals = [*root[t]]
+        for i in order:
+            vals += list(euler[t, i])
+        lines.append(" ".join(f"{v:.6f}" for v in vals))
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def _conventions(rng) -> dict:
+    """Per-joint rest conventions: random bone axes, half-turn twist axes, an A-pose."""
+    c = {}
+    for name in [*NAMES.values(), *EXTRA]:
+        axis = rng.normal(size=3)
+        c[name] = _axis_angle(axis / np.linalg.norm(axis), rng.uniform(-180, 180))
+    return c
+
+
+@pytest.fixture(scope="module")
+def rigs(tmp_path_factory):
+    from engine.retarget import retarget
+    from engine.bvh import load_bvh
+
+    tmp = tmp_path_factory.mktemp("body")
+    local, root = canonical_walk()
+    ph = np.linspace(0, 4 * np.pi, len(local))
+    half = {n: _axis_angle([1, 0, 0], 180.0) for n in ("LeftArm", "LeftForeArm", "RightUpLeg", "RightLeg", "LeftHand")}
+    apose = {n: _axis_angle([0, 1, 0], s * 45.0) for n, s in (("LeftArm", 1), ("RightArm", -1))}
+    variants = {
+        "tpose": {},
+        "random_axes": {"frames_c": _conventions(np.random.default_rng(1))},
+        "half_turn_twist_axes": {"frames_c": half},
+        "apose": {"frames_c": apose},
+        "child_undoes_twist": {"twist": {n: 150 * np.sin(ph) for n in ("LeftUpLeg", "RightUpLeg", "LeftForeArm")}},
+    }
+    out = {}
+    for version in (3, 4):
+        for name, kw in variants.items():
+            raw = load_bvh(write_rig(tmp / f"{name}.bvh", local, root, **kw))
+            out[version, name] = retarget(raw, version=version)
+    return out
+
+
+def _diff(a, b) -> np.ndarray:
+    return np.degrees(Q.angle(a.local_rot, b.local_rot)).max(0)
+
+
+@pytest.mark.parametrize("variant", ["random_axes", "half_turn_twist_axes", "apose", "child_undoes_twist"])
+def test_rest_conventions_do_not_change_the_canonical_rotations(rigs, variant):
+    ref, rep = rigs[4, "tpose"]
+    other, rep2 = rigs[4, variant]
+    assert rep.mapping == rep2.mapping
+    worst = _diff(ref, other)
+    assert worst.max() < 1.0, dict(zip(sk.JOINT_NAMES, np.round(worst, 2)))
+
+
+def test_the_source_twist_a_child_undoes_changed_the_older_definition(rigs):
+    """The defect body-defined twist removes: version 3 kept the thigh's own twist."""
+    worst = _diff(rigs[3, "tpose"][0], rigs[3, "child_undoes_twist"][0])
+    assert worst[sk.JOINT_INDEX["lhip"]] > 30 and worst[sk.JOINT_INDEX["lknee"]] > 30
+
+
+def test_a_rig_without_face_or_knuckles_keeps_the_source_twist_and_says_so(rigs, tmp_path):
+    from engine.bvh import load_bvh
+    from engine.retarget import retarget
+
+    full = rigs[4, "tpose"][1]
+    assert full.source_twist_joints == [] and "lwrist" in full.body_joints and "upperneck" in full.body_joints
+    local, root = canonical_walk(60)
+    text = write_rig(tmp_path / "bare.bvh", local, root, landmarks=False)
+    rep = retarget(load_bvh(text), version=4)[1]
+    assert set(rep.source_twist_joints) == {"lwrist", "rwrist", "lowerneck", "upperneck"}
+
+
+def test_models_version_comes_from_the_model_card(tmp_path):
+    from engine.errors import UserError
+    from engine.retarget import RETARGET_VERSION, models_version
+
+    (tmp_path / "data.toml").write_text("retarget_version = 3\n")
+    assert models_version(tmp_path / "data.toml") == 3
+    assert models_version(tmp_path / "absent.toml") == RETARGET_VERSION
+    (tmp_path / "bad.toml").write_text("retarget_version = 9\n")
+    with pytest.raises(UserError, match="bad.toml: retarget_version"):
+        models_version(tmp_path / "bad.toml")

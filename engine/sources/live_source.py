@@ -1,26 +1,25 @@
 """A live tracker stream as the studio's sensor source: a clip that grows as frames
 arrive, with recording, a calibration countdown and a status for the status light.
 
-The studio's engine thread reads sensors through ``fps``, ``num_frames``,
-``frame(i)``, ``ground_truth(i)`` and ``set_sensors(sensors)`` (the sensor-source
-contract of :mod:`engine.studio.source`); this class keeps every received frame (up to
-``history_s`` seconds) so the timeline can scrub back through them, and ``live`` tells
-playback to follow the newest frame instead of a clock. There is no ground truth:
-``ground_truth`` is NaN.
+The studio's engine thread reads it as a :class:`engine.sensor_source.SensorSource`;
+this class keeps every received frame (up to ``history_s`` seconds) so the timeline can
+scrub back through them, and ``live`` tells playback to follow the newest frame instead
+of a clock. There is no ground truth: ``ground_truth`` is NaN.
 """
 
 from __future__ import annotations
 
 import threading
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from engine import skeleton as sk
-from engine.methods import SensorFrame
+from engine.sensor_source import SensorSource, apply_edits
+from engine.sensors import SensorFrame
 from engine.sources.calibration import Calibration, calibrate
 from engine.sources.receiver import LiveFrame, VMCReceiver
 from engine.sources.recording import RecordingWriter, header
@@ -65,24 +64,7 @@ class LiveStatus:
     calibration: str
 
 
-def with_studio_edits(readings: dict, sensors: tuple, frame: int) -> SensorFrame:
-    """``readings`` restricted to the studio's enabled sensors (all of them when it has
-    set none), with each sensor's DoF and drag offset applied."""
-    if not sensors:
-        return SensorFrame(frame, dict(readings))
-    out = {}
-    for s in sensors:
-        r = readings.get(s.joint)
-        if r is None or not getattr(s, "enabled", True):
-            continue
-        pos = np.asarray(r.position, float) + np.asarray(getattr(s, "offset", (0.0, 0.0, 0.0)), float)
-        dof = getattr(s, "dof", r.dof)
-        rot = r.rotation if dof == 6 else np.array([1.0, 0.0, 0.0, 0.0])
-        out[s.joint] = replace(r, position=pos, rotation=rot, dof=dof)
-    return SensorFrame(frame, out)
-
-
-class LiveSource:
+class LiveSource(SensorSource):
     """Receive VMC on ``host:port`` and serve the frames to the studio.
 
     Parameters
@@ -98,7 +80,6 @@ class LiveSource:
     """
 
     live = True
-    motion = None
 
     def __init__(self, host: str = "0.0.0.0", port: int = 39539, mapping: TrackerMapping | None = None,
                  convention: str = "unity", fps: float = sk.FPS, timeout_s: float = DEFAULT_TIMEOUT_S,
@@ -110,7 +91,6 @@ class LiveSource:
         self._frames: list[LiveFrame] = []
         self._offset = 0  # frames dropped from the front of the history
         self._lock = threading.Lock()
-        self.sensors: tuple = ()
         self.skeleton = sk.Skeleton.canonical()
         #: Bumped whenever :attr:`skeleton` changes (the engine then resets its methods).
         self.skeleton_version = 0
@@ -141,12 +121,6 @@ class LiveSource:
         with self._lock:
             return self._offset + len(self._frames)
 
-    def set_sensors(self, sensors: tuple) -> None:
-        self.sensors = tuple(sensors)
-
-    def ground_truth(self, frame: int) -> np.ndarray:
-        return np.full((sk.NUM_JOINTS, 3), np.nan)
-
     def frame(self, frame: int) -> SensorFrame:
         """Readings at received frame ``frame`` (clamped to what is kept), restricted to
         the studio's enabled sensors when it has set any, with their DoF and offsets."""
@@ -154,7 +128,7 @@ class LiveSource:
             if not self._frames:
                 return SensorFrame(frame, {})
             f = self._frames[int(np.clip(frame - self._offset, 0, len(self._frames) - 1))]
-        return with_studio_edits(f.sensors.readings, self.sensors, frame)
+        return apply_edits(f.sensors.readings, self.sensors, frame)
 
     def arrival(self, frame: int) -> float | None:
         """``time.perf_counter()`` when ``frame`` arrived (for latency), if still kept."""

@@ -11,8 +11,8 @@
   its playback clock (:mod:`engine.studio.playback`) and the methods it runs on each
   frame (:mod:`engine.studio.method_set`); :mod:`engine.studio.process` runs the same
   loop in a child process.
-* :mod:`engine.studio.source`: where sensor readings come from (a clip today; any
-  :class:`~engine.studio.source.SensorSource` later, e.g. live trackers).
+* :mod:`engine.studio.source`: a clip's simulated trackers, one
+  :class:`~engine.sensor_source.SensorSource` (recordings and live streams are others).
 * :mod:`engine.studio.catalog`: the constraint kinds users may add, with their fields.
 * :mod:`engine.studio.methods`: building methods and pushing the scene into them.
 

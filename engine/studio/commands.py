@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from engine.motion import Motion
+from engine.sensor_source import SensorSource
 from engine.sensors import Sensor
 
 
@@ -87,7 +88,7 @@ class Stop:
 
 @dataclass(frozen=True)
 class SetSource:
-    """Read sensors from ``source`` (an :class:`engine.studio.source.SensorSource`)
+    """Read sensors from ``source`` (an :class:`engine.sensor_source.SensorSource`)
     instead of the clip; the session's sensor settings still apply."""
 
-    source: Any
+    source: SensorSource

@@ -18,6 +18,7 @@ from typing import Any, Literal
 from psygnal import Signal, SignalGroup
 
 from engine.motion import Motion
+from engine.sensor_source import SensorSource
 from engine.sensors import Sensor
 
 #: How playback advances: wait for every frame to be solved, or keep the wall clock.
@@ -106,10 +107,10 @@ class PlaybackChanged:
 @dataclass(frozen=True)
 class SourceChanged:
     """Sensors now come from ``source`` (a tracker recording or a live stream, see
-    :mod:`engine.sources`) instead of a clip; there is no ground truth. ``name`` says
+    :class:`engine.sensor_source.SensorSource`) instead of a clip; there is no ground truth. ``name`` says
     which (a file name or an address); ``live`` is True for a stream that grows."""
 
-    source: Any
+    source: SensorSource
     name: str
     live: bool
 

@@ -14,6 +14,7 @@ from typing import Any
 
 from engine.methods import driver
 from engine.methods.base import FrameResult, Method
+from engine.sensor_source import SensorSource
 from engine.sensors import Sensor, SensorFrame
 from engine.studio.method_state import copy_state
 from engine.studio.methods import apply_constraints, apply_sensor_weights, apply_settings
@@ -92,7 +93,7 @@ class MethodSet:
         self._selected = not keep
         return True
 
-    def reset(self, source: Any) -> None:
+    def reset(self, source: SensorSource | None) -> None:
         """Reset every method for ``source``'s clip or skeleton, then configure them.
 
         A shown method that is missing (its build failed at an earlier selection) is
@@ -109,16 +110,12 @@ class MethodSet:
             if g not in self.ghosts and (m := self.build(g)) is not None:
                 self.ghosts[g] = m
                 fresh = True
-        motion = source.motion if source is not None else None
-        # a tracker source has no clip, only the wearer's (perhaps calibrated) skeleton
-        skeleton = motion.skeleton if motion is not None else getattr(source, "skeleton", None)
-        self.skeleton_version = getattr(source, "skeleton_version", 0)
-        for _, m in self.running():
-            if skeleton is None:
-                continue
+        self.skeleton_version = source.skeleton_version if source is not None else 0
+        for _, m in self.running() if source is not None else ():
             try:
-                # the clip is the ground truth of a method that needs one (an oracle baseline)
-                driver.reset(m, skeleton, source.fps, reference=motion)
+                # a tracker source has no clip, only the wearer's (perhaps calibrated)
+                # skeleton; a clip is the ground truth of a method that needs one
+                driver.reset(m, source.skeleton, source.fps, reference=source.motion)
             except Exception as exc:
                 self._report(f"{m.name}.reset: {exc}")
         self.configure(report=fresh)  # methods may drop their settings on reset

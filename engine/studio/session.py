@@ -26,6 +26,7 @@ from engine.constraints.base import Constraint
 from engine.errors import UserError
 from engine.methods import available_methods
 from engine.motion import Motion
+from engine.sensor_source import SensorSource
 from engine.sensors import Sensor
 from engine.solver.settings import check_values
 from engine.studio import commands as cmd
@@ -67,7 +68,7 @@ class Session(ConstraintEditing, SensorEditing):
         self.events = ev.SessionEvents()
         self.motion: Motion | None = None
         self.path: Path | None = None
-        self.source: Any = None  # a tracker recording or live stream instead of a clip
+        self.source: SensorSource | None = None  # a tracker recording or live stream instead of a clip
         self.preset = ""
         self.sensors: dict[str, Sensor] = {}
         self.constraints: list[Constraint] = []
@@ -169,7 +170,7 @@ class Session(ConstraintEditing, SensorEditing):
         if not self.sensors:
             self.set_preset(next(iter(sensor_presets())))
 
-    def set_source(self, source: Any, name: str = "") -> None:
+    def set_source(self, source: SensorSource, name: str = "") -> None:
         """Read sensors from ``source`` instead of a clip: a tracker recording
         (:class:`engine.sources.recording_source.RecordingSource`) or a live stream
         (:class:`engine.sources.live_source.LiveSource`), which the session now owns and
@@ -182,7 +183,7 @@ class Session(ConstraintEditing, SensorEditing):
             self._engine_in_thread()  # sends the source with the rest of the session
         else:
             self._send(command)
-        self.events.source.emit(ev.SourceChanged(source, name, bool(getattr(source, "live", False))))
+        self.events.source.emit(ev.SourceChanged(source, name, source.live))
         self._send(cmd.Seek(0))
         self.events.frame.emit(0)
         if not self.sensors:
@@ -190,7 +191,7 @@ class Session(ConstraintEditing, SensorEditing):
 
     def _close_source(self) -> None:
         source, self.source = self.source, None
-        if source is not None and hasattr(source, "close"):
+        if source is not None:
             source.close()
 
     # -- optimizer, method ---------------------------------------------------------

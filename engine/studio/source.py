@@ -1,64 +1,20 @@
-"""Where the engine thread's sensor readings come from.
+"""The studio's sensor source for a loaded clip: trackers simulated from its motion.
 
-A :class:`SensorSource` gives, per frame, the readings of the session's sensors with
-the studio's edits applied (disabled sensors dropped, 3-DoF sensors without rotation,
-simulated failures disconnected, drag offsets added), plus the reference pose drawn
-as "ground truth" when there is one. :class:`ClipSource` simulates trackers from a
-loaded clip (:func:`engine.tracking.simulate`); other sources (recordings, live
-trackers) implement the same four members and are installed with
-:class:`engine.studio.commands.SetSource`.
+:class:`ClipSource` implements :class:`engine.sensor_source.SensorSource` with
+:func:`engine.tracking.simulate` (6-DoF streams for every sensor; the DoF, offsets and
+failures are the studio's edits, :func:`engine.sensor_source.apply_edits`). The clip is
+the ground truth drawn beside the reconstruction.
 """
 
 from __future__ import annotations
 
-from abc import ABC, abstractmethod
-
 import numpy as np
 
-from engine import skeleton as sk
 from engine.errors import UserError
 from engine.motion import Motion
+from engine.sensor_source import SensorSource, apply_edits
 from engine.sensors import Sensor, SensorFrame
 from engine.tracking import Tracking, simulate
-
-
-class SensorSource(ABC):
-    """Per-frame sensor readings for the engine thread (see the module doc)."""
-
-    #: The session's sensors, settings only (set by the engine thread on every change).
-    sensors: tuple[Sensor, ...] = ()
-    #: The clip behind the source, when there is one (methods are reset with it).
-    motion: Motion | None = None
-
-    @property
-    @abstractmethod
-    def fps(self) -> float:
-        """Frames per second of the stream."""
-
-    @property
-    @abstractmethod
-    def num_frames(self) -> int:
-        """Frames available (0 while there are none)."""
-
-    @abstractmethod
-    def frame(self, frame: int) -> SensorFrame:
-        """Readings of the enabled sensors at ``frame`` with the studio's edits applied."""
-
-    def ground_truth(self, frame: int) -> np.ndarray:
-        """Reference world joint positions (22, 3), metres; NaN when there is none."""
-        return np.full((sk.NUM_JOINTS, 3), np.nan)
-
-    def set_sensors(self, sensors: tuple[Sensor, ...]) -> None:
-        self.sensors = tuple(sensors)
-
-
-def apply_edits(sensor: Sensor, reading: Sensor, frame: int) -> Sensor:
-    """``reading`` (the raw sample) with ``sensor``'s offset, DoF and failures applied."""
-    position = np.asarray(reading.position, float) + np.asarray(sensor.offset, float)
-    rotation = np.asarray(reading.rotation, float)
-    if sensor.dof == 3:
-        rotation = np.array([1.0, 0.0, 0.0, 0.0])  # position-only: no ground truth leaks through
-    return sensor.read(position, rotation, bool(reading.connected) and not sensor.lost_at(frame))
 
 
 class ClipSource(SensorSource):
@@ -67,6 +23,7 @@ class ClipSource(SensorSource):
 
     def __init__(self, motion: Motion) -> None:
         self.motion = motion
+        self.skeleton = motion.skeleton
         self.gt_positions, _ = motion.fk()
         self.sensors = ()
         self._tracking: Tracking | None = None
@@ -98,10 +55,6 @@ class ClipSource(SensorSource):
             raise UserError(f"clip {self.motion.name!r}: cannot simulate sensors ({exc})") from exc
 
     def frame(self, frame: int) -> SensorFrame:
-        readings: dict[str, Sensor] = {}
-        if self._tracking is not None:
-            base = self._tracking.frame(frame).readings
-            for s in self.sensors:
-                if s.enabled:
-                    readings[s.joint] = apply_edits(s, base[s.joint], frame)
-        return SensorFrame(frame, readings)
+        if self._tracking is None:
+            return SensorFrame(frame, {})
+        return apply_edits(self._tracking.frame(frame).readings, self.sensors, frame)

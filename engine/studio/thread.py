@@ -33,7 +33,8 @@ from engine.studio.method_set import MethodSet
 from engine.studio.methods import make_method
 from engine.studio.playback import ENDED, LOOPED, PlaybackClock
 from engine.studio.snapshot import HISTORY, FrameRecord, Snapshot, readonly
-from engine.studio.source import ClipSource, SensorSource
+from engine.sensor_source import SensorSource
+from engine.studio.source import ClipSource
 
 #: How often playback of a live source looks for a newer frame, seconds.
 LIVE_POLL_S = 0.005
@@ -137,7 +138,7 @@ class EngineThread(threading.Thread):
                 break
             if self._source is None or self._source.num_frames == 0:
                 continue
-            if getattr(self._source, "skeleton_version", 0) != self._methods.skeleton_version:
+            if self._source.skeleton_version != self._methods.skeleton_version:
                 self._reset_methods()  # a live source was calibrated: a new skeleton
             was_playing = self._playing
             target = self._playback_frame() if self._playing else self._frame
@@ -153,7 +154,7 @@ class EngineThread(threading.Thread):
             return 0.0
         if not self._playing or self._source is None:
             return None
-        if getattr(self._source, "live", False):
+        if self._source.live:
             return LIVE_POLL_S  # frames arrive on the network's schedule, not a clock's
         return self._clock.wait_time(self._frame, self._last_solved, self._source.fps)
 
@@ -243,7 +244,7 @@ class EngineThread(threading.Thread):
     def _playback_frame(self) -> int:
         """The frame playback is at now (:meth:`PlaybackClock.advance`); a live source's
         newest frame, whatever the pace."""
-        if getattr(self._source, "live", False):
+        if self._source.live:
             self._frame = max(self._source.num_frames - 1, 0)
             return self._frame
         f, event = self._clock.advance(self._frame, self._last_solved, self._source.num_frames, self._source.fps)
@@ -302,8 +303,7 @@ class EngineThread(threading.Thread):
                 self._recent_errors.append(error)
                 self._reset_methods()
         ms = (time.perf_counter() - t0) * 1000.0
-        arrival = getattr(self._source, "arrival", None)
-        arrived = arrival(frame) if arrival is not None else None
+        arrived = self._source.arrival(frame)
         self._latency_ms = None if arrived is None else (time.perf_counter() - arrived) * 1000.0
         ghosts = {}
         for name, m in self._methods.ghosts.items():

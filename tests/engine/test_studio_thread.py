@@ -327,7 +327,7 @@ def test_looping_does_not_skip_the_start_of_the_clip(synthetic_motion, pace):
 
 
 def test_a_sensor_source_that_fails_is_reported_not_replaced_by_perfect_trackers(synthetic_motion):
-    from engine.studio.source import SensorSource
+    from engine.sensor_source import SensorSource
 
     class Broken(SensorSource):
         fps, num_frames = 60.0, 10

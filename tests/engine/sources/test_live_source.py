@@ -4,27 +4,13 @@ timeline, recording started and stopped while streaming, calibration after a cou
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
 
 import numpy as np
 
+from engine.sensors import Sensor
 from engine.sources.live_source import LiveSource
 from engine.sources.recording import read_recording
 from engine.sources.sender import plan_stream, scaled_motion, send_stream
-
-
-@dataclass(frozen=True)
-class StudioSensor:
-    """The studio sensor's settings fields the live source reads (duck-typed)."""
-
-    joint: str
-    dof: int = 6
-    enabled: bool = True
-    offset: tuple = (0.0, 0.0, 0.0)
-
-
-def make_sensor(joint, **kw):
-    return StudioSensor(joint, **kw)
 
 
 def _wait(cond, timeout=5.0):
@@ -65,7 +51,7 @@ def test_studio_sensor_edits_apply(synthetic_motion):
         send_stream(plan_stream(synthetic_motion.slice(0, 5), "6"), "127.0.0.1", src.receiver.port, fps=200.0)
         assert _wait(lambda: src.num_frames == 5)
         raw = src.frame(4).readings
-        src.set_sensors((make_sensor("upperneck", dof=3, offset=(0.0, 0.0, 0.1)), make_sensor("root", enabled=False)))
+        src.set_sensors((Sensor("upperneck", dof=3, offset=(0.0, 0.0, 0.1)), Sensor("root", enabled=False)))
         edited = src.frame(4).readings
     finally:
         src.close()
@@ -100,5 +86,5 @@ def test_a_recording_opens_like_a_clip(synthetic_motion, tmp_path):
     assert src.calibration.pose == "tpose"
     true_h = synthetic_motion.skeleton.height() * 0.9
     assert abs(src.skeleton.height() - true_h) / true_h < 0.02
-    src.set_sensors((make_sensor("lwrist"),))
+    src.set_sensors((Sensor("lwrist"),))
     assert set(src.frame(70).readings) == {"lwrist"}

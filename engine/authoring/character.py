@@ -72,6 +72,14 @@ class Ground:
 
 
 @dataclass
+class HeldRoot(RootOverride):
+    """The root held at ``position`` during the solve; ``ground``: then shift the pose
+    vertically so its lowest foot stands on the floor (False keeps a clip's root)."""
+
+    ground: bool = True
+
+
+@dataclass
 class Pose:
     """One solved pose (numpy, float64).
 
@@ -112,11 +120,15 @@ class Character:
         The decoder (frozen by the optimizer).
     height : float or None
         Standing height, metres (None: the canonical skeleton's own).
+    skeleton : Skeleton or None
+        A subject's own skeleton instead (a loaded clip's); ``height`` is then ignored.
     """
 
-    def __init__(self, vae, height: float | None = None) -> None:
+    def __init__(self, vae, height: float | None = None, skeleton: sk.Skeleton | None = None) -> None:
         base = sk.Skeleton.canonical()
-        if height is not None:
+        if skeleton is not None:
+            base = skeleton
+        elif height is not None:
             if not (HEIGHT_RANGE[0] <= float(height) <= HEIGHT_RANGE[1]):
                 raise UserError(f"height must be within {HEIGHT_RANGE[0]}-{HEIGHT_RANGE[1]} m, got {height}")
             base = sk.Skeleton.canonical(float(height) / base.height())
@@ -148,11 +160,15 @@ class Character:
         return FrameContext(ref, None, anchor, _f_or_none(previous), _f_or_none(prior), frame)  # type: ignore[arg-type]
 
     def placed(self, root: np.ndarray, heading_deg: float = 0.0, frame: int = 0,
-               previous: np.ndarray | None = None, prior: np.ndarray | None = None) -> FrameContext:  # fmt: skip
+               previous: np.ndarray | None = None, prior: np.ndarray | None = None,
+               reference: np.ndarray | None = None, ground: bool = True) -> FrameContext:  # fmt: skip
         """Context of a placed solve: the root held at ``root (3,)`` metres during the
-        solve (then grounded, see the module doc); the rest as :meth:`grounded`."""
-        ref = RootFrame(_f(yaw_quaternion(heading_deg)), _f(root))
-        return FrameContext(ref, RootOverride(_f(root)), None, _f_or_none(previous), _f_or_none(prior), frame)
+        solve, then grounded (unless ``ground`` is False); the decoded root rotation is
+        relative to the heading of ``reference (4,)`` (a clip's previous root rotation)
+        or else of ``heading_deg``; the rest as :meth:`grounded`."""
+        ref = RootFrame(_f(yaw_quaternion(heading_deg) if reference is None else reference), _f(root))
+        held = HeldRoot(_f(root), None, ground)
+        return FrameContext(ref, held, None, _f_or_none(previous), _f_or_none(prior), frame)
 
     def ground_shift(self, positions: np.ndarray) -> float:
         """Metres to add to z so the lowest foot of ``positions (22, 3)`` stands on the floor."""
@@ -211,7 +227,7 @@ class Character:
         local = local / np.linalg.norm(local, axis=-1, keepdims=True)
         root = state.positions[0].detach().double().numpy().copy()
         positions = fk(local, root, self.skeleton.offsets)[0]
-        if ctx.root_override is not None:
+        if isinstance(ctx.root_override, HeldRoot) and ctx.root_override.ground:
             dz = self.ground_shift(positions)
             root[2] += dz
             positions[:, 2] += dz

@@ -9,7 +9,7 @@ one frame and nothing is written. The BVH is written to a temporary file and ren
 from __future__ import annotations
 
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -56,7 +56,7 @@ class ReconstructionExport(QObject):
     def running(self) -> bool:
         return self.thread is not None
 
-    def start(self, motion: Any, sensors: tuple, constraints: tuple, settings: dict, method: str, path: str,
+    def start(self, motion: Any, sensors: tuple, constraints: tuple, settings: Mapping[str, Any], method: str, path: str,
               source: Path | None = None, rig_map: Path | None = None) -> None:  # fmt: skip
         """Solve ``motion`` with ``method`` and the studio's edits, then write ``path`` (onto
         the hierarchy of the BVH ``source`` when given, mapped with the joint mapping file
@@ -89,7 +89,7 @@ class ReconstructionExport(QObject):
         self.done = frame + 1
         return self._cancel.is_set()
 
-    def _run(self, motion: Any, sensors: tuple, constraints: tuple, settings: dict, method: str, path: str,
+    def _run(self, motion: Any, sensors: tuple, constraints: tuple, settings: Mapping[str, Any], method: str, path: str,
              source: Path | None, rig_map: Path | None) -> None:  # fmt: skip
         try:
             from engine.bvh import save_motion_bvh

@@ -136,7 +136,7 @@ class FileActions:
                 return None
         source = s.path if on_source_rig else None
         self.export.start(s.motion, tuple(s.sensors.values()), tuple(s.constraints),
-                          dict(s.settings), s.method, path, source, self.rig_map_of(source))  # fmt: skip
+                          s.settings, s.method, path, source, self.rig_map_of(source))  # fmt: skip
         return None
 
     def _export_finished(self, ok: bool, message: str) -> None:

@@ -16,6 +16,7 @@ import numpy as np
 from engine.motion import Motion
 from engine.sensor_source import SensorSource
 from engine.sensors import Sensor
+from engine.solver.settings import SettingsEdit
 
 
 @dataclass(frozen=True)
@@ -37,7 +38,9 @@ class SetConstraints:
 
 @dataclass(frozen=True)
 class SetSettings:
-    values: dict
+    """Settings the studio set explicitly (checked, immutable), merged into the earlier ones."""
+
+    values: SettingsEdit
 
 
 @dataclass(frozen=True)

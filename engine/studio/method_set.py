@@ -9,13 +9,14 @@ raises: a method that cannot be built, reset or configured is reported through t
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any
 
 from engine.methods import driver
 from engine.methods.base import FrameResult, Method
 from engine.sensor_source import SensorSource
 from engine.sensors import Sensor, SensorFrame
+from engine.solver.settings import SettingsEdit
 from engine.studio.method_state import copy_state
 from engine.studio.methods import apply_constraints, apply_sensor_weights, apply_settings
 
@@ -52,7 +53,7 @@ class MethodSet:
         self.ghosts: dict[str, Method] = {}
         self.sensors: tuple[Sensor, ...] = ()
         self.constraints: tuple[Any, ...] = ()
-        self.settings: dict[str, Any] = {}
+        self.settings = SettingsEdit()
         self.skeleton_version = 0
         # select() built (or tried to build) the shown method since the last reset
         self._selected = False
@@ -138,9 +139,9 @@ class MethodSet:
         """Forget the state kept by :meth:`keep_state` (another frame, play, a reset)."""
         self._kept = None
 
-    def set_settings(self, values: dict[str, Any]) -> None:
+    def set_settings(self, values: Mapping[str, Any]) -> None:
         """Merge ``values`` into the settings and push them."""
-        self.settings = {**self.settings, **values}
+        self.settings = self.settings | values
         self.configure("settings")
 
     def set_constraints(self, constraints: tuple[Any, ...]) -> None:

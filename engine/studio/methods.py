@@ -10,7 +10,7 @@ snapshots.
 from __future__ import annotations
 
 import copy
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
@@ -28,7 +28,7 @@ def make_method(name: str) -> Method:
     return get_method(name)
 
 
-def apply_settings(method: Method, values: dict[str, Any]) -> list[str]:
+def apply_settings(method: Method, values: Mapping[str, Any]) -> list[str]:
     """Give ``method`` optimizer settings by name; methods without settings skip them."""
     try:
         driver.configure(method, values)
@@ -57,7 +57,7 @@ def apply_sensor_weights(method: Method, sensors: tuple[Sensor, ...]) -> list[st
 
 
 def reconstruct_clip(motion: Motion, sensors: tuple[Sensor, ...], constraints: tuple[Constraint, ...],
-                     settings: dict[str, Any], method_name: str, factory: Callable[[str], Method] | None = None,
+                     settings: Mapping[str, Any], method_name: str, factory: Callable[[str], Method] | None = None,
                      progress: Callable[[int], bool | None] | None = None) -> Motion:  # fmt: skip
     """Run a fresh method over every frame of ``motion`` with the studio's sensor edits.
 

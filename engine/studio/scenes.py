@@ -8,7 +8,7 @@ A studio scene is an optimizer scene (``format``, ``version``, ``settings``,
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -17,6 +17,7 @@ from engine.constraints.base import Constraint
 from engine.errors import UserError
 from engine.sensors import Sensor
 from engine.solver import OptimizerSettings
+from engine.solver.settings import SettingsEdit
 
 
 #: Settings a session sets from the start (at the optimizer's defaults); the others stay
@@ -24,17 +25,17 @@ from engine.solver import OptimizerSettings
 SESSION_SETTINGS = ("mode", "iterations", "lr", "temporal_weight")
 
 
-def default_settings() -> dict[str, Any]:
+def default_settings() -> SettingsEdit:
     """The optimizer's own defaults of :data:`SESSION_SETTINGS`."""
     d = OptimizerSettings()
-    return {name: getattr(d, name) for name in SESSION_SETTINGS}
+    return SettingsEdit({name: getattr(d, name) for name in SESSION_SETTINGS})
 
 
 
 def scene_to_dict(path: Path | None, method: str, preset: str, sensors: Iterable[Sensor],
-                  constraints: Iterable[Constraint], settings: dict[str, Any], frame: int) -> dict[str, Any]:  # fmt: skip
+                  constraints: Iterable[Constraint], settings: Mapping[str, Any], frame: int) -> dict[str, Any]:  # fmt: skip
     """Plain-JSON description of a session's scene (the clip by path)."""
-    doc = optimizer_scene.scene_to_dict(constraints, settings)
+    doc = optimizer_scene.scene_to_dict(constraints, dict(settings))
     doc.update({
         "clip": str(path) if path else None,
         "method": method,
@@ -49,8 +50,8 @@ def scene_from_dict(scene: Any, where: str = "scene") -> dict[str, Any]:
     """Check and convert :func:`scene_to_dict` output; errors name ``where`` and the entry.
 
     Returns a dict with ``method`` (str), ``preset`` (str), ``sensors`` (tuple of
-    Sensor), ``constraints`` (list of Constraint), ``settings`` (dict of the settings the
-    scene gives, checked against their ranges), ``frame`` (int).
+    Sensor), ``constraints`` (list of Constraint), ``settings`` (a :class:`SettingsEdit`
+    of the settings the scene gives), ``frame`` (int).
     """
     constraints, settings = optimizer_scene.scene_from_dict(scene, where)  # also checks it is an object
     sensors = scene.get("sensors", [])
@@ -64,4 +65,4 @@ def scene_from_dict(scene: Any, where: str = "scene") -> dict[str, Any]:
         raise UserError(f"{where}: field 'frame' must be an integer") from None
     return {"method": str(scene.get("method") or ""), "preset": str(scene.get("preset") or ""),
             "sensors": sensors, "constraints": constraints,
-            "settings": {k: getattr(settings, k) for k in given}, "frame": frame}  # fmt: skip
+            "settings": SettingsEdit({k: getattr(settings, k) for k in given}, where), "frame": frame}  # fmt: skip

@@ -16,7 +16,7 @@ live in :mod:`engine.studio.session_constraints`, the sensor methods in
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -28,7 +28,7 @@ from engine.methods import available_methods
 from engine.motion import Motion
 from engine.sensor_source import SensorSource
 from engine.sensors import Sensor
-from engine.solver.settings import check_values
+from engine.solver.settings import SettingsEdit
 from engine.studio import commands as cmd
 from engine.studio import events as ev
 from engine.studio.clips import load_clip, sensor_presets
@@ -54,7 +54,7 @@ class Session(ConstraintEditing, SensorEditing):
         Active trackers by joint, in preset order; ``preset`` names the set ("" = custom).
     constraints : list of Constraint
         User constraints, in order. Treat them as read-only: edit through the methods.
-    settings : dict
+    settings : SettingsEdit
         Optimizer parameters by name (``mode``, ``iterations``, ``lr``...).
     method : str
         Reconstruction method; ``ghosts`` are other methods drawn alongside it.
@@ -72,7 +72,7 @@ class Session(ConstraintEditing, SensorEditing):
         self.preset = ""
         self.sensors: dict[str, Sensor] = {}
         self.constraints: list[Constraint] = []
-        self.settings: dict[str, Any] = default_settings()
+        self.settings: SettingsEdit = default_settings()
         self.method = method
         self.ghosts: tuple[str, ...] = ()
         self.frame = 0
@@ -128,7 +128,7 @@ class Session(ConstraintEditing, SensorEditing):
         if sink is None:
             return
         sink(cmd.SetMethod(self.method, self.ghosts))
-        sink(cmd.SetSettings(dict(self.settings)))
+        sink(cmd.SetSettings(self.settings))
         sink(cmd.SetSensors(tuple(self.sensors.values())))
         if self.motion is not None:
             sink(cmd.SetMotion(self.motion))
@@ -198,12 +198,12 @@ class Session(ConstraintEditing, SensorEditing):
     def set_setting(self, name: str, value: Any) -> None:
         self.set_settings({name: value})
 
-    def set_settings(self, values: dict[str, Any]) -> None:
-        values = check_values(values)  # a bad name or value fails here, naming it, not in the engine
-        old = {k: self.settings.get(k) for k in values}
-        self.settings.update(values)
-        self._send(cmd.SetSettings(dict(values)))
-        self.events.settings.emit(ev.SettingsChanged(dict(values), old))
+    def set_settings(self, values: Mapping[str, Any]) -> None:
+        edit = SettingsEdit(values)  # a bad name or value fails here, naming it, not in the engine
+        old = {k: self.settings.get(k) for k in edit}
+        self.settings = self.settings | edit
+        self._send(cmd.SetSettings(edit))
+        self.events.settings.emit(ev.SettingsChanged(dict(edit), old))
 
     def set_method(self, name: str, ghosts: tuple[str, ...] | None = None) -> None:
         old, old_ghosts = self.method, self.ghosts

@@ -94,3 +94,37 @@ def test_the_settings_table_of_the_optimizer_guide_is_the_generated_one():
     assert begin in text and end in text, "docs/optimizer.md lost its settings-table markers"
     table = text.split(begin, 1)[1].split(end, 1)[0]
     assert table == schema.markdown_table(), "run: python -m engine.solver.settings > table; see docs/architecture.md"
+
+
+def test_a_settings_edit_is_checked_immutable_and_merges():
+    import pickle
+
+    edit = schema.SettingsEdit({"iterations": 4.0, "mode": "offline"})
+    assert dict(edit) == {"iterations": 4, "mode": "offline"} and edit == {"iterations": 4, "mode": "offline"}
+    merged = edit | {"iterations": 7, "lr": 0.1}
+    assert dict(merged) == {"iterations": 7, "mode": "offline", "lr": 0.1} and edit["iterations"] == 4
+    assert pickle.loads(pickle.dumps(merged)) == merged  # crosses to the engine process
+    with pytest.raises(TypeError):
+        edit["lr"] = 0.2  # type: ignore[index]
+    with pytest.raises(UserError, match="scene.json: iterations = 0 is out of range"):
+        schema.SettingsEdit({"iterations": 0}, "scene.json")
+    with pytest.raises(UserError, match="unknown setting"):
+        edit | {"itterations": 1}
+
+
+def test_the_session_refuses_a_bad_setting_before_it_reaches_the_engine(synthetic_motion):
+    from engine.studio.session import Session
+
+    session = Session()
+    session.set_motion(synthetic_motion)
+    commands = []
+    session.attach(commands.append)
+    commands.clear()
+    for name, value, message in (("lr", 11.0, r"lr = 11.0 is out of range; allowed: a number in \(0, 10\]"),
+                                 ("mode", "fast", "mode = 'fast' is not allowed"),
+                                 ("itterations", 3, "unknown setting")):  # fmt: skip
+        with pytest.raises(UserError, match=message):
+            session.set_setting(name, value)
+    assert commands == [] and session.settings["lr"] == OptimizerSettings().lr
+    session.set_setting("iterations", 5.0)
+    assert commands[-1].values == {"iterations": 5} and isinstance(commands[-1].values, schema.SettingsEdit)

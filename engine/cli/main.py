@@ -61,7 +61,13 @@ def build_parser() -> argparse.ArgumentParser:
             raise
         mod.register(sub)
     for ep in sorted(entry_points(group=PLUGIN_GROUP), key=lambda e: e.name):
-        ep.load().register(sub)
+        try:
+            plugin = ep.load()
+        except ModuleNotFoundError as exc:
+            if exc.name == ep.value:  # installed metadata names a module this checkout lacks
+                continue
+            raise
+        plugin.register(sub)
     return parser
 
 

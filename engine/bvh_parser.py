@@ -30,6 +30,12 @@ _CHANNEL = re.compile(r"^([xyz])(position|rotation)$", re.IGNORECASE)
 _TOKEN = re.compile(r"[{}]|[^\s{}]+")
 _FRAMES = re.compile(r"^\s*frames\s*:\s*(\S*)\s*$", re.IGNORECASE)
 _FRAME_TIME = re.compile(r"^\s*frame\s+time\s*:\s*(\S*)\s*$", re.IGNORECASE)
+#: A number as BVH files write it: ASCII digits, sign, point, exponent. Python's ``float``
+#: and ``int`` also take other scripts' digits ('\u0663') and underscores ('1_000'),
+#: which other BVH readers refuse; ``str.isdigit`` even takes '\u00b2', which ``int`` does not.
+_DECIMAL = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
+_WHOLE = re.compile(r"[0-9]+")
+_NON_FINITE = ("nan", "inf", "infinity")
 
 
 class _Tokens:
@@ -74,9 +80,17 @@ class _Tokens:
         return line
 
 
+def _float(text: str) -> float:
+    """``float(text)`` for a :data:`_DECIMAL` or a spelling of NaN/infinity (the callers
+    name those as not finite); ``ValueError`` for anything else."""
+    if _DECIMAL.fullmatch(text) is None and text.lstrip("+-").lower() not in _NON_FINITE:
+        raise ValueError(f"not a BVH number: {text!r}")
+    return float(text)
+
+
 def _number(tokens: _Tokens, text: str, line: int, what: str) -> float:
     try:
-        value = float(text)
+        value = _float(text)
     except ValueError:
         raise tokens.error(f"{what}: '{text}' is not a number", line) from None
     if not math.isfinite(value):
@@ -240,13 +254,13 @@ def _motion_header(path: str, lines: _Lines) -> tuple[int, float, int]:
             raise BVHError(path, f"expected '{label}', found {shown(line.strip(), 60)}", lines.count)
         values.append((m.group(1), lines.count))
     (frames_text, frames_line), (time_text, time_line) = values
-    if not frames_text.isdigit():
+    if _WHOLE.fullmatch(frames_text) is None:
         raise BVHError(path, f"Frames must be a whole number, got {shown(frames_text)}", frames_line)
     if int(frames_text[:12]) == 0:
         raise BVHError(path, "the file has zero frames", frames_line)
     frames = int(frames_text[:12]) if len(frames_text) <= 12 else 10**12  # no 5000-digit int()
     try:
-        frame_time = float(time_text)
+        frame_time = _float(time_text)
     except ValueError:
         raise BVHError(path, f"Frame Time {shown(time_text)} is not a number", time_line) from None
     if not math.isfinite(frame_time) or frame_time <= 0:
@@ -275,6 +289,17 @@ def _convert(path: str, rows: list[list[str]], numbers: list[int]) -> np.ndarray
     return data
 
 
+def _unplain_row(path: str, parts: list[str], line: str, number: int) -> BVHError:
+    """The error for a data row holding a non-ASCII character or an underscore."""
+    for text in parts:
+        try:
+            _float(text)
+        except ValueError:
+            return BVHError(path, f"{shown(text)} is not a number", number)
+    odd = next(ch for ch in line if not ch.isascii())
+    return BVHError(path, f"non-ASCII character U+{ord(odd):04X} between the numbers of a motion row", number)
+
+
 def _motion_data(path: str, lines: _Lines, columns: int, frames: int, frames_line: int,
                  keep: int, room: int) -> np.ndarray:  # fmt: skip
     """Parse the data rows, CHUNK at a time; every row is checked, the first ``keep`` kept.
@@ -292,6 +317,8 @@ def _motion_data(path: str, lines: _Lines, columns: int, frames: int, frames_lin
             parts = line.split()
             if not parts:
                 continue
+            if not line.isascii() or "_" in line:  # isascii() is O(1) on a str
+                raise _unplain_row(path, parts, line, lines.count)
             if len(parts) != columns:
                 raise BVHError(path, f"wrong number of values on frame {done + len(rows) + 1}: expected {columns}, "
                                      f"got {len(parts)}", lines.count)  # fmt: skip

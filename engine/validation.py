@@ -12,12 +12,13 @@ Schemas
 ``CLI``        command-line numbers (``--iterations``, ``--fps``, ``--seed``...)
 ``MANIFEST``   one entry of a ``manifest.json`` beside a clip
 ``BVH_HEADER`` ``Frames:`` / ``Frame Time:`` of a BVH file
-``VAE_CONFIG`` / ``PREDICTOR_CONFIG``  the ``config`` stored in a weights file
 ``SKELETON``   plausibility of a retargeted subject (height, root travel)
 
 The optimizer settings' schema (``--set KEY=VALUE``, a scene's ``settings``, the
 studio's panel) is generated from the metadata of the settings' own fields:
 :data:`engine.solver.settings.SETTINGS`.
+
+The ``config`` of a weights file is checked by :mod:`engine.models.weights_check`.
 
 Files
 -----
@@ -178,29 +179,6 @@ MANIFEST: Schema = {"fps": Num(1, 1000, unit="frames/s")}
 BVH_HEADER: Schema = {
     "Frames": Num(1, 10_000_000, integer=True),
     "Frame Time": Num(0.001, 1.0, unit="s (1 to 1000 frames/s)"),
-}
-
-#: Architecture stored in a VAE weights file.
-VAE_CONFIG: Schema = {
-    "latent": Num(1, 1024, integer=True),
-    "neighbour_distance": Num(0, 22, integer=True),
-    "negative_slope": Num(0, 1),
-}
-VAE_CHANNEL = Num(1, 4096, integer=True)
-
-#: Architecture stored in a predictor weights file.
-PREDICTOR_CONFIG: Schema = {
-    "latent": Num(1, 1024, integer=True),
-    "cond": Num(1, 1024, integer=True),
-    "d_model": Num(1, 4096, integer=True),
-    "heads": Num(1, 64, integer=True),
-    "encoder_layers": Num(1, 64, integer=True),
-    "decoder_layers": Num(1, 64, integer=True),
-    "feedforward": Num(1, 65_536, integer=True),
-    "dropout": Num(0, 1),
-    "past": Num(1, 1024, integer=True),
-    "future": Num(1, 1024, integer=True),
-    "stride": Num(1, 1024, integer=True),
 }
 
 #: A retargeted subject: standing height and how far the root may travel.

@@ -8,8 +8,9 @@ epochs, validation figures). Anything else is a :class:`ModelFileError` naming t
 from __future__ import annotations
 
 import pickle
+import pickletools
 import re
-import zipfile
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -20,8 +21,8 @@ import torch
 from engine.errors import ModelFileError, UserError
 from engine.models.predictor import PredictorConfig, TemporalPredictor
 from engine.models.vae import PoseVAE, VAEConfig
-from engine.validation import (PREDICTOR_CONFIG, VAE_CHANNEL, VAE_CONFIG, check_fields, check_input_file,
-                               check_value, one_line, shown)  # fmt: skip
+from engine.models.weights_check import check_config, check_fits, check_state, shape_only
+from engine.validation import check_input_file, one_line, shown
 
 try:
     from numpy._core.multiarray import scalar as _np_scalar
@@ -29,6 +30,8 @@ except ImportError:  # numpy 1.x
     from numpy.core.multiarray import scalar as _np_scalar
 
 FORMAT_VERSION = 1
+#: First bytes of a zip archive, the container ``torch.save`` writes.
+ZIP_MAGIC = b"PK\x03\x04"
 ASSETS = Path(__file__).resolve().parents[2] / "assets" / "models"
 DEFAULT_VAE = ASSETS / "vae.pt"
 DEFAULT_PREDICTOR = ASSETS / "predictor.pt"
@@ -55,25 +58,53 @@ def load_checkpoint(path: Path | str, what: str = "weights file") -> Any:
     plain values (dict, list, tuple, str, int, float, bool, None, and the numpy scalars
     of :data:`SAFE_GLOBALS`) are rebuilt; anything else is refused.
 
-    The file is checked first (regular file, size limit: :mod:`engine.validation`).
-    Every failure is one :class:`ModelFileError` line naming the file, without torch's
-    advice to turn the protection off."""
+    The file is checked first (regular file, size limit: :mod:`engine.validation`) and
+    must be the zip archive ``torch.save`` writes. Every failure is one
+    :class:`ModelFileError` line naming the file, without torch's warnings or its advice
+    to turn the protection off."""
     path = Path(path)
     try:
         check_input_file(path, what)
+        with open(path, "rb") as fh:
+            head = fh.read(64)
     except UserError as exc:
         raise ModelFileError(str(exc)) from None
+    except OSError as exc:
+        raise ModelFileError(f"{path}: cannot read {what}: {exc.strerror or exc}") from None
+    if not head.startswith(ZIP_MAGIC):
+        raise ModelFileError(f"{path}: not a torch {what}: {_looks_like(head)}, not the zip archive torch.save writes")
     try:
-        with torch.serialization.safe_globals(SAFE_GLOBALS):
+        with torch.serialization.safe_globals(SAFE_GLOBALS), warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # e.g. "Detected pickle protocol 4": the errors below say what matters
             return torch.load(path, map_location="cpu", weights_only=True)
     except pickle.UnpicklingError as exc:
+        op = re.search(r"Unsupported operand (\d+)", str(exc))
+        if op:
+            code = pickletools.code2op.get(chr(int(op.group(1))))
+            name = f" ({code.name})" if code else ""
+            raise ModelFileError(f"{path}: refused: the {what} uses pickle instruction {op.group(1)}{name}, which the "
+                                 f"safe loader does not read (save it with torch.save's default pickle protocol)") from None  # fmt: skip
         hint = _refused_global(str(exc))
         raise ModelFileError(
             f"{path}: refused: the {what} holds {hint} (only tensors and plain values are loaded)"
         ) from None
-    except (zipfile.BadZipFile, RuntimeError, EOFError, ValueError, OSError, AttributeError, TypeError) as exc:
+    except MemoryError:
+        raise ModelFileError(f"{path}: not a readable torch {what} (out of memory while reading it)") from None
+    except Exception as exc:  # a damaged archive fails anywhere in the unpickler, with any type
         first = one_line(str(exc).split(". ")[0], 160)
         raise ModelFileError(f"{path}: not a readable torch {what} ({type(exc).__name__}: {first})") from None
+
+
+def _looks_like(head: bytes) -> str:
+    """What the first bytes of a file that is not a zip archive suggest, for the message."""
+    if not head:
+        return "the file is empty"
+    if head[:1] == b"\x80":
+        return "it is a plain pickle"
+    text = head.decode("utf-8", errors="replace").rstrip("\ufffd")  # the 64 bytes may cut a character
+    if text and all(c.isprintable() or c in "\t\r\n" for c in text):
+        return "it is a text file"
+    return "its format is unknown"
 
 
 def _refused_global(message: str) -> str:
@@ -95,81 +126,60 @@ def _read(path: Path, kind: str) -> dict:
         raise ModelFileError(f"{path}: format_version {shown(version)}, this program reads {FORMAT_VERSION}")
     if not isinstance(payload.get("config"), dict):
         raise ModelFileError(f"{path}: field 'config' must be a dict of model sizes")
+    meta = payload.get("meta", {})
+    if not isinstance(meta, dict):
+        raise ModelFileError(f"{path}: field 'meta' must be a dict, got {type(meta).__name__} {shown(meta)}")
     return payload
 
 
-def _load_state(model: torch.nn.Module, payload: dict, path: Path) -> None:
-    state = payload["state_dict"]
-    if not isinstance(state, dict):
-        raise ModelFileError(f"{path}: field 'state_dict' must be a dict of tensors")
+def _build(path: Path | str, kind: str, config_cls: type, model_cls: type) -> tuple[Any, dict]:
+    """The model of ``kind`` in ``path``, frozen, and its ``meta``.
+
+    The config is checked and the model's shapes compared with the file's before any
+    model memory is allocated (:mod:`engine.models.weights_check`)."""
+    path = Path(path)
+    payload = _read(path, kind)
+    where = f"{path}: config"
+    config = check_config(kind, payload["config"], config_cls, where)
     try:
-        model.load_state_dict(state)
-    except (RuntimeError, TypeError, AttributeError) as exc:
-        first = str(exc).splitlines()[1:3]
-        raise ModelFileError(f"{path}: weights do not fit the model ({'; '.join(s.strip() for s in first)})") from None
+        cfg = config_cls.from_dict(config)
+    except (TypeError, ValueError) as exc:
+        raise ModelFileError(f"{where}: {shown(str(exc), 120)}") from None
+    skeleton = shape_only(lambda: model_cls(cfg), where)
+    check_state(skeleton, payload["state_dict"], config, path)
+    check_fits(skeleton, config, path)
+    model = model_cls(cfg)
+    model.load_state_dict(payload["state_dict"])
     bad = [name for name, t in model.state_dict().items() if t.is_floating_point() and not bool(torch.isfinite(t).all())]
     if bad:
         more = f" and {len(bad) - 1} more" if len(bad) > 1 else ""
         raise ModelFileError(f"{path}: weights hold NaN or infinite values (in {bad[0]}{more}); the file is damaged")
+    model.eval().requires_grad_(False)
+    return model, dict(payload.get("meta", {}))
 
 
 def load_vae(path: Path | str) -> tuple[PoseVAE, dict]:
-    payload = _read(Path(path), "vae")
-    try:
-        config = check_fields(VAE_CONFIG, payload["config"], f"{path}: config")
-        for i, c in enumerate(config.get("channels") or ()):
-            check_value(VAE_CHANNEL, c, f"{path}: config", f"channels[{i}]")
-        cfg = VAEConfig.from_dict(config)
-    except (TypeError, KeyError, ValueError) as exc:
-        raise ModelFileError(f"{path}: bad VAE config ({shown(str(exc), 120)})") from None
-    vae = PoseVAE(cfg)
-    _load_state(vae, payload, Path(path))
-    vae.eval().requires_grad_(False)
-    return vae, dict(payload.get("meta", {}))
+    """The pose VAE of the weights file ``path`` and its ``meta``."""
+    return _build(path, "vae", VAEConfig, PoseVAE)
 
 
 def load_predictor(path: Path | str) -> tuple[TemporalPredictor, dict]:
-    payload = _read(Path(path), "predictor")
-    try:
-        cfg = PredictorConfig(**check_fields(PREDICTOR_CONFIG, payload["config"], f"{path}: config"))
-    except (TypeError, ValueError) as exc:
-        raise ModelFileError(f"{path}: bad predictor config ({shown(str(exc), 120)})") from None
-    model = TemporalPredictor(cfg)
-    _load_state(model, payload, Path(path))
-    model.eval().requires_grad_(False)
-    return model, dict(payload.get("meta", {}))
+    """The temporal predictor of the weights file ``path`` and its ``meta``."""
+    return _build(path, "predictor", PredictorConfig, TemporalPredictor)
 
 
 def load_sparseposer(path: Path | str | None = None):
     """SparsePoser (generator + learned IK) from ``path`` (default: the shipped file)."""
     from engine.models.sparseposer import SparsePoser, SparsePoserConfig
 
-    path = Path(path or DEFAULT_SPARSEPOSER)
-    payload = _read(path, "sparseposer")
-    try:
-        cfg = SparsePoserConfig.from_dict(payload["config"])
-    except (TypeError, KeyError) as exc:
-        raise ModelFileError(f"{path}: bad SparsePoser config ({exc})") from exc
-    model = SparsePoser(cfg)
-    _load_state(model, payload, path)
-    model.eval().requires_grad_(False)
-    return model, dict(payload.get("meta", {}))
+    return _build(path or DEFAULT_SPARSEPOSER, "sparseposer", SparsePoserConfig, SparsePoser)
 
 
 def load_rpm(path: Path | str | None = None):
     """The Rolling Prediction Model from ``path`` (default: the shipped file)."""
     from engine.models.rpm import RPM, RPMConfig
 
-    path = Path(path or DEFAULT_RPM)
-    payload = _read(path, "rpm")
-    try:
-        cfg = RPMConfig(**payload["config"])
-    except TypeError as exc:
-        raise ModelFileError(f"{path}: bad RPM config ({exc})") from exc
-    model = RPM(cfg)
-    _load_state(model, payload, path)
-    model.eval().requires_grad_(False)
-    return model, dict(payload.get("meta", {}))
+    return _build(path or DEFAULT_RPM, "rpm", RPMConfig, RPM)
 
 
 def load_models(vae_path: Path | str, predictor_path: Path | str | None = None) -> ModelBundle:

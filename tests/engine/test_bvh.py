@@ -120,6 +120,20 @@ BAD_CASES = {
     "truncated hierarchy": (edited({}, cut=10), 10, "truncated"),
     "truncated row": (VALID[: VALID.rindex(" 4.0 ")], 26, "expected 12, got 10"),
     "empty file": ("", 1, "HIERARCHY"),
+    # numbers are ASCII decimals: other digits (which int()/float() take unevenly) and '_' are errors
+    "superscript Frames": (edited({22: "Frames: \u00b2"}), 22, "whole number"),
+    "Arabic-Indic Frames": (edited({22: "Frames: \u0663"}), 22, "whole number"),
+    "circled Frames": (edited({22: "Frames: \u2462"}), 22, "whole number"),
+    "underscore Frames": (edited({22: "Frames: 0_3"}), 22, "whole number"),
+    "Arabic-Indic Frame Time": (edited({23: "Frame Time: 0.0\u0663"}), 23, "not a number"),
+    "underscore Frame Time": (edited({23: "Frame Time: 0.0_3"}), 23, "not a number"),
+    "Arabic-Indic OFFSET": (edited({8: "\t\tOFFSET 0.0 \u0663\u0664 0.0"}), 8, "not a number"),
+    "fullwidth OFFSET": (edited({8: "\t\tOFFSET \uff13 0.1 0.0"}), 8, "not a number"),
+    "underscore OFFSET": (edited({8: "\t\tOFFSET 0.0 0.1 1_0"}), 8, "'1_0' is not a number"),
+    "Arabic-Indic in a row": (edited({25: LINES[24].replace("6.0", "\u0663\u0664")}), 25, "is not a number"),
+    "superscript in a row": (edited({24: LINES[23].replace("5.0", "5\u00b2")}), 24, "is not a number"),
+    "underscore in a row": (edited({26: LINES[25].replace("47.0", "4_7.0")}), 26, "'4_7.0' is not a number"),
+    "no-break space in a row": (edited({24: LINES[23].replace(" 1.0 ", "\u00a01.0 ", 1)}), 24, "U+00A0"),
 }
 
 

@@ -186,10 +186,20 @@ class OptimizerSettings:
         return self.iterations if self.mode == "realtime" else self.max_iterations
 
 
-def fields() -> Iterator[tuple[dataclasses.Field, Setting]]:
-    """Every field of :class:`OptimizerSettings` with its :class:`Setting`, in order."""
-    for f in dataclasses.fields(OptimizerSettings):
-        yield f, f.metadata[META]
+def fields(cls: type = OptimizerSettings) -> Iterator[tuple[dataclasses.Field, Setting]]:
+    """Every field of :class:`OptimizerSettings` (or another settings dataclass ``cls``)
+    with its :class:`Setting`, in order.
+
+    Raises
+    ------
+    TypeError
+        For a field declared without :func:`setting` (so nothing could check or show it).
+    """
+    for f in dataclasses.fields(cls):
+        info = f.metadata.get(META)
+        if not isinstance(info, Setting):
+            raise TypeError(f"{cls.__name__}.{f.name}: declare it with setting(default, label, help, spec)")
+        yield f, info
 
 
 #: The settings' validation schema, by field (from the fields' metadata).

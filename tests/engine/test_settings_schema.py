@@ -29,6 +29,16 @@ def test_every_field_has_its_metadata():
     assert list(SETTINGS) == [f.name for f in dataclasses.fields(OptimizerSettings)]
 
 
+def test_a_field_declared_without_its_metadata_is_refused():
+    @dataclasses.dataclass
+    class Partly:
+        fine: int = schema.setting(1, "Fine", "Declared.", Num(0, 2, integer=True))
+        bare: float = 0.5
+
+    with pytest.raises(TypeError, match=r"Partly.bare: declare it with setting"):
+        list(schema.fields(Partly))
+
+
 def test_defaults_lie_inside_their_own_ranges():
     defaults = OptimizerSettings()  # validates
     for name, spec in SETTINGS.items():

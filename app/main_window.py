@@ -15,9 +15,10 @@ import time
 from typing import Any
 
 from PyQt6.QtCore import QSettings, Qt, QTimer, pyqtSignal
-from PyQt6.QtWidgets import QDockWidget, QLabel, QMainWindow, QMessageBox, QTabWidget, QVBoxLayout, QWidget
+from PyQt6.QtWidgets import QApplication, QDockWidget, QLabel, QMainWindow, QMessageBox, QTabWidget, QVBoxLayout, QWidget
 
 from app.busy import BusyNotice
+from app.camera_keys import CameraKeys
 from app.constraint_placement import placed_params
 from app.drawing import DrawScheduler
 from app.file_actions import FileActions
@@ -70,6 +71,8 @@ class MainWindow(QMainWindow):
         self.live = LiveActions(self)
         self.undo = SceneUndo(self.session, self)
         build_menus(self)
+        self.camera_keys = CameraKeys(self.viewport, self)
+        QApplication.instance().installEventFilter(self.camera_keys)
         self._connect_session()
         self._show_sensors(None)
         self._show_constraints(None)
@@ -308,6 +311,7 @@ class MainWindow(QMainWindow):
 
     def closeEvent(self, event: Any) -> None:
         self.timer.stop()
+        QApplication.instance().removeEventFilter(self.camera_keys)
         self.settings.setValue("geometry", self.saveGeometry())
         self._disconnect_session()
         self.live.close()

@@ -21,6 +21,7 @@ from app.busy import BusyNotice
 from app.camera_keys import CameraKeys
 from app.constraint_placement import placed_params
 from app.drawing import DrawScheduler
+from app.failures import FailureCountdown
 from app.file_actions import FileActions
 from app.live_actions import LiveActions
 from app.menus import build_menus
@@ -70,6 +71,8 @@ class MainWindow(QMainWindow):
         self.files = FileActions(self)
         self.live = LiveActions(self)
         self.undo = SceneUndo(self.session, self)
+        self.failures = FailureCountdown(self)
+        self.snapshotDrawn.connect(self.failures.on_frame)
         build_menus(self)
         self.camera_keys = CameraKeys(self.viewport, self)
         QApplication.instance().installEventFilter(self.camera_keys)

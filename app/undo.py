@@ -15,8 +15,9 @@ move of a pin merges into the step that created it.
 
 from __future__ import annotations
 
+import contextlib
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import Any
 
 import numpy as np
@@ -92,6 +93,15 @@ class SceneUndo:
         self.session.events.sensors.disconnect(self._on_sensors)
         self.session.events.constraints.disconnect(self._on_constraints)
         self.session.events.motion.disconnect(self._on_motion)
+
+    @contextlib.contextmanager
+    def unrecorded(self) -> Iterator[None]:
+        """Edits made inside are not undo steps (a simulated failure running out)."""
+        was, self._applying = self._applying, True
+        try:
+            yield
+        finally:
+            self._applying = was
 
     def _on_motion(self, e: Any) -> None:
         """A new clip starts a new history (offsets and failures were made for the old one)."""

@@ -104,6 +104,14 @@ class SensorPanel(QWidget):
         if r["label"].text() != label:
             r["label"].setText(label)
 
+    def set_failure_left(self, joint: str, left: int | None) -> None:
+        """Show ``left`` frames of a simulated failure on ``joint``'s Fail button (None:
+        no failure running)."""
+        r = self.rows.get(joint)
+        if r is None:
+            return
+        r["fail"].setText("Fail" if left is None else f"Lost {left}")
+
     def _build_rows(self, joints: list[str]) -> None:
         while self.grid.count():
             item = self.grid.takeAt(0)
@@ -128,6 +136,7 @@ class SensorPanel(QWidget):
             weight.setValue(1.0)
             weight.setMinimumWidth(110)
             fail = QPushButton("Fail", toolTip="Simulate losing this tracker from the current frame")
+            fail.setMinimumWidth(fail.fontMetrics().horizontalAdvance("Lost 99999") + 16)  # no relayout per frame
             reset = QPushButton("Reset", toolTip="Reset drag offset and simulated failures")
             enabled.toggled.connect(lambda v, j=j: self._edit(j, enabled=bool(v)))
             dof.currentIndexChanged.connect(lambda k, j=j: self._edit(j, dof=6 if k == 0 else 3))

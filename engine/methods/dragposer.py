@@ -259,12 +259,14 @@ class DragPoserMethod(DragPoserEdits, Method):
 
     def _reach_targets(self) -> dict[int, np.ndarray]:
         """Tracked wrists and ankles -> their trackers' positions (setting ``reach``): a
-        limb whose shoulder/elbow (hip/knee) a user constraint holds is left as solved."""
+        limb whose shoulder/elbow (hip/knee) or end joint a user constraint holds is left
+        as solved (put back on its tracker, a distance between the tracked wrists had no
+        effect on the pose while its loss read as met)."""
         held = {sk.JOINT_INDEX[n] for c in self.constraints if c.enabled and c.weight > 0
                 for n in _joints_of(c) if n in sk.JOINT_INDEX}  # fmt: skip
         return {sk.JOINT_INDEX[j]: c.position for j, c in self.sensors.items()
                 if c.enabled and c.connected and sk.JOINT_INDEX[j] in LIMBS
-                and not held & set(LIMBS[sk.JOINT_INDEX[j]])}  # fmt: skip
+                and not held & {sk.JOINT_INDEX[j], *LIMBS[sk.JOINT_INDEX[j]]}}  # fmt: skip
 
     def _rotation_targets(self) -> dict[int, np.ndarray]:
         """The head, hands and feet -> their connected 6-DoF trackers' world rotations

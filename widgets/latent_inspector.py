@@ -65,6 +65,11 @@ class LatentInspector(QWidget):
         self.dim = QSpinBox(minimum=0, maximum=23, prefix="dim ")
         self.value = QSlider(Qt.Orientation.Horizontal, minimum=-300, maximum=300, toolTip="value x 100")
         self.value.valueChanged.connect(self._scrub)
+        self.value_label = QLabel("0.00")
+        self.value_label.setMinimumWidth(self.value_label.fontMetrics().horizontalAdvance("-3.00") + 6)
+        self.dim.valueChanged.connect(self._dim_chosen)
+        #: The latent being decoded in debug mode (the bars show it), None otherwise.
+        self.edited: np.ndarray | None = None
         self.capture_a = QPushButton("Store as A")
         self.capture_b = QPushButton("Store as B")
         self.capture_a.clicked.connect(lambda: self._store("a"))
@@ -73,7 +78,8 @@ class LatentInspector(QWidget):
         self.mix.valueChanged.connect(self._interpolate)
         grid.addWidget(self.debug, 0, 0, 1, 4)
         grid.addWidget(self.dim, 1, 0)
-        grid.addWidget(self.value, 1, 1, 1, 3)
+        grid.addWidget(self.value, 1, 1, 1, 2)
+        grid.addWidget(self.value_label, 1, 3)
         grid.addWidget(self.capture_a, 2, 0)
         grid.addWidget(self.capture_b, 2, 1)
         grid.addWidget(QLabel("A → B"), 2, 2)
@@ -110,7 +116,7 @@ class LatentInspector(QWidget):
         # in debug mode too: after a seek, "Store as B" must store the new frame's latent
         # (it stored A's again); the engine's latent is unchanged by decoding requests
         self.latent = z
-        self._draw_bars(z)
+        self._draw_bars(z if self.edited is None or self.edited.size != z.size else self.edited)
         # the engine's record covers frames this view never drew (it draws the newest only)
         recorded = [r for r in snap.history[-HISTORY:]
                     if r.latent is not None and np.size(r.latent) == z.size]  # fmt: skip
@@ -143,14 +149,33 @@ class LatentInspector(QWidget):
 
     def _debug_toggled(self, on: bool) -> None:
         self.debugToggled.emit(on)
+        self.edited = None
         if on and self.latent is not None:
-            self.value.setValue(int(round(self.latent[self.dim.value()] * 100)))
+            self._dim_chosen(self.dim.value())
+            self._decode(self.latent.copy())  # starts on the pose on screen
+        elif self.latent is not None:
+            self._draw_bars(self.latent)
+
+    def _dim_chosen(self, dim: int) -> None:
+        """The value slider shows the chosen dimension's value (of the edited latent)."""
+        z = self.edited if self.edited is not None else self.latent
+        if z is not None and 0 <= dim < z.size:
+            self.value.blockSignals(True)
+            self.value.setValue(int(round(float(z[dim]) * 100)))
+            self.value.blockSignals(False)
+            self.value_label.setText(f"{float(z[dim]):.2f}")
+
+    def _decode(self, z: np.ndarray) -> None:
+        self.edited = z
+        self._draw_bars(z)
+        self.decodeRequested.emit(z)
 
     def _scrub(self, v: int) -> None:
+        self.value_label.setText(f"{v / 100.0:.2f}")
         if self.debug.isChecked() and self.latent is not None:
-            z = self.latent.copy()
+            z = (self.edited if self.edited is not None else self.latent).copy()
             z[self.dim.value()] = v / 100.0
-            self.decodeRequested.emit(z)
+            self._decode(z)
 
     def _store(self, slot: str) -> None:
         if self.latent is not None:
@@ -159,7 +184,7 @@ class LatentInspector(QWidget):
     def _interpolate(self, v: int) -> None:
         if self.debug.isChecked() and {"a", "b"} <= set(self.stored):
             t = v / 100.0
-            self.decodeRequested.emit((1 - t) * self.stored["a"] + t * self.stored["b"])
+            self._decode((1 - t) * self.stored["a"] + t * self.stored["b"])
 
 
 def nice_ceil(x: float) -> float:

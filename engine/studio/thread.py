@@ -335,8 +335,15 @@ class EngineThread(threading.Thread):
             return
         self._playing = False
         try:
-            decoded = method.decode_latent(np.asarray(latent, float))
-            self._decoded = np.asarray(decoded, float).reshape(sk.NUM_JOINTS, 3)
+            pose = np.asarray(method.decode_latent(np.asarray(latent, float)), float).reshape(sk.NUM_JOINTS, 3)
+            # drawn as the change the edited latent makes, on the pose on screen: the bare
+            # decoder output lacks the solve's root placement and reach (10 cm off, a foot
+            # above the floor), so the unedited latent must land exactly on the pose
+            shown = self._last_result.latent if self._last_result is not None else None
+            if shown is not None and np.size(shown) == np.size(latent):
+                base = np.asarray(method.decode_latent(np.asarray(shown, float)), float).reshape(sk.NUM_JOINTS, 3)
+                pose = pose + (self._last_pose - base)
+            self._decoded = pose
         except Exception as exc:
             self._report_error(f"decode latent: {exc}")
 

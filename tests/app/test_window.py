@@ -81,10 +81,17 @@ def test_latent_debugger_decodes_an_edited_latent_and_draws_it(studio, qtbot, la
     studio.session.play()
     inspector.debug.setChecked(True)
     assert not studio.session.playing
-    inspector.dim.setValue(0)
-    inspector.value.setValue(150)  # z[0] = 1.5: the stand-in shifts the pose 1.5 m along x
+    # ticking Debug decodes the unedited latent: exactly on the pose on screen
     qtbot.waitUntil(lambda: studio.session.latest.decoded is not None and studio.viewport.decoded.visible)
-    assert np.allclose(studio.viewport.decoded.mesh.points[0, 0], 1.5)
+    pose = np.asarray(studio.session.latest.positions)
+    assert np.allclose(studio.session.latest.decoded, pose)
+    inspector.dim.setValue(0)
+    assert inspector.value.value() == -100 and inspector.value_label.text() == "-1.00"
+    inspector.value.setValue(150)  # z[0] -1 -> 1.5: the stand-in shifts its pose 2.5 m along x
+    assert inspector.value_label.text() == "1.50" and inspector.bars.opts["height"][0] == 1.5
+    qtbot.waitUntil(lambda: np.allclose(studio.session.latest.decoded, pose + [2.5, 0, 0]))
+    qtbot.waitUntil(lambda: np.allclose(studio.viewport.decoded.mesh.points[0], pose[0] + [2.5, 0, 0]))
+    assert inspector.bars.opts["height"][0] == 1.5  # the bars show the edited latent
     inspector.debug.setChecked(False)
     qtbot.waitUntil(lambda: studio.session.latest.decoded is None and not studio.viewport.decoded.visible)
 

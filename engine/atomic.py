@@ -8,7 +8,18 @@ the target, so they are recognisable:
   file (a handler is installed for SIGTERM/SIGHUP while a write is in progress, when the
   program has not set its own);
 * a run killed with SIGKILL cannot clean up; the next write to the same output removes
-  the temporary files of writers that are no longer running (their pid is in the name).
+  the temporary files of writers that are no longer running: their pid (in the name) is
+  not a process here *and* the file is not locked. Every writer holds an exclusive
+  ``flock`` on its temporary file until it is renamed, which the kernel releases when
+  the writer dies however it dies; the lock keeps the files of writers this process
+  cannot see (another pid namespace, another host on a shared folder) from being taken
+  for stale.
+
+An output that is a symlink is written through: the temporary file is made beside the
+link's final target and renamed over it, so the link stays and the target changes (as
+editors do). A dangling link creates its target when the target's folder exists; a
+link into a missing folder, a symlink loop and a target that is not a regular file (a
+FIFO, a device) are errors.
 
 The new file gets the permissions of the file it replaces; a new output gets those a
 plain ``open(path, "w")`` would give (``mkstemp`` creates files readable by the owner
@@ -19,6 +30,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import stat
 import re
 import signal
 import tempfile
@@ -27,6 +39,11 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from engine.errors import OutputError
+
+try:
+    import fcntl
+except ImportError:  # Windows: no flock; the pid in the name alone tells stale files
+    fcntl = None  # type: ignore[assignment]
 
 #: Temporary files being written by this process (removed on SIGTERM/SIGHUP).
 _LIVE: set[Path] = set()
@@ -58,9 +75,27 @@ def _pid_alive(pid: int) -> bool:
     return True
 
 
+def _locked(path: str) -> bool:
+    """Whether a writer holds the ``flock`` of the temporary file ``path``."""
+    if fcntl is None:
+        return False
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
+    except OSError:
+        return True  # unreadable: not ours to judge
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        return True
+    finally:
+        os.close(fd)  # releases the probe's lock
+    return False
+
+
 def remove_stale(path: str | Path) -> list[Path]:
     """Remove temporary files left beside ``path`` by writers that died (SIGKILL, power
-    loss); returns what was removed. Files of running writers are kept."""
+    loss); returns what was removed. Files of running writers are kept: a pid that is
+    alive here, or a file that is locked."""
     path = Path(path)
     prefix = temp_prefix(path)
     pattern = re.compile(re.escape(prefix) + r"(\d+)-")
@@ -71,11 +106,37 @@ def remove_stale(path: str | Path) -> list[Path]:
         return removed
     for entry in entries:
         m = pattern.match(entry.name)
-        if m and entry.is_file(follow_symlinks=False) and not _pid_alive(int(m.group(1))):
+        if m and entry.is_file(follow_symlinks=False) and not _pid_alive(int(m.group(1))) and not _locked(entry.path):
             with contextlib.suppress(OSError):
                 os.unlink(entry.path)
                 removed.append(Path(entry.path))
     return removed
+
+
+def write_target(path: str | Path) -> Path:
+    """The file a write to ``path`` replaces: ``path``, or its final target if it is a
+    symlink (any depth, relative or absolute).
+
+    Raises
+    ------
+    OutputError
+        For a symlink loop, a link whose target folder does not exist, and an existing
+        target that is not a regular file (a FIFO, a device, a folder).
+    """
+    path = Path(path)
+    target = Path(os.path.realpath(path)) if path.is_symlink() else path
+    if target.is_symlink():  # realpath gives up on a loop
+        raise OutputError(f"{path}: cannot write: symlink loop")
+    if target != path and not target.parent.is_dir():
+        raise OutputError(f"{path}: cannot write: it links to {target}, whose folder does not exist")
+    try:
+        mode = os.stat(target).st_mode
+    except OSError:
+        return target
+    if not stat.S_ISREG(mode):
+        where = f"it links to {target}, which" if target != path else "it"
+        raise OutputError(f"{path}: cannot write: {where} is not a regular file")
+    return target
 
 
 def _cleanup_live() -> None:
@@ -114,23 +175,31 @@ def _install_handlers() -> None:
 
 @contextlib.contextmanager
 def atomic_path(path: str | Path, suffix: str = ".tmp") -> Iterator[Path]:
-    """Yield a temporary path to write; on success it replaces ``path``.
+    """Yield a temporary path to write; on success it replaces ``path`` (the final target
+    of ``path`` when it is a symlink: :func:`write_target`).
 
     ``suffix`` lets writers that insist on an extension (``np.savez`` adds ``.npz``)
     get one: pass the target's suffix."""
-    path = Path(path)
+    given = Path(path)
+    lock = -1
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
+        given.parent.mkdir(parents=True, exist_ok=True)
+        path = write_target(given)
         remove_stale(path)
         try:
             mode = os.stat(path).st_mode & 0o7777
         except OSError:
             mode = 0o666 & ~_umask()
         _install_handlers()
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f"{temp_prefix(path)}{os.getpid()}-", suffix=suffix)
-        os.close(fd)
+        lock, tmp = tempfile.mkstemp(dir=path.parent, prefix=f"{temp_prefix(path)}{os.getpid()}-", suffix=suffix)
+        if fcntl is not None:
+            fcntl.flock(lock, fcntl.LOCK_EX)  # held until the rename: the file is not stale
+    except OutputError:
+        raise
     except OSError as exc:
-        raise OutputError(f"{path}: cannot write ({exc.strerror or exc})") from None
+        if lock >= 0:
+            os.close(lock)
+        raise OutputError(f"{given}: cannot write ({exc.strerror or exc})") from None
     tmp_path = Path(tmp)
     with _LOCK:
         _LIVE.add(tmp_path)
@@ -140,11 +209,12 @@ def atomic_path(path: str | Path, suffix: str = ".tmp") -> Iterator[Path]:
             os.chmod(tmp_path, mode)
             os.replace(tmp_path, path)
         except OSError as exc:  # disk full, folder removed or made read-only meanwhile
-            raise OutputError(f"{path}: cannot write ({exc.strerror or exc})") from exc
+            raise OutputError(f"{given}: cannot write ({exc.strerror or exc})") from exc
     finally:
         with _LOCK:
             _LIVE.discard(tmp_path)
         tmp_path.unlink(missing_ok=True)
+        os.close(lock)
 
 
 def write_bytes(path: str | Path, data: bytes) -> None:

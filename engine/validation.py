@@ -41,7 +41,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from engine.errors import UserError
+from engine.atomic import write_target
+from engine.errors import OutputError, UserError
 
 #: Longest piece of user input quoted back in an error message (characters).
 MAX_SHOWN = 40
@@ -252,7 +253,8 @@ def check_output_path(path: str | Path, flag: str = "--out") -> Path:
 
     Refuses a folder, a special file, an existing file without write permission and a
     parent that cannot be created or written. Missing parent folders are allowed (the
-    writers create them) when the nearest existing ancestor is writable."""
+    writers create them) when the nearest existing ancestor is writable. A symlink is
+    checked as its target, which is what the writers replace (:func:`engine.atomic.write_target`)."""
     path = Path(path)
     if path.is_dir():
         raise ValidationError(f"{flag} {path}: is a folder, expected a file name")
@@ -261,7 +263,11 @@ def check_output_path(path: str | Path, flag: str = "--out") -> Path:
             raise ValidationError(f"{flag} {path}: exists and is not a regular file")
         if not os.access(path, os.W_OK):
             raise ValidationError(f"{flag} {path}: exists and is not writable (permission denied)")
-    parent = path.parent if str(path.parent) else Path(".")
+    try:
+        real = write_target(path)
+    except OutputError as exc:
+        raise ValidationError(f"{flag} {exc}") from None
+    parent = real.parent if str(real.parent) else Path(".")
     ancestor = parent
     while not ancestor.exists():
         if ancestor.parent == ancestor:

@@ -84,7 +84,7 @@ class _Curves:
 
     def get(self, name: str, symbols: bool = False) -> pg.PlotDataItem:
         if name not in self.items:
-            colour = self.colours.setdefault(name, style.TERM_CYCLE[len(self.colours) % len(style.TERM_CYCLE)])
+            colour = self.colours.setdefault(name, style.term_colour(len(self.colours) - 1))
             # wide pens go through Qt's stroker: fine for a few points per iteration,
             # costly for a long history, which uses 1 px lines (the total is white)
             width = (2.5 if name == "total" else 1.5) if symbols else 1.0

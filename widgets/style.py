@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import colorsys
+
 #: Reconstruction of the selected method.
 RECONSTRUCTION = "#ff8a1f"
 #: Ground truth of the loaded clip (green, as in the DragPoser paper's figures).
@@ -19,11 +21,19 @@ FLOOR = "#3a4150"
 FLOOR_PLANE = "#1b1e25"
 PLOT_BACKGROUND = "#171a21"
 PLOT_FOREGROUND = "#c8ccd4"
-#: Loss-term curves, in order of first appearance.
-TERM_CYCLE = (
-    "#ff8a1f", "#4da3ff", "#4cd964", "#c77dff", "#ffd60a", "#ff5fa2", "#00e5ff",
-    "#b0b8c8", "#ff3b30", "#a0e515",
-)  # fmt: skip
+def term_colour(index: int) -> str:
+    """The ``index``-th loss term's colour (in order of first appearance).
+
+    Hues step by the golden angle (137.5 degrees), so any number of terms get distinct
+    colours and each new one lands far from the last; saturation and brightness
+    alternate too. A cycle of ten repeated itself from the eleventh term (a look-at and
+    the hips' sensor were both blue with six trackers, a floor and a distance).
+    """
+    hue = (0.08 + index * 0.381966) % 1.0
+    sat = 0.72 if index % 3 else 0.55
+    val = 1.0 if index % 2 == 0 else 0.82
+    r, g, b = colorsys.hsv_to_rgb(hue, sat, val)
+    return "#{:02x}{:02x}{:02x}".format(*(int(round(255 * c)) for c in (r, g, b)))
 
 
 def ghost_color(name: str, index: int = 0) -> str:

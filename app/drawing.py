@@ -152,7 +152,8 @@ class DrawScheduler:
         self._set_text(w.status_gui, f"view {self._draw_rate:3.0f} draws/s")
         self._set_text(w.status_warnings, f"warnings {snap.warnings}")
         self._set_tip(w.status_warnings, "\n".join(snap.recent_errors + tuple(snap.messages)))
-        if snap.error:
+        w.ghost_status.on_snapshot(snap)
+        if snap.error and not w.ghost_status.is_ghost_problem(snap.error):  # a ghost's shows in its row
             w.statusBar().showMessage(snap.error, 5000)
 
     @staticmethod

@@ -22,6 +22,7 @@ from app.camera_keys import CameraKeys
 from app.constraint_placement import placed_params
 from app.drawing import DrawScheduler
 from app.failures import FailureCountdown
+from app.ghost_status import GhostStatus
 from app.file_actions import FileActions
 from app.live_actions import LiveActions
 from app.menus import build_menus
@@ -73,6 +74,7 @@ class MainWindow(QMainWindow):
         self.undo = SceneUndo(self.session, self)
         self.failures = FailureCountdown(self)
         self.snapshotDrawn.connect(self.failures.on_frame)
+        self.ghost_status = GhostStatus(self)
         build_menus(self)
         self.camera_keys = CameraKeys(self.viewport, self)
         QApplication.instance().installEventFilter(self.camera_keys)
@@ -194,6 +196,7 @@ class MainWindow(QMainWindow):
         e.playback.connect(self._show_playback)
         e.motion.connect(self._show_motion)
         e.sensors.connect(self._show_sensors)
+        e.sensors.connect(self.ghost_status.sensors_changed)
         e.constraints.connect(self._show_constraints)
         e.settings.connect(self._show_optimizer)
         e.method.connect(self._show_optimizer)
@@ -204,6 +207,7 @@ class MainWindow(QMainWindow):
         e = self.session.events
         for signal, slot in ((e.frame, self.timeline.set_frame), (e.playback, self._show_playback),
                              (e.motion, self._show_motion), (e.sensors, self._show_sensors),
+                             (e.sensors, self.ghost_status.sensors_changed),
                              (e.constraints, self._show_constraints), (e.settings, self._show_optimizer),
                              (e.method, self._show_optimizer), (e.method, self._announce_method),
                              (e.motion, self._announce_motion)):  # fmt: skip
@@ -248,6 +252,7 @@ class MainWindow(QMainWindow):
         s = self.session
         # settings the session has not set yet show the engine's defaults
         self.optimizer_panel.set_state(s.method, s.ghosts, {**self._optimizer_defaults, **s.settings})
+        self.ghost_status.apply()  # a ghost that cannot run stays disabled
 
     def _guard(self, fn: Any) -> Any:
         """Wrap a request so a user error shows a dialog instead of escaping into Qt."""

@@ -113,6 +113,7 @@ class EngineThread(threading.Thread):
         self._pending_error = ""
         self._method_error = ""
         self._recent_errors: deque[str] = deque(maxlen=RECENT_ERRORS)
+        self._ghost_errors: dict[str, str] = {}  # ghost -> the failure last reported
         self._stopping = False
         self._latency_ms: float | None = None
 
@@ -186,6 +187,7 @@ class EngineThread(threading.Thread):
             self._recent_errors.clear()
             self._reset_methods()
         elif isinstance(c, cmd.SetSensors):
+            self._ghost_errors.clear()  # other sensors: a ghost may run now, or fail anew
             if self._source is not None:
                 try:
                     self._source.set_sensors(c.sensors)
@@ -197,6 +199,7 @@ class EngineThread(threading.Thread):
         elif isinstance(c, cmd.SetSettings):
             self._methods.set_settings(c.values)
         elif isinstance(c, cmd.SetMethod):
+            self._ghost_errors.clear()
             self._set_method(c)
         elif isinstance(c, cmd.Seek):
             self._frame = self._clamp(c.frame)
@@ -309,9 +312,15 @@ class EngineThread(threading.Thread):
         for name, m in self._methods.ghosts.items():
             try:
                 ghosts[name] = self._methods.step(m, sf).positions
+                self._ghost_errors.pop(name, None)
             except Exception as exc:
-                error = error or f"{name} at frame {frame}: {exc}"
-                self._recent_errors.append(f"{name} at frame {frame}: {exc}")
+                # once per ghost and cause: a ghost that cannot run with these sensors
+                # fails on every frame, and said so on every frame
+                if self._ghost_errors.get(name) != str(exc):
+                    self._ghost_errors[name] = str(exc)
+                    error = error or f"{name} at frame {frame}: {exc}"
+                    self._recent_errors.append(f"{name} at frame {frame}: {exc}")
+                    self._warnings += 1
         dt = max(ms / 1000.0, 1e-4)
         self._fps = 1.0 / dt if self._fps == 0 else 0.9 * self._fps + 0.1 / dt
         self._last_solved = frame

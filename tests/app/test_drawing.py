@@ -16,6 +16,7 @@ def test_status_shows_the_solver_breakdown_and_leaves_unchanged_labels_alone(qtb
     labels = {n: QLabel() for n in ("status_engine", "status_gui", "status_warnings")}
     window = SimpleNamespace(plots=SimpleNamespace(update_iterations=None, update_cost=None, update_history=None),
                              latent=SimpleNamespace(update_snapshot=None), method_errors=SimpleNamespace(update_snapshot=None),
+                             ghost_status=SimpleNamespace(on_snapshot=lambda snap: None, is_ghost_problem=lambda m: False),
                              statusBar=lambda: bar, **labels)  # fmt: skip
     d = DrawScheduler(window)
     snap = FakeSnapshot()

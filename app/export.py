@@ -1,28 +1,27 @@
 """File ▸ Save reconstruction as BVH: the whole clip solved off the GUI thread.
 
-A progress dialog shows the frames solved and offers Cancel; the solver checks the
-cancel flag after every frame, so cancelling (or quitting the studio) stops it within
-one frame and nothing is written. The BVH is written to a temporary file and renamed
-(:func:`engine.bvh.save_motion_bvh`), so a file is either complete or absent.
+The work is the session's :class:`engine.studio.export.ExportJob` (solve, then write
+atomically); this module runs it on a worker thread behind a progress dialog with
+Cancel. The job checks the cancel flag after every frame, so cancelling (or quitting
+the studio) stops it within one frame and nothing is written.
 """
 
 from __future__ import annotations
 
 import threading
-from collections.abc import Callable, Mapping
-from pathlib import Path
-from typing import Any
+from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 from PyQt6.QtCore import QObject, Qt, QTimer, pyqtSignal
 from PyQt6.QtWidgets import QProgressDialog, QWidget
 
+if TYPE_CHECKING:
+    from engine.methods.base import Method
+    from engine.studio.export import ExportJob
+
 POLL_MS = 100
 #: How long quitting waits for a cancelled export to finish its current frame, seconds.
 SHUTDOWN_WAIT_S = 3.0
-
-
-class ExportCancelled(Exception):
-    """The user cancelled the export (nothing was written)."""
 
 
 class ReconstructionExport(QObject):
@@ -39,7 +38,7 @@ class ReconstructionExport(QObject):
 
     finished = pyqtSignal(bool, str)
 
-    def __init__(self, parent: QWidget, factory: Callable[[str], Any] | None = None) -> None:
+    def __init__(self, parent: QWidget, factory: Callable[[str], Method] | None = None) -> None:
         super().__init__(parent)
         self._parent = parent
         self.factory = factory
@@ -56,16 +55,13 @@ class ReconstructionExport(QObject):
     def running(self) -> bool:
         return self.thread is not None
 
-    def start(self, motion: Any, sensors: tuple, constraints: tuple, settings: Mapping[str, Any], method: str, path: str,
-              source: Path | None = None, rig_map: Path | None = None) -> None:  # fmt: skip
-        """Solve ``motion`` with ``method`` and the studio's edits, then write ``path`` (onto
-        the hierarchy of the BVH ``source`` when given, mapped with the joint mapping file
-        ``rig_map`` if any: docs/skeleton.md, --on-source-rig)."""
+    def start(self, job: ExportJob) -> None:
+        """Run ``job`` (:meth:`engine.studio.session.Session.export_job`) off the GUI thread."""
         if self.running:
             raise RuntimeError("an export is already running")
-        self.done, self.total, self._result = 0, len(motion), None
+        self.done, self.total, self._result = 0, len(job.motion), None
         self._cancel.clear()
-        self.dialog = QProgressDialog(f"Reconstructing {self.total} frames with {method}...", "Cancel",
+        self.dialog = QProgressDialog(f"Reconstructing {self.total} frames with {job.method}...", "Cancel",
                                       0, self.total, self._parent)  # fmt: skip
         self.dialog.setWindowTitle("Save reconstruction")
         self.dialog.setWindowModality(Qt.WindowModality.NonModal)  # the studio stays usable
@@ -74,8 +70,7 @@ class ReconstructionExport(QObject):
         self.dialog.setAutoReset(False)
         self.dialog.canceled.connect(self.cancel)
         self.dialog.show()
-        args = (motion, sensors, constraints, settings, method, path, source, rig_map)
-        self.thread = threading.Thread(target=self._run, args=args, name="bvh-export", daemon=True)
+        self.thread = threading.Thread(target=self._run, args=(job,), name="bvh-export", daemon=True)
         self.thread.start()
         self._poll.start()
 
@@ -85,34 +80,15 @@ class ReconstructionExport(QObject):
         if self.dialog is not None:
             self.dialog.setLabelText("Cancelling...")
 
-    def _progress(self, frame: int) -> bool:
+    def _progress(self, frame: int) -> None:
         self.done = frame + 1
-        return self._cancel.is_set()
 
-    def _run(self, motion: Any, sensors: tuple, constraints: tuple, settings: Mapping[str, Any], method: str, path: str,
-             source: Path | None, rig_map: Path | None) -> None:  # fmt: skip
+    def _run(self, job: ExportJob) -> None:
         try:
-            from engine.bvh import save_motion_bvh
-            from engine.studio.methods import reconstruct_clip
-
-            result = reconstruct_clip(motion, sensors, constraints, settings, method,
-                                      factory=self.factory, progress=self._progress)  # fmt: skip
-            if self._cancel.is_set():
-                raise ExportCancelled
-            if source is None:
-                save_motion_bvh(path, result)
-            else:
-                from engine.bvh import load_bvh
-                from engine.retarget import manifest_fps, retarget
-                from engine.source_rig import save_on_source_rig
-
-                raw = load_bvh(source)
-                save_on_source_rig(path, result, raw, retarget(raw, manifest_fps(source), rig_map=rig_map)[1])
-            self._result = (True, f"Saved {len(result)} frames to {path}")
-        except ExportCancelled:
-            self._result = (False, "")
+            rec = job.run(self.factory, self._progress, self._cancel.is_set)
+            self._result = (False, "") if rec is None else (True, f"Saved {len(rec)} frames to {job.path}")
         except Exception as exc:  # the GUI shows it; the studio keeps running
-            self._result = (False, f"{path}: {type(exc).__name__}: {exc}")
+            self._result = (False, f"{job.path}: {type(exc).__name__}: {exc}")
 
     def _check(self) -> None:
         if self.dialog is not None and not self._cancel.is_set():

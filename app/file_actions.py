@@ -6,6 +6,7 @@ a temporary name and renamed, so nothing is ever half written.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 from pathlib import Path
@@ -124,19 +125,19 @@ class FileActions:
             return self.w.show_error("Not for tracker input", "Saving re-solves a clip. For trackers use "
                                      "`dragposer-studio reconstruct --trackers REC.jsonl --out OUT.bvh` on a "
                                      "recording (Live trackers > Record), or `live --out` (docs/trackers.md).")  # fmt: skip
-        if s.motion is None:
-            return self.w.show_error("Nothing to save", "Open a motion first.")
-        if on_source_rig and getattr(s, "path", None) is None:
-            return self.w.show_error("Nothing to save", "This clip was not opened from a BVH file.")
         if self.export.running:
             return self.w.statusBar().showMessage("An export is already running", 3000)
+        try:  # checked before a file is asked for
+            job = s.export_job(path or "", on_source_rig)
+        except UserError as exc:
+            text = str(exc)
+            return self.w.show_error("Nothing to save", f"{text[:1].upper()}{text[1:]}.")
         if path is None:
             path, _ = QFileDialog.getSaveFileName(self.w, "Save reconstruction", "", "BVH motion (*.bvh)")
             if not path:
                 return None
-        source = s.path if on_source_rig else None
-        self.export.start(s.motion, tuple(s.sensors.values()), tuple(s.constraints),
-                          s.settings, s.method, path, source, self.rig_map_of(source))  # fmt: skip
+            job = dataclasses.replace(job, path=Path(path))
+        self.export.start(job)
         return None
 
     def _export_finished(self, ok: bool, message: str) -> None:

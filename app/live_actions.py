@@ -5,7 +5,7 @@ Calibrate with a countdown). Kept apart from the window, which only creates it."
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 from PyQt6.QtCore import Qt, QTimer
 from PyQt6.QtWidgets import QDialog, QDockWidget, QFileDialog, QMainWindow
@@ -13,6 +13,9 @@ from PyQt6.QtWidgets import QDialog, QDockWidget, QFileDialog, QMainWindow
 from engine.errors import UserError
 from engine.studio import events as ev
 from widgets.live_panel import ConnectDialog, LivePanel
+
+if TYPE_CHECKING:
+    from engine.sources.live_source import LiveSource
 
 
 class LiveActions:
@@ -42,10 +45,9 @@ class LiveActions:
         self.w.session.events.source.disconnect(self._show_source)
 
     @property
-    def live(self) -> Any:
+    def live(self) -> LiveSource | None:
         """The session's live source, if it has one."""
-        src = self.w.session.source
-        return src if getattr(src, "live", False) else None
+        return self.w.session.live_source
 
     # -- File menu ----------------------------------------------------------------------
     def connect_dialog(self) -> None:
@@ -57,16 +59,12 @@ class LiveActions:
 
     def connect(self, host: str, port: int, mapping: str = "", convention: str = "unity") -> bool:
         """Listen on ``host:port`` and play the stream live; errors show a dialog."""
-        from engine.sources.live_source import LiveSource
-        from engine.sources.trackers import TrackerMapping
-
         try:
-            src = LiveSource(host, port, TrackerMapping.parse(mapping), convention).start()
+            self.w.session.connect_live(host, port, mapping, convention)
         except UserError as exc:
             self.w.show_error("Cannot connect live source", str(exc))
             return False
         self.w.settings.setValue("live_port", port)
-        self.w.session.set_source(src, f"live {src.receiver.host}:{src.receiver.port}")
         self.w.session.play()
         return True
 
@@ -76,14 +74,11 @@ class LiveActions:
             self.open_recording(path)
 
     def open_recording(self, path: str | Path) -> bool:
-        from engine.sources.recording_source import RecordingSource
-
         try:
-            src = RecordingSource(path)
+            self.w.session.open_recording(path)
         except UserError as exc:
             self.w.show_error("Cannot open tracker recording", str(exc))
             return False
-        self.w.session.set_source(src, Path(path).name)
         return True
 
     # -- the Live dock --------------------------------------------------------------------

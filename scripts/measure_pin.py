@@ -13,7 +13,7 @@ import numpy as np
 from engine import skeleton as sk
 from engine.constraints import PinConstraint
 from engine.studio.clips import load_clip, sensor_presets
-from engine.studio.methods import reconstruct_clip
+from engine.studio.export import reconstruct_clip
 
 motion = load_clip("assets/clips/example.bvh")
 start = int(sys.argv[1]) if len(sys.argv) > 1 else 200

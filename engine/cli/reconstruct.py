@@ -121,9 +121,10 @@ _METHOD: dict[str, Any] = {}  # this process's method, built once for all its fi
 def _reconstruct_file(job: tuple[Path, Path, argparse.Namespace, bool]) -> str:
     """Reconstruct one input and write it; returns the summary (in this process or a
     ``--jobs`` worker)."""
-    from engine.bvh import load_bvh, save_motion_bvh
+    from engine.bvh import load_bvh
     from engine.methods import run_method
     from engine.retarget import manifest_fps, retarget, source_frames_needed
+    from engine.studio.export import write_reconstruction
     from engine.tracking import simulate
 
     path, out, args, progress = job
@@ -139,12 +140,7 @@ def _reconstruct_file(job: tuple[Path, Path, argparse.Namespace, bool]) -> str:
     rec, results = run_method(_METHOD["method"], tracking, motion.skeleton, progress=progress, desc=path.name,
                               light=True)  # fmt: skip
     rec.name = f"{motion.name} ({args.method})"
-    if args.on_source_rig:
-        from engine.source_rig import save_on_source_rig
-
-        save_on_source_rig(out, rec, raw, report)
-    else:
-        save_motion_bvh(out, rec)
+    write_reconstruction(out, rec, (raw, report) if args.on_source_rig else None)
     return summary(results, tracking, rec, out)
 
 

@@ -9,18 +9,13 @@ snapshots.
 
 from __future__ import annotations
 
-import copy
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from typing import Any
-
-import numpy as np
 
 from engine.constraints.base import Constraint
 from engine.methods import driver, get_method
 from engine.methods.base import Method
-from engine.motion import Motion
 from engine.sensors import Sensor
-from engine.studio.source import ClipSource
 
 
 def make_method(name: str) -> Method:
@@ -54,33 +49,3 @@ def apply_sensor_weights(method: Method, sensors: tuple[Sensor, ...]) -> list[st
     except Exception as exc:
         return [f"{method.name}: sensor weights rejected ({exc})"]
     return []
-
-
-def reconstruct_clip(motion: Motion, sensors: tuple[Sensor, ...], constraints: tuple[Constraint, ...],
-                     settings: Mapping[str, Any], method_name: str, factory: Callable[[str], Method] | None = None,
-                     progress: Callable[[int], bool | None] | None = None) -> Motion:  # fmt: skip
-    """Run a fresh method over every frame of ``motion`` with the studio's sensor edits.
-
-    ``motion`` is the ground truth of a method that needs one (the autoencoder).
-    Returns the reconstruction as a :class:`engine.motion.Motion` (same skeleton and fps).
-    ``progress(frame)`` is called after each frame and may return True to cancel.
-
-    Raises
-    ------
-    UserError, FloatingPointError
-        Settings the method rejects; a non-finite pose.
-    """
-    source = ClipSource(motion)
-    source.set_sensors(tuple(sensors))
-    constraints = copy.deepcopy(tuple(constraints))  # a separate run: its own pin captures
-    method = (factory or make_method)(method_name)
-    driver.start(method, motion.skeleton, motion.fps, reference=motion, settings=settings,
-                 constraints=constraints, sensors=source.sensors)  # fmt: skip
-    rots, roots = [], []
-    for f in range(len(motion)):
-        res = driver.step(method, source.frame(f))
-        rots.append(np.asarray(res.local_rot, float))
-        roots.append(np.asarray(res.root_pos, float))
-        if progress is not None and progress(f):
-            break
-    return Motion(np.array(rots), np.array(roots), motion.skeleton, motion.fps, f"{motion.name} ({method_name})")

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -38,6 +38,11 @@ from engine.studio.session_sensors import SensorEditing
 from engine.studio.process import EngineProcess
 from engine.studio.snapshot import Snapshot
 from engine.studio.thread import EngineThread
+
+if TYPE_CHECKING:
+    from engine.sources.live_source import LiveSource
+    from engine.sources.recording_source import RecordingSource
+    from engine.studio.export import ExportJob
 
 
 class Session(ConstraintEditing, SensorEditing):
@@ -68,6 +73,7 @@ class Session(ConstraintEditing, SensorEditing):
         self.events = ev.SessionEvents()
         self.motion: Motion | None = None
         self.path: Path | None = None
+        self.rig_map: Path | None = None  # the joint mapping file ``path`` was opened with
         self.source: SensorSource | None = None  # a tracker recording or live stream instead of a clip
         self.preset = ""
         self.sensors: dict[str, Sensor] = {}
@@ -158,10 +164,14 @@ class Session(ConstraintEditing, SensorEditing):
     def open(self, path: str | Path, rig_map: str | Path | None = None) -> None:
         """Load a BVH (with the joint mapping file ``rig_map`` if given); on failure raise
         :class:`UserError` and leave the session as it was."""
-        self.set_motion(load_clip(path, rig_map), Path(path))
+        motion = load_clip(path, rig_map)
+        self.rig_map = Path(rig_map) if rig_map else None
+        self.set_motion(motion, Path(path))
 
     def set_motion(self, motion: Motion, path: Path | None = None) -> None:
         self._close_source()
+        if path is None:
+            self.rig_map = None
         self.motion, self.path, self.frame = motion, path, 0
         self._send(cmd.SetMotion(motion))
         self.events.motion.emit(ev.MotionChanged(motion, path))
@@ -188,6 +198,61 @@ class Session(ConstraintEditing, SensorEditing):
         self.events.frame.emit(0)
         if not self.sensors:
             self.set_preset(next(iter(sensor_presets())))
+
+    def connect_live(self, host: str, port: int, mapping: str = "", convention: str = "unity") -> LiveSource:
+        """Listen for VMC trackers on ``host:port`` (``mapping``: tracker names to joints,
+        ``convention``: the axes of the incoming poses) and read sensors from the stream.
+
+        Raises
+        ------
+        UserError
+            A bad mapping, or an address that cannot be listened on.
+        """
+        from engine.sources.live_source import LiveSource
+        from engine.sources.trackers import TrackerMapping
+
+        src = LiveSource(host, port, TrackerMapping.parse(mapping), convention).start()
+        self.set_source(src, f"live {src.receiver.host}:{src.receiver.port}")
+        return src
+
+    def open_recording(self, path: str | Path) -> RecordingSource:
+        """Read sensors from a tracker recording (JSON Lines); raises :class:`UserError`
+        naming the file and line of a bad one."""
+        from engine.sources.recording_source import RecordingSource
+
+        src = RecordingSource(path)
+        self.set_source(src, Path(path).name)
+        return src
+
+    @property
+    def live_source(self) -> LiveSource | None:
+        """The live tracker stream sensors come from, if they do."""
+        from engine.sources.live_source import LiveSource
+
+        return self.source if isinstance(self.source, LiveSource) else None
+
+    def export_job(self, path: str | Path, on_source_rig: bool = False) -> ExportJob:
+        """What saving the reconstruction to ``path`` needs, copied now (later edits do
+        not reach a running export): see :class:`engine.studio.export.ExportJob`. With
+        ``on_source_rig`` the BVH is written on the hierarchy of the file the clip came from.
+
+        Raises
+        ------
+        UserError
+            With tracker input (saving re-solves a clip), with no clip, or with
+            ``on_source_rig`` for a clip that was not opened from a file.
+        """
+        from engine.studio.export import ExportJob
+
+        if self.source is not None:
+            raise UserError("saving re-solves a clip; tracker input has none")
+        if self.motion is None:
+            raise UserError("open a motion first")
+        if on_source_rig and self.path is None:
+            raise UserError("this clip was not opened from a BVH file")
+        source = self.path if on_source_rig else None
+        return ExportJob(self.motion, tuple(self.sensors.values()), tuple(self.constraints), self.settings,
+                         self.method, Path(path), source, self.rig_map if on_source_rig else None)  # fmt: skip
 
     def _close_source(self) -> None:
         source, self.source = self.source, None

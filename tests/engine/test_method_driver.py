@@ -11,7 +11,8 @@ from engine.errors import UserError
 from engine.methods import driver, get_method
 from engine.methods.base import FrameResult, Method
 from engine.sensors import Sensor, SensorFrame
-from engine.studio.methods import apply_constraints, reconstruct_clip
+from engine.studio.export import reconstruct_clip
+from engine.studio.methods import apply_constraints
 from tests.stand_ins import RestPoseMethod
 
 

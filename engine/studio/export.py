@@ -1,0 +1,138 @@
+"""Saving a reconstruction as BVH: the studio's File > Save reconstruction and
+``reconstruct --out`` write through :func:`write_reconstruction`.
+
+:class:`ExportJob` is what the studio's export runs off the GUI thread: a copy of the
+session's clip, sensors, constraints, settings and method taken when the export starts
+(:meth:`engine.studio.session.Session.export_job`), solved by :func:`reconstruct_clip`
+with a fresh method, then written. The BVH is written atomically, so a file is either
+complete or absent, and a cancelled job writes nothing.
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from engine.constraints.base import Constraint
+from engine.methods import driver
+from engine.methods.base import Method
+from engine.motion import Motion
+from engine.sensors import Sensor
+from engine.studio.methods import make_method
+from engine.studio.source import ClipSource
+
+if TYPE_CHECKING:
+    from engine.bvh import RawBVH
+
+
+def reconstruct_clip(motion: Motion, sensors: tuple[Sensor, ...], constraints: tuple[Constraint, ...],
+                     settings: Mapping[str, Any], method_name: str, factory: Callable[[str], Method] | None = None,
+                     progress: Callable[[int], bool | None] | None = None) -> Motion:  # fmt: skip
+    """Run a fresh method over every frame of ``motion`` with the studio's sensor edits.
+
+    ``motion`` is the ground truth of a method that needs one (the autoencoder).
+    Returns the reconstruction as a :class:`engine.motion.Motion` (same skeleton and fps).
+    ``progress(frame)`` is called after each frame and may return True to cancel.
+
+    Raises
+    ------
+    UserError, FloatingPointError
+        Settings the method rejects; a non-finite pose.
+    """
+    source = ClipSource(motion)
+    source.set_sensors(tuple(sensors))
+    constraints = copy.deepcopy(tuple(constraints))  # a separate run: its own pin captures
+    method = (factory or make_method)(method_name)
+    driver.start(method, motion.skeleton, motion.fps, reference=motion, settings=settings,
+                 constraints=constraints, sensors=source.sensors)  # fmt: skip
+    rots, roots = [], []
+    for f in range(len(motion)):
+        res = driver.step(method, source.frame(f))
+        rots.append(np.asarray(res.local_rot, float))
+        roots.append(np.asarray(res.root_pos, float))
+        if progress is not None and progress(f):
+            break
+    return Motion(np.array(rots), np.array(roots), motion.skeleton, motion.fps, f"{motion.name} ({method_name})")
+
+
+def write_reconstruction(path: str | Path, rec: Motion, on_rig: tuple[RawBVH, Any] | None = None) -> None:
+    """Write ``rec`` to ``path`` as BVH, atomically: on the canonical skeleton, or with
+    ``on_rig = (raw, report)`` onto the hierarchy of the source file it was retargeted
+    from (:func:`engine.source_rig.save_on_source_rig`, docs/skeleton.md)."""
+    if on_rig is None:
+        from engine.bvh import save_motion_bvh
+
+        save_motion_bvh(path, rec)
+    else:
+        from engine.source_rig import save_on_source_rig
+
+        save_on_source_rig(path, rec, *on_rig)
+
+
+def source_rig(source: str | Path, rig_map: str | Path | None = None) -> tuple[RawBVH, Any]:
+    """``(raw, report)`` of the BVH ``source`` retargeted with the joint mapping file
+    ``rig_map`` (what :func:`write_reconstruction` needs to write onto its hierarchy)."""
+    from engine.bvh import load_bvh
+    from engine.retarget import manifest_fps, retarget
+
+    raw = load_bvh(source)
+    return raw, retarget(raw, manifest_fps(source), rig_map=rig_map)[1]
+
+
+@dataclass(frozen=True)
+class ExportJob:
+    """A studio export: solve ``motion`` with ``method`` and the studio's edits, then
+    write ``path`` (onto the hierarchy of the BVH ``source`` when given, mapped with
+    ``rig_map``).
+
+    Attributes
+    ----------
+    motion : Motion
+    sensors : tuple of Sensor
+    constraints : tuple of Constraint
+    settings : Mapping
+        Optimizer settings by name (the session's :class:`~engine.solver.settings.SettingsEdit`).
+    method : str
+        Registered method name.
+    path : Path
+        Output BVH.
+    source : Path or None
+        The BVH the clip was opened from, to write onto its rig; None: canonical skeleton.
+    rig_map : Path or None
+        The joint mapping file the clip was opened with.
+    """
+
+    motion: Motion
+    sensors: tuple[Sensor, ...]
+    constraints: tuple[Constraint, ...]
+    settings: Mapping[str, Any]
+    method: str
+    path: Path
+    source: Path | None = None
+    rig_map: Path | None = None
+
+    def run(self, factory: Callable[[str], Method] | None = None, progress: Callable[[int], None] | None = None,
+            cancelled: Callable[[], bool] | None = None) -> Motion | None:  # fmt: skip
+        """Solve and write; returns the reconstruction, or None when ``cancelled()``
+        became true (checked after every frame and before writing: nothing is written).
+
+        ``factory(name) -> Method`` defaults to the registry; ``progress(frame)`` is
+        called after each solved frame.
+        """
+
+        def after(frame: int) -> bool:
+            if progress is not None:
+                progress(frame)
+            return cancelled is not None and cancelled()
+
+        rec = reconstruct_clip(self.motion, self.sensors, self.constraints, self.settings, self.method,
+                               factory=factory, progress=after)  # fmt: skip
+        if cancelled is not None and cancelled():
+            return None
+        write_reconstruction(self.path, rec, source_rig(self.source, self.rig_map) if self.source else None)
+        return rec

@@ -170,7 +170,7 @@ def render(res: dict[tuple[str, bool, str], dict[str, Any]], args: argparse.Name
         if missing:
             lines.append(f"- not run yet: {', '.join(missing)} (the same command fills them in; cached rows are kept)")
         lines.append("")
-    lines += ["## Targets of issue 16", "", *(_targets(res, args.blend) or ["(results missing)"]), "", PAPERS]
+    lines += ["## Targets", "", *(_targets(res, args.blend) or ["(results missing)"]), "", PAPERS]
     if files:
         lines += ["## Files", "", *[f"- `{f}`" for f in files], ""]
     return "\n".join(lines)

@@ -4,7 +4,9 @@ Each subcommand module exposes ``register(subparsers)``, which adds its parser a
 ``func`` (taking the parsed args, returning an exit code). Packages outside the engine
 add subcommands through the ``dragposer_studio.subcommands`` entry-point group (the
 studio's ``gui`` comes from ``app.cli`` this way), so the engine never imports them. User-facing failures raise
-:class:`engine.errors.UserError`; they are printed without a traceback and exit 2.
+:class:`engine.errors.UserError`; they are printed without a traceback and exit 2. A
+subcommand module that fails to import is an error (exit 1, naming the module), never
+a subcommand silently missing.
 """
 
 from __future__ import annotations
@@ -37,6 +39,10 @@ SUBCOMMANDS = (
 PLUGIN_GROUP = "dragposer_studio.subcommands"
 
 
+class SubcommandImportError(RuntimeError):
+    """A module of :data:`SUBCOMMANDS` failed to import (a broken install or a bug)."""
+
+
 class _Parser(argparse.ArgumentParser):
     """argparse with one-line errors: no usage block, bad tokens cut short (subcommand
     parsers inherit the class)."""
@@ -55,10 +61,9 @@ def build_parser() -> argparse.ArgumentParser:
     for mod_name in SUBCOMMANDS:
         try:
             mod = importlib.import_module(mod_name)
-        except ModuleNotFoundError as exc:
-            if exc.name == mod_name:  # subcommand not written yet
-                continue
-            raise
+        except Exception as exc:  # a broken subcommand must say so, not vanish from --help
+            raise SubcommandImportError(f"subcommand module {mod_name} cannot be imported: "
+                                        f"{type(exc).__name__}: {exc}") from exc  # fmt: skip
         mod.register(sub)
     for ep in sorted(entry_points(group=PLUGIN_GROUP), key=lambda e: e.name):
         try:
@@ -72,7 +77,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
+    try:
+        parser = build_parser()
+    except SubcommandImportError as exc:
+        print(f"error: {one_line(str(exc))}", file=sys.stderr)
+        return 1
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
         parser.print_help()

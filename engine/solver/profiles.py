@@ -58,9 +58,8 @@ PROFILES: dict[str, Profile] = {
     # hand and foot rotation weight 0.01: heavier pulls the arms' twist (the decoder turns
     # the upper arm to meet a hand's rotation that its wrist cannot), lighter loses the
     # forearm's; 9 validation files, 150 frames, Rot deg for 0.003 / 0.01 / 0.02 / 0.03:
-    # 10.31 / 10.15 / 10.43 / 12.46 (session-9 models; session-8 models: 0.01 10.54, 0.03
-    # 10.69, 0.1 11.92; docs/optimizer.md). The pose bank's latent as the prior, weight
-    # 0.05 (session 10): 1.18 cm / 10.15 deg -> 0.89 / 7.39; 0.03 0.89 / 7.56, 0.1 0.96 /
+    # 10.31 / 10.15 / 10.43 / 12.46 (docs/optimizer.md). The pose bank's latent as the
+    # prior, weight 0.05: 1.18 cm / 10.15 deg -> 0.89 / 7.39; 0.03 0.89 / 7.56, 0.1 0.96 /
     # 7.41, 0.3 1.18 / 7.67 (heavier pulls the hands off their trackers)
     "full": Profile("full", dict(future_window=1, temporal_weight=0.01, step_size=0.3, lr=0.05, smooth_weight=5.0,
                     ground_weight=0.0, sensor_rotation_weight=0.01, prior="trackers", tracker_prior_weight=0.05)),
@@ -70,7 +69,7 @@ PROFILES: dict[str, Profile] = {
     # 21.9 -> 18.8 deg; docs/optimizer.md)
     "full3": Profile("full3", dict(future_window=16, temporal_weight=0.03, step_size=0.3, lr=0.05, smooth_weight=0.0,
                      ground_weight=0.0, sensor_rotation_weight=0.03)),
-    # smoothing 5 on the sparse sets (session 10): jitter 20.4 / 20.7 / 19.7 -> 18.2 / 18.5 /
+    # smoothing 5 on the sparse sets: jitter 20.4 / 20.7 / 19.7 -> 18.2 / 18.5 /
     # 16.4 (truth 13.0) for presets 4 / 3-hip-hands / 3-head-hands, Pos 4.99 / 5.02 / 7.67 ->
     # 4.97 / 5.03 / 7.71 cm; 10 and 20 smooth more but cost velocity error (docs/optimizer.md)
     "hip": Profile("hip", dict(future_window=16, temporal_weight=0.01, step_size=0.3, lr=0.05, smooth_weight=5.0,

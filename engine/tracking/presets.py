@@ -10,7 +10,7 @@ Presets (also shipped as ``assets/presets/sensors.json``, which is what is loade
 name            joints                                   note
 =============== ======================================== ====================================
 ``6``           hips, head, hands, feet                  DragPoser's full set (paper Tab. 2)
-``5``           head, hands, feet (no hips)              as issue 5 defines it
+``5``           head, hands, feet (no hips)              hips-free five-tracker set
 ``5-paper``     hips, head, hands, right foot            DragPoser paper's "5" (Tab. 2)
 ``4``           hips, head, hands                        paper Tab. 2
 ``3-hip-hands`` hips, hands                              paper Tab. 2

@@ -6,7 +6,10 @@ import subprocess
 import sys
 from importlib.metadata import entry_points
 
-from engine.cli.main import PLUGIN_GROUP, build_parser
+import pytest
+
+from engine.cli import main as cli_main
+from engine.cli.main import PLUGIN_GROUP, SubcommandImportError, build_parser
 
 
 def test_gui_comes_from_the_app_through_the_entry_point_group():
@@ -20,3 +23,20 @@ def test_the_engine_command_line_does_not_import_the_app():
     code = "import sys, engine.cli.main; print(any(m == 'app' or m.startswith('app.') for m in sys.modules))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+@pytest.mark.parametrize("body, message", [
+    (None, "No module named 'cli_broken_sub'"),  # the module is missing
+    ("import no_such_dependency_xyz\n", "no_such_dependency_xyz"),  # it imports something missing
+    ("raise ValueError('bad constant')\n", "ValueError: bad constant"),  # it raises on import
+])  # fmt: skip
+def test_a_subcommand_that_fails_to_import_is_an_error_not_a_gap(monkeypatch, tmp_path, capsys, body, message):
+    if body is not None:
+        (tmp_path / "cli_broken_sub.py").write_text(body)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.setattr(cli_main, "SUBCOMMANDS", ("engine.cli.info", "cli_broken_sub"))
+    with pytest.raises(SubcommandImportError, match="cli_broken_sub"):
+        build_parser()
+    assert cli_main.main(["info", "--help"]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("error: subcommand module cli_broken_sub cannot be imported") and message in err

@@ -12,10 +12,9 @@ def _editor_field(f: Any) -> tuple[Any, ...]:
     """One catalog field as the panel's ``(name, tag, default[, choices])``."""
     if f.tag == "choice":
         return (f.name, "choice", f.default, tuple(f.choices))
-    d = f.default
-    if f.tag == "other" and "joint" in f.name and isinstance(d, (tuple, list)) and all(isinstance(v, str) for v in d):
-        return (f.name, "joints", tuple(d))  # e.g. the floor's feet
-    return (f.name, f.tag, d)
+    if f.tag == "joints":
+        return (f.name, "joints", tuple(f.default))  # e.g. the floor's feet
+    return (f.name, f.tag, f.default)
 
 
 def constraint_schema() -> dict[str, list[tuple[Any, ...]]]:

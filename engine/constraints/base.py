@@ -29,13 +29,52 @@ import numpy as np
 import torch
 
 from engine import skeleton as sk
+from engine.constraints.terms import FrameInputs, PoseTerm
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
-from engine.solver.state import PoseState
+from engine.kinematics.pose_state import PoseState
 from engine.validation import shown
 
 #: kind string -> constraint class; filled by subclasses as they are defined.
 REGISTRY: dict[str, type["Constraint"]] = {}
+#: Editor tags a parameter's ``metadata["editor"]`` may take (:func:`param`).
+EDITOR_TAGS = ("float", "int", "bool", "joint", "joints", "choice", "str", "vec3", "quat")
+
+
+def param(default: Any = dataclasses.MISSING, *, editor: str, unit: str = "", factory: Any = dataclasses.MISSING,
+          choices: tuple[str, ...] = (), init: bool = True) -> Any:  # fmt: skip
+    """A constraint parameter: a dataclass field whose metadata tells editors how to show it.
+
+    Parameters
+    ----------
+    default, factory
+        The field's default value, or a function making it (arrays).
+    editor : str
+        One of :data:`EDITOR_TAGS` (``joint``: a canonical joint name, ``joints``: a
+        tuple of them, ``choice``: one of ``choices``).
+    unit : str
+        Unit of the value (``m``, ``deg``), empty for none.
+    """
+    if editor not in EDITOR_TAGS or (editor == "choice") != bool(choices):
+        raise TypeError(f"param: editor {editor!r} needs choices exactly when it is 'choice'")
+    meta = {"editor": editor, "unit": unit, "choices": tuple(choices)}
+    return dataclasses.field(default=default, default_factory=factory, metadata=meta, init=init)
+
+
+def missing_parts(cls: type["Constraint"]) -> list[str]:
+    """What a constraint kind fails to declare (empty when complete): its joints
+    (:meth:`Constraint.acts_on`), its fast-path term or the reason it has none, its
+    studio placement, and editor metadata on each parameter."""
+    own = lambda name: any(name in vars(k) for k in cls.__mro__ if k is not Constraint)  # noqa: E731
+    out = [f"{m}()" for m in ("loss", "acts_on") if not own(m)]
+    if cls.user_facing and not own("placement"):
+        out.append("placement()")
+    if not own("fast_term") and not cls.no_fast_term:
+        out.append("fast_term() or no_fast_term")
+    for f in dataclasses.fields(cls):
+        if f.name not in ("name", "weight", "enabled") and "editor" not in f.metadata:
+            out.append(f"editor metadata on field {f.name!r} (engine.constraints.base.param)")
+    return out
 
 
 def world_rotation_matrix(state: PoseState, joint: int) -> torch.Tensor:
@@ -80,8 +119,9 @@ class Constraint(ABC):
     #: False for kinds methods build themselves (sensors, the temporal prior): the
     #: studio does not offer them to users.
     user_facing: ClassVar[bool] = True
-    #: Field name -> the values it accepts, for fields that take one of a few strings.
-    choices: ClassVar[dict[str, tuple[str, ...]]] = {}
+    #: Why this kind has no fast-path term (:meth:`fast_term`); a kind declares a term or
+    #: says why not, and frames using it are solved by the slower reference path.
+    no_fast_term: ClassVar[str] = ""
     #: Human label shown in the GUI and loss plots (unique within a scene).
     name: str = ""
     weight: float = 1.0
@@ -98,6 +138,14 @@ class Constraint(ABC):
         super().__init_subclass__(**kw)
         if cls.kind:
             REGISTRY[cls.kind] = cls
+
+    @classmethod
+    def check_complete(cls) -> None:
+        """Check the kind declares everything (:func:`missing_parts`); called for each
+        kind by the package's discovery, so a kind missing a part fails on import."""
+        missing = missing_parts(cls)
+        if missing:
+            raise TypeError(f"constraint kind {cls.kind!r} ({cls.__module__}) lacks: {', '.join(missing)}")
 
     def __post_init__(self) -> None:
         if not self.name:
@@ -189,6 +237,34 @@ class Constraint(ABC):
     def satisfied(self, state: PoseState) -> bool:
         """Whether the offline optimizer may stop on this constraint's account."""
         return True
+
+    @abstractmethod
+    def acts_on(self) -> tuple[str, ...]:
+        """Canonical joints whose pose the loss reads (empty: none, e.g. a latent prior)."""
+
+    def fast_term(self, frame: FrameInputs) -> PoseTerm | None:
+        """This frame's term for the solver's fast path (:mod:`engine.constraints.terms`),
+        equal to ``loss`` with hand-derived gradients; None: the frame goes to the
+        reference path (a kind without a term sets :attr:`no_fast_term`)."""
+        return None
+
+    @classmethod
+    def placement(cls, params: dict[str, Any], positions: np.ndarray) -> dict[str, Any]:
+        """Parameters that put a new constraint next to the character in the studio.
+
+        ``params`` are the values it would get (defaults, or what the user chose) and
+        ``positions (22, 3)`` the pose on screen, metres; returns the fields to change
+        (``{}``: the defaults are fine wherever the body is). Every user-facing kind
+        defines it (:func:`missing_parts`); kinds methods build are never placed.
+        """
+        return {}
+
+    def settled(self, previous_positions: np.ndarray | None) -> "Constraint":
+        """This constraint with any target it captures on first use fixed from the
+        previous solved pose ``(22, 3)`` (a copy; ``self`` when nothing is captured).
+        Methods keep the returned object for the later frames; the constraint itself is
+        never changed (the studio publishes it to the engine thread)."""
+        return self
 
     @classmethod
     def batch(cls, items: "list[Constraint]", like: torch.Tensor) -> "Callable[[PoseState], torch.Tensor] | None":

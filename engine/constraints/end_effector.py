@@ -1,16 +1,22 @@
-"""``end_effector``: a joint reaches a fixed world target (position, optionally rotation)."""
+"""``end_effector``: a joint reaches a fixed world target (position, optionally rotation).
+
+Fast path: the position term ``|P_j - t|^2`` has gradient ``2 (P_j - t)``; the rotation
+term is the sensors' ``sin^2(angle / 2)`` (:func:`engine.constraints.terms.rotation_term`).
+"""
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
 import torch
 
-from engine.constraints.base import Constraint, joint_index, rotation_distance, vec
-from engine.solver.state import PoseState
+from engine.constraints.base import Constraint, joint_index, param, rotation_distance, vec
+from engine.constraints.placement import REACH, facing, joint_at
+from engine.constraints.terms import FrameInputs, rotation_term, unit_quaternion_matrix
+from engine.kinematics.pose_state import PoseState
 
 
 @dataclass
@@ -34,15 +40,18 @@ class EndEffectorConstraint(Constraint):
     """
 
     kind: ClassVar[str] = "end_effector"
-    joint: str = "lwrist"
-    position: np.ndarray = field(default_factory=lambda: np.array([0.3, -0.3, 1.2]))
-    rotation: np.ndarray = field(default_factory=lambda: np.array([1.0, 0.0, 0.0, 0.0]))
-    use_rotation: bool = False
-    rotation_weight: float = 0.1
-    tolerance: float = 0.01
+    joint: str = param("lwrist", editor="joint")
+    position: np.ndarray = param(factory=lambda: np.array([0.3, -0.3, 1.2]), editor="vec3", unit="m")
+    rotation: np.ndarray = param(factory=lambda: np.array([1.0, 0.0, 0.0, 0.0]), editor="quat")
+    use_rotation: bool = param(False, editor="bool")
+    rotation_weight: float = param(0.1, editor="float")
+    tolerance: float = param(0.01, editor="float", unit="m")
 
     def check(self) -> None:
         joint_index(self.joint, "joint", self.kind)
+
+    def acts_on(self) -> tuple[str, ...]:
+        return (self.joint,)
 
     def loss(self, state: PoseState) -> torch.Tensor:
         j = joint_index(self.joint, "joint", self.kind)
@@ -56,5 +65,40 @@ class EndEffectorConstraint(Constraint):
         err = np.linalg.norm(state.positions[j].detach().cpu().numpy() - self.position)
         return bool(err <= self.tolerance) or not math.isfinite(err)
 
+    def fast_term(self, frame: FrameInputs) -> "EndEffectorTerm":
+        return EndEffectorTerm(self)
+
+    @classmethod
+    def placement(cls, params: dict[str, Any], positions: np.ndarray) -> dict[str, Any]:
+        """The target :data:`REACH` in front of the joint."""
+        return {"position": joint_at(positions, params.get("joint"), "lwrist") + REACH * facing(positions)}
+
     def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
         return {"type": "point", "position": np.asarray(self.position, float).copy(), "edit": "position"}
+
+
+class EndEffectorTerm:
+    """The fast-path term of one :class:`EndEffectorConstraint` (module doc)."""
+
+    def __init__(self, c: EndEffectorConstraint) -> None:
+        self.name, self.weight, self.tolerance = c.name, c.weight, c.tolerance
+        self.j = joint_index(c.joint, "joint", c.kind)
+        self.target = np.asarray(c.position, dtype=np.float64)
+        self.rot = unit_quaternion_matrix(c.rotation) if c.use_rotation else None
+        self.rot_weight = c.rotation_weight
+
+    def loss(self, pos: np.ndarray, world: np.ndarray) -> float:
+        d = pos[self.j] - self.target
+        out = float(d @ d)
+        if self.rot is not None:
+            out += self.rot_weight * rotation_term(self.rot, world[self.j])[1]
+        return out
+
+    def add_gradient(self, g_pos: np.ndarray, g_rot: np.ndarray, pos: np.ndarray, world: np.ndarray) -> None:
+        g_pos[self.j] += (2.0 * self.weight) * (pos[self.j] - self.target)
+        if self.rot is not None:
+            g_rot[self.j] += (self.weight * self.rot_weight) * rotation_term(self.rot, world[self.j])[2]
+
+    def satisfied(self, pos: np.ndarray, world: np.ndarray) -> bool:
+        err = float(np.linalg.norm(pos[self.j] - self.target))
+        return err <= self.tolerance or not math.isfinite(err)

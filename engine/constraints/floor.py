@@ -6,6 +6,9 @@ Two terms, summed over the listed joints (ankles and toes by default):
 * **sliding**: ``slide_weight * |xy - xy_prev|^2`` for joints whose previous-frame
   height was below ``contact_height`` (a planted foot should not skate). The contact
   test uses the previous frame only, so it is a fixed mask within a solve.
+
+Fast path: gradient ``-2 relu(floor_height + clearance - z)`` on each joint's height and
+``2 slide_weight (xy - xy_prev)`` on a planted joint's horizontal position.
 """
 
 from __future__ import annotations
@@ -16,9 +19,12 @@ from typing import Any, ClassVar
 import numpy as np
 import torch
 
-from engine.constraints.base import Constraint, joint_index
+from engine.constraints.base import Constraint, joint_index, param
+from engine.constraints.terms import FrameInputs
 from engine.errors import UserError
-from engine.solver.state import PoseState
+from engine.kinematics.pose_state import PoseState
+
+_SLACK = 0.01  # metres: satisfied this far below the clearance
 
 
 @dataclass
@@ -40,11 +46,11 @@ class FloorConstraint(Constraint):
     """
 
     kind: ClassVar[str] = "floor"
-    joints: tuple[str, ...] = ("lankle", "rankle", "ltoe", "rtoe")
-    floor_height: float = 0.0
-    clearance: float = 0.0
-    contact_height: float = 0.08
-    slide_weight: float = 1.0
+    joints: tuple[str, ...] = param(("lankle", "rankle", "ltoe", "rtoe"), editor="joints")
+    floor_height: float = param(0.0, editor="float", unit="m")
+    clearance: float = param(0.0, editor="float", unit="m")
+    contact_height: float = param(0.08, editor="float", unit="m")
+    slide_weight: float = param(1.0, editor="float")
 
     def check(self) -> None:
         if isinstance(self.joints, str):
@@ -54,6 +60,9 @@ class FloorConstraint(Constraint):
             raise UserError(f"constraint {self.kind!r}: field 'joints' lists no joint")
         for j in self.joints:
             joint_index(j, "joints", self.kind)
+
+    def acts_on(self) -> tuple[str, ...]:
+        return self.joints
 
     def _index(self) -> list[int]:
         return [joint_index(j, "joints", self.kind) for j in self.joints]
@@ -71,7 +80,15 @@ class FloorConstraint(Constraint):
 
     def satisfied(self, state: PoseState) -> bool:
         z = state.positions[self._index(), 2].detach()
-        return bool((z >= self.floor_height + self.clearance - 0.01).all())
+        return bool((z >= self.floor_height + self.clearance - _SLACK).all())
+
+    def fast_term(self, frame: FrameInputs) -> "FloorTerm":
+        return FloorTerm(self, frame.previous_positions)
+
+    @classmethod
+    def placement(cls, params: dict[str, Any], positions: np.ndarray) -> dict[str, Any]:
+        """Nothing to place: the floor plane is under the body wherever it is."""
+        return {}
 
     def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
         if self.floor_height == 0.0:
@@ -79,3 +96,39 @@ class FloorConstraint(Constraint):
         lo = np.array([-2.0, -2.0, self.floor_height - 0.005])
         hi = np.array([2.0, 2.0, self.floor_height])
         return {"type": "box", "min": lo, "max": hi}
+
+
+class FloorTerm:
+    """The fast-path term of one :class:`FloorConstraint` for one frame (module doc)."""
+
+    def __init__(self, c: FloorConstraint, previous: np.ndarray | None) -> None:
+        self.name, self.weight = c.name, c.weight
+        self.idx = np.array(c._index(), dtype=np.intp)
+        self.low = c.floor_height + c.clearance
+        self.ok = self.low - _SLACK
+        self.prev = None
+        if previous is not None and c.slide_weight > 0:
+            prev = np.asarray(previous, dtype=np.float64)[self.idx]
+            # as the reference compares in the previous pose's precision (float32)
+            contact = prev[:, 2].astype(np.float32) < np.float32(c.floor_height + c.contact_height)
+            self.prev, self.slide = prev[:, :2], c.slide_weight * contact.astype(np.float64)
+
+    def loss(self, pos: np.ndarray, world: np.ndarray) -> float:
+        p = pos[self.idx]
+        under = np.maximum(self.low - p[:, 2], 0.0)
+        out = float(under @ under)
+        if self.prev is not None:
+            d = p[:, :2] - self.prev
+            out += float(self.slide @ (d * d).sum(-1))
+        return out
+
+    def add_gradient(self, g_pos: np.ndarray, g_rot: np.ndarray, pos: np.ndarray, world: np.ndarray) -> None:
+        p = pos[self.idx]
+        g = np.zeros((len(self.idx), 3))
+        g[:, 2] = -2.0 * np.maximum(self.low - p[:, 2], 0.0)
+        if self.prev is not None:
+            g[:, :2] = (2.0 * self.slide)[:, None] * (p[:, :2] - self.prev)
+        np.add.at(g_pos, self.idx, self.weight * g)  # a joint may be listed twice
+
+    def satisfied(self, pos: np.ndarray, world: np.ndarray) -> bool:
+        return bool((pos[self.idx, 2] >= self.ok).all())

@@ -3,20 +3,28 @@
 The forward axis is given in the joint's own frame. In the canonical rest pose every
 joint's world rotation is the identity and the character faces -Y, so the head's
 (``upperneck``) forward axis is ``(0, -1, 0)``.
+
+Fast path: with ``f = W_j axis`` and ``t = target - P_j``, ``loss = 1 - f.t / |t|`` has
+``d loss / d P_j = (f - cos t/|t|) / |t|`` and rotation gradient ``-(f x t) / |t|``
+(turning the joint by ``a`` moves ``f`` by ``a x f``).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
 import torch
 
-from engine.constraints.base import Constraint, joint_index, vec, world_rotation_matrix
+from engine.constraints.base import Constraint, joint_index, param, vec, world_rotation_matrix
+from engine.constraints.placement import LOOK_DISTANCE, facing, joint_at
+from engine.constraints.terms import FrameInputs
 from engine.errors import UserError
-from engine.solver.state import PoseState
+from engine.kinematics.pose_state import PoseState
+
+_MIN_DISTANCE = 1e-6  # metres: the direction to a target this close is not defined
 
 
 @dataclass
@@ -36,22 +44,25 @@ class LookAtConstraint(Constraint):
     """
 
     kind: ClassVar[str] = "look_at"
-    joint: str = "upperneck"
-    target: np.ndarray = field(default_factory=lambda: np.array([0.0, -2.0, 1.6]))
-    axis: np.ndarray = field(default_factory=lambda: np.array([0.0, -1.0, 0.0]))
-    tolerance: float = 5.0
+    joint: str = param("upperneck", editor="joint")
+    target: np.ndarray = param(factory=lambda: np.array([0.0, -2.0, 1.6]), editor="vec3", unit="m")
+    axis: np.ndarray = param(factory=lambda: np.array([0.0, -1.0, 0.0]), editor="vec3")
+    tolerance: float = param(5.0, editor="float", unit="deg")
 
     def check(self) -> None:
         joint_index(self.joint, "joint", self.kind)
         if not np.linalg.norm(self.axis) > 1e-9:
             raise UserError(f"constraint {self.kind!r}: field 'axis' must be a non-zero vector")
 
+    def acts_on(self) -> tuple[str, ...]:
+        return (self.joint,)
+
     def _cos(self, state: PoseState) -> torch.Tensor:
         j = joint_index(self.joint, "joint", self.kind)
         axis = vec(self.axis / np.linalg.norm(self.axis), state.positions)
         forward = world_rotation_matrix(state, j) @ axis
         to_target = vec(self.target, state.positions) - state.positions[j]
-        return (forward * to_target).sum() / to_target.norm().clamp_min(1e-6)
+        return (forward * to_target).sum() / to_target.norm().clamp_min(_MIN_DISTANCE)
 
     def loss(self, state: PoseState) -> torch.Tensor:
         return 1.0 - self._cos(state)
@@ -61,6 +72,14 @@ class LookAtConstraint(Constraint):
             c = float(self._cos(state))
         return c >= math.cos(math.radians(self.tolerance)) or not math.isfinite(c)
 
+    def fast_term(self, frame: FrameInputs) -> "LookAtTerm":
+        return LookAtTerm(self)
+
+    @classmethod
+    def placement(cls, params: dict[str, Any], positions: np.ndarray) -> dict[str, Any]:
+        """The target in front of the looking joint, at :data:`LOOK_DISTANCE`."""
+        return {"target": joint_at(positions, params.get("joint"), "upperneck") + LOOK_DISTANCE * facing(positions)}
+
     def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
         target = np.asarray(self.target, float).copy()
         if positions is None:
@@ -68,3 +87,36 @@ class LookAtConstraint(Constraint):
         start = np.asarray(positions, float)[joint_index(self.joint, "joint", self.kind)]
         # the line's end (the target) stays draggable once a pose exists
         return {"type": "line", "points": np.stack([start, target]), "edit": "target"}
+
+
+class LookAtTerm:
+    """The fast-path term of one :class:`LookAtConstraint` (module doc)."""
+
+    def __init__(self, c: LookAtConstraint) -> None:
+        self.name, self.weight = c.name, c.weight
+        self.j = joint_index(c.joint, "joint", c.kind)
+        self.axis = np.asarray(c.axis, dtype=np.float64) / np.linalg.norm(c.axis)
+        self.target = np.asarray(c.target, dtype=np.float64)
+        self.cos_tol = math.cos(math.radians(c.tolerance))
+
+    def _parts(self, pos: np.ndarray, world: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, float]:
+        f = world[self.j] @ self.axis
+        t = self.target - pos[self.j]
+        n = max(math.sqrt(float(t @ t)), _MIN_DISTANCE)
+        return f, t, n, float(f @ t) / n
+
+    def loss(self, pos: np.ndarray, world: np.ndarray) -> float:
+        return 1.0 - self._parts(pos, world)[3]
+
+    def add_gradient(self, g_pos: np.ndarray, g_rot: np.ndarray, pos: np.ndarray, world: np.ndarray) -> None:
+        f, t, n, c = self._parts(pos, world)
+        k = self.weight / n
+        if n > _MIN_DISTANCE:  # below it the reference clamps |t|: the cosine is then linear in t
+            g_pos[self.j] += k * (f - (c / n) * t)
+        else:
+            g_pos[self.j] += k * f
+        g_rot[self.j] -= k * np.cross(f, t)
+
+    def satisfied(self, pos: np.ndarray, world: np.ndarray) -> bool:
+        c = self._parts(pos, world)[3]
+        return c >= self.cos_tol or not math.isfinite(c)

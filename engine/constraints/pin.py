@@ -8,20 +8,27 @@ a few frames and holds it within ~2 cm; ``scripts/measure_pin.py`` measures it
 
 With ``follow_previous`` the target is the joint's previous-frame position every frame
 (the joint resists motion). Otherwise the target is ``position``; while that is unset
-(NaN) it is captured from the previous frame's solved pose on first use (or, on the very
-first frame, from the pose being solved, which costs nothing that frame).
+(NaN) the target is the previous frame's solved position, and a method keeps it from the
+first frame that has one on (:meth:`PinConstraint.settled` returns the captured copy;
+the pin itself is never changed). On the very first frame, with no previous pose, an
+unset pin costs nothing.
+
+Fast path: ``|P_j - t|^2`` has gradient ``2 (P_j - t)``.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import dataclasses
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
 import torch
 
-from engine.constraints.base import Constraint, joint_index, vec
-from engine.solver.state import PoseState
+from engine.constraints.base import Constraint, joint_index, param, vec
+from engine.constraints.placement import joint_at
+from engine.constraints.terms import FrameInputs
+from engine.kinematics.pose_state import PoseState
 
 
 @dataclass
@@ -30,30 +37,53 @@ class PinConstraint(Constraint):
 
     kind: ClassVar[str] = "pin"
     weight: float = 30.0
-    joint: str = "lankle"
-    position: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))
-    follow_previous: bool = False
-    tolerance: float = 0.01
+    joint: str = param("lankle", editor="joint")
+    position: np.ndarray = param(factory=lambda: np.full(3, np.nan), editor="vec3", unit="m")
+    follow_previous: bool = param(False, editor="bool")
+    tolerance: float = param(0.01, editor="float", unit="m")
 
     def check(self) -> None:
         joint_index(self.joint, "joint", self.kind)
 
-    def _target(self, state: PoseState) -> torch.Tensor:
+    def acts_on(self) -> tuple[str, ...]:
+        return (self.joint,)
+
+    def _target(self, previous: Any) -> Any:
+        """The target (same type as ``previous``'s rows), or None while there is none."""
         j = joint_index(self.joint, "joint", self.kind)
-        if self.follow_previous and state.previous_positions is not None:
-            return state.previous_positions[j].detach()
-        if not np.all(np.isfinite(self.position)):
-            src = state.previous_positions if state.previous_positions is not None else state.positions
-            self.position = src[j].detach().cpu().numpy().astype(np.float64)
-        return vec(self.position, state.positions)
+        if self.follow_previous and previous is not None:
+            return previous[j]
+        if np.all(np.isfinite(self.position)):
+            return self.position
+        return None if previous is None else previous[j]
 
     def loss(self, state: PoseState) -> torch.Tensor:
         j = joint_index(self.joint, "joint", self.kind)
-        return ((state.positions[j] - self._target(state)) ** 2).sum()
+        prev = None if state.previous_positions is None else state.previous_positions.detach()
+        target = self._target(prev)
+        if target is None:
+            return state.positions.new_zeros(())
+        t = target if isinstance(target, torch.Tensor) else vec(target, state.positions)
+        return ((state.positions[j] - t) ** 2).sum()
 
     def satisfied(self, state: PoseState) -> bool:
         with torch.no_grad():
             return float(self.loss(state)) <= self.tolerance**2
+
+    def settled(self, previous_positions: np.ndarray | None) -> "PinConstraint":
+        """A copy holding the previous pose's joint position when ``position`` is unset."""
+        if self.follow_previous or previous_positions is None or np.all(np.isfinite(self.position)):
+            return self
+        j = joint_index(self.joint, "joint", self.kind)
+        return dataclasses.replace(self, position=np.array(previous_positions[j], dtype=np.float64))
+
+    def fast_term(self, frame: FrameInputs) -> "PinTerm":
+        return PinTerm(self, self._target(frame.previous_positions))
+
+    @classmethod
+    def placement(cls, params: dict[str, Any], positions: np.ndarray) -> dict[str, Any]:
+        """Pinned where the joint is now."""
+        return {"position": joint_at(positions, params.get("joint"), "lankle")}
 
     def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
         """A draggable point labelled with the joint, tied to the joint by a line."""
@@ -63,3 +93,25 @@ class PinConstraint(Constraint):
         if positions is not None:
             g["anchor"] = np.asarray(positions, float)[joint_index(self.joint, "joint", self.kind)].copy()
         return g
+
+
+class PinTerm:
+    """The fast-path term of one :class:`PinConstraint` for one frame (module doc)."""
+
+    def __init__(self, c: PinConstraint, target: np.ndarray | None) -> None:
+        self.name, self.weight, self.tol2 = c.name, c.weight, c.tolerance**2
+        self.j = joint_index(c.joint, "joint", c.kind)
+        self.target = None if target is None else np.asarray(target, dtype=np.float64)
+
+    def loss(self, pos: np.ndarray, world: np.ndarray) -> float:
+        if self.target is None:
+            return 0.0
+        d = pos[self.j] - self.target
+        return float(d @ d)
+
+    def add_gradient(self, g_pos: np.ndarray, g_rot: np.ndarray, pos: np.ndarray, world: np.ndarray) -> None:
+        if self.target is not None:
+            g_pos[self.j] += (2.0 * self.weight) * (pos[self.j] - self.target)
+
+    def satisfied(self, pos: np.ndarray, world: np.ndarray) -> bool:
+        return self.loss(pos, world) <= self.tol2

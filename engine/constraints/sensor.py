@@ -4,22 +4,25 @@ The loss is the squared position error (metres squared, summed over x, y, z) plu
 6-DoF tracker, ``rotation_weight * (1 - <q, q_target>^2)``: a sign-invariant rotation
 distance equal to ``sin^2(angle / 2)`` (about ``angle^2 / 4`` for small errors).
 The method updates the target every frame with :meth:`SensorConstraint.set_target`.
+The solver's fast path batches every tracker of a frame into arrays (a :class:`NativeTerm`;
+:class:`engine.solver.fast.FastTerms`).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
 import torch
 
-from engine.constraints.base import Constraint, joint_index, rotation_distance, vec
+from engine.constraints.base import Constraint, joint_index, param, rotation_distance, vec
+from engine.constraints.terms import FrameInputs, NativeTerm
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
-from engine.solver.state import PoseState
+from engine.kinematics.pose_state import PoseState
 
 
 @dataclass
@@ -48,19 +51,25 @@ class SensorConstraint(Constraint):
 
     kind: ClassVar[str] = "sensor"
     user_facing: ClassVar[bool] = False  # built by methods from the sensor readings
-    joint: str = "root"
-    dof: int = 6
-    position: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    rotation: np.ndarray = field(default_factory=lambda: np.array([1.0, 0.0, 0.0, 0.0]))
-    connected: bool = True
-    rotation_weight: float = 0.1
-    position_tolerance: float = 0.01
-    rotation_tolerance: float = 5.0
+    joint: str = param("root", editor="joint")
+    dof: int = param(6, editor="int")
+    position: np.ndarray = param(factory=lambda: np.zeros(3), editor="vec3", unit="m")
+    rotation: np.ndarray = param(factory=lambda: np.array([1.0, 0.0, 0.0, 0.0]), editor="quat")
+    connected: bool = param(True, editor="bool")
+    rotation_weight: float = param(0.1, editor="float")
+    position_tolerance: float = param(0.01, editor="float", unit="m")
+    rotation_tolerance: float = param(5.0, editor="float", unit="deg")
 
     def check(self) -> None:
         joint_index(self.joint, "joint", self.kind)
         if self.dof not in (3, 6):
             raise UserError(f"constraint {self.kind!r}: field 'dof' must be 3 or 6, got {self.dof!r}")
+
+    def acts_on(self) -> tuple[str, ...]:
+        return (self.joint,)
+
+    def fast_term(self, frame: FrameInputs) -> NativeTerm:
+        return NativeTerm(self, self.weight)
 
     def set_target(self, position: np.ndarray, rotation: np.ndarray | None = None, connected: bool = True) -> None:
         """New tracker reading for the next solve (metres; (w, x, y, z))."""

@@ -4,8 +4,8 @@ Loss: mean over the 22 joints of ``|p_j - target_j|^2`` (metres squared), where 
 method sets ``target = p(t-1) + (p(t-1) - p(t-2))`` every frame, the constant-velocity
 extrapolation of the previous two solved poses. It penalises each joint's acceleration
 (``|a| dt^2``), not its velocity, so steady motion is not held back; only a change of
-velocity costs. Zero until two frames have been solved (``target`` NaN). The solver's
-fast path evaluates the same term itself (:mod:`engine.solver.pose_terms`).
+velocity costs. Zero until two frames have been solved (``target`` NaN). Fast path: the
+gradient is ``2 (p_j - target_j) / 22`` per joint.
 """
 
 from __future__ import annotations
@@ -17,8 +17,9 @@ import numpy as np
 import torch
 
 from engine import skeleton as sk
-from engine.constraints.base import Constraint, vec
-from engine.solver.state import PoseState
+from engine.constraints.base import Constraint, param, vec
+from engine.constraints.terms import FrameInputs
+from engine.kinematics.pose_state import PoseState
 
 
 @dataclass
@@ -46,6 +47,12 @@ class SmoothConstraint(Constraint):
         else:
             self.target = 2.0 * np.asarray(previous, dtype=np.float64) - np.asarray(before, dtype=np.float64)
 
+    def acts_on(self) -> tuple[str, ...]:
+        return tuple(sk.JOINT_NAMES)
+
+    def fast_term(self, frame: FrameInputs) -> "SmoothTerm":
+        return SmoothTerm(self.name, self.weight, self.target if self.active else None)
+
     @property
     def active(self) -> bool:
         return bool(np.isfinite(self.target).all())
@@ -54,3 +61,34 @@ class SmoothConstraint(Constraint):
         if not self.active:
             return state.positions.new_zeros(())
         return ((state.positions - vec(self.target, state.positions)) ** 2).sum(-1).mean()
+
+
+class SmoothTerm:
+    """``weight * mean_j |P_j - target_j|^2``, the fast-path term of :class:`SmoothConstraint`.
+
+    Parameters
+    ----------
+    name : str
+        Constraint name (loss reporting).
+    weight : float
+    target : ndarray (22, 3) or None
+        Constant-velocity extrapolation of the last two poses, metres; None = inactive
+        (loss and gradient zero).
+    """
+
+    def __init__(self, name: str, weight: float, target: np.ndarray | None) -> None:
+        self.name, self.weight = name, float(weight)
+        self.target = None if target is None else np.asarray(target, dtype=np.float64)
+
+    def loss(self, pos: np.ndarray, world: np.ndarray) -> float:
+        if self.target is None:
+            return 0.0
+        d = pos - self.target
+        return float((d * d).sum() / len(pos))
+
+    def add_gradient(self, g_pos: np.ndarray, g_rot: np.ndarray, pos: np.ndarray, world: np.ndarray) -> None:
+        if self.target is not None:
+            g_pos += (2.0 * self.weight / len(pos)) * (pos - self.target)
+
+    def satisfied(self, pos: np.ndarray, world: np.ndarray) -> bool:
+        return True

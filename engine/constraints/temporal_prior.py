@@ -2,6 +2,8 @@
 
 Loss: mean squared difference between the latent being optimised and the predictor's
 latent for the frame (``PoseState.prediction``); zero when there is no prediction yet.
+The solver's fast path evaluates it on the latent itself (a :class:`NativeTerm`: the
+gradient ``2 (z - z_pred) / L`` skips the decoder).
 """
 
 from __future__ import annotations
@@ -12,7 +14,8 @@ from typing import ClassVar
 import torch
 
 from engine.constraints.base import Constraint
-from engine.solver.state import PoseState
+from engine.constraints.terms import FrameInputs, NativeTerm
+from engine.kinematics.pose_state import PoseState
 
 
 @dataclass
@@ -21,6 +24,12 @@ class TemporalPriorConstraint(Constraint):
 
     kind: ClassVar[str] = "temporal_prior"
     user_facing: ClassVar[bool] = False  # built by DragPoser from its predictor
+
+    def acts_on(self) -> tuple[str, ...]:
+        return ()
+
+    def fast_term(self, frame: FrameInputs) -> NativeTerm:
+        return NativeTerm(self, self.weight)
 
     def loss(self, state: PoseState) -> torch.Tensor:
         if state.prediction is None:

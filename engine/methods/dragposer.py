@@ -85,6 +85,7 @@ class DragPoserMethod(DragPoserEdits, Method):
         self.latent_dim = latent_dim
         self.fast = fast
         self.constraints: list[Constraint] = []
+        self._captured: dict[int, tuple[Constraint, Constraint]] = {}
         self.sensor_weights: dict[str, float] = {}
         self.configure(**overrides)
         self.reset(sk.Skeleton.canonical())
@@ -174,6 +175,7 @@ class DragPoserMethod(DragPoserEdits, Method):
             override = roots.held_root(self._root, self._points, self._last_points)
         root = roots.reference_root(self._root, self.sensors, s, override, self._facing)
         ctx = FrameContext(root, override, anchor, self._positions, prediction, self._frame, deadline)
+        self.settle_constraints(self._pos64)  # e.g. an unset pin takes the previous pose
         terms = [*self.sensors.values(), self.prior, self.smooth, self.ground, *self.constraints]
         self.optimizer.settings = dataclasses.replace(s, mode="offline") if self._frame == 0 else s
         try:  # frame 0 has no history to start from: it is solved offline
@@ -263,7 +265,7 @@ class DragPoserMethod(DragPoserEdits, Method):
         as solved (put back on its tracker, a distance between the tracked wrists had no
         effect on the pose while its loss read as met)."""
         held = {sk.JOINT_INDEX[n] for c in self.constraints if c.enabled and c.weight > 0
-                for n in _joints_of(c) if n in sk.JOINT_INDEX}  # fmt: skip
+                for n in c.acts_on() if n in sk.JOINT_INDEX}  # fmt: skip
         return {sk.JOINT_INDEX[j]: c.position for j, c in self.sensors.items()
                 if c.enabled and c.connected and sk.JOINT_INDEX[j] in LIMBS
                 and not held & {sk.JOINT_INDEX[j], *LIMBS[sk.JOINT_INDEX[j]]}}  # fmt: skip
@@ -306,13 +308,6 @@ class DragPoserMethod(DragPoserEdits, Method):
         self._frame += 1
         res.ms = 1000.0 * (time.perf_counter() - t0)
         return res
-
-
-def _joints_of(c: Constraint) -> list[str]:
-    """Joint names a constraint acts on (its ``joint``, ``joint_a``/``joint_b``, ``joints``)."""
-    names = [getattr(c, k, None) for k in ("joint", "joint_a", "joint_b")]
-    names += list(getattr(c, "joints", None) or [])
-    return [n for n in names if isinstance(n, str)]
 
 
 def _finite(r: Sensor) -> bool:

@@ -50,6 +50,8 @@ class DragPoserEdits:
     sensor_weights: dict[str, float]
     sensors: dict[str, SensorConstraint]
     _effective: dict[tuple, OptimizerSettings]  # per clip: (settings, sensor set) -> settings
+    #: id(published constraint) -> (it, the copy that holds what it captured on first use)
+    _captured: dict[int, tuple[Constraint, Constraint]]
 
     def configure(self, **values: Any) -> None:
         """Change settings by name; applied from the next frame. Unknown names raise
@@ -83,15 +85,36 @@ class DragPoserEdits:
         names = [c.name for c in items]
         if len(set(names)) != len(names):
             raise UserError("constraint names must be unique")
-        self.constraints = items
+        # a constraint sent again keeps what it captured (a pin's first position)
+        kept = {k: v for k, v in self._captured.items() if any(c is v[0] for c in items)}
+        self._captured = kept
+        self.constraints = [kept[id(c)][1] if id(c) in kept else c for c in items]
+
+    def settle_constraints(self, previous_positions: Any) -> None:
+        """Let each constraint capture what it takes from the previous solved pose
+        ``(22, 3)`` metres (:meth:`~engine.constraints.base.Constraint.settled`): the copies
+        replace them here; the caller's objects are never changed."""
+        out = []
+        for c in self.constraints:
+            s = c.settled(previous_positions)
+            if s is not c:
+                original = next((v[0] for v in self._captured.values() if v[1] is c), c)
+                self._captured[id(original)] = (original, s)
+            out.append(s)
+        self.constraints = out
+
+    def _replace_constraint(self, name: str, **changes: Any) -> None:
+        """An edited copy in place of the named constraint (the caller may hold the old one)."""
+        old = self.get_constraint(name)
+        self.constraints = [dataclasses.replace(old, **changes) if c is old else c for c in self.constraints]
 
     def set_weight(self, name: str, weight: float) -> None:
         if not weight >= 0:
             raise UserError(f"constraint {name!r}: weight must be >= 0, got {weight!r}")
-        self.get_constraint(name).weight = float(weight)
+        self._replace_constraint(name, weight=float(weight))
 
     def set_enabled(self, name: str, enabled: bool) -> None:
-        self.get_constraint(name).enabled = bool(enabled)
+        self._replace_constraint(name, enabled=bool(enabled))
 
     def set_sensor_weight(self, joint: str, weight: float) -> None:
         """Weight of the tracker on ``joint`` (applies to its ``sensor`` constraint)."""

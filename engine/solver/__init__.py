@@ -19,7 +19,7 @@ from engine.solver.frame import FrameContext, LatentDecoder, Solution, SolveTimi
 from engine.solver.optimizer import PoseOptimizer
 from engine.solver.pose import RootAnchor, RootFrame, RootOverride, world_root
 from engine.solver.settings import FULL_SET, MODES, OPTIMIZERS, PRIORS, OptimizerSettings
-from engine.solver.state import PoseState
+from engine.kinematics.pose_state import PoseState
 from engine.solver.temporal import LatentPredictor, TemporalSchedule
 from engine.solver.update import LatentUpdate
 

@@ -1,9 +1,12 @@
 """The solver's fast path: one optimizer iteration with hand-derived gradients (numpy).
 
-Used when every enabled term is a ``sensor`` or the ``temporal_prior`` (what a live or
-offline reconstruction has) and the decoder can be fused (:class:`DenseDecoder`).
-Any other constraint kind sends the frame to the reference path (autograd through the
-torch decoder), which computes the same function; a test compares the two.
+Used when every enabled constraint has a fast-path term
+(:meth:`engine.constraints.base.Constraint.fast_term`) and the decoder can be fused
+(:class:`DenseDecoder`). The trackers (``sensor``) and the ``temporal_prior`` are
+evaluated here in batched arrays; every other kind's term (:mod:`engine.constraints.terms`)
+adds its loss and its gradients w.r.t. the joint positions and rotations. A kind without
+a term sends the frame to the reference path (autograd through the torch decoder), which
+computes the same function; tests compare the two for every kind.
 
 Per iteration (``L`` latent size, ``S`` sensors)::
 
@@ -13,7 +16,7 @@ Per iteration (``L`` latent size, ``S`` sensors)::
     P, W = FK by levels (matrices)             (22, 3), (22, 3, 3)
     P'   = P + (head_target - P[head])         when the head anchors the body
     loss = sum_s w_s (|P'[j_s] - t_s|^2 + rw_s (3 - <T_s, W[j_s]>) / 4) + w_p |z - z_pred|^2 / L
-           + sum_e w_e loss_e(P')            (whole-pose terms: ``smooth``, ``ground``; pose_terms.py)
+           + sum_e w_e loss_e(P', W)         (every other kind's term, engine/constraints/*.py)
 
 and the reverse pass is the closed form in :meth:`FastPose.backward`.
 """
@@ -28,7 +31,7 @@ from engine import skeleton as sk
 from engine.kinematics import quat_np as QN
 from engine.kinematics.fk import levels
 from engine.models.fused import DenseDecoder
-from engine.solver.pose_terms import PoseTerm
+from engine.constraints.terms import PoseTerm
 
 _EPS = 1e-8  # quaternion normalisation floor, as in engine.kinematics.quaternion.normalize
 
@@ -58,20 +61,34 @@ def _axial(m: np.ndarray) -> np.ndarray:
 
 
 class FastTerms:
-    """The frame's sensor and prior terms as arrays (parameters frozen for the frame).
+    """The frame's terms (parameters frozen for the frame): sensors and the prior as arrays.
+
+    Parameters
+    ----------
+    sensors : list of SensorConstraint
+    prior : TemporalPriorConstraint or None
+    weights_prior : float
+        The prior's weight this frame.
+    prediction : ndarray (L,) or None
+        The predictor's latent.
+    extras : list of PoseTerm
+        Every other constraint's term (:mod:`engine.constraints.terms`).
+    sensor_weights : list of float, optional
+        The sensors' weights this frame (default: their ``weight``).
 
     Attributes
     ----------
     names : list of str
-        Term names in evaluation order (sensors first, then the prior if present).
+        Term names in evaluation order (sensors, the extras, then the prior if present).
     """
 
     def __init__(self, sensors: list, prior, weights_prior: float, prediction: np.ndarray | None,
-                 extras: list[PoseTerm] | None = None) -> None:  # fmt: skip
-        self.extras = extras or []  # whole-pose terms (engine.solver.pose_terms), between sensors and prior
+                 extras: list[PoseTerm] | None = None, sensor_weights: list[float] | None = None) -> None:  # fmt: skip
+        self.extras = extras or []
         self.names = ([c.name for c in sensors] + [e.name for e in self.extras]
                       + ([prior.name] if prior is not None else []))  # fmt: skip
-        self.weights = np.array([c.weight for c in sensors] + [e.weight for e in self.extras]
+        sw = [c.weight for c in sensors] if sensor_weights is None else list(sensor_weights)
+        self.weights = np.array(sw + [e.weight for e in self.extras]
                                 + ([weights_prior] if prior is not None else []))  # fmt: skip
         self.joint = np.array([sk.JOINT_INDEX[c.joint] for c in sensors], dtype=np.intp)
         self.target = np.array([c.position for c in sensors], dtype=np.float64).reshape(-1, 3)
@@ -190,8 +207,8 @@ class FastPose:
             losses[t.six] += t.rot_weight * self.rot_loss
         losses = losses * t.on
         if t.extras:
-            pos_j = pos[self.row]  # joint order
-            losses = np.append(losses, [e.loss(pos_j) for e in t.extras])
+            self.pos_j, self.world_j = pos_j, world_j = pos[self.row], world[self.row]  # joint order
+            losses = np.append(losses, [e.loss(pos_j, world_j) for e in t.extras])
         if t.has_prior:
             if t.prediction is None:
                 return np.append(losses, 0.0)
@@ -234,15 +251,18 @@ class FastPose:
         """
         t, pos = self.terms, self.pos_lo
         g = self.w2 * self.err  # (S, 3) position gradients at the sensor rows
-        if t.extras:  # whole-pose terms: a gradient at every row (engine.solver.pose_terms)
-            ge = np.zeros((self.n, 3))
-            pos_j = pos[self.row]
+        g_rot = None
+        if t.extras:  # other kinds' terms: a gradient at every row (engine.constraints.terms)
+            ge, gr = np.zeros((self.n, 3)), np.zeros((self.n, 3))
             for e in t.extras:
-                e.add_gradient(ge, pos_j)
+                e.add_gradient(ge, gr, self.pos_j, self.world_j)
             g = np.concatenate((g, ge[self.order]))
+            g_rot = gr[self.order]
         if self.anchor is not None:
             g = np.concatenate((g, -g.sum(0, keepdims=True)))
         tau = self.sub_points @ _cross(pos[self.points], g) - _cross(pos, self.sub_points @ g)
+        if g_rot is not None:
+            tau += self.subtree @ g_rot  # turning a joint turns every joint of its subtree
         if len(t.six):
             inside = (self.rot_raw >= 0.0) & (self.rot_raw <= 1.0)
             m = np.matmul(t.rot_target, self.world_lo[self.rows6].transpose(0, 2, 1))
@@ -268,11 +288,12 @@ class FastPose:
         return g
 
     def satisfied(self) -> bool:
-        """Every connected sensor within its tolerances (offline stopping rule)."""
+        """Every connected sensor within its tolerances and every other term satisfied
+        (offline stopping rule)."""
         t = self.terms
         ok = (self.pos_loss <= t.pos_tol2) | (t.on == 0)
         if not ok.all():
             return False
-        if len(t.six):
-            return bool(((self.rot_loss <= t.rot_tol) | (t.on[t.six] == 0)).all())
-        return True
+        if len(t.six) and not ((self.rot_loss <= t.rot_tol) | (t.on[t.six] == 0)).all():
+            return False
+        return all(e.satisfied(self.pos_j, self.world_j) for e in t.extras)

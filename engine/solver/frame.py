@@ -18,7 +18,7 @@ from typing import Protocol
 import torch
 
 from engine.solver.pose import RootAnchor, RootFrame, RootOverride
-from engine.solver.state import PoseState
+from engine.kinematics.pose_state import PoseState
 
 
 class LatentDecoder(Protocol):
@@ -66,7 +66,9 @@ class SolveTimings:
     """Where one frame's solve spent its time, milliseconds summed over its iterations.
 
     ``decoder`` is the decoder's forward pass, ``fk_losses`` the root, FK and loss terms,
-    ``backward`` the gradient, ``step`` the latent update; ``fast`` tells which path ran.
+    ``backward`` the gradient, ``step`` the latent update; ``fast`` tells which path ran,
+    ``slow_kinds`` the constraint kinds without a fast-path term that kept it from the
+    fast path.
     """
 
     iterations: int = 0
@@ -75,12 +77,16 @@ class SolveTimings:
     backward: float = 0.0
     step: float = 0.0
     fast: bool = False
+    slow_kinds: tuple[str, ...] = ()
 
     def per_iteration(self) -> dict[str, float]:
-        """Milliseconds per iteration: each part and their sum ``ms_per_iteration``."""
+        """Milliseconds per iteration: each part and their sum ``ms_per_iteration``; with
+        ``slow_path: 1.0`` when kinds without a fast-path term slowed the frame (the
+        studio shows it)."""
         n = max(self.iterations, 1)
         parts = {k: getattr(self, k) / n for k in ("decoder", "fk_losses", "backward", "step")}
-        return {"ms_per_iteration": sum(parts.values()), **parts}
+        flag = {"slow_path": 1.0} if self.slow_kinds else {}
+        return {"ms_per_iteration": sum(parts.values()), **parts, **flag}
 
 
 @dataclass
@@ -103,6 +109,9 @@ class Solution:
     timings : SolveTimings
     cut : bool
         True when the frame's deadline stopped the solve before ``iterations`` steps.
+    slow_kinds : tuple of str
+        Constraint kinds without a fast-path term that sent this frame to the slower
+        reference path (empty when the fast path ran, or was not asked for).
     """
 
     latent: torch.Tensor
@@ -113,3 +122,4 @@ class Solution:
     fell_back: bool = False
     timings: SolveTimings = field(default_factory=SolveTimings)
     cut: bool = False
+    slow_kinds: tuple[str, ...] = ()

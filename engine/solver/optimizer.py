@@ -27,10 +27,13 @@ starting latent, again with a warning. The caller's state is only ever updated f
 finite solution, so the next frame starts clean.
 
 Two paths compute the same iterations: the **fast path** (:mod:`engine.solver.fast`,
-hand-derived gradients through a fused decoder, numpy) whenever every enabled term is a
-sensor or the temporal prior and the decoder is a :class:`~engine.models.PoseVAE`, and
-the **reference path** (autograd through the torch decoder and every constraint's
-``loss``) otherwise, or when ``PoseOptimizer(..., fast=False)``. Both use the update
+hand-derived gradients through a fused decoder, numpy) whenever every enabled constraint
+has a fast-path term (:meth:`~engine.constraints.base.Constraint.fast_term`, declared in
+its kind's module) and the decoder is a :class:`~engine.models.PoseVAE`, and the
+**reference path** (autograd through the torch decoder and every constraint's ``loss``)
+otherwise, or when ``PoseOptimizer(..., fast=False)``. A frame that a kind without a
+term sends to the reference path says so: :attr:`Solution.slow_kinds` names the kinds
+and its warnings carry one line. Both use the update
 rules of :mod:`engine.solver.update`. What a solve takes and returns (:class:`FrameContext`,
 :class:`Solution`, :class:`SolveTimings`, the :class:`LatentDecoder` protocol) is
 :mod:`engine.solver.frame`.
@@ -48,23 +51,22 @@ import numpy as np
 import torch
 from threadpoolctl import ThreadpoolController
 
+from engine.constraints.terms import FrameInputs, NativeTerm, PoseTerm
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk_matrices
 from engine.models.fused import DenseDecoder
 from engine.models.vae import PoseVAE
 from engine.solver.fast import FastPose, FastTerms
 from engine.solver.frame import FrameContext, LatentDecoder, Solution, SolveTimings
-from engine.solver.pose_terms import POSE_TERMS
 from engine.solver.pose import world_root
+from engine.solver.slow_path import report_slow
 from engine.solver.settings import FULL_SET, OptimizerSettings
-from engine.solver.state import PoseState
+from engine.kinematics.pose_state import PoseState
 from engine.solver.update import LatentUpdate
 
-if TYPE_CHECKING:  # constraints import the pose state from this package
+if TYPE_CHECKING:
     from engine.constraints.base import Constraint
 
-#: Term kinds the fast path evaluates itself.
-FAST_KINDS = ("sensor", "temporal_prior", *POSE_TERMS)
 _DENSE: "weakref.WeakKeyDictionary[torch.nn.Module, DenseDecoder]" = weakref.WeakKeyDictionary()
 _BLAS = ThreadpoolController()
 
@@ -99,6 +101,7 @@ class PoseOptimizer:
                 _DENSE[decoder] = DenseDecoder(decoder)
             self._fast = FastPose(_DENSE[decoder], np.asarray(offsets, dtype=np.float64))
         self._carry: dict = {}
+        self._reported: set[tuple[str, ...]] = set()  # sets of slow kinds this solver has reported
 
     # -- decoding --------------------------------------------------------------------
     def decode(self, z: torch.Tensor, ctx: FrameContext) -> PoseState:
@@ -119,16 +122,25 @@ class PoseOptimizer:
         """Optimise from latent ``start (L,)`` against the enabled ``constraints``."""
         terms = [c for c in constraints if c.enabled and c.weight > 0]
         with _BLAS.limit(limits=1, user_api="blas"):  # tiny products: one thread is fastest
-            if self._fast is not None and self._fast_terms(terms):
-                sol = self._solve_fast(start, terms, ctx)
-                if sol is not None:
-                    return sol
-            return self._solve_reference(start, terms, ctx)
+            slow: list[str] = []
+            if self._fast is not None:
+                built = self._fast_terms(terms, ctx)
+                slow = sorted({c.kind for c, t in zip(terms, built) if t is None})
+                if not slow and sum(c.kind == "temporal_prior" for c in terms) <= 1:
+                    sol = self._solve_fast(start, terms, built, ctx)  # type: ignore[arg-type]
+                    if sol is not None:
+                        return sol
+            sol = self._solve_reference(start, terms, ctx)
+            if slow:
+                report_slow(sol, tuple(slow), self._reported)
+            return sol
 
     @staticmethod
-    def _fast_terms(terms: Sequence["Constraint"]) -> bool:
-        kinds = [c.kind for c in terms]
-        return all(k in FAST_KINDS for k in kinds) and kinds.count("temporal_prior") <= 1
+    def _fast_terms(terms: Sequence["Constraint"], ctx: FrameContext) -> list[PoseTerm | None]:
+        """Each constraint's fast-path term for this frame (None: it has none)."""
+        prev = ctx.previous_positions
+        inputs = FrameInputs(None if prev is None else prev.detach().double().numpy(), ctx.frame)
+        return [c.fast_term(inputs) for c in terms]
 
     def update_rule(self, terms: Sequence["Constraint"], deadline: bool = False) -> str:
         """The rule ``solve`` uses with these enabled ``terms``: ``auto`` is Adam with
@@ -160,16 +172,19 @@ class PoseOptimizer:
         latent = torch.from_numpy(z.copy())
         return Solution(latent, state_of(latent), losses, steps, warnings, timings=timings)
 
-    def _solve_fast(self, start: torch.Tensor, terms: list, ctx: FrameContext) -> Solution | None:
-        """The fast path; None when the starting losses are not all finite (the
-        reference path then drops the bad terms with its warning)."""
+    def _solve_fast(self, start: torch.Tensor, terms: list, built: list[PoseTerm], ctx: FrameContext) -> Solution | None:
+        """The fast path with the constraints' terms ``built``; None when the starting
+        losses are not all finite (the reference path then drops the bad terms with its
+        warning)."""
         s, fp, clock = self.settings, self._fast, time.perf_counter
         assert fp is not None
-        sensors = [c for c in terms if c.kind == "sensor"]
-        prior = next((c for c in terms if c.kind == "temporal_prior"), None)
+        native = [t for t in built if isinstance(t, NativeTerm)]
+        sensors = [t for t in native if t.constraint.kind == "sensor"]
+        prior = next((t for t in native if t.constraint.kind == "temporal_prior"), None)
         pred = None if ctx.prediction is None else ctx.prediction.detach().double().numpy()
-        extras = [POSE_TERMS[c.kind](c) for c in terms if c.kind in POSE_TERMS]
-        ft = FastTerms(sensors, prior, prior.weight if prior is not None else 0.0, pred, extras)
+        extras = [t for t in built if not isinstance(t, NativeTerm)]
+        ft = FastTerms([t.constraint for t in sensors], None if prior is None else prior.constraint,
+                       prior.weight if prior is not None else 0.0, pred, extras, [t.weight for t in sensors])  # fmt: skip
         ov, anchor = ctx.root_override, ctx.root_anchor
         fp.setup(Q.heading(ctx.previous_root.rotation.detach().double().numpy()),
                  ctx.previous_root.position.detach().double().numpy(),

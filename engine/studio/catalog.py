@@ -2,8 +2,10 @@
 
 Built from :data:`engine.constraints.REGISTRY`: every kind whose class has
 ``user_facing`` set (methods build ``sensor`` and ``temporal_prior`` themselves). Each
-field gets a tag an editor can switch on (``float``, ``int``, ``bool``, ``joint``,
-``choice``, ``str``, ``vec3``), its default and, for ``choice``, the accepted values.
+field gets the editor tag its kind declares on it (``metadata["editor"]``, see
+:func:`engine.constraints.base.param`: ``float``, ``int``, ``bool``, ``joint``,
+``joints``, ``choice``, ``str``, ``vec3``, ``quat``), its default, unit and, for
+``choice``, the accepted values.
 """
 
 from __future__ import annotations
@@ -11,8 +13,6 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 from typing import Any
-
-import numpy as np
 
 import engine.constraints  # noqa: F401  (importing the package registers every kind)
 from engine.constraints.base import REGISTRY, Constraint, field_default
@@ -30,6 +30,7 @@ class FieldSpec:
     tag: str
     default: Any
     choices: tuple[str, ...] = ()
+    unit: str = ""
 
 
 @dataclass(frozen=True)
@@ -45,30 +46,16 @@ class ConstraintKind:
         return next((f for f in self.fields if f.name == name), None)
 
 
-def _tag(cls: type[Constraint], name: str, default: Any) -> str:
-    if name in cls.choices:
-        return "choice"
-    if isinstance(default, bool):
-        return "bool"
-    if isinstance(default, int):
-        return "int"
-    if isinstance(default, float):
-        return "float"
-    if isinstance(default, str):
-        return "joint" if "joint" in name or name in ("target_joint", "end_effector") else "str"
-    if isinstance(default, (np.ndarray, tuple, list)) and np.asarray(default).size == 3:
-        return "vec3"
-    return "other"
-
-
 def describe(cls: type[Constraint]) -> ConstraintKind:
-    """The catalog entry of one constraint class."""
+    """The catalog entry of one constraint class (a :class:`TypeError` names what an
+    incomplete kind lacks, e.g. editor metadata)."""
+    cls.check_complete()
     fields = []
     for f in dataclasses.fields(cls):
         if f.name in COMMON_FIELDS or not f.init:
             continue
-        d = field_default(f)
-        fields.append(FieldSpec(f.name, _tag(cls, f.name, d), d, tuple(cls.choices.get(f.name, ()))))
+        meta = f.metadata
+        fields.append(FieldSpec(f.name, meta["editor"], field_default(f), tuple(meta["choices"]), meta["unit"]))
     summary = (cls.__doc__ or cls.kind).strip().splitlines()[0]
     return ConstraintKind(cls.kind, tuple(fields), summary, cls)
 

@@ -4,8 +4,15 @@ from __future__ import annotations
 
 import numpy as np
 
+import pytest
+
 from app.constraint_placement import facing, placed_params
 from engine import skeleton as sk
+from engine.constraints import REGISTRY
+from engine.constraints.placement import LOOK_DISTANCE
+from engine.studio.catalog import constraint_catalog
+from widgets.viewport.camera import CAMERA_PRESETS, VIEW_ANGLE_DEG
+from widgets.viewport.viewport import HOME_FOCUS_HEIGHT
 
 
 def _pose(yaw_deg: float, at=(3.0, -5.0, 0.0)) -> np.ndarray:
@@ -25,7 +32,7 @@ def test_look_at_target_is_in_front_of_the_head_wherever_the_body_is():
     defaults = {"joint": "upperneck", "target": np.array([0.0, -2.0, 1.6]), "axis": np.array([0, -1.0, 0])}
     out = placed_params("look_at", defaults, pose)
     head = pose[sk.JOINT_INDEX["upperneck"]]
-    assert set(out) == {"target"} and np.allclose(out["target"], head + [1.5, 0, 0], atol=0.1)
+    assert set(out) == {"target"} and np.allclose(out["target"], head + [LOOK_DISTANCE, 0, 0], atol=0.1)
 
 
 def test_without_a_pose_or_for_other_kinds_nothing_changes():
@@ -34,3 +41,28 @@ def test_without_a_pose_or_for_other_kinds_nothing_changes():
     out = placed_params("distance", {"joint_a": "lwrist", "joint_b": "rwrist", "distance": 0.3}, _pose(0))
     pose = _pose(0)
     assert np.isclose(out["distance"], np.linalg.norm(pose[sk.JOINT_INDEX["lwrist"]] - pose[sk.JOINT_INDEX["rwrist"]]))
+
+
+def _gizmo_points(g: dict) -> list[np.ndarray]:
+    pts = [g[k] for k in ("position", "anchor", "min", "max") if k in g]
+    return pts + list(g.get("points", []))
+
+
+@pytest.mark.parametrize("yaw", [0.0, 60.0, 150.0, -90.0])
+@pytest.mark.parametrize("kind", sorted(constraint_catalog()))
+def test_a_new_constraint_is_drawn_in_view_of_every_camera_preset(kind, yaw):
+    """Placed on the pose, each kind's gizmo lies within the viewport's view cone from
+    every camera preset framed on the hips (as the studio frames them): a look-at target
+    1.5 m in front of the head lay 20 degrees off the home view's axis, in its corner."""
+    pose = _pose(yaw)
+    spec = constraint_catalog()[kind]
+    defaults = {f.name: f.default for f in spec.fields}
+    c = REGISTRY[kind](**{**defaults, **placed_params(kind, defaults, pose)})
+    focus = np.array([pose[0, 0], pose[0, 1], HOME_FOCUS_HEIGHT])
+    for preset, (offset, _up) in CAMERA_PRESETS.items():
+        eye = focus + np.asarray(offset)
+        axis = (focus - eye) / np.linalg.norm(focus - eye)
+        for p in _gizmo_points(c.gizmo(pose)):
+            ray = (np.asarray(p, float) - eye) / np.linalg.norm(np.asarray(p, float) - eye)
+            angle = np.degrees(np.arccos(np.clip(ray @ axis, -1.0, 1.0)))
+            assert angle < VIEW_ANGLE_DEG / 2, f"{kind}: a point {angle:.0f} deg off the {preset} view's axis"

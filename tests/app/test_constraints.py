@@ -2,14 +2,15 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
 import pytest
 
 from engine import skeleton as sk
-from engine.constraints.base import REGISTRY, Constraint
+from engine.constraints.base import REGISTRY, Constraint, param
+from engine.constraints.placement import LOOK_DISTANCE
 
 pytestmark = pytest.mark.gui
 
@@ -21,8 +22,16 @@ def pin_kind():
     @dataclass
     class StudioTestPin(Constraint):
         kind: ClassVar[str] = "studio_test_pin"
-        joint: str = "lwrist"
-        target: np.ndarray = field(default_factory=lambda: np.array([0.3, -0.2, 1.2]))
+        no_fast_term: ClassVar[str] = "a stand-in for the editor mechanics"
+        joint: str = param("lwrist", editor="joint")
+        target: np.ndarray = param(factory=lambda: np.array([0.3, -0.2, 1.2]), editor="vec3", unit="m")
+
+        def acts_on(self):
+            return (self.joint,)
+
+        @classmethod
+        def placement(cls, params, positions):
+            return {}
 
         def loss(self, state):
             t = torch.as_tensor(self.target, dtype=state.positions.dtype)
@@ -88,7 +97,7 @@ def test_a_new_constraint_starts_next_to_the_character(studio, qtbot, kind):
         assert np.all(c.box_max - c.box_min < 1.5)
     elif kind == "look_at":
         head = pose[sk.JOINT_INDEX[c.joint]]
-        assert 1.0 < np.linalg.norm(c.target - head) < 2.0
+        assert np.linalg.norm(c.target - head) == pytest.approx(LOOK_DISTANCE, abs=0.05)
         # in front of the face: the direction the hips face, give or take
         assert np.isclose(c.target[2], head[2])
     else:

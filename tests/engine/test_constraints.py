@@ -122,17 +122,24 @@ def test_temporal_prior_is_the_latent_mse_and_zero_without_prediction():
     assert float(c.loss(rest_state(latent=z, prediction=torch.zeros(4, dtype=torch.float64)))) == pytest.approx(7.5)
 
 
-def test_pin_captures_the_previous_position_and_follow_previous_tracks_it():
+def test_an_unset_pin_targets_the_previous_position_and_is_never_changed():
+    """A published constraint is read by the engine thread without a lock: its loss must
+    not write to it."""
     s = rest_state()
     prev = s.positions.detach() + torch.tensor([0.0, 0.1, 0.0], dtype=torch.float64)
     pin = PinConstraint(joint="lankle")
     assert not np.isfinite(pin.position).any() and pin.gizmo() == {}
+    assert float(pin.loss(s)) == 0.0  # no previous pose: nothing to hold yet
     s.previous_positions = prev
     assert float(pin.loss(s)) == pytest.approx(0.01)
-    assert np.allclose(pin.position, prev[J["lankle"]].numpy())
-    assert pin.gizmo()["type"] == "point"
+    assert not np.isfinite(pin.position).any()  # unchanged
+    held = pin.settled(prev.numpy())
+    assert held is not pin and np.allclose(held.position, prev[J["lankle"]].numpy())
+    assert held.gizmo()["type"] == "point" and not np.isfinite(pin.position).any()
+    assert held.settled(prev.numpy() + 1.0) is held  # captured once
     follow = PinConstraint(joint="lankle", follow_previous=True)
     assert float(follow.loss(s)) == pytest.approx(0.01)
+    assert follow.settled(prev.numpy()) is follow
 
 
 def test_sensor_batch_equals_the_single_losses():

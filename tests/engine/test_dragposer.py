@@ -117,6 +117,31 @@ def test_constraint_editing_between_frames(clip):
     assert "sensor:lwrist" not in m.step(tr.frame(4)).losses[0]
 
 
+def test_published_constraints_are_never_changed_and_an_unset_pin_keeps_its_capture(clip):
+    """The studio hands its constraint objects to the engine thread: solving and editing
+    work on copies. An unset pin holds the first solved position from then on, also
+    when the same list is sent again."""
+    m = make()
+    tr = simulate(clip, "4")
+    m.reset(clip.skeleton)
+    look, pin = LookAtConstraint(name="look"), PinConstraint(name="pin", joint="rankle")
+    published = [look, pin]
+    m.set_constraints(published)
+    first = m.step(tr.frame(0)).positions[sk.JOINT_INDEX["rankle"]]
+    m.step(tr.frame(1))
+    m.set_weight("look", 3.0)
+    m.set_enabled("look", False)
+    assert look.weight == 1.0 and look.enabled and not np.isfinite(pin.position).any()
+    held = m.get_constraint("pin")
+    assert held is not pin and np.allclose(held.position, first)
+    m.set_constraints(published)  # e.g. the studio edited another constraint
+    m.step(tr.frame(2))
+    assert np.allclose(m.get_constraint("pin").position, first)
+    m.set_constraints([PinConstraint(name="pin", joint="rankle")])  # a new pin captures afresh
+    m.step(tr.frame(3))
+    assert not np.allclose(m.get_constraint("pin").position, first)
+
+
 def test_settings_apply_from_the_next_frame_and_unknown_names_fail(clip):
     m = make()
     tr = simulate(clip, "6")

@@ -38,7 +38,11 @@ from engine.validation import shown
 #: kind string -> constraint class; filled by subclasses as they are defined.
 REGISTRY: dict[str, type["Constraint"]] = {}
 #: Editor tags a parameter's ``metadata["editor"]`` may take (:func:`param`).
-EDITOR_TAGS = ("float", "int", "bool", "joint", "joints", "choice", "str", "vec3", "quat")
+EDITOR_TAGS = ("float", "int", "bool", "joint", "joints", "choice", "str", "vec3", "quat", "frames")
+
+
+def _meta(editor: str, unit: str = "", choices: tuple[str, ...] = ()) -> dict[str, Any]:
+    return {"editor": editor, "unit": unit, "choices": tuple(choices)}
 
 
 def param(default: Any = dataclasses.MISSING, *, editor: str, unit: str = "", factory: Any = dataclasses.MISSING,
@@ -57,8 +61,7 @@ def param(default: Any = dataclasses.MISSING, *, editor: str, unit: str = "", fa
     """
     if editor not in EDITOR_TAGS or (editor == "choice") != bool(choices):
         raise TypeError(f"param: editor {editor!r} needs choices exactly when it is 'choice'")
-    meta = {"editor": editor, "unit": unit, "choices": tuple(choices)}
-    return dataclasses.field(default=default, default_factory=factory, metadata=meta, init=init)
+    return dataclasses.field(default=default, default_factory=factory, metadata=_meta(editor, unit, choices), init=init)
 
 
 def missing_parts(cls: type["Constraint"]) -> list[str]:
@@ -72,7 +75,7 @@ def missing_parts(cls: type["Constraint"]) -> list[str]:
     if not own("fast_term") and not cls.no_fast_term:
         out.append("fast_term() or no_fast_term")
     for f in dataclasses.fields(cls):
-        if f.name not in ("name", "weight", "enabled") and "editor" not in f.metadata:
+        if f.name not in ("name", "weight", "enabled", *FRAME_FIELDS) and "editor" not in f.metadata:
             out.append(f"editor metadata on field {f.name!r} (engine.constraints.base.param)")
     return out
 
@@ -128,11 +131,11 @@ class Constraint(ABC):
     enabled: bool = True
     #: Active frames ``(start, end)``, inclusive, or None for every frame. Keyword-only
     #: so the kinds' own fields keep their positions.
-    frames: tuple[int, int] | None = field(default=None, kw_only=True)
+    frames: tuple[int, int] | None = field(default=None, kw_only=True, metadata=_meta("frames", "frame"))
     #: Frames before ``start`` over which the weight rises from 0 to 1.
-    blend_in: int = field(default=0, kw_only=True)
+    blend_in: int = field(default=0, kw_only=True, metadata=_meta("int", "frame"))
     #: Frames after ``end`` over which the weight falls from 1 to 0.
-    blend_out: int = field(default=0, kw_only=True)
+    blend_out: int = field(default=0, kw_only=True, metadata=_meta("int", "frame"))
 
     def __init_subclass__(cls, **kw: Any) -> None:
         super().__init_subclass__(**kw)

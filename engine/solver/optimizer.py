@@ -119,28 +119,35 @@ class PoseOptimizer:
 
     # -- solving ---------------------------------------------------------------------
     def solve(self, start: torch.Tensor, constraints: Sequence["Constraint"], ctx: FrameContext) -> Solution:
-        """Optimise from latent ``start (L,)`` against the enabled ``constraints``."""
-        terms = [c for c in constraints if c.enabled and c.weight > 0]
+        """Optimise from latent ``start (L,)`` against the enabled ``constraints``, each
+        weighted by its ``weight`` times its :meth:`~Constraint.activity` at ``ctx.frame``."""
+        weighted = [(c, c.weight * c.activity(ctx.frame)) for c in constraints if c.enabled]
+        terms = [c for c, w in weighted if w > 0]
+        weights = {id(c): w for c, w in weighted if w > 0}
         with _BLAS.limit(limits=1, user_api="blas"):  # tiny products: one thread is fastest
             slow: list[str] = []
             if self._fast is not None:
-                built = self._fast_terms(terms, ctx)
+                built = self._fast_terms(terms, weights, ctx)
                 slow = sorted({c.kind for c, t in zip(terms, built) if t is None})
                 if not slow and sum(c.kind == "temporal_prior" for c in terms) <= 1:
                     sol = self._solve_fast(start, terms, built, ctx)  # type: ignore[arg-type]
                     if sol is not None:
                         return sol
-            sol = self._solve_reference(start, terms, ctx)
+            sol = self._solve_reference(start, terms, weights, ctx)
             if slow:
                 report_slow(sol, tuple(slow), self._reported)
             return sol
 
     @staticmethod
-    def _fast_terms(terms: Sequence["Constraint"], ctx: FrameContext) -> list[PoseTerm | None]:
-        """Each constraint's fast-path term for this frame (None: it has none)."""
+    def _fast_terms(terms: Sequence["Constraint"], weights: dict[int, float], ctx: FrameContext) -> list[PoseTerm | None]:
+        """Each constraint's fast-path term for this frame with its frame weight (None: it has none)."""
         prev = ctx.previous_positions
         inputs = FrameInputs(None if prev is None else prev.detach().double().numpy(), ctx.frame)
-        return [c.fast_term(inputs) for c in terms]
+        built = [c.fast_term(inputs) for c in terms]
+        for c, t in zip(terms, built):
+            if t is not None:
+                t.weight = weights[id(c)]  # terms read it when evaluated: the activity counts
+        return built
 
     def update_rule(self, terms: Sequence["Constraint"], deadline: bool = False) -> str:
         """The rule ``solve`` uses with these enabled ``terms``: ``auto`` is Adam with
@@ -257,7 +264,8 @@ class PoseOptimizer:
         return PoseState(f(fp.pos), None, f(local), latent, ctx.previous_positions, ctx.frame, ctx.prediction,
                          f(fp.world))  # fmt: skip
 
-    def _solve_reference(self, start: torch.Tensor, terms: list, ctx: FrameContext) -> Solution:
+    def _solve_reference(self, start: torch.Tensor, terms: list, weight_of: dict[int, float],
+                         ctx: FrameContext) -> Solution:  # fmt: skip
         """Autograd through the torch decoder and every constraint's loss."""
         s, clock = self.settings, time.perf_counter
         warnings: list[str] = []
@@ -271,7 +279,7 @@ class PoseOptimizer:
             terms = [c for c, ok in zip(terms, finite) if ok]
         terms, evaluate = _evaluator(terms, values)
         names = [c.name for c in terms]
-        weights = torch.tensor([c.weight for c in terms], dtype=values.dtype)
+        weights = torch.tensor([weight_of[id(c)] for c in terms], dtype=values.dtype)
         rule = self.update_rule(terms, ctx.deadline is not None)
         upd, timings = self._update(rule), SolveTimings()
         z0 = start.detach().numpy().astype(np.float32)
@@ -309,7 +317,8 @@ class PoseOptimizer:
                     if since_best >= s.patience:
                         break
             t0 = clock()
-            (grad,) = torch.autograd.grad(total, z)
+            # no term left (e.g. every constraint outside its frame range): nothing to move
+            (grad,) = torch.autograd.grad(total, z) if total.requires_grad else (torch.zeros_like(z),)
             t1 = clock()
             z = torch.from_numpy(upd.step(z.detach().numpy(), grad.numpy())).requires_grad_(True)
             timings.backward += t1 - t0

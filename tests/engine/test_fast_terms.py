@@ -186,3 +186,30 @@ def test_fast_path_frames_equal_the_reference(models, kinds):
                 # abs: float32 resolution of a look-at loss 1 - cos near 0
                 assert a.losses[-1][k] == pytest.approx(b.losses[-1][k], rel=1e-3, abs=2e-7), (i, k)
     assert len(active) == len(kinds), f"inactive terms: {set(kinds)} vs {active}"
+
+
+def test_both_paths_weigh_a_constraint_by_its_activity_on_the_frame(models):
+    """A constraint limited to a frame range acts with ``weight * activity(frame)``: in its
+    blend the solve equals that of an every-frame copy with the scaled weight, on both
+    paths; outside its range it is left out."""
+    from engine.solver import FrameContext, OptimizerSettings, PoseOptimizer, RootFrame
+
+    offsets = sk.Skeleton.canonical().offsets
+    settings = OptimizerSettings(iterations=3, optimizer="sgd", step_size=0.5)
+    fast, ref = PoseOptimizer(models.vae, offsets, settings), PoseOptimizer(models.vae, offsets, settings, fast=False)
+    root = RootFrame(torch.tensor([1.0, 0, 0, 0]), torch.tensor([0.0, 0.0, 0.95]))
+    ranged = LookAtConstraint(name="look", weight=2.0, target=np.array([1.0, -1.0, 1.2]), frames=(5, 9), blend_in=3)
+    a = ranged.activity(3)
+    assert 0.0 < a < 1.0
+    plain = LookAtConstraint(name="look", weight=2.0 * a, target=ranged.target)
+    z = torch.zeros(24)
+    for opt in (fast, ref):
+        blended = opt.solve(z, [ranged], FrameContext(root, frame=3))
+        scaled = opt.solve(z, [plain], FrameContext(root, frame=3))
+        assert blended.timings.fast == (opt is fast)
+        np.testing.assert_array_equal(blended.latent.numpy(), scaled.latent.numpy())
+        assert blended.losses[0]["total"] == pytest.approx(2.0 * a * blended.losses[0]["look"])
+        outside = opt.solve(z, [ranged], FrameContext(root, frame=0))
+        assert "look" not in outside.losses[0] and np.array_equal(outside.latent.numpy(), z.numpy())
+    np.testing.assert_allclose(fast.solve(z, [ranged], FrameContext(root, frame=3)).latent.numpy(),
+                               ref.solve(z, [ranged], FrameContext(root, frame=3)).latent.numpy(), atol=1e-5)  # fmt: skip

@@ -38,6 +38,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--frames", type=int, default=300, help="frames to time (default: 300)")
     p.add_argument("--warmup", type=int, default=10, help="untimed frames first (default: 10)")
     p.add_argument("--json", type=Path, metavar="OUT", help="also write the results as JSON")
+    p.add_argument("--scene", type=Path, metavar="SCENE.json",
+                   help="also solve the scene's constraints with the sensors (methods that take constraints; "
+                   "the scene's optimizer settings are not applied)")  # fmt: skip
     add_rig_map_option(p)
     p.set_defaults(func=_bench)
 
@@ -45,16 +48,20 @@ def register(sub: argparse._SubParsersAction) -> None:
 PARTS = ("decoder", "fk_losses", "backward", "step")
 
 
-def bench_method(name: str, motion, tracking, frames: int, warmup: int, **kwargs) -> dict:
-    """Time ``frames`` steps of method ``name`` after ``warmup`` untimed ones.
+def bench_method(name: str, motion, tracking, frames: int, warmup: int, constraints=(), **kwargs) -> dict:
+    """Time ``frames`` steps of method ``name`` after ``warmup`` untimed ones, with the
+    user ``constraints`` (a scene's) besides the sensors.
 
     Per frame: wall-clock milliseconds of ``step`` (everything the method does for the
     frame). Per iteration (iterative methods): the solver's own milliseconds per
     iteration on each frame (:attr:`FrameResult.timings`), and its parts.
     """
+    from engine.errors import UserError
     from engine.methods import driver, get_method
 
     method = get_method(name, **kwargs)
+    if constraints and not driver.set_constraints(method, constraints):
+        raise UserError(f"method {name!r} takes no constraints (--scene)")
     driver.reset(method, motion.skeleton, motion.fps, reference=motion)
     n = min(len(tracking), warmup + frames)
     times, iters, per_iter = [], [], []
@@ -105,6 +112,7 @@ def _bench(args: argparse.Namespace) -> int:
     from engine.errors import UserError
     from engine.methods import available_methods
     from engine.retarget import load_motion
+    from engine.scene import load_scene
     from engine.tracking import simulate
     from engine.validation import check_args, check_output_path
 
@@ -115,6 +123,7 @@ def _bench(args: argparse.Namespace) -> int:
     if args.warmup + 1 > len(motion):
         raise UserError(f"{args.file}: only {len(motion)} frames, fewer than the warm-up")
     tracking = simulate(motion, args.sensors)
+    constraints = load_scene(args.scene)[0] if args.scene else []
     names = args.method or list(available_methods())
     kwargs = {"mode": args.mode}
     if args.iterations:
@@ -130,12 +139,13 @@ def _bench(args: argparse.Namespace) -> int:
     for name in names:
         kw = kwargs if name not in ("ik",) else {}
         try:
-            rows.append(bench_method(name, motion, tracking, args.frames, args.warmup, **kw))
+            rows.append(bench_method(name, motion, tracking, args.frames, args.warmup, constraints, **kw))
         except UserError as exc:
             if args.method:  # named on the command line: its failure is the answer
                 raise
             skipped.append(f"{name}: skipped: {exc}")  # e.g. needs another sensor preset
-    print(f"{args.file.name}: sensors {args.sensors}, mode {args.mode}, "
+    scene = f", scene {args.scene.name} ({len(constraints)} constraints)" if args.scene else ""
+    print(f"{args.file.name}: sensors {args.sensors}{scene}, mode {args.mode}, "
           f"{machine['cpu_count']} cores, torch {machine['torch_threads']} threads")
     print(f"{'method':<12} {'frames':>6} {'ms mean':>8} {'median':>8} {'p95':>8} {'fps':>7} {'iters':>6} "
           f"{'ms/it':>7} {'it p95':>7}  breakdown ms/it (decoder fk+losses backward step)")
@@ -149,5 +159,7 @@ def _bench(args: argparse.Namespace) -> int:
         print(line)
     if args.json:
         out = {"file": str(args.file), "sensors": args.sensors, "mode": args.mode, "machine": machine, "methods": rows}
+        if args.scene:
+            out["scene"] = str(args.scene)
         write_text(args.json, json.dumps(out, indent=1))
     return 0

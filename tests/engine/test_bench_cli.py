@@ -26,3 +26,27 @@ def test_bench_unknown_method_is_a_user_error(synthetic_motion, tmp_path, capsys
     save_motion_bvh(clip, synthetic_motion)
     assert main(["bench", str(clip), "--method", "nope", "--frames", "5"]) == 2
     assert "unknown method" in capsys.readouterr().err
+
+
+def test_bench_scene_solves_its_constraints_and_reports_the_same_keys(synthetic_motion, tmp_path, capsys, monkeypatch):
+    from pathlib import Path
+
+    from engine.methods import driver
+
+    clip = tmp_path / "clip.bvh"
+    save_motion_bvh(clip, synthetic_motion)
+    scene = Path(__file__).resolve().parents[2] / "assets" / "scenes" / "look_floor_pin_distance.json"
+    given = []
+    real = driver.set_constraints
+    monkeypatch.setattr(driver, "set_constraints", lambda m, cs: given.append([c.kind for c in cs]) or real(m, cs))
+    rows = []
+    for extra in ([], ["--scene", str(scene)]):
+        out = tmp_path / f"bench{len(extra)}.json"
+        args = ["bench", str(clip), "--method", "dragposer", "--frames", "4", "--warmup", "1", "--iterations", "2"]
+        assert main([*args, "--json", str(out), *extra]) == 0
+        rows.append(json.loads(out.read_text()))
+    assert given == [["look_at", "floor", "pin", "distance"]]
+    assert rows[0]["methods"][0].keys() == rows[1]["methods"][0].keys() and rows[1]["scene"] == str(scene)
+    assert "4 constraints" in capsys.readouterr().out
+    assert main(["bench", str(clip), "--method", "ik", "--frames", "2", "--warmup", "1", "--scene", str(scene)]) == 2
+    assert "takes no constraints" in capsys.readouterr().err

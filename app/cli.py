@@ -36,6 +36,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    "ik when no weights are installed)")
     p.add_argument("--sensors", metavar="PRESET", help="sensor preset name")
     p.add_argument("--ghosts", metavar="A,B", help="other methods drawn as ghosts beside it, e.g. ik,sparseposer")
+    p.add_argument("--scene", metavar="SCENE.json", help="apply a saved scene (sensors, constraints, settings, "
+                   "method, frame) to FILE; without FILE the scene's own clip opens")
     p.add_argument("--screenshot", metavar="OUT.png", help="save a screenshot and exit")
     p.add_argument("--after-frames", type=int, default=60, metavar="N", help="frames to play first (60)")
     p.add_argument("--pace", choices=PLAYBACK_PACES,
@@ -62,5 +64,8 @@ def run(args: argparse.Namespace) -> int:
     if args.old_pace is not None:
         print("gui: --mode is deprecated, use --pace", file=sys.stderr)
     ghosts = tuple(g.strip() for g in (args.ghosts or "").split(",") if g.strip())
+    if args.after_frames < 1:
+        raise UserError(f"--after-frames: N must be >= 1, got {args.after_frames}")
     return run_app(args.file, args.method or default_method(), args.sensors, args.screenshot, args.after_frames,
-                   args.measure, args.json, args.pace or args.old_pace, ghosts, args.view, rig_map_path(args), args.engine)  # fmt: skip
+                   args.measure, args.json, args.pace or args.old_pace, ghosts, args.view, rig_map_path(args), args.engine,
+                   args.scene, args.method is not None)  # fmt: skip

@@ -46,17 +46,44 @@ def open_initial(window: MainWindow, path: str | None, sensors: str | None, rig_
             window.statusBar().showMessage(str(exc), 8000)
 
 
+def apply_scene_file(window: MainWindow, scene_path: str, clip_given: bool) -> None:
+    """Apply the scene file ``scene_path`` (``--scene``) to the open clip; without a clip
+    on the command line the scene's own clip is opened first.
+
+    Raises
+    ------
+    UserError
+        A scene that cannot be read or applied, naming the file (and line or field).
+    """
+    from engine.input_files import read_json
+
+    try:
+        scene = read_json(scene_path, "scene")
+        if not isinstance(scene, dict):
+            raise UserError("a scene is a JSON object")
+        clip = scene.get("clip")
+        if clip and not clip_given and not window.files.open_path(str(clip)):
+            raise UserError(f"cannot open its clip {clip}")
+        window.session.apply_scene(scene, scene_path)
+    except (OSError, ValueError) as exc:
+        raise UserError(f"{scene_path}: {exc}") from exc
+    except UserError as exc:
+        raise UserError(str(exc) if scene_path in str(exc) else f"{scene_path}: {exc}") from exc
+
+
 def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
         screenshot: str | None = None, after_frames: int = 60, measure: float | None = None,
         measure_json: str | None = None, pace: str | None = None, ghosts: tuple[str, ...] = (),
-        view: str = "stick", rig_map: Path | None = None, engine: str = "process") -> int:  # fmt: skip
+        view: str = "stick", rig_map: Path | None = None, engine: str = "process",
+        scene: str | None = None, explicit_method: bool = True) -> int:  # fmt: skip
     """Show the studio; with ``screenshot``, play ``after_frames`` frames, save and exit;
     with ``measure``, play that many seconds and write the figures to ``measure_json``
     (:mod:`app.measure`). ``pace`` sets the playback pace (every_frame or real_time).
     ``ghosts``: other methods drawn beside the reconstruction; ``view`` draws the
     reconstruction as a ``stick`` figure or a shaded ``body``; ``rig_map`` is the joint
     mapping file for ``path`` (``--rig-map``); ``engine`` runs the solver in its own
-    ``process`` or in a ``thread`` of this one."""
+    ``process`` or in a ``thread`` of this one. ``scene`` is a saved scene applied to the
+    clip (``--scene``); ``--sensors`` and an explicit ``--method`` win over the scene's."""
     # Mesa's software rasterizer (llvmpipe: Xvfb, no GPU) starts a thread per core; on a
     # small machine leave one core to the solver's process (set before the first GL context)
     os.environ.setdefault("LP_NUM_THREADS", str(max(1, (os.cpu_count() or 2) - 1)))
@@ -64,7 +91,13 @@ def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
     app.setApplicationName("DragPoser Studio")
     window = MainWindow(method=method, engine=engine)
     try:
-        open_initial(window, path, sensors, rig_map)
+        open_initial(window, path if path or not scene else None, sensors, rig_map)
+        if scene:
+            apply_scene_file(window, scene, clip_given=bool(path))
+            if sensors:
+                window.session.set_sensor_text(sensors)
+            if explicit_method and method != window.session.method:
+                window.session.set_method(method)
         if ghosts:  # comparing methods: show their errors rather than the optimizer's losses
             window.session.set_method(window.session.method, ghosts)
             window.method_errors_dock.raise_()
@@ -85,14 +118,19 @@ def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
         return app.exec()
     status = {"code": 1}
     start = window.session.frame
+    stepped = {"to": start}
 
+    # frame by frame (each step solved like a played frame, in order), so exactly
+    # ``after_frames`` are played: a pause sent after the window drew its last one
+    # arrived when the engine had solved 4-6 more
     def check(frame: int) -> None:
         snap = window.session.latest
-        ended = snap is not None and snap.seq > 0 and not snap.playing and frame > start
-        if frame - start < after_frames and not ended:
+        last = snap is not None and snap.num_frames > 0 and frame >= snap.num_frames - 1
+        if frame - start < after_frames and not last:
+            if frame == stepped["to"]:
+                advance(frame + 1)
             return
         window.snapshotDrawn.disconnect(check)
-        window.session.pause()
         QTimer.singleShot(200, finish)
 
     def finish() -> None:
@@ -104,9 +142,13 @@ def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
         print(f"error: the engine did not reach frame {after_frames} in time", file=sys.stderr)
         finish()
 
+    def advance(frame: int) -> None:
+        stepped["to"] = frame
+        window.session.seek(frame)  # the next frame: solved in order, not a jump
+
+    window.session.pause()
     window.snapshotDrawn.connect(check)
-    window.session.set_playback(loop=False)
-    QTimer.singleShot(300, window.session.play)
+    QTimer.singleShot(300, lambda: advance(start + 1))
     QTimer.singleShot(int(SCREENSHOT_TIMEOUT_S * 1000), timeout)
     app.exec()
     return status["code"]

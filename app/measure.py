@@ -118,6 +118,7 @@ class Measurement:
             "clip": str(s.path) if s.path else "(generated)",
             "method": s.method,
             "sensors": [sn.joint for sn in s.sensors.values() if sn.enabled],
+            "constraints": [f"{c.name} ({c.kind})" for c in s.constraints if c.enabled],
             "pace": s.pace,
             "window": [self.w.width(), self.w.height()],
             "platform": {"qt": QGuiApplication.platformName(), "display": os.environ.get("DISPLAY", ""),

@@ -14,7 +14,7 @@ def test_view_and_ghost_options_are_passed_to_the_window(monkeypatch):
     cli.register(parser.add_subparsers())
     args = parser.parse_args(["gui", "--view", "body", "--ghosts", "ik,autoencoder", "--method", "ik"])
     args.func(args)
-    assert seen["args"][-4:] == (("ik", "autoencoder"), "body", None, "process")  # ..., rig map, engine
+    assert seen["args"][8:12] == (("ik", "autoencoder"), "body", None, "process")  # ..., rig map, engine
 
 
 def test_rig_map_option_reaches_the_window(monkeypatch, tmp_path):
@@ -31,7 +31,7 @@ def test_rig_map_option_reaches_the_window(monkeypatch, tmp_path):
     rig_map.write_text("[joints]\n")
     args = parser.parse_args(["gui", "clip.bvh", "--rig-map", str(rig_map)])
     args.func(args)
-    assert seen["args"][0] == "clip.bvh" and seen["args"][-2] == rig_map  # the engine is last
+    assert seen["args"][0] == "clip.bvh" and seen["args"][10] == rig_map  # then the engine, the scene
     args = parser.parse_args(["gui", "clip.bvh", "--rig-map", str(tmp_path / "missing.toml")])
     with pytest.raises(UserError, match="--rig-map: no such file"):
         args.func(args)

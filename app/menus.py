@@ -13,6 +13,7 @@ from PyQt6.QtCore import Qt
 from PyQt6.QtGui import QAction, QActionGroup, QKeySequence
 from PyQt6.QtWidgets import QMainWindow, QMenu
 
+from app import authoring_actions
 from widgets.help_dialog import HelpDialog
 
 
@@ -58,6 +59,7 @@ def build_menus(w: QMainWindow) -> None:
     action(w, file_menu, "Save s&cene...", f.save_scene, "Ctrl+Shift+S")
     action(w, file_menu, "&Load scene...", f.load_scene, "Ctrl+L")
     action(w, file_menu, "Export screens&hot...", f.export_screenshot, "Ctrl+E")
+    named.update(authoring_actions.add_menu_entries(w, file_menu, action))
     file_menu.addSeparator()
     action(w, file_menu, "&Quit", w.close, QKeySequence.StandardKey.Quit)
     edit = w.menuBar().addMenu("&Edit")

@@ -1,0 +1,102 @@
+"""The studio window's authoring entries: File ▸ New pose... and File ▸ Export video...
+
+:func:`add_menu_entries` puts them in the File menu (one call from :mod:`app.menus`).
+New pose asks for the character's height and whether to start from the VAE's mean pose
+or from the current frame of the loaded clip, and opens a
+:class:`app.pose_window.PoseWindow`. Export video renders the loaded clip with the
+current tracker preset drawn on it (:func:`app.render.render_video`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from PyQt6.QtCore import Qt
+from PyQt6.QtWidgets import (
+    QComboBox, QDialog, QDialogButtonBox, QDoubleSpinBox, QFileDialog, QFormLayout, QMenu, QMessageBox,
+    QProgressDialog,
+)  # fmt: skip
+
+from engine.errors import UserError
+
+MEAN, CLIP = "the VAE's mean pose", "the clip's current frame"
+
+
+class NewPoseDialog(QDialog):
+    """Height (metres) and starting pose."""
+
+    def __init__(self, parent: Any, has_clip: bool) -> None:
+        super().__init__(parent)
+        self.setWindowTitle("New pose")
+        form = QFormLayout(self)
+        self.height_m = QDoubleSpinBox(minimum=0.5, maximum=2.5, decimals=2, singleStep=0.05, value=1.75, suffix=" m")
+        self.start = QComboBox()
+        self.start.addItems([MEAN, CLIP] if has_clip else [MEAN])
+        form.addRow("Height", self.height_m)
+        form.addRow("Start from", self.start)
+        box = QDialogButtonBox(QDialogButtonBox.StandardButton.Ok | QDialogButtonBox.StandardButton.Cancel)
+        box.accepted.connect(self.accept)
+        box.rejected.connect(self.reject)
+        form.addRow(box)
+
+
+def open_pose_window(window: Any, height: float, from_clip: bool):
+    """Open a pose window over ``window`` (kept on ``window.pose_windows``) and return it."""
+    from app.pose_window import PoseWindow
+    from engine.authoring.pose_mode import PoseMode
+    from engine.models import load_default_models
+
+    vae = load_default_models().vae
+    session = window.session
+    if from_clip and session.motion is not None:
+        mode = PoseMode.from_clip_frame(vae, session.motion, session.frame, height)
+    else:
+        mode = PoseMode(vae, height)
+    pose = PoseWindow(vae, mode)
+    window.pose_windows = [w for w in getattr(window, "pose_windows", []) if w.isVisible()] + [pose]
+    pose.resize(1200, 800)
+    pose.show()
+    return pose
+
+
+def new_pose(window: Any) -> None:
+    dialog = NewPoseDialog(window, window.session.motion is not None)
+    if dialog.exec() != QDialog.DialogCode.Accepted:
+        return
+    try:
+        open_pose_window(window, dialog.height_m.value(), dialog.start.currentText() == CLIP)
+    except UserError as exc:
+        QMessageBox.warning(window, "New pose", str(exc))
+
+
+def export_clip_video(window: Any, path: str | Path, size: tuple[int, int] = (960, 540)) -> None:
+    """Render the loaded clip with the current tracker preset to ``path`` (MP4)."""
+    from app.render import render_video
+
+    motion = window.session.motion
+    if motion is None:
+        raise UserError("open a clip first")
+    dialog = QProgressDialog("Rendering video...", "", 0, len(motion), window)
+    dialog.setCancelButton(None)
+    dialog.setWindowModality(Qt.WindowModality.WindowModal)
+    try:
+        render_video(motion, Path(path), size, motion.fps, window.session.preset or None,
+                     progress=lambda f: dialog.setValue(f + 1))  # fmt: skip
+    finally:
+        dialog.close()
+
+
+def export_video(window: Any) -> None:
+    path, _ = QFileDialog.getSaveFileName(window, "Export video", "", "MP4 video (*.mp4)")
+    if path:
+        try:
+            export_clip_video(window, path)
+        except (UserError, OSError) as exc:
+            QMessageBox.warning(window, "Export video", str(exc))
+
+
+def add_menu_entries(window: Any, file_menu: QMenu, action) -> dict:
+    """Add New pose and Export video to ``file_menu`` with the menus' ``action`` helper."""
+    return {"new_pose": action(window, file_menu, "&New pose...", lambda: new_pose(window), "Ctrl+Shift+N"),
+            "export_video": action(window, file_menu, "Export &video...", lambda: export_video(window))}  # fmt: skip

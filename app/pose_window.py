@@ -1,0 +1,305 @@
+"""The pose and key window (File ▸ New pose): pose the character by its joints, key it.
+
+The window holds an :class:`engine.authoring.pose_mode.PoseMode` and the animation being
+authored (an :class:`engine.authoring.document.AuthoringScene`). Ctrl + drag on a joint
+creates a target there and moves it; a plain drag on a target's sphere moves it; every
+move solves the pose again (the continuous solve, on the GUI thread: a few milliseconds
+with targets only). The target list enables, weights and clears targets; the key strip
+adds the current pose as a key at the current frame (its latent and targets), moves and
+deletes keys and sets the length and rate; Preview bakes the keys and plays them.
+Every edit (targets, keys, length, rate) is one undo step (Ctrl+Z / Ctrl+Shift+Z);
+closing with unsaved edits asks first. Export writes the bake as BVH or MP4.
+"""
+
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from PyQt6.QtCore import Qt, QTimer
+from PyQt6.QtGui import QAction, QCloseEvent, QKeySequence, QUndoStack
+from PyQt6.QtWidgets import QDockWidget, QFileDialog, QMainWindow, QMessageBox, QProgressDialog, QWidget
+
+from app.undo import StateCommand
+from engine.authoring.bake import bake
+from engine.authoring.document import AuthoringScene, save_authoring
+from engine.authoring.keys import Animation, Key
+from engine.authoring.pose_mode import PoseMode
+from engine.bvh import save_motion_bvh
+from engine.errors import UserError
+from widgets.key_strip import KeyStrip
+from widgets.target_list import TargetList
+from widgets.viewport.viewport import Viewport
+
+
+class PoseWindow(QMainWindow):
+    """See the module doc. ``vae``: the pose VAE; ``mode``: the starting pose mode."""
+
+    def __init__(self, vae: Any, mode: PoseMode, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.setWindowTitle("DragPoser studio: pose and keys")
+        self.vae, self.mode = vae, mode
+        self.scene = AuthoringScene(animation=Animation(), height=mode.character.height)
+        self.frame, self.path, self.dirty = 0, None, False
+        self.baked = None
+        self.undo = QUndoStack(self)
+        self.undo.cleanChanged.connect(lambda clean: setattr(self, "dirty", not clean))
+        self.viewport = Viewport(self)
+        self.viewport.ground_truth.update(None)
+        self.setCentralWidget(self.viewport)
+        self.viewport.jointDragged.connect(self.drag_joint)
+        self.viewport.targetDragged.connect(self.drag_joint)
+        self.targets = TargetList()
+        self.targets.enabledChanged.connect(lambda j, on: self.edit_target(j, enabled=on))
+        self.targets.weightChanged.connect(lambda j, w: self.edit_target(j, weight=w))
+        self.targets.clearRequested.connect(self.clear_target)
+        self.targets.clearAllRequested.connect(self.clear_all)
+        self._dock("Targets", self.targets, Qt.DockWidgetArea.RightDockWidgetArea)
+        self.keys = KeyStrip()
+        self.keys.frameChanged.connect(self.go_to)
+        self.keys.addRequested.connect(self.add_key)
+        self.keys.deleteRequested.connect(self.delete_key)
+        self.keys.moveRequested.connect(self.move_key)
+        self.keys.lengthChanged.connect(lambda n: self._edit("length", lambda: setattr(self.scene.animation, "frames", n)))
+        self.keys.fpsChanged.connect(lambda f: self._edit("rate", lambda: setattr(self.scene.animation, "fps", f)))
+        self.keys.previewRequested.connect(self.preview)
+        self._dock("Keys", self.keys, Qt.DockWidgetArea.BottomDockWidgetArea)
+        self._menus()
+        self._timer = QTimer(self)
+        self._timer.timeout.connect(self._next_preview_frame)
+        self._preview_frame = 0
+        self.refresh()
+
+    # -- layout --------------------------------------------------------------------
+    def _dock(self, title: str, widget: QWidget, area: Qt.DockWidgetArea) -> None:
+        dock = QDockWidget(title, self)
+        dock.setWidget(widget)
+        dock.setFeatures(QDockWidget.DockWidgetFeature.NoDockWidgetFeatures)
+        self.addDockWidget(area, dock)
+
+    def _menus(self) -> None:
+        file_menu = self.menuBar().addMenu("&File")
+        for text, slot, key in (("&Save scene...", self.save_dialog, QKeySequence.StandardKey.Save),
+                                ("Export &BVH...", self.export_bvh_dialog, None),
+                                ("Export &video...", self.export_video_dialog, None),
+                                ("&Close", self.close, QKeySequence.StandardKey.Close)):  # fmt: skip
+            act = QAction(text, self)
+            if key is not None:
+                act.setShortcut(QKeySequence(key))
+            act.triggered.connect(lambda _=False, s=slot: s())
+            file_menu.addAction(act)
+        edit = self.menuBar().addMenu("&Edit")
+        undo, redo = self.undo.createUndoAction(self, "&Undo"), self.undo.createRedoAction(self, "&Redo")
+        undo.setShortcut(QKeySequence.StandardKey.Undo)
+        redo.setShortcuts([QKeySequence("Ctrl+Shift+Z"), QKeySequence("Ctrl+Y")])
+        edit.addActions([undo, redo])
+        settle = QAction("S&ettle pose", self)
+        settle.triggered.connect(lambda _=False: self.settle())
+        edit.addAction(settle)
+
+    # -- undoable state ------------------------------------------------------------
+    def _state(self) -> tuple:
+        a = self.scene.animation
+        return (copy.deepcopy(self.mode.targets), copy.deepcopy(self.scene.keys), (a.frames, a.fps),
+                self.mode.pose)  # fmt: skip
+
+    def _restore(self, state: tuple) -> None:
+        targets, keys, (frames, fps), pose = state
+        self.mode.targets, self.scene.keys = copy.deepcopy(targets), copy.deepcopy(keys)
+        self.scene.animation.frames, self.scene.animation.fps = frames, fps
+        self.mode.pose = pose
+        self.baked = None
+        self.refresh()
+
+    def _edit(self, text: str, change, key: tuple | None = None, solve: bool = False) -> None:
+        """Apply ``change()`` as one undo step (merging drags of the same ``key``)."""
+        self._timer.stop()
+        before = self._state()
+        try:
+            change()
+            if solve:
+                self.mode.solve()
+        except UserError as exc:
+            self._restore(before)
+            QMessageBox.warning(self, "Pose", str(exc))
+            return
+        self.baked = None
+        self.undo.push(StateCommand(text, self._restore, before, self._state(), key))
+        self.refresh()
+
+    # -- targets -------------------------------------------------------------------
+    def drag_joint(self, joint: str, position: np.ndarray) -> None:
+        """Create or move the target on ``joint`` to ``position (3,)`` metres and solve."""
+        key = ("target", joint, "position")
+        self._edit(f"move target {joint}", lambda: self.mode.set_target(joint, np.asarray(position, float)), key,
+                   solve=True)  # fmt: skip
+
+    def edit_target(self, joint: str, **fields: Any) -> None:
+        """Change a target's ``enabled`` or ``weight`` and solve."""
+        self._edit(f"edit target {joint}", lambda: self.mode.set_target(joint, **fields), solve=True)
+
+    def clear_target(self, joint: str) -> None:
+        self._edit(f"clear target {joint}", lambda: self.mode.remove_target(joint), solve=True)
+
+    def clear_all(self) -> None:
+        self._edit("clear all targets", self.mode.clear_targets, solve=True)
+
+    def settle(self) -> None:
+        """An offline solve of the current targets (one undo step)."""
+        self._edit("settle pose", self.mode.settle)
+
+    # -- keys ----------------------------------------------------------------------
+    def _key_at(self, frame: int) -> Key | None:
+        return next((k for k in self.scene.keys if k.frame == frame), None)
+
+    def add_key(self, frame: int) -> None:
+        """The current pose (latent, targets, where it stands) as the key at ``frame``."""
+        p = self.mode.pose
+
+        def change() -> None:
+            self.scene.keys = [k for k in self.scene.keys if k.frame != frame]
+            key = Key(int(frame), copy.deepcopy(self.mode.targets), p.latent.copy(), p.root_pos[:2].copy(),
+                      self.mode.heading)  # fmt: skip
+            self.scene.keys = sorted([*self.scene.keys, key], key=lambda k: k.frame)
+
+        self._edit(f"key frame {frame}", change)
+
+    def delete_key(self, frame: int) -> None:
+        if self._key_at(frame) is not None:
+            self._edit(f"delete key {frame}", lambda: setattr(self.scene, "keys", [k for k in self.scene.keys if k.frame != frame]))
+
+    def move_key(self, frame: int, to: int) -> None:
+        key = self._key_at(frame)
+        if key is None or frame == to or not 0 <= to < self.scene.animation.frames:
+            return
+
+        def change() -> None:
+            self.scene.keys = [k for k in self.scene.keys if k.frame not in (frame, to)]
+            moved = copy.deepcopy(key)
+            moved.frame = int(to)
+            self.scene.keys = sorted([*self.scene.keys, moved], key=lambda k: k.frame)
+
+        self._edit(f"move key {frame} -> {to}", change)
+        self.go_to(to)
+
+    def go_to(self, frame: int) -> None:
+        """Make ``frame`` current; on a key, pose the character as that key."""
+        self._timer.stop()
+        self.frame = int(frame)
+        key = self._key_at(self.frame)
+        if key is not None:
+            self.mode.targets = copy.deepcopy(key.targets)
+            if key.latent is not None:
+                ctx = self.mode.character.grounded(key.root, key.heading)
+                self.mode.pose = self.mode.character.decode(key.latent, ctx)
+                self.mode.solve(0)  # the exact limb steps onto the key's targets
+        self.refresh()
+
+    # -- bake, preview, export -----------------------------------------------------
+    def bake_scene(self):
+        """The keys baked (cached until the next edit)."""
+        if self.baked is None:
+            if not self.scene.keys:
+                raise UserError("add at least one key first")
+            self.baked = bake(self.scene, self.vae)
+        return self.baked
+
+    def preview(self) -> None:
+        """Play the baked keys in the view, once."""
+        try:
+            self.bake_scene()
+        except UserError as exc:
+            QMessageBox.information(self, "Preview", str(exc))
+            return
+        self._preview_frame = 0
+        self._timer.start(int(1000 / self.scene.animation.fps))
+
+    def _next_preview_frame(self) -> None:
+        positions = self.baked.motion.positions()
+        if self._preview_frame >= len(positions):
+            self._timer.stop()
+            self.refresh()
+            return
+        self._show_positions(positions[self._preview_frame])
+        self.keys.set_state(self.scene.animation.frames, self.scene.animation.fps,
+                            tuple(k.frame for k in self.scene.keys), self._preview_frame)  # fmt: skip
+        self._preview_frame += 1
+
+    def save(self, path: str | Path) -> None:
+        save_authoring(path, self.scene)
+        self.path = Path(path)
+        self.undo.setClean()
+
+    def export_bvh(self, path: str | Path) -> None:
+        save_motion_bvh(path, self.bake_scene().motion)
+
+    def export_video(self, path: str | Path, size: tuple[int, int] = (960, 540)) -> None:
+        from app.render import render_video
+
+        motion = self.bake_scene().motion
+        dialog = QProgressDialog("Rendering video...", "", 0, len(motion), self)
+        dialog.setCancelButton(None)
+        dialog.setWindowModality(Qt.WindowModality.WindowModal)
+        try:
+            render_video(motion, Path(path), size, motion.fps, progress=lambda f: dialog.setValue(f + 1))
+        finally:
+            dialog.close()
+
+    def _file_dialog(self, title: str, pattern: str, action) -> None:
+        path, _ = QFileDialog.getSaveFileName(self, title, "", pattern)
+        if path:
+            try:
+                action(path)
+            except (UserError, OSError) as exc:
+                QMessageBox.warning(self, title, str(exc))
+
+    def save_dialog(self) -> None:
+        self._file_dialog("Save scene", "Scenes (*.json)", self.save)
+
+    def export_bvh_dialog(self) -> None:
+        self._file_dialog("Export BVH", "BVH (*.bvh)", self.export_bvh)
+
+    def export_video_dialog(self) -> None:
+        self._file_dialog("Export video", "MP4 video (*.mp4)", self.export_video)
+
+    # -- drawing and closing -------------------------------------------------------
+    def _show_positions(self, positions: np.ndarray) -> None:
+        self.viewport.reconstruction.update(positions)
+        self.viewport.joints.positions = positions
+        self.viewport.plotter.render()
+
+    def refresh(self) -> None:
+        """Show the pose, its targets, the target list and the key strip."""
+        t = self.mode.targets
+        self.viewport.sensors.update(tuple(t), np.array([x.position for x in t.values()]).reshape(-1, 3),
+                                     np.array([x.rotation if x.rotation is not None else [1.0, 0, 0, 0]
+                                               for x in t.values()]).reshape(-1, 4),
+                                     np.array([x.active for x in t.values()], bool),
+                                     tuple(x.rotation is not None for x in t.values()))  # fmt: skip
+        self.targets.set_targets({j: (x.enabled, x.weight, x.rotation is not None) for j, x in t.items()})
+        a = self.scene.animation
+        self.keys.set_state(a.frames, a.fps, tuple(k.frame for k in self.scene.keys), self.frame)
+        self._show_positions(self.mode.pose.positions)
+
+    def closeEvent(self, event: QCloseEvent | None) -> None:  # noqa: N802 (Qt's name)
+        if event is None:
+            return
+        if self.dirty:
+            buttons = QMessageBox.StandardButton
+            answer = QMessageBox.question(self, "Unsaved changes", "Save the keys and targets before closing?",
+                                          buttons.Save | buttons.Discard | buttons.Cancel)  # fmt: skip
+            if answer == buttons.Cancel:
+                event.ignore()
+                return
+            if answer == buttons.Save:
+                path, _ = QFileDialog.getSaveFileName(self, "Save scene", "", "Scenes (*.json)")
+                if not path:
+                    event.ignore()
+                    return
+                self.save(path)
+        self._timer.stop()
+        if not getattr(self.viewport.plotter, "_closed", False):  # a second close would free VTK twice
+            self.viewport.close()
+        event.accept()

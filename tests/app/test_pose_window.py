@@ -1,0 +1,151 @@
+"""The pose and key window driven programmatically: targets, keys, undo/redo of every edit
+kind, the unsaved-changes prompt, export equal to ``bake``, the File menu entry."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from PyQt6.QtWidgets import QMessageBox
+
+from engine import skeleton as sk
+from engine.cli.main import main as cli
+
+pytestmark = pytest.mark.gui
+LW = sk.JOINT_INDEX["lwrist"]
+
+
+@pytest.fixture
+def window(qtbot, vae, monkeypatch):
+    from app.pose_window import PoseWindow
+    from engine.authoring.pose_mode import PoseMode
+
+    monkeypatch.setattr(QMessageBox, "question", lambda *a, **k: QMessageBox.StandardButton.Discard)
+    w = PoseWindow(vae, PoseMode(vae, 1.75))
+    w.resize(1000, 700)
+    w.show()
+    yield w
+    close_now(w)
+
+
+def close_now(w) -> None:
+    """Close and delete ``w`` now, as the studio fixture does: a VTK view deleted later,
+    among other tests' events, crashes."""
+    from PyQt6.QtCore import QEvent
+    from PyQt6.QtWidgets import QApplication
+
+    w.undo.setClean()
+    w.close()
+    w.deleteLater()
+    QApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete.value)
+
+
+@pytest.fixture(scope="session")
+def vae():
+    from engine.models import load_default_models
+
+    return load_default_models().vae
+
+
+def state(w):
+    return ({j: (t.position.round(9).tolist(), t.weight, t.enabled) for j, t in w.mode.targets.items()},
+            [(k.frame, sorted(k.targets)) for k in w.scene.keys], w.scene.animation.frames, w.scene.animation.fps,
+            w.mode.pose.positions.round(9).tolist())  # fmt: skip
+
+
+def test_dragging_a_joint_makes_a_target_the_pose_follows(window):
+    start = window.mode.pose.positions[LW].copy()
+    for k in range(1, 11):
+        window.drag_joint("lwrist", start + [0.0, -0.02 * k, 0.0])
+    assert list(window.mode.targets) == ["lwrist"] and list(window.targets.rows) == ["lwrist"]
+    assert np.linalg.norm(window.mode.pose.positions[LW] - (start + [0, -0.2, 0])) < 0.01
+    assert window.viewport.sensors.joints == ("lwrist",)
+    assert window.undo.count() == 1  # the drag's moves merged into one step
+
+
+def test_every_edit_kind_undoes_and_redoes(window, qtbot):
+    w = window
+    start = w.mode.pose.positions[LW].copy()
+    edits = [
+        lambda: w.drag_joint("lwrist", start + [0.0, -0.1, 0.1]),
+        lambda: w.targets.rows["lwrist"]["weight"].setValue(5.0),
+        lambda: w.targets.rows["lwrist"]["enabled"].setChecked(False),
+        lambda: w.add_key(0),
+        lambda: w.drag_joint("rwrist", w.mode.pose.positions[sk.JOINT_INDEX["rwrist"]] + [0, 0, 0.2]),
+        lambda: w.add_key(20),
+        lambda: w.move_key(20, 30),
+        lambda: w.keys.length.setValue(45),
+        lambda: w.keys.fps.setValue(24.0),
+        lambda: w.clear_target("rwrist"),
+        lambda: w.delete_key(0),
+        lambda: w.clear_all(),
+    ]
+    states = [state(w)]
+    for edit in edits:
+        qtbot.wait(700)  # beyond the merge window: each edit is its own step
+        edit()
+        states.append(state(w))
+        assert states[-1] != states[-2], edit
+    assert w.undo.count() == len(edits) and w.dirty
+    for i in range(len(edits), 0, -1):
+        w.undo.undo()
+        assert state(w) == states[i - 1], i
+    for i in range(1, len(edits) + 1):
+        w.undo.redo()
+        assert state(w) == states[i], i
+
+
+def test_the_window_exports_what_bake_writes_from_its_saved_scene(window, tmp_path):
+    w = window
+    start = w.mode.pose.positions[LW].copy()
+    w.drag_joint("lwrist", start + [0.0, -0.15, 0.05])
+    w.add_key(0)
+    w.drag_joint("lwrist", start + [0.1, -0.1, 0.35])
+    w.add_key(20)
+    w.keys.length.setValue(21)
+    w.save(tmp_path / "s.json")
+    assert not w.dirty
+    w.export_bvh(tmp_path / "studio.bvh")
+    assert cli(["bake", str(tmp_path / "s.json"), "--out", str(tmp_path / "cli.bvh"), "--no-progress"]) == 0
+    assert (tmp_path / "cli.bvh").read_bytes() == (tmp_path / "studio.bvh").read_bytes()
+    w.export_video(tmp_path / "v.mp4", (128, 96))
+    import imageio_ffmpeg
+
+    frames = imageio_ffmpeg.read_frames(str(tmp_path / "v.mp4"))
+    meta = next(frames)
+    assert meta["size"] == (128, 96) and sum(1 for _ in frames) == 21
+
+
+def test_preview_plays_the_bake_and_going_to_a_key_poses_it(window, qtbot):
+    w = window
+    start = w.mode.pose.positions[LW].copy()
+    w.drag_joint("lwrist", start + [0.0, -0.1, 0.3])
+    w.add_key(10)
+    w.clear_all()
+    w.go_to(10)
+    assert list(w.mode.targets) == ["lwrist"]
+    assert np.linalg.norm(w.mode.pose.positions[LW] - (start + [0, -0.1, 0.3])) < 1e-6
+    w.keys.length.setValue(15)
+    w.preview()
+    qtbot.waitUntil(lambda: not w._timer.isActive(), timeout=10000)
+    assert w.baked is not None and len(w.baked.motion) == 15
+
+
+def test_closing_with_unsaved_edits_asks_and_cancel_keeps_the_window(window, monkeypatch):
+    window.add_key(0)
+    asked = []
+    monkeypatch.setattr(QMessageBox, "question", lambda *a, **k: asked.append(a[1]) or QMessageBox.StandardButton.Cancel)
+    assert not window.close() and window.isVisible() and asked == ["Unsaved changes"]
+    monkeypatch.setattr(QMessageBox, "question", lambda *a, **k: QMessageBox.StandardButton.Discard)
+    assert window.close()
+
+
+def test_the_studio_file_menu_opens_a_pose_window_on_the_clip_frame(studio):
+    from app.authoring_actions import open_pose_window
+
+    assert {"new_pose", "export_video"} <= set(studio.actions_by_name)
+    pose = open_pose_window(studio, 1.7, from_clip=True)
+    try:
+        assert pose.isVisible() and pose.mode.character.height == pytest.approx(1.7)
+        assert np.allclose(pose.mode.pose.root_pos[:2], studio.session.motion.root_pos[studio.session.frame, :2])
+    finally:
+        close_now(pose)

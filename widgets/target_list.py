@@ -1,0 +1,78 @@
+"""The pose mode's joint target list: one row per target with enable, weight and clear."""
+
+from __future__ import annotations
+
+from PyQt6.QtCore import pyqtSignal
+from PyQt6.QtWidgets import (
+    QCheckBox, QDoubleSpinBox, QGridLayout, QLabel, QPushButton, QVBoxLayout, QWidget,
+)  # fmt: skip
+
+#: Target weights the spin box offers (the engine accepts the same range).
+WEIGHT_RANGE = (0.0, 10.0)
+
+
+class TargetList(QWidget):
+    """Shows targets; user edits become signals (the window changes the pose mode).
+
+    Signals
+    -------
+    enabledChanged(str, bool), weightChanged(str, float)
+        A row's checkbox or weight was edited (joint, value).
+    clearRequested(str)
+        A row's Clear button.
+    clearAllRequested()
+        The Clear all button.
+    """
+
+    enabledChanged = pyqtSignal(str, bool)
+    weightChanged = pyqtSignal(str, float)
+    clearRequested = pyqtSignal(str)
+    clearAllRequested = pyqtSignal()
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        outer = QVBoxLayout(self)
+        self.hint = QLabel("Ctrl + drag a joint to add a target; drag its sphere to move it.")
+        self.hint.setWordWrap(True)
+        outer.addWidget(self.hint)
+        self.grid_host = QWidget()
+        self.grid = QGridLayout(self.grid_host)
+        outer.addWidget(self.grid_host)
+        self.clear_all = QPushButton("Clear all")
+        self.clear_all.clicked.connect(self.clearAllRequested.emit)
+        outer.addWidget(self.clear_all)
+        outer.addStretch(1)
+        self.rows: dict[str, dict[str, QWidget]] = {}
+
+    def set_targets(self, targets: dict[str, tuple[bool, float, bool]]) -> None:
+        """Show ``joint -> (enabled, weight, has rotation)`` without emitting signals."""
+        if tuple(targets) != tuple(self.rows):
+            self._rebuild(tuple(targets))
+        for joint, (enabled, weight, rotation) in targets.items():
+            row = self.rows[joint]
+            for w in (row["enabled"], row["weight"]):
+                w.blockSignals(True)
+            row["enabled"].setChecked(bool(enabled))
+            row["weight"].setValue(float(weight))
+            row["label"].setText(f"{joint} (+rotation)" if rotation else joint)
+            for w in (row["enabled"], row["weight"]):
+                w.blockSignals(False)
+        self.clear_all.setEnabled(bool(targets))
+
+    def _rebuild(self, joints: tuple[str, ...]) -> None:
+        for row in self.rows.values():
+            for w in row.values():
+                self.grid.removeWidget(w)
+                w.deleteLater()
+        self.rows = {}
+        for i, joint in enumerate(joints):
+            enabled = QCheckBox()
+            enabled.toggled.connect(lambda on, j=joint: self.enabledChanged.emit(j, bool(on)))
+            weight = QDoubleSpinBox(minimum=WEIGHT_RANGE[0], maximum=WEIGHT_RANGE[1], singleStep=0.5, decimals=2)
+            weight.valueChanged.connect(lambda v, j=joint: self.weightChanged.emit(j, float(v)))
+            clear = QPushButton("Clear")
+            clear.clicked.connect(lambda _=False, j=joint: self.clearRequested.emit(j))
+            label = QLabel(joint)
+            for col, w in enumerate((enabled, label, weight, clear)):
+                self.grid.addWidget(w, i, col)
+            self.rows[joint] = {"enabled": enabled, "label": label, "weight": weight, "clear": clear}

@@ -178,7 +178,7 @@ class FrameRenderer:
 def _sensors_and_ghosts(motion, preset: str, ghosts: tuple[str, ...]):
     from engine import skeleton as sk
     from engine.studio.clips import sensor_presets
-    from engine.studio.methods import reconstruct_clip
+    from engine.studio.export import reconstruct_clip
 
     presets = sensor_presets()
     if preset not in presets:

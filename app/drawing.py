@@ -96,6 +96,7 @@ class DrawScheduler:
             t1 = time.perf_counter()
             self.view_costs.append((t1 - t0) * 1000.0)
             self._next_view_at = t1 + VIEW_REST * (t1 - t0)
+            self.w.method_errors.record(snap)  # a point per drawn frame; the plot redraws 4/s
             self.w.snapshotDrawn.emit(snap.frame)
         self._update_one_panel(snap, now, spent_ms=(time.perf_counter() - t0) * 1000.0)
 

@@ -133,7 +133,8 @@ class FileActions:
             text = str(exc)
             return self.w.show_error("Nothing to save", f"{text[:1].upper()}{text[1:]}.")
         if path is None:
-            path, _ = QFileDialog.getSaveFileName(self.w, "Save reconstruction", "", "BVH motion (*.bvh)")
+            path, _ = QFileDialog.getSaveFileName(self.w, "Save reconstruction", self.suggested_name("bvh"),
+                                                  "BVH motion (*.bvh)")  # fmt: skip
             if not path:
                 return None
             job = dataclasses.replace(job, path=Path(path))
@@ -151,10 +152,19 @@ class FileActions:
     def shutdown(self) -> None:
         self.export.shutdown()
 
+    def suggested_name(self, ext: str, what: str | None = None) -> str:
+        """A file name the save dialogs offer: beside the open clip, named after it and
+        the method (``walk_dragposer.bvh``), or after ``what`` (``walk_scene.json``)."""
+        clip = self.w.session.path
+        stem = Path(clip).stem if clip else "studio"
+        name = f"{stem}_{what or self.w.session.method}.{ext}"
+        return str(Path(clip).with_name(name)) if clip else name
+
     # -- scenes ---------------------------------------------------------------------
     def save_scene(self, path: str | None = None) -> bool:
         if path is None:
-            path, _ = QFileDialog.getSaveFileName(self.w, "Save scene", "", "Studio scene (*.json)")
+            path, _ = QFileDialog.getSaveFileName(self.w, "Save scene", self.suggested_name("json", "scene"),
+                                                  "Studio scene (*.json)")  # fmt: skip
             if not path:
                 return False
         try:
@@ -195,7 +205,8 @@ class FileActions:
 
     def export_screenshot(self, path: str | None = None) -> bool:
         if path is None:
-            path, _ = QFileDialog.getSaveFileName(self.w, "Export screenshot", "", "PNG image (*.png)")
+            path, _ = QFileDialog.getSaveFileName(self.w, "Export screenshot", self.suggested_name("png", "studio"),
+                                                  "PNG image (*.png)")  # fmt: skip
             if not path:
                 return False
         target = Path(path)

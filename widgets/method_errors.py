@@ -17,7 +17,7 @@ import pyqtgraph as pg
 from PyQt6.QtWidgets import QHBoxLayout, QLabel, QVBoxLayout, QWidget
 
 from widgets import style
-from widgets.plots import settle
+from widgets.plots import fit_frames, settle
 
 #: Frames kept per curve (older ones scroll out).
 KEEP = 3000
@@ -54,7 +54,7 @@ class MethodErrorPlot(QWidget):
         layout.addLayout(side)
         self.curves: dict[str, pg.PlotDataItem] = {}
         self.data: dict[str, dict[int, float]] = {}
-        self._seq, self._last_frame = -1, -1
+        self._seq, self._last_frame, self._recorded = -1, -1, -1
 
     def colour(self, name: str, index: int, main: bool) -> str:
         return style.RECONSTRUCTION if main else style.ghost_color(name, index)
@@ -65,18 +65,35 @@ class MethodErrorPlot(QWidget):
         self.curves, self.data, self._last_frame = {}, {}, -1
         self.legend.setText("")
 
-    def update_snapshot(self, snap: Any) -> None:
-        """Add this snapshot's errors (the selected method and every ghost)."""
-        if snap.seq == self._seq:
-            return
-        self._seq = snap.seq
-        if snap.frame < self._last_frame:
-            self.clear()
-        self._last_frame = snap.frame
+    def record(self, snap: Any) -> dict[str, float]:
+        """Keep this snapshot's errors (the selected method and every ghost) without
+        drawing; called for every drawn snapshot, so the curves have a point per drawn
+        frame even though the plot redraws a few times a second. Returns them by name."""
         main = snap.method or "reconstruction"
         errors = {main: frame_error_cm(snap.positions, snap.ground_truth)}
         for name, pos in snap.ghosts.items():
             errors[name] = frame_error_cm(pos, snap.ground_truth)
+        if snap.seq == self._recorded:
+            return errors
+        self._recorded = snap.seq
+        if snap.frame < self._last_frame:
+            self.clear()
+        self._last_frame = snap.frame
+        for name, err in errors.items():
+            series = self.data.setdefault(name, {})
+            series[snap.frame] = err
+            if len(series) > KEEP:
+                for f in sorted(series)[: len(series) - KEEP]:
+                    del series[f]
+        return errors
+
+    def update_snapshot(self, snap: Any) -> None:
+        """Add this snapshot's errors and redraw the curves."""
+        if snap.seq == self._seq:
+            return
+        self._seq = snap.seq
+        errors = self.record(snap)
+        main = snap.method or "reconstruction"
         for name in list(self.curves):
             if name not in errors:  # a method no longer shown
                 self.plot.removeItem(self.curves.pop(name))
@@ -87,10 +104,6 @@ class MethodErrorPlot(QWidget):
             if name not in self.curves:
                 self.curves[name] = self.plot.plot(pen=pg.mkPen(colour, width=1), name=name)
             series = self.data.setdefault(name, {})
-            series[snap.frame] = err
-            if len(series) > KEEP:
-                for f in sorted(series)[: len(series) - KEEP]:
-                    del series[f]
             x = np.array(sorted(series), float)
             y = np.array([series[int(f)] for f in x], float)
             if np.isfinite(y).any():
@@ -98,4 +111,5 @@ class MethodErrorPlot(QWidget):
             rows.append(f"<span style='color:{colour}'>&#9644; {name}</span>: "
                         + ("-" if not np.isfinite(err) else f"{err:.1f} cm"))  # fmt: skip
         self.legend.setText("<br>".join(rows))
+        fit_frames(self.plot, np.array(sorted(self.data.get(main, {})), float))
         settle(self.plot)

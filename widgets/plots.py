@@ -47,6 +47,17 @@ def _set_curve(item: pg.PlotDataItem, x: np.ndarray, y: np.ndarray) -> None:
         item.setData([], [])
 
 
+def fit_frames(plot: pg.PlotWidget, x: np.ndarray) -> None:
+    """A frame axis over a few frames at least: with one solved frame the auto range
+    spread frames -80 to 80 around it."""
+    vb = plot.getPlotItem().getViewBox()
+    if len(x) and float(np.max(x) - np.min(x)) < 4.0:
+        mid = 0.5 * float(np.max(x) + np.min(x))
+        vb.setXRange(mid - 2.0, mid + 2.0, padding=0.0)  # turns the x auto range off
+    elif not vb.autoRangeEnabled()[0]:
+        vb.enableAutoRange(x=True)
+
+
 def settle(plot: pg.PlotWidget) -> None:
     """Fit the plot's auto range to its new data now, not in the coming paint.
 
@@ -197,6 +208,7 @@ class LossPlots(QWidget):
         x = np.array([r.frame for r in history], float)
         _set_curve(self.ms_curve, x, np.array([_loggable(r.ms) for r in history], float))
         _set_curve(self.iter_curve, x, np.array([_loggable(r.iterations) for r in history], float))
+        fit_frames(self.cost_plot, x)
         settle(self.cost_plot)
 
     def update_history(self, snap: Any) -> None:
@@ -207,4 +219,5 @@ class LossPlots(QWidget):
         for name in names:
             y = np.array([_loggable(float(r.losses.get(name, np.nan))) for r in history])
             _set_curve(self.history_curves.get(name), x, y)
+        fit_frames(self.history_plot, x)
         settle(self.history_plot)

@@ -1,0 +1,50 @@
+"""Small things a new user meets: save dialogs suggest a name, plot axes with one
+frame, a point per drawn frame in the method errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from PyQt6.QtWidgets import QFileDialog
+
+pytestmark = pytest.mark.gui
+
+
+def test_save_dialogs_suggest_a_name_beside_the_clip(studio, monkeypatch, tmp_path, synthetic_motion):
+    from engine.bvh import save_motion_bvh
+
+    clip = tmp_path / "walk.bvh"
+    save_motion_bvh(clip, synthetic_motion.slice(0, 30))
+    assert studio.files.open_path(str(clip))
+    offered = []
+    monkeypatch.setattr(QFileDialog, "getSaveFileName", lambda *a, **k: (offered.append(a[2]), ("", ""))[1])
+    studio.files.save_scene()
+    studio.files.export_screenshot()
+    assert offered == [str(tmp_path / "walk_scene.json"), str(tmp_path / "walk_studio.png")]
+
+
+def test_frame_axes_with_one_solved_frame_span_a_few_frames(studio, qtbot):
+    s = studio.session
+    s.seek(30)
+    qtbot.waitUntil(lambda: s.latest.frame == 30, timeout=5000)
+    s.seek(10)  # back: the histories start again, with one frame
+    qtbot.waitUntil(lambda: s.latest.frame == 10 and len(s.latest.history) == 1, timeout=5000)
+    studio.plots.update_cost(s.latest)
+    studio.plots.update_history(s.latest)
+    studio.method_errors.update_snapshot(s.latest)
+    for plot in (studio.plots.cost_plot, studio.plots.history_plot, studio.method_errors.plot):
+        lo, hi = plot.getPlotItem().getViewBox().viewRange()[0]
+        assert lo <= 10 <= hi and hi - lo <= 6, (lo, hi)
+
+
+def test_method_errors_get_a_point_per_drawn_frame(studio, qtbot):
+    s = studio.session
+    drawn = []
+    studio.snapshotDrawn.connect(drawn.append)
+    s.set_playing(True)
+    qtbot.waitUntil(lambda: len(drawn) >= 40, timeout=20000)
+    s.pause()
+    series = studio.method_errors.data[s.latest.method]
+    seen = [f for f in set(drawn) if f in series]
+    assert len(seen) >= 0.9 * len(set(drawn)), (len(seen), len(set(drawn)))
+    assert np.all(np.isfinite(list(series.values())))

@@ -15,7 +15,7 @@ from engine.studio import events as ev
 from widgets.live_panel import ConnectDialog, LivePanel
 
 if TYPE_CHECKING:
-    from engine.sources.live_source import LiveSource
+    from engine.tracker_io.live_source import LiveSource
 
 
 class LiveActions:

@@ -6,8 +6,8 @@ studio's edits applied (:func:`apply_edits`: disabled sensors dropped, 3-DoF sen
 without rotation, simulated failures disconnected, drag offsets added), plus the
 reference pose drawn as "ground truth" when there is one. The sources are a clip's
 simulated trackers (:class:`engine.studio.clip_source.ClipSource`), a tracker recording
-(:class:`engine.trackers.recording_source.RecordingSource`) and a live stream
-(:class:`engine.trackers.live_source.LiveSource`); the studio installs one with
+(:class:`engine.tracker_io.recording_source.RecordingSource`) and a live stream
+(:class:`engine.tracker_io.live_source.LiveSource`); the studio installs one with
 :class:`engine.studio.commands.SetSource`.
 """
 

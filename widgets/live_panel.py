@@ -2,7 +2,7 @@
 rate and latency, Record / Stop and a Calibrate button with a countdown.
 
 Qt only: the panel reads a status object duck-typed (the fields of
-``engine.sources.live_source.LiveStatus``) and says what the user asked through signals.
+``engine.tracker_io.live_source.LiveStatus``) and says what the user asked through signals.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from PyQt6.QtWidgets import (
     QLineEdit, QPushButton, QSpinBox, QVBoxLayout, QWidget,
 )  # fmt: skip
 
-#: The sender's tracker names -> joints (``engine.sources.trackers.DEFAULT_SLOTS``).
+#: The sender's tracker names -> joints (``engine.tracker_io.trackers.DEFAULT_SLOTS``).
 DEFAULT_MAPPING = "head=upperneck, left_hand=lwrist, right_hand=rwrist, hips=root, left_foot=lankle, right_foot=rankle"
 
 #: Status-light colours: receiving, stale (nothing for a moment), silent, not connected.

@@ -60,7 +60,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _check(args: argparse.Namespace) -> None:
-    from engine.sources.receiver import parse_listen
+    from engine.tracker_io.receiver import parse_listen
 
     parse_listen(args.listen)
     check_tracker_options(args)
@@ -78,11 +78,11 @@ def _check(args: argparse.Namespace) -> None:
 
 def _live(args: argparse.Namespace) -> int:
     from engine.bvh import save_motion_bvh
-    from engine.sources.live import (LiveRun, default_budget_ms, iteration_summary, latency_summary, reference_error,
+    from engine.tracker_io.live import (LiveRun, default_budget_ms, iteration_summary, latency_summary, reference_error,
                                      to_motion, tracker_error_cm)  # fmt: skip
-    from engine.sources.receiver import VMCReceiver, parse_listen
-    from engine.sources.recording import RecordingWriter, header
-    from engine.sources.trackers import TrackerMapping
+    from engine.tracker_io.receiver import VMCReceiver, parse_listen
+    from engine.tracker_io.recording import RecordingWriter, header
+    from engine.tracker_io.trackers import TrackerMapping
 
     _check(args)
     host, port = parse_listen(args.listen)

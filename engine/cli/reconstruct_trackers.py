@@ -23,10 +23,10 @@ def reconstruct_trackers(args: argparse.Namespace) -> int:
     from engine.bvh import save_motion_bvh
     from engine.cli.method_options import build_method
     from engine.methods import run_method
-    from engine.sources.calibration import calibrate
-    from engine.sources.live import calibration_window, reference_error, to_motion, tracker_error_cm
-    from engine.sources.recording import read_recording, replay
-    from engine.sources.trackers import TrackerMapping
+    from engine.tracker_io.calibration import calibrate
+    from engine.tracker_io.live import calibration_window, reference_error, to_motion, tracker_error_cm
+    from engine.tracker_io.recording import read_recording, replay
+    from engine.tracker_io.trackers import TrackerMapping
 
     check_tracker_options(args)
     rec = read_recording(args.trackers)

@@ -39,7 +39,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _check(args: argparse.Namespace) -> None:
-    from engine.sources.sender import parse_target
+    from engine.tracker_io.sender import parse_target
     from engine.tracking import parse_sensors
 
     parse_target(args.to)
@@ -63,7 +63,7 @@ def _send(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from engine.retarget import load_motion
-    from engine.sources.sender import parse_target, plan_stream, scaled_motion, send_stream
+    from engine.tracker_io.sender import parse_target, plan_stream, scaled_motion, send_stream
 
     _check(args)
     host, port = parse_target(args.to)

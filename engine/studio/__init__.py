@@ -11,10 +11,10 @@
   its playback clock (:mod:`engine.studio.playback`) and the methods it runs on each
   frame (:mod:`engine.studio.method_set`); :mod:`engine.studio.process` runs the same
   loop in a child process.
-* :mod:`engine.studio.source`: a clip's simulated trackers, one
+* :mod:`engine.studio.clip_source`: a clip's simulated trackers, one
   :class:`~engine.sensor_source.SensorSource` (recordings and live streams are others).
 * :mod:`engine.studio.catalog`: the constraint kinds users may add, with their fields.
-* :mod:`engine.studio.methods`: building methods and pushing the scene into them.
+* :mod:`engine.studio.method_edits`: building methods and pushing the scene into them.
 
 Layering (no loops): ``sensors`` < ``commands``, ``snapshot``, ``source``, ``catalog``,
 ``methods``, ``playback`` < ``method_set`` < ``thread`` < ``process`` < ``session``.

@@ -23,8 +23,8 @@ from engine.methods import driver
 from engine.methods.base import Method
 from engine.motion import Motion
 from engine.sensors import Sensor
-from engine.studio.methods import make_method
-from engine.studio.source import ClipSource
+from engine.studio.method_edits import make_method
+from engine.studio.clip_source import ClipSource
 
 if TYPE_CHECKING:
     from engine.bvh import RawBVH

@@ -2,7 +2,7 @@
 
 :class:`MethodSet` builds them by name, resets them for a clip (or for a tracker
 stream's skeleton) and gives them the studio's settings, constraints and sensor weights
-(:mod:`engine.studio.methods`), re-applying only the aspect an edit changed. It never
+(:mod:`engine.studio.method_edits`), re-applying only the aspect an edit changed. It never
 raises: a method that cannot be built, reset or configured is reported through the
 ``report`` callback as one readable line, and the others keep running.
 """
@@ -18,7 +18,7 @@ from engine.sensor_source import SensorSource
 from engine.sensors import Sensor, SensorFrame
 from engine.solver.settings import SettingsEdit
 from engine.studio.method_state import copy_state
-from engine.studio.methods import apply_constraints, apply_sensor_weights, apply_settings
+from engine.studio.method_edits import apply_constraints, apply_sensor_weights, apply_settings
 
 
 class MethodSet:

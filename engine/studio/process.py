@@ -40,7 +40,7 @@ class EngineProcess:
     ----------
     method_factory : callable, optional
         ``factory(name) -> Method``, picklable (a module-level function); the engine's
-        :func:`~engine.studio.methods.make_method` by default.
+        :func:`~engine.studio.method_edits.make_method` by default.
     threads : int, optional
         Math-library threads of the child (OpenMP, BLAS, torch); default: all cores but
         one, which the window keeps for drawing.

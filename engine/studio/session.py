@@ -40,8 +40,8 @@ from engine.studio.snapshot import Snapshot
 from engine.studio.thread import EngineThread
 
 if TYPE_CHECKING:
-    from engine.sources.live_source import LiveSource
-    from engine.sources.recording_source import RecordingSource
+    from engine.tracker_io.live_source import LiveSource
+    from engine.tracker_io.recording_source import RecordingSource
     from engine.studio.export import ExportJob
 
 
@@ -182,8 +182,8 @@ class Session(ConstraintEditing, SensorEditing):
 
     def set_source(self, source: SensorSource, name: str = "") -> None:
         """Read sensors from ``source`` instead of a clip: a tracker recording
-        (:class:`engine.sources.recording_source.RecordingSource`) or a live stream
-        (:class:`engine.sources.live_source.LiveSource`), which the session now owns and
+        (:class:`engine.tracker_io.recording_source.RecordingSource`) or a live stream
+        (:class:`engine.tracker_io.live_source.LiveSource`), which the session now owns and
         closes when another clip or source replaces it."""
         self._close_source()
         self.motion, self.path, self.frame = None, None, 0
@@ -208,8 +208,8 @@ class Session(ConstraintEditing, SensorEditing):
         UserError
             A bad mapping, or an address that cannot be listened on.
         """
-        from engine.sources.live_source import LiveSource
-        from engine.sources.trackers import TrackerMapping
+        from engine.tracker_io.live_source import LiveSource
+        from engine.tracker_io.trackers import TrackerMapping
 
         src = LiveSource(host, port, TrackerMapping.parse(mapping), convention).start()
         self.set_source(src, f"live {src.receiver.host}:{src.receiver.port}")
@@ -218,7 +218,7 @@ class Session(ConstraintEditing, SensorEditing):
     def open_recording(self, path: str | Path) -> RecordingSource:
         """Read sensors from a tracker recording (JSON Lines); raises :class:`UserError`
         naming the file and line of a bad one."""
-        from engine.sources.recording_source import RecordingSource
+        from engine.tracker_io.recording_source import RecordingSource
 
         src = RecordingSource(path)
         self.set_source(src, Path(path).name)
@@ -227,7 +227,7 @@ class Session(ConstraintEditing, SensorEditing):
     @property
     def live_source(self) -> LiveSource | None:
         """The live tracker stream sensors come from, if they do."""
-        from engine.sources.live_source import LiveSource
+        from engine.tracker_io.live_source import LiveSource
 
         return self.source if isinstance(self.source, LiveSource) else None
 

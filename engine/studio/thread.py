@@ -30,11 +30,11 @@ from engine.methods.base import DecodesLatents, FrameResult, Method
 from engine.sensors import SensorFrame
 from engine.studio import commands as cmd
 from engine.studio.method_set import MethodSet
-from engine.studio.methods import make_method
+from engine.studio.method_edits import make_method
 from engine.studio.playback import ENDED, LOOPED, PlaybackClock
 from engine.studio.snapshot import HISTORY, FrameRecord, Snapshot, readonly
 from engine.sensor_source import SensorSource
-from engine.studio.source import ClipSource
+from engine.studio.clip_source import ClipSource
 
 #: How often playback of a live source looks for a newer frame, seconds.
 LIVE_POLL_S = 0.005
@@ -81,7 +81,7 @@ class EngineThread(threading.Thread):
     Parameters
     ----------
     method_factory : callable, optional
-        ``factory(name) -> Method``; defaults to :func:`engine.studio.methods.make_method`.
+        ``factory(name) -> Method``; defaults to :func:`engine.studio.method_edits.make_method`.
     commands : queue, optional
         Where commands arrive (anything with ``put``, ``get(timeout=)`` and
         ``get_nowait()`` raising :class:`queue.Empty`, e.g. a ``multiprocessing`` queue

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 from PyQt6.QtWidgets import QFileDialog
 
-from engine.sources.recording import read_recording, write_recording
-from engine.sources.sender import plan_stream, scaled_motion, send_stream
-from engine.sources.trackers import TrackerSample
+from engine.tracker_io.recording import read_recording, write_recording
+from engine.tracker_io.sender import plan_stream, scaled_motion, send_stream
+from engine.tracker_io.trackers import TrackerSample
 from widgets.live_panel import LIGHT
 
 pytestmark = pytest.mark.gui

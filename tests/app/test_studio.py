@@ -133,7 +133,7 @@ def test_event_loop_stays_responsive_while_the_engine_is_busy(studio, qtbot, mon
     itself and says nothing about the engine. Redraw pacing is covered by the screenshot
     run and the status bar's draws/s.
     """
-    from engine.studio import methods as studio_methods
+    from engine.studio import method_edits as studio_methods
 
     monkeypatch.setattr(studio_methods, "make_method", lambda name: SlowMethod())
     studio.engine._factory = studio_methods.make_method

@@ -259,8 +259,8 @@ def test_a_deadline_cuts_the_iterations_and_keeps_at_least_one(models, motion, f
 
 def test_live_run_gives_the_method_its_deadline_and_time_between_frames():
     from engine.sensors import Sensor, SensorFrame
-    from engine.sources.live import LiveRun
-    from engine.sources.receiver import LiveFrame
+    from engine.tracker_io.live import LiveRun
+    from engine.tracker_io.receiver import LiveFrame
 
     class Stream:  # three frames, then nothing
         def __init__(self):

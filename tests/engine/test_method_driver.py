@@ -12,7 +12,7 @@ from engine.methods import driver, get_method
 from engine.methods.base import FrameResult, Method
 from engine.sensors import Sensor, SensorFrame
 from engine.studio.export import reconstruct_clip
-from engine.studio.methods import apply_constraints
+from engine.studio.method_edits import apply_constraints
 from tests.stand_ins import RestPoseMethod
 
 

@@ -6,7 +6,7 @@ from collections import Counter
 
 from engine.studio.method_set import MethodSet
 from tests.stand_ins import RestPoseMethod
-from engine.studio.source import ClipSource
+from engine.studio.clip_source import ClipSource
 
 
 def _counting_set():

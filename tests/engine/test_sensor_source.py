@@ -7,9 +7,9 @@ import pytest
 
 from engine.sensor_source import SensorSource, apply_edits
 from engine.sensors import Sensor
-from engine.sources.live_source import LiveSource
-from engine.sources.recording_source import RecordingSource
-from engine.studio.source import ClipSource
+from engine.tracker_io.live_source import LiveSource
+from engine.tracker_io.recording_source import RecordingSource
+from engine.studio.clip_source import ClipSource
 
 SOURCES = (ClipSource, LiveSource, RecordingSource)
 
@@ -52,9 +52,9 @@ def test_apply_edits_drops_disabled_offsets_strips_and_fails():
 def test_a_recording_takes_the_studio_edits_of_a_clip_failures_included(synthetic_motion, tmp_path):
     """A recording of a clip's trackers, with the same edits, reads as the clip does
     (the recording's lost-tracker windows were ignored before both used apply_edits)."""
-    from engine.sources.recording import write_recording
-    from engine.sources.sender import plan_stream
-    from engine.sources.trackers import TrackerSample
+    from engine.tracker_io.recording import write_recording
+    from engine.tracker_io.sender import plan_stream
+    from engine.tracker_io.trackers import TrackerSample
 
     plan = plan_stream(synthetic_motion.slice(0, 6), "6")
     samples = [TrackerSample(float(plan.times[i]), n, p, r) for i in range(len(plan)) for n, p, r in plan.frame(i)]

@@ -8,9 +8,9 @@ import pytest
 from engine.bvh import load_bvh, save_motion_bvh
 from engine.errors import UserError
 from engine.retarget import load_motion
-from engine.sources.recording import write_recording
-from engine.sources.sender import plan_stream
-from engine.sources.trackers import TrackerSample
+from engine.tracker_io.recording import write_recording
+from engine.tracker_io.sender import plan_stream
+from engine.tracker_io.trackers import TrackerSample
 from engine.studio.session import Session
 from tests.stand_ins import RestPoseMethod
 

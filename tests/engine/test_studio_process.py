@@ -135,7 +135,7 @@ def test_a_source_that_cannot_cross_moves_the_engine_into_a_thread(synthetic_mot
     """A live tracker stream (sockets, threads) stays in the window's process."""
     import threading
 
-    from engine.studio.source import ClipSource
+    from engine.studio.clip_source import ClipSource
 
     class LiveLike(ClipSource):
         live = False

@@ -7,7 +7,7 @@ import pytest
 
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
-from engine.sources.coords import AXES, from_project, to_project, wxyz_to_xyzw, xyzw_to_wxyz
+from engine.tracker_io.coords import AXES, from_project, to_project, wxyz_to_xyzw, xyzw_to_wxyz
 
 
 def _random_quats(n: int, seed: int = 0) -> np.ndarray:

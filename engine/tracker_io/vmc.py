@@ -2,7 +2,7 @@
 write, encoded and decoded with python-osc.
 
 Messages (all positions in Unity's left-handed, Y-up world, metres; quaternions
-``(x, y, z, w)``; :mod:`engine.sources.coords` converts):
+``(x, y, z, w)``; :mod:`engine.tracker_io.coords` converts):
 
 ==================== ================================================ ======================
 address              arguments                                        what
@@ -30,7 +30,7 @@ from pythonosc.osc_bundle_builder import IMMEDIATELY, OscBundleBuilder
 from pythonosc.osc_message_builder import OscMessageBuilder
 from pythonosc.osc_packet import OscPacket, ParseError
 
-from engine.sources.coords import from_project, to_project, wxyz_to_xyzw, xyzw_to_wxyz
+from engine.tracker_io.coords import from_project, to_project, wxyz_to_xyzw, xyzw_to_wxyz
 
 TIME = "/VMC/Ext/T"
 HMD = "/VMC/Ext/Hmd/Pos"

@@ -16,9 +16,9 @@ from engine.bvh import save_motion_bvh
 from engine.cli.main import main
 from engine.methods import get_method
 from engine.retarget import load_motion
-from engine.sources.live import LiveRun, reference_error, to_motion
-from engine.sources.receiver import VMCReceiver
-from engine.sources.sender import plan_stream, send_stream
+from engine.tracker_io.live import LiveRun, reference_error, to_motion
+from engine.tracker_io.receiver import VMCReceiver
+from engine.tracker_io.sender import plan_stream, send_stream
 
 
 def _free_port() -> int:

@@ -9,10 +9,10 @@ import pytest
 from engine import skeleton as sk
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
-from engine.sources.calibration import calibrate, scaled_skeleton
-from engine.sources.recording import replay
-from engine.sources.sender import TRACKER_NAMES, plan_stream, scaled_motion, with_tpose
-from engine.sources.trackers import TrackerMapping, TrackerSample
+from engine.tracker_io.calibration import calibrate, scaled_skeleton
+from engine.tracker_io.recording import replay
+from engine.tracker_io.sender import TRACKER_NAMES, plan_stream, scaled_motion, with_tpose
+from engine.tracker_io.trackers import TrackerMapping, TrackerSample
 
 
 def _frames_of(plan, start=0, stop=None, calibration=None):
@@ -57,7 +57,7 @@ def test_standing_pose_scales_by_height_and_leaves_the_hands(synthetic_motion):
     subject = scaled_motion(still, 1.08)
     subject.root_pos[:, 2] = 0.0
     subject = with_tpose(subject, 0.0)
-    from engine.sources.calibration import standing_root_height
+    from engine.tracker_io.calibration import standing_root_height
 
     subject.root_pos[:, 2] = standing_root_height(subject.skeleton)
     plan = plan_stream(subject, "6")

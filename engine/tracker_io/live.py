@@ -1,11 +1,11 @@
 """Realtime reconstruction from a live tracker stream, and its figures.
 
-:class:`LiveRun` takes the newest frame from a :class:`~engine.sources.receiver.VMCReceiver`,
+:class:`LiveRun` takes the newest frame from a :class:`~engine.tracker_io.receiver.VMCReceiver`,
 hands its :class:`~engine.methods.SensorFrame` to a reconstruction method (exactly what
 the method gets from simulated trackers) and times each solve from the arrival of the
 frame's packet to the solved pose. A solver slower than the stream skips to the newest
 frame; skipped frames are counted. An optional first window calibrates the wearer
-(:mod:`engine.sources.calibration`) before solving starts.
+(:mod:`engine.tracker_io.calibration`) before solving starts.
 
 Real-time policy: with a frame budget, each frame's solve gets the deadline ``arrival +
 budget`` (methods with :attr:`~engine.methods.Method.takes_deadline`: DragPoser stops
@@ -29,8 +29,8 @@ import numpy as np
 from engine import skeleton as sk
 from engine.methods import FrameResult, Method, SensorFrame, driver
 from engine.motion import Motion
-from engine.sources.calibration import Calibration, calibrate
-from engine.sources.receiver import VMCReceiver
+from engine.tracker_io.calibration import Calibration, calibrate
+from engine.tracker_io.receiver import VMCReceiver
 
 
 @dataclass

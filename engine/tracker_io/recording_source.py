@@ -10,13 +10,13 @@ import numpy as np
 from engine import skeleton as sk
 from engine.sensor_source import SensorSource, apply_edits
 from engine.sensors import SensorFrame
-from engine.sources.calibration import Calibration, calibrate
-from engine.sources.live import calibration_window
-from engine.sources.recording import Recording, read_recording, replay
+from engine.tracker_io.calibration import Calibration, calibrate
+from engine.tracker_io.live import calibration_window
+from engine.tracker_io.recording import Recording, read_recording, replay
 
 
 class RecordingSource(SensorSource):
-    """Frames of a recording (:mod:`engine.sources.recording`), replayed as live.
+    """Frames of a recording (:mod:`engine.tracker_io.recording`), replayed as live.
 
     Parameters
     ----------

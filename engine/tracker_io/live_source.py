@@ -20,10 +20,10 @@ import numpy as np
 from engine import skeleton as sk
 from engine.sensor_source import SensorSource, apply_edits
 from engine.sensors import SensorFrame
-from engine.sources.calibration import Calibration, calibrate
-from engine.sources.receiver import LiveFrame, VMCReceiver
-from engine.sources.recording import RecordingWriter, header
-from engine.sources.trackers import DEFAULT_TIMEOUT_S, TrackerMapping
+from engine.tracker_io.calibration import Calibration, calibrate
+from engine.tracker_io.receiver import LiveFrame, VMCReceiver
+from engine.tracker_io.recording import RecordingWriter, header
+from engine.tracker_io.trackers import DEFAULT_TIMEOUT_S, TrackerMapping
 
 
 @dataclass(frozen=True)

@@ -3,7 +3,7 @@
 Trackers are simulated from the clip (:func:`engine.tracking.simulate`: the same
 presets, the same Gaussian position noise), optionally preceded by a still T-pose for
 calibration and offset as real devices would be (:data:`HARDWARE_OFFSETS`). Every frame
-is one OSC bundle (:func:`engine.sources.vmc.encode_frame`) whose ``/VMC/Ext/T`` is the
+is one OSC bundle (:func:`engine.tracker_io.vmc.encode_frame`) whose ``/VMC/Ext/T`` is the
 clip time, so a receiver can line frames up with the clip (``--reference``). Frames are
 sent on a fixed schedule (``start + i / fps``, no drift); a dropped frame is simply not
 sent.
@@ -22,9 +22,9 @@ from engine import skeleton as sk
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
 from engine.motion import Motion
-from engine.sources.calibration import standing_root_height
-from engine.sources.trackers import DEFAULT_SLOTS
-from engine.sources.vmc import encode_frame
+from engine.tracker_io.calibration import standing_root_height
+from engine.tracker_io.trackers import DEFAULT_SLOTS
+from engine.tracker_io.vmc import encode_frame
 
 #: Tracker name the sender uses for each joint (the default mapping, inverted).
 TRACKER_NAMES: dict[str, str] = {j: n for n, j in DEFAULT_SLOTS.items()}

@@ -1,7 +1,7 @@
 """The live VMC receiver: a UDP socket read on its own thread.
 
 Every datagram is timestamped on arrival (``time.perf_counter``), decoded
-(:mod:`engine.sources.vmc`) and applied to a :class:`TrackerState`. Bad input is
+(:mod:`engine.tracker_io.vmc`) and applied to a :class:`TrackerState`. Bad input is
 counted, never fatal:
 
 * a datagram that is not OSC -> ``malformed_packets``;
@@ -28,11 +28,11 @@ from collections.abc import Callable
 from dataclasses import asdict, dataclass
 
 from engine.errors import UserError
-from engine.sources.coords import CONVENTIONS
+from engine.tracker_io.coords import CONVENTIONS
 from engine.methods import SensorFrame
-from engine.sources.recording import RecordingWriter
-from engine.sources.trackers import DEFAULT_TIMEOUT_S, TrackerMapping, TrackerSample, TrackerState
-from engine.sources.vmc import ParseError, decode_packet
+from engine.tracker_io.recording import RecordingWriter
+from engine.tracker_io.trackers import DEFAULT_TIMEOUT_S, TrackerMapping, TrackerSample, TrackerState
+from engine.tracker_io.vmc import ParseError, decode_packet
 
 #: A stream clock that goes back by more than this (seconds) means the sender restarted.
 RESTART_S = 1.0
@@ -104,7 +104,7 @@ class VMCReceiver:
         Where to listen; port 0 picks a free port (see :attr:`port`).
     mapping : TrackerMapping, optional
     convention : str
-        Axes of the incoming poses (VMC: ``unity``; :mod:`engine.sources.coords`).
+        Axes of the incoming poses (VMC: ``unity``; :mod:`engine.tracker_io.coords`).
     timeout_s : float
         Seconds without a valid sample before a tracker reads as lost.
     recorder : RecordingWriter, optional

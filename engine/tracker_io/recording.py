@@ -8,7 +8,7 @@ Format (one JSON object per line, UTF-8; ``docs/trackers.md`` has a worked examp
     {"format": "dragposer-trackers", "version": 1, "convention": "project",
      "units": "m", "fps": 60.0, "mapping": {"slots": {...}, "dof": {...}}, "source": "..."}
 
-  ``convention`` says which axes the samples use (:mod:`engine.sources.coords`: our
+  ``convention`` says which axes the samples use (:mod:`engine.tracker_io.coords`: our
   writer always writes ``project``; files from elsewhere may say ``unity`` or
   ``openxr`` and are converted on reading). ``fps`` is the nominal rate, ``mapping`` the
   tracker -> joint mapping in force when recording (the reader's default mapping).
@@ -38,12 +38,12 @@ import numpy as np
 from engine import skeleton as sk
 from engine.atomic import atomic_path
 from engine.errors import UserError
-from engine.sources.coords import CONVENTIONS, to_project
-from engine.sources.trackers import DEFAULT_TIMEOUT_S, TrackerMapping, TrackerSample, TrackerState
+from engine.tracker_io.coords import CONVENTIONS, to_project
+from engine.tracker_io.trackers import DEFAULT_TIMEOUT_S, TrackerMapping, TrackerSample, TrackerState
 from engine.validation import MAX_LINE_BYTES, check_input_file
 
 if TYPE_CHECKING:
-    from engine.sources.calibration import Calibration
+    from engine.tracker_io.calibration import Calibration
     from engine.tracking.simulate import Tracking
 
 FORMAT = "dragposer-trackers"

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from engine.errors import UserError
-from engine.sources.coords import from_project
-from engine.sources.recording import RecordingWriter, header, read_recording, replay, write_recording
-from engine.sources.trackers import TrackerMapping, TrackerSample, TrackerState
+from engine.tracker_io.coords import from_project
+from engine.tracker_io.recording import RecordingWriter, header, read_recording, replay, write_recording
+from engine.tracker_io.trackers import TrackerMapping, TrackerSample, TrackerState
 
 IDENT = np.array([1.0, 0.0, 0.0, 0.0])
 

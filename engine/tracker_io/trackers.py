@@ -27,7 +27,7 @@ from engine.input_files import read_json
 from engine.sensors import Sensor, SensorFrame
 
 if TYPE_CHECKING:
-    from engine.sources.calibration import Calibration
+    from engine.tracker_io.calibration import Calibration
 
 #: Seconds without a valid sample after which a tracker counts as lost.
 DEFAULT_TIMEOUT_S = 0.25
@@ -156,7 +156,7 @@ class TrackerState:
         A tracker is lost when its newest valid sample is older than this, seconds.
     calibration : Calibration, optional
         Tracker-to-joint offsets applied to every reading (see
-        :mod:`engine.sources.calibration`).
+        :mod:`engine.tracker_io.calibration`).
     """
 
     def __init__(self, mapping: TrackerMapping | None = None, timeout_s: float = DEFAULT_TIMEOUT_S,

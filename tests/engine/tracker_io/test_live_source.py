@@ -8,9 +8,9 @@ import time
 import numpy as np
 
 from engine.sensors import Sensor
-from engine.sources.live_source import LiveSource
-from engine.sources.recording import read_recording
-from engine.sources.sender import plan_stream, scaled_motion, send_stream
+from engine.tracker_io.live_source import LiveSource
+from engine.tracker_io.recording import read_recording
+from engine.tracker_io.sender import plan_stream, scaled_motion, send_stream
 
 
 def _wait(cond, timeout=5.0):
@@ -73,9 +73,9 @@ def test_a_failed_calibration_says_why(synthetic_motion):
 
 
 def test_a_recording_opens_like_a_clip(synthetic_motion, tmp_path):
-    from engine.sources.recording import write_recording
-    from engine.sources.recording_source import RecordingSource
-    from engine.sources.trackers import TrackerSample
+    from engine.tracker_io.recording import write_recording
+    from engine.tracker_io.recording_source import RecordingSource
+    from engine.tracker_io.trackers import TrackerSample
 
     plan = plan_stream(scaled_motion(synthetic_motion, 0.9), "6", tpose_s=1.0, hardware_offsets=True)
     samples = [TrackerSample(float(plan.times[i]), n, p, r) for i in range(len(plan)) for n, p, r in plan.frame(i)]

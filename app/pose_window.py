@@ -264,6 +264,14 @@ class PoseWindow(QMainWindow):
     def export_video_dialog(self) -> None:
         self._file_dialog("Export video", "MP4 video (*.mp4)", self.export_video)
 
+    def screenshot(self, path: str | Path) -> bool:
+        """Save the window, 3D view included, as a PNG (the studio's compositing)."""
+        from types import SimpleNamespace
+
+        from app.file_actions import FileActions
+
+        return FileActions.grab_window(SimpleNamespace(w=self)).save(str(path))  # type: ignore[arg-type]
+
     # -- drawing and closing -------------------------------------------------------
     def _show_positions(self, positions: np.ndarray) -> None:
         self.viewport.reconstruction.update(positions)

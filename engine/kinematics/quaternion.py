@@ -1,9 +1,10 @@
-"""Quaternion helpers, batched, for numpy arrays and torch tensors alike.
+"""The torch quaternion kit, batched, which also takes numpy arrays.
 
-Quaternions are ``(..., 4)`` arrays in ``(w, x, y, z)`` order. The heavy lifting is
-upc-pymotion's (``pymotion.rotations.quat_np`` / ``quat_torch``); this module picks
-the right backend from the argument type and adds the few operations the project
-needs that pymotion lacks (heading extraction, geodesic angle, mirroring).
+Quaternions are ``(..., 4)`` arrays in ``(w, x, y, z)`` order. Torch tensors are handled
+here (with upc-pymotion's ``quat_torch`` for the matrix conversion); numpy arrays go to
+the numpy kit, :mod:`engine.kinematics.quat_np`, so each operation has one numpy and one
+torch implementation. Code that only ever holds numpy arrays can import the numpy kit
+directly and skip the dispatch.
 """
 
 from __future__ import annotations
@@ -11,17 +12,12 @@ from __future__ import annotations
 from typing import TypeVar
 
 import numpy as np
-import pymotion.rotations.quat_np as _qnp
 import pymotion.rotations.quat_torch as _qt
 import torch
 
 from engine.kinematics import quat_np as _np
 
 Array = TypeVar("Array", np.ndarray, torch.Tensor)
-
-
-def _backend(x):
-    return _qt if isinstance(x, torch.Tensor) else _qnp
 
 
 def mul(q0: Array, q1: Array) -> Array:
@@ -66,14 +62,14 @@ inverse = conjugate
 def normalize(q: Array, eps: float = 1e-8) -> Array:
     if isinstance(q, torch.Tensor):
         return q / torch.linalg.vector_norm(q, dim=-1, keepdim=True).clamp_min(eps)
-    return q / np.maximum(np.linalg.norm(q, axis=-1, keepdims=True), eps)
+    return _np.normalize(q, eps)
 
 
 def canonicalize(q: Array) -> Array:
     """Pick the representative with ``w >= 0`` (q and -q are the same rotation)."""
     if isinstance(q, torch.Tensor):
         return torch.where(q[..., :1] < 0, -q, q)
-    return np.where(q[..., :1] < 0, -q, q)
+    return _np.canonicalize(q)
 
 
 def identity(shape: tuple[int, ...] = (), like: Array | None = None) -> Array:
@@ -81,19 +77,17 @@ def identity(shape: tuple[int, ...] = (), like: Array | None = None) -> Array:
         out = torch.zeros(shape + (4,), dtype=like.dtype, device=like.device)
         out[..., 0] = 1.0
         return out
-    out = np.zeros(shape + (4,))
-    out[..., 0] = 1.0
-    return out
+    return _np.identity(shape)
 
 
 def from_euler(euler_rad: np.ndarray, order: np.ndarray) -> np.ndarray:
     """Euler angles (radians) ``(..., J, 3)`` with per-joint ``order (..., J, 3)`` of 'x'/'y'/'z'."""
-    return _qnp.from_euler(euler_rad, order=order)
+    return _np.from_euler(euler_rad, order)
 
 
 def to_euler(q: np.ndarray, order: np.ndarray) -> np.ndarray:
     """Inverse of :func:`from_euler` (radians)."""
-    return _qnp.to_euler(q, order=order)
+    return _np.to_euler(q, order)
 
 
 def from_axis_angle(axis: Array, angle: Array) -> Array:
@@ -101,18 +95,17 @@ def from_axis_angle(axis: Array, angle: Array) -> Array:
     if isinstance(axis, torch.Tensor):
         half = 0.5 * angle
         return torch.cat((torch.cos(half)[..., None], torch.sin(half)[..., None] * axis), dim=-1)
-    half = 0.5 * np.asarray(angle)
-    return np.concatenate((np.cos(half)[..., None], np.sin(half)[..., None] * axis), axis=-1)
+    return _np.from_axis_angle(axis, angle)
 
 
 def from_to(v0: np.ndarray, v1: np.ndarray) -> np.ndarray:
     """Shortest rotation taking direction ``v0 (..., 3)`` onto ``v1 (..., 3)`` (numpy)."""
-    return _qnp.from_to(np.asarray(v0, dtype=float), np.asarray(v1, dtype=float))
+    return _np.from_to(v0, v1)
 
 
 def from_matrix(m: Array) -> Array:
     """Rotation matrices ``(..., 3, 3)`` to quaternions."""
-    return _backend(m).from_matrix(m)
+    return _qt.from_matrix(m) if isinstance(m, torch.Tensor) else _np.from_matrix(m)
 
 
 def to_matrix(q: Array) -> Array:
@@ -134,8 +127,7 @@ def angle(q0: Array, q1: Array) -> Array:
     if isinstance(q0, torch.Tensor):
         d = (q0 * q1).sum(-1).abs().clamp(max=1.0)
         return 2.0 * torch.arccos(d)
-    d = np.clip(np.abs((q0 * q1).sum(-1)), 0.0, 1.0)
-    return 2.0 * np.arccos(d)
+    return _np.angle(q0, q1)
 
 
 def heading(q: Array) -> Array:
@@ -152,16 +144,16 @@ def heading(q: Array) -> Array:
 
 def unroll(q: np.ndarray, axis: int = 0) -> np.ndarray:
     """Flip signs along ``axis`` (time) so consecutive quaternions stay in one hemisphere."""
-    return _qnp.unroll(q, axis=axis)
+    return _np.unroll(q, axis)
 
 
 def mirror_x(q: Array) -> Array:
     """Conjugate a rotation by the reflection ``x -> -x`` (the left/right mirror)."""
     if isinstance(q, torch.Tensor):
         return q * torch.tensor([1.0, 1.0, -1.0, -1.0], dtype=q.dtype, device=q.device)
-    return q * np.array([1.0, 1.0, -1.0, -1.0])
+    return _np.mirror_x(q)
 
 
 def slerp(q0: np.ndarray, q1: np.ndarray, t: np.ndarray) -> np.ndarray:
     """Spherical interpolation, ``t`` broadcast against ``(...,)``."""
-    return _qnp.slerp(q0, q1, t)
+    return _np.slerp(q0, q1, t)

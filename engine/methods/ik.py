@@ -33,6 +33,7 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.kinematics import quat_np as Q  # numpy only: no torch dispatch per call
+from engine.kinematics.quat_np import qbetween, qfrom_bases, qnorm, qpow, qtwist, vcross, vnorm
 from engine.kinematics.fk import fk_joints
 from engine.methods.base import FrameResult, Method
 from engine.solver.pose import body_facing
@@ -58,84 +59,6 @@ CLAVICLE_MAX = math.radians(30.0)
 IDENTITY = np.array([1.0, 0.0, 0.0, 0.0])
 
 
-def _norm(v) -> float:
-    """Length of one short vector (np.linalg.norm's generic path costs ~10x more here)."""
-    v = np.asarray(v, dtype=float)
-    return math.sqrt(float(v @ v))
-
-
-def _cross(a, b) -> np.ndarray:
-    """Cross product of two 3-vectors (np.cross's generic path costs ~20x more here)."""
-    a0, a1, a2 = np.asarray(a, dtype=float).tolist()
-    b0, b1, b2 = np.asarray(b, dtype=float).tolist()
-    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
-
-
-def _axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
-    n = _norm(axis)
-    if n < 1e-12 or abs(angle) < 1e-12:
-        return IDENTITY.copy()
-    return np.concatenate([[math.cos(angle / 2)], math.sin(angle / 2) * axis / n])
-
-
-def _from_to(v0: np.ndarray, v1: np.ndarray) -> np.ndarray:
-    """Shortest rotation taking the direction of ``v0`` onto that of ``v1``."""
-    a = v0 / max(_norm(v0), 1e-12)
-    b = v1 / max(_norm(v1), 1e-12)
-    c = float(np.clip(a @ b, -1.0, 1.0))
-    axis = _cross(a, b)
-    if _norm(axis) < 1e-9:
-        if c > 0:
-            return IDENTITY.copy()
-        axis = _cross(a, [1.0, 0, 0] if abs(a[0]) < 0.9 else [0, 1.0, 0])
-    return _axis_angle(axis, math.acos(c))
-
-
-def _pow(q: np.ndarray, t: float) -> np.ndarray:
-    """``q`` scaled to ``t`` of its angle (shortest arc)."""
-    q = q if q[0] >= 0 else -q
-    angle = 2.0 * math.acos(min(1.0, q[0]))
-    return _axis_angle(q[1:], t * angle)
-
-
-def _twist(q: np.ndarray, axis: np.ndarray) -> np.ndarray:
-    """Twist part of ``q`` about ``axis`` (swing-twist decomposition)."""
-    a = axis / _norm(axis)
-    t = np.concatenate([[q[0]], (q[1:] @ a) * a])
-    n = _norm(t)
-    return t / n if n > 1e-9 else IDENTITY.copy()
-
-
-def _basis_rotation(u0: np.ndarray, w0: np.ndarray, u1: np.ndarray, w1: np.ndarray) -> np.ndarray:
-    """Rotation taking direction ``u0`` onto ``u1`` and the plane (u0, w0) onto (u1, w1)."""
-
-    def frame(u: np.ndarray, w: np.ndarray) -> np.ndarray:
-        x = u / _norm(u)
-        y = w - (w @ x) * x
-        if _norm(y) < 1e-9:
-            y = _cross(x, [0.0, 0.0, 1.0] if abs(x[2]) < 0.9 else [1.0, 0.0, 0.0])
-        y /= _norm(y)
-        return np.stack([x, y, _cross(x, y)], axis=1)
-
-    m = frame(u1, w1) @ frame(u0, w0).T
-    # matrix -> quaternion (m is orthonormal); pick the numerically safest branch
-    tr = np.trace(m)
-    if tr > 0:
-        s = 2.0 * math.sqrt(1.0 + tr)
-        q = [0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s]
-    else:
-        i = int(np.argmax(np.diag(m)))
-        j, k = (i + 1) % 3, (i + 2) % 3
-        s = 2.0 * math.sqrt(max(1e-12, 1.0 + m[i, i] - m[j, j] - m[k, k]))
-        q = [0.0, 0.0, 0.0, 0.0]
-        q[0] = (m[k, j] - m[j, k]) / s
-        q[1 + i] = 0.25 * s
-        q[1 + j] = (m[j, i] + m[i, j]) / s
-        q[1 + k] = (m[k, i] + m[i, k]) / s
-    q = np.asarray(q)
-    return q / _norm(q)
-
-
 #: Farthest a tracker may be from the origin, metres; beyond it a reading is ignored.
 MAX_TRACKER_DISTANCE = 1e4
 
@@ -150,7 +73,7 @@ def usable_reading(r: Sensor) -> bool:
         return False
     if r.dof == 6:
         q = np.asarray(r.rotation, float)
-        return bool(np.isfinite(q).all()) and float(_norm(q)) > 1e-6
+        return bool(np.isfinite(q).all()) and qnorm(q) > 1e-6
     return True
 
 
@@ -172,15 +95,15 @@ def two_bone_mid(start: np.ndarray, target: np.ndarray, a: float, b: float, pole
         Middle-joint position; the reach is clamped to ``[|a-b|, a+b]``.
     """
     d_vec = target - start
-    d = float(_norm(d_vec))
+    d = vnorm(d_vec)
     n = d_vec / d if d > 1e-9 else np.array([0.0, 0.0, -1.0])
     d = min(max(d, abs(a - b) + 1e-6), a + b - 1e-6)
     cos_a = (a * a + d * d - b * b) / (2.0 * a * d)
     sin_a = math.sqrt(max(0.0, 1.0 - cos_a * cos_a))
     m = pole - (pole @ n) * n
-    if _norm(m) < 1e-9:  # pole along the reach: any perpendicular will do
-        m = _cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0])
-    m /= _norm(m)
+    if vnorm(m) < 1e-9:  # pole along the reach: any perpendicular will do
+        m = np.array(vcross(n, (1.0, 0.0, 0.0) if abs(n[0]) < 0.9 else (0.0, 1.0, 0.0)))
+    m /= vnorm(m)
     return start + a * (cos_a * n + sin_a * m)
 
 
@@ -236,17 +159,17 @@ class IKMethod(Method):
         else:
             pos = self._root_pos
         self._root_pos = pos
-        return pos, rot / _norm(rot)
+        return pos, rot / qnorm(rot)
 
     # -- body parts ---------------------------------------------------------------------
     def _solve_spine(self, local: np.ndarray, root: np.ndarray, head: Sensor) -> None:
         n = len(SPINE)
         for _ in range(SPINE_PASSES):
             pos, rot = self._at(local, root, HEAD, SPINE[0], *(sk.PARENTS[j] for j in SPINE))
-            swing = _from_to(pos[0] - pos[1], head.position - pos[1])
+            swing = qbetween(pos[0] - pos[1], head.position - pos[1])
             if 1.0 - abs(swing[0]) < 1e-12:
                 break
-            step = _pow(swing, 1.0 / n)
+            step = qpow(swing, 1.0 / n)
             for j, pr in zip(SPINE, rot[2:]):  # each segment turns one more step than the one below it
                 local[j] = Q.mul(Q.mul(Q.conjugate(pr), Q.mul(step, pr)), local[j])
         if head.dof == 6:
@@ -260,13 +183,13 @@ class IKMethod(Method):
         clav = sk.PARENTS[up]
         pos, rot = self._at(local, root, up, clav, sk.PARENTS[clav])
         p_up, p_clav, pr = pos[0], pos[1], rot[2]
-        reach = float(_norm(self.offsets[mid]) + _norm(self.offsets[end]))
-        if _norm(target - p_up) <= reach:
+        reach = vnorm(self.offsets[mid]) + vnorm(self.offsets[end])
+        if vnorm(target - p_up) <= reach:
             return
-        swing = _from_to(p_up - p_clav, target - p_clav)
+        swing = qbetween(p_up - p_clav, target - p_clav)
         angle = 2.0 * math.acos(min(1.0, abs(swing[0])))
         if angle > CLAVICLE_MAX:
-            swing = _pow(swing, CLAVICLE_MAX / angle)
+            swing = qpow(swing, CLAVICLE_MAX / angle)
         local[clav] = Q.mul(Q.mul(Q.conjugate(pr), Q.mul(swing, pr)), local[clav])
 
     def _pull_root_to_feet(self, root: np.ndarray, root_rot: np.ndarray,
@@ -277,12 +200,12 @@ class IKMethod(Method):
                 r = s.get(sk.JOINT_NAMES[ankle])
                 if r is None:
                     continue
-                leg = _norm(self.offsets[knee]) + _norm(self.offsets[ankle])
+                leg = vnorm(self.offsets[knee]) + vnorm(self.offsets[ankle])
                 hip_pos = root + Q.rotate(root_rot, self.offsets[hip])
                 d = r.position - hip_pos
-                excess = float(_norm(d)) - 0.999 * leg
+                excess = vnorm(d) - 0.999 * leg
                 if excess > 0:
-                    root = root + excess * d / _norm(d)
+                    root = root + excess * d / vnorm(d)
         return root
 
     def _solve_limb(self, local: np.ndarray, root: np.ndarray, chain: tuple[int, int, int],
@@ -290,17 +213,17 @@ class IKMethod(Method):
                     end_rot: np.ndarray | None, twist_mid: bool = False) -> None:
         up, mid, end = chain
         (p_up, _), (_, r_parent) = self._at(local, root, up, sk.PARENTS[up])
-        a = float(_norm(self.offsets[mid]))
-        b = float(_norm(self.offsets[end]))
+        a = vnorm(self.offsets[mid])
+        b = vnorm(self.offsets[end])
         elbow = two_bone_mid(p_up, target, a, b, pole)
         bend = pole - (pole @ (target - p_up)) * (target - p_up) / max(float(np.sum((target - p_up) ** 2)), 1e-12)
-        g_up = _basis_rotation(self.offsets[mid], rest_pole, elbow - p_up, bend)
+        g_up = np.array(qfrom_bases(self.offsets[mid], rest_pole, elbow - p_up, bend))
         local[up] = Q.mul(Q.conjugate(r_parent), g_up)
         lower = Q.rotate(g_up, self.offsets[end])
-        g_mid = Q.mul(_from_to(lower, target - elbow), g_up)
+        g_mid = Q.mul(qbetween(lower, target - elbow), g_up)
         if end_rot is not None and twist_mid:
             # the forearm carries the hand's twist (pronation), the wrist only the swing
-            g_mid = Q.mul(g_mid, _twist(Q.mul(Q.conjugate(g_mid), end_rot), self.offsets[end]))
+            g_mid = Q.mul(g_mid, qtwist(Q.mul(Q.conjugate(g_mid), end_rot), self.offsets[end]))
         local[mid] = Q.mul(Q.conjugate(g_up), g_mid)
         local[end] = IDENTITY if end_rot is None else Q.mul(Q.conjugate(g_mid), end_rot)
 
@@ -353,7 +276,7 @@ class IKMethod(Method):
             if r is None and self._keep_or_rest(local, chain, joint):
                 continue
             if r is None:  # never tracked: hang straight down under the hip
-                reach = _norm(self.rest[chain[2]] - self.rest[chain[0]])
+                reach = vnorm(self.rest[chain[2]] - self.rest[chain[0]])
                 hip = self._at(local, root_pos, chain[0])[0][0]
                 target, pole, end_rot = hip - [0.0, 0.0, reach], forward, level
             elif r.dof == 6:

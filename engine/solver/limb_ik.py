@@ -13,7 +13,7 @@ tracker's, when :func:`adopt_rotations` runs after). Beyond reach the limb point
 straight at the tracker.
 
 Both steps run once per solved frame on one pose, so the per-limb arithmetic is on
-Python floats (at this size numpy's per-call overhead costs 10-20x the arithmetic), and
+Python floats (the single-rotation functions of :mod:`engine.kinematics.quat_np`), and
 forward kinematics runs twice in all (:func:`finish`): once for what the limbs need
 (limbs do not hold each other's joints, so one placement serves them all) and once for
 the result. Both passes are :func:`engine.kinematics.fk.fk` itself, whose rounding
@@ -30,6 +30,7 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.kinematics.fk import fk, fk_joints
+from engine.kinematics.quat_np import qaxis_angle, qbetween, qconj, qmul, qrotate, vcross, vdot, vnorm, vscale, vsub
 
 #: End joint -> (limb root, middle joint).
 LIMBS = {sk.JOINT_INDEX[c]: (sk.JOINT_INDEX[a], sk.JOINT_INDEX[b])
@@ -38,63 +39,6 @@ LIMBS = {sk.JOINT_INDEX[c]: (sk.JOINT_INDEX[a], sk.JOINT_INDEX[b])
 #: Keep the limb this far (metres) from fully straight or folded: the bend axis and the
 #: solution are ill-defined there.
 _SLACK = 1e-3
-
-# -- scalar 3-vectors and quaternions (tuples; (w, x, y, z)) ----------------------------
-
-
-def _sub(a, b):
-    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
-
-
-def _dot(a, b) -> float:
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-def _cross(a, b):
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
-
-
-def _norm(a) -> float:
-    return math.sqrt(_dot(a, a))
-
-
-def _scale(a, s: float):
-    return tuple(s * x for x in a)
-
-
-def _qmul(q0, q1):
-    w0, x0, y0, z0 = q0
-    w1, x1, y1, z1 = q1
-    return (w0 * w1 - x0 * x1 - y0 * y1 - z0 * z1, w0 * x1 + x0 * w1 + y0 * z1 - z0 * y1,
-            w0 * y1 - x0 * z1 + y0 * w1 + z0 * x1, w0 * z1 + x0 * y1 - y0 * x1 + z0 * w1)  # fmt: skip
-
-
-def _conj(q):
-    return (q[0], -q[1], -q[2], -q[3])
-
-
-def _rotate(q, v):
-    w, x, y, z = q
-    a, b, c = v
-    tx, ty, tz = 2.0 * (y * c - z * b), 2.0 * (z * a - x * c), 2.0 * (x * b - y * a)
-    return (a + w * tx + y * tz - z * ty, b + w * ty + z * tx - x * tz, c + w * tz + x * ty - y * tx)
-
-
-def _axis_angle(axis, angle: float):
-    s = math.sin(angle / 2)
-    return (math.cos(angle / 2), s * axis[0], s * axis[1], s * axis[2])
-
-
-def _between(u, v):
-    """Smallest rotation taking direction ``u`` onto direction ``v``."""
-    u, v = _scale(u, 1.0 / _norm(u)), _scale(v, 1.0 / _norm(v))
-    c = _cross(u, v)
-    q = (1.0 + _dot(u, v), *c)
-    n = math.sqrt(q[0] * q[0] + _dot(c, c))
-    if n < 1e-9:  # opposite: any perpendicular axis
-        perp = _cross(u, (1.0, 0.0, 0.0) if abs(u[0]) < 0.9 else (0.0, 1.0, 0.0))
-        return _axis_angle(_scale(perp, 1.0 / _norm(perp)), math.pi)
-    return _scale(q, 1.0 / n)
 
 
 def _chain(j: int) -> list[int]:
@@ -123,25 +67,25 @@ def reach_local(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray
         parent = sk.PARENTS[a]
         (pa, wa0), (pb, wb0), (pc, wc0) = placed[a], placed[b], placed[c]
         t = tuple(float(x) for x in target)
-        l1, l2 = _norm(_sub(pb, pa)), _norm(_sub(pc, pb))
-        ta = _sub(t, pa)
-        d = min(max(_norm(ta), abs(l1 - l2) + _SLACK), l1 + l2 - _SLACK)
-        u, v = _sub(pa, pb), _sub(pc, pb)
-        n = _cross(u, v)
-        sin_uv = _norm(n)
+        l1, l2 = vnorm(vsub(pb, pa)), vnorm(vsub(pc, pb))
+        ta = vsub(t, pa)
+        d = min(max(vnorm(ta), abs(l1 - l2) + _SLACK), l1 + l2 - _SLACK)
+        u, v = vsub(pa, pb), vsub(pc, pb)
+        n = vcross(u, v)
+        sin_uv = vnorm(n)
         if sin_uv < 1e-9:  # straight or folded: bend about the middle joint's x axis
-            n = _rotate(wb0, (1.0, 0.0, 0.0))
-        n = _scale(n, 1.0 / _norm(n))
-        current = math.atan2(sin_uv, _dot(u, v))
+            n = qrotate(wb0, (1.0, 0.0, 0.0))
+        n = vscale(n, 1.0 / vnorm(n))
+        current = math.atan2(sin_uv, vdot(u, v))
         wanted = math.acos(min(max((l1 * l1 + l2 * l2 - d * d) / (2 * l1 * l2), -1.0), 1.0))
-        bend = _axis_angle(n, wanted - current)  # about n: u x v turns u towards v, so v away from u
-        wb = _qmul(bend, wb0)
-        pc_new = tuple(p + r for p, r in zip(pb, _rotate(bend, v)))
-        turn = _between(_sub(pc_new, pa), ta) if _norm(ta) > 1e-9 else (1.0, 0.0, 0.0, 0.0)
-        wa, wb = _qmul(turn, wa0), _qmul(turn, wb)
-        local[a] = _qmul(_conj(placed[parent][1]), wa)
-        local[b] = _qmul(_conj(wa), wb)
-        local[c] = _qmul(_conj(wb), wc0)  # the end joint keeps its world rotation
+        bend = qaxis_angle(n, wanted - current)  # about n: u x v turns u towards v, so v away from u
+        wb = qmul(bend, wb0)
+        pc_new = tuple(p + r for p, r in zip(pb, qrotate(bend, v)))
+        turn = qbetween(vsub(pc_new, pa), ta) if vnorm(ta) > 1e-9 else (1.0, 0.0, 0.0, 0.0)
+        wa, wb = qmul(turn, wa0), qmul(turn, wb)
+        local[a] = qmul(qconj(placed[parent][1]), wa)
+        local[b] = qmul(qconj(wa), wb)
+        local[c] = qmul(qconj(wb), wc0)  # the end joint keeps its world rotation
     local *= np.where(local[:, :1] < 0, -1.0, 1.0)
     return local
 
@@ -180,7 +124,7 @@ def adopt_local(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray
         parent_rot = fk_joints(local, root_pos, offsets, [parents[k]])[1][0] if nested else world[k]
         t = [float(x) for x in targets[j]]
         s = 1.0 / max(math.sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2] + t[3] * t[3]), 1e-12)
-        q = _qmul(_conj(parent_rot), (t[0] * s, t[1] * s, t[2] * s, t[3] * s))
+        q = qmul(qconj(parent_rot), (t[0] * s, t[1] * s, t[2] * s, t[3] * s))
         local[j] = q if q[0] >= 0 else tuple(-x for x in q)
     return local
 
@@ -224,18 +168,18 @@ def share_neck_twist(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.nd
     n = math.sqrt(sum(x * x for x in t))
     if not n > 1e-12:
         return local
-    delta = _qmul(tuple(x / n for x in t), _conj(head))  # world correction of the head
-    axis = _rotate(neck, tuple(float(x) for x in offsets[HEAD]))
-    length = _norm(axis)
+    delta = qmul(tuple(x / n for x in t), qconj(head))  # world correction of the head
+    axis = qrotate(neck, tuple(float(x) for x in offsets[HEAD]))
+    length = vnorm(axis)
     if length < 1e-9:
         return local
-    axis = _scale(axis, 1.0 / length)
-    angle = 2.0 * math.atan2(_dot(delta[1:], axis), delta[0])  # signed twist, radians
+    axis = vscale(axis, 1.0 / length)
+    angle = 2.0 * math.atan2(vdot(delta[1:], axis), delta[0])  # signed twist, radians
     angle = (angle + math.pi) % (2.0 * math.pi) - math.pi
-    turn = _axis_angle(axis, share * angle)
-    parent = _qmul(neck, _conj(tuple(local[NECK].tolist())))  # the chest's world rotation
-    q = _qmul(_conj(parent), _qmul(turn, neck))
-    n = math.sqrt(_dot(q[1:], q[1:]) + q[0] * q[0])
+    turn = qaxis_angle(axis, share * angle)
+    parent = qmul(neck, qconj(tuple(local[NECK].tolist())))  # the chest's world rotation
+    q = qmul(qconj(parent), qmul(turn, neck))
+    n = math.sqrt(vdot(q[1:], q[1:]) + q[0] * q[0])
     local[NECK] = tuple(x / n for x in (q if q[0] >= 0 else tuple(-x for x in q)))
     return local
 

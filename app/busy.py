@@ -37,9 +37,10 @@ class BusyNotice:
     def begin(self, method: str, after_seq: int, what: str = "") -> None:
         """Wait for a snapshot from ``method`` with ``seq > after_seq``."""
         self.method, self.after_seq = method, after_seq
-        self.text = f"{what or 'Loading'} {method}: loading the model and solving the first frame..."
+        # two short lines: one long line was wider than the view and cut at both ends
+        self.text = f"{what or 'Loading'} {method}:\nloading the model and solving the first frame..."
         self.viewport.set_notice(self.text)
-        self.status.showMessage(self.text)
+        self.status.showMessage(self.text.replace("\n", " "))
 
     def check(self, snap: Any) -> None:
         """Clear the notice once ``snap`` is the awaited method's (or reports its failure)."""
@@ -48,5 +49,5 @@ class BusyNotice:
         if snap.method == self.method or getattr(snap, "method_error", ""):
             self.method = None
             self.viewport.set_notice("")
-            if self.status.currentMessage() == self.text:
+            if self.status.currentMessage() == self.text.replace("\n", " "):
                 self.status.clearMessage()

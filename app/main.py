@@ -71,6 +71,12 @@ def apply_scene_file(window: MainWindow, scene_path: str, clip_given: bool) -> N
         raise UserError(str(exc) if scene_path in str(exc) else f"{scene_path}: {exc}") from exc
 
 
+def start_playing(window: MainWindow) -> None:
+    """Play the clip once the window is up: opened paused on frame 0, the studio looked
+    like a still picture (the engine solves the first frame, then playback runs)."""
+    QTimer.singleShot(0, window.session.play)
+
+
 def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
         screenshot: str | None = None, after_frames: int = 60, measure: float | None = None,
         measure_json: str | None = None, pace: str | None = None, ghosts: tuple[str, ...] = (),
@@ -115,6 +121,7 @@ def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
     if measure is not None:
         return _measure(app, window, measure, measure_json)
     if screenshot is None:
+        start_playing(window)
         return app.exec()
     status = {"code": 1}
     start = window.session.frame

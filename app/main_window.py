@@ -76,6 +76,8 @@ class MainWindow(QMainWindow):
         self.snapshotDrawn.connect(self.failures.on_frame)
         self.ghost_status = GhostStatus(self)
         build_menus(self)
+        # the follow camera beside the play controls, where a walking character's user looks
+        self.follow_button = self.timeline.add_action(self.actions_by_name["follow"])
         self.camera_keys = CameraKeys(self.viewport, self)
         QApplication.instance().installEventFilter(self.camera_keys)
         self._connect_session()

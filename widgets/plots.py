@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 import pyqtgraph as pg
-from PyQt6.QtWidgets import QHBoxLayout, QVBoxLayout, QWidget
+from PyQt6.QtWidgets import QHBoxLayout, QWidget
 
 from widgets import style
 from widgets.log_axis import LogAxis
@@ -139,12 +139,12 @@ class LossPlots(QWidget):
         self.legend.visibilityChanged.connect(self._set_visible)
         self.ms_curve = self.cost_plot.plot(pen=pg.mkPen(MS_COLOUR, width=1))
         self.iter_curve = self.cost_plot.plot(pen=pg.mkPen(ITERATIONS_COLOUR, width=1))
-        plots = QVBoxLayout()
-        plots.addWidget(self.iteration_plot, 1)
-        row = QHBoxLayout()
-        row.addWidget(self.cost_plot, 1)
-        row.addWidget(self.history_plot, 1)
-        plots.addLayout(row, 1)
+        # one row: each plot gets the dock's full height (stacked two high they were
+        # ~100 px each at 1600 x 1000, their curves on top of one another)
+        plots = QHBoxLayout()
+        plots.addWidget(self.iteration_plot, 4)
+        plots.addWidget(self.cost_plot, 3)
+        plots.addWidget(self.history_plot, 4)
         layout = QHBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addLayout(plots, 1)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from PyQt6.QtCore import Qt, pyqtSignal
+from PyQt6.QtGui import QAction
 from PyQt6.QtWidgets import QCheckBox, QComboBox, QHBoxLayout, QLabel, QSlider, QStyle, QToolButton, QWidget
 
 SPEEDS = (0.25, 0.5, 1.0, 2.0)
@@ -65,8 +66,16 @@ class Timeline(QWidget):
         self.pace.currentIndexChanged.connect(self._on_pace)
         for w in (self.counter, self.speed, self.pace, self.loop):
             row.addWidget(w)
+        self._row = row
         self._updating = False
         self._fps = 60.0
+
+    def add_action(self, action: QAction) -> QToolButton:
+        """A button at the end of the row for a window action (e.g. View ▸ Follow)."""
+        button = QToolButton()
+        button.setDefaultAction(action)
+        self._row.addWidget(button)
+        return button
 
     def _on_play(self, playing: bool) -> None:
         self.play_button.setIcon(self._icons[1] if playing else self._icons[0])

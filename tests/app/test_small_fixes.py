@@ -39,12 +39,54 @@ def test_frame_axes_with_one_solved_frame_span_a_few_frames(studio, qtbot):
 
 def test_method_errors_get_a_point_per_drawn_frame(studio, qtbot):
     s = studio.session
+    s.set_playback(loop=False)  # a loop starts the curves again
+    s.seek(0)
+    qtbot.waitUntil(lambda: s.latest.frame == 0, timeout=5000)
     drawn = []
     studio.snapshotDrawn.connect(drawn.append)
     s.set_playing(True)
-    qtbot.waitUntil(lambda: len(drawn) >= 40, timeout=20000)
+    qtbot.waitUntil(lambda: len(drawn) >= 40 or not s.latest.playing, timeout=20000)
     s.pause()
     series = studio.method_errors.data[s.latest.method]
     seen = [f for f in set(drawn) if f in series]
     assert len(seen) >= 0.9 * len(set(drawn)), (len(seen), len(set(drawn)))
     assert np.all(np.isfinite(list(series.values())))
+
+
+def test_the_loading_notice_fits_in_the_view(studio, qtbot):
+    studio.resize(1600, 1000)
+    qtbot.wait(200)
+    studio.busy.begin("dragposer", 10**9, "Opening the clip with")
+    img = studio.viewport.grab_image()
+    w, h = img.width(), img.height()
+    arr = np.frombuffer(img.constBits().asstring(img.sizeInBytes()), np.uint8).reshape(h, img.bytesPerLine())
+    arr = arr[:, : 3 * w].reshape(h, w, 3).astype(int)
+    yellow = (arr[..., 0] > 200) & (arr[..., 1] > 180) & (arr[..., 2] < 140)
+    cols = np.flatnonzero(yellow[h - 80 :].any(axis=0))
+    assert cols.size, "no notice drawn"
+    assert cols.min() > 4 and cols.max() < w - 5, (cols.min(), cols.max(), w)
+
+
+def test_the_three_plots_are_tall_and_side_by_side_at_1600_by_1000(studio, qtbot):
+    studio.resize(1600, 1000)
+    qtbot.wait(300)
+    p = studio.plots
+    boxes = [w.geometry() for w in (p.iteration_plot, p.cost_plot, p.history_plot)]
+    assert min(b.height() for b in boxes) >= 180, [b.height() for b in boxes]
+    for a, b in zip(boxes, boxes[1:]):
+        assert not a.intersects(b)
+
+
+def test_follow_is_a_button_beside_the_play_controls(studio):
+    button = studio.follow_button
+    assert button.isVisible() and "Follow" in button.text()
+    button.click()
+    assert not studio.viewport.follow and not studio.actions_by_name["follow"].isChecked()
+
+
+def test_the_studio_starts_playing(studio, qtbot):
+    from app.main import start_playing
+
+    studio.session.pause()
+    start_playing(studio)
+    qtbot.waitUntil(lambda: studio.session.latest.playing and studio.timeline.play_button.isChecked(), timeout=5000)

@@ -38,8 +38,11 @@ def _cli(*argv: object, limit_bytes: int | None = None) -> subprocess.CompletedP
     pre = ""
     if limit_bytes:  # a bounded address space: a loader that allocates for nothing fails, not the machine
         pre = f"import resource; resource.setrlimit(resource.RLIMIT_AS, ({limit_bytes}, {limit_bytes}))\n"
-    code = pre + ("import resource, sys\nfrom engine.cli.main import main\ntry:\n    rc = main(sys.argv[1:])\n"
-                  "finally:\n    print('maxrss_kb', resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)\n"
+    # The peak is read from VmHWM, which exec resets: ru_maxrss would carry the pytest
+    # parent's resident size over the fork into the child's figure.
+    code = pre + ("import re, sys\nfrom engine.cli.main import main\ntry:\n    rc = main(sys.argv[1:])\n"
+                  "finally:\n    hwm = re.search(r'VmHWM:\\s+(\\d+)', open('/proc/self/status').read()).group(1)\n"
+                  "    print('maxrss_kb', hwm)\n"
                   "sys.exit(rc)\n")  # fmt: skip
     env = {**os.environ, "PYTHONPATH": str(REPO)}
     return subprocess.run([sys.executable, "-c", code, *map(str, argv)], capture_output=True, text=True, env=env,

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import os
 from pathlib import Path
 
 from PyQt6.QtCore import QPoint
@@ -17,8 +16,8 @@ from PyQt6.QtWidgets import QFileDialog, QMainWindow
 
 from app import rig_maps
 from app.export import ReconstructionExport
-from engine.atomic import write_text
-from engine.errors import RigError, UserError
+from engine.atomic import atomic_path, write_text
+from engine.errors import OutputError, RigError, UserError
 from engine.input_files import read_json
 
 MAX_RECENT = 8
@@ -209,10 +208,12 @@ class FileActions:
                                                   "PNG image (*.png)")  # fmt: skip
             if not path:
                 return False
-        target = Path(path)
-        tmp = target.with_name(target.stem + ".tmp" + (target.suffix or ".png"))
-        if not self.grab_window().save(str(tmp)):
-            self.w.show_error("Cannot export screenshot", f"{path}: could not write the image")
+        pix = self.grab_window()
+        try:
+            with atomic_path(path, suffix=Path(path).suffix or ".png") as tmp:
+                if not pix.save(str(tmp), "PNG"):
+                    raise OutputError(f"{path}: could not write the image")
+        except OutputError as exc:
+            self.w.show_error("Cannot export screenshot", str(exc))
             return False
-        os.replace(tmp, target)
         return True

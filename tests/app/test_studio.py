@@ -242,3 +242,21 @@ def test_simulated_failure_disconnects_the_sensor_for_the_chosen_frames(studio, 
     snap_after(studio, qtbot, lambda s: s.frame == 29 and not connected(s, 29))
     studio.session.seek(30)  # the failure covers frames 10..29
     snap_after(studio, qtbot, lambda s: connected(s, 30))
+
+
+def test_screenshot_writes_through_a_symlink_and_leaves_no_temp_file(studio, qtbot, tmp_path, monkeypatch):
+    snap_after(studio, qtbot, lambda s: True)
+    target = tmp_path / "shots" / "real.png"
+    target.parent.mkdir()
+    target.write_bytes(b"old")
+    link = tmp_path / "shot.png"
+    link.symlink_to(target)
+    assert studio.files.export_screenshot(str(link))
+    assert link.is_symlink() and target.read_bytes()[:4] == b"\x89PNG"
+    # a grab that cannot be saved leaves the previous image and no temporary file
+    monkeypatch.setattr(studio, "show_error", lambda *a: None)
+    monkeypatch.setattr(studio.files, "grab_window", lambda: type("P", (), {"save": lambda self, p, fmt=None: False})())
+    before = target.read_bytes()
+    assert not studio.files.export_screenshot(str(link))
+    assert target.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.rglob("*") if p.is_file() or p.is_symlink()) == ["real.png", "shot.png"]

@@ -72,7 +72,10 @@ def settle(plot: pg.PlotWidget) -> None:
 def _plot(title: str, log_y: bool, x_label: str) -> pg.PlotWidget:
     # pyqtgraph's own log axis labels every 1..9 multiple on a range of a decade or two,
     # one label over the other: LogAxis labels only what fits (decades, 1-2-5, ...)
-    w = pg.PlotWidget(title=title, axisItems={"left": LogAxis("left")})
+    w = pg.PlotWidget(axisItems={"left": LogAxis("left")})
+    # short titles in a small font: a title wider than the plot kept the plot item from
+    # shrinking, and the plots beside it cut it off
+    w.setTitle(title, size="9pt")
     w.setLogMode(y=log_y)
     # no grid: its translucent lines cost ~8 ms per repaint under software rendering
     w.setLabel("bottom", x_label)
@@ -128,10 +131,10 @@ class LossPlots(QWidget):
         colours: dict[str, str] = {"total": "#ffffff"}
         self.colours = colours
         self.legend = TermLegend()
-        self.iteration_plot = _plot("Loss per iteration (this frame)", True, "iteration")
+        self.iteration_plot = _plot("Loss per iteration", True, "iteration")
         # log y: the first frame of a clip is solved offline (seconds) and would flatten
         # the steady per-frame cost (tens of ms) on a linear axis
-        self.cost_plot = _plot(f"Cost per frame: <span style='color:{MS_COLOUR}'>ms</span>, "
+        self.cost_plot = _plot(f"<span style='color:{MS_COLOUR}'>ms</span> and "
                                f"<span style='color:{ITERATIONS_COLOUR}'>iterations</span>", True, "frame")  # fmt: skip
         self.history_plot = _plot("Loss history", True, "frame")
         self.iter_curves = _Curves(self.iteration_plot, colours, self.legend)

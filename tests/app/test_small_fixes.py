@@ -75,6 +75,8 @@ def test_the_three_plots_are_tall_and_side_by_side_at_1600_by_1000(studio, qtbot
     assert min(b.height() for b in boxes) >= 180, [b.height() for b in boxes]
     for a, b in zip(boxes, boxes[1:]):
         assert not a.intersects(b)
+    for plot in (p.iteration_plot, p.cost_plot, p.history_plot):  # no plot is wider than its widget
+        assert plot.getPlotItem().geometry().width() <= plot.viewport().width() + 1
 
 
 def test_follow_is_a_button_beside_the_play_controls(studio):

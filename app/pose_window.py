@@ -23,6 +23,7 @@ from PyQt6.QtGui import QAction, QCloseEvent, QKeySequence, QUndoStack
 from PyQt6.QtWidgets import QDockWidget, QFileDialog, QMainWindow, QMessageBox, QProgressDialog, QWidget
 
 from app.undo import StateCommand
+from engine import skeleton as sk
 from engine.authoring.bake import bake
 from engine.authoring.document import AuthoringScene, save_authoring
 from engine.authoring.keys import Animation, Key
@@ -54,6 +55,7 @@ class PoseWindow(QMainWindow):
         self.targets = TargetList()
         self.targets.enabledChanged.connect(lambda j, on: self.edit_target(j, enabled=on))
         self.targets.weightChanged.connect(lambda j, w: self.edit_target(j, weight=w))
+        self.targets.turnHeld.connect(self.hold_turn)
         self.targets.clearRequested.connect(self.clear_target)
         self.targets.clearAllRequested.connect(self.clear_all)
         self._dock("Targets", self.targets, Qt.DockWidgetArea.RightDockWidgetArea)
@@ -139,6 +141,21 @@ class PoseWindow(QMainWindow):
     def edit_target(self, joint: str, **fields: Any) -> None:
         """Change a target's ``enabled`` or ``weight`` and solve."""
         self._edit(f"edit target {joint}", lambda: self.mode.set_target(joint, **fields), solve=True)
+
+    def hold_turn(self, joint: str, on: bool) -> None:
+        """Give the target on ``joint`` the joint's current world rotation (``on``) or
+        make it a position target again."""
+        from engine.kinematics.fk import fk
+
+        def change() -> None:
+            if on:
+                p = self.mode.pose
+                world = fk(p.local_rot, p.root_pos, self.mode.character.skeleton.offsets)[1]
+                self.mode.set_target(joint, rotation=world[sk.JOINT_INDEX[joint]])
+            else:
+                self.mode.clear_rotation(joint)
+
+        self._edit(f"{'hold' if on else 'free'} turn {joint}", change, solve=True)
 
     def clear_target(self, joint: str) -> None:
         self._edit(f"clear target {joint}", lambda: self.mode.remove_target(joint), solve=True)

@@ -18,6 +18,9 @@ class TargetList(QWidget):
     -------
     enabledChanged(str, bool), weightChanged(str, float)
         A row's checkbox or weight was edited (joint, value).
+    turnHeld(str, bool)
+        A row's "hold turn" box: keep the joint's current world rotation (True) or
+        drop the rotation target (False).
     clearRequested(str)
         A row's Clear button.
     clearAllRequested()
@@ -26,6 +29,7 @@ class TargetList(QWidget):
 
     enabledChanged = pyqtSignal(str, bool)
     weightChanged = pyqtSignal(str, float)
+    turnHeld = pyqtSignal(str, bool)
     clearRequested = pyqtSignal(str)
     clearAllRequested = pyqtSignal()
 
@@ -50,12 +54,13 @@ class TargetList(QWidget):
             self._rebuild(tuple(targets))
         for joint, (enabled, weight, rotation) in targets.items():
             row = self.rows[joint]
-            for w in (row["enabled"], row["weight"]):
+            for w in (row["enabled"], row["weight"], row["turn"]):
                 w.blockSignals(True)
             row["enabled"].setChecked(bool(enabled))
             row["weight"].setValue(float(weight))
+            row["turn"].setChecked(bool(rotation))
             row["label"].setText(f"{joint} (+rotation)" if rotation else joint)
-            for w in (row["enabled"], row["weight"]):
+            for w in (row["enabled"], row["weight"], row["turn"]):
                 w.blockSignals(False)
         self.clear_all.setEnabled(bool(targets))
 
@@ -70,9 +75,12 @@ class TargetList(QWidget):
             enabled.toggled.connect(lambda on, j=joint: self.enabledChanged.emit(j, bool(on)))
             weight = QDoubleSpinBox(minimum=WEIGHT_RANGE[0], maximum=WEIGHT_RANGE[1], singleStep=0.5, decimals=2)
             weight.valueChanged.connect(lambda v, j=joint: self.weightChanged.emit(j, float(v)))
+            turn = QCheckBox("hold turn")
+            turn.setToolTip("Keep the joint turned as it is now (a rotation target)")
+            turn.toggled.connect(lambda on, j=joint: self.turnHeld.emit(j, bool(on)))
             clear = QPushButton("Clear")
             clear.clicked.connect(lambda _=False, j=joint: self.clearRequested.emit(j))
             label = QLabel(joint)
-            for col, w in enumerate((enabled, label, weight, clear)):
+            for col, w in enumerate((enabled, label, weight, turn, clear)):
                 self.grid.addWidget(w, i, col)
-            self.rows[joint] = {"enabled": enabled, "label": label, "weight": weight, "clear": clear}
+            self.rows[joint] = {"enabled": enabled, "label": label, "weight": weight, "turn": turn, "clear": clear}

@@ -47,7 +47,8 @@ def vae():
 
 
 def state(w):
-    return ({j: (t.position.round(9).tolist(), t.weight, t.enabled) for j, t in w.mode.targets.items()},
+    return ({j: (t.position.round(9).tolist(), t.weight, t.enabled, t.rotation is not None)
+             for j, t in w.mode.targets.items()},
             [(k.frame, sorted(k.targets)) for k in w.scene.keys], w.scene.animation.frames, w.scene.animation.fps,
             w.mode.pose.positions.round(9).tolist())  # fmt: skip
 
@@ -68,6 +69,7 @@ def test_every_edit_kind_undoes_and_redoes(window, qtbot):
     edits = [
         lambda: w.drag_joint("lwrist", start + [0.0, -0.1, 0.1]),
         lambda: w.targets.rows["lwrist"]["weight"].setValue(5.0),
+        lambda: w.targets.rows["lwrist"]["turn"].setChecked(True),
         lambda: w.targets.rows["lwrist"]["enabled"].setChecked(False),
         lambda: w.add_key(0),
         lambda: w.drag_joint("rwrist", w.mode.pose.positions[sk.JOINT_INDEX["rwrist"]] + [0, 0, 0.2]),

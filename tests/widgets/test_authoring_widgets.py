@@ -12,7 +12,7 @@ def test_target_list_rows_emit_their_edits_and_set_targets_is_silent(qtbot):
     t = TargetList()
     qtbot.addWidget(t)
     seen = []
-    for sig in (t.enabledChanged, t.weightChanged, t.clearRequested):
+    for sig in (t.enabledChanged, t.weightChanged, t.turnHeld, t.clearRequested):
         sig.connect(lambda *a: seen.append(a))
     t.clearAllRequested.connect(lambda: seen.append(("all",)))
     t.set_targets({"lwrist": (True, 1.0, False), "upperneck": (False, 4.0, True)})
@@ -20,9 +20,11 @@ def test_target_list_rows_emit_their_edits_and_set_targets_is_silent(qtbot):
     assert t.rows["upperneck"]["label"].text() == "upperneck (+rotation)" and t.rows["upperneck"]["weight"].value() == 4.0
     t.rows["lwrist"]["enabled"].setChecked(False)
     t.rows["lwrist"]["weight"].setValue(7.5)
+    assert t.rows["upperneck"]["turn"].isChecked()
+    t.rows["lwrist"]["turn"].setChecked(True)
     t.rows["upperneck"]["clear"].click()
     t.clear_all.click()
-    assert seen == [("lwrist", False), ("lwrist", 7.5), ("upperneck",), ("all",)]
+    assert seen == [("lwrist", False), ("lwrist", 7.5), ("lwrist", True), ("upperneck",), ("all",)]
     t.rows["lwrist"]["weight"].setValue(50.0)
     assert t.rows["lwrist"]["weight"].value() == 10.0  # the engine's range
     t.set_targets({})

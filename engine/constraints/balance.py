@@ -95,7 +95,8 @@ class BalanceTerm:
     """The fast-path term of one :class:`BalanceConstraint` (module doc)."""
 
     def __init__(self, c: BalanceConstraint) -> None:
-        self.name, self.weight, self.tolerance, self.com = c.name, c.weight, c.tolerance, c.mode == "com_over_feet"
+        self.name, self.weight, self.turns = c.name, c.weight, False
+        self.tolerance, self.com = c.tolerance, c.mode == "com_over_feet"
 
     def _gap(self, pos: np.ndarray) -> tuple[np.ndarray, float, bool]:
         if self.com:
@@ -105,21 +106,20 @@ class BalanceTerm:
         s = float(d @ d)
         return d, math.sqrt(max(s, _MIN_SQUARED)), s > _MIN_SQUARED
 
-    def loss(self, pos: np.ndarray, world: np.ndarray) -> float:
-        return max(self._gap(pos)[1] - self.tolerance, 0.0) ** 2
-
-    def add_gradient(self, g_pos: np.ndarray, g_rot: np.ndarray, pos: np.ndarray, world: np.ndarray) -> None:
+    def evaluate(self, pos: np.ndarray, world: np.ndarray, g_pos: np.ndarray, g_rot: np.ndarray) -> float:
         d, dist, free = self._gap(pos)
         excess = dist - self.tolerance
-        if excess <= 0.0 or not free:
-            return
-        g = (2.0 * self.weight * excess / dist) * d  # d loss / d a, (2,)
-        if self.com:
-            g_pos[:, :2] += g / len(pos)
-            g_pos[_FEET, :2] -= g / len(_FEET)
-        else:
-            g_pos[_HEAD, :2] += g
-            g_pos[_ROOT, :2] -= g
+        if excess <= 0.0:
+            return 0.0
+        if free:
+            g = (2.0 * self.weight * excess / dist) * d  # d (weight loss) / d a, (2,)
+            if self.com:
+                g_pos[:, :2] += g / len(pos)
+                g_pos[_FEET, :2] -= g / len(_FEET)
+            else:
+                g_pos[_HEAD, :2] += g
+                g_pos[_ROOT, :2] -= g
+        return excess * excess
 
     def satisfied(self, pos: np.ndarray, world: np.ndarray) -> bool:
         return self._gap(pos)[1] <= self.tolerance + _SLACK

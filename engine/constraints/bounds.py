@@ -66,7 +66,7 @@ class BoundsTerm:
     """The fast-path term of one :class:`BoundsConstraint` (module doc)."""
 
     def __init__(self, c: BoundsConstraint) -> None:
-        self.name, self.weight = c.name, c.weight
+        self.name, self.weight, self.turns = c.name, c.weight, False
         self.j = joint_index(c.joint, "joint", c.kind)
         self.lo, self.hi = np.asarray(c.box_min, dtype=np.float64), np.asarray(c.box_max, dtype=np.float64)
 
@@ -74,12 +74,10 @@ class BoundsTerm:
         p = pos[self.j]
         return np.maximum(p - self.hi, 0.0) - np.maximum(self.lo - p, 0.0)
 
-    def loss(self, pos: np.ndarray, world: np.ndarray) -> float:
+    def evaluate(self, pos: np.ndarray, world: np.ndarray, g_pos: np.ndarray, g_rot: np.ndarray) -> float:
         e = self._excess(pos)
+        g_pos[self.j] += (2.0 * self.weight) * e
         return float(e @ e)
-
-    def add_gradient(self, g_pos: np.ndarray, g_rot: np.ndarray, pos: np.ndarray, world: np.ndarray) -> None:
-        g_pos[self.j] += (2.0 * self.weight) * self._excess(pos)
 
     def satisfied(self, pos: np.ndarray, world: np.ndarray) -> bool:
         p = pos[self.j]

@@ -85,7 +85,8 @@ class DistanceTerm:
     """The fast-path term of one :class:`DistanceConstraint` (module doc)."""
 
     def __init__(self, c: DistanceConstraint) -> None:
-        self.name, self.weight, self.distance, self.tolerance = c.name, c.weight, c.distance, c.tolerance
+        self.name, self.weight, self.turns = c.name, c.weight, False
+        self.distance, self.tolerance = c.distance, c.tolerance
         self.a, self.b = c._pair()
 
     def _length(self, pos: np.ndarray) -> tuple[np.ndarray, float, bool]:
@@ -93,15 +94,13 @@ class DistanceTerm:
         s = float(d @ d)
         return d, math.sqrt(max(s, _MIN_SQUARED)), s > _MIN_SQUARED
 
-    def loss(self, pos: np.ndarray, world: np.ndarray) -> float:
-        return (self._length(pos)[1] - self.distance) ** 2
-
-    def add_gradient(self, g_pos: np.ndarray, g_rot: np.ndarray, pos: np.ndarray, world: np.ndarray) -> None:
+    def evaluate(self, pos: np.ndarray, world: np.ndarray, g_pos: np.ndarray, g_rot: np.ndarray) -> float:
         d, length, free = self._length(pos)
         if free:  # within the clamp the length is constant
             g = (2.0 * self.weight * (length - self.distance) / length) * d
             g_pos[self.a] += g
             g_pos[self.b] -= g
+        return (length - self.distance) ** 2
 
     def satisfied(self, pos: np.ndarray, world: np.ndarray) -> bool:
         return abs(self._length(pos)[1] - self.distance) <= self.tolerance

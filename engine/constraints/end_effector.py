@@ -81,23 +81,21 @@ class EndEffectorTerm:
     """The fast-path term of one :class:`EndEffectorConstraint` (module doc)."""
 
     def __init__(self, c: EndEffectorConstraint) -> None:
-        self.name, self.weight, self.tolerance = c.name, c.weight, c.tolerance
+        self.name, self.weight, self.turns, self.tolerance = c.name, c.weight, c.use_rotation, c.tolerance
         self.j = joint_index(c.joint, "joint", c.kind)
         self.target = np.asarray(c.position, dtype=np.float64)
         self.rot = unit_quaternion_matrix(c.rotation) if c.use_rotation else None
         self.rot_weight = c.rotation_weight
 
-    def loss(self, pos: np.ndarray, world: np.ndarray) -> float:
+    def evaluate(self, pos: np.ndarray, world: np.ndarray, g_pos: np.ndarray, g_rot: np.ndarray) -> float:
         d = pos[self.j] - self.target
+        g_pos[self.j] += (2.0 * self.weight) * d
         out = float(d @ d)
         if self.rot is not None:
-            out += self.rot_weight * rotation_term(self.rot, world[self.j])[1]
+            _, value, grad = rotation_term(self.rot, world[self.j])
+            g_rot[self.j] += (self.weight * self.rot_weight) * grad
+            out += self.rot_weight * value
         return out
-
-    def add_gradient(self, g_pos: np.ndarray, g_rot: np.ndarray, pos: np.ndarray, world: np.ndarray) -> None:
-        g_pos[self.j] += (2.0 * self.weight) * (pos[self.j] - self.target)
-        if self.rot is not None:
-            g_rot[self.j] += (self.weight * self.rot_weight) * rotation_term(self.rot, world[self.j])[2]
 
     def satisfied(self, pos: np.ndarray, world: np.ndarray) -> bool:
         err = float(np.linalg.norm(pos[self.j] - self.target))

@@ -102,8 +102,9 @@ class FloorTerm:
     """The fast-path term of one :class:`FloorConstraint` for one frame (module doc)."""
 
     def __init__(self, c: FloorConstraint, previous: np.ndarray | None) -> None:
-        self.name, self.weight = c.name, c.weight
+        self.name, self.weight, self.turns = c.name, c.weight, False
         self.idx = np.array(c._index(), dtype=np.intp)
+        self.unique = len(set(self.idx.tolist())) == len(self.idx)
         self.low = c.floor_height + c.clearance
         self.ok = self.low - _SLACK
         self.prev = None
@@ -113,22 +114,22 @@ class FloorTerm:
             contact = prev[:, 2].astype(np.float32) < np.float32(c.floor_height + c.contact_height)
             self.prev, self.slide = prev[:, :2], c.slide_weight * contact.astype(np.float64)
 
-    def loss(self, pos: np.ndarray, world: np.ndarray) -> float:
+    def evaluate(self, pos: np.ndarray, world: np.ndarray, g_pos: np.ndarray, g_rot: np.ndarray) -> float:
         p = pos[self.idx]
+        g = np.zeros((len(self.idx), 3))
         under = np.maximum(self.low - p[:, 2], 0.0)
         out = float(under @ under)
+        g[:, 2] = under
+        g[:, 2] *= -2.0 * self.weight
         if self.prev is not None:
             d = p[:, :2] - self.prev
             out += float(self.slide @ (d * d).sum(-1))
+            g[:, :2] = (2.0 * self.weight * self.slide)[:, None] * d
+        if self.unique:
+            g_pos[self.idx] += g
+        else:  # a joint listed twice counts twice
+            np.add.at(g_pos, self.idx, g)
         return out
-
-    def add_gradient(self, g_pos: np.ndarray, g_rot: np.ndarray, pos: np.ndarray, world: np.ndarray) -> None:
-        p = pos[self.idx]
-        g = np.zeros((len(self.idx), 3))
-        g[:, 2] = -2.0 * np.maximum(self.low - p[:, 2], 0.0)
-        if self.prev is not None:
-            g[:, :2] = (2.0 * self.slide)[:, None] * (p[:, :2] - self.prev)
-        np.add.at(g_pos, self.idx, self.weight * g)  # a joint may be listed twice
 
     def satisfied(self, pos: np.ndarray, world: np.ndarray) -> bool:
         return bool((pos[self.idx, 2] >= self.ok).all())

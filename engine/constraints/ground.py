@@ -71,7 +71,7 @@ class GroundTerm:
     """
 
     def __init__(self, name: str, weight: float, low: float, high: float) -> None:
-        self.name, self.weight, self.low, self.high = name, float(weight), float(low), float(high)
+        self.name, self.weight, self.turns, self.low, self.high = name, float(weight), False, float(low), float(high)
 
     def _excess(self, pos: np.ndarray) -> tuple[np.ndarray, float]:
         """Softmin weights of the two ankles ``(2,)`` and the soft height's excess over the band."""
@@ -81,12 +81,11 @@ class GroundTerm:
         z = m - SOFTMIN_TAU * math.log(e.sum())
         return e / e.sum(), (z - self.high if z > self.high else (z - self.low if z < self.low else 0.0))
 
-    def loss(self, pos: np.ndarray, world: np.ndarray) -> float:
-        return self._excess(pos)[1] ** 2
-
-    def add_gradient(self, g_pos: np.ndarray, g_rot: np.ndarray, pos: np.ndarray, world: np.ndarray) -> None:
+    def evaluate(self, pos: np.ndarray, world: np.ndarray, g_pos: np.ndarray, g_rot: np.ndarray) -> float:
         w, e = self._excess(pos)
-        g_pos[_FEET, 2] += (2.0 * self.weight * e) * w
+        if e != 0.0:
+            g_pos[_FEET, 2] += (2.0 * self.weight * e) * w
+        return e * e
 
     def satisfied(self, pos: np.ndarray, world: np.ndarray) -> bool:
         return True

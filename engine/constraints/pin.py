@@ -99,19 +99,19 @@ class PinTerm:
     """The fast-path term of one :class:`PinConstraint` for one frame (module doc)."""
 
     def __init__(self, c: PinConstraint, target: np.ndarray | None) -> None:
-        self.name, self.weight, self.tol2 = c.name, c.weight, c.tolerance**2
+        self.name, self.weight, self.turns, self.tol2 = c.name, c.weight, False, c.tolerance**2
         self.j = joint_index(c.joint, "joint", c.kind)
         self.target = None if target is None else np.asarray(target, dtype=np.float64)
 
-    def loss(self, pos: np.ndarray, world: np.ndarray) -> float:
+    def evaluate(self, pos: np.ndarray, world: np.ndarray, g_pos: np.ndarray, g_rot: np.ndarray) -> float:
         if self.target is None:
             return 0.0
         d = pos[self.j] - self.target
+        g_pos[self.j] += (2.0 * self.weight) * d
         return float(d @ d)
 
-    def add_gradient(self, g_pos: np.ndarray, g_rot: np.ndarray, pos: np.ndarray, world: np.ndarray) -> None:
-        if self.target is not None:
-            g_pos[self.j] += (2.0 * self.weight) * (pos[self.j] - self.target)
-
     def satisfied(self, pos: np.ndarray, world: np.ndarray) -> bool:
-        return self.loss(pos, world) <= self.tol2
+        if self.target is None:
+            return True
+        d = pos[self.j] - self.target
+        return float(d @ d) <= self.tol2

@@ -77,18 +77,15 @@ class SmoothTerm:
     """
 
     def __init__(self, name: str, weight: float, target: np.ndarray | None) -> None:
-        self.name, self.weight = name, float(weight)
+        self.name, self.weight, self.turns = name, float(weight), False
         self.target = None if target is None else np.asarray(target, dtype=np.float64)
 
-    def loss(self, pos: np.ndarray, world: np.ndarray) -> float:
+    def evaluate(self, pos: np.ndarray, world: np.ndarray, g_pos: np.ndarray, g_rot: np.ndarray) -> float:
         if self.target is None:
             return 0.0
         d = pos - self.target
-        return float((d * d).sum() / len(pos))
-
-    def add_gradient(self, g_pos: np.ndarray, g_rot: np.ndarray, pos: np.ndarray, world: np.ndarray) -> None:
-        if self.target is not None:
-            g_pos += (2.0 * self.weight / len(pos)) * (pos - self.target)
+        g_pos += (2.0 * self.weight / len(pos)) * d
+        return float(np.einsum("ij,ij->", d, d) / len(pos))
 
     def satisfied(self, pos: np.ndarray, world: np.ndarray) -> bool:
         return True

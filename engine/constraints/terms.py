@@ -11,7 +11,10 @@ matrices ``W (22, 3, 3)``, and adds the gradient of ``weight * loss`` w.r.t. the
   world-frame turn ``a`` of joint ``j``'s own rotation (``W_j -> exp([a]x) W_j``, its
   position and its children left alone), the weighted loss changes by ``g_rot[j] . a``.
 
-The fast path turns both into the latent gradient (FK and decoder reverse pass). The
+One call, :meth:`PoseTerm.evaluate`, gives the loss and adds the gradient (most of a
+term's cost on a 22-joint pose is per numpy call, so loss and gradient share their
+work). The fast path turns both gradients into the latent gradient (FK and decoder
+reverse pass). The
 autograd reference path uses :meth:`~engine.constraints.base.Constraint.loss` instead;
 ``tests/engine/test_fast_terms.py`` checks every kind's term against it.
 """
@@ -49,19 +52,20 @@ class PoseTerm(Protocol):
     name : str
         The constraint's name (loss reporting).
     weight : float
-        The weight the term's loss is multiplied by (already including any per-frame
-        activity of the constraint).
+        The weight the term's loss is multiplied by (the solver sets it for the frame:
+        the constraint's weight times its frame-range activity).
+    turns : bool
+        Whether the term may add to ``g_rot`` (it reads a joint's rotation).
     """
 
     name: str
     weight: float
+    turns: bool
 
-    def loss(self, pos: np.ndarray, world: np.ndarray) -> float:
-        """Unweighted loss at positions ``pos (22, 3)`` and rotations ``world (22, 3, 3)``."""
-        ...
-
-    def add_gradient(self, g_pos: np.ndarray, g_rot: np.ndarray, pos: np.ndarray, world: np.ndarray) -> None:
-        """Add the weighted gradient in place: ``g_pos (22, 3)``, ``g_rot (22, 3)``."""
+    def evaluate(self, pos: np.ndarray, world: np.ndarray, g_pos: np.ndarray, g_rot: np.ndarray) -> float:
+        """The unweighted loss at positions ``pos (22, 3)`` and rotations ``world (22, 3,
+        3)``; adds the gradient of ``weight * loss`` to ``g_pos (22, 3)`` and ``g_rot
+        (22, 3)`` in place."""
         ...
 
     def satisfied(self, pos: np.ndarray, world: np.ndarray) -> bool:

@@ -172,6 +172,7 @@ class FastPose:
         pts = self.rows if not t.extras else np.concatenate((self.rows, np.arange(n)))  # extras: every row
         pts = pts if self.anchor is None else np.append(pts, self.anchor)
         self.points = pts
+        self.turns = any(e.turns for e in t.extras)
         self.sub_points = self.subtree[:, pts]
         self.sub_rot = self.subtree[:, self.rows6]
 
@@ -206,9 +207,10 @@ class FastPose:
             losses = losses.copy()
             losses[t.six] += t.rot_weight * self.rot_loss
         losses = losses * t.on
-        if t.extras:
-            self.pos_j, self.world_j = pos_j, world_j = pos[self.row], world[self.row]  # joint order
-            losses = np.append(losses, [e.loss(pos_j, world_j) for e in t.extras])
+        if t.extras:  # each term's loss, and its gradients for backward (joint order)
+            self.pos_j, self.world_j = pos_j, world_j = pos[self.row], world[self.row]
+            self.g_extra, self.g_turn = ge, gr = np.zeros((n, 3)), np.zeros((n, 3))
+            losses = np.append(losses, [e.evaluate(pos_j, world_j, ge, gr) for e in t.extras])
         if t.has_prior:
             if t.prediction is None:
                 return np.append(losses, 0.0)
@@ -251,18 +253,13 @@ class FastPose:
         """
         t, pos = self.terms, self.pos_lo
         g = self.w2 * self.err  # (S, 3) position gradients at the sensor rows
-        g_rot = None
-        if t.extras:  # other kinds' terms: a gradient at every row (engine.constraints.terms)
-            ge, gr = np.zeros((self.n, 3)), np.zeros((self.n, 3))
-            for e in t.extras:
-                e.add_gradient(ge, gr, self.pos_j, self.world_j)
-            g = np.concatenate((g, ge[self.order]))
-            g_rot = gr[self.order]
+        if t.extras:  # other kinds' terms, evaluated by forward: a gradient at every row
+            g = np.concatenate((g, self.g_extra[self.order]))
         if self.anchor is not None:
             g = np.concatenate((g, -g.sum(0, keepdims=True)))
         tau = self.sub_points @ _cross(pos[self.points], g) - _cross(pos, self.sub_points @ g)
-        if g_rot is not None:
-            tau += self.subtree @ g_rot  # turning a joint turns every joint of its subtree
+        if self.turns:
+            tau += self.subtree @ self.g_turn[self.order]  # turning a joint turns every joint of its subtree
         if len(t.six):
             inside = (self.rot_raw >= 0.0) & (self.rot_raw <= 1.0)
             m = np.matmul(t.rot_target, self.world_lo[self.rows6].transpose(0, 2, 1))

@@ -119,7 +119,7 @@ def test_solving_never_changes_a_constraint(index):
     c.loss(state), c.satisfied(state), c.gizmo(state.positions.detach().numpy())
     term = c.fast_term(FrameInputs(state.previous_positions.numpy()))
     pos = state.positions.detach().numpy()
-    term.add_gradient(np.zeros((22, 3)), np.zeros((22, 3)), pos, np.tile(np.eye(3), (22, 1, 1)))
+    term.evaluate(pos, np.tile(np.eye(3), (22, 1, 1)), np.zeros((22, 3)), np.zeros((22, 3)))
     after = c.to_dict()
     assert before.keys() == after.keys()
     for k in before:
@@ -165,3 +165,43 @@ def shipped_vae():
     from engine.models import load_default_models
 
     return load_default_models().vae
+
+
+def test_the_studio_snapshot_timing_carries_the_slow_path_flag(registry):
+    """DragPoser with a kind without a fast term: each frame's timings (what the engine
+    thread copies into the snapshot's ``timing``, the studio's badge) say ``slow_path``;
+    the warning line comes with the first such frame only."""
+    from pathlib import Path
+
+    from engine.methods.dragposer import create
+    from engine.retarget import load_motion
+    from engine.studio.thread import _timing
+    from engine.tracking import simulate
+
+    @dataclass
+    class Slow(Constraint):
+        kind: ClassVar[str] = "test_slow_method"
+        no_fast_term: ClassVar[str] = "a test kind"
+
+        def loss(self, state):
+            return (state.positions[sk.JOINT_INDEX["upperneck"], 2] - 1.5) ** 2
+
+        def acts_on(self):
+            return ("upperneck",)
+
+        @classmethod
+        def placement(cls, params, positions):
+            return {}
+
+    motion = load_motion(Path(__file__).resolve().parents[2] / "assets" / "clips" / "example.bvh", max_frames=3)
+    tracking = simulate(motion, "6")
+    method = create(iterations=2)
+    method.reset(motion.skeleton, motion.fps)
+    plain = method.step(tracking.frame(0))
+    method.set_constraints([Slow(name="slow")])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SlowPathWarning)
+        first, second = method.step(tracking.frame(1)), method.step(tracking.frame(2))
+    assert "slow_path" not in _timing(plain, 1.0)
+    assert _timing(first, 1.0)["slow_path"] == _timing(second, 1.0)["slow_path"] == 1.0
+    assert sum("test_slow_method" in w for w in first.warnings + second.warnings) == 1

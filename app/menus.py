@@ -13,7 +13,7 @@ from PyQt6.QtCore import Qt
 from PyQt6.QtGui import QAction, QActionGroup, QKeySequence
 from PyQt6.QtWidgets import QMainWindow, QMenu
 
-from app import authoring_actions
+from app import authoring_actions, range_actions
 from widgets.help_dialog import HelpDialog
 
 
@@ -71,6 +71,7 @@ def build_menus(w: QMainWindow) -> None:
         act.setShortcutContext(Qt.ShortcutContext.WindowShortcut)
         edit.addAction(act)
     named["undo"], named["redo"] = undo, redo
+    named.update(range_actions.add_edit_entries(w, edit, action))
     play = w.menuBar().addMenu("&Playback")
     action(w, play, "Play / pause", w.toggle_play, "Space")
     action(w, play, "Next frame", lambda: w.session.step(1), "Right")

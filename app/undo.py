@@ -103,9 +103,20 @@ class SceneUndo:
         finally:
             self._applying = was
 
+    @contextlib.contextmanager
+    def same_clip(self) -> Iterator[None]:
+        """A motion set inside is the same clip edited (a range re-solve and its undo):
+        the history is kept."""
+        was, self._same_clip = getattr(self, "_same_clip", False), True
+        try:
+            yield
+        finally:
+            self._same_clip = was
+
     def _on_motion(self, e: Any) -> None:
         """A new clip starts a new history (offsets and failures were made for the old one)."""
-        self.stack.clear()
+        if not getattr(self, "_same_clip", False):
+            self.stack.clear()
 
     # -- recording ------------------------------------------------------------------
     def _on_sensors(self, e: Any) -> None:

@@ -116,9 +116,13 @@ def run_method(
     else:
         results: list[FrameResult] = []
         local, root = np.full((n, sk.NUM_JOINTS, 4), np.nan), np.full((n, 3), np.nan)
-    for i in tqdm(range(n), desc=desc or method.name, unit="frame", disable=not progress, leave=False):
+    # a method may solve the whole clip at once (DragPoser's batched offline mode)
+    clip = getattr(method, "solve_clip", None)
+    solved = clip([tracking.frame(i) for i in range(n)]) if clip is not None else None
+    for i in tqdm(range(n), desc=desc or method.name, unit="frame", disable=not progress or solved is not None,
+                  leave=False):  # fmt: skip
         t0 = time.perf_counter()
-        res = driver.step(method, tracking.frame(i))
+        res = solved[i] if solved is not None else driver.step(method, tracking.frame(i))
         if not res.ms:
             res.ms = 1000.0 * (time.perf_counter() - t0)
         if light:

@@ -17,6 +17,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -131,8 +132,9 @@ class DragPoserMethod(DragPoserEdits, Method):
         finally:
             torch.set_num_threads(threads)
 
-    def _step(self, sensors: SensorFrame, deadline: float | None = None) -> FrameResult:
-        t0 = time.perf_counter()
+    def _read_frame(self, sensors: SensorFrame) -> tuple[list[str], OptimizerSettings]:
+        """Take a frame's readings: sensor terms, tracker history, facing; returns the
+        warnings so far and the settings the frame runs with."""
         warnings = self._update_sensors(sensors)
         self._tracks.push({j: (np.asarray(r.position, np.float64), np.asarray(r.rotation, np.float64))
                            for j, r in sensors.readings.items() if r.connected and r.dof == 6 and _finite(r)})  # fmt: skip
@@ -145,6 +147,19 @@ class DragPoserMethod(DragPoserEdits, Method):
         if s.sensor_rotation_weight != base and base > 0:  # the profile's rotation weight (blend kept)
             for c in self.sensors.values():
                 c.rotation_weight *= s.sensor_rotation_weight / base
+        return warnings, s
+
+    def solve_clip(self, frames: Sequence[SensorFrame]) -> list[FrameResult] | None:
+        """Offline mode: the whole clip solved in windows of frames optimised together
+        (:mod:`engine.methods.dragposer_batch`), or None when this clip is solved frame by
+        frame (realtime mode, user constraints, no 6-DoF hip tracker in every frame...)."""
+        from engine.methods.dragposer_batch import solve_clip
+
+        return solve_clip(self, frames)
+
+    def _step(self, sensors: SensorFrame, deadline: float | None = None) -> FrameResult:
+        t0 = time.perf_counter()
+        warnings, s = self._read_frame(sensors)
         self.schedule.configure(s.predictor_every, s.past_window)
         override = roots.root_override(self.sensors)
         if self._root is None:

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from engine.atomic import write_text
-from engine.cli.jobs import add_jobs_option, jobs_of, map_files
+from engine.cli.jobs import add_jobs_option, executor_of, jobs_of, map_files
 from engine.cli.method_options import add_model_options, apply_settings, method_kwargs
 from engine.cli.rig_options import add_rig_map_option, rig_map_path
 from engine.errors import UserError
@@ -247,11 +247,12 @@ def _evaluate(args: argparse.Namespace) -> int:
     if args.max_frames is not None and args.max_frames < 4:
         raise UserError("--max-frames must be at least 4 (jitter needs 4 frames)")
     clips = find_clips(args.paths)
-    jobs = jobs_of(args)
-    progress = not args.no_progress and (jobs == 1 or len(clips) == 1)  # workers: one bar for the files
+    jobs, executor = jobs_of(args), executor_of(args)
+    # workers (or Ray tasks): one bar for the files
+    progress = not args.no_progress and executor.kind == "local" and (jobs == 1 or len(clips) == 1)
     _METHODS.clear()
     rows = map_files(_evaluate_file, [(path, args, names, progress) for path in clips], jobs,
-                     progress=not args.no_progress, desc="evaluate")  # fmt: skip
+                     progress=not args.no_progress, desc="evaluate", executor=executor)  # fmt: skip
     docs: dict[str, dict[str, Any]] = {}
     for name in names:  # merged in file order; a method failing on any file: its first error
         errors = [r[name]["error"] for r in rows if "error" in r[name]]

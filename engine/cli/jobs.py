@@ -1,9 +1,18 @@
-"""``--jobs N``: one worker process per input file, results merged in file order.
+"""How ``evaluate`` and ``reconstruct`` run their per-file jobs; results are merged in file order.
 
-Each worker runs one torch thread and one BLAS thread (the per-frame solve is a chain of
-tiny operations that gains nothing from more, and the workers would only compete), and
-builds its method once. Workers are started with ``spawn`` so they inherit no threads
-or locks from the parent. ``--jobs 1`` (or a single file) runs in this process.
+* ``--jobs N`` (the default executor, ``local``): one worker process per input file.
+  Each worker runs one torch thread and one BLAS thread (the per-frame solve is a chain
+  of tiny operations that gains nothing from more, and the workers would only compete),
+  and builds its method once. Workers are started with ``spawn`` so they inherit no
+  threads or locks from the parent. ``--jobs 1`` (or a single file) runs in this process.
+* ``--executor ray [--address ADDR]``: the same jobs as Ray tasks (one CPU each, one
+  thread each as above), on the cluster at ``ADDR`` or, without it, on a Ray instance
+  started for the run on this machine and stopped after it (or the one this process
+  has already started). Ray is an optional extra (``pip install '.[cluster]'``); every
+  node needs this package installed and the input and output paths visible under the
+  same names (docs/performance.md, "A folder of clips on a cluster").
+
+This module is the only place that dispatches jobs.
 """
 
 from __future__ import annotations
@@ -11,6 +20,7 @@ from __future__ import annotations
 import argparse
 import os
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from multiprocessing import get_context
 from typing import Any, TypeVar
@@ -20,9 +30,44 @@ from engine.errors import UserError
 T = TypeVar("T")
 
 
+#: ``--executor`` choices.
+EXECUTORS = ("local", "ray")
+
+
+@dataclass(frozen=True)
+class Executor:
+    """Where jobs run: ``kind`` ``local`` (``--jobs`` processes) or ``ray``; ``address``
+    the Ray cluster's (None: a local instance)."""
+
+    kind: str = "local"
+    address: str | None = None
+
+
+LOCAL = Executor()
+
+
 def add_jobs_option(p: argparse.ArgumentParser) -> None:
     p.add_argument("--jobs", type=int, metavar="N", default=None,
                    help="worker processes, one file at a time each (default: the number of cores; 1: no workers)")  # fmt: skip
+    p.add_argument("--executor", choices=EXECUTORS, default="local",
+                   help="local: --jobs worker processes; ray: Ray tasks, one per file (needs the 'cluster' extra)")  # fmt: skip
+    p.add_argument("--address", metavar="ADDR", default=None,
+                   help="with --executor ray: the Ray cluster to run on (default: a local Ray instance for this run)")  # fmt: skip
+
+
+def executor_of(args: argparse.Namespace) -> Executor:
+    """The ``--executor`` / ``--address`` choice; a :class:`UserError` for ``--address``
+    without ``--executor ray`` or ``ray`` without Ray installed."""
+    kind, address = getattr(args, "executor", "local"), getattr(args, "address", None)
+    if kind == "local":
+        if address is not None:
+            raise UserError("--address applies to --executor ray")
+        return LOCAL
+    try:
+        import ray  # noqa: F401
+    except ImportError:
+        raise UserError("--executor ray needs Ray: pip install 'dragposer-studio[cluster]'") from None
+    return Executor("ray", address)
 
 
 def jobs_of(args: argparse.Namespace) -> int:
@@ -42,9 +87,12 @@ def _one_thread() -> None:
 
 
 def map_files(fn: Callable[[Any], T], items: Sequence[Any], jobs: int, progress: bool = True,
-              desc: str = "files") -> list[T]:  # fmt: skip
+              desc: str = "files", executor: Executor = LOCAL) -> list[T]:  # fmt: skip
     """``[fn(x) for x in items]``, in worker processes when ``jobs > 1`` and there are
-    several items (``fn`` must be a module-level function; its errors are re-raised)."""
+    several items, or as Ray tasks with a ``ray`` ``executor`` (``fn`` must be a
+    module-level function; its :class:`UserError` is re-raised here)."""
+    if executor.kind == "ray":
+        return _map_ray(fn, items, executor.address, progress, desc)
     if jobs <= 1 or len(items) <= 1:
         return [fn(x) for x in items]
     from tqdm import tqdm
@@ -61,6 +109,38 @@ def map_files(fn: Callable[[Any], T], items: Sequence[Any], jobs: int, progress:
                 raise UserError(value)
             out.append(value)
         return out
+
+
+def _map_ray(fn: Callable[[Any], T], items: Sequence[Any], address: str | None, progress: bool,
+             desc: str) -> list[T]:  # fmt: skip
+    import ray
+    from tqdm import tqdm
+
+    started = not ray.is_initialized()
+    if started:  # workers inherit this process's environment (PYTHONPATH) on a local instance
+        ray.init(address=address, include_dashboard=False, log_to_driver=False, configure_logging=False)
+    try:
+        task = ray.remote(num_cpus=1)(_ray_call)
+        refs = [task.remote(fn, x) for x in items]
+        pending = list(refs)
+        with tqdm(total=len(refs), desc=desc, unit="file", disable=not progress) as bar:
+            while pending:
+                ready, pending = ray.wait(pending, num_returns=1)
+                bar.update(len(ready))
+        out = []
+        for ok, value in ray.get(refs):  # file order
+            if not ok:
+                raise UserError(value)
+            out.append(value)
+        return out
+    finally:
+        if started:
+            ray.shutdown()
+
+
+def _ray_call(fn: Callable[[Any], T], x: Any) -> tuple[bool, Any]:
+    _one_thread()
+    return _call(fn, x)
 
 
 def _call(fn: Callable[[Any], T], x: Any) -> tuple[bool, Any]:

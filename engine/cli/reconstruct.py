@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from engine.cli.jobs import add_jobs_option, jobs_of, map_files
+from engine.cli.jobs import add_jobs_option, executor_of, jobs_of, map_files
 from engine.cli.method_options import add_model_options, build_method
 from engine.cli.rig_options import add_rig_map_option, rig_map_path
 from engine.cli.tracker_options import add_tracker_options
@@ -106,11 +106,12 @@ def _reconstruct(args: argparse.Namespace) -> int:
         for out in outs:
             check_output_path(out, "--out-dir")
         args.out_dir.mkdir(parents=True, exist_ok=True)
-    jobs = jobs_of(args)
-    parallel = jobs > 1 and len(args.input) > 1
+    jobs, executor = jobs_of(args), executor_of(args)
+    parallel = (jobs > 1 and len(args.input) > 1) or executor.kind == "ray"
     _METHOD.clear()
     work = [(p, o, args, not args.no_progress and not parallel) for p, o in zip(args.input, outs)]
-    for text in map_files(_reconstruct_file, work, jobs, progress=not args.no_progress, desc="reconstruct"):
+    for text in map_files(_reconstruct_file, work, jobs, progress=not args.no_progress, desc="reconstruct",
+                          executor=executor):  # fmt: skip
         print(text)
     return 0
 

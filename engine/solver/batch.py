@@ -28,7 +28,7 @@ import numpy as np
 from engine.kinematics import quat_np as QN
 from engine.models.fused import DenseDecoder
 from engine.solver.fast import FastPose, _AXIAL, _CROSS
-from engine.solver.pose_terms import SOFTMIN_TAU, _FEET
+from engine.constraints.ground import _FEET, SOFTMIN_TAU
 from engine.solver.update import LatentUpdate
 
 

@@ -50,3 +50,22 @@ def test_bench_scene_solves_its_constraints_and_reports_the_same_keys(synthetic_
     assert "4 constraints" in capsys.readouterr().out
     assert main(["bench", str(clip), "--method", "ik", "--frames", "2", "--warmup", "1", "--scene", str(scene)]) == 2
     assert "takes no constraints" in capsys.readouterr().err
+
+
+def test_bench_offline_times_the_batched_solve_and_reports_the_same_keys(synthetic_motion, tmp_path, monkeypatch):
+    from engine.methods import dragposer_batch
+
+    clip = tmp_path / "clip.bvh"
+    save_motion_bvh(clip, synthetic_motion)
+    calls = []
+    real = dragposer_batch.solve_clip
+    monkeypatch.setattr(dragposer_batch, "solve_clip", lambda m, frames: calls.append(len(frames)) or real(m, frames))
+    rows = []
+    for mode in ("realtime", "offline"):
+        out = tmp_path / f"{mode}.json"
+        args = ["bench", str(clip), "--method", "dragposer", "--frames", "6", "--warmup", "2", "--mode", mode]
+        assert main([*args, "--json", str(out)]) == 0
+        rows.append(json.loads(out.read_text())["methods"][0])
+    assert calls == [8]  # the offline run solved its 2 + 6 frames in one call
+    assert rows[0].keys() == rows[1].keys()
+    assert rows[1]["frames"] == 6 and rows[1]["iterations_mean"] >= 1 and rows[1]["ms_per_iteration_median"] > 0

@@ -47,10 +47,10 @@ def test_the_video_has_the_frame_count_and_size_and_shows_the_skeleton(short_cli
     assert not list(tmp_path.glob("*.tmp*")) and [p.name for p in tmp_path.iterdir()] == ["v.mp4"]
 
 
-def test_another_rate_sensors_side_camera_and_body_view(short_clip, tmp_path):
+def test_another_rate_sensors_a_ghost_side_camera_and_body_view(short_clip, tmp_path):
     out = tmp_path / "v.mp4"
     assert main([str(short_clip), "--out", str(out), "--size", "96x64", "--fps", "30", "--sensors", "6",
-                 "--camera", "side", "--view", "body", "--no-progress"]) == 0  # fmt: skip
+                 "--ghosts", "ik", "--camera", "side", "--view", "body", "--no-progress"]) == 0  # fmt: skip
     from engine.retarget import resample_motion
 
     size, frames = decode(out)

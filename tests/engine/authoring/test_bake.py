@@ -73,7 +73,6 @@ def test_no_joint_moves_more_per_frame_than_twice_the_wrist_key_to_key_speed(bak
     assert step[:, LW].max() > 0.5 * bound  # the wrist really travels
 
 
-@pytest.mark.slow
 def test_an_other_output_rate_keeps_the_duration(example_scene, vae):
     scene = load_authoring(example_scene)
     result = bake(scene, vae, fps=60)

@@ -14,8 +14,8 @@ matrices ``W (22, 3, 3)``, and adds the gradient of ``weight * loss`` w.r.t. the
 One call, :meth:`PoseTerm.evaluate`, gives the loss and adds the gradient (most of a
 term's cost on a 22-joint pose is per numpy call, so loss and gradient share their
 work). The fast path turns both gradients into the latent gradient (FK and decoder
-reverse pass). The
-autograd reference path uses :meth:`~engine.constraints.base.Constraint.loss` instead;
+reverse pass). The autograd reference path uses
+:meth:`~engine.constraints.base.Constraint.loss` instead;
 ``tests/engine/test_fast_terms.py`` checks every kind's term against it.
 """
 

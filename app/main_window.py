@@ -235,6 +235,8 @@ class MainWindow(QMainWindow):
         self.plots.clear()
         self.method_errors.clear()
         self.viewport.reset_camera(event.motion.root_pos[0])
+        # the clip at once, the solve behind it (the first solved frame takes seconds)
+        self.viewport.show_clip_frame(event.motion.slice(0, 1).positions()[0])
 
     def _show_sensors(self, event: ev.SensorsChanged | None) -> None:
         s = self.session

@@ -92,3 +92,31 @@ def test_the_studio_starts_playing(studio, qtbot):
     studio.session.pause()
     start_playing(studio)
     qtbot.waitUntil(lambda: studio.session.latest.playing and studio.timeline.play_button.isChecked(), timeout=5000)
+
+
+def test_a_new_clip_shows_at_once_while_the_method_loads(studio, qtbot, tmp_path, synthetic_motion):
+    import dataclasses
+    import time
+
+    from engine.bvh import save_motion_bvh
+    from tests.stand_ins import RestPoseMethod
+
+    class SlowToLoad(RestPoseMethod):
+        name = "slow"
+
+        def reset(self, *args, **kwargs) -> None:
+            time.sleep(1.5)  # as if a first frame were solved offline
+            super().reset(*args, **kwargs)
+
+    inner = studio.engine._factory
+    studio.engine._factory = lambda name: SlowToLoad() if name == "slow" else inner(name)
+    studio.session.set_method("slow")
+    qtbot.waitUntil(lambda: studio.session.latest.method == "slow", timeout=10000)
+    far = dataclasses.replace(synthetic_motion, root_pos=synthetic_motion.root_pos + [6.0, 0.0, 0.0])
+    clip = tmp_path / "far.bvh"
+    save_motion_bvh(clip, far.slice(0, 30))
+    seq = studio.session.latest.seq
+    assert studio.files.open_path(str(clip))
+    assert studio.session.latest.seq == seq, "drawn before the engine solved the new clip"
+    first = studio.session.motion.slice(0, 1).positions()[0]
+    assert np.allclose(studio.viewport.ground_truth.mesh.points[: len(first)], first, atol=1e-6)

@@ -177,6 +177,13 @@ class Viewport(QWidget):
             self._follow(snap.positions[0])
         self.plotter.render()
 
+    def show_clip_frame(self, positions: np.ndarray) -> None:
+        """Draw a newly opened clip's frame (22, 3) m as the ground truth at once, before
+        the engine has solved anything (loading a model and the first solve take seconds)."""
+        if self.show_ground_truth:
+            self.ground_truth.update(np.asarray(positions, float))
+        self.plotter.render()
+
     def set_notice(self, text: str) -> None:
         """A line of text at the bottom of the view ("" removes it), e.g. while a model loads."""
         if text != self.notice:

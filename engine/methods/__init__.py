@@ -1,14 +1,20 @@
 """Reconstruction methods behind one interface, and a registry to build them by name.
 
-``register_method(name, factory)`` adds a method; ``get_method(name, **kwargs)`` builds
-one (keyword arguments such as ``mode`` or ``iterations`` go to the factory, which may
-ignore them). :func:`run_method` runs a method over a whole simulated clip.
+Every module of this package that defines ``create(**kwargs) -> Method`` is registered
+under its file name (:func:`method_modules`); ``register_method(name, factory)`` adds
+others (tests, plugins). ``get_method(name, **kwargs)`` builds one (keyword arguments
+such as ``mode`` or ``iterations`` go to the factory, which may ignore them).
+:func:`run_method` runs a method over a whole simulated clip.
 """
 
 from __future__ import annotations
 
+import importlib
+import pkgutil
+import re
 import time
 from collections.abc import Callable, Sequence
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -25,7 +31,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "Configurable", "Constrainable", "DecodesLatents", "FrameResult", "Method", "SensorWeighted", "SensorFrame", "Sensor",
-    "available_methods", "get_method", "register_method", "run_method",
+    "available_methods", "get_method", "method_modules", "register_method", "run_method",
 ]  # fmt: skip
 
 _FACTORIES: dict[str, Callable[..., Method]] = {}
@@ -134,40 +140,33 @@ def run_method(
     return Motion(local, root, skeleton, tracking.fps, name), records if light else results
 
 
+#: A module of this package is a method when it defines a top-level ``create``.
+_CREATE = re.compile(r"^def create\(", re.MULTILINE)
+
+
+def method_modules(folder: Path) -> list[str]:
+    """Names of the modules in ``folder`` that define a top-level ``create(**kwargs)``
+    (found by reading them, not importing them), sorted."""
+    return sorted(info.name for info in pkgutil.iter_modules([str(folder)])
+                  if not info.ispkg and _CREATE.search((folder / f"{info.name}.py").read_text(encoding="utf-8")))  # fmt: skip
+
+
+def _lazy(module: str) -> Callable[..., Method]:
+    """A factory that imports ``engine.methods.<module>`` only when a method is built:
+    DragPoser pulls in torch and the models, which the CLI's other commands should not
+    pay for at start-up."""
+
+    def build(**kwargs: Any) -> Method:
+        return importlib.import_module(f"{__name__}.{module}").create(**kwargs)
+
+    return build
+
+
 def _register_builtin() -> None:
-    from engine.methods.ik import IKMethod
-
-    register_method("ik", IKMethod)
-    register_method("dragposer", _dragposer)
-    register_method("autoencoder", _autoencoder)
-    register_method("sparseposer", _sparseposer)
-    register_method("rpm", _rpm)
-
-
-def _sparseposer(**kwargs: Any) -> Method:
-    from engine.methods.sparseposer import create
-
-    return create(**kwargs)
-
-
-def _rpm(**kwargs: Any) -> Method:
-    from engine.methods.rpm import create
-
-    return create(**kwargs)
-
-
-def _autoencoder(**kwargs: Any) -> Method:
-    from engine.methods.autoencoder import AutoencoderMethod
-
-    return AutoencoderMethod(**kwargs)
-
-
-def _dragposer(**kwargs: Any) -> Method:
-    # imported on use: DragPoser pulls in torch and the models, which the CLI's other
-    # commands should not pay for at start-up
-    from engine.methods.dragposer import create
-
-    return create(**kwargs)
+    """Register every method module of this package under its module name
+    (docs/architecture.md, "Add a method")."""
+    for name in method_modules(Path(__file__).parent):
+        register_method(name, _lazy(name))
 
 
 _register_builtin()

@@ -295,3 +295,8 @@ class IKMethod(Method):
         self._last = local.copy()
         return FrameResult(local_rot=local, root_pos=root_pos.copy(), positions=pos,
                            ms=1000.0 * (time.perf_counter() - t0), warnings=warnings)
+
+
+def create(**kwargs: Any) -> IKMethod:
+    """Registry factory: analytic IK (the learned methods' ``mode``, ``iterations``... are ignored)."""
+    return IKMethod(**kwargs)

@@ -1,13 +1,15 @@
 """Live trackers in the studio: File > Connect live source, File > Open tracker
 recording, and the Live dock (status light, packet rate, latency, Record / Stop,
-Calibrate with a countdown). Kept apart from the window, which only creates it."""
+Calibrate with a countdown). Kept apart from the window, which only creates it with the
+objects it needs."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from PyQt6.QtCore import Qt, QTimer
+from PyQt6.QtCore import QSettings, Qt, QTimer
 from PyQt6.QtWidgets import QDialog, QDockWidget, QFileDialog, QMainWindow
 
 from engine.errors import UserError
@@ -15,18 +17,42 @@ from engine.studio import events as ev
 from widgets.live_panel import ConnectDialog, LivePanel
 
 if TYPE_CHECKING:
+    from engine.studio.session import Session
     from engine.tracker_io.live_source import LiveSource
+    from widgets.plots import LossPlots
+    from widgets.timeline import Timeline
 
 
 class LiveActions:
-    """The window's live-source operations; ``window`` is the studio's main window (its
-    ``session``, ``timeline``, ``plots``, ``viewport``, ``show_error``, ``_dock`` and
-    status bar are used)."""
+    """The window's live-source operations.
 
-    def __init__(self, window: QMainWindow) -> None:
+    Parameters
+    ----------
+    window : QMainWindow
+        Only as a Qt main window: the parent of its dialogs and dock, its title and
+        status bar.
+    session : Session
+        Builds and owns the sources (:meth:`Session.connect_live`, :meth:`Session.open_recording`).
+    timeline : Timeline
+        Its range follows the stream.
+    plots : LossPlots
+        Cleared for a new source.
+    settings : QSettings
+        Remembers the last port.
+    show_error : callable
+        ``show_error(title, text)``: the window's error dialog.
+    """
+
+    def __init__(self, window: QMainWindow, session: Session, timeline: Timeline, plots: LossPlots,
+                 settings: QSettings, show_error: Callable[[str, str], None]) -> None:  # fmt: skip
         self.w = window
+        self.session, self.timeline, self.plots, self.settings = session, timeline, plots, settings
+        self.show_error = show_error
         self.panel = LivePanel()
-        self.dock = window._dock("Live trackers", self.panel, Qt.DockWidgetArea.RightDockWidgetArea)
+        self.dock = QDockWidget("Live trackers", window)
+        self.dock.setObjectName("Live trackers")
+        self.dock.setWidget(self.panel)
+        window.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, self.dock)
         latent = window.findChild(QDockWidget, "Latent")
         if latent is not None:  # a tab beside the latent view: room for the calibration text
             window.tabifyDockWidget(latent, self.dock)
@@ -38,20 +64,20 @@ class LiveActions:
         self.timer.timeout.connect(self.refresh)
         self.timer.start()
         self._frames = -1
-        window.session.events.source.connect(self._show_source)
+        session.events.source.connect(self._show_source)
 
     def close(self) -> None:
         self.timer.stop()
-        self.w.session.events.source.disconnect(self._show_source)
+        self.session.events.source.disconnect(self._show_source)
 
     @property
     def live(self) -> LiveSource | None:
         """The session's live source, if it has one."""
-        return self.w.session.live_source
+        return self.session.live_source
 
     # -- File menu ----------------------------------------------------------------------
     def connect_dialog(self) -> None:
-        dlg = ConnectDialog(self.w, port=int(self.w.settings.value("live_port", 39539)))
+        dlg = ConnectDialog(self.w, port=int(self.settings.value("live_port", 39539)))
         if dlg.exec() != QDialog.DialogCode.Accepted:
             return
         v = dlg.values()
@@ -60,12 +86,12 @@ class LiveActions:
     def connect(self, host: str, port: int, mapping: str = "", convention: str = "unity") -> bool:
         """Listen on ``host:port`` and play the stream live; errors show a dialog."""
         try:
-            self.w.session.connect_live(host, port, mapping, convention)
+            self.session.connect_live(host, port, mapping, convention)
         except UserError as exc:
-            self.w.show_error("Cannot connect live source", str(exc))
+            self.show_error("Cannot connect live source", str(exc))
             return False
-        self.w.settings.setValue("live_port", port)
-        self.w.session.play()
+        self.settings.setValue("live_port", port)
+        self.session.play()
         return True
 
     def open_recording_dialog(self) -> None:
@@ -75,16 +101,16 @@ class LiveActions:
 
     def open_recording(self, path: str | Path) -> bool:
         try:
-            self.w.session.open_recording(path)
+            self.session.open_recording(path)
         except UserError as exc:
-            self.w.show_error("Cannot open tracker recording", str(exc))
+            self.show_error("Cannot open tracker recording", str(exc))
             return False
         return True
 
     # -- the Live dock --------------------------------------------------------------------
     def _show_source(self, event: ev.SourceChanged) -> None:
-        self.w.timeline.set_range(max(event.source.num_frames, 1), event.source.fps)
-        self.w.plots.clear()
+        self.timeline.set_range(max(event.source.num_frames, 1), event.source.fps)
+        self.plots.clear()
         self.w.setWindowTitle(f"DragPoser Studio - {event.name}")
         self._frames = -1
         self.panel.set_recording(False)
@@ -97,13 +123,13 @@ class LiveActions:
         if src is None or not src.receiver.running:
             self.panel.show_status(None)
             return
-        snap = self.w.session.latest
+        snap = self.session.latest
         latency = snap.timing.get("latency_ms") if snap is not None else None
         self.panel.show_status(src.status(), latency)
         n = src.num_frames
         if n != self._frames:  # the timeline grows with the stream
             self._frames = n
-            self.w.timeline.set_range(max(n, 1), src.fps)
+            self.timeline.set_range(max(n, 1), src.fps)
 
     def record(self, on: bool) -> None:
         src = self.live
@@ -123,7 +149,7 @@ class LiveActions:
             src.start_recording(path)
         except (OSError, UserError) as exc:
             self.panel.set_recording(False)
-            self.w.show_error("Cannot record", str(exc))
+            self.show_error("Cannot record", str(exc))
 
     def calibrate(self, countdown_s: float, window_s: float) -> None:
         src = self.live

@@ -70,7 +70,7 @@ class MainWindow(QMainWindow):
         # after the widgets: the thread's first imports would compete with theirs
         self.session.start_engine(process=engine == "process")
         self.files = FileActions(self)
-        self.live = LiveActions(self)
+        self.live = LiveActions(self, self.session, self.timeline, self.plots, self.settings, self.show_error)
         self.undo = SceneUndo(self.session, self)
         self.failures = FailureCountdown(self)
         self.snapshotDrawn.connect(self.failures.on_frame)

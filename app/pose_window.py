@@ -14,13 +14,16 @@ closing with unsaved edits asks first. Export writes the bake as BVH or MP4.
 from __future__ import annotations
 
 import copy
+import time
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from PyQt6.QtCore import Qt, QTimer
 from PyQt6.QtGui import QAction, QCloseEvent, QKeySequence, QUndoStack
-from PyQt6.QtWidgets import QDockWidget, QFileDialog, QMainWindow, QMessageBox, QProgressDialog, QWidget
+from PyQt6.QtWidgets import (
+    QApplication, QDockWidget, QFileDialog, QMainWindow, QMessageBox, QProgressDialog, QWidget,
+)  # fmt: skip
 
 from app.undo import StateCommand
 from engine import skeleton as sk
@@ -30,9 +33,19 @@ from engine.authoring.keys import Animation, Key
 from engine.authoring.pose_mode import PoseMode
 from engine.bvh import save_motion_bvh
 from engine.errors import UserError
+from engine.kinematics import quat_np as QN
+from engine.kinematics import quaternion as Q
+from engine.kinematics.fk import fk
 from widgets.key_strip import KeyStrip
 from widgets.target_list import TargetList
 from widgets.viewport.viewport import Viewport
+
+
+#: Alt + drag: the mouse must be this far from the joint (metres, on the drag plane)
+#: before its direction starts turning the joint (closer, the direction is noise).
+TURN_START_M = 0.02
+#: A pause longer than this (seconds) between Alt-drag moves starts a new turn.
+TURN_GESTURE_S = 0.5
 
 
 class PoseWindow(QMainWindow):
@@ -44,6 +57,7 @@ class PoseWindow(QMainWindow):
         self.vae, self.mode = vae, mode
         self.scene = AuthoringScene(animation=Animation(), height=mode.character.height)
         self.frame, self.path, self.dirty = 0, None, False
+        self._turn: list | None = None  # joint, start direction, start rotation, last time
         self.baked = None
         self.undo = QUndoStack(self)
         self.undo.cleanChanged.connect(lambda clean: setattr(self, "dirty", not clean))
@@ -133,10 +147,39 @@ class PoseWindow(QMainWindow):
 
     # -- targets -------------------------------------------------------------------
     def drag_joint(self, joint: str, position: np.ndarray) -> None:
-        """Create or move the target on ``joint`` to ``position (3,)`` metres and solve."""
+        """Create or move the target on ``joint`` to ``position (3,)`` metres and solve;
+        with Alt held, turn it instead (:meth:`turn_joint`)."""
+        if QApplication.keyboardModifiers() & Qt.KeyboardModifier.AltModifier:
+            self.turn_joint(joint, position)
+            return
+        self._turn = None
         key = ("target", joint, "position")
         self._edit(f"move target {joint}", lambda: self.mode.set_target(joint, np.asarray(position, float)), key,
                    solve=True)  # fmt: skip
+
+    def turn_joint(self, joint: str, position: np.ndarray) -> None:
+        """Alt + drag: give ``joint`` a rotation target, its rotation at the start of the
+        drag turned by the rotation carrying the first mouse direction from the joint
+        onto the current one (both on the drag plane, ``position (3,)`` metres)."""
+        j = sk.JOINT_INDEX[joint]
+        t = self.mode.targets.get(joint)
+        pivot = t.position if t is not None else self.mode.pose.positions[j]
+        v = np.asarray(position, float) - pivot
+        now = time.monotonic()
+        g = self._turn
+        if g is None or g[0] != joint or now - g[3] > TURN_GESTURE_S:
+            p = self.mode.pose
+            world = fk(p.local_rot, p.root_pos, self.mode.character.skeleton.offsets)[1][j]
+            g = self._turn = [joint, None, world, now]
+        g[3] = now
+        if g[1] is None:
+            if np.linalg.norm(v) >= TURN_START_M:
+                g[1] = v
+            return
+        q = QN.mul(Q.from_to(g[1], v), g[2])
+        self._edit(f"turn {joint}", lambda: self.mode.set_target(joint, rotation=q / np.linalg.norm(q)),
+                   ("target", joint, "rotation"), solve=True)  # fmt: skip
+        self._turn = g  # the edit's refresh does not end the gesture
 
     def edit_target(self, joint: str, **fields: Any) -> None:
         """Change a target's ``enabled`` or ``weight`` and solve."""

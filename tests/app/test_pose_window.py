@@ -63,6 +63,30 @@ def test_dragging_a_joint_makes_a_target_the_pose_follows(window):
     assert window.undo.count() == 1  # the drag's moves merged into one step
 
 
+def test_alt_drag_turns_the_joint_by_the_angle_swept_about_it(window, monkeypatch):
+    import app.pose_window as pw
+    from PyQt6.QtCore import Qt
+
+    from engine.kinematics import quat_np as QN
+    from engine.kinematics.fk import fk
+
+    monkeypatch.setattr(pw.QApplication, "keyboardModifiers", staticmethod(lambda: Qt.KeyboardModifier.AltModifier))
+    w = window
+    pose = w.mode.pose
+    start = fk(pose.local_rot, pose.root_pos, w.mode.character.skeleton.offsets)[1][LW]
+    pivot = pose.positions[LW].copy()
+    for a in np.radians(np.arange(0, 91, 10)):
+        w.drag_joint("lwrist", pivot + 0.1 * np.array([np.cos(a), 0.0, np.sin(a)]))
+    t = w.mode.targets["lwrist"]
+    assert t.rotation is not None and np.allclose(t.position, pivot)
+    turn = QN.mul(t.rotation, QN.conjugate(start))
+    assert np.degrees(2 * np.arccos(min(1.0, abs(turn[0])))) == pytest.approx(90.0, abs=1.0)
+    p = w.mode.pose
+    now = fk(p.local_rot, p.root_pos, w.mode.character.skeleton.offsets)[1][LW]
+    assert abs(float(now @ t.rotation)) == pytest.approx(1.0, abs=1e-9)
+    assert w.undo.count() == 1 and "+rotation" in w.targets.rows["lwrist"]["label"].text()
+
+
 def test_every_edit_kind_undoes_and_redoes(window, qtbot):
     w = window
     start = w.mode.pose.positions[LW].copy()

@@ -34,24 +34,18 @@ import numpy as np
 from engine import skeleton as sk
 from engine.bvh import RawBVH, load_bvh
 from engine.errors import UserError
-from engine.input_files import read_json, read_toml
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk, local_from_global
 from engine.motion import Motion
 from engine import retarget_body as RB
 from engine import retarget_frames as RF
-from engine.retarget_rotations import rigid_hands, world_rotations
+from engine.retarget_inputs import (  # noqa: F401 - re-exported: callers import them from here
+    MODELS_DATA, RETARGET_VERSION, RETARGET_VERSIONS, _snap_fps, manifest_entry, manifest_fps, models_version,
+    rest_frame_count)
+from engine.retarget_rotations import rigid_hands, straightened_offsets, world_rotations
 from engine.rigs import RigProfile, resolve_rig
-from engine.validation import SKELETON, check_manifest, check_value, shown
+from engine.validation import SKELETON, check_value
 
-#: Bumped whenever retargeting gives different clips (prepared data is rebuilt then).
-#: 4: limbs, hands, feet and head take their twist from the body (:mod:`engine.retarget_body`);
-#: 3: every joint keeps the source's rotation with one constant alignment per joint.
-RETARGET_VERSION = 4
-#: Definitions :func:`retarget` can still produce (models record the one they learnt).
-RETARGET_VERSIONS = (3, 4)
-#: Where the shipped models record the definition they learnt from (``retarget_version``).
-MODELS_DATA = Path(__file__).resolve().parents[1] / "assets" / "models" / "data.toml"
 _AXIS = {"x": 0, "y": 1, "z": 2}
 #: Source frames kept at least when only the start of a clip is loaded (the rest-pose
 #: alignment and the heights are measured on them; every shared clip is shorter).
@@ -106,19 +100,6 @@ class RetargetReport:
         return dict(self.profile.joints) if self.profile else {}
 
 
-def models_version(path: Path = MODELS_DATA) -> int:
-    """The retargeting definition every command feeding the shipped models uses by default
-    (``retarget_version`` in :data:`MODELS_DATA`, beside the version they were trained on);
-    :data:`RETARGET_VERSION` when the file is absent."""
-    if not path.is_file():
-        return RETARGET_VERSION
-    version = read_toml(path, "model data card").get("retarget_version", RETARGET_VERSION)
-    if version not in RETARGET_VERSIONS:
-        raise UserError(f"{path}: retarget_version must be one of {', '.join(map(str, RETARGET_VERSIONS))}, "
-                        f"got {shown(version)}")  # fmt: skip
-    return int(version)
-
-
 def _basis_change(up: str, forward: str) -> np.ndarray:
     """Rotation matrix taking source axes to canonical ones (up -> +Z, forward -> -Y)."""
 
@@ -133,14 +114,16 @@ def _basis_change(up: str, forward: str) -> np.ndarray:
     return src.T  # orthonormal: inverse = transpose
 
 
-def _points(raw_pos: np.ndarray, raw: RawBVH, prof: RigProfile, world_rot: np.ndarray) -> dict[str, np.ndarray]:
-    """Named source points (F, 3): mapped canonical joints and landmarks."""
+def _points(raw_pos: np.ndarray, raw: RawBVH, prof: RigProfile, world_rot: np.ndarray,
+            end_sites: dict) -> dict[str, np.ndarray]:  # fmt: skip
+    """Named source points (F, 3): mapped canonical joints and landmarks (``end_sites``:
+    the source's end-site offsets by joint index)."""
     idx = {n: i for i, n in enumerate(raw.names)}
     pts = {c: raw_pos[:, idx[s]] for c, s in prof.joints.items()}
     for lm, spec in prof.landmarks.items():
         if spec.startswith("end:"):
             j = idx.get(spec[4:])
-            end = raw.end_sites.get(j) if j is not None else None
+            end = end_sites.get(j) if j is not None else None
             if end is None:
                 raise UserError(f"{raw.path}: rig {prof.name}: joint {spec[4:]} has no end site")
             pts[lm] = raw_pos[:, j] + Q.rotate(world_rot[:, j], np.broadcast_to(end * prof.units_to_m, raw_pos[:, j].shape))
@@ -242,7 +225,8 @@ def retarget(raw: RawBVH, fps: float | None = None, profile: RigProfile | None =
     src_fps = float(fps) if fps else _snap_fps(raw.fps)
     if src_fps <= 0:
         raise UserError(f"{raw.path}: frame rate must be positive, got {src_fps}")
-    skip = prof.skip_frames if raw.total_frames > prof.skip_frames + 2 else 0
+    skip = prof.skip_frames or rest_frame_count(raw)
+    skip = skip if raw.total_frames > skip + 2 else 0
     canonical = _resampled_count(raw.total_frames - skip, src_fps)
     check_value(SKELETON["canonical frames"], canonical, f"{raw.path}: at {src_fps:g} frames/s", "frames at 60 fps")
     quats = raw.local_quaternions()[skip:]
@@ -250,7 +234,13 @@ def retarget(raw: RawBVH, fps: float | None = None, profile: RigProfile | None =
     if prof.root_channels_relative_to_offset:
         pos[:, 0] += raw.offsets[0]
     _check_root(raw.path, pos[:, 0], prof.units_to_m)
-    wpos, wrot = fk(quats, pos[:, 0], raw.offsets, list(raw.parents))
+    offsets, ends = (straightened_offsets(raw, prof) if prof.straight_elbows and version >= 4
+                     else (raw.offsets, raw.end_sites))  # fmt: skip
+    moving = [k for k, c in enumerate(raw.channels) if k > 0 and len(c) == 6]
+    if moving:  # position channels below the root (a 6-channel Hips under a static ROOT) move their joint
+        offsets = np.repeat(offsets[None], len(pos), axis=0)
+        offsets[:, moving] = pos[:, moving]
+    wpos, wrot = fk(quats, pos[:, 0], offsets, list(raw.parents))
 
     basis = _basis_change(prof.up, prof.forward)
     cq = Q.from_matrix(basis)
@@ -258,7 +248,7 @@ def retarget(raw: RawBVH, fps: float | None = None, profile: RigProfile | None =
     wrot = Q.mul(np.broadcast_to(cq, wrot.shape), wrot)
 
     idx = {n: i for i, n in enumerate(raw.names)}
-    pts = _points(wpos, raw, prof, wrot)
+    pts = _points(wpos, raw, prof, wrot, ends)
     RF.add_derived(pts)
     leg = sum(float(np.median(np.linalg.norm(pts[b] - pts[a], axis=-1)))
               for a, b in (("lhip", "lknee"), ("lknee", "lankle")))  # fmt: skip
@@ -330,11 +320,6 @@ def _check_root(path: str, root: np.ndarray, units_to_m: float) -> None:
     check_value(SKELETON["root position"], worst, f"{path}: motion", "largest root coordinate")
 
 
-def _snap_fps(fps: float) -> float:
-    """Headers store a rounded frame time (0.008333 s); snap to the whole rate it means."""
-    return float(round(fps)) if abs(fps - round(fps)) < 1e-3 * fps else fps
-
-
 def _refloor(motion: Motion) -> float:
     """Shift the clip vertically so its feet stand on z = 0; returns the shift (metres)."""
     pos = motion.positions()
@@ -343,29 +328,6 @@ def _refloor(motion: Motion) -> float:
     shift = float(_TOE_HEIGHT * motion.skeleton.scale - ground)
     motion.root_pos[:, 2] += shift
     return shift
-
-
-def manifest_fps(path: Path) -> float | None:
-    """True frame rate of ``path`` from a ``manifest.json`` in one of its parent folders.
-
-    A malformed manifest (not an object, ``files`` not a list, an fps outside 1-1000)
-    is a :class:`UserError` naming it and the entry (:func:`engine.validation.check_manifest`)."""
-    try:
-        path = Path(path).resolve()
-    except (OSError, RuntimeError):  # a symlink loop: load_bvh names it
-        return None
-    for parent in list(path.parents)[:4]:
-        man = parent / "manifest.json"
-        if not man.is_file():
-            continue
-        entries = check_manifest(read_json(man, "manifest"), str(man))
-        rel = path.relative_to(parent).as_posix()
-        for entry in entries:
-            listed = str(entry.get("path", ""))
-            # paths are relative to the manifest's folder or to the data folder above it
-            if (listed == rel or listed.endswith("/" + rel)) and entry.get("fps"):
-                return float(entry["fps"])
-    return None
 
 
 def load_motion(path: str | Path, fps: float | None = None, rig_map: str | Path | None = None,

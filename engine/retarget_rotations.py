@@ -74,3 +74,34 @@ def world_rotations(prof: RigProfile, pts, wrot, idx, cq, version: int, hands: s
         else:
             glob[:, j] = glob[:, sk.PARENTS[j]]  # joint the rig lacks: identity local rotation
     return glob, align, [j for j in RB.BODY_JOINTS if j in body]
+
+
+def straightened_offsets(raw: RawBVH, prof: RigProfile) -> tuple[np.ndarray, dict]:
+    """The source's OFFSETs ``(J, 3)`` and end sites with each elbow straight in the zero
+    pose, for a rig whose zero pose stands for a T-pose with straight arms (``straight_elbows``).
+
+    The wrist OFFSET is turned onto the direction of the elbow's, its length kept, and the
+    hand below it (joints and end sites) turns with it, so the hand keeps its angle to the
+    forearm. In the zero pose every joint has its parent's axes, so the OFFSETs compare
+    directly; only a wrist that is a direct child of the elbow is turned. Knees are left
+    as drawn: the shin's twist the body defines differs from the source's, and on a shin
+    drawn bent that would move the written-back ankle (docs/skeleton.md)."""
+    off, ends = raw.offsets.copy(), {j: np.array(v, float) for j, v in raw.end_sites.items()}
+    for s in ("l", "r"):
+        for mid, end in ((f"{s}elbow", f"{s}wrist"),):
+            if mid not in prof.joints or end not in prof.joints:
+                continue
+            m, e = raw.names.index(prof.joints[mid]), raw.names.index(prof.joints[end])
+            if raw.parents[e] != m:
+                continue
+            turn = Q.from_to(off[e], off[m])
+            below = {e}
+            for j in range(e + 1, len(raw.names)):  # BVH order: descendants follow their parent
+                if raw.parents[j] in below:
+                    below.add(j)
+                    off[j] = Q.rotate(turn, off[j])
+            for j in below:
+                if j in ends:
+                    ends[j] = Q.rotate(turn, ends[j])
+            off[e] = Q.rotate(turn, off[e])
+    return off, ends

@@ -9,7 +9,9 @@ mapped to a canonical joint gets ``G_s = C^-1 G_c R^-1``; joints outside the 22
 local rotation of the source clip, and their children follow. The root's position
 undoes the re-flooring, the change of axes and the unit. The result has the source's
 own hierarchy, OFFSETs, channel layout and Euler orders, so it opens on the user's
-character in Blender or any BVH tool; its frame rate is the motion's (60 fps).
+character in Blender or any BVH tool. The trajectory goes on whichever joint carries it in
+the source (:func:`trajectory_joint`), the other position channels keep the source's
+values, and the frame rate is the source's unless another is asked for.
 """
 
 from __future__ import annotations
@@ -36,11 +38,38 @@ def _mean_local(q: np.ndarray) -> np.ndarray:
     return Q.normalize(q.mean(0))
 
 
+def trajectory_joint(raw: RawBVH, root: int) -> int:
+    """The joint whose position channels carry the trajectory of source joint ``root``:
+    ``root`` itself when it has position channels (a ``Hips`` with 6 channels under a static
+    ``joint_Root``), else its nearest ancestor that has them (the file's ROOT)."""
+    j = root
+    while len(raw.channels[j]) != 6 and raw.parents[j] >= 0:
+        j = raw.parents[j]
+    return j
+
+
+def _below(raw: RawBVH, j: int, root: int) -> bool:
+    """Whether joint ``j`` is ``root`` or one of its descendants."""
+    while j >= 0 and j != root:
+        j = raw.parents[j]
+    return j == root
+
+
+def _local_offsets(raw: RawBVH, positions: np.ndarray) -> np.ndarray:
+    """Per-frame local positions ``(F, J, 3)``: position channels where a joint has them
+    (``positions``), its OFFSET elsewhere."""
+    moving = np.array([len(c) == 6 for c in raw.channels])
+    return np.where(moving[None, :, None], positions, raw.offsets[None])
+
+
 def source_rig_pose(motion: Motion, raw: RawBVH, report) -> tuple[np.ndarray, np.ndarray]:
     """Local rotations ``(F, J, 4)`` and local positions ``(F, J, 3)`` of the source rig.
 
-    Positions are in the file's units: the root's holds its position channels (as
-    the file writes them), other joints their channel values or OFFSET."""
+    Positions are in the file's units, as the file writes them: the position channels of
+    every joint that has them (the source's values at the same time), except that the
+    joint carrying the trajectory (:func:`trajectory_joint`) takes the reconstruction's;
+    joints without position channels hold their OFFSET. ``motion`` is at the frame rate
+    to be written."""
     prof = report.profile
     if prof is None or report.align is None or report.basis is None:
         raise UserError(f"{raw.path}: this motion carries no retargeting record; load it with engine.retarget")
@@ -49,33 +78,54 @@ def source_rig_pose(motion: Motion, raw: RawBVH, report) -> tuple[np.ndarray, np
     cqi = Q.conjugate(Q.from_matrix(report.basis))
     src_local = raw.local_quaternions()[report.skip:]
     rest_rot = _mean_local(src_local)
-    rest_pos = raw.positions[report.skip:].mean(0)
     canon_of = {src: sk.JOINT_INDEX[c] for c, src in prof.joints.items()}
+    # every position channel as the source has it at the same time; the one joint that
+    # carries the trajectory is moved at the end so that the mapped root lands on the canonical one
+    src_frame = np.rint(np.arange(n) / motion.fps * report.source_fps).astype(int) + report.skip
+    positions = raw.positions[np.clip(src_frame, 0, len(raw.positions) - 1)].copy()
+    if prof.root_channels_relative_to_offset:
+        positions[:, 0] += raw.offsets[0]
+    local_off = _local_offsets(raw, positions)
+    root_src = raw.names.index(prof.joints["root"])
+    # canonical joint positions relative to the canonical root, in source axes and units
+    want = (pos_c - pos_c[:, :1]) @ report.basis / prof.units_to_m
+    rel = np.zeros((n, nj, 3))  # source joints relative to the mapped root, as they are placed
     glob = np.zeros((n, nj, 4))
     local = np.zeros((n, nj, 4))
     for j, name in enumerate(raw.names):
         p = raw.parents[j]
         k = canon_of.get(name)
+        if p >= 0 and j != root_src and _below(raw, j, root_src):
+            rel[:, j] = rel[:, p] + Q.rotate(glob[:, p], local_off[:, j])
         if k is not None and report.align[k] is not None:
-            g = Q.mul(cqi, Q.mul(glob_c[:, k], Q.conjugate(report.align[k])))
-            glob[:, j] = g
-            local[:, j] = g if p < 0 else Q.mul(Q.conjugate(glob[:, p]), g)
+            glob[:, j] = Q.mul(cqi, Q.mul(glob_c[:, k], Q.conjugate(report.align[k])))
         else:
-            local[:, j] = rest_rot[j]
-            glob[:, j] = local[:, j] if p < 0 else Q.mul(glob[:, p], local[:, j])
-    positions = np.repeat(rest_pos[None], n, axis=0)
-    # world position the mapped root must reach, back in source axes and units
+            glob[:, j] = rest_rot[j] if p < 0 else Q.mul(glob[:, p], np.broadcast_to(rest_rot[j], (n, 4)))
+            kids = [c for c in range(j + 1, nj) if raw.parents[c] == j]
+            if len(kids) == 1 and raw.names[kids[0]] in canon_of and _below(raw, j, root_src):
+                # a joint folded into a canonical bone (LowerBack, Neck): swung so that the next
+                # mapped joint lands where the canonical one is, its own twist kept from the rest
+                c = kids[0]
+                now = Q.rotate(glob[:, j], local_off[:, c])
+                glob[:, j] = Q.mul(Q.from_to(now, want[:, canon_of[raw.names[c]]] - rel[:, j]), glob[:, j])
+        local[:, j] = glob[:, j] if p < 0 else Q.mul(Q.conjugate(glob[:, p]), glob[:, j])
+    mover = trajectory_joint(raw, root_src)
     target = pos_c[:, 0] - np.array([0.0, 0.0, report.floor_shift])
-    target = target @ report.basis / prof.units_to_m
-    root_src = raw.names.index(prof.joints["root"])
-    placed, _ = fk(local, np.zeros((n, 3)), raw.offsets, list(raw.parents))  # source root at the origin
-    root = target - placed[:, root_src]
-    positions[:, 0] = root - raw.offsets[0] if prof.root_channels_relative_to_offset else root
+    target = target @ report.basis / prof.units_to_m  # back in source axes and units
+    placed, grot = fk(local, positions[:, 0], local_off, list(raw.parents))
+    delta = target - placed[:, root_src]
+    up = raw.parents[mover]
+    positions[:, mover] += delta if up < 0 else Q.rotate(Q.conjugate(grot[:, up]), delta)
+    if prof.root_channels_relative_to_offset:
+        positions[:, 0] -= raw.offsets[0]
     return Q.normalize(local), positions
 
 
-def save_on_source_rig(path: str | Path, motion: Motion, raw: RawBVH, report) -> None:
+def save_on_source_rig(path: str | Path, motion: Motion, raw: RawBVH, report, fps: float | None = None) -> None:
     """Write ``motion`` onto ``raw``'s hierarchy as a BVH file, atomically (see module docs).
+
+    ``fps`` is the frame rate written (default: the source's, ``report.source_fps``);
+    the motion is resampled to it (slerp).
 
     Raises
     ------
@@ -88,6 +138,11 @@ def save_on_source_rig(path: str | Path, motion: Motion, raw: RawBVH, report) ->
         if len(rot) != 3 or len(chans) not in (3, 6):
             raise UserError(f"{raw.path}: joint {name} has channels {' '.join(chans)}; "
                             "only 3 rotations or 3 positions + 3 rotations can be written back")  # fmt: skip
+    from engine.retarget import resample_motion
+
+    fps = float(fps or report.source_fps or motion.fps)
+    if abs(fps - motion.fps) > 1e-6:
+        motion = resample_motion(motion, fps)
     local, positions = source_rig_pose(motion, raw, report)
     order = np.asarray(raw.rot_order)
     euler = np.degrees(Q.to_euler(local, np.broadcast_to(order, local.shape[:-1] + (3,))))

@@ -45,6 +45,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--on-source-rig", action="store_true",
                    help="write the result onto IN.bvh's own hierarchy (its joint names, offsets and "
                    "channels; joints outside the 22 keep their rest rotation) instead of the canonical one")
+    p.add_argument("--fps", type=float, metavar="F",
+                   help="frame rate of the file written with --on-source-rig (default: the source's)")
     add_rig_map_option(p)
     p.add_argument("--sensors", default="6", help="sensor preset or list, e.g. 6, 4, root,lwrist:3 (default: 6)")
     p.add_argument("--mode", choices=MODES, help="realtime: fixed iterations per frame; "
@@ -96,6 +98,8 @@ def _reconstruct(args: argparse.Namespace) -> int:
             raise UserError(f"--{opt} applies to --trackers recordings")
     if args.map:
         raise UserError("--map applies to --trackers recordings")
+    if args.fps is not None and not args.on_source_rig:
+        raise UserError("--fps applies to --on-source-rig (the canonical file is written at 60 fps)")
     parse_sensors(args.sensors)  # fail before loading anything
     for path in args.input:
         check_input_file(path)
@@ -141,7 +145,7 @@ def _reconstruct_file(job: tuple[Path, Path, argparse.Namespace, bool]) -> str:
     rec, results = run_method(_METHOD["method"], tracking, motion.skeleton, progress=progress, desc=path.name,
                               light=True)  # fmt: skip
     rec.name = f"{motion.name} ({args.method})"
-    write_reconstruction(out, rec, (raw, report) if args.on_source_rig else None)
+    write_reconstruction(out, rec, (raw, report) if args.on_source_rig else None, fps=args.fps)
     return summary(results, tracking, rec, out)
 
 

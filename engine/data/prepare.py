@@ -7,9 +7,13 @@ Output layout (``--out DIR``)::
 
 * **Split** (deterministic, by file): inside every source folder, files are sorted by
   path and every 8th one (positions 3, 11, 19, ...) goes to ``val``, the rest to
-  ``train``. Files matching an ``--eval-only`` pattern (default ``dragposer/*``: those
+  ``train``. Copies of one take on several rigs (``cmu_trial`` in the shared manifest)
+  share a split: validation when any copy's folder rule makes it validation, so the
+  validation takes of a smaller corpus stay validation and no take leaks. Files matching an ``--eval-only`` pattern (default ``dragposer/*``: those
   clips derive from AMASS, whose licence is non-commercial) go to ``test`` and are
   never used for training or statistics.
+* **Rest frames and rates**: a leading rest frame is dropped (a profile's ``skip_frames``
+  or :func:`engine.retarget.rest_frame_count`), the true frame rate comes from the manifest.
 * **Mirroring**: every train/val clip also gets a left/right mirrored copy.
 * **Statistics**: mean/std of the encoder's root-space dual quaternions and of the
   root displacement over the train shards, accumulated as running sums, so memory does
@@ -34,7 +38,7 @@ from engine.atomic import atomic_path, write_bytes
 from engine.errors import UserError
 from engine.kinematics.features import encoder_input, mirror_motion, pose_from_motion
 from engine.motion import Motion
-from engine.retarget import RETARGET_VERSION, load_with_report, manifest_fps
+from engine.retarget import RETARGET_VERSION, load_with_report, manifest_entry, manifest_fps
 
 FORMAT = 1
 #: Bumped whenever the feature definition changes, so cached statistics are recomputed.
@@ -78,8 +82,12 @@ def discover(inputs: list[Path]) -> list[tuple[Path, str]]:
     return found
 
 
-def assign_splits(rel_paths: list[str], eval_only: list[str]) -> dict[str, str]:
-    """Deterministic train/val/test split by file (see module docs)."""
+def assign_splits(rel_paths: list[str], eval_only: list[str], takes: dict[str, str] | None = None) -> dict[str, str]:
+    """Deterministic train/val/test split (see module docs).
+
+    ``takes`` maps a file to the take it records (``cmu_trial`` of the shared manifest):
+    copies of one take on several rigs share a split, validation when any copy's own
+    folder rule makes it validation, so a take never sits on both sides."""
     splits: dict[str, str] = {}
     groups: dict[str, list[str]] = {}
     for rel in rel_paths:
@@ -90,6 +98,14 @@ def assign_splits(rel_paths: list[str], eval_only: list[str]) -> dict[str, str]:
     for members in groups.values():
         for i, rel in enumerate(sorted(members)):
             splits[rel] = "val" if i % VAL_EVERY == VAL_PHASE else "train"
+    copies: dict[str, list[str]] = {}
+    for rel, take in (takes or {}).items():
+        if take and splits.get(rel) in ("train", "val"):
+            copies.setdefault(take, []).append(rel)
+    for members in copies.values():
+        if any(splits[r] == "val" for r in members):
+            for r in members:
+                splits[r] = "val"
     return splits
 
 
@@ -150,7 +166,8 @@ def prepare(
     files = discover(inputs)
     if not files:
         raise UserError(f"no .bvh files found under {', '.join(map(str, inputs))}")
-    splits = assign_splits([rel for _, rel in files], eval_only)
+    takes = {rel: (manifest_entry(path) or {}).get("cmu_trial") for path, rel in files}
+    splits = assign_splits([rel for _, rel in files], eval_only, {r: t for r, t in takes.items() if t})
     settings = {"format": FORMAT, "features": FEATURES_VERSION, "mirror": mirror, "eval_only": eval_only,
                 "retarget": RETARGET_VERSION, "rig_map": sha256_file(rig_map) if rig_map else None}
     man_path = out / "manifest.json"
@@ -198,10 +215,12 @@ def prepare(
                         "sha256": digest,
                         "rig": report.rig,
                         "split": splits[rel],
+                        "take": takes.get(rel),
                         "mirrored": m,
                         "shard": shard,
                         "frames": len(clip),
                         "source_fps": report.source_fps,
+                        "skipped": report.skip,
                         "scale": report.scale,
                         "sums": _feature_sums(clip),
                     }
@@ -224,7 +243,8 @@ def prepare(
         "settings": settings,
         "hash": digest,
         "split_rule": f"per source folder, sorted by path: every {VAL_EVERY}th file from index "
-        f"{VAL_PHASE} is val; eval-only patterns {eval_only} are test",
+        f"{VAL_PHASE} is val; copies of one take (manifest cmu_trial) are val when any copy is; "
+        f"eval-only patterns {eval_only} are test",
         "files": entries,
         "failed": [{"path": p, "reason": r} for p, r in result.failed],
         "stats": stats,

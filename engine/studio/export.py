@@ -60,10 +60,12 @@ def reconstruct_clip(motion: Motion, sensors: tuple[Sensor, ...], constraints: t
     return Motion(np.array(rots), np.array(roots), motion.skeleton, motion.fps, f"{motion.name} ({method_name})")
 
 
-def write_reconstruction(path: str | Path, rec: Motion, on_rig: tuple[RawBVH, Any] | None = None) -> None:
+def write_reconstruction(path: str | Path, rec: Motion, on_rig: tuple[RawBVH, Any] | None = None,
+                         fps: float | None = None) -> None:  # fmt: skip
     """Write ``rec`` to ``path`` as BVH, atomically: on the canonical skeleton, or with
     ``on_rig = (raw, report)`` onto the hierarchy of the source file it was retargeted
-    from (:func:`engine.source_rig.save_on_source_rig`, docs/skeleton.md)."""
+    from (:func:`engine.source_rig.save_on_source_rig`, docs/skeleton.md), at ``fps``
+    (default: the source's frame rate)."""
     if on_rig is None:
         from engine.bvh import save_motion_bvh
 
@@ -71,7 +73,7 @@ def write_reconstruction(path: str | Path, rec: Motion, on_rig: tuple[RawBVH, An
     else:
         from engine.source_rig import save_on_source_rig
 
-        save_on_source_rig(path, rec, *on_rig)
+        save_on_source_rig(path, rec, *on_rig, fps=fps)
 
 
 def source_rig(source: str | Path, rig_map: str | Path | None = None) -> tuple[RawBVH, Any]:

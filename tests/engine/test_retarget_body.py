@@ -71,15 +71,45 @@ def _hierarchy(landmarks: bool = True):
     return rows
 
 
-def write_rig(path, local, root, frames_c=None, twist=None, landmarks=True):
+def _straight_elbows(rows, bend_deg: float = 0.0):
+    """Make each elbow straight in the zero pose (the wrist's OFFSET on the elbow's
+    direction), then bend the left forearm by ``bend_deg`` degrees (its OFFSET, the hand's
+    joints and end sites turning rigidly)."""
+    names = [r[0] for r in rows]
+    for mid, end in (("LeftForeArm", "LeftHand"), ("RightForeArm", "RightHand")):
+        m, e = names.index(mid), names.index(end)
+        rows[e][2] = rows[m][2] / np.linalg.norm(rows[m][2]) * np.linalg.norm(rows[e][2])
+    if bend_deg:
+        e = names.index("LeftHand")
+        d = rows[e][2] / np.linalg.norm(rows[e][2])
+        axis = np.array([0.0, 0.0, 1.0]) - d[2] * d  # the vertical off the bone: the walk's elbow hinge
+        turn = _axis_angle(axis / np.linalg.norm(axis), bend_deg)
+        below = {e}
+        for j, r in enumerate(rows):
+            if r[1] in below or j == e:
+                below.add(j)
+                r[2] = Q.rotate(turn, r[2])
+                r[3] = None if r[3] is None else Q.rotate(turn, r[3])
+    return rows
+
+
+def write_rig(path, local, root, frames_c=None, twist=None, landmarks=True, rest=None, hub=False, fps=60.0):
     """Write the canonical motion onto a rig with per-joint constant frames ``frames_c``
     (joint name -> quaternion ``C``: ``G_rig = G C``, OFFSETs and end sites re-expressed)
     and ``twist`` (upper joint name -> degrees (F,)): that joint carries a twist about its
-    bone that its child undoes. World positions are the canonical ones."""
+    bone that its child undoes; ``rest`` edits the zero pose's rows (see :func:`_straight_elbows`).
+    World positions are the canonical ones unless ``rest`` changes the OFFSETs. With
+    ``hub``, a static ``joint_Root`` sits above the hips and every joint has 6 channels
+    (positions: the OFFSET, the hips' the trajectory), as game-studio rigs write them.
+    ``fps`` is the header's rate."""
     rows = _hierarchy(landmarks)
+    rows = rest(rows) if rest else rows
+    if hub:
+        rows = [["joint_Root", -1, np.zeros(3), None]] + [[r[0], r[1] + 1, r[2], r[3]] for r in rows]
+        local = np.concatenate([np.tile(np.array([1.0, 0, 0, 0]), (len(local), 1, 1)), local], axis=1)
     n, f = len(rows), len(local)
     full = np.tile(np.array([1.0, 0, 0, 0]), (f, n, 1))
-    full[:, : sk.NUM_JOINTS] = local
+    full[:, : local.shape[1]] = local
     c = np.tile(np.array([1.0, 0, 0, 0]), (n, 1))
     for i, r in enumerate(rows):
         if frames_c and r[0] in frames_c:
@@ -104,7 +134,7 @@ def write_rig(path, local, root, frames_c=None, twist=None, landmarks=True):
         lines.append(f"{pad}{'ROOT' if r[1] < 0 else 'JOINT'} {r[0]}")
         lines.append(f"{pad}{{")
         lines.append(f"{pad}  OFFSET {off[0]:.6f} {off[1]:.6f} {off[2]:.6f}")
-        lines.append(f"{pad}  CHANNELS {'6 Xposition Yposition Zposition ' if r[1] < 0 else '3 '}"
+        lines.append(f"{pad}  CHANNELS {'6 Xposition Yposition Zposition ' if r[1] < 0 or hub else '3 '}"
                      "Zrotation Yrotation Xrotation")  # fmt: skip
         kids = [k for k, q in enumerate(rows) if q[1] == i]
         for k in kids:
@@ -125,10 +155,12 @@ def write_rig(path, local, root, frames_c=None, twist=None, landmarks=True):
                 walk(k)
 
     walk(0)
-    lines += ["MOTION", f"Frames: {f}", "Frame Time: 0.0166667"]
+    lines += ["MOTION", f"Frames: {f}", f"Frame Time: {1.0 / fps:.7f}"]
     for t in range(f):
-        vals = [*root[t]]
+        vals = [] if hub else [*root[t]]
         for i in order:
+            if hub:
+                vals += list(root[t] if i == 1 else Q.rotate(Q.conjugate(c[rows[i][1]]), rows[i][2]) if i else np.zeros(3))
             vals += list(euler[t, i])
         lines.append(" ".join(f"{v:.6f}" for v in vals))
     path.write_text("\n".join(lines) + "\n")
@@ -210,3 +242,24 @@ def test_models_version_comes_from_the_model_card(tmp_path):
     (tmp_path / "bad.toml").write_text("retarget_version = 9\n")
     with pytest.raises(UserError, match="bad.toml: retarget_version"):
         models_version(tmp_path / "bad.toml")
+
+
+def test_straight_elbows_measures_the_bend_from_a_rest_drawn_bent(tmp_path):
+    """A rig whose zero pose draws the forearm 17 degrees bent, with the T-pose rotations
+    copied onto it (as the Daz rig's conversion did): ``straight_elbows`` reads the elbow
+    as the T-pose rig does; without it the elbow is 17 degrees off."""
+    import dataclasses
+
+    from engine.bvh import load_bvh
+    from engine.rigs import resolve_rig
+    from engine.retarget import retarget
+
+    local, root = canonical_walk(90)
+    ref = retarget(load_bvh(write_rig(tmp_path / "t.bvh", local, root, rest=_straight_elbows)), version=4)[0]
+    raw = load_bvh(write_rig(tmp_path / "b.bvh", local, root, rest=lambda rows: _straight_elbows(rows, 17.0)))
+    prof = resolve_rig(raw)
+    elbow = sk.JOINT_INDEX["lelbow"]
+    plain = retarget(raw, profile=prof, version=4)[0]
+    assert np.degrees(Q.angle(plain.local_rot[:, elbow], ref.local_rot[:, elbow])).mean() > 10
+    fixed = retarget(raw, profile=dataclasses.replace(prof, straight_elbows=True), version=4)[0]
+    assert _diff(ref, fixed).max() < 1.0

@@ -77,17 +77,28 @@ def test_limbs_rotate_like_the_canonical_clips(shared_mocap, rel):
         assert abs(rep[thigh]["twist_median"]) < 35, (rel, thigh, rep[thigh])
 
 
-@pytest.mark.parametrize("rel", ("cmu_iclone/007_02.bvh", "cmu_iclone/002_01.bvh", "cmu_daz/salsa/01.bvh"))
-def test_written_back_onto_the_source_rig_within_1cm(shared_mocap, tmp_path, rel):
+# The CMU rig's LowerBack (folded into the canonical lower back) moves Spine up to 1.4 cm
+# about the hips; the canonical skeleton holds that offset fixed, so its clip is up to
+# 1.7 cm off the source there (the write-back itself adds nothing: it lands every mapped
+# joint on the canonical clip's).
+@pytest.mark.parametrize("rel, tol_cm", [("cmu_iclone/007_02.bvh", 1.0), ("cmu_iclone/002_01.bvh", 1.0),
+                                         ("cmu_daz/salsa/01.bvh", 1.0), ("cmu_daz_cgspeed/07_03.bvh", 1.0),
+                                         ("cmu_mb/07_03.bvh", 2.0)])  # fmt: skip
+def test_written_back_onto_the_source_rig_within_1cm(shared_mocap, tmp_path, rel, tol_cm):
+    """Each rig family (iClone, its 101-joint variant, Daz at 60 and 120 fps, the CMU rig at
+    120 fps): source -> canonical -> source over the whole clip. Written at 60 fps, the
+    canonical rate, every written frame is one the canonical clip holds (at 120 fps the
+    frames between would add the resampling's own error, up to 1.7 cm on a walk)."""
     from engine.bvh import load_bvh
     from engine.retarget import RETARGET_VERSION, manifest_fps, retarget
     from engine.source_rig import save_on_source_rig
 
     raw = load_bvh(shared_mocap / rel)
     motion, report = retarget(raw, manifest_fps(shared_mocap / rel), version=RETARGET_VERSION)
-    assert report.source_fps == 60.0  # frames line up one to one
-    save_on_source_rig(tmp_path / "back.bvh", motion, raw, report)
+    save_on_source_rig(tmp_path / "back.bvh", motion, raw, report, fps=60.0)
     back = load_bvh(tmp_path / "back.bvh")
+    step = round(report.source_fps / 60.0)
+    assert abs(back.fps - 60.0) < 0.01 and step * 60.0 == report.source_fps
     prof = report.profile
 
     def world(r, skip):
@@ -96,10 +107,12 @@ def test_written_back_onto_the_source_rig_within_1cm(shared_mocap, tmp_path, rel
             p += r.offsets[0]
         return fk(r.local_quaternions()[skip:], p, r.offsets, list(r.parents))[0]
 
-    a, b = world(raw, report.skip), world(back, 0)
+    a, b = world(raw, report.skip)[::step], world(back, 0)
+    n = min(len(a), len(b))
+    assert n >= len(a) - 1, "the written file covers the clip"
     idx = [raw.names.index(s) for s in prof.joints.values()]
-    err = np.linalg.norm(a[:, idx] - b[:, idx], axis=-1) * prof.units_to_m
-    assert err.max() < 0.01, f"{rel}: {100 * err.max():.2f} cm"
+    err = np.linalg.norm(a[:n, idx] - b[:n, idx], axis=-1) * prof.units_to_m
+    assert err.max() < tol_cm / 100 and err.mean() < 0.01, f"{rel}: {100 * err.max():.2f} cm"
 
 
 FAMILIES = ("cmu_daz", "cmu_daz_cgspeed", "cmu_iclone", "cmu_mb")

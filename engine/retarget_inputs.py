@@ -1,0 +1,91 @@
+"""What retargeting needs to know about a source before it starts: the definition to use,
+the true frame rate, and whether the file opens with a rest frame.
+
+Re-exported by :mod:`engine.retarget`, where callers find them.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from engine.bvh import RawBVH
+from engine.errors import UserError
+from engine.input_files import read_json, read_toml
+from engine.kinematics import quaternion as Q
+from engine.validation import check_manifest, shown
+
+#: Bumped whenever retargeting gives different clips (prepared data is rebuilt then).
+#: 4: limbs, hands, feet and head take their twist from the body (:mod:`engine.retarget_body`);
+#: 3: every joint keeps the source's rotation with one constant alignment per joint.
+RETARGET_VERSION = 4
+#: Definitions :func:`retarget` can still produce (models record the one they learnt).
+RETARGET_VERSIONS = (3, 4)
+#: Where the shipped models record the definition they learnt from (``retarget_version``).
+MODELS_DATA = Path(__file__).resolve().parents[1] / "assets" / "models" / "data.toml"
+
+def models_version(path: Path = MODELS_DATA) -> int:
+    """The retargeting definition every command feeding the shipped models uses by default
+    (``retarget_version`` in :data:`MODELS_DATA`, beside the version they were trained on);
+    :data:`RETARGET_VERSION` when the file is absent."""
+    if not path.is_file():
+        return RETARGET_VERSION
+    version = read_toml(path, "model data card").get("retarget_version", RETARGET_VERSION)
+    if version not in RETARGET_VERSIONS:
+        raise UserError(f"{path}: retarget_version must be one of {', '.join(map(str, RETARGET_VERSIONS))}, "
+                        f"got {shown(version)}")  # fmt: skip
+    return int(version)
+
+
+def rest_frame_count(raw: RawBVH) -> int:
+    """Leading frames (0 to 2) of the file that hold its rig's rest pose rather than motion.
+
+    Conversions such as the cgspeed CMU files start with the rig's rest pose: root
+    rotation exactly zero in frame 0, then a jump to the motion larger than its own steps
+    (more than 2 degrees per joint on average and 3 times the median step of the first 200
+    frames). A second jump right after counts too (a rest frame followed by a half-way one)."""
+    if raw.frames < 8 or np.any(raw.rotations_deg[0, 0] != 0.0):
+        return 0
+    q = raw.local_quaternions()[:201]
+    steps = np.degrees(Q.angle(q[1:], q[:-1])).mean(-1)
+    jump = 3.0 * float(np.median(steps))
+    n = 0
+    while n < 2 and steps[n] > max(2.0, jump):
+        n += 1
+    return n
+
+
+def _snap_fps(fps: float) -> float:
+    """Headers store a rounded frame time (0.008333 s); snap to the whole rate it means."""
+    return float(round(fps)) if abs(fps - round(fps)) < 1e-3 * fps else fps
+
+
+def manifest_entry(path: Path) -> dict | None:
+    """The entry of ``path`` in a ``manifest.json`` of one of its parent folders (the shared
+    data's lists ``fps``, ``cmu_trial``...), or None.
+
+    A malformed manifest (not an object, ``files`` not a list, an fps outside 1-1000)
+    is a :class:`UserError` naming it and the entry (:func:`engine.validation.check_manifest`)."""
+    try:
+        path = Path(path).resolve()
+    except (OSError, RuntimeError):  # a symlink loop: load_bvh names it
+        return None
+    for parent in list(path.parents)[:4]:
+        man = parent / "manifest.json"
+        if not man.is_file():
+            continue
+        entries = check_manifest(read_json(man, "manifest"), str(man))
+        rel = path.relative_to(parent).as_posix()
+        for entry in entries:
+            listed = str(entry.get("path", ""))
+            # paths are relative to the manifest's folder or to the data folder above it
+            if listed == rel or listed.endswith("/" + rel):
+                return dict(entry)
+    return None
+
+
+def manifest_fps(path: Path) -> float | None:
+    """True frame rate of ``path`` from its :func:`manifest_entry`, or None."""
+    entry = manifest_entry(path)
+    return float(entry["fps"]) if entry and entry.get("fps") else None

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import pytest
 from PyQt6.QtCore import Qt
+from PyQt6.QtGui import QCursor
 from PyQt6.QtTest import QTest
 
 pytestmark = pytest.mark.gui  # the real window, VTK view included
@@ -20,6 +21,9 @@ def _type_while_playing(qtbot, studio, spin, text: str) -> None:
     QApplication.setActiveWindow(studio)  # Xvfb has no window manager to activate it
     spin.setFocus()
     qtbot.waitUntil(spin.hasFocus, timeout=5000)
+    # the pointer where the user clicked the field (over the 3D view, 1, 3 and 7 are camera keys)
+    QCursor.setPos(spin.mapToGlobal(spin.rect().center()))
+    qtbot.waitUntil(lambda: spin.rect().contains(spin.mapFromGlobal(QCursor.pos())), timeout=5000)
     spin.selectAll()
     seq = studio.session.latest.seq
     for ch in text:

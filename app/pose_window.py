@@ -1,8 +1,8 @@
 """The pose and key window (File ▸ New pose): pose the character by its joints, key it.
 
 The window holds an :class:`engine.authoring.pose_mode.PoseMode` and the animation being
-authored (an :class:`engine.authoring.document.AuthoringScene`). Ctrl + drag on a joint
-creates a target there and moves it; a plain drag on a target's sphere moves it; every
+authored (an :class:`engine.authoring.document.AuthoringScene`). A drag on a joint
+creates a target there and moves it; a drag on a target's sphere moves it; every
 move solves the pose again (the continuous solve, on the GUI thread: a few milliseconds
 with targets only). The target list enables, weights and clears targets; the key strip
 adds the current pose as a key at the current frame (its latent and targets), moves and
@@ -66,6 +66,11 @@ class PoseWindow(QMainWindow):
         self.setCentralWidget(self.viewport)
         self.viewport.jointDragged.connect(self.drag_joint)
         self.viewport.targetDragged.connect(self.drag_joint)
+        # in pose mode a plain press grabs a joint too (the studio's view needs Ctrl, where
+        # a plain press on the body turns the camera); off every joint the camera turns
+        dragger = self.viewport.joints
+        on_target = dragger.press_target
+        dragger.press_target = lambda x, y: on_target(x, y) or dragger.press(x, y)
         self.targets = TargetList()
         self.targets.enabledChanged.connect(lambda j, on: self.edit_target(j, enabled=on))
         self.targets.weightChanged.connect(lambda j, w: self.edit_target(j, weight=w))

@@ -63,6 +63,15 @@ def test_dragging_a_joint_makes_a_target_the_pose_follows(window):
     assert window.undo.count() == 1  # the drag's moves merged into one step
 
 
+def test_a_plain_press_on_a_joint_grabs_it(window):
+    d = window.viewport.joints
+    window.viewport.plotter.render()
+    x, y = d._to_display(window.mode.pose.positions[[LW]])[0]
+    assert d.press_target(x, y) and d.joint == LW  # no Ctrl needed in pose mode
+    d.release()
+    assert not d.press_target(2, 2)  # off the body the camera turns
+
+
 def test_alt_drag_turns_the_joint_by_the_angle_swept_about_it(window, monkeypatch):
     import app.pose_window as pw
     from PyQt6.QtCore import Qt

@@ -85,6 +85,8 @@ class PoseWindow(QMainWindow):
         self.keys.moveRequested.connect(self.move_key)
         self.keys.lengthChanged.connect(lambda n: self._edit("length", lambda: setattr(self.scene.animation, "frames", n)))
         self.keys.fpsChanged.connect(lambda f: self._edit("rate", lambda: setattr(self.scene.animation, "fps", f)))
+        self.keys.interpolationChanged.connect(
+            lambda v: self._edit("in-betweens", lambda: setattr(self.scene.animation, "interpolation", v)))
         self.keys.previewRequested.connect(self.preview)
         self._dock("Keys", self.keys, Qt.DockWidgetArea.BottomDockWidgetArea)
         self._menus()
@@ -123,13 +125,14 @@ class PoseWindow(QMainWindow):
     # -- undoable state ------------------------------------------------------------
     def _state(self) -> tuple:
         a = self.scene.animation
-        return (copy.deepcopy(self.mode.targets), copy.deepcopy(self.scene.keys), (a.frames, a.fps),
+        return (copy.deepcopy(self.mode.targets), copy.deepcopy(self.scene.keys), (a.frames, a.fps, a.interpolation),
                 self.mode.pose)  # fmt: skip
 
     def _restore(self, state: tuple) -> None:
-        targets, keys, (frames, fps), pose = state
+        targets, keys, (frames, fps, interpolation), pose = state
         self.mode.targets, self.scene.keys = copy.deepcopy(targets), copy.deepcopy(keys)
-        self.scene.animation.frames, self.scene.animation.fps = frames, fps
+        a = self.scene.animation
+        a.frames, a.fps, a.interpolation = frames, fps, interpolation
         self.mode.pose = pose
         self.baked = None
         self.refresh()
@@ -353,7 +356,7 @@ class PoseWindow(QMainWindow):
                                      tuple(x.rotation is not None for x in t.values()))  # fmt: skip
         self.targets.set_targets({j: (x.enabled, x.weight, x.rotation is not None) for j, x in t.items()})
         a = self.scene.animation
-        self.keys.set_state(a.frames, a.fps, tuple(k.frame for k in self.scene.keys), self.frame)
+        self.keys.set_state(a.frames, a.fps, tuple(k.frame for k in self.scene.keys), self.frame, a.interpolation)
         self._show_positions(self.mode.pose.positions)
 
     def closeEvent(self, event: QCloseEvent | None) -> None:  # noqa: N802 (Qt's name)

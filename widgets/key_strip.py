@@ -10,11 +10,15 @@ from __future__ import annotations
 
 from PyQt6.QtCore import QRectF, pyqtSignal
 from PyQt6.QtGui import QColor, QMouseEvent, QPainter, QPaintEvent
-from PyQt6.QtWidgets import QDoubleSpinBox, QHBoxLayout, QLabel, QPushButton, QSpinBox, QVBoxLayout, QWidget
+from PyQt6.QtWidgets import (
+    QComboBox, QDoubleSpinBox, QHBoxLayout, QLabel, QPushButton, QSpinBox, QVBoxLayout, QWidget,
+)  # fmt: skip
 
 from widgets import style
 
 MAX_FRAMES = 36000
+#: In-between rules (``engine.authoring.keys.SCHEMES``; widgets do not import the engine's solver).
+SCHEMES = ("cubic", "linear", "spherical")
 
 
 class _Strip(QWidget):
@@ -54,7 +58,7 @@ class _Strip(QWidget):
 class KeyStrip(QWidget):
     """Signals: ``frameChanged(int)``, ``addRequested(int)``, ``deleteRequested(int)``,
     ``moveRequested(int, int)`` (from, to), ``lengthChanged(int)``, ``fpsChanged(float)``,
-    ``previewRequested()``."""
+    ``interpolationChanged(str)``, ``previewRequested()``."""
 
     frameChanged = pyqtSignal(int)
     addRequested = pyqtSignal(int)
@@ -62,6 +66,7 @@ class KeyStrip(QWidget):
     moveRequested = pyqtSignal(int, int)
     lengthChanged = pyqtSignal(int)
     fpsChanged = pyqtSignal(float)
+    interpolationChanged = pyqtSignal(str)
     previewRequested = pyqtSignal()
 
     def __init__(self, parent: QWidget | None = None) -> None:
@@ -85,9 +90,14 @@ class KeyStrip(QWidget):
         self.length.valueChanged.connect(lambda v: self.lengthChanged.emit(int(v)))
         self.fps = QDoubleSpinBox(minimum=1.0, maximum=240.0, decimals=1, suffix=" fps")
         self.fps.valueChanged.connect(lambda v: self.fpsChanged.emit(float(v)))
+        self.interpolation = QComboBox()
+        self.interpolation.addItems(SCHEMES)
+        self.interpolation.setToolTip("How in-betweens blend the keys' latents")
+        self.interpolation.currentTextChanged.connect(self.interpolationChanged.emit)
         self.preview = QPushButton("Preview")
         self.preview.clicked.connect(self.previewRequested.emit)
-        for w in (self.label, self.add, self.delete, self.move_to, self.move, self.length, self.fps, self.preview):
+        for w in (self.label, self.add, self.delete, self.move_to, self.move, self.length, self.fps, self.interpolation,
+                  self.preview):  # fmt: skip
             row.addWidget(w)
         self.set_state(61, 30.0, (), 0)
 
@@ -95,8 +105,13 @@ class KeyStrip(QWidget):
         self.set_state(self.strip.frames, self.fps.value(), self.strip.keys, frame)
         self.frameChanged.emit(frame)
 
-    def set_state(self, frames: int, fps: float, keys: tuple[int, ...], current: int) -> None:
+    def set_state(self, frames: int, fps: float, keys: tuple[int, ...], current: int,
+                  interpolation: str | None = None) -> None:  # fmt: skip
         """Show the animation without emitting signals."""
+        if interpolation is not None:
+            self.interpolation.blockSignals(True)
+            self.interpolation.setCurrentText(interpolation)
+            self.interpolation.blockSignals(False)
         s = self.strip
         s.frames, s.keys, s.current = int(frames), tuple(sorted(keys)), max(0, min(int(current), int(frames) - 1))
         for w, v in ((self.length, int(frames)), (self.fps, float(fps))):

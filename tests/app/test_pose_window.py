@@ -50,6 +50,7 @@ def state(w):
     return ({j: (t.position.round(9).tolist(), t.weight, t.enabled, t.rotation is not None)
              for j, t in w.mode.targets.items()},
             [(k.frame, sorted(k.targets)) for k in w.scene.keys], w.scene.animation.frames, w.scene.animation.fps,
+            w.scene.animation.interpolation, w.keys.interpolation.currentText(),
             w.mode.pose.positions.round(9).tolist())  # fmt: skip
 
 
@@ -110,6 +111,7 @@ def test_every_edit_kind_undoes_and_redoes(window, qtbot):
         lambda: w.move_key(20, 30),
         lambda: w.keys.length.setValue(45),
         lambda: w.keys.fps.setValue(24.0),
+        lambda: w.keys.interpolation.setCurrentText("spherical"),
         lambda: w.clear_target("rwrist"),
         lambda: w.delete_key(0),
         lambda: w.clear_all(),

@@ -37,7 +37,8 @@ def test_key_strip_add_move_delete_length_rate_preview(qtbot):
     k.resize(600, 80)
     k.show()
     seen = []
-    for sig in (k.frameChanged, k.addRequested, k.deleteRequested, k.moveRequested, k.lengthChanged, k.fpsChanged):
+    for sig in (k.frameChanged, k.addRequested, k.deleteRequested, k.moveRequested, k.lengthChanged, k.fpsChanged,
+                k.interpolationChanged):  # fmt: skip
         sig.connect(lambda *a, s=sig: seen.append(a))
     k.previewRequested.connect(lambda: seen.append("preview"))
     k.set_state(61, 30.0, (0, 60), 0)
@@ -51,6 +52,17 @@ def test_key_strip_add_move_delete_length_rate_preview(qtbot):
     k.delete.click()
     k.length.setValue(90)
     k.fps.setValue(24.0)
+    k.interpolation.setCurrentText("linear")
     k.preview.click()
-    assert seen[1:] == [(30,), (30, 40), (30,), (90,), (24.0,), "preview"]
+    assert seen[1:] == [(30,), (30, 40), (30,), (90,), (24.0,), ("linear",), "preview"]
+    k.set_state(90, 24.0, (), 0, "spherical")
+    assert k.interpolation.currentText() == "spherical" and seen[-1] == "preview"
     assert k.strip.frame_at(k.strip.x_of(45)) == 45
+
+
+def test_the_strip_offers_exactly_the_engine_in_between_rules():
+    from engine.authoring.keys import SCHEMES
+
+    from widgets.key_strip import SCHEMES as OFFERED
+
+    assert sorted(OFFERED) == sorted(SCHEMES)

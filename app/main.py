@@ -35,15 +35,17 @@ def open_initial(window: MainWindow, path: str | None, sensors: str | None, rig_
     if not ok:
         window.session.set_motion(demo_walk())
         window.statusBar().showMessage("No clip loaded: showing a procedural walk (File > Open a BVH)", 10000)
-    if sensors:
-        window.session.set_sensor_text(sensors)
-        return
-    last = window.settings.value("last_preset")
-    if last:
-        try:
-            window.session.set_preset(str(last))
-        except UserError as exc:  # a preset name from an older version
-            window.statusBar().showMessage(str(exc), 8000)
+    # the starting sensors are where the history begins, not an edit to undo
+    with window.undo.unrecorded():
+        if sensors:
+            window.session.set_sensor_text(sensors)
+            return
+        last = window.settings.value("last_preset")
+        if last:
+            try:
+                window.session.set_preset(str(last))
+            except UserError as exc:  # a preset name from an older version
+                window.statusBar().showMessage(str(exc), 8000)
 
 
 def apply_scene_file(window: MainWindow, scene_path: str, clip_given: bool) -> None:

@@ -97,3 +97,18 @@ def test_a_new_clip_starts_a_new_history(studio, synthetic_motion):
     assert studio.undo.stack.count() >= 1
     studio.session.set_motion(synthetic_motion.slice(0, 30))
     assert studio.undo.stack.count() == 0
+
+
+def test_the_starting_preset_is_not_an_undo_step_and_later_edits_are(studio, qtbot):
+    from app.main import open_initial
+
+    studio.settings.setValue("last_preset", "3-head-hands")
+    open_initial(studio, None, None)
+    stack = studio.undo.stack
+    assert studio.session.preset == "3-head-hands" and stack.count() == 0
+    studio.sensor_panel.preset.setCurrentText("6")
+    studio.constraint_panel.kinds.setCurrentText("look_at")
+    studio.constraint_panel.add_button.click()
+    joint = next(iter(studio.sensor_panel.rows))
+    studio.sensor_panel.rows[joint]["enabled"].setChecked(False)
+    assert [stack.text(i) for i in range(stack.count())] == ["Sensor preset 6", "Add look_at", f"Edit {joint} sensor (enabled)"]

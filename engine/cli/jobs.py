@@ -50,9 +50,11 @@ def add_jobs_option(p: argparse.ArgumentParser) -> None:
     p.add_argument("--jobs", type=int, metavar="N", default=None,
                    help="worker processes, one file at a time each (default: the number of cores; 1: no workers)")  # fmt: skip
     p.add_argument("--executor", choices=EXECUTORS, default="local",
-                   help="local: --jobs worker processes; ray: Ray tasks, one per file (needs the 'cluster' extra)")  # fmt: skip
+                   help="local: --jobs worker processes; ray: Ray tasks, one per file "
+                        "(needs the 'cluster' extra)")  # fmt: skip
     p.add_argument("--address", metavar="ADDR", default=None,
-                   help="with --executor ray: the Ray cluster to run on (default: a local Ray instance for this run)")  # fmt: skip
+                   help="with --executor ray: the Ray cluster to run on "
+                        "(default: a local Ray instance for this run)")  # fmt: skip
 
 
 def executor_of(args: argparse.Namespace) -> Executor:

@@ -64,8 +64,8 @@ def _solve_clip(m: Any, frames: Sequence[SensorFrame]) -> list[FrameResult] | No
     if any(c.enabled and c.weight > 0 for c in m.constraints):
         return None
     t0 = time.perf_counter()
-    read = [_read(m, f) for f in frames]
-    if any(r is None for r in read) or len({r["names"] for r in read}) != 1:
+    read = _read_all(m, frames)
+    if read is None:
         m.reset(m.skeleton, m.fps)
         return None
     s = read[0]["settings"]
@@ -141,6 +141,20 @@ def _same_hip_set(frames: Sequence[SensorFrame]) -> bool:
     return True
 
 
+def _read_all(m: Any, frames: Sequence[SensorFrame]) -> list[dict] | None:
+    """Every frame's :func:`_read` record with its prior latent (``prior``), or None when a
+    frame cannot be batched or the frames do not share their trackers."""
+    read = [_read(m, f) for f in frames]
+    if any(r is None for r in read) or len({(r["names"], r["bank"][0]) for r in read}) != 1:
+        return None
+    joints = read[0]["bank"][0]  # the priors of all frames in a few products over the bank
+    pos, rot = np.array([r["bank"][1] for r in read]), np.array([r["bank"][2] for r in read])
+    priors = m.bank.latent_batch(joints, pos, rot, k=read[0]["settings"].tracker_prior_neighbours)
+    for r, z in zip(read, priors.numpy().astype(np.float64)):
+        r["prior"] = z
+    return read
+
+
 def _read(m: Any, frame: SensorFrame) -> dict | None:
     """One frame's terms as ``m.step`` would set them up, or None when the frame cannot be
     batched (its prior is not the pose bank's, or a reading is not finite)."""
@@ -164,13 +178,17 @@ def _read(m: Any, frame: SensorFrame) -> dict | None:
         "pos_tol2": np.array([c.position_tolerance**2 for c in live]),
         "rot_tol": np.array([math.sin(math.radians(c.rotation_tolerance) / 2) ** 2 for c in six]),
         "root": (np.array(hip.position, dtype=np.float64), _unit(hip.rotation)),
-        "prior": m.bank.latent(*readings, k=s.tracker_prior_neighbours).numpy().astype(np.float64),
+        "bank": readings,  # the pose bank's lookup, made for all frames at once
         "prior_weight": s.tracker_prior_weight,
         "feet": any(m.sensors[j].enabled for j in ("lankle", "rankle") if j in m.sensors),
         "ground": (m.ground.low, m.ground.high),
-        "reach": {k: np.array(v, dtype=np.float64) for k, v in (m._reach_targets() if s.reach else {}).items()},
-        "turn": {k: np.array(v, dtype=np.float64) for k, v in (m._rotation_targets() if s.sensor_rotations else {}).items()},
+        "reach": _copied(m._reach_targets() if s.reach else {}),
+        "turn": _copied(m._rotation_targets() if s.sensor_rotations else {}),
     }  # fmt: skip
+
+
+def _copied(targets: dict[int, Any]) -> dict[int, np.ndarray]:
+    return {k: np.array(v, dtype=np.float64) for k, v in targets.items()}
 
 
 def _unit(q: Any) -> np.ndarray:

@@ -210,6 +210,28 @@ class PoseBank:
         nearest = (idx.norms - 2.0 * (tab.table @ q)).topk(k, largest=False).indices
         return self._latents[nearest].mean(0)
 
+    def latent_batch(self, joints: Sequence[str], pos: np.ndarray, rot: np.ndarray, k: int = 0,
+                     chunk: int = 64) -> torch.Tensor:  # fmt: skip
+        """:meth:`latent` of ``F`` frames at once, ``(F, L)``: ``pos (F, LAG+1, S, 3)``, ``rot
+        (F, LAG+1, S, 4)`` each frame's window as :meth:`latent` takes it. The distances of
+        ``chunk`` frames are one matrix product (the table is read once per chunk, not once
+        per frame); the sums run in another order than :meth:`latent`'s, so a neighbour
+        tied with the ``k``-th to float32 rounding may differ."""
+        joints = tuple(joints)
+        idx, a = self._index(joints), _anchor(joints)
+        tab = idx.table
+        x = features(pos[:, -1], rot[:, -1], a, pos[:, 0, a])
+        q = torch.zeros(len(x), tab.table.shape[1])
+        x32 = ((x - tab.mean[idx.cols]) / tab.std[idx.cols]).astype(np.float32)
+        q[:, torch.from_numpy(idx.cols)] = torch.from_numpy(x32)
+        k = min(k or self.k, len(self))
+        out = []
+        for c in range(0, len(q), chunk):
+            d = idx.norms[:, None] - 2.0 * (tab.table @ q[c : c + chunk].T)  # (N, chunk)
+            nearest = d.topk(k, dim=0, largest=False).indices  # (k, chunk)
+            out.append(self._latents[nearest].mean(0))
+        return torch.cat(out) if out else torch.zeros(0, self._latents.shape[1])
+
     def save(self, path: str | Path) -> None:
         """Write the bank (float16 arrays, compressed) atomically."""
         from engine.atomic import atomic_path

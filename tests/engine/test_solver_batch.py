@@ -85,7 +85,7 @@ def test_the_batched_gradient_is_the_derivative_of_the_batched_loss(clip):
 
     m = _offline()
     tr = simulate(clip, "4")
-    read = [DB._read(m, tr.frame(i)) for i in range(5)]
+    read = DB._read_all(m, [tr.frame(i) for i in range(5)])
     terms = DB._terms(read)
     rng = np.random.default_rng(0)
     terms.smooth_on[:] = [False, True, True, False, True]

@@ -164,7 +164,8 @@ def test_a_combination_looks_up_what_a_table_of_its_own_features_finds(joints):
     x = features(bank.positions[:, cols], bank.rotations[:, cols], a, prev)
     mu, sd = x.mean(0), x.std(0) + 1e-6
     for i in (3, 150, 299):
-        pos = np.repeat(bank.positions[i : i + 1, cols], LAG + 1, 0) + rng.normal(scale=0.05, size=(LAG + 1, len(cols), 3))
+        pos = np.repeat(bank.positions[i : i + 1, cols], LAG + 1, 0)
+        pos += rng.normal(scale=0.05, size=pos.shape)
         rot = np.repeat(bank.rotations[i : i + 1, cols], LAG + 1, 0)
         q = features(pos[-1:], rot[-1:], a, pos[:1, a])[0]
         near = np.argsort((((x - mu) / sd - (q - mu) / sd) ** 2).sum(1))[:4]
@@ -192,3 +193,18 @@ def test_the_first_frame_of_every_preset_finds_its_bank_index_built_when_the_mod
         m.step(simulate(clip, preset).frame(0))
     assert len(looked_up) == len([p for p, s in PRESET_SENSORS.items() if sum(x.dof == 6 for x in s) >= 2])
     assert m.bank.index_builds == built  # no frame built or derived an index
+
+
+def test_many_frames_at_once_find_what_one_frame_at_a_time_finds():
+    rng = np.random.default_rng(6)
+    bank = _bank(rng, n=400, k=5)
+    joints = ("root", "upperneck", "lwrist", "rwrist")
+    cols = [BANK_JOINTS.index(j) for j in joints]
+    starts = rng.integers(0, 390, 70)  # more frames than one chunk
+    pos = np.stack([bank.positions[i : i + LAG + 1, cols] for i in starts])
+    pos += rng.normal(scale=0.03, size=pos.shape)
+    rot = np.stack([bank.rotations[i : i + LAG + 1, cols] for i in starts])
+    many = bank.latent_batch(joints, pos, rot, chunk=32)
+    one = torch.stack([bank.latent(joints, p, r) for p, r in zip(pos, rot)])
+    assert many.shape == (70, 24)
+    torch.testing.assert_close(many, one, atol=1e-5, rtol=0)

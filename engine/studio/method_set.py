@@ -121,11 +121,15 @@ class MethodSet:
                 self._report(f"{m.name}.reset: {exc}")
         self.configure(report=fresh)  # methods may drop their settings on reset
 
-    def keep_state(self) -> None:
-        """Solve from the same state again: the first call keeps a copy of every
-        method's state, each later one puts a fresh copy of it back (with the current
-        edits applied) until :meth:`drop_state`. The engine calls it before solving the
-        paused frame again after an edit (:mod:`engine.studio.method_state`)."""
+    def keep_state(self, again: bool = True) -> None:
+        """Before a solve: with ``again`` (the paused frame solved again after an edit)
+        the first call keeps a copy of every method's state and each later one puts a
+        fresh copy of it back, with the current edits applied; without, the kept state
+        is dropped (:meth:`drop_state`; another frame, playback). See
+        :mod:`engine.studio.method_state`."""
+        if not again:
+            self._kept = None
+            return
         if self._kept is None:
             self._kept = {name: copy_state(m) for name, m in self.running()}
             return

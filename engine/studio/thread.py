@@ -29,6 +29,7 @@ from engine import skeleton as sk
 from engine.methods.base import DecodesLatents, FrameResult, Method
 from engine.sensors import SensorFrame
 from engine.studio import commands as cmd
+from engine.studio.decode import decoded_on_pose
 from engine.studio.method_set import MethodSet
 from engine.studio.method_edits import make_method
 from engine.studio.playback import ENDED, LOOPED, PlaybackClock
@@ -280,10 +281,8 @@ class EngineThread(threading.Thread):
 
     def _solve(self, frame: int) -> None:
         jump = self._is_jump(frame)
-        if not self._playing and not jump and frame == self._last_solved:
-            self._methods.keep_state()  # an edit while paused: from the state before it
-        else:
-            self._methods.drop_state()
+        # an edit while paused solves the frame again from the state before the first edit
+        self._methods.keep_state(not self._playing and not jump and frame == self._last_solved)
         if jump:
             if self._last_solved >= 0:  # after a load, loop or method change it is done already
                 self._reset_methods()  # temporal state is meaningless across a jump
@@ -313,9 +312,7 @@ class EngineThread(threading.Thread):
             try:
                 ghosts[name] = self._methods.step(m, sf).positions
                 self._ghost_errors.pop(name, None)
-            except Exception as exc:
-                # once per ghost and cause: a ghost that cannot run with these sensors
-                # fails on every frame, and said so on every frame
+            except Exception as exc:  # said once per ghost and cause, not on every frame
                 if self._ghost_errors.get(name) != str(exc):
                     self._ghost_errors[name] = str(exc)
                     error = error or f"{name} at frame {frame}: {exc}"
@@ -344,15 +341,8 @@ class EngineThread(threading.Thread):
             return
         self._playing = False
         try:
-            pose = np.asarray(method.decode_latent(np.asarray(latent, float)), float).reshape(sk.NUM_JOINTS, 3)
-            # drawn as the change the edited latent makes, on the pose on screen: the bare
-            # decoder output lacks the solve's root placement and reach (10 cm off, a foot
-            # above the floor), so the unedited latent must land exactly on the pose
             shown = self._last_result.latent if self._last_result is not None else None
-            if shown is not None and np.size(shown) == np.size(latent):
-                base = np.asarray(method.decode_latent(np.asarray(shown, float)), float).reshape(sk.NUM_JOINTS, 3)
-                pose = pose + (self._last_pose - base)
-            self._decoded = pose
+            self._decoded = decoded_on_pose(method, latent, shown, self._last_pose)  # exact on screen
         except Exception as exc:
             self._report_error(f"decode latent: {exc}")
 

@@ -1,0 +1,27 @@
+"""Latent debugging: an edited latent's pose, drawn on the pose on screen.
+
+The decoder's bare output for a frame's latent lacks what the solve adds after it (the
+root placement from the trackers, the exact reach of tracked hands and feet): drawn as
+is it sat about 10 cm off the reconstruction and a foot above the floor. The studio
+draws the *change* an edited latent makes, added to the pose on screen, so the
+unedited latent lands exactly on it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from engine import skeleton as sk
+from engine.methods.base import DecodesLatents
+
+
+def decoded_on_pose(method: DecodesLatents, latent: np.ndarray, shown: np.ndarray | None,
+                    pose: np.ndarray) -> np.ndarray:  # fmt: skip
+    """World joints (22, 3) m of ``latent`` (L,) relative to the frame on screen, whose
+    latent is ``shown`` (L,) and pose ``pose`` (22, 3) m; the bare decoded pose when
+    ``shown`` is missing or of another size."""
+    out = np.asarray(method.decode_latent(np.asarray(latent, float)), float).reshape(sk.NUM_JOINTS, 3)
+    if shown is None or np.size(shown) != np.size(latent):
+        return out
+    base = np.asarray(method.decode_latent(np.asarray(shown, float)), float).reshape(sk.NUM_JOINTS, 3)
+    return out + (np.asarray(pose, float) - base)

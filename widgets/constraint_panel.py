@@ -206,8 +206,10 @@ class ConstraintPanel(QWidget):
         self.constraints: list[dict[str, Any]] = []
         self._updating = False
 
-    def set_constraints(self, constraints: list[dict[str, Any]]) -> None:
-        """Show the session's constraints (``to_dict`` form) without emitting.
+    def set_constraints(self, constraints: list[dict[str, Any]], slow: dict[str, str] | None = None) -> None:
+        """Show the session's constraints (``to_dict`` form) without emitting; ``slow``
+        names those whose kind has no fast-path term, with why (a badge in the row: a
+        frame with one is solved by the slower reference path).
 
         A constraint that was not there before is selected (the one just added); the
         open editor takes the new values of its constraint.
@@ -232,7 +234,13 @@ class ConstraintPanel(QWidget):
                 self.list.setCurrentRow(names.index(pick) if pick in names else len(names) - 1)
             for i, c in enumerate(constraints):
                 state = Qt.CheckState.Checked if c.get("enabled", True) else Qt.CheckState.Unchecked
-                self.list.item(i).setCheckState(state)
+                item = self.list.item(i)
+                item.setCheckState(state)
+                why = (slow or {}).get(c["name"], "")
+                text = f"{c['name']}  [{c['kind']}]" + ("  · slow path" if why else "")
+                if item.text() != text:
+                    item.setText(text)
+                    item.setToolTip(f"No fast path: {why}" if why else "")
         finally:
             self._updating = False
         if rebuild:

@@ -102,3 +102,17 @@ def test_a_new_constraint_starts_next_to_the_character(studio, qtbot, kind):
         assert np.isclose(c.target[2], head[2])
     else:
         assert np.linalg.norm(c.position - pose[sk.JOINT_INDEX[c.joint]]) < 0.3
+
+
+def test_a_constraint_without_a_fast_path_has_a_badge_in_its_row(studio, monkeypatch):
+    from PyQt6.QtCore import Qt
+
+    from engine.constraints.distance import DistanceConstraint
+
+    monkeypatch.setattr(DistanceConstraint, "no_fast_term", "its term is not written for the fast path yet")
+    studio.session.add_constraint("distance", name="hands")
+    studio.session.add_constraint("look_at", name="look")
+    rows = {studio.constraint_panel.list.item(i).data(Qt.ItemDataRole.UserRole): studio.constraint_panel.list.item(i)
+            for i in range(studio.constraint_panel.list.count())}  # fmt: skip
+    assert "slow path" in rows["hands"].text() and "not written" in rows["hands"].toolTip()
+    assert "slow path" not in rows["look"].text()

@@ -106,11 +106,12 @@ def bench_method(name: str, motion, tracking, frames: int, warmup: int, constrai
 def _solve_clip(method, tracking, n: int) -> tuple[float, list] | None:
     """``(ms per frame, results)`` of the method's whole-clip solve of the first ``n``
     frames (engine/methods/dragposer_batch.py), or None for a method that steps frame by frame."""
-    solve = getattr(method, "solve_clip", None)
-    if solve is None:
+    from engine.methods import SolvesClips, driver
+
+    if not isinstance(method, SolvesClips):
         return None
     t0 = time.perf_counter()
-    results = solve([tracking.frame(i) for i in range(n)])
+    results = driver.solve_clip(method, [tracking.frame(i) for i in range(n)])
     return (None if results is None else (1000.0 * (time.perf_counter() - t0) / n, results))
 
 

@@ -22,7 +22,8 @@ import numpy as np
 from engine import skeleton as sk
 from engine.errors import UserError
 from engine.methods import driver
-from engine.methods.base import Configurable, Constrainable, DecodesLatents, FrameResult, Method, SensorWeighted
+from engine.methods.base import (Configurable, Constrainable, DecodesLatents, FrameResult, Method, SensorWeighted,
+                                 SolvesClips)  # fmt: skip
 from engine.sensors import Sensor, SensorFrame
 
 if TYPE_CHECKING:
@@ -30,7 +31,7 @@ if TYPE_CHECKING:
     from engine.tracking.simulate import Tracking
 
 __all__ = [
-    "Configurable", "Constrainable", "DecodesLatents", "FrameResult", "Method", "SensorWeighted", "SensorFrame", "Sensor",
+    "Configurable", "Constrainable", "DecodesLatents", "FrameResult", "Method", "SensorWeighted", "SolvesClips", "SensorFrame", "Sensor",
     "available_methods", "get_method", "method_modules", "register_method", "run_method",
 ]  # fmt: skip
 
@@ -123,8 +124,8 @@ def run_method(
         results: list[FrameResult] = []
         local, root = np.full((n, sk.NUM_JOINTS, 4), np.nan), np.full((n, 3), np.nan)
     # a method may solve the whole clip at once (DragPoser's batched offline mode)
-    clip = getattr(method, "solve_clip", None)
-    solved = clip([tracking.frame(i) for i in range(n)]) if clip is not None else None
+    whole = isinstance(method, SolvesClips)
+    solved = driver.solve_clip(method, [tracking.frame(i) for i in range(n)]) if whole else None
     for i in tqdm(range(n), desc=desc or method.name, unit="frame", disable=not progress or solved is not None,
                   leave=False):  # fmt: skip
         t0 = time.perf_counter()

@@ -7,15 +7,15 @@ starts a new clip.
 What a method may offer beyond that is typed here, so callers check it with
 ``isinstance`` instead of probing attribute names: :class:`Configurable` (optimizer
 settings by name), :class:`Constrainable` (the user's constraints),
-:class:`SensorWeighted` (a weight per tracker) and :class:`DecodesLatents` (a latent to a
-pose). The flags :attr:`Method.needs_ground_truth` and :attr:`Method.takes_deadline` say
+:class:`SensorWeighted` (a weight per tracker), :class:`DecodesLatents` (a latent to a
+pose) and :class:`SolvesClips` (a whole clip at once). The flags :attr:`Method.needs_ground_truth` and :attr:`Method.takes_deadline` say
 how :mod:`engine.methods.driver` resets and steps it.
 """
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
@@ -143,6 +143,16 @@ class DecodesLatents(Protocol):
 
     def decode_latent(self, latent: np.ndarray) -> np.ndarray:
         """World joint positions ``(22, 3)``, metres, of ``latent (L,)`` at the current root."""
+        ...
+
+
+@runtime_checkable
+class SolvesClips(Protocol):
+    """A method that can solve a whole clip at once (DragPoser's batched offline mode)."""
+
+    def solve_clip(self, frames: Sequence[SensorFrame]) -> list[FrameResult] | None:
+        """One result per frame of the clip, right after :meth:`Method.reset`; None (the
+        method left as reset) when this clip is to be solved frame by frame."""
         ...
 
 

@@ -10,7 +10,8 @@ functions:
    the edits to the methods that offer the matching capability
    (:class:`~engine.methods.base.Configurable`, ...) and say whether it did;
 3. :func:`step` per frame, with the frame's deadline when the method
-   :attr:`~engine.methods.base.Method.takes_deadline`, raising on a non-finite pose.
+   :attr:`~engine.methods.base.Method.takes_deadline`, raising on a non-finite pose (or
+   :func:`solve_clip` for the whole clip, when the method can).
 
 :func:`start` is steps 1 and 2 together.
 """
@@ -24,7 +25,7 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.errors import UserError
-from engine.methods.base import Configurable, Constrainable, FrameResult, Method, SensorWeighted
+from engine.methods.base import Configurable, Constrainable, FrameResult, Method, SensorWeighted, SolvesClips
 from engine.sensors import Sensor, SensorFrame
 
 if TYPE_CHECKING:
@@ -116,3 +117,19 @@ def step(method: Method, sensors: SensorFrame, deadline: float | None = None) ->
     if not np.all(np.isfinite(res.positions)):
         raise FloatingPointError(f"method {method.name!r} returned a non-finite pose at frame {sensors.frame}")
     return res
+
+
+def solve_clip(method: Method, frames: Sequence[SensorFrame]) -> list[FrameResult] | None:
+    """The whole clip solved at once by a :class:`SolvesClips` method right after
+    :func:`reset`, or None when the method (or this clip) goes frame by frame.
+
+    Raises
+    ------
+    FloatingPointError
+        When a frame's pose has a non-finite joint position.
+    """
+    results = method.solve_clip(frames) if isinstance(method, SolvesClips) else None
+    for f, res in zip(frames, results or ()):
+        if not np.all(np.isfinite(res.positions)):
+            raise FloatingPointError(f"method {method.name!r} returned a non-finite pose at frame {f.frame}")
+    return results

@@ -125,3 +125,15 @@ def test_the_studio_export_gives_a_ground_truth_method_its_clip(synthetic_motion
 
     rec = reconstruct_clip(synthetic_motion, (), (), {}, "oracle", factory=factory)
     assert len(rec) == len(synthetic_motion) and built[0].reference is synthetic_motion
+
+
+def test_a_whole_clip_solve_is_checked_like_a_step():
+    class WholeClip(NaNPose):
+        def solve_clip(self, frames):
+            return [self.step(f) for f in frames]
+
+    m = WholeClip()
+    m.reset(sk.Skeleton.canonical())
+    with pytest.raises(FloatingPointError, match="frame 0"):
+        driver.solve_clip(m, [_frame(0), _frame(1)])
+    assert driver.solve_clip(RestPoseMethod(), [_frame(0)]) is None  # steps frame by frame

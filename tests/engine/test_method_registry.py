@@ -9,14 +9,15 @@ from pathlib import Path
 import pytest
 
 import engine.methods as M
-from engine.methods.base import Configurable, Constrainable, DecodesLatents, Method, SensorWeighted
+from engine.methods.base import Configurable, Constrainable, DecodesLatents, Method, SensorWeighted, SolvesClips
 
 FOLDER = Path(M.__file__).parent
 MODULES = M.method_modules(FOLDER)
 
 #: Each capability's members: a method offers all of them or none (the driver sees whole capabilities).
 CAPABILITIES = {Configurable: ("configure",), Constrainable: ("set_constraints", "add_constraint"),
-                SensorWeighted: ("set_sensor_weight",), DecodesLatents: ("decode_latent",)}  # fmt: skip
+                SensorWeighted: ("set_sensor_weight",), DecodesLatents: ("decode_latent",),
+                SolvesClips: ("solve_clip",)}  # fmt: skip
 
 
 def _method_classes(module: str) -> list[type[Method]]:

@@ -8,11 +8,13 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from PyQt6.QtCore import QPoint
+from PyQt6.QtCore import QPoint, QSettings
 from PyQt6.QtGui import QImage, QPainter, QPixmap
-from PyQt6.QtWidgets import QFileDialog, QMainWindow
+from PyQt6.QtWidgets import QFileDialog, QMainWindow, QMenu
 
 from app import rig_maps
 from app.export import ReconstructionExport
@@ -20,22 +22,44 @@ from engine.atomic import atomic_path, write_text
 from engine.errors import OutputError, RigError, UserError
 from engine.input_files import read_json
 
+if TYPE_CHECKING:
+    from engine.studio.session import Session
+    from widgets.viewport import Viewport
+
 MAX_RECENT = 8
 
 
 class FileActions:
     """Holds the window's file operations (kept apart so the window stays about wiring).
 
-    ``window`` is the studio's main window; this class uses its ``session``,
-    ``settings``, ``viewport``, ``recent_menu``, ``show_error`` and status bar (it does
-    not import the window's module, which imports this one).
+    Parameters
+    ----------
+    window : QMainWindow
+        Only as a Qt main window: the parent of dialogs, its title, status bar and grab
+        (this module does not import the window's, which imports this one).
+    session : Session
+        Opens clips and scenes, builds exports.
+    settings : QSettings
+        Recent files and remembered joint mapping files.
+    viewport : Viewport
+        Composited into screenshots.
+    show_error : callable
+        ``show_error(title, text)``: the window's error dialog.
+
+    Attributes
+    ----------
+    recent_menu : QMenu or None
+        File > Open recent, filled by :meth:`refresh_recent` once the menus give it.
     """
 
-    def __init__(self, window: QMainWindow) -> None:
+    def __init__(self, window: QMainWindow, session: Session, settings: QSettings, viewport: Viewport,
+                 show_error: Callable[[str, str], None]) -> None:  # fmt: skip
         self.w = window
+        self.session, self.settings, self.viewport, self.show_error = session, settings, viewport, show_error
+        self.recent_menu: QMenu | None = None
         self.export = ReconstructionExport(window)
         self.export.finished.connect(self._export_finished)
-        self.rig_maps = rig_maps.RigMaps(window.settings)
+        self.rig_maps = rig_maps.RigMaps(settings)
         # dialogs, as attributes so tests can answer them without a modal box
         self.ask_unmapped = rig_maps.ask_unmapped
         self.pick_rig_map = rig_maps.pick_rig_map
@@ -54,18 +78,18 @@ class FileActions:
         mapped leads to :meth:`_unmapped`."""
         rig_map = rig_map or self.rig_maps.get(path)
         try:
-            self.w.session.open(path, rig_map)
+            self.session.open(path, rig_map)
         except RigError as exc:
             return self._unmapped(path, exc)
         except UserError as exc:
-            self.w.show_error("Cannot open motion", str(exc))
+            self.show_error("Cannot open motion", str(exc))
             return False
         if rig_map:
             self.rig_maps.remember(path, rig_map)
         self.add_recent(str(path))
         self.w.setWindowTitle(f"DragPoser Studio - {Path(path).name}")
         shown = f" with {Path(rig_map).name}" if rig_map else ""
-        self.w.statusBar().showMessage(f"Loaded {path}{shown} ({self.w.session.num_frames} frames)", 5000)
+        self.w.statusBar().showMessage(f"Loaded {path}{shown} ({self.session.num_frames} frames)", 5000)
         return True
 
     def _unmapped(self, path: str | Path, exc: RigError) -> bool:
@@ -81,7 +105,7 @@ class FileActions:
             try:
                 complete = write_suggestion(Path(path), out)
             except (UserError, OSError) as err:
-                self.w.show_error("Cannot suggest a mapping", str(err))
+                self.show_error("Cannot suggest a mapping", str(err))
                 return False
             what = "the mapping guessed" if complete else "a template listing the file's joints"
             self.w.statusBar().showMessage(f"Mapping suggestion written to {out}", 10000)
@@ -95,16 +119,18 @@ class FileActions:
         return None if path is None else self.rig_maps.get(path)
 
     def recent(self) -> list[str]:
-        value = self.w.settings.value("recent_files", [])
+        value = self.settings.value("recent_files", [])
         return [str(v) for v in (value if isinstance(value, list) else [value] if value else [])]
 
     def add_recent(self, path: str) -> None:
         items = [path] + [p for p in self.recent() if p != path]
-        self.w.settings.setValue("recent_files", items[:MAX_RECENT])
+        self.settings.setValue("recent_files", items[:MAX_RECENT])
         self.refresh_recent()
 
     def refresh_recent(self) -> None:
-        menu = self.w.recent_menu
+        menu = self.recent_menu
+        if menu is None:
+            return
         menu.clear()
         for p in self.recent():
             menu.addAction(p, lambda p=p: self.open_path(p))
@@ -119,9 +145,9 @@ class FileActions:
         """Reconstruct the whole clip off the GUI thread (progress, Cancel), then write it as
         BVH (canonical skeleton, or with ``on_source_rig`` the hierarchy of the file it was
         opened from)."""
-        s = self.w.session
+        s = self.session
         if s.source is not None:
-            return self.w.show_error("Not for tracker input", "Saving re-solves a clip. For trackers use "
+            return self.show_error("Not for tracker input", "Saving re-solves a clip. For trackers use "
                                      "`dragposer-studio reconstruct --trackers REC.jsonl --out OUT.bvh` on a "
                                      "recording (Live trackers > Record), or `live --out` (docs/trackers.md).")  # fmt: skip
         if self.export.running:
@@ -130,7 +156,7 @@ class FileActions:
             job = s.export_job(path or "", on_source_rig)
         except UserError as exc:
             text = str(exc)
-            return self.w.show_error("Nothing to save", f"{text[:1].upper()}{text[1:]}.")
+            return self.show_error("Nothing to save", f"{text[:1].upper()}{text[1:]}.")
         if path is None:
             path, _ = QFileDialog.getSaveFileName(self.w, "Save reconstruction", self.suggested_name("bvh"),
                                                   "BVH motion (*.bvh)")  # fmt: skip
@@ -146,7 +172,7 @@ class FileActions:
         elif not message:
             self.w.statusBar().showMessage("Export cancelled: nothing was written", 5000)
         else:
-            self.w.show_error("Cannot save reconstruction", message)
+            self.show_error("Cannot save reconstruction", message)
 
     def shutdown(self) -> None:
         self.export.shutdown()
@@ -154,9 +180,9 @@ class FileActions:
     def suggested_name(self, ext: str, what: str | None = None) -> str:
         """A file name the save dialogs offer: beside the open clip, named after it and
         the method (``walk_dragposer.bvh``), or after ``what`` (``walk_scene.json``)."""
-        clip = self.w.session.path
+        clip = self.session.path
         stem = Path(clip).stem if clip else "studio"
-        name = f"{stem}_{what or self.w.session.method}.{ext}"
+        name = f"{stem}_{what or self.session.method}.{ext}"
         return str(Path(clip).with_name(name)) if clip else name
 
     # -- scenes ---------------------------------------------------------------------
@@ -167,9 +193,9 @@ class FileActions:
             if not path:
                 return False
         try:
-            write_text(path, json.dumps(self.w.session.to_scene(), indent=2, allow_nan=False) + "\n")
+            write_text(path, json.dumps(self.session.to_scene(), indent=2, allow_nan=False) + "\n")
         except (OSError, ValueError) as exc:
-            self.w.show_error("Cannot save scene", f"{path}: {exc}")
+            self.show_error("Cannot save scene", f"{path}: {exc}")
             return False
         return True
 
@@ -181,11 +207,11 @@ class FileActions:
         try:
             scene = read_json(path, "scene")  # size, UTF-8, depth; errors name the file and line
             clip = scene.get("clip") if isinstance(scene, dict) else None
-            if clip and (self.w.session.path is None or Path(clip) != self.w.session.path):
-                self.w.session.open(clip, self.rig_map_of(clip))
-            self.w.session.apply_scene(scene, str(path))
+            if clip and (self.session.path is None or Path(clip) != self.session.path):
+                self.session.open(clip, self.rig_map_of(clip))
+            self.session.apply_scene(scene, str(path))
         except (OSError, ValueError, UserError) as exc:
-            self.w.show_error("Cannot load scene", f"{path}: {exc}")
+            self.show_error("Cannot load scene", f"{path}: {exc}")
             return False
         return True
 
@@ -193,7 +219,7 @@ class FileActions:
     def grab_window(self) -> QPixmap:
         """The whole window with the 3D view composited in (grab() may leave it black)."""
         pix = self.w.grab()
-        vp = self.w.viewport
+        vp = self.viewport
         img: QImage = vp.grab_image()
         ratio = pix.devicePixelRatio()
         pos = vp.mapTo(self.w, QPoint(0, 0))
@@ -214,6 +240,6 @@ class FileActions:
                 if not pix.save(str(tmp), "PNG"):
                     raise OutputError(f"{path}: could not write the image")
         except OutputError as exc:
-            self.w.show_error("Cannot export screenshot", str(exc))
+            self.show_error("Cannot export screenshot", str(exc))
             return False
         return True

@@ -69,7 +69,7 @@ class MainWindow(QMainWindow):
         self.busy.begin(method, -1, "Starting")
         # after the widgets: the thread's first imports would compete with theirs
         self.session.start_engine(process=engine == "process")
-        self.files = FileActions(self)
+        self.files = FileActions(self, self.session, self.settings, self.viewport, self.show_error)
         self.live = LiveActions(self, self.session, self.timeline, self.plots, self.settings, self.show_error)
         self.undo = SceneUndo(self.session, self)
         self.failures = FailureCountdown(self)

@@ -49,7 +49,7 @@ def build_menus(w: QMainWindow) -> None:
     named: dict[str, QAction] = {}
     file_menu = w.menuBar().addMenu("&File")
     action(w, file_menu, "&Open BVH...", f.open_dialog, QKeySequence.StandardKey.Open)
-    w.recent_menu = file_menu.addMenu("Open &recent")
+    w.recent_menu = f.recent_menu = file_menu.addMenu("Open &recent")
     f.refresh_recent()
     named["connect_live"] = action(w, file_menu, "Connect &live source (VMC)...", w.live.connect_dialog)
     named["open_recording"] = action(w, file_menu, "Open &tracker recording...", w.live.open_recording_dialog)

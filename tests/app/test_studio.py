@@ -254,7 +254,7 @@ def test_screenshot_writes_through_a_symlink_and_leaves_no_temp_file(studio, qtb
     assert studio.files.export_screenshot(str(link))
     assert link.is_symlink() and target.read_bytes()[:4] == b"\x89PNG"
     # a grab that cannot be saved leaves the previous image and no temporary file
-    monkeypatch.setattr(studio, "show_error", lambda *a: None)
+    monkeypatch.setattr(studio.files, "show_error", lambda *a: None)  # the dialog FileActions was given
     monkeypatch.setattr(studio.files, "grab_window", lambda: type("P", (), {"save": lambda self, p, fmt=None: False})())
     before = target.read_bytes()
     assert not studio.files.export_screenshot(str(link))

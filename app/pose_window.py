@@ -338,7 +338,8 @@ class PoseWindow(QMainWindow):
 
         from app.file_actions import FileActions
 
-        return FileActions.grab_window(SimpleNamespace(w=self)).save(str(path))  # type: ignore[arg-type]
+        shim = SimpleNamespace(w=self, viewport=self.viewport)  # what grab_window reads
+        return FileActions.grab_window(shim).save(str(path))  # type: ignore[arg-type]
 
     # -- drawing and closing -------------------------------------------------------
     def _show_positions(self, positions: np.ndarray) -> None:

@@ -186,3 +186,14 @@ def test_the_studio_file_menu_opens_a_pose_window_on_the_clip_frame(studio):
         assert np.allclose(pose.mode.pose.root_pos[:2], studio.session.motion.root_pos[studio.session.frame, :2])
     finally:
         close_now(pose)
+
+
+def test_the_screenshot_shows_the_window_with_the_character(window, tmp_path):
+    from PyQt6.QtGui import QImage
+
+    assert window.screenshot(tmp_path / "s.png")
+    img = QImage(str(tmp_path / "s.png"))
+    assert img.width() >= window.width() - 2 and img.height() >= window.height() - 2
+    vp = window.viewport.mapTo(window, window.viewport.rect().center())
+    colours = {img.pixelColor(x, y).name() for x in range(vp.x() - 60, vp.x() + 60, 3) for y in range(0, img.height(), 3)}
+    assert any(int(c[1:3], 16) > 180 and int(c[5:7], 16) < 90 for c in colours)  # the orange figure is drawn

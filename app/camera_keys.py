@@ -1,38 +1,51 @@
-"""The camera keys (Home, 1, 3, 7) reach the 3D view while the pointer is over it.
+"""The camera keys (Home, 1, 3, 7) work wherever the keyboard focus is, except in a field
+the user types into.
 
-A number field that has the keyboard focus takes digits and Home for itself (Qt lets
-the focused widget override a shortcut), so after an edit in a panel the camera keys
-did nothing until the user clicked the view. While the pointer is over the 3D view
-those keys go to its camera, whatever has the focus; elsewhere a number field keeps
-its digits (typing 0.3 must stay possible).
+Qt lets the focused widget override a shortcut: a slider takes Home, a combo box takes
+digits for its keyboard search, so after a click in a panel the camera keys did nothing
+until the user clicked the 3D view. This filter lets the View ▸ Camera shortcuts fire
+whatever has the focus, unless it is a text or number field: typing 0.3 must give 0.3
+wherever the pointer rests (pressing Escape or clicking the view gives the keys back).
 """
 
 from __future__ import annotations
 
 from PyQt6.QtCore import QEvent, QObject, Qt
-from PyQt6.QtGui import QCursor, QKeyEvent
-from PyQt6.QtWidgets import QWidget
+from PyQt6.QtGui import QKeyEvent
+from PyQt6.QtWidgets import QAbstractSpinBox, QApplication, QComboBox, QLineEdit, QPlainTextEdit, QTextEdit, QWidget
 
-#: Keys of View ▸ Camera (:data:`app.menus.CAMERAS`) the 3D view takes from a field.
+#: Keys of View ▸ Camera (:data:`app.menus.CAMERAS`) that no other panel widget keeps.
 CAMERA_KEYS = frozenset((Qt.Key.Key_Home, Qt.Key.Key_1, Qt.Key.Key_3, Qt.Key.Key_7))
 
 
+def types_text(widget: QWidget | None) -> bool:
+    """Whether ``widget`` is a field whose keys are text (line edits, number fields,
+    editable combo boxes, text areas)."""
+    if isinstance(widget, QComboBox):
+        return widget.isEditable()
+    return isinstance(widget, (QLineEdit, QAbstractSpinBox, QTextEdit, QPlainTextEdit))
+
+
 class CameraKeys(QObject):
-    """Application event filter: a camera key pressed with the pointer over ``view``
-    is not overridden by the focused widget, so the View ▸ Camera shortcut fires."""
+    """Application event filter: a camera key that the focused widget would override
+    reaches the View ▸ Camera shortcut instead, unless that widget types text."""
 
     def __init__(self, view: QWidget, parent: QObject | None = None) -> None:
         super().__init__(parent)
         self._view = view
 
-    def pointer_over_view(self) -> bool:
-        view = self._view
-        return view.isVisible() and view.rect().contains(view.mapFromGlobal(QCursor.pos()))
-
     def eventFilter(self, obj: QObject | None, event: QEvent | None) -> bool:
+        if (event is not None and event.type() == QEvent.Type.KeyPress and isinstance(event, QKeyEvent)
+                and event.key() == Qt.Key.Key_Escape and obj is QApplication.focusWidget()
+                and types_text(obj) and obj.window() is self._view.window()):  # fmt: skip
+            self._view.setFocus()  # leave the field: the camera keys are the view's again
+            return True
         if event is not None and event.type() == QEvent.Type.ShortcutOverride and isinstance(event, QKeyEvent):
             mods = event.modifiers() & ~Qt.KeyboardModifier.KeypadModifier
-            if event.key() in CAMERA_KEYS and mods == Qt.KeyboardModifier.NoModifier and self.pointer_over_view():
+            if event.key() in CAMERA_KEYS and mods == Qt.KeyboardModifier.NoModifier:
+                focus = QApplication.focusWidget()
+                if types_text(focus) or (focus is not None and focus.window() is not self._view.window()):
+                    return False  # a field being typed in, or another window's widget
                 event.ignore()  # not overridden: the shortcut map fires the camera action
                 return True
         return False

@@ -1,10 +1,11 @@
-"""The camera keys (Home, 1, 3, 7) work wherever the keyboard focus is in the window."""
+"""The camera keys (Home, 1, 3, 7) work wherever the keyboard focus is, except in a field
+the user types into, which keeps its digits wherever the pointer rests."""
 
 from __future__ import annotations
 
 import pytest
-from PyQt6.QtCore import Qt
 from PyQt6.QtGui import QCursor
+from PyQt6.QtCore import Qt
 from PyQt6.QtTest import QTest
 from PyQt6.QtWidgets import QApplication
 
@@ -13,21 +14,19 @@ pytestmark = pytest.mark.gui
 KEYS = ((Qt.Key.Key_7, "top"), (Qt.Key.Key_Home, "home"), (Qt.Key.Key_3, "side"), (Qt.Key.Key_1, "front"))
 
 
-def _focus_targets(studio):
-    weight = next(iter(studio.sensor_panel.rows.values()))["weight"]
-    return {"window": studio, "3D view": studio.viewport.plotter, "timeline slider": studio.timeline.slider,
-            "sensor weight": weight, "fail frames": studio.sensor_panel.fail_frames,
-            "preset": studio.sensor_panel.preset}  # fmt: skip
-
-
-def test_camera_keys_work_over_the_view_whatever_has_the_focus(studio, qtbot):
+def _activate(studio, qtbot, pointer_on):
     studio.windowHandle().requestActivate()
     qtbot.waitUntil(lambda: QApplication.activeWindow() is studio)
-    view = studio.viewport
-    QCursor.setPos(view.mapToGlobal(view.rect().center()))
-    qtbot.waitUntil(lambda: studio.camera_keys.pointer_over_view())
+    QCursor.setPos(pointer_on.mapToGlobal(pointer_on.rect().center()))
+
+
+def test_camera_keys_work_whatever_panel_widget_has_the_focus(studio, qtbot):
+    row = next(iter(studio.sensor_panel.rows.values()))
+    _activate(studio, qtbot, studio.sensor_panel)  # the pointer away from the 3D view
+    targets = {"window": studio, "3D view": studio.viewport.plotter, "timeline slider": studio.timeline.slider,
+               "preset": studio.sensor_panel.preset, "sensor toggle": row["enabled"]}  # fmt: skip
     failed = []
-    for name, widget in _focus_targets(studio).items():
+    for name, widget in targets.items():
         widget.setFocus()
         QApplication.processEvents()
         for key, preset in KEYS:
@@ -38,14 +37,26 @@ def test_camera_keys_work_over_the_view_whatever_has_the_focus(studio, qtbot):
     assert not failed, failed
 
 
-def test_a_number_field_keeps_its_digits_away_from_the_view(studio, qtbot):
-    studio.windowHandle().requestActivate()
-    qtbot.waitUntil(lambda: QApplication.activeWindow() is studio)
-    field = studio.sensor_panel.fail_frames
-    QCursor.setPos(field.mapToGlobal(field.rect().center()))
-    qtbot.waitUntil(lambda: not studio.camera_keys.pointer_over_view())
-    field.setFocus()
-    field.selectAll()
+@pytest.mark.parametrize("field", ["fail frames", "iterations"])
+def test_a_number_field_keeps_its_digits_even_with_the_pointer_over_the_view(studio, qtbot, field):
+    _activate(studio, qtbot, studio.viewport)
+    widget = {"fail frames": studio.sensor_panel.fail_frames,
+              "iterations": studio.optimizer_panel.editors["iterations"]}[field]  # fmt: skip
+    widget.setFocus()
+    QApplication.processEvents()
+    widget.selectAll()
     studio.viewport.set_camera("home")
-    QTest.keyClicks(field, "37")
-    assert field.text().startswith("37") and studio.viewport.camera_preset == "home"
+    QTest.keyClicks(widget, "37")
+    assert widget.text().startswith("37") and studio.viewport.camera_preset == "home"
+
+
+def test_escape_leaves_a_number_field_and_the_camera_keys_work_again(studio, qtbot):
+    _activate(studio, qtbot, studio.viewport)
+    field = studio.sensor_panel.fail_frames
+    field.setFocus()
+    QApplication.processEvents()
+    QTest.keyClick(field, Qt.Key.Key_Escape)
+    assert not field.hasFocus()
+    studio.viewport.set_camera("home")
+    QTest.keyClick(QApplication.focusWidget() or studio, Qt.Key.Key_7)
+    assert studio.viewport.camera_preset == "top"

@@ -15,6 +15,7 @@ import argparse
 import importlib
 import sys
 from importlib.metadata import entry_points
+from types import ModuleType
 from typing import NoReturn
 
 from engine.errors import UserError, shorten_words
@@ -59,21 +60,23 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for mod_name in SUBCOMMANDS:
-        try:
-            mod = importlib.import_module(mod_name)
-        except Exception as exc:  # a broken subcommand must say so, not vanish from --help
-            raise SubcommandImportError(f"subcommand module {mod_name} cannot be imported: "
-                                        f"{type(exc).__name__}: {exc}") from exc  # fmt: skip
-        mod.register(sub)
+        _import_subcommand(mod_name).register(sub)
     for ep in sorted(entry_points(group=PLUGIN_GROUP), key=lambda e: e.name):
-        try:
-            plugin = ep.load()
-        except ModuleNotFoundError as exc:
-            if exc.name == ep.value:  # installed metadata names a module this checkout lacks
-                continue
-            raise
-        plugin.register(sub)
+        _import_subcommand(ep.value, installed=True).register(sub)
     return parser
+
+
+def _import_subcommand(mod_name: str, installed: bool = False) -> ModuleType:
+    """The subcommand module ``mod_name``; :class:`SubcommandImportError` when it fails to
+    import, so a broken subcommand says so instead of vanishing from ``--help``."""
+    try:
+        return importlib.import_module(mod_name)
+    except Exception as exc:
+        hint = ""
+        if installed and isinstance(exc, ModuleNotFoundError) and exc.name == mod_name:
+            hint = " (the installed entry points name a module this checkout lacks: reinstall with pip install -e .)"
+        raise SubcommandImportError(f"subcommand module {mod_name} cannot be imported: "
+                                    f"{type(exc).__name__}: {exc}{hint}") from exc  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -40,3 +40,15 @@ def test_a_subcommand_that_fails_to_import_is_an_error_not_a_gap(monkeypatch, tm
     assert cli_main.main(["info", "--help"]) == 1
     err = capsys.readouterr().err
     assert err.startswith("error: subcommand module cli_broken_sub cannot be imported") and message in err
+
+
+def test_an_entry_point_whose_module_is_missing_is_an_error_that_says_how_to_fix_it(monkeypatch, capsys):
+    from importlib.metadata import EntryPoint
+
+    stale = EntryPoint(name="ghost", value="app.no_such_subcommand", group=cli_main.PLUGIN_GROUP)
+    monkeypatch.setattr(cli_main, "entry_points", lambda group: [stale])
+    with pytest.raises(SubcommandImportError, match="app.no_such_subcommand"):
+        build_parser()
+    assert cli_main.main(["info", "--help"]) == 1
+    err = capsys.readouterr().err
+    assert "reinstall with pip install -e ." in err and len(err.strip().splitlines()) == 1

@@ -30,6 +30,7 @@ from engine.methods.base import DecodesLatents, FrameResult, Method
 from engine.sensors import SensorFrame
 from engine.studio import commands as cmd
 from engine.studio.decode import decoded_on_pose
+from engine.studio.frame_figures import losses_of, timing_of
 from engine.studio.method_set import MethodSet
 from engine.studio.method_edits import make_method
 from engine.studio.playback import ENDED, LOOPED, PlaybackClock
@@ -43,37 +44,6 @@ LIVE_POLL_S = 0.005
 #: Problems a snapshot repeats (newest last), so a reader that skipped the snapshot
 #: which first reported one still shows it.
 RECENT_ERRORS = 5
-
-
-def _losses(res: FrameResult | None, sf: SensorFrame) -> tuple[dict[str, float], ...]:
-    """The method's per-iteration losses; for methods without any (classical IK), one
-    "iteration" of squared position errors to every connected target, so the plots and
-    tests can compare methods on the same terms."""
-    if res is None:
-        return ()
-    if res.losses:
-        return tuple(dict(d) for d in res.losses)
-    errs = {f"pos:{j}": float(np.sum((res.positions[sk.JOINT_INDEX[j]] - r.position) ** 2))
-            for j, r in sf.connected().items()}  # fmt: skip
-    errs["total"] = float(sum(errs.values()))
-    return (errs,)
-
-
-def _timing(res: FrameResult | None, ms: float, latency_ms: float | None = None) -> dict[str, float]:
-    """The solve's timing figures, ms: wall time per frame and per iteration, overridden
-    by the method's own per-iteration breakdown when its result carries one (a
-    ``timings`` dict: ``ms_per_iteration``, ``decoder``, ``fk_losses``, ``backward``,
-    ``step``, as DragPoser reports them); for a live source ``latency_ms``, from the
-    frame's packet arriving to its solved pose."""
-    if res is None:
-        return {}
-    out = {"ms_per_frame": float(ms)}
-    if latency_ms is not None:
-        out["latency_ms"] = float(latency_ms)
-    if res.iterations:
-        out["ms_per_iteration"] = float(ms) / res.iterations
-    out.update({str(k): float(v) for k, v in res.timings.items() if isinstance(v, (int, float))})
-    return out
 
 
 class EngineThread(threading.Thread):
@@ -326,7 +296,7 @@ class EngineThread(threading.Thread):
             self._clock.restart(frame)
         self._last_ghosts, self._last_ms = ghosts, ms
         if res is not None:
-            final = dict(res.losses[-1]) if res.losses else dict(_losses(res, sf)[-1])
+            final = dict(res.losses[-1]) if res.losses else dict(losses_of(res, sf)[-1])
             latent = readonly(res.latent) if res.latent is not None else None
             self._history.append(FrameRecord(frame, res.iterations, ms, final, latent))
         self._publish(frame, sf, res, ms, error, ghosts)
@@ -364,7 +334,7 @@ class EngineThread(threading.Thread):
             target_rotations=readonly(np.array([r.rotation for r in readings]).reshape(-1, 4)),
             target_connected=readonly(np.array([r.connected for r in readings], bool)),
             gizmos=self._gizmos(),
-            losses=_losses(res, sf),
+            losses=losses_of(res, sf),
             latent=readonly(last.latent) if last is not None and last.latent is not None else None,
             iterations=res.iterations if res else 0,
             ms=ms,
@@ -381,7 +351,7 @@ class EngineThread(threading.Thread):
             solved=self._solved,
             frames_skipped=self._skipped,
             pace=self._clock.pace,
-            timing=_timing(res, ms, self._latency_ms),
+            timing=timing_of(res, ms, self._latency_ms),
             recent_errors=tuple(self._recent_errors),
             plays=self._plays,
         )

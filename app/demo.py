@@ -6,7 +6,7 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
-from engine.motion import Motion
+from engine.motion.clip import Motion
 
 
 def _axis(angle: np.ndarray, axis: tuple[float, float, float]) -> np.ndarray:

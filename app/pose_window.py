@@ -31,7 +31,7 @@ from engine.authoring.bake import bake
 from engine.authoring.document import AuthoringScene, save_authoring
 from engine.authoring.keys import Animation, Key
 from engine.authoring.pose_mode import PoseMode
-from engine.bvh import save_motion_bvh
+from engine.motion.bvh import save_motion_bvh
 from engine.errors import UserError
 from engine.kinematics import quat_np as QN
 from engine.kinematics import quaternion as Q

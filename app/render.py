@@ -75,7 +75,7 @@ def run(args: argparse.Namespace) -> int:
     if args.fps:
         if not 1.0 <= args.fps <= 240.0:
             raise UserError(f"--fps must be within 1-240, got {args.fps}")
-        from engine.retarget import resample_motion
+        from engine.motion.retarget import resample_motion
 
         motion = resample_motion(motion, float(args.fps))
     bar = tqdm(total=len(motion), unit="frame", desc="render", disable=args.no_progress, file=sys.stderr)

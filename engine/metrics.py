@@ -25,7 +25,7 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
-from engine.motion import Motion
+from engine.motion.clip import Motion
 
 #: Jerk unit of RPM's tables: 10^2 m/s^3.
 JERK_UNIT = 100.0

@@ -23,7 +23,7 @@ from engine import skeleton as sk
 from engine.sensors import Sensor, SensorFrame
 
 if TYPE_CHECKING:
-    from engine.motion import Motion
+    from engine.motion.clip import Motion
 
 _IDENTITY = np.array([1.0, 0.0, 0.0, 0.0])
 

@@ -51,7 +51,7 @@ def main() -> int:
     ap.add_argument("--k", type=int, default=24)
     args = ap.parse_args()
 
-    from engine.retarget import load_motion
+    from engine.motion.retarget import load_motion
 
     bank = default_bank()
     if bank is None:

@@ -75,7 +75,7 @@ def main() -> None:
 
 def _clip(v: EngineVersion, sensors: str):
     with v:
-        from engine.retarget import load_motion
+        from engine.motion.retarget import load_motion
         from engine.tracking import simulate
 
         motion = load_motion(CLIP)

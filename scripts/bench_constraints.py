@@ -19,7 +19,7 @@ from pathlib import Path
 
 from engine.atomic import write_text
 from engine.cli.bench import DEFAULT_CLIP, bench_method
-from engine.retarget import load_motion
+from engine.motion.retarget import load_motion
 from engine.scene import load_scene
 from engine.tracking import simulate
 

@@ -25,7 +25,7 @@ from engine.solver.tracker_prior import ANCHORS, BANK_JOINTS, LAG, PoseBank, fil
 
 
 def bank_from_motions(motions, vae, k: int = 8, vae_sha256: str = "") -> PoseBank:
-    """A :class:`PoseBank` of every frame of ``motions`` (:class:`engine.motion.Motion`)."""
+    """A :class:`PoseBank` of every frame of ``motions`` (:class:`engine.motion.clip.Motion`)."""
     from engine.kinematics.fk import fk
     from engine.methods.autoencoder import AutoencoderMethod
 
@@ -55,7 +55,7 @@ def main() -> int:
 
     from engine.models import load_default_models, load_models
     from engine.models.loading import DEFAULT_VAE
-    from engine.motion import Motion
+    from engine.motion.clip import Motion
 
     vae_file = Path(args.vae) if args.vae else DEFAULT_VAE
     vae = (load_models(vae_file) if args.vae else load_default_models()).vae

@@ -2,7 +2,7 @@
 
 Every take the shared manifest lists on two or three rigs (``cmu_trial``) is converted from
 each rig, and every pair of copies is aligned in time and heading and compared
-(:func:`engine.retarget_compare.compare_clips`): mean local-rotation difference, the worst
+(:func:`engine.motion.retarget_compare.compare_clips`): mean local-rotation difference, the worst
 joint, and root-relative positions at one height. The table goes into ``docs/skeleton.md``.
 
     PYTHONPATH=. python scripts/cross_rig.py ../shared/data/mocap [--max-frames 1200] [--json OUT.json]
@@ -19,8 +19,8 @@ from pathlib import Path
 import numpy as np
 
 from engine import skeleton as sk
-from engine.retarget import RETARGET_VERSION, RETARGET_VERSIONS, load_motion
-from engine.retarget_compare import compare_clips, multi_rig_takes
+from engine.motion.retarget import RETARGET_VERSION, RETARGET_VERSIONS, load_motion
+from engine.motion.retarget_compare import compare_clips, multi_rig_takes
 
 
 def cross_rig_rows(mocap: Path, max_frames: int | None = None, version: int = RETARGET_VERSION) -> list[dict]:

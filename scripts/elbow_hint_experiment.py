@@ -40,7 +40,7 @@ def finish(local_rot, root_pos, offsets, reach_to, turn_to, share=0.0):
     return orig(local, root_pos, offsets, {}, turn_to, share)
 dp.finish = finish
 from engine.methods import get_method, run_method
-from engine.retarget import load_motion
+from engine.motion.retarget import load_motion
 from engine.tracking import simulate
 m = get_method("dragposer", mode="realtime")
 errs = []; pos = []

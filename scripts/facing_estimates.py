@@ -35,7 +35,7 @@ def main() -> int:
     args = ap.parse_args()
 
     from engine.kinematics import quaternion as Q
-    from engine.retarget import load_motion
+    from engine.motion.retarget import load_motion
     from engine.solver.pose import body_facing, head_hands_facing
     from engine.tracking import simulate
 

@@ -41,7 +41,7 @@ def main() -> None:
                 with v:
                     from engine.methods.dragposer import DragPoserMethod
                     from engine.models import load_default_models
-                    from engine.retarget import load_motion
+                    from engine.motion.retarget import load_motion
                     from engine.tracking import simulate
 
                     motion = load_motion(CLIP)

@@ -1,7 +1,7 @@
 """Hinge-axis alignment and twist statistics per joint, on every clip of a data folder.
 
-Each clip is retargeted to the canonical rig (``engine.retarget``) and measured with
-:func:`engine.joint_stats.joint_report`. Clips are grouped by their top folder
+Each clip is retargeted to the canonical rig (``engine.motion.retarget``) and measured with
+:func:`engine.motion.joint_stats.joint_report`. Clips are grouped by their top folder
 (``cmu_daz``, ``cmu_iclone``, ``dragposer``); the canonical rig's own clips
 (``--canonical``, default ``dragposer``) give the reference hinge axis of each joint.
 
@@ -20,8 +20,8 @@ import json
 import sys
 from pathlib import Path
 
-from engine.joint_stats import joint_report, summarize
-from engine.retarget import load_with_report
+from engine.motion.joint_stats import joint_report, summarize
+from engine.motion.retarget import load_with_report
 
 
 def collect(root: Path, progress: bool = True) -> dict[str, dict[str, dict]]:

@@ -27,9 +27,9 @@ REPO = Path(__file__).resolve().parents[1]
 
 
 def long_clip(frames: int, path: Path) -> None:
-    from engine.bvh import save_motion_bvh
-    from engine.motion import Motion
-    from engine.retarget import load_motion
+    from engine.motion.bvh import save_motion_bvh
+    from engine.motion.clip import Motion
+    from engine.motion.retarget import load_motion
 
     m = load_motion(REPO / "assets" / "clips" / "example.bvh")
     reps = -(-frames // len(m))

@@ -41,7 +41,7 @@ def run_one(v: EngineVersion, path: str, a: argparse.Namespace) -> tuple[float, 
     with v:
         from engine.cli.evaluate import evaluate_clip
         from engine.methods import get_method
-        from engine.retarget import load_motion
+        from engine.motion.retarget import load_motion
 
         motion = load_motion(path)
         if a.max_frames:

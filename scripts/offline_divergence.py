@@ -85,7 +85,7 @@ def main() -> int:
 
     import torch
 
-    from engine.retarget import load_motion
+    from engine.motion.retarget import load_motion
 
     motion = load_motion(args.file, max_frames=args.max_frames or None)
     a = record(motion, args.sensors, args.mode, 0.0, 0)

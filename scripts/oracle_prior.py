@@ -82,7 +82,7 @@ def main() -> int:
 
     from engine.methods import get_method, run_method
     from engine.metrics import evaluate_motion
-    from engine.retarget import load_motion
+    from engine.motion.retarget import load_motion
     from engine.tracking import simulate
 
     _tracking_runs()

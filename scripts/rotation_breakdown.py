@@ -69,7 +69,7 @@ def main() -> int:
     joints = [sk.JOINT_INDEX[n] for n in args.joints.split(",")]
 
     from engine.methods import get_method, run_method
-    from engine.retarget import load_motion
+    from engine.motion.retarget import load_motion
     from engine.tracking import simulate
 
     kw = {"mode": args.mode}

@@ -30,7 +30,7 @@ def _setup(v: EngineVersion):
     with v:
         from engine.methods.dragposer import DragPoserMethod
         from engine.models import load_default_models
-        from engine.retarget import load_motion
+        from engine.motion.retarget import load_motion
         from engine.tracking import simulate
 
         motion = load_motion(CLIP)

@@ -49,7 +49,7 @@ def main() -> int:
 
     from engine.methods.sparseposer import SparsePoserMethod
     from engine.models.loading import load_sparseposer
-    from engine.retarget import load_motion
+    from engine.motion.retarget import load_motion
     from engine.tracking import simulate
 
     with tempfile.TemporaryDirectory() as tmp:

@@ -118,7 +118,7 @@ def main() -> int:
     args = ap.parse_args()
 
     from engine.config import parse_overrides
-    from engine.retarget import load_motion
+    from engine.motion.retarget import load_motion
     from engine.solver import OptimizerSettings
 
     settings = parse_overrides(OptimizerSettings, args.set) if args.set else {}

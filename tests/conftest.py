@@ -43,7 +43,7 @@ def shared_mocap() -> Path:
 def synthetic_motion():
     """A smooth 120-frame canonical motion (walk-like sway), deterministic."""
     from engine.kinematics import quaternion as Q
-    from engine.motion import Motion
+    from engine.motion.clip import Motion
     from engine import skeleton as sk
 
     f = 120

@@ -36,7 +36,7 @@ from engine.authoring.targets import JointTarget, solve_inputs
 from engine.constraints.base import Constraint
 from engine.constraints.smooth import SmoothConstraint
 from engine.errors import UserError
-from engine.motion import Motion
+from engine.motion.clip import Motion
 
 #: Latent steps per in-between frame (each starts next to its answer).
 IN_BETWEEN_ITERATIONS = 12

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from engine.authoring.bake import Baked, bake
 from engine.authoring.document import AuthoringScene
-from engine.bvh import save_motion_bvh
+from engine.motion.bvh import save_motion_bvh
 
 
 def bake_to_bvh(scene: AuthoringScene, vae, out: str | Path, fps: float | None = None,

@@ -22,7 +22,7 @@ from engine.constraints.base import Constraint
 from engine.errors import UserError
 from engine.kinematics import quat_np as QN
 from engine.kinematics.features import encoder_input, pose_from_motion
-from engine.motion import Motion
+from engine.motion.clip import Motion
 
 #: Latent steps of one continuous solve (one drag event).
 ITERATIONS = 8

@@ -34,7 +34,7 @@ from engine.errors import UserError
 from engine.kinematics import quat_np as QN
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk
-from engine.motion import Motion
+from engine.motion.clip import Motion
 from engine.solver.limb_ik import LIMBS, reach_local
 
 #: Latent steps per frame.

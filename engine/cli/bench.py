@@ -130,7 +130,7 @@ def _bench(args: argparse.Namespace) -> int:
     from engine.atomic import write_text
     from engine.errors import UserError
     from engine.methods import available_methods
-    from engine.retarget import load_motion
+    from engine.motion.retarget import load_motion
     from engine.scene import load_scene
     from engine.tracking import simulate
     from engine.validation import check_args, check_output_path

@@ -54,7 +54,7 @@ def _files(args: argparse.Namespace) -> list[Path]:
 
 def _run(args: argparse.Namespace, files: list[Path], preset: str, gaps: bool, variant: str) -> dict[str, Any]:
     from engine.cli.evaluate import _safe_doc, run_method_on_clips
-    from engine.retarget import load_motion
+    from engine.motion.retarget import load_motion
 
     name = variant.split("+")[0]
     blend = args.blend if variant.endswith("+blend") else 0.0

@@ -24,9 +24,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _convert(args: argparse.Namespace) -> int:
-    from engine.bvh import save_motion_bvh
+    from engine.motion.bvh import save_motion_bvh
     from engine.errors import UserError
-    from engine.retarget import RETARGET_VERSION, load_with_report, manifest_fps, resample_motion
+    from engine.motion.retarget import RETARGET_VERSION, load_with_report, manifest_fps, resample_motion
 
     if args.fps is not None and not args.fps > 0:
         raise UserError(f"--fps must be > 0, got {args.fps}")

@@ -209,7 +209,7 @@ def run_method_on_clips(args: argparse.Namespace, name: str, motions: list[tuple
 def _evaluate_file(job: tuple[Path, argparse.Namespace, list[str], bool]) -> dict[str, Any]:
     """Every method's metrics on one file, or ``{"error": message}`` for a method that
     cannot run it (in this process or a ``--jobs`` worker)."""
-    from engine.retarget import load_motion
+    from engine.motion.retarget import load_motion
 
     path, args, names, progress = job
     motion = load_motion(path, rig_map=rig_map_path(args), max_frames=args.max_frames)  # reads only what is needed

@@ -27,7 +27,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def describe(path: Path, fps: float | None = None, rig_map: Path | None = None) -> dict:
     """Everything ``info`` reports about a BVH file, as a JSON-ready dict."""
-    from engine.retarget import RETARGET_VERSION, load_with_report, manifest_fps
+    from engine.motion.retarget import RETARGET_VERSION, load_with_report, manifest_fps
     from engine.validation import CLI, check_value
 
     if fps is not None:

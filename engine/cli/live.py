@@ -77,7 +77,7 @@ def _check(args: argparse.Namespace) -> None:
 
 
 def _live(args: argparse.Namespace) -> int:
-    from engine.bvh import save_motion_bvh
+    from engine.motion.bvh import save_motion_bvh
     from engine.tracker_io.live import (LiveRun, default_budget_ms, iteration_summary, latency_summary, reference_error,
                                      to_motion, tracker_error_cm)  # fmt: skip
     from engine.tracker_io.receiver import VMCReceiver, parse_listen

@@ -126,9 +126,9 @@ _METHOD: dict[str, Any] = {}  # this process's method, built once for all its fi
 def _reconstruct_file(job: tuple[Path, Path, argparse.Namespace, bool]) -> str:
     """Reconstruct one input and write it; returns the summary (in this process or a
     ``--jobs`` worker)."""
-    from engine.bvh import load_bvh
+    from engine.motion.bvh import load_bvh
     from engine.methods import run_method
-    from engine.retarget import manifest_fps, retarget, source_frames_needed
+    from engine.motion.retarget import manifest_fps, retarget, source_frames_needed
     from engine.studio.export import write_reconstruction
     from engine.tracking import simulate
 

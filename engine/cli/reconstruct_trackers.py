@@ -20,7 +20,7 @@ def _slice(tracking: Any, start: int, stop: int | None = None) -> Any:
 
 
 def reconstruct_trackers(args: argparse.Namespace) -> int:
-    from engine.bvh import save_motion_bvh
+    from engine.motion.bvh import save_motion_bvh
     from engine.cli.method_options import build_method
     from engine.methods import run_method
     from engine.tracker_io.calibration import calibrate

@@ -1,6 +1,6 @@
 """``dragposer-studio rig suggest FILE.bvh --out MAP.toml``: a joint mapping to check and fix.
 
-The file holds the automatic mapping (:mod:`engine.rigs.automap`) with the reason
+The file holds the automatic mapping (:mod:`engine.motion.rigs.automap`) with the reason
 for every choice as a comment, the inferred unit and axes, and the joints that were
 folded in or left out; pass it back with ``--rig-map MAP.toml`` after editing. When
 the automatic mapping fails, a template with every canonical joint is written instead.
@@ -92,9 +92,9 @@ def write_suggestion(bvh: Path, out: Path, rig_map: Path | None = None) -> bool:
     be mapped and a template to fill in was written instead. Used by ``rig suggest`` and
     the studio's Open dialog."""
     from engine.atomic import write_text
-    from engine.bvh import load_bvh
+    from engine.motion.bvh import load_bvh
     from engine.errors import RigError
-    from engine.rigs import resolve_rig
+    from engine.motion.rigs import resolve_rig
 
     raw = load_bvh(bvh)
     try:

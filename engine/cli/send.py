@@ -62,7 +62,7 @@ def _send(args: argparse.Namespace) -> int:
 
     from tqdm import tqdm
 
-    from engine.retarget import load_motion
+    from engine.motion.retarget import load_motion
     from engine.tracker_io.sender import parse_target, plan_stream, scaled_motion, send_stream
 
     _check(args)

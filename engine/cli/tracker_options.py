@@ -45,7 +45,7 @@ def load_reference(args: argparse.Namespace) -> Any:
     if args.reference is None:
         return None
     from engine.cli.rig_options import rig_map_path
-    from engine.retarget import load_motion
+    from engine.motion.retarget import load_motion
 
     return load_motion(args.reference, rig_map=rig_map_path(args))
 

@@ -13,7 +13,7 @@ Output layout (``--out DIR``)::
   clips derive from AMASS, whose licence is non-commercial) go to ``test`` and are
   never used for training or statistics.
 * **Rest frames and rates**: a leading rest frame is dropped (a profile's ``skip_frames``
-  or :func:`engine.retarget.rest_frame_count`), the true frame rate comes from the manifest.
+  or :func:`engine.motion.retarget.rest_frame_count`), the true frame rate comes from the manifest.
 * **Mirroring**: every train/val clip also gets a left/right mirrored copy.
 * **Statistics**: mean/std of the encoder's root-space dual quaternions and of the
   root displacement over the train shards, accumulated as running sums, so memory does
@@ -37,8 +37,8 @@ from tqdm import tqdm
 from engine.atomic import atomic_path, write_bytes
 from engine.errors import UserError
 from engine.kinematics.features import encoder_input, mirror_motion, pose_from_motion
-from engine.motion import Motion
-from engine.retarget import RETARGET_VERSION, load_with_report, manifest_entry, manifest_fps
+from engine.motion.clip import Motion
+from engine.motion.retarget import RETARGET_VERSION, load_with_report, manifest_entry, manifest_fps
 
 FORMAT = 1
 #: Bumped whenever the feature definition changes, so cached statistics are recomputed.

@@ -27,7 +27,7 @@ from engine.methods.base import (Configurable, Constrainable, DecodesLatents, Fr
 from engine.sensors import Sensor, SensorFrame
 
 if TYPE_CHECKING:
-    from engine.motion import Motion
+    from engine.motion.clip import Motion
     from engine.tracking.simulate import Tracking
 
 __all__ = [
@@ -111,7 +111,7 @@ def run_method(
     """
     from tqdm import tqdm
 
-    from engine.motion import Motion
+    from engine.motion.clip import Motion
 
     driver.reset(method, skeleton, tracking.fps, reference)
     n = len(tracking)

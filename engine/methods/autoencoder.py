@@ -22,7 +22,7 @@ from engine.errors import UserError
 from engine.kinematics.features import encoder_input, pose_from_motion
 from engine.kinematics.fk import fk
 from engine.methods.base import FrameResult, Method, SensorFrame
-from engine.motion import Motion
+from engine.motion.clip import Motion
 
 
 class AutoencoderMethod(Method):

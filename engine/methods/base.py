@@ -27,7 +27,7 @@ from engine.sensors import Sensor, SensorFrame
 
 if TYPE_CHECKING:
     from engine.constraints.base import Constraint
-    from engine.motion import Motion
+    from engine.motion.clip import Motion
 
 
 @dataclass

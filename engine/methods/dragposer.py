@@ -35,7 +35,7 @@ from engine.methods.base import FrameResult, Method
 from engine.methods.dragposer_edits import DragPoserEdits
 from engine.methods.sensor_blend import SensorBlend
 from engine.sensors import Sensor, SensorFrame
-from engine.motion import Motion
+from engine.motion.clip import Motion
 from engine.solver import (
     FrameContext, LatentDecoder, LatentPredictor, OptimizerSettings, PoseOptimizer, RootFrame, TemporalSchedule,
 )  # fmt: skip

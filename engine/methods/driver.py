@@ -30,7 +30,7 @@ from engine.sensors import Sensor, SensorFrame
 
 if TYPE_CHECKING:
     from engine.constraints.base import Constraint
-    from engine.motion import Motion
+    from engine.motion.clip import Motion
 
 
 def reset(method: Method, skeleton: sk.Skeleton, fps: float, reference: Motion | None = None) -> None:

@@ -38,7 +38,7 @@ from engine.kinematics.fk import fk_joints
 from engine.methods.base import FrameResult, Method
 from engine.solver.pose import body_facing
 from engine.sensors import Sensor, SensorFrame
-from engine.motion import Motion
+from engine.motion.clip import Motion
 
 J = sk.JOINT_INDEX
 SPINE = (J["lowerback"], J["upperback"], J["chest"], J["lowerneck"])

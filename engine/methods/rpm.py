@@ -25,7 +25,7 @@ from engine.kinematics.fk import fk
 from engine.methods.base import FrameResult, Method, check_preset
 from engine.sensors import Sensor, SensorFrame
 from engine.models.rpm import RPM_JOINTS, blank_pose, roll, rolling_step, track_features, yaw_matrix
-from engine.motion import Motion
+from engine.motion.clip import Motion
 
 _HEAD = sk.JOINT_INDEX["upperneck"]
 

@@ -36,7 +36,7 @@ from engine.sensors import SensorFrame
 from engine.models.sparseposer import LIMB_EE, SPARSE_INDEX, SPARSE_JOINTS, local_rotations
 from engine.models.sparseposer_infer import DenseGenerator, StackedLimbIK, context_frames
 from engine.models.sparseposer_stream import streaming_generator
-from engine.motion import Motion
+from engine.motion.clip import Motion
 
 #: Rows of the limbs' end effectors (ankles, wrists) in the tracked joints.
 _EE_ROWS = [SPARSE_INDEX.index(j) for j in LIMB_EE]

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from engine.errors import UserError
-from engine.motion import Motion
+from engine.motion.clip import Motion
 from engine.sensor_source import SensorSource, apply_edits
 from engine.sensors import Sensor, SensorFrame
 from engine.tracking import Tracking, simulate

@@ -5,8 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from engine.errors import UserError
-from engine.motion import Motion
-from engine.retarget import load_motion
+from engine.motion.clip import Motion
+from engine.motion.retarget import load_motion
 from engine.sensors import Sensor
 from engine.tracking import PRESET_SENSORS
 

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from engine.motion import Motion
+from engine.motion.clip import Motion
 from engine.sensor_source import SensorSource
 from engine.sensors import Sensor
 from engine.solver.settings import SettingsEdit

@@ -17,7 +17,7 @@ from typing import Any, Literal
 
 from psygnal import Signal, SignalGroup
 
-from engine.motion import Motion
+from engine.motion.clip import Motion
 from engine.sensor_source import SensorSource
 from engine.sensors import Sensor
 

@@ -21,13 +21,13 @@ import numpy as np
 from engine.constraints.base import Constraint
 from engine.methods import driver
 from engine.methods.base import Method
-from engine.motion import Motion
+from engine.motion.clip import Motion
 from engine.sensors import Sensor
 from engine.studio.method_edits import make_method
 from engine.studio.clip_source import ClipSource
 
 if TYPE_CHECKING:
-    from engine.bvh import RawBVH
+    from engine.motion.bvh import RawBVH
 
 
 def reconstruct_clip(motion: Motion, sensors: tuple[Sensor, ...], constraints: tuple[Constraint, ...],
@@ -36,7 +36,7 @@ def reconstruct_clip(motion: Motion, sensors: tuple[Sensor, ...], constraints: t
     """Run a fresh method over every frame of ``motion`` with the studio's sensor edits.
 
     ``motion`` is the ground truth of a method that needs one (the autoencoder).
-    Returns the reconstruction as a :class:`engine.motion.Motion` (same skeleton and fps).
+    Returns the reconstruction as a :class:`engine.motion.clip.Motion` (same skeleton and fps).
     ``progress(frame)`` is called after each frame and may return True to cancel.
 
     Raises
@@ -64,14 +64,14 @@ def write_reconstruction(path: str | Path, rec: Motion, on_rig: tuple[RawBVH, An
                          fps: float | None = None) -> None:  # fmt: skip
     """Write ``rec`` to ``path`` as BVH, atomically: on the canonical skeleton, or with
     ``on_rig = (raw, report)`` onto the hierarchy of the source file it was retargeted
-    from (:func:`engine.source_rig.save_on_source_rig`, docs/skeleton.md), at ``fps``
+    from (:func:`engine.motion.write_back.save_on_source_rig`, docs/skeleton.md), at ``fps``
     (default: the source's frame rate)."""
     if on_rig is None:
-        from engine.bvh import save_motion_bvh
+        from engine.motion.bvh import save_motion_bvh
 
         save_motion_bvh(path, rec)
     else:
-        from engine.source_rig import save_on_source_rig
+        from engine.motion.write_back import save_on_source_rig
 
         save_on_source_rig(path, rec, *on_rig, fps=fps)
 
@@ -79,8 +79,8 @@ def write_reconstruction(path: str | Path, rec: Motion, on_rig: tuple[RawBVH, An
 def source_rig(source: str | Path, rig_map: str | Path | None = None) -> tuple[RawBVH, Any]:
     """``(raw, report)`` of the BVH ``source`` retargeted with the joint mapping file
     ``rig_map`` (what :func:`write_reconstruction` needs to write onto its hierarchy)."""
-    from engine.bvh import load_bvh
-    from engine.retarget import manifest_fps, retarget
+    from engine.motion.bvh import load_bvh
+    from engine.motion.retarget import manifest_fps, retarget
 
     raw = load_bvh(source)
     return raw, retarget(raw, manifest_fps(source), rig_map=rig_map)[1]

@@ -25,7 +25,7 @@ import numpy as np
 from engine.constraints.base import Constraint
 from engine.errors import UserError
 from engine.methods import available_methods
-from engine.motion import Motion
+from engine.motion.clip import Motion
 from engine.sensor_source import SensorSource
 from engine.sensors import Sensor
 from engine.solver.settings import SettingsEdit

@@ -13,7 +13,7 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.errors import UserError
-from engine.motion import Motion
+from engine.motion.clip import Motion
 from engine.sensors import Sensor
 from engine.studio import commands as cmd
 from engine.studio import events as ev

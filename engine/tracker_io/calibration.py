@@ -41,7 +41,7 @@ from engine.errors import UserError
 from engine.kinematics import quaternion as Q
 from engine.methods import SensorFrame
 
-#: Height of the toe joint above the floor for a scale-1 skeleton (``engine.retarget``).
+#: Height of the toe joint above the floor for a scale-1 skeleton (``engine.motion.retarget``).
 TOE_HEIGHT_M = 0.045
 ARM_JOINTS = ("lshoulder", "lelbow", "lwrist", "rshoulder", "relbow", "rwrist")
 _ARM_IDX = [sk.JOINT_INDEX[j] for j in ARM_JOINTS]

@@ -28,7 +28,7 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.methods import FrameResult, Method, SensorFrame, driver
-from engine.motion import Motion
+from engine.motion.clip import Motion
 from engine.tracker_io.calibration import Calibration, calibrate
 from engine.tracker_io.receiver import VMCReceiver
 

@@ -21,7 +21,7 @@ import numpy as np
 from engine import skeleton as sk
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
-from engine.motion import Motion
+from engine.motion.clip import Motion
 from engine.tracker_io.calibration import standing_root_height
 from engine.tracker_io.trackers import DEFAULT_SLOTS
 from engine.tracker_io.vmc import encode_frame

@@ -30,7 +30,7 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
-from engine.motion import Motion
+from engine.motion.clip import Motion
 from engine.sensors import Sensor, SensorFrame
 from engine.tracking.presets import parse_sensors
 

@@ -24,7 +24,7 @@ def _gui(tmp_path, *args: str) -> subprocess.CompletedProcess:
 
 @pytest.fixture
 def scene_file(tmp_path, synthetic_motion):
-    from engine.bvh import save_motion_bvh
+    from engine.motion.bvh import save_motion_bvh
     from engine.studio.session import Session
 
     clip = tmp_path / "walk.bvh"

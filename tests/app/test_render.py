@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from app.render import main, parse_size
-from engine.bvh import save_motion_bvh
+from engine.motion.bvh import save_motion_bvh
 from engine.errors import UserError
 from engine.studio.clips import load_clip
 
@@ -51,7 +51,7 @@ def test_another_rate_sensors_a_ghost_side_camera_and_body_view(short_clip, tmp_
     out = tmp_path / "v.mp4"
     assert main([str(short_clip), "--out", str(out), "--size", "96x64", "--fps", "30", "--sensors", "6",
                  "--ghosts", "ik", "--camera", "side", "--view", "body", "--no-progress"]) == 0  # fmt: skip
-    from engine.retarget import resample_motion
+    from engine.motion.retarget import resample_motion
 
     size, frames = decode(out)
     assert size == (96, 64) and len(frames) == len(resample_motion(load_clip(short_clip), 30.0))

@@ -17,7 +17,7 @@ pytestmark = pytest.mark.gui
 def _renamed(tmp_path: Path) -> tuple[Path, Path]:
     """A LAFAN1-style clip whose joints are renamed ``bone_NN`` (no automatic mapping can
     read that), and the mapping file that fixes it (``rig suggest`` on the original, renamed)."""
-    from engine.bvh import load_bvh
+    from engine.motion.bvh import load_bvh
     from engine.cli.rig import write_suggestion
 
     orig = write_family_bvh(tmp_path / "orig.bvh", "lafan", frames=90)
@@ -87,7 +87,7 @@ def test_suggest_writes_a_template_beside_the_file_and_says_where(studio, tmp_pa
 
 
 def test_save_onto_the_source_rig_uses_the_files_mapping(studio, qtbot, tmp_path):
-    from engine.bvh import load_bvh
+    from engine.motion.bvh import load_bvh
 
     bvh, rig_map = _renamed(tmp_path)
     assert studio.files.open_path(bvh, rig_map)

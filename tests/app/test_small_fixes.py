@@ -11,7 +11,7 @@ pytestmark = pytest.mark.gui
 
 
 def test_save_dialogs_suggest_a_name_beside_the_clip(studio, monkeypatch, tmp_path, synthetic_motion):
-    from engine.bvh import save_motion_bvh
+    from engine.motion.bvh import save_motion_bvh
 
     clip = tmp_path / "walk.bvh"
     save_motion_bvh(clip, synthetic_motion.slice(0, 30))
@@ -98,7 +98,7 @@ def test_a_new_clip_shows_at_once_while_the_method_loads(studio, qtbot, tmp_path
     import dataclasses
     import time
 
-    from engine.bvh import save_motion_bvh
+    from engine.motion.bvh import save_motion_bvh
     from tests.stand_ins import RestPoseMethod
 
     class SlowToLoad(RestPoseMethod):

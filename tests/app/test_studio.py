@@ -177,21 +177,21 @@ def test_screenshot_shows_the_skeleton(studio, qtbot, tmp_path):
 
 
 def test_save_reconstruction_writes_a_bvh_off_the_gui_thread(studio, qtbot, tmp_path):
-    pytest.importorskip("engine.bvh")
+    pytest.importorskip("engine.motion.bvh")
     out = tmp_path / "recon.bvh"
     studio.files.save_reconstruction(str(out))
     assert studio.files.export.dialog.isVisible()  # progress, with a Cancel button
     qtbot.waitUntil(lambda: not studio.files.export.running, timeout=30000)
     assert studio.files.export.dialog is None and "Saved" in studio.statusBar().currentMessage()
-    from engine.retarget import load_motion
+    from engine.motion.retarget import load_motion
 
     assert len(load_motion(out)) == studio.session.num_frames
 
 
 def test_save_onto_the_source_rig_keeps_the_files_hierarchy(studio, qtbot, tmp_path):
-    from engine.bvh import load_bvh
+    from engine.motion.bvh import load_bvh
 
-    from engine.bvh import save_motion_bvh
+    from engine.motion.bvh import save_motion_bvh
 
     src_path = tmp_path / "source.bvh"
     save_motion_bvh(src_path, studio.session.motion)

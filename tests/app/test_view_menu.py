@@ -18,7 +18,7 @@ def _activate(studio, qtbot) -> None:
 
 def test_a_bvh_dropped_on_the_3d_view_opens(studio, qtbot, tmp_path, synthetic_motion):
     """The 3D view is the largest drop target; pyvistaqt used to swallow the drop."""
-    from engine.bvh import save_motion_bvh
+    from engine.motion.bvh import save_motion_bvh
 
     clip = tmp_path / "on-the-view.bvh"
     save_motion_bvh(clip, synthetic_motion.slice(0, 30))

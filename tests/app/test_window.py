@@ -150,7 +150,7 @@ def _drag_and_drop(window, path) -> bool:
 
 def test_dropped_bvh_opens_is_remembered_and_the_preset_comes_back(studio, qtbot, tmp_path, synthetic_motion):
     from app.main import open_initial
-    from engine.bvh import save_motion_bvh
+    from engine.motion.bvh import save_motion_bvh
 
     clip = tmp_path / "dropped.bvh"
     save_motion_bvh(clip, synthetic_motion.slice(0, 40))

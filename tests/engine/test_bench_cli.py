@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 
-from engine.bvh import save_motion_bvh
+from engine.motion.bvh import save_motion_bvh
 from engine.cli.main import main
 
 

@@ -13,10 +13,10 @@ from pymotion.io.bvh import BVH as PymotionBVH
 from pymotion.rotations import quat_np
 
 from engine import skeleton as sk
-from engine.bvh import RawBVH, load_bvh, save_motion_bvh
+from engine.motion.bvh import RawBVH, load_bvh, save_motion_bvh
 from engine.errors import BVHError
 from engine.kinematics.fk import fk
-from engine.motion import Motion
+from engine.motion.clip import Motion
 
 # A three-joint clip; the line numbers below are the ones the error tests expect.
 VALID = """\
@@ -311,7 +311,7 @@ def test_non_finite_motion_is_not_written(tmp_path, synthetic_motion):
 
 
 def test_only_the_kept_frames_are_held_but_every_row_is_checked(tmp_path):
-    from engine.bvh_parser import parse_bvh_text
+    from engine.motion.bvh_parser import parse_bvh_text
 
     lines = VALID.splitlines()
     path = write(tmp_path, VALID)
@@ -327,7 +327,7 @@ def test_only_the_kept_frames_are_held_but_every_row_is_checked(tmp_path):
 
 
 def test_a_huge_hierarchy_is_refused_before_tokenising(tmp_path, monkeypatch):
-    import engine.bvh_parser as bp
+    import engine.motion.bvh_parser as bp
 
     monkeypatch.setattr(bp, "MAX_HEADER", 100)
     with pytest.raises(BVHError, match="HIERARCHY section is longer than 100"):

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from engine.bvh import load_bvh
+from engine.motion.bvh import load_bvh
 from engine.cli.main import main
 
 from tests.engine.test_bvh import edited, write

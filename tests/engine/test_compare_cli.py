@@ -11,7 +11,7 @@ from engine.cli.main import main
 
 
 def test_compare_writes_the_document_and_reuses_its_cache(tmp_path, synthetic_motion, monkeypatch, capsys):
-    bvh = pytest.importorskip("engine.bvh")
+    bvh = pytest.importorskip("engine.motion.bvh")
     bvh.save_motion_bvh(tmp_path / "walk.bvh", synthetic_motion)
     passes = (("6", False, ("ik",)), ("6", True, ("ik",)), ("3-head-hands", False, ("ik",)),
               ("3-head-hands", True, ("ik",)))  # fmt: skip

@@ -174,7 +174,7 @@ def test_the_studio_snapshot_timing_carries_the_slow_path_flag(registry):
     from pathlib import Path
 
     from engine.methods.dragposer import create
-    from engine.retarget import load_motion
+    from engine.motion.retarget import load_motion
     from engine.studio.frame_figures import timing_of as _timing
     from engine.tracking import simulate
 

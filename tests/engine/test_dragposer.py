@@ -13,7 +13,7 @@ from engine.constraints import LookAtConstraint, PinConstraint
 from engine.errors import UserError
 from engine.sensors import Sensor, SensorFrame
 from engine.methods.dragposer import DragPoserMethod
-from engine.motion import Motion
+from engine.motion.clip import Motion
 from engine.solver import OptimizerSettings
 from engine.scene import load_scene, save_scene
 from engine.tracking import simulate

@@ -37,8 +37,8 @@ def test_latent_methods_report_their_latent_step(synthetic_motion):
 
 @pytest.fixture
 def clip_dir(tmp_path, synthetic_motion):
-    bvh = pytest.importorskip("engine.bvh")
-    pytest.importorskip("engine.retarget")
+    bvh = pytest.importorskip("engine.motion.bvh")
+    pytest.importorskip("engine.motion.retarget")
     sub = tmp_path / "clips" / "nested"
     sub.mkdir(parents=True)
     bvh.save_motion_bvh(sub / "walk.bvh", synthetic_motion)
@@ -70,7 +70,7 @@ def test_cli_writes_table_and_json(clip_dir, tmp_path, capsys):
 
 
 def test_cli_matches_the_function_underneath(clip_dir, tmp_path):
-    from engine.retarget import load_motion
+    from engine.motion.retarget import load_motion
 
     out = tmp_path / "e.json"
     walk = next(clip_dir.rglob("walk.bvh"))

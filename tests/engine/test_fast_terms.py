@@ -21,7 +21,7 @@ from engine.constraints.terms import FrameInputs, NativeTerm, axial
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk_matrices
 from engine.methods.dragposer import DragPoserMethod
-from engine.retarget import load_motion
+from engine.motion.retarget import load_motion
 from engine.tracking import simulate
 
 J = sk.JOINT_INDEX

@@ -22,7 +22,7 @@ from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk
 from engine.methods import dragposer as D
 from engine.models import load_default_models
-from engine.retarget import load_motion
+from engine.motion.retarget import load_motion
 from engine.solver import limb_ik
 from engine.solver.temporal import TemporalSchedule
 from engine.tracking import simulate

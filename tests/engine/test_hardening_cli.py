@@ -286,8 +286,8 @@ def _long_clip(tmp_path: Path, frames: int) -> Path:
 
 
 def test_info_and_reconstruct_keep_only_the_start_of_a_long_file(tmp_path, capsys, monkeypatch):
-    import engine.bvh
-    import engine.retarget as rt
+    import engine.motion.bvh
+    import engine.motion.retarget as rt
 
     kept = []
     real = rt.load_bvh
@@ -298,7 +298,7 @@ def test_info_and_reconstruct_keep_only_the_start_of_a_long_file(tmp_path, capsy
         return raw
 
     monkeypatch.setattr(rt, "load_bvh", spy)
-    monkeypatch.setattr(engine.bvh, "load_bvh", spy)
+    monkeypatch.setattr(engine.motion.bvh, "load_bvh", spy)
     monkeypatch.setattr(rt, "ALIGN_FRAMES", 1000)
     clip = _long_clip(tmp_path, 3000)
     rc, out, err = run(["info", clip], capsys)

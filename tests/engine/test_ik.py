@@ -99,7 +99,7 @@ def test_lost_hand_keeps_its_last_pose(synthetic_motion):
 
 
 def test_real_clip(shared_mocap):
-    from engine.retarget import load_motion
+    from engine.motion.retarget import load_motion
 
     path = next(iter(sorted((shared_mocap / "dragposer").rglob("*.bvh"))), None)
     if path is None:

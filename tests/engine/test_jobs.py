@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from engine.bvh import save_motion_bvh
+from engine.motion.bvh import save_motion_bvh
 from engine.cli.main import main
 
 TIMING = {"ms_per_frame"}

@@ -8,7 +8,7 @@ import pytest
 from engine import metrics as M
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
-from engine.motion import Motion
+from engine.motion.clip import Motion
 
 
 def _static(frames: int = 60) -> Motion:

@@ -18,7 +18,7 @@ def test_a_pinned_elbow_stays_near_its_pin_with_six_trackers():
         pytest.skip("shipped model not found in assets/models")
     from engine.constraints import PinConstraint
     from engine.methods import get_method
-    from engine.retarget import load_motion
+    from engine.motion.retarget import load_motion
     from engine.tracking import simulate
 
     # the pin pulls the elbow in over the first few frames (session 9 models: 7.9, 6.8,

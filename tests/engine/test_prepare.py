@@ -89,7 +89,7 @@ def test_info_fps_override_and_errors(shared_mocap, tmp_path, capsys):
 
 @pytest.mark.slow
 def test_info_works_on_every_shared_file(shared_mocap):
-    from engine.retarget import load_with_report
+    from engine.motion.retarget import load_with_report
 
     for path in sorted(shared_mocap.rglob("*.bvh")):
         motion, rep = load_with_report(path, None)

@@ -14,7 +14,7 @@ import pytest
 from engine import skeleton as sk
 from engine.errors import RigError
 from engine.kinematics import quaternion as Q
-from engine.rigs import detect_rig, load_profiles
+from engine.motion.rigs import detect_rig, load_profiles
 
 RIG_FILES = {
     "dragposer": ("dragposer/example_2.bvh", None),
@@ -32,7 +32,7 @@ def _source_positions(path, prof):
     from pymotion.io.bvh import BVH
     from pymotion.ops import skeleton_np
 
-    from engine.retarget import _basis_change
+    from engine.motion.retarget import _basis_change
 
     b = BVH()
     b.load(str(path))
@@ -47,8 +47,8 @@ def _source_positions(path, prof):
 
 @pytest.fixture(scope="module", params=list(RIG_FILES))
 def retargeted(request, shared_mocap):
-    from engine.bvh import load_bvh
-    from engine.retarget import retarget
+    from engine.motion.bvh import load_bvh
+    from engine.motion.retarget import retarget
 
     rel, fps = RIG_FILES[request.param]
     raw = load_bvh(shared_mocap / rel)
@@ -124,8 +124,8 @@ def test_walks_step_forward_with_feet_and_head_facing_the_walk(retargeted):
 
 def test_canonical_rig_round_trips_unchanged(shared_mocap):
     """The DragPoser rig is the canonical one: rotations must be copied, not realigned."""
-    from engine.bvh import load_bvh
-    from engine.retarget import retarget
+    from engine.motion.bvh import load_bvh
+    from engine.motion.retarget import retarget
 
     raw = load_bvh(shared_mocap / "dragposer/example_2.bvh")
     motion, _ = retarget(raw)
@@ -135,7 +135,7 @@ def test_canonical_rig_round_trips_unchanged(shared_mocap):
 
 
 def test_header_fps_overridden_by_manifest(shared_mocap):
-    from engine.retarget import manifest_fps
+    from engine.motion.retarget import manifest_fps
 
     assert manifest_fps(shared_mocap / "cmu_daz/salsa/01.bvh") == 60.0
     assert manifest_fps(shared_mocap / "cmu_daz/martial/03.bvh") == 120.0

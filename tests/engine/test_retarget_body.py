@@ -11,7 +11,7 @@ import pytest
 
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
-from engine.retarget_frames import CANON_LANDMARKS
+from engine.motion.retarget_frames import CANON_LANDMARKS
 
 NAMES = {"root": "Hips", "lhip": "LeftUpLeg", "lknee": "LeftLeg", "lankle": "LeftFoot", "ltoe": "LeftToeBase",
          "rhip": "RightUpLeg", "rknee": "RightLeg", "rankle": "RightFoot", "rtoe": "RightToeBase",
@@ -178,8 +178,8 @@ def _conventions(rng) -> dict:
 
 @pytest.fixture(scope="module")
 def rigs(tmp_path_factory):
-    from engine.retarget import retarget
-    from engine.bvh import load_bvh
+    from engine.motion.retarget import retarget
+    from engine.motion.bvh import load_bvh
 
     tmp = tmp_path_factory.mktemp("body")
     local, root = canonical_walk()
@@ -221,8 +221,8 @@ def test_the_source_twist_a_child_undoes_changed_the_older_definition(rigs):
 
 
 def test_a_rig_without_face_or_knuckles_keeps_the_source_twist_and_says_so(rigs, tmp_path):
-    from engine.bvh import load_bvh
-    from engine.retarget import retarget
+    from engine.motion.bvh import load_bvh
+    from engine.motion.retarget import retarget
 
     full = rigs[4, "tpose"][1]
     assert full.source_twist_joints == [] and "lwrist" in full.body_joints and "upperneck" in full.body_joints
@@ -234,7 +234,7 @@ def test_a_rig_without_face_or_knuckles_keeps_the_source_twist_and_says_so(rigs,
 
 def test_models_version_comes_from_the_model_card(tmp_path):
     from engine.errors import UserError
-    from engine.retarget import RETARGET_VERSION, models_version
+    from engine.motion.retarget import RETARGET_VERSION, models_version
 
     (tmp_path / "data.toml").write_text("retarget_version = 3\n")
     assert models_version(tmp_path / "data.toml") == 3
@@ -250,9 +250,9 @@ def test_straight_elbows_measures_the_bend_from_a_rest_drawn_bent(tmp_path):
     as the T-pose rig does; without it the elbow is 17 degrees off."""
     import dataclasses
 
-    from engine.bvh import load_bvh
-    from engine.rigs import resolve_rig
-    from engine.retarget import retarget
+    from engine.motion.bvh import load_bvh
+    from engine.motion.rigs import resolve_rig
+    from engine.motion.retarget import retarget
 
     local, root = canonical_walk(90)
     ref = retarget(load_bvh(write_rig(tmp_path / "t.bvh", local, root, rest=_straight_elbows)), version=4)[0]

@@ -2,7 +2,7 @@
 
 Every take the shared manifest lists on several rigs (``cmu_trial``) is converted from each
 rig; each pair of copies is aligned in time and heading and compared
-(:func:`engine.retarget_compare.compare_clips`, table: ``scripts/cross_rig.py``)."""
+(:func:`engine.motion.retarget_compare.compare_clips`, table: ``scripts/cross_rig.py``)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from engine import skeleton as sk
-from engine.motion import Motion
+from engine.motion.clip import Motion
 
 pytestmark = pytest.mark.shared_data
 #: Canonical frames read per copy (30 s): the longest takes run 40 s on the CMU rig, and
@@ -23,8 +23,8 @@ def cross_rig(shared_mocap):
     """Every pair of copies of every multi-rig take, compared once: ``[(take, a, b, difference)]``."""
     import itertools
 
-    from engine.retarget import RETARGET_VERSION, load_motion
-    from engine.retarget_compare import compare_clips, multi_rig_takes
+    from engine.motion.retarget import RETARGET_VERSION, load_motion
+    from engine.motion.retarget_compare import compare_clips, multi_rig_takes
 
     rows = []
     takes = multi_rig_takes(shared_mocap)
@@ -75,8 +75,8 @@ def test_every_take_meets_the_cross_rig_targets(cross_rig):
 def test_alignment_finds_the_offset_and_heading_of_a_copy():
     """A clip against a copy that starts 7 frames (120 fps) later and faces 40 degrees away."""
     from engine.kinematics import quaternion as Q
-    from engine.retarget import resample_motion
-    from engine.retarget_compare import compare_clips
+    from engine.motion.retarget import resample_motion
+    from engine.motion.retarget_compare import compare_clips
     from tests.engine.test_retarget_body import canonical_walk
 
     local, root = canonical_walk(240)

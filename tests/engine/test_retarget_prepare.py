@@ -29,7 +29,7 @@ def test_copies_of_a_take_follow_the_copy_in_validation():
 @pytest.mark.shared_data
 def test_every_copy_of_a_shared_take_lands_in_one_split_and_todays_validation_stays(shared_mocap):
     from engine.data.prepare import discover
-    from engine.retarget import manifest_entry
+    from engine.motion.retarget import manifest_entry
 
     files = discover([shared_mocap])
     takes = {rel: (manifest_entry(path) or {}).get("cmu_trial") for path, rel in files}

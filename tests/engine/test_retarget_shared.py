@@ -1,6 +1,6 @@
 """True proportions, natural rotations and the way back, on the real shared clips.
 
-* the canonical hinge axes in ``engine.retarget_frames`` are what DragPoser's own clips show;
+* the canonical hinge axes in ``engine.motion.retarget_frames`` are what DragPoser's own clips show;
 * retargeted knees bend about their local x axis with a few degrees of twist, and thighs
   carry no large twist the shin undoes (the Daz takes used to carry +114/+61 degrees);
 * the spine and clavicles have one convention on every rig: near identity while the
@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 
 from engine import skeleton as sk
-from engine.joint_stats import joint_report, limb_hinge
+from engine.motion.joint_stats import joint_report, limb_hinge
 from engine.kinematics.fk import fk
-from engine.retarget_frames import CANON_HINGE, LIMBS
+from engine.motion.retarget_frames import CANON_HINGE, LIMBS
 
 pytestmark = pytest.mark.shared_data
 
@@ -27,7 +27,7 @@ CLIPS = ("cmu_daz/martial/03.bvh", "cmu_daz/indian/04.bvh", "cmu_daz/salsa/01.bv
 
 
 def _load(mocap, rel):
-    from engine.retarget import RETARGET_VERSION, load_with_report
+    from engine.motion.retarget import RETARGET_VERSION, load_with_report
 
     return load_with_report(mocap / rel, version=RETARGET_VERSION)
 
@@ -48,7 +48,7 @@ def test_upright_spine_and_clavicles_are_near_identity_on_every_rig(shared_mocap
 
 
 def test_canonical_hinges_are_those_of_dragposers_clips(shared_mocap):
-    from engine.retarget import load_motion
+    from engine.motion.retarget import load_motion
 
     found: dict[str, list] = {}
     for name in ("example.bvh", "example_2.bvh", "example_3.bvh"):
@@ -89,9 +89,9 @@ def test_written_back_onto_the_source_rig_within_1cm(shared_mocap, tmp_path, rel
     120 fps): source -> canonical -> source over the whole clip. Written at 60 fps, the
     canonical rate, every written frame is one the canonical clip holds (at 120 fps the
     frames between would add the resampling's own error, up to 1.7 cm on a walk)."""
-    from engine.bvh import load_bvh
-    from engine.retarget import RETARGET_VERSION, manifest_fps, retarget
-    from engine.source_rig import save_on_source_rig
+    from engine.motion.bvh import load_bvh
+    from engine.motion.retarget import RETARGET_VERSION, manifest_fps, retarget
+    from engine.motion.write_back import save_on_source_rig
 
     raw = load_bvh(shared_mocap / rel)
     motion, report = retarget(raw, manifest_fps(shared_mocap / rel), version=RETARGET_VERSION)
@@ -125,8 +125,8 @@ def every_shared_clip(shared_mocap):
     covered without editing these tests."""
     import json
 
-    from engine.joint_stats import summarize
-    from engine.retarget import RETARGET_VERSION, load_with_report
+    from engine.motion.joint_stats import summarize
+    from engine.motion.retarget import RETARGET_VERSION, load_with_report
 
     listed = json.loads((shared_mocap / "manifest.json").read_text())["files"]
     expected = sorted(entry["path"].removeprefix("mocap/") for entry in listed)
@@ -157,7 +157,7 @@ def test_every_shared_clip_keeps_its_height(every_shared_clip):
 @pytest.mark.parametrize("family", FAMILIES)
 def test_every_shared_clip_rotates_like_the_canonical_clips(every_shared_clip, family):
     """Per joint, the hinge axis and twist of each rig family against DragPoser's own clips
-    (``engine.joint_stats.summarize``, the figures of docs/skeleton.md: ``scripts/joint_stats.py``)."""
+    (``engine.motion.joint_stats.summarize``, the figures of docs/skeleton.md: ``scripts/joint_stats.py``)."""
     table = every_shared_clip[2]
     for knee in ("lknee", "rknee"):  # the hinge of every clip, with DragPoser's few degrees of twist
         row = table[knee][family]

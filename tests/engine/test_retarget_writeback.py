@@ -26,14 +26,14 @@ def _world(raw, skip=0):
 
 @pytest.fixture
 def hub_rig(tmp_path):
-    from engine.bvh import load_bvh
+    from engine.motion.bvh import load_bvh
 
     local, root = canonical_walk(90)
     return load_bvh(write_rig(tmp_path / "hub.bvh", local[::2], root[::2], hub=True, fps=30.0))
 
 
 def test_a_static_root_above_moving_hips_is_read_with_its_trajectory(hub_rig):
-    from engine.retarget import retarget
+    from engine.motion.retarget import retarget
 
     assert np.ptp(hub_rig.positions[:, 0], axis=0).max() == 0.0, "joint_Root never moves"
     motion, rep = retarget(hub_rig, version=4)
@@ -44,9 +44,9 @@ def test_a_static_root_above_moving_hips_is_read_with_its_trajectory(hub_rig):
 
 
 def test_written_back_the_hips_carry_the_trajectory_at_the_source_rate(hub_rig, tmp_path):
-    from engine.bvh import load_bvh
-    from engine.retarget import retarget
-    from engine.source_rig import save_on_source_rig
+    from engine.motion.bvh import load_bvh
+    from engine.motion.retarget import retarget
+    from engine.motion.write_back import save_on_source_rig
 
     motion, rep = retarget(hub_rig, version=4)
     save_on_source_rig(tmp_path / "back.bvh", motion, hub_rig, rep)
@@ -61,9 +61,9 @@ def test_written_back_the_hips_carry_the_trajectory_at_the_source_rate(hub_rig, 
 
 
 def test_fps_asked_for_resamples_the_written_file(hub_rig, tmp_path):
-    from engine.bvh import load_bvh
-    from engine.retarget import retarget
-    from engine.source_rig import save_on_source_rig
+    from engine.motion.bvh import load_bvh
+    from engine.motion.retarget import retarget
+    from engine.motion.write_back import save_on_source_rig
 
     motion, rep = retarget(hub_rig, version=4)
     save_on_source_rig(tmp_path / "back60.bvh", motion, hub_rig, rep, fps=60.0)

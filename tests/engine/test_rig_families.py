@@ -13,14 +13,14 @@ import numpy as np
 import pytest
 
 from engine import skeleton as sk
-from engine.bvh import load_bvh
+from engine.motion.bvh import load_bvh
 from engine.errors import RigError
-from engine.joint_stats import joint_report
+from engine.motion.joint_stats import joint_report
 from engine.kinematics.fk import fk
-from engine.retarget import retarget
-from engine.rigs import resolve_rig
-from engine.rigs.automap import split_name
-from engine.source_rig import save_on_source_rig
+from engine.motion.retarget import retarget
+from engine.motion.rigs import resolve_rig
+from engine.motion.rigs.automap import split_name
+from engine.motion.write_back import save_on_source_rig
 
 from .rig_fixtures import EXPECTED, FAMILIES, family_rows, write_family_bvh
 
@@ -188,7 +188,7 @@ def test_info_json_is_one_object_always(tmp_path, capsys):
 
 def test_convert_writes_the_canonical_clip(tmp_path):
     from engine.cli.main import main
-    from engine.retarget import load_with_report
+    from engine.motion.retarget import load_with_report
 
     src = write_family_bvh(tmp_path / "c.bvh", "cmu", fps=120.0)
     out = tmp_path / "canon.bvh"

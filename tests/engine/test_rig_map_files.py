@@ -8,9 +8,9 @@ import json
 import pytest
 
 from engine import validation
-from engine.bvh import load_bvh
+from engine.motion.bvh import load_bvh
 from engine.errors import UserError
-from engine.rigs import resolve_rig
+from engine.motion.rigs import resolve_rig
 
 from .rig_fixtures import write_family_bvh
 

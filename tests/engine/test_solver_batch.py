@@ -17,7 +17,7 @@ CLIP = Path(__file__).resolve().parents[2] / "assets" / "clips" / "example.bvh"
 
 @pytest.fixture(scope="module")
 def clip():
-    from engine.retarget import load_motion
+    from engine.motion.retarget import load_motion
 
     return load_motion(CLIP, max_frames=40)
 

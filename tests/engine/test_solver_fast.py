@@ -14,7 +14,7 @@ from engine.kinematics import quaternion as Q
 from engine.methods.dragposer import DragPoserMethod
 from engine.models import load_default_models
 from engine.models.fused import DenseDecoder, _matvec, plan_runs
-from engine.retarget import load_motion
+from engine.motion.retarget import load_motion
 from engine.solver import LatentUpdate
 from engine.tracking import simulate
 

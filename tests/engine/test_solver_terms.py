@@ -16,7 +16,7 @@ from engine.kinematics import quat_np as QN
 from engine.kinematics.fk import fk
 from engine.methods.dragposer import DragPoserMethod
 from engine.models import load_default_models
-from engine.retarget import load_motion
+from engine.motion.retarget import load_motion
 from engine.constraints import GroundConstraint, SensorConstraint, SmoothConstraint
 from engine.solver import FrameContext, OptimizerSettings, PoseOptimizer, RootAnchor, RootFrame
 from engine.solver.limb_ik import adopt_rotations

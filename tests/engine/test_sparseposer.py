@@ -121,7 +121,7 @@ def _reference_poses(model: SparsePoser, motion, frames: int) -> np.ndarray:
 
 
 def test_realtime_step_matches_the_plain_full_window_pipeline_with_the_shipped_weights():
-    from engine.retarget import load_motion
+    from engine.motion.retarget import load_motion
     from tests.engine.test_hardening_cli import EX
 
     model, _ = load_sparseposer()  # trained limb networks: the stacked IK really changes poses

@@ -16,7 +16,7 @@ from tests.engine.test_sparseposer import _reference_poses
 
 
 def _example(frames: int):
-    from engine.retarget import load_motion
+    from engine.motion.retarget import load_motion
     from tests.engine.test_hardening_cli import EX
 
     return load_motion(EX).slice(100, 100 + frames)

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from engine.bvh import load_bvh, save_motion_bvh
+from engine.motion.bvh import load_bvh, save_motion_bvh
 from engine.errors import UserError
-from engine.retarget import load_motion
+from engine.motion.retarget import load_motion
 from engine.tracker_io.recording import write_recording
 from engine.tracker_io.sender import plan_stream
 from engine.tracker_io.trackers import TrackerSample

@@ -133,7 +133,7 @@ def test_dragposer_takes_the_bank_latent_when_6dof_trackers_give_one_and_else_ru
 
 @pytest.fixture
 def clip():
-    from engine.motion import Motion
+    from engine.motion.clip import Motion
 
     f = 24
     t = np.arange(f) / 60.0
@@ -174,7 +174,7 @@ def test_a_combination_looks_up_what_a_table_of_its_own_features_finds(joints):
 
 def test_the_first_frame_of_every_preset_finds_its_bank_index_built_when_the_models_load():
     from engine.methods import get_method
-    from engine.motion import Motion
+    from engine.motion.clip import Motion
     from engine.tracking.presets import PRESET_SENSORS
 
     m = get_method("dragposer")

@@ -7,7 +7,7 @@ import pytest
 
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
-from engine.motion import Motion
+from engine.motion.clip import Motion
 from engine.tracking import simulate
 from engine.tracking.simulate import FAULTY_DOWN_FRAMES, faulty_mask, gap_mask
 

@@ -11,10 +11,10 @@ import pytest
 import torch
 
 from engine import skeleton as sk
-from engine.bvh import save_motion_bvh
+from engine.motion.bvh import save_motion_bvh
 from engine.data.prepare import prepare
 from engine.kinematics import quaternion as Q
-from engine.motion import Motion
+from engine.motion.clip import Motion
 from engine.errors import UserError
 from engine.config import load_config
 from engine.training.vae import VAETrainConfig, state_hash, train_vae

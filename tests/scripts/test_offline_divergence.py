@@ -12,7 +12,7 @@ def _script():
 
 
 def test_resolving_recorded_inputs_reproduces_the_frame_and_swaps_change_it():
-    from engine.retarget import load_motion
+    from engine.motion.retarget import load_motion
 
     sc = _script()
     motion = load_motion(ROOT / "assets" / "clips" / "example.bvh", max_frames=5)

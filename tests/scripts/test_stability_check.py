@@ -48,7 +48,7 @@ def test_heading_ignores_lean_and_sees_a_turn_about_the_vertical():
 
 
 def test_run_once_on_the_bundled_clip_is_repeatable():
-    from engine.retarget import load_motion
+    from engine.motion.retarget import load_motion
 
     sc = _script()
     motion = load_motion(ROOT / "assets" / "clips" / "example.bvh", max_frames=12)
@@ -61,7 +61,7 @@ def test_run_once_on_the_bundled_clip_is_repeatable():
 
 def test_settings_reach_the_method():
     """``--set`` values are applied: a different iteration count gives another reconstruction."""
-    from engine.retarget import load_motion
+    from engine.motion.retarget import load_motion
 
     sc = _script()
     motion = load_motion(ROOT / "assets" / "clips" / "example.bvh", max_frames=6)

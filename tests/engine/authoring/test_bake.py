@@ -11,7 +11,7 @@ from engine.authoring.document import load_authoring
 from engine.authoring.export import bake_to_bvh
 from engine.authoring.keys import Key
 from engine.authoring.targets import JointTarget
-from engine.bvh import load_bvh
+from engine.motion.bvh import load_bvh
 from engine.cli.main import main
 
 LW = sk.JOINT_INDEX["lwrist"]

@@ -86,7 +86,7 @@ def test_other_constraint_kinds_act_in_pose_mode(vae):
 
 @pytest.fixture(scope="module")
 def example_clip():
-    from engine.retarget import load_motion
+    from engine.motion.retarget import load_motion
 
     return load_motion(Path(__file__).resolve().parents[3] / "assets" / "clips" / "example.bvh")
 

@@ -12,7 +12,7 @@ from engine.authoring.range_edit import edit_range
 from engine.constraints import EndEffectorConstraint, FloorConstraint
 from engine.errors import UserError
 from engine.kinematics import quat_np as QN
-from engine.motion import Motion
+from engine.motion.clip import Motion
 
 LTOE, LANKLE, LWRIST = sk.JOINT_INDEX["ltoe"], sk.JOINT_INDEX["lankle"], sk.JOINT_INDEX["lwrist"]
 #: Frames of the bundled clip where the left toe is planted (below 8 cm, 2 mm/frame).
@@ -22,7 +22,7 @@ PLANTED = (150, 200)
 @pytest.fixture(scope="module")
 def sliding_clip():
     """The bundled clip with its planted left foot swung +-6 cm, about 2.4 cm per frame."""
-    from engine.retarget import load_motion
+    from engine.motion.retarget import load_motion
 
     m = load_motion(Path(__file__).resolve().parents[3] / "assets" / "clips" / "example.bvh")
     local = m.local_rot.copy()

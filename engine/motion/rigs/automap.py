@@ -25,7 +25,7 @@ mapper finds a few *anchors* by name and reads the rest off the hierarchy:
 Each choice is recorded with its reason (``rig suggest`` writes them next to the
 mapping). A mapped joint always descends from its mapped parent; anything that breaks
 that is reported as an error naming the joints. The unit and the up axis are inferred
-by :mod:`engine.rigs.infer`.
+by :mod:`engine.motion.rigs.infer`.
 """
 
 from __future__ import annotations

@@ -13,7 +13,7 @@ The second direction decides the bone's twist, so it must be rigid with the bone
   elbow): the dominant axis of the lower joint's rotation relative to the upper one,
   read in each joint's own frame (:func:`limb_alignments`). On the canonical side the
   hinge is the one DragPoser's own clips show (:data:`CANON_HINGE`, measured with
-  :func:`engine.joint_stats.limb_hinge` on ``../shared/data/mocap/dragposer``; a test
+  :func:`engine.motion.joint_stats.limb_hinge` on ``../shared/data/mocap/dragposer``; a test
   re-measures it), so a retargeted knee bends about the same local axis as in the
   clips the models learnt from, and the thigh carries no twist the shin undoes;
 * the torso joints (pelvis, lower and upper back, chest, clavicles) all use the line from the
@@ -34,7 +34,7 @@ from __future__ import annotations
 import numpy as np
 
 from engine import skeleton as sk
-from engine.joint_stats import limb_hinge
+from engine.motion.joint_stats import limb_hinge
 from engine.kinematics import quaternion as Q
 
 # canonical joint -> (primary (from, [to candidates]), [secondary specs tried in order]).
@@ -84,7 +84,7 @@ def upright_weight(up: np.ndarray) -> np.ndarray:
 
 
 #: Knee/elbow hinge axes in the local frame of each limb joint, as DragPoser's own clips
-#: bend them: :func:`engine.joint_stats.limb_hinge`, mean over the three example clips.
+#: bend them: :func:`engine.motion.joint_stats.limb_hinge`, mean over the three example clips.
 CANON_HINGE: dict[str, tuple[float, float, float]] = {
     "lhip": (0.936, 0.233, 0.264),
     "lknee": (0.947, 0.194, 0.256),
@@ -183,7 +183,7 @@ def limb_alignments(pts: dict[str, np.ndarray], g: dict[str, np.ndarray]) -> dic
     ``pts`` are canonical-named world points (F, 3), ``g`` the source world rotations
     (F, 4) of the mapped joints. For the upper and the lower joint of each limb the
     bone direction (mean over the clip, in the joint's frame) and the hinge axis
-    (:func:`engine.joint_stats.limb_hinge`) define a frame; the canonical frame is the
+    (:func:`engine.motion.joint_stats.limb_hinge`) define a frame; the canonical frame is the
     canonical bone direction with :data:`CANON_HINGE`. Twist about the bone therefore
     comes only from the source's own motion about its hinge's frame."""
     out = {}

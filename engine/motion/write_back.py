@@ -1,9 +1,9 @@
 """Write a canonical motion back onto the rig of the BVH file it came from.
 
-:func:`engine.retarget.retarget` turns a source joint's world rotation into the
+:func:`engine.motion.retarget.retarget` turns a source joint's world rotation into the
 canonical one with one constant rotation per joint, ``G_c = C G_s C^-1 R`` (``C`` the
 change of axes, ``R`` the joint's alignment, both in the
-:class:`~engine.retarget.RetargetReport`). Writing back inverts it: every source joint
+:class:`~engine.motion.retarget.RetargetReport`). Writing back inverts it: every source joint
 mapped to a canonical joint gets ``G_s = C^-1 G_c R^-1``; joints outside the 22
 (fingers, twist bones, eyes, ``LHipJoint``...) keep their *rest rotation*, the mean
 local rotation of the source clip, and their children follow. The root's position
@@ -24,11 +24,11 @@ from pymotion.io.bvh import BVH as _PymotionBVH
 
 from engine import skeleton as sk
 from engine.atomic import atomic_path
-from engine.bvh import RawBVH
+from engine.motion.bvh import RawBVH
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk
-from engine.motion import Motion
+from engine.motion.clip import Motion
 
 
 def _mean_local(q: np.ndarray) -> np.ndarray:
@@ -72,7 +72,7 @@ def source_rig_pose(motion: Motion, raw: RawBVH, report) -> tuple[np.ndarray, np
     to be written."""
     prof = report.profile
     if prof is None or report.align is None or report.basis is None:
-        raise UserError(f"{raw.path}: this motion carries no retargeting record; load it with engine.retarget")
+        raise UserError(f"{raw.path}: this motion carries no retargeting record; load it with engine.motion.retarget")
     n, nj = len(motion), len(raw.names)
     pos_c, glob_c = motion.fk()
     cqi = Q.conjugate(Q.from_matrix(report.basis))
@@ -138,7 +138,7 @@ def save_on_source_rig(path: str | Path, motion: Motion, raw: RawBVH, report, fp
         if len(rot) != 3 or len(chans) not in (3, 6):
             raise UserError(f"{raw.path}: joint {name} has channels {' '.join(chans)}; "
                             "only 3 rotations or 3 positions + 3 rotations can be written back")  # fmt: skip
-    from engine.retarget import resample_motion
+    from engine.motion.retarget import resample_motion
 
     fps = float(fps or report.source_fps or motion.fps)
     if abs(fps - motion.fps) > 1e-6:

@@ -1,4 +1,4 @@
-"""Declarative retarget profiles, one TOML file per source rig (see :mod:`engine.retarget`).
+"""Declarative retarget profiles, one TOML file per source rig (see :mod:`engine.motion.retarget`).
 
 A profile names the source joint for each canonical joint (``[joints]``; canonical joints
 it lacks are left out), optional ``[landmarks]`` used to build bone frames, the unit
@@ -6,8 +6,8 @@ scale, the up and forward axes of the source's rest pose, whether rotations need
 rest-pose alignment, whether root position channels are relative to the root OFFSET and
 how many leading frames to drop. Adding a rig means adding one ``.toml`` file here.
 
-Rigs without a profile are mapped automatically (:mod:`engine.rigs.automap`, with unit
-and up axis from :mod:`engine.rigs.infer`); a user's mapping file (``--rig-map``, the
+Rigs without a profile are mapped automatically (:mod:`engine.motion.rigs.automap`, with unit
+and up axis from :mod:`engine.motion.rigs.infer`); a user's mapping file (``--rig-map``, the
 same format with every field but ``[joints]`` optional) overrides both. See
 :func:`resolve_rig` and ``docs/skeleton.md``.
 """
@@ -22,8 +22,8 @@ import numpy as np
 from engine import skeleton as sk
 from engine.errors import RigError, UserError
 from engine.input_files import read_toml
-from engine.rigs.automap import automap, check_mapping
-from engine.rigs.infer import infer_axes, infer_units
+from engine.motion.rigs.automap import automap, check_mapping
+from engine.motion.rigs.infer import infer_axes, infer_units
 from engine.validation import Num, check_value, shown
 
 PROFILE_DIR = Path(__file__).resolve().parent
@@ -158,10 +158,10 @@ def detect_rig(joint_names: list[str], source: str = "", profiles: list[RigProfi
 
 
 def resolve_rig(raw, rig_map: str | Path | None = None, profiles: list[RigProfile] | None = None) -> RigProfile:
-    """The rig description for a parsed BVH (``engine.bvh.RawBVH``).
+    """The rig description for a parsed BVH (``engine.motion.bvh.RawBVH``).
 
     In order: the user's mapping file ``rig_map`` if given; a TOML profile of
-    ``engine/rigs/`` whose joints all appear in the file; otherwise an automatic
+    ``engine/motion/rigs/`` whose joints all appear in the file; otherwise an automatic
     mapping. Unit, up axis and root convention a mapping file leaves out are inferred.
     Raises :class:`RigError` (what was not found, and the file's joint names)."""
     names = list(raw.names)

@@ -2,16 +2,16 @@
 
 How it works (details and figures in ``docs/skeleton.md``)
 ----------------------------------------------------------
-1. The source file is read and validated (:func:`engine.bvh.load_bvh`); its rig comes from
-   a mapping file, a TOML profile or the automatic mapping (:func:`engine.rigs.resolve_rig`).
+1. The source file is read and validated (:func:`engine.motion.bvh.load_bvh`); its rig comes from
+   a mapping file, a TOML profile or the automatic mapping (:func:`engine.motion.rigs.resolve_rig`).
 2. Source FK gives world positions and rotations of every source joint, converted to the
    canonical axes (Z-up, facing -Y) and metres.
 3. **Rotations defined by the body.** Limbs, hands, feet, neck and head get the rotation
-   of a bone frame built each frame from the body's positions (:mod:`engine.retarget_body`:
+   of a bone frame built each frame from the body's positions (:mod:`engine.motion.retarget_body`:
    swing from the bone, twist from the bending plane, the knuckles, the foot, the eyes),
    so the source rig's joint axes do not matter. The torso, and any joint whose defining
    points the rig lacks, keep the source joint's rotation times one constant ``R``
-   (``G_c = G_s R``, :mod:`engine.retarget_frames`). Canonical joints a rig lacks get
+   (``G_c = G_s R``, :mod:`engine.motion.retarget_frames`). Canonical joints a rig lacks get
    identity local rotations.
 4. **True proportions.** Bone offsets are measured per clip along the source chain
    (:func:`measure_offsets`), so mapped joints land where the source's are and the clip's
@@ -20,7 +20,7 @@ How it works (details and figures in ``docs/skeleton.md``)
    re-floored (the 2nd-percentile lowest toe sits at the canonical toe height).
 
 The :class:`RetargetReport` keeps what is needed to go back onto the source rig
-(:mod:`engine.source_rig`).
+(:mod:`engine.motion.write_back`).
 """
 
 from __future__ import annotations
@@ -32,18 +32,18 @@ from pathlib import Path
 import numpy as np
 
 from engine import skeleton as sk
-from engine.bvh import RawBVH, load_bvh
+from engine.motion.bvh import RawBVH, load_bvh
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk, local_from_global
-from engine.motion import Motion
-from engine import retarget_body as RB
-from engine import retarget_frames as RF
-from engine.retarget_inputs import (  # noqa: F401 - re-exported: callers import them from here
+from engine.motion.clip import Motion
+from engine.motion import retarget_body as RB
+from engine.motion import retarget_frames as RF
+from engine.motion.retarget_inputs import (  # noqa: F401 - re-exported: callers import them from here
     MODELS_DATA, RETARGET_VERSION, RETARGET_VERSIONS, _snap_fps, manifest_entry, manifest_fps, models_version,
     rest_frame_count)
-from engine.retarget_rotations import rigid_hands, straightened_offsets, world_rotations
-from engine.rigs import RigProfile, resolve_rig
+from engine.motion.retarget_rotations import rigid_hands, straightened_offsets, world_rotations
+from engine.motion.rigs import RigProfile, resolve_rig
 from engine.validation import SKELETON, check_value
 
 _AXIS = {"x": 0, "y": 1, "z": 2}
@@ -88,7 +88,7 @@ class RetargetReport:
 
     @property
     def source_twist_joints(self) -> list[str]:
-        """Mapped joints of :data:`engine.retarget_body.BODY_JOINTS` whose defining points
+        """Mapped joints of :data:`engine.motion.retarget_body.BODY_JOINTS` whose defining points
         the rig lacks: they keep the source's rotation (one constant alignment)."""
         if self.profile is None or self.body_joints is None:
             return []

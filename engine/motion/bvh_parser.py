@@ -1,6 +1,6 @@
 """Syntax of BVH files: a strict tokenizer and parser that names the line at fault.
 
-Used by :func:`engine.bvh.load_bvh`; nothing here builds joint arrays. The header is
+Used by :func:`engine.motion.bvh.load_bvh`; nothing here builds joint arrays. The header is
 split into tokens that remember their line, then read by an iterative descent parser
 (deep hierarchies cannot hit Python's recursion limit); the motion rows are checked
 line by line before numpy converts them in one go.
@@ -348,7 +348,7 @@ class ParsedBVH:
     Attributes
     ----------
     names, parents, offsets, channels, end_sites
-        The hierarchy in file order (see :class:`engine.bvh.RawBVH`); ``offsets`` is a
+        The hierarchy in file order (see :class:`engine.motion.bvh.RawBVH`); ``offsets`` is a
         list of J ``[x, y, z]`` in file units.
     frame_time : float
         Seconds per frame, > 0.

@@ -7,12 +7,12 @@ or a silently wrong array instead of a message a user can act on. :func:`load_bv
 therefore parses the file itself, token by token with line numbers, and every problem
 becomes an :class:`engine.errors.BVHError` that reads ``file:line: message``. The
 result, :class:`RawBVH`, keeps the file's own rig (names, offsets, Euler orders, units);
-retargeting to the canonical skeleton is :mod:`engine.retarget`'s job. Euler angles
+retargeting to the canonical skeleton is :mod:`engine.motion.retarget`'s job. Euler angles
 become quaternions with upc-pymotion's rotation maths.
 
 Writing
 -------
-:func:`save_motion_bvh` writes a canonical :class:`engine.motion.Motion` through
+:func:`save_motion_bvh` writes a canonical :class:`engine.motion.clip.Motion` through
 upc-pymotion's ``BVH.save`` into a temporary file beside the target, then renames it
 over the target (:mod:`engine.atomic`), so a crash never leaves a half-written file.
 See ``docs/bvh.md``.
@@ -30,10 +30,10 @@ from pymotion.rotations import quat_np as _qnp
 
 from engine import skeleton as sk
 from engine.atomic import atomic_path
-from engine.bvh_parser import MAX_OFFSET, parse_bvh_lines
+from engine.motion.bvh_parser import MAX_OFFSET, parse_bvh_lines
 from engine.errors import BVHError, UserError
 from engine.kinematics import quaternion as Q
-from engine.motion import Motion
+from engine.motion.clip import Motion
 from engine.validation import check_input_file
 
 __all__ = ["MAX_OFFSET", "SAVE_ROT_ORDER", "RawBVH", "load_bvh", "save_motion_bvh"]

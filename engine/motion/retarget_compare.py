@@ -19,7 +19,7 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
-from engine.motion import Motion
+from engine.motion.clip import Motion
 
 #: Rate (frames/s) at which clips are compared: a copy that dropped one 120-fps rest
 #: frame is half a 60-fps frame off, which this rate resolves.
@@ -115,7 +115,7 @@ def compare_clips(a: Motion, b: Motion) -> ClipDifference:
     ClipDifference
         The offset and heading found and the per-joint mean differences.
     """
-    from engine.retarget import clip_height, resample_motion
+    from engine.motion.retarget import clip_height, resample_motion
 
     ha, hb = clip_height(a), clip_height(b)  # standing heights, as ``info`` prints them
     a, b = resample_motion(a, COMPARE_FPS), resample_motion(b, COMPARE_FPS)

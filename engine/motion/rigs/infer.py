@@ -1,6 +1,6 @@
 """Unit, up axis and root-channel convention of a BVH rig, inferred from the file itself.
 
-Used for rigs mapped automatically (:mod:`engine.rigs.automap`) and for mapping files
+Used for rigs mapped automatically (:mod:`engine.motion.rigs.automap`) and for mapping files
 that leave these fields out; the TOML profiles state them explicitly.
 
 * **Unit**: the leg (hip to knee to ankle, rest OFFSETs) of an adult is 0.65-1.1 m;

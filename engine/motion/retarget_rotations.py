@@ -1,22 +1,22 @@
 """Canonical world rotations of a source clip: body-defined where the body defines them.
 
 :func:`world_rotations` gives every mapped joint one constant alignment ``R``
-(``G_c = G_s R``, :mod:`engine.retarget_frames`) and, from retarget version 4, replaces
-the rotation of the joints the body defines (:mod:`engine.retarget_body`) by their
+(``G_c = G_s R``, :mod:`engine.motion.retarget_frames`) and, from retarget version 4, replaces
+the rotation of the joints the body defines (:mod:`engine.motion.retarget_body`) by their
 body-defined one; ``R`` is then the mean of ``G_s^-1 G_c`` over the clip, which writing
-back onto the source rig uses (:mod:`engine.source_rig`).
+back onto the source rig uses (:mod:`engine.motion.write_back`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from engine import retarget_body as RB
-from engine import retarget_frames as RF
+from engine.motion import retarget_body as RB
+from engine.motion import retarget_frames as RF
 from engine import skeleton as sk
-from engine.bvh import RawBVH
+from engine.motion.bvh import RawBVH
 from engine.kinematics import quaternion as Q
-from engine.rigs import RigProfile
+from engine.motion.rigs import RigProfile
 
 _CANON_FRAMES = RF.canonical_frames()
 _BODY_FRAMES = RB.canonical_body_frames()
@@ -38,7 +38,7 @@ def world_rotations(prof: RigProfile, pts, wrot, idx, cq, version: int, hands: s
                      ) -> tuple[np.ndarray, list, list]:  # fmt: skip
     """Canonical world rotations (F, 22, 4), the per-joint constant alignment ``R`` with
     ``G_c ~ G_s R`` (None for joints the rig lacks) and the joints whose rotation the body
-    defines (:mod:`engine.retarget_body`, from version 4)."""
+    defines (:mod:`engine.motion.retarget_body`, from version 4)."""
     n = wrot.shape[0]
     frames = RF.bone_frames(pts) if prof.align else {}
     limbs = RF.limb_alignments(pts, {c: wrot[:, idx[s]] for c, s in prof.joints.items()}) if prof.align else {}

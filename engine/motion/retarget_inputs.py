@@ -1,7 +1,7 @@
 """What retargeting needs to know about a source before it starts: the definition to use,
 the true frame rate, and whether the file opens with a rest frame.
 
-Re-exported by :mod:`engine.retarget`, where callers find them.
+Re-exported by :mod:`engine.motion.retarget`, where callers find them.
 """
 
 from __future__ import annotations
@@ -10,20 +10,20 @@ from pathlib import Path
 
 import numpy as np
 
-from engine.bvh import RawBVH
+from engine.motion.bvh import RawBVH
 from engine.errors import UserError
 from engine.input_files import read_json, read_toml
 from engine.kinematics import quaternion as Q
 from engine.validation import check_manifest, shown
 
 #: Bumped whenever retargeting gives different clips (prepared data is rebuilt then).
-#: 4: limbs, hands, feet and head take their twist from the body (:mod:`engine.retarget_body`);
+#: 4: limbs, hands, feet and head take their twist from the body (:mod:`engine.motion.retarget_body`);
 #: 3: every joint keeps the source's rotation with one constant alignment per joint.
 RETARGET_VERSION = 4
 #: Definitions :func:`retarget` can still produce (models record the one they learnt).
 RETARGET_VERSIONS = (3, 4)
 #: Where the shipped models record the definition they learnt from (``retarget_version``).
-MODELS_DATA = Path(__file__).resolve().parents[1] / "assets" / "models" / "data.toml"
+MODELS_DATA = Path(__file__).resolve().parents[2] / "assets" / "models" / "data.toml"
 
 def models_version(path: Path = MODELS_DATA) -> int:
     """The retargeting definition every command feeding the shipped models uses by default

@@ -21,7 +21,7 @@ show in the canonical rotations. The rules (``docs/skeleton.md``, *Body-defined 
 * **lower neck and head**: the head's direction and the face's eye line.
 
 A joint whose defining points the rig lacks keeps the source's rotation with one
-constant alignment (:mod:`engine.retarget_frames`), and :func:`body_frames` says so.
+constant alignment (:mod:`engine.motion.retarget_frames`), and :func:`body_frames` says so.
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
-from engine.retarget_frames import CANON_HINGE, CANON_LANDMARKS, frame
+from engine.motion.retarget_frames import CANON_HINGE, CANON_LANDMARKS, frame
 
 #: Weight of the straight-limb reference against the bending plane's normal (whose
 #: length is the sine of the bend) when the limb is straight; it fades to 0 at
@@ -79,13 +79,13 @@ def body_frames(pts: dict[str, np.ndarray], arm_straight: dict[str, np.ndarray] 
     ----------
     pts : dict
         Canonical-named world points ``(F, 3)``, metres, canonical axes: joints and
-        landmarks (with :func:`engine.retarget_frames.add_derived`'s midpoints).
+        landmarks (with :func:`engine.motion.retarget_frames.add_derived`'s midpoints).
     arm_straight : dict, optional
         Per arm joint, the world reference ``(F, 3)`` used while the arm is straight
         (the y axis of the source's own, constantly aligned frame).
     canonical : bool
         The canonical rest pose: limbs are straight, their references are
-        :data:`engine.retarget_frames.CANON_HINGE`.
+        :data:`engine.motion.retarget_frames.CANON_HINGE`.
     """
     out: dict[str, np.ndarray] = {}
     arm_straight = arm_straight or {}
@@ -123,7 +123,7 @@ def body_frames(pts: dict[str, np.ndarray], arm_straight: dict[str, np.ndarray] 
 
 def canonical_body_frames(offsets: np.ndarray = sk.REST_OFFSETS) -> dict[str, np.ndarray]:
     """:func:`body_frames` ``(4,)`` of the canonical rest pose (T-pose)."""
-    from engine.retarget_frames import add_derived
+    from engine.motion.retarget_frames import add_derived
 
     rest = sk.Skeleton(offsets=np.asarray(offsets, float)).rest_positions()
     pts = {n: rest[i][None] for i, n in enumerate(sk.JOINT_NAMES)}

@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from typing import Protocol
+from typing import Protocol, runtime_checkable
 
 import torch
 
@@ -54,6 +54,20 @@ class LatentPredictor(Protocol):
         ...
 
 
+@runtime_checkable
+class SteppedPredictor(LatentPredictor, Protocol):
+    """A predictor that can also run in pieces between frames: its encoder on the past
+    once, then one latent at a time (:class:`engine.models.predictor.TemporalPredictor`)."""
+
+    def encode_past(self, past: torch.Tensor, cond: torch.Tensor) -> torch.Tensor:
+        """``past (B, W_p, L)``, ``cond (B, W_p, C)`` -> the encoder's memory."""
+        ...
+
+    def next_latent(self, tokens: torch.Tensor, memory: torch.Tensor) -> torch.Tensor:
+        """The latents so far ``tokens (B, T, L)`` and ``memory`` -> the next latent ``(B, L)``."""
+        ...
+
+
 def _join(*warnings: str) -> str:
     return "; ".join(w for w in warnings if w)
 
@@ -64,7 +78,8 @@ class _Run:
     def __init__(self, predictor: LatentPredictor, inputs: tuple, first_step: int, steps: int,
                  memory: torch.Tensor | None = None) -> None:  # fmt: skip
         self.predictor, self.inputs, self.first_step, self.steps = predictor, inputs, first_step, steps
-        self.split = hasattr(predictor, "encode_past") and hasattr(predictor, "next_latent")
+        self.stepped = predictor if isinstance(predictor, SteppedPredictor) else None
+        self.split = self.stepped is not None
         self.memory = memory if self.split else None
         self.tokens: torch.Tensor | None = None
         self.done = 0
@@ -83,14 +98,15 @@ class _Run:
         past, cond, first = self.inputs
         try:
             with torch.no_grad():
-                if not self.split:
+                stepped = self.stepped
+                if stepped is None:
                     out = self.predictor.predict(past, cond, first, self.steps)
                 elif self.memory is None:
-                    self.memory = self.predictor.encode_past(past, cond)  # type: ignore[attr-defined]
+                    self.memory = stepped.encode_past(past, cond)
                     return ""
                 else:
                     tokens = first[:, None] if self.tokens is None else self.tokens
-                    nxt = self.predictor.next_latent(tokens, self.memory)  # type: ignore[attr-defined]
+                    nxt = stepped.next_latent(tokens, self.memory)
                     self.tokens = torch.cat((tokens, nxt[:, None]), dim=1)
                     out = nxt[:, None]
         except Exception as exc:  # a broken predictor must not stop the reconstruction
@@ -203,12 +219,12 @@ class TemporalSchedule:
         if self.pending:
             assert self.run is not None
             self.pending_warning = _join(self.pending_warning, self.run.piece(self.cache))
-        elif (self.predictor is not None and hasattr(self.predictor, "encode_past") and self.history
+        elif (isinstance(self.predictor, SteppedPredictor) and self.history
               and self.last is not None and (self.memory is None or self.memory[0] != self.version)):  # fmt: skip
             past, cond, _ = self._inputs()
             try:
                 with torch.no_grad():
-                    self.memory = (self.version, self.predictor.encode_past(past, cond))  # type: ignore[attr-defined]
+                    self.memory = (self.version, self.predictor.encode_past(past, cond))
             except Exception:  # the run itself will try again and warn
                 self.memory = None
 

@@ -80,7 +80,8 @@ class DrawScheduler:
         now = time.monotonic()
         if now - self._rate_t0 >= 1.0:
             self._draw_rate, self._rate_draws, self._rate_t0 = self._rate_draws / (now - self._rate_t0), 0, now
-        failure = getattr(self.w.session.engine, "failure", "")
+        engine = self.w.session.engine
+        failure = engine.failure if engine is not None else ""
         if failure and failure != self._failure:
             self._failure = failure
             self.w.show_error("The engine stopped", failure)

@@ -251,7 +251,7 @@ class MainWindow(QMainWindow):
 
     def _show_constraints(self, event: ev.ConstraintsChanged | None) -> None:
         cs = self.session.constraints
-        slow = {c.name: c.no_fast_term for c in cs if getattr(c, "no_fast_term", "")}
+        slow = {c.name: c.no_fast_term for c in cs if c.no_fast_term}
         self.constraint_panel.set_constraints([c.to_dict() for c in cs], slow)
 
     def _show_optimizer(self, event: Any = None) -> None:

@@ -158,7 +158,7 @@ class PoseOptimizer:
         --iterations 3``: 2.45 cm carried, 0.91 cm fresh; 2 iterations fresh: 1.01 cm)."""
         rule = self.settings.optimizer
         if rule == "auto":
-            sensors = sum(1 for c in terms if getattr(c, "kind", "") == "sensor")
+            sensors = sum(1 for c in terms if c.kind == "sensor")
             rule = ("adam" if deadline else "adam-carry") if sensors >= FULL_SET else "sgd"
         return rule
 

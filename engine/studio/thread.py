@@ -58,7 +58,16 @@ class EngineThread(threading.Thread):
         ``get_nowait()`` raising :class:`queue.Empty`, e.g. a ``multiprocessing`` queue
         when the loop runs in its own process, :mod:`engine.studio.process`); a new
         :class:`queue.Queue` by default.
+
+    Attributes
+    ----------
+    failure : str
+        Why the engine stopped for good, '' while it runs: always '' here, since a
+        method's error is reported in the snapshot and never ends the thread (the
+        engine process sets it when its child dies).
     """
+
+    failure: str = ""
 
     def __init__(self, method_factory: Callable[[str], Method] | None = None, commands: Any = None) -> None:
         super().__init__(name="dragposer-engine", daemon=True)

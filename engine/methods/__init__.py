@@ -89,7 +89,7 @@ def run_method(
         Progress-bar label.
     light : bool
         Keep the results in arrays allocated (and written) up front
-        (:class:`~engine.methods.records.FrameRecords`: the frames' ``FrameResult`` are
+        (:class:`~engine.methods.records.ResultArrays`: the frames' ``FrameResult`` are
         built when read, their pose fields views into those arrays, their ``losses``
         only the final total), so memory stays flat over long clips (``reconstruct``,
         ``evaluate``).
@@ -98,7 +98,7 @@ def run_method(
     -------
     motion : Motion
         The reconstruction (F frames, ``tracking.fps``).
-    results : list of FrameResult (a FrameRecords sequence when ``light``)
+    results : list of FrameResult (a ResultArrays sequence when ``light``)
         One per frame; ``ms`` is filled with the measured step time when the method
         left it at 0.
 
@@ -116,9 +116,9 @@ def run_method(
     driver.reset(method, skeleton, tracking.fps, reference)
     n = len(tracking)
     if light:
-        from engine.methods.records import FrameRecords
+        from engine.methods.records import ResultArrays
 
-        records = FrameRecords(n)
+        records = ResultArrays(n)
         local, root = records.local_rot, records.root_pos
     else:
         results: list[FrameResult] = []

@@ -2,7 +2,7 @@
 
 A :class:`FrameResult` per frame costs about 1.7 kB of Python objects (the result, its
 array views, a losses dict, a timings dict, a latent array), so a 10,000-frame
-reconstruction grew by ~17 MB while it ran. :class:`FrameRecords` stores the same
+reconstruction grew by ~17 MB while it ran. :class:`ResultArrays` stores the same
 figures in arrays allocated (and written) when the run starts, and builds a
 ``FrameResult`` only when one is asked for, so memory stays flat over the clip.
 """
@@ -20,7 +20,7 @@ from engine.methods.base import FrameResult
 TIMING_KEYS = ("ms_per_iteration", "decoder", "fk_losses", "backward", "step")
 
 
-class FrameRecords(Sequence[FrameResult]):
+class ResultArrays(Sequence[FrameResult]):
     """``n`` frames' results; frame ``i`` is written by :meth:`store` and read back as a
     :class:`FrameResult` whose pose fields are views into the arrays and whose ``losses``
     keep only the final ``total``.

@@ -24,7 +24,7 @@ HISTORY = 600  # solved frames a snapshot carries in ``history``
 
 
 @dataclass(frozen=True)
-class FrameRecord:
+class HistoryEntry:
     """What the plots keep of one solved frame.
 
     Attributes
@@ -96,7 +96,7 @@ class Snapshot:
     plays : int
         Play commands the engine has received; a reader tells a snapshot that reports
         the end of playback from one that predates its latest play request.
-    history : tuple of FrameRecord
+    history : tuple of HistoryEntry
         The last :data:`HISTORY` solved frames, oldest first, including frames whose
         snapshots a reader skipped (the GUI draws only the newest one); cleared when
         playback jumps (seek back, loop, new clip or method).
@@ -126,7 +126,7 @@ class Snapshot:
     method: str = ""
     can_decode: bool = False
     decoded: np.ndarray | None = None
-    history: tuple[FrameRecord, ...] = ()
+    history: tuple[HistoryEntry, ...] = ()
     solved: int = 0
     frames_skipped: int = 0
     pace: str = "every_frame"

@@ -34,7 +34,7 @@ from engine.studio.frame_figures import losses_of, timing_of
 from engine.studio.method_set import MethodSet
 from engine.studio.method_edits import make_method
 from engine.studio.playback import ENDED, LOOPED, PlaybackClock
-from engine.studio.snapshot import HISTORY, FrameRecord, Snapshot, readonly
+from engine.studio.snapshot import HISTORY, HistoryEntry, Snapshot, readonly
 from engine.sensor_source import SensorSource
 from engine.studio.clip_source import ClipSource
 
@@ -88,7 +88,7 @@ class EngineThread(threading.Thread):
         self._last_result: FrameResult | None = None
         self._decoded: np.ndarray | None = None
         self._last_ghosts: dict[str, np.ndarray] = {}
-        self._history: deque[FrameRecord] = deque(maxlen=HISTORY)
+        self._history: deque[HistoryEntry] = deque(maxlen=HISTORY)
         self._last_ms = 0.0
         self._pending_error = ""
         self._method_error = ""
@@ -307,7 +307,7 @@ class EngineThread(threading.Thread):
         if res is not None:
             final = dict(res.losses[-1]) if res.losses else dict(losses_of(res, sf)[-1])
             latent = readonly(res.latent) if res.latent is not None else None
-            self._history.append(FrameRecord(frame, res.iterations, ms, final, latent))
+            self._history.append(HistoryEntry(frame, res.iterations, ms, final, latent))
         self._publish(frame, sf, res, ms, error, ghosts)
         # the pose is out: work the methods deferred (DragPoser's predictor pieces) now,
         # not inside the next frame's solve

@@ -6,7 +6,7 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.methods import FrameResult, get_method, run_method
-from engine.methods.records import FrameRecords
+from engine.methods.records import ResultArrays
 from engine.tracking import simulate
 
 
@@ -15,7 +15,7 @@ def test_light_run_gives_the_same_motion_and_figures(synthetic_motion):
     tracking = simulate(clip, "6")
     full_rec, full = run_method(get_method("ik"), tracking, clip.skeleton, progress=False)
     light_rec, light = run_method(get_method("ik"), tracking, clip.skeleton, progress=False, light=True)
-    assert isinstance(light, FrameRecords) and len(light) == len(full) == 30
+    assert isinstance(light, ResultArrays) and len(light) == len(full) == 30
     np.testing.assert_allclose(light_rec.local_rot, full_rec.local_rot, atol=1e-12)
     np.testing.assert_allclose(light_rec.root_pos, full_rec.root_pos, atol=1e-12)
     for a, b in zip(light, full):
@@ -25,7 +25,7 @@ def test_light_run_gives_the_same_motion_and_figures(synthetic_motion):
 
 
 def test_records_keep_latent_final_loss_timings_and_warnings():
-    rec = FrameRecords(3)
+    rec = ResultArrays(3)
     pose = dict(local_rot=np.tile([1.0, 0, 0, 0], (sk.NUM_JOINTS, 1)), root_pos=np.ones(3),
                 positions=np.zeros((sk.NUM_JOINTS, 3)))  # fmt: skip
     rec.store(0, FrameResult(**pose, iterations=10, losses=[{"a": 2.0, "total": 2.0}, {"a": 1.0, "total": 1.0}],

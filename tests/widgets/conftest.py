@@ -12,7 +12,7 @@ from engine import skeleton as sk
 
 @dataclass(frozen=True)
 class FakeRecord:
-    """The fields widgets read from ``engine.studio.snapshot.FrameRecord``."""
+    """The fields widgets read from ``engine.studio.snapshot.HistoryEntry``."""
 
     frame: int
     iterations: int

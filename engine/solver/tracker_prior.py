@@ -35,6 +35,7 @@ import numpy as np
 import torch
 
 from engine.kinematics import quaternion as Q
+from engine.solver.bank_prefilter import Prefilter, nearest
 
 #: Joints whose tracker readings the bank stores, in this order.
 BANK_JOINTS: tuple[str, ...] = ("root", "upperneck", "lwrist", "rwrist", "lankle", "rankle")
@@ -108,6 +109,7 @@ class _Index:
     cols: np.ndarray  # (D_c,) its columns, in features(joints) order
     norms: torch.Tensor  # (N,) squared lengths of the rows over those columns
     full: bool  # cols is the whole table in order (the product is the table's own)
+    prefilter: Prefilter  # exact lower bounds that spare most rows' products
 
 
 @dataclass
@@ -138,6 +140,7 @@ class PoseBank:
     k: int = 8
     _indexes: dict = field(default_factory=dict, repr=False)
     _tables: dict = field(default_factory=dict, repr=False)
+    _hints: dict = field(default_factory=dict, repr=False)  # combination -> last neighbours
     #: Index work done so far: anchor tables built plus combinations derived from them
     #: (a live frame must find its combination ready: :meth:`prepare`).
     index_builds: int = field(default=0, repr=False)
@@ -185,7 +188,7 @@ class PoseBank:
             cols = np.asarray(feature_columns(joints), dtype=np.intp)
             full = len(cols) == tab.table.shape[1] and bool((cols == np.arange(len(cols))).all())
             sub = tab.table if full else tab.table[:, torch.from_numpy(cols)]
-            idx = self._indexes[joints] = _Index(tab, cols, (sub * sub).sum(1), full)
+            idx = self._indexes[joints] = _Index(tab, cols, (sub * sub).sum(1), full, Prefilter(sub))
             self.index_builds += 1
         return idx
 
@@ -205,10 +208,12 @@ class PoseBank:
         else:  # the other columns multiply zeros
             q = torch.zeros(tab.table.shape[1])
             q[torch.from_numpy(idx.cols)] = torch.from_numpy(q32)
-        # |t - q|^2 = |t|^2 - 2 t.q + |q|^2; the last term is the same for every row
+        # |t - q|^2 = |t|^2 - 2 t.q + |q|^2; the last term is the same for every row. The
+        # previous lookup's neighbours bound the search (any hint gives the same answer)
         k = min(k or self.k, len(self))
-        nearest = (idx.norms - 2.0 * (tab.table @ q)).topk(k, largest=False).indices
-        return self._latents[nearest].mean(0)
+        near = nearest(tab.table, idx.norms, q, q32, idx.prefilter, self._hints.get(joints), k)
+        self._hints[joints] = near
+        return self._latents[near].mean(0)
 
     def latent_batch(self, joints: Sequence[str], pos: np.ndarray, rot: np.ndarray, k: int = 0,
                      chunk: int = 64) -> torch.Tensor:  # fmt: skip

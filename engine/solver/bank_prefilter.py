@@ -1,0 +1,104 @@
+"""An exact prefilter for the pose bank's nearest-neighbour lookup
+(:class:`engine.solver.tracker_prior.PoseBank`).
+
+A lookup compares the query with every bank row over the combination's columns: the
+whole ``(N, 55)`` float32 table (~20 MB) is read once per frame. The prefilter keeps, per
+combination, the rows projected onto their ``rank`` principal directions plus the length
+of what the projection leaves out. For any row ``t`` and query ``q``,
+
+    |t - q|^2 = |P(t - q)|^2 + |R(t - q)|^2 >= |P t - P q|^2 + (|R t| - |R q|)^2,
+
+(``P`` the projection, ``R`` its orthogonal complement, the triangle inequality on the
+second term), so a row whose bound exceeds the ``k``-th smallest distance of ``k`` known
+rows (the previous frame's neighbours: poses change little between frames) cannot be a
+neighbour. Only the rows that survive are compared exactly, with the same float32
+products the full lookup uses, so the neighbours and their order are the full lookup's.
+The bound is evaluated in float32 and the distances carry float32 rounding, so the
+test keeps a margin (:data:`MARGIN` times the largest magnitudes involved) that is far
+above both rounding errors: a row is dropped only when it is certainly farther.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+
+#: Principal directions kept per combination (16 of 55 columns: about 4 MB per combination).
+RANK = 16
+#: Relative margin of the pruning test, far above float32 rounding of 55-term sums (~4e-6).
+MARGIN = 1e-4
+#: Rows compared exactly are gathered in blocks of this many (the float32 product of a
+#: gathered block gives each row the bits it has in the whole table's product; a ragged
+#: tail takes another summation path).
+BLOCK = 16
+#: Above this share of the bank surviving, the whole table is compared instead.
+MAX_SHARE = 0.25
+
+
+class Prefilter:
+    """Lower bounds of the squared distances between bank rows and a query.
+
+    Parameters
+    ----------
+    rows : Tensor (N, D_c) float32
+        The combination's standardised features of every bank frame.
+    rank : int
+        Principal directions kept.
+    """
+
+    def __init__(self, rows: torch.Tensor, rank: int = RANK) -> None:
+        x = rows.double().numpy()
+        rank = min(rank, x.shape[1])
+        _, vecs = np.linalg.eigh(x.T @ x)  # ascending eigenvalues
+        self.basis = np.ascontiguousarray(vecs[:, ::-1][:, :rank])  # (D_c, rank) float64
+        proj = x @ self.basis
+        sq = (x * x).sum(1)
+        pn = (proj * proj).sum(1)
+        res = np.sqrt(np.maximum(sq - pn, 0.0))
+        # |Pt - Pq|^2 + (|Rt| - |Rq|)^2 = [Pt, |Rt|, |Pt|^2 + |Rt|^2] . [-2Pq, -2|Rq|, 1] + |q|^2:
+        # one product over the rows, the query's own term added to the threshold instead
+        self.rows = torch.from_numpy(np.column_stack((proj, res, pn + res * res)).astype(np.float32))
+        self.largest = float(sq.max())  # the largest squared row length, for the margin
+
+    def bound(self, q: np.ndarray) -> tuple[torch.Tensor, float, float]:
+        """``(b (N,) float32, offset, margin)`` for the query ``q (D_c,)`` (the float32
+        query's values), in squared standardised units: ``b + offset - margin`` is below
+        every row's true squared distance to ``q``."""
+        q = np.asarray(q, dtype=np.float64)
+        pq = q @ self.basis
+        qq = float(q @ q)
+        rq = np.sqrt(max(qq - float(pq @ pq), 0.0))
+        w = torch.from_numpy(np.concatenate((-2.0 * pq, [-2.0 * rq, 1.0])).astype(np.float32))
+        return self.rows @ w, qq, MARGIN * (1.0 + self.largest + qq)
+
+
+def distances(table: torch.Tensor, norms: torch.Tensor, q: torch.Tensor, rows: torch.Tensor) -> torch.Tensor:
+    """``norms - 2 table @ q`` of ``rows`` only ``(len(rows),)``, each with the bits the
+    whole table's product gives it (the gathered block is padded to :data:`BLOCK` rows)."""
+    m = len(rows)
+    pad = -m % BLOCK
+    if pad:
+        rows_p = torch.cat((rows, rows[-1:].expand(pad)))
+    else:
+        rows_p = rows
+    return norms[rows] - 2.0 * (table.index_select(0, rows_p) @ q)[:m]
+
+
+def nearest(table: torch.Tensor, norms: torch.Tensor, q: torch.Tensor, q_cols: np.ndarray,
+            pre: Prefilter, hint: torch.Tensor | None, k: int) -> torch.Tensor:  # fmt: skip
+    """Indices ``(k,)`` of the ``k`` rows with the smallest ``norms - 2 table @ q``, in
+    increasing order, as ``topk`` over the whole table gives them; ``hint`` (at least
+    ``k`` row indices, e.g. the previous frame's neighbours) bounds the search, ``q_cols``
+    is the query over the combination's columns (float32 values)."""
+    n = len(table)
+    if hint is not None and len(hint) >= k:
+        d_hint = distances(table, norms, q, hint)
+        worst = float(d_hint.topk(k, largest=False).values[-1])
+        b, offset, margin = pre.bound(q_cols)
+        # computed d = |t - q|^2 - |q|^2 (+ rounding) and bound = b + offset, so a row can
+        # be nearer than the k-th known one only when b + offset - margin <= worst + |q|^2 + margin
+        keep = torch.nonzero(b <= worst + 2.0 * margin).flatten()
+        if len(keep) <= MAX_SHARE * n:
+            d = distances(table, norms, q, keep)
+            return keep[d.topk(k, largest=False).indices]
+    return (norms - 2.0 * (table @ q)).topk(k, largest=False).indices

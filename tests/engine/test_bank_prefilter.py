@@ -1,0 +1,96 @@
+"""The pose bank's exact prefilter (engine/solver/bank_prefilter.py): its bound is below
+every true distance, gathered rows keep their bits, and lookups through it find exactly
+what the whole table finds."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from engine.solver import bank_prefilter as bp
+from engine.solver.tracker_prior import TrackerHistory, default_bank, features
+from engine.tracking import simulate
+
+
+def _rows(rng, n: int = 3000, d: int = 55) -> torch.Tensor:
+    # strongly correlated columns (a few factors and a little noise), as tracker features are
+    x = rng.normal(size=(n, 10)) @ rng.normal(size=(10, d)) + rng.normal(scale=0.1, size=(n, d))
+    return torch.from_numpy(x.astype(np.float32))
+
+
+def test_the_bound_is_below_every_true_distance_and_close_for_near_rows():
+    rng = np.random.default_rng(0)
+    rows = _rows(rng)
+    pre = bp.Prefilter(rows)
+    x = rows.double().numpy()
+    for _ in range(20):
+        q = (x[rng.integers(len(x))] + rng.normal(scale=0.1, size=x.shape[1])).astype(np.float32)
+        b, offset, margin = pre.bound(q)
+        true = ((x - q.astype(np.float64)) ** 2).sum(1)
+        assert (b.double().numpy() + offset - margin <= true).all()
+        # not vacuous: the bound of the nearest rows is most of their distance
+        near = np.argsort(true)[1:100]
+        assert (b.double().numpy()[near] + offset).sum() > 0.9 * true[near].sum()
+
+
+@pytest.mark.parametrize("m", [1, 5, 16, 47, 333])
+def test_gathered_rows_keep_the_bits_of_the_whole_tables_product(m):
+    rng = np.random.default_rng(1)
+    table = _rows(rng, n=4000)
+    norms = (table * table).sum(1)
+    q = torch.from_numpy(rng.normal(size=55).astype(np.float32))
+    full = norms - 2.0 * (table @ q)
+    rows = torch.from_numpy(np.sort(rng.choice(len(table), m, replace=False)))
+    assert torch.equal(bp.distances(table, norms, q, rows), full[rows])
+
+
+def test_a_lookup_with_any_hint_finds_the_whole_tables_neighbours_in_its_order():
+    rng = np.random.default_rng(2)
+    table = _rows(rng, n=5000)
+    norms = (table * table).sum(1)
+    pre = bp.Prefilter(table)
+    pruned = 0
+    for i in range(30):
+        q32 = (table[rng.integers(len(table))].numpy() + rng.normal(scale=0.1, size=55)).astype(np.float32)
+        q = torch.from_numpy(q32)
+        want = (norms - 2.0 * (table @ q)).topk(8, largest=False).indices
+        for hint in (want.flip(0), torch.from_numpy(rng.choice(len(table), 8, replace=False)), None):
+            assert torch.equal(bp.nearest(table, norms, q, q32, pre, hint, 8), want)
+        b, _, margin = pre.bound(q32)
+        worst = float((norms - 2.0 * (table @ q))[want].max())
+        pruned += int((b > worst + 2.0 * margin).sum())
+    assert pruned > 0.5 * 30 * len(table)  # the prefilter spares most rows
+
+
+@pytest.fixture
+def clip():
+    from engine.cli.bench import DEFAULT_CLIP
+    from engine.motion.retarget import load_motion
+
+    return load_motion(DEFAULT_CLIP)
+
+
+def test_real_bank_lookups_over_a_clip_are_those_of_the_whole_table(clip):
+    bank = default_bank()
+    if bank is None:
+        pytest.skip("the shipped pose bank is not installed")
+    looked = 0
+    for preset in ("6", "4"):
+        hist = TrackerHistory()
+        tr = simulate(clip, preset)
+        for i in range(min(len(clip), 120)):
+            fr = tr.frame(i)
+            hist.push({j: (r.position, r.rotation) for j, r in fr.readings.items() if r.connected and r.dof == 6})
+            joints, pos, rot = hist.arrays()
+            idx = bank._index(joints)
+            tab, a = idx.table, joints.index("root")
+            x = features(pos[-1:], rot[-1:], a, pos[:1, a])[0]
+            q = torch.zeros(tab.table.shape[1])
+            x32 = ((x - tab.mean[idx.cols]) / tab.std[idx.cols]).astype(np.float32)
+            q[torch.from_numpy(idx.cols)] = torch.from_numpy(x32)
+            want = (idx.norms - 2.0 * (tab.table @ q)).topk(bank.k, largest=False).indices
+            assert torch.equal(bank.latent(joints, pos, rot), bank._latents[want].mean(0))
+            assert torch.equal(bank._hints[joints], want)
+            looked += 1
+    assert looked == 2 * min(len(clip), 120)

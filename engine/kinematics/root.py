@@ -41,3 +41,9 @@ def root_increment(prev_rot, prev_pos, rot, pos):
     whose world root is ``rot``, ``pos`` after a frame with ``prev_rot``, ``prev_pos``."""
     h_inv = Q.conjugate(Q.heading(prev_rot))
     return Q.mul(h_inv, rot), Q.rotate(h_inv, pos - prev_pos)
+
+
+def root_displacement(prev_rot, prev_pos, pos):
+    """The displacement half of :func:`root_increment` alone, ``(..., 3)`` metres (the same
+    operations, so the same rounding), for callers that do not need the rotation."""
+    return Q.rotate(Q.conjugate(Q.heading(prev_rot)), pos - prev_pos)

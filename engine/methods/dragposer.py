@@ -29,7 +29,7 @@ from engine.constraints import (
 )  # fmt: skip
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
-from engine.kinematics.root import root_increment
+from engine.kinematics.root import root_displacement
 from engine.methods import dragposer_root as roots
 from engine.methods.base import FrameResult, Method
 from engine.methods.dragposer_edits import DragPoserEdits
@@ -297,7 +297,7 @@ class DragPoserMethod(DragPoserEdits, Method):
         conditioning, and so every later frame, depends on its exact rounding)."""
         rot32, pos32 = np.asarray(root_rot, dtype=np.float32), np.asarray(positions, dtype=np.float32)
         rot_t, pos_t = torch.from_numpy(rot32), torch.from_numpy(pos32)
-        _, disp = root_increment(prev.rotation, prev.position, rot_t, pos_t[0])
+        disp = root_displacement(prev.rotation, prev.position, pos_t[0])
         # predictor conditioning: displacement summed over the last n frames (each in its
         # previous heading frame), then the heights of HEIGHT_JOINTS (engine.models.predictor)
         self._disps.append(disp)

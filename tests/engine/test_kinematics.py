@@ -15,7 +15,7 @@ from engine import skeleton as sk
 from engine.kinematics import features as Fe
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk, fk_joints, fk_matrices, local_from_global
-from engine.kinematics.root import integrate_root, root_increment
+from engine.kinematics.root import integrate_root, root_displacement, root_increment
 
 RNG = np.random.default_rng(3)
 PARENTS_PM = np.array([0] + list(sk.PARENTS[1:]))
@@ -157,6 +157,16 @@ def test_fk_by_levels_matches_a_joint_by_joint_loop():
         np.testing.assert_allclose(rot[:, j], pm_q.mul(rot[:, p], q[:, j]), atol=1e-12)
         np.testing.assert_allclose(pos[:, j], pos[:, p] + pm_q.mul_vec(rot[:, p], np.broadcast_to(
             sk.REST_OFFSETS[j], (4, 3))), atol=1e-12)
+
+
+def test_the_root_displacement_alone_has_the_bits_of_the_root_increments():
+    prev_rot, rot = _random_quats(50), _random_quats(50)
+    prev_pos, pos = RNG.normal(size=(50, 3)), RNG.normal(size=(50, 3))
+    for conv in (np.asarray, lambda x: torch.tensor(x, dtype=torch.float32)):
+        args = [conv(x) for x in (prev_rot, prev_pos, rot, pos)]
+        want = root_increment(*args)[1]
+        got = root_displacement(args[0], args[1], args[3])
+        assert type(got) is type(want) and (np.asarray(got) == np.asarray(want)).all()
 
 
 def test_root_integration_round_trips_numpy_and_torch():

@@ -60,6 +60,7 @@ def describe(path: Path, fps: float | None = None, rig_map: Path | None = None) 
         "skipped_frames": rep.skip,
         "body_twist": rep.body_joints or [],
         "source_twist": rep.source_twist_joints,
+        "twist_rule": dict(rep.twist_rules or {}),
     }
 
 
@@ -84,6 +85,9 @@ def _info(args: argparse.Namespace) -> int:
     if out["source_twist"]:
         print("source twist  " + ", ".join(out["source_twist"]) + " (the rig lacks the points that define "
               "their twist: docs/skeleton.md, Body-defined twist)")
+    if out["twist_rule"]:
+        print("twist rule    " + ", ".join(f"{j} ({r})" for j, r in out["twist_rule"].items()) + " (the rig lacks "
+              "the points that define their twist; a documented rule stands in: docs/skeleton.md, Body-defined twist)")
     if out["folded"]:
         print("folded in     " + ", ".join(f"{c}: {'+'.join(v)}" for c, v in out["folded"].items()))
     return 0

@@ -42,7 +42,7 @@ from engine.motion import retarget_frames as RF
 from engine.motion.retarget_inputs import (  # noqa: F401 - re-exported: callers import them from here
     MODELS_DATA, RETARGET_VERSION, RETARGET_VERSIONS, _snap_fps, manifest_entry, manifest_fps, models_version,
     rest_frame_count)
-from engine.motion.retarget_rotations import rigid_hands, straightened_offsets, world_rotations
+from engine.motion.retarget_rotations import rigid_hands, straightened_offsets, tip_points, world_rotations
 from engine.motion.rigs import RigProfile, resolve_rig
 from engine.validation import SKELETON, check_value
 
@@ -85,6 +85,8 @@ class RetargetReport:
     version: int = RETARGET_VERSION
     #: Joints whose rotation the body defines; the other mapped joints keep the source's.
     body_joints: list | None = None
+    #: Body-defined joints whose defining points a documented rule stood in for: joint -> rule.
+    twist_rules: dict | None = None
 
     @property
     def source_twist_joints(self) -> list[str]:
@@ -255,7 +257,9 @@ def retarget(raw: RawBVH, fps: float | None = None, profile: RigProfile | None =
     leg_scale = leg / float(np.linalg.norm(sk.REST_OFFSETS[_LEG], axis=-1).sum())
     _check_height(raw.path, leg_scale)
 
-    glob, align, body_joints = world_rotations(prof, pts, wrot, idx, cq, version, rigid_hands(raw, prof))
+    hands = rigid_hands(raw, prof)
+    pts.update(tip_points(raw, prof, wpos, wrot, ends, hands))
+    glob, align, body_joints, rules = world_rotations(prof, pts, wrot, idx, cq, version, hands)
     joint_pts = {n: pts[n] for n in [*sk.JOINT_NAMES, "l_toe_tip", "r_toe_tip"] if n in pts}
     skel = sk.Skeleton(offsets=measure_offsets(joint_pts, glob, leg_scale))
     local = Q.unroll(Q.normalize(local_from_global(glob)), axis=0)
@@ -269,7 +273,7 @@ def retarget(raw: RawBVH, fps: float | None = None, profile: RigProfile | None =
     shift = _refloor(motion)
     report = RetargetReport(prof.name, len(raw.names), raw.total_frames, src_fps, skel.scale, prof, align, basis,
                             shift, skip, src_height, clip_height(motion, tips), tips, canonical, version,
-                            body_joints)  # fmt: skip
+                            body_joints, rules)  # fmt: skip
     return motion, report
 
 

@@ -20,8 +20,13 @@ show in the canonical rotations. The rules (``docs/skeleton.md``, *Body-defined 
   sole); **toe**: the toe's direction (to its tip) and the same shin reference;
 * **lower neck and head**: the head's direction and the face's eye line.
 
-A joint whose defining points the rig lacks keeps the source's rotation with one
-constant alignment (:mod:`engine.motion.retarget_frames`), and :func:`body_frames` says so.
+Where the rig lacks the defining points, a documented rule (:data:`RULES`) puts them on
+the body (:func:`engine.motion.retarget_rotations.rule_points`): a hand without knuckles
+that are its children but with an index (finger base) and a thumb takes its direction
+towards the index and its thumb side from the thumb's tip, both rigid with the hand; a
+head without eyes gets eyes where the canonical ones sit in the head's own frame. A joint
+that neither the body nor a rule defines keeps the source's rotation with one constant
+alignment (:mod:`engine.motion.retarget_frames`).
 """
 
 from __future__ import annotations
@@ -37,9 +42,21 @@ from engine.motion.retarget_frames import CANON_HINGE, CANON_LANDMARKS, frame
 #: :data:`FADE_DEG` of bend, so a bent limb's twist is its bending plane's alone.
 STRAIGHT = 0.2
 FADE_DEG = 30.0
+#: Angle (degrees) about the hand's direction from the thumb side (the knuckle line) to
+#: the thumb's tip, towards the palm: a hand frame built on the thumb is turned back by it.
+#: Measured on the shared takes on both rigs: the CMU rig's thumb rule against the
+#: knuckle lines of the iClone and Daz copies (docs/skeleton.md).
+THUMB_PALM_DEG = 75.0
 #: Canonical joints whose rotation the body rules define.
 BODY_JOINTS = tuple(f"{s}{j}" for s in "lr" for j in ("hip", "knee", "ankle", "toe", "shoulder", "elbow", "wrist")) + (
     "lowerneck", "upperneck")  # fmt: skip
+#: The documented rules for rigs without the defining points: (rule name, the points
+#: that stand in (:func:`engine.motion.retarget_rotations.rule_points`), the joints they define).
+RULES = (
+    ("thumb", ("l_hand_tip", "l_thumb_tip"), ("lwrist",)),
+    ("thumb", ("r_hand_tip", "r_thumb_tip"), ("rwrist",)),
+    ("head frame", ("l_eye", "r_eye"), ("lowerneck", "upperneck")),
+)
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -64,11 +81,28 @@ def _limb_reference(pts, a, b, c, straight: np.ndarray | None) -> np.ndarray | N
 
 def _hand(pts, s: str):
     """The wrist's (direction, thumb-side) pair of ``(F, 3)`` vectors, or None: towards
-    the knuckles' midpoint, and from the little finger's knuckle to the index's."""
+    the knuckles' midpoint, and from the little finger's knuckle to the index's; without
+    those, towards the index (finger base) and towards the thumb's tip (the ``thumb`` rule)."""
     w, index, pinky = f"{s}wrist", f"{s}_index", f"{s}_pinky"
-    if not all(k in pts for k in (w, index, pinky)):
-        return None
-    return pts[f"{s}_hand_mid"] - pts[w], pts[index] - pts[pinky]
+    if all(k in pts for k in (w, index, pinky)):
+        return pts[f"{s}_hand_mid"] - pts[w], pts[index] - pts[pinky]
+    if all(k in pts for k in (w, f"{s}_hand_tip", f"{s}_thumb_tip")):
+        return pts[f"{s}_hand_tip"] - pts[w], pts[f"{s}_thumb_tip"] - pts[w]
+    return None
+
+
+def _thumb_to_knuckles(b: np.ndarray, s: str) -> np.ndarray:
+    """A hand frame ``(F, 4)`` built on the thumb's tip turned back to the knuckle line's:
+    the tip sits :data:`THUMB_PALM_DEG` from the thumb side towards the palm (frame +z on
+    the left hand, -z on the right)."""
+    turn = np.radians(THUMB_PALM_DEG if s == "l" else -THUMB_PALM_DEG)
+    r = Q.from_axis_angle(np.array([1.0, 0.0, 0.0]), np.array(-turn))
+    return Q.mul(b, np.broadcast_to(r, b.shape))
+
+
+def rule_joints(points: dict) -> dict[str, str]:
+    """Joint -> the :data:`RULES` name whose stand-in points are all in ``points``."""
+    return {j: name for name, need, joints in RULES if all(k in points for k in need) for j in joints}
 
 
 def body_frames(pts: dict[str, np.ndarray], arm_straight: dict[str, np.ndarray] | None = None,
@@ -114,6 +148,8 @@ def body_frames(pts: dict[str, np.ndarray], arm_straight: dict[str, np.ndarray] 
         hand = _hand(pts, s)
         if hand is not None:
             out[f"{s}wrist"] = frame(*hand)[0]
+            if f"{s}_pinky" not in pts:
+                out[f"{s}wrist"] = _thumb_to_knuckles(out[f"{s}wrist"], s)
     if all(k in pts for k in ("l_eye", "r_eye", "upperneck", "lowerneck")):
         eyes = pts["l_eye"] - pts["r_eye"]
         out["lowerneck"] = frame(pts["upperneck"] - pts["lowerneck"], eyes)[0]

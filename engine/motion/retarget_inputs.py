@@ -17,7 +17,8 @@ from engine.kinematics import quaternion as Q
 from engine.validation import check_manifest, shown
 
 #: Bumped whenever retargeting gives different clips (prepared data is rebuilt then).
-#: 4: limbs, hands, feet and head take their twist from the body (:mod:`engine.motion.retarget_body`);
+#: 4: limbs, hands, feet and head take their twist from the body (:mod:`engine.motion.retarget_body`),
+#: through documented rules where the rig lacks the defining landmarks;
 #: 3: every joint keeps the source's rotation with one constant alignment per joint.
 RETARGET_VERSION = 4
 #: Definitions :func:`retarget` can still produce (models record the one they learnt).

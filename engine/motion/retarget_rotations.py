@@ -34,11 +34,102 @@ def rigid_hands(raw: RawBVH, prof: RigProfile) -> set[str]:
     return out
 
 
+def _chain_tip(raw: RawBVH, j: int, wpos: np.ndarray, wrot: np.ndarray, ends: dict, units: float) -> np.ndarray:
+    """World point ``(F, 3)`` at the end of joint ``j``'s first-child chain (its end site
+    when there is one)."""
+    while kids := [k for k in range(len(raw.names)) if raw.parents[k] == j]:
+        j = kids[0]
+    tip = wpos[:, j]
+    if j in ends:
+        tip = tip + Q.rotate(wrot[:, j], np.broadcast_to(np.asarray(ends[j]) * units, tip.shape))
+    return tip
+
+
+def tip_points(raw: RawBVH, prof: RigProfile, wpos: np.ndarray, wrot: np.ndarray, ends: dict,
+               hands: set[str]) -> dict[str, np.ndarray]:  # fmt: skip
+    """World points ``(F, 3)`` (canonical axes, metres) the rules for rigs without knuckles
+    or eyes need: the thumb's tip ``{s}_thumb_tip`` on the sides whose knuckles are not
+    rigid with the hand (not in ``hands``), and the head's top ``head_top``.
+
+    The thumb is the landmark ``{s}_thumb`` or else the wrist's descendant nearest it whose
+    name holds "thumb"; a tip is the end of the joint's first-child chain (the end site
+    when there is one). ``wpos`` / ``wrot`` ``(F, J, 3/4)`` are the source's world positions
+    and rotations, ``ends`` its end-site OFFSETs (source units) by joint index."""
+    out = {}
+    for s in ("l", "r"):
+        wrist = prof.joints.get(f"{s}wrist")
+        if s in hands or not wrist:
+            continue
+        w = raw.names.index(wrist)
+        below, depth = {w}, {w: 0}
+        for j in range(w + 1, len(raw.names)):  # BVH order: descendants follow their parent
+            if raw.parents[j] in below:
+                below.add(j)
+                depth[j] = depth[raw.parents[j]] + 1
+        named = prof.landmarks.get(f"{s}_thumb")
+        cands = [raw.names.index(named)] if named in raw.names else sorted(
+            (j for j in below if "thumb" in raw.names[j].lower()), key=lambda j: depth[j])  # fmt: skip
+        if cands:
+            out[f"{s}_thumb_tip"] = _chain_tip(raw, cands[0], wpos, wrot, ends, prof.units_to_m)
+    head = prof.joints.get("upperneck")
+    if head:
+        out["head_top"] = _chain_tip(raw, raw.names.index(head), wpos, wrot, ends, prof.units_to_m)
+    return out
+
+
+def _rigid(point: np.ndarray, origin: np.ndarray, rot: np.ndarray) -> np.ndarray:
+    """``point`` ``(F, 3)`` made rigid with the frame ``rot`` ``(F, 4)`` at ``origin``: its
+    mean over the clip in that frame, put back in the world every frame (fingers that the
+    rig animates about the hand then do not turn the hand's frame)."""
+    local = Q.rotate(Q.conjugate(rot), point - origin).mean(0)
+    return origin + Q.rotate(rot, np.broadcast_to(local, origin.shape))
+
+
+def rule_points(pts: dict, aligned: dict, wrot, idx, prof: RigProfile, hands: set[str]) -> dict[str, np.ndarray]:
+    """Points the documented rules put on the body where the rig lacks the defining ones.
+
+    * A hand whose knuckles are not its children but which has an index (finger base)
+      landmark and a thumb: the index joint (or, when it sits on the wrist, nothing) and
+      the thumb's tip, each made rigid with the source's hand joint (:func:`_rigid`):
+      ``{s}_hand_tip`` and ``{s}_thumb_tip``.
+    * A head without eyes: eyes placed where the canonical ones sit on a head whose up
+      direction is the source head's (towards its top: the end of its chain, or without one
+      the canonical head top on the source head's axes) and which faces as
+      the chest does (its left axis is the chest's, made square to the head's up): the
+      head turns with the chest and nods and tilts with its bone, with no twist of its
+      own. The source head joint's own twist is not used: on CMU takes converted to the
+      MotionBuilder rig it is turned up to 165 degrees from the chest (docs/skeleton.md)."""
+    out = {}
+    for s in ("l", "r"):
+        wrist = prof.joints.get(f"{s}wrist")
+        if s in hands or not wrist or f"{s}_index" not in pts or f"{s}_thumb_tip" not in pts:
+            continue
+        rot, origin = wrot[:, idx[wrist]], pts[f"{s}wrist"]
+        if np.median(np.linalg.norm(pts[f"{s}_index"] - origin, axis=-1)) < 0.01:
+            continue  # an index joint on the wrist gives no direction
+        out[f"{s}_hand_tip"] = _rigid(pts[f"{s}_index"], origin, rot)
+        out[f"{s}_thumb_tip"] = _rigid(pts[f"{s}_thumb_tip"], origin, rot)
+    torso = next((j for j in ("chest", "upperback", "lowerback", "root") if j in aligned), None)
+    if "l_eye" not in pts and "r_eye" not in pts and "upperneck" in pts and torso:
+        shape = pts["upperneck"].shape
+        up = pts["head_top"] - pts["upperneck"] if "head_top" in pts else (
+            Q.rotate(aligned["upperneck"], np.broadcast_to(sk.END_SITES["upperneck"], shape)))  # fmt: skip
+        left = Q.rotate(aligned[torso], np.broadcast_to([1.0, 0.0, 0.0], shape))
+        rest, _ = RF.frame(sk.END_SITES["upperneck"], np.array([1.0, 0.0, 0.0]))
+        head = Q.mul(RF.frame(up, left)[0], np.broadcast_to(Q.conjugate(rest), shape[:-1] + (4,)))
+        for lm in ("l_eye", "r_eye"):
+            out[lm] = pts["upperneck"] + Q.rotate(head, np.broadcast_to(RF.CANON_LANDMARKS[lm][1], shape))
+        out["eyes_mid"] = 0.5 * (out["l_eye"] + out["r_eye"])
+    return out
+
+
 def world_rotations(prof: RigProfile, pts, wrot, idx, cq, version: int, hands: set[str],
-                     ) -> tuple[np.ndarray, list, list]:  # fmt: skip
+                     ) -> tuple[np.ndarray, list, list, dict]:  # fmt: skip
     """Canonical world rotations (F, 22, 4), the per-joint constant alignment ``R`` with
-    ``G_c ~ G_s R`` (None for joints the rig lacks) and the joints whose rotation the body
-    defines (:mod:`engine.motion.retarget_body`, from version 4)."""
+    ``G_c ~ G_s R`` (None for joints the rig lacks), the joints whose rotation the body
+    defines (:mod:`engine.motion.retarget_body`, from version 4) and, among those, the
+    joints a documented rule defined (:data:`engine.motion.retarget_body.RULES`) with the
+    rule's name."""
     n = wrot.shape[0]
     frames = RF.bone_frames(pts) if prof.align else {}
     limbs = RF.limb_alignments(pts, {c: wrot[:, idx[s]] for c, s in prof.joints.items()}) if prof.align else {}
@@ -62,7 +153,12 @@ def world_rotations(prof: RigProfile, pts, wrot, idx, cq, version: int, hands: s
                     for j in ("lshoulder", "rshoulder") if j in aligned}  # fmt: skip
         loose = {f"{s}_{k}" for s in "lr" if s not in hands for k in ("index", "pinky", "hand_mid")}
         body_pts = {k: v for k, v in pts.items() if k not in loose}
+        extra = rule_points(pts, aligned, wrot, idx, prof, hands)
+        body_pts.update(extra)
         body = {j: q for j, q in RB.body_rotations(body_pts, straight).items() if j in prof.joints}
+        rules = {j: r for j, r in RB.rule_joints(extra).items() if j in body}
+    else:
+        rules = {}
     glob = np.zeros((n, sk.NUM_JOINTS, 4))
     for j, name in enumerate(sk.JOINT_NAMES):
         if name in body:
@@ -73,7 +169,7 @@ def world_rotations(prof: RigProfile, pts, wrot, idx, cq, version: int, hands: s
             glob[:, j] = aligned[name]
         else:
             glob[:, j] = glob[:, sk.PARENTS[j]]  # joint the rig lacks: identity local rotation
-    return glob, align, [j for j in RB.BODY_JOINTS if j in body]
+    return glob, align, [j for j in RB.BODY_JOINTS if j in body], rules
 
 
 def straightened_offsets(raw: RawBVH, prof: RigProfile) -> tuple[np.ndarray, dict]:

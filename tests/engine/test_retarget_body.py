@@ -220,16 +220,18 @@ def test_the_source_twist_a_child_undoes_changed_the_older_definition(rigs):
     assert worst[sk.JOINT_INDEX["lhip"]] > 30 and worst[sk.JOINT_INDEX["lknee"]] > 30
 
 
-def test_a_rig_without_face_or_knuckles_keeps_the_source_twist_and_says_so(rigs, tmp_path):
+def test_a_rig_without_face_or_fingers_uses_the_rules_and_says_so(rigs, tmp_path):
     from engine.motion.bvh import load_bvh
     from engine.motion.retarget import retarget
 
     full = rigs[4, "tpose"][1]
     assert full.source_twist_joints == [] and "lwrist" in full.body_joints and "upperneck" in full.body_joints
+    assert full.twist_rules == {}
     local, root = canonical_walk(60)
     text = write_rig(tmp_path / "bare.bvh", local, root, landmarks=False)
     rep = retarget(load_bvh(text), version=4)[1]
-    assert set(rep.source_twist_joints) == {"lwrist", "rwrist", "lowerneck", "upperneck"}
+    assert set(rep.source_twist_joints) == {"lwrist", "rwrist"}  # no finger at all: the hand keeps the source's
+    assert rep.twist_rules == {"lowerneck": "head frame", "upperneck": "head frame"}
 
 
 def test_models_version_comes_from_the_model_card(tmp_path):

@@ -17,6 +17,7 @@ from PyQt6.QtGui import QImage, QPainter, QPixmap
 from PyQt6.QtWidgets import QFileDialog, QMainWindow, QMenu
 
 from app import rig_maps
+from app.clip_saving import clip_edited
 from app.export import ReconstructionExport
 from engine.atomic import atomic_path, write_text
 from engine.errors import OutputError, RigError, UserError
@@ -64,6 +65,9 @@ class FileActions:
         self.ask_unmapped = rig_maps.ask_unmapped
         self.pick_rig_map = rig_maps.pick_rig_map
         self.tell = rig_maps.tell
+        #: ``confirm_discard(doing) -> bool`` before another file replaces the edits (the
+        #: window's unsaved-changes prompt; True goes ahead)
+        self.confirm_discard: Callable[[str], bool] = lambda doing: True
 
     # -- opening ------------------------------------------------------------------------
     def open_dialog(self) -> None:
@@ -72,10 +76,13 @@ class FileActions:
         if path:
             self.open_path(path)
 
-    def open_path(self, path: str | Path, rig_map: str | Path | None = None) -> bool:
+    def open_path(self, path: str | Path, rig_map: str | Path | None = None, ask: bool = True) -> bool:
         """Load ``path`` (with the joint mapping file ``rig_map``, else the one remembered
         for it); on error show a dialog and keep the current clip. A rig that cannot be
-        mapped leads to :meth:`_unmapped`."""
+        mapped leads to :meth:`_unmapped`. With ``ask``, unsaved edits are offered for
+        saving first (:attr:`confirm_discard`)."""
+        if ask and not self.confirm_discard("opening another clip"):
+            return False
         rig_map = rig_map or self.rig_maps.get(path)
         try:
             self.session.open(path, rig_map)
@@ -97,7 +104,7 @@ class FileActions:
         choice = self.ask_unmapped(self.w, str(path), str(exc))
         if choice == "pick":
             chosen = self.pick_rig_map(self.w, str(Path(path).parent))
-            return self.open_path(path, chosen) if chosen else False
+            return self.open_path(path, chosen, ask=False) if chosen else False
         if choice == "suggest":
             from engine.cli.rig import write_suggestion
 
@@ -197,9 +204,13 @@ class FileActions:
         except (OSError, ValueError) as exc:
             self.show_error("Cannot save scene", f"{path}: {exc}")
             return False
+        if not clip_edited(self.w):  # a re-solved clip is saved apart (app.clip_saving)
+            self.w.undo.stack.setClean()
         return True
 
     def load_scene(self, path: str | None = None) -> bool:
+        if not self.confirm_discard("loading another scene"):
+            return False
         if path is None:
             path, _ = QFileDialog.getOpenFileName(self.w, "Load scene", "", "Studio scene (*.json)")
             if not path:
@@ -213,6 +224,7 @@ class FileActions:
         except (OSError, ValueError, UserError) as exc:
             self.show_error("Cannot load scene", f"{path}: {exc}")
             return False
+        self.w.undo.stack.setClean()  # the scene as loaded is what is saved
         return True
 
     # -- screenshots ------------------------------------------------------------------

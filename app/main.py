@@ -29,9 +29,9 @@ def open_initial(window: MainWindow, path: str | None, sensors: str | None, rig_
 
     ok = False
     if path:
-        ok = window.files.open_path(path, rig_map)
+        ok = window.files.open_path(path, rig_map, ask=False)  # the start: nothing to lose
     elif EXAMPLE_CLIP.is_file():
-        ok = window.files.open_path(EXAMPLE_CLIP)
+        ok = window.files.open_path(EXAMPLE_CLIP, ask=False)
     if not ok:
         window.session.set_motion(demo_walk())
         window.statusBar().showMessage("No clip loaded: showing a procedural walk (File > Open a BVH)", 10000)
@@ -64,7 +64,7 @@ def apply_scene_file(window: MainWindow, scene_path: str, clip_given: bool) -> N
         if not isinstance(scene, dict):
             raise UserError("a scene is a JSON object")
         clip = scene.get("clip")
-        if clip and not clip_given and not window.files.open_path(str(clip)):
+        if clip and not clip_given and not window.files.open_path(str(clip), ask=False):
             raise UserError(f"cannot open its clip {clip}")
         window.session.apply_scene(scene, scene_path)
     except (OSError, ValueError) as exc:
@@ -115,6 +115,7 @@ def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
     if pace is not None:
         window.session.set_playback(pace=pace)
     window.actions_by_name[f"display-{view}"].setChecked(True)
+    window.undo.stack.setClean()  # what the command line set up is the start, nothing to save
     if screenshot is not None:
         window.resize(1600, 980)  # a reproducible layout, whatever geometry was saved
     if measure is not None:

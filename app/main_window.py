@@ -17,6 +17,7 @@ from typing import Any
 from PyQt6.QtCore import QSettings, Qt, QTimer, pyqtSignal
 from PyQt6.QtWidgets import QApplication, QDockWidget, QLabel, QMainWindow, QMessageBox, QTabWidget, QVBoxLayout, QWidget
 
+from app import clip_saving
 from app.busy import BusyNotice
 from app.camera_keys import CameraKeys
 from app.constraint_placement import placed_params
@@ -72,6 +73,7 @@ class MainWindow(QMainWindow):
         self.files = FileActions(self, self.session, self.settings, self.viewport, self.show_error)
         self.live = LiveActions(self, self.session, self.timeline, self.plots, self.settings, self.show_error)
         self.undo = SceneUndo(self.session, self)
+        self.files.confirm_discard = lambda doing: clip_saving.confirm_discard(self, doing)
         self.failures = FailureCountdown(self)
         self.snapshotDrawn.connect(self.failures.on_frame)
         self.ghost_status = GhostStatus(self)
@@ -231,6 +233,9 @@ class MainWindow(QMainWindow):
         self.timeline.set_pace(event.pace)
 
     def _show_motion(self, event: ev.MotionChanged) -> None:
+        if not self.undo.editing_clip:  # another clip: its frames are not the selected ones
+            self.timeline.set_selection(None)
+            self.opened_motion = event.motion  # what clip_saving compares against
         self.timeline.set_range(self.session.num_frames, event.motion.fps)
         self.plots.clear()
         self.method_errors.clear()
@@ -324,6 +329,9 @@ class MainWindow(QMainWindow):
         self._open_dropped([u.toLocalFile() for u in event.mimeData().urls() if u.isLocalFile()])
 
     def closeEvent(self, event: Any) -> None:
+        if not clip_saving.confirm_discard(self, "quitting"):
+            event.ignore()
+            return
         self.timer.stop()
         QApplication.instance().removeEventFilter(self.camera_keys)
         self.settings.setValue("geometry", self.saveGeometry())

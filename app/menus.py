@@ -13,7 +13,7 @@ from PyQt6.QtCore import Qt
 from PyQt6.QtGui import QAction, QActionGroup, QKeySequence
 from PyQt6.QtWidgets import QMainWindow, QMenu
 
-from app import authoring_actions, range_actions
+from app import authoring_actions, clip_saving, range_actions
 from widgets.help_dialog import HelpDialog
 
 
@@ -56,6 +56,7 @@ def build_menus(w: QMainWindow) -> None:
     file_menu.addSeparator()
     action(w, file_menu, "&Save reconstruction as BVH...", f.save_reconstruction, QKeySequence.StandardKey.Save)
     action(w, file_menu, "Save reconstruction onto the source &rig...", f.save_on_source_rig, "Ctrl+Alt+S")
+    named.update(clip_saving.add_menu_entries(w, file_menu, action))
     action(w, file_menu, "Save s&cene...", f.save_scene, "Ctrl+Shift+S")
     action(w, file_menu, "&Load scene...", f.load_scene, "Ctrl+L")
     action(w, file_menu, "Export screens&hot...", f.export_screenshot, "Ctrl+E")

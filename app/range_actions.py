@@ -1,6 +1,7 @@
 """Edit ▸ Re-solve range...: re-solve a frame range of the loaded clip, undoably.
 
-A dialog takes the range (start, end), the blend frames at each end and what to add:
+A dialog takes the range (start, end; the range selected on the timeline, when there is
+one), the blend frames at each end and what to add:
 feet held in floor contact (a ``floor`` constraint) and the scene's own constraints
 (each with its own frame range). :func:`engine.authoring.range_edit.edit_range` solves
 it; the clip is replaced by the result (same path, same frame) and the replacement is
@@ -18,15 +19,17 @@ from engine.errors import UserError
 
 
 class RangeDialog(QDialog):
-    """Range, blend and what to add; starts on the current frame."""
+    """Range, blend and what to add; starts on the timeline's selected range, else on
+    the current frame."""
 
-    def __init__(self, parent: Any, frames: int, current: int) -> None:
+    def __init__(self, parent: Any, frames: int, current: int, selection: tuple[int, int] | None = None) -> None:
         super().__init__(parent)
         self.setWindowTitle("Re-solve range")
         form = QFormLayout(self)
         last = max(0, frames - 1)
-        self.start = QSpinBox(minimum=0, maximum=last, value=min(current, last))
-        self.end = QSpinBox(minimum=0, maximum=last, value=min(current + 60, last))
+        start, end = selection if selection is not None else (current, current + 60)
+        self.start = QSpinBox(minimum=0, maximum=last, value=min(start, last))
+        self.end = QSpinBox(minimum=0, maximum=last, value=min(end, last))
         self.blend = QSpinBox(minimum=0, maximum=120, value=8, suffix=" frames")
         self.floor = QCheckBox("hold feet in floor contact", checked=True)
         self.scene = QCheckBox("the scene's constraints", checked=True)
@@ -70,7 +73,8 @@ def resolve_range_dialog(window: Any) -> None:
     if session.motion is None:
         QMessageBox.information(window, "Re-solve range", "Open a clip first.")
         return
-    dialog = RangeDialog(window, len(session.motion), session.frame)
+    dialog = RangeDialog(window, len(session.motion), session.frame, window.timeline.selection())
+    window.range_dialog = dialog  # tests answer it
     if dialog.exec() != QDialog.DialogCode.Accepted:
         return
     try:

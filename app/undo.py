@@ -113,9 +113,14 @@ class SceneUndo:
         finally:
             self._same_clip = was
 
+    @property
+    def editing_clip(self) -> bool:
+        """Whether the motion being set is the same clip edited (inside :meth:`same_clip`)."""
+        return getattr(self, "_same_clip", False)
+
     def _on_motion(self, e: Any) -> None:
         """A new clip starts a new history (offsets and failures were made for the old one)."""
-        if not getattr(self, "_same_clip", False):
+        if not self.editing_clip:
             self.stack.clear()
 
     # -- recording ------------------------------------------------------------------

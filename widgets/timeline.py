@@ -1,10 +1,13 @@
-"""Timeline: play/pause, step, scrub, speed, loop, playback pace and a frame counter."""
+"""Timeline: play/pause, step, scrub, a selectable frame range, speed, loop, playback pace
+and a frame counter."""
 
 from __future__ import annotations
 
 from PyQt6.QtCore import Qt, pyqtSignal
 from PyQt6.QtGui import QAction
-from PyQt6.QtWidgets import QCheckBox, QComboBox, QHBoxLayout, QLabel, QSlider, QStyle, QToolButton, QWidget
+from PyQt6.QtWidgets import QCheckBox, QComboBox, QHBoxLayout, QLabel, QStyle, QToolButton, QWidget
+
+from widgets.range_slider import RangeSlider
 
 SPEEDS = (0.25, 0.5, 1.0, 2.0)
 #: Playback paces (value, label, tooltip); the session's names.
@@ -20,7 +23,8 @@ class Timeline(QWidget):
     Signals
     -------
     playToggled(bool), stepRequested(int), seekRequested(int), speedChanged(float),
-    loopChanged(bool), paceChanged(str)
+    loopChanged(bool), paceChanged(str), selectionChanged(int, int) (a frame range
+    marked with Shift-click or Shift-drag; ``(-1, -1)`` when cleared)
     """
 
     playToggled = pyqtSignal(bool)
@@ -29,6 +33,7 @@ class Timeline(QWidget):
     speedChanged = pyqtSignal(float)
     loopChanged = pyqtSignal(bool)
     paceChanged = pyqtSignal(str)
+    selectionChanged = pyqtSignal(int, int)
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -43,7 +48,10 @@ class Timeline(QWidget):
         back.clicked.connect(lambda: self.stepRequested.emit(-1))
         fwd = QToolButton(icon=icon(QStyle.StandardPixmap.SP_MediaSkipForward), toolTip="Next frame (Right)")
         fwd.clicked.connect(lambda: self.stepRequested.emit(1))
-        self.slider = QSlider(Qt.Orientation.Horizontal, toolTip="Scrub")
+        self.slider = RangeSlider()
+        self.slider.setToolTip("Scrub; Shift-click or Shift-drag selects a frame range, right click clears it")
+        self.slider.selectionChanged.connect(self.selectionChanged.emit)
+        self.slider.setMinimumWidth(160)  # a frame range must stay pickable beside the wide docks
         self.slider.setRange(0, 0)
         self.slider.valueChanged.connect(self._on_slider)
         self.counter = QLabel("0 / 0")
@@ -106,8 +114,21 @@ class Timeline(QWidget):
         self._fps = fps
         self._updating = True
         self.slider.setRange(0, max(num_frames - 1, 0))
+        sel = self.slider.selection()
+        if sel is not None and sel[0] > self.slider.maximum():  # a shorter clip cuts the range
+            self.slider.set_selection(None)
+        elif sel is not None:
+            self.slider.set_selection(*sel)
         self._updating = False
         self._show_counter(self.slider.value())
+
+    def selection(self) -> tuple[int, int] | None:
+        """The selected frame range ``(start, end)``, inclusive, or None."""
+        return self.slider.selection()
+
+    def set_selection(self, start: int | None, end: int | None = None) -> None:
+        """Select ``start..end`` (None clears); emits ``selectionChanged`` if it changed."""
+        self.slider.set_selection(start, end)
 
     def set_frame(self, frame: int) -> None:
         """Show the engine's frame without emitting a seek (unless the user is dragging)."""

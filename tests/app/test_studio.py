@@ -76,13 +76,16 @@ def test_a_method_that_cannot_load_shows_a_dialog_and_keeps_the_old_one(studio, 
     assert studio.session.latest.method == before
 
 
-def test_scene_save_and_load(studio, qtbot, tmp_path):
+def test_scene_save_and_load(studio, qtbot, tmp_path, monkeypatch):
     joint = next(iter(studio.session.sensors))
     studio.session.update_sensor(joint, dof=3, weight=2.0)
     path = tmp_path / "scene.json"
     assert studio.files.save_scene(str(path))
     studio.session.update_sensor(joint, dof=6, weight=1.0)
+    asked = []  # the edit after the save is unsaved: loading asks, and it is discarded
+    monkeypatch.setattr(QMessageBox, "question", lambda *a: asked.append(a[1]) or QMessageBox.StandardButton.Discard)
     assert studio.files.load_scene(str(path))
+    assert asked == ["Unsaved changes"]
     assert studio.session.sensors[joint].dof == 3
     assert studio.sensor_panel.rows[joint]["dof"].currentText() == "3-DoF"
 

@@ -1,0 +1,96 @@
+"""Saving the studio's authoring edits: the edited clip as BVH, and the unsaved-changes prompt.
+
+A range re-solve (Edit ▸ Re-solve range) replaces the loaded clip in memory; File ▸ Save
+edited clip as BVH writes it as it is now, on the canonical skeleton or onto the rig of
+the file it was opened from (:func:`engine.motion.write_back.save_on_source_rig`),
+atomically, with no solver run (the reconstruction saves re-solve the clip instead).
+
+The window's undo stack says what is unsaved: any edit since the clip was opened or the
+scene saved or loaded (range re-solves, constraint and sensor edits) leaves it unclean,
+and quitting or opening another clip or scene then asks Save / Discard / Cancel. Save
+writes the scene and, when the clip was re-solved, the edited clip.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from PyQt6.QtWidgets import QFileDialog, QMenu, QMessageBox
+
+from engine.errors import UserError
+
+
+def clip_edited(window: Any) -> bool:
+    """Whether the loaded clip differs from the one opened (a range re-solve not undone)."""
+    session = window.session
+    return session.motion is not None and session.motion is not getattr(window, "opened_motion", session.motion)
+
+
+def save_clip(window: Any, path: str | Path, on_source_rig: bool = False) -> None:
+    """Write the loaded clip as it is now to ``path`` (BVH, atomically): on the canonical
+    skeleton, or with ``on_source_rig`` onto the hierarchy of the file it was opened from.
+
+    Raises
+    ------
+    UserError
+        With no clip, or ``on_source_rig`` for a clip not opened from a file (or a rig
+        whose channels cannot be written back).
+    """
+    from engine.studio.export import source_rig, write_reconstruction
+
+    session = window.session
+    if session.motion is None or session.source is not None:
+        raise UserError("open a clip first")
+    if on_source_rig and session.path is None:
+        raise UserError("this clip was not opened from a BVH file")
+    on_rig = source_rig(session.path, session.rig_map) if on_source_rig else None
+    write_reconstruction(path, session.motion, on_rig)
+
+
+def save_clip_dialog(window: Any, on_source_rig: bool = False) -> bool:
+    """Ask for a file and save the clip there; False when cancelled or failed."""
+    title = "Save edited clip" + (" onto the source rig" if on_source_rig else "")
+    path, _ = QFileDialog.getSaveFileName(window, title, window.files.suggested_name("bvh", "edited"),
+                                          "BVH motion (*.bvh)")  # fmt: skip
+    if not path:
+        return False
+    try:
+        save_clip(window, path, on_source_rig)
+    except (UserError, OSError) as exc:
+        window.show_error("Cannot save the clip", str(exc))
+        return False
+    window.statusBar().showMessage(f"Saved the clip to {path}", 8000)
+    return True
+
+
+def save_edits(window: Any) -> bool:
+    """Save the edited clip (if re-solved) and the scene, each asking for a file; the
+    edits then count as saved. False when a save was cancelled or failed."""
+    if clip_edited(window) and not save_clip_dialog(window):
+        return False
+    if not window.files.save_scene():
+        return False
+    window.undo.stack.setClean()
+    return True
+
+
+def confirm_discard(window: Any, doing: str) -> bool:
+    """Before ``doing`` (``"quitting"``, ``"opening another clip"``...): True when there
+    is nothing unsaved, or the user saved or discarded it; False to stay (Cancel)."""
+    if window.undo.stack.isClean():
+        return True
+    buttons = QMessageBox.StandardButton
+    what = "the re-solved clip and the scene" if clip_edited(window) else "the scene"
+    answer = QMessageBox.question(window, "Unsaved changes", f"Save the edits of {what} before {doing}?",
+                                  buttons.Save | buttons.Discard | buttons.Cancel)  # fmt: skip
+    if answer == buttons.Save:
+        return save_edits(window)
+    return answer == buttons.Discard
+
+
+def add_menu_entries(window: Any, file_menu: QMenu, action) -> dict:
+    """Add the edited clip's saves to ``file_menu`` with the menus' ``action`` helper."""
+    return {"save_clip": action(window, file_menu, "Save edited &clip as BVH...", lambda: save_clip_dialog(window)),
+            "save_clip_rig": action(window, file_menu, "Save edited clip onto the source r&ig...",
+                                    lambda: save_clip_dialog(window, True))}  # fmt: skip

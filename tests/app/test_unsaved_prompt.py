@@ -1,0 +1,93 @@
+"""The studio's unsaved-changes prompt: on quit, on opening another clip or scene, after edits."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+pytestmark = pytest.mark.gui
+
+
+@pytest.fixture
+def answer(monkeypatch):
+    """Answer the prompt with ``answer.next`` ("Save", "Discard", "Cancel"); ``answer.asked`` lists each prompt."""
+    from PyQt6.QtWidgets import QMessageBox
+
+    class Answer:
+        next = "Cancel"
+        asked: list[str] = []
+
+    def question(parent, title, text, buttons):
+        Answer.asked.append(text)
+        assert buttons & QMessageBox.StandardButton.Save and buttons & QMessageBox.StandardButton.Discard
+        return getattr(QMessageBox.StandardButton, Answer.next)
+
+    monkeypatch.setattr(QMessageBox, "question", question)
+    return Answer
+
+
+def _save_to(monkeypatch, paths: list):
+    from PyQt6.QtWidgets import QFileDialog
+
+    monkeypatch.setattr(QFileDialog, "getSaveFileName", lambda *a, **k: (str(paths.pop(0)), ""))
+
+
+def test_quit_with_no_edits_does_not_ask(studio, answer):
+    assert studio.close() and answer.asked == []
+
+
+def test_quit_after_a_constraint_edit_asks_and_cancel_keeps_the_window(studio, answer, qtbot):
+    studio.session.add_constraint("floor")
+    answer.next = "Cancel"
+    assert not studio.close() and studio.isVisible() and studio.engine.is_alive()
+    assert len(answer.asked) == 1 and "before quitting" in answer.asked[0]
+    answer.next = "Discard"
+    assert studio.close() and not studio.engine.is_alive()
+
+
+def test_quit_save_writes_the_scene(studio, answer, monkeypatch, tmp_path):
+    studio.session.add_constraint("floor")
+    _save_to(monkeypatch, [tmp_path / "s.json"])
+    answer.next = "Save"
+    assert studio.close()
+    assert [c["kind"] for c in json.loads((tmp_path / "s.json").read_text())["constraints"]] == ["floor"]
+
+
+def test_opening_a_clip_after_a_range_resolve_asks_cancel_keeps_save_writes_both(studio, answer, monkeypatch,
+                                                                                  tmp_path, synthetic_motion, qtbot):  # fmt: skip
+    from app.range_actions import resolve_range
+    from engine.motion.bvh import save_motion_bvh
+    from engine.studio.clips import load_clip
+
+    other = tmp_path / "other.bvh"
+    save_motion_bvh(other, synthetic_motion)
+    edited = resolve_range(studio, 30, 50, blend=4).motion
+    answer.next = "Cancel"
+    assert not studio.files.open_path(other)
+    assert studio.session.motion is edited and "re-solved clip" in answer.asked[-1]
+    _save_to(monkeypatch, [tmp_path / "edited.bvh", tmp_path / "scene.json"])
+    answer.next = "Save"
+    assert studio.files.open_path(other)
+    assert studio.session.path == other and studio.undo.stack.isClean()
+    def rel(m):  # loading re-floors the clip: compare poses about the first root
+        p = m.positions()
+        return p - p[:1, :1]
+
+    saved = rel(load_clip(tmp_path / "edited.bvh"))
+    assert np.allclose(saved, rel(edited), atol=1e-4)  # the edit, not the original
+    assert not np.allclose(saved[30:51], rel(synthetic_motion)[30:51], atol=1e-3)
+    assert (tmp_path / "scene.json").exists()
+    qtbot.waitUntil(lambda: studio.session.latest is not None, timeout=10000)
+
+
+def test_loading_a_scene_after_an_edit_asks_and_discard_loads_it(studio, answer, tmp_path):
+    scene = tmp_path / "s.json"
+    scene.write_text(json.dumps({"format": "dragposer-scene", "version": 1, "constraints": []}))
+    studio.session.add_constraint("floor")
+    answer.next = "Cancel"
+    assert not studio.files.load_scene(str(scene)) and len(studio.session.constraints) == 1
+    answer.next = "Discard"
+    assert studio.files.load_scene(str(scene)) and studio.session.constraints == []
+    assert studio.undo.stack.isClean() and "loading another scene" in answer.asked[-1]

@@ -1,0 +1,115 @@
+"""The timeline's scrub slider with a selectable frame range, drawn as a band.
+
+A plain press or drag scrubs as any slider does. With Shift held, a click marks the
+range from the current frame to the clicked one, and a drag marks the frames it sweeps;
+a right click clears the range. The range is what Edit ▸ Re-solve range acts on.
+"""
+
+from __future__ import annotations
+
+from PyQt6.QtCore import QPoint, Qt, pyqtSignal
+from PyQt6.QtGui import QColor, QMouseEvent, QPainter, QPaintEvent
+from PyQt6.QtWidgets import QSlider, QStyle, QStyleOptionSlider, QWidget
+
+#: A Shift-press that moves less than this (pixels) before release is a click.
+DRAG_START_PX = 4
+
+
+class RangeSlider(QSlider):
+    """Horizontal slider with a frame range; ``selectionChanged(start, end)`` on each
+    change (``(-1, -1)`` when cleared)."""
+
+    selectionChanged = pyqtSignal(int, int)
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(Qt.Orientation.Horizontal, parent)
+        self._selection: tuple[int, int] | None = None
+        self._press: tuple[int, int] | None = None  # x (pixels) and frame of a Shift-press
+
+    # -- the range ---------------------------------------------------------------
+    def selection(self) -> tuple[int, int] | None:
+        """``(start, end)`` frames, inclusive, start <= end; None when nothing is selected."""
+        return self._selection
+
+    def set_selection(self, start: int | None, end: int | None = None) -> None:
+        """Select ``start..end`` (clamped to the slider's range, either order); None clears."""
+        if start is None or end is None or self.maximum() < self.minimum():
+            new = None
+        else:
+            lo, hi = sorted((int(start), int(end)))
+            new = (max(lo, self.minimum()), min(hi, self.maximum()))
+        if new != self._selection:
+            self._selection = new
+            self.update()
+            self.selectionChanged.emit(*(new if new is not None else (-1, -1)))
+
+    def frame_at(self, x: int) -> int:
+        """The frame under horizontal pixel ``x`` (the handle's centre lands there)."""
+        opt = QStyleOptionSlider()
+        self.initStyleOption(opt)
+        style = self.style()
+        groove = style.subControlRect(QStyle.ComplexControl.CC_Slider, opt, QStyle.SubControl.SC_SliderGroove, self)
+        handle = style.subControlRect(QStyle.ComplexControl.CC_Slider, opt, QStyle.SubControl.SC_SliderHandle, self)
+        span = groove.width() - handle.width()
+        pos = x - groove.x() - handle.width() // 2
+        return QStyle.sliderValueFromPosition(self.minimum(), self.maximum(), pos, max(span, 1))
+
+    def _x_of(self, frame: int) -> int:
+        opt = QStyleOptionSlider()
+        self.initStyleOption(opt)
+        style = self.style()
+        groove = style.subControlRect(QStyle.ComplexControl.CC_Slider, opt, QStyle.SubControl.SC_SliderGroove, self)
+        handle = style.subControlRect(QStyle.ComplexControl.CC_Slider, opt, QStyle.SubControl.SC_SliderHandle, self)
+        span = max(groove.width() - handle.width(), 1)
+        return groove.x() + handle.width() // 2 + QStyle.sliderPositionFromValue(self.minimum(), self.maximum(), frame, span)
+
+    # -- mouse -------------------------------------------------------------------
+    def mousePressEvent(self, event: QMouseEvent | None) -> None:  # noqa: N802 (Qt's name)
+        if event is None:
+            return
+        x = int(event.position().x())
+        if event.button() == Qt.MouseButton.RightButton:
+            self.set_selection(None)
+            event.accept()
+            return
+        if event.button() == Qt.MouseButton.LeftButton and event.modifiers() & Qt.KeyboardModifier.ShiftModifier:
+            frame = self.frame_at(x)
+            self._press = (x, frame)
+            self.set_selection(self.value(), frame)  # a click: from the current frame
+            event.accept()
+            return
+        super().mousePressEvent(event)
+
+    def mouseMoveEvent(self, event: QMouseEvent | None) -> None:  # noqa: N802 (Qt's name)
+        if event is None:
+            return
+        if self._press is not None:
+            x = int(event.position().x())
+            if abs(x - self._press[0]) >= DRAG_START_PX:  # a drag: the frames swept
+                self.set_selection(self._press[1], self.frame_at(x))
+            event.accept()
+            return
+        super().mouseMoveEvent(event)
+
+    def mouseReleaseEvent(self, event: QMouseEvent | None) -> None:  # noqa: N802 (Qt's name)
+        if event is not None and self._press is not None:
+            self._press = None
+            event.accept()
+            return
+        super().mouseReleaseEvent(event)
+
+    # -- drawing -----------------------------------------------------------------
+    def paintEvent(self, event: QPaintEvent | None) -> None:  # noqa: N802 (Qt's name)
+        super().paintEvent(event)
+        if self._selection is None:
+            return
+        x0, x1 = self._x_of(self._selection[0]), self._x_of(self._selection[1])
+        painter = QPainter(self)
+        painter.setPen(QColor(255, 160, 40))
+        painter.setBrush(QColor(255, 160, 40, 90))
+        painter.drawRect(x0 - 2, 1, max(x1 - x0, 0) + 4, self.height() - 3)
+        painter.end()
+
+    def point_of(self, frame: int) -> QPoint:
+        """Where ``frame`` is drawn (tests click there)."""
+        return QPoint(self._x_of(frame), self.height() // 2)

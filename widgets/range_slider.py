@@ -43,25 +43,23 @@ class RangeSlider(QSlider):
             self.update()
             self.selectionChanged.emit(*(new if new is not None else (-1, -1)))
 
+    def _track(self) -> tuple[int, int]:
+        """Pixel x of the handle's centre at the first frame, and the pixels it travels."""
+        opt = QStyleOptionSlider()
+        self.initStyleOption(opt)
+        style = self.style()
+        groove = style.subControlRect(QStyle.ComplexControl.CC_Slider, opt, QStyle.SubControl.SC_SliderGroove, self)
+        handle = style.subControlRect(QStyle.ComplexControl.CC_Slider, opt, QStyle.SubControl.SC_SliderHandle, self)
+        return groove.x() + handle.width() // 2, max(groove.width() - handle.width(), 1)
+
     def frame_at(self, x: int) -> int:
         """The frame under horizontal pixel ``x`` (the handle's centre lands there)."""
-        opt = QStyleOptionSlider()
-        self.initStyleOption(opt)
-        style = self.style()
-        groove = style.subControlRect(QStyle.ComplexControl.CC_Slider, opt, QStyle.SubControl.SC_SliderGroove, self)
-        handle = style.subControlRect(QStyle.ComplexControl.CC_Slider, opt, QStyle.SubControl.SC_SliderHandle, self)
-        span = groove.width() - handle.width()
-        pos = x - groove.x() - handle.width() // 2
-        return QStyle.sliderValueFromPosition(self.minimum(), self.maximum(), pos, max(span, 1))
+        x0, span = self._track()
+        return QStyle.sliderValueFromPosition(self.minimum(), self.maximum(), x - x0, span)
 
     def _x_of(self, frame: int) -> int:
-        opt = QStyleOptionSlider()
-        self.initStyleOption(opt)
-        style = self.style()
-        groove = style.subControlRect(QStyle.ComplexControl.CC_Slider, opt, QStyle.SubControl.SC_SliderGroove, self)
-        handle = style.subControlRect(QStyle.ComplexControl.CC_Slider, opt, QStyle.SubControl.SC_SliderHandle, self)
-        span = max(groove.width() - handle.width(), 1)
-        return groove.x() + handle.width() // 2 + QStyle.sliderPositionFromValue(self.minimum(), self.maximum(), frame, span)
+        x0, span = self._track()
+        return x0 + QStyle.sliderPositionFromValue(self.minimum(), self.maximum(), frame, span)
 
     # -- mouse -------------------------------------------------------------------
     def mousePressEvent(self, event: QMouseEvent | None) -> None:  # noqa: N802 (Qt's name)

@@ -57,6 +57,9 @@ RULES = (
     ("thumb", ("r_hand_tip", "r_thumb_tip"), ("rwrist",)),
     ("head frame", ("l_eye", "r_eye"), ("lowerneck", "upperneck")),
 )
+#: A wrist with neither knuckles nor a finger base and thumb ("no twist",
+#: :func:`engine.motion.retarget_rotations.world_rotations`) keeps the swing of the
+#: source's hand relative to the forearm and no twist about the hand's direction.
 
 
 def _unit(v: np.ndarray) -> np.ndarray:

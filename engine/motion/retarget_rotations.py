@@ -123,6 +123,13 @@ def rule_points(pts: dict, aligned: dict, wrot, idx, prof: RigProfile, hands: se
     return out
 
 
+def _untwisted(q: np.ndarray, axis: np.ndarray) -> np.ndarray:
+    """Local rotations ``(F, 4)`` without their twist about ``axis`` (the swing alone)."""
+    a = np.asarray(axis, float) / np.linalg.norm(axis)
+    twist = Q.normalize(np.concatenate([q[:, :1], (q[:, 1:] @ a)[:, None] * a], axis=-1))
+    return Q.normalize(Q.mul(q, Q.conjugate(twist)))
+
+
 def world_rotations(prof: RigProfile, pts, wrot, idx, cq, version: int, hands: set[str],
                      ) -> tuple[np.ndarray, list, list, dict]:  # fmt: skip
     """Canonical world rotations (F, 22, 4), the per-joint constant alignment ``R`` with
@@ -165,6 +172,12 @@ def world_rotations(prof: RigProfile, pts, wrot, idx, cq, version: int, hands: s
             g = wrot[:, idx[prof.joints[name]]]
             glob[:, j] = body[name]
             align[j] = RF.mean_rotation(Q.mul(Q.conjugate(g), body[name]), np.ones(n))
+        elif prof.align and version >= 4 and name in ("lwrist", "rwrist") and name in aligned:
+            body[name] = glob[:, j] = Q.mul(glob[:, sk.PARENTS[j]], _untwisted(
+                Q.mul(Q.conjugate(glob[:, sk.PARENTS[j]]), aligned[name]), sk.END_SITES[name]))  # fmt: skip
+            g = wrot[:, idx[prof.joints[name]]]
+            align[j] = RF.mean_rotation(Q.mul(Q.conjugate(g), glob[:, j]), np.ones(n))
+            rules[name] = "no twist"
         elif name in aligned:
             glob[:, j] = aligned[name]
         else:

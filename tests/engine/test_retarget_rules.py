@@ -135,3 +135,28 @@ def test_info_names_the_rule_each_joint_used(tmp_path, capsys):
     assert out["source_twist"] == []
     assert main(["info", str(path)]) == 0
     assert "twist rule    lwrist (thumb), rwrist (thumb), lowerneck (head frame)" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("hand_axes", ["plain", "half_turn"])
+def test_a_hand_without_fingers_keeps_its_swing_and_no_twist(tmp_path, hand_axes):
+    """No knuckles, finger base or thumb: the wrist keeps the swing of the source's hand
+    relative to the forearm and no twist about the hand's direction, whichever way the
+    rig's hand axes are turned about the bone."""
+    from engine.motion.bvh import load_bvh
+    from engine.motion.joint_stats import twist_deg
+    from engine.motion.retarget import retarget
+
+    local, root = canonical_walk(90)
+    truth = retarget(load_bvh(write_rig(tmp_path / "k.bvh", local, root)), version=4)[0]
+    half = {n: _axis_angle(sk.END_SITES[j] / np.linalg.norm(sk.END_SITES[j]), 180.0)  # about the hand's direction
+            for n, j in (("LeftHand", "lwrist"), ("RightHand", "rwrist"))} if hand_axes == "half_turn" else {}  # fmt: skip
+    motion, rep = retarget(load_bvh(write_rig(tmp_path / "bare.bvh", local, root, landmarks=False, frames_c=half)),
+                           version=4)  # fmt: skip
+    assert rep.twist_rules["lwrist"] == rep.twist_rules["rwrist"] == "no twist"
+    for joint in ("lwrist", "rwrist"):
+        k, axis = sk.JOINT_INDEX[joint], sk.END_SITES[joint]
+        assert np.abs(twist_deg(motion.local_rot[:, k], axis)).max() < 1e-6
+        bone = np.broadcast_to(axis / np.linalg.norm(axis), (len(local), 3))
+        a, b = Q.rotate(motion.local_rot[:, k], bone), Q.rotate(truth.local_rot[:, k], bone)
+        assert np.degrees(np.arccos(np.clip((a * b).sum(-1), -1, 1))).max() < 1.0, joint
+        assert np.abs(twist_deg(truth.local_rot[:, k], axis)).max() > 10  # the truth does twist

@@ -6,7 +6,8 @@ creates a target there and moves it; a drag on a target's sphere moves it; every
 move solves the pose again (the continuous solve, on the GUI thread: a few milliseconds
 with targets only). The target list enables, weights and clears targets; the key strip
 adds the current pose as a key at the current frame (its latent and targets), moves and
-deletes keys and sets the length and rate; Preview bakes the keys and plays them.
+deletes keys and sets the length and rate; Preview bakes the keys and plays them. The
+Constraints dock adds any constraint kind to the pose (:mod:`app.pose_constraints`).
 Every edit (targets, keys, length, rate) is one undo step (Ctrl+Z / Ctrl+Shift+Z);
 closing with unsaved edits asks first. Export writes the bake as BVH or MP4.
 """
@@ -25,6 +26,7 @@ from PyQt6.QtWidgets import (
     QApplication, QDockWidget, QFileDialog, QMainWindow, QMessageBox, QProgressDialog, QWidget,
 )  # fmt: skip
 
+from app.pose_constraints import PoseConstraints
 from app.undo import StateCommand
 from engine import skeleton as sk
 from engine.authoring.bake import bake
@@ -78,6 +80,7 @@ class PoseWindow(QMainWindow):
         self.targets.clearRequested.connect(self.clear_target)
         self.targets.clearAllRequested.connect(self.clear_all)
         self._dock("Targets", self.targets, Qt.DockWidgetArea.RightDockWidgetArea)
+        self.constraints = PoseConstraints(self)
         self.keys = KeyStrip()
         self.keys.frameChanged.connect(self.go_to)
         self.keys.addRequested.connect(self.add_key)
@@ -126,10 +129,11 @@ class PoseWindow(QMainWindow):
     def _state(self) -> tuple:
         a = self.scene.animation
         return (copy.deepcopy(self.mode.targets), copy.deepcopy(self.scene.keys), (a.frames, a.fps, a.interpolation),
-                self.mode.pose)  # fmt: skip
+                self.mode.pose, self.constraints.state())  # fmt: skip
 
     def _restore(self, state: tuple) -> None:
-        targets, keys, (frames, fps, interpolation), pose = state
+        targets, keys, (frames, fps, interpolation), pose, constraints = state
+        self.constraints.restore(constraints)
         self.mode.targets, self.scene.keys = copy.deepcopy(targets), copy.deepcopy(keys)
         a = self.scene.animation
         a.frames, a.fps, a.interpolation = frames, fps, interpolation
@@ -358,6 +362,7 @@ class PoseWindow(QMainWindow):
         self.targets.set_targets({j: (x.enabled, x.weight, x.rotation is not None) for j, x in t.items()})
         a = self.scene.animation
         self.keys.set_state(a.frames, a.fps, tuple(k.frame for k in self.scene.keys), self.frame, a.interpolation)
+        self.constraints.refresh()
         self._show_positions(self.mode.pose.positions)
 
     def closeEvent(self, event: QCloseEvent | None) -> None:  # noqa: N802 (Qt's name)

@@ -345,19 +345,15 @@ def create(mode: str = "realtime", iterations: int | None = None, lr: float | No
     UserError
         When the models cannot be loaded (the message says why).
     """
-    try:
-        from engine.models import load_default_models  # type: ignore[attr-defined]
-    except ImportError as exc:
-        raise UserError(f"dragposer: the model loader is not available yet ({exc})") from exc
-    if vae_path is not None:
-        from engine.models import load_models
+    from engine.models import load_default_models, load_models
 
+    if vae_path is not None:
         models = load_models(vae_path, predictor_path)
     elif predictor_path is not None:
         raise UserError("a predictor path needs the VAE it was trained on (vae_path)")
     else:
         models = load_default_models()
-    decoder, predictor = _unpack_models(models)
+    decoder, predictor = models.vae, models.predictor
     # the shipped pose bank holds the shipped VAE's latents: a user's VAE goes without it
     bank = default_bank() if vae_path is None else None
     if bank is not None:  # the presets' lookups ready before their first frame (no cold start)
@@ -367,7 +363,7 @@ def create(mode: str = "realtime", iterations: int | None = None, lr: float | No
         values["iterations" if mode == "realtime" else "max_iterations"] = iterations
     if lr is not None:
         values["lr"] = lr
-    return DragPoserMethod(decoder, predictor, latent_dim=_latent_dim(decoder), bank=bank, **values)
+    return DragPoserMethod(decoder, predictor, latent_dim=decoder.config.latent, bank=bank, **values)
 
 
 def preset_combinations() -> list[tuple[str, ...]]:
@@ -377,15 +373,3 @@ def preset_combinations() -> list[tuple[str, ...]]:
 
     combos = (combination(s.joint for s in sensors if s.dof == 6) for sensors in PRESET_SENSORS.values())
     return list(dict.fromkeys(c for c in combos if c is not None))
-
-
-def _unpack_models(models: Any) -> tuple[Any, Any]:
-    """``(decoder, predictor)`` from ``engine.models.ModelBundle`` (``.vae``, ``.predictor``)."""
-    if isinstance(models, tuple):
-        return models[0], models[1] if len(models) > 1 else None
-    return models.vae, getattr(models, "predictor", None)
-
-
-def _latent_dim(decoder: Any) -> int:
-    cfg = getattr(decoder, "config", None)
-    return int(getattr(cfg, "latent", 24))

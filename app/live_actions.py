@@ -77,6 +77,8 @@ class LiveActions:
 
     # -- File menu ----------------------------------------------------------------------
     def connect_dialog(self) -> None:
+        if not self.w.files.confirm_discard("connecting a live source"):
+            return
         dlg = ConnectDialog(self.w, port=int(self.settings.value("live_port", 39539)))
         if dlg.exec() != QDialog.DialogCode.Accepted:
             return
@@ -95,6 +97,8 @@ class LiveActions:
         return True
 
     def open_recording_dialog(self) -> None:
+        if not self.w.files.confirm_discard("opening a tracker recording"):
+            return
         path, _ = QFileDialog.getOpenFileName(self.w, "Open tracker recording", "", "Tracker recording (*.jsonl)")
         if path:
             self.open_recording(path)

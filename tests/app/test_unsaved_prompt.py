@@ -91,3 +91,17 @@ def test_loading_a_scene_after_an_edit_asks_and_discard_loads_it(studio, answer,
     answer.next = "Discard"
     assert studio.files.load_scene(str(scene)) and studio.session.constraints == []
     assert studio.undo.stack.isClean() and "loading another scene" in answer.asked[-1]
+
+
+def test_opening_a_tracker_recording_after_an_edit_asks_first(studio, answer, monkeypatch):
+    from PyQt6.QtWidgets import QFileDialog
+
+    asked_for_file = []
+    monkeypatch.setattr(QFileDialog, "getOpenFileName", lambda *a, **k: asked_for_file.append(a) or ("", ""))
+    studio.session.add_constraint("floor")
+    answer.next = "Cancel"
+    studio.live.open_recording_dialog()
+    assert asked_for_file == [] and "tracker recording" in answer.asked[-1]
+    answer.next = "Discard"
+    studio.live.open_recording_dialog()
+    assert len(asked_for_file) == 1

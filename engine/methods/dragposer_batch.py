@@ -9,10 +9,12 @@ came out at 0.90 cm / 6.29 deg against 0.83 / 5.87 frame by frame, because a fra
 start decides where the solve ends. Instead the clip is cut into segments of
 :data:`SEGMENT` frames and the segments' frames are solved side by side
 (:func:`engine.solver.batch.solve_streams`), each segment carrying its own state exactly
-as the frame-by-frame solve does. A segment first solves the :data:`WARMUP` frames before
-it (results dropped) so that its first frame starts from a solved neighbour, not cold.
-Each frame then gets the same after-solve steps (limbs onto their trackers, tracker
-rotations) as in a frame-by-frame solve.
+as the frame-by-frame solve does. A segment after the first starts from the pose bank's
+latent and first solves the :data:`WARMUP` frames before it, so that its first kept frame
+starts from a solved neighbour, not cold; those frames' solutions are dropped but for the
+last :data:`FADE`, into which the previous segment's solution is cross-faded (a step at
+each segment's start otherwise adds jitter). Each frame gets the same after-solve steps
+(limbs onto their trackers, tracker rotations) as in a frame-by-frame solve.
 
 A clip is batched when the method is in offline mode on its fast path with no user
 constraint, every frame has the same connected trackers, among them a 6-DoF hip
@@ -33,6 +35,7 @@ import torch
 
 from engine import skeleton as sk
 from engine.kinematics import quat_np as QN
+from engine.kinematics.fk import fk
 from engine.methods.base import FrameResult
 from engine.sensors import SensorFrame
 from engine.solver.batch import BatchDecoder, BatchPose, FrameTerms, solve_streams
@@ -46,8 +49,17 @@ STREAMS = 32
 #: Frames a segment solves in order, at least. Shorter segments put more frames in each
 #: decoder pass, and solve more warm-up frames twice.
 SEGMENT = 16
-#: Frames before its first that a segment solves first and drops.
-WARMUP = 4
+#: Frames before its first that a segment solves first (at most :data:`SEGMENT`). They are
+#: the previous segment's last frames, and the two solutions are cross-faded over them.
+WARMUP = 8
+#: Cross-fade the overlap's last :data:`FADE` frames (the previous segment's solution to
+#: this segment's warm-up solution, by slerp of the local rotations) instead of cutting at
+#: the segment's start. The warm-up's first frames, started cold, are not blended in.
+CROSSFADE = True
+FADE = 2
+#: A segment after the first starts from the pose bank's latent of its first warm-up frame
+#: (the clip's first frame starts from the mean latent, as frame by frame).
+PRIOR_START = True
 
 
 def solve_clip(m: Any, frames: Sequence[SensorFrame]) -> list[FrameResult] | None:
@@ -80,14 +92,18 @@ def _solve_clip(m: Any, frames: Sequence[SensorFrame]) -> list[FrameResult] | No
     n = len(frames)
     seg = max(SEGMENT, -(-n // STREAMS))
     keep_from = list(range(0, n, seg))  # each segment's first kept frame
-    first = [max(0, a - WARMUP) for a in keep_from]
+    first = [max(0, a - min(WARMUP, seg)) for a in keep_from]  # warm-up within the previous segment
     end = [min(n, a + seg) for a in keep_from]
     c_all = len(keep_from)
     at = [f - 1 for f in first]  # each segment's current frame
     hist: list[list[np.ndarray]] = [[] for _ in range(c_all)]  # its last two finished poses
-    z = np.zeros((c_all, m.latent_dim), np.float32)  # a segment's first frame starts from the mean latent
+    z = np.zeros((c_all, m.latent_dim), np.float32)  # the clip's first frame starts from the mean latent
+    if PRIOR_START:
+        for c in range(1, c_all):
+            z[c] = read[first[c]]["prior"]
     terms = _terms([read[0]] * c_all)
     results: list[FrameResult | None] = [None] * n
+    overlap: dict[int, np.ndarray] = {}  # frame -> the next segment's warm-up local rotations
     decoder, pose = BatchDecoder(fast.decoder), BatchPose(m.skeleton.offsets, fast.decoder)
     names = [*terms.names, "smooth", "ground", "temporal_prior"]
 
@@ -104,6 +120,8 @@ def _solve_clip(m: Any, frames: Sequence[SensorFrame]) -> list[FrameResult] | No
         f = at[c]
         local, pos = _finished(m, read[f], *pose.row(c)[::-1])
         hist[c] = [*hist[c][-1:], pos]
+        if f < keep_from[c] and CROSSFADE:
+            overlap[f] = local
         if f >= keep_from[c]:
             values = pose.values[c]
             losses = {**dict(zip(names, values.tolist())), "total": float(pose.term_weights()[c] @ values)}
@@ -114,6 +132,9 @@ def _solve_clip(m: Any, frames: Sequence[SensorFrame]) -> list[FrameResult] | No
     lr = s.step_size if rule == "sgd" else s.lr
     solve_streams(decoder, pose, terms, z, rule, lr, s.max_iterations, s.patience, s.min_improvement, load, done)
     ms = 1000.0 * (time.perf_counter() - t0) / n
+    for a, b in zip(first[1:], keep_from[1:]):
+        a = max(a, b - FADE)
+        _crossfade(results[a:b], [overlap[f] for f in range(a, b) if f in overlap], m.skeleton.offsets)
     out = [r for r in results if r is not None]
     m.reset(m.skeleton, m.fps)  # the segments leave no single history to continue from
     if not all(np.isfinite(r.positions).all() for r in out):
@@ -121,6 +142,24 @@ def _solve_clip(m: Any, frames: Sequence[SensorFrame]) -> list[FrameResult] | No
     for res in out:
         res.ms = ms  # the clip's solve time shared by its frames
     return out
+
+
+def _crossfade(own: Sequence[FrameResult | None], warm: list[np.ndarray], offsets: np.ndarray) -> None:
+    """Blend the ``W`` frames ``own`` (the previous segment's last, in order) towards
+    ``warm`` (the next segment's warm-up solutions of the same frames, local rotations
+    ``(22, 4)``) with weights ``1/(W+1) .. W/(W+1)``, so the next segment's first kept
+    frame follows on without a step; positions are recomputed by forward kinematics
+    (the root position is the hip tracker's in both)."""
+    if not warm or len(warm) != len(own) or any(r is None for r in own):
+        return
+    alpha = np.arange(1, len(own) + 1) / (len(own) + 1.0)
+    q0 = np.array([r.local_rot for r in own])
+    q1 = np.array(warm)
+    q1 = q1 * np.where((q0 * q1).sum(-1, keepdims=True) < 0, -1.0, 1.0)  # one hemisphere per joint
+    blend = QN.slerp(q0, q1, alpha[:, None, None])
+    pos, _ = fk(blend, np.array([r.root_pos for r in own]), offsets)
+    for r, q, p in zip(own, blend, pos):
+        r.local_rot, r.positions, r.root_pos = q, p, p[0].copy()
 
 
 def _finished(m: Any, r: dict, local: np.ndarray, pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

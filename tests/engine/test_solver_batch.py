@@ -111,3 +111,59 @@ def test_the_batched_gradient_is_the_derivative_of_the_batched_loss(clip):
             up[f, d] += 1e-3
             down[f, d] -= 1e-3
             assert (total(up) - total(down)) / 2e-3 == pytest.approx(grad[a, d], rel=0.02, abs=2e-3)
+
+
+def test_the_overlap_is_cross_faded_from_the_previous_segment_to_the_next():
+    from engine.kinematics.fk import fk
+    from engine.methods.base import FrameResult
+
+    offsets = np.tile([0.0, 0.1, 0.0], (22, 1))
+    own_q = np.tile([1.0, 0.0, 0.0, 0.0], (22, 1))
+    turn = np.tile([np.cos(0.4), 0.0, 0.0, -np.sin(0.4)], (22, 1))  # 0.8 rad about x
+    own = [FrameResult(local_rot=own_q.copy(), root_pos=np.zeros(3), positions=np.zeros((22, 3))) for _ in range(3)]
+    DB._crossfade(own, [turn] * 3, offsets)
+    angle = [2 * np.arccos(np.clip(abs(r.local_rot[5, 0]), 0, 1)) for r in own]
+    assert np.allclose(angle, [0.2, 0.4, 0.6])  # 1/4, 2/4, 3/4 of the way to the next segment's pose
+    for r in own:
+        assert np.allclose(r.positions, fk(r.local_rot, r.root_pos, offsets)[0])
+
+
+def test_segment_starts_step_less_with_the_cross_fade(clip, monkeypatch):
+    from engine.tracking import simulate
+
+    tr = simulate(clip, "6")
+    monkeypatch.setattr(DB, "SEGMENT", 8)
+    monkeypatch.setattr(DB, "WARMUP", 6)
+    steps = {}
+    for fade in (False, True):
+        monkeypatch.setattr(DB, "CROSSFADE", fade)
+        rec, _ = run_method(_offline(), tr, clip.skeleton, progress=False)
+        jump = np.linalg.norm(np.diff(rec.positions(), axis=0), axis=-1).max(1)  # per frame pair, m
+        steps[fade] = jump[[7, 15, 23, 31]].mean()  # into each segment's first frame (8, 16, 24, 32)
+    assert steps[True] < steps[False]
+
+
+@pytest.mark.parametrize("prior_start", [False, True])
+def test_later_segments_start_from_the_bank_latent_of_their_first_warm_up_frame(clip, monkeypatch, prior_start):
+    from engine.tracking import simulate
+
+    tr = simulate(clip, "6")
+    monkeypatch.setattr(DB, "SEGMENT", 8)
+    monkeypatch.setattr(DB, "PRIOR_START", prior_start)
+    starts = []
+    solve = DB.solve_streams
+
+    def record(dec, pose, terms, z, *rest):
+        starts.append(z.copy())
+        return solve(dec, pose, terms, z, *rest)
+
+    monkeypatch.setattr(DB, "solve_streams", record)
+    frames = [tr.frame(i) for i in range(len(tr))]
+    assert _offline().solve_clip(frames) is not None
+    read = DB._read_all(_offline(), frames)
+    w = min(DB.WARMUP, 8)
+    z0 = starts[0]
+    assert not z0[0].any()  # the clip's first frame: the mean latent, as frame by frame
+    for c in range(1, 5):
+        want = read[8 * c - w]["prior"] if prior_start else np.zeros_like(z0[c])
+        assert np.allclose(z0[c], want, atol=1e-6)

@@ -24,7 +24,8 @@ from engine.errors import UserError
 def clip_edited(window: Any) -> bool:
     """Whether the loaded clip differs from the one opened (a range re-solve not undone)."""
     session = window.session
-    return session.motion is not None and session.motion is not getattr(window, "opened_motion", session.motion)
+    opened = window.opened_motion
+    return session.motion is not None and opened is not None and session.motion is not opened
 
 
 def save_clip(window: Any, path: str | Path, on_source_rig: bool = False) -> None:

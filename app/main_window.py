@@ -65,6 +65,7 @@ class MainWindow(QMainWindow):
         self.setAcceptDrops(True)
         self.settings = settings or QSettings("dragposer-studio", "studio")
         self.session = Session(method=method)
+        self.opened_motion = None  # the clip as opened, which a range re-solve replaces
         self._build_widgets()
         self.busy = BusyNotice(self.viewport, self.statusBar())
         self.busy.begin(method, -1, "Starting")

@@ -85,6 +85,7 @@ class SceneUndo:
         self._sensors = (tuple(session.sensors.values()), session.preset)
         self._constraints = tuple(session.constraints)
         self._applying = False
+        self._same_clip = False
         session.events.sensors.connect(self._on_sensors)
         session.events.constraints.connect(self._on_constraints)
         session.events.motion.connect(self._on_motion)
@@ -107,7 +108,7 @@ class SceneUndo:
     def same_clip(self) -> Iterator[None]:
         """A motion set inside is the same clip edited (a range re-solve and its undo):
         the history is kept."""
-        was, self._same_clip = getattr(self, "_same_clip", False), True
+        was, self._same_clip = self._same_clip, True
         try:
             yield
         finally:
@@ -116,7 +117,7 @@ class SceneUndo:
     @property
     def editing_clip(self) -> bool:
         """Whether the motion being set is the same clip edited (inside :meth:`same_clip`)."""
-        return getattr(self, "_same_clip", False)
+        return self._same_clip
 
     def _on_motion(self, e: Any) -> None:
         """A new clip starts a new history (offsets and failures were made for the old one)."""

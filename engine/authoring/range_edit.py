@@ -28,7 +28,9 @@ from engine.authoring.bake import active_constraints
 from engine.authoring.character import Character
 from engine.authoring.pose_mode import encode_frames
 from engine.constraints.base import Constraint
+from engine.constraints.end_effector import EndEffectorConstraint
 from engine.constraints.floor import FloorConstraint
+from engine.constraints.pin import PinConstraint
 from engine.constraints.smooth import SmoothConstraint
 from engine.errors import UserError
 from engine.kinematics import quat_np as QN
@@ -137,9 +139,11 @@ def _exact_steps(local: np.ndarray, motion: Motion, constraints: list[Constraint
         for ankle in [a for a in held if a not in targets]:
             del held[ankle]  # the foot lifted: a new contact starts where it lands
         for c in constraints:
+            if not isinstance(c, (PinConstraint, EndEffectorConstraint)):
+                continue  # only these hold one joint at a position
             a = c.activity(f) if c.enabled else 0.0
-            j = sk.JOINT_INDEX.get(getattr(c, "joint", ""), -1)
-            p = getattr(c, "position", None)
+            j = sk.JOINT_INDEX.get(c.joint, -1)
+            p = c.position
             if a > 0 and j in LIMBS and p is not None and np.shape(p) == (3,) and np.isfinite(p).all():
                 targets[j] = pos[j] + a * (np.asarray(p, float) - pos[j])
         if targets:

@@ -111,7 +111,7 @@ class SensorConstraint(Constraint):
         six = [k for k, c in enumerate(items) if c.dof == 6]
         rot_idx = idx[six]
         rot_w = vec([items[k].rotation_weight for k in six], like)
-        quats = [_unit(items[k].rotation) for k in six]  # no 6-DoF sensor (e.g. 6x3dof): none
+        quats = [unit_rotation(items[k].rotation) for k in six]  # no 6-DoF sensor (e.g. 6x3dof): none
         rot_t = Q.to_matrix(vec(np.stack(quats) if quats else np.zeros((0, 4)), like))
         six_t = torch.tensor(six, dtype=torch.long)
 
@@ -129,7 +129,9 @@ class SensorConstraint(Constraint):
         return {"type": "point", "position": np.asarray(self.position, float).copy()}
 
 
-def _unit(q: np.ndarray) -> np.ndarray:
+def unit_rotation(q: Any) -> np.ndarray:
+    """A tracker's rotation ``(4,)`` as the sensor term takes it: float64, unit length
+    (a zero quaternion stays finite)."""
     q = np.asarray(q, dtype=np.float64)
     return q / max(float(np.linalg.norm(q)), 1e-12)
 

@@ -34,6 +34,7 @@ import numpy as np
 import torch
 
 from engine import skeleton as sk
+from engine.constraints.sensor import unit_rotation
 from engine.kinematics import quat_np as QN
 from engine.kinematics.fk import fk
 from engine.methods.base import FrameResult
@@ -212,11 +213,11 @@ def _read(m: Any, frame: SensorFrame) -> dict | None:
         "six": [k for k, c in enumerate(live) if c.dof == 6],
         "pos": np.array([c.position for c in live], dtype=np.float64),
         "weight": np.array([c.weight for c in live]),
-        "rot": np.array([_unit(c.rotation) for c in six]).reshape(-1, 4),
+        "rot": np.array([unit_rotation(c.rotation) for c in six]).reshape(-1, 4),
         "rot_weight": np.array([c.rotation_weight for c in six]),
         "pos_tol2": np.array([c.position_tolerance**2 for c in live]),
         "rot_tol": np.array([math.sin(math.radians(c.rotation_tolerance) / 2) ** 2 for c in six]),
-        "root": (np.array(hip.position, dtype=np.float64), _unit(hip.rotation)),
+        "root": (np.array(hip.position, dtype=np.float64), unit_rotation(hip.rotation)),
         "bank": readings,  # the pose bank's lookup, made for all frames at once
         "prior_weight": s.tracker_prior_weight,
         "feet": any(m.sensors[j].enabled for j in ("lankle", "rankle") if j in m.sensors),
@@ -228,11 +229,6 @@ def _read(m: Any, frame: SensorFrame) -> dict | None:
 
 def _copied(targets: dict[int, Any]) -> dict[int, np.ndarray]:
     return {k: np.array(v, dtype=np.float64) for k, v in targets.items()}
-
-
-def _unit(q: Any) -> np.ndarray:
-    q = np.asarray(q, dtype=np.float64)
-    return q / max(float(np.linalg.norm(q)), 1e-12)
 
 
 def _terms(chunk: list[dict]) -> FrameTerms:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import tomllib
 import typing
 from pathlib import Path
@@ -34,6 +35,10 @@ def load_config(cls: type, path: Path | None = None, overrides: list[str] | None
     return cls(**values)
 
 
+_INT = re.compile(r"[+-]?[0-9]+")
+_FLOAT = re.compile(r"[+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?|[+-]?(inf|nan)", re.IGNORECASE)
+
+
 def parse_overrides(cls: type, overrides: list[str] | None) -> dict[str, Any]:
     """``["key=value", ...]`` -> ``{key: value}`` typed by the fields of dataclass ``cls``;
     an unknown key or a value of the wrong type raises :class:`UserError` naming it."""
@@ -56,7 +61,13 @@ def _convert(key: str, raw: str, hint: Any) -> Any:
             if raw.lower() not in ("true", "false", "1", "0"):
                 raise ValueError(raw)
             return raw.lower() in ("true", "1")
-        if hint in (int, float, str):
+        if hint is str:
+            return raw
+        if hint in (int, float):
+            # int()/float() also take Unicode digits and underscores ("٣", "1_0"): a typo
+            # there should be an error, not a silently different number.
+            if not (_INT if hint is int else _FLOAT).fullmatch(raw):
+                raise ValueError(raw)
             return hint(raw)
         return tomllib.loads(f"v = {raw}")["v"]
     except (ValueError, tomllib.TOMLDecodeError) as exc:

@@ -59,6 +59,7 @@ def describe(path: Path, fps: float | None = None, rig_map: Path | None = None) 
         "retarget_version": rep.version,
         "skipped_frames": rep.skip,
         "body_twist": rep.body_joints or [],
+        "rotations_copied": rep.copied,
         "source_twist": rep.source_twist_joints,
         "twist_rule": dict(rep.twist_rules or {}),
     }
@@ -82,6 +83,8 @@ def _info(args: argparse.Namespace) -> int:
     print(f"height        {out['height_m']:.2f} m (source {out['source_height_m']:.2f} m; "
           f"T-pose {out['rest_height_m']:.2f} m, legs {out['scale']:.3f} x the canonical subject's)")
     print("mapping       " + ", ".join(f"{c}={s}" for c, s in out["mapping"].items()))
+    if out["rotations_copied"]:
+        print("rotations     copied as they are (the rig's rotations are canonical ones: align = false)")
     if out["source_twist"]:
         print("source twist  " + ", ".join(out["source_twist"]) + " (the rig lacks the points that define "
               "their twist: docs/skeleton.md, Body-defined twist)")

@@ -89,10 +89,17 @@ class RetargetReport:
     twist_rules: dict | None = None
 
     @property
+    def copied(self) -> bool:
+        """Whether the rotations were copied as they are (``align = false``: the canonical
+        rig, whose rotations are canonical by definition) rather than retargeted."""
+        return self.profile is not None and not self.profile.align
+
+    @property
     def source_twist_joints(self) -> list[str]:
         """Mapped joints of :data:`engine.motion.retarget_body.BODY_JOINTS` whose defining points
-        the rig lacks: they keep the source's rotation (one constant alignment)."""
-        if self.profile is None or self.body_joints is None:
+        the rig lacks: they keep the source's rotation (one constant alignment). None on a
+        rig whose rotations are copied (:attr:`copied`): nothing there is retargeted."""
+        if self.profile is None or self.body_joints is None or self.copied:
             return []
         return [j for j in RB.BODY_JOINTS if j in self.profile.joints and j not in self.body_joints]
 
@@ -236,8 +243,8 @@ def retarget(raw: RawBVH, fps: float | None = None, profile: RigProfile | None =
     if prof.root_channels_relative_to_offset:
         pos[:, 0] += raw.offsets[0]
     _check_root(raw.path, pos[:, 0], prof.units_to_m)
-    offsets, ends = (straightened_offsets(raw, prof) if prof.straight_elbows and version >= 4
-                     else (raw.offsets, raw.end_sites))  # fmt: skip
+    offsets, ends = straightened_offsets(raw, prof, elbows=prof.straight_elbows and version >= 4,
+                                         knees=prof.straight_knees and version >= 5)  # fmt: skip
     moving = [k for k, c in enumerate(raw.channels) if k > 0 and len(c) == 6]
     if moving:  # position channels below the root (a 6-channel Hips under a static ROOT) move their joint
         offsets = np.repeat(offsets[None], len(pos), axis=0)

@@ -102,19 +102,30 @@ def _yaw(pa: np.ndarray, pb: np.ndarray) -> float:
     return float(np.arctan2((a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]).sum(), (a * b).sum()))
 
 
-def compare_clips(a: Motion, b: Motion) -> ClipDifference:
-    """Align ``a`` to ``b`` in time and heading and measure their difference.
+@dataclass
+class AlignedPair:
+    """Two copies of one take aligned in time and heading (:func:`align_clips`)."""
 
-    Parameters
-    ----------
-    a, b : Motion
-        Canonical clips of the same take (any frame rate; compared at :data:`COMPARE_FPS`).
+    #: Frames of ``b`` (at :data:`COMPARE_FPS`) that ``a`` starts later by.
+    shift: int
+    #: Rotation about +Z (radians) applied to ``a`` to face like ``b``.
+    yaw: float
+    #: Local rotations (n, 22, 4) over the overlap; ``a``'s root turned by ``yaw``.
+    local_a: np.ndarray
+    local_b: np.ndarray
+    #: Root-relative positions (n, 22, 3), metres, on the canonical skeleton
+    #: :data:`COMMON_HEIGHT` tall; ``a``'s turned by ``yaw``.
+    rel_a: np.ndarray
+    rel_b: np.ndarray
+    #: The same on each clip's own skeleton scaled to :data:`COMMON_HEIGHT`.
+    own_a: np.ndarray
+    own_b: np.ndarray
 
-    Returns
-    -------
-    ClipDifference
-        The offset and heading found and the per-joint mean differences.
-    """
+
+def align_clips(a: Motion, b: Motion) -> AlignedPair:
+    """Resample both clips to :data:`COMPARE_FPS`, find the time offset whose pose
+    signatures agree best (within :data:`MAX_SHIFT_S`) and the heading (one rotation about
+    +Z) that maps ``a``'s root-relative positions onto ``b``'s, and apply both to ``a``."""
     from engine.motion.retarget import clip_height, resample_motion
 
     ha, hb = clip_height(a), clip_height(b)  # standing heights, as ``info`` prints them
@@ -133,11 +144,28 @@ def compare_clips(a: Motion, b: Motion) -> ClipDifference:
         return Q.rotate(np.broadcast_to(turn, p.shape[:-1] + (4,)), p)
 
     la[:, 0] = Q.mul(np.broadcast_to(turn, la[:, 0].shape), la[:, 0])
-    rot = np.degrees(Q.angle(la, lb)).mean(0)
-    pos = 100.0 * np.linalg.norm(turned(ra) - rb, axis=-1).mean(0)
     oa, ob = _relative(a, True, ha)[cut[0]], _relative(b, True, hb)[cut[1]]
-    own = 100.0 * np.linalg.norm(turned(oa) - ob, axis=-1).mean(0)
-    return ClipDifference(s, float(np.degrees(yaw)), n, rot, pos, own)
+    return AlignedPair(s, yaw, la, lb, turned(ra), rb, turned(oa), ob)
+
+
+def compare_clips(a: Motion, b: Motion) -> ClipDifference:
+    """Align ``a`` to ``b`` in time and heading (:func:`align_clips`) and measure their difference.
+
+    Parameters
+    ----------
+    a, b : Motion
+        Canonical clips of the same take (any frame rate; compared at :data:`COMPARE_FPS`).
+
+    Returns
+    -------
+    ClipDifference
+        The offset and heading found and the per-joint mean differences.
+    """
+    p = align_clips(a, b)
+    rot = np.degrees(Q.angle(p.local_a, p.local_b)).mean(0)
+    pos = 100.0 * np.linalg.norm(p.rel_a - p.rel_b, axis=-1).mean(0)
+    own = 100.0 * np.linalg.norm(p.own_a - p.own_b, axis=-1).mean(0)
+    return ClipDifference(p.shift, float(np.degrees(p.yaw)), len(p.local_a), rot, pos, own)
 
 
 def multi_rig_takes(mocap: str | Path) -> dict[str, list[str]]:

@@ -19,10 +19,12 @@ from engine.validation import check_manifest, shown
 #: Bumped whenever retargeting gives different clips (prepared data is rebuilt then).
 #: 4: limbs, hands, feet and head take their twist from the body (:mod:`engine.motion.retarget_body`),
 #: through documented rules where the rig lacks the defining landmarks;
-#: 3: every joint keeps the source's rotation with one constant alignment per joint.
+#: 3: every joint keeps the source's rotation with one constant alignment per joint;
+#: 5 (not current: the shipped models reconstruct it slightly worse, docs/skeleton.md *Versions*):
+#: version 4 with legs a profile draws bent read straight along the hip-to-ankle line (``straight_knees``).
 RETARGET_VERSION = 4
 #: Definitions :func:`retarget` can still produce (models record the one they learnt).
-RETARGET_VERSIONS = (3, 4)
+RETARGET_VERSIONS = (3, 4, 5)
 #: Where the shipped models record the definition they learnt from (``retarget_version``).
 MODELS_DATA = Path(__file__).resolve().parents[2] / "assets" / "models" / "data.toml"
 

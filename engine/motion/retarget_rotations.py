@@ -185,25 +185,30 @@ def world_rotations(prof: RigProfile, pts, wrot, idx, cq, version: int, hands: s
     return glob, align, [j for j in RB.BODY_JOINTS if j in body], rules
 
 
-def straightened_offsets(raw: RawBVH, prof: RigProfile) -> tuple[np.ndarray, dict]:
-    """The source's OFFSETs ``(J, 3)`` and end sites with each elbow straight in the zero
-    pose, for a rig whose zero pose stands for a T-pose with straight arms (``straight_elbows``).
+def straightened_offsets(raw: RawBVH, prof: RigProfile, elbows: bool = True, knees: bool = False,
+                         ) -> tuple[np.ndarray, dict]:  # fmt: skip
+    """The source's OFFSETs ``(J, 3)`` and end sites with each elbow (``elbows``) and knee
+    (``knees``) straight in the zero pose, for a rig whose zero pose stands for a T-pose with
+    straight limbs (``straight_elbows``, ``straight_knees``).
 
-    The wrist OFFSET is turned onto the direction of the elbow's, its length kept, and the
-    hand below it (joints and end sites) turns with it, so the hand keeps its angle to the
-    forearm. In the zero pose every joint has its parent's axes, so the OFFSETs compare
-    directly; only a wrist that is a direct child of the elbow is turned. Knees are left
-    as drawn: the shin's twist the body defines differs from the source's, and on a shin
-    drawn bent that would move the written-back ankle (docs/skeleton.md)."""
+    The wrist (ankle) OFFSET is turned onto the direction of the elbow's (knee's), its
+    length kept, and the hand (foot) below it (joints and end sites) turns with it, so it
+    keeps its angle to the forearm (shin). In the zero pose every joint has its parent's
+    axes, so the OFFSETs compare directly; only an end joint that is a direct child of the
+    middle one is turned. With neither, the file's own OFFSETs and end sites."""
     off, ends = raw.offsets.copy(), {j: np.array(v, float) for j, v in raw.end_sites.items()}
     for s in ("l", "r"):
-        for mid, end in ((f"{s}elbow", f"{s}wrist"),):
+        limbs = [(f"{s}elbow", f"{s}wrist")] * elbows + [(f"{s}knee", f"{s}ankle")] * knees
+        for mid, end in limbs:
             if mid not in prof.joints or end not in prof.joints:
                 continue
             m, e = raw.names.index(prof.joints[mid]), raw.names.index(prof.joints[end])
             if raw.parents[e] != m:
                 continue
-            turn = Q.from_to(off[e], off[m])
+            line = off[m] + off[e] if mid.endswith("knee") else off[m]
+            if mid.endswith("knee"):  # the whole leg straight along its hip-to-ankle line
+                off[m] = Q.rotate(Q.from_to(off[m], line), off[m])
+            turn = Q.from_to(off[e], line)
             below = {e}
             for j in range(e + 1, len(raw.names)):  # BVH order: descendants follow their parent
                 if raw.parents[j] in below:

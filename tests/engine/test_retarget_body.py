@@ -2,7 +2,8 @@
 
 A synthetic canonical walk is written onto rigs that differ only in conventions (per-joint
 bone axes, an A-pose rest, twist axes turned half a turn, a twist the thigh and forearm
-carry and their children undo) and read back: the rotations agree within 1 degree."""
+carry and their children undo, bone axes along +X with the right side's mirrored) and read
+back: the rotations agree within 1 degree."""
 
 from __future__ import annotations
 
@@ -176,6 +177,21 @@ def _conventions(rng) -> dict:
     return c
 
 
+def _bone_x(mirrored: bool) -> dict:
+    """Per-joint frames whose local +X runs along the bone (towards the child, the end site
+    for leaves; up for the hips), as game rigs draw them; ``mirrored``: the right side's +X
+    runs the other way (towards the parent), so its twist axis is mirrored."""
+    from engine.motion.retarget_ablation import joint_axis
+
+    c = {}
+    for canon, name in NAMES.items():
+        axis = joint_axis(canon)
+        if mirrored and canon.startswith("r"):
+            axis = -axis
+        c[name] = Q.from_to(np.array([1.0, 0.0, 0.0]), axis)
+    return c
+
+
 @pytest.fixture(scope="module")
 def rigs(tmp_path_factory):
     from engine.motion.retarget import retarget
@@ -191,6 +207,8 @@ def rigs(tmp_path_factory):
         "random_axes": {"frames_c": _conventions(np.random.default_rng(1))},
         "half_turn_twist_axes": {"frames_c": half},
         "apose": {"frames_c": apose},
+        "bone_axes_along_x": {"frames_c": _bone_x(False)},
+        "bone_axes_along_x_mirrored": {"frames_c": _bone_x(True)},
         "child_undoes_twist": {"twist": {n: 150 * np.sin(ph) for n in ("LeftUpLeg", "RightUpLeg", "LeftForeArm")}},
     }
     out = {}
@@ -205,7 +223,8 @@ def _diff(a, b) -> np.ndarray:
     return np.degrees(Q.angle(a.local_rot, b.local_rot)).max(0)
 
 
-@pytest.mark.parametrize("variant", ["random_axes", "half_turn_twist_axes", "apose", "child_undoes_twist"])
+@pytest.mark.parametrize("variant", ["random_axes", "half_turn_twist_axes", "apose", "bone_axes_along_x",
+                                     "bone_axes_along_x_mirrored", "child_undoes_twist"])  # fmt: skip
 def test_rest_conventions_do_not_change_the_canonical_rotations(rigs, variant):
     ref, rep = rigs[4, "tpose"]
     other, rep2 = rigs[4, variant]
@@ -266,3 +285,59 @@ def test_straight_elbows_measures_the_bend_from_a_rest_drawn_bent(tmp_path):
     assert np.degrees(Q.angle(plain.local_rot[:, elbow], ref.local_rot[:, elbow])).mean() > 10
     fixed = retarget(raw, profile=dataclasses.replace(prof, straight_elbows=True), version=4)[0]
     assert _diff(ref, fixed).max() < 1.0
+
+
+def _straight_knees(rows, bend_deg: float = 0.0):
+    """Make each leg straight in the zero pose (the ankle's OFFSET on the knee's direction),
+    then draw the left knee ``bend_deg`` degrees bent with the hip-to-ankle line kept (the
+    thigh turned forward, the shin back, both lengths kept; the foot turning with the shin)."""
+    names = [r[0] for r in rows]
+    for mid, end in (("LeftLeg", "LeftFoot"), ("RightLeg", "RightFoot")):
+        m, e = names.index(mid), names.index(end)
+        rows[e][2] = rows[m][2] / np.linalg.norm(rows[m][2]) * np.linalg.norm(rows[e][2])
+    if bend_deg:
+        m, e = names.index("LeftLeg"), names.index("LeftFoot")
+        knee, shin = rows[m][2], rows[e][2]
+        line = (knee + shin) / np.linalg.norm(knee + shin)
+        a, b = np.linalg.norm(knee), np.linalg.norm(shin)
+        thigh_turn = np.degrees(np.arcsin(b * np.sin(np.radians(bend_deg)) / np.linalg.norm(knee + shin)))
+        side = np.cross(line, [0.0, -1.0, 0.0])  # the knee goes forward (-Y)
+        new_knee = Q.rotate(_axis_angle(side / np.linalg.norm(side), -thigh_turn), knee)
+        dk = float(new_knee @ line)
+        new_shin = (dk + np.sqrt(dk * dk - a * a + b * b)) * line - new_knee
+        turn = Q.from_to(shin, new_shin)
+        rows[m][2], rows[e][2] = new_knee, new_shin
+        below = {e}
+        for j, r in enumerate(rows):
+            if r[1] in below:
+                below.add(j)
+                r[2] = Q.rotate(turn, r[2])
+            if j in below:
+                r[3] = None if r[3] is None else Q.rotate(turn, r[3])
+    return rows
+
+
+def test_straight_knees_reads_a_leg_drawn_bent_along_its_hip_to_ankle_line(tmp_path):
+    """A rig whose zero pose draws the left knee 7.7 degrees bent about an unchanged
+    hip-to-ankle line (as the Daz rig does), the T-pose rotations copied onto it:
+    ``straight_knees`` reads the whole leg as the straight-legged rig does from version 5;
+    version 4 ignores it and reads the drawn bend."""
+    import dataclasses
+
+    from engine.motion.bvh import load_bvh
+    from engine.motion.rigs import resolve_rig
+    from engine.motion.retarget import retarget
+
+    local, root = canonical_walk(90)
+    ref = retarget(load_bvh(write_rig(tmp_path / "t.bvh", local, root, rest=_straight_knees)), version=5)[0]
+    raw = load_bvh(write_rig(tmp_path / "b.bvh", local, root, rest=lambda rows: _straight_knees(rows, 7.7)))
+    prof = dataclasses.replace(resolve_rig(raw), straight_knees=True)
+    knee, hip = sk.JOINT_INDEX["lknee"], sk.JOINT_INDEX["lhip"]
+    for version in (4, 5):
+        plain = retarget(raw, profile=dataclasses.replace(prof, straight_knees=False), version=version)[0]
+        assert np.degrees(Q.angle(plain.local_rot[:, knee], ref.local_rot[:, knee])).mean() > 5
+    old = retarget(raw, profile=prof, version=4)[0]
+    assert np.degrees(Q.angle(old.local_rot[:, knee], ref.local_rot[:, knee])).mean() > 5
+    fixed = retarget(raw, profile=prof, version=5)[0]
+    assert _diff(ref, fixed).max() < 1.0, dict(zip(sk.JOINT_NAMES, np.round(_diff(ref, fixed), 2)))
+    assert np.degrees(Q.angle(fixed.local_rot[:, hip], ref.local_rot[:, hip])).max() < 1.0

@@ -132,9 +132,24 @@ def test_info_names_the_rule_each_joint_used(tmp_path, capsys):
     out = describe(path, None, None)
     assert out["twist_rule"] == {"lwrist": "thumb", "rwrist": "thumb", "lowerneck": "head frame",
                                  "upperneck": "head frame"}  # fmt: skip
-    assert out["source_twist"] == []
+    assert out["source_twist"] == [] and out["rotations_copied"] is False
     assert main(["info", str(path)]) == 0
     assert "twist rule    lwrist (thumb), rwrist (thumb), lowerneck (head frame)" in capsys.readouterr().out
+
+
+def test_info_on_the_canonical_rig_says_its_rotations_are_copied(shared_mocap, capsys):
+    """The canonical rig's rotations are canonical ones: none of its joints keeps a
+    "source twist" for want of landmarks."""
+    from engine.cli.info import describe
+    from engine.cli.main import main
+
+    path = shared_mocap / "dragposer" / "example_2.bvh"
+    out = describe(path, None, None)
+    assert out["rig"] == "dragposer" and out["rotations_copied"] is True
+    assert out["source_twist"] == [] and out["body_twist"] == [] and out["twist_rule"] == {}
+    assert main(["info", str(path)]) == 0
+    text = capsys.readouterr().out
+    assert "rotations     copied as they are" in text and "source twist" not in text
 
 
 @pytest.mark.parametrize("hand_axes", ["plain", "half_turn"])

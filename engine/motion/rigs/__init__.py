@@ -47,6 +47,8 @@ class RigProfile:
     #: converter copied T-pose rotations onto it): their bend is measured from a straight
     #: rest (retarget version 4, ``docs/skeleton.md``).
     straight_elbows: bool = False
+    #: The same for the knees (retarget version 5): the zero pose stands for straight legs.
+    straight_knees: bool = False
     path: str = ""
     #: Why each joint / field was chosen (automatic mappings only), for ``rig suggest``.
     reasons: dict[str, str] = field(default_factory=dict)
@@ -62,7 +64,7 @@ class RigProfile:
 
 #: Fields of a rig profile / mapping file and what each must hold.
 _TEXT_FIELDS = ("name", "description", "up", "forward")
-_BOOL_FIELDS = ("align", "root_channels_relative_to_offset", "straight_elbows")
+_BOOL_FIELDS = ("align", "root_channels_relative_to_offset", "straight_elbows", "straight_knees")
 _TABLE_FIELDS = ("joints", "landmarks")
 _NUMBERS = {"units_to_m": Num(1e-6, 1e3, open_lo=True, unit="metres per file unit"),
             "skip_frames": Num(0, 1_000_000, integer=True)}  # fmt: skip
@@ -111,6 +113,7 @@ def _parse(path: Path, data: dict | None = None) -> RigProfile:
             joints={str(k): str(v) for k, v in dict(data["joints"]).items()},
             landmarks=dict(data.get("landmarks", {})),
             straight_elbows=bool(data.get("straight_elbows", False)),
+            straight_knees=bool(data.get("straight_knees", False)),
             path=str(path),
         )
     except KeyError as exc:

@@ -5,13 +5,16 @@ Output layout (``--out DIR``)::
     DIR/manifest.json          inputs (path, sha256, rig, split, frames...), stats, hash
     DIR/shards/<name>.npz      one clip each: local_rot (F,22,4), root_pos (F,3), offsets (22,3)
 
-* **Split** (deterministic, by file): inside every source folder, files are sorted by
-  path and every 8th one (positions 3, 11, 19, ...) goes to ``val``, the rest to
-  ``train``. Copies of one take on several rigs (``cmu_trial`` in the shared manifest)
-  share a split: validation when any copy's folder rule makes it validation, so the
-  validation takes of a smaller corpus stay validation and no take leaks. Files matching an ``--eval-only`` pattern (default ``dragposer/*``: those
-  clips derive from AMASS, whose licence is non-commercial) go to ``test`` and are
-  never used for training or statistics.
+* **Split** (deterministic, by take): the *folder rule* sorts the files of each source
+  folder by path and makes every 8th one (positions 3, 11, 19, ...) ``val``, the rest
+  ``train``. A file that names no take follows its folder rule. Copies of one take on
+  several rigs (``cmu_trial`` in the shared manifest) always share a split: a take with
+  a copy in a reference folder (:data:`REFERENCE_SOURCES`) follows that copy's folder
+  rule, so those folders' validation files stay validation; the other takes are sorted
+  by take key and every 8th one (positions 3, 11, ...) is ``val``. About one take in 8
+  is validation. Files matching an ``--eval-only`` pattern (default ``dragposer/*``:
+  those clips derive from AMASS, whose licence is non-commercial) go to ``test`` and
+  are never used for training or statistics.
 * **Rest frames and rates**: a leading rest frame is dropped (a profile's ``skip_frames``
   or :func:`engine.motion.retarget.rest_frame_count`), the true frame rate comes from the manifest.
 * **Mirroring**: every train/val clip also gets a left/right mirrored copy.
@@ -44,6 +47,9 @@ FORMAT = 1
 #: Bumped whenever the feature definition changes, so cached statistics are recomputed.
 FEATURES_VERSION = 2
 VAL_EVERY, VAL_PHASE = 8, 3
+#: Source folders that defined the validation split first; a take with a copy in one of them
+#: follows that copy's folder rule, so their validation takes stay validation.
+REFERENCE_SOURCES = ("cmu_iclone", "cmu_daz")
 
 
 @dataclass
@@ -82,13 +88,34 @@ def discover(inputs: list[Path]) -> list[tuple[Path, str]]:
     return found
 
 
-def assign_splits(rel_paths: list[str], eval_only: list[str], takes: dict[str, str] | None = None) -> dict[str, str]:
+def assign_splits(
+    rel_paths: list[str],
+    eval_only: list[str],
+    takes: dict[str, str] | None = None,
+    reference: tuple[str, ...] = REFERENCE_SOURCES,
+) -> dict[str, str]:
     """Deterministic train/val/test split (see module docs).
 
-    ``takes`` maps a file to the take it records (``cmu_trial`` of the shared manifest):
-    copies of one take on several rigs share a split, validation when any copy's own
-    folder rule makes it validation, so a take never sits on both sides."""
+    Parameters
+    ----------
+    rel_paths : list of str
+        Input files, relative to their input root (``mocap/<source>/...`` or ``<source>/...``).
+    eval_only : list of str
+        ``fnmatch`` patterns of files that only ever go to ``test``.
+    takes : dict, optional
+        File -> the take it records (``cmu_trial`` of the shared manifest). Every copy of
+        one take gets the same split.
+    reference : tuple of str
+        Source folders whose own folder rule decides the split of every take with a copy
+        in them (the first in this order wins), so their validation files stay validation.
+
+    Returns
+    -------
+    dict
+        File -> ``"train"``, ``"val"`` or ``"test"``.
+    """
     splits: dict[str, str] = {}
+    folder_rule: dict[str, str] = {}
     groups: dict[str, list[str]] = {}
     for rel in rel_paths:
         if any(fnmatch.fnmatch(rel, pat) or fnmatch.fnmatch(rel, f"*/{pat}") for pat in eval_only):
@@ -97,16 +124,49 @@ def assign_splits(rel_paths: list[str], eval_only: list[str], takes: dict[str, s
         groups.setdefault(_source_folder(rel), []).append(rel)
     for members in groups.values():
         for i, rel in enumerate(sorted(members)):
-            splits[rel] = "val" if i % VAL_EVERY == VAL_PHASE else "train"
+            folder_rule[rel] = "val" if i % VAL_EVERY == VAL_PHASE else "train"
     copies: dict[str, list[str]] = {}
-    for rel, take in (takes or {}).items():
-        if take and splits.get(rel) in ("train", "val"):
+    for rel in folder_rule:
+        take = (takes or {}).get(rel)
+        if take:
             copies.setdefault(take, []).append(rel)
-    for members in copies.values():
-        if any(splits[r] == "val" for r in members):
+        else:
+            splits[rel] = folder_rule[rel]
+    rank = {src: i for i, src in enumerate(reference)}
+    pooled: list[str] = []
+    for take, members in copies.items():
+        anchors = sorted((rank[_source_folder(r)], r) for r in members if _source_folder(r) in rank)
+        if anchors:
             for r in members:
-                splits[r] = "val"
+                splits[r] = folder_rule[anchors[0][1]]
+        else:
+            pooled.append(take)
+    for i, take in enumerate(sorted(pooled)):
+        for r in copies[take]:
+            splits[r] = "val" if i % VAL_EVERY == VAL_PHASE else "train"
     return splits
+
+
+def split_files(files: list[tuple[Path, str]], eval_only: list[str]) -> tuple[dict[str, str], dict[str, str]]:
+    """Split of discovered files, with the takes read from the shared manifest.
+
+    Parameters
+    ----------
+    files : list of (Path, str)
+        :func:`discover` output: absolute path and path relative to its input root.
+    eval_only : list of str
+        Patterns of evaluation-only files.
+
+    Returns
+    -------
+    splits : dict
+        Relative path -> split (:func:`assign_splits`).
+    takes : dict
+        Relative path -> ``cmu_trial``, for the files the manifest names a take for.
+    """
+    takes = {rel: (manifest_entry(path) or {}).get("cmu_trial") for path, rel in files}
+    takes = {rel: take for rel, take in takes.items() if take}
+    return assign_splits([rel for _, rel in files], eval_only, takes), takes
 
 
 def _source_folder(rel: str) -> str:
@@ -166,8 +226,7 @@ def prepare(
     files = discover(inputs)
     if not files:
         raise UserError(f"no .bvh files found under {', '.join(map(str, inputs))}")
-    takes = {rel: (manifest_entry(path) or {}).get("cmu_trial") for path, rel in files}
-    splits = assign_splits([rel for _, rel in files], eval_only, {r: t for r, t in takes.items() if t})
+    splits, takes = split_files(files, eval_only)
     settings = {"format": FORMAT, "features": FEATURES_VERSION, "mirror": mirror, "eval_only": eval_only,
                 "retarget": RETARGET_VERSION, "rig_map": sha256_file(rig_map) if rig_map else None}
     man_path = out / "manifest.json"
@@ -190,7 +249,9 @@ def prepare(
             variants = [False, True] if (mirror and splits[rel] != "test") else [False]
             cached = [old.get(rel + ("#m" if m else "")) for m in variants]
             if all(c and c["sha256"] == digest and (out / c["shard"]).is_file() for c in cached):
-                entries.extend(cached)  # type: ignore[arg-type]
+                # A shard does not depend on the split, but its entry records it: a changed rule
+                # must reach the reused entries too.
+                entries.extend(dict(c, split=splits[rel]) for c in cached)  # type: ignore[arg-type]
                 result.reused += len(cached)
                 continue
             motion, report = load_with_report(path, manifest_fps(path), rig_map, version=RETARGET_VERSION)
@@ -235,15 +296,16 @@ def prepare(
 
     stats = _stats(entries)
     digest = hashlib.sha256(
-        json.dumps([settings, sorted((e["shard"], e["sha256"]) for e in entries)]).encode()
+        json.dumps([settings, sorted((e["shard"], e["sha256"], e["split"]) for e in entries)]).encode()
     ).hexdigest()[:16]
     manifest = {
         "format": FORMAT,
         "fps": 60,
         "settings": settings,
         "hash": digest,
-        "split_rule": f"per source folder, sorted by path: every {VAL_EVERY}th file from index "
-        f"{VAL_PHASE} is val; copies of one take (manifest cmu_trial) are val when any copy is; "
+        "split_rule": f"by take: every {VAL_EVERY}th file from index {VAL_PHASE} of each source folder "
+        f"sorted by path is val; a take (manifest cmu_trial) with a copy in {list(REFERENCE_SOURCES)} "
+        f"follows that copy, the other takes sorted by key every {VAL_EVERY}th from index {VAL_PHASE}; "
         f"eval-only patterns {eval_only} are test",
         "files": entries,
         "failed": [{"path": p, "reason": r} for p, r in result.failed],

@@ -8,7 +8,6 @@ from pathlib import Path
 
 import pytest
 
-from engine.data.prepare import assign_splits
 
 #: The validation files of the split the shipped models were trained with (model card).
 TODAYS_VAL = ["cmu_daz/indian/14.bvh", "cmu_daz/salsa/07.bvh", "cmu_iclone/002_01.bvh", "cmu_iclone/002_09.bvh",
@@ -16,24 +15,11 @@ TODAYS_VAL = ["cmu_daz/indian/14.bvh", "cmu_daz/salsa/07.bvh", "cmu_iclone/002_0
               "cmu_iclone/007_05.bvh"]  # fmt: skip
 
 
-def test_copies_of_a_take_follow_the_copy_in_validation():
-    rels = [f"a/{i:02d}.bvh" for i in range(8)] + [f"b/{i:02d}.bvh" for i in range(8)]
-    takes = {"a/03.bvh": "t3", "b/05.bvh": "t3", "a/05.bvh": "t5", "b/03.bvh": "t9"}
-    plain = assign_splits(rels, [])
-    assert plain["a/03.bvh"] == "val" and plain["b/05.bvh"] == "train"
-    split = assign_splits(rels, [], takes)
-    assert split["a/03.bvh"] == split["b/05.bvh"] == "val"
-    assert split["a/05.bvh"] == "train" and split["b/03.bvh"] == "val"
-
-
 @pytest.mark.shared_data
 def test_every_copy_of_a_shared_take_lands_in_one_split_and_todays_validation_stays(shared_mocap):
-    from engine.data.prepare import discover
-    from engine.motion.retarget import manifest_entry
+    from engine.data.prepare import discover, split_files
 
-    files = discover([shared_mocap])
-    takes = {rel: (manifest_entry(path) or {}).get("cmu_trial") for path, rel in files}
-    split = assign_splits([rel for _, rel in files], ["dragposer/*"], {r: t for r, t in takes.items() if t})
+    split, takes = split_files(discover([shared_mocap]), ["dragposer/*"])
     by_take: dict[str, set] = {}
     for rel, take in takes.items():
         if take:

@@ -115,10 +115,26 @@ def check_config(kind: str, config: Mapping[str, Any], config_cls: type, where: 
     return out
 
 
+class _SkipMetaInPlace(torch.overrides.TorchFunctionMode):
+    """In-place operations on ``meta`` tensors (weight initialisers, buffer copies) return
+    their tensor untouched: there are no values to change, and torch runs a meta tensor's
+    ``normal_`` through its reference implementation, whose first use imports the whole
+    compiler stack (``torch._dynamo``, ~2 s of a model load)."""
+
+    def __torch_function__(self, func: Any, types: Any, args: tuple = (), kwargs: dict | None = None) -> Any:
+        kwargs = kwargs or {}
+        name = getattr(func, "__name__", "")
+        target = args[0] if args else kwargs.get("tensor")  # nn.init's functions name it ``tensor``
+        if name.endswith("_") and not name.startswith("_") and isinstance(target, torch.Tensor) and target.is_meta:
+            return target
+        return func(*args, **kwargs)
+
+
 def shape_only(build: Callable[[], torch.nn.Module], where: str) -> torch.nn.Module:
-    """``build()`` on the ``meta`` device: the model's tensors have shapes, no storage."""
+    """``build()`` on the ``meta`` device: the model's tensors have shapes, no storage
+    (its initialisers skipped: :class:`_SkipMetaInPlace`)."""
     try:
-        with torch.device("meta"), warnings.catch_warnings():
+        with torch.device("meta"), _SkipMetaInPlace(), warnings.catch_warnings():
             warnings.simplefilter("ignore")
             return build()
     except Exception as exc:  # a config the checks let through but the model code refuses

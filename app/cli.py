@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import Any
 
 from engine.cli.rig_options import add_rig_map_option, rig_map_path
 from engine.errors import UserError
@@ -57,8 +58,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from app.main import run as run_app  # Qt loads only when the window opens
+    from engine.startup_trace import mark
 
+    mark("gui start")
     if args.measure is not None and not args.measure > 0:
         raise UserError(f"--measure: SECONDS must be > 0, got {args.measure}")
     if args.old_pace is not None:
@@ -66,6 +68,27 @@ def run(args: argparse.Namespace) -> int:
     ghosts = tuple(g.strip() for g in (args.ghosts or "").split(",") if g.strip())
     if args.after_frames < 1:
         raise UserError(f"--after-frames: N must be >= 1, got {args.after_frames}")
-    return run_app(args.file, args.method or default_method(), args.sensors, args.screenshot, args.after_frames,
-                   args.measure, args.json, args.pace or args.old_pace, ghosts, args.view, rig_map_path(args), args.engine,
-                   args.scene, args.method is not None)  # fmt: skip
+    method = args.method or default_method()
+    started = _start_engine(method) if args.engine == "process" else None
+    try:
+        from app.main import run as run_app  # Qt loads only when the window opens
+
+        mark("Qt, VTK and the window's modules imported")
+        return run_app(args.file, method, args.sensors, args.screenshot, args.after_frames,
+                       args.measure, args.json, args.pace or args.old_pace, ghosts, args.view, rig_map_path(args),
+                       args.engine, args.scene, args.method is not None, started)  # fmt: skip
+    finally:
+        if started is not None:
+            started.stop()  # already stopped when the window closed; at once when it never opened
+
+
+def _start_engine(method: str) -> Any:
+    """The solver's process, started before this process imports Qt, VTK and the
+    window's modules, building ``method`` at once: its imports (torch) and the models'
+    loading then run on the other core in the same seconds, instead of after the window
+    is built (a scene that names another method builds that one too, when it is read)."""
+    from engine.studio.process import EngineProcess
+
+    engine = EngineProcess(prepare=method)
+    engine.start()
+    return engine

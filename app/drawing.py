@@ -20,6 +20,8 @@ from typing import Any
 
 import numpy as np
 
+from engine.startup_trace import mark
+
 #: The display tick, ms: how soon a new snapshot is drawn (the tick itself costs ~0.1 ms).
 TICK_MS = 8
 #: After a view draw costing c ms the next one waits REST x c: at most ~80 % of the GUI
@@ -93,6 +95,8 @@ class DrawScheduler:
             self._drawn_seq = snap.seq
             self.w.viewport.show_snapshot(snap)
             self.draws += 1
+            if self.draws == 1:
+                mark("first snapshot drawn")
             self._rate_draws += 1
             t1 = time.perf_counter()
             self.view_costs.append((t1 - t0) * 1000.0)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import sys
 from pathlib import Path
+from typing import Any
 
 from PyQt6.QtCore import QTimer
 from PyQt6.QtWidgets import QApplication
@@ -12,6 +13,7 @@ from PyQt6.QtWidgets import QApplication
 from app.main_window import MainWindow
 from app.measure import Measurement
 from engine.errors import UserError
+from engine.startup_trace import mark
 
 REPO = Path(__file__).resolve().parents[1]
 EXAMPLE_CLIP = REPO / "assets" / "clips" / "example.bvh"
@@ -83,7 +85,7 @@ def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
         screenshot: str | None = None, after_frames: int = 60, measure: float | None = None,
         measure_json: str | None = None, pace: str | None = None, ghosts: tuple[str, ...] = (),
         view: str = "stick", rig_map: Path | None = None, engine: str = "process",
-        scene: str | None = None, explicit_method: bool = True) -> int:  # fmt: skip
+        scene: str | None = None, explicit_method: bool = True, started: Any = None) -> int:  # fmt: skip
     """Show the studio; with ``screenshot``, play ``after_frames`` frames, save and exit;
     with ``measure``, play that many seconds and write the figures to ``measure_json``
     (:mod:`app.measure`). ``pace`` sets the playback pace (every_frame or real_time).
@@ -91,13 +93,15 @@ def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
     reconstruction as a ``stick`` figure or a shaded ``body``; ``rig_map`` is the joint
     mapping file for ``path`` (``--rig-map``); ``engine`` runs the solver in its own
     ``process`` or in a ``thread`` of this one. ``scene`` is a saved scene applied to the
-    clip (``--scene``); ``--sensors`` and an explicit ``--method`` win over the scene's."""
+    clip (``--scene``); ``--sensors`` and an explicit ``--method`` win over the scene's.
+    ``started``: the engine process :func:`app.cli.run` started before importing Qt."""
     # Mesa's software rasterizer (llvmpipe: Xvfb, no GPU) starts a thread per core; on a
     # small machine leave one core to the solver's process (set before the first GL context)
     os.environ.setdefault("LP_NUM_THREADS", str(max(1, (os.cpu_count() or 2) - 1)))
     app = QApplication.instance() or QApplication(sys.argv[:1])
     app.setApplicationName("DragPoser Studio")
-    window = MainWindow(method=method, engine=engine)
+    window = MainWindow(method=method, engine=engine, started=started)
+    mark("window built")
     try:
         open_initial(window, path if path or not scene else None, sensors, rig_map)
         if scene:
@@ -121,6 +125,7 @@ def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
     if measure is not None:
         window.resize(1600, 1000)  # the layout the issue's targets are set for
     window.show()
+    mark("window shown")
     if measure is not None:
         return _measure(app, window, measure, measure_json)
     if screenshot is None:

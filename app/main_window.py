@@ -54,12 +54,14 @@ class MainWindow(QMainWindow):
 
     ``engine="process"`` (the default) runs the solver in a child process
     (:mod:`engine.studio.process`), ``"thread"`` in a thread of this one (tests use it to
-    reach the engine's internals).
+    reach the engine's internals). ``started``: an engine process already started
+    (``gui`` starts it before importing Qt: :func:`app.cli.run`), used instead of a new one.
     """
 
     snapshotDrawn = pyqtSignal(int)
 
-    def __init__(self, method: str = "ik", settings: QSettings | None = None, engine: str = "process") -> None:
+    def __init__(self, method: str = "ik", settings: QSettings | None = None, engine: str = "process",
+                 started: Any = None) -> None:  # fmt: skip
         super().__init__()
         self.setWindowTitle("DragPoser Studio")
         self.setAcceptDrops(True)
@@ -70,7 +72,7 @@ class MainWindow(QMainWindow):
         self.busy = BusyNotice(self.viewport, self.statusBar())
         self.busy.begin(method, -1, "Starting")
         # after the widgets: the thread's first imports would compete with theirs
-        self.session.start_engine(process=engine == "process")
+        self.session.start_engine(process=engine == "process", started=started)
         self.files = FileActions(self, self.session, self.settings, self.viewport, self.show_error)
         self.live = LiveActions(self, self.session, self.timeline, self.plots, self.settings, self.show_error)
         self.undo = SceneUndo(self.session, self)

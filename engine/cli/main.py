@@ -19,6 +19,7 @@ from types import ModuleType
 from typing import NoReturn
 
 from engine.errors import UserError, shorten_words
+from engine.startup_trace import mark
 from engine.validation import one_line
 
 #: Subcommand modules, in the order ``--help`` lists them.
@@ -80,11 +81,13 @@ def _import_subcommand(mod_name: str, installed: bool = False) -> ModuleType:
 
 
 def main(argv: list[str] | None = None) -> int:
+    mark("interpreter up")
     try:
         parser = build_parser()
     except SubcommandImportError as exc:
         print(f"error: {one_line(str(exc))}", file=sys.stderr)
         return 1
+    mark("command line parsed")
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
         parser.print_help()

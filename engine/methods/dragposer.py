@@ -42,6 +42,7 @@ from engine.solver import (
 from engine.solver.limb_ik import LIMBS, finish
 from engine.solver.pose import body_facing
 from engine.solver.tracker_prior import PoseBank, TrackerHistory, combination, default_bank
+from engine.startup_trace import mark
 
 _HEIGHT_IDX = [sk.JOINT_INDEX[j] for j in sk.HEIGHT_JOINTS]
 
@@ -353,11 +354,13 @@ def create(mode: str = "realtime", iterations: int | None = None, lr: float | No
         raise UserError("a predictor path needs the VAE it was trained on (vae_path)")
     else:
         models = load_default_models()
+    mark("engine: models loaded")
     decoder, predictor = models.vae, models.predictor
     # the shipped pose bank holds the shipped VAE's latents: a user's VAE goes without it
     bank = default_bank() if vae_path is None else None
     if bank is not None:  # the presets' lookups ready before their first frame (no cold start)
         bank.prepare(preset_combinations())
+    mark("engine: pose bank ready")
     values: dict[str, Any] = {"mode": mode, **overrides}
     if iterations is not None:
         values["iterations" if mode == "realtime" else "max_iterations"] = iterations

@@ -15,13 +15,32 @@ Public surface:
 * Protocols :class:`LatentDecoder`, :class:`LatentPredictor`.
 """
 
-from engine.solver.frame import FrameContext, LatentDecoder, Solution, SolveTimings
-from engine.solver.optimizer import PoseOptimizer
-from engine.solver.pose import RootAnchor, RootFrame, RootOverride, world_root
-from engine.solver.settings import FULL_SET, MODES, OPTIMIZERS, PRIORS, OptimizerSettings
-from engine.kinematics.pose_state import PoseState
-from engine.solver.temporal import LatentPredictor, TemporalSchedule
-from engine.solver.update import LatentUpdate
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+#: Public name -> the module defining it. Imported on first use (PEP 562), so that
+#: reading the settings (``engine.solver.settings``, e.g. to build the command line)
+#: does not import torch.
+_WHERE = {
+    "FrameContext": "frame", "LatentDecoder": "frame", "Solution": "frame", "SolveTimings": "frame",
+    "PoseOptimizer": "optimizer", "RootAnchor": "pose", "RootFrame": "pose", "RootOverride": "pose",
+    "world_root": "pose", "FULL_SET": "settings", "MODES": "settings", "OPTIMIZERS": "settings",
+    "PRIORS": "settings", "OptimizerSettings": "settings", "PoseState": "engine.kinematics.pose_state",
+    "LatentPredictor": "temporal", "TemporalSchedule": "temporal", "LatentUpdate": "update",
+}  # fmt: skip
+
+
+def __getattr__(name: str) -> Any:
+    where = _WHERE.get(name)
+    if where is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    module = importlib.import_module(where if "." in where else f"{__name__}.{where}")
+    value = getattr(module, name)
+    globals()[name] = value
+    return value
+
 
 __all__ = [
     "FULL_SET", "MODES", "OPTIMIZERS", "PRIORS", "FrameContext", "LatentDecoder", "LatentPredictor", "LatentUpdate",

@@ -13,13 +13,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 from psygnal import Signal, SignalGroup
 
-from engine.motion.clip import Motion
-from engine.sensor_source import SensorSource
-from engine.sensors import Sensor
+if TYPE_CHECKING:  # annotations only: the command line reads PLAYBACK_PACES without torch
+    from engine.motion.clip import Motion
+    from engine.sensor_source import SensorSource
+    from engine.sensors import Sensor
 
 #: How playback advances: wait for every frame to be solved, or keep the wall clock.
 PlaybackPace = Literal["every_frame", "real_time"]

@@ -59,14 +59,29 @@ class MethodSet:
         self._selected = False
         # the methods' state before the first edit of a paused frame (see keep_state)
         self._kept: dict[str, Method] | None = None
+        self._prepared: dict[str, Method] = {}  # built ahead of their selection (prepare)
 
     def running(self) -> list[tuple[str, Method]]:
         """``(name, method)`` of every built method, the shown one first."""
         pairs = [(self.name, self.method), *self.ghosts.items()]
         return [(name, m) for name, m in pairs if m is not None]
 
+    def prepare(self, name: str) -> None:
+        """Build method ``name`` now, before any command asks for it, so that its first
+        :meth:`build` (the studio's first selection) finds it ready: the engine process
+        loads the models while the window is still being built. A failure is not
+        reported here: the selection's own build tries again and reports it."""
+        try:
+            self._prepared[name] = self._factory(name)
+        except Exception:
+            pass
+
     def build(self, name: str) -> Method | None:
-        """A new method ``name``, or None (reported) when the factory fails."""
+        """A new method ``name`` (the one :meth:`prepare` built, the first time), or None
+        (reported) when the factory fails."""
+        ready = self._prepared.pop(name, None)
+        if ready is not None:
+            return ready
         try:
             return self._factory(name)
         except Exception as exc:

@@ -44,14 +44,19 @@ class EngineProcess:
     threads : int, optional
         Math-library threads of the child (OpenMP, BLAS, torch); default: all cores but
         one, which the window keeps for drawing.
+    prepare : str
+        A method the child builds as soon as it has started, before reading any command
+        (:meth:`~engine.studio.thread.EngineThread.prepare`): the window's first
+        selection of it then finds its models loaded. "" builds nothing ahead.
     """
 
-    def __init__(self, method_factory: Callable[[str], Any] | None = None, threads: int | None = None) -> None:
+    def __init__(self, method_factory: Callable[[str], Any] | None = None, threads: int | None = None,
+                 prepare: str = "") -> None:  # fmt: skip
         ctx = mp.get_context("spawn")
         self._commands = ctx.Queue()
         self._receive, send = ctx.Pipe(duplex=False)
         n = threads if threads is not None else max(1, (os.cpu_count() or 2) - 1)
-        self._process = ctx.Process(target=_child_main, args=(self._commands, send, method_factory, n, os.getpid()),
+        self._process = ctx.Process(target=_child_main, args=(self._commands, send, method_factory, n, os.getpid(), prepare),
                                     name="dragposer-engine", daemon=True)  # fmt: skip
         self._send_end = send
         self._receiver = threading.Thread(target=self._receive_loop, name="dragposer-engine-receiver", daemon=True)
@@ -179,17 +184,23 @@ def _watch_parent(parent: int) -> None:
             os._exit(0)
 
 
-def _child_main(commands: Any, conn: Any, method_factory: Any, threads: int, parent: int) -> None:
+def _child_main(commands: Any, conn: Any, method_factory: Any, threads: int, parent: int, prepare: str = "") -> None:
+    from engine.startup_trace import mark
+
+    mark("engine process up")
     for var in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
         os.environ[var] = str(threads)
     threading.Thread(target=_watch_parent, args=(parent,), daemon=True).start()
     import torch
 
     torch.set_num_threads(threads)
+    mark("engine: torch imported")
     from engine.studio.thread import EngineThread
 
     engine = EngineThread(method_factory, commands=commands)
     engine.listeners.append(_HistorySender(conn))
+    if prepare:
+        engine.prepare(prepare)
     try:
         engine.run()  # this process's main thread runs the loop
     finally:

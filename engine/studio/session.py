@@ -94,14 +94,19 @@ class Session(ConstraintEditing, SensorEditing):
         self.plays = 0
 
     # -- engine ------------------------------------------------------------------------
-    def start_engine(self, method_factory: Callable[[str], Any] | None = None,
-                     process: bool = False) -> EngineThread | EngineProcess:  # fmt: skip
+    def start_engine(self, method_factory: Callable[[str], Any] | None = None, process: bool = False,
+                     started: EngineProcess | None = None) -> EngineThread | EngineProcess:  # fmt: skip
         """Start the engine and send it the whole session: a thread of this process, or
         with ``process`` a child process (:mod:`engine.studio.process`; the solver and
-        the window then never wait for each other's interpreter lock)."""
+        the window then never wait for each other's interpreter lock). ``started`` is an
+        engine process already running (started before the window's imports, so that its
+        own imports and model loading run beside them), taken as it is."""
         self._factory = method_factory
-        self.engine = EngineProcess(method_factory) if process else EngineThread(method_factory)
-        self.engine.start()
+        if started is not None:
+            self.engine = started
+        else:
+            self.engine = EngineProcess(method_factory) if process else EngineThread(method_factory)
+            self.engine.start()
         self.attach(self.engine.submit)
         return self.engine
 

@@ -37,6 +37,7 @@ from engine.studio.playback import ENDED, LOOPED, PlaybackClock
 from engine.studio.snapshot import HISTORY, HistoryEntry, Snapshot, readonly
 from engine.sensor_source import SensorSource
 from engine.studio.clip_source import ClipSource
+from engine.startup_trace import mark
 
 #: How often playback of a live source looks for a newer frame, seconds.
 LIVE_POLL_S = 0.005
@@ -98,6 +99,12 @@ class EngineThread(threading.Thread):
         self._latency_ms: float | None = None
 
     # -- public API (any thread) --------------------------------------------------------
+    def prepare(self, method: str) -> None:
+        """Build ``method`` before the loop starts (:meth:`MethodSet.prepare`); call it
+        before :meth:`run` or :meth:`start`, from the thread that starts the loop."""
+        self._methods.prepare(method)
+        mark(f"engine: method {method} prepared")
+
     def submit(self, command: Any) -> None:
         """Queue a command; returns at once."""
         self._queue.put(command)
@@ -206,7 +213,9 @@ class EngineThread(threading.Thread):
             self._republish()
 
     def _set_method(self, c: cmd.SetMethod) -> None:
-        if not self._methods.select(c.name, c.ghosts):
+        built = self._methods.select(c.name, c.ghosts)
+        mark(f"engine: method {c.name} ready")
+        if not built:
             # a method that cannot be built (e.g. a broken weights file) leaves the
             # session as it was; the window shows why
             self._method_error = self._pending_error
@@ -309,6 +318,8 @@ class EngineThread(threading.Thread):
             latent = readonly(res.latent) if res.latent is not None else None
             self._history.append(HistoryEntry(frame, res.iterations, ms, final, latent))
         self._publish(frame, sf, res, ms, error, ghosts)
+        if self._solved == 1:
+            mark("engine: first frame solved")
         # the pose is out: work the methods deferred (DragPoser's predictor pieces) now,
         # not inside the next frame's solve
         self._methods.between_frames()

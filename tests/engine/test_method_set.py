@@ -49,3 +49,24 @@ def test_a_failing_first_build_is_reported_once_and_tried_again_with_the_next_cl
     assert built == {"broken": 1} and len(problems) == 1 and "vae.pt" in problems[0]
     methods.reset(source)  # e.g. the user opens another clip
     assert built == {"broken": 2} and methods.method is None
+
+
+def test_a_prepared_method_serves_the_first_selection_only(synthetic_motion):
+    methods, built, problems = _counting_set()
+    source = ClipSource(synthetic_motion)
+    methods.prepare("dragposer")  # the engine process, before any command
+    assert built == {"dragposer": 1}
+    assert methods.select("dragposer", ())
+    methods.reset(source)
+    assert built == {"dragposer": 1}  # the prepared one, not a second build
+    assert methods.select("ik", ())
+    assert methods.select("dragposer", ())  # selected again: a new method, as without prepare
+    assert built == {"dragposer": 2, "ik": 1} and not problems
+
+
+def test_a_failing_prepare_is_reported_by_the_selection_that_builds_again(synthetic_motion):
+    methods, built, problems = _counting_set()
+    methods.prepare("broken")
+    assert built == {"broken": 1} and not problems  # nothing asked for it yet
+    assert methods.select("broken", ())
+    assert built == {"broken": 2} and len(problems) == 1 and "vae.pt" in problems[0]

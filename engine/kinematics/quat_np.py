@@ -58,7 +58,8 @@ def mul(q0: np.ndarray, q1: np.ndarray) -> np.ndarray:
     if np.ndim(q0) == 1 and np.ndim(q1) == 1:
         return np.array(qmul(_floats(q0), _floats(q1)))
     q0, q1 = np.asarray(q0), np.asarray(q1)
-    return (q0[..., :, None] * q1[..., None, :]).reshape(np.broadcast_shapes(q0.shape, q1.shape)[:-1] + (16,)) @ _MUL
+    shape = q0.shape if q0.shape == q1.shape else np.broadcast_shapes(q0.shape, q1.shape)  # the common case first
+    return (q0[..., :, None] * q1[..., None, :]).reshape(shape[:-1] + (16,)) @ _MUL
 
 
 def rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:

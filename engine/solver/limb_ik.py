@@ -29,7 +29,7 @@ import math
 import numpy as np
 
 from engine import skeleton as sk
-from engine.kinematics.fk import fk, fk_joints
+from engine.kinematics.fk import fk, fk_joints, fk_positions
 from engine.kinematics.quat_np import qaxis_angle, qbetween, qconj, qmul, qrotate, vcross, vdot, vnorm, vscale, vsub
 
 #: End joint -> (limb root, middle joint).
@@ -227,5 +227,4 @@ def finish(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, rea
             local = share_neck_twist(local, root_pos, offsets, rotation_targets[HEAD], neck_twist_share)
         local = adopt_local(local, root_pos, offsets, rotation_targets)
     local = np.array(local, dtype=np.float64)
-    positions, _ = fk(local, np.asarray(root_pos, dtype=np.float64), offsets)
-    return local, positions
+    return local, fk_positions(local, np.asarray(root_pos, dtype=np.float64), offsets)

@@ -113,6 +113,9 @@ class _Index:
     norms: torch.Tensor  # (N,) squared lengths of the rows over those columns
     full: bool  # cols is the whole table in order (the product is the table's own)
     prefilter: Prefilter  # exact lower bounds that spare most rows' products
+    mean: np.ndarray  # (D_c,) the table's mean and std over cols, float64
+    std: np.ndarray
+    cols_t: torch.Tensor  # cols as a tensor, for writing the query
 
 
 @dataclass
@@ -191,7 +194,8 @@ class PoseBank:
             cols = np.asarray(feature_columns(joints), dtype=np.intp)
             full = len(cols) == tab.table.shape[1] and bool((cols == np.arange(len(cols))).all())
             sub = tab.table if full else tab.table[:, torch.from_numpy(cols)]
-            idx = self._indexes[joints] = _Index(tab, cols, (sub * sub).sum(1), full, Prefilter(sub))
+            idx = self._indexes[joints] = _Index(tab, cols, (sub * sub).sum(1), full, Prefilter(sub), tab.mean[cols],
+                                                 tab.std[cols], torch.from_numpy(cols))  # fmt: skip
             self.index_builds += 1
         return idx
 
@@ -205,12 +209,12 @@ class PoseBank:
         a = _anchor(joints)
         x = features(pos[-1:], rot[-1:], a, pos[:1, a])[0]
         tab = idx.table
-        q32 = ((x - tab.mean[idx.cols]) / tab.std[idx.cols]).astype(np.float32)
+        q32 = ((x - idx.mean) / idx.std).astype(np.float32)
         if idx.full:
             q = torch.from_numpy(q32)
         else:  # the other columns multiply zeros
             q = torch.zeros(tab.table.shape[1])
-            q[torch.from_numpy(idx.cols)] = torch.from_numpy(q32)
+            q[idx.cols_t] = torch.from_numpy(q32)
         # |t - q|^2 = |t|^2 - 2 t.q + |q|^2; the last term is the same for every row. The
         # previous lookup's neighbours bound the search (any hint gives the same answer)
         k = min(k or self.k, len(self))

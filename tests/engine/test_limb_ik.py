@@ -9,7 +9,7 @@ import pytest
 from engine import skeleton as sk
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
-from engine.kinematics.fk import fk
+from engine.kinematics.fk import fk, fk_positions
 from engine.solver import OptimizerSettings, limb_ik
 
 HEAD, NECK = sk.JOINT_INDEX["upperneck"], sk.JOINT_INDEX["lowerneck"]
@@ -75,3 +75,14 @@ def test_a_tilt_without_twist_leaves_the_lower_neck_alone_and_share_zero_is_the_
 def test_neck_twist_share_is_validated(bad):
     with pytest.raises(UserError, match="neck_twist_share"):
         OptimizerSettings(neck_twist_share=bad)
+
+
+def test_positions_only_fk_gives_the_positions_of_fk_bit_for_bit():
+    rng = np.random.default_rng(7)
+    offsets = sk.Skeleton.canonical().offsets
+    for shape in ((), (5,)):
+        # slightly non-unit, as the decoder's float32 rotations are
+        local = rng.normal(size=shape + (sk.NUM_JOINTS, 4)).astype(np.float32).astype(np.float64)
+        local /= np.linalg.norm(local, axis=-1, keepdims=True) * (1.0 + 1e-6)
+        root = rng.normal(size=shape + (3,))
+        assert np.array_equal(fk_positions(local, root, offsets), fk(local, root, offsets)[0])

@@ -29,7 +29,6 @@ from engine.constraints import (
 )  # fmt: skip
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
-from engine.kinematics.root import root_displacement
 from engine.methods import dragposer_root as roots
 from engine.methods.base import FrameResult, Method
 from engine.methods.dragposer_edits import DragPoserEdits
@@ -43,9 +42,6 @@ from engine.solver.limb_ik import LIMBS, finish
 from engine.solver.pose import body_facing
 from engine.solver.tracker_prior import PoseBank, TrackerHistory, combination, default_bank
 from engine.startup_trace import mark
-
-_HEIGHT_IDX = [sk.JOINT_INDEX[j] for j in sk.HEIGHT_JOINTS]
-
 
 class DragPoserMethod(DragPoserEdits, Method):
     """Latent-space pose optimisation guided by a temporal predictor.
@@ -111,7 +107,7 @@ class DragPoserMethod(DragPoserEdits, Method):
         self._pos64: np.ndarray | None = None  # the same values in float64 (numpy users)
         self._before64: np.ndarray | None = None
         self._last: FrameResult | None = None
-        self._disps: list[torch.Tensor] = []
+        self._roots: list[tuple[torch.Tensor, torch.Tensor, torch.Tensor]] = []  # see _advance
         self._effective: dict[tuple, OptimizerSettings] = {}
         self._blends: dict[str, SensorBlend] = {}
         self._facing: np.ndarray | None = None  # this frame's body heading (4,), from its trackers
@@ -298,13 +294,11 @@ class DragPoserMethod(DragPoserEdits, Method):
         conditioning, and so every later frame, depends on its exact rounding)."""
         rot32, pos32 = np.asarray(root_rot, dtype=np.float32), np.asarray(positions, dtype=np.float32)
         rot_t, pos_t = torch.from_numpy(rot32), torch.from_numpy(pos32)
-        disp = root_displacement(prev.rotation, prev.position, pos_t[0])
-        # predictor conditioning: displacement summed over the last n frames (each in its
-        # previous heading frame), then the heights of HEIGHT_JOINTS (engine.models.predictor)
-        self._disps.append(disp)
-        del self._disps[: -self.settings.predictor_every]
-        cond = torch.cat((torch.stack(self._disps).sum(0), pos_t[_HEIGHT_IDX, 2]))
-        self.schedule.record(self._frame, latent, cond)
+        # the predictor's conditioning, computed only if the predictor runs on it (never while
+        # the pose bank gives the prior): the same torch operations on the same tensors
+        self._roots.append((prev.rotation, prev.position, pos_t[0]))
+        del self._roots[: -self.settings.predictor_every]
+        self.schedule.record(self._frame, latent, roots.Conditioning(tuple(self._roots), pos_t))
         self._latent = latent
         self._root = RootFrame(rot_t, pos_t[0].clone())
         self._before, self._before64 = self._positions, self._pos64

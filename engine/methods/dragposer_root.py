@@ -5,7 +5,8 @@
 Every function reads the method's sensor constraints (joint name ->
 :class:`~engine.constraints.SensorConstraint`, enabled while connected) and returns the
 solver's root objects (:class:`~engine.solver.RootFrame`, :class:`~engine.solver.RootOverride`,
-:class:`~engine.solver.RootAnchor`); none keeps state.
+:class:`~engine.solver.RootAnchor`); none keeps state. :class:`Conditioning` is the
+root's motion as the temporal predictor reads it.
 """
 
 from __future__ import annotations
@@ -17,9 +18,11 @@ from engine import skeleton as sk
 from engine.constraints import SensorConstraint
 from engine.kinematics import quaternion as Q
 from engine.solver import OptimizerSettings, RootAnchor, RootFrame, RootOverride
+from engine.kinematics.root import root_displacement
 from engine.solver.pose import BODY_HEADING_LIMIT_DEG, clamp_heading, head_hands_facing
 
 Sensors = dict[str, SensorConstraint]
+_HEIGHT_IDX = [sk.JOINT_INDEX[j] for j in sk.HEIGHT_JOINTS]
 
 
 def root_override(sensors: Sensors) -> RootOverride | None:
@@ -112,3 +115,30 @@ def initial_root(skeleton: sk.Skeleton, sensors: Sensors, facing: np.ndarray | N
     else:
         pos = np.array([0.0, 0.0, -rest[:, 2].min()])
     return RootFrame(torch.as_tensor(rot, dtype=torch.float32), torch.as_tensor(pos, dtype=torch.float32))
+
+
+class Conditioning:
+    """The temporal predictor's conditioning of a frame ``(C,)``, computed on first call:
+    the root displacement summed over the last ``n`` frames (each in its previous heading
+    frame, :func:`~engine.kinematics.root.root_displacement`), then the heights of
+    :data:`~engine.skeleton.HEIGHT_JOINTS` (engine.models.predictor).
+
+    Parameters
+    ----------
+    roots : tuple of (Tensor (4,), Tensor (3,), Tensor (3,))
+        Per frame, oldest first: the previous root's rotation and position and this
+        frame's root position (float32, never changed afterwards).
+    positions : Tensor (22, 3)
+        The frame's solved joint positions, float32, metres.
+    """
+
+    def __init__(self, roots: tuple[tuple[torch.Tensor, torch.Tensor, torch.Tensor], ...],
+                 positions: torch.Tensor) -> None:  # fmt: skip
+        self.roots, self.positions = roots, positions
+        self._value: torch.Tensor | None = None
+
+    def __call__(self) -> torch.Tensor:
+        if self._value is None:
+            disps = torch.stack([root_displacement(*r) for r in self.roots])
+            self._value = torch.cat((disps.sum(0), self.positions[_HEIGHT_IDX, 2]))
+        return self._value

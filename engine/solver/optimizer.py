@@ -49,7 +49,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import torch
-from threadpoolctl import ThreadpoolController
 
 from engine.constraints.terms import FrameInputs, NativeTerm, PoseTerm
 from engine.kinematics import quaternion as Q
@@ -60,6 +59,7 @@ from engine.solver.fast import FastPose, FastTerms
 from engine.solver.frame import FrameContext, LatentDecoder, Solution, SolveTimings
 from engine.solver.pose import world_root
 from engine.solver.slow_path import report_slow
+from engine.solver.threads import one_blas_thread
 from engine.solver.settings import FULL_SET, OptimizerSettings
 from engine.kinematics.pose_state import PoseState
 from engine.solver.update import LatentUpdate
@@ -68,7 +68,6 @@ if TYPE_CHECKING:
     from engine.constraints.base import Constraint
 
 _DENSE: "weakref.WeakKeyDictionary[torch.nn.Module, DenseDecoder]" = weakref.WeakKeyDictionary()
-_BLAS = ThreadpoolController()
 
 
 class PoseOptimizer:
@@ -124,7 +123,7 @@ class PoseOptimizer:
         weighted = [(c, c.weight * c.activity(ctx.frame)) for c in constraints if c.enabled]
         terms = [c for c, w in weighted if w > 0]
         weights = {id(c): w for c, w in weighted if w > 0}
-        with _BLAS.limit(limits=1, user_api="blas"):  # tiny products: one thread is fastest
+        with one_blas_thread():  # tiny products: one thread is fastest
             slow: list[str] = []
             if self._fast is not None:
                 built = self._fast_terms(terms, weights, ctx)

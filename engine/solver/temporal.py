@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from collections.abc import Callable
 from typing import Protocol, runtime_checkable
 
 import torch
@@ -147,7 +148,7 @@ class TemporalSchedule:
         self.reset()
 
     def reset(self) -> None:
-        self.history: deque[tuple[torch.Tensor, torch.Tensor]] = deque(maxlen=self.past)
+        self.history: deque[tuple[torch.Tensor, torch.Tensor | Callable[[], torch.Tensor]]] = deque(maxlen=self.past)
         self.cache: dict[int, torch.Tensor] = {}
         self.last: torch.Tensor | None = None
         self.run: _Run | None = None  # the block in progress
@@ -167,11 +168,12 @@ class TemporalSchedule:
             self.history = deque(self.history, maxlen=past)
             self.version += 1
 
-    def record(self, frame: int, latent: torch.Tensor, cond: torch.Tensor) -> None:
-        """Remember frame ``frame``'s solved ``latent (L,)`` and conditioning ``cond (C,)``."""
+    def record(self, frame: int, latent: torch.Tensor, cond: torch.Tensor | Callable[[], torch.Tensor]) -> None:
+        """Remember frame ``frame``'s solved ``latent (L,)`` and conditioning ``cond (C,)``,
+        or a function returning it, called only when the predictor needs it."""
         self.last = latent.detach()
         if frame % self.every == 0:
-            self.history.append((latent.detach(), cond.detach()))
+            self.history.append((latent.detach(), cond.detach() if isinstance(cond, torch.Tensor) else cond))
             self.version += 1
 
     def step_of(self, frame: int) -> int:
@@ -238,6 +240,6 @@ class TemporalSchedule:
         hist = list(self.history)
         hist = [hist[0]] * (self.past - len(hist)) + hist
         past = torch.stack([h[0] for h in hist])[None]
-        cond = torch.stack([h[1] for h in hist])[None]
+        cond = torch.stack([h[1] if isinstance(h[1], torch.Tensor) else h[1]().detach() for h in hist])[None]
         assert self.last is not None
         return past, cond, self.last[None]

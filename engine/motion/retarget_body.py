@@ -17,7 +17,9 @@ show in the canonical rotations. The rules (``docs/skeleton.md``, *Body-defined 
   so that they move rigidly with the hand;
 * **ankle**: the foot's direction (to the toe, or the toe tip) and the sole's normal,
   taken as the shin's direction off the foot (no rig here carries a landmark across the
-  sole); **toe**: the toe's direction (to its tip) and the same shin reference;
+  sole); **toe**: the toe's direction (to its tip) and the same shin reference (from
+  version 5 the canonical rest's tip lies on the sole's line, :func:`sole_tip`, where
+  source rigs put theirs);
 * **lower neck and head**: the head's direction and the face's eye line.
 
 Where the rig lacks the defining points, a documented rule (:data:`RULES`) puts them on
@@ -160,20 +162,36 @@ def body_frames(pts: dict[str, np.ndarray], arm_straight: dict[str, np.ndarray] 
     return out
 
 
-def canonical_body_frames(offsets: np.ndarray = sk.REST_OFFSETS) -> dict[str, np.ndarray]:
-    """:func:`body_frames` ``(4,)`` of the canonical rest pose (T-pose)."""
+def sole_tip(side: str) -> np.ndarray:
+    """Offset (3,) of a toe tip on the sole's line from the canonical toe joint, metres: as
+    long as the toe's end site and with its heading, horizontal in the T-pose. Source rigs put their
+    toe-tip landmark there (iClone's middle-toe joint, the CMU rig's end site) rather than
+    where the canonical end site points, on the floor 25 degrees below it."""
+    end = sk.END_SITES[f"{side}toe"]
+    flat = np.array([end[0], end[1], 0.0])
+    return flat / np.linalg.norm(flat) * float(np.linalg.norm(end))
+
+
+def canonical_body_frames(offsets: np.ndarray = sk.REST_OFFSETS, sole: bool = False) -> dict[str, np.ndarray]:
+    """:func:`body_frames` ``(4,)`` of the canonical rest pose (T-pose); with ``sole`` the
+    toe tips are :func:`sole_tip` instead of the toes' end sites."""
     from engine.motion.retarget_frames import add_derived
 
     rest = sk.Skeleton(offsets=np.asarray(offsets, float)).rest_positions()
     pts = {n: rest[i][None] for i, n in enumerate(sk.JOINT_NAMES)}
     for lm, (anchor, off) in CANON_LANDMARKS.items():
+        if sole and lm.endswith("toe_tip"):
+            off = sole_tip(lm[0])
         pts[lm] = (rest[sk.JOINT_INDEX[anchor]] + off)[None]
     add_derived(pts)
     return {j: q[0] for j, q in body_frames(pts, canonical=True).items()}
 
 
 def body_rotations(pts: dict[str, np.ndarray], arm_straight: dict[str, np.ndarray] | None = None,
-                   ) -> dict[str, np.ndarray]:  # fmt: skip
-    """Canonical world rotations ``G = B(t) B0^-1`` ``(F, 4)`` of the joints the body defines."""
-    canon = canonical_body_frames()
+                   version: int = 4) -> dict[str, np.ndarray]:  # fmt: skip
+    """Canonical world rotations ``G = B(t) B0^-1`` ``(F, 4)`` of the joints the body defines.
+
+    From ``version`` 5 the rest frames ``B0`` take the toe tips on the sole's line
+    (:func:`sole_tip`)."""
+    canon = canonical_body_frames(sole=version >= 5)
     return {j: Q.mul(b, np.broadcast_to(Q.conjugate(canon[j]), b.shape)) for j, b in body_frames(pts, arm_straight).items()}

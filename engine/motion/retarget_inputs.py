@@ -21,7 +21,8 @@ from engine.validation import check_manifest, shown
 #: through documented rules where the rig lacks the defining landmarks;
 #: 3: every joint keeps the source's rotation with one constant alignment per joint;
 #: 5 (not current: the shipped models reconstruct it slightly worse, docs/skeleton.md *Versions*):
-#: version 4 with legs a profile draws bent read straight along the hip-to-ankle line (``straight_knees``).
+#: version 4 with legs a profile draws bent read straight along the hip-to-ankle line (``straight_knees``)
+#: and a rig's toe tip read against a canonical tip on the sole's line (:func:`retarget_body.sole_tip`).
 RETARGET_VERSION = 4
 #: Definitions :func:`retarget` can still produce (models record the one they learnt).
 RETARGET_VERSIONS = (3, 4, 5)

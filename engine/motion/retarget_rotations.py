@@ -162,7 +162,7 @@ def world_rotations(prof: RigProfile, pts, wrot, idx, cq, version: int, hands: s
         body_pts = {k: v for k, v in pts.items() if k not in loose}
         extra = rule_points(pts, aligned, wrot, idx, prof, hands)
         body_pts.update(extra)
-        body = {j: q for j, q in RB.body_rotations(body_pts, straight).items() if j in prof.joints}
+        body = {j: q for j, q in RB.body_rotations(body_pts, straight, version).items() if j in prof.joints}
         rules = {j: r for j, r in RB.rule_joints(extra).items() if j in body}
     else:
         rules = {}

@@ -12,6 +12,7 @@ import pytest
 
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
+from engine.motion.clip import Motion
 from engine.motion.retarget_frames import CANON_LANDMARKS
 
 NAMES = {"root": "Hips", "lhip": "LeftUpLeg", "lknee": "LeftLeg", "lankle": "LeftFoot", "ltoe": "LeftToeBase",
@@ -341,3 +342,37 @@ def test_straight_knees_reads_a_leg_drawn_bent_along_its_hip_to_ankle_line(tmp_p
     fixed = retarget(raw, profile=prof, version=5)[0]
     assert _diff(ref, fixed).max() < 1.0, dict(zip(sk.JOINT_NAMES, np.round(_diff(ref, fixed), 2)))
     assert np.degrees(Q.angle(fixed.local_rot[:, hip], ref.local_rot[:, hip])).max() < 1.0
+
+
+def _sole_toes(rows):
+    """Put each toe's end site on the sole's line (horizontal in the zero pose, its length
+    and its heading kept), where source rigs put their toe tips."""
+    from engine.motion.retarget_body import sole_tip
+
+    for side, name in (("l", "LeftToeBase"), ("r", "RightToeBase")):
+        row = next(r for r in rows if r[0] == name)
+        row[3] = sole_tip(side)
+    return rows
+
+
+def test_version_5_reads_a_toe_tip_on_the_sole_as_a_straight_toe(tmp_path):
+    """The canonical walk on a rig whose toe tips lie on the sole's line (iClone's middle
+    toe, the CMU rig's end site): version 5 reads its toes as version 4 reads a rig whose
+    tips are where the canonical end site points (on the floor, 25 degrees below the toe),
+    while version 4 reads the sole tips about 25 degrees bent. Only the toes change."""
+    from engine.motion.bvh import load_bvh
+    from engine.motion.retarget import retarget
+
+    local, root = canonical_walk(90)
+    sole = load_bvh(write_rig(tmp_path / "sole.bvh", local, root, rest=_sole_toes))
+    floor = load_bvh(write_rig(tmp_path / "floor.bvh", local, root))
+    toes = [sk.JOINT_INDEX["ltoe"], sk.JOINT_INDEX["rtoe"]]
+
+    def toe_error(motion) -> float:
+        return float(np.degrees(Q.angle(motion.local_rot[:, toes], local[:, toes])).mean())
+
+    v4, v5 = retarget(sole, version=4)[0], retarget(sole, version=5)[0]
+    assert toe_error(v4) > 20.0
+    assert toe_error(v5) < toe_error(retarget(floor, version=4)[0]) + 1.5 < 6.0
+    others = [j for j in range(sk.NUM_JOINTS) if j not in toes]
+    assert np.degrees(Q.angle(v4.local_rot[:, others], v5.local_rot[:, others])).max() < 1e-3

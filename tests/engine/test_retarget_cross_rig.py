@@ -203,3 +203,21 @@ def test_daz_legs_drawn_bent_read_straight(shared_mocap, daz, other):
     assert diff[4].rot_deg[legs].mean() > 6.0, np.round(diff[4].rot_deg[legs], 1)
     assert diff[5].rot_deg[legs].mean() < 4.0, np.round(diff[5].rot_deg[legs], 1)
     assert diff[5].pos_mean <= diff[4].pos_mean + 0.1
+
+
+def test_toe_tips_on_the_sole_line_make_the_daz_toes_agree(shared_mocap):
+    """The Daz rig has no toe joint (its toes never bend); the iClone and CMU rigs put their
+    toe tips on the sole's line, which version 4 read as toes bent 19-35 degrees against the
+    canonical end site (on the floor). Version 5's sole-line tip makes the Daz copy's toes
+    agree and leaves the iClone / CMU agreement as it was."""
+    from engine.motion.retarget import load_motion
+    from engine.motion.retarget_compare import compare_clips
+
+    toes = [sk.JOINT_INDEX["ltoe"], sk.JOINT_INDEX["rtoe"]]
+    clips = {(rig, v): load_motion(shared_mocap / path, version=v, max_frames=300)
+             for rig, path in (("daz", "cmu_daz_cgspeed/07_03.bvh"), ("iclone", "cmu_iclone/007_03.bvh"),
+                               ("mb", "cmu_mb/07_03.bvh")) for v in (4, 5)}  # fmt: skip
+    daz = {v: compare_clips(clips["daz", v], clips["iclone", v]).rot_deg[toes] for v in (4, 5)}
+    assert daz[4].min() > 15.0 and (daz[5] < daz[4] / 2).all() and daz[5].mean() < 9.0, (daz[4].round(1), daz[5].round(1))
+    same = {v: compare_clips(clips["iclone", v], clips["mb", v]).rot_deg[toes] for v in (4, 5)}
+    assert np.abs(same[5] - same[4]).max() < 1.5, (same[4].round(1), same[5].round(1))

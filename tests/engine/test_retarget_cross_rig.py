@@ -82,12 +82,12 @@ def test_knees_bend_alike_on_nine_takes_in_ten(cross_rig):
 
 @pytest.fixture(scope="module")
 def daz_legs_v5(shared_mocap):
-    """Thigh and knee differences (degrees) of every pair with a Daz copy, version 5:
-    ``{(a, b): array (takes, 4)}`` for lhip, lknee, rhip, rknee."""
+    """Thigh, knee and toe differences (degrees) of every pair with a Daz copy, version 5:
+    ``{(a, b): array (takes, 6)}`` for lhip, lknee, rhip, rknee, ltoe, rtoe."""
     from engine.motion.retarget import load_motion
     from engine.motion.retarget_compare import compare_clips, multi_rig_takes
 
-    legs = [sk.JOINT_INDEX[j] for j in ("lhip", "lknee", "rhip", "rknee")]
+    legs = [sk.JOINT_INDEX[j] for j in ("lhip", "lknee", "rhip", "rknee", "ltoe", "rtoe")]
     out: dict[tuple[str, str], list] = {}
     for take, paths in multi_rig_takes(shared_mocap).items():
         daz = [p for p in paths if "daz" in p]
@@ -109,6 +109,14 @@ def test_version_5_knees_bend_alike_on_the_daz_rig_too(daz_legs_v5):
         knees, thighs = v[:, [1, 3]], v[:, [0, 2]]
         assert np.percentile(knees, 90) <= 8.0 and np.median(knees) <= 3.5, (pair, np.round(np.sort(knees.ravel())[-5:], 1))
         assert np.median(thighs) <= 6.0, (pair, round(float(np.median(thighs)), 1))
+
+
+@pytest.mark.slow
+def test_version_5_toes_agree_on_the_daz_rig(daz_legs_v5):
+    """With the canonical toe tip on the sole's line, the Daz copies' toes (the rig has no
+    toe joint) agree with the others within 9 degrees on the median (version 4: 21-27)."""
+    for pair, v in daz_legs_v5.items():
+        assert np.median(v[:, 4:]) <= 9.0, (pair, round(float(np.median(v[:, 4:])), 1))
 
 
 @pytest.mark.slow

@@ -28,6 +28,8 @@ reading the whole ``(N, 18)`` table.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import torch
 
@@ -76,8 +78,12 @@ class Prefilter:
         spread = np.sqrt(((u - np.repeat(centres, GROUP, axis=0)[:n]) ** 2).sum(1))
         # [c, |c|^2] per block: |c - u_q|^2 = [c, |c|^2] . [-2 u_q, 1] + |u_q|^2, one product
         self.blocks = torch.from_numpy(np.column_stack((centres, (centres * centres).sum(1))).astype(np.float32))
-        self._offsets = torch.arange(GROUP)
-        self.radii = torch.from_numpy((np.maximum.reduceat(spread, starts) * (1.0 + 1e-6)).astype(np.float32))
+        radii = np.maximum.reduceat(spread, starts) * (1.0 + 1e-6)
+        self.radii, self.radii2 = torch.from_numpy(radii.astype(np.float32)), torch.from_numpy((radii * radii).astype(np.float32))
+        # the rows block by block (B, GROUP, rank + 2); padding rows have a bound no test passes
+        pad = np.zeros((-n % GROUP, self.rows.shape[1]), dtype=np.float32)
+        pad[:, -1] = 1e30
+        self.grouped = torch.cat((self.rows, torch.from_numpy(pad))).reshape(len(starts), GROUP, -1)
 
     def bound(self, q: np.ndarray) -> tuple[torch.Tensor, float, float]:
         """``(b (N,) float32, offset, margin)`` for the query ``q (D_c,)`` (the float32
@@ -106,15 +112,15 @@ class Prefilter:
         uq, qq = self.query(q)
         margin = MARGIN * (1.0 + self.largest + qq)
         w = torch.from_numpy(np.concatenate((-2.0 * uq, [1.0])).astype(np.float32))
-        # |c - u_q|^2 with float32 rounding far below one margin (|c|^2 <= largest, |u_q|^2 = qq)
-        # taken off, so the block's distance is never overestimated
-        near = (self.blocks @ w + (qq - margin)).clamp_min_(0.0).sqrt_().sub_(self.radii).clamp_min_(0.0)
-        blocks = torch.nonzero(near * near <= worst + qq + 3.0 * margin).flatten()
-        rows = (blocks[:, None] * GROUP + self._offsets).flatten()
-        if len(blocks) and int(blocks[-1]) * GROUP + GROUP > len(self.rows):
-            rows = rows[rows < len(self.rows)]
-        b = self.rows.index_select(0, rows) @ w
-        return rows[b <= worst + 2.0 * margin]
+        # a block is kept when max(|c - u_q| - r, 0)^2 <= T = worst + |q|^2 + 3 margin, i.e. when
+        # |c - u_q|^2 - margin <= (sqrt(T) + r)^2: the margin (far above the float32 rounding
+        # of these sums, |c|^2 <= largest and |u_q|^2 = |q|^2) keeps a block's distance from
+        # being overestimated
+        root = math.sqrt(max(worst + qq + 3.0 * margin, 0.0))
+        limit = torch.add(self.radii2, self.radii, alpha=2.0 * root).add_(root * root - qq + margin)
+        blocks = torch.nonzero(self.blocks @ w <= limit).flatten()
+        hit = torch.nonzero(self.grouped.index_select(0, blocks) @ w <= worst + 2.0 * margin)
+        return blocks[hit[:, 0]] * GROUP + hit[:, 1]
 
 
 def distances(table: torch.Tensor, norms: torch.Tensor, q: torch.Tensor, rows: torch.Tensor) -> torch.Tensor:

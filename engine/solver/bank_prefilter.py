@@ -56,12 +56,15 @@ class Prefilter:
         The combination's standardised features of every bank frame.
     rank : int
         Principal directions kept.
+    gram : ndarray (D_c, D_c), optional
+        ``rows.T @ rows`` in float64 if known (e.g. the combination's block of its
+        anchor table's Gram matrix: one product per anchor instead of one per combination).
     """
 
-    def __init__(self, rows: torch.Tensor, rank: int = RANK) -> None:
+    def __init__(self, rows: torch.Tensor, rank: int = RANK, gram: np.ndarray | None = None) -> None:
         x = rows.double().numpy()
         rank = min(rank, x.shape[1])
-        _, vecs = np.linalg.eigh(x.T @ x)  # ascending eigenvalues
+        _, vecs = np.linalg.eigh(x.T @ x if gram is None else gram)  # ascending eigenvalues
         self.basis = np.ascontiguousarray(vecs[:, ::-1][:, :rank])  # (D_c, rank) float64
         proj = x @ self.basis
         sq = (x * x).sum(1)

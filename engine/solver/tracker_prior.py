@@ -100,6 +100,7 @@ class _Table:
     mean: np.ndarray  # (D,) float64
     std: np.ndarray  # (D,) float64
     table: torch.Tensor  # (N, D) float32
+    gram: np.ndarray  # (D, D) float64 table.T @ table, which every combination's prefilter reads a block of
 
 
 @dataclass
@@ -183,7 +184,9 @@ class PoseBank:
             x = features(self.positions.astype(np.float64), self.rotations.astype(np.float64), a,
                          self.prev_anchor[:, ANCHORS.index(anchor)].astype(np.float64))  # fmt: skip
             mean, std = x.mean(0), x.std(0) + 1e-6
-            tab = self._tables[anchor] = _Table(mean, std, torch.as_tensor((x - mean) / std, dtype=torch.float32))
+            table = torch.as_tensor((x - mean) / std, dtype=torch.float32)
+            t64 = table.double().numpy()
+            tab = self._tables[anchor] = _Table(mean, std, table, t64.T @ t64)
             self.index_builds += 1
         return tab
 
@@ -194,7 +197,8 @@ class PoseBank:
             cols = np.asarray(feature_columns(joints), dtype=np.intp)
             full = len(cols) == tab.table.shape[1] and bool((cols == np.arange(len(cols))).all())
             sub = tab.table if full else tab.table[:, torch.from_numpy(cols)]
-            idx = self._indexes[joints] = _Index(tab, cols, (sub * sub).sum(1), full, Prefilter(sub), tab.mean[cols],
+            pre = Prefilter(sub, gram=tab.gram[np.ix_(cols, cols)])
+            idx = self._indexes[joints] = _Index(tab, cols, (sub * sub).sum(1), full, pre, tab.mean[cols],
                                                  tab.std[cols], torch.from_numpy(cols))  # fmt: skip
             self.index_builds += 1
         return idx

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import gc
 import os
 import sys
 from pathlib import Path
@@ -101,6 +102,7 @@ def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
     app = QApplication.instance() or QApplication(sys.argv[:1])
     app.setApplicationName("DragPoser Studio")
     window = MainWindow(method=method, engine=engine, started=started)
+    gc.enable()  # what the start-up made is frozen now (MainWindow); app.cli.run turned it off
     mark("window built")
     try:
         open_initial(window, path if path or not scene else None, sensors, rig_map)

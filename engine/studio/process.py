@@ -21,6 +21,7 @@ reported in :attr:`EngineProcess.failure`.
 from __future__ import annotations
 
 import dataclasses
+import gc
 import multiprocessing as mp
 import os
 import pickle
@@ -189,6 +190,9 @@ def _child_main(commands: Any, conn: Any, method_factory: Any, threads: int, par
     from engine.startup_trace import mark
 
     mark("engine process up")
+    # no cyclic collections while the imports and the models' loading create their
+    # long-lived objects (collections that free nothing); frozen once the method is ready
+    gc.disable()
     for var in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
         os.environ[var] = str(threads)
     threading.Thread(target=_watch_parent, args=(parent,), daemon=True).start()
@@ -202,6 +206,8 @@ def _child_main(commands: Any, conn: Any, method_factory: Any, threads: int, par
     engine.listeners.append(_HistorySender(conn))
     if prepare:
         engine.prepare(prepare)
+    gc.freeze()
+    gc.enable()
     try:
         engine.run()  # this process's main thread runs the loop
     finally:

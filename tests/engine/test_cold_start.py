@@ -65,3 +65,4 @@ def test_a_started_engine_process_is_adopted_with_the_whole_session(synthetic_mo
     assert started.starts == 0 and session.engine is started
     kinds = [type(c).__name__ for c in started.commands]
     assert kinds[0] == "SetMethod" and "SetMotion" in kinds and "SetSensors" in kinds
+

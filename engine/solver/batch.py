@@ -9,8 +9,9 @@ and losses vectorised over the frames, the closed-form reverse pass of
 :class:`engine.solver.fast.FastPose` vectorised the same way, and one update of every
 latent. Each frame minimises what the frame-by-frame solve minimises (sensors, the
 temporal prior's latent, the smoothing target from its two previous solved frames, the
-ground band), stops by the same rule, and keeps its own update state (Adam moments or
-plain steps), so a frame solved here is the frame-by-frame solve's, given the same start.
+ground band), keeps its own update state (Adam moments or plain steps), and stops by the
+same rule or after a number of steps the caller gives per frame; under the same rule a
+frame solved here is the frame-by-frame solve's, given the same start.
 
 Which frames are independent is the caller's choice: :mod:`engine.methods.dragposer_batch`
 cuts a clip into segments and solves the ``k``-th frame of every segment together, each
@@ -159,9 +160,10 @@ class BatchPose:
             np.matmul(world[:, parents], local[:, a:b], out=world[:, a:b])
         bones = np.matmul(world[:, fp.prow[1:]], fp.off_col)[..., 0]  # (A, 21, 3)
         pos = np.matmul(fp.chain, bones) + t.root_pos[idx, None]
-        self.pos[idx] = pos
+        self.pos[idx] = pos  # for row()
         self.world[idx], self.u[idx] = world, u
         self.idx, self.norm, self.z = idx, norm, z
+        self._active = pos, world, u  # the same, for backward() without a gather
         self.err = pos[:, self.rows] - t.targets[idx]
         self.pos_loss = np.einsum("tsi,tsi->ts", self.err, self.err)
         w = t.weights[idx]
@@ -172,14 +174,17 @@ class BatchPose:
             sensors[:, t.six] += t.rot_weights[idx] * self.rot_loss
         self.dev = (pos - t.smooth_target[idx][:, fp.order]) * t.smooth_on[idx, None, None]
         cols = [sensors * (w > 0), (self.dev**2).sum((1, 2))[:, None] / n]
-        h = pos[:, self.feet, 2]
-        m = h.min(1, keepdims=True)
-        e = np.exp(-(h - m) / SOFTMIN_TAU)
-        soft = m[:, 0] - SOFTMIN_TAU * np.log(e.sum(1))
-        lo, hi = t.ground_band
-        self.ground_w = e / e.sum(1, keepdims=True)
-        self.ground_e = np.where(soft > hi, soft - hi, np.where(soft < lo, soft - lo, 0.0))
-        cols.append(self.ground_e[:, None] ** 2)
+        if t.ground_weight > 0:
+            h = pos[:, self.feet, 2]
+            m = h.min(1, keepdims=True)
+            e = np.exp(-(h - m) / SOFTMIN_TAU)
+            soft = m[:, 0] - SOFTMIN_TAU * np.log(e.sum(1))
+            lo, hi = t.ground_band
+            self.ground_w = e / e.sum(1, keepdims=True)
+            self.ground_e = np.where(soft > hi, soft - hi, np.where(soft < lo, soft - lo, 0.0))
+            cols.append(self.ground_e[:, None] ** 2)
+        else:  # weight 0 (trackers on the feet): the term is not evaluated
+            cols.append(np.zeros((f, 1)))
         if t.prior is not None:
             d = z.astype(np.float64) - t.prior[idx]
             cols.append((d * d).sum(1, keepdims=True) / z.shape[1])
@@ -207,7 +212,7 @@ class BatchPose:
             g += (2.0 * t.smooth_weight / n) * self.dev
         if t.ground_weight > 0:
             g[:, self.feet, 2] += (2.0 * t.ground_weight * self.ground_e)[:, None] * self.ground_w
-        pos, world = self.pos[idx], self.world[idx]
+        pos, world, u = self._active
         tau = np.matmul(fp.subtree, _cross3(pos, g)) - _cross3(pos, np.matmul(fp.subtree, g))
         if len(t.six):
             inside = (self.rot_raw >= 0.0) & (self.rot_raw <= 1.0)
@@ -216,7 +221,7 @@ class BatchPose:
             tau += np.matmul(fp.subtree[:, self.rows6], (m.reshape(f, -1, 9) @ _AXIAL) * coef[..., None])
         frame = world[:, fp.prow]
         sigma = np.einsum("tri,trij->trj", tau, frame)  # W_parent^T tau
-        g_q = QN.mul(np.concatenate((np.zeros((f, n, 1)), sigma), axis=2), self.u[idx])
+        g_q = QN.mul(np.concatenate((np.zeros((f, n, 1)), sigma), axis=2), u)
         g_q *= (2.0 / self.norm)[..., None]
         g_q[:, 0] = 0.0  # the root's rotation and position are the hip tracker's
         out = np.zeros((4 * n + 3, f), np.float32)
@@ -252,16 +257,18 @@ def _cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def solve_streams(decoder: BatchDecoder, pose: BatchPose, terms: FrameTerms, z: np.ndarray, rule: str,
                   lr: float, max_iterations: int, patience: int, min_improvement: float,
-                  load: Callable[[int], bool], done: Callable[[int, int], None]) -> None:  # fmt: skip
+                  load: Callable[[int], bool], done: Callable[[int, int], None],
+                  fixed_steps: Callable[[int], int | None] | None = None) -> None:  # fmt: skip
     """Solve ``C`` streams of frames, one frame of each at a time, all in the same decoder
     passes. Row ``c`` of ``terms`` and of the latents ``z (C, L)`` float32 hold stream
     ``c``'s current frame; ``load(c)`` puts its next frame's terms into row ``c`` (its
     start is the latent left in ``z[c]``, the previous frame's) and returns False when
     the stream has no frame left; ``done(c, iterations)`` is called when row ``c``'s frame
     has stopped (its result is in ``z[c]``, :meth:`BatchPose.row` and
-    :attr:`BatchPose.values`). A frame stops by the frame-by-frame offline rule: it meets
-    its tolerances, its loss has not improved by ``min_improvement`` (relative) for
-    ``patience`` iterations, or ``max_iterations`` are done. ``rule``: ``sgd`` (steps of
+    :attr:`BatchPose.values`). A frame takes ``fixed_steps(c)`` steps (called after each
+    ``load(c)``) or, where that is None or not given, stops by the frame-by-frame offline
+    rule: it meets its tolerances, its loss has not improved by ``min_improvement``
+    (relative) for ``patience`` iterations, or ``max_iterations`` are done. ``rule``: ``sgd`` (steps of
     ``lr`` times the gradient), ``adam`` (fresh moments per frame) or ``adam-carry``
     (moments carried from frame to frame of a stream)."""
     c_all, dim = z.shape
@@ -269,17 +276,29 @@ def solve_streams(decoder: BatchDecoder, pose: BatchPose, terms: FrameTerms, z: 
     b1, b2 = LatentUpdate.BETAS
     m1, m2, steps = np.zeros((c_all, dim), np.float32), np.zeros((c_all, dim), np.float32), np.zeros(c_all)
     best, since, iters = np.full(c_all, np.inf), np.zeros(c_all, np.intp), np.zeros(c_all, np.intp)
-    pose.values = np.zeros((c_all, pose.term_weights().shape[1]))
-    live = [c for c in range(c_all) if load(c)]
+    weights = pose.term_weights()  # a row's sensor columns change with its frame, the rest never
+    pose.values = np.zeros(weights.shape)
+    steps_of = np.full(c_all, -1, np.intp)  # each row's frame's step count (-1: the stopping rule)
+
+    def next_frame(c: int) -> bool:
+        if not load(c):
+            return False
+        weights[c, : terms.weights.shape[1]] = terms.weights[c]
+        k = fixed_steps(c) if fixed_steps is not None else None
+        steps_of[c] = -1 if k is None else k
+        return True
+
+    live = [c for c in range(c_all) if next_frame(c)]
     while live:
         idx = np.array(live, dtype=np.intp)
-        w = pose.term_weights()[idx]
+        w = weights[idx]
         values = pose.values[idx] = pose.forward(z[idx], decoder.forward(z[idx].T), idx)
         total = (w * values).sum(1)
         better = total < best[idx] * (1.0 - min_improvement)
         best[idx] = np.where(better, total, best[idx])
         since[idx] = np.where(better, 0, since[idx] + 1)
-        stop = pose.satisfied() | (since[idx] >= patience) | (iters[idx] >= max_iterations)
+        rule_stop = pose.satisfied() | (since[idx] >= patience) | (iters[idx] >= max_iterations)
+        stop = np.where(steps_of[idx] < 0, rule_stop, iters[idx] >= steps_of[idx])
         if not stop.all():
             g_out, g_z = pose.backward()
             grad = decoder.backward(g_out).T
@@ -302,5 +321,5 @@ def solve_streams(decoder: BatchDecoder, pose: BatchPose, terms: FrameTerms, z: 
             best[c], since[c], iters[c] = np.inf, 0, 0
             if rule == "adam":
                 m1[c], m2[c], steps[c] = 0.0, 0.0, 0
-            if not load(int(c)):
+            if not next_frame(int(c)):
                 live.remove(int(c))

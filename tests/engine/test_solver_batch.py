@@ -35,20 +35,91 @@ def _frame_by_frame(m, tracking, skeleton):
 
 
 @pytest.mark.parametrize("preset", ["6", "4"])
-def test_one_segment_is_the_frame_by_frame_solve(clip, preset, monkeypatch):
+def test_one_segment_under_the_stopping_rule_is_the_frame_by_frame_solve(clip, preset, monkeypatch):
     from engine.tracking import simulate
 
     tr = simulate(clip, preset)
     monkeypatch.setattr(DB, "STREAMS", 1)  # the whole clip is one segment: every frame starts from the last
     monkeypatch.setattr(DB, "SEGMENT", 1000)
-    batched, res_b = run_method(_offline(), tr, clip.skeleton, progress=False)
-    seq, res_s = _frame_by_frame(_offline(), tr, clip.skeleton)
+    # a stopping setting given by the user (here its default value) asks for the stopping rule
+    batched, res_b = run_method(_offline(patience=10), tr, clip.skeleton, progress=False)
+    seq, res_s = _frame_by_frame(_offline(patience=10), tr, clip.skeleton)
     gap = np.linalg.norm(batched.positions() - seq.positions(), axis=-1)
     its_b, its_s = np.array([r.iterations for r in res_b]), np.array([r.iterations for r in res_s])
     # float32 products in another order (a matrix, not a vector) move a stopping test by an
     # iteration now and then, and the frames after it drift apart by up to a few centimetres
     assert (its_b[:8] == its_s[:8]).all() and abs(its_b.mean() - its_s.mean()) < 0.05 * its_s.mean()
+    assert len(set(its_b[1:].tolist())) > 1  # the rule, not a fixed count
     assert gap[:8].max() < 1e-4 and np.median(gap) < 1e-5 and gap.max() < 0.05
+
+
+@pytest.mark.parametrize("preset, rule", [("6", "adam-carry"), ("4", "sgd")])
+def test_one_segment_with_fixed_steps_is_the_frame_by_frame_solve_at_that_many_steps(clip, preset, rule,
+                                                                                      monkeypatch):  # fmt: skip
+    from engine.tracking import simulate
+
+    tr = simulate(clip, preset)
+    monkeypatch.setattr(DB, "STREAMS", 1)
+    monkeypatch.setattr(DB, "SEGMENT", 1000)
+    monkeypatch.setattr(DB, "EXTRAPOLATE", {})  # each frame starts from the last latent, as frame by frame
+    steps = DB.STEPS[rule]
+    batched, res_b = run_method(_offline(), tr, clip.skeleton, progress=False)
+    # realtime mode frame by frame: frame 0 by the stopping rule, then a fixed count of steps
+    seq, res_s = _frame_by_frame(get_method("dragposer", mode="realtime", iterations=steps), tr, clip.skeleton)
+    its_b = [r.iterations for r in res_b]
+    assert its_b[0] == res_s[0].iterations and set(its_b[1:]) == {steps}
+    gap = np.linalg.norm(batched.positions() - seq.positions(), axis=-1)
+    assert gap[:8].max() < 1e-4 and np.median(gap) < 1e-4 and gap.max() < 0.05
+
+
+def test_each_frame_starts_from_its_stream_s_last_latent_moved_on_by_its_last_change(clip, monkeypatch):
+    from engine.tracking import simulate
+
+    tr = simulate(clip, "6")
+    monkeypatch.setattr(DB, "STREAMS", 1)
+    monkeypatch.setattr(DB, "SEGMENT", 1000)
+    starts, loads = [], []
+    solve = DB.solve_streams
+
+    def record(dec, pose, terms, z, rule, lr, mx, pat, mi, load, done, fixed):
+        def load_and_keep(c):
+            ok = load(c)
+            starts.append(z[c].copy())
+            return ok
+
+        def done_and_keep(c, it):
+            loads.append(z[c].copy())
+            done(c, it)
+
+        return solve(dec, pose, terms, z, rule, lr, mx, pat, mi, load_and_keep, done_and_keep, fixed)
+
+    monkeypatch.setattr(DB, "solve_streams", record)
+    assert _offline().solve_clip([tr.frame(i) for i in range(6)]) is not None
+    share = DB.EXTRAPOLATE["adam-carry"]
+    assert np.allclose(starts[1], loads[0])  # no velocity yet
+    for f in range(2, 6):
+        assert np.allclose(starts[f], loads[f - 1] + share * (loads[f - 1] - loads[f - 2]), atol=1e-6)
+
+
+def test_warm_up_frames_take_their_own_step_counts(clip, monkeypatch):
+    from engine.tracking import simulate
+
+    tr = simulate(clip, "6")
+    monkeypatch.setattr(DB, "SEGMENT", 8)
+    monkeypatch.setattr(DB, "WARMUP", 4)  # every later segment's first frame after the clip's first
+    counts = []
+    solve = DB.solve_streams
+
+    def record(*args):
+        fixed = args[-1]
+        return solve(*args[:-1], lambda c: counts.append(fixed(c)) or counts[-1])
+
+    monkeypatch.setattr(DB, "solve_streams", record)
+    res = _offline().solve_clip([tr.frame(i) for i in range(len(tr))])
+    assert [r.iterations for r in res[1:]] == [DB.STEPS["adam-carry"]] * (len(tr) - 1)
+    # stream 0: frame 0 by the rule, then kept frames; streams 1-4: a first frame, warm-ups, kept frames
+    assert counts.count(None) == 1 and counts.count(DB.FIRST_STEPS) == 4
+    assert counts.count(DB.WARMUP_STEPS) == 4 * 3 and counts.count(DB.STEPS["adam-carry"]) == len(tr) - 1
 
 
 def test_segments_are_solved_side_by_side_and_stay_close_to_the_frame_by_frame_solve(clip, monkeypatch):

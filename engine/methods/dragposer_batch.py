@@ -19,13 +19,17 @@ each segment's start otherwise adds jitter). Each frame gets the same after-solv
 *Steps.* A frame takes a fixed number of steps (:data:`STEPS`) instead of the
 frame-by-frame stopping rule (tolerances, ``patience``, ``max_iterations``), which ends
 most frames on ``patience``, after ten steps that no longer help, and stops the hard ones
-no later than the easy ones. With six sensors, a fixed 40 steps per frame frame by frame
+no later than the easy ones. Frame by frame with six sensors, a fixed 40 steps per frame
 is as accurate as the rule's mean of 62 (3 validation files, 300 frames: 0.793 cm / 5.872
-deg against 0.801 / 5.887), and 80 or 160 steps gain nothing more; with the sparse sets'
-plain gradient steps 10 are more accurate than 20, 40 or the rule's 89. Each stream's next
-frame starts from its last latent moved on by half its last change (:data:`EXTRAPOLATE`),
-which buys what about ten more steps would. Warm-up frames, whose solutions are dropped,
-take :data:`WARMUP_STEPS`, and all but their last two skip the after-solve steps.
+deg against 0.801 / 5.887), and 80 or 160 steps gain nothing more. Each stream's next
+frame starts from its last latent moved on by half its last change (:data:`EXTRAPOLATE`;
+with the sparse sets' plain gradient steps it does worse). What the segments' starts
+cost is mostly how well their warm-up frames are solved: warm-up frames, whose solutions
+are dropped, take :data:`WARMUP_STEPS` steps and a segment's first frame (from the bank's
+latent, fresh moments) :data:`FIRST_STEPS`. Six sensors, 300 frames: with 10 and 40, six
+validation files gave 0.777 cm / 8.029 deg against 0.768 / 8.005 with 30 and 100; 20 and
+100 do as well as 30 and 100 on all nine (0.775 / 7.305 against 0.775 / 7.303). All but
+the last two warm-up frames skip the after-solve steps.
 
 A clip is batched when the method is in offline mode on its fast path with no user
 constraint, every frame has the same connected trackers, among them a 6-DoF hip
@@ -75,13 +79,13 @@ PRIOR_START = True
 #: Steps per kept frame, by update rule (module doc, *Steps*). The frame-by-frame stopping
 #: rule applies instead when the user set ``max_iterations``, ``patience`` or
 #: ``min_improvement``, and always to the clip's first frame (it starts from the mean latent).
-STEPS = {"adam-carry": 30, "adam": 30, "sgd": 10}
+STEPS = {"adam-carry": 30, "adam": 30, "sgd": 15}
 #: Steps per warm-up frame: its solution is dropped, it only brings the stream's latent,
 #: moments and smoothing history to the segment's first kept frame.
-WARMUP_STEPS = 10
+WARMUP_STEPS = 20
 #: Steps of a later segment's first warm-up frame, which starts from the pose bank's latent
 #: with fresh moments.
-FIRST_STEPS = 40
+FIRST_STEPS = 100
 #: A stream's next frame starts from its last latent plus this share of the latent's last
 #: change (by update rule; the plain gradient steps of the sparse sets do worse with it).
 EXTRAPOLATE = {"adam-carry": 0.5, "adam": 0.5, "sgd": 0.0}

@@ -19,7 +19,6 @@ import pkgutil
 from typing import Any
 
 from engine.constraints.base import REGISTRY, Constraint, from_dict
-from engine.kinematics.pose_state import PoseState  # what every loss(state) receives
 
 #: Modules of the package that define the interface, not a kind.
 INTERFACE_MODULES = ("base", "terms", "placement")
@@ -43,7 +42,14 @@ _KINDS = _discover()
 globals().update(_KINDS)
 
 
-def __getattr__(name: str) -> Any:  # kinds registered after the import (e.g. by a plug-in module)
+def __getattr__(name: str) -> Any:
+    """``PoseState`` (what every ``loss(state)`` receives) on first use, since it imports
+    torch, which the studio's window never needs; kinds registered after the import (e.g.
+    by a plug-in module) by class name."""
+    if name == "PoseState":
+        from engine.kinematics.pose_state import PoseState
+
+        return PoseState
     for cls in REGISTRY.values():
         if cls.__name__ == name:
             return cls

@@ -15,16 +15,19 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any, ClassVar, TYPE_CHECKING
 
 import numpy as np
-import torch
 
 from engine import skeleton as sk
 from engine.constraints.base import Constraint, param
 from engine.constraints.terms import FrameInputs
 from engine.errors import UserError
-from engine.kinematics.pose_state import PoseState
+
+if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
+    import torch
+
+    from engine.kinematics.pose_state import PoseState
 
 MODES = ("head_over_hip", "com_over_feet")
 _HEAD, _ROOT = sk.JOINT_INDEX["upperneck"], sk.JOINT_INDEX["root"]
@@ -66,6 +69,7 @@ class BalanceConstraint(Constraint):
         return ((a - b) ** 2).sum().clamp_min(_MIN_SQUARED).sqrt()
 
     def loss(self, state: PoseState) -> torch.Tensor:
+        import torch
         return torch.relu(self._distance(state.positions) - self.tolerance).pow(2)
 
     def satisfied(self, state: PoseState) -> bool:

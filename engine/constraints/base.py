@@ -23,17 +23,19 @@ import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from collections.abc import Callable
-from typing import Any, ClassVar
+from typing import Any, ClassVar, TYPE_CHECKING
 
 import numpy as np
-import torch
 
 from engine import skeleton as sk
 from engine.constraints.terms import FrameInputs, PoseTerm
 from engine.errors import UserError
-from engine.kinematics import quaternion as Q
-from engine.kinematics.pose_state import PoseState
 from engine.validation import shown
+
+if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
+    import torch
+
+    from engine.kinematics.pose_state import PoseState
 
 #: kind string -> constraint class; filled by subclasses as they are defined.
 REGISTRY: dict[str, type["Constraint"]] = {}
@@ -82,6 +84,7 @@ def missing_parts(cls: type["Constraint"]) -> list[str]:
 
 def world_rotation_matrix(state: PoseState, joint: int) -> torch.Tensor:
     """World rotation ``(3, 3)`` of one joint, from whichever form the state carries."""
+    from engine.kinematics import quaternion as Q
     if state.rotation_matrices is not None:
         return state.rotation_matrices[joint]
     return Q.to_matrix(state.world_rotations()[joint])
@@ -90,6 +93,7 @@ def world_rotation_matrix(state: PoseState, joint: int) -> torch.Tensor:
 def rotation_distance(state: PoseState, joint: int, target: np.ndarray) -> torch.Tensor:
     """``1 - <q, q_target>^2 = sin^2(angle / 2)`` between a joint's world rotation and a
     target quaternion ``(4,)``, computed as ``(3 - trace(R_t^T R)) / 4``; scalar in [0, 1]."""
+    from engine.kinematics import quaternion as Q
     r = world_rotation_matrix(state, joint)
     t = np.asarray(target, dtype=np.float64)
     rt = Q.to_matrix(vec(t / max(np.linalg.norm(t), 1e-12), r))
@@ -107,6 +111,7 @@ def joint_index(name: str, field: str = "joint", kind: str = "") -> int:
 
 def vec(x: Any, like: torch.Tensor) -> torch.Tensor:
     """A numpy parameter as a tensor of ``like``'s dtype and device (no gradient)."""
+    import torch
     return torch.as_tensor(np.asarray(x, dtype=np.float64), dtype=like.dtype, device=like.device)
 
 

@@ -8,16 +8,19 @@ below it, per axis.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any, ClassVar, TYPE_CHECKING
 
 import numpy as np
-import torch
 
 from engine.constraints.base import Constraint, joint_index, param, vec
 from engine.constraints.placement import BOUNDS_HALF, joint_at
 from engine.constraints.terms import FrameInputs
 from engine.errors import UserError
-from engine.kinematics.pose_state import PoseState
+
+if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
+    import torch
+
+    from engine.kinematics.pose_state import PoseState
 
 _SLACK = 1e-3  # metres: satisfied this far outside the box
 
@@ -40,6 +43,7 @@ class BoundsConstraint(Constraint):
         return (self.joint,)
 
     def loss(self, state: PoseState) -> torch.Tensor:
+        import torch
         p = state.positions[joint_index(self.joint, "joint", self.kind)]
         lo, hi = vec(self.box_min, p), vec(self.box_max, p)
         return (torch.relu(lo - p) ** 2 + torch.relu(p - hi) ** 2).sum()

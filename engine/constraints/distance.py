@@ -8,16 +8,19 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any, ClassVar, TYPE_CHECKING
 
 import numpy as np
-import torch
 
 from engine.constraints.base import Constraint, joint_index, param
 from engine.constraints.placement import joint_at
 from engine.constraints.terms import FrameInputs
 from engine.errors import UserError
-from engine.kinematics.pose_state import PoseState
+
+if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
+    import torch
+
+    from engine.kinematics.pose_state import PoseState
 
 _MIN_SQUARED = 1e-12  # m^2: the length is clamped so its gradient stays finite when the joints coincide
 

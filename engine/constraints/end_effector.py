@@ -8,15 +8,18 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any, ClassVar, TYPE_CHECKING
 
 import numpy as np
-import torch
 
 from engine.constraints.base import Constraint, joint_index, param, rotation_distance, vec
 from engine.constraints.placement import REACH, facing, joint_at
 from engine.constraints.terms import FrameInputs, rotation_term, unit_quaternion_matrix
-from engine.kinematics.pose_state import PoseState
+
+if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
+    import torch
+
+    from engine.kinematics.pose_state import PoseState
 
 
 @dataclass

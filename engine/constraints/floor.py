@@ -14,15 +14,18 @@ Fast path: gradient ``-2 relu(floor_height + clearance - z)`` on each joint's he
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any, ClassVar, TYPE_CHECKING
 
 import numpy as np
-import torch
 
 from engine.constraints.base import Constraint, joint_index, param
 from engine.constraints.terms import FrameInputs
 from engine.errors import UserError
-from engine.kinematics.pose_state import PoseState
+
+if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
+    import torch
+
+    from engine.kinematics.pose_state import PoseState
 
 _SLACK = 0.01  # metres: satisfied this far below the clearance
 
@@ -68,6 +71,7 @@ class FloorConstraint(Constraint):
         return [joint_index(j, "joints", self.kind) for j in self.joints]
 
     def loss(self, state: PoseState) -> torch.Tensor:
+        import torch
         idx = self._index()
         p = state.positions[idx]
         out = torch.relu(self.floor_height + self.clearance - p[:, 2]).pow(2).sum()

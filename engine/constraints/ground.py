@@ -13,15 +13,18 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import ClassVar, TYPE_CHECKING
 
 import numpy as np
-import torch
 
 from engine import skeleton as sk
 from engine.constraints.base import Constraint, param
 from engine.constraints.terms import FrameInputs
-from engine.kinematics.pose_state import PoseState
+
+if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
+    import torch
+
+    from engine.kinematics.pose_state import PoseState
 
 _FEET = [sk.JOINT_INDEX["lankle"], sk.JOINT_INDEX["rankle"]]
 #: Softness of the minimum over the two ankles, metres.
@@ -47,6 +50,7 @@ class GroundConstraint(Constraint):
         return ("lankle", "rankle")
 
     def loss(self, state: PoseState) -> torch.Tensor:
+        import torch
         z = -SOFTMIN_TAU * torch.logsumexp(-state.positions[_FEET, 2] / SOFTMIN_TAU, dim=0)
         return torch.relu(z - self.high) ** 2 + torch.relu(self.low - z) ** 2
 

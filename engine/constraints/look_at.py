@@ -13,16 +13,19 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any, ClassVar, TYPE_CHECKING
 
 import numpy as np
-import torch
 
 from engine.constraints.base import Constraint, joint_index, param, vec, world_rotation_matrix
 from engine.constraints.placement import LOOK_DISTANCE, facing, joint_at
 from engine.constraints.terms import FrameInputs
 from engine.errors import UserError
-from engine.kinematics.pose_state import PoseState
+
+if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
+    import torch
+
+    from engine.kinematics.pose_state import PoseState
 
 _MIN_DISTANCE = 1e-6  # metres: the direction to a target this close is not defined
 
@@ -68,6 +71,7 @@ class LookAtConstraint(Constraint):
         return 1.0 - self._cos(state)
 
     def satisfied(self, state: PoseState) -> bool:
+        import torch
         with torch.no_grad():
             c = float(self._cos(state))
         return c >= math.cos(math.radians(self.tolerance)) or not math.isfinite(c)

@@ -20,15 +20,18 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any, ClassVar, TYPE_CHECKING
 
 import numpy as np
-import torch
 
 from engine.constraints.base import Constraint, joint_index, param, vec
 from engine.constraints.placement import joint_at
 from engine.constraints.terms import FrameInputs
-from engine.kinematics.pose_state import PoseState
+
+if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
+    import torch
+
+    from engine.kinematics.pose_state import PoseState
 
 
 @dataclass
@@ -58,6 +61,7 @@ class PinConstraint(Constraint):
         return None if previous is None else previous[j]
 
     def loss(self, state: PoseState) -> torch.Tensor:
+        import torch
         j = joint_index(self.joint, "joint", self.kind)
         prev = None if state.previous_positions is None else state.previous_positions.detach()
         target = self._target(prev)
@@ -67,6 +71,7 @@ class PinConstraint(Constraint):
         return ((state.positions[j] - t) ** 2).sum()
 
     def satisfied(self, state: PoseState) -> bool:
+        import torch
         with torch.no_grad():
             return float(self.loss(state)) <= self.tolerance**2
 

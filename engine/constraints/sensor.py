@@ -13,16 +13,18 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any, ClassVar, TYPE_CHECKING
 
 import numpy as np
-import torch
 
 from engine.constraints.base import Constraint, joint_index, param, rotation_distance, vec
 from engine.constraints.terms import FrameInputs, NativeTerm
 from engine.errors import UserError
-from engine.kinematics import quaternion as Q
-from engine.kinematics.pose_state import PoseState
+
+if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
+    import torch
+
+    from engine.kinematics.pose_state import PoseState
 
 
 @dataclass
@@ -92,6 +94,7 @@ class SensorConstraint(Constraint):
         return pos_err if rot_err is None else pos_err + self.rotation_weight * rot_err
 
     def satisfied(self, state: PoseState) -> bool:
+        import torch
         if not self.connected:
             return True
         with torch.no_grad():
@@ -105,6 +108,8 @@ class SensorConstraint(Constraint):
 
     @classmethod
     def batch(cls, items: list[Constraint], like: torch.Tensor) -> Callable[[PoseState], torch.Tensor]:
+        import torch
+        from engine.kinematics import quaternion as Q
         idx = torch.tensor([joint_index(c.joint, "joint", cls.kind) for c in items])
         target = vec(np.stack([c.position for c in items]), like)
         on = vec([float(c.connected) for c in items], like)
@@ -137,6 +142,7 @@ def unit_rotation(q: Any) -> np.ndarray:
 
 
 def _matrices(state: PoseState, idx: torch.Tensor) -> torch.Tensor:
+    from engine.kinematics import quaternion as Q
     if state.rotation_matrices is not None:
         return state.rotation_matrices.index_select(0, idx)
     return Q.to_matrix(state.world_rotations().index_select(0, idx))

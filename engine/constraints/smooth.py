@@ -11,15 +11,18 @@ gradient is ``2 (p_j - target_j) / 22`` per joint.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import ClassVar, TYPE_CHECKING
 
 import numpy as np
-import torch
 
 from engine import skeleton as sk
 from engine.constraints.base import Constraint, param, vec
 from engine.constraints.terms import FrameInputs
-from engine.kinematics.pose_state import PoseState
+
+if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
+    import torch
+
+    from engine.kinematics.pose_state import PoseState
 
 
 @dataclass

@@ -9,13 +9,16 @@ gradient ``2 (z - z_pred) / L`` skips the decoder).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import ClassVar, TYPE_CHECKING
 
-import torch
 
 from engine.constraints.base import Constraint
 from engine.constraints.terms import FrameInputs, NativeTerm
-from engine.kinematics.pose_state import PoseState
+
+if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
+    import torch
+
+    from engine.kinematics.pose_state import PoseState
 
 
 @dataclass

@@ -13,10 +13,10 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
-import torch
 
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
+from engine.kinematics.backend import torch_of
 
 
 @dataclass(frozen=True)
@@ -60,14 +60,16 @@ def levels(parents: tuple[int, ...]) -> Levels:
 
 
 def _ops(x):
-    if isinstance(x, torch.Tensor):
+    torch = torch_of(x)
+    if torch is not None:
         return (lambda a, i, d: a.index_select(d, torch.as_tensor(i, device=a.device)),
                 lambda xs, d: torch.cat(xs, dim=d))  # fmt: skip
     return (lambda a, i, d: np.take(a, i, axis=d)), (lambda xs, d: np.concatenate(xs, axis=d))
 
 
 def _offsets_like(offsets, like):
-    if isinstance(like, torch.Tensor) and not isinstance(offsets, torch.Tensor):
+    torch = torch_of(like)
+    if torch is not None and not isinstance(offsets, torch.Tensor):
         return torch.as_tensor(np.asarray(offsets), dtype=like.dtype, device=like.device)
     return offsets
 
@@ -94,7 +96,7 @@ def fk(local_rot, root_pos, offsets, parents=sk.PARENTS):
         World joint rotations.
     """
     lv = levels(tuple(int(p) for p in parents))
-    if not isinstance(local_rot, torch.Tensor):
+    if torch_of(local_rot) is None:
         return _fk_numpy(np.asarray(local_rot), np.asarray(root_pos), np.asarray(offsets), lv, parents)
     take, cat = _ops(local_rot)
     offsets = _offsets_like(offsets, local_rot)

@@ -9,20 +9,23 @@ directly and skip the dispatch.
 
 from __future__ import annotations
 
-from typing import TypeVar
+from typing import TYPE_CHECKING, TypeVar
 
 import numpy as np
-import pymotion.rotations.quat_torch as _qt
-import torch
 
 from engine.kinematics import quat_np as _np
+from engine.kinematics.backend import torch_of
 
-Array = TypeVar("Array", np.ndarray, torch.Tensor)
+if TYPE_CHECKING:  # imported by whoever made a tensor; numpy callers never load torch
+    import torch
+
+Array = TypeVar("Array", np.ndarray, "torch.Tensor")
 
 
 def mul(q0: Array, q1: Array) -> Array:
     """Hamilton product ``q0 * q1``; shapes broadcast, ``(..., 4)``."""
-    if isinstance(q0, torch.Tensor):
+    torch = torch_of(q0)
+    if torch is not None:
         w0, x0, y0, z0 = q0.unbind(-1)
         w1, x1, y1, z1 = q1.unbind(-1)
         return torch.stack(
@@ -41,7 +44,8 @@ def rotate(q: Array, v: Array) -> Array:
     """Rotate vectors ``v (..., 3)`` by quaternions ``q (..., 4)``."""
     w = q[..., :1]
     u = q[..., 1:]
-    if isinstance(q, torch.Tensor):
+    torch = torch_of(q)
+    if torch is not None:
         shape = torch.broadcast_shapes(u.shape, v.shape)
         u, v, w = u.expand(shape), v.expand(shape), w.expand(shape[:-1] + (1,))
         t = 2.0 * torch.linalg.cross(u, v, dim=-1)
@@ -51,7 +55,8 @@ def rotate(q: Array, v: Array) -> Array:
 
 def conjugate(q: Array) -> Array:
     """Inverse of a unit quaternion."""
-    if isinstance(q, torch.Tensor):
+    torch = torch_of(q)
+    if torch is not None:
         return q * torch.tensor([1.0, -1.0, -1.0, -1.0], dtype=q.dtype, device=q.device)
     return _np.conjugate(q)
 
@@ -60,20 +65,23 @@ inverse = conjugate
 
 
 def normalize(q: Array, eps: float = 1e-8) -> Array:
-    if isinstance(q, torch.Tensor):
+    torch = torch_of(q)
+    if torch is not None:
         return q / torch.linalg.vector_norm(q, dim=-1, keepdim=True).clamp_min(eps)
     return _np.normalize(q, eps)
 
 
 def canonicalize(q: Array) -> Array:
     """Pick the representative with ``w >= 0`` (q and -q are the same rotation)."""
-    if isinstance(q, torch.Tensor):
+    torch = torch_of(q)
+    if torch is not None:
         return torch.where(q[..., :1] < 0, -q, q)
     return _np.canonicalize(q)
 
 
 def identity(shape: tuple[int, ...] = (), like: Array | None = None) -> Array:
-    if isinstance(like, torch.Tensor):
+    torch = torch_of(like)
+    if torch is not None:
         out = torch.zeros(shape + (4,), dtype=like.dtype, device=like.device)
         out[..., 0] = 1.0
         return out
@@ -92,7 +100,8 @@ def to_euler(q: np.ndarray, order: np.ndarray) -> np.ndarray:
 
 def from_axis_angle(axis: Array, angle: Array) -> Array:
     """Rotation of ``angle (...,)`` radians about unit ``axis (..., 3)``."""
-    if isinstance(axis, torch.Tensor):
+    torch = torch_of(axis)
+    if torch is not None:
         half = 0.5 * angle
         return torch.cat((torch.cos(half)[..., None], torch.sin(half)[..., None] * axis), dim=-1)
     return _np.from_axis_angle(axis, angle)
@@ -105,12 +114,17 @@ def from_to(v0: np.ndarray, v1: np.ndarray) -> np.ndarray:
 
 def from_matrix(m: Array) -> Array:
     """Rotation matrices ``(..., 3, 3)`` to quaternions."""
-    return _qt.from_matrix(m) if isinstance(m, torch.Tensor) else _np.from_matrix(m)
+    if torch_of(m) is None:
+        return _np.from_matrix(m)
+    import pymotion.rotations.quat_torch as _qt  # imports torch, which a tensor argument has loaded
+
+    return _qt.from_matrix(m)
 
 
 def to_matrix(q: Array) -> Array:
     """Unit quaternions ``(..., 4)`` (w, x, y, z) to rotation matrices ``(..., 3, 3)``."""
-    if not isinstance(q, torch.Tensor):
+    torch = torch_of(q)
+    if torch is None:
         return _np.to_matrix(q)
     w, x, y, z = q.unbind(-1)
     m = torch.stack(
@@ -124,7 +138,8 @@ def to_matrix(q: Array) -> Array:
 
 def angle(q0: Array, q1: Array) -> Array:
     """Geodesic angle (radians) between two rotations, ``(...,)``; in [0, pi]."""
-    if isinstance(q0, torch.Tensor):
+    torch = torch_of(q0)
+    if torch is not None:
         d = (q0 * q1).sum(-1).abs().clamp(max=1.0)
         return 2.0 * torch.arccos(d)
     return _np.angle(q0, q1)
@@ -133,7 +148,8 @@ def angle(q0: Array, q1: Array) -> Array:
 def heading(q: Array) -> Array:
     """Yaw-only part of a rotation: rotation about +Z that turns the rest forward (-Y)
     onto the horizontal projection of ``q``'s forward. Shape ``(..., 4)``."""
-    if not isinstance(q, torch.Tensor):
+    torch = torch_of(q)
+    if torch is None:
         return _np.heading(q)
     f = torch.tensor([0.0, -1.0, 0.0], dtype=q.dtype, device=q.device)
     fw = rotate(q, f.expand(q.shape[:-1] + (3,)))
@@ -149,7 +165,8 @@ def unroll(q: np.ndarray, axis: int = 0) -> np.ndarray:
 
 def mirror_x(q: Array) -> Array:
     """Conjugate a rotation by the reflection ``x -> -x`` (the left/right mirror)."""
-    if isinstance(q, torch.Tensor):
+    torch = torch_of(q)
+    if torch is not None:
         return q * torch.tensor([1.0, 1.0, -1.0, -1.0], dtype=q.dtype, device=q.device)
     return _np.mirror_x(q)
 

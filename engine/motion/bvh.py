@@ -25,7 +25,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from pymotion.io.bvh import BVH as _PymotionBVH
 from pymotion.rotations import quat_np as _qnp
 
 from engine import skeleton as sk
@@ -240,6 +239,9 @@ def save_motion_bvh(path: str | Path, motion: Motion) -> None:
     positions = np.repeat(offsets[None], f, axis=0)
     positions[:, 0] = motion.root_pos
     ends = sorted((sk.JOINT_INDEX[n], off) for n, off in sk.END_SITES.items())
+    # pymotion's BVH module imports torch (its skeleton ops take tensors too): only when saving
+    from pymotion.io.bvh import BVH as _PymotionBVH
+
     writer = _PymotionBVH()
     writer.data = {
         "filename": path.stem,

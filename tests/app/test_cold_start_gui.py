@@ -1,8 +1,10 @@
 """``gui``'s start-up (app/cli.py): no cyclic garbage collection while the window's
-modules are imported, collection on again once the window is built."""
+modules are imported, collection on again once the window is built, and no torch in the
+window process."""
 
 from __future__ import annotations
 
+import os
 import sys
 
 
@@ -31,3 +33,18 @@ def test_gui_collects_no_cycles_while_starting_and_collects_again_after(monkeypa
         assert gc.isenabled()
     finally:
         gc.enable()
+
+
+def test_the_window_process_does_not_import_torch():
+    """The window never runs torch (the engine process does), and torch costs about a CPU
+    second of the launch: the modules the window imports must reach it only inside the
+    functions the engine calls (a constraint's loss, tensor kinematics, saving a BVH)."""
+    import subprocess
+
+    from tests.conftest import REPO
+
+    code = ("import sys\nimport app.main_window, app.main, engine.constraints, engine.motion.bvh\n"
+            "print('torch' in sys.modules, 'engine.constraints.look_at' in sys.modules)")  # fmt: skip
+    out = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True, check=True,
+                         timeout=300, env={**os.environ, "QT_QPA_PLATFORM": "offscreen"})  # fmt: skip
+    assert out.stdout.split() == ["False", "True"], out.stderr[-2000:]

@@ -68,3 +68,38 @@ def test_the_native_view_copies_colour_only_to_the_window_and_the_screen_shows_t
     img = np.frombuffer(shot.constBits().asstring(shot.bytesPerLine() * h), np.uint8)
     img = img.reshape(h, shot.bytesPerLine())[:, : 3 * w].reshape(h, w, 3)
     assert orange_fraction(img) > 0.001  # read back from the X server, not from VTK
+
+
+def test_the_native_view_draws_nothing_before_its_first_show_and_then_the_scene(qtbot, monkeypatch, fake_snapshot):
+    """Building the view adds a dozen actors and places the camera, each of which asked
+    for a render of a window not on screen yet; the first show's paint draws the scene."""
+    from PyQt6.QtGui import QGuiApplication
+
+    import widgets.viewport.viewport as viewport_module
+    from tests.widgets.test_viewport import orange_fraction
+    from widgets.viewport import Viewport
+
+    if QGuiApplication.platformName() != "xcb":
+        pytest.skip("the native-window view is the X11 choice")
+    renders = []
+    make = viewport_module.make_plotter
+
+    def counted(parent):
+        plotter = make(parent)
+        plotter.render_window.AddObserver("StartEvent", lambda *_: renders.append(1))
+        return plotter
+
+    monkeypatch.setattr(viewport_module, "make_plotter", counted)
+    v = Viewport()
+    v.set_notice("loading")
+    v.show_clip_frame(fake_snapshot().positions)
+    assert renders == []
+    v.resize(640, 480)
+    v.show()
+    qtbot.waitExposed(v)
+    try:
+        v.show_snapshot(fake_snapshot())
+        assert renders
+        assert orange_fraction(np.asarray(v.plotter.screenshot(return_img=True))) > 0.001
+    finally:
+        v.close()

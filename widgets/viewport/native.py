@@ -73,6 +73,16 @@ class NativeInteractor(QVTKRenderWindowInteractor, BasePlotter):
         self.iren.initialize()
         self.enable_trackball_style()
         self._first_time = False  # BasePlotter: this window renders itself
+        # Until the first show nothing is on screen, and that show's paint event draws the
+        # whole scene: the renders asked for while the window is built (one per actor
+        # added, the camera's placement, the busy notice) would each draw a frame nobody
+        # sees (15 of them, about 0.15 CPU s on software GL, before the studio's window appears).
+        self.suppress_rendering = True
+
+    def showEvent(self, event: Any) -> None:  # noqa: N802 (Qt's name)
+        """Render from now on (the paint event of this show draws the first frame)."""
+        self.suppress_rendering = False
+        super().showEvent(event)
 
     def render(self) -> None:
         if getattr(self, "_closed", False):

@@ -17,7 +17,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from typing import Any
 
 import numpy as np
@@ -75,6 +75,7 @@ class DragPoserMethod(DragPoserEdits, Method):
             predictor.eval().requires_grad_(False)
         self.predictor = predictor
         self.bank = bank  # the tracker prior's training poses (engine/solver/tracker_prior.py)
+        self._bank_later: tuple[tuple[str, ...], ...] = ()  # combinations between_frames prepares
         self.settings = settings or OptimizerSettings()
         # settings the caller chose (kept against the sensor-set profiles, engine/solver/profiles.py)
         defaults = OptimizerSettings()
@@ -220,15 +221,25 @@ class DragPoserMethod(DragPoserEdits, Method):
         self._last = result
         return result
 
+    def prepare_bank_later(self, combinations: Iterable[tuple[str, ...]]) -> None:
+        """Have :meth:`between_frames` prepare the pose bank (its tables and these
+        combinations, :meth:`PoseBank.prepare`) after the next frame instead of now."""
+        self._bank_later = tuple(combinations)
+
     def between_frames(self) -> None:
         """One piece of the temporal predictor's deferred work (engine/solver/temporal.py):
         the same latents as when the next :meth:`step` does it, without adding to that
-        frame's latency (nothing while the pose bank gives the prior). Runs with the solver's
-        torch thread count, as :meth:`step` does."""
+        frame's latency (nothing while the pose bank gives the prior), and the pose bank's
+        tables and combinations a method made with ``prepare_bank=False`` left for after
+        its first frame (:func:`create`). Runs with the solver's torch thread count, as
+        :meth:`step` does."""
         threads = torch.get_num_threads()
         if self.settings.threads:
             torch.set_num_threads(self.settings.threads)
         try:
+            if self._bank_later and self.bank is not None:  # once, after the first frame
+                later, self._bank_later = self._bank_later, ()
+                self.bank.prepare(later)
             if not self._bank_prior:
                 self.schedule.run_pending()
         finally:
@@ -331,9 +342,17 @@ def _finite(r: Sensor) -> bool:
 
 
 def create(mode: str = "realtime", iterations: int | None = None, lr: float | None = None,
-           vae_path: Any = None, predictor_path: Any = None, **overrides: Any) -> DragPoserMethod:  # fmt: skip
+           vae_path: Any = None, predictor_path: Any = None, prepare_bank: bool = True,
+           **overrides: Any) -> DragPoserMethod:  # fmt: skip
     """Registry factory: DragPoser with the shipped models (``engine.models``), or with a
     user-trained VAE (``vae_path``) and, optionally, its predictor (``predictor_path``).
+
+    ``prepare_bank`` builds the pose bank's two anchor tables and the shipped presets'
+    combinations now (about 1.3 CPU s beyond the first frame's own table and combination),
+    so that no live frame waits for them. False leaves them: the first frame's lookup
+    builds the table and combination it needs, and :meth:`DragPoserMethod.between_frames`
+    the rest after that frame (the studio, which shows one frame and then waits for the
+    user). The lookups are the same either way.
 
     Raises
     ------
@@ -352,7 +371,7 @@ def create(mode: str = "realtime", iterations: int | None = None, lr: float | No
     decoder, predictor = models.vae, models.predictor
     # the shipped pose bank holds the shipped VAE's latents: a user's VAE goes without it
     bank = default_bank() if vae_path is None else None
-    if bank is not None:  # the presets' lookups ready before their first frame (no cold start)
+    if bank is not None and prepare_bank:  # the presets' lookups ready before their first frame (no cold start)
         bank.prepare(preset_combinations())
     mark("engine: pose bank ready")
     values: dict[str, Any] = {"mode": mode, **overrides}
@@ -360,7 +379,10 @@ def create(mode: str = "realtime", iterations: int | None = None, lr: float | No
         values["iterations" if mode == "realtime" else "max_iterations"] = iterations
     if lr is not None:
         values["lr"] = lr
-    return DragPoserMethod(decoder, predictor, latent_dim=decoder.config.latent, bank=bank, **values)
+    method = DragPoserMethod(decoder, predictor, latent_dim=decoder.config.latent, bank=bank, **values)
+    if bank is not None and not prepare_bank:
+        method.prepare_bank_later(preset_combinations())
+    return method
 
 
 def preset_combinations() -> list[tuple[str, ...]]:

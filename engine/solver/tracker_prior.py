@@ -276,7 +276,8 @@ class PoseBank:
 @functools.cache
 def default_bank() -> PoseBank | None:
     """The shipped bank (loaded once per process), or None when it is missing or was not
-    made with the shipped VAE's encoder (then the temporal predictor stays the prior)."""
+    made with the shipped VAE's encoder (then the temporal predictor stays the prior).
+    Its tables are built by :meth:`PoseBank.prepare` or by the first lookups."""
     from engine.models.loading import DEFAULT_VAE
 
     if not (DEFAULT_BANK.is_file() and DEFAULT_VAE.is_file()):
@@ -284,7 +285,7 @@ def default_bank() -> PoseBank | None:
     bank = PoseBank.load(DEFAULT_BANK)
     if bank.vae_sha256 and bank.vae_sha256 != file_sha256(DEFAULT_VAE):
         return None
-    return bank.prepare()
+    return bank
 
 
 def combination(joints: Iterable[str]) -> tuple[str, ...] | None:

@@ -208,3 +208,43 @@ def test_many_frames_at_once_find_what_one_frame_at_a_time_finds():
     one = torch.stack([bank.latent(joints, p, r) for p, r in zip(pos, rot)])
     assert many.shape == (70, 24)
     torch.testing.assert_close(many, one, atol=1e-5, rtol=0)
+
+
+def test_a_bank_left_for_later_builds_the_first_frames_lookup_then_the_rest_after_it(clip):
+    """``prepare_bank_later`` (the studio's DragPoser): the first frame builds only its
+    anchor's table and its combination, ``between_frames`` the rest once, and the priors
+    equal those of a bank prepared before the first frame."""
+    from engine.methods.dragposer import preset_combinations
+
+    combos = preset_combinations()
+    later, ahead = _bank(np.random.default_rng(5), k=2), _bank(np.random.default_rng(5), k=2)
+    ahead.prepare(combos)
+    priors = {}
+    for name, bank in (("later", later), ("ahead", ahead)):
+        torch.manual_seed(0)
+        m = DragPoserMethod(MLPDecoder(), CountingPredictor(), iterations=2, bank=bank)
+        if bank is later:
+            m.prepare_bank_later(combos)
+        lookup, seen = bank.latent, priors.setdefault(name, [])
+        bank.latent = lambda *a, _lookup=lookup, _seen=seen, **kw: _seen.append(_lookup(*a, **kw)) or _seen[-1]
+        tr = simulate(clip, "6")
+        m.reset(clip.skeleton)
+        for i in range(3):
+            m.step(tr.frame(i))
+            if bank is later and i == 0:
+                assert later.index_builds == 2  # the hips' table and the six trackers' combination
+            m.between_frames()
+            if bank is later and i == 0:
+                assert later.index_builds == len(ANCHORS) + len(combos)
+    assert later.index_builds == ahead.index_builds
+    assert len(priors["later"]) == 3 and all(torch.equal(a, b) for a, b in zip(priors["later"], priors["ahead"]))
+
+
+def test_the_studio_builds_dragposer_with_the_bank_left_for_after_its_first_frame(monkeypatch):
+    import engine.studio.method_edits as edits
+
+    asked = []
+    monkeypatch.setattr(edits, "get_method", lambda name, **kw: asked.append((name, kw)))
+    edits.make_method("dragposer")
+    edits.make_method("ik")
+    assert asked == [("dragposer", {"prepare_bank": False}), ("ik", {})]

@@ -5,7 +5,12 @@ data prepare``): forward kinematics gives the world positions and rotations of t
 joints, the VAE encoder's mean gives the latent of the true pose.
 
     PYTHONPATH=. python scripts/build_pose_bank.py --data prepared --out assets/models/pose_bank.npz
-        [--vae assets/models/vae.pt] [--k 8]
+        [--vae assets/models/vae.pt] [--k 8] [--stride 1]
+
+``--stride N`` keeps every N-th frame of each clip (frames 0, N, 2N, ...; the previous
+anchor positions of a kept frame still come from the frame ``LAG`` before it): the bank's
+size sets its load time and the cost of a lookup, and neighbouring frames at 60 fps are
+nearly the same pose.
 """
 
 from __future__ import annotations
@@ -24,8 +29,9 @@ from engine import skeleton as sk  # noqa: E402
 from engine.solver.tracker_prior import ANCHORS, BANK_JOINTS, LAG, PoseBank, file_sha256  # noqa: E402
 
 
-def bank_from_motions(motions, vae, k: int = 8, vae_sha256: str = "") -> PoseBank:
-    """A :class:`PoseBank` of every frame of ``motions`` (:class:`engine.motion.clip.Motion`)."""
+def bank_from_motions(motions, vae, k: int = 8, vae_sha256: str = "", stride: int = 1) -> PoseBank:
+    """A :class:`PoseBank` of every ``stride``-th frame of each of ``motions``
+    (:class:`engine.motion.clip.Motion`)."""
     from engine.kinematics.fk import fk
     from engine.methods.autoencoder import AutoencoderMethod
 
@@ -35,12 +41,12 @@ def bank_from_motions(motions, vae, k: int = 8, vae_sha256: str = "") -> PoseBan
     pos, rot, prev, lat = [], [], [], []
     for motion in motions:
         p, r = fk(motion.local_rot, motion.root_pos, motion.skeleton.offsets)
-        pos.append(p[:, cols])
-        rot.append(r[:, cols])
+        pos.append(p[::stride, cols])
+        rot.append(r[::stride, cols])
         a = p[:, anchors]
-        prev.append(np.concatenate((np.repeat(a[:1], LAG, 0), a[:-LAG]))[: len(a)])
+        prev.append(np.concatenate((np.repeat(a[:1], LAG, 0), a[:-LAG]))[: len(a)][::stride])
         ae.reset(motion.skeleton, reference=motion)
-        lat.append(ae._latent)
+        lat.append(ae._latent[::stride])
     return PoseBank(np.concatenate(pos), np.concatenate(rot), np.concatenate(prev),
                     np.concatenate(lat).astype(np.float32), vae_sha256, k)  # fmt: skip
 
@@ -51,7 +57,10 @@ def main() -> int:
     ap.add_argument("--out", default="assets/models/pose_bank.npz")
     ap.add_argument("--vae", help="VAE weights (default: the shipped one)")
     ap.add_argument("--k", type=int, default=8)
+    ap.add_argument("--stride", type=int, default=1, help="keep every N-th frame of each clip (default: all)")
     args = ap.parse_args()
+    if args.stride < 1:
+        ap.error(f"--stride must be 1 or more, got {args.stride}")
 
     from engine.models import load_default_models, load_models
     from engine.models.loading import DEFAULT_VAE
@@ -67,9 +76,10 @@ def main() -> int:
         if entry["split"] == "train":
             d = np.load(data / entry["shard"])
             motions.append(Motion(d["local_rot"], d["root_pos"], sk.Skeleton(offsets=d["offsets"])))
-    bank = bank_from_motions(motions, vae, args.k, file_sha256(vae_file))
+    bank = bank_from_motions(motions, vae, args.k, file_sha256(vae_file), args.stride)
     bank.save(args.out)
-    print(f"wrote {args.out}: {len(bank)} frames of {len(motions)} training clips (data hash {man.get('hash')}), "
+    print(f"wrote {args.out}: {len(bank)} frames (stride {args.stride}) of {len(motions)} training clips "
+          f"(data hash {man.get('hash')}), "
           f"{time.monotonic() - t0:.0f} s")  # fmt: skip
     return 0
 

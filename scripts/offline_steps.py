@@ -114,7 +114,7 @@ def _timed_parts(db) -> dict[str, float]:
     wrap(SB.BatchPose, "forward", "FK and losses")
     wrap(SB.BatchPose, "backward", "FK and losses reverse")
     wrap(db, "_finished", "after-solve steps")
-    wrap(TP.PoseBank, "latent_batch", "bank lookups")
+    wrap(TP.PoseBank, "latent_frames", "bank lookups")
     wrap(db, "_read", "reading frames")
     return spent
 

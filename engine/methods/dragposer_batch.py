@@ -233,9 +233,9 @@ def _read_all(m: Any, frames: Sequence[SensorFrame]) -> list[dict] | None:
     read = [_read(m, f) for f in frames]
     if any(r is None for r in read) or len({(r["names"], r["bank"][0]) for r in read}) != 1:
         return None
-    joints = read[0]["bank"][0]  # the priors of all frames in a few products over the bank
+    joints = read[0]["bank"][0]  # all frames' priors in one call, as frame by frame finds them
     pos, rot = np.array([r["bank"][1] for r in read]), np.array([r["bank"][2] for r in read])
-    priors = m.bank.latent_batch(joints, pos, rot, k=read[0]["settings"].tracker_prior_neighbours)
+    priors = m.bank.latent_frames(joints, pos, rot, k=read[0]["settings"].tracker_prior_neighbours)
     for r, z in zip(read, priors.numpy().astype(np.float64)):
         r["prior"] = z
     return read

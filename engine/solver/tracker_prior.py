@@ -212,41 +212,43 @@ class PoseBank:
         idx = self._index(joints)
         a = _anchor(joints)
         x = features(pos[-1:], rot[-1:], a, pos[:1, a])[0]
-        tab = idx.table
         q32 = ((x - idx.mean) / idx.std).astype(np.float32)
+        # the previous lookup's neighbours bound the search (any hint gives the same answer)
+        near = self._nearest(idx, q32, self._hints.get(joints), min(k or self.k, len(self)))
+        self._hints[joints] = near
+        return self._latents[near].mean(0)
+
+    def _nearest(self, idx: _Index, q32: np.ndarray, hint: torch.Tensor | None, k: int) -> torch.Tensor:
+        """The ``k`` nearest rows ``(k,)`` of ``idx`` to the standardised query ``q32 (D_c,)``."""
+        tab = idx.table
         if idx.full:
             q = torch.from_numpy(q32)
         else:  # the other columns multiply zeros
             q = torch.zeros(tab.table.shape[1])
             q[idx.cols_t] = torch.from_numpy(q32)
-        # |t - q|^2 = |t|^2 - 2 t.q + |q|^2; the last term is the same for every row. The
-        # previous lookup's neighbours bound the search (any hint gives the same answer)
-        k = min(k or self.k, len(self))
-        near = nearest(tab.table, idx.norms, q, q32, idx.prefilter, self._hints.get(joints), k)
-        self._hints[joints] = near
-        return self._latents[near].mean(0)
+        # |t - q|^2 = |t|^2 - 2 t.q + |q|^2; the last term is the same for every row
+        return nearest(tab.table, idx.norms, q, q32, idx.prefilter, hint, k)
 
-    def latent_batch(self, joints: Sequence[str], pos: np.ndarray, rot: np.ndarray, k: int = 0,
-                     chunk: int = 64) -> torch.Tensor:  # fmt: skip
-        """:meth:`latent` of ``F`` frames at once, ``(F, L)``: ``pos (F, LAG+1, S, 3)``, ``rot
-        (F, LAG+1, S, 4)`` each frame's window as :meth:`latent` takes it. The distances of
-        ``chunk`` frames are one matrix product (the table is read once per chunk, not once
-        per frame); the sums run in another order than :meth:`latent`'s, so a neighbour
-        tied with the ``k``-th to float32 rounding may differ."""
+    def latent_frames(self, joints: Sequence[str], pos: np.ndarray, rot: np.ndarray, k: int = 0) -> torch.Tensor:
+        """:meth:`latent` of ``F`` consecutive frames, ``(F, L)``, with the rows and bits
+        ``F`` calls of it give: ``pos (F, LAG+1, S, 3)``, ``rot (F, LAG+1, S, 4)`` each
+        frame's window as :meth:`latent` takes it. The features are computed for all
+        frames at once and each frame's search is bounded by the previous frame's
+        neighbours (its prefilter then passes a few percent of the bank's rows, where a
+        product over the whole bank reads all of them); the realtime lookup's hint is
+        left as it was."""
         joints = tuple(joints)
         idx, a = self._index(joints), _anchor(joints)
-        tab = idx.table
-        x = features(pos[:, -1], rot[:, -1], a, pos[:, 0, a])
-        q = torch.zeros(len(x), tab.table.shape[1])
-        x32 = ((x - tab.mean[idx.cols]) / tab.std[idx.cols]).astype(np.float32)
-        q[:, torch.from_numpy(idx.cols)] = torch.from_numpy(x32)
         k = min(k or self.k, len(self))
-        out = []
-        for c in range(0, len(q), chunk):
-            d = idx.norms[:, None] - 2.0 * (tab.table @ q[c : c + chunk].T)  # (N, chunk)
-            nearest = d.topk(k, dim=0, largest=False).indices  # (k, chunk)
-            out.append(self._latents[nearest].mean(0))
-        return torch.cat(out) if out else torch.zeros(0, self._latents.shape[1])
+        if not len(pos):
+            return torch.zeros(0, self._latents.shape[1])
+        x = features(pos[:, -1], rot[:, -1], a, pos[:, 0, a])
+        q32 = ((x - idx.mean) / idx.std).astype(np.float32)
+        hint, out = self._hints.get(joints), []
+        for q in q32:
+            hint = self._nearest(idx, q, hint, k)
+            out.append(hint)
+        return self._latents[torch.stack(out)].mean(1)
 
     def save(self, path: str | Path) -> None:
         """Write the bank (float16 arrays, compressed) atomically."""

@@ -241,3 +241,24 @@ def test_later_segments_start_from_the_bank_latent_of_their_first_warm_up_frame(
     for c in range(1, 5):
         want = read[8 * c - w]["prior"] if prior_start else np.zeros_like(z0[c])
         assert np.allclose(z0[c], want, atol=1e-6)
+
+
+def test_the_batched_solve_gives_every_frame_the_prior_a_lookup_of_that_frame_alone_gives(clip, monkeypatch):
+    from engine.solver.tracker_prior import PoseBank
+    from engine.tracking import simulate
+
+    tr = simulate(clip, "6")
+    monkeypatch.setattr(DB, "SEGMENT", 8)
+    frames = [tr.frame(i) for i in range(len(tr))]
+    batched = _offline().solve_clip(frames)
+
+    def one_at_a_time(bank, joints, pos, rot, k=0):
+        import torch
+
+        return torch.stack([bank.latent(joints, p, r, k) for p, r in zip(pos, rot)])
+
+    monkeypatch.setattr(PoseBank, "latent_frames", one_at_a_time)
+    looked_up = _offline().solve_clip(frames)
+    assert batched is not None and len(batched) == len(looked_up) == len(frames)
+    for a, b in zip(batched, looked_up):
+        assert np.array_equal(a.positions, b.positions) and np.array_equal(a.local_rot, b.local_rot)

@@ -10,7 +10,7 @@ import torch
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
 from engine.methods.dragposer import DragPoserMethod
-from engine.solver.tracker_prior import ANCHORS, BANK_JOINTS, LAG, PoseBank, TrackerHistory, features
+from engine.solver.tracker_prior import ANCHORS, BANK_JOINTS, LAG, PoseBank, TrackerHistory, default_bank, features
 from engine.tracking import simulate
 from tests.engine.test_optimizer_standins import CountingPredictor, MLPDecoder
 
@@ -195,19 +195,41 @@ def test_the_first_frame_of_every_preset_finds_its_bank_index_built_when_the_mod
     assert m.bank.index_builds == built  # no frame built or derived an index
 
 
+def _windows(bank: PoseBank, joints: tuple[str, ...], starts: np.ndarray, rng) -> tuple[np.ndarray, np.ndarray]:
+    """Each start's ``LAG + 1``-frame window of the bank's own readings of ``joints``, moved a little."""
+    cols = [BANK_JOINTS.index(j) for j in joints]
+    pos = np.stack([bank.positions[i : i + LAG + 1, cols] for i in starts])
+    pos += rng.normal(scale=0.03, size=pos.shape)
+    return pos, np.stack([bank.rotations[i : i + LAG + 1, cols] for i in starts])
+
+
 def test_many_frames_at_once_find_what_one_frame_at_a_time_finds():
     rng = np.random.default_rng(6)
     bank = _bank(rng, n=400, k=5)
     joints = ("root", "upperneck", "lwrist", "rwrist")
-    cols = [BANK_JOINTS.index(j) for j in joints]
-    starts = rng.integers(0, 390, 70)  # more frames than one chunk
-    pos = np.stack([bank.positions[i : i + LAG + 1, cols] for i in starts])
-    pos += rng.normal(scale=0.03, size=pos.shape)
-    rot = np.stack([bank.rotations[i : i + LAG + 1, cols] for i in starts])
-    many = bank.latent_batch(joints, pos, rot, chunk=32)
+    pos, rot = _windows(bank, joints, rng.integers(0, 390, 70), rng)
+    many = bank.latent_frames(joints, pos, rot)
     one = torch.stack([bank.latent(joints, p, r) for p, r in zip(pos, rot)])
-    assert many.shape == (70, 24)
-    torch.testing.assert_close(many, one, atol=1e-5, rtol=0)
+    assert many.shape == (70, 24) and torch.equal(many, one)
+    assert bank.latent_frames(joints, pos[:0], rot[:0]).shape == (0, 24)
+
+
+@pytest.mark.parametrize("joints", [BANK_JOINTS, ("root", "upperneck", "lwrist", "rwrist"),
+                                    ("upperneck", "lwrist", "rwrist")])  # fmt: skip
+def test_the_shipped_bank_finds_for_a_run_of_frames_the_bits_one_frame_at_a_time_finds(joints):
+    bank = default_bank()
+    if bank is None:
+        pytest.skip("the shipped pose bank is not installed")
+    rng = np.random.default_rng(7)
+    # a run of consecutive frames (each bounded by the last one's neighbours), then a jump
+    starts = np.concatenate((np.arange(3000, 3060), rng.integers(0, len(bank) - LAG - 1, 10)))
+    pos, rot = _windows(bank, joints, starts, rng)
+    bank.latent(joints, pos[-1], rot[-1])
+    hint = bank._hints[tuple(joints)]
+    many = bank.latent_frames(joints, pos, rot, k=6)
+    assert bank._hints[tuple(joints)] is hint  # the run left the realtime lookup's hint alone
+    one = torch.stack([bank.latent(joints, p, r, k=6) for p, r in zip(pos, rot)])
+    assert torch.equal(many, one)
 
 
 def test_a_bank_left_for_later_builds_the_first_frames_lookup_then_the_rest_after_it(clip):

@@ -167,7 +167,7 @@ on {_files_text(files, args.files is not None)}, on a 2-core CPU machine with no
 ```
 
 which runs, for every preset P, mode M and method X,
-`dragposer-studio evaluate $(dragposer-studio data list --split val) --method X --sensors P --mode M --max-frames N --json {args.out}/X-P-M.json`,
+`dragposer-studio evaluate {"FILE..." if args.files else "$(dragposer-studio data list --split val)"} --method X --sensors P --mode M --max-frames N --json {args.out}/X-P-M.json`,
 first {args.realtime_frames} frames of each file in realtime mode, first {args.offline_frames} in
 offline mode (offline costs up to 100 iterations per frame), first {lossy} with lost trackers. `ms/frame` was measured with
 {args.jobs} evaluations sharing the two cores (idle-machine speed: `docs/performance.md`).
@@ -207,11 +207,11 @@ DragPoser's Tables 1 and 2 against our realtime rows:
 What differs in the protocol, so the columns are not strictly comparable:
 
 - **Data.** The paper trains on DanceDB and tests on HUMAN4D and SOMA (AMASS); we train
-  on 66 CMU clips (retargeted, plus mirrors; about 25 minutes of motion) and test on 9
-  held-out CMU clips of the same sources (dance, walks, basketball). Our VAE and predictor
-  are trained on 2 CPU cores (the VAE 56 minutes, then fine-tunes of 36 and 50 minutes
-  after the retargeting changed; the predictor 25 minutes, then 16 to follow the last
-  fine-tune), the paper's VAE for about a day on a GPU.
+  on 200 CMU files on four rigs (retargeted, plus mirrors; about 30 minutes of motion) and
+  test on held-out CMU takes of the same sources (dance, walks, basketball). Our VAE and
+  predictor are trained on 2 CPU cores (the VAE 56 minutes, then fine-tunes of 36, 50 and
+  47 minutes as the retargeting and the data changed; the predictor 25 minutes, then
+  fine-tunes of 16 and 21), the paper's VAE for about a day on a GPU.
 - **Skeleton.** Ours is the canonical 22-joint skeleton with each subject's bone lengths;
   the paper's is DanceDB's 22-joint rig.
 - **Metric.** The paper aligns the root before measuring Pos; compare its Pos with our

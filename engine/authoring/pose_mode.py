@@ -25,12 +25,14 @@ from engine.kinematics.features import encoder_input, pose_from_motion
 from engine.motion.clip import Motion
 
 #: Latent steps of one continuous solve (one drag event).
-ITERATIONS = 8
+ITERATIONS = 16
 #: Plain gradient step of the continuous solve. Dragging a wrist 30 cm in 30 events
-#: (mean pose, 1.75 m), the decoded wrist lagged its target by 4.8-6.7 cm at the
-#: optimizer's default 0.3, 1.8-3.9 cm at 1, 0.5-2.0 cm at 3 (Adam, lr 0.05: 2.1-3.2 cm,
-#: and the free arm moved more). Plain steps move only the constrained latent directions.
-STEP_SIZE = 3.0
+#: (mean pose, 1.75 m) in five directions with the shipped VAE, the decoded wrist's
+#: largest lag was 1.9 cm at 1.5 x 16 steps, 2.4 cm at 2 x 8, 3.6 cm at 1 x 8; from a
+#: step of 2.5 the solve starts to overshoot (2.8 cm at 2.5 x 12, 9.4 cm at 3 x 8), so
+#: the step keeps a margin below that. Plain steps move only the constrained latent
+#: directions (Adam moved the free arm more).
+STEP_SIZE = 1.5
 
 
 def encode_frames(vae, motion: Motion, frames: list[int]) -> np.ndarray:

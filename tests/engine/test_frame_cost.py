@@ -21,6 +21,7 @@ from engine.kinematics import quat_np as QN
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk
 from engine.methods import dragposer as D
+from engine.methods import dragposer_root as R
 from engine.models import load_default_models
 from engine.motion.retarget import load_motion
 from engine.solver import limb_ik
@@ -161,7 +162,7 @@ def test_predictor_conditioning_equals_the_torch_root_increment(models, motion, 
     record = m.schedule.record
 
     def spy(frame, latent, cond):
-        conds.append(cond.clone())
+        conds.append(cond().clone())  # the conditioning is computed when first read
         record(frame, latent, cond)
 
     monkeypatch.setattr(m.schedule, "record", spy)
@@ -176,7 +177,7 @@ def test_predictor_conditioning_equals_the_torch_root_increment(models, motion, 
         pos = torch.as_tensor(results[i].positions, dtype=torch.float32)
         h_inv = Q.conjugate(Q.heading(prev.rotation))
         disps.append(Q.rotate(h_inv, pos[0] - prev.position))
-        want = torch.cat((torch.stack(disps[-4:]).sum(0), pos[D._HEIGHT_IDX, 2]))
+        want = torch.cat((torch.stack(disps[-4:]).sum(0), pos[R._HEIGHT_IDX, 2]))
         np.testing.assert_allclose(conds[i].numpy(), want.numpy(), atol=1e-6)
 
 

@@ -57,9 +57,7 @@ from engine.methods.base import FrameResult
 from engine.sensors import SensorFrame
 from engine.solver.batch import BatchDecoder, BatchPose, FrameTerms, solve_streams
 from engine.solver.limb_ik import finish
-from threadpoolctl import ThreadpoolController
-
-_BLAS = ThreadpoolController()
+from engine.solver.threads import one_blas_thread
 
 #: Segments solved side by side (at most; fewer in a clip shorter than ``STREAMS * SEGMENT``).
 STREAMS = 32
@@ -97,7 +95,7 @@ RULE_SETTINGS = frozenset({"max_iterations", "patience", "min_improvement"})
 def solve_clip(m: Any, frames: Sequence[SensorFrame]) -> list[FrameResult] | None:
     """The clip's frames solved by ``m`` (a :class:`~engine.methods.dragposer.DragPoserMethod`
     just reset), or None (method left reset) when the clip is not batched (module doc)."""
-    with _BLAS.limit(limits=1, user_api="blas"):  # as the per-frame solver: more threads only wait
+    with one_blas_thread():  # as the per-frame solver: more threads only wait
         return _solve_clip(m, frames)
 
 

@@ -30,6 +30,10 @@ if TYPE_CHECKING:
 MAX_RECENT = 8
 
 
+#: File types of the Open dialog: an AMC motion's ASF skeleton is found beside it
+#: (engine.motion.source_file).
+OPEN_FILTER = "Motion files (*.bvh *.amc);;BVH motion (*.bvh);;ASF/AMC motion (*.amc)"
+
 class FileActions:
     """Holds the window's file operations (kept apart so the window stays about wiring).
 
@@ -72,7 +76,7 @@ class FileActions:
     # -- opening ------------------------------------------------------------------------
     def open_dialog(self) -> None:
         start = str(Path(self.recent()[0]).parent) if self.recent() else ""
-        path, _ = QFileDialog.getOpenFileName(self.w, "Open motion", start, "BVH motion (*.bvh)")
+        path, _ = QFileDialog.getOpenFileName(self.w, "Open motion", start, OPEN_FILTER)
         if path:
             self.open_path(path)
 

@@ -30,6 +30,7 @@ from app.menus import build_menus
 from app.schema import constraint_schema, optimizer_fields
 from app.undo import SceneUndo
 from engine.errors import UserError
+from engine.motion.source_file import is_source_file
 from engine.studio import events as ev
 from engine.studio.session import Session
 from widgets.constraint_panel import ConstraintPanel
@@ -317,16 +318,16 @@ class MainWindow(QMainWindow):
 
     # -- Qt events ------------------------------------------------------------------
     def dragEnterEvent(self, event: Any) -> None:
-        if any(u.toLocalFile().lower().endswith(".bvh") for u in event.mimeData().urls()):
+        if any(is_source_file(u.toLocalFile()) for u in event.mimeData().urls()):
             event.acceptProposedAction()
 
     def _open_dropped(self, paths: list[str]) -> None:
-        """Open the first .bvh of a drop (on the window or the 3D view)."""
-        bvh = next((p for p in paths if p.lower().endswith(".bvh")), None)
-        if bvh is None:
-            self.statusBar().showMessage("Only .bvh motion files can be opened by dropping them", 5000)
+        """Open the first motion file (.bvh or .amc) of a drop (on the window or the 3D view)."""
+        motion = next((p for p in paths if is_source_file(p)), None)
+        if motion is None:
+            self.statusBar().showMessage("Only .bvh and .amc motion files can be opened by dropping them", 5000)
         else:
-            self.files.open_path(bvh)
+            self.files.open_path(motion)
 
     def dropEvent(self, event: Any) -> None:
         self._open_dropped([u.toLocalFile() for u in event.mimeData().urls() if u.isLocalFile()])

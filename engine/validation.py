@@ -49,6 +49,8 @@ MAX_SHOWN = 40
 #: Largest file read per kind, bytes (checked with ``stat`` before reading).
 MAX_BYTES = {
     "BVH file": 1 << 30,
+    "AMC file": 1 << 30,
+    "ASF file": 16 << 20,
     "scene": 16 << 20,
     "manifest": 16 << 20,
     "weights file": 1 << 30,
@@ -297,17 +299,20 @@ def check_output_dir(path: str | Path, flag: str = "--out") -> Path:
 
 
 def check_manifest(doc: Any, where: str) -> list[dict]:
-    """The ``files`` entries of a manifest document, each with a checked ``fps``."""
+    """The ``files`` (BVH) and ``amc`` (ASF/AMC motions) entries of a manifest document,
+    each with a checked ``fps``."""
     if not isinstance(doc, dict):
         raise ValidationError(f"{where}: a manifest is a JSON object with a 'files' list, got {type(doc).__name__}")
-    files = doc.get("files", [])
-    if not isinstance(files, list):
-        raise ValidationError(f"{where}: field 'files' must be a list, got {type(files).__name__}")
     out = []
-    for i, entry in enumerate(files):
-        if not isinstance(entry, dict):
-            raise ValidationError(f"{where}: files[{i}] must be an object, got {type(entry).__name__}")
-        if not isinstance(entry.get("path", ""), str):
-            raise ValidationError(f"{where}: files[{i}].path must be a string")
-        out.append(check_fields(MANIFEST, entry, f"{where}: files[{i}]"))
+    for key in ("files", "amc"):
+        files = doc.get(key, [])
+        if not isinstance(files, list):
+            raise ValidationError(f"{where}: field '{key}' must be a list, got {type(files).__name__}")
+        for i, entry in enumerate(files):
+            if not isinstance(entry, dict):
+                raise ValidationError(f"{where}: {key}[{i}] must be an object, got {type(entry).__name__}")
+            for name in ("path", "skeleton"):
+                if not isinstance(entry.get(name, ""), str):
+                    raise ValidationError(f"{where}: {key}[{i}].{name} must be a string")
+            out.append(check_fields(MANIFEST, entry, f"{where}: {key}[{i}]"))
     return out

@@ -243,6 +243,7 @@ def main() -> int:
                     help="run only these methods (e.g. ik while the models are still training)")
     ap.add_argument("--presets", nargs="+", default=list(PRESETS), choices=PRESETS)
     ap.add_argument("--no-lossy", action="store_true", help="skip the --faulty / --gaps runs")
+    ap.add_argument("--modes", nargs="+", default=list(MODES), choices=MODES, help="solver modes (default: all)")
     ap.add_argument("--vae", help="evaluate these models instead of the shipped ones (with --predictor)")
     ap.add_argument("--predictor")
     ap.add_argument("--doc", type=Path, help="write the whole Markdown document here (docs/evaluation.md)")
@@ -256,7 +257,7 @@ def main() -> int:
     models = [*(["--vae", args.vae] if args.vae else []), *(["--predictor", args.predictor] if args.predictor else [])]
     if not args.table_only:
         jobs = [(m, p, mode, args.realtime_frames if mode == "realtime" else args.offline_frames, ())
-                for p in args.presets for mode in MODES for m in args.methods]  # fmt: skip
+                for p in args.presets for mode in args.modes for m in args.methods]  # fmt: skip
         if not args.no_lossy:
             lossy = args.lossy_frames or args.realtime_frames
             jobs += [(m, p, "realtime", lossy, extra) for _, p, extra in LOSSY for m in args.methods]

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from engine.cli.rig_options import add_rig_map_option, rig_map_path
+from engine.cli.rig_options import add_rig_map_option, asf_path, rig_map_path
 from engine.solver.settings import MODES
 
 REPO = Path(__file__).resolve().parents[2]
@@ -138,7 +138,7 @@ def _bench(args: argparse.Namespace) -> int:
     check_args(args)
     if args.json:
         check_output_path(args.json, "--json")
-    motion = load_motion(args.file, rig_map=rig_map_path(args))
+    motion = load_motion(args.file, rig_map=rig_map_path(args), asf=asf_path(args))
     if args.warmup + 1 > len(motion):
         raise UserError(f"{args.file}: only {len(motion)} frames, fewer than the warm-up")
     tracking = simulate(motion, args.sensors)

@@ -18,7 +18,7 @@ from typing import Any
 
 from engine.atomic import write_text
 from engine.cli.comparison_doc import PASSES, render
-from engine.cli.rig_options import add_rig_map_option, rig_map_path
+from engine.cli.rig_options import add_rig_map_option, asf_path, rig_map_path
 from engine.errors import UserError
 
 DEFAULT_BLEND_S = 0.5
@@ -65,7 +65,7 @@ def _run(args: argparse.Namespace, files: list[Path], preset: str, gaps: bool, v
     )  # fmt: skip
     motions = []
     for f in files:
-        m = load_motion(f, rig_map=rig_map_path(args))
+        m = load_motion(f, rig_map=rig_map_path(args), asf=asf_path(args))
         motions.append((f, m.slice(0, args.max_frames) if args.max_frames else m))
     doc = _safe_doc(run_method_on_clips(ns, name, motions))
     doc.update(variant=variant, gaps=gaps, max_frames=args.max_frames, blend_s=blend)

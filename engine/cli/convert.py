@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from engine.cli.rig_options import add_rig_map_option, rig_map_path
+from engine.cli.rig_options import add_rig_map_option, asf_path, rig_map_path
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -30,7 +30,7 @@ def _convert(args: argparse.Namespace) -> int:
 
     if args.fps is not None and not args.fps > 0:
         raise UserError(f"--fps must be > 0, got {args.fps}")
-    motion, rep = load_with_report(args.input, args.source_fps or manifest_fps(args.input), rig_map_path(args),
+    motion, rep = load_with_report(args.input, args.source_fps or manifest_fps(args.input), rig_map_path(args), asf=asf_path(args),
                                    version=RETARGET_VERSION)
     if args.fps:
         motion = resample_motion(motion, args.fps)

@@ -23,14 +23,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         "normalisation statistics and write shards + manifest.json to --out. Unchanged inputs "
         "are not reprocessed.",
     )
-    p.add_argument("inputs", nargs="*", type=Path, help="BVH files or folders (default: ../shared/data)")
+    p.add_argument("inputs", nargs="*", type=Path, help="BVH or AMC files, or folders (default: ../shared/data)")
     p.add_argument("--out", type=Path, default=Path("prepared"), help="output folder (default: prepared)")
     p.add_argument(
         "--eval-only",
         action="append",
         metavar="GLOB",
         help="files matching GLOB (relative path) are kept out of training, split 'test' "
-        "(default: dragposer/*, AMASS-derived, non-commercial licence)",
+        "(default: dragposer/* and hdm05/*: AMASS-derived non-commercial, and CC BY-SA)",
     )
     p.add_argument("--no-mirror", action="store_true", help="do not add left/right mirrored copies")
     p.add_argument("--quiet", action="store_true", help="no progress bar")

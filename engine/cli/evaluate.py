@@ -23,7 +23,7 @@ import numpy as np
 from engine.atomic import write_text
 from engine.cli.jobs import add_jobs_option, executor_of, jobs_of, map_files
 from engine.cli.method_options import add_model_options, apply_settings, method_kwargs
-from engine.cli.rig_options import add_rig_map_option, rig_map_path
+from engine.cli.rig_options import add_rig_map_option, asf_path, rig_map_path
 from engine.errors import UserError
 from engine.solver.settings import MODES
 
@@ -212,7 +212,7 @@ def _evaluate_file(job: tuple[Path, argparse.Namespace, list[str], bool]) -> dic
     from engine.motion.retarget import load_motion
 
     path, args, names, progress = job
-    motion = load_motion(path, rig_map=rig_map_path(args), max_frames=args.max_frames)  # reads only what is needed
+    motion = load_motion(path, rig_map=rig_map_path(args), asf=asf_path(args), max_frames=args.max_frames)  # reads only what is needed
     if len(motion) < 4:
         raise UserError(f"{path}: only {len(motion)} frames; at least 4 are needed")
     out: dict[str, Any] = {}

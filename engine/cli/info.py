@@ -7,7 +7,7 @@ import json
 import math
 from pathlib import Path
 
-from engine.cli.rig_options import add_rig_map_option, rig_map_path
+from engine.cli.rig_options import add_rig_map_option, asf_path, rig_map_path
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -18,15 +18,15 @@ def register(sub: argparse._SubParsersAction) -> None:
         "skeleton at 60 fps and print what was found. With --json one JSON object is printed, "
         "with an \"error\" field when the file cannot be read.",
     )
-    p.add_argument("file", type=Path, help="BVH file")
+    p.add_argument("file", type=Path, help="motion file: BVH, or AMC (its ASF found beside it or given by --asf)")
     p.add_argument("--fps", type=float, help="true source frame rate (overrides the header)")
     add_rig_map_option(p)
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     p.set_defaults(func=_info)
 
 
-def describe(path: Path, fps: float | None = None, rig_map: Path | None = None) -> dict:
-    """Everything ``info`` reports about a BVH file, as a JSON-ready dict."""
+def describe(path: Path, fps: float | None = None, rig_map: Path | None = None, asf: Path | None = None) -> dict:
+    """Everything ``info`` reports about a motion file (BVH or AMC), as a JSON-ready dict."""
     from engine.motion.retarget import RETARGET_VERSION, load_with_report, manifest_fps
     from engine.validation import CLI, check_value
 
@@ -34,7 +34,7 @@ def describe(path: Path, fps: float | None = None, rig_map: Path | None = None) 
         fps = check_value(CLI["fps"], fps, "--fps", "value")
     # only the start is kept (every row is still checked): a long file stays cheap
     motion, rep = load_with_report(path, fps or manifest_fps(path), rig_map, max_frames=1,
-                                 version=RETARGET_VERSION)
+                                 version=RETARGET_VERSION, asf=asf)
 
     def num(x: float, nd: int = 3):
         return round(float(x), nd) if math.isfinite(x) else None
@@ -68,13 +68,13 @@ def describe(path: Path, fps: float | None = None, rig_map: Path | None = None) 
 def _info(args: argparse.Namespace) -> int:
     if args.json:
         try:
-            out = describe(args.file, args.fps, rig_map_path(args))
+            out = describe(args.file, args.fps, rig_map_path(args), asf_path(args))
         except Exception as exc:  # noqa: BLE001 - --json promises one object whatever happens
             print(json.dumps({"file": str(args.file), "error": str(exc) or type(exc).__name__}))
             return 2
         print(json.dumps(out))
         return 0
-    out = describe(args.file, args.fps, rig_map_path(args))
+    out = describe(args.file, args.fps, rig_map_path(args), asf_path(args))
     print(f"file          {out['file']}")
     print(f"rig           {out['rig']} (up {out['up']}, {out['units_to_m']:g} m per unit)")
     print(f"source        {out['source_joints']} joints, {out['source_frames']} frames at {out['source_fps']:g} fps "

@@ -22,7 +22,7 @@ import numpy as np
 
 from engine.cli.jobs import add_jobs_option, executor_of, jobs_of, map_files
 from engine.cli.method_options import add_model_options, build_method
-from engine.cli.rig_options import add_rig_map_option, rig_map_path
+from engine.cli.rig_options import add_rig_map_option, asf_path, rig_map_path
 from engine.cli.tracker_options import add_tracker_options
 from engine.errors import UserError
 from engine.solver.settings import MODES
@@ -126,14 +126,14 @@ _METHOD: dict[str, Any] = {}  # this process's method, built once for all its fi
 def _reconstruct_file(job: tuple[Path, Path, argparse.Namespace, bool]) -> str:
     """Reconstruct one input and write it; returns the summary (in this process or a
     ``--jobs`` worker)."""
-    from engine.motion.bvh import load_bvh
     from engine.methods import run_method
     from engine.motion.retarget import manifest_fps, retarget, source_frames_needed
+    from engine.motion.source_file import load_source
     from engine.studio.export import write_reconstruction
     from engine.tracking import simulate
 
     path, out, args, progress = job
-    raw = load_bvh(path, source_frames_needed(args.max_frames))  # a long file: only its start
+    raw = load_source(path, source_frames_needed(args.max_frames), asf_path(args))  # a long file: only its start
     motion, report = retarget(raw, manifest_fps(path), rig_map=rig_map_path(args))
     if args.max_frames:
         motion = motion.slice(0, args.max_frames)

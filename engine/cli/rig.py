@@ -92,11 +92,11 @@ def write_suggestion(bvh: Path, out: Path, rig_map: Path | None = None) -> bool:
     be mapped and a template to fill in was written instead. Used by ``rig suggest`` and
     the studio's Open dialog."""
     from engine.atomic import write_text
-    from engine.motion.bvh import load_bvh
     from engine.errors import RigError
+    from engine.motion.source_file import load_source
     from engine.motion.rigs import resolve_rig
 
-    raw = load_bvh(bvh)
+    raw = load_source(bvh)
     try:
         text, ok = mapping_toml(resolve_rig(raw, rig_map), list(raw.names)), True
     except RigError as exc:

@@ -7,7 +7,7 @@ import argparse
 import math
 from pathlib import Path
 
-from engine.cli.rig_options import add_rig_map_option, rig_map_path
+from engine.cli.rig_options import add_rig_map_option, asf_path, rig_map_path
 from engine.errors import UserError
 
 
@@ -67,7 +67,7 @@ def _send(args: argparse.Namespace) -> int:
 
     _check(args)
     host, port = parse_target(args.to)
-    motion = load_motion(args.input, rig_map=rig_map_path(args))
+    motion = load_motion(args.input, rig_map=rig_map_path(args), asf=asf_path(args))
     if args.max_frames:
         motion = motion.slice(0, args.max_frames)
     motion = scaled_motion(motion, args.scale)

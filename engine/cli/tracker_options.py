@@ -44,10 +44,10 @@ def check_tracker_options(args: argparse.Namespace) -> None:
 def load_reference(args: argparse.Namespace) -> Any:
     if args.reference is None:
         return None
-    from engine.cli.rig_options import rig_map_path
+    from engine.cli.rig_options import asf_path, rig_map_path
     from engine.motion.retarget import load_motion
 
-    return load_motion(args.reference, rig_map=rig_map_path(args))
+    return load_motion(args.reference, rig_map=rig_map_path(args), asf=asf_path(args))
 
 
 def default_skeleton(reference: Any) -> Any:

@@ -42,6 +42,7 @@ from engine.errors import UserError
 from engine.kinematics.features import encoder_input, mirror_motion, pose_from_motion
 from engine.motion.clip import Motion
 from engine.motion.retarget import RETARGET_VERSION, load_with_report, manifest_entry, manifest_fps
+from engine.motion.source_file import SOURCE_SUFFIXES
 
 FORMAT = 1
 #: Bumped whenever the feature definition changes, so cached statistics are recomputed.
@@ -50,6 +51,13 @@ VAL_EVERY, VAL_PHASE = 8, 3
 #: Source folders that defined the validation split first; a take with a copy in one of them
 #: follows that copy's folder rule, so their validation takes stay validation.
 REFERENCE_SOURCES = ("cmu_iclone", "cmu_daz")
+#: Source folders added after the split was first drawn: a take whose every copy lies in
+#: one of them is drawn from that folder's own pool (every 8th of its takes), so adding
+#: the folder moves no take of the folders before it between train and validation.
+LATER_SOURCES = ("cmu_asf",)
+#: Evaluation-only folders by default: ``dragposer/`` derives from AMASS (non-commercial),
+#: ``hdm05/`` is CC BY-SA (its ShareAlike would extend to weights trained on it).
+EVAL_ONLY = ("dragposer/*", "hdm05/*")
 
 
 @dataclass
@@ -75,7 +83,8 @@ def _save_npz(path: Path, **arrays: np.ndarray) -> None:
 
 
 def discover(inputs: list[Path]) -> list[tuple[Path, str]]:
-    """All BVH files under ``inputs`` as (absolute path, path relative to its input root)."""
+    """All motion files (BVH and AMC, :data:`SOURCE_SUFFIXES`) under ``inputs`` as (absolute
+    path, path relative to its input root)."""
     found = []
     for root in inputs:
         if root.is_file():
@@ -83,7 +92,9 @@ def discover(inputs: list[Path]) -> list[tuple[Path, str]]:
             continue
         if not root.is_dir():
             raise UserError(f"{root}: no such file or folder")
-        for p in sorted(root.rglob("*.bvh")):
+        for p in sorted(root.rglob("*")):
+            if p.suffix.lower() not in SOURCE_SUFFIXES or not p.is_file():
+                continue
             found.append((p.resolve(), p.relative_to(root).as_posix()))
     return found
 
@@ -141,9 +152,15 @@ def assign_splits(
                 splits[r] = folder_rule[anchors[0][1]]
         else:
             pooled.append(take)
-    for i, take in enumerate(sorted(pooled)):
-        for r in copies[take]:
-            splits[r] = "val" if i % VAL_EVERY == VAL_PHASE else "train"
+    pools: dict[str, list[str]] = {}
+    for take in pooled:
+        folders = {_source_folder(r) for r in copies[take]}
+        later = sorted(folders) if folders <= set(LATER_SOURCES) else []
+        pools.setdefault(later[0] if later else "", []).append(take)
+    for takes_in_pool in pools.values():
+        for i, take in enumerate(sorted(takes_in_pool)):
+            for r in copies[take]:
+                splits[r] = "val" if i % VAL_EVERY == VAL_PHASE else "train"
     return splits
 
 
@@ -178,7 +195,7 @@ def _source_folder(rel: str) -> str:
 
 
 def _shard_name(rel: str, mirrored: bool) -> str:
-    stem = rel[:-4] if rel.lower().endswith(".bvh") else rel
+    stem = rel[:-4] if rel.lower().endswith((".bvh", ".amc")) else rel
     return stem.replace("/", "__") + ("__mirror" if mirrored else "") + ".npz"
 
 
@@ -222,10 +239,10 @@ def prepare(
     """Run the whole preparation (see module docs). Returns what was done.
 
     ``rig_map`` is a joint mapping file used for every input instead of rig detection."""
-    eval_only = ["dragposer/*"] if eval_only is None else eval_only
+    eval_only = list(EVAL_ONLY) if eval_only is None else eval_only
     files = discover(inputs)
     if not files:
-        raise UserError(f"no .bvh files found under {', '.join(map(str, inputs))}")
+        raise UserError(f"no .bvh or .amc files found under {', '.join(map(str, inputs))}")
     splits, takes = split_files(files, eval_only)
     settings = {"format": FORMAT, "features": FEATURES_VERSION, "mirror": mirror, "eval_only": eval_only,
                 "retarget": RETARGET_VERSION, "rig_map": sha256_file(rig_map) if rig_map else None}
@@ -305,7 +322,8 @@ def prepare(
         "hash": digest,
         "split_rule": f"by take: every {VAL_EVERY}th file from index {VAL_PHASE} of each source folder "
         f"sorted by path is val; a take (manifest cmu_trial) with a copy in {list(REFERENCE_SOURCES)} "
-        f"follows that copy, the other takes sorted by key every {VAL_EVERY}th from index {VAL_PHASE}; "
+        f"follows that copy, the other takes sorted by key every {VAL_EVERY}th from index {VAL_PHASE} "
+        f"(takes only in {list(LATER_SOURCES)} in a pool of their folder's own); "
         f"eval-only patterns {eval_only} are test",
         "files": entries,
         "failed": [{"path": p, "reason": r} for p, r in result.failed],

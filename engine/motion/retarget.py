@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from engine import skeleton as sk
-from engine.motion.bvh import RawBVH, load_bvh
+from engine.motion.bvh import RawBVH
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk, local_from_global
@@ -44,6 +44,7 @@ from engine.motion.retarget_inputs import (  # noqa: F401 - re-exported: callers
     rest_frame_count)
 from engine.motion.retarget_rotations import rigid_hands, straightened_offsets, tip_points, world_rotations
 from engine.motion.rigs import RigProfile, resolve_rig
+from engine.motion.source_file import load_source
 from engine.validation import SKELETON, check_value
 
 _AXIS = {"x": 0, "y": 1, "z": 2}
@@ -342,8 +343,10 @@ def _refloor(motion: Motion) -> float:
 
 
 def load_motion(path: str | Path, fps: float | None = None, rig_map: str | Path | None = None,
-                max_frames: int | None = None, version: int | None = None) -> Motion:  # fmt: skip
-    """Load any humanoid BVH as a canonical motion (see module docs).
+                max_frames: int | None = None, version: int | None = None,
+                asf: str | Path | None = None) -> Motion:  # fmt: skip
+    """Load any humanoid BVH, or AMC with its ASF skeleton (``asf``, else found beside it;
+    :mod:`engine.motion.source_file`), as a canonical motion (see module docs).
 
     ``fps`` overrides the file's header; otherwise a ``manifest.json`` beside the data
     (as in ``../shared/data/mocap``) gives the true rate, else the header does.
@@ -351,7 +354,7 @@ def load_motion(path: str | Path, fps: float | None = None, rig_map: str | Path 
     (canonical frames) reads only the start of a long file; see :func:`load_with_report`.
     ``version`` is the retargeting definition (default: the shipped models', see
     :func:`retarget`)."""
-    motion = load_with_report(path, fps, rig_map, max_frames, version)[0]
+    motion = load_with_report(path, fps, rig_map, max_frames, version, asf)[0]
     return motion.slice(0, max_frames) if max_frames else motion
 
 
@@ -365,10 +368,10 @@ def source_frames_needed(max_frames: int | None) -> int | None:
 
 def load_with_report(path: str | Path, fps: float | None = None, rig_map: str | Path | None = None,
                      max_frames: int | None = None, version: int | None = None,
-                     ) -> tuple[Motion, RetargetReport]:  # fmt: skip
+                     asf: str | Path | None = None) -> tuple[Motion, RetargetReport]:  # fmt: skip
     """:func:`load_motion` plus the :class:`RetargetReport`. With ``max_frames``, only the
     source frames those canonical frames need are kept (at least :data:`ALIGN_FRAMES`,
     which the rest-pose alignment averages over); every row is still checked, and the
     report's ``source_frames`` / ``frames`` describe the whole file."""
-    raw = load_bvh(path, source_frames_needed(max_frames))
+    raw = load_source(path, source_frames_needed(max_frames), asf, fps)
     return retarget(raw, fps or manifest_fps(Path(path)), rig_map=rig_map, version=version)

@@ -6,6 +6,7 @@ Re-exported by :mod:`engine.motion.retarget`, where callers find them.
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 
 import numpy as np
@@ -79,7 +80,8 @@ def manifest_entry(path: Path) -> dict | None:
         man = parent / "manifest.json"
         if not man.is_file():
             continue
-        entries = check_manifest(read_json(man, "manifest"), str(man))
+        stat = man.stat()
+        entries = _manifest_entries(str(man), stat.st_mtime_ns, stat.st_size)
         rel = path.relative_to(parent).as_posix()
         for entry in entries:
             listed = str(entry.get("path", ""))
@@ -87,6 +89,13 @@ def manifest_entry(path: Path) -> dict | None:
             if listed == rel or listed.endswith("/" + rel):
                 return dict(entry)
     return None
+
+
+@functools.lru_cache(maxsize=8)
+def _manifest_entries(man: str, mtime_ns: int, size: int) -> tuple[dict, ...]:
+    """The checked entries of one manifest, read once per version of the file (``data
+    prepare`` looks up every file of a folder of hundreds in the same manifest)."""
+    return tuple(check_manifest(read_json(man, "manifest"), man))
 
 
 def manifest_fps(path: Path) -> float | None:

@@ -79,10 +79,10 @@ def write_reconstruction(path: str | Path, rec: Motion, on_rig: tuple[RawBVH, An
 def source_rig(source: str | Path, rig_map: str | Path | None = None) -> tuple[RawBVH, Any]:
     """``(raw, report)`` of the BVH ``source`` retargeted with the joint mapping file
     ``rig_map`` (what :func:`write_reconstruction` needs to write onto its hierarchy)."""
-    from engine.motion.bvh import load_bvh
     from engine.motion.retarget import manifest_fps, retarget
+    from engine.motion.source_file import load_source
 
-    raw = load_bvh(source)
+    raw = load_source(source)
     return raw, retarget(raw, manifest_fps(source), rig_map=rig_map)[1]
 
 

@@ -51,6 +51,11 @@ class VAETrainConfig:
     #: chain) from another random training frame, so the model sees new combinations of
     #: limb poses (the validation dances are new combinations of familiar limb poses).
     limb_mix: float = 0.0
+    #: Proportion augmentation: every bone's length is scaled by a factor drawn uniformly
+    #: in ``1 +- bone_scale`` per training pose (one factor per bone, shared by its left and
+    #: right copies), so the encoder meets performers of other builds than the training
+    #: subjects'. Encoder input and target positions are recomputed by FK.
+    bone_scale: float = 0.0
     #: Stop after this many epochs in this invocation (0: no limit); resume continues the
     #: same schedule, so a run can be trained in chunks.
     stop_after: int = 0
@@ -128,6 +133,24 @@ def batch_of(data: PoseData, idx: torch.Tensor, limb_mix: float = 0.0,
     b["pos"], _ = root_space_fk(rot, b["offsets"])
     b["dq"] = encoder_input(rot, b["disp"], b["offsets"])
     return b
+
+
+def scale_bones(b: dict[str, torch.Tensor], spread: float, generator: torch.Generator | None = None,
+                ) -> dict[str, torch.Tensor]:  # fmt: skip
+    """The batch ``b`` with every pose's bone offsets (B, 22, 3) scaled by one factor per
+    bone in ``1 +- spread`` (left and right copies alike; :data:`engine.skeleton.MIRROR_INDEX`),
+    and the encoder input and target positions recomputed for the new proportions."""
+    from engine import skeleton as sk
+
+    n, j = b["offsets"].shape[:2]
+    pair = torch.minimum(torch.arange(j), torch.tensor(sk.MIRROR_INDEX))  # the lower index of a pair draws
+    draw = 1.0 + spread * (2.0 * torch.rand(n, j, generator=generator, dtype=b["offsets"].dtype) - 1.0)
+    factor = draw[:, pair]
+    out = dict(b)
+    out["offsets"] = b["offsets"] * factor[..., None]
+    out["pos"], _ = root_space_fk(b["rot"], out["offsets"])
+    out["dq"] = encoder_input(b["rot"], b["disp"], out["offsets"])
+    return out
 
 
 @torch.no_grad()
@@ -230,7 +253,10 @@ def train_vae(data_dir: Path, out_dir: Path, cfg: VAETrainConfig, resume: bool =
             minutes = minutes_before + (time.monotonic() - t0) / 60.0
             for group in opt.param_groups:
                 group["lr"] = cosine_lr(cfg, global_step / total_steps, minutes)
-            losses = objective(batch_of(train, idx, cfg.limb_mix, gen, pairs))
+            batch = batch_of(train, idx, cfg.limb_mix, gen, pairs)
+            if cfg.bone_scale > 0:
+                batch = scale_bones(batch, cfg.bone_scale, gen)
+            losses = objective(batch)
             opt.zero_grad(set_to_none=True)
             losses["total"].backward()
             opt.step()

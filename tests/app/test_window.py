@@ -169,6 +169,20 @@ def test_dropped_bvh_opens_is_remembered_and_the_preset_comes_back(studio, qtbot
     assert studio.session.preset == chosen
 
 
+def test_a_dropped_amc_motion_opens_with_its_skeleton_found_beside_it(studio, qtbot, shared_mocap):
+    """An ASF/AMC take of the shared data dropped on the window opens like a BVH; the Open
+    dialog offers both formats."""
+    from app.file_actions import OPEN_FILTER
+
+    amc = shared_mocap / "cmu_asf" / "10" / "10_04.amc"
+    if not amc.is_file():
+        pytest.skip(f"{amc} is not in the shared data")
+    assert "*.amc" in OPEN_FILTER and "*.bvh" in OPEN_FILTER
+    assert _drag_and_drop(studio, amc)
+    assert "10_04.amc" in studio.windowTitle()
+    assert studio.session.num_frames > 100
+
+
 def test_a_sensor_switched_to_3_dof_loses_its_orientation_axes(studio, qtbot):
     joint = next(iter(studio.session.sensors))
     seq = studio.session.latest.seq  # before the edit: its snapshot may come at once

@@ -288,16 +288,17 @@ def _long_clip(tmp_path: Path, frames: int) -> Path:
 def test_info_and_reconstruct_keep_only_the_start_of_a_long_file(tmp_path, capsys, monkeypatch):
     import engine.motion.bvh
     import engine.motion.retarget as rt
+    import engine.motion.source_file
 
     kept = []
-    real = rt.load_bvh
+    real = engine.motion.bvh.load_bvh
 
     def spy(path, max_frames=None):
         raw = real(path, max_frames)
         kept.append((raw.frames, raw.total_frames))
         return raw
 
-    monkeypatch.setattr(rt, "load_bvh", spy)
+    monkeypatch.setattr(engine.motion.source_file, "load_bvh", spy)
     monkeypatch.setattr(engine.motion.bvh, "load_bvh", spy)
     monkeypatch.setattr(rt, "ALIGN_FRAMES", 1000)
     clip = _long_clip(tmp_path, 3000)

@@ -17,15 +17,21 @@ TODAYS_VAL = ["cmu_daz/indian/14.bvh", "cmu_daz/salsa/07.bvh", "cmu_iclone/002_0
 
 @pytest.mark.shared_data
 def test_every_copy_of_a_shared_take_lands_in_one_split_and_todays_validation_stays(shared_mocap):
-    from engine.data.prepare import discover, split_files
+    from engine.data.prepare import EVAL_ONLY, discover, split_files
 
-    split, takes = split_files(discover([shared_mocap]), ["dragposer/*"])
+    files = discover([shared_mocap])
+    split, takes = split_files(files, list(EVAL_ONLY))
     by_take: dict[str, set] = {}
     for rel, take in takes.items():
         if take:
             by_take.setdefault(take, set()).add(split[rel])
-    assert len(by_take) == 110 and all(len(s) == 1 for s in by_take.values()), {t: s for t, s in by_take.items()
-                                                                                if len(s) > 1}  # fmt: skip
+    assert all(len(s) == 1 for s in by_take.values()), {t: s for t, s in by_take.items() if len(s) > 1}
+    assert len({t for rel, t in takes.items() if rel.endswith(".bvh")}) == 110
+    # adding the ASF/AMC folders moves no BVH take between train and validation
+    bvh_only, _ = split_files([f for f in files if f[1].endswith(".bvh")], ["dragposer/*"])
+    assert {rel: split[rel] for rel in bvh_only} == bvh_only
+    assert {s for rel, s in split.items() if rel.startswith(("hdm05/", "dragposer/"))} == {"test"}
+    assert {s for rel, s in split.items() if rel.startswith("cmu_asf/105/")} == {"train", "val"}
     assert all(split[rel] == "val" for rel in TODAYS_VAL)
     assert {rel.split("/")[0] for rel, s in split.items() if s == "train"} >= {"cmu_mb", "cmu_daz_cgspeed"}
 

@@ -32,12 +32,10 @@ import pygltflib as G
 
 from engine.atomic import atomic_path
 from engine.kinematics import quaternion as Q
+from engine.motion.formats import GLTF_SUFFIXES
 from engine.motion.mannequin import SkinnedMesh, bones_of, skinned_mannequin
 
-__all__ = ["Character", "TrackerNodes", "Z_UP_TO_Y_UP", "save_gltf", "GLTF_SUFFIXES"]
-
-#: File name endings written as glTF.
-GLTF_SUFFIXES = (".glb", ".gltf")
+__all__ = ["Character", "TrackerNodes", "Z_UP_TO_Y_UP", "build_gltf", "save_gltf"]
 
 #: Rotation taking the studio's Z-up axes to glTF's Y-up ones (x, y, z) -> (x, z, -y).
 Z_UP_TO_Y_UP = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])

@@ -8,7 +8,7 @@ import pytest
 from engine import skeleton as sk
 from engine.authoring.bake import bake, interpolated_targets
 from engine.authoring.document import load_authoring
-from engine.authoring.export import bake_to_bvh
+from engine.authoring.export import bake_to_file
 from engine.authoring.keys import Key
 from engine.authoring.targets import JointTarget
 from engine.motion.bvh import load_bvh
@@ -26,7 +26,7 @@ def baked(vae, tmp_path_factory):
     path = folder / "example.json"
     path.write_text(EXAMPLE)
     scene = load_authoring(path)
-    return scene, bake_to_bvh(scene, vae, folder / "studio.bvh"), folder / "studio.bvh"
+    return scene, bake_to_file(scene, vae, folder / "studio.bvh"), folder / "studio.bvh"
 
 
 def test_the_command_bakes_61_frames_at_30_fps_the_bytes_the_studio_exports(baked, example_scene, tmp_path, capsys):

@@ -153,3 +153,64 @@ def test_the_format_follows_the_extension_and_an_unknown_one_lists_the_known(tmp
     save_motion(tmp_path / "b.glb", _motion(4))
     assert (tmp_path / "b.glb").read_bytes()[:4] == b"glTF"
     assert [p.name for p in tmp_path.iterdir()] == ["b.glb"]  # no temporary file left
+
+
+#: One file of each rig family of the shared data (docs/skeleton.md).
+SOURCE_RIGS = ("dragposer/example.bvh", "cmu_mb/01_01.bvh", "cmu_daz/indian", "cmu_iclone/001_01.bvh",
+               "cmu_daz_cgspeed")  # fmt: skip
+
+
+def _first_bvh(mocap, rel: str):
+    path = mocap / rel
+    return path if path.is_file() else sorted(path.rglob("*.bvh"))[0]
+
+
+@pytest.fixture(scope="module")
+def source_rig_files(shared_mocap, tmp_path_factory):
+    """Per rig family: the clip's first 2 s retargeted, written back onto its rig as BVH
+    and as glTF (mesh, a comparison character and the trackers), with the rig's report."""
+    from engine.motion.retarget import manifest_fps, retarget, source_frames_needed
+
+    folder = tmp_path_factory.mktemp("gltf_rigs")
+    out = {}
+    for rel in SOURCE_RIGS:
+        path = _first_bvh(shared_mocap, rel)
+        raw = load_bvh(path, source_frames_needed(120))
+        motion, rep = retarget(raw, manifest_fps(path))
+        motion = motion.slice(0, 120)
+        ghost = Motion(motion.local_rot[::-1].copy(), motion.root_pos[::-1].copy(), motion.skeleton, motion.fps)
+        stem = rel.split("/")[0]
+        bvh, glb = folder / f"{stem}.bvh", folder / f"{stem}.glb"
+        save_motion(bvh, motion, (raw, rep))
+        save_motion(glb, motion, (raw, rep), contents=GltfContents(ghosts=(("ik", ghost),),
+                                                                    tracking=simulate(motion, "6")))  # fmt: skip
+        out[stem] = (raw, rep, bvh, glb)
+    return out
+
+
+@pytest.mark.shared_data
+def test_on_the_source_rig_the_joints_names_and_frames_are_the_bvh_s(source_rig_files):
+    for stem, (raw, rep, bvh, glb) in source_rig_files.items():
+        back = load_bvh(bvh)
+        world = bvh_world_positions(back)
+        if rep.profile.root_channels_relative_to_offset:
+            world = world + back.offsets[0]  # the rig's root channels count from its OFFSET
+        want = world @ np.asarray(rep.basis).T * rep.profile.units_to_m
+        read = read_gltf(glb)
+        skin = read.doc.skins[0]
+        assert [read.doc.nodes[j].name for j in skin.joints] == list(raw.names), stem
+        times, _ = read.channels()[(skin.joints[0], "rotation")]
+        assert len(times) == back.frames and abs(1 / np.diff(times).mean() - rep.source_fps) < 1e-3, stem
+        got = read.world_positions(list(skin.joints), back.frames) @ Y_UP_TO_Z_UP.T
+        err = np.abs(got - want).max()
+        assert err < TOL, f"{stem}: {err:.2e} m"
+
+
+@pytest.mark.shared_data
+def test_the_validator_passes_the_source_rig_files(source_rig_files):
+    if validator_command() is None:
+        pytest.skip("node or the npm package gltf-validator is absent (scripts/bootstrap.sh installs it)")
+    reports = validate([glb for *_, glb in source_rig_files.values()])
+    assert len(reports) == len(SOURCE_RIGS)
+    for r in reports:
+        assert (r["errors"], r["warnings"]) == (0, 0), r

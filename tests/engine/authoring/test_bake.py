@@ -89,3 +89,15 @@ def test_a_joint_targeted_by_both_keys_follows_an_eased_straight_path():
     early = interpolated_targets([a, b], [0.0, 10.0], 1.0, "cubic")[0].position[0]
     late = interpolated_targets([a, b], [0.0, 10.0], 1.0, "linear")[0].position[0]
     assert 0 < early < late == pytest.approx(0.1)  # cubic eases out of the key
+
+
+def test_the_command_bakes_to_gltf_with_the_bvh_s_joints(baked, example_scene, tmp_path):
+    from tests.engine.gltf_reading import Y_UP_TO_Z_UP, bvh_world_positions, read_gltf
+
+    out = tmp_path / "out.glb"
+    assert main(["bake", str(example_scene), "--out", str(out), "--no-progress"]) == 0
+    raw = load_bvh(baked[2])
+    read = read_gltf(out)
+    got = read.world_positions([read.node_index(n) for n in raw.names], raw.frames) @ Y_UP_TO_Z_UP.T
+    assert np.abs(got - bvh_world_positions(raw)).max() < 1e-5
+    assert read.doc.meshes

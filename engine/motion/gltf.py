@@ -42,7 +42,7 @@ Z_UP_TO_Y_UP = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])
 _C_Q = Q.from_matrix(Z_UP_TO_Y_UP)
 
 #: Half the edge of a tracker's box, metres.
-TRACKER_SIZE = 0.025
+TRACKER_SIZE = 0.035
 
 
 @dataclass(frozen=True)

@@ -16,7 +16,7 @@ from engine.kinematics import quaternion as Q
 from engine.motion.bvh import RawBVH
 from engine.motion.clip import Motion
 from engine.motion.gltf import Character, TrackerNodes
-from engine.motion.mannequin import BONE_RADIUS, END_RADIUS
+from engine.motion.mannequin import BONE_RADIUS, END_RADIUS, END_SHARE
 
 #: Base colour of the main character and, in turn, of the comparison characters (linear RGBA).
 MAIN_COLOUR = (0.80, 0.55, 0.40, 1.0)
@@ -46,7 +46,7 @@ def character_of(motion: Motion, name: str = "", colour: tuple[float, ...] = MAI
     return Character(
         name=name, joints=tuple(sk.JOINT_NAMES), parents=tuple(sk.PARENTS), rest=offsets, translations=trans,
         rotations=Q.normalize(motion.local_rot), fps=float(motion.fps),
-        ends={sk.JOINT_INDEX[n]: off * scale for n, off in sk.END_SITES.items()},
+        ends={sk.JOINT_INDEX[n]: off * scale * END_SHARE[n] for n, off in sk.END_SITES.items()},
         radius=_radii(sk.JOINT_INDEX, scale), colour=tuple(colour),
     )  # fmt: skip
 

@@ -28,7 +28,12 @@ BONE_RADIUS: dict[str, float] = {
 }  # fmt: skip
 
 #: Radius of the end-site capsules (head top, hands, toes), by the joint that owns them.
-END_RADIUS: dict[str, float] = {"upperneck": 0.095, "lwrist": 0.04, "rwrist": 0.04, "ltoe": 0.03, "rtoe": 0.03}
+END_RADIUS: dict[str, float] = {"upperneck": 0.085, "lwrist": 0.038, "rwrist": 0.038, "ltoe": 0.03, "rtoe": 0.03}
+
+#: Share of the canonical end-site OFFSET a capsule spans: the canonical rig's end sites
+#: repeat their joint's own OFFSET (a 26 cm "hand"), so the mannequin draws a hand, a
+#: toe cap and a head top of plausible length instead.
+END_SHARE: dict[str, float] = {"upperneck": 0.55, "lwrist": 0.35, "rwrist": 0.35, "ltoe": 0.45, "rtoe": 0.45}
 
 AROUND = 12  # vertices around a capsule
 ALONG = 8  # segments along the straight part (room for the bend's blend)

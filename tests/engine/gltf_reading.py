@@ -68,8 +68,12 @@ class Read:
         return out
 
     def world_positions(self, nodes: list[int], frames: int) -> np.ndarray:
-        """World positions ``(frames, len(nodes), 3)`` of ``nodes`` on the first ``frames`` keys of the animation
-        (every channel keyed on the same frames), glTF axes."""
+        """World positions ``(frames, len(nodes), 3)`` of ``nodes`` on the first ``frames``
+        keys of the animation (every channel keyed on the same frames), glTF axes."""
+        return self.world_matrices(nodes, frames)[..., :3, 3]
+
+    def world_matrices(self, nodes: list[int], frames: int) -> np.ndarray:
+        """World matrices ``(frames, len(nodes), 4, 4)`` of ``nodes`` (see :meth:`world_positions`)."""
         chans = self.channels()
         par = self.parents()
         cache: dict[int, np.ndarray] = {}
@@ -96,7 +100,7 @@ class Read:
                 cache[i] = local(i) if par[i] < 0 else world(par[i]) @ local(i)
             return cache[i]
 
-        return np.stack([world(i)[:, :3, 3] for i in nodes], axis=1)
+        return np.stack([world(i) for i in nodes], axis=1)
 
 
 def quat_xyzw_matrix(q: np.ndarray) -> np.ndarray:
@@ -170,3 +174,48 @@ def bvh_world_positions(raw) -> np.ndarray:
             glob_r[:, jj] = glob_r[:, p] @ mats[:, jj]
             pos[:, jj] = pos[:, p] + np.einsum("fij,fj->fi", glob_r[:, p], trans[:, jj])
     return pos
+
+
+def skinned_points(read: Read, mesh_node: int, frame: int) -> np.ndarray:
+    """Vertices ``(V, 3)`` of the skinned mesh on ``mesh_node`` at key ``frame``: linear
+    blend skinning, ``sum_k w_k (World_k IBM_k) v``, glTF axes."""
+    doc = read.doc
+    node = doc.nodes[mesh_node]
+    skin = doc.skins[node.skin]
+    prim = doc.meshes[node.mesh].primitives[0]
+    v = read.accessor(prim.attributes.POSITION).astype(float)
+    joints = read.accessor(prim.attributes.JOINTS_0).astype(int)
+    weights = read.accessor(prim.attributes.WEIGHTS_0).astype(float)
+    ibm = read.accessor(skin.inverseBindMatrices).reshape(-1, 4, 4).transpose(0, 2, 1)
+    world = read.world_matrices(list(skin.joints), frame + 1)[frame]  # (J, 4, 4)
+    m = world @ ibm
+    vh = np.c_[v, np.ones(len(v))]
+    out = np.zeros((len(v), 3))
+    for k in range(4):
+        out += weights[:, k : k + 1] * np.einsum("vij,vj->vi", m[joints[:, k]], vh)[:, :3]
+    return out
+
+
+def vtk_points_at(path: Path, t: float) -> list[np.ndarray]:
+    """Deformed mesh vertices as VTK's glTF reader gives them at time ``t`` (seconds), one
+    array per mesh in the reader's order: an outside implementation of skinning and
+    animation sampling."""
+    import vtk
+    from vtk.util.numpy_support import vtk_to_numpy
+
+    reader = vtk.vtkGLTFReader()
+    reader.SetFileName(str(path))
+    reader.ApplyDeformationsToGeometryOn()
+    reader.UpdateInformation()
+    reader.EnableAnimation(0)
+    reader.UpdateInformation()
+    reader.UpdateTimeStep(t)
+    it = reader.GetOutput().NewIterator()
+    it.InitTraversal()
+    out = []
+    while not it.IsDoneWithTraversal():
+        data = it.GetCurrentDataObject()
+        if data.GetNumberOfPoints():
+            out.append(vtk_to_numpy(data.GetPoints().GetData()).astype(float))
+        it.GoToNextItem()
+    return out

@@ -14,7 +14,8 @@ from engine.motion.bvh import load_bvh
 from engine.motion.clip import Motion
 from engine.motion.formats import GltfContents, motion_format, save_motion
 from engine.tracking import simulate
-from tests.engine.gltf_reading import Y_UP_TO_Z_UP, bvh_world_positions, read_gltf, validate, validator_command
+from tests.engine.gltf_reading import (Y_UP_TO_Z_UP, bvh_world_positions, read_gltf, skinned_points, validate,
+                                      validator_command, vtk_points_at)  # fmt: skip
 
 TOL = 1e-5  # metres
 
@@ -131,6 +132,23 @@ def test_ghosts_are_extra_characters_and_trackers_follow_their_targets(written):
         assert np.array_equal(scale[:, 0] > 0, tracking.connected[:, s])
 
 
+def _check_vtk_skinning(path, frame: int, fps: float) -> None:
+    """VTK's glTF reader, an outside importer, deforms every body at ``frame`` as linear
+    blend skinning of the file's joints says (within 1e-5 m)."""
+    read = read_gltf(path)
+    bodies = [i for i, n in enumerate(read.doc.nodes) if n.skin is not None]
+    vtk_meshes = [p for p in vtk_points_at(path, frame / fps) if len(p) > 100]
+    assert len(vtk_meshes) == len(bodies) >= 1
+    for node, theirs in zip(bodies, vtk_meshes):
+        ours = skinned_points(read, node, frame)
+        assert np.abs(ours - theirs).max() < TOL
+
+
+def test_vtk_s_importer_skins_and_animates_the_bodies(written):
+    motion, _, _, files = written
+    _check_vtk_skinning(files["full"], 57, motion.fps)
+
+
 def test_the_khronos_validator_finds_no_error_and_no_warning(written):
     if validator_command() is None:
         pytest.skip("node or the npm package gltf-validator is absent (scripts/bootstrap.sh installs it)")
@@ -204,6 +222,12 @@ def test_on_the_source_rig_the_joints_names_and_frames_are_the_bvh_s(source_rig_
         got = read.world_positions(list(skin.joints), back.frames) @ Y_UP_TO_Z_UP.T
         err = np.abs(got - want).max()
         assert err < TOL, f"{stem}: {err:.2e} m"
+
+
+@pytest.mark.shared_data
+def test_vtk_s_importer_skins_the_source_rigs(source_rig_files):
+    for stem, (raw, rep, bvh, glb) in source_rig_files.items():
+        _check_vtk_skinning(glb, 31, rep.source_fps)
 
 
 @pytest.mark.shared_data

@@ -61,7 +61,6 @@ def main() -> None:
     times = [float(t) for t in args.times.split(",")]
     w, h = (int(v) for v in args.size.split(","))
     pl = pv.Plotter(off_screen=True, shape=(1, len(times)), window_size=(w, h), border=False)
-    pl.enable_depth_peeling()  # the see-through comparison bodies
     for k, t in enumerate(times):
         pl.subplot(0, k)
         pl.set_background("#f4f4f2")

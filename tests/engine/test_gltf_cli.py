@@ -32,6 +32,8 @@ def test_convert_writes_the_same_motion_as_glb_and_bvh(clip_path, tmp_path):
     raw = load_bvh(tmp_path / "c.bvh")
     got = _positions(tmp_path / "c.glb", list(raw.names), raw.frames)
     assert np.abs(got - bvh_world_positions(raw)).max() < 1e-5
+    if validator_command() is not None:
+        assert [(r["errors"], r["warnings"]) for r in validate([tmp_path / "c.glb"])] == [(0, 0)]
 
 
 def test_reconstruct_adds_ghosts_and_tracker_nodes(standin_dragposer, clip_path, tmp_path, capsys):  # noqa: F811

@@ -32,7 +32,6 @@ import pygltflib as G
 
 from engine.atomic import atomic_path
 from engine.kinematics import quaternion as Q
-from engine.motion.formats import GLTF_SUFFIXES
 from engine.motion.mannequin import SkinnedMesh, bones_of, skinned_mannequin
 
 __all__ = ["Character", "TrackerNodes", "Z_UP_TO_Y_UP", "build_gltf", "save_gltf"]
@@ -300,17 +299,16 @@ def build_gltf(characters: list[Character], trackers: TrackerNodes | None = None
 def save_gltf(path: str | Path, characters: list[Character], trackers: TrackerNodes | None = None,
               mesh: bool = True, name: str = "motion") -> None:  # fmt: skip
     """Write ``characters`` (and ``trackers``) to ``path`` atomically: binary glTF for a
-    ``.glb`` name, JSON with the buffer embedded for ``.gltf`` (module docs).
+    ``.glb`` name, JSON with the buffer embedded for any other (``.gltf``; the extensions
+    are checked by :func:`engine.motion.formats.motion_format`); module docs.
 
     Raises
     ------
     ValueError
-        Non-finite values, no frames, or a name ending in neither ``.glb`` nor ``.gltf``.
+        Non-finite values or no frames.
     """
     path = Path(path)
-    suffix = path.suffix.lower()
-    if suffix not in GLTF_SUFFIXES:
-        raise ValueError(f"{path}: a glTF file name ends in .glb or .gltf")
+    binary = path.suffix.lower() == ".glb"
     for ch in characters:
         if len(ch.rotations) == 0:
             raise ValueError(f"motion {name!r} has no frames; not writing {path}")
@@ -318,7 +316,7 @@ def save_gltf(path: str | Path, characters: list[Character], trackers: TrackerNo
             raise ValueError(f"motion {name!r} holds NaN or infinite values; not writing {path}")
     doc = build_gltf(characters, trackers, mesh, name)
     with atomic_path(path) as tmp:
-        if suffix == ".glb":
+        if binary:
             doc.save_binary(str(tmp))
         else:
             doc.convert_buffers(G.BufferFormat.DATAURI)

@@ -41,9 +41,11 @@ def ghost_methods(args: argparse.Namespace) -> tuple[str, ...]:
     return tuple(n.strip() for n in (getattr(args, "ghosts", "") or "").split(",") if n.strip())
 
 
-def check_export(args: argparse.Namespace, outs: Sequence[Path], flag: str = "--out") -> None:
+def check_export(args: argparse.Namespace, outs: Sequence[Path], flag: str = "--out",
+                 hint: str = "give --out a .glb or .gltf name") -> None:  # fmt: skip
     """Refuse, before any work, an output whose extension no writer knows and glTF-only
-    options with a BVH output; check the ``--ghosts`` names against the registry."""
+    options with a BVH output (the message ends with ``hint``); check the ``--ghosts``
+    names against the registry."""
     for out in outs:
         motion_format(out, flag)
     extras = [f"--{k.replace('_', '-')}" for k in ("no_mesh", "tracker_nodes") if getattr(args, k, False)]
@@ -51,8 +53,7 @@ def check_export(args: argparse.Namespace, outs: Sequence[Path], flag: str = "--
         extras.append("--ghosts")
     if extras and not all(Path(o).suffix.lower() in GLTF_SUFFIXES for o in outs):
         verb = "apply" if len(extras) > 1 else "applies"
-        raise UserError(f"{' and '.join(extras)} {verb} to glTF output: give {flag} a .glb or .gltf name "
-                        "(a BVH file holds one skeleton)")  # fmt: skip
+        raise UserError(f"{' and '.join(extras)} {verb} to glTF output: {hint} (a BVH file holds one skeleton)")
     if ghost_methods(args):
         from engine.methods import available_methods
 

@@ -110,7 +110,7 @@ def _reconstruct(args: argparse.Namespace) -> int:
     for path in args.input:
         check_input_file(path)
     outs = [args.out] if args.out is not None else [args.out_dir / f"{p.stem}.{args.out_format}" for p in args.input]
-    check_export(args, outs)
+    check_export(args, outs, hint="give --out a .glb or .gltf name" if args.out else "add --out-format glb or gltf")
     if len(set(outs)) != len(outs):
         raise UserError("two inputs share a file name; their outputs in --out-dir would collide")
     if args.out_dir is not None:

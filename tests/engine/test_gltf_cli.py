@@ -87,3 +87,8 @@ def test_recordings_take_no_ghosts_and_bake_checks_the_extension_first(tmp_path,
     scene.write_text("{}")
     assert main(["bake", str(scene), "--out", str(tmp_path / "o.fbx"), "--no-progress"]) == 2
     assert "known: .bvh (BVH motion), .glb (glTF 2.0 binary), .gltf (glTF 2.0 JSON)" in capsys.readouterr().err
+
+
+def test_out_dir_with_a_glb_only_option_asks_for_the_out_format(clip_path, tmp_path, capsys):
+    assert main(["reconstruct", str(clip_path), "--out-dir", str(tmp_path / "d"), "--no-mesh", "--no-progress"]) == 2
+    assert "--no-mesh applies to glTF output: add --out-format glb or gltf" in capsys.readouterr().err

@@ -137,8 +137,7 @@ class _Builder:
         self.chunks: list[bytes] = []
         self.size = 0
 
-    def accessor(self, data: np.ndarray, kind: str, target: int | None = None, bounds: bool = False,
-                 normalized: bool = False) -> int:  # fmt: skip
+    def accessor(self, data: np.ndarray, kind: str, target: int | None = None, bounds: bool = False) -> int:
         comp = {np.float32: G.FLOAT, np.uint16: G.UNSIGNED_SHORT, np.uint32: G.UNSIGNED_INT}[data.dtype.type]
         raw = np.ascontiguousarray(data).tobytes()
         pad = (-len(raw)) % 4
@@ -147,8 +146,7 @@ class _Builder:
         self.size += len(raw) + pad
         width = {"SCALAR": 1, "VEC3": 3, "VEC4": 4, "MAT4": 16}[kind]
         flat = data.reshape(-1, width)
-        acc = G.Accessor(bufferView=len(self.gltf.bufferViews) - 1, componentType=comp, count=len(flat), type=kind,
-                         normalized=normalized or None)  # fmt: skip
+        acc = G.Accessor(bufferView=len(self.gltf.bufferViews) - 1, componentType=comp, count=len(flat), type=kind)
         if bounds:
             acc.min = [float(x) for x in flat.min(0)]
             acc.max = [float(x) for x in flat.max(0)]

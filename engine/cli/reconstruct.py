@@ -149,10 +149,11 @@ def _reconstruct_file(job: tuple[Path, Path, argparse.Namespace, bool]) -> str:
     if "method" not in _METHOD:
         _METHOD["method"] = build_method(args)
     tracking = simulate(motion, args.sensors, faulty=args.faulty, gaps=args.gaps, seed=args.seed)
+    # comparison methods first: one that refuses the options (a --scene for IK) stops before the long run
+    ghosts = run_ghosts(args, tracking, motion.skeleton, motion.name, progress, path.name, reference=motion)
     rec, results = run_method(_METHOD["method"], tracking, motion.skeleton, progress=progress, desc=path.name,
                               light=True)  # fmt: skip
     rec.name = f"{motion.name} ({args.method})"
-    ghosts = run_ghosts(args, tracking, motion.skeleton, motion.name, progress, path.name, reference=motion)
     write_reconstruction(out, rec, (raw, report) if args.on_source_rig else None, fps=args.fps,
                          contents=export_contents(args, ghosts, tracking))  # fmt: skip
     return summary(results, tracking, rec, out)

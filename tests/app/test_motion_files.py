@@ -19,7 +19,7 @@ def test_the_dialog_offers_every_format_and_a_bare_name_takes_the_filter_s():
 
 
 def test_save_reconstruction_writes_a_glb_and_refuses_an_unknown_extension(studio, qtbot, tmp_path, monkeypatch):
-    from tests.engine.gltf_reading import read_gltf
+    from tests.engine.gltf_reading import read_gltf, validate, validator_command
 
     studio.files.export.factory = lambda name: RestPoseMethod()
     errors = []
@@ -32,3 +32,5 @@ def test_save_reconstruction_writes_a_glb_and_refuses_an_unknown_extension(studi
     assert len(errors) == 1
     doc = read_gltf(out).doc
     assert doc.skins and doc.meshes and len(doc.animations[0].channels) > 22
+    if validator_command() is not None:
+        assert [(r["errors"], r["warnings"]) for r in validate([out])] == [(0, 0)]

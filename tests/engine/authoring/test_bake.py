@@ -92,7 +92,7 @@ def test_a_joint_targeted_by_both_keys_follows_an_eased_straight_path():
 
 
 def test_the_command_bakes_to_gltf_with_the_bvh_s_joints(baked, example_scene, tmp_path):
-    from tests.engine.gltf_reading import Y_UP_TO_Z_UP, bvh_world_positions, read_gltf
+    from tests.engine.gltf_reading import Y_UP_TO_Z_UP, bvh_world_positions, read_gltf, validate, validator_command
 
     out = tmp_path / "out.glb"
     assert main(["bake", str(example_scene), "--out", str(out), "--no-progress"]) == 0
@@ -101,3 +101,5 @@ def test_the_command_bakes_to_gltf_with_the_bvh_s_joints(baked, example_scene, t
     got = read.world_positions([read.node_index(n) for n in raw.names], raw.frames) @ Y_UP_TO_Z_UP.T
     assert np.abs(got - bvh_world_positions(raw)).max() < 1e-5
     assert read.doc.meshes
+    if validator_command() is not None:
+        assert [(r["errors"], r["warnings"]) for r in validate([out])] == [(0, 0)]

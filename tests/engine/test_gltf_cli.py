@@ -92,3 +92,13 @@ def test_recordings_take_no_ghosts_and_bake_checks_the_extension_first(tmp_path,
 def test_out_dir_with_a_glb_only_option_asks_for_the_out_format(clip_path, tmp_path, capsys):
     assert main(["reconstruct", str(clip_path), "--out-dir", str(tmp_path / "d"), "--no-mesh", "--no-progress"]) == 2
     assert "--no-mesh applies to glTF output: add --out-format glb or gltf" in capsys.readouterr().err
+
+
+def test_on_the_source_rig_at_another_rate_the_glb_matches_the_bvh(standin_dragposer, clip_path, tmp_path):  # noqa: F811
+    common = ["--iterations", "1", "--max-frames", "20", "--on-source-rig", "--fps", "30", "--no-progress"]
+    assert main(["reconstruct", str(clip_path), "--out", str(tmp_path / "r.bvh"), *common]) == 0
+    assert main(["reconstruct", str(clip_path), "--out", str(tmp_path / "r.glb"), *common]) == 0
+    raw = load_bvh(tmp_path / "r.bvh")
+    assert raw.frames == 10
+    got = _positions(tmp_path / "r.glb", list(raw.names), raw.frames)
+    assert np.abs(got - bvh_world_positions(raw)).max() < 1e-5

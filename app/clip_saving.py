@@ -1,7 +1,7 @@
-"""Saving the studio's authoring edits: the edited clip as BVH, and the unsaved-changes prompt.
+"""Saving the studio's authoring edits: the edited clip as BVH or glTF, and the unsaved-changes prompt.
 
 A range re-solve (Edit ▸ Re-solve range) replaces the loaded clip in memory; File ▸ Save
-edited clip as BVH writes it as it is now, on the canonical skeleton or onto the rig of
+edited clip writes it as it is now, on the canonical skeleton or onto the rig of
 the file it was opened from (:func:`engine.motion.write_back.save_on_source_rig`),
 atomically, with no solver run (the reconstruction saves re-solve the clip instead).
 
@@ -16,7 +16,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from PyQt6.QtWidgets import QFileDialog, QMenu, QMessageBox
+from PyQt6.QtWidgets import QMenu, QMessageBox
+
+from app.motion_files import ask_motion_path
 
 from engine.errors import UserError
 
@@ -29,7 +31,7 @@ def clip_edited(window: Any) -> bool:
 
 
 def save_clip(window: Any, path: str | Path, on_source_rig: bool = False) -> None:
-    """Write the loaded clip as it is now to ``path`` (BVH, atomically): on the canonical
+    """Write the loaded clip as it is now to ``path`` (BVH or glTF by the extension, atomically): on the canonical
     skeleton, or with ``on_source_rig`` onto the hierarchy of the file it was opened from.
 
     Raises
@@ -52,8 +54,7 @@ def save_clip(window: Any, path: str | Path, on_source_rig: bool = False) -> Non
 def save_clip_dialog(window: Any, on_source_rig: bool = False) -> bool:
     """Ask for a file and save the clip there; False when cancelled or failed."""
     title = "Save edited clip" + (" onto the source rig" if on_source_rig else "")
-    path, _ = QFileDialog.getSaveFileName(window, title, window.files.suggested_name("bvh", "edited"),
-                                          "BVH motion (*.bvh)")  # fmt: skip
+    path = ask_motion_path(window, title, window.files.suggested_name("bvh", "edited"))
     if not path:
         return False
     try:
@@ -92,6 +93,6 @@ def confirm_discard(window: Any, doing: str) -> bool:
 
 def add_menu_entries(window: Any, file_menu: QMenu, action) -> dict:
     """Add the edited clip's saves to ``file_menu`` with the menus' ``action`` helper."""
-    return {"save_clip": action(window, file_menu, "Save edited &clip as BVH...", lambda: save_clip_dialog(window)),
+    return {"save_clip": action(window, file_menu, "Save edited &clip (BVH / glTF)...", lambda: save_clip_dialog(window)),
             "save_clip_rig": action(window, file_menu, "Save edited clip onto the source r&ig...",
                                     lambda: save_clip_dialog(window, True))}  # fmt: skip

@@ -1,4 +1,4 @@
-"""File menu of the studio: open, recent files, save BVH / scene, screenshots.
+"""File menu of the studio: open, recent files, save BVH or glTF / scene, screenshots.
 
 Every failure shows a message box and leaves the session as it was. Files are written to
 a temporary name and renamed, so nothing is ever half written.
@@ -19,9 +19,11 @@ from PyQt6.QtWidgets import QFileDialog, QMainWindow, QMenu
 from app import rig_maps
 from app.clip_saving import clip_edited
 from app.export import ReconstructionExport
+from app.motion_files import ask_motion_path
 from engine.atomic import atomic_path, write_text
 from engine.errors import OutputError, RigError, UserError
 from engine.input_files import read_json
+from engine.motion.formats import motion_format
 
 if TYPE_CHECKING:
     from engine.studio.session import Session
@@ -154,7 +156,7 @@ class FileActions:
 
     def save_reconstruction(self, path: str | None = None, on_source_rig: bool = False) -> None:
         """Reconstruct the whole clip off the GUI thread (progress, Cancel), then write it as
-        BVH (canonical skeleton, or with ``on_source_rig`` the hierarchy of the file it was
+        BVH or glTF by the extension (canonical skeleton, or with ``on_source_rig`` the hierarchy of the file it was
         opened from)."""
         s = self.session
         if s.source is not None:
@@ -169,11 +171,14 @@ class FileActions:
             text = str(exc)
             return self.show_error("Nothing to save", f"{text[:1].upper()}{text[1:]}.")
         if path is None:
-            path, _ = QFileDialog.getSaveFileName(self.w, "Save reconstruction", self.suggested_name("bvh"),
-                                                  "BVH motion (*.bvh)")  # fmt: skip
+            path = ask_motion_path(self.w, "Save reconstruction", self.suggested_name("bvh"))
             if not path:
                 return None
             job = dataclasses.replace(job, path=Path(path))
+        try:  # an extension no writer knows: said before the solve, not after it
+            motion_format(path, "file")
+        except UserError as exc:
+            return self.show_error("Cannot save reconstruction", str(exc))
         self.export.start(job)
         return None
 

@@ -54,7 +54,7 @@ def build_menus(w: QMainWindow) -> None:
     named["connect_live"] = action(w, file_menu, "Connect &live source (VMC)...", w.live.connect_dialog)
     named["open_recording"] = action(w, file_menu, "Open &tracker recording...", w.live.open_recording_dialog)
     file_menu.addSeparator()
-    action(w, file_menu, "&Save reconstruction as BVH...", f.save_reconstruction, QKeySequence.StandardKey.Save)
+    action(w, file_menu, "&Save reconstruction (BVH / glTF)...", f.save_reconstruction, QKeySequence.StandardKey.Save)
     action(w, file_menu, "Save reconstruction onto the source &rig...", f.save_on_source_rig, "Ctrl+Alt+S")
     named.update(clip_saving.add_menu_entries(w, file_menu, action))
     action(w, file_menu, "Save s&cene...", f.save_scene, "Ctrl+Shift+S")

@@ -26,6 +26,7 @@ from PyQt6.QtWidgets import (
     QApplication, QDockWidget, QFileDialog, QMainWindow, QMessageBox, QProgressDialog, QWidget,
 )  # fmt: skip
 
+from app.motion_files import ask_motion_path
 from app.pose_constraints import PoseConstraints
 from app.undo import StateCommand
 from engine import skeleton as sk
@@ -33,7 +34,7 @@ from engine.authoring.bake import bake
 from engine.authoring.document import AuthoringScene, save_authoring
 from engine.authoring.keys import Animation, Key
 from engine.authoring.pose_mode import PoseMode
-from engine.motion.bvh import save_motion_bvh
+from engine.motion.formats import motion_format, save_motion
 from engine.errors import UserError
 from engine.kinematics import quat_np as QN
 from engine.kinematics import quaternion as Q
@@ -108,7 +109,7 @@ class PoseWindow(QMainWindow):
     def _menus(self) -> None:
         file_menu = self.menuBar().addMenu("&File")
         for text, slot, key in (("&Save scene...", self.save_dialog, QKeySequence.StandardKey.Save),
-                                ("Export &BVH...", self.export_bvh_dialog, None),
+                                ("Export &motion (BVH / glTF)...", self.export_bvh_dialog, None),
                                 ("Export &video...", self.export_video_dialog, None),
                                 ("&Close", self.close, QKeySequence.StandardKey.Close)):  # fmt: skip
             act = QAction(text, self)
@@ -305,7 +306,9 @@ class PoseWindow(QMainWindow):
         self.undo.setClean()
 
     def export_bvh(self, path: str | Path) -> None:
-        save_motion_bvh(path, self.bake_scene().motion)
+        """Bake and write the motion, BVH or glTF by the extension of ``path``."""
+        motion_format(path, "file")  # before the bake
+        save_motion(path, self.bake_scene().motion)
 
     def export_video(self, path: str | Path, size: tuple[int, int] = (960, 540)) -> None:
         from app.render import render_video
@@ -331,7 +334,12 @@ class PoseWindow(QMainWindow):
         self._file_dialog("Save scene", "Scenes (*.json)", self.save)
 
     def export_bvh_dialog(self) -> None:
-        self._file_dialog("Export BVH", "BVH (*.bvh)", self.export_bvh)
+        path = ask_motion_path(self, "Export motion", "")
+        if path:
+            try:
+                self.export_bvh(path)
+            except (UserError, OSError) as exc:
+                QMessageBox.warning(self, "Export motion", str(exc))
 
     def export_video_dialog(self) -> None:
         self._file_dialog("Export video", "MP4 video (*.mp4)", self.export_video)

@@ -7,6 +7,10 @@
 # 2. A virtual environment in .venv (created on first use).
 # 3. `pip install -e '.[dev]'`, only when pyproject.toml changed since the last install
 #    (its sha256 is kept in .venv/.pyproject.sha256).
+# 4. The Khronos glTF validator (npm package gltf-validator, pinned) in .venv/gltf-validator,
+#    which the glTF export tests run through node (docs/export.md). Node and npm come from
+#    apt (nodejs, npm) when missing and running as root; without them, or offline, the
+#    script says so and goes on: those tests then skip, saying why.
 #
 # Environment: PYTHON=/path/to/python3.11 picks the interpreter; DRAGPOSER_SKIP_APT=1
 # skips step 1 (non-Debian machines, containers prepared by hand).
@@ -102,12 +106,38 @@ ensure_project_installed() {
     printf '%s\n' "$want" >"$STAMP"
 }
 
+GLTF_VALIDATOR_VERSION=2.0.0-dev.3.10
+
+ensure_gltf_validator() {
+    local dir="$VENV/gltf-validator"
+    if [[ -f "$dir/node_modules/gltf-validator/package.json" ]] &&
+        grep -q "\"version\": \"$GLTF_VALIDATOR_VERSION\"" "$dir/node_modules/gltf-validator/package.json"; then
+        return 0
+    fi
+    if ! command -v npm >/dev/null 2>&1 || ! command -v node >/dev/null 2>&1; then
+        if [[ "${DRAGPOSER_SKIP_APT:-0}" != "1" && "$(id -u)" -eq 0 ]] && command -v apt-get >/dev/null 2>&1; then
+            say "installing node and npm for the glTF validator"
+            apt-get update -q && DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends nodejs npm ||
+                say "warning: could not install nodejs/npm"
+        fi
+    fi
+    if ! command -v npm >/dev/null 2>&1 || ! command -v node >/dev/null 2>&1; then
+        say "warning: node/npm absent: the glTF validator tests will skip (install nodejs and npm)"
+        return 0
+    fi
+    say "installing the Khronos glTF validator (npm gltf-validator $GLTF_VALIDATOR_VERSION) into $dir"
+    mkdir -p "$dir"
+    npm install --prefix "$dir" --no-audit --no-fund --silent "gltf-validator@$GLTF_VALIDATOR_VERSION" ||
+        say "warning: npm could not install gltf-validator (offline?): the glTF validator tests will skip"
+}
+
 main() {
     local python
     python=$(pick_python) || die "Python 3.11 not found (install python3.11 or set PYTHON=/path/to/python3.11)"
     ensure_apt_packages "$python"
     ensure_venv "$python"
     ensure_project_installed
+    ensure_gltf_validator
 }
 
 main "$@"

@@ -1,4 +1,4 @@
-"""A scene's baked motion as BVH: one function, so the ``bake`` command and the studio
+"""A scene's baked motion as BVH or glTF: one function, so the ``bake`` command and the studio
 write the same bytes for the same scene."""
 
 from __future__ import annotations
@@ -8,13 +8,15 @@ from pathlib import Path
 
 from engine.authoring.bake import Baked, bake
 from engine.authoring.document import AuthoringScene
-from engine.motion.bvh import save_motion_bvh
+from engine.motion.formats import GltfContents, save_motion
 
 
-def bake_to_bvh(scene: AuthoringScene, vae, out: str | Path, fps: float | None = None,
-                progress: Callable[[int, int], None] | None = None) -> Baked:  # fmt: skip
-    """Bake ``scene`` (:func:`engine.authoring.bake.bake`) and write it to ``out`` as a
-    BVH file on the character's skeleton, atomically."""
+def bake_to_file(scene: AuthoringScene, vae, out: str | Path, fps: float | None = None,
+                 progress: Callable[[int, int], None] | None = None,
+                 contents: GltfContents | None = None) -> Baked:  # fmt: skip
+    """Bake ``scene`` (:func:`engine.authoring.bake.bake`) and write it to ``out`` on the
+    character's skeleton, atomically, as BVH or glTF by the extension
+    (:func:`engine.motion.formats.save_motion`)."""
     baked = bake(scene, vae, fps, progress)
-    save_motion_bvh(out, baked.motion)
+    save_motion(out, baked.motion, contents=contents)
     return baked

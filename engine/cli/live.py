@@ -36,7 +36,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--listen", default="39539", metavar="[HOST:]PORT",
                    help="UDP port (all interfaces) or HOST:PORT (default: 39539, VMC's)")  # fmt: skip
     p.add_argument("--record", type=Path, metavar="REC.jsonl", help="record every tracker sample (JSON Lines)")
-    p.add_argument("--out", type=Path, metavar="OUT.bvh", help="write the reconstruction")
+    p.add_argument("--out", type=Path, metavar="OUT.bvh",
+                   help="write the reconstruction: .bvh, .glb or .gltf (docs/export.md)")
     p.add_argument("--duration", type=float, metavar="S", help="stop after S seconds (default: Ctrl-C)")
     p.add_argument("--idle-stop", type=float, metavar="S", help="stop when no frame came for S seconds")
     p.add_argument("--fps", type=float, default=60.0, help="nominal stream rate (default: 60)")
@@ -72,12 +73,16 @@ def _check(args: argparse.Namespace) -> None:
         raise UserError(f"--frame-budget must be a number of milliseconds >= 0, got {args.frame_budget}")
     if args.iterations is not None and not 1 <= args.iterations <= 10000:
         raise UserError(f"--iterations must be in [1, 10000], got {args.iterations}")
+    if args.out is not None:
+        from engine.motion.formats import motion_format
+
+        motion_format(args.out)  # an unknown extension: before listening, not after the session
     if args.lr is not None and not (math.isfinite(args.lr) and args.lr > 0):
         raise UserError(f"--lr must be > 0, got {args.lr}")
 
 
 def _live(args: argparse.Namespace) -> int:
-    from engine.motion.bvh import save_motion_bvh
+    from engine.motion.formats import save_motion
     from engine.tracker_io.live import (LiveRun, default_budget_ms, iteration_summary, latency_summary, reference_error,
                                      to_motion, tracker_error_cm)  # fmt: skip
     from engine.tracker_io.receiver import VMCReceiver, parse_listen
@@ -140,7 +145,7 @@ def _live(args: argparse.Namespace) -> int:
         "wall_s": wall,
     }
     if args.out and result.results:
-        save_motion_bvh(args.out, to_motion(result.times, result.results, skeleton, args.fps, f"live ({args.method})"))
+        save_motion(args.out, to_motion(result.times, result.results, skeleton, args.fps, f"live ({args.method})"))
     write_json(args.json, stats)
     print(_report(stats, args, result))
     return 0

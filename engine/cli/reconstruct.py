@@ -7,9 +7,9 @@ process per file, see :mod:`engine.cli.jobs`);
 The clip is loaded onto the canonical skeleton, trackers are simulated from it
 (:func:`engine.tracking.simulate`: preset or joint list, optional faulty sensors and
 hand-tracking gaps), DragPoser reconstructs it frame by frame (progress bar on stderr)
-and the result is written as a BVH. A scene file (``--scene``, see
-``docs/optimizer.md``) adds constraints and settings; options given on the command
-line win over the scene's settings.
+and the result is written as BVH or glTF (by ``--out``'s extension, docs/export.md).
+A scene file (``--scene``, see ``docs/optimizer.md``) adds constraints and settings;
+options given on the command line win over the scene's settings.
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from engine.cli.export_options import add_export_options, check_export, export_contents, run_ghosts
 from engine.cli.jobs import add_jobs_option, executor_of, jobs_of, map_files
 from engine.cli.method_options import add_model_options, build_method
 from engine.cli.rig_options import add_rig_map_option, asf_path, rig_map_path
@@ -39,9 +40,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="source motion(s) (any supported rig); several need --out-dir")
     p.add_argument("--trackers", type=Path, metavar="REC.jsonl",
                    help="reconstruct a tracker recording (from `live --record`; docs/trackers.md) instead of IN.bvh")
-    p.add_argument("--out", type=Path, metavar="OUT.bvh", help="where to write the reconstruction (one input)")
+    p.add_argument("--out", type=Path, metavar="OUT.bvh",
+                   help="where to write the reconstruction (one input): .bvh, .glb or .gltf (docs/export.md)")
     p.add_argument("--out-dir", type=Path, metavar="DIR",
-                   help="write each input's reconstruction to DIR/<input name>.bvh (several inputs)")
+                   help="write each input's reconstruction to DIR/<input name>.bvh (several inputs; --out-format)")
     p.add_argument("--on-source-rig", action="store_true",
                    help="write the result onto IN.bvh's own hierarchy (its joint names, offsets and "
                    "channels; joints outside the 22 keep their rest rotation) instead of the canonical one")
@@ -64,6 +66,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--method", default="dragposer", help=argparse.SUPPRESS)
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     add_tracker_options(p)
+    add_export_options(p, ghosts=True, tracker_nodes=True, out_dir=True)
     add_jobs_option(p)
     p.set_defaults(func=_reconstruct)
 
@@ -84,6 +87,9 @@ def _reconstruct(args: argparse.Namespace) -> int:
             raise UserError("--on-source-rig writes onto IN.bvh's rig; it does not apply to --trackers")
         if args.out is None or args.out_dir is not None:
             raise UserError("--trackers needs --out OUT.bvh (not --out-dir)")
+        if args.ghosts or args.tracker_nodes:
+            raise UserError("--ghosts and --tracker-nodes apply to IN.bvh reconstructions, not to --trackers recordings")
+        check_export(args, [args.out])
         from engine.cli.reconstruct_trackers import reconstruct_trackers
 
         return reconstruct_trackers(args)
@@ -103,7 +109,8 @@ def _reconstruct(args: argparse.Namespace) -> int:
     parse_sensors(args.sensors)  # fail before loading anything
     for path in args.input:
         check_input_file(path)
-    outs = [args.out] if args.out is not None else [args.out_dir / f"{p.stem}.bvh" for p in args.input]
+    outs = [args.out] if args.out is not None else [args.out_dir / f"{p.stem}.{args.out_format}" for p in args.input]
+    check_export(args, outs, hint="give --out a .glb or .gltf name" if args.out else "add --out-format glb or gltf")
     if len(set(outs)) != len(outs):
         raise UserError("two inputs share a file name; their outputs in --out-dir would collide")
     if args.out_dir is not None:
@@ -142,10 +149,13 @@ def _reconstruct_file(job: tuple[Path, Path, argparse.Namespace, bool]) -> str:
     if "method" not in _METHOD:
         _METHOD["method"] = build_method(args)
     tracking = simulate(motion, args.sensors, faulty=args.faulty, gaps=args.gaps, seed=args.seed)
+    # comparison methods first: one that refuses the options (a --scene for IK) stops before the long run
+    ghosts = run_ghosts(args, tracking, motion.skeleton, motion.name, progress, path.name, reference=motion)
     rec, results = run_method(_METHOD["method"], tracking, motion.skeleton, progress=progress, desc=path.name,
                               light=True)  # fmt: skip
     rec.name = f"{motion.name} ({args.method})"
-    write_reconstruction(out, rec, (raw, report) if args.on_source_rig else None, fps=args.fps)
+    write_reconstruction(out, rec, (raw, report) if args.on_source_rig else None, fps=args.fps,
+                         contents=export_contents(args, ghosts, tracking))  # fmt: skip
     return summary(results, tracking, rec, out)
 
 

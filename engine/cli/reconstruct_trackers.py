@@ -20,7 +20,8 @@ def _slice(tracking: Any, start: int, stop: int | None = None) -> Any:
 
 
 def reconstruct_trackers(args: argparse.Namespace) -> int:
-    from engine.motion.bvh import save_motion_bvh
+    from engine.cli.export_options import export_contents
+    from engine.motion.formats import save_motion
     from engine.cli.method_options import build_method
     from engine.methods import run_method
     from engine.tracker_io.calibration import calibrate
@@ -50,7 +51,7 @@ def reconstruct_trackers(args: argparse.Namespace) -> int:
         raise UserError(f"{args.trackers}: no frame left to reconstruct after the calibration window")
     _, results = run_method(method, tracking, skeleton, progress=not args.no_progress, desc=args.trackers.name)
     motion = to_motion(times, results, skeleton, tracking.fps, f"{args.trackers.stem} ({args.method})")
-    save_motion_bvh(args.out, motion)
+    save_motion(args.out, motion, contents=export_contents(args))
     frames = [tracking.frame(i) for i in range(len(tracking))]
     stats = {
         "frames_solved": len(results),

@@ -1,10 +1,10 @@
-"""Saving a reconstruction as BVH: the studio's File > Save reconstruction and
+"""Saving a reconstruction as BVH or glTF: the studio's File > Save reconstruction and
 ``reconstruct --out`` write through :func:`write_reconstruction`.
 
 :class:`ExportJob` is what the studio's export runs off the GUI thread: a copy of the
 session's clip, sensors, constraints, settings and method taken when the export starts
 (:meth:`engine.studio.session.Session.export_job`), solved by :func:`reconstruct_clip`
-with a fresh method, then written. The BVH is written atomically, so a file is either
+with a fresh method, then written. The file is written atomically, so a file is either
 complete or absent, and a cancelled job writes nothing.
 """
 
@@ -28,6 +28,7 @@ from engine.studio.clip_source import ClipSource
 
 if TYPE_CHECKING:
     from engine.motion.bvh import RawBVH
+    from engine.motion.formats import GltfContents
 
 
 def reconstruct_clip(motion: Motion, sensors: tuple[Sensor, ...], constraints: tuple[Constraint, ...],
@@ -61,19 +62,14 @@ def reconstruct_clip(motion: Motion, sensors: tuple[Sensor, ...], constraints: t
 
 
 def write_reconstruction(path: str | Path, rec: Motion, on_rig: tuple[RawBVH, Any] | None = None,
-                         fps: float | None = None) -> None:  # fmt: skip
-    """Write ``rec`` to ``path`` as BVH, atomically: on the canonical skeleton, or with
-    ``on_rig = (raw, report)`` onto the hierarchy of the source file it was retargeted
-    from (:func:`engine.motion.write_back.save_on_source_rig`, docs/skeleton.md), at ``fps``
-    (default: the source's frame rate)."""
-    if on_rig is None:
-        from engine.motion.bvh import save_motion_bvh
+                         fps: float | None = None, contents: GltfContents | None = None) -> None:  # fmt: skip
+    """Write ``rec`` to ``path`` atomically, as BVH or glTF by its extension
+    (:func:`engine.motion.formats.save_motion`, docs/export.md): on the canonical
+    skeleton, or with ``on_rig = (raw, report)`` onto the hierarchy of the source file it
+    was retargeted from (docs/skeleton.md), at ``fps`` (default: the source's frame rate)."""
+    from engine.motion.formats import save_motion
 
-        save_motion_bvh(path, rec)
-    else:
-        from engine.motion.write_back import save_on_source_rig
-
-        save_on_source_rig(path, rec, *on_rig, fps=fps)
+    save_motion(path, rec, on_rig, fps, contents)
 
 
 def source_rig(source: str | Path, rig_map: str | Path | None = None) -> tuple[RawBVH, Any]:
@@ -102,7 +98,7 @@ class ExportJob:
     method : str
         Registered method name.
     path : Path
-        Output BVH.
+        Output file (.bvh, .glb or .gltf).
     source : Path or None
         The BVH the clip was opened from, to write onto its rig; None: canonical skeleton.
     rig_map : Path or None

@@ -13,17 +13,9 @@ import numpy as np
 import pyvista as pv
 
 from engine import skeleton as sk
+from engine.motion.mannequin import BONE_RADIUS  # the exported glTF body has the same build
 from widgets.viewport.actors import direct_colour_actor
 
-#: Capsule radius per bone, metres, keyed by the bone's child joint (SMPL-like build).
-BONE_RADIUS = {
-    "lhip": 0.075, "rhip": 0.075, "lknee": 0.065, "rknee": 0.065,
-    "lankle": 0.048, "rankle": 0.048, "ltoe": 0.035, "rtoe": 0.035,
-    "lowerback": 0.12, "upperback": 0.12, "chest": 0.13, "lowerneck": 0.055,
-    "upperneck": 0.095, "lclavicle": 0.05, "rclavicle": 0.05,
-    "lshoulder": 0.05, "rshoulder": 0.05, "lelbow": 0.042, "relbow": 0.042,
-    "lwrist": 0.04, "rwrist": 0.04,
-}  # fmt: skip
 RING = 10  # vertices around a capsule
 CAP_RINGS = 3  # latitude rings per hemisphere (the equator included)
 SHADOW_RINGS = 6

@@ -8,7 +8,7 @@ import pytest
 from engine import skeleton as sk
 from engine.authoring.bake import bake, interpolated_targets
 from engine.authoring.document import load_authoring
-from engine.authoring.export import bake_to_bvh
+from engine.authoring.export import bake_to_file
 from engine.authoring.keys import Key
 from engine.authoring.targets import JointTarget
 from engine.motion.bvh import load_bvh
@@ -26,7 +26,7 @@ def baked(vae, tmp_path_factory):
     path = folder / "example.json"
     path.write_text(EXAMPLE)
     scene = load_authoring(path)
-    return scene, bake_to_bvh(scene, vae, folder / "studio.bvh"), folder / "studio.bvh"
+    return scene, bake_to_file(scene, vae, folder / "studio.bvh"), folder / "studio.bvh"
 
 
 def test_the_command_bakes_61_frames_at_30_fps_the_bytes_the_studio_exports(baked, example_scene, tmp_path, capsys):
@@ -89,3 +89,17 @@ def test_a_joint_targeted_by_both_keys_follows_an_eased_straight_path():
     early = interpolated_targets([a, b], [0.0, 10.0], 1.0, "cubic")[0].position[0]
     late = interpolated_targets([a, b], [0.0, 10.0], 1.0, "linear")[0].position[0]
     assert 0 < early < late == pytest.approx(0.1)  # cubic eases out of the key
+
+
+def test_the_command_bakes_to_gltf_with_the_bvh_s_joints(baked, example_scene, tmp_path):
+    from tests.engine.gltf_reading import Y_UP_TO_Z_UP, bvh_world_positions, read_gltf, validate, validator_command
+
+    out = tmp_path / "out.glb"
+    assert main(["bake", str(example_scene), "--out", str(out), "--no-progress"]) == 0
+    raw = load_bvh(baked[2])
+    read = read_gltf(out)
+    got = read.world_positions([read.node_index(n) for n in raw.names], raw.frames) @ Y_UP_TO_Z_UP.T
+    assert np.abs(got - bvh_world_positions(raw)).max() < 1e-5
+    assert read.doc.meshes
+    if validator_command() is not None:
+        assert [(r["errors"], r["warnings"]) for r in validate([out])] == [(0, 0)]

@@ -112,6 +112,7 @@ def test_cli_calibrates_a_scaled_wearer(synthetic_motion, tmp_path, capsys):
     (["live", "--listen", "x"], "expected PORT or HOST:PORT"),
     (["live", "--duration", "-1"], "--duration must be a positive"),
     (["live", "--calibrate", "nan"], "--calibrate must be seconds"),
+    (["live", "--out", "take.fbx"], "'.fbx' is not a motion format this program writes; known: .bvh"),
     (["send", "missing.bvh", "--to", "localhost"], "expected HOST:PORT"),
     (["send", "missing.bvh", "--to", "127.0.0.1:9", "--drop", "2"], "--drop must be in"),
     (["reconstruct", "--out", "x.bvh"], "give IN.bvh or --trackers"),

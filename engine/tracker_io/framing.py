@@ -7,13 +7,13 @@ each); the assembler tells them apart by themselves, per stream:
   is a frame of its own, complete on arrival.
 * **time first**: ``/VMC/Ext/T`` alone, then one datagram per device. A datagram without a
   time belongs to the frame of the latest time. The frame closes as soon as every
-  *expected* device has arrived, else after :data:`FRAME_GAP_S` without one of its
-  datagrams, else when the next time arrives.
+  *expected* device has arrived, else when the next time arrives.
 * **time last**: one datagram per device, then ``/VMC/Ext/T``. The devices wait for the time,
   which closes their frame.
 * **no time**: one datagram per device and never a time. A frame is a burst of devices:
   it closes as soon as every expected device has arrived, when a device repeats, or after
-  :data:`FRAME_GAP_S` of silence. Its time is the arrival of its first datagram.
+  a silence of half the stream's frame period (the median over the last frames; at least
+  :data:`FRAME_GAP_S`). Its time is the arrival of its first datagram.
 
 Whether a lone time starts or ends its frame cannot be told from the order of the
 datagrams (``T D D D T D D D`` reads both ways), only from their timing: a frame's
@@ -24,10 +24,12 @@ the order, seven of the last eight against it turn it over (one arrival stamped 
 receiver thread waiting for the interpreter does not). Until the order is set, each time
 is placed by its own vote, once the next datagram has arrived.
 
-A stream is taken as one without time when devices come again (a device repeats, or
-after a silence) before any time was seen; devices are held until then. In a stream with
-time, devices whose time never comes (its datagram was lost: a device repeats, or a
-silence falls, while they wait) are dropped and counted as :attr:`FrameAssembler.untimed`.
+A stream is taken as one without time when a device repeats before any time was seen;
+devices are held until then. In a stream with time, devices whose time never comes (its
+datagram was lost, so a device repeats while they wait) are dropped and counted as
+:attr:`FrameAssembler.untimed`. Only a stream without time has a silence rule: a sender
+that stalls in the middle of a frame (a busy machine) then splits it in two, where a
+time keeps it whole.
 
 *Expected* devices are those in each of the last two frames: a device that stops sending
 is no longer waited for after two frames, one that sends every other frame never is.
@@ -48,12 +50,15 @@ import math
 from collections import deque
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from engine.tracker_io.vmc import Packet, Pose
 
-#: Seconds without a datagram of an open frame after which it closes (frames without a
-#: complete set of expected devices; a burst's datagrams come well within it, frames at up
-#: to 120 Hz are further apart).
+#: Seconds of silence that close a frame of a sender without time, at least (module doc):
+#: a burst's datagrams come well within it, frames at up to 120 Hz further apart.
 FRAME_GAP_S = 0.004
+#: Frame starts over which a sender without time has its frame period measured.
+PERIOD_FRAMES = 16
 
 #: Votes in a row that set the order of a stream's lone times; of the last eight, the
 #: votes against it that turn it over.
@@ -103,7 +108,7 @@ class FrameAssembler:
     Parameters
     ----------
     gap_s : float
-        Silence that closes an open frame, seconds.
+        Least silence that closes a frame of a sender without time, seconds.
     clock_origin : float
         Wire time that is stream time 0 for a sender without time.
     """
@@ -123,6 +128,7 @@ class FrameAssembler:
         self._pending: tuple[float, float, float] | None = None  # a lone time (t, arrival, wire) waiting for its vote
         self._frame: _Open | None = None
         self._recent: deque[frozenset[str]] = deque(maxlen=2)
+        self._starts: deque[float] = deque(maxlen=PERIOD_FRAMES + 1)  # wire times of untimed frames' starts
 
     @property
     def shape(self) -> str:
@@ -140,13 +146,20 @@ class FrameAssembler:
         if self._pending is not None and self._last is not None:
             times.append(self._last + max(self.gap_s, self._vote_gap or 0.0))
         f = self._frame
-        if f is not None and f.t is not None and not f.closed and f.names:
-            times.append(f.last_wire + self.gap_s)
+        if self.timed is False and f is not None and not f.closed:
+            times.append(f.last_wire + self.silence())
         return min(times) if times else None
+
+    def silence(self) -> float:
+        """The silence that closes a frame of a sender without time: half its frame period."""
+        if len(self._starts) < 3:
+            return self.gap_s
+        return max(self.gap_s, 0.5 * float(np.median(np.diff(self._starts))))
 
     def expire(self, now: float) -> list[Piece]:
         """Apply the silence rules at wire time ``now``: a lone time followed by a longer silence
-        than the one before it ends its frame; an open frame silent for ``gap_s`` closes."""
+        than the one before it ends its frame; a frame of a sender without time closes after
+        :meth:`silence`."""
         out: list[Piece] = []
         if self._pending is not None and self._last is not None:
             if now - self._last >= max(self.gap_s, self._vote_gap or 0.0):
@@ -155,7 +168,7 @@ class FrameAssembler:
                 self._place(*self._pending, "last", out)
                 self._pending = None
         f = self._frame
-        if f is not None and f.t is not None and not f.closed and f.names and now - f.last_wire >= self.gap_s:
+        if self.timed is False and f is not None and not f.closed and now - f.last_wire >= self.silence():
             f.closed = True
             out.append(Piece(f.t, [], f.last_arrival, True))
         return out
@@ -275,15 +288,16 @@ class FrameAssembler:
             self._untimed_device(pose, arrival, wire, out)
             return
         # waiting for a time (time last, or not known yet)
-        if f is not None and (pose.tracker in f.names or wire - f.last_wire >= self.gap_s):
-            if self.timed is None:  # devices again, and still no time: a sender without time
+        if f is not None and pose.tracker in f.names:
+            if self.timed is None:  # a device repeated before any time: a sender without time
                 self.timed = False
                 f.t, f.closed = f.first_wire - self.clock_origin, True
+                self._starts.append(f.first_wire)
                 out.append(Piece(f.t, f.waiting, f.last_arrival, True))
                 f.waiting = []
                 self._untimed_device(pose, arrival, wire, out)
                 return
-            self.untimed += len(f.waiting)  # their time never came (its datagram was lost)
+            self.untimed += len(f.waiting)  # this frame's time never came (its datagram was lost)
             f = None
         if f is None:
             f = _Open(None, wire, wire, arrival)
@@ -295,12 +309,13 @@ class FrameAssembler:
     def _untimed_device(self, pose: Pose, arrival: float, wire: float, out: list[Piece]) -> None:
         """A device of a sender without time: a repeat or a silence starts a new frame."""
         f = self._frame
-        if f is None or f.t is None or pose.tracker in f.names or wire - f.last_wire >= self.gap_s:
+        if f is None or f.t is None or pose.tracker in f.names or wire - f.last_wire >= self.silence():
             if f is not None and f.t is not None and not f.closed:
                 f.closed = True
                 out.append(Piece(f.t, [], f.last_arrival, True))
             f = _Open(wire - self.clock_origin, wire, wire, arrival)
             self._start(f)
+            self._starts.append(wire)
         f.names.add(pose.tracker)
         f.last_wire, f.last_arrival = wire, arrival
         close = f.closed or self._complete(f)

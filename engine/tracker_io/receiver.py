@@ -250,21 +250,34 @@ class VMCReceiver:
             # wake for the assembler's silence rules, else now and then to see stop
             wait = 0.05 if due is None else min(max(due - time.perf_counter(), 1e-4), 0.05)
             try:
-                self._sock.settimeout(wait)
-                if self._wire_stamps:
-                    data, ancillary, _, _ = self._sock.recvmsg(65535, socket.CMSG_SPACE(_TIMESPEC.size))
-                else:
-                    data, ancillary = self._sock.recvfrom(65535)[0], []
+                data, ancillary = self._receive(wait)
             except TimeoutError:
-                with self._lock:
-                    self._apply(self._assembler.expire(time.perf_counter()))
-                continue
+                # Datagrams may have come while this thread waited for the interpreter after
+                # the timeout: they go first (their wire time places the silence), and the
+                # silence rules run at "now" only when none is waiting.
+                now = time.perf_counter()
+                try:
+                    data, ancillary = self._receive(0.0)
+                except (BlockingIOError, TimeoutError):
+                    with self._lock:
+                        self._apply(self._assembler.expire(now))
+                    continue
+                except OSError:
+                    continue
             except OSError:
                 if self._stop.is_set():
                     break
                 continue
             arrival = time.perf_counter()
             self._handle(data, arrival, _wire_time(ancillary, arrival))
+
+    def _receive(self, timeout: float) -> tuple[bytes, list]:
+        """One datagram and its ancillary data (the kernel's stamp), waiting ``timeout`` s."""
+        self._sock.settimeout(timeout)
+        if self._wire_stamps:
+            data, ancillary, _, _ = self._sock.recvmsg(65535, socket.CMSG_SPACE(_TIMESPEC.size))
+            return data, ancillary
+        return self._sock.recvfrom(65535)[0], []
 
     def _handle(self, data: bytes, arrival: float, wire: float | None = None) -> None:
         """One datagram, stamped ``arrival`` here and received by the kernel at ``wire``

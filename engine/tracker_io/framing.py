@@ -26,8 +26,8 @@ is placed by its own vote, once the next datagram has arrived.
 
 A stream is taken as one without time when a device repeats before any time was seen;
 devices are held until then. In a stream with time, devices whose time never comes (its
-datagram was lost, so a device repeats while they wait) are dropped and counted as
-:attr:`FrameAssembler.untimed`. Only a stream without time has a silence rule: a sender
+datagram was lost, so a device repeats under the latest time or while they wait) are
+dropped and counted as :attr:`FrameAssembler.untimed`. Only a stream without time has a silence rule: a sender
 that stalls in the middle of a frame (a busy machine) then splits it in two, where a
 time keeps it whole.
 
@@ -276,6 +276,12 @@ class FrameAssembler:
     def _device(self, pose: Pose, arrival: float, wire: float, out: list[Piece]) -> None:
         """A device without a time in its datagram."""
         f = self._frame
+        if f is not None and f.t is not None and self.timed and pose.tracker in f.names:
+            # a device again under the same time: the next frame's time was lost; its devices
+            # wait, and are dropped when the next time comes
+            f = _Open(None, wire, wire, arrival, {pose.tracker}, [pose])
+            self._start(f)
+            return
         if f is not None and f.t is not None and self.timed:
             # the frame of the latest time (time first, or more of a bundle's frame)
             f.names.add(pose.tracker)

@@ -10,7 +10,8 @@ counted, never fatal:
   ``late`` (older); it does not change the state;
 * a tracker the mapping does not know -> ``unmapped`` (recorded, not solved);
 * the stream clock jumping back by more than :data:`RESTART_S` -> ``restarts`` (the
-  sender restarted; the state starts over).
+  sender restarted; the state starts over);
+* devices whose frame's time never came -> ``untimed`` (not applied).
 
 Which datagrams make up a *frame*, and its stream time, comes from the stream's structure
 (:mod:`engine.tracker_io.framing`: one bundle per frame, or one message per datagram with

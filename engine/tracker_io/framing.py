@@ -96,7 +96,7 @@ class _Open:
     first_wire: float
     last_wire: float
     last_arrival: float
-    names: set[str] = field(default_factory=set)
+    names: set[tuple[str, str]] = field(default_factory=set)  # devices in it: (name, address)
     waiting: list[Pose] = field(default_factory=list)
     closed: bool = False
     bundle: bool = False
@@ -127,7 +127,7 @@ class FrameAssembler:
         self._vote_gap: float | None = None  # silence before the newest lone time, until it votes
         self._pending: tuple[float, float, float] | None = None  # a lone time (t, arrival, wire) waiting for its vote
         self._frame: _Open | None = None
-        self._recent: deque[frozenset[str]] = deque(maxlen=2)
+        self._recent: deque[frozenset[tuple[str, str]]] = deque(maxlen=2)
         self._starts: deque[float] = deque(maxlen=PERIOD_FRAMES + 1)  # wire times of untimed frames' starts
 
     @property
@@ -212,7 +212,7 @@ class FrameAssembler:
         elif sum(v != self.order for v in votes) >= VOTES_TO_TURN:
             self.order = "last" if self.order == "first" else "first"
 
-    def _expected(self) -> frozenset[str]:
+    def _expected(self) -> frozenset[tuple[str, str]]:
         return frozenset.intersection(*self._recent) if self._recent else frozenset()
 
     def _complete(self, f: _Open) -> bool:
@@ -260,7 +260,7 @@ class FrameAssembler:
         the same time (a frame split over datagrams); devices waiting for a time join it."""
         f = self._frame
         if f is not None and f.t == t:
-            f.names.update(p.tracker for p in poses)
+            f.names.update(_key(p) for p in poses)
             f.last_wire, f.last_arrival, f.closed = wire, arrival, True
             out.append(Piece(t, list(poses), arrival, True))
             return
@@ -269,22 +269,22 @@ class FrameAssembler:
             f.waiting = []
         else:
             self._close_open(out)
-        names = {p.tracker for p in [*waiting, *poses]}
+        names = {_key(p) for p in [*waiting, *poses]}
         self._start(_Open(t, wire, wire, arrival, names, closed=True, bundle=True))
         out.append(Piece(t, [*waiting, *poses], arrival, True))
 
     def _device(self, pose: Pose, arrival: float, wire: float, out: list[Piece]) -> None:
         """A device without a time in its datagram."""
         f = self._frame
-        if f is not None and f.t is not None and self.timed and pose.tracker in f.names:
+        if f is not None and f.t is not None and self.timed and _key(pose) in f.names:
             # a device again under the same time: the next frame's time was lost; its devices
             # wait, and are dropped when the next time comes
-            f = _Open(None, wire, wire, arrival, {pose.tracker}, [pose])
+            f = _Open(None, wire, wire, arrival, {_key(pose)}, [pose])
             self._start(f)
             return
         if f is not None and f.t is not None and self.timed:
             # the frame of the latest time (time first, or more of a bundle's frame)
-            f.names.add(pose.tracker)
+            f.names.add(_key(pose))
             f.last_wire, f.last_arrival = wire, arrival
             close = f.closed or self._complete(f)
             f.closed = close
@@ -294,7 +294,7 @@ class FrameAssembler:
             self._untimed_device(pose, arrival, wire, out)
             return
         # waiting for a time (time last, or not known yet)
-        if f is not None and pose.tracker in f.names:
+        if f is not None and _key(pose) in f.names:
             if self.timed is None:  # a device repeated before any time: a sender without time
                 self.timed = False
                 f.t, f.closed = f.first_wire - self.clock_origin, True
@@ -308,22 +308,28 @@ class FrameAssembler:
         if f is None:
             f = _Open(None, wire, wire, arrival)
             self._start(f)
-        f.names.add(pose.tracker)
+        f.names.add(_key(pose))
         f.waiting.append(pose)
         f.last_wire, f.last_arrival = wire, arrival
 
     def _untimed_device(self, pose: Pose, arrival: float, wire: float, out: list[Piece]) -> None:
         """A device of a sender without time: a repeat or a silence starts a new frame."""
         f = self._frame
-        if f is None or f.t is None or pose.tracker in f.names or wire - f.last_wire >= self.silence():
+        if f is None or f.t is None or _key(pose) in f.names or wire - f.last_wire >= self.silence():
             if f is not None and f.t is not None and not f.closed:
                 f.closed = True
                 out.append(Piece(f.t, [], f.last_arrival, True))
             f = _Open(wire - self.clock_origin, wire, wire, arrival)
             self._start(f)
             self._starts.append(wire)
-        f.names.add(pose.tracker)
+        f.names.add(_key(pose))
         f.last_wire, f.last_arrival = wire, arrival
         close = f.closed or self._complete(f)
         f.closed = close
         out.append(Piece(f.t, [pose], arrival, close))
+
+
+def _key(pose: Pose) -> tuple[str, str]:
+    """A device as the frame rules count it: its name on its address (a sender may send
+    one device on ``/Pos`` and on ``/Pos/Local`` in the same frame)."""
+    return pose.tracker, pose.address

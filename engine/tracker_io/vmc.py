@@ -58,11 +58,13 @@ __all__ = ["ParseError", "Pose", "Packet", "SHAPES", "decode_packet", "encode_fr
 
 @dataclass(frozen=True)
 class Pose:
-    """One decoded tracker pose, project frame (metres; quaternion w, x, y, z)."""
+    """One decoded tracker pose, project frame (metres; quaternion w, x, y, z), and the
+    address it came on (a sender may send a device on ``/Pos`` and ``/Pos/Local``)."""
 
     tracker: str
     position: np.ndarray
     rotation: np.ndarray
+    address: str = ""
 
 
 @dataclass
@@ -167,7 +169,7 @@ def decode_packet(dgram: bytes, convention: str = "unity") -> Packet:
             else:
                 out.malformed += 1
         elif addr in POSE_ADDRESSES:
-            pose = _pose(args, convention)
+            pose = _pose(addr, args, convention)
             if pose is None:
                 out.malformed += 1
             else:
@@ -181,7 +183,7 @@ def _is_number(v: object) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool)
 
 
-def _pose(args: list, convention: str) -> Pose | None:
+def _pose(address: str, args: list, convention: str) -> Pose | None:
     if len(args) < 8 or not isinstance(args[0], str) or not args[0]:
         return None
     vals = args[1:8]
@@ -195,4 +197,4 @@ def _pose(args: list, convention: str) -> Pose | None:
     if n < 1e-6:
         return None
     pos, rot = to_project(a[:3], q / n, convention)
-    return Pose(args[0], pos, rot)
+    return Pose(args[0], pos, rot, address)

@@ -173,3 +173,25 @@ def test_bundles_with_devices_waiting_and_split_bundles():
     pieces = [pc for k, d in enumerate(split) for pc in asm.feed(decode_packet(d), T0 + k * 1e-4)]
     assert [(pc.t, [x.tracker for x in pc.poses], pc.close) for pc in pieces] == [(1.0, [head], True), (1.0, [hand], True)]
     assert asm.shape == "bundle"
+
+
+def test_a_device_on_pos_and_pos_local_is_not_a_repeat():
+    from pythonosc.osc_message_builder import OscMessageBuilder
+
+    def msg(address, *args):
+        m = OscMessageBuilder(address)
+        for a in args:
+            m.add_arg(a)
+        return decode_packet(m.build().dgram)
+
+    asm = FrameAssembler(clock_origin=T0)
+    frames = {}
+    for i in range(5):
+        w = T0 + i / 60.0
+        stream = [msg("/VMC/Ext/T", i / 60.0)] + [msg(a, "HMD", float(i), 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)
+                                                  for a in ("/VMC/Ext/Hmd/Pos", "/VMC/Ext/Hmd/Pos/Local")]  # fmt: skip
+        for j, p in enumerate(stream):
+            for pc in asm.feed(p, w + j * SPACING, w + j * SPACING):
+                frames.setdefault(round(pc.t * 60), []).extend(x.address for x in pc.poses)
+    assert asm.untimed == 0 and asm.shape == "time-first"
+    assert frames == {i: ["/VMC/Ext/Hmd/Pos", "/VMC/Ext/Hmd/Pos/Local"] for i in range(5)}

@@ -149,3 +149,13 @@ def test_cli_calibrates_a_scaled_wearer(synthetic_motion, tmp_path, capsys):
 def test_cli_argument_errors(argv, message, capsys):
     assert main(argv) == 2
     assert message in capsys.readouterr().err
+
+
+def test_completeness_summary_counts_frames_by_fresh_devices():
+    from engine.tracker_io.live import completeness_summary
+
+    c = completeness_summary([6, 5, 6, 6, 3], [6, 6, 6, 6, 6])
+    assert (c["frames"], c["complete"], c["fresh_min"], c["devices"]) == (5, 3, 3, 6)
+    assert c["complete_fraction"] == pytest.approx(0.6) and c["fresh_mean"] == pytest.approx(5.2)
+    assert c["by_fresh"] == {"3": 1, "5": 1, "6": 3}
+    assert completeness_summary([], [])["complete_fraction"] is None

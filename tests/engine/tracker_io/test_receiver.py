@@ -181,3 +181,14 @@ def test_completeness_shows_a_sender_that_leaves_a_device_out(receiver, sock):
     assert _wait(lambda: receiver.snapshot_stats().frames == 6)
     f = receiver.wait_frame(0, timeout=1.0)
     assert (f.index, f.fresh, f.devices) == (6, 2, 3)
+
+
+def test_send_drops_single_datagrams_of_separate_messages(sock, synthetic_motion):
+    sock.bind(("127.0.0.1", 0))
+    plan = plan_stream(synthetic_motion.slice(0, 40), "6")
+    st = send_stream(plan, "127.0.0.1", sock.getsockname()[1], fps=1000.0, drop=0.1, seed=2, shape="time-last",
+                     realtime=False)  # fmt: skip
+    assert st.packets + st.packets_dropped == 40 * 7 and 0 < st.packets_dropped < 60
+    assert st.sent + st.dropped == 40 and st.dropped <= st.packets_dropped
+    with pytest.raises(UserError, match="--packets must be one of"):
+        send_stream(plan, "127.0.0.1", 9, fps=60.0, shape="bundles")

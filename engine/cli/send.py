@@ -86,7 +86,7 @@ def _send(args: argparse.Namespace) -> int:
     with tqdm(total=len(plan), unit="frame", disable=args.no_progress, leave=False) as bar:
         stats = send_stream(plan, host, port, args.fps, args.drop, args.seed, args.convention,
                             on_frame=lambda i: bar.update(1), shape=args.packets, chatter=args.chatter)  # fmt: skip
-    print(f"sent {stats.sent} of {stats.frames} frames whole (dropped from {stats.dropped}) in {stats.packets} "
+    print(f"sent {stats.sent} of {stats.frames} frames whole ({stats.dropped} lost a datagram) in {stats.packets} "
           f"datagrams ({args.packets}, {stats.packets_dropped} dropped); "
           f"sender late by up to {stats.late_ms_max:.1f} ms")  # fmt: skip
     return 0

@@ -83,8 +83,8 @@ def _check(args: argparse.Namespace) -> None:
 
 def _live(args: argparse.Namespace) -> int:
     from engine.motion.formats import save_motion
-    from engine.tracker_io.live import (LiveRun, default_budget_ms, iteration_summary, latency_summary, reference_error,
-                                     to_motion, tracker_error_cm)  # fmt: skip
+    from engine.tracker_io.live import (LiveRun, completeness_summary, default_budget_ms, iteration_summary,
+                                        latency_summary, reference_error, to_motion, tracker_error_cm)  # fmt: skip
     from engine.tracker_io.receiver import VMCReceiver, parse_listen
     from engine.tracker_io.recording import RecordingWriter, header
     from engine.tracker_io.trackers import TrackerMapping
@@ -133,6 +133,7 @@ def _live(args: argparse.Namespace) -> int:
         "frames_skipped_first_solve": result.frames_skipped_first_solve,
         "solved_fraction": result.frames_solved / result.frames_received if result.frames_received else None,
         "calibration_frames": result.calibration_frames,
+        "completeness": completeness_summary(result.fresh, result.devices),
         "latency_ms": latency_summary(result.latency_ms),
         "ms_per_frame_median": float(np.median([r.ms for r in result.results])) if result.results else None,
         "frame_budget_ms": run.budget_s * 1000.0 if method.takes_deadline else None,
@@ -184,8 +185,11 @@ class _Status:
             self._last = now
             s = self.receiver.snapshot_stats()
             lat = sorted(result.latency_ms[-120:])
+            fresh, devices = result.fresh[-120:], result.devices[-120:]
+            complete = sum(f >= d for f, d in zip(fresh, devices)) / len(fresh)
             self.bar.set_postfix_str(f"{s.packet_rate_hz:.0f} pkt/s, skipped {result.frames_skipped}, "
-                                     f"latency p95 {lat[int(0.95 * (len(lat) - 1))]:.1f} ms")  # fmt: skip
+                                     f"latency p95 {lat[int(0.95 * (len(lat) - 1))]:.1f} ms, "
+                                     f"fresh {fresh[-1]}/{devices[-1]} ({100 * complete:.0f} % complete)")  # fmt: skip
 
     def close(self) -> None:
         self.bar.close()
@@ -205,6 +209,11 @@ def _report(stats: dict, args: argparse.Namespace, result) -> str:
                  f"{stats['late']} late)  frames {stats['frames_received']} solved {stats['frames_solved']}"
                  + (f" ({100 * frac:.1f} %)" if frac is not None else "")
                  + f", skipped {stats['frames_skipped']} ({stats['frames_skipped_first_solve']} during the first solve)")  # fmt: skip
+    comp = stats["completeness"]
+    if comp["frames"]:
+        lines.append(f"complete frames {comp['complete']} of {comp['frames']} ({100 * comp['complete_fraction']:.1f} %): "
+                     f"fresh devices per solved frame mean {comp['fresh_mean']:.2f} of {comp['devices']}, "
+                     f"min {comp['fresh_min']} ({stats['packet_shape'] or 'shape not known'})")  # fmt: skip
     if lat["p50"] is not None:
         lines.append(f"latency p50 {lat['p50']:.1f} ms  p95 {lat['p95']:.1f} ms  max {lat['max']:.1f} ms")
     it = stats["iterations"]

@@ -9,21 +9,30 @@ from pathlib import Path
 
 from engine.cli.rig_options import add_rig_map_option, asf_path, rig_map_path
 from engine.errors import UserError
+from engine.tracker_io.vmc import SHAPES
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "send",
         help="stream a clip's simulated trackers as VMC packets (OSC/UDP) in real time",
-        description="Simulate trackers from CLIP.bvh and send one VMC bundle per frame to HOST:PORT "
-        "(/VMC/Ext/T = clip time, then /VMC/Ext/Hmd|Con|Tra/Pos per tracker, Unity axes). See docs/trackers.md.",
+        description="Simulate trackers from CLIP.bvh and send them to HOST:PORT, by default one VMC bundle per "
+        "frame (/VMC/Ext/T = clip time, then /VMC/Ext/Hmd|Con|Tra/Pos per tracker, Unity axes); --packets sends "
+        "one message per datagram instead. See docs/trackers.md.",
     )
     p.add_argument("input", type=Path, metavar="CLIP.bvh", help="motion to stream (any supported rig)")
     p.add_argument("--to", required=True, metavar="HOST:PORT", help="receiver address, e.g. 127.0.0.1:39539")
     p.add_argument("--sensors", default="6", help="sensor preset or list (default: 6)")
     p.add_argument("--fps", type=float, default=60.0, help="frames per second to send (default: 60)")
     p.add_argument("--noise-pos", type=float, default=0.0, metavar="M", help="Gaussian position noise, metres")
-    p.add_argument("--drop", type=float, default=0.0, metavar="P", help="probability that a frame's packet is lost")
+    p.add_argument("--drop", type=float, default=0.0, metavar="P",
+                   help="probability that a datagram (a frame's bundle, or one message) is lost")  # fmt: skip
+    p.add_argument("--packets", choices=SHAPES, default="bundle",
+                   help="bundle: one OSC bundle per frame (default); time-first / time-last: one message per "
+                        "datagram, /VMC/Ext/T before / after the devices; no-time: one message per datagram, "
+                        "no /VMC/Ext/T")  # fmt: skip
+    p.add_argument("--chatter", action="store_true",
+                   help="also send /VMC/Ext/OK, /VMC/Ext/Root/Pos and /VMC/Ext/Bone/Pos, as a VMC performer does")  # fmt: skip
     p.add_argument("--tpose", type=float, default=0.0, metavar="SECONDS",
                    help="stand still in a T-pose for SECONDS before the clip (for --calibrate)")  # fmt: skip
     p.add_argument("--scale", type=float, default=1.0, metavar="F", help="scale the subject by F (e.g. 1.1)")
@@ -76,7 +85,8 @@ def _send(args: argparse.Namespace) -> int:
           f"subject height {motion.skeleton.height():.3f} m", file=sys.stderr, flush=True)  # fmt: skip
     with tqdm(total=len(plan), unit="frame", disable=args.no_progress, leave=False) as bar:
         stats = send_stream(plan, host, port, args.fps, args.drop, args.seed, args.convention,
-                            on_frame=lambda i: bar.update(1))  # fmt: skip
-    print(f"sent {stats.sent} of {stats.frames} frames (dropped {stats.dropped}); "
+                            on_frame=lambda i: bar.update(1), shape=args.packets, chatter=args.chatter)  # fmt: skip
+    print(f"sent {stats.sent} of {stats.frames} frames whole ({stats.dropped} lost a datagram) in {stats.packets} "
+          f"datagrams ({args.packets}, {stats.packets_dropped} dropped); "
           f"sender late by up to {stats.late_ms_max:.1f} ms")  # fmt: skip
     return 0

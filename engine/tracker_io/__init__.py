@@ -6,6 +6,8 @@ recorded tracker files, and calibration to the wearer.
 * :mod:`~engine.tracker_io.trackers` - tracker samples, the tracker -> body-slot mapping,
   :class:`TrackerState` (samples in, :class:`~engine.methods.SensorFrame` out);
 * :mod:`~engine.tracker_io.vmc` - the VMC messages, encoded and decoded with python-osc;
+* :mod:`~engine.tracker_io.framing` - which datagrams make up a frame (bundles, or one
+  message per datagram with the time first, last or absent);
 * :mod:`~engine.tracker_io.receiver` - the UDP receiver thread, tolerant of bad input;
 * :mod:`~engine.tracker_io.recording` - the JSON Lines recording format: atomic streaming
   writer, reader, replay into a :class:`~engine.tracking.Tracking`;

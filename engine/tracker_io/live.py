@@ -55,6 +55,9 @@ class LiveResult:
         frame in offline mode, to convergence: a start-up cost, not a steady one).
     iterations : list of int
         Optimizer iterations of every solved frame (what the budget allowed).
+    fresh, devices : list of int
+        Per solved frame, the mapped devices that sent a sample for it, of those seen
+        (:class:`~engine.tracker_io.receiver.LiveFrame`).
     calibration : Calibration or None
     calibration_frames : int
         Frames spent calibrating.
@@ -68,6 +71,8 @@ class LiveResult:
     frames_skipped: int = 0
     frames_skipped_first_solve: int = 0
     iterations: list[int] = field(default_factory=list)
+    fresh: list[int] = field(default_factory=list)
+    devices: list[int] = field(default_factory=list)
     calibration: Calibration | None = None
     calibration_frames: int = 0
 
@@ -173,6 +178,8 @@ class LiveRun:
             out.results.append(res)
             out.sensors.append(f.sensors)
             out.iterations.append(res.iterations)
+            out.fresh.append(f.fresh)
+            out.devices.append(f.devices)
             if on_frame is not None:
                 on_frame(out)
             self.method.between_frames()  # the pose is out: deferred work now
@@ -249,6 +256,21 @@ def iteration_summary(iterations: Sequence[int]) -> dict:
     a = np.asarray(iterations, float)
     return {"median": float(np.median(a)), "mean": float(a.mean()), "p5": float(np.percentile(a, 5)),
             "min": int(a.min())}  # fmt: skip
+
+
+def completeness_summary(fresh: Sequence[int], devices: Sequence[int]) -> dict:
+    """How complete the solved frames were: frames whose every mapped device seen so far
+    sent a sample for them, the mean and minimum of fresh devices per frame, and how many
+    frames had each count (``by_fresh``)."""
+    if not fresh:
+        return {"frames": 0, "complete": 0, "complete_fraction": None, "fresh_mean": None, "fresh_min": None,
+                "devices": 0, "by_fresh": {}}  # fmt: skip
+    f, d = np.asarray(fresh, int), np.asarray(devices, int)
+    complete = int(np.sum(f >= d))
+    counts = np.bincount(f)
+    return {"frames": int(f.size), "complete": complete, "complete_fraction": complete / f.size,
+            "fresh_mean": float(f.mean()), "fresh_min": int(f.min()), "devices": int(d.max()),
+            "by_fresh": {str(k): int(n) for k, n in enumerate(counts) if n}}  # fmt: skip
 
 
 def latency_summary(latency_ms: Sequence[float]) -> dict:

@@ -10,17 +10,23 @@ counted, never fatal:
   ``late`` (older); it does not change the state;
 * a tracker the mapping does not know -> ``unmapped`` (recorded, not solved);
 * the stream clock jumping back by more than :data:`RESTART_S` -> ``restarts`` (the
-  sender restarted; the state starts over).
+  sender restarted; the state starts over);
+* devices whose frame's time never came -> ``untimed`` (not applied).
 
-A *frame* is each new, larger stream time (``/VMC/Ext/T``, or the arrival time when the
-sender sends none). Consumers call :meth:`VMCReceiver.wait_frame` to get the newest frame
-with the sensor readings at that moment; frames that arrive while a consumer is busy are
-superseded, which is how a realtime solver that falls behind skips frames.
+Which datagrams make up a *frame*, and its stream time, comes from the stream's structure
+(:mod:`engine.tracker_io.framing`: one bundle per frame, or one message per datagram with
+``/VMC/Ext/T`` first, last or absent). A frame is published when it closes, with how many
+mapped devices sent a sample for it (:attr:`LiveFrame.fresh`). Consumers call
+:meth:`VMCReceiver.wait_frame` to get the newest frame with the sensor readings at that
+moment; frames that arrive while a consumer is busy are superseded, which is how a
+realtime solver that falls behind skips frames.
 """
 
 from __future__ import annotations
 
 import socket
+import struct
+import sys
 import threading
 import time
 from collections import deque
@@ -28,8 +34,9 @@ from collections.abc import Callable
 from dataclasses import asdict, dataclass
 
 from engine.errors import UserError
-from engine.tracker_io.coords import CONVENTIONS
 from engine.methods import SensorFrame
+from engine.tracker_io.coords import CONVENTIONS
+from engine.tracker_io.framing import FRAME_GAP_S, FrameAssembler, Piece
 from engine.tracker_io.recording import RecordingWriter
 from engine.tracker_io.trackers import DEFAULT_TIMEOUT_S, TrackerMapping, TrackerSample, TrackerState
 from engine.tracker_io.vmc import ParseError, decode_packet
@@ -38,6 +45,10 @@ from engine.tracker_io.vmc import ParseError, decode_packet
 RESTART_S = 1.0
 #: Default VMC port (the protocol's performer -> marionette port).
 DEFAULT_PORT = 39539
+#: Linux's ``SO_TIMESTAMPNS`` (the socket module does not export it): the kernel stamps
+#: each datagram with its receive time (``struct timespec``, wall clock).
+_SO_TIMESTAMPNS = getattr(socket, "SO_TIMESTAMPNS", 35 if sys.platform.startswith("linux") else None)
+_TIMESPEC = struct.Struct("ll")
 
 
 @dataclass
@@ -54,8 +65,10 @@ class ReceiverStats:
     late: int = 0
     unmapped: int = 0
     restarts: int = 0
+    untimed: int = 0
     frames: int = 0
     packet_rate_hz: float = 0.0
+    packet_shape: str = ""
 
     def to_json(self) -> dict:
         return asdict(self)
@@ -75,12 +88,19 @@ class LiveFrame:
         ``time.perf_counter()`` when the frame's newest datagram arrived.
     sensors : SensorFrame
         Readings of the mapped trackers at ``t`` (calibration applied if set).
+    fresh : int
+        Mapped devices that sent a sample for this frame.
+    devices : int
+        Mapped devices seen since the stream (re)started; ``fresh < devices`` means the
+        sender left some out of this frame.
     """
 
     index: int
     t: float
     arrival: float
     sensors: SensorFrame
+    fresh: int = 0
+    devices: int = 0
 
 
 def parse_listen(text: str) -> tuple[str, int]:
@@ -112,12 +132,15 @@ class VMCReceiver:
         swapped while running (:attr:`recorder`).
     on_frame : callable, optional
         Called on the receiver thread with every new :class:`LiveFrame` (keep it short).
+    frame_gap_s : float
+        Silence that closes a frame sent as separate messages (:mod:`~engine.tracker_io.framing`).
     """
 
     def __init__(self, host: str = "127.0.0.1", port: int = DEFAULT_PORT, mapping: TrackerMapping | None = None,
                  convention: str = "unity", timeout_s: float = DEFAULT_TIMEOUT_S,
                  recorder: RecordingWriter | None = None,
-                 on_frame: Callable[[LiveFrame], None] | None = None) -> None:  # fmt: skip
+                 on_frame: Callable[[LiveFrame], None] | None = None,
+                 frame_gap_s: float = FRAME_GAP_S) -> None:  # fmt: skip
         if convention not in CONVENTIONS:
             raise UserError(f"unknown coordinate convention {convention!r}; known: {', '.join(CONVENTIONS)}")
         self.state = TrackerState(mapping, timeout_s)
@@ -133,13 +156,22 @@ class VMCReceiver:
         except OSError as exc:
             self._sock.close()
             raise UserError(f"cannot listen on {host}:{port} ({exc.strerror})") from None
-        self._sock.settimeout(0.05)
+        self._wire_stamps = False
+        if _SO_TIMESTAMPNS is not None:
+            try:
+                self._sock.setsockopt(socket.SOL_SOCKET, _SO_TIMESTAMPNS, 1)
+                self._wire_stamps = True
+            except OSError:  # no kernel stamps here: the receiver's own stamps serve
+                pass
         self.host, self.port = self._sock.getsockname()[:2]
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._frame: LiveFrame | None = None
         self._max_t: float | None = None
         self._t0 = time.perf_counter()
+        self._assembler = FrameAssembler(frame_gap_s, self._t0)
+        self._acc_t: float | None = None  # time of the frame whose samples are being counted
+        self._acc = 0  # samples accepted for it since it was last published
         self._arrivals: deque[float] = deque(maxlen=512)
         self._unmapped_names: set[str] = set()
 
@@ -189,6 +221,7 @@ class VMCReceiver:
     def snapshot_stats(self) -> ReceiverStats:
         with self._lock:
             s = ReceiverStats(**asdict(self.stats))
+            s.untimed, s.packet_shape = self._assembler.untimed, self._assembler.shape
         if len(self._arrivals) >= 2:
             span = self._arrivals[-1] - self._arrivals[0]
             s.packet_rate_hz = (len(self._arrivals) - 1) / span if span > 0 else 0.0
@@ -213,17 +246,43 @@ class VMCReceiver:
 
     def _run(self) -> None:
         while not self._stop.is_set():
+            with self._lock:
+                due = self._assembler.deadline()
+            # wake for the assembler's silence rules, else now and then to see stop
+            wait = 0.05 if due is None else min(max(due - time.perf_counter(), 1e-4), 0.05)
             try:
-                data, _ = self._sock.recvfrom(65535)
+                data, ancillary = self._receive(wait)
             except TimeoutError:
-                continue
+                # Datagrams may have come while this thread waited for the interpreter after
+                # the timeout: they go first (their wire time places the silence), and the
+                # silence rules run at "now" only when none is waiting.
+                now = time.perf_counter()
+                try:
+                    data, ancillary = self._receive(0.0)
+                except (BlockingIOError, TimeoutError):
+                    with self._lock:
+                        self._apply(self._assembler.expire(now))
+                    continue
+                except OSError:
+                    continue
             except OSError:
                 if self._stop.is_set():
                     break
                 continue
-            self._handle(data, time.perf_counter())
+            arrival = time.perf_counter()
+            self._handle(data, arrival, _wire_time(ancillary, arrival))
 
-    def _handle(self, data: bytes, arrival: float) -> None:
+    def _receive(self, timeout: float) -> tuple[bytes, list]:
+        """One datagram and its ancillary data (the kernel's stamp), waiting ``timeout`` s."""
+        self._sock.settimeout(timeout)
+        if self._wire_stamps:
+            data, ancillary, _, _ = self._sock.recvmsg(65535, socket.CMSG_SPACE(_TIMESPEC.size))
+            return data, ancillary
+        return self._sock.recvfrom(65535)[0], []
+
+    def _handle(self, data: bytes, arrival: float, wire: float | None = None) -> None:
+        """One datagram, stamped ``arrival`` here and received by the kernel at ``wire``
+        (both ``perf_counter`` time; :mod:`~engine.tracker_io.framing`)."""
         self._arrivals.append(arrival)
         try:
             packet = decode_packet(data, self.convention)
@@ -240,18 +299,20 @@ class VMCReceiver:
                 return
             st.malformed_messages += packet.malformed
             st.other_messages += packet.other
-            if packet.time is not None:
-                t = packet.time
-            elif self._max_t is not None and not packet.poses:
-                return
-            else:
-                t = arrival - self._t0
+            self._apply(self._assembler.feed(packet, arrival, wire))
+
+    def _apply(self, pieces: list[Piece]) -> None:
+        """Apply the assembler's pieces to the state (lock held); publish closed frames."""
+        st = self.stats
+        for pc in pieces:
+            t = pc.t
             if self._max_t is not None and t < self._max_t - RESTART_S:
                 st.restarts += 1
                 self.state = TrackerState(self.state.mapping, self.state.timeout_s, self.state.calibration)
                 self._max_t = None
-            accepted = 0
-            for pose in packet.poses:
+            if t != self._acc_t:
+                self._acc_t, self._acc = t, 0
+            for pose in pc.poses:
                 sample = TrackerSample(t, pose.tracker, pose.position, pose.rotation, True)
                 result = self.state.update(sample)
                 if result == "duplicate":
@@ -261,20 +322,39 @@ class VMCReceiver:
                     st.late += 1
                     continue
                 st.samples += 1
-                accepted += 1
+                self._acc += 1
                 slot = self.state.mapping.slot(pose.tracker)
                 if slot is None:
                     st.unmapped += 1
                     self._unmapped_names.add(pose.tracker)
                 if self.recorder is not None:
                     self.recorder.write(sample, slot)
-            if accepted and (self._max_t is None or t > self._max_t):
-                self._max_t = t
-                st.frames += 1
-                self._frame = LiveFrame(st.frames, t, arrival, self.state.frame(st.frames, t))
-                self._lock.notify_all()
-                if self.on_frame is not None:
-                    self.on_frame(self._frame)
-            elif accepted and self._frame is not None and t == self._max_t:
-                # the rest of a frame split over several datagrams: same frame, newer data
-                self._frame = LiveFrame(self._frame.index, t, arrival, self.state.frame(self._frame.index, t))
+            if pc.close and self._acc:
+                self._acc = 0
+                self._publish(t, pc.arrival)
+
+    def _publish(self, t: float, arrival: float) -> None:
+        mapped = [n for n in self.state.last_t if self.state.mapping.slot(n) is not None]
+        fresh = sum(1 for n in mapped if self.state.last_t[n] == t)
+        if self._max_t is None or t > self._max_t:
+            self._max_t = t
+            self.stats.frames += 1
+            self._frame = LiveFrame(self.stats.frames, t, arrival, self.state.frame(self.stats.frames, t), fresh,
+                                    len(mapped))  # fmt: skip
+            self._lock.notify_all()
+            if self.on_frame is not None:
+                self.on_frame(self._frame)
+        elif self._frame is not None and t == self._max_t:
+            # more of a published frame (a device after it closed): same frame, newer data
+            i = self._frame.index
+            self._frame = LiveFrame(i, t, arrival, self.state.frame(i, t), fresh, len(mapped))
+
+
+def _wire_time(ancillary: list, arrival: float) -> float:
+    """The kernel's receive stamp of a datagram on the ``perf_counter`` timeline (``arrival``
+    when there is none)."""
+    for level, kind, payload in ancillary:
+        if level == socket.SOL_SOCKET and kind == _SO_TIMESTAMPNS and len(payload) >= _TIMESPEC.size:
+            sec, nsec = _TIMESPEC.unpack_from(payload)
+            return min(arrival, arrival - (time.time() - (sec + 1e-9 * nsec)))
+    return arrival

@@ -2,11 +2,13 @@
 
 Trackers are simulated from the clip (:func:`engine.tracking.simulate`: the same
 presets, the same Gaussian position noise), optionally preceded by a still T-pose for
-calibration and offset as real devices would be (:data:`HARDWARE_OFFSETS`). Every frame
-is one OSC bundle (:func:`engine.tracker_io.vmc.encode_frame`) whose ``/VMC/Ext/T`` is the
-clip time, so a receiver can line frames up with the clip (``--reference``). Frames are
-sent on a fixed schedule (``start + i / fps``, no drift); a dropped frame is simply not
-sent.
+calibration and offset as real devices would be (:data:`HARDWARE_OFFSETS`). By default
+every frame is one OSC bundle (:func:`engine.tracker_io.vmc.encode_frame`) whose
+``/VMC/Ext/T`` is the clip time, so a receiver can line frames up with the clip
+(``--reference``); the other shapes senders use (one message per datagram, the time
+first, last or not at all, :data:`engine.tracker_io.vmc.SHAPES`) are sent back to back at
+the frame's time. Frames are sent on a fixed schedule (``start + i / fps``, no drift); a
+dropped datagram is simply not sent.
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ from engine.kinematics import quaternion as Q
 from engine.motion.clip import Motion
 from engine.tracker_io.calibration import standing_root_height
 from engine.tracker_io.trackers import DEFAULT_SLOTS
-from engine.tracker_io.vmc import encode_frame
+from engine.tracker_io.vmc import SHAPES, encode_packets
 
 #: Tracker name the sender uses for each joint (the default mapping, inverted).
 TRACKER_NAMES: dict[str, str] = {j: n for n, j in DEFAULT_SLOTS.items()}
@@ -130,10 +132,15 @@ def plan_stream(motion: Motion, sensors: str = "6", noise_pos_m: float = 0.0, se
 
 @dataclass
 class SendStats:
+    """What :func:`send_stream` sent: frames, those sent whole (``sent``) and those with a
+    datagram dropped (``dropped``), and datagrams."""
+
     frames: int = 0
     sent: int = 0
     dropped: int = 0
     late_ms_max: float = 0.0
+    packets: int = 0
+    packets_dropped: int = 0
 
 
 def parse_target(text: str) -> tuple[str, int]:
@@ -150,20 +157,28 @@ def parse_target(text: str) -> tuple[str, int]:
 
 def send_stream(plan: StreamPlan, host: str, port: int, fps: float, drop: float = 0.0, seed: int = 0,
                 convention: str = "unity", realtime: bool = True,
-                on_frame: Callable[[int], None] | None = None) -> SendStats:  # fmt: skip
-    """Send the plan to ``host:port``, one bundle per frame at ``fps``.
+                on_frame: Callable[[int], None] | None = None, shape: str = "bundle",
+                chatter: bool = False) -> SendStats:  # fmt: skip
+    """Send the plan to ``host:port``, one frame at ``fps``.
 
     Parameters
     ----------
     drop : float
-        Probability that a frame's packet is not sent (simulated network loss).
+        Probability that a datagram is not sent (simulated network loss): the frame's
+        bundle, or one of its messages.
     realtime : bool
         Keep the schedule ``start + i / fps``; False sends as fast as possible.
     on_frame : callable, optional
         Called with the frame index after each frame (progress bars).
+    shape : str
+        How a frame goes on the wire (:data:`engine.tracker_io.vmc.SHAPES`).
+    chatter : bool
+        Also send ``/VMC/Ext/OK``, root and bone messages, as a VMC performer does.
     """
     if not 0.0 <= drop <= 1.0:
         raise UserError(f"--drop must be a probability in [0, 1], got {drop}")
+    if shape not in SHAPES:
+        raise UserError(f"--packets must be one of {', '.join(SHAPES)}, got {shape!r}")
     rng = np.random.default_rng(seed + 1)
     stats = SendStats()
     sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
@@ -178,14 +193,19 @@ def send_stream(plan: StreamPlan, host: str, port: int, fps: float, drop: float 
                 else:
                     stats.late_ms_max = max(stats.late_ms_max, -1000.0 * wait)
             stats.frames += 1
-            if drop and rng.random() < drop:
-                stats.dropped += 1
-            else:
+            lost = 0
+            for dgram in encode_packets(float(plan.times[i]), plan.frame(i), convention, shape, chatter):
+                if drop and rng.random() < drop:
+                    lost += 1
+                    continue
                 try:
-                    sock.sendto(encode_frame(float(plan.times[i]), plan.frame(i), convention), (host, port))
+                    sock.sendto(dgram, (host, port))
                 except OSError as exc:
                     raise UserError(f"cannot send to {host}:{port} ({exc.strerror})") from None
-                stats.sent += 1
+                stats.packets += 1
+            stats.packets_dropped += lost
+            stats.dropped += bool(lost)
+            stats.sent += not lost
             if on_frame is not None:
                 on_frame(i)
     finally:

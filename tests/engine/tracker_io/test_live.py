@@ -86,6 +86,36 @@ def test_cli_send_live_and_reconstruct_with_drops_and_noise(synthetic_motion, tm
     assert "error against the reference" in capsys.readouterr().out
 
 
+@pytest.mark.parametrize("shape, fps", [("time-first", 60), ("time-last", 90)])
+def test_cli_live_on_separate_messages_solves_the_sent_frames(shape, fps, synthetic_motion, tmp_path, capsys):
+    clip = tmp_path / "clip.bvh"
+    save_motion_bvh(clip, synthetic_motion)
+    port = _free_port()
+    stats, rec = tmp_path / "stats.json", tmp_path / "rec.jsonl"
+    live, code = _run_live(["--listen", f"127.0.0.1:{port}", "--method", "ik", "--record", str(rec), "--fps", str(fps),
+                            "--json", str(stats), "--reference", str(clip), "--idle-stop", "0.7", "--duration", "30"])  # fmt: skip
+    import time
+
+    time.sleep(1.5)
+    assert main(["send", str(clip), "--to", f"127.0.0.1:{port}", "--packets", shape, "--chatter", "--fps", str(fps),
+                 "--max-frames", "60", "--no-progress"]) == 0  # fmt: skip
+    live.join(timeout=60)
+    assert code == [0]
+    s = json.loads(stats.read_text())
+    sent = int(np.floor(59 / 60 * fps)) + 1  # 60 clip frames resampled to fps
+    assert s["packet_shape"] == shape and s["frames_received"] == sent and s["untimed"] == 0
+    assert s["packets"] == sent * 15 and s["other_messages"] == sent * 8
+    c = s["completeness"]
+    assert c["frames"] == s["frames_solved"] and c["devices"] == 6 and c["complete"] >= c["frames"] - 2
+    assert s["reference"]["pos_cm"] < 10.0
+    out = capsys.readouterr().out
+    assert "complete frames" in out and f"({shape})" in out
+    offj = tmp_path / "off.json"
+    assert main(["reconstruct", "--trackers", str(rec), "--out", str(tmp_path / "off.bvh"), "--method", "ik",
+                 "--json", str(offj), "--no-progress"]) == 0  # fmt: skip
+    assert json.loads(offj.read_text())["frames_solved"] == sent  # the recording holds the same frames
+
+
 def test_cli_calibrates_a_scaled_wearer(synthetic_motion, tmp_path, capsys):
     clip = tmp_path / "clip.bvh"
     save_motion_bvh(clip, synthetic_motion.slice(0, 30))
@@ -120,3 +150,13 @@ def test_cli_calibrates_a_scaled_wearer(synthetic_motion, tmp_path, capsys):
 def test_cli_argument_errors(argv, message, capsys):
     assert main(argv) == 2
     assert message in capsys.readouterr().err
+
+
+def test_completeness_summary_counts_frames_by_fresh_devices():
+    from engine.tracker_io.live import completeness_summary
+
+    c = completeness_summary([6, 5, 6, 6, 3], [6, 6, 6, 6, 6])
+    assert (c["frames"], c["complete"], c["fresh_min"], c["devices"]) == (5, 3, 3, 6)
+    assert c["complete_fraction"] == pytest.approx(0.6) and c["fresh_mean"] == pytest.approx(5.2)
+    assert c["by_fresh"] == {"3": 1, "5": 1, "6": 3}
+    assert completeness_summary([], [])["complete_fraction"] is None

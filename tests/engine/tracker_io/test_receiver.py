@@ -133,3 +133,62 @@ def test_listen_address_parsing():
     with pytest.raises(UserError, match="cannot listen"):
         with VMCReceiver("127.0.0.1", 0) as rx:
             VMCReceiver("127.0.0.1", rx.port)
+
+
+@pytest.mark.parametrize("fps", [60.0, 90.0])
+@pytest.mark.parametrize("shape", ["time-first", "time-last", "no-time"])
+def test_separate_messages_make_the_sent_frames_and_the_recording_replays_to_them(shape, fps, synthetic_motion,
+                                                                                  tmp_path):  # fmt: skip
+    """One message per datagram in real time, with /VMC/Ext/OK, root and bone chatter mixed in."""
+    plan = plan_stream(synthetic_motion.slice(0, 24), "6", fps=fps)
+    path = tmp_path / "rec.jsonl"
+    writer = RecordingWriter(path, header(fps, TrackerMapping(), "test"))
+    published = []
+    with VMCReceiver("127.0.0.1", 0, recorder=writer, on_frame=published.append) as rx:
+        st = send_stream(plan, "127.0.0.1", rx.port, fps=fps, shape=shape, chatter=True)
+        assert st.packets == len(plan) * (2 + 2 * 6 + (shape != "no-time"))
+        _wait(lambda: rx.snapshot_stats().frames >= len(plan) and not rx._assembler.deadline(), timeout=3.0)
+        s = rx.snapshot_stats()
+    writer.close()
+    assert s.packet_shape == shape and s.other_messages == len(plan) * 8 and s.unmapped == 0
+    assert s.duplicates == 0 and s.late == 0 and s.untimed == 0
+    # every published frame holds the devices of one sent frame (no-time: in the order sent)
+    truth = plan.positions
+    sent = [int(np.argmin(np.abs(plan.times - f.t))) if shape != "no-time" else k for k, f in enumerate(published)]
+    assert len(published) == len(plan) and sent == list(range(len(plan)))
+    if shape != "no-time":
+        np.testing.assert_allclose([f.t for f in published], plan.times, atol=1e-6)
+    for f, i in zip(published[2:], sent[2:]):  # from the third frame the expected devices are known
+        assert f.fresh == f.devices == 6
+        for k, name in enumerate(plan.names):
+            joint = TrackerMapping().slot(name)
+            np.testing.assert_allclose(f.sensors.readings[joint].position, truth[i, k], atol=1e-5)
+    # the recording replays to the same frames: same times, same readings
+    rec = read_recording(path)
+    tracking, times = replay(rec.samples, rec.mapping)
+    np.testing.assert_array_equal(times, np.round([f.t for f in published], 6))
+    for fi, f in enumerate(published):
+        for k, j in enumerate(tracking.joints):
+            np.testing.assert_allclose(tracking.positions[fi, k], f.sensors.readings[j].position, atol=2e-6)
+
+
+def test_completeness_shows_a_sender_that_leaves_a_device_out(receiver, sock):
+    addr = ("127.0.0.1", receiver.port)
+    pose = (np.array([0, 0, 1.6]), np.array([1.0, 0, 0, 0]))
+    for i in range(6):
+        names = ["head", "left_hand", "right_hand"] if i % 2 == 0 else ["head", "left_hand"]
+        sock.sendto(encode_frame(i / 60.0, [(n, *pose) for n in names]), addr)
+    assert _wait(lambda: receiver.snapshot_stats().frames == 6)
+    f = receiver.wait_frame(0, timeout=1.0)
+    assert (f.index, f.fresh, f.devices) == (6, 2, 3)
+
+
+def test_send_drops_single_datagrams_of_separate_messages(sock, synthetic_motion):
+    sock.bind(("127.0.0.1", 0))
+    plan = plan_stream(synthetic_motion.slice(0, 40), "6")
+    st = send_stream(plan, "127.0.0.1", sock.getsockname()[1], fps=1000.0, drop=0.1, seed=2, shape="time-last",
+                     realtime=False)  # fmt: skip
+    assert st.packets + st.packets_dropped == 40 * 7 and 0 < st.packets_dropped < 60
+    assert st.sent + st.dropped == 40 and st.dropped <= st.packets_dropped
+    with pytest.raises(UserError, match="--packets must be one of"):
+        send_stream(plan, "127.0.0.1", 9, fps=60.0, shape="bundles")

@@ -24,7 +24,9 @@ from __future__ import annotations
 
 import inspect
 import time
+import typing
 from dataclasses import asdict, dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -34,6 +36,7 @@ from engine.authoring.ik_poser import IKPoser
 from engine.authoring.pose_metrics import PoseCheck, check_pose
 from engine.authoring.pose_mode import PoseMode
 from engine.authoring.pose_reference import ReferenceSet
+from engine.config import parse_typed
 from engine.errors import UserError
 from engine.kinematics import quat_np as QN
 from engine.kinematics.fk import fk
@@ -202,30 +205,36 @@ def goal_errors(pose, goals: list[Goal], offsets: np.ndarray) -> list[dict]:
     return out
 
 
-def split_options(options: dict) -> tuple[dict, dict, dict]:
-    """``options`` (name -> value) as keyword arguments of ``PoseMode(...)``, its
-    ``solve()`` (names ``solve.NAME``) and its ``settle()`` (``settle.NAME``); a name
-    none of them takes is a :class:`UserError` that lists the names they take."""
+def split_options(items: list[str]) -> tuple[dict, dict, dict]:
+    """``--set NAME=VALUE`` items as keyword arguments of ``PoseMode(...)``, of its
+    ``solve()`` (``solve.NAME``) and of its ``settle()`` (``settle.NAME``), each value
+    typed by the parameter's annotation. Every keyword those take is accepted, so a new
+    pose-mode option needs no change here; a name none of them takes is a
+    :class:`UserError` that lists the names they take."""
     calls = {"": PoseMode.__init__, "solve.": PoseMode.solve, "settle.": PoseMode.settle}
     out: dict[str, dict] = {k: {} for k in calls}
-    for name, value in options.items():
+    for item in items:
+        if "=" not in item:
+            raise UserError(f"--set {item!r}: expected NAME=VALUE")
+        name, raw = (x.strip() for x in item.split("=", 1))
         prefix = next((p for p in ("solve.", "settle.") if name.startswith(p)), "")
-        accepted = _keywords(calls[prefix])
-        key = name[len(prefix):]
-        if key not in accepted:
+        key, hints = name[len(prefix):], _keywords(calls[prefix])
+        if key not in hints:
             every = sorted(f"{p}{k}" for p, f in calls.items() for k in _keywords(f))
-            raise UserError(f"--set {name}: pose mode takes no option {key!r} there; options: {', '.join(every)}")
-        out[prefix][key] = value
+            raise UserError(f"--set {name}: pose mode takes no option {key!r}; options: {', '.join(every)}")
+        out[prefix][key] = parse_typed(name, raw, hints[key])
     return out[""], out["solve."], out["settle."]
 
 
-def _keywords(func) -> list[str]:
+def _keywords(func) -> dict:
+    """Keyword parameter -> annotation (``Any`` where there is none) of ``func``."""
+    hints = typing.get_type_hints(func)
     skip = {"self", "vae", "latent"}
-    return [p.name for p in inspect.signature(func).parameters.values()
-            if p.name not in skip and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]  # fmt: skip
+    return {p.name: hints.get(p.name, Any) for p in inspect.signature(func).parameters.values()
+            if p.name not in skip and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)}  # fmt: skip
 
 
-def run_task(task: Task, poser_name: str, vae, reference: ReferenceSet, options: dict | None = None,
+def run_task(task: Task, poser_name: str, vae, reference: ReferenceSet, options: list[str] | None = None,
              release: str = "none", events: int = EVENTS) -> TaskResult:  # fmt: skip
     """Do ``task`` with one poser from the starting pose and measure the result.
 
@@ -236,9 +245,9 @@ def run_task(task: Task, poser_name: str, vae, reference: ReferenceSet, options:
     vae : engine.models.PoseVAE
     reference : ReferenceSet
         For naturalness; laid out on the character's skeleton.
-    options : dict
-        Pose-mode options, see :func:`split_options` (the IK poser starts from the pose
-        mode these make).
+    options : list of str
+        Pose-mode options ``NAME=VALUE``, see :func:`split_options` (the IK poser starts
+        from the pose these make).
     release : str
         ``none`` (the pose window) or ``settle`` after every drag.
     events : int
@@ -250,7 +259,7 @@ def run_task(task: Task, poser_name: str, vae, reference: ReferenceSet, options:
         raise UserError(f"unknown release {release!r}; choices: {', '.join(RELEASES)}")
     if events < 1:
         raise UserError(f"drag events must be at least 1, got {events}")
-    init, solve, settle = split_options(options or {})
+    init, solve, settle = split_options(options or [])
     mode = PoseMode(vae, **init)
     offsets = mode.character.skeleton.offsets
     goals = resolve_goals(task, mode.pose, offsets, mode.heading)

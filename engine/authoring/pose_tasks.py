@@ -1,8 +1,9 @@
 """The pose-mode benchmark: fixed posing tasks on the canonical character, done as a user
 drags, measured for reach and plausibility (``dragposer-studio bench --pose-tasks``).
 
-A task (:data:`TASKS`) is a list of drags. A drag moves one joint's target from where
-the joint (or its existing target) is to a goal in :data:`EVENTS` equal steps, calling
+A task (:data:`engine.authoring.pose_task_table.TASKS`) is a list of drags. A drag
+moves one joint's target from where the joint (or its existing target) is to a goal in
+:data:`EVENTS` equal steps, calling
 ``set_target`` and ``solve()`` on every step as the pose window does on every mouse move
 (``app/pose_window.py``: ``drag_joint`` sets the target and solves; a release calls
 nothing, and *Edit > Settle pose* calls ``settle()``; ``release="settle"`` settles after
@@ -16,7 +17,7 @@ measures of :func:`engine.authoring.pose_metrics.check_pose`, and how far each a
 that no drag moved has slid over the floor from where it stood (centimetres).
 
 Posers: ``pose-mode`` (:class:`engine.authoring.pose_mode.PoseMode`, with the keyword
-options given to :func:`run_tasks`) and ``ik`` (:class:`engine.authoring.ik_poser.IKPoser`
+options given to :func:`run_task`) and ``ik`` (:class:`engine.authoring.ik_poser.IKPoser`
 from the same starting pose).
 """
 
@@ -36,79 +37,19 @@ from engine.authoring.ik_poser import IKPoser
 from engine.authoring.pose_metrics import PoseCheck, check_pose
 from engine.authoring.pose_mode import PoseMode
 from engine.authoring.pose_reference import ReferenceSet
+from engine.authoring.pose_task_table import EVENTS, POSERS, RELEASES, TASK_NAMES, TASKS, Task
 from engine.config import parse_typed
 from engine.errors import UserError
 from engine.kinematics import quat_np as QN
 from engine.kinematics.fk import fk
 
 J = sk.JOINT_INDEX
-#: Drag events per drag (mouse moves the solve runs on).
-EVENTS = 20
 #: A task is reached when every position goal is within this (centimetres) ...
 REACH_CM = 2.0
 #: ... and every turn within this (degrees).
 TURN_DEG = 5.0
-POSERS = ("pose-mode", "ik")
 #: Ankles whose horizontal slide from the starting pose is reported (when not dragged).
 FOOT_JOINTS = ("lankle", "rankle")
-RELEASES = ("none", "settle")
-
-
-@dataclass(frozen=True)
-class Drag:
-    """One drag of a joint's target to a goal.
-
-    Attributes
-    ----------
-    joint : str
-        The dragged joint.
-    anchor : str or None
-        Joint of the starting pose the goal is placed from (None: ``joint`` itself).
-    offset : tuple of 3 floats
-        Goal minus the anchor, metres, in the character's frame (+X its left, -Y its
-        forward, +Z up).
-    height : float or None
-        The goal's height above the floor, metres, instead of the anchor's plus offset.
-    turn_deg : float or None
-        A turn instead: the joint's starting world rotation turned by this about the
-        vertical (positive: to the character's left); the target keeps its position.
-    """
-
-    joint: str
-    anchor: str | None = None
-    offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    height: float | None = None
-    turn_deg: float | None = None
-
-
-@dataclass(frozen=True)
-class Task:
-    """A posing task: ``drags`` in order; ``allowed``: the drags a user may need."""
-
-    name: str
-    description: str
-    drags: tuple[Drag, ...]
-    allowed: int
-
-
-#: The tasks of issue 35, item 4. Goals sit where a user would drop the joint: a hand on
-#: the kneecap 8 cm in front of the knee joint, wrists 30 cm above the head joint and 12 cm
-#: to each side (within 90 % of the arm's reach of the standing shoulder), the wrist 10 cm
-#: above the floor 25 cm in front of the toes, wrists 12 cm outside the hip joints and
-#: 8 cm above them (on the iliac crest), a 30-cm step with the foot kept level.
-TASKS: tuple[Task, ...] = (
-    Task("hand_to_knee", "right hand to the left knee", (Drag("rwrist", "lknee", (0.0, -0.08, 0.0)),), 1),
-    Task("hands_overhead", "both hands overhead",
-         (Drag("lwrist", "upperneck", (0.12, 0.0, 0.30)), Drag("rwrist", "upperneck", (-0.12, 0.0, 0.30))), 2),
-    Task("squat", "pelvis down 40 cm", (Drag("root", offset=(0.0, 0.0, -0.40)),), 1),
-    Task("head_turn", "head turned 60 deg to the left", (Drag("upperneck", turn_deg=60.0),), 1),
-    Task("step_forward", "left foot a 30 cm step forward", (Drag("lankle", offset=(0.0, -0.30, 0.0)),), 1),
-    Task("pick_up", "right hand to an object on the floor in front",
-         (Drag("rwrist", "rtoe", (0.0, -0.25, 0.0), height=0.10),), 1),
-    Task("hands_on_hips", "both hands on the hips",
-         (Drag("lwrist", "lhip", (0.12, 0.0, 0.08)), Drag("rwrist", "rhip", (-0.12, 0.0, 0.08))), 2),
-)  # fmt: skip
-TASK_NAMES = tuple(t.name for t in TASKS)
 
 
 @dataclass
@@ -170,12 +111,13 @@ def resolve_goals(task: Task, pose, offsets: np.ndarray, heading_deg: float = 0.
     return goals
 
 
-def drag(poser, goal: Goal, events: int = EVENTS, solve: dict | None = None) -> None:
-    """Move ``goal.joint``'s target to the goal in ``events`` steps, solving on each."""
+def drag(poser, goal: Goal, offsets: np.ndarray, events: int = EVENTS, solve: dict | None = None) -> None:
+    """Move ``goal.joint``'s target to the goal in ``events`` steps, solving on each
+    (``offsets (22, 3)``: the poser's skeleton)."""
     j = goal.joint
     old = poser.targets.get(j)
     if goal.rotation is not None:
-        start = fk(poser.pose.local_rot, poser.pose.root_pos, _offsets(poser))[1][J[j]]
+        start = fk(poser.pose.local_rot, poser.pose.root_pos, offsets)[1][J[j]]
         turn = QN.mul(goal.rotation, QN.conjugate(start))  # the whole turn, world frame
         for k in range(1, events + 1):
             poser.set_target(j, rotation=QN.mul(np.array(QN.qpow(turn, k / events)), start))
@@ -185,10 +127,6 @@ def drag(poser, goal: Goal, events: int = EVENTS, solve: dict | None = None) -> 
     for k in range(1, events + 1):
         poser.set_target(j, start + (goal.position - start) * k / events)
         poser.solve(**(solve or {}))
-
-
-def _offsets(poser) -> np.ndarray:
-    return poser.character.skeleton.offsets if isinstance(poser, PoseMode) else poser.offsets
 
 
 def goal_errors(pose, goals: list[Goal], offsets: np.ndarray) -> list[dict]:
@@ -267,7 +205,7 @@ def run_task(task: Task, poser_name: str, vae, reference: ReferenceSet, options:
     feet = {j: mode.pose.positions[J[j], :2].copy() for j in FOOT_JOINTS if j not in {d.joint for d in task.drags}}
     t0 = time.perf_counter()
     for g in goals:
-        drag(poser, g, events, solve if poser is mode else None)
+        drag(poser, g, offsets, events, solve if poser is mode else None)
         if release == "settle":
             poser.settle(**(settle if poser is mode else {}))
     seconds = time.perf_counter() - t0

@@ -14,7 +14,7 @@ from engine.errors import UserError
 
 def add_options(p: argparse.ArgumentParser) -> None:
     """The ``--pose-tasks`` mode's options on the ``bench`` parser."""
-    from engine.authoring.pose_tasks import EVENTS, RELEASES, TASK_NAMES
+    from engine.authoring.pose_task_table import EVENTS, RELEASES, TASK_NAMES
 
     g = p.add_argument_group("pose tasks", "with --pose-tasks: posing tasks on the character, no clip "
                              "(--method names the posers: pose-mode, ik; default both)")  # fmt: skip

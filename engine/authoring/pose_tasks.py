@@ -3,11 +3,11 @@ drags, measured for reach and plausibility (``dragposer-studio bench --pose-task
 
 A task (:data:`engine.authoring.pose_task_table.TASKS`) is a list of drags. A drag
 moves one joint's target from where the joint (or its existing target) is to a goal in
-:data:`EVENTS` equal steps, calling
-``set_target`` and ``solve()`` on every step as the pose window does on every mouse move
-(``app/pose_window.py``: ``drag_joint`` sets the target and solves; a release calls
-nothing, and *Edit > Settle pose* calls ``settle()``; ``release="settle"`` settles after
-every drag, as a user who uses that menu does). Targets stay after their drag, as in the
+:data:`EVENTS` equal steps, calling ``set_target`` and ``solve()`` on every step as the
+pose window does on every mouse move (``app/pose_window.py``: ``drag_joint`` sets the
+target and solves; a release calls nothing, and *Edit > Settle pose* calls
+``settle()``; ``release="settle"`` settles after every drag, as a user who uses that
+menu does). Targets stay after their drag, as in the
 window. Goals are placed relative to the starting pose's joints (the VAE's mean pose,
 standing at the origin, facing -Y), resolved once, so every poser gets the same goals.
 

@@ -51,11 +51,14 @@ def parse_overrides(cls: type, overrides: list[str] | None) -> dict[str, Any]:
         key = key.strip()
         if key not in hints:
             raise UserError(f"--set {key}: unknown setting; known: {', '.join(sorted(hints))}")
-        values[key] = _convert(key, raw.strip(), hints[key])
+        values[key] = parse_typed(key, raw.strip(), hints[key])
     return values
 
 
-def _convert(key: str, raw: str, hint: Any) -> Any:
+def parse_typed(key: str, raw: str, hint: Any) -> Any:
+    """``raw`` (the text of ``--set key=raw``) as a value of type ``hint``: bool, str,
+    int and float strictly, anything else as a TOML value; a :class:`UserError` names
+    ``key`` when it is not one."""
     try:
         if hint is bool:
             if raw.lower() not in ("true", "false", "1", "0"):

@@ -1,4 +1,5 @@
-"""``dragposer-studio bench``: how fast each method reconstructs, frame by frame.
+"""``dragposer-studio bench``: how fast each method reconstructs, frame by frame (and,
+with ``--pose-tasks``, the pose-mode benchmark of :mod:`engine.cli.pose_bench`).
 
 Speed targets are measured here and reported, never asserted by timing tests: the
 numbers depend on the machine. The report names the machine (cores, torch threads).
@@ -15,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from engine.cli import pose_bench
 from engine.cli.rig_options import add_rig_map_option, asf_path, rig_map_path
 from engine.solver.settings import MODES
 
@@ -42,6 +44,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="also solve the scene's constraints with the sensors (methods that take constraints; "
                    "the scene's optimizer settings are not applied)")  # fmt: skip
     add_rig_map_option(p)
+    pose_bench.add_options(p)
     p.set_defaults(func=_bench)
 
 
@@ -136,6 +139,8 @@ def _bench(args: argparse.Namespace) -> int:
     from engine.validation import check_args, check_output_path
 
     check_args(args)
+    if args.pose_tasks:
+        return pose_bench.run(args, DEFAULT_CLIP)
     if args.json:
         check_output_path(args.json, "--json")
     motion = load_motion(args.file, rig_map=rig_map_path(args), asf=asf_path(args))

@@ -1,0 +1,168 @@
+"""Naturalness of a pose: how far it is from the nearest real pose of the validation files.
+
+A pose is compared by its **root-relative joint positions after aligning heading**: the
+root moved to the origin and the body turned about the vertical so its hip line points
+along +X (the character faces -Y). The distance between two poses is the mean over the 21
+non-root joints of the joints' distances, metres. Both the reference poses and the
+measured ones are laid out on the same skeleton (the character's), so bone lengths do
+not count, only how the joints are turned.
+
+The **reference set** (:class:`ReferenceSet`) is every ``stride``-th frame of the
+validation clips and their left/right mirror images. Its **spread** is the distribution,
+over the reference poses, of each one's distance to the nearest pose of *another* take
+(its own take, its mirror image and the take's copies on other rigs excluded): how far a
+real pose typically is from the rest of the data. A pose whose nearest-neighbour distance
+is below the spread's 95th percentile is *within the spread* of real poses.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from engine import skeleton as sk
+from engine.errors import UserError
+from engine.kinematics import quat_np as QN
+from engine.kinematics.fk import fk
+
+#: The 9 validation files of every release (assets/models/README.md), under the shared mocap folder.
+VALIDATION_FILES = ("cmu_daz/indian/14.bvh", "cmu_daz/salsa/07.bvh", "cmu_iclone/002_01.bvh", "cmu_iclone/002_09.bvh",
+                    "cmu_iclone/005_05.bvh", "cmu_iclone/005_13.bvh", "cmu_iclone/006_02.bvh",
+                    "cmu_iclone/006_10.bvh", "cmu_iclone/007_05.bvh")  # fmt: skip
+MOCAP = Path(__file__).resolve().parents[3] / "shared" / "data" / "mocap"
+#: Every 4th frame (15 per second at 60 fps): neighbouring frames add little.
+STRIDE = 4
+#: Query rows per distance block (memory: rows x reference poses x 4 bytes per joint).
+_BLOCK = 256
+
+
+def aligned(positions: np.ndarray) -> np.ndarray:
+    """Root-relative, heading-aligned joint positions ``(..., 21, 3)`` (no root) of world
+    positions ``(..., 22, 3)``: the hip line turned onto +X about the vertical."""
+    p = np.asarray(positions, float)
+    rel = p - p[..., :1, :]
+    left = rel[..., sk.JOINT_INDEX["lhip"], :] - rel[..., sk.JOINT_INDEX["rhip"], :]
+    yaw = np.arctan2(left[..., 1], left[..., 0])  # hip line's angle from +X
+    c, s = np.cos(-yaw)[..., None], np.sin(-yaw)[..., None]
+    x, y = rel[..., 0], rel[..., 1]
+    out = np.stack((c * x - s * y, s * x + c * y, rel[..., 2]), axis=-1)
+    return out[..., 1:, :]
+
+
+def pose_distances(query: np.ndarray, poses: np.ndarray) -> np.ndarray:
+    """Distances ``(Q, N)`` (metres) between aligned poses ``query (Q, 21, 3)`` and
+    ``poses (N, 21, 3)``: the mean over joints of the joints' distances."""
+    q = torch.as_tensor(np.asarray(query, np.float32)).transpose(0, 1)  # (21, Q, 3)
+    r = torch.as_tensor(np.asarray(poses, np.float32)).transpose(0, 1)  # (21, N, 3)
+    d = torch.cdist(q, r, compute_mode="donot_use_mm_for_euclid_dist")  # exact: a pose is 0 from itself
+    return d.mean(0).numpy()
+
+
+@dataclass
+class ReferenceSet:
+    """Aligned real poses and the take each comes from (see the module doc).
+
+    Attributes
+    ----------
+    poses : ndarray (N, 21, 3) float32
+        Aligned joint positions, metres.
+    takes : ndarray (N,) int
+        Take index per pose; a mirror image has its original's take.
+    names : list of str
+        Take names.
+    description : str
+        Where the poses come from, for reports.
+    """
+
+    poses: np.ndarray
+    takes: np.ndarray
+    names: list[str]
+    description: str = ""
+    _spread: np.ndarray | None = field(default=None, repr=False)
+
+    def __len__(self) -> int:
+        return len(self.poses)
+
+    @classmethod
+    def from_rotations(cls, clips: list[tuple[str, np.ndarray]], offsets: np.ndarray, stride: int = STRIDE,
+                       mirror: bool = True, description: str = "") -> "ReferenceSet":  # fmt: skip
+        """From ``(take name, local rotations (F, 22, 4))`` pairs, laid out on ``offsets
+        (22, 3)``; with ``mirror``, each frame's left/right mirror image too. Several
+        pairs may share a take name (copies of one take)."""
+        if stride < 1:
+            raise UserError(f"reference stride must be at least 1, got {stride}")
+        names = sorted({n for n, _ in clips})
+        poses, takes = [], []
+        for name, local in clips:
+            rot = np.asarray(local, float)[::stride]
+            sets = [rot] + ([QN.mirror_x(rot[:, list(sk.MIRROR_INDEX)])] if mirror else [])
+            for r in sets:
+                pos = fk(r, np.zeros((len(r), 3)), np.asarray(offsets, float))[0]
+                poses.append(aligned(pos).astype(np.float32))
+                takes.append(np.full(len(r), names.index(name)))
+        if not poses:
+            raise UserError("the reference set has no poses")
+        return cls(np.concatenate(poses), np.concatenate(takes), names, description)
+
+    def nearest(self, positions: np.ndarray) -> float:
+        """Distance (metres) from world positions ``(22, 3)`` to the nearest reference pose."""
+        return float(pose_distances(aligned(positions)[None], self.poses).min())
+
+    def spread(self) -> np.ndarray:
+        """Per reference pose, its distance (metres) to the nearest pose of another take
+        ``(N,)`` (computed once)."""
+        if self._spread is None:
+            if len(self.names) < 2:
+                raise UserError("the spread of real poses needs at least two takes")
+            out = np.empty(len(self.poses))
+            for i in range(0, len(self.poses), _BLOCK):
+                d = pose_distances(self.poses[i:i + _BLOCK], self.poses)
+                d[self.takes[i:i + _BLOCK, None] == self.takes[None, :]] = np.inf
+                out[i:i + _BLOCK] = d.min(1)
+            self._spread = out
+        return self._spread
+
+    def spread_summary(self) -> dict:
+        """Median and 95th percentile of :meth:`spread`, centimetres."""
+        s = 100.0 * self.spread()
+        return {"median_cm": float(np.median(s)), "p95_cm": float(np.percentile(s, 95))}
+
+
+def validation_files(mocap: Path = MOCAP) -> list[Path]:
+    """The 9 validation files; a clear error when the shared data is absent."""
+    paths = [mocap / f for f in VALIDATION_FILES]
+    missing = [str(p) for p in paths if not p.is_file()]
+    if missing:
+        raise UserError(f"validation file(s) not found: {', '.join(missing)} (the shared data, ../shared/data/mocap)")
+    return paths
+
+
+def load_files(paths: list[Path], offsets: np.ndarray, stride: int = STRIDE) -> ReferenceSet:
+    """A reference set of motion files (any format :func:`load_motion` reads), one take each."""
+    from engine.motion.retarget import load_motion
+
+    clips = [(str(p), load_motion(p).local_rot) for p in paths]
+    return ReferenceSet.from_rotations(clips, offsets, stride, True, f"{len(paths)} validation files, every {stride}th frame, mirrored")
+
+
+def load_prepared(data_dir: Path, offsets: np.ndarray, stride: int = STRIDE) -> ReferenceSet:
+    """The ``val`` split of a ``data prepare`` folder: its shards (mirrored copies
+    included, as prepared), takes as its manifest names them."""
+    from engine.training.data import read_manifest
+
+    entries = [e for e in read_manifest(Path(data_dir))["files"] if e["split"] == "val"]
+    if not entries:
+        raise UserError(f"{data_dir}: no 'val' shards in manifest.json")
+    clips = []
+    for e in entries:
+        path = Path(data_dir) / e["shard"]
+        try:
+            clips.append((str(e.get("take") or e["path"]), np.load(path)["local_rot"]))
+        except (OSError, KeyError, ValueError) as exc:
+            raise UserError(f"{path}: cannot read its local rotations ({exc})") from None
+    originals = sum(not e["mirrored"] for e in entries)
+    return ReferenceSet.from_rotations(clips, offsets, stride, False,
+                                       f"{data_dir} val split ({originals} files and their mirrors), every {stride}th frame")

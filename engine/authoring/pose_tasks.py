@@ -1,0 +1,229 @@
+"""The pose-mode benchmark: fixed posing tasks on the canonical character, done as a user
+drags, measured for reach and plausibility (``dragposer-studio bench --pose-tasks``).
+
+A task (:data:`engine.authoring.pose_task_table.TASKS`) is a list of drags. A drag
+moves one joint's target from where the joint (or its existing target) is to a goal in
+:data:`EVENTS` equal steps, calling ``set_target`` and ``solve()`` on every step as the
+pose window does on every mouse move (``app/pose_window.py``: ``drag_joint`` sets the
+target and solves; a release calls nothing, and *Edit > Settle pose* calls
+``settle()``; ``release="settle"`` settles after every drag, as a user who uses that
+menu does). Targets stay after their drag, as in the
+window. Goals are placed relative to the starting pose's joints (the VAE's mean pose,
+standing at the origin, facing -Y), resolved once, so every poser gets the same goals.
+
+Per task and poser (:func:`run_task`): each goal's error (centimetres, or degrees for a
+turn), the final pose's naturalness (:mod:`engine.authoring.pose_reference`), the
+measures of :func:`engine.authoring.pose_metrics.check_pose`, and how far each ankle
+that no drag moved has slid over the floor from where it stood (centimetres).
+
+Posers: ``pose-mode`` (:class:`engine.authoring.pose_mode.PoseMode`, with the keyword
+options given to :func:`run_task`) and ``ik`` (:class:`engine.authoring.ik_poser.IKPoser`
+from the same starting pose).
+"""
+
+from __future__ import annotations
+
+import inspect
+import time
+import typing
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+from engine import skeleton as sk
+from engine.authoring.character import yaw_quaternion
+from engine.authoring.ik_poser import IKPoser
+from engine.authoring.pose_metrics import PoseCheck, check_pose
+from engine.authoring.pose_mode import PoseMode
+from engine.authoring.pose_reference import ReferenceSet
+from engine.authoring.pose_task_table import EVENTS, POSERS, RELEASES, TASK_NAMES, TASKS, Task
+from engine.config import parse_typed
+from engine.errors import UserError
+from engine.kinematics import quat_np as QN
+from engine.kinematics.fk import fk
+
+J = sk.JOINT_INDEX
+#: A task is reached when every position goal is within this (centimetres) ...
+REACH_CM = 2.0
+#: ... and every turn within this (degrees).
+TURN_DEG = 5.0
+#: Ankles whose horizontal slide from the starting pose is reported (when not dragged).
+FOOT_JOINTS = ("lankle", "rankle")
+
+
+@dataclass
+class Goal:
+    """A drag's resolved goal: a world ``position (3,)`` metres, or a world ``rotation (4,)``."""
+
+    joint: str
+    position: np.ndarray | None = None
+    rotation: np.ndarray | None = None
+
+
+@dataclass
+class TaskResult:
+    """What one poser did on one task (see the module doc); errors in cm / degrees."""
+
+    task: str
+    poser: str
+    drags: int
+    allowed: int
+    goal_errors: list[dict]
+    reached: bool
+    naturalness_cm: float
+    within_spread: bool
+    check: PoseCheck
+    seconds: float
+    feet_moved_cm: dict[str, float] = field(default_factory=dict)
+    positions: list[list[float]] = field(default_factory=list)
+
+    @property
+    def max_position_error_cm(self) -> float | None:
+        e = [g["error"] for g in self.goal_errors if g["kind"] == "position"]
+        return max(e) if e else None
+
+    @property
+    def max_turn_error_deg(self) -> float | None:
+        e = [g["error"] for g in self.goal_errors if g["kind"] == "turn"]
+        return max(e) if e else None
+
+    def to_dict(self) -> dict:
+        out = asdict(self)
+        out["check"] = self.check.to_dict()
+        out["balanced"] = self.check.balanced
+        return out
+
+
+def resolve_goals(task: Task, pose, offsets: np.ndarray, heading_deg: float = 0.0) -> list[Goal]:
+    """World goals of ``task``'s drags, placed from ``pose`` (a starting :class:`Pose`)."""
+    yaw = yaw_quaternion(heading_deg)
+    world_rot = fk(pose.local_rot, pose.root_pos, offsets)[1]
+    goals = []
+    for d in task.drags:
+        if d.turn_deg is not None:
+            goals.append(Goal(d.joint, rotation=QN.mul(yaw_quaternion(d.turn_deg), world_rot[J[d.joint]])))
+            continue
+        p = pose.positions[J[d.anchor or d.joint]] + QN.rotate(yaw, np.asarray(d.offset, float))
+        if d.height is not None:
+            p[2] = d.height
+        goals.append(Goal(d.joint, position=p))
+    return goals
+
+
+def drag(poser, goal: Goal, offsets: np.ndarray, events: int = EVENTS, solve: dict | None = None) -> None:
+    """Move ``goal.joint``'s target to the goal in ``events`` steps, solving on each
+    (``offsets (22, 3)``: the poser's skeleton)."""
+    j = goal.joint
+    old = poser.targets.get(j)
+    if goal.rotation is not None:
+        start = fk(poser.pose.local_rot, poser.pose.root_pos, offsets)[1][J[j]]
+        turn = QN.mul(goal.rotation, QN.conjugate(start))  # the whole turn, world frame
+        for k in range(1, events + 1):
+            poser.set_target(j, rotation=QN.mul(np.array(QN.qpow(turn, k / events)), start))
+            poser.solve(**(solve or {}))
+        return
+    start = old.position.copy() if old is not None else poser.pose.positions[J[j]].copy()
+    for k in range(1, events + 1):
+        poser.set_target(j, start + (goal.position - start) * k / events)
+        poser.solve(**(solve or {}))
+
+
+def goal_errors(pose, goals: list[Goal], offsets: np.ndarray) -> list[dict]:
+    """Each goal's error: ``{"joint", "kind": "position" | "turn", "error"}`` (cm or degrees)."""
+    world_rot = fk(pose.local_rot, pose.root_pos, offsets)[1]
+    out = []
+    for g in goals:
+        if g.rotation is not None:
+            err = float(np.degrees(QN.angle(world_rot[J[g.joint]], g.rotation)))
+            out.append({"joint": g.joint, "kind": "turn", "error": err})
+        else:
+            err = 100.0 * float(np.linalg.norm(pose.positions[J[g.joint]] - g.position))
+            out.append({"joint": g.joint, "kind": "position", "error": err})
+    return out
+
+
+def split_options(items: list[str]) -> tuple[dict, dict, dict]:
+    """``--set NAME=VALUE`` items as keyword arguments of ``PoseMode(...)``, of its
+    ``solve()`` (``solve.NAME``) and of its ``settle()`` (``settle.NAME``), each value
+    typed by the parameter's annotation. Every keyword those take is accepted, so a new
+    pose-mode option needs no change here; a name none of them takes is a
+    :class:`UserError` that lists the names they take."""
+    calls = {"": PoseMode.__init__, "solve.": PoseMode.solve, "settle.": PoseMode.settle}
+    out: dict[str, dict] = {k: {} for k in calls}
+    for item in items:
+        if "=" not in item:
+            raise UserError(f"--set {item!r}: expected NAME=VALUE")
+        name, raw = (x.strip() for x in item.split("=", 1))
+        prefix = next((p for p in ("solve.", "settle.") if name.startswith(p)), "")
+        key, hints = name[len(prefix):], _keywords(calls[prefix])
+        if key not in hints:
+            every = sorted(f"{p}{k}" for p, f in calls.items() for k in _keywords(f))
+            raise UserError(f"--set {name}: pose mode takes no option {key!r}; options: {', '.join(every)}")
+        out[prefix][key] = parse_typed(name, raw, hints[key])
+    return out[""], out["solve."], out["settle."]
+
+
+def _keywords(func) -> dict:
+    """Keyword parameter -> annotation (``Any`` where there is none) of ``func``."""
+    hints = typing.get_type_hints(func)
+    skip = {"self", "vae", "latent"}
+    return {p.name: hints.get(p.name, Any) for p in inspect.signature(func).parameters.values()
+            if p.name not in skip and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)}  # fmt: skip
+
+
+def run_task(task: Task, poser_name: str, vae, reference: ReferenceSet, options: list[str] | None = None,
+             release: str = "none", events: int = EVENTS) -> TaskResult:  # fmt: skip
+    """Do ``task`` with one poser from the starting pose and measure the result.
+
+    Parameters
+    ----------
+    poser_name : str
+        One of :data:`POSERS`.
+    vae : engine.models.PoseVAE
+    reference : ReferenceSet
+        For naturalness; laid out on the character's skeleton.
+    options : list of str
+        Pose-mode options ``NAME=VALUE``, see :func:`split_options` (the IK poser starts
+        from the pose these make).
+    release : str
+        ``none`` (the pose window) or ``settle`` after every drag.
+    events : int
+        Drag events per drag.
+    """
+    if poser_name not in POSERS:
+        raise UserError(f"unknown poser {poser_name!r}; posers: {', '.join(POSERS)}")
+    if release not in RELEASES:
+        raise UserError(f"unknown release {release!r}; choices: {', '.join(RELEASES)}")
+    if events < 1:
+        raise UserError(f"drag events must be at least 1, got {events}")
+    init, solve, settle = split_options(options or [])
+    mode = PoseMode(vae, **init)
+    offsets = mode.character.skeleton.offsets
+    goals = resolve_goals(task, mode.pose, offsets, mode.heading)
+    poser = mode if poser_name == "pose-mode" else IKPoser(mode.pose, offsets)
+    feet = {j: mode.pose.positions[J[j], :2].copy() for j in FOOT_JOINTS if j not in {d.joint for d in task.drags}}
+    t0 = time.perf_counter()
+    for g in goals:
+        drag(poser, g, offsets, events, solve if poser is mode else None)
+        if release == "settle":
+            poser.settle(**(settle if poser is mode else {}))
+    seconds = time.perf_counter() - t0
+    pose = poser.pose
+    errors = goal_errors(pose, goals, offsets)
+    reached = all(e["error"] <= (REACH_CM if e["kind"] == "position" else TURN_DEG) for e in errors)
+    natural = 100.0 * reference.nearest(pose.positions)
+    moved = {j: 100.0 * float(np.linalg.norm(pose.positions[J[j], :2] - xy)) for j, xy in feet.items()}
+    return TaskResult(task.name, poser_name, len(task.drags), task.allowed, errors, reached, natural,
+                      natural <= reference.spread_summary()["p95_cm"], check_pose(pose.local_rot, pose.root_pos, offsets),
+                      seconds, moved, [[round(float(x), 4) for x in p] for p in pose.positions])  # fmt: skip
+
+
+def select_tasks(names: list[str] | None) -> list[Task]:
+    """The tasks named (all, in table order, for None); an unknown name is a :class:`UserError`."""
+    if not names:
+        return list(TASKS)
+    unknown = [n for n in names if n not in TASK_NAMES]
+    if unknown:
+        raise UserError(f"unknown task(s) {', '.join(unknown)}; tasks: {', '.join(TASK_NAMES)}")
+    return [t for t in TASKS if t.name in names]

@@ -1,0 +1,107 @@
+"""``dragposer-studio bench --pose-tasks``: the pose-mode benchmark's report
+(:mod:`engine.authoring.pose_tasks`): a table, and ``--json``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+from pathlib import Path
+
+from engine.errors import UserError
+
+
+def add_options(p: argparse.ArgumentParser) -> None:
+    """The ``--pose-tasks`` mode's options on the ``bench`` parser."""
+    from engine.authoring.pose_task_table import EVENTS, RELEASES, TASK_NAMES
+
+    g = p.add_argument_group("pose tasks", "with --pose-tasks: posing tasks on the character, no clip "
+                             "(--method names the posers: pose-mode, ik; default both)")  # fmt: skip
+    g.add_argument("--pose-tasks", action="store_true", help="run the pose-mode benchmark instead of timing methods")
+    g.add_argument("--task", action="append", choices=TASK_NAMES, help="task to run; repeat for several (default: all)")
+    g.add_argument("--release", choices=RELEASES, default="none",
+                   help="at each drag's end: none (as the pose window) or settle (Edit > Settle pose)")
+    g.add_argument("--events", type=int, default=EVENTS, help=f"drag events per drag (default: {EVENTS})")
+    g.add_argument("--set", dest="pose_set", action="append", default=[], metavar="NAME=VALUE",
+                   help="pose-mode option: a PoseMode keyword, or solve.NAME / settle.NAME for its solves")
+    g.add_argument("--reference-data", type=Path, metavar="PREPARED",
+                   help="naturalness against the val split of this prepared folder (default: ./prepared when it "
+                   "has a manifest, else the 9 validation files of ../shared/data/mocap)")  # fmt: skip
+    g.add_argument("--reference-stride", type=int, default=4, help="every Nth reference frame (default: 4)")
+
+
+def run(args: argparse.Namespace, default_clip: Path) -> int:
+    """The benchmark of ``args`` (``bench --pose-tasks``); prints the table."""
+    import torch
+
+    from engine.atomic import write_text
+    from engine.authoring.pose_mode import PoseMode
+    from engine.authoring.pose_tasks import POSERS, run_task, select_tasks, split_options
+    from engine.models import load_default_models
+    from engine.validation import check_output_path
+
+    if args.file != default_clip:
+        raise UserError("--pose-tasks poses the character and reads no clip; leave out the file")
+    if args.json:
+        check_output_path(args.json, "--json")
+    posers = args.method or list(POSERS)
+    unknown = [m for m in posers if m not in POSERS]
+    if unknown:
+        raise UserError(f"--pose-tasks: unknown poser(s) {', '.join(unknown)}; posers: {', '.join(POSERS)}")
+    init = split_options(args.pose_set)[0]  # bad options fail before the models load
+    tasks = select_tasks(args.task)
+    vae = load_default_models().vae
+    offsets = PoseMode(vae, **init).character.skeleton.offsets
+    reference = _reference(args, offsets)
+    spread = reference.spread_summary()
+    rows = [run_task(t, p, vae, reference, args.pose_set, args.release, args.events) for t in tasks for p in posers]
+    machine = {"cpu_count": os.cpu_count(), "torch_threads": torch.get_num_threads(), "platform": platform.platform()}
+    options = " ".join(args.pose_set) or "defaults"
+    print(f"pose tasks: release {args.release}, {args.events} events per drag, pose mode {options}; "
+          f"{machine['cpu_count']} cores, torch {machine['torch_threads']} threads")
+    print(f"naturalness reference: {reference.description}, {len(reference)} poses; real poses' nearest other "
+          f"take: median {spread['median_cm']:.1f} cm, p95 {spread['p95_cm']:.1f} cm")
+    print(_table(rows))
+    if args.json:
+        out = {"release": args.release, "events": args.events, "options": args.pose_set, "machine": machine,
+               "reference": {"description": reference.description, "poses": len(reference), **spread},
+               "tasks": [r.to_dict() for r in rows]}  # fmt: skip
+        write_text(args.json, json.dumps(out, indent=1))
+    return 0
+
+
+def _reference(args: argparse.Namespace, offsets):
+    from engine.authoring import pose_reference as R
+
+    data = args.reference_data
+    if data is None and (Path("prepared") / "manifest.json").is_file():
+        data = Path("prepared")
+    if data is not None:
+        return R.load_prepared(data, offsets, args.reference_stride)
+    return R.load_files(R.validation_files(), offsets, args.reference_stride)
+
+
+def _table(rows) -> str:
+    head = (f"{'task':<15} {'poser':<9} {'drags':>5} {'err cm':>7} {'turn':>5} {'reach':>5} {'natural':>7} "
+            f"{'spread':>6} {'limits':>6} {'feet':>5} {'balance':>7} {'tilt':>5} {'slide':>5} {'s':>5}")  # fmt: skip
+    lines = [head]
+    for r in rows:
+        c = r.check
+        err, turn = r.max_position_error_cm, r.max_turn_error_deg
+        feet = "".join(side[0].upper() if down else "-" for side, down in c.feet_down.items())
+        slide = max(r.feet_moved_cm.values()) if r.feet_moved_cm else None
+        lines.append(
+            f"{r.task:<15} {r.poser:<9} {r.drags:>2}/{r.allowed:<2} {_num(err, 7, 1)} {_num(turn, 5, 0)} "
+            f"{'yes' if r.reached else 'no':>5} {r.naturalness_cm:>7.1f} {'in' if r.within_spread else 'out':>6} "
+            f"{len(c.violations):>6d} {feet:>5} {_num(c.balance_margin_cm, 7, 1)} {c.trunk_tilt_deg:>5.0f} "
+            f"{_num(slide, 5, 0)} {r.seconds:>5.1f}")  # fmt: skip
+    lines.append("err cm: largest position error; turn: deg; natural: cm to the nearest real pose (spread: within "
+                 "the real poses' 95th percentile); limits: knees/elbows hyperextended; feet: L/R down; balance: cm "
+                 "inside the support polygon (both feet down); tilt: trunk from vertical, deg; slide: cm an undragged "
+                 "ankle slid; s: seconds of posing")  # fmt: skip
+    return "\n".join(lines)
+
+
+def _num(x: float | None, width: int, digits: int) -> str:
+    return f"{'-':>{width}}" if x is None else f"{x:>{width}.{digits}f}"

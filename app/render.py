@@ -21,6 +21,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import time
 from collections.abc import Callable
 from pathlib import Path
 
@@ -118,12 +119,13 @@ def load_input(path: Path):
 
 
 def render_video(motion, out: Path, options: RenderOptions = RenderOptions(),
-                 progress: Callable[[int], None] | None = None) -> None:  # fmt: skip
+                 progress: Callable[[int], None] | None = None, timings: dict[str, float] | None = None) -> None:  # fmt: skip
     """Draw every frame of ``motion`` off-screen and write ``out`` (H.264 MP4) atomically.
 
     The ghosts' solve (a process), the drawing (this thread and Mesa's) and the
     encoding (ffmpeg, fed by a thread) run at once; ``progress(f)`` is called as frame
-    ``f`` is handed to the encoder."""
+    ``f`` is handed to the encoder. ``timings``, when given, sums the seconds spent in
+    each step of the loop (``scripts/bench_render.py`` prints them per frame)."""
     from app.render_scene import FrameRenderer
     from app.video_encoder import VideoEncoder
     from engine.atomic import atomic_path
@@ -131,29 +133,54 @@ def render_video(motion, out: Path, options: RenderOptions = RenderOptions(),
     # llvmpipe's rasteriser threads: one, since ffmpeg and the ghosts' solve have the
     # other core (set before the first GL context; the studio does the same)
     os.environ.setdefault("LP_NUM_THREADS", str(max(1, (os.cpu_count() or 2) - 1)))
+    clock = _Stopwatch(timings)
     ghosts = _start_ghosts(motion, options)
     try:
         scene = FrameRenderer(motion, options)
         try:
             with atomic_path(out, suffix=".mp4") as tmp:
                 encoder = VideoEncoder(tmp, options.size, motion.fps)
+                clock.lap("setup")
                 try:
                     for f in range(len(motion)):
-                        scene.draw(f, ghosts.positions(f) if ghosts is not None else None)
+                        posed = ghosts.positions(f) if ghosts is not None else None
+                        clock.lap("ghost wait")
+                        scene.pose(f, posed)
+                        clock.lap("pose")
+                        scene.window.Render()
+                        clock.lap("render")
                         buf = encoder.buffer()
+                        clock.lap("encoder wait")
                         scene.read_into(buf)
+                        clock.lap("read pixels")
                         encoder.submit(buf)
                         if progress:
                             progress(f)
+                        clock.lap("progress")
                 except BaseException:
                     encoder.abort()
                     raise
                 encoder.close()
+                clock.lap("encoder finish")
         finally:
             scene.close()
     finally:
         if ghosts is not None:
             ghosts.close()
+
+
+class _Stopwatch:
+    """Adds the seconds since the previous lap to ``timings[name]`` (nothing when None)."""
+
+    def __init__(self, timings: dict[str, float] | None) -> None:
+        self.timings = timings
+        self.last = time.perf_counter()
+
+    def lap(self, name: str) -> None:
+        if self.timings is not None:
+            now = time.perf_counter()
+            self.timings[name] = self.timings.get(name, 0.0) + now - self.last
+            self.last = now
 
 
 def _start_ghosts(motion, options: RenderOptions):

@@ -128,6 +128,7 @@ class FrameRenderer:
         self.overlay.SetLayer(1)
         self.overlay.SetActiveCamera(self.camera)
         self.overlay.InteractiveOff()
+        self.overlay.SetUseOIT(False)  # the ghosts are lines: plain blending suffices
         self.window.AddRenderer(self.overlay)
         if o.layout == "overlay":
             from widgets.viewport.ghosts import GhostSkeleton
@@ -165,6 +166,11 @@ class FrameRenderer:
 
     def draw(self, f: int, ghosts: dict[str, np.ndarray] | None = None) -> None:
         """Pose every figure at frame ``f`` (``ghosts``: ``{method: (J, 3)}``) and render once."""
+        self.pose(f, ghosts)
+        self.window.Render()
+
+    def pose(self, f: int, ghosts: dict[str, np.ndarray] | None = None) -> None:
+        """Move every drawable, the camera and the time code to frame ``f`` (no drawing)."""
         from widgets.viewport.camera import CAMERA_PRESETS
 
         ghosts = ghosts or {}
@@ -184,7 +190,6 @@ class FrameRenderer:
         self.camera.SetViewUp(*up)
         self.camera.SetClippingRange(*CLIPPING)
         self.texts.set_time(f, self.num_frames, self.fps)
-        self.window.Render()
 
     def read_into(self, buf: np.ndarray) -> None:
         """Copy the rendered frame into ``buf`` ``(H, W, 3 or 4)`` uint8, rows bottom-up."""

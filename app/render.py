@@ -189,17 +189,15 @@ def _start_ghosts(motion, options: RenderOptions):
         return None
     if not options.sensors:
         raise UserError("--ghosts needs --sensors (the trackers they reconstruct from)")
+    from app.render_scene import preset_sensors
     from engine.methods import available_methods
-    from engine.studio.clips import sensor_presets
     from engine.studio.ghost_solve import GhostSolves
 
-    presets = sensor_presets()
-    if options.sensors not in presets:
-        raise UserError(f"--sensors: unknown preset {options.sensors!r}; known: {', '.join(sorted(presets))}")
+    sensors = preset_sensors(options.sensors)
     unknown = [g for g in options.ghosts if g not in available_methods()]
     if unknown:
         raise UserError(f"--ghosts: unknown method {unknown[0]!r}; known: {', '.join(available_methods())}")
-    return GhostSolves(motion, presets[options.sensors], options.ghosts)
+    return GhostSolves(motion, sensors, options.ghosts)
 
 
 def main(argv: list[str] | None = None) -> int:

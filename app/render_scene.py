@@ -220,18 +220,25 @@ class FrameRenderer:
         self.plotter.close()
 
 
+def preset_sensors(preset: str) -> tuple:
+    """The sensors of tracker preset ``preset`` (:class:`engine.errors.UserError` naming
+    the known ones when there is none of that name)."""
+    from engine.errors import UserError
+    from engine.studio.clips import sensor_presets
+
+    presets = sensor_presets()
+    if preset not in presets:
+        raise UserError(f"--sensors: unknown preset {preset!r}; known: {', '.join(sorted(presets))}")
+    return presets[preset]
+
+
 class _Trackers:
     """The trackers of preset ``preset`` simulated on ``motion`` (as the studio shows a clip's)."""
 
     def __init__(self, motion: Any, preset: str) -> None:
-        from engine.errors import UserError
         from engine.studio.clip_source import ClipSource
-        from engine.studio.clips import sensor_presets
 
-        presets = sensor_presets()
-        if preset not in presets:
-            raise UserError(f"--sensors: unknown preset {preset!r}; known: {', '.join(sorted(presets))}")
-        self.sensors = presets[preset]
+        self.sensors = preset_sensors(preset)
         source = ClipSource(motion)
         source.set_sensors(self.sensors)
         self.joints = tuple(s.joint for s in self.sensors)

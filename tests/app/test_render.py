@@ -210,3 +210,20 @@ def test_bad_input_exits_2_and_writes_nothing(tmp_path, capsys):
     assert "nope" in capsys.readouterr().err
     assert main([str(EXAMPLE), "--out", str(out), "--msaa", "3", "--no-progress"]) == 2
     assert "--msaa" in capsys.readouterr().err and not out.exists()
+
+
+def test_a_failure_mid_video_stops_the_encoder_and_leaves_no_file(short_clip, tmp_path, monkeypatch):
+    from app.render import render_video
+    from app.render_scene import FrameRenderer, RenderOptions
+
+    pose = FrameRenderer.pose
+
+    def failing(self, f, ghosts=None):
+        if f == 5:
+            raise RuntimeError("boom")
+        pose(self, f, ghosts)
+
+    monkeypatch.setattr(FrameRenderer, "pose", failing)
+    with pytest.raises(RuntimeError, match="boom"):
+        render_video(load_clip(short_clip), tmp_path / "v.mp4", RenderOptions(size=(64, 48)))
+    assert list(tmp_path.iterdir()) == []

@@ -68,14 +68,11 @@ class ExportVideoDialog(QDialog):
         self.timecode = QCheckBox("time and frame number")
         self.title = QLineEdit()
         self.title.setPlaceholderText("optional title above the legend")
-        form.addRow("Size", self.size_box)
-        form.addRow("View", self.view)
-        form.addRow("Layout", self.layout_box)
-        form.addRow("Camera", self.camera)
-        form.addRow(f"Ghosts (from trackers {sensors})" if sensors else "Ghosts", self.ghosts)
-        form.addRow("Ground truth", self.truth)
-        form.addRow("Time code", self.timecode)
-        form.addRow("Title", self.title)
+        ghosts = f"Ghosts (from trackers {sensors})" if sensors else "Ghosts"
+        for label, widget in (("Size", self.size_box), ("View", self.view), ("Layout", self.layout_box),
+                              ("Camera", self.camera), (ghosts, self.ghosts), ("Ground truth", self.truth),
+                              ("Time code", self.timecode), ("Title", self.title)):  # fmt: skip
+            form.addRow(label, widget)
         box = QDialogButtonBox(QDialogButtonBox.StandardButton.Ok | QDialogButtonBox.StandardButton.Cancel)
         box.accepted.connect(self.accept)
         box.rejected.connect(self.reject)

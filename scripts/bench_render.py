@@ -1,8 +1,10 @@
 """How fast ``render`` makes a video, against the clip's own duration.
 
 Runs ``python -m app.render`` on a clip for each configuration (default: 960x540 and
-1280x720, body view, six trackers, an IK ghost) and prints the command's wall time and
-its ratio to the clip's duration (1.0 = renders exactly as fast as it plays). Give
+1280x720, body view, six trackers, an IK ghost) and prints the command's wall time, its
+ratio to the clip's duration (1.0 = renders exactly as fast as it plays) and the CPU
+seconds it used with its children (ffmpeg, the ghosts' solve): on a machine busy with
+other work the wall time grows, the CPU time much less. Give
 several trees with ``--tree`` (e.g. an unpacked older commit) to compare versions: the
 runs alternate between trees, so a machine loaded by other work weighs on each alike.
 Options only this tree knows (``--layout``) are passed to every tree, so compare with
@@ -60,13 +62,13 @@ def main(argv: list[str] | None = None) -> int:
                 out = Path(f"/tmp/bench_render_{os.getpid()}.mp4")
                 cmd[cmd.index(os.devnull + ".mp4")] = str(out)
                 env = dict(os.environ, PYTHONPATH=str(tree.resolve()))
-                t = time.perf_counter()
+                t, cpu = time.perf_counter(), _children_cpu()
                 res = subprocess.run(cmd, cwd=tree, env=env, capture_output=True, text=True)
-                wall = time.perf_counter() - t
+                wall, cpu = time.perf_counter() - t, _children_cpu() - cpu
                 out.unlink(missing_ok=True)
                 status = "ok" if res.returncode == 0 else f"FAILED: {res.stderr.strip()[-300:]}"
-                print(f"run {rep + 1} {size:>9} {tree}: {wall:6.2f} s = {wall / duration:.2f} x the clip "
-                      f"(load {os.getloadavg()[0]:.2f}) {status}", flush=True)  # fmt: skip
+                print(f"run {rep + 1} {size:>9} {tree.resolve()}: {wall:6.2f} s = {wall / duration:.2f} x the clip, "
+                      f"CPU {cpu:6.2f} s (load {os.getloadavg()[0]:.2f}) {status}", flush=True)  # fmt: skip
     return 0
 
 
@@ -79,19 +81,28 @@ def profile(clip, sizes: list[str], options: str) -> int:
         args = parser.parse_args(["render", "x.bvh", "--out", "x.mp4", "--size", size, *options.split()])
         timings: dict[str, float] = {}
         out = Path(f"/tmp/bench_render_{os.getpid()}.mp4")
-        t, cpu = time.perf_counter(), time.process_time()
+        t, cpu, others = time.perf_counter(), time.process_time(), _children_cpu()
         render_video(clip, out, options_from_args(args), timings=timings)
-        wall, cpu = time.perf_counter() - t, time.process_time() - cpu
+        wall, cpu, others = time.perf_counter() - t, time.process_time() - cpu, _children_cpu() - others
         out.unlink(missing_ok=True)
         n = len(clip)
         loop = sum(v for k, v in timings.items() if k not in ("setup", "encoder finish"))
         print(f"{size} {options}: {wall:.2f} s in all; setup {timings['setup']:.2f} s, "
               f"frames {1000 * loop / n:.1f} ms each, encoder finish {timings['encoder finish']:.2f} s; "
-              f"this process's CPU {1000 * cpu / n:.1f} ms per frame")  # fmt: skip
+              f"CPU per frame: {1000 * cpu / n:.1f} ms this process (drawing, Mesa, the writer), "
+              f"{1000 * others / n:.1f} ms its children (ffmpeg, the ghosts' solve)")  # fmt: skip
         for key, value in timings.items():
             if key not in ("setup", "encoder finish"):
                 print(f"    {key:>14}: {1000 * value / n:6.2f} ms per frame")
     return 0
+
+
+def _children_cpu() -> float:
+    """User + system CPU seconds of every finished child process (and theirs) so far."""
+    import resource
+
+    use = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return use.ru_utime + use.ru_stime
 
 
 if __name__ == "__main__":

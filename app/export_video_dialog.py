@@ -60,7 +60,8 @@ class ExportVideoDialog(QDialog):
             item.setFlags(item.flags() | Qt.ItemFlag.ItemIsUserCheckable)
             item.setCheckState(Qt.CheckState.Unchecked)
             self.ghosts.addItem(item)
-        self.ghosts.setMaximumHeight(22 * max(1, min(len(methods), 5)) + 6)
+        rows = max(1, min(len(methods), 5))
+        self.ghosts.setFixedHeight(max(self.ghosts.sizeHintForRow(0), 16) * rows + 2 * self.ghosts.frameWidth() + 2)
         self.ghosts.setEnabled(bool(sensors))
         self.ghosts.setToolTip("methods reconstructing the motion from its trackers" if sensors
                                else "choose a tracker preset first: ghosts are solved from its trackers")  # fmt: skip

@@ -227,3 +227,20 @@ def test_a_failure_mid_video_stops_the_encoder_and_leaves_no_file(short_clip, tm
     with pytest.raises(RuntimeError, match="boom"):
         render_video(load_clip(short_clip), tmp_path / "v.mp4", RenderOptions(size=(64, 48)))
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("msaa", [0, 4])
+def test_the_window_is_set_for_throughput(msaa):
+    """No multisampling unless asked, no gradient, no order-independent transparency pass
+    (each costs several ms a frame on software GL: docs/performance.md)."""
+    from app.render_scene import FrameRenderer, RenderOptions
+
+    scene = FrameRenderer(load_clip(EXAMPLE).slice(0, 3), RenderOptions(size=(64, 48), msaa=msaa, sensors="6"))
+    try:
+        scene.draw(1)
+        assert scene.window.GetMultiSamples() == msaa
+        for renderer in [*scene.plotter.renderers, scene.overlay]:
+            assert not renderer.GetUseOIT() and not renderer.GetGradientBackground()
+        assert scene.camera.GetClippingRange() == pytest.approx((0.1, 40.0))
+    finally:
+        scene.close()

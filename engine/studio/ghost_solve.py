@@ -29,6 +29,10 @@ CHUNK = 12
 
 def _solve(motion: Any, sensors: tuple, methods: tuple[str, ...], out: Any) -> None:
     """Child process: solve every frame with each method, send positions in chunks."""
+    import signal
+
+    # Ctrl+C reaches the whole process group: the drawing process stops this one itself
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
         import torch
 

@@ -280,6 +280,8 @@ class _Texts:
                 x, y = pad, top - step * (i + 1)
             actor.SetDisplayPosition(x, y)
             self.rows.append((fig.name, fig.color, (x, y)))
+        if options.layout == "side" and panels > 1:
+            self._separators(w, h, panels)
         self.time = self._text("", "#d0d4dc", self.font, mono=True) if options.timecode else None
         if self.time is not None:
             self.time.GetTextProperty().SetJustificationToRight()
@@ -304,6 +306,27 @@ class _Texts:
         actor.PickableOff()
         self.renderer.AddViewProp(actor)
         return actor
+
+    def _separators(self, w: int, h: int, panels: int) -> None:
+        """A dark vertical line between side-by-side panels, so their floors do not read as one."""
+        import vtk
+
+        from widgets import style
+
+        pts, lines = vtk.vtkPoints(), vtk.vtkCellArray()
+        for i in range(1, panels):
+            x = i * w / panels
+            lines.InsertNextCell(2, [pts.InsertNextPoint(x, 0, 0), pts.InsertNextPoint(x, h, 0)])
+        poly = vtk.vtkPolyData()
+        poly.SetPoints(pts)
+        poly.SetLines(lines)
+        mapper = vtk.vtkPolyDataMapper2D()
+        mapper.SetInputData(poly)
+        actor = vtk.vtkActor2D()
+        actor.SetMapper(mapper)
+        actor.GetProperty().SetColor(*(c / 255 for c in style.hex_to_rgb(style.BACKGROUND_BOTTOM)))
+        actor.GetProperty().SetLineWidth(3)
+        self.renderer.AddViewProp(actor)
 
     def set_time(self, f: int, n: int, fps: float) -> None:
         if self.time is not None:

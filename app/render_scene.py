@@ -281,7 +281,7 @@ class _Texts:
             actor.SetDisplayPosition(x, y)
             self.rows.append((fig.name, fig.color, (x, y)))
         if options.layout == "side" and panels > 1:
-            self._separators(w, h, panels)
+            self._separators(w, top if options.title else h, panels)  # under the title
         self.time = self._text("", "#d0d4dc", self.font, mono=True) if options.timecode else None
         if self.time is not None:
             self.time.GetTextProperty().SetJustificationToRight()
@@ -307,7 +307,7 @@ class _Texts:
         self.renderer.AddViewProp(actor)
         return actor
 
-    def _separators(self, w: int, h: int, panels: int) -> None:
+    def _separators(self, w: int, top: int, panels: int) -> None:
         """A dark vertical line between side-by-side panels, so their floors do not read as one."""
         import vtk
 
@@ -316,7 +316,7 @@ class _Texts:
         pts, lines = vtk.vtkPoints(), vtk.vtkCellArray()
         for i in range(1, panels):
             x = i * w / panels
-            lines.InsertNextCell(2, [pts.InsertNextPoint(x, 0, 0), pts.InsertNextPoint(x, h, 0)])
+            lines.InsertNextCell(2, [pts.InsertNextPoint(x, 0, 0), pts.InsertNextPoint(x, top, 0)])
         poly = vtk.vtkPolyData()
         poly.SetPoints(pts)
         poly.SetLines(lines)

@@ -60,7 +60,8 @@ class RenderOptions:
 
 @dataclass
 class Figure:
-    """One figure of the video: its legend name, colour, and joint positions per frame."""
+    """One figure of the video: its legend name, its colour, whether it is a ghost (posed
+    from the ghosts' solve) or the input, and the drawables that show it."""
 
     name: str
     color: str
@@ -101,6 +102,7 @@ class FrameRenderer:
         import vtk
 
         from widgets import style
+        from widgets.viewport.camera import VIEW_ANGLE_DEG
 
         self.options = o = options
         self.fps = float(motion.fps)
@@ -118,7 +120,7 @@ class FrameRenderer:
         self.plotter = pv.Plotter(off_screen=True, window_size=[w, h], shape=(1, panels), border=False, theme=theme)
         self.window = self.plotter.render_window
         self.camera = self.plotter.renderers[0].GetActiveCamera()
-        self.camera.SetViewAngle(35.0)
+        self.camera.SetViewAngle(VIEW_ANGLE_DEG)
         self.trackers = _Trackers(motion, o.sensors) if o.sensors else None
         self.sensor_markers = []
         for panel in range(panels):

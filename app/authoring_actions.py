@@ -10,7 +10,6 @@ dialog (:mod:`app.export_video_dialog`).
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Any
 
 from PyQt6.QtWidgets import (

@@ -4,18 +4,16 @@
 New pose asks for the character's height and whether to start from the VAE's mean pose
 or from the current frame of the loaded clip, and opens a
 :class:`app.pose_window.PoseWindow`. Export video renders the loaded clip with the
-current tracker preset drawn on it (:func:`app.render.render_video`).
+current tracker preset drawn on it, with the options of ``render`` chosen in a small
+dialog (:mod:`app.export_video_dialog`).
 """
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Any
 
-from PyQt6.QtCore import Qt
 from PyQt6.QtWidgets import (
-    QComboBox, QDialog, QDialogButtonBox, QDoubleSpinBox, QFileDialog, QFormLayout, QMenu, QMessageBox,
-    QProgressDialog,
+    QComboBox, QDialog, QDialogButtonBox, QDoubleSpinBox, QFormLayout, QMenu, QMessageBox,
 )  # fmt: skip
 
 from engine.errors import UserError
@@ -70,30 +68,16 @@ def new_pose(window: Any) -> None:
         QMessageBox.warning(window, "New pose", str(exc))
 
 
-def export_clip_video(window: Any, path: str | Path, size: tuple[int, int] = (960, 540)) -> None:
-    """Render the loaded clip with the current tracker preset to ``path`` (MP4)."""
-    from app.render import render_video
+def export_video(window: Any) -> str | None:
+    """File ▸ Export video...: the loaded clip with the current tracker preset, through
+    the video options dialog (:mod:`app.export_video_dialog`)."""
+    from app.export_video_dialog import export_video as export
 
     motion = window.session.motion
     if motion is None:
-        raise UserError("open a clip first")
-    dialog = QProgressDialog("Rendering video...", "", 0, len(motion), window)
-    dialog.setCancelButton(None)
-    dialog.setWindowModality(Qt.WindowModality.WindowModal)
-    try:
-        render_video(motion, Path(path), size, motion.fps, window.session.preset or None,
-                     progress=lambda f: dialog.setValue(f + 1))  # fmt: skip
-    finally:
-        dialog.close()
-
-
-def export_video(window: Any) -> None:
-    path, _ = QFileDialog.getSaveFileName(window, "Export video", "", "MP4 video (*.mp4)")
-    if path:
-        try:
-            export_clip_video(window, path)
-        except (UserError, OSError) as exc:
-            QMessageBox.warning(window, "Export video", str(exc))
+        QMessageBox.warning(window, "Export video", "Open a clip first.")
+        return None
+    return export(window, motion, window.session.preset or None, tuple(window.session.available_methods()))
 
 
 def add_menu_entries(window: Any, file_menu: QMenu, action) -> dict:

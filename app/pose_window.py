@@ -23,7 +23,7 @@ import numpy as np
 from PyQt6.QtCore import Qt, QTimer
 from PyQt6.QtGui import QAction, QCloseEvent, QKeySequence, QUndoStack
 from PyQt6.QtWidgets import (
-    QApplication, QDockWidget, QFileDialog, QMainWindow, QMessageBox, QProgressDialog, QWidget,
+    QApplication, QDockWidget, QFileDialog, QMainWindow, QMessageBox, QWidget,
 )  # fmt: skip
 
 from app.motion_files import ask_motion_path
@@ -310,17 +310,12 @@ class PoseWindow(QMainWindow):
         motion_format(path, "file")  # before the bake
         save_motion(path, self.bake_scene().motion)
 
-    def export_video(self, path: str | Path, size: tuple[int, int] = (960, 540)) -> None:
-        from app.render import render_video
+    def export_video(self, path: str | Path, size: tuple[int, int] = (960, 540)) -> str:
+        """Render the bake to ``path`` (MP4, stick figure); returns the line saying so."""
+        from app.export_video_dialog import write_video
+        from app.render_scene import RenderOptions
 
-        motion = self.bake_scene().motion
-        dialog = QProgressDialog("Rendering video...", "", 0, len(motion), self)
-        dialog.setCancelButton(None)
-        dialog.setWindowModality(Qt.WindowModality.WindowModal)
-        try:
-            render_video(motion, Path(path), size, motion.fps, progress=lambda f: dialog.setValue(f + 1))
-        finally:
-            dialog.close()
+        return write_video(self, self.bake_scene().motion, path, RenderOptions(size=size))
 
     def _file_dialog(self, title: str, pattern: str, action) -> None:
         path, _ = QFileDialog.getSaveFileName(self, title, "", pattern)
@@ -342,7 +337,15 @@ class PoseWindow(QMainWindow):
                 QMessageBox.warning(self, "Export motion", str(exc))
 
     def export_video_dialog(self) -> None:
-        self._file_dialog("Export video", "MP4 video (*.mp4)", self.export_video)
+        """The video options dialog (:mod:`app.export_video_dialog`) on the bake."""
+        from app.export_video_dialog import export_video
+
+        try:
+            motion = self.bake_scene().motion
+        except UserError as exc:
+            QMessageBox.warning(self, "Export video", str(exc))
+            return
+        export_video(self, motion, None)
 
     def screenshot(self, path: str | Path) -> bool:
         """Save the window, 3D view included, as a PNG (the studio's compositing)."""

@@ -3,31 +3,30 @@
 Registered from the app side through the ``dragposer_studio.subcommands`` entry point
 (like ``gui``), so the engine never imports PyVista. The frames are drawn off-screen by
 VTK (EGL without a display, or the X server under Xvfb) with the studio's own drawables
-(:mod:`widgets.viewport`) and encoded to H.264 MP4 by the ffmpeg binary that the
-``imageio-ffmpeg`` wheel ships (no system ffmpeg), into a temporary file moved over
-``OUT.mp4`` when complete. The video has exactly the motion's frame count at ``--fps``
-(the motion resampled when it differs) and exactly ``--size``.
+(:mod:`app.render_scene`) and encoded to H.264 MP4 by the ffmpeg binary that the
+``imageio-ffmpeg`` wheel ships (no system ffmpeg), running beside the drawing
+(:mod:`app.video_encoder`), into a temporary file moved over ``OUT.mp4`` when complete.
+The video has exactly the motion's frame count at ``--fps`` (the motion resampled when
+it differs) and exactly ``--size``.
 
 A scene is baked first (:mod:`engine.authoring.bake`, as ``bake`` does). ``--sensors P``
 draws the trackers of preset P on the motion; ``--ghosts ik,...`` reconstructs the
-motion from those trackers with each method and draws the results beside it.
+motion from those trackers with each method, solved ahead in a process of its own
+(:mod:`engine.studio.ghost_solve`), and draws the results over it (``--layout overlay``)
+or beside it (``--layout side``). The legend names every figure in its colour.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
+import time
 from collections.abc import Callable
 from pathlib import Path
 
-import numpy as np
-
+from app.render_scene import CAMERAS, LAYOUTS, VIEWS, RenderOptions
 from engine.errors import UserError
-
-VIEWS = ("sticks", "body")
-CAMERAS = ("front", "side", "follow")
-#: Height of the camera's focus above the floor, metres (about the chest).
-FOCUS_HEIGHT = 1.0
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -41,10 +40,18 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--size", default="960x540", metavar="WxH", help="frame size in pixels, even numbers (960x540)")
     p.add_argument("--fps", type=float, metavar="F", help="frame rate (default: the motion's)")
     p.add_argument("--sensors", metavar="P", help="draw the trackers of sensor preset P")
-    p.add_argument("--ghosts", metavar="A,B", help="methods reconstructing from --sensors, drawn as ghosts")
+    p.add_argument("--ghosts", metavar="A,B", help="methods reconstructing from --sensors, drawn with the motion")
     p.add_argument("--view", choices=VIEWS, default="sticks", help="stick figure (default) or shaded body")
+    p.add_argument("--layout", choices=LAYOUTS, default="overlay",
+                   help="ghosts as thin sticks over the motion (default) or each figure in a panel of its own")  # fmt: skip
     p.add_argument("--camera", choices=CAMERAS, default="follow",
                    help="fixed from the front or the side, or following the root (default)")  # fmt: skip
+    p.add_argument("--truth", action="store_true",
+                   help="the input is the ground truth: drawn green and named 'ground truth' in the legend")  # fmt: skip
+    p.add_argument("--title", default="", metavar="TEXT", help="a title line above the legend")
+    p.add_argument("--timecode", action="store_true", help="show the time and frame number (bottom right)")
+    p.add_argument("--msaa", type=int, default=0, metavar="N",
+                   help="multisampling anti-aliasing samples (default 0: fastest on software GL)")  # fmt: skip
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     p.set_defaults(func=run)
 
@@ -60,17 +67,26 @@ def parse_size(text: str) -> tuple[int, int]:
     return w, h
 
 
+def options_from_args(args: argparse.Namespace) -> RenderOptions:
+    """The video options of ``render``'s arguments, checked (:class:`engine.errors.UserError`)."""
+    ghosts = tuple(g.strip() for g in (args.ghosts or "").split(",") if g.strip())
+    if ghosts and not args.sensors:
+        raise UserError("--ghosts needs --sensors (the trackers they reconstruct from)")
+    if args.msaa not in (0, 2, 4, 8):
+        raise UserError(f"--msaa must be 0, 2, 4 or 8, got {args.msaa}")
+    return RenderOptions(size=parse_size(args.size), sensors=args.sensors, ghosts=ghosts, view=args.view,
+                         camera=args.camera, layout=args.layout, truth=args.truth, title=args.title,
+                         timecode=args.timecode, msaa=args.msaa)  # fmt: skip
+
+
 def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from engine.validation import check_input_file, check_output_path
 
-    size = parse_size(args.size)
+    options = options_from_args(args)
     check_input_file(args.input, "scene" if args.input.suffix.lower() == ".json" else "BVH file")
     check_output_path(args.out)
-    ghosts = tuple(g.strip() for g in (args.ghosts or "").split(",") if g.strip())
-    if ghosts and not args.sensors:
-        raise UserError("--ghosts needs --sensors (the trackers they reconstruct from)")
     motion = load_input(args.input)
     if args.fps:
         if not 1.0 <= args.fps <= 240.0:
@@ -78,13 +94,14 @@ def run(args: argparse.Namespace) -> int:
         from engine.motion.retarget import resample_motion
 
         motion = resample_motion(motion, float(args.fps))
-    bar = tqdm(total=len(motion), unit="frame", desc="render", disable=args.no_progress, file=sys.stderr)
+    bar = tqdm(total=len(motion), unit="frame", desc="render", disable=args.no_progress, file=sys.stderr,
+               bar_format="{l_bar}{bar}| {n_fmt}/{total_fmt} [{elapsed}<{remaining} left, {rate_fmt}]")  # fmt: skip
     try:
-        render_video(motion, args.out, size, motion.fps, args.sensors, ghosts, args.view, args.camera,
-                     lambda f: bar.update(1))  # fmt: skip
+        render_video(motion, args.out, options, lambda f: bar.update(1))
     finally:
         bar.close()
-    print(f"{args.out}: {len(motion)} frames, {size[0]}x{size[1]} at {motion.fps:g} fps")
+    w, h = options.size
+    print(f"{args.out}: {len(motion)} frames, {w}x{h} at {motion.fps:g} fps")
     return 0
 
 
@@ -101,92 +118,86 @@ def load_input(path: Path):
     return load_clip(path)
 
 
-def render_video(motion, out: Path, size: tuple[int, int], fps: float, sensors: str | None = None,
-                 ghosts: tuple[str, ...] = (), view: str = "sticks", camera: str = "follow",
-                 progress: Callable[[int], None] | None = None) -> None:  # fmt: skip
-    """Draw every frame of ``motion`` off-screen and write ``out`` (H.264 MP4) atomically."""
-    import imageio_ffmpeg
+def render_video(motion, out: Path, options: RenderOptions = RenderOptions(),
+                 progress: Callable[[int], None] | None = None, timings: dict[str, float] | None = None) -> None:  # fmt: skip
+    """Draw every frame of ``motion`` off-screen and write ``out`` (H.264 MP4) atomically.
 
+    The ghosts' solve (a process), the drawing (this thread and Mesa's) and the
+    encoding (ffmpeg, fed by a thread) run at once; ``progress(f)`` is called as frame
+    ``f`` is handed to the encoder. ``timings``, when given, sums the seconds spent in
+    each step of the loop (``scripts/bench_render.py`` prints them per frame)."""
+    from app.render_scene import FrameRenderer
+    from app.video_encoder import VideoEncoder
     from engine.atomic import atomic_path
 
-    frames = FrameRenderer(motion, size, sensors, ghosts, view, camera)
+    # llvmpipe's rasteriser threads: one, since ffmpeg and the ghosts' solve have the
+    # other core (set before the first GL context; the studio does the same)
+    os.environ.setdefault("LP_NUM_THREADS", str(max(1, (os.cpu_count() or 2) - 1)))
+    clock = _Stopwatch(timings)
+    ghosts = _start_ghosts(motion, options)
     try:
-        with atomic_path(out, suffix=".mp4") as tmp:
-            writer = imageio_ffmpeg.write_frames(str(tmp), size, fps=fps, codec="libx264", pix_fmt_out="yuv420p",
-                                                 macro_block_size=1, quality=7, ffmpeg_log_level="error")  # fmt: skip
-            writer.send(None)  # start ffmpeg
-            try:
-                for f in range(len(motion)):
-                    writer.send(np.ascontiguousarray(frames.draw(f)))
-                    if progress:
-                        progress(f)
-            finally:
-                writer.close()
+        scene = FrameRenderer(motion, options)
+        try:
+            with atomic_path(out, suffix=".mp4") as tmp:
+                encoder = VideoEncoder(tmp, options.size, motion.fps)
+                clock.lap("setup")
+                try:
+                    for f in range(len(motion)):
+                        posed = ghosts.positions(f) if ghosts is not None else None
+                        clock.lap("ghost wait")
+                        scene.pose(f, posed)
+                        clock.lap("pose")
+                        scene.window.Render()
+                        clock.lap("render")
+                        buf = encoder.buffer()
+                        clock.lap("encoder wait")
+                        scene.read_into(buf)
+                        clock.lap("read pixels")
+                        encoder.submit(buf)
+                        if progress:
+                            progress(f)
+                        clock.lap("progress")
+                except BaseException:
+                    encoder.abort()
+                    raise
+                encoder.close()
+                clock.lap("encoder finish")
+        finally:
+            scene.close()
     finally:
-        frames.close()
+        if ghosts is not None:
+            ghosts.close()
 
 
-class FrameRenderer:
-    """An off-screen PyVista scene of a motion; :meth:`draw` gives frame ``f`` as RGB
-    ``(H, W, 3)`` uint8."""
+class _Stopwatch:
+    """Adds the seconds since the previous lap to ``timings[name]`` (nothing when None)."""
 
-    def __init__(self, motion, size: tuple[int, int], sensors: str | None, ghosts: tuple[str, ...], view: str,
-                 camera: str) -> None:  # fmt: skip
-        import pyvista as pv
+    def __init__(self, timings: dict[str, float] | None) -> None:
+        self.timings = timings
+        self.last = time.perf_counter()
 
-        from widgets import style
-        from widgets.viewport.body import BodyActor
-        from widgets.viewport.floor import FloorGrid
-        from widgets.viewport.skeleton import SkeletonActor
-
-        self.positions = motion.positions()
-        self.camera = camera
-        self.plotter = pv.Plotter(off_screen=True, window_size=list(size))
-        self.plotter.set_background(style.BACKGROUND_BOTTOM, top=style.BACKGROUND_TOP)
-        FloorGrid(self.plotter)
-        make = BodyActor if view == "body" else SkeletonActor
-        self.actors = [(make(self.plotter, style.RECONSTRUCTION, name="motion"), self.positions)]
-        self.sensor_points = None
-        if sensors:
-            joints, ghost_positions = _sensors_and_ghosts(motion, sensors, ghosts)
-            for i, (name, pos) in enumerate(ghost_positions):
-                self.actors.append((make(self.plotter, style.ghost_color(name, i), opacity=0.55, name=f"ghost-{name}"), pos))
-            self.sensor_joints = joints
-            self.sensor_points = pv.PolyData(self.positions[0, joints])
-            self.plotter.add_mesh(self.sensor_points, color=style.SENSOR, point_size=16, render_points_as_spheres=True,
-                                  pickable=False, reset_camera=False)  # fmt: skip
-        self._centre = np.array([*self.positions[:, 0, :2].mean(axis=0), FOCUS_HEIGHT])
-
-    def draw(self, f: int) -> np.ndarray:
-        from widgets.viewport.camera import place_camera
-
-        for actor, pos in self.actors:
-            actor.update(pos[f])
-        if self.sensor_points is not None:
-            self.sensor_points.points = self.positions[f, self.sensor_joints]
-        if self.camera == "follow":
-            place_camera(self.plotter.camera, "home", np.array([*self.positions[f, 0, :2], FOCUS_HEIGHT]))
-        else:
-            place_camera(self.plotter.camera, self.camera, self._centre)
-        self.plotter.render()
-        return self.plotter.screenshot(return_img=True)[..., :3]
-
-    def close(self) -> None:
-        self.plotter.close()
+    def lap(self, name: str) -> None:
+        if self.timings is not None:
+            now = time.perf_counter()
+            self.timings[name] = self.timings.get(name, 0.0) + now - self.last
+            self.last = now
 
 
-def _sensors_and_ghosts(motion, preset: str, ghosts: tuple[str, ...]):
-    from engine import skeleton as sk
-    from engine.studio.clips import sensor_presets
-    from engine.studio.export import reconstruct_clip
+def _start_ghosts(motion, options: RenderOptions):
+    """The ghosts' solve, started at once (its process loads while the scene is built)."""
+    if not options.ghosts:
+        return None
+    if not options.sensors:
+        raise UserError("--ghosts needs --sensors (the trackers they reconstruct from)")
+    from app.render_scene import preset_sensors
+    from engine.methods import available_methods
+    from engine.studio.ghost_solve import GhostSolves
 
-    presets = sensor_presets()
-    if preset not in presets:
-        raise UserError(f"--sensors: unknown preset {preset!r}; known: {', '.join(sorted(presets))}")
-    sensors = presets[preset]
-    joints = [sk.JOINT_INDEX[s.joint] for s in sensors]
-    out = [(name, reconstruct_clip(motion, sensors, (), {}, name).positions()) for name in ghosts]
-    return joints, out
+    sensors = preset_sensors(options.sensors)
+    unknown = [g for g in options.ghosts if g not in available_methods()]
+    if unknown:
+        raise UserError(f"--ghosts: unknown method {unknown[0]!r}; known: {', '.join(available_methods())}")
+    return GhostSolves(motion, sensors, options.ghosts)
 
 
 def main(argv: list[str] | None = None) -> int:

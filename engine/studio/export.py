@@ -11,7 +11,7 @@ complete or absent, and a cancelled job writes nothing.
 from __future__ import annotations
 
 import copy
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -45,20 +45,30 @@ def reconstruct_clip(motion: Motion, sensors: tuple[Sensor, ...], constraints: t
     UserError, FloatingPointError
         Settings the method rejects; a non-finite pose.
     """
+    rots, roots = [], []
+    for f, (rot, root) in enumerate(solve_frames(motion, sensors, constraints, settings, method_name, factory)):
+        rots.append(rot)
+        roots.append(root)
+        if progress is not None and progress(f):
+            break
+    return Motion(np.array(rots), np.array(roots), motion.skeleton, motion.fps, f"{motion.name} ({method_name})")
+
+
+def solve_frames(motion: Motion, sensors: tuple[Sensor, ...], constraints: tuple[Constraint, ...],
+                 settings: Mapping[str, Any], method_name: str,
+                 factory: Callable[[str], Method] | None = None) -> Iterator[tuple[np.ndarray, np.ndarray]]:  # fmt: skip
+    """Solve ``motion``'s frames one by one with a fresh method (as :func:`reconstruct_clip`),
+    yielding each frame's local rotations ``(J, 4)`` and root position ``(3,)`` as soon as
+    it is solved (a consumer may draw frame f while f + 1 is solved)."""
     source = ClipSource(motion)
     source.set_sensors(tuple(sensors))
     constraints = copy.deepcopy(tuple(constraints))  # a separate run: its own pin captures
     method = (factory or make_method)(method_name)
     driver.start(method, motion.skeleton, motion.fps, reference=motion, settings=settings,
                  constraints=constraints, sensors=source.sensors)  # fmt: skip
-    rots, roots = [], []
     for f in range(len(motion)):
         res = driver.step(method, source.frame(f))
-        rots.append(np.asarray(res.local_rot, float))
-        roots.append(np.asarray(res.root_pos, float))
-        if progress is not None and progress(f):
-            break
-    return Motion(np.array(rots), np.array(roots), motion.skeleton, motion.fps, f"{motion.name} ({method_name})")
+        yield np.asarray(res.local_rot, float), np.asarray(res.root_pos, float)
 
 
 def write_reconstruction(path: str | Path, rec: Motion, on_rig: tuple[RawBVH, Any] | None = None,

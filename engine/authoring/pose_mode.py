@@ -12,11 +12,14 @@ offsets), and the lowest foot stands on the floor after every solve.
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field, fields
+
 import numpy as np
 import torch
 
 from engine import skeleton as sk
-from engine.authoring.character import Character, Pose
+from engine.authoring.character import PRIOR_WEIGHT, Character, Pose
+from engine.authoring.pose_metrics import centre_of_mass
 from engine.authoring.targets import JointTarget, solve_inputs
 from engine.constraints.base import Constraint
 from engine.errors import UserError
@@ -53,6 +56,65 @@ def heading_deg(rotation: np.ndarray) -> float:
     return float(np.degrees(2.0 * np.arctan2(h[3], h[0])))
 
 
+#: Foot joints that stay planted where they stand until the user drags that foot.
+PLANTED = ("lankle", "ltoe", "rankle", "rtoe")
+_FOOT_OF = {"lankle": "l", "ltoe": "l", "rankle": "r", "rtoe": "r"}
+
+
+#: Lowest pelvis height the crouch moves it to, as a share of its standing height (a deep
+#: squat; the two-bone legs cannot fold much further).
+LOWEST_ROOT = 0.45
+
+
+@dataclass
+class PoseOptions:
+    """How pose mode keeps a pose natural (``bench --pose-tasks --set name=value``).
+
+    Attributes
+    ----------
+    plant_feet : bool
+        Untargeted feet stay where they stand (ankle and toe each a target at their
+        planted place) until that foot is dragged; a dragged foot is planted where it is
+        left.
+    plant_weight : float
+        Weight of a planted foot's targets, as a user target's.
+    balance : bool
+        While both feet are planted, each solve starts with the pelvis moved horizontally
+        by ``balance_gain`` of the distance from the centre of mass to the middle of the
+        feet, so a body that leans or reaches keeps its weight over its feet (the planted
+        feet stay, the legs lean). A pelvis the user drags goes where it is dragged.
+    balance_gain : float
+        Share of the centre of mass's distance from the feet that one solve corrects.
+    balance_tolerance : float
+        Distance (metres) from the middle of the feet within which the centre of mass is
+        left where it is (well inside a standing support polygon), so a reach forward is
+        not pulled back.
+    crouch_share : float
+        Share of a dragged joint's downward distance to its target that the pelvis takes
+        at the start of each solve (the planted legs bend under it), so a low reach
+        bends the knees as well as the trunk; the pelvis stays between
+        :data:`LOWEST_ROOT` of its standing height and its standing height.
+    free_height : bool
+        Drags solve with the lowest foot on the floor (the root's height is part of the
+        pose, so reaching low bends the knees instead of folding the trunk) instead of
+        holding the root where it stands. It runs on the solver's reference path, about
+        30 times slower than the fast path that drags use otherwise: too slow for
+        interactive drags on two cores.
+    prior_weight : float
+        Pull towards the starting latent (the character's neutral pose for a new pose),
+        which keeps the parts no target constrains as they were.
+    """
+
+    plant_feet: bool = True
+    plant_weight: float = 1.0
+    balance: bool = True
+    balance_gain: float = 0.5
+    balance_tolerance: float = 0.08
+    crouch_share: float = 0.5
+    free_height: bool = False
+    prior_weight: float = PRIOR_WEIGHT
+
+
 class PoseMode:
     """A posing session (see the module doc).
 
@@ -67,25 +129,32 @@ class PoseMode:
         Where the character stands, metres.
     heading : float
         Facing, degrees about +Z.
+    options : PoseOptions or None
+        How the pose is kept natural (None: the defaults).
     """
 
     def __init__(self, vae, height: float | None = None, latent: np.ndarray | None = None,
-                 root_xy=(0.0, 0.0), heading: float = 0.0) -> None:  # fmt: skip
+                 root_xy=(0.0, 0.0), heading: float = 0.0, options: PoseOptions | None = None) -> None:  # fmt: skip
+        self.options = options or PoseOptions()
         self.character = Character(vae, height)
         self.base_latent = self.character.mean_latent() if latent is None else np.asarray(latent, np.float32)
         self.heading = float(heading)
         self.targets: dict[str, JointTarget] = {}
         self.constraints: list[Constraint] = []
         self.pose: Pose = self.character.decode(self.base_latent, self.character.grounded(root_xy, self.heading))
+        self._standing_root = float(self.pose.root_pos[2])
+        #: Where each untargeted foot joint stays (world, metres), see :class:`PoseOptions`.
+        self.planted: dict[str, np.ndarray] = {j: self.pose.positions[sk.JOINT_INDEX[j]].copy() for j in PLANTED}
 
     @classmethod
-    def from_clip_frame(cls, vae, motion: Motion, frame: int, height: float | None = None) -> "PoseMode":
+    def from_clip_frame(cls, vae, motion: Motion, frame: int, height: float | None = None,
+                        options: PoseOptions | None = None) -> "PoseMode":  # fmt: skip
         """Start from frame ``frame`` of ``motion``: its encoded latent, where it stands
         and its facing."""
         if not 0 <= frame < len(motion):
             raise UserError(f"frame {frame} is outside the clip (0-{len(motion) - 1})")
         latent = encode_frames(vae, motion, [frame])[0]
-        return cls(vae, height, latent, motion.root_pos[frame, :2], heading_deg(motion.local_rot[frame, 0]))
+        return cls(vae, height, latent, motion.root_pos[frame, :2], heading_deg(motion.local_rot[frame, 0]), options)
 
     # -- targets -------------------------------------------------------------------
     def set_target(self, joint: str, position=None, rotation=None, weight: float | None = None,
@@ -119,21 +188,66 @@ class PoseMode:
         self.targets.clear()
 
     # -- solving -------------------------------------------------------------------
+    def _inputs(self) -> tuple[list[Constraint], dict, dict]:
+        """The solve's terms: the user's targets, the planted feet that no target moves, the
+        scene's constraints; and the exact limb and rotation steps after it."""
+        targets = list(self.targets.values())
+        if self.options.plant_feet:
+            moved = {_FOOT_OF[t.joint] for t in targets if t.joint in _FOOT_OF and t.active}
+            targets += [JointTarget(j, p, weight=self.options.plant_weight) for j, p in self.planted.items()
+                        if _FOOT_OF[j] not in moved and j not in self.targets]  # fmt: skip
+        terms, reach, rotations = solve_inputs(targets)
+        return terms + list(self.constraints), reach, rotations
+
+    def _replant(self) -> None:
+        """A foot the user moves is planted where it is left."""
+        moved = {_FOOT_OF[t.joint] for t in self.targets.values() if t.joint in _FOOT_OF and t.active}
+        for j in PLANTED:
+            if _FOOT_OF[j] in moved:
+                self.planted[j] = self.pose.positions[sk.JOINT_INDEX[j]].copy()
+
+    def _where(self) -> np.ndarray:
+        """Where the root is held during the solve (3,) metres: a target on the root puts
+        it there; else, with :attr:`PoseOptions.balance` and both feet planted, it moves
+        the centre of mass towards the middle of the feet."""
+        root = self.targets.get("root")
+        if root is not None and root.active:
+            return np.asarray(root.position, float).copy()
+        where = self.pose.root_pos.copy()
+        o = self.options
+        user = [t for t in self.targets.values() if t.active and t.joint != "root" and t.joint not in _FOOT_OF]
+        if o.crouch_share > 0 and user:
+            drop = min(0.0, min(t.position[2] - self.pose.positions[t.index, 2] for t in user))
+            standing = self._standing_root
+            where[2] = float(np.clip(where[2] + o.crouch_share * drop, LOWEST_ROOT * standing, standing))
+        if o.balance and o.plant_feet and not any(t.joint in _FOOT_OF and t.active for t in self.targets.values()):
+            feet = np.mean([p[:2] for p in self.planted.values()], axis=0)
+            off = feet - centre_of_mass(self.pose.positions)[:2]
+            dist = float(np.linalg.norm(off))
+            if dist > o.balance_tolerance:
+                where[:2] += o.balance_gain * off * (1.0 - o.balance_tolerance / dist)
+        return where
+
     def solve(self, iterations: int = ITERATIONS) -> Pose:
         """One continuous solve from the current pose (a drag event)."""
-        terms, reach, rotations = solve_inputs(list(self.targets.values()))
-        c = self.character
-        ctx = c.placed(self.pose.root_pos, self.heading, prior=self.base_latent)
-        self.pose = c.solve(self.pose.latent, terms + list(self.constraints), ctx, reach, rotations,
-                            iterations=iterations, rule="sgd", step_size=STEP_SIZE)  # fmt: skip
+        terms, reach, rotations = self._inputs()
+        c, o = self.character, self.options
+        if o.free_height:
+            ctx = c.grounded(self._where()[:2], self.heading, prior=self.base_latent)
+        else:
+            ctx = c.placed(self._where(), self.heading, prior=self.base_latent)
+        self.pose = c.solve(self.pose.latent, terms, ctx, reach, rotations, iterations=iterations,
+                            prior_weight=o.prior_weight, rule="sgd", step_size=STEP_SIZE)  # fmt: skip
+        self._replant()
         return self.pose
 
     def settle(self) -> Pose:
         """An offline, grounded solve from the current pose (when a drag ends)."""
-        terms, reach, rotations = solve_inputs(list(self.targets.values()))
+        terms, reach, rotations = self._inputs()
         c = self.character
-        ctx = c.grounded(self.pose.root_pos[:2], self.heading, prior=self.base_latent)
-        self.pose = c.solve(self.pose.latent, terms + list(self.constraints), ctx, reach, rotations)
+        ctx = c.grounded(self._where()[:2], self.heading, prior=self.base_latent)
+        self.pose = c.solve(self.pose.latent, terms, ctx, reach, rotations, prior_weight=self.options.prior_weight)
+        self._replant()
         return self.pose
 
     def motion(self) -> Motion:

@@ -23,6 +23,7 @@ from the same starting pose).
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
 import time
 import typing
@@ -35,7 +36,7 @@ from engine import skeleton as sk
 from engine.authoring.character import yaw_quaternion
 from engine.authoring.ik_poser import IKPoser
 from engine.authoring.pose_metrics import PoseCheck, check_pose
-from engine.authoring.pose_mode import PoseMode
+from engine.authoring.pose_mode import PoseMode, PoseOptions
 from engine.authoring.pose_reference import ReferenceSet
 from engine.authoring.pose_task_table import EVENTS, POSERS, RELEASES, TASK_NAMES, TASKS, Task
 from engine.config import parse_typed
@@ -146,21 +147,29 @@ def goal_errors(pose, goals: list[Goal], offsets: np.ndarray) -> list[dict]:
 def split_options(items: list[str]) -> tuple[dict, dict, dict]:
     """``--set NAME=VALUE`` items as keyword arguments of ``PoseMode(...)``, of its
     ``solve()`` (``solve.NAME``) and of its ``settle()`` (``settle.NAME``), each value
-    typed by the parameter's annotation. Every keyword those take is accepted, so a new
+    typed by the parameter's annotation; a field of :class:`PoseOptions` by its own name.
+    Every keyword those take is accepted, so a new
     pose-mode option needs no change here; a name none of them takes is a
     :class:`UserError` that lists the names they take."""
     calls = {"": PoseMode.__init__, "solve.": PoseMode.solve, "settle.": PoseMode.settle}
     out: dict[str, dict] = {k: {} for k in calls}
+    option_hints = typing.get_type_hints(PoseOptions)  # its fields are set by name (``plant_feet=false``)
+    chosen: dict = {}
     for item in items:
         if "=" not in item:
             raise UserError(f"--set {item!r}: expected NAME=VALUE")
         name, raw = (x.strip() for x in item.split("=", 1))
         prefix = next((p for p in ("solve.", "settle.") if name.startswith(p)), "")
         key, hints = name[len(prefix):], _keywords(calls[prefix])
+        if not prefix and key in option_hints:
+            chosen[key] = parse_typed(name, raw, option_hints[key])
+            continue
         if key not in hints:
-            every = sorted(f"{p}{k}" for p, f in calls.items() for k in _keywords(f))
+            every = sorted([f"{p}{k}" for p, f in calls.items() for k in _keywords(f)] + list(option_hints))
             raise UserError(f"--set {name}: pose mode takes no option {key!r}; options: {', '.join(every)}")
         out[prefix][key] = parse_typed(name, raw, hints[key])
+    if chosen:
+        out[""]["options"] = dataclasses.replace(out[""].get("options") or PoseOptions(), **chosen)
     return out[""], out["solve."], out["settle."]
 
 

@@ -9,6 +9,8 @@ import pytest
 
 from engine import skeleton as sk
 from engine.authoring.pose_mode import PoseMode
+
+J = sk.JOINT_INDEX
 from engine.constraints import LookAtConstraint
 from engine.errors import UserError
 from engine.kinematics import quat_np as QN
@@ -101,3 +103,61 @@ def test_a_clip_frame_starts_the_pose_where_the_clip_stands(vae, example_clip):
     assert err(pm.pose.positions) < 0.7 * err(mean)  # the encoded pose, not the mean
     with pytest.raises(UserError, match="frame 1000000"):
         PoseMode.from_clip_frame(vae, example_clip, 10**6)
+
+
+def _drag(mode, joint, goal, events=20):
+    start = mode.pose.positions[J[joint]].copy()
+    for t in np.linspace(0.0, 1.0, events + 1)[1:]:
+        mode.set_target(joint, position=start + t * (np.asarray(goal) - start))
+        mode.solve()
+
+
+def test_planted_feet_stay_and_the_body_keeps_its_weight_over_them(vae):
+    """A hand dragged to the opposite knee: with the defaults the feet do not slide and the
+    centre of mass stays inside the feet's support polygon (the benchmark's measure);
+    without planting and balance (how pose mode solved before) the feet slide and the
+    weight leaves the feet."""
+    from engine.authoring.pose_metrics import check_pose
+    from engine.authoring.pose_mode import PoseMode, PoseOptions
+
+    def run(options):
+        mode = PoseMode(vae, options=options)
+        feet = mode.pose.positions[[J["lankle"], J["rankle"]], :2].copy()
+        goal = mode.pose.positions[J["lknee"]] + [0.0, -0.08, 0.0]
+        _drag(mode, "rwrist", goal)
+        slide = np.linalg.norm(mode.pose.positions[[J["lankle"], J["rankle"]], :2] - feet, axis=-1).max()
+        check = check_pose(mode.pose.local_rot, mode.pose.root_pos, mode.character.skeleton.offsets)
+        return slide, check.balance_margin_cm, np.linalg.norm(mode.pose.positions[J["rwrist"]] - goal)
+
+    slide, margin, err = run(PoseOptions())
+    assert slide < 0.01 and margin is not None and margin > 2.0 and err < 0.06
+    slide_before, margin_before, _ = run(PoseOptions(plant_feet=False, balance=False, crouch_share=0.0))
+    assert slide_before > 0.2 and margin_before is not None and margin_before < -10.0
+
+
+def test_dragging_the_pelvis_down_squats_on_planted_feet(vae):
+    """The pelvis goes where it is dragged (40 cm down) and the planted legs bend under it;
+    before, the root was held where it stood and the drag did nothing."""
+    from engine.authoring.pose_mode import PoseMode, PoseOptions
+
+    mode = PoseMode(vae)
+    feet = mode.pose.positions[[J["lankle"], J["rankle"]]].copy()
+    goal = mode.pose.root_pos + [0.0, 0.0, -0.4]
+    _drag(mode, "root", goal)
+    assert np.linalg.norm(mode.pose.root_pos - goal) < 0.02
+    assert np.abs(mode.pose.positions[[J["lankle"], J["rankle"]]] - feet).max() < 0.01
+    held = PoseMode(vae, options=PoseOptions(plant_feet=False, balance=False))
+    _drag(held, "root", goal)
+    assert np.linalg.norm(held.pose.root_pos - goal) > 0.3
+
+
+def test_a_dragged_foot_is_planted_where_it_is_left(vae):
+    from engine.authoring.pose_mode import PoseMode
+
+    mode = PoseMode(vae)
+    goal = mode.pose.positions[J["lankle"]] + [0.0, -0.25, 0.0]
+    _drag(mode, "lankle", goal)
+    mode.remove_target("lankle")
+    mode.solve()
+    assert np.linalg.norm(mode.planted["lankle"][:2] - goal[:2]) < 0.03
+    assert np.linalg.norm(mode.pose.positions[J["lankle"], :2] - goal[:2]) < 0.03

@@ -35,7 +35,7 @@ import numpy as np
 
 from engine.errors import BVHError, UserError
 from engine.kinematics import quaternion as Q
-from engine.motion.bvh import RawBVH
+from engine.motion.bvh import RawBVH, file_error
 from engine.validation import check_input_file
 
 #: cgspeed BVH names of the CMU/Vicon ASF bones (the BVH conversion of the same skeletons
@@ -106,9 +106,7 @@ def _lines(path: str, kind: str) -> Iterator[tuple[int, list[str]]]:
     except AsfAmcError:
         raise
     except (UserError, OSError) as exc:
-        if isinstance(exc, OSError):
-            raise AsfAmcError(path, f"cannot read {kind}: {exc.strerror or exc}") from None
-        raise AsfAmcError(path, str(exc).removeprefix(f"{path}: ")) from None
+        raise file_error(path, exc, AsfAmcError, kind) from None
 
 
 def _number(path: str, line: int, token: str, what: str) -> float:

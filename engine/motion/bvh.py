@@ -126,6 +126,14 @@ class RawBVH:
         return Q.normalize(q)
 
 
+def file_error(path: str, exc: Exception, error: type[BVHError] = BVHError, kind: str = "file") -> BVHError:
+    """The ``file:line: message`` error of a motion file that could not be opened or
+    checked (an :class:`OSError`, or the size and type checks' :class:`UserError`)."""
+    if isinstance(exc, OSError):
+        return error(path, f"cannot read {kind}: {exc.strerror or exc}")
+    return error(path, str(exc).removeprefix(f"{path}: "))
+
+
 def load_bvh(path: str | Path, max_frames: int | None = None) -> RawBVH:
     """Read and validate a BVH file.
 
@@ -158,9 +166,7 @@ def load_bvh(path: str | Path, max_frames: int | None = None) -> RawBVH:
     except BVHError:
         raise
     except (UserError, OSError) as exc:
-        if isinstance(exc, OSError):
-            raise BVHError(path, f"cannot read file: {exc.strerror or exc}") from None
-        raise BVHError(path, str(exc).removeprefix(f"{path}: ")) from None
+        raise file_error(path, exc) from None
     frames = p.data.shape[0]
     j = len(p.names)
     offsets = np.array(p.offsets, dtype=np.float64)

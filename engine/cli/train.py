@@ -23,6 +23,9 @@ def _common(p: argparse.ArgumentParser, out_default: str) -> None:
     p.add_argument("--seed", type=int, help="random seed")
     p.add_argument("--resume", action="store_true", help="continue from OUT/last.pt")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--device", choices=("auto", "cpu", "cuda"), default="auto",
+                   help="where the VAE and the predictor train (default auto: a CUDA device when torch sees one, "
+                   "else the CPU); SparsePoser and RPM train on the CPU")  # fmt: skip
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -58,7 +61,7 @@ def _train_vae(args: argparse.Namespace) -> int:
     from engine.training.vae import VAETrainConfig, train_vae
 
     cfg = load_config(VAETrainConfig, args.config, args.set, **_direct(args))
-    meta = train_vae(args.data, args.out, cfg, resume=args.resume, progress=not args.quiet)
+    meta = train_vae(args.data, args.out, cfg, resume=args.resume, progress=not args.quiet, device=args.device)
     if meta:
         print(f"{args.out}/vae.pt: {meta.get('epochs')} epochs, {meta.get('minutes')} min, "
               f"val {meta.get('val_pos_cm', float('nan')):.2f} cm / {meta.get('val_rot_deg', float('nan')):.2f} deg")
@@ -70,7 +73,8 @@ def _train_predictor(args: argparse.Namespace) -> int:
     from engine.training.predictor import PredictorTrainConfig, train_predictor
 
     cfg = load_config(PredictorTrainConfig, args.config, args.set, **_direct(args))
-    meta = train_predictor(args.data, args.vae, args.out, cfg, resume=args.resume, progress=not args.quiet)
+    meta = train_predictor(args.data, args.vae, args.out, cfg, resume=args.resume, progress=not args.quiet,
+                           device=args.device)  # fmt: skip
     if meta:
         print(f"{args.out}/predictor.pt: {meta.get('epochs')} epochs, {meta.get('minutes')} min, "
               f"val latent MSE {meta.get('val_mse', float('nan')):.4g}")

@@ -40,19 +40,45 @@ def seed_everything(seed: int) -> None:
     torch.manual_seed(seed)
 
 
-class Distributed:
-    """Process-group facts; a single process when not launched by ``torchrun``."""
+#: ``train --device`` choices: ``auto`` takes a CUDA device when torch sees one.
+DEVICES = ("auto", "cpu", "cuda")
 
-    def __init__(self) -> None:
+
+def pick_device(name: str = "auto", index: int = 0) -> torch.device:
+    """The training device for ``--device name``; ``cuda`` without a CUDA device is a
+    :class:`UserError` that says so."""
+    if name not in DEVICES:
+        raise UserError(f"--device must be one of {', '.join(DEVICES)}, got {name!r}")
+    if name == "auto":
+        name = "cuda" if torch.cuda.is_available() else "cpu"
+    if name == "cuda":
+        if not torch.cuda.is_available():
+            raise UserError("--device cuda: torch sees no CUDA device here; use --device auto or cpu")
+        return torch.device("cuda", index)
+    return torch.device("cpu")
+
+
+def on_device(batch: dict[str, torch.Tensor], device: torch.device) -> dict[str, torch.Tensor]:
+    """``batch`` with every tensor on ``device`` (the data stays in CPU memory; only each
+    step's batch moves)."""
+    return {k: v.to(device, non_blocking=True) for k, v in batch.items()}
+
+
+class Distributed:
+    """Process-group facts; a single process when not launched by ``torchrun``.
+
+    ``device`` is a :data:`DEVICES` name (each process takes the CUDA device of its local
+    rank)."""
+
+    def __init__(self, device: str = "auto") -> None:
         self.world = int(os.environ.get("WORLD_SIZE", "1"))
         self.rank = int(os.environ.get("RANK", "0"))
         self.local_rank = int(os.environ.get("LOCAL_RANK", "0"))
-        self.device = torch.device("cpu")
-        if torch.cuda.is_available():
-            self.device = torch.device("cuda", self.local_rank)
+        self.device = pick_device(device, self.local_rank)
+        if self.device.type == "cuda":
             torch.cuda.set_device(self.device)
         if self.world > 1 and not dist.is_initialized():
-            dist.init_process_group("nccl" if torch.cuda.is_available() else "gloo")
+            dist.init_process_group("nccl" if self.device.type == "cuda" else "gloo")
         if self.device.type == "cpu":
             # share the cores between processes; never raise an explicit OMP_NUM_THREADS
             cores = os.cpu_count() or 1

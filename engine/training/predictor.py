@@ -152,13 +152,16 @@ def _lr(cfg: PredictorTrainConfig, frac: float) -> float:
 
 
 def train_predictor(data_dir: Path, vae_path: Path, out_dir: Path, cfg: PredictorTrainConfig,
-                    resume: bool = False, progress: bool = True) -> dict:  # fmt: skip
-    """Train (or resume) the predictor; writes ``predictor.pt``, ``best.pt``, ``last.pt``, losses."""
+                    resume: bool = False, progress: bool = True, device: str = "auto") -> dict:  # fmt: skip
+    """Train (or resume) the predictor; writes ``predictor.pt``, ``best.pt``, ``last.pt``, losses.
+
+    ``device`` as :func:`engine.training.vae.train_vae`'s: the latents are made on the CPU,
+    each step's batch moves to the device."""
     if cfg.select not in ("val_mse", "val_rollout_mse"):
         raise UserError(f"predictor setting 'select' must be val_mse or val_rollout_mse, got {cfg.select!r}")
     if not 0.0 <= cfg.self_feed <= 1.0:
         raise UserError(f"predictor setting 'self_feed' must be within [0, 1], got {cfg.self_feed!r}")
-    ddp = Distributed()
+    ddp = Distributed(device)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     seed_everything(cfg.seed)
@@ -186,7 +189,8 @@ def train_predictor(data_dir: Path, vae_path: Path, out_dir: Path, cfg: Predicto
         gen.set_state(ck["gen"])
     total = cfg.epochs * cfg.steps_per_epoch
     t0 = time.monotonic()
-    meta = {"vae": str(vae_path), "vae_data_hash": vae_meta.get("data_hash"), "train_anchors": len(a_tr)}
+    meta = {"vae": str(vae_path), "vae_data_hash": vae_meta.get("data_hash"), "train_anchors": len(a_tr),
+            "device": str(ddp.device)}  # fmt: skip
     for epoch in range(start, cfg.epochs):
         model.train()
         run = 0.0
@@ -199,7 +203,7 @@ def train_predictor(data_dir: Path, vae_path: Path, out_dir: Path, cfg: Predicto
                 g["lr"] = _lr(cfg, frac)
             pick = torch.randint(len(a_tr), (cfg.batch_size * ddp.world,), generator=gen)
             t = a_tr[pick[ddp.rank :: ddp.world]]
-            past, cond, tokens, target = make_batch(t, z_tr, None, c_tr, noisy, flags, cfg, gen)
+            past, cond, tokens, target = (x.to(ddp.device) for x in make_batch(t, z_tr, None, c_tr, noisy, flags, cfg, gen))
             memory = model.encode_past(past, cond)
             if cfg.self_feed > 0:
                 tokens = self_fed(model, tokens, memory, cfg.self_feed, gen)
@@ -250,6 +254,7 @@ def self_fed(model: TemporalPredictor, tokens: torch.Tensor, memory: torch.Tenso
         own = model.decode_steps(tokens, memory.detach())[:, :-1]  # predictions of tokens 1..T-1
     pick = torch.rand(tokens.shape[:2], generator=gen) < p
     pick[:, 0] = False
+    pick = pick.to(tokens.device)
     shifted = torch.cat((tokens[:, :1], own), dim=1)
     return torch.where(pick[..., None], shifted, tokens)
 
@@ -259,7 +264,8 @@ def validate(model: TemporalPredictor, z, cond, anchors_, cfg, limit: int = 2048
     """Teacher-forced MSE and the MSE of a free autoregressive rollout over Wf steps."""
     model.eval()
     idx = anchors_[torch.linspace(0, len(anchors_) - 1, min(limit, len(anchors_))).long()]
-    past, c, tokens, target = make_batch(idx, z, None, cond, None, None, cfg, None)
+    dev = next(model.parameters()).device
+    past, c, tokens, target = (x.to(dev) for x in make_batch(idx, z, None, cond, None, None, cfg, None))
     tf = (((model.decode_steps(tokens, model.encode_past(past, c)) - target) / model.z_std) ** 2).mean()
     roll = model.predict(past, c, tokens[:, 0], cfg.future)
     ro = (((roll - target) / model.z_std) ** 2).mean()

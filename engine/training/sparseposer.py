@@ -109,7 +109,7 @@ def train_sparseposer(data_dir: Path, out_dir: Path, cfg: SparsePoserTrainConfig
     """Train (or resume) SparsePoser; writes ``sparseposer.pt``, ``best.pt``, ``last.pt``, losses."""
     from engine.training.data import read_manifest
 
-    ddp = Distributed()
+    ddp = Distributed("cpu")  # its data loop keeps every tensor in CPU memory
     seed_everything(cfg.seed)
     gen = torch.Generator().manual_seed(cfg.seed)
     manifest = read_manifest(data_dir)

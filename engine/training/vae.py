@@ -23,7 +23,8 @@ from engine.kinematics import quaternion as Q
 from engine.kinematics.features import encoder_input, root_space_fk
 from engine.models.loading import load_checkpoint, load_vae
 from engine.models.vae import PoseVAE, VAEConfig, pose_distance
-from engine.training.common import CurveLog, Distributed, config_dict, save_checkpoint, seed_everything, start_from
+from engine.training.common import (CurveLog, Distributed, config_dict, on_device, save_checkpoint, seed_everything,
+                                    start_from)  # fmt: skip
 from engine.training.data import PoseData, load_split, read_manifest
 
 FORMAT_VERSION = 1
@@ -158,15 +159,16 @@ def reconstruction_error(vae: PoseVAE, data: PoseData, max_frames: int | None = 
     """Encode (mean) -> decode every frame; mean joint position error (cm, root space) and
     mean local joint rotation error (degrees, joints 1-21) against the ground truth."""
     vae.eval()
+    dev = next(vae.parameters()).device
     n = len(data) if max_frames is None else min(len(data), max_frames)
     pos_err, rot_err, count = 0.0, 0.0, 0
     for s in range(0, n, batch):
         idx = torch.arange(s, min(n, s + batch))
-        mu, _ = vae.encode(data.dq[idx])
+        mu, _ = vae.encode(data.dq[idx].to(dev))
         rot, _ = vae.decode(mu)
-        pos, _ = root_space_fk(rot, data.offsets[idx])
-        pos_err += torch.linalg.vector_norm(pos - data.pos[idx], dim=-1).mean(-1).sum().item()
-        rot_err += Q.angle(rot[:, 1:], data.rot[idx, 1:]).mean(-1).sum().item()
+        pos, _ = root_space_fk(rot, data.offsets[idx].to(dev))
+        pos_err += torch.linalg.vector_norm(pos - data.pos[idx].to(dev), dim=-1).mean(-1).sum().item()
+        rot_err += Q.angle(rot[:, 1:], data.rot[idx, 1:].to(dev)).mean(-1).sum().item()
         count += idx.numel()
     return {"val_pos_cm": 100.0 * pos_err / count, "val_rot_deg": math.degrees(rot_err / count)}
 
@@ -204,11 +206,13 @@ def weights_payload(vae: PoseVAE, cfg: VAETrainConfig, meta: dict) -> dict:
     }
 
 
-def train_vae(data_dir: Path, out_dir: Path, cfg: VAETrainConfig, resume: bool = False, progress: bool = True) -> dict:
+def train_vae(data_dir: Path, out_dir: Path, cfg: VAETrainConfig, resume: bool = False, progress: bool = True,
+              device: str = "auto") -> dict:  # fmt: skip
     """Train (or resume) a VAE; writes ``last.pt``, ``best.pt``, ``vae.pt``, ``losses.csv/png``.
 
-    Returns the final metadata (epochs, minutes, validation errors)."""
-    ddp = Distributed()
+    ``device``: a :data:`engine.training.common.DEVICES` name (``auto``: CUDA when torch
+    sees it). Returns the final metadata (epochs, minutes, validation errors, device)."""
+    ddp = Distributed(device)
     out_dir = Path(out_dir)
     if ddp.main:
         out_dir.mkdir(parents=True, exist_ok=True)
@@ -239,7 +243,8 @@ def train_vae(data_dir: Path, out_dir: Path, cfg: VAETrainConfig, resume: bool =
         log = CurveLog(out_dir, ck["curve"])
         torch.set_rng_state(ck["rng"])
     t0 = time.monotonic()
-    meta: dict = {"data_hash": manifest.get("hash"), "train_frames": len(train), "val_frames": len(val)}
+    meta: dict = {"data_hash": manifest.get("hash"), "train_frames": len(train), "val_frames": len(val),
+                  "device": str(ddp.device)}  # fmt: skip
     for epoch in range(start_epoch, cfg.epochs):
         vae.train()
         gen = torch.Generator().manual_seed(cfg.seed * 1000 + epoch)
@@ -256,7 +261,7 @@ def train_vae(data_dir: Path, out_dir: Path, cfg: VAETrainConfig, resume: bool =
             batch = batch_of(train, idx, cfg.limb_mix, gen, pairs)
             if cfg.bone_scale > 0:
                 batch = scale_bones(batch, cfg.bone_scale, gen)
-            losses = objective(batch)
+            losses = objective(on_device(batch, ddp.device))
             opt.zero_grad(set_to_none=True)
             losses["total"].backward()
             opt.step()

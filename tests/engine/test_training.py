@@ -199,3 +199,26 @@ def test_limb_mix_swaps_one_limb_and_recomputes_the_features(tiny_data):
     assert torch.allclose(mixed["pos"], pos) and not torch.allclose(mixed["pos"], plain["pos"])
     assert torch.allclose(mixed["dq"], encoder_input(mixed["rot"], mixed["disp"], mixed["offsets"]))
     assert torch.equal(batch_of(data, idx, 0.0, None, pairs)["rot"], plain["rot"])
+
+
+def test_the_device_auto_is_the_cpu_here_with_the_same_weights_and_cuda_is_refused(tiny_data, tmp_path):
+    """``--device auto`` trains where ``cpu`` does on a machine without CUDA, to the same
+    weights; ``cuda`` there is a clear error, before any work."""
+    import pytest
+    import torch
+
+    from engine.errors import UserError
+    from engine.training.common import pick_device
+    from engine.training.vae import state_hash, train_vae
+    from engine.models.loading import load_vae
+
+    if torch.cuda.is_available():
+        pytest.skip("a CUDA device is present: auto would take it")
+    a = train_vae(tiny_data, tmp_path / "auto", _cfg(epochs=1, seed=5), progress=False, device="auto")
+    c = train_vae(tiny_data, tmp_path / "cpu", _cfg(epochs=1, seed=5), progress=False, device="cpu")
+    assert a["device"] == c["device"] == "cpu"
+    assert state_hash(load_vae(tmp_path / "auto" / "vae.pt")[0]) == state_hash(load_vae(tmp_path / "cpu" / "vae.pt")[0])
+    with pytest.raises(UserError, match="--device cuda: torch sees no CUDA device"):
+        pick_device("cuda")
+    with pytest.raises(UserError, match="--device must be one of auto, cpu, cuda"):
+        pick_device("tpu")

@@ -130,12 +130,13 @@ class PoseWindow(QMainWindow):
     def _state(self) -> tuple:
         a = self.scene.animation
         return (copy.deepcopy(self.mode.targets), copy.deepcopy(self.scene.keys), (a.frames, a.fps, a.interpolation),
-                self.mode.pose, self.constraints.state())  # fmt: skip
+                self.mode.pose, self.constraints.state(), copy.deepcopy(self.mode.planted))  # fmt: skip
 
     def _restore(self, state: tuple) -> None:
-        targets, keys, (frames, fps, interpolation), pose, constraints = state
+        targets, keys, (frames, fps, interpolation), pose, constraints, planted = state
         self.constraints.restore(constraints)
         self.mode.targets, self.scene.keys = copy.deepcopy(targets), copy.deepcopy(keys)
+        self.mode.planted = copy.deepcopy(planted)
         a = self.scene.animation
         a.frames, a.fps, a.interpolation = frames, fps, interpolation
         self.mode.pose = pose

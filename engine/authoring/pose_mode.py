@@ -206,15 +206,18 @@ class PoseMode:
             if _FOOT_OF[j] in moved:
                 self.planted[j] = self.pose.positions[sk.JOINT_INDEX[j]].copy()
 
-    def _where(self) -> np.ndarray:
+    def _where(self, adjust: bool = True) -> np.ndarray:
         """Where the root is held during the solve (3,) metres: a target on the root puts
-        it there; else, with :attr:`PoseOptions.balance` and both feet planted, it moves
-        the centre of mass towards the middle of the feet."""
+        it there; else, with ``adjust``, the crouch and balance steps move it (see
+        :class:`PoseOptions`), which a solve without latent steps does not do, so that it
+        only puts the limbs on their targets."""
         root = self.targets.get("root")
         if root is not None and root.active:
             return np.asarray(root.position, float).copy()
         where = self.pose.root_pos.copy()
         o = self.options
+        if not adjust:
+            return where
         user = [t for t in self.targets.values() if t.active and t.joint != "root" and t.joint not in _FOOT_OF]
         if o.crouch_share > 0 and user:
             drop = min(0.0, min(t.position[2] - self.pose.positions[t.index, 2] for t in user))
@@ -235,7 +238,7 @@ class PoseMode:
         if o.free_height:
             ctx = c.grounded(self._where()[:2], self.heading, prior=self.base_latent)
         else:
-            ctx = c.placed(self._where(), self.heading, prior=self.base_latent)
+            ctx = c.placed(self._where(iterations > 0), self.heading, prior=self.base_latent)
         self.pose = c.solve(self.pose.latent, terms, ctx, reach, rotations, iterations=iterations,
                             prior_weight=o.prior_weight, rule="sgd", step_size=STEP_SIZE)  # fmt: skip
         self._replant()

@@ -21,12 +21,14 @@ from typing import Any
 
 import numpy as np
 from PyQt6.QtCore import Qt, QTimer
-from PyQt6.QtGui import QAction, QCloseEvent, QKeySequence, QUndoStack
+from PyQt6.QtGui import QCloseEvent, QUndoStack
 from PyQt6.QtWidgets import (
     QApplication, QDockWidget, QFileDialog, QMainWindow, QMessageBox, QProgressDialog, QWidget,
 )  # fmt: skip
 
+from app.camera_keys import CameraKeys
 from app.pose_constraints import PoseConstraints
+from app.pose_menus import build_pose_menus
 from app.undo import StateCommand
 from engine import skeleton as sk
 from engine.authoring.bake import bake
@@ -92,7 +94,9 @@ class PoseWindow(QMainWindow):
             lambda v: self._edit("in-betweens", lambda: setattr(self.scene.animation, "interpolation", v)))
         self.keys.previewRequested.connect(self.preview)
         self._dock("Keys", self.keys, Qt.DockWidgetArea.BottomDockWidgetArea)
-        self._menus()
+        build_pose_menus(self)
+        self.camera_keys = CameraKeys(self.viewport, self)
+        QApplication.instance().installEventFilter(self.camera_keys)
         self._timer = QTimer(self)
         self._timer.timeout.connect(self._next_preview_frame)
         self._preview_frame = 0
@@ -104,26 +108,6 @@ class PoseWindow(QMainWindow):
         dock.setWidget(widget)
         dock.setFeatures(QDockWidget.DockWidgetFeature.NoDockWidgetFeatures)
         self.addDockWidget(area, dock)
-
-    def _menus(self) -> None:
-        file_menu = self.menuBar().addMenu("&File")
-        for text, slot, key in (("&Save scene...", self.save_dialog, QKeySequence.StandardKey.Save),
-                                ("Export &BVH...", self.export_bvh_dialog, None),
-                                ("Export &video...", self.export_video_dialog, None),
-                                ("&Close", self.close, QKeySequence.StandardKey.Close)):  # fmt: skip
-            act = QAction(text, self)
-            if key is not None:
-                act.setShortcut(QKeySequence(key))
-            act.triggered.connect(lambda _=False, s=slot: s())
-            file_menu.addAction(act)
-        edit = self.menuBar().addMenu("&Edit")
-        undo, redo = self.undo.createUndoAction(self, "&Undo"), self.undo.createRedoAction(self, "&Redo")
-        undo.setShortcut(QKeySequence.StandardKey.Undo)
-        redo.setShortcuts([QKeySequence("Ctrl+Shift+Z"), QKeySequence("Ctrl+Y")])
-        edit.addActions([undo, redo])
-        settle = QAction("S&ettle pose", self)
-        settle.triggered.connect(lambda _=False: self.settle())
-        edit.addAction(settle)
 
     # -- undoable state ------------------------------------------------------------
     def _state(self) -> tuple:
@@ -216,7 +200,15 @@ class PoseWindow(QMainWindow):
         self._edit(f"clear target {joint}", lambda: self.mode.remove_target(joint), solve=True)
 
     def clear_all(self) -> None:
-        self._edit("clear all targets", self.mode.clear_targets, solve=True)
+        """Remove every target and put the character back in its starting pose, where
+        it stands now (one undo step)."""
+
+        def change() -> None:
+            m = self.mode
+            m.clear_targets()
+            m.pose = m.character.decode(m.base_latent, m.character.grounded(m.pose.root_pos[:2], m.heading))
+
+        self._edit("clear all targets", change)
 
     def settle(self) -> None:
         """An offline solve of the current targets (one undo step)."""
@@ -346,8 +338,18 @@ class PoseWindow(QMainWindow):
         return FileActions.grab_window(shim).save(str(path))  # type: ignore[arg-type]
 
     # -- drawing and closing -------------------------------------------------------
+    def hips(self) -> np.ndarray:
+        """The shown pose's hips (3,) metres: what the camera presets look at."""
+        return self.mode.pose.positions[0]
+
+    def set_display(self, mode: str) -> None:
+        """Draw the character as a ``stick`` figure or a shaded ``body``."""
+        self.viewport.set_display(mode)
+        self._show_positions(self.mode.pose.positions)
+
     def _show_positions(self, positions: np.ndarray) -> None:
-        self.viewport.reconstruction.update(positions)
+        vp = self.viewport
+        (vp.body if vp.display == "body" else vp.reconstruction).update(positions)
         self.viewport.joints.positions = positions
         self.viewport.plotter.render()
 
@@ -382,6 +384,7 @@ class PoseWindow(QMainWindow):
                     return
                 self.save(path)
         self._timer.stop()
+        QApplication.instance().removeEventFilter(self.camera_keys)
         if not getattr(self.viewport.plotter, "_closed", False):  # a second close would free VTK twice
             self.viewport.close()
         event.accept()

@@ -9,41 +9,15 @@ from PyQt6.QtWidgets import QMessageBox
 
 from engine import skeleton as sk
 from engine.cli.main import main as cli
+from tests.app.gui_helpers import close_now
 
 pytestmark = pytest.mark.gui
 LW = sk.JOINT_INDEX["lwrist"]
 
 
 @pytest.fixture
-def window(qtbot, vae, monkeypatch):
-    from app.pose_window import PoseWindow
-    from engine.authoring.pose_mode import PoseMode
-
-    monkeypatch.setattr(QMessageBox, "question", lambda *a, **k: QMessageBox.StandardButton.Discard)
-    w = PoseWindow(vae, PoseMode(vae, 1.75))
-    w.resize(1000, 700)
-    w.show()
-    yield w
-    close_now(w)
-
-
-def close_now(w) -> None:
-    """Close and delete ``w`` now, as the studio fixture does: a VTK view deleted later,
-    among other tests' events, crashes."""
-    from PyQt6.QtCore import QEvent
-    from PyQt6.QtWidgets import QApplication
-
-    w.undo.setClean()
-    w.close()
-    w.deleteLater()
-    QApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete.value)
-
-
-@pytest.fixture(scope="session")
-def vae():
-    from engine.models import load_default_models
-
-    return load_default_models().vae
+def window(pose_window):
+    return pose_window
 
 
 def state(w):

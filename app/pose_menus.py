@@ -1,0 +1,56 @@
+"""The pose window's menus: File, Edit (undo, redo, settle, clear), View (display, camera)
+and Help, built with the studio's helpers so the same keys do the same things in both.
+
+Every entry is a QAction owned by the window (the undo stack's actions too: a QAction
+that only a local variable holds is deleted by PyQt and drops out of its menu), kept on
+``w.actions_by_name`` for the tests and the help.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from PyQt6.QtCore import Qt
+from PyQt6.QtGui import QActionGroup, QKeySequence
+from PyQt6.QtWidgets import QMainWindow
+
+from app.menus import CAMERAS, action, show_help, toggle
+
+
+def build_pose_menus(w: QMainWindow) -> None:
+    """Fill the pose window ``w``'s menu bar (see the module doc)."""
+    named: dict[str, Any] = {}
+    file_menu = w.menuBar().addMenu("&File")
+    named["save"] = action(w, file_menu, "&Save scene...", w.save_dialog, QKeySequence.StandardKey.Save)
+    named["export_bvh"] = action(w, file_menu, "Export &BVH...", w.export_bvh_dialog, "Ctrl+B")
+    named["export_video"] = action(w, file_menu, "Export &video...", w.export_video_dialog)
+    file_menu.addSeparator()
+    named["close"] = action(w, file_menu, "&Close", w.close, QKeySequence.StandardKey.Close)
+    edit = w.menuBar().addMenu("&Edit")
+    undo = w.undo.createUndoAction(w, "&Undo")
+    undo.setShortcut(QKeySequence.StandardKey.Undo)
+    redo = w.undo.createRedoAction(w, "&Redo")
+    redo.setShortcuts([QKeySequence("Ctrl+Shift+Z"), QKeySequence("Ctrl+Y")])
+    for act in (undo, redo):
+        act.setShortcutContext(Qt.ShortcutContext.WindowShortcut)
+        edit.addAction(act)
+    named["undo"], named["redo"] = undo, redo
+    edit.addSeparator()
+    named["settle"] = action(w, edit, "S&ettle pose", w.settle, "Ctrl+Return")
+    named["clear_all"] = action(w, edit, "&Clear all targets (reset pose)", w.clear_all, "Ctrl+Shift+Delete")
+    view = w.menuBar().addMenu("&View")
+    vp = w.viewport
+    display = view.addMenu("&Draw character as")
+    group = QActionGroup(w)
+    for mode, label, key in (("stick", "&Stick figure", "S"), ("body", "Shaded &body", "B")):
+        act = toggle(w, display, label, vp.display == mode, lambda on, m=mode: on and w.set_display(m), key)
+        group.addAction(act)
+        named[f"display-{mode}"] = act
+    camera = view.addMenu("&Camera")
+    for preset, label, key in CAMERAS:
+        named[f"camera-{preset}"] = action(w, camera, label, lambda p=preset: vp.set_camera(p, w.hips()), key)
+    named["follow"] = toggle(w, camera, "F&ollow character", vp.follow, lambda v: setattr(vp, "follow", v), "F")
+    help_menu = w.menuBar().addMenu("&Help")
+    named["help"] = action(w, help_menu, "&Keyboard and mouse...", lambda: show_help(w),
+                           QKeySequence.StandardKey.HelpContents)  # fmt: skip
+    w.actions_by_name = named

@@ -141,3 +141,63 @@ def test_clear_all_puts_the_starting_pose_back(pose_window):
     assert w.mode.targets == {} and np.allclose(w.mode.pose.positions, start, atol=1e-6)
     w.undo.undo()
     assert np.allclose(w.mode.pose.positions, folded) and "lwrist" in w.mode.targets
+
+
+#: Keys VTK's interactor style or pyvista bind by default: stereo, wireframe, surface,
+#: camera reset, fly-to, joystick, picking modes, isometric view, zoom, point size, quit.
+VTK_KEYS = (Qt.Key.Key_3, Qt.Key.Key_W, Qt.Key.Key_S, Qt.Key.Key_R, Qt.Key.Key_F, Qt.Key.Key_J, Qt.Key.Key_P,
+            Qt.Key.Key_B, Qt.Key.Key_C, Qt.Key.Key_V, Qt.Key.Key_Up, Qt.Key.Key_Plus, Qt.Key.Key_U, Qt.Key.Key_E,
+            Qt.Key.Key_Q)  # fmt: skip
+
+
+def representations(plotter) -> list[int]:
+    actors = plotter.renderer.GetActors()
+    actors.InitTraversal()
+    return [actors.GetNextActor().GetProperty().GetRepresentation() for _ in range(actors.GetNumberOfItems())]
+
+
+def check_vtk_keys_do_nothing(view) -> None:
+    """Keys sent straight to the VTK widget (no window shortcut takes them: the window is
+    not active) change nothing and close nothing."""
+    p = view.plotter
+    p.render()
+    styles = representations(p)
+    camera = (tuple(p.camera.position), tuple(p.camera.focal_point), p.camera.view_angle)
+    for key in VTK_KEYS:
+        mods = Qt.KeyboardModifier.ShiftModifier if key == Qt.Key.Key_C else Qt.KeyboardModifier.NoModifier
+        QTest.keyClick(p, key, mods)
+        QApplication.processEvents()
+    assert not p._closed
+    assert not p.ren_win.GetStereoRender()
+    assert representations(p) == styles  # w/s switch every actor to wireframe/surface
+    assert (tuple(p.camera.position), tuple(p.camera.focal_point), p.camera.view_angle) == camera
+
+
+def test_vtk_default_keys_do_nothing_in_the_studio_view(studio):
+    check_vtk_keys_do_nothing(studio.viewport)
+
+
+def test_vtk_default_keys_do_nothing_in_the_pose_view(pose_window):
+    check_vtk_keys_do_nothing(pose_window.viewport)
+
+
+def test_pose_window_camera_keys_and_display(pose_window, qtbot):
+    w = pose_window
+    _activate(w, qtbot)
+    cam = w.viewport.plotter.camera
+    QTest.keyClick(w.viewport, Qt.Key.Key_7)
+    offset = np.subtract(cam.position, cam.focal_point)
+    assert w.viewport.camera_preset == "top" and offset[2] > 0.9 * np.linalg.norm(offset)
+    QTest.keyClick(w.viewport, Qt.Key.Key_1)
+    offset = np.subtract(cam.position, cam.focal_point)
+    assert w.viewport.camera_preset == "front" and offset[1] < -0.9 * np.linalg.norm(offset)
+    QTest.keyClick(w.viewport, Qt.Key.Key_3)
+    assert w.viewport.camera_preset == "side" and not w.viewport.plotter.ren_win.GetStereoRender()
+    QTest.keyClick(w.viewport, Qt.Key.Key_Home)
+    assert w.viewport.camera_preset == "home"
+    QTest.keyClick(w.viewport, Qt.Key.Key_F)
+    assert not w.viewport.follow
+    QTest.keyClick(w.viewport, Qt.Key.Key_B)
+    assert w.viewport.display == "body" and w.viewport.body.visible and not w.viewport.reconstruction.visible
+    QTest.keyClick(w.viewport, Qt.Key.Key_S)
+    assert w.viewport.display == "stick" and w.viewport.reconstruction.visible

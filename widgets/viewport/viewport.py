@@ -68,8 +68,10 @@ class Viewport(QWidget):
         layout.setContentsMargins(0, 0, 0, 0)
         self.plotter = make_plotter(self)
         # pyvistaqt accepts any dropped file and tries to read it as a mesh; take the
-        # drops here instead so a .bvh dropped on the view opens like one on the window
+        # drops here instead so a .bvh dropped on the view opens like one on the window;
+        # the filter also keeps keys from VTK and pyvista (see eventFilter)
         self.plotter.installEventFilter(self)
+        self.plotter.iren.clear_key_event_callbacks()
         layout.addWidget(self.plotter)
         p = self.plotter
         p.set_background(style.BACKGROUND_TOP)
@@ -198,7 +200,14 @@ class Viewport(QWidget):
         return QImage(img.data, w, h, 3 * w, QImage.Format.Format_RGB888).copy()
 
     def eventFilter(self, obj: QObject | None, event: QEvent | None) -> bool:
-        """Take file drags and drops from the VTK widget (see ``__init__``)."""
+        """Take file drags and drops from the VTK widget (see ``__init__``), and keep
+        every key from it: VTK's interactor style and pyvista bind plain letters to
+        stereo (3), wireframe (w), a camera reset (r), picking modes (b, p, C) and
+        closing the render window (q, e), none of which the menus show, and the
+        window's shortcuts have already taken the keys they bind."""
+        if event is not None and event.type() in (QEvent.Type.KeyPress, QEvent.Type.KeyRelease):
+            event.ignore()
+            return True
         if event is not None and event.type() in (QEvent.Type.DragEnter, QEvent.Type.DragMove, QEvent.Type.Drop):
             paths = [u.toLocalFile() for u in event.mimeData().urls() if u.isLocalFile()]
             if paths:

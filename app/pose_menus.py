@@ -14,7 +14,7 @@ from PyQt6.QtCore import Qt
 from PyQt6.QtGui import QActionGroup, QKeySequence
 from PyQt6.QtWidgets import QMainWindow
 
-from app.menus import CAMERAS, action, show_help, toggle
+from app.menu_parts import CAMERAS, action, show_help, toggle
 
 
 def build_pose_menus(w: QMainWindow) -> None:

@@ -58,7 +58,7 @@ def test_camera_presets_and_display_mode_from_the_keyboard(studio, qtbot):
 
 
 def test_help_lists_every_shortcut_of_the_menus(studio, qtbot):
-    from app.menus import show_help
+    from app.menu_parts import show_help
 
     dialog = show_help(studio)
     try:

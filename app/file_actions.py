@@ -22,6 +22,7 @@ from app.export import ReconstructionExport
 from engine.atomic import atomic_path, write_text
 from engine.errors import OutputError, RigError, UserError
 from engine.input_files import read_json
+from engine.studio.scenes import scene_from_dict
 
 if TYPE_CHECKING:
     from engine.studio.session import Session
@@ -215,16 +216,24 @@ class FileActions:
             path, _ = QFileDialog.getOpenFileName(self.w, "Load scene", "", "Studio scene (*.json)")
             if not path:
                 return False
+        stack = self.w.undo.stack
         try:
             scene = read_json(path, "scene")  # size, UTF-8, depth; errors name the file and line
             clip = scene.get("clip") if isinstance(scene, dict) else None
             if clip and (self.session.path is None or Path(clip) != self.session.path):
                 self.session.open(clip, self.rig_map_of(clip))
-            self.session.apply_scene(scene, str(path))
+            scene_from_dict(scene, str(path))  # a scene that fails changes nothing, leaves no undo step
+            stack.beginMacro(f"Load scene {Path(path).name}")  # one undo step puts back all it replaced
+            try:
+                done = self.session.apply_scene(scene, str(path))
+            finally:
+                stack.endMacro()
         except (OSError, ValueError, UserError) as exc:
-            self.show_error("Cannot load scene", f"{path}: {exc}")
+            text = str(exc)
+            self.show_error("Cannot load scene", text if str(path) in text else f"{path}: {text}")
             return False
-        self.w.undo.stack.setClean()  # the scene as loaded is what is saved
+        stack.setClean()  # the scene as loaded is what is saved
+        self.w.statusBar().showMessage(f"Loaded {Path(path).name}: {done}", 15000)
         return True
 
     # -- screenshots ------------------------------------------------------------------

@@ -23,7 +23,8 @@ import numpy as np
 from PyQt6.QtCore import Qt, QTimer
 from PyQt6.QtGui import QCloseEvent, QUndoStack
 from PyQt6.QtWidgets import (
-    QApplication, QDockWidget, QFileDialog, QMainWindow, QMessageBox, QProgressDialog, QWidget,
+    QApplication, QDockWidget, QDoubleSpinBox, QFileDialog, QLabel, QMainWindow, QMessageBox, QProgressDialog,
+    QWidget,
 )  # fmt: skip
 
 from app.camera_keys import CameraKeys
@@ -94,6 +95,14 @@ class PoseWindow(QMainWindow):
             lambda v: self._edit("in-betweens", lambda: setattr(self.scene.animation, "interpolation", v)))
         self.keys.previewRequested.connect(self.preview)
         self._dock("Keys", self.keys, Qt.DockWidgetArea.BottomDockWidgetArea)
+        body = self.addToolBar("Body")
+        body.setMovable(False)
+        body.addWidget(QLabel(" Body: drag the hips to move it; facing "))
+        self.facing = QDoubleSpinBox(minimum=-180.0, maximum=180.0, decimals=1, singleStep=15.0, suffix=" deg",
+                                     wrapping=True)  # fmt: skip
+        self.facing.setToolTip("Where the whole body faces, degrees about the vertical (0: towards -Y, the front view)")
+        self.facing.valueChanged.connect(self.turn_body)
+        body.addWidget(self.facing)
         build_pose_menus(self)
         self.camera_keys = CameraKeys(self.viewport, self)
         QApplication.instance().installEventFilter(self.camera_keys)
@@ -113,10 +122,10 @@ class PoseWindow(QMainWindow):
     def _state(self) -> tuple:
         a = self.scene.animation
         return (copy.deepcopy(self.mode.targets), copy.deepcopy(self.scene.keys), (a.frames, a.fps, a.interpolation),
-                self.mode.pose, self.constraints.state())  # fmt: skip
+                self.mode.pose, self.constraints.state(), self.mode.heading)  # fmt: skip
 
     def _restore(self, state: tuple) -> None:
-        targets, keys, (frames, fps, interpolation), pose, constraints = state
+        targets, keys, (frames, fps, interpolation), pose, constraints, self.mode.heading = state
         self.constraints.restore(constraints)
         self.mode.targets, self.scene.keys = copy.deepcopy(targets), copy.deepcopy(keys)
         a = self.scene.animation
@@ -149,9 +158,39 @@ class PoseWindow(QMainWindow):
             self.turn_joint(joint, position)
             return
         self._turn = None
+        if joint == "root":
+            self.move_body(np.asarray(position, float) - self.mode.pose.root_pos)
+            return
         key = ("target", joint, "position")
         self._edit(f"move target {joint}", lambda: self.mode.set_target(joint, np.asarray(position, float)), key,
                    solve=True)  # fmt: skip
+
+    def move_body(self, delta: np.ndarray) -> None:
+        """Root motion: translate the whole body horizontally by ``delta (3,)`` metres
+        (its height is the floor's business), then solve the targets from there."""
+        d = np.array([delta[0], delta[1], 0.0])
+
+        def change() -> None:
+            self.mode.pose = self.mode.pose.moved(d)
+            if self.mode.targets:
+                self.mode.solve()
+
+        self._edit("move body", change, ("body", "root", "position"))
+
+    def turn_body(self, heading: float) -> None:
+        """Root motion: face ``heading`` degrees about +Z (0 faces -Y), the whole body
+        turned about its root, then the targets solved from there."""
+        turn = float(heading) - self.mode.heading
+        if abs(turn) < 1e-9:
+            return
+
+        def change() -> None:
+            self.mode.heading = float(heading)
+            self.mode.pose = self.mode.pose.turned(turn)
+            if self.mode.targets:
+                self.mode.solve()
+
+        self._edit("turn body", change, ("body", "root", "heading"))
 
     def turn_joint(self, joint: str, position: np.ndarray) -> None:
         """Alt + drag: give ``joint`` a rotation target, its rotation at the start of the
@@ -256,6 +295,7 @@ class PoseWindow(QMainWindow):
         if key is not None:
             self.mode.targets = copy.deepcopy(key.targets)
             if key.latent is not None:
+                self.mode.heading = key.heading
                 ctx = self.mode.character.grounded(key.root, key.heading)
                 self.mode.pose = self.mode.character.decode(key.latent, ctx)
                 self.mode.solve(0)  # the exact limb steps onto the key's targets
@@ -365,6 +405,9 @@ class PoseWindow(QMainWindow):
         a = self.scene.animation
         self.keys.set_state(a.frames, a.fps, tuple(k.frame for k in self.scene.keys), self.frame, a.interpolation)
         self.constraints.refresh()
+        self.facing.blockSignals(True)
+        self.facing.setValue((self.mode.heading + 180.0) % 360.0 - 180.0)
+        self.facing.blockSignals(False)
         self._show_positions(self.mode.pose.positions)
 
     def closeEvent(self, event: QCloseEvent | None) -> None:  # noqa: N802 (Qt's name)

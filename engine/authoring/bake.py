@@ -140,7 +140,9 @@ def _in_between(character: Character, scene: AuthoringScene, keys: list[Key], po
                 f: int, scene_frame: float, scheme: str, smooth: SmoothConstraint, done: list[Pose]) -> Pose:  # fmt: skip
     z = interpolate(times, [p.latent for p in poses], f, scheme).astype(np.float32)
     root = interpolate(times, [p.root_pos for p in poses], f, scheme)
-    heading = float(interpolate(times, [np.array([k.heading]) for k in keys], f, scheme)[0])
+    # unwrapped, so keys facing 170 and -170 degrees turn 20 degrees between them, not 340
+    headings = np.degrees(np.unwrap(np.radians([k.heading for k in keys])))
+    heading = float(interpolate(times, [np.array([h]) for h in headings], f, scheme)[0])
     targets = interpolated_targets(keys, times, f, scheme)
     _, reach, rotations = solve_inputs(targets)
     aims = []

@@ -171,3 +171,40 @@ def test_the_screenshot_shows_the_window_with_the_character(window, tmp_path):
     vp = window.viewport.mapTo(window, window.viewport.rect().center())
     colours = {img.pixelColor(x, y).name() for x in range(vp.x() - 60, vp.x() + 60, 3) for y in range(0, img.height(), 3)}
     assert any(int(c[1:3], 16) > 180 and int(c[5:7], 16) < 90 for c in colours)  # the orange figure is drawn
+
+
+def test_dragging_the_hips_moves_the_whole_body_live_and_keys_carry_root_and_facing(window, qtbot):
+    from PyQt6.QtCore import Qt
+    from PyQt6.QtTest import QTest
+
+    from engine.authoring.pose_mode import heading_deg
+    from tests.app.gui_helpers import mouse_drag, pixel_of
+
+    w = window
+    w.add_key(0)
+    w.viewport.set_camera("front", w.hips())
+    w.viewport.plotter.render()
+    before = w.mode.pose.positions.copy()
+    seen = []
+    w.viewport.jointDragged.connect(lambda j, p: seen.append(w.mode.pose.root_pos.copy()))
+    x, y = pixel_of(w.viewport, before[0])
+    mouse_drag(w.viewport, (x, y), (x + 120, y), steps=8)
+    moved = w.mode.pose.positions - before
+    assert moved[0, 0] > 0.2 and np.allclose(moved, moved[0], atol=1e-9) and abs(moved[0, 2]) < 1e-9
+    assert len(seen) == 8 and np.all(np.diff([r[0] for r in seen]) > 0)  # the body follows every move
+    assert w.mode.targets == {} and w.undo.undoText() == "move body"
+    w.facing.selectAll()
+    QTest.keyClicks(w.facing, "90")
+    QTest.keyClick(w.facing, Qt.Key.Key_Return)
+    assert w.mode.heading == 90.0
+    w.add_key(20)
+    w.keys.length.setValue(21)
+    motion = w.bake_scene().motion
+    assert np.allclose(motion.root_pos[20, :2], w.mode.pose.root_pos[:2], atol=1e-6)
+    assert np.allclose(motion.root_pos[0, :2], before[0, :2], atol=1e-6)
+    assert 0.3 < (motion.root_pos[10, 0] - before[0, 0]) / moved[0, 0] < 0.7  # the in-between travels
+    turn = heading_deg(motion.local_rot[20, 0]) - heading_deg(motion.local_rot[0, 0])
+    assert turn == pytest.approx(90.0, abs=1.0)
+    for _ in range(3):  # the length, the key, the turn (typed 9, 90: one step)
+        w.undo.undo()
+    assert w.mode.heading == 0.0 and w.facing.value() == 0.0

@@ -23,8 +23,8 @@ import numpy as np
 from PyQt6.QtCore import Qt, QTimer
 from PyQt6.QtGui import QCloseEvent, QUndoStack
 from PyQt6.QtWidgets import (
-    QApplication, QDockWidget, QDoubleSpinBox, QFileDialog, QLabel, QMainWindow, QMessageBox, QProgressDialog,
-    QWidget,
+    QApplication, QDockWidget, QDoubleSpinBox, QFileDialog, QFrame, QLabel, QMainWindow, QMessageBox,
+    QProgressDialog, QScrollArea, QWidget,
 )  # fmt: skip
 
 from app.camera_keys import CameraKeys
@@ -51,6 +51,8 @@ from widgets.viewport.viewport import Viewport
 TURN_START_M = 0.02
 #: A pause longer than this (seconds) between Alt-drag moves starts a new turn.
 TURN_GESTURE_S = 0.5
+#: Width of the side panels (targets, constraints), pixels: wide enough for a target row.
+SIDE_PANEL_PX = 330
 
 
 class PoseWindow(QMainWindow):
@@ -114,6 +116,15 @@ class PoseWindow(QMainWindow):
     # -- layout --------------------------------------------------------------------
     def _dock(self, title: str, widget: QWidget, area: Qt.DockWidgetArea) -> None:
         dock = QDockWidget(title, self)
+        if area == Qt.DockWidgetArea.RightDockWidgetArea:
+            # a side panel scrolls instead of widening: rows and long joint names that
+            # appear while posing would otherwise push the 3D view aside between drags
+            scroll = QScrollArea()
+            scroll.setWidgetResizable(True)
+            scroll.setFrameShape(QFrame.Shape.NoFrame)
+            scroll.setMinimumWidth(SIDE_PANEL_PX)
+            scroll.setWidget(widget)
+            widget = scroll
         dock.setWidget(widget)
         dock.setFeatures(QDockWidget.DockWidgetFeature.NoDockWidgetFeatures)
         self.addDockWidget(area, dock)

@@ -208,3 +208,23 @@ def test_dragging_the_hips_moves_the_whole_body_live_and_keys_carry_root_and_fac
     for _ in range(3):  # the length, the key, the turn (typed 9, 90: one step)
         w.undo.undo()
     assert w.mode.heading == 0.0 and w.facing.value() == 0.0
+
+
+def test_the_3d_view_keeps_its_place_while_targets_are_added(window, qtbot):
+    """The Targets dock grew with its first rows and long names, shifting the view 20-90 px
+    between drags so the next grab missed."""
+    from tests.app.gui_helpers import mouse_drag, pixel_of
+
+    w = window
+    qtbot.wait(50)
+    w.viewport.plotter.render()
+    place = w.viewport.geometry()
+    for joint in ("lclavicle", "rshoulder", "upperneck"):
+        x, y = pixel_of(w.viewport, w.mode.pose.positions[sk.JOINT_INDEX[joint]])
+        mouse_drag(w.viewport, (x, y), (x + 10, y + 10), steps=2)
+        assert joint in w.mode.targets
+        qtbot.wait(20)
+        assert w.viewport.geometry() == place, joint
+    w.targets.rows["lclavicle"]["turn"].setChecked(True)  # the longer "(+rotation)" label
+    qtbot.wait(20)
+    assert w.viewport.geometry() == place

@@ -1,5 +1,5 @@
-"""The pose window's menus: File, Edit (undo, redo, settle, clear), View (display, camera)
-and Help, built with the studio's helpers so the same keys do the same things in both.
+"""The pose window's menus: File, Edit (undo, redo, settle, clear), Keys (play, step,
+add and delete keys), View (display, camera) and Help, built with the studio's helpers so the same keys do the same things in both.
 
 Every entry is a QAction owned by the window (the undo stack's actions too: a QAction
 that only a local variable holds is deleted by PyQt and drops out of its menu), kept on
@@ -21,9 +21,10 @@ def build_pose_menus(w: QMainWindow) -> None:
     """Fill the pose window ``w``'s menu bar (see the module doc)."""
     named: dict[str, Any] = {}
     file_menu = w.menuBar().addMenu("&File")
-    named["save"] = action(w, file_menu, "&Save scene...", w.save_dialog, QKeySequence.StandardKey.Save)
-    named["export_bvh"] = action(w, file_menu, "Export &BVH...", w.export_bvh_dialog, "Ctrl+B")
-    named["export_video"] = action(w, file_menu, "Export &video...", w.export_video_dialog)
+    f = w.files
+    named["save"] = action(w, file_menu, "&Save scene...", f.save_dialog, QKeySequence.StandardKey.Save)
+    named["export_bvh"] = action(w, file_menu, "Export &BVH...", f.export_bvh_dialog, "Ctrl+B")
+    named["export_video"] = action(w, file_menu, "Export &video...", f.export_video_dialog)
     file_menu.addSeparator()
     named["close"] = action(w, file_menu, "&Close", w.close, QKeySequence.StandardKey.Close)
     edit = w.menuBar().addMenu("&Edit")
@@ -38,6 +39,17 @@ def build_pose_menus(w: QMainWindow) -> None:
     edit.addSeparator()
     named["settle"] = action(w, edit, "S&ettle pose", w.settle, "Ctrl+Return")
     named["clear_all"] = action(w, edit, "&Clear all targets (reset pose)", w.clear_all, "Ctrl+Shift+Delete")
+    keys = w.menuBar().addMenu("&Keys")
+    named["play"] = action(w, keys, "&Play / stop", lambda: w.keys.previewRequested.emit(), "Space")
+    named["next_frame"] = action(w, keys, "&Next frame", lambda: w.step(1), "Right")
+    named["previous_frame"] = action(w, keys, "P&revious frame", lambda: w.step(-1), "Left")
+    named["next_key"] = action(w, keys, "Next &key", lambda: w.step_key(1), "Ctrl+Right")
+    named["previous_key"] = action(w, keys, "Previous k&ey", lambda: w.step_key(-1), "Ctrl+Left")
+    named["add_key"] = action(w, keys, "&Add key at the current frame", lambda: w.add_key(w.frame), "K")
+    named["delete_key"] = action(w, keys, "&Delete the key at the current frame", lambda: w.delete_key(w.frame),
+                                 "Shift+K")  # fmt: skip
+    named["loop"] = toggle(w, keys, "&Loop playing", False, w.keys.loop.setChecked, "L")
+    w.keys.loop.toggled.connect(named["loop"].setChecked)
     view = w.menuBar().addMenu("&View")
     vp = w.viewport
     display = view.addMenu("&Draw character as")

@@ -16,27 +16,25 @@ from __future__ import annotations
 
 import copy
 import time
-from pathlib import Path
 from typing import Any
 
 import numpy as np
-from PyQt6.QtCore import Qt, QTimer
+from PyQt6.QtCore import Qt
 from PyQt6.QtGui import QCloseEvent, QUndoStack
 from PyQt6.QtWidgets import (
-    QApplication, QDockWidget, QDoubleSpinBox, QFileDialog, QFrame, QLabel, QMainWindow, QMessageBox,
-    QProgressDialog, QScrollArea, QWidget,
+    QApplication, QDockWidget, QDoubleSpinBox, QFrame, QLabel, QMainWindow, QMessageBox, QScrollArea, QWidget,
 )  # fmt: skip
 
 from app.camera_keys import CameraKeys
 from app.pose_constraints import PoseConstraints
+from app.pose_files import PoseFiles
 from app.pose_menus import build_pose_menus
+from app.pose_timeline import KeyPlayback
 from app.undo import StateCommand
 from engine import skeleton as sk
-from engine.authoring.bake import bake
-from engine.authoring.document import AuthoringScene, save_authoring
+from engine.authoring.document import AuthoringScene
 from engine.authoring.keys import Animation, Key
 from engine.authoring.pose_mode import PoseMode
-from engine.motion.bvh import save_motion_bvh
 from engine.errors import UserError
 from engine.kinematics import quat_np as QN
 from engine.kinematics import quaternion as Q
@@ -63,9 +61,8 @@ class PoseWindow(QMainWindow):
         self.setWindowTitle("DragPoser studio: pose and keys")
         self.vae, self.mode = vae, mode
         self.scene = AuthoringScene(animation=Animation(), height=mode.character.height)
-        self.frame, self.path, self.dirty = 0, None, False
+        self.frame, self.dirty = 0, False
         self._turn: list | None = None  # joint, start direction, start rotation, last time
-        self.baked = None
         self.undo = QUndoStack(self)
         self.undo.cleanChanged.connect(lambda clean: setattr(self, "dirty", not clean))
         self.viewport = Viewport(self)
@@ -95,7 +92,7 @@ class PoseWindow(QMainWindow):
         self.keys.fpsChanged.connect(lambda f: self._edit("rate", lambda: setattr(self.scene.animation, "fps", f)))
         self.keys.interpolationChanged.connect(
             lambda v: self._edit("in-betweens", lambda: setattr(self.scene.animation, "interpolation", v)))
-        self.keys.previewRequested.connect(self.preview)
+        self.keys.previewRequested.connect(lambda: self._guard("Play", self.playback.toggle))
         self._dock("Keys", self.keys, Qt.DockWidgetArea.BottomDockWidgetArea)
         body = self.addToolBar("Body")
         body.setMovable(False)
@@ -105,12 +102,11 @@ class PoseWindow(QMainWindow):
         self.facing.setToolTip("Where the whole body faces, degrees about the vertical (0: towards -Y, the front view)")
         self.facing.valueChanged.connect(self.turn_body)
         body.addWidget(self.facing)
+        self.playback = KeyPlayback(self)
+        self.files = PoseFiles(self)
         build_pose_menus(self)
         self.camera_keys = CameraKeys(self.viewport, self)
         QApplication.instance().installEventFilter(self.camera_keys)
-        self._timer = QTimer(self)
-        self._timer.timeout.connect(self._next_preview_frame)
-        self._preview_frame = 0
         self.refresh()
 
     # -- layout --------------------------------------------------------------------
@@ -142,12 +138,12 @@ class PoseWindow(QMainWindow):
         a = self.scene.animation
         a.frames, a.fps, a.interpolation = frames, fps, interpolation
         self.mode.pose = pose
-        self.baked = None
+        self.playback.invalidate()
         self.refresh()
 
     def _edit(self, text: str, change, key: tuple | None = None, solve: bool = False) -> None:
         """Apply ``change()`` as one undo step (merging drags of the same ``key``)."""
-        self._timer.stop()
+        self.playback.stop()
         before = self._state()
         try:
             change()
@@ -157,9 +153,16 @@ class PoseWindow(QMainWindow):
             self._restore(before)
             QMessageBox.warning(self, "Pose", str(exc))
             return
-        self.baked = None
+        self.playback.invalidate()
         self.undo.push(StateCommand(text, self._restore, before, self._state(), key))
         self.refresh()
+
+    def _guard(self, title: str, action) -> None:
+        """Run ``action()``; a UserError becomes a message box titled ``title``."""
+        try:
+            action()
+        except UserError as exc:
+            QMessageBox.information(self, title, str(exc))
 
     # -- targets -------------------------------------------------------------------
     def drag_joint(self, joint: str, position: np.ndarray) -> None:
@@ -298,11 +301,30 @@ class PoseWindow(QMainWindow):
         self._edit(f"move key {frame} -> {to}", change)
         self.go_to(to)
 
+    def step(self, by: int) -> None:
+        """Go ``by`` frames on (or back), within the animation."""
+        self.go_to(max(0, min(self.scene.animation.frames - 1, self.frame + by)))
+
+    def step_key(self, by: int) -> None:
+        """Go to the next (``by`` > 0) or previous key, if there is one."""
+        frames = [k.frame for k in self.scene.keys if (k.frame - self.frame) * by > 0]
+        if frames:
+            self.go_to(min(frames) if by > 0 else max(frames))
+
     def go_to(self, frame: int) -> None:
-        """Make ``frame`` current; on a key, pose the character as that key."""
-        self._timer.stop()
+        """Make ``frame`` current: on a key, pose the character as that key; between
+        keys, as the baked in-between (:mod:`app.pose_timeline`); while the bake plays,
+        go on playing from there."""
+        if self.playback.playing:
+            self.playback.seek(frame)
+            return
         self.frame = int(frame)
         key = self._key_at(self.frame)
+        if key is None and self.scene.keys:
+            try:
+                self.playback.pose_between(self.frame)
+            except UserError as exc:
+                QMessageBox.warning(self, "Keys", str(exc))
         if key is not None:
             self.mode.targets = copy.deepcopy(key.targets)
             if key.latent is not None:
@@ -312,82 +334,6 @@ class PoseWindow(QMainWindow):
                 self.mode.solve(0)  # the exact limb steps onto the key's targets
         self.refresh()
 
-    # -- bake, preview, export -----------------------------------------------------
-    def bake_scene(self):
-        """The keys baked (cached until the next edit)."""
-        if self.baked is None:
-            if not self.scene.keys:
-                raise UserError("add at least one key first")
-            self.baked = bake(self.scene, self.vae)
-        return self.baked
-
-    def preview(self) -> None:
-        """Play the baked keys in the view, once."""
-        try:
-            self.bake_scene()
-        except UserError as exc:
-            QMessageBox.information(self, "Preview", str(exc))
-            return
-        self._preview_frame = 0
-        self._timer.start(int(1000 / self.scene.animation.fps))
-
-    def _next_preview_frame(self) -> None:
-        positions = self.baked.motion.positions()
-        if self._preview_frame >= len(positions):
-            self._timer.stop()
-            self.refresh()
-            return
-        self._show_positions(positions[self._preview_frame])
-        self.keys.set_state(self.scene.animation.frames, self.scene.animation.fps,
-                            tuple(k.frame for k in self.scene.keys), self._preview_frame)  # fmt: skip
-        self._preview_frame += 1
-
-    def save(self, path: str | Path) -> None:
-        save_authoring(path, self.scene)
-        self.path = Path(path)
-        self.undo.setClean()
-
-    def export_bvh(self, path: str | Path) -> None:
-        save_motion_bvh(path, self.bake_scene().motion)
-
-    def export_video(self, path: str | Path, size: tuple[int, int] = (960, 540)) -> None:
-        from app.render import render_video
-
-        motion = self.bake_scene().motion
-        dialog = QProgressDialog("Rendering video...", "", 0, len(motion), self)
-        dialog.setCancelButton(None)
-        dialog.setWindowModality(Qt.WindowModality.WindowModal)
-        try:
-            render_video(motion, Path(path), size, motion.fps, progress=lambda f: dialog.setValue(f + 1))
-        finally:
-            dialog.close()
-
-    def _file_dialog(self, title: str, pattern: str, action) -> None:
-        path, _ = QFileDialog.getSaveFileName(self, title, "", pattern)
-        if path:
-            try:
-                action(path)
-            except (UserError, OSError) as exc:
-                QMessageBox.warning(self, title, str(exc))
-
-    def save_dialog(self) -> None:
-        self._file_dialog("Save scene", "Scenes (*.json)", self.save)
-
-    def export_bvh_dialog(self) -> None:
-        self._file_dialog("Export BVH", "BVH (*.bvh)", self.export_bvh)
-
-    def export_video_dialog(self) -> None:
-        self._file_dialog("Export video", "MP4 video (*.mp4)", self.export_video)
-
-    def screenshot(self, path: str | Path) -> bool:
-        """Save the window, 3D view included, as a PNG (the studio's compositing)."""
-        from types import SimpleNamespace
-
-        from app.file_actions import FileActions
-
-        shim = SimpleNamespace(w=self, viewport=self.viewport)  # what grab_window reads
-        return FileActions.grab_window(shim).save(str(path))  # type: ignore[arg-type]
-
     # -- drawing and closing -------------------------------------------------------
     def hips(self) -> np.ndarray:
         """The shown pose's hips (3,) metres: what the camera presets look at."""
@@ -396,9 +342,10 @@ class PoseWindow(QMainWindow):
     def set_display(self, mode: str) -> None:
         """Draw the character as a ``stick`` figure or a shaded ``body``."""
         self.viewport.set_display(mode)
-        self._show_positions(self.mode.pose.positions)
+        self.show_positions(self.mode.pose.positions)
 
-    def _show_positions(self, positions: np.ndarray) -> None:
+    def show_positions(self, positions: np.ndarray) -> None:
+        """Draw the character at ``positions (22, 3)`` metres (a pose or a played frame)."""
         vp = self.viewport
         (vp.body if vp.display == "body" else vp.reconstruction).update(positions)
         self.viewport.joints.positions = positions
@@ -419,7 +366,7 @@ class PoseWindow(QMainWindow):
         self.facing.blockSignals(True)
         self.facing.setValue((self.mode.heading + 180.0) % 360.0 - 180.0)
         self.facing.blockSignals(False)
-        self._show_positions(self.mode.pose.positions)
+        self.show_positions(self.mode.pose.positions)
 
     def closeEvent(self, event: QCloseEvent | None) -> None:  # noqa: N802 (Qt's name)
         if event is None:
@@ -432,12 +379,12 @@ class PoseWindow(QMainWindow):
                 event.ignore()
                 return
             if answer == buttons.Save:
-                path, _ = QFileDialog.getSaveFileName(self, "Save scene", "", "Scenes (*.json)")
+                path = self.files.ask_path("Save scene", "Scenes (*.json)", ".json")
                 if not path:
                     event.ignore()
                     return
-                self.save(path)
-        self._timer.stop()
+                self.files.save(path)
+        self.playback.timer.stop()
         QApplication.instance().removeEventFilter(self.camera_keys)
         if not getattr(self.viewport.plotter, "_closed", False):  # a second close would free VTK twice
             self.viewport.close()

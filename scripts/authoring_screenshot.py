@@ -35,7 +35,7 @@ w.go_to(40)
 w.viewport.set_camera("home", w.mode.pose.root_pos)
 for _ in range(5):
     app.processEvents()
-ok = w.screenshot(sys.argv[1] if len(sys.argv) > 1 else "authoring.png")
+ok = w.files.screenshot(sys.argv[1] if len(sys.argv) > 1 else "authoring.png")
 w.undo.setClean()
 w.close()
 sys.exit(0 if ok else 1)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from PyQt6.QtWidgets import QMessageBox
+from PyQt6.QtWidgets import QApplication, QMessageBox
 
 from engine import skeleton as sk
 from engine.cli.main import main as cli
@@ -113,12 +113,12 @@ def test_the_window_exports_what_bake_writes_from_its_saved_scene(window, tmp_pa
     w.drag_joint("lwrist", start + [0.1, -0.1, 0.35])
     w.add_key(20)
     w.keys.length.setValue(21)
-    w.save(tmp_path / "s.json")
+    w.files.save(tmp_path / "s.json")
     assert not w.dirty
-    w.export_bvh(tmp_path / "studio.bvh")
+    w.files.export_bvh(tmp_path / "studio.bvh")
     assert cli(["bake", str(tmp_path / "s.json"), "--out", str(tmp_path / "cli.bvh"), "--no-progress"]) == 0
     assert (tmp_path / "cli.bvh").read_bytes() == (tmp_path / "studio.bvh").read_bytes()
-    w.export_video(tmp_path / "v.mp4", (128, 96))
+    w.files.export_video(tmp_path / "v.mp4", (128, 96))
     import imageio_ffmpeg
 
     frames = imageio_ffmpeg.read_frames(str(tmp_path / "v.mp4"))
@@ -136,9 +136,9 @@ def test_preview_plays_the_bake_and_going_to_a_key_poses_it(window, qtbot):
     assert list(w.mode.targets) == ["lwrist"]
     assert np.linalg.norm(w.mode.pose.positions[LW] - (start + [0, -0.1, 0.3])) < 1e-6
     w.keys.length.setValue(15)
-    w.preview()
-    qtbot.waitUntil(lambda: not w._timer.isActive(), timeout=10000)
-    assert w.baked is not None and len(w.baked.motion) == 15
+    w.playback.toggle()
+    qtbot.waitUntil(lambda: not w.playback.timer.isActive(), timeout=10000)
+    assert w.playback.baked is not None and len(w.playback.baked.motion) == 15
 
 
 def test_closing_with_unsaved_edits_asks_and_cancel_keeps_the_window(window, monkeypatch):
@@ -165,7 +165,7 @@ def test_the_studio_file_menu_opens_a_pose_window_on_the_clip_frame(studio):
 def test_the_screenshot_shows_the_window_with_the_character(window, tmp_path):
     from PyQt6.QtGui import QImage
 
-    assert window.screenshot(tmp_path / "s.png")
+    assert window.files.screenshot(tmp_path / "s.png")
     img = QImage(str(tmp_path / "s.png"))
     assert img.width() >= window.width() - 2 and img.height() >= window.height() - 2
     vp = window.viewport.mapTo(window, window.viewport.rect().center())
@@ -199,7 +199,7 @@ def test_dragging_the_hips_moves_the_whole_body_live_and_keys_carry_root_and_fac
     assert w.mode.heading == 90.0
     w.add_key(20)
     w.keys.length.setValue(21)
-    motion = w.bake_scene().motion
+    motion = w.playback.baked_scene().motion
     assert np.allclose(motion.root_pos[20, :2], w.mode.pose.root_pos[:2], atol=1e-6)
     assert np.allclose(motion.root_pos[0, :2], before[0, :2], atol=1e-6)
     assert 0.3 < (motion.root_pos[10, 0] - before[0, 0]) / moved[0, 0] < 0.7  # the in-between travels
@@ -228,3 +228,45 @@ def test_the_3d_view_keeps_its_place_while_targets_are_added(window, qtbot):
     w.targets.rows["lclavicle"]["turn"].setChecked(True)  # the longer "(+rotation)" label
     qtbot.wait(20)
     assert w.viewport.geometry() == place
+
+
+def test_scrubbing_between_keys_shows_the_in_between_and_a_key_dragged_moves(window, qtbot):
+    from PyQt6.QtCore import Qt
+    from PyQt6.QtTest import QTest
+
+    from engine.kinematics.fk import fk_positions
+    from tests.widgets.test_authoring_widgets import drag_on
+
+    w = window
+    start = w.mode.pose.positions[LW].copy()
+    w.drag_joint("lwrist", start + [0.0, -0.1, 0.1])
+    w.add_key(0)
+    w.drag_joint("lwrist", start + [0.1, -0.2, 0.5])
+    w.add_key(20)
+    w.keys.length.setValue(31)
+    s = w.keys.strip
+    drag_on(s, s.x_of(4), s.x_of(10), steps=3)  # scrub from frame 4 to 10
+    motion = w.playback.baked.motion
+    shown = fk_positions(motion.local_rot[10], motion.root_pos[10], motion.skeleton.offsets)
+    assert w.frame == 10 and np.allclose(w.mode.pose.positions, shown)
+    assert np.allclose(w.viewport.joints.positions, shown) and w.keys.label.text().endswith("(in-between)")
+    assert 0.1 < np.linalg.norm(shown[LW] - start) < 0.5  # neither key's wrist: on its way
+    assert list(w.mode.targets) == ["lwrist"]  # the targets interpolated there
+    w.add_key(10)  # keying the in-between keeps the motion
+    assert np.abs(w.playback.baked_scene().motion.positions()[10] - shown).max() < 0.02
+    w.undo.undo()
+    drag_on(s, s.x_of(20), s.x_of(26))  # the key at 20 dragged to 26
+    assert [k.frame for k in w.scene.keys] == [0, 26] and w.undo.undoText() == "move key 20 -> 26"
+    w.activateWindow()
+    w.windowHandle().requestActivate()
+    qtbot.waitUntil(lambda: QApplication.activeWindow() is w)
+    w.go_to(0)
+    w.keys.loop.setChecked(True)
+    w.keys.fps.setValue(120.0)
+    seen = []
+    w.keys.strip.update = lambda *a, f=w.keys.strip: seen.append(f.current)  # every frame shown
+    QTest.keyClick(w.viewport, Qt.Key.Key_Space)
+    assert w.playback.playing and w.keys.preview.text() == "Stop"
+    qtbot.waitUntil(lambda: len(seen) > 40, timeout=10000)
+    QTest.keyClick(w.viewport, Qt.Key.Key_Space)
+    assert not w.playback.playing and 30 in seen and seen.index(0, 1) > seen.index(30)  # looped

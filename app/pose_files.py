@@ -1,0 +1,94 @@
+"""The pose window's files: save the scene, export the bake as BVH or MP4, screenshots.
+
+Every dialog starts in the folder of the last file the window wrote (else the user's
+home) with a name (``pose.json``, ``pose.bvh``, ``pose.mp4``, or the saved scene's name
+with the export's suffix); a finished export says so in the status bar with its path.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from PyQt6.QtCore import Qt
+from PyQt6.QtWidgets import QFileDialog, QMessageBox, QProgressDialog
+
+from engine.authoring.document import save_authoring
+from engine.errors import UserError
+from engine.motion.bvh import save_motion_bvh
+
+#: How long the status bar shows that a file was written, milliseconds.
+DONE_MS = 10000
+
+
+class PoseFiles:
+    """Files of the pose window ``w`` (its ``scene``, ``undo``, ``playback``)."""
+
+    def __init__(self, w: Any) -> None:
+        self.w = w
+        self.path: Path | None = None  # the scene as last saved
+        self.folder = Path.home()
+
+    def suggested(self, suffix: str) -> str:
+        """Where a dialog for a ``suffix`` file starts (see the module doc)."""
+        stem = self.path.stem if self.path is not None else "pose"
+        return str(self.folder / f"{stem}{suffix}")
+
+    def _wrote(self, path: str | Path, what: str) -> None:
+        self.folder = Path(path).resolve().parent
+        self.w.statusBar().showMessage(f"{what} written to {path}", DONE_MS)
+
+    def save(self, path: str | Path) -> None:
+        save_authoring(path, self.w.scene)
+        self.path = Path(path)
+        self.w.undo.setClean()
+        self._wrote(path, "Scene")
+
+    def export_bvh(self, path: str | Path) -> None:
+        save_motion_bvh(path, self.w.playback.baked_scene().motion)
+        self._wrote(path, "BVH")
+
+    def export_video(self, path: str | Path, size: tuple[int, int] = (960, 540)) -> None:
+        from app.render import render_video
+
+        motion = self.w.playback.baked_scene().motion
+        dialog = QProgressDialog("Rendering video...", "", 0, len(motion), self.w)
+        dialog.setCancelButton(None)
+        dialog.setWindowModality(Qt.WindowModality.WindowModal)
+        try:
+            render_video(motion, Path(path), size, motion.fps, progress=lambda f: dialog.setValue(f + 1))
+        finally:
+            dialog.close()
+        self._wrote(path, f"Video ({len(motion)} frames at {motion.fps:g} fps)")
+
+    def ask_path(self, title: str, pattern: str, suffix: str) -> str:
+        """A path from a save dialog ("" when cancelled)."""
+        path, _ = QFileDialog.getSaveFileName(self.w, title, self.suggested(suffix), pattern)
+        return path
+
+    def _dialog(self, title: str, pattern: str, suffix: str, action: Callable[[str], None]) -> None:
+        path = self.ask_path(title, pattern, suffix)
+        if path:
+            try:
+                action(path)
+            except (UserError, OSError) as exc:
+                QMessageBox.warning(self.w, title, str(exc))
+
+    def save_dialog(self) -> None:
+        self._dialog("Save scene", "Scenes (*.json)", ".json", self.save)
+
+    def export_bvh_dialog(self) -> None:
+        self._dialog("Export BVH", "BVH (*.bvh)", ".bvh", self.export_bvh)
+
+    def export_video_dialog(self) -> None:
+        self._dialog("Export video", "MP4 video (*.mp4)", ".mp4", self.export_video)
+
+    def screenshot(self, path: str | Path) -> bool:
+        """Save the window, 3D view included, as a PNG (the studio's compositing)."""
+        from types import SimpleNamespace
+
+        from app.file_actions import FileActions
+
+        shim = SimpleNamespace(w=self.w, viewport=self.w.viewport)  # what grab_window reads
+        return FileActions.grab_window(shim).save(str(path))  # type: ignore[arg-type]

@@ -39,6 +39,7 @@ def build_pose_menus(w: QMainWindow) -> None:
     edit.addSeparator()
     named["settle"] = action(w, edit, "S&ettle pose", w.settle, "Ctrl+Return")
     named["clear_all"] = action(w, edit, "&Clear all targets (reset pose)", w.clear_all, "Ctrl+Shift+Delete")
+    named["deselect"] = action(w, edit, "&Hide the rotation rings", w.deselect, "Escape")
     keys = w.menuBar().addMenu("&Keys")
     named["play"] = action(w, keys, "&Play / stop", lambda: w.keys.previewRequested.emit(), "Space")
     named["next_frame"] = action(w, keys, "&Next frame", lambda: w.step(1), "Right")

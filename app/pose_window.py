@@ -2,14 +2,16 @@
 
 The window holds an :class:`engine.authoring.pose_mode.PoseMode` and the animation being
 authored (an :class:`engine.authoring.document.AuthoringScene`). A drag on a joint
-creates a target there and moves it; a drag on a target's sphere moves it; every
-move solves the pose again (the continuous solve, on the GUI thread: a few milliseconds
-with targets only). The target list enables, weights and clears targets; the key strip
-adds the current pose as a key at the current frame (its latent and targets), moves and
-deletes keys and sets the length and rate; Preview bakes the keys and plays them. The
-Constraints dock adds any constraint kind to the pose (:mod:`app.pose_constraints`).
-Every edit (targets, keys, length, rate) is one undo step (Ctrl+Z / Ctrl+Shift+Z);
-closing with unsaved edits asks first. Export writes the bake as BVH or MP4.
+creates a target there and moves it and selects the joint (its rotation rings show: a
+ring dragged turns it about that world axis); a drag on a target's sphere moves it; a
+drag on the hips moves the whole body and their ring turns it (root motion). Every move
+solves the pose again (the continuous solve, on the GUI thread: a few milliseconds with
+targets only). The target list enables, weights and clears targets; the key timeline
+(:mod:`app.pose_timeline`) adds the current pose as a key at the current frame (its
+latent, targets, place and facing), drags and deletes keys, scrubs through the baked
+in-betweens and plays them. The Constraints dock adds any constraint kind to the pose
+(:mod:`app.pose_constraints`). Every edit is one undo step (Ctrl+Z / Ctrl+Shift+Z);
+closing with unsaved edits asks first. Files: :mod:`app.pose_files`.
 """
 
 from __future__ import annotations
@@ -68,6 +70,9 @@ class PoseWindow(QMainWindow):
         self.viewport = Viewport(self)
         self.viewport.ground_truth.update(None)
         self.setCentralWidget(self.viewport)
+        self.selected: str | None = None  # the joint whose rotation rings are shown
+        self._ring_start: tuple | None = None  # the turned joint's world rotation (or facing) at the press
+        self.viewport.ringTurned.connect(self.turn_by_ring)
         self.viewport.jointDragged.connect(self.drag_joint)
         self.viewport.targetDragged.connect(self.drag_joint)
         # in pose mode a plain press grabs a joint too (the studio's view needs Ctrl, where
@@ -117,6 +122,7 @@ class PoseWindow(QMainWindow):
             # appear while posing would otherwise push the 3D view aside between drags
             scroll = QScrollArea()
             scroll.setWidgetResizable(True)
+            scroll.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
             scroll.setFrameShape(QFrame.Shape.NoFrame)
             scroll.setMinimumWidth(SIDE_PANEL_PX)
             scroll.setWidget(widget)
@@ -168,6 +174,7 @@ class PoseWindow(QMainWindow):
     def drag_joint(self, joint: str, position: np.ndarray) -> None:
         """Create or move the target on ``joint`` to ``position (3,)`` metres and solve;
         with Alt held, turn it instead (:meth:`turn_joint`)."""
+        self.selected = joint
         if QApplication.keyboardModifiers() & Qt.KeyboardModifier.AltModifier:
             self.turn_joint(joint, position)
             return
@@ -178,6 +185,36 @@ class PoseWindow(QMainWindow):
         key = ("target", joint, "position")
         self._edit(f"move target {joint}", lambda: self.mode.set_target(joint, np.asarray(position, float)), key,
                    solve=True)  # fmt: skip
+
+    def world_rotation(self, joint: str) -> np.ndarray:
+        """The current pose's world rotation ``(4,)`` of ``joint``."""
+        p = self.mode.pose
+        return fk(p.local_rot, p.root_pos, self.mode.character.skeleton.offsets)[1][sk.JOINT_INDEX[joint]]
+
+    def turn_by_ring(self, axis: int, angle: float, first: bool) -> None:
+        """A rotation ring of the selected joint dragged: turn the joint (a rotation
+        target: its rotation at the press turned by ``angle`` radians about world axis
+        ``axis``); the hips' ring about Z turns the whole body (its facing)."""
+        joint = self.selected
+        if joint is None:
+            return
+        if first:
+            self._ring_start = (self.mode.heading,) if joint == "root" else (self.world_rotation(joint),)
+            return
+        if self._ring_start is None:
+            return
+        if joint == "root":
+            if axis == 2:
+                self.turn_body(self._ring_start[0] + np.degrees(angle))
+            return
+        q = QN.mul(QN.from_axis_angle(np.eye(3)[axis], np.array(angle)), self._ring_start[0])
+        self._edit(f"turn {joint}", lambda: self.mode.set_target(joint, rotation=q / np.linalg.norm(q)),
+                   ("target", joint, "rotation"), solve=True)  # fmt: skip
+
+    def deselect(self) -> None:
+        """Hide the rotation rings."""
+        self.selected = None
+        self.refresh()
 
     def move_body(self, delta: np.ndarray) -> None:
         """Root motion: translate the whole body horizontally by ``delta (3,)`` metres
@@ -366,7 +403,22 @@ class PoseWindow(QMainWindow):
         self.facing.blockSignals(True)
         self.facing.setValue((self.mode.heading + 180.0) % 360.0 - 180.0)
         self.facing.blockSignals(False)
+        self._show_handles()
         self.show_positions(self.mode.pose.positions)
+
+    def _show_handles(self) -> None:
+        """The selected joint's rotation rings (only the turn about Z on the hips: the
+        body's facing) and the facing arrow in front of the head."""
+        pos = self.mode.pose.positions
+        rings = self.viewport.rings
+        if self.selected is None or self.selected not in sk.JOINT_INDEX:
+            rings.hide()
+        elif self.selected == "root":
+            rings.show(pos[0], 0.3, (2,))
+        else:
+            rings.show(pos[sk.JOINT_INDEX[self.selected]], 0.12)
+        head = sk.JOINT_INDEX["upperneck"]
+        rings.show_facing(pos[head], QN.rotate(self.world_rotation("upperneck"), np.array([0.0, -1.0, 0.0])))
 
     def closeEvent(self, event: QCloseEvent | None) -> None:  # noqa: N802 (Qt's name)
         if event is None:

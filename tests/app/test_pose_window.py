@@ -270,3 +270,47 @@ def test_scrubbing_between_keys_shows_the_in_between_and_a_key_dragged_moves(win
     qtbot.waitUntil(lambda: len(seen) > 40, timeout=10000)
     QTest.keyClick(w.viewport, Qt.Key.Key_Space)
     assert not w.playback.playing and 30 in seen and seen.index(0, 1) > seen.index(30)  # looped
+
+
+def test_dragging_the_z_ring_turns_the_head_about_the_vertical_without_tilting_it(window, qtbot):
+    from engine.kinematics import quat_np as QN
+    from tests.app.gui_helpers import mouse_drag, pixel_of
+    from widgets.viewport.rings import AXES, circle
+
+    w = window
+    head = sk.JOINT_INDEX["upperneck"]
+    w.viewport.set_camera("top", w.hips())
+    w.viewport.plotter.render()
+    x, y = pixel_of(w.viewport, w.mode.pose.positions[head])
+    mouse_drag(w.viewport, (x, y), (x, y), steps=1)  # a click on the head selects it: its rings show
+    rings = w.viewport.rings
+    assert w.selected == "upperneck" and rings.visible and rings.shown == (0, 1, 2)
+    before = w.world_rotation("upperneck")
+    facing = np.array(rings._arrow_mesh.center) - w.mode.pose.positions[head]
+    ring = circle(rings.center, AXES[2], rings.radius, 72)  # 5 degrees apart, counter-clockwise from above
+    w.viewport.plotter.render()
+    path = [pixel_of(w.viewport, ring[k]) for k in (9, 13, 17)]  # 45 -> 85 degrees (away from the edge-on rings)
+    mouse_drag(w.viewport, path[0], path[2], steps=8)
+    t = w.mode.targets["upperneck"]
+    turn = QN.mul(t.rotation, QN.conjugate(before))
+    assert np.degrees(2 * np.arccos(min(1.0, abs(turn[0])))) == pytest.approx(40.0, abs=2.0)
+    assert abs(turn[3]) > 0.99 * np.linalg.norm(turn[1:])  # about the vertical only
+    now = w.world_rotation("upperneck")
+    assert abs(float(now @ t.rotation)) == pytest.approx(1.0, abs=1e-9)
+    up = lambda q: QN.rotate(q, np.array([0.0, 0.0, 1.0]))  # noqa: E731
+    assert up(now)[2] == pytest.approx(up(before)[2], abs=1e-6)  # no tilt: the head leans from vertical as before
+    turned = np.array(rings._arrow_mesh.center) - w.mode.pose.positions[head]
+    yaw = np.degrees(np.arctan2(turned[1], turned[0]) - np.arctan2(facing[1], facing[0]))
+    assert (yaw + 180) % 360 - 180 == pytest.approx(40.0, abs=3.0)  # the facing arrow turned with it
+    assert w.undo.undoText() == "turn upperneck"
+    w.actions_by_name["deselect"].trigger()
+    assert not rings.visible and w.selected is None
+
+
+def test_the_hips_ring_turns_the_whole_body(window):
+    w = window
+    w.drag_joint("root", w.mode.pose.root_pos)
+    assert w.viewport.rings.shown == (2,)  # only the turn about the vertical
+    w.turn_by_ring(2, 0.0, True)
+    w.turn_by_ring(2, np.radians(30.0), False)
+    assert w.mode.heading == pytest.approx(30.0) and w.facing.value() == pytest.approx(30.0)

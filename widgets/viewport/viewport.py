@@ -19,6 +19,7 @@ from widgets.viewport.ghosts import GhostLayer
 from widgets.viewport.gizmos import ConstraintGizmos
 from widgets.viewport.native import make_plotter
 from widgets.viewport.picking import JointDragger
+from widgets.viewport.rings import RotationRings
 from widgets.viewport.sensors import SensorMarkers
 from widgets.viewport.skeleton import SkeletonActor
 
@@ -55,12 +56,16 @@ class Viewport(QWidget):
         A constraint gizmo was dragged; ``dict`` of field name -> new value.
     filesDropped(list)
         Local file paths dropped on the 3D view.
+    ringTurned(int, float, bool)
+        A rotation ring (:attr:`rings`, shown by its owner) is dragged: its axis (0, 1,
+        2: world X, Y, Z), the radians swept since the press, and whether this is the press.
     """
 
     targetDragged = pyqtSignal(str, object)
     jointDragged = pyqtSignal(str, object)
     gizmoEdited = pyqtSignal(str, object)
     filesDropped = pyqtSignal(list)
+    ringTurned = pyqtSignal(int, float, bool)
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -87,7 +92,9 @@ class Viewport(QWidget):
         self.decoded.set_visible(False)
         self.ghosts = GhostLayer(p)
         self.sensors = SensorMarkers(p, lambda j, pos: self.targetDragged.emit(j, pos))
-        self.joints = JointDragger(p, lambda j, pos: self.jointDragged.emit(j, pos), self.sensors)
+        self.rings = RotationRings(p)
+        self.joints = JointDragger(p, lambda j, pos: self.jointDragged.emit(j, pos), self.sensors, self.rings,
+                                   lambda axis, angle, first: self.ringTurned.emit(axis, angle, first))  # fmt: skip
         self.gizmos = ConstraintGizmos(p, lambda n, changes: self.gizmoEdited.emit(n, changes))
         self._label = p.add_text("", position="upper_left", font_size=9, color="#d0d4dc")
         self._notice = p.add_text("", position="lower_edge", font_size=12, color="#ffe14d")
@@ -223,6 +230,7 @@ class Viewport(QWidget):
         """Release widgets and the VTK interactor (no interactor may outlive the view)."""
         self.plotter.removeEventFilter(self)
         self.sensors.clear()
+        self.rings.clear()
         self.gizmos.clear()
         self.ghosts.close()
         self.plotter.close()

@@ -17,7 +17,6 @@ closing with unsaved edits asks first. Files: :mod:`app.pose_files`.
 from __future__ import annotations
 
 import copy
-import time
 from typing import Any
 
 import numpy as np
@@ -32,25 +31,17 @@ from app.pose_constraints import PoseConstraints
 from app.pose_files import PoseFiles
 from app.pose_menus import build_pose_menus
 from app.pose_timeline import KeyPlayback
+from app.pose_turns import JointTurns
 from app.undo import StateCommand
-from engine import skeleton as sk
 from engine.authoring.document import AuthoringScene
 from engine.authoring.keys import Animation, Key
 from engine.authoring.pose_mode import PoseMode
 from engine.errors import UserError
-from engine.kinematics import quat_np as QN
-from engine.kinematics import quaternion as Q
-from engine.kinematics.fk import fk
 from widgets.key_strip import KeyStrip
 from widgets.target_list import TargetList
 from widgets.viewport.viewport import Viewport
 
 
-#: Alt + drag: the mouse must be this far from the joint (metres, on the drag plane)
-#: before its direction starts turning the joint (closer, the direction is noise).
-TURN_START_M = 0.02
-#: A pause longer than this (seconds) between Alt-drag moves starts a new turn.
-TURN_GESTURE_S = 0.5
 #: Width of the side panels (targets, constraints), pixels: wide enough for a target row.
 SIDE_PANEL_PX = 330
 
@@ -64,15 +55,14 @@ class PoseWindow(QMainWindow):
         self.vae, self.mode = vae, mode
         self.scene = AuthoringScene(animation=Animation(), height=mode.character.height)
         self.frame, self.dirty = 0, False
-        self._turn: list | None = None  # joint, start direction, start rotation, last time
         self.undo = QUndoStack(self)
         self.undo.cleanChanged.connect(lambda clean: setattr(self, "dirty", not clean))
         self.viewport = Viewport(self)
         self.viewport.ground_truth.update(None)
         self.setCentralWidget(self.viewport)
         self.selected: str | None = None  # the joint whose rotation rings are shown
-        self._ring_start: tuple | None = None  # the turned joint's world rotation (or facing) at the press
-        self.viewport.ringTurned.connect(self.turn_by_ring)
+        self.turns = JointTurns(self)
+        self.viewport.ringTurned.connect(self.turns.by_ring)
         self.viewport.jointDragged.connect(self.drag_joint)
         self.viewport.targetDragged.connect(self.drag_joint)
         # in pose mode a plain press grabs a joint too (the studio's view needs Ctrl, where
@@ -83,7 +73,7 @@ class PoseWindow(QMainWindow):
         self.targets = TargetList()
         self.targets.enabledChanged.connect(lambda j, on: self.edit_target(j, enabled=on))
         self.targets.weightChanged.connect(lambda j, w: self.edit_target(j, weight=w))
-        self.targets.turnHeld.connect(self.hold_turn)
+        self.targets.turnHeld.connect(self.turns.hold)
         self.targets.clearRequested.connect(self.clear_target)
         self.targets.clearAllRequested.connect(self.clear_all)
         self._dock("Targets", self.targets, Qt.DockWidgetArea.RightDockWidgetArea)
@@ -93,10 +83,10 @@ class PoseWindow(QMainWindow):
         self.keys.addRequested.connect(self.add_key)
         self.keys.deleteRequested.connect(self.delete_key)
         self.keys.moveRequested.connect(self.move_key)
-        self.keys.lengthChanged.connect(lambda n: self._edit("length", lambda: setattr(self.scene.animation, "frames", n)))
-        self.keys.fpsChanged.connect(lambda f: self._edit("rate", lambda: setattr(self.scene.animation, "fps", f)))
+        self.keys.lengthChanged.connect(lambda n: self.edit("length", lambda: setattr(self.scene.animation, "frames", n)))
+        self.keys.fpsChanged.connect(lambda f: self.edit("rate", lambda: setattr(self.scene.animation, "fps", f)))
         self.keys.interpolationChanged.connect(
-            lambda v: self._edit("in-betweens", lambda: setattr(self.scene.animation, "interpolation", v)))
+            lambda v: self.edit("in-betweens", lambda: setattr(self.scene.animation, "interpolation", v)))
         self.keys.previewRequested.connect(lambda: self._guard("Play", self.playback.toggle))
         self._dock("Keys", self.keys, Qt.DockWidgetArea.BottomDockWidgetArea)
         body = self.addToolBar("Body")
@@ -147,7 +137,7 @@ class PoseWindow(QMainWindow):
         self.playback.invalidate()
         self.refresh()
 
-    def _edit(self, text: str, change, key: tuple | None = None, solve: bool = False) -> None:
+    def edit(self, text: str, change, key: tuple | None = None, solve: bool = False) -> None:
         """Apply ``change()`` as one undo step (merging drags of the same ``key``)."""
         self.playback.stop()
         before = self._state()
@@ -173,43 +163,18 @@ class PoseWindow(QMainWindow):
     # -- targets -------------------------------------------------------------------
     def drag_joint(self, joint: str, position: np.ndarray) -> None:
         """Create or move the target on ``joint`` to ``position (3,)`` metres and solve;
-        with Alt held, turn it instead (:meth:`turn_joint`)."""
+        with Alt held, turn it instead (:meth:`app.pose_turns.JointTurns.alt_drag`)."""
         self.selected = joint
         if QApplication.keyboardModifiers() & Qt.KeyboardModifier.AltModifier:
-            self.turn_joint(joint, position)
+            self.turns.alt_drag(joint, position)
             return
-        self._turn = None
+        self.turns.gesture = None
         if joint == "root":
             self.move_body(np.asarray(position, float) - self.mode.pose.root_pos)
             return
         key = ("target", joint, "position")
-        self._edit(f"move target {joint}", lambda: self.mode.set_target(joint, np.asarray(position, float)), key,
+        self.edit(f"move target {joint}", lambda: self.mode.set_target(joint, np.asarray(position, float)), key,
                    solve=True)  # fmt: skip
-
-    def world_rotation(self, joint: str) -> np.ndarray:
-        """The current pose's world rotation ``(4,)`` of ``joint``."""
-        p = self.mode.pose
-        return fk(p.local_rot, p.root_pos, self.mode.character.skeleton.offsets)[1][sk.JOINT_INDEX[joint]]
-
-    def turn_by_ring(self, axis: int, angle: float, first: bool) -> None:
-        """A rotation ring of the selected joint dragged: turn the joint (a rotation
-        target: its rotation at the press turned by ``angle`` radians about world axis
-        ``axis``); the hips' ring about Z turns the whole body (its facing)."""
-        joint = self.selected
-        if joint is None:
-            return
-        if first:
-            self._ring_start = (self.mode.heading,) if joint == "root" else (self.world_rotation(joint),)
-            return
-        if self._ring_start is None:
-            return
-        if joint == "root":
-            if axis == 2:
-                self.turn_body(self._ring_start[0] + np.degrees(angle))
-            return
-        q = QN.mul(QN.from_axis_angle(np.eye(3)[axis], np.array(angle)), self._ring_start[0])
-        self._edit(f"turn {joint}", lambda: self.mode.set_target(joint, rotation=q / np.linalg.norm(q)),
-                   ("target", joint, "rotation"), solve=True)  # fmt: skip
 
     def deselect(self) -> None:
         """Hide the rotation rings."""
@@ -226,7 +191,7 @@ class PoseWindow(QMainWindow):
             if self.mode.targets:
                 self.mode.solve()
 
-        self._edit("move body", change, ("body", "root", "position"))
+        self.edit("move body", change, ("body", "root", "position"))
 
     def turn_body(self, heading: float) -> None:
         """Root motion: face ``heading`` degrees about +Z (0 faces -Y), the whole body
@@ -241,53 +206,14 @@ class PoseWindow(QMainWindow):
             if self.mode.targets:
                 self.mode.solve()
 
-        self._edit("turn body", change, ("body", "root", "heading"))
-
-    def turn_joint(self, joint: str, position: np.ndarray) -> None:
-        """Alt + drag: give ``joint`` a rotation target, its rotation at the start of the
-        drag turned by the rotation carrying the first mouse direction from the joint
-        onto the current one (both on the drag plane, ``position (3,)`` metres)."""
-        j = sk.JOINT_INDEX[joint]
-        t = self.mode.targets.get(joint)
-        pivot = t.position if t is not None else self.mode.pose.positions[j]
-        v = np.asarray(position, float) - pivot
-        now = time.monotonic()
-        g = self._turn
-        if g is None or g[0] != joint or now - g[3] > TURN_GESTURE_S:
-            p = self.mode.pose
-            world = fk(p.local_rot, p.root_pos, self.mode.character.skeleton.offsets)[1][j]
-            g = self._turn = [joint, None, world, now]
-        g[3] = now
-        if g[1] is None:
-            if np.linalg.norm(v) >= TURN_START_M:
-                g[1] = v
-            return
-        q = QN.mul(Q.from_to(g[1], v), g[2])
-        self._edit(f"turn {joint}", lambda: self.mode.set_target(joint, rotation=q / np.linalg.norm(q)),
-                   ("target", joint, "rotation"), solve=True)  # fmt: skip
-        self._turn = g  # the edit's refresh does not end the gesture
+        self.edit("turn body", change, ("body", "root", "heading"))
 
     def edit_target(self, joint: str, **fields: Any) -> None:
         """Change a target's ``enabled`` or ``weight`` and solve."""
-        self._edit(f"edit target {joint}", lambda: self.mode.set_target(joint, **fields), solve=True)
-
-    def hold_turn(self, joint: str, on: bool) -> None:
-        """Give the target on ``joint`` the joint's current world rotation (``on``) or
-        make it a position target again."""
-        from engine.kinematics.fk import fk
-
-        def change() -> None:
-            if on:
-                p = self.mode.pose
-                world = fk(p.local_rot, p.root_pos, self.mode.character.skeleton.offsets)[1]
-                self.mode.set_target(joint, rotation=world[sk.JOINT_INDEX[joint]])
-            else:
-                self.mode.clear_rotation(joint)
-
-        self._edit(f"{'hold' if on else 'free'} turn {joint}", change, solve=True)
+        self.edit(f"edit target {joint}", lambda: self.mode.set_target(joint, **fields), solve=True)
 
     def clear_target(self, joint: str) -> None:
-        self._edit(f"clear target {joint}", lambda: self.mode.remove_target(joint), solve=True)
+        self.edit(f"clear target {joint}", lambda: self.mode.remove_target(joint), solve=True)
 
     def clear_all(self) -> None:
         """Remove every target and put the character back in its starting pose, where
@@ -298,11 +224,11 @@ class PoseWindow(QMainWindow):
             m.clear_targets()
             m.pose = m.character.decode(m.base_latent, m.character.grounded(m.pose.root_pos[:2], m.heading))
 
-        self._edit("clear all targets", change)
+        self.edit("clear all targets", change)
 
     def settle(self) -> None:
         """An offline solve of the current targets (one undo step)."""
-        self._edit("settle pose", self.mode.settle)
+        self.edit("settle pose", self.mode.settle)
 
     # -- keys ----------------------------------------------------------------------
     def _key_at(self, frame: int) -> Key | None:
@@ -318,11 +244,11 @@ class PoseWindow(QMainWindow):
                       self.mode.heading)  # fmt: skip
             self.scene.keys = sorted([*self.scene.keys, key], key=lambda k: k.frame)
 
-        self._edit(f"key frame {frame}", change)
+        self.edit(f"key frame {frame}", change)
 
     def delete_key(self, frame: int) -> None:
         if self._key_at(frame) is not None:
-            self._edit(f"delete key {frame}", lambda: setattr(self.scene, "keys", [k for k in self.scene.keys if k.frame != frame]))
+            self.edit(f"delete key {frame}", lambda: setattr(self.scene, "keys", [k for k in self.scene.keys if k.frame != frame]))
 
     def move_key(self, frame: int, to: int) -> None:
         key = self._key_at(frame)
@@ -335,7 +261,7 @@ class PoseWindow(QMainWindow):
             moved.frame = int(to)
             self.scene.keys = sorted([*self.scene.keys, moved], key=lambda k: k.frame)
 
-        self._edit(f"move key {frame} -> {to}", change)
+        self.edit(f"move key {frame} -> {to}", change)
         self.go_to(to)
 
     def step(self, by: int) -> None:
@@ -403,22 +329,8 @@ class PoseWindow(QMainWindow):
         self.facing.blockSignals(True)
         self.facing.setValue((self.mode.heading + 180.0) % 360.0 - 180.0)
         self.facing.blockSignals(False)
-        self._show_handles()
+        self.turns.show_handles()
         self.show_positions(self.mode.pose.positions)
-
-    def _show_handles(self) -> None:
-        """The selected joint's rotation rings (only the turn about Z on the hips: the
-        body's facing) and the facing arrow in front of the head."""
-        pos = self.mode.pose.positions
-        rings = self.viewport.rings
-        if self.selected is None or self.selected not in sk.JOINT_INDEX:
-            rings.hide()
-        elif self.selected == "root":
-            rings.show(pos[0], 0.3, (2,))
-        else:
-            rings.show(pos[sk.JOINT_INDEX[self.selected]], 0.12)
-        head = sk.JOINT_INDEX["upperneck"]
-        rings.show_facing(pos[head], QN.rotate(self.world_rotation("upperneck"), np.array([0.0, -1.0, 0.0])))
 
     def closeEvent(self, event: QCloseEvent | None) -> None:  # noqa: N802 (Qt's name)
         if event is None:

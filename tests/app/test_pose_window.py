@@ -285,7 +285,7 @@ def test_dragging_the_z_ring_turns_the_head_about_the_vertical_without_tilting_i
     mouse_drag(w.viewport, (x, y), (x, y), steps=1)  # a click on the head selects it: its rings show
     rings = w.viewport.rings
     assert w.selected == "upperneck" and rings.visible and rings.shown == (0, 1, 2)
-    before = w.world_rotation("upperneck")
+    before = w.turns.world_rotation("upperneck")
     facing = np.array(rings._arrow_mesh.center) - w.mode.pose.positions[head]
     ring = circle(rings.center, AXES[2], rings.radius, 72)  # 5 degrees apart, counter-clockwise from above
     w.viewport.plotter.render()
@@ -295,7 +295,7 @@ def test_dragging_the_z_ring_turns_the_head_about_the_vertical_without_tilting_i
     turn = QN.mul(t.rotation, QN.conjugate(before))
     assert np.degrees(2 * np.arccos(min(1.0, abs(turn[0])))) == pytest.approx(40.0, abs=2.0)
     assert abs(turn[3]) > 0.99 * np.linalg.norm(turn[1:])  # about the vertical only
-    now = w.world_rotation("upperneck")
+    now = w.turns.world_rotation("upperneck")
     assert abs(float(now @ t.rotation)) == pytest.approx(1.0, abs=1e-9)
     up = lambda q: QN.rotate(q, np.array([0.0, 0.0, 1.0]))  # noqa: E731
     assert up(now)[2] == pytest.approx(up(before)[2], abs=1e-6)  # no tilt: the head leans from vertical as before
@@ -311,6 +311,6 @@ def test_the_hips_ring_turns_the_whole_body(window):
     w = window
     w.drag_joint("root", w.mode.pose.root_pos)
     assert w.viewport.rings.shown == (2,)  # only the turn about the vertical
-    w.turn_by_ring(2, 0.0, True)
-    w.turn_by_ring(2, np.radians(30.0), False)
+    w.turns.by_ring(2, 0.0, True)
+    w.turns.by_ring(2, np.radians(30.0), False)
     assert w.mode.heading == pytest.approx(30.0) and w.facing.value() == pytest.approx(30.0)

@@ -1,8 +1,8 @@
 """The studio window's authoring entries: File ▸ New pose... and File ▸ Export video...
 
 :func:`add_menu_entries` puts them in the File menu (one call from :mod:`app.menus`).
-New pose asks for the character's height and whether to start from the VAE's mean pose
-or from the current frame of the loaded clip, and opens a
+New pose asks for the character's height and whether to start from a neutral standing
+pose (the pose model's average) or from the current frame of the loaded clip, and opens a
 :class:`app.pose_window.PoseWindow`. Export video renders the loaded clip with the
 current tracker preset drawn on it (:func:`app.render.render_video`).
 """
@@ -18,9 +18,11 @@ from PyQt6.QtWidgets import (
     QProgressDialog,
 )  # fmt: skip
 
+from engine import skeleton as sk
 from engine.errors import UserError
 
-MEAN, CLIP = "the VAE's mean pose", "the clip's current frame"
+#: The starting poses offered: the pose model's average pose (its latent zero) or a clip frame.
+MEAN, CLIP = "a neutral standing pose", "the clip's current frame"
 
 
 class NewPoseDialog(QDialog):
@@ -30,7 +32,9 @@ class NewPoseDialog(QDialog):
         super().__init__(parent)
         self.setWindowTitle("New pose")
         form = QFormLayout(self)
-        self.height_m = QDoubleSpinBox(minimum=0.5, maximum=2.5, decimals=2, singleStep=0.05, value=1.75, suffix=" m")
+        # the canonical subject's height: a scene that gives none is baked at it too
+        canonical = round(sk.Skeleton.canonical().height(), 2)
+        self.height_m = QDoubleSpinBox(minimum=0.5, maximum=2.5, decimals=2, singleStep=0.05, value=canonical, suffix=" m")
         self.start = QComboBox()
         self.start.addItems([MEAN, CLIP] if has_clip else [MEAN])
         form.addRow("Height", self.height_m)
@@ -88,12 +92,15 @@ def export_clip_video(window: Any, path: str | Path, size: tuple[int, int] = (96
 
 
 def export_video(window: Any) -> None:
-    path, _ = QFileDialog.getSaveFileName(window, "Export video", "", "MP4 video (*.mp4)")
+    path, _ = QFileDialog.getSaveFileName(window, "Export video", window.files.suggested_name("mp4", "video"),
+                                          "MP4 video (*.mp4)")  # fmt: skip
     if path:
         try:
             export_clip_video(window, path)
         except (UserError, OSError) as exc:
             QMessageBox.warning(window, "Export video", str(exc))
+            return
+        window.statusBar().showMessage(f"Video written to {path}", 10000)
 
 
 def add_menu_entries(window: Any, file_menu: QMenu, action) -> dict:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -29,6 +30,8 @@ if TYPE_CHECKING:
     from widgets.viewport import Viewport
 
 MAX_RECENT = 8
+#: The studio's bundled files (the example clip): save dialogs do not offer this folder.
+APP_ASSETS = Path(__file__).resolve().parents[1] / "assets"
 
 
 class FileActions:
@@ -186,12 +189,18 @@ class FileActions:
         self.export.shutdown()
 
     def suggested_name(self, ext: str, what: str | None = None) -> str:
-        """A file name the save dialogs offer: beside the open clip, named after it and
-        the method (``walk_dragposer.bvh``), or after ``what`` (``walk_scene.json``)."""
+        """A file name the save dialogs offer, named after the open clip and the method
+        (``walk_dragposer.bvh``) or after ``what`` (``walk_scene.json``): beside the clip
+        when that folder is the user's to write in, else in the home folder (a shared
+        data folder is read-only, and the studio's own ``assets`` are not a place for
+        the user's files)."""
         clip = self.session.path
         stem = Path(clip).stem if clip else "studio"
         name = f"{stem}_{what or self.session.method}.{ext}"
-        return str(Path(clip).with_name(name)) if clip else name
+        folder = Path(clip).resolve().parent if clip else Path.home()
+        if not os.access(folder, os.W_OK) or folder.is_relative_to(APP_ASSETS):
+            folder = Path.home()
+        return str(folder / name)
 
     # -- scenes ---------------------------------------------------------------------
     def save_scene(self, path: str | None = None) -> bool:

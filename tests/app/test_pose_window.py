@@ -116,6 +116,8 @@ def test_the_window_exports_what_bake_writes_from_its_saved_scene(window, tmp_pa
     w.files.save(tmp_path / "s.json")
     assert not w.dirty
     w.files.export_bvh(tmp_path / "studio.bvh")
+    assert w.statusBar().currentMessage() == f"BVH written to {tmp_path / 'studio.bvh'}"
+    assert w.files.suggested(".mp4") == str(tmp_path / "s.mp4")  # named after the scene, where it was saved
     assert cli(["bake", str(tmp_path / "s.json"), "--out", str(tmp_path / "cli.bvh"), "--no-progress"]) == 0
     assert (tmp_path / "cli.bvh").read_bytes() == (tmp_path / "studio.bvh").read_bytes()
     w.files.export_video(tmp_path / "v.mp4", (128, 96))

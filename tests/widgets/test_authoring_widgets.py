@@ -117,3 +117,18 @@ def test_the_key_timeline_scrubs_drags_keys_and_shows_the_last_frame(qtbot):
     assert k.label.text().endswith("(in-between)")
     k.set_playing(True)
     assert k.preview.text() == "Stop"
+
+
+def test_a_click_on_the_timeline_groove_jumps_to_the_click(qtbot):
+    """QSlider paged by 10 frames towards a click on its groove."""
+    from widgets.range_slider import RangeSlider
+
+    s = RangeSlider()
+    qtbot.addWidget(s)
+    s.resize(400, 24)
+    s.setRange(0, 200)
+    s.show()
+    qtbot.mouseClick(s, Qt.MouseButton.LeftButton, pos=s.point_of(150))
+    assert abs(s.value() - 150) <= 1
+    qtbot.mouseClick(s, Qt.MouseButton.LeftButton, pos=s.point_of(20))
+    assert abs(s.value() - 20) <= 1

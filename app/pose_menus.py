@@ -62,7 +62,9 @@ def build_pose_menus(w: QMainWindow) -> None:
     camera = view.addMenu("&Camera")
     for preset, label, key in CAMERAS:
         named[f"camera-{preset}"] = action(w, camera, label, lambda p=preset: vp.set_camera(p, w.hips()), key)
-    named["follow"] = toggle(w, camera, "F&ollow character", vp.follow, lambda v: setattr(vp, "follow", v), "F")
+    # F frames the character (as in Maya): a camera that followed every edit would move
+    # under a drag, and the drag plane with it
+    named["frame"] = action(w, camera, "F&rame the character", lambda: vp.frame(w.hips()), "F")
     help_menu = w.menuBar().addMenu("&Help")
     named["help"] = action(w, help_menu, "&Keyboard and mouse...", lambda: show_help(w),
                            QKeySequence.StandardKey.HelpContents)  # fmt: skip

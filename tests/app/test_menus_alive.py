@@ -195,8 +195,9 @@ def test_pose_window_camera_keys_and_display(pose_window, qtbot):
     assert w.viewport.camera_preset == "side" and not w.viewport.plotter.ren_win.GetStereoRender()
     QTest.keyClick(w.viewport, Qt.Key.Key_Home)
     assert w.viewport.camera_preset == "home"
+    w.move_body(np.array([1.5, -0.5, 0.0]))  # the character walks off the centre
     QTest.keyClick(w.viewport, Qt.Key.Key_F)
-    assert not w.viewport.follow
+    assert np.allclose(cam.focal_point, w.hips()) and w.viewport.camera_preset == "home"
     QTest.keyClick(w.viewport, Qt.Key.Key_B)
     assert w.viewport.display == "body" and w.viewport.body.visible and not w.viewport.reconstruction.visible
     QTest.keyClick(w.viewport, Qt.Key.Key_S)

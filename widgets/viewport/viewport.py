@@ -145,6 +145,16 @@ class Viewport(QWidget):
         else:
             self.reconstruction.set_visible(False)
 
+    def frame(self, point: np.ndarray) -> None:
+        """Centre the view on ``point (3,)`` metres, keeping the camera's angle and distance."""
+        cam = self.plotter.camera
+        delta = np.asarray(point, float) - np.asarray(cam.GetFocalPoint())
+        self._focus = self._focus + delta
+        cam.SetFocalPoint(*(np.asarray(cam.GetFocalPoint()) + delta))
+        cam.SetPosition(*(np.asarray(cam.GetPosition()) + delta))
+        self.plotter.reset_camera_clipping_range()
+        self.plotter.render()
+
     def _follow(self, root: np.ndarray) -> None:
         """Slide camera and focus horizontally with the hips, keeping the user's angle."""
         now = self.clock()

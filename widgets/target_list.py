@@ -69,6 +69,7 @@ class TargetList(QWidget):
         for row in self.rows.values():
             for w in row.values():
                 self.grid.removeWidget(w)
+                w.hide()  # at once: the deletion waits for the event loop
                 w.deleteLater()
         self.rows = {}
         for i, joint in enumerate(joints):

@@ -8,7 +8,7 @@ from collections.abc import Callable
 from typing import Any
 
 from PyQt6.QtCore import Qt
-from PyQt6.QtGui import QAction, QKeySequence
+from PyQt6.QtGui import QAction, QActionGroup, QKeySequence
 from PyQt6.QtWidgets import QMenu
 
 from widgets.help_dialog import HelpDialog
@@ -38,6 +38,24 @@ def toggle(window: Any, menu: QMenu, text: str, on: bool, slot: Callable[[bool],
     act.toggled.connect(slot)
     menu.addAction(act)
     return act
+
+
+def add_view_entries(w: Any, view: QMenu, noun: str, set_display: Callable[[str], Any]) -> tuple[dict, QMenu]:
+    """View ▸ Draw ``noun`` as (stick figure S, shaded body B) and View ▸ Camera (the
+    :data:`CAMERAS` presets about ``w.hips()``) on ``view``; the actions by name and the
+    camera menu, for the window's own camera entries."""
+    named: dict[str, QAction] = {}
+    vp = w.viewport
+    display = view.addMenu(f"&Draw {noun} as")
+    group = QActionGroup(w)
+    for mode, label, key in (("stick", "&Stick figure", "S"), ("body", "Shaded &body", "B")):
+        act = toggle(w, display, label, vp.display == mode, lambda on, m=mode: on and set_display(m), key)
+        group.addAction(act)
+        named[f"display-{mode}"] = act
+    camera = view.addMenu("&Camera")
+    for preset, label, key in CAMERAS:
+        named[f"camera-{preset}"] = action(w, camera, label, lambda p=preset: vp.set_camera(p, w.hips()), key)
+    return named, camera
 
 
 def shortcut_rows(w: Any) -> list[tuple[str, str]]:

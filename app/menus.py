@@ -9,11 +9,11 @@ from __future__ import annotations
 from typing import Any
 
 from PyQt6.QtCore import Qt
-from PyQt6.QtGui import QActionGroup, QKeySequence
+from PyQt6.QtGui import QKeySequence
 from PyQt6.QtWidgets import QMainWindow
 
 from app import authoring_actions, clip_saving, range_actions
-from app.menu_parts import CAMERAS, action, show_help, toggle
+from app.menu_parts import action, add_view_entries, show_help, toggle
 
 
 def build_menus(w: QMainWindow) -> None:
@@ -52,15 +52,8 @@ def build_menus(w: QMainWindow) -> None:
     action(w, play, "Previous frame", lambda: w.session.step(-1), "Left")
     view = w.menuBar().addMenu("&View")
     vp = w.viewport
-    display = view.addMenu("&Draw reconstruction as")
-    group = QActionGroup(w)
-    for mode, label, key in (("stick", "&Stick figure", "S"), ("body", "Shaded &body", "B")):
-        act = toggle(w, display, label, vp.display == mode, lambda on, m=mode: on and vp.set_display(m), key)
-        group.addAction(act)
-        named[f"display-{mode}"] = act
-    camera = view.addMenu("&Camera")
-    for preset, label, key in CAMERAS:
-        named[f"camera-{preset}"] = action(w, camera, label, lambda p=preset: vp.set_camera(p, w.hips()), key)
+    entries, camera = add_view_entries(w, view, "reconstruction", vp.set_display)
+    named.update(entries)
     named["follow"] = toggle(w, camera, "F&ollow character", True, lambda v: setattr(vp, "follow", v), "F")
     view.addSeparator()
     toggle(w, view, "Ground truth", True, lambda v: setattr(vp, "show_ground_truth", v), "G")

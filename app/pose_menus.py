@@ -11,10 +11,10 @@ from __future__ import annotations
 from typing import Any
 
 from PyQt6.QtCore import Qt
-from PyQt6.QtGui import QActionGroup, QKeySequence
+from PyQt6.QtGui import QKeySequence
 from PyQt6.QtWidgets import QMainWindow
 
-from app.menu_parts import CAMERAS, action, show_help, toggle
+from app.menu_parts import action, add_view_entries, show_help, toggle
 
 
 def build_pose_menus(w: QMainWindow) -> None:
@@ -53,15 +53,8 @@ def build_pose_menus(w: QMainWindow) -> None:
     w.keys.loop.toggled.connect(named["loop"].setChecked)
     view = w.menuBar().addMenu("&View")
     vp = w.viewport
-    display = view.addMenu("&Draw character as")
-    group = QActionGroup(w)
-    for mode, label, key in (("stick", "&Stick figure", "S"), ("body", "Shaded &body", "B")):
-        act = toggle(w, display, label, vp.display == mode, lambda on, m=mode: on and w.set_display(m), key)
-        group.addAction(act)
-        named[f"display-{mode}"] = act
-    camera = view.addMenu("&Camera")
-    for preset, label, key in CAMERAS:
-        named[f"camera-{preset}"] = action(w, camera, label, lambda p=preset: vp.set_camera(p, w.hips()), key)
+    entries, camera = add_view_entries(w, view, "character", w.set_display)
+    named.update(entries)
     # F frames the character (as in Maya): a camera that followed every edit would move
     # under a drag, and the drag plane with it
     named["frame"] = action(w, camera, "F&rame the character", lambda: vp.frame(w.hips()), "F")

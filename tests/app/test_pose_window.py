@@ -28,6 +28,17 @@ def state(w):
             w.mode.pose.positions.round(9).tolist())  # fmt: skip
 
 
+def key_the_wrist(w, *keys: tuple, length: int) -> np.ndarray:
+    """Drag the left wrist by each ``(frame, offset)``'s offset from where it starts and key
+    it there; set the length (frames); the wrist's start (3,)."""
+    start = w.mode.pose.positions[LW].copy()
+    for frame, offset in keys:
+        w.drag_joint("lwrist", start + offset)
+        w.add_key(frame)
+    w.keys.length.setValue(length)
+    return start
+
+
 def test_dragging_a_joint_makes_a_target_the_pose_follows(window):
     start = window.mode.pose.positions[LW].copy()
     for k in range(1, 11):
@@ -107,12 +118,7 @@ def test_every_edit_kind_undoes_and_redoes(window, qtbot):
 
 def test_the_window_exports_what_bake_writes_from_its_saved_scene(window, tmp_path):
     w = window
-    start = w.mode.pose.positions[LW].copy()
-    w.drag_joint("lwrist", start + [0.0, -0.15, 0.05])
-    w.add_key(0)
-    w.drag_joint("lwrist", start + [0.1, -0.1, 0.35])
-    w.add_key(20)
-    w.keys.length.setValue(21)
+    key_the_wrist(w, (0, [0.0, -0.15, 0.05]), (20, [0.1, -0.1, 0.35]), length=21)
     w.files.save(tmp_path / "s.json")
     assert not w.dirty
     w.files.export_bvh(tmp_path / "studio.bvh")
@@ -240,12 +246,7 @@ def test_scrubbing_between_keys_shows_the_in_between_and_a_key_dragged_moves(win
     from tests.widgets.test_authoring_widgets import drag_on
 
     w = window
-    start = w.mode.pose.positions[LW].copy()
-    w.drag_joint("lwrist", start + [0.0, -0.1, 0.1])
-    w.add_key(0)
-    w.drag_joint("lwrist", start + [0.1, -0.2, 0.5])
-    w.add_key(20)
-    w.keys.length.setValue(31)
+    start = key_the_wrist(w, (0, [0.0, -0.1, 0.1]), (20, [0.1, -0.2, 0.5]), length=31)
     s = w.keys.strip
     drag_on(s, s.x_of(4), s.x_of(10), steps=3)  # scrub from frame 4 to 10
     motion = w.playback.baked.motion

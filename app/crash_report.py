@@ -94,8 +94,11 @@ class CrashLog(QObject):
         self._lines = 0
         self._header = ""
         self._hook: Any = None
+        self._was_enabled = False
 
     def start(self) -> None:
+        # a handler already on (pytest's, ``python -X faulthandler``) is put back by close()
+        self._was_enabled = faulthandler.is_enabled()
         self.folder.mkdir(parents=True, exist_ok=True)
         self._header = _header()
         self._rewrite([])
@@ -163,6 +166,8 @@ class CrashLog(QObject):
             self.file.close()
             self.file = None
             self.path.unlink(missing_ok=True)
+            if self._was_enabled:
+                faulthandler.enable(sys.__stderr__, all_threads=True)
 
 
 def offer(parent: QWidget | None, reports: list[Path]) -> QMessageBox | None:

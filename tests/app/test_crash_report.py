@@ -4,6 +4,7 @@ and an exception no slot caught is logged and shown instead of ending the proces
 
 from __future__ import annotations
 
+import faulthandler
 import os
 import subprocess
 import sys
@@ -67,6 +68,7 @@ def test_a_clean_exit_leaves_no_report(tmp_path, qtbot):
     finally:
         log.close()
     assert list(tmp_path.iterdir()) == []
+    assert faulthandler.is_enabled()  # pytest's own handler is back
 
 
 def test_an_exception_nothing_caught_is_logged_and_shown(tmp_path, monkeypatch):

@@ -275,6 +275,16 @@ class Session(ConstraintEditing, SensorEditing):
         self._send(cmd.SetSettings(edit))
         self.events.settings.emit(ev.SettingsChanged(dict(edit), old))
 
+    def replace_settings(self, values: Mapping[str, Any]) -> None:
+        """Make ``values`` the settings set explicitly, the others back to the method's
+        profile (an undo of a settings edit)."""
+        edit = SettingsEdit(values)
+        names = set(edit) | set(self.settings)
+        old = {k: self.settings.get(k) for k in names}
+        self.settings = edit
+        self._send(cmd.SetSettings(edit, replace=True))
+        self.events.settings.emit(ev.SettingsChanged({k: edit.get(k) for k in names}, old))
+
     def set_method(self, name: str, ghosts: tuple[str, ...] | None = None) -> None:
         old, old_ghosts = self.method, self.ghosts
         self.method = name

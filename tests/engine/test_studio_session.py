@@ -252,3 +252,21 @@ def test_the_studio_refuses_a_scene_exactly_as_bake_does(session, tmp_path):
     assert str(by_studio.value) == str(by_bake.value)
     assert "animation: field 'fps' must be a number" in str(by_bake.value)
     assert session.sensors == before
+
+
+def test_replace_settings_leaves_unset_what_it_does_not_give_and_tells_the_engine(session):
+    from engine.studio.method_set import MethodSet
+
+    commands = []
+    session.attach(commands.append)
+    session.set_setting("smooth_weight", 2.0)
+    kept = {k: v for k, v in session.settings.items() if k != "smooth_weight"}
+    session.replace_settings(kept)
+    assert "smooth_weight" not in session.settings and dict(session.settings) == kept
+    last = commands[-1]
+    assert isinstance(last, c.SetSettings) and last.replace and dict(last.values) == kept
+    methods = MethodSet.__new__(MethodSet)  # the engine side: only its settings are looked at
+    methods.settings = session.settings | {"smooth_weight": 2.0}
+    methods.configure = lambda *a, **k: None
+    methods.set_settings(last.values, last.replace)
+    assert dict(methods.settings) == kept

@@ -292,7 +292,7 @@ def test_dragging_the_z_ring_turns_the_head_about_the_vertical_without_tilting_i
     facing = np.array(rings._arrow_mesh.center) - w.mode.pose.positions[head]
     ring = circle(rings.center, AXES[2], rings.radius, 72)  # 5 degrees apart, counter-clockwise from above
     w.viewport.plotter.render()
-    path = [pixel_of(w.viewport, ring[k]) for k in (9, 13, 17)]  # 45 -> 85 degrees (away from the edge-on rings)
+    path = [pixel_of(w.viewport, ring[k]) for k in (0, 4, 8)]  # 0 -> 40 degrees, from where an edge-on ring crosses
     mouse_drag(w.viewport, path[0], path[2], steps=8)
     t = w.mode.targets["upperneck"]
     turn = QN.mul(t.rotation, QN.conjugate(before))

@@ -120,13 +120,20 @@ class RotationRings:
         :data:`RING_PICK_PX` of display pixel (x, y), the nearest; None if none."""
         if not self.visible:
             return None
-        best, hit = RING_PICK_PX, None
+        best, hit = np.inf, None
         for k, mesh in enumerate(self.meshes):
             if k not in self.shown:
                 continue
-            d = np.linalg.norm(to_display(np.asarray(mesh.points)) - [x, y], axis=1).min()
-            if d <= best:
-                best, hit = d, k
+            screen = to_display(np.asarray(mesh.points))
+            d = float(np.linalg.norm(screen - [x, y], axis=1).min())
+            if d > RING_PICK_PX:
+                continue
+            # where rings cross, the one seen face-on wins over one seen edge-on (a line
+            # through the joint, which a press meant for the other would also touch)
+            spread = np.linalg.svd(screen - screen.mean(axis=0), compute_uv=False)
+            edge_on = 1.0 - spread[-1] / max(spread[0], 1e-9)
+            if d + RING_PICK_PX * edge_on < best:
+                best, hit = d + RING_PICK_PX * edge_on, k
         return hit
 
     def begin(self, axis: int, ray: tuple[np.ndarray, np.ndarray]) -> None:

@@ -81,12 +81,13 @@ class Monkey:
         self.slowest = (0.0, "")
 
     def step(self) -> str:
+        """One random event; what it was (kind, window and detail)."""
         w = self.windows[int(self.rng.integers(len(self.windows)))]
         kind = str(self.rng.choice(["drag", "drag", "click", "wheel", "key", "key", "menu", "widget", "widget",
                                     "strip"]))  # fmt: skip
-        getattr(self, f"_{kind}")(w)
+        detail = getattr(self, f"_{kind}")(w)
         self.counts[kind] += 1
-        return kind
+        return f"{kind} {type(w).__name__}" + (f" {detail}" if detail else "")
 
     def _point(self, w) -> tuple[float, float]:
         """A pixel of the 3D view: on a joint half of the time, else anywhere."""
@@ -115,24 +116,33 @@ class Monkey:
                             Qt.KeyboardModifier.NoModifier, Qt.ScrollPhase.NoScrollPhase, False)  # fmt: skip
         QApplication.sendEvent(p, event)
 
-    def _key(self, w) -> None:
+    def _key(self, w) -> str:
         key, mods = KEYS[int(self.rng.integers(len(KEYS)))]
         w.activateWindow()
         target = QApplication.focusWidget() if self.rng.random() < 0.3 else None
         QTest.keyClick(target if target is not None and target.window() is w else w.viewport, key, mods)
+        return f"{key.name}{'+' + str(mods.value) if mods.value else ''}"
 
-    def _menu(self, w) -> None:
+    def _menu(self, w) -> str:
         acts = [a for a in menu_actions(w) if a.isEnabled()]
         if acts:
-            acts[int(self.rng.integers(len(acts)))].trigger()
+            act = acts[int(self.rng.integers(len(acts)))]
+            act.trigger()
+            return act.text().replace("&", "")
+        return ""
 
-    def _widget(self, w) -> None:
+    def _widget(self, w) -> str:
         kinds = (QAbstractButton, QAbstractSpinBox, QComboBox, QSlider)
         found = [c for c in w.findChildren(QWidget) if isinstance(c, kinds) and c.isVisible() and c.isEnabled()
                  and c.window() is w]  # fmt: skip
         if not found:
-            return
+            return ""
         c = found[int(self.rng.integers(len(found)))]
+        what = f"{type(c).__name__}({getattr(c, 'text', lambda: '')() or c.objectName()})"
+        self._widget_act(c)
+        return what
+
+    def _widget_act(self, c: QWidget) -> None:
         if isinstance(c, QAbstractButton):
             c.click()
         elif isinstance(c, QAbstractSpinBox):
@@ -188,16 +198,16 @@ def run(seed: int, events: int, step_timeout: float) -> int:
     for done in range(1, events + 1):
         faulthandler.dump_traceback_later(step_timeout, exit=True)  # a frozen step: stacks, exit 1
         t0 = time.monotonic()
-        kind = monkey.step()
+        what = monkey.step()
         app.processEvents()
         took = time.monotonic() - t0
         faulthandler.cancel_dump_traceback_later()
         if took > monkey.slowest[0]:
-            monkey.slowest = (took, kind)
+            monkey.slowest = (took, what)
         if errors:
             break
         if not pose.isVisible():  # a window may only close through the entries left out
-            errors.append(f"the pose window closed at event {done} ({kind})")
+            errors.append(f"the pose window closed at event {done} ({what})")
             break
     for w in (pose, studio):
         if hasattr(w, "undo") and hasattr(w.undo, "setClean"):
@@ -208,7 +218,7 @@ def run(seed: int, events: int, step_timeout: float) -> int:
     app.processEvents()
     counts = " ".join(f"{k}={v}" for k, v in sorted(monkey.counts.items()))
     print(f"monkey seed={seed} events={done} seconds={time.monotonic() - start:.0f} "
-          f"slowest={monkey.slowest[0]:.2f}s({monkey.slowest[1]}) errors={len(errors)} {counts}", flush=True)  # fmt: skip
+          f"slowest={monkey.slowest[0]:.2f}s ({monkey.slowest[1]}) errors={len(errors)} {counts}", flush=True)  # fmt: skip
     for e in errors[:1]:
         print(e, file=sys.stderr)
     return 1 if errors else 0

@@ -1,6 +1,11 @@
-"""The pose window's files: save the scene, export the bake as BVH or MP4, screenshots.
+"""The pose window's files: open and save the scene, export the bake as BVH or MP4,
+screenshots.
 
-Every dialog starts in the folder of the last file the window wrote (else the user's
+Opening a scene (File ▸ Open scene) is a new document: it is read and checked as
+``bake`` reads it, the window takes its keys, animation, constraints and settings (and
+its character's height), goes to its first key and starts a new undo history; what
+only the studio uses (sensors, clip) is left and the status bar says so. Unsaved edits
+are offered for saving first, as on closing. Every dialog starts in the folder of the last file the window wrote (else the user's
 home) with a name (``pose.json``, ``pose.bvh``, ``pose.mp4``, or the saved scene's name
 with the export's suffix); a finished export says so in the status bar with its path.
 """
@@ -14,7 +19,7 @@ from typing import Any
 from PyQt6.QtCore import Qt
 from PyQt6.QtWidgets import QFileDialog, QMessageBox, QProgressDialog
 
-from engine.authoring.document import save_authoring
+from engine.authoring.document import authoring_from_dict, save_authoring
 from engine.errors import UserError
 from engine.motion.bvh import save_motion_bvh
 
@@ -38,6 +43,66 @@ class PoseFiles:
     def _wrote(self, path: str | Path, what: str) -> None:
         self.folder = Path(path).resolve().parent
         self.w.statusBar().showMessage(f"{what} written to {path}", DONE_MS)
+
+    def confirm_discard(self, doing: str) -> bool:
+        """With unsaved edits, ask Save / Discard / Cancel before ``doing``; whether to go on."""
+        if not self.w.dirty:
+            return True
+        buttons = QMessageBox.StandardButton
+        answer = QMessageBox.question(self.w, "Unsaved changes", f"Save the keys and targets before {doing}?",
+                                      buttons.Save | buttons.Discard | buttons.Cancel)  # fmt: skip
+        if answer == buttons.Discard:
+            return True
+        if answer != buttons.Save:
+            return False
+        path = self.ask_path("Save scene", "Scenes (*.json)", ".json")
+        if not path:
+            return False
+        self.save(path)
+        return True
+
+    def open(self, path: str | Path) -> None:
+        """Make the scene at ``path`` the window's (see the module doc)."""
+        from engine.authoring.pose_mode import PoseMode
+        from engine.input_files import read_json
+        from engine.skeleton import Skeleton
+
+        doc = read_json(path, "scene")
+        loaded = authoring_from_dict(doc, str(path))
+        w = self.w
+        height = loaded.height if loaded.height is not None else Skeleton.canonical().height()
+        if abs(height - w.mode.character.height) > 1e-6:
+            shared = w.mode.constraints  # the list the Constraints dock and the scene edit
+            w.mode = PoseMode(w.vae, height)
+            w.mode.constraints = shared
+        w.constraints.restore(tuple(loaded.constraints))
+        w.scene.keys, w.scene.animation, w.scene.settings = loaded.keys, loaded.animation, loaded.settings
+        w.scene.height = w.mode.character.height
+        m = w.mode
+        m.targets, m.heading = {}, 0.0
+        m.pose = m.character.decode(m.base_latent, m.character.grounded())  # where a scene without keys starts
+        w.playback.invalidate()
+        w.go_to(loaded.keys[0].frame if loaded.keys else 0)
+        w.undo.clear()
+        self.path = Path(path)
+        w.undo.setClean()
+        left = [k for k in ("sensors", "clip", "preset", "method") if isinstance(doc, dict) and doc.get(k)]
+        note = f"; left to the studio: {', '.join(left)}" if left else ""
+        n = len(loaded.keys)
+        w.statusBar().showMessage(f"Opened {Path(path).name}: {n} key{'s' * (n != 1)}, "
+                                  f"{len(loaded.constraints)} constraint(s){note}", DONE_MS)  # fmt: skip
+        self.folder = Path(path).resolve().parent
+
+    def open_dialog(self) -> None:
+        if not self.confirm_discard("opening another scene"):
+            return
+        path, _ = QFileDialog.getOpenFileName(self.w, "Open scene", str(self.folder), "Scenes (*.json)")
+        if path:
+            try:
+                self.open(path)
+            except (UserError, OSError, ValueError) as exc:
+                text = str(exc)
+                QMessageBox.warning(self.w, "Open scene", text if str(path) in text else f"{path}: {text}")
 
     def save(self, path: str | Path) -> None:
         save_authoring(path, self.w.scene)

@@ -22,6 +22,7 @@ def build_pose_menus(w: QMainWindow) -> None:
     named: dict[str, Any] = {}
     file_menu = w.menuBar().addMenu("&File")
     f = w.files
+    named["open"] = action(w, file_menu, "&Open scene...", f.open_dialog, QKeySequence.StandardKey.Open)
     named["save"] = action(w, file_menu, "&Save scene...", f.save_dialog, QKeySequence.StandardKey.Save)
     named["export_bvh"] = action(w, file_menu, "Export &BVH...", f.export_bvh_dialog, "Ctrl+B")
     named["export_video"] = action(w, file_menu, "Export &video...", f.export_video_dialog)

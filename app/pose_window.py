@@ -335,19 +335,9 @@ class PoseWindow(QMainWindow):
     def closeEvent(self, event: QCloseEvent | None) -> None:  # noqa: N802 (Qt's name)
         if event is None:
             return
-        if self.dirty:
-            buttons = QMessageBox.StandardButton
-            answer = QMessageBox.question(self, "Unsaved changes", "Save the keys and targets before closing?",
-                                          buttons.Save | buttons.Discard | buttons.Cancel)  # fmt: skip
-            if answer == buttons.Cancel:
-                event.ignore()
-                return
-            if answer == buttons.Save:
-                path = self.files.ask_path("Save scene", "Scenes (*.json)", ".json")
-                if not path:
-                    event.ignore()
-                    return
-                self.files.save(path)
+        if not self.files.confirm_discard("closing"):
+            event.ignore()
+            return
         self.playback.timer.stop()
         QApplication.instance().removeEventFilter(self.camera_keys)
         if not getattr(self.viewport.plotter, "_closed", False):  # a second close would free VTK twice

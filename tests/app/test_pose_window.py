@@ -317,3 +317,48 @@ def test_the_hips_ring_turns_the_whole_body(window):
     w.turns.by_ring(2, 0.0, True)
     w.turns.by_ring(2, np.radians(30.0), False)
     assert w.mode.heading == pytest.approx(30.0) and w.facing.value() == pytest.approx(30.0)
+
+
+def test_a_saved_scene_opens_again_in_a_pose_window(window, tmp_path, vae, monkeypatch):
+    """The pose window could save a scene but not open one."""
+    from engine.authoring.document import load_authoring
+    from engine.authoring.pose_mode import PoseMode
+
+    w = window
+    key_the_wrist(w, (0, [0.0, -0.15, 0.05]), (20, [0.1, -0.1, 0.35]), length=25)
+    w.move_body(np.array([0.3, 0.0, 0.0]))
+    w.add_key(20)
+    w.constraints.add("floor")
+    w.files.save(tmp_path / "s.json")
+    w.files.export_bvh(tmp_path / "first.bvh")
+    from app.pose_window import PoseWindow
+    from tests.app.gui_helpers import close_now
+
+    other = PoseWindow(vae, PoseMode(vae, 1.6))  # another height: the scene's wins
+    other.show()
+    try:
+        other.drag_joint("lwrist", other.mode.pose.positions[LW] + [0, 0, 0.1])  # an unsaved edit
+        asked = []
+        monkeypatch.setattr(QMessageBox, "question", lambda *a, **k: asked.append(a[1]) or QMessageBox.StandardButton.Discard)
+        from PyQt6.QtWidgets import QFileDialog
+
+        monkeypatch.setattr(QFileDialog, "getOpenFileName", staticmethod(lambda *a, **k: (str(tmp_path / "s.json"), "")))
+        other.actions_by_name["open"].trigger()
+        assert asked == ["Unsaved changes"]
+        assert other.mode.character.height == pytest.approx(1.75)
+        assert [k.frame for k in other.scene.keys] == [0, 20] and other.scene.animation.frames == 25
+        assert [c.name for c in other.mode.constraints] == [c.name for c in load_authoring(tmp_path / "s.json").constraints]
+        assert other.mode.constraints is other.scene.constraints
+        assert other.frame == 0 and other.undo.count() == 0 and not other.dirty
+        assert "Opened s.json: 2 keys, 1 constraint(s)" in other.statusBar().currentMessage()
+        other.files.export_bvh(tmp_path / "again.bvh")
+        assert (tmp_path / "again.bvh").read_bytes() == (tmp_path / "first.bvh").read_bytes()
+        (tmp_path / "bad.json").write_text('{"format": "dragposer-scene", "version": 2, "animation": {"fps": "fast"}}')
+        shown = []
+        monkeypatch.setattr(QMessageBox, "warning", lambda *a, **k: shown.append(a[2]))
+        monkeypatch.setattr(QFileDialog, "getOpenFileName", staticmethod(lambda *a, **k: (str(tmp_path / "bad.json"), "")))
+        other.actions_by_name["open"].trigger()
+        assert len(shown) == 1 and shown[0].count("bad.json") == 1 and "fps" in shown[0]
+        assert [k.frame for k in other.scene.keys] == [0, 20]  # a bad file changes nothing
+    finally:
+        close_now(other)

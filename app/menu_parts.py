@@ -7,6 +7,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+from PyQt6 import sip
 from PyQt6.QtCore import Qt
 from PyQt6.QtGui import QAction, QActionGroup, QKeySequence
 from PyQt6.QtWidgets import QMenu
@@ -77,8 +78,14 @@ def shortcut_rows(w: Any) -> list[tuple[str, str]]:
 
 
 def show_help(w: Any) -> HelpDialog:
-    dialog = HelpDialog(shortcut_rows(w), w)
-    dialog.setModal(False)
+    """Show the window's shortcut list, raising the one already open (a second F1 made a
+    second window, and every one stayed, hidden behind, until the window closed)."""
+    dialog = getattr(w, "help_dialog", None)
+    if dialog is None or sip.isdeleted(dialog):
+        dialog = HelpDialog(shortcut_rows(w), w)
+        dialog.setModal(False)
+        dialog.setAttribute(Qt.WidgetAttribute.WA_DeleteOnClose)
+        w.help_dialog = dialog
     dialog.show()
-    w.help_dialog = dialog
+    dialog.raise_()
     return dialog

@@ -24,7 +24,7 @@ from collections import Counter
 from pathlib import Path
 
 import numpy as np
-from PyQt6.QtCore import QPoint, QPointF, QSettings, Qt
+from PyQt6.QtCore import QEvent, QPoint, QPointF, QSettings, Qt, QTimer
 from PyQt6.QtGui import QWheelEvent
 from PyQt6.QtTest import QTest
 from PyQt6.QtWidgets import (
@@ -34,6 +34,8 @@ from PyQt6.QtWidgets import (
 
 from tests.app.gui_helpers import mouse_drag
 
+#: An open popup menu or modal dialog is closed after this long, milliseconds.
+POPUP_MS = 300
 #: Menu entries that end a window (the run would lose its windows) or leave the process.
 LEAVING = ("Quit", "Close")
 #: Keys a user presses in these windows (with the modifiers that make them edits).
@@ -55,6 +57,14 @@ def answer_every_dialog_cancel() -> None:
     QDialog.exec = lambda self: QDialog.DialogCode.Rejected  # type: ignore[method-assign]
     for name in ("getText", "getInt", "getDouble", "getItem"):
         setattr(QInputDialog, name, staticmethod(lambda *a, **k: (None, False)))
+
+
+def close_popups() -> None:
+    """Close an open popup menu or modal dialog (a button's menu runs its own event loop
+    until a person picks an entry; the monkey is not that person)."""
+    for widget in (QApplication.activePopupWidget(), QApplication.activeModalWidget()):
+        if widget is not None:
+            widget.close()
 
 
 def menu_actions(window: QWidget) -> list:
@@ -198,8 +208,14 @@ def run(seed: int, events: int, step_timeout: float) -> int:
     for done in range(1, events + 1):
         faulthandler.dump_traceback_later(step_timeout, exit=True)  # a frozen step: stacks, exit 1
         t0 = time.monotonic()
+        closer = QTimer(singleShot=True, interval=POPUP_MS)
+        closer.timeout.connect(close_popups)
+        closer.start()
         what = monkey.step()
         app.processEvents()
+        closer.stop()
+        # what the event loop does between events: widgets deleted later are deleted now
+        QApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete.value)
         took = time.monotonic() - t0
         faulthandler.cancel_dump_traceback_later()
         if took > monkey.slowest[0]:

@@ -227,8 +227,13 @@ class PoseWindow(QMainWindow):
         self.edit("clear all targets", change)
 
     def settle(self) -> None:
-        """An offline solve of the current targets (one undo step)."""
-        self.edit("settle pose", self.mode.settle)
+        """An offline solve of the current targets (one undo step); a wait cursor while it
+        runs (seconds with constraints on a loaded machine)."""
+        QApplication.setOverrideCursor(Qt.CursorShape.WaitCursor)
+        try:
+            self.edit("settle pose", self.mode.settle)
+        finally:
+            QApplication.restoreOverrideCursor()
 
     # -- keys ----------------------------------------------------------------------
     def _key_at(self, frame: int) -> Key | None:

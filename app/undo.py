@@ -2,11 +2,11 @@
 
 The stack listens to the session's typed events, so every edit is recorded however it
 was made (panel, 3D drag, Ctrl-drag pin, scene load) and no widget has to know about
-undo. A record holds the sensor set, the constraint list, the optimizer settings set
-explicitly or the method and its ghosts, before and after the edit: small tuples and dicts of immutable objects (the
+undo. A record holds the sensor set, the constraint list or the optimizer settings set
+explicitly, before and after the edit: small tuples and dicts of immutable objects (the
 session replaces a constraint object on every edit, never changes it in place), so
 undoing is one session call (``set_sensors`` / ``set_constraints`` /
-``replace_settings`` / ``set_method``) that fires its event and reaches the engine like any other edit.
+``replace_settings``) that fires its event and reaches the engine like any other edit.
 
 A drag sends an edit per mouse move; consecutive edits of the same thing (one tracker's
 offset, one constraint's fields) within :data:`MERGE_S` merge into one step, and the
@@ -85,20 +85,17 @@ class SceneUndo:
         self._sensors = (tuple(session.sensors.values()), session.preset)
         self._constraints = tuple(session.constraints)
         self._settings = dict(session.settings)
-        self._method = (session.method, tuple(session.ghosts))
         self._applying = False
         self._same_clip = False
         session.events.sensors.connect(self._on_sensors)
         session.events.constraints.connect(self._on_constraints)
         session.events.settings.connect(self._on_settings)
-        session.events.method.connect(self._on_method)
         session.events.motion.connect(self._on_motion)
 
     def close(self) -> None:
         self.session.events.sensors.disconnect(self._on_sensors)
         self.session.events.constraints.disconnect(self._on_constraints)
         self.session.events.settings.disconnect(self._on_settings)
-        self.session.events.method.disconnect(self._on_method)
         self.session.events.motion.disconnect(self._on_motion)
 
     @contextlib.contextmanager
@@ -177,27 +174,7 @@ class SceneUndo:
         key = ("setting", names, "value") if len(names) == 1 else None  # a spin box's steps merge
         self.stack.push(StateCommand(text, self._apply_settings, before, after, key))
 
-    def _on_method(self, e: Any) -> None:
-        before, after = self._method, (e.method, tuple(e.ghosts))
-        self._method = after
-        # a refused change is the engine keeping its method: the step that asked for it
-        # stays, and undoing it asks for the method in effect, which changes nothing
-        if self._applying or e.refused or before == after:
-            return
-        if before[0] != after[0]:
-            text = f"Method {after[0]}"
-        else:
-            text = f"Ghosts {', '.join(after[1])}" if after[1] else "No ghosts"
-        self.stack.push(StateCommand(text, self._apply_method, before, after))
-
     # -- applying ---------------------------------------------------------------------
-    def _apply_method(self, state: tuple) -> None:
-        self._applying = True
-        try:
-            self.session.set_method(state[0], state[1])
-        finally:
-            self._applying = False
-
     def _apply_settings(self, state: dict) -> None:
         self._applying = True
         try:

@@ -87,14 +87,12 @@ class SettingsChanged:
 
 @dataclass(frozen=True)
 class MethodChanged:
-    """The reconstruction method or its ghosts changed; ``refused``: the engine refused
-    a change and the session mirrors the method it kept (not an edit)."""
+    """The reconstruction method or its ghosts changed."""
 
     method: str
     ghosts: tuple[str, ...]
     old_method: str = ""
     old_ghosts: tuple[str, ...] = ()
-    refused: bool = False
 
 
 @dataclass(frozen=True)

@@ -306,7 +306,7 @@ class Session(ConstraintEditing, SensorEditing):
         if name != self.method:
             old = self.method
             self.method = name
-            self.events.method.emit(ev.MethodChanged(name, self.ghosts, old, self.ghosts, refused=True))
+            self.events.method.emit(ev.MethodChanged(name, self.ghosts, old, self.ghosts))
 
     # -- playback --------------------------------------------------------------------
     def seek(self, frame: int) -> None:

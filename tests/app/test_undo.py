@@ -138,23 +138,3 @@ def test_optimizer_settings_edits_are_undone_and_redone(studio, qtbot):
     stack.redo()
     stack.redo()
     assert unset in s.settings and s.settings["lr"] != before["lr"]
-
-
-def test_method_and_ghost_changes_are_undone_and_a_refused_method_adds_no_step(studio, qtbot):
-    s, stack, panel = studio.session, studio.undo.stack, studio.optimizer_panel
-    stack.clear()
-    start = s.method
-    other = next(m for m in s.available_methods() if m != start)
-    panel.method.setCurrentText(other)
-    assert s.method == other and stack.undoText() == f"Method {other}"
-    ghost = next(m for m in panel.ghost_boxes if m != other)
-    panel.ghost_boxes[ghost].setChecked(True)
-    assert ghost in s.ghosts and stack.count() == 2 and stack.undoText() == f"Ghosts {ghost}"
-    stack.undo()
-    assert ghost not in s.ghosts
-    stack.undo()
-    assert s.method == start and panel.method.currentText() == start
-    stack.redo()
-    assert s.method == other
-    s.note_method(start)  # the engine refused the change: the session mirrors it, no new step
-    assert s.method == start and stack.count() == 2 and stack.index() == 1

@@ -1,8 +1,8 @@
 """The studio window's authoring entries: File ▸ New pose... and File ▸ Export video...
 
 :func:`add_menu_entries` puts them in the File menu (one call from :mod:`app.menus`).
-New pose asks for the character's height and whether to start from the VAE's mean pose
-or from the current frame of the loaded clip, and opens a
+New pose asks for the character's height and whether to start from a neutral standing
+pose (the pose model's average) or from the current frame of the loaded clip, and opens a
 :class:`app.pose_window.PoseWindow`. Export video renders the loaded clip with the
 current tracker preset drawn on it, with the options of ``render`` chosen in a small
 dialog (:mod:`app.export_video_dialog`).
@@ -16,9 +16,11 @@ from PyQt6.QtWidgets import (
     QComboBox, QDialog, QDialogButtonBox, QDoubleSpinBox, QFormLayout, QMenu, QMessageBox,
 )  # fmt: skip
 
+from engine import skeleton as sk
 from engine.errors import UserError
 
-MEAN, CLIP = "the VAE's mean pose", "the clip's current frame"
+#: The starting poses offered: the pose model's average pose (its latent zero) or a clip frame.
+MEAN, CLIP = "a neutral standing pose", "the clip's current frame"
 
 
 class NewPoseDialog(QDialog):
@@ -28,7 +30,9 @@ class NewPoseDialog(QDialog):
         super().__init__(parent)
         self.setWindowTitle("New pose")
         form = QFormLayout(self)
-        self.height_m = QDoubleSpinBox(minimum=0.5, maximum=2.5, decimals=2, singleStep=0.05, value=1.75, suffix=" m")
+        # the canonical subject's height: a scene that gives none is baked at it too
+        canonical = round(sk.Skeleton.canonical().height(), 2)
+        self.height_m = QDoubleSpinBox(minimum=0.5, maximum=2.5, decimals=2, singleStep=0.05, value=canonical, suffix=" m")
         self.start = QComboBox()
         self.start.addItems([MEAN, CLIP] if has_clip else [MEAN])
         form.addRow("Height", self.height_m)
@@ -77,7 +81,8 @@ def export_video(window: Any) -> str | None:
     if motion is None:
         QMessageBox.warning(window, "Export video", "Open a clip first.")
         return None
-    return export(window, motion, window.session.preset or None, tuple(window.session.available_methods()))
+    return export(window, motion, window.session.preset or None, tuple(window.session.available_methods()),
+                  window.files.suggested_name("mp4", "video"))  # fmt: skip
 
 
 def add_menu_entries(window: Any, file_menu: QMenu, action) -> dict:

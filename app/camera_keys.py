@@ -14,7 +14,7 @@ from PyQt6.QtCore import QEvent, QObject, Qt
 from PyQt6.QtGui import QKeyEvent
 from PyQt6.QtWidgets import QAbstractSpinBox, QApplication, QComboBox, QLineEdit, QPlainTextEdit, QTextEdit, QWidget
 
-#: Keys of View ▸ Camera (:data:`app.menus.CAMERAS`) that no other panel widget keeps.
+#: Keys of View ▸ Camera (:data:`app.menu_parts.CAMERAS`) that no other panel widget keeps.
 CAMERA_KEYS = frozenset((Qt.Key.Key_Home, Qt.Key.Key_1, Qt.Key.Key_3, Qt.Key.Key_7))
 
 

@@ -111,13 +111,15 @@ def write_video(parent: Any, motion: Any, path: str | Path, options: RenderOptio
     return done
 
 
-def export_video(parent: Any, motion: Any, sensors: str | None, methods: tuple[str, ...] = ()) -> str | None:
-    """Ask for the options and the file, render, and say so; None when cancelled.
-    Errors (bad options, a failed method or ffmpeg) are shown, not raised."""
+def export_video(parent: Any, motion: Any, sensors: str | None, methods: tuple[str, ...] = (),
+                 suggested: str = "") -> str | None:  # fmt: skip
+    """Ask for the options and the file (``suggested`` is the name the save dialog
+    offers), render, and say so; None when cancelled. Errors (bad options, a failed
+    method or ffmpeg) are shown, not raised."""
     dialog = ExportVideoDialog(parent, sensors, methods)
     if dialog.exec() != QDialog.DialogCode.Accepted:
         return None
-    path, _ = QFileDialog.getSaveFileName(parent, "Export video", "", "MP4 video (*.mp4)")
+    path, _ = QFileDialog.getSaveFileName(parent, "Export video", suggested, "MP4 video (*.mp4)")
     if not path:
         return None
     try:

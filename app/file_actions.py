@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -24,12 +25,15 @@ from engine.atomic import atomic_path, write_text
 from engine.errors import OutputError, RigError, UserError
 from engine.input_files import read_json
 from engine.motion.formats import motion_format
+from engine.studio.scenes import scene_from_dict
 
 if TYPE_CHECKING:
     from engine.studio.session import Session
     from widgets.viewport import Viewport
 
 MAX_RECENT = 8
+#: The studio's bundled files (the example clip): save dialogs do not offer this folder.
+APP_ASSETS = Path(__file__).resolve().parents[1] / "assets"
 
 
 #: File types of the Open dialog: an AMC motion's ASF skeleton is found beside it
@@ -194,12 +198,18 @@ class FileActions:
         self.export.shutdown()
 
     def suggested_name(self, ext: str, what: str | None = None) -> str:
-        """A file name the save dialogs offer: beside the open clip, named after it and
-        the method (``walk_dragposer.bvh``), or after ``what`` (``walk_scene.json``)."""
+        """A file name the save dialogs offer, named after the open clip and the method
+        (``walk_dragposer.bvh``) or after ``what`` (``walk_scene.json``): beside the clip
+        when that folder is the user's to write in, else in the home folder (a shared
+        data folder is read-only, and the studio's own ``assets`` are not a place for
+        the user's files)."""
         clip = self.session.path
         stem = Path(clip).stem if clip else "studio"
         name = f"{stem}_{what or self.session.method}.{ext}"
-        return str(Path(clip).with_name(name)) if clip else name
+        folder = Path(clip).resolve().parent if clip else Path.home()
+        if not os.access(folder, os.W_OK) or folder.is_relative_to(APP_ASSETS):
+            folder = Path.home()
+        return str(folder / name)
 
     # -- scenes ---------------------------------------------------------------------
     def save_scene(self, path: str | None = None) -> bool:
@@ -224,16 +234,24 @@ class FileActions:
             path, _ = QFileDialog.getOpenFileName(self.w, "Load scene", "", "Studio scene (*.json)")
             if not path:
                 return False
+        stack = self.w.undo.stack
         try:
             scene = read_json(path, "scene")  # size, UTF-8, depth; errors name the file and line
             clip = scene.get("clip") if isinstance(scene, dict) else None
             if clip and (self.session.path is None or Path(clip) != self.session.path):
                 self.session.open(clip, self.rig_map_of(clip))
-            self.session.apply_scene(scene, str(path))
+            scene_from_dict(scene, str(path))  # a scene that fails changes nothing, leaves no undo step
+            stack.beginMacro(f"Load scene {Path(path).name}")  # one undo step puts back all it replaced
+            try:
+                done = self.session.apply_scene(scene, str(path))
+            finally:
+                stack.endMacro()
         except (OSError, ValueError, UserError) as exc:
-            self.show_error("Cannot load scene", f"{path}: {exc}")
+            text = str(exc)
+            self.show_error("Cannot load scene", text if str(path) in text else f"{path}: {text}")
             return False
-        self.w.undo.stack.setClean()  # the scene as loaded is what is saved
+        stack.setClean()  # the scene as loaded is what is saved
+        self.w.statusBar().showMessage(f"Loaded {Path(path).name}: {done}", 15000)
         return True
 
     # -- screenshots ------------------------------------------------------------------

@@ -11,6 +11,7 @@ from typing import Any
 from PyQt6.QtCore import QTimer
 from PyQt6.QtWidgets import QApplication
 
+from app.crash_report import CrashLog, left_reports, offer
 from app.main_window import MainWindow
 from app.measure import Measurement
 from engine.errors import UserError
@@ -101,6 +102,20 @@ def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
     os.environ.setdefault("LP_NUM_THREADS", str(max(1, (os.cpu_count() or 2) - 1)))
     app = QApplication.instance() or QApplication(sys.argv[:1])
     app.setApplicationName("DragPoser Studio")
+    crash = CrashLog()
+    reports = left_reports(crash.folder) if crash.folder.is_dir() else []
+    crash.start()
+    try:
+        return _run(app, path, method, sensors, screenshot, after_frames, measure, measure_json, pace, ghosts, view,
+                    rig_map, engine, scene, explicit_method, started, reports)  # fmt: skip
+    finally:
+        crash.close()
+
+
+def _run(app: QApplication, path: str | None, method: str, sensors: str | None, screenshot: str | None,
+         after_frames: int, measure: float | None, measure_json: str | None, pace: str | None,
+         ghosts: tuple[str, ...], view: str, rig_map: Path | None, engine: str, scene: str | None,
+         explicit_method: bool, started: Any, reports: list[Path]) -> int:  # fmt: skip
     window = MainWindow(method=method, engine=engine, started=started)
     gc.enable()  # what the start-up made is frozen now (MainWindow); app.cli.run turned it off
     mark("window built")
@@ -132,6 +147,7 @@ def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
         return _measure(app, window, measure, measure_json)
     if screenshot is None:
         start_playing(window)
+        QTimer.singleShot(0, lambda: setattr(window, "crash_box", offer(window, reports)))
         return app.exec()
     status = {"code": 1}
     start = window.session.frame

@@ -1,52 +1,25 @@
 """The studio's menus: File, Edit (undo, redo), Playback, View (display, camera) and Help.
 
 Every entry is a QAction owned by the window, so its shortcut works anywhere in the
-window and the help dialog can list it (:func:`shortcut_rows`).
+window and the help dialog can list it (:func:`app.menu_parts.shortcut_rows`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import Any
 
 from PyQt6.QtCore import Qt
-from PyQt6.QtGui import QAction, QActionGroup, QKeySequence
-from PyQt6.QtWidgets import QMainWindow, QMenu
+from PyQt6.QtGui import QKeySequence
+from PyQt6.QtWidgets import QMainWindow
 
 from app import authoring_actions, clip_saving, range_actions
-from widgets.help_dialog import HelpDialog
-
-
-#: View ▸ Camera entries: preset, label, shortcut (Blender's numpad digits).
-CAMERAS = (("home", "&Home (front-left)", "Home"), ("front", "&Front", "1"),
-           ("side", "&Side (character's left)", "3"), ("top", "&Top", "7"))  # fmt: skip
-
-
-def action(window: Any, menu: QMenu, text: str, slot: Callable[[], Any], shortcut: Any = None) -> QAction:
-    act = QAction(text, window)
-    if shortcut is not None:
-        act.setShortcut(QKeySequence(shortcut))
-        act.setShortcutContext(Qt.ShortcutContext.WindowShortcut)
-    act.triggered.connect(lambda _=False: slot())
-    menu.addAction(act)
-    return act
-
-
-def toggle(window: Any, menu: QMenu, text: str, on: bool, slot: Callable[[bool], Any],
-           shortcut: str | None = None) -> QAction:  # fmt: skip
-    act = QAction(text, window, checkable=True, checked=on)
-    if shortcut:
-        act.setShortcut(QKeySequence(shortcut))
-        act.setShortcutContext(Qt.ShortcutContext.WindowShortcut)
-    act.toggled.connect(slot)
-    menu.addAction(act)
-    return act
+from app.menu_parts import action, add_view_entries, show_help, toggle
 
 
 def build_menus(w: QMainWindow) -> None:
     """Fill ``w``'s menu bar; actions the tests and the help need are kept on ``w.actions_by_name``."""
     f = w.files
-    named: dict[str, QAction] = {}
+    named: dict[str, Any] = {}
     file_menu = w.menuBar().addMenu("&File")
     action(w, file_menu, "&Open BVH...", f.open_dialog, QKeySequence.StandardKey.Open)
     w.recent_menu = f.recent_menu = file_menu.addMenu("Open &recent")
@@ -79,15 +52,8 @@ def build_menus(w: QMainWindow) -> None:
     action(w, play, "Previous frame", lambda: w.session.step(-1), "Left")
     view = w.menuBar().addMenu("&View")
     vp = w.viewport
-    display = view.addMenu("&Draw reconstruction as")
-    group = QActionGroup(w)
-    for mode, label, key in (("stick", "&Stick figure", "S"), ("body", "Shaded &body", "B")):
-        act = toggle(w, display, label, vp.display == mode, lambda on, m=mode: on and vp.set_display(m), key)
-        group.addAction(act)
-        named[f"display-{mode}"] = act
-    camera = view.addMenu("&Camera")
-    for preset, label, key in CAMERAS:
-        named[f"camera-{preset}"] = action(w, camera, label, lambda p=preset: vp.set_camera(p, w.hips()), key)
+    entries, camera = add_view_entries(w, view, "reconstruction", vp.set_display)
+    named.update(entries)
     named["follow"] = toggle(w, camera, "F&ollow character", True, lambda v: setattr(vp, "follow", v), "F")
     view.addSeparator()
     toggle(w, view, "Ground truth", True, lambda v: setattr(vp, "show_ground_truth", v), "G")
@@ -95,29 +61,3 @@ def build_menus(w: QMainWindow) -> None:
     help_menu = w.menuBar().addMenu("&Help")
     named["help"] = action(w, help_menu, "&Keyboard and mouse...", lambda: show_help(w), QKeySequence.StandardKey.HelpContents)
     w.actions_by_name = named
-
-
-def shortcut_rows(w: Any) -> list[tuple[str, str]]:
-    """``(shortcut, menu path)`` of every window action that has a shortcut."""
-    rows = []
-
-    def walk(menu: QMenu, path: str) -> None:
-        for act in menu.actions():
-            if act.menu() is not None:
-                walk(act.menu(), f"{path} > {act.text().replace('&', '')}")
-            elif not act.isSeparator() and not act.shortcut().isEmpty():
-                keys = act.shortcut().toString(QKeySequence.SequenceFormat.NativeText)
-                rows.append((keys, f"{path} > {act.text().replace('&', '').rstrip('.')}"))
-
-    for top in w.menuBar().actions():
-        if top.menu() is not None:
-            walk(top.menu(), top.text().replace("&", ""))
-    return rows
-
-
-def show_help(w: Any) -> HelpDialog:
-    dialog = HelpDialog(shortcut_rows(w), w)
-    dialog.setModal(False)
-    dialog.show()
-    w.help_dialog = dialog
-    return dialog

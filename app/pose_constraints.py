@@ -53,14 +53,14 @@ class PoseConstraints:
         spec = self.list.constraint_catalog().get(kind)
         defaults = {} if spec is None else {f.name: f.default for f in spec.fields}
         placed = placed_params(kind, defaults, self.w.mode.pose.positions) | params
-        self.w._edit(f"add {kind}", lambda: self.list.add_constraint(kind, **placed), solve=True)
+        self.w.edit(f"add {kind}", lambda: self.list.add_constraint(kind, **placed), solve=True)
 
     def remove(self, name: str) -> None:
-        self.w._edit(f"remove {name}", lambda: self.list.remove_constraint(name), solve=True)
+        self.w.edit(f"remove {name}", lambda: self.list.remove_constraint(name), solve=True)
 
     def update(self, name: str, changes: dict) -> None:
-        self.w._edit(f"edit {name}", lambda: self.list.update_constraint(name, **changes),
-                     ("constraint", name, tuple(changes)), solve=True)  # fmt: skip
+        self.w.edit(f"edit {name}", lambda: self.list.update_constraint(name, **changes),
+                    ("constraint", name, tuple(changes)), solve=True)  # fmt: skip
 
     # -- undo and display ----------------------------------------------------------
     def state(self) -> tuple:

@@ -115,7 +115,7 @@ def load_input(path: Path):
         return bake(load_authoring(path), load_default_models().vae).motion
     from engine.studio.clips import load_clip
 
-    return load_clip(path)
+    return load_clip(path, own_rate=True)
 
 
 def render_video(motion, out: Path, options: RenderOptions = RenderOptions(),

@@ -2,11 +2,11 @@
 
 The stack listens to the session's typed events, so every edit is recorded however it
 was made (panel, 3D drag, Ctrl-drag pin, scene load) and no widget has to know about
-undo. A record holds the sensor set or the constraint list before and after the edit:
-both are small tuples of immutable objects (the session replaces a constraint object on
-every edit, never changes it in place), so undoing is one session call
-(``set_sensors`` / ``set_constraints``) that fires its event and reaches the engine
-like any other edit.
+undo. A record holds the sensor set, the constraint list or the optimizer settings set
+explicitly, before and after the edit: small tuples and dicts of immutable objects (the
+session replaces a constraint object on every edit, never changes it in place), so
+undoing is one session call (``set_sensors`` / ``set_constraints`` /
+``replace_settings``) that fires its event and reaches the engine like any other edit.
 
 A drag sends an edit per mouse move; consecutive edits of the same thing (one tracker's
 offset, one constraint's fields) within :data:`MERGE_S` merge into one step, and the
@@ -84,15 +84,18 @@ class SceneUndo:
         self.stack = QUndoStack(parent)
         self._sensors = (tuple(session.sensors.values()), session.preset)
         self._constraints = tuple(session.constraints)
+        self._settings = dict(session.settings)
         self._applying = False
         self._same_clip = False
         session.events.sensors.connect(self._on_sensors)
         session.events.constraints.connect(self._on_constraints)
+        session.events.settings.connect(self._on_settings)
         session.events.motion.connect(self._on_motion)
 
     def close(self) -> None:
         self.session.events.sensors.disconnect(self._on_sensors)
         self.session.events.constraints.disconnect(self._on_constraints)
+        self.session.events.settings.disconnect(self._on_settings)
         self.session.events.motion.disconnect(self._on_motion)
 
     @contextlib.contextmanager
@@ -161,7 +164,24 @@ class SceneUndo:
             text = "Replace constraints"
         self.stack.push(StateCommand(text, self._apply_constraints, before, after, key))
 
+    def _on_settings(self, e: Any) -> None:
+        before, after = self._settings, dict(self.session.settings)
+        self._settings = after
+        if self._applying or before == after:
+            return
+        names = tuple(sorted(k for k in set(before) | set(after) if before.get(k) != after.get(k)))
+        text = f"Set {', '.join(names)}" if len(names) <= 3 else f"Set {len(names)} optimizer settings"
+        key = ("setting", names, "value") if len(names) == 1 else None  # a spin box's steps merge
+        self.stack.push(StateCommand(text, self._apply_settings, before, after, key))
+
     # -- applying ---------------------------------------------------------------------
+    def _apply_settings(self, state: dict) -> None:
+        self._applying = True
+        try:
+            self.session.replace_settings(state)
+        finally:
+            self._applying = False
+
     def _apply_sensors(self, state: tuple) -> None:
         self._applying = True
         try:

@@ -1,58 +1,147 @@
-"""The key strip under the timeline: the animation's keys, its length and rate, preview.
+"""The key timeline of the pose window: the animation's keys, its length and rate, preview.
 
-A strip of frames with a mark per key; clicking a frame makes it current. Buttons add a
-key at the current frame, delete the current key, move it to another frame; spin boxes
-set the length (frames) and the rate (fps). Every edit is a signal; the window applies
-it and shows the result back with :meth:`KeyStrip.set_state`.
+A frame ruler with a mark per key: a click or drag scrubs (the window shows the frame,
+an in-between too), a key dragged along it moves to where it is dropped. Buttons add a
+key at the current frame, delete the current key, move it to the frame in the box;
+spin boxes set the length (frames) and the rate (fps); Play plays the bake from the
+current frame (once, or looped with Loop) and Stop ends it. Every edit is a signal;
+the window applies it and shows the result back with :meth:`KeyStrip.set_state`.
 """
 
 from __future__ import annotations
 
-from PyQt6.QtCore import QRectF, pyqtSignal
-from PyQt6.QtGui import QColor, QMouseEvent, QPainter, QPaintEvent
+from PyQt6.QtCore import QPointF, QRectF, Qt, pyqtSignal
+from PyQt6.QtGui import QColor, QMouseEvent, QPainter, QPaintEvent, QPen, QPolygonF
 from PyQt6.QtWidgets import (
-    QComboBox, QDoubleSpinBox, QHBoxLayout, QLabel, QPushButton, QSpinBox, QVBoxLayout, QWidget,
+    QCheckBox, QComboBox, QDoubleSpinBox, QHBoxLayout, QLabel, QPushButton, QSpinBox, QVBoxLayout, QWidget,
 )  # fmt: skip
 
 from widgets import style
 
 MAX_FRAMES = 36000
+#: Height of the frame ruler above the keys, pixels.
+RULER_PX = 16
+#: Space at either end, so the first and last frame's line and key are whole, pixels.
+MARGIN_PX = 8
+#: A press this close to a key's mark grabs the key, pixels.
+KEY_GRAB_PX = 6
+#: Least spacing of the ruler's numbers, pixels.
+LABEL_PX = 40
 #: In-between rules (``engine.authoring.keys.SCHEMES``; widgets do not import the engine's solver).
 SCHEMES = ("cubic", "linear", "spherical")
 
 
 class _Strip(QWidget):
-    """Frames as a bar, keys as marks, the current frame as a line."""
+    """The key timeline: a frame ruler, keys as marks, the current frame as a line with a
+    head. A press or drag off the keys scrubs (``scrubbed(frame)``); a key dragged to
+    another frame and dropped there asks to move it (``keyDragged(from, to)``); a press
+    on a key without moving selects its frame."""
 
-    clicked = pyqtSignal(int)
+    scrubbed = pyqtSignal(int)
+    keyDragged = pyqtSignal(int, int)
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
-        self.setMinimumHeight(22)
+        self.setMinimumHeight(RULER_PX + 28)
+        self.setCursor(Qt.CursorShape.PointingHandCursor)
+        self.setToolTip("Click or drag to scrub (in-betweens are shown); drag a key to move it")
         self.frames, self.keys, self.current = 61, (), 0
+        self.dragging: int | None = None  # the key held
+        self.drop = 0  # where it would land
 
     def frame_at(self, x: float) -> int:
-        return max(0, min(self.frames - 1, int(round(x / max(1, self.width() - 1) * (self.frames - 1)))))
+        span = max(1.0, self.width() - 1 - 2 * MARGIN_PX)
+        return max(0, min(self.frames - 1, int(round((x - MARGIN_PX) / span * (self.frames - 1)))))
 
     def x_of(self, frame: int) -> float:
-        return frame / max(1, self.frames - 1) * (self.width() - 1)
+        return MARGIN_PX + frame / max(1, self.frames - 1) * max(1.0, self.width() - 1 - 2 * MARGIN_PX)
 
-    def mousePressEvent(self, event: QMouseEvent | None) -> None:
-        if event is not None:
-            self.clicked.emit(self.frame_at(event.position().x()))
+    def key_at(self, x: float) -> int | None:
+        """The key whose mark is under pixel ``x``, the nearest one if several."""
+        near = [(abs(self.x_of(k) - x), k) for k in self.keys if abs(self.x_of(k) - x) <= KEY_GRAB_PX]
+        return min(near)[1] if near else None
 
-    def paintEvent(self, event: QPaintEvent | None) -> None:
+    def mousePressEvent(self, event: QMouseEvent | None) -> None:  # noqa: N802 (Qt's name)
+        if event is None or event.button() != Qt.MouseButton.LeftButton:
+            return
+        x = event.position().x()
+        key = self.key_at(x)
+        if key is not None:
+            self.dragging = self.drop = key
+            self.update()
+        else:
+            self.scrubbed.emit(self.frame_at(x))
+
+    def mouseMoveEvent(self, event: QMouseEvent | None) -> None:  # noqa: N802 (Qt's name)
+        if event is None or not event.buttons() & Qt.MouseButton.LeftButton:
+            return
+        frame = self.frame_at(event.position().x())
+        if self.dragging is not None:
+            if frame != self.drop:
+                self.drop = frame
+                self.update()
+        elif frame != self.current:
+            self.scrubbed.emit(frame)
+
+    def mouseReleaseEvent(self, event: QMouseEvent | None) -> None:  # noqa: N802 (Qt's name)
+        if self.dragging is None:
+            return
+        key, drop, self.dragging = self.dragging, self.drop, None
+        self.update()
+        if drop != key:
+            self.keyDragged.emit(key, drop)
+        else:
+            self.scrubbed.emit(key)
+
+    def ruler_step(self) -> int:
+        """Frames between numbered ticks: the smallest of 1, 2, 5, 10, 20, 50... that
+        leaves :data:`LABEL_PX` pixels between numbers."""
+        per_frame = max(1e-6, (self.width() - 2 * MARGIN_PX) / max(1, self.frames - 1))
+        step, k = 1, 0
+        while step * per_frame < LABEL_PX:
+            k += 1
+            step = (1, 2, 5)[k % 3] * 10 ** (k // 3)
+        return step
+
+    def paintEvent(self, event: QPaintEvent | None) -> None:  # noqa: N802 (Qt's name)
         p = QPainter(self)
+        h = self.height()
         p.fillRect(self.rect(), QColor(style.PLOT_BACKGROUND))
-        p.setPen(QColor(style.GIZMO))
-        p.setBrush(QColor(style.GIZMO))
+        p.fillRect(QRectF(0, 0, self.width(), RULER_PX), QColor("#232733"))
+        p.setPen(QColor(style.PLOT_FOREGROUND))
+        font = p.font()
+        font.setPixelSize(10)
+        p.setFont(font)
+        step = self.ruler_step()
+        for f in range(0, self.frames, step):
+            x = self.x_of(f)
+            p.drawLine(QPointF(x, RULER_PX - 5), QPointF(x, RULER_PX))
+            if x + 2 + p.fontMetrics().horizontalAdvance(str(f)) < self.width():  # no cut number at the end
+                p.drawText(QPointF(x + 2, RULER_PX - 5), str(f))
+        p.setPen(QColor("#3a4150"))
+        for f in range(0, self.frames, max(1, step // 5)):
+            x = self.x_of(f)
+            p.drawLine(QPointF(x, RULER_PX), QPointF(x, RULER_PX + 3))
         for k in self.keys:
-            x = self.x_of(k)
-            p.drawRect(QRectF(x - 3, 3, 6, self.height() - 6))
-        p.setPen(QColor(style.RECONSTRUCTION))
+            ghost = self.dragging == k
+            colour = QColor(style.GIZMO)
+            if ghost:
+                colour.setAlpha(90)
+            self._diamond(p, self.x_of(k), colour)
+        if self.dragging is not None:
+            self._diamond(p, self.x_of(self.drop), QColor(style.GIZMO))
         x = self.x_of(self.current)
-        p.drawLine(int(x), 0, int(x), self.height())
+        p.setPen(QPen(QColor(style.RECONSTRUCTION), 2))
+        p.drawLine(QPointF(x, RULER_PX), QPointF(x, h))
+        p.setBrush(QColor(style.RECONSTRUCTION))
+        p.drawPolygon(QPolygonF([QPointF(x - 5, 0), QPointF(x + 5, 0), QPointF(x, 7)]))
         p.end()
+
+    def _diamond(self, p: QPainter, x: float, colour: QColor) -> None:
+        y, r = RULER_PX + (self.height() - RULER_PX) / 2, KEY_GRAB_PX - 1
+        p.setPen(QColor(style.PLOT_BACKGROUND))
+        p.setBrush(colour)
+        p.drawPolygon(QPolygonF([QPointF(x, y - r - 2), QPointF(x + r, y), QPointF(x, y + r + 2), QPointF(x - r, y)]))
 
 
 class KeyStrip(QWidget):
@@ -74,7 +163,8 @@ class KeyStrip(QWidget):
         outer = QVBoxLayout(self)
         outer.setContentsMargins(4, 2, 4, 2)
         self.strip = _Strip()
-        self.strip.clicked.connect(self._pick)
+        self.strip.scrubbed.connect(self._pick)
+        self.strip.keyDragged.connect(self.moveRequested.emit)
         outer.addWidget(self.strip)
         row = QHBoxLayout()
         outer.addLayout(row)
@@ -94,10 +184,14 @@ class KeyStrip(QWidget):
         self.interpolation.addItems(SCHEMES)
         self.interpolation.setToolTip("How in-betweens blend the keys' latents")
         self.interpolation.currentTextChanged.connect(self.interpolationChanged.emit)
-        self.preview = QPushButton("Preview")
+        self.preview = QPushButton("Play")
+        self.preview.setToolTip("Play the bake from the current frame; Stop ends it (Space)")
         self.preview.clicked.connect(self.previewRequested.emit)
+        self.loop = QCheckBox("Loop")
+        self.loop.setToolTip("Play again from the first frame at the end")
+        self.label.setMinimumWidth(self.label.fontMetrics().horizontalAdvance("frame 00000 / 00000, 000 keys (key)"))
         for w in (self.label, self.add, self.delete, self.move_to, self.move, self.length, self.fps, self.interpolation,
-                  self.preview):  # fmt: skip
+                  self.preview, self.loop):  # fmt: skip
             row.addWidget(w)
         self.set_state(61, 30.0, (), 0)
 
@@ -122,5 +216,10 @@ class KeyStrip(QWidget):
         on_key = s.current in s.keys
         self.delete.setEnabled(on_key)
         self.move.setEnabled(on_key)
-        self.label.setText(f"frame {s.current} / {frames - 1}, {len(s.keys)} key{'s' * (len(s.keys) != 1)}")
+        where = " (key)" if on_key else " (in-between)" if len(s.keys) > 1 and s.keys[0] < s.current < s.keys[-1] else ""
+        self.label.setText(f"frame {s.current} / {frames - 1}, {len(s.keys)} key{'s' * (len(s.keys) != 1)}{where}")
         s.update()
+
+    def set_playing(self, playing: bool) -> None:
+        """Show the Play button as Stop while the bake plays."""
+        self.preview.setText("Stop" if playing else "Play")

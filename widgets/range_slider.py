@@ -76,6 +76,10 @@ class RangeSlider(QSlider):
             self.set_selection(self.value(), frame)  # a click: from the current frame
             event.accept()
             return
+        if event.button() == Qt.MouseButton.LeftButton:
+            # a click on the groove jumps there (QSlider pages by 10); the handle is then
+            # under the mouse, so the press goes on as a drag of it
+            self.setValue(self.frame_at(x))
         super().mousePressEvent(event)
 
     def mouseMoveEvent(self, event: QMouseEvent | None) -> None:  # noqa: N802 (Qt's name)

@@ -36,11 +36,12 @@ class TargetList(QWidget):
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         outer = QVBoxLayout(self)
-        self.hint = QLabel("Drag a joint to add a target; drag its sphere to move it; with Alt, turn it.")
+        self.hint = QLabel("Drag a joint to add a target; drag its sphere to move it; drag a ring to turn it. The hips move the whole body; their ring turns it.")
         self.hint.setWordWrap(True)
         outer.addWidget(self.hint)
         self.grid_host = QWidget()
         self.grid = QGridLayout(self.grid_host)
+        self.grid.setColumnStretch(4, 1)  # spare width goes right of the controls
         outer.addWidget(self.grid_host)
         self.clear_all = QPushButton("Clear all")
         self.clear_all.clicked.connect(self.clearAllRequested.emit)
@@ -68,6 +69,7 @@ class TargetList(QWidget):
         for row in self.rows.values():
             for w in row.values():
                 self.grid.removeWidget(w)
+                w.hide()  # at once: the deletion waits for the event loop
                 w.deleteLater()
         self.rows = {}
         for i, joint in enumerate(joints):
@@ -79,8 +81,12 @@ class TargetList(QWidget):
             turn.setToolTip("Keep the joint turned as it is now (a rotation target)")
             turn.toggled.connect(lambda on, j=joint: self.turnHeld.emit(j, bool(on)))
             clear = QPushButton("Clear")
+            clear.setMaximumWidth(clear.fontMetrics().horizontalAdvance("Clear") + 16)  # the row fits the panel
             clear.clicked.connect(lambda _=False, j=joint: self.clearRequested.emit(j))
             label = QLabel(joint)
-            for col, w in enumerate((enabled, label, weight, turn, clear)):
-                self.grid.addWidget(w, i, col)
+            # two lines per target, so a long name and its controls fit the side panel
+            self.grid.addWidget(enabled, 2 * i, 0)
+            self.grid.addWidget(label, 2 * i, 1, 1, 3)
+            for col, w in enumerate((weight, turn, clear), start=1):
+                self.grid.addWidget(w, 2 * i + 1, col)
             self.rows[joint] = {"enabled": enabled, "label": label, "weight": weight, "turn": turn, "clear": clear}

@@ -140,7 +140,7 @@ def _in_between(character: Character, scene: AuthoringScene, keys: list[Key], po
                 f: int, scene_frame: float, scheme: str, smooth: SmoothConstraint, done: list[Pose]) -> Pose:  # fmt: skip
     z = interpolate(times, [p.latent for p in poses], f, scheme).astype(np.float32)
     root = interpolate(times, [p.root_pos for p in poses], f, scheme)
-    heading = float(interpolate(times, [np.array([k.heading]) for k in keys], f, scheme)[0])
+    heading = interpolated_heading(keys, times, f, scheme)
     targets = interpolated_targets(keys, times, f, scheme)
     _, reach, rotations = solve_inputs(targets)
     aims = []
@@ -156,6 +156,13 @@ def _in_between(character: Character, scene: AuthoringScene, keys: list[Key], po
     ctx = character.placed(root, heading, f, previous=previous, prior=z)
     return character.solve(z, [*terms, smooth, *rules], ctx, reach, rotations, iterations=IN_BETWEEN_ITERATIONS,
                            prior_weight=IN_BETWEEN_PRIOR, rule="sgd")  # fmt: skip
+
+
+def interpolated_heading(keys: list[Key], times: list[float], t: float, scheme: str) -> float:
+    """The facing (degrees) at time ``t``: the keys' headings interpolated, unwrapped so
+    keys facing 170 and -170 degrees turn 20 degrees between them, not 340."""
+    headings = np.degrees(np.unwrap(np.radians([k.heading for k in keys])))
+    return float(interpolate(times, [np.array([h]) for h in headings], t, scheme)[0])
 
 
 def interpolated_targets(keys: list[Key], times: list[float], t: float, scheme: str) -> list[JointTarget]:

@@ -30,6 +30,7 @@ from engine import skeleton as sk
 from engine.constraints.base import Constraint
 from engine.constraints.temporal_prior import TemporalPriorConstraint
 from engine.errors import UserError
+from engine.kinematics import quat_np as QN
 from engine.kinematics.fk import fk
 from engine.solver import FrameContext, OptimizerSettings, PoseOptimizer, RootFrame, RootOverride
 from engine.solver.limb_ik import LIMBS, finish
@@ -109,6 +110,23 @@ class Pose:
     def __post_init__(self) -> None:
         if self.decoded is None:
             self.decoded = self.positions.copy()
+
+    def moved(self, delta) -> "Pose":
+        """The same pose with the whole body translated by ``delta (3,)`` metres (root
+        motion: the latent describes the body relative to its root, so it is unchanged)."""
+        d = np.asarray(delta, float).reshape(3)
+        return Pose(self.latent.copy(), self.local_rot.copy(), self.root_pos + d, self.positions + d,
+                    self.iterations, self.decoded + d)  # fmt: skip
+
+    def turned(self, yaw_deg: float) -> "Pose":
+        """The same pose with the whole body turned by ``yaw_deg`` degrees about the
+        vertical through its root (the latent is relative to the heading, so it is unchanged)."""
+        q = yaw_quaternion(yaw_deg)
+        r = QN.to_matrix(q)
+        local = self.local_rot.copy()
+        local[0] = QN.mul(q, local[0])
+        return Pose(self.latent.copy(), local, self.root_pos.copy(), (self.positions - self.root_pos) @ r.T + self.root_pos,
+                    self.iterations, (self.decoded - self.root_pos) @ r.T + self.root_pos)  # fmt: skip
 
 
 class Character:

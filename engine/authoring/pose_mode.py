@@ -144,7 +144,8 @@ class PoseMode:
         self.pose: Pose = self.character.decode(self.base_latent, self.character.grounded(root_xy, self.heading))
         self._standing_root = float(self.pose.root_pos[2])
         #: Where each untargeted foot joint stays (world, metres), see :class:`PoseOptions`.
-        self.planted: dict[str, np.ndarray] = {j: self.pose.positions[sk.JOINT_INDEX[j]].copy() for j in PLANTED}
+        self.planted: dict[str, np.ndarray] = {}
+        self.plant_where_standing()
 
     @classmethod
     def from_clip_frame(cls, vae, motion: Motion, frame: int, height: float | None = None,
@@ -198,6 +199,11 @@ class PoseMode:
                         if _FOOT_OF[j] not in moved and j not in self.targets]  # fmt: skip
         terms, reach, rotations = solve_inputs(targets)
         return terms + list(self.constraints), reach, rotations
+
+    def plant_where_standing(self) -> None:
+        """Plant the feet where the current pose has them (after the pose was set from a
+        key, or the whole body was moved or turned)."""
+        self.planted = {j: self.pose.positions[sk.JOINT_INDEX[j]].copy() for j in PLANTED}
 
     def _replant(self) -> None:
         """A foot the user moves is planted where it is left."""

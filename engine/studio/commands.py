@@ -38,9 +38,11 @@ class SetConstraints:
 
 @dataclass(frozen=True)
 class SetSettings:
-    """Settings the studio set explicitly (checked, immutable), merged into the earlier ones."""
+    """Settings the studio set explicitly (checked, immutable), merged into the earlier
+    ones; with ``replace``, instead of them (an undo puts back a setting left unset)."""
 
     values: SettingsEdit
+    replace: bool = False
 
 
 @dataclass(frozen=True)

@@ -158,9 +158,9 @@ class MethodSet:
         """Forget the state kept by :meth:`keep_state` (another frame, play, a reset)."""
         self._kept = None
 
-    def set_settings(self, values: Mapping[str, Any]) -> None:
-        """Merge ``values`` into the settings and push them."""
-        self.settings = self.settings | values
+    def set_settings(self, values: Mapping[str, Any], replace: bool = False) -> None:
+        """Merge ``values`` into the settings (``replace``: take them instead) and push them."""
+        self.settings = SettingsEdit(values) if replace else self.settings | values
         self.configure("settings")
 
     def set_constraints(self, constraints: tuple[Any, ...]) -> None:

@@ -32,7 +32,7 @@ from engine.solver.settings import SettingsEdit
 from engine.studio import commands as cmd
 from engine.studio import events as ev
 from engine.studio.clips import load_clip, sensor_presets
-from engine.studio.scenes import default_settings, scene_from_dict, scene_to_dict
+from engine.studio.scenes import default_settings, describe_load, scene_from_dict, scene_to_dict
 from engine.studio.session_constraints import PIN_PREFIX, ConstraintEditing  # noqa: F401 (PIN_PREFIX: re-exported)
 from engine.studio.session_sensors import SensorEditing
 from engine.studio.process import EngineProcess
@@ -275,6 +275,16 @@ class Session(ConstraintEditing, SensorEditing):
         self._send(cmd.SetSettings(edit))
         self.events.settings.emit(ev.SettingsChanged(dict(edit), old))
 
+    def replace_settings(self, values: Mapping[str, Any]) -> None:
+        """Make ``values`` the settings set explicitly, the others back to the method's
+        profile (an undo of a settings edit)."""
+        edit = SettingsEdit(values)
+        names = set(edit) | set(self.settings)
+        old = {k: self.settings.get(k) for k in names}
+        self.settings = edit
+        self._send(cmd.SetSettings(edit, replace=True))
+        self.events.settings.emit(ev.SettingsChanged({k: edit.get(k) for k in names}, old))
+
     def set_method(self, name: str, ghosts: tuple[str, ...] | None = None) -> None:
         old, old_ghosts = self.method, self.ghosts
         self.method = name
@@ -363,16 +373,21 @@ class Session(ConstraintEditing, SensorEditing):
         return scene_to_dict(self.path, self.method, self.preset, tuple(self.sensors.values()),
                              self.constraints, self.settings, self.frame)  # fmt: skip
 
-    def apply_scene(self, scene: dict[str, Any], where: str = "scene") -> None:
-        """Restore :meth:`to_scene` output (the clip is loaded by the caller).
+    def apply_scene(self, scene: dict[str, Any], where: str = "scene") -> str:
+        """Restore :meth:`to_scene` output (the clip is loaded by the caller); what the
+        scene leaves out (sensors, method, frame) stays as it is. Returns a line saying
+        what was replaced and kept (:func:`engine.studio.scenes.describe_load`).
 
         Everything is checked before anything changes; errors name ``where``.
         """
         parsed = scene_from_dict(scene, where)
         self.set_settings(parsed["settings"])
-        self.set_sensors(parsed["sensors"], parsed["preset"] or "")
+        if parsed["sensors"] is not None:
+            self.set_sensors(parsed["sensors"], parsed["preset"] or "")
         self.set_constraints(parsed["constraints"])
         if parsed["method"] and parsed["method"] != self.method:
             self.set_method(parsed["method"])
-        self.seek(parsed["frame"])
+        if parsed["frame"] is not None:
+            self.seek(parsed["frame"])
+        return describe_load(parsed)
 

@@ -184,7 +184,7 @@ class EngineThread(threading.Thread):
         elif isinstance(c, cmd.SetConstraints):
             self._methods.set_constraints(c.constraints)
         elif isinstance(c, cmd.SetSettings):
-            self._methods.set_settings(c.values)
+            self._methods.set_settings(c.values, c.replace)
         elif isinstance(c, cmd.SetMethod):
             self._ghost_errors.clear()
             self._set_method(c)

@@ -1,5 +1,6 @@
 """The ``studio`` fixture: a main window on a synthetic clip that must clean up after itself
-(no thread, VTK interactor or visible window may outlive a test)."""
+(no thread, VTK interactor or visible window may outlive a test); ``pose_window``: a pose
+and key window on a 1.75 m character (``vae``: the shipped pose VAE, loaded once)."""
 
 from __future__ import annotations
 
@@ -40,3 +41,26 @@ def studio(qtbot, tmp_path, synthetic_motion, monkeypatch):
     QApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete.value)
     leaked = [type(w).__name__ for w in QApplication.topLevelWidgets() if w.isVisible()]
     assert not leaked, f"widgets left open: {leaked}"
+
+
+@pytest.fixture(scope="session")
+def vae():
+    from engine.models import load_default_models
+
+    return load_default_models().vae
+
+
+@pytest.fixture
+def pose_window(qtbot, vae, monkeypatch):
+    from PyQt6.QtWidgets import QMessageBox
+
+    from app.pose_window import PoseWindow
+    from engine.authoring.pose_mode import PoseMode
+    from tests.app.gui_helpers import close_now
+
+    monkeypatch.setattr(QMessageBox, "question", lambda *a, **k: QMessageBox.StandardButton.Discard)
+    w = PoseWindow(vae, PoseMode(vae, 1.75))
+    w.resize(1000, 700)
+    w.show()
+    yield w
+    close_now(w)

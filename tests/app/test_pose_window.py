@@ -5,45 +5,19 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from PyQt6.QtWidgets import QMessageBox
+from PyQt6.QtWidgets import QApplication, QMessageBox
 
 from engine import skeleton as sk
 from engine.cli.main import main as cli
+from tests.app.gui_helpers import close_now
 
 pytestmark = pytest.mark.gui
 LW = sk.JOINT_INDEX["lwrist"]
 
 
 @pytest.fixture
-def window(qtbot, vae, monkeypatch):
-    from app.pose_window import PoseWindow
-    from engine.authoring.pose_mode import PoseMode
-
-    monkeypatch.setattr(QMessageBox, "question", lambda *a, **k: QMessageBox.StandardButton.Discard)
-    w = PoseWindow(vae, PoseMode(vae, 1.75))
-    w.resize(1000, 700)
-    w.show()
-    yield w
-    close_now(w)
-
-
-def close_now(w) -> None:
-    """Close and delete ``w`` now, as the studio fixture does: a VTK view deleted later,
-    among other tests' events, crashes."""
-    from PyQt6.QtCore import QEvent
-    from PyQt6.QtWidgets import QApplication
-
-    w.undo.setClean()
-    w.close()
-    w.deleteLater()
-    QApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete.value)
-
-
-@pytest.fixture(scope="session")
-def vae():
-    from engine.models import load_default_models
-
-    return load_default_models().vae
+def window(pose_window):
+    return pose_window
 
 
 def state(w):
@@ -52,6 +26,17 @@ def state(w):
             [(k.frame, sorted(k.targets)) for k in w.scene.keys], w.scene.animation.frames, w.scene.animation.fps,
             w.scene.animation.interpolation, w.keys.interpolation.currentText(),
             w.mode.pose.positions.round(9).tolist())  # fmt: skip
+
+
+def key_the_wrist(w, *keys: tuple, length: int) -> np.ndarray:
+    """Drag the left wrist by each ``(frame, offset)``'s offset from where it starts and key
+    it there; set the length (frames); the wrist's start (3,)."""
+    start = w.mode.pose.positions[LW].copy()
+    for frame, offset in keys:
+        w.drag_joint("lwrist", start + offset)
+        w.add_key(frame)
+    w.keys.length.setValue(length)
+    return start
 
 
 def test_dragging_a_joint_makes_a_target_the_pose_follows(window):
@@ -133,18 +118,15 @@ def test_every_edit_kind_undoes_and_redoes(window, qtbot):
 
 def test_the_window_exports_what_bake_writes_from_its_saved_scene(window, tmp_path):
     w = window
-    start = w.mode.pose.positions[LW].copy()
-    w.drag_joint("lwrist", start + [0.0, -0.15, 0.05])
-    w.add_key(0)
-    w.drag_joint("lwrist", start + [0.1, -0.1, 0.35])
-    w.add_key(20)
-    w.keys.length.setValue(21)
-    w.save(tmp_path / "s.json")
+    key_the_wrist(w, (0, [0.0, -0.15, 0.05]), (20, [0.1, -0.1, 0.35]), length=21)
+    w.files.save(tmp_path / "s.json")
     assert not w.dirty
-    w.export_bvh(tmp_path / "studio.bvh")
+    w.files.export_bvh(tmp_path / "studio.bvh")
+    assert w.statusBar().currentMessage() == f"BVH written to {tmp_path / 'studio.bvh'}"
+    assert w.files.suggested(".mp4") == str(tmp_path / "s.mp4")  # named after the scene, where it was saved
     assert cli(["bake", str(tmp_path / "s.json"), "--out", str(tmp_path / "cli.bvh"), "--no-progress"]) == 0
     assert (tmp_path / "cli.bvh").read_bytes() == (tmp_path / "studio.bvh").read_bytes()
-    w.export_video(tmp_path / "v.mp4", (128, 96))
+    w.files.export_video(tmp_path / "v.mp4", (128, 96))
     import imageio_ffmpeg
 
     frames = imageio_ffmpeg.read_frames(str(tmp_path / "v.mp4"))
@@ -162,9 +144,9 @@ def test_preview_plays_the_bake_and_going_to_a_key_poses_it(window, qtbot):
     assert list(w.mode.targets) == ["lwrist"]
     assert np.linalg.norm(w.mode.pose.positions[LW] - (start + [0, -0.1, 0.3])) < 1e-6
     w.keys.length.setValue(15)
-    w.preview()
-    qtbot.waitUntil(lambda: not w._timer.isActive(), timeout=10000)
-    assert w.baked is not None and len(w.baked.motion) == 15
+    w.playback.toggle()
+    qtbot.waitUntil(lambda: not w.playback.timer.isActive(), timeout=10000)
+    assert w.playback.baked is not None and len(w.playback.baked.motion) == 15
 
 
 def test_closing_with_unsaved_edits_asks_and_cancel_keeps_the_window(window, monkeypatch):
@@ -191,9 +173,192 @@ def test_the_studio_file_menu_opens_a_pose_window_on_the_clip_frame(studio):
 def test_the_screenshot_shows_the_window_with_the_character(window, tmp_path):
     from PyQt6.QtGui import QImage
 
-    assert window.screenshot(tmp_path / "s.png")
+    assert window.files.screenshot(tmp_path / "s.png")
     img = QImage(str(tmp_path / "s.png"))
     assert img.width() >= window.width() - 2 and img.height() >= window.height() - 2
     vp = window.viewport.mapTo(window, window.viewport.rect().center())
     colours = {img.pixelColor(x, y).name() for x in range(vp.x() - 60, vp.x() + 60, 3) for y in range(0, img.height(), 3)}
     assert any(int(c[1:3], 16) > 180 and int(c[5:7], 16) < 90 for c in colours)  # the orange figure is drawn
+
+
+def test_dragging_the_hips_moves_the_whole_body_live_and_keys_carry_root_and_facing(window, qtbot):
+    from PyQt6.QtCore import Qt
+    from PyQt6.QtTest import QTest
+
+    from engine.authoring.pose_mode import heading_deg
+    from tests.app.gui_helpers import mouse_drag, pixel_of
+
+    w = window
+    w.add_key(0)
+    w.viewport.set_camera("front", w.hips())
+    w.viewport.plotter.render()
+    before = w.mode.pose.positions.copy()
+    seen = []
+    w.viewport.jointDragged.connect(lambda j, p: seen.append(w.mode.pose.root_pos.copy()))
+    x, y = pixel_of(w.viewport, before[0])
+    mouse_drag(w.viewport, (x, y), (x + 120, y), steps=8)
+    moved = w.mode.pose.positions - before
+    assert moved[0, 0] > 0.2 and np.allclose(moved, moved[0], atol=1e-9) and abs(moved[0, 2]) < 1e-9
+    assert len(seen) == 8 and np.all(np.diff([r[0] for r in seen]) > 0)  # the body follows every move
+    assert w.mode.targets == {} and w.undo.undoText() == "move body"
+    w.facing.selectAll()
+    QTest.keyClicks(w.facing, "90")
+    QTest.keyClick(w.facing, Qt.Key.Key_Return)
+    assert w.mode.heading == 90.0
+    w.add_key(20)
+    w.keys.length.setValue(21)
+    motion = w.playback.baked_scene().motion
+    assert np.allclose(motion.root_pos[20, :2], w.mode.pose.root_pos[:2], atol=1e-6)
+    assert np.allclose(motion.root_pos[0, :2], before[0, :2], atol=1e-6)
+    assert 0.3 < (motion.root_pos[10, 0] - before[0, 0]) / moved[0, 0] < 0.7  # the in-between travels
+    turn = heading_deg(motion.local_rot[20, 0]) - heading_deg(motion.local_rot[0, 0])
+    assert turn == pytest.approx(90.0, abs=1.0)
+    for _ in range(3):  # the length, the key, the turn (typed 9, 90: one step)
+        w.undo.undo()
+    assert w.mode.heading == 0.0 and w.facing.value() == 0.0
+
+
+def test_the_3d_view_keeps_its_place_while_targets_are_added(window, qtbot):
+    """The Targets dock grew with its first rows and long names, shifting the view 20-90 px
+    between drags so the next grab missed."""
+    from tests.app.gui_helpers import mouse_drag, pixel_of
+
+    w = window
+    qtbot.wait(50)
+    w.viewport.plotter.render()
+    place = w.viewport.geometry()
+    for joint in ("lclavicle", "rshoulder", "upperneck"):
+        x, y = pixel_of(w.viewport, w.mode.pose.positions[sk.JOINT_INDEX[joint]])
+        mouse_drag(w.viewport, (x, y), (x + 10, y + 10), steps=2)
+        assert joint in w.mode.targets
+        qtbot.wait(20)
+        assert w.viewport.geometry() == place, joint
+    w.targets.rows["lclavicle"]["turn"].setChecked(True)  # the longer "(+rotation)" label
+    qtbot.wait(20)
+    assert w.viewport.geometry() == place
+
+
+def test_scrubbing_between_keys_shows_the_in_between_and_a_key_dragged_moves(window, qtbot):
+    from PyQt6.QtCore import Qt
+    from PyQt6.QtTest import QTest
+
+    from engine.kinematics.fk import fk_positions
+    from tests.widgets.test_authoring_widgets import drag_on
+
+    w = window
+    start = key_the_wrist(w, (0, [0.0, -0.1, 0.1]), (20, [0.1, -0.2, 0.5]), length=31)
+    s = w.keys.strip
+    drag_on(s, s.x_of(4), s.x_of(10), steps=3)  # scrub from frame 4 to 10
+    motion = w.playback.baked.motion
+    shown = fk_positions(motion.local_rot[10], motion.root_pos[10], motion.skeleton.offsets)
+    assert w.frame == 10 and np.allclose(w.mode.pose.positions, shown)
+    assert np.allclose(w.viewport.joints.positions, shown) and w.keys.label.text().endswith("(in-between)")
+    assert 0.1 < np.linalg.norm(shown[LW] - start) < 0.5  # neither key's wrist: on its way
+    assert list(w.mode.targets) == ["lwrist"]  # the targets interpolated there
+    w.add_key(10)  # keying the in-between keeps the motion
+    assert np.abs(w.playback.baked_scene().motion.positions()[10] - shown).max() < 0.02
+    w.undo.undo()
+    drag_on(s, s.x_of(20), s.x_of(26))  # the key at 20 dragged to 26
+    assert [k.frame for k in w.scene.keys] == [0, 26] and w.undo.undoText() == "move key 20 -> 26"
+    w.activateWindow()
+    w.windowHandle().requestActivate()
+    qtbot.waitUntil(lambda: QApplication.activeWindow() is w)
+    w.go_to(0)
+    w.keys.loop.setChecked(True)
+    w.keys.fps.setValue(120.0)
+    seen = []
+    w.keys.strip.update = lambda *a, f=w.keys.strip: seen.append(f.current)  # every frame shown
+    QTest.keyClick(w.viewport, Qt.Key.Key_Space)
+    assert w.playback.playing and w.keys.preview.text() == "Stop"
+    qtbot.waitUntil(lambda: len(seen) > 40, timeout=10000)
+    QTest.keyClick(w.viewport, Qt.Key.Key_Space)
+    assert not w.playback.playing and 30 in seen and seen.index(0, 1) > seen.index(30)  # looped
+
+
+def test_dragging_the_z_ring_turns_the_head_about_the_vertical_without_tilting_it(window, qtbot):
+    from engine.kinematics import quat_np as QN
+    from tests.app.gui_helpers import mouse_drag, pixel_of
+    from widgets.viewport.rings import AXES, circle
+
+    w = window
+    head = sk.JOINT_INDEX["upperneck"]
+    w.viewport.set_camera("top", w.hips())
+    w.viewport.plotter.render()
+    x, y = pixel_of(w.viewport, w.mode.pose.positions[head])
+    mouse_drag(w.viewport, (x, y), (x, y), steps=1)  # a click on the head selects it: its rings show
+    rings = w.viewport.rings
+    assert w.selected == "upperneck" and rings.visible and rings.shown == (0, 1, 2)
+    before = w.turns.world_rotation("upperneck")
+    facing = np.array(rings._arrow_mesh.center) - w.mode.pose.positions[head]
+    ring = circle(rings.center, AXES[2], rings.radius, 72)  # 5 degrees apart, counter-clockwise from above
+    w.viewport.plotter.render()
+    path = [pixel_of(w.viewport, ring[k]) for k in (0, 4, 8)]  # 0 -> 40 degrees, from where an edge-on ring crosses
+    mouse_drag(w.viewport, path[0], path[2], steps=8)
+    t = w.mode.targets["upperneck"]
+    turn = QN.mul(t.rotation, QN.conjugate(before))
+    assert np.degrees(2 * np.arccos(min(1.0, abs(turn[0])))) == pytest.approx(40.0, abs=2.0)
+    assert abs(turn[3]) > 0.99 * np.linalg.norm(turn[1:])  # about the vertical only
+    now = w.turns.world_rotation("upperneck")
+    assert abs(float(now @ t.rotation)) == pytest.approx(1.0, abs=1e-9)
+    up = lambda q: QN.rotate(q, np.array([0.0, 0.0, 1.0]))  # noqa: E731
+    assert up(now)[2] == pytest.approx(up(before)[2], abs=1e-6)  # no tilt: the head leans from vertical as before
+    turned = np.array(rings._arrow_mesh.center) - w.mode.pose.positions[head]
+    yaw = np.degrees(np.arctan2(turned[1], turned[0]) - np.arctan2(facing[1], facing[0]))
+    assert (yaw + 180) % 360 - 180 == pytest.approx(40.0, abs=3.0)  # the facing arrow turned with it
+    assert w.undo.undoText() == "turn upperneck"
+    w.actions_by_name["deselect"].trigger()
+    assert not rings.visible and w.selected is None
+
+
+def test_the_hips_ring_turns_the_whole_body(window):
+    w = window
+    w.drag_joint("root", w.mode.pose.root_pos)
+    assert w.viewport.rings.shown == (2,)  # only the turn about the vertical
+    w.turns.by_ring(2, 0.0, True)
+    w.turns.by_ring(2, np.radians(30.0), False)
+    assert w.mode.heading == pytest.approx(30.0) and w.facing.value() == pytest.approx(30.0)
+
+
+def test_a_saved_scene_opens_again_in_a_pose_window(window, tmp_path, vae, monkeypatch):
+    """The pose window could save a scene but not open one."""
+    from engine.authoring.document import load_authoring
+    from engine.authoring.pose_mode import PoseMode
+
+    w = window
+    key_the_wrist(w, (0, [0.0, -0.15, 0.05]), (20, [0.1, -0.1, 0.35]), length=25)
+    w.move_body(np.array([0.3, 0.0, 0.0]))
+    w.add_key(20)
+    w.constraints.add("floor")
+    w.files.save(tmp_path / "s.json")
+    w.files.export_bvh(tmp_path / "first.bvh")
+    from app.pose_window import PoseWindow
+    from tests.app.gui_helpers import close_now
+
+    other = PoseWindow(vae, PoseMode(vae, 1.6))  # another height: the scene's wins
+    other.show()
+    try:
+        other.drag_joint("lwrist", other.mode.pose.positions[LW] + [0, 0, 0.1])  # an unsaved edit
+        asked = []
+        monkeypatch.setattr(QMessageBox, "question", lambda *a, **k: asked.append(a[1]) or QMessageBox.StandardButton.Discard)
+        from PyQt6.QtWidgets import QFileDialog
+
+        monkeypatch.setattr(QFileDialog, "getOpenFileName", staticmethod(lambda *a, **k: (str(tmp_path / "s.json"), "")))
+        other.actions_by_name["open"].trigger()
+        assert asked == ["Unsaved changes"]
+        assert other.mode.character.height == pytest.approx(1.75)
+        assert [k.frame for k in other.scene.keys] == [0, 20] and other.scene.animation.frames == 25
+        assert [c.name for c in other.mode.constraints] == [c.name for c in load_authoring(tmp_path / "s.json").constraints]
+        assert other.mode.constraints is other.scene.constraints
+        assert other.frame == 0 and other.undo.count() == 0 and not other.dirty
+        assert "Opened s.json: 2 keys, 1 constraint(s)" in other.statusBar().currentMessage()
+        other.files.export_bvh(tmp_path / "again.bvh")
+        assert (tmp_path / "again.bvh").read_bytes() == (tmp_path / "first.bvh").read_bytes()
+        (tmp_path / "bad.json").write_text('{"format": "dragposer-scene", "version": 2, "animation": {"fps": "fast"}}')
+        shown = []
+        monkeypatch.setattr(QMessageBox, "warning", lambda *a, **k: shown.append(a[2]))
+        monkeypatch.setattr(QFileDialog, "getOpenFileName", staticmethod(lambda *a, **k: (str(tmp_path / "bad.json"), "")))
+        other.actions_by_name["open"].trigger()
+        assert len(shown) == 1 and shown[0].count("bad.json") == 1 and "fps" in shown[0]
+        assert [k.frame for k in other.scene.keys] == [0, 20]  # a bad file changes nothing
+    finally:
+        close_now(other)

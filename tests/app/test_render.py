@@ -244,3 +244,18 @@ def test_the_window_is_set_for_throughput(msaa):
         assert scene.camera.GetClippingRange() == pytest.approx((0.1, 40.0))
     finally:
         scene.close()
+
+
+def test_a_30_fps_bvh_renders_at_30_fps(tmp_path):
+    """It rendered at 60 fps (the studio's rate) while the same motion as a scene rendered at 30."""
+    import imageio_ffmpeg
+
+    from engine.motion.retarget import resample_motion
+
+    clip = tmp_path / "thirty.bvh"
+    save_motion_bvh(clip, resample_motion(load_clip(EXAMPLE).slice(100, 160), 30.0))
+    out = tmp_path / "v.mp4"
+    assert main([str(clip), "--out", str(out), "--size", "96x64", "--no-progress"]) == 0
+    frames = imageio_ffmpeg.read_frames(str(out))
+    meta = next(frames)
+    assert meta["fps"] == pytest.approx(30.0) and sum(1 for _ in frames) == 30

@@ -120,3 +120,48 @@ def test_a_new_clip_shows_at_once_while_the_method_loads(studio, qtbot, tmp_path
     assert studio.session.latest.seq == seq, "drawn before the engine solved the new clip"
     first = studio.session.motion.slice(0, 1).positions()[0]
     assert np.allclose(studio.viewport.ground_truth.mesh.points[: len(first)], first, atol=1e-6)
+
+
+def test_save_dialogs_avoid_read_only_folders_and_the_studio_assets(studio, monkeypatch, tmp_path, synthetic_motion):
+    """Export video opened in a read-only data folder with no name; Save scene offered a
+    file inside the studio's own assets/."""
+    from pathlib import Path
+
+    from app.authoring_actions import export_video
+    from app.main import EXAMPLE_CLIP
+    from engine.motion.bvh import save_motion_bvh
+
+    home = tmp_path / "home"
+    home.mkdir()
+    monkeypatch.setattr(Path, "home", staticmethod(lambda: home))
+    offered = []
+    monkeypatch.setattr(QFileDialog, "getSaveFileName", lambda *a, **k: (offered.append(a[2]), ("", ""))[1])
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    save_motion_bvh(shared / "run.bvh", synthetic_motion.slice(0, 30))
+    import app.file_actions as fa
+
+    # the tests run as root, who may write anywhere: the folder reads as read-only to the studio
+    monkeypatch.setattr(fa.os, "access", lambda p, mode: Path(p) != shared)
+    assert studio.files.open_path(str(shared / "run.bvh"))
+    from PyQt6.QtWidgets import QDialog
+
+    from app.export_video_dialog import ExportVideoDialog
+
+    monkeypatch.setattr(ExportVideoDialog, "exec", lambda self: QDialog.DialogCode.Accepted)
+    export_video(studio)
+    studio.files.save_scene()
+    assert studio.files.open_path(str(EXAMPLE_CLIP))
+    studio.files.save_scene()
+    assert offered == [str(home / "run_video.mp4"), str(home / "run_scene.json"), str(home / "example_scene.json")]
+
+
+def test_the_new_pose_dialog_starts_at_the_canonical_height_in_plain_words(studio):
+    from app.authoring_actions import NewPoseDialog
+    from engine import skeleton as sk
+
+    dialog = NewPoseDialog(studio, has_clip=True)
+    assert dialog.height_m.value() == pytest.approx(sk.Skeleton.canonical().height(), abs=0.005)
+    offered = [dialog.start.itemText(i) for i in range(dialog.start.count())]
+    assert offered == ["a neutral standing pose", "the clip's current frame"]
+    dialog.deleteLater()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import time
 
 import numpy as np
@@ -263,3 +264,40 @@ def test_screenshot_writes_through_a_symlink_and_leaves_no_temp_file(studio, qtb
     assert not studio.files.export_screenshot(str(link))
     assert target.read_bytes() == before
     assert sorted(p.name for p in tmp_path.rglob("*") if p.is_file() or p.is_symlink()) == ["real.png", "shot.png"]
+
+
+def test_loading_a_pose_window_scene_keeps_the_sensors_and_one_undo_puts_everything_back(studio, tmp_path):
+    from engine.authoring.document import AuthoringScene, authoring_to_dict
+    from engine.authoring.keys import Key
+    from engine.constraints.base import from_dict
+
+    s = studio.session
+    s.add_constraint("distance", joint_a="lwrist", joint_b="rwrist", distance=0.4)
+    studio.undo.stack.setClean()  # saved: loading does not ask
+    sensors, preset, constraints = dict(s.sensors), s.preset, list(s.constraints)
+    scene = authoring_to_dict(AuthoringScene([from_dict({"kind": "floor", "name": "floor"})], keys=[Key(0)]))
+    path = tmp_path / "pose.json"
+    path.write_text(json.dumps(scene))
+    assert studio.files.load_scene(str(path))
+    assert s.sensors == sensors and s.preset == preset and [c.name for c in s.constraints] == ["floor"]
+    message = studio.statusBar().currentMessage()
+    assert "kept the sensors and preset" in message and "pose.json" in message
+    path.write_text(json.dumps({**scene, "sensors": []}))
+    studio.undo.stack.setClean()
+    assert studio.files.load_scene(str(path)) and s.sensors == {}
+    assert studio.undo.stack.undoText() == "Load scene pose.json"
+    studio.undo.stack.undo()
+    assert s.sensors == sensors and [c.name for c in s.constraints] == ["floor"]
+    studio.undo.stack.undo()
+    assert s.sensors == sensors and s.constraints == constraints
+
+
+def test_a_scene_the_studio_refuses_names_its_file_once(studio, tmp_path, monkeypatch):
+    shown = []
+    monkeypatch.setattr(QMessageBox, "critical", lambda *a, **k: shown.append(a[2]))
+    path = tmp_path / "fast.json"
+    path.write_text(json.dumps({"format": "dragposer-scene", "version": 2, "animation": {"fps": "fast"}}))
+    steps = studio.undo.stack.count()
+    assert not studio.files.load_scene(str(path))
+    assert len(shown) == 1 and shown[0].count(str(path)) == 1 and "animation: field 'fps'" in shown[0]
+    assert studio.undo.stack.count() == steps

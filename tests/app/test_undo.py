@@ -112,3 +112,29 @@ def test_the_starting_preset_is_not_an_undo_step_and_later_edits_are(studio, qtb
     joint = next(iter(studio.sensor_panel.rows))
     studio.sensor_panel.rows[joint]["enabled"].setChecked(False)
     assert [stack.text(i) for i in range(stack.count())] == ["Sensor preset 6", "Add look_at", f"Edit {joint} sensor (enabled)"]
+
+
+def test_optimizer_settings_edits_are_undone_and_redone(studio, qtbot):
+    """A setting typed in the optimizer panel is one step (a spin box's steps merge); undo
+    puts back the value it had, or leaves it unset again for the method's profile."""
+    from PyQt6.QtTest import QTest
+
+    s, stack, panel = studio.session, studio.undo.stack, studio.optimizer_panel
+    stack.clear()
+    before = dict(s.settings)
+    lr = panel.editors["lr"]
+    lr.setFocus()
+    for _ in range(3):
+        QTest.keyClick(lr, Qt.Key.Key_Up)
+    assert s.settings["lr"] != before["lr"] and stack.count() == 1 and stack.undoText() == "Set lr"
+    unset = next(n for n in panel.editors if n not in s.settings and hasattr(panel.editors[n], "stepBy"))
+    qtbot.wait(700)  # beyond the merge window
+    panel.editors[unset].stepBy(1)
+    assert unset in s.settings and stack.count() == 2
+    stack.undo()
+    assert unset not in s.settings and s.settings["lr"] != before["lr"]
+    stack.undo()
+    assert dict(s.settings) == before and lr.value() == pytest.approx(before["lr"])
+    stack.redo()
+    stack.redo()
+    assert unset in s.settings and s.settings["lr"] != before["lr"]

@@ -58,7 +58,7 @@ def test_camera_presets_and_display_mode_from_the_keyboard(studio, qtbot):
 
 
 def test_help_lists_every_shortcut_of_the_menus(studio, qtbot):
-    from app.menus import show_help
+    from app.menu_parts import show_help
 
     dialog = show_help(studio)
     try:
@@ -67,8 +67,16 @@ def test_help_lists_every_shortcut_of_the_menus(studio, qtbot):
             assert keys in rows, f"{keys} missing from the help"
         assert "Camera" in rows["7"] and "Top" in rows["7"]
         assert any("Ctrl + drag" in k for k in rows)
+        assert show_help(studio) is dialog  # a second F1 raises it, no second window
     finally:
         dialog.close()
+    from PyQt6.QtCore import QEvent
+    from PyQt6.QtWidgets import QApplication
+
+    QApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete.value)
+    again = show_help(studio)  # closed (and deleted): a new one
+    assert again is not dialog and again.isVisible()
+    again.close()
 
 
 def test_a_notice_shows_while_a_method_loads_and_solves_its_first_frame(studio, qtbot):

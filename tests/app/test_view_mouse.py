@@ -5,41 +5,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from PyQt6.QtCore import QPointF, Qt
-from PyQt6.QtGui import QMouseEvent
-from PyQt6.QtWidgets import QApplication
 
 from engine import skeleton as sk
+from tests.app.gui_helpers import mouse_drag, pixel_of
 
 pytestmark = pytest.mark.gui
-
-LEFT = Qt.MouseButton.LeftButton
-NONE = Qt.MouseButton.NoButton
-
-
-def _send(widget, kind, x, y, button, buttons, mods):
-    event = QMouseEvent(kind, QPointF(x, y), widget.mapToGlobal(QPointF(x, y)), button, buttons, mods)
-    QApplication.sendEvent(widget, event)
-
-
-def mouse_drag(view, start, end, ctrl: bool = False, steps: int = 6) -> None:
-    """Left-drag on the 3D view from ``start`` to ``end`` (VTK display pixels, y up)."""
-    widget = view.plotter
-    h = widget.height()
-    mods = Qt.KeyboardModifier.ControlModifier if ctrl else Qt.KeyboardModifier.NoModifier
-    (x0, y0), (x1, y1) = start, end
-    _send(widget, QMouseEvent.Type.MouseButtonPress, x0, h - 1 - y0, LEFT, LEFT, mods)
-    for t in np.linspace(0, 1, steps + 1)[1:]:
-        x, y = x0 + t * (x1 - x0), y0 + t * (y1 - y0)
-        _send(widget, QMouseEvent.Type.MouseMove, x, h - 1 - y, NONE, LEFT, mods)
-        QApplication.processEvents()
-    _send(widget, QMouseEvent.Type.MouseButtonRelease, x1, h - 1 - y1, LEFT, NONE, mods)
-    QApplication.processEvents()
-
-
-def pixel_of(view, point) -> tuple[float, float]:
-    x, y = view.joints._to_display(np.asarray(point, float)[None])[0]
-    return float(x), float(y)
 
 
 def paused_on_a_pose(studio, qtbot):

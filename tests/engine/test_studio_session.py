@@ -207,3 +207,66 @@ def test_method_changes_carry_the_previous_method(session):
     session.events.method.connect(seen.append)
     session.set_method("dragposer", ghosts=("ik", "dragposer"))
     assert seen[-1] == ev.MethodChanged("dragposer", ("ik",), "ik", ())
+
+
+def _pose_window_scene() -> dict:
+    """A scene as the pose window saves it: character, animation, keys, a constraint, no sensors."""
+    from engine.authoring.document import AuthoringScene, authoring_to_dict
+    from engine.authoring.keys import Animation, Key
+    from engine.authoring.targets import JointTarget
+    from engine.constraints.base import from_dict
+
+    floor = from_dict({"kind": "floor", "name": "floor"})
+    keys = [Key(0, {"lwrist": JointTarget("lwrist", [0.3, 0.0, 1.2])}), Key(20)]
+    return authoring_to_dict(AuthoringScene([floor], animation=Animation(30.0, 40), keys=keys, height=1.8))
+
+
+def test_a_pose_window_scene_keeps_the_sensors_and_says_what_it_replaced(session):
+    session.seek(17)
+    before, preset = dict(session.sensors), session.preset
+    assert before
+    said = session.apply_scene(json.loads(json.dumps(_pose_window_scene())), "pose.json")
+    assert session.sensors == before and session.preset == preset and session.frame == 17
+    assert [x.name for x in session.constraints] == ["floor"]
+    n = len(_pose_window_scene()["settings"])
+    assert said == (f"replaced the constraints (1) and the optimizer settings ({n}); kept the sensors and preset (the scene has none); "
+                    "its 2 keys are for the pose window and bake")  # fmt: skip
+    scene = {**session.to_scene(), "sensors": []}
+    said = session.apply_scene(scene)
+    assert said == f"replaced the constraints (1), the optimizer settings ({len(scene['settings'])}) and the sensors (0)"
+    assert session.sensors == {}
+
+
+def test_the_studio_refuses_a_scene_exactly_as_bake_does(session, tmp_path):
+    from engine.authoring.document import load_authoring
+
+    doc = _pose_window_scene()
+    doc["animation"]["fps"] = "fast"
+    path = tmp_path / "fast.json"
+    path.write_text(json.dumps(doc))
+    with pytest.raises(UserError) as by_bake:
+        load_authoring(path)
+    before = dict(session.sensors)
+    with pytest.raises(UserError) as by_studio:
+        session.apply_scene(doc, str(path))
+    assert str(by_studio.value) == str(by_bake.value)
+    assert "animation: field 'fps' must be a number" in str(by_bake.value)
+    assert session.sensors == before
+
+
+def test_replace_settings_leaves_unset_what_it_does_not_give_and_tells_the_engine(session):
+    from engine.studio.method_set import MethodSet
+
+    commands = []
+    session.attach(commands.append)
+    session.set_setting("smooth_weight", 2.0)
+    kept = {k: v for k, v in session.settings.items() if k != "smooth_weight"}
+    session.replace_settings(kept)
+    assert "smooth_weight" not in session.settings and dict(session.settings) == kept
+    last = commands[-1]
+    assert isinstance(last, c.SetSettings) and last.replace and dict(last.values) == kept
+    methods = MethodSet.__new__(MethodSet)  # the engine side: only its settings are looked at
+    methods.settings = session.settings | {"smooth_weight": 2.0}
+    methods.configure = lambda *a, **k: None
+    methods.set_settings(last.values, last.replace)
+    assert dict(methods.settings) == kept

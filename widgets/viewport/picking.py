@@ -27,10 +27,16 @@ class JointDragger:
     is dragged through its own ``begin_drag``/``drag``/``end_drag``."""
 
     def __init__(self, plotter: pv.Plotter, on_drag: Callable[[str, np.ndarray], None],
-                 sensors: Any = None) -> None:  # fmt: skip
+                 sensors: Any = None, rings: Any = None,
+                 on_turn: Callable[[int, float, bool], None] | None = None) -> None:  # fmt: skip
         self._plotter = plotter
         self._on_drag = on_drag
         self._sensors = sensors
+        #: Rotation rings (:class:`widgets.viewport.rings.RotationRings`), grabbed before
+        #: anything else; ``on_turn(axis, radians swept, first)`` while one is dragged.
+        self._rings = rings
+        self._on_turn = on_turn
+        self.ring: int | None = None
         self.positions: np.ndarray | None = None
         self.joint: int | None = None
         self.target: str | None = None  # the tracker target being dragged
@@ -59,16 +65,31 @@ class JointDragger:
         iren = self._plotter.iren.interactor
         x, y = iren.GetEventPosition()
         if event == "LeftButtonPressEvent":
-            if self.press(x, y) if iren.GetControlKey() else self.press_target(x, y):
+            if self.press_ring(x, y) or (self.press(x, y) if iren.GetControlKey() else self.press_target(x, y)):
                 self._take(event)
         elif event == "MouseMoveEvent":
-            if self.joint is not None or self.target is not None:
+            if self.ring is not None:
+                self._on_turn(self.ring, self._rings.angle(self.ray(x, y)), False)
+            elif self.joint is not None or self.target is not None:
                 self.move(x, y)
             else:
                 self._style.OnMouseMove()
-        elif event == "LeftButtonReleaseEvent" and (self.joint is not None or self.target is not None):
+        elif event == "LeftButtonReleaseEvent" and (self.ring is not None or self.joint is not None
+                                                    or self.target is not None):  # fmt: skip
             self.release()
             self._take(event)
+
+    def press_ring(self, x: float, y: float) -> bool:
+        """Grab the rotation ring under display pixel (x, y); True on a hit."""
+        if self._rings is None or self._on_turn is None:
+            return False
+        axis = self._rings.pick(self._to_display, x, y)
+        if axis is None:
+            return False
+        self.ring = axis
+        self._rings.begin(axis, self.ray(x, y))
+        self._on_turn(axis, 0.0, True)
+        return True
 
     def _to_display(self, points: np.ndarray) -> np.ndarray:
         ren = self._plotter.renderer
@@ -100,13 +121,15 @@ class JointDragger:
         return True
 
     def release(self) -> None:
-        """Let go of the held joint or target."""
+        """Let go of the held ring, joint or target."""
         if self.target is not None:
             self._sensors.end_drag()
-        self.joint = self.target = None
+        if self.ring is not None:
+            self._rings.end()
+        self.joint = self.target = self.ring = None
 
-    def move(self, x: float, y: float) -> None:
-        """Drag the grabbed joint or target to display pixel (x, y)."""
+    def ray(self, x: float, y: float) -> tuple[np.ndarray, np.ndarray]:
+        """The mouse ray at display pixel (x, y): a world point on it and its direction."""
         ren = self._plotter.renderer
         ends = []
         for z in (0.0, 1.0):
@@ -114,15 +137,19 @@ class JointDragger:
             ren.DisplayToWorld()
             w = np.array(ren.GetWorldPoint())
             ends.append(w[:3] / w[3])
+        return ends[0], ends[1] - ends[0]
+
+    def move(self, x: float, y: float) -> None:
+        """Drag the grabbed joint or target to display pixel (x, y)."""
+        start, direction = self.ray(x, y)
         cam = self._plotter.camera
         normal = np.asarray(cam.focal_point) - np.asarray(cam.position)
-        direction = ends[1] - ends[0]
         denom = float(direction @ normal)
         if abs(denom) < 1e-12 or (self.joint is None and self.target is None):
             return
-        t = float((self._origin - ends[0]) @ normal) / denom
+        t = float((self._origin - start) @ normal) / denom
         if self.target is not None:
-            self._sensors.drag(self.target, ends[0] + t * direction)
+            self._sensors.drag(self.target, start + t * direction)
             self._plotter.render()  # the sphere follows the mouse at once, as a widget's did
         else:
-            self._on_drag(JOINT_NAMES[self.joint], ends[0] + t * direction)
+            self._on_drag(JOINT_NAMES[self.joint], start + t * direction)

@@ -19,6 +19,7 @@ from widgets.viewport.ghosts import GhostLayer
 from widgets.viewport.gizmos import ConstraintGizmos
 from widgets.viewport.native import make_plotter
 from widgets.viewport.picking import JointDragger
+from widgets.viewport.rings import RotationRings
 from widgets.viewport.sensors import SensorMarkers
 from widgets.viewport.skeleton import SkeletonActor
 
@@ -55,12 +56,16 @@ class Viewport(QWidget):
         A constraint gizmo was dragged; ``dict`` of field name -> new value.
     filesDropped(list)
         Local file paths dropped on the 3D view.
+    ringTurned(int, float, bool)
+        A rotation ring (:attr:`rings`, shown by its owner) is dragged: its axis (0, 1,
+        2: world X, Y, Z), the radians swept since the press, and whether this is the press.
     """
 
     targetDragged = pyqtSignal(str, object)
     jointDragged = pyqtSignal(str, object)
     gizmoEdited = pyqtSignal(str, object)
     filesDropped = pyqtSignal(list)
+    ringTurned = pyqtSignal(int, float, bool)
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -68,8 +73,10 @@ class Viewport(QWidget):
         layout.setContentsMargins(0, 0, 0, 0)
         self.plotter = make_plotter(self)
         # pyvistaqt accepts any dropped file and tries to read it as a mesh; take the
-        # drops here instead so a .bvh dropped on the view opens like one on the window
+        # drops here instead so a .bvh dropped on the view opens like one on the window;
+        # the filter also keeps keys from VTK and pyvista (see eventFilter)
         self.plotter.installEventFilter(self)
+        self.plotter.iren.clear_key_event_callbacks()
         layout.addWidget(self.plotter)
         p = self.plotter
         p.set_background(style.BACKGROUND_TOP)
@@ -85,7 +92,9 @@ class Viewport(QWidget):
         self.decoded.set_visible(False)
         self.ghosts = GhostLayer(p)
         self.sensors = SensorMarkers(p, lambda j, pos: self.targetDragged.emit(j, pos))
-        self.joints = JointDragger(p, lambda j, pos: self.jointDragged.emit(j, pos), self.sensors)
+        self.rings = RotationRings(p)
+        self.joints = JointDragger(p, lambda j, pos: self.jointDragged.emit(j, pos), self.sensors, self.rings,
+                                   lambda axis, angle, first: self.ringTurned.emit(axis, angle, first))  # fmt: skip
         self.gizmos = ConstraintGizmos(p, lambda n, changes: self.gizmoEdited.emit(n, changes))
         self._label = p.add_text("", position="upper_left", font_size=9, color="#d0d4dc")
         self._notice = p.add_text("", position="lower_edge", font_size=12, color="#ffe14d")
@@ -135,6 +144,16 @@ class Viewport(QWidget):
             self.body.set_visible(False)
         else:
             self.reconstruction.set_visible(False)
+
+    def frame(self, point: np.ndarray) -> None:
+        """Centre the view on ``point (3,)`` metres, keeping the camera's angle and distance."""
+        cam = self.plotter.camera
+        delta = np.asarray(point, float) - np.asarray(cam.GetFocalPoint())
+        self._focus = self._focus + delta
+        cam.SetFocalPoint(*(np.asarray(cam.GetFocalPoint()) + delta))
+        cam.SetPosition(*(np.asarray(cam.GetPosition()) + delta))
+        self.plotter.reset_camera_clipping_range()
+        self.plotter.render()
 
     def _follow(self, root: np.ndarray) -> None:
         """Slide camera and focus horizontally with the hips, keeping the user's angle."""
@@ -198,7 +217,14 @@ class Viewport(QWidget):
         return QImage(img.data, w, h, 3 * w, QImage.Format.Format_RGB888).copy()
 
     def eventFilter(self, obj: QObject | None, event: QEvent | None) -> bool:
-        """Take file drags and drops from the VTK widget (see ``__init__``)."""
+        """Take file drags and drops from the VTK widget (see ``__init__``), and keep
+        every key from it: VTK's interactor style and pyvista bind plain letters to
+        stereo (3), wireframe (w), a camera reset (r), picking modes (b, p, C) and
+        closing the render window (q, e), none of which the menus show, and the
+        window's shortcuts have already taken the keys they bind."""
+        if event is not None and event.type() in (QEvent.Type.KeyPress, QEvent.Type.KeyRelease):
+            event.ignore()
+            return True
         if event is not None and event.type() in (QEvent.Type.DragEnter, QEvent.Type.DragMove, QEvent.Type.Drop):
             paths = [u.toLocalFile() for u in event.mimeData().urls() if u.isLocalFile()]
             if paths:
@@ -214,6 +240,7 @@ class Viewport(QWidget):
         """Release widgets and the VTK interactor (no interactor may outlive the view)."""
         self.plotter.removeEventFilter(self)
         self.sensors.clear()
+        self.rings.clear()
         self.gizmos.clear()
         self.ghosts.close()
         self.plotter.close()

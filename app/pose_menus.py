@@ -1,0 +1,65 @@
+"""The pose window's menus: File, Edit (undo, redo, settle, clear), Keys (play, step,
+add and delete keys), View (display, camera) and Help, built with the studio's helpers so the same keys do the same things in both.
+
+Every entry is a QAction owned by the window (the undo stack's actions too: a QAction
+that only a local variable holds is deleted by PyQt and drops out of its menu), kept on
+``w.actions_by_name`` for the tests and the help.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from PyQt6.QtCore import Qt
+from PyQt6.QtGui import QKeySequence
+from PyQt6.QtWidgets import QMainWindow
+
+from app.menu_parts import action, add_view_entries, show_help, toggle
+
+
+def build_pose_menus(w: QMainWindow) -> None:
+    """Fill the pose window ``w``'s menu bar (see the module doc)."""
+    named: dict[str, Any] = {}
+    file_menu = w.menuBar().addMenu("&File")
+    f = w.files
+    named["open"] = action(w, file_menu, "&Open scene...", f.open_dialog, QKeySequence.StandardKey.Open)
+    named["save"] = action(w, file_menu, "&Save scene...", f.save_dialog, QKeySequence.StandardKey.Save)
+    named["export_bvh"] = action(w, file_menu, "Export &motion (BVH / glTF)...", f.export_bvh_dialog, "Ctrl+B")
+    named["export_video"] = action(w, file_menu, "Export &video...", f.export_video_dialog)
+    file_menu.addSeparator()
+    named["close"] = action(w, file_menu, "&Close", w.close, QKeySequence.StandardKey.Close)
+    edit = w.menuBar().addMenu("&Edit")
+    undo = w.undo.createUndoAction(w, "&Undo")
+    undo.setShortcut(QKeySequence.StandardKey.Undo)
+    redo = w.undo.createRedoAction(w, "&Redo")
+    redo.setShortcuts([QKeySequence("Ctrl+Shift+Z"), QKeySequence("Ctrl+Y")])
+    for act in (undo, redo):
+        act.setShortcutContext(Qt.ShortcutContext.WindowShortcut)
+        edit.addAction(act)
+    named["undo"], named["redo"] = undo, redo
+    edit.addSeparator()
+    named["settle"] = action(w, edit, "S&ettle pose", w.settle, "Ctrl+Return")
+    named["clear_all"] = action(w, edit, "&Clear all targets (reset pose)", w.clear_all, "Ctrl+Shift+Delete")
+    named["deselect"] = action(w, edit, "&Hide the rotation rings", w.deselect, "Escape")
+    keys = w.menuBar().addMenu("&Keys")
+    named["play"] = action(w, keys, "&Play / stop", lambda: w.keys.previewRequested.emit(), "Space")
+    named["next_frame"] = action(w, keys, "&Next frame", lambda: w.step(1), "Right")
+    named["previous_frame"] = action(w, keys, "P&revious frame", lambda: w.step(-1), "Left")
+    named["next_key"] = action(w, keys, "Next &key", lambda: w.step_key(1), "Ctrl+Right")
+    named["previous_key"] = action(w, keys, "Previous k&ey", lambda: w.step_key(-1), "Ctrl+Left")
+    named["add_key"] = action(w, keys, "&Add key at the current frame", lambda: w.add_key(w.frame), "K")
+    named["delete_key"] = action(w, keys, "&Delete the key at the current frame", lambda: w.delete_key(w.frame),
+                                 "Shift+K")  # fmt: skip
+    named["loop"] = toggle(w, keys, "&Loop playing", False, w.keys.loop.setChecked, "L")
+    w.keys.loop.toggled.connect(named["loop"].setChecked)
+    view = w.menuBar().addMenu("&View")
+    vp = w.viewport
+    entries, camera = add_view_entries(w, view, "character", w.set_display)
+    named.update(entries)
+    # F frames the character (as in Maya): a camera that followed every edit would move
+    # under a drag, and the drag plane with it
+    named["frame"] = action(w, camera, "F&rame the character", lambda: vp.frame(w.hips()), "F")
+    help_menu = w.menuBar().addMenu("&Help")
+    named["help"] = action(w, help_menu, "&Keyboard and mouse...", lambda: show_help(w),
+                           QKeySequence.StandardKey.HelpContents)  # fmt: skip
+    w.actions_by_name = named

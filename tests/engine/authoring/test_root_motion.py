@@ -1,0 +1,49 @@
+"""Root motion: a pose moves and turns as a whole without changing its latent, and a bake
+carries the keys' root positions and headings through the in-betweens into the motion."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from engine.authoring.bake import bake
+from engine.authoring.character import Character
+from engine.authoring.document import AuthoringScene
+from engine.authoring.keys import Animation, Key, interpolate
+from engine.authoring.pose_mode import heading_deg
+from engine.kinematics.fk import fk
+
+
+def test_a_moved_and_turned_pose_is_the_same_pose_placed_elsewhere(vae):
+    c = Character(vae, 1.8)
+    pose = c.decode(c.mean_latent(), c.grounded((0.2, -0.1), 30.0))
+    moved = pose.moved([0.5, 1.0, 0.0]).turned(90.0)
+    assert np.array_equal(moved.latent, pose.latent)
+    assert np.allclose(moved.root_pos, pose.root_pos + [0.5, 1.0, 0.0])
+    assert np.allclose(fk(moved.local_rot, moved.root_pos, c.skeleton.offsets)[0], moved.positions, atol=1e-9)
+    assert heading_deg(moved.local_rot[0]) - heading_deg(pose.local_rot[0]) == pytest.approx(90.0, abs=1e-6)
+    # the bone lengths and the height above the floor do not change
+    assert np.allclose(moved.positions[:, 2], pose.positions[:, 2])
+    again = c.decode(c.mean_latent(), c.grounded(moved.root_pos[:2], 120.0))  # what a key at 120 degrees bakes
+    assert np.allclose(again.positions, moved.positions, atol=1e-4)
+
+
+def test_a_bake_interpolates_the_keys_root_and_heading(vae):
+    c = Character(vae, 1.75)
+    z = c.mean_latent()
+    keys = [Key(0, latent=z, root=np.array([0.0, 0.0]), heading=0.0),
+            Key(20, latent=z, root=np.array([0.8, -0.4]), heading=170.0),
+            Key(40, latent=z, root=np.array([1.6, -0.4]), heading=-170.0)]  # fmt: skip
+    motion = bake(AuthoringScene(animation=Animation(30.0, 41, "cubic"), keys=keys, height=1.75), vae).motion
+    root = motion.root_pos
+    assert np.allclose(root[[0, 20, 40], :2], [[0, 0], [0.8, -0.4], [1.6, -0.4]], atol=1e-6)
+    between = interpolate([0, 20, 40], [k.root for k in keys], 10, "cubic")  # (0.3, -0.175): the keys' spline
+    assert np.allclose(root[10, :2], between, atol=1e-6) and 0.2 < root[10, 0] < 0.6
+    assert np.all(np.diff(root[:, 0]) > -1e-6)  # travels forward throughout
+    yaw = np.array([heading_deg(q) for q in motion.local_rot[:, 0]])
+    turn = (yaw - yaw[0] + 180.0) % 360.0 - 180.0
+    unwrapped = [np.array([h]) for h in (0.0, 170.0, 190.0)]
+    assert turn[20] == pytest.approx(170.0, abs=1.0)
+    assert turn[10] == pytest.approx(interpolate([0, 20, 40], unwrapped, 10, "cubic")[0], abs=1.0)
+    steps = np.abs((np.diff(yaw) + 180.0) % 360.0 - 180.0)
+    assert steps[20:].max() < 5.0  # 170 -> -170 turns the short way (20 degrees), not 340

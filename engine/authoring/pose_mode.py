@@ -12,7 +12,7 @@ offsets), and the lowest foot stands on the floor after every solve.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass
 
 import numpy as np
 import torch
@@ -189,12 +189,16 @@ class PoseMode:
         self.targets.clear()
 
     # -- solving -------------------------------------------------------------------
+    def _moved_feet(self) -> set[str]:
+        """The feet (``"l"``, ``"r"``) that an active user target moves."""
+        return {_FOOT_OF[t.joint] for t in self.targets.values() if t.joint in _FOOT_OF and t.active}
+
     def _inputs(self) -> tuple[list[Constraint], dict, dict]:
         """The solve's terms: the user's targets, the planted feet that no target moves, the
         scene's constraints; and the exact limb and rotation steps after it."""
         targets = list(self.targets.values())
         if self.options.plant_feet:
-            moved = {_FOOT_OF[t.joint] for t in targets if t.joint in _FOOT_OF and t.active}
+            moved = self._moved_feet()
             targets += [JointTarget(j, p, weight=self.options.plant_weight) for j, p in self.planted.items()
                         if _FOOT_OF[j] not in moved and j not in self.targets]  # fmt: skip
         terms, reach, rotations = solve_inputs(targets)
@@ -207,7 +211,7 @@ class PoseMode:
 
     def _replant(self) -> None:
         """A foot the user moves is planted where it is left."""
-        moved = {_FOOT_OF[t.joint] for t in self.targets.values() if t.joint in _FOOT_OF and t.active}
+        moved = self._moved_feet()
         for j in PLANTED:
             if _FOOT_OF[j] in moved:
                 self.planted[j] = self.pose.positions[sk.JOINT_INDEX[j]].copy()
@@ -229,7 +233,7 @@ class PoseMode:
             drop = min(0.0, min(t.position[2] - self.pose.positions[t.index, 2] for t in user))
             standing = self._standing_root
             where[2] = float(np.clip(where[2] + o.crouch_share * drop, LOWEST_ROOT * standing, standing))
-        if o.balance and o.plant_feet and not any(t.joint in _FOOT_OF and t.active for t in self.targets.values()):
+        if o.balance and o.plant_feet and not self._moved_feet():
             feet = np.mean([p[:2] for p in self.planted.values()], axis=0)
             off = feet - centre_of_mass(self.pose.positions)[:2]
             dist = float(np.linalg.norm(off))

@@ -195,7 +195,7 @@ def _source_folder(rel: str) -> str:
 
 
 def _shard_name(rel: str, mirrored: bool) -> str:
-    stem = rel[:-4] if rel.lower().endswith((".bvh", ".amc")) else rel
+    stem = rel[:-4] if rel.lower().endswith(SOURCE_SUFFIXES) else rel
     return stem.replace("/", "__") + ("__mirror" if mirrored else "") + ".npz"
 
 

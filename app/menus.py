@@ -21,7 +21,7 @@ def build_menus(w: QMainWindow) -> None:
     f = w.files
     named: dict[str, Any] = {}
     file_menu = w.menuBar().addMenu("&File")
-    action(w, file_menu, "&Open BVH...", f.open_dialog, QKeySequence.StandardKey.Open)
+    action(w, file_menu, "&Open motion (BVH / AMC)...", f.open_dialog, QKeySequence.StandardKey.Open)
     w.recent_menu = f.recent_menu = file_menu.addMenu("Open &recent")
     f.refresh_recent()
     named["connect_live"] = action(w, file_menu, "Connect &live source (VMC)...", w.live.connect_dialog)

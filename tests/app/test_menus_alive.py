@@ -88,7 +88,7 @@ def test_every_action_of_the_studio_menus_is_alive(studio, no_dialogs, qtbot):
             assert act.receivers(act.triggered) + act.receivers(act.toggled) > 0, name
     check_edit_menu(studio)
     done = trigger_all(studio)
-    assert any(p.startswith("File > Open BVH") for p in done)
+    assert any(p.startswith("File > Open motion") for p in done)
 
 
 def test_every_action_of_the_pose_window_menus_is_alive(pose_window, no_dialogs, qtbot):

@@ -15,6 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Protocol
 
+import numpy as np
 import torch
 
 from engine.solver.pose import RootAnchor, RootFrame, RootOverride
@@ -78,6 +79,7 @@ class SolveTimings:
     step: float = 0.0
     fast: bool = False
     slow_kinds: tuple[str, ...] = ()
+    path: "np.ndarray | None" = None
 
     def per_iteration(self) -> dict[str, float]:
         """Milliseconds per iteration: each part and their sum ``ms_per_iteration``; with
@@ -112,6 +114,9 @@ class Solution:
     slow_kinds : tuple of str
         Constraint kinds without a fast-path term that sent this frame to the slower
         reference path (empty when the fast path ran, or was not asked for).
+    path : ndarray (K, L) float32 or None
+        The latents the solve visited, from the start (row 0) to the last one evaluated;
+        ``K == len(losses)`` (latent-space debugging draws it).
     """
 
     latent: torch.Tensor

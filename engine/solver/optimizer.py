@@ -202,6 +202,7 @@ class PoseOptimizer:
         z, rule = z0.copy(), self.update_rule(terms, ctx.deadline is not None)
         upd, timings = self._update(rule), SolveTimings(fast=True)
         losses: list[dict[str, float]] = []
+        path: list[np.ndarray] = []
         cap, offline = s.steps_cap(), s.mode == "offline"
         best, since_best, steps, warnings = math.inf, 0, 0, []
         deadline, cut, t_loop = ctx.deadline, False, clock()
@@ -216,6 +217,7 @@ class PoseOptimizer:
             timings.fk_losses += t2 - t1
             if steps == 0 and not np.isfinite(values).all():
                 return None
+            path.append(z)
             losses.append({**dict(zip(ft.names, values.tolist())), "total": total})
             if not math.isfinite(total) or not np.isfinite(z).all():
                 return self._fall_back(z0, ctx, losses, steps, warnings, "loss became non-finite", timings)
@@ -247,6 +249,7 @@ class PoseOptimizer:
         sol = self._finish(z0, z, rule, upd, losses, steps, warnings, ctx, lambda lat: self._fast_state(lat, ctx),
                            timings)  # fmt: skip
         sol.cut = cut
+        sol.path = np.stack(path)
         return sol
 
     def _fast_state(self, latent: torch.Tensor, ctx: FrameContext) -> PoseState:
@@ -283,6 +286,7 @@ class PoseOptimizer:
         upd, timings = self._update(rule), SolveTimings()
         z0 = start.detach().numpy().astype(np.float32)
         losses: list[dict[str, float]] = []
+        path: list[np.ndarray] = []
         cap, offline = s.steps_cap(), s.mode == "offline"
         best, since_best, steps = math.inf, 0, 0
         deadline, cut, t_loop = ctx.deadline, False, clock()
@@ -296,6 +300,7 @@ class PoseOptimizer:
             t2 = clock()
             timings.decoder += t1 - t0
             timings.fk_losses += t2 - t1
+            path.append(z.detach().numpy().copy())
             losses.append({**dict(zip(names, values.detach().tolist())), "total": float(total.detach())})
             if not math.isfinite(losses[-1]["total"]) or not bool(torch.isfinite(z).all()):
                 return self._fall_back(z0, ctx, losses, steps, warnings, "loss became non-finite", timings)
@@ -329,6 +334,7 @@ class PoseOptimizer:
         sol = self._finish(z0, z.detach().numpy(), rule, upd, losses, steps, warnings, ctx,
                            lambda lat: _with_latent(final, lat), timings)  # fmt: skip
         sol.cut = cut
+        sol.path = np.stack(path)
         return sol
 
     def _fall_back(self, z0: np.ndarray, ctx: FrameContext, losses: list[dict[str, float]], steps: int,

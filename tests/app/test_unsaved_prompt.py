@@ -63,7 +63,7 @@ def test_opening_a_clip_after_a_range_resolve_asks_cancel_keeps_save_writes_both
 
     other = tmp_path / "other.bvh"
     save_motion_bvh(other, synthetic_motion)
-    edited = resolve_range(studio, 30, 50, blend=4).motion
+    edited = resolve_range(studio, 30, 50, blend=4).wait().motion
     answer.next = "Cancel"
     assert not studio.files.open_path(other)
     assert studio.session.motion is edited and "re-solved clip" in answer.asked[-1]

@@ -29,7 +29,7 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.authoring import events as ev
-from engine.authoring.bake import Baked, interpolated_heading, interpolated_targets
+from engine.authoring.bake import Baked
 from engine.authoring.character import Pose
 from engine.authoring.document import MAX_FRAMES, AuthoringScene
 from engine.authoring.history import Edit, History
@@ -38,10 +38,9 @@ from engine.authoring.keys import SCHEMES, Animation, Key
 from engine.authoring.pose_mode import PoseMode
 from engine.authoring.progress import CancelCheck, Progress
 from engine.authoring.session_constraints import ConstraintList, constraints_event
-from engine.authoring.state import AuthoringState, copy_targets, differences
+from engine.authoring.state import AuthoringState, capture, differences, pose_between, pose_on_key, put
 from engine.authoring.turns import world_rotation
 from engine.errors import UserError
-from engine.kinematics.fk import fk_positions
 from engine.motion.clip import Motion
 
 
@@ -109,19 +108,10 @@ class AuthoringSession:
     # -- state, commands and events ------------------------------------------------
     def state(self) -> AuthoringState:
         """The model now, as immutable copies (what a command records)."""
-        m, a = self.mode, self.scene.animation
-        return AuthoringState(copy_targets(m.targets), tuple((j, p.copy()) for j, p in m.planted.items()), m.pose,
-                              m.heading, tuple(copy.deepcopy(k) for k in self.scene.keys),
-                              (a.frames, a.fps, a.interpolation), tuple(m.constraints))  # fmt: skip
+        return capture(self.mode, self.scene)
 
     def _put(self, state: AuthoringState) -> None:
-        m, a = self.mode, self.scene.animation
-        m.targets = {t.joint: copy.deepcopy(t) for t in state.targets}
-        m.planted = {j: p.copy() for j, p in state.planted}
-        m.pose, m.heading = state.pose, state.heading
-        self.scene.keys = [copy.deepcopy(k) for k in state.keys]
-        a.frames, a.fps, a.interpolation = state.animation
-        m.constraints[:] = list(state.constraints)
+        put(self.mode, self.scene, state)
 
     def restore_state(self, state: AuthoringState) -> None:
         """Make ``state`` the model's and announce what that changed (undo and redo)."""
@@ -351,24 +341,11 @@ class AuthoringSession:
         self._changed(before, old)
 
     def _pose_at(self, frame: int) -> None:
-        m = self.mode
         key = self.key_at(frame)
-        if key is None and self.scene.keys:
-            baked = self.bake_now()
-            motion = baked.motion
-            f = min(int(frame), len(motion) - 1)
-            local, root = motion.local_rot[f].copy(), motion.root_pos[f].copy()
-            m.pose = Pose(baked.latents[f].copy(), local, root, fk_positions(local, root, motion.skeleton.offsets))
-            keys, times, scheme = self.scene.keys, [float(k.frame) for k in self.scene.keys], self.animation.interpolation
-            m.heading = interpolated_heading(keys, times, f, scheme)
-            m.targets = {t.joint: copy.deepcopy(t) for t in interpolated_targets(keys, times, f, scheme)}
         if key is not None:
-            m.targets = copy.deepcopy(key.targets)
-            if key.latent is not None:
-                m.heading = key.heading
-                m.pose = m.character.decode(key.latent, m.character.grounded(key.root, key.heading))
-                m.plant_where_standing()
-                m.solve(0)  # the exact limb steps onto the key's targets
+            pose_on_key(self.mode, key)
+        elif self.scene.keys:
+            pose_between(self.mode, self.bake_now(), self.scene.keys, self.animation.interpolation, frame)
 
     def _stale(self) -> None:
         if self.baked is not None:

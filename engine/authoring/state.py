@@ -1,10 +1,12 @@
-"""What an authoring edit saves and restores: the model's state, as immutable copies.
+"""What an authoring edit saves and restores: the model's state, as immutable copies,
+and the poses the model takes on a key or between keys.
 
 :class:`AuthoringState` holds the targets, the planted feet, the pose and facing, the
 keys, the animation's length, rate and scheme and the constraint list. An edit records
 it before and after (:class:`engine.authoring.history.Edit`); :func:`differences`
 compares two of them part by part, so the session announces exactly the parts an edit
-or its undo changed.
+or its undo changed. :func:`pose_on_key` and :func:`pose_between` pose the character on
+a frame (the session's ``go_to``).
 """
 
 from __future__ import annotations
@@ -14,10 +16,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from engine.authoring.bake import Baked, interpolated_heading, interpolated_targets
 from engine.authoring.character import Pose
+from engine.authoring.document import AuthoringScene
 from engine.authoring.keys import Animation, Key
+from engine.authoring.pose_mode import PoseMode
 from engine.authoring.targets import JointTarget
 from engine.constraints.base import Constraint
+from engine.kinematics.fk import fk_positions
 
 
 @dataclass(frozen=True)
@@ -108,5 +114,46 @@ def differences(old: AuthoringState, new: AuthoringState) -> Differences:
     return Differences(joints, added, removed, changed, pose, old.animation != new.animation, constraints)
 
 
-def copy_targets(targets: dict[str, JointTarget]) -> tuple[JointTarget, ...]:
-    return tuple(copy.deepcopy(t) for t in targets.values())
+def capture(mode: PoseMode, scene: AuthoringScene) -> AuthoringState:
+    """The state of ``mode`` (targets, planted feet, pose, facing) and ``scene`` (keys,
+    animation, constraints), as copies."""
+    a = scene.animation
+    return AuthoringState(tuple(copy.deepcopy(t) for t in mode.targets.values()),
+                          tuple((j, p.copy()) for j, p in mode.planted.items()), mode.pose, mode.heading,
+                          tuple(copy.deepcopy(k) for k in scene.keys), (a.frames, a.fps, a.interpolation),
+                          tuple(mode.constraints))  # fmt: skip
+
+
+def put(mode: PoseMode, scene: AuthoringScene, state: AuthoringState) -> None:
+    """Make ``state`` that of ``mode`` and ``scene`` (copies again: the state stays as it is;
+    the constraint list and the animation object are edited in place, as others hold them)."""
+    mode.targets = {t.joint: copy.deepcopy(t) for t in state.targets}
+    mode.planted = {j: p.copy() for j, p in state.planted}
+    mode.pose, mode.heading = state.pose, state.heading
+    scene.keys = [copy.deepcopy(k) for k in state.keys]
+    a = scene.animation
+    a.frames, a.fps, a.interpolation = state.animation
+    mode.constraints[:] = list(state.constraints)
+
+
+def pose_on_key(mode: PoseMode, key: Key) -> None:
+    """Pose ``mode`` as ``key``: its targets and, when it has a latent, its pose, place and
+    facing, with the exact limb steps onto its targets."""
+    mode.targets = copy.deepcopy(key.targets)
+    if key.latent is not None:
+        mode.heading = key.heading
+        mode.pose = mode.character.decode(key.latent, mode.character.grounded(key.root, key.heading))
+        mode.plant_where_standing()
+        mode.solve(0)
+
+
+def pose_between(mode: PoseMode, baked: Baked, keys: list[Key], scheme: str, frame: int) -> None:
+    """Pose ``mode`` as the baked in-between at ``frame``: its latent and pose, the facing
+    and targets interpolated there (so a key added on it keeps the motion)."""
+    motion = baked.motion
+    f = min(int(frame), len(motion) - 1)
+    local, root = motion.local_rot[f].copy(), motion.root_pos[f].copy()
+    mode.pose = Pose(baked.latents[f].copy(), local, root, fk_positions(local, root, motion.skeleton.offsets))
+    times = [float(k.frame) for k in keys]
+    mode.heading = interpolated_heading(keys, times, f, scheme)
+    mode.targets = {t.joint: copy.deepcopy(t) for t in interpolated_targets(keys, times, f, scheme)}

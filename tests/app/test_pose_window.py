@@ -363,3 +363,37 @@ def test_a_saved_scene_opens_again_in_a_pose_window(window, tmp_path, vae, monke
         assert [k.frame for k in other.scene.keys] == [0, 20]  # a bad file changes nothing
     finally:
         close_now(other)
+
+
+def test_the_bake_runs_on_a_worker_with_a_dialog_whose_cancel_changes_nothing(window, qtbot, monkeypatch):
+    """Scrubbing between keys bakes off the GUI thread (the event loop runs, the progress
+    dialog shows); Cancel stops it, the frame, the keys and the history stay as they were."""
+    import threading
+
+    from PyQt6.QtCore import QTimer
+    from PyQt6.QtWidgets import QPushButton
+
+    w = window
+    key_the_wrist(w, (0, [0.0, -0.1, 0.1]), (150, [0.1, -0.2, 0.5]), length=151)
+    steps, state_before = w.undo.count(), state(w)
+    shown = []
+    monkeypatch.setattr(QMessageBox, "warning", lambda *a, **k: shown.append(a[2]))
+    seen: dict = {}
+
+    def watch() -> None:
+        r = w.jobs
+        if r.running and r.done >= 5 and r.dialog is not None and r.dialog.isVisible():
+            seen["worker"] = r.thread is not threading.main_thread() and r.thread.is_alive()
+            seen["progress"] = (r.done, r.dialog.maximum())
+            r.dialog.findChild(QPushButton).click()  # Cancel
+
+    timer = QTimer(interval=10)
+    timer.timeout.connect(watch)
+    timer.start()
+    w.go_to(75)  # between the keys: it needs the bake
+    timer.stop()
+    # the timer's callback saw the worker running and clicked Cancel: the loop ran during the bake
+    assert seen.get("worker") and seen["progress"][1] == 153  # 2 keys + 151 frames
+    assert shown == ["the bake did not finish: cancelled"]
+    assert w.frame == 0 and w.playback.baked is None and w.undo.count() == steps and state(w) == state_before
+    assert not w.jobs.running and w.jobs.dialog is None

@@ -8,7 +8,8 @@ clean index (where the scene was last saved), and reports every change through
 
 Consecutive edits of the same thing (one target's position, one constraint's fields)
 less than :data:`MERGE_S` apart are one step, so a drag of a hundred mouse moves undoes
-in one Ctrl+Z; the edit of a constraint merges into the step that added it.
+in one Ctrl+Z; an edit keyed ``(kind, name, "added")`` takes the next edits of the same
+thing into it.
 """
 
 from __future__ import annotations

@@ -190,11 +190,8 @@ class DragPoserMethod(DragPoserEdits, Method):
         ctx = FrameContext(root, override, anchor, self._positions, prediction, self._frame, deadline)
         self.settle_constraints(self._pos64)  # e.g. an unset pin takes the previous pose
         terms = [*self.sensors.values(), self.prior, self.smooth, self.ground, *self.constraints]
-        self.optimizer.settings = dataclasses.replace(s, mode="offline") if self._frame == 0 else s
-        try:  # frame 0 has no history to start from: it is solved offline
-            sol = self.optimizer.solve(start, terms, ctx)
-        finally:
-            self.optimizer.settings = self.settings
+        # frame 0 has no history to start from: it is solved offline
+        sol = self.optimizer.solve(start, terms, ctx, dataclasses.replace(s, mode="offline") if self._frame == 0 else s)
         warnings += sol.warnings
         state = sol.state
         if not (torch.isfinite(state.positions).all() and torch.isfinite(state.local_rot).all()):

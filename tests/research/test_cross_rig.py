@@ -2,7 +2,7 @@
 
 Every take the shared manifest lists on several rigs (``cmu_trial``) is converted from each
 rig; each pair of copies is aligned in time and heading and compared
-(:func:`engine.motion.retarget_compare.compare_clips`, table: ``scripts/cross_rig.py``)."""
+(:func:`research.retarget_compare.compare_clips`, table: ``research/cross_rig.py``)."""
 
 from __future__ import annotations
 
@@ -11,6 +11,7 @@ import pytest
 
 from engine import skeleton as sk
 from engine.motion.clip import Motion
+from research.retarget_versions import VERSION_5, VERSIONS
 
 pytestmark = pytest.mark.shared_data
 #: Canonical frames read per copy (30 s): the longest takes run 40 s on the CMU rig, and
@@ -23,14 +24,14 @@ def cross_rig(shared_mocap):
     """Every pair of copies of every multi-rig take, compared once: ``[(take, a, b, difference)]``."""
     import itertools
 
-    from engine.motion.retarget import RETARGET_VERSION, load_motion
-    from engine.motion.retarget_compare import compare_clips, multi_rig_takes
+    from engine.motion.retarget import CURRENT, load_motion
+    from research.retarget_compare import compare_clips, multi_rig_takes
 
     rows = []
     takes = multi_rig_takes(shared_mocap)
     assert len(takes) >= 81, "the manifest lists 81 takes on two or three rigs"
     for take, paths in takes.items():
-        clips = {p: load_motion(shared_mocap / p, version=RETARGET_VERSION, max_frames=MAX_FRAMES) for p in paths}
+        clips = {p: load_motion(shared_mocap / p, strategy=CURRENT, max_frames=MAX_FRAMES) for p in paths}
         for a, b in itertools.combinations(paths, 2):
             rows.append((take, a.split("/")[0], b.split("/")[0], compare_clips(clips[a], clips[b])))
     return rows
@@ -39,16 +40,16 @@ def cross_rig(shared_mocap):
 @pytest.fixture(scope="module")
 def offsets_removed(shared_mocap):
     """Per pair of rigs, the mean over its takes of the mean local-rotation difference once
-    each joint's constant offset is removed (:func:`engine.motion.retarget_ablation.offset_ablation`)."""
+    each joint's constant offset is removed (:func:`research.retarget_ablation.offset_ablation`)."""
     import itertools
 
-    from engine.motion.retarget import RETARGET_VERSION, load_motion
-    from engine.motion.retarget_ablation import offset_ablation
-    from engine.motion.retarget_compare import multi_rig_takes
+    from engine.motion.retarget import CURRENT, load_motion
+    from research.retarget_ablation import offset_ablation
+    from research.retarget_compare import multi_rig_takes
 
     out: dict[tuple[str, str], list[tuple[float, float]]] = {}
     for take, paths in multi_rig_takes(shared_mocap).items():
-        clips = {p: load_motion(shared_mocap / p, version=RETARGET_VERSION, max_frames=MAX_FRAMES) for p in paths}
+        clips = {p: load_motion(shared_mocap / p, strategy=CURRENT, max_frames=MAX_FRAMES) for p in paths}
         for a, b in itertools.combinations(paths, 2):
             ab = offset_ablation(clips[a], clips[b])
             out.setdefault((a.split("/")[0], b.split("/")[0]), []).append(
@@ -85,16 +86,16 @@ def daz_legs_v5(shared_mocap):
     """Thigh, knee and toe differences (degrees) of every pair with a Daz copy, version 5:
     ``{(a, b): array (takes, 6)}`` for lhip, lknee, rhip, rknee, ltoe, rtoe."""
     from engine.motion.retarget import load_motion
-    from engine.motion.retarget_compare import compare_clips, multi_rig_takes
+    from research.retarget_compare import compare_clips, multi_rig_takes
 
     legs = [sk.JOINT_INDEX[j] for j in ("lhip", "lknee", "rhip", "rknee", "ltoe", "rtoe")]
     out: dict[tuple[str, str], list] = {}
     for take, paths in multi_rig_takes(shared_mocap).items():
         daz = [p for p in paths if "daz" in p]
         for d in daz:
-            a = load_motion(shared_mocap / d, version=5, max_frames=MAX_FRAMES)
+            a = load_motion(shared_mocap / d, strategy=VERSION_5, max_frames=MAX_FRAMES)
             for other in (p for p in paths if p != d):
-                diff = compare_clips(a, load_motion(shared_mocap / other, version=5, max_frames=MAX_FRAMES))
+                diff = compare_clips(a, load_motion(shared_mocap / other, strategy=VERSION_5, max_frames=MAX_FRAMES))
                 out.setdefault((d.split("/")[0], other.split("/")[0]), []).append(diff.rot_deg[legs])
     return {pair: np.array(v) for pair, v in out.items()}
 
@@ -151,7 +152,7 @@ def test_alignment_finds_the_offset_and_heading_of_a_copy():
     """A clip against a copy that starts 7 frames (120 fps) later and faces 40 degrees away."""
     from engine.kinematics import quaternion as Q
     from engine.motion.retarget import resample_motion
-    from engine.motion.retarget_compare import compare_clips
+    from research.retarget_compare import compare_clips
     from tests.engine.test_retarget_body import canonical_walk
 
     local, root = canonical_walk(240)
@@ -177,7 +178,8 @@ def test_ablation_separates_a_constant_offset_from_a_disagreement():
     from engine.kinematics import quaternion as Q
     from engine.kinematics.fk import fk, local_from_global
     from engine.motion.retarget import resample_motion
-    from engine.motion.retarget_ablation import joint_axis, offset_ablation
+    from engine.motion.joint_stats import joint_axis
+    from research.retarget_ablation import offset_ablation
     from tests.engine.test_retarget_body import canonical_walk
 
     local, root = canonical_walk(240)
@@ -202,11 +204,11 @@ def test_daz_legs_drawn_bent_read_straight(shared_mocap, daz, other):
     copies bend them that much more than the same take on the iClone and CMU rigs
     (version 4); ``straight_knees`` (version 5) reads its legs straight along that line."""
     from engine.motion.retarget import load_motion
-    from engine.motion.retarget_compare import compare_clips
+    from research.retarget_compare import compare_clips
 
-    ref = load_motion(shared_mocap / other, version=5, max_frames=300)
+    ref = load_motion(shared_mocap / other, strategy=VERSION_5, max_frames=300)
     legs = [sk.JOINT_INDEX[j] for j in ("lhip", "lknee", "rhip", "rknee")]
-    diff = {v: compare_clips(load_motion(shared_mocap / f"cmu_daz_cgspeed/{daz}.bvh", version=v, max_frames=300), ref)
+    diff = {v: compare_clips(load_motion(shared_mocap / f"cmu_daz_cgspeed/{daz}.bvh", strategy=VERSIONS[v], max_frames=300), ref)
             for v in (4, 5)}  # fmt: skip
     assert diff[4].rot_deg[legs].mean() > 6.0, np.round(diff[4].rot_deg[legs], 1)
     assert diff[5].rot_deg[legs].mean() < 4.0, np.round(diff[5].rot_deg[legs], 1)
@@ -219,10 +221,10 @@ def test_toe_tips_on_the_sole_line_make_the_daz_toes_agree(shared_mocap):
     canonical end site (on the floor). Version 5's sole-line tip makes the Daz copy's toes
     agree and leaves the iClone / CMU agreement as it was."""
     from engine.motion.retarget import load_motion
-    from engine.motion.retarget_compare import compare_clips
+    from research.retarget_compare import compare_clips
 
     toes = [sk.JOINT_INDEX["ltoe"], sk.JOINT_INDEX["rtoe"]]
-    clips = {(rig, v): load_motion(shared_mocap / path, version=v, max_frames=300)
+    clips = {(rig, v): load_motion(shared_mocap / path, strategy=VERSIONS[v], max_frames=300)
              for rig, path in (("daz", "cmu_daz_cgspeed/07_03.bvh"), ("iclone", "cmu_iclone/007_03.bvh"),
                                ("mb", "cmu_mb/07_03.bvh")) for v in (4, 5)}  # fmt: skip
     daz = {v: compare_clips(clips["daz", v], clips["iclone", v]).rot_deg[toes] for v in (4, 5)}

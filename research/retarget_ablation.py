@@ -7,7 +7,7 @@ disagreement about the motion varies with time. :func:`offset_ablation` measures
 it estimates each joint's ``K_j`` (the mean of ``G_a^-1 G_b`` over the clip), removes it
 from ``a`` (local rotations ``K_parent^-1 L_a K_j``) and measures what is left, and splits
 each ``K_j`` into its twist about the joint's bone and the swing of the bone.
-``scripts/cross_rig.py --ablate`` prints the table of every take on several rigs.
+``research/cross_rig.py --ablate`` prints the table of every take on several rigs.
 """
 
 from __future__ import annotations
@@ -20,9 +20,9 @@ from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk
 from engine.motion.clip import Motion
-from engine.motion.joint_stats import BONE_CHILD, bone_axis, twist_deg
-from engine.motion.retarget_compare import COMMON_HEIGHT, align_clips
+from engine.motion.joint_stats import joint_axis, twist_deg
 from engine.motion.retarget_frames import mean_rotation
+from research.retarget_compare import COMMON_HEIGHT, align_clips
 
 
 @dataclass
@@ -45,13 +45,6 @@ class OffsetAblation:
     removed_pos_cm: np.ndarray
 
 
-def joint_axis(joint: str) -> np.ndarray:
-    """Unit bone direction (3,) of ``joint`` in its own rest frame; the pelvis's is up."""
-    if joint != "root" and (joint in BONE_CHILD or joint in sk.END_SITES):
-        return bone_axis(sk.REST_OFFSETS, joint)
-    return np.array([0.0, 0.0, 1.0])
-
-
 def swing_twist_deg(q: np.ndarray, axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Signed twist about unit ``axis`` (3,) and unsigned swing angle of rotations ``q``
     ``(..., 4)``, degrees (``q = swing * twist``)."""
@@ -68,7 +61,7 @@ def _relative(local: np.ndarray) -> np.ndarray:
 
 
 def offset_ablation(a: Motion, b: Motion) -> OffsetAblation:
-    """Align ``a`` to ``b`` (:func:`engine.motion.retarget_compare.align_clips`) and split
+    """Align ``a`` to ``b`` (:func:`research.retarget_compare.align_clips`) and split
     their difference into a constant offset per joint and what varies over the clip.
 
     Parameters

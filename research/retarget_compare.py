@@ -5,8 +5,8 @@ frame, a trimmed start), run at different source rates and face different global
 headings. :func:`compare_clips` finds the time offset and the heading that align them
 best, then measures how far their canonical motions differ: local rotations (degrees,
 per joint) and root-relative joint positions with both subjects scaled to one height
-(centimetres, per joint). ``scripts/cross_rig.py`` prints the table of every take on
-several rigs; ``tests/engine/test_retarget_cross_rig.py`` checks it.
+(centimetres, per joint). ``research/cross_rig.py`` prints the table of every take on
+several rigs; ``tests/research/test_cross_rig.py`` checks it.
 """
 
 from __future__ import annotations

@@ -2,12 +2,12 @@
 
 Every take the shared manifest lists on two or three rigs (``cmu_trial``) is converted from
 each rig, and every pair of copies is aligned in time and heading and compared
-(:func:`engine.motion.retarget_compare.compare_clips`): mean local-rotation difference, the worst
+(:func:`research.retarget_compare.compare_clips`): mean local-rotation difference, the worst
 joint, and root-relative positions at one height. The table goes into ``docs/skeleton.md``.
 With ``--ablate`` each pair's difference is also split into a constant offset per joint
-and what varies over the clip (:func:`engine.motion.retarget_ablation.offset_ablation`).
+and what varies over the clip (:func:`research.retarget_ablation.offset_ablation`).
 
-    PYTHONPATH=. python scripts/cross_rig.py ../shared/data/mocap [--max-frames 1200] [--ablate] [--json OUT.json]
+    PYTHONPATH=. python research/cross_rig.py ../shared/data/mocap [--max-frames 1200] [--ablate] [--json OUT.json]
 """
 
 from __future__ import annotations
@@ -20,10 +20,13 @@ from pathlib import Path
 
 import numpy as np
 
-from engine import skeleton as sk
-from engine.motion.retarget import RETARGET_VERSION, RETARGET_VERSIONS, load_motion
-from engine.motion.retarget_ablation import offset_ablation
-from engine.motion.retarget_compare import compare_clips, multi_rig_takes
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from engine import skeleton as sk  # noqa: E402
+from engine.motion.retarget import RETARGET_VERSION, load_motion  # noqa: E402
+from research.retarget_ablation import offset_ablation  # noqa: E402
+from research.retarget_compare import compare_clips, multi_rig_takes  # noqa: E402
+from research.retarget_versions import VERSIONS  # noqa: E402
 
 #: Joints of the per-joint ablation table: the left side (the right is alike) and the spine.
 ABLATE_JOINTS = ("root", "lhip", "lknee", "lankle", "ltoe", "lowerback", "chest", "lowerneck", "upperneck",
@@ -39,7 +42,7 @@ def cross_rig_rows(mocap: Path, max_frames: int | None = None, version: int = RE
     """One row per pair of copies of a take (see module docs)."""
     rows = []
     for take, paths in multi_rig_takes(mocap).items():
-        clips = {p: load_motion(mocap / p, max_frames=max_frames, version=version) for p in paths}
+        clips = {p: load_motion(mocap / p, max_frames=max_frames, strategy=VERSIONS[version]) for p in paths}
         for pa, pb in itertools.combinations(paths, 2):
             d = compare_clips(clips[pa], clips[pb])
             extra = {}
@@ -94,7 +97,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("mocap", type=Path)
     ap.add_argument("--max-frames", type=int, default=None, help="canonical frames read per clip")
     ap.add_argument("--json", type=Path, default=None)
-    ap.add_argument("--version", type=int, choices=RETARGET_VERSIONS, default=RETARGET_VERSION,
+    ap.add_argument("--version", type=int, choices=sorted(VERSIONS), default=RETARGET_VERSION,
                     help="retargeting definition (default: the current one)")
     ap.add_argument("--ablate", action="store_true",
                     help="also split each difference into a constant offset per joint and the rest")

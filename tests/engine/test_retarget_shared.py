@@ -157,7 +157,7 @@ def test_every_shared_clip_keeps_its_height(every_shared_clip):
 @pytest.mark.parametrize("family", FAMILIES)
 def test_every_shared_clip_rotates_like_the_canonical_clips(every_shared_clip, family):
     """Per joint, the hinge axis and twist of each rig family against DragPoser's own clips
-    (``engine.motion.joint_stats.summarize``, the figures of docs/skeleton.md: ``scripts/joint_stats.py``)."""
+    (``engine.motion.joint_stats.summarize``, the figures of docs/skeleton.md: ``research/joint_stats.py``)."""
     table = every_shared_clip[2]
     for knee in ("lknee", "rknee"):  # the hinge of every clip, with DragPoser's few degrees of twist
         row = table[knee][family]

@@ -111,8 +111,8 @@ def _timed_parts(db) -> dict[str, float]:
 
     wrap(SB.BatchDecoder, "forward", "decoder forward", columns=True)
     wrap(SB.BatchDecoder, "backward", "decoder reverse")
-    wrap(SB.BatchPose, "forward", "FK and losses")
-    wrap(SB.BatchPose, "backward", "FK and losses reverse")
+    wrap(SB.BatchObjective, "evaluate", "FK and losses")
+    wrap(SB.BatchObjective, "gradient", "FK and losses reverse")
     wrap(db, "_finished", "after-solve steps")
     wrap(TP.PoseBank, "latent_frames", "bank lookups")
     wrap(db, "_read", "reading frames")

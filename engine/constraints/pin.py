@@ -3,7 +3,7 @@
 Its default weight is 30, not 1: a pin is the user overriding the trackers, and at
 weight 1 six sensor terms of the same scale (squared metres) held a Ctrl-dragged elbow
 10-13 cm short of the pin with the shipped DragPoser; at 30 it pulls the joint in over
-a few frames and holds it within ~2 cm; ``scripts/measure_pin.py`` measures it
+a few frames and holds it within ~2 cm; ``research/measure_pin.py`` measures it
 (docs/studio.md, "Pins").
 
 With ``follow_previous`` the target is the joint's previous-frame position every frame

@@ -18,7 +18,7 @@ and ``d_latent (A, m, L)``. Everything else is derived from that one definition:
 
 * the loss of each constraint: ``|r|^2`` over its entries (:meth:`Term.losses`);
 * the solver's fast path: ``2 w J^T r``, accumulated into position, rotation and latent
-  gradients (:meth:`Term.accumulate`), which :mod:`engine.solver.fast` carries through
+  gradients (:meth:`Term.accumulate`), which :mod:`engine.solver.chain` carries through
   FK and the decoder in closed form; ``A = 1`` is the frame-by-frame solve and ``A > 1``
   the batched offline solve (:mod:`engine.solver.batch`);
 * the torch reference: the same residual evaluated on tensors (:data:`TORCH`), through

@@ -6,7 +6,7 @@ decoder's matrices by one latent per call, up to 100 times per frame, reading th
 solved together: every iteration is one decoder pass over all their latents (a matrix
 product per block of the block-sparse stages, ``A`` columns wide), forward kinematics
 and losses vectorised over the frames, the closed-form reverse pass of
-:class:`engine.solver.fast.FastPose` vectorised the same way, and one update of every
+:class:`engine.solver.chain.PoseChain`, and one update of every
 latent. Each frame minimises the frame-by-frame solve's terms (the same
 :class:`~engine.constraints.residual.Term` objects, given a frame axis: trackers, the
 temporal prior's latent, the smoothing target from its two previous solved frames, the

@@ -163,3 +163,16 @@ def test_the_constraint_loss_is_the_term_on_the_state():
             P, W, Z = (a.numpy() for a in state_arrays(state))
             assert float(c.loss(state)) == pytest.approx(float(t.losses(t.residual(NUMPY, P, W, Z))[0, 0]), rel=1e-12)
             assert c.satisfied(state) == bool(t.satisfied(P, W, Z)[0, 0])
+
+
+def test_the_kinds_table_of_the_optimizer_guide_is_the_generated_one():
+    from pathlib import Path
+
+    from engine.studio.kinds_table import BEGIN, END, kinds_table
+
+    text = (Path(__file__).resolve().parents[2] / "docs" / "optimizer.md").read_text(encoding="utf-8")
+    assert BEGIN in text and END in text, "docs/optimizer.md lost its kinds-table markers"
+    table = text.split(BEGIN, 1)[1].split(END, 1)[0]
+    assert table == kinds_table(), "run: PYTHONPATH=. python scripts/settings_table.py"
+    for kind in REGISTRY:
+        assert f"| `{kind}` |" in table

@@ -49,7 +49,7 @@ def _sections(run) -> None:
     wrap(tp.TrackerHistory, "arrays", "tracker history")
     wrap(dp, "finish", "after-solve steps (limb_ik.finish)")
     wrap(dp.DragPoserMethod, "_advance", "next frame's history (_advance)")
-    wrap(dp.DragPoserMethod, "_read_frame", "reading the frame (_read_frame)")
+    wrap(dp.DragPoserMethod, "plan", "reading the frame (plan)")
     for name in ("root_override", "reference_root", "root_anchor", "initial_root", "held_root"):
         wrap(roots, name, "root rules")
     frames = run()

@@ -43,12 +43,11 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from engine.constraints.residual import FrameInputs, FrameRows
-from engine.constraints.sensor import SensorConstraint, unit_rotation
 from engine.constraints.smooth import SmoothTerm
 from engine.constraints.temporal_prior import PriorTerm
 from engine.kinematics import quat_np as QN
@@ -59,6 +58,9 @@ from engine.solver.batch import BatchDecoder, BatchObjective, solve_streams
 from engine.solver.chain import RootFrames
 from engine.solver.limb_ik import finish
 from engine.solver.threads import one_blas_thread
+
+if TYPE_CHECKING:
+    from engine.methods.dragposer import DragPoserMethod
 
 #: Segments solved side by side (at most; fewer in a clip shorter than ``STREAMS * SEGMENT``).
 STREAMS = 32
@@ -93,15 +95,15 @@ EXTRAPOLATE = {"adam-carry": 0.5, "adam": 0.5, "sgd": 0.0}
 RULE_SETTINGS = frozenset({"max_iterations", "patience", "min_improvement"})
 
 
-def solve_clip(m: Any, frames: Sequence[SensorFrame]) -> list[FrameResult] | None:
+def solve_clip(m: DragPoserMethod, frames: Sequence[SensorFrame]) -> list[FrameResult] | None:
     """The clip's frames solved by ``m`` (a :class:`~engine.methods.dragposer.DragPoserMethod`
     just reset), or None (method left reset) when the clip is not batched (module doc)."""
     with one_blas_thread():  # as the per-frame solver: more threads only wait
         return _solve_clip(m, frames)
 
 
-def _solve_clip(m: Any, frames: Sequence[SensorFrame]) -> list[FrameResult] | None:
-    fast = m.optimizer._fast
+def _solve_clip(m: DragPoserMethod, frames: Sequence[SensorFrame]) -> list[FrameResult] | None:
+    fast = m.optimizer.fast_parts
     if m.settings.mode != "offline" or fast is None or not frames or not _same_hip_set(frames):
         return None
     if any(c.enabled and c.weight > 0 for c in m.constraints):
@@ -206,7 +208,7 @@ def _crossfade(own: Sequence[FrameResult | None], warm: list[np.ndarray], offset
         r.local_rot, r.positions, r.root_pos = q, p, p[0].copy()
 
 
-def _finished(m: Any, r: dict, local: np.ndarray, pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _finished(m: DragPoserMethod, r: dict, local: np.ndarray, pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """A solved frame after the limb and tracker-rotation steps of a frame-by-frame solve."""
     if r["reach"] or r["turn"]:
         return finish(local, pos[0], m.skeleton.offsets, r["reach"], r["turn"], r["settings"].neck_twist_share)
@@ -224,7 +226,7 @@ def _same_hip_set(frames: Sequence[SensorFrame]) -> bool:
     return True
 
 
-def _read_all(m: Any, frames: Sequence[SensorFrame]) -> list[dict] | None:
+def _read_all(m: DragPoserMethod, frames: Sequence[SensorFrame]) -> list[dict] | None:
     """Every frame's :func:`_read` record with its prior latent (``prior``), or None when a
     frame cannot be batched or the frames do not share their trackers."""
     read = [_read(m, f) for f in frames]
@@ -238,38 +240,32 @@ def _read_all(m: Any, frames: Sequence[SensorFrame]) -> list[dict] | None:
     return read
 
 
-def _read(m: Any, frame: SensorFrame) -> dict | None:
-    """One frame's terms as ``m.step`` would set them up, or None when the frame cannot be
-    batched (its prior is not the pose bank's, or a reading is not finite)."""
-    warnings, s = m._read_frame(frame)
-    live = [c for c in m.sensors.values() if c.enabled]
-    hip = m.sensors.get("root")
-    readings = m._tracks.arrays() if s.prior == "trackers" and m.bank is not None else None
-    if readings is None or hip is None or not hip.enabled or hip.dof != 6 or warnings:
+def _read(m: DragPoserMethod, frame: SensorFrame) -> dict | None:
+    """One frame's terms as ``m.step`` would set them up (:meth:`DragPoserMethod.plan`), or
+    None when the frame cannot be batched (its prior is not the pose bank's, no 6-DoF hip
+    tracker, or a reading is not finite)."""
+    plan = m.plan(frame)
+    s = plan.settings
+    if plan.bank_readings is None or plan.hip is None or plan.warnings:
         return None
     smooth_w, ground_w = float(s.smooth_weight), float(s.ground_weight)
-    feet = any(m.sensors[j].enabled for j in ("lankle", "rankle") if j in m.sensors)
-    weights = [np.array([c.weight for c in live]), [s.tracker_prior_weight], [smooth_w], [0.0 if feet else ground_w]]
-    kept = [True, s.tracker_prior_weight > 0, smooth_w > 0, not feet and ground_w > 0]  # as the solver drops zero weights
+    weights = [plan.weights, [s.tracker_prior_weight], [smooth_w], [0.0 if plan.feet else ground_w]]
+    kept = [True, s.tracker_prior_weight > 0, smooth_w > 0, not plan.feet and ground_w > 0]  # as the solver drops zero weights
     return {
         "settings": s,
-        "warnings": warnings,
-        "names": tuple(c.name for c in live),
-        "sensor_term": SensorConstraint.terms(live, FrameInputs())[0],
+        "warnings": plan.warnings,
+        "names": plan.names,
+        "sensor_term": plan.trackers,
         "kept": kept,
         "weights": np.concatenate([np.asarray(w, dtype=np.float64) for w, k in zip(weights, kept) if k]),
-        "root": (np.array(hip.position, dtype=np.float64), unit_rotation(hip.rotation)),
-        "bank": readings,  # the pose bank's lookup, made for all frames at once
-        "reach": _copied(m._reach_targets() if s.reach else {}),
-        "turn": _copied(m._rotation_targets() if s.sensor_rotations else {}),
+        "root": plan.hip,
+        "bank": plan.bank_readings,  # the pose bank's lookup, made for all frames at once
+        "reach": plan.reach,
+        "turn": plan.turn,
     }  # fmt: skip
 
 
-def _copied(targets: dict[int, Any]) -> dict[int, np.ndarray]:
-    return {k: np.array(v, dtype=np.float64) for k, v in targets.items()}
-
-
-def _objective(m: Any, r: dict, rows: int) -> BatchObjective:
+def _objective(m: DragPoserMethod, r: dict, rows: int) -> BatchObjective:
     """The batched objective with ``rows`` rows, each the frame of record ``r`` (:func:`_read`)
     until :meth:`~engine.solver.batch.BatchObjective.set_row` gives it its own."""
     frame_terms = [r["sensor_term"], PriorTerm(m.prior.name, r["prior"]), m.smooth.term(FrameInputs()),

@@ -113,6 +113,11 @@ class PoseOptimizer:
             self._fast = FastParts(dense_decoder(decoder), np.asarray(offsets, dtype=np.float64))
         self._carry: dict = {}
 
+    @property
+    def fast_parts(self) -> FastParts | None:
+        """The fused decoder and pose chain of the numpy objective (None: the reference runs)."""
+        return self._fast
+
     # -- decoding --------------------------------------------------------------------
     def decode(self, z: torch.Tensor, ctx: FrameContext) -> PoseState:
         """World pose of latent ``z (L,)`` in the context of a frame (differentiable)."""

@@ -172,7 +172,7 @@ def test_the_batched_gradient_is_the_derivative_of_the_batched_loss(clip):
         weights[-1] = 10.0  # the ground band, strong
         objective.set_row(c, [r["sensor_term"], PriorTerm("temporal_prior", r["prior"]), smooth,
                               m.ground.term(FrameInputs())], weights, *r["root"])  # fmt: skip
-    dec = B.BatchDecoder(m.optimizer._fast.decoder)
+    dec = B.BatchDecoder(m.optimizer.fast_parts.decoder)
     z = np.array([r["prior"] for r in read]) + rng.normal(scale=0.3, size=(5, 24))  # float64: exact differences
     idx = np.array([0, 1, 3, 4])
     w = objective.weights[idx]

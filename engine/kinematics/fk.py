@@ -187,6 +187,8 @@ def _forward(local_mat, root_pos, offsets, parents, local_quat=None):
     quaternions are composed along the same levels. Returns positions ``(..., J, 3)``,
     world matrices ``(..., J, 3, 3)`` and world quaternions ``(..., J, 4)`` or None."""
     lv = levels(tuple(int(p) for p in parents))
+    if torch_of(local_mat) is None:
+        return _forward_numpy(np.asarray(local_mat), np.asarray(root_pos), np.asarray(offsets), lv, local_quat)
     take, cat = _ops(local_mat)
     offsets = _offsets_like(offsets, local_mat)
     g_rot = local_mat[..., :1, :, :]
@@ -201,6 +203,37 @@ def _forward(local_mat, root_pos, offsets, parents, local_quat=None):
             g_q = cat((g_q, Q.mul(take(g_q, rows, -2), take(local_quat, idx, -2))), -2)
     order = lv.unorder
     return take(g_pos, order, -2), take(g_rot, order, -3), None if g_q is None else take(g_q, order, -2)
+
+
+def _forward_numpy(local_mat: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, lv: Levels,
+                   local_quat: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:  # fmt: skip
+    """:func:`_forward` for numpy: the same levels written in place into level-ordered
+    arrays (no autograd to keep, and numpy's per-call overhead, not arithmetic, is what
+    one pose costs: one product per level into a slice instead of a concatenation)."""
+    order = np.concatenate([[0], *lv.joints]).astype(np.intp)
+    shape = np.broadcast_shapes(local_mat.shape[:-3], root_pos.shape[:-1], offsets.shape[:-2])
+    n = len(order)
+    mats = np.broadcast_to(local_mat, shape + local_mat.shape[-3:])[..., order, :, :]
+    off = np.broadcast_to(offsets, shape + offsets.shape[-2:])[..., order, :, None]
+    world = np.empty(shape + (n, 3, 3))
+    pos = np.empty(shape + (n, 3))
+    world[..., 0, :, :], pos[..., 0, :] = mats[..., 0, :, :], root_pos
+    quats = None
+    if local_quat is not None:
+        lq = np.broadcast_to(local_quat, shape + local_quat.shape[-2:])[..., order, :]
+        quats = np.empty(shape + (n, 4))
+        quats[..., 0, :] = lq[..., 0, :]
+    start = 1
+    for idx, rows in zip(lv.joints, lv.parent_rows):
+        end = start + len(idx)
+        parent = world[..., rows, :, :]
+        np.matmul(parent, mats[..., start:end, :, :], out=world[..., start:end, :, :])
+        pos[..., start:end, :] = pos[..., rows, :] + np.matmul(parent, off[..., start:end, :, :])[..., 0]
+        if quats is not None:
+            quats[..., start:end, :] = Q.mul(quats[..., rows, :], lq[..., start:end, :])
+        start = end
+    back = lv.unorder
+    return pos[..., back, :], world[..., back, :, :], None if quats is None else quats[..., back, :]
 
 
 def local_from_global(global_rot, parents=sk.PARENTS):

@@ -214,9 +214,18 @@ class FrameRows:
         return slice(0, len(like)) if rows is None else rows
 
 
+_DISTINCT: dict[bytes, bool] = {}  # joint lists seen -> whether no joint repeats (terms reuse theirs)
+
+
 def _scatter(out: np.ndarray, joints: np.ndarray, g: np.ndarray) -> None:
     """``out[:, joints] += g``, counting a joint listed twice twice."""
-    if len(np.unique(joints)) == len(joints):
+    key = joints.tobytes()
+    distinct = _DISTINCT.get(key)
+    if distinct is None:
+        if len(_DISTINCT) > 4096:
+            _DISTINCT.clear()
+        distinct = _DISTINCT[key] = len(np.unique(joints)) == len(joints)
+    if distinct:
         out[:, joints] += g
     else:
         np.add.at(out, (slice(None), joints), g)

@@ -121,6 +121,7 @@ class SensorTerm(FrameRows, Term):
         self.names = tuple(c.name for c in items)
         self.joints = np.array([joint_index(c.joint, "joint", c.kind) for c in items], dtype=np.intp)
         self.six = np.array([k for k, c in enumerate(items) if c.dof == 6], dtype=np.intp)
+        self.joints6 = self.joints[self.six]
         self.target = np.array([c.position for c in items], dtype=np.float64).reshape(1, -1, 3)
         self.on = np.array([[float(c.connected) for c in items]]).reshape(1, -1)
         rot = np.array([unit_rotation(items[k].rotation) for k in self.six]).reshape(-1, 4)
@@ -141,7 +142,7 @@ class SensorTerm(FrameRows, Term):
         parts, d_rot = [err.reshape(a, -1)], None
         if len(self.six):
             scale = self.scale[sel] * self.on[sel][:, self.six]
-            rot, d_rot = rotation_residual(kit, W[:, self.joints[self.six]], kit.const(self.rot_target[sel], P),
+            rot, d_rot = rotation_residual(kit, W[:, self.joints6], kit.const(self.rot_target[sel], P),
                                            kit.const(scale, P), jac)  # fmt: skip
             parts.append(rot)
         r = kit.cat(parts, -1) if len(parts) > 1 else parts[0]
@@ -151,7 +152,7 @@ class SensorTerm(FrameRows, Term):
         if d_rot is not None:
             d_pos = np.concatenate((d_pos, np.zeros((a, d_rot.shape[1]) + d_pos.shape[2:])), axis=1)
             d_rot = np.concatenate((np.zeros((a, 3 * len(self.joints)) + d_rot.shape[2:]), d_rot), axis=1)
-        return Residuals(r, self.joints, d_pos, self.joints[self.six] if d_rot is not None else None, d_rot)
+        return Residuals(r, self.joints, d_pos, self.joints6 if d_rot is not None else None, d_rot)
 
     def satisfied(self, P: np.ndarray, W: np.ndarray, z: np.ndarray, rows: Any = None) -> np.ndarray:
         sel = self.select(P, rows)
@@ -159,7 +160,7 @@ class SensorTerm(FrameRows, Term):
         err = P[:, self.joints] - self.target[sel]
         ok = (np.einsum("asi,asi->as", err, err) <= self.pos_tol2) | off
         if len(self.six):
-            dist = (3.0 - np.einsum("akij,akij->ak", self.rot_target[sel], W[:, self.joints[self.six]])) * 0.25
+            dist = (3.0 - np.einsum("akij,akij->ak", self.rot_target[sel], W[:, self.joints6])) * 0.25
             ok[:, self.six] &= (dist <= self.rot_tol) | off[:, self.six]
         return ok
 

@@ -43,7 +43,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -59,8 +59,26 @@ from engine.solver.chain import RootFrames
 from engine.solver.limb_ik import finish
 from engine.solver.threads import one_blas_thread
 
-if TYPE_CHECKING:
-    from engine.methods.dragposer import DragPoserMethod
+class DragPoserMethod(Protocol):
+    """What the batched solve takes from :class:`engine.methods.dragposer.DragPoserMethod`
+    (public parts only: the frames' plans, the solver, the method's own terms)."""
+
+    settings: Any
+    explicit: set[str]
+    constraints: list
+    skeleton: Any
+    fps: float
+    latent_dim: int
+    bank: Any
+    optimizer: Any
+    prior: Any
+    smooth: Any
+    ground: Any
+
+    def plan(self, frame: SensorFrame) -> Any: ...
+
+    def reset(self, skeleton: Any, fps: float = ...) -> None: ...
+
 
 #: Segments solved side by side (at most; fewer in a clip shorter than ``STREAMS * SEGMENT``).
 STREAMS = 32

@@ -23,6 +23,7 @@ from engine import skeleton as sk
 from engine.constraints.base import Constraint, param
 from engine.constraints.terms import FrameInputs
 from engine.errors import UserError
+from engine.gizmos import LineGizmo
 
 if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
     import torch
@@ -83,16 +84,16 @@ class BalanceConstraint(Constraint):
         """Nothing to place: the rule is relative to the body."""
         return {}
 
-    def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
+    def gizmo(self, positions: np.ndarray | None = None) -> LineGizmo | None:
         if positions is None:
-            return {}
+            return None
         p = np.asarray(positions, float)
         if self.mode == "head_over_hip":
             a, b = p[_HEAD].copy(), p[_ROOT].copy()
         else:
             a, b = p.mean(0), p[_FEET].mean(0)
         a[2] = b[2] = 0.0
-        return {"type": "line", "points": np.stack([a, b])}
+        return LineGizmo(np.stack([a, b]))
 
 
 class BalanceTerm:

@@ -16,6 +16,7 @@ from engine.constraints.base import Constraint, joint_index, param, vec
 from engine.constraints.placement import BOUNDS_HALF, joint_at
 from engine.constraints.terms import FrameInputs
 from engine.errors import UserError
+from engine.gizmos import BoxGizmo
 
 if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
     import torch
@@ -61,9 +62,8 @@ class BoundsConstraint(Constraint):
         c = joint_at(positions, params.get("joint"), "root")
         return {"box_min": c - BOUNDS_HALF, "box_max": c + BOUNDS_HALF}
 
-    def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
-        return {"type": "box", "min": self.box_min.copy(), "max": self.box_max.copy(),
-                "edit": ("box_min", "box_max")}  # fmt: skip
+    def gizmo(self, positions: np.ndarray | None = None) -> BoxGizmo:
+        return BoxGizmo(self.box_min, self.box_max, edit=("box_min", "box_max"))
 
 
 class BoundsTerm:

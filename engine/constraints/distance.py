@@ -16,6 +16,7 @@ from engine.constraints.base import Constraint, joint_index, param
 from engine.constraints.placement import joint_at
 from engine.constraints.terms import FrameInputs
 from engine.errors import UserError
+from engine.gizmos import LineGizmo
 
 if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
     import torch
@@ -76,12 +77,12 @@ class DistanceConstraint(Constraint):
         a, b = joint_at(positions, params.get("joint_a"), "lwrist"), joint_at(positions, params.get("joint_b"), "rwrist")
         return {"distance": float(np.linalg.norm(a - b))}
 
-    def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
+    def gizmo(self, positions: np.ndarray | None = None) -> LineGizmo | None:
         if positions is None:
-            return {}
+            return None
         p = np.asarray(positions, float)
         a, b = self._pair()
-        return {"type": "line", "points": np.stack([p[a], p[b]])}
+        return LineGizmo(np.stack([p[a], p[b]]))
 
 
 class DistanceTerm:

@@ -15,6 +15,7 @@ import numpy as np
 from engine.constraints.base import Constraint, joint_index, param, rotation_distance, vec
 from engine.constraints.placement import REACH, facing, joint_at
 from engine.constraints.terms import FrameInputs, rotation_term, unit_quaternion_matrix
+from engine.gizmos import PointGizmo
 
 if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
     import torch
@@ -76,8 +77,8 @@ class EndEffectorConstraint(Constraint):
         """The target :data:`REACH` in front of the joint."""
         return {"position": joint_at(positions, params.get("joint"), "lwrist") + REACH * facing(positions)}
 
-    def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
-        return {"type": "point", "position": np.asarray(self.position, float).copy(), "edit": "position"}
+    def gizmo(self, positions: np.ndarray | None = None) -> PointGizmo:
+        return PointGizmo(self.position, edit="position")
 
 
 class EndEffectorTerm:

@@ -21,6 +21,7 @@ import numpy as np
 from engine.constraints.base import Constraint, joint_index, param
 from engine.constraints.terms import FrameInputs
 from engine.errors import UserError
+from engine.gizmos import BoxGizmo
 
 if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
     import torch
@@ -94,12 +95,12 @@ class FloorConstraint(Constraint):
         """Nothing to place: the floor plane is under the body wherever it is."""
         return {}
 
-    def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
+    def gizmo(self, positions: np.ndarray | None = None) -> BoxGizmo | None:
         if self.floor_height == 0.0:
-            return {}  # the viewport already draws the z = 0 floor
+            return None  # the viewport already draws the z = 0 floor
         lo = np.array([-2.0, -2.0, self.floor_height - 0.005])
         hi = np.array([2.0, 2.0, self.floor_height])
-        return {"type": "box", "min": lo, "max": hi}
+        return BoxGizmo(lo, hi)
 
 
 class FloorTerm:

@@ -21,6 +21,7 @@ from engine.constraints.base import Constraint, joint_index, param, vec, world_r
 from engine.constraints.placement import LOOK_DISTANCE, facing, joint_at
 from engine.constraints.terms import FrameInputs
 from engine.errors import UserError
+from engine.gizmos import LineGizmo, PointGizmo
 
 if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
     import torch
@@ -84,13 +85,13 @@ class LookAtConstraint(Constraint):
         """The target in front of the looking joint, at :data:`LOOK_DISTANCE`."""
         return {"target": joint_at(positions, params.get("joint"), "upperneck") + LOOK_DISTANCE * facing(positions)}
 
-    def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
-        target = np.asarray(self.target, float).copy()
+    def gizmo(self, positions: np.ndarray | None = None) -> PointGizmo | LineGizmo:
+        target = np.asarray(self.target, float)
         if positions is None:
-            return {"type": "point", "position": target, "edit": "target"}
+            return PointGizmo(target, edit="target")
         start = np.asarray(positions, float)[joint_index(self.joint, "joint", self.kind)]
         # the line's end (the target) stays draggable once a pose exists
-        return {"type": "line", "points": np.stack([start, target]), "edit": "target"}
+        return LineGizmo(np.stack([start, target]), edit="target")
 
 
 class LookAtTerm:

@@ -20,6 +20,7 @@ import numpy as np
 from engine.constraints.base import Constraint, joint_index, param, rotation_distance, vec
 from engine.constraints.terms import FrameInputs, NativeTerm
 from engine.errors import UserError
+from engine.gizmos import PointGizmo
 
 if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
     import torch
@@ -130,8 +131,9 @@ class SensorConstraint(Constraint):
 
         return losses
 
-    def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
-        return {"type": "point", "position": np.asarray(self.position, float).copy()}
+    def gizmo(self, positions: np.ndarray | None = None) -> PointGizmo | None:
+        position = np.asarray(self.position, float)
+        return PointGizmo(position) if np.all(np.isfinite(position)) else None
 
 
 def unit_rotation(q: Any) -> np.ndarray:

@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from engine import skeleton as sk
+from engine.gizmos import Gizmo
 from engine.methods.base import DecodesLatents, FrameResult, Method
 from engine.sensors import SensorFrame
 from engine.studio import commands as cmd
@@ -380,15 +381,18 @@ class EngineThread(threading.Thread):
         for cb in list(self.listeners):
             cb(snap)
 
-    def _gizmos(self) -> tuple[tuple[str, dict], ...]:
-        """Viewport descriptions of the enabled constraints, posed on the last solve
+    def _gizmos(self) -> tuple[tuple[str, Gizmo], ...]:
+        """The shapes of the enabled constraints that draw one, posed on the last solve
         (distance, balance and look-at draw lines between current joints)."""
         out = []
         for c in self._methods.constraints:
             if not c.enabled:
                 continue
             try:
-                out.append((c.name, c.gizmo(self._last_pose)))
+                g = c.gizmo(self._last_pose)
             except Exception as exc:  # a constraint that cannot draw itself is reported, not hidden
                 self._report_error(f"constraint {c.name!r}: cannot draw its gizmo ({exc})")
+                continue
+            if g is not None:
+                out.append((c.name, g))
         return tuple(out)

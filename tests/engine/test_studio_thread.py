@@ -9,6 +9,7 @@ import time
 import numpy as np
 import pytest
 
+from engine.gizmos import LineGizmo
 from engine.methods.base import FrameResult, Method
 from engine.studio import commands as w
 from engine.studio.session import Session
@@ -141,7 +142,7 @@ def test_gizmos_that_relate_joints_get_the_current_pose(engine):
     session.play()
     wait_for(lambda: worker.latest is not None and dict(worker.latest.gizmos).get("hands"))
     giz = dict(worker.latest.gizmos)["hands"]
-    assert giz["type"] == "line" and np.asarray(giz["points"]).shape == (2, 3)
+    assert isinstance(giz, LineGizmo) and giz.points.shape == (2, 3)
 
 
 class Counting(Method):

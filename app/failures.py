@@ -39,7 +39,7 @@ class FailureCountdown:
                     keep.append((a, b))  # still to come
             if len(keep) != len(cfg.failures):
                 with self.w.undo.unrecorded():
-                    s.update_sensor(joint, failures=tuple(keep))
+                    s.sensors.edit(joint, failures=tuple(keep))
             self._show(joint, left)
 
     def _show(self, joint: str, left: int | None) -> None:

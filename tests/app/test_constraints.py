@@ -70,7 +70,7 @@ def test_add_edit_drag_disable_and_remove_a_constraint(pin_kind, studio, qtbot):
     assert session.constraints[0].enabled is False
     qtbot.waitUntil(lambda: name not in dict(studio.session.latest.gizmos))
     panel.remove_button.click()
-    assert session.constraints == [] and panel.list.count() == 0
+    assert list(session.constraints) == [] and panel.list.count() == 0
 
 
 def test_ctrl_dragging_a_joint_without_sensor_pins_it(studio, qtbot):
@@ -111,8 +111,8 @@ def test_a_constraint_without_a_fast_path_has_a_badge_in_its_row(studio, monkeyp
     from engine.constraints.distance import DistanceConstraint
 
     monkeypatch.setattr(DistanceConstraint, "no_fast_term", "its term is not written for the fast path yet")
-    studio.session.add_constraint("distance", name="hands")
-    studio.session.add_constraint("look_at", name="look")
+    studio.session.constraints.add("distance", name="hands")
+    studio.session.constraints.add("look_at", name="look")
     rows = {studio.constraint_panel.list.item(i).data(Qt.ItemDataRole.UserRole): studio.constraint_panel.list.item(i)
             for i in range(studio.constraint_panel.list.count())}  # fmt: skip
     assert "slow path" in rows["hands"].text() and "not written" in rows["hands"].toolTip()

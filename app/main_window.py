@@ -33,6 +33,7 @@ from engine.errors import UserError
 from engine.motion.source_file import is_source_file
 from engine.studio import events as ev
 from engine.studio.session import Session
+from engine.studio.session_sensors import SensorSet
 from widgets.constraint_panel import ConstraintPanel
 from widgets.latent_inspector import LatentInspector
 from widgets.optimizer_panel import OptimizerPanel
@@ -124,7 +125,7 @@ class MainWindow(QMainWindow):
         col.addWidget(self.viewport, 1)
         col.addWidget(self.timeline)
         self.setCentralWidget(central)
-        self.sensor_panel = SensorPanel(Session.sensor_presets())
+        self.sensor_panel = SensorPanel(SensorSet.presets())
         self.constraint_panel = ConstraintPanel(constraint_schema())
         fields = optimizer_fields()
         self._optimizer_defaults = {f.name: f.default for f in fields}

@@ -14,6 +14,7 @@ import sys
 import time
 from typing import Any
 
+import numpy as np
 from PyQt6.QtCore import QSettings, Qt, QTimer, pyqtSignal
 from PyQt6.QtWidgets import QApplication, QDockWidget, QLabel, QMainWindow, QMessageBox, QTabWidget, QVBoxLayout, QWidget
 
@@ -312,7 +313,7 @@ class MainWindow(QMainWindow):
     def toggle_play(self) -> None:
         self.session.set_playing(not self.session.playing)
 
-    def hips(self) -> Any:
+    def hips(self) -> np.ndarray | None:
         """The hips of the newest snapshot (3,) metres, or None before the first one."""
         snap = self.session.latest
         return None if snap is None else snap.positions[0]

@@ -5,6 +5,7 @@ headless. It owns the reconstruction methods and the sensor source; the session 
 changes as :mod:`engine.studio.commands`. After each solved frame it publishes a
 :class:`~engine.studio.snapshot.Snapshot` of plain, read-only numpy arrays: readers keep
 the newest one (``thread.latest``) or get called back (``listeners``, on this thread).
+Commands are dispatched on their class: each has one ``@cmd.handles`` method here.
 
 Which frame is due when is the :class:`~engine.studio.playback.PlaybackClock`'s
 arithmetic (two paces: solve every frame, or keep real time and skip); the methods are

@@ -44,6 +44,13 @@ class Gizmo:
         """The constraint fields a drag of this shape writes (empty: not draggable)."""
         return ()
 
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        # unpickled arrays (the engine process's snapshots) come back writeable
+        for name, value in state.items():
+            if isinstance(value, np.ndarray):
+                value.flags.writeable = False
+            object.__setattr__(self, name, value)
+
 
 @dataclass(frozen=True, eq=False)
 class PointGizmo(Gizmo):

@@ -3,6 +3,8 @@ without one is a TypeError, and every constraint kind's gizmo is drawn (under Xv
 
 from __future__ import annotations
 
+import pickle
+
 import numpy as np
 import pytest
 
@@ -55,6 +57,8 @@ def test_shapes_check_their_arrays():
     g = PointGizmo(p, edit="position")
     p[0] = 5.0
     assert g.position[0] == 0.0 and not g.position.flags.writeable  # a copy, read-only
+    back = pickle.loads(pickle.dumps(PointGizmo(p, anchor=[0.0, 0.0, 1.0])))  # as from the engine process
+    assert np.allclose(back.position, p) and not back.position.flags.writeable and not back.anchor.flags.writeable
 
 
 def _cyan_pixels(img: np.ndarray) -> int:

@@ -261,9 +261,7 @@ class MainWindow(QMainWindow):
         self.sensor_panel.set_sensors(s.preset, s.sensors)
 
     def _show_constraints(self, event: ev.ConstraintsChanged | None) -> None:
-        cs = self.session.constraints
-        slow = {c.name: c.no_fast_term for c in cs if c.no_fast_term}
-        self.constraint_panel.set_constraints([c.to_dict() for c in cs], slow)
+        self.constraint_panel.set_constraints([c.to_dict() for c in self.session.constraints])
 
     def _show_optimizer(self, event: Any = None) -> None:
         s = self.session

@@ -18,12 +18,9 @@ pytestmark = pytest.mark.gui
 
 @pytest.fixture
 def pin_kind():
-    import torch
-
     @dataclass
     class StudioTestPin(Constraint):
         kind: ClassVar[str] = "studio_test_pin"
-        no_fast_term: ClassVar[str] = "a stand-in for the editor mechanics"
         joint: str = param("lwrist", editor="joint")
         target: np.ndarray = param(factory=lambda: np.array([0.3, -0.2, 1.2]), editor="vec3", unit="m")
 
@@ -34,9 +31,14 @@ def pin_kind():
         def placement(cls, params, positions):
             return {}
 
-        def loss(self, state):
-            t = torch.as_tensor(self.target, dtype=state.positions.dtype)
-            return ((state.positions[sk.JOINT_INDEX[self.joint]] - t) ** 2).sum()
+        def term(self, frame):
+            from engine.constraints.pin import PinConstraint
+
+            return PinConstraint(name=self.name, joint=self.joint, position=self.target).term(frame)
+
+        @classmethod
+        def examples(cls, positions):
+            return [cls()]
 
         def gizmo(self, positions=None):
             return PointGizmo(self.target, edit="target")
@@ -103,17 +105,3 @@ def test_a_new_constraint_starts_next_to_the_character(studio, qtbot, kind):
         assert np.isclose(c.target[2], head[2])
     else:
         assert np.linalg.norm(c.position - pose[sk.JOINT_INDEX[c.joint]]) < 0.3
-
-
-def test_a_constraint_without_a_fast_path_has_a_badge_in_its_row(studio, monkeypatch):
-    from PyQt6.QtCore import Qt
-
-    from engine.constraints.distance import DistanceConstraint
-
-    monkeypatch.setattr(DistanceConstraint, "no_fast_term", "its term is not written for the fast path yet")
-    studio.session.constraints.add("distance", name="hands")
-    studio.session.constraints.add("look_at", name="look")
-    rows = {studio.constraint_panel.list.item(i).data(Qt.ItemDataRole.UserRole): studio.constraint_panel.list.item(i)
-            for i in range(studio.constraint_panel.list.count())}  # fmt: skip
-    assert "slow path" in rows["hands"].text() and "not written" in rows["hands"].toolTip()
-    assert "slow path" not in rows["look"].text()

@@ -143,13 +143,20 @@ def test_an_unset_pin_targets_the_previous_position_and_is_never_changed():
     assert follow.settled(prev.numpy()) is follow
 
 
-def test_sensor_batch_equals_the_single_losses():
+def test_the_trackers_term_gives_each_tracker_its_own_loss():
+    """All trackers of a frame are one term; its per-tracker losses are each tracker's loss
+    alone (a lost tracker's is zero)."""
+    from engine.constraints.base import frame_inputs, state_arrays
+    from engine.constraints.residual import torch_kit
+
     s = rest_state()
     s.rotation_matrices = None
     items = [c for c in CASES if c.kind == "sensor"] + [SensorConstraint(joint="root", connected=False)]
-    batched = SensorConstraint.batch(items, s.positions)(s)
+    (term,) = SensorConstraint.terms(items, frame_inputs(s))
+    kit = torch_kit()
+    batched = term.losses(term.residual(kit, *state_arrays(s)), kit)[0]
     single = torch.stack([c.loss(s) for c in items])
-    assert torch.allclose(batched, single, atol=1e-10)
+    assert torch.allclose(batched, single, atol=1e-10) and float(single[-1]) == 0.0 and float(single[:-1].sum()) > 0
 
 
 @pytest.mark.parametrize("kind", sorted(REGISTRY))

@@ -40,7 +40,7 @@ def main() -> int:
     w.resize(1600, 1000)
     w.show()
     w.files.open_path(args.clip)
-    w.session.set_preset(args.sensors)
+    w.session.sensors.set_preset(args.sensors)
     snaps = []
 
     def pump(seconds: float) -> None:

@@ -22,6 +22,7 @@ from engine import skeleton as sk
 from engine.constraints.base import Constraint, param
 from engine.constraints.residual import NUMPY, FrameInputs, Kit, Residuals, Term
 from engine.errors import UserError
+from engine.gizmos import LineGizmo
 
 
 MODES = ("head_over_hip", "com_over_feet")
@@ -68,16 +69,16 @@ class BalanceConstraint(Constraint):
         """Nothing to place: the rule is relative to the body."""
         return {}
 
-    def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
+    def gizmo(self, positions: np.ndarray | None = None) -> LineGizmo | None:
         if positions is None:
-            return {}
+            return None
         p = np.asarray(positions, float)
         if self.mode == "head_over_hip":
             a, b = p[_HEAD].copy(), p[_ROOT].copy()
         else:
             a, b = p.mean(0), p[_FEET].mean(0)
         a[2] = b[2] = 0.0
-        return {"type": "line", "points": np.stack([a, b])}
+        return LineGizmo(np.stack([a, b]))
 
 
 class BalanceTerm(Term):

@@ -30,6 +30,7 @@ import numpy as np
 from engine import skeleton as sk
 from engine.constraints.residual import FrameInputs, Term
 from engine.errors import UserError
+from engine.gizmos import Gizmo
 from engine.validation import shown
 
 if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
@@ -273,14 +274,14 @@ class Constraint(ABC):
         never changed (the studio publishes it to the engine thread)."""
         return self
 
-    def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
-        """Plain-numpy description for the viewport (e.g. ``{"type": "point", "position": ...}``).
+    def gizmo(self, positions: np.ndarray | None = None) -> Gizmo | None:
+        """What the viewport draws for this constraint (:mod:`engine.gizmos`), or None.
 
         ``positions (22, 3)``, the current world joint positions in metres, lets kinds
         that relate joints (distance, look-at) draw lines; without it they draw what
-        they can from their parameters alone (possibly nothing: ``{}``).
+        they can from their parameters alone (possibly nothing: None).
         """
-        return {}
+        return None
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-JSON form: ``kind`` plus every field; arrays as lists, NaN as ``None``."""

@@ -16,6 +16,7 @@ from engine.constraints.base import Constraint, joint_index, param
 from engine.constraints.placement import BOUNDS_HALF, joint_at
 from engine.constraints.residual import FrameInputs, Kit, Residuals, Term
 from engine.errors import UserError
+from engine.gizmos import BoxGizmo
 
 
 _SLACK = 1e-3  # metres: satisfied this far outside the box
@@ -53,9 +54,8 @@ class BoundsConstraint(Constraint):
         c = joint_at(positions, params.get("joint"), "root")
         return {"box_min": c - BOUNDS_HALF, "box_max": c + BOUNDS_HALF}
 
-    def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
-        return {"type": "box", "min": self.box_min.copy(), "max": self.box_max.copy(),
-                "edit": ("box_min", "box_max")}  # fmt: skip
+    def gizmo(self, positions: np.ndarray | None = None) -> BoxGizmo:
+        return BoxGizmo(self.box_min, self.box_max, edit=("box_min", "box_max"))
 
 
 class BoundsTerm(Term):

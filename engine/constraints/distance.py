@@ -15,6 +15,7 @@ from engine.constraints.base import Constraint, joint_index, param
 from engine.constraints.placement import joint_at
 from engine.constraints.residual import NUMPY, FrameInputs, Kit, Residuals, Term
 from engine.errors import UserError
+from engine.gizmos import LineGizmo
 
 
 _MIN_SQUARED = 1e-12  # m^2: the length is clamped so its gradient stays finite when the joints coincide
@@ -65,12 +66,12 @@ class DistanceConstraint(Constraint):
         a, b = joint_at(positions, params.get("joint_a"), "lwrist"), joint_at(positions, params.get("joint_b"), "rwrist")
         return {"distance": float(np.linalg.norm(a - b))}
 
-    def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
+    def gizmo(self, positions: np.ndarray | None = None) -> LineGizmo | None:
         if positions is None:
-            return {}
+            return None
         p = np.asarray(positions, float)
         a, b = self._pair()
-        return {"type": "line", "points": np.stack([p[a], p[b]])}
+        return LineGizmo(np.stack([p[a], p[b]]))
 
 
 class DistanceTerm(Term):

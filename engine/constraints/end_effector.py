@@ -16,6 +16,7 @@ import numpy as np
 from engine.constraints.base import Constraint, joint_index, param
 from engine.constraints.placement import REACH, facing, joint_at
 from engine.constraints.residual import FrameInputs, Kit, Residuals, Term, rotation_residual, unit_quaternion_matrix
+from engine.gizmos import PointGizmo
 
 
 
@@ -69,8 +70,8 @@ class EndEffectorConstraint(Constraint):
         """The target :data:`REACH` in front of the joint."""
         return {"position": joint_at(positions, params.get("joint"), "lwrist") + REACH * facing(positions)}
 
-    def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
-        return {"type": "point", "position": np.asarray(self.position, float).copy(), "edit": "position"}
+    def gizmo(self, positions: np.ndarray | None = None) -> PointGizmo:
+        return PointGizmo(self.position, edit="position")
 
 
 class EndEffectorTerm(Term):

@@ -21,6 +21,7 @@ import numpy as np
 from engine.constraints.base import Constraint, joint_index, param
 from engine.constraints.residual import FrameInputs, FrameRows, Kit, Residuals, Term
 from engine.errors import UserError
+from engine.gizmos import BoxGizmo
 
 
 _SLACK = 0.01  # metres: satisfied this far below the clearance
@@ -79,12 +80,12 @@ class FloorConstraint(Constraint):
         """Nothing to place: the floor plane is under the body wherever it is."""
         return {}
 
-    def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
+    def gizmo(self, positions: np.ndarray | None = None) -> BoxGizmo | None:
         if self.floor_height == 0.0:
-            return {}  # the viewport already draws the z = 0 floor
+            return None  # the viewport already draws the z = 0 floor
         lo = np.array([-2.0, -2.0, self.floor_height - 0.005])
         hi = np.array([2.0, 2.0, self.floor_height])
-        return {"type": "box", "min": lo, "max": hi}
+        return BoxGizmo(lo, hi)
 
 
 class FloorTerm(FrameRows, Term):

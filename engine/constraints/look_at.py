@@ -22,6 +22,7 @@ from engine.constraints.base import Constraint, joint_index, param
 from engine.constraints.placement import LOOK_DISTANCE, facing, joint_at
 from engine.constraints.residual import EPS3, FrameInputs, Kit, Residuals, Term
 from engine.errors import UserError
+from engine.gizmos import LineGizmo, PointGizmo
 
 
 _MIN_DISTANCE = 1e-6  # metres: the direction to a target this close is not defined
@@ -74,13 +75,13 @@ class LookAtConstraint(Constraint):
         """The target in front of the looking joint, at :data:`LOOK_DISTANCE`."""
         return {"target": joint_at(positions, params.get("joint"), "upperneck") + LOOK_DISTANCE * facing(positions)}
 
-    def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
-        target = np.asarray(self.target, float).copy()
+    def gizmo(self, positions: np.ndarray | None = None) -> PointGizmo | LineGizmo:
+        target = np.asarray(self.target, float)
         if positions is None:
-            return {"type": "point", "position": target, "edit": "target"}
+            return PointGizmo(target, edit="target")
         start = np.asarray(positions, float)[joint_index(self.joint, "joint", self.kind)]
         # the line's end (the target) stays draggable once a pose exists
-        return {"type": "line", "points": np.stack([start, target]), "edit": "target"}
+        return LineGizmo(np.stack([start, target]), edit="target")
 
 
 class LookAtTerm(Term):

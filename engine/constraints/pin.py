@@ -27,6 +27,7 @@ import numpy as np
 from engine.constraints.base import Constraint, joint_index, param
 from engine.constraints.placement import joint_at
 from engine.constraints.residual import FrameInputs, FrameRows, Kit, Residuals, Term
+from engine.gizmos import PointGizmo
 
 
 
@@ -77,14 +78,14 @@ class PinConstraint(Constraint):
         """Pinned where the joint is now."""
         return {"position": joint_at(positions, params.get("joint"), "lankle")}
 
-    def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
+    def gizmo(self, positions: np.ndarray | None = None) -> PointGizmo | None:
         """A draggable point labelled with the joint, tied to the joint by a line."""
         if not np.all(np.isfinite(self.position)):
-            return {}
-        g = {"type": "point", "position": self.position.copy(), "edit": "position", "label": self.joint}
+            return None
+        anchor = None
         if positions is not None:
-            g["anchor"] = np.asarray(positions, float)[joint_index(self.joint, "joint", self.kind)].copy()
-        return g
+            anchor = np.asarray(positions, float)[joint_index(self.joint, "joint", self.kind)]
+        return PointGizmo(self.position, edit="position", label=self.joint, anchor=anchor)
 
 
 class PinTerm(FrameRows, Term):

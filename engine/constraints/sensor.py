@@ -21,6 +21,7 @@ from engine.constraints.residual import (
     FrameInputs, FrameRows, Kit, Residuals, Term, rotation_residual, unit_quaternion_matrix,
 )  # fmt: skip
 from engine.errors import UserError
+from engine.gizmos import PointGizmo
 
 @dataclass
 class SensorConstraint(Constraint):
@@ -92,8 +93,9 @@ class SensorConstraint(Constraint):
                 rotation_weight=0.5),
         ]  # fmt: skip
 
-    def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
-        return {"type": "point", "position": np.asarray(self.position, float).copy()}
+    def gizmo(self, positions: np.ndarray | None = None) -> PointGizmo | None:
+        position = np.asarray(self.position, float)
+        return PointGizmo(position) if np.all(np.isfinite(position)) else None
 
 
 def unit_rotation(q: Any) -> np.ndarray:

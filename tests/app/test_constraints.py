@@ -11,6 +11,7 @@ import pytest
 from engine import skeleton as sk
 from engine.constraints.base import REGISTRY, Constraint, param
 from engine.constraints.placement import LOOK_DISTANCE
+from engine.gizmos import PointGizmo
 
 pytestmark = pytest.mark.gui
 
@@ -40,7 +41,7 @@ def pin_kind():
             return [cls()]
 
         def gizmo(self, positions=None):
-            return {"type": "point", "position": np.asarray(self.target), "edit": "target"}
+            return PointGizmo(self.target, edit="target")
 
     yield StudioTestPin.kind
     REGISTRY.pop(StudioTestPin.kind, None)  # keep the registry as other tests expect it
@@ -59,7 +60,7 @@ def test_add_edit_drag_disable_and_remove_a_constraint(pin_kind, studio, qtbot):
     widget.InvokeEvent("InteractionEvent")
     widget.InvokeEvent("EndInteractionEvent")
     assert np.allclose(session.constraints[0].target, [0.5, 0.0, 1.0])
-    qtbot.waitUntil(lambda: np.allclose(dict(studio.session.latest.gizmos)[name]["position"], [0.5, 0, 1]))
+    qtbot.waitUntil(lambda: np.allclose(dict(studio.session.latest.gizmos)[name].position, [0.5, 0, 1]))
 
     panel.editor.inputs["target"].spins[2].setValue(1.4)
     panel.editor.inputs["weight"].setValue(3.0)
@@ -71,7 +72,7 @@ def test_add_edit_drag_disable_and_remove_a_constraint(pin_kind, studio, qtbot):
     assert session.constraints[0].enabled is False
     qtbot.waitUntil(lambda: name not in dict(studio.session.latest.gizmos))
     panel.remove_button.click()
-    assert session.constraints == [] and panel.list.count() == 0
+    assert list(session.constraints) == [] and panel.list.count() == 0
 
 
 def test_ctrl_dragging_a_joint_without_sensor_pins_it(studio, qtbot):

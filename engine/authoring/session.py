@@ -37,10 +37,11 @@ from engine.authoring.jobs import BakeJob
 from engine.authoring.keys import SCHEMES, Animation, Key
 from engine.authoring.pose_mode import PoseMode
 from engine.authoring.progress import CancelCheck, Progress
-from engine.authoring.session_constraints import ConstraintList, constraints_event
+from engine.authoring.session_constraints import constraints_event
 from engine.authoring.state import AuthoringState, capture, differences, pose_between, pose_on_key, put
 from engine.authoring.turns import world_rotation
 from engine.errors import UserError
+from engine.studio.session_constraints import ConstraintList
 from engine.motion.clip import Motion
 
 
@@ -63,7 +64,6 @@ class AuthoringSession:
         self.baked: Baked | None = None
         self.events = ev.AuthoringEvents()
         self.history = History(self, self._history_changed)
-        self._constraints = ConstraintList(mode.constraints)
         self._clock = clock
         self._generation = 0  # counts changes: a bake of an older scene is stale
 
@@ -260,18 +260,18 @@ class AuthoringSession:
     # -- constraints ---------------------------------------------------------------
     def constraint_catalog(self) -> dict:
         """The constraint kinds users may add, with their fields."""
-        return self._constraints.constraint_catalog()
+        return ConstraintList.catalog()
 
     def add_constraint(self, kind: str, **params: Any) -> None:
         """Add a ``kind`` constraint with ``params`` and solve."""
-        self.edit(f"add {kind}", lambda: self._constraints.add_constraint(kind, **params), solve=True)
+        self.edit(f"add {kind}", lambda: ConstraintList(self.mode.constraints).add(kind, **params), solve=True)
 
     def remove_constraint(self, name: str) -> None:
-        self.edit(f"remove {name}", lambda: self._constraints.remove_constraint(name), solve=True)
+        self.edit(f"remove {name}", lambda: ConstraintList(self.mode.constraints).remove(name), solve=True)
 
     def update_constraint(self, name: str, changes: dict[str, Any]) -> None:
         """Set fields of the constraint ``name`` and solve (a slider's steps merge)."""
-        self.edit(f"edit {name}", lambda: self._constraints.update_constraint(name, **changes),
+        self.edit(f"edit {name}", lambda: ConstraintList(self.mode.constraints).edit(name, **changes),
                   ("constraint", name, tuple(changes)), solve=True)  # fmt: skip
 
     # -- keys and the animation ----------------------------------------------------

@@ -1,31 +1,16 @@
-"""The authoring model's constraint list: the studio's constraint editing on a plain list.
+"""What changed in the authoring model's constraint list, as one event.
 
-:class:`ConstraintList` gives the pose window the same rules as the studio (unique
-names, checked copies, objects replaced on every edit, never changed in place) through
-:class:`engine.studio.session_constraints.ConstraintEditing`, on the list the pose
-solves and the saved scene share. It announces nothing itself: the session compares the
-list before and after each command and says what changed (:func:`constraints_event`).
+The model edits its list (the one the pose solves and the saved scene share) through
+the studio's :class:`engine.studio.session_constraints.ConstraintList` on that list, so
+names, checks and replace-never-mutate rules are the studio's. It compares the list
+before and after each command (an edit or its undo) and says what changed with
+:func:`constraints_event`.
 """
 
 from __future__ import annotations
 
-from types import SimpleNamespace
-from typing import Any
-
 from engine.constraints.base import Constraint
 from engine.studio.events import ConstraintsChanged
-from engine.studio.session_constraints import ConstraintEditing
-
-
-class ConstraintList(ConstraintEditing):
-    """Constraint edits on ``constraints`` (the list is edited in place, so every holder sees them)."""
-
-    def __init__(self, constraints: list[Constraint]) -> None:
-        self.constraints = constraints
-        self.events = SimpleNamespace(constraints=SimpleNamespace(emit=lambda event: None))
-
-    def _send(self, command: Any) -> None:
-        return None  # no engine thread: the session's solves read the list directly
 
 
 def constraints_event(old: tuple[Constraint, ...], new: tuple[Constraint, ...]) -> ConstraintsChanged:

@@ -191,23 +191,3 @@ class ConstraintList(Sequence[Constraint]):
         event = ConstraintsChanged(action, tuple(self._items), name, index, **change)  # type: ignore[arg-type]
         self.events.changed.emit(event)
 
-
-class ConstraintEditing:
-    """The edits of :class:`ConstraintList` under the names the pose window calls, on a
-    ``constraints`` list its subclass provides (shared with the pose mode and scene);
-    nobody listens to these edits, so the list's events are not kept."""
-
-    constraints: list[Constraint]
-
-    @staticmethod
-    def constraint_catalog() -> dict[str, ConstraintKind]:
-        return constraint_catalog()
-
-    def add_constraint(self, kind: str, **params: Any) -> str:
-        return ConstraintList(self.constraints).add(kind, **params)
-
-    def remove_constraint(self, name: str) -> None:
-        ConstraintList(self.constraints).remove(name)
-
-    def update_constraint(self, name: str, **changes: Any) -> None:
-        ConstraintList(self.constraints).edit(name, **changes)

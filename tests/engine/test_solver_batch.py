@@ -235,9 +235,9 @@ def test_later_segments_start_from_the_bank_latent_of_their_first_warm_up_frame(
     starts = []
     solve = DB.solve_streams
 
-    def record(dec, pose, terms, z, *rest):
+    def record(dec, objective, z, *rest):
         starts.append(z.copy())
-        return solve(dec, pose, terms, z, *rest)
+        return solve(dec, objective, z, *rest)
 
     monkeypatch.setattr(DB, "solve_streams", record)
     frames = [tr.frame(i) for i in range(len(tr))]

@@ -34,7 +34,7 @@ from engine.solver.settings import SettingsEdit
 from engine.studio import commands as cmd
 from engine.studio import events as ev
 from engine.studio.clips import load_clip, sensor_presets, tracked_position
-from engine.studio.scenes import default_settings, describe_load, scene_from_dict, scene_to_dict
+from engine.studio.scenes import apply_scene, default_settings, scene_to_dict
 from engine.studio.session_constraints import ConstraintList
 from engine.studio.session_sensors import SensorSet
 from engine.studio.process import EngineProcess
@@ -223,10 +223,7 @@ class Session:
         self.motion, self.path, self.frame = motion, path, 0
         self._send(cmd.SetMotion(motion))
         self.events.motion.emit(ev.MotionChanged(motion, path))
-        self._send(cmd.Seek(0))
-        self.events.frame.emit(0)
-        if not self.sensors:
-            self.sensors.set_preset(next(iter(sensor_presets())))
+        self._from_start()
 
     def set_source(self, source: SensorSource, name: str = "") -> None:
         """Read sensors from ``source`` instead of a clip: a tracker recording
@@ -242,6 +239,10 @@ class Session:
         else:
             self._send(command)
         self.events.source.emit(ev.SourceChanged(source, name, source.live))
+        self._from_start()
+
+    def _from_start(self) -> None:
+        """A new clip or source plays from frame 0, with the first preset if no sensors."""
         self._send(cmd.Seek(0))
         self.events.frame.emit(0)
         if not self.sensors:
@@ -394,20 +395,5 @@ class Session:
                              self.constraints, self.settings, self.frame)  # fmt: skip
 
     def apply_scene(self, scene: dict[str, Any], where: str = "scene") -> str:
-        """Restore :meth:`to_scene` output (the clip is loaded by the caller); what the
-        scene leaves out (sensors, method, frame) stays as it is. Returns a line saying
-        what was replaced and kept (:func:`engine.studio.scenes.describe_load`).
-
-        Everything is checked before anything changes; errors name ``where``.
-        """
-        parsed = scene_from_dict(scene, where)
-        self.set_settings(parsed["settings"])
-        if parsed["sensors"] is not None:
-            self.sensors.set_all(parsed["sensors"], parsed["preset"] or "")
-        self.constraints.set_all(parsed["constraints"])
-        if parsed["method"] and parsed["method"] != self.method:
-            self.set_method(parsed["method"])
-        if parsed["frame"] is not None:
-            self.seek(parsed["frame"])
-        return describe_load(parsed)
-
+        """Restore :meth:`to_scene` output (:func:`engine.studio.scenes.apply_scene`)."""
+        return apply_scene(self, scene, where)

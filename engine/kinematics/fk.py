@@ -35,11 +35,21 @@ class Levels:
         (root first, then level 1, level 2, ...).
     unorder : ndarray (J,)
         Row of every joint in level-ordered storage (gather back to joint order).
+    order : ndarray (J,)
+        Joint of every row (root, then level 1, 2, ...).
+    prow : ndarray (J,)
+        Row of every row's parent (the root: itself).
+    chain : ndarray (J, J - 1)
+        1 where the bone into row ``b + 1`` lies on the path from the root to row ``r``: a
+        joint's position is the root's plus the world bone vectors on its path.
     """
 
     joints: tuple[np.ndarray, ...]
     parent_rows: tuple[np.ndarray, ...]
     unorder: np.ndarray
+    order: np.ndarray
+    prow: np.ndarray
+    chain: np.ndarray
 
 
 @lru_cache(maxsize=32)
@@ -55,10 +65,20 @@ def levels(parents: tuple[int, ...]) -> Levels:
     lv = [[j for j in range(len(parents)) if depth[j] == d] for d in range(1, max(depth, default=0) + 1)]
     order = [0] + [j for level in lv for j in level]
     row = {j: i for i, j in enumerate(order)}
+    prow = np.array([0] + [row[parents[j]] for j in order[1:]], dtype=np.intp)
+    chain = np.zeros((len(order), max(len(order) - 1, 0)))
+    for r in range(1, len(order)):
+        a = r
+        while a != 0:
+            chain[r, a - 1] = 1.0
+            a = prow[a]
     return Levels(
         tuple(np.array(level) for level in lv),
         tuple(np.array([row[parents[j]] for j in level]) for level in lv),
         np.array([row[j] for j in range(len(parents))]),
+        np.array(order, dtype=np.intp),
+        prow,
+        chain,
     )
 
 
@@ -208,30 +228,28 @@ def _forward(local_mat, root_pos, offsets, parents, local_quat=None):
 def _forward_numpy(local_mat: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, lv: Levels,
                    local_quat: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:  # fmt: skip
     """:func:`_forward` for numpy: the same levels written in place into level-ordered
-    arrays (no autograd to keep, and numpy's per-call overhead, not arithmetic, is what
-    one pose costs: one product per level into a slice instead of a concatenation)."""
-    order = np.concatenate([[0], *lv.joints]).astype(np.intp)
+    arrays, then every position at once from the world bone vectors (no autograd to
+    keep, and numpy's per-call overhead, not arithmetic, is what one pose costs)."""
+    order, prow, chain = lv.order, lv.prow, lv.chain
     shape = np.broadcast_shapes(local_mat.shape[:-3], root_pos.shape[:-1], offsets.shape[:-2])
     n = len(order)
-    mats = np.broadcast_to(local_mat, shape + local_mat.shape[-3:])[..., order, :, :]
-    off = np.broadcast_to(offsets, shape + offsets.shape[-2:])[..., order, :, None]
+    mats = local_mat[..., order, :, :]
     world = np.empty(shape + (n, 3, 3))
-    pos = np.empty(shape + (n, 3))
-    world[..., 0, :, :], pos[..., 0, :] = mats[..., 0, :, :], root_pos
+    world[..., 0, :, :] = mats[..., 0, :, :]
     quats = None
     if local_quat is not None:
-        lq = np.broadcast_to(local_quat, shape + local_quat.shape[-2:])[..., order, :]
+        lq = local_quat[..., order, :]
         quats = np.empty(shape + (n, 4))
         quats[..., 0, :] = lq[..., 0, :]
     start = 1
-    for idx, rows in zip(lv.joints, lv.parent_rows):
-        end = start + len(idx)
-        parent = world[..., rows, :, :]
-        np.matmul(parent, mats[..., start:end, :, :], out=world[..., start:end, :, :])
-        pos[..., start:end, :] = pos[..., rows, :] + np.matmul(parent, off[..., start:end, :, :])[..., 0]
+    for rows in lv.parent_rows:
+        end = start + len(rows)
+        np.matmul(world[..., rows, :, :], mats[..., start:end, :, :], out=world[..., start:end, :, :])
         if quats is not None:
             quats[..., start:end, :] = Q.mul(quats[..., rows, :], lq[..., start:end, :])
         start = end
+    bones = np.matmul(world[..., prow[1:], :, :], offsets[..., order[1:], :, None])[..., 0]
+    pos = np.matmul(chain, bones) + root_pos[..., None, :]
     back = lv.unorder
     return pos[..., back, :], world[..., back, :, :], None if quats is None else quats[..., back, :]
 

@@ -104,10 +104,10 @@ def test_dragposer_takes_the_bank_latent_when_6dof_trackers_give_one_and_else_ru
         m.reset(clip.skeleton)
         solve = m.optimizer.solve
 
-        def spy(start, terms, ctx):
+        def spy(start, terms, ctx, settings=None):
             pred = ctx.prediction
             seen.append((m.prior.weight, None if pred is None else float(pred.mean())))
-            return solve(start, terms, ctx)
+            return solve(start, terms, ctx, settings)
 
         m.optimizer.solve = spy
         for i in range(6):

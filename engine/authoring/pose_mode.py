@@ -119,11 +119,11 @@ class PoseOptions:
     plant_weight: float = 1.0
     balance: bool = True
     balance_gain: float = 0.5
-    balance_tolerance: float = 0.08
+    balance_tolerance: float = 0.10
     crouch_share: float = 0.5
     free_height: bool = False
     prior_weight: float = PRIOR_WEIGHT
-    reach_rounds: int = 3
+    reach_rounds: int = 4
     reach_tolerance: float = 0.005
 
 

@@ -4,7 +4,9 @@ A :class:`PoseMode` holds the character, its current pose and the user's targets
 constraints. :meth:`PoseMode.solve` is one short solve from the current pose (call it on
 every drag event, :data:`ITERATIONS` plain gradient steps with the root held where it
 stands, then the feet grounded and targeted wrists / ankles put exactly on their
-targets); with targets only it runs on the solver's fast path. :meth:`PoseMode.settle`
+targets; while a targeted wrist or ankle is still beyond its limb's reach, up to
+``PoseOptions.reach_rounds`` further rounds of those steps, so a low reach bends the
+body within the drag); with targets only it runs on the solver's fast path. :meth:`PoseMode.settle`
 is a full offline solve (grounded, so the body may crouch), for when the drag ends.
 Bone lengths are those of the skeleton by construction (forward kinematics of fixed
 offsets), and the lowest foot stands on the floor after every solve.

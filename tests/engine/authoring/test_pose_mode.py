@@ -182,7 +182,7 @@ def test_a_wrist_dragged_beyond_the_arm_takes_further_rounds_and_one_within_reac
 
         pm.character.solve = counted
         pm.solve()
-    assert rounds == {"far": 1 + PoseOptions().reach_rounds, "near": 1}
+    assert 1 < rounds["far"] <= 1 + PoseOptions().reach_rounds and rounds["near"] == 1
     one = PoseMode(vae, options=PoseOptions(reach_rounds=0))
     one.set_target("rwrist", far.targets["rwrist"].position)
     one.solve()

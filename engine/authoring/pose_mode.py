@@ -4,7 +4,9 @@ A :class:`PoseMode` holds the character, its current pose and the user's targets
 constraints. :meth:`PoseMode.solve` is one short solve from the current pose (call it on
 every drag event, :data:`ITERATIONS` plain gradient steps with the root held where it
 stands, then the feet grounded and targeted wrists / ankles put exactly on their
-targets); with targets only it runs on the solver's fast path. :meth:`PoseMode.settle`
+targets; while a targeted wrist or ankle is still beyond its limb's reach, up to
+``PoseOptions.reach_rounds`` further rounds of those steps, so a low reach bends the
+body within the drag); with targets only it runs on the solver's fast path. :meth:`PoseMode.settle`
 is a full offline solve (grounded, so the body may crouch), for when the drag ends.
 Bone lengths are those of the skeleton by construction (forward kinematics of fixed
 offsets), and the lowest foot stands on the floor after every solve.
@@ -26,6 +28,7 @@ from engine.errors import UserError
 from engine.kinematics import quat_np as QN
 from engine.kinematics.features import encoder_input, pose_from_motion
 from engine.motion.clip import Motion
+from engine.solver.limb_ik import LIMBS
 
 #: Latent steps of one continuous solve (one drag event).
 ITERATIONS = 16
@@ -103,16 +106,27 @@ class PoseOptions:
     prior_weight : float
         Pull towards the starting latent (the character's neutral pose for a new pose),
         which keeps the parts no target constrains as they were.
+    reach_rounds : int
+        Most further rounds of a drag event's solve (each :data:`ITERATIONS` steps from
+        where the last ended, the crouch and balance steps redone first) while a dragged
+        joint is more than ``reach_tolerance`` from its target after the exact limb step:
+        a reach beyond the arm bends the body further within the same event, and a drag
+        that is reached costs one round.
+    reach_tolerance : float
+        Distance (metres) of a dragged joint from its target below which no further
+        round runs.
     """
 
     plant_feet: bool = True
     plant_weight: float = 1.0
     balance: bool = True
     balance_gain: float = 0.5
-    balance_tolerance: float = 0.08
+    balance_tolerance: float = 0.10
     crouch_share: float = 0.5
     free_height: bool = False
     prior_weight: float = PRIOR_WEIGHT
+    reach_rounds: int = 4
+    reach_tolerance: float = 0.005
 
 
 class PoseMode:
@@ -242,24 +256,47 @@ class PoseMode:
         return where
 
     def solve(self, iterations: int = ITERATIONS) -> Pose:
-        """One continuous solve from the current pose (a drag event)."""
+        """One continuous solve from the current pose (a drag event): a round of
+        ``iterations`` steps, and up to ``options.reach_rounds`` more while a dragged
+        joint is short of its target."""
         terms, reach, rotations = self._inputs()
         c, o = self.character, self.options
-        if o.free_height:
-            ctx = c.grounded(self._where()[:2], self.heading, prior=self.base_latent)
-        else:
-            ctx = c.placed(self._where(iterations > 0), self.heading, prior=self.base_latent)
-        self.pose = c.solve(self.pose.latent, terms, ctx, reach, rotations, iterations=iterations,
-                            prior_weight=o.prior_weight, rule="sgd", step_size=STEP_SIZE)  # fmt: skip
+        for round_ in range(1 + (max(0, o.reach_rounds) if iterations > 0 else 0)):
+            if round_ and self.shortfall() <= o.reach_tolerance:
+                break
+            if o.free_height:
+                ctx = c.grounded(self._where()[:2], self.heading, prior=self.base_latent)
+            else:
+                ctx = c.placed(self._where(iterations > 0), self.heading, prior=self.base_latent)
+            self.pose = c.solve(self.pose.latent, terms, ctx, reach, rotations, iterations=iterations,
+                                prior_weight=o.prior_weight, rule="sgd", step_size=STEP_SIZE)  # fmt: skip
         self._replant()
         return self.pose
 
+    def shortfall(self) -> float:
+        """Largest distance (metres) of a targeted wrist or ankle from its target in the
+        current pose (0 without such targets): after the exact limb step, how far the
+        target lies beyond the limb's reach."""
+        gaps = [np.linalg.norm(self.pose.positions[t.index] - t.position) for t in self.targets.values()
+                if t.active and t.index in LIMBS]  # fmt: skip
+        return float(max(gaps, default=0.0))
+
     def settle(self) -> Pose:
-        """An offline, grounded solve from the current pose (when a drag ends)."""
+        """An offline, grounded solve from the current pose (when a drag ends), then up to
+        ``options.reach_rounds`` grounded rounds of the drag's plain steps while a dragged
+        wrist or ankle is short of its target: the offline solve's adaptive steps can stop
+        at once from a pose that is already close, where the plain steps still close
+        the gap."""
         terms, reach, rotations = self._inputs()
-        c = self.character
+        c, o = self.character, self.options
         ctx = c.grounded(self._where()[:2], self.heading, prior=self.base_latent)
-        self.pose = c.solve(self.pose.latent, terms, ctx, reach, rotations, prior_weight=self.options.prior_weight)
+        self.pose = c.solve(self.pose.latent, terms, ctx, reach, rotations, prior_weight=o.prior_weight)
+        for _ in range(max(0, o.reach_rounds)):
+            if self.shortfall() <= o.reach_tolerance:
+                break
+            ctx = c.grounded(self._where()[:2], self.heading, prior=self.base_latent)
+            self.pose = c.solve(self.pose.latent, terms, ctx, reach, rotations, iterations=ITERATIONS,
+                                prior_weight=o.prior_weight, rule="sgd", step_size=STEP_SIZE)  # fmt: skip
         self._replant()
         return self.pose
 

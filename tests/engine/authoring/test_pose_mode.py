@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from engine import skeleton as sk
-from engine.authoring.pose_mode import PoseMode
+from engine.authoring.pose_mode import PoseMode, PoseOptions
 
 J = sk.JOINT_INDEX
 from engine.constraints import LookAtConstraint
@@ -161,3 +161,34 @@ def test_a_dragged_foot_is_planted_where_it_is_left(vae):
     mode.solve()
     assert np.linalg.norm(mode.planted["lankle"][:2] - goal[:2]) < 0.03
     assert np.linalg.norm(mode.pose.positions[J["lankle"], :2] - goal[:2]) < 0.03
+
+
+def test_a_wrist_dragged_beyond_the_arm_takes_further_rounds_and_one_within_reach_does_not(vae):
+    """A drag event whose wrist target lies out of the arm's reach solves further rounds
+    (more latent steps, the body bends further) until it is within ``reach_tolerance``; a
+    target within reach costs one round, as with ``reach_rounds=0``."""
+    far = PoseMode(vae)
+    near = PoseMode(vae)
+    w = far.pose.positions[sk.JOINT_INDEX["rwrist"]].copy()
+    far.set_target("rwrist", w + np.array([0.0, -0.25, -0.45]))
+    near.set_target("rwrist", w + np.array([0.0, -0.05, 0.0]))
+    rounds = {}
+    for name, pm in (("far", far), ("near", near)):
+        solve = pm.character.solve
+
+        def counted(*a, _name=name, _solve=solve, **k):
+            rounds[_name] = rounds.get(_name, 0) + 1
+            return _solve(*a, **k)
+
+        pm.character.solve = counted
+        pm.solve()
+    assert 1 < rounds["far"] <= 1 + PoseOptions().reach_rounds and rounds["near"] == 1
+    one = PoseMode(vae, options=PoseOptions(reach_rounds=0))
+    one.set_target("rwrist", far.targets["rwrist"].position)
+    one.solve()
+    assert far.shortfall() < one.shortfall() - 0.01
+    assert near.shortfall() < 1e-6
+    same = PoseMode(vae, options=PoseOptions(reach_rounds=0))
+    same.set_target("rwrist", near.targets["rwrist"].position)
+    same.solve()
+    np.testing.assert_allclose(same.pose.positions, near.pose.positions, atol=1e-6)

@@ -250,3 +250,19 @@ def test_bench_pose_tasks_refuses_a_clip_an_unknown_poser_and_a_bad_option(tmp_p
     assert main(["bench", "--pose-tasks", "--set", "nope=1"]) == 2
     assert "no option 'nope'" in capsys.readouterr().err
     assert Path(tmp_path).is_dir()
+
+
+@pytest.mark.parametrize("name", ["hand_to_knee", "pick_up"])
+def test_low_reaches_end_on_their_goal_with_the_feet_planted_and_the_body_balanced(vae, name):
+    """The two low reaches with the shipped VAE, 20 events as the benchmark drags: the
+    wrist ends within 2 cm of its goal, both feet down where they stood, the centre of
+    mass over the feet, no limb bent backwards. Without the reach rounds
+    (``reach_rounds=0``) the same drag stops more than 2 cm short."""
+    ref = R.ReferenceSet.from_rotations([("a", wobble(4, 5)), ("b", wobble(4, 6))], OFFSETS, stride=1)
+    task = next(t for t in T.TASKS if t.name == name)
+    r = T.run_task(task, "pose-mode", vae, ref)
+    assert r.reached and r.max_position_error_cm <= T.REACH_CM
+    assert all(r.check.feet_down.values()) and r.check.balance_margin_cm > 0.0
+    assert max(r.feet_moved_cm.values()) < 0.5 and r.check.violations == []
+    short = T.run_task(task, "pose-mode", vae, ref, ["reach_rounds=0"])
+    assert short.max_position_error_cm > T.REACH_CM

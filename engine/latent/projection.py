@@ -90,6 +90,13 @@ class LatentMap:
         along the two axes (zero along every other principal direction)."""
         return self.mean + np.asarray(xy, dtype=np.float64) @ self.components
 
+    def move_to(self, latent: np.ndarray, xy: np.ndarray) -> np.ndarray:
+        """``latent (L,)`` moved within the map plane so that it projects to ``xy (2,)``,
+        its components along the other principal directions kept: a point near a frame's
+        own marker decodes to a pose near that frame's (the studio's hover and click)."""
+        z = np.asarray(latent, dtype=np.float64).ravel()
+        return z + (np.asarray(xy, dtype=np.float64).reshape(2) - self.project(z)) @ self.components
+
     def save(self, path: str | Path) -> None:
         """Write the map as a compressed ``.npz`` of plain arrays, atomically."""
         from engine.atomic import atomic_path

@@ -87,6 +87,15 @@ class DecodeLatent:
 
 
 @dataclass(frozen=True)
+class InspectLatent:
+    """Compute the latent detail of the last solved frame (term forces, dimension sweep,
+    and ``joint``'s most influential dimensions when given); published in the snapshot's
+    ``latent_detail`` (docs/latent.md). The frame is not solved again."""
+
+    joint: str = ""
+
+
+@dataclass(frozen=True)
 class Stop:
     pass
 

@@ -38,6 +38,11 @@ def test_project_and_lift_are_inverse_in_the_plane():
     xy = np.array([[1.0, -2.0], [0.3, 0.4]])
     assert m.project(m.lift(xy)) == pytest.approx(xy)
     assert m.project(m.mean) == pytest.approx([0.0, 0.0])
+    z0 = z[10]
+    moved = m.move_to(z0, [0.5, 0.25])
+    assert m.project(moved) == pytest.approx([0.5, 0.25])
+    # only the plane's components changed
+    assert (moved - z0) - ((moved - z0) @ m.components.T) @ m.components == pytest.approx(np.zeros(6), abs=1e-9)
     with pytest.raises(ValueError, match="size 5"):
         m.project(np.zeros(5))
 

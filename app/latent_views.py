@@ -1,0 +1,139 @@
+"""The studio's latent-debugging views and their wiring (docs/latent.md, "In the studio").
+
+A "Latent map" dock, tabbed beside the Latent dock, holds three tabs: *Map* (the latent
+map over the prior readouts), *Forces* (term forces of the frame on screen) and
+*Gallery* (the dimension sweep). Requests go to the session: a click on a trajectory
+point seeks its frame; a click elsewhere pauses and decodes the point as the white debug
+pose; hovering decodes too while paused; *Inspect this frame* asks the engine for the
+forces and the sweep; *Next flagged frame* seeks. Flagged frames are marked on the
+timeline. The panels are drawn from snapshots by the window's draw scheduler, and only
+while their tab is visible.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from PyQt6.QtCore import Qt, QTimer
+from PyQt6.QtWidgets import QDockWidget, QSplitter, QTabWidget
+
+from app.drawing import Panel
+from engine.latent.projection import default_map
+from widgets.latent_forces import LatentForces
+from widgets.latent_gallery import LatentGallery
+from widgets.latent_map import LatentMapPlot
+from widgets.latent_readouts import LatentReadouts
+
+#: Hover decodes are sent at most this often, ms (a mouse sends ~100 moves a second).
+HOVER_MS = 40
+NO_MAP = "No latent map: assets/models/latent_map.npz is missing or belongs to another VAE."
+
+
+class LatentViews:
+    """Builds the dock on ``window`` (the main window) and connects it; see the module doc."""
+
+    def __init__(self, window: Any) -> None:
+        self.w = window
+        self.session = window.session
+        self.latent_map = default_map()
+        self.map = LatentMapPlot()
+        self.readouts = LatentReadouts()
+        self.forces = LatentForces(window.plots.colours)
+        self.gallery = LatentGallery()
+        if self.latent_map is not None:
+            m = self.latent_map
+            self.map.set_map(m.density, m.extent, m.explained)
+            self.readouts.set_thresholds(m.nn_threshold, m.norm_threshold)
+        else:
+            self.map.set_note(NO_MAP)
+        split = QSplitter(Qt.Orientation.Vertical)
+        split.addWidget(self.map)
+        split.addWidget(self.readouts)
+        split.setSizes([300, 150])
+        self.tabs = QTabWidget()
+        self.tabs.addTab(split, "Map")
+        self.tabs.addTab(self.forces, "Forces")
+        self.tabs.addTab(self.gallery, "Gallery")
+        self.dock = QDockWidget("Latent map", window)
+        self.dock.setObjectName("Latent map")
+        self.dock.setWidget(self.tabs)
+        window.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, self.dock)
+        latent = window.findChild(QDockWidget, "Latent")
+        if latent is not None:
+            window.tabifyDockWidget(latent, self.dock)
+            latent.raise_()
+        self._hover: tuple[str, Any] | None = None
+        self._hover_timer = QTimer(window, singleShot=True, interval=HOVER_MS)
+        self._hover_timer.timeout.connect(self._send_hover)
+        self.map.frameClicked.connect(self.seek)
+        self.map.pointClicked.connect(self._click_point)
+        self.map.pointHovered.connect(lambda x, y: self._queue_hover(("point", (x, y))))
+        self.map.frameHovered.connect(lambda f: self._queue_hover(("frame", f)))
+        self.readouts.seekRequested.connect(self.seek)
+        self.readouts.flagsChanged.connect(window.timeline.set_marks)
+        self.forces.inspectRequested.connect(self.inspect)
+        window.session.events.motion.connect(self._forget)
+        window.session.events.method.connect(self._forget)
+        window.drawing.panels += [Panel("latent map", self._update_map, 0.5),
+                                  Panel("latent detail", self._update_detail, 0.5)]  # fmt: skip
+
+    # -- snapshots -> views ------------------------------------------------------------
+    def _update_map(self, snap: Any) -> None:
+        """The map and the readouts (the readouts' verdicts always: they mark the timeline)."""
+        if self.map.isVisible():
+            self.map.update_snapshot(snap)
+        self.readouts.update_snapshot(snap)
+
+    def _update_detail(self, snap: Any) -> None:
+        self.forces.set_detail(snap.latent_detail)
+        self.gallery.set_detail(snap.latent_detail)
+
+    def _forget(self, event: Any = None) -> None:
+        self.readouts.clear()
+
+    # -- requests ------------------------------------------------------------------------
+    def seek(self, frame: int) -> None:
+        self.session.pause()
+        self.session.seek(int(frame))
+
+    def inspect(self, joint: str) -> None:
+        self.session.pause()
+        self.session.inspect_latent(joint)
+
+    def latent_of_point(self, x: float, y: float) -> np.ndarray | None:
+        """The latent the map point ``(x, y)`` stands for: the frame on screen's latent moved
+        within the map plane (:meth:`engine.latent.projection.LatentMap.move_to`)."""
+        snap = self.session.latest
+        if self.latent_map is None or snap is None or snap.latent_view is None:
+            return None
+        return self.latent_map.move_to(snap.latent_view.latent, np.array([x, y]))
+
+    def latent_of_frame(self, frame: int) -> np.ndarray | None:
+        snap = self.session.latest
+        if snap is None:
+            return None
+        return next((np.asarray(r.latent, float) for r in snap.history if r.frame == frame and r.latent is not None),
+                    None)  # fmt: skip
+
+    def _click_point(self, x: float, y: float) -> None:
+        z = self.latent_of_point(x, y)
+        if z is not None:
+            self.session.pause()
+            self.session.decode_latent(z)
+
+    def _queue_hover(self, what: tuple[str, Any]) -> None:
+        if self.session.playing:  # decoding pauses the engine: hovering only points while playing
+            return
+        self._hover = what
+        if not self._hover_timer.isActive():
+            self._hover_timer.start()
+
+    def _send_hover(self) -> None:
+        if self._hover is None or self.session.playing:
+            return
+        kind, value = self._hover
+        self._hover = None
+        z = self.latent_of_point(*value) if kind == "point" else self.latent_of_frame(value)
+        if z is not None:
+            self.session.decode_latent(z)

@@ -1,0 +1,179 @@
+"""The latent map: the clip's latents on a fixed 2D view of the latent space.
+
+Drawn on the shipped projection (engine/latent/projection.py, handed in with
+:meth:`LatentMapPlot.set_map`): the training latents as a grey density, the solved frames
+as a trajectory coloured by frame (dark blue oldest, yellow newest), flagged frames as red
+crosses, the frame on screen as a white ring, and its solve's iterations as an orange path
+from its start, labelled by where the solve started.
+
+The mouse asks, the window answers: hovering emits ``pointHovered(x, y)`` (or
+``frameHovered(frame)`` near a trajectory point), a left click ``pointClicked(x, y)`` (or
+``frameClicked(frame)``). The window decodes the point as a ghost pose or seeks the frame.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pyqtgraph as pg
+from PyQt6.QtCore import QPointF, QRectF, Qt, pyqtSignal
+from PyQt6.QtWidgets import QLabel, QVBoxLayout, QWidget
+
+import widgets.plots  # noqa: F401 (applies the shared pyqtgraph look)
+
+#: A trajectory point within this many pixels of the mouse is the one pointed at.
+PICK_PX = 8.0
+PATH_COLOUR = "#ff8a1f"
+FLAG_COLOUR = "#ff3b30"
+HOVER_COLOUR = "#00e5ff"
+
+
+class LatentMapPlot(QWidget):
+    """See the module doc. Feed it snapshots with :meth:`update_snapshot`."""
+
+    pointHovered = pyqtSignal(float, float)
+    frameHovered = pyqtSignal(int)
+    pointClicked = pyqtSignal(float, float)
+    frameClicked = pyqtSignal(int)
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        layout = QVBoxLayout(self)
+        layout.setContentsMargins(0, 0, 0, 0)
+        self.note = QLabel("")
+        self.note.setWordWrap(True)
+        self.note.setStyleSheet("color: #8a93a6;")
+        self.note.setVisible(False)
+        self.plot = pg.PlotWidget()
+        self.plot.setMinimumSize(200, 200)
+        self.setToolTip("Latent map: hover or click to decode a point as a ghost pose; "
+                             "click a trajectory point to go to its frame")  # fmt: skip
+        for side in ("bottom", "left"):
+            self.plot.getAxis(side).enableAutoSIPrefix(False)
+        self.plot.setMenuEnabled(False)
+        self.density = pg.ImageItem()
+        self.density.setColorMap(pg.colormap.get("CET-L1"))  # black to white: the training data as light
+        self.plot.addItem(self.density)
+        self.line = self.plot.plot(pen=pg.mkPen((200, 200, 200, 90), width=1))
+        self.points = pg.ScatterPlotItem(size=5, pen=None)
+        self.flags = pg.ScatterPlotItem(size=9, symbol="x", pen=None, brush=FLAG_COLOUR)
+        self.path = self.plot.plot(pen=pg.mkPen(PATH_COLOUR, width=1.5), symbol="o", symbolSize=4,
+                                   symbolBrush=PATH_COLOUR, symbolPen=None)  # fmt: skip
+        self.start_label = pg.TextItem("", color=PATH_COLOUR, anchor=(0, 1))
+        self.current = pg.ScatterPlotItem(size=13, pen=pg.mkPen("w", width=2), brush=None)
+        self.hover = pg.ScatterPlotItem(size=11, symbol="+", pen=pg.mkPen(HOVER_COLOUR, width=2))
+        for item in (self.points, self.flags, self.current, self.hover, self.start_label):
+            self.plot.addItem(item)
+        layout.addWidget(self.note)
+        layout.addWidget(self.plot, 1)
+        self._cmap = pg.colormap.get("viridis")
+        self.frames = np.zeros(0, int)
+        self.xy = np.zeros((0, 2))
+        self._seq = -1
+        self._explained: tuple[float, float] | None = None
+        scene = self.plot.scene()
+        scene.sigMouseMoved.connect(self._moved)
+        scene.sigMouseClicked.connect(self._clicked)
+
+    # -- data ---------------------------------------------------------------------------
+    def set_map(self, density: np.ndarray, extent: np.ndarray, explained: np.ndarray) -> None:
+        """The training density ``(G, G)`` (rows y, columns x) over ``extent`` (x0, x1, y0,
+        y1) and the axes' explained variance fractions ``(2,)``."""
+        d = np.log1p(np.asarray(density, float))
+        self.density.setImage(np.ascontiguousarray(d.T), levels=(0.0, max(float(d.max()), 1e-9)))
+        x0, x1, y0, y1 = (float(v) for v in extent)
+        self.density.setRect(QRectF(x0, y0, x1 - x0, y1 - y0))
+        self.plot.setXRange(x0, x1, padding=0.0)
+        self.plot.setYRange(y0, y1, padding=0.0)
+        self._explained = (float(explained[0]), float(explained[1]))
+        self.plot.setLabel("bottom", f"PC 1 ({100 * explained[0]:.1f} % of variance)")
+        self.plot.setLabel("left", f"PC 2 ({100 * explained[1]:.1f} % of variance)")
+
+    def set_note(self, text: str) -> None:
+        """Say why the map is empty (e.g. the method has no latent); "" hides the note."""
+        if text != self.note.text():
+            self.note.setText(text)
+        self.note.setVisible(bool(text))
+
+    def update_snapshot(self, snap: Any) -> None:
+        """Draw the solved frames of ``snap.history`` and the frame on screen."""
+        if snap.seq == self._seq:
+            return
+        self._seq = snap.seq
+        view = snap.latent_view
+        self.set_note(snap.latent_note if view is None else "")
+        rows = [r for r in snap.history if r.readouts]
+        self.frames = np.array([r.frame for r in rows], int)
+        self.xy = np.array([[r.readouts["x"], r.readouts["y"]] for r in rows], float).reshape(-1, 2)
+        flagged = np.array([r.readouts.get("flagged", 0.0) > 0 for r in rows], bool)
+        if len(rows):
+            t = (self.frames - self.frames.min()) / max(int(np.ptp(self.frames)), 1)
+            brushes = [pg.mkBrush(c) for c in self._cmap.map(t, mode="qcolor")]
+            self.points.setData(self.xy[:, 0], self.xy[:, 1], brush=brushes)
+            self.line.setData(self.xy[:, 0], self.xy[:, 1])
+        else:
+            self.points.setData([], [])
+            self.line.setData([], [])
+        self.flags.setData(self.xy[flagged, 0], self.xy[flagged, 1])
+        if view is None:
+            self.current.setData([], [])
+            self.path.setData([], [])
+            self.start_label.setText("")
+            return
+        self.current.setData([view.xy[0]], [view.xy[1]])
+        if view.path_xy is not None and len(view.path_xy):
+            self.path.setData(view.path_xy[:, 0], view.path_xy[:, 1])
+            self.start_label.setText(f"start: {view.start}" if view.start else "start")
+            self.start_label.setPos(float(view.path_xy[0, 0]), float(view.path_xy[0, 1]))
+        else:
+            self.path.setData([], [])
+            self.start_label.setText("")
+
+    # -- mouse ----------------------------------------------------------------------------
+    def to_view(self, scene_pos: QPointF) -> tuple[float, float] | None:
+        """Map coordinates of a scene position, None outside the plot's view box."""
+        vb = self.plot.getPlotItem().getViewBox()
+        if not vb.sceneBoundingRect().contains(scene_pos):
+            return None
+        p = vb.mapSceneToView(scene_pos)
+        return float(p.x()), float(p.y())
+
+    def to_widget(self, x: float, y: float) -> QPointF:
+        """The plot viewport's pixel position of map point ``(x, y)`` (tests aim with it)."""
+        vb = self.plot.getPlotItem().getViewBox()
+        return QPointF(self.plot.mapFromScene(vb.mapViewToScene(QPointF(x, y))))
+
+    def frame_near(self, scene_pos: QPointF) -> int | None:
+        """The solved frame whose trajectory point lies within :data:`PICK_PX` pixels."""
+        xy = self.to_view(scene_pos)
+        if xy is None or not len(self.xy):
+            return None
+        px, py = self.plot.getPlotItem().getViewBox().viewPixelSize()  # map units per pixel
+        d = np.hypot((self.xy[:, 0] - xy[0]) / px, (self.xy[:, 1] - xy[1]) / py)
+        i = int(np.argmin(d))
+        return int(self.frames[i]) if d[i] <= PICK_PX else None
+
+    def _moved(self, scene_pos: QPointF) -> None:
+        xy = self.to_view(scene_pos)
+        if xy is None:
+            self.hover.setData([], [])
+            return
+        self.hover.setData([xy[0]], [xy[1]])
+        frame = self.frame_near(scene_pos)
+        if frame is not None:
+            self.frameHovered.emit(frame)
+        else:
+            self.pointHovered.emit(*xy)
+
+    def _clicked(self, event: Any) -> None:
+        if event.button() != Qt.MouseButton.LeftButton:
+            return
+        xy = self.to_view(event.scenePos())
+        if xy is None:
+            return
+        frame = self.frame_near(event.scenePos())
+        if frame is not None:
+            self.frameClicked.emit(frame)
+        else:
+            self.pointClicked.emit(*xy)

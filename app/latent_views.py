@@ -7,7 +7,8 @@ point seeks its frame; a click elsewhere pauses and decodes the point as the whi
 pose; hovering decodes too while paused; *Inspect this frame* asks the engine for the
 forces and the sweep; *Next flagged frame* seeks. Flagged frames are marked on the
 timeline. The panels are drawn from snapshots by the window's draw scheduler, and only
-while their tab is visible.
+while their tab is visible. Whether the dock or the Latent dock was in front is kept in
+the window's settings (``latent_map_raised``) for the next start.
 """
 
 from __future__ import annotations
@@ -27,6 +28,8 @@ from widgets.latent_readouts import LatentReadouts
 
 #: Hover decodes are sent at most this often, ms (a mouse sends ~100 moves a second).
 HOVER_MS = 40
+#: The settings key that remembers the dock in front of the Latent dock.
+RAISED = "latent_map_raised"
 NO_MAP = "No latent map: assets/models/latent_map.npz is missing or belongs to another VAE."
 
 
@@ -62,7 +65,11 @@ class LatentViews:
         latent = window.findChild(QDockWidget, "Latent")
         if latent is not None:
             window.tabifyDockWidget(latent, self.dock)
-            latent.raise_()
+            in_front = self.dock if window.settings.value(RAISED, False, type=bool) else latent
+            in_front.raise_()
+        window.tabifiedDockWidgetActivated.connect(
+            lambda dock: window.settings.setValue(RAISED, dock is self.dock) if dock.objectName() in ("Latent", "Latent map")
+            else None)  # fmt: skip
         self._hover: tuple[str, Any] | None = None
         self._hover_timer = QTimer(window, singleShot=True, interval=HOVER_MS)
         self._hover_timer.timeout.connect(self._send_hover)

@@ -3,7 +3,7 @@
 For the frame on screen (after *Inspect this frame*), each of the 24 dimensions decoded
 at -2 sigma (blue), unchanged (grey) and +2 sigma (orange), drawn as small front views
 side by side (six per row, root at the cell's foot, turned so the hips lie across),
-with the three joints that move most marked and named under the cell. With a joint
+with the three joints that move most marked (red) and the first named under the cell. With a joint
 chosen, the five dimensions that move that joint most right here (the Jacobian's
 largest norms) have their labels in yellow.
 """
@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 import pyqtgraph as pg
+from PyQt6.QtGui import QFont
 from PyQt6.QtWidgets import QVBoxLayout, QWidget
 
 import widgets.plots  # noqa: F401 (applies the shared pyqtgraph look)
@@ -59,6 +60,8 @@ class LatentGallery(QWidget):
         self.marks = pg.ScatterPlotItem(size=6, pen=None, brush="#ff3b30")
         self.plot.addItem(self.marks)
         self.labels: list[pg.TextItem] = []
+        self._font = QFont()
+        self._font.setPointSize(7)
         layout.addWidget(self.plot, 1)
         self.detail: Any = None
         self.influential: list[int] = []
@@ -89,10 +92,10 @@ class LatentGallery(QWidget):
                 segs[k].append(v[k][np.array(_BONES).ravel()])
             top = np.argsort(detail.motion[d])[::-1][:3]
             marks.append(v[2][top])
-            names = ", ".join(sk.JOINT_NAMES[j] for j in top[:2])
             colour = INFLUENCE_COLOUR if d in self.influential else "#c8ccd4"
-            text = pg.TextItem(f"d{d}: {names}", color=colour, anchor=(0.5, 0))
-            text.setPos(ox, oy - 0.15)
+            text = pg.TextItem(f"d{d}\n{sk.JOINT_NAMES[top[0]]}", color=colour, anchor=(0.5, 0))
+            text.setFont(self._font)
+            text.setPos(ox, oy - 0.1)
             self.plot.addItem(text)
             self.labels.append(text)
         for k in range(3):

@@ -18,12 +18,14 @@ from typing import Any
 import numpy as np
 import pyqtgraph as pg
 from PyQt6.QtCore import QPointF, QRectF, Qt, pyqtSignal
-from PyQt6.QtWidgets import QLabel, QVBoxLayout, QWidget
+from PyQt6.QtWidgets import QCheckBox, QLabel, QVBoxLayout, QWidget
 
 import widgets.plots  # noqa: F401 (applies the shared pyqtgraph look)
 
 #: A trajectory point within this many pixels of the mouse is the one pointed at.
 PICK_PX = 8.0
+#: *Zoom to the clip* shows the trajectory with this margin (map units) around it.
+ZOOM_MARGIN = 0.8
 PATH_COLOUR = "#ff8a1f"
 FLAG_COLOUR = "#ff3b30"
 HOVER_COLOUR = "#00e5ff"
@@ -52,6 +54,11 @@ class LatentMapPlot(QWidget):
         for side in ("bottom", "left"):
             self.plot.getAxis(side).enableAutoSIPrefix(False)
         self.plot.setMenuEnabled(False)
+        self.plot.setAspectLocked(True)  # directions on the map (forces, paths) as they are
+        self.zoom = QCheckBox("Zoom to the clip", checked=True)
+        self.zoom.setToolTip("Keep the clip's trajectory in view; zooming or panning with the mouse turns it off")
+        self.zoom.toggled.connect(lambda on: self._fit() if on else None)
+        self.plot.getPlotItem().getViewBox().sigRangeChangedManually.connect(lambda *_: self.zoom.setChecked(False))
         self.density = pg.ImageItem()
         self.density.setColorMap(pg.colormap.get("CET-L1"))  # black to white: the training data as light
         self.plot.addItem(self.density)
@@ -66,12 +73,15 @@ class LatentMapPlot(QWidget):
         for item in (self.points, self.flags, self.current, self.hover, self.start_label):
             self.plot.addItem(item)
         layout.addWidget(self.note)
+        layout.addWidget(self.zoom)
         layout.addWidget(self.plot, 1)
         self._cmap = pg.colormap.get("viridis")
         self.frames = np.zeros(0, int)
         self.xy = np.zeros((0, 2))
         self._seq = -1
         self._explained: tuple[float, float] | None = None
+        self._extent = (-1.0, 1.0, -1.0, 1.0)
+        self._path = np.zeros((0, 2))
         scene = self.plot.scene()
         scene.sigMouseMoved.connect(self._moved)
         scene.sigMouseClicked.connect(self._clicked)
@@ -86,6 +96,7 @@ class LatentMapPlot(QWidget):
         self.density.setRect(QRectF(x0, y0, x1 - x0, y1 - y0))
         self.plot.setXRange(x0, x1, padding=0.0)
         self.plot.setYRange(y0, y1, padding=0.0)
+        self._extent = (x0, x1, y0, y1)
         self._explained = (float(explained[0]), float(explained[1]))
         self.plot.setLabel("bottom", f"PC 1 ({100 * explained[0]:.1f} % of variance)")
         self.plot.setLabel("left", f"PC 2 ({100 * explained[1]:.1f} % of variance)")
@@ -122,6 +133,8 @@ class LatentMapPlot(QWidget):
             self.start_label.setText("")
             return
         self.current.setData([view.xy[0]], [view.xy[1]])
+        self._path = np.asarray(view.path_xy if view.path_xy is not None else view.xy[None], float).reshape(-1, 2)
+        self._fit()
         if view.path_xy is not None and len(view.path_xy):
             self.path.setData(view.path_xy[:, 0], view.path_xy[:, 1])
             self.start_label.setText(f"start: {view.start}" if view.start else "start")
@@ -129,6 +142,21 @@ class LatentMapPlot(QWidget):
         else:
             self.path.setData([], [])
             self.start_label.setText("")
+
+    def _fit(self) -> None:
+        """With *Zoom to the clip*: the trajectory and the frame's path in view, with
+        :data:`ZOOM_MARGIN` around them (the whole map when there is nothing yet)."""
+        if not self.zoom.isChecked():
+            return
+        pts = np.vstack([self.xy, self._path]) if len(self.xy) or len(self._path) else np.zeros((0, 2))
+        if not len(pts):
+            x0, x1, y0, y1 = self._extent
+        else:
+            (x0, y0), (x1, y1) = pts.min(0) - ZOOM_MARGIN, pts.max(0) + ZOOM_MARGIN
+        vb = self.plot.getPlotItem().getViewBox()
+        vb.blockSignals(True)  # not a manual change: the box stays ticked
+        self.plot.setRange(xRange=(x0, x1), yRange=(y0, y1), padding=0.0)
+        vb.blockSignals(False)
 
     # -- mouse ----------------------------------------------------------------------------
     def to_view(self, scene_pos: QPointF) -> tuple[float, float] | None:

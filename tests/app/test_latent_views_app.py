@@ -70,3 +70,17 @@ def test_map_clicks_decode_and_seek_with_dragposer(studio, qtbot):
     d = views.forces.detail
     assert d.frame == frame and len(views.forces.norm_bars.opts["height"]) == len(d.names)
     assert any(n.startswith("sensor:") for n in d.names)
+
+
+def test_the_dock_in_front_is_remembered(studio, qtbot):
+    from PyQt6.QtWidgets import QTabBar
+
+    from app.latent_views import RAISED
+
+    bar = next(b for b in studio.findChildren(QTabBar) if "Latent map" in [b.tabText(i) for i in range(b.count())])
+    index = [bar.tabText(i) for i in range(bar.count())].index("Latent map")
+    qtbot.mouseClick(bar, Qt.MouseButton.LeftButton, pos=bar.tabRect(index).center())
+    qtbot.waitUntil(lambda: studio.settings.value(RAISED, False, type=bool), timeout=3000)
+    latent = [bar.tabText(i) for i in range(bar.count())].index("Latent")
+    qtbot.mouseClick(bar, Qt.MouseButton.LeftButton, pos=bar.tabRect(latent).center())
+    qtbot.waitUntil(lambda: not studio.settings.value(RAISED, True, type=bool), timeout=3000)

@@ -166,7 +166,7 @@ def test_forces_bars_in_the_loss_plots_colours(qtbot):
 def test_gallery_draws_every_dimension(qtbot):
     w = shown(qtbot, LatentGallery(), 500, 400)
     w.set_detail(_detail())
-    assert len(w.labels) == 24 and "lwrist" in w.labels[0].textItem.toPlainText()
+    assert len(w.labels) == 24 and w.labels[0].textItem.toPlainText() == "d0\nlwrist"
     x, _ = w.lines[0].getData()
     assert len(x) == 24 * 2 * (sk.NUM_JOINTS - 1)
     assert w.influential == [23, 22, 21, 20, 19]
@@ -184,3 +184,13 @@ def test_front_view_turns_the_hips_across():
     # the whole horizontal hip line lies across the view, the heights unchanged
     assert left == pytest.approx([np.hypot(hips[0], hips[1]), hips[2]])
     assert v[0] == pytest.approx([0.0, 0.0])
+
+
+def test_zoom_to_the_clip_until_the_user_zooms(latent_map, qtbot):
+    latent_map.update_snapshot(_snap())
+    (x0, x1), (y0, y1) = latent_map.plot.getPlotItem().getViewBox().viewRange()
+    assert x0 <= -2.0 and x1 >= 2.0 and x1 - x0 < 8.0  # the clip, not the whole map (12 wide)
+    assert latent_map.zoom.isChecked()
+    latent_map.plot.getPlotItem().getViewBox().scaleBy((0.5, 0.5))  # as the mouse wheel does
+    latent_map.plot.getPlotItem().getViewBox().sigRangeChangedManually.emit([True, True])
+    assert not latent_map.zoom.isChecked()

@@ -2,7 +2,7 @@
 
 For the frame on screen (after *Inspect this frame*), each of the 24 dimensions decoded
 at -2 sigma (blue), unchanged (grey) and +2 sigma (orange), drawn as small front views
-side by side (six per row, root at the cell's foot, turned so the hips lie across),
+side by side (six per row, each turned so its hips lie across the view),
 with the three joints that move most marked (red) and the first named under the cell. With a joint
 chosen, the five dimensions that move that joint most right here (the Jacobian's
 largest norms) have their labels in yellow.
@@ -95,7 +95,7 @@ class LatentGallery(QWidget):
             colour = INFLUENCE_COLOUR if d in self.influential else "#c8ccd4"
             text = pg.TextItem(f"d{d}\n{sk.JOINT_NAMES[top[0]]}", color=colour, anchor=(0.5, 0))
             text.setFont(self._font)
-            text.setPos(ox, oy - 0.1)
+            text.setPos(ox, oy - 1.05)  # under the feet (the root sits at the cell origin)
             self.plot.addItem(text)
             self.labels.append(text)
         for k in range(3):

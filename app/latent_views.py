@@ -87,10 +87,14 @@ class LatentViews:
 
     # -- snapshots -> views ------------------------------------------------------------
     def _update_map(self, snap: Any) -> None:
-        """The map and the readouts (the readouts' verdicts always: they mark the timeline)."""
+        """The map and the readouts while they are in view; the flag verdicts always (they
+        mark the timeline)."""
         if self.map.isVisible():
             self.map.update_snapshot(snap)
-        self.readouts.update_snapshot(snap)
+        if self.readouts.isVisible():
+            self.readouts.update_snapshot(snap)
+        else:
+            self.readouts.note_verdicts(snap)
 
     def _update_detail(self, snap: Any) -> None:
         self.forces.set_detail(snap.latent_detail)

@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import argparse
 import sys
+
+import numpy as np
 import time
 from pathlib import Path
 
@@ -79,7 +81,14 @@ def main() -> int:
     v.forces.joint.setCurrentIndex(v.forces.joint.findData("lwrist"))
     QTest.mouseClick(v.forces.inspect_button, Qt.MouseButton.LeftButton)
     wait(app, lambda: v.forces.detail is not None)
-    print(f"inspect: {v.forces.detail.ms:.0f} ms on the engine")
+    d = v.forces.detail
+    print(f"inspect: {d.ms:.0f} ms on the engine")
+    lv = s.latest.latent_view
+    print(f"frame {lv.frame}: nearest {lv.nearest:.2f} norm {lv.norm:.2f} prior {lv.predictor:.2f} start {lv.start}")
+    norms = dict(zip(d.names, np.linalg.norm(d.forces[0], axis=1).round(3)))
+    print("force norms at iteration 0:", norms)
+    print("conflicts:", v.forces.info.text())
+    print("most influential dimensions on the left wrist:", v.gallery.influential or list(np.argsort(d.influence)[::-1][:5]))
     for _ in range(30):
         app.processEvents()
         time.sleep(0.02)

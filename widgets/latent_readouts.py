@@ -67,11 +67,13 @@ class LatentReadouts(QWidget):
         self.flagged = np.zeros(0, bool)
         self.frame = 0
         self.verdicts: dict[int, bool] = {}  # frame -> flagged, every frame solved since clear()
+        self._last_entry: Any = None  # the newest history entry read
         self._seq = -1
 
     def clear(self) -> None:
         """Forget the verdicts (another clip or method)."""
         self.verdicts.clear()
+        self._last_entry = None
         self.flagsChanged.emit([])
 
     def set_thresholds(self, nearest: float, norm: float) -> None:
@@ -80,11 +82,34 @@ class LatentReadouts(QWidget):
             self.thresholds[key].setValue(float(value))
             self.thresholds[key].setVisible(bool(np.isfinite(value)))
 
+    def note_verdicts(self, snap: Any) -> None:
+        """Remember the flag verdicts of ``snap``'s solved frames (cheap: only the entries
+        newer than the last one read; a frame solved again takes its new verdict); emits
+        ``flagsChanged`` when the flagged set changes."""
+        self.frame = int(snap.frame)
+        new = []
+        for r in reversed(snap.history):
+            if r is self._last_entry:
+                break
+            if r.readouts:
+                new.append((r.frame, r.readouts.get("flagged", 0.0) > 0))
+        if snap.history:
+            self._last_entry = snap.history[-1]
+        if not new:
+            return
+        before = {f for f, on in self.verdicts.items() if on}
+        self.verdicts.update(reversed(new))  # oldest first: the newest verdict of a frame wins
+        after = {f for f, on in self.verdicts.items() if on}
+        if after != before:
+            self.flagsChanged.emit(sorted(after))
+        self.next_button.setEnabled(bool(after))
+
     def update_snapshot(self, snap: Any) -> None:
+        """:meth:`note_verdicts`, then draw the readouts of ``snap.history``."""
         if snap.seq == self._seq:
             return
         self._seq = snap.seq
-        self.frame = int(snap.frame)
+        self.note_verdicts(snap)
         rows = [r for r in snap.history if r.readouts]
         self.frames = np.array([r.frame for r in rows], int)
         x = self.frames.astype(float)
@@ -92,11 +117,6 @@ class LatentReadouts(QWidget):
             y = np.array([r.readouts.get(key, np.nan) for r in rows], float)
             curve.setData(x, y) if np.isfinite(y).any() else curve.setData([], [])
         self.flagged = np.array([r.readouts.get("flagged", 0.0) > 0 for r in rows], bool)
-        before = {f for f, on in self.verdicts.items() if on}
-        self.verdicts.update(zip(self.frames.tolist(), self.flagged.tolist()))
-        after = {f for f, on in self.verdicts.items() if on}
-        if after != before:
-            self.flagsChanged.emit(sorted(after))
         near = np.array([r.readouts["nearest"] for r in rows], float)
         self.flags.setData(x[self.flagged], near[self.flagged])
         self.cursor.setValue(float(snap.frame))
@@ -107,7 +127,6 @@ class LatentReadouts(QWidget):
             flag = f" <b style='color:{FLAG_COLOUR}'>flagged</b>" if v.flagged else ""
             self.label.setText(f"frame {v.frame}: nearest {v.nearest:.2f}, norm {v.norm:.2f}, "
                                f"prior {v.predictor:.2f}{flag}")  # fmt: skip
-        self.next_button.setEnabled(bool(after))
         fit_frames(self.plot, x)
         settle(self.plot)
 

@@ -194,3 +194,19 @@ def test_zoom_to_the_clip_until_the_user_zooms(latent_map, qtbot):
     latent_map.plot.getPlotItem().getViewBox().scaleBy((0.5, 0.5))  # as the mouse wheel does
     latent_map.plot.getPlotItem().getViewBox().sigRangeChangedManually.emit([True, True])
     assert not latent_map.zoom.isChecked()
+
+
+def test_a_frame_solved_again_takes_its_new_verdict(qtbot):
+    w = LatentReadouts()
+    qtbot.addWidget(w)  # never shown: the verdicts alone (what the window reads while the tab is hidden)
+    marks = []
+    w.flagsChanged.connect(marks.append)
+    first = _snap(n=10, flagged=(4,), frame=9)
+    w.note_verdicts(first)
+    assert marks[-1] == [4]
+    again = _snap(n=10, flagged=(), seq=2, frame=9)  # an edit: the frames solved again, none flagged
+    w.note_verdicts(again)
+    assert marks[-1] == [] and w.next_flagged() is None
+    n = len(marks)
+    w.note_verdicts(again)  # nothing new
+    assert len(marks) == n

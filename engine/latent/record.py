@@ -39,3 +39,16 @@ class SolveRecord:
     context: "FrameContext"
     terms: tuple[tuple["Constraint", float], ...]
     start: str
+
+
+def record_of(solution: "Solution", context: "FrameContext", terms: "list[Constraint]", predicted: bool,
+              bank: bool) -> SolveRecord:  # fmt: skip
+    """The :class:`SolveRecord` of a solve over ``terms`` (their weights taken now: the next
+    frame changes them) that started from the frame's prior latent (``predicted``; from the
+    pose bank when ``bank``) or else from the previous frame's latent (zero on frame 0)."""
+    weighted = ((c, c.weight * c.activity(context.frame)) for c in terms if c.enabled)
+    if predicted:
+        start = "pose bank" if bank else "predictor"
+    else:
+        start = "previous frame" if context.frame else "zero latent"
+    return SolveRecord(solution, context, tuple((c, w) for c, w in weighted if w > 0), start)

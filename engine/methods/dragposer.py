@@ -29,7 +29,7 @@ from engine.constraints import (
 )  # fmt: skip
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
-from engine.latent.record import SolveRecord
+from engine.latent.record import SolveRecord, record_of
 from engine.methods import dragposer_root as roots
 from engine.methods.base import FrameResult, Method
 from engine.methods.dragposer_edits import DragPoserEdits
@@ -198,7 +198,7 @@ class DragPoserMethod(DragPoserEdits, Method):
         finally:
             self.optimizer.settings = self.settings
         warnings += sol.warnings
-        self.last_solve = _record(sol, ctx, terms, start is prediction, self._bank_prior)
+        self.last_solve = record_of(sol, ctx, terms, start is prediction, self._bank_prior)
         state = sol.state
         if not (torch.isfinite(state.positions).all() and torch.isfinite(state.local_rot).all()):
             warnings.append("decoded pose is not finite; previous pose repeated")
@@ -332,13 +332,6 @@ class DragPoserMethod(DragPoserEdits, Method):
         self._frame += 1
         res.ms = 1000.0 * (time.perf_counter() - t0)
         return res
-
-
-def _record(sol: Any, ctx: FrameContext, terms: list[Constraint], predicted: bool, bank: bool) -> SolveRecord:
-    """The frame's :class:`SolveRecord`: its terms' weights now (the next frame changes them)."""
-    weighted = ((c, c.weight * c.activity(ctx.frame)) for c in terms if c.enabled)
-    start = ("pose bank" if bank else "predictor") if predicted else ("previous frame" if ctx.frame else "zero latent")
-    return SolveRecord(sol, ctx, tuple((c, w) for c, w in weighted if w > 0), start)
 
 
 def _finite(r: Sensor) -> bool:

@@ -80,6 +80,7 @@ class LatentViews:
         self.readouts.seekRequested.connect(self.seek)
         self.readouts.flagsChanged.connect(window.timeline.set_marks)
         self.forces.inspectRequested.connect(self.inspect)
+        self.forces.iteration.valueChanged.connect(lambda _: self._draw_forces())
         window.session.events.motion.connect(self._forget)
         window.session.events.method.connect(self._forget)
         window.drawing.panels += [Panel("latent map", self._update_map, 0.5),
@@ -97,8 +98,23 @@ class LatentViews:
             self.readouts.note_verdicts(snap)
 
     def _update_detail(self, snap: Any) -> None:
-        self.forces.set_detail(snap.latent_detail)
-        self.gallery.set_detail(snap.latent_detail)
+        d = snap.latent_detail
+        changed = d is not self.forces.detail
+        self.forces.set_detail(d)
+        self.gallery.set_detail(d)
+        if changed:
+            self._draw_forces()
+
+    def _draw_forces(self) -> None:
+        """The inspected frame's term forces on the map, from its path at the iteration the
+        Forces tab shows."""
+        d, snap = self.forces.detail, self.session.latest
+        view = None if snap is None else snap.latent_view
+        if d is None or view is None or view.frame != d.frame or view.path_xy is None:
+            self.map.set_forces(None)
+            return
+        k = min(self.forces.iteration.value(), len(d.plane) - 1, len(view.path_xy) - 1)
+        self.map.set_forces(view.path_xy[k], d.plane[k], [self.forces.colour(n) for n in d.names])
 
     def _forget(self, event: Any = None) -> None:
         self.readouts.clear()

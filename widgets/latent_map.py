@@ -4,7 +4,8 @@ Drawn on the shipped projection (engine/latent/projection.py, handed in with
 :meth:`LatentMapPlot.set_map`): the training latents as a grey density, the solved frames
 as a trajectory coloured by frame (dark blue oldest, yellow newest), flagged frames as red
 crosses, the frame on screen as a white ring, and its solve's iterations as an orange path
-from its start, labelled by where the solve started.
+from its start, labelled by where the solve started; after an inspection, each term's
+force in the map plane as a line in its loss-plot colour (:meth:`LatentMapPlot.set_forces`).
 
 The mouse asks, the window answers: hovering emits ``pointHovered(x, y)`` (or
 ``frameHovered(frame)`` near a trajectory point), a left click ``pointClicked(x, y)`` (or
@@ -86,6 +87,7 @@ class LatentMapPlot(QWidget):
         self._explained: tuple[float, float] | None = None
         self._extent = (-1.0, 1.0, -1.0, 1.0)
         self._path = np.zeros((0, 2))
+        self.force_lines: list = []
         scene = self.plot.scene()
         scene.sigMouseMoved.connect(self._moved)
         scene.sigMouseClicked.connect(self._clicked)
@@ -161,6 +163,27 @@ class LatentMapPlot(QWidget):
         vb.blockSignals(True)  # not a manual change: the box stays ticked
         self.plot.setRange(xRange=(x0, x1), yRange=(y0, y1), padding=0.0)
         vb.blockSignals(False)
+
+    def set_forces(self, origin: np.ndarray | None, vectors: np.ndarray | None = None,
+                   colours: list[str] | None = None) -> None:  # fmt: skip
+        """Draw each term's force in the map plane as a line from ``origin (2,)`` along
+        ``vectors (T, 2)`` in ``colours`` (the loss plots' term colours), the longest a
+        quarter of the view's width; None clears them."""
+        for item in self.force_lines:
+            self.plot.removeItem(item)
+        self.force_lines = []
+        if origin is None or vectors is None or not len(vectors):
+            return
+        v = np.asarray(vectors, float)
+        longest = float(np.linalg.norm(v, axis=1).max())
+        if longest <= 0:
+            return
+        (x0, x1), _ = self.plot.getPlotItem().getViewBox().viewRange()
+        v = v * (0.25 * (x1 - x0) / longest)
+        for vec, colour in zip(v, colours or ["#ffffff"] * len(v)):
+            item = self.plot.plot([origin[0], origin[0] + vec[0]], [origin[1], origin[1] + vec[1]],
+                                  pen=pg.mkPen(colour, width=2))  # fmt: skip
+            self.force_lines.append(item)
 
     # -- mouse ----------------------------------------------------------------------------
     def to_view(self, scene_pos: QPointF) -> tuple[float, float] | None:

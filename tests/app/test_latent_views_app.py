@@ -70,6 +70,7 @@ def test_map_clicks_decode_and_seek_with_dragposer(studio, qtbot):
     d = views.forces.detail
     assert d.frame == frame and len(views.forces.norm_bars.opts["height"]) == len(d.names)
     assert any(n.startswith("sensor:") for n in d.names)
+    qtbot.waitUntil(lambda: len(views.map.force_lines) == len(d.names), timeout=5000)  # drawn on the map too
 
 
 def test_the_dock_in_front_is_remembered(studio, qtbot):

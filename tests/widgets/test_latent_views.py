@@ -210,3 +210,17 @@ def test_a_frame_solved_again_takes_its_new_verdict(qtbot):
     n = len(marks)
     w.note_verdicts(again)  # nothing new
     assert len(marks) == n
+
+
+def test_forces_drawn_on_the_map_in_term_colours(latent_map):
+    latent_map.update_snapshot(_snap())
+    latent_map.set_forces(np.array([0.0, 0.0]), np.array([[1.0, 0.0], [0.0, -0.5]]), ["#ff0000", "#00ff00"])
+    assert len(latent_map.force_lines) == 2
+    (x0, x1), _ = latent_map.plot.getPlotItem().getViewBox().viewRange()
+    xs, ys = latent_map.force_lines[0].getData()
+    assert xs[1] - xs[0] == pytest.approx(0.25 * (x1 - x0))  # the longest: a quarter of the view
+    xs, ys = latent_map.force_lines[1].getData()
+    assert ys[1] - ys[0] == pytest.approx(-0.125 * (x1 - x0))
+    assert latent_map.force_lines[1].opts["pen"].color().name() == "#00ff00"
+    latent_map.set_forces(None)
+    assert latent_map.force_lines == []

@@ -1,5 +1,5 @@
 """``dragposer-studio latent CLIP.bvh --sensors P --out report.png [--json F]``: a clip's
-reconstruction seen from the latent space (docs/studio.md, "Debug a bad frame").
+reconstruction seen from the latent space (docs/latent.md).
 
 Trackers are simulated from the clip as in ``reconstruct``; DragPoser solves it frame by
 frame (progress bar on stderr) and every frame is probed (:mod:`engine.latent`): its place

@@ -10,7 +10,7 @@ the sum only roughly). When two terms' forces point against each other they disa
 about the pose; the larger norm wins.
 
 This replays the solve with the reference (autograd) losses, whichever path the solver
-took; both compute the same losses (tests in ``tests/engine/solver`` hold them equal).
+took; both compute the same losses (``tests/engine/test_solver_fast.py`` holds them equal).
 """
 
 from __future__ import annotations

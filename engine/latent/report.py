@@ -13,6 +13,7 @@ from __future__ import annotations
 import io
 import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -74,7 +75,7 @@ def render_report(trace: LatentTrace, latent_map: LatentMap, out: str | Path, me
     write_bytes(out, buf.getvalue())
 
 
-def _draw_map(ax, fig, trace: LatentTrace, m: LatentMap) -> None:
+def _draw_map(ax: Any, fig: Any, trace: LatentTrace, m: LatentMap) -> None:
     """The map panel (module doc)."""
     ax.imshow(np.log1p(m.density), extent=tuple(m.extent), origin="lower", cmap="Greys", aspect="auto",
               interpolation="bilinear")  # fmt: skip

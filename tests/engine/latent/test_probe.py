@@ -39,3 +39,27 @@ def test_methods_without_a_latent():
     assert not isinstance(ik, SolvesInLatent)
     assert LatentProbe.shipped().after_step(ik, 0, None) is None
     assert "ik has no latent space" in NO_LATENT.format(method="ik")
+
+
+class _Term:
+    def __init__(self, name, weight, enabled=True, active=1.0):
+        self.name, self.weight, self.enabled, self._active = name, weight, enabled, active
+
+    def activity(self, frame):
+        return self._active
+
+
+def test_record_keeps_the_frame_weights_and_names_the_start():
+    from engine.latent.record import record_of
+    from engine.solver.frame import FrameContext
+
+    terms = [_Term("a", 2.0, active=0.5), _Term("off", 1.0, enabled=False), _Term("zero", 0.0), _Term("b", 1.0)]
+    ctx = FrameContext(None, frame=3)
+    rec = record_of("sol", ctx, terms, predicted=True, bank=False)
+    assert [(c.name, w) for c, w in rec.terms] == [("a", 1.0), ("b", 1.0)]
+    terms[0].weight = 10.0  # a later frame's weights do not change this record
+    assert rec.terms[0][1] == 1.0
+    assert rec.start == "predictor"
+    assert record_of("sol", ctx, terms, predicted=True, bank=True).start == "pose bank"
+    assert record_of("sol", ctx, terms, predicted=False, bank=False).start == "previous frame"
+    assert record_of("sol", FrameContext(None, frame=0), terms, False, False).start == "zero latent"

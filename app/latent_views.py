@@ -92,6 +92,7 @@ class LatentViews:
         mark the timeline)."""
         if self.map.isVisible():
             self.map.update_snapshot(snap)
+            self._draw_blend()
         if self.readouts.isVisible():
             self.readouts.update_snapshot(snap)
         else:
@@ -104,6 +105,14 @@ class LatentViews:
         self.gallery.set_detail(d)
         if changed:
             self._draw_forces()
+
+    def _draw_blend(self) -> None:
+        """The Latent panel's stored A and B (its A to B blend) on the map."""
+        stored = self.w.latent.stored
+        a, b = stored.get("a"), stored.get("b")
+        m = self.latent_map
+        ok = m is not None and a is not None and b is not None and a.size == b.size == m.latent_dim
+        self.map.set_blend(m.project(a) if ok else None, m.project(b) if ok else None)
 
     def _draw_forces(self) -> None:
         """The inspected frame's term forces on the map, from its path at the iteration the

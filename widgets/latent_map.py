@@ -5,7 +5,8 @@ Drawn on the shipped projection (engine/latent/projection.py, handed in with
 as a trajectory coloured by frame (dark blue oldest, yellow newest), flagged frames as red
 crosses, the frame on screen as a white ring, and its solve's iterations as an orange path
 from its start, labelled by where the solve started; after an inspection, each term's
-force in the map plane as a line in its loss-plot colour (:meth:`LatentMapPlot.set_forces`).
+force in the map plane as a line in its loss-plot colour (:meth:`LatentMapPlot.set_forces`),
+and the Latent panel's stored A and B with the A to B blend's path (dashed).
 
 The mouse asks, the window answers: hovering emits ``pointHovered(x, y)`` (or
 ``frameHovered(frame)`` near a trajectory point), a left click ``pointClicked(x, y)`` (or
@@ -73,7 +74,9 @@ class LatentMapPlot(QWidget):
         self.start_label = pg.TextItem("", color=PATH_COLOUR, anchor=(0, 1))
         self.current = pg.ScatterPlotItem(size=13, pen=pg.mkPen("w", width=2), brush=None)
         self.hover = pg.ScatterPlotItem(size=11, symbol="+", pen=pg.mkPen(HOVER_COLOUR, width=2))
-        for item in (self.points, self.flags, self.current, self.hover, self.start_label):
+        self.blend = self.plot.plot(pen=pg.mkPen("#ffffff", width=1, style=Qt.PenStyle.DashLine))
+        self.blend_labels = (pg.TextItem("A", color="#ffffff"), pg.TextItem("B", color="#ffffff"))
+        for item in (self.points, self.flags, self.current, self.hover, self.start_label, *self.blend_labels):
             self.plot.addItem(item)
         layout.addWidget(self.note)
         layout.addWidget(self.zoom)
@@ -163,6 +166,20 @@ class LatentMapPlot(QWidget):
         vb.blockSignals(True)  # not a manual change: the box stays ticked
         self.plot.setRange(xRange=(x0, x1), yRange=(y0, y1), padding=0.0)
         vb.blockSignals(False)
+
+    def set_blend(self, a: np.ndarray | None, b: np.ndarray | None) -> None:
+        """The Latent panel's stored latents A and B at map points ``a``, ``b`` (2,), and the
+        A to B blend's path between them (a straight line: the projection is linear);
+        None hides them."""
+        if a is None or b is None:
+            self.blend.setData([], [])
+            for t in self.blend_labels:
+                t.setText("")
+            return
+        self.blend.setData([a[0], b[0]], [a[1], b[1]])
+        for t, p, name in zip(self.blend_labels, (a, b), "AB"):
+            t.setText(name)
+            t.setPos(float(p[0]), float(p[1]))
 
     def set_forces(self, origin: np.ndarray | None, vectors: np.ndarray | None = None,
                    colours: list[str] | None = None) -> None:  # fmt: skip

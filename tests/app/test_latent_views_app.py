@@ -71,6 +71,14 @@ def test_map_clicks_decode_and_seek_with_dragposer(studio, qtbot):
     assert d.frame == frame and len(views.forces.norm_bars.opts["height"]) == len(d.names)
     assert any(n.startswith("sensor:") for n in d.names)
     qtbot.waitUntil(lambda: len(views.map.force_lines) == len(d.names), timeout=5000)  # drawn on the map too
+    # the Latent panel's A and B: their blend's path appears on the map
+    qtbot.waitUntil(lambda: studio.latent.latent is not None, timeout=5000)
+    studio.latent.capture_a.click()
+    studio.latent.stored["b"] = studio.latent.stored["a"] + 0.5
+    views.tabs.setCurrentIndex(0)
+    s.step(1)
+    qtbot.waitUntil(lambda: views.map.blend.getData()[0] is not None and len(views.map.blend.getData()[0]) == 2,
+                    timeout=10000)  # fmt: skip
 
 
 def test_the_dock_in_front_is_remembered(studio, qtbot):

@@ -224,3 +224,12 @@ def test_forces_drawn_on_the_map_in_term_colours(latent_map):
     assert latent_map.force_lines[1].opts["pen"].color().name() == "#00ff00"
     latent_map.set_forces(None)
     assert latent_map.force_lines == []
+
+
+def test_the_a_to_b_blend_is_drawn(latent_map):
+    latent_map.set_blend(np.array([0.0, 1.0]), np.array([2.0, -1.0]))
+    xs, ys = latent_map.blend.getData()
+    assert list(xs) == [0.0, 2.0] and list(ys) == [1.0, -1.0]
+    assert latent_map.blend_labels[1].textItem.toPlainText() == "B"
+    latent_map.set_blend(None, None)
+    assert len(latent_map.blend.getData()[0] or []) == 0

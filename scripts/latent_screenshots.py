@@ -4,7 +4,8 @@ Opens the studio on the bundled clip with DragPoser and head, hands and hips tra
 (preset 4) plus a look-at constraint (the bundled look/floor/pin/distance scene), plays
 ``FRAMES`` frames, pauses, then saves the window with the dock's *Map* tab (after a click
 beside the trajectory decodes that point as the white debug pose), its *Forces* tab
-(after *Inspect this frame* with the left wrist chosen) and its *Gallery* tab.
+(after *Inspect this frame* with the left wrist chosen), its *Gallery* tab and the *Map*
+tab again with the inspected forces drawn in the map plane.
 
     PYTHONPATH=. xvfb-run -a -s "-screen 0 1600x1000x24" python scripts/latent_screenshots.py docs/images
         [--frames 150] [--scene assets/scenes/look_floor_pin_distance.json]
@@ -98,6 +99,11 @@ def main() -> int:
         app.processEvents()
         time.sleep(0.02)
     w.files.export_screenshot(str(args.out / "latent-gallery.png"))
+    v.tabs.setCurrentIndex(0)  # the forces in the map plane
+    for _ in range(30):
+        app.processEvents()
+        time.sleep(0.02)
+    w.files.export_screenshot(str(args.out / "latent-map-forces.png"))
     w.undo.stack.setClean()
     w.close()
     return 0

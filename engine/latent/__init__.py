@@ -9,6 +9,7 @@
 * :mod:`~engine.latent.probe` — readouts and map coordinates of a method's frames.
 * :mod:`~engine.latent.forces` — each loss term's force on the latent per iteration.
 * :mod:`~engine.latent.sweep` — the dimension sweep and per-joint influence.
+* :mod:`~engine.latent.trace` — a clip reconstructed frame by frame and probed.
 * :mod:`~engine.latent.report` — the ``latent`` command's figure and JSON.
 
 Submodules are imported where used (the package import stays torch-free).

@@ -27,6 +27,12 @@ CURVES = (("nearest", "#4da3ff", "nearest training latent"), ("norm", "#c77dff",
 FLAG_COLOUR = "#ff3b30"
 
 
+def _key(entry: Any) -> tuple:
+    """What tells one solve's history entry from another's: the snapshots of an engine in
+    its own process arrive unpickled, so the same entry is a new object every time."""
+    return entry.frame, entry.ms, entry.iterations
+
+
 class LatentReadouts(QWidget):
     """See the module doc. ``seekRequested(int)`` asks for a frame."""
 
@@ -67,7 +73,7 @@ class LatentReadouts(QWidget):
         self.flagged = np.zeros(0, bool)
         self.frame = 0
         self.verdicts: dict[int, bool] = {}  # frame -> flagged, every frame solved since clear()
-        self._last_entry: Any = None  # the newest history entry read
+        self._last_entry: Any = None  # the newest history entry read (its _key)
         self._seq = -1
 
     def clear(self) -> None:
@@ -89,12 +95,12 @@ class LatentReadouts(QWidget):
         self.frame = int(snap.frame)
         new = []
         for r in reversed(snap.history):
-            if r is self._last_entry:
+            if _key(r) == self._last_entry:
                 break
             if r.readouts:
                 new.append((r.frame, r.readouts.get("flagged", 0.0) > 0))
         if snap.history:
-            self._last_entry = snap.history[-1]
+            self._last_entry = _key(snap.history[-1])
         if not new:
             return
         before = {f for f, on in self.verdicts.items() if on}

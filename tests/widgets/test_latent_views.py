@@ -35,10 +35,12 @@ class Snap:
     extra: dict = field(default_factory=dict)
 
 
-def _snap(n: int = 40, flagged: tuple[int, ...] = (), seq: int = 1, frame: int | None = None) -> Snap:
-    """Frames 0..n-1 on a line across the map, frame ``frame`` (default last) on screen."""
+def _snap(n: int = 40, flagged: tuple[int, ...] = (), seq: int = 1, frame: int | None = None,
+          ms: float = 2.0) -> Snap:  # fmt: skip
+    """Frames 0..n-1 on a line across the map, frame ``frame`` (default last) on screen,
+    each solved in ``ms`` (a solve's wall time tells its entry from an earlier solve's)."""
     xs = np.linspace(-2.0, 2.0, n)
-    hist = tuple(HistoryEntry(f, 5, 2.0, {"total": 1.0}, np.full(24, 0.1 * f),
+    hist = tuple(HistoryEntry(f, 5, ms, {"total": 1.0}, np.full(24, 0.1 * f),
                               {"x": xs[f], "y": 0.5 * xs[f], "nearest": 1.0 + 0.01 * f, "norm": 3.0,
                                "predictor": 0.4, "flagged": float(f in flagged)})
                  for f in range(n))  # fmt: skip
@@ -204,7 +206,7 @@ def test_a_frame_solved_again_takes_its_new_verdict(qtbot):
     first = _snap(n=10, flagged=(4,), frame=9)
     w.note_verdicts(first)
     assert marks[-1] == [4]
-    again = _snap(n=10, flagged=(), seq=2, frame=9)  # an edit: the frames solved again, none flagged
+    again = _snap(n=10, flagged=(), seq=2, frame=9, ms=2.5)  # an edit: the frames solved again, none flagged
     w.note_verdicts(again)
     assert marks[-1] == [] and w.next_flagged() is None
     n = len(marks)
@@ -233,3 +235,16 @@ def test_the_a_to_b_blend_is_drawn(latent_map):
     assert latent_map.blend_labels[1].textItem.toPlainText() == "B"
     latent_map.set_blend(None, None)
     assert len(latent_map.blend.getData()[0] or []) == 0
+
+
+def test_verdicts_read_only_new_entries_of_unpickled_snapshots(qtbot):
+    import pickle
+
+    w = LatentReadouts()
+    qtbot.addWidget(w)
+    snap = _snap(n=600, flagged=(7,))
+    w.note_verdicts(snap)
+    copy = pickle.loads(pickle.dumps(snap))  # as an engine process delivers it: new objects
+    w.verdicts.clear()  # were every entry read again, frame 7 would come back
+    w.note_verdicts(copy)
+    assert w.verdicts == {}

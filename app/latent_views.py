@@ -33,6 +33,12 @@ RAISED = "latent_map_raised"
 NO_MAP = "No latent map: assets/models/latent_map.npz is missing or belongs to another VAE."
 
 
+def _on_screen(widget: Any) -> bool:
+    """Whether any of ``widget`` is on screen: a dock tabified behind another stays
+    ``isVisible()`` (moved out of the window), but shows nothing."""
+    return widget.isVisible() and not widget.visibleRegion().isEmpty()
+
+
 class LatentViews:
     """Builds the dock on ``window`` (the main window) and connects it; see the module doc."""
 
@@ -90,10 +96,10 @@ class LatentViews:
     def _update_map(self, snap: Any) -> None:
         """The map and the readouts while they are in view; the flag verdicts always (they
         mark the timeline)."""
-        if self.map.isVisible():
+        if _on_screen(self.map):
             self.map.update_snapshot(snap)
             self._draw_blend()
-        if self.readouts.isVisible():
+        if _on_screen(self.readouts):
             self.readouts.update_snapshot(snap)
         else:
             self.readouts.note_verdicts(snap)

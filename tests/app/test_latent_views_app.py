@@ -93,3 +93,16 @@ def test_the_dock_in_front_is_remembered(studio, qtbot):
     latent = [bar.tabText(i) for i in range(bar.count())].index("Latent")
     qtbot.mouseClick(bar, Qt.MouseButton.LeftButton, pos=bar.tabRect(latent).center())
     qtbot.waitUntil(lambda: not studio.settings.value(RAISED, True, type=bool), timeout=3000)
+
+
+def test_a_map_behind_the_latent_dock_is_not_redrawn(studio, qtbot):
+    views = _show_map(studio)
+    qtbot.waitUntil(lambda: views.map._seq == studio.session.latest.seq, timeout=10000)
+    studio.findChild(QDockWidget, "Latent").raise_()
+    QApplication.processEvents()
+    seq = studio.session.latest.seq
+    drawn = views.map._seq
+    studio.session.step(1)
+    qtbot.waitUntil(lambda: studio.session.latest.seq > seq, timeout=10000)
+    qtbot.wait(1200)  # more than the panel's interval
+    assert views.map._seq == drawn

@@ -3,7 +3,8 @@
 :func:`add_menu_entries` puts them in the File menu (one call from :mod:`app.menus`).
 New pose asks for the character's height and whether to start from a neutral standing
 pose (the pose model's average) or from the current frame of the loaded clip, and opens a
-:class:`app.pose_window.PoseWindow`. Export video renders the loaded clip with the
+:class:`app.pose_window.PoseWindow` on a new authoring model
+(:meth:`engine.authoring.session.AuthoringSession.new`, which loads the pose model). Export video renders the loaded clip with the
 current tracker preset drawn on it, with the options of ``render`` chosen in a small
 dialog (:mod:`app.export_video_dialog`).
 """
@@ -46,16 +47,11 @@ class NewPoseDialog(QDialog):
 def open_pose_window(window: Any, height: float, from_clip: bool):
     """Open a pose window over ``window`` (kept on ``window.pose_windows``) and return it."""
     from app.pose_window import PoseWindow
-    from engine.authoring.pose_mode import PoseMode
-    from engine.models import load_default_models
+    from engine.authoring.session import AuthoringSession
 
-    vae = load_default_models().vae
     session = window.session
-    if from_clip and session.motion is not None:
-        mode = PoseMode.from_clip_frame(vae, session.motion, session.frame, height)
-    else:
-        mode = PoseMode(vae, height)
-    pose = PoseWindow(vae, mode)
+    clip = session.motion if from_clip else None
+    pose = PoseWindow(AuthoringSession.new(height, clip, session.frame))
     window.pose_windows = [w for w in getattr(window, "pose_windows", []) if w.isVisible()] + [pose]
     pose.resize(1200, 800)
     pose.show()

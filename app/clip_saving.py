@@ -14,23 +14,24 @@ writes the scene and, when the clip was re-solved, the edited clip.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from collections.abc import Callable
 
+from PyQt6.QtGui import QAction
 from PyQt6.QtWidgets import QMenu, QMessageBox
 
 from app.motion_files import ask_motion_path
-
+from app.shell import StudioShell
 from engine.errors import UserError
 
 
-def clip_edited(window: Any) -> bool:
+def clip_edited(window: StudioShell) -> bool:
     """Whether the loaded clip differs from the one opened (a range re-solve not undone)."""
     session = window.session
     opened = window.opened_motion
     return session.motion is not None and opened is not None and session.motion is not opened
 
 
-def save_clip(window: Any, path: str | Path, on_source_rig: bool = False) -> None:
+def save_clip(window: StudioShell, path: str | Path, on_source_rig: bool = False) -> None:
     """Write the loaded clip as it is now to ``path`` (BVH or glTF by the extension, atomically): on the canonical
     skeleton, or with ``on_source_rig`` onto the hierarchy of the file it was opened from.
 
@@ -51,7 +52,7 @@ def save_clip(window: Any, path: str | Path, on_source_rig: bool = False) -> Non
     write_reconstruction(path, session.motion, on_rig)
 
 
-def save_clip_dialog(window: Any, on_source_rig: bool = False) -> bool:
+def save_clip_dialog(window: StudioShell, on_source_rig: bool = False) -> bool:
     """Ask for a file and save the clip there; False when cancelled or failed."""
     title = "Save edited clip" + (" onto the source rig" if on_source_rig else "")
     path = ask_motion_path(window, title, window.files.suggested_name("bvh", "edited"))
@@ -66,7 +67,7 @@ def save_clip_dialog(window: Any, on_source_rig: bool = False) -> bool:
     return True
 
 
-def save_edits(window: Any) -> bool:
+def save_edits(window: StudioShell) -> bool:
     """Save the edited clip (if re-solved) and the scene, each asking for a file; the
     edits then count as saved. False when a save was cancelled or failed."""
     if clip_edited(window) and not save_clip_dialog(window):
@@ -77,7 +78,7 @@ def save_edits(window: Any) -> bool:
     return True
 
 
-def confirm_discard(window: Any, doing: str) -> bool:
+def confirm_discard(window: StudioShell, doing: str) -> bool:
     """Before ``doing`` (``"quitting"``, ``"opening another clip"``...): True when there
     is nothing unsaved, or the user saved or discarded it; False to stay (Cancel)."""
     if window.undo.stack.isClean():
@@ -91,7 +92,7 @@ def confirm_discard(window: Any, doing: str) -> bool:
     return answer == buttons.Discard
 
 
-def add_menu_entries(window: Any, file_menu: QMenu, action) -> dict:
+def add_menu_entries(window: StudioShell, file_menu: QMenu, action: Callable[..., QAction]) -> dict[str, QAction]:
     """Add the edited clip's saves to ``file_menu`` with the menus' ``action`` helper."""
     return {"save_clip": action(window, file_menu, "Save edited &clip (BVH / glTF)...", lambda: save_clip_dialog(window)),
             "save_clip_rig": action(window, file_menu, "Save edited clip onto the source r&ig...",

@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from app.shell import StudioShell
 from engine.startup_trace import mark
 
 #: The display tick, ms: how soon a new snapshot is drawn (the tick itself costs ~0.1 ms).
@@ -49,7 +50,7 @@ class Panel:
 class DrawScheduler:
     """Drives the window's drawing; see the module doc. ``window`` is the main window."""
 
-    def __init__(self, window: Any) -> None:
+    def __init__(self, window: StudioShell) -> None:
         self.w = window
         self.interval_ms = TICK_MS
         self.view_costs: deque = deque(maxlen=2000)

@@ -56,7 +56,7 @@ class ReconstructionExport(QObject):
         return self.thread is not None
 
     def start(self, job: ExportJob) -> None:
-        """Run ``job`` (:meth:`engine.studio.session.Session.export_job`) off the GUI thread."""
+        """Run ``job`` (:meth:`engine.studio.export.ExportJob.of_session`) off the GUI thread."""
         if self.running:
             raise RuntimeError("an export is already running")
         self.done, self.total, self._result = 0, len(job.motion), None

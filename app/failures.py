@@ -10,14 +10,14 @@ the failure running its course, not an edit, so it makes no undo step.
 
 from __future__ import annotations
 
-from typing import Any
+from app.shell import StudioShell
 
 
 class FailureCountdown:
     """Ends the simulated failures of ``window.session`` and shows their countdown in
     ``window.sensor_panel``; call :meth:`on_frame` with every drawn frame."""
 
-    def __init__(self, window: Any) -> None:
+    def __init__(self, window: StudioShell) -> None:
         self.w = window
         self._started: set[tuple[str, int, int]] = set()  # failures seen covering a frame
         self._shown: dict[str, int | None] = {}
@@ -39,7 +39,7 @@ class FailureCountdown:
                     keep.append((a, b))  # still to come
             if len(keep) != len(cfg.failures):
                 with self.w.undo.unrecorded():
-                    s.update_sensor(joint, failures=tuple(keep))
+                    s.sensors.edit(joint, failures=tuple(keep))
             self._show(joint, left)
 
     def _show(self, joint: str, left: int | None) -> None:

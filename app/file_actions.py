@@ -162,6 +162,8 @@ class FileActions:
         """Reconstruct the whole clip off the GUI thread (progress, Cancel), then write it as
         BVH or glTF by the extension (canonical skeleton, or with ``on_source_rig`` the hierarchy of the file it was
         opened from)."""
+        from engine.studio.export import ExportJob
+
         s = self.session
         if s.source is not None:
             return self.show_error("Not for tracker input", "Saving re-solves a clip. For trackers use "
@@ -170,7 +172,7 @@ class FileActions:
         if self.export.running:
             return self.w.statusBar().showMessage("An export is already running", 3000)
         try:  # checked before a file is asked for
-            job = s.export_job(path or "", on_source_rig)
+            job = ExportJob.of_session(s, path or "", on_source_rig)
         except UserError as exc:
             text = str(exc)
             return self.show_error("Nothing to save", f"{text[:1].upper()}{text[1:]}.")

@@ -11,12 +11,13 @@ from __future__ import annotations
 
 from typing import Any
 
+from app.shell import StudioShell
 
 class GhostStatus:
     """Watches the drawn snapshots' problems for ghost failures (``window.session``'s
     ghosts, the checkboxes of ``window.optimizer_panel``)."""
 
-    def __init__(self, window: Any) -> None:
+    def __init__(self, window: StudioShell) -> None:
         self.w = window
         self.failed: dict[str, str] = {}  # ghost -> why it cannot run
         self._tips: dict[str, str] = {}

@@ -42,12 +42,12 @@ def open_initial(window: MainWindow, path: str | None, sensors: str | None, rig_
     # the starting sensors are where the history begins, not an edit to undo
     with window.undo.unrecorded():
         if sensors:
-            window.session.set_sensor_text(sensors)
+            window.session.sensors.set_text(sensors)
             return
         last = window.settings.value("last_preset")
         if last:
             try:
-                window.session.set_preset(str(last))
+                window.session.sensors.set_preset(str(last))
             except UserError as exc:  # a preset name from an older version
                 window.statusBar().showMessage(str(exc), 8000)
 
@@ -124,7 +124,7 @@ def _run(app: QApplication, path: str | None, method: str, sensors: str | None, 
         if scene:
             apply_scene_file(window, scene, clip_given=bool(path))
             if sensors:
-                window.session.set_sensor_text(sensors)
+                window.session.sensors.set_text(sensors)
             if explicit_method and method != window.session.method:
                 window.session.set_method(method)
         if ghosts:  # comparing methods: show their errors rather than the optimizer's losses

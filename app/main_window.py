@@ -14,6 +14,7 @@ import sys
 import time
 from typing import Any
 
+import numpy as np
 from PyQt6.QtCore import QSettings, Qt, QTimer, pyqtSignal
 from PyQt6.QtWidgets import QApplication, QDockWidget, QLabel, QMainWindow, QMessageBox, QTabWidget, QVBoxLayout, QWidget
 
@@ -34,6 +35,7 @@ from engine.errors import UserError
 from engine.motion.source_file import is_source_file
 from engine.studio import events as ev
 from engine.studio.session import Session
+from engine.studio.session_sensors import SensorSet
 from widgets.constraint_panel import ConstraintPanel
 from widgets.latent_inspector import LatentInspector
 from widgets.optimizer_panel import OptimizerPanel
@@ -126,7 +128,7 @@ class MainWindow(QMainWindow):
         col.addWidget(self.viewport, 1)
         col.addWidget(self.timeline)
         self.setCentralWidget(central)
-        self.sensor_panel = SensorPanel(Session.sensor_presets())
+        self.sensor_panel = SensorPanel(SensorSet.presets())
         self.constraint_panel = ConstraintPanel(constraint_schema())
         fields = optimizer_fields()
         self._optimizer_defaults = {f.name: f.default for f in fields}
@@ -179,20 +181,20 @@ class MainWindow(QMainWindow):
         t.paceChanged.connect(self._guard(lambda p: s.set_playback(pace=p)))
         sp = self.sensor_panel
         sp.presetChanged.connect(self._guard(self._set_preset))
-        sp.sensorChanged.connect(self._guard(lambda j, ch: s.update_sensor(j, **ch)))
+        sp.sensorChanged.connect(self._guard(lambda j, ch: s.sensors.edit(j, **ch)))
         sp.failureRequested.connect(self._guard(s.simulate_failure))
-        sp.resetRequested.connect(lambda j: s.reset_offsets(j or None))
+        sp.resetRequested.connect(lambda j: s.sensors.reset_offsets(j or None))
         cp = self.constraint_panel
         cp.addRequested.connect(self._guard(self._add_constraint))
-        cp.removeRequested.connect(self._guard(s.remove_constraint))
-        cp.changed.connect(self._guard(lambda n, ch: s.update_constraint(n, **ch)))
+        cp.removeRequested.connect(self._guard(s.constraints.remove))
+        cp.changed.connect(self._guard(lambda n, ch: s.constraints.edit(n, **ch)))
         op = self.optimizer_panel
         op.settingChanged.connect(self._guard(s.set_setting))
         op.methodChanged.connect(lambda m: s.set_method(m))
         op.ghostsChanged.connect(s.set_ghosts)
         self.viewport.targetDragged.connect(self._guard(s.drag_target))
         self.viewport.jointDragged.connect(self._guard(self._drag_joint))
-        self.viewport.gizmoEdited.connect(self._guard(lambda n, ch: s.update_constraint(n, **ch)))
+        self.viewport.gizmoEdited.connect(self._guard(lambda n, ch: s.constraints.edit(n, **ch)))
         self.latent.decodeRequested.connect(s.decode_latent)
         self.latent.debugToggled.connect(self._latent_debug)
         self.viewport.filesDropped.connect(self._open_dropped)
@@ -261,9 +263,7 @@ class MainWindow(QMainWindow):
         self.sensor_panel.set_sensors(s.preset, s.sensors)
 
     def _show_constraints(self, event: ev.ConstraintsChanged | None) -> None:
-        cs = self.session.constraints
-        slow = {c.name: c.no_fast_term for c in cs if c.no_fast_term}
-        self.constraint_panel.set_constraints([c.to_dict() for c in cs], slow)
+        self.constraint_panel.set_constraints([c.to_dict() for c in self.session.constraints])
 
     def _show_optimizer(self, event: Any = None) -> None:
         s = self.session
@@ -286,22 +286,22 @@ class MainWindow(QMainWindow):
         QMessageBox.critical(self, title, message)
 
     def _set_preset(self, name: str) -> None:
-        self.session.set_preset(name)
+        self.session.sensors.set_preset(name)
         self.settings.setValue("last_preset", name)
 
     def _add_constraint(self, kind: str) -> None:
         """Add ``kind`` placed next to the character as it stands now (not at the origin)."""
-        spec = self.session.constraint_catalog().get(kind)
+        spec = self.session.constraints.catalog().get(kind)
         snap = self.session.latest
         defaults = {} if spec is None else {f.name: f.default for f in spec.fields}
-        self.session.add_constraint(kind, **placed_params(kind, defaults, None if snap is None else snap.positions))
+        self.session.constraints.add(kind, **placed_params(kind, defaults, None if snap is None else snap.positions))
 
     def _drag_joint(self, joint: str, position: Any) -> None:
         """Ctrl-drag on a joint: move its sensor target, else pin the joint there."""
         if joint in self.session.sensors:
             self.session.drag_target(joint, position)
         else:
-            self.session.pin(joint, position)
+            self.session.constraints.pin(joint, position)
 
     def _latent_debug(self, on: bool) -> None:
         """Debug on pauses playback; off solves the frame again, which drops the decoded pose."""
@@ -313,7 +313,7 @@ class MainWindow(QMainWindow):
     def toggle_play(self) -> None:
         self.session.set_playing(not self.session.playing)
 
-    def hips(self) -> Any:
+    def hips(self) -> np.ndarray | None:
         """The hips of the newest snapshot (3,) metres, or None before the first one."""
         snap = self.session.latest
         return None if snap is None else snap.positions[0]

@@ -23,6 +23,7 @@ import json
 import os
 import platform
 import time
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -30,6 +31,7 @@ from PyQt6.QtCore import Qt, QTimer
 from PyQt6.QtGui import QGuiApplication
 
 from app.drawing import cost_summary
+from app.shell import StudioShell
 from engine.atomic import write_text
 
 PROBE_MS = 10  # the lateness probe's period
@@ -39,7 +41,7 @@ START_TIMEOUT_S = 120.0  # the first solve of a clip (model load, offline frame)
 class Measurement:
     """Plays ``window``'s clip and measures for ``seconds``; ``done(code)`` is called at the end."""
 
-    def __init__(self, window: Any, seconds: float, out: str, done: Any) -> None:
+    def __init__(self, window: StudioShell, seconds: float, out: str, done: Callable[[int, str], None]) -> None:
         self.w, self.seconds, self.out, self.done = window, float(seconds), out, done
         self.lateness: list[float] = []
         self._probe = QTimer(window, interval=PROBE_MS)

@@ -8,10 +8,11 @@ from collections.abc import Callable
 from typing import Any
 
 from PyQt6 import sip
-from PyQt6.QtCore import Qt
+from PyQt6.QtCore import QObject, Qt
 from PyQt6.QtGui import QAction, QActionGroup, QKeySequence
 from PyQt6.QtWidgets import QMenu
 
+from app.shell import ViewWindow
 from widgets.help_dialog import HelpDialog
 
 
@@ -20,7 +21,7 @@ CAMERAS = (("home", "&Home (front-left)", "Home"), ("front", "&Front", "1"),
            ("side", "&Side (character's left)", "3"), ("top", "&Top", "7"))  # fmt: skip
 
 
-def action(window: Any, menu: QMenu, text: str, slot: Callable[[], Any], shortcut: Any = None) -> QAction:
+def action(window: QObject, menu: QMenu, text: str, slot: Callable[[], Any], shortcut: Any = None) -> QAction:
     act = QAction(text, window)
     if shortcut is not None:
         act.setShortcut(QKeySequence(shortcut))
@@ -30,7 +31,7 @@ def action(window: Any, menu: QMenu, text: str, slot: Callable[[], Any], shortcu
     return act
 
 
-def toggle(window: Any, menu: QMenu, text: str, on: bool, slot: Callable[[bool], Any],
+def toggle(window: QObject, menu: QMenu, text: str, on: bool, slot: Callable[[bool], Any],
            shortcut: str | None = None) -> QAction:  # fmt: skip
     act = QAction(text, window, checkable=True, checked=on)
     if shortcut:
@@ -41,7 +42,7 @@ def toggle(window: Any, menu: QMenu, text: str, on: bool, slot: Callable[[bool],
     return act
 
 
-def add_view_entries(w: Any, view: QMenu, noun: str, set_display: Callable[[str], Any]) -> tuple[dict, QMenu]:
+def add_view_entries(w: ViewWindow, view: QMenu, noun: str, set_display: Callable[[str], Any]) -> tuple[dict, QMenu]:
     """View ▸ Draw ``noun`` as (stick figure S, shaded body B) and View ▸ Camera (the
     :data:`CAMERAS` presets about ``w.hips()``) on ``view``; the actions by name and the
     camera menu, for the window's own camera entries."""
@@ -59,7 +60,7 @@ def add_view_entries(w: Any, view: QMenu, noun: str, set_display: Callable[[str]
     return named, camera
 
 
-def shortcut_rows(w: Any) -> list[tuple[str, str]]:
+def shortcut_rows(w: ViewWindow) -> list[tuple[str, str]]:
     """``(shortcut, menu path)`` of every window action that has a shortcut."""
     rows = []
 
@@ -77,7 +78,7 @@ def shortcut_rows(w: Any) -> list[tuple[str, str]]:
     return rows
 
 
-def show_help(w: Any) -> HelpDialog:
+def show_help(w: ViewWindow) -> HelpDialog:
     """Show the window's shortcut list, raising the one already open (a second F1 made a
     second window, and every one stayed, hidden behind, until the window closed)."""
     dialog = getattr(w, "help_dialog", None)

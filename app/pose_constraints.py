@@ -1,37 +1,24 @@
-"""Constraints in the pose window: the studio's constraint panel acting on the pose mode.
+"""Constraints in the pose window: the studio's constraint panel acting on the authoring model.
 
 The panel (:class:`widgets.constraint_panel.ConstraintPanel`, the same schema as the
 studio's) adds, edits and removes any user-facing kind (floor, look-at, pin, distance,
-bounds...) on :attr:`engine.authoring.pose_mode.PoseMode.constraints`, which every solve
-of the pose takes; a new constraint is placed on the pose as it stands
-(:func:`app.constraint_placement.placed_params`). The list is also the scene's, so it is
-saved with it and the bake's keys and in-betweens honour it. Each edit is one step of the
-window's undo stack and solves the pose again.
+bounds...) through the model
+(:meth:`engine.authoring.session.AuthoringSession.add_constraint` and its siblings), whose
+list every solve of the pose takes and the scene saves, so the bake's keys and
+in-betweens honour it. A new constraint is placed on the pose as it stands
+(:func:`app.constraint_placement.placed_params`). Each edit is one undo step of the
+model and solves the pose again; the panel redraws on the model's ``constraints`` event.
 """
 
 from __future__ import annotations
 
-from types import SimpleNamespace
 from typing import Any
 
 from PyQt6.QtCore import Qt
 
 from app.constraint_placement import placed_params
 from app.schema import constraint_schema
-from engine.studio.session_constraints import ConstraintEditing
 from widgets.constraint_panel import ConstraintPanel
-
-
-class _ConstraintList(ConstraintEditing):
-    """The session's constraint editing (unique names, checked copies) on a plain list:
-    nothing to send to an engine and nobody listening."""
-
-    def __init__(self) -> None:
-        self.constraints = []
-        self.events = SimpleNamespace(constraints=SimpleNamespace(emit=lambda event: None))
-
-    def _send(self, command: Any) -> None:
-        return None
 
 
 class PoseConstraints:
@@ -39,9 +26,6 @@ class PoseConstraints:
 
     def __init__(self, window: Any) -> None:
         self.w = window
-        self.list = _ConstraintList()
-        self.list.constraints = window.mode.constraints
-        window.scene.constraints = window.mode.constraints
         self.panel = ConstraintPanel(constraint_schema())
         self.panel.addRequested.connect(self.add)
         self.panel.removeRequested.connect(self.remove)
@@ -50,25 +34,17 @@ class PoseConstraints:
 
     def add(self, kind: str, **params: Any) -> None:
         """Add a ``kind`` constraint placed on the current pose (``params`` override)."""
-        spec = self.list.constraint_catalog().get(kind)
+        session = self.w.session
+        spec = session.constraint_catalog().get(kind)
         defaults = {} if spec is None else {f.name: f.default for f in spec.fields}
-        placed = placed_params(kind, defaults, self.w.mode.pose.positions) | params
-        self.w.edit(f"add {kind}", lambda: self.list.add_constraint(kind, **placed), solve=True)
+        placed = placed_params(kind, defaults, session.pose.positions) | params
+        self.w._edit(lambda: session.add_constraint(kind, **placed))
 
     def remove(self, name: str) -> None:
-        self.w.edit(f"remove {name}", lambda: self.list.remove_constraint(name), solve=True)
+        self.w._edit(lambda: self.w.session.remove_constraint(name))
 
     def update(self, name: str, changes: dict) -> None:
-        self.w.edit(f"edit {name}", lambda: self.list.update_constraint(name, **changes),
-                    ("constraint", name, tuple(changes)), solve=True)  # fmt: skip
-
-    # -- undo and display ----------------------------------------------------------
-    def state(self) -> tuple:
-        return tuple(self.list.constraints)
-
-    def restore(self, state: tuple) -> None:
-        """Put the list back (undo); the mode and the scene keep sharing it."""
-        self.list.constraints[:] = list(state)
+        self.w._edit(lambda: self.w.session.update_constraint(name, changes))
 
     def refresh(self) -> None:
-        self.panel.set_constraints([c.to_dict() for c in self.list.constraints])
+        self.panel.set_constraints([c.to_dict() for c in self.w.session.mode.constraints])

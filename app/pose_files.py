@@ -2,11 +2,13 @@
 screenshots.
 
 Opening a scene (File ▸ Open scene) is a new document: it is read and checked as
-``bake`` reads it, the window takes its keys, animation, constraints and settings (and
-its character's height), goes to its first key and starts a new undo history; what
+``bake`` reads it, the model takes its keys, animation, constraints and settings (and
+its character's height), goes to its first key and starts a new undo history
+(:meth:`engine.authoring.session.AuthoringSession.open_scene`); what
 only the studio uses (sensors, clip) is left and the status bar says so. Unsaved edits
-are offered for saving first, as on closing. Every dialog starts in the folder of the last file the window wrote (else the user's
-home) with a name (``pose.json``, ``pose.bvh``, ``pose.mp4``, or the saved scene's name
+are offered for saving first, as on closing. Exports bake the keys first, off the GUI
+thread with a Cancel (:mod:`app.pose_timeline`). Every dialog starts in the folder of
+the last file the window wrote (else the user's home) with a name (``pose.json``, ``pose.bvh``, ``pose.mp4``, or the saved scene's name
 with the export's suffix); a finished export says so in the status bar with its path.
 """
 
@@ -28,7 +30,7 @@ DONE_MS = 10000
 
 
 class PoseFiles:
-    """Files of the pose window ``w`` (its ``scene``, ``undo``, ``playback``)."""
+    """Files of the pose window ``w`` (its ``session``, ``scene``, ``playback``)."""
 
     def __init__(self, w: Any) -> None:
         self.w = w
@@ -63,29 +65,13 @@ class PoseFiles:
 
     def open(self, path: str | Path) -> None:
         """Make the scene at ``path`` the window's (see the module doc)."""
-        from engine.authoring.pose_mode import PoseMode
         from engine.input_files import read_json
-        from engine.skeleton import Skeleton
 
         doc = read_json(path, "scene")
         loaded = authoring_from_dict(doc, str(path))
         w = self.w
-        height = loaded.height if loaded.height is not None else Skeleton.canonical().height()
-        if abs(height - w.mode.character.height) > 1e-6:
-            shared = w.mode.constraints  # the list the Constraints dock and the scene edit
-            w.mode = PoseMode(w.vae, height)
-            w.mode.constraints = shared
-        w.constraints.restore(tuple(loaded.constraints))
-        w.scene.keys, w.scene.animation, w.scene.settings = loaded.keys, loaded.animation, loaded.settings
-        w.scene.height = w.mode.character.height
-        m = w.mode
-        m.targets, m.heading = {}, 0.0
-        m.pose = m.character.decode(m.base_latent, m.character.grounded())  # where a scene without keys starts
-        w.playback.invalidate()
-        w.go_to(loaded.keys[0].frame if loaded.keys else 0)
-        w.undo.clear()
+        w.session.open_scene(loaded)
         self.path = Path(path)
-        w.undo.setClean()
         left = [k for k in ("sensors", "clip", "preset", "method") if isinstance(doc, dict) and doc.get(k)]
         note = f"; left to the studio: {', '.join(left)}" if left else ""
         n = len(loaded.keys)
@@ -107,7 +93,7 @@ class PoseFiles:
     def save(self, path: str | Path) -> None:
         save_authoring(path, self.w.scene)
         self.path = Path(path)
-        self.w.undo.setClean()
+        self.w.session.history.set_clean()
         self._wrote(path, "Scene")
 
     def export_bvh(self, path: str | Path) -> None:

@@ -1,16 +1,16 @@
 """The pose window's menus: File, Edit (undo, redo, settle, clear), Keys (play, step,
 add and delete keys), View (display, camera) and Help, built with the studio's helpers so the same keys do the same things in both.
 
-Every entry is a QAction owned by the window (the undo stack's actions too: a QAction
-that only a local variable holds is deleted by PyQt and drops out of its menu), kept on
-``w.actions_by_name`` for the tests and the help.
+Every entry is a QAction owned by the window (a QAction that only a local variable
+holds is deleted by PyQt and drops out of its menu), kept on ``w.actions_by_name`` for
+the tests and the help. Undo and Redo call the authoring model; the window keeps their
+text and enabled state in step with the model's history.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-from PyQt6.QtCore import Qt
 from PyQt6.QtGui import QKeySequence
 from PyQt6.QtWidgets import QMainWindow
 
@@ -29,13 +29,10 @@ def build_pose_menus(w: QMainWindow) -> None:
     file_menu.addSeparator()
     named["close"] = action(w, file_menu, "&Close", w.close, QKeySequence.StandardKey.Close)
     edit = w.menuBar().addMenu("&Edit")
-    undo = w.undo.createUndoAction(w, "&Undo")
-    undo.setShortcut(QKeySequence.StandardKey.Undo)
-    redo = w.undo.createRedoAction(w, "&Redo")
+    # undo and redo go through the model; the window names the step on its history event
+    undo = action(w, edit, "&Undo", lambda: w._edit(w.session.undo), QKeySequence.StandardKey.Undo)
+    redo = action(w, edit, "&Redo", lambda: w._edit(w.session.redo))
     redo.setShortcuts([QKeySequence("Ctrl+Shift+Z"), QKeySequence("Ctrl+Y")])
-    for act in (undo, redo):
-        act.setShortcutContext(Qt.ShortcutContext.WindowShortcut)
-        edit.addAction(act)
     named["undo"], named["redo"] = undo, redo
     edit.addSeparator()
     named["settle"] = action(w, edit, "S&ettle pose", w.settle, "Ctrl+Return")

@@ -1,34 +1,32 @@
-"""The pose window's timeline: the bake (cached until the next edit), playing it (once or
-looped, from the current frame) and scrubbing to an in-between.
+"""The pose window's timeline: the bake of the keys (on a worker, with progress and
+Cancel), playing it (once or looped, from the current frame) and seeking while it plays.
 
-Going to a frame between keys makes the baked in-between the current pose (its latent,
-where it stands, its facing and the targets interpolated there), so a key added on it
-keeps the motion as it was; on a key the character takes the key's pose (the window).
+The model (:class:`engine.authoring.session.AuthoringSession`) keeps the bake until an
+edit makes it stale; :meth:`KeyPlayback.baked_scene` bakes again off the GUI thread
+(:class:`app.job_runner.JobRunner`: the window keeps drawing, a window-modal progress
+dialog offers Cancel) and hands the result to the model on the GUI thread. Scrubbing to
+an in-between is the model's :meth:`~engine.authoring.session.AuthoringSession.go_to`.
 While the bake plays, a scrub moves the playhead and playing goes on from there.
 """
 
 from __future__ import annotations
 
-import copy
 from typing import Any
 
-from PyQt6.QtCore import QObject, Qt, QTimer
-from PyQt6.QtWidgets import QApplication
+from PyQt6.QtCore import QObject, QTimer
 
-from engine.authoring.bake import Baked, bake, interpolated_heading, interpolated_targets
-from engine.authoring.character import Pose
+from engine.authoring.bake import Baked
 from engine.errors import UserError
 from engine.kinematics.fk import fk_positions
 
 
 class KeyPlayback(QObject):
-    """Bake, play and scrub the keys of the pose window ``w`` (its ``scene``, ``vae``,
-    ``mode``, ``keys`` strip)."""
+    """Bake, play and seek the keys of the pose window ``w`` (its ``session``, ``jobs``,
+    ``keys`` strip)."""
 
     def __init__(self, w: Any) -> None:
         super().__init__(w)
         self.w = w
-        self.baked: Baked | None = None
         self.frame = 0  # the frame playing
         self.timer = QTimer(self)
         self.timer.timeout.connect(self._tick)
@@ -37,21 +35,23 @@ class KeyPlayback(QObject):
     def playing(self) -> bool:
         return self.timer.isActive()
 
-    def invalidate(self) -> None:
-        """An edit: the next use bakes again."""
-        self.baked = None
+    @property
+    def baked(self) -> Baked | None:
+        """The model's bake (None while it is stale)."""
+        return self.w.session.baked
 
     def baked_scene(self) -> Baked:
-        """The keys baked (cached until the next edit); a wait cursor while it bakes."""
-        if self.baked is None:
-            if not self.w.scene.keys:
-                raise UserError("add at least one key first")
-            QApplication.setOverrideCursor(Qt.CursorShape.WaitCursor)
-            try:
-                self.baked = bake(self.w.scene, self.w.vae)
-            finally:
-                QApplication.restoreOverrideCursor()
-        return self.baked
+        """The keys baked: the model's bake, or a new one from the worker (the event loop
+        runs meanwhile); a UserError when there are no keys or the bake was cancelled."""
+        session = self.w.session
+        if session.baked is None:
+            job = session.bake_job()
+            runner = self.w.jobs
+            runner.start(job, lambda baked: session.take_bake(job, baked), modal=True)
+            runner.wait()
+            if session.baked is None:
+                raise UserError(f"the bake did not finish: {runner.message}")
+        return session.baked
 
     # -- playing -------------------------------------------------------------------
     def toggle(self) -> None:
@@ -59,8 +59,8 @@ class KeyPlayback(QObject):
         if self.playing:
             self.stop()
             return
-        self.baked_scene()
-        last = len(self.baked.motion) - 1
+        baked = self.baked_scene()
+        last = len(baked.motion) - 1
         self.frame = 0 if self.w.frame >= last else self.w.frame
         self.timer.start(int(1000 / self.w.scene.animation.fps))
         self.w.keys.set_playing(True)
@@ -79,7 +79,8 @@ class KeyPlayback(QObject):
         self._show(self.frame)
 
     def _tick(self) -> None:
-        n = len(self.baked.motion) if self.baked is not None else 0
+        baked = self.baked
+        n = len(baked.motion) if baked is not None else 0
         if n == 0:
             self.stop()
             return
@@ -93,22 +94,11 @@ class KeyPlayback(QObject):
         self._show(nxt)
 
     def _show(self, frame: int) -> None:
-        motion = self.baked.motion
+        baked = self.baked
+        if baked is None:
+            return
+        motion = baked.motion
         f = min(frame, len(motion) - 1)
         self.w.show_positions(fk_positions(motion.local_rot[f], motion.root_pos[f], motion.skeleton.offsets))
         a = self.w.scene.animation
         self.w.keys.set_state(a.frames, a.fps, tuple(k.frame for k in self.w.scene.keys), f)
-
-    # -- scrubbing -----------------------------------------------------------------
-    def pose_between(self, frame: int) -> None:
-        """Make the baked in-between at ``frame`` the window's current pose (see the module doc)."""
-        baked = self.baked_scene()
-        motion, m = baked.motion, self.w.mode
-        f = min(int(frame), len(motion) - 1)
-        local, root = motion.local_rot[f].copy(), motion.root_pos[f].copy()
-        m.pose = Pose(baked.latents[f].copy(), local, root, fk_positions(local, root, motion.skeleton.offsets))
-        keys = self.w.scene.keys
-        times = [float(k.frame) for k in keys]
-        scheme = self.w.scene.animation.interpolation
-        m.heading = interpolated_heading(keys, times, f, scheme)
-        m.targets = {t.joint: copy.deepcopy(t) for t in interpolated_targets(keys, times, f, scheme)}

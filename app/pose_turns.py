@@ -1,10 +1,11 @@
-"""Turning joints in the pose window: the rotation rings of the selected joint, Alt-drag
-(a turn by the angle the mouse sweeps about the joint), *hold turn*, and the handles
-drawn (rings, the facing arrow in front of the head).
+"""Turning joints in the pose window: the rotation rings of the selected joint, Alt-drag,
+*hold turn*, and the handles drawn (rings, the facing arrow in front of the head).
 
-Every turn is a rotation target on the joint (its world rotation), one undo step of the
-window (:meth:`app.pose_window.PoseWindow.edit`); on the hips, the ring about the
-vertical turns the whole body (:meth:`app.pose_window.PoseWindow.turn_body`).
+The mouse gestures are read here and the turn they ask for is computed by
+:mod:`engine.authoring.turns`; each becomes one model edit
+(:meth:`engine.authoring.session.AuthoringSession.turn_joint`, a rotation target on the
+joint, or :meth:`~engine.authoring.session.AuthoringSession.turn_body` for the hips'
+ring about the vertical).
 """
 
 from __future__ import annotations
@@ -15,15 +16,8 @@ from typing import Any
 import numpy as np
 
 from engine import skeleton as sk
+from engine.authoring.turns import SweptTurn, ring_turn
 from engine.kinematics import quat_np as QN
-from engine.kinematics import quaternion as Q
-from engine.kinematics.fk import fk
-
-#: Alt + drag: the mouse must be this far from the joint (metres, on the drag plane)
-#: before its direction starts turning the joint (closer, the direction is noise).
-TURN_START_M = 0.02
-#: A pause longer than this (seconds) between Alt-drag moves starts a new turn.
-TURN_GESTURE_S = 0.5
 
 
 class JointTurns:
@@ -31,18 +25,16 @@ class JointTurns:
 
     def __init__(self, w: Any) -> None:
         self.w = w
-        self.gesture: list | None = None  # Alt-drag: joint, start direction, start rotation, last time
+        self.gesture: SweptTurn | None = None  # the Alt-drag going on
         self._ring_start: tuple | None = None  # the turned joint's world rotation (or facing) at the press
 
     def world_rotation(self, joint: str) -> np.ndarray:
         """The current pose's world rotation ``(4,)`` of ``joint``."""
-        p = self.w.mode.pose
-        return fk(p.local_rot, p.root_pos, self.w.mode.character.skeleton.offsets)[1][sk.JOINT_INDEX[joint]]
+        return self.w.session.world_rotation(joint)
 
     def by_ring(self, axis: int, angle: float, first: bool) -> None:
-        """A rotation ring of the selected joint dragged: turn the joint (a rotation
-        target: its rotation at the press turned by ``angle`` radians about world axis
-        ``axis``); the hips' ring about Z turns the whole body (its facing)."""
+        """A rotation ring of the selected joint dragged by ``angle`` radians about world
+        axis ``axis`` since the press (``first``: the press itself)."""
         joint = self.w.selected
         if joint is None:
             return
@@ -55,43 +47,23 @@ class JointTurns:
             if axis == 2:
                 self.w.turn_body(self._ring_start[0] + np.degrees(angle))
             return
-        q = QN.mul(QN.from_axis_angle(np.eye(3)[axis], np.array(angle)), self._ring_start[0])
-        self.w.edit(f"turn {joint}", lambda: self.w.mode.set_target(joint, rotation=q / np.linalg.norm(q)),
-                    ("target", joint, "rotation"), solve=True)  # fmt: skip
+        q = ring_turn(self._ring_start[0], axis, angle)
+        self.w._edit(lambda: self.w.session.turn_joint(joint, q))
 
     def alt_drag(self, joint: str, position: np.ndarray) -> None:
-        """Alt + drag: give ``joint`` a rotation target, its rotation at the start of the
-        drag turned by the rotation carrying the first mouse direction from the joint
-        onto the current one (both on the drag plane, ``position (3,)`` metres)."""
-        j = sk.JOINT_INDEX[joint]
+        """Alt + drag to ``position (3,)`` metres on the drag plane: turn ``joint``
+        (:class:`engine.authoring.turns.SweptTurn`) about its target, or itself."""
         t = self.w.mode.targets.get(joint)
-        pivot = t.position if t is not None else self.w.mode.pose.positions[j]
-        v = np.asarray(position, float) - pivot
-        now = time.monotonic()
-        g = self.gesture
-        if g is None or g[0] != joint or now - g[3] > TURN_GESTURE_S:
-            g = self.gesture = [joint, None, self.world_rotation(joint), now]
-        g[3] = now
-        if g[1] is None:
-            if np.linalg.norm(v) >= TURN_START_M:
-                g[1] = v
-            return
-        q = QN.mul(Q.from_to(g[1], v), g[2])
-        self.w.edit(f"turn {joint}", lambda: self.w.mode.set_target(joint, rotation=q / np.linalg.norm(q)),
-                    ("target", joint, "rotation"), solve=True)  # fmt: skip
-        self.gesture = g  # the edit's refresh does not end the gesture
+        pivot = t.position if t is not None else self.w.mode.pose.positions[sk.JOINT_INDEX[joint]]
+        g = self.gesture = SweptTurn.follow(self.gesture, joint, self.world_rotation(joint), time.monotonic())
+        q = g.rotation(np.asarray(position, float) - pivot)
+        if q is not None:
+            self.w._edit(lambda: self.w.session.turn_joint(joint, q))
 
     def hold(self, joint: str, on: bool) -> None:
         """Give the target on ``joint`` the joint's current world rotation (``on``) or
         make it a position target again."""
-
-        def change() -> None:
-            if on:
-                self.w.mode.set_target(joint, rotation=self.world_rotation(joint))
-            else:
-                self.w.mode.clear_rotation(joint)
-
-        self.w.edit(f"{'hold' if on else 'free'} turn {joint}", change, solve=True)
+        self.w._edit(lambda: self.w.session.hold_turn(joint, on))
 
     def show_handles(self) -> None:
         """The selected joint's rotation rings (only the turn about Z on the hips: the

@@ -3,19 +3,28 @@
 A dialog takes the range (start, end; the range selected on the timeline, when there is
 one), the blend frames at each end and what to add:
 feet held in floor contact (a ``floor`` constraint) and the scene's own constraints
-(each with its own frame range). :func:`engine.authoring.range_edit.edit_range` solves
-it; the clip is replaced by the result (same path, same frame) and the replacement is
-one step on the window's undo stack, so Ctrl+Z restores the original clip.
+(each with its own frame range). The solve (:func:`engine.authoring.range_edit.edit_range`,
+as an :class:`engine.authoring.jobs.RangeJob` on a copy of the clip) runs on a worker
+thread behind a progress dialog with Cancel (:class:`app.job_runner.JobRunner`): the
+studio keeps playing and drawing meanwhile. When it ends, the GUI thread replaces the
+clip by the result (same path, the frame shown then) as one step on the window's undo
+stack, so Ctrl+Z restores the original clip; a cancelled re-solve changes nothing, and
+one whose clip was replaced meanwhile is dropped with a message.
 """
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from PyQt6.QtWidgets import QCheckBox, QDialog, QDialogButtonBox, QFormLayout, QMenu, QMessageBox, QSpinBox
 
+from app.job_runner import JobRunner
 from app.undo import StateCommand
 from engine.errors import UserError
+
+if TYPE_CHECKING:
+    from engine.authoring.range_edit import RangeEdit
+    from engine.motion.clip import Motion
 
 
 class RangeDialog(QDialog):
@@ -42,30 +51,54 @@ class RangeDialog(QDialog):
         form.addRow(box)
 
 
-def resolve_range(window: Any, start: int, end: int, blend: int = 8, floor: bool = True, scene: bool = True):
-    """Re-solve ``start..end`` of the window's clip and replace it (one undo step);
-    returns the :class:`engine.authoring.range_edit.RangeEdit`."""
-    from engine.authoring.range_edit import edit_range
-    from engine.constraints import FloorConstraint
-    from engine.models import load_default_models
+def range_runner(window: Any) -> JobRunner:
+    """The window's runner of range re-solves (made on first use; it cancels its job
+    when the window closes)."""
+    runner = getattr(window, "range_jobs", None)
+    if runner is None:
+        runner = window.range_jobs = JobRunner(window)
+        runner.finished.connect(lambda ok, message: _finished(window, ok, message))
+        runner.cancel_on_close(window)
+    return runner
+
+
+def resolve_range(window: Any, start: int, end: int, blend: int = 8, floor: bool = True,
+                  scene: bool = True) -> JobRunner:  # fmt: skip
+    """Start re-solving ``start..end`` of the window's clip on a worker thread; when it
+    ends the result replaces the clip (one undo step). Returns the runner: its
+    ``result`` is then the :class:`engine.authoring.range_edit.RangeEdit`, and
+    ``wait()`` waits for it with the event loop running."""
+    from engine.authoring.jobs import range_job
 
     session = window.session
-    original, path, frame = session.motion, session.path, session.frame
-    if original is None:
-        raise UserError("open a clip first")
-    constraints = list(session.constraints) if scene else []
-    if floor:
-        constraints.append(FloorConstraint(name="range floor"))
-    edit = edit_range(load_default_models().vae, original, int(start), int(end), constraints, int(blend))
+    original, path = session.motion, session.path
+    job = range_job(original, list(session.constraints) if scene else [], start, end, blend, floor)
 
-    def show(motion) -> None:
-        with window.undo.same_clip():
-            session.set_motion(motion, path)
-        session.seek(min(frame, len(motion) - 1))
+    def apply(edit: RangeEdit) -> None:
+        if session.motion is not original:
+            raise UserError("another clip was opened while the range was re-solved: nothing was replaced")
+        frame = session.frame
 
-    show(edit.motion)
-    window.undo.stack.push(StateCommand(f"re-solve frames {start}-{end}", show, original, edit.motion))
-    return edit
+        def show(motion: Motion) -> None:
+            with window.undo.same_clip():
+                session.set_motion(motion, path)
+            session.seek(min(frame, len(motion) - 1))
+
+        show(edit.motion)
+        window.undo.stack.push(StateCommand(f"re-solve frames {job.start}-{job.end}", show, original, edit.motion))
+
+    runner = range_runner(window)
+    runner.start(job, apply)
+    return runner
+
+
+def _finished(window: Any, ok: bool, message: str) -> None:
+    if ok:
+        window.statusBar().showMessage("Range re-solved (Ctrl+Z puts the clip back)", 5000)
+    elif message == "cancelled":
+        window.statusBar().showMessage("Range re-solve cancelled: the clip is unchanged", 5000)
+    else:
+        QMessageBox.warning(window, "Re-solve range", message)
 
 
 def resolve_range_dialog(window: Any) -> None:

@@ -125,7 +125,7 @@ def render_video(motion, out: Path, options: RenderOptions = RenderOptions(),
     The ghosts' solve (a process), the drawing (this thread and Mesa's) and the
     encoding (ffmpeg, fed by a thread) run at once; ``progress(f)`` is called as frame
     ``f`` is handed to the encoder. ``timings``, when given, sums the seconds spent in
-    each step of the loop (``scripts/bench_render.py`` prints them per frame)."""
+    each step of the loop (``research/bench_render.py`` prints them per frame)."""
     from app.render_scene import FrameRenderer
     from app.video_encoder import VideoEncoder
     from engine.atomic import atomic_path

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from engine.studio.session import Session
+from engine.studio.catalog import constraint_catalog
 from widgets.optimizer_panel import SettingField
 
 
@@ -21,7 +21,7 @@ def constraint_schema() -> dict[str, list[tuple[Any, ...]]]:
     """kind -> [(field, tag, default[, choices])] for :class:`widgets.constraint_panel.ConstraintPanel`,
     from the session's catalog of user-facing kinds (so ``sensor`` and ``temporal_prior``,
     which methods build themselves, are not offered)."""
-    return {kind: [_editor_field(f) for f in spec.fields] for kind, spec in Session.constraint_catalog().items()}
+    return {kind: [_editor_field(f) for f in spec.fields] for kind, spec in constraint_catalog().items()}
 
 
 def optimizer_fields() -> tuple[SettingField, ...]:

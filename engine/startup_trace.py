@@ -4,7 +4,7 @@ With the environment variable :data:`ENV` set to a file path, :func:`mark` appen
 line ``<unix time, s> <pid> <process CPU time, s> <label>`` to that file (every process of the studio, the
 window's and the engine's, writes to the same file: a spawned child inherits the
 environment). Without it :func:`mark` does nothing, so the marks stay in the start-up
-path at no cost. ``scripts/startup_breakdown.py`` launches the studio with it and prints
+path at no cost. ``research/startup_breakdown.py`` launches the studio with it and prints
 the breakdown (docs/performance.md).
 """
 

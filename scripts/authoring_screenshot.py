@@ -18,6 +18,7 @@ from PyQt6.QtWidgets import QApplication
 from app.pose_window import PoseWindow
 from engine import skeleton as sk
 from engine.authoring.pose_mode import PoseMode
+from engine.authoring.session import AuthoringSession
 from engine.models import load_default_models
 
 app = QApplication(sys.argv)
@@ -25,7 +26,7 @@ vae = load_default_models().vae
 
 
 def window() -> PoseWindow:
-    w = PoseWindow(vae, PoseMode(vae, 1.75))
+    w = PoseWindow(AuthoringSession(PoseMode(vae, 1.75)))
     w.resize(1400, 860)
     w.show()
     return w
@@ -35,7 +36,7 @@ def save(w: PoseWindow, path: str) -> bool:
     for _ in range(5):
         app.processEvents()
     ok = w.files.screenshot(path)
-    w.undo.setClean()
+    w.session.history.set_clean()
     w.close()
     return ok
 

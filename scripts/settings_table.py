@@ -1,9 +1,12 @@
-"""Rewrite the settings table of docs/optimizer.md from the settings' own metadata.
+"""Rewrite the generated tables of docs/optimizer.md: the settings (from the settings'
+own metadata) and the constraint kinds (from the registry).
 
     PYTHONPATH=. python scripts/settings_table.py
 
-The table sits between two HTML comments; ``tests/engine/test_settings_schema.py``
-fails while it differs from :func:`engine.solver.settings.markdown_table`.
+Each table sits between two HTML comments; ``tests/engine/test_settings_schema.py`` and
+``tests/engine/test_terms.py`` fail while they differ from
+:func:`engine.solver.settings.markdown_table` and
+:func:`engine.studio.kinds_table.kinds_table`.
 """
 
 from __future__ import annotations
@@ -16,6 +19,7 @@ sys.path.insert(0, str(ROOT))
 
 from engine.atomic import write_text  # noqa: E402
 from engine.solver.settings import markdown_table  # noqa: E402
+from engine.studio import kinds_table as K  # noqa: E402
 
 DOC = ROOT / "docs" / "optimizer.md"
 BEGIN, END = "<!-- settings table: generated -->\n", "<!-- end of settings table -->"
@@ -23,12 +27,13 @@ BEGIN, END = "<!-- settings table: generated -->\n", "<!-- end of settings table
 
 def main() -> int:
     text = DOC.read_text(encoding="utf-8")
-    if BEGIN not in text or END not in text:
-        print(f"{DOC}: the markers {BEGIN.strip()} and {END} are missing", file=sys.stderr)
-        return 2
-    head, rest = text.split(BEGIN, 1)
-    tail = rest.split(END, 1)[1]
-    write_text(DOC, head + BEGIN + markdown_table() + END + tail)
+    for begin, end, table in ((BEGIN, END, markdown_table()), (K.BEGIN, K.END, K.kinds_table())):
+        if begin not in text or end not in text:
+            print(f"{DOC}: the markers {begin.strip()} and {end} are missing", file=sys.stderr)
+            return 2
+        head, rest = text.split(begin, 1)
+        text = head + begin + table + end + rest.split(end, 1)[1]
+    write_text(DOC, text)
     return 0
 
 

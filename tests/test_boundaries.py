@@ -1,4 +1,5 @@
-"""Package boundaries: the engine stays free of GUI toolkits, the widgets free of torch.
+"""Package boundaries: the engine stays free of GUI toolkits, the widgets free of torch,
+and no installed package imports the repository's research or scripts folders.
 
 Every ``.py`` file is parsed with :mod:`ast` (never imported), so a forbidden import is
 found wherever it sits: at module level, inside a function, under ``if TYPE_CHECKING``,
@@ -17,8 +18,13 @@ REPO = Path(__file__).resolve().parents[1]
 GUI_MODULES = frozenset({"PyQt6", "PySide6", "pyvista", "pyvistaqt", "pyqtgraph", "superqt"})
 TORCH_MODULES = frozenset({"torch"})
 
+#: Folders of the repository that are not installed (``pyproject.toml`` packages engine,
+#: widgets and app): code that imports them works only from a checkout.
+REPO_ONLY = frozenset({"research", "scripts"})
+
 #: package folder -> top-level modules it must never import
-RULES: dict[str, frozenset[str]] = {"engine": GUI_MODULES, "widgets": TORCH_MODULES}
+RULES: dict[str, frozenset[str]] = {"engine": GUI_MODULES | REPO_ONLY, "widgets": TORCH_MODULES | REPO_ONLY,
+                                    "app": REPO_ONLY}  # fmt: skip
 
 
 def forbidden_imports(source: str, banned: frozenset[str], filename: str = "<string>") -> list[tuple[int, str]]:
@@ -61,8 +67,7 @@ def _python_files(package: str) -> list[Path]:
 @pytest.mark.parametrize("package", list(RULES))
 def test_package_respects_its_import_boundary(package):
     files = _python_files(package)
-    if package == "engine":
-        assert files, "engine/ has no Python files: is the test looking in the right place?"
+    assert files, f"{package}/ has no Python files: is the test looking in the right place?"
     offences = [
         f"{path.relative_to(REPO)}:{line}: imports {module}"
         for path in files
@@ -91,3 +96,8 @@ def test_checker_finds_torch_in_widgets_code():
     source = "from torch import nn\nimport numpy\n\n\nclass W:\n    def f(self):\n        import torch.nn\n"
     assert forbidden_imports(source, TORCH_MODULES) == [(1, "torch"), (7, "torch.nn")]
     assert forbidden_imports("import torchvision\nimport numpy\n", TORCH_MODULES) == []
+
+
+def test_checker_finds_research_imports():
+    source = "from research.retarget_versions import VERSIONS\nimport scripts.eval_table\nimport researchers\n"
+    assert forbidden_imports(source, REPO_ONLY) == [(1, "research.retarget_versions"), (2, "scripts.eval_table")]

@@ -206,10 +206,8 @@ class ConstraintPanel(QWidget):
         self.constraints: list[dict[str, Any]] = []
         self._updating = False
 
-    def set_constraints(self, constraints: list[dict[str, Any]], slow: dict[str, str] | None = None) -> None:
-        """Show the session's constraints (``to_dict`` form) without emitting; ``slow``
-        names those whose kind has no fast-path term, with why (a badge in the row: a
-        frame with one is solved by the slower reference path).
+    def set_constraints(self, constraints: list[dict[str, Any]]) -> None:
+        """Show the session's constraints (``to_dict`` form) without emitting.
 
         A constraint that was not there before is selected (the one just added); the
         open editor takes the new values of its constraint.
@@ -236,11 +234,9 @@ class ConstraintPanel(QWidget):
                 state = Qt.CheckState.Checked if c.get("enabled", True) else Qt.CheckState.Unchecked
                 item = self.list.item(i)
                 item.setCheckState(state)
-                why = (slow or {}).get(c["name"], "")
-                text = f"{c['name']}  [{c['kind']}]" + ("  · slow path" if why else "")
+                text = f"{c['name']}  [{c['kind']}]"
                 if item.text() != text:
                     item.setText(text)
-                    item.setToolTip(f"No fast path: {why}" if why else "")
         finally:
             self._updating = False
         if rebuild:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 from PyQt6.QtCore import Qt, pyqtSignal
@@ -65,7 +66,7 @@ class SensorPanel(QWidget):
         if not self._updating:
             self.presetChanged.emit(name)
 
-    def set_sensors(self, preset: str, sensors: dict[str, Any]) -> None:
+    def set_sensors(self, preset: str, sensors: Mapping[str, Any]) -> None:
         """Show ``sensors`` (joint -> ``engine.sensors.Sensor``) without emitting."""
         self._updating = True
         try:

@@ -8,5 +8,11 @@
 * :mod:`engine.authoring.bake`: a scene to a motion; :mod:`engine.authoring.export`
   writes it as BVH (the ``bake`` command and the studio's export).
 * :mod:`engine.authoring.pose_mode`: the continuous pose mode.
+* :mod:`engine.authoring.session`: the authoring model the pose window shows: every
+  edit a command on its history (:mod:`~engine.authoring.history`, the state it records
+  in :mod:`~engine.authoring.state`), typed events (:mod:`~engine.authoring.events`),
+  joint turns (:mod:`~engine.authoring.turns`).
 * :mod:`engine.authoring.range_edit`: re-solve a frame range of a clip.
+* :mod:`engine.authoring.jobs`: the bake and range re-solves as jobs a worker thread runs,
+  with progress and cancel (:mod:`~engine.authoring.progress`).
 """

@@ -32,6 +32,7 @@ import numpy as np
 from engine.authoring.character import Character, Pose
 from engine.authoring.document import AuthoringScene
 from engine.authoring.keys import Key, eased, interpolate, slerp_quaternion
+from engine.authoring.progress import CancelCheck, check
 from engine.authoring.targets import JointTarget, solve_inputs
 from engine.constraints.base import Constraint
 from engine.constraints.smooth import SmoothConstraint
@@ -101,11 +102,13 @@ def output_frames(scene: AuthoringScene, fps: float | None) -> tuple[int, float,
     return int(round((a.frames - 1) / ratio)) + 1, rate, ratio
 
 
-def bake(scene: AuthoringScene, vae, fps: float | None = None,
-         progress: Callable[[int, int], None] | None = None) -> Baked:  # fmt: skip
+def bake(scene: AuthoringScene, vae, fps: float | None = None, progress: Callable[[int, int], None] | None = None,
+         cancelled: CancelCheck | None = None) -> Baked:  # fmt: skip
     """Bake ``scene`` with the pose VAE ``vae`` at ``fps`` (default: the scene's rate).
 
-    ``progress(done, total)`` is called after every frame.
+    ``progress(done, total)`` is called after every key and frame; ``cancelled()`` is
+    asked before each, and a True answer raises
+    :class:`engine.authoring.progress.Cancelled` (``scene`` is only read).
     """
     character = Character(vae, scene.height)
     n, rate, ratio = output_frames(scene, fps)
@@ -113,7 +116,8 @@ def bake(scene: AuthoringScene, vae, fps: float | None = None,
     times = [k.frame / ratio for k in keys]
     key_at = {int(round(t)): i for i, t in enumerate(times) if abs(t - round(t)) < 1e-9}
     poses: list[Pose] = []
-    for i, key in enumerate(keys):
+    for key in keys:
+        check(cancelled)
         poses.append(solve_key(character, key, scene.constraints, key.frame))
         if progress:
             progress(0, n + len(keys))
@@ -121,6 +125,7 @@ def bake(scene: AuthoringScene, vae, fps: float | None = None,
     smooth = SmoothConstraint(name="authoring smooth", weight=SMOOTH_WEIGHT)
     frames: list[Pose] = []
     for f in range(n):
+        check(cancelled)
         if f in key_at:
             pose = poses[key_at[f]]
         elif not keys:

@@ -25,6 +25,7 @@ for bit.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -33,6 +34,7 @@ from engine import skeleton as sk
 from engine.authoring.bake import active_constraints
 from engine.authoring.character import Character
 from engine.authoring.pose_mode import encode_frames
+from engine.authoring.progress import CancelCheck, check
 from engine.constraints.base import Constraint
 from engine.constraints.end_effector import EndEffectorConstraint
 from engine.constraints.floor import FloorConstraint
@@ -82,10 +84,16 @@ class RangeEdit:
     last: int
 
 
-def edit_range(vae, motion: Motion, start: int, end: int, constraints: list[Constraint],
-               blend: int = 8) -> RangeEdit:  # fmt: skip
+def edit_range(vae, motion: Motion, start: int, end: int, constraints: list[Constraint], blend: int = 8,
+               progress: Callable[[int, int], None] | None = None,
+               cancelled: CancelCheck | None = None) -> RangeEdit:  # fmt: skip
     """Re-solve frames ``start..end`` (inclusive) of ``motion`` with ``constraints`` and
-    blend ``blend`` frames at each end (see the module doc)."""
+    blend ``blend`` frames at each end (see the module doc).
+
+    ``progress(done, total)`` is called after each solved frame (``total``: the range
+    with its blends); ``cancelled()`` is asked before each and a True answer raises
+    :class:`engine.authoring.progress.Cancelled`. ``motion`` and ``constraints`` are
+    only read: the result is a new clip."""
     n = len(motion)
     if not (0 <= start <= end < n):
         raise UserError(f"range {start}-{end} is not within the clip's frames 0-{n - 1}")
@@ -102,6 +110,7 @@ def edit_range(vae, motion: Motion, start: int, end: int, constraints: list[Cons
     history: list[np.ndarray] = []
     deltas = np.zeros((len(frames), sk.NUM_JOINTS, 4))
     for i, f in enumerate(frames):
+        check(cancelled)
         previous_rot = motion.local_rot[max(f - 1, 0), 0]
         ctx = character.placed(motion.root_pos[f], frame=f, previous=history[-1] if history else None,
                                prior=latents[i], reference=previous_rot, ground=False)  # fmt: skip
@@ -114,9 +123,12 @@ def edit_range(vae, motion: Motion, start: int, end: int, constraints: list[Cons
         edited = QN.mul(motion.local_rot[f], deltas[i])
         out_local[f] = Q.slerp(motion.local_rot[f], edited, np.full((sk.NUM_JOINTS, 1), weight[i]))
         history.append(fk(out_local[f], motion.root_pos[f], offsets)[0])
+        if progress is not None:
+            progress(i + 1, len(frames))
     full = QN.mul(motion.local_rot[lo : hi + 1], smooth_rotations(deltas, SMOOTH_FRAMES))
     limit = step_limit(motion, lo, hi)
     for _ in range(40):
+        check(cancelled)
         out_local = motion.local_rot.copy()
         out_local[lo : hi + 1] = Q.slerp(motion.local_rot[lo : hi + 1], full, weight[:, None, None])
         _exact_steps(out_local, motion, constraints, frames, weight, end)

@@ -29,13 +29,13 @@ def register(sub: argparse._SubParsersAction) -> None:
 def _convert(args: argparse.Namespace) -> int:
     from engine.motion.formats import save_motion
     from engine.errors import UserError
-    from engine.motion.retarget import RETARGET_VERSION, load_with_report, manifest_fps, resample_motion
+    from engine.motion.retarget import CURRENT, load_with_report, manifest_fps, resample_motion
 
     if args.fps is not None and not args.fps > 0:
         raise UserError(f"--fps must be > 0, got {args.fps}")
     check_export(args, [args.out])
     motion, rep = load_with_report(args.input, args.source_fps or manifest_fps(args.input), rig_map_path(args),
-                                   version=RETARGET_VERSION, asf=asf_path(args))
+                                   strategy=CURRENT, asf=asf_path(args))
     if args.fps:
         motion = resample_motion(motion, args.fps)
     save_motion(args.out, motion, contents=export_contents(args))

@@ -27,14 +27,14 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def describe(path: Path, fps: float | None = None, rig_map: Path | None = None, asf: Path | None = None) -> dict:
     """Everything ``info`` reports about a motion file (BVH or AMC), as a JSON-ready dict."""
-    from engine.motion.retarget import RETARGET_VERSION, load_with_report, manifest_fps
+    from engine.motion.retarget import CURRENT, load_with_report, manifest_fps
     from engine.validation import CLI, check_value
 
     if fps is not None:
         fps = check_value(CLI["fps"], fps, "--fps", "value")
     # only the start is kept (every row is still checked): a long file stays cheap
     motion, rep = load_with_report(path, fps or manifest_fps(path), rig_map, max_frames=1,
-                                 version=RETARGET_VERSION, asf=asf)
+                                 strategy=CURRENT, asf=asf)
 
     def num(x: float, nd: int = 3):
         return round(float(x), nd) if math.isfinite(x) else None

@@ -1,6 +1,6 @@
 """Constraint kinds of the pose optimizer; importing this package registers them all.
 
-Every module of this package that is not part of the interface (``base``, ``terms``,
+Every module of this package that is not part of the interface (``base``, ``residual``,
 ``placement``) defines one kind: a :class:`~engine.constraints.base.Constraint`
 subclass with a ``kind`` string. The package imports each such module, so adding a kind
 means adding its module (and its test), nothing here. A module that fails to import, or
@@ -21,7 +21,7 @@ from typing import Any
 from engine.constraints.base import REGISTRY, Constraint, from_dict
 
 #: Modules of the package that define the interface, not a kind.
-INTERFACE_MODULES = ("base", "terms", "placement")
+INTERFACE_MODULES = ("base", "residual", "placement")
 
 
 def _discover() -> dict[str, type[Constraint]]:

@@ -6,28 +6,24 @@ between a centre-of-mass proxy (the mean of all joint positions) and the midpoin
 the ankles. Distances within ``tolerance`` cost nothing; beyond it the loss is the
 squared excess (metres squared).
 
-Fast path: with ``a``, ``b`` the two horizontal points and ``d = |a - b|``, the gradient
-w.r.t. ``a`` is ``2 relu(d - tolerance) (a - b) / d``, spread over the joints ``a`` and
-``b`` are means of.
+Residual: ``relu(|a - b| - tolerance)`` for ``a``, ``b`` the two horizontal points; its
+Jacobian w.r.t. ``a`` is ``(a - b) / |a - b|`` beyond the tolerance, spread over the joints
+``a`` and ``b`` are means of.
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
-from typing import Any, ClassVar, TYPE_CHECKING
+from typing import Any, ClassVar
 
 import numpy as np
 
 from engine import skeleton as sk
 from engine.constraints.base import Constraint, param
-from engine.constraints.terms import FrameInputs
+from engine.constraints.residual import NUMPY, FrameInputs, Kit, Residuals, Term
 from engine.errors import UserError
+from engine.gizmos import LineGizmo
 
-if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
-    import torch
-
-    from engine.kinematics.pose_state import PoseState
 
 MODES = ("head_over_hip", "com_over_feet")
 _HEAD, _ROOT = sk.JOINT_INDEX["upperneck"], sk.JOINT_INDEX["root"]
@@ -61,69 +57,59 @@ class BalanceConstraint(Constraint):
     def acts_on(self) -> tuple[str, ...]:
         return ("upperneck", "root") if self.mode == "head_over_hip" else tuple(sk.JOINT_NAMES)
 
-    def _distance(self, positions: torch.Tensor) -> torch.Tensor:
-        if self.mode == "head_over_hip":
-            a, b = positions[_HEAD, :2], positions[_ROOT, :2]
-        else:
-            a, b = positions[:, :2].mean(0), positions[_FEET, :2].mean(0)
-        return ((a - b) ** 2).sum().clamp_min(_MIN_SQUARED).sqrt()
-
-    def loss(self, state: PoseState) -> torch.Tensor:
-        import torch
-        return torch.relu(self._distance(state.positions) - self.tolerance).pow(2)
-
-    def satisfied(self, state: PoseState) -> bool:
-        return float(self._distance(state.positions.detach())) <= self.tolerance + _SLACK
-
-    def fast_term(self, frame: FrameInputs) -> "BalanceTerm":
+    def term(self, frame: FrameInputs) -> "BalanceTerm":
         return BalanceTerm(self)
+
+    @classmethod
+    def examples(cls, positions: np.ndarray) -> list[Constraint]:
+        return [cls(weight=3.0, tolerance=0.01), cls(mode="com_over_feet", tolerance=0.0)]
 
     @classmethod
     def placement(cls, params: dict[str, Any], positions: np.ndarray) -> dict[str, Any]:
         """Nothing to place: the rule is relative to the body."""
         return {}
 
-    def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
+    def gizmo(self, positions: np.ndarray | None = None) -> LineGizmo | None:
         if positions is None:
-            return {}
+            return None
         p = np.asarray(positions, float)
         if self.mode == "head_over_hip":
             a, b = p[_HEAD].copy(), p[_ROOT].copy()
         else:
             a, b = p.mean(0), p[_FEET].mean(0)
         a[2] = b[2] = 0.0
-        return {"type": "line", "points": np.stack([a, b])}
+        return LineGizmo(np.stack([a, b]))
 
 
-class BalanceTerm:
-    """The fast-path term of one :class:`BalanceConstraint` (module doc)."""
+class BalanceTerm(Term):
+    """``relu(|a - b| - tolerance)`` for the two horizontal points of the mode, each a
+    weighted sum of joints (:attr:`coef`: +1 or a mean's share for ``a``, minus for ``b``)."""
 
     def __init__(self, c: BalanceConstraint) -> None:
-        self.name, self.weight, self.turns = c.name, c.weight, False
-        self.tolerance, self.com = c.tolerance, c.mode == "com_over_feet"
-
-    def _gap(self, pos: np.ndarray) -> tuple[np.ndarray, float, bool]:
-        if self.com:
-            d = pos[:, :2].mean(0) - pos[_FEET, :2].mean(0)
+        self.names, self.owner = (c.name,), np.zeros(1, dtype=np.intp)
+        self.tolerance = c.tolerance
+        coef = np.zeros(sk.NUM_JOINTS)
+        if c.mode == "com_over_feet":
+            coef += 1.0 / sk.NUM_JOINTS
+            coef[_FEET] -= 1.0 / len(_FEET)
         else:
-            d = pos[_HEAD, :2] - pos[_ROOT, :2]
-        s = float(d @ d)
-        return d, math.sqrt(max(s, _MIN_SQUARED)), s > _MIN_SQUARED
+            coef[_HEAD], coef[_ROOT] = 1.0, -1.0
+        self.joints = np.flatnonzero(coef).astype(np.intp)
+        self.coef = coef[self.joints]
 
-    def evaluate(self, pos: np.ndarray, world: np.ndarray, g_pos: np.ndarray, g_rot: np.ndarray) -> float:
-        d, dist, free = self._gap(pos)
-        excess = dist - self.tolerance
-        if excess <= 0.0:
-            return 0.0
-        if free:
-            g = (2.0 * self.weight * excess / dist) * d  # d (weight loss) / d a, (2,)
-            if self.com:
-                g_pos[:, :2] += g / len(pos)
-                g_pos[_FEET, :2] -= g / len(_FEET)
-            else:
-                g_pos[_HEAD, :2] += g
-                g_pos[_ROOT, :2] -= g
-        return excess * excess
+    def _gap(self, kit: Kit, P: Any) -> tuple[Any, Any]:
+        d = (P[:, self.joints, :2] * kit.const(self.coef, P)[:, None]).sum(1)  # (A, 2)
+        return d, kit.sqrt(kit.clamp_min((d * d).sum(-1), _MIN_SQUARED))
 
-    def satisfied(self, pos: np.ndarray, world: np.ndarray) -> bool:
-        return self._gap(pos)[1] <= self.tolerance + _SLACK
+    def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:
+        d, dist = self._gap(kit, P)
+        r = kit.relu(dist - self.tolerance)[:, None]
+        if not jac:
+            return Residuals(r)
+        free = ((r[:, 0] > 0.0) & ((d * d).sum(-1) > _MIN_SQUARED)).astype(float)
+        dd = np.zeros((len(P), 1, len(self.joints), 3))
+        dd[:, 0, :, :2] = (free / dist)[:, None, None] * d[:, None, :] * self.coef[None, :, None]
+        return Residuals(r, self.joints, dd)
+
+    def satisfied(self, P: np.ndarray, W: np.ndarray, z: np.ndarray, rows: Any = None) -> np.ndarray:
+        return (self._gap(NUMPY, P)[1] <= self.tolerance + _SLACK)[:, None]

@@ -1,8 +1,9 @@
 """Constraints: every tracker, target and rule the pose optimizer satisfies is one.
 
 A constraint is a small dataclass with its parameters, a ``weight`` and an ``enabled``
-flag, and a differentiable :meth:`Constraint.loss` of the current :class:`PoseState`.
-The optimizer sums ``weight * loss`` over enabled constraints. Parameters can change
+flag, and one residual of the pose (:meth:`Constraint.term`,
+:mod:`engine.constraints.residual`) whose squared norm is its loss. The optimizer sums
+``weight * loss`` over enabled constraints. Parameters can change
 between frames (the GUI does this live). Each kind registers itself by its ``kind``
 string, so a scene can be saved to JSON and loaded back (:func:`from_dict`).
 
@@ -22,14 +23,14 @@ import dataclasses
 import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
-from collections.abc import Callable
 from typing import Any, ClassVar, TYPE_CHECKING
 
 import numpy as np
 
 from engine import skeleton as sk
-from engine.constraints.terms import FrameInputs, PoseTerm
+from engine.constraints.residual import FrameInputs, Term
 from engine.errors import UserError
+from engine.gizmos import Gizmo
 from engine.validation import shown
 
 if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
@@ -67,37 +68,18 @@ def param(default: Any = dataclasses.MISSING, *, editor: str, unit: str = "", fa
 
 
 def missing_parts(cls: type["Constraint"]) -> list[str]:
-    """What a constraint kind fails to declare (empty when complete): its joints
-    (:meth:`Constraint.acts_on`), its fast-path term or the reason it has none, its
-    studio placement, and editor metadata on each parameter."""
+    """What a constraint kind fails to declare (empty when complete): its term
+    (:meth:`Constraint.term`), its joints (:meth:`Constraint.acts_on`), its example inputs
+    (:meth:`Constraint.examples`), its studio placement, and editor metadata on each
+    parameter."""
     own = lambda name: any(name in vars(k) for k in cls.__mro__ if k is not Constraint)  # noqa: E731
-    out = [f"{m}()" for m in ("loss", "acts_on") if not own(m)]
+    out = [f"{m}()" for m in ("term", "acts_on", "examples") if not own(m)]
     if cls.user_facing and not own("placement"):
         out.append("placement()")
-    if not own("fast_term") and not cls.no_fast_term:
-        out.append("fast_term() or no_fast_term")
     for f in dataclasses.fields(cls):
         if f.name not in ("name", "weight", "enabled", *FRAME_FIELDS) and "editor" not in f.metadata:
             out.append(f"editor metadata on field {f.name!r} (engine.constraints.base.param)")
     return out
-
-
-def world_rotation_matrix(state: PoseState, joint: int) -> torch.Tensor:
-    """World rotation ``(3, 3)`` of one joint, from whichever form the state carries."""
-    from engine.kinematics import quaternion as Q
-    if state.rotation_matrices is not None:
-        return state.rotation_matrices[joint]
-    return Q.to_matrix(state.world_rotations()[joint])
-
-
-def rotation_distance(state: PoseState, joint: int, target: np.ndarray) -> torch.Tensor:
-    """``1 - <q, q_target>^2 = sin^2(angle / 2)`` between a joint's world rotation and a
-    target quaternion ``(4,)``, computed as ``(3 - trace(R_t^T R)) / 4``; scalar in [0, 1]."""
-    from engine.kinematics import quaternion as Q
-    r = world_rotation_matrix(state, joint)
-    t = np.asarray(target, dtype=np.float64)
-    rt = Q.to_matrix(vec(t / max(np.linalg.norm(t), 1e-12), r))
-    return ((3.0 - (rt * r).sum()) * 0.25).clamp(0.0, 1.0)
 
 
 def joint_index(name: str, field: str = "joint", kind: str = "") -> int:
@@ -127,9 +109,6 @@ class Constraint(ABC):
     #: False for kinds methods build themselves (sensors, the temporal prior): the
     #: studio does not offer them to users.
     user_facing: ClassVar[bool] = True
-    #: Why this kind has no fast-path term (:meth:`fast_term`); a kind declares a term or
-    #: says why not, and frames using it are solved by the slower reference path.
-    no_fast_term: ClassVar[str] = ""
     #: Human label shown in the GUI and loss plots (unique within a scene).
     name: str = ""
     weight: float = 1.0
@@ -239,22 +218,43 @@ class Constraint(ABC):
         return (max(0, self.frames[0] - self.blend_in), self.frames[1] + self.blend_out)
 
     @abstractmethod
+    def term(self, frame: FrameInputs) -> Term:
+        """This constraint's residual for one frame (:mod:`engine.constraints.residual`),
+        its parameters frozen as they are now; what it captures on first use comes from
+        ``frame.previous_positions``."""
+
+    @classmethod
+    def terms(cls, items: "list[Constraint]", frame: FrameInputs) -> list[Term]:
+        """The terms of several constraints of this kind for one frame: one per
+        constraint, unless the kind batches them into one (the trackers)."""
+        return [c.term(frame) for c in items]
+
+    @classmethod
+    @abstractmethod
+    def examples(cls, positions: np.ndarray) -> "list[Constraint]":
+        """Instances of the kind that the generic tests check (gradients against
+        autograd, fast against reference, batched against frame by frame, no mutation),
+        each with a non-zero loss near the pose ``positions (22, 3)``, metres, and
+        together covering the kind's branches (every mode, optional parts on and off)."""
+
     def loss(self, state: PoseState) -> torch.Tensor:
-        """Scalar, non-negative; zero when the constraint is satisfied."""
+        """Scalar, non-negative: the squared norm of :meth:`term`'s residual at ``state``,
+        through autograd (the reference the solver's fast path is checked against)."""
+        from engine.constraints.residual import torch_kit
+
+        kit = torch_kit()
+        term = self.term(frame_inputs(state))
+        P, W, z = state_arrays(state)
+        return term.losses(term.residual(kit, P, W, z), kit)[0, 0]
 
     def satisfied(self, state: PoseState) -> bool:
         """Whether the offline optimizer may stop on this constraint's account."""
-        return True
+        P, W, z = (None if a is None else a.detach().double().cpu().numpy() for a in state_arrays(state))
+        return bool(self.term(frame_inputs(state)).satisfied(P, W, z)[0, 0])
 
     @abstractmethod
     def acts_on(self) -> tuple[str, ...]:
         """Canonical joints whose pose the loss reads (empty: none, e.g. a latent prior)."""
-
-    def fast_term(self, frame: FrameInputs) -> PoseTerm | None:
-        """This frame's term for the solver's fast path (:mod:`engine.constraints.terms`),
-        equal to ``loss`` with hand-derived gradients; None: the frame goes to the
-        reference path (a kind without a term sets :attr:`no_fast_term`)."""
-        return None
 
     @classmethod
     def placement(cls, params: dict[str, Any], positions: np.ndarray) -> dict[str, Any]:
@@ -274,25 +274,14 @@ class Constraint(ABC):
         never changed (the studio publishes it to the engine thread)."""
         return self
 
-    @classmethod
-    def batch(cls, items: "list[Constraint]", like: torch.Tensor) -> "Callable[[PoseState], torch.Tensor] | None":
-        """Optional fast path: one function giving the losses of many constraints of this
-        kind at once, ``(len(items),)``, equal to ``[c.loss(state) for c in items]``.
-
-        The optimizer calls it once per frame (parameters are frozen for the frame's
-        solve) and then once per iteration, which saves graph nodes and Python work
-        when a kind has many instances (sensors). ``None`` means "no fast path".
-        """
-        return None
-
-    def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
-        """Plain-numpy description for the viewport (e.g. ``{"type": "point", "position": ...}``).
+    def gizmo(self, positions: np.ndarray | None = None) -> Gizmo | None:
+        """What the viewport draws for this constraint (:mod:`engine.gizmos`), or None.
 
         ``positions (22, 3)``, the current world joint positions in metres, lets kinds
         that relate joints (distance, look-at) draw lines; without it they draw what
-        they can from their parameters alone (possibly nothing: ``{}``).
+        they can from their parameters alone (possibly nothing: None).
         """
-        return {}
+        return None
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-JSON form: ``kind`` plus every field; arrays as lists, NaN as ``None``."""
@@ -366,3 +355,19 @@ def from_dict(data: dict[str, Any]) -> Constraint:
         return cls(**kwargs)
     except (TypeError, ValueError) as exc:
         raise UserError(f"constraint {kind!r}: {exc}") from exc
+
+
+def frame_inputs(state: PoseState) -> FrameInputs:
+    """The :class:`FrameInputs` of a torch :class:`PoseState` (numpy, detached)."""
+    prev, pred = state.previous_positions, state.prediction
+    return FrameInputs(None if prev is None else prev.detach().double().cpu().numpy(), state.frame,
+                       None if pred is None else pred.detach().double().cpu().numpy())  # fmt: skip
+
+
+def state_arrays(state: PoseState) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    """A state's positions ``(1, 22, 3)``, world rotation matrices ``(1, 22, 3, 3)`` and
+    latent ``(1, L)``: one frame, as terms take them."""
+    from engine.kinematics import quaternion as Q
+
+    W = state.rotation_matrices if state.rotation_matrices is not None else Q.to_matrix(state.world_rotations())
+    return state.positions[None], W[None], state.latent[None]

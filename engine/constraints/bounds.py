@@ -1,26 +1,23 @@
 """``bounds``: a joint stays inside an axis-aligned box.
 
-Loss: ``sum(relu(box_min - p)^2 + relu(p - box_max)^2)`` over x, y, z (metres squared);
-its gradient (fast path) is ``2 (p - box_max)`` above the box and ``2 (p - box_min)``
-below it, per axis.
+Loss: ``sum(relu(box_min - p)^2 + relu(p - box_max)^2)`` over x, y, z (metres squared),
+the squared norm of the residual ``relu(p - box_max) - relu(box_min - p)`` (one entry per
+axis, its Jacobian 1 on an axis outside the box).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, ClassVar, TYPE_CHECKING
+from typing import Any, ClassVar
 
 import numpy as np
 
-from engine.constraints.base import Constraint, joint_index, param, vec
+from engine.constraints.base import Constraint, joint_index, param
 from engine.constraints.placement import BOUNDS_HALF, joint_at
-from engine.constraints.terms import FrameInputs
+from engine.constraints.residual import FrameInputs, Kit, Residuals, Term
 from engine.errors import UserError
+from engine.gizmos import BoxGizmo
 
-if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
-    import torch
-
-    from engine.kinematics.pose_state import PoseState
 
 _SLACK = 1e-3  # metres: satisfied this far outside the box
 
@@ -42,18 +39,14 @@ class BoundsConstraint(Constraint):
     def acts_on(self) -> tuple[str, ...]:
         return (self.joint,)
 
-    def loss(self, state: PoseState) -> torch.Tensor:
-        import torch
-        p = state.positions[joint_index(self.joint, "joint", self.kind)]
-        lo, hi = vec(self.box_min, p), vec(self.box_max, p)
-        return (torch.relu(lo - p) ** 2 + torch.relu(p - hi) ** 2).sum()
-
-    def satisfied(self, state: PoseState) -> bool:
-        p = state.positions[joint_index(self.joint, "joint", self.kind)].detach().cpu().numpy()
-        return bool(np.all(p >= self.box_min - _SLACK) and np.all(p <= self.box_max + _SLACK))
-
-    def fast_term(self, frame: FrameInputs) -> "BoundsTerm":
+    def term(self, frame: FrameInputs) -> "BoundsTerm":
         return BoundsTerm(self)
+
+    @classmethod
+    def examples(cls, positions: np.ndarray) -> list[Constraint]:
+        w = positions[joint_index("lwrist")]
+        return [cls(joint="lwrist", box_min=w + [0.05, -0.5, -0.5], box_max=w + [0.5, -0.02, 0.5]),
+                cls(weight=2.0, box_min=np.array([-5.0, -5.0, 1.5]), box_max=np.array([5.0, 5.0, 3.0]))]
 
     @classmethod
     def placement(cls, params: dict[str, Any], positions: np.ndarray) -> dict[str, Any]:
@@ -61,28 +54,27 @@ class BoundsConstraint(Constraint):
         c = joint_at(positions, params.get("joint"), "root")
         return {"box_min": c - BOUNDS_HALF, "box_max": c + BOUNDS_HALF}
 
-    def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
-        return {"type": "box", "min": self.box_min.copy(), "max": self.box_max.copy(),
-                "edit": ("box_min", "box_max")}  # fmt: skip
+    def gizmo(self, positions: np.ndarray | None = None) -> BoxGizmo:
+        return BoxGizmo(self.box_min, self.box_max, edit=("box_min", "box_max"))
 
 
-class BoundsTerm:
-    """The fast-path term of one :class:`BoundsConstraint` (module doc)."""
+class BoundsTerm(Term):
+    """``relu(p - box_max) - relu(box_min - p)`` per axis (module doc)."""
 
     def __init__(self, c: BoundsConstraint) -> None:
-        self.name, self.weight, self.turns = c.name, c.weight, False
-        self.j = joint_index(c.joint, "joint", c.kind)
+        self.names, self.owner = (c.name,), np.zeros(3, dtype=np.intp)
+        self.j = np.array([joint_index(c.joint, "joint", c.kind)], dtype=np.intp)
         self.lo, self.hi = np.asarray(c.box_min, dtype=np.float64), np.asarray(c.box_max, dtype=np.float64)
 
-    def _excess(self, pos: np.ndarray) -> np.ndarray:
-        p = pos[self.j]
-        return np.maximum(p - self.hi, 0.0) - np.maximum(self.lo - p, 0.0)
+    def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:
+        p = P[:, self.j[0]]
+        r = kit.relu(p - kit.const(self.hi, P)) - kit.relu(kit.const(self.lo, P) - p)
+        if not jac:
+            return Residuals(r)
+        d = np.zeros((len(P), 3, 1, 3))
+        d[:, np.arange(3), 0, np.arange(3)] = (r != 0.0).astype(float)
+        return Residuals(r, self.j, d)
 
-    def evaluate(self, pos: np.ndarray, world: np.ndarray, g_pos: np.ndarray, g_rot: np.ndarray) -> float:
-        e = self._excess(pos)
-        g_pos[self.j] += (2.0 * self.weight) * e
-        return float(e @ e)
-
-    def satisfied(self, pos: np.ndarray, world: np.ndarray) -> bool:
-        p = pos[self.j]
-        return bool(np.all(p >= self.lo - _SLACK) and np.all(p <= self.hi + _SLACK))
+    def satisfied(self, P: np.ndarray, W: np.ndarray, z: np.ndarray, rows: Any = None) -> np.ndarray:
+        p = P[:, self.j[0]]
+        return ((p >= self.lo - _SLACK) & (p <= self.hi + _SLACK)).all(-1)[:, None]

@@ -1,26 +1,22 @@
 """``distance``: two joints at a given distance, loss ``(|p_a - p_b| - d)^2`` (m^2).
 
-Fast path: with ``l = |p_a - p_b|``, the gradient at ``p_a`` is ``2 (l - d) (p_a - p_b) / l``
-and its negative at ``p_b``.
+Residual ``|p_a - p_b| - d``; its Jacobian is the unit vector ``(p_a - p_b) / |p_a - p_b|``
+at ``p_a`` and its negative at ``p_b``.
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
-from typing import Any, ClassVar, TYPE_CHECKING
+from typing import Any, ClassVar
 
 import numpy as np
 
 from engine.constraints.base import Constraint, joint_index, param
 from engine.constraints.placement import joint_at
-from engine.constraints.terms import FrameInputs
+from engine.constraints.residual import NUMPY, FrameInputs, Kit, Residuals, Term
 from engine.errors import UserError
+from engine.gizmos import LineGizmo
 
-if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
-    import torch
-
-    from engine.kinematics.pose_state import PoseState
 
 _MIN_SQUARED = 1e-12  # m^2: the length is clamped so its gradient stays finite when the joints coincide
 
@@ -57,18 +53,12 @@ class DistanceConstraint(Constraint):
     def _pair(self) -> tuple[int, int]:
         return joint_index(self.joint_a, "joint_a", self.kind), joint_index(self.joint_b, "joint_b", self.kind)
 
-    def _length(self, positions: torch.Tensor) -> torch.Tensor:
-        a, b = self._pair()
-        return ((positions[a] - positions[b]) ** 2).sum().clamp_min(_MIN_SQUARED).sqrt()
-
-    def loss(self, state: PoseState) -> torch.Tensor:
-        return (self._length(state.positions) - self.distance) ** 2
-
-    def satisfied(self, state: PoseState) -> bool:
-        return abs(float(self._length(state.positions.detach())) - self.distance) <= self.tolerance
-
-    def fast_term(self, frame: FrameInputs) -> "DistanceTerm":
+    def term(self, frame: FrameInputs) -> "DistanceTerm":
         return DistanceTerm(self)
+
+    @classmethod
+    def examples(cls, positions: np.ndarray) -> list[Constraint]:
+        return [cls(weight=5.0, distance=0.9), cls(joint_a="lankle", joint_b="upperneck", distance=0.2)]
 
     @classmethod
     def placement(cls, params: dict[str, Any], positions: np.ndarray) -> dict[str, Any]:
@@ -76,34 +66,33 @@ class DistanceConstraint(Constraint):
         a, b = joint_at(positions, params.get("joint_a"), "lwrist"), joint_at(positions, params.get("joint_b"), "rwrist")
         return {"distance": float(np.linalg.norm(a - b))}
 
-    def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
+    def gizmo(self, positions: np.ndarray | None = None) -> LineGizmo | None:
         if positions is None:
-            return {}
+            return None
         p = np.asarray(positions, float)
         a, b = self._pair()
-        return {"type": "line", "points": np.stack([p[a], p[b]])}
+        return LineGizmo(np.stack([p[a], p[b]]))
 
 
-class DistanceTerm:
-    """The fast-path term of one :class:`DistanceConstraint` (module doc)."""
+class DistanceTerm(Term):
+    """``|p_a - p_b| - distance`` (module doc)."""
 
     def __init__(self, c: DistanceConstraint) -> None:
-        self.name, self.weight, self.turns = c.name, c.weight, False
+        self.names, self.owner = (c.name,), np.zeros(1, dtype=np.intp)
         self.distance, self.tolerance = c.distance, c.tolerance
-        self.a, self.b = c._pair()
+        self.joints = np.array(c._pair(), dtype=np.intp)
 
-    def _length(self, pos: np.ndarray) -> tuple[np.ndarray, float, bool]:
-        d = pos[self.a] - pos[self.b]
-        s = float(d @ d)
-        return d, math.sqrt(max(s, _MIN_SQUARED)), s > _MIN_SQUARED
+    def _length(self, kit: Kit, P: Any) -> tuple[Any, Any]:
+        d = P[:, self.joints[0]] - P[:, self.joints[1]]
+        return d, kit.sqrt(kit.clamp_min((d * d).sum(-1), _MIN_SQUARED))
 
-    def evaluate(self, pos: np.ndarray, world: np.ndarray, g_pos: np.ndarray, g_rot: np.ndarray) -> float:
-        d, length, free = self._length(pos)
-        if free:  # within the clamp the length is constant
-            g = (2.0 * self.weight * (length - self.distance) / length) * d
-            g_pos[self.a] += g
-            g_pos[self.b] -= g
-        return (length - self.distance) ** 2
+    def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:
+        d, length = self._length(kit, P)
+        r = (length - self.distance)[:, None]
+        if not jac:
+            return Residuals(r)
+        u = d / length[:, None] * ((d * d).sum(-1) > _MIN_SQUARED)[:, None]  # within the clamp: constant
+        return Residuals(r, self.joints, np.stack((u, -u), axis=1)[:, None])
 
-    def satisfied(self, pos: np.ndarray, world: np.ndarray) -> bool:
-        return abs(self._length(pos)[1] - self.distance) <= self.tolerance
+    def satisfied(self, P: np.ndarray, W: np.ndarray, z: np.ndarray, rows: Any = None) -> np.ndarray:
+        return (np.abs(self._length(NUMPY, P)[1] - self.distance) <= self.tolerance)[:, None]

@@ -1,25 +1,23 @@
 """``end_effector``: a joint reaches a fixed world target (position, optionally rotation).
 
-Fast path: the position term ``|P_j - t|^2`` has gradient ``2 (P_j - t)``; the rotation
-term is the sensors' ``sin^2(angle / 2)`` (:func:`engine.constraints.terms.rotation_term`).
+Residual: ``P_j - t`` and, with a rotation, the trackers' rotation residual, whose squared
+norm is ``rotation_weight * sin^2(angle / 2)``
+(:func:`engine.constraints.residual.rotation_residual`).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, ClassVar, TYPE_CHECKING
+from typing import Any, ClassVar
 
 import numpy as np
 
-from engine.constraints.base import Constraint, joint_index, param, rotation_distance, vec
+from engine.constraints.base import Constraint, joint_index, param
 from engine.constraints.placement import REACH, facing, joint_at
-from engine.constraints.terms import FrameInputs, rotation_term, unit_quaternion_matrix
+from engine.constraints.residual import FrameInputs, Kit, Residuals, Term, rotation_residual, unit_quaternion_matrix
+from engine.gizmos import PointGizmo
 
-if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
-    import torch
-
-    from engine.kinematics.pose_state import PoseState
 
 
 @dataclass
@@ -56,50 +54,51 @@ class EndEffectorConstraint(Constraint):
     def acts_on(self) -> tuple[str, ...]:
         return (self.joint,)
 
-    def loss(self, state: PoseState) -> torch.Tensor:
-        j = joint_index(self.joint, "joint", self.kind)
-        out = ((state.positions[j] - vec(self.position, state.positions)) ** 2).sum()
-        if self.use_rotation:
-            out = out + self.rotation_weight * rotation_distance(state, j, self.rotation)
-        return out
-
-    def satisfied(self, state: PoseState) -> bool:
-        j = joint_index(self.joint, "joint", self.kind)
-        err = np.linalg.norm(state.positions[j].detach().cpu().numpy() - self.position)
-        return bool(err <= self.tolerance) or not math.isfinite(err)
-
-    def fast_term(self, frame: FrameInputs) -> "EndEffectorTerm":
+    def term(self, frame: FrameInputs) -> "EndEffectorTerm":
         return EndEffectorTerm(self)
+
+    @classmethod
+    def examples(cls, positions: np.ndarray) -> list[Constraint]:
+        ankle, wrist = positions[joint_index("rankle")], positions[joint_index("lwrist")]
+        turn = np.array([math.cos(0.55), 0.3 * math.sin(0.55), 0.95 * math.sin(0.55), 0.0])
+        return [cls(joint="rankle", position=ankle + [0.1, 0.0, 0.1]),
+                cls(joint="lwrist", position=wrist + [0.0, 0.01, 0.0], use_rotation=True, rotation_weight=0.7,
+                    rotation=turn / np.linalg.norm(turn))]  # fmt: skip
 
     @classmethod
     def placement(cls, params: dict[str, Any], positions: np.ndarray) -> dict[str, Any]:
         """The target :data:`REACH` in front of the joint."""
         return {"position": joint_at(positions, params.get("joint"), "lwrist") + REACH * facing(positions)}
 
-    def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
-        return {"type": "point", "position": np.asarray(self.position, float).copy(), "edit": "position"}
+    def gizmo(self, positions: np.ndarray | None = None) -> PointGizmo:
+        return PointGizmo(self.position, edit="position")
 
 
-class EndEffectorTerm:
-    """The fast-path term of one :class:`EndEffectorConstraint` (module doc)."""
+class EndEffectorTerm(Term):
+    """``P_j - t`` and, with a rotation, ``sqrt(rotation_weight / 8) (W_j - T)`` (module doc)."""
 
     def __init__(self, c: EndEffectorConstraint) -> None:
-        self.name, self.weight, self.turns, self.tolerance = c.name, c.weight, c.use_rotation, c.tolerance
-        self.j = joint_index(c.joint, "joint", c.kind)
+        self.names, self.tolerance = (c.name,), c.tolerance
+        self.j = np.array([joint_index(c.joint, "joint", c.kind)], dtype=np.intp)
         self.target = np.asarray(c.position, dtype=np.float64)
-        self.rot = unit_quaternion_matrix(c.rotation) if c.use_rotation else None
-        self.rot_weight = c.rotation_weight
+        self.rot = unit_quaternion_matrix(c.rotation)[None, None] if c.use_rotation else None
+        self.scale = np.full((1, 1), math.sqrt(c.rotation_weight / 8.0))
+        self.owner = np.zeros(12 if c.use_rotation else 3, dtype=np.intp)
 
-    def evaluate(self, pos: np.ndarray, world: np.ndarray, g_pos: np.ndarray, g_rot: np.ndarray) -> float:
-        d = pos[self.j] - self.target
-        g_pos[self.j] += (2.0 * self.weight) * d
-        out = float(d @ d)
-        if self.rot is not None:
-            _, value, grad = rotation_term(self.rot, world[self.j])
-            g_rot[self.j] += (self.weight * self.rot_weight) * grad
-            out += self.rot_weight * value
-        return out
+    def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:
+        a = P.shape[0]
+        r = P[:, self.j[0]] - kit.const(self.target, P)
+        d_pos = np.broadcast_to(np.eye(3)[None, :, None, :], (a, 3, 1, 3)) if jac else None
+        if self.rot is None:
+            return Residuals(r, self.j, d_pos)
+        scale = np.broadcast_to(self.scale, (a, 1))
+        rot, d_rot = rotation_residual(kit, W[:, self.j], kit.const(self.rot, P), kit.const(scale, P), jac)
+        r = kit.cat([r, rot], -1)
+        if not jac:
+            return Residuals(r)
+        d_pos = np.concatenate((d_pos, np.zeros((a, 9, 1, 3))), axis=1)
+        return Residuals(r, self.j, d_pos, self.j, np.concatenate((np.zeros((a, 3, 1, 3)), d_rot), axis=1))
 
-    def satisfied(self, pos: np.ndarray, world: np.ndarray) -> bool:
-        err = float(np.linalg.norm(pos[self.j] - self.target))
-        return err <= self.tolerance or not math.isfinite(err)
+    def satisfied(self, P: np.ndarray, W: np.ndarray, z: np.ndarray, rows: Any = None) -> np.ndarray:
+        err = np.linalg.norm(P[:, self.j[0]] - self.target, axis=-1)
+        return ((err <= self.tolerance) | ~np.isfinite(err))[:, None]

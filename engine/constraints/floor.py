@@ -7,25 +7,22 @@ Two terms, summed over the listed joints (ankles and toes by default):
   height was below ``contact_height`` (a planted foot should not skate). The contact
   test uses the previous frame only, so it is a fixed mask within a solve.
 
-Fast path: gradient ``-2 relu(floor_height + clearance - z)`` on each joint's height and
-``2 slide_weight (xy - xy_prev)`` on a planted joint's horizontal position.
+Residual: ``relu(floor_height + clearance - z)`` per joint and ``sqrt(slide_weight) (xy -
+xy_prev)`` per planted joint; a joint listed twice counts twice.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, ClassVar, TYPE_CHECKING
+from typing import Any, ClassVar
 
 import numpy as np
 
 from engine.constraints.base import Constraint, joint_index, param
-from engine.constraints.terms import FrameInputs
+from engine.constraints.residual import FrameInputs, FrameRows, Kit, Residuals, Term
 from engine.errors import UserError
+from engine.gizmos import BoxGizmo
 
-if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
-    import torch
-
-    from engine.kinematics.pose_state import PoseState
 
 _SLACK = 0.01  # metres: satisfied this far below the clearance
 
@@ -70,70 +67,68 @@ class FloorConstraint(Constraint):
     def _index(self) -> list[int]:
         return [joint_index(j, "joints", self.kind) for j in self.joints]
 
-    def loss(self, state: PoseState) -> torch.Tensor:
-        import torch
-        idx = self._index()
-        p = state.positions[idx]
-        out = torch.relu(self.floor_height + self.clearance - p[:, 2]).pow(2).sum()
-        if state.previous_positions is not None and self.slide_weight > 0:
-            prev = state.previous_positions[idx].detach()
-            contact = (prev[:, 2] < self.floor_height + self.contact_height).to(p.dtype)
-            slide = ((p[:, :2] - prev[:, :2]) ** 2).sum(-1)
-            out = out + self.slide_weight * (contact * slide).sum()
-        return out
-
-    def satisfied(self, state: PoseState) -> bool:
-        z = state.positions[self._index(), 2].detach()
-        return bool((z >= self.floor_height + self.clearance - _SLACK).all())
-
-    def fast_term(self, frame: FrameInputs) -> "FloorTerm":
+    def term(self, frame: FrameInputs) -> "FloorTerm":
         return FloorTerm(self, frame.previous_positions)
+
+    @classmethod
+    def examples(cls, positions: np.ndarray) -> list[Constraint]:
+        return [cls(weight=4.0, clearance=0.2, floor_height=0.05, contact_height=0.4, slide_weight=2.0),
+                cls(joints=("ltoe", "ltoe"), clearance=0.3)]
 
     @classmethod
     def placement(cls, params: dict[str, Any], positions: np.ndarray) -> dict[str, Any]:
         """Nothing to place: the floor plane is under the body wherever it is."""
         return {}
 
-    def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
+    def gizmo(self, positions: np.ndarray | None = None) -> BoxGizmo | None:
         if self.floor_height == 0.0:
-            return {}  # the viewport already draws the z = 0 floor
+            return None  # the viewport already draws the z = 0 floor
         lo = np.array([-2.0, -2.0, self.floor_height - 0.005])
         hi = np.array([2.0, 2.0, self.floor_height])
-        return {"type": "box", "min": lo, "max": hi}
+        return BoxGizmo(lo, hi)
 
 
-class FloorTerm:
-    """The fast-path term of one :class:`FloorConstraint` for one frame (module doc)."""
+class FloorTerm(FrameRows, Term):
+    """``relu(low - z_k)`` per joint and, with a sliding weight, ``sqrt(slide_weight *
+    contact_k) (xy_k - xy_prev_k)`` per joint, ``contact_k`` whether it touched the floor on
+    the previous frame (module doc). The previous positions and the contact mask are
+    fixed for the frame (``prev (A, k, 2)``, ``slide (A, k)``: per frame)."""
+
+    PER_FRAME = ("prev", "slide")
 
     def __init__(self, c: FloorConstraint, previous: np.ndarray | None) -> None:
-        self.name, self.weight, self.turns = c.name, c.weight, False
+        self.names = (c.name,)
         self.idx = np.array(c._index(), dtype=np.intp)
-        self.unique = len(set(self.idx.tolist())) == len(self.idx)
         self.low = c.floor_height + c.clearance
         self.ok = self.low - _SLACK
-        self.prev = None
-        if previous is not None and c.slide_weight > 0:
+        k = len(self.idx)
+        self.sliding = c.slide_weight > 0
+        self.prev, self.slide = np.zeros((1, k, 2)), np.zeros((1, k))
+        if previous is not None and self.sliding:
             prev = np.asarray(previous, dtype=np.float64)[self.idx]
-            # as the reference compares in the previous pose's precision (float32)
+            # the previous pose arrives in float32; compare in its precision
             contact = prev[:, 2].astype(np.float32) < np.float32(c.floor_height + c.contact_height)
-            self.prev, self.slide = prev[:, :2], c.slide_weight * contact.astype(np.float64)
+            self.prev[0], self.slide[0] = prev[:, :2], np.sqrt(c.slide_weight * contact.astype(np.float64))
+        self.owner = np.zeros(3 * k if self.sliding else k, dtype=np.intp)
 
-    def evaluate(self, pos: np.ndarray, world: np.ndarray, g_pos: np.ndarray, g_rot: np.ndarray) -> float:
-        p = pos[self.idx]
-        g = np.zeros((len(self.idx), 3))
-        under = np.maximum(self.low - p[:, 2], 0.0)
-        out = float(under @ under)
-        g[:, 2] = under
-        g[:, 2] *= -2.0 * self.weight
-        if self.prev is not None:
-            d = p[:, :2] - self.prev
-            out += float(self.slide @ (d * d).sum(-1))
-            g[:, :2] = (2.0 * self.weight * self.slide)[:, None] * d
-        if self.unique:
-            g_pos[self.idx] += g
-        else:  # a joint listed twice counts twice
-            np.add.at(g_pos, self.idx, g)
-        return out
+    def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:
+        p, a, k = P[:, self.idx], P.shape[0], len(self.idx)
+        under = kit.relu(self.low - p[:, :, 2])
+        sel = self.select(P, rows)
+        slide = self.slide[sel]
+        if not self.sliding:
+            r = under
+        else:
+            moved = (p[:, :, :2] - kit.const(self.prev[sel], P)) * kit.const(slide, P)[:, :, None]
+            r = kit.cat([under, moved.reshape(a, 2 * k)], -1)
+        if not jac:
+            return Residuals(r)
+        d = np.zeros((a, len(self.owner), k, 3))
+        d[:, np.arange(k), np.arange(k), 2] = -(under > 0.0).astype(float)
+        if self.sliding:
+            at = k + np.arange(2 * k)
+            d[:, at, np.repeat(np.arange(k), 2), np.tile([0, 1], k)] = np.repeat(slide, 2, axis=1)
+        return Residuals(r, self.idx, d)
 
-    def satisfied(self, pos: np.ndarray, world: np.ndarray) -> bool:
-        return bool((pos[self.idx, 2] >= self.ok).all())
+    def satisfied(self, P: np.ndarray, W: np.ndarray, z: np.ndarray, rows: Any = None) -> np.ndarray:
+        return (P[:, self.idx, 2] >= self.ok).all(-1)[:, None]

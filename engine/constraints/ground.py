@@ -11,22 +11,17 @@ similar "feet near the floor" loss for its three-sensor sets.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
-from typing import ClassVar, TYPE_CHECKING
+from typing import Any, ClassVar
 
 import numpy as np
 
 from engine import skeleton as sk
 from engine.constraints.base import Constraint, param
-from engine.constraints.terms import FrameInputs
+from engine.constraints.residual import FrameInputs, Kit, Residuals, Term
 
-if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
-    import torch
-
-    from engine.kinematics.pose_state import PoseState
-
-_FEET = [sk.JOINT_INDEX["lankle"], sk.JOINT_INDEX["rankle"]]
+#: The joints whose lower height the band acts on.
+FEET = [sk.JOINT_INDEX["lankle"], sk.JOINT_INDEX["rankle"]]
 #: Softness of the minimum over the two ankles, metres.
 SOFTMIN_TAU = 0.02
 
@@ -49,47 +44,43 @@ class GroundConstraint(Constraint):
     def acts_on(self) -> tuple[str, ...]:
         return ("lankle", "rankle")
 
-    def loss(self, state: PoseState) -> torch.Tensor:
-        import torch
-        z = -SOFTMIN_TAU * torch.logsumexp(-state.positions[_FEET, 2] / SOFTMIN_TAU, dim=0)
-        return torch.relu(z - self.high) ** 2 + torch.relu(self.low - z) ** 2
+    def term(self, frame: FrameInputs) -> "GroundTerm":
+        return GroundTerm(self.name, self.low, self.high)
 
-    def fast_term(self, frame: FrameInputs) -> "GroundTerm":
-        return GroundTerm(self.name, self.weight, self.low, self.high)
+    @classmethod
+    def examples(cls, positions: np.ndarray) -> list[Constraint]:
+        low = float(positions[FEET, 2].min())
+        return [cls(weight=2.0, low=low + 0.3, high=low + 0.4), cls(low=low - 0.4, high=low - 0.3)]
 
 
-class GroundTerm:
-    """``weight * (relu(z - high)^2 + relu(low - z)^2)`` for ``z`` the soft minimum of the
-    two ankle heights: the fast-path term of :class:`GroundConstraint`.
+class GroundTerm(Term):
+    """``e`` with ``e^2 = relu(z - high)^2 + relu(low - z)^2`` for ``z`` the soft minimum
+    of the two ankle heights: the residual of :class:`GroundConstraint`.
 
     ``z = -tau log(exp(-z_l / tau) + exp(-z_r / tau))`` with ``tau`` = :data:`SOFTMIN_TAU`:
     within ``tau ln 2`` of the lower ankle, and smooth where the feet swap (a hard minimum
-    made the gradient jump between the feet from one iteration to the next).
+    made the gradient jump between the feet from one iteration to the next). Its Jacobian
+    on the ankles' heights is the softmin's weights inside the band's complement.
 
     Parameters
     ----------
     name : str
-    weight : float
     low, high : float
         Band of the lower ankle's height, metres above the floor (z = 0).
     """
 
-    def __init__(self, name: str, weight: float, low: float, high: float) -> None:
-        self.name, self.weight, self.turns, self.low, self.high = name, float(weight), False, float(low), float(high)
+    def __init__(self, name: str, low: float, high: float) -> None:
+        self.names, self.owner = (name,), np.zeros(1, dtype=np.intp)
+        self.low, self.high = float(low), float(high)
 
-    def _excess(self, pos: np.ndarray) -> tuple[np.ndarray, float]:
-        """Softmin weights of the two ankles ``(2,)`` and the soft height's excess over the band."""
-        h = pos[_FEET, 2]
-        m = h.min()
-        e = np.exp(-(h - m) / SOFTMIN_TAU)
-        z = m - SOFTMIN_TAU * math.log(e.sum())
-        return e / e.sum(), (z - self.high if z > self.high else (z - self.low if z < self.low else 0.0))
-
-    def evaluate(self, pos: np.ndarray, world: np.ndarray, g_pos: np.ndarray, g_rot: np.ndarray) -> float:
-        w, e = self._excess(pos)
-        if e != 0.0:
-            g_pos[_FEET, 2] += (2.0 * self.weight * e) * w
-        return e * e
-
-    def satisfied(self, pos: np.ndarray, world: np.ndarray) -> bool:
-        return True
+    def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:
+        h = P[:, FEET, 2]
+        soft = -SOFTMIN_TAU * kit.logsumexp(-h / SOFTMIN_TAU, axis=-1)
+        e = kit.relu(soft - self.high) - kit.relu(self.low - soft)
+        if not jac:
+            return Residuals(e[:, None])
+        w = np.exp(-(h - h.min(1, keepdims=True)) / SOFTMIN_TAU)
+        w /= w.sum(1, keepdims=True)
+        d = np.zeros((len(P), 1, len(FEET), 3))
+        d[:, 0, :, 2] = w * (e != 0.0)[:, None]
+        return Residuals(e[:, None], np.array(FEET, dtype=np.intp), d)

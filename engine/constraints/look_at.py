@@ -4,30 +4,29 @@ The forward axis is given in the joint's own frame. In the canonical rest pose e
 joint's world rotation is the identity and the character faces -Y, so the head's
 (``upperneck``) forward axis is ``(0, -1, 0)``.
 
-Fast path: with ``f = W_j axis`` and ``t = target - P_j``, ``loss = 1 - f.t / |t|`` has
-``d loss / d P_j = (f - cos t/|t|) / |t|`` and rotation gradient ``-(f x t) / |t|``
-(turning the joint by ``a`` moves ``f`` by ``a x f``).
+Residual: with ``f = W_j axis`` and ``u = t / |t|`` the unit direction to the target
+(``t = target - P_j``), ``(f - u) / sqrt(2)``, whose squared norm ``(2 - 2 f.u) / 2`` is the
+loss ``1 - cos``. Its Jacobian is ``(I - u u^T) / (|t| sqrt(2))`` on ``P_j`` and ``-[f]x /
+sqrt(2)`` on the joint's turn (turning it by ``a`` moves ``f`` by ``a x f``).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, ClassVar, TYPE_CHECKING
+from typing import Any, ClassVar
 
 import numpy as np
 
-from engine.constraints.base import Constraint, joint_index, param, vec, world_rotation_matrix
+from engine.constraints.base import Constraint, joint_index, param
 from engine.constraints.placement import LOOK_DISTANCE, facing, joint_at
-from engine.constraints.terms import FrameInputs
+from engine.constraints.residual import EPS3, FrameInputs, Kit, Residuals, Term
 from engine.errors import UserError
+from engine.gizmos import LineGizmo, PointGizmo
 
-if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
-    import torch
-
-    from engine.kinematics.pose_state import PoseState
 
 _MIN_DISTANCE = 1e-6  # metres: the direction to a target this close is not defined
+_HALF = math.sqrt(0.5)
 
 
 @dataclass
@@ -60,65 +59,57 @@ class LookAtConstraint(Constraint):
     def acts_on(self) -> tuple[str, ...]:
         return (self.joint,)
 
-    def _cos(self, state: PoseState) -> torch.Tensor:
-        j = joint_index(self.joint, "joint", self.kind)
-        axis = vec(self.axis / np.linalg.norm(self.axis), state.positions)
-        forward = world_rotation_matrix(state, j) @ axis
-        to_target = vec(self.target, state.positions) - state.positions[j]
-        return (forward * to_target).sum() / to_target.norm().clamp_min(_MIN_DISTANCE)
-
-    def loss(self, state: PoseState) -> torch.Tensor:
-        return 1.0 - self._cos(state)
-
-    def satisfied(self, state: PoseState) -> bool:
-        import torch
-        with torch.no_grad():
-            c = float(self._cos(state))
-        return c >= math.cos(math.radians(self.tolerance)) or not math.isfinite(c)
-
-    def fast_term(self, frame: FrameInputs) -> "LookAtTerm":
+    def term(self, frame: FrameInputs) -> "LookAtTerm":
         return LookAtTerm(self)
+
+    @classmethod
+    def examples(cls, positions: np.ndarray) -> list[Constraint]:
+        head, wrist = positions[joint_index("upperneck")], positions[joint_index("lwrist")]
+        return [
+            cls(weight=2.0, target=head + [0.9, -0.4, 0.3]),
+            cls(joint="lwrist", axis=np.array([1.0, 0.2, 0.0]), target=wrist + [0.0, -0.5, 0.1]),
+        ]
 
     @classmethod
     def placement(cls, params: dict[str, Any], positions: np.ndarray) -> dict[str, Any]:
         """The target in front of the looking joint, at :data:`LOOK_DISTANCE`."""
         return {"target": joint_at(positions, params.get("joint"), "upperneck") + LOOK_DISTANCE * facing(positions)}
 
-    def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
-        target = np.asarray(self.target, float).copy()
+    def gizmo(self, positions: np.ndarray | None = None) -> PointGizmo | LineGizmo:
+        target = np.asarray(self.target, float)
         if positions is None:
-            return {"type": "point", "position": target, "edit": "target"}
+            return PointGizmo(target, edit="target")
         start = np.asarray(positions, float)[joint_index(self.joint, "joint", self.kind)]
         # the line's end (the target) stays draggable once a pose exists
-        return {"type": "line", "points": np.stack([start, target]), "edit": "target"}
+        return LineGizmo(np.stack([start, target]), edit="target")
 
 
-class LookAtTerm:
-    """The fast-path term of one :class:`LookAtConstraint` (module doc)."""
+class LookAtTerm(Term):
+    """``(f - t / |t|) / sqrt(2)`` for the forward axis ``f = W_j axis`` and ``t = target -
+    P_j``: its squared norm is ``1 - cos`` of the angle between them (module doc)."""
 
     def __init__(self, c: LookAtConstraint) -> None:
-        self.name, self.weight, self.turns = c.name, c.weight, True
-        self.j = joint_index(c.joint, "joint", c.kind)
+        self.names, self.owner = (c.name,), np.zeros(3, dtype=np.intp)
+        self.j = np.array([joint_index(c.joint, "joint", c.kind)], dtype=np.intp)
         self.axis = np.asarray(c.axis, dtype=np.float64) / np.linalg.norm(c.axis)
         self.target = np.asarray(c.target, dtype=np.float64)
         self.cos_tol = math.cos(math.radians(c.tolerance))
 
-    def _parts(self, pos: np.ndarray, world: np.ndarray) -> tuple[list[float], list[float], float, float]:
-        """Forward axis, direction to the target (unnormalised), its length and the
-        cosine, in floats (numpy calls cost more than the arithmetic on three numbers)."""
-        f = (world[self.j] @ self.axis).tolist()
-        t = (self.target - pos[self.j]).tolist()
-        n = max(math.sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]), _MIN_DISTANCE)
-        return f, t, n, (f[0] * t[0] + f[1] * t[1] + f[2] * t[2]) / n
+    def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:
+        f = W[:, self.j[0]] @ kit.const(self.axis, P)  # (A, 3)
+        t = kit.const(self.target, P) - P[:, self.j[0]]
+        n = kit.clamp_min(kit.sqrt((t * t).sum(-1)), _MIN_DISTANCE)
+        u = t / n[:, None]
+        r = (f - u) * _HALF
+        if not jac:
+            return Residuals(r)
+        free = (n > _MIN_DISTANCE)[:, None, None]  # below it |t| is a constant
+        d_pos = (np.eye(3) - free * u[:, :, None] * u[:, None, :]) / n[:, None, None] * _HALF
+        d_rot = np.einsum("ikl,al->aik", EPS3, f) * _HALF  # turning by a moves f by a x f
+        return Residuals(r, self.j, d_pos[:, :, None], self.j, d_rot[:, :, None])
 
-    def evaluate(self, pos: np.ndarray, world: np.ndarray, g_pos: np.ndarray, g_rot: np.ndarray) -> float:
-        (fx, fy, fz), (tx, ty, tz), n, c = self._parts(pos, world)
-        k = self.weight / n
-        s = c / n if n > _MIN_DISTANCE else 0.0  # below it the reference clamps |t|: the cosine is linear in t
-        g_pos[self.j] += (k * (fx - s * tx), k * (fy - s * ty), k * (fz - s * tz))
-        g_rot[self.j] -= (k * (fy * tz - fz * ty), k * (fz * tx - fx * tz), k * (fx * ty - fy * tx))  # k f x t
-        return 1.0 - c
-
-    def satisfied(self, pos: np.ndarray, world: np.ndarray) -> bool:
-        c = self._parts(pos, world)[3]
-        return c >= self.cos_tol or not math.isfinite(c)
+    def satisfied(self, P: np.ndarray, W: np.ndarray, z: np.ndarray, rows: Any = None) -> np.ndarray:
+        f = W[:, self.j[0]] @ self.axis
+        t = self.target - P[:, self.j[0]]
+        c = (f * t).sum(-1) / np.maximum(np.linalg.norm(t, axis=-1), _MIN_DISTANCE)
+        return ((c >= self.cos_tol) | ~np.isfinite(c))[:, None]

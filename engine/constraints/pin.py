@@ -3,7 +3,7 @@
 Its default weight is 30, not 1: a pin is the user overriding the trackers, and at
 weight 1 six sensor terms of the same scale (squared metres) held a Ctrl-dragged elbow
 10-13 cm short of the pin with the shipped DragPoser; at 30 it pulls the joint in over
-a few frames and holds it within ~2 cm; ``scripts/measure_pin.py`` measures it
+a few frames and holds it within ~2 cm; ``research/measure_pin.py`` measures it
 (docs/studio.md, "Pins").
 
 With ``follow_previous`` the target is the joint's previous-frame position every frame
@@ -13,25 +13,22 @@ first frame that has one on (:meth:`PinConstraint.settled` returns the captured 
 the pin itself is never changed). On the very first frame, with no previous pose, an
 unset pin costs nothing.
 
-Fast path: ``|P_j - t|^2`` has gradient ``2 (P_j - t)``.
+Residual: ``P_j - t``.
 """
 
 from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import Any, ClassVar, TYPE_CHECKING
+from typing import Any, ClassVar
 
 import numpy as np
 
-from engine.constraints.base import Constraint, joint_index, param, vec
+from engine.constraints.base import Constraint, joint_index, param
 from engine.constraints.placement import joint_at
-from engine.constraints.terms import FrameInputs
+from engine.constraints.residual import FrameInputs, FrameRows, Kit, Residuals, Term
+from engine.gizmos import PointGizmo
 
-if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
-    import torch
-
-    from engine.kinematics.pose_state import PoseState
 
 
 @dataclass
@@ -60,21 +57,6 @@ class PinConstraint(Constraint):
             return self.position
         return None if previous is None else previous[j]
 
-    def loss(self, state: PoseState) -> torch.Tensor:
-        import torch
-        j = joint_index(self.joint, "joint", self.kind)
-        prev = None if state.previous_positions is None else state.previous_positions.detach()
-        target = self._target(prev)
-        if target is None:
-            return state.positions.new_zeros(())
-        t = target if isinstance(target, torch.Tensor) else vec(target, state.positions)
-        return ((state.positions[j] - t) ** 2).sum()
-
-    def satisfied(self, state: PoseState) -> bool:
-        import torch
-        with torch.no_grad():
-            return float(self.loss(state)) <= self.tolerance**2
-
     def settled(self, previous_positions: np.ndarray | None) -> "PinConstraint":
         """A copy holding the previous pose's joint position when ``position`` is unset."""
         if self.follow_previous or previous_positions is None or np.all(np.isfinite(self.position)):
@@ -82,41 +64,49 @@ class PinConstraint(Constraint):
         j = joint_index(self.joint, "joint", self.kind)
         return dataclasses.replace(self, position=np.array(previous_positions[j], dtype=np.float64))
 
-    def fast_term(self, frame: FrameInputs) -> "PinTerm":
+    def term(self, frame: FrameInputs) -> "PinTerm":
         return PinTerm(self, self._target(frame.previous_positions))
+
+    @classmethod
+    def examples(cls, positions: np.ndarray) -> list[Constraint]:
+        return [cls(joint="rwrist", position=positions[joint_index("rwrist")] + [0.0, -0.1, 0.05]),
+                cls(name="follow", joint="lelbow", follow_previous=True),
+                cls(name="unset", joint="rknee")]
 
     @classmethod
     def placement(cls, params: dict[str, Any], positions: np.ndarray) -> dict[str, Any]:
         """Pinned where the joint is now."""
         return {"position": joint_at(positions, params.get("joint"), "lankle")}
 
-    def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
+    def gizmo(self, positions: np.ndarray | None = None) -> PointGizmo | None:
         """A draggable point labelled with the joint, tied to the joint by a line."""
         if not np.all(np.isfinite(self.position)):
-            return {}
-        g = {"type": "point", "position": self.position.copy(), "edit": "position", "label": self.joint}
+            return None
+        anchor = None
         if positions is not None:
-            g["anchor"] = np.asarray(positions, float)[joint_index(self.joint, "joint", self.kind)].copy()
-        return g
+            anchor = np.asarray(positions, float)[joint_index(self.joint, "joint", self.kind)]
+        return PointGizmo(self.position, edit="position", label=self.joint, anchor=anchor)
 
 
-class PinTerm:
-    """The fast-path term of one :class:`PinConstraint` for one frame (module doc)."""
+class PinTerm(FrameRows, Term):
+    """``on * (P_j - target)``: ``on`` 0 while there is no target (module doc); per frame
+    (``target (A, 3)``, ``on (A,)``)."""
+
+    PER_FRAME = ("target", "on")
 
     def __init__(self, c: PinConstraint, target: np.ndarray | None) -> None:
-        self.name, self.weight, self.turns, self.tol2 = c.name, c.weight, False, c.tolerance**2
-        self.j = joint_index(c.joint, "joint", c.kind)
-        self.target = None if target is None else np.asarray(target, dtype=np.float64)
+        self.names, self.owner, self.tol2 = (c.name,), np.zeros(3, dtype=np.intp), c.tolerance**2
+        self.j = np.array([joint_index(c.joint, "joint", c.kind)], dtype=np.intp)
+        self.on = np.array([0.0 if target is None else 1.0])
+        self.target = np.zeros((1, 3)) if target is None else np.asarray(target, dtype=np.float64).reshape(1, 3)
 
-    def evaluate(self, pos: np.ndarray, world: np.ndarray, g_pos: np.ndarray, g_rot: np.ndarray) -> float:
-        if self.target is None:
-            return 0.0
-        d = pos[self.j] - self.target
-        g_pos[self.j] += (2.0 * self.weight) * d
-        return float(d @ d)
+    def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:
+        sel = self.select(P, rows)
+        on = self.on[sel]
+        r = (P[:, self.j[0]] - kit.const(self.target[sel], P)) * kit.const(on, P)[:, None]
+        return Residuals(r, self.j, np.eye(3)[None, :, None, :] * on[:, None, None, None] if jac else None)
 
-    def satisfied(self, pos: np.ndarray, world: np.ndarray) -> bool:
-        if self.target is None:
-            return True
-        d = pos[self.j] - self.target
-        return float(d @ d) <= self.tol2
+    def satisfied(self, P: np.ndarray, W: np.ndarray, z: np.ndarray, rows: Any = None) -> np.ndarray:
+        sel = self.select(P, rows)
+        d = P[:, self.j[0]] - self.target[sel]
+        return (((d * d).sum(-1) <= self.tol2) | (self.on[sel] == 0))[:, None]

@@ -4,28 +4,24 @@ The loss is the squared position error (metres squared, summed over x, y, z) plu
 6-DoF tracker, ``rotation_weight * (1 - <q, q_target>^2)``: a sign-invariant rotation
 distance equal to ``sin^2(angle / 2)`` (about ``angle^2 / 4`` for small errors).
 The method updates the target every frame with :meth:`SensorConstraint.set_target`.
-The solver's fast path batches every tracker of a frame into arrays (a :class:`NativeTerm`;
-:class:`engine.solver.fast.FastTerms`).
+Every tracker of a frame is one :class:`SensorTerm` (one set of array operations), which
+the batched offline solve gives a frame axis.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, ClassVar, TYPE_CHECKING
+from typing import Any, ClassVar
 
 import numpy as np
 
-from engine.constraints.base import Constraint, joint_index, param, rotation_distance, vec
-from engine.constraints.terms import FrameInputs, NativeTerm
+from engine.constraints.base import Constraint, joint_index, param
+from engine.constraints.residual import (
+    FrameInputs, FrameRows, Kit, Residuals, Term, rotation_residual, unit_quaternion_matrix,
+)  # fmt: skip
 from engine.errors import UserError
-
-if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
-    import torch
-
-    from engine.kinematics.pose_state import PoseState
-
+from engine.gizmos import PointGizmo
 
 @dataclass
 class SensorConstraint(Constraint):
@@ -70,9 +66,6 @@ class SensorConstraint(Constraint):
     def acts_on(self) -> tuple[str, ...]:
         return (self.joint,)
 
-    def fast_term(self, frame: FrameInputs) -> NativeTerm:
-        return NativeTerm(self, self.weight)
-
     def set_target(self, position: np.ndarray, rotation: np.ndarray | None = None, connected: bool = True) -> None:
         """New tracker reading for the next solve (metres; (w, x, y, z))."""
         self.position = np.asarray(position, dtype=np.float64).reshape(3)
@@ -80,58 +73,29 @@ class SensorConstraint(Constraint):
             self.rotation = np.asarray(rotation, dtype=np.float64).reshape(4)
         self.connected = bool(connected)
 
-    def _errors(self, state: PoseState) -> tuple[torch.Tensor, torch.Tensor | None]:
-        j = joint_index(self.joint, "joint", self.kind)
-        pos_err = ((state.positions[j] - vec(self.position, state.positions)) ** 2).sum()
-        if self.dof != 6:
-            return pos_err, None
-        return pos_err, rotation_distance(state, j, self.rotation)
-
-    def loss(self, state: PoseState) -> torch.Tensor:
-        if not self.connected:
-            return state.positions.new_zeros(())
-        pos_err, rot_err = self._errors(state)
-        return pos_err if rot_err is None else pos_err + self.rotation_weight * rot_err
-
-    def satisfied(self, state: PoseState) -> bool:
-        import torch
-        if not self.connected:
-            return True
-        with torch.no_grad():
-            pos_err, rot_err = self._errors(state)
-            if float(pos_err) > self.position_tolerance**2:
-                return False
-            if rot_err is None:
-                return True
-            # rot_err = sin^2(angle / 2)
-            return float(rot_err) <= math.sin(math.radians(self.rotation_tolerance) / 2) ** 2
+    def term(self, frame: FrameInputs) -> "SensorTerm":
+        return SensorTerm([self])
 
     @classmethod
-    def batch(cls, items: list[Constraint], like: torch.Tensor) -> Callable[[PoseState], torch.Tensor]:
-        import torch
-        from engine.kinematics import quaternion as Q
-        idx = torch.tensor([joint_index(c.joint, "joint", cls.kind) for c in items])
-        target = vec(np.stack([c.position for c in items]), like)
-        on = vec([float(c.connected) for c in items], like)
-        six = [k for k, c in enumerate(items) if c.dof == 6]
-        rot_idx = idx[six]
-        rot_w = vec([items[k].rotation_weight for k in six], like)
-        quats = [unit_rotation(items[k].rotation) for k in six]  # no 6-DoF sensor (e.g. 6x3dof): none
-        rot_t = Q.to_matrix(vec(np.stack(quats) if quats else np.zeros((0, 4)), like))
-        six_t = torch.tensor(six, dtype=torch.long)
+    def terms(cls, items: list[Constraint], frame: FrameInputs) -> list[Term]:
+        """Every tracker of the frame in one term (one set of array operations)."""
+        return [SensorTerm(items)] if items else []  # type: ignore[arg-type]
 
-        def losses(state: PoseState) -> torch.Tensor:
-            out = ((state.positions.index_select(0, idx) - target) ** 2).sum(-1)
-            if len(six):
-                r = _matrices(state, rot_idx)
-                rot = ((3.0 - (rot_t * r).sum((-1, -2))) * 0.25).clamp(0.0, 1.0)
-                out = out.index_add(0, six_t, rot_w * rot)
-            return out * on
+    @classmethod
+    def examples(cls, positions: np.ndarray) -> list[Constraint]:
+        p = lambda j: positions[joint_index(j)]  # noqa: E731
+        turn = np.array([math.cos(0.4), 0.3 * math.sin(0.4), math.sin(0.4) * 0.9, 0.3 * math.sin(0.4)])
+        return [
+            cls(name="head", joint="upperneck", position=p("upperneck") + [0.05, -0.1, 0.02], rotation=turn),
+            cls(name="hand", joint="lwrist", dof=3, position=p("lwrist") + [0.1, 0.0, -0.05], weight=2.0),
+            cls(name="lost", joint="rwrist", position=p("rwrist") + [0.2, 0.0, 0.0], connected=False),
+            cls(name="hip", joint="root", position=p("root") + [0.0, 0.03, 0.0], rotation=turn[[0, 2, 1, 3]],
+                rotation_weight=0.5),
+        ]  # fmt: skip
 
-        return losses
-
-    def gizmo(self, positions: np.ndarray | None = None) -> dict[str, Any]:
-        return {"type": "point", "position": np.asarray(self.position, float).copy()}
+    def gizmo(self, positions: np.ndarray | None = None) -> PointGizmo | None:
+        position = np.asarray(self.position, float)
+        return PointGizmo(position) if np.all(np.isfinite(position)) else None
 
 
 def unit_rotation(q: Any) -> np.ndarray:
@@ -141,8 +105,64 @@ def unit_rotation(q: Any) -> np.ndarray:
     return q / max(float(np.linalg.norm(q)), 1e-12)
 
 
-def _matrices(state: PoseState, idx: torch.Tensor) -> torch.Tensor:
-    from engine.kinematics import quaternion as Q
-    if state.rotation_matrices is not None:
-        return state.rotation_matrices.index_select(0, idx)
-    return Q.to_matrix(state.world_rotations().index_select(0, idx))
+class SensorTerm(FrameRows, Term):
+    """The residual of the trackers ``items`` over ``A`` frames: per tracker
+    ``on * (P_j - t)`` (3 entries) and, for a 6-DoF one, ``on * sqrt(rotation_weight / 8)
+    * (W_j - T)`` (9 entries: :func:`~engine.constraints.residual.rotation_residual`), so
+    its loss is the squared position error plus ``rotation_weight * sin^2(angle / 2)``.
+
+    The targets carry a frame axis (``target (A, S, 3)``, ``rot_target (A, S6, 3, 3)``,
+    ``on (A, S)``, ``scale (A, S6)``) so the batched offline solve gives each frame its
+    readings (:class:`~engine.constraints.residual.FrameRows`); built from the
+    constraints they hold one frame.
+    """
+
+    PER_FRAME = ("target", "on", "rot_target", "scale")
+
+    def __init__(self, items: list[SensorConstraint]) -> None:
+        self.names = tuple(c.name for c in items)
+        self.joints = np.array([joint_index(c.joint, "joint", c.kind) for c in items], dtype=np.intp)
+        self.six = np.array([k for k, c in enumerate(items) if c.dof == 6], dtype=np.intp)
+        self.joints6 = self.joints[self.six]
+        self.target = np.array([c.position for c in items], dtype=np.float64).reshape(1, -1, 3)
+        self.on = np.array([[float(c.connected) for c in items]]).reshape(1, -1)
+        rot = np.array([unit_rotation(items[k].rotation) for k in self.six]).reshape(-1, 4)
+        self.rot_target = unit_quaternion_matrix(rot).reshape(1, -1, 3, 3)
+        self.scale = np.array([[math.sqrt(items[k].rotation_weight / 8.0) for k in self.six]]).reshape(1, -1)
+        self.pos_tol2 = np.array([c.position_tolerance**2 for c in items])
+        self.rot_tol = np.array([math.sin(math.radians(items[k].rotation_tolerance) / 2) ** 2 for k in self.six])
+        self.owner = np.concatenate([np.repeat(np.arange(len(items)), 3), np.repeat(self.six, 9)]).astype(np.intp)
+        s = len(items)
+        self._d_pos = np.zeros((3 * s, s, 3))
+        self._d_pos[np.arange(3 * s), np.repeat(np.arange(s), 3), np.tile(np.arange(3), s)] = 1.0
+
+    def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:
+        sel = self.select(P, rows)
+        on = kit.const(self.on[sel], P)
+        a = P.shape[0]
+        err = (P[:, self.joints] - kit.const(self.target[sel], P)) * on[..., None]
+        parts, d_rot = [err.reshape(a, -1)], None
+        if len(self.six):
+            scale = self.scale[sel] * self.on[sel][:, self.six]
+            rot, d_rot = rotation_residual(kit, W[:, self.joints6], kit.const(self.rot_target[sel], P),
+                                           kit.const(scale, P), jac)  # fmt: skip
+            parts.append(rot)
+        r = kit.cat(parts, -1) if len(parts) > 1 else parts[0]
+        if not jac:
+            return Residuals(r)
+        d_pos = self._d_pos[None] * np.repeat(self.on[sel], 3, axis=1)[:, :, None, None]
+        if d_rot is not None:
+            d_pos = np.concatenate((d_pos, np.zeros((a, d_rot.shape[1]) + d_pos.shape[2:])), axis=1)
+            d_rot = np.concatenate((np.zeros((a, 3 * len(self.joints)) + d_rot.shape[2:]), d_rot), axis=1)
+        return Residuals(r, self.joints, d_pos, self.joints6 if d_rot is not None else None, d_rot)
+
+    def satisfied(self, P: np.ndarray, W: np.ndarray, z: np.ndarray, rows: Any = None) -> np.ndarray:
+        sel = self.select(P, rows)
+        off = self.on[sel] == 0
+        err = P[:, self.joints] - self.target[sel]
+        ok = (np.einsum("asi,asi->as", err, err) <= self.pos_tol2) | off
+        if len(self.six):
+            dist = (3.0 - np.einsum("akij,akij->ak", self.rot_target[sel], W[:, self.joints6])) * 0.25
+            ok[:, self.six] &= (dist <= self.rot_tol) | off[:, self.six]
+        return ok
+

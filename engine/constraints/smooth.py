@@ -4,25 +4,21 @@ Loss: mean over the 22 joints of ``|p_j - target_j|^2`` (metres squared), where 
 method sets ``target = p(t-1) + (p(t-1) - p(t-2))`` every frame, the constant-velocity
 extrapolation of the previous two solved poses. It penalises each joint's acceleration
 (``|a| dt^2``), not its velocity, so steady motion is not held back; only a change of
-velocity costs. Zero until two frames have been solved (``target`` NaN). Fast path: the
-gradient is ``2 (p_j - target_j) / 22`` per joint.
+velocity costs. Zero until two frames have been solved (``target`` NaN). The residual
+is ``(p - target) / sqrt(22)``.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
-from typing import ClassVar, TYPE_CHECKING
+from typing import Any, ClassVar
 
 import numpy as np
 
 from engine import skeleton as sk
-from engine.constraints.base import Constraint, param, vec
-from engine.constraints.terms import FrameInputs
-
-if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
-    import torch
-
-    from engine.kinematics.pose_state import PoseState
+from engine.constraints.base import Constraint
+from engine.constraints.residual import FrameInputs, FrameRows, Kit, Residuals, Term
 
 
 @dataclass
@@ -53,42 +49,48 @@ class SmoothConstraint(Constraint):
     def acts_on(self) -> tuple[str, ...]:
         return tuple(sk.JOINT_NAMES)
 
-    def fast_term(self, frame: FrameInputs) -> "SmoothTerm":
-        return SmoothTerm(self.name, self.weight, self.target if self.active else None)
+    def term(self, frame: FrameInputs) -> "SmoothTerm":
+        return SmoothTerm(self.name, self.target if self.active else None)
+
+    @classmethod
+    def examples(cls, positions: np.ndarray) -> list[Constraint]:
+        moving = cls(weight=3.0)
+        moving.set_history(positions + 0.03, positions)
+        return [moving]
 
     @property
     def active(self) -> bool:
         return bool(np.isfinite(self.target).all())
 
-    def loss(self, state: PoseState) -> torch.Tensor:
-        if not self.active:
-            return state.positions.new_zeros(())
-        return ((state.positions - vec(self.target, state.positions)) ** 2).sum(-1).mean()
 
-
-class SmoothTerm:
-    """``weight * mean_j |P_j - target_j|^2``, the fast-path term of :class:`SmoothConstraint`.
+class SmoothTerm(FrameRows, Term):
+    """``(P - target) / sqrt(22)`` over every joint (66 entries), so the loss is the mean
+    squared distance to the constant-velocity target.
 
     Parameters
     ----------
     name : str
         Constraint name (loss reporting).
-    weight : float
     target : ndarray (22, 3) or None
         Constant-velocity extrapolation of the last two poses, metres; None = inactive
-        (loss and gradient zero).
+        (residual zero). With a frame axis (``target (A, 22, 3)``, ``on (A,)``) in the
+        batched solve.
     """
 
-    def __init__(self, name: str, weight: float, target: np.ndarray | None) -> None:
-        self.name, self.weight, self.turns = name, float(weight), False
-        self.target = None if target is None else np.asarray(target, dtype=np.float64)
+    PER_FRAME = ("target", "on")
 
-    def evaluate(self, pos: np.ndarray, world: np.ndarray, g_pos: np.ndarray, g_rot: np.ndarray) -> float:
-        if self.target is None:
-            return 0.0
-        d = pos - self.target
-        g_pos += (2.0 * self.weight / len(pos)) * d
-        return float(np.einsum("ij,ij->", d, d) / len(pos))
+    def __init__(self, name: str, target: np.ndarray | None) -> None:
+        n = sk.NUM_JOINTS
+        self.names, self.owner = (name,), np.zeros(3 * n, dtype=np.intp)
+        self.on = np.array([0.0 if target is None else 1.0])
+        self.target = np.zeros((1, n, 3)) if target is None else np.asarray(target, dtype=np.float64).reshape(1, n, 3)
+        self._d_pos = np.eye(3 * n).reshape(3 * n, n, 3) / math.sqrt(n)
 
-    def satisfied(self, pos: np.ndarray, world: np.ndarray) -> bool:
-        return True
+    def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:
+        sel = self.select(P, rows)
+        on = self.on[sel]
+        a, n = P.shape[0], P.shape[1]
+        r = ((P - kit.const(self.target[sel], P)) * kit.const(on / math.sqrt(n), P)[:, None, None]).reshape(a, 3 * n)
+        if not jac:
+            return Residuals(r)
+        return Residuals(r, np.arange(n), self._d_pos[None] * on[:, None, None, None])

@@ -1,24 +1,21 @@
 """``temporal_prior``: stay near the temporal predictor's latent (DragPoser Algorithm 1).
 
 Loss: mean squared difference between the latent being optimised and the predictor's
-latent for the frame (``PoseState.prediction``); zero when there is no prediction yet.
-The solver's fast path evaluates it on the latent itself (a :class:`NativeTerm`: the
-gradient ``2 (z - z_pred) / L`` skips the decoder).
+latent for the frame (:attr:`FrameInputs.prediction`); zero when there is no prediction
+yet. The residual is ``(z - z_pred) / sqrt(L)``, a term on the latent itself: its
+gradient ``2 (z - z_pred) / L`` skips the decoder.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
-from typing import ClassVar, TYPE_CHECKING
+from typing import Any, ClassVar
 
+import numpy as np
 
 from engine.constraints.base import Constraint
-from engine.constraints.terms import FrameInputs, NativeTerm
-
-if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
-    import torch
-
-    from engine.kinematics.pose_state import PoseState
+from engine.constraints.residual import FrameInputs, FrameRows, Kit, Residuals, Term
 
 
 @dataclass
@@ -31,10 +28,31 @@ class TemporalPriorConstraint(Constraint):
     def acts_on(self) -> tuple[str, ...]:
         return ()
 
-    def fast_term(self, frame: FrameInputs) -> NativeTerm:
-        return NativeTerm(self, self.weight)
+    def term(self, frame: FrameInputs) -> "PriorTerm":
+        return PriorTerm(self.name, frame.prediction)
 
-    def loss(self, state: PoseState) -> torch.Tensor:
-        if state.prediction is None:
-            return state.latent.new_zeros(())
-        return ((state.latent - state.prediction.detach()) ** 2).mean()
+    @classmethod
+    def examples(cls, positions: np.ndarray) -> list[Constraint]:
+        return [cls(weight=0.5)]
+
+
+class PriorTerm(FrameRows, Term):
+    """``(z - prediction) / sqrt(L)`` per frame; ``prediction (A, L)``, or None (no
+    prediction: the residual is zero)."""
+
+    PER_FRAME = ("prediction",)
+
+    def __init__(self, name: str, prediction: np.ndarray | None) -> None:
+        self.names = (name,)
+        self.prediction = None if prediction is None else np.asarray(prediction, dtype=np.float64).reshape(1, -1)
+        self.owner = np.zeros(1 if prediction is None else self.prediction.shape[1], dtype=np.intp)
+        if prediction is None:
+            self.PER_FRAME = ()
+
+    def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:
+        a, n = z.shape
+        if self.prediction is None:
+            return Residuals(kit.zeros((a, 1), z))
+        s = 1.0 / math.sqrt(n)
+        r = (z - kit.const(self.prediction[self.select(z, rows)], z)) * s
+        return Residuals(r, d_latent=np.broadcast_to(np.eye(n) * s, (a, n, n)) if jac else None)

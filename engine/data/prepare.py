@@ -41,7 +41,7 @@ from engine.atomic import atomic_path, write_bytes
 from engine.errors import UserError
 from engine.kinematics.features import encoder_input, mirror_motion, pose_from_motion
 from engine.motion.clip import Motion
-from engine.motion.retarget import RETARGET_VERSION, load_with_report, manifest_entry, manifest_fps
+from engine.motion.retarget import CURRENT, load_with_report, manifest_entry, manifest_fps
 from engine.motion.source_file import SOURCE_SUFFIXES
 
 FORMAT = 1
@@ -245,7 +245,7 @@ def prepare(
         raise UserError(f"no .bvh or .amc files found under {', '.join(map(str, inputs))}")
     splits, takes = split_files(files, eval_only)
     settings = {"format": FORMAT, "features": FEATURES_VERSION, "mirror": mirror, "eval_only": eval_only,
-                "retarget": RETARGET_VERSION, "rig_map": sha256_file(rig_map) if rig_map else None}
+                "retarget": CURRENT.version, "rig_map": sha256_file(rig_map) if rig_map else None}
     man_path = out / "manifest.json"
     old = {}
     if man_path.is_file():
@@ -271,7 +271,7 @@ def prepare(
                 entries.extend(dict(c, split=splits[rel]) for c in cached)  # type: ignore[arg-type]
                 result.reused += len(cached)
                 continue
-            motion, report = load_with_report(path, manifest_fps(path), rig_map, version=RETARGET_VERSION)
+            motion, report = load_with_report(path, manifest_fps(path), rig_map, strategy=CURRENT)
             if len(motion) < 8:
                 raise UserError(f"{path}: only {len(motion)} frames after retargeting")
             for m in variants:

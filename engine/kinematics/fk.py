@@ -5,6 +5,9 @@ placed at once (7 levels for the 22-joint skeleton instead of 21 joints), so the
 per call, and the autograd graph through it, stays small. Levels are built by
 concatenation rather than by writing into a preallocated array, so autograd records no
 in-place copies. Offsets are an argument (per clip, or per frame), never a global.
+:func:`fk`, :func:`fk_positions` and :func:`fk_matrices` are that one pass
+(:func:`_forward`); :func:`fk_joints` places a few joints of one pose in scalar
+arithmetic for IK, which asks for them many times per frame (tested equal to :func:`fk`).
 """
 
 from __future__ import annotations
@@ -32,11 +35,21 @@ class Levels:
         (root first, then level 1, level 2, ...).
     unorder : ndarray (J,)
         Row of every joint in level-ordered storage (gather back to joint order).
+    order : ndarray (J,)
+        Joint of every row (root, then level 1, 2, ...).
+    prow : ndarray (J,)
+        Row of every row's parent (the root: itself).
+    chain : ndarray (J, J - 1)
+        1 where the bone into row ``b + 1`` lies on the path from the root to row ``r``: a
+        joint's position is the root's plus the world bone vectors on its path.
     """
 
     joints: tuple[np.ndarray, ...]
     parent_rows: tuple[np.ndarray, ...]
     unorder: np.ndarray
+    order: np.ndarray
+    prow: np.ndarray
+    chain: np.ndarray
 
 
 @lru_cache(maxsize=32)
@@ -52,10 +65,20 @@ def levels(parents: tuple[int, ...]) -> Levels:
     lv = [[j for j in range(len(parents)) if depth[j] == d] for d in range(1, max(depth, default=0) + 1)]
     order = [0] + [j for level in lv for j in level]
     row = {j: i for i, j in enumerate(order)}
+    prow = np.array([0] + [row[parents[j]] for j in order[1:]], dtype=np.intp)
+    chain = np.zeros((len(order), max(len(order) - 1, 0)))
+    for r in range(1, len(order)):
+        a = r
+        while a != 0:
+            chain[r, a - 1] = 1.0
+            a = prow[a]
     return Levels(
         tuple(np.array(level) for level in lv),
         tuple(np.array([row[parents[j]] for j in level]) for level in lv),
         np.array([row[j] for j in range(len(parents))]),
+        np.array(order, dtype=np.intp),
+        prow,
+        chain,
     )
 
 
@@ -95,50 +118,17 @@ def fk(local_rot, root_pos, offsets, parents=sk.PARENTS):
     rotations : (..., J, 4)
         World joint rotations.
     """
-    lv = levels(tuple(int(p) for p in parents))
     if torch_of(local_rot) is None:
-        return _fk_numpy(np.asarray(local_rot), np.asarray(root_pos), np.asarray(offsets), lv, parents)
-    take, cat = _ops(local_rot)
-    offsets = _offsets_like(offsets, local_rot)
-    g_rot = local_rot[..., :1, :]
-    g_pos = root_pos[..., None, :]
-    for idx, rows in zip(lv.joints, lv.parent_rows):
-        pr = take(g_rot, rows, -2)
-        g_pos = cat((g_pos, take(g_pos, rows, -2) + Q.rotate(pr, take(offsets, idx, -2))), -2)
-        g_rot = cat((g_rot, Q.mul(pr, take(local_rot, idx, -2))), -2)
-    return take(g_pos, lv.unorder, -2), take(g_rot, lv.unorder, -2)
+        local_rot, root_pos, offsets = np.asarray(local_rot), np.asarray(root_pos), np.asarray(offsets)
+    pos, _, quats = _forward(Q.to_matrix(local_rot), root_pos, offsets, parents, local_rot)
+    return pos, quats
 
 
 def fk_positions(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, parents=sk.PARENTS) -> np.ndarray:
-    """The positions of numpy :func:`fk` (the same values, bit for bit), without
-    composing the world quaternions: ``(..., J, 3)``, metres."""
-    lv = levels(tuple(int(p) for p in parents))
-    return _fk_numpy(np.asarray(local_rot), np.asarray(root_pos), np.asarray(offsets), lv, parents, False)[0]
-
-
-def _fk_numpy(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, lv: Levels,
-              parents, rotations: bool = True) -> tuple[np.ndarray, np.ndarray | None]:  # fmt: skip
-    """Numpy :func:`fk`: writes each level into preallocated arrays in joint order and
-    places joints with rotation matrices (one conversion for all joints), since numpy's
-    per-call overhead, not arithmetic, is the cost at one frame (IK calls this often).
-    Without ``rotations`` the world quaternions are not composed (None)."""
-    shape = np.broadcast_shapes(local_rot.shape[:-2], root_pos.shape[:-1], offsets.shape[:-2])
-    local = np.broadcast_to(local_rot, shape + local_rot.shape[-2:])
-    mats = Q.to_matrix(local)
-    off = offsets[..., None]
-    par = np.array([0] + [int(p) for p in parents[1:]])
-    g_rot = np.empty(shape + local.shape[-2:])
-    g_mat = np.empty(shape + mats.shape[-3:])
-    g_pos = np.empty(shape + (local.shape[-2], 3))
-    g_rot[..., 0, :], g_mat[..., 0, :, :], g_pos[..., 0, :] = local[..., 0, :], mats[..., 0, :, :], root_pos
-    for idx in lv.joints:
-        p = par[idx]
-        pm = g_mat[..., p, :, :]
-        g_pos[..., idx, :] = g_pos[..., p, :] + (pm @ off[..., idx, :, :])[..., 0]
-        g_mat[..., idx, :, :] = pm @ mats[..., idx, :, :]
-        if rotations:
-            g_rot[..., idx, :] = Q.mul(g_rot[..., p, :], local[..., idx, :])
-    return g_pos, g_rot if rotations else None
+    """The positions of :func:`fk` (the same values, bit for bit), without composing the
+    world quaternions: ``(..., J, 3)``, metres."""
+    local_rot = np.asarray(local_rot)
+    return _forward(Q.to_matrix(local_rot), np.asarray(root_pos), np.asarray(offsets), parents)[0]
 
 
 def fk_joints(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, joints,
@@ -188,8 +178,7 @@ def fk_joints(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, 
 
 
 def fk_matrices(local_mat, root_pos, offsets, parents=sk.PARENTS):
-    """Like :func:`fk` with rotation matrices: cheaper when many calls are made
-    (the optimizer's inner loop, IK), and what rotation losses use.
+    """Like :func:`fk` with rotation matrices: what the solver and rotation losses use.
 
     Parameters
     ----------
@@ -208,17 +197,61 @@ def fk_matrices(local_mat, root_pos, offsets, parents=sk.PARENTS):
     rotations : (..., J, 3, 3)
         World joint rotation matrices.
     """
+    pos, mats, _ = _forward(local_mat, root_pos, offsets, parents)
+    return pos, mats
+
+
+def _forward(local_mat, root_pos, offsets, parents, local_quat=None):
+    """The one level-ordered pass (numpy or torch): each level's joints are placed at once
+    from their parents' world matrices; with ``local_quat (..., J, 4)`` the world
+    quaternions are composed along the same levels. Returns positions ``(..., J, 3)``,
+    world matrices ``(..., J, 3, 3)`` and world quaternions ``(..., J, 4)`` or None."""
     lv = levels(tuple(int(p) for p in parents))
+    if torch_of(local_mat) is None:
+        return _forward_numpy(np.asarray(local_mat), np.asarray(root_pos), np.asarray(offsets), lv, local_quat)
     take, cat = _ops(local_mat)
     offsets = _offsets_like(offsets, local_mat)
     g_rot = local_mat[..., :1, :, :]
     g_pos = root_pos[..., None, :]
+    g_q = None if local_quat is None else local_quat[..., :1, :]
     for idx, rows in zip(lv.joints, lv.parent_rows):
         pr = take(g_rot, rows, -3)
         step = (pr @ take(offsets, idx, -2)[..., None])[..., 0]
         g_pos = cat((g_pos, take(g_pos, rows, -2) + step), -2)
         g_rot = cat((g_rot, pr @ take(local_mat, idx, -3)), -3)
-    return take(g_pos, lv.unorder, -2), take(g_rot, lv.unorder, -3)
+        if g_q is not None:
+            g_q = cat((g_q, Q.mul(take(g_q, rows, -2), take(local_quat, idx, -2))), -2)
+    order = lv.unorder
+    return take(g_pos, order, -2), take(g_rot, order, -3), None if g_q is None else take(g_q, order, -2)
+
+
+def _forward_numpy(local_mat: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, lv: Levels,
+                   local_quat: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:  # fmt: skip
+    """:func:`_forward` for numpy: the same levels written in place into level-ordered
+    arrays, then every position at once from the world bone vectors (no autograd to
+    keep, and numpy's per-call overhead, not arithmetic, is what one pose costs)."""
+    order, prow, chain = lv.order, lv.prow, lv.chain
+    shape = np.broadcast_shapes(local_mat.shape[:-3], root_pos.shape[:-1], offsets.shape[:-2])
+    n = len(order)
+    mats = local_mat[..., order, :, :]
+    world = np.empty(shape + (n, 3, 3))
+    world[..., 0, :, :] = mats[..., 0, :, :]
+    quats = None
+    if local_quat is not None:
+        lq = local_quat[..., order, :]
+        quats = np.empty(shape + (n, 4))
+        quats[..., 0, :] = lq[..., 0, :]
+    start = 1
+    for rows in lv.parent_rows:
+        end = start + len(rows)
+        np.matmul(world[..., rows, :, :], mats[..., start:end, :, :], out=world[..., start:end, :, :])
+        if quats is not None:
+            quats[..., start:end, :] = Q.mul(quats[..., rows, :], lq[..., start:end, :])
+        start = end
+    bones = np.matmul(world[..., prow[1:], :, :], offsets[..., order[1:], :, None])[..., 0]
+    pos = np.matmul(chain, bones) + root_pos[..., None, :]
+    back = lv.unorder
+    return pos[..., back, :], world[..., back, :, :], None if quats is None else quats[..., back, :]
 
 
 def local_from_global(global_rot, parents=sk.PARENTS):

@@ -5,17 +5,18 @@ Every frame, each sensor reading becomes (or updates) a ``sensor`` constraint na
 the temporal predictor proposes a latent (:mod:`engine.solver.temporal`), and
 :class:`engine.solver.PoseOptimizer` moves the latent until the sensors, the
 temporal prior and the user's constraints agree. This module holds the per-frame
-step (readings to terms, the solve, the exact after-solve steps, the frame's history)
-and the registry factory :func:`create`. Beside it: the edits between frames (settings
-with ``configure``, user constraints, tracker weights) and the settings a frame runs
-with, :mod:`engine.methods.dragposer_edits`; where the body is and which way it faces,
-:mod:`engine.methods.dragposer_root`.
+step (a :class:`~engine.methods.dragposer_parts.FramePlan` read from the frame, the
+solve, the exact after-solve steps, the frame's history), the edits between frames, and
+the registry factory :func:`create`. Its collaborators, one job each: the trackers as
+terms, the user's constraints and the prior's source
+(:mod:`engine.methods.dragposer_parts`), the settings a frame runs with
+(:mod:`engine.methods.dragposer_edits`), where the body is and which way it faces
+(:mod:`engine.methods.dragposer_root`).
 """
 
 from __future__ import annotations
 
 import dataclasses
-import math
 import time
 from collections.abc import Iterable, Sequence
 from typing import Any
@@ -24,27 +25,23 @@ import numpy as np
 import torch
 
 from engine import skeleton as sk
-from engine.constraints import (
-    Constraint, GroundConstraint, SensorConstraint, SmoothConstraint, TemporalPriorConstraint,
-)  # fmt: skip
+from engine.constraints import Constraint, GroundConstraint, SensorConstraint, SmoothConstraint, TemporalPriorConstraint
+from engine.constraints.sensor import unit_rotation
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
 from engine.latent.record import SolveRecord, record_of
 from engine.methods import dragposer_root as roots
 from engine.methods.base import FrameResult, Method
-from engine.methods.dragposer_edits import DragPoserEdits
-from engine.methods.sensor_blend import SensorBlend
-from engine.sensors import Sensor, SensorFrame
+from engine.methods.dragposer_edits import FrameSettings
+from engine.methods.dragposer_parts import FramePlan, PriorSource, TrackerTerms, UserConstraints
+from engine.sensors import SensorFrame
 from engine.motion.clip import Motion
-from engine.solver import (
-    FrameContext, LatentDecoder, LatentPredictor, OptimizerSettings, PoseOptimizer, RootFrame, TemporalSchedule,
-)  # fmt: skip
-from engine.solver.limb_ik import LIMBS, finish
-from engine.solver.pose import body_facing
-from engine.solver.tracker_prior import PoseBank, TrackerHistory, combination, default_bank
+from engine.solver import FrameContext, LatentDecoder, LatentPredictor, OptimizerSettings, PoseOptimizer, RootFrame
+from engine.solver.limb_ik import finish
+from engine.solver.tracker_prior import PoseBank, combination, default_bank
 from engine.startup_trace import mark
 
-class DragPoserMethod(DragPoserEdits, Method):
+class DragPoserMethod(Method):
     """Latent-space pose optimisation guided by a temporal predictor.
 
     Parameters
@@ -76,19 +73,30 @@ class DragPoserMethod(DragPoserEdits, Method):
             predictor.eval().requires_grad_(False)
         self.predictor = predictor
         self.bank = bank  # the tracker prior's training poses (engine/solver/tracker_prior.py)
-        self._bank_later: tuple[tuple[str, ...], ...] = ()  # combinations between_frames prepares
-        self.settings = settings or OptimizerSettings()
-        # settings the caller chose (kept against the sensor-set profiles, engine/solver/profiles.py)
-        defaults = OptimizerSettings()
-        self.explicit: set[str] = {f.name for f in dataclasses.fields(OptimizerSettings)
-                                   if getattr(self.settings, f.name) != getattr(defaults, f.name)}  # fmt: skip
+        self._settings = FrameSettings(settings)
+        self.settings = self._settings.settings
         self.latent_dim = latent_dim
         self.fast = fast
-        self.constraints: list[Constraint] = []
-        self._captured: dict[int, tuple[Constraint, Constraint]] = {}
-        self.sensor_weights: dict[str, float] = {}
+        self._user = UserConstraints()
+        self._weights: dict[str, float] = {}  # tracker weights by joint, kept across clips
+        self._bank_later: tuple[tuple[str, ...], ...] = ()
         self.configure(**overrides)
         self.reset(sk.Skeleton.canonical())
+
+    @property
+    def explicit(self) -> set[str]:
+        """Settings fields the caller chose (kept against the sensor-set profiles)."""
+        return self._settings.explicit
+
+    @property
+    def constraints(self) -> list[Constraint]:
+        """The user's constraints, as the solver takes them (captured copies included)."""
+        return self._user.items
+
+    @property
+    def sensors(self) -> dict[str, SensorConstraint]:
+        """This clip's tracker terms by joint name."""
+        return self.trackers.constraints
 
     # -- running ---------------------------------------------------------------------
 
@@ -96,12 +104,13 @@ class DragPoserMethod(DragPoserEdits, Method):
         self.skeleton = skeleton
         self.fps = fps
         self.optimizer = PoseOptimizer(self.decoder, skeleton.offsets, self.settings, fast=self.fast)
-        self.schedule = TemporalSchedule(self.settings.predictor_every, self.settings.past_window)
-        self.sensors: dict[str, SensorConstraint] = {}
+        self.trackers = TrackerTerms(self._weights)
+        self.priors = PriorSource(self.predictor, self.bank, self.settings)
+        self.priors.bank_later = self._bank_later
         self.prior = TemporalPriorConstraint(name="temporal_prior")
         self.smooth = SmoothConstraint(name="smooth")
         self.ground = GroundConstraint(name="ground")
-        self._before: torch.Tensor | None = None  # positions two frames back (smooth term)
+        self._settings.forget()
         self._frame = 0
         self._latent = torch.zeros(self.latent_dim)
         self._root: RootFrame | None = None
@@ -110,13 +119,6 @@ class DragPoserMethod(DragPoserEdits, Method):
         self._before64: np.ndarray | None = None
         self._last: FrameResult | None = None
         self._roots: list[tuple[torch.Tensor, torch.Tensor, torch.Tensor]] = []  # see _advance
-        self._effective: dict[tuple, OptimizerSettings] = {}
-        self._blends: dict[str, SensorBlend] = {}
-        self._facing: np.ndarray | None = None  # this frame's body heading (4,), from its trackers
-        self._points: dict[str, np.ndarray] = {}  # connected trackers' positions, this frame
-        self._last_points: dict[str, np.ndarray] = {}  # ... and the previous one
-        self._tracks = TrackerHistory()  # recent 6-DoF readings for the tracker prior
-        self._bank_prior = False  # the last frame's prior came from the pose bank
         self.last_solve: SolveRecord | None = None  # the last frame's solve (latent debugging)
 
     def step(self, sensors: SensorFrame, deadline: float | None = None) -> FrameResult:
@@ -132,22 +134,28 @@ class DragPoserMethod(DragPoserEdits, Method):
         finally:
             torch.set_num_threads(threads)
 
-    def _read_frame(self, sensors: SensorFrame) -> tuple[list[str], OptimizerSettings]:
-        """Take a frame's readings: sensor terms, tracker history, facing; returns the
-        warnings so far and the settings the frame runs with."""
-        warnings = self._update_sensors(sensors)
-        self._tracks.push({j: (np.asarray(r.position, np.float64), np.asarray(r.rotation, np.float64))
-                           for j, r in sensors.readings.items() if r.connected and r.dof == 6 and _finite(r)})  # fmt: skip
-        points = {j: np.array(c.position, dtype=np.float64) for j, c in self.sensors.items() if c.enabled}
-        self._facing = body_facing(points)
-        self._last_points, self._points = self._points, points
-        # the connected sensor set's profile fills the settings the caller left alone
-        s = self._effective_settings()
+    def plan(self, frame: SensorFrame) -> FramePlan:
+        """Take a frame's readings and say what it will be solved against (the trackers'
+        term, the settings, the pose bank's lookup input, the after-solve targets); the
+        next :meth:`step` or the batched offline solve solves it."""
+        warnings = self.trackers.update(frame, self.settings, self.fps, self._pos64)
+        live = tuple(j for j, c in self.sensors.items() if c.enabled)
+        hip = self.sensors.get("root")
+        s = self._settings.for_sensors(live, hip is None or hip.dof == 6)
         base = self.settings.sensor_rotation_weight
         if s.sensor_rotation_weight != base and base > 0:  # the profile's rotation weight (blend kept)
-            for c in self.sensors.values():
-                c.rotation_weight *= s.sensor_rotation_weight / base
-        return warnings, s
+            self.trackers.scale_rotation_weights(s.sensor_rotation_weight / base)
+        term, names, weights = self.trackers.term()
+        on_hip = hip is not None and hip.enabled and hip.dof == 6
+        return FramePlan(
+            settings=s, warnings=warnings, trackers=term, names=names, weights=weights,
+            bank_readings=self.priors.readings(s, self.trackers.history), feet=self.trackers.feet(),
+            hip=(np.array(hip.position, dtype=np.float64), unit_rotation(hip.rotation)) if on_hip else None,
+            reach={k: np.array(v, dtype=np.float64) for k, v in self.trackers.reach_targets(self._user.held_joints()).items()}
+            if s.reach else {},
+            turn={k: np.array(v, dtype=np.float64) for k, v in self.trackers.rotation_targets().items()}
+            if s.sensor_rotations else {},
+        )  # fmt: skip
 
     def solve_clip(self, frames: Sequence[SensorFrame]) -> list[FrameResult] | None:
         """Offline mode: the whole clip solved in windows of frames optimised together
@@ -159,53 +167,37 @@ class DragPoserMethod(DragPoserEdits, Method):
 
     def _step(self, sensors: SensorFrame, deadline: float | None = None) -> FrameResult:
         t0 = time.perf_counter()
-        warnings, s = self._read_frame(sensors)
-        self.schedule.configure(s.predictor_every, s.past_window)
+        plan = self.plan(sensors)
+        warnings, s = plan.warnings, plan.settings
         override = roots.root_override(self.sensors)
         if self._root is None:
-            self._root = roots.initial_root(self.skeleton, self.sensors, self._facing)
-        readings = self._tracks.arrays() if s.prior == "trackers" and self.bank is not None else None
-        # the predictor runs only when its latent is the prior: while the bank answers
-        # (hips or head among the 6-DoF trackers) its runs would be thrown away
-        self._bank_prior = readings is not None
-        if self._bank_prior:
-            prediction = self.bank.latent(*readings, k=s.tracker_prior_neighbours)
-            prior_weight = s.tracker_prior_weight
-        else:  # a predictor run for later frames waits for between_frames (engine/solver/temporal.py)
-            prediction, warn = self.schedule.prediction(self._frame, self.predictor, max(1, s.future_window),
-                                                        defer=True)  # fmt: skip
-            if warn:
-                warnings.append(warn)
-            prior_weight = s.temporal_weight
+            self._root = roots.initial_root(self.skeleton, self.sensors, self.trackers.facing)
+        prediction, prior_weight, warned = self.priors.latent(self._frame, s, plan.bank_readings)
+        warnings += warned
         start = prediction if prediction is not None and s.init_from_prediction else self._latent
         self.prior.weight = prior_weight
         self.smooth.weight = s.smooth_weight
-        feet = any(self.sensors[j].enabled for j in ("lankle", "rankle") if j in self.sensors)
-        self.ground.weight = 0.0 if feet else s.ground_weight
+        self.ground.weight = 0.0 if plan.feet else s.ground_weight
         # frame 0 is solved offline from the mean latent, so the step from it to frame 1 is
         # not a velocity: extrapolating it threw frames 2-4 of a head-and-hands clip 36 cm off
         self.smooth.set_history(self._pos64, self._before64 if self._frame >= 3 else None)
         anchor = roots.root_anchor(self.sensors, self.settings) if override is None else None
         if override is None and anchor is None and s.root_anchor != "none" and self._frame > 0:
-            override = roots.held_root(self._root, self._points, self._last_points)
-        root = roots.reference_root(self._root, self.sensors, s, override, self._facing)
+            override = roots.held_root(self._root, self.trackers.points, self.trackers.last_points)
+        root = roots.reference_root(self._root, self.sensors, s, override, self.trackers.facing)
         ctx = FrameContext(root, override, anchor, self._positions, prediction, self._frame, deadline)
         self.settle_constraints(self._pos64)  # e.g. an unset pin takes the previous pose
         terms = [*self.sensors.values(), self.prior, self.smooth, self.ground, *self.constraints]
-        self.optimizer.settings = dataclasses.replace(s, mode="offline") if self._frame == 0 else s
-        try:  # frame 0 has no history to start from: it is solved offline
-            sol = self.optimizer.solve(start, terms, ctx)
-        finally:
-            self.optimizer.settings = self.settings
+        # frame 0 has no history to start from: it is solved offline
+        sol = self.optimizer.solve(start, terms, ctx, dataclasses.replace(s, mode="offline") if self._frame == 0 else s)
         warnings += sol.warnings
-        self.last_solve = record_of(sol, ctx, terms, start is prediction, self._bank_prior)
+        self.last_solve = record_of(sol, ctx, terms, start is prediction, self.priors.from_bank)
         state = sol.state
         if not (torch.isfinite(state.positions).all() and torch.isfinite(state.local_rot).all()):
             warnings.append("decoded pose is not finite; previous pose repeated")
             return self._repeat_last(warnings, sol.losses, sol.iterations, t0)
         local_rot, positions = state.local_rot.double().numpy(), state.positions.double().numpy()
-        reach_to = self._reach_targets() if s.reach else {}
-        turn_to = self._rotation_targets() if s.sensor_rotations else {}
+        reach_to, turn_to = plan.reach, plan.turn
         if reach_to or turn_to:  # one FK for both steps (engine/solver/limb_ik.py)
             local_rot, positions = finish(local_rot, positions[0], self.skeleton.offsets, reach_to, turn_to,
                                           s.neck_twist_share)  # fmt: skip
@@ -227,80 +219,64 @@ class DragPoserMethod(DragPoserEdits, Method):
     def prepare_bank_later(self, combinations: Iterable[tuple[str, ...]]) -> None:
         """Have :meth:`between_frames` prepare the pose bank (its tables and these
         combinations, :meth:`PoseBank.prepare`) after the next frame instead of now."""
-        self._bank_later = tuple(combinations)
+        self._bank_later = self.priors.bank_later = tuple(combinations)
 
     def between_frames(self) -> None:
-        """One piece of the temporal predictor's deferred work (engine/solver/temporal.py):
-        the same latents as when the next :meth:`step` does it, without adding to that
-        frame's latency (nothing while the pose bank gives the prior), and the pose bank's
-        tables and combinations a method made with ``prepare_bank=False`` left for after
-        its first frame (:func:`create`). Runs with the solver's torch thread count, as
-        :meth:`step` does."""
+        """The prior's deferred work (:meth:`PriorSource.between_frames`): the same latents
+        as when the next :meth:`step` does it, without adding to that frame's latency.
+        Runs with the solver's torch thread count, as :meth:`step` does."""
         threads = torch.get_num_threads()
         if self.settings.threads:
             torch.set_num_threads(self.settings.threads)
         try:
-            if self._bank_later and self.bank is not None:  # once, after the first frame
-                later, self._bank_later = self._bank_later, ()
-                self.bank.prepare(later)
-            if not self._bank_prior:
-                self.schedule.run_pending()
+            self.priors.between_frames()
+            self._bank_later = self.priors.bank_later
         finally:
             torch.set_num_threads(threads)
+
+    # -- edits between frames ----------------------------------------------------------
+    def configure(self, **values: Any) -> None:
+        """Change settings by name (:meth:`FrameSettings.configure`); from the next frame."""
+        self._settings.configure(**values)
+
+    def add_constraint(self, constraint: Constraint) -> None:
+        self._user.add(constraint)
+
+    def remove_constraint(self, name: str) -> None:
+        self._user.remove(name)
+
+    def get_constraint(self, name: str) -> Constraint:
+        return self._user.get(name)
+
+    def set_constraints(self, constraints: Iterable[Constraint]) -> None:
+        """Replace all user constraints (names must be unique)."""
+        self._user.replace_all(constraints)
+
+    def settle_constraints(self, previous_positions: Any) -> None:
+        """Let each constraint capture what it takes from the previous solved pose."""
+        self._user.settle(previous_positions)
+
+    def set_weight(self, name: str, weight: float) -> None:
+        if not weight >= 0:
+            raise UserError(f"constraint {name!r}: weight must be >= 0, got {weight!r}")
+        self._user.edit(name, weight=float(weight))
+
+    def set_enabled(self, name: str, enabled: bool) -> None:
+        self._user.edit(name, enabled=bool(enabled))
+
+    def set_sensor_weight(self, joint: str, weight: float) -> None:
+        """Weight of the tracker on ``joint`` (applies to its ``sensor`` constraint)."""
+        self.trackers.set_weight(joint, weight)
 
     def decode_latent(self, latent: np.ndarray) -> np.ndarray:
         """World joint positions ``(22, 3)`` of ``latent (L,)``, placed at the current root."""
         z = torch.as_tensor(np.asarray(latent, dtype=np.float32).reshape(self.latent_dim))
-        root = self._root or roots.initial_root(self.skeleton, self.sensors, self._facing)
+        root = self._root or roots.initial_root(self.skeleton, self.sensors, self.trackers.facing)
         with torch.no_grad():
             state = self.optimizer.decode(z, FrameContext(root))
         return state.positions.double().numpy()
 
     # -- internals -------------------------------------------------------------------
-
-    def _update_sensors(self, frame: SensorFrame) -> list[str]:
-        warnings: list[str] = []
-        s = self.settings
-        for c in self.sensors.values():
-            c.enabled = False  # readings absent this frame are not used
-        for joint, r in frame.readings.items():
-            c = self.sensors.get(joint)
-            if c is None or c.dof != r.dof:
-                c = SensorConstraint(name=f"sensor:{joint}", joint=joint, dof=r.dof,
-                                     weight=self.sensor_weights.get(joint, 1.0))  # fmt: skip
-                self.sensors[joint] = c
-            ok = _finite(r)
-            if r.connected and not ok:
-                warnings.append(f"sensor {joint}: non-finite reading ignored")
-            c.position_tolerance, c.rotation_tolerance = s.position_tolerance, s.rotation_tolerance
-            live = bool(r.connected and ok)
-            # trackers that place the body (hips, root anchor) are never blended
-            seconds = 0.0 if joint in ("root", s.root_anchor) else s.sensor_blend
-            prev = None if self._pos64 is None else self._pos64[sk.JOINT_INDEX[joint]]
-            t = self._blends.setdefault(joint, SensorBlend()).update(r.position, live, prev, seconds, self.fps)
-            c.rotation_weight = s.sensor_rotation_weight * t.rotation_weight
-            c.weight = self.sensor_weights.get(joint, 1.0) * t.weight
-            if t.active:
-                c.set_target(t.position, r.rotation if live and r.dof == 6 else None, True)
-            c.connected = c.enabled = t.active
-        return warnings
-
-    def _reach_targets(self) -> dict[int, np.ndarray]:
-        """Tracked wrists and ankles -> their trackers' positions (setting ``reach``): a
-        limb whose shoulder/elbow (hip/knee) or end joint a user constraint holds is left
-        as solved (put back on its tracker, a distance between the tracked wrists had no
-        effect on the pose while its loss read as met)."""
-        held = {sk.JOINT_INDEX[n] for c in self.constraints if c.enabled and c.weight > 0
-                for n in c.acts_on() if n in sk.JOINT_INDEX}  # fmt: skip
-        return {sk.JOINT_INDEX[j]: c.position for j, c in self.sensors.items()
-                if c.enabled and c.connected and sk.JOINT_INDEX[j] in LIMBS
-                and not held & {sk.JOINT_INDEX[j], *LIMBS[sk.JOINT_INDEX[j]]}}  # fmt: skip
-
-    def _rotation_targets(self) -> dict[int, np.ndarray]:
-        """The head, hands and feet -> their connected 6-DoF trackers' world rotations
-        (setting ``sensor_rotations``); the hips' is the tracker's already."""
-        return {sk.JOINT_INDEX[j]: c.rotation for j, c in self.sensors.items()
-                if c.enabled and c.connected and c.dof == 6 and j != "root"}  # fmt: skip
 
     def _advance(self, latent: torch.Tensor, prev: RootFrame, root_rot: np.ndarray, positions: np.ndarray) -> None:
         """Keep the solved frame as the next frame's history, in float32 as the solver's
@@ -312,10 +288,10 @@ class DragPoserMethod(DragPoserEdits, Method):
         # the pose bank gives the prior): the same torch operations on the same tensors
         self._roots.append((prev.rotation, prev.position, pos_t[0]))
         del self._roots[: -self.settings.predictor_every]
-        self.schedule.record(self._frame, latent, roots.Conditioning(tuple(self._roots), pos_t))
+        self.priors.schedule.record(self._frame, latent, roots.Conditioning(tuple(self._roots), pos_t))
         self._latent = latent
         self._root = RootFrame(rot_t, pos_t[0].clone())
-        self._before, self._before64 = self._positions, self._pos64
+        self._before64 = self._pos64
         self._positions, self._pos64 = pos_t, pos32.astype(np.float64)
         self._frame += 1
 
@@ -332,16 +308,6 @@ class DragPoserMethod(DragPoserEdits, Method):
         self._frame += 1
         res.ms = 1000.0 * (time.perf_counter() - t0)
         return res
-
-
-def _finite(r: Sensor) -> bool:
-    pos = np.asarray(r.position, dtype=np.float64).tolist()
-    if not all(math.isfinite(v) for v in pos):
-        return False
-    if r.dof == 6:
-        q = np.asarray(r.rotation, dtype=np.float64).tolist()
-        return all(math.isfinite(v) for v in q) and math.sqrt(sum(v * v for v in q)) > 1e-6
-    return True
 
 
 def create(mode: str = "realtime", iterations: int | None = None, lr: float | None = None,

@@ -41,23 +41,44 @@ returns None and the caller steps frame by frame.
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
-import torch
 
-from engine import skeleton as sk
-from engine.constraints.sensor import unit_rotation
+from engine.constraints.residual import FrameInputs, FrameRows
+from engine.constraints.smooth import SmoothTerm
+from engine.constraints.temporal_prior import PriorTerm
 from engine.kinematics import quat_np as QN
 from engine.kinematics.fk import fk
 from engine.methods.base import FrameResult
 from engine.sensors import SensorFrame
-from engine.solver.batch import BatchDecoder, BatchPose, FrameTerms, solve_streams
+from engine.solver.batch import BatchDecoder, BatchObjective, solve_streams
+from engine.solver.chain import RootFrames
 from engine.solver.limb_ik import finish
 from engine.solver.threads import one_blas_thread
+
+class DragPoserMethod(Protocol):
+    """What the batched solve takes from :class:`engine.methods.dragposer.DragPoserMethod`
+    (public parts only: the frames' plans, the solver, the method's own terms)."""
+
+    settings: Any
+    explicit: set[str]
+    constraints: list
+    skeleton: Any
+    fps: float
+    latent_dim: int
+    bank: Any
+    optimizer: Any
+    prior: Any
+    smooth: Any
+    ground: Any
+
+    def plan(self, frame: SensorFrame) -> Any: ...
+
+    def reset(self, skeleton: Any, fps: float = ...) -> None: ...
+
 
 #: Segments solved side by side (at most; fewer in a clip shorter than ``STREAMS * SEGMENT``).
 STREAMS = 32
@@ -92,15 +113,15 @@ EXTRAPOLATE = {"adam-carry": 0.5, "adam": 0.5, "sgd": 0.0}
 RULE_SETTINGS = frozenset({"max_iterations", "patience", "min_improvement"})
 
 
-def solve_clip(m: Any, frames: Sequence[SensorFrame]) -> list[FrameResult] | None:
+def solve_clip(m: DragPoserMethod, frames: Sequence[SensorFrame]) -> list[FrameResult] | None:
     """The clip's frames solved by ``m`` (a :class:`~engine.methods.dragposer.DragPoserMethod`
     just reset), or None (method left reset) when the clip is not batched (module doc)."""
     with one_blas_thread():  # as the per-frame solver: more threads only wait
         return _solve_clip(m, frames)
 
 
-def _solve_clip(m: Any, frames: Sequence[SensorFrame]) -> list[FrameResult] | None:
-    fast = m.optimizer._fast
+def _solve_clip(m: DragPoserMethod, frames: Sequence[SensorFrame]) -> list[FrameResult] | None:
+    fast = m.optimizer.fast_parts
     if m.settings.mode != "offline" or fast is None or not frames or not _same_hip_set(frames):
         return None
     if any(c.enabled and c.weight > 0 for c in m.constraints):
@@ -111,11 +132,7 @@ def _solve_clip(m: Any, frames: Sequence[SensorFrame]) -> list[FrameResult] | No
         m.reset(m.skeleton, m.fps)
         return None
     s = read[0]["settings"]
-    m.optimizer.settings = s
-    try:
-        rule = m.optimizer.update_rule([c for c in m.sensors.values() if c.enabled])
-    finally:
-        m.optimizer.settings = m.settings
+    rule = m.optimizer.update_rule([c for c in m.sensors.values() if c.enabled], settings=s)
     if rule not in ("sgd", "adam", "adam-carry") or (rule == "sgd" and s.momentum > 0):
         m.reset(m.skeleton, m.fps)
         return None
@@ -133,11 +150,10 @@ def _solve_clip(m: Any, frames: Sequence[SensorFrame]) -> list[FrameResult] | No
     if PRIOR_START:
         for c in range(1, c_all):
             z[c] = read[first[c]]["prior"]
-    terms = _terms([read[0]] * c_all)
+    objective = _objective(m, read[0], c_all)
     results: list[FrameResult | None] = [None] * n
     overlap: dict[int, np.ndarray] = {}  # frame -> the next segment's warm-up local rotations
-    decoder, pose = BatchDecoder(fast.decoder), BatchPose(m.skeleton.offsets, fast.decoder)
-    names = [*terms.names, "smooth", "ground", "temporal_prior"]
+    decoder = BatchDecoder(fast.decoder)
 
     def load(c: int) -> bool:
         at[c] += 1
@@ -149,18 +165,21 @@ def _solve_clip(m: Any, frames: Sequence[SensorFrame]) -> list[FrameResult] | No
             z[c] += ahead * (solved - last_z[c])
         last_z[c] = solved
         on = f >= 3 and len(hist[c]) == 2  # as the frame-by-frame solve's smoothing history
-        _write_row(terms, c, read[f], 2.0 * hist[c][1] - hist[c][0] if on else None)
+        r = read[f]
+        smooth = m.smooth.term(FrameInputs()) if not on else SmoothTerm(m.smooth.name, 2.0 * hist[c][1] - hist[c][0])
+        frame_terms = [r["sensor_term"], PriorTerm(m.prior.name, r["prior"]), smooth, m.ground.term(FrameInputs())]
+        objective.set_row(c, [t for t, keep in zip(frame_terms, r["kept"]) if keep], r["weights"], *r["root"])
         return True
 
     def done(c: int, iterations: int) -> None:
         f = at[c]
-        local, pos = _finished(m, read[f], *pose.row(c)[::-1])
+        local, pos = _finished(m, read[f], *objective.row(c)[::-1])
         hist[c] = [*hist[c][-1:], pos]
         if f < keep_from[c] and CROSSFADE:
             overlap[f] = local
         if f >= keep_from[c]:
-            values = pose.values[c]
-            losses = {**dict(zip(names, values.tolist())), "total": float(pose.term_weights()[c] @ values)}
+            values = objective.values[c]
+            losses = {**dict(zip(objective.names, values.tolist())), "total": float(objective.weights[c] @ values)}
             results[f] = FrameResult(local_rot=local, root_pos=pos[0].copy(), positions=pos, iterations=iterations,
                                      losses=[losses], latent=z[c].astype(np.float64), ms=0.0,
                                      warnings=read[f]["warnings"], timings={})  # fmt: skip
@@ -174,7 +193,7 @@ def _solve_clip(m: Any, frames: Sequence[SensorFrame]) -> list[FrameResult] | No
             return None
         return FIRST_STEPS if f == first[c] else WARMUP_STEPS if f < keep_from[c] else fixed
 
-    solve_streams(decoder, pose, terms, z, rule, lr, s.max_iterations, s.patience, s.min_improvement, load, done,
+    solve_streams(decoder, objective, z, rule, lr, s.max_iterations, s.patience, s.min_improvement, load, done,
                   steps)
     ms = 1000.0 * (time.perf_counter() - t0) / n
     for a, b in zip(first[1:], keep_from[1:]):
@@ -207,7 +226,7 @@ def _crossfade(own: Sequence[FrameResult | None], warm: list[np.ndarray], offset
         r.local_rot, r.positions, r.root_pos = q, p, p[0].copy()
 
 
-def _finished(m: Any, r: dict, local: np.ndarray, pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _finished(m: DragPoserMethod, r: dict, local: np.ndarray, pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """A solved frame after the limb and tracker-rotation steps of a frame-by-frame solve."""
     if r["reach"] or r["turn"]:
         return finish(local, pos[0], m.skeleton.offsets, r["reach"], r["turn"], r["settings"].neck_twist_share)
@@ -225,7 +244,7 @@ def _same_hip_set(frames: Sequence[SensorFrame]) -> bool:
     return True
 
 
-def _read_all(m: Any, frames: Sequence[SensorFrame]) -> list[dict] | None:
+def _read_all(m: DragPoserMethod, frames: Sequence[SensorFrame]) -> list[dict] | None:
     """Every frame's :func:`_read` record with its prior latent (``prior``), or None when a
     frame cannot be batched or the frames do not share their trackers."""
     read = [_read(m, f) for f in frames]
@@ -239,76 +258,39 @@ def _read_all(m: Any, frames: Sequence[SensorFrame]) -> list[dict] | None:
     return read
 
 
-def _read(m: Any, frame: SensorFrame) -> dict | None:
-    """One frame's terms as ``m.step`` would set them up, or None when the frame cannot be
-    batched (its prior is not the pose bank's, or a reading is not finite)."""
-    warnings, s = m._read_frame(frame)
-    live = [c for c in m.sensors.values() if c.enabled]
-    hip = m.sensors.get("root")
-    readings = m._tracks.arrays() if s.prior == "trackers" and m.bank is not None else None
-    if readings is None or hip is None or not hip.enabled or hip.dof != 6 or warnings:
+def _read(m: DragPoserMethod, frame: SensorFrame) -> dict | None:
+    """One frame's terms as ``m.step`` would set them up (:meth:`DragPoserMethod.plan`), or
+    None when the frame cannot be batched (its prior is not the pose bank's, no 6-DoF hip
+    tracker, or a reading is not finite)."""
+    plan = m.plan(frame)
+    s = plan.settings
+    if plan.bank_readings is None or plan.hip is None or plan.warnings:
         return None
-    six = [c for c in live if c.dof == 6]
+    smooth_w, ground_w = float(s.smooth_weight), float(s.ground_weight)
+    weights = [plan.weights, [s.tracker_prior_weight], [smooth_w], [0.0 if plan.feet else ground_w]]
+    kept = [True, s.tracker_prior_weight > 0, smooth_w > 0, not plan.feet and ground_w > 0]  # as the solver drops zero weights
     return {
         "settings": s,
-        "warnings": warnings,
-        "names": tuple(c.name for c in live),
-        "joints": [sk.JOINT_INDEX[c.joint] for c in live],
-        "six": [k for k, c in enumerate(live) if c.dof == 6],
-        "pos": np.array([c.position for c in live], dtype=np.float64),
-        "weight": np.array([c.weight for c in live]),
-        "rot": np.array([unit_rotation(c.rotation) for c in six]).reshape(-1, 4),
-        "rot_weight": np.array([c.rotation_weight for c in six]),
-        "pos_tol2": np.array([c.position_tolerance**2 for c in live]),
-        "rot_tol": np.array([math.sin(math.radians(c.rotation_tolerance) / 2) ** 2 for c in six]),
-        "root": (np.array(hip.position, dtype=np.float64), unit_rotation(hip.rotation)),
-        "bank": readings,  # the pose bank's lookup, made for all frames at once
-        "prior_weight": s.tracker_prior_weight,
-        "feet": any(m.sensors[j].enabled for j in ("lankle", "rankle") if j in m.sensors),
-        "ground": (m.ground.low, m.ground.high),
-        "reach": _copied(m._reach_targets() if s.reach else {}),
-        "turn": _copied(m._rotation_targets() if s.sensor_rotations else {}),
+        "warnings": plan.warnings,
+        "names": plan.names,
+        "sensor_term": plan.trackers,
+        "kept": kept,
+        "weights": np.concatenate([np.asarray(w, dtype=np.float64) for w, k in zip(weights, kept) if k]),
+        "root": plan.hip,
+        "bank": plan.bank_readings,  # the pose bank's lookup, made for all frames at once
+        "reach": plan.reach,
+        "turn": plan.turn,
     }  # fmt: skip
 
 
-def _copied(targets: dict[int, Any]) -> dict[int, np.ndarray]:
-    return {k: np.array(v, dtype=np.float64) for k, v in targets.items()}
-
-
-def _terms(chunk: list[dict]) -> FrameTerms:
-    """:class:`FrameTerms` with one row per record of ``chunk`` (:func:`_read`), smoothing off."""
-    r0, s = chunk[0], chunk[0]["settings"]
-    root_q = np.array([r["root"][1] for r in chunk])
-    stack = lambda key: np.array([r[key] for r in chunk])  # noqa: E731
-    return FrameTerms(
-        joints=np.asarray(r0["joints"], dtype=np.intp),
-        targets=stack("pos"),
-        weights=stack("weight"),
-        six=np.asarray(r0["six"], dtype=np.intp),
-        rot_targets=QN.to_matrix(stack("rot")),
-        rot_weights=stack("rot_weight"),
-        root_pos=np.array([r["root"][0] for r in chunk]),
-        root_rot=QN.to_matrix(root_q),
-        root_quat=root_q * np.where(root_q[:, :1] < 0, -1.0, 1.0),
-        prior=stack("prior"),
-        prior_weight=float(r0["prior_weight"]),
-        smooth_weight=float(s.smooth_weight),
-        ground_weight=0.0 if r0["feet"] else float(s.ground_weight),
-        ground_band=r0["ground"],
-        smooth_target=np.zeros((len(chunk), sk.NUM_JOINTS, 3)),
-        smooth_on=np.zeros(len(chunk), dtype=bool),
-        pos_tol2=r0["pos_tol2"],
-        rot_tol=r0["rot_tol"],
-        names=list(r0["names"]),
-    )
-
-
-def _write_row(t: FrameTerms, c: int, r: dict, smooth_target: np.ndarray | None) -> None:
-    """Row ``c`` of ``t`` becomes the frame of record ``r`` (:func:`_read`)."""
-    t.targets[c], t.weights[c], t.rot_weights[c], t.prior[c] = r["pos"], r["weight"], r["rot_weight"], r["prior"]
-    t.rot_targets[c] = QN.to_matrix(r["rot"])
-    q = r["root"][1]
-    t.root_pos[c], t.root_rot[c], t.root_quat[c] = r["root"][0], QN.to_matrix(q), q if q[0] >= 0 else -q
-    t.smooth_on[c] = smooth_target is not None
-    if smooth_target is not None:
-        t.smooth_target[c] = smooth_target
+def _objective(m: DragPoserMethod, r: dict, rows: int) -> BatchObjective:
+    """The batched objective with ``rows`` rows, each the frame of record ``r`` (:func:`_read`)
+    until :meth:`~engine.solver.batch.BatchObjective.set_row` gives it its own."""
+    frame_terms = [r["sensor_term"], PriorTerm(m.prior.name, r["prior"]), m.smooth.term(FrameInputs()),
+                   m.ground.term(FrameInputs())]  # fmt: skip
+    terms = [t.rows(rows) if isinstance(t, FrameRows) else t for t, keep in zip(frame_terms, r["kept"]) if keep]
+    q = np.tile(r["root"][1], (rows, 1))
+    root = RootFrames(heading=np.tile(np.eye(3), (rows, 1, 1)), previous=np.zeros((rows, 3)),
+                      position=np.tile(r["root"][0], (rows, 1)), rotation=QN.to_matrix(q))  # fmt: skip
+    return BatchObjective(m.skeleton.offsets, terms, np.tile(r["weights"], (rows, 1)), root,
+                          q * np.where(q[:, :1] < 0, -1.0, 1.0))  # fmt: skip

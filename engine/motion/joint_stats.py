@@ -36,6 +36,15 @@ def bone_axis(offsets: np.ndarray, joint: str) -> np.ndarray:
     return v / np.linalg.norm(v)
 
 
+def joint_axis(joint: str) -> np.ndarray:
+    """Unit bone direction (3,) of ``joint`` in its own canonical rest frame
+    (:func:`bone_axis` on the canonical offsets); up (+Z) for the pelvis and for a joint
+    with neither a child bone nor an end site."""
+    if joint != "root" and (joint in BONE_CHILD or joint in sk.END_SITES):
+        return bone_axis(sk.REST_OFFSETS, joint)
+    return np.array([0.0, 0.0, 1.0])
+
+
 def twist_deg(q: np.ndarray, axis: np.ndarray) -> np.ndarray:
     """Signed twist angle (degrees) of rotations ``q (..., 4)`` about unit ``axis (3,)``."""
     proj = (q[..., 1:] * axis).sum(-1)

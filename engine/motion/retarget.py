@@ -19,6 +19,8 @@ How it works (details and figures in ``docs/skeleton.md``)
 5. The clip is resampled to 60 fps (slerp for rotations, linear for the root) and
    re-floored (the 2nd-percentile lowest toe sits at the canonical toe height).
 
+Which of these choices apply (body-defined twist, straightened elbows and knees, where the
+toe tip lies) is the :class:`RetargetStrategy` given (:mod:`engine.motion.retarget_strategy`).
 The :class:`RetargetReport` keeps what is needed to go back onto the source rig
 (:mod:`engine.motion.write_back`).
 """
@@ -40,8 +42,9 @@ from engine.motion.clip import Motion
 from engine.motion import retarget_body as RB
 from engine.motion import retarget_frames as RF
 from engine.motion.retarget_inputs import (  # noqa: F401 - re-exported: callers import them from here
-    MODELS_DATA, RETARGET_VERSION, RETARGET_VERSIONS, _snap_fps, manifest_entry, manifest_fps, models_version,
-    rest_frame_count)
+    MODELS_DATA, _snap_fps, manifest_entry, manifest_fps, models_strategy, rest_frame_count)
+from engine.motion.retarget_strategy import (  # noqa: F401 - re-exported: callers import them from here
+    CURRENT, RETARGET_VERSION, STRATEGIES, RetargetStrategy)
 from engine.motion.retarget_rotations import rigid_hands, straightened_offsets, tip_points, world_rotations
 from engine.motion.rigs import RigProfile, resolve_rig
 from engine.motion.source_file import load_source
@@ -82,12 +85,17 @@ class RetargetReport:
     toe_tips: dict | None = None
     #: Canonical (60 fps) frames of the whole file, even when only its start was loaded.
     frames: int = 0
-    #: Retargeting definition used (:data:`RETARGET_VERSIONS`).
-    version: int = RETARGET_VERSION
+    #: Retargeting definition used.
+    strategy: RetargetStrategy = CURRENT
     #: Joints whose rotation the body defines; the other mapped joints keep the source's.
     body_joints: list | None = None
     #: Body-defined joints whose defining points a documented rule stood in for: joint -> rule.
     twist_rules: dict | None = None
+
+    @property
+    def version(self) -> int:
+        """The number of :attr:`strategy` (``info`` prints it as ``retarget_version``)."""
+        return self.strategy.version
 
     @property
     def copied(self) -> bool:
@@ -209,7 +217,8 @@ def _resample(local_rot: np.ndarray, root: np.ndarray, fps: float, target: float
 
 
 def retarget(raw: RawBVH, fps: float | None = None, profile: RigProfile | None = None,
-             rig_map: str | Path | None = None, version: int | None = None) -> tuple[Motion, RetargetReport]:
+             rig_map: str | Path | None = None, strategy: RetargetStrategy | None = None,
+             ) -> tuple[Motion, RetargetReport]:  # fmt: skip
     """Canonical :class:`Motion` (60 fps, Z-up metres, floor at 0) from a parsed BVH.
 
     Parameters
@@ -222,15 +231,12 @@ def retarget(raw: RawBVH, fps: float | None = None, profile: RigProfile | None =
         Force a rig profile instead of detecting it from the joint names.
     rig_map : path, optional
         A mapping file (``rig suggest`` writes one) that overrides detection.
-    version : int, optional
-        Retargeting definition (:data:`RETARGET_VERSIONS`); default: the one the shipped
-        models learnt from (:func:`models_version`), so that what feeds them looks like
-        what they learnt. ``convert``, ``info`` and ``data prepare`` ask for
-        :data:`RETARGET_VERSION`.
+    strategy : RetargetStrategy, optional
+        Retargeting definition; default: the one the shipped models learnt from
+        (:func:`models_strategy`), so that what feeds them looks like what they learnt.
+        ``convert``, ``info`` and ``data prepare`` ask for :data:`CURRENT`.
     """
-    version = models_version() if version is None else version
-    if version not in RETARGET_VERSIONS:
-        raise UserError(f"{raw.path}: retarget version {version} is not one of {', '.join(map(str, RETARGET_VERSIONS))}")
+    strategy = models_strategy() if strategy is None else strategy
     prof = profile or resolve_rig(raw, rig_map)
     src_fps = float(fps) if fps else _snap_fps(raw.fps)
     if src_fps <= 0:
@@ -244,8 +250,8 @@ def retarget(raw: RawBVH, fps: float | None = None, profile: RigProfile | None =
     if prof.root_channels_relative_to_offset:
         pos[:, 0] += raw.offsets[0]
     _check_root(raw.path, pos[:, 0], prof.units_to_m)
-    offsets, ends = straightened_offsets(raw, prof, elbows=prof.straight_elbows and version >= 4,
-                                         knees=prof.straight_knees and version >= 5)  # fmt: skip
+    offsets, ends = straightened_offsets(raw, prof, elbows=prof.straight_elbows and strategy.straight_elbows,
+                                         knees=prof.straight_knees and strategy.straight_knees)  # fmt: skip
     moving = [k for k, c in enumerate(raw.channels) if k > 0 and len(c) == 6]
     if moving:  # position channels below the root (a 6-channel Hips under a static ROOT) move their joint
         offsets = np.repeat(offsets[None], len(pos), axis=0)
@@ -267,7 +273,7 @@ def retarget(raw: RawBVH, fps: float | None = None, profile: RigProfile | None =
 
     hands = rigid_hands(raw, prof)
     pts.update(tip_points(raw, prof, wpos, wrot, ends, hands))
-    glob, align, body_joints, rules = world_rotations(prof, pts, wrot, idx, cq, version, hands)
+    glob, align, body_joints, rules = world_rotations(prof, pts, wrot, idx, cq, strategy, hands)
     joint_pts = {n: pts[n] for n in [*sk.JOINT_NAMES, "l_toe_tip", "r_toe_tip"] if n in pts}
     skel = sk.Skeleton(offsets=measure_offsets(joint_pts, glob, leg_scale))
     local = Q.unroll(Q.normalize(local_from_global(glob)), axis=0)
@@ -280,7 +286,7 @@ def retarget(raw: RawBVH, fps: float | None = None, profile: RigProfile | None =
     motion = Motion(local, root, skel, sk.FPS, Path(raw.path).stem)
     shift = _refloor(motion)
     report = RetargetReport(prof.name, len(raw.names), raw.total_frames, src_fps, skel.scale, prof, align, basis,
-                            shift, skip, src_height, clip_height(motion, tips), tips, canonical, version,
+                            shift, skip, src_height, clip_height(motion, tips), tips, canonical, strategy,
                             body_joints, rules)  # fmt: skip
     return motion, report
 
@@ -343,7 +349,7 @@ def _refloor(motion: Motion) -> float:
 
 
 def load_motion(path: str | Path, fps: float | None = None, rig_map: str | Path | None = None,
-                max_frames: int | None = None, version: int | None = None,
+                max_frames: int | None = None, strategy: RetargetStrategy | None = None,
                 asf: str | Path | None = None) -> Motion:  # fmt: skip
     """Load any humanoid BVH, or AMC with its ASF skeleton (``asf``, else found beside it;
     :mod:`engine.motion.source_file`), as a canonical motion (see module docs).
@@ -352,9 +358,9 @@ def load_motion(path: str | Path, fps: float | None = None, rig_map: str | Path 
     (as in ``../shared/data/mocap``) gives the true rate, else the header does.
     ``rig_map`` is a mapping file that overrides rig detection. ``max_frames``
     (canonical frames) reads only the start of a long file; see :func:`load_with_report`.
-    ``version`` is the retargeting definition (default: the shipped models', see
+    ``strategy`` is the retargeting definition (default: the shipped models', see
     :func:`retarget`)."""
-    motion = load_with_report(path, fps, rig_map, max_frames, version, asf)[0]
+    motion = load_with_report(path, fps, rig_map, max_frames, strategy, asf)[0]
     return motion.slice(0, max_frames) if max_frames else motion
 
 
@@ -367,11 +373,11 @@ def source_frames_needed(max_frames: int | None) -> int | None:
 
 
 def load_with_report(path: str | Path, fps: float | None = None, rig_map: str | Path | None = None,
-                     max_frames: int | None = None, version: int | None = None,
+                     max_frames: int | None = None, strategy: RetargetStrategy | None = None,
                      asf: str | Path | None = None) -> tuple[Motion, RetargetReport]:  # fmt: skip
     """:func:`load_motion` plus the :class:`RetargetReport`. With ``max_frames``, only the
     source frames those canonical frames need are kept (at least :data:`ALIGN_FRAMES`,
     which the rest-pose alignment averages over); every row is still checked, and the
     report's ``source_frames`` / ``frames`` describe the whole file."""
     raw = load_source(path, source_frames_needed(max_frames), asf, fps)
-    return retarget(raw, fps or manifest_fps(Path(path)), rig_map=rig_map, version=version)
+    return retarget(raw, fps or manifest_fps(Path(path)), rig_map=rig_map, strategy=strategy)

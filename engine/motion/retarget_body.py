@@ -17,9 +17,9 @@ show in the canonical rotations. The rules (``docs/skeleton.md``, *Body-defined 
   so that they move rigidly with the hand;
 * **ankle**: the foot's direction (to the toe, or the toe tip) and the sole's normal,
   taken as the shin's direction off the foot (no rig here carries a landmark across the
-  sole); **toe**: the toe's direction (to its tip) and the same shin reference (from
-  version 5 the canonical rest's tip lies on the sole's line, :func:`sole_tip`, where
-  source rigs put theirs);
+  sole); **toe**: the toe's direction (to its tip) and the same shin reference (with the
+  strategy's ``sole_toe_tips`` the canonical rest's tip lies on the sole's line,
+  :func:`sole_tip`, where source rigs put theirs);
 * **lower neck and head**: the head's direction and the face's eye line.
 
 Where the rig lacks the defining points, a documented rule (:data:`RULES`) puts them on
@@ -188,10 +188,10 @@ def canonical_body_frames(offsets: np.ndarray = sk.REST_OFFSETS, sole: bool = Fa
 
 
 def body_rotations(pts: dict[str, np.ndarray], arm_straight: dict[str, np.ndarray] | None = None,
-                   version: int = 4) -> dict[str, np.ndarray]:  # fmt: skip
+                   sole_toe_tips: bool = False) -> dict[str, np.ndarray]:  # fmt: skip
     """Canonical world rotations ``G = B(t) B0^-1`` ``(F, 4)`` of the joints the body defines.
 
-    From ``version`` 5 the rest frames ``B0`` take the toe tips on the sole's line
-    (:func:`sole_tip`)."""
-    canon = canonical_body_frames(sole=version >= 5)
+    With ``sole_toe_tips`` (a :class:`~engine.motion.retarget_strategy.RetargetStrategy`
+    choice) the rest frames ``B0`` take the toe tips on the sole's line (:func:`sole_tip`)."""
+    canon = canonical_body_frames(sole=sole_toe_tips)
     return {j: Q.mul(b, np.broadcast_to(Q.conjugate(canon[j]), b.shape)) for j, b in body_frames(pts, arm_straight).items()}

@@ -19,10 +19,10 @@ The second direction decides the bone's twist, so it must be rigid with the bone
 * the torso joints (pelvis, lower and upper back, chest, clavicles) all use the line from the
   pelvis to the neck and the hip or shoulder line, weighted towards frames where that
   line is upright (:func:`upright_weight`): on every rig a subject standing upright then
-  has near-identity spine rotations, whatever the rig's spine segments look like
-  (retarget version 3; version 2 used each spine segment and gave the iClone rig an
-  80-deg upper-back bend that the Daz rig, lacking that joint, does not have, and
-  clavicles raised 20 deg more on the Daz rig than on the iClone one);
+  has near-identity spine rotations, whatever the rig's spine segments look like (a
+  frame per spine segment gives the iClone rig an 80-deg upper-back bend that the Daz
+  rig, lacking that joint, does not have, and clavicles raised 20 deg more on the Daz
+  rig than on the iClone one);
 * the feet use the shin; the head the eye line; the hands the index-to-pinky line.
 
 When a rule cannot be built (no eyes or fingers in the rig) the joint falls back to

@@ -1,5 +1,6 @@
-"""What retargeting needs to know about a source before it starts: the definition to use,
-the true frame rate, and whether the file opens with a rest frame.
+"""What retargeting needs to know about a source before it starts: the definition to use
+(the model card's :class:`~engine.motion.retarget_strategy.RetargetStrategy`), the true
+frame rate, and whether the file opens with a rest frame.
 
 Re-exported by :mod:`engine.motion.retarget`, where callers find them.
 """
@@ -15,32 +16,24 @@ from engine.motion.bvh import RawBVH
 from engine.errors import UserError
 from engine.input_files import read_json, read_toml
 from engine.kinematics import quaternion as Q
+from engine.motion.retarget_strategy import CURRENT, STRATEGIES, RetargetStrategy
 from engine.validation import check_manifest, shown
 
-#: Bumped whenever retargeting gives different clips (prepared data is rebuilt then).
-#: 4: limbs, hands, feet and head take their twist from the body (:mod:`engine.motion.retarget_body`),
-#: through documented rules where the rig lacks the defining landmarks;
-#: 3: every joint keeps the source's rotation with one constant alignment per joint;
-#: 5 (not current: the shipped models reconstruct it slightly worse, docs/skeleton.md *Versions*):
-#: version 4 with legs a profile draws bent read straight along the hip-to-ankle line (``straight_knees``)
-#: and a rig's toe tip read against a canonical tip on the sole's line (:func:`retarget_body.sole_tip`).
-RETARGET_VERSION = 4
-#: Definitions :func:`retarget` can still produce (models record the one they learnt).
-RETARGET_VERSIONS = (3, 4, 5)
 #: Where the shipped models record the definition they learnt from (``retarget_version``).
 MODELS_DATA = Path(__file__).resolve().parents[2] / "assets" / "models" / "data.toml"
 
-def models_version(path: Path = MODELS_DATA) -> int:
-    """The retargeting definition every command feeding the shipped models uses by default
+
+def models_strategy(path: Path = MODELS_DATA) -> RetargetStrategy:
+    """The retargeting strategy every command feeding the shipped models uses by default
     (``retarget_version`` in :data:`MODELS_DATA`, beside the version they were trained on);
-    :data:`RETARGET_VERSION` when the file is absent."""
+    :data:`CURRENT` when the file is absent."""
     if not path.is_file():
-        return RETARGET_VERSION
-    version = read_toml(path, "model data card").get("retarget_version", RETARGET_VERSION)
-    if version not in RETARGET_VERSIONS:
-        raise UserError(f"{path}: retarget_version must be one of {', '.join(map(str, RETARGET_VERSIONS))}, "
-                        f"got {shown(version)}")  # fmt: skip
-    return int(version)
+        return CURRENT
+    version = read_toml(path, "model data card").get("retarget_version", CURRENT.version)
+    if version not in STRATEGIES:
+        raise UserError(f"{path}: retarget_version must be one of {', '.join(map(str, STRATEGIES))} "
+                        f"(the definitions this program produces), got {shown(version)}")  # fmt: skip
+    return STRATEGIES[version]
 
 
 def rest_frame_count(raw: RawBVH) -> int:

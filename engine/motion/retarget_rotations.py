@@ -1,8 +1,8 @@
 """Canonical world rotations of a source clip: body-defined where the body defines them.
 
 :func:`world_rotations` gives every mapped joint one constant alignment ``R``
-(``G_c = G_s R``, :mod:`engine.motion.retarget_frames`) and, from retarget version 4, replaces
-the rotation of the joints the body defines (:mod:`engine.motion.retarget_body`) by their
+(``G_c = G_s R``, :mod:`engine.motion.retarget_frames`) and, with the strategy's
+``body_twist``, replaces the rotation of the joints the body defines (:mod:`engine.motion.retarget_body`) by their
 body-defined one; ``R`` is then the mean of ``G_s^-1 G_c`` over the clip, which writing
 back onto the source rig uses (:mod:`engine.motion.write_back`).
 """
@@ -16,6 +16,7 @@ from engine.motion import retarget_frames as RF
 from engine import skeleton as sk
 from engine.motion.bvh import RawBVH
 from engine.kinematics import quaternion as Q
+from engine.motion.retarget_strategy import RetargetStrategy
 from engine.motion.rigs import RigProfile
 
 _CANON_FRAMES = RF.canonical_frames()
@@ -130,13 +131,13 @@ def _untwisted(q: np.ndarray, axis: np.ndarray) -> np.ndarray:
     return Q.normalize(Q.mul(q, Q.conjugate(twist)))
 
 
-def world_rotations(prof: RigProfile, pts, wrot, idx, cq, version: int, hands: set[str],
+def world_rotations(prof: RigProfile, pts, wrot, idx, cq, strategy: RetargetStrategy, hands: set[str],
                      ) -> tuple[np.ndarray, list, list, dict]:  # fmt: skip
     """Canonical world rotations (F, 22, 4), the per-joint constant alignment ``R`` with
     ``G_c ~ G_s R`` (None for joints the rig lacks), the joints whose rotation the body
-    defines (:mod:`engine.motion.retarget_body`, from version 4) and, among those, the
-    joints a documented rule defined (:data:`engine.motion.retarget_body.RULES`) with the
-    rule's name."""
+    defines (:mod:`engine.motion.retarget_body`, with the strategy's ``body_twist``) and,
+    among those, the joints a documented rule defined (:data:`engine.motion.retarget_body.RULES`)
+    with the rule's name."""
     n = wrot.shape[0]
     frames = RF.bone_frames(pts) if prof.align else {}
     limbs = RF.limb_alignments(pts, {c: wrot[:, idx[s]] for c, s in prof.joints.items()}) if prof.align else {}
@@ -154,7 +155,8 @@ def world_rotations(prof: RigProfile, pts, wrot, idx, cq, version: int, hands: s
         align[sk.JOINT_INDEX[name]] = r
         aligned[name] = Q.mul(g, np.broadcast_to(r, g.shape))
     body: dict[str, np.ndarray] = {}
-    if prof.align and version >= 4:
+    body_twist = prof.align and strategy.body_twist
+    if body_twist:
         straight = {j: Q.rotate(Q.mul(aligned[j], np.broadcast_to(_BODY_FRAMES[j], aligned[j].shape)),
                                 np.broadcast_to([0.0, 1.0, 0.0], (n, 3)))
                     for j in ("lshoulder", "rshoulder") if j in aligned}  # fmt: skip
@@ -162,7 +164,8 @@ def world_rotations(prof: RigProfile, pts, wrot, idx, cq, version: int, hands: s
         body_pts = {k: v for k, v in pts.items() if k not in loose}
         extra = rule_points(pts, aligned, wrot, idx, prof, hands)
         body_pts.update(extra)
-        body = {j: q for j, q in RB.body_rotations(body_pts, straight, version).items() if j in prof.joints}
+        body = {j: q for j, q in RB.body_rotations(body_pts, straight, strategy.sole_toe_tips).items()
+                if j in prof.joints}  # fmt: skip
         rules = {j: r for j, r in RB.rule_joints(extra).items() if j in body}
     else:
         rules = {}
@@ -172,7 +175,7 @@ def world_rotations(prof: RigProfile, pts, wrot, idx, cq, version: int, hands: s
             g = wrot[:, idx[prof.joints[name]]]
             glob[:, j] = body[name]
             align[j] = RF.mean_rotation(Q.mul(Q.conjugate(g), body[name]), np.ones(n))
-        elif prof.align and version >= 4 and name in ("lwrist", "rwrist") and name in aligned:
+        elif body_twist and name in ("lwrist", "rwrist") and name in aligned:
             body[name] = glob[:, j] = Q.mul(glob[:, sk.PARENTS[j]], _untwisted(
                 Q.mul(Q.conjugate(glob[:, sk.PARENTS[j]]), aligned[name]), sk.END_SITES[name]))  # fmt: skip
             g = wrot[:, idx[prof.joints[name]]]

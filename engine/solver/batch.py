@@ -6,12 +6,15 @@ decoder's matrices by one latent per call, up to 100 times per frame, reading th
 solved together: every iteration is one decoder pass over all their latents (a matrix
 product per block of the block-sparse stages, ``A`` columns wide), forward kinematics
 and losses vectorised over the frames, the closed-form reverse pass of
-:class:`engine.solver.fast.FastPose` vectorised the same way, and one update of every
-latent. Each frame minimises what the frame-by-frame solve minimises (sensors, the
+:class:`engine.solver.chain.PoseChain`, and one update of every
+latent. Each frame minimises the frame-by-frame solve's terms (the same
+:class:`~engine.constraints.residual.Term` objects, given a frame axis: trackers, the
 temporal prior's latent, the smoothing target from its two previous solved frames, the
-ground band), keeps its own update state (Adam moments or plain steps), and stops by the
-same rule or after a number of steps the caller gives per frame; under the same rule a
-frame solved here is the frame-by-frame solve's, given the same start.
+ground band), through the same :class:`~engine.solver.chain.PoseChain`, keeps its own
+update state (:meth:`~engine.solver.update.LatentUpdate.step_rows`), and stops by the same
+:class:`~engine.solver.objective.StoppingRule` or after a number of steps the caller gives
+per frame; under the same rule a frame solved here is the frame-by-frame solve's, given
+the same start.
 
 Which frames are independent is the caller's choice: :mod:`engine.methods.dragposer_batch`
 cuts a clip into segments and solves the ``k``-th frame of every segment together, each
@@ -22,14 +25,13 @@ frame (position and rotation).
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
 
 import numpy as np
 
-from engine.kinematics import quat_np as QN
+from engine.constraints.residual import NUMPY, FrameRows, Term
 from engine.models.fused import DenseDecoder
-from engine.solver.fast import FastPose, _AXIAL, _CROSS
-from engine.constraints.ground import _FEET, SOFTMIN_TAU
+from engine.solver.chain import PoseChain, RootFrames
+from engine.solver.objective import StoppingRule
 from engine.solver.update import LatentUpdate
 
 
@@ -72,254 +74,129 @@ class BatchDecoder:
         return g
 
 
-@dataclass
-class FrameTerms:
-    """What ``T`` independent frames are solved against (``S`` sensors of which ``S6``
-    give rotations; joint indices in the canonical skeleton's order).
+class BatchObjective:
+    """The terms of ``C`` rows of frames (one frame per row at a time) as a function of
+    their latents: the frame-by-frame :class:`~engine.solver.objective.FastObjective` with
+    a frame axis.
 
-    Attributes
+    Parameters
     ----------
-    joints : ndarray (S,) int
-    targets : ndarray (T, S, 3)
-        Sensor positions, metres.
-    weights : ndarray (T, S)
-        Sensor weights (0 for a frame where a sensor is not connected).
-    six : ndarray (S6,) int
-        Indices (in ``S``) of the sensors with rotations.
-    rot_targets : ndarray (T, S6, 3, 3)
-        Their world rotations.
-    rot_weights : ndarray (T, S6)
-        Rotation term weights against the squared position error.
-    root_pos : ndarray (T, 3)
-    root_rot : ndarray (T, 3, 3)
-        The hip tracker's world pose per frame; ``root_quat (T, 4)`` the same rotation.
-    prior : ndarray (T, L) or None
-        The temporal prior's latents; ``prior_weight`` their weight.
-    smooth_weight, ground_weight : float
-    ground_band : (float, float)
-        Band of the lower ankle's height, metres.
-    smooth_target : ndarray (T, 22, 3)
-        The smoothing term's targets (constant-velocity extrapolation of each frame's two
-        previous solved poses), metres; ``smooth_on (T,)`` bool, where it acts.
-    pos_tol2 : ndarray (S,)
-        Squared position tolerances, m^2; ``rot_tol`` (S6,) the rotation tolerances as
-        ``sin^2(angle / 2)``.
+    offsets : ndarray (22, 3)
+        Bone offsets, metres.
+    terms : list of Term
+        The terms, each with ``C`` rows where it has per-frame parameters
+        (:meth:`~engine.constraints.residual.FrameRows.rows`); ``load`` callers write
+        a row with :meth:`set_row`.
+    weights : ndarray (C, K)
+        Each row's weight of each constraint (``K`` = the terms' names, in order).
+    root : RootFrames
+        Each row's root (the hip tracker's: ``position (C, 3)`` and ``rotation (C, 3, 3)``).
+    root_quat : ndarray (C, 4)
+        The same rotations as quaternions (``w >= 0``), for :meth:`row`.
     """
 
-    joints: np.ndarray
-    targets: np.ndarray
-    weights: np.ndarray
-    six: np.ndarray
-    rot_targets: np.ndarray
-    rot_weights: np.ndarray
-    root_pos: np.ndarray
-    root_rot: np.ndarray
-    root_quat: np.ndarray
-    prior: np.ndarray | None
-    prior_weight: float
-    smooth_weight: float
-    ground_weight: float
-    ground_band: tuple[float, float]
-    smooth_target: np.ndarray
-    smooth_on: np.ndarray
-    pos_tol2: np.ndarray
-    rot_tol: np.ndarray
-    names: list[str] = field(default_factory=list)  # sensor term names, for the losses
+    def __init__(self, offsets: np.ndarray, terms: list[Term], weights: np.ndarray, root: RootFrames,
+                 root_quat: np.ndarray) -> None:  # fmt: skip
+        self.chain = PoseChain(offsets)
+        self.terms, self.weights, self.root, self.root_quat = terms, weights, root, root_quat
+        self.names = [n for t in terms for n in t.names]
+        self.spans = np.cumsum([0] + [len(t.names) for t in terms])
+        c, n = len(weights), self.chain.n
+        self.pos, self.local = np.zeros((c, n, 3)), np.tile([1.0, 0.0, 0.0, 0.0], (c, n, 1))
+        self.values = np.zeros(weights.shape)
 
+    def set_row(self, row: int, frame_terms: list[Term], weights: np.ndarray, root_pos: np.ndarray,
+                root_rot: np.ndarray) -> None:  # fmt: skip
+        """Row ``row`` becomes a frame: its one-frame terms (the same kinds, in order), its
+        weights ``(K,)`` and its root (hip tracker position ``(3,)``, rotation ``(4,)``)."""
+        from engine.kinematics import quat_np as QN
 
-class BatchPose:
-    """Forward and closed-form reverse pass of FK and losses for the active frames of a
-    batch (the per-frame formulas of :class:`engine.solver.fast.FastPose`, with a frame axis)."""
+        for t, f in zip(self.terms, frame_terms):
+            if isinstance(t, FrameRows):
+                t.set_row(row, f)
+        self.weights[row] = weights
+        self.root.position[row], self.root.rotation[row] = root_pos, QN.to_matrix(root_rot)
+        self.root_quat[row] = root_rot if root_rot[0] >= 0 else -root_rot
 
-    def __init__(self, offsets: np.ndarray, dense: DenseDecoder) -> None:
-        self.fp = FastPose(dense, np.asarray(offsets, dtype=np.float64))  # the level-order tables
+    def evaluate(self, z: np.ndarray, out: np.ndarray, idx: np.ndarray) -> np.ndarray:
+        """Losses ``(A, K)`` of the rows ``idx (A,)`` at latents ``z (A, L)`` with decoder
+        outputs ``out (91, A)``; keeps what :meth:`gradient` needs."""
+        r = self.root
+        sub = RootFrames(r.heading[idx], r.previous[idx], r.position[idx], r.rotation[idx])
+        P, W = self.chain.forward(out.T, sub)
+        z64 = z.astype(np.float64)
+        self.idx, self.P, self.W, self.z = idx, P, W, z64
+        self.res = [t.residual(NUMPY, P, W, z64, jac=True, rows=idx) for t in self.terms]
+        values = np.concatenate([t.losses(res) for t, res in zip(self.terms, self.res)], axis=1)
+        self.pos[idx], self.local[idx] = P, self.chain.local()
+        self.values[idx] = values
+        return values
 
-    def setup(self, t: FrameTerms) -> None:
-        fp, self.t = self.fp, t
-        self.rows, self.rows6 = fp.row[t.joints], fp.row[t.joints[t.six]]
-        self.feet = fp.row[_FEET]
-        f = len(t.targets)
-        self.pos = np.zeros((f, fp.n, 3))  # level order, the last evaluation of each frame
-        self.world = np.zeros((f, fp.n, 3, 3))
-        self.u = np.zeros((f, fp.n, 4))
-
-    def forward(self, z: np.ndarray, out: np.ndarray, idx: np.ndarray) -> np.ndarray:
-        """Per-frame losses ``(A, K)`` (sensors, then smooth, ground, prior) of the active
-        frames ``idx (A,)`` at their latents ``z (A, L)`` float32 with decoder outputs
-        ``out (91, A)``; keeps what :meth:`backward` needs."""
-        fp, t = self.fp, self.t
-        f, n = len(z), fp.n
-        q = out[fp.q_index].T.astype(np.float64).reshape(f, n, 4)
-        norm = np.sqrt(np.einsum("tij,tij->ti", q, q))
-        np.maximum(norm, 1e-8, out=norm)
-        u = q / norm[..., None]
-        local = QN.to_matrix(u)
-        world = np.empty((f, n, 3, 3))
-        world[:, 0] = t.root_rot[idx]
-        for a, b, parents in fp.level_slices:
-            np.matmul(world[:, parents], local[:, a:b], out=world[:, a:b])
-        bones = np.matmul(world[:, fp.prow[1:]], fp.off_col)[..., 0]  # (A, 21, 3)
-        pos = np.matmul(fp.chain, bones) + t.root_pos[idx, None]
-        self.pos[idx] = pos  # for row()
-        self.world[idx], self.u[idx] = world, u
-        self.idx, self.norm, self.z = idx, norm, z
-        self._active = pos, world, u  # the same, for backward() without a gather
-        self.err = pos[:, self.rows] - t.targets[idx]
-        self.pos_loss = np.einsum("tsi,tsi->ts", self.err, self.err)
-        w = t.weights[idx]
-        sensors = self.pos_loss.copy()
-        if len(t.six):
-            c = (3.0 - np.einsum("tkij,tkij->tk", t.rot_targets[idx], world[:, self.rows6])) * 0.25
-            self.rot_raw, self.rot_loss = c, np.clip(c, 0.0, 1.0)
-            sensors[:, t.six] += t.rot_weights[idx] * self.rot_loss
-        self.dev = (pos - t.smooth_target[idx][:, fp.order]) * t.smooth_on[idx, None, None]
-        cols = [sensors * (w > 0), (self.dev**2).sum((1, 2))[:, None] / n]
-        if t.ground_weight > 0:
-            h = pos[:, self.feet, 2]
-            m = h.min(1, keepdims=True)
-            e = np.exp(-(h - m) / SOFTMIN_TAU)
-            soft = m[:, 0] - SOFTMIN_TAU * np.log(e.sum(1))
-            lo, hi = t.ground_band
-            self.ground_w = e / e.sum(1, keepdims=True)
-            self.ground_e = np.where(soft > hi, soft - hi, np.where(soft < lo, soft - lo, 0.0))
-            cols.append(self.ground_e[:, None] ** 2)
-        else:  # weight 0 (trackers on the feet): the term is not evaluated
-            cols.append(np.zeros((f, 1)))
-        if t.prior is not None:
-            d = z.astype(np.float64) - t.prior[idx]
-            cols.append((d * d).sum(1, keepdims=True) / z.shape[1])
-        return np.concatenate(cols, axis=1)
-
-    def term_weights(self) -> np.ndarray:
-        """Weights ``(T, K)`` of :meth:`forward`'s columns, every frame."""
-        t = self.t
-        f = len(t.targets)
-        extra = [np.full((f, 1), t.smooth_weight), np.full((f, 1), t.ground_weight)]
-        if t.prior is not None:
-            extra.append(np.full((f, 1), t.prior_weight))
-        return np.concatenate([t.weights, *extra], axis=1)
-
-    def backward(self) -> tuple[np.ndarray, np.ndarray | None]:
-        """Gradients of the weighted totals w.r.t. the active frames' decoder outputs
-        ``(91, A)`` float32 and w.r.t. their latents directly (the prior term) ``(A, L)``,
-        for the last :meth:`forward`."""
-        fp, t, idx = self.fp, self.t, self.idx
-        f, n = len(idx), fp.n
-        w = t.weights[idx]
-        g = np.zeros((f, n, 3))
-        g[:, self.rows] += (2.0 * w)[..., None] * self.err  # sensor joints are distinct
-        if t.smooth_weight > 0:
-            g += (2.0 * t.smooth_weight / n) * self.dev
-        if t.ground_weight > 0:
-            g[:, self.feet, 2] += (2.0 * t.ground_weight * self.ground_e)[:, None] * self.ground_w
-        pos, world, u = self._active
-        tau = np.matmul(fp.subtree, _cross3(pos, g)) - _cross3(pos, np.matmul(fp.subtree, g))
-        if len(t.six):
-            inside = (self.rot_raw >= 0.0) & (self.rot_raw <= 1.0)
-            m = np.matmul(t.rot_targets[idx], world[:, self.rows6].transpose(0, 1, 3, 2))
-            coef = -0.25 * w[:, t.six] * t.rot_weights[idx] * inside
-            tau += np.matmul(fp.subtree[:, self.rows6], (m.reshape(f, -1, 9) @ _AXIAL) * coef[..., None])
-        frame = world[:, fp.prow]
-        sigma = np.einsum("tri,trij->trj", tau, frame)  # W_parent^T tau
-        g_q = QN.mul(np.concatenate((np.zeros((f, n, 1)), sigma), axis=2), u)
-        g_q *= (2.0 / self.norm)[..., None]
-        g_q[:, 0] = 0.0  # the root's rotation and position are the hip tracker's
-        out = np.zeros((4 * n + 3, f), np.float32)
-        out[fp.q_index] = g_q.reshape(f, -1).T
-        gz = None
-        if t.prior is not None:
-            gz = (2.0 * t.prior_weight / self.z.shape[1]) * (self.z.astype(np.float64) - t.prior[idx])
-        return out, gz
-
-    def row(self, c: int) -> tuple[np.ndarray, np.ndarray]:
-        """Frame ``c``'s last evaluated pose: world positions ``(22, 3)`` and local rotations
-        ``(22, 4)`` (``w >= 0``; the root's is the hip tracker's), joint order."""
-        fp = self.fp
-        u = self.u[c][fp.row]
-        local = u * np.where(u[:, :1] < 0, -1.0, 1.0)
-        local[0] = self.t.root_quat[c]
-        return self.pos[c][fp.row], local
+    def gradient(self) -> tuple[np.ndarray, np.ndarray]:
+        """Gradients of each row's weighted total w.r.t. its decoder outputs ``(91, A)``
+        float32 and w.r.t. its latent directly ``(A, L)`` (terms on the latent)."""
+        g_pos, g_rot, g_z = np.zeros_like(self.P), np.zeros_like(self.P), np.zeros_like(self.z)
+        w = self.weights[self.idx]
+        for k, (t, res) in enumerate(zip(self.terms, self.res)):
+            t.accumulate(res, w[:, self.spans[k] : self.spans[k + 1]], g_pos, g_rot, g_z)
+        return self.chain.backward(g_pos, g_rot).T, g_z
 
     def satisfied(self) -> np.ndarray:
-        """Per active frame ``(A,)``: every connected sensor within its tolerances."""
-        t, idx = self.t, self.idx
-        w = t.weights[idx]
-        ok = ((self.pos_loss <= t.pos_tol2) | (w <= 0)).all(1)
-        if len(t.six):
-            ok &= ((self.rot_loss <= t.rot_tol) | (w[:, t.six] <= 0)).all(1)
+        """Per evaluated row ``(A,)``: every constraint lets its frame stop."""
+        ok = np.ones(len(self.idx), dtype=bool)
+        for t in self.terms:
+            ok &= t.satisfied(self.P, self.W, self.z, rows=self.idx).all(1)
         return ok
 
+    def row(self, c: int) -> tuple[np.ndarray, np.ndarray]:
+        """Row ``c``'s last evaluated pose: world positions ``(22, 3)`` and local rotations
+        ``(22, 4)`` (``w >= 0``; the root's is the hip tracker's), joint order."""
+        local = self.local[c].copy()
+        local[0] = self.root_quat[c]
+        return self.pos[c].copy(), local
 
-def _cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Cross products of ``(..., 3)`` arrays by one matmul (as :func:`engine.solver.fast._cross`)."""
-    return (a[..., :, None] * b[..., None, :]).reshape(a.shape[:-1] + (9,)) @ _CROSS
 
-
-def solve_streams(decoder: BatchDecoder, pose: BatchPose, terms: FrameTerms, z: np.ndarray, rule: str,
-                  lr: float, max_iterations: int, patience: int, min_improvement: float,
+def solve_streams(decoder: BatchDecoder, objective: BatchObjective, z: np.ndarray, rule: str, lr: float,
+                  max_iterations: int, patience: int, min_improvement: float,
                   load: Callable[[int], bool], done: Callable[[int, int], None],
                   fixed_steps: Callable[[int], int | None] | None = None) -> None:  # fmt: skip
     """Solve ``C`` streams of frames, one frame of each at a time, all in the same decoder
-    passes. Row ``c`` of ``terms`` and of the latents ``z (C, L)`` float32 hold stream
-    ``c``'s current frame; ``load(c)`` puts its next frame's terms into row ``c`` (its
-    start is the latent left in ``z[c]``, the previous frame's) and returns False when
-    the stream has no frame left; ``done(c, iterations)`` is called when row ``c``'s frame
-    has stopped (its result is in ``z[c]``, :meth:`BatchPose.row` and
-    :attr:`BatchPose.values`). A frame takes ``fixed_steps(c)`` steps (called after each
-    ``load(c)``) or, where that is None or not given, stops by the frame-by-frame offline
-    rule: it meets its tolerances, its loss has not improved by ``min_improvement``
-    (relative) for ``patience`` iterations, or ``max_iterations`` are done. ``rule``: ``sgd`` (steps of
-    ``lr`` times the gradient), ``adam`` (fresh moments per frame) or ``adam-carry``
-    (moments carried from frame to frame of a stream)."""
-    c_all, dim = z.shape
-    pose.setup(terms)
-    b1, b2 = LatentUpdate.BETAS
-    m1, m2, steps = np.zeros((c_all, dim), np.float32), np.zeros((c_all, dim), np.float32), np.zeros(c_all)
-    best, since, iters = np.full(c_all, np.inf), np.zeros(c_all, np.intp), np.zeros(c_all, np.intp)
-    weights = pose.term_weights()  # a row's sensor columns change with its frame, the rest never
-    pose.values = np.zeros(weights.shape)
-    steps_of = np.full(c_all, -1, np.intp)  # each row's frame's step count (-1: the stopping rule)
+    passes. Row ``c`` of ``objective`` and of the latents ``z (C, L)`` float32 hold stream
+    ``c``'s current frame; ``load(c)`` puts its next frame into row ``c``
+    (:meth:`BatchObjective.set_row`; its start is the latent left in ``z[c]``, the previous
+    frame's) and returns False when the stream has no frame left; ``done(c, iterations)``
+    is called when row ``c``'s frame has stopped (its result is in ``z[c]``,
+    :meth:`BatchObjective.row` and :attr:`BatchObjective.values`). A frame takes
+    ``fixed_steps(c)`` steps (called after each ``load(c)``) or, where that is None or not
+    given, stops by the frame-by-frame offline rule (:class:`StoppingRule`). ``rule``:
+    ``sgd`` (steps of ``lr`` times the gradient), ``adam`` (fresh moments per frame) or
+    ``adam-carry`` (moments carried from frame to frame of a stream)."""
+    c_all = len(z)
+    stopping = StoppingRule(max_iterations, True, patience, min_improvement, rows=c_all)
+    update = LatentUpdate(rule, lr)
 
     def next_frame(c: int) -> bool:
         if not load(c):
             return False
-        weights[c, : terms.weights.shape[1]] = terms.weights[c]
-        k = fixed_steps(c) if fixed_steps is not None else None
-        steps_of[c] = -1 if k is None else k
+        stopping.restart(c)
+        stopping.fix(c, fixed_steps(c) if fixed_steps is not None else None)
         return True
 
     live = [c for c in range(c_all) if next_frame(c)]
     while live:
         idx = np.array(live, dtype=np.intp)
-        w = weights[idx]
-        values = pose.values[idx] = pose.forward(z[idx], decoder.forward(z[idx].T), idx)
-        total = (w * values).sum(1)
-        better = total < best[idx] * (1.0 - min_improvement)
-        best[idx] = np.where(better, total, best[idx])
-        since[idx] = np.where(better, 0, since[idx] + 1)
-        rule_stop = pose.satisfied() | (since[idx] >= patience) | (iters[idx] >= max_iterations)
-        stop = np.where(steps_of[idx] < 0, rule_stop, iters[idx] >= steps_of[idx])
+        values = objective.evaluate(z[idx], decoder.forward(z[idx].T), idx)
+        total = (objective.weights[idx] * values).sum(1)
+        stop = stopping.stop(total, objective.satisfied, idx)
         if not stop.all():
-            g_out, g_z = pose.backward()
-            grad = decoder.backward(g_out).T
-            if g_z is not None:
-                grad = grad + g_z.astype(np.float32)
+            g_out, g_z = objective.gradient()
+            grad = decoder.backward(g_out).T + g_z.astype(np.float32)
             keep = ~stop
-            grad, k = grad[keep], idx[keep]
-            if rule == "sgd":
-                z[k] -= np.float32(lr) * grad
-            else:
-                steps[k] += 1
-                n = steps[k][:, None]
-                m1[k] += np.float32(1 - b1) * (grad - m1[k])
-                m2[k] = m2[k] * np.float32(b2) + np.float32(1 - b2) * grad * grad
-                denom = np.sqrt(m2[k]) / np.sqrt(1 - b2**n).astype(np.float32) + np.float32(LatentUpdate.EPS)
-                z[k] -= (lr / (1 - b1**n)).astype(np.float32) * (m1[k] / denom)
-            iters[k] += 1
+            update.step_rows(z, grad[keep], idx[keep])
+            stopping.stepped(idx[keep])
         for c in idx[stop]:
-            done(int(c), int(iters[c]))
-            best[c], since[c], iters[c] = np.inf, 0, 0
+            done(int(c), int(stopping.steps[c]))
             if rule == "adam":
-                m1[c], m2[c], steps[c] = 0.0, 0.0, 0
+                update.restart_row(int(c))
             if not next_frame(int(c)):
                 live.remove(int(c))

@@ -67,9 +67,8 @@ class SolveTimings:
     """Where one frame's solve spent its time, milliseconds summed over its iterations.
 
     ``decoder`` is the decoder's forward pass, ``fk_losses`` the root, FK and loss terms,
-    ``backward`` the gradient, ``step`` the latent update; ``fast`` tells which path ran,
-    ``slow_kinds`` the constraint kinds without a fast-path term that kept it from the
-    fast path.
+    ``backward`` the gradient, ``step`` the latent update; ``fast`` tells which objective
+    ran (numpy or the autograd reference).
     """
 
     iterations: int = 0
@@ -78,17 +77,12 @@ class SolveTimings:
     backward: float = 0.0
     step: float = 0.0
     fast: bool = False
-    slow_kinds: tuple[str, ...] = ()
-    path: "np.ndarray | None" = None
 
     def per_iteration(self) -> dict[str, float]:
-        """Milliseconds per iteration: each part and their sum ``ms_per_iteration``; with
-        ``slow_path: 1.0`` when kinds without a fast-path term slowed the frame (the
-        studio shows it)."""
+        """Milliseconds per iteration: each part and their sum ``ms_per_iteration``."""
         n = max(self.iterations, 1)
         parts = {k: getattr(self, k) / n for k in ("decoder", "fk_losses", "backward", "step")}
-        flag = {"slow_path": 1.0} if self.slow_kinds else {}
-        return {"ms_per_iteration": sum(parts.values()), **parts, **flag}
+        return {"ms_per_iteration": sum(parts.values()), **parts}
 
 
 @dataclass
@@ -111,9 +105,6 @@ class Solution:
     timings : SolveTimings
     cut : bool
         True when the frame's deadline stopped the solve before ``iterations`` steps.
-    slow_kinds : tuple of str
-        Constraint kinds without a fast-path term that sent this frame to the slower
-        reference path (empty when the fast path ran, or was not asked for).
     path : ndarray (K, L) float32 or None
         The latents the solve visited, from the start (row 0) to the last one evaluated;
         ``K == len(losses)`` (latent-space debugging draws it).
@@ -127,4 +118,4 @@ class Solution:
     fell_back: bool = False
     timings: SolveTimings = field(default_factory=SolveTimings)
     cut: bool = False
-    slow_kinds: tuple[str, ...] = ()
+    path: "np.ndarray | None" = None

@@ -26,17 +26,15 @@ final loss far above the starting one (divergence), makes the frame fall back to
 starting latent, again with a warning. The caller's state is only ever updated from a
 finite solution, so the next frame starts clean.
 
-Two paths compute the same iterations: the **fast path** (:mod:`engine.solver.fast`,
-hand-derived gradients through a fused decoder, numpy) whenever every enabled constraint
-has a fast-path term (:meth:`~engine.constraints.base.Constraint.fast_term`, declared in
-its kind's module) and the decoder is a :class:`~engine.models.PoseVAE`, and the
-**reference path** (autograd through the torch decoder and every constraint's ``loss``)
-otherwise, or when ``PoseOptimizer(..., fast=False)``. A frame that a kind without a
-term sends to the reference path says so: :attr:`Solution.slow_kinds` names the kinds
-and its warnings carry one line. Both use the update
-rules of :mod:`engine.solver.update`. What a solve takes and returns (:class:`FrameContext`,
-:class:`Solution`, :class:`SolveTimings`, the :class:`LatentDecoder` protocol) is
-:mod:`engine.solver.frame`.
+One loop (:meth:`PoseOptimizer.solve`) runs an :class:`~engine.solver.objective.Objective`
+built from the frame's terms (each constraint kind's one residual,
+:mod:`engine.constraints.residual`): the numpy :class:`~engine.solver.objective.FastObjective`
+whenever the decoder is a :class:`~engine.models.PoseVAE`, the autograd
+:class:`~engine.solver.objective.ReferenceObjective` otherwise or with
+``PoseOptimizer(..., fast=False)``. Both use the update rules of
+:mod:`engine.solver.update` and the :class:`~engine.solver.objective.StoppingRule`.
+What a solve takes and returns (:class:`FrameContext`, :class:`Solution`,
+:class:`SolveTimings`, the :class:`LatentDecoder` protocol) is :mod:`engine.solver.frame`.
 """
 
 from __future__ import annotations
@@ -50,24 +48,40 @@ from typing import TYPE_CHECKING
 import numpy as np
 import torch
 
-from engine.constraints.terms import FrameInputs, NativeTerm, PoseTerm
+from engine.constraints.residual import FrameInputs
+from engine.kinematics import quat_np as QN
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk_matrices
+from engine.kinematics.pose_state import PoseState
 from engine.models.fused import DenseDecoder
 from engine.models.vae import PoseVAE
-from engine.solver.fast import FastPose, FastTerms
+from engine.solver.chain import PoseChain, RootFrames
 from engine.solver.frame import FrameContext, LatentDecoder, Solution, SolveTimings
+from engine.solver.objective import FastObjective, Objective, ReferenceObjective, StoppingRule, build_terms
 from engine.solver.pose import world_root
-from engine.solver.slow_path import report_slow
-from engine.solver.threads import one_blas_thread
 from engine.solver.settings import FULL_SET, OptimizerSettings
-from engine.kinematics.pose_state import PoseState
+from engine.solver.threads import one_blas_thread
 from engine.solver.update import LatentUpdate
 
 if TYPE_CHECKING:
     from engine.constraints.base import Constraint
 
 _DENSE: "weakref.WeakKeyDictionary[torch.nn.Module, DenseDecoder]" = weakref.WeakKeyDictionary()
+
+
+def dense_decoder(vae: PoseVAE) -> DenseDecoder:
+    """The fused numpy decoder of ``vae`` (made once per model)."""
+    if vae not in _DENSE:
+        _DENSE[vae] = DenseDecoder(vae)
+    return _DENSE[vae]
+
+
+class FastParts:
+    """What the fast objective needs from the model and the subject: the fused decoder and
+    the pose chain."""
+
+    def __init__(self, decoder: DenseDecoder, offsets: np.ndarray) -> None:
+        self.decoder, self.chain = decoder, PoseChain(offsets)
 
 
 class PoseOptimizer:
@@ -81,10 +95,10 @@ class PoseOptimizer:
     offsets : array (22, 3)
         Bone offsets of the subject, metres.
     settings : OptimizerSettings
-        Read at every :meth:`solve`, so edits apply from the next frame.
+        The default settings of :meth:`solve` (a solve may be given others).
     fast : bool
-        Use the fast path when the frame allows it (module doc); False forces the
-        reference path (tests compare the two).
+        Use the numpy objective when the decoder allows it (module doc); False forces the
+        autograd reference (tests compare the two).
     """
 
     def __init__(self, decoder: LatentDecoder, offsets: np.ndarray, settings: OptimizerSettings | None = None,
@@ -94,248 +108,125 @@ class PoseOptimizer:
             decoder.eval().requires_grad_(False)
         self.settings = settings or OptimizerSettings()
         self.offsets = torch.as_tensor(np.asarray(offsets), dtype=torch.float32)
-        self._fast: FastPose | None = None
+        self._fast: FastParts | None = None
         if fast and isinstance(decoder, PoseVAE):
-            if decoder not in _DENSE:
-                _DENSE[decoder] = DenseDecoder(decoder)
-            self._fast = FastPose(_DENSE[decoder], np.asarray(offsets, dtype=np.float64))
+            self._fast = FastParts(dense_decoder(decoder), np.asarray(offsets, dtype=np.float64))
         self._carry: dict = {}
-        self._reported: set[tuple[str, ...]] = set()  # sets of slow kinds this solver has reported
+
+    @property
+    def fast_parts(self) -> FastParts | None:
+        """The fused decoder and pose chain of the numpy objective (None: the reference runs)."""
+        return self._fast
 
     # -- decoding --------------------------------------------------------------------
     def decode(self, z: torch.Tensor, ctx: FrameContext) -> PoseState:
         """World pose of latent ``z (L,)`` in the context of a frame (differentiable)."""
         rot, disp = self.decoder.decode(z[None])
-        return self._pose(rot[0], disp[0], z, ctx)
-
-    def _pose(self, rot: torch.Tensor, disp: torch.Tensor, z: torch.Tensor, ctx: FrameContext) -> PoseState:
-        root_rot, root_pos = world_root(rot[0], disp, ctx.previous_root, ctx.root_override)
-        local = torch.cat((root_rot[None], rot[1:]), dim=0)
+        root_rot, root_pos = world_root(rot[0][0], disp[0], ctx.previous_root, ctx.root_override)
+        local = torch.cat((root_rot[None], rot[0][1:]), dim=0)
         pos, mats = fk_matrices(Q.to_matrix(local), root_pos, self.offsets)
         if ctx.root_anchor is not None and ctx.root_override is None:
             pos = ctx.root_anchor.apply(pos)
         return PoseState(pos, None, local, z, ctx.previous_positions, ctx.frame, ctx.prediction, mats)
 
-    # -- solving ---------------------------------------------------------------------
-    def solve(self, start: torch.Tensor, constraints: Sequence["Constraint"], ctx: FrameContext) -> Solution:
-        """Optimise from latent ``start (L,)`` against the enabled ``constraints``, each
-        weighted by its ``weight`` times its :meth:`~Constraint.activity` at ``ctx.frame``."""
-        weighted = [(c, c.weight * c.activity(ctx.frame)) for c in constraints if c.enabled]
-        terms = [c for c, w in weighted if w > 0]
-        weights = {id(c): w for c, w in weighted if w > 0}
-        with one_blas_thread():  # tiny products: one thread is fastest
-            slow: list[str] = []
-            if self._fast is not None:
-                built = self._fast_terms(terms, weights, ctx)
-                slow = sorted({c.kind for c, t in zip(terms, built) if t is None})
-                if not slow and sum(c.kind == "temporal_prior" for c in terms) <= 1:
-                    sol = self._solve_fast(start, terms, built, ctx)  # type: ignore[arg-type]
-                    if sol is not None:
-                        return sol
-            sol = self._solve_reference(start, terms, weights, ctx)
-            if slow:
-                report_slow(sol, tuple(slow), self._reported)
-            return sol
+    # -- the objective -------------------------------------------------------------------
+    def objective(self, constraints: Sequence["Constraint"], weights: Sequence[float], ctx: FrameContext) -> Objective:
+        """The frame's objective over ``constraints`` with these ``weights`` (module doc)."""
+        prev, pred = ctx.previous_positions, ctx.prediction
+        inputs = FrameInputs(None if prev is None else prev.detach().double().numpy(), ctx.frame,
+                             None if pred is None else pred.detach().double().numpy())  # fmt: skip
+        terms, term_weights = build_terms(constraints, weights, inputs)
+        if self._fast is None:
+            return ReferenceObjective(lambda z: self.decode(z, ctx), terms, term_weights)
+        return FastObjective(self._fast.decoder, self._fast.chain, terms, term_weights, _root_frames(ctx),
+                             lambda latent, obj: _fast_state(latent, obj, ctx))  # fmt: skip
 
-    @staticmethod
-    def _fast_terms(terms: Sequence["Constraint"], weights: dict[int, float], ctx: FrameContext) -> list[PoseTerm | None]:
-        """Each constraint's fast-path term for this frame with its frame weight (None: it has none)."""
-        prev = ctx.previous_positions
-        inputs = FrameInputs(None if prev is None else prev.detach().double().numpy(), ctx.frame)
-        built = [c.fast_term(inputs) for c in terms]
-        for c, t in zip(terms, built):
-            if t is not None:
-                t.weight = weights[id(c)]  # terms read it when evaluated: the activity counts
-        return built
-
-    def update_rule(self, terms: Sequence["Constraint"], deadline: bool = False) -> str:
+    def update_rule(self, terms: Sequence["Constraint"], deadline: bool = False,
+                    settings: OptimizerSettings | None = None) -> str:  # fmt: skip
         """The rule ``solve`` uses with these enabled ``terms``: ``auto`` is Adam with
         carried moments with at least :data:`FULL_SET` sensors, plain gradient steps with
         fewer. Under a ``deadline`` (live) ``auto`` takes Adam with fresh moments instead:
         carried moments make small steps, which ten iterations make up for but the three
         or four a deadline leaves do not (bundled clip, six sensors, ``evaluate
         --iterations 3``: 2.45 cm carried, 0.91 cm fresh; 2 iterations fresh: 1.01 cm)."""
-        rule = self.settings.optimizer
+        rule = (settings or self.settings).optimizer
         if rule == "auto":
             sensors = sum(1 for c in terms if c.kind == "sensor")
             rule = ("adam" if deadline else "adam-carry") if sensors >= FULL_SET else "sgd"
         return rule
 
-    def _update(self, rule: str) -> LatentUpdate:
-        s = self.settings
+    def _update(self, rule: str, s: OptimizerSettings) -> LatentUpdate:
         if rule == "sgd":
             return LatentUpdate("sgd", s.step_size, s.momentum)
         return LatentUpdate(rule, s.lr, state=self._carry if rule == "adam-carry" else None)
 
-    def _finish(self, z0: np.ndarray, z: np.ndarray, rule: str, upd: LatentUpdate, losses: list, steps: int,
-                warnings: list[str], ctx: FrameContext, state_of, timings: SolveTimings) -> Solution:  # fmt: skip
-        """Divergence check, moment carry-over and the detached result."""
-        if losses[-1]["total"] > self.settings.divergence_factor * losses[0]["total"] + 1e-6:
+    # -- solving ---------------------------------------------------------------------
+    def solve(self, start: torch.Tensor, constraints: Sequence["Constraint"], ctx: FrameContext,
+              settings: OptimizerSettings | None = None) -> Solution:  # fmt: skip
+        """Optimise from latent ``start (L,)`` against the enabled ``constraints``, each
+        weighted by its ``weight`` times its :meth:`~Constraint.activity` at ``ctx.frame``,
+        under ``settings`` (default: the optimizer's)."""
+        s = settings or self.settings
+        weighted = [(c, c.weight * c.activity(ctx.frame)) for c in constraints if c.enabled]
+        active = [c for c, w in weighted if w > 0]
+        weights = [w for _, w in weighted if w > 0]
+        warnings: list[str] = []
+        timings = SolveTimings()
+        z0 = start.detach().numpy().astype(np.float32)
+        with one_blas_thread():  # tiny products: one thread is fastest
+            obj = self.objective(active, weights, ctx)
+            values = obj.evaluate(z0, timings)
+            bad = {n for n, v in zip(obj.names, values) if not math.isfinite(v)}
+            if bad:
+                warnings.append(f"non-finite loss ignored this frame: {', '.join(sorted(bad))}")
+                keep = [i for i, c in enumerate(active) if c.name not in bad]
+                active, weights = [active[i] for i in keep], [weights[i] for i in keep]
+                obj = self.objective(active, weights, ctx)
+            return self._run(obj, z0, active, s, ctx, warnings, timings)
+
+    def _run(self, obj: Objective, z0: np.ndarray, active: list, s: OptimizerSettings, ctx: FrameContext,
+             warnings: list[str], timings: SolveTimings) -> Solution:  # fmt: skip
+        """The solve loop: evaluate, record, stop or step (module doc)."""
+        clock = time.perf_counter
+        rule = self.update_rule(active, ctx.deadline is not None, s)
+        upd = self._update(rule, s)
+        stopping = StoppingRule(s.steps_cap(), s.mode == "offline", s.patience, s.min_improvement)
+        timings.fast = obj.fast
+        z, losses, path = z0.copy(), [], []
+        deadline, cut, t_loop, steps = ctx.deadline, False, clock(), 0
+        timings.decoder = timings.fk_losses = 0.0  # the first evaluation is repeated in the loop
+        while True:
+            values = obj.evaluate(z, timings)
+            total = float(obj.weights @ values)
+            path.append(z)
+            losses.append({**dict(zip(obj.names, values.tolist())), "total": total})
+            if not math.isfinite(total) or not np.isfinite(z).all():
+                return self._fall_back(z0, ctx, losses, steps, warnings, "loss became non-finite", timings)
+            if steps == 0:
+                t_loop = clock()  # steps are timed from the first evaluation on
+            elif deadline is not None and steps < stopping.cap and _past(deadline, t_loop, steps):
+                cut = True
+                break
+            if stopping.stop(np.array([total]), lambda: np.array([obj.satisfied()]))[0]:
+                break
+            t0 = clock()
+            grad = obj.gradient()
+            t1 = clock()
+            z = upd.step(z, grad)
+            timings.backward += t1 - t0
+            timings.step += clock() - t1
+            stopping.stepped()
+            steps += 1
+        timings.iterations = steps
+        _to_ms(timings)
+        if losses[-1]["total"] > s.divergence_factor * losses[0]["total"] + 1e-6:
             return self._fall_back(z0, ctx, losses, steps, warnings, "loss diverged", timings)
         # moments from before a stretch under another rule (a tracker was lost) describe
         # a different problem: start them afresh
         self._carry = upd.state if rule == "adam-carry" else {}
         latent = torch.from_numpy(z.copy())
-        return Solution(latent, state_of(latent), losses, steps, warnings, timings=timings)
-
-    def _solve_fast(self, start: torch.Tensor, terms: list, built: list[PoseTerm], ctx: FrameContext) -> Solution | None:
-        """The fast path with the constraints' terms ``built``; None when the starting
-        losses are not all finite (the reference path then drops the bad terms with its
-        warning)."""
-        s, fp, clock = self.settings, self._fast, time.perf_counter
-        assert fp is not None
-        native = [t for t in built if isinstance(t, NativeTerm)]
-        sensors = [t for t in native if t.constraint.kind == "sensor"]
-        prior = next((t for t in native if t.constraint.kind == "temporal_prior"), None)
-        pred = None if ctx.prediction is None else ctx.prediction.detach().double().numpy()
-        extras = [t for t in built if not isinstance(t, NativeTerm)]
-        ft = FastTerms([t.constraint for t in sensors], None if prior is None else prior.constraint,
-                       prior.weight if prior is not None else 0.0, pred, extras, [t.weight for t in sensors])  # fmt: skip
-        ov, anchor = ctx.root_override, ctx.root_anchor
-        fp.setup(Q.heading(ctx.previous_root.rotation.detach().double().numpy()),
-                 ctx.previous_root.position.detach().double().numpy(),
-                 None if ov is None else ov.position.detach().double().numpy(),
-                 None if ov is None or ov.rotation is None else ov.rotation.detach().double().numpy(),
-                 None if anchor is None else anchor.joint,
-                 None if anchor is None else anchor.position.detach().double().numpy(), ft)  # fmt: skip
-        z0 = start.detach().numpy().astype(np.float32)
-        z, rule = z0.copy(), self.update_rule(terms, ctx.deadline is not None)
-        upd, timings = self._update(rule), SolveTimings(fast=True)
-        losses: list[dict[str, float]] = []
-        path: list[np.ndarray] = []
-        cap, offline = s.steps_cap(), s.mode == "offline"
-        best, since_best, steps, warnings = math.inf, 0, 0, []
-        deadline, cut, t_loop = ctx.deadline, False, clock()
-        while True:
-            t0 = clock()
-            out = fp.decoder.forward(z)
-            t1 = clock()
-            values = fp.after_decoder(z, out)
-            total = float(ft.weights @ values)
-            t2 = clock()
-            timings.decoder += t1 - t0
-            timings.fk_losses += t2 - t1
-            if steps == 0 and not np.isfinite(values).all():
-                return None
-            path.append(z)
-            losses.append({**dict(zip(ft.names, values.tolist())), "total": total})
-            if not math.isfinite(total) or not np.isfinite(z).all():
-                return self._fall_back(z0, ctx, losses, steps, warnings, "loss became non-finite", timings)
-            if steps >= cap:
-                break
-            if steps == 0:
-                t_loop = clock()  # steps are timed from the first evaluation on
-            elif deadline is not None and _past(deadline, t_loop, steps):
-                cut = True
-                break
-            if offline:
-                if fp.satisfied():
-                    break
-                if total < best * (1.0 - s.min_improvement):
-                    best, since_best = total, 0
-                else:
-                    since_best += 1
-                    if since_best >= s.patience:
-                        break
-            t0 = clock()
-            grad = fp.latent_gradient()
-            t1 = clock()
-            z = upd.step(z, grad)
-            timings.backward += t1 - t0
-            timings.step += clock() - t1
-            steps += 1
-        timings.iterations = steps
-        _to_ms(timings)
-        sol = self._finish(z0, z, rule, upd, losses, steps, warnings, ctx, lambda lat: self._fast_state(lat, ctx),
-                           timings)  # fmt: skip
-        sol.cut = cut
-        sol.path = np.stack(path)
-        return sol
-
-    def _fast_state(self, latent: torch.Tensor, ctx: FrameContext) -> PoseState:
-        """The fast path's last evaluated pose as a (detached, float32) :class:`PoseState`."""
-        fp = self._fast
-        assert fp is not None
-        local = fp.r.copy()
-        ov = ctx.root_override
-        if ov is not None and ov.rotation is not None:
-            local[0] = ov.rotation.detach().double().numpy()
-        else:
-            local[0] = Q.mul(Q.heading(ctx.previous_root.rotation.detach().double().numpy()), fp.r[0])
-        f = lambda a: torch.as_tensor(a, dtype=torch.float32)  # noqa: E731
-        return PoseState(f(fp.pos), None, f(local), latent, ctx.previous_positions, ctx.frame, ctx.prediction,
-                         f(fp.world))  # fmt: skip
-
-    def _solve_reference(self, start: torch.Tensor, terms: list, weight_of: dict[int, float],
-                         ctx: FrameContext) -> Solution:  # fmt: skip
-        """Autograd through the torch decoder and every constraint's loss."""
-        s, clock = self.settings, time.perf_counter
-        warnings: list[str] = []
-        z = start.detach().clone().requires_grad_(True)
-        state = self.decode(z, ctx)
-        values = _evaluate(terms, state)
-        finite = torch.isfinite(values).tolist()
-        if not all(finite):
-            bad = [c.name for c, ok in zip(terms, finite) if not ok]
-            warnings.append(f"non-finite loss ignored this frame: {', '.join(bad)}")
-            terms = [c for c, ok in zip(terms, finite) if ok]
-        terms, evaluate = _evaluator(terms, values)
-        names = [c.name for c in terms]
-        weights = torch.tensor([weight_of[id(c)] for c in terms], dtype=values.dtype)
-        rule = self.update_rule(terms, ctx.deadline is not None)
-        upd, timings = self._update(rule), SolveTimings()
-        z0 = start.detach().numpy().astype(np.float32)
-        losses: list[dict[str, float]] = []
-        path: list[np.ndarray] = []
-        cap, offline = s.steps_cap(), s.mode == "offline"
-        best, since_best, steps = math.inf, 0, 0
-        deadline, cut, t_loop = ctx.deadline, False, clock()
-        while True:
-            t0 = clock()
-            rot, disp = self.decoder.decode(z[None])
-            t1 = clock()
-            state = self._pose(rot[0], disp[0], z, ctx)
-            values = evaluate(state)
-            total = (weights * values).sum()
-            t2 = clock()
-            timings.decoder += t1 - t0
-            timings.fk_losses += t2 - t1
-            path.append(z.detach().numpy().copy())
-            losses.append({**dict(zip(names, values.detach().tolist())), "total": float(total.detach())})
-            if not math.isfinite(losses[-1]["total"]) or not bool(torch.isfinite(z).all()):
-                return self._fall_back(z0, ctx, losses, steps, warnings, "loss became non-finite", timings)
-            if steps >= cap:
-                break
-            if steps == 0:
-                t_loop = clock()  # steps are timed from the first evaluation on
-            elif deadline is not None and _past(deadline, t_loop, steps):
-                cut = True
-                break
-            if offline:
-                if all(c.satisfied(state) for c in terms):
-                    break
-                if losses[-1]["total"] < best * (1.0 - s.min_improvement):
-                    best, since_best = losses[-1]["total"], 0
-                else:
-                    since_best += 1
-                    if since_best >= s.patience:
-                        break
-            t0 = clock()
-            # no term left (e.g. every constraint outside its frame range): nothing to move
-            (grad,) = torch.autograd.grad(total, z) if total.requires_grad else (torch.zeros_like(z),)
-            t1 = clock()
-            z = torch.from_numpy(upd.step(z.detach().numpy(), grad.numpy())).requires_grad_(True)
-            timings.backward += t1 - t0
-            timings.step += clock() - t1
-            steps += 1
-        timings.iterations = steps
-        _to_ms(timings)
-        final = state.detached()
-        sol = self._finish(z0, z.detach().numpy(), rule, upd, losses, steps, warnings, ctx,
-                           lambda lat: _with_latent(final, lat), timings)  # fmt: skip
-        sol.cut = cut
-        sol.path = np.stack(path)
-        return sol
+        return Solution(latent, obj.state(latent), losses, steps, warnings, timings=timings, cut=cut,
+                        path=np.stack(path))  # fmt: skip
 
     def _fall_back(self, z0: np.ndarray, ctx: FrameContext, losses: list[dict[str, float]], steps: int,
                    warnings: list[str], why: str, timings: SolveTimings) -> Solution:  # fmt: skip
@@ -344,6 +235,33 @@ class PoseOptimizer:
         with torch.no_grad():
             state = self.decode(z, ctx)
         return Solution(z, state.detached(), losses, steps, warnings, fell_back=True, timings=timings)
+
+
+def _root_frames(ctx: FrameContext) -> RootFrames:
+    """The chain's root for one frame (:class:`RootFrames` with ``A = 1``)."""
+    n = lambda t: t.detach().double().numpy()  # noqa: E731
+    ov, anchor = ctx.root_override, ctx.root_anchor
+    return RootFrames(
+        heading=QN.to_matrix(Q.heading(n(ctx.previous_root.rotation)))[None],
+        previous=n(ctx.previous_root.position)[None],
+        position=None if ov is None else n(ov.position)[None],
+        rotation=None if ov is None or ov.rotation is None else QN.to_matrix(n(ov.rotation))[None],
+        anchor=None if anchor is None else anchor.joint,
+        anchor_position=None if anchor is None else n(anchor.position)[None],
+    )
+
+
+def _fast_state(latent: torch.Tensor, obj: FastObjective, ctx: FrameContext) -> PoseState:
+    """The fast objective's last evaluated pose as a (detached, float32) :class:`PoseState`."""
+    local = obj.chain.local()[0].copy()
+    ov = ctx.root_override
+    if ov is not None and ov.rotation is not None:
+        local[0] = ov.rotation.detach().double().numpy()
+    else:
+        local[0] = QN.mul(Q.heading(ctx.previous_root.rotation.detach().double().numpy()), local[0])
+    f = lambda a: torch.as_tensor(a, dtype=torch.float32)  # noqa: E731
+    return PoseState(f(obj.P[0]), None, f(local), latent, ctx.previous_positions, ctx.frame, ctx.prediction,
+                     f(obj.W[0]))  # fmt: skip
 
 
 def _past(deadline: float, t_loop: float, steps: int) -> bool:
@@ -356,36 +274,3 @@ def _past(deadline: float, t_loop: float, steps: int) -> bool:
 def _to_ms(t: SolveTimings) -> None:
     for k in ("decoder", "fk_losses", "backward", "step"):
         setattr(t, k, 1000.0 * getattr(t, k))
-
-
-def _with_latent(state: PoseState, latent: torch.Tensor) -> PoseState:
-    state.latent = latent
-    return state
-
-
-def _evaluate(terms: Sequence["Constraint"], state: PoseState) -> torch.Tensor:
-    return torch.stack([c.loss(state).reshape(()) for c in terms]) if terms else state.positions.new_zeros(0)
-
-
-def _evaluator(terms: list["Constraint"], like: torch.Tensor):
-    """Reorder ``terms`` so kinds with a :meth:`~Constraint.batch` fast path come first,
-    and return them with a function ``state -> (K,)`` losses in that order."""
-    kinds: dict[type, list] = {}
-    for c in terms:
-        kinds.setdefault(type(c), []).append(c)
-    fast, ordered, singles = [], [], []
-    for cls, items in kinds.items():
-        fn = cls.batch(items, like) if len(items) > 1 else None
-        if fn is None:
-            singles += items
-        else:
-            fast.append(fn)
-            ordered += items
-
-    def evaluate(state: PoseState) -> torch.Tensor:
-        parts = [fn(state) for fn in fast]
-        if singles:
-            parts.append(_evaluate(singles, state))
-        return torch.cat(parts) if parts else like.new_zeros(0)
-
-    return ordered + singles, evaluate

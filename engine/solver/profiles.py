@@ -14,7 +14,7 @@ profile    connected trackers                              presets
 =========  ==============================================  ==================================
 
 A profile only supplies the values of the settings the user left alone
-(:meth:`engine.methods.dragposer_edits.DragPoserEdits.configure` records what was set);
+(:meth:`engine.methods.dragposer_edits.FrameSettings.configure` records what was set);
 ``tuning = "off"`` disables profiles altogether. The values were chosen on the
 validation files only; the sweeps are in ``docs/optimizer.md``.
 """

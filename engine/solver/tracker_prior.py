@@ -4,7 +4,7 @@ look like this frame's (beyond the paper).
 DragPoser's temporal predictor guesses the next latent from past latents only. With a
 sparse sensor set those past latents are themselves guesses, and the untracked legs
 follow them: with a prior as good as the truth, presets ``4`` and ``3-hip-hands`` reach
-1.5-1.6 cm instead of 7.6-9.2 (``scripts/oracle_prior.py``, docs/accuracy.md). The
+1.5-1.6 cm instead of 7.6-9.2 (``research/oracle_prior.py``, docs/accuracy.md). The
 :class:`PoseBank` gives a prior from what *is* measured. It holds, for every frame of the
 training clips, the world positions and rotations of the joints trackers sit on
 (:data:`BANK_JOINTS`) and the VAE encoder's latent of the true pose. For a frame being

@@ -7,13 +7,14 @@ overhead, and shared by the solver's fast and reference paths.
 
 from __future__ import annotations
 
-import math
 
 import numpy as np
 
 
 class LatentUpdate:
-    """One update rule's state for a latent ``(L,)``.
+    """One update rule's state for latents ``(..., L)``: one latent frame by frame, or a
+    row per frame of the batched solve (:meth:`step_rows`), each row with its own moments
+    and step count.
 
     Parameters
     ----------
@@ -35,7 +36,7 @@ class LatentUpdate:
         self.state = {k: (v.copy() if isinstance(v, np.ndarray) else v) for k, v in (state or {}).items()}
 
     def step(self, z: np.ndarray, grad: np.ndarray) -> np.ndarray:
-        """The next latent (new array, float32)."""
+        """The next latents (new array, float32) of ``z`` with gradients ``grad``, same shape."""
         grad = grad.astype(np.float32, copy=False)
         if self.rule == "sgd":
             if self.momentum > 0:
@@ -44,14 +45,42 @@ class LatentUpdate:
                 self.state["momentum_buffer"] = buf
                 grad = grad + np.float32(self.momentum) * buf
             return z - np.float32(self.lr) * grad
-        b1, b2 = self.BETAS
         s = self.state
         if not s:
-            s.update(step=0, exp_avg=np.zeros_like(z), exp_avg_sq=np.zeros_like(z))
-        s["step"] += 1
-        m = s["exp_avg"] + np.float32(1 - b1) * (grad - s["exp_avg"])
-        v = s["exp_avg_sq"] * np.float32(b2) + np.float32(1 - b2) * grad * grad
-        s["exp_avg"], s["exp_avg_sq"] = m, v
-        step_size = self.lr / (1 - b1 ** s["step"])
-        denom = np.sqrt(v) / np.float32(math.sqrt(1 - b2 ** s["step"])) + np.float32(self.EPS)
-        return z - np.float32(step_size) * (m / denom)
+            s.update(step=np.zeros(z.shape[:-1]), exp_avg=np.zeros_like(z), exp_avg_sq=np.zeros_like(z))
+        n, m, v = self._adam(s["step"] + 1, s["exp_avg"], s["exp_avg_sq"], grad)
+        s["step"], s["exp_avg"], s["exp_avg_sq"] = n, m, v
+        return z - self._move(n, m, v)
+
+    def step_rows(self, z: np.ndarray, grad: np.ndarray, rows: np.ndarray) -> None:
+        """Step rows ``rows`` of ``z (C, L)`` in place with their gradients ``grad (len(rows), L)``;
+        the state holds every row (plain steps keep none)."""
+        grad = grad.astype(np.float32, copy=False)
+        if self.rule == "sgd":
+            z[rows] -= np.float32(self.lr) * grad
+            return
+        s = self.state
+        if not s:
+            s.update(step=np.zeros(len(z)), exp_avg=np.zeros_like(z), exp_avg_sq=np.zeros_like(z))
+        n, m, v = self._adam(s["step"][rows] + 1, s["exp_avg"][rows], s["exp_avg_sq"][rows], grad)
+        s["step"][rows], s["exp_avg"][rows], s["exp_avg_sq"][rows] = n, m, v
+        z[rows] -= self._move(n, m, v)
+
+    def restart_row(self, row: int) -> None:
+        """Row ``row`` starts with fresh moments (rule ``adam``: a new frame)."""
+        if self.state:
+            self.state["step"][row] = 0
+            self.state["exp_avg"][row] = 0.0
+            self.state["exp_avg_sq"][row] = 0.0
+
+    def _adam(self, n: np.ndarray, m: np.ndarray, v: np.ndarray, grad: np.ndarray) -> tuple:
+        b1, b2 = self.BETAS
+        return n, m + np.float32(1 - b1) * (grad - m), v * np.float32(b2) + np.float32(1 - b2) * grad * grad
+
+    def _move(self, n: np.ndarray, m: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """Adam's step for step counts ``n`` (one per row) and moments ``m``, ``v``."""
+        b1, b2 = self.BETAS
+        n = np.asarray(n, dtype=np.float64)[..., None]
+        size = (self.lr / (1 - b1**n)).astype(np.float32)
+        denom = np.sqrt(v) / np.sqrt(1 - b2**n).astype(np.float32) + np.float32(self.EPS)
+        return size * (m / denom)

@@ -3,9 +3,10 @@
 * :mod:`engine.studio.session`: :class:`~engine.studio.session.Session`, the model. The GUI
   changes the scene only through its methods; each change fires a typed event
   (:mod:`engine.studio.events`) and becomes a command for the engine thread. Its
-  sensor and constraint edits live in :mod:`engine.studio.session_sensors` and
-  :mod:`engine.studio.session_constraints`.
-* :mod:`engine.studio.commands`: those commands (frozen dataclasses).
+  sensor set and constraint list are sub-models with their own events,
+  :mod:`engine.studio.session_sensors` and :mod:`engine.studio.session_constraints`.
+* :mod:`engine.studio.commands`: those commands (frozen dataclasses), with the table of
+  their handlers the engine thread dispatches on.
 * :mod:`engine.studio.snapshot`: what the engine thread publishes, numpy only.
 * :mod:`engine.studio.thread`: the engine thread (commands in, snapshots out), with
   its playback clock (:mod:`engine.studio.playback`) and the methods it runs on each
@@ -17,5 +18,6 @@
 * :mod:`engine.studio.method_edits`: building methods and pushing the scene into them.
 
 Layering (no loops): ``sensors`` < ``commands``, ``snapshot``, ``source``, ``catalog``,
-``methods``, ``playback`` < ``method_set`` < ``thread`` < ``process`` < ``session``.
+``methods``, ``playback`` < ``method_set`` < ``thread`` < ``process``; ``events``,
+``catalog`` < ``session_sensors``, ``session_constraints``; all < ``session``.
 """

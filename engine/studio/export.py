@@ -3,7 +3,7 @@
 
 :class:`ExportJob` is what the studio's export runs off the GUI thread: a copy of the
 session's clip, sensors, constraints, settings and method taken when the export starts
-(:meth:`engine.studio.session.Session.export_job`), solved by :func:`reconstruct_clip`
+(:meth:`ExportJob.of_session`), solved by :func:`reconstruct_clip`
 with a fresh method, then written. The file is written atomically, so a file is either
 complete or absent, and a cancelled job writes nothing.
 """
@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from engine.constraints.base import Constraint
+from engine.errors import UserError
 from engine.methods import driver
 from engine.methods.base import Method
 from engine.motion.clip import Motion
@@ -27,6 +28,7 @@ from engine.studio.method_edits import make_method
 from engine.studio.clip_source import ClipSource
 
 if TYPE_CHECKING:
+    from engine.studio.session import Session
     from engine.motion.bvh import RawBVH
     from engine.motion.formats import GltfContents
 
@@ -123,6 +125,28 @@ class ExportJob:
     path: Path
     source: Path | None = None
     rig_map: Path | None = None
+
+    @classmethod
+    def of_session(cls, session: Session, path: str | Path, on_source_rig: bool = False) -> ExportJob:
+        """What saving ``session``'s reconstruction to ``path`` needs, copied now (later
+        edits do not reach a running export). With ``on_source_rig`` the BVH is written
+        on the hierarchy of the file the clip came from.
+
+        Raises
+        ------
+        UserError
+            With tracker input (saving re-solves a clip), with no clip, or with
+            ``on_source_rig`` for a clip that was not opened from a file.
+        """
+        if session.source is not None:
+            raise UserError("saving re-solves a clip; tracker input has none")
+        if session.motion is None:
+            raise UserError("open a motion first")
+        if on_source_rig and session.path is None:
+            raise UserError("this clip was not opened from a BVH file")
+        return cls(session.motion, tuple(session.sensors.values()), tuple(session.constraints), session.settings,
+                   session.method, Path(path), session.path if on_source_rig else None,
+                   session.rig_map if on_source_rig else None)  # fmt: skip
 
     def run(self, factory: Callable[[str], Method] | None = None, progress: Callable[[int], None] | None = None,
             cancelled: Callable[[], bool] | None = None) -> Motion | None:  # fmt: skip

@@ -1,11 +1,16 @@
 """The figures a studio snapshot reports of one solve: the per-iteration losses and the
-timings, derived from a method's :class:`~engine.methods.base.FrameResult`."""
+timings, derived from a method's :class:`~engine.methods.base.FrameResult`, and the
+constraints' gizmos posed on the solved pose."""
 
 from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+from typing import Any
 
 import numpy as np
 
 from engine import skeleton as sk
+from engine.gizmos import Gizmo
 from engine.methods.base import FrameResult
 from engine.sensors import SensorFrame
 
@@ -39,3 +44,23 @@ def timing_of(res: FrameResult | None, ms: float, latency_ms: float | None = Non
         out["ms_per_iteration"] = float(ms) / res.iterations
     out.update({str(k): float(v) for k, v in res.timings.items() if isinstance(v, (int, float))})
     return out
+
+
+def gizmos_of(constraints: Iterable[Any], positions: np.ndarray,
+              report: Callable[[str], None]) -> tuple[tuple[str, Gizmo], ...]:  # fmt: skip
+    """``(name, shape)`` of the enabled constraints that draw one, posed on
+    ``positions`` (22, 3), metres (distance, balance and look-at draw lines between
+    current joints). A constraint whose ``gizmo`` raises is left out and ``report`` ed,
+    not hidden."""
+    out = []
+    for c in constraints:
+        if not c.enabled:
+            continue
+        try:
+            g = c.gizmo(positions)
+        except Exception as exc:
+            report(f"constraint {c.name!r}: cannot draw its gizmo ({exc})")
+            continue
+        if g is not None:
+            out.append((c.name, g))
+    return tuple(out)

@@ -29,7 +29,10 @@ import sys
 import threading
 from collections import deque
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # imported when first used: `gui` starts this process before the engine's imports (app.cli)
+    from engine.studio.commands import Command
 
 #: How often the child checks that the window's process is still there, seconds.
 PARENT_POLL_S = 1.0
@@ -75,8 +78,19 @@ class EngineProcess:
         self._send_end.close()  # the child holds the only sending end: EOF when it exits
         self._receiver.start()
 
-    def submit(self, command: Any) -> None:
-        """Queue a command (pickled on the queue's feeder thread); returns at once."""
+    def submit(self, command: Command) -> None:
+        """Queue a command (pickled on the queue's feeder thread); returns at once.
+
+        Raises
+        ------
+        TypeError
+            For anything but an :class:`engine.studio.commands.Command` (the child's
+            engine thread dispatches on the command's class).
+        """
+        from engine.studio.commands import Command
+
+        if not isinstance(command, Command):
+            raise TypeError(f"the engine takes commands (engine.studio.commands), not {type(command).__name__!r}")
         self._commands.put(command)
 
     @staticmethod

@@ -96,3 +96,20 @@ def describe_load(parsed: Mapping[str, Any]) -> str:
     if parsed["keys"]:
         out += f"; its {parsed['keys']} key{'s' * (parsed['keys'] != 1)} are for the pose window and bake"
     return out
+
+
+def apply_scene(session: Any, scene: dict[str, Any], where: str = "scene") -> str:
+    """Restore a session's :func:`scene_to_dict` output (the clip is loaded by the caller)
+    through its methods; what the scene leaves out (sensors, method, frame) stays as it
+    is. Returns a line saying what was replaced and kept (:func:`describe_load`).
+    Everything is checked before anything changes; errors name ``where``."""
+    parsed = scene_from_dict(scene, where)
+    session.set_settings(parsed["settings"])
+    if parsed["sensors"] is not None:
+        session.sensors.set_all(parsed["sensors"], parsed["preset"] or "")
+    session.constraints.set_all(parsed["constraints"])
+    if parsed["method"] and parsed["method"] != session.method:
+        session.set_method(parsed["method"])
+    if parsed["frame"] is not None:
+        session.seek(parsed["frame"])
+    return describe_load(parsed)

@@ -9,14 +9,16 @@ after publishing them (an edit replaces the object), so the engine uses the sess
 own constraints, without copies and without a lock.
 
 The window never builds engine objects: it calls :meth:`Session.start_engine`, reads
-:attr:`Session.latest` and edits through these methods. The constraint-list methods
-live in :mod:`engine.studio.session_constraints`, the sensor methods in
-:mod:`engine.studio.session_sensors`.
+:attr:`Session.latest` and edits through these methods. The sensor set and the
+constraint list are sub-models with their own events, ``session.sensors``
+(:mod:`engine.studio.session_sensors`) and ``session.constraints``
+(:mod:`engine.studio.session_constraints`); the session sends each of their changes to
+the engine and re-emits it as ``events.sensors`` or ``events.constraints``.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -31,10 +33,10 @@ from engine.sensors import Sensor
 from engine.solver.settings import SettingsEdit
 from engine.studio import commands as cmd
 from engine.studio import events as ev
-from engine.studio.clips import load_clip, sensor_presets
-from engine.studio.scenes import default_settings, describe_load, scene_from_dict, scene_to_dict
-from engine.studio.session_constraints import PIN_PREFIX, ConstraintEditing  # noqa: F401 (PIN_PREFIX: re-exported)
-from engine.studio.session_sensors import SensorEditing
+from engine.studio.clips import load_clip, sensor_presets, tracked_position
+from engine.studio.scenes import apply_scene, default_settings, scene_to_dict
+from engine.studio.session_constraints import ConstraintList
+from engine.studio.session_sensors import SensorSet
 from engine.studio.process import EngineProcess
 from engine.studio.snapshot import Snapshot
 from engine.studio.thread import EngineThread
@@ -42,10 +44,9 @@ from engine.studio.thread import EngineThread
 if TYPE_CHECKING:
     from engine.tracker_io.live_source import LiveSource
     from engine.tracker_io.recording_source import RecordingSource
-    from engine.studio.export import ExportJob
 
 
-class Session(ConstraintEditing, SensorEditing):
+class Session:
     """Everything the studio shows and edits; see the module docstring.
 
     Attributes
@@ -55,10 +56,12 @@ class Session(ConstraintEditing, SensorEditing):
         ``frame``, ``playback``.
     motion : Motion or None
         Ground-truth clip the sensors are simulated from; ``path`` its file.
-    sensors : dict of str to Sensor
-        Active trackers by joint, in preset order; ``preset`` names the set ("" = custom).
-    constraints : list of Constraint
-        User constraints, in order. Treat them as read-only: edit through the methods.
+    sensors : SensorSet
+        Active trackers by joint, in preset order (a read-only mapping), with their
+        edits and ``sensors.events``; ``preset`` names the set ("" = custom).
+    constraints : ConstraintList
+        User constraints, in order (a read-only sequence), with their edits and
+        ``constraints.events``.
     settings : SettingsEdit
         Optimizer parameters by name (``mode``, ``iterations``, ``lr``...).
     method : str
@@ -75,9 +78,10 @@ class Session(ConstraintEditing, SensorEditing):
         self.path: Path | None = None
         self.rig_map: Path | None = None  # the joint mapping file ``path`` was opened with
         self.source: SensorSource | None = None  # a tracker recording or live stream instead of a clip
-        self.preset = ""
-        self.sensors: dict[str, Sensor] = {}
-        self.constraints: list[Constraint] = []
+        self.sensors = SensorSet()
+        self.constraints = ConstraintList()
+        self.sensors.events.changed.connect(self._sensors_changed)
+        self.constraints.events.changed.connect(self._constraints_changed)
         self.settings: SettingsEdit = default_settings()
         self.method = method
         self.ghosts: tuple[str, ...] = ()
@@ -164,6 +168,45 @@ class Session(ConstraintEditing, SensorEditing):
         most influential dimensions); they arrive in the snapshot's ``latent_detail``."""
         self._send(cmd.InspectLatent(str(joint)))
 
+    # -- sensors and constraints -----------------------------------------------------
+    @property
+    def preset(self) -> str:
+        """The sensor preset (``sensors.preset``; "" for a custom set)."""
+        return self.sensors.preset
+
+    def set_sensors(self, sensors: Sequence[Sensor], preset: str = "") -> None:
+        """Replace the whole sensor set (:meth:`SensorSet.set_all`; a scene's, or an undo)."""
+        self.sensors.set_all(sensors, preset)
+
+    def set_constraints(self, constraints: Sequence[Constraint]) -> None:
+        """Replace the whole constraint list (:meth:`ConstraintList.set_all`)."""
+        self.constraints.set_all(constraints)
+
+    def _sensors_changed(self, e: ev.SensorsChanged) -> None:
+        self._send(cmd.SetSensors(e.sensors))
+        self.events.sensors.emit(e)
+
+    def _constraints_changed(self, e: ev.ConstraintsChanged) -> None:
+        self._send(cmd.SetConstraints(e.constraints))
+        self.events.constraints.emit(e)
+
+    def drag_target(self, joint: str, world_pos: np.ndarray) -> None:
+        """Move a tracker's target to ``world_pos`` (metres) by setting its drag offset."""
+        base = self.tracked_position(joint, self.frame)
+        self.sensors.edit(joint, offset=np.asarray(world_pos, float) - base)
+
+    def simulate_failure(self, joint: str, frames: int, start: int | None = None) -> None:
+        """Make ``joint``'s tracker lost for ``frames`` frames from ``start`` (default: now)."""
+        start = self.frame if start is None else int(start)
+        failures = self.sensors.require(joint).failures + ((start, start + int(frames)),)
+        self.sensors.edit(joint, failures=failures)
+
+    def tracked_position(self, joint: str, frame: int) -> np.ndarray:
+        """Position (3,), metres, of ``joint``'s tracker at ``frame`` before any drag offset:
+        :func:`engine.studio.clips.tracked_position` of the newest snapshot, the source
+        or the clip."""
+        return tracked_position(joint, frame, self.latest, self.source, self.motion, self.sensors.get(joint))
+
     # -- clip ------------------------------------------------------------------------
     @property
     def num_frames(self) -> int:
@@ -185,10 +228,7 @@ class Session(ConstraintEditing, SensorEditing):
         self.motion, self.path, self.frame = motion, path, 0
         self._send(cmd.SetMotion(motion))
         self.events.motion.emit(ev.MotionChanged(motion, path))
-        self._send(cmd.Seek(0))
-        self.events.frame.emit(0)
-        if not self.sensors:
-            self.set_preset(next(iter(sensor_presets())))
+        self._from_start()
 
     def set_source(self, source: SensorSource, name: str = "") -> None:
         """Read sensors from ``source`` instead of a clip: a tracker recording
@@ -204,10 +244,14 @@ class Session(ConstraintEditing, SensorEditing):
         else:
             self._send(command)
         self.events.source.emit(ev.SourceChanged(source, name, source.live))
+        self._from_start()
+
+    def _from_start(self) -> None:
+        """A new clip or source plays from frame 0, with the first preset if no sensors."""
         self._send(cmd.Seek(0))
         self.events.frame.emit(0)
         if not self.sensors:
-            self.set_preset(next(iter(sensor_presets())))
+            self.sensors.set_preset(next(iter(sensor_presets())))
 
     def connect_live(self, host: str, port: int, mapping: str = "", convention: str = "unity") -> LiveSource:
         """Listen for VMC trackers on ``host:port`` (``mapping``: tracker names to joints,
@@ -240,29 +284,6 @@ class Session(ConstraintEditing, SensorEditing):
         from engine.tracker_io.live_source import LiveSource
 
         return self.source if isinstance(self.source, LiveSource) else None
-
-    def export_job(self, path: str | Path, on_source_rig: bool = False) -> ExportJob:
-        """What saving the reconstruction to ``path`` needs, copied now (later edits do
-        not reach a running export): see :class:`engine.studio.export.ExportJob`. With
-        ``on_source_rig`` the BVH is written on the hierarchy of the file the clip came from.
-
-        Raises
-        ------
-        UserError
-            With tracker input (saving re-solves a clip), with no clip, or with
-            ``on_source_rig`` for a clip that was not opened from a file.
-        """
-        from engine.studio.export import ExportJob
-
-        if self.source is not None:
-            raise UserError("saving re-solves a clip; tracker input has none")
-        if self.motion is None:
-            raise UserError("open a motion first")
-        if on_source_rig and self.path is None:
-            raise UserError("this clip was not opened from a BVH file")
-        source = self.path if on_source_rig else None
-        return ExportJob(self.motion, tuple(self.sensors.values()), tuple(self.constraints), self.settings,
-                         self.method, Path(path), source, self.rig_map if on_source_rig else None)  # fmt: skip
 
     def _close_source(self) -> None:
         source, self.source = self.source, None
@@ -379,20 +400,5 @@ class Session(ConstraintEditing, SensorEditing):
                              self.constraints, self.settings, self.frame)  # fmt: skip
 
     def apply_scene(self, scene: dict[str, Any], where: str = "scene") -> str:
-        """Restore :meth:`to_scene` output (the clip is loaded by the caller); what the
-        scene leaves out (sensors, method, frame) stays as it is. Returns a line saying
-        what was replaced and kept (:func:`engine.studio.scenes.describe_load`).
-
-        Everything is checked before anything changes; errors name ``where``.
-        """
-        parsed = scene_from_dict(scene, where)
-        self.set_settings(parsed["settings"])
-        if parsed["sensors"] is not None:
-            self.set_sensors(parsed["sensors"], parsed["preset"] or "")
-        self.set_constraints(parsed["constraints"])
-        if parsed["method"] and parsed["method"] != self.method:
-            self.set_method(parsed["method"])
-        if parsed["frame"] is not None:
-            self.seek(parsed["frame"])
-        return describe_load(parsed)
-
+        """Restore :meth:`to_scene` output (:func:`engine.studio.scenes.apply_scene`)."""
+        return apply_scene(self, scene, where)

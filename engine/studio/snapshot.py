@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from engine.gizmos import Gizmo
 from engine.studio.latent_views import LatentDetail, LatentView
 
 
@@ -71,6 +72,8 @@ class Snapshot:
     target_joints : tuple of str
         Sensors sent to the method, in order; ``target_positions`` (S, 3),
         ``target_rotations`` (S, 4) and ``target_connected`` (S,) bool follow it.
+    gizmos : tuple of (str, Gizmo)
+        The enabled constraints that draw a shape (:mod:`engine.gizmos`), by name.
     losses : tuple of dict
         Per optimizer iteration, every loss term by name plus ``"total"``.
     latent : ndarray (L,) or None
@@ -124,7 +127,7 @@ class Snapshot:
     target_positions: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     target_rotations: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))
     target_connected: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
-    gizmos: tuple[tuple[str, dict], ...] = ()
+    gizmos: tuple[tuple[str, Gizmo], ...] = ()
     losses: tuple[dict[str, float], ...] = ()
     latent: np.ndarray | None = None
     iterations: int = 0

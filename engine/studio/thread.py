@@ -5,6 +5,7 @@ headless. It owns the reconstruction methods and the sensor source; the session 
 changes as :mod:`engine.studio.commands`. After each solved frame it publishes a
 :class:`~engine.studio.snapshot.Snapshot` of plain, read-only numpy arrays: readers keep
 the newest one (``thread.latest``) or get called back (``listeners``, on this thread).
+Commands are dispatched on their class: each has one ``@cmd.handles`` method here.
 
 Which frame is due when is the :class:`~engine.studio.playback.PlaybackClock`'s
 arithmetic (two paces: solve every frame, or keep real time and skip); the methods are
@@ -30,7 +31,7 @@ from engine.methods.base import DecodesLatents, FrameResult, Method
 from engine.sensors import SensorFrame
 from engine.studio import commands as cmd
 from engine.studio.decode import decoded_on_pose
-from engine.studio.frame_figures import losses_of, timing_of
+from engine.studio.frame_figures import gizmos_of, losses_of, timing_of
 from engine.studio.latent_debug import LatentDebug
 from engine.studio.method_set import MethodSet
 from engine.studio.method_edits import make_method
@@ -107,8 +108,15 @@ class EngineThread(threading.Thread):
         self._methods.prepare(method)
         mark(f"engine: method {method} prepared")
 
-    def submit(self, command: Any) -> None:
-        """Queue a command; returns at once."""
+    def submit(self, command: cmd.Command) -> None:
+        """Queue a command; returns at once.
+
+        Raises
+        ------
+        TypeError
+            For a command no handler takes (:data:`engine.studio.commands.HANDLERS`).
+        """
+        cmd.check_command(command)
         self._queue.put(command)
 
     def stop(self, timeout: float = 5.0) -> None:
@@ -160,67 +168,53 @@ class EngineThread(threading.Thread):
             except queue.Empty:
                 return
 
-    def _apply(self, c: Any) -> None:
+    def _apply(self, c: cmd.Command) -> None:
+        handler = cmd.handler_for(type(c))
+        if handler is None:  # reached the queue without submit(): said, and the loop goes on
+            self._report_error(f"engine: no handler for command {type(c).__name__}")
+            return
         was_dirty, self._dirty = self._dirty, True
-        if isinstance(c, cmd.Stop):
-            self._stopping = True
-        elif isinstance(c, (cmd.SetMotion, cmd.SetSource)):
-            source = ClipSource(c.motion) if isinstance(c, cmd.SetMotion) else c.source
-            try:
-                source.set_sensors(self._methods.sensors)
-            except Exception as exc:  # reported, and the old source stays
-                self._report_error(f"sensor source: {exc}")
-                return
-            self._source = source
-            self._frame, self._warnings, self._playing = 0, 0, False
-            self._recent_errors.clear()
-            self._reset_methods()
-        elif isinstance(c, cmd.SetSensors):
-            self._ghost_errors.clear()  # other sensors: a ghost may run now, or fail anew
-            if self._source is not None:
-                try:
-                    self._source.set_sensors(c.sensors)
-                except Exception as exc:
-                    self._report_error(f"sensor source: {exc}")
-            self._methods.set_sensors(c.sensors)
-        elif isinstance(c, cmd.SetConstraints):
-            self._methods.set_constraints(c.constraints)
-        elif isinstance(c, cmd.SetSettings):
-            self._methods.set_settings(c.values, c.replace)
-        elif isinstance(c, cmd.SetMethod):
-            self._ghost_errors.clear()
-            self._set_method(c)
-        elif isinstance(c, cmd.Seek):
-            self._frame = self._clamp(c.frame)
-            self._clock.restart(self._frame)
-            self._decoded = None
-        elif isinstance(c, cmd.Step):
-            self._playing = False
-            self._frame = self._clamp(self._frame + c.delta)
-        elif isinstance(c, cmd.Play):
-            self._plays += 1
-            self._playing = True
-            self._clock = PlaybackClock(c.speed, c.loop, c.pace, (time.monotonic(), self._frame))
-            self._decoded = None
-            self._dirty = was_dirty or self._frame != self._last_solved
-        elif isinstance(c, cmd.Pause):
-            # say so without solving the frame again (which would move temporal state on)
-            self._playing, self._dirty = False, was_dirty
-            self._republish()
-        elif isinstance(c, cmd.InspectLatent):  # the frame on screen, not solved again
-            self._dirty = False
-            error = self._latent.inspect(self._methods.method, c.joint)
-            if error:
-                self._report_error(f"inspect latent: {error}")
-            self._republish()
-        elif isinstance(c, cmd.DecodeLatent):
-            # debug mode: decode and show, without solving the frame again (which would
-            # move the method's temporal state on)
-            self._dirty = False
-            self._decode(c.latent)
-            self._republish()
+        handler(self, c, was_dirty)
 
-    def _set_method(self, c: cmd.SetMethod) -> None:
+    # -- command handlers: each takes the command and whether a solve was due before it
+    @cmd.handles(cmd.Stop)
+    def _on_stop(self, c: cmd.Stop, was_dirty: bool) -> None:
+        self._stopping = True
+
+    @cmd.handles(cmd.SetMotion, cmd.SetSource)
+    def _on_set_source(self, c: cmd.SetMotion | cmd.SetSource, was_dirty: bool) -> None:
+        source = ClipSource(c.motion) if isinstance(c, cmd.SetMotion) else c.source
+        try:
+            source.set_sensors(self._methods.sensors)
+        except Exception as exc:  # reported, and the old source stays
+            self._report_error(f"sensor source: {exc}")
+            return
+        self._source = source
+        self._frame, self._warnings, self._playing = 0, 0, False
+        self._recent_errors.clear()
+        self._reset_methods()
+
+    @cmd.handles(cmd.SetSensors)
+    def _on_set_sensors(self, c: cmd.SetSensors, was_dirty: bool) -> None:
+        self._ghost_errors.clear()  # other sensors: a ghost may run now, or fail anew
+        if self._source is not None:
+            try:
+                self._source.set_sensors(c.sensors)
+            except Exception as exc:
+                self._report_error(f"sensor source: {exc}")
+        self._methods.set_sensors(c.sensors)
+
+    @cmd.handles(cmd.SetConstraints)
+    def _on_set_constraints(self, c: cmd.SetConstraints, was_dirty: bool) -> None:
+        self._methods.set_constraints(c.constraints)
+
+    @cmd.handles(cmd.SetSettings)
+    def _on_set_settings(self, c: cmd.SetSettings, was_dirty: bool) -> None:
+        self._methods.set_settings(c.values, c.replace)
+
+    @cmd.handles(cmd.SetMethod)
+    def _on_set_method(self, c: cmd.SetMethod, was_dirty: bool) -> None:
+        self._ghost_errors.clear()
         built = self._methods.select(c.name, c.ghosts)
         mark(f"engine: method {c.name} ready")
         if not built:
@@ -229,6 +223,48 @@ class EngineThread(threading.Thread):
             self._method_error = self._pending_error
             return
         self._reset_methods()
+
+    @cmd.handles(cmd.Seek)
+    def _on_seek(self, c: cmd.Seek, was_dirty: bool) -> None:
+        self._frame = self._clamp(c.frame)
+        self._clock.restart(self._frame)
+        self._decoded = None
+
+    @cmd.handles(cmd.Step)
+    def _on_step(self, c: cmd.Step, was_dirty: bool) -> None:
+        self._playing = False
+        self._frame = self._clamp(self._frame + c.delta)
+
+    @cmd.handles(cmd.Play)
+    def _on_play(self, c: cmd.Play, was_dirty: bool) -> None:
+        self._plays += 1
+        self._playing = True
+        self._clock = PlaybackClock(c.speed, c.loop, c.pace, (time.monotonic(), self._frame))
+        self._decoded = None
+        self._dirty = was_dirty or self._frame != self._last_solved
+
+    @cmd.handles(cmd.Pause)
+    def _on_pause(self, c: cmd.Pause, was_dirty: bool) -> None:
+        # say so without solving the frame again (which would move temporal state on)
+        self._playing, self._dirty = False, was_dirty
+        self._republish()
+
+    @cmd.handles(cmd.InspectLatent)
+    def _on_inspect_latent(self, c: cmd.InspectLatent, was_dirty: bool) -> None:
+        # the frame on screen, not solved again
+        self._dirty = False
+        error = self._latent.inspect(self._methods.method, c.joint)
+        if error:
+            self._report_error(f"inspect latent: {error}")
+        self._republish()
+
+    @cmd.handles(cmd.DecodeLatent)
+    def _on_decode_latent(self, c: cmd.DecodeLatent, was_dirty: bool) -> None:
+        # debug mode: decode and show, without solving the frame again (which would
+        # move the method's temporal state on)
+        self._dirty = False
+        self._decode(c.latent)
+        self._republish()
 
     def _republish(self) -> None:
         """Publish the last solved frame again (its pose, losses and timing) with the
@@ -363,7 +399,7 @@ class EngineThread(threading.Thread):
             target_positions=readonly(np.array([r.position for r in readings]).reshape(-1, 3)),
             target_rotations=readonly(np.array([r.rotation for r in readings]).reshape(-1, 4)),
             target_connected=readonly(np.array([r.connected for r in readings], bool)),
-            gizmos=self._gizmos(),
+            gizmos=gizmos_of(self._methods.constraints, self._last_pose, self._report_error),
             losses=losses_of(res, sf),
             latent=readonly(last.latent) if last is not None and last.latent is not None else None,
             iterations=res.iterations if res else 0,
@@ -392,16 +428,3 @@ class EngineThread(threading.Thread):
         self.latest = snap
         for cb in list(self.listeners):
             cb(snap)
-
-    def _gizmos(self) -> tuple[tuple[str, dict], ...]:
-        """Viewport descriptions of the enabled constraints, posed on the last solve
-        (distance, balance and look-at draw lines between current joints)."""
-        out = []
-        for c in self._methods.constraints:
-            if not c.enabled:
-                continue
-            try:
-                out.append((c.name, c.gizmo(self._last_pose)))
-            except Exception as exc:  # a constraint that cannot draw itself is reported, not hidden
-                self._report_error(f"constraint {c.name!r}: cannot draw its gizmo ({exc})")
-        return tuple(out)

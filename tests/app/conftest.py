@@ -56,10 +56,11 @@ def pose_window(qtbot, vae, monkeypatch):
 
     from app.pose_window import PoseWindow
     from engine.authoring.pose_mode import PoseMode
+    from engine.authoring.session import AuthoringSession
     from tests.app.gui_helpers import close_now
 
     monkeypatch.setattr(QMessageBox, "question", lambda *a, **k: QMessageBox.StandardButton.Discard)
-    w = PoseWindow(vae, PoseMode(vae, 1.75))
+    w = PoseWindow(AuthoringSession(PoseMode(vae, 1.75)))
     w.resize(1000, 700)
     w.show()
     yield w

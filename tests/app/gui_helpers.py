@@ -43,7 +43,7 @@ def close_now(w) -> None:
     deleted later, among other tests' events, crashes."""
     from PyQt6.QtCore import QEvent
 
-    w.undo.setClean()
+    w.session.history.set_clean()
     w.close()
     w.deleteLater()
     QApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete.value)

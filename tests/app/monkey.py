@@ -226,8 +226,8 @@ def run(seed: int, events: int, step_timeout: float) -> int:
             errors.append(f"the pose window closed at event {done} ({what})")
             break
     for w in (pose, studio):
-        if hasattr(w, "undo") and hasattr(w.undo, "setClean"):
-            w.undo.setClean()
+        if hasattr(w, "session") and hasattr(w.session, "history"):
+            w.session.history.set_clean()
     pose.close()
     studio.undo.stack.setClean()
     studio.close()

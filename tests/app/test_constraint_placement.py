@@ -10,6 +10,7 @@ from app.constraint_placement import facing, placed_params
 from engine import skeleton as sk
 from engine.constraints import REGISTRY
 from engine.constraints.placement import LOOK_DISTANCE
+from engine.gizmos import BoxGizmo, Gizmo, LineGizmo, PointGizmo
 from engine.studio.catalog import constraint_catalog
 from widgets.viewport.camera import CAMERA_PRESETS, VIEW_ANGLE_DEG
 from widgets.viewport.viewport import HOME_FOCUS_HEIGHT
@@ -43,9 +44,15 @@ def test_without_a_pose_or_for_other_kinds_nothing_changes():
     assert np.isclose(out["distance"], np.linalg.norm(pose[sk.JOINT_INDEX["lwrist"]] - pose[sk.JOINT_INDEX["rwrist"]]))
 
 
-def _gizmo_points(g: dict) -> list[np.ndarray]:
-    pts = [g[k] for k in ("position", "anchor", "min", "max") if k in g]
-    return pts + list(g.get("points", []))
+def _gizmo_points(g: Gizmo | None) -> list[np.ndarray]:
+    if isinstance(g, PointGizmo):
+        return [g.position] + ([] if g.anchor is None else [g.anchor])
+    if isinstance(g, LineGizmo):
+        return list(g.points)
+    if isinstance(g, BoxGizmo):
+        return [g.lower, g.upper]
+    assert g is None, f"no points known for {type(g).__name__}"
+    return []
 
 
 @pytest.mark.parametrize("yaw", [0.0, 60.0, 150.0, -90.0])

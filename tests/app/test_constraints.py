@@ -11,18 +11,16 @@ import pytest
 from engine import skeleton as sk
 from engine.constraints.base import REGISTRY, Constraint, param
 from engine.constraints.placement import LOOK_DISTANCE
+from engine.gizmos import PointGizmo
 
 pytestmark = pytest.mark.gui
 
 
 @pytest.fixture
 def pin_kind():
-    import torch
-
     @dataclass
     class StudioTestPin(Constraint):
         kind: ClassVar[str] = "studio_test_pin"
-        no_fast_term: ClassVar[str] = "a stand-in for the editor mechanics"
         joint: str = param("lwrist", editor="joint")
         target: np.ndarray = param(factory=lambda: np.array([0.3, -0.2, 1.2]), editor="vec3", unit="m")
 
@@ -33,12 +31,17 @@ def pin_kind():
         def placement(cls, params, positions):
             return {}
 
-        def loss(self, state):
-            t = torch.as_tensor(self.target, dtype=state.positions.dtype)
-            return ((state.positions[sk.JOINT_INDEX[self.joint]] - t) ** 2).sum()
+        def term(self, frame):
+            from engine.constraints.pin import PinConstraint
+
+            return PinConstraint(name=self.name, joint=self.joint, position=self.target).term(frame)
+
+        @classmethod
+        def examples(cls, positions):
+            return [cls()]
 
         def gizmo(self, positions=None):
-            return {"type": "point", "position": np.asarray(self.target), "edit": "target"}
+            return PointGizmo(self.target, edit="target")
 
     yield StudioTestPin.kind
     REGISTRY.pop(StudioTestPin.kind, None)  # keep the registry as other tests expect it
@@ -57,7 +60,7 @@ def test_add_edit_drag_disable_and_remove_a_constraint(pin_kind, studio, qtbot):
     widget.InvokeEvent("InteractionEvent")
     widget.InvokeEvent("EndInteractionEvent")
     assert np.allclose(session.constraints[0].target, [0.5, 0.0, 1.0])
-    qtbot.waitUntil(lambda: np.allclose(dict(studio.session.latest.gizmos)[name]["position"], [0.5, 0, 1]))
+    qtbot.waitUntil(lambda: np.allclose(dict(studio.session.latest.gizmos)[name].position, [0.5, 0, 1]))
 
     panel.editor.inputs["target"].spins[2].setValue(1.4)
     panel.editor.inputs["weight"].setValue(3.0)
@@ -69,7 +72,7 @@ def test_add_edit_drag_disable_and_remove_a_constraint(pin_kind, studio, qtbot):
     assert session.constraints[0].enabled is False
     qtbot.waitUntil(lambda: name not in dict(studio.session.latest.gizmos))
     panel.remove_button.click()
-    assert session.constraints == [] and panel.list.count() == 0
+    assert list(session.constraints) == [] and panel.list.count() == 0
 
 
 def test_ctrl_dragging_a_joint_without_sensor_pins_it(studio, qtbot):
@@ -102,17 +105,3 @@ def test_a_new_constraint_starts_next_to_the_character(studio, qtbot, kind):
         assert np.isclose(c.target[2], head[2])
     else:
         assert np.linalg.norm(c.position - pose[sk.JOINT_INDEX[c.joint]]) < 0.3
-
-
-def test_a_constraint_without_a_fast_path_has_a_badge_in_its_row(studio, monkeypatch):
-    from PyQt6.QtCore import Qt
-
-    from engine.constraints.distance import DistanceConstraint
-
-    monkeypatch.setattr(DistanceConstraint, "no_fast_term", "its term is not written for the fast path yet")
-    studio.session.add_constraint("distance", name="hands")
-    studio.session.add_constraint("look_at", name="look")
-    rows = {studio.constraint_panel.list.item(i).data(Qt.ItemDataRole.UserRole): studio.constraint_panel.list.item(i)
-            for i in range(studio.constraint_panel.list.count())}  # fmt: skip
-    assert "slow path" in rows["hands"].text() and "not written" in rows["hands"].toolTip()
-    assert "slow path" not in rows["look"].text()

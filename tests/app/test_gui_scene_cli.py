@@ -30,8 +30,8 @@ def scene_file(tmp_path, synthetic_motion):
     clip = tmp_path / "walk.bvh"
     save_motion_bvh(clip, synthetic_motion.slice(0, 60))
     session = Session(method="ik")
-    session.add_constraint("look_at", name="look")
-    session.add_constraint("distance", name="hands", distance=0.3)
+    session.constraints.add("look_at", name="look")
+    session.constraints.add("distance", name="hands", distance=0.3)
     scene = session.to_scene()
     scene["frame"] = 5
     path = tmp_path / "scene.json"

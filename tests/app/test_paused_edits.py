@@ -38,7 +38,7 @@ def test_removing_a_dragged_pin_while_paused_gives_the_pose_back(studio, qtbot):
     pinned = s.latest
     assert np.linalg.norm(pinned.positions[sk.JOINT_INDEX["lknee"]] - knee) > 0.05  # the pin did pull
     seq = s.latest.seq
-    s.remove_constraint("pin lknee")
+    s.constraints.remove("pin lknee")
     after = _resolved(studio, qtbot, seq)
     assert after.frame == before.frame
     error = np.linalg.norm(after.positions - before.positions, axis=1)

@@ -23,6 +23,7 @@ def test_a_floor_added_in_the_pose_window_holds_the_shoulder_up(qtbot, monkeypat
 
     from app.pose_window import PoseWindow
     from engine.authoring.pose_mode import PoseMode
+    from engine.authoring.session import AuthoringSession
     from engine.models import load_default_models
     from tests.app.test_pose_window import close_now
 
@@ -39,7 +40,7 @@ def test_a_floor_added_in_the_pose_window_holds_the_shoulder_up(qtbot, monkeypat
     free.settle()
 
     monkeypatch.setattr(QMessageBox, "question", lambda *a, **k: QMessageBox.StandardButton.Discard)
-    w = PoseWindow(vae, PoseMode(vae, 1.75))
+    w = PoseWindow(AuthoringSession(PoseMode(vae, 1.75)))
     w.show()
     try:
         panel = w.constraints.panel
@@ -56,7 +57,7 @@ def test_a_floor_added_in_the_pose_window_holds_the_shoulder_up(qtbot, monkeypat
         assert held > bent + 0.3, (held, bent)  # measured 1.24 m against 0.71 m
         assert held > top - 0.2
         steps = w.undo.count()
-        while w.undo.canUndo():
+        while w.undo.can_undo():
             w.undo.undo()
         assert w.mode.constraints == [] and panel.list.count() == 0
         for _ in range(steps):

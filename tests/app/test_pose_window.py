@@ -53,9 +53,9 @@ def test_a_plain_press_on_a_joint_grabs_it(window):
     d = window.viewport.joints
     window.viewport.plotter.render()
     x, y = d._to_display(window.mode.pose.positions[[LW]])[0]
-    assert d.press_target(x, y) and d.joint == LW  # no Ctrl needed in pose mode
+    assert d.press_plain(x, y) and d.joint == LW  # no Ctrl needed in pose mode
     d.release()
-    assert not d.press_target(2, 2)  # off the body the camera turns
+    assert not d.press_plain(2, 2)  # off the body the camera turns
 
 
 def test_alt_drag_turns_the_joint_by_the_angle_swept_about_it(window, monkeypatch):
@@ -200,7 +200,7 @@ def test_dragging_the_hips_moves_the_whole_body_live_and_keys_carry_root_and_fac
     moved = w.mode.pose.positions - before
     assert moved[0, 0] > 0.2 and np.allclose(moved, moved[0], atol=1e-9) and abs(moved[0, 2]) < 1e-9
     assert len(seen) == 8 and np.all(np.diff([r[0] for r in seen]) > 0)  # the body follows every move
-    assert w.mode.targets == {} and w.undo.undoText() == "move body"
+    assert w.mode.targets == {} and w.undo.undo_text() == "move body"
     w.facing.selectAll()
     QTest.keyClicks(w.facing, "90")
     QTest.keyClick(w.facing, Qt.Key.Key_Return)
@@ -259,7 +259,7 @@ def test_scrubbing_between_keys_shows_the_in_between_and_a_key_dragged_moves(win
     assert np.abs(w.playback.baked_scene().motion.positions()[10] - shown).max() < 0.02
     w.undo.undo()
     drag_on(s, s.x_of(20), s.x_of(26))  # the key at 20 dragged to 26
-    assert [k.frame for k in w.scene.keys] == [0, 26] and w.undo.undoText() == "move key 20 -> 26"
+    assert [k.frame for k in w.scene.keys] == [0, 26] and w.undo.undo_text() == "move key 20 -> 26"
     w.activateWindow()
     w.windowHandle().requestActivate()
     qtbot.waitUntil(lambda: QApplication.activeWindow() is w)
@@ -305,7 +305,7 @@ def test_dragging_the_z_ring_turns_the_head_about_the_vertical_without_tilting_i
     turned = np.array(rings._arrow_mesh.center) - w.mode.pose.positions[head]
     yaw = np.degrees(np.arctan2(turned[1], turned[0]) - np.arctan2(facing[1], facing[0]))
     assert (yaw + 180) % 360 - 180 == pytest.approx(40.0, abs=3.0)  # the facing arrow turned with it
-    assert w.undo.undoText() == "turn upperneck"
+    assert w.undo.undo_text() == "turn upperneck"
     w.actions_by_name["deselect"].trigger()
     assert not rings.visible and w.selected is None
 
@@ -323,6 +323,7 @@ def test_a_saved_scene_opens_again_in_a_pose_window(window, tmp_path, vae, monke
     """The pose window could save a scene but not open one."""
     from engine.authoring.document import load_authoring
     from engine.authoring.pose_mode import PoseMode
+    from engine.authoring.session import AuthoringSession
 
     w = window
     key_the_wrist(w, (0, [0.0, -0.15, 0.05]), (20, [0.1, -0.1, 0.35]), length=25)
@@ -334,7 +335,7 @@ def test_a_saved_scene_opens_again_in_a_pose_window(window, tmp_path, vae, monke
     from app.pose_window import PoseWindow
     from tests.app.gui_helpers import close_now
 
-    other = PoseWindow(vae, PoseMode(vae, 1.6))  # another height: the scene's wins
+    other = PoseWindow(AuthoringSession(PoseMode(vae, 1.6)))  # another height: the scene's wins
     other.show()
     try:
         other.drag_joint("lwrist", other.mode.pose.positions[LW] + [0, 0, 0.1])  # an unsaved edit
@@ -362,3 +363,37 @@ def test_a_saved_scene_opens_again_in_a_pose_window(window, tmp_path, vae, monke
         assert [k.frame for k in other.scene.keys] == [0, 20]  # a bad file changes nothing
     finally:
         close_now(other)
+
+
+def test_the_bake_runs_on_a_worker_with_a_dialog_whose_cancel_changes_nothing(window, qtbot, monkeypatch):
+    """Scrubbing between keys bakes off the GUI thread (the event loop runs, the progress
+    dialog shows); Cancel stops it, the frame, the keys and the history stay as they were."""
+    import threading
+
+    from PyQt6.QtCore import QTimer
+    from PyQt6.QtWidgets import QPushButton
+
+    w = window
+    key_the_wrist(w, (0, [0.0, -0.1, 0.1]), (150, [0.1, -0.2, 0.5]), length=151)
+    steps, state_before = w.undo.count(), state(w)
+    shown = []
+    monkeypatch.setattr(QMessageBox, "warning", lambda *a, **k: shown.append(a[2]))
+    seen: dict = {}
+
+    def watch() -> None:
+        r = w.jobs
+        if r.running and r.done >= 5 and r.dialog is not None and r.dialog.isVisible():
+            seen["worker"] = r.thread is not threading.main_thread() and r.thread.is_alive()
+            seen["progress"] = (r.done, r.dialog.maximum())
+            r.dialog.findChild(QPushButton).click()  # Cancel
+
+    timer = QTimer(interval=10)
+    timer.timeout.connect(watch)
+    timer.start()
+    w.go_to(75)  # between the keys: it needs the bake
+    timer.stop()
+    # the timer's callback saw the worker running and clicked Cancel: the loop ran during the bake
+    assert seen.get("worker") and seen["progress"][1] == 153  # 2 keys + 151 frames
+    assert shown == ["the bake did not finish: cancelled"]
+    assert w.frame == 0 and w.playback.baked is None and w.undo.count() == steps and state(w) == state_before
+    assert not w.jobs.running and w.jobs.dialog is None

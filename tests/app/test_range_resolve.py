@@ -15,7 +15,7 @@ def test_resolving_a_range_replaces_it_and_undo_redo_round_trip(studio, qtbot):
     original = session.motion
     before = original.local_rot.copy()
     session.seek(40)
-    edit = resolve_range(studio, 30, 50, blend=4)
+    edit = resolve_range(studio, 30, 50, blend=4).wait()
     assert session.motion is edit.motion and session.frame == 40
     assert np.array_equal(session.motion.local_rot[: edit.first], before[: edit.first])
     assert np.array_equal(session.motion.local_rot[edit.last + 1 :], before[edit.last + 1 :])
@@ -26,3 +26,35 @@ def test_resolving_a_range_replaces_it_and_undo_redo_round_trip(studio, qtbot):
     studio.undo.stack.redo()
     assert session.motion is edit.motion
     qtbot.waitUntil(lambda: session.latest is not None, timeout=10000)
+
+
+def test_a_range_resolve_runs_off_the_gui_thread_and_cancel_leaves_the_clip(studio, qtbot):
+    """The event loop goes on while the worker solves (a 10 ms timer keeps firing) and
+    Cancel stops it: the clip, the undo history and the frame are as they were."""
+    import threading
+    import time
+
+    from PyQt6.QtCore import QTimer
+    from PyQt6.QtWidgets import QPushButton
+
+    from app.range_actions import resolve_range
+
+    session = studio.session
+    original = session.motion
+    ticks: list[float] = []
+    timer = QTimer(interval=10)
+    timer.timeout.connect(lambda: ticks.append(time.perf_counter()))
+    timer.start()
+    runner = resolve_range(studio, 0, len(original) - 1, blend=0)
+    worker = runner.thread
+    assert worker is not None and worker is not threading.main_thread() and worker.is_alive()
+    qtbot.waitUntil(lambda: runner.done >= 3, timeout=60000)  # frames solved while the loop ran
+    assert runner.running and runner.dialog is not None and runner.dialog.maximum() == len(original)
+    gaps = np.diff(ticks) * 1000.0
+    assert len(ticks) > 10 and np.percentile(gaps, 99) < 250.0, (len(ticks), np.percentile(gaps, 99))
+    with qtbot.waitSignal(runner.finished, timeout=30000) as done:
+        runner.dialog.findChild(QPushButton).click()  # the dialog's Cancel button
+    timer.stop()
+    assert done.args == [False, "cancelled"] and runner.result is None and not worker.is_alive()
+    assert session.motion is original and studio.undo.stack.count() == 0
+    assert "cancelled" in studio.statusBar().currentMessage()

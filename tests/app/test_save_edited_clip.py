@@ -19,7 +19,7 @@ def test_a_range_edit_is_written_onto_the_source_rig(studio, qtbot, tmp_path):
 
     src = write_family_bvh(tmp_path / "mixamo.bvh", "mixamo", frames=120)
     assert studio.files.open_path(src)
-    resolve_range(studio, 40, 70, blend=4)
+    assert resolve_range(studio, 40, 70, blend=4).wait() is not None
     out = tmp_path / "edited_rig.bvh"
     save_clip(studio, out, on_source_rig=True)
     raw, back = load_bvh(src), load_bvh(out)

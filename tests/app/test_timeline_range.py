@@ -70,6 +70,7 @@ def test_the_range_dialog_starts_on_the_selection_and_the_resolve_is_unsaved(stu
     QTimer.singleShot(0, answer)
     original = studio.session.motion
     resolve_range_dialog(studio)
+    studio.range_jobs.wait()  # the re-solve runs on a worker
     assert seen["range"] == (24, 44)
     assert studio.session.motion is not original
     assert not studio.undo.stack.isClean()  # the re-solve is an unsaved edit

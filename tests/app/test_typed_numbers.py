@@ -55,12 +55,12 @@ def test_a_temporal_weight_typed_while_playing_is_applied_once_as_typed(playing,
 
 def test_a_distance_typed_while_playing_is_applied_once_as_typed(playing, qtbot):
     studio = playing
-    name = studio.session.add_constraint("distance", joint_a="lwrist", joint_b="rwrist", distance=0.5)
+    name = studio.session.constraints.add("distance", joint_a="lwrist", joint_b="rwrist", distance=0.5)
     qtbot.waitUntil(lambda: studio.constraint_panel.current_name() == name and studio.constraint_panel.editor is not None)
     edits = []
-    studio.session.events.constraints.connect(lambda e: edits.append(studio.session.constraint(name).distance))
+    studio.session.events.constraints.connect(lambda e: edits.append(studio.session.constraints.named(name).distance))
     spin = studio.constraint_panel.editor.inputs["distance"]
     _type_while_playing(qtbot, studio, spin, "0.3")
-    assert studio.session.constraint(name).distance == pytest.approx(0.3)
+    assert studio.session.constraints.named(name).distance == pytest.approx(0.3)
     assert spin.value() == pytest.approx(0.3)
     assert edits == [pytest.approx(0.3)]  # once, when committed

@@ -39,7 +39,7 @@ def test_quit_with_no_edits_does_not_ask(studio, answer):
 
 
 def test_quit_after_a_constraint_edit_asks_and_cancel_keeps_the_window(studio, answer, qtbot):
-    studio.session.add_constraint("floor")
+    studio.session.constraints.add("floor")
     answer.next = "Cancel"
     assert not studio.close() and studio.isVisible() and studio.engine.is_alive()
     assert len(answer.asked) == 1 and "before quitting" in answer.asked[0]
@@ -48,7 +48,7 @@ def test_quit_after_a_constraint_edit_asks_and_cancel_keeps_the_window(studio, a
 
 
 def test_quit_save_writes_the_scene(studio, answer, monkeypatch, tmp_path):
-    studio.session.add_constraint("floor")
+    studio.session.constraints.add("floor")
     _save_to(monkeypatch, [tmp_path / "s.json"])
     answer.next = "Save"
     assert studio.close()
@@ -63,7 +63,7 @@ def test_opening_a_clip_after_a_range_resolve_asks_cancel_keeps_save_writes_both
 
     other = tmp_path / "other.bvh"
     save_motion_bvh(other, synthetic_motion)
-    edited = resolve_range(studio, 30, 50, blend=4).motion
+    edited = resolve_range(studio, 30, 50, blend=4).wait().motion
     answer.next = "Cancel"
     assert not studio.files.open_path(other)
     assert studio.session.motion is edited and "re-solved clip" in answer.asked[-1]
@@ -85,11 +85,11 @@ def test_opening_a_clip_after_a_range_resolve_asks_cancel_keeps_save_writes_both
 def test_loading_a_scene_after_an_edit_asks_and_discard_loads_it(studio, answer, tmp_path):
     scene = tmp_path / "s.json"
     scene.write_text(json.dumps({"format": "dragposer-scene", "version": 1, "constraints": []}))
-    studio.session.add_constraint("floor")
+    studio.session.constraints.add("floor")
     answer.next = "Cancel"
     assert not studio.files.load_scene(str(scene)) and len(studio.session.constraints) == 1
     answer.next = "Discard"
-    assert studio.files.load_scene(str(scene)) and studio.session.constraints == []
+    assert studio.files.load_scene(str(scene)) and list(studio.session.constraints) == []
     assert studio.undo.stack.isClean() and "loading another scene" in answer.asked[-1]
 
 
@@ -98,7 +98,7 @@ def test_opening_a_tracker_recording_after_an_edit_asks_first(studio, answer, mo
 
     asked_for_file = []
     monkeypatch.setattr(QFileDialog, "getOpenFileName", lambda *a, **k: asked_for_file.append(a) or ("", ""))
-    studio.session.add_constraint("floor")
+    studio.session.constraints.add("floor")
     answer.next = "Cancel"
     studio.live.open_recording_dialog()
     assert asked_for_file == [] and "tracker recording" in answer.asked[-1]

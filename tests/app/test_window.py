@@ -164,7 +164,7 @@ def test_dropped_bvh_opens_is_remembered_and_the_preset_comes_back(studio, qtbot
     chosen = "3-head-hands"
     studio.sensor_panel.preset.setCurrentText(chosen)  # the user's choice is stored...
     assert studio.settings.value("last_preset") == chosen
-    studio.session.set_preset("6")
+    studio.session.sensors.set_preset("6")
     open_initial(studio, str(clip), None)  # ...and restored when the studio opens next time
     assert studio.session.preset == chosen
 

@@ -17,6 +17,7 @@ from engine.constraints import (
 )  # fmt: skip
 from engine.solver import PoseState
 from engine.errors import UserError
+from engine.gizmos import Gizmo, LineGizmo, PointGizmo, gizmo_types
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk
 
@@ -128,27 +129,34 @@ def test_an_unset_pin_targets_the_previous_position_and_is_never_changed():
     s = rest_state()
     prev = s.positions.detach() + torch.tensor([0.0, 0.1, 0.0], dtype=torch.float64)
     pin = PinConstraint(joint="lankle")
-    assert not np.isfinite(pin.position).any() and pin.gizmo() == {}
+    assert not np.isfinite(pin.position).any() and pin.gizmo() is None
     assert float(pin.loss(s)) == 0.0  # no previous pose: nothing to hold yet
     s.previous_positions = prev
     assert float(pin.loss(s)) == pytest.approx(0.01)
     assert not np.isfinite(pin.position).any()  # unchanged
     held = pin.settled(prev.numpy())
     assert held is not pin and np.allclose(held.position, prev[J["lankle"]].numpy())
-    assert held.gizmo()["type"] == "point" and not np.isfinite(pin.position).any()
+    assert isinstance(held.gizmo(), PointGizmo) and not np.isfinite(pin.position).any()
     assert held.settled(prev.numpy() + 1.0) is held  # captured once
     follow = PinConstraint(joint="lankle", follow_previous=True)
     assert float(follow.loss(s)) == pytest.approx(0.01)
     assert follow.settled(prev.numpy()) is follow
 
 
-def test_sensor_batch_equals_the_single_losses():
+def test_the_trackers_term_gives_each_tracker_its_own_loss():
+    """All trackers of a frame are one term; its per-tracker losses are each tracker's loss
+    alone (a lost tracker's is zero)."""
+    from engine.constraints.base import frame_inputs, state_arrays
+    from engine.constraints.residual import torch_kit
+
     s = rest_state()
     s.rotation_matrices = None
     items = [c for c in CASES if c.kind == "sensor"] + [SensorConstraint(joint="root", connected=False)]
-    batched = SensorConstraint.batch(items, s.positions)(s)
+    (term,) = SensorConstraint.terms(items, frame_inputs(s))
+    kit = torch_kit()
+    batched = term.losses(term.residual(kit, *state_arrays(s)), kit)[0]
     single = torch.stack([c.loss(s) for c in items])
-    assert torch.allclose(batched, single, atol=1e-10)
+    assert torch.allclose(batched, single, atol=1e-10) and float(single[-1]) == 0.0 and float(single[:-1].sum()) > 0
 
 
 @pytest.mark.parametrize("kind", sorted(REGISTRY))
@@ -157,18 +165,22 @@ def test_every_kind_survives_a_json_round_trip(kind):
     text = json.dumps(c.to_dict(), allow_nan=False)
     back = from_dict(json.loads(text))
     assert type(back) is type(c) and back.to_dict() == c.to_dict()
-    assert isinstance(c.gizmo(), dict) and isinstance(c.gizmo(REST), dict)
+    for g in (c.gizmo(), c.gizmo(REST)):
+        assert g is None or isinstance(g, Gizmo)
 
 
-def test_gizmos_use_the_viewport_types():
+def test_gizmos_are_shapes_whose_edit_fields_the_constraint_has():
+    drawn = set()
     for c in CASES:
-        g = c.gizmo(REST)
-        assert g == {} or g["type"] in ("point", "box", "line")
-        if g and "edit" in g:  # an editable gizmo names fields the constraint has
-            fields = g["edit"] if isinstance(g["edit"], tuple) else (g["edit"],)
-            assert all(f in c.to_dict() for f in fields), (c.kind, g["edit"])
+        for g in (c.gizmo(), c.gizmo(REST)):
+            assert g is None or type(g) in gizmo_types(), (c.kind, g)
+            if g is not None:  # a drag writes fields the constraint has
+                drawn.add(c.kind)
+                assert all(f in c.to_dict() for f in g.edit_fields), (c.kind, g.edit_fields)
+    assert {"pin", "look_at", "bounds", "distance", "end_effector"} <= drawn
     look = next(c for c in CASES if c.kind == "look_at")
-    assert look.gizmo(REST)["edit"] == "target", "the look-at target stays draggable with a pose"
+    assert look.gizmo(REST).edit_fields == ("target",), "the look-at target stays draggable with a pose"
+    assert isinstance(look.gizmo(REST), LineGizmo) and isinstance(look.gizmo(), PointGizmo)
 
 
 @pytest.mark.parametrize(

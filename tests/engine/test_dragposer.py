@@ -213,9 +213,9 @@ def test_smoothing_extrapolates_only_between_realtime_frames(clip):
     seen = []
     solve = m.optimizer.solve
 
-    def spy(start, terms, ctx):
+    def spy(start, terms, ctx, settings=None):
         seen.append((m.smooth.active, m.smooth.target.copy()))
-        return solve(start, terms, ctx)
+        return solve(start, terms, ctx, settings)
 
     m.optimizer.solve = spy
     poses = [m.step(tr.frame(i)).positions for i in range(5)]

@@ -159,13 +159,13 @@ def test_predictor_conditioning_equals_the_torch_root_increment(models, motion, 
     m.reset(motion.skeleton, motion.fps)
     tr = simulate(motion, "6")
     conds = []
-    record = m.schedule.record
+    record = m.priors.schedule.record
 
     def spy(frame, latent, cond):
         conds.append(cond().clone())  # the conditioning is computed when first read
         record(frame, latent, cond)
 
-    monkeypatch.setattr(m.schedule, "record", spy)
+    monkeypatch.setattr(m.priors.schedule, "record", spy)
     roots, results = [], []
     for i in range(FRAMES):
         roots.append(m._root)

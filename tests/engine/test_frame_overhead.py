@@ -41,15 +41,15 @@ def _run(clip, preset: str, monkeypatch, **settings):
 
 def test_no_conditioning_is_computed_while_the_pose_bank_gives_the_prior(clip, monkeypatch):
     method, calls = _run(clip, "6", monkeypatch)
-    assert method._bank_prior and method.schedule.history
+    assert method.priors.from_bank and method.priors.schedule.history
     assert calls == []
 
 
 def test_the_predictor_gets_the_conditioning_it_got_when_it_was_computed_at_once(clip, monkeypatch):
     method, calls = _run(clip, "6", monkeypatch, prior="predictor")
-    assert not method._bank_prior and calls  # the predictor ran on it
+    assert not method.priors.from_bank and calls  # the predictor ran on it
     lengths = []
-    for _, cond in method.schedule.history:
+    for _, cond in method.priors.schedule.history:
         roots, pos = cond.roots, cond.positions
         want = torch.cat((torch.stack([root_displacement(*r) for r in roots]).sum(0), pos[roots_mod._HEIGHT_IDX, 2]))
         assert torch.equal(cond(), want)

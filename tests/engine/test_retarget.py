@@ -80,7 +80,7 @@ def test_bone_directions_follow_the_source(retargeted):
         c = ours[:n, sk.JOINT_INDEX[b]] - ours[:n, sk.JOINT_INDEX[a]]
         cos = (s * c).sum(-1) / np.linalg.norm(s, axis=-1) / np.linalg.norm(c, axis=-1)
         err = np.degrees(np.arccos(np.clip(cos, -1, 1)))
-        if prof.straight_elbows and report.version >= 4 and a in ("lelbow", "relbow"):
+        if prof.straight_elbows and report.strategy.straight_elbows and a in ("lelbow", "relbow"):
             # the zero pose's drawn elbow bend is read as straight (docs/skeleton.md): the
             # forearm turns by that fixed bend, the same on every frame
             assert err.max() - err.min() < 0.1, f"{key} forearm {a}->{b} turn varies over the clip"

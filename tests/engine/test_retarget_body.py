@@ -7,6 +7,8 @@ back: the rotations agree within 1 degree."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -14,6 +16,7 @@ from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
 from engine.motion.clip import Motion
 from engine.motion.retarget_frames import CANON_LANDMARKS
+from engine.motion.retarget_strategy import CURRENT
 
 NAMES = {"root": "Hips", "lhip": "LeftUpLeg", "lknee": "LeftLeg", "lankle": "LeftFoot", "ltoe": "LeftToeBase",
          "rhip": "RightUpLeg", "rknee": "RightLeg", "rankle": "RightFoot", "rtoe": "RightToeBase",
@@ -182,7 +185,7 @@ def _bone_x(mirrored: bool) -> dict:
     """Per-joint frames whose local +X runs along the bone (towards the child, the end site
     for leaves; up for the hips), as game rigs draw them; ``mirrored``: the right side's +X
     runs the other way (towards the parent), so its twist axis is mirrored."""
-    from engine.motion.retarget_ablation import joint_axis
+    from engine.motion.joint_stats import joint_axis
 
     c = {}
     for canon, name in NAMES.items():
@@ -213,10 +216,10 @@ def rigs(tmp_path_factory):
         "child_undoes_twist": {"twist": {n: 150 * np.sin(ph) for n in ("LeftUpLeg", "RightUpLeg", "LeftForeArm")}},
     }
     out = {}
-    for version in (3, 4):
+    for key, strategy in (("source_twist", dataclasses.replace(CURRENT, body_twist=False)), ("body_twist", CURRENT)):
         for name, kw in variants.items():
             raw = load_bvh(write_rig(tmp / f"{name}.bvh", local, root, **kw))
-            out[version, name] = retarget(raw, version=version)
+            out[key, name] = retarget(raw, strategy=strategy)
     return out
 
 
@@ -227,16 +230,16 @@ def _diff(a, b) -> np.ndarray:
 @pytest.mark.parametrize("variant", ["random_axes", "half_turn_twist_axes", "apose", "bone_axes_along_x",
                                      "bone_axes_along_x_mirrored", "child_undoes_twist"])  # fmt: skip
 def test_rest_conventions_do_not_change_the_canonical_rotations(rigs, variant):
-    ref, rep = rigs[4, "tpose"]
-    other, rep2 = rigs[4, variant]
+    ref, rep = rigs["body_twist", "tpose"]
+    other, rep2 = rigs["body_twist", variant]
     assert rep.mapping == rep2.mapping
     worst = _diff(ref, other)
     assert worst.max() < 1.0, dict(zip(sk.JOINT_NAMES, np.round(worst, 2)))
 
 
 def test_the_source_twist_a_child_undoes_changed_the_older_definition(rigs):
-    """The defect body-defined twist removes: version 3 kept the thigh's own twist."""
-    worst = _diff(rigs[3, "tpose"][0], rigs[3, "child_undoes_twist"][0])
+    """The defect body-defined twist removes: without it the thigh keeps its own twist."""
+    worst = _diff(rigs["source_twist", "tpose"][0], rigs["source_twist", "child_undoes_twist"][0])
     assert worst[sk.JOINT_INDEX["lhip"]] > 30 and worst[sk.JOINT_INDEX["lknee"]] > 30
 
 
@@ -244,47 +247,48 @@ def test_a_rig_without_face_or_fingers_uses_the_rules_and_says_so(rigs, tmp_path
     from engine.motion.bvh import load_bvh
     from engine.motion.retarget import retarget
 
-    full = rigs[4, "tpose"][1]
+    full = rigs["body_twist", "tpose"][1]
     assert full.source_twist_joints == [] and "lwrist" in full.body_joints and "upperneck" in full.body_joints
     assert full.twist_rules == {}
     local, root = canonical_walk(60)
     text = write_rig(tmp_path / "bare.bvh", local, root, landmarks=False)
-    rep = retarget(load_bvh(text), version=4)[1]
+    rep = retarget(load_bvh(text), strategy=CURRENT)[1]
     assert rep.source_twist_joints == []
     assert rep.twist_rules == {"lwrist": "no twist", "rwrist": "no twist", "lowerneck": "head frame",
                                "upperneck": "head frame"}  # fmt: skip
 
 
-def test_models_version_comes_from_the_model_card(tmp_path):
+def test_models_strategy_comes_from_the_model_card(tmp_path):
+    """The card names the current version; a version this program no longer produces (3)
+    or never did (9) is refused, naming the file and the field."""
     from engine.errors import UserError
-    from engine.motion.retarget import RETARGET_VERSION, models_version
+    from engine.motion.retarget import models_strategy
 
-    (tmp_path / "data.toml").write_text("retarget_version = 3\n")
-    assert models_version(tmp_path / "data.toml") == 3
-    assert models_version(tmp_path / "absent.toml") == RETARGET_VERSION
-    (tmp_path / "bad.toml").write_text("retarget_version = 9\n")
-    with pytest.raises(UserError, match="bad.toml: retarget_version"):
-        models_version(tmp_path / "bad.toml")
+    (tmp_path / "data.toml").write_text(f"retarget_version = {CURRENT.version}\n")
+    assert models_strategy(tmp_path / "data.toml") is CURRENT
+    assert models_strategy(tmp_path / "absent.toml") is CURRENT
+    for version in (3, 9):
+        (tmp_path / "bad.toml").write_text(f"retarget_version = {version}\n")
+        with pytest.raises(UserError, match=f"bad.toml: retarget_version must be one of {CURRENT.version} .*got {version}"):
+            models_strategy(tmp_path / "bad.toml")
 
 
 def test_straight_elbows_measures_the_bend_from_a_rest_drawn_bent(tmp_path):
     """A rig whose zero pose draws the forearm 17 degrees bent, with the T-pose rotations
     copied onto it (as the Daz rig's conversion did): ``straight_elbows`` reads the elbow
     as the T-pose rig does; without it the elbow is 17 degrees off."""
-    import dataclasses
-
     from engine.motion.bvh import load_bvh
     from engine.motion.rigs import resolve_rig
     from engine.motion.retarget import retarget
 
     local, root = canonical_walk(90)
-    ref = retarget(load_bvh(write_rig(tmp_path / "t.bvh", local, root, rest=_straight_elbows)), version=4)[0]
+    ref = retarget(load_bvh(write_rig(tmp_path / "t.bvh", local, root, rest=_straight_elbows)), strategy=CURRENT)[0]
     raw = load_bvh(write_rig(tmp_path / "b.bvh", local, root, rest=lambda rows: _straight_elbows(rows, 17.0)))
     prof = resolve_rig(raw)
     elbow = sk.JOINT_INDEX["lelbow"]
-    plain = retarget(raw, profile=prof, version=4)[0]
+    plain = retarget(raw, profile=prof, strategy=CURRENT)[0]
     assert np.degrees(Q.angle(plain.local_rot[:, elbow], ref.local_rot[:, elbow])).mean() > 10
-    fixed = retarget(raw, profile=dataclasses.replace(prof, straight_elbows=True), version=4)[0]
+    fixed = retarget(raw, profile=dataclasses.replace(prof, straight_elbows=True), strategy=CURRENT)[0]
     assert _diff(ref, fixed).max() < 1.0
 
 
@@ -321,25 +325,24 @@ def _straight_knees(rows, bend_deg: float = 0.0):
 def test_straight_knees_reads_a_leg_drawn_bent_along_its_hip_to_ankle_line(tmp_path):
     """A rig whose zero pose draws the left knee 7.7 degrees bent about an unchanged
     hip-to-ankle line (as the Daz rig does), the T-pose rotations copied onto it:
-    ``straight_knees`` reads the whole leg as the straight-legged rig does from version 5;
-    version 4 ignores it and reads the drawn bend."""
-    import dataclasses
-
+    ``straight_knees`` reads the whole leg as the straight-legged rig does with the
+    strategy's ``straight_knees``; the current strategy ignores it and reads the drawn bend."""
     from engine.motion.bvh import load_bvh
     from engine.motion.rigs import resolve_rig
     from engine.motion.retarget import retarget
 
+    knees = dataclasses.replace(CURRENT, straight_knees=True)
     local, root = canonical_walk(90)
-    ref = retarget(load_bvh(write_rig(tmp_path / "t.bvh", local, root, rest=_straight_knees)), version=5)[0]
+    ref = retarget(load_bvh(write_rig(tmp_path / "t.bvh", local, root, rest=_straight_knees)), strategy=knees)[0]
     raw = load_bvh(write_rig(tmp_path / "b.bvh", local, root, rest=lambda rows: _straight_knees(rows, 7.7)))
     prof = dataclasses.replace(resolve_rig(raw), straight_knees=True)
     knee, hip = sk.JOINT_INDEX["lknee"], sk.JOINT_INDEX["lhip"]
-    for version in (4, 5):
-        plain = retarget(raw, profile=dataclasses.replace(prof, straight_knees=False), version=version)[0]
+    for strategy in (CURRENT, knees):
+        plain = retarget(raw, profile=dataclasses.replace(prof, straight_knees=False), strategy=strategy)[0]
         assert np.degrees(Q.angle(plain.local_rot[:, knee], ref.local_rot[:, knee])).mean() > 5
-    old = retarget(raw, profile=prof, version=4)[0]
+    old = retarget(raw, profile=prof, strategy=CURRENT)[0]
     assert np.degrees(Q.angle(old.local_rot[:, knee], ref.local_rot[:, knee])).mean() > 5
-    fixed = retarget(raw, profile=prof, version=5)[0]
+    fixed = retarget(raw, profile=prof, strategy=knees)[0]
     assert _diff(ref, fixed).max() < 1.0, dict(zip(sk.JOINT_NAMES, np.round(_diff(ref, fixed), 2)))
     assert np.degrees(Q.angle(fixed.local_rot[:, hip], ref.local_rot[:, hip])).max() < 1.0
 
@@ -355,11 +358,12 @@ def _sole_toes(rows):
     return rows
 
 
-def test_version_5_reads_a_toe_tip_on_the_sole_as_a_straight_toe(tmp_path):
+def test_sole_toe_tips_read_a_toe_tip_on_the_sole_as_a_straight_toe(tmp_path):
     """The canonical walk on a rig whose toe tips lie on the sole's line (iClone's middle
-    toe, the CMU rig's end site): version 5 reads its toes as version 4 reads a rig whose
-    tips are where the canonical end site points (on the floor, 25 degrees below the toe),
-    while version 4 reads the sole tips about 25 degrees bent. Only the toes change."""
+    toe, the CMU rig's end site): with ``sole_toe_tips`` its toes read as the current
+    strategy reads a rig whose tips are where the canonical end site points (on the floor,
+    25 degrees below the toe), while the current strategy reads the sole tips about 25
+    degrees bent. Only the toes change."""
     from engine.motion.bvh import load_bvh
     from engine.motion.retarget import retarget
 
@@ -371,8 +375,9 @@ def test_version_5_reads_a_toe_tip_on_the_sole_as_a_straight_toe(tmp_path):
     def toe_error(motion) -> float:
         return float(np.degrees(Q.angle(motion.local_rot[:, toes], local[:, toes])).mean())
 
-    v4, v5 = retarget(sole, version=4)[0], retarget(sole, version=5)[0]
-    assert toe_error(v4) > 20.0
-    assert toe_error(v5) < toe_error(retarget(floor, version=4)[0]) + 1.5 < 6.0
+    current = retarget(sole, strategy=CURRENT)[0]
+    on_sole = retarget(sole, strategy=dataclasses.replace(CURRENT, sole_toe_tips=True))[0]
+    assert toe_error(current) > 20.0
+    assert toe_error(on_sole) < toe_error(retarget(floor, strategy=CURRENT)[0]) + 1.5 < 6.0
     others = [j for j in range(sk.NUM_JOINTS) if j not in toes]
-    assert np.degrees(Q.angle(v4.local_rot[:, others], v5.local_rot[:, others])).max() < 1e-3
+    assert np.degrees(Q.angle(current.local_rot[:, others], on_sole.local_rot[:, others])).max() < 1e-3

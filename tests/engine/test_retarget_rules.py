@@ -7,12 +7,15 @@ joints) the wrists read back as on a rig with knuckles, and the neck follows its
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
 from engine.motion import retarget_body as RB
+from engine.motion.retarget_strategy import CURRENT
 from tests.engine.test_retarget_body import _axis_angle, _conventions, canonical_walk, write_rig
 
 FINGERS = ("FingerBase", "HandIndex1", "Thumb")
@@ -50,7 +53,7 @@ def cmu_like(tmp_path_factory):
 
     tmp = tmp_path_factory.mktemp("rules")
     local, root = canonical_walk(120)
-    ref = retarget(load_bvh(write_rig(tmp / "knuckles.bvh", local, root)), version=4)
+    ref = retarget(load_bvh(write_rig(tmp / "knuckles.bvh", local, root)), strategy=CURRENT)
     axes = _conventions(np.random.default_rng(7))
     for side in ("Left", "Right"):
         for f in FINGERS:
@@ -59,7 +62,7 @@ def cmu_like(tmp_path_factory):
     out = {"knuckles": ref}
     for name, kw in {"plain": {}, "rotated_axes": {"frames_c": axes}}.items():
         path = write_rig(tmp / f"{name}.bvh", local, root, landmarks=False, rest=_cmu_hands, **kw)
-        out[name] = retarget(load_bvh(path), version=4)
+        out[name] = retarget(load_bvh(path), strategy=CURRENT)
     return out
 
 
@@ -79,15 +82,15 @@ def test_a_hand_with_finger_base_and_thumb_reads_back_as_with_knuckles(cmu_like,
 
 
 def test_the_thumb_rule_changes_the_source_twist_reading(cmu_like, tmp_path):
-    """Without the rule (version 3, the source's hand axes) the rotated axes show."""
+    """Without body-defined twist (the source's hand axes) the rotated axes show."""
     from engine.motion.bvh import load_bvh
     from engine.motion.retarget import retarget
 
     local, root = canonical_walk(60)
     axes = _conventions(np.random.default_rng(7))
     raw = load_bvh(write_rig(tmp_path / "v3.bvh", local, root, landmarks=False, rest=_cmu_hands, frames_c=axes))
-    old = retarget(raw, version=3)[0]
-    new = retarget(raw, version=4)[0]
+    old = retarget(raw, strategy=dataclasses.replace(CURRENT, body_twist=False))[0]
+    new = retarget(raw, strategy=CURRENT)[0]
     ref = cmu_like["knuckles"][0].slice(0, 60)
     assert _deg(ref, old, "lwrist").mean() > 5.0
     assert _deg(ref, new, "lwrist").max() < 1.0
@@ -162,11 +165,11 @@ def test_a_hand_without_fingers_keeps_its_swing_and_no_twist(tmp_path, hand_axes
     from engine.motion.retarget import retarget
 
     local, root = canonical_walk(90)
-    truth = retarget(load_bvh(write_rig(tmp_path / "k.bvh", local, root)), version=4)[0]
+    truth = retarget(load_bvh(write_rig(tmp_path / "k.bvh", local, root)), strategy=CURRENT)[0]
     half = {n: _axis_angle(sk.END_SITES[j] / np.linalg.norm(sk.END_SITES[j]), 180.0)  # about the hand's direction
             for n, j in (("LeftHand", "lwrist"), ("RightHand", "rwrist"))} if hand_axes == "half_turn" else {}  # fmt: skip
     motion, rep = retarget(load_bvh(write_rig(tmp_path / "bare.bvh", local, root, landmarks=False, frames_c=half)),
-                           version=4)  # fmt: skip
+                           strategy=CURRENT)  # fmt: skip
     assert rep.twist_rules["lwrist"] == rep.twist_rules["rwrist"] == "no twist"
     for joint in ("lwrist", "rwrist"):
         k, axis = sk.JOINT_INDEX[joint], sk.END_SITES[joint]

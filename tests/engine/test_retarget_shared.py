@@ -27,9 +27,9 @@ CLIPS = ("cmu_daz/martial/03.bvh", "cmu_daz/indian/04.bvh", "cmu_daz/salsa/01.bv
 
 
 def _load(mocap, rel):
-    from engine.motion.retarget import RETARGET_VERSION, load_with_report
+    from engine.motion.retarget import CURRENT, load_with_report
 
-    return load_with_report(mocap / rel, version=RETARGET_VERSION)
+    return load_with_report(mocap / rel, strategy=CURRENT)
 
 
 @pytest.mark.parametrize("rel", CLIPS)
@@ -90,11 +90,11 @@ def test_written_back_onto_the_source_rig_within_1cm(shared_mocap, tmp_path, rel
     canonical rate, every written frame is one the canonical clip holds (at 120 fps the
     frames between would add the resampling's own error, up to 1.7 cm on a walk)."""
     from engine.motion.bvh import load_bvh
-    from engine.motion.retarget import RETARGET_VERSION, manifest_fps, retarget
+    from engine.motion.retarget import CURRENT, manifest_fps, retarget
     from engine.motion.write_back import save_on_source_rig
 
     raw = load_bvh(shared_mocap / rel)
-    motion, report = retarget(raw, manifest_fps(shared_mocap / rel), version=RETARGET_VERSION)
+    motion, report = retarget(raw, manifest_fps(shared_mocap / rel), strategy=CURRENT)
     save_on_source_rig(tmp_path / "back.bvh", motion, raw, report, fps=60.0)
     back = load_bvh(tmp_path / "back.bvh")
     step = round(report.source_fps / 60.0)
@@ -126,7 +126,7 @@ def every_shared_clip(shared_mocap):
     import json
 
     from engine.motion.joint_stats import summarize
-    from engine.motion.retarget import RETARGET_VERSION, load_with_report
+    from engine.motion.retarget import CURRENT, load_with_report
 
     listed = json.loads((shared_mocap / "manifest.json").read_text())["files"]
     expected = sorted(entry["path"].removeprefix("mocap/") for entry in listed)
@@ -138,7 +138,7 @@ def every_shared_clip(shared_mocap):
     for path in files:
         rel = path.relative_to(shared_mocap)
         counts[rel.parts[0]] = counts.get(rel.parts[0], 0) + 1
-        motion, rep = load_with_report(path, version=RETARGET_VERSION)
+        motion, rep = load_with_report(path, strategy=CURRENT)
         heights[str(rel)] = (rep.height_m, rep.source_height_m)
         groups.setdefault(rel.parts[0], {})[str(rel)] = joint_report(motion.local_rot, motion.skeleton.offsets)
     return counts, heights, summarize(groups, "dragposer")
@@ -157,7 +157,7 @@ def test_every_shared_clip_keeps_its_height(every_shared_clip):
 @pytest.mark.parametrize("family", FAMILIES)
 def test_every_shared_clip_rotates_like_the_canonical_clips(every_shared_clip, family):
     """Per joint, the hinge axis and twist of each rig family against DragPoser's own clips
-    (``engine.motion.joint_stats.summarize``, the figures of docs/skeleton.md: ``scripts/joint_stats.py``)."""
+    (``engine.motion.joint_stats.summarize``, the figures of docs/skeleton.md: ``research/joint_stats.py``)."""
     table = every_shared_clip[2]
     for knee in ("lknee", "rknee"):  # the hinge of every clip, with DragPoser's few degrees of twist
         row = table[knee][family]

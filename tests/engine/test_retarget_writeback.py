@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from engine.kinematics.fk import fk
+from engine.motion.retarget_strategy import CURRENT
 from tests.engine.test_retarget_body import canonical_walk, write_rig
 
 
@@ -36,7 +37,7 @@ def test_a_static_root_above_moving_hips_is_read_with_its_trajectory(hub_rig):
     from engine.motion.retarget import retarget
 
     assert np.ptp(hub_rig.positions[:, 0], axis=0).max() == 0.0, "joint_Root never moves"
-    motion, rep = retarget(hub_rig, version=4)
+    motion, rep = retarget(hub_rig, strategy=CURRENT)
     hips = _world(hub_rig)[:, 1]
     travel = np.ptp(hips, axis=0)
     assert travel.max() > 0.5
@@ -48,7 +49,7 @@ def test_written_back_the_hips_carry_the_trajectory_at_the_source_rate(hub_rig, 
     from engine.motion.retarget import retarget
     from engine.motion.write_back import save_on_source_rig
 
-    motion, rep = retarget(hub_rig, version=4)
+    motion, rep = retarget(hub_rig, strategy=CURRENT)
     save_on_source_rig(tmp_path / "back.bvh", motion, hub_rig, rep)
     back = load_bvh(tmp_path / "back.bvh")
     assert abs(back.fps - 30.0) < 0.01 and back.frames == hub_rig.frames
@@ -65,7 +66,7 @@ def test_fps_asked_for_resamples_the_written_file(hub_rig, tmp_path):
     from engine.motion.retarget import retarget
     from engine.motion.write_back import save_on_source_rig
 
-    motion, rep = retarget(hub_rig, version=4)
+    motion, rep = retarget(hub_rig, strategy=CURRENT)
     save_on_source_rig(tmp_path / "back60.bvh", motion, hub_rig, rep, fps=60.0)
     back = load_bvh(tmp_path / "back60.bvh")
     assert abs(back.fps - 60.0) < 0.01 and back.frames == 2 * hub_rig.frames - 1

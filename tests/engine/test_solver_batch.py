@@ -83,7 +83,7 @@ def test_each_frame_starts_from_its_stream_s_last_latent_moved_on_by_its_last_ch
     starts, loads = [], []
     solve = DB.solve_streams
 
-    def record(dec, pose, terms, z, rule, lr, mx, pat, mi, load, done, fixed):
+    def record(dec, objective, z, rule, lr, mx, pat, mi, load, done, fixed):
         def load_and_keep(c):
             ok = load(c)
             starts.append(z[c].copy())
@@ -93,7 +93,7 @@ def test_each_frame_starts_from_its_stream_s_last_latent_moved_on_by_its_last_ch
             loads.append(z[c].copy())
             done(c, it)
 
-        return solve(dec, pose, terms, z, rule, lr, mx, pat, mi, load_and_keep, done_and_keep, fixed)
+        return solve(dec, objective, z, rule, lr, mx, pat, mi, load_and_keep, done_and_keep, fixed)
 
     monkeypatch.setattr(DB, "solve_streams", record)
     assert _offline().solve_clip([tr.frame(i) for i in range(6)]) is not None
@@ -154,29 +154,35 @@ def test_clips_it_cannot_batch_are_solved_frame_by_frame(clip):
 
 
 def test_the_batched_gradient_is_the_derivative_of_the_batched_loss(clip):
+    from engine.constraints.residual import FrameInputs
+    from engine.constraints.smooth import SmoothTerm
+    from engine.constraints.temporal_prior import PriorTerm
     from engine.tracking import simulate
 
     m = _offline()
     tr = simulate(clip, "4")
     read = DB._read_all(m, [tr.frame(i) for i in range(5)])
-    terms = DB._terms(read)
+    assert all(read[0]["kept"]), "preset 4: trackers, prior, smoothing and the ground band all act"
+    objective = DB._objective(m, read[0], 5)
     rng = np.random.default_rng(0)
-    terms.smooth_on[:] = [False, True, True, False, True]
-    terms.smooth_target[:] = rng.normal(scale=0.3, size=terms.smooth_target.shape) + np.array([0, 0, 1.0])
-    terms.ground_weight = 10.0
-    dense = m.optimizer._fast.decoder
-    dec, pose = B.BatchDecoder(dense), B.BatchPose(m.skeleton.offsets, dense)
-    pose.setup(terms)
-    z = terms.prior + rng.normal(scale=0.3, size=terms.prior.shape)  # float64: exact differences
+    for c, (r, on) in enumerate(zip(read, [False, True, True, False, True])):
+        target = rng.normal(scale=0.3, size=(22, 3)) + np.array([0, 0, 1.0])
+        smooth = SmoothTerm("smooth", target if on else None)
+        weights = r["weights"].copy()
+        weights[-1] = 10.0  # the ground band, strong
+        objective.set_row(c, [r["sensor_term"], PriorTerm("temporal_prior", r["prior"]), smooth,
+                              m.ground.term(FrameInputs())], weights, *r["root"])  # fmt: skip
+    dec = B.BatchDecoder(m.optimizer.fast_parts.decoder)
+    z = np.array([r["prior"] for r in read]) + rng.normal(scale=0.3, size=(5, 24))  # float64: exact differences
     idx = np.array([0, 1, 3, 4])
-    w = pose.term_weights()[idx]
+    w = objective.weights[idx]
 
     def total(zz):
         z32 = zz[idx].astype(np.float32)
-        return float((w * pose.forward(z32, dec.forward(z32.T), idx)).sum())
+        return float((w * objective.evaluate(z32, dec.forward(z32.T), idx)).sum())
 
     total(z)
-    g_out, g_z = pose.backward()
+    g_out, g_z = objective.gradient()
     grad = dec.backward(g_out).T + g_z
     for a, f in enumerate(idx):
         for d in (0, 7, 19):
@@ -229,9 +235,9 @@ def test_later_segments_start_from_the_bank_latent_of_their_first_warm_up_frame(
     starts = []
     solve = DB.solve_streams
 
-    def record(dec, pose, terms, z, *rest):
+    def record(dec, objective, z, *rest):
         starts.append(z.copy())
-        return solve(dec, pose, terms, z, *rest)
+        return solve(dec, objective, z, *rest)
 
     monkeypatch.setattr(DB, "solve_streams", record)
     frames = [tr.frame(i) for i in range(len(tr))]

@@ -11,6 +11,7 @@ from engine.motion.retarget import load_motion
 from engine.tracker_io.recording import write_recording
 from engine.tracker_io.sender import plan_stream
 from engine.tracker_io.trackers import TrackerSample
+from engine.studio.export import ExportJob
 from engine.studio.session import Session
 from tests.stand_ins import RestPoseMethod
 
@@ -26,7 +27,7 @@ def opened(synthetic_motion, tmp_path):
 
 def test_an_export_job_solves_the_session_clip_and_writes_it(opened):
     session, tmp = opened
-    job = session.export_job(tmp / "out.bvh")
+    job = ExportJob.of_session(session, tmp / "out.bvh")
     session.set_method("ik")  # a later edit does not reach the job
     solved = []
     rec = job.run(lambda name: RestPoseMethod(), progress=solved.append)
@@ -37,7 +38,7 @@ def test_an_export_job_solves_the_session_clip_and_writes_it(opened):
 
 def test_a_cancelled_job_writes_nothing(opened):
     session, tmp = opened
-    job = session.export_job(tmp / "never.bvh")
+    job = ExportJob.of_session(session, tmp / "never.bvh")
     solved = []
     assert job.run(lambda name: RestPoseMethod(), solved.append, cancelled=lambda: len(solved) >= 3) is None
     assert solved == [0, 1, 2] and not list(tmp.glob("*never*"))
@@ -45,7 +46,7 @@ def test_a_cancelled_job_writes_nothing(opened):
 
 def test_on_the_source_rig_the_job_writes_the_opened_file_hierarchy(opened):
     session, tmp = opened
-    job = session.export_job(tmp / "rig.bvh", on_source_rig=True)
+    job = ExportJob.of_session(session, tmp / "rig.bvh", on_source_rig=True)
     assert job.source == session.path
     job.run(lambda name: RestPoseMethod())
     assert load_bvh(tmp / "rig.bvh").names == load_bvh(session.path).names
@@ -54,10 +55,10 @@ def test_on_the_source_rig_the_job_writes_the_opened_file_hierarchy(opened):
 def test_an_export_needs_a_clip(synthetic_motion, tmp_path):
     session = Session()
     with pytest.raises(UserError, match="open a motion"):
-        session.export_job(tmp_path / "o.bvh")
+        ExportJob.of_session(session, tmp_path / "o.bvh")
     session.set_motion(synthetic_motion)  # not from a file
     with pytest.raises(UserError, match="not opened from a BVH file"):
-        session.export_job(tmp_path / "o.bvh", on_source_rig=True)
+        ExportJob.of_session(session, tmp_path / "o.bvh", on_source_rig=True)
 
 
 def test_the_session_opens_a_recording_and_saving_then_says_why_not(synthetic_motion, tmp_path):
@@ -68,7 +69,7 @@ def test_the_session_opens_a_recording_and_saving_then_says_why_not(synthetic_mo
     src = session.open_recording(tmp_path / "rec.jsonl")
     assert session.source is src and src.num_frames == 10 and session.live_source is None
     with pytest.raises(UserError, match="tracker input"):
-        session.export_job(tmp_path / "o.bvh")
+        ExportJob.of_session(session, tmp_path / "o.bvh")
     with pytest.raises(UserError):
         session.open_recording(tmp_path / "missing.jsonl")
     assert session.source is src  # a failed open leaves the session as it was

@@ -73,9 +73,9 @@ def test_edits_reach_the_process_like_the_thread(proc_session):
     wait_for(lambda: engine.latest is not None and engine.latest.losses, START_S)
     joint = next(iter(session.sensors))
     seq = engine.latest.seq
-    session.update_sensor(joint, enabled=False)
+    session.sensors.edit(joint, enabled=False)
     wait_for(lambda: engine.latest.seq > seq and joint not in engine.latest.target_joints, 30)
-    session.add_constraint("pin", joint="lwrist", position=(0.3, 0.2, 1.0))
+    session.constraints.add("pin", joint="lwrist", position=(0.3, 0.2, 1.0))
     wait_for(lambda: any(name == "pin" for name, _ in engine.latest.gizmos), 30)
 
 

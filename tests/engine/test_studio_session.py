@@ -11,7 +11,8 @@ from engine.errors import UserError
 from engine.sensors import Sensor
 from engine.studio import commands as c
 from engine.studio import events as ev
-from engine.studio.session import PIN_PREFIX, Session
+from engine.studio.session import Session
+from engine.studio.session_constraints import PIN_PREFIX, ConstraintList
 
 
 @pytest.fixture
@@ -30,7 +31,7 @@ def test_changes_fire_typed_events_and_become_commands(session):
     commands.clear()
     joint = next(iter(session.sensors))
     old = session.sensors[joint]
-    session.update_sensor(joint, enabled=False)
+    session.sensors.edit(joint, enabled=False)
     session.seek(10)
     session.set_setting("iterations", 5)
     assert isinstance(seen[0], ev.SensorsChanged) and seen[0].joint == joint
@@ -48,24 +49,24 @@ def test_an_unchanged_sensor_edit_fires_nothing(session):
     seen = []
     session.events.sensors.connect(seen.append)
     joint = next(iter(session.sensors))
-    session.update_sensor(joint, enabled=True)
+    session.sensors.edit(joint, enabled=True)
     assert seen == []
 
 
 def test_preset_and_bad_sensor_edits(session):
-    name, sensors = list(session.sensor_presets().items())[-1]
+    name, sensors = list(session.sensors.presets().items())[-1]
     seen = []
     session.events.sensors.connect(seen.append)
     before = tuple(session.sensors.values())
-    session.set_preset(name)
+    session.sensors.set_preset(name)
     assert tuple(session.sensors.values()) == sensors
     assert seen[-1].joint is None and seen[-1].old_set == before and seen[-1].preset == name
     with pytest.raises(UserError, match="unknown sensor preset"):
-        session.set_preset("no such preset")
+        session.sensors.set_preset("no such preset")
     with pytest.raises(UserError, match="dof"):
-        session.update_sensor(sensors[0].joint, dof=4)
+        session.sensors.edit(sensors[0].joint, dof=4)
     with pytest.raises(UserError, match="unknown field"):
-        session.update_sensor(sensors[0].joint, colour="red")
+        session.sensors.edit(sensors[0].joint, colour="red")
 
 
 def test_drag_target_sets_offset_from_the_tracked_position(session):
@@ -75,7 +76,7 @@ def test_drag_target_sets_offset_from_the_tracked_position(session):
     assert np.allclose(session.sensors[joint].offset, [0.1, 0.0, -0.2])
     session.simulate_failure(joint, 30)
     assert session.sensors[joint].lost_at(10) and not session.sensors[joint].lost_at(30)
-    session.reset_offsets()
+    session.sensors.reset_offsets()
     assert session.sensors[joint].offset == (0.0, 0.0, 0.0) and not session.sensors[joint].failures
 
 
@@ -92,9 +93,9 @@ def test_open_bad_file_leaves_session_unchanged(session, tmp_path):
 
 def test_scene_round_trip(session):
     joint = next(iter(session.sensors))
-    session.update_sensor(joint, dof=3, weight=0.5, offset=(0.0, 0.1, 0.0))
+    session.sensors.edit(joint, dof=3, weight=0.5, offset=(0.0, 0.1, 0.0))
     session.set_setting("lr", 0.05)
-    session.add_constraint("distance", joint_a="lwrist", joint_b="rwrist", distance=0.4)
+    session.constraints.add("distance", joint_a="lwrist", joint_b="rwrist", distance=0.4)
     scene = json.loads(json.dumps(session.to_scene()))
     other = Session()
     other.set_motion(session.motion)
@@ -110,7 +111,7 @@ def test_studio_scenes_are_optimizer_scenes(session, tmp_path):
     from engine.scene import load_scene
 
     session.set_setting("lr", 0.05)
-    session.add_constraint("distance", joint_a="lwrist", joint_b="rwrist", distance=0.4)
+    session.constraints.add("distance", joint_a="lwrist", joint_b="rwrist", distance=0.4)
     path = tmp_path / "studio.json"
     path.write_text(json.dumps(session.to_scene()))
     constraints, settings = load_scene(path)
@@ -136,15 +137,15 @@ def test_a_bad_scene_names_the_entry_and_changes_nothing(session):
 
 
 def test_sensor_text_accepts_presets_and_joint_lists(session):
-    session.set_sensor_text("root,lwrist:3")
+    session.sensors.set_text("root,lwrist:3")
     assert list(session.sensors) == ["root", "lwrist"] and session.sensors["lwrist"].dof == 3
     assert isinstance(session.sensors["root"], Sensor) and session.preset == ""
     with pytest.raises(UserError):
-        session.set_sensor_text("root,nose")
+        session.sensors.set_text("root,nose")
 
 
 def test_catalog_offers_user_kinds_with_their_fields_but_not_internal_ones():
-    catalog = Session.constraint_catalog()
+    catalog = ConstraintList.catalog()
     assert {"pin", "look_at", "distance", "bounds", "floor", "balance", "end_effector"} <= set(catalog)
     assert "sensor" not in catalog and "temporal_prior" not in catalog
     assert catalog["pin"].field("joint").tag == "joint" and catalog["pin"].field("position").tag == "vec3"
@@ -156,35 +157,71 @@ def test_constraints_are_added_by_kind_edited_by_replacement_and_removed(session
     seen, commands = [], []
     session.events.constraints.connect(seen.append)
     session.attach(commands.append)
-    name = session.add_constraint("distance", joint_a="lwrist", joint_b="rwrist", distance=0.3)
+    name = session.constraints.add("distance", joint_a="lwrist", joint_b="rwrist", distance=0.3)
     assert name == "distance" and seen[-1].action == "added" and seen[-1].index == 0
-    first = session.constraint(name)
+    first = session.constraints.named(name)
     assert commands[-1] == c.SetConstraints((first,))  # the session's own object, no copy
-    session.update_constraint(name, distance=0.5, weight=2.0)
-    second = session.constraint(name)
+    session.constraints.edit(name, distance=0.5, weight=2.0)
+    second = session.constraints.named(name)
     assert second is not first and first.distance == 0.3, "published objects are never edited"
     assert second.distance == 0.5 and seen[-1].old is first and seen[-1].new is second
-    assert session.add_constraint("distance") == "distance1"
+    assert session.constraints.add("distance") == "distance1"
     with pytest.raises(UserError, match="unknown constraint kind 'sensor'"):
-        session.add_constraint("sensor")
+        session.constraints.add("sensor")
     with pytest.raises(UserError, match="no field 'colour'"):
-        session.update_constraint(name, colour="red")
+        session.constraints.edit(name, colour="red")
     with pytest.raises(UserError, match="weight"):
-        session.update_constraint(name, weight=-1.0)
-    session.remove_constraint(name)
+        session.constraints.edit(name, weight=-1.0)
+    session.constraints.remove(name)
     assert seen[-1].action == "removed" and seen[-1].old is second
-    session.insert_constraint(seen[-1].old, seen[-1].index)  # what an undo does
+    session.constraints.insert(seen[-1].old, seen[-1].index)  # what an undo does
     assert session.constraints[0] is second
 
 
 def test_pin_creates_then_moves_one_pin_per_joint(session):
-    name = session.pin("lelbow", np.array([0.1, 0.2, 1.0]))
+    name = session.constraints.pin("lelbow", np.array([0.1, 0.2, 1.0]))
     assert name == PIN_PREFIX + "lelbow"
-    session.pin("lelbow", np.array([0.3, 0.2, 1.0]))
+    session.constraints.pin("lelbow", np.array([0.3, 0.2, 1.0]))
     (pin,) = session.constraints
     assert pin.kind == "pin" and pin.joint == "lelbow" and np.allclose(pin.position, [0.3, 0.2, 1.0])
-    session.unpin("lelbow")
-    assert session.constraints == []
+    session.constraints.unpin("lelbow")
+    assert list(session.constraints) == []
+
+
+def test_the_sub_models_fire_their_own_events_which_the_session_sends_and_relays(session):
+    """``session.constraints`` and ``session.sensors`` announce each edit on their own
+    ``events.changed``; the session sends the new set to the engine and re-emits the
+    same payload on its own group."""
+    own, relayed, commands = [], [], []
+    session.constraints.events.changed.connect(own.append)
+    session.events.constraints.connect(relayed.append)
+    session.attach(commands.append)
+    commands.clear()
+    name = session.constraints.add("floor")
+    assert own == relayed and own[-1].action == "added" and own[-1].name == name and own[-1].new.kind == "floor"
+    assert commands == [c.SetConstraints((session.constraints.named(name),))]
+    sensors_seen = []
+    session.sensors.events.changed.connect(sensors_seen.append)
+    joint = next(iter(session.sensors))
+    session.sensors.edit(joint, weight=3.0)
+    e = sensors_seen[-1]
+    assert (e.joint, e.old.weight, e.new.weight) == (joint, 1.0, 3.0) and isinstance(commands[-1], c.SetSensors)
+    session.sensors.remove(joint)
+    assert sensors_seen[-1].old.joint == joint and sensors_seen[-1].new is None and session.preset == ""
+
+
+def test_a_constraint_list_edits_a_list_it_is_given_in_place():
+    """The pose window's constraints are one list shared with its pose mode and scene."""
+    shared: list = []
+    seen = []
+    constraints = ConstraintList(shared)
+    constraints.events.changed.connect(seen.append)
+    constraints.add("floor")
+    constraints.set_all(list(constraints) + [constraints.named("floor").__class__(name="other")])
+    assert [c.name for c in shared] == ["floor", "other"] and seen[-1].action == "replaced"
+    assert seen[-1].old_list[0] is shared[0] and len(seen[-1].old_list) == 1
+    with pytest.raises(UserError, match="no constraint named 'nope'"):
+        constraints.named("nope")
 
 
 def test_playback_state_and_pace_go_through_the_session(session):

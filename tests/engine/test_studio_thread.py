@@ -9,9 +9,11 @@ import time
 import numpy as np
 import pytest
 
+from engine.gizmos import LineGizmo
 from engine.methods.base import FrameResult, Method
 from engine.studio import commands as w
 from engine.studio.session import Session
+from engine.studio.session_sensors import SensorSet
 from engine.studio.thread import EngineThread
 
 
@@ -55,7 +57,7 @@ def test_toggling_a_sensor_changes_the_loss_terms(engine):
     joint = next(iter(session.sensors))
     terms = set(worker.latest.losses[-1])
     seq = worker.latest.seq
-    session.update_sensor(joint, enabled=False)
+    session.sensors.edit(joint, enabled=False)
     snap = newest(worker, seq)
     assert joint not in snap.target_joints
     assert set(snap.losses[-1]) != terms
@@ -63,7 +65,7 @@ def test_toggling_a_sensor_changes_the_loss_terms(engine):
 
 def test_dragging_the_hip_target_moves_the_pose(engine):
     session, worker = engine
-    session.set_preset(next(p for p, j in w_presets().items() if "root" in j))
+    session.sensors.set_preset(next(p for p, j in w_presets().items() if "root" in j))
     snap = newest(worker)
     seq, before = snap.seq, snap.positions.copy()
     session.drag_target("root", session.tracked_position("root", 0) + [0.0, 0.0, 0.3])
@@ -72,7 +74,7 @@ def test_dragging_the_hip_target_moves_the_pose(engine):
 
 
 def w_presets():
-    return {name: tuple(s.joint for s in sensors) for name, sensors in Session.sensor_presets().items()}
+    return {name: tuple(s.joint for s in sensors) for name, sensors in SensorSet.presets().items()}
 
 
 def test_playback_advances_with_time_and_seek_wins(engine):
@@ -137,11 +139,11 @@ def test_playback_skipping_a_few_frames_keeps_the_methods_temporal_state():
 
 def test_gizmos_that_relate_joints_get_the_current_pose(engine):
     session, worker = engine
-    session.add_constraint("distance", name="hands", joint_a="lwrist", joint_b="rwrist", distance=0.3)
+    session.constraints.add("distance", name="hands", joint_a="lwrist", joint_b="rwrist", distance=0.3)
     session.play()
     wait_for(lambda: worker.latest is not None and dict(worker.latest.gizmos).get("hands"))
     giz = dict(worker.latest.gizmos)["hands"]
-    assert giz["type"] == "line" and np.asarray(giz["points"]).shape == (2, 3)
+    assert isinstance(giz, LineGizmo) and giz.points.shape == (2, 3)
 
 
 class Counting(Method):

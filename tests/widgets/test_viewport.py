@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from engine.gizmos import BoxGizmo, LineGizmo, PointGizmo
 from widgets.viewport import Viewport
 
 pytestmark = pytest.mark.gui
@@ -83,9 +84,9 @@ def test_a_press_off_every_target_leaves_the_camera_to_the_user(viewport, fake_s
 
 
 def test_gizmos_follow_constraints(viewport, fake_snapshot):
-    gizmos = (("pin", {"type": "point", "position": [0, 0, 1], "edit": "target"}),
-              ("bounds", {"type": "box", "min": [-1, -1, 0], "max": [1, 1, 2]}),
-              ("look", {"type": "line", "start": [0, 0, 1.6], "end": [0, -2, 1.6]}))  # fmt: skip
+    gizmos = (("pin", PointGizmo([0, 0, 1], edit="target")),
+              ("bounds", BoxGizmo([-1, -1, 0], [1, 1, 2])),
+              ("look", LineGizmo([[0, 0, 1.6], [0, -2, 1.6]])))  # fmt: skip
     viewport.show_snapshot(fake_snapshot(gizmos=gizmos))
     assert set(viewport.gizmos.items) == {"pin", "bounds", "look"}
     viewport.show_snapshot(fake_snapshot(seq=2, gizmos=gizmos[1:]))
@@ -142,7 +143,7 @@ def test_ctrl_press_on_a_joint_takes_the_drag_from_the_camera(viewport, qtbot, f
 
 def test_a_line_gizmo_with_an_edit_field_has_a_draggable_end(viewport, qtbot, fake_snapshot):
     """A look-at draws a line from the head to its target; the target end is a handle."""
-    look = ("look", {"type": "line", "points": [[0, 0, 1.6], [0, -2, 1.6]], "edit": "target"})
+    look = ("look", LineGizmo([[0, 0, 1.6], [0, -2, 1.6]], edit="target"))
     viewport.show_snapshot(fake_snapshot(gizmos=(look,)))
     widget = viewport.gizmos.items["look"].widget
     assert widget is not None and np.allclose(widget.GetCenter(), [0, -2, 1.6])
@@ -152,7 +153,7 @@ def test_a_line_gizmo_with_an_edit_field_has_a_draggable_end(viewport, qtbot, fa
         widget.InvokeEvent("InteractionEvent")
         widget.InvokeEvent("EndInteractionEvent")
     assert sig.args[0] == "look" and np.allclose(sig.args[1]["target"], [1.0, -2.0, 1.5])
-    moved = ("look", {**look[1], "points": [[0, 0, 1.6], [1.0, -2.0, 1.5]]})
+    moved = ("look", LineGizmo([[0, 0, 1.6], [1.0, -2.0, 1.5]], edit="target"))
     viewport.show_snapshot(fake_snapshot(seq=2, gizmos=(moved,)))
     assert np.allclose(viewport.gizmos.items["look"].mesh.points[-1], [1.0, -2.0, 1.5])
 
@@ -162,7 +163,7 @@ def test_box_gizmo_drags_and_follows_edits_made_elsewhere(viewport, qtbot, fake_
 
     edits = []
     viewport.gizmoEdited.connect(lambda n, ch: edits.append((n, ch)))
-    box = {"type": "box", "min": [-1, -1, 0], "max": [1, 1, 2], "edit": ("box_min", "box_max")}
+    box = BoxGizmo([-1, -1, 0], [1, 1, 2], edit=("box_min", "box_max"))
     viewport.show_snapshot(fake_snapshot(gizmos=(("bounds", box),)))
     assert edits == []  # building the box widget is not an edit
     gizmo = viewport.gizmos.items["bounds"]
@@ -170,7 +171,7 @@ def test_box_gizmo_drags_and_follows_edits_made_elsewhere(viewport, qtbot, fake_
         gizmo.widget.PlaceWidget((-1, 1.5, -1, 1, 0, 2))
         gizmo.widget.InvokeEvent("EndInteractionEvent")
     assert sig.args[0] == "bounds" and np.allclose(sig.args[1]["box_max"], [1.5, 1, 2])
-    viewport.show_snapshot(fake_snapshot(seq=2, gizmos=(("bounds", {**box, "max": [2, 1, 2]}),)))
+    viewport.show_snapshot(fake_snapshot(seq=2, gizmos=(("bounds", BoxGizmo(box.lower, [2, 1, 2], edit=box.edit)),)))
     assert viewport.gizmos.items["bounds"] is gizmo  # moved in place, not rebuilt
     handles = pv.PolyData()
     gizmo.widget.GetPolyData(handles)

@@ -40,6 +40,9 @@ class JointDragger:
         self.positions: np.ndarray | None = None
         self.joint: int | None = None
         self.target: str | None = None  # the tracker target being dragged
+        #: A press without Ctrl grabs a joint too when no target is under it (the pose
+        #: window: the studio keeps a plain press on the body for the camera).
+        self.plain_press_grabs_joints = False
         self._origin = np.zeros(3)
         iren = plotter.iren.interactor
         self._style = iren.GetInteractorStyle()
@@ -65,7 +68,7 @@ class JointDragger:
         iren = self._plotter.iren.interactor
         x, y = iren.GetEventPosition()
         if event == "LeftButtonPressEvent":
-            if self.press_ring(x, y) or (self.press(x, y) if iren.GetControlKey() else self.press_target(x, y)):
+            if self.press_ring(x, y) or (self.press(x, y) if iren.GetControlKey() else self.press_plain(x, y)):
                 self._take(event)
         elif event == "MouseMoveEvent":
             if self.ring is not None:
@@ -119,6 +122,11 @@ class JointDragger:
         self.target, self._origin = hit
         self._sensors.begin_drag(self.target)
         return True
+
+    def press_plain(self, x: float, y: float) -> bool:
+        """A press without Ctrl at display pixel (x, y): a target's sphere, else (with
+        :attr:`plain_press_grabs_joints`) a joint; True on a hit."""
+        return self.press_target(x, y) or (self.plain_press_grabs_joints and self.press(x, y))
 
     def release(self) -> None:
         """Let go of the held ring, joint or target."""

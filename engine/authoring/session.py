@@ -1,0 +1,403 @@
+"""The authoring model: a pose and its keys, edited through commands, announced by events.
+
+:class:`AuthoringSession` owns the :class:`~engine.authoring.pose_mode.PoseMode` (the
+character, its pose, the joint targets and the planted feet), the authored scene (keys,
+animation, constraints), the current frame and the bake of the keys. It imports no Qt:
+the pose window (:mod:`app.pose_window`) is a view that calls its methods and redraws on
+its events (:mod:`engine.authoring.events`).
+
+Every change is one command on :attr:`AuthoringSession.history` (Ctrl+Z undoes it
+exactly: the command holds the state it touched before and after, see
+:mod:`engine.authoring.state`), and fires one event per part it changed, with what
+changed. A change that fails (a :class:`~engine.errors.UserError`) leaves the model as
+it was and records nothing.
+
+The bake (keys solved and in-betweens, seconds for a long animation) is long work:
+:meth:`AuthoringSession.bake_job` takes a copy of the scene for a worker thread, which
+computes while the model stays untouched; :meth:`AuthoringSession.take_bake` then
+applies the result on the model's own thread, unless an edit made it stale meanwhile.
+"""
+
+from __future__ import annotations
+
+import copy
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from engine import skeleton as sk
+from engine.authoring import events as ev
+from engine.authoring.bake import Baked
+from engine.authoring.character import Pose
+from engine.authoring.document import MAX_FRAMES, AuthoringScene
+from engine.authoring.history import Edit, History
+from engine.authoring.jobs import BakeJob
+from engine.authoring.keys import SCHEMES, Animation, Key
+from engine.authoring.pose_mode import PoseMode
+from engine.authoring.progress import CancelCheck, Progress
+from engine.authoring.session_constraints import constraints_event
+from engine.authoring.state import AuthoringState, capture, differences, pose_between, pose_on_key, put
+from engine.authoring.turns import world_rotation
+from engine.errors import UserError
+from engine.studio.session_constraints import ConstraintList
+from engine.motion.clip import Motion
+
+
+class AuthoringSession:
+    """See the module doc.
+
+    Parameters
+    ----------
+    mode : PoseMode
+        The character and its starting pose.
+    clock : callable, optional
+        Seconds (monotonic) that decide which edits merge into one undo step.
+    """
+
+    def __init__(self, mode: PoseMode, clock: Callable[[], float] = time.monotonic) -> None:
+        self.mode = mode
+        self.scene = AuthoringScene(animation=Animation(), height=mode.character.height)
+        self.scene.constraints = mode.constraints  # one list: the solves and the saved scene read it
+        self.frame = 0
+        self.baked: Baked | None = None
+        self.events = ev.AuthoringEvents()
+        self.history = History(self, self._history_changed)
+        self._clock = clock
+        self._generation = 0  # counts changes: a bake of an older scene is stale
+
+    @classmethod
+    def new(cls, height: float | None = None, motion: Motion | None = None, frame: int = 0,
+            vae: Any = None) -> AuthoringSession:  # fmt: skip
+        """A session on a character ``height`` metres tall (None: the canonical one),
+        standing in the VAE's mean pose, or in frame ``frame`` of ``motion`` when given;
+        ``vae`` None loads the shipped pose VAE."""
+        if vae is None:
+            from engine.models import load_default_models
+
+            vae = load_default_models().vae
+        mode = PoseMode(vae, height) if motion is None else PoseMode.from_clip_frame(vae, motion, frame, height)
+        return cls(mode)
+
+    @property
+    def vae(self) -> Any:
+        return self.mode.character.vae
+
+    @property
+    def animation(self) -> Animation:
+        return self.scene.animation
+
+    @property
+    def keys(self) -> list[Key]:
+        return self.scene.keys
+
+    @property
+    def targets(self) -> dict:
+        return self.mode.targets
+
+    @property
+    def pose(self) -> Pose:
+        return self.mode.pose
+
+    @property
+    def dirty(self) -> bool:
+        """Whether there are edits since the scene was opened or saved."""
+        return not self.history.is_clean()
+
+    # -- state, commands and events ------------------------------------------------
+    def state(self) -> AuthoringState:
+        """The model now, as immutable copies (what a command records)."""
+        return capture(self.mode, self.scene)
+
+    def _put(self, state: AuthoringState) -> None:
+        put(self.mode, self.scene, state)
+
+    def restore_state(self, state: AuthoringState) -> None:
+        """Make ``state`` the model's and announce what that changed (undo and redo)."""
+        before = self.state()
+        self._put(state)
+        self._changed(before)
+
+    def edit(self, text: str, change: Callable[[], Any], key: tuple | None = None, solve: bool = False) -> None:
+        """Run ``change()`` (then a solve of the pose, with ``solve``) as one undo step
+        named ``text``; ``key`` (see :class:`engine.authoring.history.Edit`) merges a drag's
+        moves into one step. On a UserError the model is put back and it is raised."""
+        before, frame = self.state(), self.frame
+        try:
+            change()
+            if solve:
+                self.mode.solve()
+        except UserError:
+            self._put(before)
+            self.frame = frame
+            raise
+        self.history.push(Edit(text, before, self.state(), key, self._clock()))
+        self._changed(before, frame)
+
+    def _changed(self, before: AuthoringState, frame: int | None = None) -> None:
+        """Announce every part that differs from ``before``; a changed scene makes the bake stale."""
+        after = self.state()
+        d = differences(before, after)
+        if d.keys or d.animation or d.constraints:
+            self._generation += 1
+            self._stale()
+        if frame is not None and frame != self.frame:
+            self.events.frame.emit(ev.FrameChanged(self.frame, frame))
+        if d.joints:
+            self.events.targets.emit(ev.TargetsChanged(after.targets, d.joints))
+        if d.constraints:
+            self.events.constraints.emit(constraints_event(before.constraints, after.constraints))
+        if d.keys:
+            self.events.keys.emit(ev.KeysChanged(tuple(k.frame for k in after.keys), d.keys_added, d.keys_removed,
+                                                 d.keys_changed))  # fmt: skip
+        if d.animation:
+            frames, fps, interpolation = after.animation
+            self.events.animation.emit(ev.AnimationChanged(frames, fps, interpolation, before.animation))
+        if d.pose:
+            self.events.pose.emit(ev.PoseChanged(after.pose, after.heading, before.heading))
+
+    def _history_changed(self) -> None:
+        h = self.history
+        self.events.history.emit(ev.HistoryChanged(h.can_undo(), h.can_redo(), h.undo_text(), h.redo_text(),
+                                                   h.is_clean(), h.count()))  # fmt: skip
+
+    def undo(self) -> None:
+        self.history.undo()
+
+    def redo(self) -> None:
+        self.history.redo()
+
+    # -- targets and the body ------------------------------------------------------
+    def world_rotation(self, joint: str) -> np.ndarray:
+        """The current pose's world rotation ``(4,)`` of ``joint``."""
+        return world_rotation(self.mode.pose, self.mode.character.skeleton.offsets, joint)
+
+    def drag_joint(self, joint: str, position: np.ndarray) -> None:
+        """Create or move the target on ``joint`` to ``position (3,)`` metres and solve;
+        the hips (``root``) move the whole body instead (:meth:`move_body`)."""
+        p = np.asarray(position, float)
+        if joint == "root":
+            self.move_body(p - self.mode.pose.root_pos)
+            return
+        self.edit(f"move target {joint}", lambda: self.mode.set_target(joint, p), ("target", joint, "position"),
+                  solve=True)  # fmt: skip
+
+    def turn_joint(self, joint: str, rotation: np.ndarray) -> None:
+        """Give ``joint`` the world rotation ``rotation (4,)`` as a target and solve."""
+        q = np.asarray(rotation, float)
+        self.edit(f"turn {joint}", lambda: self.mode.set_target(joint, rotation=q / np.linalg.norm(q)),
+                  ("target", joint, "rotation"), solve=True)  # fmt: skip
+
+    def hold_turn(self, joint: str, on: bool) -> None:
+        """Give the target on ``joint`` the joint's current world rotation (``on``) or make
+        it a position target again."""
+
+        def change() -> None:
+            if on:
+                self.mode.set_target(joint, rotation=self.world_rotation(joint))
+            else:
+                self.mode.clear_rotation(joint)
+
+        self.edit(f"{'hold' if on else 'free'} turn {joint}", change, solve=True)
+
+    def edit_target(self, joint: str, enabled: bool | None = None, weight: float | None = None) -> None:
+        """Switch the target on ``joint`` on or off or change its weight, and solve."""
+        self.edit(f"edit target {joint}", lambda: self.mode.set_target(joint, enabled=enabled, weight=weight),
+                  solve=True)  # fmt: skip
+
+    def clear_target(self, joint: str) -> None:
+        self.edit(f"clear target {joint}", lambda: self.mode.remove_target(joint), solve=True)
+
+    def clear_all(self) -> None:
+        """Remove every target and put the character back in its starting pose, on the
+        feet where it stands now (one undo step)."""
+
+        def change() -> None:
+            m = self.mode
+            m.clear_targets()
+            feet = np.mean([p[:2] for p in m.planted.values()], axis=0)
+            pose = m.character.decode(m.base_latent, m.character.grounded(m.pose.root_pos[:2], m.heading))
+            shift = feet - np.mean([pose.positions[sk.JOINT_INDEX[j], :2] for j in m.planted], axis=0)
+            m.pose = m.character.decode(m.base_latent, m.character.grounded(pose.root_pos[:2] + shift, m.heading))
+            m.plant_where_standing()
+
+        self.edit("clear all targets", change)
+
+    def move_body(self, delta: np.ndarray) -> None:
+        """Root motion: translate the whole body horizontally by ``delta (3,)`` metres
+        (its height is the floor's business), then solve the targets from there."""
+        d = np.array([delta[0], delta[1], 0.0], float)
+
+        def change() -> None:
+            self.mode.pose = self.mode.pose.moved(d)
+            self.mode.plant_where_standing()
+            if self.mode.targets:
+                self.mode.solve()
+
+        self.edit("move body", change, ("body", "root", "position"))
+
+    def turn_body(self, heading: float) -> None:
+        """Root motion: face ``heading`` degrees about +Z (0 faces -Y), the whole body
+        turned about its root, then the targets solved from there."""
+        turn = float(heading) - self.mode.heading
+        if abs(turn) < 1e-9:
+            return
+
+        def change() -> None:
+            self.mode.heading = float(heading)
+            self.mode.pose = self.mode.pose.turned(turn)
+            self.mode.plant_where_standing()
+            if self.mode.targets:
+                self.mode.solve()
+
+        self.edit("turn body", change, ("body", "root", "heading"))
+
+    def settle(self) -> None:
+        """An offline, grounded solve of the current targets (one undo step)."""
+        self.edit("settle pose", self.mode.settle)
+
+    # -- constraints ---------------------------------------------------------------
+    def constraint_catalog(self) -> dict:
+        """The constraint kinds users may add, with their fields."""
+        return ConstraintList.catalog()
+
+    def add_constraint(self, kind: str, **params: Any) -> None:
+        """Add a ``kind`` constraint with ``params`` and solve."""
+        self.edit(f"add {kind}", lambda: ConstraintList(self.mode.constraints).add(kind, **params), solve=True)
+
+    def remove_constraint(self, name: str) -> None:
+        self.edit(f"remove {name}", lambda: ConstraintList(self.mode.constraints).remove(name), solve=True)
+
+    def update_constraint(self, name: str, changes: dict[str, Any]) -> None:
+        """Set fields of the constraint ``name`` and solve (a slider's steps merge)."""
+        self.edit(f"edit {name}", lambda: ConstraintList(self.mode.constraints).edit(name, **changes),
+                  ("constraint", name, tuple(changes)), solve=True)  # fmt: skip
+
+    # -- keys and the animation ----------------------------------------------------
+    def key_at(self, frame: int) -> Key | None:
+        return next((k for k in self.scene.keys if k.frame == frame), None)
+
+    def add_key(self, frame: int) -> None:
+        """The current pose (latent, targets, where it stands, facing) as the key at ``frame``."""
+        p, m = self.mode.pose, self.mode
+
+        def change() -> None:
+            key = Key(int(frame), copy.deepcopy(m.targets), p.latent.copy(), p.root_pos[:2].copy(), m.heading)
+            self.scene.keys = sorted([*(k for k in self.scene.keys if k.frame != frame), key], key=lambda k: k.frame)
+
+        self.edit(f"key frame {frame}", change)
+
+    def delete_key(self, frame: int) -> None:
+        """Delete the key at ``frame`` (nothing when there is none)."""
+        if self.key_at(frame) is not None:
+            self.edit(f"delete key {frame}",
+                      lambda: setattr(self.scene, "keys", [k for k in self.scene.keys if k.frame != frame]))  # fmt: skip
+
+    def move_key(self, frame: int, to: int) -> None:
+        """Move the key at ``frame`` to ``to`` (replacing a key there) and go there."""
+        key = self.key_at(frame)
+        if key is None or frame == to or not 0 <= to < self.scene.animation.frames:
+            return
+
+        def change() -> None:
+            moved = copy.deepcopy(key)
+            moved.frame = int(to)
+            kept = [k for k in self.scene.keys if k.frame not in (frame, to)]
+            self.scene.keys = sorted([*kept, moved], key=lambda k: k.frame)
+            self.frame = int(to)
+            self._pose_at(self.frame)  # inside the step: undo and redo give back the pose shown
+
+        self.edit(f"move key {frame} -> {to}", change)
+
+    def set_length(self, frames: int) -> None:
+        """The animation's length, frames."""
+        if not 1 <= int(frames) <= MAX_FRAMES:
+            raise UserError(f"length must be 1-{MAX_FRAMES} frames, got {frames}")
+        self.edit("length", lambda: setattr(self.scene.animation, "frames", int(frames)))
+
+    def set_fps(self, fps: float) -> None:
+        """The animation's rate, frames per second."""
+        if not 1.0 <= float(fps) <= 240.0:
+            raise UserError(f"rate must be 1-240 frames per second, got {fps}")
+        self.edit("rate", lambda: setattr(self.scene.animation, "fps", float(fps)))
+
+    def set_interpolation(self, scheme: str) -> None:
+        """How in-betweens are made: one of :data:`engine.authoring.keys.SCHEMES`."""
+        if scheme not in SCHEMES:
+            raise UserError(f"in-betweens: {scheme!r} is not one of {', '.join(SCHEMES)}")
+        self.edit("in-betweens", lambda: setattr(self.scene.animation, "interpolation", scheme))
+
+    # -- frames and the bake -------------------------------------------------------
+    def go_to(self, frame: int) -> None:
+        """Make ``frame`` current: on a key the character takes the key's pose; between
+        keys the baked in-between (its latent, place, facing and interpolated targets),
+        so a key added there keeps the motion as it was. Not an undo step. Bakes first
+        when the bake is stale (on this thread: a view runs :meth:`bake_job` off its
+        thread beforehand)."""
+        before, old = self.state(), self.frame
+        self.frame = int(frame)
+        self._pose_at(self.frame)
+        self._changed(before, old)
+
+    def _pose_at(self, frame: int) -> None:
+        key = self.key_at(frame)
+        if key is not None:
+            pose_on_key(self.mode, key)
+        elif self.scene.keys:
+            pose_between(self.mode, self.bake_now(), self.scene.keys, self.animation.interpolation, frame)
+
+    def _stale(self) -> None:
+        if self.baked is not None:
+            self.baked = None
+            self.events.bake.emit(ev.BakeChanged(None))
+
+    def bake_job(self) -> BakeJob:
+        """The bake of the keys as it stands, to run on any thread (:meth:`take_bake`)."""
+        if not self.scene.keys:
+            raise UserError("add at least one key first")
+        scene = AuthoringScene(list(self.scene.constraints), self.scene.settings, copy.copy(self.scene.animation),
+                               [copy.deepcopy(k) for k in self.scene.keys], self.scene.height)  # fmt: skip
+        return BakeJob(scene, self.vae, self._generation)
+
+    def take_bake(self, job: BakeJob, baked: Baked) -> bool:
+        """Make ``baked`` (``job``'s result) the bake, unless the scene changed since the
+        job was made; whether it was taken."""
+        if job.generation != self._generation:
+            return False
+        self.baked = baked
+        self.events.bake.emit(ev.BakeChanged(baked))
+        return True
+
+    def bake_now(self, progress: Progress | None = None, cancelled: CancelCheck | None = None) -> Baked:
+        """The bake, baked on this thread when it is stale (raises Cancelled when ``cancelled()``)."""
+        if self.baked is None:
+            job = self.bake_job()
+            self.take_bake(job, job.run(progress, cancelled))
+        assert self.baked is not None
+        return self.baked
+
+    # -- documents -----------------------------------------------------------------
+    def open_scene(self, loaded: AuthoringScene) -> None:
+        """Make ``loaded`` the document: its keys, animation, constraints and settings (and
+        its character's height), at its first key, with a new undo history."""
+        from engine.skeleton import Skeleton
+
+        before, old = self.state(), self.frame
+        height = loaded.height if loaded.height is not None else Skeleton.canonical().height()
+        if abs(height - self.mode.character.height) > 1e-6:
+            shared = self.mode.constraints
+            self.mode = PoseMode(self.vae, height, options=self.mode.options)
+            self.mode.constraints = shared
+        m = self.mode
+        m.constraints[:] = list(loaded.constraints)
+        self.scene.keys, self.scene.animation, self.scene.settings = loaded.keys, loaded.animation, loaded.settings
+        self.scene.height = m.character.height
+        m.targets, m.heading = {}, 0.0
+        m.pose = m.character.decode(m.base_latent, m.character.grounded())  # where a scene without keys starts
+        m.plant_where_standing()
+        self._stale()
+        self.frame = loaded.keys[0].frame if loaded.keys else 0
+        self._pose_at(self.frame)
+        self._changed(before, old)
+        self.history.clear()

@@ -1,0 +1,268 @@
+"""A constraint's maths, written once: a residual of the pose, batched over frames.
+
+Every term the pose optimizer minimises (trackers, the temporal prior, smoothing, the
+ground band and every user constraint) is a :class:`Term`: a vector function of the pose
+whose squared norm is the term's loss (Ceres' cost functions are the model). A term is
+built once per solve from its constraint's parameters frozen for the frame(s)
+(:meth:`engine.constraints.base.Constraint.term`) and evaluated on ``A`` frames at once:
+
+* ``P (A, 22, 3)``: world joint positions, metres;
+* ``W (A, 22, 3, 3)``: world joint rotation matrices;
+* ``z (A, L)``: the latents (for terms on the latent itself).
+
+:meth:`Term.residual` returns ``r (A, m)`` and, when asked (numpy only), its Jacobian
+blocks: ``d_pos (A, m, k, 3)`` w.r.t. the positions of ``pos_joints (k,)``, ``d_rot (A,
+m, k', 3)`` w.r.t. a small world-frame turn ``a`` of the rotations of ``rot_joints
+(k',)`` (``W_j -> exp([a]x) W_j``; the joint's position and its children left alone),
+and ``d_latent (A, m, L)``. Everything else is derived from that one definition:
+
+* the loss of each constraint: ``|r|^2`` over its entries (:meth:`Term.losses`);
+* the solver's fast path: ``2 w J^T r``, accumulated into position, rotation and latent
+  gradients (:meth:`Term.accumulate`), which :mod:`engine.solver.chain` carries through
+  FK and the decoder in closed form; ``A = 1`` is the frame-by-frame solve and ``A > 1``
+  the batched offline solve (:mod:`engine.solver.batch`);
+* the torch reference: the same residual evaluated on tensors (:data:`TORCH`), through
+  autograd (:meth:`engine.constraints.base.Constraint.loss`).
+
+A term may hold several constraints of one kind (all the trackers of a frame are one
+term): :attr:`Term.names` lists them and :attr:`Term.owner` says which entry of ``r``
+belongs to which. The array kit (:class:`Kit`) makes one residual function serve numpy
+and torch; ``tests/engine/test_terms.py`` checks every kind's Jacobian against autograd
+on the inputs its :meth:`~engine.constraints.base.Constraint.examples` declares.
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class FrameInputs:
+    """What a term may depend on besides the pose being solved.
+
+    Attributes
+    ----------
+    previous_positions : ndarray (22, 3) or None
+        The previous frame's solved world positions, metres (None on the first frame).
+    frame : int
+        Frame index in the clip.
+    prediction : ndarray (L,) or None
+        The temporal predictor's latent for the frame.
+    """
+
+    previous_positions: np.ndarray | None = None
+    frame: int = 0
+    prediction: np.ndarray | None = None
+
+
+class Kit:
+    """The array operations a residual uses, for numpy arrays (:data:`NUMPY`) or torch
+    tensors (:data:`TORCH`); arithmetic operators and indexing work on both directly."""
+
+    def __init__(self, module: Any) -> None:
+        self.xp = module
+        self.is_numpy = module is np
+
+    def const(self, x: Any, like: Any) -> Any:
+        """A parameter (numpy) as an array of ``like``'s kind, dtype and device."""
+        if self.is_numpy:
+            return np.asarray(x, dtype=np.float64)
+        return self.xp.as_tensor(np.array(x, dtype=np.float64), dtype=like.dtype, device=like.device)
+
+    def relu(self, x: Any) -> Any:
+        return np.maximum(x, 0.0) if self.is_numpy else self.xp.relu(x)
+
+    def sqrt(self, x: Any) -> Any:
+        return self.xp.sqrt(x)
+
+    def clamp_min(self, x: Any, low: float) -> Any:
+        return np.maximum(x, low) if self.is_numpy else x.clamp_min(low)
+
+    def where(self, cond: Any, a: Any, b: Any) -> Any:
+        return self.xp.where(cond, a, b)
+
+    def cat(self, parts: list, axis: int = -1) -> Any:
+        return np.concatenate(parts, axis=axis) if self.is_numpy else self.xp.cat(parts, dim=axis)
+
+    def logsumexp(self, x: Any, axis: int = -1) -> Any:
+        if not self.is_numpy:
+            return self.xp.logsumexp(x, dim=axis)
+        m = x.max(axis=axis, keepdims=True)
+        return (m + np.log(np.exp(x - m).sum(axis=axis, keepdims=True))).squeeze(axis)
+
+    def zeros(self, shape: tuple[int, ...], like: Any) -> Any:
+        return np.zeros(shape) if self.is_numpy else like.new_zeros(shape)
+
+
+NUMPY = Kit(np)
+
+
+def torch_kit() -> Kit:
+    """The torch kit (torch is imported on first use: editors never need it)."""
+    global TORCH
+    if TORCH is None:
+        import torch
+
+        TORCH = Kit(torch)
+    return TORCH
+
+
+TORCH: Kit | None = None
+
+
+@dataclass
+class Residuals:
+    """A term's residual on ``A`` frames and, when asked for, its Jacobian blocks (module doc)."""
+
+    r: Any
+    pos_joints: np.ndarray | None = None
+    d_pos: np.ndarray | None = None
+    rot_joints: np.ndarray | None = None
+    d_rot: np.ndarray | None = None
+    d_latent: np.ndarray | None = None
+
+
+def owners(sizes: list[int]) -> np.ndarray:
+    """``owner`` of a term whose constraints have ``sizes`` residual entries each, in order."""
+    return np.repeat(np.arange(len(sizes)), sizes).astype(np.intp)
+
+
+class Term:
+    """Base of every kind's term: subclasses set :attr:`names` and :attr:`owner` and define
+    :meth:`residual` (and :meth:`satisfied` when the offline stopping rule should wait
+    for them).
+
+    Attributes
+    ----------
+    names : tuple of str
+        The names of the constraints the term holds (loss reporting).
+    owner : ndarray (m,) int
+        Index in :attr:`names` of the constraint each residual entry belongs to.
+    """
+
+    names: tuple[str, ...] = ()
+    owner: np.ndarray = np.zeros(0, dtype=np.intp)
+
+    def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:
+        """``r (A, m)`` at ``P (A, 22, 3)``, ``W (A, 22, 3, 3)``, ``z (A, L)``, with the
+        Jacobian blocks when ``jac`` (numpy only). A term with per-frame parameters
+        (:class:`FrameRows`) reads its rows ``rows`` (index array, ``(A,)``) of them."""
+        raise NotImplementedError
+
+    def satisfied(self, P: np.ndarray, W: np.ndarray, z: np.ndarray, rows: Any = None) -> np.ndarray:
+        """Per frame ``(A,)`` and constraint ``(n,)``: whether the offline optimizer may
+        stop on its account (default: always)."""
+        return np.ones((len(P), len(self.names)), dtype=bool)
+
+    # -- derived from the residual ------------------------------------------------------
+    def _membership(self) -> np.ndarray:
+        m = getattr(self, "_member", None)
+        if m is None or m.shape[0] != len(self.owner):
+            m = np.zeros((len(self.owner), len(self.names)))
+            m[np.arange(len(self.owner)), self.owner] = 1.0
+            self._member = m
+        return m
+
+    def losses(self, res: Residuals, kit: Kit = NUMPY) -> Any:
+        """Each constraint's loss ``(A, n)``: the squared norm of its residual entries."""
+        member = self._membership()
+        r2 = res.r * res.r
+        return r2 @ (member if kit.is_numpy else kit.const(member, r2))
+
+    def accumulate(self, res: Residuals, weights: np.ndarray, g_pos: np.ndarray, g_rot: np.ndarray,
+                   g_z: np.ndarray | None) -> None:  # fmt: skip
+        """Add the gradient of ``sum_n weights[:, n] * loss_n`` to ``g_pos (A, 22, 3)``,
+        ``g_rot (A, 22, 3)`` and ``g_z (A, L)`` in place (``weights (A, n)``)."""
+        rw = (2.0 * weights[:, self.owner]) * res.r  # (A, m)
+        if res.d_pos is not None:
+            _scatter(g_pos, res.pos_joints, np.einsum("am,amkc->akc", rw, res.d_pos))
+        if res.d_rot is not None:
+            _scatter(g_rot, res.rot_joints, np.einsum("am,amkc->akc", rw, res.d_rot))
+        if res.d_latent is not None and g_z is not None:
+            g_z += np.einsum("am,aml->al", rw, res.d_latent)
+
+
+class FrameRows:
+    """A term whose parameters have a frame axis (trackers, smoothing target, predicted
+    latent): built for one frame, :meth:`rows` gives it ``T`` rows and :meth:`set_row`
+    writes one frame's parameters into a row, which is how the batched offline solve
+    (:mod:`engine.solver.batch`) gives each of its frames its own readings.
+
+    Subclasses list their per-frame arrays (leading axis the frame) in :attr:`PER_FRAME`.
+    """
+
+    PER_FRAME: tuple[str, ...] = ()
+
+    def rows(self, count: int) -> Any:
+        """A copy with ``count`` rows, each row 0 of this one."""
+        out = copy.copy(self)
+        for name in self.PER_FRAME:
+            setattr(out, name, np.repeat(getattr(self, name)[:1], count, axis=0))
+        return out
+
+    def set_row(self, row: int, frame: Any) -> None:
+        """Row ``row`` takes the parameters of ``frame`` (a one-frame term of the same shape)."""
+        for name in self.PER_FRAME:
+            getattr(self, name)[row] = getattr(frame, name)[0]
+
+    def select(self, like: Any, rows: Any) -> Any:
+        """The row selection for ``A = len(like)`` frames: ``rows``, or the first ``A``."""
+        return slice(0, len(like)) if rows is None else rows
+
+
+_DISTINCT: dict[bytes, bool] = {}  # joint lists seen -> whether no joint repeats (terms reuse theirs)
+
+
+def _scatter(out: np.ndarray, joints: np.ndarray, g: np.ndarray) -> None:
+    """``out[:, joints] += g``, counting a joint listed twice twice."""
+    key = joints.tobytes()
+    distinct = _DISTINCT.get(key)
+    if distinct is None:
+        if len(_DISTINCT) > 4096:
+            _DISTINCT.clear()
+        distinct = _DISTINCT[key] = len(np.unique(joints)) == len(joints)
+    if distinct:
+        out[:, joints] += g
+    else:
+        np.add.at(out, (slice(None), joints), g)
+
+
+#: Levi-Civita symbol: ``(a x v)_i = EPS3[i, k, l] a_k v_l``.
+EPS3 = np.zeros((3, 3, 3))
+EPS3[0, 1, 2] = EPS3[1, 2, 0] = EPS3[2, 0, 1] = 1.0
+EPS3[0, 2, 1] = EPS3[2, 1, 0] = EPS3[1, 0, 2] = -1.0
+
+
+def rotation_residual(kit: Kit, W: Any, T: Any, scale: Any, jac: bool) -> tuple[Any, np.ndarray | None]:
+    """The rotation part of a tracker or end-effector term: ``scale (A, s) * (W - T)``,
+    flattened to ``(A, s * 9)``, for world rotations ``W (A, s, 3, 3)`` and targets ``T``.
+
+    Its squared norm is ``scale^2 * |W - T|_F^2 = scale^2 * 2 (3 - trace(T^T W))``, so with
+    ``scale = sqrt(weight / 8)`` it is ``weight * sin^2(angle / 2)``, the sign-invariant
+    rotation distance of quaternions ``1 - <q, q_t>^2``. The Jacobian w.r.t. a world turn
+    ``a`` of each joint is ``scale * [e_k]x W``: ``(A, s * 9, s, 3)`` block-diagonal.
+    """
+    a, s = W.shape[0], W.shape[1]
+    r = (scale[..., None, None] * (W - T)).reshape(a, s * 9)
+    if not jac:
+        return r, None
+    block = np.einsum("ikl,aslj->asijk", EPS3, W) * np.asarray(scale)[..., None, None, None]  # (A, s, 3, 3, 3)
+    d = np.zeros((a, s, 9, s, 3))
+    d[:, np.arange(s), :, np.arange(s)] = block.reshape(a, s, 9, 3).transpose(1, 0, 2, 3)
+    return r, d.reshape(a, s * 9, s, 3)
+
+
+def unit_quaternion_matrix(q: np.ndarray) -> np.ndarray:
+    """Rotation matrices ``(..., 3, 3)`` of quaternions ``q (..., 4)`` (w, x, y, z),
+    normalised first (a zero quaternion stays finite)."""
+    q = np.asarray(q, dtype=np.float64)
+    w, x, y, z = np.moveaxis(q / np.maximum(np.linalg.norm(q, axis=-1, keepdims=True), 1e-12), -1, 0)
+    return np.stack([
+        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+    ], -2)  # fmt: skip

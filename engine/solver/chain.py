@@ -1,0 +1,141 @@
+"""Decoder output to world pose, and back: the numpy chain of the solver's fast paths.
+
+Per frame (``A`` frames at once; ``A = 1`` frame by frame)::
+
+    out  = decoder(z)                          q_raw (22, 4), disp (3,)
+    u    = q_raw / |q_raw|                     local rotations
+    R0   = H R(u0) (or the hip tracker's),  p0 = p_prev + H disp (or the hip tracker's)
+    P, W = fk_matrices(...)                    (22, 3), (22, 3, 3)  (engine.kinematics.fk)
+    P'   = P + (head_target - P[head])         when the head anchors the body
+
+:meth:`PoseChain.backward` turns the gradients of any loss w.r.t. ``P'`` and world turns
+of ``W`` (what :meth:`engine.constraints.residual.Term.accumulate` gives) into the
+gradient w.r.t. the decoder output, in closed form: turning joint ``j`` by a small
+world-frame angle ``a`` moves every descendant ``d`` by ``a x (P_d - P_j)`` and turns its
+world rotation by ``a``, so the gradient w.r.t. that angle is ``tau_j = sum_{d in
+subtree(j)} (P_d x g_d + w_d) - P_j x sum_{d in subtree(j)} g_d`` (``g_d`` position
+gradients, ``w_d`` rotation gradients): products with constant subtree columns. A local
+quaternion ``u_j`` turned by ``du`` turns the joint by ``W_parent 2 vec(du u_j*)``, hence
+``d loss / d u_j = 2 (0, W_parent^T tau_j) u_j``, tangent to the unit sphere, so the
+normalisation only divides it by ``|q_j|``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from engine import skeleton as sk
+from engine.constraints.residual import EPS3
+from engine.kinematics import quat_np as QN
+from engine.kinematics.fk import fk_matrices
+
+_EPS = 1e-8  # quaternion normalisation floor, as in engine.kinematics.quaternion.normalize
+#: ``cross(a, b) = (a outer b).reshape(9) @ _CROSS``: one matmul instead of a dozen small ops.
+_CROSS = EPS3.transpose(1, 2, 0).reshape(9, 3)
+
+
+def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross products of ``(..., 3)`` arrays (np.cross costs ~10x more at this size)."""
+    return (a[..., :, None] * b[..., None, :]).reshape(a.shape[:-1] + (9,)) @ _CROSS
+
+
+@dataclass
+class RootFrames:
+    """Where each of ``A`` frames' root comes from.
+
+    Attributes
+    ----------
+    heading : ndarray (A, 3, 3)
+        Heading of the previous root (the decoder's root rotation and displacement are
+        relative to it).
+    previous : ndarray (A, 3)
+        The previous root position, metres.
+    position, rotation : ndarray (A, 3), (A, 3, 3) or None
+        The hip tracker's root (it dictates the root; the rotation may be absent).
+    anchor : int or None
+        Joint (the head) whose tracker places the body when there is no hip tracker;
+        ``anchor_position (A, 3)`` its target.
+    """
+
+    heading: np.ndarray
+    previous: np.ndarray
+    position: np.ndarray | None = None
+    rotation: np.ndarray | None = None
+    anchor: int | None = None
+    anchor_position: np.ndarray | None = None
+
+
+class PoseChain:
+    """Forward and reverse pass of decoder output -> root -> FK for ``A`` frames (module doc).
+
+    Parameters
+    ----------
+    offsets : ndarray (22, 3)
+        Bone offsets, metres.
+    """
+
+    def __init__(self, offsets: np.ndarray) -> None:
+        n = self.n = sk.NUM_JOINTS
+        self.offsets = np.asarray(offsets, dtype=np.float64)
+        self.parent = np.array([0, *sk.PARENTS[1:]], dtype=np.intp)
+        # subtree[j, d]: 1 when joint d is j or below it
+        self.subtree = np.eye(n)
+        for d in range(1, n):
+            a = int(self.parent[d])
+            while True:
+                self.subtree[a, d] = 1.0
+                if a == 0:
+                    break
+                a = int(self.parent[a])
+
+    def forward(self, out: np.ndarray, root: RootFrames) -> tuple[np.ndarray, np.ndarray]:
+        """World positions ``(A, 22, 3)`` and rotations ``(A, 22, 3, 3)`` of decoder outputs
+        ``out (A, 91)``; keeps what :meth:`backward` needs."""
+        n, a = self.n, len(out)
+        q = out[:, : 4 * n].astype(np.float64).reshape(a, n, 4)
+        norm = np.sqrt(np.einsum("aij,aij->ai", q, q))
+        np.maximum(norm, _EPS, out=norm)
+        u = q / norm[..., None]
+        local = QN.to_matrix(u)  # R(u) = R(-u): the canonical sign does not matter here
+        local[:, 0] = root.rotation if root.rotation is not None else root.heading @ local[:, 0]
+        if root.position is not None:
+            base = root.position
+        else:
+            base = root.previous + np.einsum("aij,aj->ai", root.heading, out[:, 4 * n :].astype(np.float64))
+        pos, world = fk_matrices(local, base, self.offsets)
+        self.anchor = root.anchor if root.position is None else None
+        if self.anchor is not None:
+            pos = pos + (root.anchor_position - pos[:, self.anchor])[:, None]
+        self.root, self.norm, self.u, self.pos, self.world = root, norm, u, pos, world
+        return pos, world
+
+    def backward(self, g_pos: np.ndarray, g_rot: np.ndarray | None) -> np.ndarray:
+        """Gradient w.r.t. the decoder outputs ``(A, 91)`` float32 of a loss whose gradients
+        are ``g_pos (A, 22, 3)`` w.r.t. the positions and ``g_rot (A, 22, 3)`` w.r.t. world
+        turns of the rotations (None: zero), at the last :meth:`forward`."""
+        n, root, pos = self.n, self.root, self.pos
+        if self.anchor is not None:  # the anchor moves the whole body against the others' pull
+            g_pos = g_pos.copy()
+            g_pos[:, self.anchor] -= g_pos.sum(1)
+        tau = self.subtree @ cross(pos, g_pos) - cross(pos, self.subtree @ g_pos)
+        if g_rot is not None:
+            tau += self.subtree @ g_rot  # turning a joint turns every joint of its subtree
+        frame = self.world[:, self.parent]
+        frame[:, 0] = root.heading
+        sigma = np.einsum("ajk,ajkl->ajl", tau, frame)  # W_parent^T tau
+        g_q = QN.mul(np.concatenate((np.zeros(sigma.shape[:-1] + (1,)), sigma), axis=-1), self.u)
+        g_q *= (2.0 / self.norm)[..., None]
+        if root.rotation is not None:
+            g_q[:, 0] = 0.0
+        out = np.zeros((len(pos), 4 * n + 3), np.float32)
+        out[:, : 4 * n] = g_q.reshape(len(pos), -1)
+        if root.position is None:
+            out[:, 4 * n :] = np.einsum("aji,aj->ai", root.heading, g_pos.sum(1))
+        return out
+
+    def local(self) -> np.ndarray:
+        """Local rotations ``(A, 22, 4)`` of the last :meth:`forward`: unit quaternions with
+        ``w >= 0``, row 0 before the heading (the decoder's own)."""
+        return self.u * np.where(self.u[..., :1] < 0, -1.0, 1.0)

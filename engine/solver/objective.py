@@ -1,0 +1,218 @@
+"""What one frame's solve minimises, and the rule that stops it.
+
+An :class:`Objective` is the weighted sum of a frame's terms (:mod:`engine.constraints.residual`)
+as a function of the latent: :meth:`~Objective.evaluate` gives every constraint's loss,
+:meth:`~Objective.gradient` the latent gradient of the weighted total at the last
+evaluation, :meth:`~Objective.satisfied` whether every constraint allows the offline
+solve to stop. Two objectives compute the same function from the same terms:
+
+* :class:`FastObjective`: numpy, the fused decoder (:class:`~engine.models.fused.DenseDecoder`)
+  and the closed-form chain (:class:`~engine.solver.chain.PoseChain`); what every frame
+  uses when the decoder is the pose VAE;
+* :class:`ReferenceObjective`: torch autograd through the decoder module and the
+  terms' residuals on tensors; the reference tests compare with, and the path for other
+  decoders.
+
+:class:`StoppingRule` is the one stopping rule of the realtime, offline and batched solves.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Protocol
+
+import numpy as np
+
+from engine.constraints.residual import NUMPY, FrameInputs, Term, torch_kit
+from engine.solver.chain import PoseChain, RootFrames
+from engine.solver.frame import SolveTimings
+
+if TYPE_CHECKING:
+    from engine.constraints.base import Constraint
+    from engine.kinematics.pose_state import PoseState
+
+
+def build_terms(constraints: Sequence["Constraint"], weights: Sequence[float],
+                frame: FrameInputs) -> tuple[list[Term], list[np.ndarray]]:  # fmt: skip
+    """The frame's terms, kind by kind (:meth:`~engine.constraints.base.Constraint.terms`),
+    and each term's weights ``(n,)`` in the order of its :attr:`~Term.names`."""
+    groups: dict[type, list[int]] = {}
+    for i, c in enumerate(constraints):
+        groups.setdefault(type(c), []).append(i)
+    terms, term_weights = [], []
+    for cls, idx in groups.items():
+        built = cls.terms([constraints[i] for i in idx], frame)
+        at = 0
+        for t in built:
+            terms.append(t)
+            term_weights.append(np.array([weights[i] for i in idx[at : at + len(t.names)]], dtype=np.float64))
+            at += len(t.names)
+    return terms, term_weights
+
+
+class Objective(Protocol):
+    """A frame's weighted objective as a function of the latent (module doc)."""
+
+    names: list[str]
+    weights: np.ndarray
+    fast: bool
+
+    def evaluate(self, z: np.ndarray, timings: SolveTimings) -> np.ndarray:
+        """Every constraint's loss ``(K,)`` at latent ``z (L,)`` float32."""
+        ...
+
+    def gradient(self) -> np.ndarray:
+        """The gradient ``(L,)`` float32 of ``weights @ losses`` at the last evaluation."""
+        ...
+
+    def satisfied(self) -> bool:
+        """Whether every constraint lets the offline solve stop, at the last evaluation."""
+        ...
+
+    def state(self, latent: Any) -> "PoseState":
+        """The last evaluated pose as a detached :class:`PoseState` with ``latent``."""
+        ...
+
+
+@dataclass
+class _Frame:
+    """The terms of a frame and their weights, flattened in the objective's order."""
+
+    terms: list[Term]
+    weights: list[np.ndarray]
+    names: list[str] = field(init=False)
+    flat: np.ndarray = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.names = [n for t in self.terms for n in t.names]
+        self.flat = np.concatenate(self.weights) if self.weights else np.zeros(0)
+
+
+class FastObjective:
+    """numpy objective: fused decoder, :class:`PoseChain`, terms with their Jacobians."""
+
+    fast = True
+
+    def __init__(self, decoder: Any, chain: PoseChain, terms: list[Term], weights: list[np.ndarray],
+                 root: RootFrames, make_state: Callable[[Any, "FastObjective"], "PoseState"]) -> None:  # fmt: skip
+        self.decoder, self.chain, self.root, self._make_state = decoder, chain, root, make_state
+        self.frame = _Frame(terms, weights)
+        self.names, self.weights = self.frame.names, self.frame.flat
+
+    def evaluate(self, z: np.ndarray, timings: SolveTimings) -> np.ndarray:
+        t0 = time.perf_counter()
+        out = self.decoder.forward(z)
+        t1 = time.perf_counter()
+        self.P, self.W = self.chain.forward(out[None], self.root)
+        self.z = z[None].astype(np.float64)
+        self.res = [t.residual(NUMPY, self.P, self.W, self.z, jac=True) for t in self.frame.terms]
+        values = [t.losses(r)[0] for t, r in zip(self.frame.terms, self.res)]
+        timings.decoder += t1 - t0
+        timings.fk_losses += time.perf_counter() - t1
+        return np.concatenate(values) if values else np.zeros(0)
+
+    def gradient(self) -> np.ndarray:
+        g_pos, g_rot, g_z = np.zeros_like(self.P), np.zeros_like(self.P), np.zeros_like(self.z)
+        for t, r, w in zip(self.frame.terms, self.res, self.frame.weights):
+            t.accumulate(r, w[None], g_pos, g_rot, g_z)
+        g = self.decoder.backward(self.chain.backward(g_pos, g_rot)[0])
+        return g + g_z[0].astype(np.float32)
+
+    def satisfied(self) -> bool:
+        return all(t.satisfied(self.P, self.W, self.z).all() for t in self.frame.terms)
+
+    def state(self, latent: Any) -> "PoseState":
+        return self._make_state(latent, self)
+
+
+class ReferenceObjective:
+    """torch objective: autograd through ``decode(z) -> PoseState`` and the terms."""
+
+    fast = False
+
+    def __init__(self, decode: Callable[[Any], "PoseState"], terms: list[Term], weights: list[np.ndarray]) -> None:
+        self.decode = decode
+        self.frame = _Frame(terms, weights)
+        self.names, self.weights = self.frame.names, self.frame.flat
+
+    def evaluate(self, z: np.ndarray, timings: SolveTimings) -> np.ndarray:
+        import torch
+
+        from engine.constraints.base import state_arrays
+
+        kit = torch_kit()
+        t0 = time.perf_counter()
+        self.z = torch.from_numpy(np.array(z, dtype=np.float32)).requires_grad_(True)
+        self._state = self.decode(self.z)
+        P, W, Z = state_arrays(self._state)
+        parts = [t.losses(t.residual(kit, P, W, Z), kit)[0] for t in self.frame.terms]
+        values = torch.cat(parts) if parts else P.new_zeros(0)
+        self.total = (torch.as_tensor(self.weights, dtype=values.dtype) * values).sum()
+        timings.fk_losses += time.perf_counter() - t0
+        return values.detach().double().numpy()
+
+    def gradient(self) -> np.ndarray:
+        import torch
+
+        if not self.total.requires_grad:  # no term depends on the latent: nothing to move
+            return np.zeros(self.z.shape, np.float32)
+        (g,) = torch.autograd.grad(self.total, self.z)
+        return g.numpy()
+
+    def satisfied(self) -> bool:
+        from engine.constraints.base import state_arrays
+
+        P, W, Z = (a.detach().double().numpy() for a in state_arrays(self._state))
+        return all(t.satisfied(P, W, Z).all() for t in self.frame.terms)
+
+    def state(self, latent: Any) -> "PoseState":
+        out = self._state.detached()
+        out.latent = latent
+        return out
+
+
+class StoppingRule:
+    """When a solve of ``rows`` independent frames stops, per frame.
+
+    A frame stops after ``cap`` steps; in ``offline`` mode also when every constraint is
+    satisfied, or when its total has not improved by ``min_improvement`` (relative) for
+    ``patience`` evaluations in a row. A frame given a fixed step count
+    (:meth:`fix`) stops after exactly that many steps instead.
+    """
+
+    def __init__(self, cap: int, offline: bool, patience: int, min_improvement: float, rows: int = 1) -> None:
+        self.cap, self.offline, self.patience, self.min_improvement = cap, offline, patience, min_improvement
+        self.best = np.full(rows, np.inf)
+        self.since = np.zeros(rows, np.intp)
+        self.steps = np.zeros(rows, np.intp)
+        self.fixed = np.full(rows, -1, np.intp)
+
+    def fix(self, row: int, steps: int | None) -> None:
+        """Row ``row``'s frame takes ``steps`` steps (None: the rule decides)."""
+        self.fixed[row] = -1 if steps is None else steps
+
+    def restart(self, row: int) -> None:
+        """Row ``row`` starts a new frame."""
+        self.best[row], self.since[row], self.steps[row] = np.inf, 0, 0
+
+    def stop(self, total: np.ndarray, satisfied: Callable[[], np.ndarray], rows: np.ndarray | None = None) -> np.ndarray:
+        """Whether each of ``rows`` (default: all) stops at its latest evaluation (``total``,
+        ``(A,)``); ``satisfied()`` is asked only when the offline rule needs it."""
+        rows = np.arange(len(self.best)) if rows is None else rows
+        steps = self.steps[rows]
+        out = steps >= self.cap
+        if self.offline:
+            best = self.best[rows]
+            better = total < best * (1.0 - self.min_improvement)
+            self.best[rows] = np.where(better, total, best)
+            self.since[rows] = np.where(better, 0, self.since[rows] + 1)
+            out = out | (self.since[rows] >= self.patience) | satisfied()
+        fixed = self.fixed[rows]
+        return np.where(fixed >= 0, steps >= fixed, out)
+
+    def stepped(self, rows: np.ndarray | None = None) -> None:
+        """Count one step of ``rows`` (default: all)."""
+        self.steps[slice(None) if rows is None else rows] += 1
+

@@ -20,6 +20,7 @@ from PyQt6.QtCore import Qt, QTimer
 from PyQt6.QtWidgets import QDockWidget, QSplitter, QTabWidget
 
 from app.drawing import Panel
+from app.shell import StudioShell
 from engine.latent.projection import default_map
 from widgets.latent_forces import LatentForces
 from widgets.latent_gallery import LatentGallery
@@ -42,7 +43,7 @@ def _on_screen(widget: Any) -> bool:
 class LatentViews:
     """Builds the dock on ``window`` (the main window) and connects it; see the module doc."""
 
-    def __init__(self, window: Any) -> None:
+    def __init__(self, window: StudioShell) -> None:
         self.w = window
         self.session = window.session
         self.latent_map = default_map()

@@ -53,7 +53,7 @@ def main() -> int:
     w.files.open_path("assets/clips/example.bvh", ask=False)
     if args.scene:
         w.files.load_scene(args.scene)
-    s.set_preset("4")
+    s.sensors.set_preset("4")
     wait(app, lambda: s.latest is not None and s.latest.latent_view is not None)
     s.play()
     wait(app, lambda: s.latest.frame >= args.frames)

@@ -26,6 +26,7 @@ from app.drawing import DrawScheduler
 from app.failures import FailureCountdown
 from app.ghost_status import GhostStatus
 from app.file_actions import FileActions
+from app.latent_views import LatentViews
 from app.live_actions import LiveActions
 from app.menus import build_menus
 from app.schema import constraint_schema, optimizer_fields
@@ -93,6 +94,7 @@ class MainWindow(QMainWindow):
         self._show_constraints(None)
         self._show_optimizer(None)
         self.drawing = DrawScheduler(self)
+        self.latent_views = LatentViews(self)  # the latent map dock, drawn by the scheduler's panels
         self.timer = QTimer(self, interval=self.drawing.interval_ms)
         self.timer.timeout.connect(self.drawing.tick)
         self.timer.start()

@@ -21,8 +21,8 @@ from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 import numpy as np
 
 if TYPE_CHECKING:
-    from PyQt6.QtCore import pyqtBoundSignal
-    from PyQt6.QtWidgets import QLabel, QMenuBar, QStatusBar
+    from PyQt6.QtCore import QSettings, Qt, pyqtBoundSignal
+    from PyQt6.QtWidgets import QDockWidget, QLabel, QMenuBar, QStatusBar
 
     from app.busy import BusyNotice
     from app.undo import SceneUndo
@@ -33,6 +33,7 @@ if TYPE_CHECKING:
     from widgets.optimizer_panel import OptimizerPanel
     from widgets.plots import LossPlots
     from widgets.sensor_panel import SensorPanel
+    from widgets.timeline import Timeline
     from widgets.viewport import Viewport
 
 
@@ -64,7 +65,7 @@ class DrawRecord(Protocol):
 
     draws: int
     view_costs: deque
-    panels: Sequence[TimedPanel]
+    panels: list[TimedPanel]  # the latent views add theirs (app/latent_views.py)
 
     def costs(self) -> dict[str, dict[str, float]]: ...
 
@@ -95,6 +96,10 @@ class StudioShell(Protocol):
         Emitted with the frame of each drawn snapshot.
     status_engine, status_gui, status_warnings : QLabel
         The status bar's solver, view and warning figures.
+    settings : QSettings
+        The window's persistent settings.
+    tabifiedDockWidgetActivated : bound signal (QDockWidget)
+        A tabbed dock was brought to the front.
     """
 
     session: Session
@@ -114,8 +119,17 @@ class StudioShell(Protocol):
     status_engine: QLabel
     status_gui: QLabel
     status_warnings: QLabel
+    timeline: Timeline
+    settings: QSettings
+    tabifiedDockWidgetActivated: pyqtBoundSignal
 
     def show_error(self, title: str, message: str) -> None: ...
+
+    def findChild(self, kind: type, name: str = "") -> Any: ...
+
+    def addDockWidget(self, area: Qt.DockWidgetArea, dock: QDockWidget) -> None: ...
+
+    def tabifyDockWidget(self, first: QDockWidget, second: QDockWidget) -> None: ...
 
     def statusBar(self) -> QStatusBar: ...
 

@@ -25,6 +25,17 @@ class RangeSlider(QSlider):
         super().__init__(Qt.Orientation.Horizontal, parent)
         self._selection: tuple[int, int] | None = None
         self._press: tuple[int, int] | None = None  # x (pixels) and frame of a Shift-press
+        self._marks: tuple[int, ...] = ()  # frames drawn as red ticks (flagged by latent debugging)
+
+    def set_marks(self, frames: list[int] | tuple[int, ...]) -> None:
+        """Draw ``frames`` as short red ticks under the groove (empty: none)."""
+        marks = tuple(int(f) for f in frames)
+        if marks != self._marks:
+            self._marks = marks
+            self.update()
+
+    def marks(self) -> tuple[int, ...]:
+        return self._marks
 
     # -- the range ---------------------------------------------------------------
     def selection(self) -> tuple[int, int] | None:
@@ -103,6 +114,13 @@ class RangeSlider(QSlider):
     # -- drawing -----------------------------------------------------------------
     def paintEvent(self, event: QPaintEvent | None) -> None:  # noqa: N802 (Qt's name)
         super().paintEvent(event)
+        if self._marks:
+            painter = QPainter(self)
+            painter.setPen(QColor(255, 59, 48))
+            for f in self._marks:
+                x = self._x_of(f)
+                painter.drawLine(x, self.height() - 5, x, self.height() - 1)
+            painter.end()
         if self._selection is None:
             return
         x0, x1 = self._x_of(self._selection[0]), self._x_of(self._selection[1])

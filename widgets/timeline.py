@@ -130,6 +130,10 @@ class Timeline(QWidget):
         """Select ``start..end`` (None clears); emits ``selectionChanged`` if it changed."""
         self.slider.set_selection(start, end)
 
+    def set_marks(self, frames: list[int]) -> None:
+        """Mark ``frames`` on the slider (red ticks: the frames latent debugging flags)."""
+        self.slider.set_marks(frames)
+
     def set_frame(self, frame: int) -> None:
         """Show the engine's frame without emitting a seek (unless the user is dragging)."""
         if self.slider.isSliderDown():

@@ -36,6 +36,7 @@ SUBCOMMANDS = (
     "engine.cli.bench",
     "engine.cli.compare",
     "engine.cli.bake",
+    "engine.cli.latent",
 )
 #: Entry-point group of subcommand modules other packages register.
 PLUGIN_GROUP = "dragposer_studio.subcommands"

@@ -29,6 +29,7 @@ from engine.constraints import Constraint, GroundConstraint, SensorConstraint, S
 from engine.constraints.sensor import unit_rotation
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
+from engine.latent.record import SolveRecord, record_of
 from engine.methods import dragposer_root as roots
 from engine.methods.base import FrameResult, Method
 from engine.methods.dragposer_edits import FrameSettings
@@ -118,6 +119,7 @@ class DragPoserMethod(Method):
         self._before64: np.ndarray | None = None
         self._last: FrameResult | None = None
         self._roots: list[tuple[torch.Tensor, torch.Tensor, torch.Tensor]] = []  # see _advance
+        self.last_solve: SolveRecord | None = None  # the last frame's solve (latent debugging)
 
     def step(self, sensors: SensorFrame, deadline: float | None = None) -> FrameResult:
         """Solve the next frame. ``deadline`` (a ``time.perf_counter()`` time; live input)
@@ -189,6 +191,7 @@ class DragPoserMethod(Method):
         # frame 0 has no history to start from: it is solved offline
         sol = self.optimizer.solve(start, terms, ctx, dataclasses.replace(s, mode="offline") if self._frame == 0 else s)
         warnings += sol.warnings
+        self.last_solve = record_of(sol, ctx, terms, start is prediction, self.priors.from_bank)
         state = sol.state
         if not (torch.isfinite(state.positions).all() and torch.isfinite(state.local_rot).all()):
             warnings.append("decoded pose is not finite; previous pose repeated")

@@ -98,6 +98,15 @@ class DecodeLatent(Command):
 
 
 @dataclass(frozen=True)
+class InspectLatent(Command):
+    """Compute the latent detail of the last solved frame (term forces, dimension sweep,
+    and ``joint``'s most influential dimensions when given); published in the snapshot's
+    ``latent_detail`` (docs/latent.md). The frame is not solved again."""
+
+    joint: str = ""
+
+
+@dataclass(frozen=True)
 class Stop(Command):
     pass
 

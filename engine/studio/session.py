@@ -163,6 +163,11 @@ class Session:
         """Show the pose the method's decoder makes of ``latent`` (L,) (debug mode)."""
         self._send(cmd.DecodeLatent(np.asarray(latent, float).copy()))
 
+    def inspect_latent(self, joint: str = "") -> None:
+        """Ask for the frame on screen's term forces and dimension sweep (and ``joint``'s
+        most influential dimensions); they arrive in the snapshot's ``latent_detail``."""
+        self._send(cmd.InspectLatent(str(joint)))
+
     # -- sensors and constraints -----------------------------------------------------
     @property
     def preset(self) -> str:

@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from engine.gizmos import Gizmo
+from engine.studio.latent_views import LatentDetail, LatentView
 
 
 def readonly(a: Any) -> Any:
@@ -39,6 +40,9 @@ class HistoryEntry:
         Every loss term's value after the last iteration (plus ``"total"``).
     latent : ndarray (L,) or None
         The frame's latent vector, for methods that have one.
+    readouts : dict of str to float
+        The frame's place on the latent map and prior readouts (``x, y, nearest, norm,
+        predictor, flagged``; :meth:`LatentView.readouts`), empty without a latent.
     """
 
     frame: int
@@ -46,6 +50,7 @@ class HistoryEntry:
     ms: float
     losses: dict[str, float]
     latent: np.ndarray | None = None
+    readouts: dict[str, float] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -104,6 +109,12 @@ class Snapshot:
         The last :data:`HISTORY` solved frames, oldest first, including frames whose
         snapshots a reader skipped (the GUI draws only the newest one); cleared when
         playback jumps (seek back, loop, new clip or method).
+    latent_view : LatentView or None
+        The solved frame on the latent map, with its readouts (latent-space methods).
+    latent_detail : LatentDetail or None
+        The frame's term forces and dimension sweep, after an ``InspectLatent`` request.
+    latent_note : str
+        Why there is no ``latent_view`` (e.g. the method has no latent), "" otherwise.
     """
 
     seq: int
@@ -137,3 +148,6 @@ class Snapshot:
     timing: dict[str, float] = field(default_factory=dict)
     recent_errors: tuple[str, ...] = ()
     plays: int = 0
+    latent_view: LatentView | None = None
+    latent_detail: LatentDetail | None = None
+    latent_note: str = ""

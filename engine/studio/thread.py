@@ -32,6 +32,7 @@ from engine.sensors import SensorFrame
 from engine.studio import commands as cmd
 from engine.studio.decode import decoded_on_pose
 from engine.studio.frame_figures import gizmos_of, losses_of, timing_of
+from engine.studio.latent_debug import LatentDebug
 from engine.studio.method_set import MethodSet
 from engine.studio.method_edits import make_method
 from engine.studio.playback import ENDED, LOOPED, PlaybackClock
@@ -98,6 +99,7 @@ class EngineThread(threading.Thread):
         self._ghost_errors: dict[str, str] = {}  # ghost -> the failure last reported
         self._stopping = False
         self._latency_ms: float | None = None
+        self._latent = LatentDebug()
 
     # -- public API (any thread) --------------------------------------------------------
     def prepare(self, method: str) -> None:
@@ -247,6 +249,15 @@ class EngineThread(threading.Thread):
         self._playing, self._dirty = False, was_dirty
         self._republish()
 
+    @cmd.handles(cmd.InspectLatent)
+    def _on_inspect_latent(self, c: cmd.InspectLatent, was_dirty: bool) -> None:
+        # the frame on screen, not solved again
+        self._dirty = False
+        error = self._latent.inspect(self._methods.method, c.joint)
+        if error:
+            self._report_error(f"inspect latent: {error}")
+        self._republish()
+
     @cmd.handles(cmd.DecodeLatent)
     def _on_decode_latent(self, c: cmd.DecodeLatent, was_dirty: bool) -> None:
         # debug mode: decode and show, without solving the frame again (which would
@@ -349,7 +360,9 @@ class EngineThread(threading.Thread):
         if res is not None:
             final = dict(res.losses[-1]) if res.losses else dict(losses_of(res, sf)[-1])
             latent = readonly(res.latent) if res.latent is not None else None
-            self._history.append(HistoryEntry(frame, res.iterations, ms, final, latent))
+            view = self._latent.after_solve(self._methods.method, frame, res.latent)
+            readouts = view.readouts() if view is not None else {}
+            self._history.append(HistoryEntry(frame, res.iterations, ms, final, latent, readouts))
         self._publish(frame, sf, res, ms, error, ghosts)
         if self._solved == 1:
             mark("engine: first frame solved")
@@ -407,6 +420,9 @@ class EngineThread(threading.Thread):
             timing=timing_of(res, ms, self._latency_ms),
             recent_errors=tuple(self._recent_errors),
             plays=self._plays,
+            latent_view=self._latent.view,
+            latent_detail=self._latent.detail,
+            latent_note=self._latent.note,
         )
         self._method_error = ""
         self.latest = snap

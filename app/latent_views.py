@@ -1,0 +1,182 @@
+"""The studio's latent-debugging views and their wiring (docs/latent.md, "In the studio").
+
+A "Latent map" dock, tabbed beside the Latent dock, holds three tabs: *Map* (the latent
+map over the prior readouts), *Forces* (term forces of the frame on screen) and
+*Gallery* (the dimension sweep). Requests go to the session: a click on a trajectory
+point seeks its frame; a click elsewhere pauses and decodes the point as the white debug
+pose; hovering decodes too while paused; *Inspect this frame* asks the engine for the
+forces and the sweep; *Next flagged frame* seeks. Flagged frames are marked on the
+timeline. The panels are drawn from snapshots by the window's draw scheduler, and only
+while their tab is visible. Whether the dock or the Latent dock was in front is kept in
+the window's settings (``latent_map_raised``) for the next start.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from PyQt6.QtCore import Qt, QTimer
+from PyQt6.QtWidgets import QDockWidget, QSplitter, QTabWidget
+
+from app.drawing import Panel
+from app.shell import StudioShell
+from engine.latent.projection import default_map
+from widgets.latent_forces import LatentForces
+from widgets.latent_gallery import LatentGallery
+from widgets.latent_map import LatentMapPlot
+from widgets.latent_readouts import LatentReadouts
+
+#: Hover decodes are sent at most this often, ms (a mouse sends ~100 moves a second).
+HOVER_MS = 40
+#: The settings key that remembers the dock in front of the Latent dock.
+RAISED = "latent_map_raised"
+NO_MAP = "No latent map: assets/models/latent_map.npz is missing or belongs to another VAE."
+
+
+def _on_screen(widget: Any) -> bool:
+    """Whether any of ``widget`` is on screen: a dock tabified behind another stays
+    ``isVisible()`` (moved out of the window), but shows nothing."""
+    return widget.isVisible() and not widget.visibleRegion().isEmpty()
+
+
+class LatentViews:
+    """Builds the dock on ``window`` (the main window) and connects it; see the module doc."""
+
+    def __init__(self, window: StudioShell) -> None:
+        self.w = window
+        self.session = window.session
+        self.latent_map = default_map()
+        self.map = LatentMapPlot()
+        self.readouts = LatentReadouts()
+        self.forces = LatentForces(window.plots.colours)
+        self.gallery = LatentGallery()
+        if self.latent_map is not None:
+            m = self.latent_map
+            self.map.set_map(m.density, m.extent, m.explained)
+            self.readouts.set_thresholds(m.nn_threshold, m.norm_threshold)
+        else:
+            self.map.set_note(NO_MAP)
+        split = QSplitter(Qt.Orientation.Vertical)
+        split.addWidget(self.map)
+        split.addWidget(self.readouts)
+        split.setSizes([300, 150])
+        self.tabs = QTabWidget()
+        self.tabs.addTab(split, "Map")
+        self.tabs.addTab(self.forces, "Forces")
+        self.tabs.addTab(self.gallery, "Gallery")
+        self.dock = QDockWidget("Latent map", window)
+        self.dock.setObjectName("Latent map")
+        self.dock.setWidget(self.tabs)
+        window.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, self.dock)
+        latent = window.findChild(QDockWidget, "Latent")
+        if latent is not None:
+            window.tabifyDockWidget(latent, self.dock)
+            in_front = self.dock if window.settings.value(RAISED, False, type=bool) else latent
+            in_front.raise_()
+        window.tabifiedDockWidgetActivated.connect(
+            lambda dock: window.settings.setValue(RAISED, dock is self.dock) if dock.objectName() in ("Latent", "Latent map")
+            else None)  # fmt: skip
+        self._hover: tuple[str, Any] | None = None
+        self._hover_timer = QTimer(window, singleShot=True, interval=HOVER_MS)
+        self._hover_timer.timeout.connect(self._send_hover)
+        self.map.frameClicked.connect(self.seek)
+        self.map.pointClicked.connect(self._click_point)
+        self.map.pointHovered.connect(lambda x, y: self._queue_hover(("point", (x, y))))
+        self.map.frameHovered.connect(lambda f: self._queue_hover(("frame", f)))
+        self.readouts.seekRequested.connect(self.seek)
+        self.readouts.flagsChanged.connect(window.timeline.set_marks)
+        self.forces.inspectRequested.connect(self.inspect)
+        self.forces.iteration.valueChanged.connect(lambda _: self._draw_forces())
+        window.session.events.motion.connect(self._forget)
+        window.session.events.method.connect(self._forget)
+        window.drawing.panels += [Panel("latent map", self._update_map, 0.5),
+                                  Panel("latent detail", self._update_detail, 0.5)]  # fmt: skip
+
+    # -- snapshots -> views ------------------------------------------------------------
+    def _update_map(self, snap: Any) -> None:
+        """The map and the readouts while they are in view; the flag verdicts always (they
+        mark the timeline)."""
+        if _on_screen(self.map):
+            self.map.update_snapshot(snap)
+            self._draw_blend()
+        if _on_screen(self.readouts):
+            self.readouts.update_snapshot(snap)
+        else:
+            self.readouts.note_verdicts(snap)
+
+    def _update_detail(self, snap: Any) -> None:
+        d = snap.latent_detail
+        changed = d is not self.forces.detail
+        self.forces.set_detail(d)
+        self.gallery.set_detail(d)
+        if changed:
+            self._draw_forces()
+
+    def _draw_blend(self) -> None:
+        """The Latent panel's stored A and B (its A to B blend) on the map."""
+        stored = self.w.latent.stored
+        a, b = stored.get("a"), stored.get("b")
+        m = self.latent_map
+        ok = m is not None and a is not None and b is not None and a.size == b.size == m.latent_dim
+        self.map.set_blend(m.project(a) if ok else None, m.project(b) if ok else None)
+
+    def _draw_forces(self) -> None:
+        """The inspected frame's term forces on the map, from its path at the iteration the
+        Forces tab shows."""
+        d, snap = self.forces.detail, self.session.latest
+        view = None if snap is None else snap.latent_view
+        if d is None or view is None or view.frame != d.frame or view.path_xy is None:
+            self.map.set_forces(None)
+            return
+        k = min(self.forces.iteration.value(), len(d.plane) - 1, len(view.path_xy) - 1)
+        self.map.set_forces(view.path_xy[k], d.plane[k], [self.forces.colour(n) for n in d.names])
+
+    def _forget(self, event: Any = None) -> None:
+        self.readouts.clear()
+
+    # -- requests ------------------------------------------------------------------------
+    def seek(self, frame: int) -> None:
+        self.session.pause()
+        self.session.seek(int(frame))
+
+    def inspect(self, joint: str) -> None:
+        self.session.pause()
+        self.session.inspect_latent(joint)
+
+    def latent_of_point(self, x: float, y: float) -> np.ndarray | None:
+        """The latent the map point ``(x, y)`` stands for: the frame on screen's latent moved
+        within the map plane (:meth:`engine.latent.projection.LatentMap.move_to`)."""
+        snap = self.session.latest
+        if self.latent_map is None or snap is None or snap.latent_view is None:
+            return None
+        return self.latent_map.move_to(snap.latent_view.latent, np.array([x, y]))
+
+    def latent_of_frame(self, frame: int) -> np.ndarray | None:
+        snap = self.session.latest
+        if snap is None:
+            return None
+        return next((np.asarray(r.latent, float) for r in snap.history if r.frame == frame and r.latent is not None),
+                    None)  # fmt: skip
+
+    def _click_point(self, x: float, y: float) -> None:
+        z = self.latent_of_point(x, y)
+        if z is not None:
+            self.session.pause()
+            self.session.decode_latent(z)
+
+    def _queue_hover(self, what: tuple[str, Any]) -> None:
+        if self.session.playing:  # decoding pauses the engine: hovering only points while playing
+            return
+        self._hover = what
+        if not self._hover_timer.isActive():
+            self._hover_timer.start()
+
+    def _send_hover(self) -> None:
+        if self._hover is None or self.session.playing:
+            return
+        kind, value = self._hover
+        self._hover = None
+        z = self.latent_of_point(*value) if kind == "point" else self.latent_of_frame(value)
+        if z is not None:
+            self.session.decode_latent(z)

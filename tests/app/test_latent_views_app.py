@@ -1,0 +1,108 @@
+"""The studio's latent map dock end to end: real clicks on the map decode a ghost pose or
+seek a frame, *Inspect this frame* brings the term forces, a method without a latent says
+so (a real engine thread; DragPoser with the shipped models)."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from PyQt6.QtCore import Qt
+from PyQt6.QtWidgets import QApplication, QDockWidget
+
+
+def _show_map(window):
+    views = window.latent_views
+    views.dock.raise_()
+    views.tabs.setCurrentIndex(0)
+    QApplication.processEvents()
+    return views
+
+
+def _click(views, x, y):
+    w = views.map
+    w.plot.repaint()
+    QApplication.processEvents()
+    from pytestqt.qtbot import QtBot  # noqa: F401 (the fixture's type; clicks go through QTest)
+    from PyQt6.QtTest import QTest
+
+    QTest.mouseClick(w.plot.viewport(), Qt.MouseButton.LeftButton, pos=w.to_widget(x, y).toPoint())
+
+
+def test_the_dock_says_when_the_method_has_no_latent(studio, qtbot):
+    assert studio.session.method == "ik"
+    dock = studio.findChild(QDockWidget, "Latent map")
+    assert dock is studio.latent_views.dock
+    views = _show_map(studio)
+    qtbot.waitUntil(lambda: views.map.note.isVisible(), timeout=10000)
+    assert "ik has no latent space" in views.map.note.text()
+
+
+def test_map_clicks_decode_and_seek_with_dragposer(studio, qtbot):
+    s = studio.session
+    s.set_method("dragposer")
+    s.play()
+    qtbot.waitUntil(lambda: s.latest is not None and s.latest.latent_view is not None
+                    and len([r for r in s.latest.history if r.readouts]) >= 10, timeout=90000)  # fmt: skip
+    s.pause()
+    views = _show_map(studio)
+    qtbot.waitUntil(lambda: len(views.map.xy) >= 10, timeout=10000)
+    # a click beside the trajectory decodes that point as the debug pose
+    view = s.latest.latent_view
+    seq = s.latest.seq
+    target = view.xy + [0.8, 0.8]
+    t0 = time.perf_counter()
+    _click(views, *target)
+    qtbot.waitUntil(lambda: s.latest.seq > seq and s.latest.decoded is not None, timeout=10000)
+    decode_ms = 1000 * (time.perf_counter() - t0)
+    print(f"map click to decoded pose: {decode_ms:.0f} ms")
+    assert not np.allclose(s.latest.decoded, s.latest.positions, atol=1e-3)
+    # a click on a trajectory point goes to its frame
+    frame = int(views.map.frames[3])
+    _click(views, *views.map.xy[3])
+    qtbot.waitUntil(lambda: s.frame == frame, timeout=5000)
+    qtbot.waitUntil(lambda: s.latest.frame == frame and s.latest.latent_view is not None, timeout=30000)
+    # Inspect this frame: the forces arrive and are drawn
+    views.tabs.setCurrentIndex(1)
+    qtbot.mouseClick(views.forces.inspect_button, Qt.MouseButton.LeftButton)
+    qtbot.waitUntil(lambda: s.latest.latent_detail is not None, timeout=30000)
+    qtbot.waitUntil(lambda: views.forces.detail is not None, timeout=10000)
+    d = views.forces.detail
+    assert d.frame == frame and len(views.forces.norm_bars.opts["height"]) == len(d.names)
+    assert any(n.startswith("sensor:") for n in d.names)
+    qtbot.waitUntil(lambda: len(views.map.force_lines) == len(d.names), timeout=5000)  # drawn on the map too
+    # the Latent panel's A and B: their blend's path appears on the map
+    qtbot.waitUntil(lambda: studio.latent.latent is not None, timeout=5000)
+    studio.latent.capture_a.click()
+    studio.latent.stored["b"] = studio.latent.stored["a"] + 0.5
+    views.tabs.setCurrentIndex(0)
+    s.step(1)
+    qtbot.waitUntil(lambda: views.map.blend.getData()[0] is not None and len(views.map.blend.getData()[0]) == 2,
+                    timeout=10000)  # fmt: skip
+
+
+def test_the_dock_in_front_is_remembered(studio, qtbot):
+    from PyQt6.QtWidgets import QTabBar
+
+    from app.latent_views import RAISED
+
+    bar = next(b for b in studio.findChildren(QTabBar) if "Latent map" in [b.tabText(i) for i in range(b.count())])
+    index = [bar.tabText(i) for i in range(bar.count())].index("Latent map")
+    qtbot.mouseClick(bar, Qt.MouseButton.LeftButton, pos=bar.tabRect(index).center())
+    qtbot.waitUntil(lambda: studio.settings.value(RAISED, False, type=bool), timeout=3000)
+    latent = [bar.tabText(i) for i in range(bar.count())].index("Latent")
+    qtbot.mouseClick(bar, Qt.MouseButton.LeftButton, pos=bar.tabRect(latent).center())
+    qtbot.waitUntil(lambda: not studio.settings.value(RAISED, True, type=bool), timeout=3000)
+
+
+def test_a_map_behind_the_latent_dock_is_not_redrawn(studio, qtbot):
+    views = _show_map(studio)
+    qtbot.waitUntil(lambda: views.map._seq == studio.session.latest.seq, timeout=10000)
+    studio.findChild(QDockWidget, "Latent").raise_()
+    QApplication.processEvents()
+    seq = studio.session.latest.seq
+    drawn = views.map._seq
+    studio.session.step(1)
+    qtbot.waitUntil(lambda: studio.session.latest.seq > seq, timeout=10000)
+    qtbot.wait(1200)  # more than the panel's interval
+    assert views.map._seq == drawn

@@ -1,0 +1,250 @@
+"""The latent-debugging widgets with real mouse events: the map's hover and clicks, the
+readouts' next flagged frame, the term forces' bars and the dimension gallery."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import pytest
+from PyQt6.QtCore import QPoint, Qt
+from PyQt6.QtWidgets import QApplication
+
+from engine import skeleton as sk
+from engine.latent.projection import default_map
+from engine.studio.latent_views import LatentDetail, LatentView
+from engine.studio.snapshot import HistoryEntry
+from tests.widgets.conftest import shown
+from widgets.latent_forces import LatentForces, conflicts
+from widgets.latent_gallery import LatentGallery, front_view
+from widgets.latent_map import LatentMapPlot
+from widgets.latent_readouts import LatentReadouts
+
+
+@dataclass
+class Snap:
+    """The fields the latent views read from ``engine.studio.snapshot.Snapshot``."""
+
+    seq: int
+    frame: int
+    history: tuple
+    latent_view: LatentView | None = None
+    latent_detail: LatentDetail | None = None
+    latent_note: str = ""
+    playing: bool = False
+    extra: dict = field(default_factory=dict)
+
+
+def _snap(n: int = 40, flagged: tuple[int, ...] = (), seq: int = 1, frame: int | None = None,
+          ms: float = 2.0) -> Snap:  # fmt: skip
+    """Frames 0..n-1 on a line across the map, frame ``frame`` (default last) on screen,
+    each solved in ``ms`` (a solve's wall time tells its entry from an earlier solve's)."""
+    xs = np.linspace(-2.0, 2.0, n)
+    hist = tuple(HistoryEntry(f, 5, ms, {"total": 1.0}, np.full(24, 0.1 * f),
+                              {"x": xs[f], "y": 0.5 * xs[f], "nearest": 1.0 + 0.01 * f, "norm": 3.0,
+                               "predictor": 0.4, "flagged": float(f in flagged)})
+                 for f in range(n))  # fmt: skip
+    f = n - 1 if frame is None else frame
+    r = hist[f].readouts
+    path = np.array([[r["x"] - 0.6, r["y"] - 0.9], [r["x"] - 0.2, r["y"] - 0.3], [r["x"], r["y"]]])
+    view = LatentView(f, np.full(24, 0.1 * f), np.array([r["x"], r["y"]]), path, "predictor", r["nearest"], 3.0, 0.4,
+                      f in flagged)  # fmt: skip
+    return Snap(seq, f, hist, view)
+
+
+@pytest.fixture
+def latent_map(qtbot):
+    w = shown(qtbot, LatentMapPlot(), 420, 420)
+    m = default_map()
+    w.set_map(m.density, m.extent, m.explained)
+    return w
+
+
+def _at(w: LatentMapPlot, x: float, y: float) -> QPoint:
+    """Where map point ``(x, y)`` is on screen, after the plot's layout settled (the axes
+    take their widths at the first paint, which moves the view box)."""
+    w.plot.repaint()
+    QApplication.processEvents()
+    return w.to_widget(x, y).toPoint()
+
+
+def test_hover_over_empty_map_and_over_a_frame(latent_map, qtbot):
+    latent_map.update_snapshot(_snap())
+    points, frames = [], []
+    latent_map.pointHovered.connect(lambda x, y: points.append((x, y)))
+    latent_map.frameHovered.connect(frames.append)
+    qtbot.mouseMove(latent_map.plot.viewport(), _at(latent_map, 1.0, -2.5))
+    qtbot.waitUntil(lambda: bool(points), timeout=2000)
+    px, py = latent_map.plot.getPlotItem().getViewBox().viewPixelSize()
+    assert points[-1] == pytest.approx((1.0, -2.5), abs=2 * max(px, py))
+    target = latent_map.xy[10]
+    qtbot.wait(100)  # under Xvfb the first move's events are still arriving
+    qtbot.mouseMove(latent_map.plot.viewport(), _at(latent_map, *target))
+    qtbot.waitUntil(lambda: bool(frames), timeout=2000)
+    assert frames[-1] == 10
+
+
+def test_clicks_seek_a_frame_or_pick_a_point(latent_map, qtbot):
+    latent_map.update_snapshot(_snap())
+    points, frames = [], []
+    latent_map.pointClicked.connect(lambda x, y: points.append((x, y)))
+    latent_map.frameClicked.connect(frames.append)
+    qtbot.mouseClick(latent_map.plot.viewport(), Qt.MouseButton.LeftButton, pos=_at(latent_map, *latent_map.xy[25]))
+    assert frames == [25] and points == []
+    qtbot.mouseClick(latent_map.plot.viewport(), Qt.MouseButton.LeftButton, pos=_at(latent_map, -1.0, 2.0))
+    px, py = latent_map.plot.getPlotItem().getViewBox().viewPixelSize()
+    assert frames == [25] and points[-1] == pytest.approx((-1.0, 2.0), abs=2 * max(px, py))
+
+
+def test_map_draws_trajectory_path_and_flags(latent_map):
+    latent_map.update_snapshot(_snap(flagged=(3, 7)))
+    assert len(latent_map.points.data) == 40
+    assert len(latent_map.flags.data) == 2
+    assert latent_map.path.getData()[0].shape == (3,)
+    assert latent_map.start_label.textItem.toPlainText() == "start: predictor"
+    x, y = latent_map.current.getData()
+    assert (x[0], y[0]) == pytest.approx(tuple(latent_map.xy[-1]))
+    # colour by time: the first point dark, the last bright
+    first, last = latent_map.points.data[0]["brush"].color(), latent_map.points.data[-1]["brush"].color()
+    assert first.lightness() < last.lightness()
+
+
+def test_a_method_without_a_latent_is_said(latent_map):
+    snap = Snap(2, 0, (HistoryEntry(0, 1, 1.0, {"total": 1.0}),), None, None, "ik has no latent space: ...")
+    latent_map.update_snapshot(snap)
+    assert latent_map.note.isVisible() and "ik has no latent space" in latent_map.note.text()
+    assert len(latent_map.points.data) == 0
+
+
+def test_next_flagged_frame_seeks_and_marks(qtbot):
+    w = shown(qtbot, LatentReadouts(), 420, 250)
+    marks, seeks = [], []
+    w.flagsChanged.connect(marks.append)
+    w.seekRequested.connect(seeks.append)
+    w.update_snapshot(_snap(flagged=(5, 30), frame=10))
+    assert marks[-1] == [5, 30]
+    qtbot.mouseClick(w.next_button, Qt.MouseButton.LeftButton)
+    assert seeks == [30]
+    w.update_snapshot(_snap(n=12, flagged=(5,), seq=2, frame=11))  # the engine's history restarted
+    qtbot.mouseClick(w.next_button, Qt.MouseButton.LeftButton)
+    assert seeks == [30, 30]  # frame 30's verdict is remembered across the restart
+    w.clear()
+    assert marks[-1] == [] and w.next_flagged() is None
+
+
+def _detail(influence: bool = True) -> LatentDetail:
+    forces = np.zeros((3, 3, 24))
+    forces[:, 0, 0] = 1.0
+    forces[:, 1, 0] = -2.0  # against the first
+    forces[:, 2, 5] = 0.5
+    rest = np.asarray(sk.Skeleton.canonical().rest_positions())
+    sweep = np.stack([np.stack([rest + [0, 0, 0.1 * o] for o in (-1, 0, 1)]) for _ in range(24)])
+    motion = np.zeros((24, 22))
+    motion[:, sk.JOINT_INDEX["lwrist"]] = 0.2
+    return LatentDetail(7, ("sensor:lwrist", "look_at", "temporal_prior"), forces, forces[..., :2], sweep, motion,
+                        "lwrist" if influence else "", np.arange(24.0) if influence else None, 800.0)  # fmt: skip
+
+
+def test_forces_bars_in_the_loss_plots_colours(qtbot):
+    colours = {"total": "#ffffff", "sensor:lwrist": "#123456"}
+    w = shown(qtbot, LatentForces(colours), 420, 400)
+    asked = []
+    w.inspectRequested.connect(asked.append)
+    w.joint.setCurrentIndex(w.joint.findData("lwrist"))
+    qtbot.mouseClick(w.inspect_button, Qt.MouseButton.LeftButton)
+    assert asked == ["lwrist"]
+    w.set_detail(_detail())
+    heights = w.norm_bars.opts["height"]
+    assert list(heights) == pytest.approx([1.0, 2.0, 0.5])
+    assert w.norm_bars.opts["brushes"][0] == "#123456"  # the shared colour
+    assert "look_at" in colours  # a new term gets its colour in the shared dict
+    assert "sensor:lwrist vs look_at" in w.info.text()
+    assert list(w.dim_bars.opts["height"]) == pytest.approx(np.arange(24.0))  # the joint's influence first
+    w.term.setCurrentIndex(w.term.findData("temporal_prior"))
+    assert w.dim_bars.opts["height"][5] == pytest.approx(0.5)
+    assert conflicts(_detail().forces[0], _detail().names) == ["sensor:lwrist vs look_at"]
+
+
+def test_gallery_draws_every_dimension(qtbot):
+    w = shown(qtbot, LatentGallery(), 500, 400)
+    w.set_detail(_detail())
+    assert len(w.labels) == 24 and w.labels[0].textItem.toPlainText() == "d0\nlwrist"
+    x, _ = w.lines[0].getData()
+    assert len(x) == 24 * 2 * (sk.NUM_JOINTS - 1)
+    assert w.influential == [23, 22, 21, 20, 19]
+    w.set_detail(None)
+    assert w.labels == [] and len(w.lines[0].getData()[0] or []) == 0
+
+
+def test_front_view_turns_the_hips_across():
+    rest = np.asarray(sk.Skeleton.canonical().rest_positions())
+    c, s = np.cos(1.0), np.sin(1.0)
+    turned = rest @ np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]]).T + [3, 4, 0]
+    v = front_view(turned[None])[0]
+    left = v[sk.JOINT_INDEX["lhip"]] - v[sk.JOINT_INDEX["rhip"]]
+    hips = rest[sk.JOINT_INDEX["lhip"]] - rest[sk.JOINT_INDEX["rhip"]]
+    # the whole horizontal hip line lies across the view, the heights unchanged
+    assert left == pytest.approx([np.hypot(hips[0], hips[1]), hips[2]])
+    assert v[0] == pytest.approx([0.0, 0.0])
+
+
+def test_zoom_to_the_clip_until_the_user_zooms(latent_map, qtbot):
+    latent_map.update_snapshot(_snap())
+    (x0, x1), (y0, y1) = latent_map.plot.getPlotItem().getViewBox().viewRange()
+    assert x0 <= -2.0 and x1 >= 2.0 and x1 - x0 < 8.0  # the clip, not the whole map (12 wide)
+    assert latent_map.zoom.isChecked()
+    latent_map.plot.getPlotItem().getViewBox().scaleBy((0.5, 0.5))  # as the mouse wheel does
+    latent_map.plot.getPlotItem().getViewBox().sigRangeChangedManually.emit([True, True])
+    assert not latent_map.zoom.isChecked()
+
+
+def test_a_frame_solved_again_takes_its_new_verdict(qtbot):
+    w = LatentReadouts()
+    qtbot.addWidget(w)  # never shown: the verdicts alone (what the window reads while the tab is hidden)
+    marks = []
+    w.flagsChanged.connect(marks.append)
+    first = _snap(n=10, flagged=(4,), frame=9)
+    w.note_verdicts(first)
+    assert marks[-1] == [4]
+    again = _snap(n=10, flagged=(), seq=2, frame=9, ms=2.5)  # an edit: the frames solved again, none flagged
+    w.note_verdicts(again)
+    assert marks[-1] == [] and w.next_flagged() is None
+    n = len(marks)
+    w.note_verdicts(again)  # nothing new
+    assert len(marks) == n
+
+
+def test_forces_drawn_on_the_map_in_term_colours(latent_map):
+    latent_map.update_snapshot(_snap())
+    latent_map.set_forces(np.array([0.0, 0.0]), np.array([[1.0, 0.0], [0.0, -0.5]]), ["#ff0000", "#00ff00"])
+    assert len(latent_map.force_lines) == 2
+    (x0, x1), _ = latent_map.plot.getPlotItem().getViewBox().viewRange()
+    xs, ys = latent_map.force_lines[0].getData()
+    assert xs[1] - xs[0] == pytest.approx(0.25 * (x1 - x0))  # the longest: a quarter of the view
+    xs, ys = latent_map.force_lines[1].getData()
+    assert ys[1] - ys[0] == pytest.approx(-0.125 * (x1 - x0))
+    assert latent_map.force_lines[1].opts["pen"].color().name() == "#00ff00"
+    latent_map.set_forces(None)
+    assert latent_map.force_lines == []
+
+
+def test_the_a_to_b_blend_is_drawn(latent_map):
+    latent_map.set_blend(np.array([0.0, 1.0]), np.array([2.0, -1.0]))
+    xs, ys = latent_map.blend.getData()
+    assert list(xs) == [0.0, 2.0] and list(ys) == [1.0, -1.0]
+    assert latent_map.blend_labels[1].textItem.toPlainText() == "B"
+    latent_map.set_blend(None, None)
+    assert len(latent_map.blend.getData()[0] or []) == 0
+
+
+def test_verdicts_read_only_new_entries_of_unpickled_snapshots(qtbot):
+    import pickle
+
+    w = LatentReadouts()
+    qtbot.addWidget(w)
+    snap = _snap(n=600, flagged=(7,))
+    w.note_verdicts(snap)
+    copy = pickle.loads(pickle.dumps(snap))  # as an engine process delivers it: new objects
+    w.verdicts.clear()  # were every entry read again, frame 7 would come back
+    w.note_verdicts(copy)
+    assert w.verdicts == {}

@@ -1,0 +1,129 @@
+"""Term forces of the frame on screen: which loss term pulls the latent, how hard, where.
+
+*Inspect this frame* asks the engine (``inspectRequested(joint)``) for the frame's
+detail: each term's force on the latent (minus the gradient of its weighted loss) at
+every iteration of its solve (docs/latent.md). The top chart shows each term's force
+norm at the chosen iteration, in the term's colour from the loss plots; the bottom one
+the chosen term's force per latent dimension (or, with a joint chosen, each dimension's
+influence on that joint). Terms whose forces point against each other are named.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pyqtgraph as pg
+from PyQt6.QtWidgets import QComboBox, QGridLayout, QLabel, QPushButton, QSpinBox, QVBoxLayout, QWidget
+from PyQt6.QtCore import pyqtSignal
+
+from engine import skeleton as sk
+from widgets import style
+from widgets.plots import settle
+
+INFLUENCE = "influence on the joint"
+
+
+def conflicts(forces: np.ndarray, names: tuple[str, ...], limit: float = -0.5) -> list[str]:
+    """``"a vs b"`` for terms whose forces ``(T, L)`` have a cosine below ``limit``."""
+    n = np.linalg.norm(forces, axis=1)
+    out = []
+    for i in range(len(names)):
+        for j in range(i + 1, len(names)):
+            if n[i] > 1e-12 and n[j] > 1e-12 and forces[i] @ forces[j] / (n[i] * n[j]) < limit:
+                out.append(f"{names[i]} vs {names[j]}")
+    return out
+
+
+class LatentForces(QWidget):
+    """See the module doc. ``colours`` is the loss plots' term-colour dict (shared)."""
+
+    inspectRequested = pyqtSignal(str)
+
+    def __init__(self, colours: dict[str, str] | None = None, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.colours = colours if colours is not None else {"total": "#ffffff"}
+        layout = QVBoxLayout(self)
+        layout.setContentsMargins(0, 0, 0, 0)
+        grid = QGridLayout()
+        self.inspect_button = QPushButton("Inspect this frame")
+        self.inspect_button.setToolTip("Pause and compute this frame's term forces and dimension sweep (about a second)")
+        self.inspect_button.clicked.connect(lambda: self.inspectRequested.emit(self.joint.currentData() or ""))
+        self.joint = QComboBox(toolTip="A joint: its most influential latent dimensions")
+        self.joint.addItem("(no joint)", "")
+        for name in sk.JOINT_NAMES:
+            self.joint.addItem(name, name)
+        self.iteration = QSpinBox(prefix="iteration ", minimum=0, maximum=0)
+        self.iteration.valueChanged.connect(lambda _: self._draw())
+        self.term = QComboBox(toolTip="Whose force to show per latent dimension")
+        self.term.currentIndexChanged.connect(lambda _: self._draw())
+        self.info = QLabel("")
+        self.info.setWordWrap(True)
+        grid.addWidget(self.inspect_button, 0, 0)
+        grid.addWidget(self.joint, 0, 1)
+        grid.addWidget(self.iteration, 1, 0)
+        grid.addWidget(self.term, 1, 1)
+        layout.addLayout(grid)
+        layout.addWidget(self.info)
+        self.norm_plot = pg.PlotWidget(title="force norm per term")
+        self.norm_plot.setMinimumHeight(110)
+        self.norm_bars = pg.BarGraphItem(x=[], height=[], width=0.8)
+        self.norm_plot.addItem(self.norm_bars)
+        self.dim_plot = pg.PlotWidget(title="per latent dimension")
+        self.dim_plot.setMinimumHeight(110)
+        self.dim_plot.setLabel("bottom", "latent dimension")
+        self.dim_bars = pg.BarGraphItem(x=[], height=[], width=0.8)
+        self.dim_plot.addItem(self.dim_bars)
+        layout.addWidget(self.norm_plot, 1)
+        layout.addWidget(self.dim_plot, 1)
+        self.detail: Any = None
+
+    def colour(self, name: str) -> str:
+        """A term's colour, as the loss plots give it (assigned here first if new)."""
+        return self.colours.setdefault(name, style.term_colour(len(self.colours) - 1))
+
+    def set_detail(self, detail: Any) -> None:
+        """Show a :class:`~engine.studio.latent_views.LatentDetail` (None clears)."""
+        if detail is self.detail:
+            return
+        self.detail = detail
+        self.term.blockSignals(True)
+        self.term.clear()
+        if detail is not None:
+            for name in detail.names:
+                self.term.addItem(name, name)
+            if detail.influence is not None:
+                self.term.addItem(f"{INFLUENCE} {detail.joint}", INFLUENCE)
+                self.term.setCurrentIndex(self.term.count() - 1)
+        self.term.blockSignals(False)
+        self.iteration.blockSignals(True)
+        self.iteration.setMaximum(max(0, len(detail.forces) - 1) if detail is not None else 0)
+        self.iteration.setValue(0)
+        self.iteration.blockSignals(False)
+        self._draw()
+
+    def _draw(self) -> None:
+        d = self.detail
+        if d is None:
+            self.norm_bars.setOpts(x=[], height=[])
+            self.dim_bars.setOpts(x=[], height=[])
+            self.info.setText("")
+            return
+        k = min(self.iteration.value(), len(d.forces) - 1)
+        f = np.asarray(d.forces[k])
+        norms = np.linalg.norm(f, axis=1)
+        self.norm_bars.setOpts(x=np.arange(len(d.names)), height=norms, brushes=[self.colour(n) for n in d.names])
+        self.norm_plot.getAxis("bottom").setTicks([[(i, n.replace("sensor:", "")) for i, n in enumerate(d.names)]])
+        chosen = self.term.currentData()
+        if chosen == INFLUENCE and d.influence is not None:
+            self.dim_bars.setOpts(x=np.arange(len(d.influence)), height=d.influence, brush=style.SENSOR)
+            self.dim_plot.setTitle(f"|d {d.joint} / d z| (m per latent unit)", size="9pt")
+        elif chosen in d.names:
+            t = d.names.index(chosen)
+            self.dim_bars.setOpts(x=np.arange(f.shape[1]), height=f[t], brush=self.colour(chosen))
+            self.dim_plot.setTitle(f"force of {chosen}, iteration {k}", size="9pt")
+        against = conflicts(f, d.names)
+        self.info.setText(f"frame {d.frame}, {len(d.forces)} iterations, {d.ms:.0f} ms"
+                          + (f"; pulling against each other: {', '.join(against)}" if against else ""))  # fmt: skip
+        settle(self.norm_plot)
+        settle(self.dim_plot)

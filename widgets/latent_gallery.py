@@ -1,0 +1,105 @@
+"""The dimension gallery: what each latent dimension does to the body.
+
+For the frame on screen (after *Inspect this frame*), each of the 24 dimensions decoded
+at -2 sigma (blue), unchanged (grey) and +2 sigma (orange), drawn as small front views
+side by side (six per row, each turned so its hips lie across the view),
+with the three joints that move most marked (red) and the first named under the cell. With a joint
+chosen, the five dimensions that move that joint most right here (the Jacobian's
+largest norms) have their labels in yellow.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pyqtgraph as pg
+from PyQt6.QtGui import QFont
+from PyQt6.QtWidgets import QVBoxLayout, QWidget
+
+import widgets.plots  # noqa: F401 (applies the shared pyqtgraph look)
+from engine import skeleton as sk
+
+COLUMNS = 6
+#: Cell size in metres (a body is ~1.8 m tall).
+CELL_W, CELL_H = 1.6, 2.4
+OFFSET_COLOURS = ("#4da3ff", "#8a93a6", "#ff8a1f")
+INFLUENCE_COLOUR = "#ffd60a"
+_BONES = [(j, p) for j, p in enumerate(sk.PARENTS) if p >= 0]
+
+
+def front_view(poses: np.ndarray) -> np.ndarray:
+    """``(..., 22, 2)`` front-view coordinates of world joints ``(..., 22, 3)``: the root
+    at 0, turned about the vertical so the first pose's hip line runs along +x, then
+    (x, z)."""
+    p = np.asarray(poses, float)
+    rel = p - p[..., :1, :]
+    first = rel.reshape(-1, sk.NUM_JOINTS, 3)[0]
+    left = first[sk.JOINT_INDEX["lhip"]] - first[sk.JOINT_INDEX["rhip"]]
+    a = -np.arctan2(left[1], left[0])
+    c, s = np.cos(a), np.sin(a)
+    x = c * rel[..., 0] - s * rel[..., 1]
+    return np.stack([x, rel[..., 2]], axis=-1)
+
+
+class LatentGallery(QWidget):
+    """See the module doc. Feed it :meth:`set_detail` with the snapshot's ``latent_detail``."""
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        layout = QVBoxLayout(self)
+        layout.setContentsMargins(0, 0, 0, 0)
+        self.plot = pg.PlotWidget()
+        self.plot.setAspectLocked(True)
+        self.plot.hideAxis("bottom")
+        self.plot.hideAxis("left")
+        self.plot.setMenuEnabled(False)
+        self.plot.setToolTip("Each latent dimension at -2 sigma (blue), 0 (grey), +2 sigma (orange); "
+                             "under each: the joints it moves most")  # fmt: skip
+        self.lines = [self.plot.plot(pen=pg.mkPen(c, width=1.2), connect="pairs") for c in OFFSET_COLOURS]
+        self.marks = pg.ScatterPlotItem(size=6, pen=None, brush="#ff3b30")
+        self.plot.addItem(self.marks)
+        self.labels: list[pg.TextItem] = []
+        self._font = QFont()
+        self._font.setPointSize(7)
+        layout.addWidget(self.plot, 1)
+        self.detail: Any = None
+        self.influential: list[int] = []
+
+    def set_detail(self, detail: Any) -> None:
+        """Draw a :class:`~engine.studio.latent_views.LatentDetail` (None clears)."""
+        if detail is self.detail:
+            return
+        self.detail = detail
+        for t in self.labels:
+            self.plot.removeItem(t)
+        self.labels = []
+        if detail is None:
+            for line in self.lines:
+                line.setData([], [])
+            self.marks.setData([], [])
+            return
+        sweep = np.asarray(detail.sweep, float)  # (L, 3, 22, 3)
+        L = sweep.shape[0]
+        influence = detail.influence
+        self.influential = [] if influence is None else [int(i) for i in np.argsort(influence)[::-1][:5]]
+        segs: list[list[np.ndarray]] = [[], [], []]
+        marks = []
+        for d in range(L):
+            ox, oy = (d % COLUMNS) * CELL_W, -(d // COLUMNS) * CELL_H
+            v = front_view(sweep[d]) + np.array([ox, oy])
+            for k in range(3):
+                segs[k].append(v[k][np.array(_BONES).ravel()])
+            top = np.argsort(detail.motion[d])[::-1][:3]
+            marks.append(v[2][top])
+            colour = INFLUENCE_COLOUR if d in self.influential else "#c8ccd4"
+            text = pg.TextItem(f"d{d}\n{sk.JOINT_NAMES[top[0]]}", color=colour, anchor=(0.5, 0))
+            text.setFont(self._font)
+            text.setPos(ox, oy - 1.05)  # under the feet (the root sits at the cell origin)
+            self.plot.addItem(text)
+            self.labels.append(text)
+        for k in range(3):
+            pts = np.concatenate(segs[k])
+            self.lines[k].setData(pts[:, 0], pts[:, 1], connect="pairs")
+        m = np.concatenate(marks)
+        self.marks.setData(m[:, 0], m[:, 1])

@@ -1,6 +1,7 @@
 """What the app's helpers may use of the window they serve, as typed protocols.
 
-The studio's helpers (saving, drawing, failure countdowns, ghost status, measuring) take
+The studio's helpers (saving, drawing, failure countdowns, ghost status, measuring,
+range re-solves, the authoring entries) take
 the main window as a :class:`StudioShell`: the session, the widgets and the few window
 services they call, and nothing else. The menu parts shared with the pose window take a
 :class:`ViewWindow`. Both are ``runtime_checkable``; a test checks that
@@ -22,9 +23,10 @@ import numpy as np
 
 if TYPE_CHECKING:
     from PyQt6.QtCore import pyqtBoundSignal
-    from PyQt6.QtWidgets import QLabel, QMenuBar, QStatusBar
+    from PyQt6.QtWidgets import QDialog, QLabel, QMainWindow, QMenuBar, QStatusBar
 
     from app.busy import BusyNotice
+    from app.job_runner import JobRunner
     from app.undo import SceneUndo
     from engine.motion.clip import Motion
     from engine.studio.session import Session
@@ -33,6 +35,7 @@ if TYPE_CHECKING:
     from widgets.optimizer_panel import OptimizerPanel
     from widgets.plots import LossPlots
     from widgets.sensor_panel import SensorPanel
+    from widgets.timeline import Timeline
     from widgets.viewport import Viewport
 
 
@@ -95,6 +98,14 @@ class StudioShell(Protocol):
         Emitted with the frame of each drawn snapshot.
     status_engine, status_gui, status_warnings : QLabel
         The status bar's solver, view and warning figures.
+    timeline : Timeline
+        The play bar, with the frame range selected on it.
+    range_jobs : JobRunner or None
+        The runner of range re-solves (:mod:`app.range_actions`), made on first use.
+    range_dialog : QDialog or None
+        The last Re-solve range dialog shown (tests answer it).
+    pose_windows : list of QMainWindow
+        The pose windows opened from File ▸ New pose (:mod:`app.authoring_actions`).
     """
 
     session: Session
@@ -114,6 +125,10 @@ class StudioShell(Protocol):
     status_engine: QLabel
     status_gui: QLabel
     status_warnings: QLabel
+    timeline: Timeline
+    range_jobs: JobRunner | None
+    range_dialog: QDialog | None
+    pose_windows: list[QMainWindow]
 
     def show_error(self, title: str, message: str) -> None: ...
 

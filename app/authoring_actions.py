@@ -11,14 +11,20 @@ dialog (:mod:`app.export_video_dialog`).
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Callable
+from typing import TYPE_CHECKING
 
+from PyQt6.QtGui import QAction
 from PyQt6.QtWidgets import (
-    QComboBox, QDialog, QDialogButtonBox, QDoubleSpinBox, QFormLayout, QMenu, QMessageBox,
+    QComboBox, QDialog, QDialogButtonBox, QDoubleSpinBox, QFormLayout, QMenu, QMessageBox, QWidget,
 )  # fmt: skip
 
 from engine import skeleton as sk
 from engine.errors import UserError
+
+if TYPE_CHECKING:
+    from app.pose_window import PoseWindow
+    from app.shell import StudioShell
 
 #: The starting poses offered: the pose model's average pose (its latent zero) or a clip frame.
 MEAN, CLIP = "a neutral standing pose", "the clip's current frame"
@@ -27,7 +33,7 @@ MEAN, CLIP = "a neutral standing pose", "the clip's current frame"
 class NewPoseDialog(QDialog):
     """Height (metres) and starting pose."""
 
-    def __init__(self, parent: Any, has_clip: bool) -> None:
+    def __init__(self, parent: QWidget | None, has_clip: bool) -> None:
         super().__init__(parent)
         self.setWindowTitle("New pose")
         form = QFormLayout(self)
@@ -44,7 +50,7 @@ class NewPoseDialog(QDialog):
         form.addRow(box)
 
 
-def open_pose_window(window: Any, height: float, from_clip: bool):
+def open_pose_window(window: StudioShell, height: float, from_clip: bool) -> PoseWindow:
     """Open a pose window over ``window`` (kept on ``window.pose_windows``) and return it."""
     from app.pose_window import PoseWindow
     from engine.authoring.session import AuthoringSession
@@ -52,13 +58,13 @@ def open_pose_window(window: Any, height: float, from_clip: bool):
     session = window.session
     clip = session.motion if from_clip else None
     pose = PoseWindow(AuthoringSession.new(height, clip, session.frame))
-    window.pose_windows = [w for w in getattr(window, "pose_windows", []) if w.isVisible()] + [pose]
+    window.pose_windows = [p for p in window.pose_windows if p.isVisible()] + [pose]
     pose.resize(1200, 800)
     pose.show()
     return pose
 
 
-def new_pose(window: Any) -> None:
+def new_pose(window: StudioShell) -> None:
     dialog = NewPoseDialog(window, window.session.motion is not None)
     if dialog.exec() != QDialog.DialogCode.Accepted:
         return
@@ -68,7 +74,7 @@ def new_pose(window: Any) -> None:
         QMessageBox.warning(window, "New pose", str(exc))
 
 
-def export_video(window: Any) -> str | None:
+def export_video(window: StudioShell) -> str | None:
     """File ▸ Export video...: the loaded clip with the current tracker preset, through
     the video options dialog (:mod:`app.export_video_dialog`)."""
     from app.export_video_dialog import export_video as export
@@ -81,7 +87,7 @@ def export_video(window: Any) -> str | None:
                   window.files.suggested_name("mp4", "video"))  # fmt: skip
 
 
-def add_menu_entries(window: Any, file_menu: QMenu, action) -> dict:
+def add_menu_entries(window: StudioShell, file_menu: QMenu, action: Callable[..., QAction]) -> dict[str, QAction]:
     """Add New pose and Export video to ``file_menu`` with the menus' ``action`` helper."""
     return {"new_pose": action(window, file_menu, "&New pose...", lambda: new_pose(window), "Ctrl+Shift+N"),
             "export_video": action(window, file_menu, "Export &video...", lambda: export_video(window))}  # fmt: skip

@@ -72,6 +72,9 @@ class MainWindow(QMainWindow):
         self.settings = settings or QSettings("dragposer-studio", "studio")
         self.session = Session(method=method)
         self.opened_motion = None  # the clip as opened, which a range re-solve replaces
+        self.range_jobs = None  # a JobRunner made on the first re-solve (app.range_actions)
+        self.range_dialog = None  # the last Re-solve range dialog (tests answer it)
+        self.pose_windows: list[QMainWindow] = []  # File ▸ New pose (app.authoring_actions)
         self._build_widgets()
         self.busy = BusyNotice(self.viewport, self.statusBar())
         self.busy.begin(method, -1, "Starting")

@@ -6,7 +6,8 @@ history: every gesture calls one model method (one undo step) and the window red
 what the model's events say changed. A drag on a joint creates a target there and moves
 it and selects the joint (its rotation rings show: a ring dragged turns it about that
 world axis); a drag on a target's sphere moves it; a drag on the hips moves the whole
-body and their ring turns it (root motion). Every move solves the pose again (the
+body sideways and lowers or raises the pelvis up and down the screen, over the planted
+feet (a squat), and their ring turns it (root motion). Every move solves the pose again (the
 continuous solve, on the GUI thread: a few milliseconds with targets only). The target
 list enables, weights and clears targets; the key timeline (:mod:`app.pose_timeline`)
 adds the current pose as a key at the current frame, drags and deletes keys, scrubs
@@ -70,6 +71,9 @@ class PoseWindow(QMainWindow):
         # in pose mode a plain press grabs a joint too (the studio's view needs Ctrl, where
         # a plain press on the body turns the camera); off every joint the camera turns
         self.viewport.joints.plain_press_grabs_joints = True
+        # the hips move on an upright plane: up and down the screen lowers or raises the
+        # pelvis (a squat), sideways moves the body (AuthoringSession.drag_hips)
+        self.viewport.joints.upright = frozenset({"root"})
         self.targets = TargetList()
         self.targets.enabledChanged.connect(lambda j, on: self.edit_target(j, enabled=on))
         self.targets.weightChanged.connect(lambda j, w: self.edit_target(j, weight=w))
@@ -90,7 +94,7 @@ class PoseWindow(QMainWindow):
         self._dock("Keys", self.keys, Qt.DockWidgetArea.BottomDockWidgetArea)
         body = self.addToolBar("Body")
         body.setMovable(False)
-        body.addWidget(QLabel(" Body: drag the hips to move it; facing "))
+        body.addWidget(QLabel(" Body: drag the hips to move it (down: squat); facing "))
         self.facing = QDoubleSpinBox(minimum=-180.0, maximum=180.0, decimals=1, singleStep=15.0, suffix=" deg",
                                      wrapping=True)  # fmt: skip
         self.facing.setToolTip("Where the whole body faces, degrees about the vertical (0: towards -Y, the front view)")

@@ -14,15 +14,18 @@ one whose clip was replaced meanwhile is dropped with a message.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from collections.abc import Callable
+from typing import TYPE_CHECKING
 
-from PyQt6.QtWidgets import QCheckBox, QDialog, QDialogButtonBox, QFormLayout, QMenu, QMessageBox, QSpinBox
+from PyQt6.QtGui import QAction
+from PyQt6.QtWidgets import QCheckBox, QDialog, QDialogButtonBox, QFormLayout, QMenu, QMessageBox, QSpinBox, QWidget
 
 from app.job_runner import JobRunner
 from app.undo import StateCommand
 from engine.errors import UserError
 
 if TYPE_CHECKING:
+    from app.shell import StudioShell
     from engine.authoring.range_edit import RangeEdit
     from engine.motion.clip import Motion
 
@@ -31,7 +34,7 @@ class RangeDialog(QDialog):
     """Range, blend and what to add; starts on the timeline's selected range, else on
     the current frame."""
 
-    def __init__(self, parent: Any, frames: int, current: int, selection: tuple[int, int] | None = None) -> None:
+    def __init__(self, parent: QWidget | None, frames: int, current: int, selection: tuple[int, int] | None = None) -> None:
         super().__init__(parent)
         self.setWindowTitle("Re-solve range")
         form = QFormLayout(self)
@@ -51,10 +54,10 @@ class RangeDialog(QDialog):
         form.addRow(box)
 
 
-def range_runner(window: Any) -> JobRunner:
+def range_runner(window: StudioShell) -> JobRunner:
     """The window's runner of range re-solves (made on first use; it cancels its job
     when the window closes)."""
-    runner = getattr(window, "range_jobs", None)
+    runner = window.range_jobs
     if runner is None:
         runner = window.range_jobs = JobRunner(window)
         runner.finished.connect(lambda ok, message: _finished(window, ok, message))
@@ -62,7 +65,7 @@ def range_runner(window: Any) -> JobRunner:
     return runner
 
 
-def resolve_range(window: Any, start: int, end: int, blend: int = 8, floor: bool = True,
+def resolve_range(window: StudioShell, start: int, end: int, blend: int = 8, floor: bool = True,
                   scene: bool = True) -> JobRunner:  # fmt: skip
     """Start re-solving ``start..end`` of the window's clip on a worker thread; when it
     ends the result replaces the clip (one undo step). Returns the runner: its
@@ -92,7 +95,7 @@ def resolve_range(window: Any, start: int, end: int, blend: int = 8, floor: bool
     return runner
 
 
-def _finished(window: Any, ok: bool, message: str) -> None:
+def _finished(window: StudioShell, ok: bool, message: str) -> None:
     if ok:
         window.statusBar().showMessage("Range re-solved (Ctrl+Z puts the clip back)", 5000)
     elif message == "cancelled":
@@ -101,7 +104,7 @@ def _finished(window: Any, ok: bool, message: str) -> None:
         QMessageBox.warning(window, "Re-solve range", message)
 
 
-def resolve_range_dialog(window: Any) -> None:
+def resolve_range_dialog(window: StudioShell) -> None:
     session = window.session
     if session.motion is None:
         QMessageBox.information(window, "Re-solve range", "Open a clip first.")
@@ -117,7 +120,7 @@ def resolve_range_dialog(window: Any) -> None:
         QMessageBox.warning(window, "Re-solve range", str(exc))
 
 
-def add_edit_entries(window: Any, edit_menu: QMenu, action) -> dict:
+def add_edit_entries(window: StudioShell, edit_menu: QMenu, action: Callable[..., QAction]) -> dict[str, QAction]:
     """Add Re-solve range to ``edit_menu`` with the menus' ``action`` helper."""
     edit_menu.addSeparator()
     return {"resolve_range": action(window, edit_menu, "Re-solve &range...", lambda: resolve_range_dialog(window))}

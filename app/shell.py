@@ -1,6 +1,7 @@
 """What the app's helpers may use of the window they serve, as typed protocols.
 
-The studio's helpers (saving, drawing, failure countdowns, ghost status, measuring) take
+The studio's helpers (saving, drawing, failure countdowns, ghost status, measuring,
+range re-solves, the authoring entries) take
 the main window as a :class:`StudioShell`: the session, the widgets and the few window
 services they call, and nothing else. The menu parts shared with the pose window take a
 :class:`ViewWindow`. Both are ``runtime_checkable``; a test checks that
@@ -15,16 +16,16 @@ take a shell themselves, and naming their classes here would make an import loop
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
 
 if TYPE_CHECKING:
     from PyQt6.QtCore import QSettings, Qt, pyqtBoundSignal
-    from PyQt6.QtWidgets import QDockWidget, QLabel, QMenuBar, QStatusBar
+    from PyQt6.QtWidgets import QDialog, QDockWidget, QLabel, QMainWindow, QMenuBar, QStatusBar
 
     from app.busy import BusyNotice
+    from app.job_runner import JobRunner
     from app.undo import SceneUndo
     from engine.motion.clip import Motion
     from engine.studio.session import Session
@@ -100,6 +101,14 @@ class StudioShell(Protocol):
         The window's persistent settings.
     tabifiedDockWidgetActivated : bound signal (QDockWidget)
         A tabbed dock was brought to the front.
+    timeline : Timeline
+        The play bar, with the frame range selected on it.
+    range_jobs : JobRunner or None
+        The runner of range re-solves (:mod:`app.range_actions`), made on first use.
+    range_dialog : QDialog or None
+        The last Re-solve range dialog shown (tests answer it).
+    pose_windows : list of QMainWindow
+        The pose windows opened from File ▸ New pose (:mod:`app.authoring_actions`).
     """
 
     session: Session
@@ -122,6 +131,9 @@ class StudioShell(Protocol):
     timeline: Timeline
     settings: QSettings
     tabifiedDockWidgetActivated: pyqtBoundSignal
+    range_jobs: JobRunner | None
+    range_dialog: QDialog | None
+    pose_windows: list[QMainWindow]
 
     def show_error(self, title: str, message: str) -> None: ...
 

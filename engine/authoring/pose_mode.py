@@ -67,6 +67,9 @@ _FOOT_OF = {"lankle": "l", "ltoe": "l", "rankle": "r", "rtoe": "r"}
 #: Lowest pelvis height the crouch moves it to, as a share of its standing height (a deep
 #: squat; the two-bone legs cannot fold much further).
 LOWEST_ROOT = 0.45
+#: A dragged pelvis crouches once it is this far below its standing height, metres: less
+#: is the jitter of a level drag of the hips.
+SQUAT_FROM = 0.02
 
 
 @dataclass
@@ -171,6 +174,12 @@ class PoseMode:
         latent = encode_frames(vae, motion, [frame])[0]
         return cls(vae, height, latent, motion.root_pos[frame, :2], heading_deg(motion.local_rot[frame, 0]), options)
 
+    @property
+    def standing_root(self) -> float:
+        """Height (metres) of the pelvis standing in the starting pose: the highest the
+        crouch and a dragged pelvis put it."""
+        return self._standing_root
+
     # -- targets -------------------------------------------------------------------
     def set_target(self, joint: str, position=None, rotation=None, weight: float | None = None,
                    enabled: bool | None = None) -> JointTarget:  # fmt: skip
@@ -201,6 +210,30 @@ class PoseMode:
 
     def clear_targets(self) -> None:
         self.targets.clear()
+
+    def drag_hips(self, position: np.ndarray) -> Pose:
+        """The hips dragged to ``position (3,)`` metres. The level part of the move is root
+        motion: the whole body and its feet move. The height lowers the pelvis over the
+        planted feet, so the knees bend: a target on ``root``, kept between
+        :data:`LOWEST_ROOT` of :attr:`standing_root` and :attr:`standing_root`. A pelvis
+        dragged back up to standing height loses the target; one less than
+        :data:`SQUAT_FROM` below it gets none, so the jitter of a level drag does not
+        crouch. The targets are solved from there."""
+        p = np.asarray(position, float)
+        level = np.array([p[0] - self.pose.root_pos[0], p[1] - self.pose.root_pos[1], 0.0])
+        standing = self._standing_root
+        z = float(np.clip(p[2], LOWEST_ROOT * standing, standing))
+        held = self.targets.get("root")
+        if np.any(level):
+            self.pose = self.pose.moved(level)
+            self.plant_where_standing()
+        if held is not None and z >= standing:
+            self.remove_target("root")
+        elif held is not None or standing - z > SQUAT_FROM:
+            self.set_target("root", np.array([*self.pose.root_pos[:2], z]))
+        if self.targets:
+            self.solve()
+        return self.pose
 
     # -- solving -------------------------------------------------------------------
     def _moved_feet(self) -> set[str]:

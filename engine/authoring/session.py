@@ -175,10 +175,11 @@ class AuthoringSession:
 
     def drag_joint(self, joint: str, position: np.ndarray) -> None:
         """Create or move the target on ``joint`` to ``position (3,)`` metres and solve;
-        the hips (``root``) move the whole body instead (:meth:`move_body`)."""
+        the hips (``root``) move the whole body and the pelvis's height instead
+        (:meth:`engine.authoring.pose_mode.PoseMode.drag_hips`)."""
         p = np.asarray(position, float)
         if joint == "root":
-            self.move_body(p - self.mode.pose.root_pos)
+            self.edit("move body", lambda: self.mode.drag_hips(p), ("body", "root", "position"))
             return
         self.edit(f"move target {joint}", lambda: self.mode.set_target(joint, p), ("target", joint, "position"),
                   solve=True)  # fmt: skip

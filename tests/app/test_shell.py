@@ -13,7 +13,8 @@ from app.shell import StudioShell, ViewWindow
 APP = Path(__file__).resolve().parents[2] / "app"
 
 #: The helpers typed against :class:`StudioShell`, and the names they call the window by.
-HELPERS = ("clip_saving.py", "drawing.py", "failures.py", "ghost_status.py", "latent_views.py", "measure.py")
+HELPERS = ("clip_saving.py", "drawing.py", "failures.py", "ghost_status.py", "latent_views.py", "measure.py",
+           "range_actions.py", "authoring_actions.py")
 WINDOW_NAMES = {"window", "w"}
 
 

@@ -25,6 +25,20 @@ EditCallback = Callable[[str, dict[str, Any]], None]
 
 _LABEL_LIFT = np.array([0.0, 0.0, 0.07])  # metres above the point, so the text clears the handle
 _HANDLE_RADIUS = 0.04  # metres
+#: VTK observer priorities of the gizmos' widgets (3D widgets default to 0.5; a higher
+#: one sees a press first). A point handle inside an editable box is covered by the
+#: box's faces on screen: the small handle must be asked first, and the box takes the
+#: press only when no handle was hit.
+HANDLE_PRIORITY = 0.6
+BOX_PRIORITY = 0.5
+
+
+def set_priority(widget: Any, priority: float) -> None:
+    """Give an enabled VTK 3D ``widget`` the observer ``priority``: its interactor
+    observers are registered when it is switched on, so it is switched off and on again."""
+    widget.Off()
+    widget.SetPriority(priority)
+    widget.On()
 
 
 class GizmoAdapter:
@@ -81,6 +95,7 @@ class GizmoAdapter:
             moved, center=tuple(center), radius=_HANDLE_RADIUS, color=style.GIZMO,
             interaction_event="always", test_callback=False, style="wireframe",
         )  # fmt: skip
+        set_priority(self.widget, HANDLE_PRIORITY)
         self.widget.AddObserver("StartInteractionEvent", lambda *_: setattr(self, "dragging", True))
         self.widget.AddObserver("EndInteractionEvent", lambda *_: setattr(self, "dragging", False))
 
@@ -189,6 +204,7 @@ class BoxAdapter(GizmoAdapter):
                 self._box_moved, bounds=self._bounds, factor=1.0,
                 rotation_enabled=False, color=style.GIZMO, interaction_event="end",
             )  # fmt: skip
+            set_priority(self.widget, BOX_PRIORITY)
 
     def _box_moved(self, box: pv.PolyData) -> None:
         b = np.asarray(box.bounds, float)

@@ -19,6 +19,13 @@ import pyvista as pv
 from engine.skeleton import JOINT_NAMES
 
 PICK_RADIUS_PX = 14.0
+#: Priority of the dragger's press observer on the interactor: below the gizmos' point
+#: handles (:data:`widgets.viewport.gizmo_adapters.HANDLE_PRIORITY`), so a pin's handle
+#: on a joint is its own, above their boxes (``BOX_PRIORITY``) and the camera style.
+PRESS_PRIORITY = 0.55
+#: An upright joint (:attr:`JointDragger.upright`) moves on a level-normal plane while
+#: the view's direction is within asin(0.87) = 60 degrees of level.
+UPRIGHT_STEEPEST = 0.87
 
 
 class JointDragger:
@@ -43,17 +50,25 @@ class JointDragger:
         #: A press without Ctrl grabs a joint too when no target is under it (the pose
         #: window: the studio keeps a plain press on the body for the camera).
         self.plain_press_grabs_joints = False
+        #: Joints (and targets, by joint) dragged on an upright plane facing the camera
+        #: instead of the camera-facing one, so that a mouse moved up or down the screen
+        #: moves them straight up or down (the pose window's hips: a squat) while a
+        #: sideways move stays level (see :meth:`drag_normal`).
+        self.upright: frozenset[str] = frozenset()
         self._origin = np.zeros(3)
         iren = plotter.iren.interactor
         self._style = iren.GetInteractorStyle()
-        # pyvista's style handles press/release in its own observers; ours run first
-        # (priority 10) and abort the event when they take it. A style observer on
-        # MouseMoveEvent replaces the style's handler (VTK's HandleObservers rule), so
-        # mouse moves are forwarded explicitly when no joint is held.
+        # The press is watched on the interactor between the gizmos' widgets (see
+        # PRESS_PRIORITY) and the style, and aborted when taken: a target or a ring
+        # inside an editable box is then grabbed before the box's faces, which cover it
+        # on screen. A style observer on MouseMoveEvent replaces the style's handler
+        # (VTK's HandleObservers rule), so mouse moves are forwarded explicitly when
+        # nothing is held.
         self._commands = {}
-        for event in ("LeftButtonPressEvent", "MouseMoveEvent"):
-            tag = self._style.AddObserver(event, self._handle, 10.0)
-            self._commands[event] = self._style.GetCommand(tag)
+        tag = iren.AddObserver("LeftButtonPressEvent", self._handle, PRESS_PRIORITY)
+        self._commands["LeftButtonPressEvent"] = iren.GetCommand(tag)
+        tag = self._style.AddObserver("MouseMoveEvent", self._handle, 10.0)
+        self._commands["MouseMoveEvent"] = self._style.GetCommand(tag)
         # The release is watched on the interactor, ahead of every widget (they observe
         # it at priority 0.5): a VTK sphere widget that has never been grabbed takes the
         # first release it sees, and one made during a drag (the pin a Ctrl-drag creates)
@@ -147,13 +162,25 @@ class JointDragger:
             ends.append(w[:3] / w[3])
         return ends[0], ends[1] - ends[0]
 
+    def drag_normal(self) -> np.ndarray:
+        """Normal (3,) of the plane the held joint or target moves on: the view direction,
+        made level for an :attr:`upright` one unless the camera looks steeply down (from
+        above, a level plane is all the mouse can reach)."""
+        cam = self._plotter.camera
+        normal = np.asarray(cam.focal_point, float) - np.asarray(cam.position, float)
+        name = self.target if self.target is not None else None if self.joint is None else JOINT_NAMES[self.joint]
+        if name in self.upright and abs(normal[2]) < UPRIGHT_STEEPEST * np.linalg.norm(normal):
+            normal[2] = 0.0
+        return normal
+
     def move(self, x: float, y: float) -> None:
         """Drag the grabbed joint or target to display pixel (x, y)."""
+        if self.joint is None and self.target is None:
+            return
         start, direction = self.ray(x, y)
-        cam = self._plotter.camera
-        normal = np.asarray(cam.focal_point) - np.asarray(cam.position)
+        normal = self.drag_normal()
         denom = float(direction @ normal)
-        if abs(denom) < 1e-12 or (self.joint is None and self.target is None):
+        if abs(denom) < 1e-12:
             return
         t = float((self._origin - start) @ normal) / denom
         if self.target is not None:

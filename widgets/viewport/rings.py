@@ -1,7 +1,10 @@
 """Rotation handles: three rings about a joint (about world X red, Y green, Z blue) and a
 facing arrow, for turning a joint by dragging a ring rather than by a modifier key.
 
-A press within :data:`RING_PICK_PX` of a ring's drawn circle grabs it; every mouse move
+A press within :data:`RING_PICK_PX` of a ring's drawn circle grabs it, unless it lands on
+the hub (the joint or target sphere the rings surround, :data:`HUB_RADIUS`): a ring seen
+edge-on is a line through its centre, and a press on the sphere there is meant for the
+sphere. Every mouse move
 then gives the angle swept about the ring's axis since the press (the mouse ray meets
 the ring's plane; radians, right-handed about the axis), which the dragger reports to
 its owner. The ring about +Z turns a joint the way a head turns to look left or right.
@@ -16,6 +19,11 @@ import pyvista as pv
 
 #: A press this close to a ring's circle grabs it, pixels.
 RING_PICK_PX = 8.0
+#: The hub of the rings: a press this close to their centre on screen (metres, the
+#: target sphere's 4.5 cm and a margin; at least :data:`HUB_MIN_PX` pixels, a joint's pick
+#: radius) is left to the sphere or joint there.
+HUB_RADIUS = 0.055
+HUB_MIN_PX = 14.0
 #: Points per ring (drawn and picked).
 RING_POINTS = 64
 AXES = np.eye(3)
@@ -118,7 +126,7 @@ class RotationRings:
     def pick(self, to_display: Callable[[np.ndarray], np.ndarray], x: float, y: float) -> int | None:
         """The ring (0, 1, 2: about X, Y, Z) whose circle passes within
         :data:`RING_PICK_PX` of display pixel (x, y), the nearest; None if none."""
-        if not self.visible:
+        if not self.visible or self.on_hub(to_display, x, y):
             return None
         best, hit = np.inf, None
         for k, mesh in enumerate(self.meshes):
@@ -135,6 +143,14 @@ class RotationRings:
             if d + RING_PICK_PX * edge_on < best:
                 best, hit = d + RING_PICK_PX * edge_on, k
         return hit
+
+    def on_hub(self, to_display: Callable[[np.ndarray], np.ndarray], x: float, y: float) -> bool:
+        """Whether display pixel (x, y) is on the rings' hub (see :data:`HUB_RADIUS`)."""
+        up = np.asarray(self._plotter.camera.up, float)
+        up /= np.linalg.norm(up) or 1.0
+        centre, edge = to_display(np.stack([self.center, self.center + HUB_RADIUS * up]))
+        hub_px = max(float(np.linalg.norm(edge - centre)), HUB_MIN_PX)
+        return float(np.linalg.norm(centre - [x, y])) <= hub_px
 
     def begin(self, axis: int, ray: tuple[np.ndarray, np.ndarray]) -> None:
         """Grab ring ``axis`` where the mouse ray ``(origin, direction)`` meets its plane."""

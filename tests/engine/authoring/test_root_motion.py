@@ -47,3 +47,28 @@ def test_a_bake_interpolates_the_keys_root_and_heading(vae):
     assert turn[10] == pytest.approx(interpolate([0, 20, 40], unwrapped, 10, "cubic")[0], abs=1.0)
     steps = np.abs((np.diff(yaw) + 180.0) % 360.0 - 180.0)
     assert steps[20:].max() < 5.0  # 170 -> -170 turns the short way (20 degrees), not 340
+
+
+def test_dragging_the_hips_down_squats_sideways_moves_and_back_up_stands(vae):
+    from engine import skeleton as sk
+    from engine.authoring.pose_mode import LOWEST_ROOT, SQUAT_FROM, PoseMode
+
+    m = PoseMode(vae, 1.75)
+    ankles = [sk.JOINT_INDEX["lankle"], sk.JOINT_INDEX["rankle"]]
+    start = m.pose.positions.copy()
+    standing = m.standing_root
+    m.drag_hips(start[0] - [0.0, 0.0, SQUAT_FROM / 2])  # the jitter of a level drag
+    assert m.targets == {} and m.pose.root_pos[2] == pytest.approx(standing)
+    for k in range(1, 11):  # 30 cm down in ten drag events
+        m.drag_hips(start[0] - [0.0, 0.0, 0.03 * k])
+    assert standing - m.pose.root_pos[2] == pytest.approx(0.30, abs=0.015)
+    assert np.abs(m.pose.positions[ankles] - start[ankles]).max() < 1e-3  # the planted feet stay
+    assert np.allclose(m.pose.root_pos[:2], start[0, :2], atol=1e-6)
+    m.drag_hips(m.pose.root_pos + [0.2, 0.0, 0.0])  # sideways while squatting: the body travels, still low
+    assert m.targets["root"].position[0] == pytest.approx(start[0, 0] + 0.2)
+    assert np.allclose(m.pose.positions[ankles, 0] - start[ankles, 0], 0.2, atol=1e-3)
+    assert standing - m.pose.root_pos[2] > 0.25
+    m.drag_hips(m.pose.root_pos - [0.0, 0.0, 5.0])  # no lower than a deep squat
+    assert m.targets["root"].position[2] == pytest.approx(LOWEST_ROOT * standing)
+    m.drag_hips(m.pose.root_pos + [0.0, 0.0, 5.0])  # back up: standing, the target gone
+    assert "root" not in m.targets

@@ -12,8 +12,10 @@ import threading
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
-from PyQt6.QtCore import QObject, Qt, QTimer, pyqtSignal
+from PyQt6.QtCore import QObject, QTimer, pyqtSignal
 from PyQt6.QtWidgets import QProgressDialog, QWidget
+
+from app.job_runner import cancellable_progress
 
 if TYPE_CHECKING:
     from engine.methods.base import Method
@@ -61,14 +63,10 @@ class ReconstructionExport(QObject):
             raise RuntimeError("an export is already running")
         self.done, self.total, self._result = 0, len(job.motion), None
         self._cancel.clear()
-        self.dialog = QProgressDialog(f"Reconstructing {self.total} frames with {job.method}...", "Cancel",
-                                      0, self.total, self._parent)  # fmt: skip
-        self.dialog.setWindowTitle("Save reconstruction")
-        self.dialog.setWindowModality(Qt.WindowModality.NonModal)  # the studio stays usable
-        self.dialog.setMinimumDuration(0)
-        self.dialog.setAutoClose(False)
-        self.dialog.setAutoReset(False)
-        self.dialog.canceled.connect(self.cancel)
+        # not modal: the studio stays usable
+        self.dialog = cancellable_progress(self._parent, "Save reconstruction",
+                                           f"Reconstructing {self.total} frames with {job.method}...", self.total,
+                                           self.cancel)  # fmt: skip
         self.dialog.show()
         self.thread = threading.Thread(target=self._run, args=(job,), name="bvh-export", daemon=True)
         self.thread.start()

@@ -70,13 +70,7 @@ class JobRunner(QObject):
         self._on_done = on_done
         self._active = QApplication.activeWindow()  # gets the keyboard back from the dialog
         self._cancel.clear()
-        dialog = QProgressDialog(job.label, "Cancel", 0, 0, self._parent)
-        dialog.setWindowTitle(job.title)
-        dialog.setWindowModality(Qt.WindowModality.WindowModal if modal else Qt.WindowModality.NonModal)
-        dialog.setMinimumDuration(SHOW_AFTER_MS)
-        dialog.setAutoClose(False)
-        dialog.setAutoReset(False)
-        dialog.canceled.connect(self.cancel)
+        dialog = cancellable_progress(self._parent, job.title, job.label, 0, self.cancel, modal, SHOW_AFTER_MS)
         dialog.setValue(0)  # starts the dialog's own timer: it shows after SHOW_AFTER_MS
         self.dialog = dialog
         self.thread = threading.Thread(target=self._run, args=(job,), name="authoring-job", daemon=True)
@@ -168,3 +162,18 @@ class JobRunner(QObject):
     def _close_if_hidden(self) -> None:
         if self._window is not None and not self._window.isVisible():
             self.shutdown()
+
+
+def cancellable_progress(parent: QWidget | None, title: str, label: str, maximum: int, cancel: Callable[[], None],
+                         modal: bool = False, show_after_ms: int = 0) -> QProgressDialog:  # fmt: skip
+    """A progress dialog for work on another thread: Cancel calls ``cancel`` (the work stops
+    between its steps), and the dialog neither closes nor resets itself when the bar is
+    full, since the result is applied after it (``maximum`` 0: a busy bar)."""
+    dialog = QProgressDialog(label, "Cancel", 0, maximum, parent)
+    dialog.setWindowTitle(title)
+    dialog.setWindowModality(Qt.WindowModality.WindowModal if modal else Qt.WindowModality.NonModal)
+    dialog.setMinimumDuration(show_after_ms)
+    dialog.setAutoClose(False)
+    dialog.setAutoReset(False)
+    dialog.canceled.connect(cancel)
+    return dialog

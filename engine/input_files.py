@@ -107,3 +107,15 @@ def _max_depth(text: str) -> int:
         elif ch in "]}":
             depth -= 1
     return deepest
+
+
+def file_sha256(path: str | Path) -> str:
+    """Hex SHA-256 of a file's bytes, read in 1 MiB chunks (which VAE a bank or a latent
+    map belongs to, what data a prepared set was made from)."""
+    import hashlib
+
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for chunk in iter(lambda: fh.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()

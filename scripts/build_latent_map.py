@@ -23,7 +23,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from engine.latent.projection import fit_map, file_sha256, with_thresholds  # noqa: E402
+from engine.input_files import file_sha256  # noqa: E402
+from engine.latent.projection import fit_map, with_thresholds  # noqa: E402
 from engine.latent.readouts import DEFAULT_BANK, NearestLatents, bank_latents  # noqa: E402
 
 

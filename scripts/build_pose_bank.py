@@ -26,7 +26,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from engine import skeleton as sk  # noqa: E402
-from engine.solver.tracker_prior import ANCHORS, BANK_JOINTS, LAG, PoseBank, file_sha256  # noqa: E402
+from engine.input_files import file_sha256  # noqa: E402
+from engine.solver.tracker_prior import ANCHORS, BANK_JOINTS, LAG, PoseBank  # noqa: E402
 
 
 def bank_from_motions(motions, vae, k: int = 8, vae_sha256: str = "", stride: int = 1) -> PoseBank:

@@ -39,6 +39,7 @@ from tqdm import tqdm
 
 from engine.atomic import atomic_path, write_bytes
 from engine.errors import UserError
+from engine.input_files import file_sha256
 from engine.kinematics.features import encoder_input, mirror_motion, pose_from_motion
 from engine.motion.clip import Motion
 from engine.motion.retarget import CURRENT, load_with_report, manifest_entry, manifest_fps
@@ -67,14 +68,6 @@ class PrepareResult:
     reused: int = 0
     failed: list[tuple[str, str]] = field(default_factory=list)
     unchanged: bool = False
-
-
-def sha256_file(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
 
 
 def _save_npz(path: Path, **arrays: np.ndarray) -> None:
@@ -245,7 +238,7 @@ def prepare(
         raise UserError(f"no .bvh or .amc files found under {', '.join(map(str, inputs))}")
     splits, takes = split_files(files, eval_only)
     settings = {"format": FORMAT, "features": FEATURES_VERSION, "mirror": mirror, "eval_only": eval_only,
-                "retarget": CURRENT.version, "rig_map": sha256_file(rig_map) if rig_map else None}
+                "retarget": CURRENT.version, "rig_map": file_sha256(rig_map) if rig_map else None}
     man_path = out / "manifest.json"
     old = {}
     if man_path.is_file():
@@ -262,7 +255,7 @@ def prepare(
     for path, rel in bar:
         bar.set_postfix_str(rel[-40:])
         try:
-            digest = sha256_file(path)
+            digest = file_sha256(path)
             variants = [False, True] if (mirror and splits[rel] != "test") else [False]
             cached = [old.get(rel + ("#m" if m else "")) for m in variants]
             if all(c and c["sha256"] == digest and (out / c["shard"]).is_file() for c in cached):

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from engine.errors import UserError
+from engine.input_files import file_sha256
 
 DEFAULT_MAP = Path(__file__).resolve().parents[2] / "assets" / "models" / "latent_map.npz"
 #: Cells per side of the density grid.
@@ -180,14 +181,3 @@ def default_map() -> LatentMap | None:
     if m.vae_sha256 and m.vae_sha256 != file_sha256(vae):
         return None
     return m
-
-
-def file_sha256(path: str | Path) -> str:
-    """Hex SHA-256 of a file (which VAE a map belongs to)."""
-    import hashlib
-
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for chunk in iter(lambda: fh.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()

@@ -26,7 +26,6 @@ The bank belongs to the VAE whose encoder made its latents: the shipped bank
 from __future__ import annotations
 
 import functools
-import hashlib
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -34,6 +33,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from engine.input_files import file_sha256
 from engine.kinematics import quaternion as Q
 from engine.solver.bank_prefilter import Prefilter, nearest
 
@@ -308,14 +308,6 @@ def _anchor(joints: Sequence[str]) -> int:
             return list(joints).index(a)
     raise ValueError(f"no anchor ({' or '.join(ANCHORS)}) among {joints}")
 
-
-def file_sha256(path: str | Path) -> str:
-    """Hex SHA-256 of a file (which VAE a bank belongs to)."""
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for chunk in iter(lambda: fh.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()
 
 
 class TrackerHistory:

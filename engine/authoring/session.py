@@ -30,7 +30,6 @@ import numpy as np
 from engine import skeleton as sk
 from engine.authoring import events as ev
 from engine.authoring.bake import Baked
-from engine.authoring.character import Pose
 from engine.authoring.document import MAX_FRAMES, AuthoringScene
 from engine.authoring.history import Edit, History
 from engine.authoring.jobs import BakeJob
@@ -92,13 +91,8 @@ class AuthoringSession:
     def keys(self) -> list[Key]:
         return self.scene.keys
 
-    @property
-    def targets(self) -> dict:
-        return self.mode.targets
-
-    @property
-    def pose(self) -> Pose:
-        return self.mode.pose
+    targets = property(lambda self: self.mode.targets, doc="The pose mode's targets by joint.")
+    pose = property(lambda self: self.mode.pose, doc="The pose on screen (:class:`Pose`).")
 
     @property
     def dirty(self) -> bool:
@@ -259,9 +253,7 @@ class AuthoringSession:
         self.edit("settle pose", self.mode.settle)
 
     # -- constraints ---------------------------------------------------------------
-    def constraint_catalog(self) -> dict:
-        """The constraint kinds users may add, with their fields."""
-        return ConstraintList.catalog()
+    constraint_catalog = staticmethod(ConstraintList.catalog)  # the kinds users may add, with their fields
 
     def add_constraint(self, kind: str, **params: Any) -> None:
         """Add a ``kind`` constraint with ``params`` and solve."""

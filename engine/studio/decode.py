@@ -25,3 +25,16 @@ def decoded_on_pose(method: DecodesLatents, latent: np.ndarray, shown: np.ndarra
         return out
     base = np.asarray(method.decode_latent(np.asarray(shown, float)), float).reshape(sk.NUM_JOINTS, 3)
     return out + (np.asarray(pose, float) - base)
+
+
+def decode_request(method: object, name: str, latent: np.ndarray, shown: np.ndarray | None,
+                   pose: np.ndarray | None) -> tuple[np.ndarray | None, str]:  # fmt: skip
+    """A studio request to decode ``latent``: the pose (:func:`decoded_on_pose`, exact on
+    screen) and an empty message, or None and the error to report (a method without a
+    latent, or a decode that failed)."""
+    if not isinstance(method, DecodesLatents):
+        return None, f"{name}: cannot decode latents"
+    try:
+        return decoded_on_pose(method, latent, shown, pose), ""
+    except Exception as exc:  # the studio reports it and keeps running
+        return None, f"decode latent: {exc}"

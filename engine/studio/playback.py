@@ -89,3 +89,12 @@ class PlaybackClock:
                 return 0, LOOPED
             return num_frames - 1, ENDED
         return f, ""
+
+
+def is_jump(frame: int, last_solved: int, fps: float) -> bool:
+    """Whether solving ``frame`` after ``last_solved`` (negative: nothing solved since a
+    reset) is a jump: a seek backwards or more than 2 s ahead. Playback skipping a few
+    frames because the solver is slower than real time is not a jump: resetting then
+    would make every frame a first frame (solved offline, slower still) and the solver
+    would never catch up."""
+    return last_solved < 0 or frame < last_solved or frame - last_solved > 2 * fps

@@ -164,8 +164,7 @@ class Session:
         self._send(cmd.DecodeLatent(np.asarray(latent, float).copy()))
 
     def inspect_latent(self, joint: str = "") -> None:
-        """Ask for the frame on screen's term forces and dimension sweep (and ``joint``'s
-        most influential dimensions); they arrive in the snapshot's ``latent_detail``."""
+        """Ask for the frame's term forces, dimension sweep and ``joint``'s influences (snapshot ``latent_detail``)."""
         self._send(cmd.InspectLatent(str(joint)))
 
     # -- sensors and constraints -----------------------------------------------------
@@ -202,17 +201,15 @@ class Session:
         self.sensors.edit(joint, failures=failures)
 
     def tracked_position(self, joint: str, frame: int) -> np.ndarray:
-        """Position (3,), metres, of ``joint``'s tracker at ``frame`` before any drag offset:
-        :func:`engine.studio.clips.tracked_position` of the newest snapshot, the source
-        or the clip."""
+        """Position (3,), metres, of ``joint``'s tracker at ``frame`` before any drag offset
+        (:func:`engine.studio.clips.tracked_position`: newest snapshot, source or clip)."""
         return tracked_position(joint, frame, self.latest, self.source, self.motion, self.sensors.get(joint))
 
     # -- clip ------------------------------------------------------------------------
     @property
     def num_frames(self) -> int:
-        if self.source is not None:
-            return int(self.source.num_frames)
-        return 0 if self.motion is None else len(self.motion)
+        """Frames of the sensor source or the clip (0 without either)."""
+        return int(self.source.num_frames) if self.source is not None else 0 if self.motion is None else len(self.motion)
 
     def open(self, path: str | Path, rig_map: str | Path | None = None) -> None:
         """Load a BVH (with the joint mapping file ``rig_map`` if given); on failure raise
@@ -282,7 +279,6 @@ class Session:
     def live_source(self) -> LiveSource | None:
         """The live tracker stream sensors come from, if they do."""
         from engine.tracker_io.live_source import LiveSource
-
         return self.source if isinstance(self.source, LiveSource) else None
 
     def _close_source(self) -> None:

@@ -30,12 +30,12 @@ from engine import skeleton as sk
 from engine.methods.base import DecodesLatents, FrameResult, Method
 from engine.sensors import SensorFrame
 from engine.studio import commands as cmd
-from engine.studio.decode import decoded_on_pose
+from engine.studio.decode import decode_request
 from engine.studio.frame_figures import gizmos_of, losses_of, timing_of
 from engine.studio.latent_debug import LatentDebug
 from engine.studio.method_set import MethodSet
 from engine.studio.method_edits import make_method
-from engine.studio.playback import ENDED, LOOPED, PlaybackClock
+from engine.studio.playback import ENDED, LOOPED, PlaybackClock, is_jump
 from engine.studio.snapshot import HISTORY, HistoryEntry, Snapshot, readonly
 from engine.sensor_source import SensorSource
 from engine.studio.clip_source import ClipSource
@@ -86,25 +86,22 @@ class EngineThread(threading.Thread):
         self._clock = PlaybackClock()
         self._dirty = False
         self._seq = self._solved = self._skipped = self._warnings = self._plays = 0
-        self._fps = 0.0
+        self._fps = self._last_ms = 0.0
         self._last_pose = np.zeros((sk.NUM_JOINTS, 3))
         self._last_result: FrameResult | None = None
         self._decoded: np.ndarray | None = None
         self._last_ghosts: dict[str, np.ndarray] = {}
         self._history: deque[HistoryEntry] = deque(maxlen=HISTORY)
-        self._last_ms = 0.0
-        self._pending_error = ""
-        self._method_error = ""
+        self._pending_error = self._method_error = ""
         self._recent_errors: deque[str] = deque(maxlen=RECENT_ERRORS)
         self._ghost_errors: dict[str, str] = {}  # ghost -> the failure last reported
         self._stopping = False
-        self._latency_ms: float | None = None
+        self._latency_ms: float | None = None  # a live frame's arrival to its solve, ms
         self._latent = LatentDebug()
 
     # -- public API (any thread) --------------------------------------------------------
     def prepare(self, method: str) -> None:
-        """Build ``method`` before the loop starts (:meth:`MethodSet.prepare`); call it
-        before :meth:`run` or :meth:`start`, from the thread that starts the loop."""
+        """Build ``method`` before the loop starts (:meth:`MethodSet.prepare`), from the starting thread."""
         self._methods.prepare(method)
         mark(f"engine: method {method} prepared")
 
@@ -267,8 +264,7 @@ class EngineThread(threading.Thread):
         self._republish()
 
     def _republish(self) -> None:
-        """Publish the last solved frame again (its pose, losses and timing) with the
-        current playback state and debug pose, without solving it again."""
+        """Publish the last solved frame again with the current playback state and debug pose."""
         if self._source is not None and self._last_solved >= 0:
             self._publish(self._last_solved, self._source.frame(self._last_solved), self._last_result,
                           self._last_ms, self._pending_error, self._last_ghosts)  # fmt: skip
@@ -301,18 +297,8 @@ class EngineThread(threading.Thread):
         self._pending_error = message
         self._recent_errors.append(message)
 
-    def _is_jump(self, frame: int) -> bool:
-        """A seek backwards or more than 2 s ahead. Playback skipping a few frames because
-        the solver is slower than real time is not a jump: resetting then would make every
-        frame a first frame (solved offline, slower still) and the solver would never
-        catch up."""
-        if self._last_solved < 0:
-            return True
-        fps = self._source.fps if self._source is not None else sk.FPS
-        return frame < self._last_solved or frame - self._last_solved > 2 * fps
-
     def _solve(self, frame: int) -> None:
-        jump = self._is_jump(frame)
+        jump = is_jump(frame, self._last_solved, self._source.fps if self._source is not None else sk.FPS)
         # an edit while paused solves the frame again from the state before the first edit
         self._methods.keep_state(not self._playing and not jump and frame == self._last_solved)
         if jump:
@@ -371,16 +357,14 @@ class EngineThread(threading.Thread):
         self._methods.between_frames()
 
     def _decode(self, latent: np.ndarray) -> None:
-        method = self._methods.method
-        if not isinstance(method, DecodesLatents):
-            self._report_error(f"{self._methods.name}: cannot decode latents")
-            return
-        self._playing = False
-        try:
-            shown = self._last_result.latent if self._last_result is not None else None
-            self._decoded = decoded_on_pose(method, latent, shown, self._last_pose)  # exact on screen
-        except Exception as exc:
-            self._report_error(f"decode latent: {exc}")
+        if isinstance(self._methods.method, DecodesLatents):
+            self._playing = False  # the decoded pose is shown on a paused frame
+        shown = self._last_result.latent if self._last_result is not None else None
+        decoded, error = decode_request(self._methods.method, self._methods.name, latent, shown, self._last_pose)
+        if error:
+            self._report_error(error)
+        else:
+            self._decoded = decoded
 
     def _publish(self, frame: int, sf: SensorFrame, res: FrameResult | None, ms: float,
                  error: str, ghosts: dict[str, np.ndarray]) -> None:  # fmt: skip
@@ -388,12 +372,10 @@ class EngineThread(threading.Thread):
         readings = [sf.readings[j] for j in joints]
         last = res or self._last_result
         self._seq += 1
+        method = self._methods.method
         snap = Snapshot(
-            seq=self._seq,
-            frame=frame,
-            num_frames=self._source.num_frames,
-            positions=readonly(self._last_pose),
-            ground_truth=readonly(self._source.ground_truth(frame)),
+            seq=self._seq, frame=frame, num_frames=self._source.num_frames,
+            positions=readonly(self._last_pose), ground_truth=readonly(self._source.ground_truth(frame)),
             ghosts={k: readonly(v) for k, v in ghosts.items()},
             target_joints=joints,
             target_positions=readonly(np.array([r.position for r in readings]).reshape(-1, 3)),
@@ -402,28 +384,16 @@ class EngineThread(threading.Thread):
             gizmos=gizmos_of(self._methods.constraints, self._last_pose, self._report_error),
             losses=losses_of(res, sf),
             latent=readonly(last.latent) if last is not None and last.latent is not None else None,
-            iterations=res.iterations if res else 0,
-            ms=ms,
-            warnings=self._warnings,
-            messages=tuple(res.warnings) if res else (),
-            error=error,
-            method_error=self._method_error,
-            engine_fps=self._fps,
-            playing=self._playing,
-            method=self._methods.method.name if self._methods.method is not None else self._methods.name,
-            can_decode=isinstance(self._methods.method, DecodesLatents),
+            iterations=res.iterations if res else 0, ms=ms,
+            warnings=self._warnings, messages=tuple(res.warnings) if res else (), error=error,
+            method_error=self._method_error, engine_fps=self._fps, playing=self._playing,
+            method=method.name if method is not None else self._methods.name,
+            can_decode=isinstance(method, DecodesLatents),
             decoded=readonly(self._decoded) if self._decoded is not None else None,
-            history=tuple(self._history),
-            solved=self._solved,
-            frames_skipped=self._skipped,
-            pace=self._clock.pace,
-            timing=timing_of(res, ms, self._latency_ms),
-            recent_errors=tuple(self._recent_errors),
-            plays=self._plays,
-            latent_view=self._latent.view,
-            latent_detail=self._latent.detail,
-            latent_note=self._latent.note,
-        )
+            history=tuple(self._history), solved=self._solved, frames_skipped=self._skipped, pace=self._clock.pace,
+            timing=timing_of(res, ms, self._latency_ms), recent_errors=tuple(self._recent_errors), plays=self._plays,
+            latent_view=self._latent.view, latent_detail=self._latent.detail, latent_note=self._latent.note,
+        )  # fmt: skip
         self._method_error = ""
         self.latest = snap
         for cb in list(self.listeners):

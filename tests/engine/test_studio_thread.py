@@ -128,13 +128,13 @@ def test_stop_joins_and_leaves_no_thread():
 def test_playback_skipping_a_few_frames_keeps_the_methods_temporal_state():
     """A solver slower than real time makes playback skip frames; resetting the method then
     would make every frame a first frame (solved offline, slower still)."""
-    worker = EngineThread()  # not started: only the jump rule is exercised
-    assert worker._is_jump(0)  # nothing solved yet
-    worker._last_solved = 100
-    assert not worker._is_jump(101)
-    assert not worker._is_jump(105)  # a few frames skipped by playback
-    assert worker._is_jump(99)  # seek backwards (or a loop)
-    assert worker._is_jump(100 + 121)  # more than 2 s ahead at 60 fps
+    from engine.studio.playback import is_jump
+
+    assert is_jump(0, -2, 60.0)  # nothing solved yet
+    assert not is_jump(101, 100, 60.0)
+    assert not is_jump(105, 100, 60.0)  # a few frames skipped by playback
+    assert is_jump(99, 100, 60.0)  # seek backwards (or a loop)
+    assert is_jump(100 + 121, 100, 60.0)  # more than 2 s ahead at 60 fps
 
 
 def test_gizmos_that_relate_joints_get_the_current_pose(engine):

@@ -39,13 +39,13 @@ def record(motion, preset: str, mode: str, noise: float, seed: int) -> dict:
     method.reset(motion.skeleton, tracking.fps)
     opt, real, inputs = method.optimizer, method.optimizer.solve, []
 
-    def solve(start, terms, ctx):
-        inputs.append({"start": start.clone(), "ctx": ctx, "settings": opt.settings,
+    def solve(start, terms, ctx, settings=None):
+        inputs.append({"start": start.clone(), "ctx": ctx, "settings": settings or opt.settings,
                        "targets": {c.name: (c.position.copy(), None if c.rotation is None else c.rotation.copy())
                                    for c in terms if c.kind == "sensor"},
                        # the smoothing target moves with the history: keep this frame's
                        "smooth": (method.smooth.weight, method.smooth.target.copy())})  # fmt: skip
-        return real(start, terms, ctx)
+        return real(start, terms, ctx, settings)
 
     opt.solve = solve
     results = [method.step(tracking.frame(i)) for i in range(len(tracking))]
@@ -63,12 +63,8 @@ def resolve(method, inputs: dict, start=None, ctx=None, targets=None, **settings
         if rotation is not None:
             c.rotation = rotation
     method.smooth.weight, method.smooth.target = inputs["smooth"][0], inputs["smooth"][1].copy()
-    opt.settings = dataclasses.replace(inputs["settings"], **settings)
-    try:
-        sol = type(opt).solve(opt, inputs["start"] if start is None else start, terms,
-                              inputs["ctx"] if ctx is None else ctx)  # fmt: skip
-    finally:
-        opt.settings = method.settings
+    sol = type(opt).solve(opt, inputs["start"] if start is None else start, terms,
+                          inputs["ctx"] if ctx is None else ctx, dataclasses.replace(inputs["settings"], **settings))  # fmt: skip
     return sol.latent.numpy().astype(np.float64), sol.losses[-1]["total"]
 
 

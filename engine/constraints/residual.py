@@ -177,13 +177,13 @@ class Term:
                    g_z: np.ndarray | None) -> None:  # fmt: skip
         """Add the gradient of ``sum_n weights[:, n] * loss_n`` to ``g_pos (A, 22, 3)``,
         ``g_rot (A, 22, 3)`` and ``g_z (A, L)`` in place (``weights (A, n)``)."""
-        rw = (2.0 * weights[:, self.owner]) * res.r  # (A, m)
+        rw = ((2.0 * weights[:, self.owner]) * res.r)[:, None, :]  # (A, 1, m)
         if res.d_pos is not None:
-            _scatter(g_pos, res.pos_joints, np.einsum("am,amkc->akc", rw, res.d_pos))
+            _scatter(g_pos, res.pos_joints, _times(rw, res.d_pos))
         if res.d_rot is not None:
-            _scatter(g_rot, res.rot_joints, np.einsum("am,amkc->akc", rw, res.d_rot))
+            _scatter(g_rot, res.rot_joints, _times(rw, res.d_rot))
         if res.d_latent is not None and g_z is not None:
-            g_z += np.einsum("am,aml->al", rw, res.d_latent)
+            g_z += (rw @ res.d_latent)[:, 0]
 
 
 class FrameRows:
@@ -212,6 +212,12 @@ class FrameRows:
     def select(self, like: Any, rows: Any) -> Any:
         """The row selection for ``A = len(like)`` frames: ``rows``, or the first ``A``."""
         return slice(0, len(like)) if rows is None else rows
+
+
+def _times(rw: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """``sum_m rw[a, 0, m] d[a, m, k, c]`` as one matrix product: ``(A, k, 3)``."""
+    a, m, k, _ = d.shape
+    return (rw @ d.reshape(a, m, 3 * k)).reshape(a, k, 3)
 
 
 _DISTINCT: dict[bytes, bool] = {}  # joint lists seen -> whether no joint repeats (terms reuse theirs)

@@ -91,12 +91,6 @@ def joint_index(name: str, field: str = "joint", kind: str = "") -> int:
         raise UserError(f"{where}field {field!r}: unknown joint {name!r}") from None
 
 
-def vec(x: Any, like: torch.Tensor) -> torch.Tensor:
-    """A numpy parameter as a tensor of ``like``'s dtype and device (no gradient)."""
-    import torch
-    return torch.as_tensor(np.asarray(x, dtype=np.float64), dtype=like.dtype, device=like.device)
-
-
 @dataclass
 class Constraint(ABC):
     """Base class. Subclasses are dataclasses whose extra fields are their parameters.

@@ -176,8 +176,7 @@ class DragPoserMethod(Method):
         warnings += warned
         start = prediction if prediction is not None and s.init_from_prediction else self._latent
         self.prior.weight = prior_weight
-        self.smooth.weight = s.smooth_weight
-        self.ground.weight = 0.0 if plan.feet else s.ground_weight
+        self.smooth.weight, self.ground.weight = plan.smooth_weight, plan.ground_weight
         # frame 0 is solved offline from the mean latent, so the step from it to frame 1 is
         # not a velocity: extrapolating it threw frames 2-4 of a head-and-hands clip 36 cm off
         self.smooth.set_history(self._pos64, self._before64 if self._frame >= 3 else None)

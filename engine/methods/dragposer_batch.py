@@ -266,9 +266,8 @@ def _read(m: DragPoserMethod, frame: SensorFrame) -> dict | None:
     s = plan.settings
     if plan.bank_readings is None or plan.hip is None or plan.warnings:
         return None
-    smooth_w, ground_w = float(s.smooth_weight), float(s.ground_weight)
-    weights = [plan.weights, [s.tracker_prior_weight], [smooth_w], [0.0 if plan.feet else ground_w]]
-    kept = [True, s.tracker_prior_weight > 0, smooth_w > 0, not plan.feet and ground_w > 0]  # as the solver drops zero weights
+    weights = [plan.weights, [s.tracker_prior_weight], [plan.smooth_weight], [plan.ground_weight]]
+    kept = [True] + [w[0] > 0 for w in weights[1:]]  # as the solver drops zero weights
     return {
         "settings": s,
         "warnings": plan.warnings,

@@ -73,6 +73,16 @@ class FramePlan:
     reach: dict[int, np.ndarray] = field(default_factory=dict)
     turn: dict[int, np.ndarray] = field(default_factory=dict)
 
+    @property
+    def smooth_weight(self) -> float:
+        """The smoothing term's weight this frame."""
+        return float(self.settings.smooth_weight)
+
+    @property
+    def ground_weight(self) -> float:
+        """The ground band's weight this frame: off while a foot tracker is connected."""
+        return 0.0 if self.feet else float(self.settings.ground_weight)
+
 
 class TrackerTerms:
     """The trackers of a clip as ``sensor`` constraints (module doc).

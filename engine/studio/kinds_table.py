@@ -49,7 +49,4 @@ def kinds_table() -> str:
 
 def _rest() -> np.ndarray:
     """World positions ``(22, 3)`` of the canonical rest pose standing on the floor."""
-    from engine.kinematics.fk import fk_positions
-
-    q = np.tile([1.0, 0.0, 0.0, 0.0], (sk.NUM_JOINTS, 1))
-    return fk_positions(q, np.array([0.0, 0.0, 0.95]), np.asarray(sk.REST_OFFSETS))
+    return sk.Skeleton.canonical().rest_positions() + np.array([0.0, 0.0, 0.95])

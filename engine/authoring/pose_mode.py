@@ -38,6 +38,10 @@ ITERATIONS = 16
 #: the step keeps a margin below that. Plain steps move only the constrained latent
 #: directions (Adam moved the free arm more).
 STEP_SIZE = 1.5
+#: A reach round that leaves the dragged wrist or ankle this much further (metres) from
+#: its target than the round before overshot (the plain steps diverge in a body folded
+#: near the floor: 5 cm short became 25 cm in one round); it is dropped.
+OVERSHOOT = 0.05
 
 
 def encode_frames(vae, motion: Motion, frames: list[int]) -> np.ndarray:
@@ -264,16 +268,22 @@ class PoseMode:
         if self.anchor is None:
             self.anchor = self.pose
         for round_ in range(1 + (max(0, o.reach_rounds) if iterations > 0 else 0)):
-            if round_ and self.shortfall() <= o.reach_tolerance:
+            gap = self.shortfall()
+            if round_ and gap <= o.reach_tolerance:
                 break
             where = self._where(o.free_height or iterations > 0)
             if o.free_height:
                 ctx = c.grounded(where[:2], self.heading, prior=self.base_latent)
             else:
                 ctx = c.placed(where, self.heading, prior=self.base_latent)
+            before = self.pose
             self.pose = c.solve(self.pose.latent, terms + self._hold_terms(where), ctx, reach, rotations,
                                 iterations=iterations, prior_weight=o.prior_weight, rule="sgd",
                                 step_size=STEP_SIZE)  # fmt: skip
+            if round_ and self.shortfall() > gap + OVERSHOOT:
+                # the plain steps overshot (a folded body near the floor): keep the round before
+                self.pose = before
+                break
         self._replant()
         self._solved = self.pose
         return self.pose

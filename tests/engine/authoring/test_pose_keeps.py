@@ -87,3 +87,26 @@ def test_the_hold_keeps_the_free_arm_near_where_the_drag_began(vae, weight):
     assert {"rwrist", "relbow", "lknee", "upperneck", "chest"} <= names
     assert not names & {"root", "lwrist", "lelbow", "lankle", "ltoe", "rankle", "rtoe"}
     assert mode.anchor is not None and mode.anchor is not mode.pose
+
+
+def test_a_reach_round_that_leaves_the_wrist_further_is_dropped(vae):
+    """A wrist target out of reach takes further rounds; a round whose plain steps
+    overshoot (here: a solve that returns the body further from the target) is not kept:
+    the pose stays the one before it and no more rounds run."""
+    mode = PoseMode(vae)
+    w = mode.pose.positions[J["rwrist"]].copy()
+    mode.set_target("rwrist", w + np.array([0.0, -0.25, -0.45]))
+    solve, calls, poses = mode.character.solve, [], []
+
+    def overshooting(*a, **k):
+        calls.append(1)
+        pose = solve(*a, **k)
+        if len(calls) == 2:  # the first further round: the wrist ends 30 cm further off
+            pose = pose.moved([0.0, 0.3, 0.3])
+        poses.append(pose)
+        return pose
+
+    mode.character.solve = overshooting
+    mode.solve()
+    assert len(calls) == 2
+    assert mode.pose is poses[0]

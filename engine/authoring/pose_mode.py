@@ -6,10 +6,16 @@ every drag event, :data:`ITERATIONS` plain gradient steps with the root held whe
 stands, then the feet grounded and targeted wrists / ankles put exactly on their
 targets; while a targeted wrist or ankle is still beyond its limb's reach, up to
 ``PoseOptions.reach_rounds`` further rounds of those steps, so a low reach bends the
-body within the drag); with targets only it runs on the solver's fast path. :meth:`PoseMode.settle`
-is a full offline solve (grounded, so the body may crouch), for when the drag ends.
-Bone lengths are those of the skeleton by construction (forward kinematics of fixed
-offsets), and the lowest foot stands on the floor after every solve.
+body within the drag; a round that overshoots is dropped); with targets only it runs on
+the solver's fast path. :meth:`PoseMode.settle` is a full offline solve (grounded, so the
+body may crouch), for when the drag ends. Bone lengths are those of the skeleton by
+construction (forward kinematics of fixed offsets), and the lowest foot stands on the
+floor after every solve.
+
+What no target asks for stays as the user left it (:class:`PoseOptions`): a turn is
+taken exactly by its joint after the solve and moves no other joint, the pelvis crouches
+only for a wrist target below the hanging arm's reach, and ``hold_weight`` pulls the
+joints no target holds towards :attr:`PoseMode.anchor`, the pose the drag began from.
 """
 
 from __future__ import annotations

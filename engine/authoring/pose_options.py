@@ -84,10 +84,10 @@ class PoseOptions:
     balance_gain: float = 0.5
     balance_tolerance: float = 0.10
     crouch_share: float = 0.5
+    crouch_below_reach: bool = True
     free_height: bool = False
     prior_weight: float = PRIOR_WEIGHT
     reach_rounds: int = 4
     reach_tolerance: float = 0.005
     hold_weight: float = 0.0
     turn_weight: float = 0.0
-    crouch_below_reach: bool = True

@@ -6,22 +6,27 @@ every drag event, :data:`ITERATIONS` plain gradient steps with the root held whe
 stands, then the feet grounded and targeted wrists / ankles put exactly on their
 targets; while a targeted wrist or ankle is still beyond its limb's reach, up to
 ``PoseOptions.reach_rounds`` further rounds of those steps, so a low reach bends the
-body within the drag); with targets only it runs on the solver's fast path. :meth:`PoseMode.settle`
-is a full offline solve (grounded, so the body may crouch), for when the drag ends.
-Bone lengths are those of the skeleton by construction (forward kinematics of fixed
-offsets), and the lowest foot stands on the floor after every solve.
+body within the drag; a round that overshoots is dropped); with targets only it runs on
+the solver's fast path. :meth:`PoseMode.settle` is a full offline solve (grounded, so the
+body may crouch), for when the drag ends. Bone lengths are those of the skeleton by
+construction (forward kinematics of fixed offsets), and the lowest foot stands on the
+floor after every solve.
+
+What no target asks for stays as the user left it (:class:`PoseOptions`): a turn is
+taken exactly by its joint after the solve and moves no other joint, the pelvis crouches
+only for a wrist target below the hanging arm's reach, and ``hold_weight`` pulls the
+joints no target holds towards :attr:`PoseMode.anchor`, the pose the drag began from.
 """
 
 from __future__ import annotations
-
-from dataclasses import dataclass
 
 import numpy as np
 import torch
 
 from engine import skeleton as sk
-from engine.authoring.character import PRIOR_WEIGHT, Character, Pose
+from engine.authoring.character import Character, Pose
 from engine.authoring.pose_metrics import centre_of_mass
+from engine.authoring.pose_options import LOWEST_ROOT, SQUAT_FROM, PoseOptions
 from engine.authoring.targets import JointTarget, solve_inputs
 from engine.constraints.base import Constraint
 from engine.errors import UserError
@@ -39,6 +44,10 @@ ITERATIONS = 16
 #: the step keeps a margin below that. Plain steps move only the constrained latent
 #: directions (Adam moved the free arm more).
 STEP_SIZE = 1.5
+#: A reach round that leaves the dragged wrist or ankle this much further (metres) from
+#: its target than the round before overshot (the plain steps diverge in a body folded
+#: near the floor: 5 cm short became 25 cm in one round); it is dropped.
+OVERSHOOT = 0.05
 
 
 def encode_frames(vae, motion: Motion, frames: list[int]) -> np.ndarray:
@@ -62,74 +71,6 @@ def heading_deg(rotation: np.ndarray) -> float:
 #: Foot joints that stay planted where they stand until the user drags that foot.
 PLANTED = ("lankle", "ltoe", "rankle", "rtoe")
 _FOOT_OF = {"lankle": "l", "ltoe": "l", "rankle": "r", "rtoe": "r"}
-
-
-#: Lowest pelvis height the crouch moves it to, as a share of its standing height (a deep
-#: squat; the two-bone legs cannot fold much further).
-LOWEST_ROOT = 0.45
-#: A dragged pelvis crouches once it is this far below its standing height, metres: less
-#: is the jitter of a level drag of the hips.
-SQUAT_FROM = 0.02
-
-
-@dataclass
-class PoseOptions:
-    """How pose mode keeps a pose natural (``bench --pose-tasks --set name=value``).
-
-    Attributes
-    ----------
-    plant_feet : bool
-        Untargeted feet stay where they stand (ankle and toe each a target at their
-        planted place) until that foot is dragged; a dragged foot is planted where it is
-        left.
-    plant_weight : float
-        Weight of a planted foot's targets, as a user target's.
-    balance : bool
-        While both feet are planted, each solve starts with the pelvis moved horizontally
-        by ``balance_gain`` of the distance from the centre of mass to the middle of the
-        feet, so a body that leans or reaches keeps its weight over its feet (the planted
-        feet stay, the legs lean). A pelvis the user drags goes where it is dragged.
-    balance_gain : float
-        Share of the centre of mass's distance from the feet that one solve corrects.
-    balance_tolerance : float
-        Distance (metres) from the middle of the feet within which the centre of mass is
-        left where it is (well inside a standing support polygon), so a reach forward is
-        not pulled back.
-    crouch_share : float
-        Share of a dragged joint's downward distance to its target that the pelvis takes
-        at the start of each solve (the planted legs bend under it), so a low reach
-        bends the knees as well as the trunk; the pelvis stays between
-        :data:`LOWEST_ROOT` of its standing height and its standing height.
-    free_height : bool
-        Drags solve with the lowest foot on the floor (the root's height is part of the
-        pose, so reaching low bends the knees instead of folding the trunk) instead of
-        holding the root where it stands. It runs on the solver's reference path, about
-        30 times slower than the fast path that drags use otherwise: too slow for
-        interactive drags on two cores.
-    prior_weight : float
-        Pull towards the starting latent (the character's neutral pose for a new pose),
-        which keeps the parts no target constrains as they were.
-    reach_rounds : int
-        Most further rounds of a drag event's solve (each :data:`ITERATIONS` steps from
-        where the last ended, the crouch and balance steps redone first) while a dragged
-        joint is more than ``reach_tolerance`` from its target after the exact limb step:
-        a reach beyond the arm bends the body further within the same event, and a drag
-        that is reached costs one round.
-    reach_tolerance : float
-        Distance (metres) of a dragged joint from its target below which no further
-        round runs.
-    """
-
-    plant_feet: bool = True
-    plant_weight: float = 1.0
-    balance: bool = True
-    balance_gain: float = 0.5
-    balance_tolerance: float = 0.10
-    crouch_share: float = 0.5
-    free_height: bool = False
-    prior_weight: float = PRIOR_WEIGHT
-    reach_rounds: int = 4
-    reach_tolerance: float = 0.005
 
 
 class PoseMode:
@@ -160,8 +101,14 @@ class PoseMode:
         self.constraints: list[Constraint] = []
         self.pose: Pose = self.character.decode(self.base_latent, self.character.grounded(root_xy, self.heading))
         self._standing_root = float(self.pose.root_pos[2])
+        self._lowest_reach = self._arm_low_points()
         #: Where each untargeted foot joint stays (world, metres), see :class:`PoseOptions`.
         self.planted: dict[str, np.ndarray] = {}
+        #: The pose the current drag began from (None: the next solve's starting pose),
+        #: and the joint dragged; see :meth:`held`.
+        self.anchor: Pose | None = None
+        self._anchor_joint: str | None = None
+        self._solved: Pose | None = None
         self.plant_where_standing()
 
     @classmethod
@@ -188,6 +135,9 @@ class PoseMode:
         old = self.targets.get(joint)
         if joint not in sk.JOINT_INDEX:
             raise UserError(f"unknown joint {joint!r}")
+        # a drag begins when another joint is moved or the pose was set other than by a solve
+        if joint != self._anchor_joint or self.anchor is None or self.pose is not self._solved:
+            self.anchor, self._anchor_joint = self.pose, joint
         here = self.pose.positions[sk.JOINT_INDEX[joint]]
         t = JointTarget(
             joint,
@@ -225,8 +175,11 @@ class PoseMode:
         z = float(np.clip(p[2], LOWEST_ROOT * standing, standing))
         held = self.targets.get("root")
         if np.any(level):
+            solved, anchor = self.pose is self._solved, self.anchor
             self.pose = self.pose.moved(level)
             self.plant_where_standing()
+            if solved:  # root motion keeps the body's pose (the anchor is root-relative): the drag goes on
+                self._solved, self.anchor = self.pose, anchor
         if held is not None and z >= standing:
             self.remove_target("root")
         elif held is not None or standing - z > SQUAT_FROM:
@@ -249,12 +202,16 @@ class PoseMode:
             targets += [JointTarget(j, p, weight=self.options.plant_weight) for j, p in self.planted.items()
                         if _FOOT_OF[j] not in moved and j not in self.targets]  # fmt: skip
         terms, reach, rotations = solve_inputs(targets)
+        for t in terms:
+            if t.dof == 6:
+                t.rotation_weight *= self.options.turn_weight
         return terms + list(self.constraints), reach, rotations
 
     def plant_where_standing(self) -> None:
         """Plant the feet where the current pose has them (after the pose was set from a
         key, or the whole body was moved or turned)."""
         self.planted = {j: self.pose.positions[sk.JOINT_INDEX[j]].copy() for j in PLANTED}
+        self.anchor = None
 
     def _replant(self) -> None:
         """A foot the user moves is planted where it is left."""
@@ -277,7 +234,10 @@ class PoseMode:
             return where
         user = [t for t in self.targets.values() if t.active and t.joint != "root" and t.joint not in _FOOT_OF]
         if o.crouch_share > 0 and user:
-            drop = min(0.0, min(t.position[2] - self.pose.positions[t.index, 2] for t in user))
+            # the part of the way from the joint down to its target that lies below where it crouches from
+            low = {t.index: self._crouch_from(t.index) for t in user}
+            drop = min(0.0, min(min(t.position[2], low[t.index]) - min(self.pose.positions[t.index, 2], low[t.index])
+                                for t in user))  # fmt: skip
             standing = self._standing_root
             where[2] = float(np.clip(where[2] + o.crouch_share * drop, LOWEST_ROOT * standing, standing))
         if o.balance and o.plant_feet and not self._moved_feet():
@@ -288,23 +248,76 @@ class PoseMode:
                 where[:2] += o.balance_gain * off * (1.0 - o.balance_tolerance / dist)
         return where
 
+    def _arm_low_points(self) -> dict[int, float]:
+        """Per wrist, the lowest height (metres) it reaches from its shoulder in the
+        starting pose, the arm hanging straight down."""
+        p, out = self.pose.positions, {}
+        for c, (a, b) in LIMBS.items():
+            if sk.JOINT_NAMES[c] not in _FOOT_OF:
+                out[c] = float(p[a, 2] - np.linalg.norm(p[b] - p[a]) - np.linalg.norm(p[c] - p[b]))
+        return out
+
+    def _crouch_from(self, joint: int) -> float:
+        """Height (metres) below which a dragged ``joint``'s target lowers the pelvis: a
+        wrist's low point when ``options.crouch_below_reach`` (a target the standing arm
+        reaches bends no knee), else no limit."""
+        if self.options.crouch_below_reach and joint in self._lowest_reach:
+            return self._lowest_reach[joint]
+        return np.inf
+
     def solve(self, iterations: int = ITERATIONS) -> Pose:
         """One continuous solve from the current pose (a drag event): a round of
         ``iterations`` steps, and up to ``options.reach_rounds`` more while a dragged
         joint is short of its target."""
         terms, reach, rotations = self._inputs()
         c, o = self.character, self.options
+        if self.anchor is None:
+            self.anchor = self.pose
         for round_ in range(1 + (max(0, o.reach_rounds) if iterations > 0 else 0)):
-            if round_ and self.shortfall() <= o.reach_tolerance:
+            gap = self.shortfall()
+            if round_ and gap <= o.reach_tolerance:
                 break
+            where = self._where(o.free_height or iterations > 0)
             if o.free_height:
-                ctx = c.grounded(self._where()[:2], self.heading, prior=self.base_latent)
+                ctx = c.grounded(where[:2], self.heading, prior=self.base_latent)
             else:
-                ctx = c.placed(self._where(iterations > 0), self.heading, prior=self.base_latent)
-            self.pose = c.solve(self.pose.latent, terms, ctx, reach, rotations, iterations=iterations,
-                                prior_weight=o.prior_weight, rule="sgd", step_size=STEP_SIZE)  # fmt: skip
+                ctx = c.placed(where, self.heading, prior=self.base_latent)
+            before = self.pose
+            self.pose = c.solve(self.pose.latent, terms + self._hold_terms(where), ctx, reach, rotations,
+                                iterations=iterations, prior_weight=o.prior_weight, rule="sgd",
+                                step_size=STEP_SIZE)  # fmt: skip
+            if round_ and self.shortfall() > gap + OVERSHOOT:
+                # the plain steps overshot (a folded body near the floor): keep the round before
+                self.pose = before
+                break
         self._replant()
+        self._solved = self.pose
         return self.pose
+
+    def held(self) -> list[int]:
+        """Joints the hold pulls towards the anchor (see ``PoseOptions.hold_weight``):
+        every joint but the root, the joints with a target, the planted feet, and the
+        knee or elbow and toe of a targeted limb (the limb step places those)."""
+        free = {0} | {t.index for t in self.targets.values() if t.active}
+        for t in self.targets.values():
+            if t.active and t.index in LIMBS:
+                free.add(LIMBS[t.index][1])
+                if t.joint in _FOOT_OF:
+                    free.add(sk.JOINT_INDEX[_FOOT_OF[t.joint] + "toe"])
+        if self.options.plant_feet:
+            moved = self._moved_feet()
+            free |= {sk.JOINT_INDEX[j] for j in self.planted if _FOOT_OF[j] not in moved}
+        return [j for j in range(len(sk.JOINT_NAMES)) if j not in free]
+
+    def _hold_terms(self, where: np.ndarray) -> list[Constraint]:
+        """The hold's terms for a solve with the root at ``where (3,)`` metres: each held
+        joint's anchor position relative to the anchor's root, from ``where``."""
+        w = self.options.hold_weight
+        if w <= 0 or self.anchor is None:
+            return []
+        a = self.anchor
+        return [JointTarget(sk.JOINT_NAMES[j], a.positions[j] - a.root_pos + where, weight=w).constraint()
+                for j in self.held()]  # fmt: skip
 
     def shortfall(self) -> float:
         """Largest distance (metres) of a targeted wrist or ankle from its target in the
@@ -322,15 +335,22 @@ class PoseMode:
         the gap."""
         terms, reach, rotations = self._inputs()
         c, o = self.character, self.options
-        ctx = c.grounded(self._where()[:2], self.heading, prior=self.base_latent)
-        self.pose = c.solve(self.pose.latent, terms, ctx, reach, rotations, prior_weight=o.prior_weight)
+        if self.anchor is None:
+            self.anchor = self.pose
+        where = self._where()
+        ctx = c.grounded(where[:2], self.heading, prior=self.base_latent)
+        self.pose = c.solve(self.pose.latent, terms + self._hold_terms(where), ctx, reach, rotations,
+                            prior_weight=o.prior_weight)  # fmt: skip
         for _ in range(max(0, o.reach_rounds)):
             if self.shortfall() <= o.reach_tolerance:
                 break
-            ctx = c.grounded(self._where()[:2], self.heading, prior=self.base_latent)
-            self.pose = c.solve(self.pose.latent, terms, ctx, reach, rotations, iterations=ITERATIONS,
-                                prior_weight=o.prior_weight, rule="sgd", step_size=STEP_SIZE)  # fmt: skip
+            where = self._where()
+            ctx = c.grounded(where[:2], self.heading, prior=self.base_latent)
+            self.pose = c.solve(self.pose.latent, terms + self._hold_terms(where), ctx, reach, rotations,
+                                iterations=ITERATIONS, prior_weight=o.prior_weight, rule="sgd",
+                                step_size=STEP_SIZE)  # fmt: skip
         self._replant()
+        self._solved = self.pose
         return self.pose
 
     def motion(self) -> Motion:

@@ -289,7 +289,7 @@ def test_dragging_the_z_ring_turns_the_head_about_the_vertical_without_tilting_i
     rings = w.viewport.rings
     assert w.selected == "upperneck" and rings.visible and rings.shown == (0, 1, 2)
     before = w.turns.world_rotation("upperneck")
-    facing = np.array(rings._arrow_mesh.center) - w.mode.pose.positions[head]
+    facing = np.asarray(rings._arrow_mesh.points).mean(0) - w.mode.pose.positions[head]  # on the cone's axis
     ring = circle(rings.center, AXES[2], rings.radius, 72)  # 5 degrees apart, counter-clockwise from above
     w.viewport.plotter.render()
     path = [pixel_of(w.viewport, ring[k]) for k in (0, 4, 8)]  # 0 -> 40 degrees, from where an edge-on ring crosses
@@ -302,7 +302,7 @@ def test_dragging_the_z_ring_turns_the_head_about_the_vertical_without_tilting_i
     assert abs(float(now @ t.rotation)) == pytest.approx(1.0, abs=1e-9)
     up = lambda q: QN.rotate(q, np.array([0.0, 0.0, 1.0]))  # noqa: E731
     assert up(now)[2] == pytest.approx(up(before)[2], abs=1e-6)  # no tilt: the head leans from vertical as before
-    turned = np.array(rings._arrow_mesh.center) - w.mode.pose.positions[head]
+    turned = np.asarray(rings._arrow_mesh.points).mean(0) - w.mode.pose.positions[head]
     yaw = np.degrees(np.arctan2(turned[1], turned[0]) - np.arctan2(facing[1], facing[0]))
     assert (yaw + 180) % 360 - 180 == pytest.approx(40.0, abs=3.0)  # the facing arrow turned with it
     assert w.undo.undo_text() == "turn upperneck"

@@ -1,0 +1,93 @@
+"""How pose mode keeps a pose natural: :class:`PoseOptions` and the crouch's limits
+(:mod:`engine.authoring.pose_mode` uses them; ``bench --pose-tasks --set NAME=VALUE``
+sets a field)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from engine.authoring.character import PRIOR_WEIGHT
+
+#: Lowest pelvis height the crouch moves it to, as a share of its standing height (a deep
+#: squat; the two-bone legs cannot fold much further).
+LOWEST_ROOT = 0.45
+#: A dragged pelvis crouches once it is this far below its standing height, metres: less
+#: is the jitter of a level drag of the hips.
+SQUAT_FROM = 0.02
+
+
+@dataclass
+class PoseOptions:
+    """How pose mode keeps a pose natural (``bench --pose-tasks --set name=value``).
+
+    Attributes
+    ----------
+    plant_feet : bool
+        Untargeted feet stay where they stand (ankle and toe each a target at their
+        planted place) until that foot is dragged; a dragged foot is planted where it is
+        left.
+    plant_weight : float
+        Weight of a planted foot's targets, as a user target's.
+    balance : bool
+        While both feet are planted, each solve starts with the pelvis moved horizontally
+        by ``balance_gain`` of the distance from the centre of mass to the middle of the
+        feet, so a body that leans or reaches keeps its weight over its feet (the planted
+        feet stay, the legs lean). A pelvis the user drags goes where it is dragged.
+    balance_gain : float
+        Share of the centre of mass's distance from the feet that one solve corrects.
+    balance_tolerance : float
+        Distance (metres) from the middle of the feet within which the centre of mass is
+        left where it is (well inside a standing support polygon), so a reach forward is
+        not pulled back.
+    crouch_share : float
+        Share of a dragged joint's downward distance to its target that the pelvis takes
+        at the start of each solve (the planted legs bend under it), so a low reach
+        bends the knees as well as the trunk; the pelvis stays between
+        :data:`LOWEST_ROOT` of its standing height and its standing height.
+    crouch_below_reach : bool
+        A dragged wrist's target crouches only for the part of its way below the
+        lowest point the arm reaches in the starting pose (the arm hanging straight from
+        its shoulder): a hand put on the hips or the belly bends no knee.
+    free_height : bool
+        Drags solve with the lowest foot on the floor (the root's height is part of the
+        pose, so reaching low bends the knees instead of folding the trunk) instead of
+        holding the root where it stands. It runs on the solver's reference path, about
+        30 times slower than the fast path that drags use otherwise: too slow for
+        interactive drags on two cores.
+    prior_weight : float
+        Pull towards the starting latent (the character's neutral pose for a new pose),
+        which keeps the parts no target constrains as they were.
+    reach_rounds : int
+        Most further rounds of a drag event's solve (each :data:`engine.authoring.pose_mode.ITERATIONS` steps from
+        where the last ended, the crouch and balance steps redone first) while a dragged
+        joint is more than ``reach_tolerance`` from its target after the exact limb step:
+        a reach beyond the arm bends the body further within the same event, and a drag
+        that is reached costs one round.
+    reach_tolerance : float
+        Distance (metres) of a dragged joint from its target below which no further
+        round runs.
+    hold_weight : float
+        Weight (as a user target's) of a pull on every joint the drag does not move
+        towards where it was, relative to the root, when the drag began (see
+        :meth:`engine.authoring.pose_mode.PoseMode.held`): a drag moves what its targets, the planted feet and the
+        prior need and leaves the rest of the body where the user left it. 0: off.
+    turn_weight : float
+        Share of a rotation target's weight in the latent solve. The exact step after
+        the solve turns the joint onto its target whatever this is, so it sets only how
+        much the rest of the body (the learned prior's idea of a turned head or hand)
+        moves with a turn; 0: a turn moves only that joint.
+    """
+
+    plant_feet: bool = True
+    plant_weight: float = 1.0
+    balance: bool = True
+    balance_gain: float = 0.5
+    balance_tolerance: float = 0.10
+    crouch_share: float = 0.5
+    crouch_below_reach: bool = True
+    free_height: bool = False
+    prior_weight: float = PRIOR_WEIGHT
+    reach_rounds: int = 4
+    reach_tolerance: float = 0.005
+    hold_weight: float = 0.0
+    turn_weight: float = 0.0

@@ -1,0 +1,112 @@
+"""Pose mode keeps what the user did not drag: a head turn leaves the body, a hand put on
+the hips bends no knee, a low reach still crouches, and the optional hold keeps the free
+arm. Drags are the pose-mode benchmark's own (``pose_tasks.drag`` on its task goals)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from engine import skeleton as sk
+from engine.authoring.pose_mode import PoseMode, PoseOptions
+from engine.authoring.pose_task_table import TASKS
+from engine.authoring.pose_tasks import drag, resolve_goals
+
+J = sk.JOINT_INDEX
+TASK = {t.name: t for t in TASKS}
+
+
+def _do(mode: PoseMode, name: str, events: int = 20) -> np.ndarray:
+    """Do task ``name`` in ``mode``; returns the starting positions ``(22, 3)``."""
+    start = mode.pose.positions.copy()
+    offsets = mode.character.skeleton.offsets
+    for g in resolve_goals(TASK[name], mode.pose, offsets, mode.heading):
+        drag(mode, g, offsets, events)
+    return start
+
+
+def test_a_head_turn_leaves_the_body_where_it_was(vae):
+    """The head turned 60 deg to the left (an Alt-drag) turns the head and moves no other
+    joint by more than 5 mm; with the turn in the latent solve (``turn_weight=1``) the
+    arms swing and the knees bend."""
+    mode = PoseMode(vae)
+    start = _do(mode, "head_turn")
+    moved = np.linalg.norm(mode.pose.positions - start, axis=-1)
+    assert moved.max() < 0.005, f"{sk.JOINT_NAMES[int(moved.argmax())]} moved {100 * moved.max():.1f} cm"
+    turned = PoseMode(vae, options=PoseOptions(turn_weight=1.0))
+    start = _do(turned, "head_turn")
+    assert np.linalg.norm(turned.pose.positions - start, axis=-1).max() > 0.05
+
+
+def test_hands_on_the_hips_bend_no_knee(vae):
+    """Both wrists put on the iliac crests (within the standing arm's reach): the pelvis
+    stays at its standing height (within 1 cm) and the knees where they were (2 cm);
+    crouching for every downward drag (``crouch_below_reach=False``) lowers it by more
+    than 5 cm."""
+    mode = PoseMode(vae)
+    start = _do(mode, "hands_on_hips")
+    assert abs(mode.pose.root_pos[2] - start[0, 2]) < 0.01
+    knees = [J["lknee"], J["rknee"]]
+    assert np.linalg.norm(mode.pose.positions[knees] - start[knees], axis=-1).max() < 0.02
+    for j in ("lwrist", "rwrist"):
+        goal = resolve_goals(TASK["hands_on_hips"], PoseMode(vae).pose, mode.character.skeleton.offsets)
+        assert np.linalg.norm(mode.pose.positions[J[j]] - next(g.position for g in goal if g.joint == j)) < 0.01
+    always = PoseMode(vae, options=PoseOptions(crouch_below_reach=False))
+    _do(always, "hands_on_hips")
+    assert start[0, 2] - always.pose.root_pos[2] > 0.05
+
+
+def test_a_reach_below_the_arm_still_crouches(vae):
+    """The right hand to the left knee lies below the hanging arm's reach: the knees bend
+    (the pelvis 10 cm or more lower) and the hand arrives within 2 cm."""
+    mode = PoseMode(vae)
+    start = _do(mode, "hand_to_knee")
+    assert start[0, 2] - mode.pose.root_pos[2] > 0.10
+    goal = start[J["lknee"]] + np.array([0.0, -0.08, 0.0])
+    assert np.linalg.norm(mode.pose.positions[J["rwrist"]] - goal) < 0.02
+
+
+@pytest.mark.parametrize("weight", [0.3])
+def test_the_hold_keeps_the_free_arm_near_where_the_drag_began(vae, weight):
+    """Dragging the left wrist 30 cm forward: with ``hold_weight`` the right wrist, which
+    no target moves, stays nearer where it was than without; the held joints are all but
+    the root, the targeted ones, the dragged arm's elbow and the planted feet."""
+
+    def free_wrist_moved(hold: float) -> tuple[float, PoseMode]:
+        mode = PoseMode(vae, options=PoseOptions(hold_weight=hold))
+        start = mode.pose.positions.copy()
+        for k in range(1, 21):
+            mode.set_target("lwrist", start[J["lwrist"]] + np.array([0.0, -0.3, 0.0]) * k / 20)
+            mode.solve()
+        return float(np.linalg.norm(mode.pose.positions[J["rwrist"]] - start[J["rwrist"]])), mode
+
+    held, mode = free_wrist_moved(weight)
+    free, _ = free_wrist_moved(0.0)
+    assert held < free - 0.005, (held, free)
+    names = {sk.JOINT_NAMES[j] for j in mode.held()}
+    assert {"rwrist", "relbow", "lknee", "upperneck", "chest"} <= names
+    assert not names & {"root", "lwrist", "lelbow", "lankle", "ltoe", "rankle", "rtoe"}
+    assert mode.anchor is not None and mode.anchor is not mode.pose
+
+
+def test_a_reach_round_that_leaves_the_wrist_further_is_dropped(vae):
+    """A wrist target out of reach takes further rounds; a round whose plain steps
+    overshoot (here: a solve that returns the body further from the target) is not kept:
+    the pose stays the one before it and no more rounds run."""
+    mode = PoseMode(vae)
+    w = mode.pose.positions[J["rwrist"]].copy()
+    mode.set_target("rwrist", w + np.array([0.0, -0.25, -0.45]))
+    solve, calls, poses = mode.character.solve, [], []
+
+    def overshooting(*a, **k):
+        calls.append(1)
+        pose = solve(*a, **k)
+        if len(calls) == 2:  # the first further round: the wrist ends 30 cm further off
+            pose = pose.moved([0.0, 0.3, 0.3])
+        poses.append(pose)
+        return pose
+
+    mode.character.solve = overshooting
+    mode.solve()
+    assert len(calls) == 2
+    assert mode.pose is poses[0]

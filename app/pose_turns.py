@@ -59,6 +59,7 @@ class JointTurns:
         q = g.rotation(np.asarray(position, float) - pivot)
         if q is not None:
             self.w._edit(lambda: self.w.session.turn_joint(joint, q))
+        g.last = time.monotonic()  # a pause is the mouse's, not the solve's: a slow solve keeps the gesture
 
     def hold(self, joint: str, on: bool) -> None:
         """Give the target on ``joint`` the joint's current world rotation (``on``) or

@@ -166,7 +166,9 @@ class PoseWindow(QMainWindow):
         """Create or move the target on ``joint`` to ``position (3,)`` metres and solve;
         with Alt held, turn it instead (:meth:`app.pose_turns.JointTurns.alt_drag`)."""
         self.selected = joint
-        if QApplication.keyboardModifiers() & Qt.KeyboardModifier.AltModifier:
+        # the keys held now: the drag arrives through VTK's callback, and Qt's cached
+        # modifiers lag until its next input event (an Alt pressed before the drag read as none)
+        if QApplication.queryKeyboardModifiers() & Qt.KeyboardModifier.AltModifier:
             self.turns.alt_drag(joint, position)
             return
         self.turns.gesture = None

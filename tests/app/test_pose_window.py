@@ -65,7 +65,7 @@ def test_alt_drag_turns_the_joint_by_the_angle_swept_about_it(window, monkeypatc
     from engine.kinematics import quat_np as QN
     from engine.kinematics.fk import fk
 
-    monkeypatch.setattr(pw.QApplication, "keyboardModifiers", staticmethod(lambda: Qt.KeyboardModifier.AltModifier))
+    monkeypatch.setattr(pw.QApplication, "queryKeyboardModifiers", staticmethod(lambda: Qt.KeyboardModifier.AltModifier))
     w = window
     pose = w.mode.pose
     start = fk(pose.local_rot, pose.root_pos, w.mode.character.skeleton.offsets)[1][LW]
@@ -80,6 +80,32 @@ def test_alt_drag_turns_the_joint_by_the_angle_swept_about_it(window, monkeypatc
     now = fk(p.local_rot, p.root_pos, w.mode.character.skeleton.offsets)[1][LW]
     assert abs(float(now @ t.rotation)) == pytest.approx(1.0, abs=1e-9)
     assert w.undo.count() == 1 and "+rotation" in w.targets.rows["lwrist"]["label"].text()
+
+
+def test_a_slow_solve_does_not_split_an_alt_drag(window, monkeypatch):
+    """The gesture ends at a pause of the mouse, not at a solve slower than the pause."""
+    import time
+
+    import app.pose_window as pw
+    from PyQt6.QtCore import Qt
+
+    from engine.authoring.turns import TURN_GESTURE_S
+
+    monkeypatch.setattr(pw.QApplication, "queryKeyboardModifiers", staticmethod(lambda: Qt.KeyboardModifier.AltModifier))
+    w = window
+    turn = w.session.turn_joint
+
+    def slow_turn(*args, **kwargs):
+        time.sleep(1.2 * TURN_GESTURE_S)
+        return turn(*args, **kwargs)
+
+    monkeypatch.setattr(w.session, "turn_joint", slow_turn)
+    pivot = w.mode.pose.positions[LW].copy()
+    gestures = []
+    for a in np.radians(np.arange(0, 41, 10)):
+        w.drag_joint("lwrist", pivot + 0.1 * np.array([np.cos(a), 0.0, np.sin(a)]))
+        gestures.append(w.turns.gesture)
+    assert all(g is gestures[0] for g in gestures)
 
 
 def test_every_edit_kind_undoes_and_redoes(window, qtbot):

@@ -7,11 +7,6 @@ VENV := .venv
 CLI := $(VENV)/bin/dragposer-studio
 # Extra pytest arguments, e.g. `make test PYTEST_ARGS=tests/engine/test_bvh.py`.
 PYTEST_ARGS ?=
-# pytest-xdist workers: the suite is single-threaded Python, so two workers use both cores
-# of a 2-core machine. Each test file runs whole on one worker (--dist loadfile): a
-# module's shared setup (a sweep of the shared data, a loaded model) is made once.
-# `make test PYTEST_WORKERS=0` runs everything in one process.
-PYTEST_WORKERS ?= 2
 
 .PHONY: run test bootstrap
 
@@ -28,6 +23,6 @@ run: bootstrap
 
 # pytest exits 5 when it collects nothing; that is a failure too, said plainly.
 test: bootstrap
-	@rc=0; $(VENV)/bin/python -m pytest -q -n $(PYTEST_WORKERS) --dist loadfile $(PYTEST_ARGS) || rc=$$?; \
+	@rc=0; $(VENV)/bin/python -m pytest -q $(PYTEST_ARGS) || rc=$$?; \
 	if [ $$rc -eq 5 ]; then echo "make test: no tests were collected" >&2; fi; \
 	exit $$rc

@@ -6,7 +6,8 @@
 * the spine and clavicles have one convention on every rig: near identity while the
   torso is upright (version 2 bent the iClone upper back 80 degrees, which the Daz rig,
   lacking that joint, did not);
-* heights match the source within 3 % (every file: slow);
+* every shared file loads as a finite canonical clip, and heights match the source within
+  3 % (every file, loaded once for these sweeps: slow);
 * a clip written back onto its own rig reproduces the source's mapped joints within 1 cm.
 """
 
@@ -120,9 +121,10 @@ FAMILIES = ("cmu_daz", "cmu_daz_cgspeed", "cmu_iclone", "cmu_mb")
 
 @pytest.fixture(scope="module")
 def every_shared_clip(shared_mocap):
-    """Each file the manifest lists, loaded once: ``(per-folder file counts, heights, summary
-    table)``. The list comes from the manifest, so a folder added to the shared data is
-    covered without editing these tests."""
+    """Each file the manifest lists, loaded once (as ``info`` loads it): ``(per-folder file
+    counts, heights, summary table, files that load short or not finite)``. The list comes
+    from the manifest, so a folder added to the shared data is covered without editing
+    these tests."""
     import json
 
     from engine.motion.joint_stats import summarize
@@ -135,18 +137,26 @@ def every_shared_clip(shared_mocap):
     counts: dict[str, int] = {}
     heights: dict[str, tuple[float, float]] = {}
     groups: dict[str, dict] = {}
+    bad: list[str] = []
     for path in files:
         rel = path.relative_to(shared_mocap)
         counts[rel.parts[0]] = counts.get(rel.parts[0], 0) + 1
         motion, rep = load_with_report(path, strategy=CURRENT)
         heights[str(rel)] = (rep.height_m, rep.source_height_m)
+        if len(motion) <= 10 or not np.isfinite(motion.positions()).all():
+            bad.append(str(rel))
         groups.setdefault(rel.parts[0], {})[str(rel)] = joint_report(motion.local_rot, motion.skeleton.offsets)
-    return counts, heights, summarize(groups, "dragposer")
+    return counts, heights, summarize(groups, "dragposer"), bad
+
+
+@pytest.mark.slow
+def test_every_shared_file_loads_as_a_finite_clip(every_shared_clip):
+    assert not every_shared_clip[3], f"short or not finite once loaded: {every_shared_clip[3]}"
 
 
 @pytest.mark.slow
 def test_every_shared_clip_keeps_its_height(every_shared_clip):
-    counts, heights, table = every_shared_clip
+    counts, heights, table, _ = every_shared_clip
     assert set(counts) == {"dragposer", *FAMILIES}, "a new folder needs its family's rotation check below"
     assert {g: table["lknee"][g]["clips"] for g in counts} == counts
     off = {rel: h for rel, h in heights.items() if abs(h[0] / h[1] - 1) >= 0.03}

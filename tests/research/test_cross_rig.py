@@ -20,11 +20,15 @@ MAX_FRAMES = 1800
 
 
 @pytest.fixture(scope="module")
-def cross_rig(shared_mocap):
-    """Every pair of copies of every multi-rig take, compared once: ``[(take, a, b, difference)]``."""
+def every_pair(shared_mocap):
+    """Every pair of copies of every multi-rig take, each copy loaded once and each pair
+    compared (:func:`research.retarget_compare.compare_clips`) and split into a constant
+    offset per joint and what varies (:func:`research.retarget_ablation.offset_ablation`):
+    ``[(take, a, b, difference, ablation)]``."""
     import itertools
 
     from engine.motion.retarget import CURRENT, load_motion
+    from research.retarget_ablation import offset_ablation
     from research.retarget_compare import compare_clips, multi_rig_takes
 
     rows = []
@@ -33,27 +37,24 @@ def cross_rig(shared_mocap):
     for take, paths in takes.items():
         clips = {p: load_motion(shared_mocap / p, strategy=CURRENT, max_frames=MAX_FRAMES) for p in paths}
         for a, b in itertools.combinations(paths, 2):
-            rows.append((take, a.split("/")[0], b.split("/")[0], compare_clips(clips[a], clips[b])))
+            rows.append((take, a.split("/")[0], b.split("/")[0], compare_clips(clips[a], clips[b]),
+                         offset_ablation(clips[a], clips[b])))  # fmt: skip
     return rows
 
 
 @pytest.fixture(scope="module")
-def offsets_removed(shared_mocap):
+def cross_rig(every_pair):
+    """Every pair of copies of every multi-rig take, compared: ``[(take, a, b, difference)]``."""
+    return [row[:4] for row in every_pair]
+
+
+@pytest.fixture(scope="module")
+def offsets_removed(every_pair):
     """Per pair of rigs, the mean over its takes of the mean local-rotation difference once
     each joint's constant offset is removed (:func:`research.retarget_ablation.offset_ablation`)."""
-    import itertools
-
-    from engine.motion.retarget import CURRENT, load_motion
-    from research.retarget_ablation import offset_ablation
-    from research.retarget_compare import multi_rig_takes
-
     out: dict[tuple[str, str], list[tuple[float, float]]] = {}
-    for take, paths in multi_rig_takes(shared_mocap).items():
-        clips = {p: load_motion(shared_mocap / p, strategy=CURRENT, max_frames=MAX_FRAMES) for p in paths}
-        for a, b in itertools.combinations(paths, 2):
-            ab = offset_ablation(clips[a], clips[b])
-            out.setdefault((a.split("/")[0], b.split("/")[0]), []).append(
-                (float(ab.removed_deg.mean()), float(ab.removed_pos_cm.mean())))
+    for _, a, b, _, ab in every_pair:
+        out.setdefault((a, b), []).append((float(ab.removed_deg.mean()), float(ab.removed_pos_cm.mean())))
     return {pair: tuple(np.mean(v, axis=0).tolist()) for pair, v in out.items()}
 
 

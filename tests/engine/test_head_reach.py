@@ -112,3 +112,15 @@ def test_with_a_hip_tracker_the_head_points_at_its_tracker_and_a_held_spine_is_l
     tr = simulate(clip, "4")
     m.step(tr.frame(0))
     assert not m.plan(tr.frame(1)).reach.keys() & {HEAD}, "a user's constraint on the spine: no head reach"
+
+
+@pytest.mark.parametrize(("preset", "expected"), [("4", True), ("3-hip-hands", True), ("6", False),
+                                                  ("3-head-hands", False), ("5", False)])
+def test_only_the_hip_profile_reaches_the_head_by_the_spine(preset, expected):
+    from engine.solver import OptimizerSettings
+    from engine.solver.profiles import effective
+    from engine.tracking.presets import PRESET_SENSORS
+
+    joints = [s.joint for s in PRESET_SENSORS[preset]]
+    assert effective(OptimizerSettings(), joints, explicit=()).head_reach is expected
+    assert effective(OptimizerSettings(head_reach=not expected), joints, explicit=("head_reach",)).head_reach is not expected

@@ -153,14 +153,20 @@ def reach_head_local(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.nd
         levers = [vnorm(vsub(head, p)) for p in pts[:-1]]
         gain = vnorm(have) / max(sum(levers) / len(levers), 1e-9)
         r = qaxis_angle(vscale(axis, 1.0 / sin_a), min(gain * angle / len(SPINE), math.pi / len(SPINE)))
-        world = qmul(tuple(rots[0].tolist()), qconj(tuple(local[SPINE[0]].tolist())))  # the root's world rotation
+        world = _unit(qmul(tuple(rots[0].tolist()), qconj(tuple(local[SPINE[0]].tolist()))))  # the root's
         for j in SPINE:
-            # the same world turn r at joint j, in its parent's frame: W^-1 r W
-            q = qmul(qmul(qmul(qconj(world), r), world), tuple(local[j].tolist()))
+            # the same world turn r at joint j, in its parent's frame: W^-1 r W; kept unit, as
+            # the conjugate is the inverse of a unit quaternion only (the norms grew per pass)
+            q = _unit(qmul(qmul(qmul(qconj(world), r), world), tuple(local[j].tolist())))
             local[j] = q
-            world = qmul(world, q)
+            world = _unit(qmul(world, q))
     local *= np.where(local[:, :1] < 0, -1.0, 1.0)
     return local
+
+
+def _unit(q: tuple) -> tuple:
+    n = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
+    return tuple(x / n for x in q)
 
 
 def adopt_local(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray,

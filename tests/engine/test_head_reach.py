@@ -124,3 +124,18 @@ def test_only_the_hip_profile_reaches_the_head_by_the_spine(preset, expected):
     joints = [s.joint for s in PRESET_SENSORS[preset]]
     assert effective(OptimizerSettings(), joints, explicit=()).head_reach is expected
     assert effective(OptimizerSettings(head_reach=not expected), joints, explicit=("head_reach",)).head_reach is not expected
+
+
+def test_the_reach_is_as_smooth_as_its_input_however_many_passes(monkeypatch):
+    """A rounding difference in the decoded pose (1e-7) stays that small in the result, and
+    the spine's rotations stay unit (the conjugate inverts a unit quaternion only)."""
+    local, root, off, rng = _pose(2)
+    target, _ = _swung_target(local, root, off, rng, 15.0)
+    nudged = local + rng.normal(0, 1e-7, local.shape)
+    for passes in (3, 8):
+        monkeypatch.setattr(limb_ik, "SPINE_PASSES", passes)
+        a, _ = fk(limb_ik.reach_head_local(local, root, off, target), root, off)
+        b, _ = fk(limb_ik.reach_head_local(nudged, root, off, target), root, off)
+        assert np.abs(a - b).max() < 1e-5
+        got = limb_ik.reach_head_local(nudged, root, off, target)
+        np.testing.assert_allclose(np.linalg.norm(got[sorted(SPINE)], axis=-1), 1.0, atol=1e-12)

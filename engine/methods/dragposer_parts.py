@@ -59,7 +59,8 @@ class FramePlan:
     hip : (ndarray (3,), ndarray (4,)) or None
         The connected 6-DoF hip tracker's position and rotation.
     reach, turn : dict of int to ndarray
-        The after-solve steps' targets: limbs onto their trackers, tracker rotations.
+        The after-solve steps' targets: the head (by the spine) and limbs onto their
+        trackers, tracker rotations.
     """
 
     settings: OptimizerSettings
@@ -171,6 +172,16 @@ class TrackerTerms:
         return {sk.JOINT_INDEX[j]: c.position for j, c in self.constraints.items()
                 if c.enabled and c.connected and sk.JOINT_INDEX[j] in LIMBS
                 and not held & {sk.JOINT_INDEX[j], *LIMBS[sk.JOINT_INDEX[j]]}}  # fmt: skip
+
+    def head_target(self, held: set[int]) -> dict[int, np.ndarray]:
+        """The head -> its tracker's position (setting ``head_reach``) while a hip tracker
+        places the root and no user constraint acts on the spine or head; else empty.
+        Without hips the root follows the head tracker already."""
+        hip, head = self.constraints.get("root"), self.constraints.get("upperneck")
+        spine = {sk.JOINT_INDEX[n] for n in ("lowerback", "upperback", "chest", "lowerneck", "upperneck")}
+        if hip is None or head is None or not (hip.enabled and head.enabled and head.connected) or held & spine:
+            return {}
+        return {sk.JOINT_INDEX["upperneck"]: head.position}
 
     def rotation_targets(self) -> dict[int, np.ndarray]:
         """The head, hands and feet -> their connected 6-DoF trackers' world rotations

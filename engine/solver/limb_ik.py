@@ -1,5 +1,5 @@
-"""Exact steps after the latent solve (numpy): wrists and ankles onto their trackers
-(:func:`reach`) and tracked joints onto their trackers' rotations (:func:`adopt_rotations`,
+"""Exact steps after the latent solve (numpy): the head onto its tracker by the spine
+(:func:`reach_head_local`), wrists and ankles onto theirs (:func:`reach`) and tracked joints onto their trackers' rotations (:func:`adopt_rotations`,
 with the head's turn about the neck shared with the lower neck: :func:`share_neck_twist`).
 
 The decoder brings a tracked hand or foot within a centimetre or two of its tracker; the
@@ -36,6 +36,13 @@ from engine.kinematics.quat_np import qaxis_angle, qbetween, qconj, qmul, qrotat
 LIMBS = {sk.JOINT_INDEX[c]: (sk.JOINT_INDEX[a], sk.JOINT_INDEX[b])
          for a, b, c in (("lshoulder", "lelbow", "lwrist"), ("rshoulder", "relbow", "rwrist"),
                          ("lhip", "lknee", "lankle"), ("rhip", "rknee", "rankle"))}  # fmt: skip
+#: The head tracker's joint and the neck joint below it (:func:`share_neck_twist`).
+HEAD, NECK = sk.JOINT_INDEX["upperneck"], sk.JOINT_INDEX["lowerneck"]
+#: The joints between the hips and the head that :func:`reach_head_local` bends, hips first.
+SPINE = tuple(sk.JOINT_INDEX[n] for n in ("lowerback", "upperback", "chest", "lowerneck"))
+#: Passes of :func:`reach_head_local` (each pivots every spine joint once; three leave
+#: the chord within 0.1 degree of a 25-degree swing's target, tests/engine/test_head_reach.py).
+SPINE_PASSES = 3
 #: Keep the limb this far (metres) from fully straight or folded: the bend axis and the
 #: solution are ill-defined there.
 _SLACK = 1e-3
@@ -109,6 +116,59 @@ def reach(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray,
     return local, fk(local, np.asarray(root_pos, dtype=np.float64), offsets)[0]
 
 
+def reach_head_local(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray,
+                     target: np.ndarray) -> np.ndarray:  # fmt: skip
+    """Turn the head (``upperneck``) towards ``target (3,)`` by the spine: local rotations
+    ``(22, 4)``, changed at :data:`SPINE` only.
+
+    With a hip tracker the root is placed by the hips, and the decoder's spine leaves a
+    head tracker several centimetres off on performers whose posture it cannot express
+    (preset ``4``, ``dragposer/`` clips: 7.6 cm). Each pass takes the swing that turns the
+    chord from the lower back to the head onto the chord to ``target`` and gives each
+    spine joint an equal share of its angle (scaled by the levers, below), about the
+    same world axis; the joints pivot at different points, so :data:`SPINE_PASSES`
+    passes converge on the target's direction (within 0.05 degrees after two). The
+    chord's length is not a target: the bend changes it (on random poses, 3 mm median
+    and under 2 cm for a 10-degree swing), and a target nearer or farther than the head
+    stays off along the chord. Arms and head follow the chest and neck (their own local
+    rotations are unchanged), so :func:`reach` of the wrists comes after.
+    """
+    local = np.array(local_rot, dtype=np.float64)
+    root_pos = np.asarray(root_pos, dtype=np.float64)
+    t = tuple(float(x) for x in target)
+    for _ in range(SPINE_PASSES):
+        pos, rots = fk_joints(local, root_pos, offsets, [*SPINE, HEAD])
+        pts = [tuple(p) for p in pos.tolist()]
+        base, head = pts[0], pts[-1]
+        have, want = vsub(head, base), vsub(t, base)
+        if vnorm(have) < 1e-9 or vnorm(want) < 1e-9:
+            break
+        axis = vcross(have, want)
+        sin_a = vnorm(axis)
+        if sin_a < 1e-12:  # on the chord already (or opposite it: no defined swing)
+            break
+        angle = math.atan2(sin_a, vdot(have, want))
+        # the upper joints pivot nearer the head and move it less per degree: each turn is
+        # scaled by the lower back's lever over the spine joints' mean lever
+        levers = [vnorm(vsub(head, p)) for p in pts[:-1]]
+        gain = vnorm(have) / max(sum(levers) / len(levers), 1e-9)
+        r = qaxis_angle(vscale(axis, 1.0 / sin_a), min(gain * angle / len(SPINE), math.pi / len(SPINE)))
+        world = _unit(qmul(tuple(rots[0].tolist()), qconj(tuple(local[SPINE[0]].tolist()))))  # the root's
+        for j in SPINE:
+            # the same world turn r at joint j, in its parent's frame: W^-1 r W; kept unit, as
+            # the conjugate is the inverse of a unit quaternion only (the norms grew per pass)
+            q = _unit(qmul(qmul(qmul(qconj(world), r), world), tuple(local[j].tolist())))
+            local[j] = q
+            world = _unit(qmul(world, q))
+    local *= np.where(local[:, :1] < 0, -1.0, 1.0)
+    return local
+
+
+def _unit(q: tuple) -> tuple:
+    n = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
+    return tuple(x / n for x in q)
+
+
 def adopt_local(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray,
                 targets: dict[int, np.ndarray]) -> np.ndarray:  # fmt: skip
     """The local rotations of :func:`adopt_rotations` ``(22, 4)``, without the positions."""
@@ -129,8 +189,6 @@ def adopt_local(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray
     return local
 
 
-#: The head tracker's joint and the neck joint below it (:func:`share_neck_twist`).
-HEAD, NECK = sk.JOINT_INDEX["upperneck"], sk.JOINT_INDEX["lowerneck"]
 
 
 def share_neck_twist(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, head_target: np.ndarray,
@@ -211,7 +269,8 @@ def adopt_rotations(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.nda
 
 def finish(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, reach_targets: dict[int, np.ndarray],
            rotation_targets: dict[int, np.ndarray], neck_twist_share: float = 0.0) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
-    """:func:`reach` onto ``reach_targets`` (positions), then :func:`share_neck_twist`
+    """:func:`reach_head_local` onto ``reach_targets[HEAD]`` when the head is among them,
+    :func:`reach` onto the others (positions), then :func:`share_neck_twist`
     (with a head target and ``neck_twist_share`` > 0) and :func:`adopt_rotations` of
     ``rotation_targets``, with one forward kinematics pass for the positions.
 
@@ -221,7 +280,11 @@ def finish(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, rea
     positions : ndarray (22, 3)
         Metres.
     """
-    local = reach_local(local_rot, root_pos, offsets, reach_targets) if reach_targets else local_rot
+    local = local_rot
+    if HEAD in reach_targets:
+        local = reach_head_local(local, root_pos, offsets, reach_targets[HEAD])
+        reach_targets = {j: t for j, t in reach_targets.items() if j != HEAD}
+    local = reach_local(local, root_pos, offsets, reach_targets) if reach_targets else local
     if rotation_targets:
         if neck_twist_share > 0.0 and HEAD in rotation_targets:
             local = share_neck_twist(local, root_pos, offsets, rotation_targets[HEAD], neck_twist_share)

@@ -1,5 +1,6 @@
 """Exact steps after the latent solve (numpy): the head onto its tracker by the spine
-(:func:`reach_head_local`), wrists and ankles onto theirs (:func:`reach`) and tracked joints onto their trackers' rotations (:func:`adopt_rotations`,
+(:func:`reach_head_local`), wrists and ankles onto theirs (:func:`reach`) and tracked
+joints onto their trackers' rotations (:func:`adopt_rotations`,
 with the head's turn about the neck shared with the lower neck: :func:`share_neck_twist`).
 
 The decoder brings a tracked hand or foot within a centimetre or two of its tracker; the
@@ -187,8 +188,6 @@ def adopt_local(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray
         q = qmul(qconj(parent_rot), (t[0] * s, t[1] * s, t[2] * s, t[3] * s))
         local[j] = q if q[0] >= 0 else tuple(-x for x in q)
     return local
-
-
 
 
 def share_neck_twist(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, head_target: np.ndarray,

@@ -1,4 +1,4 @@
-"""Ablation (session 9, docs/accuracy.md "Held-out clips"): a naive elbow bend goal.
+"""Ablation (docs/accuracy.md "Held-out clips"): a naive elbow bend goal.
 After the solve and the reach step, each tracked arm swivels about its shoulder-wrist
 line by the share F of the angle towards an elbow hint: the point one forearm behind the
 wrist along the hand tracker's rest direction (a straight wrist). Wraps the solver's

@@ -17,8 +17,8 @@ clean run's (``spread``) and how far apart the perturbed and clean reconstructio
 both.
 
 Flags in the output: ``FLIP`` (heading > 90 deg on some frame), ``DIVERGED`` (a frame's
-error above 50 cm or non-finite), ``UNSTABLE`` (spread above 0.5 cm). ``FLIP`` was the
-total angle (``pelvis``) > 90 deg until session 7; that also counted the lean that head
+error above 50 cm or non-finite), ``UNSTABLE`` (spread above 0.5 cm). ``FLIP`` reads the
+heading only, not the total angle (``pelvis``), which also counts the lean that head
 and hands barely show (docs/optimizer.md, "Stability with head and hands").
 """
 

@@ -1,4 +1,4 @@
-"""Ablation (session 9, docs/optimizer.md "After the solve"): spread each 6-DoF tracker's
+"""Ablation (docs/optimizer.md "After the solve"): spread each 6-DoF tracker's
 rotation correction, its twist about the limb, into the chain above it, by wrapping the
 solver's after-solve step (``engine.methods.dragposer.finish``) for this process only.
 
@@ -7,7 +7,7 @@ solver's after-solve step (``engine.methods.dragposer.finish``) for this process
 NECK: share of the head correction's twist about the neck bone put on the lower neck.
 ARM / LEG: share of the wrist's (ankle's) twist about the shoulder-wrist (hip-ankle)
 line put on the whole limb, a swivel that moves no end joint. Preset 6, the first 150
-frames of each file; prints Rot / Pos and per-joint errors. The session-9 figures were
+frames of each file; prints Rot / Pos and per-joint errors. The figures in docs/optimizer.md were
 taken before NECK became the setting ``neck_twist_share`` (default 0.5), which the
 solver now applies after this step: today ``0 ARM LEG`` reproduces the rows
 ``0.5 ARM LEG`` of docs/optimizer.md.

@@ -172,7 +172,7 @@ first {args.realtime_frames} frames of each file in realtime mode, first {args.o
 offline mode (offline costs up to 100 iterations per frame), first {lossy} with lost trackers. `ms/frame` was measured with
 {args.jobs} evaluations sharing the two cores (idle-machine speed: `docs/performance.md`).
 The ground truth's own jitter on the realtime frames is {_f(gt.get('gt_jitter'), '.1f')}.
-What limits the figures that miss issue 13's targets, with the ablations that show it:
+What limits the figures that miss their targets, with the ablations that show it:
 [accuracy.md](accuracy.md).
 {(chr(10) + "**Note.** " + args.note + chr(10)) if args.note else ""}
 ## All sensor sets

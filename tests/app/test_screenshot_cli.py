@@ -1,4 +1,4 @@
-"""``dragposer-studio gui --screenshot``: the headless check issue 6 promises, run for real."""
+"""``dragposer-studio gui --screenshot``: the headless check, run for real."""
 
 from __future__ import annotations
 

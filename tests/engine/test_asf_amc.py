@@ -177,7 +177,7 @@ CMU_PAIRS = ["02/02_01", "05/05_02", "06/06_13", "09/09_11"]
 @pytest.mark.parametrize("take", CMU_PAIRS)
 def test_shared_amc_takes_match_their_cgspeed_bvh(shared_mocap: Path, take: str):
     """The same CMU take as ASF/AMC and as the cgspeed BVH: the same canonical motion
-    within 1 cm and 2 degrees (issue 35's check), frame for frame."""
+    within 1 cm and 2 degrees, frame for frame."""
     from engine.motion.retarget import load_motion
 
     bvh = shared_mocap / "cmu_mb" / (Path(take).name + ".bvh")

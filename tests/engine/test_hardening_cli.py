@@ -1,4 +1,4 @@
-"""Hostile input through the CLI (issue 15's audit): every case ends in one line naming the
+"""Hostile input through the CLI (the hostile-input audit): every case ends in one line naming the
 file/flag/field and the allowed range, exit status 2, before any expensive work."""
 
 from __future__ import annotations

@@ -21,8 +21,8 @@ def test_a_pinned_elbow_stays_near_its_pin_with_six_trackers():
     from engine.motion.retarget import load_motion
     from engine.tracking import simulate
 
-    # the pin pulls the elbow in over the first few frames (session 9 models: 7.9, 6.8,
-    # 5.9, 4.3, 2.4, 1.6, 1.5, 1.3 cm) and then holds it; what matters is the hold
+    # the pin pulls the elbow in over the first few frames (by 7.9, 6.8, 5.9, 4.3, 2.4,
+    # 1.6, 1.5, 1.3 cm with one release's models) and then holds it; what matters is the hold
     clip = load_motion(REPO / "assets" / "clips" / "example.bvh").slice(200, 208)
     j = sk.JOINT_INDEX["lelbow"]
     target = clip.positions()[0, j] + [0.10, -0.10, 0.05]  # a Ctrl-drag of 15 cm

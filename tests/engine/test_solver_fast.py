@@ -103,11 +103,10 @@ def test_fast_and_reference_paths_give_the_same_poses(models, preset, mode):
     compared is one frame's solve, not 16 frames of float32 round-off fed back through
     Adam (whose normalised steps amplify differences in near-zero gradients). Per frame
     the paths agree to about 5e-7 m. The cold first frame (30 full Adam steps from the
-    mean latent) amplifies round-off most: 1.09e-5 m with the session-8 models, 1.8e-4 m
-    with the session-9 models at the six-tracker profile's rotation weight 0.01 (5.7e-7 m
-    at 0.03; joint rotations then differ by up to 2.2e-3 rad), so it alone is held to
+    mean latent) amplifies round-off most: up to 1.8e-4 m with shipped models at the
+    six-tracker profile's rotation weight 0.01 (5.7e-7 m at 0.03; joint rotations then differ by up to 2.2e-3 rad), so it alone is held to
     5e-4 m and 5e-3 rad. Offline frames run 30 steps too: with the bank prior and the
-    smoothing starting at frame 3 (session 10), frame 12 of the offline run differs by
+    smoothing starting at frame 3, frame 12 of the offline run differs by
     4.0e-5 m / 1.2e-3 rad (its total loss by 8e-4 relative) while the other 14 agree to
     5e-7 m, so offline frames are held to 1e-4 m and 2e-3 rad; a wrong gradient term
     shows at the centimetre scale."""

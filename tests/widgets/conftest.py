@@ -1,4 +1,5 @@
-"""GUI test helpers: fake snapshots (the display handling lives in tests/conftest.py)."""
+"""GUI test helpers: fake snapshots and a shown viewport (the display handling lives in
+tests/conftest.py)."""
 
 from __future__ import annotations
 
@@ -69,3 +70,16 @@ def shown(qtbot, widget, width: int, height: int):
     widget.show()
     qtbot.waitExposed(widget)
     return widget
+
+
+@pytest.fixture
+def viewport(qtbot):
+    """A shown 640 x 480 :class:`widgets.viewport.Viewport`, closed after the test."""
+    from widgets.viewport import Viewport
+
+    v = Viewport()
+    v.resize(640, 480)
+    v.show()
+    qtbot.waitExposed(v)
+    yield v
+    v.close()

@@ -16,16 +16,6 @@ BOX = ("bounds", BoxGizmo([-0.5, -0.5, 0.5], [0.5, 0.5, 1.8], edit=("box_min", "
 PIN = ("pin", PointGizmo([0.2, -0.1, 1.2], edit="position", label="pin"))
 
 
-@pytest.fixture
-def viewport(qtbot):
-    v = Viewport()
-    v.resize(640, 480)
-    v.show()
-    qtbot.waitExposed(v)
-    yield v
-    v.close()
-
-
 def box_bounds(v: Viewport) -> np.ndarray:
     import pyvista as pv
 

@@ -6,19 +6,8 @@ import numpy as np
 import pytest
 
 from engine.gizmos import BoxGizmo, LineGizmo, PointGizmo
-from widgets.viewport import Viewport
 
 pytestmark = pytest.mark.gui
-
-
-@pytest.fixture
-def viewport(qtbot):
-    v = Viewport()
-    v.resize(640, 480)
-    v.show()
-    qtbot.waitExposed(v)
-    yield v
-    v.close()
 
 
 def orange_fraction(img: np.ndarray) -> float:

@@ -17,19 +17,9 @@ MOCAP = SHARED_DATA / "mocap"
 
 @pytest.hookimpl(trylast=True)
 def pytest_configure(config):
-    if not os.environ.get("PYTEST_XDIST_WORKER") and config.getoption("dist", "no") != "no":
-        # pytest-xdist's controller runs no test and starts no Xvfb; its workers, which
-        # inherit its environment, each start their own, so it must not pick offscreen
-        return
     # after pytest-xvfb has (or has not) set DISPLAY
     if not os.environ.get("DISPLAY"):
         os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
-    if os.environ.get("PYTEST_XDIST_WORKER"):
-        # one worker per core (pytest-xdist): torch's default of a thread per core would
-        # put two threads on each core, which spin against each other
-        import torch
-
-        torch.set_num_threads(1)
 
 
 def pytest_collection_modifyitems(config, items):

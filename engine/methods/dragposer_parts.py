@@ -30,7 +30,7 @@ from engine.errors import UserError
 from engine.methods.sensor_blend import SensorBlend
 from engine.sensors import Sensor, SensorFrame
 from engine.solver import LatentPredictor, OptimizerSettings, TemporalSchedule
-from engine.solver.limb_ik import LIMBS
+from engine.solver.limb_ik import HEAD, LIMBS, SPINE
 from engine.solver.pose import body_facing
 from engine.solver.tracker_prior import PoseBank, TrackerHistory
 
@@ -178,10 +178,10 @@ class TrackerTerms:
         places the root and no user constraint acts on the spine or head; else empty.
         Without hips the root follows the head tracker already."""
         hip, head = self.constraints.get("root"), self.constraints.get("upperneck")
-        spine = {sk.JOINT_INDEX[n] for n in ("lowerback", "upperback", "chest", "lowerneck", "upperneck")}
-        if hip is None or head is None or not (hip.enabled and head.enabled and head.connected) or held & spine:
+        on = hip is not None and head is not None and hip.enabled and head.enabled and head.connected
+        if not on or held & {*SPINE, HEAD}:
             return {}
-        return {sk.JOINT_INDEX["upperneck"]: head.position}
+        return {HEAD: head.position}
 
     def rotation_targets(self) -> dict[int, np.ndarray]:
         """The head, hands and feet -> their connected 6-DoF trackers' world rotations

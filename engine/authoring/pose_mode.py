@@ -329,7 +329,7 @@ class PoseMode:
 
     def settle(self) -> Pose:
         """An offline, grounded solve from the current pose (when a drag ends), then up to
-        ``options.reach_rounds`` grounded rounds of the drag's plain steps while a dragged
+        ``options.settle_rounds`` grounded rounds of the drag's plain steps while a dragged
         wrist or ankle is short of its target: the offline solve's adaptive steps can stop
         at once from a pose that is already close, where the plain steps still close
         the gap."""
@@ -341,7 +341,7 @@ class PoseMode:
         ctx = c.grounded(where[:2], self.heading, prior=self.base_latent)
         self.pose = c.solve(self.pose.latent, terms + self._hold_terms(where), ctx, reach, rotations,
                             prior_weight=o.prior_weight)  # fmt: skip
-        for _ in range(max(0, o.reach_rounds)):
+        for _ in range(max(0, o.settle_rounds)):
             if self.shortfall() <= o.reach_tolerance:
                 break
             where = self._where()

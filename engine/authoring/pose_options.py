@@ -66,6 +66,11 @@ class PoseOptions:
     reach_tolerance : float
         Distance (metres) of a dragged joint from its target below which no further
         round runs.
+    settle_rounds : int
+        Most such rounds when a drag ends (:meth:`engine.authoring.pose_mode.PoseMode.settle`):
+        a wrist left at the arm's full stretch closes its last centimetres a few
+        millimetres a round, and a settle is a single solve the user asked for, so it
+        may take more rounds than a drag event.
     hold_weight : float
         Weight (as a user target's) of a pull on every joint the drag does not move
         towards where it was, relative to the root, when the drag began (see
@@ -89,5 +94,6 @@ class PoseOptions:
     prior_weight: float = PRIOR_WEIGHT
     reach_rounds: int = 4
     reach_tolerance: float = 0.005
+    settle_rounds: int = 12
     hold_weight: float = 0.0
     turn_weight: float = 0.0

@@ -5,6 +5,7 @@ Qt falls back to offscreen and the tests marked ``gui`` (VTK) are skipped, sayin
 from __future__ import annotations
 
 import os
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -29,6 +30,27 @@ def pytest_collection_modifyitems(config, items):
     for item in items:
         if "gui" in item.keywords:
             item.add_marker(skip)
+
+
+@pytest.fixture(scope="session", autouse=True)
+def shipped_models_unchanged():
+    """The shipped models are loaded once per process and shared by every test that builds
+    DragPoser or asks for them (:func:`engine.models.loading.load_default_models`): at the
+    end they must still hold what their files hold, frozen, so no test changed the models
+    that later tests ran with."""
+    yield
+    loading = sys.modules.get("engine.models.loading")
+    for shared in list(loading._SHIPPED.values()) if loading is not None else []:
+        import torch
+
+        fresh = loading.load_models(loading.DEFAULT_VAE, loading.DEFAULT_PREDICTOR if shared.predictor else None)
+        for kind, model, file in (("vae", shared.vae, fresh.vae), ("predictor", shared.predictor, fresh.predictor)):
+            if model is None:
+                continue
+            changed = [k for k, t in model.state_dict().items() if not torch.equal(t, file.state_dict()[k])]
+            assert not changed, f"a test changed the shared shipped {kind}: {changed[:5]}"
+            assert not model.training and not any(p.requires_grad for p in model.parameters()), (
+                f"a test unfroze the shared shipped {kind}")  # fmt: skip
 
 
 @pytest.fixture(scope="session")

@@ -251,6 +251,10 @@ def _evaluate(args: argparse.Namespace) -> int:
     # workers (or Ray tasks): one bar for the files
     progress = not args.no_progress and executor.kind == "local" and (jobs == 1 or len(clips) == 1)
     _METHODS.clear()
+    if len(names) == 1 and (executor.kind == "ray" or (jobs > 1 and len(clips) > 1)):
+        # A bad model file or --set is then a user error now, not after the workers have
+        # started and imported torch (seconds each); the workers build their own.
+        _method(args, names[0])
     rows = map_files(_evaluate_file, [(path, args, names, progress) for path in clips], jobs,
                      progress=not args.no_progress, desc="evaluate", executor=executor)  # fmt: skip
     docs: dict[str, dict[str, Any]] = {}

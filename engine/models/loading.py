@@ -7,9 +7,11 @@ epochs, validation figures). Anything else is a :class:`ModelFileError` naming t
 
 from __future__ import annotations
 
+import copy
 import pickle
 import pickletools
 import re
+import threading
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -195,7 +197,37 @@ def load_models(vae_path: Path | str, predictor_path: Path | str | None = None) 
     return ModelBundle(vae, pred, vmeta, pmeta)
 
 
+def _file_key(path: Path) -> tuple[str, int, int, int]:
+    """Which file ``path`` is now (inode, size, modification time in ns): a file replaced
+    on disk, written in place or renamed over, gets another key."""
+    st = path.stat()
+    return str(path), st.st_ino, st.st_size, st.st_mtime_ns
+
+
+#: The shipped models as last loaded, by :func:`_file_key` of their files.
+_SHIPPED: dict[tuple, ModelBundle] = {}
+_SHIPPED_LOCK = threading.Lock()
+
+
 def load_default_models(require_predictor: bool = False) -> ModelBundle:
-    """The shipped models in ``assets/models`` (the predictor only if present, unless required)."""
+    """The shipped models in ``assets/models`` (the predictor only if present, unless required).
+
+    They are read once per process and shared: each call returns a new bundle that holds
+    the same frozen modules (eval mode, ``requires_grad`` off; nothing may change them)
+    and copies of their ``meta``. Building DragPoser again (the studio's export and
+    ghosts, a method switch, the pose window) then reads and checks no file (about
+    0.5 CPU s) and reuses the fused decoder made for the model
+    (:func:`engine.solver.optimizer.dense_decoder`, about 0.8 CPU s). A file replaced on
+    disk is read again."""
     pred = DEFAULT_PREDICTOR if (DEFAULT_PREDICTOR.is_file() or require_predictor) else None
-    return load_models(DEFAULT_VAE, pred)
+    try:
+        key = tuple(_file_key(p) for p in (DEFAULT_VAE, pred) if p is not None)
+    except OSError:  # missing: load_models says so, naming the file
+        return load_models(DEFAULT_VAE, pred)
+    with _SHIPPED_LOCK:
+        if key not in _SHIPPED:
+            _SHIPPED.clear()  # a replaced file: the old models are not kept alive
+            _SHIPPED[key] = load_models(DEFAULT_VAE, pred)
+        shared = _SHIPPED[key]
+    return ModelBundle(shared.vae, shared.predictor, copy.deepcopy(shared.vae_meta),
+                       copy.deepcopy(shared.predictor_meta))  # fmt: skip

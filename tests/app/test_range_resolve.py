@@ -48,7 +48,9 @@ def test_a_range_resolve_runs_off_the_gui_thread_and_cancel_leaves_the_clip(stud
     runner = resolve_range(studio, 0, len(original) - 1, blend=0)
     worker = runner.thread
     assert worker is not None and worker is not threading.main_thread() and worker.is_alive()
-    qtbot.waitUntil(lambda: runner.done >= 3, timeout=60000)  # frames solved while the loop ran
+    # frames solved while the loop ran, and long enough for the timer to show it (the
+    # shipped models may already be loaded, so the first frames can come within 50 ms)
+    qtbot.waitUntil(lambda: runner.done >= 3 and len(ticks) > 10, timeout=60000)
     assert runner.running and runner.dialog is not None and runner.dialog.maximum() == len(original)
     gaps = np.diff(ticks) * 1000.0
     assert len(ticks) > 10 and np.percentile(gaps, 99) < 250.0, (len(ticks), np.percentile(gaps, 99))

@@ -97,6 +97,14 @@ def test_cli_user_errors(clip_dir, capsys, argv, message):
     assert message in capsys.readouterr().err
 
 
+def test_a_bad_setting_fails_before_any_worker_starts(clip_dir, capsys, monkeypatch):
+    import engine.cli.evaluate as ev
+
+    monkeypatch.setattr(ev, "map_files", lambda *a, **k: pytest.fail("the workers started"))
+    assert main(["evaluate", str(clip_dir), "--no-progress", "--jobs", "2", "--set", "warp=9"]) == 2
+    assert "--set warp: unknown setting" in capsys.readouterr().err
+
+
 def test_missing_path_is_a_user_error(tmp_path, capsys):
     assert main(["evaluate", str(tmp_path / "missing.bvh")]) == 2
     assert "no such file" in capsys.readouterr().err

@@ -129,3 +129,31 @@ def test_autoencoder_method_reconstructs_through_the_vae(synthetic_motion):
     # untrained: poses differ from the ground truth, but are valid rotations
     assert np.allclose(np.linalg.norm(motion.local_rot, axis=-1), 1.0, atol=1e-5)
     assert Q.angle(motion.local_rot[:, 1:], synthetic_motion.local_rot[:, 1:]).mean() > 0
+
+
+def test_shipped_models_are_read_once_and_again_when_their_file_is_replaced(tmp_path, monkeypatch):
+    """``load_default_models`` shares one frozen copy of the shipped models per process;
+    each caller's ``meta`` is its own; a file renamed over the shipped one is read again,
+    and a missing one is an error naming it."""
+    import shutil
+
+    from engine.models import loading
+
+    vae, pred = tmp_path / "vae.pt", tmp_path / "predictor.pt"
+    shutil.copy(loading.DEFAULT_VAE, vae)
+    shutil.copy(loading.DEFAULT_PREDICTOR, pred)
+    monkeypatch.setattr(loading, "DEFAULT_VAE", vae)
+    monkeypatch.setattr(loading, "DEFAULT_PREDICTOR", pred)
+    monkeypatch.setattr(loading, "_SHIPPED", {})  # the process's own shipped models stay out of this
+    first, again = loading.load_default_models(), loading.load_default_models()
+    assert again.vae is first.vae and again.predictor is first.predictor is not None
+    assert not first.vae.training and not any(p.requires_grad for p in first.vae.parameters())
+    again.vae_meta["epochs"] = -1
+    assert loading.load_default_models().vae_meta.get("epochs") != -1
+    shutil.copy(pred, tmp_path / "new.pt")
+    (tmp_path / "new.pt").replace(pred)
+    replaced = loading.load_default_models()
+    assert replaced.predictor is not first.predictor and replaced.vae is not first.vae
+    vae.unlink()
+    with pytest.raises(ModelFileError, match="vae.pt"):
+        loading.load_default_models()

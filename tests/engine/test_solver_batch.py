@@ -22,6 +22,23 @@ def clip():
     return load_motion(CLIP, max_frames=40)
 
 
+@pytest.fixture(scope="module")
+def frame_by_frame(clip):
+    """``solve(preset)``: the clip solved frame by frame in offline mode with the default
+    settings (the stopping rule; the batched path's constants play no part), made once
+    per preset for the tests that compare the batched solve with it."""
+    from engine.tracking import simulate
+
+    done = {}
+
+    def solve(preset):
+        if preset not in done:
+            done[preset] = _frame_by_frame(_offline(), simulate(clip, preset), clip.skeleton)
+        return done[preset]
+
+    return solve
+
+
 def _offline(**kw):
     m = get_method("dragposer", mode="offline", **kw)
     if m.bank is None:
@@ -35,7 +52,7 @@ def _frame_by_frame(m, tracking, skeleton):
 
 
 @pytest.mark.parametrize("preset", ["6", "4"])
-def test_one_segment_under_the_stopping_rule_is_the_frame_by_frame_solve(clip, preset, monkeypatch):
+def test_one_segment_under_the_stopping_rule_is_the_frame_by_frame_solve(clip, frame_by_frame, preset, monkeypatch):
     from engine.tracking import simulate
 
     tr = simulate(clip, preset)
@@ -43,7 +60,7 @@ def test_one_segment_under_the_stopping_rule_is_the_frame_by_frame_solve(clip, p
     monkeypatch.setattr(DB, "SEGMENT", 1000)
     # a stopping setting given by the user (here its default value) asks for the stopping rule
     batched, res_b = run_method(_offline(patience=10), tr, clip.skeleton, progress=False)
-    seq, res_s = _frame_by_frame(_offline(patience=10), tr, clip.skeleton)
+    seq, res_s = frame_by_frame(preset)
     gap = np.linalg.norm(batched.positions() - seq.positions(), axis=-1)
     its_b, its_s = np.array([r.iterations for r in res_b]), np.array([r.iterations for r in res_s])
     # float32 products in another order (a matrix, not a vector) move a stopping test by an
@@ -124,7 +141,7 @@ def test_warm_up_frames_take_their_own_step_counts(clip, monkeypatch):
     assert counts.count(DB.WARMUP_STEPS) == 4 * 3 and counts.count(DB.STEPS["adam-carry"]) == len(tr) - 1
 
 
-def test_segments_are_solved_side_by_side_and_stay_close_to_the_frame_by_frame_solve(clip, monkeypatch):
+def test_segments_are_solved_side_by_side_and_stay_close_to_the_frame_by_frame_solve(clip, frame_by_frame, monkeypatch):
     from engine.tracking import simulate
 
     tr = simulate(clip, "6")
@@ -134,7 +151,7 @@ def test_segments_are_solved_side_by_side_and_stay_close_to_the_frame_by_frame_s
     monkeypatch.setattr(B.BatchDecoder, "forward", lambda self, z: widths.append(z.shape[1]) or forward(self, z))
     batched, res = run_method(_offline(), tr, clip.skeleton, progress=False)
     assert len(res) == len(tr) and max(widths) == 5  # 40 frames: five segments of eight
-    seq, _ = _frame_by_frame(_offline(), tr, clip.skeleton)
+    seq, _ = frame_by_frame("6")
     gap = np.linalg.norm(batched.positions() - seq.positions(), axis=-1)
     assert np.median(gap) < 0.005 and gap.max() < 0.05  # only the segments' starts differ
 

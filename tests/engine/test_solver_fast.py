@@ -78,6 +78,24 @@ def test_block_sparse_decoder_reads_less_and_equals_the_dense_products(models):
         np.testing.assert_allclose(_matvec(br, g, np.empty(w.shape[1], np.float32)), g @ w, rtol=1e-5, atol=1e-5)
 
 
+def test_solvers_on_one_model_keep_their_own_activations(models):
+    """Two solvers on one model (the pose window and a bake on a worker thread, two
+    methods built from the shared shipped models) interleave their passes: a backward
+    still reads the activation slopes of its own forward, and the matrices are made once."""
+    from engine.solver.optimizer import dense_decoder
+
+    a, b = dense_decoder(models.vae), dense_decoder(models.vae)
+    assert a.weights is b.weights and a.forward_runs is b.forward_runs
+    gen = np.random.default_rng(4)
+    za, zb = (gen.standard_normal(24).astype(np.float32) for _ in range(2))
+    g = gen.standard_normal(91).astype(np.float32)
+    out, grad = a.forward(za), a.backward(g)
+    again = a.forward(za)
+    b.forward(zb)
+    np.testing.assert_array_equal(a.backward(g), grad)
+    np.testing.assert_array_equal(again, out)
+
+
 @pytest.mark.parametrize("rule", ["adam", "sgd"])
 def test_latent_update_matches_torch_optimizers(rule):
     gen = torch.Generator().manual_seed(2)

@@ -14,8 +14,9 @@ floor after every solve.
 
 What no target asks for stays as the user left it (:class:`PoseOptions`): a turn is
 taken exactly by its joint after the solve and moves no other joint, the pelvis crouches
-only for a wrist target below the hanging arm's reach, and ``hold_weight`` pulls the
-joints no target holds towards :attr:`PoseMode.anchor`, the pose the drag began from.
+only for a wrist target below the hanging arm's reach, ``hold_weight`` pulls the
+joints no target holds towards :attr:`PoseMode.anchor`, the pose the drag began from,
+and ``keep_trunk`` keeps any trunk bone from leaning further back than it did then.
 """
 
 from __future__ import annotations
@@ -24,9 +25,10 @@ import numpy as np
 import torch
 
 from engine import skeleton as sk
-from engine.authoring.character import Character, Pose
+from engine.authoring.character import Character, Pose, yaw_quaternion
 from engine.authoring.pose_metrics import centre_of_mass
 from engine.authoring.pose_options import LOWEST_ROOT, SQUAT_FROM, PoseOptions
+from engine.authoring.pose_trunk import LEGS, TRUNK, keep_trunk
 from engine.authoring.targets import JointTarget, solve_inputs
 from engine.constraints.base import Constraint
 from engine.errors import UserError
@@ -283,9 +285,10 @@ class PoseMode:
             else:
                 ctx = c.placed(where, self.heading, prior=self.base_latent)
             before = self.pose
-            self.pose = c.solve(self.pose.latent, terms + self._hold_terms(where), ctx, reach, rotations,
-                                iterations=iterations, prior_weight=o.prior_weight, rule="sgd",
-                                step_size=STEP_SIZE)  # fmt: skip
+            solved = c.solve(self.pose.latent, terms + self._hold_terms(where), ctx, reach, rotations,
+                             iterations=iterations, prior_weight=o.prior_weight, rule="sgd",
+                             step_size=STEP_SIZE)  # fmt: skip
+            self.pose = self._kept_trunk(solved, reach, rotations)
             if round_ and self.shortfall() > gap + OVERSHOOT:
                 # the plain steps overshot (a folded body near the floor): keep the round before
                 self.pose = before
@@ -293,6 +296,19 @@ class PoseMode:
         self._replant()
         self._solved = self.pose
         return self.pose
+
+    def _kept_trunk(self, pose: Pose, reach: dict, rotations: dict) -> Pose:
+        """``pose`` with ``options.keep_trunk``'s rule (:mod:`engine.authoring.pose_trunk`)
+        applied against :attr:`anchor`, while no trunk or leg joint has a target; the
+        pelvis is kept only while it stands on both planted feet."""
+        o = self.options
+        if not o.keep_trunk or self.anchor is None or any(t.active and t.index in TRUNK + LEGS
+                                                          for t in self.targets.values()):  # fmt: skip
+            return pose
+        forward = QN.rotate(yaw_quaternion(self.heading), np.array([0.0, -1.0, 0.0]))
+        limbs = {j: np.asarray(p, float) for j, p in reach.items() if j in LIMBS}
+        pelvis = o.plant_feet and pose.root_pos[2] >= self._standing_root - SQUAT_FROM
+        return keep_trunk(pose, self.anchor, forward, self.character.skeleton.offsets, limbs, dict(rotations), pelvis)
 
     def held(self) -> list[int]:
         """Joints the hold pulls towards the anchor (see ``PoseOptions.hold_weight``):
@@ -339,16 +355,18 @@ class PoseMode:
             self.anchor = self.pose
         where = self._where()
         ctx = c.grounded(where[:2], self.heading, prior=self.base_latent)
-        self.pose = c.solve(self.pose.latent, terms + self._hold_terms(where), ctx, reach, rotations,
-                            prior_weight=o.prior_weight)  # fmt: skip
+        solved = c.solve(self.pose.latent, terms + self._hold_terms(where), ctx, reach, rotations,
+                         prior_weight=o.prior_weight)  # fmt: skip
+        self.pose = self._kept_trunk(solved, reach, rotations)
         for _ in range(max(0, o.settle_rounds)):
             if self.shortfall() <= o.reach_tolerance:
                 break
             where = self._where()
             ctx = c.grounded(where[:2], self.heading, prior=self.base_latent)
-            self.pose = c.solve(self.pose.latent, terms + self._hold_terms(where), ctx, reach, rotations,
-                                iterations=ITERATIONS, prior_weight=o.prior_weight, rule="sgd",
-                                step_size=STEP_SIZE)  # fmt: skip
+            solved = c.solve(self.pose.latent, terms + self._hold_terms(where), ctx, reach, rotations,
+                             iterations=ITERATIONS, prior_weight=o.prior_weight, rule="sgd",
+                             step_size=STEP_SIZE)  # fmt: skip
+            self.pose = self._kept_trunk(solved, reach, rotations)
         self._replant()
         self._solved = self.pose
         return self.pose

@@ -81,6 +81,14 @@ class PoseOptions:
         the solve turns the joint onto its target whatever this is, so it sets only how
         much the rest of the body (the learned prior's idea of a turned head or hand)
         moves with a turn; 0: a turn moves only that joint.
+    keep_trunk : bool
+        While no trunk or leg joint has a target, no trunk bone (pelvis, spine, neck)
+        leans further back than when the drag began: a bone the latent solve leaned back
+        is turned forward until it does not, and the wrists and ankles are put back on
+        their targets from there (:mod:`engine.authoring.pose_trunk`). A forward or side
+        lean stays, so a low reach still bends the trunk; the pelvis is kept only while
+        it stands on both planted feet (a crouch tips it back). Off by default: real
+        poses with the arms overhead lean back a little (docs/authoring.md).
     """
 
     plant_feet: bool = True
@@ -97,3 +105,4 @@ class PoseOptions:
     settle_rounds: int = 12
     hold_weight: float = 0.0
     turn_weight: float = 0.0
+    keep_trunk: bool = False

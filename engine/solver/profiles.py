@@ -67,8 +67,12 @@ PROFILES: dict[str, Profile] = {
     # frames: 3.97 -> 3.69 cm, 30.5 -> 28.2 deg without it), and without rotations the
     # predictor's longer look-ahead helps (retarget 3, 9 validation files: 4.06 -> 3.59 cm,
     # 21.9 -> 18.8 deg; docs/optimizer.md)
+    # the head reached by the spine too: 6x3dof realtime, Pos / Rot / Vel, 9 validation files
+    # (150 frames) 3.44 / 17.7 / 17.3 -> 3.39 / 17.7 / 14.9; hdm05/ (22 clips, whole) 5.84 /
+    # 27.3 / 25.9 -> 5.29 / 27.8 / 22.7; dragposer/ (whole) 4.12 / 23.0 / 37.3 -> 3.98 / 22.8 /
+    # 34.3 (docs/accuracy.md, "Other labs' performers")
     "full3": Profile("full3", dict(future_window=16, temporal_weight=0.03, step_size=0.3, lr=0.05, smooth_weight=0.0,
-                     ground_weight=0.0, sensor_rotation_weight=0.03)),
+                     ground_weight=0.0, sensor_rotation_weight=0.03, head_reach=True)),
     # smoothing 5 on the sparse sets: jitter 20.4 / 20.7 / 19.7 -> 18.2 / 18.5 /
     # 16.4 (truth 13.0) for presets 4 / 3-hip-hands / 3-head-hands, Pos 4.99 / 5.02 / 7.67 ->
     # 4.97 / 5.03 / 7.71 cm; 10 and 20 smooth more but cost velocity error (docs/optimizer.md)

@@ -114,16 +114,18 @@ def test_with_a_hip_tracker_the_head_points_at_its_tracker_and_a_held_spine_is_l
     assert not m.plan(tr.frame(1)).reach.keys() & {HEAD}, "a user's constraint on the spine: no head reach"
 
 
-@pytest.mark.parametrize(("preset", "expected"), [("4", True), ("3-hip-hands", True), ("6", False),
-                                                  ("3-head-hands", False), ("5", False)])
-def test_only_the_hip_profile_reaches_the_head_by_the_spine(preset, expected):
+@pytest.mark.parametrize(("preset", "expected"), [("4", True), ("3-hip-hands", True), ("6x3dof", True),
+                                                  ("6", False), ("3-head-hands", False), ("5", False)])
+def test_the_hip_profiles_without_its_rotation_reach_the_head_by_the_spine(preset, expected):
     from engine.solver import OptimizerSettings
     from engine.solver.profiles import effective
     from engine.tracking.presets import PRESET_SENSORS
 
     joints = [s.joint for s in PRESET_SENSORS[preset]]
-    assert effective(OptimizerSettings(), joints, explicit=()).head_reach is expected
-    assert effective(OptimizerSettings(head_reach=not expected), joints, explicit=("head_reach",)).head_reach is not expected
+    hip = all(s.dof == 6 for s in PRESET_SENSORS[preset] if s.joint == "root")
+    assert effective(OptimizerSettings(), joints, explicit=(), hip_rotation=hip).head_reach is expected
+    assert effective(OptimizerSettings(head_reach=not expected), joints, explicit=("head_reach",),
+                     hip_rotation=hip).head_reach is not expected  # fmt: skip
 
 
 def test_the_reach_is_as_smooth_as_its_input_however_many_passes(monkeypatch):

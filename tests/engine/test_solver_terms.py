@@ -1,4 +1,4 @@
-"""Issue-13 solver pieces: the ``smooth`` term on both paths, sensor-set profiles, the
+"""Solver pieces: the ``smooth`` term on both paths, sensor-set profiles, the
 heading limit and the adoption of tracker rotations."""
 
 from __future__ import annotations

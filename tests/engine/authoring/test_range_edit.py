@@ -92,7 +92,7 @@ def contact_slide(before: Motion, after: Motion, joint: int, frames: range, floo
 @pytest.mark.parametrize("clip, start, end", [("cmu_iclone/005_04.bvh", 300, 360), ("cmu_mb/05_04.bvh", 530, 599)])
 def test_a_floor_contact_resolve_of_a_cmu_clip_pops_no_joint_and_slides_no_foot_more(vae, shared_mocap, clip, start,
                                                                                         end):  # fmt: skip
-    """Issue 37: a re-solve with floor contact made a joint jump 10-34 cm in a frame where
+    """A re-solve with floor contact made a joint jump 10-34 cm in a frame where
     the clip moves 5 cm, and planted toes slide 0.2 -> 2.5 cm/frame."""
     from engine.motion.retarget import load_motion
 

@@ -305,7 +305,7 @@ class PoseMode:
         if not o.keep_trunk or self.anchor is None or any(t.active and t.index in TRUNK + LEGS
                                                           for t in self.targets.values()):  # fmt: skip
             return pose
-        forward = QN.rotate(yaw_quaternion(self.heading), np.array([0.0, -1.0, 0.0]))
+        forward = QN.rotate(yaw_quaternion(self.heading), sk.FORWARD)
         limbs = {j: np.asarray(p, float) for j, p in reach.items() if j in LIMBS}
         pelvis = o.plant_feet and pose.root_pos[2] >= self._standing_root - SQUAT_FROM
         return keep_trunk(pose, self.anchor, forward, self.character.skeleton.offsets, limbs, dict(rotations), pelvis)

@@ -86,14 +86,15 @@ def keep_trunk(pose: Pose, start: Pose, forward: np.ndarray, offsets: np.ndarray
     forward = np.asarray(forward, float)
     turned = False
     for j, end in BONES[0 if pelvis else 1:]:
-        pos, rot = fk_joints(local, root, offsets, [j, end])
+        # the bone's ends and its joint's parent (the root's: none, the identity) in one pass
+        pos, rot = fk_joints(local, root, offsets, [j, end, max(sk.PARENTS[j], 0)])
         have = (pos[1] - pos[0]) / np.linalg.norm(pos[1] - pos[0])
         was = start.positions[end] - start.positions[j]
         want = unleaned(have, was / np.linalg.norm(was), forward)
         if float(have @ want) > 1.0 - 1e-12:
             continue
         world = QN.mul(QN.from_to(have, want), rot[0])
-        parent = fk_joints(local, root, offsets, [sk.PARENTS[j]])[1][0] if j else np.array([1.0, 0.0, 0.0, 0.0])
+        parent = rot[2] if j else np.array([1.0, 0.0, 0.0, 0.0])
         local[j] = QN.canonicalize(QN.normalize(QN.mul(QN.conjugate(parent), world)))
         turned = True
     if not turned:

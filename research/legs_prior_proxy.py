@@ -3,13 +3,20 @@ features change in the legs (docs/accuracy.md, "Other labs' performers: the head
 legs").
 
     PYTHONPATH=. python research/legs_prior_proxy.py joints FILE... [--sensors 4] [--max-frames N]
-        [--set KEY=VALUE ...]
+        [--set KEY=VALUE ...] [--save OUT.npz]
     PYTHONPATH=. python research/legs_prior_proxy.py bank FILE... [--sensors 4] [--max-frames N]
 
 ``joints`` runs DragPoser (realtime, the profile of the preset, ``--set`` applied) and IK
 on the simulated trackers of each file and prints, per file and per joint, the mean
 position error of both (cm), and the error by the hips' horizontal speed (standing,
 walking...).
+
+``gap`` reads the errors ``joints --save`` wrote and splits DragPoser's gap to IK by joint
+(each joint's share of the mean over the 22), and gives two oracles that bound what a
+rule for the unobserved legs could gain: IK's legs on the standing frames (hips under
+0.1 m/s), and on every frame, the better of the two methods per leg joint.
+
+    PYTHONPATH=. python research/legs_prior_proxy.py gap OUT.npz
 
 ``bank`` is a fast screen of pose-bank variants without the solver: each frame's prior
 latent (the mean latent of the nearest bank frames, as :class:`PoseBank` gives it, by a
@@ -79,12 +86,51 @@ def joints_main(args) -> None:
         print(f"{n:<11} {e['dragposer'][:, j].mean():9.2f} {e['ik'][:, j].mean():6.2f}")
     print(f"{'mean':<11} {e['dragposer'].mean():9.2f} {e['ik'].mean():6.2f}")
     v = np.concatenate(speeds)
+    if args.save:
+        np.savez_compressed(args.save, dragposer=e["dragposer"], ik=e["ik"], hip_speed=v)
+        print(f"per-frame, per-joint errors (cm) and hip speeds (m/s) written to {args.save}")
     for lo, hi in ((0, 0.1), (0.1, 0.3), (0.3, 0.8), (0.8, np.inf)):
         sel = (v >= lo) & (v < hi)
         if sel.any():
             print(f"hips {lo}-{hi} m/s: {100 * sel.mean():3.0f} % of frames, DragPoser {e['dragposer'][sel].mean():.2f}"
                   f" (legs {e['dragposer'][sel][:, LEGS].mean():.2f}), IK {e['ik'][sel].mean():.2f}"
                   f" (legs {e['ik'][sel][:, LEGS].mean():.2f})")
+
+
+STANDING = 0.1  # m/s of the hips' horizontal speed
+
+
+def gap_shares(dragposer: np.ndarray, ik: np.ndarray) -> dict[str, float]:
+    """Each joint's share (cm) of the difference between DragPoser's and IK's mean
+    position error over all joints; ``dragposer``, ``ik``: (F, J) errors in cm. The
+    shares sum to the difference of the means."""
+    d = (dragposer - ik).mean(axis=0) / dragposer.shape[1]
+    return {n: float(d[j]) for j, n in enumerate(sk.JOINT_NAMES)}
+
+
+def leg_oracles(dragposer: np.ndarray, ik: np.ndarray, hip_speed: np.ndarray) -> dict[str, float]:
+    """Mean error over all joints (cm) if DragPoser's leg joints took IK's error on the
+    standing frames (``standing``), or the smaller of the two per leg joint and frame
+    (``best_legs``); ``as_measured`` and ``ik`` for reference."""
+    standing = dragposer.copy()
+    still = hip_speed < STANDING
+    standing[np.ix_(still, LEGS)] = ik[np.ix_(still, LEGS)]
+    best = dragposer.copy()
+    best[:, LEGS] = np.minimum(dragposer[:, LEGS], ik[:, LEGS])
+    return {"as_measured": float(dragposer.mean()), "standing": float(standing.mean()),
+            "best_legs": float(best.mean()), "ik": float(ik.mean())}
+
+
+def gap_main(args) -> None:
+    data = np.load(args.files[0])
+    dp, ik, v = data["dragposer"], data["ik"], data["hip_speed"]
+    shares = gap_shares(dp, ik)
+    print(f"{'joint':<11} {'share of the gap (cm)':>22}")
+    for name, share in sorted(shares.items(), key=lambda kv: -abs(kv[1])):
+        print(f"{name:<11} {share:22.3f}")
+    print(f"{'sum':<11} {sum(shares.values()):22.3f}")
+    for name, value in leg_oracles(dp, ik, v).items():
+        print(f"{name:<13} {value:.2f} cm")
 
 
 def _clip_rows_back(bank: TP.PoseBank, steps: int) -> np.ndarray:
@@ -180,13 +226,14 @@ def bank_main(args) -> None:
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("what", choices=("joints", "bank"))
+    ap.add_argument("what", choices=("joints", "bank", "gap"))
     ap.add_argument("files", nargs="+")
     ap.add_argument("--sensors", default="4")
     ap.add_argument("--max-frames", type=int)
     ap.add_argument("--set", action="append", default=[])
+    ap.add_argument("--save", metavar="OUT.npz", help="joints: also write the per-frame errors")
     args = ap.parse_args()
-    (joints_main if args.what == "joints" else bank_main)(args)
+    {"joints": joints_main, "bank": bank_main, "gap": gap_main}[args.what](args)
     return 0
 
 

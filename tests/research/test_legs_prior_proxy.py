@@ -50,3 +50,21 @@ def test_the_brute_force_lookup_is_the_pose_bank_s_lookup():
     weights = np.ones(lp.Variant(bank).table.shape[1])
     weights[9] = 50.0  # the anchor's height
     assert not torch.allclose(lp.Variant(bank, weights=weights).latents(p, r, 4), want)
+
+
+def test_the_gap_shares_sum_to_the_difference_and_the_oracles_touch_only_the_legs():
+    lp = load_script("legs_prior_proxy")
+    rng = np.random.default_rng(2)
+    dp, ik = rng.uniform(0, 10, (40, 22)), rng.uniform(0, 10, (40, 22))
+    shares = lp.gap_shares(dp, ik)
+    assert abs(sum(shares.values()) - (dp.mean() - ik.mean())) < 1e-9
+    assert shares["lelbow"] == (dp[:, 16] - ik[:, 16]).mean() / 22
+    speed = np.r_[np.zeros(10), np.ones(30)]  # the first 10 frames standing
+    o = lp.leg_oracles(dp, ik, speed)
+    still = dp.copy()
+    still[:10, lp.LEGS] = ik[:10, lp.LEGS]
+    assert o["standing"] == still.mean() and o["as_measured"] == dp.mean() and o["ik"] == ik.mean()
+    assert o["best_legs"] < o["as_measured"]
+    best = dp.copy()
+    best[:, lp.LEGS] = np.minimum(dp[:, lp.LEGS], ik[:, lp.LEGS])
+    assert o["best_legs"] == best.mean()

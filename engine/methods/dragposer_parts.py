@@ -30,7 +30,7 @@ from engine.errors import UserError
 from engine.methods.sensor_blend import SensorBlend
 from engine.sensors import Sensor, SensorFrame
 from engine.solver import LatentPredictor, OptimizerSettings, TemporalSchedule
-from engine.solver.limb_ik import HEAD, LIMBS, SPINE
+from engine.solver.limb_ik import CARRIED, HEAD, LIMBS
 from engine.solver.pose import body_facing
 from engine.solver.tracker_prior import PoseBank, TrackerHistory
 
@@ -175,11 +175,13 @@ class TrackerTerms:
 
     def head_target(self, held: set[int]) -> dict[int, np.ndarray]:
         """The head -> its tracker's position (setting ``head_reach``) while a hip tracker
-        places the root and no user constraint acts on the spine or head; else empty.
-        Without hips the root follows the head tracker already."""
+        places the root and no user constraint acts on a joint the spine's turn carries
+        (:data:`~engine.solver.limb_ik.CARRIED`: the spine, head, clavicles and arms; the
+        turn would take a pinned elbow off the pin the solve met); else empty. Without
+        hips the root follows the head tracker already."""
         hip, head = self.constraints.get("root"), self.constraints.get("upperneck")
         on = hip is not None and head is not None and hip.enabled and head.enabled and head.connected
-        if not on or held & {*SPINE, HEAD}:
+        if not on or held & CARRIED:
             return {}
         return {HEAD: head.position}
 

@@ -216,6 +216,12 @@ class DenseDecoder:
                 np.multiply(y, gate, out=self._act[i])
         return self._pre[last].copy()
 
+    def pre_activations(self) -> list[np.ndarray]:
+        """The last :meth:`forward`'s pre-activations of the stages a LeakyReLU follows,
+        one ``(units,)`` float32 copy per stage: the side of zero each lies on is the
+        slope :meth:`backward` takes through that unit."""
+        return [p.copy() for p in self._pre[:-1]]
+
     def backward(self, grad_out: np.ndarray) -> np.ndarray:
         """Gradient w.r.t. the latent ``(L,)`` of a loss whose gradient w.r.t. the last
         :meth:`forward` output is ``grad_out (91,)`` (a new array)."""

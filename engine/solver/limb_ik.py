@@ -58,6 +58,11 @@ def _chain(j: int) -> list[int]:
     return out
 
 
+#: The joints :func:`reach_head_local` moves or turns: the lower back and all above it (the
+#: spine, neck, head, clavicles and arms).
+CARRIED = frozenset(j for j in range(sk.NUM_JOINTS) if SPINE[0] in _chain(j))
+
+
 # -- the steps ------------------------------------------------------------------------
 
 

@@ -60,9 +60,12 @@ PROFILES: dict[str, Profile] = {
     # forearm's; 9 validation files, 150 frames, Rot deg for 0.003 / 0.01 / 0.02 / 0.03:
     # 10.31 / 10.15 / 10.43 / 12.46 (docs/optimizer.md). The pose bank's latent as the
     # prior, weight 0.05: 1.18 cm / 10.15 deg -> 0.89 / 7.39; 0.03 0.89 / 7.56, 0.1 0.96 /
-    # 7.41, 0.3 1.18 / 7.67 (heavier pulls the hands off their trackers)
+    # 7.41, 0.3 1.18 / 7.67 (heavier pulls the hands off their trackers). The head reached by
+    # the spine (limb_ik.reach_head_local), realtime, Pos cm / Rot deg / Vel cm/s: 9 validation
+    # files (150 frames) 0.82 / 7.14 / 10.2 -> 0.75 / 7.12 / 7.6; hdm05/ (whole) 1.49 / 13.4 /
+    # 10.3 -> 1.30 / 13.4 / 8.8; dragposer/ (whole) 2.06 / 14.86 / 21.0 -> 1.97 / 14.91 / 18.2
     "full": Profile("full", dict(future_window=1, temporal_weight=0.01, step_size=0.3, lr=0.05, smooth_weight=5.0,
-                    ground_weight=0.0, sensor_rotation_weight=0.01, prior="trackers", tracker_prior_weight=0.05)),
+                    ground_weight=0.0, sensor_rotation_weight=0.01, prior="trackers", tracker_prior_weight=0.05, head_reach=True)),
     # positions only: the smoothing term made 6x3dof worse (3 validation files, 150
     # frames: 3.97 -> 3.69 cm, 30.5 -> 28.2 deg without it), and without rotations the
     # predictor's longer look-ahead helps (retarget 3, 9 validation files: 4.06 -> 3.59 cm,

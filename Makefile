@@ -7,6 +7,11 @@ VENV := .venv
 CLI := $(VENV)/bin/dragposer-studio
 # Extra pytest arguments, e.g. `make test PYTEST_ARGS=tests/engine/test_bvh.py`.
 PYTEST_ARGS ?=
+# pytest-xdist worker processes, one per core of the 2-core CI machine: the suite runs
+# one test at a time on one core otherwise (its solves keep one torch thread). Each
+# module's tests stay in one worker (--dist loadscope), so a module-scoped fixture (the
+# shared-data sweeps) is built once. `make test PYTEST_WORKERS=0`: one process.
+PYTEST_WORKERS ?= 2
 
 .PHONY: run test bootstrap
 
@@ -23,6 +28,6 @@ run: bootstrap
 
 # pytest exits 5 when it collects nothing; that is a failure too, said plainly.
 test: bootstrap
-	@rc=0; $(VENV)/bin/python -m pytest -q $(PYTEST_ARGS) || rc=$$?; \
+	@rc=0; $(VENV)/bin/python -m pytest -q -n $(PYTEST_WORKERS) --dist loadscope $(PYTEST_ARGS) || rc=$$?; \
 	if [ $$rc -eq 5 ]; then echo "make test: no tests were collected" >&2; fi; \
 	exit $$rc

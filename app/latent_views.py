@@ -9,6 +9,10 @@ forces and the sweep; *Next flagged frame* seeks. Flagged frames are marked on t
 timeline. The panels are drawn from snapshots by the window's draw scheduler, and only
 while their tab is visible. Whether the dock or the Latent dock was in front is kept in
 the window's settings (``latent_map_raised``) for the next start.
+
+The tabs are built when the dock is first shown: behind the Latent dock (where it starts)
+the map, forces and gallery cost the window ~0.2 s of CPU at start-up and draw nothing.
+The readouts are built at once, hidden: their flag verdicts mark the timeline meanwhile.
 """
 
 from __future__ import annotations
@@ -17,7 +21,7 @@ from typing import Any
 
 import numpy as np
 from PyQt6.QtCore import Qt, QTimer
-from PyQt6.QtWidgets import QDockWidget, QSplitter, QTabWidget
+from PyQt6.QtWidgets import QDockWidget, QSplitter, QTabWidget, QWidget
 
 from app.drawing import Panel
 from app.shell import StudioShell
@@ -47,27 +51,19 @@ class LatentViews:
         self.w = window
         self.session = window.session
         self.latent_map = default_map()
-        self.map = LatentMapPlot()
         self.readouts = LatentReadouts()
-        self.forces = LatentForces(window.plots.colours)
-        self.gallery = LatentGallery()
         if self.latent_map is not None:
-            m = self.latent_map
-            self.map.set_map(m.density, m.extent, m.explained)
-            self.readouts.set_thresholds(m.nn_threshold, m.norm_threshold)
-        else:
-            self.map.set_note(NO_MAP)
-        split = QSplitter(Qt.Orientation.Vertical)
-        split.addWidget(self.map)
-        split.addWidget(self.readouts)
-        split.setSizes([300, 150])
-        self.tabs = QTabWidget()
-        self.tabs.addTab(split, "Map")
-        self.tabs.addTab(self.forces, "Forces")
-        self.tabs.addTab(self.gallery, "Gallery")
+            self.readouts.set_thresholds(self.latent_map.nn_threshold, self.latent_map.norm_threshold)
+        #: Built with the tabs when the dock is first shown (:meth:`build`); None until then.
+        self.map: LatentMapPlot | None = None
+        self.forces: LatentForces | None = None
+        self.gallery: LatentGallery | None = None
+        self.tabs: QTabWidget | None = None
+        self._detail: Any = None  # the newest snapshot's latent detail, for tabs built later
         self.dock = QDockWidget("Latent map", window)
         self.dock.setObjectName("Latent map")
-        self.dock.setWidget(self.tabs)
+        self.dock.setWidget(QWidget())
+        self.dock.visibilityChanged.connect(lambda shown: self.build() if shown else None)
         window.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, self.dock)
         latent = window.findChild(QDockWidget, "Latent")
         if latent is not None:
@@ -80,24 +76,50 @@ class LatentViews:
         self._hover: tuple[str, Any] | None = None
         self._hover_timer = QTimer(window, singleShot=True, interval=HOVER_MS)
         self._hover_timer.timeout.connect(self._send_hover)
-        self.map.frameClicked.connect(self.seek)
-        self.map.pointClicked.connect(self._click_point)
-        self.map.pointHovered.connect(lambda x, y: self._queue_hover(("point", (x, y))))
-        self.map.frameHovered.connect(lambda f: self._queue_hover(("frame", f)))
         self.readouts.seekRequested.connect(self.seek)
         self.readouts.flagsChanged.connect(window.timeline.set_marks)
-        self.forces.inspectRequested.connect(self.inspect)
-        self.forces.iteration.valueChanged.connect(lambda _: self._draw_forces())
         window.session.events.motion.connect(self._forget)
         window.session.events.method.connect(self._forget)
         window.drawing.panels += [Panel("latent map", self._update_map, 0.5),
                                   Panel("latent detail", self._update_detail, 0.5)]  # fmt: skip
 
+    def build(self) -> None:
+        """The dock's tabs (Map with the readouts under it, Forces, Gallery), once."""
+        if self.tabs is not None:
+            return
+        self.map = LatentMapPlot()
+        self.forces = LatentForces(self.w.plots.colours)
+        self.gallery = LatentGallery()
+        if self.latent_map is not None:
+            m = self.latent_map
+            self.map.set_map(m.density, m.extent, m.explained)
+        else:
+            self.map.set_note(NO_MAP)
+        split = QSplitter(Qt.Orientation.Vertical)
+        split.addWidget(self.map)
+        split.addWidget(self.readouts)
+        split.setSizes([300, 150])
+        self.tabs = QTabWidget()
+        self.tabs.addTab(split, "Map")
+        self.tabs.addTab(self.forces, "Forces")
+        self.tabs.addTab(self.gallery, "Gallery")
+        self.dock.setWidget(self.tabs)
+        self.map.frameClicked.connect(self.seek)
+        self.map.pointClicked.connect(self._click_point)
+        self.map.pointHovered.connect(lambda x, y: self._queue_hover(("point", (x, y))))
+        self.map.frameHovered.connect(lambda f: self._queue_hover(("frame", f)))
+        self.forces.inspectRequested.connect(self.inspect)
+        self.forces.iteration.valueChanged.connect(lambda _: self._draw_forces())
+        if self._detail is not None:
+            self.forces.set_detail(self._detail)
+            self.gallery.set_detail(self._detail)
+            self._draw_forces()
+
     # -- snapshots -> views ------------------------------------------------------------
     def _update_map(self, snap: Any) -> None:
         """The map and the readouts while they are in view; the flag verdicts always (they
         mark the timeline)."""
-        if _on_screen(self.map):
+        if self.map is not None and _on_screen(self.map):
             self.map.update_snapshot(snap)
             self._draw_blend()
         if _on_screen(self.readouts):
@@ -107,6 +129,9 @@ class LatentViews:
 
     def _update_detail(self, snap: Any) -> None:
         d = snap.latent_detail
+        self._detail = d
+        if self.forces is None or self.gallery is None:
+            return
         changed = d is not self.forces.detail
         self.forces.set_detail(d)
         self.gallery.set_detail(d)
@@ -115,6 +140,8 @@ class LatentViews:
 
     def _draw_blend(self) -> None:
         """The Latent panel's stored A and B (its A to B blend) on the map."""
+        if self.map is None:
+            return
         stored = self.w.latent.stored
         a, b = stored.get("a"), stored.get("b")
         m = self.latent_map
@@ -124,6 +151,8 @@ class LatentViews:
     def _draw_forces(self) -> None:
         """The inspected frame's term forces on the map, from its path at the iteration the
         Forces tab shows."""
+        if self.forces is None or self.map is None:
+            return
         d, snap = self.forces.detail, self.session.latest
         view = None if snap is None else snap.latent_view
         if d is None or view is None or view.frame != d.frame or view.path_xy is None:

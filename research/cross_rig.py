@@ -25,7 +25,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from engine import skeleton as sk  # noqa: E402
 from engine.motion.retarget import RETARGET_VERSION, load_motion  # noqa: E402
 from research.retarget_ablation import offset_ablation  # noqa: E402
-from research.retarget_compare import compare_clips, multi_rig_takes  # noqa: E402
+from research.retarget_compare import align_clips, difference, multi_rig_takes  # noqa: E402
 from research.retarget_versions import VERSIONS  # noqa: E402
 
 #: Joints of the per-joint ablation table: the left side (the right is alike) and the spine.
@@ -44,10 +44,11 @@ def cross_rig_rows(mocap: Path, max_frames: int | None = None, version: int = RE
     for take, paths in multi_rig_takes(mocap).items():
         clips = {p: load_motion(mocap / p, max_frames=max_frames, strategy=VERSIONS[version]) for p in paths}
         for pa, pb in itertools.combinations(paths, 2):
-            d = compare_clips(clips[pa], clips[pb])
+            aligned = align_clips(clips[pa], clips[pb])
+            d = difference(aligned)
             extra = {}
             if ablate:
-                ab = offset_ablation(clips[pa], clips[pb])
+                ab = offset_ablation(clips[pa], clips[pb], aligned)
                 extra = {"removed_deg": _rounded(ab.removed_deg), "offset_twist_deg": _rounded(ab.offset_twist_deg),
                          "offset_swing_deg": _rounded(ab.offset_swing_deg),
                          "removed_pos_cm": round(float(ab.removed_pos_cm.mean()), 2)}  # fmt: skip

@@ -22,7 +22,7 @@ from engine.kinematics.fk import fk
 from engine.motion.clip import Motion
 from engine.motion.joint_stats import joint_axis, twist_deg
 from engine.motion.retarget_frames import mean_rotation
-from research.retarget_compare import COMMON_HEIGHT, align_clips
+from research.retarget_compare import COMMON_HEIGHT, AlignedPair, align_clips
 
 
 @dataclass
@@ -60,7 +60,7 @@ def _relative(local: np.ndarray) -> np.ndarray:
     return pos - pos[:, :1]
 
 
-def offset_ablation(a: Motion, b: Motion) -> OffsetAblation:
+def offset_ablation(a: Motion, b: Motion, aligned: AlignedPair | None = None) -> OffsetAblation:
     """Align ``a`` to ``b`` (:func:`research.retarget_compare.align_clips`) and split
     their difference into a constant offset per joint and what varies over the clip.
 
@@ -68,6 +68,9 @@ def offset_ablation(a: Motion, b: Motion) -> OffsetAblation:
     ----------
     a, b : Motion
         Canonical clips of the same take.
+    aligned : AlignedPair or None
+        ``align_clips(a, b)`` when the caller has it already (the alignment costs as
+        much as the rest); None: aligned here.
 
     Returns
     -------
@@ -75,7 +78,7 @@ def offset_ablation(a: Motion, b: Motion) -> OffsetAblation:
         Per-joint raw and offset-removed differences (degrees, centimetres) and the
         twist / swing of each joint's constant offset.
     """
-    p = align_clips(a, b)
+    p = aligned if aligned is not None else align_clips(a, b)
     la, lb = p.local_a, p.local_b
     zeros = np.zeros(la.shape[:1] + (3,))
     ga = fk(la, zeros, sk.REST_OFFSETS)[1]

@@ -161,7 +161,12 @@ def compare_clips(a: Motion, b: Motion) -> ClipDifference:
     ClipDifference
         The offset and heading found and the per-joint mean differences.
     """
-    p = align_clips(a, b)
+    return difference(align_clips(a, b))
+
+
+def difference(p: AlignedPair) -> ClipDifference:
+    """The per-joint mean differences of an aligned pair (:func:`compare_clips` of its
+    clips), for a caller that also needs the alignment (``offset_ablation(..., aligned=p)``)."""
     rot = np.degrees(Q.angle(p.local_a, p.local_b)).mean(0)
     pos = 100.0 * np.linalg.norm(p.rel_a - p.rel_b, axis=-1).mean(0)
     own = 100.0 * np.linalg.norm(p.own_a - p.own_b, axis=-1).mean(0)

@@ -18,9 +18,22 @@ MOCAP = SHARED_DATA / "mocap"
 
 @pytest.hookimpl(trylast=True)
 def pytest_configure(config):
-    # after pytest-xvfb has (or has not) set DISPLAY
+    # after pytest-xvfb has (or has not) set DISPLAY; a pytest-xdist controller runs no
+    # test and starts no Xvfb (each worker starts its own): its environment, which the
+    # workers inherit, must not send them offscreen
+    controller = config.getoption("dist", "no") != "no" and not os.environ.get("PYTEST_XDIST_WORKER")
+    if controller:
+        return
     if not os.environ.get("DISPLAY"):
         os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+    # One torch thread in every test process: the tests' solves are single poses and small
+    # batches, whose ops a second intra-op thread only slows on two shared cores (the pose
+    # window's floor test: 34 s with two, 14 s with one, on the loaded 2-core machine), and
+    # with two pytest-xdist workers each core runs a worker. Set once here, not by whichever
+    # fixture happens to run first, so a test's speed does not depend on the order.
+    import torch
+
+    torch.set_num_threads(1)
 
 
 def pytest_collection_modifyitems(config, items):

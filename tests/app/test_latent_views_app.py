@@ -106,3 +106,23 @@ def test_a_map_behind_the_latent_dock_is_not_redrawn(studio, qtbot):
     qtbot.waitUntil(lambda: studio.session.latest.seq > seq, timeout=10000)
     qtbot.wait(1200)  # more than the panel's interval
     assert views.map._seq == drawn
+
+
+def test_the_tabs_are_built_when_the_dock_is_first_shown_and_flags_reach_the_timeline_before(studio, qtbot):
+    """Behind the Latent dock (where it starts) the map dock builds nothing, yet the flag
+    verdicts of the solved frames still mark the timeline; raised, it shows its tabs."""
+    from types import SimpleNamespace
+
+    views = studio.latent_views
+    assert views.tabs is None and views.map is None and views.forces is None and views.gallery is None
+
+    def entry(frame, flagged):
+        return SimpleNamespace(frame=frame, ms=1.0, iterations=1, readouts={"flagged": float(flagged)})
+
+    views._update_map(SimpleNamespace(seq=10**6, frame=3, history=(entry(2, True), entry(3, False))))
+    assert studio.timeline.slider.marks() == (2,)
+    assert views.tabs is None
+    views = _show_map(studio)
+    assert views.tabs is not None and views.map.isVisible() and views.readouts.isVisible()
+    assert views.tabs.count() == 3 and views.readouts.next_flagged() == 2
+    qtbot.waitUntil(lambda: views.map._seq == studio.session.latest.seq, timeout=10000)  # drawn once shown

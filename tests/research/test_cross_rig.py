@@ -22,14 +22,15 @@ MAX_FRAMES = 1800
 @pytest.fixture(scope="module")
 def every_pair(shared_mocap):
     """Every pair of copies of every multi-rig take, each copy loaded once and each pair
-    compared (:func:`research.retarget_compare.compare_clips`) and split into a constant
+    compared (:func:`research.retarget_compare.compare_clips`, from one alignment shared
+    with the split) and split into a constant
     offset per joint and what varies (:func:`research.retarget_ablation.offset_ablation`):
     ``[(take, a, b, difference, ablation)]``."""
     import itertools
 
     from engine.motion.retarget import CURRENT, load_motion
     from research.retarget_ablation import offset_ablation
-    from research.retarget_compare import compare_clips, multi_rig_takes
+    from research.retarget_compare import align_clips, difference, multi_rig_takes
 
     rows = []
     takes = multi_rig_takes(shared_mocap)
@@ -37,8 +38,9 @@ def every_pair(shared_mocap):
     for take, paths in takes.items():
         clips = {p: load_motion(shared_mocap / p, strategy=CURRENT, max_frames=MAX_FRAMES) for p in paths}
         for a, b in itertools.combinations(paths, 2):
-            rows.append((take, a.split("/")[0], b.split("/")[0], compare_clips(clips[a], clips[b]),
-                         offset_ablation(clips[a], clips[b])))  # fmt: skip
+            aligned = align_clips(clips[a], clips[b])  # once for both: it costs as much as the rest
+            rows.append((take, a.split("/")[0], b.split("/")[0], difference(aligned),
+                         offset_ablation(clips[a], clips[b], aligned)))  # fmt: skip
     return rows
 
 
@@ -197,6 +199,32 @@ def test_ablation_separates_a_constant_offset_from_a_disagreement():
     assert ab.raw_deg[k] > 4.0 and ab.removed_deg[k] > 4.0  # half the frames at +-5 around the mean
     others = [j for j in range(sk.NUM_JOINTS) if j not in (w, k, sk.JOINT_INDEX["rankle"])]
     assert ab.removed_deg[others].max() < 0.1 and ab.removed_pos_cm[: sk.JOINT_INDEX["rknee"]].max() < 0.05
+
+
+def test_one_alignment_shared_by_the_difference_and_the_ablation_gives_their_own_results():
+    """``every_pair`` aligns each pair once for :func:`research.retarget_compare.difference`
+    and ``offset_ablation(..., aligned=)``: the figures are those of ``compare_clips`` and
+    of ``offset_ablation`` aligning on their own, to the bit."""
+    import dataclasses
+
+    from engine.kinematics import quaternion as Q
+    from engine.motion.retarget import resample_motion
+    from research.retarget_ablation import offset_ablation
+    from research.retarget_compare import align_clips, compare_clips, difference
+    from tests.engine.test_retarget_body import canonical_walk
+
+    local, root = canonical_walk(240)
+    clip = resample_motion(Motion(local, root), 120.0)
+    rot = clip.local_rot[5:].copy()
+    knee = sk.JOINT_INDEX["rknee"]
+    rot[:, knee] = Q.mul(rot[:, knee], Q.from_axis_angle(np.array([1.0, 0.0, 0.0]), np.radians(-8.0)))
+    copy = Motion(rot, clip.root_pos[5:], fps=120.0)
+    aligned = align_clips(clip, copy)
+    for shared, own in ((difference(aligned), compare_clips(clip, copy)),
+                        (offset_ablation(clip, copy, aligned), offset_ablation(clip, copy))):  # fmt: skip
+        for f in dataclasses.fields(own):
+            assert np.array_equal(getattr(shared, f.name), getattr(own, f.name)), f.name
+    assert difference(aligned).rot_deg[knee] > 7.0  # the pair differs: the check above can fail
 
 
 @pytest.mark.parametrize("daz, other", [("07_03", "cmu_iclone/007_03.bvh"), ("02_01", "cmu_mb/02_01.bvh")])

@@ -339,8 +339,8 @@ def create(mode: str = "realtime", iterations: int | None = None, lr: float | No
         models = load_default_models()
     mark("engine: models loaded")
     decoder, predictor = models.vae, models.predictor
-    # the shipped pose bank holds the shipped VAE's latents: a user's VAE goes without it
-    bank = default_bank() if vae_path is None else None
+    # the shipped pose bank holds the shipped VAE's latents: another VAE goes without it
+    bank = default_bank(vae_path)
     if bank is not None and prepare_bank:  # the presets' lookups ready before their first frame (no cold start)
         bank.prepare(preset_combinations())
     mark("engine: pose bank ready")

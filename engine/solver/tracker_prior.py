@@ -276,16 +276,22 @@ class PoseBank:
 
 
 @functools.cache
-def default_bank() -> PoseBank | None:
+def default_bank(vae_path: str | Path | None = None) -> PoseBank | None:
     """The shipped bank (loaded once per process), or None when it is missing or was not
-    made with the shipped VAE's encoder (then the temporal predictor stays the prior).
-    Its tables are built by :meth:`PoseBank.prepare` or by the first lookups."""
+    made with the encoder of the VAE at ``vae_path`` (default: the shipped VAE; then the
+    temporal predictor stays the prior). A user's VAE file that is byte for byte the
+    shipped one (a predictor retrained on the shipped VAE) keeps the bank; a bank that
+    records no VAE hash is used only with the shipped VAE. Its tables are built by
+    :meth:`PoseBank.prepare` or by the first lookups."""
     from engine.models.loading import DEFAULT_VAE
 
-    if not (DEFAULT_BANK.is_file() and DEFAULT_VAE.is_file()):
+    vae = Path(vae_path) if vae_path is not None else DEFAULT_VAE
+    if not (DEFAULT_BANK.is_file() and vae.is_file()):
         return None
     bank = PoseBank.load(DEFAULT_BANK)
-    if bank.vae_sha256 and bank.vae_sha256 != file_sha256(DEFAULT_VAE):
+    if bank.vae_sha256 and bank.vae_sha256 != file_sha256(vae):
+        return None
+    if not bank.vae_sha256 and vae_path is not None:
         return None
     return bank
 

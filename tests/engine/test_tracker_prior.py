@@ -270,3 +270,23 @@ def test_the_studio_builds_dragposer_with_the_bank_left_for_after_its_first_fram
     edits.make_method("dragposer")
     edits.make_method("ik")
     assert asked == [("dragposer", {"prepare_bank": False}), ("ik", {})]
+
+
+def test_a_copy_of_the_shipped_vae_keeps_the_bank_and_another_vae_goes_without(tmp_path):
+    """A predictor retrained on the shipped VAE is evaluated with ``--vae`` pointing at that
+    VAE: the bank holds its latents, so the prior must stay; any other VAE's latents differ."""
+    import shutil
+
+    from engine.methods.dragposer import create
+    from engine.models.loading import DEFAULT_PREDICTOR, DEFAULT_VAE
+
+    copy = tmp_path / "vae.pt"
+    shutil.copyfile(DEFAULT_VAE, copy)
+    assert default_bank(copy) is not None
+    other = tmp_path / "other.pt"
+    data = bytearray(DEFAULT_VAE.read_bytes())
+    data[-1] ^= 1
+    other.write_bytes(bytes(data))
+    assert default_bank(other) is None
+    method = create(vae_path=copy, predictor_path=DEFAULT_PREDICTOR, prepare_bank=False)
+    assert method.bank is not None

@@ -54,7 +54,7 @@ def test_a_floor_added_in_the_pose_window_holds_the_shoulder_up(qtbot, monkeypat
         w.settle()
         held = float(w.mode.pose.positions[LSH][2])
         bent = float(free.pose.positions[LSH][2])
-        assert held > bent + 0.3, (held, bent)  # measured 1.24 m against 0.71 m
+        assert held > bent + 0.3, (held, bent)  # measured 1.22 m against 0.53 m
         assert held > top - 0.2
         steps = w.undo.count()
         while w.undo.can_undo():

@@ -157,6 +157,7 @@ class DragPoserMethod(Method):
                 **(self.trackers.reach_targets(held) if s.reach else {})}.items()},
             turn={k: np.array(v, dtype=np.float64) for k, v in self.trackers.rotation_targets().items()}
             if s.sensor_rotations else {},
+            level=self.trackers.level_ankles(held) if s.level_feet else (),
         )  # fmt: skip
 
     def solve_clip(self, frames: Sequence[SensorFrame]) -> list[FrameResult] | None:
@@ -199,9 +200,9 @@ class DragPoserMethod(Method):
             return self._repeat_last(warnings, sol.losses, sol.iterations, t0)
         local_rot, positions = state.local_rot.double().numpy(), state.positions.double().numpy()
         reach_to, turn_to = plan.reach, plan.turn
-        if reach_to or turn_to:  # one FK for both steps (engine/solver/limb_ik.py)
+        if reach_to or turn_to or plan.level:  # one FK for every step (engine/solver/limb_ik.py)
             local_rot, positions = finish(local_rot, positions[0], self.skeleton.offsets, reach_to, turn_to,
-                                          s.neck_twist_share)  # fmt: skip
+                                          s.neck_twist_share, plan.level)  # fmt: skip
         self._advance(sol.latent, root, local_rot[0], positions)
         result = FrameResult(
             local_rot=local_rot,

@@ -228,8 +228,9 @@ def _crossfade(own: Sequence[FrameResult | None], warm: list[np.ndarray], offset
 
 def _finished(m: DragPoserMethod, r: dict, local: np.ndarray, pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """A solved frame after the limb and tracker-rotation steps of a frame-by-frame solve."""
-    if r["reach"] or r["turn"]:
-        return finish(local, pos[0], m.skeleton.offsets, r["reach"], r["turn"], r["settings"].neck_twist_share)
+    if r["reach"] or r["turn"] or r["level"]:
+        return finish(local, pos[0], m.skeleton.offsets, r["reach"], r["turn"], r["settings"].neck_twist_share,
+                      r["level"])
     return local, pos
 
 
@@ -279,6 +280,7 @@ def _read(m: DragPoserMethod, frame: SensorFrame) -> dict | None:
         "bank": plan.bank_readings,  # the pose bank's lookup, made for all frames at once
         "reach": plan.reach,
         "turn": plan.turn,
+        "level": plan.level,
     }  # fmt: skip
 
 

@@ -61,6 +61,8 @@ class FramePlan:
     reach, turn : dict of int to ndarray
         The after-solve steps' targets: the head (by the spine) and limbs onto their
         trackers, tracker rotations.
+    level : tuple of int
+        Ankles that take the pelvis's heading after the solve (setting ``level_feet``).
     """
 
     settings: OptimizerSettings
@@ -73,6 +75,7 @@ class FramePlan:
     hip: tuple[np.ndarray, np.ndarray] | None
     reach: dict[int, np.ndarray] = field(default_factory=dict)
     turn: dict[int, np.ndarray] = field(default_factory=dict)
+    level: tuple[int, ...] = ()
 
     @property
     def smooth_weight(self) -> float:
@@ -184,6 +187,13 @@ class TrackerTerms:
         if not on or held & CARRIED:
             return {}
         return {HEAD: head.position}
+
+    def level_ankles(self, held: set[int]) -> tuple[int, ...]:
+        """Ankles whose connected tracker gives a position only (setting ``level_feet``),
+        except one whose ankle or toe is in ``held`` (a user constraint acts on the foot)."""
+        return tuple(sk.JOINT_INDEX[j] for j, c in self.constraints.items()
+                     if j in ("lankle", "rankle") and c.enabled and c.connected and c.dof == 3
+                     and not held & {sk.JOINT_INDEX[j], sk.JOINT_INDEX[j[0] + "toe"]})  # fmt: skip
 
     def rotation_targets(self) -> dict[int, np.ndarray]:
         """The head, hands and feet -> their connected 6-DoF trackers' world rotations

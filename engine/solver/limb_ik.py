@@ -31,7 +31,9 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.kinematics.fk import fk, fk_joints, fk_positions
-from engine.kinematics.quat_np import qaxis_angle, qbetween, qconj, qmul, qrotate, vcross, vdot, vnorm, vscale, vsub
+from engine.kinematics.quat_np import (
+    heading, qaxis_angle, qbetween, qconj, qmul, qrotate, vcross, vdot, vnorm, vscale, vsub,
+)
 
 #: End joint -> (limb root, middle joint).
 LIMBS = {sk.JOINT_INDEX[c]: (sk.JOINT_INDEX[a], sk.JOINT_INDEX[b])
@@ -272,11 +274,13 @@ def adopt_rotations(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.nda
 
 
 def finish(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, reach_targets: dict[int, np.ndarray],
-           rotation_targets: dict[int, np.ndarray], neck_twist_share: float = 0.0) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+           rotation_targets: dict[int, np.ndarray], neck_twist_share: float = 0.0,
+           level: tuple[int, ...] = ()) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """:func:`reach_head_local` onto ``reach_targets[HEAD]`` when the head is among them,
     :func:`reach` onto the others (positions), then :func:`share_neck_twist`
     (with a head target and ``neck_twist_share`` > 0) and :func:`adopt_rotations` of
-    ``rotation_targets``, with one forward kinematics pass for the positions.
+    ``rotation_targets`` and of the joints in ``level``, which take the root's heading
+    (its yaw alone) as their world rotation; one forward kinematics pass for the positions.
 
     Returns
     -------
@@ -289,6 +293,9 @@ def finish(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, rea
         local = reach_head_local(local, root_pos, offsets, reach_targets[HEAD])
         reach_targets = {j: t for j, t in reach_targets.items() if j != HEAD}
     local = reach_local(local, root_pos, offsets, reach_targets) if reach_targets else local
+    if level:
+        flat = heading(np.asarray(local[0], dtype=np.float64))
+        rotation_targets = {**{j: flat for j in level}, **rotation_targets}
     if rotation_targets:
         if neck_twist_share > 0.0 and HEAD in rotation_targets:
             local = share_neck_twist(local, root_pos, offsets, rotation_targets[HEAD], neck_twist_share)

@@ -31,7 +31,7 @@ from engine.solver.settings import FULL_SET, OptimizerSettings, check_values
 #: Settings a profile may supply (each profile gives all of them; a value it leaves out is
 #: the :class:`OptimizerSettings` default).
 TUNED = ("future_window", "temporal_weight", "step_size", "lr", "smooth_weight", "ground_weight",
-         "sensor_rotation_weight", "prior", "tracker_prior_weight", "head_reach")
+         "sensor_rotation_weight", "prior", "tracker_prior_weight", "head_reach", "level_feet")
 
 
 @dataclass(frozen=True)
@@ -74,8 +74,12 @@ PROFILES: dict[str, Profile] = {
     # (150 frames) 3.44 / 17.7 / 17.3 -> 3.39 / 17.7 / 14.9; hdm05/ (22 clips, whole) 5.84 /
     # 27.3 / 25.9 -> 5.29 / 27.8 / 22.7; dragposer/ (whole) 4.12 / 23.0 / 37.3 -> 3.98 / 22.8 /
     # 34.3 (docs/accuracy.md, "Other labs' performers")
+    # the 3-DoF feet level along the pelvis heading (IK's rule): 6x3dof realtime, Pos / Rot,
+    # hdm05/ 5.29 / 27.8 -> 5.02 / 27.4, dragposer/ 3.98 / 22.8 -> 3.79 / 22.7, 9 validation
+    # files 3.39 / 17.7 -> 3.34 / 18.2 (docs/accuracy.md, "What the remaining `dragposer/`
+    # gaps are made of")
     "full3": Profile("full3", dict(future_window=16, temporal_weight=0.03, step_size=0.3, lr=0.05, smooth_weight=0.0,
-                     ground_weight=0.0, sensor_rotation_weight=0.03, head_reach=True)),
+                     ground_weight=0.0, sensor_rotation_weight=0.03, head_reach=True, level_feet=True)),
     # smoothing 5 on the sparse sets: jitter 20.4 / 20.7 / 19.7 -> 18.2 / 18.5 /
     # 16.4 (truth 13.0) for presets 4 / 3-hip-hands / 3-head-hands, Pos 4.99 / 5.02 / 7.67 ->
     # 4.97 / 5.03 / 7.71 cm; 10 and 20 smooth more but cost velocity error (docs/optimizer.md)

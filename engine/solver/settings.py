@@ -163,6 +163,9 @@ class OptimizerSettings:
                                       "lower neck; the head takes the rest (0 = all in the head).", Num(0, 1))
     reach: bool = setting(True, "Reach", "After each solve, put every tracked wrist and ankle exactly on its "
                           "tracker by its limb's two bones (the decoder alone leaves them 1-2 cm off).", Flag())
+    level_feet: bool = setting(False, "Level feet", "After each solve, an ankle whose tracker gives its position "
+                               "only (3-DoF) takes the pelvis's heading, without pitch or roll, as IK keeps it "
+                               "(the decoder's foot orientation misses other performers' feet).", Flag())
     head_reach: bool = setting(False, "Head reach", "After each solve, with a hip tracker, turn the spine so the "
                                "head points at its tracker (before reach: the arms follow the chest).", Flag())
     heading: str = setting("anchor", "Heading", "Without a hip tracker, what the decoded root rotation is "

@@ -111,7 +111,8 @@ def test_reach_and_rotations_equal_the_previous_code_on_real_frames(models, moti
     calls = []
     new_finish = limb_ik.finish
 
-    def spy(local, root, offsets, reach_to, turn_to, neck_twist_share=0.0):
+    def spy(local, root, offsets, reach_to, turn_to, neck_twist_share=0.0, level=()):
+        assert level == ()  # 6-DoF feet, or none: nothing to level (tests/engine/test_level_feet.py)
         got = new_finish(local, root, offsets, reach_to, turn_to, neck_twist_share)
         want_local, want_pos = local, None
         limbs = {j: t for j, t in reach_to.items() if j != limb_ik.HEAD}

@@ -8,12 +8,12 @@ the remaining `dragposer/` gaps are made of").
 
 RULE is ``none`` (the solve and its reach, setting ``level_feet`` off), ``flat`` (after
 the solve each ankle keeps the yaw the decoder gave its foot, with no pitch or roll),
-``heading`` (each ankle takes the pelvis's yaw, IK's rule, what ``level_feet`` does) or
-``turn`` (each foot turned about the vertical until its yaw is the pelvis's, keeping the
-decoder's pitch and roll). The rule is applied after DragPoser's reach and rotation
-steps to both ankles, through ``dragposer-studio evaluate --sensors 6x3dof --set
-level_feet=false`` run in this process (``--jobs 1``); its table is printed as
-``evaluate`` prints it.
+``heading`` (each ankle takes the pelvis's yaw, IK's rule: the setting ``level_feet``
+itself, on) or ``turn`` (each foot turned about the vertical until its yaw is the
+pelvis's, keeping the decoder's pitch and roll). ``flat`` and ``turn`` are applied after
+DragPoser's reach and rotation steps to both ankles. Runs ``dragposer-studio evaluate
+--sensors 6x3dof --set level_feet=...`` in this process (``--jobs 1``) and prints its
+table.
 """
 
 from __future__ import annotations
@@ -36,11 +36,9 @@ ANKLES = (sk.JOINT_INDEX["lankle"], sk.JOINT_INDEX["rankle"])
 
 def ankle_targets(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, rule: str) -> dict[int, np.ndarray]:
     """World rotation ``(4,)`` of each ankle under ``rule`` (``flat``: the yaw of the
-    ankle's own world rotation; ``heading``: the yaw of the root's; ``turn``: the ankle's
-    world rotation turned about +Z from its own yaw to the root's)."""
+    ankle's own world rotation; ``turn``: the ankle's world rotation turned about +Z from
+    its own yaw to the root's)."""
     level = Q.heading(np.asarray(local_rot[0], dtype=np.float64))
-    if rule == "heading":
-        return {j: level for j in ANKLES}
     _, rots = fk_joints(np.asarray(local_rot, dtype=np.float64), np.asarray(root_pos, dtype=np.float64), offsets,
                         list(ANKLES))  # fmt: skip
     own = [np.asarray(r, dtype=np.float64) for r in rots]
@@ -73,11 +71,12 @@ def main() -> int:
     import engine.methods.dragposer_batch as dpb
     from engine.cli.main import main as cli
 
-    if args.rule != "none":
+    if args.rule in ("flat", "turn"):
         dp.finish = with_rule(dp.finish, args.rule)
         dpb.finish = with_rule(dpb.finish, args.rule)
+    level = "true" if args.rule == "heading" else "false"
     argv = ["evaluate", *args.files, "--method", "dragposer", "--sensors", "6x3dof", "--jobs", "1", "--no-progress",
-            "--set", "level_feet=false", "--mode", args.mode]
+            "--set", f"level_feet={level}", "--mode", args.mode]
     argv += ["--max-frames", str(args.max_frames)] if args.max_frames else []
     argv += ["--json", args.json] if args.json else []
     return cli(argv) or 0

@@ -5,8 +5,8 @@
   density in it; numpy only.
 * :mod:`~engine.latent.readouts` — prior readouts per frame (distance to the nearest
   training latent, norm, distance from the prior latent) and the flag rule; numpy only.
-* :mod:`~engine.latent.record` — what DragPoser keeps of its last solve.
-* :mod:`~engine.latent.probe` — readouts and map coordinates of a method's frames.
+* :mod:`~engine.latent.probe` — readouts and map coordinates of a method's frames (and
+  of the :class:`~engine.methods.solve_record.SolveRecord` DragPoser keeps of its last solve).
 * :mod:`~engine.latent.forces` — each loss term's force on the latent per iteration.
 * :mod:`~engine.latent.sweep` — the dimension sweep and per-joint influence.
 * :mod:`~engine.latent.trace` — a clip reconstructed frame by frame and probed.

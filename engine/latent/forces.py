@@ -28,7 +28,7 @@ from engine.solver.threads import one_blas_thread
 
 if TYPE_CHECKING:
     from engine.constraints.base import Constraint
-    from engine.latent.record import SolveRecord
+    from engine.methods.solve_record import SolveRecord
     from engine.solver.frame import FrameContext
     from engine.solver.optimizer import PoseOptimizer
 
@@ -142,7 +142,7 @@ def _minus_gradients(values: list[torch.Tensor], z: torch.Tensor) -> np.ndarray:
 
 def record_forces(method_optimizer: "PoseOptimizer", record: "SolveRecord",
                   latent_map: LatentMap | None = None) -> TermForces:  # fmt: skip
-    """:func:`term_forces` of a method's last :class:`~engine.latent.record.SolveRecord`
+    """:func:`term_forces` of a method's last :class:`~engine.methods.solve_record.SolveRecord`
     (its path; the final latent alone when the solver recorded none)."""
     path = getattr(record.solution, "path", None)
     if path is None:

@@ -3,7 +3,7 @@ report and the studio's latent map read after each solved frame.
 
 :class:`LatentProbe` holds the shipped latent map and the pose bank's latents; after a
 method's step, :meth:`LatentProbe.frame` turns the frame's latent and (for a method that
-keeps one, :class:`SolvesInLatent`) its :class:`~engine.latent.record.SolveRecord` into a
+keeps one, :class:`SolvesInLatent`) its :class:`~engine.methods.solve_record.SolveRecord` into a
 :class:`FrameProbe` of plain numpy data.
 """
 
@@ -19,7 +19,7 @@ from engine.latent.projection import LatentMap, default_map
 from engine.latent.readouts import NearestLatents, bank_latents, flag
 
 if TYPE_CHECKING:
-    from engine.latent.record import SolveRecord
+    from engine.methods.solve_record import SolveRecord
     from engine.solver.optimizer import PoseOptimizer
 
 #: What the studio and the CLI say for a method without a latent space.
@@ -50,7 +50,7 @@ class FrameProbe:
     prior : ndarray (L,) or None
         The frame's prior latent (temporal predictor or pose bank), if any.
     start : str
-        Where the solve started (:data:`engine.latent.record.STARTS`), "" when unknown.
+        Where the solve started (:data:`engine.methods.solve_record.STARTS`), "" when unknown.
     path_xy : ndarray (K, 2) or None
         The solve's iterations on the map, start first.
     nearest, norm, predictor : float

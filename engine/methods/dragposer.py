@@ -29,7 +29,7 @@ from engine.constraints import Constraint, GroundConstraint, SensorConstraint, S
 from engine.constraints.sensor import unit_rotation
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
-from engine.latent.record import SolveRecord, record_of
+from engine.methods.solve_record import SolveRecord, record_of
 from engine.methods import dragposer_root as roots
 from engine.methods.base import FrameResult, Method
 from engine.methods.dragposer_edits import FrameSettings

@@ -50,7 +50,7 @@ class _Term:
 
 
 def test_record_keeps_the_frame_weights_and_names_the_start():
-    from engine.latent.record import record_of
+    from engine.methods.solve_record import record_of
     from engine.solver.frame import FrameContext
 
     terms = [_Term("a", 2.0, active=0.5), _Term("off", 1.0, enabled=False), _Term("zero", 0.0), _Term("b", 1.0)]

@@ -1,5 +1,8 @@
 """What a latent-space method keeps of its last frame's solve for latent debugging.
 
+The method writes it, so it lives with the methods; :mod:`engine.latent` reads it and
+runs methods, never the other way round.
+
 :class:`SolveRecord` is valid until the method's next step: its constraints are the
 method's own objects, whose targets the next frame's readings replace.
 """

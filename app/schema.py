@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from engine.studio.catalog import constraint_catalog
+from engine.editing.catalog import constraint_catalog
 from widgets.optimizer_panel import SettingField
 
 

@@ -1,5 +1,6 @@
 """Typed events of the authoring model (psygnal signals, as the studio's
-:mod:`engine.studio.events`).
+:mod:`engine.studio.events`; the constraint list's payload is
+:class:`engine.editing.events.ConstraintsChanged`, shared with the studio).
 
 Each signal of :class:`AuthoringEvents` carries one frozen payload that says what
 changed, so a view redraws only that part::
@@ -17,7 +18,7 @@ from typing import TYPE_CHECKING
 
 from psygnal import Signal, SignalGroup
 
-from engine.studio.events import ConstraintsChanged
+from engine.editing.events import ConstraintsChanged
 
 if TYPE_CHECKING:
     from engine.authoring.bake import Baked

@@ -40,7 +40,7 @@ from engine.authoring.session_constraints import constraints_event
 from engine.authoring.state import AuthoringState, capture, differences, pose_between, pose_on_key, put
 from engine.authoring.turns import world_rotation
 from engine.errors import UserError
-from engine.studio.session_constraints import ConstraintList
+from engine.editing.constraint_list import ConstraintList
 from engine.motion.clip import Motion
 
 

@@ -1,8 +1,8 @@
 """What changed in the authoring model's constraint list, as one event.
 
 The model edits its list (the one the pose solves and the saved scene share) through
-the studio's :class:`engine.studio.session_constraints.ConstraintList` on that list, so
-names, checks and replace-never-mutate rules are the studio's. It compares the list
+a :class:`engine.editing.constraint_list.ConstraintList` on that list, so names,
+checks and replace-never-mutate rules are those of the studio's list. It compares the list
 before and after each command (an edit or its undo) and says what changed with
 :func:`constraints_event`.
 """
@@ -10,7 +10,7 @@ before and after each command (an edit or its undo) and says what changed with
 from __future__ import annotations
 
 from engine.constraints.base import Constraint
-from engine.studio.events import ConstraintsChanged
+from engine.editing.events import ConstraintsChanged
 
 
 def constraints_event(old: tuple[Constraint, ...], new: tuple[Constraint, ...]) -> ConstraintsChanged:

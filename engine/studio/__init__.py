@@ -4,7 +4,8 @@
   changes the scene only through its methods; each change fires a typed event
   (:mod:`engine.studio.events`) and becomes a command for the engine thread. Its
   sensor set and constraint list are sub-models with their own events,
-  :mod:`engine.studio.session_sensors` and :mod:`engine.studio.session_constraints`.
+  :mod:`engine.studio.session_sensors` and :mod:`engine.editing.constraint_list`
+  (shared with the pose window).
 * :mod:`engine.studio.commands`: those commands (frozen dataclasses), with the table of
   their handlers the engine thread dispatches on.
 * :mod:`engine.studio.snapshot`: what the engine thread publishes, numpy only.
@@ -14,10 +15,11 @@
   loop in a child process.
 * :mod:`engine.studio.clip_source`: a clip's simulated trackers, one
   :class:`~engine.sensor_source.SensorSource` (recordings and live streams are others).
-* :mod:`engine.studio.catalog`: the constraint kinds users may add, with their fields.
 * :mod:`engine.studio.method_edits`: building methods and pushing the scene into them.
 
-Layering (no loops): ``sensors`` < ``commands``, ``snapshot``, ``source``, ``catalog``,
-``methods``, ``playback`` < ``method_set`` < ``thread`` < ``process``; ``events``,
-``catalog`` < ``session_sensors``, ``session_constraints``; all < ``session``.
+Layering (no loops): ``sensors`` < ``commands``, ``snapshot``, ``source``,
+``methods``, ``playback`` < ``method_set`` < ``thread`` < ``process``; ``events`` <
+``session_sensors``; all < ``session``. :mod:`engine.editing` (the constraint list and
+its catalog) and :mod:`engine.authoring` (the pose window's scene format, which
+:mod:`engine.studio.scenes` reads) sit below the whole package.
 """

@@ -17,6 +17,8 @@ from typing import TYPE_CHECKING, Any, Literal
 
 from psygnal import Signal, SignalGroup
 
+from engine.editing.events import ConstraintsChanged
+
 if TYPE_CHECKING:  # annotations only: the command line reads PLAYBACK_PACES without torch
     from engine.motion.clip import Motion
     from engine.sensor_source import SensorSource
@@ -51,30 +53,6 @@ class SensorsChanged:
     new: Sensor | None = None
     old_set: tuple[Sensor, ...] = ()
     old_preset: str = ""
-
-
-@dataclass(frozen=True)
-class ConstraintsChanged:
-    """The constraint list changed.
-
-    ``action`` is ``added``, ``removed``, ``updated`` (``old`` -> ``new``, same name) or
-    ``replaced`` (the whole list, e.g. a scene load; ``old_list`` holds the previous one).
-    ``index`` is the position of the added, removed or updated constraint. Constraint
-    objects are never modified after they are published: an update replaces the object,
-    so ``old`` stays a faithful record of the previous state.
-    """
-
-    action: Literal["added", "removed", "updated", "replaced"]
-    constraints: tuple[Any, ...]
-    name: str = ""
-    index: int = -1
-    old: Any = None
-    new: Any = None
-    old_list: tuple[Any, ...] = ()
-
-    @property
-    def names(self) -> tuple[str, ...]:
-        return tuple(c.name for c in self.constraints)
 
 
 @dataclass(frozen=True)

@@ -17,7 +17,7 @@ from engine import skeleton as sk
 from engine.constraints import REGISTRY
 from engine.constraints.base import FRAME_FIELDS
 from engine.constraints.residual import FrameInputs
-from engine.studio.catalog import COMMON_FIELDS, describe
+from engine.editing.catalog import COMMON_FIELDS, describe
 
 BEGIN, END = "<!-- kinds table: generated -->\n", "<!-- end of kinds table -->"
 

@@ -12,7 +12,7 @@ The window never builds engine objects: it calls :meth:`Session.start_engine`, r
 :attr:`Session.latest` and edits through these methods. The sensor set and the
 constraint list are sub-models with their own events, ``session.sensors``
 (:mod:`engine.studio.session_sensors`) and ``session.constraints``
-(:mod:`engine.studio.session_constraints`); the session sends each of their changes to
+(:mod:`engine.editing.constraint_list`); the session sends each of their changes to
 the engine and re-emits it as ``events.sensors`` or ``events.constraints``.
 """
 
@@ -35,7 +35,7 @@ from engine.studio import commands as cmd
 from engine.studio import events as ev
 from engine.studio.clips import load_clip, sensor_presets, tracked_position
 from engine.studio.scenes import apply_scene, default_settings, scene_to_dict
-from engine.studio.session_constraints import ConstraintList
+from engine.editing.constraint_list import ConstraintList
 from engine.studio.session_sensors import SensorSet
 from engine.studio.process import EngineProcess
 from engine.studio.snapshot import Snapshot

@@ -11,7 +11,7 @@ from engine import skeleton as sk
 from engine.constraints import REGISTRY
 from engine.constraints.placement import LOOK_DISTANCE
 from engine.gizmos import BoxGizmo, Gizmo, LineGizmo, PointGizmo
-from engine.studio.catalog import constraint_catalog
+from engine.editing.catalog import constraint_catalog
 from widgets.viewport.camera import CAMERA_PRESETS, VIEW_ANGLE_DEG
 from widgets.viewport.viewport import HOME_FOCUS_HEIGHT
 

@@ -73,7 +73,7 @@ def test_each_kind_draws_its_gizmo(kind, qtbot, fake_snapshot):
     """Every registered kind, placed on the pose as the studio places a new one, draws
     through the adapter of its shape, visibly (pixels of the gizmo colour)."""
     from app.constraint_placement import placed_params
-    from engine.studio.catalog import constraint_catalog
+    from engine.editing.catalog import constraint_catalog
     from widgets.viewport import Viewport
 
     snap = fake_snapshot()

@@ -1,4 +1,4 @@
-"""The constraint kinds users may add in the studio, with their editable fields.
+"""The constraint kinds users may add (in the studio and the pose window), with their editable fields.
 
 Built from :data:`engine.constraints.REGISTRY`: every kind whose class has
 ``user_facing`` set (methods build ``sensor`` and ``temporal_prior`` themselves). Each

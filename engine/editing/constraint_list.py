@@ -1,9 +1,10 @@
-"""The studio's constraint list: ``session.constraints``, a sub-model with its own events.
+"""A constraint list with its edits: ``session.constraints`` of the studio and the list the
+pose window's authoring model edits, a sub-model with its own events.
 
 A :class:`ConstraintList` is a read-only sequence of constraint objects plus the edits
-the studio makes to it. Every edit replaces objects rather than changing them in place
+a user makes to it. Every edit replaces objects rather than changing them in place
 (the engine thread and the undo records hold the old ones) and fires one
-``events.changed`` (:class:`~engine.studio.events.ConstraintsChanged`) that says what
+``events.changed`` (:class:`~engine.editing.events.ConstraintsChanged`) that says what
 changed. It knows nothing of engines: the :class:`~engine.studio.session.Session` that
 owns it subscribes, sends the new list to its engine and re-emits the event as
 ``session.events.constraints``.
@@ -21,21 +22,21 @@ from psygnal import Signal, SignalGroup
 from engine import skeleton as sk
 from engine.constraints.base import Constraint
 from engine.errors import UserError
-from engine.studio.catalog import ConstraintKind, constraint_catalog
-from engine.studio.events import ConstraintsChanged
+from engine.editing.catalog import ConstraintKind, constraint_catalog
+from engine.editing.events import ConstraintsChanged
 
 #: Prefix of the pin constraints made by :meth:`ConstraintList.pin` (one per joint).
 PIN_PREFIX = "pin "
 
 
 class ConstraintListEvents(SignalGroup):
-    """``changed``: one :class:`~engine.studio.events.ConstraintsChanged` per edit."""
+    """``changed``: one :class:`~engine.editing.events.ConstraintsChanged` per edit."""
 
     changed = Signal(ConstraintsChanged)
 
 
 class ConstraintList(Sequence[Constraint]):
-    """User constraints, in order, with the edits the studio makes; see the module doc.
+    """User constraints, in order, with the edits a user makes; see the module doc.
 
     Parameters
     ----------
@@ -73,7 +74,7 @@ class ConstraintList(Sequence[Constraint]):
 
     @staticmethod
     def catalog() -> dict[str, ConstraintKind]:
-        """The kinds users may add, with their fields (:mod:`engine.studio.catalog`)."""
+        """The kinds users may add, with their fields (:mod:`engine.editing.catalog`)."""
         return constraint_catalog()
 
     def named(self, name: str) -> Constraint:

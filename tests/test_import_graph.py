@@ -1,5 +1,5 @@
-"""The import graph between packages has no loops, and the three installed packages stay
-layered: ``engine`` below ``widgets`` below ``app``.
+"""The import graph between packages (and between modules) has no loops, and the three
+installed packages stay layered: ``engine`` below ``widgets`` below ``app``.
 
 What counts as a package-level import loop
 ------------------------------------------
@@ -191,6 +191,13 @@ def test_no_import_loop_between_packages():
     assert not found, "import loops between packages (break them by moving what both sides share):\n" + "\n".join(
         describe(graph, c) for c in found
     )
+
+
+def test_no_import_loop_between_modules():
+    """Inside a package too, no two modules need each other (the same edges, one node per module)."""
+    graph = unit_graph(repository_imports(), unit=lambda m: m)
+    found = loops(graph)
+    assert not found, "import loops between modules:\n" + "\n".join(describe(graph, c) for c in found)
 
 
 def test_installed_packages_are_layered():

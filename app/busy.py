@@ -37,7 +37,7 @@ class BusyNotice:
     def begin(self, method: str, after_seq: int, what: str = "") -> None:
         """Wait for a snapshot from ``method`` with ``seq > after_seq``."""
         self.method, self.after_seq = method, after_seq
-        # two short lines: one long line was wider than the view and cut at both ends
+        # two short lines: one long line is wider than the view and cut at both ends
         self.text = f"{what or 'Loading'} {method}:\nloading the model and solving the first frame..."
         self.viewport.set_notice(self.text)
         self.status.showMessage(self.text.replace("\n", " "))

@@ -154,8 +154,8 @@ def _run(app: QApplication, path: str | None, method: str, sensors: str | None, 
     stepped = {"to": start}
 
     # frame by frame (each step solved like a played frame, in order), so exactly
-    # ``after_frames`` are played: a pause sent after the window drew its last one
-    # arrived when the engine had solved 4-6 more
+    # ``after_frames`` are played: a pause sent after the window draws its last one
+    # arrives when the engine has solved 4-6 more
     def check(frame: int) -> None:
         snap = window.session.latest
         last = snap is not None and snap.num_frames > 0 and frame >= snap.num_frames - 1

@@ -13,7 +13,8 @@ Definitions, formulas and units are in ``docs/metrics.md``. In short:
   FlowMDM defines them and RPM (sec. 4) uses them: per frame the largest joint jerk (L1
   over x, y, z), the 1-s windows after the changes averaged into one curve, its maximum
   (PJ) and its summed absolute deviation from the ground truth's mean jerk (AUJ), same
-  jerk unit. ``pj_raw`` / ``auj_raw`` keep this project's earlier definition.
+  jerk unit. ``pj_raw`` / ``auj_raw`` are plain sums of the mean joint jerk over the same
+  windows (:func:`transition_jerk_raw`), which count the motion's own jerk too.
 """
 
 from __future__ import annotations
@@ -151,7 +152,7 @@ def _peak_and_area(window_sum: np.ndarray, count: int, gt_jerk: float, suffix: s
 def transition_jerk_raw(
     jerk: np.ndarray, connected: np.ndarray, fps: float, window_s: float = TRANSITION_WINDOW_S
 ) -> dict[str, float]:
-    """The previous PJ / AUJ (kept as ``pj_raw`` / ``auj_raw`` {,``_ts``, ``_st``}).
+    """Plain-sum PJ / AUJ (``pj_raw`` / ``auj_raw`` {,``_ts``, ``_st``}), beside FlowMDM's.
 
     Per change, the peak and the plain sum of the :func:`jerk_curve` (mean joint jerk)
     over the window, then the mean over changes; NaN without a complete window.

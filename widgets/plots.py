@@ -142,7 +142,7 @@ class LossPlots(QWidget):
         self.legend.visibilityChanged.connect(self._set_visible)
         self.ms_curve = self.cost_plot.plot(pen=pg.mkPen(MS_COLOUR, width=1))
         self.iter_curve = self.cost_plot.plot(pen=pg.mkPen(ITERATIONS_COLOUR, width=1))
-        # one row: each plot gets the dock's full height (stacked two high they were
+        # one row: each plot gets the dock's full height (stacked two high they would be
         # ~100 px each at 1600 x 1000, their curves on top of one another)
         plots = QHBoxLayout()
         plots.addWidget(self.iteration_plot, 4)

@@ -1,7 +1,7 @@
 """One legend for every loss plot: a scrollable list of the current terms beside them.
 
 A legend drawn inside a plot covers the curves, and with 12+ terms (six trackers with
-position and rotation, the temporal prior, constraints) it no longer fits a short
+position and rotation, the temporal prior, constraints) it does not fit a short
 plot at all. This list sits beside the plots, scrolls, and lists exactly the terms of
 the current frame: a sensor removed by a preset change leaves it. Unticking a term hides
 its curves in every plot, and it stays hidden when it comes back.

@@ -12,11 +12,11 @@ what the solver should use this frame:
   ``s`` a smoothstep from 0 to 1, so it follows the tracker's own motion meanwhile. The
   rotation term's weight rises with ``s``.
 
-Why no blend *out*: an earlier version held a lost tracker's last target while its
-weight fell to 0 over ``seconds``. DragPoser's limb reach (``engine/solver/limb_ik.py``)
-places a tracked wrist exactly on its target whatever the weight, so the wrist stayed
-pinned to the held point while the body moved on and was let go at the end of the fade:
-a jump inside the second after the loss. On 3-head-hands with ``--gaps`` (9 validation
+Why no blend *out* (holding a lost tracker's last target while its weight falls to 0
+over ``seconds``): DragPoser's limb reach (``engine/solver/limb_ik.py``) places a
+tracked wrist exactly on its target whatever the weight, so the wrist would stay pinned
+to the held point while the body moves on and be let go at the end of the fade: a jump
+inside the second after the loss. On 3-head-hands with ``--gaps`` (9 validation
 files, 300 frames, FlowMDM's PJ / AUJ, docs/metrics.md) that fade made the losses worse
 than no blending (PJ T-S 832 against 346, AUJ T-S 3927 against 2433); ending the term at
 once keeps the no-blend figures for losses and the blend-in's gain for returns

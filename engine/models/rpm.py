@@ -85,7 +85,7 @@ class RPM(nn.Module):
         self.register_buffer("pose_std", torch.ones(POSE_DIM))
         self.register_buffer("track_mean", torch.zeros(TRACK_DIM))
         self.register_buffer("track_std", torch.ones(TRACK_DIM))
-        # structure, rebuilt from the config (files from before the fix stored an inverted U)
+        # structure, rebuilt from the config (some weights files hold an inverted U; it is ignored)
         self.register_buffer("u", uncertainty(cfg.window), persistent=False)
         if stats is not None:
             for k, v in stats.items():

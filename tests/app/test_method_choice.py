@@ -13,8 +13,8 @@ def test_choosing_a_method_and_a_ghost_builds_each_once(studio, qtbot):
     """The real path: the panel's combo and ghost box -> window -> session -> engine
     thread -> :class:`engine.studio.method_set.MethodSet` -> the method factory.
 
-    DragPoser used to be built twice per choice (``select`` built it, the reset after it
-    built it again), and ticking a ghost built the shown method and every ghost anew.
+    A choice builds the method once (``select`` builds it; the reset after it reuses it),
+    and ticking a ghost builds that ghost alone, not the shown method and every ghost anew.
     """
     built: Counter[str] = Counter()
     inner = studio.engine._factory  # looked up at each build (see EngineThread)

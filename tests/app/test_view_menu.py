@@ -17,7 +17,8 @@ def _activate(studio, qtbot) -> None:
 
 
 def test_a_bvh_dropped_on_the_3d_view_opens(studio, qtbot, tmp_path, synthetic_motion):
-    """The 3D view is the largest drop target; pyvistaqt used to swallow the drop."""
+    """The 3D view is the largest drop target, and pyvistaqt's interactor would take the drop
+    as a mesh to read: the viewport hands it to the window instead."""
     from engine.motion.bvh import save_motion_bvh
 
     clip = tmp_path / "on-the-view.bvh"

@@ -1,6 +1,6 @@
-"""What a realtime DragPoser frame no longer computes: the temporal predictor's
-conditioning while the pose bank gives the prior (computed when the predictor needs it,
-the same values as computed at once)."""
+"""What a realtime DragPoser frame leaves out: the temporal predictor's conditioning
+while the pose bank gives the prior (computed when the predictor needs it, the same
+values as computed at once)."""
 
 from __future__ import annotations
 

@@ -145,7 +145,7 @@ def test_a_reconstruction_equal_to_a_constant_jerk_ground_truth_has_no_area():
     r = M.evaluate_motion(gt, _copy(gt), connected=_gaps(120))
     assert r["gt_jerk"] == pytest.approx(0.12) and r["transitions"] == 2
     assert r["pj"] == pytest.approx(0.12) and r["auj"] == pytest.approx(0.0, abs=1e-9)
-    assert r["auj_raw"] == pytest.approx(60 * 0.12)  # the old sum counted the motion's own jerk
+    assert r["auj_raw"] == pytest.approx(60 * 0.12)  # the plain sum counts the motion's own jerk
     assert (r["gt_pj"], r["gt_auj"]) == (r["pj"], r["auj"])
 
 

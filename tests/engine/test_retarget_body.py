@@ -259,8 +259,8 @@ def test_a_rig_without_face_or_fingers_uses_the_rules_and_says_so(rigs, tmp_path
 
 
 def test_models_strategy_comes_from_the_model_card(tmp_path):
-    """The card names the current version; a version this program no longer produces (3)
-    or never did (9) is refused, naming the file and the field."""
+    """The card names the current version; a version this program does not produce (3,
+    retired, or 9, never made) is refused, naming the file and the field."""
     from engine.errors import UserError
     from engine.motion.retarget import models_strategy
 

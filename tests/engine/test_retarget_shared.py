@@ -2,10 +2,10 @@
 
 * the canonical hinge axes in ``engine.motion.retarget_frames`` are what DragPoser's own clips show;
 * retargeted knees bend about their local x axis with a few degrees of twist, and thighs
-  carry no large twist the shin undoes (the Daz takes used to carry +114/+61 degrees);
+  carry no large twist the shin undoes (+114/+61 degrees on the Daz takes would fail);
 * the spine and clavicles have one convention on every rig: near identity while the
-  torso is upright (version 2 bent the iClone upper back 80 degrees, which the Daz rig,
-  lacking that joint, did not);
+  torso is upright (not the iClone upper back bent 80 degrees where the Daz rig, lacking
+  that joint, stays straight);
 * every shared file loads as a finite canonical clip, and heights match the source within
   3 % (every file, loaded once for these sweeps: slow);
 * a clip written back onto its own rig reproduces the source's mapped joints within 1 cm.
@@ -176,5 +176,5 @@ def test_every_shared_clip_rotates_like_the_canonical_clips(every_shared_clip, f
     for elbow in ("lelbow", "relbow"):  # per family; the left elbows of iClone 007_* differ (docs)
         row = table[elbow][family]
         assert row["hinge_alignment_median"] > 0.9 and max(map(abs, row["twist_median"])) < 25, (family, elbow, row)
-    for thigh in ("lhip", "rhip"):  # no large twist the shin undoes (was +114/+61 degrees)
+    for thigh in ("lhip", "rhip"):  # no large twist the shin undoes (not +114/+61 degrees)
         assert max(map(abs, table[thigh][family]["twist_median"])) < 35, (family, thigh, table[thigh][family])

@@ -42,7 +42,7 @@ def test_weights_files_with_the_stored_inverted_uncertainty_load_the_papers():
     m = _tiny_model()
     sd = m.state_dict()
     assert "u" not in sd  # structure, rebuilt from the config
-    sd["u"] = torch.flip(m.u, [0])  # what files from before the fix hold
+    sd["u"] = torch.flip(m.u, [0])  # what those files hold
     other = _tiny_model()
     other.load_state_dict(sd)
     assert torch.equal(other.u, m.u)

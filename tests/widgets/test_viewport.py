@@ -268,8 +268,8 @@ def blue_fraction(img: np.ndarray) -> float:
 
 
 def test_ghosts_are_thin_translucent_and_show_through_the_reconstruction(viewport, fake_snapshot):
-    """A ghost on the same pose as the reconstruction used to vanish inside its thicker,
-    opaque figure; now it is a thin translucent overlay drawn over it."""
+    """A ghost on the same pose as the reconstruction would vanish inside its thicker,
+    opaque figure, so it is a thin translucent overlay drawn over it."""
     snap = fake_snapshot(ground_truth=None)
     viewport.show_ground_truth = False
     viewport.show_snapshot(fake_snapshot(seq=2, ghosts={"ik": snap.positions.copy()}))

@@ -20,7 +20,7 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.constraints.base import Constraint, param
-from engine.constraints.residual import NUMPY, FrameInputs, Kit, Residuals, Term
+from engine.constraints.residual import FrameInputs, Kit, Residuals, Term
 from engine.errors import UserError
 from engine.gizmos import LineGizmo
 
@@ -88,6 +88,7 @@ class BalanceTerm(Term):
     def __init__(self, c: BalanceConstraint) -> None:
         self.names, self.owner = (c.name,), np.zeros(1, dtype=np.intp)
         self.tolerance = c.tolerance
+        self.check_group, self.check_limit2 = np.zeros(1, dtype=np.intp), np.array([_SLACK**2])
         coef = np.zeros(sk.NUM_JOINTS)
         if c.mode == "com_over_feet":
             coef += 1.0 / sk.NUM_JOINTS
@@ -110,6 +111,3 @@ class BalanceTerm(Term):
         dd = np.zeros((len(P), 1, len(self.joints), 3))
         dd[:, 0, :, :2] = (free / dist)[:, None, None] * d[:, None, :] * self.coef[None, :, None]
         return Residuals(r, self.joints, dd)
-
-    def satisfied(self, P: np.ndarray, W: np.ndarray, z: np.ndarray, rows: Any = None) -> np.ndarray:
-        return (self._gap(NUMPY, P)[1] <= self.tolerance + _SLACK)[:, None]

@@ -63,6 +63,7 @@ class BoundsTerm(Term):
 
     def __init__(self, c: BoundsConstraint) -> None:
         self.names, self.owner = (c.name,), np.zeros(3, dtype=np.intp)
+        self.check_group, self.check_limit2 = np.arange(3), np.full(3, _SLACK**2)  # each axis alone
         self.j = np.array([joint_index(c.joint, "joint", c.kind)], dtype=np.intp)
         self.lo, self.hi = np.asarray(c.box_min, dtype=np.float64), np.asarray(c.box_max, dtype=np.float64)
 
@@ -74,7 +75,3 @@ class BoundsTerm(Term):
         d = np.zeros((len(P), 3, 1, 3))
         d[:, np.arange(3), 0, np.arange(3)] = (r != 0.0).astype(float)
         return Residuals(r, self.j, d)
-
-    def satisfied(self, P: np.ndarray, W: np.ndarray, z: np.ndarray, rows: Any = None) -> np.ndarray:
-        p = P[:, self.j[0]]
-        return ((p >= self.lo - _SLACK) & (p <= self.hi + _SLACK)).all(-1)[:, None]

@@ -13,7 +13,7 @@ import numpy as np
 
 from engine.constraints.base import Constraint, joint_index, param
 from engine.constraints.placement import joint_at
-from engine.constraints.residual import NUMPY, FrameInputs, Kit, Residuals, Term
+from engine.constraints.residual import FrameInputs, Kit, Residuals, Term
 from engine.errors import UserError
 from engine.gizmos import LineGizmo
 
@@ -79,7 +79,8 @@ class DistanceTerm(Term):
 
     def __init__(self, c: DistanceConstraint) -> None:
         self.names, self.owner = (c.name,), np.zeros(1, dtype=np.intp)
-        self.distance, self.tolerance = c.distance, c.tolerance
+        self.distance = c.distance
+        self.check_group, self.check_limit2 = np.zeros(1, dtype=np.intp), np.array([c.tolerance**2])
         self.joints = np.array(c._pair(), dtype=np.intp)
 
     def _length(self, kit: Kit, P: Any) -> tuple[Any, Any]:
@@ -93,6 +94,3 @@ class DistanceTerm(Term):
             return Residuals(r)
         u = d / length[:, None] * ((d * d).sum(-1) > _MIN_SQUARED)[:, None]  # within the clamp: constant
         return Residuals(r, self.joints, np.stack((u, -u), axis=1)[:, None])
-
-    def satisfied(self, P: np.ndarray, W: np.ndarray, z: np.ndarray, rows: Any = None) -> np.ndarray:
-        return (np.abs(self._length(NUMPY, P)[1] - self.distance) <= self.tolerance)[:, None]

@@ -78,12 +78,14 @@ class EndEffectorTerm(Term):
     """``P_j - t`` and, with a rotation, ``sqrt(rotation_weight / 8) (W_j - T)`` (module doc)."""
 
     def __init__(self, c: EndEffectorConstraint) -> None:
-        self.names, self.tolerance = (c.name,), c.tolerance
+        self.names = (c.name,)
         self.j = np.array([joint_index(c.joint, "joint", c.kind)], dtype=np.intp)
         self.target = np.asarray(c.position, dtype=np.float64)
         self.rot = unit_quaternion_matrix(c.rotation)[None, None] if c.use_rotation else None
         self.scale = np.full((1, 1), math.sqrt(c.rotation_weight / 8.0))
         self.owner = np.zeros(12 if c.use_rotation else 3, dtype=np.intp)
+        self.check_group = np.r_[np.zeros(3, dtype=np.intp), np.full(len(self.owner) - 3, -1)]  # the position only
+        self.check_limit2 = np.array([c.tolerance**2])
 
     def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:
         a = P.shape[0]
@@ -98,7 +100,3 @@ class EndEffectorTerm(Term):
             return Residuals(r)
         d_pos = np.concatenate((d_pos, np.zeros((a, 9, 1, 3))), axis=1)
         return Residuals(r, self.j, d_pos, self.j, np.concatenate((np.zeros((a, 3, 1, 3)), d_rot), axis=1))
-
-    def satisfied(self, P: np.ndarray, W: np.ndarray, z: np.ndarray, rows: Any = None) -> np.ndarray:
-        err = np.linalg.norm(P[:, self.j[0]] - self.target, axis=-1)
-        return ((err <= self.tolerance) | ~np.isfinite(err))[:, None]

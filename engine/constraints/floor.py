@@ -100,7 +100,6 @@ class FloorTerm(FrameRows, Term):
         self.names = (c.name,)
         self.idx = np.array(c._index(), dtype=np.intp)
         self.low = c.floor_height + c.clearance
-        self.ok = self.low - _SLACK
         k = len(self.idx)
         self.sliding = c.slide_weight > 0
         self.prev, self.slide = np.zeros((1, k, 2)), np.zeros((1, k))
@@ -110,6 +109,8 @@ class FloorTerm(FrameRows, Term):
             contact = prev[:, 2].astype(np.float32) < np.float32(c.floor_height + c.contact_height)
             self.prev[0], self.slide[0] = prev[:, :2], np.sqrt(c.slide_weight * contact.astype(np.float64))
         self.owner = np.zeros(3 * k if self.sliding else k, dtype=np.intp)
+        self.check_group = np.r_[np.arange(k), np.full(len(self.owner) - k, -1)]  # each joint's depth, not sliding
+        self.check_limit2 = np.full(k, _SLACK**2)
 
     def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:
         p, a, k = P[:, self.idx], P.shape[0], len(self.idx)
@@ -129,6 +130,3 @@ class FloorTerm(FrameRows, Term):
             at = k + np.arange(2 * k)
             d[:, at, np.repeat(np.arange(k), 2), np.tile([0, 1], k)] = np.repeat(slide, 2, axis=1)
         return Residuals(r, self.idx, d)
-
-    def satisfied(self, P: np.ndarray, W: np.ndarray, z: np.ndarray, rows: Any = None) -> np.ndarray:
-        return (P[:, self.idx, 2] >= self.ok).all(-1)[:, None]

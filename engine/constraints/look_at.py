@@ -93,7 +93,10 @@ class LookAtTerm(Term):
         self.j = np.array([joint_index(c.joint, "joint", c.kind)], dtype=np.intp)
         self.axis = np.asarray(c.axis, dtype=np.float64) / np.linalg.norm(c.axis)
         self.target = np.asarray(c.target, dtype=np.float64)
-        self.cos_tol = math.cos(math.radians(c.tolerance))
+        # |r|^2 = 1 - cos(angle) (unit f and u), so the angle is within the tolerance when
+        # |r|^2 <= 1 - cos(tolerance)
+        self.check_group = np.zeros(3, dtype=np.intp)
+        self.check_limit2 = np.array([1.0 - math.cos(math.radians(c.tolerance))])
 
     def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:
         f = W[:, self.j[0]] @ kit.const(self.axis, P)  # (A, 3)
@@ -107,9 +110,3 @@ class LookAtTerm(Term):
         d_pos = (np.eye(3) - free * u[:, :, None] * u[:, None, :]) / n[:, None, None] * _HALF
         d_rot = np.einsum("ikl,al->aik", EPS3, f) * _HALF  # turning by a moves f by a x f
         return Residuals(r, self.j, d_pos[:, :, None], self.j, d_rot[:, :, None])
-
-    def satisfied(self, P: np.ndarray, W: np.ndarray, z: np.ndarray, rows: Any = None) -> np.ndarray:
-        f = W[:, self.j[0]] @ self.axis
-        t = self.target - P[:, self.j[0]]
-        c = (f * t).sum(-1) / np.maximum(np.linalg.norm(t, axis=-1), _MIN_DISTANCE)
-        return ((c >= self.cos_tol) | ~np.isfinite(c))[:, None]

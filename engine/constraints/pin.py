@@ -95,7 +95,8 @@ class PinTerm(FrameRows, Term):
     PER_FRAME = ("target", "on")
 
     def __init__(self, c: PinConstraint, target: np.ndarray | None) -> None:
-        self.names, self.owner, self.tol2 = (c.name,), np.zeros(3, dtype=np.intp), c.tolerance**2
+        self.names, self.owner = (c.name,), np.zeros(3, dtype=np.intp)
+        self.check_group, self.check_limit2 = np.zeros(3, dtype=np.intp), np.array([c.tolerance**2])  # off: r = 0
         self.j = np.array([joint_index(c.joint, "joint", c.kind)], dtype=np.intp)
         self.on = np.array([0.0 if target is None else 1.0])
         self.target = np.zeros((1, 3)) if target is None else np.asarray(target, dtype=np.float64).reshape(1, 3)
@@ -105,8 +106,3 @@ class PinTerm(FrameRows, Term):
         on = self.on[sel]
         r = (P[:, self.j[0]] - kit.const(self.target[sel], P)) * kit.const(on, P)[:, None]
         return Residuals(r, self.j, np.eye(3)[None, :, None, :] * on[:, None, None, None] if jac else None)
-
-    def satisfied(self, P: np.ndarray, W: np.ndarray, z: np.ndarray, rows: Any = None) -> np.ndarray:
-        sel = self.select(P, rows)
-        d = P[:, self.j[0]] - self.target[sel]
-        return (((d * d).sum(-1) <= self.tol2) | (self.on[sel] == 0))[:, None]

@@ -133,8 +133,8 @@ def owners(sizes: list[int]) -> np.ndarray:
 
 class Term:
     """Base of every kind's term: subclasses set :attr:`names` and :attr:`owner` and define
-    :meth:`residual` (and :meth:`satisfied` when the offline stopping rule should wait
-    for them).
+    :meth:`residual`; a term the offline stopping rule should wait for also sets
+    :attr:`check_group` and :attr:`check_limit2` (or :meth:`check_limits`).
 
     Attributes
     ----------
@@ -142,10 +142,18 @@ class Term:
         The names of the constraints the term holds (loss reporting).
     owner : ndarray (m,) int
         Index in :attr:`names` of the constraint each residual entry belongs to.
+    check_group : ndarray (m,) int or None
+        The group of residual entries each entry belongs to for :meth:`satisfied_by`
+        (``0 .. G-1``, one constraint's entries only; -1: not read). None: the term never
+        holds the offline stop.
+    check_limit2 : ndarray (G,)
+        The largest squared norm of each group's entries that lets the solve stop.
     """
 
     names: tuple[str, ...] = ()
     owner: np.ndarray = np.zeros(0, dtype=np.intp)
+    check_group: np.ndarray | None = None
+    check_limit2: np.ndarray = np.zeros(0)
 
     def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:
         """``r (A, m)`` at ``P (A, 22, 3)``, ``W (A, 22, 3, 3)``, ``z (A, L)``, with the
@@ -153,12 +161,49 @@ class Term:
         (:class:`FrameRows`) reads its rows ``rows`` (index array, ``(A,)``) of them."""
         raise NotImplementedError
 
-    def satisfied(self, P: np.ndarray, W: np.ndarray, z: np.ndarray, rows: Any = None) -> np.ndarray:
-        """Per frame ``(A,)`` and constraint ``(n,)``: whether the offline optimizer may
-        stop on its account (default: always)."""
-        return np.ones((len(P), len(self.names)), dtype=bool)
+    def check_limits(self, sel: Any) -> np.ndarray:
+        """The squared bound of each check group, ``(G,)``, or ``(A, G)`` for a term whose
+        bounds change per frame (``sel``: the rows of its per-frame parameters that
+        :meth:`residual` read, a slice or an index array)."""
+        return self.check_limit2
 
     # -- derived from the residual ------------------------------------------------------
+    def satisfied_by(self, res: Residuals, rows: Any = None) -> np.ndarray:
+        """Per frame ``(A,)`` and constraint ``(n,)``: whether the offline optimizer may
+        stop on its account, read from the residual ``res`` of those frames: every check
+        group of the constraint has a squared norm within its bound (a non-finite one
+        never has). Always, for a term without checks."""
+        a = len(res.r)
+        if self.check_group is None:
+            return np.ones((a, len(self.names)), dtype=bool)
+        order, starts, group_owner = self._groups()
+        r = np.asarray(res.r)[:, order]
+        squared = np.add.reduceat(r * r, starts, axis=1)  # (A, G)
+        held = ~(squared <= self.check_limits(slice(0, a) if rows is None else rows))
+        out = np.ones((a, len(self.names)), dtype=bool)
+        for g in np.flatnonzero(held.any(0)):
+            out[:, group_owner[g]] &= ~held[:, g]
+        return out
+
+    def satisfied(self, P: np.ndarray, W: np.ndarray, z: np.ndarray, rows: Any = None) -> np.ndarray:
+        """:meth:`satisfied_by` of the residual at ``P``, ``W``, ``z`` (numpy); the solver's
+        objectives read the residual they evaluated instead."""
+        if self.check_group is None:
+            return np.ones((len(P), len(self.names)), dtype=bool)
+        return self.satisfied_by(self.residual(NUMPY, P, W, z, rows=rows), rows)
+
+    def _groups(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The checked entries in group order, where each group starts in it, and each
+        group's constraint (cached: a term's groups never change)."""
+        cached = getattr(self, "_group_cache", None)
+        if cached is None or cached[0] is not self.check_group:
+            group = self.check_group
+            order = np.flatnonzero(group >= 0)
+            order = order[np.argsort(group[order], kind="stable")]
+            starts = np.flatnonzero(np.r_[True, np.diff(group[order]) != 0])
+            cached = self._group_cache = (group, order, starts, self.owner[order[starts]])
+        return cached[1], cached[2], cached[3]
+
     def _membership(self) -> np.ndarray:
         m = getattr(self, "_member", None)
         if m is None or m.shape[0] != len(self.owner):

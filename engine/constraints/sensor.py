@@ -133,6 +133,8 @@ class SensorTerm(FrameRows, Term):
         self.rot_tol = np.array([math.sin(math.radians(items[k].rotation_tolerance) / 2) ** 2 for k in self.six])
         self.owner = np.concatenate([np.repeat(np.arange(len(items)), 3), np.repeat(self.six, 9)]).astype(np.intp)
         s = len(items)
+        # groups: each tracker's position (3 entries), then each 6-DoF one's rotation (9)
+        self.check_group = np.concatenate([np.repeat(np.arange(s), 3), s + np.repeat(np.arange(len(self.six)), 9)])
         self._d_pos = np.zeros((3 * s, s, 3))
         self._d_pos[np.arange(3 * s), np.repeat(np.arange(s), 3), np.tile(np.arange(3), s)] = 1.0
 
@@ -156,13 +158,12 @@ class SensorTerm(FrameRows, Term):
             d_rot = np.concatenate((np.zeros((a, 3 * len(self.joints)) + d_rot.shape[2:]), d_rot), axis=1)
         return Residuals(r, self.joints, d_pos, self.joints6 if d_rot is not None else None, d_rot)
 
-    def satisfied(self, P: np.ndarray, W: np.ndarray, z: np.ndarray, rows: Any = None) -> np.ndarray:
-        sel = self.select(P, rows)
-        off = self.on[sel] == 0
-        err = P[:, self.joints] - self.target[sel]
-        ok = (np.einsum("asi,asi->as", err, err) <= self.pos_tol2) | off
-        if len(self.six):
-            dist = (3.0 - np.einsum("akij,akij->ak", self.rot_target[sel], W[:, self.joints6])) * 0.25
-            ok[:, self.six] &= (dist <= self.rot_tol) | off[:, self.six]
-        return ok
+    def check_limits(self, sel: Any) -> np.ndarray:
+        """Position: the squared tolerance. Rotation: ``|r|^2 = scale^2 |W - T|_F^2 = 8 scale^2
+        sin^2(angle / 2)``, so the bound is ``8 scale^2`` times the tolerance's ``sin^2``
+        (a rotation with zero weight does not hold the stop). A tracker that is off has a
+        zero residual."""
+        scale = self.scale[sel]
+        rot = 8.0 * scale * scale * self.rot_tol
+        return np.concatenate([np.broadcast_to(self.pos_tol2, (len(scale), len(self.pos_tol2))), rot], axis=1)
 

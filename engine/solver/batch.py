@@ -144,8 +144,8 @@ class BatchObjective:
     def satisfied(self) -> np.ndarray:
         """Per evaluated row ``(A,)``: every constraint lets its frame stop."""
         ok = np.ones(len(self.idx), dtype=bool)
-        for t in self.terms:
-            ok &= t.satisfied(self.P, self.W, self.z, rows=self.idx).all(1)
+        for t, res in zip(self.terms, self.res):
+            ok &= t.satisfied_by(res, rows=self.idx).all(1)
         return ok
 
     def row(self, c: int) -> tuple[np.ndarray, np.ndarray]:

@@ -121,7 +121,7 @@ class FastObjective:
         return g + g_z[0].astype(np.float32)
 
     def satisfied(self) -> bool:
-        return all(t.satisfied(self.P, self.W, self.z).all() for t in self.frame.terms)
+        return all(t.satisfied_by(r).all() for t, r in zip(self.frame.terms, self.res))
 
     def state(self, latent: Any) -> "PoseState":
         return self._make_state(latent, self)

@@ -103,6 +103,12 @@ def test_hand_built_satisfied_and_unsatisfied_states():
     head = s.positions[J["upperneck"]].detach().numpy()
     assert float(LookAtConstraint(target=head + [0, -2.0, 0]).loss(s)) < 1e-12  # rest head faces -Y
     assert float(LookAtConstraint(target=head + [0, 2.0, 0]).loss(s)) == pytest.approx(2.0)
+    for deg, ok in ((4.5, True), (5.5, False)):  # the default tolerance: 5 degrees
+        aside = head + 2.0 * np.array([math.sin(math.radians(deg)), -math.cos(math.radians(deg)), 0.0])
+        assert LookAtConstraint(target=aside).satisfied(s) == ok, deg
+        turn = Q.from_axis_angle(np.array([0.0, 0.0, 1.0]), math.radians(deg))
+        assert SensorConstraint(joint="lwrist", position=wrist, rotation=turn).satisfied(s) == ok, deg
+        assert SensorConstraint(joint="lwrist", position=wrist + [0, 0, deg / 500]).satisfied(s) == ok, deg  # 1 cm
     assert float(FloorConstraint().loss(s)) == 0.0  # toes above the floor
     assert float(FloorConstraint().loss(rest_state(root=[0, 0, 0.9]))) > 0
     assert float(BoundsConstraint(joint="root", box_min=np.array([-1, -1, 0.5]), box_max=np.array([1, 1, 1.5])).loss(s)) == 0

@@ -150,6 +150,28 @@ def test_solving_never_changes_a_constraint(kind, index):
         assert np.array_equal(np.asarray(before[k], dtype=object), np.asarray(after[k], dtype=object)), k
 
 
+@pytest.mark.parametrize("kind, index", EXAMPLES)
+def test_the_stopping_test_reads_well_formed_groups_of_the_residual(kind, index):
+    """``satisfied`` is derived from the residual (:meth:`Term.satisfied_by`): each check
+    group lies inside one constraint's entries, groups are numbered ``0 .. G-1`` with a
+    bound each, and reading the residual the objective kept gives what ``satisfied``
+    computes afresh."""
+    pos, mats, z, frame = _inputs(8)
+    c = _example(kind, index)
+    for t in type(c).terms([c], frame):
+        res = t.residual(NUMPY, pos[None], mats[None], z[None], jac=True)
+        assert np.array_equal(t.satisfied_by(res), t.satisfied(pos[None], mats[None], z[None]))
+        if t.check_group is None:
+            continue
+        group = np.asarray(t.check_group)
+        assert group.shape == t.owner.shape and group.dtype.kind == "i"
+        used = np.unique(group[group >= 0])
+        assert np.array_equal(used, np.arange(len(used))), "groups numbered 0 .. G-1"
+        assert np.shape(t.check_limits(slice(0, 1)))[-1] == len(used)
+        for g in used:
+            assert len(set(t.owner[group == g])) == 1, f"group {g} spans constraints"
+
+
 def test_the_constraint_loss_is_the_term_on_the_state():
     """``Constraint.loss(state)`` (the autograd reference) is the term's squared norm on
     the state's arrays, and ``satisfied`` its stopping test."""

@@ -15,8 +15,9 @@ import numpy as np
 
 from engine.constraints.base import Constraint, joint_index, param
 from engine.constraints.placement import REACH, facing, joint_at
-from engine.constraints.residual import FrameInputs, Kit, Residuals, Term, rotation_residual, unit_quaternion_matrix
+from engine.constraints.residual import FrameInputs, Kit, Residuals, Term, rotation_residual
 from engine.gizmos import PointGizmo
+from engine.kinematics import quat_np as QN
 
 
 
@@ -81,7 +82,7 @@ class EndEffectorTerm(Term):
         self.names = (c.name,)
         self.j = np.array([joint_index(c.joint, "joint", c.kind)], dtype=np.intp)
         self.target = np.asarray(c.position, dtype=np.float64)
-        self.rot = unit_quaternion_matrix(c.rotation)[None, None] if c.use_rotation else None
+        self.rot = QN.unit_to_matrix(c.rotation)[None, None] if c.use_rotation else None
         self.scale = np.full((1, 1), math.sqrt(c.rotation_weight / 8.0))
         self.owner = np.zeros(12 if c.use_rotation else 3, dtype=np.intp)
         self.check_group = np.r_[np.zeros(3, dtype=np.intp), np.full(len(self.owner) - 3, -1)]  # the position only

@@ -306,14 +306,3 @@ def rotation_residual(kit: Kit, W: Any, T: Any, scale: Any, jac: bool) -> tuple[
     d[:, np.arange(s), :, np.arange(s)] = block.reshape(a, s, 9, 3).transpose(1, 0, 2, 3)
     return r, d.reshape(a, s * 9, s, 3)
 
-
-def unit_quaternion_matrix(q: np.ndarray) -> np.ndarray:
-    """Rotation matrices ``(..., 3, 3)`` of quaternions ``q (..., 4)`` (w, x, y, z),
-    normalised first (a zero quaternion stays finite)."""
-    q = np.asarray(q, dtype=np.float64)
-    w, x, y, z = np.moveaxis(q / np.maximum(np.linalg.norm(q, axis=-1, keepdims=True), 1e-12), -1, 0)
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
-    ], -2)  # fmt: skip

@@ -17,11 +17,11 @@ from typing import Any, ClassVar
 import numpy as np
 
 from engine.constraints.base import Constraint, joint_index, param
-from engine.constraints.residual import (
-    FrameInputs, FrameRows, Kit, Residuals, Term, rotation_residual, unit_quaternion_matrix,
-)  # fmt: skip
+from engine.constraints.residual import FrameInputs, FrameRows, Kit, Residuals, Term, rotation_residual
 from engine.errors import UserError
 from engine.gizmos import PointGizmo
+from engine.kinematics import quat_np as QN
+
 
 @dataclass
 class SensorConstraint(Constraint):
@@ -127,7 +127,7 @@ class SensorTerm(FrameRows, Term):
         self.target = np.array([c.position for c in items], dtype=np.float64).reshape(1, -1, 3)
         self.on = np.array([[float(c.connected) for c in items]]).reshape(1, -1)
         rot = np.array([unit_rotation(items[k].rotation) for k in self.six]).reshape(-1, 4)
-        self.rot_target = unit_quaternion_matrix(rot).reshape(1, -1, 3, 3)
+        self.rot_target = QN.unit_to_matrix(rot).reshape(1, -1, 3, 3)
         self.scale = np.array([[math.sqrt(items[k].rotation_weight / 8.0) for k in self.six]]).reshape(1, -1)
         self.pos_tol2 = np.array([c.position_tolerance**2 for c in items])
         self.rot_tol = np.array([math.sin(math.radians(items[k].rotation_tolerance) / 2) ** 2 for k in self.six])

@@ -77,9 +77,19 @@ def conjugate(q: np.ndarray) -> np.ndarray:
 
 def to_matrix(q: np.ndarray) -> np.ndarray:
     """Unit quaternions ``(..., 4)`` to rotation matrices ``(..., 3, 3)`` (the quadratic
-    form ``R = q (0, v) q*``; it scales by ``|q|^2`` for non-unit input)."""
+    form ``R = q (0, v) q*``, :data:`MATRIX_TABLE`; it scales by ``|q|^2`` for non-unit
+    input). The torch kit uses the same table."""
     q = np.asarray(q)
     return ((q[..., :, None] * q[..., None, :]).reshape(q.shape[:-1] + (16,)) @ _MAT).reshape(q.shape[:-1] + (3, 3))
+
+
+def unit_to_matrix(q: np.ndarray) -> np.ndarray:
+    """Rotation matrices ``(..., 3, 3)`` of quaternions ``q (..., 4)`` of any length
+    (targets typed by a user or read from a tracker): normalised first, a zero quaternion
+    taken as the identity."""
+    q = np.asarray(q, dtype=np.float64)
+    n = np.linalg.norm(q, axis=-1, keepdims=True)
+    return to_matrix(np.where(n > 0.0, q / np.maximum(n, 1e-12), np.array(IDENTITY)))
 
 
 def heading(q: np.ndarray) -> np.ndarray:
@@ -311,3 +321,5 @@ def qfrom_bases(u0: Sequence[float], w0: Sequence[float], u1: Sequence[float], w
 
 #: The product tensors of :func:`mul` and :func:`to_matrix` (built from :func:`qmul`).
 _MUL, _MAT = _product_tensors()
+#: ``(16, 9)``: coefficient of ``q_j q_k`` (row ``4 j + k``) in ``R(q)[r, c]`` (column ``3 r + c``).
+MATRIX_TABLE = _MAT

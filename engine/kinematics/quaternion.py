@@ -1,7 +1,7 @@
 """The torch quaternion kit, batched, which also takes numpy arrays.
 
 Quaternions are ``(..., 4)`` arrays in ``(w, x, y, z)`` order. Torch tensors are handled
-here (with upc-pymotion's ``quat_torch`` for the matrix conversion); numpy arrays go to
+here (with upc-pymotion's ``quat_torch`` for matrix to quaternion); numpy arrays go to
 the numpy kit, :mod:`engine.kinematics.quat_np`, so each operation has one numpy and one
 torch implementation. Code that only ever holds numpy arrays can import the numpy kit
 directly and skip the dispatch.
@@ -122,18 +122,21 @@ def from_matrix(m: Array) -> Array:
 
 
 def to_matrix(q: Array) -> Array:
-    """Unit quaternions ``(..., 4)`` (w, x, y, z) to rotation matrices ``(..., 3, 3)``."""
+    """Unit quaternions ``(..., 4)`` (w, x, y, z) to rotation matrices ``(..., 3, 3)``:
+    the numpy kit's quadratic form (:func:`engine.kinematics.quat_np.to_matrix`) for both
+    array kinds, its coefficient table copied once per dtype and device for tensors."""
     torch = torch_of(q)
     if torch is None:
         return _np.to_matrix(q)
-    w, x, y, z = q.unbind(-1)
-    m = torch.stack(
-        (1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),
-         2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
-         2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)),
-        dim=-1,
-    )  # fmt: skip
-    return m.reshape(q.shape[:-1] + (3, 3))
+    key = (q.dtype, q.device)
+    table = _MATRIX_TABLES.get(key)
+    if table is None:
+        table = _MATRIX_TABLES[key] = torch.as_tensor(_np.MATRIX_TABLE, dtype=q.dtype, device=q.device)
+    return ((q[..., :, None] * q[..., None, :]).reshape(q.shape[:-1] + (16,)) @ table).reshape(q.shape[:-1] + (3, 3))
+
+
+#: :data:`engine.kinematics.quat_np.MATRIX_TABLE` as tensors, by (dtype, device).
+_MATRIX_TABLES: dict = {}
 
 
 def angle(q0: Array, q1: Array) -> Array:

@@ -124,3 +124,19 @@ def test_from_bases_maps_the_direction_and_the_plane():
         np.testing.assert_allclose(QN.qrotate(q, n0 / np.linalg.norm(n0)), n1 / np.linalg.norm(n1), atol=1e-12)
     q = QN.qfrom_bases((1.0, 0.0, 0.0), (2.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 3.0, 0.0))  # no plane given
     np.testing.assert_allclose(QN.qrotate(q, (1.0, 0.0, 0.0)), (0.0, 1.0, 0.0), atol=1e-15)
+
+
+def test_one_matrix_formula_for_numpy_and_torch_and_any_length():
+    """Both kits share the quadratic form; :func:`QN.unit_to_matrix` normalises a
+    quaternion of any length first and takes a zero one as the identity."""
+    import torch
+
+    from engine.kinematics import quaternion as Q
+
+    axis, angle = _unit(3), 1.2
+    q = np.array(QN.qaxis_angle(axis, angle))
+    np.testing.assert_allclose(Q.to_matrix(torch.tensor(q)).numpy(), _rodrigues(axis, angle), atol=1e-12)
+    np.testing.assert_allclose(Q.to_matrix(torch.tensor(q, dtype=torch.float32)).numpy(), _rodrigues(axis, angle),
+                               atol=1e-6)  # fmt: skip
+    np.testing.assert_allclose(QN.unit_to_matrix(3.0 * q), _rodrigues(axis, angle), atol=1e-12)
+    np.testing.assert_array_equal(QN.unit_to_matrix(np.zeros((2, 4))), np.broadcast_to(np.eye(3), (2, 3, 3)))

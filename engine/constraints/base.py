@@ -91,6 +91,19 @@ def joint_index(name: str, field: str = "joint", kind: str = "") -> int:
         raise UserError(f"{where}field {field!r}: unknown joint {name!r}") from None
 
 
+class OnOneJoint:
+    """For a kind that acts on the one joint its ``joint`` field names: the joint is
+    checked (a :class:`UserError` names the field) and is what ``acts_on()`` returns.
+    Listed before :class:`Constraint` (``class PinConstraint(OnOneJoint, Constraint)``);
+    a kind with more to check calls ``super().check()`` first."""
+
+    def check(self) -> None:
+        joint_index(self.joint, "joint", self.kind)  # type: ignore[attr-defined]
+
+    def acts_on(self) -> tuple[str, ...]:
+        return (self.joint,)  # type: ignore[attr-defined]
+
+
 @dataclass
 class Constraint(ABC):
     """Base class. Subclasses are dataclasses whose extra fields are their parameters.

@@ -12,7 +12,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from engine.constraints.base import Constraint, joint_index, param
+from engine.constraints.base import Constraint, OnOneJoint, joint_index, param
 from engine.constraints.placement import BOUNDS_HALF, joint_at
 from engine.constraints.residual import FrameInputs, Kit, Residuals, Term
 from engine.errors import UserError
@@ -23,7 +23,7 @@ _SLACK = 1e-3  # metres: satisfied this far outside the box
 
 
 @dataclass
-class BoundsConstraint(Constraint):
+class BoundsConstraint(OnOneJoint, Constraint):
     """Keep ``joint`` within ``[box_min, box_max]`` (world, metres)."""
 
     kind: ClassVar[str] = "bounds"
@@ -32,12 +32,9 @@ class BoundsConstraint(Constraint):
     box_max: np.ndarray = param(factory=lambda: np.array([1.0, 1.0, 2.0]), editor="vec3", unit="m")
 
     def check(self) -> None:
-        joint_index(self.joint, "joint", self.kind)
+        super().check()
         if np.any(self.box_min > self.box_max):
             raise UserError(f"constraint {self.kind!r}: field 'box_min' exceeds 'box_max' on some axis")
-
-    def acts_on(self) -> tuple[str, ...]:
-        return (self.joint,)
 
     def term(self, frame: FrameInputs) -> "BoundsTerm":
         return BoundsTerm(self)

@@ -13,7 +13,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from engine.constraints.base import Constraint, joint_index, param
+from engine.constraints.base import Constraint, OnOneJoint, joint_index, param
 from engine.constraints.placement import REACH, facing, joint_at
 from engine.constraints.residual import FrameInputs, Kit, Residuals, Term, rotation_residual
 from engine.gizmos import PointGizmo
@@ -22,7 +22,7 @@ from engine.kinematics import quat_np as QN
 
 
 @dataclass
-class EndEffectorConstraint(Constraint):
+class EndEffectorConstraint(OnOneJoint, Constraint):
     """Pull ``joint`` to ``position`` (and to ``rotation`` if ``use_rotation``).
 
     Parameters
@@ -48,12 +48,6 @@ class EndEffectorConstraint(Constraint):
     use_rotation: bool = param(False, editor="bool")
     rotation_weight: float = param(0.1, editor="float")
     tolerance: float = param(0.01, editor="float", unit="m")
-
-    def check(self) -> None:
-        joint_index(self.joint, "joint", self.kind)
-
-    def acts_on(self) -> tuple[str, ...]:
-        return (self.joint,)
 
     def term(self, frame: FrameInputs) -> "EndEffectorTerm":
         return EndEffectorTerm(self)

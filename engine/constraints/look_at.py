@@ -18,7 +18,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from engine.constraints.base import Constraint, joint_index, param
+from engine.constraints.base import Constraint, OnOneJoint, joint_index, param
 from engine.constraints.placement import LOOK_DISTANCE, facing, joint_at
 from engine.constraints.residual import EPS3, FrameInputs, Kit, Residuals, Term
 from engine.errors import UserError
@@ -30,7 +30,7 @@ _HALF = math.sqrt(0.5)
 
 
 @dataclass
-class LookAtConstraint(Constraint):
+class LookAtConstraint(OnOneJoint, Constraint):
     """``1 - cos(angle)`` between the joint's forward axis and the direction to ``target``.
 
     Parameters
@@ -52,12 +52,9 @@ class LookAtConstraint(Constraint):
     tolerance: float = param(5.0, editor="float", unit="deg")
 
     def check(self) -> None:
-        joint_index(self.joint, "joint", self.kind)
+        super().check()
         if not np.linalg.norm(self.axis) > 1e-9:
             raise UserError(f"constraint {self.kind!r}: field 'axis' must be a non-zero vector")
-
-    def acts_on(self) -> tuple[str, ...]:
-        return (self.joint,)
 
     def term(self, frame: FrameInputs) -> "LookAtTerm":
         return LookAtTerm(self)

@@ -24,7 +24,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from engine.constraints.base import Constraint, joint_index, param
+from engine.constraints.base import Constraint, OnOneJoint, joint_index, param
 from engine.constraints.placement import joint_at
 from engine.constraints.residual import FrameInputs, FrameRows, Kit, Residuals, Term
 from engine.gizmos import PointGizmo
@@ -32,7 +32,7 @@ from engine.gizmos import PointGizmo
 
 
 @dataclass
-class PinConstraint(Constraint):
+class PinConstraint(OnOneJoint, Constraint):
     """Keep ``joint`` at ``position`` (metres), see the module doc."""
 
     kind: ClassVar[str] = "pin"
@@ -41,12 +41,6 @@ class PinConstraint(Constraint):
     position: np.ndarray = param(factory=lambda: np.full(3, np.nan), editor="vec3", unit="m")
     follow_previous: bool = param(False, editor="bool")
     tolerance: float = param(0.01, editor="float", unit="m")
-
-    def check(self) -> None:
-        joint_index(self.joint, "joint", self.kind)
-
-    def acts_on(self) -> tuple[str, ...]:
-        return (self.joint,)
 
     def _target(self, previous: Any) -> Any:
         """The target (same type as ``previous``'s rows), or None while there is none."""

@@ -16,7 +16,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from engine.constraints.base import Constraint, joint_index, param
+from engine.constraints.base import Constraint, OnOneJoint, joint_index, param
 from engine.constraints.residual import FrameInputs, FrameRows, Kit, Residuals, Term, rotation_residual
 from engine.errors import UserError
 from engine.gizmos import PointGizmo
@@ -24,7 +24,7 @@ from engine.kinematics import quat_np as QN
 
 
 @dataclass
-class SensorConstraint(Constraint):
+class SensorConstraint(OnOneJoint, Constraint):
     """Joint follows a tracker: position (3-DoF) or position and rotation (6-DoF).
 
     Parameters
@@ -59,12 +59,9 @@ class SensorConstraint(Constraint):
     rotation_tolerance: float = param(5.0, editor="float", unit="deg")
 
     def check(self) -> None:
-        joint_index(self.joint, "joint", self.kind)
+        super().check()
         if self.dof not in (3, 6):
             raise UserError(f"constraint {self.kind!r}: field 'dof' must be 3 or 6, got {self.dof!r}")
-
-    def acts_on(self) -> tuple[str, ...]:
-        return (self.joint,)
 
     def set_target(self, position: np.ndarray, rotation: np.ndarray | None = None, connected: bool = True) -> None:
         """New tracker reading for the next solve (metres; (w, x, y, z))."""

@@ -1,8 +1,8 @@
-"""The per-frame work outside DragPoser's iterations, rewritten for speed, gives what the
-previous code gave on real frames (the shipped models on the bundled clip):
+"""The per-frame work outside DragPoser's iterations, written for speed, gives what plain
+references give on real frames (the shipped models on the bundled clip):
 
 * the limb reach and tracker rotations (``engine/solver/limb_ik.py``: partial FK on Python
-  floats, one FK at the end) against the previous numpy implementation, kept below;
+  floats, one FK at the end) against a plain numpy reference (a full FK per limb) below;
 * the predictor's conditioning from the root increment (numpy) against the torch formula;
 * the predictor's look-ahead deferred to ``between_frames`` against running it at once.
 """
@@ -32,7 +32,7 @@ CLIP = Path(__file__).resolve().parents[2] / "assets" / "clips" / "example.bvh"
 FRAMES = 30
 
 
-# -- the previous implementation (numpy, a full FK per limb), the reference ----------------
+# -- the reference: plain numpy, a full FK per limb --------------------------------------
 
 
 def _axis_angle(axis, angle):

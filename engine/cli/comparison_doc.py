@@ -124,7 +124,7 @@ def _targets(res: dict, blend: float) -> list[str]:
 
 
 def _auj_note(dp: dict, bl: dict) -> str:
-    """What PJ / AUJ measure here, and the earlier raw sums for comparison."""
+    """What PJ / AUJ measure here, and the plain sums (``PJ raw`` / ``AUJ raw``) beside them."""
     gt = dp["total"].get("gt_jerk")
     raw = _ratio(bl["total"].get("auj_raw"), dp["total"].get("auj_raw"))
     return ("  PJ / AUJ follow FlowMDM, as RPM uses them (docs/metrics.md): the 1-s windows after the "
@@ -132,7 +132,7 @@ def _auj_note(dp: dict, bl: dict) -> str:
             f"distance from the ground truth's mean jerk ({fmt(gt, '.1f')} here), so motion as smooth as the "
             "real one scores AUJ ~ 0 up to the noise of averaging few windows: the ground truth itself, at the "
             f"same changes, scores PJ {fmt(dp['total'].get('gt_pj'), '.1f')} / AUJ "
-            f"{fmt(dp['total'].get('gt_auj'), '.0f')}. With the earlier plain sums (`PJ raw` / `AUJ raw`, which count the "
+            f"{fmt(dp['total'].get('gt_auj'), '.0f')}. With the plain sums (`PJ raw` / `AUJ raw`, which count the "
             f"motion's own jerk too) the blend gives {fmt(bl['total'].get('auj_raw'), '.0f')} against "
             f"{fmt(dp['total'].get('auj_raw'), '.0f')} ({fmt(raw, '.2f')}x).")
 
@@ -151,7 +151,7 @@ def render(res: dict[tuple[str, bool, str], dict[str, Any]], args: argparse.Name
         "`dragposer+blend` is DragPoser with trackers blended in over the blend time when they",
         "reconnect (`--set sensor_blend=S`; a lost tracker ends at once, docs/optimizer.md);",
         "`dragposer` lets the targets jump. PJ / AUJ follow FlowMDM (docs/metrics.md); `raw`",
-        "columns are this project's earlier sums.",
+        "columns are plain sums of the mean joint jerk.",
         "Timings (ms/frame) are from the machine that ran the command; see docs/optimizer.md",
         "for the idle-machine figures.",
         "",

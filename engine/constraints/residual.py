@@ -22,7 +22,9 @@ and ``d_latent (A, m, L)``. Everything else is derived from that one definition:
   FK and the decoder in closed form; ``A = 1`` is the frame-by-frame solve and ``A > 1``
   the batched offline solve (:mod:`engine.solver.batch`);
 * the torch reference: the same residual evaluated on tensors (:data:`TORCH`), through
-  autograd (:meth:`engine.constraints.base.Constraint.loss`).
+  autograd (:meth:`engine.constraints.base.Constraint.loss`);
+* the offline stopping test: a bound on the norm of groups of residual entries
+  (:meth:`Term.satisfied_by`), read from the residual the objective already evaluated.
 
 A term may hold several constraints of one kind (all the trackers of a frame are one
 term): :attr:`Term.names` lists them and :attr:`Term.owner` says which entry of ``r``
@@ -174,13 +176,15 @@ class Term:
         group of the constraint has a squared norm within its bound (a non-finite one
         never has). Always, for a term without checks."""
         a = len(res.r)
+        out = np.ones((a, len(self.names)), dtype=bool)
         if self.check_group is None:
-            return np.ones((a, len(self.names)), dtype=bool)
+            return out
         order, starts, group_owner = self._groups()
+        if not len(order):
+            return out
         r = np.asarray(res.r)[:, order]
         squared = np.add.reduceat(r * r, starts, axis=1)  # (A, G)
         held = ~(squared <= self.check_limits(slice(0, a) if rows is None else rows))
-        out = np.ones((a, len(self.names)), dtype=bool)
         for g in np.flatnonzero(held.any(0)):
             out[:, group_owner[g]] &= ~held[:, g]
         return out

@@ -17,6 +17,9 @@ taken exactly by its joint after the solve and moves no other joint, the pelvis 
 only for a wrist target below the hanging arm's reach, ``hold_weight`` pulls the
 joints no target holds towards :attr:`PoseMode.anchor`, the pose the drag began from,
 and ``keep_trunk`` keeps any trunk bone from leaning further back than it did then.
+
+:meth:`PoseMode.pose_key` poses a key as the bake does (:mod:`engine.authoring.bake`):
+one machinery for the pose window and the baked keys.
 """
 
 from __future__ import annotations

@@ -9,7 +9,8 @@ Version 1 (``docs/optimizer.md``)::
 
 Version 2 (``docs/authoring.md``) adds ``character`` (``height``), ``animation``
 (``fps``, ``frames``, ``interpolation``) and ``keys`` (``frame``, ``targets`` by joint,
-optional ``latent``, ``root``, ``heading``); its constraints may carry ``frames`` ranges
+optional ``latent``, ``root``, ``heading``) and ``pose_options`` (how pose mode poses
+the keys: :func:`engine.authoring.pose_options.options_from_dict`); its constraints may carry ``frames`` ranges
 (which version 1 files may too: :mod:`engine.constraints.base`). Both versions load; a
 scene is written as version 2 only when it has something version 1 lacks.
 
@@ -84,7 +85,7 @@ def scene_from_dict(doc: Any, where: str = "scene") -> tuple[list[Constraint], O
     if isinstance(version, bool) or version not in VERSIONS:
         raise UserError(f"{where}: field 'version' is {shown(version)}; this build reads {', '.join(map(str, VERSIONS))}")
     if version < 2:
-        late = [k for k in ("animation", "keys", "character") if k in doc]
+        late = [k for k in ("animation", "keys", "character", "pose_options") if k in doc]
         if late:
             raise UserError(f"{where}: field {late[0]!r} needs \"version\": 2")
     raw = doc.get("settings", {}) or {}

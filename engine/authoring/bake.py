@@ -1,9 +1,12 @@
 """Bake an authored scene into a motion: keys solved, in-betweens from the latent space.
 
-1. **Keys.** A key given only targets is solved offline from the VAE's mean pose
-   (grounded, :mod:`engine.authoring.character`) against its targets and the scene's
-   constraints active on its frame; a key with a latent takes it as it is. Targeted
-   wrists and ankles are then put exactly on their targets.
+1. **Keys.** Each key is posed by pose mode, the machinery the pose window poses with
+   (:meth:`engine.authoring.pose_mode.PoseMode.pose_key`, with the scene's
+   :class:`~engine.authoring.pose_options.PoseOptions` and its constraints active on the
+   key's frame): a key given only targets starts in the VAE's mean pose where the key
+   stands and faces and has its targets dragged there as a user drags them (planted
+   feet, balance, crouch); a key with a latent takes that pose with the feet planted
+   and its targets taken exactly. A one-key bake is the pose pose mode gives.
 2. **In-betweens.** For every other frame the neighbouring keys' latents, targets and
    root placements are interpolated (:mod:`engine.authoring.keys`), the interpolated
    latent decoded and re-solved from there: against the interpolated targets, a prior
@@ -32,6 +35,7 @@ import numpy as np
 from engine.authoring.character import Character, Pose
 from engine.authoring.document import AuthoringScene
 from engine.authoring.keys import Key, eased, interpolate, slerp_quaternion
+from engine.authoring.pose_mode import PoseMode
 from engine.authoring.progress import CancelCheck, check
 from engine.authoring.targets import JointTarget, solve_inputs
 from engine.constraints.base import Constraint
@@ -79,17 +83,14 @@ def active_constraints(constraints: list[Constraint], frame: int) -> list[Constr
     return out
 
 
-def solve_key(character: Character, key: Key, constraints: list[Constraint], frame: int) -> Pose:
+def solve_key(scene: AuthoringScene, vae, key: Key, cancelled: CancelCheck | None = None) -> Pose:
     """The pose of one key (see the module doc)."""
-    terms, reach, rotations = solve_inputs(list(key.targets.values()))
-    ctx = character.grounded(key.root, key.heading, frame, prior=character.mean_latent())
-    if key.latent is not None:
-        if key.latent.shape != (character.latent_dim,):
-            raise UserError(f"key at frame {key.frame}: latent has {key.latent.size} numbers, "
-                            f"the pose model takes {character.latent_dim}")  # fmt: skip
-        pose = character.decode(key.latent, ctx)
-        return character.solve(key.latent, [], ctx, reach, rotations, iterations=0) if (reach or rotations) else pose
-    return character.solve(character.mean_latent(), terms + active_constraints(constraints, frame), ctx, reach, rotations)
+    if key.latent is not None and key.latent.shape != (int(vae.config.latent),):
+        raise UserError(f"key at frame {key.frame}: latent has {key.latent.size} numbers, "
+                        f"the pose model takes {int(vae.config.latent)}")  # fmt: skip
+    mode = PoseMode(vae, scene.height, root_xy=key.root, heading=key.heading, options=scene.pose_options)
+    mode.constraints = active_constraints(scene.constraints, key.frame)
+    return mode.pose_key(key, cancelled=cancelled)
 
 
 def output_frames(scene: AuthoringScene, fps: float | None) -> tuple[int, float, float]:
@@ -118,7 +119,7 @@ def bake(scene: AuthoringScene, vae, fps: float | None = None, progress: Callabl
     poses: list[Pose] = []
     for key in keys:
         check(cancelled)
-        poses.append(solve_key(character, key, scene.constraints, key.frame))
+        poses.append(solve_key(scene, vae, key, cancelled))
         if progress:
             progress(0, n + len(keys))
     scheme = scene.animation.interpolation

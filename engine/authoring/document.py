@@ -18,6 +18,7 @@ import numpy as np
 
 from engine.atomic import write_text
 from engine.authoring.keys import SCHEMES, Animation, Key
+from engine.authoring.pose_options import PoseOptions, options_from_dict, options_to_dict
 from engine.authoring.targets import target_from_json
 from engine.constraints.base import Constraint
 from engine.errors import UserError
@@ -45,6 +46,9 @@ class AuthoringScene:
         The character's standing height, metres (None: the canonical skeleton's).
     version : int
         The version the file was written in.
+    pose_options : PoseOptions
+        How pose mode keeps the keys' poses natural when they are posed (the bake, the
+        pose window); the defaults when the file gives none.
     """
 
     constraints: list[Constraint] = field(default_factory=list)
@@ -53,6 +57,7 @@ class AuthoringScene:
     keys: list[Key] = field(default_factory=list)
     height: float | None = None
     version: int = 2
+    pose_options: PoseOptions = field(default_factory=PoseOptions)
 
 
 def load_authoring(path: str | Path) -> AuthoringScene:
@@ -67,6 +72,8 @@ def authoring_from_dict(doc: Any, where: str = "scene") -> AuthoringScene:
     out = AuthoringScene(constraints, settings, version=int(doc.get("version", 1)))
     out.height = _height(doc.get("character"), where)
     out.animation = _animation(doc.get("animation"), where)
+    if doc.get("pose_options") is not None:
+        out.pose_options = options_from_dict(doc["pose_options"], f"{where}: field 'pose_options'")
     raw = doc.get("keys", []) or []
     if not isinstance(raw, list):
         raise UserError(f"{where}: field 'keys' must be a list")
@@ -88,6 +95,9 @@ def authoring_to_dict(scene: AuthoringScene) -> dict:
     a = scene.animation
     doc["animation"] = {"fps": float(a.fps), "frames": int(a.frames), "interpolation": a.interpolation}
     doc["keys"] = [k.to_dict() for k in scene.keys]
+    options = options_to_dict(scene.pose_options)
+    if options:
+        doc["pose_options"] = options
     return doc
 
 

@@ -54,7 +54,8 @@ class Key:
     frame : int
     targets : dict joint -> JointTarget
     latent : ndarray (L,) or None
-        The solved latent; None: solved from the mean pose when baked.
+        The solved latent; None: posed by pose mode from the mean pose when baked
+        (its targets dragged there, :meth:`engine.authoring.pose_mode.PoseMode.pose_key`).
     root : ndarray (2,)
         Root's horizontal position, metres.
     heading : float

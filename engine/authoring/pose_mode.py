@@ -17,18 +17,26 @@ taken exactly by its joint after the solve and moves no other joint, the pelvis 
 only for a wrist target below the hanging arm's reach, ``hold_weight`` pulls the
 joints no target holds towards :attr:`PoseMode.anchor`, the pose the drag began from,
 and ``keep_trunk`` keeps any trunk bone from leaning further back than it did then.
+
+:meth:`PoseMode.pose_key` poses a key as the bake does (:mod:`engine.authoring.bake`):
+one machinery for the pose window and the baked keys.
 """
 
 from __future__ import annotations
+
+import copy
 
 import numpy as np
 import torch
 
 from engine import skeleton as sk
 from engine.authoring.character import Character, Pose, yaw_quaternion
+from engine.authoring.keys import Key
+from engine.authoring.pose_drag import EVENTS, drag
 from engine.authoring.pose_metrics import centre_of_mass
 from engine.authoring.pose_options import LOWEST_ROOT, SQUAT_FROM, PoseOptions
 from engine.authoring.pose_trunk import LEGS, TRUNK, keep_trunk
+from engine.authoring.progress import CancelCheck
 from engine.authoring.targets import JointTarget, solve_inputs
 from engine.constraints.base import Constraint
 from engine.errors import UserError
@@ -369,6 +377,40 @@ class PoseMode:
             self.pose = self._kept_trunk(solved, reach, rotations)
         self._replant()
         self._solved = self.pose
+        return self.pose
+
+    def pose_key(self, key: Key, events: int = EVENTS, cancelled: CancelCheck | None = None) -> Pose:
+        """Pose as ``key`` (what a baked key is, :mod:`engine.authoring.bake`, and what the
+        pose window shows on a key).
+
+        A key with a latent (one the window keyed): that pose where the key stands and
+        faces, the feet planted there, its targets taken exactly by the limbs and turned
+        joints (``solve(0)``). A key with targets only (a scene written by hand): from the
+        current pose, each active target dragged from where its joint is to its place in
+        ``events`` drag events, then turned to its rotation in as many, in the key's order,
+        each event one :meth:`solve`, as a user drags it in the pose window
+        (:func:`engine.authoring.pose_drag.drag`); targets already in place (within 1 mm)
+        are set, not dragged, and inactive ones are set as they are. ``cancelled()`` is
+        asked before each event.
+        """
+        if key.latent is not None:
+            self.targets = copy.deepcopy(key.targets)
+            self.heading = key.heading
+            self.pose = self.character.decode(key.latent, self.character.grounded(key.root, key.heading))
+            self.plant_where_standing()
+            return self.solve(0)
+        offsets = self.character.skeleton.offsets
+        for t in key.targets.values():
+            here = self.pose.positions[t.index]
+            if not t.active or np.linalg.norm(here - t.position) < 1e-3:
+                self.set_target(t.joint, t.position, None, t.weight, t.enabled)
+            else:
+                drag(self, t.joint, offsets, position=t.position, events=events, weight=t.weight, cancelled=cancelled)
+            if t.rotation is not None:
+                if t.active:
+                    drag(self, t.joint, offsets, rotation=t.rotation, events=events, cancelled=cancelled)
+                else:
+                    self.set_target(t.joint, rotation=t.rotation)
         return self.pose
 
     def motion(self) -> Motion:

@@ -1,12 +1,27 @@
 """How pose mode keeps a pose natural: :class:`PoseOptions` and the crouch's limits
 (:mod:`engine.authoring.pose_mode` uses them; ``bench --pose-tasks --set NAME=VALUE``
-sets a field)."""
+sets a field; a scene stores them as ``pose_options``, :func:`options_from_dict`, and
+``bake`` poses its keys with them)."""
 
 from __future__ import annotations
 
+import dataclasses
+import math
+import typing
 from dataclasses import dataclass
+from typing import Any
 
 from engine.authoring.character import PRIOR_WEIGHT
+from engine.errors import UserError
+from engine.validation import shown
+
+#: Key of a numeric field's accepted range ``(lo, hi)`` in its ``dataclasses.field`` metadata.
+RANGE = "range"
+
+
+def _option(default: Any, lo: float | None = None, hi: float | None = None) -> Any:
+    """A field with ``default`` and, for a number, its range ``lo``-``hi`` as metadata."""
+    return dataclasses.field(default=default, metadata={} if lo is None else {RANGE: (lo, hi)})
 
 #: Lowest pelvis height the crouch moves it to, as a share of its standing height (a deep
 #: squat; the two-bone legs cannot fold much further).
@@ -92,17 +107,56 @@ class PoseOptions:
     """
 
     plant_feet: bool = True
-    plant_weight: float = 1.0
+    plant_weight: float = _option(1.0, 0.0, 10.0)
     balance: bool = True
-    balance_gain: float = 0.5
-    balance_tolerance: float = 0.10
-    crouch_share: float = 0.5
+    balance_gain: float = _option(0.5, 0.0, 1.0)
+    balance_tolerance: float = _option(0.10, 0.0, 1.0)
+    crouch_share: float = _option(0.5, 0.0, 1.0)
     crouch_below_reach: bool = True
     free_height: bool = False
-    prior_weight: float = PRIOR_WEIGHT
-    reach_rounds: int = 4
-    reach_tolerance: float = 0.005
-    settle_rounds: int = 12
-    hold_weight: float = 0.0
-    turn_weight: float = 0.0
+    prior_weight: float = _option(PRIOR_WEIGHT, 0.0, 10.0)
+    reach_rounds: int = _option(4, 0, 50)
+    reach_tolerance: float = _option(0.005, 0.0, 1.0)
+    settle_rounds: int = _option(12, 0, 100)
+    hold_weight: float = _option(0.0, 0.0, 10.0)
+    turn_weight: float = _option(0.0, 0.0, 10.0)
     keep_trunk: bool = False
+
+
+def options_to_dict(options: PoseOptions) -> dict[str, Any]:
+    """The fields of ``options`` that differ from the defaults, as plain JSON (a scene's
+    ``pose_options``; empty for the defaults)."""
+    default = PoseOptions()
+    return {f.name: getattr(options, f.name) for f in dataclasses.fields(PoseOptions)
+            if getattr(options, f.name) != getattr(default, f.name)}  # fmt: skip
+
+
+def options_from_dict(value: Any, where: str) -> PoseOptions:
+    """:class:`PoseOptions` from a scene's ``pose_options`` object (fields not given keep
+    their defaults). Each field is checked against its type and range; errors are
+    :class:`UserError` naming ``where`` and the field."""
+    if not isinstance(value, dict):
+        raise UserError(f"{where} must be an object (pose option -> value)")
+    fields = {f.name: f for f in dataclasses.fields(PoseOptions)}
+    unknown = sorted(set(value) - set(fields))
+    if unknown:
+        raise UserError(f"{where}: unknown field(s) {', '.join(shown(u) for u in unknown)}; "
+                        f"pose options: {', '.join(fields)}")  # fmt: skip
+    hints = typing.get_type_hints(PoseOptions)
+    out = {}
+    for name, raw in value.items():
+        kind, at = hints[name], f"{where}: field {name!r}"
+        if kind is bool:
+            if not isinstance(raw, bool):
+                raise UserError(f"{at} must be true or false, got {shown(raw)}")
+            out[name] = raw
+            continue
+        lo, hi = fields[name].metadata[RANGE]
+        if kind is int and isinstance(raw, float) and raw.is_integer():
+            raw = int(raw)
+        number = (int,) if kind is int else (int, float)
+        if isinstance(raw, bool) or not isinstance(raw, number) or not math.isfinite(raw) or not lo <= raw <= hi:
+            what = "a whole number" if kind is int else "a number"
+            raise UserError(f"{at} must be {what} in {lo:g}-{hi:g}, got {shown(raw)}")
+        out[name] = kind(raw)
+    return PoseOptions(**out)

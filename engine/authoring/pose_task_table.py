@@ -7,10 +7,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-#: Drag events per drag (mouse moves the solve runs on).
-EVENTS = 20
+from engine.authoring.pose_drag import EVENTS  # noqa: F401  (drag events per drag: the bake's too)
+
 #: Who poses: the pose mode, or plain IK (:mod:`engine.authoring.ik_poser`).
 POSERS = ("pose-mode", "ik")
+#: The rows of each task's one-key scene baked as ``bake`` bakes it
+#: (:func:`engine.authoring.pose_tasks.run_bake`).
+BAKE = "bake"
 #: What a drag's end calls: nothing (the pose window) or ``settle()``.
 RELEASES = ("none", "settle")
 

@@ -13,12 +13,16 @@ standing at the origin, facing -Y), resolved once, so every poser gets the same 
 
 Per task and poser (:func:`run_task`): each goal's error (centimetres, or degrees for a
 turn), the final pose's naturalness (:mod:`engine.authoring.pose_reference`), the
-measures of :func:`engine.authoring.pose_metrics.check_pose`, and how far each ankle
-that no drag moved has slid over the floor from where it stood (centimetres).
+measures of :func:`engine.authoring.pose_metrics.check_pose`, how far each ankle
+that no drag moved has slid over the floor from where it stood, and the lower knee's
+height above the floor (centimetres).
 
 Posers: ``pose-mode`` (:class:`engine.authoring.pose_mode.PoseMode`, with the keyword
 options given to :func:`run_task`) and ``ik`` (:class:`engine.authoring.ik_poser.IKPoser`
-from the same starting pose).
+from the same starting pose). Beside them, :func:`run_bake` bakes each task's one-key
+scene (:data:`TASK_SCENES`, written by :func:`task_scene`: the task's goals as the key's
+targets, as a user would write them) with :func:`engine.authoring.bake.bake` and
+measures its one frame the same way (the ``bake`` rows).
 """
 
 from __future__ import annotations
@@ -28,17 +32,22 @@ import inspect
 import time
 import typing
 from dataclasses import asdict, dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from engine import skeleton as sk
-from engine.authoring.character import yaw_quaternion
+from engine.authoring.character import Pose, yaw_quaternion
+from engine.authoring.document import AuthoringScene, load_authoring
 from engine.authoring.ik_poser import IKPoser
+from engine.authoring.keys import Animation, Key
+from engine.authoring.pose_drag import drag as drag_target
 from engine.authoring.pose_metrics import PoseCheck, check_pose
 from engine.authoring.pose_mode import PoseMode, PoseOptions
 from engine.authoring.pose_reference import ReferenceSet
-from engine.authoring.pose_task_table import EVENTS, POSERS, RELEASES, TASK_NAMES, TASKS, Task
+from engine.authoring.pose_task_table import BAKE, EVENTS, POSERS, RELEASES, TASK_NAMES, TASKS, Task
+from engine.authoring.targets import JointTarget
 from engine.config import parse_typed
 from engine.errors import UserError
 from engine.kinematics import quat_np as QN
@@ -51,6 +60,10 @@ REACH_CM = 2.0
 TURN_DEG = 5.0
 #: Ankles whose horizontal slide from the starting pose is reported (when not dragged).
 FOOT_JOINTS = ("lankle", "rankle")
+#: The knees whose lower height is reported (a squat that kneels puts one near the floor).
+KNEES = ("lknee", "rknee")
+#: The tasks' one-key scenes, ``<task>.json`` (:func:`task_scene`; ``bake`` rows).
+TASK_SCENES = Path(__file__).resolve().parents[2] / "assets" / "scenes" / "pose_tasks"
 
 
 @dataclass
@@ -78,6 +91,7 @@ class TaskResult:
     seconds: float
     feet_moved_cm: dict[str, float] = field(default_factory=dict)
     positions: list[list[float]] = field(default_factory=list)
+    knee_height_cm: float | None = None
 
     @property
     def max_position_error_cm(self) -> float | None:
@@ -114,20 +128,8 @@ def resolve_goals(task: Task, pose, offsets: np.ndarray, heading_deg: float = 0.
 
 def drag(poser, goal: Goal, offsets: np.ndarray, events: int = EVENTS, solve: dict | None = None) -> None:
     """Move ``goal.joint``'s target to the goal in ``events`` steps, solving on each
-    (``offsets (22, 3)``: the poser's skeleton)."""
-    j = goal.joint
-    old = poser.targets.get(j)
-    if goal.rotation is not None:
-        start = fk(poser.pose.local_rot, poser.pose.root_pos, offsets)[1][J[j]]
-        turn = QN.mul(goal.rotation, QN.conjugate(start))  # the whole turn, world frame
-        for k in range(1, events + 1):
-            poser.set_target(j, rotation=QN.mul(np.array(QN.qpow(turn, k / events)), start))
-            poser.solve(**(solve or {}))
-        return
-    start = old.position.copy() if old is not None else poser.pose.positions[J[j]].copy()
-    for k in range(1, events + 1):
-        poser.set_target(j, start + (goal.position - start) * k / events)
-        poser.solve(**(solve or {}))
+    (``offsets (22, 3)``: the poser's skeleton; :func:`engine.authoring.pose_drag.drag`)."""
+    drag_target(poser, goal.joint, offsets, goal.position, goal.rotation, events, solve=solve)
 
 
 def goal_errors(pose, goals: list[Goal], offsets: np.ndarray) -> list[dict]:
@@ -207,25 +209,73 @@ def run_task(task: Task, poser_name: str, vae, reference: ReferenceSet, options:
     if events < 1:
         raise UserError(f"drag events must be at least 1, got {events}")
     init, solve, settle = split_options(options or [])
-    mode = PoseMode(vae, **init)
+    mode, goals, feet = _start(task, vae, init)
     offsets = mode.character.skeleton.offsets
-    goals = resolve_goals(task, mode.pose, offsets, mode.heading)
     poser = mode if poser_name == "pose-mode" else IKPoser(mode.pose, offsets)
-    feet = {j: mode.pose.positions[J[j], :2].copy() for j in FOOT_JOINTS if j not in {d.joint for d in task.drags}}
     t0 = time.perf_counter()
     for g in goals:
         drag(poser, g, offsets, events, solve if poser is mode else None)
         if release == "settle":
             poser.settle(**(settle if poser is mode else {}))
     seconds = time.perf_counter() - t0
-    pose = poser.pose
+    return _measured(task, poser_name, poser.pose, goals, offsets, reference, feet, seconds)
+
+
+def _measured(task: Task, poser_name: str, pose: Pose, goals: list[Goal], offsets: np.ndarray,
+              reference: ReferenceSet, feet: dict[str, np.ndarray], seconds: float) -> TaskResult:  # fmt: skip
+    """The measures of ``pose``, the end of ``task`` (``feet``: each undragged ankle's
+    starting place, ``(2,)`` metres)."""
     errors = goal_errors(pose, goals, offsets)
     reached = all(e["error"] <= (REACH_CM if e["kind"] == "position" else TURN_DEG) for e in errors)
     natural = 100.0 * reference.nearest(pose.positions)
     moved = {j: 100.0 * float(np.linalg.norm(pose.positions[J[j], :2] - xy)) for j, xy in feet.items()}
     return TaskResult(task.name, poser_name, len(task.drags), task.allowed, errors, reached, natural,
                       natural <= reference.spread_summary()["p95_cm"], check_pose(pose.local_rot, pose.root_pos, offsets),
-                      seconds, moved, [[round(float(x), 4) for x in p] for p in pose.positions])  # fmt: skip
+                      seconds, moved, [[round(float(x), 4) for x in p] for p in pose.positions],
+                      100.0 * float(min(pose.positions[J[k], 2] for k in KNEES)))  # fmt: skip
+
+
+def _start(task: Task, vae, init: dict) -> tuple[PoseMode, list[Goal], dict[str, np.ndarray]]:
+    """The starting pose mode, the task's goals and the undragged ankles' places."""
+    mode = PoseMode(vae, **init)
+    goals = resolve_goals(task, mode.pose, mode.character.skeleton.offsets, mode.heading)
+    feet = {j: mode.pose.positions[J[j], :2].copy() for j in FOOT_JOINTS if j not in {d.joint for d in task.drags}}
+    return mode, goals, feet
+
+
+def task_scene(task: Task, vae) -> AuthoringScene:
+    """``task`` as a one-key scene (what :data:`TASK_SCENES` holds): one frame, its goals as
+    the key's targets in drag order (a turn: the joint's rotation goal, its position where
+    the joint stands), the default character and pose options."""
+    mode, goals, _ = _start(task, vae, {})
+    targets = {}
+    for g in goals:
+        here = mode.pose.positions[J[g.joint]]
+        targets[g.joint] = JointTarget(g.joint, here if g.position is None else g.position, g.rotation)
+    return AuthoringScene(animation=Animation(frames=1), keys=[Key(0, targets)])
+
+
+def task_scene_path(task: Task) -> Path:
+    """Where ``task``'s one-key scene is (:data:`TASK_SCENES`)."""
+    return TASK_SCENES / f"{task.name}.json"
+
+
+def run_bake(task: Task, vae, reference: ReferenceSet, options: PoseOptions | None = None) -> TaskResult:
+    """Bake ``task``'s one-key scene (:func:`task_scene_path`, its own pose options, or
+    ``options``) as ``bake`` does and measure the frame against the task's goals (poser
+    ``bake``; the seconds are the bake's)."""
+    from engine.authoring.bake import bake
+
+    scene = load_authoring(task_scene_path(task))
+    if options is not None:
+        scene.pose_options = options
+    mode, goals, feet = _start(task, vae, {"height": scene.height})
+    t0 = time.perf_counter()
+    baked = bake(scene, vae)
+    seconds = time.perf_counter() - t0
+    m = baked.motion
+    pose = Pose(baked.latents[0], m.local_rot[0], m.root_pos[0], m.positions()[0])
+    return _measured(task, BAKE, pose, goals, mode.character.skeleton.offsets, reference, feet, seconds)
 
 
 def select_tasks(names: list[str] | None) -> list[Task]:

@@ -59,6 +59,7 @@ class AuthoringSession:
         self.mode = mode
         self.scene = AuthoringScene(animation=Animation(), height=mode.character.height)
         self.scene.constraints = mode.constraints  # one list: the solves and the saved scene read it
+        self.scene.pose_options = mode.options  # one object: the pose window's solves and the bake read it
         self.frame = 0
         self.baked: Baked | None = None
         self.events = ev.AuthoringEvents()
@@ -350,7 +351,8 @@ class AuthoringSession:
         if not self.scene.keys:
             raise UserError("add at least one key first")
         scene = AuthoringScene(list(self.scene.constraints), self.scene.settings, copy.copy(self.scene.animation),
-                               [copy.deepcopy(k) for k in self.scene.keys], self.scene.height)  # fmt: skip
+                               [copy.deepcopy(k) for k in self.scene.keys], self.scene.height,
+                               pose_options=copy.copy(self.scene.pose_options))  # fmt: skip
         return BakeJob(scene, self.vae, self._generation)
 
     def take_bake(self, job: BakeJob, baked: Baked) -> bool:
@@ -383,6 +385,7 @@ class AuthoringSession:
             self.mode = PoseMode(self.vae, height, options=self.mode.options)
             self.mode.constraints = shared
         m = self.mode
+        m.options = self.scene.pose_options = loaded.pose_options
         m.constraints[:] = list(loaded.constraints)
         self.scene.keys, self.scene.animation, self.scene.settings = loaded.keys, loaded.animation, loaded.settings
         self.scene.height = m.character.height

@@ -137,14 +137,13 @@ def put(mode: PoseMode, scene: AuthoringScene, state: AuthoringState) -> None:
 
 
 def pose_on_key(mode: PoseMode, key: Key) -> None:
-    """Pose ``mode`` as ``key``: its targets and, when it has a latent, its pose, place and
-    facing, with the exact limb steps onto its targets."""
-    mode.targets = copy.deepcopy(key.targets)
+    """Pose ``mode`` as ``key``: when it has a latent, its pose as the bake poses it
+    (:meth:`~engine.authoring.pose_mode.PoseMode.pose_key`); else its targets on the
+    current pose (posing them is a bake's work, too long for a scrub)."""
     if key.latent is not None:
-        mode.heading = key.heading
-        mode.pose = mode.character.decode(key.latent, mode.character.grounded(key.root, key.heading))
-        mode.plant_where_standing()
-        mode.solve(0)
+        mode.pose_key(key)
+    else:
+        mode.targets = copy.deepcopy(key.targets)
 
 
 def pose_between(mode: PoseMode, baked: Baked, keys: list[Key], scheme: str, frame: int) -> None:

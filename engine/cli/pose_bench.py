@@ -17,7 +17,8 @@ def add_options(p: argparse.ArgumentParser) -> None:
     from engine.authoring.pose_task_table import EVENTS, RELEASES, TASK_NAMES
 
     g = p.add_argument_group("pose tasks", "with --pose-tasks: posing tasks on the character, no clip "
-                             "(--method names the posers: pose-mode, ik; default both)")  # fmt: skip
+                             "(--method names the posers: pose-mode, ik, and bake, each task's one-key scene "
+                             "baked as `bake` bakes it; default all three)")  # fmt: skip
     g.add_argument("--pose-tasks", action="store_true", help="run the pose-mode benchmark instead of timing methods")
     g.add_argument("--task", action="append", choices=TASK_NAMES, help="task to run; repeat for several (default: all)")
     g.add_argument("--release", choices=RELEASES, default="none",
@@ -37,7 +38,8 @@ def run(args: argparse.Namespace, default_clip: Path) -> int:
 
     from engine.atomic import write_text
     from engine.authoring.pose_mode import PoseMode
-    from engine.authoring.pose_tasks import POSERS, run_task, select_tasks, split_options
+    from engine.authoring.pose_task_table import BAKE, EVENTS
+    from engine.authoring.pose_tasks import POSERS, run_bake, run_task, select_tasks, split_options
     from engine.models import load_default_models
     from engine.validation import check_output_path
 
@@ -45,21 +47,36 @@ def run(args: argparse.Namespace, default_clip: Path) -> int:
         raise UserError("--pose-tasks poses the character and reads no clip; leave out the file")
     if args.json:
         check_output_path(args.json, "--json")
-    posers = args.method or list(POSERS)
-    unknown = [m for m in posers if m not in POSERS]
+    every = [*POSERS, BAKE]
+    posers = args.method or every
+    unknown = [m for m in posers if m not in every]
     if unknown:
-        raise UserError(f"--pose-tasks: unknown poser(s) {', '.join(unknown)}; posers: {', '.join(POSERS)}")
+        raise UserError(f"--pose-tasks: unknown poser(s) {', '.join(unknown)}; posers: {', '.join(every)}")
     init = split_options(args.pose_set)[0]  # bad options fail before the models load
+    # the bake poses as the pose window does (EVENTS drag events, no settle) with the scene's pose options
+    unlike = [f"--events {args.events}"] * (args.events != EVENTS) + [f"--release {args.release}"] * (
+        args.release != "none") + [f"--set {o}" for o in args.pose_set if not _pose_option(o)]  # fmt: skip
+    if BAKE in posers and unlike:
+        if args.method:
+            raise UserError(f"--pose-tasks: the bake rows pose as `bake` does ({EVENTS} drag events, no settle, "
+                            f"pose options only); {', '.join(unlike)} do not apply to them: leave out "
+                            f"--method {BAKE}")  # fmt: skip
+        posers = [p for p in posers if p != BAKE]
+    left_out = BAKE not in posers and not args.method
     tasks = select_tasks(args.task)
     vae = load_default_models().vae
     offsets = PoseMode(vae, **init).character.skeleton.offsets
     reference = _reference(args, offsets)
     spread = reference.spread_summary()
-    rows = [run_task(t, p, vae, reference, args.pose_set, args.release, args.events) for t in tasks for p in posers]
+    rows = [run_bake(t, vae, reference, init.get("options")) if p == BAKE else
+            run_task(t, p, vae, reference, args.pose_set, args.release, args.events)
+            for t in tasks for p in posers]  # fmt: skip
     machine = {"cpu_count": os.cpu_count(), "torch_threads": torch.get_num_threads(), "platform": platform.platform()}
     options = " ".join(args.pose_set) or "defaults"
     print(f"pose tasks: release {args.release}, {args.events} events per drag, pose mode {options}; "
           f"{machine['cpu_count']} cores, torch {machine['torch_threads']} threads")
+    if left_out:
+        print(f"bake rows left out: they pose as `bake` does ({EVENTS} drag events, no settle, pose options only)")
     print(f"naturalness reference: {reference.description}, {len(reference)} poses; real poses' nearest other "
           f"take: median {spread['median_cm']:.1f} cm, p95 {spread['p95_cm']:.1f} cm")
     print(_table(rows))
@@ -69,6 +86,15 @@ def run(args: argparse.Namespace, default_clip: Path) -> int:
                "tasks": [r.to_dict() for r in rows]}  # fmt: skip
         write_text(args.json, json.dumps(out, indent=1))
     return 0
+
+
+def _pose_option(item: str) -> bool:
+    """Whether ``--set`` ``item`` sets a :class:`PoseOptions` field (what a scene stores)."""
+    import dataclasses
+
+    from engine.authoring.pose_options import PoseOptions
+
+    return item.split("=", 1)[0].strip() in {f.name for f in dataclasses.fields(PoseOptions)}
 
 
 def _reference(args: argparse.Namespace, offsets):
@@ -84,7 +110,7 @@ def _reference(args: argparse.Namespace, offsets):
 
 def _table(rows) -> str:
     head = (f"{'task':<15} {'poser':<9} {'drags':>5} {'err cm':>7} {'turn':>5} {'reach':>5} {'natural':>7} "
-            f"{'spread':>6} {'limits':>6} {'feet':>5} {'balance':>7} {'tilt':>5} {'slide':>5} {'s':>5}")  # fmt: skip
+            f"{'spread':>6} {'limits':>6} {'feet':>5} {'balance':>7} {'tilt':>5} {'slide':>5} {'knee':>5} {'s':>5}")  # fmt: skip
     lines = [head]
     for r in rows:
         c = r.check
@@ -95,11 +121,12 @@ def _table(rows) -> str:
             f"{r.task:<15} {r.poser:<9} {r.drags:>2}/{r.allowed:<2} {_num(err, 7, 1)} {_num(turn, 5, 0)} "
             f"{'yes' if r.reached else 'no':>5} {r.naturalness_cm:>7.1f} {'in' if r.within_spread else 'out':>6} "
             f"{len(c.violations):>6d} {feet:>5} {_num(c.balance_margin_cm, 7, 1)} {c.trunk_tilt_deg:>5.0f} "
-            f"{_num(slide, 5, 0)} {r.seconds:>5.1f}")  # fmt: skip
+            f"{_num(slide, 5, 0)} {_num(r.knee_height_cm, 5, 0)} {r.seconds:>5.1f}")  # fmt: skip
     lines.append("err cm: largest position error; turn: deg; natural: cm to the nearest real pose (spread: within "
                  "the real poses' 95th percentile); limits: knees/elbows hyperextended; feet: L/R down; balance: cm "
                  "inside the support polygon (both feet down); tilt: trunk from vertical, deg; slide: cm an undragged "
-                 "ankle slid; s: seconds of posing")  # fmt: skip
+                 "ankle slid; knee: cm from the floor to the lower knee joint; s: seconds of posing (bake: of the "
+                 "bake); bake: the task's one-key scene (assets/scenes/pose_tasks) baked as `bake` bakes it")  # fmt: skip
     return "\n".join(lines)
 
 

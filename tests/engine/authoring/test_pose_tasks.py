@@ -249,7 +249,24 @@ def test_bench_pose_tasks_refuses_a_clip_an_unknown_poser_and_a_bad_option(tmp_p
     assert "unknown poser" in capsys.readouterr().err
     assert main(["bench", "--pose-tasks", "--set", "nope=1"]) == 2
     assert "no option 'nope'" in capsys.readouterr().err
+    assert main(["bench", "--pose-tasks", "--method", "bake", "--events", "4"]) == 2
+    assert "--events 4" in capsys.readouterr().err
     assert Path(tmp_path).is_dir()
+
+
+@needs_data
+def test_bench_pose_tasks_bakes_the_task_s_scene_and_reports_pose_mode_s_pose(vae, tmp_path, capsys, monkeypatch):
+    from engine.cli.main import main
+
+    monkeypatch.chdir(tmp_path)
+    out = tmp_path / "tasks.json"
+    assert main(["bench", "--pose-tasks", "--task", "squat", "--method", "pose-mode", "--method", "bake",
+                 "--reference-stride", "16", "--json", str(out)]) == 0  # fmt: skip
+    assert "knee" in capsys.readouterr().out
+    mode, baked = json.loads(out.read_text())["tasks"]
+    assert (mode["poser"], baked["poser"]) == ("pose-mode", "bake")
+    assert np.abs(np.subtract(mode["positions"], baked["positions"])).max() < 1e-4
+    assert baked["knee_height_cm"] == pytest.approx(mode["knee_height_cm"]) and baked["knee_height_cm"] > 25
 
 
 @pytest.mark.parametrize("name", ["hand_to_knee", "pick_up"])

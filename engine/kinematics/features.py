@@ -111,7 +111,17 @@ def encoder_input(rot, disp, offsets):
 
     Each dual quaternion is given the sign whose real part has ``w >= 0`` (``q`` and
     ``-q`` are the same transform), so the network never sees both."""
+    return root_space_features(rot, disp, offsets)[1]
+
+
+def root_space_features(rot, disp, offsets):
+    """Root-space joint positions ``(..., J, 3)`` and the encoder input ``(..., J, 8)``
+    of a pose, from one FK pass (what a training batch needs of every augmented pose)."""
     pos, grot = root_space_fk(rot, offsets)
+    return pos, _dual_quaternions(rot, disp, pos, grot)
+
+
+def _dual_quaternions(rot, disp, pos, grot):
     if isinstance(rot, torch.Tensor):
         grot = torch.cat((rot[..., :1, :], grot[..., 1:, :]), dim=-2)
         pos = torch.cat((disp[..., None, :], pos[..., 1:, :]), dim=-2)

@@ -20,7 +20,7 @@ from torch import nn
 from tqdm import tqdm
 
 from engine.kinematics import quaternion as Q
-from engine.kinematics.features import encoder_input, root_space_fk
+from engine.kinematics.features import root_space_features, root_space_fk
 from engine.models.loading import load_checkpoint, load_vae
 from engine.models.vae import PoseVAE, VAEConfig, pose_distance
 from engine.training.common import (CurveLog, Distributed, config_dict, on_device, save_checkpoint, seed_everything,
@@ -103,24 +103,36 @@ LIMBS: tuple[tuple[int, ...], ...] = ((1, 2, 3, 4), (5, 6, 7, 8), (14, 15, 16, 1
 
 
 def batch_of(data: PoseData, idx: torch.Tensor, limb_mix: float = 0.0,
-             generator: torch.Generator | None = None, pairs: torch.Tensor | None = None) -> dict[str, torch.Tensor]:
+             generator: torch.Generator | None = None, pairs: torch.Tensor | None = None,
+             bone_scale: float = 0.0) -> dict[str, torch.Tensor]:  # fmt: skip
     """Training batch of frames ``idx`` and their successors.
 
     With ``limb_mix > 0`` each pose, with that probability, takes one limb's local
     rotations from another frame drawn from ``pairs`` (and its successor from that frame's
-    successor, so the pair stays a motion); encoder input and positions are recomputed
-    by FK."""
+    successor, so the pair stays a motion). With ``bone_scale > 0`` every pose's bones
+    are then scaled as :func:`scale_bones` does. The encoder input and target positions
+    of an augmented batch are recomputed once, by one FK pass, after both."""
     nxt = idx + 1
     b = {
         "dq": data.dq[idx], "rot": data.rot[idx], "disp": data.disp[idx], "pos": data.pos[idx],
         "offsets": data.offsets[idx], "rot_next": data.rot[nxt], "disp_next": data.disp[nxt],
     }  # fmt: skip
-    if limb_mix <= 0 or pairs is None:
-        return b
-    n = idx.numel()
+    mixed = limb_mix > 0 and pairs is not None and _mix_limbs(b, data, limb_mix, generator, pairs)
+    if bone_scale > 0:
+        b["offsets"] = b["offsets"] * _bone_factors(b["offsets"], bone_scale, generator)[..., None]
+    if mixed or bone_scale > 0:
+        b["pos"], b["dq"] = root_space_features(b["rot"], b["disp"], b["offsets"])
+    return b
+
+
+def _mix_limbs(b: dict[str, torch.Tensor], data: PoseData, limb_mix: float, generator: torch.Generator | None,
+               pairs: torch.Tensor) -> bool:  # fmt: skip
+    """Swap one limb's rotations of a ``limb_mix`` share of the poses of ``b`` (in place);
+    False when no pose was drawn."""
+    n = b["rot"].shape[0]
     chosen = torch.rand(n, generator=generator) < limb_mix
     if not bool(chosen.any()):
-        return b
+        return False
     donor = pairs[torch.randint(len(pairs), (n,), generator=generator)]
     limb = torch.randint(len(LIMBS), (n,), generator=generator)
     mask = torch.zeros(n, data.rot.shape[1], dtype=torch.bool)
@@ -128,29 +140,30 @@ def batch_of(data: PoseData, idx: torch.Tensor, limb_mix: float = 0.0,
         rows = chosen & (limb == li)
         mask[rows.nonzero().squeeze(1)[:, None], torch.tensor(joints)] = True
     m = mask[..., None]
-    rot = torch.where(m, data.rot[donor], b["rot"])
+    b["rot"] = torch.where(m, data.rot[donor], b["rot"])
     b["rot_next"] = torch.where(m, data.rot[donor + 1], b["rot_next"])
-    b["rot"] = rot
-    b["pos"], _ = root_space_fk(rot, b["offsets"])
-    b["dq"] = encoder_input(rot, b["disp"], b["offsets"])
-    return b
+    return True
+
+
+def _bone_factors(offsets: torch.Tensor, spread: float, generator: torch.Generator | None) -> torch.Tensor:
+    """One length factor per pose and bone ``(B, J)`` in ``1 +- spread``, drawn once per
+    left/right pair (:data:`engine.skeleton.MIRROR_INDEX`)."""
+    from engine import skeleton as sk
+
+    n, j = offsets.shape[:2]
+    pair = torch.minimum(torch.arange(j), torch.tensor(sk.MIRROR_INDEX))  # the lower index of a pair draws
+    draw = 1.0 + spread * (2.0 * torch.rand(n, j, generator=generator, dtype=offsets.dtype) - 1.0)
+    return draw[:, pair]
 
 
 def scale_bones(b: dict[str, torch.Tensor], spread: float, generator: torch.Generator | None = None,
                 ) -> dict[str, torch.Tensor]:  # fmt: skip
     """The batch ``b`` with every pose's bone offsets (B, 22, 3) scaled by one factor per
-    bone in ``1 +- spread`` (left and right copies alike; :data:`engine.skeleton.MIRROR_INDEX`),
-    and the encoder input and target positions recomputed for the new proportions."""
-    from engine import skeleton as sk
-
-    n, j = b["offsets"].shape[:2]
-    pair = torch.minimum(torch.arange(j), torch.tensor(sk.MIRROR_INDEX))  # the lower index of a pair draws
-    draw = 1.0 + spread * (2.0 * torch.rand(n, j, generator=generator, dtype=b["offsets"].dtype) - 1.0)
-    factor = draw[:, pair]
+    bone in ``1 +- spread`` (left and right copies alike), and the encoder input and
+    target positions recomputed for the new proportions."""
     out = dict(b)
-    out["offsets"] = b["offsets"] * factor[..., None]
-    out["pos"], _ = root_space_fk(b["rot"], out["offsets"])
-    out["dq"] = encoder_input(b["rot"], b["disp"], out["offsets"])
+    out["offsets"] = b["offsets"] * _bone_factors(b["offsets"], spread, generator)[..., None]
+    out["pos"], out["dq"] = root_space_features(b["rot"], b["disp"], out["offsets"])
     return out
 
 
@@ -227,7 +240,8 @@ def train_vae(data_dir: Path, out_dir: Path, cfg: VAETrainConfig, resume: bool =
     objective: nn.Module = VAEObjective(vae, cfg)
     if ddp.world > 1:
         objective = nn.parallel.DistributedDataParallel(objective)
-    opt = torch.optim.AdamW(vae.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
+    # the fused kernel: one pass over all parameters instead of a dozen tensor ops per tensor
+    opt = torch.optim.AdamW(vae.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay, fused=True)
     pairs = torch.nonzero(train.has_next).squeeze(1)
     steps_per_epoch = max(1, len(pairs) // (cfg.batch_size * ddp.world))
     total_steps = steps_per_epoch * cfg.epochs
@@ -249,7 +263,7 @@ def train_vae(data_dir: Path, out_dir: Path, cfg: VAETrainConfig, resume: bool =
         vae.train()
         gen = torch.Generator().manual_seed(cfg.seed * 1000 + epoch)
         perm = pairs[torch.randperm(len(pairs), generator=gen)]
-        sums: dict[str, float] = {}
+        sums_t: torch.Tensor | None = None
         bar = tqdm(range(steps_per_epoch), desc=f"vae epoch {epoch + 1}/{cfg.epochs}", disable=not (progress and ddp.main),
                    leave=False)  # fmt: skip
         for step in bar:
@@ -258,18 +272,18 @@ def train_vae(data_dir: Path, out_dir: Path, cfg: VAETrainConfig, resume: bool =
             minutes = minutes_before + (time.monotonic() - t0) / 60.0
             for group in opt.param_groups:
                 group["lr"] = cosine_lr(cfg, global_step / total_steps, minutes)
-            batch = batch_of(train, idx, cfg.limb_mix, gen, pairs)
-            if cfg.bone_scale > 0:
-                batch = scale_bones(batch, cfg.bone_scale, gen)
+            batch = batch_of(train, idx, cfg.limb_mix, gen, pairs, cfg.bone_scale)
             losses = objective(on_device(batch, ddp.device))
             opt.zero_grad(set_to_none=True)
             losses["total"].backward()
             opt.step()
             global_step += 1
-            for k, v in losses.items():
-                sums[k] = sums.get(k, 0.0) + float(v.detach())
+            # summed on the device: one host sync per progress update, not one per loss and step
+            terms = torch.stack([v.detach() for v in losses.values()])
+            sums_t = terms if sums_t is None else sums_t + terms
             if step % 10 == 0:
-                bar.set_postfix({k: f"{v / (step + 1):.2e}" for k, v in sums.items()})
+                bar.set_postfix({k: f"{v / (step + 1):.2e}" for k, v in zip(losses, sums_t.tolist())})
+        sums = dict(zip(losses, sums_t.tolist()))
         row = {"epoch": epoch + 1, **{k: ddp.mean(v / steps_per_epoch) for k, v in sums.items()}}
         minutes = minutes_before + (time.monotonic() - t0) / 60.0
         if ddp.main:

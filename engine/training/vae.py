@@ -60,6 +60,10 @@ class VAETrainConfig:
     #: Stop after this many epochs in this invocation (0: no limit); resume continues the
     #: same schedule, so a run can be trained in chunks.
     stop_after: int = 0
+    #: Stop when the validation position error has not improved for this many epochs
+    #: (0: never); the run's final ``vae.pt`` is then the best epoch's weights. With
+    #: ``minutes = 0`` and many ``epochs`` this trains to convergence, not to a budget.
+    patience: int = 0
     #: Start from the weights of this VAE file instead of at random (fine-tuning, e.g.
     #: after a retargeting change); its architecture must match the settings'. The
     #: prepared data's normalisation statistics replace the file's.
@@ -245,7 +249,7 @@ def train_vae(data_dir: Path, out_dir: Path, cfg: VAETrainConfig, resume: bool =
     pairs = torch.nonzero(train.has_next).squeeze(1)
     steps_per_epoch = max(1, len(pairs) // (cfg.batch_size * ddp.world))
     total_steps = steps_per_epoch * cfg.epochs
-    start_epoch, minutes_before, best, global_step = 0, 0.0, float("inf"), 0
+    start_epoch, minutes_before, best, global_step, best_epoch, stalled = 0, 0.0, float("inf"), 0, 0, False
     log = CurveLog(out_dir)
     last = out_dir / "last.pt"
     if resume and last.is_file():
@@ -253,6 +257,7 @@ def train_vae(data_dir: Path, out_dir: Path, cfg: VAETrainConfig, resume: bool =
         vae.load_state_dict(ck["state_dict"])
         opt.load_state_dict(ck["optimizer"])
         start_epoch, minutes_before, best = ck["epoch"], ck["minutes"], ck["best"]
+        best_epoch = ck.get("best_epoch", start_epoch)
         global_step = ck["step"]
         log = CurveLog(out_dir, ck["curve"])
         torch.set_rng_state(ck["rng"])
@@ -295,13 +300,20 @@ def train_vae(data_dir: Path, out_dir: Path, cfg: VAETrainConfig, resume: bool =
             meta.update(epochs=epoch + 1, minutes=round(minutes, 2), val_pos_cm=row["val_pos_cm"],
                         val_rot_deg=row["val_rot_deg"])  # fmt: skip
             if row["val_pos_cm"] < best:
-                best = row["val_pos_cm"]
+                best, best_epoch = row["val_pos_cm"], epoch + 1
+                meta["best_epoch"] = best_epoch
                 save_checkpoint(out_dir / "best.pt", weights_payload(vae, cfg, dict(meta)))
             save_checkpoint(last, {
                 "state_dict": vae.state_dict(), "optimizer": opt.state_dict(), "step": global_step,
-                "epoch": epoch + 1, "minutes": minutes, "best": best, "curve": log.rows, "rng": torch.get_rng_state(),
+                "epoch": epoch + 1, "minutes": minutes, "best": best, "best_epoch": best_epoch, "curve": log.rows,
+                "rng": torch.get_rng_state(),
             })  # fmt: skip
         ddp.barrier()
+        if cfg.patience and epoch + 1 - best_epoch >= cfg.patience:
+            stalled = True
+            if ddp.main and progress:
+                tqdm.write(f"validation has not improved for {cfg.patience} epochs (best: epoch {best_epoch}): stopping")
+            break
         if cfg.stop_after and epoch + 1 - start_epoch >= cfg.stop_after and epoch + 1 < cfg.epochs:
             return meta
         if cfg.minutes and minutes >= cfg.minutes:
@@ -312,6 +324,9 @@ def train_vae(data_dir: Path, out_dir: Path, cfg: VAETrainConfig, resume: bool =
         (out_dir / f"weights_rank{ddp.rank}.sha256").write_text(state_hash(vae) + "\n")
     if ddp.main:
         meta["finished"] = True
+        if stalled:  # the final file is the best epoch's weights, with the whole run's record
+            meta["stopped"] = f"no improvement for {cfg.patience} epochs"
+            vae.load_state_dict(load_vae(out_dir / "best.pt")[0].state_dict())
         save_checkpoint(out_dir / "vae.pt", weights_payload(vae, cfg, meta))
     ddp.close()
     return meta

@@ -85,6 +85,18 @@ def test_resume_continues_exactly(tiny_data, run_a, tmp_path):
     assert _same(run_a[0] / "vae.pt", tmp_path / "r/vae.pt"), "stop + resume must equal the straight run"
 
 
+def test_patience_stops_a_run_whose_validation_stalls(tiny_data, run_a, tmp_path):
+    """With nothing learnt (lr 0) validation never improves on epoch 1: ``patience=2``
+    ends the run after epoch 3 of 10, and the final file is the best epoch's."""
+    cfg = _cfg(init=str(run_a[0] / "vae.pt"), epochs=10, seed=5, lr=0.0, lr_final=0.0, patience=2)
+    meta = train_vae(tiny_data, tmp_path / "p", cfg, progress=False)
+    assert meta["epochs"] == 3 and meta["best_epoch"] == 1 and "2 epochs" in meta["stopped"]
+    assert (tmp_path / "p/losses.csv").read_text().count("\n") == 4
+    assert _same(tmp_path / "p/best.pt", tmp_path / "p/vae.pt")
+    straight = train_vae(tiny_data, tmp_path / "q", _cfg(epochs=2, seed=3, patience=5), progress=False)
+    assert straight["epochs"] == 2 and "stopped" not in straight
+
+
 def test_init_starts_from_a_vae_file_and_checks_its_architecture(tiny_data, run_a, tmp_path):
     frozen = dict(epochs=1, seed=5, lr=0.0, lr_final=0.0, weight_decay=0.0)
     train_vae(tiny_data, tmp_path / "i", _cfg(init=str(run_a[0] / "vae.pt"), **frozen), progress=False)

@@ -187,6 +187,7 @@ def _recover_studio(window: StudioShell, scene: dict[str, Any], edited: Motion |
     if clip and (session.path is None or Path(clip) != session.path):
         if not window.files.open_path(str(clip), window.files.rig_map_of(clip), ask=False):
             raise UserError(f"{where}: cannot open its clip {clip}")
+    session.pause()  # the recovered frame stays on screen (gui starts playing the clip)
     stack = window.undo.stack
     stack.beginMacro("Recover last session")  # one undo step puts back the session as started
     try:

@@ -199,9 +199,15 @@ def _locked(path: Path) -> bool:
 
 def left_sessions(folder: str | Path) -> list[LeftSession]:
     """Sessions in ``folder`` whose program no longer runs and that hold a document,
-    newest first (see the module doc)."""
+    newest first (see the module doc). The lock of such a program that had nothing
+    unsaved is removed on the way."""
     folder = Path(folder)
     found: dict[str, LeftSession] = {}
+    if fcntl is not None and folder.is_dir():
+        for lock in folder.glob(f"{_PREFIX}*.lock"):
+            ident = lock.name[len(_PREFIX):-len(".lock")]
+            if not any(folder.glob(f"{_PREFIX}{ident}-*")) and not _locked(lock):
+                lock.unlink(missing_ok=True)
     for path in folder.glob(f"{_PREFIX}*.json") if folder.is_dir() else ():
         stem = path.name[len(_PREFIX):-len(".json")]
         ident, _, doc = stem.rpartition("-")

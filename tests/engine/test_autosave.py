@@ -73,3 +73,11 @@ def test_a_malformed_autosave_names_the_file_and_field(tmp_path):
     bad.write_bytes(b"not a zip")
     with pytest.raises(UserError, match=f"{bad}: cannot read the autosaved clip"):
         load_clip(bad)
+
+
+def test_the_lock_of_a_dead_program_with_nothing_unsaved_is_cleared(tmp_path):
+    a, b = AutosaveSession(tmp_path), AutosaveSession(tmp_path)
+    a.abandon()  # died with no document
+    assert left_sessions(tmp_path) == []
+    assert [p.name for p in tmp_path.iterdir()] == [f"autosave-{b.id}.lock"]  # the running one's stays
+    b.close()

@@ -13,7 +13,6 @@ import sys
 
 import numpy as np
 import pytest
-from PyQt6.QtWidgets import QMessageBox
 
 from engine import skeleton as sk
 from engine.autosave import AutosaveSession, left_sessions

@@ -58,10 +58,18 @@ def open_pose_window(window: StudioShell, height: float, from_clip: bool) -> Pos
     session = window.session
     clip = session.motion if from_clip else None
     pose = PoseWindow(AuthoringSession.new(height, clip, session.frame))
+    show_pose_window(window, pose)
+    return pose
+
+
+def show_pose_window(window: StudioShell, pose: PoseWindow) -> None:
+    """Show ``pose`` over ``window``: kept on ``window.pose_windows``, autosaved with the
+    studio (:mod:`app.autosave`) when the studio autosaves."""
     window.pose_windows = [p for p in window.pose_windows if p.isVisible()] + [pose]
+    if window.autosave is not None:
+        window.autosave.watch_pose(pose)
     pose.resize(1200, 800)
     pose.show()
-    return pose
 
 
 def new_pose(window: StudioShell) -> None:

@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from app.engine_watch import EngineWatch
 from app.shell import StudioShell
 from engine.startup_trace import mark
 
@@ -59,7 +60,7 @@ class DrawScheduler:
         self._rate_draws, self._draw_rate, self._rate_t0 = 0, 0.0, time.monotonic()
         self._next_view_at = 0.0  # perf_counter() time before which the view rests
         self._status_text: dict[str, str] = {}
-        self._failure = ""  # the engine process's failure, once shown
+        self.engine_watch = EngineWatch(window)
         w = window
         self.panels = [
             # while playing: a plot's repaint (Qt paints it after the update) costs
@@ -83,11 +84,7 @@ class DrawScheduler:
         now = time.monotonic()
         if now - self._rate_t0 >= 1.0:
             self._draw_rate, self._rate_draws, self._rate_t0 = self._rate_draws / (now - self._rate_t0), 0, now
-        engine = self.w.session.engine
-        failure = engine.failure if engine is not None else ""
-        if failure and failure != self._failure:
-            self._failure = failure
-            self.w.show_error("The engine stopped", failure)
+        self.engine_watch.check()  # a dead solver process: restarted, or why not
         snap = self.w.session.latest
         if snap is None:
             return

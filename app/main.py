@@ -11,9 +11,11 @@ from typing import Any
 from PyQt6.QtCore import QTimer
 from PyQt6.QtWidgets import QApplication
 
-from app.crash_report import CrashLog, left_reports, offer
+from app import autosave
+from app.crash_report import CrashLog, left_reports, offer, state_folder
 from app.main_window import MainWindow
 from app.measure import Measurement
+from engine.autosave import AutosaveSession, left_sessions
 from engine.errors import UserError
 from engine.startup_trace import mark
 
@@ -75,6 +77,19 @@ def apply_scene_file(window: MainWindow, scene_path: str, clip_given: bool) -> N
         raise UserError(f"{scene_path}: {exc}") from exc
     except UserError as exc:
         raise UserError(str(exc) if scene_path in str(exc) else f"{scene_path}: {exc}") from exc
+
+
+def start_autosave(window: MainWindow, folder: Path | None = None) -> AutosaveSession | None:
+    """Autosave ``window`` (and its pose windows) into ``folder`` (default: the state
+    folder, beside the crash logs: :mod:`app.autosave`); None, said in the status bar,
+    when the folder cannot be written."""
+    try:
+        files = AutosaveSession(folder or state_folder())
+    except UserError as exc:
+        window.statusBar().showMessage(f"No autosave: {exc}", 15000)
+        return None
+    window.autosave = autosave.StudioAutosave(window, files)
+    return files
 
 
 def start_playing(window: MainWindow) -> None:
@@ -146,9 +161,16 @@ def _run(app: QApplication, path: str | None, method: str, sensors: str | None, 
     if measure is not None:
         return _measure(app, window, measure, measure_json)
     if screenshot is None:
+        files = start_autosave(window)
+        left = left_sessions(files.folder) if files is not None else []
         start_playing(window)
         QTimer.singleShot(0, lambda: setattr(window, "crash_box", offer(window, reports)))
-        return app.exec()
+        QTimer.singleShot(0, lambda: setattr(window, "recovery_box", autosave.offer(window, left)))
+        try:
+            return app.exec()
+        finally:
+            if files is not None:
+                files.close()  # a clean quit: nothing to recover next time
     status = {"code": 1}
     start = window.session.frame
     stepped = {"to": start}

@@ -75,6 +75,7 @@ class MainWindow(QMainWindow):
         self.range_jobs = None  # a JobRunner made on the first re-solve (app.range_actions)
         self.range_dialog = None  # the last Re-solve range dialog (tests answer it)
         self.pose_windows: list[QMainWindow] = []  # File ▸ New pose (app.authoring_actions)
+        self.autosave: Any = None  # an app.autosave.StudioAutosave when `gui` autosaves
         self._build_widgets()
         self.busy = BusyNotice(self.viewport, self.statusBar())
         self.busy.begin(method, -1, "Starting")
@@ -341,6 +342,8 @@ class MainWindow(QMainWindow):
         if not clip_saving.confirm_discard(self, "quitting"):
             event.ignore()
             return
+        if self.autosave is not None:  # closed on purpose: saved, or discarded when asked
+            self.autosave.studio_closed()
         self.timer.stop()
         QApplication.instance().removeEventFilter(self.camera_keys)
         self.settings.setValue("geometry", self.saveGeometry())

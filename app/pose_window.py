@@ -60,6 +60,7 @@ class PoseWindow(QMainWindow):
         self.session = session
         self.undo: History = session.history
         self.jobs = JobRunner(self)
+        self.autosave: Any = None  # an app.autosave.DocumentAutosave when the studio autosaves
         self.viewport = Viewport(self)
         self.viewport.ground_truth.update(None)
         self.setCentralWidget(self.viewport)
@@ -317,6 +318,8 @@ class PoseWindow(QMainWindow):
         if not self.files.confirm_discard("closing"):
             event.ignore()
             return
+        if self.autosave is not None:  # closed on purpose: saved, or discarded when asked
+            self.autosave.discard()
         self.jobs.shutdown()
         self.playback.timer.stop()
         for signal, slot in self._subscriptions:

@@ -109,6 +109,8 @@ class StudioShell(Protocol):
         The last Re-solve range dialog shown (tests answer it).
     pose_windows : list of QMainWindow
         The pose windows opened from File ▸ New pose (:mod:`app.authoring_actions`).
+    autosave : StudioAutosave or None
+        The autosave of the window and its pose windows (:mod:`app.autosave`), when on.
     """
 
     session: Session
@@ -134,6 +136,7 @@ class StudioShell(Protocol):
     range_jobs: JobRunner | None
     range_dialog: QDialog | None
     pose_windows: list[QMainWindow]
+    autosave: Any
 
     def show_error(self, title: str, message: str) -> None: ...
 

@@ -39,6 +39,8 @@ def main() -> int:
     p.add_argument("--presets", nargs="+", default=["6", "4", "3-head-hands"])
     p.add_argument("--max-frames", type=int, default=200)
     p.add_argument("--json", type=Path)
+    p.add_argument("--mocap", type=Path, default=Path(__file__).resolve().parent.parent.parent / "shared" / "data" / "mocap",
+                   help="folder holding the validation files (default: ../shared/data/mocap)")  # fmt: skip
     args = p.parse_args()
     from engine.authoring.pose_reference import validation_files
     from engine.methods import get_method
@@ -47,7 +49,7 @@ def main() -> int:
 
     probe = LatentProbe.shipped()
     method = get_method("dragposer")
-    files = validation_files()
+    files = validation_files(args.mocap)
     motions = [load_motion(f).slice(0, args.max_frames) for f in files]
     out: dict = {"max_frames": args.max_frames, "files": [str(f) for f in files], "presets": {}}
     print("| preset | frames | Pos cm | r pooled | rho pooled | r median per file | flagged | Pos cm, top 10 % nearest / rest |")

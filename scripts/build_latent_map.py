@@ -8,6 +8,7 @@ is the ``--quantile`` of their distance to the nearest bank latent and of their 
 
     PYTHONPATH=. python scripts/build_latent_map.py --out assets/models/latent_map.npz
         [--bank assets/models/pose_bank.npz] [--vae assets/models/vae.pt] [--stride 4] [--quantile 0.99]
+        [--mocap ../shared/data/mocap]
 
 Prints the explained variance, the thresholds and the time taken.
 """
@@ -50,6 +51,8 @@ def main() -> int:
     p.add_argument("--bank", type=Path, default=DEFAULT_BANK)
     p.add_argument("--vae", type=Path, default=Path(__file__).resolve().parent.parent / "assets" / "models" / "vae.pt")
     p.add_argument("--stride", type=int, default=4, help="every N-th validation frame (default 4)")
+    p.add_argument("--mocap", type=Path, default=Path(__file__).resolve().parent.parent.parent / "shared" / "data" / "mocap",
+                   help="folder holding the validation files (default: ../shared/data/mocap)")  # fmt: skip
     p.add_argument("--quantile", type=float, default=0.99, help="threshold quantile over unseen poses (default 0.99)")
     args = p.parse_args()
     t0 = time.perf_counter()
@@ -60,7 +63,7 @@ def main() -> int:
     bank = bank_latents(args.bank)
     m = fit_map(bank, vae_sha256=file_sha256(args.vae))
     vae, _ = load_vae(args.vae)
-    unseen = np.concatenate([encode_motion(vae, load_motion(f))[:: args.stride] for f in validation_files()])
+    unseen = np.concatenate([encode_motion(vae, load_motion(f))[:: args.stride] for f in validation_files(args.mocap)])
     nearest, _ = NearestLatents(bank).query(unseen)
     norms = np.linalg.norm(unseen, axis=1)
     m = with_thresholds(m, np.quantile(nearest, args.quantile), np.quantile(norms, args.quantile))

@@ -3,8 +3,8 @@
 One curve per method on screen: the selected method (the reconstruction's colour) and
 every ghost method (its ghost colour), each the mean joint distance in centimetres
 between that method's pose and the loaded clip's pose on the frame shown. Frames the
-reader skipped leave gaps; a jump back in time (seek, loop, new clip or method) starts
-the curves again. The legend beside the plot lists the methods with their current
+reader skipped leave gaps; a jump (seek back or far ahead, loop, new clip or method)
+starts the curves again, as it starts the engine's history again. The legend beside the plot lists the methods with their current
 error.
 """
 
@@ -55,6 +55,7 @@ class MethodErrorPlot(QWidget):
         self.curves: dict[str, pg.PlotDataItem] = {}
         self.data: dict[str, dict[int, float]] = {}
         self._seq, self._last_frame, self._recorded = -1, -1, -1
+        self._run = 0  # the engine's history_run the curves belong to
 
     def colour(self, name: str, index: int, main: bool) -> str:
         return style.RECONSTRUCTION if main else style.ghost_color(name, index)
@@ -76,8 +77,11 @@ class MethodErrorPlot(QWidget):
         if snap.seq == self._recorded:
             return errors
         self._recorded = snap.seq
-        if snap.frame < self._last_frame:
+        # the frame before a jump may never have been drawn (the window draws only the
+        # newest snapshot), so the engine's count of history restarts decides
+        if snap.frame < self._last_frame or snap.history_run != self._run:
             self.clear()
+            self._run = snap.history_run
         self._last_frame = snap.frame
         for name, err in errors.items():
             series = self.data.setdefault(name, {})

@@ -13,6 +13,11 @@ over the reference poses, of each one's distance to the nearest pose of *another
 (its own take, its mirror image and the take's copies on other rigs excluded): how far a
 real pose typically is from the rest of the data. A pose whose nearest-neighbour distance
 is below the spread's 95th percentile is *within the spread* of real poses.
+
+The validation files' poses ship with the package (:data:`SHIPPED`, local rotations of
+every :data:`STRIDE`-th frame, built by ``scripts/build_pose_reference.py``), so the
+benchmark needs no motion data beside the installation; a folder holding the files
+themselves can be given instead (:func:`validation_files`).
 """
 
 from __future__ import annotations
@@ -28,13 +33,15 @@ from engine.errors import UserError
 from engine.kinematics import quat_np as QN
 from engine.kinematics.fk import fk
 
-#: The 9 validation files of every release (assets/models/README.md), under the shared mocap folder.
+#: The 9 validation files of every release (assets/models/README.md), relative to a mocap folder.
 VALIDATION_FILES = ("cmu_daz/indian/14.bvh", "cmu_daz/salsa/07.bvh", "cmu_iclone/002_01.bvh", "cmu_iclone/002_09.bvh",
                     "cmu_iclone/005_05.bvh", "cmu_iclone/005_13.bvh", "cmu_iclone/006_02.bvh",
                     "cmu_iclone/006_10.bvh", "cmu_iclone/007_05.bvh")  # fmt: skip
-MOCAP = Path(__file__).resolve().parents[3] / "shared" / "data" / "mocap"
 #: Every 4th frame (15 per second at 60 fps): neighbouring frames add little.
 STRIDE = 4
+#: The validation files' local rotations at :data:`STRIDE` (scripts/build_pose_reference.py).
+SHIPPED = Path(__file__).resolve().parents[2] / "assets" / "reference" / "validation_poses.npz"
+_SHIPPED_FIELDS = ("local_rot", "take", "names", "stride")
 #: Query rows per distance block (memory: rows x reference poses x 4 bytes per joint).
 _BLOCK = 256
 
@@ -131,13 +138,39 @@ class ReferenceSet:
         return {"median_cm": float(np.median(s)), "p95_cm": float(np.percentile(s, 95))}
 
 
-def validation_files(mocap: Path = MOCAP) -> list[Path]:
-    """The 9 validation files; a clear error when the shared data is absent."""
-    paths = [mocap / f for f in VALIDATION_FILES]
+def validation_files(mocap: Path) -> list[Path]:
+    """The 9 validation files under the mocap folder ``mocap``; a clear error naming the
+    missing ones otherwise."""
+    paths = [Path(mocap) / f for f in VALIDATION_FILES]
     missing = [str(p) for p in paths if not p.is_file()]
     if missing:
-        raise UserError(f"validation file(s) not found: {', '.join(missing)} (the shared data, ../shared/data/mocap)")
+        raise UserError(f"validation file(s) not found: {', '.join(missing)} "
+                        f"(give the mocap folder that holds {VALIDATION_FILES[0]} and the others)")  # fmt: skip
     return paths
+
+
+def load_shipped(offsets: np.ndarray, stride: int = STRIDE, path: Path = SHIPPED) -> ReferenceSet:
+    """The shipped validation poses (:data:`SHIPPED`), laid out on ``offsets (22, 3)``:
+    the same set :func:`load_files` makes of the 9 files at ``stride``, which must be a
+    multiple of the stored :data:`STRIDE`."""
+    try:
+        with np.load(Path(path), allow_pickle=False) as d:
+            missing = [f for f in _SHIPPED_FIELDS if f not in d.files]
+            if missing:
+                raise UserError(f"{path}: not a reference pose file (no field {missing[0]!r})")
+            data = {f: d[f] for f in _SHIPPED_FIELDS}
+    except (OSError, ValueError) as exc:
+        raise UserError(f"{path}: not a reference pose file ({exc})") from None
+    stored = int(data["stride"])
+    if stride < 1 or stride % stored:
+        raise UserError(f"--reference-stride must be a multiple of {stored} with the shipped reference poses "
+                        f"(got {stride}); give --reference DIR for any other stride")  # fmt: skip
+    rot, take, names = data["local_rot"].astype(np.float64), data["take"], [str(n) for n in data["names"]]
+    if rot.ndim != 3 or rot.shape[1:] != (sk.NUM_JOINTS, 4) or take.shape != rot.shape[:1]:
+        raise UserError(f"{path}: local_rot must be (N, {sk.NUM_JOINTS}, 4) with one take per row")
+    clips = [(name, rot[take == i][:: stride // stored]) for i, name in enumerate(names)]
+    return ReferenceSet.from_rotations(clips, offsets, 1, True,
+                                       f"{len(names)} validation files (shipped), every {stride}th frame, mirrored")
 
 
 def load_files(paths: list[Path], offsets: np.ndarray, stride: int = STRIDE) -> ReferenceSet:

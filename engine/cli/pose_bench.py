@@ -26,10 +26,15 @@ def add_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--events", type=int, default=EVENTS, help=f"drag events per drag (default: {EVENTS})")
     g.add_argument("--set", dest="pose_set", action="append", default=[], metavar="NAME=VALUE",
                    help="pose-mode option: a PoseMode keyword, or solve.NAME / settle.NAME for its solves")
-    g.add_argument("--reference-data", type=Path, metavar="PREPARED",
-                   help="naturalness against the val split of this prepared folder (default: ./prepared when it "
-                   "has a manifest, else the 9 validation files of ../shared/data/mocap)")  # fmt: skip
-    g.add_argument("--reference-stride", type=int, default=4, help="every Nth reference frame (default: 4)")
+    ref = g.add_mutually_exclusive_group()
+    ref.add_argument("--reference", type=Path, metavar="DIR",
+                     help="naturalness against the 9 validation files read from this mocap folder (e.g. "
+                     "../shared/data/mocap) instead of the poses shipped from them")  # fmt: skip
+    ref.add_argument("--reference-data", type=Path, metavar="PREPARED",
+                     help="naturalness against the val split of this prepared folder (default: ./prepared when it "
+                     "has a manifest, else the validation files' poses shipped in assets/reference/)")  # fmt: skip
+    g.add_argument("--reference-stride", type=int, default=4,
+                   help="every Nth reference frame (default: 4; a multiple of 4 with the shipped poses)")
 
 
 def run(args: argparse.Namespace, default_clip: Path) -> int:
@@ -100,12 +105,21 @@ def _pose_option(item: str) -> bool:
 def _reference(args: argparse.Namespace, offsets):
     from engine.authoring import pose_reference as R
 
+    if args.reference is not None:
+        if not Path(args.reference).is_dir():
+            raise UserError(f"--reference {args.reference}: not a folder (give the mocap folder that holds "
+                            f"{R.VALIDATION_FILES[0]} and the other validation files)")  # fmt: skip
+        try:
+            files = R.validation_files(args.reference)
+        except UserError as exc:
+            raise UserError(f"--reference {args.reference}: {exc}") from None
+        return R.load_files(files, offsets, args.reference_stride)
     data = args.reference_data
     if data is None and (Path("prepared") / "manifest.json").is_file():
         data = Path("prepared")
     if data is not None:
         return R.load_prepared(data, offsets, args.reference_stride)
-    return R.load_files(R.validation_files(), offsets, args.reference_stride)
+    return R.load_shipped(offsets, args.reference_stride)
 
 
 def _table(rows) -> str:

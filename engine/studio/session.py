@@ -125,6 +125,22 @@ class Session:
             old.stop()
         self.attach(self.engine.submit)
 
+    def restart_engine(self) -> EngineThread | EngineProcess:
+        """Replace an engine that died by a new one of the same kind (a process, or a
+        thread) and send it the whole session: clip or source, method and ghosts,
+        settings, sensors, constraints, frame and playback, so no edit made meanwhile is
+        lost (:mod:`engine.studio.restarts` decides whether to)."""
+        old = self.engine
+        process = isinstance(old, EngineProcess)
+        if process and self.source is not None and not EngineProcess.can_send(cmd.SetSource(self.source)):
+            process = False  # a live source stays in this process
+        self.engine = EngineProcess(self._factory) if process else EngineThread(self._factory)
+        self.engine.start()
+        if old is not None:
+            old.stop(timeout=0.5)  # already dead: frees its pipe and queue
+        self.attach(self.engine.submit)
+        return self.engine
+
     def shutdown(self) -> None:
         """Stop the engine thread (if any) and wait for it; close a live source."""
         if self.engine is not None:

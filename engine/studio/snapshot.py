@@ -109,6 +109,10 @@ class Snapshot:
         The last :data:`HISTORY` solved frames, oldest first, including frames whose
         snapshots a reader skipped (the GUI draws only the newest one); cleared when
         playback jumps (seek back, loop, new clip or method).
+    history_run : int
+        How many times ``history`` has been cleared. A reader that keeps its own series
+        per frame starts it again when this changes: it may never have drawn the frame
+        before a jump, so the frames it saw cannot tell it that one happened.
     latent_view : LatentView or None
         The solved frame on the latent map, with its readouts (latent-space methods).
     latent_detail : LatentDetail or None
@@ -142,6 +146,7 @@ class Snapshot:
     can_decode: bool = False
     decoded: np.ndarray | None = None
     history: tuple[HistoryEntry, ...] = ()
+    history_run: int = 0
     solved: int = 0
     frames_skipped: int = 0
     pace: str = "every_frame"

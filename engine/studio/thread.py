@@ -92,6 +92,7 @@ class EngineThread(threading.Thread):
         self._decoded: np.ndarray | None = None
         self._last_ghosts: dict[str, np.ndarray] = {}
         self._history: deque[HistoryEntry] = deque(maxlen=HISTORY)
+        self._history_run = 0
         self._pending_error = self._method_error = ""
         self._recent_errors: deque[str] = deque(maxlen=RECENT_ERRORS)
         self._ghost_errors: dict[str, str] = {}  # ghost -> the failure last reported
@@ -305,6 +306,7 @@ class EngineThread(threading.Thread):
             if self._last_solved >= 0:  # after a load, loop or method change it is done already
                 self._reset_methods()  # temporal state is meaningless across a jump
             self._history.clear()
+            self._history_run += 1
         elif self._playing and frame > self._last_solved + 1:
             self._skipped += frame - self._last_solved - 1
         sf = self._source.frame(frame)
@@ -390,7 +392,7 @@ class EngineThread(threading.Thread):
             method=method.name if method is not None else self._methods.name,
             can_decode=isinstance(method, DecodesLatents),
             decoded=readonly(self._decoded) if self._decoded is not None else None,
-            history=tuple(self._history), solved=self._solved, frames_skipped=self._skipped, pace=self._clock.pace,
+            history=tuple(self._history), history_run=self._history_run, solved=self._solved, frames_skipped=self._skipped, pace=self._clock.pace,
             timing=timing_of(res, ms, self._latency_ms), recent_errors=tuple(self._recent_errors), plays=self._plays,
             latent_view=self._latent.view, latent_detail=self._latent.detail, latent_note=self._latent.note,
         )  # fmt: skip

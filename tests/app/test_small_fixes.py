@@ -3,6 +3,8 @@ frame, a point per drawn frame in the method errors."""
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 import pytest
 from PyQt6.QtWidgets import QFileDialog
@@ -35,6 +37,26 @@ def test_frame_axes_with_one_solved_frame_span_a_few_frames(studio, qtbot):
     for plot in (studio.plots.cost_plot, studio.plots.history_plot, studio.method_errors.plot):
         lo, hi = plot.getPlotItem().getViewBox().viewRange()[0]
         assert lo <= 10 <= hi and hi - lo <= 6, (lo, hi)
+
+
+def test_frame_axes_span_a_few_frames_when_the_frame_before_a_seek_back_was_not_drawn(studio, qtbot):
+    """The window draws only the newest snapshot: frame 30 is published and superseded
+    by frame 10 without the event loop running in between, so the window never sees 30."""
+    s = studio.session
+    published = {30: threading.Event(), 10: threading.Event()}
+    # called on the engine thread, so waiting for it runs no Qt event and draws nothing
+    studio.engine.listeners.append(lambda snap: snap.frame in published and published[snap.frame].set())
+    s.seek(30)
+    assert published[30].wait(10), "the engine never solved frame 30"
+    s.seek(10)
+    assert published[10].wait(10), "the engine never solved frame 10"
+    with qtbot.waitSignal(studio.snapshotDrawn, timeout=10000, check_params_cb=lambda f: f == 10):
+        pass
+    assert s.latest.frame == 10 and len(s.latest.history) == 1
+    studio.method_errors.update_snapshot(s.latest)
+    assert sorted(studio.method_errors.data[s.latest.method]) == [10]
+    lo, hi = studio.method_errors.plot.getPlotItem().getViewBox().viewRange()[0]
+    assert lo <= 10 <= hi and hi - lo <= 6, (lo, hi)
 
 
 def test_method_errors_get_a_point_per_drawn_frame(studio, qtbot):

@@ -155,3 +155,27 @@ def test_a_source_that_cannot_cross_moves_the_engine_into_a_thread(synthetic_mot
     finally:
         session.shutdown()
     assert not session.engine.is_alive()
+
+
+def test_a_dead_engine_is_replaced_by_one_with_the_whole_session_edits_made_meanwhile_included(synthetic_motion):
+    session = Session(method="ik")
+    session.set_motion(synthetic_motion)
+    engine = session.start_engine(process=True)
+    new = None
+    try:
+        wait_for(lambda: engine.latest is not None, START_S)
+        os.kill(engine._process.pid, signal.SIGKILL)
+        wait_for(lambda: engine.failure != "", 10)
+        session.sensors.set_preset("4")  # edits while no engine runs: sent to the dead one
+        session.constraints.add("pin", joint="lwrist", position=(0.3, 0.2, 1.0))
+        session.seek(33)
+        new = session.restart_engine()
+        assert isinstance(new, EngineProcess) and new is not engine and session.engine is new
+        assert not engine.is_alive()
+        wait_for(lambda: new.latest is not None and new.latest.frame == 33, START_S)
+        snap = new.latest
+        assert set(snap.target_joints) == {s.joint for s in session.sensors.values()} and len(snap.target_joints) == 4
+        assert any(name == "pin" for name, _ in snap.gizmos) and snap.method == "ik"
+    finally:
+        session.shutdown()
+    assert new is not None and not new.is_alive()

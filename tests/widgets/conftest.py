@@ -50,6 +50,7 @@ class FakeSnapshot:
     can_decode: bool = False
     decoded: np.ndarray | None = None
     history: tuple | None = None  # None: just this frame's record
+    history_run: int = 0
     plays: int = 0
 
     def __post_init__(self) -> None:

@@ -31,3 +31,19 @@ def test_one_curve_per_method_restarting_when_playback_jumps(qtbot, fake_snapsho
     assert "rpm" in p.legend.text() and "5.0 cm" in p.legend.text()
     p.update_snapshot(fake_snapshot(seq=9, frame=1, positions=gt, ground_truth=gt, method="dragposer"))
     assert set(p.curves) == {"dragposer"} and len(p.curves["dragposer"].getData()[0]) == 1
+
+
+def test_curves_restart_when_the_engine_history_restarts_unseen(qtbot, fake_snapshot):
+    """The window draws only the newest snapshot: after frames 0 and 1 it may miss the
+    engine reaching frame 30 and see frame 10 next, a frame later than the last it drew.
+    The engine's history_run says the history started again, so the curves do too."""
+    p = MethodErrorPlot()
+    qtbot.addWidget(p)
+    gt = fake_snapshot().ground_truth
+    for seq, frame in ((1, 0), (2, 1)):
+        p.update_snapshot(fake_snapshot(seq=seq, frame=frame, positions=gt, ground_truth=gt, method="dragposer",
+                                        history_run=1))  # fmt: skip
+    p.update_snapshot(fake_snapshot(seq=5, frame=10, positions=gt, ground_truth=gt, method="dragposer", history_run=2))
+    assert sorted(p.data["dragposer"]) == [10]
+    p.update_snapshot(fake_snapshot(seq=6, frame=11, positions=gt, ground_truth=gt, method="dragposer", history_run=2))
+    assert sorted(p.data["dragposer"]) == [10, 11]

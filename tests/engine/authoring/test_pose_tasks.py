@@ -20,6 +20,7 @@ from engine.errors import UserError
 from engine.kinematics import quat_np as QN
 from engine.kinematics.fk import fk
 from engine.motion.retarget_frames import CANON_HINGE
+from tests.conftest import MOCAP
 
 J = sk.JOINT_INDEX
 OFFSETS = sk.REST_OFFSETS
@@ -132,9 +133,8 @@ def test_the_spread_is_each_pose_to_the_nearest_pose_of_another_take():
     assert ref.spread_summary()["p95_cm"] >= ref.spread_summary()["median_cm"] > 1.0
 
 
-MOCAP = R.MOCAP
 needs_data = pytest.mark.skipif(not (MOCAP / R.VALIDATION_FILES[0]).is_file(),
-                                reason="needs the shared validation files (../shared/data/mocap)")  # fmt: skip
+                                reason=f"needs the validation files in {MOCAP} (set DRAGPOSER_SHARED_DATA)")  # fmt: skip
 
 
 @needs_data
@@ -149,6 +149,37 @@ def test_real_knees_and_elbows_are_never_flagged_and_a_validation_pose_is_0_from
     frame = 8 * 7
     positions = fk(motion.local_rot[frame], motion.root_pos[frame], OFFSETS)[0]
     assert ref.nearest(positions) == pytest.approx(0.0, abs=1e-6)
+
+
+def test_the_shipped_reference_poses_are_every_4th_frame_of_the_validation_files():
+    ref = R.load_shipped(OFFSETS)
+    assert len(ref.names) == 9 and "shipped" in ref.description
+    assert len(ref) == 2 * 1611  # each pose and its mirror image
+    coarse = R.load_shipped(OFFSETS, stride=16)
+    assert 0.24 * len(ref) < len(coarse) < 0.26 * len(ref)
+    assert np.isin(coarse.poses[:5].reshape(5, -1), ref.poses.reshape(len(ref), -1)).all()
+
+
+@needs_data
+def test_the_shipped_reference_poses_match_the_files_they_were_built_from():
+    """Built by scripts/build_pose_reference.py: the same set load_files makes of the
+    files, to float32 precision (regenerate the asset when this fails)."""
+    shipped = R.load_shipped(OFFSETS)
+    files = R.load_files(R.validation_files(MOCAP), OFFSETS)
+    assert shipped.poses.shape == files.poses.shape
+    np.testing.assert_allclose(shipped.poses, files.poses, atol=1e-5)
+    np.testing.assert_array_equal(shipped.takes, files.takes)
+
+
+def test_a_stride_the_shipped_poses_cannot_give_and_a_broken_file_are_refused(tmp_path):
+    with pytest.raises(UserError, match="--reference-stride must be a multiple of 4"):
+        R.load_shipped(OFFSETS, stride=6)
+    bad = tmp_path / "poses.npz"
+    np.savez(bad, local_rot=np.zeros((2, 22, 4)))
+    with pytest.raises(UserError, match=f"{bad}: not a reference pose file \\(no field 'take'\\)"):
+        R.load_shipped(OFFSETS, path=bad)
+    with pytest.raises(UserError, match="validation file\\(s\\) not found"):
+        R.validation_files(tmp_path)
 
 
 # -- the IK poser and the options hook -----------------------------------------------
@@ -223,16 +254,16 @@ def test_a_task_end_to_end_in_pose_mode_and_with_ik(vae):
     assert max(r.feet_moved_cm.values()) < 1e-6  # the IK poser (last) holds the feet
 
 
-@needs_data
 def test_bench_pose_tasks_prints_the_table_and_writes_json(vae, tmp_path, capsys, monkeypatch):
+    """Runs without any motion data: the reference is the poses shipped in assets/."""
     from engine.cli.main import main
 
-    monkeypatch.chdir(tmp_path)  # no ./prepared: the 9 validation files are the reference
+    monkeypatch.chdir(tmp_path)  # no ./prepared: the shipped validation poses are the reference
     out = tmp_path / "tasks.json"
     assert main(["bench", "--pose-tasks", "--task", "head_turn", "--events", "4", "--reference-stride", "16",
                  "--json", str(out)]) == 0  # fmt: skip
     text = capsys.readouterr().out
-    assert "head_turn" in text and "pose-mode" in text and "9 validation files" in text
+    assert "head_turn" in text and "pose-mode" in text and "9 validation files (shipped)" in text
     data = json.loads(out.read_text())
     assert [r["poser"] for r in data["tasks"]] == ["pose-mode", "ik"]
     assert data["reference"]["p95_cm"] > data["reference"]["median_cm"] > 0
@@ -251,6 +282,11 @@ def test_bench_pose_tasks_refuses_a_clip_an_unknown_poser_and_a_bad_option(tmp_p
     assert "no option 'nope'" in capsys.readouterr().err
     assert main(["bench", "--pose-tasks", "--method", "bake", "--events", "4"]) == 2
     assert "--events 4" in capsys.readouterr().err
+    assert main(["bench", "--pose-tasks", "--task", "head_turn", "--reference", str(tmp_path / "none")]) == 2
+    assert "--reference" in capsys.readouterr().err
+    assert main(["bench", "--pose-tasks", "--task", "head_turn", "--reference", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert f"--reference {tmp_path}: validation file(s) not found" in err and R.VALIDATION_FILES[0] in err
     assert Path(tmp_path).is_dir()
 
 

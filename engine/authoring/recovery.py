@@ -1,0 +1,108 @@
+"""The pose window's whole state as a scene document, and back: what its autosave keeps.
+
+A saved scene holds the keys, animation, constraints, settings and height
+(:func:`engine.authoring.document.authoring_to_dict`); the autosave needs the rest of
+the model too, so :func:`document` adds ``recovery``: the frame shown, the targets of the
+pose being made (not yet a key), the planted feet, the facing and the pose itself (latent,
+local rotations, root, joint positions). JSON writes every float64 so it reads back
+bit for bit, so :func:`recover` gives back exactly the state that was written; it is one
+undo step, so the recovered edits count as unsaved.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from engine import skeleton as sk
+from engine.authoring.character import Pose
+from engine.authoring.document import authoring_from_dict, authoring_to_dict
+from engine.authoring.targets import target_from_json
+from engine.errors import UserError
+
+
+def _floats(a: np.ndarray) -> list:
+    return np.asarray(a, float).tolist()
+
+
+def document(session: Any) -> dict[str, Any]:
+    """The scene document of an :class:`engine.authoring.session.AuthoringSession` with
+    its ``recovery`` part (see the module doc)."""
+    m = session.mode
+    p = m.pose
+    doc = authoring_to_dict(session.scene)
+    doc["recovery"] = {
+        "frame": int(session.frame),
+        "targets": {j: t.to_dict() for j, t in m.targets.items()},
+        "planted": {j: _floats(v) for j, v in m.planted.items()},
+        "heading": float(m.heading),
+        "pose": {"latent": _floats(p.latent), "local_rot": _floats(p.local_rot), "root_pos": _floats(p.root_pos),
+                 "positions": _floats(p.positions)},
+    }  # fmt: skip
+    return doc
+
+
+def _array(value: Any, shape: tuple[int, ...], where: str) -> np.ndarray:
+    try:
+        a = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        a = np.zeros(0)
+    if a.shape != shape or not np.isfinite(a).all():
+        raise UserError(f"{where} must be {'x'.join(map(str, shape))} finite numbers")
+    return a
+
+
+def recover(session: Any, doc: Any, where: str = "autosave") -> None:
+    """Make the state :func:`document` wrote ``session``'s: the scene as a new document
+    (:meth:`~engine.authoring.session.AuthoringSession.open_scene`), then the frame,
+    targets, planted feet, facing and pose as one undo step ("recovered session").
+    Everything is checked first; errors name ``where`` and the field."""
+    loaded = authoring_from_dict(doc, where)
+    rec = doc.get("recovery")
+    if not isinstance(rec, dict):
+        raise UserError(f"{where}: field 'recovery' must be an object")
+    frame = rec.get("frame", 0)
+    if isinstance(frame, bool) or not isinstance(frame, int) or not 0 <= frame < loaded.animation.frames:
+        raise UserError(f"{where}: recovery: field 'frame' must be a frame of the animation, got {frame!r}")
+    raw_targets = rec.get("targets") or {}
+    raw_planted = rec.get("planted") or {}
+    if not isinstance(raw_targets, dict) or not isinstance(raw_planted, dict):
+        raise UserError(f"{where}: recovery: fields 'targets' and 'planted' must be objects (joint -> ...)")
+    targets = {}
+    for j, t in raw_targets.items():
+        target = target_from_json(j, t, f"{where}: recovery: targets: {j}")
+        if isinstance(t, dict) and t.get("rotation") is not None:
+            # stored after the target normalised it; normalising again may move its last bit
+            target.rotation = _array(t["rotation"], (4,), f"{where}: recovery: targets: {j}: rotation")
+        targets[j] = target
+    unknown = sorted(set(raw_planted) - set(sk.JOINT_INDEX))
+    if unknown:
+        raise UserError(f"{where}: recovery: planted: unknown joint(s) {', '.join(unknown)}")
+    planted = {j: _array(v, (3,), f"{where}: recovery: planted: {j}") for j, v in raw_planted.items()}
+    heading = rec.get("heading", 0.0)
+    if isinstance(heading, bool) or not isinstance(heading, (int, float)) or not np.isfinite(heading):
+        raise UserError(f"{where}: recovery: field 'heading' must be a number of degrees")
+    raw_pose = rec.get("pose")
+    if not isinstance(raw_pose, dict):
+        raise UserError(f"{where}: recovery: field 'pose' must be an object")
+    latent = np.array(raw_pose.get("latent", []), dtype=np.float64) if isinstance(raw_pose.get("latent"), list) else None
+    if latent is None or latent.ndim != 1 or latent.size == 0 or not np.isfinite(latent).all():
+        raise UserError(f"{where}: recovery: pose: field 'latent' must be a list of finite numbers")
+    J = sk.NUM_JOINTS
+    pose = Pose(latent, _array(raw_pose.get("local_rot"), (J, 4), f"{where}: recovery: pose: local_rot"),
+                _array(raw_pose.get("root_pos"), (3,), f"{where}: recovery: pose: root_pos"),
+                _array(raw_pose.get("positions"), (J, 3), f"{where}: recovery: pose: positions"))  # fmt: skip
+    model_latent = np.asarray(session.mode.pose.latent)
+    if latent.size != model_latent.size:
+        raise UserError(f"{where}: recovery: pose: field 'latent' has {latent.size} values; the pose model has "
+                        f"{model_latent.size}")  # fmt: skip
+    pose.latent = latent.astype(model_latent.dtype)
+    session.open_scene(loaded)
+    m = session.mode
+
+    def change() -> None:
+        session.frame = frame
+        m.targets, m.planted, m.heading, m.pose = targets, planted, float(heading), pose
+
+    session.edit("recovered session", change)

@@ -12,7 +12,7 @@ from engine.kinematics import quaternion as Q
 from engine.kinematics.features import encoder_input, pose_from_motion, root_space_fk
 from engine.models.loading import load_models, load_predictor, load_vae
 from engine.models.predictor import PredictorConfig, TemporalPredictor
-from engine.models.skeletal import SkeletalLinear, level_edges, neighbour_mask
+from engine.models.skeletal import SkeletalLinear, level_edges, level_sizes, neighbour_mask
 from engine.models.vae import PoseVAE, VAEConfig, pose_distance
 from engine.training.vae import VAETrainConfig, VAEObjective, weights_payload
 
@@ -40,6 +40,29 @@ def test_skeletal_mask_keeps_far_joints_out():
     y1 = layer(x2)
     assert torch.allclose(y0[:, sk.JOINT_INDEX["root"]], y1[:, sk.JOINT_INDEX["root"]])
     assert not torch.allclose(y0[:, sk.JOINT_INDEX["lelbow"]], y1[:, sk.JOINT_INDEX["lelbow"]])
+
+
+@pytest.mark.parametrize("level, c_in, c_out", [(0, 8, 32), (1, 48, 64), (3, 96, 64)])
+def test_skeletal_dense_batch_pass_equals_the_per_node_pass(level, c_in, c_out):
+    """A batch of DENSE_FROM poses or more runs as one dense product: the same outputs
+    and the same gradients (weights, bias, input) as the per-node pass a few poses take."""
+    from engine.models import skeletal
+
+    mask = neighbour_mask(level_sizes()[level], level_edges()[level], 2)
+    layer = SkeletalLinear(mask, c_in, c_out)
+    with torch.no_grad():
+        layer.bias.normal_()
+    x = torch.randn(skeletal.DENSE_FROM, layer.n, c_in, requires_grad=True)
+    grads = []
+    for small in (False, True):
+        layer.zero_grad()
+        x.grad = None
+        y = torch.cat([layer(x[i : i + 1]) for i in range(len(x))]) if small else layer(x)
+        (y * torch.linspace(-1, 1, y.numel()).reshape(y.shape)).sum().backward()
+        grads.append((y.detach(), layer.weight.grad.clone(), layer.bias.grad.clone(), x.grad.clone()))
+    for dense, per_node in zip(*grads):
+        torch.testing.assert_close(dense, per_node, rtol=1e-5, atol=1e-5)
+    assert grads[0][1].abs().sum() > 0
 
 
 def test_vae_shapes_and_unit_quaternions(synthetic_motion):

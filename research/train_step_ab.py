@@ -81,7 +81,7 @@ def main() -> None:
         for r in range(args.rounds):
             for name, root in versions.items():
                 rows[name].append(run(root, args))
-                print(f"round {r + 1} {name:8s} " + " ".join(f"{k}={v:.6g}" for k, v in rows[name][-1].items()), flush=True)
+                print(f"round {r + 1} {name:8s} " + " ".join(f"{k}={v:.8g}" for k, v in rows[name][-1].items()), flush=True)
     med = {k: sorted(x["cpu_ms"] for x in v)[len(v) // 2] for k, v in rows.items()}
     print(f"median CPU ms/step: baseline {med['baseline']:.1f}, tree {med['tree']:.1f}, "
           f"ratio {med['baseline'] / med['tree']:.2f}x")

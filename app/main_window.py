@@ -18,7 +18,7 @@ import numpy as np
 from PyQt6.QtCore import QSettings, Qt, QTimer, pyqtSignal
 from PyQt6.QtWidgets import QApplication, QDockWidget, QLabel, QMainWindow, QMessageBox, QTabWidget, QVBoxLayout, QWidget
 
-from app import clip_saving
+from app import authoring_actions, clip_saving
 from app.busy import BusyNotice
 from app.camera_keys import CameraKeys
 from app.constraint_placement import placed_params
@@ -338,7 +338,7 @@ class MainWindow(QMainWindow):
         self._open_dropped([u.toLocalFile() for u in event.mimeData().urls() if u.isLocalFile()])
 
     def closeEvent(self, event: Any) -> None:
-        if not clip_saving.confirm_discard(self, "quitting"):
+        if not authoring_actions.confirm_quit(self):
             event.ignore()
             return
         self.timer.stop()

@@ -106,6 +106,7 @@ class PoseWindow(QMainWindow):
         self.camera_keys = CameraKeys(self.viewport, self)
         QApplication.instance().installEventFilter(self.camera_keys)
         self._render_pending = False
+        self._asked_to_close = False  # the studio's quit asked already (close_unasked)
         self._subscriptions: list[tuple[Any, Callable]] = []
         for signal, slot in ((session.events.targets, self._on_targets), (session.events.pose, self._on_pose),
                              (session.events.keys, self._on_keys), (session.events.animation, self._on_keys),
@@ -311,10 +312,16 @@ class PoseWindow(QMainWindow):
         self._on_pose()
 
     # -- closing -------------------------------------------------------------------
+    def close_unasked(self) -> bool:
+        """Close without the unsaved-work prompt: the studio's quit has asked it already
+        (:func:`app.authoring_actions.confirm_quit`)."""
+        self._asked_to_close = True
+        return self.close()
+
     def closeEvent(self, event: QCloseEvent | None) -> None:  # noqa: N802 (Qt's name)
         if event is None:
             return
-        if not self.files.confirm_discard("closing"):
+        if not self._asked_to_close and not self.files.confirm_discard("closing"):
             event.ignore()
             return
         self.jobs.shutdown()

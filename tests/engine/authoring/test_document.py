@@ -105,6 +105,7 @@ def test_bad_fields_are_named(doc, words):
         (_doc(settings={"iteration": 3}), "iteration", "iterations"),
         (_doc(animation={"fps": 30, "frame": 10}), "frame", "frames"),
         (_doc(keys=[{"frame": 1, "heading_deg": 3}]), "heading_deg", "heading"),
+        (_doc(keys=[{"frame": 1, "targets": {"lwrist": {"positon": [0, 0, 1]}}}]), "positon", "position"),
         (_doc(constraints=[{**V1["constraints"][0], "frame": [1, 2]}]), "frame", "frames"),
     ],
 )

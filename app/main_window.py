@@ -22,6 +22,7 @@ from app import authoring_actions, clip_saving
 from app.busy import BusyNotice
 from app.camera_keys import CameraKeys
 from app.constraint_placement import placed_params
+from app.constraint_ranges import link_ranges
 from app.drawing import DrawScheduler
 from app.failures import FailureCountdown
 from app.ghost_status import GhostStatus
@@ -191,6 +192,8 @@ class MainWindow(QMainWindow):
         cp.addRequested.connect(self._guard(self._add_constraint))
         cp.removeRequested.connect(self._guard(s.constraints.remove))
         cp.changed.connect(self._guard(lambda n, ch: s.constraints.edit(n, **ch)))
+        link_ranges(cp, self.timeline.set_constraint_span, lambda: s.frame, lambda: s.num_frames,
+                    self.timeline.selection)  # fmt: skip
         op = self.optimizer_panel
         op.settingChanged.connect(self._guard(s.set_setting))
         op.methodChanged.connect(lambda m: s.set_method(m))

@@ -58,7 +58,7 @@ def open_pose_window(window: StudioShell, height: float, from_clip: bool) -> Pos
 
     session = window.session
     clip = session.motion if from_clip else None
-    pose = PoseWindow(AuthoringSession.new(height, clip, session.frame))
+    pose = PoseWindow(AuthoringSession.new(height, clip, session.frame), settings=window.settings)
     window.pose_windows = [p for p in window.pose_windows if not sip.isdeleted(p) and p.isVisible()] + [pose]
     pose.resize(1200, 800)
     pose.show()
@@ -106,7 +106,7 @@ def export_video(window: StudioShell) -> str | None:
         QMessageBox.warning(window, "Export video", "Open a clip first.")
         return None
     return export(window, motion, window.session.preset or None, tuple(window.session.available_methods()),
-                  window.files.suggested_name("mp4", "video"))  # fmt: skip
+                  window.files.suggested_name("mp4", "video"), window.settings)  # fmt: skip
 
 
 def add_menu_entries(window: StudioShell, file_menu: QMenu, action: Callable[..., QAction]) -> dict[str, QAction]:

@@ -24,7 +24,7 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-from PyQt6.QtCore import Qt, QTimer
+from PyQt6.QtCore import QSettings, Qt, QTimer
 from PyQt6.QtGui import QCloseEvent
 from PyQt6.QtWidgets import (
     QApplication, QDockWidget, QDoubleSpinBox, QFrame, QLabel, QMainWindow, QMessageBox, QScrollArea, QWidget,
@@ -52,12 +52,15 @@ SIDE_PANEL_PX = 330
 
 
 class PoseWindow(QMainWindow):
-    """See the module doc. ``session``: the authoring model the window shows and edits."""
+    """See the module doc. ``session``: the authoring model the window shows and edits;
+    ``settings``: where dialogs remember their choices (default: the studio's)."""
 
-    def __init__(self, session: AuthoringSession, parent: QWidget | None = None) -> None:
+    def __init__(self, session: AuthoringSession, parent: QWidget | None = None,
+                 settings: QSettings | None = None) -> None:  # fmt: skip
         super().__init__(parent)
         self.setWindowTitle("DragPoser studio: pose and keys")
         self.session = session
+        self.settings = settings or QSettings("dragposer-studio", "studio")
         self.undo: History = session.history
         self.jobs = JobRunner(self)
         self.viewport = Viewport(self)

@@ -160,11 +160,14 @@ class MainWindow(QMainWindow):
         self.status_gui = QLabel()
         self.status_warnings = QLabel()
         # fixed widths that hold the longest texts (app/drawing.py sets short texts, details
-        # in tooltips): a text change must not relayout the window every frame
-        for w, longest in ((self.status_engine, "solver 9999 frames/s   99999 ms/frame   999 it   99.99 ms/it   skipped 99999"),
-                           (self.status_gui, "view 999 draws/s"), (self.status_warnings, "warnings 9999")):  # fmt: skip
+        # in tooltips): a text change must not relayout the window every frame. The solver
+        # and view readouts are the status bar's normal widgets, which Qt hides while a
+        # message shows: as permanent ones they took half the bar and cut messages off.
+        for w, longest, permanent in (
+                (self.status_engine, "solver 9999 frames/s   99999 ms/frame   999 it   99.99 ms/it   skipped 99999", False),
+                (self.status_gui, "view 999 draws/s", False), (self.status_warnings, "warnings 9999", True)):  # fmt: skip
             w.setFixedWidth(w.fontMetrics().horizontalAdvance(longest) + 16)
-            self.statusBar().addPermanentWidget(w)
+            (self.statusBar().addPermanentWidget if permanent else self.statusBar().addWidget)(w)
         self._connect_widgets()
 
     def _dock(self, title: str, widget: QWidget, area: Qt.DockWidgetArea) -> QDockWidget:

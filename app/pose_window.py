@@ -157,11 +157,14 @@ class PoseWindow(QMainWindow):
         self.addDockWidget(area, dock)
 
     def _guard(self, title: str, action: Callable[[], Any], warn: bool = False) -> None:
-        """Run ``action()``; a UserError becomes a message box titled ``title``."""
+        """Run ``action()``; a UserError becomes a message box titled ``title``, unless the
+        window closed while the action waited (a bake cancelled by quitting): a box over
+        no window would keep the application running until clicked away."""
         try:
             action()
         except UserError as exc:
-            (QMessageBox.warning if warn else QMessageBox.information)(self, title, str(exc))
+            if self.isVisible():
+                (QMessageBox.warning if warn else QMessageBox.information)(self, title, str(exc))
 
     def _edit(self, action: Callable[[], Any]) -> None:
         """A model edit from a gesture: playing stops first; a refused edit says why."""

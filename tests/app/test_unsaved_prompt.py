@@ -160,3 +160,36 @@ def test_quit_cancelled_in_the_studio_keeps_the_pose_window_open_too(studio, mon
         assert studio.isVisible() and pose.isVisible() and pose.session.scene.keys
     finally:
         close_now(pose)
+
+
+def test_quit_while_a_pose_window_bakes_cancels_it_and_leaves_no_message_behind(studio, answer, qtbot, monkeypatch):
+    """Quitting while a pose window waited on its bake (scrubbed between keys) cancelled
+    the bake and then showed "the bake did not finish" over no window, so the process
+    stayed until someone clicked it away."""
+    from PyQt6.QtCore import QTimer
+    from PyQt6.QtWidgets import QApplication, QMessageBox
+
+    from app.authoring_actions import open_pose_window
+    from tests.app.gui_helpers import close_now
+
+    pose = open_pose_window(studio, 1.7, from_clip=False)
+    try:
+        pose.keys.length.setValue(151)
+        pose.add_key(0)
+        pose.go_to(150)
+        pose.add_key(150)
+        pose.session.history.set_clean()  # saved: the quit asks nothing
+        shown = []
+        monkeypatch.setattr(QMessageBox, "warning", lambda *a, **k: shown.append(a[2]))
+        quit_during_bake = QTimer(interval=10)
+        quit_during_bake.timeout.connect(lambda: pose.jobs.running and pose.jobs.done >= 3 and (
+            quit_during_bake.stop(), _quit_action(studio).trigger()))  # fmt: skip
+        quit_during_bake.start()
+        pose.go_to(75)  # between the keys: waits on the bake, during which the studio quits
+        quit_during_bake.stop()
+        QApplication.processEvents()
+        assert not studio.isVisible() and not pose.isVisible() and not pose.jobs.running
+        assert shown == [] and answer.asked == []
+    finally:
+        if pose.isVisible():
+            close_now(pose)

@@ -70,8 +70,8 @@ def confirm_quit(window: StudioShell) -> bool:
     unsaved work, and close the pose windows when all agreed. A Cancel anywhere keeps
     every window open as it is (nothing has closed yet); True when the studio may close.
 
-    The pose windows are top-level windows of their own: closing only the studio left
-    them, with their unsaved keys, and the process running."""
+    The pose windows are top-level windows of their own: closing only the studio would
+    leave them open, with their unsaved keys, and the process running."""
     from app.clip_saving import confirm_discard
 
     poses = [p for p in window.pose_windows if not sip.isdeleted(p) and p.isVisible()]

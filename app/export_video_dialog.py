@@ -11,7 +11,7 @@ What cannot run is not offered: a ghost method that cannot reconstruct from the
 motion's trackers (RPM needs head and hands, SparsePoser the six trackers:
 :func:`engine.methods.presets.preset_problem`) is greyed out with the reason beside it,
 and OK checks the options as ``render`` does (:func:`app.render.check_options`) before
-the file dialog opens, so nothing fails after a file was chosen. The choices are
+the file dialog opens, so nothing fails once a file is chosen. The choices are
 remembered (QSettings, ``export_video/...``) for the next export.
 """
 

@@ -162,7 +162,8 @@ class MainWindow(QMainWindow):
         # fixed widths that hold the longest texts (app/drawing.py sets short texts, details
         # in tooltips): a text change must not relayout the window every frame. The solver
         # and view readouts are the status bar's normal widgets, which Qt hides while a
-        # message shows: as permanent ones they took half the bar and cut messages off.
+        # message shows, so a message gets the bar's width (permanent ones would keep
+        # half of it and cut the message off).
         for w, longest, permanent in (
                 (self.status_engine, "solver 9999 frames/s   99999 ms/frame   999 it   99.99 ms/it   skipped 99999", False),
                 (self.status_gui, "view 999 draws/s", False), (self.status_warnings, "warnings 9999", True)):  # fmt: skip

@@ -104,8 +104,8 @@ class PoseWindow(QMainWindow):
         self.facing.valueChanged.connect(self.turn_body)
         body.addWidget(self.facing)
         self.playback = KeyPlayback(self)
-        # the status bar from the start: QMainWindow makes it on the first message, and
-        # its arrival pushed the 3D view and the key timeline up under the mouse
+        # the status bar from the start: QMainWindow would make it on the first message,
+        # and its arrival would push the 3D view and the key timeline up under the mouse
         self.statusBar().setSizeGripEnabled(False)
         self.files = PoseFiles(self)
         build_pose_menus(self)

@@ -81,7 +81,7 @@ def shown(value: Any, limit: int = MAX_SHOWN) -> str:
 
 def check_known_fields(value: Mapping[str, Any], known: Iterable[str], where: str) -> None:
     """Refuse any key of ``value`` outside ``known``: a misspelt key would otherwise be
-    read as absent and its default used without a word (``keyz`` baked a clip with no
+    read as absent and its default used without a word (``keyz`` would bake a clip with no
     keys). The message names each unknown key and the nearest known one.
 
     Raises

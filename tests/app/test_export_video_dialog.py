@@ -77,8 +77,8 @@ def _ok(dialog: ExportVideoDialog) -> None:
 
 
 def test_a_ghost_that_cannot_run_from_the_trackers_is_greyed_out_and_says_why(studio, monkeypatch):
-    """RPM needs head and hands: with six trackers it failed with "UserError" only after
-    the file was chosen."""
+    """RPM needs head and hands: with six trackers it cannot run, and the dialog says so
+    before any file is asked for."""
     studio.session.sensors.set_preset("6")
     seen: dict = {}
 

@@ -163,9 +163,9 @@ def test_quit_cancelled_in_the_studio_keeps_the_pose_window_open_too(studio, mon
 
 
 def test_quit_while_a_pose_window_bakes_cancels_it_and_leaves_no_message_behind(studio, answer, qtbot, monkeypatch):
-    """Quitting while a pose window waited on its bake (scrubbed between keys) cancelled
-    the bake and then showed "the bake did not finish" over no window, so the process
-    stayed until someone clicked it away."""
+    """Quitting while a pose window waits on its bake (scrubbed between keys) cancels the
+    bake; a "the bake did not finish" box over no window would keep the process running
+    until clicked away, so none is shown."""
     from PyQt6.QtCore import QTimer
     from PyQt6.QtWidgets import QApplication, QMessageBox
 

@@ -73,8 +73,8 @@ def test_a_scene_carries_the_range_and_names_a_bad_one():
 
 def test_dragposer_weighs_a_range_by_the_clip_frame_it_solves_not_by_its_solve_count():
     """The studio resets the method on a seek and solves the frame sought first: a pin
-    limited to frames 10-20 must act when frame 15 is the first one solved (it was read
-    as frame 0 of the solve count, outside the range) and not on frame 3 after frame 2."""
+    limited to frames 10-20 acts when frame 15 is the first one solved (frame 0 of the
+    count of solves, outside the range) and not on frame 3 after frame 2."""
     import numpy as np
     import torch
 

@@ -108,7 +108,7 @@ def test_the_command_bakes_to_gltf_with_the_bvh_s_joints(baked, example_scene, t
 
 
 def test_bake_refuses_a_misspelt_key_naming_it_and_exits_non_zero(tmp_path, capsys):
-    """``keys`` misspelt ``keyz`` baked the animation without its keys and exited 0."""
+    """``keys`` misspelt ``keyz`` read as absent would bake the animation without its keys and exit 0."""
     scene = tmp_path / "s.json"
     scene.write_text(json.dumps({"format": "dragposer-scene", "version": 2, "animation": {"frames": 61},
                                  "keyz": [{"frame": 0, "targets": {"lwrist": [0.3, -0.2, 1.2]}}]}))  # fmt: skip

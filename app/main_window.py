@@ -255,6 +255,7 @@ class MainWindow(QMainWindow):
             self.timeline.set_selection(None)
             self.opened_motion = event.motion  # what clip_saving compares against
         self.timeline.set_range(self.session.num_frames, event.motion.fps)
+        self.constraint_panel.frames_changed()
         self.plots.clear()
         self.method_errors.clear()
         self.viewport.reset_camera(event.motion.root_pos[0])

@@ -300,6 +300,7 @@ class PoseWindow(QMainWindow):
     def _on_keys(self, e: Any = None) -> None:
         a = self.scene.animation
         self.keys.set_state(a.frames, a.fps, tuple(k.frame for k in self.scene.keys), self.frame, a.interpolation)
+        self.constraints.panel.frames_changed()
 
     def _on_constraints(self, e: Any = None) -> None:
         self.constraints.refresh()

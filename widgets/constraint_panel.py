@@ -225,6 +225,11 @@ class ConstraintPanel(QWidget):
         #: ``() -> (start, end)``: the range offered when *only frames* is ticked.
         self.default_range: Callable[[], tuple[int, int]] = lambda: (0, 60)
 
+    def frames_changed(self) -> None:
+        """The clip or the animation changed length: bound the open range editor by it."""
+        if self.editor is not None and self.editor.range is not None:
+            self.editor.range.set_frame_count(self.frame_count())
+
     def span(self) -> Span | None:
         """The selected constraint's frame range and blends, None for none or every frame."""
         data = next((c for c in self.constraints if c["name"] == self.current_name()), None)
@@ -270,6 +275,7 @@ class ConstraintPanel(QWidget):
                 data = next((c for c in self.constraints if c["name"] == self.current_name()), None)
                 if data is not None:
                     self.editor.set_values(data)
+                self.frames_changed()
             self.selected.emit(self.current_name())
 
     def current_name(self) -> str:

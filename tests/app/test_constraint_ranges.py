@@ -122,3 +122,13 @@ def test_the_frame_range_span_is_drawn_only_for_the_selected_constraint(studio, 
     assert studio.timeline.slider.span() == (10, 30, 5, 0)
     panel.list.setCurrentRow(0)  # the floor acts on every frame
     assert studio.timeline.slider.span() is None
+
+
+def test_the_range_fields_reach_the_last_frame_of_a_lengthened_animation(pose_window, qtbot):
+    w = pose_window
+    panel = w.constraints.panel
+    panel.kinds.setCurrentText("floor")
+    QTest.mouseClick(panel.add_button, Qt.MouseButton.LeftButton)
+    assert panel.editor.range.end.maximum() == 60  # the 61 frames of a new animation
+    w.keys.length.setValue(300)
+    assert panel.editor.range.end.maximum() == 299

@@ -14,6 +14,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
+from PyQt6 import sip
 from PyQt6.QtGui import QAction
 from PyQt6.QtWidgets import (
     QComboBox, QDialog, QDialogButtonBox, QDoubleSpinBox, QFormLayout, QMenu, QMessageBox, QWidget,
@@ -57,7 +58,7 @@ def open_pose_window(window: StudioShell, height: float, from_clip: bool) -> Pos
 
     session = window.session
     clip = session.motion if from_clip else None
-    pose = PoseWindow(AuthoringSession.new(height, clip, session.frame))
+    pose = PoseWindow(AuthoringSession.new(height, clip, session.frame), settings=window.settings)
     show_pose_window(window, pose)
     return pose
 
@@ -65,11 +66,32 @@ def open_pose_window(window: StudioShell, height: float, from_clip: bool) -> Pos
 def show_pose_window(window: StudioShell, pose: PoseWindow) -> None:
     """Show ``pose`` over ``window``: kept on ``window.pose_windows``, autosaved with the
     studio (:mod:`app.autosave`) when the studio autosaves."""
-    window.pose_windows = [p for p in window.pose_windows if p.isVisible()] + [pose]
+    window.pose_windows = [p for p in window.pose_windows if not sip.isdeleted(p) and p.isVisible()] + [pose]
     if window.autosave is not None:
         window.autosave.watch_pose(pose)
     pose.resize(1200, 800)
     pose.show()
+
+
+def confirm_quit(window: StudioShell) -> bool:
+    """Before the studio quits: ask every open pose window, then the studio, about its
+    unsaved work, and close the pose windows when all agreed. A Cancel anywhere keeps
+    every window open as it is (nothing has closed yet); True when the studio may close.
+
+    The pose windows are top-level windows of their own: closing only the studio would
+    leave them open, with their unsaved keys, and the process running."""
+    from app.clip_saving import confirm_discard
+
+    poses = [p for p in window.pose_windows if not sip.isdeleted(p) and p.isVisible()]
+    for pose in poses:
+        pose.raise_()  # the prompt is about this window's keys: show which one
+        if not pose.files.confirm_discard("quitting"):
+            return False
+    if not confirm_discard(window, "quitting"):
+        return False
+    for pose in poses:
+        pose.close_unasked()
+    return True
 
 
 def new_pose(window: StudioShell) -> None:
@@ -92,7 +114,7 @@ def export_video(window: StudioShell) -> str | None:
         QMessageBox.warning(window, "Export video", "Open a clip first.")
         return None
     return export(window, motion, window.session.preset or None, tuple(window.session.available_methods()),
-                  window.files.suggested_name("mp4", "video"))  # fmt: skip
+                  window.files.suggested_name("mp4", "video"), window.settings)  # fmt: skip
 
 
 def add_menu_entries(window: StudioShell, file_menu: QMenu, action: Callable[..., QAction]) -> dict[str, QAction]:

@@ -215,7 +215,7 @@ def recover_pose(window: StudioShell | None, scene: dict[str, Any], where: str) 
 
     session = AuthoringSession.new()
     recover_document(session, scene, where)
-    pose = PoseWindow(session)
+    pose = PoseWindow(session, settings=window.settings if window is not None else None)
     if window is not None:
         show_pose_window(window, pose)
     else:

@@ -6,6 +6,13 @@ layout, camera, ghost methods, whether the motion is the ground truth, a title a
 time code (the options of ``dragposer-studio render``, :class:`app.render_scene.RenderOptions`),
 then the file name; :func:`write_video` renders it with a progress dialog and says
 where the file was written (status bar and a message).
+
+What cannot run is not offered: a ghost method that cannot reconstruct from the
+motion's trackers (RPM needs head and hands, SparsePoser the six trackers:
+:func:`engine.methods.presets.preset_problem`) is greyed out with the reason beside it,
+and OK checks the options as ``render`` does (:func:`app.render.check_options`) before
+the file dialog opens, so nothing fails once a file is chosen. The choices are
+remembered (QSettings, ``export_video/...``) for the next export.
 """
 
 from __future__ import annotations
@@ -13,9 +20,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from PyQt6.QtCore import Qt
+from PyQt6.QtCore import QSettings, Qt
 from PyQt6.QtWidgets import (
-    QCheckBox, QComboBox, QDialog, QDialogButtonBox, QFileDialog, QFormLayout, QLineEdit, QListWidget,
+    QCheckBox, QComboBox, QDialog, QDialogButtonBox, QFileDialog, QFormLayout, QLabel, QLineEdit, QListWidget,
     QListWidgetItem, QMessageBox, QProgressDialog,
 )  # fmt: skip
 
@@ -23,6 +30,8 @@ from app.render_scene import CAMERAS, LAYOUTS, VIEWS, RenderOptions
 from engine.errors import UserError
 
 SIZES = ("640x360", "960x540", "1280x720", "1920x1080")
+#: QSettings group of the remembered choices.
+GROUP = "export_video"
 
 
 class ExportVideoDialog(QDialog):
@@ -36,12 +45,18 @@ class ExportVideoDialog(QDialog):
         The tracker preset drawn (and the ghosts' input); None: no trackers.
     methods : sequence of str
         Methods offered as ghosts.
+    settings : QSettings or None
+        Where the choices are remembered (None: not remembered).
     """
 
-    def __init__(self, parent: Any, sensors: str | None, methods: tuple[str, ...] = ()) -> None:
+    def __init__(self, parent: Any, sensors: str | None, methods: tuple[str, ...] = (),
+                 settings: QSettings | None = None) -> None:  # fmt: skip
+        from engine.methods.presets import preset_problem
+
         super().__init__(parent)
         self.setWindowTitle("Export video")
         self.sensors = sensors
+        self.settings = settings
         form = QFormLayout(self)
         self.size_box = QComboBox()
         self.size_box.addItems(SIZES)
@@ -55,9 +70,15 @@ class ExportVideoDialog(QDialog):
         self.camera.addItems(CAMERAS)
         self.camera.setCurrentText("follow")
         self.ghosts = QListWidget()
+        #: ghost method -> why it cannot run from these trackers
+        self.impossible = {m: why for m in methods if sensors and (why := preset_problem(m, sensors))}
         for name in methods:
-            item = QListWidgetItem(name)
+            item = QListWidgetItem(name if name not in self.impossible else f"{name} (cannot run: see below)")
+            item.setData(Qt.ItemDataRole.UserRole, name)
             item.setFlags(item.flags() | Qt.ItemFlag.ItemIsUserCheckable)
+            if name in self.impossible:
+                item.setFlags(item.flags() & ~Qt.ItemFlag.ItemIsEnabled)
+                item.setToolTip(self.impossible[name])
             item.setCheckState(Qt.CheckState.Unchecked)
             self.ghosts.addItem(item)
         rows = max(1, min(len(methods), 5))
@@ -69,21 +90,70 @@ class ExportVideoDialog(QDialog):
         self.timecode = QCheckBox("time and frame number")
         self.title = QLineEdit()
         self.title.setPlaceholderText("optional title above the legend")
+        # why some choices are greyed out, and why OK refused, in words beside them
+        self.note = QLabel("\n".join(self.impossible.values()))
+        self.note.setWordWrap(True)
+        self.note.setVisible(bool(self.impossible))
         ghosts = f"Ghosts (from trackers {sensors})" if sensors else "Ghosts"
         for label, widget in (("Size", self.size_box), ("View", self.view), ("Layout", self.layout_box),
-                              ("Camera", self.camera), (ghosts, self.ghosts), ("Ground truth", self.truth),
-                              ("Time code", self.timecode), ("Title", self.title)):  # fmt: skip
+                              ("Camera", self.camera), (ghosts, self.ghosts), ("", self.note),
+                              ("Ground truth", self.truth), ("Time code", self.timecode),
+                              ("Title", self.title)):  # fmt: skip
             form.addRow(label, widget)
         box = QDialogButtonBox(QDialogButtonBox.StandardButton.Ok | QDialogButtonBox.StandardButton.Cancel)
         box.accepted.connect(self.accept)
         box.rejected.connect(self.reject)
         form.addRow(box)
+        self._restore()
+
+    def _restore(self) -> None:
+        """The choices of the last export (those still possible)."""
+        if self.settings is None:
+            return
+        get = lambda key, default: self.settings.value(f"{GROUP}/{key}", default)  # noqa: E731
+        for combo, key in ((self.size_box, "size"), (self.view, "view"), (self.layout_box, "layout"),
+                           (self.camera, "camera")):  # fmt: skip
+            value = str(get(key, combo.currentText()))
+            if combo.findText(value) >= 0:
+                combo.setCurrentText(value)
+        truthy = lambda v: str(v).lower() in ("true", "1")  # noqa: E731 (QSettings' ini files give strings)
+        self.truth.setChecked(truthy(get("truth", False)))
+        self.timecode.setChecked(truthy(get("timecode", False)))
+        self.title.setText(str(get("title", "")))
+        ghosts = str(get("ghosts", "")).split(",")
+        for i in range(self.ghosts.count()):
+            item = self.ghosts.item(i)
+            if item.flags() & Qt.ItemFlag.ItemIsEnabled and item.data(Qt.ItemDataRole.UserRole) in ghosts:
+                item.setCheckState(Qt.CheckState.Checked)
+
+    def _remember(self, options: RenderOptions) -> None:
+        if self.settings is None:
+            return
+        for key, value in (("size", self.size_box.currentText()), ("view", options.view), ("layout", options.layout),
+                           ("camera", options.camera), ("truth", options.truth), ("timecode", options.timecode),
+                           ("title", options.title), ("ghosts", ",".join(options.ghosts))):  # fmt: skip
+            self.settings.setValue(f"{GROUP}/{key}", value)
+
+    def accept(self) -> None:
+        """Check the options as ``render`` would before the dialog closes (and so before
+        the file dialog): a refusal is said under the ghosts and the dialog stays."""
+        from app.render import check_options
+
+        options = self.options()
+        try:
+            check_options(options)
+        except UserError as exc:
+            self.note.setText(str(exc))
+            self.note.setVisible(True)
+            return
+        self._remember(options)
+        super().accept()
 
     def options(self) -> RenderOptions:
         """The chosen options, as ``render`` takes them."""
         from app.render import parse_size
 
-        ghosts = tuple(self.ghosts.item(i).text() for i in range(self.ghosts.count())
+        ghosts = tuple(self.ghosts.item(i).data(Qt.ItemDataRole.UserRole) for i in range(self.ghosts.count())
                        if self.ghosts.item(i).checkState() == Qt.CheckState.Checked)  # fmt: skip
         return RenderOptions(size=parse_size(self.size_box.currentText()), sensors=self.sensors, ghosts=ghosts,
                              view=self.view.currentText(), camera=self.camera.currentText(),
@@ -112,11 +182,11 @@ def write_video(parent: Any, motion: Any, path: str | Path, options: RenderOptio
 
 
 def export_video(parent: Any, motion: Any, sensors: str | None, methods: tuple[str, ...] = (),
-                 suggested: str = "") -> str | None:  # fmt: skip
-    """Ask for the options and the file (``suggested`` is the name the save dialog
-    offers), render, and say so; None when cancelled. Errors (bad options, a failed
-    method or ffmpeg) are shown, not raised."""
-    dialog = ExportVideoDialog(parent, sensors, methods)
+                 suggested: str = "", settings: QSettings | None = None) -> str | None:  # fmt: skip
+    """Ask for the options (remembered in ``settings``) and the file (``suggested`` is
+    the name the save dialog offers), render, and say so; None when cancelled. Errors
+    (a failed method or ffmpeg) are shown, not raised."""
+    dialog = ExportVideoDialog(parent, sensors, methods, settings)
     if dialog.exec() != QDialog.DialogCode.Accepted:
         return None
     path, _ = QFileDialog.getSaveFileName(parent, "Export video", suggested, "MP4 video (*.mp4)")

@@ -18,10 +18,11 @@ import numpy as np
 from PyQt6.QtCore import QSettings, Qt, QTimer, pyqtSignal
 from PyQt6.QtWidgets import QApplication, QDockWidget, QLabel, QMainWindow, QMessageBox, QTabWidget, QVBoxLayout, QWidget
 
-from app import clip_saving
+from app import authoring_actions, clip_saving
 from app.busy import BusyNotice
 from app.camera_keys import CameraKeys
 from app.constraint_placement import placed_params
+from app.constraint_ranges import link_ranges
 from app.drawing import DrawScheduler
 from app.failures import FailureCountdown
 from app.ghost_status import GhostStatus
@@ -160,11 +161,15 @@ class MainWindow(QMainWindow):
         self.status_gui = QLabel()
         self.status_warnings = QLabel()
         # fixed widths that hold the longest texts (app/drawing.py sets short texts, details
-        # in tooltips): a text change must not relayout the window every frame
-        for w, longest in ((self.status_engine, "solver 9999 frames/s   99999 ms/frame   999 it   99.99 ms/it   skipped 99999"),
-                           (self.status_gui, "view 999 draws/s"), (self.status_warnings, "warnings 9999")):  # fmt: skip
+        # in tooltips): a text change must not relayout the window every frame. The solver
+        # and view readouts are the status bar's normal widgets, which Qt hides while a
+        # message shows, so a message gets the bar's width (permanent ones would keep
+        # half of it and cut the message off).
+        for w, longest, permanent in (
+                (self.status_engine, "solver 9999 frames/s   99999 ms/frame   999 it   99.99 ms/it   skipped 99999", False),
+                (self.status_gui, "view 999 draws/s", False), (self.status_warnings, "warnings 9999", True)):  # fmt: skip
             w.setFixedWidth(w.fontMetrics().horizontalAdvance(longest) + 16)
-            self.statusBar().addPermanentWidget(w)
+            (self.statusBar().addPermanentWidget if permanent else self.statusBar().addWidget)(w)
         self._connect_widgets()
 
     def _dock(self, title: str, widget: QWidget, area: Qt.DockWidgetArea) -> QDockWidget:
@@ -192,6 +197,8 @@ class MainWindow(QMainWindow):
         cp.addRequested.connect(self._guard(self._add_constraint))
         cp.removeRequested.connect(self._guard(s.constraints.remove))
         cp.changed.connect(self._guard(lambda n, ch: s.constraints.edit(n, **ch)))
+        link_ranges(cp, self.timeline.set_constraint_span, lambda: s.frame, lambda: s.num_frames,
+                    self.timeline.selection)  # fmt: skip
         op = self.optimizer_panel
         op.settingChanged.connect(self._guard(s.set_setting))
         op.methodChanged.connect(lambda m: s.set_method(m))
@@ -249,6 +256,7 @@ class MainWindow(QMainWindow):
             self.timeline.set_selection(None)
             self.opened_motion = event.motion  # what clip_saving compares against
         self.timeline.set_range(self.session.num_frames, event.motion.fps)
+        self.constraint_panel.frames_changed()
         self.plots.clear()
         self.method_errors.clear()
         self.viewport.reset_camera(event.motion.root_pos[0])
@@ -339,7 +347,7 @@ class MainWindow(QMainWindow):
         self._open_dropped([u.toLocalFile() for u in event.mimeData().urls() if u.isLocalFile()])
 
     def closeEvent(self, event: Any) -> None:
-        if not clip_saving.confirm_discard(self, "quitting"):
+        if not authoring_actions.confirm_quit(self):
             event.ignore()
             return
         if self.autosave is not None:  # closed on purpose: saved, or discarded when asked

@@ -17,6 +17,7 @@ from typing import Any
 from PyQt6.QtCore import Qt
 
 from app.constraint_placement import placed_params
+from app.constraint_ranges import link_ranges
 from app.schema import constraint_schema
 from widgets.constraint_panel import ConstraintPanel
 
@@ -30,6 +31,9 @@ class PoseConstraints:
         self.panel.addRequested.connect(self.add)
         self.panel.removeRequested.connect(self.remove)
         self.panel.changed.connect(self.update)
+        # the key strip is built after this dock: looked up when a span is drawn
+        link_ranges(self.panel, lambda span: window.keys.set_constraint_span(span), lambda: window.frame,
+                    lambda: window.scene.animation.frames)  # fmt: skip
         window._dock("Constraints", self.panel, Qt.DockWidgetArea.RightDockWidgetArea)
 
     def add(self, kind: str, **params: Any) -> None:

@@ -143,7 +143,7 @@ class PoseFiles:
         except UserError as exc:
             QMessageBox.warning(self.w, "Export video", str(exc))
             return
-        export_video(self.w, motion, None, suggested=self.suggested(".mp4"))
+        export_video(self.w, motion, None, suggested=self.suggested(".mp4"), settings=self.w.settings)
 
     def screenshot(self, path: str | Path) -> bool:
         """Save the window, 3D view included, as a PNG (the studio's compositing)."""

@@ -24,7 +24,7 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-from PyQt6.QtCore import Qt, QTimer
+from PyQt6.QtCore import QSettings, Qt, QTimer
 from PyQt6.QtGui import QCloseEvent
 from PyQt6.QtWidgets import (
     QApplication, QDockWidget, QDoubleSpinBox, QFrame, QLabel, QMainWindow, QMessageBox, QScrollArea, QWidget,
@@ -52,12 +52,15 @@ SIDE_PANEL_PX = 330
 
 
 class PoseWindow(QMainWindow):
-    """See the module doc. ``session``: the authoring model the window shows and edits."""
+    """See the module doc. ``session``: the authoring model the window shows and edits;
+    ``settings``: where dialogs remember their choices (default: the studio's)."""
 
-    def __init__(self, session: AuthoringSession, parent: QWidget | None = None) -> None:
+    def __init__(self, session: AuthoringSession, parent: QWidget | None = None,
+                 settings: QSettings | None = None) -> None:  # fmt: skip
         super().__init__(parent)
         self.setWindowTitle("DragPoser studio: pose and keys")
         self.session = session
+        self.settings = settings or QSettings("dragposer-studio", "studio")
         self.undo: History = session.history
         self.jobs = JobRunner(self)
         self.autosave: Any = None  # an app.autosave.DocumentAutosave when the studio autosaves
@@ -102,11 +105,15 @@ class PoseWindow(QMainWindow):
         self.facing.valueChanged.connect(self.turn_body)
         body.addWidget(self.facing)
         self.playback = KeyPlayback(self)
+        # the status bar from the start: QMainWindow would make it on the first message,
+        # and its arrival would push the 3D view and the key timeline up under the mouse
+        self.statusBar().setSizeGripEnabled(False)
         self.files = PoseFiles(self)
         build_pose_menus(self)
         self.camera_keys = CameraKeys(self.viewport, self)
         QApplication.instance().installEventFilter(self.camera_keys)
         self._render_pending = False
+        self._asked_to_close = False  # the studio's quit asked already (close_unasked)
         self._subscriptions: list[tuple[Any, Callable]] = []
         for signal, slot in ((session.events.targets, self._on_targets), (session.events.pose, self._on_pose),
                              (session.events.keys, self._on_keys), (session.events.animation, self._on_keys),
@@ -151,11 +158,14 @@ class PoseWindow(QMainWindow):
         self.addDockWidget(area, dock)
 
     def _guard(self, title: str, action: Callable[[], Any], warn: bool = False) -> None:
-        """Run ``action()``; a UserError becomes a message box titled ``title``."""
+        """Run ``action()``; a UserError becomes a message box titled ``title``, unless the
+        window closed while the action waited (a bake cancelled by quitting): a box over
+        no window would keep the application running until clicked away."""
         try:
             action()
         except UserError as exc:
-            (QMessageBox.warning if warn else QMessageBox.information)(self, title, str(exc))
+            if self.isVisible():
+                (QMessageBox.warning if warn else QMessageBox.information)(self, title, str(exc))
 
     def _edit(self, action: Callable[[], Any]) -> None:
         """A model edit from a gesture: playing stops first; a refused edit says why."""
@@ -291,6 +301,7 @@ class PoseWindow(QMainWindow):
     def _on_keys(self, e: Any = None) -> None:
         a = self.scene.animation
         self.keys.set_state(a.frames, a.fps, tuple(k.frame for k in self.scene.keys), self.frame, a.interpolation)
+        self.constraints.panel.frames_changed()
 
     def _on_constraints(self, e: Any = None) -> None:
         self.constraints.refresh()
@@ -312,10 +323,16 @@ class PoseWindow(QMainWindow):
         self._on_pose()
 
     # -- closing -------------------------------------------------------------------
+    def close_unasked(self) -> bool:
+        """Close without the unsaved-work prompt: the studio's quit has asked it already
+        (:func:`app.authoring_actions.confirm_quit`)."""
+        self._asked_to_close = True
+        return self.close()
+
     def closeEvent(self, event: QCloseEvent | None) -> None:  # noqa: N802 (Qt's name)
         if event is None:
             return
-        if not self.files.confirm_discard("closing"):
+        if not self._asked_to_close and not self.files.confirm_discard("closing"):
             event.ignore()
             return
         if self.autosave is not None:  # closed on purpose: saved, or discarded when asked

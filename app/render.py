@@ -70,13 +70,37 @@ def parse_size(text: str) -> tuple[int, int]:
 def options_from_args(args: argparse.Namespace) -> RenderOptions:
     """The video options of ``render``'s arguments, checked (:class:`engine.errors.UserError`)."""
     ghosts = tuple(g.strip() for g in (args.ghosts or "").split(",") if g.strip())
-    if ghosts and not args.sensors:
-        raise UserError("--ghosts needs --sensors (the trackers they reconstruct from)")
     if args.msaa not in (0, 2, 4, 8):
         raise UserError(f"--msaa must be 0, 2, 4 or 8, got {args.msaa}")
-    return RenderOptions(size=parse_size(args.size), sensors=args.sensors, ghosts=ghosts, view=args.view,
-                         camera=args.camera, layout=args.layout, truth=args.truth, title=args.title,
-                         timecode=args.timecode, msaa=args.msaa)  # fmt: skip
+    options = RenderOptions(size=parse_size(args.size), sensors=args.sensors, ghosts=ghosts, view=args.view,
+                            camera=args.camera, layout=args.layout, truth=args.truth, title=args.title,
+                            timecode=args.timecode, msaa=args.msaa)  # fmt: skip
+    check_options(options)
+    return options
+
+
+def check_options(options: RenderOptions) -> None:
+    """Refuse a video that cannot be made, before any file is chosen or frame drawn:
+    ghosts without trackers, an unknown method or tracker preset, or a ghost method that
+    cannot run from these trackers (:func:`engine.methods.presets.preset_problem`)."""
+    from engine.methods import available_methods
+    from engine.methods.presets import preset_problem
+
+    if options.sensors:
+        from app.render_scene import preset_sensors
+
+        preset_sensors(options.sensors)  # a known preset
+    if not options.ghosts:
+        return
+    if not options.sensors:
+        raise UserError("--ghosts needs --sensors (the trackers they reconstruct from)")
+    unknown = [g for g in options.ghosts if g not in available_methods()]
+    if unknown:
+        raise UserError(f"--ghosts: unknown method {unknown[0]!r}; known: {', '.join(available_methods())}")
+    for ghost in options.ghosts:
+        problem = preset_problem(ghost, options.sensors)
+        if problem:
+            raise UserError(f"--ghosts {ghost}: {problem}")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -185,19 +209,13 @@ class _Stopwatch:
 
 def _start_ghosts(motion, options: RenderOptions):
     """The ghosts' solve, started at once (its process loads while the scene is built)."""
+    check_options(options)
     if not options.ghosts:
         return None
-    if not options.sensors:
-        raise UserError("--ghosts needs --sensors (the trackers they reconstruct from)")
     from app.render_scene import preset_sensors
-    from engine.methods import available_methods
     from engine.studio.ghost_solve import GhostSolves
 
-    sensors = preset_sensors(options.sensors)
-    unknown = [g for g in options.ghosts if g not in available_methods()]
-    if unknown:
-        raise UserError(f"--ghosts: unknown method {unknown[0]!r}; known: {', '.join(available_methods())}")
-    return GhostSolves(motion, sensors, options.ghosts)
+    return GhostSolves(motion, preset_sensors(options.sensors), options.ghosts)
 
 
 def main(argv: list[str] | None = None) -> int:

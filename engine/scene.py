@@ -14,9 +14,12 @@ the keys: :func:`engine.authoring.pose_options.options_from_dict`); its constrai
 (which version 1 files may too: :mod:`engine.constraints.base`). Both versions load; a
 scene is written as version 2 only when it has something version 1 lacks.
 
-Unknown settings and malformed constraints are errors naming the file and the field.
-The studio's session may add its own keys (clip, sensors, frame); they are ignored here.
-Files are written atomically (temporary file, then rename).
+Every key is checked: an unknown one (top level, settings, constraint fields) is an error
+naming the file, the key and the nearest known one, so a misspelt ``keys`` is not read as
+"no keys". The studio's own keys (:data:`STUDIO_FIELDS`, written by
+:mod:`engine.studio.scenes`) are known here and applied by the studio only. Malformed
+constraints are errors naming the file and the field. Files are written atomically
+(temporary file, then rename).
 """
 
 from __future__ import annotations
@@ -33,12 +36,18 @@ from engine.constraints.base import Constraint, from_dict
 from engine.errors import UserError
 from engine.input_files import read_json
 from engine.solver import OptimizerSettings
-from engine.validation import shown
+from engine.validation import check_known_fields, shown
 
 FORMAT = "dragposer-scene"
 #: The newest version this build writes and reads; every version up to it loads.
 VERSION = 2
 VERSIONS = (1, 2)
+#: Top-level keys of every scene: the optimizer's (version 1), the authored animation's
+#: (version 2), and the studio's own (:mod:`engine.studio.scenes` writes and applies them).
+OPTIMIZER_FIELDS = ("format", "version", "settings", "constraints")
+AUTHORING_FIELDS = ("character", "animation", "keys")
+STUDIO_FIELDS = ("clip", "method", "preset", "sensors", "frame")
+SCENE_FIELDS = OPTIMIZER_FIELDS + AUTHORING_FIELDS + STUDIO_FIELDS
 
 
 def scene_to_dict(constraints: Iterable[Constraint], settings: OptimizerSettings | dict[str, Any] | None) -> dict:
@@ -79,6 +88,7 @@ def scene_from_dict(doc: Any, where: str = "scene") -> tuple[list[Constraint], O
     """Inverse of :func:`scene_to_dict`; ``where`` prefixes error messages."""
     if not isinstance(doc, dict):
         raise UserError(f"{where}: a scene is a JSON object")
+    check_known_fields(doc, SCENE_FIELDS, where)
     if doc.get("format", FORMAT) != FORMAT:
         raise UserError(f"{where}: field 'format' is {shown(doc.get('format'))}, expected {FORMAT!r}")
     version = doc.get("version", 1)
@@ -91,10 +101,7 @@ def scene_from_dict(doc: Any, where: str = "scene") -> tuple[list[Constraint], O
     raw = doc.get("settings", {}) or {}
     if not isinstance(raw, dict):
         raise UserError(f"{where}: field 'settings' must be an object")
-    known = {f.name for f in dataclasses.fields(OptimizerSettings)}
-    unknown = sorted(set(raw) - known)
-    if unknown:
-        raise UserError(f"{where}: settings: unknown field(s) {', '.join(shown(u) for u in unknown)}")
+    check_known_fields(raw, (f.name for f in dataclasses.fields(OptimizerSettings)), f"{where}: settings")
     try:
         settings = OptimizerSettings(**raw)
     except UserError as exc:

@@ -32,11 +32,12 @@ user-facing table.
 
 from __future__ import annotations
 
+import difflib
 import math
 import os
 import stat
 import tempfile
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -76,6 +77,28 @@ def shown(value: Any, limit: int = MAX_SHOWN) -> str:
     except ValueError:  # an int too long for repr (Python's digit limit)
         text = "<a very long number>"
     return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def check_known_fields(value: Mapping[str, Any], known: Iterable[str], where: str) -> None:
+    """Refuse any key of ``value`` outside ``known``: a misspelt key would otherwise be
+    read as absent and its default used without a word (``keyz`` would bake a clip with no
+    keys). The message names each unknown key and the nearest known one.
+
+    Raises
+    ------
+    UserError
+        ``<where>: unknown field 'keyz' (did you mean 'keys'?); known: ...``.
+    """
+    known = sorted(known)
+    unknown = sorted((k for k in value if k not in known), key=str)
+    if not unknown:
+        return
+    parts = []
+    for key in unknown:
+        near = difflib.get_close_matches(str(key), known, n=1, cutoff=0.6)
+        parts.append(f"{shown(key)} (did you mean {near[0]!r}?)" if near else shown(key))
+    noun = "field" if len(unknown) == 1 else "fields"
+    raise UserError(f"{where}: unknown {noun} {', '.join(parts)}; known: {', '.join(known)}")
 
 
 def one_line(message: str, limit: int = 500) -> str:

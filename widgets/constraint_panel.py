@@ -4,13 +4,16 @@ The panel knows constraint kinds only through a *schema* (built by the app from 
 engine's catalog, so this module stays free of torch): for each kind, a list of
 ``(field name, tag, default[, choices])`` with tags ``float``, ``int``, ``bool``,
 ``joint``, ``joints`` (several joints), ``choice`` (one of ``choices``), ``vec3``,
-``str``. The editor sits in a scroll area, so a kind with many fields never grows the
+``str``, ``frames`` (the frame range with its blends: :mod:`widgets.frame_range`). The
+window says how many frames there are and which range to offer (:attr:`ConstraintPanel.frame_count`,
+:attr:`ConstraintPanel.default_range`) and draws the selected constraint's range on its
+timeline (``selected``, :meth:`ConstraintPanel.span`). The editor sits in a scroll area, so a kind with many fields never grows the
 window, and it follows edits made elsewhere (a gizmo drag, undo) without emitting.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -24,6 +27,7 @@ from PyQt6.QtWidgets import (
 
 from engine.skeleton import JOINT_NAMES
 from widgets.field_editing import commit_only, is_editing
+from widgets.frame_range import FRAME_FIELDS, FrameRangeEditor, Span, span_of
 
 Schema = dict[str, list[Sequence[Any]]]
 _BASE_FIELDS = ("name", "weight", "enabled")
@@ -88,17 +92,22 @@ class ConstraintEditor(QWidget):
         weight.valueChanged.connect(lambda v: self.changed.emit({"weight": float(v)}))
         form.addRow("weight", weight)
         self.inputs["weight"] = weight
+        self.range: FrameRangeEditor | None = None
         for spec in fields:
             name, tag, default = spec[0], spec[1], spec[2]
-            if name in _BASE_FIELDS:
-                continue
+            if name in _BASE_FIELDS or (name in FRAME_FIELDS and tag != "frames"):
+                continue  # the blends are part of the frame range's row
             choices = tuple(spec[3]) if len(spec) > 3 else ()
             self.tags[name] = tag
             form.addRow(name, self._make(name, tag, values.get(name, default), choices))
 
     def _make(self, name: str, tag: str, value: Any, choices: tuple[str, ...]) -> QWidget:
         emit = lambda v, n=name: self.changed.emit({n: v})  # noqa: E731
-        if tag == "float":
+        if tag == "frames":
+            w: Any = FrameRangeEditor({"frames": value})
+            w.changed.connect(self.changed.emit)
+            self.range = w
+        elif tag == "float":
             w: Any = _spin(value)
             w.valueChanged.connect(lambda v: emit(float(v)))
         elif tag == "int":
@@ -141,9 +150,13 @@ class ConstraintEditor(QWidget):
         """Show ``values`` (edited elsewhere) without emitting ``changed``; a field the
         user is editing keeps what is typed there."""
         for name, w in self.inputs.items():
+            tag = self.tags.get(name, "")
+            if tag == "frames":  # keeps a number being typed itself; a saved form leaves out a range of every frame
+                w.set_values(values)
+                continue
             if name not in values or is_editing(w):
                 continue
-            v, tag = values[name], self.tags.get(name, "")
+            v = values[name]
             widgets = w.spins if tag == "vec3" else [w]
             for x in widgets:
                 x.blockSignals(True)
@@ -172,6 +185,8 @@ class ConstraintPanel(QWidget):
     addRequested = pyqtSignal(str)
     removeRequested = pyqtSignal(str)
     changed = pyqtSignal(str, dict)
+    #: The constraint whose editor shows changed, or its fields did ("" for none).
+    selected = pyqtSignal(str)
 
     def __init__(self, schema: Schema, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -205,6 +220,20 @@ class ConstraintPanel(QWidget):
         self.editor: ConstraintEditor | None = None
         self.constraints: list[dict[str, Any]] = []
         self._updating = False
+        #: ``() -> frames`` of the clip or animation (bounds the frame range's fields).
+        self.frame_count: Callable[[], int] = lambda: 61
+        #: ``() -> (start, end)``: the range offered when *only frames* is ticked.
+        self.default_range: Callable[[], tuple[int, int]] = lambda: (0, 60)
+
+    def frames_changed(self) -> None:
+        """The clip or the animation changed length: bound the open range editor by it."""
+        if self.editor is not None and self.editor.range is not None:
+            self.editor.range.set_frame_count(self.frame_count())
+
+    def span(self) -> Span | None:
+        """The selected constraint's frame range and blends, None for none or every frame."""
+        data = next((c for c in self.constraints if c["name"] == self.current_name()), None)
+        return None if data is None else span_of(data)
 
     def set_constraints(self, constraints: list[dict[str, Any]]) -> None:
         """Show the session's constraints (``to_dict`` form) without emitting.
@@ -241,10 +270,13 @@ class ConstraintPanel(QWidget):
             self._updating = False
         if rebuild:
             self._show_editor()
-        elif self.editor is not None:
-            data = next((c for c in self.constraints if c["name"] == self.current_name()), None)
-            if data is not None:
-                self.editor.set_values(data)
+        else:
+            if self.editor is not None:
+                data = next((c for c in self.constraints if c["name"] == self.current_name()), None)
+                if data is not None:
+                    self.editor.set_values(data)
+                self.frames_changed()
+            self.selected.emit(self.current_name())
 
     def current_name(self) -> str:
         item = self.list.currentItem()
@@ -257,11 +289,14 @@ class ConstraintPanel(QWidget):
             self.editor = None
         name = self.current_name()
         data = next((c for c in self.constraints if c["name"] == name), None)
-        if data is None:
-            return
-        self.editor = ConstraintEditor(self.schema.get(data["kind"], []), data)
-        self.editor.changed.connect(lambda changes, n=name: self.changed.emit(n, changes))
-        self.scroll.setWidget(self.editor)
+        if data is not None:
+            self.editor = ConstraintEditor(self.schema.get(data["kind"], []), data)
+            self.editor.changed.connect(lambda changes, n=name: self.changed.emit(n, changes))
+            if self.editor.range is not None:
+                self.editor.range.set_frame_count(self.frame_count())
+                self.editor.range.default_range = lambda: self.default_range()
+            self.scroll.setWidget(self.editor)
+        self.selected.emit(name if data is not None else "")
 
     def _item_toggled(self, item: QListWidgetItem) -> None:
         if not self._updating:

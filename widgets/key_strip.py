@@ -4,7 +4,8 @@ A frame ruler with a mark per key: a click or drag scrubs (the window shows the 
 an in-between too), a key dragged along it moves to where it is dropped. Buttons add a
 key at the current frame, delete the current key, move it to the frame in the box;
 spin boxes set the length (frames) and the rate (fps); Play plays the bake from the
-current frame (once, or looped with Loop) and Stop ends it. Every edit is a signal;
+current frame (once, or looped with Loop) and Stop ends it. The selected constraint's
+frame range is drawn along the bottom (:func:`widgets.frame_range.paint_span`). Every edit is a signal;
 the window applies it and shows the result back with :meth:`KeyStrip.set_state`.
 """
 
@@ -17,6 +18,7 @@ from PyQt6.QtWidgets import (
 )  # fmt: skip
 
 from widgets import style
+from widgets.frame_range import Span, paint_span
 
 MAX_FRAMES = 36000
 #: Height of the frame ruler above the keys, pixels.
@@ -48,6 +50,7 @@ class _Strip(QWidget):
         self.frames, self.keys, self.current = 61, (), 0
         self.dragging: int | None = None  # the key held
         self.drop = 0  # where it would land
+        self.span: Span | None = None  # the selected constraint's frame range
 
     def frame_at(self, x: float) -> int:
         span = max(1.0, self.width() - 1 - 2 * MARGIN_PX)
@@ -130,6 +133,8 @@ class _Strip(QWidget):
             self._diamond(p, self.x_of(k), colour)
         if self.dragging is not None:
             self._diamond(p, self.x_of(self.drop), QColor(style.GIZMO))
+        if self.span is not None:
+            paint_span(p, self.x_of, self.span, h - 5, 4)
         x = self.x_of(self.current)
         p.setPen(QPen(QColor(style.RECONSTRUCTION), 2))
         p.drawLine(QPointF(x, RULER_PX), QPointF(x, h))
@@ -219,6 +224,13 @@ class KeyStrip(QWidget):
         where = " (key)" if on_key else " (in-between)" if len(s.keys) > 1 and s.keys[0] < s.current < s.keys[-1] else ""
         self.label.setText(f"frame {s.current} / {frames - 1}, {len(s.keys)} key{'s' * (len(s.keys) != 1)}{where}")
         s.update()
+
+    def set_constraint_span(self, span: Span | None) -> None:
+        """Show the selected constraint's frame range ``(start, end, blend_in, blend_out)``
+        under the keys (None: it acts on every frame, or none is selected)."""
+        if span != self.strip.span:
+            self.strip.span = span
+            self.strip.update()
 
     def set_playing(self, playing: bool) -> None:
         """Show the Play button as Stop while the bake plays."""

@@ -2,7 +2,9 @@
 
 A plain press or drag scrubs as any slider does. With Shift held, a click marks the
 range from the current frame to the clicked one, and a drag marks the frames it sweeps;
-a right click clears the range. The range is what Edit ▸ Re-solve range acts on.
+a right click clears the range. The range is what Edit ▸ Re-solve range acts on. The
+selected constraint's frame range, when it has one, is drawn along the top
+(:func:`widgets.frame_range.paint_span`).
 """
 
 from __future__ import annotations
@@ -10,6 +12,8 @@ from __future__ import annotations
 from PyQt6.QtCore import QPoint, Qt, pyqtSignal
 from PyQt6.QtGui import QColor, QMouseEvent, QPainter, QPaintEvent
 from PyQt6.QtWidgets import QSlider, QStyle, QStyleOptionSlider, QWidget
+
+from widgets.frame_range import Span, paint_span
 
 #: A Shift-press that moves less than this (pixels) before release is a click.
 DRAG_START_PX = 4
@@ -26,6 +30,17 @@ class RangeSlider(QSlider):
         self._selection: tuple[int, int] | None = None
         self._press: tuple[int, int] | None = None  # x (pixels) and frame of a Shift-press
         self._marks: tuple[int, ...] = ()  # frames drawn as red ticks (flagged by latent debugging)
+        self._span: Span | None = None  # the selected constraint's frame range
+
+    def set_span(self, span: Span | None) -> None:
+        """Draw the selected constraint's range ``(start, end, blend_in, blend_out)`` along
+        the top (None: none)."""
+        if span != self._span:
+            self._span = span
+            self.update()
+
+    def span(self) -> Span | None:
+        return self._span
 
     def set_marks(self, frames: list[int] | tuple[int, ...]) -> None:
         """Draw ``frames`` as short red ticks under the groove (empty: none)."""
@@ -114,6 +129,10 @@ class RangeSlider(QSlider):
     # -- drawing -----------------------------------------------------------------
     def paintEvent(self, event: QPaintEvent | None) -> None:  # noqa: N802 (Qt's name)
         super().paintEvent(event)
+        if self._span is not None:
+            painter = QPainter(self)
+            paint_span(painter, self._x_of, self._span, 0, 4)
+            painter.end()
         if self._marks:
             painter = QPainter(self)
             painter.setPen(QColor(255, 59, 48))

@@ -130,6 +130,11 @@ class Timeline(QWidget):
         """Select ``start..end`` (None clears); emits ``selectionChanged`` if it changed."""
         self.slider.set_selection(start, end)
 
+    def set_constraint_span(self, span: tuple[int, int, int, int] | None) -> None:
+        """Show the selected constraint's frame range ``(start, end, blend_in, blend_out)``
+        on the scrub bar (None: it acts on every frame, or none is selected)."""
+        self.slider.set_span(span)
+
     def set_marks(self, frames: list[int]) -> None:
         """Mark ``frames`` on the slider (red ticks: the frames latent debugging flags)."""
         self.slider.set_marks(frames)

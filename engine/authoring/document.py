@@ -25,7 +25,7 @@ from engine.errors import UserError
 from engine.input_files import read_json
 from engine.scene import FORMAT, scene_from_dict, scene_to_dict
 from engine.solver import OptimizerSettings
-from engine.validation import shown
+from engine.validation import check_known_fields, shown
 
 #: Longest animation accepted, frames (ten minutes at 60 fps).
 MAX_FRAMES = 36000
@@ -123,9 +123,7 @@ def _whole(value: Any, where: str, lo: int, hi: int) -> int:
 def _object(value: Any, where: str, fields: set[str]) -> dict:
     if not isinstance(value, dict):
         raise UserError(f"{where} must be an object")
-    unknown = sorted(set(value) - fields)
-    if unknown:
-        raise UserError(f"{where}: unknown field(s) {', '.join(shown(u) for u in unknown)}")
+    check_known_fields(value, fields, where)
     return value
 
 

@@ -109,6 +109,9 @@ class PoseMode:
         self.heading = float(heading)
         self.targets: dict[str, JointTarget] = {}
         self.constraints: list[Constraint] = []
+        #: The animation frame being posed: a constraint limited to frames acts on the
+        #: pose as it will on that frame of the bake (its activity there).
+        self.frame = 0
         self.pose: Pose = self.character.decode(self.base_latent, self.character.grounded(root_xy, self.heading))
         self._standing_root = float(self.pose.root_pos[2])
         self._lowest_reach = self._arm_low_points()
@@ -289,9 +292,9 @@ class PoseMode:
                 break
             where = self._where(o.free_height or iterations > 0)
             if o.free_height:
-                ctx = c.grounded(where[:2], self.heading, prior=self.base_latent)
+                ctx = c.grounded(where[:2], self.heading, self.frame, prior=self.base_latent)
             else:
-                ctx = c.placed(where, self.heading, prior=self.base_latent)
+                ctx = c.placed(where, self.heading, self.frame, prior=self.base_latent)
             before = self.pose
             solved = c.solve(self.pose.latent, terms + self._hold_terms(where), ctx, reach, rotations,
                              iterations=iterations, prior_weight=o.prior_weight, rule="sgd",
@@ -362,7 +365,7 @@ class PoseMode:
         if self.anchor is None:
             self.anchor = self.pose
         where = self._where()
-        ctx = c.grounded(where[:2], self.heading, prior=self.base_latent)
+        ctx = c.grounded(where[:2], self.heading, self.frame, prior=self.base_latent)
         solved = c.solve(self.pose.latent, terms + self._hold_terms(where), ctx, reach, rotations,
                          prior_weight=o.prior_weight)  # fmt: skip
         self.pose = self._kept_trunk(solved, reach, rotations)
@@ -370,7 +373,7 @@ class PoseMode:
             if self.shortfall() <= o.reach_tolerance:
                 break
             where = self._where()
-            ctx = c.grounded(where[:2], self.heading, prior=self.base_latent)
+            ctx = c.grounded(where[:2], self.heading, self.frame, prior=self.base_latent)
             solved = c.solve(self.pose.latent, terms + self._hold_terms(where), ctx, reach, rotations,
                              iterations=ITERATIONS, prior_weight=o.prior_weight, rule="sgd",
                              step_size=STEP_SIZE)  # fmt: skip

@@ -67,6 +67,17 @@ class AuthoringSession:
         self._clock = clock
         self._generation = 0  # counts changes: a bake of an older scene is stale
 
+    @property
+    def frame(self) -> int:
+        """The animation frame shown and posed (the pose's solves weigh each constraint by
+        its activity on this frame, as the bake does)."""
+        return self._frame
+
+    @frame.setter
+    def frame(self, value: int) -> None:
+        self._frame = int(value)
+        self.mode.frame = self._frame
+
     @classmethod
     def new(cls, height: float | None = None, motion: Motion | None = None, frame: int = 0,
             vae: Any = None) -> AuthoringSession:  # fmt: skip

@@ -16,7 +16,7 @@ from engine import skeleton as sk
 from engine.constraints.sensor import SensorConstraint
 from engine.errors import UserError
 from engine.solver.limb_ik import LIMBS
-from engine.validation import shown
+from engine.validation import check_known_fields, shown
 
 #: Accepted target weights (the GUI's 0-10 slider).
 WEIGHT_RANGE = (0.0, 10.0)
@@ -97,9 +97,7 @@ def target_from_json(joint: str, value, where: str) -> JointTarget:
     "weight": w, "enabled": b}``; errors are prefixed with ``where``."""
     try:
         if isinstance(value, dict):
-            unknown = sorted(set(value) - {"position", "rotation", "weight", "enabled"})
-            if unknown:
-                raise UserError(f"unknown field(s) {', '.join(shown(u) for u in unknown)}")
+            check_known_fields(value, ("position", "rotation", "weight", "enabled"), "target")
             if "position" not in value:
                 raise UserError("field 'position' is missing")
             enabled = value.get("enabled", True)

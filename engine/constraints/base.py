@@ -31,7 +31,7 @@ from engine import skeleton as sk
 from engine.constraints.residual import FrameInputs, Term
 from engine.errors import UserError
 from engine.gizmos import Gizmo
-from engine.validation import shown
+from engine.validation import check_known_fields, shown
 
 if TYPE_CHECKING:  # torch is imported by the code that runs a loss (the engine), not by editors
     import torch
@@ -327,12 +327,11 @@ def from_dict(data: dict[str, Any]) -> Constraint:
         raise UserError(f"unknown constraint kind {shown(kind)}; known: {', '.join(sorted(REGISTRY))}")
     cls = REGISTRY[kind]
     names = {f.name: f for f in dataclasses.fields(cls)}
+    check_known_fields(data, ("kind", *names), f"constraint {kind!r}")
     kwargs = {}
     for key, value in data.items():
         if key == "kind":
             continue
-        if key not in names:
-            raise UserError(f"constraint {kind!r}: unknown field {shown(key)}")
         default = field_default(names[key])
         if isinstance(default, np.ndarray):
             try:

@@ -187,7 +187,9 @@ class DragPoserMethod(Method):
         if override is None and anchor is None and s.root_anchor != "none" and self._frame > 0:
             override = roots.held_root(self._root, self.trackers.points, self.trackers.last_points)
         root = roots.reference_root(self._root, self.sensors, s, override, self.trackers.facing)
-        ctx = FrameContext(root, override, anchor, self._positions, prediction, self._frame, deadline)
+        # the clip's frame, not the count of solves since the reset: a constraint limited
+        # to frames acts by the clip's frame numbers (the studio resets on a seek)
+        ctx = FrameContext(root, override, anchor, self._positions, prediction, sensors.frame, deadline)
         self.settle_constraints(self._pos64)  # e.g. an unset pin takes the previous pose
         terms = [*self.sensors.values(), self.prior, self.smooth, self.ground, *self.constraints]
         # frame 0 has no history to start from: it is solved offline

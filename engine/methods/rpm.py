@@ -23,6 +23,7 @@ from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk
 from engine.methods.base import FrameResult, Method, check_preset
+from engine.methods.presets import REQUIRED_PRESET
 from engine.sensors import Sensor, SensorFrame
 from engine.models.rpm import RPM_JOINTS, blank_pose, roll, rolling_step, track_features, yaw_matrix
 from engine.motion.clip import Motion
@@ -65,7 +66,7 @@ class RPMMethod(Method):
         self._ctx: torch.Tensor | None = None
 
     def _sample(self, frame: SensorFrame) -> None:
-        check_preset(frame.readings, RPM_JOINTS, self.name, "3-head-hands")
+        check_preset(frame.readings, RPM_JOINTS, self.name, REQUIRED_PRESET["rpm"])
         pos, rot, flags = np.zeros((3, 3)), np.tile([1.0, 0.0, 0.0, 0.0], (3, 1)), np.zeros(3, dtype=bool)
         for k, j in enumerate(RPM_JOINTS):
             r = frame.readings[j]

@@ -32,6 +32,7 @@ from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk
 from engine.methods.base import FrameResult, Method, check_preset
+from engine.methods.presets import REQUIRED_PRESET
 from engine.sensors import SensorFrame
 from engine.models.sparseposer import LIMB_EE, SPARSE_INDEX, SPARSE_JOINTS, local_rotations
 from engine.models.sparseposer_infer import DenseGenerator, StackedLimbIK, context_frames
@@ -100,7 +101,7 @@ class SparsePoserMethod(Method):
 
     def _sparse_features(self, frame: SensorFrame) -> np.ndarray:
         """Raw root-space dual quaternions ``(6, 8)`` of the tracked joints (SPARSE_JOINTS)."""
-        check_preset(frame.readings, SPARSE_JOINTS, self.name, "6")
+        check_preset(frame.readings, SPARSE_JOINTS, self.name, REQUIRED_PRESET["sparseposer"])
         rd = [frame.readings[j] for j in SPARSE_JOINTS]
         rot = np.array([r.rotation for r in rd], dtype=np.float64)  # (6, 4)
         pos = np.array([r.position for r in rd], dtype=np.float64)  # (6, 3)

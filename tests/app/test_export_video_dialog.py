@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import imageio_ffmpeg
 import pytest
-from PyQt6.QtCore import Qt
+from PyQt6.QtCore import QPoint, Qt
 from PyQt6.QtWidgets import QDialog, QFileDialog, QMessageBox
 
 from app.export_video_dialog import ExportVideoDialog
@@ -51,3 +51,96 @@ def test_export_video_renders_the_clip_and_says_it_was_written(studio, tmp_path,
     assert meta["size"] == (640, 360) and sum(1 for _ in frames) == n
     assert told == [f"Video written: {out} ({n} frames, 640x360 at {studio.session.motion.fps:g} fps)"]
     assert studio.statusBar().currentMessage() == told[0]
+
+
+def _click_box(dialog: ExportVideoDialog, name: str) -> None:
+    """Click the check box of ghost ``name`` in the list, where a user clicks it."""
+    from PyQt6.QtTest import QTest
+
+    item = next(dialog.ghosts.item(i) for i in range(dialog.ghosts.count())
+                if dialog.ghosts.item(i).data(Qt.ItemDataRole.UserRole) == name)  # fmt: skip
+    rect = dialog.ghosts.visualItemRect(item)
+    QTest.mouseClick(dialog.ghosts.viewport(), Qt.MouseButton.LeftButton, pos=QPoint(rect.left() + 10, rect.center().y()))
+
+
+def _checked(dialog: ExportVideoDialog) -> list[str]:
+    return [dialog.ghosts.item(i).data(Qt.ItemDataRole.UserRole) for i in range(dialog.ghosts.count())
+            if dialog.ghosts.item(i).checkState() == Qt.CheckState.Checked]  # fmt: skip
+
+
+def _ok(dialog: ExportVideoDialog) -> None:
+    from PyQt6.QtTest import QTest
+    from PyQt6.QtWidgets import QDialogButtonBox
+
+    box = dialog.findChild(QDialogButtonBox)
+    QTest.mouseClick(box.button(QDialogButtonBox.StandardButton.Ok), Qt.MouseButton.LeftButton)
+
+
+def test_a_ghost_that_cannot_run_from_the_trackers_is_greyed_out_and_says_why(studio, monkeypatch):
+    """RPM needs head and hands: with six trackers it cannot run, and the dialog says so
+    before any file is asked for."""
+    studio.session.sensors.set_preset("6")
+    seen: dict = {}
+
+    def look(dialog: ExportVideoDialog) -> int:
+        dialog.show()
+        _click_box(dialog, "rpm")
+        _click_box(dialog, "ik")
+        seen.update(checked=_checked(dialog), note=dialog.note.text(), visible=dialog.note.isVisible(),
+                    rpm_enabled=bool(next(dialog.ghosts.item(i) for i in range(dialog.ghosts.count())
+                                          if dialog.ghosts.item(i).data(Qt.ItemDataRole.UserRole) == "rpm").flags()
+                                     & Qt.ItemFlag.ItemIsEnabled))  # fmt: skip
+        dialog.reject()
+        return dialog.result()
+
+    monkeypatch.setattr(ExportVideoDialog, "exec", look)
+    monkeypatch.setattr(QFileDialog, "getSaveFileName", lambda *a, **k: pytest.fail("no file dialog on cancel"))
+    studio.actions_by_name["export_video"].trigger()
+    assert seen["checked"] == ["ik"] and not seen["rpm_enabled"]
+    assert seen["visible"] and "rpm runs only with tracker preset '3-head-hands'" in seen["note"], seen
+
+
+def test_ok_checks_the_options_before_the_file_dialog_and_stays_open_on_a_refusal(studio, monkeypatch):
+    studio.session.sensors.set_preset("6")
+    seen: dict = {}
+
+    def force_rpm(dialog: ExportVideoDialog) -> int:
+        dialog.show()
+        for i in range(dialog.ghosts.count()):  # a choice the list does not offer: OK must still refuse it
+            if dialog.ghosts.item(i).data(Qt.ItemDataRole.UserRole) == "rpm":
+                dialog.ghosts.item(i).setCheckState(Qt.CheckState.Checked)
+        _ok(dialog)
+        seen.update(open=dialog.isVisible(), note=dialog.note.text())
+        dialog.reject()
+        return dialog.result()
+
+    monkeypatch.setattr(ExportVideoDialog, "exec", force_rpm)
+    monkeypatch.setattr(QFileDialog, "getSaveFileName", lambda *a, **k: pytest.fail("file dialog after a refusal"))
+    studio.actions_by_name["export_video"].trigger()
+    assert seen["open"] and "--ghosts rpm: rpm runs only with tracker preset '3-head-hands'" in seen["note"], seen
+
+
+def test_the_dialog_remembers_the_last_choices(studio, monkeypatch):
+    studio.session.sensors.set_preset("6")
+    shown: list[dict] = []
+
+    def choose(dialog: ExportVideoDialog) -> int:
+        dialog.show()
+        shown.append({"size": dialog.size_box.currentText(), "view": dialog.view.currentText(),
+                      "timecode": dialog.timecode.isChecked(), "title": dialog.title.text(),
+                      "ghosts": _checked(dialog)})  # fmt: skip
+        if len(shown) == 1:
+            dialog.size_box.setCurrentText("640x360")
+            dialog.view.setCurrentText("sticks")
+            dialog.timecode.setChecked(True)
+            dialog.title.setText("walk")
+            _click_box(dialog, "ik")
+        _ok(dialog)
+        return dialog.result()
+
+    monkeypatch.setattr(ExportVideoDialog, "exec", choose)
+    monkeypatch.setattr(QFileDialog, "getSaveFileName", lambda *a, **k: ("", ""))  # then cancel the file
+    studio.actions_by_name["export_video"].trigger()
+    studio.actions_by_name["export_video"].trigger()
+    assert shown[0] == {"size": "960x540", "view": "body", "timecode": False, "title": "", "ghosts": []}
+    assert shown[1] == {"size": "640x360", "view": "sticks", "timecode": True, "title": "walk", "ghosts": ["ik"]}

@@ -212,6 +212,17 @@ def test_bad_input_exits_2_and_writes_nothing(tmp_path, capsys):
     assert "--msaa" in capsys.readouterr().err and not out.exists()
 
 
+def test_a_ghost_that_cannot_run_from_the_trackers_is_refused_before_the_clip_is_read(tmp_path, capsys, monkeypatch):
+    import app.render as render
+
+    monkeypatch.setattr(render, "load_input", lambda path: pytest.fail("the clip was read before the check"))
+    out = tmp_path / "v.mp4"
+    assert main([str(EXAMPLE), "--out", str(out), "--sensors", "6", "--ghosts", "ik,rpm", "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert "--ghosts rpm: rpm runs only with tracker preset '3-head-hands' (these trackers: '6')" in err, err
+    assert not out.exists()
+
+
 def test_a_failure_mid_video_stops_the_encoder_and_leaves_no_file(short_clip, tmp_path, monkeypatch):
     from app.render import render_video
     from app.render_scene import FrameRenderer, RenderOptions

@@ -105,3 +105,91 @@ def test_opening_a_tracker_recording_after_an_edit_asks_first(studio, answer, mo
     answer.next = "Discard"
     studio.live.open_recording_dialog()
     assert len(asked_for_file) == 1
+
+
+def _quit_action(studio):
+    file_menu = studio.menuBar().actions()[0].menu()
+    return next(a for a in file_menu.actions() if a.text() == "&Quit")
+
+
+def test_quit_asks_an_open_pose_window_with_unsaved_keys_and_ends_the_app(studio, answer, qtbot):
+    from PyQt6.QtWidgets import QApplication
+
+    from app.authoring_actions import open_pose_window
+    from tests.app.gui_helpers import close_now
+
+    pose = open_pose_window(studio, 1.7, from_clip=False)
+    try:
+        pose.add_key(0)
+        answer.next = "Cancel"
+        _quit_action(studio).trigger()
+        assert studio.isVisible() and pose.isVisible() and studio.engine.is_alive()
+        assert len(answer.asked) == 1 and "keys and targets before quitting" in answer.asked[0]
+        assert pose.dirty and pose.session.scene.keys  # Cancel kept the keys
+
+        answer.next = "Discard"
+        _quit_action(studio).trigger()
+        assert not studio.isVisible() and not pose.isVisible() and not studio.engine.is_alive()
+        # no window left open: Qt ends the app's event loop when its last window closes
+        assert not [w for w in QApplication.topLevelWidgets() if w.isVisible()]
+        assert len(answer.asked) == 2  # asked once, not again by the pose window's own close
+    finally:
+        if pose.isVisible():
+            close_now(pose)
+
+
+def test_quit_cancelled_in_the_studio_keeps_the_pose_window_open_too(studio, monkeypatch):
+    from PyQt6.QtWidgets import QMessageBox
+
+    from app.authoring_actions import open_pose_window
+    from tests.app.gui_helpers import close_now
+
+    pose = open_pose_window(studio, 1.7, from_clip=False)
+    try:
+        pose.add_key(0)
+        studio.session.constraints.add("floor")
+        asked = []
+
+        def discard_pose_then_cancel_studio(parent, title, text, buttons):
+            asked.append(parent)
+            return QMessageBox.StandardButton.Discard if parent is pose else QMessageBox.StandardButton.Cancel
+
+        monkeypatch.setattr(QMessageBox, "question", discard_pose_then_cancel_studio)
+        _quit_action(studio).trigger()
+        assert asked == [pose, studio]
+        assert studio.isVisible() and pose.isVisible() and pose.session.scene.keys
+    finally:
+        close_now(pose)
+
+
+def test_quit_while_a_pose_window_bakes_cancels_it_and_leaves_no_message_behind(studio, answer, qtbot, monkeypatch):
+    """Quitting while a pose window waits on its bake (scrubbed between keys) cancels the
+    bake; a "the bake did not finish" box over no window would keep the process running
+    until clicked away, so none is shown."""
+    from PyQt6.QtCore import QTimer
+    from PyQt6.QtWidgets import QApplication, QMessageBox
+
+    from app.authoring_actions import open_pose_window
+    from tests.app.gui_helpers import close_now
+
+    pose = open_pose_window(studio, 1.7, from_clip=False)
+    try:
+        pose.keys.length.setValue(151)
+        pose.add_key(0)
+        pose.go_to(150)
+        pose.add_key(150)
+        pose.session.history.set_clean()  # saved: the quit asks nothing
+        shown = []
+        monkeypatch.setattr(QMessageBox, "warning", lambda *a, **k: shown.append(a[2]))
+        quit_during_bake = QTimer(interval=10)
+        quit_during_bake.timeout.connect(lambda: pose.jobs.running and pose.jobs.done >= 3 and (
+            quit_during_bake.stop(), _quit_action(studio).trigger()))  # fmt: skip
+        quit_during_bake.start()
+        pose.go_to(75)  # between the keys: waits on the bake, during which the studio quits
+        quit_during_bake.stop()
+        QApplication.processEvents()
+        assert not studio.isVisible() and not pose.isVisible() and not pose.jobs.running
+        assert shown == [] and answer.asked == []
+    finally:
+        if pose.isVisible():
+            close_now(pose)

@@ -69,3 +69,30 @@ def test_a_scene_carries_the_range_and_names_a_bad_one():
     doc["constraints"][0]["frames"] = [8, 2]
     with pytest.raises(UserError, match=r"s.json: constraints\[0\].*frames"):
         scene_from_dict(doc, "s.json")
+
+
+def test_dragposer_weighs_a_range_by_the_clip_frame_it_solves_not_by_its_solve_count():
+    """The studio resets the method on a seek and solves the frame sought first: a pin
+    limited to frames 10-20 acts when frame 15 is the first one solved (frame 0 of the
+    count of solves, outside the range) and not on frame 3 after frame 2."""
+    import numpy as np
+    import torch
+
+    from engine.methods.dragposer import DragPoserMethod
+    from engine.motion.clip import Motion
+    from engine.tracking import simulate
+    from tests.engine.test_optimizer_standins import CountingPredictor, MLPDecoder
+
+    f = 24
+    t = np.arange(f) / 60.0
+    clip = Motion(np.tile(np.array([1.0, 0.0, 0.0, 0.0]), (f, 22, 1)), np.stack([0.2 * t, -0.8 * t, 1.0 + 0 * t], -1))
+    tracking = simulate(clip, "6")
+    torch.manual_seed(0)
+    m = DragPoserMethod(MLPDecoder(), CountingPredictor(), iterations=3, max_iterations=20)
+    m.reset(clip.skeleton)
+    m.set_constraints([PinConstraint(name="held", joint="lelbow", position=np.array([0.2, -0.3, 1.2]),
+                                     frames=(10, 20))])  # fmt: skip
+    assert "held" in m.step(tracking.frame(15)).losses[-1]  # the first solve after a reset, inside the range
+    m.reset(clip.skeleton)
+    first = [m.step(tracking.frame(i)).losses[-1] for i in (2, 3)]
+    assert all("held" not in losses for losses in first)

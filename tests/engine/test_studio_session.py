@@ -116,7 +116,7 @@ def test_studio_scenes_are_optimizer_scenes(session, tmp_path):
     path.write_text(json.dumps(session.to_scene()))
     constraints, settings = load_scene(path)
     assert settings.lr == 0.05 and [c.to_dict() for c in constraints] == [c.to_dict() for c in session.constraints]
-    for bad, message in (({"lr": 0}, r"s.json: settings: .*lr"), ({"colour": 1}, r"unknown field\(s\) 'colour'")):
+    for bad, message in (({"lr": 0}, r"s.json: settings: .*lr"), ({"colour": 1}, r"settings: unknown field 'colour'")):
         scene = {**session.to_scene(), "settings": bad}
         with pytest.raises(UserError, match=message):
             session.apply_scene(scene, "s.json")

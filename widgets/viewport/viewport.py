@@ -126,7 +126,10 @@ class Viewport(QWidget):
 
     def set_camera(self, preset: str, focus: np.ndarray | None = None) -> None:
         """Place the camera at a preset (``home``, ``front``, ``side``, ``top``) around
-        ``focus`` (default: the followed hips); see :mod:`widgets.viewport.camera`."""
+        ``focus`` (default: the followed hips); see :mod:`widgets.viewport.camera`.
+
+        Renders at once: a paused studio or a pose window draws nothing else until the
+        next edit, so the new view would otherwise wait for an unrelated repaint."""
         if preset not in CAMERA_PRESETS:
             raise ValueError(f"unknown camera preset {preset!r}; known: {', '.join(CAMERA_PRESETS)}")
         if focus is not None:
@@ -134,6 +137,7 @@ class Viewport(QWidget):
         self.camera_preset = preset
         place_camera(self.plotter.camera, preset, self._focus)
         self.plotter.reset_camera_clipping_range()
+        self.plotter.render()
 
     def set_display(self, mode: str) -> None:
         """Draw the reconstruction as a ``stick`` figure or a shaded ``body``."""

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -103,3 +105,15 @@ def test_the_command_bakes_to_gltf_with_the_bvh_s_joints(baked, example_scene, t
     assert read.doc.meshes
     if validator_command() is not None:
         assert [(r["errors"], r["warnings"]) for r in validate([out])] == [(0, 0)]
+
+
+def test_bake_refuses_a_misspelt_key_naming_it_and_exits_non_zero(tmp_path, capsys):
+    """``keys`` misspelt ``keyz`` read as absent would bake the animation without its keys and exit 0."""
+    scene = tmp_path / "s.json"
+    scene.write_text(json.dumps({"format": "dragposer-scene", "version": 2, "animation": {"frames": 61},
+                                 "keyz": [{"frame": 0, "targets": {"lwrist": [0.3, -0.2, 1.2]}}]}))  # fmt: skip
+    out = tmp_path / "o.bvh"
+    assert main(["bake", str(scene), "--out", str(out), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert "s.json" in err and "unknown field 'keyz' (did you mean 'keys'?)" in err, err
+    assert not out.exists()

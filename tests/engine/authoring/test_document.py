@@ -94,3 +94,39 @@ def test_bad_fields_are_named(doc, words):
         authoring_from_dict(doc, "s.json")
     msg = str(err.value)
     assert msg.startswith("s.json") and all(w in msg for w in words), msg
+
+
+@pytest.mark.parametrize(
+    "doc, unknown, nearest",
+    [
+        (_doc(keyz=[{"frame": 1}]), "keyz", "keys"),
+        (_doc(animaton={"frames": 3}), "animaton", "animation"),
+        ({**V1, "setings": {}}, "setings", "settings"),
+        (_doc(settings={"iteration": 3}), "iteration", "iterations"),
+        (_doc(animation={"fps": 30, "frame": 10}), "frame", "frames"),
+        (_doc(keys=[{"frame": 1, "heading_deg": 3}]), "heading_deg", "heading"),
+        (_doc(keys=[{"frame": 1, "targets": {"lwrist": {"positon": [0, 0, 1]}}}]), "positon", "position"),
+        (_doc(constraints=[{**V1["constraints"][0], "frame": [1, 2]}]), "frame", "frames"),
+    ],
+)
+def test_an_unknown_key_is_named_with_the_nearest_known_one(doc, unknown, nearest):
+    """A misspelt key read as absent changes the result silently (``keyz``: a bake with no
+    keys); every level of the scene refuses it and suggests the key meant."""
+    with pytest.raises(UserError) as err:
+        authoring_from_dict(doc, "s.json")
+    msg = str(err.value)
+    assert msg.startswith("s.json") and f"unknown field '{unknown}' (did you mean '{nearest}'?)" in msg, msg
+
+
+def test_an_unknown_key_with_no_near_one_lists_the_known_ones():
+    with pytest.raises(UserError, match=r"s.json: unknown field 'zzzzzz'; known: animation, character, clip"):
+        authoring_from_dict(_doc(zzzzzz=1), "s.json")
+
+
+def test_the_studio_scene_keys_are_known_to_the_one_validator():
+    """The studio writes its own keys (clip, sensors...); they load everywhere."""
+    from engine.studio.session import Session
+
+    doc = Session(method="ik").to_scene()
+    authoring_from_dict(doc, "s.json")
+    scene_from_dict(doc, "s.json")

@@ -246,3 +246,20 @@ def test_turn_maths_ring_and_swept_turns():
     assert SweptTurn.follow(g, "lwrist", q, now=TURN_GESTURE_S / 2) is g
     assert SweptTurn.follow(g, "lwrist", q, now=TURN_GESTURE_S * 3) is not g  # a pause: a new turn
     assert SweptTurn.follow(g, "rwrist", q, now=TURN_GESTURE_S * 3) is not g
+
+
+def test_a_constraint_limited_to_frames_acts_on_the_pose_only_on_those_frames(session):
+    """Posing frame 130 with a pin limited to frames 100-160 holds the wrist there; on
+    frame 0 the pin is not in force, as in the bake."""
+    s = session
+    s.set_length(200)
+    wrist = sk.JOINT_INDEX["lwrist"]
+    start = s.pose.positions[wrist].copy()
+    goal = start + np.array([0.0, -0.25, 0.35])
+    s.add_constraint("pin", name="hold", joint="lwrist", position=goal, weight=30.0, frames=(100, 160))
+    s.settle()  # frame 0: the pin is not in force, the wrist stays
+    off = np.linalg.norm(s.pose.positions[wrist] - start)
+    s.go_to(130)
+    s.settle()
+    on = np.linalg.norm(s.pose.positions[wrist] - goal)
+    assert off < 0.03 and on < 0.08, (off, on)

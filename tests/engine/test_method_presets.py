@@ -1,0 +1,24 @@
+"""The presets a method declares it needs are the ones its first frame checks."""
+
+from __future__ import annotations
+
+import pytest
+
+from engine.methods.presets import REQUIRED_PRESET, preset_problem
+from engine.tracking import PRESET_SENSORS
+
+
+@pytest.mark.parametrize("method, module, joints", [("sparseposer", "engine.models.sparseposer", "SPARSE_JOINTS"),
+                                                     ("rpm", "engine.models.rpm", "RPM_JOINTS")])  # fmt: skip
+def test_the_required_preset_holds_exactly_the_joints_the_method_checks(method, module, joints):
+    import importlib
+
+    want = getattr(importlib.import_module(module), joints)
+    assert sorted((s.joint, s.dof) for s in PRESET_SENSORS[REQUIRED_PRESET[method]]) == sorted((j, 6) for j in want)
+
+
+def test_preset_problem_names_the_preset_needed():
+    assert preset_problem("rpm", "3-head-hands") is None and preset_problem("ik", "4") is None
+    assert preset_problem("sparseposer", "6") is None
+    assert "'3-head-hands'" in preset_problem("rpm", "6") and "'6'" in preset_problem("sparseposer", "6x3dof")
+    assert "none" in preset_problem("ik", None)

@@ -45,7 +45,7 @@ VERSIONS = (1, 2)
 #: Top-level keys of every scene: the optimizer's (version 1), the authored animation's
 #: (version 2), and the studio's own (:mod:`engine.studio.scenes` writes and applies them).
 OPTIMIZER_FIELDS = ("format", "version", "settings", "constraints")
-AUTHORING_FIELDS = ("character", "animation", "keys")
+AUTHORING_FIELDS = ("character", "animation", "keys", "pose_options")
 STUDIO_FIELDS = ("clip", "method", "preset", "sensors", "frame")
 SCENE_FIELDS = OPTIMIZER_FIELDS + AUTHORING_FIELDS + STUDIO_FIELDS
 

@@ -58,7 +58,10 @@ def recover(session: Any, doc: Any, where: str = "autosave") -> None:
     (:meth:`~engine.authoring.session.AuthoringSession.open_scene`), then the frame,
     targets, planted feet, facing and pose as one undo step ("recovered session").
     Everything is checked first; errors name ``where`` and the field."""
-    loaded = authoring_from_dict(doc, where)
+    if not isinstance(doc, dict):
+        raise UserError(f"{where}: not a scene document")
+    # the scene part is checked as any scene file is; ``recovery`` is this module's own
+    loaded = authoring_from_dict({k: v for k, v in doc.items() if k != "recovery"}, where)
     rec = doc.get("recovery")
     if not isinstance(rec, dict):
         raise UserError(f"{where}: field 'recovery' must be an object")

@@ -15,9 +15,18 @@ from typing import Any
 
 from PyQt6.QtCore import Qt
 from PyQt6.QtWidgets import (
-    QCheckBox, QComboBox, QDialog, QDialogButtonBox, QFileDialog, QFormLayout, QLineEdit, QListWidget,
-    QListWidgetItem, QMessageBox, QProgressDialog,
-)  # fmt: skip
+    QCheckBox,
+    QComboBox,
+    QDialog,
+    QDialogButtonBox,
+    QFileDialog,
+    QFormLayout,
+    QLineEdit,
+    QListWidget,
+    QListWidgetItem,
+    QMessageBox,
+    QProgressDialog,
+)
 
 from app.render_scene import CAMERAS, LAYOUTS, VIEWS, RenderOptions
 from engine.errors import UserError

@@ -30,9 +30,9 @@ from __future__ import annotations
 
 import contextlib
 import os
-import stat
 import re
 import signal
+import stat
 import tempfile
 import threading
 from collections.abc import Iterator

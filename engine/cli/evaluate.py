@@ -236,7 +236,6 @@ def _safe_doc(doc: dict[str, Any]) -> dict[str, Any]:
 
 def _evaluate(args: argparse.Namespace) -> int:
     from engine.tracking import parse_sensors
-
     from engine.validation import check_args, check_output_path
 
     parse_sensors(args.sensors)  # fail before loading anything

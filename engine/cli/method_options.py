@@ -69,8 +69,8 @@ def build_method(args: argparse.Namespace) -> Method:
 
     constraints, scene_settings = [], {}
     if getattr(args, "scene", None):
-        from engine.solver import OptimizerSettings
         from engine.scene import load_scene
+        from engine.solver import OptimizerSettings
 
         constraints, settings = load_scene(args.scene)
         defaults = dataclasses.asdict(OptimizerSettings())

@@ -23,7 +23,7 @@ import dataclasses
 import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
-from typing import Any, ClassVar, TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
@@ -162,7 +162,7 @@ class Constraint(ABC):
                 setattr(self, f.name, value)
         self.check()
 
-    def check(self) -> None:
+    def check(self) -> None:  # noqa: B027 - a no-op default that kinds override
         """Validate parameters (override); raise :class:`UserError` naming the field."""
 
     def _check_frames(self) -> None:

@@ -20,7 +20,6 @@ from engine.gizmos import PointGizmo
 from engine.kinematics import quat_np as QN
 
 
-
 @dataclass
 class EndEffectorConstraint(OnOneJoint, Constraint):
     """Pull ``joint`` to ``position`` (and to ``rotation`` if ``use_rotation``).

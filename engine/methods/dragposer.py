@@ -29,17 +29,18 @@ from engine.constraints import Constraint, GroundConstraint, SensorConstraint, S
 from engine.constraints.sensor import unit_rotation
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
-from engine.methods.solve_record import SolveRecord, record_of
 from engine.methods import dragposer_root as roots
 from engine.methods.base import FrameResult, Method
 from engine.methods.dragposer_edits import FrameSettings
 from engine.methods.dragposer_parts import FramePlan, PriorSource, TrackerTerms, UserConstraints
-from engine.sensors import SensorFrame
+from engine.methods.solve_record import SolveRecord, record_of
 from engine.motion.clip import Motion
+from engine.sensors import SensorFrame
 from engine.solver import FrameContext, LatentDecoder, LatentPredictor, OptimizerSettings, PoseOptimizer, RootFrame
 from engine.solver.limb_ik import finish
 from engine.solver.tracker_prior import PoseBank, combination, default_bank
 from engine.startup_trace import mark
+
 
 class DragPoserMethod(Method):
     """Latent-space pose optimisation guided by a temporal predictor.

@@ -59,6 +59,7 @@ from engine.solver.chain import RootFrames
 from engine.solver.limb_ik import finish
 from engine.solver.threads import one_blas_thread
 
+
 class DragPoserMethod(Protocol):
     """What the batched solve takes from :class:`engine.methods.dragposer.DragPoserMethod`
     (public parts only: the frames' plans, the solver, the method's own terms)."""

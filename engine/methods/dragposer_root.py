@@ -17,8 +17,8 @@ import torch
 from engine import skeleton as sk
 from engine.constraints import SensorConstraint
 from engine.kinematics import quaternion as Q
-from engine.solver import OptimizerSettings, RootAnchor, RootFrame, RootOverride
 from engine.kinematics.root import root_displacement
+from engine.solver import OptimizerSettings, RootAnchor, RootFrame, RootOverride
 from engine.solver.pose import BODY_HEADING_LIMIT_DEG, clamp_heading, head_hands_facing
 
 Sensors = dict[str, SensorConstraint]

@@ -33,12 +33,12 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.kinematics import quat_np as Q  # numpy only: no torch dispatch per call
-from engine.kinematics.quat_np import qbetween, qfrom_bases, qnorm, qpow, qtwist, vcross, vnorm
 from engine.kinematics.fk import fk_joints
+from engine.kinematics.quat_np import qbetween, qfrom_bases, qnorm, qpow, qtwist, vcross, vnorm
 from engine.methods.base import FrameResult, Method
-from engine.solver.pose import body_facing
-from engine.sensors import Sensor, SensorFrame
 from engine.motion.clip import Motion
+from engine.sensors import Sensor, SensorFrame
+from engine.solver.pose import body_facing
 
 J = sk.JOINT_INDEX
 SPINE = (J["lowerback"], J["upperback"], J["chest"], J["lowerneck"])

@@ -23,9 +23,9 @@ from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk
 from engine.methods.base import FrameResult, Method, check_preset
-from engine.sensors import Sensor, SensorFrame
 from engine.models.rpm import RPM_JOINTS, blank_pose, roll, rolling_step, track_features, yaw_matrix
 from engine.motion.clip import Motion
+from engine.sensors import Sensor, SensorFrame
 
 _HEAD = sk.JOINT_INDEX["upperneck"]
 

@@ -32,11 +32,11 @@ from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk
 from engine.methods.base import FrameResult, Method, check_preset
-from engine.sensors import SensorFrame
 from engine.models.sparseposer import LIMB_EE, SPARSE_INDEX, SPARSE_JOINTS, local_rotations
 from engine.models.sparseposer_infer import DenseGenerator, StackedLimbIK, context_frames
 from engine.models.sparseposer_stream import streaming_generator
 from engine.motion.clip import Motion
+from engine.sensors import SensorFrame
 
 #: Rows of the limbs' end effectors (ankles, wrists) in the tracked joints.
 _EE_ROWS = [SPARSE_INDEX.index(j) for j in LIMB_EE]

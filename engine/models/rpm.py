@@ -33,8 +33,8 @@ import pymotion.rotations.ortho6d_torch as o6
 import torch
 from torch import nn
 
-from engine.models.config import ModelConfig
 from engine import skeleton as sk
+from engine.models.config import ModelConfig
 
 #: Tracked joints (preset ``3-head-hands``), in input order.
 RPM_JOINTS = ("upperneck", "lwrist", "rwrist")

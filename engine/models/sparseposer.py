@@ -25,10 +25,9 @@ import torch
 from torch import nn
 from torch.nn import functional as F
 
-from engine.models.config import ModelConfig
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
-from engine.kinematics.features import root_space_fk
+from engine.models.config import ModelConfig
 from engine.models.skeletal import (
     POOL_GROUPS,
     SkeletalLinear,

@@ -16,9 +16,9 @@ import numpy as np
 import torch
 from torch import nn
 
-from engine.models.config import ModelConfig
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
+from engine.models.config import ModelConfig
 from engine.models.skeletal import (
     POOL_GROUPS,
     SkeletalLinear,

@@ -11,11 +11,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from engine import skeleton as sk
+from engine.kinematics import quaternion as Q
 from engine.motion import retarget_body as RB
 from engine.motion import retarget_frames as RF
-from engine import skeleton as sk
 from engine.motion.bvh import RawBVH
-from engine.kinematics import quaternion as Q
 from engine.motion.retarget_strategy import RetargetStrategy
 from engine.motion.rigs import RigProfile
 

@@ -32,7 +32,17 @@ import numpy as np
 from engine import skeleton as sk
 from engine.kinematics.fk import fk, fk_joints, fk_positions
 from engine.kinematics.quat_np import (
-    heading, qaxis_angle, qbetween, qconj, qmul, qrotate, vcross, vdot, vnorm, vscale, vsub,
+    heading,
+    qaxis_angle,
+    qbetween,
+    qconj,
+    qmul,
+    qrotate,
+    vcross,
+    vdot,
+    vnorm,
+    vscale,
+    vsub,
 )
 
 #: End joint -> (limb root, middle joint).

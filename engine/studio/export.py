@@ -24,13 +24,13 @@ from engine.methods import driver
 from engine.methods.base import Method
 from engine.motion.clip import Motion
 from engine.sensors import Sensor
-from engine.studio.method_edits import make_method
 from engine.studio.clip_source import ClipSource
+from engine.studio.method_edits import make_method
 
 if TYPE_CHECKING:
-    from engine.studio.session import Session
     from engine.motion.bvh import RawBVH
     from engine.motion.formats import GltfContents
+    from engine.studio.session import Session
 
 
 def reconstruct_clip(motion: Motion, sensors: tuple[Sensor, ...], constraints: tuple[Constraint, ...],

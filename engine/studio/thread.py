@@ -28,18 +28,18 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.methods.base import DecodesLatents, FrameResult, Method
+from engine.sensor_source import SensorSource
 from engine.sensors import SensorFrame
+from engine.startup_trace import mark
 from engine.studio import commands as cmd
+from engine.studio.clip_source import ClipSource
 from engine.studio.decode import decode_request
 from engine.studio.frame_figures import gizmos_of, losses_of, timing_of
 from engine.studio.latent_debug import LatentDebug
-from engine.studio.method_set import MethodSet
 from engine.studio.method_edits import make_method
+from engine.studio.method_set import MethodSet
 from engine.studio.playback import ENDED, LOOPED, PlaybackClock, is_jump
 from engine.studio.snapshot import HISTORY, HistoryEntry, Snapshot, readonly
-from engine.sensor_source import SensorSource
-from engine.studio.clip_source import ClipSource
-from engine.startup_trace import mark
 
 #: How often playback of a live source looks for a newer frame, seconds.
 LIVE_POLL_S = 0.005

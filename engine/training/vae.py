@@ -23,8 +23,15 @@ from engine.kinematics import quaternion as Q
 from engine.kinematics.features import root_space_features, root_space_fk
 from engine.models.loading import load_checkpoint, load_vae
 from engine.models.vae import PoseVAE, VAEConfig, pose_distance
-from engine.training.common import (CurveLog, Distributed, config_dict, on_device, save_checkpoint, seed_everything,
-                                    start_from)  # fmt: skip
+from engine.training.common import (
+    CurveLog,
+    Distributed,
+    config_dict,
+    on_device,
+    save_checkpoint,
+    seed_everything,
+    start_from,  # fmt: skip
+)
 from engine.training.data import PoseData, load_split, read_manifest
 
 FORMAT_VERSION = 1

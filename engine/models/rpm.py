@@ -75,6 +75,13 @@ class _Block(nn.Module):
 class RPM(nn.Module):
     """``f``: tracking window + pose context -> W poses (normalised), and PCAF."""
 
+    # buffers (register_buffer in __init__), declared for the type checker
+    pose_mean: torch.Tensor
+    pose_std: torch.Tensor
+    track_mean: torch.Tensor
+    track_std: torch.Tensor
+    u: torch.Tensor
+
     def __init__(self, config: RPMConfig | None = None, stats: dict | None = None):
         super().__init__()
         self.config = cfg = config or RPMConfig()

@@ -43,6 +43,18 @@ class VAEConfig(ModelConfig):
 class PoseVAE(nn.Module):
     """Skeleton-aware variational autoencoder of single poses."""
 
+    # buffers (register_buffer in __init__), declared for the type checker
+    pool0: torch.Tensor
+    pool1: torch.Tensor
+    pool2: torch.Tensor
+    unpool0: torch.Tensor
+    unpool1: torch.Tensor
+    unpool2: torch.Tensor
+    dq_mean: torch.Tensor
+    dq_std: torch.Tensor
+    disp_mean: torch.Tensor
+    disp_std: torch.Tensor
+
     def __init__(self, config: VAEConfig | None = None, stats: dict | None = None):
         super().__init__()
         self.config = cfg = config or VAEConfig()

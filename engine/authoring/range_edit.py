@@ -234,7 +234,7 @@ def _aim_feet(local: np.ndarray, root: np.ndarray, offsets: np.ndarray, aims: di
     for ankle, (toe, xy) in aims.items():
         bone = pos[toe] - pos[ankle]
         goal = np.array([xy[0], xy[1], pos[toe, 2]]) - pos[ankle]
-        turn = QN.from_to(bone, goal * (np.linalg.norm(bone) / max(np.linalg.norm(goal), 1e-9)))
+        turn = QN.from_to(bone, goal * (np.linalg.norm(bone) / max(float(np.linalg.norm(goal)), 1e-9)))
         parent = rot[sk.PARENTS[ankle]]
         local[ankle] = QN.normalize(QN.mul(QN.conjugate(parent), QN.mul(turn, rot[ankle])))
 

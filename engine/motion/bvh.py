@@ -123,6 +123,7 @@ class RawBVH:
             axis = np.broadcast_to(axis, rad.shape)
             qk = _qnp.from_angle_axis(rad[..., k : k + 1], axis)
             q = qk if q is None else _qnp.mul(q, qk)
+        assert q is not None  # three axes were multiplied in
         return Q.normalize(q)
 
 

@@ -91,7 +91,7 @@ def source_rig(source: str | Path, rig_map: str | Path | None = None) -> tuple[R
     from engine.motion.source_file import load_source
 
     raw = load_source(source)
-    return raw, retarget(raw, manifest_fps(source), rig_map=rig_map)[1]
+    return raw, retarget(raw, manifest_fps(Path(source)), rig_map=rig_map)[1]
 
 
 @dataclass(frozen=True)

@@ -276,10 +276,11 @@ class EngineThread(threading.Thread):
     def _playback_frame(self) -> int:
         """The frame playback is at now (:meth:`PlaybackClock.advance`); a live source's
         newest frame, whatever the pace."""
-        if self._source.live:
-            self._frame = max(self._source.num_frames - 1, 0)
+        src = self._loaded()
+        if src.live:
+            self._frame = max(src.num_frames - 1, 0)
             return self._frame
-        f, event = self._clock.advance(self._frame, self._last_solved, self._source.num_frames, self._source.fps)
+        f, event = self._clock.advance(self._frame, self._last_solved, src.num_frames, src.fps)
         if event == LOOPED:
             self._reset_methods()
         elif event == ENDED:
@@ -297,8 +298,14 @@ class EngineThread(threading.Thread):
         self._pending_error = message
         self._recent_errors.append(message)
 
+    def _loaded(self) -> SensorSource:
+        """The source, which playing, solving and publishing a frame need (set first)."""
+        assert self._source is not None, "no source loaded"
+        return self._source
+
     def _solve(self, frame: int) -> None:
-        jump = is_jump(frame, self._last_solved, self._source.fps if self._source is not None else sk.FPS)
+        src = self._loaded()
+        jump = is_jump(frame, self._last_solved, src.fps)
         # an edit while paused solves the frame again from the state before the first edit
         self._methods.keep_state(not self._playing and not jump and frame == self._last_solved)
         if jump:
@@ -307,7 +314,7 @@ class EngineThread(threading.Thread):
             self._history.clear()
         elif self._playing and frame > self._last_solved + 1:
             self._skipped += frame - self._last_solved - 1
-        sf = self._source.frame(frame)
+        sf = src.frame(frame)
         error = self._pending_error
         self._pending_error = ""
         t0 = time.perf_counter()
@@ -323,7 +330,7 @@ class EngineThread(threading.Thread):
                 self._recent_errors.append(error)
                 self._reset_methods()
         ms = (time.perf_counter() - t0) * 1000.0
-        arrived = self._source.arrival(frame)
+        arrived = src.arrival(frame)
         self._latency_ms = None if arrived is None else (time.perf_counter() - arrived) * 1000.0
         ghosts = {}
         for name, m in self._methods.ghosts.items():
@@ -368,14 +375,15 @@ class EngineThread(threading.Thread):
 
     def _publish(self, frame: int, sf: SensorFrame, res: FrameResult | None, ms: float,
                  error: str, ghosts: dict[str, np.ndarray]) -> None:  # fmt: skip
+        src = self._loaded()
         joints = tuple(sf.readings)
         readings = [sf.readings[j] for j in joints]
         last = res or self._last_result
         self._seq += 1
         method = self._methods.method
         snap = Snapshot(
-            seq=self._seq, frame=frame, num_frames=self._source.num_frames,
-            positions=readonly(self._last_pose), ground_truth=readonly(self._source.ground_truth(frame)),
+            seq=self._seq, frame=frame, num_frames=src.num_frames,
+            positions=readonly(self._last_pose), ground_truth=readonly(src.ground_truth(frame)),
             ghosts={k: readonly(v) for k, v in ghosts.items()},
             target_joints=joints,
             target_positions=readonly(np.array([r.position for r in readings]).reshape(-1, 3)),

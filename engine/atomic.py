@@ -99,7 +99,7 @@ def remove_stale(path: str | Path) -> list[Path]:
     path = Path(path)
     prefix = temp_prefix(path)
     pattern = re.compile(re.escape(prefix) + r"(\d+)-")
-    removed = []
+    removed: list[Path] = []
     try:
         entries = list(os.scandir(path.parent if str(path.parent) else "."))
     except OSError:

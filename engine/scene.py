@@ -43,7 +43,7 @@ VERSIONS = (1, 2)
 
 def scene_to_dict(constraints: Iterable[Constraint], settings: OptimizerSettings | dict[str, Any] | None) -> dict:
     """Plain-JSON form of a scene."""
-    if dataclasses.is_dataclass(settings):
+    if isinstance(settings, OptimizerSettings):
         settings = dataclasses.asdict(settings)
     items = [c.to_dict() for c in constraints]
     return {

@@ -313,8 +313,8 @@ def field_default(f: dataclasses.Field) -> Any:
     """The default value of a dataclass field (calling its factory), or None."""
     if f.default is not dataclasses.MISSING:
         return f.default
-    if f.default_factory is not dataclasses.MISSING:  # type: ignore[misc]
-        return f.default_factory()  # type: ignore[misc]
+    if f.default_factory is not dataclasses.MISSING:
+        return f.default_factory()
     return None
 
 

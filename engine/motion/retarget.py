@@ -185,8 +185,8 @@ def measure_offsets(pts: dict[str, np.ndarray], glob: np.ndarray, leg_scale: flo
         if toe not in pts and tip in pts and f"{side}ankle" in pts:
             k = sk.JOINT_INDEX[toe]
             v = Q.rotate(Q.conjugate(glob[:, ankle]), pts[tip] - pts[f"{side}ankle"]).mean(0)
-            a, b = np.linalg.norm(sk.REST_OFFSETS[k]), np.linalg.norm(sk.END_SITES[toe])
-            off[k] = v * a / (a + b)
+            toe_len, tip_len = np.linalg.norm(sk.REST_OFFSETS[k]), np.linalg.norm(sk.END_SITES[toe])
+            off[k] = v * toe_len / (toe_len + tip_len)
     off[0] = 0.0
     return off
 

@@ -157,7 +157,7 @@ def world_rotations(prof: RigProfile, pts, wrot, idx, cq, strategy: RetargetStra
     body: dict[str, np.ndarray] = {}
     body_twist = prof.align and strategy.body_twist
     if body_twist:
-        straight = {j: Q.rotate(Q.mul(aligned[j], np.broadcast_to(_BODY_FRAMES[j], aligned[j].shape)),
+        straight: dict[str, np.ndarray] = {j: Q.rotate(Q.mul(aligned[j], np.broadcast_to(_BODY_FRAMES[j], aligned[j].shape)),
                                 np.broadcast_to([0.0, 1.0, 0.0], (n, 3)))
                     for j in ("lshoulder", "rshoulder") if j in aligned}  # fmt: skip
         loose = {f"{s}_{k}" for s in "lr" if s not in hands for k in ("index", "pinky", "hand_mid")}

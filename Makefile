@@ -13,7 +13,7 @@ PYTEST_ARGS ?=
 # shared-data sweeps) is built once. `make test PYTEST_WORKERS=0`: one process.
 PYTEST_WORKERS ?= 2
 
-.PHONY: run test bootstrap
+.PHONY: run test check format bootstrap
 
 bootstrap:
 	@scripts/bootstrap.sh
@@ -26,8 +26,18 @@ run: bootstrap
 		$(CLI) --help; \
 	fi
 
+# Lint (ruff) and type check (mypy on engine/, as configured in pyproject.toml); no display
+# needed. `make test` runs it first, so CI (.ci/run) fails on a lint or type error.
+check: bootstrap
+	$(VENV)/bin/ruff check .
+	$(VENV)/bin/mypy
+
+# Reformat the tree with ruff's formatter ([tool.ruff.format] in pyproject.toml).
+format: bootstrap
+	$(VENV)/bin/ruff format .
+
 # pytest exits 5 when it collects nothing; that is a failure too, said plainly.
-test: bootstrap
+test: bootstrap check
 	@rc=0; $(VENV)/bin/python -m pytest -q -n $(PYTEST_WORKERS) --dist loadscope $(PYTEST_ARGS) || rc=$$?; \
 	if [ $$rc -eq 5 ]; then echo "make test: no tests were collected" >&2; fi; \
 	exit $$rc

@@ -17,8 +17,15 @@ from typing import TYPE_CHECKING
 from PyQt6 import sip
 from PyQt6.QtGui import QAction
 from PyQt6.QtWidgets import (
-    QComboBox, QDialog, QDialogButtonBox, QDoubleSpinBox, QFormLayout, QMenu, QMessageBox, QWidget,
-)  # fmt: skip
+    QComboBox,
+    QDialog,
+    QDialogButtonBox,
+    QDoubleSpinBox,
+    QFormLayout,
+    QMenu,
+    QMessageBox,
+    QWidget,
+)
 
 from engine import skeleton as sk
 from engine.errors import UserError

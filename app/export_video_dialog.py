@@ -22,9 +22,19 @@ from typing import Any
 
 from PyQt6.QtCore import QSettings, Qt
 from PyQt6.QtWidgets import (
-    QCheckBox, QComboBox, QDialog, QDialogButtonBox, QFileDialog, QFormLayout, QLabel, QLineEdit, QListWidget,
-    QListWidgetItem, QMessageBox, QProgressDialog,
-)  # fmt: skip
+    QCheckBox,
+    QComboBox,
+    QDialog,
+    QDialogButtonBox,
+    QFileDialog,
+    QFormLayout,
+    QLabel,
+    QLineEdit,
+    QListWidget,
+    QListWidgetItem,
+    QMessageBox,
+    QProgressDialog,
+)
 
 from app.render_scene import CAMERAS, LAYOUTS, VIEWS, RenderOptions
 from engine.errors import UserError
@@ -85,7 +95,7 @@ class ExportVideoDialog(QDialog):
         self.ghosts.setFixedHeight(max(self.ghosts.sizeHintForRow(0), 16) * rows + 2 * self.ghosts.frameWidth() + 2)
         self.ghosts.setEnabled(bool(sensors))
         self.ghosts.setToolTip("methods reconstructing the motion from its trackers" if sensors
-                               else "choose a tracker preset first: ghosts are solved from its trackers")  # fmt: skip
+                               else "choose a tracker preset first: ghosts are solved from its trackers")
         self.truth = QCheckBox("the motion is the ground truth (green, named so)")
         self.timecode = QCheckBox("time and frame number")
         self.title = QLineEdit()
@@ -154,11 +164,11 @@ class ExportVideoDialog(QDialog):
         from app.render import parse_size
 
         ghosts = tuple(self.ghosts.item(i).data(Qt.ItemDataRole.UserRole) for i in range(self.ghosts.count())
-                       if self.ghosts.item(i).checkState() == Qt.CheckState.Checked)  # fmt: skip
+                       if self.ghosts.item(i).checkState() == Qt.CheckState.Checked)
         return RenderOptions(size=parse_size(self.size_box.currentText()), sensors=self.sensors, ghosts=ghosts,
                              view=self.view.currentText(), camera=self.camera.currentText(),
                              layout=self.layout_box.currentText(), truth=self.truth.isChecked(),
-                             title=self.title.text().strip(), timecode=self.timecode.isChecked())  # fmt: skip
+                             title=self.title.text().strip(), timecode=self.timecode.isChecked())
 
 
 def write_video(parent: Any, motion: Any, path: str | Path, options: RenderOptions) -> str:

@@ -13,6 +13,7 @@ from typing import Any
 
 from app.shell import StudioShell
 
+
 class GhostStatus:
     """Watches the drawn snapshots' problems for ghost failures (``window.session``'s
     ghosts, the checkboxes of ``window.optimizer_panel``)."""

@@ -11,12 +11,20 @@ from __future__ import annotations
 
 import gc
 import sys
-import time
 from typing import Any
 
 import numpy as np
 from PyQt6.QtCore import QSettings, Qt, QTimer, pyqtSignal
-from PyQt6.QtWidgets import QApplication, QDockWidget, QLabel, QMainWindow, QMessageBox, QTabWidget, QVBoxLayout, QWidget
+from PyQt6.QtWidgets import (
+    QApplication,
+    QDockWidget,
+    QLabel,
+    QMainWindow,
+    QMessageBox,
+    QTabWidget,
+    QVBoxLayout,
+    QWidget,
+)
 
 from app import authoring_actions, clip_saving
 from app.busy import BusyNotice
@@ -25,8 +33,8 @@ from app.constraint_placement import placed_params
 from app.constraint_ranges import link_ranges
 from app.drawing import DrawScheduler
 from app.failures import FailureCountdown
-from app.ghost_status import GhostStatus
 from app.file_actions import FileActions
+from app.ghost_status import GhostStatus
 from app.latent_views import LatentViews
 from app.live_actions import LiveActions
 from app.menus import build_menus
@@ -39,13 +47,12 @@ from engine.studio.session import Session
 from engine.studio.session_sensors import SensorSet
 from widgets.constraint_panel import ConstraintPanel
 from widgets.latent_inspector import LatentInspector
-from widgets.optimizer_panel import OptimizerPanel
 from widgets.method_errors import MethodErrorPlot
+from widgets.optimizer_panel import OptimizerPanel
 from widgets.plots import LossPlots
 from widgets.sensor_panel import SensorPanel
 from widgets.timeline import Timeline
 from widgets.viewport import Viewport
-
 
 
 def method_names(current: str) -> list[str]:

@@ -15,7 +15,6 @@ from PyQt6.QtWidgets import QMenu
 from app.shell import ViewWindow
 from widgets.help_dialog import HelpDialog
 
-
 #: View ▸ Camera entries: preset, label, shortcut (Blender's numpad digits).
 CAMERAS = (("home", "&Home (front-left)", "Home"), ("front", "&Front", "1"),
            ("side", "&Side (character's left)", "3"), ("top", "&Top", "7"))  # fmt: skip

@@ -27,8 +27,16 @@ import numpy as np
 from PyQt6.QtCore import QSettings, Qt, QTimer
 from PyQt6.QtGui import QCloseEvent
 from PyQt6.QtWidgets import (
-    QApplication, QDockWidget, QDoubleSpinBox, QFrame, QLabel, QMainWindow, QMessageBox, QScrollArea, QWidget,
-)  # fmt: skip
+    QApplication,
+    QDockWidget,
+    QDoubleSpinBox,
+    QFrame,
+    QLabel,
+    QMainWindow,
+    QMessageBox,
+    QScrollArea,
+    QWidget,
+)
 
 from app.camera_keys import CameraKeys
 from app.job_runner import JobRunner

@@ -30,9 +30,9 @@ from __future__ import annotations
 
 import contextlib
 import os
-import stat
 import re
 import signal
+import stat
 import tempfile
 import threading
 from collections.abc import Iterator
@@ -99,7 +99,7 @@ def remove_stale(path: str | Path) -> list[Path]:
     path = Path(path)
     prefix = temp_prefix(path)
     pattern = re.compile(re.escape(prefix) + r"(\d+)-")
-    removed = []
+    removed: list[Path] = []
     try:
         entries = list(os.scandir(path.parent if str(path.parent) else "."))
     except OSError:

@@ -5,7 +5,6 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-
 #: Longest run of non-blank characters kept in a message (long enough for file paths);
 #: longer user tokens are cut.
 MAX_WORD = 256

@@ -158,7 +158,7 @@ def transition_jerk_raw(
     over the window, then the mean over changes; NaN without a complete window.
     """
     wins = _windows(jerk, connected, int(round(window_s * fps)))
-    out = {}
+    out: dict[str, float] = {}
     for suffix, kinds in _KINDS:
         ws = [w for k in kinds for w in wins[k]]
         out["pj_raw" + suffix] = float(np.mean([w.max() for w in ws])) if ws else float("nan")
@@ -168,7 +168,7 @@ def transition_jerk_raw(
 
 def evaluate_motion(
     gt: Motion, rec: Motion, connected: np.ndarray | None = None
-) -> dict[str, float | int]:
+) -> dict[str, float | int | list[float]]:
     """All metrics of one reconstructed clip against its ground truth.
 
     Parameters
@@ -194,7 +194,8 @@ def evaluate_motion(
     g_pos, _ = gt.fk()
     r_pos, _ = rec.fk()
     aligned = r_pos - r_pos[:, :1] + g_pos[:, :1]
-    out: dict[str, float | int] = {
+    gt_jerk = float(np.nanmean(peak_jerk_curve(g_pos, gt.fps)))
+    out: dict[str, float | int | list[float]] = {
         "frames": len(gt),
         "pos_cm": float(position_error_cm(g_pos, r_pos).mean()),
         "pos_rootaligned_cm": float(position_error_cm(g_pos, aligned).mean()),
@@ -203,11 +204,11 @@ def evaluate_motion(
         "ee_cm": float(position_error_cm(g_pos[:, _EE], r_pos[:, _EE]).mean()),
         "jitter": float(np.nanmean(jerk_curve(r_pos, rec.fps))),
         "gt_jitter": float(np.nanmean(jerk_curve(g_pos, gt.fps))),
-        "gt_jerk": float(np.nanmean(peak_jerk_curve(g_pos, gt.fps))),
+        "gt_jerk": gt_jerk,
     }
     if connected is not None:
-        out.update(transition_jerk(peak_jerk_curve(r_pos, rec.fps), connected, rec.fps, float(out["gt_jerk"])))
-        own = transition_jerk(peak_jerk_curve(g_pos, gt.fps), connected, gt.fps, float(out["gt_jerk"]))
+        out.update(transition_jerk(peak_jerk_curve(r_pos, rec.fps), connected, rec.fps, gt_jerk))
+        own = transition_jerk(peak_jerk_curve(g_pos, gt.fps), connected, gt.fps, gt_jerk)
         out.update({"gt_" + k: own[k] for k in ("pj", "auj", "jerk_window_sum")})
         out.update(transition_jerk_raw(jerk_curve(r_pos, rec.fps), connected, rec.fps))
     return out

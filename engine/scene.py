@@ -52,7 +52,7 @@ SCENE_FIELDS = OPTIMIZER_FIELDS + AUTHORING_FIELDS + STUDIO_FIELDS
 
 def scene_to_dict(constraints: Iterable[Constraint], settings: OptimizerSettings | dict[str, Any] | None) -> dict:
     """Plain-JSON form of a scene."""
-    if dataclasses.is_dataclass(settings):
+    if isinstance(settings, OptimizerSettings):
         settings = dataclasses.asdict(settings)
     items = [c.to_dict() for c in constraints]
     return {

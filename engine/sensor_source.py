@@ -85,6 +85,7 @@ class SensorSource(Protocol):
 
     def close(self) -> None:
         """Release what the source holds (a socket, a recording in progress)."""
+        return None  # a default, not an abstract member (an empty Protocol body would be)
 
 
 def apply_edits(readings: Mapping[str, Sensor], sensors: tuple[Sensor, ...], frame: int) -> SensorFrame:

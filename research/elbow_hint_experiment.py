@@ -9,12 +9,16 @@ after-solve step (``engine.methods.dragposer.finish``) for this process only.
 F = 0 reproduces the shipped solver; F = 1 on the validation files gave 16.6 deg against
 10.15 (preset 6, 150 frames).
 """
-import sys, numpy as np
+import sys
+
+import numpy as np
+
 sys.path.insert(0, '.')
+import engine.methods.dragposer as dp
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk
-import engine.methods.dragposer as dp
+
 F = float(sys.argv[1]); SENS = sys.argv[2]; MAXF = int(sys.argv[3])
 orig = dp.finish
 J = sk.JOINT_INDEX
@@ -42,6 +46,7 @@ dp.finish = finish
 from engine.methods import get_method, run_method
 from engine.motion.retarget import load_motion
 from engine.tracking import simulate
+
 m = get_method("dragposer", mode="realtime")
 errs = []; pos = []
 for f in sys.argv[4:]:

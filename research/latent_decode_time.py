@@ -52,7 +52,7 @@ def main() -> int:
             z = m.move_to(view.latent, view.xy + 0.3 * np.array([np.cos(k), np.sin(k)]))
             t0 = time.perf_counter()
             s.decode_latent(z)
-            wait_for(lambda: w.latest.seq > seq and w.latest.decoded is not None, 30)
+            wait_for(lambda seq=seq: w.latest.seq > seq and w.latest.decoded is not None, 30)
             times.append(1000 * (time.perf_counter() - t0))
         rest = np.array(times[1:])
         print(f"first decode {times[0]:.0f} ms; then {len(rest)} decodes: median {np.median(rest):.1f} ms, "

@@ -10,6 +10,7 @@ error are printed.
 import sys
 
 import numpy as np
+
 from engine import skeleton as sk
 from engine.constraints import PinConstraint
 from engine.studio.clips import load_clip, sensor_presets
@@ -30,4 +31,5 @@ for mode in ("offline", "realtime"):
         p = res.positions()
         d = np.linalg.norm(p[:, J] - target, axis=1)
         sens = np.mean([np.linalg.norm(p[:, sk.JOINT_INDEX[s.joint]] - gt[:, sk.JOINT_INDEX[s.joint]], axis=1).mean() for s in sensors])
-        print(f"{mode:8s} w={w:6.1f} pin dist first {d[0]*100:5.1f} cm, mean {d.mean()*100:5.1f} cm, last {d[-1]*100:5.1f} cm; sensor err {sens*100:4.1f} cm", flush=True)
+        print(f"{mode:8s} w={w:6.1f} pin dist first {d[0]*100:5.1f} cm, mean {d.mean()*100:5.1f} cm, "
+              f"last {d[-1]*100:5.1f} cm; sensor err {sens*100:4.1f} cm", flush=True)

@@ -18,9 +18,9 @@ from engine import skeleton as sk
 from engine.authoring import pose_reference as R
 from engine.authoring import pose_tasks as T
 from engine.authoring.character import Pose
+from engine.kinematics.fk import fk
 from engine.models import load_default_models
 from engine.motion.bvh import load_bvh
-from engine.kinematics.fk import fk
 
 
 def main(argv: list[str]) -> int:

@@ -12,12 +12,16 @@ taken before NECK became the setting ``neck_twist_share`` (default 0.5), which t
 solver now applies after this step: today ``0 ARM LEG`` reproduces the rows
 ``0.5 ARM LEG`` of docs/optimizer.md.
 """
-import sys, numpy as np
+import sys
+
+import numpy as np
+
 sys.path.insert(0, '.')
+import engine.methods.dragposer as dp
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk
-import engine.methods.dragposer as dp
+
 NECK, ARM, LEG = map(float, sys.argv[1:4]); MODE = sys.argv[4]
 orig = dp.finish
 J = sk.JOINT_INDEX
@@ -35,7 +39,7 @@ CHAINS = [("upperneck", "lowerneck", "upperneck", NECK)] + [(e, r, e, ARM) for e
     + [(e, r, e, LEG) for e, r in (("lankle", "lhip"), ("rankle", "rhip"))]
 def finish(local_rot, root_pos, offsets, reach_to, turn_to, share=0.0):
     local = orig(local_rot, root_pos, offsets, reach_to, {})[0] if reach_to else np.array(local_rot, dtype=np.float64)
-    for end, top, axis_to, f in CHAINS:
+    for end, top, _axis_to, f in CHAINS:
         e, t = J[end], J[top]
         if f <= 0 or e not in turn_to: continue
         p, g = fk(local, root_pos, offsets)
@@ -50,6 +54,7 @@ dp.finish = finish
 from engine.methods import get_method, run_method
 from engine.motion.retarget import load_motion
 from engine.tracking import simulate
+
 m = get_method("dragposer", mode=MODE)
 errs = []; pos = []
 for f in sys.argv[5:]:
@@ -61,4 +66,5 @@ for f in sys.argv[5:]:
 E = np.concatenate(errs); P = np.concatenate(pos)
 names = ["lowerneck", "upperneck", "lshoulder", "rshoulder", "lwrist", "rwrist", "lhip", "rhip", "lankle", "rankle"]
 print(f"neck={NECK} arm={ARM} leg={LEG} rot {E.mean():.3f} pos {P.mean():.3f} | " + " ".join(f"{n} {E[:, J[n]].mean():.1f}" for n in names)
-      + f" | elbow pos {P[:, J['lelbow']].mean():.2f}/{P[:, J['relbow']].mean():.2f} knee pos {P[:, J['lknee']].mean():.2f}/{P[:, J['rknee']].mean():.2f}")
+      + f" | elbow pos {P[:, J['lelbow']].mean():.2f}/{P[:, J['relbow']].mean():.2f}"
+      + f" knee pos {P[:, J['lknee']].mean():.2f}/{P[:, J['rknee']].mean():.2f}")

@@ -152,6 +152,7 @@ def document(out: Path, methods, args, files: list[str]) -> str:
     gt = _total(out, _name("ik", "6", "realtime")) or _total(out, _name("dragposer", "6", "realtime")) or {}
     models = f"`{args.vae}` and `{args.predictor}`" if args.vae else "`assets/models` (see the [model card](../assets/models/README.md))"
     lossy = args.lossy_frames or args.realtime_frames
+    inputs = "FILE..." if args.files else "$(dragposer-studio data list --split val)"
     cmd = (f"python scripts/eval_table.py {args.out} --jobs {args.jobs} --realtime-frames {args.realtime_frames} "
            f"--offline-frames {args.offline_frames} --lossy-frames {lossy} --doc docs/evaluation.md"
            + (" --files FILE..." if args.files else ""))
@@ -167,7 +168,7 @@ on {_files_text(files, args.files is not None)}, on a 2-core CPU machine with no
 ```
 
 which runs, for every preset P, mode M and method X,
-`dragposer-studio evaluate {"FILE..." if args.files else "$(dragposer-studio data list --split val)"} --method X --sensors P --mode M --max-frames N --json {args.out}/X-P-M.json`,
+`dragposer-studio evaluate {inputs} --method X --sensors P --mode M --max-frames N --json {args.out}/X-P-M.json`,
 first {args.realtime_frames} frames of each file in realtime mode, first {args.offline_frames} in
 offline mode (offline costs up to 100 iterations per frame), first {lossy} with lost trackers. `ms/frame` was measured with
 {args.jobs} evaluations sharing the two cores (idle-machine speed: `docs/performance.md`).

@@ -17,11 +17,10 @@ from __future__ import annotations
 
 import argparse
 import sys
-
-import numpy as np
 import time
 from pathlib import Path
 
+import numpy as np
 from PyQt6.QtCore import QSettings, Qt
 from PyQt6.QtTest import QTest
 from PyQt6.QtWidgets import QApplication

@@ -77,9 +77,9 @@ def shared_mocap() -> Path:
 @pytest.fixture
 def synthetic_motion():
     """A smooth 120-frame canonical motion (walk-like sway), deterministic."""
+    from engine import skeleton as sk
     from engine.kinematics import quaternion as Q
     from engine.motion.clip import Motion
-    from engine import skeleton as sk
 
     f = 120
     t = np.arange(f) / 60.0

@@ -11,9 +11,19 @@ from typing import Any
 
 from PyQt6.QtCore import Qt, pyqtSignal
 from PyQt6.QtWidgets import (
-    QComboBox, QDialog, QDialogButtonBox, QDoubleSpinBox, QFormLayout, QHBoxLayout, QLabel,
-    QLineEdit, QPushButton, QSpinBox, QVBoxLayout, QWidget,
-)  # fmt: skip
+    QComboBox,
+    QDialog,
+    QDialogButtonBox,
+    QDoubleSpinBox,
+    QFormLayout,
+    QHBoxLayout,
+    QLabel,
+    QLineEdit,
+    QPushButton,
+    QSpinBox,
+    QVBoxLayout,
+    QWidget,
+)
 
 #: The sender's tracker names -> joints (``engine.tracker_io.trackers.DEFAULT_SLOTS``).
 DEFAULT_MAPPING = "head=upperneck, left_hand=lwrist, right_hand=rwrist, hips=root, left_foot=lankle, right_foot=rankle"

@@ -4,8 +4,14 @@ from __future__ import annotations
 
 from PyQt6.QtCore import pyqtSignal
 from PyQt6.QtWidgets import (
-    QCheckBox, QDoubleSpinBox, QGridLayout, QLabel, QPushButton, QVBoxLayout, QWidget,
-)  # fmt: skip
+    QCheckBox,
+    QDoubleSpinBox,
+    QGridLayout,
+    QLabel,
+    QPushButton,
+    QVBoxLayout,
+    QWidget,
+)
 
 #: Target weights the spin box offers (the engine accepts the same range).
 WEIGHT_RANGE = (0.0, 10.0)
@@ -36,7 +42,8 @@ class TargetList(QWidget):
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         outer = QVBoxLayout(self)
-        self.hint = QLabel("Drag a joint to add a target; drag its sphere to move it; drag a ring to turn it. The hips move the whole body (dragged down: a squat); their ring turns it.")
+        self.hint = QLabel("Drag a joint to add a target; drag its sphere to move it; drag a ring to turn it. "
+                           "The hips move the whole body (dragged down: a squat); their ring turns it.")
         self.hint.setWordWrap(True)
         outer.addWidget(self.hint)
         self.grid_host = QWidget()

@@ -150,9 +150,10 @@ def _in_between(character: Character, scene: AuthoringScene, keys: list[Key], po
     targets = interpolated_targets(keys, times, f, scheme)
     _, reach, rotations = solve_inputs(targets)
     aims = []
+    decoded = [p.positions if p.decoded is None else p.decoded for p in poses]  # as Pose fills it in
     for t in targets:
-        track = [(tk, p.decoded[t.index] - k.targets[t.joint].position)
-                 for tk, k, p in zip(times, keys, poses) if t.joint in k.targets]  # fmt: skip
+        track = [(tk, d[t.index] - k.targets[t.joint].position)
+                 for tk, k, d in zip(times, keys, decoded) if t.joint in k.targets]  # fmt: skip
         gap = interpolate([tk for tk, _ in track], [g for _, g in track], f, scheme)
         aims.append(dataclasses.replace(t, position=t.position + gap))
     terms, _, _ = solve_inputs(aims)

@@ -175,7 +175,7 @@ class Character:
         positions for contact and sliding terms; ``prior (L,)`` the latent pulled towards."""
         ref = RootFrame(_f(yaw_quaternion(heading_deg)), _f([xy[0], xy[1], 0.0]))
         anchor = Ground(_f(np.asarray(xy, float)[:2]), self.foot_heights)
-        return FrameContext(ref, None, anchor, _f_or_none(previous), _f_or_none(prior), frame)  # type: ignore[arg-type]
+        return FrameContext(ref, None, anchor, _f_or_none(previous), _f_or_none(prior), frame)
 
     def placed(self, root: np.ndarray, heading_deg: float = 0.0, frame: int = 0,
                previous: np.ndarray | None = None, prior: np.ndarray | None = None,

@@ -23,7 +23,7 @@ from engine.authoring.targets import target_from_json
 from engine.constraints.base import Constraint
 from engine.errors import UserError
 from engine.input_files import read_json
-from engine.scene import FORMAT, scene_from_dict, scene_to_dict
+from engine.scene import scene_from_dict, scene_to_dict
 from engine.solver import OptimizerSettings
 from engine.validation import check_known_fields, shown
 

@@ -198,9 +198,9 @@ def _exact_steps(local: np.ndarray, motion: Motion, constraints: list[Constraint
         pos = fk_positions(local[f], motion.root_pos[f], offsets)
         was = fk_positions(motion.local_rot[f], motion.root_pos[f], offsets)  # contact is read off the clip
 
-        def down(j: int) -> bool:
-            return any(c.activity(f) > 0 and sk.JOINT_NAMES[j] in c.joints
-                       and was[j, 2] < c.floor_height + c.contact_height for c in floors)  # fmt: skip
+        def down(j: int) -> bool:  # called only in this iteration, so f and was are this frame's
+            return any(c.activity(f) > 0 and sk.JOINT_NAMES[j] in c.joints  # noqa: B023
+                       and was[j, 2] < c.floor_height + c.contact_height for c in floors)  # fmt: skip  # noqa: B023
 
         keep = 1.0 if f <= end else weight[i]  # the blend out returns to the clip
         targets: dict[int, np.ndarray] = {}
@@ -234,7 +234,7 @@ def _aim_feet(local: np.ndarray, root: np.ndarray, offsets: np.ndarray, aims: di
     for ankle, (toe, xy) in aims.items():
         bone = pos[toe] - pos[ankle]
         goal = np.array([xy[0], xy[1], pos[toe, 2]]) - pos[ankle]
-        turn = QN.from_to(bone, goal * (np.linalg.norm(bone) / max(np.linalg.norm(goal), 1e-9)))
+        turn = QN.from_to(bone, goal * (np.linalg.norm(bone) / max(float(np.linalg.norm(goal)), 1e-9)))
         parent = rot[sk.PARENTS[ankle]]
         local[ankle] = QN.normalize(QN.mul(QN.conjugate(parent), QN.mul(turn, rot[ankle])))
 

@@ -39,8 +39,8 @@ from engine.authoring.progress import CancelCheck, Progress
 from engine.authoring.session_constraints import constraints_event
 from engine.authoring.state import AuthoringState, capture, differences, pose_between, pose_on_key, put
 from engine.authoring.turns import world_rotation
-from engine.errors import UserError
 from engine.editing.constraint_list import ConstraintList
+from engine.errors import UserError
 from engine.motion.clip import Motion
 
 

@@ -77,7 +77,7 @@ class JointTarget:
         return SensorConstraint(
             name=f"target:{self.joint}", weight=self.weight, enabled=self.active, joint=self.joint,
             dof=6 if six else 3, position=self.position.copy(),
-            rotation=self.rotation.copy() if six else np.array([1.0, 0.0, 0.0, 0.0]),
+            rotation=self.rotation.copy() if self.rotation is not None else np.array([1.0, 0.0, 0.0, 0.0]),
             rotation_weight=ROTATION_WEIGHT,
         )  # fmt: skip
 

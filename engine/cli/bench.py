@@ -13,12 +13,16 @@ import os
 import platform
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from engine.cli import pose_bench
 from engine.cli.rig_options import add_rig_map_option, asf_path, rig_map_path
 from engine.solver.settings import MODES
+
+if TYPE_CHECKING:
+    from engine.methods import Method
 
 REPO = Path(__file__).resolve().parents[2]
 DEFAULT_CLIP = REPO / "assets" / "clips" / "example.bvh"
@@ -106,7 +110,7 @@ def bench_method(name: str, motion, tracking, frames: int, warmup: int, constrai
     return row
 
 
-def _solve_clip(method, tracking, n: int) -> tuple[float, list] | None:
+def _solve_clip(method: Method, tracking, n: int) -> tuple[float, list] | None:
     """``(ms per frame, results)`` of the method's whole-clip solve of the first ``n``
     frames (engine/methods/dragposer_batch.py), or None for a method that steps frame by frame."""
     from engine.methods import SolvesClips, driver

@@ -18,7 +18,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "subject's own proportions, resample it (60 fps by default) and write OUT.bvh atomically.",
     )
     p.add_argument("input", type=Path, metavar="IN.bvh", help="source motion")
-    p.add_argument("--out", type=Path, required=True, metavar="OUT.bvh", help="where to write the canonical clip: .bvh, .glb or .gltf (docs/export.md)")
+    p.add_argument("--out", type=Path, required=True, metavar="OUT.bvh",
+                   help="where to write the canonical clip: .bvh, .glb or .gltf (docs/export.md)")  # fmt: skip
     add_rig_map_option(p)
     p.add_argument("--fps", type=float, metavar="F", help="output frame rate (default: 60)")
     p.add_argument("--source-fps", type=float, metavar="F", help="true frame rate of IN.bvh (overrides its header)")
@@ -27,8 +28,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _convert(args: argparse.Namespace) -> int:
-    from engine.motion.formats import save_motion
     from engine.errors import UserError
+    from engine.motion.formats import save_motion
     from engine.motion.retarget import CURRENT, load_with_report, manifest_fps, resample_motion
 
     if args.fps is not None and not args.fps > 0:

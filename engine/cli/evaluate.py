@@ -91,7 +91,7 @@ def find_clips(paths: Iterable[Path]) -> list[Path]:
 
 def evaluate_clip(motion: Any, method: Any, preset: str, *, faulty: float = 0.0, gaps: bool = False,
                   noise_pos_m: float = 0.0, noise_rot_deg: float = 0.0, seed: int = 0,
-                  progress: bool = True, desc: str | None = None) -> dict[str, float | int]:
+                  progress: bool = True, desc: str | None = None) -> dict[str, float | int | list[float]]:
     """Metrics of ``method`` on one canonical clip (what the command runs per file).
 
     Returns
@@ -236,7 +236,6 @@ def _safe_doc(doc: dict[str, Any]) -> dict[str, Any]:
 
 def _evaluate(args: argparse.Namespace) -> int:
     from engine.tracking import parse_sensors
-
     from engine.validation import check_args, check_output_path
 
     parse_sensors(args.sensors)  # fail before loading anything

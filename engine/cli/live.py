@@ -15,8 +15,13 @@ import numpy as np
 
 from engine.cli.method_options import add_model_options, build_method
 from engine.cli.rig_options import add_rig_map_option
-from engine.cli.tracker_options import (add_tracker_options, check_tracker_options, default_skeleton,
-                                        load_reference, write_json)  # fmt: skip
+from engine.cli.tracker_options import (
+    add_tracker_options,
+    check_tracker_options,
+    default_skeleton,
+    load_reference,  # fmt: skip
+    write_json,
+)
 from engine.errors import UserError
 from engine.solver.settings import MODES
 
@@ -83,8 +88,16 @@ def _check(args: argparse.Namespace) -> None:
 
 def _live(args: argparse.Namespace) -> int:
     from engine.motion.formats import save_motion
-    from engine.tracker_io.live import (LiveRun, completeness_summary, default_budget_ms, iteration_summary,
-                                        latency_summary, reference_error, to_motion, tracker_error_cm)  # fmt: skip
+    from engine.tracker_io.live import (
+        LiveRun,
+        completeness_summary,
+        default_budget_ms,
+        iteration_summary,
+        latency_summary,  # fmt: skip
+        reference_error,
+        to_motion,
+        tracker_error_cm,
+    )
     from engine.tracker_io.receiver import VMCReceiver, parse_listen
     from engine.tracker_io.recording import RecordingWriter, header
     from engine.tracker_io.trackers import TrackerMapping

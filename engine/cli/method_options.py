@@ -12,6 +12,7 @@ from engine.errors import UserError
 from engine.solver.settings import SETTINGS
 
 if TYPE_CHECKING:
+    from engine.constraints.base import Constraint
     from engine.methods.base import Method
 
 
@@ -67,10 +68,11 @@ def build_method(args: argparse.Namespace) -> Method:
 
     from engine.methods import driver, get_method
 
-    constraints, scene_settings = [], {}
+    constraints: list[Constraint] = []
+    scene_settings: dict[str, Any] = {}
     if getattr(args, "scene", None):
-        from engine.solver import OptimizerSettings
         from engine.scene import load_scene
+        from engine.solver import OptimizerSettings
 
         constraints, settings = load_scene(args.scene)
         defaults = dataclasses.asdict(OptimizerSettings())

@@ -15,6 +15,7 @@ options given on the command line win over the scene's settings.
 from __future__ import annotations
 
 import argparse
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -159,7 +160,7 @@ def _reconstruct_file(job: tuple[Path, Path, argparse.Namespace, bool]) -> str:
     return summary(results, tracking, rec, out)
 
 
-def summary(results: list, tracking: Any, rec: Any, out: Path) -> str:
+def summary(results: Sequence[Any], tracking: Any, rec: Any, out: Path) -> str:
     """Frames, ms/frame, iterations and the mean error of the connected trackers."""
     from engine import skeleton as sk
 

@@ -21,9 +21,9 @@ def _slice(tracking: Any, start: int, stop: int | None = None) -> Any:
 
 def reconstruct_trackers(args: argparse.Namespace) -> int:
     from engine.cli.export_options import export_contents
-    from engine.motion.formats import save_motion
     from engine.cli.method_options import build_method
     from engine.methods import run_method
+    from engine.motion.formats import save_motion
     from engine.tracker_io.calibration import calibrate
     from engine.tracker_io.live import calibration_window, reference_error, to_motion, tracker_error_cm
     from engine.tracker_io.recording import read_recording, replay

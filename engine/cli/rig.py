@@ -93,8 +93,8 @@ def write_suggestion(bvh: Path, out: Path, rig_map: Path | None = None) -> bool:
     the studio's Open dialog."""
     from engine.atomic import write_text
     from engine.errors import RigError
-    from engine.motion.source_file import load_source
     from engine.motion.rigs import resolve_rig
+    from engine.motion.source_file import load_source
 
     raw = load_source(bvh)
     try:

@@ -24,7 +24,6 @@ from engine.constraints.residual import FrameInputs, Kit, Residuals, Term
 from engine.errors import UserError
 from engine.gizmos import LineGizmo
 
-
 MODES = ("head_over_hip", "com_over_feet")
 _HEAD, _ROOT = sk.JOINT_INDEX["upperneck"], sk.JOINT_INDEX["root"]
 _FEET = [sk.JOINT_INDEX["lankle"], sk.JOINT_INDEX["rankle"]]

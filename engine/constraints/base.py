@@ -23,7 +23,7 @@ import dataclasses
 import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
-from typing import Any, ClassVar, TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
@@ -162,7 +162,7 @@ class Constraint(ABC):
                 setattr(self, f.name, value)
         self.check()
 
-    def check(self) -> None:
+    def check(self) -> None:  # noqa: B027 - a no-op default that kinds override
         """Validate parameters (override); raise :class:`UserError` naming the field."""
 
     def _check_frames(self) -> None:
@@ -313,8 +313,8 @@ def field_default(f: dataclasses.Field) -> Any:
     """The default value of a dataclass field (calling its factory), or None."""
     if f.default is not dataclasses.MISSING:
         return f.default
-    if f.default_factory is not dataclasses.MISSING:  # type: ignore[misc]
-        return f.default_factory()  # type: ignore[misc]
+    if f.default_factory is not dataclasses.MISSING:
+        return f.default_factory()
     return None
 
 

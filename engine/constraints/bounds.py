@@ -18,7 +18,6 @@ from engine.constraints.residual import FrameInputs, Kit, Residuals, Term
 from engine.errors import UserError
 from engine.gizmos import BoxGizmo
 
-
 _SLACK = 1e-3  # metres: satisfied this far outside the box
 
 

@@ -17,7 +17,6 @@ from engine.constraints.residual import FrameInputs, Kit, Residuals, Term
 from engine.errors import UserError
 from engine.gizmos import LineGizmo
 
-
 _MIN_SQUARED = 1e-12  # m^2: the length is clamped so its gradient stays finite when the joints coincide
 
 

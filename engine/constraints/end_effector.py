@@ -20,7 +20,6 @@ from engine.gizmos import PointGizmo
 from engine.kinematics import quat_np as QN
 
 
-
 @dataclass
 class EndEffectorConstraint(OnOneJoint, Constraint):
     """Pull ``joint`` to ``position`` (and to ``rotation`` if ``use_rotation``).
@@ -93,5 +92,6 @@ class EndEffectorTerm(Term):
         r = kit.cat([r, rot], -1)
         if not jac:
             return Residuals(r)
+        assert d_pos is not None and d_rot is not None  # asked for with jac
         d_pos = np.concatenate((d_pos, np.zeros((a, 9, 1, 3))), axis=1)
         return Residuals(r, self.j, d_pos, self.j, np.concatenate((np.zeros((a, 3, 1, 3)), d_rot), axis=1))

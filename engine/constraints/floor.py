@@ -23,7 +23,6 @@ from engine.constraints.residual import FrameInputs, FrameRows, Kit, Residuals, 
 from engine.errors import UserError
 from engine.gizmos import BoxGizmo
 
-
 _SLACK = 0.01  # metres: satisfied this far below the clearance
 
 

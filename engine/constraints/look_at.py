@@ -24,7 +24,6 @@ from engine.constraints.residual import EPS3, FrameInputs, Kit, Residuals, Term
 from engine.errors import UserError
 from engine.gizmos import LineGizmo, PointGizmo
 
-
 _MIN_DISTANCE = 1e-6  # metres: the direction to a target this close is not defined
 _HALF = math.sqrt(0.5)
 

@@ -30,7 +30,6 @@ from engine.constraints.residual import FrameInputs, FrameRows, Kit, Residuals, 
 from engine.gizmos import PointGizmo
 
 
-
 @dataclass
 class PinConstraint(OnOneJoint, Constraint):
     """Keep ``joint`` at ``position`` (metres), see the module doc."""

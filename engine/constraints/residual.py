@@ -200,8 +200,9 @@ class Term:
         """The checked entries in group order, where each group starts in it, and each
         group's constraint (cached: a term's groups never change)."""
         cached = getattr(self, "_group_cache", None)
-        if cached is None or cached[0] is not self.check_group:
-            group = self.check_group
+        group = self.check_group
+        assert group is not None  # asked only of a term with checks
+        if cached is None or cached[0] is not group:
             order = np.flatnonzero(group >= 0)
             order = order[np.argsort(group[order], kind="stable")]
             starts = np.flatnonzero(np.r_[True, np.diff(group[order]) != 0])
@@ -228,8 +229,10 @@ class Term:
         ``g_rot (A, 22, 3)`` and ``g_z (A, L)`` in place (``weights (A, n)``)."""
         rw = ((2.0 * weights[:, self.owner]) * res.r)[:, None, :]  # (A, 1, m)
         if res.d_pos is not None:
+            assert res.pos_joints is not None  # a Jacobian block comes with its joints
             _scatter(g_pos, res.pos_joints, _times(rw, res.d_pos))
         if res.d_rot is not None:
+            assert res.rot_joints is not None
             _scatter(g_rot, res.rot_joints, _times(rw, res.d_rot))
         if res.d_latent is not None and g_z is not None:
             g_z += (rw @ res.d_latent)[:, 0]
@@ -283,7 +286,7 @@ def _scatter(out: np.ndarray, joints: np.ndarray, g: np.ndarray) -> None:
     if distinct:
         out[:, joints] += g
     else:
-        np.add.at(out, (slice(None), joints), g)
+        np.add.at(out, (slice(None), joints), g)  # type: ignore[arg-type]  # numpy's stubs refuse a tuple index
 
 
 #: Levi-Civita symbol: ``(a x v)_i = EPS3[i, k, l] a_k v_l``.

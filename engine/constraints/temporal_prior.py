@@ -40,13 +40,14 @@ class PriorTerm(FrameRows, Term):
     """``(z - prediction) / sqrt(L)`` per frame; ``prediction (A, L)``, or None (no
     prediction: the residual is zero)."""
 
-    PER_FRAME = ("prediction",)
+    PER_FRAME: tuple[str, ...] = ("prediction",)
 
     def __init__(self, name: str, prediction: np.ndarray | None) -> None:
         self.names = (name,)
-        self.prediction = None if prediction is None else np.asarray(prediction, dtype=np.float64).reshape(1, -1)
-        self.owner = np.zeros(1 if prediction is None else self.prediction.shape[1], dtype=np.intp)
-        if prediction is None:
+        pred = None if prediction is None else np.asarray(prediction, dtype=np.float64).reshape(1, -1)
+        self.prediction = pred
+        self.owner = np.zeros(1 if pred is None else pred.shape[1], dtype=np.intp)
+        if pred is None:
             self.PER_FRAME = ()
 
     def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:

@@ -72,7 +72,7 @@ class PrepareResult:
 
 def _save_npz(path: Path, **arrays: np.ndarray) -> None:
     with atomic_path(path, suffix=".npz") as tmp:
-        np.savez(tmp, **arrays)
+        np.savez(tmp, **arrays)  # type: ignore[arg-type]  # numpy's stubs: **arrays could name allow_pickle
 
 
 def discover(inputs: list[Path]) -> list[tuple[Path, str]]:
@@ -174,8 +174,8 @@ def split_files(files: list[tuple[Path, str]], eval_only: list[str]) -> tuple[di
     takes : dict
         Relative path -> ``cmu_trial``, for the files the manifest names a take for.
     """
-    takes = {rel: (manifest_entry(path) or {}).get("cmu_trial") for path, rel in files}
-    takes = {rel: take for rel, take in takes.items() if take}
+    named = {rel: (manifest_entry(path) or {}).get("cmu_trial") for path, rel in files}
+    takes: dict[str, str] = {rel: take for rel, take in named.items() if take}
     return assign_splits([rel for _, rel in files], eval_only, takes), takes
 
 

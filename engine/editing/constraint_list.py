@@ -21,9 +21,9 @@ from psygnal import Signal, SignalGroup
 
 from engine import skeleton as sk
 from engine.constraints.base import Constraint
-from engine.errors import UserError
 from engine.editing.catalog import ConstraintKind, constraint_catalog
 from engine.editing.events import ConstraintsChanged
+from engine.errors import UserError
 
 #: Prefix of the pin constraints made by :meth:`ConstraintList.pin` (one per joint).
 PIN_PREFIX = "pin "

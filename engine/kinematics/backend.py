@@ -11,7 +11,11 @@ from __future__ import annotations
 
 import sys
 from types import ModuleType
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    import torch
+    from typing_extensions import TypeIs
 
 
 def torch_of(x: Any) -> ModuleType | None:
@@ -21,3 +25,10 @@ def torch_of(x: Any) -> ModuleType | None:
     if tensor is not None and isinstance(x, tensor):
         return sys.modules["torch"]
     return None
+
+
+def is_tensor(x: object) -> TypeIs[torch.Tensor]:
+    """Whether ``x`` is a torch tensor, never importing torch; a type checker narrows
+    ``x`` to ``torch.Tensor`` where it returns True (and away from it where False)."""
+    tensor = getattr(sys.modules.get("torch"), "Tensor", None)
+    return tensor is not None and isinstance(x, tensor)

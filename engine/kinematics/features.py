@@ -95,6 +95,7 @@ def root_space_fk(rot, offsets):
     """Joint positions and rotations relative to the root joint, ``(..., J, 3)`` and ``(..., J, 4)``.
 
     Slot 0 of ``rot`` is ignored (the root is the frame of reference)."""
+    zero: np.ndarray | torch.Tensor
     if isinstance(rot, torch.Tensor):
         ident = Q.identity(rot.shape[:-2], like=rot)[..., None, :]
         r = torch.cat((ident, rot[..., 1:, :]), dim=-2)

@@ -20,6 +20,9 @@ import pymotion.rotations.quat_np as _pm
 
 Vec = tuple[float, float, float]
 Quat = tuple[float, float, float, float]
+#: What the one-rotation helpers below (and :func:`mul`, :func:`rotate`) take: a tuple,
+#: a list or an array of floats.
+Floats = Sequence[float] | np.ndarray
 IDENTITY: Quat = (1.0, 0.0, 0.0, 0.0)
 
 _CONJ = np.array([1.0, -1.0, -1.0, -1.0])
@@ -50,7 +53,7 @@ def _mul_formula(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 
-def mul(q0: np.ndarray, q1: np.ndarray) -> np.ndarray:
+def mul(q0: Floats, q1: Floats) -> np.ndarray:
     """Hamilton product ``q0 * q1``, ``(..., 4)``.
 
     Two single quaternions ``(4,)`` take a scalar path: at that size numpy's per-call
@@ -62,7 +65,7 @@ def mul(q0: np.ndarray, q1: np.ndarray) -> np.ndarray:
     return (q0[..., :, None] * q1[..., None, :]).reshape(shape[:-1] + (16,)) @ _MUL
 
 
-def rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+def rotate(q: np.ndarray, v: Floats) -> np.ndarray:
     """Rotate vectors ``v (..., 3)`` by unit quaternions ``q (..., 4)`` (one ``(4,)`` by
     one ``(3,)`` takes a scalar path, as in :func:`mul`)."""
     if np.ndim(q) == 1 and np.ndim(v) == 1:
@@ -180,37 +183,37 @@ def _floats(a: Sequence[float] | np.ndarray) -> Sequence[float]:
     return a.tolist() if isinstance(a, np.ndarray) else a
 
 
-def vsub(a: Sequence[float], b: Sequence[float]) -> Vec:
+def vsub(a: Floats, b: Floats) -> Vec:
     """``a - b`` of two 3-vectors."""
     return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
 
 
-def vdot(a: Sequence[float], b: Sequence[float]) -> float:
+def vdot(a: Floats, b: Floats) -> float:
     """Dot product of two 3-vectors."""
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
-def vcross(a: Sequence[float], b: Sequence[float]) -> Vec:
+def vcross(a: Floats, b: Floats) -> Vec:
     """Cross product ``a x b`` of two 3-vectors."""
     return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
-def vnorm(a: Sequence[float]) -> float:
+def vnorm(a: Floats) -> float:
     """Length of a 3-vector."""
     return math.sqrt(vdot(a, a))
 
 
-def vscale(a: Sequence[float], s: float) -> tuple[float, ...]:
+def vscale(a: Floats, s: float) -> tuple[float, ...]:
     """``s * a`` for a vector or quaternion of any length."""
     return tuple(s * x for x in a)
 
 
-def qnorm(q: Sequence[float]) -> float:
+def qnorm(q: Floats) -> float:
     """Length of a quaternion (any 4 numbers)."""
     return math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
 
 
-def qmul(q0: Sequence[float], q1: Sequence[float]) -> Quat:
+def qmul(q0: Floats, q1: Floats) -> Quat:
     """Hamilton product ``q0 * q1``."""
     w0, x0, y0, z0 = q0
     w1, x1, y1, z1 = q1
@@ -218,12 +221,12 @@ def qmul(q0: Sequence[float], q1: Sequence[float]) -> Quat:
             w0 * y1 - x0 * z1 + y0 * w1 + z0 * x1, w0 * z1 + x0 * y1 - y0 * x1 + z0 * w1)  # fmt: skip
 
 
-def qconj(q: Sequence[float]) -> Quat:
+def qconj(q: Floats) -> Quat:
     """Conjugate: the inverse of a unit quaternion."""
     return (q[0], -q[1], -q[2], -q[3])
 
 
-def qrotate(q: Sequence[float], v: Sequence[float]) -> Vec:
+def qrotate(q: Floats, v: Floats) -> Vec:
     """The 3-vector ``v`` rotated by the unit quaternion ``q``."""
     w, x, y, z = q
     a, b, c = v
@@ -231,13 +234,13 @@ def qrotate(q: Sequence[float], v: Sequence[float]) -> Vec:
     return (a + w * tx + y * tz - z * ty, b + w * ty + z * tx - x * tz, c + w * tz + x * ty - y * tx)
 
 
-def qaxis_angle(axis: Sequence[float], angle: float) -> Quat:
+def qaxis_angle(axis: Floats, angle: float) -> Quat:
     """Rotation of ``angle`` radians about the *unit* 3-vector ``axis``."""
     s = math.sin(angle / 2)
     return (math.cos(angle / 2), s * axis[0], s * axis[1], s * axis[2])
 
 
-def qabout(axis: Sequence[float], angle: float) -> Quat:
+def qabout(axis: Floats, angle: float) -> Quat:
     """Rotation of ``angle`` radians about ``axis`` of any length; the identity when the
     axis or the angle is below 1e-12."""
     n = vnorm(axis)
@@ -247,7 +250,7 @@ def qabout(axis: Sequence[float], angle: float) -> Quat:
     return (math.cos(angle / 2), s * axis[0] / n, s * axis[1] / n, s * axis[2] / n)
 
 
-def qbetween(u: Sequence[float], v: Sequence[float]) -> Quat:
+def qbetween(u: Floats, v: Floats) -> Quat:
     """Smallest rotation taking the direction of ``u`` onto that of ``v`` (a half turn
     about an axis perpendicular to ``u`` when they are opposite; the identity when either
     is shorter than 1e-12)."""
@@ -264,13 +267,13 @@ def qbetween(u: Sequence[float], v: Sequence[float]) -> Quat:
     return vscale(q, 1.0 / n)  # type: ignore[return-value]
 
 
-def qpow(q: Sequence[float], t: float) -> Quat:
+def qpow(q: Floats, t: float) -> Quat:
     """``q`` scaled to ``t`` times its angle, the short way round."""
     q = tuple(q) if q[0] >= 0 else tuple(-x for x in q)
     return qabout(q[1:], t * 2.0 * math.acos(min(1.0, q[0])))
 
 
-def qtwist(q: Sequence[float], axis: Sequence[float]) -> Quat:
+def qtwist(q: Floats, axis: Floats) -> Quat:
     """Twist part of ``q`` about ``axis`` (swing-twist decomposition ``q = swing * twist``);
     the identity when ``q`` has no twist component."""
     n = vnorm(axis)
@@ -300,7 +303,7 @@ def qfrom_matrix(m: np.ndarray) -> Quat:
     return (float(q[0] / n), float(q[1] / n), float(q[2] / n), float(q[3] / n))
 
 
-def _frame(u: Sequence[float], w: Sequence[float]) -> np.ndarray:
+def _frame(u: Floats, w: Floats) -> np.ndarray:
     """Orthonormal frame (columns) with x along ``u`` and y in the plane of ``u`` and ``w``."""
     n = vnorm(u)
     x = (u[0] / n, u[1] / n, u[2] / n)
@@ -313,7 +316,7 @@ def _frame(u: Sequence[float], w: Sequence[float]) -> np.ndarray:
     return np.array([x, y, vcross(x, y)]).T
 
 
-def qfrom_bases(u0: Sequence[float], w0: Sequence[float], u1: Sequence[float], w1: Sequence[float]) -> Quat:
+def qfrom_bases(u0: Floats, w0: Floats, u1: Floats, w1: Floats) -> Quat:
     """Rotation taking direction ``u0`` onto ``u1`` and the plane of (``u0``, ``w0``) onto
     that of (``u1``, ``w1``)."""
     return qfrom_matrix(_frame(u1, w1) @ _frame(u0, w0).T)

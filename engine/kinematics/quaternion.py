@@ -9,12 +9,12 @@ directly and skip the dispatch.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, TypeVar
+from typing import TYPE_CHECKING, TypeVar, overload
 
 import numpy as np
 
 from engine.kinematics import quat_np as _np
-from engine.kinematics.backend import torch_of
+from engine.kinematics.backend import is_tensor
 
 if TYPE_CHECKING:  # imported by whoever made a tensor; numpy callers never load torch
     import torch
@@ -24,8 +24,9 @@ Array = TypeVar("Array", np.ndarray, "torch.Tensor")
 
 def mul(q0: Array, q1: Array) -> Array:
     """Hamilton product ``q0 * q1``; shapes broadcast, ``(..., 4)``."""
-    torch = torch_of(q0)
-    if torch is not None:
+    if is_tensor(q0):
+        import torch  # loaded: q0 is a tensor
+
         w0, x0, y0, z0 = q0.unbind(-1)
         w1, x1, y1, z1 = q1.unbind(-1)
         return torch.stack(
@@ -44,8 +45,9 @@ def rotate(q: Array, v: Array) -> Array:
     """Rotate vectors ``v (..., 3)`` by quaternions ``q (..., 4)``."""
     w = q[..., :1]
     u = q[..., 1:]
-    torch = torch_of(q)
-    if torch is not None:
+    if is_tensor(q):
+        import torch  # loaded: q is a tensor
+
         shape = torch.broadcast_shapes(u.shape, v.shape)
         u, v, w = u.expand(shape), v.expand(shape), w.expand(shape[:-1] + (1,))
         t = 2.0 * torch.linalg.cross(u, v, dim=-1)
@@ -55,8 +57,9 @@ def rotate(q: Array, v: Array) -> Array:
 
 def conjugate(q: Array) -> Array:
     """Inverse of a unit quaternion."""
-    torch = torch_of(q)
-    if torch is not None:
+    if is_tensor(q):
+        import torch  # loaded: q is a tensor
+
         return q * torch.tensor([1.0, -1.0, -1.0, -1.0], dtype=q.dtype, device=q.device)
     return _np.conjugate(q)
 
@@ -65,23 +68,32 @@ inverse = conjugate
 
 
 def normalize(q: Array, eps: float = 1e-8) -> Array:
-    torch = torch_of(q)
-    if torch is not None:
+    if is_tensor(q):
+        import torch  # loaded: q is a tensor
+
         return q / torch.linalg.vector_norm(q, dim=-1, keepdim=True).clamp_min(eps)
     return _np.normalize(q, eps)
 
 
 def canonicalize(q: Array) -> Array:
     """Pick the representative with ``w >= 0`` (q and -q are the same rotation)."""
-    torch = torch_of(q)
-    if torch is not None:
+    if is_tensor(q):
+        import torch  # loaded: q is a tensor
+
         return torch.where(q[..., :1] < 0, -q, q)
     return _np.canonicalize(q)
 
 
-def identity(shape: tuple[int, ...] = (), like: Array | None = None) -> Array:
-    torch = torch_of(like)
-    if torch is not None:
+@overload
+def identity(shape: tuple[int, ...] = (), *, like: torch.Tensor) -> torch.Tensor: ...
+@overload
+def identity(shape: tuple[int, ...] = (), like: np.ndarray | None = None) -> np.ndarray: ...
+def identity(shape: tuple[int, ...] = (), like: np.ndarray | torch.Tensor | None = None) -> np.ndarray | torch.Tensor:
+    """Identity quaternions ``shape + (4,)``: a tensor of ``like``'s dtype and device when
+    ``like`` is one, else a numpy array."""
+    if is_tensor(like):
+        import torch  # loaded: like is a tensor
+
         out = torch.zeros(shape + (4,), dtype=like.dtype, device=like.device)
         out[..., 0] = 1.0
         return out
@@ -100,8 +112,9 @@ def to_euler(q: np.ndarray, order: np.ndarray) -> np.ndarray:
 
 def from_axis_angle(axis: Array, angle: Array) -> Array:
     """Rotation of ``angle (...,)`` radians about unit ``axis (..., 3)``."""
-    torch = torch_of(axis)
-    if torch is not None:
+    if is_tensor(axis):
+        import torch  # loaded: axis is a tensor
+
         half = 0.5 * angle
         return torch.cat((torch.cos(half)[..., None], torch.sin(half)[..., None] * axis), dim=-1)
     return _np.from_axis_angle(axis, angle)
@@ -114,7 +127,7 @@ def from_to(v0: np.ndarray, v1: np.ndarray) -> np.ndarray:
 
 def from_matrix(m: Array) -> Array:
     """Rotation matrices ``(..., 3, 3)`` to quaternions."""
-    if torch_of(m) is None:
+    if not is_tensor(m):
         return _np.from_matrix(m)
     import pymotion.rotations.quat_torch as _qt  # imports torch, which a tensor argument has loaded
 
@@ -125,9 +138,10 @@ def to_matrix(q: Array) -> Array:
     """Unit quaternions ``(..., 4)`` (w, x, y, z) to rotation matrices ``(..., 3, 3)``:
     the numpy kit's quadratic form (:func:`engine.kinematics.quat_np.to_matrix`) for both
     array kinds, its coefficient table copied once per dtype and device for tensors."""
-    torch = torch_of(q)
-    if torch is None:
+    if not is_tensor(q):
         return _np.to_matrix(q)
+    import torch  # loaded: q is a tensor
+
     key = (q.dtype, q.device)
     table = _MATRIX_TABLES.get(key)
     if table is None:
@@ -141,8 +155,9 @@ _MATRIX_TABLES: dict = {}
 
 def angle(q0: Array, q1: Array) -> Array:
     """Geodesic angle (radians) between two rotations, ``(...,)``; in [0, pi]."""
-    torch = torch_of(q0)
-    if torch is not None:
+    if is_tensor(q0):
+        import torch  # loaded: q0 is a tensor
+
         d = (q0 * q1).sum(-1).abs().clamp(max=1.0)
         return 2.0 * torch.arccos(d)
     return _np.angle(q0, q1)
@@ -151,9 +166,10 @@ def angle(q0: Array, q1: Array) -> Array:
 def heading(q: Array) -> Array:
     """Yaw-only part of a rotation: rotation about +Z that turns the rest forward (-Y)
     onto the horizontal projection of ``q``'s forward. Shape ``(..., 4)``."""
-    torch = torch_of(q)
-    if torch is None:
+    if not is_tensor(q):
         return _np.heading(q)
+    import torch  # loaded: q is a tensor
+
     f = torch.tensor([0.0, -1.0, 0.0], dtype=q.dtype, device=q.device)
     fw = rotate(q, f.expand(q.shape[:-1] + (3,)))
     half = 0.5 * torch.atan2(fw[..., 0], -fw[..., 1])
@@ -168,8 +184,9 @@ def unroll(q: np.ndarray, axis: int = 0) -> np.ndarray:
 
 def mirror_x(q: Array) -> Array:
     """Conjugate a rotation by the reflection ``x -> -x`` (the left/right mirror)."""
-    torch = torch_of(q)
-    if torch is not None:
+    if is_tensor(q):
+        import torch  # loaded: q is a tensor
+
         return q * torch.tensor([1.0, 1.0, -1.0, -1.0], dtype=q.dtype, device=q.device)
     return _np.mirror_x(q)
 

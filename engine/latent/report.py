@@ -48,7 +48,7 @@ def render_report(trace: LatentTrace, latent_map: LatentMap, out: str | Path, me
     rows = (("nearest", "nearest training\nlatent", latent_map.nn_threshold),
             ("norm", "latent norm", latent_map.norm_threshold),
             ("predictor", "prior latent to\nsolution", None))  # fmt: skip
-    axes = []
+    axes: list[Any] = []
     for r, (key, label, threshold) in enumerate(rows):
         ax = fig.add_subplot(grid[r, 1], sharex=axes[0] if axes else None)
         ax.plot(frames, trace.column(key), lw=1.0, color="#1f77b4")
@@ -87,8 +87,8 @@ def _draw_map(ax: Any, fig: Any, trace: LatentTrace, m: LatentMap) -> None:
     flagged = trace.column("flagged") > 0
     if flagged.any():
         ax.scatter(xy[flagged, 0], xy[flagged, 1], marker="x", color=FLAG, s=30, zorder=4, label="flagged")
-    worst = int(np.nanargmax(trace.column("nearest"))) if len(xy) else None
-    path = trace.probes[worst].path_xy if worst is not None else None
+    worst = int(np.nanargmax(trace.column("nearest"))) if len(xy) else -1
+    path = trace.probes[worst].path_xy if worst >= 0 else None
     if path is not None and len(path) > 1:
         ax.plot(path[:, 0], path[:, 1], "-o", ms=2.5, lw=1.0, color="#ff7f0e", zorder=5,
                 label=f"frame {trace.probes[worst].frame}: iterations")  # fmt: skip

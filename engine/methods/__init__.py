@@ -22,8 +22,15 @@ import numpy as np
 from engine import skeleton as sk
 from engine.errors import UserError
 from engine.methods import driver
-from engine.methods.base import (Configurable, Constrainable, DecodesLatents, FrameResult, Method, SensorWeighted,
-                                 SolvesClips)  # fmt: skip
+from engine.methods.base import (
+    Configurable,
+    Constrainable,
+    DecodesLatents,
+    FrameResult,
+    Method,
+    SensorWeighted,
+    SolvesClips,  # fmt: skip
+)
 from engine.sensors import Sensor, SensorFrame
 
 if TYPE_CHECKING:

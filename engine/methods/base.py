@@ -99,7 +99,7 @@ class Method(ABC):
         :attr:`takes_deadline` set; the others may ignore it.
         """
 
-    def between_frames(self) -> None:
+    def between_frames(self) -> None:  # noqa: B027 - a no-op default that methods override
         """Work that can wait until the last frame's pose is out (a live loop calls it
         while waiting for the next frame; :meth:`step` does it first if nobody did).
         Results never depend on whether it was called. Nothing by default."""

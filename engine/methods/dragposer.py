@@ -29,17 +29,18 @@ from engine.constraints import Constraint, GroundConstraint, SensorConstraint, S
 from engine.constraints.sensor import unit_rotation
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
-from engine.methods.solve_record import SolveRecord, record_of
 from engine.methods import dragposer_root as roots
 from engine.methods.base import FrameResult, Method
 from engine.methods.dragposer_edits import FrameSettings
 from engine.methods.dragposer_parts import FramePlan, PriorSource, TrackerTerms, UserConstraints
-from engine.sensors import SensorFrame
+from engine.methods.solve_record import SolveRecord, record_of
 from engine.motion.clip import Motion
+from engine.sensors import SensorFrame
 from engine.solver import FrameContext, LatentDecoder, LatentPredictor, OptimizerSettings, PoseOptimizer, RootFrame
 from engine.solver.limb_ik import finish
 from engine.solver.tracker_prior import PoseBank, combination, default_bank
 from engine.startup_trace import mark
+
 
 class DragPoserMethod(Method):
     """Latent-space pose optimisation guided by a temporal predictor.
@@ -146,12 +147,14 @@ class DragPoserMethod(Method):
         if s.sensor_rotation_weight != base and base > 0:  # the profile's rotation weight (blend kept)
             self.trackers.scale_rotation_weights(s.sensor_rotation_weight / base)
         term, names, weights = self.trackers.term()
-        on_hip = hip is not None and hip.enabled and hip.dof == 6
+        hip_pose = None
+        if hip is not None and hip.enabled and hip.dof == 6:
+            hip_pose = (np.array(hip.position, dtype=np.float64), unit_rotation(hip.rotation))
         held = self._user.held_joints()
         return FramePlan(
             settings=s, warnings=warnings, trackers=term, names=names, weights=weights,
             bank_readings=self.priors.readings(s, self.trackers.history), feet=self.trackers.feet(),
-            hip=(np.array(hip.position, dtype=np.float64), unit_rotation(hip.rotation)) if on_hip else None,
+            hip=hip_pose,
             reach={k: np.array(v, dtype=np.float64) for k, v in {
                 **(self.trackers.head_target(held) if s.head_reach else {}),
                 **(self.trackers.reach_targets(held) if s.reach else {})}.items()},

@@ -59,13 +59,12 @@ from engine.solver.chain import RootFrames
 from engine.solver.limb_ik import finish
 from engine.solver.threads import one_blas_thread
 
+
 class DragPoserMethod(Protocol):
     """What the batched solve takes from :class:`engine.methods.dragposer.DragPoserMethod`
     (public parts only: the frames' plans, the solver, the method's own terms)."""
 
     settings: Any
-    explicit: set[str]
-    constraints: list
     skeleton: Any
     fps: float
     latent_dim: int
@@ -74,6 +73,15 @@ class DragPoserMethod(Protocol):
     prior: Any
     smooth: Any
     ground: Any
+
+    @property
+    def explicit(self) -> set[str]: ...
+
+    @property
+    def constraints(self) -> list: ...
+
+    @property
+    def sensors(self) -> dict[str, Any]: ...
 
     def plan(self, frame: SensorFrame) -> Any: ...
 
@@ -214,15 +222,16 @@ def _crossfade(own: Sequence[FrameResult | None], warm: list[np.ndarray], offset
     ``(22, 4)``) with weights ``1/(W+1) .. W/(W+1)``, so the next segment's first kept
     frame follows on without a step; positions are recomputed by forward kinematics
     (the root position is the hip tracker's in both)."""
-    if not warm or len(warm) != len(own) or any(r is None for r in own):
+    done = [r for r in own if r is not None]
+    if not warm or len(warm) != len(own) or len(done) != len(own):
         return
-    alpha = np.arange(1, len(own) + 1) / (len(own) + 1.0)
-    q0 = np.array([r.local_rot for r in own])
+    alpha = np.arange(1, len(done) + 1) / (len(done) + 1.0)
+    q0 = np.array([r.local_rot for r in done])
     q1 = np.array(warm)
     q1 = q1 * np.where((q0 * q1).sum(-1, keepdims=True) < 0, -1.0, 1.0)  # one hemisphere per joint
     blend = QN.slerp(q0, q1, alpha[:, None, None])
-    pos, _ = fk(blend, np.array([r.root_pos for r in own]), offsets)
-    for r, q, p in zip(own, blend, pos):
+    pos, _ = fk(blend, np.array([r.root_pos for r in done]), offsets)
+    for r, q, p in zip(done, blend, pos):
         r.local_rot, r.positions, r.root_pos = q, p, p[0].copy()
 
 
@@ -248,8 +257,9 @@ def _same_hip_set(frames: Sequence[SensorFrame]) -> bool:
 def _read_all(m: DragPoserMethod, frames: Sequence[SensorFrame]) -> list[dict] | None:
     """Every frame's :func:`_read` record with its prior latent (``prior``), or None when a
     frame cannot be batched or the frames do not share their trackers."""
-    read = [_read(m, f) for f in frames]
-    if any(r is None for r in read) or len({(r["names"], r["bank"][0]) for r in read}) != 1:
+    found = [_read(m, f) for f in frames]
+    read = [r for r in found if r is not None]
+    if len(read) != len(found) or len({(r["names"], r["bank"][0]) for r in read}) != 1:
         return None
     joints = read[0]["bank"][0]  # all frames' priors in one call, as frame by frame finds them
     pos, rot = np.array([r["bank"][1] for r in read]), np.array([r["bank"][2] for r in read])

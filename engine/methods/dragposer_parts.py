@@ -183,8 +183,7 @@ class TrackerTerms:
         turn would take a pinned elbow off the pin the solve met); else empty. Without
         hips the root follows the head tracker already."""
         hip, head = self.constraints.get("root"), self.constraints.get("upperneck")
-        on = hip is not None and head is not None and hip.enabled and head.enabled and head.connected
-        if not on or held & CARRIED:
+        if hip is None or head is None or not (hip.enabled and head.enabled and head.connected) or held & CARRIED:
             return {}
         return {HEAD: head.position}
 
@@ -299,7 +298,9 @@ class PriorSource:
         self.schedule.configure(s.predictor_every, s.past_window)
         self.from_bank = readings is not None
         if readings is not None:
-            return self.bank.latent(*readings, k=s.tracker_prior_neighbours), s.tracker_prior_weight, []
+            assert self.bank is not None  # readings come only with a bank (:meth:`readings`)
+            joints, pos, rot = readings
+            return self.bank.latent(joints, pos, rot, k=s.tracker_prior_neighbours), s.tracker_prior_weight, []
         prediction, warn = self.schedule.prediction(frame, self.predictor, max(1, s.future_window), defer=True)
         return prediction, s.temporal_weight, [warn] if warn else []
 

@@ -17,8 +17,8 @@ import torch
 from engine import skeleton as sk
 from engine.constraints import SensorConstraint
 from engine.kinematics import quaternion as Q
-from engine.solver import OptimizerSettings, RootAnchor, RootFrame, RootOverride
 from engine.kinematics.root import root_displacement
+from engine.solver import OptimizerSettings, RootAnchor, RootFrame, RootOverride
 from engine.solver.pose import BODY_HEADING_LIMIT_DEG, clamp_heading, head_hands_facing
 
 Sensors = dict[str, SensorConstraint]
@@ -58,7 +58,8 @@ def reference_root(previous: RootFrame, sensors: Sensors, s: OptimizerSettings,
     head = Q.normalize(c.rotation)
     rot = clamp_heading(previous.rotation.double().numpy(), head)
     if s.hands_heading_limit < 180.0:
-        hands = {j: sensors[j].position for j in ("lwrist", "rwrist") if j in sensors and sensors[j].enabled}
+        hands: dict[str, np.ndarray] = {j: sensors[j].position for j in ("lwrist", "rwrist")
+                                        if j in sensors and sensors[j].enabled}  # fmt: skip
         body = head_hands_facing(head, hands)
         if body is not None:
             rot = clamp_heading(rot, body, s.hands_heading_limit)

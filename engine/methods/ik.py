@@ -33,12 +33,12 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.kinematics import quat_np as Q  # numpy only: no torch dispatch per call
-from engine.kinematics.quat_np import qbetween, qfrom_bases, qnorm, qpow, qtwist, vcross, vnorm
 from engine.kinematics.fk import fk_joints
+from engine.kinematics.quat_np import qbetween, qfrom_bases, qnorm, qpow, qtwist, vcross, vnorm
 from engine.methods.base import FrameResult, Method
-from engine.solver.pose import body_facing
-from engine.sensors import Sensor, SensorFrame
 from engine.motion.clip import Motion
+from engine.sensors import Sensor, SensorFrame
+from engine.solver.pose import body_facing
 
 J = sk.JOINT_INDEX
 SPINE = (J["lowerback"], J["upperback"], J["chest"], J["lowerneck"])
@@ -137,9 +137,10 @@ class IKMethod(Method):
     # -- root ---------------------------------------------------------------------------
     def _estimate_heading(self, s: dict[str, Sensor]) -> np.ndarray:
         head = s.get("upperneck")
-        if head is not None and head.dof == 6:
+        if head is not None and head.dof == 6 and head.rotation is not None:
             return Q.heading(head.rotation)
-        facing = body_facing({j: r.position for j, r in s.items()}, _IK_LATERAL, min_length=1e-3)
+        facing = body_facing({j: r.position for j, r in s.items() if r.position is not None}, _IK_LATERAL,
+                             min_length=1e-3)  # fmt: skip
         return self._heading if facing is None else facing
 
     def _solve_root(self, s: dict[str, Sensor]) -> tuple[np.ndarray, np.ndarray]:
@@ -154,7 +155,7 @@ class IKMethod(Method):
         elif head is not None:
             pos = head.position - Q.rotate(rot, self.rest[HEAD] - self.rest[0])
         elif s:
-            mean = np.mean([r.position for r in s.values()], axis=0)
+            mean = np.mean([r.position for r in s.values() if r.position is not None], axis=0)
             pos = np.array([mean[0], mean[1], self._root_pos[2]])
         else:
             pos = self._root_pos
@@ -172,7 +173,7 @@ class IKMethod(Method):
             step = qpow(swing, 1.0 / n)
             for j, pr in zip(SPINE, rot[2:]):  # each segment turns one more step than the one below it
                 local[j] = Q.mul(Q.mul(Q.conjugate(pr), Q.mul(step, pr)), local[j])
-        if head.dof == 6:
+        if head.dof == 6 and head.rotation is not None:
             _, rot = self._at(local, root, sk.PARENTS[HEAD])
             local[HEAD] = Q.mul(Q.conjugate(rot[0]), head.rotation)
 
@@ -259,31 +260,32 @@ class IKMethod(Method):
         chest = self._at(local, root_pos, J["chest"])[1][0]
         for chain in ARMS:
             joint = sk.JOINT_NAMES[chain[2]]
-            r = s.get(joint)
-            if r is None:
+            hand = s.get(joint)
+            if hand is None:
                 self._keep_or_rest(local, chain, joint)
                 continue
-            end_rot = np.asarray(r.rotation, float) if r.dof == 6 else None
-            self._reach_with_clavicle(local, root_pos, chain, np.asarray(r.position, float))
-            self._solve_limb(local, root_pos, chain, r.position, Q.rotate(chest, ARM_POLE), ARM_POLE, end_rot,
+            end_rot = np.asarray(hand.rotation, float) if hand.dof == 6 else None
+            reach_to = np.asarray(hand.position, float)
+            self._reach_with_clavicle(local, root_pos, chain, reach_to)
+            self._solve_limb(local, root_pos, chain, reach_to, Q.rotate(chest, ARM_POLE), ARM_POLE, end_rot,
                              twist_mid=True)
 
         forward = Q.rotate(root_rot, LEG_POLE)
         level = Q.heading(root_rot)
         for chain in LEGS:
             joint = sk.JOINT_NAMES[chain[2]]
-            r = s.get(joint)
-            if r is None and self._keep_or_rest(local, chain, joint):
+            foot = s.get(joint)
+            if foot is None and self._keep_or_rest(local, chain, joint):
                 continue
-            if r is None:  # never tracked: hang straight down under the hip
+            if foot is None:  # never tracked: hang straight down under the hip
                 reach = vnorm(self.rest[chain[2]] - self.rest[chain[0]])
                 hip = self._at(local, root_pos, chain[0])[0][0]
                 target, pole, end_rot = hip - [0.0, 0.0, reach], forward, level
-            elif r.dof == 6:
-                foot_fwd = Q.rotate(np.asarray(r.rotation, float), LEG_POLE)
-                target, pole, end_rot = r.position, forward + foot_fwd, np.asarray(r.rotation, float)
+            elif foot.dof == 6:
+                foot_fwd = Q.rotate(np.asarray(foot.rotation, float), LEG_POLE)
+                target, pole, end_rot = foot.position, forward + foot_fwd, np.asarray(foot.rotation, float)
             else:
-                target, pole, end_rot = r.position, forward, level
+                target, pole, end_rot = foot.position, forward, level
             self._solve_limb(local, root_pos, chain, np.asarray(target, float), pole, LEG_POLE, end_rot)
 
         pos, _ = self._at(local, root_pos, *ALL)

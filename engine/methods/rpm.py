@@ -24,9 +24,9 @@ from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk
 from engine.methods.base import FrameResult, Method, check_preset
 from engine.methods.presets import REQUIRED_PRESET
-from engine.sensors import Sensor, SensorFrame
 from engine.models.rpm import RPM_JOINTS, blank_pose, roll, rolling_step, track_features, yaw_matrix
 from engine.motion.clip import Motion
+from engine.sensors import Sensor, SensorFrame
 
 _HEAD = sk.JOINT_INDEX["upperneck"]
 
@@ -70,7 +70,8 @@ class RPMMethod(Method):
         pos, rot, flags = np.zeros((3, 3)), np.tile([1.0, 0.0, 0.0, 0.0], (3, 1)), np.zeros(3, dtype=bool)
         for k, j in enumerate(RPM_JOINTS):
             r = frame.readings[j]
-            ok = bool(r.connected) and np.all(np.isfinite(r.position)) and np.all(np.isfinite(r.rotation))
+            ok = bool(r.connected and r.position is not None and r.rotation is not None
+                      and np.all(np.isfinite(r.position)) and np.all(np.isfinite(r.rotation)))  # fmt: skip
             if j == "upperneck":
                 if ok or self._head is None:
                     self._head = r
@@ -94,7 +95,7 @@ class RPMMethod(Method):
         h = yaw_matrix(torch.as_tensor(self._rot[-1][0], dtype=torch.float32))[None]
         origin = head_pos * torch.tensor([1.0, 1.0, 0.0])
         with torch.no_grad():
-            if self._P is None:
+            if self._P is None or self._ctx is None:
                 blank = blank_pose(self.model, h)[:, None]
                 self._P = blank.expand(-1, cfg.window, -1, -1, -1).clone()
                 self._ctx = blank.expand(-1, cfg.past_poses, -1, -1, -1).clone()

@@ -68,14 +68,14 @@ class SensorBlend:
         self.frames = 0  # since the last change of state
         self.offset = np.zeros(3)
 
-    def update(self, position: np.ndarray, connected: bool, solved: np.ndarray | None,
+    def update(self, position: np.ndarray | None, connected: bool, solved: np.ndarray | None,
                seconds: float, fps: float) -> BlendedTarget:  # fmt: skip
         """Advance one frame.
 
         Parameters
         ----------
-        position : ndarray (3,)
-            This frame's reading (ignored when not ``connected``).
+        position : ndarray (3,) or None
+            This frame's reading (ignored when not ``connected``, and may be None then).
         connected : bool
         solved : ndarray (3,) or None
             Where the solved joint was on the previous frame (None on the first frame).

@@ -33,11 +33,11 @@ from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk
 from engine.methods.base import FrameResult, Method, check_preset
 from engine.methods.presets import REQUIRED_PRESET
-from engine.sensors import SensorFrame
 from engine.models.sparseposer import LIMB_EE, SPARSE_INDEX, SPARSE_JOINTS, local_rotations
 from engine.models.sparseposer_infer import DenseGenerator, StackedLimbIK, context_frames
 from engine.models.sparseposer_stream import streaming_generator
 from engine.motion.clip import Motion
+from engine.sensors import SensorFrame
 
 #: Rows of the limbs' end effectors (ankles, wrists) in the tracked joints.
 _EE_ROWS = [SPARSE_INDEX.index(j) for j in LIMB_EE]
@@ -131,7 +131,7 @@ class SparsePoserMethod(Method):
         out[list(SPARSE_INDEX)] = self._sparse_features(frame)
         return out
 
-    def _push(self, dq: np.ndarray) -> torch.Tensor:
+    def _push(self, dq: np.ndarray | torch.Tensor) -> torch.Tensor:
         """Append one frame's raw dq ``(22, 8)``; return the window ``(1, context, 22, 8)``
         (normalised, zeros off the trackers; the first frame fills it at a clip's start)."""
         x = self.model.sparse_input(torch.as_tensor(dq, dtype=torch.float32))
@@ -172,6 +172,7 @@ class SparsePoserMethod(Method):
         local = local_rotations(out[:, :4] * self._rot_std + self._rot_mean)
         limb = self.limb_ik.limb_index
         local[limb] = Q.canonicalize(Q.normalize(local[limb] + delta.reshape(4, 4, 4)))
+        assert self._prev_root is not None  # set by _sparse_features above
         root_rot, root_pos = self._prev_root  # this frame's hip tracker
         local[0] = root_rot
         pos, _ = fk(local, root_pos, self.offsets)

@@ -21,6 +21,7 @@ import numpy as np
 import torch
 
 from engine.errors import ModelFileError, UserError
+from engine.models.config import ModelConfig
 from engine.models.predictor import PredictorConfig, TemporalPredictor
 from engine.models.vae import PoseVAE, VAEConfig
 from engine.models.weights_check import check_config, check_fits, check_state, shape_only
@@ -29,7 +30,7 @@ from engine.validation import check_input_file, one_line, shown
 try:
     from numpy._core.multiarray import scalar as _np_scalar
 except ImportError:  # numpy 1.x
-    from numpy.core.multiarray import scalar as _np_scalar
+    from numpy.core.multiarray import scalar as _np_scalar  # type: ignore[no-redef]  # the same function
 
 FORMAT_VERSION = 1
 #: First bytes of a zip archive, the container ``torch.save`` writes.
@@ -41,7 +42,7 @@ DEFAULT_SPARSEPOSER = ASSETS / "sparseposer.pt"
 DEFAULT_RPM = ASSETS / "rpm.pt"
 #: The only non-builtin types a checkpoint may hold besides tensors: numpy scalars that
 #: end up in loss curves and metadata.
-SAFE_GLOBALS = [np.dtype, np.float64, np.float32, np.int64, np.int32, np.bool_, type(np.dtype(np.float64)),
+SAFE_GLOBALS: list[Any] = [np.dtype, np.float64, np.float32, np.int64, np.int32, np.bool_, type(np.dtype(np.float64)),
                 type(np.dtype(np.float32)), type(np.dtype(np.int64)), _np_scalar]  # fmt: skip
 
 
@@ -82,7 +83,8 @@ def load_checkpoint(path: Path | str, what: str = "weights file") -> Any:
     except pickle.UnpicklingError as exc:
         op = re.search(r"Unsupported operand (\d+)", str(exc))
         if op:
-            code = pickletools.code2op.get(chr(int(op.group(1))))
+            # code2op: pickletools' table of opcodes by code, public but absent from typeshed
+            code = pickletools.code2op.get(chr(int(op.group(1))))  # type: ignore[attr-defined]
             name = f" ({code.name})" if code else ""
             raise ModelFileError(f"{path}: refused: the {what} uses pickle instruction {op.group(1)}{name}, which the "
                                  f"safe loader does not read (save it with torch.save's default pickle protocol)") from None  # fmt: skip
@@ -134,7 +136,7 @@ def _read(path: Path, kind: str) -> dict:
     return payload
 
 
-def _build(path: Path | str, kind: str, config_cls: type, model_cls: type) -> tuple[Any, dict]:
+def _build(path: Path | str, kind: str, config_cls: type[ModelConfig], model_cls: type) -> tuple[Any, dict]:
     """The model of ``kind`` in ``path``, frozen, and its ``meta``.
 
     The config is checked and the model's shapes compared with the file's before any
@@ -187,7 +189,8 @@ def load_rpm(path: Path | str | None = None):
 def load_models(vae_path: Path | str, predictor_path: Path | str | None = None) -> ModelBundle:
     """Load a VAE and optionally a predictor trained on its latents."""
     vae, vmeta = load_vae(vae_path)
-    pred, pmeta = (None, {})
+    pred: TemporalPredictor | None = None
+    pmeta: dict = {}
     if predictor_path is not None:
         pred, pmeta = load_predictor(predictor_path)
         if pred.config.latent != vae.config.latent:

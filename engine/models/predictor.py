@@ -37,6 +37,12 @@ class PredictorConfig(ModelConfig):
 class TemporalPredictor(nn.Module):
     """Predicts future latents from past latents and root/heights conditioning."""
 
+    # buffers (register_buffer in __init__), declared for the type checker
+    z_mean: torch.Tensor
+    z_std: torch.Tensor
+    c_mean: torch.Tensor
+    c_std: torch.Tensor
+
     def __init__(self, config: PredictorConfig | None = None):
         super().__init__()
         self.config = cfg = config or PredictorConfig()

@@ -33,8 +33,8 @@ import pymotion.rotations.ortho6d_torch as o6
 import torch
 from torch import nn
 
-from engine.models.config import ModelConfig
 from engine import skeleton as sk
+from engine.models.config import ModelConfig
 
 #: Tracked joints (preset ``3-head-hands``), in input order.
 RPM_JOINTS = ("upperneck", "lwrist", "rwrist")
@@ -74,6 +74,13 @@ class _Block(nn.Module):
 
 class RPM(nn.Module):
     """``f``: tracking window + pose context -> W poses (normalised), and PCAF."""
+
+    # buffers (register_buffer in __init__), declared for the type checker
+    pose_mean: torch.Tensor
+    pose_std: torch.Tensor
+    track_mean: torch.Tensor
+    track_std: torch.Tensor
+    u: torch.Tensor
 
     def __init__(self, config: RPMConfig | None = None, stats: dict | None = None):
         super().__init__()

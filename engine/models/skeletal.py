@@ -60,6 +60,12 @@ class SkeletalLinear(nn.Module):
     Each node has its own weights over the features of its neighbours (a masked dense
     matrix would store mostly zeros). Input ``(B, N, C_in)``, output ``(B, N, C_out)``."""
 
+    # buffers (register_buffer in __init__), declared for the type checker
+    gather: torch.Tensor
+    dense_src: torch.Tensor
+    dense_row: torch.Tensor
+    dense_node: torch.Tensor
+
     def __init__(self, node_mask: np.ndarray, c_in: int, c_out: int):
         super().__init__()
         n = node_mask.shape[0]
@@ -75,7 +81,9 @@ class SkeletalLinear(nn.Module):
         self.register_buffer("gather", gather, persistent=False)  # structure, rebuilt from the skeleton
         self.k = k
         # where each used weight row lands in the dense (N*C_in, N, C_out) matrix of a batch pass
-        src, dst, node = [], [], []
+        src: list[int] = []
+        dst: list[int] = []
+        node: list[int] = []
         for i, v in enumerate(neigh):
             for slot, j in enumerate(v):
                 src.extend(range((i * k + slot) * c_in, (i * k + slot + 1) * c_in))

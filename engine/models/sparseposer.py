@@ -25,10 +25,9 @@ import torch
 from torch import nn
 from torch.nn import functional as F
 
-from engine.models.config import ModelConfig
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
-from engine.kinematics.features import root_space_fk
+from engine.models.config import ModelConfig
 from engine.models.skeletal import (
     POOL_GROUPS,
     SkeletalLinear,
@@ -107,6 +106,14 @@ def upsample2(x: torch.Tensor) -> torch.Tensor:
 class SparsePoserGenerator(nn.Module):
     """Skeleton-aware convolutional autoencoder: sparse window -> full-body window."""
 
+    # buffers (register_buffer in __init__), declared for the type checker
+    pool0: torch.Tensor
+    pool1: torch.Tensor
+    pool2: torch.Tensor
+    unpool0: torch.Tensor
+    unpool1: torch.Tensor
+    unpool2: torch.Tensor
+
     def __init__(self, cfg: SparsePoserConfig):
         super().__init__()
         self.cfg = cfg
@@ -159,10 +166,11 @@ class LimbIK(nn.Module):
     def __init__(self, hidden: int):
         super().__init__()
         # limb joints' root-space dq (4 x 8), their offsets (4 x 3), the tracker's dq (8)
+        last = nn.Linear(hidden, 16)
         self.net = nn.Sequential(nn.Linear(4 * 8 + 4 * 3 + 8, hidden), nn.LeakyReLU(0.2),
-                                 nn.Linear(hidden, hidden), nn.LeakyReLU(0.2), nn.Linear(hidden, 16))  # fmt: skip
-        nn.init.zeros_(self.net[-1].weight)
-        nn.init.zeros_(self.net[-1].bias)
+                                 nn.Linear(hidden, hidden), nn.LeakyReLU(0.2), last)  # fmt: skip
+        nn.init.zeros_(last.weight)
+        nn.init.zeros_(last.bias)
 
     def forward(self, limb_dq, limb_off, target_dq, limb_local):
         """Adjusted local rotations ``(B, 4, 4)`` of the limb (w >= 0)."""
@@ -173,6 +181,11 @@ class LimbIK(nn.Module):
 
 class SparsePoser(nn.Module):
     """Generator + learned IK, with the normalisation statistics as buffers."""
+
+    # buffers (register_buffer in __init__), declared for the type checker
+    dq_mean: torch.Tensor
+    dq_std: torch.Tensor
+    sparse_mask: torch.Tensor
 
     def __init__(self, config: SparsePoserConfig | None = None, stats: dict | None = None):
         super().__init__()

@@ -20,14 +20,15 @@ full window (tests check it to 1e-5); they only remove work a realtime step does
 from __future__ import annotations
 
 import math
+from typing import cast
 
 import numpy as np
-
 import torch
+from torch import nn
 from torch.nn import functional as F
 
 from engine.kinematics import quaternion as Q
-from engine.models.sparseposer import LIMB_EE, LIMB_INDEX, SkeletalConv, SparsePoser
+from engine.models.sparseposer import LIMB_EE, LIMB_INDEX, LimbIK, SkeletalConv, SparsePoser
 
 #: Frames added to the receptive field: the shorter window's own zero padding must stay
 #: outside what the last frame reads (with 24 frames for a field of 23 the last frame
@@ -48,6 +49,7 @@ def receptive_field(model: SparsePoser) -> int:
     with torch.enable_grad():
         out = model.generator(x, off)[:, -1]
         (out * torch.randn(out.shape, generator=gen)).sum().backward()
+    assert x.grad is not None  # x requires grad and the output depends on it
     read = torch.nonzero(x.grad.abs().sum(dim=(0, 2, 3)) > 0)
     return cfg.window - int(read[0])
 
@@ -96,15 +98,17 @@ class DenseGenerator:
 
     def __init__(self, model: SparsePoser):
         g = model.generator
-        self.kernel = g.enc[0].kernel  # the encoder's (``kernel`` setting)
+        # a ModuleList's items are typed Module: these are the generator's SkeletalConvs
+        enc, dec = cast(list[SkeletalConv], list(g.enc)), cast(list[SkeletalConv], list(g.dec))
+        self.kernel = enc[0].kernel  # the encoder's (``kernel`` setting)
         self.dec_kernel = g.out.kernel  # the decoder's (always 3)
         self.slope = g.act.negative_slope
-        self.enc = [dense_conv(g.enc[0]), dense_conv(g.enc[1], g.pool0), dense_conv(g.enc[2], g.pool1)]
-        self.dec = [dense_conv(g.dec[0], g.unpool2 @ g.pool2), dense_conv(g.dec[1], g.unpool1),
-                    dense_conv(g.dec[2], g.unpool0)]  # fmt: skip
+        self.enc = [dense_conv(enc[0]), dense_conv(enc[1], g.pool0), dense_conv(enc[2], g.pool1)]
+        self.dec = [dense_conv(dec[0], g.unpool2 @ g.pool2), dense_conv(dec[1], g.unpool1),
+                    dense_conv(dec[2], g.unpool0)]  # fmt: skip
         self.out = dense_conv(g.out)
-        self.enc_nodes = [g.enc[i].linear.n for i in range(3)]
-        self.dec_nodes = [g.dec[i].linear.n for i in range(3)]
+        self.enc_nodes = [enc[i].linear.n for i in range(3)]
+        self.dec_nodes = [dec[i].linear.n for i in range(3)]
 
     def __call__(self, x: torch.Tensor, static: list[torch.Tensor], tail: int) -> torch.Tensor:
         """Last output frame ``(22, 8)`` (normalised dq) of the normalised sparse window
@@ -127,10 +131,12 @@ class StackedLimbIK:
     batched MLP (weights copied: build it again after changing the model's weights)."""
 
     def __init__(self, model: SparsePoser):
-        nets = [ik.net for ik in model.ik]
-        self.weights = [torch.stack([n[i].weight.detach().T for n in nets]).contiguous() for i in (0, 2, 4)]
-        self.biases = [torch.stack([n[i].bias.detach() for n in nets])[:, None] for i in (0, 2, 4)]
-        self.slope = nets[0][1].negative_slope
+        # the limbs' MLPs: Linear, LeakyReLU, Linear, LeakyReLU, Linear (items typed Module)
+        nets = [ik.net for ik in cast(list[LimbIK], list(model.ik))]
+        linears = [[cast(nn.Linear, n[i]) for i in (0, 2, 4)] for n in nets]
+        self.weights = [torch.stack([lin[i].weight.detach().T for lin in linears]).contiguous() for i in range(3)]
+        self.biases = [torch.stack([lin[i].bias.detach() for lin in linears])[:, None] for i in range(3)]
+        self.slope = cast(nn.LeakyReLU, nets[0][1]).negative_slope
         self.limb = torch.tensor(LIMB_INDEX)  # (4 limbs, 4 joints)
         self.limb_index = np.array(LIMB_INDEX)
         self.ee = torch.tensor(LIMB_EE)

@@ -97,7 +97,7 @@ class StreamingGenerator:
         convs = list(dense.dec) + [dense.out]
         n_in = [dense.enc_nodes[-1]] + dense.dec_nodes
         need_out = [0]  # the output layer's single frame
-        self.dec = []
+        self.dec: list[tuple[torch.Tensor, torch.Tensor, torch.Tensor, int]] = []  # (w, d, b, rows) per level
         for i in range(len(maps) - 1, -1, -1):
             w = maps[i][need_out]  # (outputs, K, frames of the level below)
             need_in = torch.nonzero(w.abs().sum(dim=(0, 1)) > 0)[:, 0].tolist()
@@ -121,6 +121,7 @@ class StreamingGenerator:
 
     def _encode(self, level: int) -> torch.Tensor:
         d, b, s = self.enc[level]
+        assert self._hist is not None  # the stream has started (__call__)
         h = self._hist[level]
         return F.leaky_relu(torch.addmm(b, torch.cat((h[-1 - 2 * s], h[-1 - s], h[-1]), dim=1), d), self.slope)
 

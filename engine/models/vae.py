@@ -16,9 +16,9 @@ import numpy as np
 import torch
 from torch import nn
 
-from engine.models.config import ModelConfig
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
+from engine.models.config import ModelConfig
 from engine.models.skeletal import (
     POOL_GROUPS,
     SkeletalLinear,
@@ -42,6 +42,18 @@ class VAEConfig(ModelConfig):
 
 class PoseVAE(nn.Module):
     """Skeleton-aware variational autoencoder of single poses."""
+
+    # buffers (register_buffer in __init__), declared for the type checker
+    pool0: torch.Tensor
+    pool1: torch.Tensor
+    pool2: torch.Tensor
+    unpool0: torch.Tensor
+    unpool1: torch.Tensor
+    unpool2: torch.Tensor
+    dq_mean: torch.Tensor
+    dq_std: torch.Tensor
+    disp_mean: torch.Tensor
+    disp_std: torch.Tensor
 
     def __init__(self, config: VAEConfig | None = None, stats: dict | None = None):
         super().__init__()

@@ -225,12 +225,12 @@ def load_asf(path: str | Path) -> Skeleton:
     stack = [(kid, 0) for kid in reversed(children["root"])]
     seen = {"root"}
     while stack:
-        name, parent = stack.pop()
+        name, parent_at = stack.pop()
         if name in seen:
             raise AsfAmcError(path, f"bone {name[:40]!r} appears twice in the :hierarchy (a loop or two parents)")
         seen.add(name)
         order.append(bones[name])
-        parents.append(parent)
+        parents.append(parent_at)
         me = len(order) - 1
         stack.extend((kid, me) for kid in reversed(children.get(name, [])))
     return Skeleton(path, order, parents, root_order, radians, unit)

@@ -29,10 +29,10 @@ from pymotion.rotations import quat_np as _qnp
 
 from engine import skeleton as sk
 from engine.atomic import atomic_path
-from engine.motion.bvh_parser import parse_bvh_lines
-from engine.motion.bvh_syntax import MAX_OFFSET
 from engine.errors import BVHError, UserError
 from engine.kinematics import quaternion as Q
+from engine.motion.bvh_parser import parse_bvh_lines
+from engine.motion.bvh_syntax import MAX_OFFSET
 from engine.motion.clip import Motion
 from engine.validation import check_input_file
 
@@ -123,6 +123,7 @@ class RawBVH:
             axis = np.broadcast_to(axis, rad.shape)
             qk = _qnp.from_angle_axis(rad[..., k : k + 1], axis)
             q = qk if q is None else _qnp.mul(q, qk)
+        assert q is not None  # three axes were multiplied in
         return Q.normalize(q)
 
 

@@ -98,9 +98,9 @@ class Hierarchy:
 
     def parse(self) -> None:
         t = self.t
-        tok = t.peek()
-        if tok is None or tok[0].upper() != "HIERARCHY":
-            raise t.error("missing HIERARCHY: a BVH file starts with the word HIERARCHY", tok[1] if tok else 1)
+        first = t.peek()
+        if first is None or first[0].upper() != "HIERARCHY":
+            raise t.error("missing HIERARCHY: a BVH file starts with the word HIERARCHY", first[1] if first else 1)
         t.i += 1
         tok, line = t.next("ROOT")
         if tok.upper() != "ROOT":
@@ -125,13 +125,13 @@ class Hierarchy:
                 )
             else:
                 raise t.error(f"unexpected '{tok}' in joint '{self.names[stack[-1]]}'", line)
-        tok = t.peek()
-        if tok is not None:
-            if tok[0] == "}":
-                raise t.error("unbalanced braces: '}' after the ROOT joint was closed", tok[1])
-            if tok[0].upper() == "ROOT":
-                raise t.error("more than one ROOT is not supported", tok[1])
-            raise t.error(f"expected MOTION after the hierarchy, found '{tok[0]}'", tok[1])
+        after = t.peek()
+        if after is not None:
+            if after[0] == "}":
+                raise t.error("unbalanced braces: '}' after the ROOT joint was closed", after[1])
+            if after[0].upper() == "ROOT":
+                raise t.error("more than one ROOT is not supported", after[1])
+            raise t.error(f"expected MOTION after the hierarchy, found '{after[0]}'", after[1])
 
     def _open_joint(self, line: int, parent: int) -> int:
         t = self.t
@@ -178,10 +178,12 @@ class Hierarchy:
         names = words[1:]
         if len(names) != count:
             raise t.error(f"CHANNELS {count} of joint '{name}' lists {len(names)} channel names", line)
-        parsed = [_CHANNEL.match(c) for c in names]
-        for c, m in zip(names, parsed):
+        parsed = []
+        for c in names:
+            m = _CHANNEL.match(c)
             if m is None:
                 raise t.error(f"unknown channel '{c}' in joint '{name}' (expected X/Y/Z position/rotation)", line)
+            parsed.append(m)
         kinds = [(m.group(1).lower(), m.group(2).lower()) for m in parsed]
         rots = [a for a, k in kinds if k == "rotation"]
         poss = [a for a, k in kinds if k == "position"]

@@ -93,7 +93,7 @@ def save_motion(path: str | Path, motion: Motion, on_rig: tuple[Any, Any] | None
     from engine.motion import gltf_characters as gc
     from engine.motion.gltf import save_gltf
 
-    def build(m: Motion, name: str, colour: tuple[float, ...]):
+    def build(m: Motion, name: str, colour: gc.RGBA):
         if on_rig is None:
             return gc.character_of(m, name, colour)
         return gc.character_on_source_rig(m, *on_rig, fps=fps, name=name, colour=colour)

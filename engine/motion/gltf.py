@@ -174,7 +174,8 @@ class _Animation:
     """Samplers and channels of the one animation, with one time accessor per frame rate."""
 
     def __init__(self, b: _Builder) -> None:
-        self.b, self.times = b, {}
+        self.b = b
+        self.times: dict[tuple[int, float], int] = {}  # (frames, fps) -> accessor
         self.anim = G.Animation(name="motion", samplers=[], channels=[])
 
     def time_accessor(self, frames: int, fps: float) -> int:
@@ -243,7 +244,9 @@ def _mesh(b: _Builder, name: str, body: SkinnedMesh, material: int, skinned: boo
 
 def _box() -> SkinnedMesh:
     """A cube of half-edge :data:`TRACKER_SIZE` with flat faces (no skin)."""
-    pos, nrm, idx = [], [], []
+    pos: list[np.ndarray] = []
+    nrm: list[np.ndarray] = []
+    idx: list[int] = []
     for axis in range(3):
         for sign in (-1.0, 1.0):
             n = np.zeros(3)

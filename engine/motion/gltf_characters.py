@@ -19,7 +19,8 @@ from engine.motion.gltf import Character, TrackerNodes
 from engine.motion.mannequin import BONE_RADIUS, END_RADIUS, END_SHARE
 
 #: Base colour of the main character and, in turn, of the comparison characters (linear RGBA).
-MAIN_COLOUR = (0.80, 0.55, 0.40, 1.0)
+RGBA = tuple[float, float, float, float]
+MAIN_COLOUR: RGBA = (0.80, 0.55, 0.40, 1.0)
 GHOST_COLOURS = ((0.35, 0.55, 0.85, 1.0), (0.45, 0.75, 0.40, 1.0), (0.85, 0.75, 0.30, 1.0), (0.65, 0.45, 0.80, 1.0))
 
 
@@ -36,7 +37,7 @@ def _radii(named: dict[str, int], scale: float) -> dict[int, float]:
     return out
 
 
-def character_of(motion: Motion, name: str = "", colour: tuple[float, ...] = MAIN_COLOUR) -> Character:
+def character_of(motion: Motion, name: str = "", colour: RGBA = MAIN_COLOUR) -> Character:
     """``motion`` on the canonical 22-joint skeleton (the joints and OFFSETs its BVH has)."""
     offsets = np.asarray(motion.skeleton.offsets, float).copy()
     offsets[0] = 0.0  # the root's position lives in its channel, as in the BVH
@@ -47,12 +48,12 @@ def character_of(motion: Motion, name: str = "", colour: tuple[float, ...] = MAI
         name=name, joints=tuple(sk.JOINT_NAMES), parents=tuple(sk.PARENTS), rest=offsets, translations=trans,
         rotations=Q.normalize(motion.local_rot), fps=float(motion.fps),
         ends={sk.JOINT_INDEX[n]: off * scale * END_SHARE[n] for n, off in sk.END_SITES.items()},
-        radius=_radii(sk.JOINT_INDEX, scale), colour=tuple(colour),
+        radius=_radii(sk.JOINT_INDEX, scale), colour=colour,
     )  # fmt: skip
 
 
 def character_on_source_rig(motion: Motion, raw: RawBVH, report: Any, fps: float | None = None, name: str = "",
-                            colour: tuple[float, ...] = MAIN_COLOUR) -> Character:  # fmt: skip
+                            colour: RGBA = MAIN_COLOUR) -> Character:  # fmt: skip
     """``motion`` written onto ``raw``'s hierarchy, exactly as
     :func:`engine.motion.write_back.save_on_source_rig` writes its BVH (same joints,
     names, OFFSETs, rotations, position channels, frame rate ``fps`` or the source's),
@@ -77,7 +78,7 @@ def character_on_source_rig(motion: Motion, raw: RawBVH, report: Any, fps: float
         translations=_local_offsets(raw, positions) @ basis.T * unit,
         rotations=Q.normalize(Q.mul(Q.mul(b, local), Q.conjugate(b))), fps=fps,
         ends={j: off @ basis.T * unit for j, off in raw.end_sites.items()},
-        radius=_radii(named, motion.skeleton.scale), colour=tuple(colour),
+        radius=_radii(named, motion.skeleton.scale), colour=colour,
     )  # fmt: skip
 
 

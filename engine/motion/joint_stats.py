@@ -77,9 +77,9 @@ def _mean(q: np.ndarray) -> np.ndarray:
     return Q.normalize(q.mean(0))
 
 
-def joint_report(local_rot: np.ndarray, offsets: np.ndarray) -> dict[str, dict[str, float]]:
+def joint_report(local_rot: np.ndarray, offsets: np.ndarray) -> dict[str, dict[str, float | list[float]]]:
     """Per joint: median and 90th-percentile |twist| (degrees), hinge axis and its share."""
-    out = {}
+    out: dict[str, dict[str, float | list[float]]] = {}
     for name in BONE_CHILD:
         j = sk.JOINT_INDEX[name]
         tw = twist_deg(local_rot[:, j], bone_axis(offsets, name))

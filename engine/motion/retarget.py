@@ -34,18 +34,23 @@ from pathlib import Path
 import numpy as np
 
 from engine import skeleton as sk
-from engine.motion.bvh import RawBVH
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk, local_from_global
-from engine.motion.clip import Motion
 from engine.motion import retarget_body as RB
 from engine.motion import retarget_frames as RF
+from engine.motion.bvh import RawBVH
+from engine.motion.clip import Motion
 from engine.motion.retarget_inputs import (  # noqa: F401 - re-exported: callers import them from here
-    MODELS_DATA, _snap_fps, manifest_entry, manifest_fps, models_strategy, rest_frame_count)
-from engine.motion.retarget_strategy import (  # noqa: F401 - re-exported: callers import them from here
-    CURRENT, RETARGET_VERSION, STRATEGIES, RetargetStrategy)
+    MODELS_DATA,
+    _snap_fps,
+    manifest_entry,
+    manifest_fps,
+    models_strategy,
+    rest_frame_count,
+)
 from engine.motion.retarget_rotations import rigid_hands, straightened_offsets, tip_points, world_rotations
+from engine.motion.retarget_strategy import CURRENT, RETARGET_VERSION, STRATEGIES, RetargetStrategy  # noqa: F401 - re-exported: callers import them from here
 from engine.motion.rigs import RigProfile, resolve_rig
 from engine.motion.source_file import load_source
 from engine.validation import SKELETON, check_value
@@ -180,8 +185,8 @@ def measure_offsets(pts: dict[str, np.ndarray], glob: np.ndarray, leg_scale: flo
         if toe not in pts and tip in pts and f"{side}ankle" in pts:
             k = sk.JOINT_INDEX[toe]
             v = Q.rotate(Q.conjugate(glob[:, ankle]), pts[tip] - pts[f"{side}ankle"]).mean(0)
-            a, b = np.linalg.norm(sk.REST_OFFSETS[k]), np.linalg.norm(sk.END_SITES[toe])
-            off[k] = v * a / (a + b)
+            toe_len, tip_len = np.linalg.norm(sk.REST_OFFSETS[k]), np.linalg.norm(sk.END_SITES[toe])
+            off[k] = v * toe_len / (toe_len + tip_len)
     off[0] = 0.0
     return off
 

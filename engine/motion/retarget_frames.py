@@ -34,8 +34,8 @@ from __future__ import annotations
 import numpy as np
 
 from engine import skeleton as sk
-from engine.motion.joint_stats import limb_hinge
 from engine.kinematics import quaternion as Q
+from engine.motion.joint_stats import limb_hinge
 
 # canonical joint -> (primary (from, [to candidates]), [secondary specs tried in order]).
 # A secondary spec is ("vec", a, b) = b - a, or ("hinge", a, b, c) = (b - a) x (c - b).

@@ -12,10 +12,10 @@ from pathlib import Path
 
 import numpy as np
 
-from engine.motion.bvh import RawBVH
 from engine.errors import UserError
 from engine.input_files import read_json, read_toml
 from engine.kinematics import quaternion as Q
+from engine.motion.bvh import RawBVH
 from engine.motion.retarget_strategy import CURRENT, STRATEGIES, RetargetStrategy
 from engine.validation import check_manifest, shown
 

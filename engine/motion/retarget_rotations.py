@@ -11,11 +11,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from engine import skeleton as sk
+from engine.kinematics import quaternion as Q
 from engine.motion import retarget_body as RB
 from engine.motion import retarget_frames as RF
-from engine import skeleton as sk
 from engine.motion.bvh import RawBVH
-from engine.kinematics import quaternion as Q
 from engine.motion.retarget_strategy import RetargetStrategy
 from engine.motion.rigs import RigProfile
 
@@ -157,7 +157,7 @@ def world_rotations(prof: RigProfile, pts, wrot, idx, cq, strategy: RetargetStra
     body: dict[str, np.ndarray] = {}
     body_twist = prof.align and strategy.body_twist
     if body_twist:
-        straight = {j: Q.rotate(Q.mul(aligned[j], np.broadcast_to(_BODY_FRAMES[j], aligned[j].shape)),
+        straight: dict[str, np.ndarray] = {j: Q.rotate(Q.mul(aligned[j], np.broadcast_to(_BODY_FRAMES[j], aligned[j].shape)),
                                 np.broadcast_to([0.0, 1.0, 0.0], (n, 3)))
                     for j in ("lshoulder", "rshoulder") if j in aligned}  # fmt: skip
         loose = {f"{s}_{k}" for s in "lr" if s not in hands for k in ("index", "pinky", "hand_mid")}

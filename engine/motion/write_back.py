@@ -24,10 +24,10 @@ from pymotion.io.bvh import BVH as _PymotionBVH
 
 from engine import skeleton as sk
 from engine.atomic import atomic_path
-from engine.motion.bvh import RawBVH
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk
+from engine.motion.bvh import RawBVH
 from engine.motion.clip import Motion
 
 

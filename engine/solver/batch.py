@@ -115,13 +115,16 @@ class BatchObjective:
             if isinstance(t, FrameRows):
                 t.set_row(row, f)
         self.weights[row] = weights
-        self.root.position[row], self.root.rotation[row] = root_pos, QN.to_matrix(root_rot)
+        r = self.root
+        assert r.position is not None and r.rotation is not None  # a batch's rows have the hip's root
+        r.position[row], r.rotation[row] = root_pos, QN.to_matrix(root_rot)
         self.root_quat[row] = root_rot if root_rot[0] >= 0 else -root_rot
 
     def evaluate(self, z: np.ndarray, out: np.ndarray, idx: np.ndarray) -> np.ndarray:
         """Losses ``(A, K)`` of the rows ``idx (A,)`` at latents ``z (A, L)`` with decoder
         outputs ``out (91, A)``; keeps what :meth:`gradient` needs."""
         r = self.root
+        assert r.position is not None and r.rotation is not None
         sub = RootFrames(r.heading[idx], r.previous[idx], r.position[idx], r.rotation[idx])
         P, W = self.chain.forward(out.T, sub)
         z64 = z.astype(np.float64)

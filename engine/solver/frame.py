@@ -18,8 +18,8 @@ from typing import Protocol
 import numpy as np
 import torch
 
-from engine.solver.pose import RootAnchor, RootFrame, RootOverride
 from engine.kinematics.pose_state import PoseState
+from engine.solver.pose import RootAnchor, RootFrame, RootOverride
 
 
 class LatentDecoder(Protocol):

@@ -32,7 +32,17 @@ import numpy as np
 from engine import skeleton as sk
 from engine.kinematics.fk import fk, fk_joints, fk_positions
 from engine.kinematics.quat_np import (
-    heading, qaxis_angle, qbetween, qconj, qmul, qrotate, vcross, vdot, vnorm, vscale, vsub,
+    heading,
+    qaxis_angle,
+    qbetween,
+    qconj,
+    qmul,
+    qrotate,
+    vcross,
+    vdot,
+    vnorm,
+    vscale,
+    vsub,
 )
 
 #: End joint -> (limb root, middle joint).
@@ -86,7 +96,7 @@ def reach_local(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray
         ta = vsub(t, pa)
         d = min(max(vnorm(ta), abs(l1 - l2) + _SLACK), l1 + l2 - _SLACK)
         u, v = vsub(pa, pb), vsub(pc, pb)
-        n = vcross(u, v)
+        n: tuple[float, ...] = vcross(u, v)
         sin_uv = vnorm(n)
         if sin_uv < 1e-9:  # straight or folded: bend about the middle joint's x axis
             n = qrotate(wb0, (1.0, 0.0, 0.0))
@@ -189,7 +199,7 @@ def adopt_local(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray
     nested = any(a in targets for p in parents for a in _chain(p))
     world = None if nested else fk_joints(local, root_pos, offsets, parents)[1].tolist()
     for k, j in enumerate(order):
-        parent_rot = fk_joints(local, root_pos, offsets, [parents[k]])[1][0] if nested else world[k]
+        parent_rot = fk_joints(local, root_pos, offsets, [parents[k]])[1][0] if world is None else world[k]
         t = [float(x) for x in targets[j]]
         s = 1.0 / max(math.sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2] + t[3] * t[3]), 1e-12)
         q = qmul(qconj(parent_rot), (t[0] * s, t[1] * s, t[2] * s, t[3] * s))
@@ -233,7 +243,7 @@ def share_neck_twist(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.nd
     if not n > 1e-12:
         return local
     delta = qmul(tuple(x / n for x in t), qconj(head))  # world correction of the head
-    axis = qrotate(neck, tuple(float(x) for x in offsets[HEAD]))
+    axis: tuple[float, ...] = qrotate(neck, tuple(float(x) for x in offsets[HEAD]))
     length = vnorm(axis)
     if length < 1e-9:
         return local

@@ -38,7 +38,7 @@ def build_terms(constraints: Sequence["Constraint"], weights: Sequence[float],
                 frame: FrameInputs) -> tuple[list[Term], list[np.ndarray]]:  # fmt: skip
     """The frame's terms, kind by kind (:meth:`~engine.constraints.base.Constraint.terms`),
     and each term's weights ``(n,)`` in the order of its :attr:`~Term.names`."""
-    groups: dict[type, list[int]] = {}
+    groups: dict[type[Constraint], list[int]] = {}
     for i, c in enumerate(constraints):
         groups.setdefault(type(c), []).append(i)
     terms, term_weights = [], []

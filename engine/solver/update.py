@@ -7,7 +7,6 @@ overhead, and shared by the solver's fast and reference paths.
 
 from __future__ import annotations
 
-
 import numpy as np
 
 

@@ -21,6 +21,8 @@ class ClipSource(SensorSource):
     """Trackers simulated from a clip's forward kinematics (no noise, no failures
     except the studio's own simulated ones)."""
 
+    motion: Motion  # always a clip here
+
     def __init__(self, motion: Motion) -> None:
         self.motion = motion
         self.skeleton = motion.skeleton

@@ -16,12 +16,12 @@ from engine.methods.base import DecodesLatents
 
 
 def decoded_on_pose(method: DecodesLatents, latent: np.ndarray, shown: np.ndarray | None,
-                    pose: np.ndarray) -> np.ndarray:  # fmt: skip
+                    pose: np.ndarray | None) -> np.ndarray:  # fmt: skip
     """World joints (22, 3) m of ``latent`` (L,) relative to the frame on screen, whose
     latent is ``shown`` (L,) and pose ``pose`` (22, 3) m; the bare decoded pose when
-    ``shown`` is missing or of another size."""
+    ``shown`` or ``pose`` is missing or ``shown`` of another size."""
     out = np.asarray(method.decode_latent(np.asarray(latent, float)), float).reshape(sk.NUM_JOINTS, 3)
-    if shown is None or np.size(shown) != np.size(latent):
+    if shown is None or pose is None or np.size(shown) != np.size(latent):
         return out
     base = np.asarray(method.decode_latent(np.asarray(shown, float)), float).reshape(sk.NUM_JOINTS, 3)
     return out + (np.asarray(pose, float) - base)

@@ -24,13 +24,13 @@ from engine.methods import driver
 from engine.methods.base import Method
 from engine.motion.clip import Motion
 from engine.sensors import Sensor
-from engine.studio.method_edits import make_method
 from engine.studio.clip_source import ClipSource
+from engine.studio.method_edits import make_method
 
 if TYPE_CHECKING:
-    from engine.studio.session import Session
     from engine.motion.bvh import RawBVH
     from engine.motion.formats import GltfContents
+    from engine.studio.session import Session
 
 
 def reconstruct_clip(motion: Motion, sensors: tuple[Sensor, ...], constraints: tuple[Constraint, ...],
@@ -91,7 +91,7 @@ def source_rig(source: str | Path, rig_map: str | Path | None = None) -> tuple[R
     from engine.motion.source_file import load_source
 
     raw = load_source(source)
-    return raw, retarget(raw, manifest_fps(source), rig_map=rig_map)[1]
+    return raw, retarget(raw, manifest_fps(Path(source)), rig_map=rig_map)[1]
 
 
 @dataclass(frozen=True)

@@ -76,6 +76,7 @@ class LatentDebug:
         t0 = time.perf_counter()
         rec = method.last_solve
         f = record_forces(method.optimizer, rec, probe.map)
+        assert f.plane is not None  # projected on probe.map
         sweep = dimension_sweep(method.optimizer, rec.context, self.view.latent, probe.map.sigma)
         influence = joint_influence(method.optimizer, rec.context, self.view.latent, joint) if joint else None
         self.detail = LatentDetail(self.view.frame, f.names, f.forces, f.plane, sweep.poses, sweep.motion, joint,

@@ -17,7 +17,6 @@ from engine.methods import driver, get_method
 from engine.methods.base import Method
 from engine.sensors import Sensor
 
-
 #: Factory options of the studio's methods. The studio shows its first frame and then
 #: waits for the user, so DragPoser leaves the pose bank's tables and combinations that
 #: frame does not use (about 1.3 CPU s) until after it.

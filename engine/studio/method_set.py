@@ -17,8 +17,8 @@ from engine.methods.base import FrameResult, Method
 from engine.sensor_source import SensorSource
 from engine.sensors import Sensor, SensorFrame
 from engine.solver.settings import SettingsEdit
-from engine.studio.method_state import copy_state
 from engine.studio.method_edits import apply_constraints, apply_sensor_weights, apply_settings
+from engine.studio.method_state import copy_state
 
 
 class MethodSet:
@@ -127,13 +127,14 @@ class MethodSet:
                 self.ghosts[g] = m
                 fresh = True
         self.skeleton_version = source.skeleton_version if source is not None else 0
-        for _, m in self.running() if source is not None else ():
-            try:
-                # a tracker source has no clip, only the wearer's (perhaps calibrated)
-                # skeleton; a clip is the ground truth of a method that needs one
-                driver.reset(m, source.skeleton, source.fps, reference=source.motion)
-            except Exception as exc:
-                self._report(f"{m.name}.reset: {exc}")
+        if source is not None:
+            for _, m in self.running():
+                try:
+                    # a tracker source has no clip, only the wearer's (perhaps calibrated)
+                    # skeleton; a clip is the ground truth of a method that needs one
+                    driver.reset(m, source.skeleton, source.fps, reference=source.motion)
+                except Exception as exc:
+                    self._report(f"{m.name}.reset: {exc}")
         self.configure(report=fresh)  # methods may drop their settings on reset
 
     def keep_state(self, again: bool = True) -> None:

@@ -25,7 +25,6 @@ from engine.solver import OptimizerSettings
 from engine.solver.settings import SettingsEdit
 from engine.validation import shown
 
-
 #: Settings a session sets from the start (at the optimizer's defaults); the others stay
 #: unset, so a method's sensor-set profile supplies them (``engine/solver/profiles.py``).
 SESSION_SETTINGS = ("mode", "iterations", "lr", "temporal_weight")

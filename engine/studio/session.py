@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from engine.constraints.base import Constraint
+from engine.editing.constraint_list import ConstraintList
 from engine.errors import UserError
 from engine.methods import available_methods
 from engine.motion.clip import Motion
@@ -34,10 +35,9 @@ from engine.solver.settings import SettingsEdit
 from engine.studio import commands as cmd
 from engine.studio import events as ev
 from engine.studio.clips import load_clip, sensor_presets, tracked_position
-from engine.studio.scenes import apply_scene, default_settings, scene_to_dict
-from engine.editing.constraint_list import ConstraintList
-from engine.studio.session_sensors import SensorSet
 from engine.studio.process import EngineProcess
+from engine.studio.scenes import apply_scene, default_settings, scene_to_dict
+from engine.studio.session_sensors import SensorSet
 from engine.studio.snapshot import Snapshot
 from engine.studio.thread import EngineThread
 

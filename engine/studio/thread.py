@@ -28,18 +28,18 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.methods.base import DecodesLatents, FrameResult, Method
+from engine.sensor_source import SensorSource
 from engine.sensors import SensorFrame
+from engine.startup_trace import mark
 from engine.studio import commands as cmd
+from engine.studio.clip_source import ClipSource
 from engine.studio.decode import decode_request
 from engine.studio.frame_figures import gizmos_of, losses_of, timing_of
 from engine.studio.latent_debug import LatentDebug
-from engine.studio.method_set import MethodSet
 from engine.studio.method_edits import make_method
+from engine.studio.method_set import MethodSet
 from engine.studio.playback import ENDED, LOOPED, PlaybackClock, is_jump
 from engine.studio.snapshot import HISTORY, HistoryEntry, Snapshot, readonly
-from engine.sensor_source import SensorSource
-from engine.studio.clip_source import ClipSource
-from engine.startup_trace import mark
 
 #: How often playback of a live source looks for a newer frame, seconds.
 LIVE_POLL_S = 0.005
@@ -277,10 +277,11 @@ class EngineThread(threading.Thread):
     def _playback_frame(self) -> int:
         """The frame playback is at now (:meth:`PlaybackClock.advance`); a live source's
         newest frame, whatever the pace."""
-        if self._source.live:
-            self._frame = max(self._source.num_frames - 1, 0)
+        src = self._loaded()
+        if src.live:
+            self._frame = max(src.num_frames - 1, 0)
             return self._frame
-        f, event = self._clock.advance(self._frame, self._last_solved, self._source.num_frames, self._source.fps)
+        f, event = self._clock.advance(self._frame, self._last_solved, src.num_frames, src.fps)
         if event == LOOPED:
             self._reset_methods()
         elif event == ENDED:
@@ -298,8 +299,14 @@ class EngineThread(threading.Thread):
         self._pending_error = message
         self._recent_errors.append(message)
 
+    def _loaded(self) -> SensorSource:
+        """The source, which playing, solving and publishing a frame need (set first)."""
+        assert self._source is not None, "no source loaded"
+        return self._source
+
     def _solve(self, frame: int) -> None:
-        jump = is_jump(frame, self._last_solved, self._source.fps if self._source is not None else sk.FPS)
+        src = self._loaded()
+        jump = is_jump(frame, self._last_solved, src.fps)
         # an edit while paused solves the frame again from the state before the first edit
         self._methods.keep_state(not self._playing and not jump and frame == self._last_solved)
         if jump:
@@ -309,7 +316,7 @@ class EngineThread(threading.Thread):
             self._history_run += 1
         elif self._playing and frame > self._last_solved + 1:
             self._skipped += frame - self._last_solved - 1
-        sf = self._source.frame(frame)
+        sf = src.frame(frame)
         error = self._pending_error
         self._pending_error = ""
         t0 = time.perf_counter()
@@ -325,7 +332,7 @@ class EngineThread(threading.Thread):
                 self._recent_errors.append(error)
                 self._reset_methods()
         ms = (time.perf_counter() - t0) * 1000.0
-        arrived = self._source.arrival(frame)
+        arrived = src.arrival(frame)
         self._latency_ms = None if arrived is None else (time.perf_counter() - arrived) * 1000.0
         ghosts = {}
         for name, m in self._methods.ghosts.items():
@@ -370,14 +377,15 @@ class EngineThread(threading.Thread):
 
     def _publish(self, frame: int, sf: SensorFrame, res: FrameResult | None, ms: float,
                  error: str, ghosts: dict[str, np.ndarray]) -> None:  # fmt: skip
+        src = self._loaded()
         joints = tuple(sf.readings)
         readings = [sf.readings[j] for j in joints]
         last = res or self._last_result
         self._seq += 1
         method = self._methods.method
         snap = Snapshot(
-            seq=self._seq, frame=frame, num_frames=self._source.num_frames,
-            positions=readonly(self._last_pose), ground_truth=readonly(self._source.ground_truth(frame)),
+            seq=self._seq, frame=frame, num_frames=src.num_frames,
+            positions=readonly(self._last_pose), ground_truth=readonly(src.ground_truth(frame)),
             ghosts={k: readonly(v) for k, v in ghosts.items()},
             target_joints=joints,
             target_positions=readonly(np.array([r.position for r in readings]).reshape(-1, 3)),

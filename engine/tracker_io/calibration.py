@@ -167,7 +167,8 @@ def calibrate(frames: Sequence[SensorFrame], pose: str = "auto") -> Calibration:
     else:
         raise UserError("calibration needs a head or a hip tracker")
     if not 0.5 <= scale <= 1.5:
-        raise UserError(f"calibration: the head is at {mean.get('upperneck', mean.get('root'))[0][2]:.2f} m, "
+        height = (mean["upperneck"] if "upperneck" in mean else mean["root"])[0][2]
+        raise UserError(f"calibration: the head is at {height:.2f} m, "
                         f"an implausible size (scale {scale:.2f}); is the floor at z = 0 and the wearer standing?")  # fmt: skip
 
     hands = all(h in mean for h in _HAND_SLOTS)
@@ -180,11 +181,11 @@ def calibrate(frames: Sequence[SensorFrame], pose: str = "auto") -> Calibration:
             rest_span = float(np.linalg.norm(rest[sk.JOINT_INDEX["lwrist"]] - rest[sk.JOINT_INDEX["rwrist"]]))
             shoulder_z = rest[sk.JOINT_INDEX["lshoulder"], 2] + standing_root_height(body)
             hand_z = 0.5 * (mean["lwrist"][0][2] + mean["rwrist"][0][2])
-            if span > 0.75 * rest_span and abs(hand_z - shoulder_z) < 0.25 * scale:
+            if span is not None and span > 0.75 * rest_span and abs(hand_z - shoulder_z) < 0.25 * scale:
                 pose = "tpose"
-    if pose == "tpose" and not hands:
+    if pose == "tpose" and span is None:  # span: both hands
         raise UserError("calibration: a T-pose needs both hand trackers")
-    arm = _arm_scale(scale, span) if pose == "tpose" else scale
+    arm = _arm_scale(scale, span) if pose == "tpose" and span is not None else scale
     skel = scaled_skeleton(scale, arm)
     offsets = _offsets(mean, skel, pose)
     return Calibration(skel, float(scale), float(arm), skel.height(), span if pose == "tpose" else None,

@@ -168,7 +168,8 @@ class FrameAssembler:
                 self._place(*self._pending, "last", out)
                 self._pending = None
         f = self._frame
-        if self.timed is False and f is not None and not f.closed and now - f.last_wire >= self.silence():
+        if self.timed is False and f is not None and f.t is not None and not f.closed \
+                and now - f.last_wire >= self.silence():  # fmt: skip
             f.closed = True
             out.append(Piece(f.t, [], f.last_arrival, True))
         return out
@@ -326,6 +327,7 @@ class FrameAssembler:
         f.last_wire, f.last_arrival = wire, arrival
         close = f.closed or self._complete(f)
         f.closed = close
+        assert f.t is not None  # an untimed sender's frame has its time from its first datagram
         out.append(Piece(f.t, [pose], arrival, close))
 
 

@@ -186,7 +186,7 @@ class LiveRun:
             gc.collect(1)  # young generations only (see run)
 
 
-def calibration_window(times: Sequence[float], seconds: float) -> int:
+def calibration_window(times: Sequence[float] | np.ndarray, seconds: float) -> int:
     """Frames a calibration of ``seconds`` takes from a stream with these frame times:
     every frame less than ``seconds`` after the first, and the one that completes them."""
     t = np.asarray(times, float)
@@ -195,7 +195,7 @@ def calibration_window(times: Sequence[float], seconds: float) -> int:
     return min(int(np.searchsorted(t - t[0], seconds, side="left")) + 1, t.size)
 
 
-def to_motion(times: Sequence[float], results: Sequence[FrameResult], skeleton: sk.Skeleton,
+def to_motion(times: Sequence[float] | np.ndarray, results: Sequence[FrameResult], skeleton: sk.Skeleton,
               fps: float, name: str = "") -> Motion:  # fmt: skip
     """The solved frames on a regular timeline at ``fps`` from the first to the last
     solved time; a frame that was not solved holds the pose solved before it."""
@@ -212,7 +212,7 @@ def to_motion(times: Sequence[float], results: Sequence[FrameResult], skeleton: 
     return Motion(local, root, skeleton, fps, name)
 
 
-def reference_error(times: Sequence[float], results: Sequence[FrameResult], reference: Motion | None) -> dict:
+def reference_error(times: Sequence[float] | np.ndarray, results: Sequence[FrameResult], reference: Motion | None) -> dict:
     """Mean joint position error (22 joints, cm) of solved frames against the clip
     frame at the same time (``round(t * fps)``), or a note that there is no ground truth."""
     if reference is None:

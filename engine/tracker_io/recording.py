@@ -43,6 +43,7 @@ from engine.tracker_io.trackers import DEFAULT_TIMEOUT_S, TrackerMapping, Tracke
 from engine.validation import MAX_LINE_BYTES, check_input_file
 
 if TYPE_CHECKING:
+    from engine.sensors import SensorFrame
     from engine.tracker_io.calibration import Calibration
     from engine.tracking.simulate import Tracking
 
@@ -292,7 +293,7 @@ def replay(samples: Iterable[TrackerSample], mapping: TrackerMapping, calibratio
 
     ordered = sorted(samples, key=lambda s: s.t)
     state = TrackerState(mapping, timeout_s, calibration)
-    frames = []
+    frames: list[SensorFrame] = []
     times: list[float] = []
     i = 0
     while i < len(ordered):

@@ -106,7 +106,7 @@ class Tracking:
 def _specs(sensors: str | Sequence[str | Sensor]) -> tuple[Sensor, ...]:
     if isinstance(sensors, str):
         return parse_sensors(sensors)
-    out = []
+    out: list[Sensor] = []
     for s in sensors:
         out.extend(parse_sensors(s) if isinstance(s, str) else (s,))
     return parse_sensors(",".join(f"{s.joint}:{s.dof}" for s in out))

@@ -9,7 +9,7 @@ import io
 import os
 import random
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import torch
@@ -18,13 +18,19 @@ import torch.distributed as dist
 from engine.atomic import atomic_path, write_bytes
 from engine.errors import UserError
 
+if TYPE_CHECKING:
+    from engine.models.predictor import TemporalPredictor
+    from engine.models.rpm import RPM
+    from engine.models.sparseposer import SparsePoser
+    from engine.models.vae import PoseVAE
+
 
 def config_dict(cfg: Any) -> dict:
     out = dataclasses.asdict(cfg)
     return {k: list(v) if isinstance(v, tuple) else v for k, v in out.items()}
 
 
-def start_from(model: torch.nn.Module, path: str, loader: Any) -> None:
+def start_from(model: PoseVAE | TemporalPredictor | SparsePoser | RPM, path: str, loader: Any) -> None:
     """Copy the weights of the file ``path`` (read by ``loader``, e.g. ``load_vae``) into
     ``model`` for fine-tuning; the two architectures (``config.to_dict()``) must match."""
     init, _ = loader(Path(path))
@@ -144,7 +150,7 @@ class CurveLog:
         for k in series:
             vals = [r.get(k) for r in self.rows]
             if all(v is not None and v > 0 for v in vals):
-                ax.plot(epochs, vals, label=k)
+                ax.plot(epochs, [float(v) for v in vals if v is not None], label=k)
         ax.set_yscale("log")
         ax.set_xlabel("epoch")
         ax.set_ylabel("loss / error")

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -48,7 +48,7 @@ def average_gradients(ddp: Distributed, params) -> None:
 def run_epochs(
     name: str,
     model: torch.nn.Module,
-    optimizers: list[torch.optim.Optimizer],
+    optimizers: Sequence[torch.optim.Optimizer],
     step: Callable[[], dict[str, float]],
     validate: Callable[[], dict[str, float]],
     payload: Callable[[dict], dict],

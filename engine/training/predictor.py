@@ -22,7 +22,6 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
 import pymotion.rotations.quat_torch as qt
 import torch
 from tqdm import tqdm

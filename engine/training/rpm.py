@@ -28,8 +28,17 @@ import torch
 from engine.kinematics.fk import fk
 from engine.models.loading import FORMAT_VERSION, load_rpm
 from engine.models.rpm import (
-    RPM, RPM_INDEX, RPMConfig, blank_pose, fk_root_space, roll, rolling_step, to_frame, track_features, yaw_matrix,
-)  # fmt: skip
+    RPM,
+    RPM_INDEX,
+    RPMConfig,
+    blank_pose,
+    fk_root_space,
+    roll,
+    rolling_step,
+    to_frame,
+    track_features,
+    yaw_matrix,
+)
 from engine.training.common import Distributed, config_dict, seed_everything, start_from
 from engine.training.data import PoseData, load_split
 from engine.training.loop import Schedule, average_gradients, run_epochs

@@ -13,7 +13,6 @@ frame as the method does (:class:`~engine.models.sparseposer_stream.StreamingGen
 
 from __future__ import annotations
 
-
 import torch
 from tqdm import tqdm
 

@@ -23,8 +23,15 @@ from engine.kinematics import quaternion as Q
 from engine.kinematics.features import root_space_features, root_space_fk
 from engine.models.loading import load_checkpoint, load_vae
 from engine.models.vae import PoseVAE, VAEConfig, pose_distance
-from engine.training.common import (CurveLog, Distributed, config_dict, on_device, save_checkpoint, seed_everything,
-                                    start_from)  # fmt: skip
+from engine.training.common import (
+    CurveLog,
+    Distributed,
+    config_dict,
+    on_device,
+    save_checkpoint,
+    seed_everything,
+    start_from,  # fmt: skip
+)
 from engine.training.data import PoseData, load_split, read_manifest
 
 FORMAT_VERSION = 1
@@ -70,7 +77,7 @@ class VAETrainConfig:
     init: str = ""
 
     def model_config(self) -> VAEConfig:
-        return VAEConfig(latent=self.latent, channels=tuple(self.channels))
+        return VAEConfig(latent=self.latent, channels=(*self.channels,))  # a tuple (a JSON config gives a list)
 
 
 class VAEObjective(nn.Module):
@@ -288,6 +295,7 @@ def train_vae(data_dir: Path, out_dir: Path, cfg: VAETrainConfig, resume: bool =
             sums_t = terms if sums_t is None else sums_t + terms
             if step % 10 == 0:
                 bar.set_postfix({k: f"{v / (step + 1):.2e}" for k, v in zip(losses, sums_t.tolist())})
+        assert sums_t is not None  # an epoch has a step at least
         sums = dict(zip(losses, sums_t.tolist()))
         row = {"epoch": epoch + 1, **{k: ddp.mean(v / steps_per_epoch) for k, v in sums.items()}}
         minutes = minutes_before + (time.monotonic() - t0) / 60.0

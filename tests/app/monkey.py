@@ -28,9 +28,18 @@ from PyQt6.QtCore import QEvent, QPoint, QPointF, QSettings, Qt, QTimer
 from PyQt6.QtGui import QWheelEvent
 from PyQt6.QtTest import QTest
 from PyQt6.QtWidgets import (
-    QAbstractButton, QAbstractSpinBox, QApplication, QComboBox, QDialog, QFileDialog, QInputDialog, QMenu,
-    QMessageBox, QSlider, QWidget,
-)  # fmt: skip
+    QAbstractButton,
+    QAbstractSpinBox,
+    QApplication,
+    QComboBox,
+    QDialog,
+    QFileDialog,
+    QInputDialog,
+    QMenu,
+    QMessageBox,
+    QSlider,
+    QWidget,
+)
 
 from tests.app.gui_helpers import mouse_drag
 

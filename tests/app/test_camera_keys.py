@@ -4,8 +4,8 @@ the user types into, which keeps its digits wherever the pointer rests."""
 from __future__ import annotations
 
 import pytest
-from PyQt6.QtGui import QCursor
 from PyQt6.QtCore import Qt
+from PyQt6.QtGui import QCursor
 from PyQt6.QtTest import QTest
 from PyQt6.QtWidgets import QApplication
 

@@ -3,15 +3,14 @@
 from __future__ import annotations
 
 import numpy as np
-
 import pytest
 
 from app.constraint_placement import facing, placed_params
 from engine import skeleton as sk
 from engine.constraints import REGISTRY
 from engine.constraints.placement import LOOK_DISTANCE
-from engine.gizmos import BoxGizmo, Gizmo, LineGizmo, PointGizmo
 from engine.editing.catalog import constraint_catalog
+from engine.gizmos import BoxGizmo, Gizmo, LineGizmo, PointGizmo
 from widgets.viewport.camera import CAMERA_PRESETS, VIEW_ANGLE_DEG
 from widgets.viewport.viewport import HOME_FOCUS_HEIGHT
 

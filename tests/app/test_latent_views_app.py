@@ -23,8 +23,8 @@ def _click(views, x, y):
     w = views.map
     w.plot.repaint()
     QApplication.processEvents()
-    from pytestqt.qtbot import QtBot  # noqa: F401 (the fixture's type; clicks go through QTest)
     from PyQt6.QtTest import QTest
+    from pytestqt.qtbot import QtBot  # noqa: F401 (the fixture's type; clicks go through QTest)
 
     QTest.mouseClick(w.plot.viewport(), Qt.MouseButton.LeftButton, pos=w.to_widget(x, y).toPoint())
 

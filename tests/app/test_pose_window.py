@@ -59,9 +59,9 @@ def test_a_plain_press_on_a_joint_grabs_it(window):
 
 
 def test_alt_drag_turns_the_joint_by_the_angle_swept_about_it(window, monkeypatch):
-    import app.pose_window as pw
     from PyQt6.QtCore import Qt
 
+    import app.pose_window as pw
     from engine.kinematics import quat_np as QN
     from engine.kinematics.fk import fk
 
@@ -86,9 +86,9 @@ def test_a_slow_solve_does_not_split_an_alt_drag(window, monkeypatch):
     """The gesture ends at a pause of the mouse, not at a solve slower than the pause."""
     import time
 
-    import app.pose_window as pw
     from PyQt6.QtCore import Qt
 
+    import app.pose_window as pw
     from engine.authoring.turns import TURN_GESTURE_S
 
     monkeypatch.setattr(pw.QApplication, "queryKeyboardModifiers", staticmethod(lambda: Qt.KeyboardModifier.AltModifier))

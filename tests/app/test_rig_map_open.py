@@ -17,8 +17,8 @@ pytestmark = pytest.mark.gui
 def _renamed(tmp_path: Path) -> tuple[Path, Path]:
     """A LAFAN1-style clip whose joints are renamed ``bone_NN`` (no automatic mapping can
     read that), and the mapping file that fixes it (``rig suggest`` on the original, renamed)."""
-    from engine.motion.bvh import load_bvh
     from engine.cli.rig import write_suggestion
+    from engine.motion.bvh import load_bvh
 
     orig = write_family_bvh(tmp_path / "orig.bvh", "lafan", frames=90)
     good = tmp_path / "orig.toml"

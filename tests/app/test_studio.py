@@ -193,9 +193,7 @@ def test_save_reconstruction_writes_a_bvh_off_the_gui_thread(studio, qtbot, tmp_
 
 
 def test_save_onto_the_source_rig_keeps_the_files_hierarchy(studio, qtbot, tmp_path):
-    from engine.motion.bvh import load_bvh
-
-    from engine.motion.bvh import save_motion_bvh
+    from engine.motion.bvh import load_bvh, save_motion_bvh
 
     src_path = tmp_path / "source.bvh"
     save_motion_bvh(src_path, studio.session.motion)

@@ -105,7 +105,7 @@ def _spine(names: list[str], scale: float):
 def cmu_rows():
     """The 31-joint CMU conversion rig (``Hips``, ``LHipJoint``, ``LeftUpLeg``...), ASF units."""
     r = [("Hips", None, (0, 0, 0))]
-    for s, sg, hip, leg, foot, toe, end in (
+    for s, sg, hip, leg, foot, toe, _end in (
         ("Left", "L", (1.85590, -1.73949, 0.84976), (2.36836, -6.50702, 0), (2.53268, -6.95849, 0),
          (0.15935, -0.43781, 1.94506), (0, 0, 1.00661)),
         ("Right", "R", (-1.68297, -1.73949, 0.84976), (-2.44709, -6.72334, 0), (-2.43843, -6.69953, 0),
@@ -214,7 +214,7 @@ def _motion(rows, frames: int, fps: float, up: str, units: float, seed: int) -> 
     heading = 20.0 * np.sin(0.3 * t)
     data += [0.3 / units * np.sin(0.5 * t), height + 0.02 / units * np.cos(2 * ph), walk]
     data += [heading, 3 * np.sin(2 * ph), 2 * np.sin(ph)]  # Z, X, Y rotations of the root
-    for name, parent, _ in rows[1:]:
+    for name, _parent, _ in rows[1:]:
         low = name.lower()
         z = x = y = np.zeros_like(t)
         side = 1.0 if re.search(r"Left|left|_L\b|_l$|^l[A-Z]|L_|^L[A-Z]", name) else -1.0

@@ -51,7 +51,7 @@ def test_a_lookup_with_any_hint_finds_the_whole_tables_neighbours_in_its_order()
     norms = (table * table).sum(1)
     pre = bp.Prefilter(table)
     pruned = 0
-    for i in range(30):
+    for _ in range(30):
         q32 = (table[rng.integers(len(table))].numpy() + rng.normal(scale=0.1, size=55)).astype(np.float32)
         q = torch.from_numpy(q32)
         want = (norms - 2.0 * (table @ q)).topk(8, largest=False).indices

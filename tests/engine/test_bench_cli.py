@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import json
 
-from engine.motion.bvh import save_motion_bvh
 from engine.cli.main import main
+from engine.motion.bvh import save_motion_bvh
 
 
 def test_bench_ik_writes_a_report(synthetic_motion, tmp_path, capsys):

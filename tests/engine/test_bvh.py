@@ -13,9 +13,9 @@ from pymotion.io.bvh import BVH as PymotionBVH
 from pymotion.rotations import quat_np
 
 from engine import skeleton as sk
-from engine.motion.bvh import RawBVH, load_bvh, save_motion_bvh
 from engine.errors import BVHError
 from engine.kinematics.fk import fk
+from engine.motion.bvh import RawBVH, load_bvh, save_motion_bvh
 from engine.motion.clip import Motion
 
 # A three-joint clip; the line numbers below are the ones the error tests expect.

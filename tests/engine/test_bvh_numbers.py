@@ -9,9 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from engine.motion.bvh import load_bvh
 from engine.cli.main import main
-
+from engine.motion.bvh import load_bvh
 from tests.engine.test_bvh import edited, write
 
 REPO = Path(__file__).resolve().parents[2]

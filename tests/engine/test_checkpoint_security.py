@@ -53,9 +53,9 @@ def test_no_module_loads_with_weights_only_false():
 
 
 def test_real_checkpoints_still_load(tmp_path):
-    from engine.training.common import save_checkpoint
-
     import numpy as np
+
+    from engine.training.common import save_checkpoint
 
     payload = {"state_dict": {"w": torch.zeros(2)}, "optimizer": {"param_groups": [{"lr": 0.1, "fused": None}]},
                "epoch": 3, "curve": [{"epoch": 1, "loss": np.float64(0.5)}], "rng": torch.get_rng_state()}

@@ -13,9 +13,9 @@ from engine import skeleton as sk
 def test_a_distance_between_tracked_wrists_changes_their_separation(synthetic_motion):
     from engine.constraints.distance import DistanceConstraint
     from engine.methods import get_method
+    from engine.studio.clip_source import ClipSource
     from engine.studio.clips import sensor_presets
     from engine.studio.method_set import MethodSet
-    from engine.studio.clip_source import ClipSource
 
     sensors = sensor_presets()["6"]
     a, b = sk.JOINT_INDEX["lwrist"], sk.JOINT_INDEX["rwrist"]

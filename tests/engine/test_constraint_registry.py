@@ -15,8 +15,8 @@ import engine.constraints as package
 from engine import skeleton as sk
 from engine.constraints import REGISTRY
 from engine.constraints.base import FRAME_FIELDS, Constraint, missing_parts, param
-from engine.solver import FrameContext, OptimizerSettings, PoseOptimizer, RootFrame
 from engine.editing.catalog import constraint_catalog, describe
+from engine.solver import FrameContext, OptimizerSettings, PoseOptimizer, RootFrame
 from tests.engine.test_constraints import CASES
 
 

@@ -10,16 +10,24 @@ import pytest
 import torch
 
 from engine import skeleton as sk
-from engine.constraints import REGISTRY, from_dict
 from engine.constraints import (
-    BalanceConstraint, BoundsConstraint, DistanceConstraint, EndEffectorConstraint, FloorConstraint,
-    LookAtConstraint, PinConstraint, SensorConstraint, TemporalPriorConstraint,
-)  # fmt: skip
-from engine.solver import PoseState
+    REGISTRY,
+    BalanceConstraint,
+    BoundsConstraint,
+    DistanceConstraint,
+    EndEffectorConstraint,
+    FloorConstraint,
+    LookAtConstraint,
+    PinConstraint,
+    SensorConstraint,
+    TemporalPriorConstraint,
+    from_dict,
+)
 from engine.errors import UserError
 from engine.gizmos import Gizmo, LineGizmo, PointGizmo, gizmo_types
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk
+from engine.solver import PoseState
 
 J = sk.JOINT_INDEX
 

@@ -11,11 +11,11 @@ import torch
 from engine import skeleton as sk
 from engine.constraints import LookAtConstraint, PinConstraint
 from engine.errors import UserError
-from engine.sensors import Sensor, SensorFrame
 from engine.methods.dragposer import DragPoserMethod
 from engine.motion.clip import Motion
-from engine.solver import OptimizerSettings
 from engine.scene import load_scene, save_scene
+from engine.sensors import Sensor, SensorFrame
+from engine.solver import OptimizerSettings
 from engine.tracking import simulate
 from tests.engine.test_optimizer_standins import CountingPredictor, MLPDecoder
 

@@ -13,11 +13,16 @@ import pytest
 import torch
 
 from engine import skeleton as sk
-from engine.constraints import REGISTRY
 from engine.constraints import (
-    BalanceConstraint, BoundsConstraint, DistanceConstraint, EndEffectorConstraint, FloorConstraint,
-    LookAtConstraint, PinConstraint,
-)  # fmt: skip
+    REGISTRY,
+    BalanceConstraint,
+    BoundsConstraint,
+    DistanceConstraint,
+    EndEffectorConstraint,
+    FloorConstraint,
+    LookAtConstraint,
+    PinConstraint,
+)
 from engine.methods.dragposer import DragPoserMethod
 from engine.motion.retarget import load_motion
 from engine.tracking import simulate

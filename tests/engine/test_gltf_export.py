@@ -14,8 +14,15 @@ from engine.motion.bvh import load_bvh
 from engine.motion.clip import Motion
 from engine.motion.formats import GltfContents, motion_format, save_motion
 from engine.tracking import simulate
-from tests.engine.gltf_reading import (Y_UP_TO_Z_UP, bvh_world_positions, read_gltf, skinned_points, validate,
-                                      validator_command, vtk_points_at)  # fmt: skip
+from tests.engine.gltf_reading import (
+    Y_UP_TO_Z_UP,
+    bvh_world_positions,
+    read_gltf,
+    skinned_points,
+    validate,
+    validator_command,  # fmt: skip
+    vtk_points_at,
+)
 
 TOL = 1e-5  # metres
 
@@ -226,7 +233,7 @@ def test_on_the_source_rig_the_joints_names_and_frames_are_the_bvh_s(source_rig_
 
 @pytest.mark.shared_data
 def test_vtk_s_importer_skins_the_source_rigs(source_rig_files):
-    for stem, (raw, rep, bvh, glb) in source_rig_files.items():
+    for _raw, rep, _bvh, glb in source_rig_files.values():
         _check_vtk_skinning(glb, 31, rep.source_fps)
 
 

@@ -113,7 +113,8 @@ def test_real_clip(shared_mocap):
 
 
 def test_non_finite_and_absurd_readings_never_give_a_nan_pose(synthetic_motion):
-    from engine.sensors import Sensor as SensorReading, SensorFrame
+    from engine.sensors import Sensor as SensorReading
+    from engine.sensors import SensorFrame
 
     tracking = simulate(synthetic_motion, "6")
     ik = IKMethod()

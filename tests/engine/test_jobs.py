@@ -6,8 +6,8 @@ import json
 
 import pytest
 
-from engine.motion.bvh import save_motion_bvh
 from engine.cli.main import main
+from engine.motion.bvh import save_motion_bvh
 
 TIMING = {"ms_per_frame"}
 

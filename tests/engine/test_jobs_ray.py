@@ -26,7 +26,7 @@ def _without_timing(doc: dict) -> dict:
 
 
 @pytest.mark.slow
-def test_evaluate_and_reconstruct_on_ray_match_the_local_jobs(local_ray, two_clips, tmp_path, capsys):
+def test_evaluate_and_reconstruct_on_ray_match_the_local_jobs(local_ray, two_clips, tmp_path, capsys):  # noqa: F811
     docs = {}
     for how in (["--jobs", "1"], ["--executor", "ray"]):
         out = tmp_path / f"{how[-1]}.json"
@@ -55,6 +55,6 @@ def test_a_worker_error_on_ray_is_the_one_line_user_error(local_ray, tmp_path, c
     assert "bad.bvh" in capsys.readouterr().err
 
 
-def test_address_without_ray_executor_is_a_user_error(two_clips, capsys):
+def test_address_without_ray_executor_is_a_user_error(two_clips, capsys):  # noqa: F811 (the imported fixture)
     assert main(["evaluate", str(two_clips[0]), "--method", "ik", "--address", "ray://x:1"]) == 2
     assert "--address" in capsys.readouterr().err

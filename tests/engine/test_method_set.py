@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from collections import Counter
 
+from engine.studio.clip_source import ClipSource
 from engine.studio.method_set import MethodSet
 from tests.stand_ins import RestPoseMethod
-from engine.studio.clip_source import ClipSource
 
 
 def _counting_set():

@@ -14,7 +14,7 @@ from engine.models.loading import load_models, load_predictor, load_vae
 from engine.models.predictor import PredictorConfig, TemporalPredictor
 from engine.models.skeletal import SkeletalLinear, level_edges, level_sizes, neighbour_mask
 from engine.models.vae import PoseVAE, VAEConfig, pose_distance
-from engine.training.vae import VAETrainConfig, VAEObjective, weights_payload
+from engine.training.vae import VAEObjective, VAETrainConfig, weights_payload
 
 TINY = VAEConfig(channels=(8, 8, 12, 16))
 

@@ -13,8 +13,15 @@ from engine import skeleton as sk
 from engine.constraints import EndEffectorConstraint, SensorConstraint, TemporalPriorConstraint
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
-from engine.kinematics.fk import fk
-from engine.solver import FrameContext, OptimizerSettings, PoseOptimizer, RootAnchor, RootFrame, RootOverride, TemporalSchedule
+from engine.solver import (
+    FrameContext,
+    OptimizerSettings,
+    PoseOptimizer,
+    RootAnchor,
+    RootFrame,
+    RootOverride,
+    TemporalSchedule,
+)
 from tests.engine.test_optimizer_standins import CountingPredictor, MLPDecoder, NaNBeyond
 
 J = sk.JOINT_INDEX

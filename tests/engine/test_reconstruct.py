@@ -7,10 +7,10 @@ import json
 import numpy as np
 import pytest
 
-from engine.motion.bvh import save_motion_bvh
 from engine.cli.main import main
 from engine.methods import _FACTORIES, register_method
 from engine.methods.dragposer import DragPoserMethod
+from engine.motion.bvh import save_motion_bvh
 from engine.motion.retarget import load_motion
 from tests.engine.test_optimizer_standins import CountingPredictor, MLPDecoder
 

@@ -6,8 +6,6 @@ with our canonical result: bone directions, ground contact, uprightness, facing.
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import pytest
 

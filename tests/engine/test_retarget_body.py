@@ -14,7 +14,6 @@ import pytest
 
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
-from engine.motion.clip import Motion
 from engine.motion.retarget_frames import CANON_LANDMARKS
 from engine.motion.retarget_strategy import CURRENT
 
@@ -198,8 +197,8 @@ def _bone_x(mirrored: bool) -> dict:
 
 @pytest.fixture(scope="module")
 def rigs(tmp_path_factory):
-    from engine.motion.retarget import retarget
     from engine.motion.bvh import load_bvh
+    from engine.motion.retarget import retarget
 
     tmp = tmp_path_factory.mktemp("body")
     local, root = canonical_walk()
@@ -278,8 +277,8 @@ def test_straight_elbows_measures_the_bend_from_a_rest_drawn_bent(tmp_path):
     copied onto it (as the Daz rig's conversion did): ``straight_elbows`` reads the elbow
     as the T-pose rig does; without it the elbow is 17 degrees off."""
     from engine.motion.bvh import load_bvh
-    from engine.motion.rigs import resolve_rig
     from engine.motion.retarget import retarget
+    from engine.motion.rigs import resolve_rig
 
     local, root = canonical_walk(90)
     ref = retarget(load_bvh(write_rig(tmp_path / "t.bvh", local, root, rest=_straight_elbows)), strategy=CURRENT)[0]
@@ -328,8 +327,8 @@ def test_straight_knees_reads_a_leg_drawn_bent_along_its_hip_to_ankle_line(tmp_p
     ``straight_knees`` reads the whole leg as the straight-legged rig does with the
     strategy's ``straight_knees``; the current strategy ignores it and reads the drawn bend."""
     from engine.motion.bvh import load_bvh
-    from engine.motion.rigs import resolve_rig
     from engine.motion.retarget import retarget
+    from engine.motion.rigs import resolve_rig
 
     knees = dataclasses.replace(CURRENT, straight_knees=True)
     local, root = canonical_walk(90)

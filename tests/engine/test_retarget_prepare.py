@@ -4,10 +4,8 @@ validation takes stay in validation, rest frames are dropped."""
 from __future__ import annotations
 
 import shutil
-from pathlib import Path
 
 import pytest
-
 
 #: The validation files of the split the shipped models were trained with (model card).
 TODAYS_VAL = ["cmu_daz/indian/14.bvh", "cmu_daz/salsa/07.bvh", "cmu_iclone/002_01.bvh", "cmu_iclone/002_09.bvh",

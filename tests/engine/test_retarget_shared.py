@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 
 from engine import skeleton as sk
-from engine.motion.joint_stats import joint_report, limb_hinge
 from engine.kinematics.fk import fk
+from engine.motion.joint_stats import joint_report, limb_hinge
 from engine.motion.retarget_frames import CANON_HINGE, LIMBS
 
 pytestmark = pytest.mark.shared_data

@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 
 from engine import skeleton as sk
-from engine.motion.bvh import load_bvh
 from engine.errors import RigError
-from engine.motion.joint_stats import joint_report
 from engine.kinematics.fk import fk
+from engine.motion.bvh import load_bvh
+from engine.motion.joint_stats import joint_report
 from engine.motion.retarget import retarget
 from engine.motion.rigs import resolve_rig
 from engine.motion.rigs.automap import split_name

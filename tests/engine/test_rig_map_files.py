@@ -8,8 +8,8 @@ import json
 import pytest
 
 from engine import validation
-from engine.motion.bvh import load_bvh
 from engine.errors import UserError
+from engine.motion.bvh import load_bvh
 from engine.motion.rigs import resolve_rig
 
 from .rig_fixtures import write_family_bvh

@@ -12,7 +12,7 @@ from engine.errors import UserError
 from engine.kinematics import quaternion as Q
 from engine.methods.rpm import RPMMethod
 from engine.models.loading import load_rpm
-from engine.models.rpm import RPM, POSE_DIM, RPMConfig, to_frame, yaw_matrix
+from engine.models.rpm import POSE_DIM, RPM, RPMConfig, to_frame, yaw_matrix
 from engine.tracking import simulate
 from engine.training.data import load_split
 from engine.training.rpm import Frames, RPMTrainConfig, free_run, gap_flags, pose_losses, train_rpm

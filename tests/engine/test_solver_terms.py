@@ -12,12 +12,12 @@ import pytest
 import torch
 
 from engine import skeleton as sk
+from engine.constraints import GroundConstraint, SensorConstraint, SmoothConstraint
 from engine.kinematics import quat_np as QN
 from engine.kinematics.fk import fk
 from engine.methods.dragposer import DragPoserMethod
 from engine.models import load_default_models
 from engine.motion.retarget import load_motion
-from engine.constraints import GroundConstraint, SensorConstraint, SmoothConstraint
 from engine.solver import FrameContext, OptimizerSettings, PoseOptimizer, RootAnchor, RootFrame
 from engine.solver.limb_ik import adopt_rotations
 from engine.solver.pose import HEADING_LIMIT_DEG, body_facing, clamp_heading

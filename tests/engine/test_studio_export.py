@@ -5,14 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from engine.motion.bvh import load_bvh, save_motion_bvh
 from engine.errors import UserError
+from engine.motion.bvh import load_bvh, save_motion_bvh
 from engine.motion.retarget import load_motion
+from engine.studio.export import ExportJob
+from engine.studio.session import Session
 from engine.tracker_io.recording import write_recording
 from engine.tracker_io.sender import plan_stream
 from engine.tracker_io.trackers import TrackerSample
-from engine.studio.export import ExportJob
-from engine.studio.session import Session
 from tests.stand_ins import RestPoseMethod
 
 

@@ -7,12 +7,12 @@ import json
 import numpy as np
 import pytest
 
+from engine.editing.constraint_list import PIN_PREFIX, ConstraintList
 from engine.errors import UserError
 from engine.sensors import Sensor
 from engine.studio import commands as c
 from engine.studio import events as ev
 from engine.studio.session import Session
-from engine.editing.constraint_list import PIN_PREFIX, ConstraintList
 
 
 @pytest.fixture

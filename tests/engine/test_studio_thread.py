@@ -109,7 +109,7 @@ def test_a_failing_method_never_kills_the_thread(synthetic_motion):
         worker.submit(w.SetMotion(synthetic_motion))
         for f, expect in ((3, "boom"), (4, "non-finite"), (5, "")):
             worker.submit(w.Seek(f))
-            wait_for(lambda: worker.latest is not None and worker.latest.frame == f)
+            wait_for(lambda f=f: worker.latest is not None and worker.latest.frame == f)
             assert expect in worker.latest.error and (expect == "" or worker.latest.error)
             assert np.all(np.isfinite(worker.latest.positions))
         assert worker.latest.warnings >= 2 and worker.is_alive()
@@ -208,7 +208,7 @@ def test_decoding_a_latent_shows_the_pose_without_solving_again(synthetic_motion
         for k, value in enumerate((0.5, 0.7, 0.9)):
             worker.submit(w.DecodeLatent(np.array([value, 0, 0, 0])))
             newest(worker, first.seq + k)
-            wait_for(lambda: worker.latest.decoded is not None and worker.latest.decoded[0, 0] == value)
+            wait_for(lambda value=value: worker.latest.decoded is not None and worker.latest.decoded[0, 0] == value)
         assert method.steps == steps, "scrubbing a latent must not advance the solver"
         assert worker.latest.frame == first.frame
 
@@ -345,7 +345,7 @@ def test_a_sensor_source_that_fails_is_reported_not_replaced_by_perfect_trackers
         first = newest(worker)
         worker.submit(w.SetSource(Broken()))
         worker.submit(w.Seek(2))
-        snap = newest(worker, first.seq)
+        newest(worker, first.seq)
         wait_for(lambda: "tracker stream closed" in worker.latest.error or worker.latest.warnings > first.warnings)
         assert worker._source.num_frames == len(synthetic_motion)  # the clip source stayed
 

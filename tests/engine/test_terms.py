@@ -41,7 +41,7 @@ def _examples() -> list:
     pos, _ = random_pose(0)
     out = []
     for kind in sorted(REGISTRY):
-        for i, c in enumerate(REGISTRY[kind].examples(pos)):
+        for i, _ in enumerate(REGISTRY[kind].examples(pos)):
             out.append(pytest.param(kind, i, id=f"{kind}-{i}"))
     return out
 
@@ -176,7 +176,7 @@ def test_the_constraint_loss_is_the_term_on_the_state():
     """``Constraint.loss(state)`` (the autograd reference) is the term's squared norm on
     the state's arrays, and ``satisfied`` its stopping test."""
     pos, mats, z, frame = _inputs(7)
-    for kind, cls in REGISTRY.items():
+    for cls in REGISTRY.values():
         for c in cls.examples(random_pose(0)[0]):
             state = PoseState(torch.as_tensor(pos), None, torch.zeros(22, 4, dtype=torch.float64), torch.as_tensor(z),
                               torch.as_tensor(frame.previous_positions), 3, torch.as_tensor(frame.prediction),

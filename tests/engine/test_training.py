@@ -11,12 +11,12 @@ import pytest
 import torch
 
 from engine import skeleton as sk
-from engine.motion.bvh import save_motion_bvh
-from engine.data.prepare import prepare
-from engine.kinematics import quaternion as Q
-from engine.motion.clip import Motion
-from engine.errors import UserError
 from engine.config import load_config
+from engine.data.prepare import prepare
+from engine.errors import UserError
+from engine.kinematics import quaternion as Q
+from engine.motion.bvh import save_motion_bvh
+from engine.motion.clip import Motion
 from engine.training.vae import VAETrainConfig, state_hash, train_vae
 
 TINY_VAE = ["channels=[8, 8, 12, 16]", "batch_size=32", "val_max_frames=200", "minutes=0.0"]
@@ -220,9 +220,9 @@ def test_the_device_auto_is_the_cpu_here_with_the_same_weights_and_cuda_is_refus
     import torch
 
     from engine.errors import UserError
+    from engine.models.loading import load_vae
     from engine.training.common import pick_device
     from engine.training.vae import state_hash, train_vae
-    from engine.models.loading import load_vae
 
     if torch.cuda.is_available():
         pytest.skip("a CUDA device is present: auto would take it")

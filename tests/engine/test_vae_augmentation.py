@@ -6,8 +6,8 @@ from __future__ import annotations
 import torch
 
 from engine import skeleton as sk
-from engine.kinematics.features import encoder_input, root_space_fk
 from engine.kinematics import quaternion as Q
+from engine.kinematics.features import encoder_input, root_space_fk
 from engine.training.vae import scale_bones
 
 

@@ -9,8 +9,16 @@ import pytest
 from engine.errors import UserError, shorten_words
 from engine.input_files import read_json
 from engine.solver.settings import SETTINGS
-from engine.validation import (CLI, Num, ValidationError, check_fields, check_input_file,
-                               check_output_path, check_value, one_line)  # fmt: skip
+from engine.validation import (
+    CLI,
+    Num,
+    ValidationError,
+    check_fields,
+    check_input_file,
+    check_output_path,  # fmt: skip
+    check_value,
+    one_line,
+)
 
 
 @pytest.mark.parametrize("spec, value, reason", [

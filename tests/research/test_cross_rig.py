@@ -93,7 +93,7 @@ def daz_legs_v5(shared_mocap):
 
     legs = [sk.JOINT_INDEX[j] for j in ("lhip", "lknee", "rhip", "rknee", "ltoe", "rtoe")]
     out: dict[tuple[str, str], list] = {}
-    for take, paths in multi_rig_takes(shared_mocap).items():
+    for paths in multi_rig_takes(shared_mocap).values():
         daz = [p for p in paths if "daz" in p]
         for d in daz:
             a = load_motion(shared_mocap / d, strategy=VERSION_5, max_frames=MAX_FRAMES)
@@ -180,8 +180,8 @@ def test_ablation_separates_a_constant_offset_from_a_disagreement():
     second: the offset is removed and read as twist, the knee's varying part stays."""
     from engine.kinematics import quaternion as Q
     from engine.kinematics.fk import fk, local_from_global
-    from engine.motion.retarget import resample_motion
     from engine.motion.joint_stats import joint_axis
+    from engine.motion.retarget import resample_motion
     from research.retarget_ablation import offset_ablation
     from tests.engine.test_retarget_body import canonical_walk
 

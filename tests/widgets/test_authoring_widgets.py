@@ -62,7 +62,6 @@ def test_key_strip_add_move_delete_length_rate_preview(qtbot):
 
 def test_the_strip_offers_exactly_the_engine_in_between_rules():
     from engine.authoring.keys import SCHEMES
-
     from widgets.key_strip import SCHEMES as OFFERED
 
     assert sorted(OFFERED) == sorted(SCHEMES)

@@ -117,10 +117,10 @@ class _Tree:
         return [j for j in hits if not any(a in hits for a in self.ancestors(j))]
 
     def lca(self, items: list[int]) -> int:
-        common = None
-        for j in items:
+        common = [items[0], *self.ancestors(items[0])]
+        for j in items[1:]:
             chain = [j, *self.ancestors(j)]
-            common = chain if common is None else [a for a in common if a in chain]
+            common = [a for a in common if a in chain]
         return common[0]
 
     def real_parent(self, j: int, stop: int) -> int | None:
@@ -158,13 +158,18 @@ def automap(names, parents, offsets, end_sites: dict[int, np.ndarray] | None = N
         missing.append(what + (f", {len(hits)} candidates" if hits else ""))
         return None
 
-    head = anchor(None, lambda c: c.endswith("head"), "upperneck (a joint named *Head)")
-    legs, arms = {}, {}
+    found_head = anchor(None, lambda c: c.endswith("head"), "upperneck (a joint named *Head)")
+    found_legs, found_arms = {}, {}
     for s in ("l", "r"):
-        legs[s] = anchor(s, lambda c: c.endswith("foot") or c.endswith("ankle"), f"{s}ankle (*Foot or *Ankle)")
-        arms[s] = anchor(s, lambda c: c.endswith("hand") or c.endswith("wrist"), f"{s}wrist (*Hand or *Wrist)")
+        found_legs[s] = anchor(s, lambda c: c.endswith("foot") or c.endswith("ankle"), f"{s}ankle (*Foot or *Ankle)")
+        found_arms[s] = anchor(s, lambda c: c.endswith("hand") or c.endswith("wrist"), f"{s}wrist (*Hand or *Wrist)")
     if missing:
         raise _unmappable(source, names, missing)
+    # nothing is missing: every anchor was found
+    assert found_head is not None
+    head = found_head
+    legs = {s: j for s, j in found_legs.items() if j is not None}
+    arms = {s: j for s, j in found_arms.items() if j is not None}
 
     chest = None
     uppers = {}
@@ -197,9 +202,10 @@ def automap(names, parents, offsets, end_sites: dict[int, np.ndarray] | None = N
                 m.landmarks[f"{s}_toe_tip"] = t.names[tip[0]]
         elif end_sites and ankle in end_sites:
             m.landmarks[f"{s}_toe_tip"] = f"end:{t.names[ankle]}"
-    if None in hips.values():
+    left_hip, right_hip = hips["l"], hips["r"]
+    if left_hip is None or right_hip is None:
         raise _unmappable(source, names, [f"{s}hip" for s, h in hips.items() if h is None])
-    root = t.lca([hips["l"], hips["r"], head])
+    root = t.lca([left_hip, right_hip, head])
     put("root", root, "common ancestor of both hips and the head")
     put("upperneck", head, "head by name")
     spine = [j for j in reversed(t.ancestors(chest)) if j in t.ancestors(chest) and root in t.ancestors(j)]

@@ -13,8 +13,8 @@ from engine.authoring.document import load_authoring
 from engine.authoring.export import bake_to_file
 from engine.authoring.keys import Key
 from engine.authoring.targets import JointTarget
-from engine.motion.bvh import load_bvh
 from engine.cli.main import main
+from engine.motion.bvh import load_bvh
 
 LW = sk.JOINT_INDEX["lwrist"]
 

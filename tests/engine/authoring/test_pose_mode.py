@@ -9,12 +9,12 @@ import pytest
 
 from engine import skeleton as sk
 from engine.authoring.pose_mode import PoseMode, PoseOptions
-
-J = sk.JOINT_INDEX
 from engine.constraints import LookAtConstraint
 from engine.errors import UserError
 from engine.kinematics import quat_np as QN
 from engine.kinematics.fk import fk
+
+J = sk.JOINT_INDEX
 
 LW, RW = sk.JOINT_INDEX["lwrist"], sk.JOINT_INDEX["rwrist"]
 FEET = [sk.JOINT_INDEX[j] for j in ("lankle", "rankle", "ltoe", "rtoe")]

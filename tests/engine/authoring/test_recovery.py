@@ -12,8 +12,8 @@ from engine import skeleton as sk
 from engine.authoring.pose_mode import PoseMode
 from engine.authoring.recovery import document, recover
 from engine.authoring.session import AuthoringSession
-from engine.errors import UserError
 from engine.authoring.state import differences
+from engine.errors import UserError
 from tests.engine.authoring.test_session import Clock
 
 

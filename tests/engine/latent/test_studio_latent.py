@@ -3,7 +3,6 @@ the note for a method without a latent (real DragPoser, bundled clip, no Qt)."""
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
 
 from engine.motion.retarget import load_motion
@@ -59,7 +58,7 @@ def test_views_readouts_and_detail(clip):
 def test_a_method_without_a_latent_says_so(clip):
     session, worker = _engine(clip, "ik")
     try:
-        snap = newest(worker)
+        newest(worker)
         wait_for(lambda: worker.latest.latent_note != "", timeout=30)
         assert worker.latest.latent_view is None
         assert "ik has no latent space" in worker.latest.latent_note

@@ -12,9 +12,9 @@ import threading
 import numpy as np
 import pytest
 
-from engine.motion.bvh import save_motion_bvh
 from engine.cli.main import main
 from engine.methods import get_method
+from engine.motion.bvh import save_motion_bvh
 from engine.motion.retarget import load_motion
 from engine.tracker_io.live import LiveRun, reference_error, to_motion
 from engine.tracker_io.receiver import VMCReceiver

@@ -12,12 +12,12 @@ import numpy as np
 import pytest
 from pythonosc.osc_message_builder import OscMessageBuilder
 
+from engine.errors import UserError
 from engine.tracker_io.receiver import VMCReceiver, parse_listen
 from engine.tracker_io.recording import RecordingWriter, header, read_recording, replay
 from engine.tracker_io.sender import plan_stream, send_stream
 from engine.tracker_io.trackers import TrackerMapping
 from engine.tracker_io.vmc import HMD, decode_packet, encode_frame
-from engine.errors import UserError
 
 
 def _wait(cond, timeout=5.0):

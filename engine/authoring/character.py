@@ -27,6 +27,7 @@ import numpy as np
 import torch
 
 from engine import skeleton as sk
+from engine.authoring.pose_options import PRIOR_WEIGHT
 from engine.constraints.base import Constraint
 from engine.constraints.temporal_prior import TemporalPriorConstraint
 from engine.errors import UserError
@@ -37,9 +38,6 @@ from engine.solver.limb_ik import LIMBS, finish
 
 #: Joints whose lowest one stands on the floor.
 FOOT_JOINTS = tuple(sk.JOINT_INDEX[j] for j in ("lankle", "rankle", "ltoe", "rtoe"))
-#: Weight of the pull towards the starting (or interpolated) latent: keeps the pose near
-#: the learned manifold where the targets leave it free, as DragPoser's temporal prior does.
-PRIOR_WEIGHT = 0.01
 #: Height range accepted for a character, metres.
 HEIGHT_RANGE = (0.5, 2.5)
 

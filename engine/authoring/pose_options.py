@@ -11,9 +11,12 @@ import typing
 from dataclasses import dataclass
 from typing import Any
 
-from engine.authoring.character import PRIOR_WEIGHT
 from engine.errors import UserError
 from engine.validation import shown
+
+#: Weight of the pull towards the starting (or interpolated) latent: keeps the pose near
+#: the learned manifold where the targets leave it free, as DragPoser's temporal prior does.
+PRIOR_WEIGHT = 0.01
 
 #: Key of a numeric field's accepted range ``(lo, hi)`` in its ``dataclasses.field`` metadata.
 RANGE = "range"

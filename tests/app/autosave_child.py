@@ -55,9 +55,12 @@ def main(state: str, clip: str, out: str, end: str) -> int:
     s.seek(12)
     resolve_range(w, 5, 15, blend=2).wait()
     s.seek(20)
+    # what the window held at each write: the seek's frame may reach the session after a
+    # write already under way, so wait for a write made from the state that is dumped below
     written: list[str] = []
-    auto.saved.connect(written.append)
-    _wait(app, lambda: written and not auto.timer.isActive())
+    auto.saved.connect(lambda _path: written.append(json.dumps(s.to_scene(), sort_keys=True)))
+    _wait(app, lambda: bool(written) and not auto.timer.isActive()
+          and written[-1] == json.dumps(s.to_scene(), sort_keys=True))
     Path(out + ".json").write_text(json.dumps(s.to_scene()))
     np.savez(out + ".npz", local_rot=s.motion.local_rot, root_pos=s.motion.root_pos)
     if end == "kill":

@@ -31,7 +31,7 @@ from engine.solver.settings import FULL_SET, OptimizerSettings, check_values
 #: Settings a profile may supply (each profile gives all of them; a value it leaves out is
 #: the :class:`OptimizerSettings` default).
 TUNED = ("future_window", "temporal_weight", "step_size", "lr", "smooth_weight", "ground_weight",
-         "sensor_rotation_weight", "prior", "tracker_prior_weight", "head_reach", "level_feet", "gait_weight")
+         "sensor_rotation_weight", "prior", "tracker_prior_weight", "head_reach", "level_feet")
 
 
 @dataclass(frozen=True)

@@ -94,9 +94,9 @@ class GaitPlanner:
         self.reset()
 
     def reset(self) -> None:
-        n = max(2, int(round(self.params.window_s * self.fps)) + 1)
+        n = max(2, round(self.params.window_s * self.fps) + 1)
         self._anchor: deque[np.ndarray] = deque(maxlen=n)
-        self._hands: deque[np.ndarray] = deque(maxlen=max(2, int(round(self.params.arm_lag_s * self.fps)) + 1))
+        self._hands: deque[np.ndarray] = deque(maxlen=max(2, round(self.params.arm_lag_s * self.fps) + 1))
         self._stance: int | None = None
         self._planted = np.zeros(3)
         self._lift = np.zeros(3)
@@ -162,7 +162,7 @@ class GaitPlanner:
             stance = int(np.argmin(ankles[:, 2])) if arms is None else arms
             self._start(stance, ankles[stance], ankles[1 - stance])
         step_s = p.step_time(speed)
-        step = max(1, int(round(step_s * self.fps)))
+        step = max(1, round(step_s * self.fps))
         self._elapsed += 1
         s = self._stance
         behind = np.linalg.norm(hips[s, :2] - self._planted[:2])

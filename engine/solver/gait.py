@@ -53,7 +53,16 @@ HIPS = (sk.JOINT_INDEX["lhip"], sk.JOINT_INDEX["rhip"])
 
 @dataclass(frozen=True)
 class GaitParams:
-    """The planner's constants (SI units: metres, seconds, metres per second)."""
+    """The planner's constants (SI units: metres, seconds, metres per second).
+
+    ``window_s``: the anchor velocity's window; ``on_speed`` / ``full_speed``: where the
+    planner starts and reaches full weight; ``max_reach``: how far the hip may leave the
+    stance foot before the feet swap; ``stance_weight`` / ``swing_weight``: the two ankles'
+    shares of ``gait_weight``; ``arm_lag_s`` / ``arm_speed``: the window and the least
+    fore-aft speed of the hands' difference that count as an arm swing; ``min_step_s``:
+    the shortest step; ``lead_s``: how far (in travel time) ahead of its hip a foot lands;
+    ``lateral_share``: where between the pelvis (0) and the hip joint (1) it lands.
+    """
 
     window_s: float = 0.25
     on_speed: float = 0.35

@@ -26,6 +26,7 @@ import torch
 
 from engine import skeleton as sk
 from engine.constraints import Constraint, GroundConstraint, SensorConstraint, SmoothConstraint, TemporalPriorConstraint
+from engine.constraints.gait import GaitConstraint
 from engine.constraints.sensor import unit_rotation
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
@@ -37,6 +38,7 @@ from engine.methods.solve_record import SolveRecord, record_of
 from engine.motion.clip import Motion
 from engine.sensors import SensorFrame
 from engine.solver import FrameContext, LatentDecoder, LatentPredictor, OptimizerSettings, PoseOptimizer, RootFrame
+from engine.solver.gait import GaitPlanner
 from engine.solver.limb_ik import finish
 from engine.solver.tracker_prior import PoseBank, combination, default_bank
 from engine.startup_trace import mark
@@ -111,6 +113,8 @@ class DragPoserMethod(Method):
         self.prior = TemporalPriorConstraint(name="temporal_prior")
         self.smooth = SmoothConstraint(name="smooth")
         self.ground = GroundConstraint(name="ground")
+        self.gait = GaitConstraint(name="gait")
+        self.gait_planner = GaitPlanner(fps)  # the gait term's targets (engine/solver/gait.py)
         self._settings.forget()
         self._frame = 0
         self._latent = torch.zeros(self.latent_dim)
@@ -194,7 +198,7 @@ class DragPoserMethod(Method):
         # to frames acts by the clip's frame numbers (the studio resets on a seek)
         ctx = FrameContext(root, override, anchor, self._positions, prediction, sensors.frame, deadline)
         self.settle_constraints(self._pos64)  # e.g. an unset pin takes the previous pose
-        terms = [*self.sensors.values(), self.prior, self.smooth, self.ground, *self.constraints]
+        terms = [*self.sensors.values(), self.prior, self.smooth, self.ground, *self._gait_terms(plan), *self.constraints]
         # frame 0 has no history to start from: it is solved offline
         sol = self.optimizer.solve(start, terms, ctx, dataclasses.replace(s, mode="offline") if self._frame == 0 else s)
         warnings += sol.warnings
@@ -284,6 +288,21 @@ class DragPoserMethod(Method):
         return state.positions.double().numpy()
 
     # -- internals -------------------------------------------------------------------
+
+    def _gait_terms(self, plan: FramePlan) -> list[Constraint]:
+        """The gait term with this frame's targets from the hips' (else the head's) tracker
+        travel, or nothing while its weight is 0 (the solve is then as without it)."""
+        weight = plan.gait_weight
+        if weight <= 0.0:
+            self.gait_planner.reset()
+            return []
+        anchor = next((c.position for j in ("root", "upperneck") if (c := self.sensors.get(j)) is not None
+                       and c.enabled), None)  # fmt: skip
+        hands = [c.position for j in ("lwrist", "rwrist") if (c := self.sensors.get(j)) is not None and c.enabled]
+        self.gait.set_targets(self.gait_planner.update(anchor, self._pos64, np.array(hands) if len(hands) == 2 else None))
+        self.gait.weight = weight
+        return [self.gait]
+
 
     def _advance(self, latent: torch.Tensor, prev: RootFrame, root_rot: np.ndarray, positions: np.ndarray) -> None:
         """Keep the solved frame as the next frame's history, in float32 as the solver's

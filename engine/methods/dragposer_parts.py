@@ -87,6 +87,11 @@ class FramePlan:
         """The ground band's weight this frame: off while a foot tracker is connected."""
         return 0.0 if self.feet else float(self.settings.ground_weight)
 
+    @property
+    def gait_weight(self) -> float:
+        """The gait term's weight this frame: off while a foot tracker is connected."""
+        return 0.0 if self.feet else float(self.settings.gait_weight)
+
 
 class TrackerTerms:
     """The trackers of a clip as ``sensor`` constraints (module doc).

@@ -152,6 +152,11 @@ class OptimizerSettings:
                                    "of the previous two solved poses.", Num(0, 1e6))
     ground_weight: float = setting(0.0, "Ground weight", "Weight of the ground term (the lower ankle 5-14 cm "
                                    "above the floor) while no foot tracker is connected.", Num(0, 1e6))
+    gait_weight: float = setting(0.0, "Gait weight", "Weight of the gait term while no foot tracker is "
+                                 "connected: when the hips or head travel faster than 0.35 m/s, the stance ankle "
+                                 "stays planted and the swing ankle moves to a landing spot ahead of its hip "
+                                 "(engine/solver/gait.py); 0 (default) turns it off. 3 plants the feet (less skating) at the "
+                                 "cost of Pos on some clips (docs/optimizer.md, 'Legs that step').", Num(0, 1e6))
     tuning: str = setting("preset", "Tuning", "preset: the settings of engine/solver/profiles.py TUNED that were "
                           "not set explicitly take the connected sensor set's profile values; off: the values "
                           "here are used as they are.", Choice(TUNINGS))

@@ -1,0 +1,207 @@
+"""Legs that step when the body travels: a gait planner for sets without foot trackers.
+
+With head and hands (or hips, head and hands) the legs are not measured, and the solver
+guesses them from the upper body: when the performer walks, the guessed feet glide along
+under the body instead of stepping. The :class:`GaitPlanner` reads the travel of an
+anchor tracker (the hips' when connected, else the head's) and gives the ``gait`` term
+(:mod:`engine.constraints.gait`) a target per ankle every frame:
+
+* **Speed and heading.** The anchor's horizontal velocity over the last
+  :attr:`GaitParams.window_s` seconds. Below :attr:`GaitParams.on_speed` the planner is
+  off (the targets' weights are 0: standing, dancing and turning on the spot are left to
+  the solver as before); it fades in up to :attr:`GaitParams.full_speed`.
+* **Phase.** One foot is in stance, the other swings. Walkers swing each arm with the
+  opposite leg, so while the left hand moves forward relative to the right one (along the
+  travel, over :attr:`GaitParams.arm_lag_s`), the left foot stands
+  (:meth:`GaitPlanner.arm_stance`); the roles swap when the arms say so and the step has
+  lasted :attr:`GaitParams.min_step_s`, after the step time ``T``
+  (:meth:`GaitParams.step_time`: about 0.5 s at a walk) when the arms do not
+  swing (hands still or not tracked), and whenever the body has left the stance foot more
+  than :attr:`GaitParams.max_reach` behind. When the planner starts, the arms (else the
+  lower foot of the previous solved pose) pick the stance foot. On the walking clips the
+  arms name the truth's slower foot in 73-96 % of the travelling frames; a head-height
+  rule (swap at the head's low points, which fall within 0-3 frames of a landing on a
+  walk) did worse in the solve (research/README.md, *Legs from the head*).
+* **Stance foot planted.** Its target is where the swing foot was headed when it landed
+  (under its hip, :attr:`GaitParams.lead_s` of travel ahead), fixed for the whole stance,
+  so it does not skate while the body moves on.
+* **Swing foot on its way.** Its target moves, along a smoothstep of the phase, from where
+  it lifted off to its landing spot: under its own hip (previous solved pose) carried
+  ahead by the velocity over the rest of the step and :attr:`GaitParams.lead_s` more
+  (Raibert's foot-placement rule: the foot lands ahead of the hips by part of a stance's
+  travel), so the stride grows with speed. "Under its hip" is 30 % of the way from the
+  pelvis to the hip joint: feet land nearly under the pelvis.
+
+Only the horizontal position is targeted (heights are the ``ground`` term's and the
+decoder's). Everything here is numpy and reads only this frame's and earlier readings and
+solved poses, so it works live.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+
+from engine import skeleton as sk
+from engine.constraints.gait import ANKLES, GaitTargets
+
+#: The hips the ankles (:data:`~engine.constraints.gait.ANKLES`) hang from, left, right.
+HIPS = (sk.JOINT_INDEX["lhip"], sk.JOINT_INDEX["rhip"])
+
+
+@dataclass(frozen=True)
+class GaitParams:
+    """The planner's constants (SI units: metres, seconds, metres per second).
+
+    ``window_s``: the anchor velocity's window; ``on_speed`` / ``full_speed``: where the
+    planner starts and reaches full weight; ``max_reach``: how far the hip may leave the
+    stance foot before the feet swap; ``stance_weight`` / ``swing_weight``: the two ankles'
+    shares of ``gait_weight``; ``arm_lag_s`` / ``arm_speed``: the window and the least
+    fore-aft speed of the hands' difference that count as an arm swing; ``min_step_s``:
+    the shortest step; ``lead_s``: how far (in travel time) ahead of its hip a foot lands;
+    ``lateral_share``: where between the pelvis (0) and the hip joint (1) it lands.
+    """
+
+    window_s: float = 0.25
+    on_speed: float = 0.35
+    full_speed: float = 0.7
+    max_reach: float = 0.55
+    stance_weight: float = 1.0
+    swing_weight: float = 0.3
+    arm_lag_s: float = 0.1
+    arm_speed: float = 0.1
+    min_step_s: float = 0.2
+    lead_s: float = 0.3
+    lateral_share: float = 0.3
+
+    def step_time(self, speed: float) -> float:
+        """Seconds per step at ``speed`` m/s: 0.55 s at 0.7 m/s, 0.49 s at 1.3, 0.3 s
+        when running (cadence rises with speed)."""
+        return float(np.clip(0.62 - 0.1 * speed, 0.3, 0.6))
+
+    def activity(self, speed: float) -> float:
+        """0 below :attr:`on_speed`, 1 above :attr:`full_speed`, a smoothstep between."""
+        t = float(np.clip((speed - self.on_speed) / (self.full_speed - self.on_speed), 0.0, 1.0))
+        return t * t * (3.0 - 2.0 * t)
+
+
+class GaitPlanner:
+    """Stance and swing targets for the ankles from an anchor's travel (module doc).
+
+    Parameters
+    ----------
+    fps : float
+        Frames per second of the readings.
+    params : GaitParams, optional
+    """
+
+    def __init__(self, fps: float, params: GaitParams | None = None) -> None:
+        self.fps = float(fps)
+        self.params = params or GaitParams()
+        self.reset()
+
+    def reset(self) -> None:
+        n = max(2, round(self.params.window_s * self.fps) + 1)
+        self._anchor: deque[np.ndarray] = deque(maxlen=n)
+        self._hands: deque[np.ndarray] = deque(maxlen=max(2, round(self.params.arm_lag_s * self.fps) + 1))
+        self._stance: int | None = None
+        self._planted = np.zeros(3)
+        self._lift = np.zeros(3)
+        self._elapsed = 0
+
+    def velocity(self) -> np.ndarray:
+        """The anchor's horizontal velocity ``(2,)``, m/s, over the window (0 until two readings)."""
+        if len(self._anchor) < 2:
+            return np.zeros(2)
+        return (self._anchor[-1] - self._anchor[0]) * self.fps / (len(self._anchor) - 1)
+
+    def arm_stance(self, v: np.ndarray) -> int | None:
+        """The stance foot the arm swing says (0 left, 1 right), or None when the arms do
+        not swing along the travel ``v (2,)``: walkers swing each arm with the opposite
+        leg, so while the left hand moves forward relative to the right one, the right
+        foot swings and the left one stands (on the walking clips the rule names the
+        truth's slower foot in 73-94 % of the travelling frames)."""
+        if len(self._hands) < 2 or not np.all(np.isfinite(self._hands[0])):
+            return None
+        fwd = v / max(float(np.linalg.norm(v)), 1e-9)
+        rate = float((self._hands[-1] - self._hands[0]) @ fwd) * self.fps / (len(self._hands) - 1)
+        if abs(rate) < self.params.arm_speed:
+            return None
+        return 0 if rate > 0 else 1
+
+    def update(self, anchor: np.ndarray | None, previous: np.ndarray | None,
+               hands: np.ndarray | None = None) -> GaitTargets:  # fmt: skip
+        """Advance one frame and give its targets.
+
+        Parameters
+        ----------
+        anchor : ndarray (3,) or None
+            This frame's anchor tracker position, metres (None: not connected; the
+            planner stops and forgets the anchor's history).
+        previous : ndarray (22, 3) or None
+            The previous frame's solved joint positions (None on the first frame).
+        hands : ndarray (2, 3) or None
+            The left and right hand trackers' positions (None: not both connected; the
+            steps then follow the step time alone).
+        """
+        if anchor is None or previous is None or not np.all(np.isfinite(anchor)):
+            self.reset()
+            return GaitTargets.off()
+        self._anchor.append(np.asarray(anchor, dtype=np.float64)[:2].copy())
+        if hands is None:
+            self._hands.clear()
+        else:
+            self._hands.append(np.asarray(hands[0, :2] - hands[1, :2], dtype=np.float64))
+        p = self.params
+        v = self.velocity()
+        speed = float(np.linalg.norm(v))
+        a = p.activity(speed)
+        if a <= 0.0:
+            self._stance = None
+            return GaitTargets.off()
+        ankles = previous[list(ANKLES)]
+        # feet land nearly under the pelvis: 2 cm outwards of its centre on average, ~5 cm
+        # inside their hips (touch-downs of 9 walking clips)
+        root = previous[sk.JOINT_INDEX["root"]]
+        hips = root + p.lateral_share * (previous[list(HIPS)] - root)
+        arms = self.arm_stance(v)
+        if self._stance is None:  # starting: as the arms say, else the lower foot stands
+            stance = int(np.argmin(ankles[:, 2])) if arms is None else arms
+            self._start(stance, ankles[stance], ankles[1 - stance])
+        step_s = p.step_time(speed)
+        step = max(1, round(step_s * self.fps))
+        self._elapsed += 1
+        s = self._stance
+        behind = np.linalg.norm(hips[s, :2] - self._planted[:2])
+        lasted = self._elapsed > p.min_step_s * self.fps
+        swap = (arms is not None and arms != s and lasted) or (arms is None and self._elapsed > step)
+        if swap or behind > p.max_reach:
+            # the swing foot lands where it was headed now (its target, not where the solve
+            # left it: the solved foot lags its target, and planting it there left the stance
+            # foot 18 cm behind the truth's on a walk)
+            landed = np.r_[hips[1 - s, :2] + v * p.lead_s, ankles[1 - s, 2]]
+            self._start(1 - s, landed, self._planted)
+            self._elapsed = 1
+            s = self._stance
+        w = 1 - s
+        phase = min(1.0, self._elapsed / step)
+        remaining = max(0.0, (step - self._elapsed) / self.fps)
+        landing = hips[w, :2] + v * (remaining + p.lead_s)
+        ease = phase * phase * (3.0 - 2.0 * phase)
+        target = np.zeros((2, 3))
+        target[s] = self._planted
+        target[w, :2] = self._lift[:2] + (landing - self._lift[:2]) * ease
+        target[w, 2] = ankles[w, 2]
+        scale = np.zeros((2, 3))
+        scale[s, :2] = np.sqrt(a * p.stance_weight)
+        scale[w, :2] = np.sqrt(a * p.swing_weight)
+        return GaitTargets(target, scale, s, phase)
+
+    def _start(self, stance: int, planted: np.ndarray, lift: np.ndarray) -> None:
+        """``stance`` plants at ``planted (3,)``; the other foot lifts off from ``lift (3,)``."""
+        self._stance = stance
+        self._planted = np.array(planted, dtype=np.float64)
+        self._lift = np.array(lift, dtype=np.float64)
+        self._elapsed = 0

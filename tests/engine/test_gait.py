@@ -1,0 +1,109 @@
+"""The gait planner (engine/solver/gait.py) and DragPoser's ``gait`` term: a travelling
+head makes the feet alternate and plant; a still one leaves the term off. The term's
+residual, Jacobian and paths are checked by the generic registry tests (its ``examples``)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from engine import skeleton as sk
+from engine.constraints.gait import ANKLES, GaitTargets
+from engine.methods.dragposer import DragPoserMethod
+from engine.motion.clip import Motion
+from engine.solver.gait import GaitParams, GaitPlanner
+from engine.tracking import simulate
+from tests.engine.test_optimizer_standins import CountingPredictor, MLPDecoder
+
+FPS = 60.0
+ROOT, HEAD = sk.JOINT_INDEX["root"], sk.JOINT_INDEX["upperneck"]
+
+
+def walk(planner: GaitPlanner, frames: int, speed: float, arms: bool) -> list[GaitTargets]:
+    """Drive ``planner`` with a head walking along -Y at ``speed`` m/s (hands swinging in
+    opposition at 1 stride per second when ``arms``), the solver standing in as perfect:
+    each frame's ankles are where the previous frame's targets put them."""
+    pose = sk.Skeleton.canonical().rest_positions()
+    pose -= pose[ROOT] - [0.0, 0.0, 0.95]
+    ankles = pose[list(ANKLES)].copy()
+    out: list[GaitTargets] = []
+    for i in range(frames):
+        t = i / FPS
+        shift = np.array([0.0, -speed * t, 0.0])
+        previous = pose + shift
+        if out:  # the ankles the last targets asked for (the others ride along with the body)
+            last = out[-1]
+            ankles = np.where(last.scale > 0, last.target, ankles + [0.0, -speed / FPS, 0.0])
+        previous[list(ANKLES)] = ankles
+        swing = 0.25 * np.sin(2.0 * np.pi * t) if arms else 0.0  # left hand forward (-Y) when > 0
+        hands = np.array([[0.2, -swing, 1.0], [-0.2, swing, 1.0]]) + shift
+        out.append(planner.update(previous[HEAD], previous, hands))
+    return out
+
+
+@pytest.mark.parametrize("arms", [True, False])
+def test_walking_head_makes_the_feet_alternate_and_plant(arms):
+    targets = walk(GaitPlanner(FPS), 240, 1.2, arms)
+    stance = np.array([-1 if not t.active else t.stance for t in targets])
+    on = stance >= 0
+    assert on[60:].all()  # on once the velocity window is full and the speed is up
+    changes = np.flatnonzero(np.diff(stance[on]) != 0)
+    assert len(changes) >= 5 and set(stance[on]) == {0, 1}  # about 2 steps per second
+    # the stance foot's target stays put for its whole stance; the swing foot's moves ahead (-Y)
+    runs = np.split(np.arange(on.sum()), changes + 1)
+    onf = np.flatnonzero(on)
+    for run in runs[1:-1]:
+        frames = onf[run]
+        k = stance[frames[0]]
+        planted = np.array([targets[f].target[k] for f in frames])
+        assert np.ptp(planted, axis=0).max() < 1e-12
+        swing = np.array([targets[f].target[1 - k, 1] for f in frames])
+        assert swing[-1] < swing[0] - 0.2
+    if arms:  # the arms say which foot stands: left while the left hand moves forward
+        rate = np.cos(2.0 * np.pi * np.arange(240) / FPS)  # d/dt of the left-minus-right forward offset
+        agree = np.mean((stance[on] == 0) == (rate[on] > 0))
+        assert agree > 0.8
+
+
+def test_a_still_head_leaves_the_term_off():
+    targets = walk(GaitPlanner(FPS), 120, 0.0, arms=True)
+    assert not any(t.active for t in targets)
+    slow = walk(GaitPlanner(FPS), 120, 0.9 * GaitParams().on_speed, arms=True)
+    assert not any(t.active for t in slow)
+
+
+def test_no_anchor_or_first_frame_is_off():
+    p = GaitPlanner(FPS)
+    assert not p.update(None, np.zeros((22, 3))).active
+    assert not p.update(np.zeros(3), None).active
+
+
+def _clip(speed: float, frames: int = 90) -> Motion:
+    t = np.arange(frames) / FPS
+    rot = np.tile(np.array([1.0, 0.0, 0.0, 0.0]), (frames, 22, 1))
+    return Motion(rot, np.stack([0 * t, -speed * t, 1.0 + 0 * t], -1))
+
+
+@pytest.mark.parametrize("speed, active", [(1.2, True), (0.0, False)])
+def test_dragposer_adds_the_gait_term_while_the_head_travels(speed, active):
+    torch.manual_seed(0)
+    m = DragPoserMethod(MLPDecoder(), CountingPredictor(), iterations=2, max_iterations=5, gait_weight=3.0)
+    clip = _clip(speed)
+    tr = simulate(clip, "3-head-hands")
+    m.reset(clip.skeleton)
+    out = [m.step(tr.frame(i)) for i in range(len(clip))]
+    assert all(np.isfinite(r.positions).all() for r in out)
+    # the term is in the solve; it pulls only while the head travels
+    assert "gait" in out[-1].losses[0]
+    assert (out[-1].losses[0]["gait"] > 0) == active and m.gait.targets.active == active
+
+
+def test_gait_weight_zero_turns_the_term_off():
+    clip = _clip(1.2, 40)
+    tr = simulate(clip, "3-head-hands")
+    torch.manual_seed(0)
+    m = DragPoserMethod(MLPDecoder(), CountingPredictor(), iterations=2, max_iterations=5, gait_weight=0.0)
+    m.reset(clip.skeleton)
+    out = [m.step(tr.frame(i)) for i in range(len(clip))]
+    assert "gait" not in out[-1].losses[0] and not m.gait.targets.active

@@ -174,6 +174,7 @@ class GaitPlanner:
         step = max(1, round(step_s * self.fps))
         self._elapsed += 1
         s = self._stance
+        assert s is not None  # set by _start above on the first frame
         behind = np.linalg.norm(hips[s, :2] - self._planted[:2])
         lasted = self._elapsed > p.min_step_s * self.fps
         swap = (arms is not None and arms != s and lasted) or (arms is None and self._elapsed > step)
@@ -184,7 +185,7 @@ class GaitPlanner:
             landed = np.r_[hips[1 - s, :2] + v * p.lead_s, ankles[1 - s, 2]]
             self._start(1 - s, landed, self._planted)
             self._elapsed = 1
-            s = self._stance
+            s = 1 - s
         w = 1 - s
         phase = min(1.0, self._elapsed / step)
         remaining = max(0.0, (step - self._elapsed) / self.fps)

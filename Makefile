@@ -30,6 +30,7 @@ run: bootstrap
 # needed. `make test` runs it first, so CI (.ci/run) fails on a lint or type error.
 check: bootstrap
 	$(VENV)/bin/ruff check .
+	$(VENV)/bin/ruff format --check .
 	$(VENV)/bin/mypy
 
 # Reformat the tree with ruff's formatter ([tool.ruff.format] in pyproject.toml).

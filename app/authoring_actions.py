@@ -47,7 +47,9 @@ class NewPoseDialog(QDialog):
         form = QFormLayout(self)
         # the canonical subject's height: a scene that gives none is baked at it too
         canonical = round(sk.Skeleton.canonical().height(), 2)
-        self.height_m = QDoubleSpinBox(minimum=0.5, maximum=2.5, decimals=2, singleStep=0.05, value=canonical, suffix=" m")
+        self.height_m = QDoubleSpinBox(
+            minimum=0.5, maximum=2.5, decimals=2, singleStep=0.05, value=canonical, suffix=" m"
+        )
         self.start = QComboBox()
         self.start.addItems([MEAN, CLIP] if has_clip else [MEAN])
         form.addRow("Height", self.height_m)
@@ -120,11 +122,19 @@ def export_video(window: StudioShell) -> str | None:
     if motion is None:
         QMessageBox.warning(window, "Export video", "Open a clip first.")
         return None
-    return export(window, motion, window.session.preset or None, tuple(window.session.available_methods()),
-                  window.files.suggested_name("mp4", "video"), window.settings)  # fmt: skip
+    return export(
+        window,
+        motion,
+        window.session.preset or None,
+        tuple(window.session.available_methods()),
+        window.files.suggested_name("mp4", "video"),
+        window.settings,
+    )
 
 
 def add_menu_entries(window: StudioShell, file_menu: QMenu, action: Callable[..., QAction]) -> dict[str, QAction]:
     """Add New pose and Export video to ``file_menu`` with the menus' ``action`` helper."""
-    return {"new_pose": action(window, file_menu, "&New pose...", lambda: new_pose(window), "Ctrl+Shift+N"),
-            "export_video": action(window, file_menu, "Export &video...", lambda: export_video(window))}  # fmt: skip
+    return {
+        "new_pose": action(window, file_menu, "&New pose...", lambda: new_pose(window), "Ctrl+Shift+N"),
+        "export_video": action(window, file_menu, "Export &video...", lambda: export_video(window)),
+    }

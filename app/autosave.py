@@ -52,9 +52,14 @@ class DocumentAutosave(QObject):
     saved = pyqtSignal(str)
     failed = pyqtSignal(str)
 
-    def __init__(self, files: AutosaveSession, name: str,
-                 document: Callable[[], tuple[dict[str, Any], Motion | None] | None],
-                 parent: QObject | None = None, interval_ms: int = AUTOSAVE_MS) -> None:  # fmt: skip
+    def __init__(
+        self,
+        files: AutosaveSession,
+        name: str,
+        document: Callable[[], tuple[dict[str, Any], Motion | None] | None],
+        parent: QObject | None = None,
+        interval_ms: int = AUTOSAVE_MS,
+    ) -> None:
         super().__init__(parent)
         self.files, self.name, self.document = files, name, document
         self.timer = QTimer(self, singleShot=True, interval=interval_ms)
@@ -140,15 +145,17 @@ class StudioAutosave(QObject):
             auto.write_now()
 
 
-def watch_pose(files: AutosaveSession, pose: PoseWindow, name: str, parent: QObject | None = None,
-               interval_ms: int = AUTOSAVE_MS) -> DocumentAutosave:  # fmt: skip
+def watch_pose(
+    files: AutosaveSession, pose: PoseWindow, name: str, parent: QObject | None = None, interval_ms: int = AUTOSAVE_MS
+) -> DocumentAutosave:
     """Autosave pose window ``pose`` through ``files`` as document ``name`` until it
     closes (its closeEvent discards :attr:`PoseWindow.autosave`)."""
     from engine.authoring.recovery import document
 
     session = pose.session
-    auto = DocumentAutosave(files, name, lambda: (document(session), None) if session.dirty else None,
-                            parent, interval_ms)  # fmt: skip
+    auto = DocumentAutosave(
+        files, name, lambda: (document(session), None) if session.dirty else None, parent, interval_ms
+    )
     auto.failed.connect(lambda text: pose.statusBar().showMessage(text, 8000))
     auto.watch(session.events.history, session.events.frame)  # every edit, undo and save; the frame
     pose.autosave = auto

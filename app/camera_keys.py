@@ -35,9 +35,15 @@ class CameraKeys(QObject):
         self._view = view
 
     def eventFilter(self, obj: QObject | None, event: QEvent | None) -> bool:
-        if (event is not None and event.type() == QEvent.Type.KeyPress and isinstance(event, QKeyEvent)
-                and event.key() == Qt.Key.Key_Escape and obj is QApplication.focusWidget()
-                and types_text(obj) and obj.window() is self._view.window()):  # fmt: skip
+        if (
+            event is not None
+            and event.type() == QEvent.Type.KeyPress
+            and isinstance(event, QKeyEvent)
+            and event.key() == Qt.Key.Key_Escape
+            and obj is QApplication.focusWidget()
+            and types_text(obj)
+            and obj.window() is self._view.window()
+        ):
             self._view.setFocus()  # leave the field: the camera keys are the view's again
             return True
         if event is not None and event.type() == QEvent.Type.ShortcutOverride and isinstance(event, QKeyEvent):

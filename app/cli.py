@@ -34,27 +34,48 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     p.add_argument("file", nargs="?", metavar="FILE.bvh", help="motion to open")
     add_rig_map_option(p)
-    p.add_argument("--method", help="reconstruction method (default: dragposer with the shipped model, "
-                   "ik when no weights are installed)")
+    p.add_argument(
+        "--method",
+        help="reconstruction method (default: dragposer with the shipped model, ik when no weights are installed)",
+    )
     p.add_argument("--sensors", metavar="PRESET", help="sensor preset name")
     p.add_argument("--ghosts", metavar="A,B", help="other methods drawn as ghosts beside it, e.g. ik,sparseposer")
-    p.add_argument("--scene", metavar="SCENE.json", help="apply a saved scene (sensors, constraints, settings, "
-                   "method, frame) to FILE; without FILE the scene's own clip opens")
+    p.add_argument(
+        "--scene",
+        metavar="SCENE.json",
+        help="apply a saved scene (sensors, constraints, settings, "
+        "method, frame) to FILE; without FILE the scene's own clip opens",
+    )
     p.add_argument("--screenshot", metavar="OUT.png", help="save a screenshot and exit")
     p.add_argument("--after-frames", type=int, default=60, metavar="N", help="frames to play first (60)")
-    p.add_argument("--pace", choices=PLAYBACK_PACES,
-                   help="playback: solve every frame (default) or keep real time, skipping frames")
+    p.add_argument(
+        "--pace",
+        choices=PLAYBACK_PACES,
+        help="playback: solve every frame (default) or keep real time, skipping frames",
+    )
     # "mode" is the optimizer's realtime/offline elsewhere; the old spelling still works
     p.add_argument("--mode", dest="old_pace", choices=PLAYBACK_PACES, help=argparse.SUPPRESS)
-    p.add_argument("--measure", type=float, metavar="SECONDS",
-                   help="play SECONDS, write smoothness figures (draws/s, solved/s, event-loop "
-                   "lateness, per-panel cost) to --json and exit")
+    p.add_argument(
+        "--measure",
+        type=float,
+        metavar="SECONDS",
+        help="play SECONDS, write smoothness figures (draws/s, solved/s, event-loop "
+        "lateness, per-panel cost) to --json and exit",
+    )
     p.add_argument("--json", metavar="OUT.json", default="measure.json", help="where --measure writes")
-    p.add_argument("--view", choices=("stick", "body"), default="stick",
-                   help="draw the reconstruction as a stick figure (default) or a shaded body")
-    p.add_argument("--engine", choices=("process", "thread"), default="process",
-                   help="run the solver in its own process (default: the window and the solver never "
-                   "wait for each other) or in a thread of the window's process")
+    p.add_argument(
+        "--view",
+        choices=("stick", "body"),
+        default="stick",
+        help="draw the reconstruction as a stick figure (default) or a shaded body",
+    )
+    p.add_argument(
+        "--engine",
+        choices=("process", "thread"),
+        default="process",
+        help="run the solver in its own process (default: the window and the solver never "
+        "wait for each other) or in a thread of the window's process",
+    )
     p.set_defaults(func=run)
 
 
@@ -79,9 +100,23 @@ def run(args: argparse.Namespace) -> int:
         from app.main import run as run_app  # Qt loads only when the window opens
 
         mark("Qt, VTK and the window's modules imported")
-        return run_app(args.file, method, args.sensors, args.screenshot, args.after_frames,
-                       args.measure, args.json, args.pace or args.old_pace, ghosts, args.view, rig_map_path(args),
-                       args.engine, args.scene, args.method is not None, started)  # fmt: skip
+        return run_app(
+            args.file,
+            method,
+            args.sensors,
+            args.screenshot,
+            args.after_frames,
+            args.measure,
+            args.json,
+            args.pace or args.old_pace,
+            ghosts,
+            args.view,
+            rig_map_path(args),
+            args.engine,
+            args.scene,
+            args.method is not None,
+            started,
+        )
     finally:
         gc.enable()
         if started is not None:

@@ -85,8 +85,12 @@ def confirm_discard(window: StudioShell, doing: str) -> bool:
         return True
     buttons = QMessageBox.StandardButton
     what = "the re-solved clip and the scene" if clip_edited(window) else "the scene"
-    answer = QMessageBox.question(window, "Unsaved changes", f"Save the edits of {what} before {doing}?",
-                                  buttons.Save | buttons.Discard | buttons.Cancel)  # fmt: skip
+    answer = QMessageBox.question(
+        window,
+        "Unsaved changes",
+        f"Save the edits of {what} before {doing}?",
+        buttons.Save | buttons.Discard | buttons.Cancel,
+    )
     if answer == buttons.Save:
         return save_edits(window)
     return answer == buttons.Discard
@@ -94,6 +98,9 @@ def confirm_discard(window: StudioShell, doing: str) -> bool:
 
 def add_menu_entries(window: StudioShell, file_menu: QMenu, action: Callable[..., QAction]) -> dict[str, QAction]:
     """Add the edited clip's saves to ``file_menu`` with the menus' ``action`` helper."""
-    return {"save_clip": action(window, file_menu, "Save edited &clip (BVH / glTF)...", lambda: save_clip_dialog(window)),
-            "save_clip_rig": action(window, file_menu, "Save edited clip onto the source r&ig...",
-                                    lambda: save_clip_dialog(window, True))}  # fmt: skip
+    return {
+        "save_clip": action(window, file_menu, "Save edited &clip (BVH / glTF)...", lambda: save_clip_dialog(window)),
+        "save_clip_rig": action(
+            window, file_menu, "Save edited clip onto the source r&ig...", lambda: save_clip_dialog(window, True)
+        ),
+    }

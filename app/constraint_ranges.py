@@ -28,9 +28,13 @@ def offered_range(frame: int, frames: int, selection: tuple[int, int] | None) ->
     return max(0, int(frame) - AROUND_FRAMES), min(last, int(frame) + AROUND_FRAMES)
 
 
-def link_ranges(panel: ConstraintPanel, show_span: Callable[[tuple[int, int, int, int] | None], None],
-                frame: Callable[[], int], frames: Callable[[], int],
-                selection: Callable[[], tuple[int, int] | None] = lambda: None) -> None:  # fmt: skip
+def link_ranges(
+    panel: ConstraintPanel,
+    show_span: Callable[[tuple[int, int, int, int] | None], None],
+    frame: Callable[[], int],
+    frames: Callable[[], int],
+    selection: Callable[[], tuple[int, int] | None] = lambda: None,
+) -> None:
     """Offer ranges from the window's ``frame``, ``frames`` and timeline ``selection``, and
     draw the selected constraint's range with ``show_span`` whenever it or the selection
     in the panel changes."""

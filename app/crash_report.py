@@ -31,8 +31,12 @@ STATE_ENV = "DRAGPOSER_STUDIO_STATE"
 #: Input lines kept in the log; older ones are dropped when the log is rewritten.
 MAX_INPUT_LINES = 400
 
-_INPUT = {QEvent.Type.KeyPress: "key", QEvent.Type.MouseButtonPress: "press",
-          QEvent.Type.MouseButtonRelease: "release", QEvent.Type.Wheel: "wheel"}  # fmt: skip
+_INPUT = {
+    QEvent.Type.KeyPress: "key",
+    QEvent.Type.MouseButtonPress: "press",
+    QEvent.Type.MouseButtonRelease: "release",
+    QEvent.Type.Wheel: "wheel",
+}
 
 
 def state_folder() -> Path:
@@ -59,7 +63,7 @@ def left_reports(folder: Path) -> list[Path]:
     ``crash-<pid>.reported.log`` so it is offered once."""
     out = []
     for path in folder.glob("crash-*.log"):
-        stem = path.name[len("crash-"):-len(".log")]
+        stem = path.name[len("crash-") : -len(".log")]
         if not stem.isdigit() or int(stem) == os.getpid() or _running(int(stem)):
             continue
         done = path.with_name(f"crash-{stem}.reported.log")
@@ -75,10 +79,12 @@ def _header() -> str:
     import vtkmodules
     from PyQt6.QtCore import PYQT_VERSION_STR, QT_VERSION_STR
 
-    return (f"DragPoser Studio, pid {os.getpid()}, started {time.strftime('%Y-%m-%d %H:%M:%S')}\n"
-            f"Python {platform.python_version()}, Qt {QT_VERSION_STR}, PyQt {PYQT_VERSION_STR}, "
-            f"VTK {getattr(vtkmodules, '__version__', '?')}, {platform.platform()}\n"
-            f"command: {' '.join(sys.argv)}\n")  # fmt: skip
+    return (
+        f"DragPoser Studio, pid {os.getpid()}, started {time.strftime('%Y-%m-%d %H:%M:%S')}\n"
+        f"Python {platform.python_version()}, Qt {QT_VERSION_STR}, PyQt {PYQT_VERSION_STR}, "
+        f"VTK {getattr(vtkmodules, '__version__', '?')}, {platform.platform()}\n"
+        f"command: {' '.join(sys.argv)}\n"
+    )
 
 
 class CrashLog(QObject):
@@ -125,7 +131,7 @@ class CrashLog(QObject):
         if self._lines >= MAX_INPUT_LINES:
             text = self.path.read_text(encoding="utf-8", errors="replace")
             kept = text.split("last input (oldest first):\n", 1)[-1].splitlines(keepends=True)
-            self._rewrite(kept[-MAX_INPUT_LINES // 2:])
+            self._rewrite(kept[-MAX_INPUT_LINES // 2 :])
         self.file.write(f"{time.strftime('%H:%M:%S')} {line}\n")
         self._lines += 1
 
@@ -151,8 +157,9 @@ class CrashLog(QObject):
             self.file.flush()
         sys.stderr.write(text)
         if QApplication.instance() is not None and self.errors <= 3:  # no cascade of boxes
-            QMessageBox.critical(None, "Internal error",
-                                 f"{kind.__name__}: {value}\n\nThe studio goes on; details are in {self.path}.")  # fmt: skip
+            QMessageBox.critical(
+                None, "Internal error", f"{kind.__name__}: {value}\n\nThe studio goes on; details are in {self.path}."
+            )
 
     def close(self) -> None:
         """A clean exit: stop logging and delete the log."""
@@ -183,8 +190,10 @@ def offer(parent: QWidget | None, reports: list[Path]) -> QMessageBox | None:
     box.setWindowTitle("The studio ended unexpectedly")
     how = "crashed" if crashed else "ended without closing (killed, or the machine stopped)"
     box.setText(f"The last session of DragPoser Studio {how}.")
-    box.setInformativeText(f"Its report was saved to {newest}. Click Show Details to read it; "
-                           "attach it to a bug report with what you were doing.")  # fmt: skip
+    box.setInformativeText(
+        f"Its report was saved to {newest}. Click Show Details to read it; "
+        "attach it to a bug report with what you were doing."
+    )
     box.setDetailedText(text)
     box.setStandardButtons(QMessageBox.StandardButton.Ok)
     box.setModal(False)

@@ -140,12 +140,19 @@ class DrawScheduler:
         per_it = timing.get("ms_per_iteration")
         solver = f"   {per_it:.2f} ms/it" if per_it is not None else ""
         skipped = f"   skipped {snap.frames_skipped}" if snap.pace == "real_time" else ""
-        self._set_text(w.status_engine, f"solver {snap.engine_fps:4.0f} frames/s   {snap.ms:5.0f} ms/frame   "
-                                        f"{snap.iterations} it{solver}{skipped}")  # fmt: skip
-        parts = [f"{k.replace('fk_losses', 'fk+loss')} {timing[k]:.2f} ms"
-                 for k in ("decoder", "fk_losses", "backward", "step") if k in timing]  # fmt: skip
-        tip = [f"solver: {snap.engine_fps:.1f} frames solved per second (moving average)",
-               f"last frame: {snap.ms:.1f} ms, {snap.iterations} iterations"]  # fmt: skip
+        self._set_text(
+            w.status_engine,
+            f"solver {snap.engine_fps:4.0f} frames/s   {snap.ms:5.0f} ms/frame   {snap.iterations} it{solver}{skipped}",
+        )
+        parts = [
+            f"{k.replace('fk_losses', 'fk+loss')} {timing[k]:.2f} ms"
+            for k in ("decoder", "fk_losses", "backward", "step")
+            if k in timing
+        ]
+        tip = [
+            f"solver: {snap.engine_fps:.1f} frames solved per second (moving average)",
+            f"last frame: {snap.ms:.1f} ms, {snap.iterations} iterations",
+        ]
         if per_it is not None:
             tip.append(f"per iteration: {per_it:.2f} ms" + (f" ({', '.join(parts)})" if parts else ""))
         if "latency_ms" in timing:
@@ -172,12 +179,18 @@ class DrawScheduler:
 
     def costs(self) -> dict[str, dict[str, float]]:
         """Per panel (and ``view``): updates, mean, p99 and max cost in ms."""
-        return {name: cost_summary(values)
-                for name, values in [("view", self.view_costs)] + [(p.name, p.costs) for p in self.panels]}  # fmt: skip
+        return {
+            name: cost_summary(values)
+            for name, values in [("view", self.view_costs)] + [(p.name, p.costs) for p in self.panels]
+        }
 
 
 def cost_summary(values: Any) -> dict[str, float]:
     """``updates``, ``mean_ms``, ``p99_ms`` and ``max_ms`` of costs in milliseconds."""
     a = np.asarray(values, float)
-    return {"updates": int(a.size), "mean_ms": float(a.mean()) if a.size else 0.0,
-            "p99_ms": float(np.percentile(a, 99)) if a.size else 0.0, "max_ms": float(a.max()) if a.size else 0.0}  # fmt: skip
+    return {
+        "updates": int(a.size),
+        "mean_ms": float(a.mean()) if a.size else 0.0,
+        "p99_ms": float(np.percentile(a, 99)) if a.size else 0.0,
+        "max_ms": float(a.max()) if a.size else 0.0,
+    }

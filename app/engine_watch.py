@@ -40,12 +40,16 @@ class EngineWatch:
         if self.policy.died():
             session.restart_engine()
             self.restarts += 1
-            self.line = (f"The solver stopped ({failure}); restarted it on frame {session.frame} with the same "
-                         "clip, method, sensors and constraints")  # fmt: skip
+            self.line = (
+                f"The solver stopped ({failure}); restarted it on frame {session.frame} with the same "
+                "clip, method, sensors and constraints"
+            )
             self.w.busy.begin(session.method, -1, "Restarting")
             self.w.statusBar().showMessage(self.line, SHOWN_MS)
             return
         self.line = f"The solver stopped ({failure}): {self.policy.stopped}"
         self.w.statusBar().showMessage(self.line)
-        self.w.show_error("The engine stopped", f"{self.line}.\n\nYour edits are kept: save the scene "
-                          "(File > Save scene) and start the studio again.")  # fmt: skip
+        self.w.show_error(
+            "The engine stopped",
+            f"{self.line}.\n\nYour edits are kept: save the scene (File > Save scene) and start the studio again.",
+        )

@@ -64,9 +64,13 @@ class ReconstructionExport(QObject):
         self.done, self.total, self._result = 0, len(job.motion), None
         self._cancel.clear()
         # not modal: the studio stays usable
-        self.dialog = cancellable_progress(self._parent, "Save reconstruction",
-                                           f"Reconstructing {self.total} frames with {job.method}...", self.total,
-                                           self.cancel)  # fmt: skip
+        self.dialog = cancellable_progress(
+            self._parent,
+            "Save reconstruction",
+            f"Reconstructing {self.total} frames with {job.method}...",
+            self.total,
+            self.cancel,
+        )
         self.dialog.show()
         self.thread = threading.Thread(target=self._run, args=(job,), name="bvh-export", daemon=True)
         self.thread.start()

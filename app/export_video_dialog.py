@@ -59,8 +59,9 @@ class ExportVideoDialog(QDialog):
         Where the choices are remembered (None: not remembered).
     """
 
-    def __init__(self, parent: Any, sensors: str | None, methods: tuple[str, ...] = (),
-                 settings: QSettings | None = None) -> None:  # fmt: skip
+    def __init__(
+        self, parent: Any, sensors: str | None, methods: tuple[str, ...] = (), settings: QSettings | None = None
+    ) -> None:
         from engine.methods.presets import preset_problem
 
         super().__init__(parent)
@@ -94,8 +95,11 @@ class ExportVideoDialog(QDialog):
         rows = max(1, min(len(methods), 5))
         self.ghosts.setFixedHeight(max(self.ghosts.sizeHintForRow(0), 16) * rows + 2 * self.ghosts.frameWidth() + 2)
         self.ghosts.setEnabled(bool(sensors))
-        self.ghosts.setToolTip("methods reconstructing the motion from its trackers" if sensors
-                               else "choose a tracker preset first: ghosts are solved from its trackers")
+        self.ghosts.setToolTip(
+            "methods reconstructing the motion from its trackers"
+            if sensors
+            else "choose a tracker preset first: ghosts are solved from its trackers"
+        )
         self.truth = QCheckBox("the motion is the ground truth (green, named so)")
         self.timecode = QCheckBox("time and frame number")
         self.title = QLineEdit()
@@ -105,10 +109,17 @@ class ExportVideoDialog(QDialog):
         self.note.setWordWrap(True)
         self.note.setVisible(bool(self.impossible))
         ghosts = f"Ghosts (from trackers {sensors})" if sensors else "Ghosts"
-        for label, widget in (("Size", self.size_box), ("View", self.view), ("Layout", self.layout_box),
-                              ("Camera", self.camera), (ghosts, self.ghosts), ("", self.note),
-                              ("Ground truth", self.truth), ("Time code", self.timecode),
-                              ("Title", self.title)):  # fmt: skip
+        for label, widget in (
+            ("Size", self.size_box),
+            ("View", self.view),
+            ("Layout", self.layout_box),
+            ("Camera", self.camera),
+            (ghosts, self.ghosts),
+            ("", self.note),
+            ("Ground truth", self.truth),
+            ("Time code", self.timecode),
+            ("Title", self.title),
+        ):
             form.addRow(label, widget)
         box = QDialogButtonBox(QDialogButtonBox.StandardButton.Ok | QDialogButtonBox.StandardButton.Cancel)
         box.accepted.connect(self.accept)
@@ -121,8 +132,12 @@ class ExportVideoDialog(QDialog):
         if self.settings is None:
             return
         get = lambda key, default: self.settings.value(f"{GROUP}/{key}", default)  # noqa: E731
-        for combo, key in ((self.size_box, "size"), (self.view, "view"), (self.layout_box, "layout"),
-                           (self.camera, "camera")):  # fmt: skip
+        for combo, key in (
+            (self.size_box, "size"),
+            (self.view, "view"),
+            (self.layout_box, "layout"),
+            (self.camera, "camera"),
+        ):
             value = str(get(key, combo.currentText()))
             if combo.findText(value) >= 0:
                 combo.setCurrentText(value)
@@ -139,9 +154,16 @@ class ExportVideoDialog(QDialog):
     def _remember(self, options: RenderOptions) -> None:
         if self.settings is None:
             return
-        for key, value in (("size", self.size_box.currentText()), ("view", options.view), ("layout", options.layout),
-                           ("camera", options.camera), ("truth", options.truth), ("timecode", options.timecode),
-                           ("title", options.title), ("ghosts", ",".join(options.ghosts))):  # fmt: skip
+        for key, value in (
+            ("size", self.size_box.currentText()),
+            ("view", options.view),
+            ("layout", options.layout),
+            ("camera", options.camera),
+            ("truth", options.truth),
+            ("timecode", options.timecode),
+            ("title", options.title),
+            ("ghosts", ",".join(options.ghosts)),
+        ):
             self.settings.setValue(f"{GROUP}/{key}", value)
 
     def accept(self) -> None:
@@ -163,12 +185,22 @@ class ExportVideoDialog(QDialog):
         """The chosen options, as ``render`` takes them."""
         from app.render import parse_size
 
-        ghosts = tuple(self.ghosts.item(i).data(Qt.ItemDataRole.UserRole) for i in range(self.ghosts.count())
-                       if self.ghosts.item(i).checkState() == Qt.CheckState.Checked)
-        return RenderOptions(size=parse_size(self.size_box.currentText()), sensors=self.sensors, ghosts=ghosts,
-                             view=self.view.currentText(), camera=self.camera.currentText(),
-                             layout=self.layout_box.currentText(), truth=self.truth.isChecked(),
-                             title=self.title.text().strip(), timecode=self.timecode.isChecked())
+        ghosts = tuple(
+            self.ghosts.item(i).data(Qt.ItemDataRole.UserRole)
+            for i in range(self.ghosts.count())
+            if self.ghosts.item(i).checkState() == Qt.CheckState.Checked
+        )
+        return RenderOptions(
+            size=parse_size(self.size_box.currentText()),
+            sensors=self.sensors,
+            ghosts=ghosts,
+            view=self.view.currentText(),
+            camera=self.camera.currentText(),
+            layout=self.layout_box.currentText(),
+            truth=self.truth.isChecked(),
+            title=self.title.text().strip(),
+            timecode=self.timecode.isChecked(),
+        )
 
 
 def write_video(parent: Any, motion: Any, path: str | Path, options: RenderOptions) -> str:
@@ -191,8 +223,14 @@ def write_video(parent: Any, motion: Any, path: str | Path, options: RenderOptio
     return done
 
 
-def export_video(parent: Any, motion: Any, sensors: str | None, methods: tuple[str, ...] = (),
-                 suggested: str = "", settings: QSettings | None = None) -> str | None:  # fmt: skip
+def export_video(
+    parent: Any,
+    motion: Any,
+    sensors: str | None,
+    methods: tuple[str, ...] = (),
+    suggested: str = "",
+    settings: QSettings | None = None,
+) -> str | None:
     """Ask for the options (remembered in ``settings``) and the file (``suggested`` is
     the name the save dialog offers), render, and say so; None when cancelled. Errors
     (a failed method or ffmpeg) are shown, not raised."""

@@ -40,6 +40,7 @@ APP_ASSETS = Path(__file__).resolve().parents[1] / "assets"
 #: (engine.motion.source_file).
 OPEN_FILTER = "Motion files (*.bvh *.amc);;BVH motion (*.bvh);;ASF/AMC motion (*.amc)"
 
+
 class FileActions:
     """Holds the window's file operations (kept apart so the window stays about wiring).
 
@@ -63,8 +64,14 @@ class FileActions:
         File > Open recent, filled by :meth:`refresh_recent` once the menus give it.
     """
 
-    def __init__(self, window: QMainWindow, session: Session, settings: QSettings, viewport: Viewport,
-                 show_error: Callable[[str, str], None]) -> None:  # fmt: skip
+    def __init__(
+        self,
+        window: QMainWindow,
+        session: Session,
+        settings: QSettings,
+        viewport: Viewport,
+        show_error: Callable[[str, str], None],
+    ) -> None:
         self.w = window
         self.session, self.settings, self.viewport, self.show_error = session, settings, viewport, show_error
         self.recent_menu: QMenu | None = None
@@ -126,9 +133,13 @@ class FileActions:
                 return False
             what = "the mapping guessed" if complete else "a template listing the file's joints"
             self.w.statusBar().showMessage(f"Mapping suggestion written to {out}", 10000)
-            self.tell(self.w, "Mapping suggested", f"Wrote {what} to\n{out}\n\nCheck and complete it, then "
-                      "open the file again and choose 'Pick mapping file...' (or pass it as "
-                      "--rig-map to any dragposer-studio command).")  # fmt: skip
+            self.tell(
+                self.w,
+                "Mapping suggested",
+                f"Wrote {what} to\n{out}\n\nCheck and complete it, then "
+                "open the file again and choose 'Pick mapping file...' (or pass it as "
+                "--rig-map to any dragposer-studio command).",
+            )
         return False
 
     def rig_map_of(self, path: str | Path | None) -> Path | None:
@@ -166,9 +177,12 @@ class FileActions:
 
         s = self.session
         if s.source is not None:
-            return self.show_error("Not for tracker input", "Saving re-solves a clip. For trackers use "
-                                     "`dragposer-studio reconstruct --trackers REC.jsonl --out OUT.bvh` on a "
-                                     "recording (Live trackers > Record), or `live --out` (docs/trackers.md).")  # fmt: skip
+            return self.show_error(
+                "Not for tracker input",
+                "Saving re-solves a clip. For trackers use "
+                "`dragposer-studio reconstruct --trackers REC.jsonl --out OUT.bvh` on a "
+                "recording (Live trackers > Record), or `live --out` (docs/trackers.md).",
+            )
         if self.export.running:
             return self.w.statusBar().showMessage("An export is already running", 3000)
         try:  # checked before a file is asked for
@@ -216,8 +230,9 @@ class FileActions:
     # -- scenes ---------------------------------------------------------------------
     def save_scene(self, path: str | None = None) -> bool:
         if path is None:
-            path, _ = QFileDialog.getSaveFileName(self.w, "Save scene", self.suggested_name("json", "scene"),
-                                                  "Studio scene (*.json)")  # fmt: skip
+            path, _ = QFileDialog.getSaveFileName(
+                self.w, "Save scene", self.suggested_name("json", "scene"), "Studio scene (*.json)"
+            )
             if not path:
                 return False
         try:
@@ -271,8 +286,9 @@ class FileActions:
 
     def export_screenshot(self, path: str | None = None) -> bool:
         if path is None:
-            path, _ = QFileDialog.getSaveFileName(self.w, "Export screenshot", self.suggested_name("png", "studio"),
-                                                  "PNG image (*.png)")  # fmt: skip
+            path, _ = QFileDialog.getSaveFileName(
+                self.w, "Export screenshot", self.suggested_name("png", "studio"), "PNG image (*.png)"
+            )
             if not path:
                 return False
         pix = self.grab_window()

@@ -164,8 +164,15 @@ class JobRunner(QObject):
             self.shutdown()
 
 
-def cancellable_progress(parent: QWidget | None, title: str, label: str, maximum: int, cancel: Callable[[], None],
-                         modal: bool = False, show_after_ms: int = 0) -> QProgressDialog:  # fmt: skip
+def cancellable_progress(
+    parent: QWidget | None,
+    title: str,
+    label: str,
+    maximum: int,
+    cancel: Callable[[], None],
+    modal: bool = False,
+    show_after_ms: int = 0,
+) -> QProgressDialog:
     """A progress dialog for work on another thread: Cancel calls ``cancel`` (the work stops
     between its steps), and the dialog neither closes nor resets itself when the bar is
     full, since the result is applied after it (``maximum`` 0: a busy bar)."""

@@ -71,8 +71,12 @@ class LatentViews:
             in_front = self.dock if window.settings.value(RAISED, False, type=bool) else latent
             in_front.raise_()
         window.tabifiedDockWidgetActivated.connect(
-            lambda dock: window.settings.setValue(RAISED, dock is self.dock) if dock.objectName() in ("Latent", "Latent map")
-            else None)  # fmt: skip
+            lambda dock: (
+                window.settings.setValue(RAISED, dock is self.dock)
+                if dock.objectName() in ("Latent", "Latent map")
+                else None
+            )
+        )
         self._hover: tuple[str, Any] | None = None
         self._hover_timer = QTimer(window, singleShot=True, interval=HOVER_MS)
         self._hover_timer.timeout.connect(self._send_hover)
@@ -80,8 +84,10 @@ class LatentViews:
         self.readouts.flagsChanged.connect(window.timeline.set_marks)
         window.session.events.motion.connect(self._forget)
         window.session.events.method.connect(self._forget)
-        window.drawing.panels += [Panel("latent map", self._update_map, 0.5),
-                                  Panel("latent detail", self._update_detail, 0.5)]  # fmt: skip
+        window.drawing.panels += [
+            Panel("latent map", self._update_map, 0.5),
+            Panel("latent detail", self._update_detail, 0.5),
+        ]
 
     def build(self) -> None:
         """The dock's tabs (Map with the readouts under it, Forces, Gallery), once."""
@@ -185,8 +191,9 @@ class LatentViews:
         snap = self.session.latest
         if snap is None:
             return None
-        return next((np.asarray(r.latent, float) for r in snap.history if r.frame == frame and r.latent is not None),
-                    None)  # fmt: skip
+        return next(
+            (np.asarray(r.latent, float) for r in snap.history if r.frame == frame and r.latent is not None), None
+        )
 
     def _click_point(self, x: float, y: float) -> None:
         z = self.latent_of_point(x, y)

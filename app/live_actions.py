@@ -43,8 +43,15 @@ class LiveActions:
         ``show_error(title, text)``: the window's error dialog.
     """
 
-    def __init__(self, window: QMainWindow, session: Session, timeline: Timeline, plots: LossPlots,
-                 settings: QSettings, show_error: Callable[[str, str], None]) -> None:  # fmt: skip
+    def __init__(
+        self,
+        window: QMainWindow,
+        session: Session,
+        timeline: Timeline,
+        plots: LossPlots,
+        settings: QSettings,
+        show_error: Callable[[str, str], None],
+    ) -> None:
         self.w = window
         self.session, self.timeline, self.plots, self.settings = session, timeline, plots, settings
         self.show_error = show_error
@@ -145,7 +152,9 @@ class LiveActions:
             if path is not None:
                 self.w.statusBar().showMessage(f"Wrote {path}", 8000)
             return
-        path, _ = QFileDialog.getSaveFileName(self.w, "Record trackers to", "trackers.jsonl", "Tracker recording (*.jsonl)")
+        path, _ = QFileDialog.getSaveFileName(
+            self.w, "Record trackers to", "trackers.jsonl", "Tracker recording (*.jsonl)"
+        )
         if not path:
             self.panel.set_recording(False)
             return

@@ -98,11 +98,23 @@ def start_playing(window: MainWindow) -> None:
     QTimer.singleShot(0, window.session.play)
 
 
-def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
-        screenshot: str | None = None, after_frames: int = 60, measure: float | None = None,
-        measure_json: str | None = None, pace: str | None = None, ghosts: tuple[str, ...] = (),
-        view: str = "stick", rig_map: Path | None = None, engine: str = "process",
-        scene: str | None = None, explicit_method: bool = True, started: Any = None) -> int:  # fmt: skip
+def run(
+    path: str | None = None,
+    method: str = "ik",
+    sensors: str | None = None,
+    screenshot: str | None = None,
+    after_frames: int = 60,
+    measure: float | None = None,
+    measure_json: str | None = None,
+    pace: str | None = None,
+    ghosts: tuple[str, ...] = (),
+    view: str = "stick",
+    rig_map: Path | None = None,
+    engine: str = "process",
+    scene: str | None = None,
+    explicit_method: bool = True,
+    started: Any = None,
+) -> int:
     """Show the studio; with ``screenshot``, play ``after_frames`` frames, save and exit;
     with ``measure``, play that many seconds and write the figures to ``measure_json``
     (:mod:`app.measure`). ``pace`` sets the playback pace (every_frame or real_time).
@@ -121,16 +133,48 @@ def run(path: str | None = None, method: str = "ik", sensors: str | None = None,
     reports = left_reports(crash.folder) if crash.folder.is_dir() else []
     crash.start()
     try:
-        return _run(app, path, method, sensors, screenshot, after_frames, measure, measure_json, pace, ghosts, view,
-                    rig_map, engine, scene, explicit_method, started, reports)  # fmt: skip
+        return _run(
+            app,
+            path,
+            method,
+            sensors,
+            screenshot,
+            after_frames,
+            measure,
+            measure_json,
+            pace,
+            ghosts,
+            view,
+            rig_map,
+            engine,
+            scene,
+            explicit_method,
+            started,
+            reports,
+        )
     finally:
         crash.close()
 
 
-def _run(app: QApplication, path: str | None, method: str, sensors: str | None, screenshot: str | None,
-         after_frames: int, measure: float | None, measure_json: str | None, pace: str | None,
-         ghosts: tuple[str, ...], view: str, rig_map: Path | None, engine: str, scene: str | None,
-         explicit_method: bool, started: Any, reports: list[Path]) -> int:  # fmt: skip
+def _run(
+    app: QApplication,
+    path: str | None,
+    method: str,
+    sensors: str | None,
+    screenshot: str | None,
+    after_frames: int,
+    measure: float | None,
+    measure_json: str | None,
+    pace: str | None,
+    ghosts: tuple[str, ...],
+    view: str,
+    rig_map: Path | None,
+    engine: str,
+    scene: str | None,
+    explicit_method: bool,
+    started: Any,
+    reports: list[Path],
+) -> int:
     window = MainWindow(method=method, engine=engine, started=started)
     gc.enable()  # what the start-up made is frozen now (MainWindow); app.cli.run turned it off
     mark("window built")

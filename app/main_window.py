@@ -72,8 +72,9 @@ class MainWindow(QMainWindow):
 
     snapshotDrawn = pyqtSignal(int)
 
-    def __init__(self, method: str = "ik", settings: QSettings | None = None, engine: str = "process",
-                 started: Any = None) -> None:  # fmt: skip
+    def __init__(
+        self, method: str = "ik", settings: QSettings | None = None, engine: str = "process", started: Any = None
+    ) -> None:
         super().__init__()
         self.setWindowTitle("DragPoser Studio")
         self.setAcceptDrops(True)
@@ -155,7 +156,9 @@ class MainWindow(QMainWindow):
         latent = self._dock("Latent", self.latent, Qt.DockWidgetArea.RightDockWidgetArea)
         plots = self._dock("Optimizer plots", self.plots, Qt.DockWidgetArea.BottomDockWidgetArea)
         self.method_errors = MethodErrorPlot()  # each method's error against the clip, per frame
-        self.method_errors_dock = self._dock("Method errors", self.method_errors, Qt.DockWidgetArea.BottomDockWidgetArea)
+        self.method_errors_dock = self._dock(
+            "Method errors", self.method_errors, Qt.DockWidgetArea.BottomDockWidgetArea
+        )
         self.tabifyDockWidget(plots, self.method_errors_dock)
         plots.raise_()
         # the right column runs the full height, so the latent dock has room for its
@@ -173,8 +176,10 @@ class MainWindow(QMainWindow):
         # message shows, so a message gets the bar's width (permanent ones would keep
         # half of it and cut the message off).
         for w, longest, permanent in (
-                (self.status_engine, "solver 9999 frames/s   99999 ms/frame   999 it   99.99 ms/it   skipped 99999", False),
-                (self.status_gui, "view 999 draws/s", False), (self.status_warnings, "warnings 9999", True)):  # fmt: skip
+            (self.status_engine, "solver 9999 frames/s   99999 ms/frame   999 it   99.99 ms/it   skipped 99999", False),
+            (self.status_gui, "view 999 draws/s", False),
+            (self.status_warnings, "warnings 9999", True),
+        ):
             w.setFixedWidth(w.fontMetrics().horizontalAdvance(longest) + 16)
             (self.statusBar().addPermanentWidget if permanent else self.statusBar().addWidget)(w)
         self._connect_widgets()
@@ -204,8 +209,9 @@ class MainWindow(QMainWindow):
         cp.addRequested.connect(self._guard(self._add_constraint))
         cp.removeRequested.connect(self._guard(s.constraints.remove))
         cp.changed.connect(self._guard(lambda n, ch: s.constraints.edit(n, **ch)))
-        link_ranges(cp, self.timeline.set_constraint_span, lambda: s.frame, lambda: s.num_frames,
-                    self.timeline.selection)  # fmt: skip
+        link_ranges(
+            cp, self.timeline.set_constraint_span, lambda: s.frame, lambda: s.num_frames, self.timeline.selection
+        )
         op = self.optimizer_panel
         op.settingChanged.connect(self._guard(s.set_setting))
         op.methodChanged.connect(lambda m: s.set_method(m))
@@ -235,12 +241,18 @@ class MainWindow(QMainWindow):
 
     def _disconnect_session(self) -> None:
         e = self.session.events
-        for signal, slot in ((e.frame, self.timeline.set_frame), (e.playback, self._show_playback),
-                             (e.motion, self._show_motion), (e.sensors, self._show_sensors),
-                             (e.sensors, self.ghost_status.sensors_changed),
-                             (e.constraints, self._show_constraints), (e.settings, self._show_optimizer),
-                             (e.method, self._show_optimizer), (e.method, self._announce_method),
-                             (e.motion, self._announce_motion)):  # fmt: skip
+        for signal, slot in (
+            (e.frame, self.timeline.set_frame),
+            (e.playback, self._show_playback),
+            (e.motion, self._show_motion),
+            (e.sensors, self._show_sensors),
+            (e.sensors, self.ghost_status.sensors_changed),
+            (e.constraints, self._show_constraints),
+            (e.settings, self._show_optimizer),
+            (e.method, self._show_optimizer),
+            (e.method, self._announce_method),
+            (e.motion, self._announce_motion),
+        ):
             signal.disconnect(slot)
 
     def _seq(self) -> int:

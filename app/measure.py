@@ -90,8 +90,7 @@ class Measurement:
         d.view_costs.clear()
         for p in d.panels:
             p.costs.clear()
-        self._start = {"t": time.monotonic(), "draws": d.draws, "solved": snap.solved,
-                       "skipped": snap.frames_skipped}  # fmt: skip
+        self._start = {"t": time.monotonic(), "draws": d.draws, "solved": snap.solved, "skipped": snap.frames_skipped}
         self._last = time.perf_counter()
         self._probe.start()
         QTimer.singleShot(int(self.seconds * 1000), self._finish)
@@ -114,8 +113,12 @@ class Measurement:
             "draws_per_s": (self.w.drawing.draws - self._start["draws"]) / elapsed,
             "solved_per_s": (snap.solved - self._start["solved"]) / elapsed,
             "frames_skipped": int(snap.frames_skipped - self._start["skipped"]),
-            "event_loop_ms": {"p50": float(np.percentile(late, 50)), "p99": float(np.percentile(late, 99)),
-                              "max": float(late.max()), "samples": int(late.size)},  # fmt: skip
+            "event_loop_ms": {
+                "p50": float(np.percentile(late, 50)),
+                "p99": float(np.percentile(late, 99)),
+                "max": float(late.max()),
+                "samples": int(late.size),
+            },
             "panels": {**self.w.drawing.costs(), "paint:plots": cost_summary(self.paint_costs)},
             "clip": str(s.path) if s.path else "(generated)",
             "method": s.method,
@@ -123,10 +126,13 @@ class Measurement:
             "constraints": [f"{c.name} ({c.kind})" for c in s.constraints if c.enabled],
             "pace": s.pace,
             "window": [self.w.width(), self.w.height()],
-            "platform": {"qt": QGuiApplication.platformName(), "display": os.environ.get("DISPLAY", ""),
-                         "cpus": os.cpu_count(), "python": platform.python_version()},  # fmt: skip
+            "platform": {
+                "qt": QGuiApplication.platformName(),
+                "display": os.environ.get("DISPLAY", ""),
+                "cpus": os.cpu_count(),
+                "python": platform.python_version(),
+            },
             "solver_timing_ms": dict(snap.timing),
         }
         write_text(self.out, json.dumps(result, indent=2) + "\n")
         self.done(0, "")
-

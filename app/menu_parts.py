@@ -16,8 +16,12 @@ from app.shell import ViewWindow
 from widgets.help_dialog import HelpDialog
 
 #: View ▸ Camera entries: preset, label, shortcut (Blender's numpad digits).
-CAMERAS = (("home", "&Home (front-left)", "Home"), ("front", "&Front", "1"),
-           ("side", "&Side (character's left)", "3"), ("top", "&Top", "7"))  # fmt: skip
+CAMERAS = (
+    ("home", "&Home (front-left)", "Home"),
+    ("front", "&Front", "1"),
+    ("side", "&Side (character's left)", "3"),
+    ("top", "&Top", "7"),
+)
 
 
 def action(window: QObject, menu: QMenu, text: str, slot: Callable[[], Any], shortcut: Any = None) -> QAction:
@@ -30,8 +34,9 @@ def action(window: QObject, menu: QMenu, text: str, slot: Callable[[], Any], sho
     return act
 
 
-def toggle(window: QObject, menu: QMenu, text: str, on: bool, slot: Callable[[bool], Any],
-           shortcut: str | None = None) -> QAction:  # fmt: skip
+def toggle(
+    window: QObject, menu: QMenu, text: str, on: bool, slot: Callable[[bool], Any], shortcut: str | None = None
+) -> QAction:
     act = QAction(text, window, checkable=True, checked=on)
     if shortcut:
         act.setShortcut(QKeySequence(shortcut))

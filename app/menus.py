@@ -59,5 +59,7 @@ def build_menus(w: QMainWindow) -> None:
     toggle(w, view, "Ground truth", True, lambda v: setattr(vp, "show_ground_truth", v), "G")
     toggle(w, view, "Ghosts", True, lambda v: setattr(vp, "show_ghosts", v), "H")
     help_menu = w.menuBar().addMenu("&Help")
-    named["help"] = action(w, help_menu, "&Keyboard and mouse...", lambda: show_help(w), QKeySequence.StandardKey.HelpContents)
+    named["help"] = action(
+        w, help_menu, "&Keyboard and mouse...", lambda: show_help(w), QKeySequence.StandardKey.HelpContents
+    )
     w.actions_by_name = named

@@ -32,8 +32,12 @@ class PoseConstraints:
         self.panel.removeRequested.connect(self.remove)
         self.panel.changed.connect(self.update)
         # the key strip is built after this dock: looked up when a span is drawn
-        link_ranges(self.panel, lambda span: window.keys.set_constraint_span(span), lambda: window.frame,
-                    lambda: window.scene.animation.frames)  # fmt: skip
+        link_ranges(
+            self.panel,
+            lambda span: window.keys.set_constraint_span(span),
+            lambda: window.frame,
+            lambda: window.scene.animation.frames,
+        )
         window._dock("Constraints", self.panel, Qt.DockWidgetArea.RightDockWidgetArea)
 
     def add(self, kind: str, **params: Any) -> None:

@@ -51,8 +51,12 @@ class PoseFiles:
         if not self.w.dirty:
             return True
         buttons = QMessageBox.StandardButton
-        answer = QMessageBox.question(self.w, "Unsaved changes", f"Save the keys and targets before {doing}?",
-                                      buttons.Save | buttons.Discard | buttons.Cancel)  # fmt: skip
+        answer = QMessageBox.question(
+            self.w,
+            "Unsaved changes",
+            f"Save the keys and targets before {doing}?",
+            buttons.Save | buttons.Discard | buttons.Cancel,
+        )
         if answer == buttons.Discard:
             return True
         if answer != buttons.Save:
@@ -75,8 +79,9 @@ class PoseFiles:
         left = [k for k in ("sensors", "clip", "preset", "method") if isinstance(doc, dict) and doc.get(k)]
         note = f"; left to the studio: {', '.join(left)}" if left else ""
         n = len(loaded.keys)
-        w.statusBar().showMessage(f"Opened {Path(path).name}: {n} key{'s' * (n != 1)}, "
-                                  f"{len(loaded.constraints)} constraint(s){note}", DONE_MS)  # fmt: skip
+        w.statusBar().showMessage(
+            f"Opened {Path(path).name}: {n} key{'s' * (n != 1)}, {len(loaded.constraints)} constraint(s){note}", DONE_MS
+        )
         self.folder = Path(path).resolve().parent
 
     def open_dialog(self) -> None:

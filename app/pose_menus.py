@@ -45,8 +45,9 @@ def build_pose_menus(w: QMainWindow) -> None:
     named["next_key"] = action(w, keys, "Next &key", lambda: w.step_key(1), "Ctrl+Right")
     named["previous_key"] = action(w, keys, "Previous k&ey", lambda: w.step_key(-1), "Ctrl+Left")
     named["add_key"] = action(w, keys, "&Add key at the current frame", lambda: w.add_key(w.frame), "K")
-    named["delete_key"] = action(w, keys, "&Delete the key at the current frame", lambda: w.delete_key(w.frame),
-                                 "Shift+K")  # fmt: skip
+    named["delete_key"] = action(
+        w, keys, "&Delete the key at the current frame", lambda: w.delete_key(w.frame), "Shift+K"
+    )
     named["loop"] = toggle(w, keys, "&Loop playing", False, w.keys.loop.setChecked, "L")
     w.keys.loop.toggled.connect(named["loop"].setChecked)
     view = w.menuBar().addMenu("&View")
@@ -57,6 +58,7 @@ def build_pose_menus(w: QMainWindow) -> None:
     # under a drag, and the drag plane with it
     named["frame"] = action(w, camera, "F&rame the character", lambda: vp.frame(w.hips()), "F")
     help_menu = w.menuBar().addMenu("&Help")
-    named["help"] = action(w, help_menu, "&Keyboard and mouse...", lambda: show_help(w),
-                           QKeySequence.StandardKey.HelpContents)  # fmt: skip
+    named["help"] = action(
+        w, help_menu, "&Keyboard and mouse...", lambda: show_help(w), QKeySequence.StandardKey.HelpContents
+    )
     w.actions_by_name = named

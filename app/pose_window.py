@@ -63,8 +63,9 @@ class PoseWindow(QMainWindow):
     """See the module doc. ``session``: the authoring model the window shows and edits;
     ``settings``: where dialogs remember their choices (default: the studio's)."""
 
-    def __init__(self, session: AuthoringSession, parent: QWidget | None = None,
-                 settings: QSettings | None = None) -> None:  # fmt: skip
+    def __init__(
+        self, session: AuthoringSession, parent: QWidget | None = None, settings: QSettings | None = None
+    ) -> None:
         super().__init__(parent)
         self.setWindowTitle("DragPoser studio: pose and keys")
         self.session = session
@@ -107,8 +108,9 @@ class PoseWindow(QMainWindow):
         body = self.addToolBar("Body")
         body.setMovable(False)
         body.addWidget(QLabel(" Body: drag the hips to move it (down: squat); facing "))
-        self.facing = QDoubleSpinBox(minimum=-180.0, maximum=180.0, decimals=1, singleStep=15.0, suffix=" deg",
-                                     wrapping=True)  # fmt: skip
+        self.facing = QDoubleSpinBox(
+            minimum=-180.0, maximum=180.0, decimals=1, singleStep=15.0, suffix=" deg", wrapping=True
+        )
         self.facing.setToolTip("Where the whole body faces, degrees about the vertical (0: towards -Y, the front view)")
         self.facing.valueChanged.connect(self.turn_body)
         body.addWidget(self.facing)
@@ -123,10 +125,15 @@ class PoseWindow(QMainWindow):
         self._render_pending = False
         self._asked_to_close = False  # the studio's quit asked already (close_unasked)
         self._subscriptions: list[tuple[Any, Callable]] = []
-        for signal, slot in ((session.events.targets, self._on_targets), (session.events.pose, self._on_pose),
-                             (session.events.keys, self._on_keys), (session.events.animation, self._on_keys),
-                             (session.events.frame, self._on_keys), (session.events.constraints, self._on_constraints),
-                             (session.events.history, self._on_history)):  # fmt: skip
+        for signal, slot in (
+            (session.events.targets, self._on_targets),
+            (session.events.pose, self._on_pose),
+            (session.events.keys, self._on_keys),
+            (session.events.animation, self._on_keys),
+            (session.events.frame, self._on_keys),
+            (session.events.constraints, self._on_constraints),
+            (session.events.history, self._on_history),
+        ):
             signal.connect(slot)
             self._subscriptions.append((signal, slot))
         self.refresh()
@@ -291,11 +298,13 @@ class PoseWindow(QMainWindow):
 
     def _on_targets(self, e: ev.TargetsChanged | None = None) -> None:
         t = self.mode.targets
-        self.viewport.sensors.update(tuple(t), np.array([x.position for x in t.values()]).reshape(-1, 3),
-                                     np.array([x.rotation if x.rotation is not None else [1.0, 0, 0, 0]
-                                               for x in t.values()]).reshape(-1, 4),
-                                     np.array([x.active for x in t.values()], bool),
-                                     tuple(x.rotation is not None for x in t.values()))  # fmt: skip
+        self.viewport.sensors.update(
+            tuple(t),
+            np.array([x.position for x in t.values()]).reshape(-1, 3),
+            np.array([x.rotation if x.rotation is not None else [1.0, 0, 0, 0] for x in t.values()]).reshape(-1, 4),
+            np.array([x.active for x in t.values()], bool),
+            tuple(x.rotation is not None for x in t.values()),
+        )
         self.targets.set_targets({j: (x.enabled, x.weight, x.rotation is not None) for j, x in t.items()})
         self._render_soon()
 
@@ -326,8 +335,16 @@ class PoseWindow(QMainWindow):
         self._on_targets()
         self._on_keys()
         self._on_constraints()
-        self._on_history(ev.HistoryChanged(self.undo.can_undo(), self.undo.can_redo(), self.undo.undo_text(),
-                                           self.undo.redo_text(), self.undo.is_clean(), self.undo.count()))  # fmt: skip
+        self._on_history(
+            ev.HistoryChanged(
+                self.undo.can_undo(),
+                self.undo.can_redo(),
+                self.undo.undo_text(),
+                self.undo.redo_text(),
+                self.undo.is_clean(),
+                self.undo.count(),
+            )
+        )
         self._on_pose()
 
     # -- closing -------------------------------------------------------------------

@@ -34,7 +34,9 @@ class RangeDialog(QDialog):
     """Range, blend and what to add; starts on the timeline's selected range, else on
     the current frame."""
 
-    def __init__(self, parent: QWidget | None, frames: int, current: int, selection: tuple[int, int] | None = None) -> None:
+    def __init__(
+        self, parent: QWidget | None, frames: int, current: int, selection: tuple[int, int] | None = None
+    ) -> None:
         super().__init__(parent)
         self.setWindowTitle("Re-solve range")
         form = QFormLayout(self)
@@ -45,8 +47,13 @@ class RangeDialog(QDialog):
         self.blend = QSpinBox(minimum=0, maximum=120, value=8, suffix=" frames")
         self.floor = QCheckBox("hold feet in floor contact", checked=True)
         self.scene = QCheckBox("the scene's constraints", checked=True)
-        for label, w in (("Start", self.start), ("End", self.end), ("Blend", self.blend), ("Add", self.floor),
-                         ("", self.scene)):  # fmt: skip
+        for label, w in (
+            ("Start", self.start),
+            ("End", self.end),
+            ("Blend", self.blend),
+            ("Add", self.floor),
+            ("", self.scene),
+        ):
             form.addRow(label, w)
         box = QDialogButtonBox(QDialogButtonBox.StandardButton.Ok | QDialogButtonBox.StandardButton.Cancel)
         box.accepted.connect(self.accept)
@@ -65,8 +72,9 @@ def range_runner(window: StudioShell) -> JobRunner:
     return runner
 
 
-def resolve_range(window: StudioShell, start: int, end: int, blend: int = 8, floor: bool = True,
-                  scene: bool = True) -> JobRunner:  # fmt: skip
+def resolve_range(
+    window: StudioShell, start: int, end: int, blend: int = 8, floor: bool = True, scene: bool = True
+) -> JobRunner:
     """Start re-solving ``start..end`` of the window's clip on a worker thread; when it
     ends the result replaces the clip (one undo step). Returns the runner: its
     ``result`` is then the :class:`engine.authoring.range_edit.RangeEdit`, and
@@ -114,8 +122,14 @@ def resolve_range_dialog(window: StudioShell) -> None:
     if dialog.exec() != QDialog.DialogCode.Accepted:
         return
     try:
-        resolve_range(window, dialog.start.value(), dialog.end.value(), dialog.blend.value(),
-                      dialog.floor.isChecked(), dialog.scene.isChecked())  # fmt: skip
+        resolve_range(
+            window,
+            dialog.start.value(),
+            dialog.end.value(),
+            dialog.blend.value(),
+            dialog.floor.isChecked(),
+            dialog.scene.isChecked(),
+        )
     except UserError as exc:
         QMessageBox.warning(window, "Re-solve range", str(exc))
 

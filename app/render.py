@@ -42,16 +42,32 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--sensors", metavar="P", help="draw the trackers of sensor preset P")
     p.add_argument("--ghosts", metavar="A,B", help="methods reconstructing from --sensors, drawn with the motion")
     p.add_argument("--view", choices=VIEWS, default="sticks", help="stick figure (default) or shaded body")
-    p.add_argument("--layout", choices=LAYOUTS, default="overlay",
-                   help="ghosts as thin sticks over the motion (default) or each figure in a panel of its own")  # fmt: skip
-    p.add_argument("--camera", choices=CAMERAS, default="follow",
-                   help="fixed from the front or the side, or following the root (default)")  # fmt: skip
-    p.add_argument("--truth", action="store_true",
-                   help="the input is the ground truth: drawn green and named 'ground truth' in the legend")  # fmt: skip
+    p.add_argument(
+        "--layout",
+        choices=LAYOUTS,
+        default="overlay",
+        help="ghosts as thin sticks over the motion (default) or each figure in a panel of its own",
+    )
+    p.add_argument(
+        "--camera",
+        choices=CAMERAS,
+        default="follow",
+        help="fixed from the front or the side, or following the root (default)",
+    )
+    p.add_argument(
+        "--truth",
+        action="store_true",
+        help="the input is the ground truth: drawn green and named 'ground truth' in the legend",
+    )
     p.add_argument("--title", default="", metavar="TEXT", help="a title line above the legend")
     p.add_argument("--timecode", action="store_true", help="show the time and frame number (bottom right)")
-    p.add_argument("--msaa", type=int, default=0, metavar="N",
-                   help="multisampling anti-aliasing samples (default 0: fastest on software GL)")  # fmt: skip
+    p.add_argument(
+        "--msaa",
+        type=int,
+        default=0,
+        metavar="N",
+        help="multisampling anti-aliasing samples (default 0: fastest on software GL)",
+    )
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     p.set_defaults(func=run)
 
@@ -72,9 +88,18 @@ def options_from_args(args: argparse.Namespace) -> RenderOptions:
     ghosts = tuple(g.strip() for g in (args.ghosts or "").split(",") if g.strip())
     if args.msaa not in (0, 2, 4, 8):
         raise UserError(f"--msaa must be 0, 2, 4 or 8, got {args.msaa}")
-    options = RenderOptions(size=parse_size(args.size), sensors=args.sensors, ghosts=ghosts, view=args.view,
-                            camera=args.camera, layout=args.layout, truth=args.truth, title=args.title,
-                            timecode=args.timecode, msaa=args.msaa)  # fmt: skip
+    options = RenderOptions(
+        size=parse_size(args.size),
+        sensors=args.sensors,
+        ghosts=ghosts,
+        view=args.view,
+        camera=args.camera,
+        layout=args.layout,
+        truth=args.truth,
+        title=args.title,
+        timecode=args.timecode,
+        msaa=args.msaa,
+    )
     check_options(options)
     return options
 
@@ -118,8 +143,14 @@ def run(args: argparse.Namespace) -> int:
         from engine.motion.retarget import resample_motion
 
         motion = resample_motion(motion, float(args.fps))
-    bar = tqdm(total=len(motion), unit="frame", desc="render", disable=args.no_progress, file=sys.stderr,
-               bar_format="{l_bar}{bar}| {n_fmt}/{total_fmt} [{elapsed}<{remaining} left, {rate_fmt}]")  # fmt: skip
+    bar = tqdm(
+        total=len(motion),
+        unit="frame",
+        desc="render",
+        disable=args.no_progress,
+        file=sys.stderr,
+        bar_format="{l_bar}{bar}| {n_fmt}/{total_fmt} [{elapsed}<{remaining} left, {rate_fmt}]",
+    )
     try:
         render_video(motion, args.out, options, lambda f: bar.update(1))
     finally:
@@ -142,8 +173,13 @@ def load_input(path: Path):
     return load_clip(path, own_rate=True)
 
 
-def render_video(motion, out: Path, options: RenderOptions = RenderOptions(),
-                 progress: Callable[[int], None] | None = None, timings: dict[str, float] | None = None) -> None:  # fmt: skip
+def render_video(
+    motion,
+    out: Path,
+    options: RenderOptions = RenderOptions(),
+    progress: Callable[[int], None] | None = None,
+    timings: dict[str, float] | None = None,
+) -> None:
     """Draw every frame of ``motion`` off-screen and write ``out`` (H.264 MP4) atomically.
 
     The ghosts' solve (a process), the drawing (this thread and Mesa's) and the

@@ -61,11 +61,17 @@ def suggestion_path(bvh: str | Path) -> Path:
 def ask_unmapped(parent: QWidget, path: str, message: str) -> str:
     """Ask what to do with a file whose rig is not recognised: ``"pick"`` a mapping file,
     ``"suggest"`` one, or ``""`` (cancel)."""
-    box = QMessageBox(QMessageBox.Icon.Warning, "Rig not recognised",
-                      f"{Path(path).name}: the joints could not be mapped onto the canonical skeleton.",
-                      QMessageBox.StandardButton.Cancel, parent)  # fmt: skip
-    box.setInformativeText("Pick a joint mapping file (MAP.toml), or let the studio write a suggestion "
-                           "beside the file for you to check and complete.")  # fmt: skip
+    box = QMessageBox(
+        QMessageBox.Icon.Warning,
+        "Rig not recognised",
+        f"{Path(path).name}: the joints could not be mapped onto the canonical skeleton.",
+        QMessageBox.StandardButton.Cancel,
+        parent,
+    )
+    box.setInformativeText(
+        "Pick a joint mapping file (MAP.toml), or let the studio write a suggestion "
+        "beside the file for you to check and complete."
+    )
     box.setDetailedText(message)
     pick = box.addButton("Pick mapping file...", QMessageBox.ButtonRole.AcceptRole)
     suggest = box.addButton("Suggest a mapping", QMessageBox.ButtonRole.ActionRole)

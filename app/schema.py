@@ -41,6 +41,15 @@ def optimizer_fields() -> tuple[SettingField, ...]:
         elif isinstance(spec, Flag):
             out.append(SettingField(kind="bool", **common))
         else:
-            out.append(SettingField(kind="int" if spec.integer else "float", lo=spec.lo, hi=spec.hi,
-                                    open_lo=spec.open_lo, step=info.step, unit=spec.unit, **common))
+            out.append(
+                SettingField(
+                    kind="int" if spec.integer else "float",
+                    lo=spec.lo,
+                    hi=spec.hi,
+                    open_lo=spec.open_lo,
+                    step=info.step,
+                    unit=spec.unit,
+                    **common,
+                )
+            )
     return tuple(out)

@@ -35,8 +35,9 @@ class StateCommand(QUndoCommand):
     ``("constraint", name, fields)``); None never merges.
     """
 
-    def __init__(self, text: str, apply: Callable[[Any], None], before: Any, after: Any,
-                 key: tuple | None = None) -> None:  # fmt: skip
+    def __init__(
+        self, text: str, apply: Callable[[Any], None], before: Any, after: Any, key: tuple | None = None
+    ) -> None:
         super().__init__(text)
         self.apply, self.before, self.after, self.key = apply, before, after, key
         self.stamp = time.monotonic()
@@ -70,7 +71,11 @@ def _changed_fields(old: Any, new: Any) -> tuple[str, ...]:
     out = []
     for f in dataclasses.fields(old):
         a, b = getattr(old, f.name, None), getattr(new, f.name, None)
-        same = np.array_equal(np.asarray(a), np.asarray(b), equal_nan=True) if isinstance(a, np.ndarray) or isinstance(b, np.ndarray) else a == b
+        same = (
+            np.array_equal(np.asarray(a), np.asarray(b), equal_nan=True)
+            if isinstance(a, np.ndarray) or isinstance(b, np.ndarray)
+            else a == b
+        )
         if not same:
             out.append(f.name)
     return tuple(out)

@@ -53,10 +53,39 @@ class VideoEncoder:
         w, h = size
         rate = Fraction(fps).limit_denominator(1001)
         pix = {3: "rgb24", 4: "rgba"}[channels]
-        cmd = [imageio_ffmpeg.get_ffmpeg_exe(), "-v", "error", "-y",
-               "-f", "rawvideo", "-pix_fmt", pix, "-s", f"{w}x{h}", "-framerate", str(rate), "-i", "-",
-               "-vf", "vflip", "-c:v", "libx264", "-preset", PRESET, "-crf", str(CRF), "-pix_fmt", "yuv420p",
-               "-r", str(rate), "-movflags", "+faststart", "-f", "mp4", str(path)]  # fmt: skip
+        cmd = [
+            imageio_ffmpeg.get_ffmpeg_exe(),
+            "-v",
+            "error",
+            "-y",
+            "-f",
+            "rawvideo",
+            "-pix_fmt",
+            pix,
+            "-s",
+            f"{w}x{h}",
+            "-framerate",
+            str(rate),
+            "-i",
+            "-",
+            "-vf",
+            "vflip",
+            "-c:v",
+            "libx264",
+            "-preset",
+            PRESET,
+            "-crf",
+            str(CRF),
+            "-pix_fmt",
+            "yuv420p",
+            "-r",
+            str(rate),
+            "-movflags",
+            "+faststart",
+            "-f",
+            "mp4",
+            str(path),
+        ]
         self.frames = 0
         self._proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stderr=subprocess.PIPE)
         self._free: queue.Queue[np.ndarray] = queue.Queue()

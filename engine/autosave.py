@@ -100,8 +100,13 @@ class AutosaveSession:
         """Keep ``scene`` (plain JSON) as document ``doc``, with ``clip`` (an edited clip
         the scene cannot name by path) beside it; the clip is written only when it is
         another object than the one last written."""
-        envelope: dict[str, Any] = {"format": FORMAT, "version": VERSION, "document": doc, "saved": time.time(),
-                                    "scene": scene}  # fmt: skip
+        envelope: dict[str, Any] = {
+            "format": FORMAT,
+            "version": VERSION,
+            "document": doc,
+            "saved": time.time(),
+            "scene": scene,
+        }
         if clip is not None:
             if self._clips.get(doc) is not clip:
                 save_clip(self.path(doc, ".npz"), clip)
@@ -205,11 +210,11 @@ def left_sessions(folder: str | Path) -> list[LeftSession]:
     found: dict[str, LeftSession] = {}
     if fcntl is not None and folder.is_dir():
         for lock in folder.glob(f"{_PREFIX}*.lock"):
-            ident = lock.name[len(_PREFIX):-len(".lock")]
+            ident = lock.name[len(_PREFIX) : -len(".lock")]
             if not any(folder.glob(f"{_PREFIX}{ident}-*")) and not _locked(lock):
                 lock.unlink(missing_ok=True)
     for path in folder.glob(f"{_PREFIX}*.json") if folder.is_dir() else ():
-        stem = path.name[len(_PREFIX):-len(".json")]
+        stem = path.name[len(_PREFIX) : -len(".json")]
         ident, _, doc = stem.rpartition("-")
         if not is_document(doc) or not ident:
             continue
@@ -230,15 +235,26 @@ def left_sessions(folder: str | Path) -> list[LeftSession]:
 def save_clip(path: str | Path, motion: Motion) -> None:
     """Write ``motion`` exactly (float64 arrays, offsets, fps, name) as ``.npz``, atomically."""
     with atomic_path(path, suffix=".npz") as tmp:
-        np.savez(tmp, local_rot=motion.local_rot, root_pos=motion.root_pos, offsets=motion.skeleton.offsets,
-                 fps=np.float64(motion.fps), name=np.array(motion.name))  # fmt: skip
+        np.savez(
+            tmp,
+            local_rot=motion.local_rot,
+            root_pos=motion.root_pos,
+            offsets=motion.skeleton.offsets,
+            fps=np.float64(motion.fps),
+            name=np.array(motion.name),
+        )
 
 
 def load_clip(path: str | Path) -> Motion:
     """Read a clip :func:`save_clip` wrote; errors name the file."""
     try:
         with np.load(Path(path), allow_pickle=False) as d:
-            return Motion(d["local_rot"], d["root_pos"], sk.Skeleton(offsets=np.array(d["offsets"], float)),
-                          float(d["fps"]), str(d["name"]))  # fmt: skip
+            return Motion(
+                d["local_rot"],
+                d["root_pos"],
+                sk.Skeleton(offsets=np.array(d["offsets"], float)),
+                float(d["fps"]),
+                str(d["name"]),
+            )
     except (OSError, ValueError, KeyError) as exc:
         raise UserError(f"{path}: cannot read the autosaved clip ({exc})") from None

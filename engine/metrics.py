@@ -99,9 +99,12 @@ _KINDS = (("", (True, False)), ("_ts", (False,)), ("_st", (True,)))
 
 
 def transition_jerk(
-    jerk: np.ndarray, connected: np.ndarray, fps: float, gt_jerk: float,
+    jerk: np.ndarray,
+    connected: np.ndarray,
+    fps: float,
+    gt_jerk: float,
     window_s: float = TRANSITION_WINDOW_S,
-) -> dict[str, float | int | list[float]]:  # fmt: skip
+) -> dict[str, float | int | list[float]]:
     """Peak Jerk and Area Under the Jerk after tracking-state changes (FlowMDM, as RPM uses them).
 
     The windows after the changes are aligned at the change and averaged frame by frame

@@ -63,8 +63,9 @@ def scene_to_dict(constraints: Iterable[Constraint], settings: OptimizerSettings
     }
 
 
-def save_scene(path: str | Path, constraints: Iterable[Constraint],
-               settings: OptimizerSettings | dict[str, Any] | None = None) -> None:  # fmt: skip
+def save_scene(
+    path: str | Path, constraints: Iterable[Constraint], settings: OptimizerSettings | dict[str, Any] | None = None
+) -> None:
     """Write the scene to ``path`` as JSON (atomically)."""
     doc = scene_to_dict(constraints, settings)
     write_text(path, json.dumps(doc, indent=2, allow_nan=False) + "\n")
@@ -93,11 +94,13 @@ def scene_from_dict(doc: Any, where: str = "scene") -> tuple[list[Constraint], O
         raise UserError(f"{where}: field 'format' is {shown(doc.get('format'))}, expected {FORMAT!r}")
     version = doc.get("version", 1)
     if isinstance(version, bool) or version not in VERSIONS:
-        raise UserError(f"{where}: field 'version' is {shown(version)}; this build reads {', '.join(map(str, VERSIONS))}")
+        raise UserError(
+            f"{where}: field 'version' is {shown(version)}; this build reads {', '.join(map(str, VERSIONS))}"
+        )
     if version < 2:
         late = [k for k in ("animation", "keys", "character", "pose_options") if k in doc]
         if late:
-            raise UserError(f"{where}: field {late[0]!r} needs \"version\": 2")
+            raise UserError(f'{where}: field {late[0]!r} needs "version": 2')
     raw = doc.get("settings", {}) or {}
     if not isinstance(raw, dict):
         raise UserError(f"{where}: field 'settings' must be an object")

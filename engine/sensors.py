@@ -104,8 +104,14 @@ class Sensor:
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-JSON settings (no sample): what a scene file stores."""
-        return {"joint": self.joint, "dof": self.dof, "enabled": self.enabled, "weight": self.weight,
-                "offset": list(self.offset), "failures": [list(w) for w in self.failures]}  # fmt: skip
+        return {
+            "joint": self.joint,
+            "dof": self.dof,
+            "enabled": self.enabled,
+            "weight": self.weight,
+            "offset": list(self.offset),
+            "failures": [list(w) for w in self.failures],
+        }
 
     @classmethod
     def from_dict(cls, data: Any, where: str = "sensor") -> Sensor:

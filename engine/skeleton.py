@@ -21,12 +21,28 @@ import numpy as np
 
 JOINT_NAMES: tuple[str, ...] = (
     "root",
-    "lhip", "lknee", "lankle", "ltoe",
-    "rhip", "rknee", "rankle", "rtoe",
-    "lowerback", "upperback", "chest", "lowerneck", "upperneck",
-    "lclavicle", "lshoulder", "lelbow", "lwrist",
-    "rclavicle", "rshoulder", "relbow", "rwrist",
-)  # fmt: skip
+    "lhip",
+    "lknee",
+    "lankle",
+    "ltoe",
+    "rhip",
+    "rknee",
+    "rankle",
+    "rtoe",
+    "lowerback",
+    "upperback",
+    "chest",
+    "lowerneck",
+    "upperneck",
+    "lclavicle",
+    "lshoulder",
+    "lelbow",
+    "lwrist",
+    "rclavicle",
+    "rshoulder",
+    "relbow",
+    "rwrist",
+)
 
 NUM_JOINTS = len(JOINT_NAMES)
 JOINT_INDEX: dict[str, int] = {n: i for i, n in enumerate(JOINT_NAMES)}
@@ -34,12 +50,28 @@ JOINT_INDEX: dict[str, int] = {n: i for i, n in enumerate(JOINT_NAMES)}
 #: Parent index of each joint; the root's parent is -1.
 PARENTS: tuple[int, ...] = (
     -1,
-    0, 1, 2, 3,
-    0, 5, 6, 7,
-    0, 9, 10, 11, 12,
-    11, 14, 15, 16,
-    11, 18, 19, 20,
-)  # fmt: skip
+    0,
+    1,
+    2,
+    3,
+    0,
+    5,
+    6,
+    7,
+    0,
+    9,
+    10,
+    11,
+    12,
+    11,
+    14,
+    15,
+    16,
+    11,
+    18,
+    19,
+    20,
+)
 
 #: Rest offsets (metres) of each joint from its parent, from DragPoser's example rig.
 REST_OFFSETS = np.array(
@@ -81,15 +113,19 @@ END_SITES: dict[str, np.ndarray] = {
 
 #: Left/right joint pairs (used for mirroring).
 MIRROR_PAIRS: tuple[tuple[str, str], ...] = (
-    ("lhip", "rhip"), ("lknee", "rknee"), ("lankle", "rankle"), ("ltoe", "rtoe"),
-    ("lclavicle", "rclavicle"), ("lshoulder", "rshoulder"), ("lelbow", "relbow"),
+    ("lhip", "rhip"),
+    ("lknee", "rknee"),
+    ("lankle", "rankle"),
+    ("ltoe", "rtoe"),
+    ("lclavicle", "rclavicle"),
+    ("lshoulder", "rshoulder"),
+    ("lelbow", "relbow"),
     ("lwrist", "rwrist"),
-)  # fmt: skip
+)
 
 #: Index permutation that swaps left and right joints.
 MIRROR_INDEX: tuple[int, ...] = tuple(
-    JOINT_INDEX[dict(MIRROR_PAIRS + tuple((b, a) for a, b in MIRROR_PAIRS)).get(n, n)]
-    for n in JOINT_NAMES
+    JOINT_INDEX[dict(MIRROR_PAIRS + tuple((b, a) for a, b in MIRROR_PAIRS)).get(n, n)] for n in JOINT_NAMES
 )
 
 #: End effectors in the field's sense (head, hands, feet); feet are the ankles as in DragPoser.
@@ -141,8 +177,7 @@ class Skeleton:
         """Size relative to the canonical rest skeleton (ratio of leg lengths)."""
         leg = [1, 2, 3]
         return float(
-            np.linalg.norm(self.offsets[leg], axis=-1).sum()
-            / np.linalg.norm(REST_OFFSETS[leg], axis=-1).sum()
+            np.linalg.norm(self.offsets[leg], axis=-1).sum() / np.linalg.norm(REST_OFFSETS[leg], axis=-1).sum()
         )
 
     def rest_positions(self) -> np.ndarray:

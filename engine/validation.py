@@ -266,8 +266,9 @@ def check_input_file(path: str | Path, kind: str = "BVH file", max_bytes: int | 
     if not stat.S_ISREG(st.st_mode):
         raise ValidationError(f"{path}: cannot read {kind}: not a regular file (a pipe, device or socket)")
     if st.st_size > limit:
-        raise ValidationError(f"{path}: cannot read {kind}: {st.st_size:,} bytes is larger than the limit of "
-                              f"{limit:,} bytes")  # fmt: skip
+        raise ValidationError(
+            f"{path}: cannot read {kind}: {st.st_size:,} bytes is larger than the limit of {limit:,} bytes"
+        )
     if not os.access(path, os.R_OK):
         raise ValidationError(f"{path}: cannot read {kind}: permission denied")
     return path

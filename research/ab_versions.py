@@ -25,8 +25,9 @@ def _engine_modules() -> dict:
 
 def checkout(rev: str, into: Path) -> Path:
     """``engine/`` and ``assets/models`` of git revision ``rev`` under ``into``."""
-    data = subprocess.run(["git", "-C", str(ROOT), "archive", rev, "engine", "assets/models"], check=True,
-                          capture_output=True).stdout  # fmt: skip
+    data = subprocess.run(
+        ["git", "-C", str(ROOT), "archive", rev, "engine", "assets/models"], check=True, capture_output=True
+    ).stdout
     with tarfile.open(fileobj=BytesIO(data)) as tar:
         tar.extractall(into, filter="data")
     return into

@@ -37,8 +37,9 @@ offsets = PoseMode(vae).character.skeleton.offsets
 files = discover([args.data])
 splits, takes = split_files(files, list(EVAL_ONLY))
 use = [(p, r) for p, r in files if splits[r] != "test"][:: args.stride]
-clips = [(str(takes.get(r) or p), load_with_report(p, manifest_fps(p), None, strategy=CURRENT)[0].local_rot)
-         for p, r in use]  # fmt: skip
+clips = [
+    (str(takes.get(r) or p), load_with_report(p, manifest_fps(p), None, strategy=CURRENT)[0].local_rot) for p, r in use
+]
 ref = R.ReferenceSet.from_rotations(clips, offsets, 4, True, f"every {args.stride}th non-test file")
 
 
@@ -61,5 +62,7 @@ task = select_tasks(["hands_overhead"])[0]
 for poser, opts in (("pose-mode", []), ("pose-mode", ["keep_trunk=true"]), ("ik", [])):
     q = R.aligned(np.array(run_task(task, poser, vae, ref, opts).positions))
     d = R.pose_distances(q[None], P)[0]
-    print(f"hands_overhead {poser} {' '.join(opts)}: lean {float(lean_deg(q)):.1f} deg, "
-          f"{100 * d.min():.2f} cm from the nearest pose, {100 * d[up].min():.2f} cm from the nearest arms-up pose")
+    print(
+        f"hands_overhead {poser} {' '.join(opts)}: lean {float(lean_deg(q)):.1f} deg, "
+        f"{100 * d.min():.2f} cm from the nearest pose, {100 * d[up].min():.2f} cm from the nearest arms-up pose"
+    )

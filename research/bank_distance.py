@@ -59,8 +59,7 @@ def main() -> int:
         return 2
     joints = tuple(args.joints.split(","))
     for files in args.group:
-        d = np.concatenate([distances(bank, joints, load_motion(f, max_frames=args.max_frames), args.k)
-                            for f in files])  # fmt: skip
+        d = np.concatenate([distances(bank, joints, load_motion(f, max_frames=args.max_frames), args.k) for f in files])
         pct = " / ".join(f"{v:.2f}" for v in np.percentile(d, [10, 50, 90, 99]))
         print(f"{len(files)} files, {len(d)} frames: percentiles 10/50/90/99 {pct}")
     return 0

@@ -68,8 +68,13 @@ def main() -> None:
         else:
             motion, tracking = _clip(new, a.sensors)
             for fast in (True, False):
-                runs["fast" if fast else "reference"] = (new, _build(new, "dragposer", a, motion, fast=fast), tracking,
-                                                         [], [])  # fmt: skip
+                runs["fast" if fast else "reference"] = (
+                    new,
+                    _build(new, "dragposer", a, motion, fast=fast),
+                    tracking,
+                    [],
+                    [],
+                )
         _run(runs, a.frames)
 
 
@@ -86,7 +91,7 @@ def _run(runs: dict, frames: int) -> None:
     labels = list(runs)
     n = min(frames, *(len(r[2]) for r in runs.values()))
     for i in range(n):
-        for label in (labels if i % 2 else labels[::-1]):
+        for label in labels if i % 2 else labels[::-1]:
             v, m, tracking, frame_ms, iter_ms = runs[label]
             with v:
                 t0, c0 = time.perf_counter(), time.thread_time()
@@ -98,13 +103,16 @@ def _run(runs: dict, frames: int) -> None:
     for label in labels:
         _, _, _, frame_ms, iter_ms = runs[label]
         f, cpu = np.array(frame_ms).T
-        line = (f"{label:<22} frame ms median {np.median(f):7.2f} min {f.min():7.2f} "
-                f"(cpu median {np.median(cpu):7.2f} min {cpu.min():7.2f})")
+        line = (
+            f"{label:<22} frame ms median {np.median(f):7.2f} min {f.min():7.2f} "
+            f"(cpu median {np.median(cpu):7.2f} min {cpu.min():7.2f})"
+        )
         if iter_ms:
             it = np.array([t["ms_per_iteration"] for t in iter_ms])
             parts = {k: np.median([t[k] for t in iter_ms]) for k in ("decoder", "fk_losses", "backward", "step")}
-            line += (f" | ms/iteration median {np.median(it):6.3f} min {it.min():6.3f} | "
-                     + " ".join(f"{k} {v:.3f}" for k, v in parts.items()))  # fmt: skip
+            line += f" | ms/iteration median {np.median(it):6.3f} min {it.min():6.3f} | " + " ".join(
+                f"{k} {v:.3f}" for k, v in parts.items()
+            )
         print(line, flush=True)
 
 

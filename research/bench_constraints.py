@@ -39,14 +39,26 @@ def main() -> None:
     motion = load_motion(DEFAULT_CLIP)
     tracking = simulate(motion, "6")
     scene = load_scene(args.scene)[0]
-    configs = [("sensors fast", [], True, args.frames), ("scene fast", scene, True, args.frames),
-               ("scene reference", scene, False, args.reference_frames),
-               ("sensors reference", [], False, args.reference_frames)]  # fmt: skip
+    configs = [
+        ("sensors fast", [], True, args.frames),
+        ("scene fast", scene, True, args.frames),
+        ("scene reference", scene, False, args.reference_frames),
+        ("sensors reference", [], False, args.reference_frames),
+    ]
     rows: dict[str, list[dict]] = {}
     for _ in range(args.repeats):
         for label, cons, fast, frames in configs:
-            r = bench_method("dragposer", motion, tracking, frames, args.warmup, cons, mode="realtime",
-                             iterations=args.iterations, fast=fast)  # fmt: skip
+            r = bench_method(
+                "dragposer",
+                motion,
+                tracking,
+                frames,
+                args.warmup,
+                cons,
+                mode="realtime",
+                iterations=args.iterations,
+                fast=fast,
+            )
             rows.setdefault(label, []).append(r)
     base = min(r["ms_per_iteration_median"] for r in rows["sensors fast"])
     out = {}
@@ -54,10 +66,16 @@ def main() -> None:
     for label, runs in rows.items():
         best = min(runs, key=lambda r: r["ms_per_iteration_median"])
         it = best["ms_per_iteration_median"]
-        out[label] = {"ms_per_iteration_median": it, "ratio_to_sensors_fast": it / base,
-                      "ms_per_frame_median": min(r["ms_median"] for r in runs), "breakdown_ms": best["breakdown_ms"]}  # fmt: skip
+        out[label] = {
+            "ms_per_iteration_median": it,
+            "ratio_to_sensors_fast": it / base,
+            "ms_per_frame_median": min(r["ms_median"] for r in runs),
+            "breakdown_ms": best["breakdown_ms"],
+        }
         parts = " ".join(f"{k} {v:.3f}" for k, v in best["breakdown_ms"].items())
-        print(f"{label:<18} {it:7.3f} ms/it  {it / base:5.2f}x  {out[label]['ms_per_frame_median']:8.2f} ms/frame  ({parts})")
+        print(
+            f"{label:<18} {it:7.3f} ms/it  {it / base:5.2f}x  {out[label]['ms_per_frame_median']:8.2f} ms/frame  ({parts})"
+        )
     if args.json:
         write_text(args.json, json.dumps(out, indent=1))
 

@@ -36,8 +36,11 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("clip", nargs="?", type=Path, default=CLIP, help=f"BVH clip (default: {CLIP.name})")
     ap.add_argument("--size", action="append", help="frame size; repeat (default: 960x540 and 1280x720)")
-    ap.add_argument("--args", default="--view body --sensors 6 --ghosts ik",
-                    help="render options of every run (default: %(default)s)")  # fmt: skip
+    ap.add_argument(
+        "--args",
+        default="--view body --sensors 6 --ghosts ik",
+        help="render options of every run (default: %(default)s)",
+    )
     ap.add_argument("--extra", default="--layout overlay", help="options only this tree's render knows")
     ap.add_argument("--tree", action="append", type=Path, help="source tree to time; repeat (default: this one)")
     ap.add_argument("--repeat", type=int, default=1, help="runs per tree and size (default 1)")
@@ -47,8 +50,10 @@ def main(argv: list[str] | None = None) -> int:
 
     clip = load_clip(args.clip)
     duration = len(clip) / clip.fps
-    print(f"{args.clip.name}: {len(clip)} frames at {clip.fps:g} fps = {duration:.2f} s; "
-          f"{os.cpu_count()} CPUs, load {os.getloadavg()[0]:.2f}")  # fmt: skip
+    print(
+        f"{args.clip.name}: {len(clip)} frames at {clip.fps:g} fps = {duration:.2f} s; "
+        f"{os.cpu_count()} CPUs, load {os.getloadavg()[0]:.2f}"
+    )
     sizes = args.size or list(SIZES)
     if args.profile:
         return profile(clip, sizes, args.args + " " + args.extra)
@@ -57,8 +62,19 @@ def main(argv: list[str] | None = None) -> int:
         for size in sizes:
             for tree in trees:
                 extra = args.extra if tree.resolve() == REPO else ""
-                cmd = [sys.executable, "-m", "app.render", str(args.clip.resolve()), "--out", os.devnull + ".mp4",
-                       "--size", size, *args.args.split(), *extra.split(), "--no-progress"]  # fmt: skip
+                cmd = [
+                    sys.executable,
+                    "-m",
+                    "app.render",
+                    str(args.clip.resolve()),
+                    "--out",
+                    os.devnull + ".mp4",
+                    "--size",
+                    size,
+                    *args.args.split(),
+                    *extra.split(),
+                    "--no-progress",
+                ]
                 out = Path(f"/tmp/bench_render_{os.getpid()}.mp4")
                 cmd[cmd.index(os.devnull + ".mp4")] = str(out)
                 env = dict(os.environ, PYTHONPATH=str(tree.resolve()))
@@ -67,8 +83,11 @@ def main(argv: list[str] | None = None) -> int:
                 wall, cpu = time.perf_counter() - t, _children_cpu() - cpu
                 out.unlink(missing_ok=True)
                 status = "ok" if res.returncode == 0 else f"FAILED: {res.stderr.strip()[-300:]}"
-                print(f"run {rep + 1} {size:>9} {tree.resolve()}: {wall:6.2f} s = {wall / duration:.2f} x the clip, "
-                      f"CPU {cpu:6.2f} s (load {os.getloadavg()[0]:.2f}) {status}", flush=True)  # fmt: skip
+                print(
+                    f"run {rep + 1} {size:>9} {tree.resolve()}: {wall:6.2f} s = {wall / duration:.2f} x the clip, "
+                    f"CPU {cpu:6.2f} s (load {os.getloadavg()[0]:.2f}) {status}",
+                    flush=True,
+                )
     return 0
 
 
@@ -87,10 +106,12 @@ def profile(clip, sizes: list[str], options: str) -> int:
         out.unlink(missing_ok=True)
         n = len(clip)
         loop = sum(v for k, v in timings.items() if k not in ("setup", "encoder finish"))
-        print(f"{size} {options}: {wall:.2f} s in all; setup {timings['setup']:.2f} s, "
-              f"frames {1000 * loop / n:.1f} ms each, encoder finish {timings['encoder finish']:.2f} s; "
-              f"CPU per frame: {1000 * cpu / n:.1f} ms this process (drawing, Mesa, the writer), "
-              f"{1000 * others / n:.1f} ms its children (ffmpeg, the ghosts' solve)")  # fmt: skip
+        print(
+            f"{size} {options}: {wall:.2f} s in all; setup {timings['setup']:.2f} s, "
+            f"frames {1000 * loop / n:.1f} ms each, encoder finish {timings['encoder finish']:.2f} s; "
+            f"CPU per frame: {1000 * cpu / n:.1f} ms this process (drawing, Mesa, the writer), "
+            f"{1000 * others / n:.1f} ms its children (ffmpeg, the ghosts' solve)"
+        )
         for key, value in timings.items():
             if key not in ("setup", "encoder finish"):
                 print(f"    {key:>14}: {1000 * value / n:6.2f} ms per frame")

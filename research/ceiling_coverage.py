@@ -65,10 +65,17 @@ def frame_rows(files: list[str], poses: np.ndarray, max_frames: int, stride: int
         canon = fk(motion.local_rot[::stride], zero, sk.REST_OFFSETS)[0]
         canon_rec = fk(rec.local_rot[::stride], zero, sk.REST_OFFSETS)[0]
         q = aligned(canon).astype(np.float32)
-        cover = np.concatenate([pose_distances(q[i:i + 128], poses).min(1) for i in range(0, len(q), 128)])
-        out.append({"file": f, "err_cm": err.tolist(), "cover_cm": (100.0 * cover).tolist(),
-                    "canon_err_cm": (100.0 * np.linalg.norm(canon - canon_rec, axis=-1).mean(1)).tolist(),
-                    "joint_err_cm": joint_err.mean(0).tolist(), "frames": len(err)})
+        cover = np.concatenate([pose_distances(q[i : i + 128], poses).min(1) for i in range(0, len(q), 128)])
+        out.append(
+            {
+                "file": f,
+                "err_cm": err.tolist(),
+                "cover_cm": (100.0 * cover).tolist(),
+                "canon_err_cm": (100.0 * np.linalg.norm(canon - canon_rec, axis=-1).mean(1)).tolist(),
+                "joint_err_cm": joint_err.mean(0).tolist(),
+                "frames": len(err),
+            }
+        )
     return out
 
 
@@ -108,10 +115,12 @@ def main() -> int:
     for name, rows in sets.items():
         err = np.concatenate([r["err_cm"] for r in rows])
         cov = np.concatenate([r["cover_cm"] for r in rows])
-        print(f"\n{name}: {len(rows)} clips, {len(err)} frames; ceiling {err.mean():.2f} cm; "
-              f"coverage distance median {np.median(cov):.1f} cm, p90 {np.percentile(cov, 90):.1f}; "
-              f"Pearson r(coverage, ceiling) {np.corrcoef(cov, err)[0, 1]:.2f}; on the canonical skeleton "
-              f"{np.concatenate([r['canon_err_cm'] for r in rows]).mean():.2f} cm")
+        print(
+            f"\n{name}: {len(rows)} clips, {len(err)} frames; ceiling {err.mean():.2f} cm; "
+            f"coverage distance median {np.median(cov):.1f} cm, p90 {np.percentile(cov, 90):.1f}; "
+            f"Pearson r(coverage, ceiling) {np.corrcoef(cov, err)[0, 1]:.2f}; on the canonical skeleton "
+            f"{np.concatenate([r['canon_err_cm'] for r in rows]).mean():.2f} cm"
+        )
         print(f"{'coverage cm':>14} {'frames %':>9} {'ceiling cm':>11} {'frames':>7}")
         for (lo, hi), (share, mean, n) in zip(zip(BINS[:-1], BINS[1:]), binned(rows)):
             print(f"{lo:6.1f}-{hi:<7.1f} {share:9.1f} {mean:11.2f} {n:7d}")

@@ -45,8 +45,12 @@ def main() -> int:
         tr = simulate(motion, args.sensors, noise_pos_m=0.0, seed=0)
         head, lw, rw = (tr.joints.index(j) for j in ("upperneck", "lwrist", "rwrist"))
         ident = np.array([1.0, 0.0, 0.0, 0.0])
-        hands_only = [body_facing({"lwrist": p[lw], "rwrist": p[rw]}, (("lwrist", "rwrist", 1.0),)) for p in tr.positions]
-        both = [head_hands_facing(r[head], {"lwrist": p[lw], "rwrist": p[rw]}) for p, r in zip(tr.positions, tr.rotations)]
+        hands_only = [
+            body_facing({"lwrist": p[lw], "rwrist": p[rw]}, (("lwrist", "rwrist", 1.0),)) for p in tr.positions
+        ]
+        both = [
+            head_hands_facing(r[head], {"lwrist": p[lw], "rwrist": p[rw]}) for p, r in zip(tr.positions, tr.rotations)
+        ]
         cells = []
         for est in (Q.heading(tr.rotations[:, head]), hands_only, both):
             q = np.array([ident if e is None else e for e in est])

@@ -96,8 +96,11 @@ def foot_metrics(gt_pos: np.ndarray, rec_pos: np.ndarray, fps: float) -> dict[st
 
 def truth_metrics(gt_pos: np.ndarray, fps: float) -> dict[str, float]:
     t = contacts(gt_pos, fps, floor_of(gt_pos))
-    return {"skate_cms": skating_cms(gt_pos, t, fps), "steps": steps_per_s(t, fps),
-            "head_speed": float(horizontal_speed(gt_pos[:, [HEAD]], fps).mean())}  # fmt: skip
+    return {
+        "skate_cms": skating_cms(gt_pos, t, fps),
+        "steps": steps_per_s(t, fps),
+        "head_speed": float(horizontal_speed(gt_pos[:, [HEAD]], fps).mean()),
+    }
 
 
 def _load(path: Path, max_frames: int | None):
@@ -128,8 +131,15 @@ def gait_params(items: list[str]) -> None:
     gait.GaitPlanner.__init__ = lambda self, fps, p=None: init(self, fps, p or params)  # type: ignore[method-assign]
 
 
-def run(files: list[Path], methods: list[str], sensors: str, max_frames: int | None,
-        settings: list[str], json_out: Path | None, gait: list[str] = ()) -> dict:  # fmt: skip
+def run(
+    files: list[Path],
+    methods: list[str],
+    sensors: str,
+    max_frames: int | None,
+    settings: list[str],
+    json_out: Path | None,
+    gait: list[str] = (),
+) -> dict:
     from engine.cli.method_options import apply_settings
     from engine.methods import get_method, run_method
     from engine.metrics import evaluate_motion
@@ -154,10 +164,12 @@ def run(files: list[Path], methods: list[str], sensors: str, max_frames: int | N
         out["files"][str(f)] = row
         print(f.name, json.dumps({k: {a: round(b, 3) for a, b in v.items()} for k, v in row.items()}), flush=True)
     keys = ("pos_cm", "f1", "acc", "skate_cms", "steps")
-    out["mean"] = {name: {k: float(np.mean([r[name][k] for r in out["files"].values()])) for k in keys}
-                   for name in methods}  # fmt: skip
-    out["mean"]["truth"] = {k: float(np.mean([r["truth"][k] for r in out["files"].values()]))
-                            for k in ("skate_cms", "steps", "head_speed")}  # fmt: skip
+    out["mean"] = {
+        name: {k: float(np.mean([r[name][k] for r in out["files"].values()])) for k in keys} for name in methods
+    }
+    out["mean"]["truth"] = {
+        k: float(np.mean([r["truth"][k] for r in out["files"].values()])) for k in ("skate_cms", "steps", "head_speed")
+    }
     print("mean", json.dumps({k: {a: round(b, 3) for a, b in v.items()} for k, v in out["mean"].items()}))
     if json_out:
         json_out.write_text(json.dumps(out, indent=1))
@@ -172,8 +184,13 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--sensors", default="3-head-hands")
     p.add_argument("--max-frames", type=int, default=600)
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a DragPoser setting")
-    p.add_argument("--gait", action="append", default=[], metavar="KEY=VALUE",
-                   help="a constant of engine.solver.gait.GaitParams, e.g. lead_s=0.2")
+    p.add_argument(
+        "--gait",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="a constant of engine.solver.gait.GaitParams, e.g. lead_s=0.2",
+    )
     p.add_argument("--json", type=Path)
     a = p.parse_args(argv)
     if a.what == "scan":

@@ -51,7 +51,7 @@ def main() -> None:
                     runs.append((v, it, m, simulate(motion, a.sensors), [], []))
         n = min(a.frames, len(runs[0][3]))
         for i in range(n):
-            for v, _, m, tracking, steps, between in (runs if i % 2 else runs[::-1]):
+            for v, _, m, tracking, steps, between in runs if i % 2 else runs[::-1]:
                 with v:
                     c0 = time.thread_time()
                     m.step(tracking.frame(i))
@@ -62,8 +62,10 @@ def main() -> None:
                         between.append(time.thread_time() - c0)
         for v, it, _, _, steps, between in runs:
             t = 1000.0 * np.array(steps[10:])
-            line = (f"{v.label:<14} {it:3d} it  step cpu ms median {np.median(t):6.2f} mean {t.mean():6.2f} "
-                    f"p95 {np.percentile(t, 95):6.2f} max {t.max():6.2f} min {t.min():6.2f}")  # fmt: skip
+            line = (
+                f"{v.label:<14} {it:3d} it  step cpu ms median {np.median(t):6.2f} mean {t.mean():6.2f} "
+                f"p95 {np.percentile(t, 95):6.2f} max {t.max():6.2f} min {t.min():6.2f}"
+            )
             if between:
                 b = 1000.0 * np.array(between[10:])
                 line += f" | between_frames mean {b.mean():5.2f} max {b.max():5.2f}"

@@ -47,7 +47,10 @@ def markdown(table: dict[str, dict[str, dict]], canonical: str) -> str:
         cells = []
         for g in groups:
             lo, hi = row[g]["twist_median"]
-            cells += [f"{lo:+.0f}..{hi:+.0f}", f"{row[g]['hinge_alignment_min']:.2f} / {row[g]['hinge_alignment_median']:.2f}"]
+            cells += [
+                f"{lo:+.0f}..{hi:+.0f}",
+                f"{row[g]['hinge_alignment_min']:.2f} / {row[g]['hinge_alignment_median']:.2f}",
+            ]
         lines.append(f"| {joint} | " + " | ".join(cells) + " |")
     counts = ", ".join(f"{g}: {table['lknee'][g]['clips']} clips" for g in groups)
     return "\n".join(lines) + f"\n\n({counts})\n"

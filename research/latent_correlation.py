@@ -39,8 +39,12 @@ def main() -> int:
     p.add_argument("--presets", nargs="+", default=["6", "4", "3-head-hands"])
     p.add_argument("--max-frames", type=int, default=200)
     p.add_argument("--json", type=Path)
-    p.add_argument("--mocap", type=Path, default=Path(__file__).resolve().parent.parent.parent / "shared" / "data" / "mocap",
-                   help="folder holding the validation files (default: ../shared/data/mocap)")  # fmt: skip
+    p.add_argument(
+        "--mocap",
+        type=Path,
+        default=Path(__file__).resolve().parent.parent.parent / "shared" / "data" / "mocap",
+        help="folder holding the validation files (default: ../shared/data/mocap)",
+    )
     args = p.parse_args()
     from engine.authoring.pose_reference import validation_files
     from engine.methods import get_method
@@ -52,7 +56,9 @@ def main() -> int:
     files = validation_files(args.mocap)
     motions = [load_motion(f).slice(0, args.max_frames) for f in files]
     out: dict = {"max_frames": args.max_frames, "files": [str(f) for f in files], "presets": {}}
-    print("| preset | frames | Pos cm | r pooled | rho pooled | r median per file | flagged | Pos cm, top 10 % nearest / rest |")
+    print(
+        "| preset | frames | Pos cm | r pooled | rho pooled | r median per file | flagged | Pos cm, top 10 % nearest / rest |"
+    )
     print("|---|---:|---:|---:|---:|---:|---:|---|")
     for preset in args.presets:
         t0 = time.perf_counter()
@@ -66,14 +72,25 @@ def main() -> int:
         x, y = np.concatenate(near), np.concatenate(pos)
         r, rho = _corr(x, y)
         top = x >= np.quantile(x, 0.9)
-        row = {"frames": int(len(x)), "pos_cm": float(y.mean()), "pearson": r, "spearman": rho,
-               "pearson_median_per_file": float(np.nanmedian([d["pearson"] for d in per_file])),
-               "flagged_share": float(np.concatenate(flags).mean()), "pos_cm_top_decile": float(y[top].mean()),
-               "pos_cm_rest": float(y[~top].mean()), "per_file": per_file, "seconds": time.perf_counter() - t0}  # fmt: skip
+        row = {
+            "frames": int(len(x)),
+            "pos_cm": float(y.mean()),
+            "pearson": r,
+            "spearman": rho,
+            "pearson_median_per_file": float(np.nanmedian([d["pearson"] for d in per_file])),
+            "flagged_share": float(np.concatenate(flags).mean()),
+            "pos_cm_top_decile": float(y[top].mean()),
+            "pos_cm_rest": float(y[~top].mean()),
+            "per_file": per_file,
+            "seconds": time.perf_counter() - t0,
+        }
         out["presets"][preset] = row
-        print(f"| {preset} | {row['frames']} | {row['pos_cm']:.2f} | {r:.2f} | {rho:.2f} | "
-              f"{row['pearson_median_per_file']:.2f} | {100 * row['flagged_share']:.1f} % | "
-              f"{row['pos_cm_top_decile']:.2f} / {row['pos_cm_rest']:.2f} |", flush=True)  # fmt: skip
+        print(
+            f"| {preset} | {row['frames']} | {row['pos_cm']:.2f} | {r:.2f} | {rho:.2f} | "
+            f"{row['pearson_median_per_file']:.2f} | {100 * row['flagged_share']:.1f} % | "
+            f"{row['pos_cm_top_decile']:.2f} / {row['pos_cm_rest']:.2f} |",
+            flush=True,
+        )
     if args.json:
         from engine.atomic import write_text
 

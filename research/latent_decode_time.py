@@ -55,8 +55,10 @@ def main() -> int:
             wait_for(lambda seq=seq: w.latest.seq > seq and w.latest.decoded is not None, 30)
             times.append(1000 * (time.perf_counter() - t0))
         rest = np.array(times[1:])
-        print(f"first decode {times[0]:.0f} ms; then {len(rest)} decodes: median {np.median(rest):.1f} ms, "
-              f"max {rest.max():.1f} ms")  # fmt: skip
+        print(
+            f"first decode {times[0]:.0f} ms; then {len(rest)} decodes: median {np.median(rest):.1f} ms, "
+            f"max {rest.max():.1f} ms"
+        )
     finally:
         w.stop()
     return 0

@@ -92,9 +92,11 @@ def joints_main(args) -> None:
     for lo, hi in ((0, 0.1), (0.1, 0.3), (0.3, 0.8), (0.8, np.inf)):
         sel = (v >= lo) & (v < hi)
         if sel.any():
-            print(f"hips {lo}-{hi} m/s: {100 * sel.mean():3.0f} % of frames, DragPoser {e['dragposer'][sel].mean():.2f}"
-                  f" (legs {e['dragposer'][sel][:, LEGS].mean():.2f}), IK {e['ik'][sel].mean():.2f}"
-                  f" (legs {e['ik'][sel][:, LEGS].mean():.2f})")
+            print(
+                f"hips {lo}-{hi} m/s: {100 * sel.mean():3.0f} % of frames, DragPoser {e['dragposer'][sel].mean():.2f}"
+                f" (legs {e['dragposer'][sel][:, LEGS].mean():.2f}), IK {e['ik'][sel].mean():.2f}"
+                f" (legs {e['ik'][sel][:, LEGS].mean():.2f})"
+            )
 
 
 STANDING = 0.1  # m/s of the hips' horizontal speed
@@ -117,8 +119,12 @@ def leg_oracles(dragposer: np.ndarray, ik: np.ndarray, hip_speed: np.ndarray) ->
     standing[np.ix_(still, LEGS)] = ik[np.ix_(still, LEGS)]
     best = dragposer.copy()
     best[:, LEGS] = np.minimum(dragposer[:, LEGS], ik[:, LEGS])
-    return {"as_measured": float(dragposer.mean()), "standing": float(standing.mean()),
-            "best_legs": float(best.mean()), "ik": float(ik.mean())}
+    return {
+        "as_measured": float(dragposer.mean()),
+        "standing": float(standing.mean()),
+        "best_legs": float(best.mean()),
+        "ik": float(ik.mean()),
+    }
 
 
 def gap_main(args) -> None:
@@ -175,8 +181,9 @@ class Variant:
         for lag in self.lags:
             x.append(2.0 * Q.rotate(unyaw, pos[:, -1, a] - pos[:, h - lag, a]))
         q = torch.as_tensor((np.concatenate(x, -1) - self.mean) / self.std, dtype=torch.float32) * self.w
-        near = torch.cat([(self.norms[None] - 2 * c @ self.table.T).topk(k, dim=1, largest=False).indices
-                          for c in q.split(256)])  # fmt: skip
+        near = torch.cat(
+            [(self.norms[None] - 2 * c @ self.table.T).topk(k, dim=1, largest=False).indices for c in q.split(256)]
+        )
         return self.bank._latents[near].mean(1)
 
 
@@ -206,11 +213,15 @@ def bank_main(args) -> None:
         raise SystemExit("no shipped pose bank for the shipped VAE")
     base = Variant(bank)
     d = base.table.shape[1]
-    blocks = {"height": [9], "displacement": [d - 3, d - 2, d - 1], "rotations": list(range(10, d - 3)),
-              "relative positions": list(range(9))}  # fmt: skip
+    blocks = {
+        "height": [9],
+        "displacement": [d - 3, d - 2, d - 1],
+        "rotations": list(range(10, d - 3)),
+        "relative positions": list(range(9)),
+    }
     rows = [("shipped (k 24)", base, 24, 0.0), ("k 8", base, 8, 0.0), ("k 64", base, 64, 0.0)]
     for name, cols in blocks.items():
-        for f in ((3.0, 6.0) if name == "height" else (0.5, 2.0)):
+        for f in (3.0, 6.0) if name == "height" else (0.5, 2.0):
             w = np.ones(d)
             w[cols] = f
             rows.append((f"{name} x{f:g}", Variant(bank, weights=w), 24, 0.0))

@@ -39,8 +39,9 @@ def ankle_targets(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarr
     ankle's own world rotation; ``turn``: the ankle's world rotation turned about +Z from
     its own yaw to the root's)."""
     level = Q.heading(np.asarray(local_rot[0], dtype=np.float64))
-    _, rots = fk_joints(np.asarray(local_rot, dtype=np.float64), np.asarray(root_pos, dtype=np.float64), offsets,
-                        list(ANKLES))  # fmt: skip
+    _, rots = fk_joints(
+        np.asarray(local_rot, dtype=np.float64), np.asarray(root_pos, dtype=np.float64), offsets, list(ANKLES)
+    )
     own = [np.asarray(r, dtype=np.float64) for r in rots]
     if rule == "flat":
         return {j: Q.heading(r) for j, r in zip(ANKLES, own)}
@@ -75,8 +76,21 @@ def main() -> int:
         dp.finish = with_rule(dp.finish, args.rule)
         dpb.finish = with_rule(dpb.finish, args.rule)
     level = "true" if args.rule == "heading" else "false"
-    argv = ["evaluate", *args.files, "--method", "dragposer", "--sensors", "6x3dof", "--jobs", "1", "--no-progress",
-            "--set", f"level_feet={level}", "--mode", args.mode]
+    argv = [
+        "evaluate",
+        *args.files,
+        "--method",
+        "dragposer",
+        "--sensors",
+        "6x3dof",
+        "--jobs",
+        "1",
+        "--no-progress",
+        "--set",
+        f"level_feet={level}",
+        "--mode",
+        args.mode,
+    ]
     argv += ["--max-frames", str(args.max_frames)] if args.max_frames else []
     argv += ["--json", args.json] if args.json else []
     return cli(argv) or 0

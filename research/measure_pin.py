@@ -7,6 +7,7 @@ error are printed.
 
     PYTHONPATH=. OMP_NUM_THREADS=1 python research/measure_pin.py [START] [FRAMES] [WEIGHT ...]
 """
+
 import sys
 
 import numpy as np
@@ -30,6 +31,14 @@ for mode in ("offline", "realtime"):
         res = reconstruct_clip(clip, sensors, cons, {"mode": mode}, "dragposer")
         p = res.positions()
         d = np.linalg.norm(p[:, J] - target, axis=1)
-        sens = np.mean([np.linalg.norm(p[:, sk.JOINT_INDEX[s.joint]] - gt[:, sk.JOINT_INDEX[s.joint]], axis=1).mean() for s in sensors])
-        print(f"{mode:8s} w={w:6.1f} pin dist first {d[0]*100:5.1f} cm, mean {d.mean()*100:5.1f} cm, "
-              f"last {d[-1]*100:5.1f} cm; sensor err {sens*100:4.1f} cm", flush=True)
+        sens = np.mean(
+            [
+                np.linalg.norm(p[:, sk.JOINT_INDEX[s.joint]] - gt[:, sk.JOINT_INDEX[s.joint]], axis=1).mean()
+                for s in sensors
+            ]
+        )
+        print(
+            f"{mode:8s} w={w:6.1f} pin dist first {d[0] * 100:5.1f} cm, mean {d.mean() * 100:5.1f} cm, "
+            f"last {d[-1] * 100:5.1f} cm; sensor err {sens * 100:4.1f} cm",
+            flush=True,
+        )

@@ -33,8 +33,24 @@ CLI = [sys.executable, "-m", "engine.cli.main"]
 def _live_and_send(out: Path, name: str, port: int, live_args: list[str], send_args: list[str], clip: Path) -> dict:
     stats = out / f"{name}.live.json"
     rec = out / f"{name}.rec.jsonl"
-    cmd = [*CLI, "live", "--listen", f"127.0.0.1:{port}", "--record", str(rec), "--out", str(out / f"{name}.live.bvh"),
-           "--json", str(stats), "--idle-stop", "3", "--duration", "600", "--no-progress", *live_args]  # fmt: skip
+    cmd = [
+        *CLI,
+        "live",
+        "--listen",
+        f"127.0.0.1:{port}",
+        "--record",
+        str(rec),
+        "--out",
+        str(out / f"{name}.live.bvh"),
+        "--json",
+        str(stats),
+        "--idle-stop",
+        "3",
+        "--duration",
+        "600",
+        "--no-progress",
+        *live_args,
+    ]
     env = {**os.environ, "PYTHONPATH": str(REPO)}
     live = subprocess.Popen(cmd, stderr=subprocess.PIPE, stdout=subprocess.PIPE, text=True, env=env)
     line = ""
@@ -43,8 +59,12 @@ def _live_and_send(out: Path, name: str, port: int, live_args: list[str], send_a
         if not line and live.poll() is not None:
             raise SystemExit(f"live failed to start: {live.stdout.read()}")
     t0 = time.perf_counter()
-    send = subprocess.run([*CLI, "send", str(clip), "--to", f"127.0.0.1:{port}", "--no-progress", *send_args],
-                          env=env, capture_output=True, text=True)  # fmt: skip
+    send = subprocess.run(
+        [*CLI, "send", str(clip), "--to", f"127.0.0.1:{port}", "--no-progress", *send_args],
+        env=env,
+        capture_output=True,
+        text=True,
+    )
     sent = time.perf_counter() - t0
     try:
         live_out, _ = live.communicate(timeout=120)
@@ -52,8 +72,14 @@ def _live_and_send(out: Path, name: str, port: int, live_args: list[str], send_a
     except subprocess.TimeoutExpired:
         live.kill()
         live_out, stalled = "", True
-    result = {"name": name, "live_exit": live.returncode, "stalled": stalled, "send_s": sent,
-              "send": send.stdout.strip() + send.stderr.strip(), "live_report": live_out.strip()}  # fmt: skip
+    result = {
+        "name": name,
+        "live_exit": live.returncode,
+        "stalled": stalled,
+        "send_s": sent,
+        "send": send.stdout.strip() + send.stderr.strip(),
+        "live_report": live_out.strip(),
+    }
     if stats.is_file():
         result["live"] = json.loads(stats.read_text())
     result["recording"] = str(rec)
@@ -62,9 +88,23 @@ def _live_and_send(out: Path, name: str, port: int, live_args: list[str], send_a
 
 def _offline(out: Path, name: str, rec: str, args: list[str]) -> dict:
     stats = out / f"{name}.offline.json"
-    subprocess.run([*CLI, "reconstruct", "--trackers", rec, "--out", str(out / f"{name}.offline.bvh"), "--json",
-                    str(stats), "--no-progress", *args], check=True, env={**os.environ, "PYTHONPATH": str(REPO)},
-                   capture_output=True)  # fmt: skip
+    subprocess.run(
+        [
+            *CLI,
+            "reconstruct",
+            "--trackers",
+            rec,
+            "--out",
+            str(out / f"{name}.offline.bvh"),
+            "--json",
+            str(stats),
+            "--no-progress",
+            *args,
+        ],
+        check=True,
+        env={**os.environ, "PYTHONPATH": str(REPO)},
+        capture_output=True,
+    )
     return json.loads(stats.read_text())
 
 
@@ -92,24 +132,36 @@ def main() -> int:
         le, oe = live.get("reference", {}).get("pos_cm"), off["reference"]["pos_cm"]
         it = live.get("iterations") or {}
         its = f"{it['mean']:.1f} ({it['min']}, {live.get('frame_budget_ms') or 0:.1f} ms)" if it.get("mean") else "-"
-        rows.append(f"| {name} | {live.get('frames_received')} | {100 * (live.get('solved_fraction') or 0):.1f} % | "
-                    f"{live['latency_ms']['p50']:.1f} / {live['latency_ms']['p95']:.1f} ms | {its} | {le:.2f} cm | "
-                    f"{oe:.2f} cm | {le - oe:+.2f} cm | exit {r['live_exit']}, stalled {r['stalled']} |")  # fmt: skip
+        rows.append(
+            f"| {name} | {live.get('frames_received')} | {100 * (live.get('solved_fraction') or 0):.1f} % | "
+            f"{live['latency_ms']['p50']:.1f} / {live['latency_ms']['p95']:.1f} ms | {its} | {le:.2f} cm | "
+            f"{oe:.2f} cm | {le - oe:+.2f} cm | exit {r['live_exit']}, stalled {r['stalled']} |"
+        )
         report[name] = r
     cal_rows = []
     if "calibration" in only:
         for f in (0.9, 1.1):
             name = f"calibration-{f}"
-            r = _live_and_send(a.out_dir, name, a.port, ["--calibrate", "2", "--method", a.method],
-                               ["--tpose", "2.2", "--scale", str(f), "--hardware-offsets"], a.clip)  # fmt: skip
+            r = _live_and_send(
+                a.out_dir,
+                name,
+                a.port,
+                ["--calibrate", "2", "--method", a.method],
+                ["--tpose", "2.2", "--scale", str(f), "--hardware-offsets"],
+                a.clip,
+            )
             true_h = float(r["send"].split("subject height ")[1].split(" m")[0])
             h = r["live"]["skeleton_height_m"]
-            cal_rows.append(f"| x{f} | {true_h:.3f} m | {h:.3f} m | {100 * (h / true_h - 1):+.2f} % | "
-                            f"{r['live']['calibration']['pose']} |")  # fmt: skip
+            cal_rows.append(
+                f"| x{f} | {true_h:.3f} m | {h:.3f} m | {100 * (h / true_h - 1):+.2f} % | "
+                f"{r['live']['calibration']['pose']} |"
+            )
             report[name] = r
     if rows:
-        print("| run | frames | solved | latency p50 / p95 | iterations mean (min, budget) | live error | offline error "
-              "| live - offline | end |")  # fmt: skip
+        print(
+            "| run | frames | solved | latency p50 / p95 | iterations mean (min, budget) | live error | offline error "
+            "| live - offline | end |"
+        )
         print("|---|---|---|---|---|---|---|---|---|")
         print("\n".join(rows))
     if cal_rows:

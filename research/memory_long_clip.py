@@ -63,8 +63,17 @@ def main() -> int:
     with tempfile.TemporaryDirectory() as tmp:
         clip = Path(tmp) / "long.bvh"
         long_clip(a.frames, clip)
-        cmd = [sys.executable, "-m", "engine.cli.main", "reconstruct", str(clip), "--out", str(Path(tmp) / "out.bvh"),
-               "--sensors", a.sensors] + (["--iterations", str(a.iterations)] if a.iterations else [])  # fmt: skip
+        cmd = [
+            sys.executable,
+            "-m",
+            "engine.cli.main",
+            "reconstruct",
+            str(clip),
+            "--out",
+            str(Path(tmp) / "out.bvh"),
+            "--sensors",
+            a.sensors,
+        ] + (["--iterations", str(a.iterations)] if a.iterations else [])
         env = {**os.environ, "PYTHONPATH": str(REPO), "TQDM_MININTERVAL": "0"}
         proc = subprocess.Popen(cmd, stderr=subprocess.PIPE, stdout=subprocess.PIPE, env=env, text=True, bufsize=1)
         samples: dict[int, float] = {}

@@ -57,8 +57,12 @@ def main() -> int:
     ap.add_argument("files", nargs="*", help="BVH files (default: the validation split)")
     ap.add_argument("--baseline", default="8610963", help="old git revision (default: 8610963)")
     ap.add_argument("--files", dest="n_files", type=int, default=9, help="first N validation files (default: 9)")
-    ap.add_argument("--prepared", type=Path, default=ROOT / "prepared",
-                    help="prepared data folder whose validation split is used (default: ./prepared)")
+    ap.add_argument(
+        "--prepared",
+        type=Path,
+        default=ROOT / "prepared",
+        help="prepared data folder whose validation split is used (default: ./prepared)",
+    )
     ap.add_argument("--max-frames", type=int, default=300)
     ap.add_argument("--sensors", default="6")
     ap.add_argument("--method", default="dragposer", help="method to run in both versions (default: dragposer)")
@@ -78,24 +82,31 @@ def main() -> int:
         for _ in range(a.repeats):
             for path in files:
                 res = {}
-                for v in ((old, new) if k % 2 == 0 else (new, old)):
+                for v in (old, new) if k % 2 == 0 else (new, old):
                     res[v.label] = run_one(v, path, a)
                 k += 1
                 for v in (old, new):
                     cpu, wall, m = res[v.label]
                     total[v.label] += (cpu, wall)
                     metrics[v.label].append(m)
-                    print(f"{Path(path).name:<14} {v.label:<20} cpu {1000 * cpu / m['frames']:8.1f} ms/frame  "
-                          f"wall {1000 * wall / m['frames']:8.1f}  "
-                          + "  ".join(f"{key} {m[key]:.3f}" for key in METRICS), flush=True)
+                    print(
+                        f"{Path(path).name:<14} {v.label:<20} cpu {1000 * cpu / m['frames']:8.1f} ms/frame  "
+                        f"wall {1000 * wall / m['frames']:8.1f}  "
+                        + "  ".join(f"{key} {m[key]:.3f}" for key in METRICS),
+                        flush=True,
+                    )
         (oc, ow), (nc, nw) = total[old.label], total[new.label]
-        print(f"\nspeed-up old/new: cpu {oc / nc:.2f}x  wall {ow / nw:.2f}x  "
-              f"(cpu {oc:.1f} s vs {nc:.1f} s; {len(files)} files x {a.repeats}, mode {a.mode}, "
-              f"max {a.max_frames} frames, sensors {a.sensors}, {a.method})")
+        print(
+            f"\nspeed-up old/new: cpu {oc / nc:.2f}x  wall {ow / nw:.2f}x  "
+            f"(cpu {oc:.1f} s vs {nc:.1f} s; {len(files)} files x {a.repeats}, mode {a.mode}, "
+            f"max {a.max_frames} frames, sensors {a.sensors}, {a.method})"
+        )
         for key in METRICS:
             o = np.array([m[key] for m in metrics[old.label]])
             n = np.array([m[key] for m in metrics[new.label]])
-            print(f"{key:<16} old {o.mean():8.3f}  new {n.mean():8.3f}  largest |diff| per file {np.abs(o - n).max():.4f}")
+            print(
+                f"{key:<16} old {o.mean():8.3f}  new {n.mean():8.3f}  largest |diff| per file {np.abs(o - n).max():.4f}"
+            )
     return 0
 
 

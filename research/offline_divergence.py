@@ -40,17 +40,31 @@ def record(motion, preset: str, mode: str, noise: float, seed: int) -> dict:
     opt, real, inputs = method.optimizer, method.optimizer.solve, []
 
     def solve(start, terms, ctx, settings=None):
-        inputs.append({"start": start.clone(), "ctx": ctx, "settings": settings or opt.settings,
-                       "targets": {c.name: (c.position.copy(), None if c.rotation is None else c.rotation.copy())
-                                   for c in terms if c.kind == "sensor"},
-                       # the smoothing target moves with the history: keep this frame's
-                       "smooth": (method.smooth.weight, method.smooth.target.copy())})  # fmt: skip
+        inputs.append(
+            {
+                "start": start.clone(),
+                "ctx": ctx,
+                "settings": settings or opt.settings,
+                "targets": {
+                    c.name: (c.position.copy(), None if c.rotation is None else c.rotation.copy())
+                    for c in terms
+                    if c.kind == "sensor"
+                },
+                # the smoothing target moves with the history: keep this frame's
+                "smooth": (method.smooth.weight, method.smooth.target.copy()),
+            }
+        )
         return real(start, terms, ctx, settings)
 
     opt.solve = solve
     results = [method.step(tracking.frame(i)) for i in range(len(tracking))]
-    return {"method": method, "inputs": inputs, "latent": np.stack([r.latent for r in results]),
-            "positions": np.stack([r.positions for r in results]), "iterations": np.array([r.iterations for r in results])}  # fmt: skip
+    return {
+        "method": method,
+        "inputs": inputs,
+        "latent": np.stack([r.latent for r in results]),
+        "positions": np.stack([r.positions for r in results]),
+        "iterations": np.array([r.iterations for r in results]),
+    }
 
 
 def resolve(method, inputs: dict, start=None, ctx=None, targets=None, **settings):
@@ -63,8 +77,13 @@ def resolve(method, inputs: dict, start=None, ctx=None, targets=None, **settings
         if rotation is not None:
             c.rotation = rotation
     method.smooth.weight, method.smooth.target = inputs["smooth"][0], inputs["smooth"][1].copy()
-    sol = type(opt).solve(opt, inputs["start"] if start is None else start, terms,
-                          inputs["ctx"] if ctx is None else ctx, dataclasses.replace(inputs["settings"], **settings))  # fmt: skip
+    sol = type(opt).solve(
+        opt,
+        inputs["start"] if start is None else start,
+        terms,
+        inputs["ctx"] if ctx is None else ctx,
+        dataclasses.replace(inputs["settings"], **settings),
+    )
     return sol.latent.numpy().astype(np.float64), sol.losses[-1]["total"]
 
 
@@ -87,16 +106,20 @@ def main() -> int:
     a = record(motion, args.sensors, args.mode, 0.0, 0)
     b = record(motion, args.sensors, args.mode, args.noise, args.seed)
     cap = a["inputs"][-1]["settings"].steps_cap()
-    print(f"{Path(args.file).parent.name}/{Path(args.file).stem}, {args.mode}, {len(a['latent'])} frames, "
-          f"noise {args.noise:g} m: frames at the cap ({cap}) {np.mean(a['iterations'] == cap):.0%} / "
-          f"{np.mean(b['iterations'] == cap):.0%}; frames with different iteration counts "
-          f"{int(np.sum(a['iterations'] != b['iterations']))}")  # fmt: skip
+    print(
+        f"{Path(args.file).parent.name}/{Path(args.file).stem}, {args.mode}, {len(a['latent'])} frames, "
+        f"noise {args.noise:g} m: frames at the cap ({cap}) {np.mean(a['iterations'] == cap):.0%} / "
+        f"{np.mean(b['iterations'] == cap):.0%}; frames with different iteration counts "
+        f"{int(np.sum(a['iterations'] != b['iterations']))}"
+    )
     dlat = np.abs(a["latent"] - b["latent"]).max(-1)
     apart = np.linalg.norm(a["positions"] - b["positions"], axis=-1).mean(-1) * 100.0
     first = {t: (int(np.argmax(dlat > t)) if (dlat > t).any() else None) for t in (1e-4, 1e-3, 1e-2)}
-    print(f"latent difference: first frame above {', '.join(f'{t:g}: {f}' for t, f in first.items())}; "
-          f"max {dlat.max():.3f}, mean {dlat.mean():.3f}; poses apart: mean {apart.mean():.3f} cm, "
-          f"worst frame {apart.max():.2f} cm")  # fmt: skip
+    print(
+        f"latent difference: first frame above {', '.join(f'{t:g}: {f}' for t, f in first.items())}; "
+        f"max {dlat.max():.3f}, mean {dlat.mean():.3f}; poses apart: mean {apart.mean():.3f} cm, "
+        f"worst frame {apart.max():.2f} cm"
+    )
     starts = np.array([np.abs(x["start"].numpy() - y["start"].numpy()).max() for x, y in zip(a["inputs"], b["inputs"])])
     jumps = np.nonzero((starts < args.jump) & (dlat >= args.jump))[0]
     if not len(jumps):
@@ -108,8 +131,10 @@ def main() -> int:
     if np.abs(ref - a["latent"][k]).max() > 1e-6:
         print(f"frame {k}: re-solving the clean run's inputs did not reproduce its latent; no swap analysis")
         return 1
-    print(f"frame {k}: start latents {starts[k]:.2e} apart, solved latents {dlat[k]:.2e}; re-solved from the "
-          f"clean inputs with ... swapped in (latent difference to the clean solve, final loss):")  # fmt: skip
+    print(
+        f"frame {k}: start latents {starts[k]:.2e} apart, solved latents {dlat[k]:.2e}; re-solved from the "
+        f"clean inputs with ... swapped in (latent difference to the clean solve, final loss):"
+    )
 
     def show(label: str, out) -> None:
         lat, loss = out
@@ -120,15 +145,24 @@ def main() -> int:
     show("start latent", resolve(method, ia, start=ib["start"]))
     show("tracker targets", resolve(method, ia, targets=ib["targets"]))
     for name in ("previous_root", "root_anchor", "previous_positions", "prediction"):
-        show(f"context {name}", resolve(method, ia, ctx=dataclasses.replace(ia["ctx"], **{name: getattr(ib["ctx"], name)})))
+        show(
+            f"context {name}",
+            resolve(method, ia, ctx=dataclasses.replace(ia["ctx"], **{name: getattr(ib["ctx"], name)})),
+        )
     d = ib["start"] - ia["start"]
     for f in (0.1, 0.01):
         show(f"{f:g} x the start difference", resolve(method, ia, start=ia["start"] + f * d))
     g = np.random.default_rng(0).standard_normal(d.shape[0]).astype(np.float32)
-    show("a random start change as large", resolve(method, ia, start=ia["start"] + float(d.abs().max()) * torch.from_numpy(g / np.abs(g).max())))
+    show(
+        "a random start change as large",
+        resolve(method, ia, start=ia["start"] + float(d.abs().max()) * torch.from_numpy(g / np.abs(g).max())),
+    )
     print("  the start latent swapped in, with:")
-    for label, kw in ((f"{4 * cap} iterations", {"max_iterations": 4 * cap, "iterations": 4 * cap}), ("optimizer adam", {"optimizer": "adam"}),
-                      ("momentum 0.9", {"momentum": 0.9})):  # fmt: skip
+    for label, kw in (
+        (f"{4 * cap} iterations", {"max_iterations": 4 * cap, "iterations": 4 * cap}),
+        ("optimizer adam", {"optimizer": "adam"}),
+        ("momentum 0.9", {"momentum": 0.9}),
+    ):
         base, _ = resolve(method, ia, **kw)
         lat, loss = resolve(method, ia, start=ib["start"], **kw)
         print(f"    {label:<32} {np.abs(lat - base).max():.2e}  {loss:.5e}")

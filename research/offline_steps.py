@@ -27,9 +27,17 @@ import torch
 from threadpoolctl import threadpool_limits
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "mocap"
-VAL = ["cmu_daz/indian/14.bvh", "cmu_daz/salsa/07.bvh", "cmu_iclone/002_01.bvh", "cmu_iclone/002_09.bvh",
-       "cmu_iclone/005_05.bvh", "cmu_iclone/005_13.bvh", "cmu_iclone/006_02.bvh", "cmu_iclone/006_10.bvh",
-       "cmu_iclone/007_05.bvh"]  # fmt: skip
+VAL = [
+    "cmu_daz/indian/14.bvh",
+    "cmu_daz/salsa/07.bvh",
+    "cmu_iclone/002_01.bvh",
+    "cmu_iclone/002_09.bvh",
+    "cmu_iclone/005_05.bvh",
+    "cmu_iclone/005_13.bvh",
+    "cmu_iclone/006_02.bvh",
+    "cmu_iclone/006_10.bvh",
+    "cmu_iclone/007_05.bvh",
+]
 KEYS = ("pos_cm", "rot_deg", "ee_cm", "jitter", "vel_cms", "iterations_mean")
 
 
@@ -79,8 +87,11 @@ def main() -> int:
                 print(f"    {mo.name[:14]:<14} pos {rows[-1]['pos_cm']:.3f}  rot {rows[-1]['rot_deg']:.3f}", flush=True)
             n = sum(len(mo) for mo in motions)
             mean = {k: float(np.mean([r[k] for r in rows])) for k in KEYS}
-            print(f"{variant} preset {a.preset}: cpu {1000 * cpu / n:.2f} ms/frame  "
-                  + "  ".join(f"{k} {mean[k]:.3f}" for k in KEYS), flush=True)  # fmt: skip
+            print(
+                f"{variant} preset {a.preset}: cpu {1000 * cpu / n:.2f} ms/frame  "
+                + "  ".join(f"{k} {mean[k]:.3f}" for k in KEYS),
+                flush=True,
+            )
             if parts is not None:
                 print(f"    decoder columns per frame {parts.pop('columns', 0.0) / n:.1f}")
                 for k in sorted(parts, key=lambda k: -parts[k]):

@@ -97,15 +97,21 @@ def main() -> int:
             shipped = method.predictor
             rows = []
             for motion, lat in zip(clips, truths):
-                method.predictor = shipped if name == "shipped" else OraclePredictor(lat, method.settings.predictor_every)
-                rec, _ = run_method(method, simulate(motion, args.sensors), motion.skeleton, progress=False,
-                                    reference=motion)  # fmt: skip
+                method.predictor = (
+                    shipped if name == "shipped" else OraclePredictor(lat, method.settings.predictor_every)
+                )
+                rec, _ = run_method(
+                    method, simulate(motion, args.sensors), motion.skeleton, progress=False, reference=motion
+                )
                 rows.append((len(motion), evaluate_motion(motion, rec)))
             n = sum(k for k, _ in rows)
             agg = {key: sum(k * r[key] for k, r in rows) / n for key in ("pos_cm", "rot_deg", "ee_cm")}
             out[f"{name} w={w:g}"] = agg
-            print(f"{name:<8} temporal_weight {w:<6g} Pos {agg['pos_cm']:6.2f} cm  Rot {agg['rot_deg']:5.1f} deg  "
-                  f"EE {agg['ee_cm']:6.2f} cm", flush=True)  # fmt: skip
+            print(
+                f"{name:<8} temporal_weight {w:<6g} Pos {agg['pos_cm']:6.2f} cm  Rot {agg['rot_deg']:5.1f} deg  "
+                f"EE {agg['ee_cm']:6.2f} cm",
+                flush=True,
+            )
     if args.json:
         Path(args.json).write_text(json.dumps(out, indent=1))
     return 0

@@ -36,8 +36,11 @@ def main(argv: list[str]) -> int:
         mode, goals, feet = T._start(tasks[name], vae, {})
         offsets = mode.character.skeleton.offsets
         if not rows:
-            ref = (R.load_prepared(args.reference_data, offsets, 4) if args.reference_data
-                   else R.load_files(R.validation_files(), offsets, 4))  # fmt: skip
+            ref = (
+                R.load_prepared(args.reference_data, offsets, 4)
+                if args.reference_data
+                else R.load_files(R.validation_files(), offsets, 4)
+            )
         raw = load_bvh(path)  # baked on this character's skeleton: its rotations as written
         assert list(raw.names) == list(sk.JOINT_NAMES), path
         local, root = raw.local_quaternions()[0], raw.positions[0, 0]
@@ -45,14 +48,18 @@ def main(argv: list[str]) -> int:
         rows.append(T._measured(tasks[name], "bvh", pose, goals, offsets, ref, feet, 0.0))
     p95 = ref.spread_summary()["p95_cm"]
     print(f"reference: {ref.description}; p95 {p95:.1f} cm")
-    print(f"{'task':<15} {'err cm':>6} {'natural':>7} {'spread':>6} {'limits':>6} {'feet':>4} {'balance':>7} {'knee':>5}")
+    print(
+        f"{'task':<15} {'err cm':>6} {'natural':>7} {'spread':>6} {'limits':>6} {'feet':>4} {'balance':>7} {'knee':>5}"
+    )
     for r in rows:
         c = r.check
         feet = "".join(s[0].upper() if d else "-" for s, d in c.feet_down.items())
         bal = "-" if c.balance_margin_cm is None else f"{c.balance_margin_cm:.1f}"
         err = r.max_position_error_cm
-        print(f"{r.task:<15} {'-' if err is None else f'{err:.1f}':>6} {r.naturalness_cm:>7.1f} "
-              f"{'in' if r.within_spread else 'out':>6} {len(c.violations):>6} {feet:>4} {bal:>7} {r.knee_height_cm:>5.0f}")  # fmt: skip
+        print(
+            f"{r.task:<15} {'-' if err is None else f'{err:.1f}':>6} {r.naturalness_cm:>7.1f} "
+            f"{'in' if r.within_spread else 'out':>6} {len(c.violations):>6} {feet:>4} {bal:>7} {r.knee_height_cm:>5.0f}"
+        )
     return 0
 
 

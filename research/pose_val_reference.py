@@ -37,7 +37,15 @@ for path, rel in files:
             rot = mirror_motion(motion.local_rot, motion.root_pos, motion.skeleton.offsets)[0]
         shard = "shards/" + _shard_name(rel, mirrored)
         np.savez(args.out / shard, local_rot=np.asarray(rot, np.float32))
-        entries.append({"source": rel, "path": str(path), "split": "val", "take": takes.get(rel),
-                        "mirrored": mirrored, "shard": shard})  # fmt: skip
+        entries.append(
+            {
+                "source": rel,
+                "path": str(path),
+                "split": "val",
+                "take": takes.get(rel),
+                "mirrored": mirrored,
+                "shard": shard,
+            }
+        )
 (args.out / "manifest.json").write_text(json.dumps({"files": entries}, indent=1))
 print(f"{args.out}: {sum(not e['mirrored'] for e in entries)} val files and their mirrors")

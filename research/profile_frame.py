@@ -102,8 +102,10 @@ def main() -> None:
     prof.enable()
     run()
     prof.disable()
-    rows = sorted(((ct, f"{f}:{line}:{name}", nc) for (f, line, name), (_, nc, _, ct, _) in
-                   pstats.Stats(prof).stats.items()), reverse=True)  # fmt: skip
+    rows = sorted(
+        ((ct, f"{f}:{line}:{name}", nc) for (f, line, name), (_, nc, _, ct, _) in pstats.Stats(prof).stats.items()),
+        reverse=True,
+    )
     step = next(ct for ct, name, _ in rows if "methods/dragposer.py" in name and name.endswith(":step"))
     for ct, name, calls in rows[: args.rows]:
         print(f"{100.0 * ct / step:6.1f} %  {calls:6d}  {name.split('/engine/')[-1]}")

@@ -82,8 +82,12 @@ def main() -> int:
             wall.append((time.perf_counter() - t) * 1000.0)
         size = vp.plotter.render_window.GetSize()
         print(f"view {size[0]}x{size[1]}, {len(snaps)} snapshots, {args.draws} draws")
-        print(f"cpu  ms per draw: median {np.median(cpu):5.1f}  p25 {np.percentile(cpu, 25):5.1f}  min {np.min(cpu):5.1f}")
-        print(f"wall ms per draw: median {np.median(wall):5.1f}  p25 {np.percentile(wall, 25):5.1f}  min {np.min(wall):5.1f}")
+        print(
+            f"cpu  ms per draw: median {np.median(cpu):5.1f}  p25 {np.percentile(cpu, 25):5.1f}  min {np.min(cpu):5.1f}"
+        )
+        print(
+            f"wall ms per draw: median {np.median(wall):5.1f}  p25 {np.percentile(wall, 25):5.1f}  min {np.min(wall):5.1f}"
+        )
         return 0
     finally:
         w.close()

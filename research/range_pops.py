@@ -41,5 +41,8 @@ for path in sys.argv[1:]:
                 now = np.linalg.norm(np.diff(b[r0:r1, j, :2], axis=0), axis=-1)[both].mean()
                 if now > was + 1e-6:
                     worse.append(f"{name} {was * 100:.2f} -> {now * 100:.2f} cm/frame")
-        print(f"{path}: {s}-{e}: largest step {steps.max() * 100:.1f} cm (limit "
-              f"{step_limit(m, ed.first, ed.last) * 100:.1f}); slid more: {', '.join(worse) or 'none'}", flush=True)
+        print(
+            f"{path}: {s}-{e}: largest step {steps.max() * 100:.1f} cm (limit "
+            f"{step_limit(m, ed.first, ed.last) * 100:.1f}); slid more: {', '.join(worse) or 'none'}",
+            flush=True,
+        )

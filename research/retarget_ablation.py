@@ -84,12 +84,13 @@ def offset_ablation(a: Motion, b: Motion, aligned: AlignedPair | None = None) ->
     ga = fk(la, zeros, sk.REST_OFFSETS)[1]
     gb = fk(lb, zeros, sk.REST_OFFSETS)[1]
     n = len(la)
-    k = np.stack([mean_rotation(Q.mul(Q.conjugate(ga[:, j]), gb[:, j]), np.ones(n))
-                  for j in range(sk.NUM_JOINTS)])  # fmt: skip
+    k = np.stack([mean_rotation(Q.mul(Q.conjugate(ga[:, j]), gb[:, j]), np.ones(n)) for j in range(sk.NUM_JOINTS)])
     fixed = la.copy()
     for j in range(sk.NUM_JOINTS):
         left = Q.conjugate(k[sk.PARENTS[j]]) if j > 0 else np.array([1.0, 0.0, 0.0, 0.0])
-        fixed[:, j] = Q.mul(Q.mul(np.broadcast_to(left, la[:, j].shape), la[:, j]), np.broadcast_to(k[j], la[:, j].shape))
+        fixed[:, j] = Q.mul(
+            Q.mul(np.broadcast_to(left, la[:, j].shape), la[:, j]), np.broadcast_to(k[j], la[:, j].shape)
+        )
     twist, swing = np.zeros(sk.NUM_JOINTS), np.zeros(sk.NUM_JOINTS)
     for j, name in enumerate(sk.JOINT_NAMES):
         twist[j], swing[j] = (float(v) for v in swing_twist_deg(k[j], joint_axis(name)))

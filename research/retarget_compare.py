@@ -90,7 +90,7 @@ def best_shift(sa: np.ndarray, sb: np.ndarray, max_shift: int) -> int:
         n = min(len(sa) - a0, len(sb) - b0)
         if n < least:
             continue
-        err = float(((sa[a0:a0 + n] - sb[b0:b0 + n]) ** 2).mean())
+        err = float(((sa[a0 : a0 + n] - sb[b0 : b0 + n]) ** 2).mean())
         if err < best_err:
             best, best_err = s, err
     return best

@@ -24,8 +24,15 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 MOCAP = ROOT.parent / "shared" / "data" / "mocap"
 #: One file per rig family of the shared data.
-FILES = ("cmu_iclone/005_04.bvh", "cmu_mb/07_03.bvh", "cmu_daz_cgspeed/07_03.bvh", "cmu_daz/indian/04.bvh",
-         "dragposer/example.bvh", "hdm05/HDM_bd_depositFloorR_001_120.amc", "cmu_asf/02/02_01.amc")  # fmt: skip
+FILES = (
+    "cmu_iclone/005_04.bvh",
+    "cmu_mb/07_03.bvh",
+    "cmu_daz_cgspeed/07_03.bvh",
+    "cmu_daz/indian/04.bvh",
+    "dragposer/example.bvh",
+    "hdm05/HDM_bd_depositFloorR_001_120.amc",
+    "cmu_asf/02/02_01.amc",
+)
 
 
 def snapshot(mocap: Path, max_frames: int) -> dict[str, np.ndarray]:
@@ -43,11 +50,13 @@ def snapshot(mocap: Path, max_frames: int) -> dict[str, np.ndarray]:
             out[key + "root_pos"] = motion.root_pos
             out[key + "offsets"] = motion.skeleton.offsets
             out[key + "align"] = np.array([np.full(4, np.nan) if a is None else a for a in rep.align or []])
-            out[key + "figures"] = np.array([rep.floor_shift, rep.height_m, rep.source_height_m, rep.version,
-                                             rep.frames])  # fmt: skip
+            out[key + "figures"] = np.array(
+                [rep.floor_shift, rep.height_m, rep.source_height_m, rep.version, rep.frames]
+            )
             out[key + "toe_tips"] = np.array([rep.toe_tips[t] for t in sorted(rep.toe_tips or {})])
-            out[key + "joints"] = np.array([*sorted(rep.body_joints or []), "|",
-                                            *sorted(f"{j}={r}" for j, r in (rep.twist_rules or {}).items())])
+            out[key + "joints"] = np.array(
+                [*sorted(rep.body_joints or []), "|", *sorted(f"{j}={r}" for j, r in (rep.twist_rules or {}).items())]
+            )
     return out
 
 

@@ -48,8 +48,9 @@ def per_file_row(gt: np.ndarray, rec: np.ndarray, err_deg: np.ndarray, joints: l
     angles are each rotation's mean angle from identity."""
     ident = np.array([1.0, 0.0, 0.0, 0.0])
     a_gt, a_rec = np.degrees(Q.angle(gt, ident)), np.degrees(Q.angle(rec, ident))
-    return float(err_deg.mean()), [(float(err_deg[:, j].mean()), float(a_gt[:, j].mean()), float(a_rec[:, j].mean()))
-                                   for j in joints]
+    return float(err_deg.mean()), [
+        (float(err_deg[:, j].mean()), float(a_gt[:, j].mean()), float(a_rec[:, j].mean())) for j in joints
+    ]
 
 
 def main() -> int:
@@ -102,8 +103,12 @@ def main() -> int:
                 axis = motion.skeleton.offsets[children[j][0]]
                 tw[:, j] = twist_angle(err[:, j], axis / np.linalg.norm(axis))
         twists.append(tw)
-        rows.append((Path(f).stem if len(Path(f).parts) < 2 else "/".join(Path(f).parts[-2:]),
-                     per_file_row(gt, out, errs[-1], joints)))
+        rows.append(
+            (
+                Path(f).stem if len(Path(f).parts) < 2 else "/".join(Path(f).parts[-2:]),
+                per_file_row(gt, out, errs[-1], joints),
+            )
+        )
     e, t = np.concatenate(errs).mean(0), np.concatenate(twists).mean(0)
     p = np.concatenate(pos_errs).mean(0)
     print(f"{'joint':<11} {'rot deg':>8} {'pos cm':>7}" + (f" {'twist deg':>9}" if args.twist else ""))
@@ -111,7 +116,9 @@ def main() -> int:
         print(f"{name:<11} {e[j]:8.1f} {p[j]:7.2f}" + (f" {t[j]:9.1f}" if args.twist and children[j] else ""))
     legs = [sk.JOINT_INDEX[n] for n in ("lhip", "lknee", "lankle", "ltoe", "rhip", "rknee", "rankle", "rtoe")]
     print(f"{'mean':<11} {e.mean():8.2f} {p.mean():7.2f}")
-    print(f"legs: {100.0 * p[legs].sum() / p.sum():.0f} % of the position error ({len(legs)} of {sk.NUM_JOINTS} joints)")
+    print(
+        f"legs: {100.0 * p[legs].sum() / p.sum():.0f} % of the position error ({len(legs)} of {sk.NUM_JOINTS} joints)"
+    )
     if args.per_file:
         names = [sk.JOINT_NAMES[j] for j in joints]
         print("\nper file: mean rot deg; per joint: error deg (truth/reconstruction angle from identity)")

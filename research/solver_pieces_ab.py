@@ -65,7 +65,7 @@ def main() -> int:
         times = {(p, k): [] for p in pieces for k in range(2)}
         for r in range(a.repeats):
             for p, f in pieces.items():
-                for k in ((0, 1) if r % 2 else (1, 0)):
+                for k in (0, 1) if r % 2 else (1, 0):
                     fp, z = set_up[k]
                     c0 = time.thread_time()
                     f(fp, z)

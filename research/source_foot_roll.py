@@ -42,7 +42,9 @@ def foot_roll(path: str, max_frames: int) -> dict[str, float]:
         axis = at["ToeBase"] - at["Foot"]
         inward = _across(world[:, names.index("CC_Base_Pelvis")] - at["Foot"], axis)
         lateral = _across(at["BigToe1"] - at["PinkyToe1"], axis)
-        cos = (inward * lateral).sum(1) / np.maximum(np.linalg.norm(inward, axis=1) * np.linalg.norm(lateral, axis=1), 1e-12)
+        cos = (inward * lateral).sum(1) / np.maximum(
+            np.linalg.norm(inward, axis=1) * np.linalg.norm(lateral, axis=1), 1e-12
+        )
         out[side] = float(cos.mean())
     return out
 

@@ -26,9 +26,11 @@ REPO = Path(__file__).resolve().parents[1]
 
 def _old_module(rev: str, tmp: Path):
     """The baseline's method module, importing the baseline's inference helpers."""
+
     def show(path: str) -> str:
-        return subprocess.run(["git", "-C", str(REPO), "show", f"{rev}:{path}"], check=True, capture_output=True,
-                              text=True).stdout  # fmt: skip
+        return subprocess.run(
+            ["git", "-C", str(REPO), "show", f"{rev}:{path}"], check=True, capture_output=True, text=True
+        ).stdout
 
     (tmp / "sp_old_infer.py").write_text(show("engine/models/sparseposer_infer.py"))
     method = show("engine/methods/sparseposer.py").replace("engine.models.sparseposer_infer", "sp_old_infer")
@@ -66,7 +68,7 @@ def main() -> int:
     d_rot = d_pos = 0.0
     for i in range(n):
         frame, res = tracking.frame(i), {}
-        for name in (("old", "new") if i % 2 == 0 else ("new", "old")):
+        for name in ("old", "new") if i % 2 == 0 else ("new", "old"):
             c0, t0 = time.thread_time(), time.perf_counter()
             res[name] = methods[name].step(frame)
             wall[name].append(1000.0 * (time.perf_counter() - t0))
@@ -75,10 +77,14 @@ def main() -> int:
         d_pos = max(d_pos, float(np.abs(res["old"].positions - res["new"].positions).max()))
     for name in methods:
         w, c = np.asarray(wall[name][10:]), np.asarray(cpu[name][10:])  # after a warm-up
-        print(f"{name}: wall min {w.min():.2f} median {np.median(w):.2f} ms; "
-              f"thread CPU min {c.min():.2f} median {np.median(c):.2f} ms")  # fmt: skip
-    print(f"{n} frames of {args.clip.name}; max |local rotation difference| {d_rot:.1e}, max |position difference| "
-          f"{d_pos:.1e} m")  # fmt: skip
+        print(
+            f"{name}: wall min {w.min():.2f} median {np.median(w):.2f} ms; "
+            f"thread CPU min {c.min():.2f} median {np.median(c):.2f} ms"
+        )
+    print(
+        f"{n} frames of {args.clip.name}; max |local rotation difference| {d_rot:.1e}, max |position difference| "
+        f"{d_pos:.1e} m"
+    )
     return 0
 
 

@@ -46,8 +46,9 @@ UNSTABLE_CM = 0.5
 
 def _val_files() -> list[str]:
     cli = str(Path(sys.executable).parent / "dragposer-studio")
-    return subprocess.run([cli, "data", "list", "--split", "val"], capture_output=True, text=True, check=True,
-                          cwd=ROOT).stdout.split()  # fmt: skip
+    return subprocess.run(
+        [cli, "data", "list", "--split", "val"], capture_output=True, text=True, check=True, cwd=ROOT
+    ).stdout.split()
 
 
 def pelvis_angle_deg(gt_q: np.ndarray, rec_q: np.ndarray) -> np.ndarray:
@@ -78,8 +79,15 @@ def heading_angle_deg(gt_q: np.ndarray, rec_q: np.ndarray) -> np.ndarray:
     return np.degrees(np.abs(np.arctan2(cross, np.einsum("...i,...i", a, b))))
 
 
-def run_once(motion, preset: str, mode: str, noise: float, seed: int, settings: dict | None = None,
-             method_name: str = "dragposer") -> dict:  # fmt: skip
+def run_once(
+    motion,
+    preset: str,
+    mode: str,
+    noise: float,
+    seed: int,
+    settings: dict | None = None,
+    method_name: str = "dragposer",
+) -> dict:
     """One reconstruction; its error summary (cm, deg) and its joint positions ``rec_pos (F, 22, 3)``
     (``settings``: optimizer settings applied with ``configure``, as ``--set`` does)."""
     from engine.kinematics.fk import fk
@@ -97,9 +105,14 @@ def run_once(motion, preset: str, mode: str, noise: float, seed: int, settings: 
     angle = pelvis_angle_deg(motion.local_rot[:, 0], rec.local_rot[:, 0])
     turn = heading_angle_deg(motion.local_rot[:, 0], rec.local_rot[:, 0])
     finite = bool(np.isfinite(err).all())
-    return {"pos_cm": float(np.nanmean(err)), "worst_frame_cm": float(np.nanmax(err)) if finite else math.inf,
-            "pelvis_max_deg": float(np.nanmax(angle)),
-            "heading_max_deg": float(np.nanmax(turn)), "finite": finite, "rec_pos": rec_pos}  # fmt: skip
+    return {
+        "pos_cm": float(np.nanmean(err)),
+        "worst_frame_cm": float(np.nanmax(err)) if finite else math.inf,
+        "pelvis_max_deg": float(np.nanmax(angle)),
+        "heading_max_deg": float(np.nanmax(turn)),
+        "finite": finite,
+        "rec_pos": rec_pos,
+    }
 
 
 def main() -> int:
@@ -111,8 +124,13 @@ def main() -> int:
     ap.add_argument("--max-frames", type=int, default=300, help="first N frames of each file (0: whole files)")
     ap.add_argument("--noise", type=float, default=1e-6, help="tracker position perturbation, metres (default 1e-6)")
     ap.add_argument("--seeds", type=int, nargs="+", default=[1, 2])
-    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                    help="optimizer setting, repeatable (as for evaluate)")
+    ap.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="optimizer setting, repeatable (as for evaluate)",
+    )
     ap.add_argument("--json", type=Path)
     ap.add_argument("--markdown", type=Path, help="also write the table as Markdown")
     args = ap.parse_args()
@@ -124,10 +142,22 @@ def main() -> int:
     settings = parse_overrides(OptimizerSettings, args.set) if args.set else {}
     files = args.files or _val_files()
     report, flags_total, rows = [], 0, []
-    head = ("file", "mode", "clean cm", "worst frame cm", "pelvis max deg", "heading max deg", "perturbed cm",
-            "spread cm", "apart cm", "flags")  # fmt: skip
-    print(f"{head[0]:<18} {head[1]:<9} {'clean cm':>9} {'worst':>7} {'pelvis':>7} {'heading':>7} "
-          f"{'perturbed cm':>14} {'spread':>7} {'apart':>7}  flags")  # fmt: skip
+    head = (
+        "file",
+        "mode",
+        "clean cm",
+        "worst frame cm",
+        "pelvis max deg",
+        "heading max deg",
+        "perturbed cm",
+        "spread cm",
+        "apart cm",
+        "flags",
+    )
+    print(
+        f"{head[0]:<18} {head[1]:<9} {'clean cm':>9} {'worst':>7} {'pelvis':>7} {'heading':>7} "
+        f"{'perturbed cm':>14} {'spread':>7} {'apart':>7}  flags"
+    )
     for path in files:
         motion = load_motion(path, max_frames=args.max_frames or None)
         for mode in args.modes:
@@ -146,22 +176,58 @@ def main() -> int:
                 flags.append("UNSTABLE")
             flags_total += len(flags)
             name = f"{Path(path).parent.name}/{Path(path).stem}"
-            row = (name, mode, f"{clean['pos_cm']:.2f}", f"{max(r['worst_frame_cm'] for r in runs):.1f}",
-                   f"{max(r['pelvis_max_deg'] for r in runs):.1f}", f"{max(r['heading_max_deg'] for r in runs):.1f}",
-                   " ".join(f"{r['pos_cm']:.2f}" for r in noisy), f"{spread:.3f}", f"{apart:.3f}", " ".join(flags))
+            row = (
+                name,
+                mode,
+                f"{clean['pos_cm']:.2f}",
+                f"{max(r['worst_frame_cm'] for r in runs):.1f}",
+                f"{max(r['pelvis_max_deg'] for r in runs):.1f}",
+                f"{max(r['heading_max_deg'] for r in runs):.1f}",
+                " ".join(f"{r['pos_cm']:.2f}" for r in noisy),
+                f"{spread:.3f}",
+                f"{apart:.3f}",
+                " ".join(flags),
+            )
             rows.append(row)
-            print(f"{row[0]:<18} {row[1]:<9} {row[2]:>9} {row[3]:>7} {row[4]:>7} {row[5]:>7} {row[6]:>14} "
-                  f"{row[7]:>7} {row[8]:>7}  {row[9]}", flush=True)  # fmt: skip
+            print(
+                f"{row[0]:<18} {row[1]:<9} {row[2]:>9} {row[3]:>7} {row[4]:>7} {row[5]:>7} {row[6]:>14} "
+                f"{row[7]:>7} {row[8]:>7}  {row[9]}",
+                flush=True,
+            )
             strip = lambda r: {k: v for k, v in r.items() if k != "rec_pos"}  # noqa: E731
-            report.append({"file": path, "mode": mode, "clean": strip(clean), "perturbed": [strip(r) for r in noisy],
-                           "spread_cm": spread, "apart_cm": apart, "flags": flags})  # fmt: skip
-    summary = (f"{flags_total} flag(s) over {len(report)} runs (method {args.method}, preset {args.sensors}, "
-               f"{args.max_frames or 'all'} frames, noise {args.noise:g} m, seeds {' '.join(map(str, args.seeds))}"
-               + (f", {' '.join(args.set)}" if args.set else "") + ")")
+            report.append(
+                {
+                    "file": path,
+                    "mode": mode,
+                    "clean": strip(clean),
+                    "perturbed": [strip(r) for r in noisy],
+                    "spread_cm": spread,
+                    "apart_cm": apart,
+                    "flags": flags,
+                }
+            )
+    summary = (
+        f"{flags_total} flag(s) over {len(report)} runs (method {args.method}, preset {args.sensors}, "
+        f"{args.max_frames or 'all'} frames, noise {args.noise:g} m, seeds {' '.join(map(str, args.seeds))}"
+        + (f", {' '.join(args.set)}" if args.set else "")
+        + ")"
+    )
     print(summary)
     if args.json:
-        write_text(args.json, json.dumps({"method": args.method, "sensors": args.sensors, "max_frames": args.max_frames,
-                                          "noise_m": args.noise, "settings": settings, "runs": report}, indent=1))  # fmt: skip
+        write_text(
+            args.json,
+            json.dumps(
+                {
+                    "method": args.method,
+                    "sensors": args.sensors,
+                    "max_frames": args.max_frames,
+                    "noise_m": args.noise,
+                    "settings": settings,
+                    "runs": report,
+                },
+                indent=1,
+            ),
+        )
     if args.markdown:
         lines = ["| " + " | ".join(head) + " |", "|---|---|" + "---:|" * 7 + "---|"]
         lines += ["| " + " | ".join(r) + " |" for r in rows]

@@ -26,8 +26,19 @@ def run_once(extra: list[str]) -> list[tuple[float, str, str]]:
     """One launch: ``(seconds since launch, process, its CPU seconds, label)`` rows, the exit last."""
     with tempfile.TemporaryDirectory() as tmp:
         trace = Path(tmp) / "trace.txt"
-        cmd = [sys.executable, "-m", "engine.cli.main", "gui", "--sensors", "6", "--screenshot",
-               str(Path(tmp) / "shot.png"), "--after-frames", "1", *extra]  # fmt: skip
+        cmd = [
+            sys.executable,
+            "-m",
+            "engine.cli.main",
+            "gui",
+            "--sensors",
+            "6",
+            "--screenshot",
+            str(Path(tmp) / "shot.png"),
+            "--after-frames",
+            "1",
+            *extra,
+        ]
         t0 = time.time()
         subprocess.run(cmd, env={**os.environ, ENV: str(trace)}, check=True)
         end = time.time()

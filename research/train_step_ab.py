@@ -61,8 +61,23 @@ print(json.dumps({"cpu_ms": 1000 * (time.process_time() - cpu) / steps,
 
 def run(root: Path, args) -> dict:
     env = dict(os.environ, PYTHONPATH=str(root), OMP_NUM_THREADS=str(args.threads))
-    out = subprocess.run([sys.executable, "-c", STEP, str(args.data), str(args.steps), str(args.threads), args.split,
-                          str(ROOT / "assets/models/vae.toml")], env=env, check=True, capture_output=True, text=True, cwd=root)
+    out = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            STEP,
+            str(args.data),
+            str(args.steps),
+            str(args.threads),
+            args.split,
+            str(ROOT / "assets/models/vae.toml"),
+        ],
+        env=env,
+        check=True,
+        capture_output=True,
+        text=True,
+        cwd=root,
+    )
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
@@ -81,10 +96,15 @@ def main() -> None:
         for r in range(args.rounds):
             for name, root in versions.items():
                 rows[name].append(run(root, args))
-                print(f"round {r + 1} {name:8s} " + " ".join(f"{k}={v:.8g}" for k, v in rows[name][-1].items()), flush=True)
+                print(
+                    f"round {r + 1} {name:8s} " + " ".join(f"{k}={v:.8g}" for k, v in rows[name][-1].items()),
+                    flush=True,
+                )
     med = {k: sorted(x["cpu_ms"] for x in v)[len(v) // 2] for k, v in rows.items()}
-    print(f"median CPU ms/step: baseline {med['baseline']:.1f}, tree {med['tree']:.1f}, "
-          f"ratio {med['baseline'] / med['tree']:.2f}x")
+    print(
+        f"median CPU ms/step: baseline {med['baseline']:.1f}, tree {med['tree']:.1f}, "
+        f"ratio {med['baseline'] / med['tree']:.2f}x"
+    )
 
 
 if __name__ == "__main__":

@@ -51,8 +51,12 @@ def main() -> int:
     p.add_argument("--bank", type=Path, default=DEFAULT_BANK)
     p.add_argument("--vae", type=Path, default=Path(__file__).resolve().parent.parent / "assets" / "models" / "vae.pt")
     p.add_argument("--stride", type=int, default=4, help="every N-th validation frame (default 4)")
-    p.add_argument("--mocap", type=Path, default=Path(__file__).resolve().parent.parent.parent / "shared" / "data" / "mocap",
-                   help="folder holding the validation files (default: ../shared/data/mocap)")  # fmt: skip
+    p.add_argument(
+        "--mocap",
+        type=Path,
+        default=Path(__file__).resolve().parent.parent.parent / "shared" / "data" / "mocap",
+        help="folder holding the validation files (default: ../shared/data/mocap)",
+    )
     p.add_argument("--quantile", type=float, default=0.99, help="threshold quantile over unseen poses (default 0.99)")
     args = p.parse_args()
     t0 = time.perf_counter()
@@ -68,14 +72,20 @@ def main() -> int:
     norms = np.linalg.norm(unseen, axis=1)
     m = with_thresholds(m, np.quantile(nearest, args.quantile), np.quantile(norms, args.quantile))
     m.save(args.out)
-    print(f"wrote {args.out}: {len(bank)} bank latents, explained variance {m.explained[0]:.3f} + "
-          f"{m.explained[1]:.3f} = {m.explained.sum():.3f}")  # fmt: skip
+    print(
+        f"wrote {args.out}: {len(bank)} bank latents, explained variance {m.explained[0]:.3f} + "
+        f"{m.explained[1]:.3f} = {m.explained.sum():.3f}"
+    )
     q = (0.5, 0.9, 0.99)
-    print(f"unseen poses: {len(unseen)} (validation files, every {args.stride}th frame); nearest-bank distance "
-          f"p50/p90/p99 {' / '.join(f'{v:.3f}' for v in np.quantile(nearest, q))}, norm p50/p90/p99 "
-          f"{' / '.join(f'{v:.3f}' for v in np.quantile(norms, q))}")  # fmt: skip
-    print(f"thresholds (quantile {args.quantile}): nearest {m.nn_threshold:.3f}, norm {m.norm_threshold:.3f}; "
-          f"{time.perf_counter() - t0:.1f} s")  # fmt: skip
+    print(
+        f"unseen poses: {len(unseen)} (validation files, every {args.stride}th frame); nearest-bank distance "
+        f"p50/p90/p99 {' / '.join(f'{v:.3f}' for v in np.quantile(nearest, q))}, norm p50/p90/p99 "
+        f"{' / '.join(f'{v:.3f}' for v in np.quantile(norms, q))}"
+    )
+    print(
+        f"thresholds (quantile {args.quantile}): nearest {m.nn_threshold:.3f}, norm {m.norm_threshold:.3f}; "
+        f"{time.perf_counter() - t0:.1f} s"
+    )
     return 0
 
 

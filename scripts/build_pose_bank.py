@@ -48,8 +48,14 @@ def bank_from_motions(motions, vae, k: int = 8, vae_sha256: str = "", stride: in
         prev.append(np.concatenate((np.repeat(a[:1], LAG, 0), a[:-LAG]))[: len(a)][::stride])
         ae.reset(motion.skeleton, reference=motion)
         lat.append(ae._latent[::stride])
-    return PoseBank(np.concatenate(pos), np.concatenate(rot), np.concatenate(prev),
-                    np.concatenate(lat).astype(np.float32), vae_sha256, k)  # fmt: skip
+    return PoseBank(
+        np.concatenate(pos),
+        np.concatenate(rot),
+        np.concatenate(prev),
+        np.concatenate(lat).astype(np.float32),
+        vae_sha256,
+        k,
+    )
 
 
 def main() -> int:
@@ -79,9 +85,11 @@ def main() -> int:
             motions.append(Motion(d["local_rot"], d["root_pos"], sk.Skeleton(offsets=d["offsets"])))
     bank = bank_from_motions(motions, vae, args.k, file_sha256(vae_file), args.stride)
     bank.save(args.out)
-    print(f"wrote {args.out}: {len(bank)} frames (stride {args.stride}) of {len(motions)} training clips "
-          f"(data hash {man.get('hash')}), "
-          f"{time.monotonic() - t0:.0f} s")  # fmt: skip
+    print(
+        f"wrote {args.out}: {len(bank)} frames (stride {args.stride}) of {len(motions)} training clips "
+        f"(data hash {man.get('hash')}), "
+        f"{time.monotonic() - t0:.0f} s"
+    )
     return 0
 
 

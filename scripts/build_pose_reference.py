@@ -31,8 +31,12 @@ REPO = Path(__file__).resolve().parent.parent
 
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    p.add_argument("--mocap", type=Path, default=REPO.parent / "shared" / "data" / "mocap",
-                   help="folder holding the validation files (default: ../shared/data/mocap)")  # fmt: skip
+    p.add_argument(
+        "--mocap",
+        type=Path,
+        default=REPO.parent / "shared" / "data" / "mocap",
+        help="folder holding the validation files (default: ../shared/data/mocap)",
+    )
     p.add_argument("--out", type=Path, default=REPO / "assets" / "reference" / "validation_poses.npz")
     p.add_argument("--stride", type=int, default=STRIDE, help=f"every N-th frame (default {STRIDE})")
     args = p.parse_args()
@@ -46,11 +50,19 @@ def main() -> int:
         takes.append(np.full(len(local), i, np.int16))
         shas.append(file_sha256(path))
     with atomic_path(args.out, suffix=".npz") as tmp:
-        np.savez_compressed(tmp, local_rot=np.concatenate(rots), take=np.concatenate(takes),
-                            names=np.array(VALIDATION_FILES), source_sha256=np.array(shas),
-                            stride=np.int64(args.stride), retarget_version=np.int64(RETARGET_VERSION))  # fmt: skip
-    print(f"wrote {args.out}: {sum(len(r) for r in rots)} poses of {len(rots)} files, every {args.stride}th frame, "
-          f"retarget version {RETARGET_VERSION}, {args.out.stat().st_size / 1e3:.0f} kB")  # fmt: skip
+        np.savez_compressed(
+            tmp,
+            local_rot=np.concatenate(rots),
+            take=np.concatenate(takes),
+            names=np.array(VALIDATION_FILES),
+            source_sha256=np.array(shas),
+            stride=np.int64(args.stride),
+            retarget_version=np.int64(RETARGET_VERSION),
+        )
+    print(
+        f"wrote {args.out}: {sum(len(r) for r in rots)} poses of {len(rots)} files, every {args.stride}th frame, "
+        f"retarget version {RETARGET_VERSION}, {args.out.stat().st_size / 1e3:.0f} kB"
+    )
     return 0
 
 

@@ -35,8 +35,7 @@ METHODS = ("dragposer", "ik")
 #: decoder can beat; one realtime run on preset 6 (the trackers do not matter to it).
 CEILING = ("autoencoder", "6", "realtime")
 #: Runs with trackers that fail: (label, preset, evaluate options), realtime only.
-LOSSY = (("faulty 1%", "6", ("--faulty", "0.01")), ("gaps", "6", ("--gaps",)),
-         ("gaps", "3-head-hands", ("--gaps",)))  # fmt: skip
+LOSSY = (("faulty 1%", "6", ("--faulty", "0.01")), ("gaps", "6", ("--gaps",)), ("gaps", "3-head-hands", ("--gaps",)))
 
 #: DragPoser paper (Ponton et al. 2024), Tables 1 and 2: Pos cm (root aligned), Rot deg,
 #: Vel cm/s, EE cm; means over their test sets (HUMAN4D, SOMA), trained on DanceDB.
@@ -50,8 +49,11 @@ PAPER = {
     "6 faulty 1%": (6.55, 12.0, 21.1, 10.2),
 }
 #: The paper's baselines on the same sets (Table 1).
-PAPER_OTHERS = {"6": "FinalIK 3.31 / 11.5; SparsePoser 2.81 / 5.78; AvatarPoser+ 7.66 / 11.3",
-                "4": "AvatarPoser 9.24 / 12.4", "3-head-hands": "AvatarPoser (3) 11.0 / 14.3"}  # fmt: skip
+PAPER_OTHERS = {
+    "6": "FinalIK 3.31 / 11.5; SparsePoser 2.81 / 5.78; AvatarPoser+ 7.66 / 11.3",
+    "4": "AvatarPoser 9.24 / 12.4",
+    "3-head-hands": "AvatarPoser (3) 11.0 / 14.3",
+}
 
 
 def _name(method: str, preset: str, mode: str, extra: tuple[str, ...] = ()) -> str:
@@ -59,16 +61,40 @@ def _name(method: str, preset: str, mode: str, extra: tuple[str, ...] = ()) -> s
     return f"{method}-{preset}-{mode}" + (f"-{tag}" if tag else "")
 
 
-def run(out: Path, files: list[str], method: str, preset: str, mode: str, frames: int,
-        extra: tuple[str, ...], models: list[str]) -> str:  # fmt: skip
+def run(
+    out: Path,
+    files: list[str],
+    method: str,
+    preset: str,
+    mode: str,
+    frames: int,
+    extra: tuple[str, ...],
+    models: list[str],
+) -> str:
     name = _name(method, preset, mode, extra)
     target = out / f"{name}.json"
     if target.is_file():
         return f"kept {target.name}"
-    cmd = [CLI, "evaluate", *files, "--method", method, "--sensors", preset, "--mode", mode,
-           "--max-frames", str(frames), "--no-progress", "--json", str(target), *extra,
-           "--jobs", "1",  # this script runs the evaluations side by side itself
-           *(models if method == "dragposer" else _vae_only(models) if method == "autoencoder" else [])]  # fmt: skip
+    cmd = [
+        CLI,
+        "evaluate",
+        *files,
+        "--method",
+        method,
+        "--sensors",
+        preset,
+        "--mode",
+        mode,
+        "--max-frames",
+        str(frames),
+        "--no-progress",
+        "--json",
+        str(target),
+        *extra,
+        "--jobs",
+        "1",  # this script runs the evaluations side by side itself
+        *(models if method == "dragposer" else _vae_only(models) if method == "autoencoder" else []),
+    ]
     env = {**os.environ, "OMP_NUM_THREADS": "1", "PYTHONPATH": str(ROOT)}
     t0 = time.monotonic()
     res = subprocess.run(cmd, capture_output=True, text=True, env=env)
@@ -78,7 +104,7 @@ def run(out: Path, files: list[str], method: str, preset: str, mode: str, frames
 
 def _vae_only(models: list[str]) -> list[str]:
     """The ``--vae PATH`` pair of the model options (the autoencoder has no predictor)."""
-    return models[models.index("--vae"):][:2] if "--vae" in models else []
+    return models[models.index("--vae") :][:2] if "--vae" in models else []
 
 
 def _total(out: Path, name: str) -> dict | None:
@@ -91,8 +117,11 @@ def _f(v, fmt: str) -> str:
 
 
 def main_table(out: Path, methods) -> str:
-    rows = ["| preset | mode | method | Pos cm | Pos cm (root aligned) | Rot deg | Vel cm/s | EE cm | "
-            "Jitter | GT jitter | ms/frame |", "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|"]  # fmt: skip
+    rows = [
+        "| preset | mode | method | Pos cm | Pos cm (root aligned) | Rot deg | Vel cm/s | EE cm | "
+        "Jitter | GT jitter | ms/frame |",
+        "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|",
+    ]
     for preset in PRESETS:
         for mode in MODES:
             for method in methods:
@@ -100,43 +129,65 @@ def main_table(out: Path, methods) -> str:
                 if t is None:
                     continue
                 bold = "**" if method == "dragposer" else ""
-                rows.append(f"| {preset} | {mode} | {method} | {bold}{_f(t['pos_cm'], '.2f')}{bold} | "
-                            f"{_f(t.get('pos_rootaligned_cm'), '.2f')} | {bold}{_f(t['rot_deg'], '.1f')}{bold} | "
-                            f"{_f(t['vel_cms'], '.1f')} | {_f(t['ee_cm'], '.2f')} | {_f(t['jitter'], '.1f')} | "
-                            f"{_f(t['gt_jitter'], '.1f')} | {_f(t['ms_per_frame'], '.0f')} |")  # fmt: skip
+                rows.append(
+                    f"| {preset} | {mode} | {method} | {bold}{_f(t['pos_cm'], '.2f')}{bold} | "
+                    f"{_f(t.get('pos_rootaligned_cm'), '.2f')} | {bold}{_f(t['rot_deg'], '.1f')}{bold} | "
+                    f"{_f(t['vel_cms'], '.1f')} | {_f(t['ee_cm'], '.2f')} | {_f(t['jitter'], '.1f')} | "
+                    f"{_f(t['gt_jitter'], '.1f')} | {_f(t['ms_per_frame'], '.0f')} |"
+                )
     t = _total(out, _name(*CEILING))
     if t is not None:
-        rows.append(f"| (any) | | VAE ceiling | {_f(t['pos_cm'], '.2f')} | {_f(t.get('pos_rootaligned_cm'), '.2f')} | "
-                    f"{_f(t['rot_deg'], '.1f')} | {_f(t['vel_cms'], '.1f')} | {_f(t['ee_cm'], '.2f')} | "
-                    f"{_f(t['jitter'], '.1f')} | {_f(t['gt_jitter'], '.1f')} | {_f(t['ms_per_frame'], '.0f')} |")  # fmt: skip
+        rows.append(
+            f"| (any) | | VAE ceiling | {_f(t['pos_cm'], '.2f')} | {_f(t.get('pos_rootaligned_cm'), '.2f')} | "
+            f"{_f(t['rot_deg'], '.1f')} | {_f(t['vel_cms'], '.1f')} | {_f(t['ee_cm'], '.2f')} | "
+            f"{_f(t['jitter'], '.1f')} | {_f(t['gt_jitter'], '.1f')} | {_f(t['ms_per_frame'], '.0f')} |"
+        )
     return "\n".join(rows)
 
 
 def lossy_table(out: Path, methods) -> str:
-    rows = ["| trackers | preset | method | Pos cm | Pos cm (root aligned) | Rot deg | EE cm | Jitter | PJ | AUJ | "
-            "transitions |", "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|"]  # fmt: skip
+    rows = [
+        "| trackers | preset | method | Pos cm | Pos cm (root aligned) | Rot deg | EE cm | Jitter | PJ | AUJ | "
+        "transitions |",
+        "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|",
+    ]
     for label, preset, extra in LOSSY:
         for method in methods:
             t = _total(out, _name(method, preset, "realtime", extra))
             if t is None:
                 continue
-            rows.append(f"| {label} | {preset} | {method} | {_f(t['pos_cm'], '.2f')} | "
-                        f"{_f(t.get('pos_rootaligned_cm'), '.2f')} | {_f(t['rot_deg'], '.1f')} | {_f(t['ee_cm'], '.2f')} | "
-                        f"{_f(t['jitter'], '.1f')} | {_f(t.get('pj'), '.1f')} | {_f(t.get('auj'), '.0f')} | "
-                        f"{t.get('transitions', '-')} |")  # fmt: skip
+            rows.append(
+                f"| {label} | {preset} | {method} | {_f(t['pos_cm'], '.2f')} | "
+                f"{_f(t.get('pos_rootaligned_cm'), '.2f')} | {_f(t['rot_deg'], '.1f')} | {_f(t['ee_cm'], '.2f')} | "
+                f"{_f(t['jitter'], '.1f')} | {_f(t.get('pj'), '.1f')} | {_f(t.get('auj'), '.0f')} | "
+                f"{t.get('transitions', '-')} |"
+            )
     return "\n".join(rows)
 
 
 def paper_table(out: Path) -> str:
-    rows = ["| sensors | paper Pos cm (root aligned) | ours, root aligned | ours, world | paper Rot deg | ours | "
-            "paper EE cm | ours | paper's baselines (Pos / Rot) |", "|---|---:|---:|---:|---:|---:|---:|---:|---|"]  # fmt: skip
+    rows = [
+        "| sensors | paper Pos cm (root aligned) | ours, root aligned | ours, world | paper Rot deg | ours | "
+        "paper EE cm | ours | paper's baselines (Pos / Rot) |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---|",
+    ]
     for key, (p_pos, p_rot, _p_vel, p_ee) in PAPER.items():
         preset, extra = (key.split(" ")[0], ("--faulty", "0.01")) if "faulty" in key else (key, ())
         t = _total(out, _name("dragposer", preset, "realtime", extra))
-        ours = (("-",) * 4) if t is None else (_f(t.get("pos_rootaligned_cm"), ".2f"), _f(t["pos_cm"], ".2f"),
-                                               _f(t["rot_deg"], ".1f"), _f(t["ee_cm"], ".2f"))  # fmt: skip
-        rows.append(f"| {key} | {p_pos} | {ours[0]} | {ours[1]} | {p_rot} | {ours[2]} | {p_ee} | {ours[3]} | "
-                    f"{PAPER_OTHERS.get(key, '')} |")  # fmt: skip
+        ours = (
+            (("-",) * 4)
+            if t is None
+            else (
+                _f(t.get("pos_rootaligned_cm"), ".2f"),
+                _f(t["pos_cm"], ".2f"),
+                _f(t["rot_deg"], ".1f"),
+                _f(t["ee_cm"], ".2f"),
+            )
+        )
+        rows.append(
+            f"| {key} | {p_pos} | {ours[0]} | {ours[1]} | {p_rot} | {ours[2]} | {p_ee} | {ours[3]} | "
+            f"{PAPER_OTHERS.get(key, '')} |"
+        )
     return "\n".join(rows)
 
 
@@ -150,12 +201,18 @@ def _files_text(files: list[str], given: bool) -> str:
 
 def document(out: Path, methods, args, files: list[str]) -> str:
     gt = _total(out, _name("ik", "6", "realtime")) or _total(out, _name("dragposer", "6", "realtime")) or {}
-    models = f"`{args.vae}` and `{args.predictor}`" if args.vae else "`assets/models` (see the [model card](../assets/models/README.md))"
+    models = (
+        f"`{args.vae}` and `{args.predictor}`"
+        if args.vae
+        else "`assets/models` (see the [model card](../assets/models/README.md))"
+    )
     lossy = args.lossy_frames or args.realtime_frames
     inputs = "FILE..." if args.files else "$(dragposer-studio data list --split val)"
-    cmd = (f"python scripts/eval_table.py {args.out} --jobs {args.jobs} --realtime-frames {args.realtime_frames} "
-           f"--offline-frames {args.offline_frames} --lossy-frames {lossy} --doc docs/evaluation.md"
-           + (" --files FILE..." if args.files else ""))
+    cmd = (
+        f"python scripts/eval_table.py {args.out} --jobs {args.jobs} --realtime-frames {args.realtime_frames} "
+        f"--offline-frames {args.offline_frames} --lossy-frames {lossy} --doc docs/evaluation.md"
+        + (" --files FILE..." if args.files else "")
+    )
     return f"""# Evaluation of the shipped models
 
 Generated by `scripts/eval_table.py` (do not edit by hand) with the models in {models},
@@ -172,7 +229,7 @@ which runs, for every preset P, mode M and method X,
 first {args.realtime_frames} frames of each file in realtime mode, first {args.offline_frames} in
 offline mode (offline costs up to 100 iterations per frame), first {lossy} with lost trackers. `ms/frame` was measured with
 {args.jobs} evaluations sharing the two cores (idle-machine speed: `docs/performance.md`).
-The ground truth's own jitter on the realtime frames is {_f(gt.get('gt_jitter'), '.1f')}.
+The ground truth's own jitter on the realtime frames is {_f(gt.get("gt_jitter"), ".1f")}.
 What limits the figures that miss their targets, with the ablations that show it:
 [accuracy.md](accuracy.md).
 {(chr(10) + "**Note.** " + args.note + chr(10)) if args.note else ""}
@@ -236,12 +293,21 @@ def main() -> int:
     ap.add_argument("--jobs", type=int, default=2, help="evaluations at once (default 2: the machine's cores)")
     ap.add_argument("--realtime-frames", type=int, default=300)
     ap.add_argument("--offline-frames", type=int, default=120)
-    ap.add_argument("--lossy-frames", type=int, help="frames of the --faulty/--gaps runs (default: --realtime-frames; "
-                    "PJ/AUJ need complete 1-s windows after tracking changes, so 300 or more)")
+    ap.add_argument(
+        "--lossy-frames",
+        type=int,
+        help="frames of the --faulty/--gaps runs (default: --realtime-frames; "
+        "PJ/AUJ need complete 1-s windows after tracking changes, so 300 or more)",
+    )
     ap.add_argument("--no-ceiling", action="store_true", help="skip the VAE-ceiling (autoencoder) run")
     ap.add_argument("--table-only", action="store_true", help="print (and write) the tables from the JSONs present")
-    ap.add_argument("--methods", nargs="+", default=list(METHODS), choices=METHODS,
-                    help="run only these methods (e.g. ik while the models are still training)")
+    ap.add_argument(
+        "--methods",
+        nargs="+",
+        default=list(METHODS),
+        choices=METHODS,
+        help="run only these methods (e.g. ik while the models are still training)",
+    )
     ap.add_argument("--presets", nargs="+", default=list(PRESETS), choices=PRESETS)
     ap.add_argument("--no-lossy", action="store_true", help="skip the --faulty / --gaps runs")
     ap.add_argument("--modes", nargs="+", default=list(MODES), choices=MODES, help="solver modes (default: all)")
@@ -249,16 +315,33 @@ def main() -> int:
     ap.add_argument("--predictor")
     ap.add_argument("--doc", type=Path, help="write the whole Markdown document here (docs/evaluation.md)")
     ap.add_argument("--note", help="a paragraph to state in the document (e.g. which runs are missing)")
-    ap.add_argument("--files", nargs="+", help="evaluate these BVH files instead of those of "
-                    "'dragposer-studio data list --split val' (e.g. an earlier split's validation files)")
+    ap.add_argument(
+        "--files",
+        nargs="+",
+        help="evaluate these BVH files instead of those of "
+        "'dragposer-studio data list --split val' (e.g. an earlier split's validation files)",
+    )
     args = ap.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
-    files = args.files or subprocess.run([CLI, "data", "list", "--split", "val"], capture_output=True, text=True,
-                                         check=True, cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)}).stdout.split()  # fmt: skip
+    files = (
+        args.files
+        or subprocess.run(
+            [CLI, "data", "list", "--split", "val"],
+            capture_output=True,
+            text=True,
+            check=True,
+            cwd=ROOT,
+            env={**os.environ, "PYTHONPATH": str(ROOT)},
+        ).stdout.split()
+    )
     models = [*(["--vae", args.vae] if args.vae else []), *(["--predictor", args.predictor] if args.predictor else [])]
     if not args.table_only:
-        jobs = [(m, p, mode, args.realtime_frames if mode == "realtime" else args.offline_frames, ())
-                for p in args.presets for mode in args.modes for m in args.methods]  # fmt: skip
+        jobs = [
+            (m, p, mode, args.realtime_frames if mode == "realtime" else args.offline_frames, ())
+            for p in args.presets
+            for mode in args.modes
+            for m in args.methods
+        ]
         if not args.no_lossy:
             lossy = args.lossy_frames or args.realtime_frames
             jobs += [(m, p, "realtime", lossy, extra) for _, p, extra in LOSSY for m in args.methods]

@@ -70,7 +70,9 @@ def main() -> int:
     seq = s.latest.seq
     v.map.plot.repaint()
     t0 = time.perf_counter()
-    QTest.mouseClick(v.map.plot.viewport(), Qt.MouseButton.LeftButton, pos=v.map.to_widget(*(view.xy + [1.2, 0.9])).toPoint())
+    QTest.mouseClick(
+        v.map.plot.viewport(), Qt.MouseButton.LeftButton, pos=v.map.to_widget(*(view.xy + [1.2, 0.9])).toPoint()
+    )
     wait(app, lambda: s.latest.seq > seq and s.latest.decoded is not None)
     print(f"click to decoded snapshot: {1000 * (time.perf_counter() - t0):.1f} ms")
     for _ in range(30):
@@ -88,7 +90,10 @@ def main() -> int:
     norms = dict(zip(d.names, np.linalg.norm(d.forces[0], axis=1).round(3)))
     print("force norms at iteration 0:", norms)
     print("conflicts:", v.forces.info.text())
-    print("most influential dimensions on the left wrist:", v.gallery.influential or list(np.argsort(d.influence)[::-1][:5]))
+    print(
+        "most influential dimensions on the left wrist:",
+        v.gallery.influential or list(np.argsort(d.influence)[::-1][:5]),
+    )
     for _ in range(30):
         app.processEvents()
         time.sleep(0.02)

@@ -63,7 +63,8 @@ def shipped_models_unchanged():
             changed = [k for k, t in model.state_dict().items() if not torch.equal(t, file.state_dict()[k])]
             assert not changed, f"a test changed the shared shipped {kind}: {changed[:5]}"
             assert not model.training and not any(p.requires_grad for p in model.parameters()), (
-                f"a test unfroze the shared shipped {kind}")  # fmt: skip
+                f"a test unfroze the shared shipped {kind}"
+            )
 
 
 @pytest.fixture(scope="session")

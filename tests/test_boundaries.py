@@ -23,8 +23,11 @@ TORCH_MODULES = frozenset({"torch"})
 REPO_ONLY = frozenset({"research", "scripts"})
 
 #: package folder -> top-level modules it must never import
-RULES: dict[str, frozenset[str]] = {"engine": GUI_MODULES | REPO_ONLY, "widgets": TORCH_MODULES | REPO_ONLY,
-                                    "app": REPO_ONLY}  # fmt: skip
+RULES: dict[str, frozenset[str]] = {
+    "engine": GUI_MODULES | REPO_ONLY,
+    "widgets": TORCH_MODULES | REPO_ONLY,
+    "app": REPO_ONLY,
+}
 
 
 def forbidden_imports(source: str, banned: frozenset[str], filename: str = "<string>") -> list[tuple[int, str]]:

@@ -76,8 +76,9 @@ def _nodes_within(tree: ast.AST, kinds: tuple[type, ...], test=lambda node: True
     return inner
 
 
-def imports_of(module: str, source: str, is_package: bool, modules: Mapping[str, object],
-               path: str = "<string>") -> list[Import]:  # fmt: skip
+def imports_of(
+    module: str, source: str, is_package: bool, modules: Mapping[str, object], path: str = "<string>"
+) -> list[Import]:
     """The imports of ``module`` (source text ``source``) that name one of ``modules``.
 
     Relative imports are resolved against the module's package; ``from p import x`` is an
@@ -169,9 +170,11 @@ def loops(graph: Mapping[str, Mapping[str, object]]) -> list[list[str]]:
 
 def repository_imports(packages: Iterable[str] = LAYERS, root: Path = REPO) -> list[Import]:
     modules = module_files(packages, root)
-    return [imp for name, (path, is_package) in modules.items()
-            for imp in imports_of(name, path.read_text(encoding="utf-8"), is_package, modules,
-                                  str(path.relative_to(root)))]  # fmt: skip
+    return [
+        imp
+        for name, (path, is_package) in modules.items()
+        for imp in imports_of(name, path.read_text(encoding="utf-8"), is_package, modules, str(path.relative_to(root)))
+    ]
 
 
 def describe(graph: Mapping[str, Mapping[str, list[Import]]], component: list[str]) -> str:
@@ -202,8 +205,13 @@ def test_no_import_loop_between_modules():
 
 def test_installed_packages_are_layered():
     graph = unit_graph(repository_imports(), unit=lambda m: m.split(".")[0])
-    upward = [f"{imp}" for a, edges in graph.items() for b, imps in edges.items()
-              if LAYERS.index(b) > LAYERS.index(a) for imp in imps]  # fmt: skip
+    upward = [
+        f"{imp}"
+        for a, edges in graph.items()
+        for b, imps in edges.items()
+        if LAYERS.index(b) > LAYERS.index(a)
+        for imp in imps
+    ]
     assert not upward, f"packages may import only lower layers of {LAYERS}:\n" + "\n".join(upward)
 
 

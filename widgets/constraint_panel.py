@@ -155,7 +155,9 @@ class ConstraintEditor(QWidget):
             w = QLineEdit(str(value))
             w.editingFinished.connect(lambda: emit(w.text()))
         else:  # shown, not editable here (e.g. a quaternion set by a sensor)
-            w = QLabel(np.array2string(np.asarray(value), precision=3) if isinstance(value, np.ndarray) else repr(value))
+            w = QLabel(
+                np.array2string(np.asarray(value), precision=3) if isinstance(value, np.ndarray) else repr(value)
+            )
             w.setWordWrap(True)
             w.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Preferred)
         self.inputs[name] = w

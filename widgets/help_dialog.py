@@ -34,8 +34,12 @@ class HelpDialog(QDialog):
         buttons = QDialogButtonBox(QDialogButtonBox.StandardButton.Close)
         buttons.rejected.connect(self.reject)
         layout = QVBoxLayout(self)
-        layout.addWidget(QLabel("Shortcuts work anywhere in the window (not while typing in a field); "
-                                "the camera keys (Home, 1, 3, 7) work over the 3D view even then."))
+        layout.addWidget(
+            QLabel(
+                "Shortcuts work anywhere in the window (not while typing in a field); "
+                "the camera keys (Home, 1, 3, 7) work over the 3D view even then."
+            )
+        )
         layout.addWidget(self.table)
         layout.addWidget(buttons)
         self.resize(520, 560)

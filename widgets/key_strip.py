@@ -203,8 +203,18 @@ class KeyStrip(QWidget):
         self.loop = QCheckBox("Loop")
         self.loop.setToolTip("Play again from the first frame at the end")
         self.label.setMinimumWidth(self.label.fontMetrics().horizontalAdvance("frame 00000 / 00000, 000 keys (key)"))
-        for w in (self.label, self.add, self.delete, self.move_to, self.move, self.length, self.fps, self.interpolation,
-                  self.preview, self.loop):  # fmt: skip
+        for w in (
+            self.label,
+            self.add,
+            self.delete,
+            self.move_to,
+            self.move,
+            self.length,
+            self.fps,
+            self.interpolation,
+            self.preview,
+            self.loop,
+        ):
             row.addWidget(w)
         self.set_state(61, 30.0, (), 0)
 
@@ -212,8 +222,9 @@ class KeyStrip(QWidget):
         self.set_state(self.strip.frames, self.fps.value(), self.strip.keys, frame)
         self.frameChanged.emit(frame)
 
-    def set_state(self, frames: int, fps: float, keys: tuple[int, ...], current: int,
-                  interpolation: str | None = None) -> None:  # fmt: skip
+    def set_state(
+        self, frames: int, fps: float, keys: tuple[int, ...], current: int, interpolation: str | None = None
+    ) -> None:
         """Show the animation without emitting signals."""
         if interpolation is not None:
             self.interpolation.blockSignals(True)
@@ -229,7 +240,9 @@ class KeyStrip(QWidget):
         on_key = s.current in s.keys
         self.delete.setEnabled(on_key)
         self.move.setEnabled(on_key)
-        where = " (key)" if on_key else " (in-between)" if len(s.keys) > 1 and s.keys[0] < s.current < s.keys[-1] else ""
+        where = (
+            " (key)" if on_key else " (in-between)" if len(s.keys) > 1 and s.keys[0] < s.current < s.keys[-1] else ""
+        )
         self.label.setText(f"frame {s.current} / {frames - 1}, {len(s.keys)} key{'s' * (len(s.keys) != 1)}{where}")
         s.update()
 

@@ -47,7 +47,9 @@ class LatentForces(QWidget):
         layout.setContentsMargins(0, 0, 0, 0)
         grid = QGridLayout()
         self.inspect_button = QPushButton("Inspect this frame")
-        self.inspect_button.setToolTip("Pause and compute this frame's term forces and dimension sweep (about a second)")
+        self.inspect_button.setToolTip(
+            "Pause and compute this frame's term forces and dimension sweep (about a second)"
+        )
         self.inspect_button.clicked.connect(lambda: self.inspectRequested.emit(self.joint.currentData() or ""))
         self.joint = QComboBox(toolTip="A joint: its most influential latent dimensions")
         self.joint.addItem("(no joint)", "")
@@ -123,7 +125,9 @@ class LatentForces(QWidget):
             self.dim_bars.setOpts(x=np.arange(f.shape[1]), height=f[t], brush=self.colour(chosen))
             self.dim_plot.setTitle(f"force of {chosen}, iteration {k}", size="9pt")
         against = conflicts(f, d.names)
-        self.info.setText(f"frame {d.frame}, {len(d.forces)} iterations, {d.ms:.0f} ms"
-                          + (f"; pulling against each other: {', '.join(against)}" if against else ""))  # fmt: skip
+        self.info.setText(
+            f"frame {d.frame}, {len(d.forces)} iterations, {d.ms:.0f} ms"
+            + (f"; pulling against each other: {', '.join(against)}" if against else "")
+        )
         settle(self.norm_plot)
         settle(self.dim_plot)

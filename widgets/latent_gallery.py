@@ -54,8 +54,10 @@ class LatentGallery(QWidget):
         self.plot.hideAxis("bottom")
         self.plot.hideAxis("left")
         self.plot.setMenuEnabled(False)
-        self.plot.setToolTip("Each latent dimension at -2 sigma (blue), 0 (grey), +2 sigma (orange); "
-                             "under each: the joints it moves most")  # fmt: skip
+        self.plot.setToolTip(
+            "Each latent dimension at -2 sigma (blue), 0 (grey), +2 sigma (orange); "
+            "under each: the joints it moves most"
+        )
         self.lines = [self.plot.plot(pen=pg.mkPen(c, width=1.2), connect="pairs") for c in OFFSET_COLOURS]
         self.marks = pg.ScatterPlotItem(size=6, pen=None, brush="#ff3b30")
         self.plot.addItem(self.marks)

@@ -118,8 +118,7 @@ class LatentInspector(QWidget):
         self.latent = z
         self._draw_bars(z if self.edited is None or self.edited.size != z.size else self.edited)
         # the engine's record covers frames this view never drew (it draws the newest only)
-        recorded = [r for r in snap.history[-HISTORY:]
-                    if r.latent is not None and np.size(r.latent) == z.size]  # fmt: skip
+        recorded = [r for r in snap.history[-HISTORY:] if r.latent is not None and np.size(r.latent) == z.size]
         image, lim = strip_image([np.ravel(r.latent) for r in recorded] or [z])
         frames = [r.frame for r in recorded] or [snap.frame]
         self.strip.setImage(image, levels=(-lim, lim))

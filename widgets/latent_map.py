@@ -53,8 +53,9 @@ class LatentMapPlot(QWidget):
         self.note.setVisible(False)
         self.plot = pg.PlotWidget()
         self.plot.setMinimumSize(200, 200)
-        self.setToolTip("Latent map: hover or click to decode a point as a ghost pose; "
-                             "click a trajectory point to go to its frame")  # fmt: skip
+        self.setToolTip(
+            "Latent map: hover or click to decode a point as a ghost pose; click a trajectory point to go to its frame"
+        )
         for side in ("bottom", "left"):
             self.plot.getAxis(side).enableAutoSIPrefix(False)
         self.plot.setMenuEnabled(False)
@@ -69,8 +70,9 @@ class LatentMapPlot(QWidget):
         self.line = self.plot.plot(pen=pg.mkPen((200, 200, 200, 90), width=1))
         self.points = pg.ScatterPlotItem(size=5, pen=None)
         self.flags = pg.ScatterPlotItem(size=9, symbol="x", pen=None, brush=FLAG_COLOUR)
-        self.path = self.plot.plot(pen=pg.mkPen(PATH_COLOUR, width=1.5), symbol="o", symbolSize=4,
-                                   symbolBrush=PATH_COLOUR, symbolPen=None)  # fmt: skip
+        self.path = self.plot.plot(
+            pen=pg.mkPen(PATH_COLOUR, width=1.5), symbol="o", symbolSize=4, symbolBrush=PATH_COLOUR, symbolPen=None
+        )
         self.start_label = pg.TextItem("", color=PATH_COLOUR, anchor=(0, 1))
         self.current = pg.ScatterPlotItem(size=13, pen=pg.mkPen("w", width=2), brush=None)
         self.hover = pg.ScatterPlotItem(size=11, symbol="+", pen=pg.mkPen(HOVER_COLOUR, width=2))
@@ -83,7 +85,9 @@ class LatentMapPlot(QWidget):
         layout.addWidget(self.plot, 1)
         # time colours in a few steps, the same brush objects every update: pyqtgraph renders
         # a symbol per distinct brush, and 600 distinct ones cost ~0.4 s per update
-        self._brushes = [pg.mkBrush(c) for c in pg.colormap.get("viridis").map(np.linspace(0, 1, TIME_STEPS), mode="qcolor")]
+        self._brushes = [
+            pg.mkBrush(c) for c in pg.colormap.get("viridis").map(np.linspace(0, 1, TIME_STEPS), mode="qcolor")
+        ]
         self.frames = np.zeros(0, int)
         self.xy = np.zeros((0, 2))
         self._seq = -1
@@ -181,8 +185,9 @@ class LatentMapPlot(QWidget):
             t.setText(name)
             t.setPos(float(p[0]), float(p[1]))
 
-    def set_forces(self, origin: np.ndarray | None, vectors: np.ndarray | None = None,
-                   colours: list[str] | None = None) -> None:  # fmt: skip
+    def set_forces(
+        self, origin: np.ndarray | None, vectors: np.ndarray | None = None, colours: list[str] | None = None
+    ) -> None:
         """Draw each term's force in the map plane as a line from ``origin (2,)`` along
         ``vectors (T, 2)`` in ``colours`` (the loss plots' term colours), the longest a
         quarter of the view's width; None clears them."""
@@ -198,8 +203,9 @@ class LatentMapPlot(QWidget):
         (x0, x1), _ = self.plot.getPlotItem().getViewBox().viewRange()
         v = v * (0.25 * (x1 - x0) / longest)
         for vec, colour in zip(v, colours or ["#ffffff"] * len(v)):
-            item = self.plot.plot([origin[0], origin[0] + vec[0]], [origin[1], origin[1] + vec[1]],
-                                  pen=pg.mkPen(colour, width=2))  # fmt: skip
+            item = self.plot.plot(
+                [origin[0], origin[0] + vec[0]], [origin[1], origin[1] + vec[1]], pen=pg.mkPen(colour, width=2)
+            )
             self.force_lines.append(item)
 
     # -- mouse ----------------------------------------------------------------------------

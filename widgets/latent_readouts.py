@@ -22,8 +22,11 @@ from engine.latent.readouts import next_flagged
 from widgets.plots import fit_frames, settle
 
 #: Readouts drawn, with their colours and legend names.
-CURVES = (("nearest", "#4da3ff", "nearest training latent"), ("norm", "#c77dff", "latent norm"),
-          ("predictor", "#3fae55", "prior latent to solution"))  # fmt: skip
+CURVES = (
+    ("nearest", "#4da3ff", "nearest training latent"),
+    ("norm", "#c77dff", "latent norm"),
+    ("predictor", "#3fae55", "prior latent to solution"),
+)
 FLAG_COLOUR = "#ff3b30"
 
 
@@ -47,8 +50,9 @@ class LatentReadouts(QWidget):
         self.label = QLabel("")
         self.label.setTextFormat(Qt.TextFormat.RichText)
         self.next_button = QPushButton("Next flagged frame")
-        self.next_button.setToolTip("Go to the next frame the flag rule marks (nearest training latent or norm "
-                                    "above its threshold)")  # fmt: skip
+        self.next_button.setToolTip(
+            "Go to the next frame the flag rule marks (nearest training latent or norm above its threshold)"
+        )
         self.next_button.clicked.connect(self._next)
         row.addWidget(self.label, 1)
         row.addWidget(self.next_button)
@@ -131,8 +135,9 @@ class LatentReadouts(QWidget):
             self.label.setText(snap.latent_note)
         else:
             flag = f" <b style='color:{FLAG_COLOUR}'>flagged</b>" if v.flagged else ""
-            self.label.setText(f"frame {v.frame}: nearest {v.nearest:.2f}, norm {v.norm:.2f}, "
-                               f"prior {v.predictor:.2f}{flag}")  # fmt: skip
+            self.label.setText(
+                f"frame {v.frame}: nearest {v.nearest:.2f}, norm {v.norm:.2f}, prior {v.predictor:.2f}{flag}"
+            )
         fit_frames(self.plot, x)
         settle(self.plot)
 

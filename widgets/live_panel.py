@@ -57,8 +57,12 @@ class ConnectDialog(QDialog):
         form.addRow(buttons)
 
     def values(self) -> dict[str, Any]:
-        return {"host": self.host.text().strip() or "0.0.0.0", "port": self.port.value(),
-                "mapping": self.mapping.text(), "convention": self.convention.currentText()}  # fmt: skip
+        return {
+            "host": self.host.text().strip() or "0.0.0.0",
+            "port": self.port.value(),
+            "mapping": self.mapping.text(),
+            "convention": self.convention.currentText(),
+        }
 
 
 def light_state(status: Any) -> str:
@@ -106,7 +110,9 @@ class LivePanel(QWidget):
         row.addWidget(self.record)
         self.calibrate = QPushButton("Calibrate")
         self.calibrate.setToolTip("count down, then stand still (T-pose or standing) while the trackers are averaged")
-        self.calibrate.clicked.connect(lambda: self.calibrateRequested.emit(self.countdown.value(), self.window.value()))
+        self.calibrate.clicked.connect(
+            lambda: self.calibrateRequested.emit(self.countdown.value(), self.window.value())
+        )
         row.addWidget(self.calibrate)
         self.disconnect = QPushButton("Disconnect")
         self.disconnect.clicked.connect(self.disconnectRequested.emit)
@@ -147,8 +153,11 @@ class LivePanel(QWidget):
         if self._texts.get("light") != state:
             self._texts["light"] = state
             self.light.setStyleSheet(f"background: {LIGHT[state]}; border-radius: 7px;")
-        self.light.setToolTip({"ok": "receiving", "stale": "no packet for a moment", "silent": "no packets",
-                               "off": "not connected"}[state])  # fmt: skip
+        self.light.setToolTip(
+            {"ok": "receiving", "stale": "no packet for a moment", "silent": "no packets", "off": "not connected"}[
+                state
+            ]
+        )
         connected = status is not None
         for w in (self.record, self.calibrate, self.disconnect):
             w.setEnabled(connected)
@@ -159,10 +168,13 @@ class LivePanel(QWidget):
             return
         self._set(self.address, "address", f"listening on {status.address}")
         lat = "-" if latency_ms is None else f"{latency_ms:.0f} ms"
-        self._set(self.figures, "figures",
-                  f"{status.packet_rate_hz:.0f} packets/s, {status.frames} frames, latency {lat}\n"
-                  f"malformed {status.malformed}, duplicate {status.duplicates}, late {status.late}"
-                  + (f"\nrecording to {status.recording}" if status.recording else ""))  # fmt: skip
+        self._set(
+            self.figures,
+            "figures",
+            f"{status.packet_rate_hz:.0f} packets/s, {status.frames} frames, latency {lat}\n"
+            f"malformed {status.malformed}, duplicate {status.duplicates}, late {status.late}"
+            + (f"\nrecording to {status.recording}" if status.recording else ""),
+        )
         if status.calibration_phase == "countdown":
             cal = f"get into the pose: {status.calibration_left_s:.0f} s"
         elif status.calibration_phase == "capturing":

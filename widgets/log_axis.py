@@ -87,7 +87,7 @@ class LogAxis(pg.AxisItem):
         return [(None, shown), (None, minor)]
 
     def logTickStrings(self, values: list[float], scale: float, spacing: float) -> list[str]:
-        return labels([10.0 ** v * scale for v in values])
+        return labels([10.0**v * scale for v in values])
 
     def text_room(self) -> float | None:
         """Pixels a y tick label may be wide on an axis of fixed width (pyqtgraph drops

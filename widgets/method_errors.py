@@ -112,8 +112,10 @@ class MethodErrorPlot(QWidget):
             y = np.array([series[int(f)] for f in x], float)
             if np.isfinite(y).any():
                 self.curves[name].setData(x, y, connect="finite")
-            rows.append(f"<span style='color:{colour}'>&#9644; {name}</span>: "
-                        + ("-" if not np.isfinite(err) else f"{err:.1f} cm"))  # fmt: skip
+            rows.append(
+                f"<span style='color:{colour}'>&#9644; {name}</span>: "
+                + ("-" if not np.isfinite(err) else f"{err:.1f} cm")
+            )
         self.legend.setText("<br>".join(rows))
         fit_frames(self.plot, np.array(sorted(self.data.get(main, {})), float))
         settle(self.plot)

@@ -94,8 +94,7 @@ class OptimizerPanel(QWidget):
     methodChanged = pyqtSignal(str)
     ghostsChanged = pyqtSignal(tuple)
 
-    def __init__(self, methods: list[str], fields: Sequence[SettingField] = (),
-                 parent: QWidget | None = None) -> None:  # fmt: skip
+    def __init__(self, methods: list[str], fields: Sequence[SettingField] = (), parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self._updating = False
         form = QFormLayout(self)

@@ -104,7 +104,11 @@ class _Curves:
             width = (2.5 if name == "total" else 1.5) if symbols else 1.0
             # the iterations are marked on the total only (markers on every term doubled
             # the plot's repaint cost)
-            marks = dict(symbol="o", symbolSize=5, symbolBrush=colour, symbolPen=None) if symbols and name == "total" else {}
+            marks = (
+                dict(symbol="o", symbolSize=5, symbolBrush=colour, symbolPen=None)
+                if symbols and name == "total"
+                else {}
+            )
             self.items[name] = self.plot.plot(pen=pg.mkPen(colour, width=width), **marks)
             self.items[name].setVisible(self.legend.visible(name))
         return self.items[name]
@@ -134,8 +138,11 @@ class LossPlots(QWidget):
         self.iteration_plot = _plot("Loss per iteration", True, "iteration")
         # log y: the first frame of a clip is solved offline (seconds) and would flatten
         # the steady per-frame cost (tens of ms) on a linear axis
-        self.cost_plot = _plot(f"<span style='color:{MS_COLOUR}'>ms</span> and "
-                               f"<span style='color:{ITERATIONS_COLOUR}'>iterations</span>", True, "frame")  # fmt: skip
+        self.cost_plot = _plot(
+            f"<span style='color:{MS_COLOUR}'>ms</span> and <span style='color:{ITERATIONS_COLOUR}'>iterations</span>",
+            True,
+            "frame",
+        )
         self.history_plot = _plot("Loss history", True, "frame")
         self.iter_curves = _Curves(self.iteration_plot, colours, self.legend)
         self.history_curves = _Curves(self.history_plot, colours, self.legend)

@@ -20,8 +20,14 @@ from PyQt6.QtWidgets import (
 from superqt import QLabeledDoubleSlider
 
 #: Friendlier labels for the joints trackers are usually worn on.
-LABELS = {"upperneck": "head", "root": "hips", "lwrist": "left hand", "rwrist": "right hand",
-          "lankle": "left foot", "rankle": "right foot"}  # fmt: skip
+LABELS = {
+    "upperneck": "head",
+    "root": "hips",
+    "lwrist": "left hand",
+    "rwrist": "right hand",
+    "lankle": "left foot",
+    "rankle": "right foot",
+}
 
 
 class SensorPanel(QWidget):

@@ -9,8 +9,7 @@ RECONSTRUCTION = "#ff8a1f"
 #: Ground truth of the loaded clip (green, as in the DragPoser paper's figures).
 GROUND_TRUTH = "#3fae55"
 #: Other methods drawn as ghosts, by name; unknown names cycle through GHOST_CYCLE.
-GHOSTS = {"ik": "#4da3ff", "autoencoder": "#c77dff", "dragposer": "#ff8a1f", "sparseposer": "#ff5fa2",
-          "rpm": "#ffd60a"}
+GHOSTS = {"ik": "#4da3ff", "autoencoder": "#c77dff", "dragposer": "#ff8a1f", "sparseposer": "#ff5fa2", "rpm": "#ffd60a"}
 GHOST_CYCLE = ("#4da3ff", "#c77dff", "#ffd60a", "#ff5fa2")
 SENSOR = "#ffe14d"
 SENSOR_LOST = "#ff3b30"
@@ -21,6 +20,8 @@ FLOOR = "#3a4150"
 FLOOR_PLANE = "#1b1e25"
 PLOT_BACKGROUND = "#171a21"
 PLOT_FOREGROUND = "#c8ccd4"
+
+
 def term_colour(index: int) -> str:
     """The ``index``-th loss term's colour (in order of first appearance).
 

@@ -42,8 +42,10 @@ class TargetList(QWidget):
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         outer = QVBoxLayout(self)
-        self.hint = QLabel("Drag a joint to add a target; drag its sphere to move it; drag a ring to turn it. "
-                           "The hips move the whole body (dragged down: a squat); their ring turns it.")
+        self.hint = QLabel(
+            "Drag a joint to add a target; drag its sphere to move it; drag a ring to turn it. "
+            "The hips move the whole body (dragged down: a squat); their ring turns it."
+        )
         self.hint.setWordWrap(True)
         outer.addWidget(self.hint)
         self.grid_host = QWidget()

@@ -86,8 +86,10 @@ def active_constraints(constraints: list[Constraint], frame: int) -> list[Constr
 def solve_key(scene: AuthoringScene, vae, key: Key, cancelled: CancelCheck | None = None) -> Pose:
     """The pose of one key (see the module doc)."""
     if key.latent is not None and key.latent.shape != (int(vae.config.latent),):
-        raise UserError(f"key at frame {key.frame}: latent has {key.latent.size} numbers, "
-                        f"the pose model takes {int(vae.config.latent)}")  # fmt: skip
+        raise UserError(
+            f"key at frame {key.frame}: latent has {key.latent.size} numbers, "
+            f"the pose model takes {int(vae.config.latent)}"
+        )
     mode = PoseMode(vae, scene.height, root_xy=key.root, heading=key.heading, options=scene.pose_options)
     mode.constraints = active_constraints(scene.constraints, key.frame)
     return mode.pose_key(key, cancelled=cancelled)
@@ -103,8 +105,13 @@ def output_frames(scene: AuthoringScene, fps: float | None) -> tuple[int, float,
     return int(round((a.frames - 1) / ratio)) + 1, rate, ratio
 
 
-def bake(scene: AuthoringScene, vae, fps: float | None = None, progress: Callable[[int, int], None] | None = None,
-         cancelled: CancelCheck | None = None) -> Baked:  # fmt: skip
+def bake(
+    scene: AuthoringScene,
+    vae,
+    fps: float | None = None,
+    progress: Callable[[int, int], None] | None = None,
+    cancelled: CancelCheck | None = None,
+) -> Baked:
     """Bake ``scene`` with the pose VAE ``vae`` at ``fps`` (default: the scene's rate).
 
     ``progress(done, total)`` is called after every key and frame; ``cancelled()`` is
@@ -142,8 +149,18 @@ def bake(scene: AuthoringScene, vae, fps: float | None = None, progress: Callabl
     return Baked(motion, np.stack([p.latent for p in frames]), sorted(key_at))
 
 
-def _in_between(character: Character, scene: AuthoringScene, keys: list[Key], poses: list[Pose], times: list[float],
-                f: int, scene_frame: float, scheme: str, smooth: SmoothConstraint, done: list[Pose]) -> Pose:  # fmt: skip
+def _in_between(
+    character: Character,
+    scene: AuthoringScene,
+    keys: list[Key],
+    poses: list[Pose],
+    times: list[float],
+    f: int,
+    scene_frame: float,
+    scheme: str,
+    smooth: SmoothConstraint,
+    done: list[Pose],
+) -> Pose:
     z = interpolate(times, [p.latent for p in poses], f, scheme).astype(np.float32)
     root = interpolate(times, [p.root_pos for p in poses], f, scheme)
     heading = interpolated_heading(keys, times, f, scheme)
@@ -152,8 +169,11 @@ def _in_between(character: Character, scene: AuthoringScene, keys: list[Key], po
     aims = []
     decoded = [p.positions if p.decoded is None else p.decoded for p in poses]  # as Pose fills it in
     for t in targets:
-        track = [(tk, d[t.index] - k.targets[t.joint].position)
-                 for tk, k, d in zip(times, keys, decoded) if t.joint in k.targets]  # fmt: skip
+        track = [
+            (tk, d[t.index] - k.targets[t.joint].position)
+            for tk, k, d in zip(times, keys, decoded)
+            if t.joint in k.targets
+        ]
         gap = interpolate([tk for tk, _ in track], [g for _, g in track], f, scheme)
         aims.append(dataclasses.replace(t, position=t.position + gap))
     terms, _, _ = solve_inputs(aims)
@@ -161,8 +181,16 @@ def _in_between(character: Character, scene: AuthoringScene, keys: list[Key], po
     smooth.set_history(previous, done[-2].positions if len(done) > 1 else None)
     rules = active_constraints(scene.constraints, int(round(scene_frame)))
     ctx = character.placed(root, heading, f, previous=previous, prior=z)
-    return character.solve(z, [*terms, smooth, *rules], ctx, reach, rotations, iterations=IN_BETWEEN_ITERATIONS,
-                           prior_weight=IN_BETWEEN_PRIOR, rule="sgd")  # fmt: skip
+    return character.solve(
+        z,
+        [*terms, smooth, *rules],
+        ctx,
+        reach,
+        rotations,
+        iterations=IN_BETWEEN_ITERATIONS,
+        prior_weight=IN_BETWEEN_PRIOR,
+        rule="sgd",
+    )
 
 
 def interpolated_heading(keys: list[Key], times: list[float], t: float, scheme: str) -> float:

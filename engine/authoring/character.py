@@ -113,8 +113,14 @@ class Pose:
         """The same pose with the whole body translated by ``delta (3,)`` metres (root
         motion: the latent describes the body relative to its root, so it is unchanged)."""
         d = np.asarray(delta, float).reshape(3)
-        return Pose(self.latent.copy(), self.local_rot.copy(), self.root_pos + d, self.positions + d,
-                    self.iterations, self.decoded + d)  # fmt: skip
+        return Pose(
+            self.latent.copy(),
+            self.local_rot.copy(),
+            self.root_pos + d,
+            self.positions + d,
+            self.iterations,
+            self.decoded + d,
+        )
 
     def turned(self, yaw_deg: float) -> "Pose":
         """The same pose with the whole body turned by ``yaw_deg`` degrees about the
@@ -123,8 +129,14 @@ class Pose:
         r = QN.to_matrix(q)
         local = self.local_rot.copy()
         local[0] = QN.mul(q, local[0])
-        return Pose(self.latent.copy(), local, self.root_pos.copy(), (self.positions - self.root_pos) @ r.T + self.root_pos,
-                    self.iterations, (self.decoded - self.root_pos) @ r.T + self.root_pos)  # fmt: skip
+        return Pose(
+            self.latent.copy(),
+            local,
+            self.root_pos.copy(),
+            (self.positions - self.root_pos) @ r.T + self.root_pos,
+            self.iterations,
+            (self.decoded - self.root_pos) @ r.T + self.root_pos,
+        )
 
 
 class Character:
@@ -156,8 +168,9 @@ class Character:
         toe_tip = rest[sk.JOINT_INDEX["ltoe"], 2] + sk.END_SITES["ltoe"][2] * base.scale
         lowest = min(rest[:, 2].min(), toe_tip)
         self.foot_heights = torch.tensor([rest[j, 2] - lowest for j in FOOT_JOINTS], dtype=torch.float32)
-        self.settings = OptimizerSettings(mode="offline", optimizer="adam", tuning="off", max_iterations=150,
-                                          lr=0.05, patience=15)  # fmt: skip
+        self.settings = OptimizerSettings(
+            mode="offline", optimizer="adam", tuning="off", max_iterations=150, lr=0.05, patience=15
+        )
         # Ground is not a joint anchor, which the fast path knows nothing of
         self._grounded = PoseOptimizer(vae, base.offsets, self.settings, fast=False)
         self._placed = PoseOptimizer(vae, base.offsets, self.settings, fast=True)
@@ -166,8 +179,14 @@ class Character:
         """The VAE prior's mean, ``(L,)``: the character's neutral pose."""
         return np.zeros(self.latent_dim, dtype=np.float32)
 
-    def grounded(self, xy=(0.0, 0.0), heading_deg: float = 0.0, frame: int = 0,
-                 previous: np.ndarray | None = None, prior: np.ndarray | None = None) -> FrameContext:  # fmt: skip
+    def grounded(
+        self,
+        xy=(0.0, 0.0),
+        heading_deg: float = 0.0,
+        frame: int = 0,
+        previous: np.ndarray | None = None,
+        prior: np.ndarray | None = None,
+    ) -> FrameContext:
         """Context of a grounded solve: root at ``xy (2,)`` metres, lowest foot on the floor,
         facing ``heading_deg`` (about +Z from the canonical -Y); ``previous (22, 3)``
         positions for contact and sliding terms; ``prior (L,)`` the latent pulled towards."""
@@ -175,9 +194,16 @@ class Character:
         anchor = Ground(_f(np.asarray(xy, float)[:2]), self.foot_heights)
         return FrameContext(ref, None, anchor, _f_or_none(previous), _f_or_none(prior), frame)
 
-    def placed(self, root: np.ndarray, heading_deg: float = 0.0, frame: int = 0,
-               previous: np.ndarray | None = None, prior: np.ndarray | None = None,
-               reference: np.ndarray | None = None, ground: bool = True) -> FrameContext:  # fmt: skip
+    def placed(
+        self,
+        root: np.ndarray,
+        heading_deg: float = 0.0,
+        frame: int = 0,
+        previous: np.ndarray | None = None,
+        prior: np.ndarray | None = None,
+        reference: np.ndarray | None = None,
+        ground: bool = True,
+    ) -> FrameContext:
         """Context of a placed solve: the root held at ``root (3,)`` metres during the
         solve, then grounded (unless ``ground`` is False); the decoded root rotation is
         relative to the heading of ``reference (4,)`` (a clip's previous root rotation)
@@ -197,10 +223,18 @@ class Character:
             state = self._grounded.decode(torch.as_tensor(np.asarray(latent), dtype=torch.float32), ctx)
         return self._pose(np.asarray(latent, np.float32), state, 0, ctx)
 
-    def solve(self, start: np.ndarray, constraints: list[Constraint], ctx: FrameContext,
-              reach: dict[int, np.ndarray] | None = None, rotations: dict[int, np.ndarray] | None = None,
-              iterations: int | None = None, prior_weight: float = PRIOR_WEIGHT, rule: str = "adam",
-              step_size: float = 0.3) -> Pose:  # fmt: skip
+    def solve(
+        self,
+        start: np.ndarray,
+        constraints: list[Constraint],
+        ctx: FrameContext,
+        reach: dict[int, np.ndarray] | None = None,
+        rotations: dict[int, np.ndarray] | None = None,
+        iterations: int | None = None,
+        prior_weight: float = PRIOR_WEIGHT,
+        rule: str = "adam",
+        step_size: float = 0.3,
+    ) -> Pose:
         """Solve a pose from latent ``start (L,)``.
 
         Parameters
@@ -233,8 +267,9 @@ class Character:
         pose = self._pose(sol.latent.numpy().astype(np.float32), sol.state, sol.iterations, ctx)
         limbs = {j: np.asarray(p, float) for j, p in (reach or {}).items() if j in LIMBS}
         if limbs or rotations:
-            pose.local_rot, pose.positions = finish(pose.local_rot, pose.root_pos, self.skeleton.offsets, limbs,
-                                                    dict(rotations or {}))  # fmt: skip
+            pose.local_rot, pose.positions = finish(
+                pose.local_rot, pose.root_pos, self.skeleton.offsets, limbs, dict(rotations or {})
+            )
         return pose
 
     def _pose(self, latent: np.ndarray, state, iterations: int, ctx: FrameContext) -> Pose:

@@ -107,7 +107,12 @@ def save_authoring(path: str | Path, scene: AuthoringScene) -> None:
 
 
 def _number(value: Any, where: str, lo: float, hi: float) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or not lo <= value <= hi:
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, (int, float))
+        or not math.isfinite(value)
+        or not lo <= value <= hi
+    ):
         raise UserError(f"{where} must be a number in {lo:g}-{hi:g}, got {shown(value)}")
     return float(value)
 
@@ -145,8 +150,10 @@ def _animation(value: Any, where: str) -> Animation:
         a.frames = _whole(value["frames"], f"{where}: animation: field 'frames'", 1, MAX_FRAMES)
     if "interpolation" in value:
         if value["interpolation"] not in SCHEMES:
-            raise UserError(f"{where}: animation: field 'interpolation' is {shown(value['interpolation'])}; "
-                            f"choose {', '.join(SCHEMES)}")  # fmt: skip
+            raise UserError(
+                f"{where}: animation: field 'interpolation' is {shown(value['interpolation'])}; "
+                f"choose {', '.join(SCHEMES)}"
+            )
         a.interpolation = value["interpolation"]
     return a
 

@@ -25,8 +25,17 @@ if TYPE_CHECKING:
     from engine.authoring.character import Pose
     from engine.authoring.targets import JointTarget
 
-__all__ = ["AnimationChanged", "AuthoringEvents", "BakeChanged", "ConstraintsChanged", "FrameChanged",
-           "HistoryChanged", "KeysChanged", "PoseChanged", "TargetsChanged"]  # fmt: skip
+__all__ = [
+    "AnimationChanged",
+    "AuthoringEvents",
+    "BakeChanged",
+    "ConstraintsChanged",
+    "FrameChanged",
+    "HistoryChanged",
+    "KeysChanged",
+    "PoseChanged",
+    "TargetsChanged",
+]
 
 
 @dataclass(frozen=True)

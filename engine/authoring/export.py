@@ -11,9 +11,14 @@ from engine.authoring.document import AuthoringScene
 from engine.motion.formats import GltfContents, save_motion
 
 
-def bake_to_file(scene: AuthoringScene, vae, out: str | Path, fps: float | None = None,
-                 progress: Callable[[int, int], None] | None = None,
-                 contents: GltfContents | None = None) -> Baked:  # fmt: skip
+def bake_to_file(
+    scene: AuthoringScene,
+    vae,
+    out: str | Path,
+    fps: float | None = None,
+    progress: Callable[[int, int], None] | None = None,
+    contents: GltfContents | None = None,
+) -> Baked:
     """Bake ``scene`` (:func:`engine.authoring.bake.bake`) and write it to ``out`` on the
     character's skeleton, atomically, as BVH or glTF by the extension
     (:func:`engine.motion.formats.save_motion`)."""

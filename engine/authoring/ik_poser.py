@@ -52,8 +52,12 @@ class IKPoser:
 
     def __init__(self, pose: Pose, offsets: np.ndarray) -> None:
         self.offsets = np.asarray(offsets, float)
-        self.pose = Pose(pose.latent, np.array(pose.local_rot, float), np.array(pose.root_pos, float),
-                         np.array(pose.positions, float))  # fmt: skip
+        self.pose = Pose(
+            pose.latent,
+            np.array(pose.local_rot, float),
+            np.array(pose.root_pos, float),
+            np.array(pose.positions, float),
+        )
         self.feet = {j: self.pose.positions[j].copy() for j in FEET}
         self.targets: dict[str, JointTarget] = {}
 
@@ -63,8 +67,11 @@ class IKPoser:
             raise UserError(f"unknown joint {joint!r}")
         old = self.targets.get(joint)
         here = self.pose.positions[J[joint]]
-        t = JointTarget(joint, position if position is not None else (old.position if old else here),
-                        rotation if rotation is not None else (old.rotation if old else None))  # fmt: skip
+        t = JointTarget(
+            joint,
+            position if position is not None else (old.position if old else here),
+            rotation if rotation is not None else (old.rotation if old else None),
+        )
         self.targets[joint] = t
         return t
 

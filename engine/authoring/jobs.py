@@ -66,12 +66,20 @@ class RangeJob:
             from engine.models import load_default_models
 
             vae = load_default_models().vae
-        return edit_range(vae, self.motion, self.start, self.end, list(self.constraints), self.blend, progress,
-                          cancelled)  # fmt: skip
+        return edit_range(
+            vae, self.motion, self.start, self.end, list(self.constraints), self.blend, progress, cancelled
+        )
 
 
-def range_job(motion: Motion | None, constraints: list[Constraint] | tuple[Constraint, ...], start: int, end: int,
-              blend: int = 8, floor: bool = True, vae: Any = None) -> RangeJob:  # fmt: skip
+def range_job(
+    motion: Motion | None,
+    constraints: list[Constraint] | tuple[Constraint, ...],
+    start: int,
+    end: int,
+    blend: int = 8,
+    floor: bool = True,
+    vae: Any = None,
+) -> RangeJob:
     """A :class:`RangeJob` on ``motion`` with ``constraints`` and, with
     ``floor``, feet held in floor contact; a bad range is an error here, before any work."""
     from engine.constraints import FloorConstraint

@@ -71,8 +71,10 @@ class Key:
     def to_dict(self) -> dict:
         """Scene JSON of the key (a plain position target as ``[x, y, z]``)."""
         targets = {j: t.to_dict() for j, t in self.targets.items()}
-        out: dict = {"frame": int(self.frame),
-                     "targets": {j: (d["position"] if set(d) == {"position"} else d) for j, d in targets.items()}}  # fmt: skip
+        out: dict = {
+            "frame": int(self.frame),
+            "targets": {j: (d["position"] if set(d) == {"position"} else d) for j, d in targets.items()},
+        }
         if self.latent is not None:
             out["latent"] = [float(x) for x in np.asarray(self.latent).ravel()]
         if np.any(self.root != 0):

@@ -21,9 +21,17 @@ from engine.kinematics.fk import fk
 EVENTS = 20
 
 
-def drag(poser, joint: str, offsets: np.ndarray, position: np.ndarray | None = None,
-         rotation: np.ndarray | None = None, events: int = EVENTS, weight: float | None = None,
-         solve: dict | None = None, cancelled: CancelCheck | None = None) -> None:  # fmt: skip
+def drag(
+    poser,
+    joint: str,
+    offsets: np.ndarray,
+    position: np.ndarray | None = None,
+    rotation: np.ndarray | None = None,
+    events: int = EVENTS,
+    weight: float | None = None,
+    solve: dict | None = None,
+    cancelled: CancelCheck | None = None,
+) -> None:
     """Drag ``joint``'s target to ``position (3,)`` metres (from where its target, else the
     joint, is) or turn it to the world ``rotation (4,)`` (from the joint's world rotation,
     the whole turn in equal powers; the target keeps its position), in ``events`` steps,

@@ -39,8 +39,11 @@ from engine.motion.retarget_frames import CANON_HINGE
 
 J = sk.JOINT_INDEX
 #: (upper joint, middle joint, end joint) of each limb whose middle joint is a hinge.
-HINGED = {f"{s}{mid}": (f"{s}{up}", f"{s}{mid}", f"{s}{end}")
-          for s in "lr" for up, mid, end in (("hip", "knee", "ankle"), ("shoulder", "elbow", "wrist"))}  # fmt: skip
+HINGED = {
+    f"{s}{mid}": (f"{s}{up}", f"{s}{mid}", f"{s}{end}")
+    for s in "lr"
+    for up, mid, end in (("hip", "knee", "ankle"), ("shoulder", "elbow", "wrist"))
+}
 #: A knee or elbow bent backwards by more than this (degrees) is a joint-limit violation.
 HYPEREXTENSION_DEG = 10.0
 #: A foot is down when its ankle and toe joints are within this of their standing heights, metres.
@@ -59,9 +62,18 @@ SEGMENTS: dict[str, tuple[float, str, str, float]] = {
 }
 TRUNK_FRACTION = 1.0 - sum(s[0] for s in SEGMENTS.values())  # 0.4346
 #: Bones of the trunk (pelvis, spine, shoulder girdle) as (parent, child) joint names.
-TRUNK_BONES = (("root", "lhip"), ("root", "rhip"), ("root", "lowerback"), ("lowerback", "upperback"),
-               ("upperback", "chest"), ("chest", "lowerneck"), ("chest", "lclavicle"), ("lclavicle", "lshoulder"),
-               ("chest", "rclavicle"), ("rclavicle", "rshoulder"))  # fmt: skip
+TRUNK_BONES = (
+    ("root", "lhip"),
+    ("root", "rhip"),
+    ("root", "lowerback"),
+    ("lowerback", "upperback"),
+    ("upperback", "chest"),
+    ("chest", "lowerneck"),
+    ("chest", "lclavicle"),
+    ("lclavicle", "lshoulder"),
+    ("chest", "rclavicle"),
+    ("rclavicle", "rshoulder"),
+)
 FEET = {"left": ("lankle", "ltoe"), "right": ("rankle", "rtoe")}
 
 
@@ -139,8 +151,10 @@ def standing_heights(offsets: np.ndarray) -> np.ndarray:
 def feet_down(positions: np.ndarray, offsets: np.ndarray, tolerance: float = FOOT_DOWN_M) -> dict[str, bool]:
     """Per foot: ankle and toe joints within ``tolerance`` metres of their standing heights."""
     flat = standing_heights(offsets)
-    return {side: bool(all(abs(positions[J[j], 2] - flat[J[j]]) <= tolerance for j in joints))
-            for side, joints in FEET.items()}  # fmt: skip
+    return {
+        side: bool(all(abs(positions[J[j], 2] - flat[J[j]]) <= tolerance for j in joints))
+        for side, joints in FEET.items()
+    }
 
 
 def convex_hull(points: np.ndarray) -> np.ndarray:

@@ -101,8 +101,15 @@ class PoseMode:
         How the pose is kept natural (None: the defaults).
     """
 
-    def __init__(self, vae, height: float | None = None, latent: np.ndarray | None = None,
-                 root_xy=(0.0, 0.0), heading: float = 0.0, options: PoseOptions | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        vae,
+        height: float | None = None,
+        latent: np.ndarray | None = None,
+        root_xy=(0.0, 0.0),
+        heading: float = 0.0,
+        options: PoseOptions | None = None,
+    ) -> None:
         self.options = options or PoseOptions()
         self.character = Character(vae, height)
         self.base_latent = self.character.mean_latent() if latent is None else np.asarray(latent, np.float32)
@@ -125,8 +132,9 @@ class PoseMode:
         self.plant_where_standing()
 
     @classmethod
-    def from_clip_frame(cls, vae, motion: Motion, frame: int, height: float | None = None,
-                        options: PoseOptions | None = None) -> "PoseMode":  # fmt: skip
+    def from_clip_frame(
+        cls, vae, motion: Motion, frame: int, height: float | None = None, options: PoseOptions | None = None
+    ) -> "PoseMode":
         """Start from frame ``frame`` of ``motion``: its encoded latent, where it stands
         and its facing."""
         if not 0 <= frame < len(motion):
@@ -141,8 +149,9 @@ class PoseMode:
         return self._standing_root
 
     # -- targets -------------------------------------------------------------------
-    def set_target(self, joint: str, position=None, rotation=None, weight: float | None = None,
-                   enabled: bool | None = None) -> JointTarget:  # fmt: skip
+    def set_target(
+        self, joint: str, position=None, rotation=None, weight: float | None = None, enabled: bool | None = None
+    ) -> JointTarget:
         """Create or change the target on ``joint``; arguments left None keep their value
         (a new target starts at the joint's current position, weight 1)."""
         old = self.targets.get(joint)
@@ -158,7 +167,7 @@ class PoseMode:
             rotation if rotation is not None else (old.rotation if old else None),
             weight if weight is not None else (old.weight if old else 1.0),
             enabled if enabled is not None else (old.enabled if old else True),
-        )  # fmt: skip
+        )
         self.targets[joint] = t
         return t
 
@@ -212,8 +221,11 @@ class PoseMode:
         targets = list(self.targets.values())
         if self.options.plant_feet:
             moved = self._moved_feet()
-            targets += [JointTarget(j, p, weight=self.options.plant_weight) for j, p in self.planted.items()
-                        if _FOOT_OF[j] not in moved and j not in self.targets]  # fmt: skip
+            targets += [
+                JointTarget(j, p, weight=self.options.plant_weight)
+                for j, p in self.planted.items()
+                if _FOOT_OF[j] not in moved and j not in self.targets
+            ]
         terms, reach, rotations = solve_inputs(targets)
         for t in terms:
             if t.dof == 6:
@@ -249,8 +261,12 @@ class PoseMode:
         if o.crouch_share > 0 and user:
             # the part of the way from the joint down to its target that lies below where it crouches from
             low = {t.index: self._crouch_from(t.index) for t in user}
-            drop = min(0.0, min(min(t.position[2], low[t.index]) - min(self.pose.positions[t.index, 2], low[t.index])
-                                for t in user))  # fmt: skip
+            drop = min(
+                0.0,
+                min(
+                    min(t.position[2], low[t.index]) - min(self.pose.positions[t.index, 2], low[t.index]) for t in user
+                ),
+            )
             standing = self._standing_root
             where[2] = float(np.clip(where[2] + o.crouch_share * drop, LOWEST_ROOT * standing, standing))
         if o.balance and o.plant_feet and not self._moved_feet():
@@ -296,9 +312,17 @@ class PoseMode:
             else:
                 ctx = c.placed(where, self.heading, self.frame, prior=self.base_latent)
             before = self.pose
-            solved = c.solve(self.pose.latent, terms + self._hold_terms(where), ctx, reach, rotations,
-                             iterations=iterations, prior_weight=o.prior_weight, rule="sgd",
-                             step_size=STEP_SIZE)  # fmt: skip
+            solved = c.solve(
+                self.pose.latent,
+                terms + self._hold_terms(where),
+                ctx,
+                reach,
+                rotations,
+                iterations=iterations,
+                prior_weight=o.prior_weight,
+                rule="sgd",
+                step_size=STEP_SIZE,
+            )
             self.pose = self._kept_trunk(solved, reach, rotations)
             if round_ and self.shortfall() > gap + OVERSHOOT:
                 # the plain steps overshot (a folded body near the floor): keep the round before
@@ -313,8 +337,11 @@ class PoseMode:
         applied against :attr:`anchor`, while no trunk or leg joint has a target; the
         pelvis is kept only while it stands on both planted feet."""
         o = self.options
-        if not o.keep_trunk or self.anchor is None or any(t.active and t.index in TRUNK + LEGS
-                                                          for t in self.targets.values()):  # fmt: skip
+        if (
+            not o.keep_trunk
+            or self.anchor is None
+            or any(t.active and t.index in TRUNK + LEGS for t in self.targets.values())
+        ):
             return pose
         forward = QN.rotate(yaw_quaternion(self.heading), sk.FORWARD)
         limbs = {j: np.asarray(p, float) for j, p in reach.items() if j in LIMBS}
@@ -343,15 +370,20 @@ class PoseMode:
         if w <= 0 or self.anchor is None:
             return []
         a = self.anchor
-        return [JointTarget(sk.JOINT_NAMES[j], a.positions[j] - a.root_pos + where, weight=w).constraint()
-                for j in self.held()]  # fmt: skip
+        return [
+            JointTarget(sk.JOINT_NAMES[j], a.positions[j] - a.root_pos + where, weight=w).constraint()
+            for j in self.held()
+        ]
 
     def shortfall(self) -> float:
         """Largest distance (metres) of a targeted wrist or ankle from its target in the
         current pose (0 without such targets): after the exact limb step, how far the
         target lies beyond the limb's reach."""
-        gaps = [np.linalg.norm(self.pose.positions[t.index] - t.position) for t in self.targets.values()
-                if t.active and t.index in LIMBS]  # fmt: skip
+        gaps = [
+            np.linalg.norm(self.pose.positions[t.index] - t.position)
+            for t in self.targets.values()
+            if t.active and t.index in LIMBS
+        ]
         return float(max(gaps, default=0.0))
 
     def settle(self) -> Pose:
@@ -366,17 +398,26 @@ class PoseMode:
             self.anchor = self.pose
         where = self._where()
         ctx = c.grounded(where[:2], self.heading, self.frame, prior=self.base_latent)
-        solved = c.solve(self.pose.latent, terms + self._hold_terms(where), ctx, reach, rotations,
-                         prior_weight=o.prior_weight)  # fmt: skip
+        solved = c.solve(
+            self.pose.latent, terms + self._hold_terms(where), ctx, reach, rotations, prior_weight=o.prior_weight
+        )
         self.pose = self._kept_trunk(solved, reach, rotations)
         for _ in range(max(0, o.settle_rounds)):
             if self.shortfall() <= o.reach_tolerance:
                 break
             where = self._where()
             ctx = c.grounded(where[:2], self.heading, self.frame, prior=self.base_latent)
-            solved = c.solve(self.pose.latent, terms + self._hold_terms(where), ctx, reach, rotations,
-                             iterations=ITERATIONS, prior_weight=o.prior_weight, rule="sgd",
-                             step_size=STEP_SIZE)  # fmt: skip
+            solved = c.solve(
+                self.pose.latent,
+                terms + self._hold_terms(where),
+                ctx,
+                reach,
+                rotations,
+                iterations=ITERATIONS,
+                prior_weight=o.prior_weight,
+                rule="sgd",
+                step_size=STEP_SIZE,
+            )
             self.pose = self._kept_trunk(solved, reach, rotations)
         self._replant()
         self._solved = self.pose

@@ -26,6 +26,7 @@ def _option(default: Any, lo: float | None = None, hi: float | None = None) -> A
     """A field with ``default`` and, for a number, its range ``lo``-``hi`` as metadata."""
     return dataclasses.field(default=default, metadata={} if lo is None else {RANGE: (lo, hi)})
 
+
 #: Lowest pelvis height the crouch moves it to, as a share of its standing height (a deep
 #: squat; the two-bone legs cannot fold much further).
 LOWEST_ROOT = 0.45
@@ -130,8 +131,11 @@ def options_to_dict(options: PoseOptions) -> dict[str, Any]:
     """The fields of ``options`` that differ from the defaults, as plain JSON (a scene's
     ``pose_options``; empty for the defaults)."""
     default = PoseOptions()
-    return {f.name: getattr(options, f.name) for f in dataclasses.fields(PoseOptions)
-            if getattr(options, f.name) != getattr(default, f.name)}  # fmt: skip
+    return {
+        f.name: getattr(options, f.name)
+        for f in dataclasses.fields(PoseOptions)
+        if getattr(options, f.name) != getattr(default, f.name)
+    }
 
 
 def options_from_dict(value: Any, where: str) -> PoseOptions:
@@ -143,8 +147,9 @@ def options_from_dict(value: Any, where: str) -> PoseOptions:
     fields = {f.name: f for f in dataclasses.fields(PoseOptions)}
     unknown = sorted(set(value) - set(fields))
     if unknown:
-        raise UserError(f"{where}: unknown field(s) {', '.join(shown(u) for u in unknown)}; "
-                        f"pose options: {', '.join(fields)}")  # fmt: skip
+        raise UserError(
+            f"{where}: unknown field(s) {', '.join(shown(u) for u in unknown)}; pose options: {', '.join(fields)}"
+        )
     hints = typing.get_type_hints(PoseOptions)
     out = {}
     for name, raw in value.items():

@@ -34,9 +34,17 @@ from engine.kinematics import quat_np as QN
 from engine.kinematics.fk import fk
 
 #: The 9 validation files of every release (assets/models/README.md), relative to a mocap folder.
-VALIDATION_FILES = ("cmu_daz/indian/14.bvh", "cmu_daz/salsa/07.bvh", "cmu_iclone/002_01.bvh", "cmu_iclone/002_09.bvh",
-                    "cmu_iclone/005_05.bvh", "cmu_iclone/005_13.bvh", "cmu_iclone/006_02.bvh",
-                    "cmu_iclone/006_10.bvh", "cmu_iclone/007_05.bvh")  # fmt: skip
+VALIDATION_FILES = (
+    "cmu_daz/indian/14.bvh",
+    "cmu_daz/salsa/07.bvh",
+    "cmu_iclone/002_01.bvh",
+    "cmu_iclone/002_09.bvh",
+    "cmu_iclone/005_05.bvh",
+    "cmu_iclone/005_13.bvh",
+    "cmu_iclone/006_02.bvh",
+    "cmu_iclone/006_10.bvh",
+    "cmu_iclone/007_05.bvh",
+)
 #: Every 4th frame (15 per second at 60 fps): neighbouring frames add little.
 STRIDE = 4
 #: The validation files' local rotations at :data:`STRIDE` (scripts/build_pose_reference.py).
@@ -94,8 +102,14 @@ class ReferenceSet:
         return len(self.poses)
 
     @classmethod
-    def from_rotations(cls, clips: list[tuple[str, np.ndarray]], offsets: np.ndarray, stride: int = STRIDE,
-                       mirror: bool = True, description: str = "") -> "ReferenceSet":  # fmt: skip
+    def from_rotations(
+        cls,
+        clips: list[tuple[str, np.ndarray]],
+        offsets: np.ndarray,
+        stride: int = STRIDE,
+        mirror: bool = True,
+        description: str = "",
+    ) -> "ReferenceSet":
         """From ``(take name, local rotations (F, 22, 4))`` pairs, laid out on ``offsets
         (22, 3)``; with ``mirror``, each frame's left/right mirror image too. Several
         pairs may share a take name (copies of one take)."""
@@ -126,9 +140,9 @@ class ReferenceSet:
                 raise UserError("the spread of real poses needs at least two takes")
             out = np.empty(len(self.poses))
             for i in range(0, len(self.poses), _BLOCK):
-                d = pose_distances(self.poses[i:i + _BLOCK], self.poses)
-                d[self.takes[i:i + _BLOCK, None] == self.takes[None, :]] = np.inf
-                out[i:i + _BLOCK] = d.min(1)
+                d = pose_distances(self.poses[i : i + _BLOCK], self.poses)
+                d[self.takes[i : i + _BLOCK, None] == self.takes[None, :]] = np.inf
+                out[i : i + _BLOCK] = d.min(1)
             self._spread = out
         return self._spread
 
@@ -144,8 +158,10 @@ def validation_files(mocap: Path) -> list[Path]:
     paths = [Path(mocap) / f for f in VALIDATION_FILES]
     missing = [str(p) for p in paths if not p.is_file()]
     if missing:
-        raise UserError(f"validation file(s) not found: {', '.join(missing)} "
-                        f"(give the mocap folder that holds {VALIDATION_FILES[0]} and the others)")  # fmt: skip
+        raise UserError(
+            f"validation file(s) not found: {', '.join(missing)} "
+            f"(give the mocap folder that holds {VALIDATION_FILES[0]} and the others)"
+        )
     return paths
 
 
@@ -163,14 +179,17 @@ def load_shipped(offsets: np.ndarray, stride: int = STRIDE, path: Path = SHIPPED
         raise UserError(f"{path}: not a reference pose file ({exc})") from None
     stored = int(data["stride"])
     if stride < 1 or stride % stored:
-        raise UserError(f"--reference-stride must be a multiple of {stored} with the shipped reference poses "
-                        f"(got {stride}); give --reference DIR for any other stride")  # fmt: skip
+        raise UserError(
+            f"--reference-stride must be a multiple of {stored} with the shipped reference poses "
+            f"(got {stride}); give --reference DIR for any other stride"
+        )
     rot, take, names = data["local_rot"].astype(np.float64), data["take"], [str(n) for n in data["names"]]
     if rot.ndim != 3 or rot.shape[1:] != (sk.NUM_JOINTS, 4) or take.shape != rot.shape[:1]:
         raise UserError(f"{path}: local_rot must be (N, {sk.NUM_JOINTS}, 4) with one take per row")
     clips = [(name, rot[take == i][:: stride // stored]) for i, name in enumerate(names)]
-    return ReferenceSet.from_rotations(clips, offsets, 1, True,
-                                       f"{len(names)} validation files (shipped), every {stride}th frame, mirrored")
+    return ReferenceSet.from_rotations(
+        clips, offsets, 1, True, f"{len(names)} validation files (shipped), every {stride}th frame, mirrored"
+    )
 
 
 def load_files(paths: list[Path], offsets: np.ndarray, stride: int = STRIDE) -> ReferenceSet:
@@ -178,7 +197,9 @@ def load_files(paths: list[Path], offsets: np.ndarray, stride: int = STRIDE) -> 
     from engine.motion.retarget import load_motion
 
     clips = [(str(p), load_motion(p).local_rot) for p in paths]
-    return ReferenceSet.from_rotations(clips, offsets, stride, True, f"{len(paths)} validation files, every {stride}th frame, mirrored")
+    return ReferenceSet.from_rotations(
+        clips, offsets, stride, True, f"{len(paths)} validation files, every {stride}th frame, mirrored"
+    )
 
 
 def load_prepared(data_dir: Path, offsets: np.ndarray, stride: int = STRIDE) -> ReferenceSet:
@@ -197,5 +218,10 @@ def load_prepared(data_dir: Path, offsets: np.ndarray, stride: int = STRIDE) -> 
         except (OSError, KeyError, ValueError) as exc:
             raise UserError(f"{path}: cannot read its local rotations ({exc})") from None
     originals = sum(not e["mirrored"] for e in entries)
-    return ReferenceSet.from_rotations(clips, offsets, stride, False,
-                                       f"{data_dir} val split ({originals} files and their mirrors), every {stride}th frame")
+    return ReferenceSet.from_rotations(
+        clips,
+        offsets,
+        stride,
+        False,
+        f"{data_dir} val split ({originals} files and their mirrors), every {stride}th frame",
+    )

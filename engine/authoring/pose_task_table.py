@@ -62,14 +62,26 @@ class Task:
 #: 8 cm above them (on the iliac crest), a 30-cm step with the foot kept level.
 TASKS: tuple[Task, ...] = (
     Task("hand_to_knee", "right hand to the left knee", (Drag("rwrist", "lknee", (0.0, -0.08, 0.0)),), 1),
-    Task("hands_overhead", "both hands overhead",
-         (Drag("lwrist", "upperneck", (0.12, 0.0, 0.30)), Drag("rwrist", "upperneck", (-0.12, 0.0, 0.30))), 2),
+    Task(
+        "hands_overhead",
+        "both hands overhead",
+        (Drag("lwrist", "upperneck", (0.12, 0.0, 0.30)), Drag("rwrist", "upperneck", (-0.12, 0.0, 0.30))),
+        2,
+    ),
     Task("squat", "pelvis down 40 cm", (Drag("root", offset=(0.0, 0.0, -0.40)),), 1),
     Task("head_turn", "head turned 60 deg to the left", (Drag("upperneck", turn_deg=60.0),), 1),
     Task("step_forward", "left foot a 30 cm step forward", (Drag("lankle", offset=(0.0, -0.30, 0.0)),), 1),
-    Task("pick_up", "right hand to an object on the floor in front",
-         (Drag("rwrist", "rtoe", (0.0, -0.25, 0.0), height=0.10),), 1),
-    Task("hands_on_hips", "both hands on the hips",
-         (Drag("lwrist", "lhip", (0.12, 0.0, 0.08)), Drag("rwrist", "rhip", (-0.12, 0.0, 0.08))), 2),
-)  # fmt: skip
+    Task(
+        "pick_up",
+        "right hand to an object on the floor in front",
+        (Drag("rwrist", "rtoe", (0.0, -0.25, 0.0), height=0.10),),
+        1,
+    ),
+    Task(
+        "hands_on_hips",
+        "both hands on the hips",
+        (Drag("lwrist", "lhip", (0.12, 0.0, 0.08)), Drag("rwrist", "rhip", (-0.12, 0.0, 0.08))),
+        2,
+    ),
+)
 TASK_NAMES = tuple(t.name for t in TASKS)

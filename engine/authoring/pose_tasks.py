@@ -162,7 +162,7 @@ def split_options(items: list[str]) -> tuple[dict, dict, dict]:
             raise UserError(f"--set {item!r}: expected NAME=VALUE")
         name, raw = (x.strip() for x in item.split("=", 1))
         prefix = next((p for p in ("solve.", "settle.") if name.startswith(p)), "")
-        key, hints = name[len(prefix):], _keywords(calls[prefix])
+        key, hints = name[len(prefix) :], _keywords(calls[prefix])
         if not prefix and key in option_hints:
             chosen[key] = parse_typed(name, raw, option_hints[key])
             continue
@@ -179,12 +179,22 @@ def _keywords(func) -> dict:
     """Keyword parameter -> annotation (``Any`` where there is none) of ``func``."""
     hints = typing.get_type_hints(func)
     skip = {"self", "vae", "latent"}
-    return {p.name: hints.get(p.name, Any) for p in inspect.signature(func).parameters.values()
-            if p.name not in skip and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)}  # fmt: skip
+    return {
+        p.name: hints.get(p.name, Any)
+        for p in inspect.signature(func).parameters.values()
+        if p.name not in skip and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)
+    }
 
 
-def run_task(task: Task, poser_name: str, vae, reference: ReferenceSet, options: list[str] | None = None,
-             release: str = "none", events: int = EVENTS) -> TaskResult:  # fmt: skip
+def run_task(
+    task: Task,
+    poser_name: str,
+    vae,
+    reference: ReferenceSet,
+    options: list[str] | None = None,
+    release: str = "none",
+    events: int = EVENTS,
+) -> TaskResult:
     """Do ``task`` with one poser from the starting pose and measure the result.
 
     Parameters
@@ -221,18 +231,37 @@ def run_task(task: Task, poser_name: str, vae, reference: ReferenceSet, options:
     return _measured(task, poser_name, poser.pose, goals, offsets, reference, feet, seconds)
 
 
-def _measured(task: Task, poser_name: str, pose: Pose, goals: list[Goal], offsets: np.ndarray,
-              reference: ReferenceSet, feet: dict[str, np.ndarray], seconds: float) -> TaskResult:  # fmt: skip
+def _measured(
+    task: Task,
+    poser_name: str,
+    pose: Pose,
+    goals: list[Goal],
+    offsets: np.ndarray,
+    reference: ReferenceSet,
+    feet: dict[str, np.ndarray],
+    seconds: float,
+) -> TaskResult:
     """The measures of ``pose``, the end of ``task`` (``feet``: each undragged ankle's
     starting place, ``(2,)`` metres)."""
     errors = goal_errors(pose, goals, offsets)
     reached = all(e["error"] <= (REACH_CM if e["kind"] == "position" else TURN_DEG) for e in errors)
     natural = 100.0 * reference.nearest(pose.positions)
     moved = {j: 100.0 * float(np.linalg.norm(pose.positions[J[j], :2] - xy)) for j, xy in feet.items()}
-    return TaskResult(task.name, poser_name, len(task.drags), task.allowed, errors, reached, natural,
-                      natural <= reference.spread_summary()["p95_cm"], check_pose(pose.local_rot, pose.root_pos, offsets),
-                      seconds, moved, [[round(float(x), 4) for x in p] for p in pose.positions],
-                      100.0 * float(min(pose.positions[J[k], 2] for k in KNEES)))  # fmt: skip
+    return TaskResult(
+        task.name,
+        poser_name,
+        len(task.drags),
+        task.allowed,
+        errors,
+        reached,
+        natural,
+        natural <= reference.spread_summary()["p95_cm"],
+        check_pose(pose.local_rot, pose.root_pos, offsets),
+        seconds,
+        moved,
+        [[round(float(x), 4) for x in p] for p in pose.positions],
+        100.0 * float(min(pose.positions[J[k], 2] for k in KNEES)),
+    )
 
 
 def _start(task: Task, vae, init: dict) -> tuple[PoseMode, list[Goal], dict[str, np.ndarray]]:

@@ -36,8 +36,13 @@ TRUNK = tuple(J[n] for n in ("root", "lowerback", "upperback", "chest", "lowerne
 #: Joints whose target moves the pelvis with the legs (a step): the rule leaves the trunk alone.
 LEGS = tuple(J[s + n] for s in "lr" for n in ("hip", "knee", "ankle", "toe"))
 #: The trunk's bones, pelvis first: (the joint that turns the bone, the joint at its far end).
-BONES = ((J["root"], J["lowerback"]), (J["lowerback"], J["upperback"]), (J["upperback"], J["chest"]),
-         (J["chest"], J["lowerneck"]), (J["lowerneck"], J["upperneck"]))  # fmt: skip
+BONES = (
+    (J["root"], J["lowerback"]),
+    (J["lowerback"], J["upperback"]),
+    (J["upperback"], J["chest"]),
+    (J["chest"], J["lowerneck"]),
+    (J["lowerneck"], J["upperneck"]),
+)
 
 
 def unleaned(have: np.ndarray, start: np.ndarray, forward: np.ndarray) -> np.ndarray:
@@ -55,8 +60,15 @@ def unleaned(have: np.ndarray, start: np.ndarray, forward: np.ndarray) -> np.nda
     return was * forward + np.sqrt(max(0.0, 1.0 - was * was)) * rest / n
 
 
-def keep_trunk(pose: Pose, start: Pose, forward: np.ndarray, offsets: np.ndarray, reach: dict[int, np.ndarray],
-               rotations: dict[int, np.ndarray], pelvis: bool = True) -> Pose:  # fmt: skip
+def keep_trunk(
+    pose: Pose,
+    start: Pose,
+    forward: np.ndarray,
+    offsets: np.ndarray,
+    reach: dict[int, np.ndarray],
+    rotations: dict[int, np.ndarray],
+    pelvis: bool = True,
+) -> Pose:
     """``pose`` with no trunk bone leaning further back than in ``start`` (module doc).
 
     Parameters
@@ -85,7 +97,7 @@ def keep_trunk(pose: Pose, start: Pose, forward: np.ndarray, offsets: np.ndarray
     root = np.asarray(pose.root_pos, float)
     forward = np.asarray(forward, float)
     turned = False
-    for j, end in BONES[0 if pelvis else 1:]:
+    for j, end in BONES[0 if pelvis else 1 :]:
         # the bone's ends and its joint's parent (the root's: none, the identity) in one pass
         pos, rot = fk_joints(local, root, offsets, [j, end, max(sk.PARENTS[j], 0)])
         have = (pos[1] - pos[0]) / np.linalg.norm(pos[1] - pos[0])

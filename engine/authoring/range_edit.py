@@ -84,9 +84,16 @@ class RangeEdit:
     last: int
 
 
-def edit_range(vae, motion: Motion, start: int, end: int, constraints: list[Constraint], blend: int = 8,
-               progress: Callable[[int, int], None] | None = None,
-               cancelled: CancelCheck | None = None) -> RangeEdit:  # fmt: skip
+def edit_range(
+    vae,
+    motion: Motion,
+    start: int,
+    end: int,
+    constraints: list[Constraint],
+    blend: int = 8,
+    progress: Callable[[int, int], None] | None = None,
+    cancelled: CancelCheck | None = None,
+) -> RangeEdit:
     """Re-solve frames ``start..end`` (inclusive) of ``motion`` with ``constraints`` and
     blend ``blend`` frames at each end (see the module doc).
 
@@ -112,13 +119,20 @@ def edit_range(vae, motion: Motion, start: int, end: int, constraints: list[Cons
     for i, f in enumerate(frames):
         check(cancelled)
         previous_rot = motion.local_rot[max(f - 1, 0), 0]
-        ctx = character.placed(motion.root_pos[f], frame=f, previous=history[-1] if history else None,
-                               prior=latents[i], reference=previous_rot, ground=False)  # fmt: skip
+        ctx = character.placed(
+            motion.root_pos[f],
+            frame=f,
+            previous=history[-1] if history else None,
+            prior=latents[i],
+            reference=previous_rot,
+            ground=False,
+        )
         base = character.decode(latents[i], ctx)
         smooth.set_history(history[-1] if history else None, history[-2] if len(history) > 1 else None)
         terms = [*active_constraints(constraints, f), smooth]
-        solved = character.solve(latents[i], terms, ctx, iterations=ITERATIONS, prior_weight=PRIOR_WEIGHT, rule="sgd",
-                                 step_size=STEP_SIZE)  # fmt: skip
+        solved = character.solve(
+            latents[i], terms, ctx, iterations=ITERATIONS, prior_weight=PRIOR_WEIGHT, rule="sgd", step_size=STEP_SIZE
+        )
         deltas[i] = QN.mul(QN.conjugate(base.local_rot), solved.local_rot)
         edited = QN.mul(motion.local_rot[f], deltas[i])
         out_local[f] = Q.slerp(motion.local_rot[f], edited, np.full((sk.NUM_JOINTS, 1), weight[i]))
@@ -187,8 +201,9 @@ def _weights(start: int, end: int, blend: int, lo: int, hi: int) -> np.ndarray:
     return np.array(out)
 
 
-def _exact_steps(local: np.ndarray, motion: Motion, constraints: list[Constraint], frames: list[int],
-                 weight: np.ndarray, end: int) -> None:  # fmt: skip
+def _exact_steps(
+    local: np.ndarray, motion: Motion, constraints: list[Constraint], frames: list[int], weight: np.ndarray, end: int
+) -> None:
     """Feet held in floor contact, then wrist / ankle targets, in place on ``local`` (see
     the module doc); ``end``: the range's last frame (after it a hold fades with ``weight``)."""
     offsets = motion.skeleton.offsets
@@ -198,9 +213,11 @@ def _exact_steps(local: np.ndarray, motion: Motion, constraints: list[Constraint
         pos = fk_positions(local[f], motion.root_pos[f], offsets)
         was = fk_positions(motion.local_rot[f], motion.root_pos[f], offsets)  # contact is read off the clip
 
-        def down(j: int) -> bool:  # called only in this iteration, so f and was are this frame's
-            return any(c.activity(f) > 0 and sk.JOINT_NAMES[j] in c.joints  # noqa: B023
-                       and was[j, 2] < c.floor_height + c.contact_height for c in floors)  # fmt: skip  # noqa: B023
+        def down(j: int, f: int = f, was: np.ndarray = was) -> bool:  # this frame's f and was, bound
+            return any(
+                c.activity(f) > 0 and sk.JOINT_NAMES[j] in c.joints and was[j, 2] < c.floor_height + c.contact_height
+                for c in floors
+            )
 
         keep = 1.0 if f <= end else weight[i]  # the blend out returns to the clip
         targets: dict[int, np.ndarray] = {}
@@ -227,7 +244,9 @@ def _exact_steps(local: np.ndarray, motion: Motion, constraints: list[Constraint
             _aim_feet(local[f], motion.root_pos[f], offsets, aims)
 
 
-def _aim_feet(local: np.ndarray, root: np.ndarray, offsets: np.ndarray, aims: dict[int, tuple[int, np.ndarray]]) -> None:
+def _aim_feet(
+    local: np.ndarray, root: np.ndarray, offsets: np.ndarray, aims: dict[int, tuple[int, np.ndarray]]
+) -> None:
     """Turn each ankle of ``aims`` (ankle -> (toe, horizontal toe target)) so that its toe
     is over the target at its own height, in place on ``local (22, 4)``."""
     pos, rot = fk(local, root, offsets)
@@ -251,8 +270,9 @@ class Foot:
         self.released = np.zeros(2)  # the shift when the hold ended
         self.fading = 0  # frames since the hold ended
 
-    def step(self, pos: np.ndarray, was: np.ndarray, ankle_down: bool, toe_down: bool,
-             keep: float) -> tuple[np.ndarray, np.ndarray | None]:  # fmt: skip
+    def step(
+        self, pos: np.ndarray, was: np.ndarray, ankle_down: bool, toe_down: bool, keep: float
+    ) -> tuple[np.ndarray, np.ndarray | None]:
         """The ankle's horizontal shift (2,) on a frame whose free pose is ``pos (22, 3)``
         and the clip's ``was (22, 3)``, and where its toe is held when both are down
         (None otherwise); ``keep`` < 1 (the blend out) moves the holds that much of the

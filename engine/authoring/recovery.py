@@ -37,9 +37,13 @@ def document(session: Any) -> dict[str, Any]:
         "targets": {j: t.to_dict() for j, t in m.targets.items()},
         "planted": {j: _floats(v) for j, v in m.planted.items()},
         "heading": float(m.heading),
-        "pose": {"latent": _floats(p.latent), "local_rot": _floats(p.local_rot), "root_pos": _floats(p.root_pos),
-                 "positions": _floats(p.positions)},
-    }  # fmt: skip
+        "pose": {
+            "latent": _floats(p.latent),
+            "local_rot": _floats(p.local_rot),
+            "root_pos": _floats(p.root_pos),
+            "positions": _floats(p.positions),
+        },
+    }
     return doc
 
 
@@ -89,17 +93,23 @@ def recover(session: Any, doc: Any, where: str = "autosave") -> None:
     raw_pose = rec.get("pose")
     if not isinstance(raw_pose, dict):
         raise UserError(f"{where}: recovery: field 'pose' must be an object")
-    latent = np.array(raw_pose.get("latent", []), dtype=np.float64) if isinstance(raw_pose.get("latent"), list) else None
+    latent = (
+        np.array(raw_pose.get("latent", []), dtype=np.float64) if isinstance(raw_pose.get("latent"), list) else None
+    )
     if latent is None or latent.ndim != 1 or latent.size == 0 or not np.isfinite(latent).all():
         raise UserError(f"{where}: recovery: pose: field 'latent' must be a list of finite numbers")
     J = sk.NUM_JOINTS
-    pose = Pose(latent, _array(raw_pose.get("local_rot"), (J, 4), f"{where}: recovery: pose: local_rot"),
-                _array(raw_pose.get("root_pos"), (3,), f"{where}: recovery: pose: root_pos"),
-                _array(raw_pose.get("positions"), (J, 3), f"{where}: recovery: pose: positions"))  # fmt: skip
+    pose = Pose(
+        latent,
+        _array(raw_pose.get("local_rot"), (J, 4), f"{where}: recovery: pose: local_rot"),
+        _array(raw_pose.get("root_pos"), (3,), f"{where}: recovery: pose: root_pos"),
+        _array(raw_pose.get("positions"), (J, 3), f"{where}: recovery: pose: positions"),
+    )
     model_latent = np.asarray(session.mode.pose.latent)
     if latent.size != model_latent.size:
-        raise UserError(f"{where}: recovery: pose: field 'latent' has {latent.size} values; the pose model has "
-                        f"{model_latent.size}")  # fmt: skip
+        raise UserError(
+            f"{where}: recovery: pose: field 'latent' has {latent.size} values; the pose model has {model_latent.size}"
+        )
     pose.latent = latent.astype(model_latent.dtype)
     session.open_scene(loaded)
     m = session.mode

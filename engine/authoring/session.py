@@ -79,8 +79,9 @@ class AuthoringSession:
         self.mode.frame = self._frame
 
     @classmethod
-    def new(cls, height: float | None = None, motion: Motion | None = None, frame: int = 0,
-            vae: Any = None) -> AuthoringSession:  # fmt: skip
+    def new(
+        cls, height: float | None = None, motion: Motion | None = None, frame: int = 0, vae: Any = None
+    ) -> AuthoringSession:
         """A session on a character ``height`` metres tall (None: the canonical one),
         standing in the VAE's mean pose, or in frame ``frame`` of ``motion`` when given;
         ``vae`` None loads the shipped pose VAE."""
@@ -155,8 +156,9 @@ class AuthoringSession:
         if d.constraints:
             self.events.constraints.emit(constraints_event(before.constraints, after.constraints))
         if d.keys:
-            self.events.keys.emit(ev.KeysChanged(tuple(k.frame for k in after.keys), d.keys_added, d.keys_removed,
-                                                 d.keys_changed))  # fmt: skip
+            self.events.keys.emit(
+                ev.KeysChanged(tuple(k.frame for k in after.keys), d.keys_added, d.keys_removed, d.keys_changed)
+            )
         if d.animation:
             frames, fps, interpolation = after.animation
             self.events.animation.emit(ev.AnimationChanged(frames, fps, interpolation, before.animation))
@@ -165,8 +167,9 @@ class AuthoringSession:
 
     def _history_changed(self) -> None:
         h = self.history
-        self.events.history.emit(ev.HistoryChanged(h.can_undo(), h.can_redo(), h.undo_text(), h.redo_text(),
-                                                   h.is_clean(), h.count()))  # fmt: skip
+        self.events.history.emit(
+            ev.HistoryChanged(h.can_undo(), h.can_redo(), h.undo_text(), h.redo_text(), h.is_clean(), h.count())
+        )
 
     def undo(self) -> None:
         self.history.undo()
@@ -187,14 +190,19 @@ class AuthoringSession:
         if joint == "root":
             self.edit("move body", lambda: self.mode.drag_hips(p), ("body", "root", "position"))
             return
-        self.edit(f"move target {joint}", lambda: self.mode.set_target(joint, p), ("target", joint, "position"),
-                  solve=True)  # fmt: skip
+        self.edit(
+            f"move target {joint}", lambda: self.mode.set_target(joint, p), ("target", joint, "position"), solve=True
+        )
 
     def turn_joint(self, joint: str, rotation: np.ndarray) -> None:
         """Give ``joint`` the world rotation ``rotation (4,)`` as a target and solve."""
         q = np.asarray(rotation, float)
-        self.edit(f"turn {joint}", lambda: self.mode.set_target(joint, rotation=q / np.linalg.norm(q)),
-                  ("target", joint, "rotation"), solve=True)  # fmt: skip
+        self.edit(
+            f"turn {joint}",
+            lambda: self.mode.set_target(joint, rotation=q / np.linalg.norm(q)),
+            ("target", joint, "rotation"),
+            solve=True,
+        )
 
     def hold_turn(self, joint: str, on: bool) -> None:
         """Give the target on ``joint`` the joint's current world rotation (``on``) or make
@@ -210,8 +218,9 @@ class AuthoringSession:
 
     def edit_target(self, joint: str, enabled: bool | None = None, weight: float | None = None) -> None:
         """Switch the target on ``joint`` on or off or change its weight, and solve."""
-        self.edit(f"edit target {joint}", lambda: self.mode.set_target(joint, enabled=enabled, weight=weight),
-                  solve=True)  # fmt: skip
+        self.edit(
+            f"edit target {joint}", lambda: self.mode.set_target(joint, enabled=enabled, weight=weight), solve=True
+        )
 
     def clear_target(self, joint: str) -> None:
         self.edit(f"clear target {joint}", lambda: self.mode.remove_target(joint), solve=True)
@@ -276,8 +285,12 @@ class AuthoringSession:
 
     def update_constraint(self, name: str, changes: dict[str, Any]) -> None:
         """Set fields of the constraint ``name`` and solve (a slider's steps merge)."""
-        self.edit(f"edit {name}", lambda: ConstraintList(self.mode.constraints).edit(name, **changes),
-                  ("constraint", name, tuple(changes)), solve=True)  # fmt: skip
+        self.edit(
+            f"edit {name}",
+            lambda: ConstraintList(self.mode.constraints).edit(name, **changes),
+            ("constraint", name, tuple(changes)),
+            solve=True,
+        )
 
     # -- keys and the animation ----------------------------------------------------
     def key_at(self, frame: int) -> Key | None:
@@ -296,8 +309,10 @@ class AuthoringSession:
     def delete_key(self, frame: int) -> None:
         """Delete the key at ``frame`` (nothing when there is none)."""
         if self.key_at(frame) is not None:
-            self.edit(f"delete key {frame}",
-                      lambda: setattr(self.scene, "keys", [k for k in self.scene.keys if k.frame != frame]))  # fmt: skip
+            self.edit(
+                f"delete key {frame}",
+                lambda: setattr(self.scene, "keys", [k for k in self.scene.keys if k.frame != frame]),
+            )
 
     def move_key(self, frame: int, to: int) -> None:
         """Move the key at ``frame`` to ``to`` (replacing a key there) and go there."""
@@ -361,9 +376,14 @@ class AuthoringSession:
         """The bake of the keys as it stands, to run on any thread (:meth:`take_bake`)."""
         if not self.scene.keys:
             raise UserError("add at least one key first")
-        scene = AuthoringScene(list(self.scene.constraints), self.scene.settings, copy.copy(self.scene.animation),
-                               [copy.deepcopy(k) for k in self.scene.keys], self.scene.height,
-                               pose_options=copy.copy(self.scene.pose_options))  # fmt: skip
+        scene = AuthoringScene(
+            list(self.scene.constraints),
+            self.scene.settings,
+            copy.copy(self.scene.animation),
+            [copy.deepcopy(k) for k in self.scene.keys],
+            self.scene.height,
+            pose_options=copy.copy(self.scene.pose_options),
+        )
         return BakeJob(scene, self.vae, self._generation)
 
     def take_bake(self, job: BakeJob, baked: Baked) -> bool:

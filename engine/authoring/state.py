@@ -62,7 +62,8 @@ def same_target(a: JointTarget | None, b: JointTarget | None) -> bool:
     if a is None or b is None:
         return a is b
     rot = (a.rotation is None and b.rotation is None) or (
-        a.rotation is not None and b.rotation is not None and np.array_equal(a.rotation, b.rotation))
+        a.rotation is not None and b.rotation is not None and np.array_equal(a.rotation, b.rotation)
+    )
     return rot and np.array_equal(a.position, b.position) and a.weight == b.weight and a.enabled == b.enabled
 
 
@@ -71,13 +72,15 @@ def same_key(a: Key, b: Key) -> bool:
     la, lb = a.latent, b.latent
     latent = (la is None and lb is None) or (la is not None and lb is not None and np.array_equal(la, lb))
     targets = set(a.targets) == set(b.targets) and all(same_target(a.targets[j], b.targets[j]) for j in a.targets)
-    return (a.frame == b.frame and latent and targets and np.array_equal(a.root, b.root)
-            and a.heading == b.heading)  # fmt: skip
+    return a.frame == b.frame and latent and targets and np.array_equal(a.root, b.root) and a.heading == b.heading
 
 
 def same_pose(a: Pose, b: Pose) -> bool:
-    return a is b or (np.array_equal(a.latent, b.latent) and np.array_equal(a.positions, b.positions)
-                      and np.array_equal(a.local_rot, b.local_rot))  # fmt: skip
+    return a is b or (
+        np.array_equal(a.latent, b.latent)
+        and np.array_equal(a.positions, b.positions)
+        and np.array_equal(a.local_rot, b.local_rot)
+    )
 
 
 @dataclass(frozen=True)
@@ -110,7 +113,8 @@ def differences(old: AuthoringState, new: AuthoringState) -> Differences:
     changed = tuple(sorted(f for f in set(k_old) & set(k_new) if not same_key(k_old[f], k_new[f])))
     pose = not same_pose(old.pose, new.pose) or old.heading != new.heading
     constraints = len(old.constraints) != len(new.constraints) or any(
-        a is not b for a, b in zip(old.constraints, new.constraints))
+        a is not b for a, b in zip(old.constraints, new.constraints)
+    )
     return Differences(joints, added, removed, changed, pose, old.animation != new.animation, constraints)
 
 
@@ -118,10 +122,15 @@ def capture(mode: PoseMode, scene: AuthoringScene) -> AuthoringState:
     """The state of ``mode`` (targets, planted feet, pose, facing) and ``scene`` (keys,
     animation, constraints), as copies."""
     a = scene.animation
-    return AuthoringState(tuple(copy.deepcopy(t) for t in mode.targets.values()),
-                          tuple((j, p.copy()) for j, p in mode.planted.items()), mode.pose, mode.heading,
-                          tuple(copy.deepcopy(k) for k in scene.keys), (a.frames, a.fps, a.interpolation),
-                          tuple(mode.constraints))  # fmt: skip
+    return AuthoringState(
+        tuple(copy.deepcopy(t) for t in mode.targets.values()),
+        tuple((j, p.copy()) for j, p in mode.planted.items()),
+        mode.pose,
+        mode.heading,
+        tuple(copy.deepcopy(k) for k in scene.keys),
+        (a.frames, a.fps, a.interpolation),
+        tuple(mode.constraints),
+    )
 
 
 def put(mode: PoseMode, scene: AuthoringScene, state: AuthoringState) -> None:

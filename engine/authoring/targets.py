@@ -57,8 +57,10 @@ class JointTarget:
             if n < 1e-9:
                 raise UserError(f"target {self.joint}: rotation must be a non-zero quaternion (w, x, y, z)")
             self.rotation = q / n
-        if isinstance(self.weight, bool) or not isinstance(self.weight, (int, float)) or not (
-            WEIGHT_RANGE[0] <= float(self.weight) <= WEIGHT_RANGE[1]
+        if (
+            isinstance(self.weight, bool)
+            or not isinstance(self.weight, (int, float))
+            or not (WEIGHT_RANGE[0] <= float(self.weight) <= WEIGHT_RANGE[1])
         ):
             raise UserError(f"target {self.joint}: weight must be a number in {WEIGHT_RANGE[0]:g}-{WEIGHT_RANGE[1]:g}")
         self.weight = float(self.weight)
@@ -75,11 +77,15 @@ class JointTarget:
         """The solver term of this target."""
         six = self.rotation is not None
         return SensorConstraint(
-            name=f"target:{self.joint}", weight=self.weight, enabled=self.active, joint=self.joint,
-            dof=6 if six else 3, position=self.position.copy(),
+            name=f"target:{self.joint}",
+            weight=self.weight,
+            enabled=self.active,
+            joint=self.joint,
+            dof=6 if six else 3,
+            position=self.position.copy(),
             rotation=self.rotation.copy() if self.rotation is not None else np.array([1.0, 0.0, 0.0, 0.0]),
             rotation_weight=ROTATION_WEIGHT,
-        )  # fmt: skip
+        )
 
     def to_dict(self) -> dict:
         out: dict = {"position": [float(x) for x in self.position]}
@@ -109,7 +115,9 @@ def target_from_json(joint: str, value, where: str) -> JointTarget:
         raise UserError(f"{where}: {exc}") from None
 
 
-def solve_inputs(targets: "list[JointTarget]") -> tuple[list[SensorConstraint], dict[int, np.ndarray], dict[int, np.ndarray]]:
+def solve_inputs(
+    targets: "list[JointTarget]",
+) -> tuple[list[SensorConstraint], dict[int, np.ndarray], dict[int, np.ndarray]]:
     """Solver terms, exact limb targets (wrists, ankles) and exact rotations of the
     active ``targets``."""
     live = [t for t in targets if t.active]

@@ -37,16 +37,24 @@ def register(sub: argparse._SubParsersAction) -> None:
         "iterations per frame.",
     )
     p.add_argument("file", nargs="?", type=Path, default=DEFAULT_CLIP, help="BVH clip (default: bundled example)")
-    p.add_argument("--method", action="append", help="method to time; repeat for several (default: every method that works with --sensors)")
+    p.add_argument(
+        "--method",
+        action="append",
+        help="method to time; repeat for several (default: every method that works with --sensors)",
+    )
     p.add_argument("--sensors", default="6", help="sensor preset or list (default: 6)")
     p.add_argument("--mode", choices=MODES, default="realtime", help="optimizer mode")
     p.add_argument("--iterations", type=int, help="optimizer iterations per frame (realtime mode)")
     p.add_argument("--frames", type=int, default=300, help="frames to time (default: 300)")
     p.add_argument("--warmup", type=int, default=10, help="untimed frames first (default: 10)")
     p.add_argument("--json", type=Path, metavar="OUT", help="also write the results as JSON")
-    p.add_argument("--scene", type=Path, metavar="SCENE.json",
-                   help="also solve the scene's constraints with the sensors (methods that take constraints; "
-                   "the scene's optimizer settings are not applied)")  # fmt: skip
+    p.add_argument(
+        "--scene",
+        type=Path,
+        metavar="SCENE.json",
+        help="also solve the scene's constraints with the sensors (methods that take constraints; "
+        "the scene's optimizer settings are not applied)",
+    )
     add_rig_map_option(p)
     pose_bench.add_options(p)
     p.set_defaults(func=_bench)
@@ -119,7 +127,7 @@ def _solve_clip(method: Method, tracking, n: int) -> tuple[float, list] | None:
         return None
     t0 = time.perf_counter()
     results = driver.solve_clip(method, [tracking.frame(i) for i in range(n)])
-    return (None if results is None else (1000.0 * (time.perf_counter() - t0) / n, results))
+    return None if results is None else (1000.0 * (time.perf_counter() - t0) / n, results)
 
 
 def _peak_rss_mb() -> float:
@@ -173,17 +181,28 @@ def _bench(args: argparse.Namespace) -> int:
                 raise
             skipped.append(f"{name}: skipped: {exc}")  # e.g. needs another sensor preset
     scene = f", scene {args.scene.name} ({len(constraints)} constraints)" if args.scene else ""
-    print(f"{args.file.name}: sensors {args.sensors}{scene}, mode {args.mode}, "
-          f"{machine['cpu_count']} cores, torch {machine['torch_threads']} threads")
-    print(f"{'method':<12} {'frames':>6} {'ms mean':>8} {'median':>8} {'p95':>8} {'fps':>7} {'iters':>6} "
-          f"{'ms/it':>7} {'it p95':>7}  breakdown ms/it (decoder fk+losses backward step)")
+    print(
+        f"{args.file.name}: sensors {args.sensors}{scene}, mode {args.mode}, "
+        f"{machine['cpu_count']} cores, torch {machine['torch_threads']} threads"
+    )
+    print(
+        f"{'method':<12} {'frames':>6} {'ms mean':>8} {'median':>8} {'p95':>8} {'fps':>7} {'iters':>6} "
+        f"{'ms/it':>7} {'it p95':>7}  breakdown ms/it (decoder fk+losses backward step)"
+    )
     for r in rows:
         it = r["ms_per_iteration_median"]
-        extra = "" if it is None else (
-            f"{it:>7.3f} {r['ms_per_iteration_p95']:>7.3f}  "
-            + " ".join(f"{v:.3f}" for v in (r["breakdown_ms"] or {}).values()))  # none for a batched solve
-        print(f"{r['method']:<12} {r['frames']:>6d} {r['ms_mean']:>8.2f} {r['ms_median']:>8.2f} "
-              f"{r['ms_p95']:>8.2f} {r['fps']:>7.1f} {r['iterations_mean']:>6.1f} {extra}")
+        extra = (
+            ""
+            if it is None
+            else (
+                f"{it:>7.3f} {r['ms_per_iteration_p95']:>7.3f}  "
+                + " ".join(f"{v:.3f}" for v in (r["breakdown_ms"] or {}).values())
+            )
+        )  # none for a batched solve
+        print(
+            f"{r['method']:<12} {r['frames']:>6d} {r['ms_mean']:>8.2f} {r['ms_median']:>8.2f} "
+            f"{r['ms_p95']:>8.2f} {r['fps']:>7.1f} {r['iterations_mean']:>6.1f} {extra}"
+        )
     for line in skipped:
         print(line)
     if args.json:

@@ -25,16 +25,30 @@ DEFAULT_BLEND_S = 0.5
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("compare", help="write docs/comparison.md: DragPoser, SparsePoser, RPM and IK side by side",
-                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
-    p.add_argument("paths", nargs="*", type=Path, metavar="PATH",
-                   help="BVH files or folders (default: the validation files of --data)")  # fmt: skip
+    p = sub.add_parser(
+        "compare",
+        help="write docs/comparison.md: DragPoser, SparsePoser, RPM and IK side by side",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument(
+        "paths",
+        nargs="*",
+        type=Path,
+        metavar="PATH",
+        help="BVH files or folders (default: the validation files of --data)",
+    )
     p.add_argument("--data", type=Path, default=Path("prepared"), help="prepared folder listing the validation files")
     p.add_argument("--out", type=Path, default=Path("docs/comparison.md"), help="Markdown file to write")
     p.add_argument("--cache", type=Path, default=Path("runs/comparison"), help="folder of per-run JSON (reused)")
     p.add_argument("--max-frames", type=int, metavar="N", help="evaluate only the first N frames of each clip")
-    p.add_argument("--blend", type=float, default=DEFAULT_BLEND_S, metavar="S",
-                   help=f"DragPoser's blend time in the smoothed rows, seconds (default {DEFAULT_BLEND_S})")
+    p.add_argument(
+        "--blend",
+        type=float,
+        default=DEFAULT_BLEND_S,
+        metavar="S",
+        help=f"DragPoser's blend time in the smoothed rows, seconds (default {DEFAULT_BLEND_S})",
+    )
     p.add_argument("--passes", default="1,2,3,4", help="which passes to run, e.g. 3,4 (default: all)")
     p.add_argument("--only", metavar="A,B", help="run only these rows, e.g. dragposer,dragposer+blend (default: all)")
     p.add_argument("--table-only", action="store_true", help="only rebuild the document from the cache")
@@ -59,10 +73,21 @@ def _run(args: argparse.Namespace, files: list[Path], preset: str, gaps: bool, v
     name = variant.split("+")[0]
     blend = args.blend if variant.endswith("+blend") else 0.0
     ns = argparse.Namespace(
-        method=name, sensors=preset, mode="realtime", faulty=0.0, gaps=gaps, noise_pos=0.0, noise_rot=0.0,
-        seed=0, no_progress=args.no_progress, iterations=None, lr=None, vae=None, predictor=None,
+        method=name,
+        sensors=preset,
+        mode="realtime",
+        faulty=0.0,
+        gaps=gaps,
+        noise_pos=0.0,
+        noise_rot=0.0,
+        seed=0,
+        no_progress=args.no_progress,
+        iterations=None,
+        lr=None,
+        vae=None,
+        predictor=None,
         set=[f"sensor_blend={blend}"] if name == "dragposer" else [],
-    )  # fmt: skip
+    )
     motions = []
     for f in files:
         m = load_motion(f, rig_map=rig_map_path(args), asf=asf_path(args))
@@ -117,4 +142,3 @@ def _load(cache: Path) -> dict[tuple[str, bool, str], dict[str, Any]]:
             if f.is_file():
                 out[(preset, gaps, v)] = json.loads(f.read_text())
     return out
-

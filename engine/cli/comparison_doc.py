@@ -19,11 +19,24 @@ def fmt(v: Any, spec: str) -> str:
     return "-" if v is None or (isinstance(v, float) and not math.isfinite(v)) else format(v, spec)
 
 
-_COLS = (("pos_cm", "Pos cm", ".2f"), ("rot_deg", "Rot deg", ".1f"), ("vel_cms", "Vel cm/s", ".1f"),
-         ("ee_cm", "EE cm", ".2f"), ("jitter", "Jitter", ".2f"), ("ms_per_frame", "ms/frame", ".1f"))  # fmt: skip
-_GAP_COLS = (("pj", "PJ", ".1f"), ("auj", "AUJ", ".0f"), ("pj_ts", "PJ T-S", ".1f"), ("auj_ts", "AUJ T-S", ".0f"),
-             ("pj_st", "PJ S-T", ".1f"), ("auj_st", "AUJ S-T", ".0f"), ("pj_raw", "PJ raw", ".1f"),
-             ("auj_raw", "AUJ raw", ".0f"))  # fmt: skip
+_COLS = (
+    ("pos_cm", "Pos cm", ".2f"),
+    ("rot_deg", "Rot deg", ".1f"),
+    ("vel_cms", "Vel cm/s", ".1f"),
+    ("ee_cm", "EE cm", ".2f"),
+    ("jitter", "Jitter", ".2f"),
+    ("ms_per_frame", "ms/frame", ".1f"),
+)
+_GAP_COLS = (
+    ("pj", "PJ", ".1f"),
+    ("auj", "AUJ", ".0f"),
+    ("pj_ts", "PJ T-S", ".1f"),
+    ("auj_ts", "AUJ T-S", ".0f"),
+    ("pj_st", "PJ S-T", ".1f"),
+    ("auj_st", "AUJ S-T", ".0f"),
+    ("pj_raw", "PJ raw", ".1f"),
+    ("auj_raw", "AUJ raw", ".0f"),
+)
 
 PAPERS = """\
 ## The papers' own figures
@@ -98,27 +111,35 @@ def _targets(res: dict, blend: float) -> list[str]:
     dp, sp = res.get(("6", False, "dragposer")), res.get(("6", False, "sparseposer"))
     if dp and sp:
         r = _ratio(sp["total"]["pos_cm"], dp["total"]["pos_cm"])
-        out.append(f"- SparsePoser, preset 6, accuracy: Pos {sp['total']['pos_cm']:.2f} cm against DragPoser's "
-                   f"{dp['total']['pos_cm']:.2f} cm on the same frames ({fmt(r, '.2f')}x; target <= 1.25x): "
-                   f"**{'met' if r is not None and r <= 1.25 else 'not met'}**.")  # fmt: skip
-        out.append("- SparsePoser, speed (target <= 5 ms per frame): the ms/frame above come from the machine "
-                   "that ran this command, busy with other jobs; the target is judged on the idle machine with "
-                   "`dragposer-studio bench --method dragposer --method sparseposer --sensors 6 --frames 300` "
-                   "(figure and verdict in `assets/models/README.md`, SparsePoser, Speed).")  # fmt: skip
+        out.append(
+            f"- SparsePoser, preset 6, accuracy: Pos {sp['total']['pos_cm']:.2f} cm against DragPoser's "
+            f"{dp['total']['pos_cm']:.2f} cm on the same frames ({fmt(r, '.2f')}x; target <= 1.25x): "
+            f"**{'met' if r is not None and r <= 1.25 else 'not met'}**."
+        )
+        out.append(
+            "- SparsePoser, speed (target <= 5 ms per frame): the ms/frame above come from the machine "
+            "that ran this command, busy with other jobs; the target is judged on the idle machine with "
+            "`dragposer-studio bench --method dragposer --method sparseposer --sensors 6 --frames 300` "
+            "(figure and verdict in `assets/models/README.md`, SparsePoser, Speed)."
+        )
     dp, rpm = res.get(("3-head-hands", True, "dragposer")), res.get(("3-head-hands", True, "rpm"))
     if dp and rpm:
         pj, auj = (rpm["total"].get(k) for k in ("pj", "auj"))
         ok = pj is not None and auj is not None and pj < dp["total"]["pj"] and auj < dp["total"]["auj"]
-        out.append(f"- RPM, 3-head-hands with gaps: PJ {fmt(pj, '.1f')} / AUJ {fmt(auj, '.0f')} against "
-                   f"DragPoser's {fmt(dp['total'].get('pj'), '.1f')} / {fmt(dp['total'].get('auj'), '.0f')} "
-                   f"without smoothing: **{'met' if ok else 'not met'}**.")  # fmt: skip
+        out.append(
+            f"- RPM, 3-head-hands with gaps: PJ {fmt(pj, '.1f')} / AUJ {fmt(auj, '.0f')} against "
+            f"DragPoser's {fmt(dp['total'].get('pj'), '.1f')} / {fmt(dp['total'].get('auj'), '.0f')} "
+            f"without smoothing: **{'met' if ok else 'not met'}**."
+        )
     bl = res.get(("3-head-hands", True, "dragposer+blend"))
     if dp and bl:
         r = _ratio(bl["total"].get("auj"), dp["total"].get("auj"))
-        out.append(f"- DragPoser's AUJ with a {blend:g} s blend: {fmt(bl['total'].get('auj'), '.0f')} against "
-                   f"{fmt(dp['total'].get('auj'), '.0f')} without ({fmt(r, '.2f')}x; target <= 0.5x): "
-                   f"**{'met' if r is not None and r <= 0.5 else 'not met'}**; PJ "
-                   f"{fmt(bl['total'].get('pj'), '.1f')} against {fmt(dp['total'].get('pj'), '.1f')}.")  # fmt: skip
+        out.append(
+            f"- DragPoser's AUJ with a {blend:g} s blend: {fmt(bl['total'].get('auj'), '.0f')} against "
+            f"{fmt(dp['total'].get('auj'), '.0f')} without ({fmt(r, '.2f')}x; target <= 0.5x): "
+            f"**{'met' if r is not None and r <= 0.5 else 'not met'}**; PJ "
+            f"{fmt(bl['total'].get('pj'), '.1f')} against {fmt(dp['total'].get('pj'), '.1f')}."
+        )
         out.append(_auj_note(dp, bl))
     return out
 
@@ -127,14 +148,16 @@ def _auj_note(dp: dict, bl: dict) -> str:
     """What PJ / AUJ measure here, and the plain sums (``PJ raw`` / ``AUJ raw``) beside them."""
     gt = dp["total"].get("gt_jerk")
     raw = _ratio(bl["total"].get("auj_raw"), dp["total"].get("auj_raw"))
-    return ("  PJ / AUJ follow FlowMDM, as RPM uses them (docs/metrics.md): the 1-s windows after the "
-            "changes are averaged into one curve of the largest joint jerk; PJ is its peak, AUJ its summed "
-            f"distance from the ground truth's mean jerk ({fmt(gt, '.1f')} here), so motion as smooth as the "
-            "real one scores AUJ ~ 0 up to the noise of averaging few windows: the ground truth itself, at the "
-            f"same changes, scores PJ {fmt(dp['total'].get('gt_pj'), '.1f')} / AUJ "
-            f"{fmt(dp['total'].get('gt_auj'), '.0f')}. With the plain sums (`PJ raw` / `AUJ raw`, which count the "
-            f"motion's own jerk too) the blend gives {fmt(bl['total'].get('auj_raw'), '.0f')} against "
-            f"{fmt(dp['total'].get('auj_raw'), '.0f')} ({fmt(raw, '.2f')}x).")
+    return (
+        "  PJ / AUJ follow FlowMDM, as RPM uses them (docs/metrics.md): the 1-s windows after the "
+        "changes are averaged into one curve of the largest joint jerk; PJ is its peak, AUJ its summed "
+        f"distance from the ground truth's mean jerk ({fmt(gt, '.1f')} here), so motion as smooth as the "
+        "real one scores AUJ ~ 0 up to the noise of averaging few windows: the ground truth itself, at the "
+        f"same changes, scores PJ {fmt(dp['total'].get('gt_pj'), '.1f')} / AUJ "
+        f"{fmt(dp['total'].get('gt_auj'), '.0f')}. With the plain sums (`PJ raw` / `AUJ raw`, which count the "
+        f"motion's own jerk too) the blend gives {fmt(bl['total'].get('auj_raw'), '.0f')} against "
+        f"{fmt(dp['total'].get('auj_raw'), '.0f')} ({fmt(raw, '.2f')}x)."
+    )
 
 
 def render(res: dict[tuple[str, bool, str], dict[str, Any]], args: argparse.Namespace) -> str:

@@ -54,11 +54,19 @@ def _prepare(args: argparse.Namespace) -> int:
     inputs = args.inputs or [DEFAULT_DATA]
     if not args.inputs and not DEFAULT_DATA.is_dir():
         raise UserError(f"no input given and the default data folder {DEFAULT_DATA} does not exist")
-    res = prepare(inputs, args.out, eval_only=args.eval_only, mirror=not args.no_mirror, progress=not args.quiet,
-                  rig_map=rig_map_path(args))
+    res = prepare(
+        inputs,
+        args.out,
+        eval_only=args.eval_only,
+        mirror=not args.no_mirror,
+        progress=not args.quiet,
+        rig_map=rig_map_path(args),
+    )
     state = "unchanged" if res.unchanged else "updated"
-    print(f"{res.out}/manifest.json {state}: {res.written} shards written, {res.reused} reused, "
-          f"{len(res.failed)} files failed")
+    print(
+        f"{res.out}/manifest.json {state}: {res.written} shards written, {res.reused} reused, "
+        f"{len(res.failed)} files failed"
+    )
     for path, reason in res.failed:
         print(f"  failed: {path}: {reason}")
     return 1 if res.failed and not (res.written or res.reused) else 0

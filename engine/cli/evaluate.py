@@ -49,12 +49,20 @@ def register(sub: argparse._SubParsersAction) -> None:
         "with the clip. Metrics are defined in docs/metrics.md.",
     )
     p.add_argument("paths", nargs="+", type=Path, metavar="PATH", help="BVH files or folders (searched for *.bvh)")
-    p.add_argument("--method", default="ik",
-                   help="reconstruction method, or several separated by commas to compare them on the same "
-                   "simulated trackers, e.g. dragposer,ik,sparseposer,rpm (default: ik)")
+    p.add_argument(
+        "--method",
+        default="ik",
+        help="reconstruction method, or several separated by commas to compare them on the same "
+        "simulated trackers, e.g. dragposer,ik,sparseposer,rpm (default: ik)",
+    )
     p.add_argument("--sensors", default="6", help="sensor preset or list, e.g. 6, 4, root,lwrist:3 (default: 6)")
-    p.add_argument("--faulty", type=float, default=0.0, metavar="P",
-                   help="per-frame probability that one sensor fails for 100 frames (DragPoser: 0.01)")
+    p.add_argument(
+        "--faulty",
+        type=float,
+        default=0.0,
+        metavar="P",
+        help="per-frame probability that one sensor fails for 100 frames (DragPoser: 0.01)",
+    )
     p.add_argument("--gaps", action="store_true", help="simulate RPM's hand-tracking gaps; adds PJ/AUJ")
     p.add_argument("--noise-pos", type=float, default=0.0, metavar="M", help="position noise std, metres")
     p.add_argument("--noise-rot", type=float, default=0.0, metavar="DEG", help="rotation noise std, degrees")
@@ -64,8 +72,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_model_options(p)
     p.add_argument("--max-frames", type=int, metavar="N", help="evaluate only the first N frames of each clip")
     p.add_argument("--seed", type=int, default=0, help="seed of the tracker simulation (default: 0)")
-    p.add_argument("--json", type=Path, metavar="OUT.json",
-                   help="also write the results as JSON (several methods: an object per method name)")
+    p.add_argument(
+        "--json",
+        type=Path,
+        metavar="OUT.json",
+        help="also write the results as JSON (several methods: an object per method name)",
+    )
     p.add_argument("--markdown", type=Path, metavar="OUT.md", help="also write the table as Markdown")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bars")
     add_rig_map_option(p)
@@ -89,9 +101,19 @@ def find_clips(paths: Iterable[Path]) -> list[Path]:
     return list(dict.fromkeys(out))
 
 
-def evaluate_clip(motion: Any, method: Any, preset: str, *, faulty: float = 0.0, gaps: bool = False,
-                  noise_pos_m: float = 0.0, noise_rot_deg: float = 0.0, seed: int = 0,
-                  progress: bool = True, desc: str | None = None) -> dict[str, float | int | list[float]]:
+def evaluate_clip(
+    motion: Any,
+    method: Any,
+    preset: str,
+    *,
+    faulty: float = 0.0,
+    gaps: bool = False,
+    noise_pos_m: float = 0.0,
+    noise_rot_deg: float = 0.0,
+    seed: int = 0,
+    progress: bool = True,
+    desc: str | None = None,
+) -> dict[str, float | int | list[float]]:
     """Metrics of ``method`` on one canonical clip (what the command runs per file).
 
     Returns
@@ -106,10 +128,12 @@ def evaluate_clip(motion: Any, method: Any, preset: str, *, faulty: float = 0.0,
     from engine.metrics import evaluate_motion
     from engine.tracking import simulate
 
-    tracking = simulate(motion, preset, noise_pos_m=noise_pos_m, noise_rot_deg=noise_rot_deg,
-                        faulty=faulty, gaps=gaps, seed=seed)
-    rec, results = run_method(method, tracking, motion.skeleton, progress=progress,
-                              reference=motion, desc=desc, light=True)
+    tracking = simulate(
+        motion, preset, noise_pos_m=noise_pos_m, noise_rot_deg=noise_rot_deg, faulty=faulty, gaps=gaps, seed=seed
+    )
+    rec, results = run_method(
+        method, tracking, motion.skeleton, progress=progress, reference=motion, desc=desc, light=True
+    )
     lossy = gaps or faulty > 0
     out = evaluate_motion(motion, rec, tracking.connected if lossy else None)
     out["iterations_mean"] = float(np.mean([r.iterations for r in results]))
@@ -188,10 +212,17 @@ def _method(args: argparse.Namespace, name: str) -> Any:
 
 def _evaluate_clip_with(args: argparse.Namespace, name: str, path: Path, motion: Any, progress: bool) -> dict:
     return evaluate_clip(
-        motion, _method(args, name), args.sensors, faulty=args.faulty, gaps=args.gaps,
-        noise_pos_m=args.noise_pos, noise_rot_deg=args.noise_rot, seed=args.seed,
-        progress=progress, desc=f"{name} {path.name}",
-    )  # fmt: skip
+        motion,
+        _method(args, name),
+        args.sensors,
+        faulty=args.faulty,
+        gaps=args.gaps,
+        noise_pos_m=args.noise_pos,
+        noise_rot_deg=args.noise_rot,
+        seed=args.seed,
+        progress=progress,
+        desc=f"{name} {path.name}",
+    )
 
 
 def _doc(args: argparse.Namespace, name: str, per_file: dict[str, Any]) -> dict[str, Any]:
@@ -212,7 +243,9 @@ def _evaluate_file(job: tuple[Path, argparse.Namespace, list[str], bool]) -> dic
     from engine.motion.retarget import load_motion
 
     path, args, names, progress = job
-    motion = load_motion(path, rig_map=rig_map_path(args), asf=asf_path(args), max_frames=args.max_frames)  # reads only what is needed
+    motion = load_motion(
+        path, rig_map=rig_map_path(args), asf=asf_path(args), max_frames=args.max_frames
+    )  # reads only what is needed
     if len(motion) < 4:
         raise UserError(f"{path}: only {len(motion)} frames; at least 4 are needed")
     out: dict[str, Any] = {}
@@ -254,13 +287,22 @@ def _evaluate(args: argparse.Namespace) -> int:
         # A bad model file or --set is then a user error now, not after the workers have
         # started and imported torch (seconds each); the workers build their own.
         _method(args, names[0])
-    rows = map_files(_evaluate_file, [(path, args, names, progress) for path in clips], jobs,
-                     progress=not args.no_progress, desc="evaluate", executor=executor)  # fmt: skip
+    rows = map_files(
+        _evaluate_file,
+        [(path, args, names, progress) for path in clips],
+        jobs,
+        progress=not args.no_progress,
+        desc="evaluate",
+        executor=executor,
+    )
     docs: dict[str, dict[str, Any]] = {}
     for name in names:  # merged in file order; a method failing on any file: its first error
         errors = [r[name]["error"] for r in rows if "error" in r[name]]
-        docs[name] = ({"method": name, "preset": args.sensors, "mode": args.mode, "error": errors[0]} if errors
-                      else _doc(args, name, {str(p): r[name] for p, r in zip(clips, rows)}))  # fmt: skip
+        docs[name] = (
+            {"method": name, "preset": args.sensors, "mode": args.mode, "error": errors[0]}
+            if errors
+            else _doc(args, name, {str(p): r[name] for p, r in zip(clips, rows)})
+        )
     lossy = args.gaps or args.faulty > 0
     if len(names) == 1:
         doc = docs[names[0]]

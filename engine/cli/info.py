@@ -16,7 +16,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="describe a BVH file: detected rig, joint mapping, frames, fps, heights",
         description="Load a BVH file, detect or map its rig, retarget it to the canonical 22-joint "
         "skeleton at 60 fps and print what was found. With --json one JSON object is printed, "
-        "with an \"error\" field when the file cannot be read.",
+        'with an "error" field when the file cannot be read.',
     )
     p.add_argument("file", type=Path, help="motion file: BVH, or AMC (its ASF found beside it or given by --asf)")
     p.add_argument("--fps", type=float, help="true source frame rate (overrides the header)")
@@ -33,8 +33,7 @@ def describe(path: Path, fps: float | None = None, rig_map: Path | None = None, 
     if fps is not None:
         fps = check_value(CLI["fps"], fps, "--fps", "value")
     # only the start is kept (every row is still checked): a long file stays cheap
-    motion, rep = load_with_report(path, fps or manifest_fps(path), rig_map, max_frames=1,
-                                 strategy=CURRENT, asf=asf)
+    motion, rep = load_with_report(path, fps or manifest_fps(path), rig_map, max_frames=1, strategy=CURRENT, asf=asf)
 
     def num(x: float, nd: int = 3):
         return round(float(x), nd) if math.isfinite(x) else None
@@ -77,20 +76,28 @@ def _info(args: argparse.Namespace) -> int:
     out = describe(args.file, args.fps, rig_map_path(args), asf_path(args))
     print(f"file          {out['file']}")
     print(f"rig           {out['rig']} (up {out['up']}, {out['units_to_m']:g} m per unit)")
-    print(f"source        {out['source_joints']} joints, {out['source_frames']} frames at {out['source_fps']:g} fps "
-          f"({out['source_frames'] / out['source_fps']:.2f} s)")
+    print(
+        f"source        {out['source_joints']} joints, {out['source_frames']} frames at {out['source_fps']:g} fps "
+        f"({out['source_frames'] / out['source_fps']:.2f} s)"
+    )
     print(f"canonical     22 joints, {out['frames']} frames at {out['fps']:g} fps ({out['frames'] / out['fps']:.2f} s)")
-    print(f"height        {out['height_m']:.2f} m (source {out['source_height_m']:.2f} m; "
-          f"T-pose {out['rest_height_m']:.2f} m, legs {out['scale']:.3f} x the canonical subject's)")
+    print(
+        f"height        {out['height_m']:.2f} m (source {out['source_height_m']:.2f} m; "
+        f"T-pose {out['rest_height_m']:.2f} m, legs {out['scale']:.3f} x the canonical subject's)"
+    )
     print("mapping       " + ", ".join(f"{c}={s}" for c, s in out["mapping"].items()))
     if out["rotations_copied"]:
         print("rotations     copied as they are (the rig's rotations are canonical ones: align = false)")
     if out["source_twist"]:
-        print("source twist  " + ", ".join(out["source_twist"]) + " (the rig lacks the points that define "
-              "their twist: docs/skeleton.md, Body-defined twist)")
+        print(
+            "source twist  " + ", ".join(out["source_twist"]) + " (the rig lacks the points that define "
+            "their twist: docs/skeleton.md, Body-defined twist)"
+        )
     if out["twist_rule"]:
-        print("twist rule    " + ", ".join(f"{j} ({r})" for j, r in out["twist_rule"].items()) + " (the rig lacks "
-              "the points that define their twist; a documented rule stands in: docs/skeleton.md, Body-defined twist)")
+        print(
+            "twist rule    " + ", ".join(f"{j} ({r})" for j, r in out["twist_rule"].items()) + " (the rig lacks "
+            "the points that define their twist; a documented rule stands in: docs/skeleton.md, Body-defined twist)"
+        )
     if out["folded"]:
         print("folded in     " + ", ".join(f"{c}: {'+'.join(v)}" for c, v in out["folded"].items()))
     return 0

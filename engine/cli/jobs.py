@@ -47,14 +47,25 @@ LOCAL = Executor()
 
 
 def add_jobs_option(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--jobs", type=int, metavar="N", default=None,
-                   help="worker processes, one file at a time each (default: the number of cores; 1: no workers)")  # fmt: skip
-    p.add_argument("--executor", choices=EXECUTORS, default="local",
-                   help="local: --jobs worker processes; ray: Ray tasks, one per file "
-                        "(needs the 'cluster' extra)")  # fmt: skip
-    p.add_argument("--address", metavar="ADDR", default=None,
-                   help="with --executor ray: the Ray cluster to run on "
-                        "(default: a local Ray instance for this run)")  # fmt: skip
+    p.add_argument(
+        "--jobs",
+        type=int,
+        metavar="N",
+        default=None,
+        help="worker processes, one file at a time each (default: the number of cores; 1: no workers)",
+    )
+    p.add_argument(
+        "--executor",
+        choices=EXECUTORS,
+        default="local",
+        help="local: --jobs worker processes; ray: Ray tasks, one per file (needs the 'cluster' extra)",
+    )
+    p.add_argument(
+        "--address",
+        metavar="ADDR",
+        default=None,
+        help="with --executor ray: the Ray cluster to run on (default: a local Ray instance for this run)",
+    )
 
 
 def executor_of(args: argparse.Namespace) -> Executor:
@@ -88,8 +99,14 @@ def _one_thread() -> None:
     threadpool_limits(limits=1)
 
 
-def map_files(fn: Callable[[Any], T], items: Sequence[Any], jobs: int, progress: bool = True,
-              desc: str = "files", executor: Executor = LOCAL) -> list[T]:  # fmt: skip
+def map_files(
+    fn: Callable[[Any], T],
+    items: Sequence[Any],
+    jobs: int,
+    progress: bool = True,
+    desc: str = "files",
+    executor: Executor = LOCAL,
+) -> list[T]:
     """``[fn(x) for x in items]``, in worker processes when ``jobs > 1`` and there are
     several items, or as Ray tasks with a ``ray`` ``executor`` (``fn`` must be a
     module-level function; its :class:`UserError` is re-raised here)."""
@@ -99,8 +116,9 @@ def map_files(fn: Callable[[Any], T], items: Sequence[Any], jobs: int, progress:
         return [fn(x) for x in items]
     from tqdm import tqdm
 
-    with ProcessPoolExecutor(max_workers=min(jobs, len(items)), mp_context=get_context("spawn"),
-                             initializer=_one_thread) as pool:  # fmt: skip
+    with ProcessPoolExecutor(
+        max_workers=min(jobs, len(items)), mp_context=get_context("spawn"), initializer=_one_thread
+    ) as pool:
         futures = [pool.submit(_call, fn, x) for x in items]
         for _ in tqdm(as_completed(futures), total=len(futures), desc=desc, unit="file", disable=not progress):
             pass
@@ -113,8 +131,7 @@ def map_files(fn: Callable[[Any], T], items: Sequence[Any], jobs: int, progress:
         return out
 
 
-def _map_ray(fn: Callable[[Any], T], items: Sequence[Any], address: str | None, progress: bool,
-             desc: str) -> list[T]:  # fmt: skip
+def _map_ray(fn: Callable[[Any], T], items: Sequence[Any], address: str | None, progress: bool, desc: str) -> list[T]:
     import ray
     from tqdm import tqdm
 

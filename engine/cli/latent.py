@@ -60,8 +60,10 @@ def _latent(args: argparse.Namespace) -> int:
     if args.json is not None:
         check_output_path(args.json, "--json")
     if args.vae is not None:
-        raise UserError("--vae: the shipped latent map belongs to the shipped VAE; build one for yours with "
-                        "scripts/build_latent_map.py (docs: assets/models/README.md, 'Latent map')")  # fmt: skip
+        raise UserError(
+            "--vae: the shipped latent map belongs to the shipped VAE; build one for yours with "
+            "scripts/build_latent_map.py (docs: assets/models/README.md, 'Latent map')"
+        )
     check_input_file(args.input)
     from engine.latent.probe import NO_LATENT, LatentProbe, SolvesInLatent
     from engine.latent.report import render_report, write_json
@@ -89,7 +91,9 @@ def _latent(args: argparse.Namespace) -> int:
     s = trace.summary()
     corr = s.get("correlation_nearest_pos", {})
     print(f"wrote {args.out}" + (f" and {args.json}" if args.json else ""))
-    print(f"frames {s['frames']}  flagged {len(s['flagged'])}  nearest p50 {s['nearest'].get('p50', float('nan')):.3f} "
-          f"max {s['nearest'].get('max', float('nan')):.3f}  Pos {s.get('pos_cm', float('nan')):.2f} cm  "
-          f"r(nearest, Pos) {corr.get('pearson', float('nan')):.2f}")  # fmt: skip
+    print(
+        f"frames {s['frames']}  flagged {len(s['flagged'])}  nearest p50 {s['nearest'].get('p50', float('nan')):.3f} "
+        f"max {s['nearest'].get('max', float('nan')):.3f}  Pos {s.get('pos_cm', float('nan')):.2f} cm  "
+        f"r(nearest, Pos) {corr.get('pearson', float('nan')):.2f}"
+    )
     return 0

@@ -19,7 +19,7 @@ from engine.cli.tracker_options import (
     add_tracker_options,
     check_tracker_options,
     default_skeleton,
-    load_reference,  # fmt: skip
+    load_reference,
     write_json,
 )
 from engine.errors import UserError
@@ -38,27 +38,45 @@ def register(sub: argparse._SubParsersAction) -> None:
         "write the reconstruction (--out), the raw trackers (--record) and the figures (--json). "
         "See docs/trackers.md.",
     )
-    p.add_argument("--listen", default="39539", metavar="[HOST:]PORT",
-                   help="UDP port (all interfaces) or HOST:PORT (default: 39539, VMC's)")  # fmt: skip
+    p.add_argument(
+        "--listen",
+        default="39539",
+        metavar="[HOST:]PORT",
+        help="UDP port (all interfaces) or HOST:PORT (default: 39539, VMC's)",
+    )
     p.add_argument("--record", type=Path, metavar="REC.jsonl", help="record every tracker sample (JSON Lines)")
-    p.add_argument("--out", type=Path, metavar="OUT.bvh",
-                   help="write the reconstruction: .bvh, .glb or .gltf (docs/export.md)")
+    p.add_argument(
+        "--out", type=Path, metavar="OUT.bvh", help="write the reconstruction: .bvh, .glb or .gltf (docs/export.md)"
+    )
     p.add_argument("--duration", type=float, metavar="S", help="stop after S seconds (default: Ctrl-C)")
     p.add_argument("--idle-stop", type=float, metavar="S", help="stop when no frame came for S seconds")
     p.add_argument("--fps", type=float, default=60.0, help="nominal stream rate (default: 60)")
-    p.add_argument("--convention", choices=("unity", "openxr", "project"), default="unity",
-                   help="axes of the incoming poses (VMC: unity; default: unity)")  # fmt: skip
-    p.add_argument("--timeout", type=float, default=0.25, metavar="S",
-                   help="a tracker silent for S seconds reads as lost (default: 0.25)")  # fmt: skip
+    p.add_argument(
+        "--convention",
+        choices=("unity", "openxr", "project"),
+        default="unity",
+        help="axes of the incoming poses (VMC: unity; default: unity)",
+    )
+    p.add_argument(
+        "--timeout",
+        type=float,
+        default=0.25,
+        metavar="S",
+        help="a tracker silent for S seconds reads as lost (default: 0.25)",
+    )
     add_tracker_options(p)
     add_rig_map_option(p)  # for --reference REF.bvh
     p.add_argument("--method", default="dragposer", help="reconstruction method (default: dragposer)")
     p.add_argument("--mode", choices=MODES, default="realtime", help=argparse.SUPPRESS)
     p.add_argument("--iterations", type=int, metavar="N", help="optimizer iterations per frame")
-    p.add_argument("--frame-budget", type=float, metavar="MS",
-                   help="milliseconds from a frame's arrival to its solved pose; the solver stops iterating "
-                        "to meet it (default: 60 %% of the frame period, 10 ms at 60 fps; 0: no budget, all "
-                        "iterations every frame)")  # fmt: skip
+    p.add_argument(
+        "--frame-budget",
+        type=float,
+        metavar="MS",
+        help="milliseconds from a frame's arrival to its solved pose; the solver stops iterating "
+        "to meet it (default: 60 %% of the frame period, 10 ms at 60 fps; 0: no budget, all "
+        "iterations every frame)",
+    )
     p.add_argument("--lr", type=float, metavar="LR", help="Adam learning rate on the latent")
     add_model_options(p)
     p.add_argument("--no-progress", action="store_true", help="hide the status line")
@@ -93,7 +111,7 @@ def _live(args: argparse.Namespace) -> int:
         completeness_summary,
         default_budget_ms,
         iteration_summary,
-        latency_summary,  # fmt: skip
+        latency_summary,
         reference_error,
         to_motion,
         tracker_error_cm,
@@ -110,11 +128,20 @@ def _live(args: argparse.Namespace) -> int:
     _warm_up(method, default_skeleton(reference), args.fps)
     recorder = None
     if args.record:
-        recorder = RecordingWriter(args.record, header(args.fps, mapping, f"vmc udp {host}:{port}", convention_in=args.convention))
+        recorder = RecordingWriter(
+            args.record, header(args.fps, mapping, f"vmc udp {host}:{port}", convention_in=args.convention)
+        )
     receiver = VMCReceiver(host, port, mapping, args.convention, args.timeout, recorder)
     budget = default_budget_ms(args.fps) if args.frame_budget is None else args.frame_budget
-    run = LiveRun(receiver, method, default_skeleton(reference), args.fps, args.calibrate, args.calibration_pose,
-                  budget if method.takes_deadline else 0.0)  # fmt: skip
+    run = LiveRun(
+        receiver,
+        method,
+        default_skeleton(reference),
+        args.fps,
+        args.calibrate,
+        args.calibration_pose,
+        budget if method.takes_deadline else 0.0,
+    )
     status = _Status(receiver, disabled=args.no_progress)
     print(f"listening on {receiver.host}:{receiver.port} (method {args.method})", file=sys.stderr, flush=True)
     t0 = time.perf_counter()
@@ -172,8 +199,10 @@ def _warm_up(method: Method, skeleton: sk.Skeleton, fps: float) -> None:
     from engine.sensors import Sensor, SensorFrame
 
     rest = skeleton.rest_positions()
-    readings = {j: Sensor(j, rest[sk.JOINT_INDEX[j]] + [0.0, 0.0, 1.0], np.array([1.0, 0.0, 0.0, 0.0]))
-                for j in ("upperneck", "lwrist", "rwrist")}  # fmt: skip
+    readings = {
+        j: Sensor(j, rest[sk.JOINT_INDEX[j]] + [0.0, 0.0, 1.0], np.array([1.0, 0.0, 0.0, 0.0]))
+        for j in ("upperneck", "lwrist", "rwrist")
+    }
     driver.reset(method, skeleton, fps)  # live trackers have no ground truth: such a method stops here
     for k in range(2):
         driver.step(method, SensorFrame(k, readings))
@@ -200,9 +229,11 @@ class _Status:
             lat = sorted(result.latency_ms[-120:])
             fresh, devices = result.fresh[-120:], result.devices[-120:]
             complete = sum(f >= d for f, d in zip(fresh, devices)) / len(fresh)
-            self.bar.set_postfix_str(f"{s.packet_rate_hz:.0f} pkt/s, skipped {result.frames_skipped}, "
-                                     f"latency p95 {lat[int(0.95 * (len(lat) - 1))]:.1f} ms, "
-                                     f"fresh {fresh[-1]}/{devices[-1]} ({100 * complete:.0f} % complete)")  # fmt: skip
+            self.bar.set_postfix_str(
+                f"{s.packet_rate_hz:.0f} pkt/s, skipped {result.frames_skipped}, "
+                f"latency p95 {lat[int(0.95 * (len(lat) - 1))]:.1f} ms, "
+                f"fresh {fresh[-1]}/{devices[-1]} ({100 * complete:.0f} % complete)"
+            )
 
     def close(self) -> None:
         self.bar.close()
@@ -218,21 +249,27 @@ def _report(stats: dict, args: argparse.Namespace, result) -> str:
         lines.append(f"wrote {args.record}")
     if result.calibration:
         lines.append(result.calibration.summary())
-    lines.append(f"packets {stats['packets']} ({stats['malformed_packets']} malformed, {stats['duplicates']} duplicate, "
-                 f"{stats['late']} late)  frames {stats['frames_received']} solved {stats['frames_solved']}"
-                 + (f" ({100 * frac:.1f} %)" if frac is not None else "")
-                 + f", skipped {stats['frames_skipped']} ({stats['frames_skipped_first_solve']} during the first solve)")  # fmt: skip
+    lines.append(
+        f"packets {stats['packets']} ({stats['malformed_packets']} malformed, {stats['duplicates']} duplicate, "
+        f"{stats['late']} late)  frames {stats['frames_received']} solved {stats['frames_solved']}"
+        + (f" ({100 * frac:.1f} %)" if frac is not None else "")
+        + f", skipped {stats['frames_skipped']} ({stats['frames_skipped_first_solve']} during the first solve)"
+    )
     comp = stats["completeness"]
     if comp["frames"]:
-        lines.append(f"complete frames {comp['complete']} of {comp['frames']} ({100 * comp['complete_fraction']:.1f} %): "
-                     f"fresh devices per solved frame mean {comp['fresh_mean']:.2f} of {comp['devices']}, "
-                     f"min {comp['fresh_min']} ({stats['packet_shape'] or 'shape not known'})")  # fmt: skip
+        lines.append(
+            f"complete frames {comp['complete']} of {comp['frames']} ({100 * comp['complete_fraction']:.1f} %): "
+            f"fresh devices per solved frame mean {comp['fresh_mean']:.2f} of {comp['devices']}, "
+            f"min {comp['fresh_min']} ({stats['packet_shape'] or 'shape not known'})"
+        )
     if lat["p50"] is not None:
         lines.append(f"latency p50 {lat['p50']:.1f} ms  p95 {lat['p95']:.1f} ms  max {lat['max']:.1f} ms")
     it = stats["iterations"]
     if stats["frame_budget_ms"] and it["median"] is not None:
-        lines.append(f"frame budget {stats['frame_budget_ms']:.1f} ms: iterations per frame median {it['median']:.0f}, "
-                     f"mean {it['mean']:.1f}, min {it['min']}")  # fmt: skip
+        lines.append(
+            f"frame budget {stats['frame_budget_ms']:.1f} ms: iterations per frame median {it['median']:.0f}, "
+            f"mean {it['mean']:.1f}, min {it['min']}"
+        )
     te = stats["tracker_error_cm"]
     ref = stats["reference"]
     err = f"{ref['pos_cm']:.2f} cm" if ref.get("pos_cm") is not None else ref["note"]

@@ -77,8 +77,9 @@ def _import_subcommand(mod_name: str, installed: bool = False) -> ModuleType:
         hint = ""
         if installed and isinstance(exc, ModuleNotFoundError) and exc.name == mod_name:
             hint = " (the installed entry points name a module this checkout lacks: reinstall with pip install -e .)"
-        raise SubcommandImportError(f"subcommand module {mod_name} cannot be imported: "
-                                    f"{type(exc).__name__}: {exc}{hint}") from exc  # fmt: skip
+        raise SubcommandImportError(
+            f"subcommand module {mod_name} cannot be imported: {type(exc).__name__}: {exc}{hint}"
+        ) from exc
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -20,18 +20,37 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
     """Add ``--vae``, ``--predictor`` and the repeatable ``--set`` to a subcommand."""
     p.add_argument("--vae", type=Path, metavar="VAE.pt", help="user-trained VAE weights (default: the shipped model)")
     p.add_argument("--predictor", type=Path, metavar="PRED.pt", help="its temporal predictor (with --vae)")
-    p.add_argument("--sparseposer-model", type=Path, dest="sparseposer_path", metavar="SP.pt",
-                   help="SparsePoser weights for --method sparseposer (default: the shipped model)")
-    p.add_argument("--rpm-model", type=Path, dest="rpm_path", metavar="RPM.pt",
-                   help="RPM weights for --method rpm (default: the shipped model)")
-    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                   help="optimizer setting of a latent-space method, repeatable, e.g. root_anchor=none; KEY is "
-                   f"one of {', '.join(SETTINGS)} (ranges and meanings: docs/optimizer.md)")  # fmt: skip
+    p.add_argument(
+        "--sparseposer-model",
+        type=Path,
+        dest="sparseposer_path",
+        metavar="SP.pt",
+        help="SparsePoser weights for --method sparseposer (default: the shipped model)",
+    )
+    p.add_argument(
+        "--rpm-model",
+        type=Path,
+        dest="rpm_path",
+        metavar="RPM.pt",
+        help="RPM weights for --method rpm (default: the shipped model)",
+    )
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="optimizer setting of a latent-space method, repeatable, e.g. root_anchor=none; KEY is "
+        f"one of {', '.join(SETTINGS)} (ranges and meanings: docs/optimizer.md)",
+    )
 
 
 #: Model-file keywords and the methods that take them (others must not receive them).
-_MODEL_KEYS = {"vae_path": ("dragposer", "autoencoder"), "predictor_path": ("dragposer", "autoencoder"),
-               "sparseposer_path": ("sparseposer",), "rpm_path": ("rpm",)}
+_MODEL_KEYS = {
+    "vae_path": ("dragposer", "autoencoder"),
+    "predictor_path": ("dragposer", "autoencoder"),
+    "sparseposer_path": ("sparseposer",),
+    "rpm_path": ("rpm",),
+}
 
 
 def method_kwargs(args: argparse.Namespace, mode: str, name: str | None = None) -> dict[str, Any]:
@@ -39,8 +58,14 @@ def method_kwargs(args: argparse.Namespace, mode: str, name: str | None = None) 
     ``--vae``, ``--predictor``, ``--sparseposer-model`` and ``--rpm-model`` (only those
     given; with ``name``, only the model files that method reads)."""
     kw: dict[str, Any] = {"mode": mode}
-    given = {"iterations": args.iterations, "lr": args.lr, "vae_path": args.vae, "predictor_path": args.predictor,
-             "sparseposer_path": getattr(args, "sparseposer_path", None), "rpm_path": getattr(args, "rpm_path", None)}
+    given = {
+        "iterations": args.iterations,
+        "lr": args.lr,
+        "vae_path": args.vae,
+        "predictor_path": args.predictor,
+        "sparseposer_path": getattr(args, "sparseposer_path", None),
+        "rpm_path": getattr(args, "rpm_path", None),
+    }
     kw.update({k: v for k, v in given.items() if v is not None})
     if name is not None:
         kw = {k: v for k, v in kw.items() if k not in _MODEL_KEYS or name in _MODEL_KEYS[k]}

@@ -16,25 +16,50 @@ def add_options(p: argparse.ArgumentParser) -> None:
     """The ``--pose-tasks`` mode's options on the ``bench`` parser."""
     from engine.authoring.pose_task_table import EVENTS, RELEASES, TASK_NAMES
 
-    g = p.add_argument_group("pose tasks", "with --pose-tasks: posing tasks on the character, no clip "
-                             "(--method names the posers: pose-mode, ik, and bake, each task's one-key scene "
-                             "baked as `bake` bakes it; default all three)")  # fmt: skip
+    g = p.add_argument_group(
+        "pose tasks",
+        "with --pose-tasks: posing tasks on the character, no clip "
+        "(--method names the posers: pose-mode, ik, and bake, each task's one-key scene "
+        "baked as `bake` bakes it; default all three)",
+    )
     g.add_argument("--pose-tasks", action="store_true", help="run the pose-mode benchmark instead of timing methods")
     g.add_argument("--task", action="append", choices=TASK_NAMES, help="task to run; repeat for several (default: all)")
-    g.add_argument("--release", choices=RELEASES, default="none",
-                   help="at each drag's end: none (as the pose window) or settle (Edit > Settle pose)")
+    g.add_argument(
+        "--release",
+        choices=RELEASES,
+        default="none",
+        help="at each drag's end: none (as the pose window) or settle (Edit > Settle pose)",
+    )
     g.add_argument("--events", type=int, default=EVENTS, help=f"drag events per drag (default: {EVENTS})")
-    g.add_argument("--set", dest="pose_set", action="append", default=[], metavar="NAME=VALUE",
-                   help="pose-mode option: a PoseMode keyword, or solve.NAME / settle.NAME for its solves")
+    g.add_argument(
+        "--set",
+        dest="pose_set",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="pose-mode option: a PoseMode keyword, or solve.NAME / settle.NAME for its solves",
+    )
     ref = g.add_mutually_exclusive_group()
-    ref.add_argument("--reference", type=Path, metavar="DIR",
-                     help="naturalness against the 9 validation files read from this mocap folder (e.g. "
-                     "../shared/data/mocap) instead of the poses shipped from them")  # fmt: skip
-    ref.add_argument("--reference-data", type=Path, metavar="PREPARED",
-                     help="naturalness against the val split of this prepared folder (default: ./prepared when it "
-                     "has a manifest, else the validation files' poses shipped in assets/reference/)")  # fmt: skip
-    g.add_argument("--reference-stride", type=int, default=4,
-                   help="every Nth reference frame (default: 4; a multiple of 4 with the shipped poses)")
+    ref.add_argument(
+        "--reference",
+        type=Path,
+        metavar="DIR",
+        help="naturalness against the 9 validation files read from this mocap folder (e.g. "
+        "../shared/data/mocap) instead of the poses shipped from them",
+    )
+    ref.add_argument(
+        "--reference-data",
+        type=Path,
+        metavar="PREPARED",
+        help="naturalness against the val split of this prepared folder (default: ./prepared when it "
+        "has a manifest, else the validation files' poses shipped in assets/reference/)",
+    )
+    g.add_argument(
+        "--reference-stride",
+        type=int,
+        default=4,
+        help="every Nth reference frame (default: 4; a multiple of 4 with the shipped poses)",
+    )
 
 
 def run(args: argparse.Namespace, default_clip: Path) -> int:
@@ -59,13 +84,18 @@ def run(args: argparse.Namespace, default_clip: Path) -> int:
         raise UserError(f"--pose-tasks: unknown poser(s) {', '.join(unknown)}; posers: {', '.join(every)}")
     init = split_options(args.pose_set)[0]  # bad options fail before the models load
     # the bake poses as the pose window does (EVENTS drag events, no settle) with the scene's pose options
-    unlike = [f"--events {args.events}"] * (args.events != EVENTS) + [f"--release {args.release}"] * (
-        args.release != "none") + [f"--set {o}" for o in args.pose_set if not _pose_option(o)]  # fmt: skip
+    unlike = (
+        [f"--events {args.events}"] * (args.events != EVENTS)
+        + [f"--release {args.release}"] * (args.release != "none")
+        + [f"--set {o}" for o in args.pose_set if not _pose_option(o)]
+    )
     if BAKE in posers and unlike:
         if args.method:
-            raise UserError(f"--pose-tasks: the bake rows pose as `bake` does ({EVENTS} drag events, no settle, "
-                            f"pose options only); {', '.join(unlike)} do not apply to them: leave out "
-                            f"--method {BAKE}")  # fmt: skip
+            raise UserError(
+                f"--pose-tasks: the bake rows pose as `bake` does ({EVENTS} drag events, no settle, "
+                f"pose options only); {', '.join(unlike)} do not apply to them: leave out "
+                f"--method {BAKE}"
+            )
         posers = [p for p in posers if p != BAKE]
     left_out = BAKE not in posers and not args.method
     tasks = select_tasks(args.task)
@@ -73,22 +103,35 @@ def run(args: argparse.Namespace, default_clip: Path) -> int:
     offsets = PoseMode(vae, **init).character.skeleton.offsets
     reference = _reference(args, offsets)
     spread = reference.spread_summary()
-    rows = [run_bake(t, vae, reference, init.get("options")) if p == BAKE else
-            run_task(t, p, vae, reference, args.pose_set, args.release, args.events)
-            for t in tasks for p in posers]  # fmt: skip
+    rows = [
+        run_bake(t, vae, reference, init.get("options"))
+        if p == BAKE
+        else run_task(t, p, vae, reference, args.pose_set, args.release, args.events)
+        for t in tasks
+        for p in posers
+    ]
     machine = {"cpu_count": os.cpu_count(), "torch_threads": torch.get_num_threads(), "platform": platform.platform()}
     options = " ".join(args.pose_set) or "defaults"
-    print(f"pose tasks: release {args.release}, {args.events} events per drag, pose mode {options}; "
-          f"{machine['cpu_count']} cores, torch {machine['torch_threads']} threads")
+    print(
+        f"pose tasks: release {args.release}, {args.events} events per drag, pose mode {options}; "
+        f"{machine['cpu_count']} cores, torch {machine['torch_threads']} threads"
+    )
     if left_out:
         print(f"bake rows left out: they pose as `bake` does ({EVENTS} drag events, no settle, pose options only)")
-    print(f"naturalness reference: {reference.description}, {len(reference)} poses; real poses' nearest other "
-          f"take: median {spread['median_cm']:.1f} cm, p95 {spread['p95_cm']:.1f} cm")
+    print(
+        f"naturalness reference: {reference.description}, {len(reference)} poses; real poses' nearest other "
+        f"take: median {spread['median_cm']:.1f} cm, p95 {spread['p95_cm']:.1f} cm"
+    )
     print(_table(rows))
     if args.json:
-        out = {"release": args.release, "events": args.events, "options": args.pose_set, "machine": machine,
-               "reference": {"description": reference.description, "poses": len(reference), **spread},
-               "tasks": [r.to_dict() for r in rows]}  # fmt: skip
+        out = {
+            "release": args.release,
+            "events": args.events,
+            "options": args.pose_set,
+            "machine": machine,
+            "reference": {"description": reference.description, "poses": len(reference), **spread},
+            "tasks": [r.to_dict() for r in rows],
+        }
         write_text(args.json, json.dumps(out, indent=1))
     return 0
 
@@ -107,8 +150,10 @@ def _reference(args: argparse.Namespace, offsets):
 
     if args.reference is not None:
         if not Path(args.reference).is_dir():
-            raise UserError(f"--reference {args.reference}: not a folder (give the mocap folder that holds "
-                            f"{R.VALIDATION_FILES[0]} and the other validation files)")  # fmt: skip
+            raise UserError(
+                f"--reference {args.reference}: not a folder (give the mocap folder that holds "
+                f"{R.VALIDATION_FILES[0]} and the other validation files)"
+            )
         try:
             files = R.validation_files(args.reference)
         except UserError as exc:
@@ -123,8 +168,10 @@ def _reference(args: argparse.Namespace, offsets):
 
 
 def _table(rows) -> str:
-    head = (f"{'task':<15} {'poser':<9} {'drags':>5} {'err cm':>7} {'turn':>5} {'reach':>5} {'natural':>7} "
-            f"{'spread':>6} {'limits':>6} {'feet':>5} {'balance':>7} {'tilt':>5} {'slide':>5} {'knee':>5} {'s':>5}")  # fmt: skip
+    head = (
+        f"{'task':<15} {'poser':<9} {'drags':>5} {'err cm':>7} {'turn':>5} {'reach':>5} {'natural':>7} "
+        f"{'spread':>6} {'limits':>6} {'feet':>5} {'balance':>7} {'tilt':>5} {'slide':>5} {'knee':>5} {'s':>5}"
+    )
     lines = [head]
     for r in rows:
         c = r.check
@@ -135,12 +182,15 @@ def _table(rows) -> str:
             f"{r.task:<15} {r.poser:<9} {r.drags:>2}/{r.allowed:<2} {_num(err, 7, 1)} {_num(turn, 5, 0)} "
             f"{'yes' if r.reached else 'no':>5} {r.naturalness_cm:>7.1f} {'in' if r.within_spread else 'out':>6} "
             f"{len(c.violations):>6d} {feet:>5} {_num(c.balance_margin_cm, 7, 1)} {c.trunk_tilt_deg:>5.0f} "
-            f"{_num(slide, 5, 0)} {_num(r.knee_height_cm, 5, 0)} {r.seconds:>5.1f}")  # fmt: skip
-    lines.append("err cm: largest position error; turn: deg; natural: cm to the nearest real pose (spread: within "
-                 "the real poses' 95th percentile); limits: knees/elbows hyperextended; feet: L/R down; balance: cm "
-                 "inside the support polygon (both feet down); tilt: trunk from vertical, deg; slide: cm an undragged "
-                 "ankle slid; knee: cm from the floor to the lower knee joint; s: seconds of posing (bake: of the "
-                 "bake); bake: the task's one-key scene (assets/scenes/pose_tasks) baked as `bake` bakes it")  # fmt: skip
+            f"{_num(slide, 5, 0)} {_num(r.knee_height_cm, 5, 0)} {r.seconds:>5.1f}"
+        )
+    lines.append(
+        "err cm: largest position error; turn: deg; natural: cm to the nearest real pose (spread: within "
+        "the real poses' 95th percentile); limits: knees/elbows hyperextended; feet: L/R down; balance: cm "
+        "inside the support polygon (both feet down); tilt: trunk from vertical, deg; slide: cm an undragged "
+        "ankle slid; knee: cm from the floor to the lower knee joint; s: seconds of posing (bake: of the "
+        "bake); bake: the task's one-key scene (assets/scenes/pose_tasks) baked as `bake` bakes it"
+    )
     return "\n".join(lines)
 
 

@@ -37,28 +37,62 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Simulate trackers from IN.bvh, reconstruct the full body with DragPoser "
         "(latent-space pose optimisation) and write OUT.bvh.",
     )
-    p.add_argument("input", type=Path, nargs="*", metavar="IN.bvh",
-                   help="source motion(s) (any supported rig); several need --out-dir")
-    p.add_argument("--trackers", type=Path, metavar="REC.jsonl",
-                   help="reconstruct a tracker recording (from `live --record`; docs/trackers.md) instead of IN.bvh")
-    p.add_argument("--out", type=Path, metavar="OUT.bvh",
-                   help="where to write the reconstruction (one input): .bvh, .glb or .gltf (docs/export.md)")
-    p.add_argument("--out-dir", type=Path, metavar="DIR",
-                   help="write each input's reconstruction to DIR/<input name>.bvh (several inputs; --out-format)")
-    p.add_argument("--on-source-rig", action="store_true",
-                   help="write the result onto IN.bvh's own hierarchy (its joint names, offsets and "
-                   "channels; joints outside the 22 keep their rest rotation) instead of the canonical one")
-    p.add_argument("--fps", type=float, metavar="F",
-                   help="frame rate of the file written with --on-source-rig (default: the source's)")
+    p.add_argument(
+        "input",
+        type=Path,
+        nargs="*",
+        metavar="IN.bvh",
+        help="source motion(s) (any supported rig); several need --out-dir",
+    )
+    p.add_argument(
+        "--trackers",
+        type=Path,
+        metavar="REC.jsonl",
+        help="reconstruct a tracker recording (from `live --record`; docs/trackers.md) instead of IN.bvh",
+    )
+    p.add_argument(
+        "--out",
+        type=Path,
+        metavar="OUT.bvh",
+        help="where to write the reconstruction (one input): .bvh, .glb or .gltf (docs/export.md)",
+    )
+    p.add_argument(
+        "--out-dir",
+        type=Path,
+        metavar="DIR",
+        help="write each input's reconstruction to DIR/<input name>.bvh (several inputs; --out-format)",
+    )
+    p.add_argument(
+        "--on-source-rig",
+        action="store_true",
+        help="write the result onto IN.bvh's own hierarchy (its joint names, offsets and "
+        "channels; joints outside the 22 keep their rest rotation) instead of the canonical one",
+    )
+    p.add_argument(
+        "--fps",
+        type=float,
+        metavar="F",
+        help="frame rate of the file written with --on-source-rig (default: the source's)",
+    )
     add_rig_map_option(p)
     p.add_argument("--sensors", default="6", help="sensor preset or list, e.g. 6, 4, root,lwrist:3 (default: 6)")
-    p.add_argument("--mode", choices=MODES, help="realtime: fixed iterations per frame; "
-                   "offline: iterate until the sensor tolerances are met (default: realtime)")  # fmt: skip
-    p.add_argument("--iterations", type=int, metavar="N",
-                   help="iterations per frame (realtime) or the cap per frame (offline)")
+    p.add_argument(
+        "--mode",
+        choices=MODES,
+        help="realtime: fixed iterations per frame; "
+        "offline: iterate until the sensor tolerances are met (default: realtime)",
+    )
+    p.add_argument(
+        "--iterations", type=int, metavar="N", help="iterations per frame (realtime) or the cap per frame (offline)"
+    )
     p.add_argument("--lr", type=float, metavar="LR", help="Adam learning rate on the latent")
-    p.add_argument("--faulty", type=float, default=0.0, metavar="P",
-                   help="per-frame probability that one sensor fails for 100 frames (DragPoser: 0.01)")
+    p.add_argument(
+        "--faulty",
+        type=float,
+        default=0.0,
+        metavar="P",
+        help="per-frame probability that one sensor fails for 100 frames (DragPoser: 0.01)",
+    )
     p.add_argument("--gaps", action="store_true", help="simulate hand-tracking gaps (RPM)")
     add_model_options(p)
     p.add_argument("--max-frames", type=int, metavar="N", help="reconstruct only the first N frames")
@@ -89,7 +123,9 @@ def _reconstruct(args: argparse.Namespace) -> int:
         if args.out is None or args.out_dir is not None:
             raise UserError("--trackers needs --out OUT.bvh (not --out-dir)")
         if args.ghosts or args.tracker_nodes:
-            raise UserError("--ghosts and --tracker-nodes apply to IN.bvh reconstructions, not to --trackers recordings")
+            raise UserError(
+                "--ghosts and --tracker-nodes apply to IN.bvh reconstructions, not to --trackers recordings"
+            )
         check_export(args, [args.out])
         from engine.cli.reconstruct_trackers import reconstruct_trackers
 
@@ -99,7 +135,9 @@ def _reconstruct(args: argparse.Namespace) -> int:
     if args.out is not None and args.out_dir is not None:
         raise UserError("give --out (one input) or --out-dir, not both")
     if args.out_dir is None and (args.out is None or len(args.input) > 1):
-        raise UserError("several inputs need --out-dir DIR" if len(args.input) > 1 else "give --out OUT.bvh or --out-dir DIR")
+        raise UserError(
+            "several inputs need --out-dir DIR" if len(args.input) > 1 else "give --out OUT.bvh or --out-dir DIR"
+        )
     for opt in ("calibrate", "reference", "json"):
         if getattr(args, opt):
             raise UserError(f"--{opt} applies to --trackers recordings")
@@ -122,8 +160,9 @@ def _reconstruct(args: argparse.Namespace) -> int:
     parallel = (jobs > 1 and len(args.input) > 1) or executor.kind == "ray"
     _METHOD.clear()
     work = [(p, o, args, not args.no_progress and not parallel) for p, o in zip(args.input, outs)]
-    for text in map_files(_reconstruct_file, work, jobs, progress=not args.no_progress, desc="reconstruct",
-                          executor=executor):  # fmt: skip
+    for text in map_files(
+        _reconstruct_file, work, jobs, progress=not args.no_progress, desc="reconstruct", executor=executor
+    ):
         print(text)
     return 0
 
@@ -152,11 +191,17 @@ def _reconstruct_file(job: tuple[Path, Path, argparse.Namespace, bool]) -> str:
     tracking = simulate(motion, args.sensors, faulty=args.faulty, gaps=args.gaps, seed=args.seed)
     # comparison methods first: one that refuses the options (a --scene for IK) stops before the long run
     ghosts = run_ghosts(args, tracking, motion.skeleton, motion.name, progress, path.name, reference=motion)
-    rec, results = run_method(_METHOD["method"], tracking, motion.skeleton, progress=progress, desc=path.name,
-                              light=True)  # fmt: skip
+    rec, results = run_method(
+        _METHOD["method"], tracking, motion.skeleton, progress=progress, desc=path.name, light=True
+    )
     rec.name = f"{motion.name} ({args.method})"
-    write_reconstruction(out, rec, (raw, report) if args.on_source_rig else None, fps=args.fps,
-                         contents=export_contents(args, ghosts, tracking))  # fmt: skip
+    write_reconstruction(
+        out,
+        rec,
+        (raw, report) if args.on_source_rig else None,
+        fps=args.fps,
+        contents=export_contents(args, ghosts, tracking),
+    )
     return summary(results, tracking, rec, out)
 
 

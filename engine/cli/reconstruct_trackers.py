@@ -15,8 +15,14 @@ def _slice(tracking: Any, start: int, stop: int | None = None) -> Any:
     from engine.tracking import Tracking
 
     sl = slice(start, stop)
-    return Tracking(tracking.joints, tracking.dof, tracking.positions[sl], tracking.rotations[sl],
-                    tracking.connected[sl], tracking.fps)  # fmt: skip
+    return Tracking(
+        tracking.joints,
+        tracking.dof,
+        tracking.positions[sl],
+        tracking.rotations[sl],
+        tracking.connected[sl],
+        tracking.fps,
+    )
 
 
 def reconstruct_trackers(args: argparse.Namespace) -> int:
@@ -69,8 +75,12 @@ def reconstruct_trackers(args: argparse.Namespace) -> int:
     if cal:
         lines.append(cal.summary())
     te = stats["tracker_error_cm"]
-    lines.append(f"frames {len(results)}  ms/frame median {stats['ms_per_frame_median']:.1f}  "
-                 f"tracker error {'-' if te is None else f'{te:.2f} cm'}")  # fmt: skip
-    lines.append("error against the reference: " + (f"{ref['pos_cm']:.2f} cm" if ref.get("pos_cm") is not None else ref["note"]))
+    lines.append(
+        f"frames {len(results)}  ms/frame median {stats['ms_per_frame_median']:.1f}  "
+        f"tracker error {'-' if te is None else f'{te:.2f} cm'}"
+    )
+    lines.append(
+        "error against the reference: " + (f"{ref['pos_cm']:.2f} cm" if ref.get("pos_cm") is not None else ref["note"])
+    )
     print("\n".join(lines))
     return 0

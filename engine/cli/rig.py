@@ -64,13 +64,13 @@ def mapping_toml(prof, names: list[str]) -> str:
                 note += f"; folds in {', '.join(prof.folded[c])}"
             lines.append(f"{c} = {_q(prof.joints[c])}" + (f"  # {note.lstrip('; ')}" if note else ""))
         else:
-            lines.append(f"# {c} = \"\"  # not found")
-    lines += ["", "[landmarks]  # points for bone frames; \"end:JOINT\" = JOINT's end site"]
+            lines.append(f'# {c} = ""  # not found')
+    lines += ["", '[landmarks]  # points for bone frames; "end:JOINT" = JOINT\'s end site']
     lines += [f"{k} = {_q(v)}" for k, v in prof.landmarks.items()]
     used = set(prof.joints.values()) | set(prof.landmarks.values())
     rest = [n for n in names if n not in used]
     lines += ["", f"# Joints not mapped ({len(rest)}), kept at their rest rotation on --on-source-rig:"]
-    lines += [f"#   {', '.join(rest[i:i + 8])}" for i in range(0, len(rest), 8)]
+    lines += [f"#   {', '.join(rest[i : i + 8])}" for i in range(0, len(rest), 8)]
     return "\n".join(lines) + "\n"
 
 
@@ -78,12 +78,17 @@ def template_toml(names: list[str], reason: str) -> str:
     """A mapping template when nothing could be mapped automatically."""
     from engine import skeleton as sk
 
-    lines = ["# Automatic mapping failed:", *[f"#   {ln}" for ln in reason.splitlines()],
-             "# Fill in the source joint of every canonical joint the rig has.",
-             "# units_to_m, up and forward are inferred when left out.", "", "[joints]"]  # fmt: skip
-    lines += [f"# {c} = \"\"" for c in sk.JOINT_NAMES]
+    lines = [
+        "# Automatic mapping failed:",
+        *[f"#   {ln}" for ln in reason.splitlines()],
+        "# Fill in the source joint of every canonical joint the rig has.",
+        "# units_to_m, up and forward are inferred when left out.",
+        "",
+        "[joints]",
+    ]
+    lines += [f'# {c} = ""' for c in sk.JOINT_NAMES]
     lines += ["", f"# The file's {len(names)} joints:"]
-    lines += [f"#   {', '.join(names[i:i + 8])}" for i in range(0, len(names), 8)]
+    lines += [f"#   {', '.join(names[i : i + 8])}" for i in range(0, len(names), 8)]
     return "\n".join(lines) + "\n"
 
 

@@ -12,12 +12,20 @@ from engine.errors import UserError
 def add_rig_map_option(parser: argparse.ArgumentParser) -> None:
     """Add ``--rig-map`` (a joint mapping written by ``rig suggest`` and edited by the user)
     and ``--asf`` (the skeleton of AMC motions, when it is not found beside them)."""
-    parser.add_argument("--rig-map", type=Path, metavar="MAP.toml",
-                        help="joint mapping for a rig that is not recognised (write one with "
-                        "'dragposer-studio rig suggest FILE.bvh --out MAP.toml')")  # fmt: skip
-    parser.add_argument("--asf", type=Path, metavar="SKELETON.asf",
-                        help="ASF skeleton of .amc motions (default: the data manifest's, or the ASF "
-                        "beside the motion whose name starts the motion's)")  # fmt: skip
+    parser.add_argument(
+        "--rig-map",
+        type=Path,
+        metavar="MAP.toml",
+        help="joint mapping for a rig that is not recognised (write one with "
+        "'dragposer-studio rig suggest FILE.bvh --out MAP.toml')",
+    )
+    parser.add_argument(
+        "--asf",
+        type=Path,
+        metavar="SKELETON.asf",
+        help="ASF skeleton of .amc motions (default: the data manifest's, or the ASF "
+        "beside the motion whose name starts the motion's)",
+    )
 
 
 def rig_map_path(args: argparse.Namespace) -> Path | None:

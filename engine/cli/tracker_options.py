@@ -11,17 +11,34 @@ from engine.errors import UserError
 
 
 def add_tracker_options(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--map", default="", metavar="MAPPING",
-                   help="tracker name -> joint, e.g. head=upperneck,puck1=root,puck2=lankle:3, or a JSON "
-                   "file (default: head, left_hand, right_hand, hips, left_foot, right_foot; docs/trackers.md)")  # fmt: skip
-    p.add_argument("--calibrate", type=float, default=0.0, metavar="SECONDS",
-                   help="calibrate height, arm span and tracker offsets from the first SECONDS of the stream "
-                   "(stand still, T-pose or standing)")  # fmt: skip
-    p.add_argument("--calibration-pose", choices=("auto", "tpose", "standing"), default="auto",
-                   help="pose held while calibrating (default: detected)")  # fmt: skip
-    p.add_argument("--reference", type=Path, metavar="CLIP.bvh",
-                   help="ground-truth clip (e.g. the one `send` streamed): its skeleton is used unless "
-                   "calibrating, and the error against it is reported")  # fmt: skip
+    p.add_argument(
+        "--map",
+        default="",
+        metavar="MAPPING",
+        help="tracker name -> joint, e.g. head=upperneck,puck1=root,puck2=lankle:3, or a JSON "
+        "file (default: head, left_hand, right_hand, hips, left_foot, right_foot; docs/trackers.md)",
+    )
+    p.add_argument(
+        "--calibrate",
+        type=float,
+        default=0.0,
+        metavar="SECONDS",
+        help="calibrate height, arm span and tracker offsets from the first SECONDS of the stream "
+        "(stand still, T-pose or standing)",
+    )
+    p.add_argument(
+        "--calibration-pose",
+        choices=("auto", "tpose", "standing"),
+        default="auto",
+        help="pose held while calibrating (default: detected)",
+    )
+    p.add_argument(
+        "--reference",
+        type=Path,
+        metavar="CLIP.bvh",
+        help="ground-truth clip (e.g. the one `send` streamed): its skeleton is used unless "
+        "calibrating, and the error against it is reported",
+    )
     p.add_argument("--json", type=Path, metavar="STATS.json", help="write the figures as JSON")
 
 

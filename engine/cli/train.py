@@ -23,9 +23,13 @@ def _common(p: argparse.ArgumentParser, out_default: str) -> None:
     p.add_argument("--seed", type=int, help="random seed")
     p.add_argument("--resume", action="store_true", help="continue from OUT/last.pt")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
-    p.add_argument("--device", choices=("auto", "cpu", "cuda"), default="auto",
-                   help="where the VAE and the predictor train (default auto: a CUDA device when torch sees one, "
-                   "else the CPU); SparsePoser and RPM train on the CPU")  # fmt: skip
+    p.add_argument(
+        "--device",
+        choices=("auto", "cpu", "cuda"),
+        default="auto",
+        help="where the VAE and the predictor train (default auto: a CUDA device when torch sees one, "
+        "else the CPU); SparsePoser and RPM train on the CPU",
+    )
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -38,8 +42,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     _common(q, "runs/predictor")
     q.add_argument("--vae", type=Path, default=Path("runs/vae/vae.pt"), help="trained VAE weights")
     q.set_defaults(func=_train_predictor)
-    s = tsub.add_parser("sparseposer", help="train SparsePoser (generator + learned IK, preset 6)",
-                        description=__doc__)
+    s = tsub.add_parser("sparseposer", help="train SparsePoser (generator + learned IK, preset 6)", description=__doc__)
     _common(s, "runs/sparseposer")
     s.set_defaults(func=_train_sparseposer)
     r = tsub.add_parser("rpm", help="train the Rolling Prediction Model (preset 3-head-hands)", description=__doc__)
@@ -63,8 +66,10 @@ def _train_vae(args: argparse.Namespace) -> int:
     cfg = load_config(VAETrainConfig, args.config, args.set, **_direct(args))
     meta = train_vae(args.data, args.out, cfg, resume=args.resume, progress=not args.quiet, device=args.device)
     if meta:
-        print(f"{args.out}/vae.pt: {meta.get('epochs')} epochs, {meta.get('minutes')} min, "
-              f"val {meta.get('val_pos_cm', float('nan')):.2f} cm / {meta.get('val_rot_deg', float('nan')):.2f} deg")
+        print(
+            f"{args.out}/vae.pt: {meta.get('epochs')} epochs, {meta.get('minutes')} min, "
+            f"val {meta.get('val_pos_cm', float('nan')):.2f} cm / {meta.get('val_rot_deg', float('nan')):.2f} deg"
+        )
     return 0
 
 
@@ -73,11 +78,14 @@ def _train_predictor(args: argparse.Namespace) -> int:
     from engine.training.predictor import PredictorTrainConfig, train_predictor
 
     cfg = load_config(PredictorTrainConfig, args.config, args.set, **_direct(args))
-    meta = train_predictor(args.data, args.vae, args.out, cfg, resume=args.resume, progress=not args.quiet,
-                           device=args.device)  # fmt: skip
+    meta = train_predictor(
+        args.data, args.vae, args.out, cfg, resume=args.resume, progress=not args.quiet, device=args.device
+    )
     if meta:
-        print(f"{args.out}/predictor.pt: {meta.get('epochs')} epochs, {meta.get('minutes')} min, "
-              f"val latent MSE {meta.get('val_mse', float('nan')):.4g}")
+        print(
+            f"{args.out}/predictor.pt: {meta.get('epochs')} epochs, {meta.get('minutes')} min, "
+            f"val latent MSE {meta.get('val_mse', float('nan')):.4g}"
+        )
     return 0
 
 
@@ -88,9 +96,11 @@ def _train_sparseposer(args: argparse.Namespace) -> int:
     cfg = load_config(SparsePoserTrainConfig, args.config, args.set, **_direct(args))
     meta = train_sparseposer(args.data, args.out, cfg, resume=args.resume, progress=not args.quiet)
     if meta:
-        print(f"{args.out}/sparseposer.pt: {meta.get('epochs')} epochs, {meta.get('minutes')} min, "
-              f"val {meta.get('val_pos_cm', float('nan')):.2f} cm (generator alone "
-              f"{meta.get('val_gen_pos_cm', float('nan')):.2f} cm)")
+        print(
+            f"{args.out}/sparseposer.pt: {meta.get('epochs')} epochs, {meta.get('minutes')} min, "
+            f"val {meta.get('val_pos_cm', float('nan')):.2f} cm (generator alone "
+            f"{meta.get('val_gen_pos_cm', float('nan')):.2f} cm)"
+        )
     return 0
 
 
@@ -101,6 +111,8 @@ def _train_rpm(args: argparse.Namespace) -> int:
     cfg = load_config(RPMTrainConfig, args.config, args.set, **_direct(args))
     meta = train_rpm(args.data, args.out, cfg, resume=args.resume, progress=not args.quiet)
     if meta:
-        print(f"{args.out}/rpm.pt: {meta.get('epochs')} epochs, {meta.get('minutes')} min, "
-              f"val {meta.get('val_pos_cm', float('nan')):.2f} cm")
+        print(
+            f"{args.out}/rpm.pt: {meta.get('epochs')} epochs, {meta.get('minutes')} min, "
+            f"val {meta.get('val_pos_cm', float('nan')):.2f} cm"
+        )
     return 0

@@ -48,8 +48,15 @@ def _meta(editor: str, unit: str = "", choices: tuple[str, ...] = ()) -> dict[st
     return {"editor": editor, "unit": unit, "choices": tuple(choices)}
 
 
-def param(default: Any = dataclasses.MISSING, *, editor: str, unit: str = "", factory: Any = dataclasses.MISSING,
-          choices: tuple[str, ...] = (), init: bool = True) -> Any:  # fmt: skip
+def param(
+    default: Any = dataclasses.MISSING,
+    *,
+    editor: str,
+    unit: str = "",
+    factory: Any = dataclasses.MISSING,
+    choices: tuple[str, ...] = (),
+    init: bool = True,
+) -> Any:
     """A constraint parameter: a dataclass field whose metadata tells editors how to show it.
 
     Parameters
@@ -180,7 +187,9 @@ class Constraint(ABC):
             or len(r) != 2
             or any(isinstance(v, bool) or not isinstance(v, (int, np.integer)) for v in r)
         ):
-            raise UserError(f"{where}: field 'frames' must be [start, end] (whole frame numbers) or null, got {shown(r)}")
+            raise UserError(
+                f"{where}: field 'frames' must be [start, end] (whole frame numbers) or null, got {shown(r)}"
+            )
         start, end = int(r[0]), int(r[1])
         if start < 0 or end < start:
             raise UserError(f"{where}: field 'frames' needs 0 <= start <= end, got [{start}, {end}]")
@@ -366,8 +375,11 @@ def from_dict(data: dict[str, Any]) -> Constraint:
 def frame_inputs(state: PoseState) -> FrameInputs:
     """The :class:`FrameInputs` of a torch :class:`PoseState` (numpy, detached)."""
     prev, pred = state.previous_positions, state.prediction
-    return FrameInputs(None if prev is None else prev.detach().double().cpu().numpy(), state.frame,
-                       None if pred is None else pred.detach().double().cpu().numpy())  # fmt: skip
+    return FrameInputs(
+        None if prev is None else prev.detach().double().cpu().numpy(),
+        state.frame,
+        None if pred is None else pred.detach().double().cpu().numpy(),
+    )
 
 
 def state_arrays(state: PoseState) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:

@@ -41,8 +41,10 @@ class BoundsConstraint(OnOneJoint, Constraint):
     @classmethod
     def examples(cls, positions: np.ndarray) -> list[Constraint]:
         w = positions[joint_index("lwrist")]
-        return [cls(joint="lwrist", box_min=w + [0.05, -0.5, -0.5], box_max=w + [0.5, -0.02, 0.5]),
-                cls(weight=2.0, box_min=np.array([-5.0, -5.0, 1.5]), box_max=np.array([5.0, 5.0, 3.0]))]
+        return [
+            cls(joint="lwrist", box_min=w + [0.05, -0.5, -0.5], box_max=w + [0.5, -0.02, 0.5]),
+            cls(weight=2.0, box_min=np.array([-5.0, -5.0, 1.5]), box_max=np.array([5.0, 5.0, 3.0])),
+        ]
 
     @classmethod
     def placement(cls, params: dict[str, Any], positions: np.ndarray) -> dict[str, Any]:

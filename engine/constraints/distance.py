@@ -62,7 +62,10 @@ class DistanceConstraint(Constraint):
     @classmethod
     def placement(cls, params: dict[str, Any], positions: np.ndarray) -> dict[str, Any]:
         """The joints' distance as they stand (the new constraint starts satisfied)."""
-        a, b = joint_at(positions, params.get("joint_a"), "lwrist"), joint_at(positions, params.get("joint_b"), "rwrist")
+        a, b = (
+            joint_at(positions, params.get("joint_a"), "lwrist"),
+            joint_at(positions, params.get("joint_b"), "rwrist"),
+        )
         return {"distance": float(np.linalg.norm(a - b))}
 
     def gizmo(self, positions: np.ndarray | None = None) -> LineGizmo | None:

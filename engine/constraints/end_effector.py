@@ -55,9 +55,16 @@ class EndEffectorConstraint(OnOneJoint, Constraint):
     def examples(cls, positions: np.ndarray) -> list[Constraint]:
         ankle, wrist = positions[joint_index("rankle")], positions[joint_index("lwrist")]
         turn = np.array([math.cos(0.55), 0.3 * math.sin(0.55), 0.95 * math.sin(0.55), 0.0])
-        return [cls(joint="rankle", position=ankle + [0.1, 0.0, 0.1]),
-                cls(joint="lwrist", position=wrist + [0.0, 0.01, 0.0], use_rotation=True, rotation_weight=0.7,
-                    rotation=turn / np.linalg.norm(turn))]  # fmt: skip
+        return [
+            cls(joint="rankle", position=ankle + [0.1, 0.0, 0.1]),
+            cls(
+                joint="lwrist",
+                position=wrist + [0.0, 0.01, 0.0],
+                use_rotation=True,
+                rotation_weight=0.7,
+                rotation=turn / np.linalg.norm(turn),
+            ),
+        ]
 
     @classmethod
     def placement(cls, params: dict[str, Any], positions: np.ndarray) -> dict[str, Any]:

@@ -71,8 +71,10 @@ class FloorConstraint(Constraint):
 
     @classmethod
     def examples(cls, positions: np.ndarray) -> list[Constraint]:
-        return [cls(weight=4.0, clearance=0.2, floor_height=0.05, contact_height=0.4, slide_weight=2.0),
-                cls(joints=("ltoe", "ltoe"), clearance=0.3)]
+        return [
+            cls(weight=4.0, clearance=0.2, floor_height=0.05, contact_height=0.4, slide_weight=2.0),
+            cls(joints=("ltoe", "ltoe"), clearance=0.3),
+        ]
 
     @classmethod
     def placement(cls, params: dict[str, Any], positions: np.ndarray) -> dict[str, Any]:

@@ -62,9 +62,11 @@ class PinConstraint(OnOneJoint, Constraint):
 
     @classmethod
     def examples(cls, positions: np.ndarray) -> list[Constraint]:
-        return [cls(joint="rwrist", position=positions[joint_index("rwrist")] + [0.0, -0.1, 0.05]),
-                cls(name="follow", joint="lelbow", follow_previous=True),
-                cls(name="unset", joint="rknee")]
+        return [
+            cls(joint="rwrist", position=positions[joint_index("rwrist")] + [0.0, -0.1, 0.05]),
+            cls(name="follow", joint="lelbow", follow_previous=True),
+            cls(name="unset", joint="rknee"),
+        ]
 
     @classmethod
     def placement(cls, params: dict[str, Any], positions: np.ndarray) -> dict[str, Any]:

@@ -223,8 +223,9 @@ class Term:
         r2 = res.r * res.r
         return r2 @ (member if kit.is_numpy else kit.const(member, r2))
 
-    def accumulate(self, res: Residuals, weights: np.ndarray, g_pos: np.ndarray, g_rot: np.ndarray,
-                   g_z: np.ndarray | None) -> None:  # fmt: skip
+    def accumulate(
+        self, res: Residuals, weights: np.ndarray, g_pos: np.ndarray, g_rot: np.ndarray, g_z: np.ndarray | None
+    ) -> None:
         """Add the gradient of ``sum_n weights[:, n] * loss_n`` to ``g_pos (A, 22, 3)``,
         ``g_rot (A, 22, 3)`` and ``g_z (A, L)`` in place (``weights (A, n)``)."""
         rw = ((2.0 * weights[:, self.owner]) * res.r)[:, None, :]  # (A, 1, m)
@@ -312,4 +313,3 @@ def rotation_residual(kit: Kit, W: Any, T: Any, scale: Any, jac: bool) -> tuple[
     d = np.zeros((a, s, 9, s, 3))
     d[:, np.arange(s), :, np.arange(s)] = block.reshape(a, s, 9, 3).transpose(1, 0, 2, 3)
     return r, d.reshape(a, s * 9, s, 3)
-

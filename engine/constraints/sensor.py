@@ -86,9 +86,14 @@ class SensorConstraint(OnOneJoint, Constraint):
             cls(name="head", joint="upperneck", position=p("upperneck") + [0.05, -0.1, 0.02], rotation=turn),
             cls(name="hand", joint="lwrist", dof=3, position=p("lwrist") + [0.1, 0.0, -0.05], weight=2.0),
             cls(name="lost", joint="rwrist", position=p("rwrist") + [0.2, 0.0, 0.0], connected=False),
-            cls(name="hip", joint="root", position=p("root") + [0.0, 0.03, 0.0], rotation=turn[[0, 2, 1, 3]],
-                rotation_weight=0.5),
-        ]  # fmt: skip
+            cls(
+                name="hip",
+                joint="root",
+                position=p("root") + [0.0, 0.03, 0.0],
+                rotation=turn[[0, 2, 1, 3]],
+                rotation_weight=0.5,
+            ),
+        ]
 
     def gizmo(self, positions: np.ndarray | None = None) -> PointGizmo | None:
         position = np.asarray(self.position, float)
@@ -143,8 +148,9 @@ class SensorTerm(FrameRows, Term):
         parts, d_rot = [err.reshape(a, -1)], None
         if len(self.six):
             scale = self.scale[sel] * self.on[sel][:, self.six]
-            rot, d_rot = rotation_residual(kit, W[:, self.joints6], kit.const(self.rot_target[sel], P),
-                                           kit.const(scale, P), jac)  # fmt: skip
+            rot, d_rot = rotation_residual(
+                kit, W[:, self.joints6], kit.const(self.rot_target[sel], P), kit.const(scale, P), jac
+            )
             parts.append(rot)
         r = kit.cat(parts, -1) if len(parts) > 1 else parts[0]
         if not jac:
@@ -163,4 +169,3 @@ class SensorTerm(FrameRows, Term):
         scale = self.scale[sel]
         rot = 8.0 * scale * scale * self.rot_tol
         return np.concatenate([np.broadcast_to(self.pos_tol2, (len(scale), len(self.pos_tol2))), rot], axis=1)
-

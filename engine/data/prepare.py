@@ -237,8 +237,14 @@ def prepare(
     if not files:
         raise UserError(f"no .bvh or .amc files found under {', '.join(map(str, inputs))}")
     splits, takes = split_files(files, eval_only)
-    settings = {"format": FORMAT, "features": FEATURES_VERSION, "mirror": mirror, "eval_only": eval_only,
-                "retarget": CURRENT.version, "rig_map": file_sha256(rig_map) if rig_map else None}
+    settings = {
+        "format": FORMAT,
+        "features": FEATURES_VERSION,
+        "mirror": mirror,
+        "eval_only": eval_only,
+        "retarget": CURRENT.version,
+        "rig_map": file_sha256(rig_map) if rig_map else None,
+    }
     man_path = out / "manifest.json"
     old = {}
     if man_path.is_file():

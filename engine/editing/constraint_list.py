@@ -191,4 +191,3 @@ class ConstraintList(Sequence[Constraint]):
     def _changed(self, action: str, name: str = "", index: int = -1, **change: Any) -> None:
         event = ConstraintsChanged(action, tuple(self._items), name, index, **change)  # type: ignore[arg-type]
         self.events.changed.emit(event)
-

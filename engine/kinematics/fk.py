@@ -85,8 +85,10 @@ def levels(parents: tuple[int, ...]) -> Levels:
 def _ops(x):
     torch = torch_of(x)
     if torch is not None:
-        return (lambda a, i, d: a.index_select(d, torch.as_tensor(i, device=a.device)),
-                lambda xs, d: torch.cat(xs, dim=d))  # fmt: skip
+        return (
+            lambda a, i, d: a.index_select(d, torch.as_tensor(i, device=a.device)),
+            lambda xs, d: torch.cat(xs, dim=d),
+        )
     return (lambda a, i, d: np.take(a, i, axis=d)), (lambda xs, d: np.concatenate(xs, axis=d))
 
 
@@ -131,8 +133,9 @@ def fk_positions(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarra
     return _forward(Q.to_matrix(local_rot), np.asarray(root_pos), np.asarray(offsets), parents)[0]
 
 
-def fk_joints(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, joints,
-              parents=sk.PARENTS) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+def fk_joints(
+    local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, joints, parents=sk.PARENTS
+) -> tuple[np.ndarray, np.ndarray]:
     """World position and rotation of a few joints of one pose: only their ancestors are
     placed (scalar arithmetic), which is what IK asks for many times per frame.
 
@@ -166,10 +169,17 @@ def fk_joints(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, 
             ox, oy, oz = off[j]
             # p + q o q*, with t = 2 (v x o): o + w t + v x t
             tx, ty, tz = 2.0 * (y0 * oz - z0 * oy), 2.0 * (z0 * ox - x0 * oz), 2.0 * (x0 * oy - y0 * ox)
-            pos = (px + ox + w0 * tx + y0 * tz - z0 * ty, py + oy + w0 * ty + z0 * tx - x0 * tz,
-                   pz + oz + w0 * tz + x0 * ty - y0 * tx)  # fmt: skip
-            rot = (w0 * w1 - x0 * x1 - y0 * y1 - z0 * z1, w0 * x1 + x0 * w1 + y0 * z1 - z0 * y1,
-                   w0 * y1 - x0 * z1 + y0 * w1 + z0 * x1, w0 * z1 + x0 * y1 - y0 * x1 + z0 * w1)  # fmt: skip
+            pos = (
+                px + ox + w0 * tx + y0 * tz - z0 * ty,
+                py + oy + w0 * ty + z0 * tx - x0 * tz,
+                pz + oz + w0 * tz + x0 * ty - y0 * tx,
+            )
+            rot = (
+                w0 * w1 - x0 * x1 - y0 * y1 - z0 * z1,
+                w0 * x1 + x0 * w1 + y0 * z1 - z0 * y1,
+                w0 * y1 - x0 * z1 + y0 * w1 + z0 * x1,
+                w0 * z1 + x0 * y1 - y0 * x1 + z0 * w1,
+            )
             world[j] = (rot, pos)
         return world[j]
 
@@ -225,8 +235,9 @@ def _forward(local_mat, root_pos, offsets, parents, local_quat=None):
     return take(g_pos, order, -2), take(g_rot, order, -3), None if g_q is None else take(g_q, order, -2)
 
 
-def _forward_numpy(local_mat: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, lv: Levels,
-                   local_quat: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:  # fmt: skip
+def _forward_numpy(
+    local_mat: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, lv: Levels, local_quat: np.ndarray | None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     """:func:`_forward` for numpy: the same levels written in place into level-ordered
     arrays, then every position at once from the world bone vectors (no autograd to
     keep, and numpy's per-call overhead, not arithmetic, is what one pose costs)."""

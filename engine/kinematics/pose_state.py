@@ -54,5 +54,13 @@ class PoseState:
     def detached(self) -> "PoseState":
         """A copy without autograd history (same tensors' values)."""
         d = lambda t: t.detach() if isinstance(t, torch.Tensor) else t  # noqa: E731
-        return PoseState(d(self.positions), d(self.rotations), d(self.local_rot), d(self.latent),
-                         d(self.previous_positions), self.frame, d(self.prediction), d(self.rotation_matrices))  # fmt: skip
+        return PoseState(
+            d(self.positions),
+            d(self.rotations),
+            d(self.local_rot),
+            d(self.latent),
+            d(self.previous_positions),
+            self.frame,
+            d(self.prediction),
+            d(self.rotation_matrices),
+        )

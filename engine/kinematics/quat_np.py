@@ -52,7 +52,6 @@ def _mul_formula(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.array(qmul(a.tolist(), b.tolist()))
 
 
-
 def mul(q0: Floats, q1: Floats) -> np.ndarray:
     """Hamilton product ``q0 * q1``, ``(..., 4)``.
 
@@ -217,8 +216,12 @@ def qmul(q0: Floats, q1: Floats) -> Quat:
     """Hamilton product ``q0 * q1``."""
     w0, x0, y0, z0 = q0
     w1, x1, y1, z1 = q1
-    return (w0 * w1 - x0 * x1 - y0 * y1 - z0 * z1, w0 * x1 + x0 * w1 + y0 * z1 - z0 * y1,
-            w0 * y1 - x0 * z1 + y0 * w1 + z0 * x1, w0 * z1 + x0 * y1 - y0 * x1 + z0 * w1)  # fmt: skip
+    return (
+        w0 * w1 - x0 * x1 - y0 * y1 - z0 * z1,
+        w0 * x1 + x0 * w1 + y0 * z1 - z0 * y1,
+        w0 * y1 - x0 * z1 + y0 * w1 + z0 * x1,
+        w0 * z1 + x0 * y1 - y0 * x1 + z0 * w1,
+    )
 
 
 def qconj(q: Floats) -> Quat:

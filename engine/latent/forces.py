@@ -82,8 +82,13 @@ class TermForces:
         return sorted(out, key=lambda t: t[2])
 
 
-def term_forces(optimizer: "PoseOptimizer", ctx: "FrameContext", terms: Sequence[tuple["Constraint", float]],
-                path: np.ndarray, latent_map: LatentMap | None = None) -> TermForces:  # fmt: skip
+def term_forces(
+    optimizer: "PoseOptimizer",
+    ctx: "FrameContext",
+    terms: Sequence[tuple["Constraint", float]],
+    path: np.ndarray,
+    latent_map: LatentMap | None = None,
+) -> TermForces:
     """Each term's force at each latent of ``path``.
 
     Parameters
@@ -140,8 +145,9 @@ def _minus_gradients(values: list[torch.Tensor], z: torch.Tensor) -> np.ndarray:
     return out
 
 
-def record_forces(method_optimizer: "PoseOptimizer", record: "SolveRecord",
-                  latent_map: LatentMap | None = None) -> TermForces:  # fmt: skip
+def record_forces(
+    method_optimizer: "PoseOptimizer", record: "SolveRecord", latent_map: LatentMap | None = None
+) -> TermForces:
     """:func:`term_forces` of a method's last :class:`~engine.methods.solve_record.SolveRecord`
     (its path; the final latent alone when the solver recorded none)."""
     path = getattr(record.solution, "path", None)

@@ -23,8 +23,9 @@ if TYPE_CHECKING:
     from engine.solver.optimizer import PoseOptimizer
 
 #: What the studio and the CLI say for a method without a latent space.
-NO_LATENT = ("{method} has no latent space: latent debugging needs DragPoser "
-             "(IK, SparsePoser and RPM pose the body directly)")  # fmt: skip
+NO_LATENT = (
+    "{method} has no latent space: latent debugging needs DragPoser (IK, SparsePoser and RPM pose the body directly)"
+)
 
 
 @runtime_checkable
@@ -71,8 +72,7 @@ class FrameProbe:
 
     def readouts(self) -> dict[str, float]:
         """The readouts by name (``flagged`` 0.0 / 1.0)."""
-        return {"nearest": self.nearest, "norm": self.norm, "predictor": self.predictor,
-                "flagged": float(self.flagged)}  # fmt: skip
+        return {"nearest": self.nearest, "norm": self.norm, "predictor": self.predictor, "flagged": float(self.flagged)}
 
 
 class LatentProbe:
@@ -100,8 +100,10 @@ class LatentProbe:
         """
         m = default_map()
         if m is None:
-            raise UserError("assets/models/latent_map.npz is missing or was made for another VAE "
-                            "(scripts/build_latent_map.py makes it)")  # fmt: skip
+            raise UserError(
+                "assets/models/latent_map.npz is missing or was made for another VAE "
+                "(scripts/build_latent_map.py makes it)"
+            )
         return cls(m, NearestLatents(bank_latents()))
 
     def frame(self, frame: int, latent: np.ndarray, record: "SolveRecord | None" = None) -> FrameProbe:
@@ -120,8 +122,9 @@ class LatentProbe:
                 path_xy = self.map.project(np.asarray(path, dtype=np.float64))
         predictor = float(np.linalg.norm(prior - z)) if prior is not None else float("nan")
         flagged = bool(flag(self.map, np.array([nearest]), np.array([norm]))[0])
-        return FrameProbe(frame, z, self.map.project(z), prior, start, path_xy, float(nearest), norm, predictor,
-                          flagged)  # fmt: skip
+        return FrameProbe(
+            frame, z, self.map.project(z), prior, start, path_xy, float(nearest), norm, predictor, flagged
+        )
 
     def after_step(self, method: object, frame: int, latent: np.ndarray | None) -> FrameProbe | None:
         """:meth:`frame` for a method just stepped (its :class:`SolvesInLatent` record
@@ -130,7 +133,8 @@ class LatentProbe:
         if latent is None:
             return None
         record = method.last_solve if isinstance(method, SolvesInLatent) else None
-        if record is not None and not np.array_equal(record.solution.latent.detach().double().numpy().ravel(),
-                                                     np.asarray(latent, dtype=np.float64).ravel()):  # fmt: skip
+        if record is not None and not np.array_equal(
+            record.solution.latent.detach().double().numpy().ravel(), np.asarray(latent, dtype=np.float64).ravel()
+        ):
             record = None
         return self.frame(frame, latent, record)

@@ -30,8 +30,17 @@ GRID = 96
 EXTENT_QUANTILES = (0.001, 0.999)
 MARGIN = 0.15
 
-_FIELDS = ("mean", "components", "explained", "sigma", "density", "extent", "nn_threshold", "norm_threshold",
-           "vae_sha256")  # fmt: skip
+_FIELDS = (
+    "mean",
+    "components",
+    "explained",
+    "sigma",
+    "density",
+    "extent",
+    "nn_threshold",
+    "norm_threshold",
+    "vae_sha256",
+)
 
 
 @dataclass(frozen=True)
@@ -103,10 +112,18 @@ class LatentMap:
         from engine.atomic import atomic_path
 
         with atomic_path(path, suffix=".npz") as tmp:
-            np.savez_compressed(tmp, mean=self.mean, components=self.components, explained=self.explained,
-                                sigma=self.sigma, density=self.density.astype(np.float32), extent=self.extent,
-                                nn_threshold=np.array(self.nn_threshold), norm_threshold=np.array(self.norm_threshold),
-                                vae_sha256=np.array(self.vae_sha256))  # fmt: skip
+            np.savez_compressed(
+                tmp,
+                mean=self.mean,
+                components=self.components,
+                explained=self.explained,
+                sigma=self.sigma,
+                density=self.density.astype(np.float32),
+                extent=self.extent,
+                nn_threshold=np.array(self.nn_threshold),
+                norm_threshold=np.array(self.norm_threshold),
+                vae_sha256=np.array(self.vae_sha256),
+            )
 
     @classmethod
     def load(cls, path: str | Path) -> "LatentMap":
@@ -122,10 +139,17 @@ class LatentMap:
                 missing = [f for f in _FIELDS if f not in d.files]
                 if missing:
                     raise UserError(f"{path}: not a latent map (no field {missing[0]!r})")
-                m = cls(d["mean"].astype(np.float64), d["components"].astype(np.float64),
-                        d["explained"].astype(np.float64), d["sigma"].astype(np.float64),
-                        d["density"].astype(np.float32), d["extent"].astype(np.float64), float(d["nn_threshold"]),
-                        float(d["norm_threshold"]), str(d["vae_sha256"]))  # fmt: skip
+                m = cls(
+                    d["mean"].astype(np.float64),
+                    d["components"].astype(np.float64),
+                    d["explained"].astype(np.float64),
+                    d["sigma"].astype(np.float64),
+                    d["density"].astype(np.float32),
+                    d["extent"].astype(np.float64),
+                    float(d["nn_threshold"]),
+                    float(d["norm_threshold"]),
+                    str(d["vae_sha256"]),
+                )
         except (OSError, ValueError) as exc:
             raise UserError(f"{path}: not a latent map ({exc})") from None
         L = m.mean.shape[0]

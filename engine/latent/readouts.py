@@ -107,8 +107,12 @@ class Readouts:
 
     def frame(self, i: int) -> dict[str, float]:
         """Frame ``i``'s readouts by name (``flagged`` as 0.0 / 1.0)."""
-        return {"nearest": float(self.nearest[i]), "norm": float(self.norm[i]),
-                "predictor": float(self.predictor[i]), "flagged": float(self.flagged[i])}  # fmt: skip
+        return {
+            "nearest": float(self.nearest[i]),
+            "norm": float(self.norm[i]),
+            "predictor": float(self.predictor[i]),
+            "flagged": float(self.flagged[i]),
+        }
 
 
 def flag(m: LatentMap, nearest: np.ndarray, norm: np.ndarray) -> np.ndarray:
@@ -116,8 +120,7 @@ def flag(m: LatentMap, nearest: np.ndarray, norm: np.ndarray) -> np.ndarray:
     return (np.asarray(nearest) > m.nn_threshold) | (np.asarray(norm) > m.norm_threshold)
 
 
-def readouts(m: LatentMap, search: NearestLatents, latents: np.ndarray,
-             priors: np.ndarray | None = None) -> Readouts:  # fmt: skip
+def readouts(m: LatentMap, search: NearestLatents, latents: np.ndarray, priors: np.ndarray | None = None) -> Readouts:
     """Readouts of latents ``(F, L)`` with the frames' prior latents ``(F, L)`` (rows of
     NaN where a frame had none; None: no frame had one)."""
     z = np.asarray(latents, dtype=np.float64).reshape(-1, m.latent_dim)

@@ -45,9 +45,11 @@ def render_report(trace: LatentTrace, latent_map: LatentMap, out: str | Path, me
     _draw_map(fig.add_subplot(grid[:, 0]), fig, trace, latent_map)
     frames = np.array([p.frame for p in trace.probes])
     flags = trace.column("flagged") > 0
-    rows = (("nearest", "nearest training\nlatent", latent_map.nn_threshold),
-            ("norm", "latent norm", latent_map.norm_threshold),
-            ("predictor", "prior latent to\nsolution", None))  # fmt: skip
+    rows = (
+        ("nearest", "nearest training\nlatent", latent_map.nn_threshold),
+        ("norm", "latent norm", latent_map.norm_threshold),
+        ("predictor", "prior latent to\nsolution", None),
+    )
     axes: list[Any] = []
     for r, (key, label, threshold) in enumerate(rows):
         ax = fig.add_subplot(grid[r, 1], sharex=axes[0] if axes else None)
@@ -68,8 +70,11 @@ def render_report(trace: LatentTrace, latent_map: LatentMap, out: str | Path, me
         a.tick_params(labelsize=7)
     axes[0].legend(fontsize=7, loc="upper right")
     corr = trace.correlation("nearest")
-    axes[0].set_title(f"{trace.name} ({method}): {len(trace.flagged_frames)} of {len(frames)} frames flagged; "
-                      f"nearest vs Pos error r = {corr['pearson']:.2f}", fontsize=9)  # fmt: skip
+    axes[0].set_title(
+        f"{trace.name} ({method}): {len(trace.flagged_frames)} of {len(frames)} frames flagged; "
+        f"nearest vs Pos error r = {corr['pearson']:.2f}",
+        fontsize=9,
+    )
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=DPI)
     write_bytes(out, buf.getvalue())
@@ -77,8 +82,14 @@ def render_report(trace: LatentTrace, latent_map: LatentMap, out: str | Path, me
 
 def _draw_map(ax: Any, fig: Any, trace: LatentTrace, m: LatentMap) -> None:
     """The map panel (module doc)."""
-    ax.imshow(np.log1p(m.density), extent=tuple(m.extent), origin="lower", cmap="Greys", aspect="auto",
-              interpolation="bilinear")  # fmt: skip
+    ax.imshow(
+        np.log1p(m.density),
+        extent=tuple(m.extent),
+        origin="lower",
+        cmap="Greys",
+        aspect="auto",
+        interpolation="bilinear",
+    )
     xy = trace.xy
     frames = np.arange(len(xy))
     ax.plot(xy[:, 0], xy[:, 1], lw=0.5, color="#888888", alpha=0.6)
@@ -90,10 +101,24 @@ def _draw_map(ax: Any, fig: Any, trace: LatentTrace, m: LatentMap) -> None:
     worst = int(np.nanargmax(trace.column("nearest"))) if len(xy) else -1
     path = trace.probes[worst].path_xy if worst >= 0 else None
     if path is not None and len(path) > 1:
-        ax.plot(path[:, 0], path[:, 1], "-o", ms=2.5, lw=1.0, color="#ff7f0e", zorder=5,
-                label=f"frame {trace.probes[worst].frame}: iterations")  # fmt: skip
-        ax.annotate(f"start ({trace.probes[worst].start})", path[0], fontsize=7, color="#ff7f0e",
-                    xytext=(4, 4), textcoords="offset points")  # fmt: skip
+        ax.plot(
+            path[:, 0],
+            path[:, 1],
+            "-o",
+            ms=2.5,
+            lw=1.0,
+            color="#ff7f0e",
+            zorder=5,
+            label=f"frame {trace.probes[worst].frame}: iterations",
+        )
+        ax.annotate(
+            f"start ({trace.probes[worst].start})",
+            path[0],
+            fontsize=7,
+            color="#ff7f0e",
+            xytext=(4, 4),
+            textcoords="offset points",
+        )
     ax.set_xlim(m.extent[0], m.extent[1])
     ax.set_ylim(m.extent[2], m.extent[3])
     ax.set_xlabel(f"PC 1 ({100 * m.explained[0]:.1f} % of variance)")
@@ -107,8 +132,11 @@ def write_json(trace: LatentTrace, latent_map: LatentMap, out: str | Path, metho
     """Write the trace's summary, the map's figures and every frame's readouts as JSON."""
     doc = {
         "method": method,
-        "map": {"explained": latent_map.explained.tolist(), "nn_threshold": latent_map.nn_threshold,
-                "norm_threshold": latent_map.norm_threshold},  # fmt: skip
+        "map": {
+            "explained": latent_map.explained.tolist(),
+            "nn_threshold": latent_map.nn_threshold,
+            "norm_threshold": latent_map.norm_threshold,
+        },
         "summary": trace.summary(),
         "frames": trace.frames_json(),
     }

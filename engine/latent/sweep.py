@@ -52,8 +52,13 @@ class Sweep:
         return [sk.JOINT_NAMES[i] for i in np.argsort(self.motion[d])[::-1][:n]]
 
 
-def dimension_sweep(optimizer: "PoseOptimizer", ctx: "FrameContext", latent: np.ndarray, sigma: np.ndarray,
-                    offsets: tuple[float, ...] = OFFSETS) -> Sweep:  # fmt: skip
+def dimension_sweep(
+    optimizer: "PoseOptimizer",
+    ctx: "FrameContext",
+    latent: np.ndarray,
+    sigma: np.ndarray,
+    offsets: tuple[float, ...] = OFFSETS,
+) -> Sweep:
     """Decode ``latent (L,)`` with each dimension at ``offsets`` times ``sigma (L,)``.
 
     Parameters

@@ -72,8 +72,11 @@ class LatentTrace:
         for name in ("nearest", "norm", "predictor"):
             col = self.column(name)
             col = col[np.isfinite(col)]
-            out[name] = {q: float(np.percentile(col, p)) for q, p in (("p50", 50), ("p90", 90), ("max", 100))} \
-                if col.size else {}  # fmt: skip
+            out[name] = (
+                {q: float(np.percentile(col, p)) for q, p in (("p50", 50), ("p90", 90), ("max", 100))}
+                if col.size
+                else {}
+            )
         if len(self.pos_cm):
             out["pos_cm"] = float(np.mean(self.pos_cm))
             out["correlation_nearest_pos"] = self.correlation("nearest")
@@ -83,8 +86,13 @@ class LatentTrace:
         """One plain dict per frame (NaN written as None)."""
         rows = []
         for i, p in enumerate(self.probes):
-            row: dict[str, Any] = {"frame": p.frame, "x": float(p.xy[0]), "y": float(p.xy[1]), "start": p.start,
-                                   "iterations": int(self.iterations[i]) if len(self.iterations) else 0}  # fmt: skip
+            row: dict[str, Any] = {
+                "frame": p.frame,
+                "x": float(p.xy[0]),
+                "y": float(p.xy[1]),
+                "start": p.start,
+                "iterations": int(self.iterations[i]) if len(self.iterations) else 0,
+            }
             row.update({k: (None if not np.isfinite(v) else v) for k, v in p.readouts().items()})
             row["flagged"] = bool(p.flagged)
             if len(self.pos_cm):
@@ -93,8 +101,9 @@ class LatentTrace:
         return rows
 
 
-def trace_clip(method: "Method", tracking: "Tracking", motion: "Motion", probe: LatentProbe,
-               progress: bool = False) -> LatentTrace:  # fmt: skip
+def trace_clip(
+    method: "Method", tracking: "Tracking", motion: "Motion", probe: LatentProbe, progress: bool = False
+) -> LatentTrace:
     """Reconstruct ``motion``'s simulated ``tracking`` with ``method`` frame by frame and
     probe every frame.
 

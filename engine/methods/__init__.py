@@ -29,7 +29,7 @@ from engine.methods.base import (
     FrameResult,
     Method,
     SensorWeighted,
-    SolvesClips,  # fmt: skip
+    SolvesClips,
 )
 from engine.sensors import Sensor, SensorFrame
 
@@ -38,9 +38,21 @@ if TYPE_CHECKING:
     from engine.tracking.simulate import Tracking
 
 __all__ = [
-    "Configurable", "Constrainable", "DecodesLatents", "FrameResult", "Method", "SensorWeighted", "SolvesClips", "SensorFrame", "Sensor",
-    "available_methods", "get_method", "method_modules", "register_method", "run_method",
-]  # fmt: skip
+    "Configurable",
+    "Constrainable",
+    "DecodesLatents",
+    "FrameResult",
+    "Method",
+    "SensorWeighted",
+    "SolvesClips",
+    "SensorFrame",
+    "Sensor",
+    "available_methods",
+    "get_method",
+    "method_modules",
+    "register_method",
+    "run_method",
+]
 
 _FACTORIES: dict[str, Callable[..., Method]] = {}
 
@@ -133,8 +145,9 @@ def run_method(
     # a method may solve the whole clip at once (DragPoser's batched offline mode)
     whole = isinstance(method, SolvesClips)
     solved = driver.solve_clip(method, [tracking.frame(i) for i in range(n)]) if whole else None
-    for i in tqdm(range(n), desc=desc or method.name, unit="frame", disable=not progress or solved is not None,
-                  leave=False):  # fmt: skip
+    for i in tqdm(
+        range(n), desc=desc or method.name, unit="frame", disable=not progress or solved is not None, leave=False
+    ):
         t0 = time.perf_counter()
         res = solved[i] if solved is not None else driver.step(method, tracking.frame(i))
         if not res.ms:
@@ -155,8 +168,11 @@ _CREATE = re.compile(r"^def create\(", re.MULTILINE)
 def method_modules(folder: Path) -> list[str]:
     """Names of the modules in ``folder`` that define a top-level ``create(**kwargs)``
     (found by reading them, not importing them), sorted."""
-    return sorted(info.name for info in pkgutil.iter_modules([str(folder)])
-                  if not info.ispkg and _CREATE.search((folder / f"{info.name}.py").read_text(encoding="utf-8")))  # fmt: skip
+    return sorted(
+        info.name
+        for info in pkgutil.iter_modules([str(folder)])
+        if not info.ispkg and _CREATE.search((folder / f"{info.name}.py").read_text(encoding="utf-8"))
+    )
 
 
 def _lazy(module: str) -> Callable[..., Method]:

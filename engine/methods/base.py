@@ -161,5 +161,7 @@ def check_preset(readings: dict[str, Sensor], joints: tuple[str, ...], method: s
     got = sorted(f"{j}:{r.dof}" for j, r in readings.items())
     want = sorted(f"{j}:6" for j in joints)
     if got != want:
-        raise UserError(f"method {method!r} works only with sensor preset {preset!r} "
-                        f"({', '.join(joints)}, 6-DoF); got {', '.join(got) or 'no sensors'}")  # fmt: skip
+        raise UserError(
+            f"method {method!r} works only with sensor preset {preset!r} "
+            f"({', '.join(joints)}, 6-DoF); got {', '.join(got) or 'no sensors'}"
+        )

@@ -66,9 +66,16 @@ class DragPoserMethod(Method):
     name = "dragposer"
     takes_deadline = True
 
-    def __init__(self, decoder: LatentDecoder, predictor: LatentPredictor | None = None,
-                 settings: OptimizerSettings | None = None, latent_dim: int = 24, fast: bool = True,
-                 bank: PoseBank | None = None, **overrides: Any) -> None:  # fmt: skip
+    def __init__(
+        self,
+        decoder: LatentDecoder,
+        predictor: LatentPredictor | None = None,
+        settings: OptimizerSettings | None = None,
+        latent_dim: int = 24,
+        fast: bool = True,
+        bank: PoseBank | None = None,
+        **overrides: Any,
+    ) -> None:
         self.decoder = decoder
         if isinstance(decoder, torch.nn.Module):
             decoder.eval().requires_grad_(False)
@@ -156,16 +163,26 @@ class DragPoserMethod(Method):
             hip_pose = (np.array(hip.position, dtype=np.float64), unit_rotation(hip.rotation))
         held = self._user.held_joints()
         return FramePlan(
-            settings=s, warnings=warnings, trackers=term, names=names, weights=weights,
-            bank_readings=self.priors.readings(s, self.trackers.history), feet=self.trackers.feet(),
+            settings=s,
+            warnings=warnings,
+            trackers=term,
+            names=names,
+            weights=weights,
+            bank_readings=self.priors.readings(s, self.trackers.history),
+            feet=self.trackers.feet(),
             hip=hip_pose,
-            reach={k: np.array(v, dtype=np.float64) for k, v in {
-                **(self.trackers.head_target(held) if s.head_reach else {}),
-                **(self.trackers.reach_targets(held) if s.reach else {})}.items()},
+            reach={
+                k: np.array(v, dtype=np.float64)
+                for k, v in {
+                    **(self.trackers.head_target(held) if s.head_reach else {}),
+                    **(self.trackers.reach_targets(held) if s.reach else {}),
+                }.items()
+            },
             turn={k: np.array(v, dtype=np.float64) for k, v in self.trackers.rotation_targets().items()}
-            if s.sensor_rotations else {},
+            if s.sensor_rotations
+            else {},
             level=self.trackers.level_ankles(held) if s.level_feet else (),
-        )  # fmt: skip
+        )
 
     def solve_clip(self, frames: Sequence[SensorFrame]) -> list[FrameResult] | None:
         """Offline mode: the whole clip solved in windows of frames optimised together
@@ -198,7 +215,14 @@ class DragPoserMethod(Method):
         # to frames acts by the clip's frame numbers (the studio resets on a seek)
         ctx = FrameContext(root, override, anchor, self._positions, prediction, sensors.frame, deadline)
         self.settle_constraints(self._pos64)  # e.g. an unset pin takes the previous pose
-        terms = [*self.sensors.values(), self.prior, self.smooth, self.ground, *self._gait_terms(plan), *self.constraints]
+        terms = [
+            *self.sensors.values(),
+            self.prior,
+            self.smooth,
+            self.ground,
+            *self._gait_terms(plan),
+            *self.constraints,
+        ]
         # frame 0 has no history to start from: it is solved offline
         sol = self.optimizer.solve(start, terms, ctx, dataclasses.replace(s, mode="offline") if self._frame == 0 else s)
         warnings += sol.warnings
@@ -210,8 +234,9 @@ class DragPoserMethod(Method):
         local_rot, positions = state.local_rot.double().numpy(), state.positions.double().numpy()
         reach_to, turn_to = plan.reach, plan.turn
         if reach_to or turn_to or plan.level:  # one FK for every step (engine/solver/limb_ik.py)
-            local_rot, positions = finish(local_rot, positions[0], self.skeleton.offsets, reach_to, turn_to,
-                                          s.neck_twist_share, plan.level)  # fmt: skip
+            local_rot, positions = finish(
+                local_rot, positions[0], self.skeleton.offsets, reach_to, turn_to, s.neck_twist_share, plan.level
+            )
         self._advance(sol.latent, root, local_rot[0], positions)
         result = FrameResult(
             local_rot=local_rot,
@@ -296,13 +321,15 @@ class DragPoserMethod(Method):
         if weight <= 0.0:
             self.gait_planner.reset()
             return []
-        anchor = next((c.position for j in ("root", "upperneck") if (c := self.sensors.get(j)) is not None
-                       and c.enabled), None)  # fmt: skip
+        anchor = next(
+            (c.position for j in ("root", "upperneck") if (c := self.sensors.get(j)) is not None and c.enabled), None
+        )
         hands = [c.position for j in ("lwrist", "rwrist") if (c := self.sensors.get(j)) is not None and c.enabled]
-        self.gait.set_targets(self.gait_planner.update(anchor, self._pos64, np.array(hands) if len(hands) == 2 else None))
+        self.gait.set_targets(
+            self.gait_planner.update(anchor, self._pos64, np.array(hands) if len(hands) == 2 else None)
+        )
         self.gait.weight = weight
         return [self.gait]
-
 
     def _advance(self, latent: torch.Tensor, prev: RootFrame, root_rot: np.ndarray, positions: np.ndarray) -> None:
         """Keep the solved frame as the next frame's history, in float32 as the solver's
@@ -336,9 +363,15 @@ class DragPoserMethod(Method):
         return res
 
 
-def create(mode: str = "realtime", iterations: int | None = None, lr: float | None = None,
-           vae_path: Any = None, predictor_path: Any = None, prepare_bank: bool = True,
-           **overrides: Any) -> DragPoserMethod:  # fmt: skip
+def create(
+    mode: str = "realtime",
+    iterations: int | None = None,
+    lr: float | None = None,
+    vae_path: Any = None,
+    predictor_path: Any = None,
+    prepare_bank: bool = True,
+    **overrides: Any,
+) -> DragPoserMethod:
     """Registry factory: DragPoser with the shipped models (``engine.models``), or with a
     user-trained VAE (``vae_path``) and, optionally, its predictor (``predictor_path``).
 

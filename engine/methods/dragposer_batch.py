@@ -188,9 +188,17 @@ def _solve_clip(m: DragPoserMethod, frames: Sequence[SensorFrame]) -> list[Frame
         if f >= keep_from[c]:
             values = objective.values[c]
             losses = {**dict(zip(objective.names, values.tolist())), "total": float(objective.weights[c] @ values)}
-            results[f] = FrameResult(local_rot=local, root_pos=pos[0].copy(), positions=pos, iterations=iterations,
-                                     losses=[losses], latent=z[c].astype(np.float64), ms=0.0,
-                                     warnings=read[f]["warnings"], timings={})  # fmt: skip
+            results[f] = FrameResult(
+                local_rot=local,
+                root_pos=pos[0].copy(),
+                positions=pos,
+                iterations=iterations,
+                losses=[losses],
+                latent=z[c].astype(np.float64),
+                ms=0.0,
+                warnings=read[f]["warnings"],
+                timings={},
+            )
 
     lr = s.step_size if rule == "sgd" else s.lr
     last_z = z.copy()
@@ -201,8 +209,7 @@ def _solve_clip(m: DragPoserMethod, frames: Sequence[SensorFrame]) -> list[Frame
             return None
         return FIRST_STEPS if f == first[c] else WARMUP_STEPS if f < keep_from[c] else fixed
 
-    solve_streams(decoder, objective, z, rule, lr, s.max_iterations, s.patience, s.min_improvement, load, done,
-                  steps)
+    solve_streams(decoder, objective, z, rule, lr, s.max_iterations, s.patience, s.min_improvement, load, done, steps)
     ms = 1000.0 * (time.perf_counter() - t0) / n
     for a, b in zip(first[1:], keep_from[1:]):
         a = max(a, b - FADE)
@@ -238,8 +245,9 @@ def _crossfade(own: Sequence[FrameResult | None], warm: list[np.ndarray], offset
 def _finished(m: DragPoserMethod, r: dict, local: np.ndarray, pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """A solved frame after the limb and tracker-rotation steps of a frame-by-frame solve."""
     if r["reach"] or r["turn"] or r["level"]:
-        return finish(local, pos[0], m.skeleton.offsets, r["reach"], r["turn"], r["settings"].neck_twist_share,
-                      r["level"])
+        return finish(
+            local, pos[0], m.skeleton.offsets, r["reach"], r["turn"], r["settings"].neck_twist_share, r["level"]
+        )
     return local, pos
 
 
@@ -291,17 +299,26 @@ def _read(m: DragPoserMethod, frame: SensorFrame) -> dict | None:
         "reach": plan.reach,
         "turn": plan.turn,
         "level": plan.level,
-    }  # fmt: skip
+    }
 
 
 def _objective(m: DragPoserMethod, r: dict, rows: int) -> BatchObjective:
     """The batched objective with ``rows`` rows, each the frame of record ``r`` (:func:`_read`)
     until :meth:`~engine.solver.batch.BatchObjective.set_row` gives it its own."""
-    frame_terms = [r["sensor_term"], PriorTerm(m.prior.name, r["prior"]), m.smooth.term(FrameInputs()),
-                   m.ground.term(FrameInputs())]  # fmt: skip
+    frame_terms = [
+        r["sensor_term"],
+        PriorTerm(m.prior.name, r["prior"]),
+        m.smooth.term(FrameInputs()),
+        m.ground.term(FrameInputs()),
+    ]
     terms = [t.rows(rows) if isinstance(t, FrameRows) else t for t, keep in zip(frame_terms, r["kept"]) if keep]
     q = np.tile(r["root"][1], (rows, 1))
-    root = RootFrames(heading=np.tile(np.eye(3), (rows, 1, 1)), previous=np.zeros((rows, 3)),
-                      position=np.tile(r["root"][0], (rows, 1)), rotation=QN.to_matrix(q))  # fmt: skip
-    return BatchObjective(m.skeleton.offsets, terms, np.tile(r["weights"], (rows, 1)), root,
-                          q * np.where(q[:, :1] < 0, -1.0, 1.0))  # fmt: skip
+    root = RootFrames(
+        heading=np.tile(np.eye(3), (rows, 1, 1)),
+        previous=np.zeros((rows, 3)),
+        position=np.tile(r["root"][0], (rows, 1)),
+        rotation=QN.to_matrix(q),
+    )
+    return BatchObjective(
+        m.skeleton.offsets, terms, np.tile(r["weights"], (rows, 1)), root, q * np.where(q[:, :1] < 0, -1.0, 1.0)
+    )

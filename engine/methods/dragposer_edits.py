@@ -34,8 +34,11 @@ class FrameSettings:
     def __init__(self, settings: OptimizerSettings | None = None) -> None:
         self.settings = settings or OptimizerSettings()
         defaults = OptimizerSettings()
-        self.explicit: set[str] = {f.name for f in dataclasses.fields(OptimizerSettings)
-                                   if getattr(self.settings, f.name) != getattr(defaults, f.name)}  # fmt: skip
+        self.explicit: set[str] = {
+            f.name
+            for f in dataclasses.fields(OptimizerSettings)
+            if getattr(self.settings, f.name) != getattr(defaults, f.name)
+        }
         self._cache: dict[tuple, OptimizerSettings] = {}
 
     def configure(self, **values: Any) -> None:

@@ -128,7 +128,9 @@ class TrackerTerms:
         for joint, r in frame.readings.items():
             c = self.constraints.get(joint)
             if c is None or c.dof != r.dof:
-                c = SensorConstraint(name=f"sensor:{joint}", joint=joint, dof=r.dof, weight=self.weights.get(joint, 1.0))
+                c = SensorConstraint(
+                    name=f"sensor:{joint}", joint=joint, dof=r.dof, weight=self.weights.get(joint, 1.0)
+                )
                 self.constraints[joint] = c
             ok = finite(r)
             if r.connected and not ok:
@@ -144,8 +146,13 @@ class TrackerTerms:
             if t.active:
                 c.set_target(t.position, r.rotation if live and r.dof == 6 else None, True)
             c.connected = c.enabled = t.active
-        self.history.push({j: (np.asarray(r.position, np.float64), np.asarray(r.rotation, np.float64))
-                           for j, r in frame.readings.items() if r.connected and r.dof == 6 and finite(r)})  # fmt: skip
+        self.history.push(
+            {
+                j: (np.asarray(r.position, np.float64), np.asarray(r.rotation, np.float64))
+                for j, r in frame.readings.items()
+                if r.connected and r.dof == 6 and finite(r)
+            }
+        )
         points = {j: np.array(c.position, dtype=np.float64) for j, c in self.constraints.items() if c.enabled}
         self.facing = body_facing(points)
         self.last_points, self.points = self.points, points
@@ -177,9 +184,14 @@ class TrackerTerms:
         except a limb whose shoulder/elbow (hip/knee) or end joint is in ``held`` (joints
         a user constraint acts on: put back on its tracker, a distance between the
         tracked wrists had no effect on the pose while its loss read as met)."""
-        return {sk.JOINT_INDEX[j]: c.position for j, c in self.constraints.items()
-                if c.enabled and c.connected and sk.JOINT_INDEX[j] in LIMBS
-                and not held & {sk.JOINT_INDEX[j], *LIMBS[sk.JOINT_INDEX[j]]}}  # fmt: skip
+        return {
+            sk.JOINT_INDEX[j]: c.position
+            for j, c in self.constraints.items()
+            if c.enabled
+            and c.connected
+            and sk.JOINT_INDEX[j] in LIMBS
+            and not held & {sk.JOINT_INDEX[j], *LIMBS[sk.JOINT_INDEX[j]]}
+        }
 
     def head_target(self, held: set[int]) -> dict[int, np.ndarray]:
         """The head -> its tracker's position (setting ``head_reach``) while a hip tracker
@@ -195,15 +207,24 @@ class TrackerTerms:
     def level_ankles(self, held: set[int]) -> tuple[int, ...]:
         """Ankles whose connected tracker gives a position only (setting ``level_feet``),
         except one whose ankle or toe is in ``held`` (a user constraint acts on the foot)."""
-        return tuple(sk.JOINT_INDEX[j] for j, c in self.constraints.items()
-                     if j in ("lankle", "rankle") and c.enabled and c.connected and c.dof == 3
-                     and not held & {sk.JOINT_INDEX[j], sk.JOINT_INDEX[j[0] + "toe"]})  # fmt: skip
+        return tuple(
+            sk.JOINT_INDEX[j]
+            for j, c in self.constraints.items()
+            if j in ("lankle", "rankle")
+            and c.enabled
+            and c.connected
+            and c.dof == 3
+            and not held & {sk.JOINT_INDEX[j], sk.JOINT_INDEX[j[0] + "toe"]}
+        )
 
     def rotation_targets(self) -> dict[int, np.ndarray]:
         """The head, hands and feet -> their connected 6-DoF trackers' world rotations
         (setting ``sensor_rotations``); the hips' is the tracker's already."""
-        return {sk.JOINT_INDEX[j]: c.rotation for j, c in self.constraints.items()
-                if c.enabled and c.connected and c.dof == 6 and j != "root"}  # fmt: skip
+        return {
+            sk.JOINT_INDEX[j]: c.rotation
+            for j, c in self.constraints.items()
+            if c.enabled and c.connected and c.dof == 6 and j != "root"
+        }
 
     def term(self) -> tuple[SensorTerm, tuple[str, ...], np.ndarray]:
         """The live trackers' term with their readings frozen now, names and weights."""
@@ -267,8 +288,13 @@ class UserConstraints:
 
     def held_joints(self) -> set[int]:
         """Joints an enabled, weighted constraint acts on."""
-        return {sk.JOINT_INDEX[n] for c in self.items if c.enabled and c.weight > 0
-                for n in c.acts_on() if n in sk.JOINT_INDEX}  # fmt: skip
+        return {
+            sk.JOINT_INDEX[n]
+            for c in self.items
+            if c.enabled and c.weight > 0
+            for n in c.acts_on()
+            if n in sk.JOINT_INDEX
+        }
 
     def active(self) -> bool:
         """Whether any constraint is enabled with a weight."""
@@ -296,7 +322,9 @@ class PriorSource:
         """The bank's lookup input for a frame (None: the predictor gives the prior)."""
         return history.arrays() if s.prior == "trackers" and self.bank is not None else None
 
-    def latent(self, frame: int, s: OptimizerSettings, readings: tuple | None) -> tuple[torch.Tensor | None, float, list[str]]:
+    def latent(
+        self, frame: int, s: OptimizerSettings, readings: tuple | None
+    ) -> tuple[torch.Tensor | None, float, list[str]]:
         """The prior's latent for ``frame`` (None: none yet), its weight and warnings. The
         predictor runs only when its latent is the prior: while the bank answers, its
         runs would be thrown away; a run for later frames waits for :meth:`between_frames`."""

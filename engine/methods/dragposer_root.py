@@ -35,8 +35,13 @@ def root_override(sensors: Sensors) -> RootOverride | None:
     return RootOverride(pos, rot)
 
 
-def reference_root(previous: RootFrame, sensors: Sensors, s: OptimizerSettings,
-                   override: RootOverride | None, facing: np.ndarray | None) -> RootFrame:  # fmt: skip
+def reference_root(
+    previous: RootFrame,
+    sensors: Sensors,
+    s: OptimizerSettings,
+    override: RootOverride | None,
+    facing: np.ndarray | None,
+) -> RootFrame:
     """The root the decoded root pose is relative to: the previous solved root
     ``previous``, whose heading (setting ``heading = anchor``) is kept, when there is no
     hip tracker, within :data:`engine.solver.pose.HEADING_LIMIT_DEG` of the anchor
@@ -46,8 +51,14 @@ def reference_root(previous: RootFrame, sensors: Sensors, s: OptimizerSettings,
     (4,)`` of the feet and hands (:func:`engine.solver.pose.body_facing`) when the hip
     tracker gives no rotation."""
     hip = sensors.get("root")
-    if (override is not None and override.rotation is None and s.heading == "anchor" and facing is not None
-            and hip is not None and hip.enabled):  # fmt: skip
+    if (
+        override is not None
+        and override.rotation is None
+        and s.heading == "anchor"
+        and facing is not None
+        and hip is not None
+        and hip.enabled
+    ):
         rot = clamp_heading(previous.rotation.double().numpy(), facing, BODY_HEADING_LIMIT_DEG)
         return RootFrame(torch.as_tensor(rot, dtype=torch.float32), previous.position)
     if override is not None or s.heading != "anchor" or s.root_anchor == "none":
@@ -58,8 +69,9 @@ def reference_root(previous: RootFrame, sensors: Sensors, s: OptimizerSettings,
     head = Q.normalize(c.rotation)
     rot = clamp_heading(previous.rotation.double().numpy(), head)
     if s.hands_heading_limit < 180.0:
-        hands: dict[str, np.ndarray] = {j: sensors[j].position for j in ("lwrist", "rwrist")
-                                        if j in sensors and sensors[j].enabled}  # fmt: skip
+        hands: dict[str, np.ndarray] = {
+            j: sensors[j].position for j in ("lwrist", "rwrist") if j in sensors and sensors[j].enabled
+        }
         body = head_hands_facing(head, hands)
         if body is not None:
             rot = clamp_heading(rot, body, s.hands_heading_limit)
@@ -133,8 +145,9 @@ class Conditioning:
         The frame's solved joint positions, float32, metres.
     """
 
-    def __init__(self, roots: tuple[tuple[torch.Tensor, torch.Tensor, torch.Tensor], ...],
-                 positions: torch.Tensor) -> None:  # fmt: skip
+    def __init__(
+        self, roots: tuple[tuple[torch.Tensor, torch.Tensor, torch.Tensor], ...], positions: torch.Tensor
+    ) -> None:
         self.roots, self.positions = roots, positions
         self._value: torch.Tensor | None = None
 

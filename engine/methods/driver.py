@@ -80,9 +80,16 @@ def set_sensor_weights(method: Method, sensors: Iterable[Sensor]) -> bool:
     return True
 
 
-def start(method: Method, skeleton: sk.Skeleton, fps: float, *, reference: Motion | None = None,
-          settings: Mapping[str, Any] | None = None, constraints: Sequence[Constraint] = (),
-          sensors: Iterable[Sensor] = ()) -> list[str]:  # fmt: skip
+def start(
+    method: Method,
+    skeleton: sk.Skeleton,
+    fps: float,
+    *,
+    reference: Motion | None = None,
+    settings: Mapping[str, Any] | None = None,
+    constraints: Sequence[Constraint] = (),
+    sensors: Iterable[Sensor] = (),
+) -> list[str]:
     """:func:`reset`, then the settings, constraints and sensor weights.
 
     Returns

@@ -139,8 +139,9 @@ class IKMethod(Method):
         head = s.get("upperneck")
         if head is not None and head.dof == 6 and head.rotation is not None:
             return Q.heading(head.rotation)
-        facing = body_facing({j: r.position for j, r in s.items() if r.position is not None}, _IK_LATERAL,
-                             min_length=1e-3)  # fmt: skip
+        facing = body_facing(
+            {j: r.position for j, r in s.items() if r.position is not None}, _IK_LATERAL, min_length=1e-3
+        )
         return self._heading if facing is None else facing
 
     def _solve_root(self, s: dict[str, Sensor]) -> tuple[np.ndarray, np.ndarray]:
@@ -177,8 +178,9 @@ class IKMethod(Method):
             _, rot = self._at(local, root, sk.PARENTS[HEAD])
             local[HEAD] = Q.mul(Q.conjugate(rot[0]), head.rotation)
 
-    def _reach_with_clavicle(self, local: np.ndarray, root: np.ndarray, chain: tuple[int, int, int],
-                             target: np.ndarray) -> None:
+    def _reach_with_clavicle(
+        self, local: np.ndarray, root: np.ndarray, chain: tuple[int, int, int], target: np.ndarray
+    ) -> None:
         """Turn the clavicle (up to :data:`CLAVICLE_MAX`) when the hand is out of reach."""
         up, mid, end = chain
         clav = sk.PARENTS[up]
@@ -193,11 +195,10 @@ class IKMethod(Method):
             swing = qpow(swing, CLAVICLE_MAX / angle)
         local[clav] = Q.mul(Q.mul(Q.conjugate(pr), Q.mul(swing, pr)), local[clav])
 
-    def _pull_root_to_feet(self, root: np.ndarray, root_rot: np.ndarray,
-                           s: dict[str, Sensor]) -> np.ndarray:
+    def _pull_root_to_feet(self, root: np.ndarray, root_rot: np.ndarray, s: dict[str, Sensor]) -> np.ndarray:
         """Move an estimated root towards tracked feet it could not reach otherwise."""
         for _ in range(2):
-            for (hip, knee, ankle) in LEGS:
+            for hip, knee, ankle in LEGS:
                 r = s.get(sk.JOINT_NAMES[ankle])
                 if r is None:
                     continue
@@ -209,9 +210,17 @@ class IKMethod(Method):
                     root = root + excess * d / vnorm(d)
         return root
 
-    def _solve_limb(self, local: np.ndarray, root: np.ndarray, chain: tuple[int, int, int],
-                    target: np.ndarray, pole: np.ndarray, rest_pole: np.ndarray,
-                    end_rot: np.ndarray | None, twist_mid: bool = False) -> None:
+    def _solve_limb(
+        self,
+        local: np.ndarray,
+        root: np.ndarray,
+        chain: tuple[int, int, int],
+        target: np.ndarray,
+        pole: np.ndarray,
+        rest_pole: np.ndarray,
+        end_rot: np.ndarray | None,
+        twist_mid: bool = False,
+    ) -> None:
         up, mid, end = chain
         (p_up, _), (_, r_parent) = self._at(local, root, up, sk.PARENTS[up])
         a = vnorm(self.offsets[mid])
@@ -267,8 +276,9 @@ class IKMethod(Method):
             end_rot = np.asarray(hand.rotation, float) if hand.dof == 6 else None
             reach_to = np.asarray(hand.position, float)
             self._reach_with_clavicle(local, root_pos, chain, reach_to)
-            self._solve_limb(local, root_pos, chain, reach_to, Q.rotate(chest, ARM_POLE), ARM_POLE, end_rot,
-                             twist_mid=True)
+            self._solve_limb(
+                local, root_pos, chain, reach_to, Q.rotate(chest, ARM_POLE), ARM_POLE, end_rot, twist_mid=True
+            )
 
         forward = Q.rotate(root_rot, LEG_POLE)
         level = Q.heading(root_rot)
@@ -295,8 +305,13 @@ class IKMethod(Method):
             root_pos = self._root_pos = prev_root
             pos, _ = self._at(local, root_pos, *ALL)
         self._last = local.copy()
-        return FrameResult(local_rot=local, root_pos=root_pos.copy(), positions=pos,
-                           ms=1000.0 * (time.perf_counter() - t0), warnings=warnings)
+        return FrameResult(
+            local_rot=local,
+            root_pos=root_pos.copy(),
+            positions=pos,
+            ms=1000.0 * (time.perf_counter() - t0),
+            warnings=warnings,
+        )
 
 
 def create(**kwargs: Any) -> IKMethod:

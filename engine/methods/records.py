@@ -75,12 +75,16 @@ class ResultArrays(Sequence[FrameResult]):
         total = self.total[i]
         t = self.timings[i]
         return FrameResult(
-            local_rot=self.local_rot[i], root_pos=self.root_pos[i], positions=self.positions[i],
-            iterations=int(self.iterations[i]), losses=[] if np.isnan(total) else [{"total": float(total)}],
-            latent=None if self.latent is None else self.latent[i], ms=float(self.ms[i]),
+            local_rot=self.local_rot[i],
+            root_pos=self.root_pos[i],
+            positions=self.positions[i],
+            iterations=int(self.iterations[i]),
+            losses=[] if np.isnan(total) else [{"total": float(total)}],
+            latent=None if self.latent is None else self.latent[i],
+            ms=float(self.ms[i]),
             warnings=list(self.warnings.get(i, ())),
             timings={} if np.isnan(t[0]) else dict(zip(TIMING_KEYS, t.tolist())),
-        )  # fmt: skip
+        )
 
     def __iter__(self) -> Iterator[FrameResult]:
         return (self[i] for i in range(self._n))

@@ -70,8 +70,13 @@ class RPMMethod(Method):
         pos, rot, flags = np.zeros((3, 3)), np.tile([1.0, 0.0, 0.0, 0.0], (3, 1)), np.zeros(3, dtype=bool)
         for k, j in enumerate(RPM_JOINTS):
             r = frame.readings[j]
-            ok = bool(r.connected and r.position is not None and r.rotation is not None
-                      and np.all(np.isfinite(r.position)) and np.all(np.isfinite(r.rotation)))  # fmt: skip
+            ok = bool(
+                r.connected
+                and r.position is not None
+                and r.rotation is not None
+                and np.all(np.isfinite(r.position))
+                and np.all(np.isfinite(r.rotation))
+            )
             if j == "upperneck":
                 if ok or self._head is None:
                     self._head = r

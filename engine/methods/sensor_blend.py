@@ -68,8 +68,9 @@ class SensorBlend:
         self.frames = 0  # since the last change of state
         self.offset = np.zeros(3)
 
-    def update(self, position: np.ndarray | None, connected: bool, solved: np.ndarray | None,
-               seconds: float, fps: float) -> BlendedTarget:  # fmt: skip
+    def update(
+        self, position: np.ndarray | None, connected: bool, solved: np.ndarray | None, seconds: float, fps: float
+    ) -> BlendedTarget:
         """Advance one frame.
 
         Parameters

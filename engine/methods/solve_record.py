@@ -44,8 +44,9 @@ class SolveRecord:
     start: str
 
 
-def record_of(solution: "Solution", context: "FrameContext", terms: "list[Constraint]", predicted: bool,
-              bank: bool) -> SolveRecord:  # fmt: skip
+def record_of(
+    solution: "Solution", context: "FrameContext", terms: "list[Constraint]", predicted: bool, bank: bool
+) -> SolveRecord:
     """The :class:`SolveRecord` of a solve over ``terms`` (their weights taken now: the next
     frame changes them) that started from the frame's prior latent (``predicted``; from the
     pose bank when ``bank``) or else from the previous frame's latent (zero on frame 0)."""

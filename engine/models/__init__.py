@@ -22,6 +22,15 @@ from engine.models.predictor import PredictorConfig, TemporalPredictor
 from engine.models.vae import PoseVAE, VAEConfig
 
 __all__ = [
-    "DEFAULT_PREDICTOR", "DEFAULT_VAE", "ModelBundle", "PoseVAE", "PredictorConfig",
-    "TemporalPredictor", "VAEConfig", "load_default_models", "load_models", "load_predictor", "load_vae",
-]  # fmt: skip
+    "DEFAULT_PREDICTOR",
+    "DEFAULT_VAE",
+    "ModelBundle",
+    "PoseVAE",
+    "PredictorConfig",
+    "TemporalPredictor",
+    "VAEConfig",
+    "load_default_models",
+    "load_models",
+    "load_predictor",
+    "load_vae",
+]

@@ -48,8 +48,9 @@ class Run:
     w: np.ndarray  # (r1 - r0, c1 - c0) float32, C-contiguous
 
 
-def plan_runs(w: np.ndarray, rows: list[tuple[int, int]], cols: list[tuple[int, int]],
-              call_cost: float = CALL_COST) -> list[Run]:  # fmt: skip
+def plan_runs(
+    w: np.ndarray, rows: list[tuple[int, int]], cols: list[tuple[int, int]], call_cost: float = CALL_COST
+) -> list[Run]:
     """Cover the non-zero node blocks of ``w (out, in)`` by row runs (module doc).
 
     Parameters
@@ -94,9 +95,9 @@ def _matvec(runs: list[Run], x: np.ndarray, out: np.ndarray) -> np.ndarray:
     """``out = W @ x`` for a matrix stored as :func:`plan_runs` rectangles."""
     for r in runs:
         if r.c1 > r.c0:
-            np.dot(r.w, x[r.c0:r.c1], out=out[r.r0:r.r1])
+            np.dot(r.w, x[r.c0 : r.c1], out=out[r.r0 : r.r1])
         else:
-            out[r.r0:r.r1] = 0.0
+            out[r.r0 : r.r1] = 0.0
     return out
 
 
@@ -145,8 +146,15 @@ class DenseDecoder:
             (n[0] * ch[0], last),
         ]
         # node partitions of each stage's input and output (the latent is one node)
-        parts = [[(0, m.config.latent)], _nodes(n[3], ch[3]), _nodes(n[2], ch[2]), _nodes(n[1], ch[1]),
-                 _nodes(n[0], ch[0]), _nodes(n[0], ch[0]), _nodes(n[0], 4) + [(4 * n[0], 4 * n[0] + 3)]]  # fmt: skip
+        parts = [
+            [(0, m.config.latent)],
+            _nodes(n[3], ch[3]),
+            _nodes(n[2], ch[2]),
+            _nodes(n[1], ch[1]),
+            _nodes(n[0], ch[0]),
+            _nodes(n[0], ch[0]),
+            _nodes(n[0], 4) + [(4 * n[0], 4 * n[0] + 3)],
+        ]
         self.weights, self.biases = [], []
         with torch.no_grad():
             for size, f in stages:
@@ -156,8 +164,9 @@ class DenseDecoder:
                 self.weights.append(np.ascontiguousarray(w.numpy(), dtype=np.float32))
                 self.biases.append(bias.numpy().astype(np.float32))
         self.forward_runs = [plan_runs(w, parts[i + 1], parts[i], call_cost) for i, w in enumerate(self.weights)]
-        self.backward_runs = [plan_runs(np.ascontiguousarray(w.T), parts[i], parts[i + 1], call_cost)
-                              for i, w in enumerate(self.weights)]  # fmt: skip
+        self.backward_runs = [
+            plan_runs(np.ascontiguousarray(w.T), parts[i], parts[i + 1], call_cost) for i, w in enumerate(self.weights)
+        ]
         self.slope = float(m.config.negative_slope)
         self.latent = int(m.config.latent)
         self._allocate()
@@ -194,8 +203,10 @@ class DenseDecoder:
 
     def stored_entries(self) -> tuple[int, int]:
         """Weight entries read per forward and per backward pass (dense: all of them)."""
-        return (sum(r.w.size for runs in self.forward_runs for r in runs),
-                sum(r.w.size for runs in self.backward_runs for r in runs))  # fmt: skip
+        return (
+            sum(r.w.size for runs in self.forward_runs for r in runs),
+            sum(r.w.size for runs in self.backward_runs for r in runs),
+        )
 
     def forward(self, z: np.ndarray) -> np.ndarray:
         """``z (L,)`` float32 -> ``(q_raw (88,), disp (3,))`` concatenated, float32 (a new
@@ -241,5 +252,5 @@ class DenseDecoder:
 def _bind(runs: list[Run], x: np.ndarray, out: np.ndarray) -> tuple[list[tuple], list[np.ndarray]]:
     """The products of ``out = W @ x`` as ``(w, x view, out view)`` triples, and the
     output views of runs that read nothing (zero)."""
-    products = [(r.w, x[r.c0:r.c1], out[r.r0:r.r1]) for r in runs if r.c1 > r.c0]
-    return products, [out[r.r0:r.r1] for r in runs if r.c1 <= r.c0]
+    products = [(r.w, x[r.c0 : r.c1], out[r.r0 : r.r1]) for r in runs if r.c1 > r.c0]
+    return products, [out[r.r0 : r.r1] for r in runs if r.c1 <= r.c0]

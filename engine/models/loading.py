@@ -42,8 +42,18 @@ DEFAULT_SPARSEPOSER = ASSETS / "sparseposer.pt"
 DEFAULT_RPM = ASSETS / "rpm.pt"
 #: The only non-builtin types a checkpoint may hold besides tensors: numpy scalars that
 #: end up in loss curves and metadata.
-SAFE_GLOBALS: list[Any] = [np.dtype, np.float64, np.float32, np.int64, np.int32, np.bool_, type(np.dtype(np.float64)),
-                type(np.dtype(np.float32)), type(np.dtype(np.int64)), _np_scalar]  # fmt: skip
+SAFE_GLOBALS: list[Any] = [
+    np.dtype,
+    np.float64,
+    np.float32,
+    np.int64,
+    np.int32,
+    np.bool_,
+    type(np.dtype(np.float64)),
+    type(np.dtype(np.float32)),
+    type(np.dtype(np.int64)),
+    _np_scalar,
+]
 
 
 @dataclass
@@ -86,8 +96,10 @@ def load_checkpoint(path: Path | str, what: str = "weights file") -> Any:
             # code2op: pickletools' table of opcodes by code, public but absent from typeshed
             code = pickletools.code2op.get(chr(int(op.group(1))))  # type: ignore[attr-defined]
             name = f" ({code.name})" if code else ""
-            raise ModelFileError(f"{path}: refused: the {what} uses pickle instruction {op.group(1)}{name}, which the "
-                                 f"safe loader does not read (save it with torch.save's default pickle protocol)") from None  # fmt: skip
+            raise ModelFileError(
+                f"{path}: refused: the {what} uses pickle instruction {op.group(1)}{name}, which the "
+                f"safe loader does not read (save it with torch.save's default pickle protocol)"
+            ) from None
         hint = _refused_global(str(exc))
         raise ModelFileError(
             f"{path}: refused: the {what} holds {hint} (only tensors and plain values are loaded)"
@@ -154,7 +166,9 @@ def _build(path: Path | str, kind: str, config_cls: type[ModelConfig], model_cls
     check_fits(skeleton, config, path)
     model = model_cls(cfg)
     model.load_state_dict(payload["state_dict"])
-    bad = [name for name, t in model.state_dict().items() if t.is_floating_point() and not bool(torch.isfinite(t).all())]
+    bad = [
+        name for name, t in model.state_dict().items() if t.is_floating_point() and not bool(torch.isfinite(t).all())
+    ]
     if bad:
         more = f" and {len(bad) - 1} more" if len(bad) > 1 else ""
         raise ModelFileError(f"{path}: weights hold NaN or infinite values (in {bad[0]}{more}); the file is damaged")
@@ -232,5 +246,6 @@ def load_default_models(require_predictor: bool = False) -> ModelBundle:
             _SHIPPED.clear()  # a replaced file: the old models are not kept alive
             _SHIPPED[key] = load_models(DEFAULT_VAE, pred)
         shared = _SHIPPED[key]
-    return ModelBundle(shared.vae, shared.predictor, copy.deepcopy(shared.vae_meta),
-                       copy.deepcopy(shared.predictor_meta))  # fmt: skip
+    return ModelBundle(
+        shared.vae, shared.predictor, copy.deepcopy(shared.vae_meta), copy.deepcopy(shared.predictor_meta)
+    )

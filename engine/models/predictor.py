@@ -69,8 +69,11 @@ class TemporalPredictor(nn.Module):
 
     def set_stats(self, z_mean, z_std, c_mean, c_std) -> None:
         for name, v in (("z_mean", z_mean), ("z_std", z_std), ("c_mean", c_mean), ("c_std", c_std)):
-            getattr(self, name).copy_(torch.as_tensor(v, dtype=torch.float32).clamp_min(1e-6) if "std" in name
-                                      else torch.as_tensor(v, dtype=torch.float32))  # fmt: skip
+            getattr(self, name).copy_(
+                torch.as_tensor(v, dtype=torch.float32).clamp_min(1e-6)
+                if "std" in name
+                else torch.as_tensor(v, dtype=torch.float32)
+            )
 
     def encode_past(self, past: torch.Tensor, cond: torch.Tensor) -> torch.Tensor:
         """Memory ``(B, Wp, d)`` from past latents ``(B, Wp, L)`` and conditioning ``(B, Wp, C)``."""

@@ -86,8 +86,13 @@ class RPM(nn.Module):
         super().__init__()
         self.config = cfg = config or RPMConfig()
         n_in = (cfg.past_inputs + 1) * TRACK_DIM + cfg.past_poses * POSE_DIM
-        self.net = nn.Sequential(nn.Linear(n_in, cfg.hidden), nn.GELU(), *[_Block(cfg.hidden) for _ in range(cfg.blocks)],
-                                 nn.LayerNorm(cfg.hidden), nn.Linear(cfg.hidden, cfg.window * POSE_DIM))  # fmt: skip
+        self.net = nn.Sequential(
+            nn.Linear(n_in, cfg.hidden),
+            nn.GELU(),
+            *[_Block(cfg.hidden) for _ in range(cfg.blocks)],
+            nn.LayerNorm(cfg.hidden),
+            nn.Linear(cfg.hidden, cfg.window * POSE_DIM),
+        )
         self.register_buffer("pose_mean", torch.zeros(POSE_DIM))
         self.register_buffer("pose_std", torch.ones(POSE_DIM))
         self.register_buffer("track_mean", torch.zeros(TRACK_DIM))
@@ -141,8 +146,9 @@ def to_frame(pose6: torch.Tensor, h: torch.Tensor, inverse: bool = True) -> torc
     return torch.cat((root[:, :, None], pose6[:, :, 1:]), dim=2)
 
 
-def track_features(pos: torch.Tensor, rot6: torch.Tensor, flags: torch.Tensor, h: torch.Tensor,
-                   origin: torch.Tensor) -> torch.Tensor:  # fmt: skip
+def track_features(
+    pos: torch.Tensor, rot6: torch.Tensor, flags: torch.Tensor, h: torch.Tensor, origin: torch.Tensor
+) -> torch.Tensor:
     """Tracking features ``(B, K, 30)`` in the heading frame ``h (B, 3, 3)`` at ``origin (B, 3)``.
 
     ``pos (B, K, 3, 3)`` world positions, ``rot6 (B, K, 3, 3, 2)`` world 6D rotations,
@@ -167,8 +173,9 @@ def fk_root_space(pose6: torch.Tensor, offsets: torch.Tensor) -> torch.Tensor:
     return torch.stack(p, dim=-2)
 
 
-def rolling_step(model: RPM, P: torch.Tensor, context: torch.Tensor, track: torch.Tensor,
-                 h: torch.Tensor) -> torch.Tensor:  # fmt: skip
+def rolling_step(
+    model: RPM, P: torch.Tensor, context: torch.Tensor, track: torch.Tensor, h: torch.Tensor
+) -> torch.Tensor:
     """One RPM step, batched: the new prediction ``P (B, W, 22, 3, 2)`` in world form.
 
     ``P`` is the previous prediction (world form, already rolled: its first pose is the

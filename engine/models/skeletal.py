@@ -17,13 +17,12 @@ from engine import skeleton as sk
 #: Pooling groups per level: each entry lists the nodes of the level below it merges.
 POOL_GROUPS: tuple[tuple[tuple[int, ...], ...], ...] = (
     # 22 -> 14: hip+knee, ankle+toe, clavicle+shoulder, elbow+wrist; root, spine, neck kept
-    ((0,), (1, 2), (3, 4), (5, 6), (7, 8), (9,), (10,), (11,), (12,), (13,),
-     (14, 15), (16, 17), (18, 19), (20, 21)),
+    ((0,), (1, 2), (3, 4), (5, 6), (7, 8), (9,), (10,), (11,), (12,), (13,), (14, 15), (16, 17), (18, 19), (20, 21)),
     # 14 -> 9: each limb one node, lowerback+upperback
     ((0,), (1, 2), (3, 4), (5, 6), (7,), (8,), (9,), (10, 11), (12, 13)),
     # 9 -> 6: the torso and neck chain becomes one node
     ((0,), (1,), (2,), (3, 4, 5, 6), (7,), (8,)),
-)  # fmt: skip
+)
 
 
 def _edges_level0() -> set[tuple[int, int]]:

@@ -42,8 +42,12 @@ from engine.models.skeletal import (
 SPARSE_JOINTS = ("root", "upperneck", "lwrist", "rwrist", "lankle", "rankle")
 SPARSE_INDEX = tuple(sk.JOINT_INDEX[j] for j in SPARSE_JOINTS)
 #: Limb chains the learned IK adjusts; the last joint of each is the tracked end effector.
-LIMBS = (("lhip", "lknee", "lankle", "ltoe"), ("rhip", "rknee", "rankle", "rtoe"),
-         ("lclavicle", "lshoulder", "lelbow", "lwrist"), ("rclavicle", "rshoulder", "relbow", "rwrist"))  # fmt: skip
+LIMBS = (
+    ("lhip", "lknee", "lankle", "ltoe"),
+    ("rhip", "rknee", "rankle", "rtoe"),
+    ("lclavicle", "lshoulder", "lelbow", "lwrist"),
+    ("rclavicle", "rshoulder", "relbow", "rwrist"),
+)
 LIMB_INDEX = tuple(tuple(sk.JOINT_INDEX[j] for j in limb) for limb in LIMBS)
 #: The tracked end effector of each limb (ankle for legs: the preset tracks the feet there).
 LIMB_EE = tuple(sk.JOINT_INDEX[j] for j in ("lankle", "rankle", "lwrist", "rwrist"))
@@ -122,13 +126,20 @@ class SparsePoserGenerator(nn.Module):
         c0, c1, c2 = cfg.channels
         k = cfg.kernel
         self.act = nn.LeakyReLU(cfg.negative_slope)
-        self.enc = nn.ModuleList([SkeletalConv(masks[0], 8, c0, k, 2), SkeletalConv(masks[1], c0, c1, k, 2),
-                                  SkeletalConv(masks[2], c1, c2, k, 2)])  # fmt: skip
-        self.dec = nn.ModuleList([SkeletalConv(masks[2], c2, c1, 3), SkeletalConv(masks[1], c1, c0, 3),
-                                  SkeletalConv(masks[0], c0, c0, 3)])  # fmt: skip
+        self.enc = nn.ModuleList(
+            [
+                SkeletalConv(masks[0], 8, c0, k, 2),
+                SkeletalConv(masks[1], c0, c1, k, 2),
+                SkeletalConv(masks[2], c1, c2, k, 2),
+            ]
+        )
+        self.dec = nn.ModuleList(
+            [SkeletalConv(masks[2], c2, c1, 3), SkeletalConv(masks[1], c1, c0, 3), SkeletalConv(masks[0], c0, c0, 3)]
+        )
         self.out = SkeletalConv(masks[0], c0, 8, 3)
-        self.static = nn.ModuleList([SkeletalLinear(masks[0], 3, c0), SkeletalLinear(masks[1], c0, c0),
-                                     SkeletalLinear(masks[2], c0, c1)])  # fmt: skip
+        self.static = nn.ModuleList(
+            [SkeletalLinear(masks[0], 3, c0), SkeletalLinear(masks[1], c0, c0), SkeletalLinear(masks[2], c0, c1)]
+        )
         for i, groups in enumerate(POOL_GROUPS):
             self.register_buffer(f"pool{i}", pool_matrix(groups, sizes[i]), persistent=False)
             self.register_buffer(f"unpool{i}", unpool_matrix(groups, sizes[i]), persistent=False)
@@ -167,8 +178,9 @@ class LimbIK(nn.Module):
         super().__init__()
         # limb joints' root-space dq (4 x 8), their offsets (4 x 3), the tracker's dq (8)
         last = nn.Linear(hidden, 16)
-        self.net = nn.Sequential(nn.Linear(4 * 8 + 4 * 3 + 8, hidden), nn.LeakyReLU(0.2),
-                                 nn.Linear(hidden, hidden), nn.LeakyReLU(0.2), last)  # fmt: skip
+        self.net = nn.Sequential(
+            nn.Linear(4 * 8 + 4 * 3 + 8, hidden), nn.LeakyReLU(0.2), nn.Linear(hidden, hidden), nn.LeakyReLU(0.2), last
+        )
         nn.init.zeros_(last.weight)
         nn.init.zeros_(last.bias)
 
@@ -221,8 +233,9 @@ class SparsePoser(nn.Module):
         raw = out * self.dq_std + self.dq_mean
         return local_rotations(raw[..., :4])
 
-    def refine(self, gen_out: torch.Tensor, local: torch.Tensor, offsets: torch.Tensor,
-               target_dq: torch.Tensor) -> torch.Tensor:  # fmt: skip
+    def refine(
+        self, gen_out: torch.Tensor, local: torch.Tensor, offsets: torch.Tensor, target_dq: torch.Tensor
+    ) -> torch.Tensor:
         """Learned IK: local rotations ``(B, 22, 4)`` with each limb replaced by its network's.
 
         ``gen_out`` normalised dq ``(B, 22, 8)``, ``local`` its local rotations,
@@ -242,4 +255,3 @@ class SparsePoser(nn.Module):
         out = self.generate(dq, offsets, tail)[:, -1]
         local = self.local_from_output(out)
         return self.refine(out, local, offsets, dq[:, -1]), local
-

@@ -104,8 +104,11 @@ class DenseGenerator:
         self.dec_kernel = g.out.kernel  # the decoder's (always 3)
         self.slope = g.act.negative_slope
         self.enc = [dense_conv(enc[0]), dense_conv(enc[1], g.pool0), dense_conv(enc[2], g.pool1)]
-        self.dec = [dense_conv(dec[0], g.unpool2 @ g.pool2), dense_conv(dec[1], g.unpool1),
-                    dense_conv(dec[2], g.unpool0)]  # fmt: skip
+        self.dec = [
+            dense_conv(dec[0], g.unpool2 @ g.pool2),
+            dense_conv(dec[1], g.unpool1),
+            dense_conv(dec[2], g.unpool0),
+        ]
         self.out = dense_conv(g.out)
         self.enc_nodes = [enc[i].linear.n for i in range(3)]
         self.dec_nodes = [dec[i].linear.n for i in range(3)]
@@ -151,8 +154,9 @@ class StackedLimbIK:
                 x = F.leaky_relu(x, self.slope)
         return x
 
-    def __call__(self, gen_out: torch.Tensor, local: torch.Tensor, offsets: torch.Tensor,
-                 target_dq: torch.Tensor) -> torch.Tensor:  # fmt: skip
+    def __call__(
+        self, gen_out: torch.Tensor, local: torch.Tensor, offsets: torch.Tensor, target_dq: torch.Tensor
+    ) -> torch.Tensor:
         """Same as :meth:`SparsePoser.refine`: ``gen_out (B, 22, 8)`` normalised, ``local
         (B, 22, 4)``, ``offsets (B, 22, 3)`` metres, ``target_dq (B, 22, 8)`` raw -> local
         rotations ``(B, 22, 4)`` with the limbs replaced."""

@@ -63,9 +63,13 @@ class PoseVAE(nn.Module):
         ch = cfg.channels
         act = lambda: nn.LeakyReLU(cfg.negative_slope)  # noqa: E731
         self.enc = nn.ModuleList(
-            [SkeletalLinear(masks[0], 8, ch[0]), SkeletalLinear(masks[0], ch[0], ch[1]),
-             SkeletalLinear(masks[1], ch[1], ch[2]), SkeletalLinear(masks[2], ch[2], ch[3])]
-        )  # fmt: skip
+            [
+                SkeletalLinear(masks[0], 8, ch[0]),
+                SkeletalLinear(masks[0], ch[0], ch[1]),
+                SkeletalLinear(masks[1], ch[1], ch[2]),
+                SkeletalLinear(masks[2], ch[2], ch[3]),
+            ]
+        )
         self.act = act()
         for i, groups in enumerate(POOL_GROUPS):
             self.register_buffer(f"pool{i}", pool_matrix(groups, sizes[i]))
@@ -75,9 +79,13 @@ class PoseVAE(nn.Module):
         self.to_logvar = nn.Linear(flat, cfg.latent)
         self.from_latent = nn.Linear(cfg.latent, flat)
         self.dec = nn.ModuleList(
-            [SkeletalLinear(masks[2], ch[3], ch[2]), SkeletalLinear(masks[1], ch[2], ch[1]),
-             SkeletalLinear(masks[0], ch[1], ch[0]), SkeletalLinear(masks[0], ch[0], ch[0])]
-        )  # fmt: skip
+            [
+                SkeletalLinear(masks[2], ch[3], ch[2]),
+                SkeletalLinear(masks[1], ch[2], ch[1]),
+                SkeletalLinear(masks[0], ch[1], ch[0]),
+                SkeletalLinear(masks[0], ch[0], ch[0]),
+            ]
+        )
         self.to_rot = SkeletalLinear(masks[0], ch[0], 4)
         self.to_disp = nn.Linear(ch[0], 3)
         for name, shape in (("dq_mean", (22, 8)), ("dq_std", (22, 8)), ("disp_mean", (3,)), ("disp_std", (3,))):

@@ -76,8 +76,10 @@ CONFIGS: dict[str, tuple[Schema, int]] = {
 #: Rules between fields, per kind: (fields named, holds(config), what must hold).
 _RULES: dict[str, list[tuple[str, Callable[[dict], bool], str]]] = {
     "predictor": [("d_model, heads", lambda c: c["d_model"] % c["heads"] == 0, "d_model a multiple of heads")],
-    "sparseposer": [("window", lambda c: c["window"] % 8 == 0, "a multiple of 8 (three halvings in time)"),
-                    ("kernel", lambda c: c["kernel"] % 2 == 1, "odd (centred windows)")],  # fmt: skip
+    "sparseposer": [
+        ("window", lambda c: c["window"] % 8 == 0, "a multiple of 8 (three halvings in time)"),
+        ("kernel", lambda c: c["kernel"] % 2 == 1, "odd (centred windows)"),
+    ],
 }
 
 
@@ -103,8 +105,10 @@ def check_config(kind: str, config: Mapping[str, Any], config_cls: type, where: 
         if channels:
             value = full["channels"]
             if not isinstance(value, (list, tuple)) or len(value) != channels:
-                raise ModelFileError(f"{where}: channels = {shown(value)} is not a list of {channels} numbers; "
-                                     f"allowed: {channels} x {_CHANNEL.describe()}")  # fmt: skip
+                raise ModelFileError(
+                    f"{where}: channels = {shown(value)} is not a list of {channels} numbers; "
+                    f"allowed: {channels} x {_CHANNEL.describe()}"
+                )
             out["channels"] = [check_value(_CHANNEL, c, where, f"channels[{i}]") for i, c in enumerate(value)]
     except ValidationError as exc:
         raise ModelFileError(str(exc)) from None
@@ -148,8 +152,10 @@ def check_fits(skeleton: torch.nn.Module, config: Mapping[str, Any], path: Path)
     need = sum(t.numel() * t.element_size() for t in skeleton.state_dict().values())
     size = path.stat().st_size
     if need > size:
-        raise ModelFileError(f"{path}: config ({_summary(config)}) describes a model of {need:,} bytes, more than "
-                             f"the file's {size:,}; config and weights do not match")  # fmt: skip
+        raise ModelFileError(
+            f"{path}: config ({_summary(config)}) describes a model of {need:,} bytes, more than "
+            f"the file's {size:,}; config and weights do not match"
+        )
 
 
 def _summary(config: Mapping[str, Any]) -> str:

@@ -41,15 +41,38 @@ from engine.validation import check_input_file
 #: cgspeed BVH names of the CMU/Vicon ASF bones (the BVH conversion of the same skeletons
 #: in ``cmu_mb/``); a bone missing here keeps its ASF name.
 CGSPEED_NAMES = {
-    "root": "Hips", "lhipjoint": "LHipJoint", "lfemur": "LeftUpLeg", "ltibia": "LeftLeg", "lfoot": "LeftFoot",
-    "ltoes": "LeftToeBase", "rhipjoint": "RHipJoint", "rfemur": "RightUpLeg", "rtibia": "RightLeg",
-    "rfoot": "RightFoot", "rtoes": "RightToeBase", "lowerback": "LowerBack", "upperback": "Spine",
-    "thorax": "Spine1", "lowerneck": "Neck", "upperneck": "Neck1", "head": "Head", "lclavicle": "LeftShoulder",
-    "lhumerus": "LeftArm", "lradius": "LeftForeArm", "lwrist": "LeftHand", "lhand": "LeftFingerBase",
-    "lfingers": "LeftHandIndex1", "lthumb": "LThumb", "rclavicle": "RightShoulder", "rhumerus": "RightArm",
-    "rradius": "RightForeArm", "rwrist": "RightHand", "rhand": "RightFingerBase", "rfingers": "RightHandIndex1",
+    "root": "Hips",
+    "lhipjoint": "LHipJoint",
+    "lfemur": "LeftUpLeg",
+    "ltibia": "LeftLeg",
+    "lfoot": "LeftFoot",
+    "ltoes": "LeftToeBase",
+    "rhipjoint": "RHipJoint",
+    "rfemur": "RightUpLeg",
+    "rtibia": "RightLeg",
+    "rfoot": "RightFoot",
+    "rtoes": "RightToeBase",
+    "lowerback": "LowerBack",
+    "upperback": "Spine",
+    "thorax": "Spine1",
+    "lowerneck": "Neck",
+    "upperneck": "Neck1",
+    "head": "Head",
+    "lclavicle": "LeftShoulder",
+    "lhumerus": "LeftArm",
+    "lradius": "LeftForeArm",
+    "lwrist": "LeftHand",
+    "lhand": "LeftFingerBase",
+    "lfingers": "LeftHandIndex1",
+    "lthumb": "LThumb",
+    "rclavicle": "RightShoulder",
+    "rhumerus": "RightArm",
+    "rradius": "RightForeArm",
+    "rwrist": "RightHand",
+    "rhand": "RightFingerBase",
+    "rfingers": "RightHandIndex1",
     "rthumb": "RThumb",
-}  # fmt: skip
+}
 #: Bones whose children the cgspeed conversion attaches at the bone's start rather than its
 #: end (neck and clavicles on the thorax's start, hand and thumb on the wrist's). Most of
 #: the BVH training data is that conversion; placing these joints as it does keeps one
@@ -164,8 +187,9 @@ def load_asf(path: str | Path) -> Skeleton:
                 root_order = tuple(t.lower() for t in tok[1:])
                 bad = [t for t in root_order if t not in ("tx", "ty", "tz", "rx", "ry", "rz")]
                 if bad or len(set(root_order)) != len(root_order):
-                    raise AsfAmcError(path, f"root order: expected TX TY TZ RX RY RZ in some order, got "
-                                            f"{' '.join(tok[1:])[:80]!r}", n)  # fmt: skip
+                    raise AsfAmcError(
+                        path, f"root order: expected TX TY TZ RX RY RZ in some order, got {' '.join(tok[1:])[:80]!r}", n
+                    )
             elif key == "axis" and len(tok) > 1:
                 root.axis_order = _order(path, n, tok[1], "root axis")
             elif key == "position":
@@ -199,8 +223,11 @@ def load_asf(path: str | Path) -> Skeleton:
                 dof = tuple(t.lower() for t in tok[1:])
                 bad = [t for t in dof if t not in ("rx", "ry", "rz")]
                 if bad or len(set(dof)) != len(dof):
-                    raise AsfAmcError(path, f"bone {bone.name!r} dof: expected rx, ry, rz (each once), got "
-                                            f"{' '.join(tok[1:])[:80]!r}", n)  # fmt: skip
+                    raise AsfAmcError(
+                        path,
+                        f"bone {bone.name!r} dof: expected rx, ry, rz (each once), got {' '.join(tok[1:])[:80]!r}",
+                        n,
+                    )
                 bone.dof = dof
         elif section == ":hierarchy":
             if key == "begin":
@@ -331,8 +358,7 @@ def load_amc(path: str | Path, skeleton: str | Path, max_frames: int | None = No
         p = skel.parents[i]
         if p > 0 and skel.bones[p].name not in CHILDREN_AT_START:
             offsets[i] = skel.bones[p].direction * skel.bones[p].length
-    end_sites = {i: b.direction * b.length for i, b in enumerate(skel.bones)
-                 if i > 0 and i not in skel.parents}  # fmt: skip
+    end_sites = {i: b.direction * b.length for i, b in enumerate(skel.bones) if i > 0 and i not in skel.parents}
     positions = np.repeat(offsets[None], f, axis=0)
     local = np.empty((f, j, 4))
     col = 0
@@ -357,6 +383,16 @@ def load_amc(path: str | Path, skeleton: str | Path, max_frames: int | None = No
     names = tuple(CGSPEED_NAMES.get(b.name, b.name) for b in skel.bones)
     rot_channels = tuple(f"{a.upper()}rotation" for a in _ROT_ORDER)
     channels = (("Xposition", "Yposition", "Zposition", *rot_channels),) + (rot_channels,) * (j - 1)
-    return RawBVH(names=names, parents=tuple(skel.parents), offsets=offsets, end_sites=end_sites,
-                  channels=channels, rot_order=order, positions=positions, rotations_deg=euler,
-                  frame_time=1.0 / fps, path=path, file_frames=total)  # fmt: skip
+    return RawBVH(
+        names=names,
+        parents=tuple(skel.parents),
+        offsets=offsets,
+        end_sites=end_sites,
+        channels=channels,
+        rot_order=order,
+        positions=positions,
+        rotations_deg=euler,
+        frame_time=1.0 / fps,
+        path=path,
+        file_frames=total,
+    )

@@ -46,6 +46,7 @@ _UNIT = np.eye(3)
 
 #: Largest accepted absolute OFFSET component, in the file's units (cm, m, inches...).
 
+
 @dataclass(frozen=True)
 class RawBVH:
     """The contents of a BVH file on its own rig, validated.

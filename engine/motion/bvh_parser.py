@@ -109,8 +109,9 @@ def _unplain_row(path: str, parts: list[str], line: str, number: int) -> BVHErro
     return BVHError(path, f"non-ASCII character U+{ord(odd):04X} between the numbers of a motion row", number)
 
 
-def _motion_data(path: str, lines: _Lines, columns: int, frames: int, frames_line: int,
-                 keep: int, room: int) -> np.ndarray:  # fmt: skip
+def _motion_data(
+    path: str, lines: _Lines, columns: int, frames: int, frames_line: int, keep: int, room: int
+) -> np.ndarray:
     """Parse the data rows, CHUNK at a time; every row is checked, the first ``keep`` kept.
 
     ``room`` bounds the rows the rest of the file can hold (each value takes at least
@@ -129,11 +130,15 @@ def _motion_data(path: str, lines: _Lines, columns: int, frames: int, frames_lin
             if not line.isascii() or "_" in line:  # isascii() is O(1) on a str
                 raise _unplain_row(path, parts, line, lines.count)
             if len(parts) != columns:
-                raise BVHError(path, f"wrong number of values on frame {done + len(rows) + 1}: expected {columns}, "
-                                     f"got {len(parts)}", lines.count)  # fmt: skip
+                raise BVHError(
+                    path,
+                    f"wrong number of values on frame {done + len(rows) + 1}: expected {columns}, got {len(parts)}",
+                    lines.count,
+                )
             if done + len(rows) >= frames:
-                raise BVHError(path, f"more data rows than the header's Frames: {frames} (line {frames_line})",
-                               lines.count)  # fmt: skip
+                raise BVHError(
+                    path, f"more data rows than the header's Frames: {frames} (line {frames_line})", lines.count
+                )
             rows.append(parts)
             numbers.append(lines.count)
         if rows and (len(rows) == CHUNK or line is None):
@@ -145,8 +150,9 @@ def _motion_data(path: str, lines: _Lines, columns: int, frames: int, frames_lin
         if line is None:
             break
     if done < frames:
-        raise BVHError(path, f"header says Frames: {frames} but only {done} data rows follow (file truncated?)",
-                       frames_line)  # fmt: skip
+        raise BVHError(
+            path, f"header says Frames: {frames} but only {done} data rows follow (file truncated?)", frames_line
+        )
     return out
 
 
@@ -212,5 +218,4 @@ def parse_bvh_lines(path: str, lines: Iterable[str], keep: int | None = None, si
     columns = sum(len(c) for c in hier.channels)
     room = frames if size is None else size // (2 * columns) + 1
     data = _motion_data(path, src, columns, frames, frames_line, frames if keep is None else keep, room)
-    return ParsedBVH(hier.names, hier.parents, hier.offsets, hier.channels, hier.end_sites, frame_time, data,
-                     frames)  # fmt: skip
+    return ParsedBVH(hier.names, hier.parents, hier.offsets, hier.channels, hier.end_sites, frame_time, data, frames)

@@ -63,8 +63,13 @@ class GltfContents:
     tracking: Any = None
 
 
-def save_motion(path: str | Path, motion: Motion, on_rig: tuple[Any, Any] | None = None, fps: float | None = None,
-                contents: GltfContents | None = None) -> None:  # fmt: skip
+def save_motion(
+    path: str | Path,
+    motion: Motion,
+    on_rig: tuple[Any, Any] | None = None,
+    fps: float | None = None,
+    contents: GltfContents | None = None,
+) -> None:
     """Write ``motion`` to ``path`` atomically in the format of its extension: on the
     canonical skeleton, or with ``on_rig = (raw, report)`` onto the hierarchy of the
     source file it was retargeted from, at ``fps`` (default: the source's).
@@ -79,8 +84,10 @@ def save_motion(path: str | Path, motion: Motion, on_rig: tuple[Any, Any] | None
     contents = contents or GltfContents()
     if fmt == ".bvh":
         if contents.ghosts or contents.tracking is not None or not contents.mesh:
-            raise UserError(f"{path}: a BVH file holds one skeleton; comparison characters, tracker nodes and "
-                            "the mesh option apply to .glb / .gltf files")  # fmt: skip
+            raise UserError(
+                f"{path}: a BVH file holds one skeleton; comparison characters, tracker nodes and "
+                "the mesh option apply to .glb / .gltf files"
+            )
         if on_rig is None:
             from engine.motion.bvh import save_motion_bvh
 

@@ -154,8 +154,9 @@ class _Builder:
         return len(self.gltf.accessors) - 1
 
     def material(self, name: str, colour: tuple[float, ...]) -> int:
-        pbr = G.PbrMetallicRoughness(baseColorFactor=[float(c) for c in colour], metallicFactor=0.0,
-                                     roughnessFactor=0.7)  # fmt: skip
+        pbr = G.PbrMetallicRoughness(
+            baseColorFactor=[float(c) for c in colour], metallicFactor=0.0, roughnessFactor=0.7
+        )
         self.gltf.materials.append(G.Material(name=name, pbrMetallicRoughness=pbr))
         return len(self.gltf.materials) - 1
 
@@ -190,8 +191,11 @@ class _Animation:
         inp = self.time_accessor(len(values), fps)
         out = self.b.accessor(np.ascontiguousarray(values, dtype=np.float32), kind)
         self.anim.samplers.append(G.AnimationSampler(input=inp, output=out, interpolation="LINEAR"))
-        self.anim.channels.append(G.AnimationChannel(sampler=len(self.anim.samplers) - 1,
-                                                     target=G.AnimationChannelTarget(node=node, path=path)))  # fmt: skip
+        self.anim.channels.append(
+            G.AnimationChannel(
+                sampler=len(self.anim.samplers) - 1, target=G.AnimationChannelTarget(node=node, path=path)
+            )
+        )
 
 
 def _add_character(b: _Builder, anim: _Animation, ch: Character, mesh: bool) -> list[int]:
@@ -219,8 +223,14 @@ def _add_character(b: _Builder, anim: _Animation, ch: Character, mesh: bool) -> 
     ibm[:, :3, 3] = -world  # the rest pose turns no joint: its bind matrices are translations
     # glTF matrices are column-major: write each transposed
     ibm_acc = b.accessor(np.ascontiguousarray(ibm.transpose(0, 2, 1)), "MAT4")
-    b.gltf.skins.append(G.Skin(name=f"{ch.name or 'character'} skin", joints=list(range(first, first + nj)),
-                               inverseBindMatrices=ibm_acc, skeleton=roots[0]))  # fmt: skip
+    b.gltf.skins.append(
+        G.Skin(
+            name=f"{ch.name or 'character'} skin",
+            joints=list(range(first, first + nj)),
+            inverseBindMatrices=ibm_acc,
+            skeleton=roots[0],
+        )
+    )
     if mesh:
         ends = {j: _to_y_up(off) for j, off in ch.ends.items()}
         body = skinned_mannequin(bones_of(world, ch.parents, ends, ch.radius), ch.parents)
@@ -231,13 +241,19 @@ def _add_character(b: _Builder, anim: _Animation, ch: Character, mesh: bool) -> 
 
 
 def _mesh(b: _Builder, name: str, body: SkinnedMesh, material: int, skinned: bool) -> int:
-    attrs = G.Attributes(POSITION=b.accessor(body.positions, "VEC3", G.ARRAY_BUFFER, bounds=True),
-                         NORMAL=b.accessor(body.normals, "VEC3", G.ARRAY_BUFFER))  # fmt: skip
+    attrs = G.Attributes(
+        POSITION=b.accessor(body.positions, "VEC3", G.ARRAY_BUFFER, bounds=True),
+        NORMAL=b.accessor(body.normals, "VEC3", G.ARRAY_BUFFER),
+    )
     if skinned:
         attrs.JOINTS_0 = b.accessor(body.joints, "VEC4", G.ARRAY_BUFFER)
         attrs.WEIGHTS_0 = b.accessor(body.weights, "VEC4", G.ARRAY_BUFFER)
-    prim = G.Primitive(attributes=attrs, indices=b.accessor(body.indices, "SCALAR", G.ELEMENT_ARRAY_BUFFER),
-                       material=material, mode=G.TRIANGLES)  # fmt: skip
+    prim = G.Primitive(
+        attributes=attrs,
+        indices=b.accessor(body.indices, "SCALAR", G.ELEMENT_ARRAY_BUFFER),
+        material=material,
+        mode=G.TRIANGLES,
+    )
     b.gltf.meshes.append(G.Mesh(name=name, primitives=[prim]))
     return len(b.gltf.meshes) - 1
 
@@ -258,8 +274,13 @@ def _box() -> SkinnedMesh:
             nrm += [n] * 4
             idx += [k, k + 1, k + 2, k, k + 2, k + 3] if sign > 0 else [k, k + 2, k + 1, k, k + 3, k + 2]
     none = np.zeros((len(pos), 4))
-    return SkinnedMesh(np.array(pos, np.float32) * TRACKER_SIZE, np.array(nrm, np.float32), none.astype(np.uint16),
-                       none.astype(np.float32), np.array(idx, np.uint32))  # fmt: skip
+    return SkinnedMesh(
+        np.array(pos, np.float32) * TRACKER_SIZE,
+        np.array(nrm, np.float32),
+        none.astype(np.uint16),
+        none.astype(np.float32),
+        np.array(idx, np.uint32),
+    )
 
 
 def _add_trackers(b: _Builder, anim: _Animation, t: TrackerNodes) -> list[int]:
@@ -279,8 +300,9 @@ def _add_trackers(b: _Builder, anim: _Animation, t: TrackerNodes) -> list[int]:
     return nodes
 
 
-def build_gltf(characters: list[Character], trackers: TrackerNodes | None = None, mesh: bool = True,
-               name: str = "motion") -> G.GLTF2:  # fmt: skip
+def build_gltf(
+    characters: list[Character], trackers: TrackerNodes | None = None, mesh: bool = True, name: str = "motion"
+) -> G.GLTF2:
     """The glTF document of ``characters`` (the first is the main one) and ``trackers``."""
     b = _Builder()
     anim = _Animation(b)
@@ -297,8 +319,13 @@ def build_gltf(characters: list[Character], trackers: TrackerNodes | None = None
     return b.finish()
 
 
-def save_gltf(path: str | Path, characters: list[Character], trackers: TrackerNodes | None = None,
-              mesh: bool = True, name: str = "motion") -> None:  # fmt: skip
+def save_gltf(
+    path: str | Path,
+    characters: list[Character],
+    trackers: TrackerNodes | None = None,
+    mesh: bool = True,
+    name: str = "motion",
+) -> None:
     """Write ``characters`` (and ``trackers``) to ``path`` atomically: binary glTF for a
     ``.glb`` name, JSON with the buffer embedded for any other (``.gltf``; the extensions
     are checked by :func:`engine.motion.formats.motion_format`); module docs.

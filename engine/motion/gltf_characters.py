@@ -45,15 +45,22 @@ def character_of(motion: Motion, name: str = "", colour: RGBA = MAIN_COLOUR) -> 
     trans[:, 0] = motion.root_pos
     scale = motion.skeleton.scale
     return Character(
-        name=name, joints=tuple(sk.JOINT_NAMES), parents=tuple(sk.PARENTS), rest=offsets, translations=trans,
-        rotations=Q.normalize(motion.local_rot), fps=float(motion.fps),
+        name=name,
+        joints=tuple(sk.JOINT_NAMES),
+        parents=tuple(sk.PARENTS),
+        rest=offsets,
+        translations=trans,
+        rotations=Q.normalize(motion.local_rot),
+        fps=float(motion.fps),
         ends={sk.JOINT_INDEX[n]: off * scale * END_SHARE[n] for n, off in sk.END_SITES.items()},
-        radius=_radii(sk.JOINT_INDEX, scale), colour=colour,
-    )  # fmt: skip
+        radius=_radii(sk.JOINT_INDEX, scale),
+        colour=colour,
+    )
 
 
-def character_on_source_rig(motion: Motion, raw: RawBVH, report: Any, fps: float | None = None, name: str = "",
-                            colour: RGBA = MAIN_COLOUR) -> Character:  # fmt: skip
+def character_on_source_rig(
+    motion: Motion, raw: RawBVH, report: Any, fps: float | None = None, name: str = "", colour: RGBA = MAIN_COLOUR
+) -> Character:
     """``motion`` written onto ``raw``'s hierarchy, exactly as
     :func:`engine.motion.write_back.save_on_source_rig` writes its BVH (same joints,
     names, OFFSETs, rotations, position channels, frame rate ``fps`` or the source's),
@@ -74,12 +81,17 @@ def character_on_source_rig(motion: Motion, raw: RawBVH, report: Any, fps: float
     index = {n: j for j, n in enumerate(raw.names)}
     named = {c: index[s] for c, s in prof.joints.items() if s in index}
     return Character(
-        name=name, joints=tuple(raw.names), parents=tuple(raw.parents), rest=raw.offsets @ basis.T * unit,
+        name=name,
+        joints=tuple(raw.names),
+        parents=tuple(raw.parents),
+        rest=raw.offsets @ basis.T * unit,
         translations=_local_offsets(raw, positions) @ basis.T * unit,
-        rotations=Q.normalize(Q.mul(Q.mul(b, local), Q.conjugate(b))), fps=fps,
+        rotations=Q.normalize(Q.mul(Q.mul(b, local), Q.conjugate(b))),
+        fps=fps,
         ends={j: off @ basis.T * unit for j, off in raw.end_sites.items()},
-        radius=_radii(named, motion.skeleton.scale), colour=colour,
-    )  # fmt: skip
+        radius=_radii(named, motion.skeleton.scale),
+        colour=colour,
+    )
 
 
 def trackers_of(tracking: Any, floor_shift: float = 0.0) -> TrackerNodes:
@@ -88,6 +100,11 @@ def trackers_of(tracking: Any, floor_shift: float = 0.0) -> TrackerNodes:
     ``floor_shift`` (metres) is the retargeting's re-flooring, taken off again when the
     character is written on its source rig, so that the boxes stay on its body."""
     pos = np.asarray(tracking.positions, float) - np.array([0.0, 0.0, floor_shift])
-    return TrackerNodes(names=tuple(tracking.joints), positions=pos, rotations=np.asarray(tracking.rotations, float),
-                        connected=np.asarray(tracking.connected, bool), fps=float(tracking.fps),
-                        position_only=tuple(d == 3 for d in tracking.dof))  # fmt: skip
+    return TrackerNodes(
+        names=tuple(tracking.joints),
+        positions=pos,
+        rotations=np.asarray(tracking.rotations, float),
+        connected=np.asarray(tracking.connected, bool),
+        fps=float(tracking.fps),
+        position_only=tuple(d == 3 for d in tracking.dof),
+    )

@@ -21,12 +21,23 @@ from engine.kinematics import quaternion as Q
 
 #: Child whose offset gives each joint's bone direction (leaf joints use their end site).
 BONE_CHILD: dict[str, str] = {
-    "lhip": "lknee", "lknee": "lankle", "lankle": "ltoe",
-    "rhip": "rknee", "rknee": "rankle", "rankle": "rtoe",
-    "lowerback": "upperback", "upperback": "chest", "chest": "lowerneck", "lowerneck": "upperneck",
-    "lclavicle": "lshoulder", "lshoulder": "lelbow", "lelbow": "lwrist",
-    "rclavicle": "rshoulder", "rshoulder": "relbow", "relbow": "rwrist",
-}  # fmt: skip
+    "lhip": "lknee",
+    "lknee": "lankle",
+    "lankle": "ltoe",
+    "rhip": "rknee",
+    "rknee": "rankle",
+    "rankle": "rtoe",
+    "lowerback": "upperback",
+    "upperback": "chest",
+    "chest": "lowerneck",
+    "lowerneck": "upperneck",
+    "lclavicle": "lshoulder",
+    "lshoulder": "lelbow",
+    "lelbow": "lwrist",
+    "rclavicle": "rshoulder",
+    "rshoulder": "relbow",
+    "relbow": "rwrist",
+}
 
 
 def bone_axis(offsets: np.ndarray, joint: str) -> np.ndarray:

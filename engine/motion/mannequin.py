@@ -19,13 +19,28 @@ import numpy as np
 
 #: Capsule radius per bone, metres, keyed by the bone's child joint (SMPL-like build).
 BONE_RADIUS: dict[str, float] = {
-    "lhip": 0.075, "rhip": 0.075, "lknee": 0.065, "rknee": 0.065,
-    "lankle": 0.048, "rankle": 0.048, "ltoe": 0.035, "rtoe": 0.035,
-    "lowerback": 0.12, "upperback": 0.12, "chest": 0.13, "lowerneck": 0.055,
-    "upperneck": 0.095, "lclavicle": 0.05, "rclavicle": 0.05,
-    "lshoulder": 0.05, "rshoulder": 0.05, "lelbow": 0.042, "relbow": 0.042,
-    "lwrist": 0.04, "rwrist": 0.04,
-}  # fmt: skip
+    "lhip": 0.075,
+    "rhip": 0.075,
+    "lknee": 0.065,
+    "rknee": 0.065,
+    "lankle": 0.048,
+    "rankle": 0.048,
+    "ltoe": 0.035,
+    "rtoe": 0.035,
+    "lowerback": 0.12,
+    "upperback": 0.12,
+    "chest": 0.13,
+    "lowerneck": 0.055,
+    "upperneck": 0.095,
+    "lclavicle": 0.05,
+    "rclavicle": 0.05,
+    "lshoulder": 0.05,
+    "rshoulder": 0.05,
+    "lelbow": 0.042,
+    "relbow": 0.042,
+    "lwrist": 0.04,
+    "rwrist": 0.04,
+}
 
 #: Radius of the end-site capsules (head top, hands, toes), by the joint that owns them.
 END_RADIUS: dict[str, float] = {"upperneck": 0.085, "lwrist": 0.038, "rwrist": 0.038, "ltoe": 0.03, "rtoe": 0.03}
@@ -121,8 +136,9 @@ def _smooth(x: np.ndarray) -> np.ndarray:
     return x * x * (3.0 - 2.0 * x)
 
 
-def bones_of(rest: np.ndarray, parents: tuple[int, ...], ends: dict[int, np.ndarray],
-             radius: dict[int, float]) -> list[Bone]:  # fmt: skip
+def bones_of(
+    rest: np.ndarray, parents: tuple[int, ...], ends: dict[int, np.ndarray], radius: dict[int, float]
+) -> list[Bone]:
     """Capsules of a skeleton in its rest pose.
 
     Parameters

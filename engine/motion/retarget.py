@@ -137,8 +137,9 @@ def _basis_change(up: str, forward: str) -> np.ndarray:
     return src.T  # orthonormal: inverse = transpose
 
 
-def _points(raw_pos: np.ndarray, raw: RawBVH, prof: RigProfile, world_rot: np.ndarray,
-            end_sites: dict) -> dict[str, np.ndarray]:  # fmt: skip
+def _points(
+    raw_pos: np.ndarray, raw: RawBVH, prof: RigProfile, world_rot: np.ndarray, end_sites: dict
+) -> dict[str, np.ndarray]:
     """Named source points (F, 3): mapped canonical joints and landmarks (``end_sites``:
     the source's end-site offsets by joint index)."""
     idx = {n: i for i, n in enumerate(raw.names)}
@@ -149,7 +150,9 @@ def _points(raw_pos: np.ndarray, raw: RawBVH, prof: RigProfile, world_rot: np.nd
             end = end_sites.get(j) if j is not None else None
             if end is None:
                 raise UserError(f"{raw.path}: rig {prof.name}: joint {spec[4:]} has no end site")
-            pts[lm] = raw_pos[:, j] + Q.rotate(world_rot[:, j], np.broadcast_to(end * prof.units_to_m, raw_pos[:, j].shape))
+            pts[lm] = raw_pos[:, j] + Q.rotate(
+                world_rot[:, j], np.broadcast_to(end * prof.units_to_m, raw_pos[:, j].shape)
+            )
         elif spec in idx:
             pts[lm] = raw_pos[:, idx[spec]]
         else:
@@ -221,9 +224,13 @@ def _resample(local_rot: np.ndarray, root: np.ndarray, fps: float, target: float
     return Q.normalize(rot_out), root_out
 
 
-def retarget(raw: RawBVH, fps: float | None = None, profile: RigProfile | None = None,
-             rig_map: str | Path | None = None, strategy: RetargetStrategy | None = None,
-             ) -> tuple[Motion, RetargetReport]:  # fmt: skip
+def retarget(
+    raw: RawBVH,
+    fps: float | None = None,
+    profile: RigProfile | None = None,
+    rig_map: str | Path | None = None,
+    strategy: RetargetStrategy | None = None,
+) -> tuple[Motion, RetargetReport]:
     """Canonical :class:`Motion` (60 fps, Z-up metres, floor at 0) from a parsed BVH.
 
     Parameters
@@ -255,8 +262,12 @@ def retarget(raw: RawBVH, fps: float | None = None, profile: RigProfile | None =
     if prof.root_channels_relative_to_offset:
         pos[:, 0] += raw.offsets[0]
     _check_root(raw.path, pos[:, 0], prof.units_to_m)
-    offsets, ends = straightened_offsets(raw, prof, elbows=prof.straight_elbows and strategy.straight_elbows,
-                                         knees=prof.straight_knees and strategy.straight_knees)  # fmt: skip
+    offsets, ends = straightened_offsets(
+        raw,
+        prof,
+        elbows=prof.straight_elbows and strategy.straight_elbows,
+        knees=prof.straight_knees and strategy.straight_knees,
+    )
     moving = [k for k, c in enumerate(raw.channels) if k > 0 and len(c) == 6]
     if moving:  # position channels below the root (a 6-channel Hips under a static ROOT) move their joint
         offsets = np.repeat(offsets[None], len(pos), axis=0)
@@ -271,8 +282,9 @@ def retarget(raw: RawBVH, fps: float | None = None, profile: RigProfile | None =
     idx = {n: i for i, n in enumerate(raw.names)}
     pts = _points(wpos, raw, prof, wrot, ends)
     RF.add_derived(pts)
-    leg = sum(float(np.median(np.linalg.norm(pts[b] - pts[a], axis=-1)))
-              for a, b in (("lhip", "lknee"), ("lknee", "lankle")))  # fmt: skip
+    leg = sum(
+        float(np.median(np.linalg.norm(pts[b] - pts[a], axis=-1))) for a, b in (("lhip", "lknee"), ("lknee", "lankle"))
+    )
     leg_scale = leg / float(np.linalg.norm(sk.REST_OFFSETS[_LEG], axis=-1).sum())
     _check_height(raw.path, leg_scale)
 
@@ -290,9 +302,25 @@ def retarget(raw: RawBVH, fps: float | None = None, profile: RigProfile | None =
     local, root = _resample(local, root, src_fps)
     motion = Motion(local, root, skel, sk.FPS, Path(raw.path).stem)
     shift = _refloor(motion)
-    report = RetargetReport(prof.name, len(raw.names), raw.total_frames, src_fps, skel.scale, prof, align, basis,
-                            shift, skip, src_height, clip_height(motion, tips), tips, canonical, strategy,
-                            body_joints, rules)  # fmt: skip
+    report = RetargetReport(
+        prof.name,
+        len(raw.names),
+        raw.total_frames,
+        src_fps,
+        skel.scale,
+        prof,
+        align,
+        basis,
+        shift,
+        skip,
+        src_height,
+        clip_height(motion, tips),
+        tips,
+        canonical,
+        strategy,
+        body_joints,
+        rules,
+    )
     return motion, report
 
 
@@ -353,9 +381,14 @@ def _refloor(motion: Motion) -> float:
     return shift
 
 
-def load_motion(path: str | Path, fps: float | None = None, rig_map: str | Path | None = None,
-                max_frames: int | None = None, strategy: RetargetStrategy | None = None,
-                asf: str | Path | None = None) -> Motion:  # fmt: skip
+def load_motion(
+    path: str | Path,
+    fps: float | None = None,
+    rig_map: str | Path | None = None,
+    max_frames: int | None = None,
+    strategy: RetargetStrategy | None = None,
+    asf: str | Path | None = None,
+) -> Motion:
     """Load any humanoid BVH, or AMC with its ASF skeleton (``asf``, else found beside it;
     :mod:`engine.motion.source_file`), as a canonical motion (see module docs).
 
@@ -377,9 +410,14 @@ def source_frames_needed(max_frames: int | None) -> int | None:
     return max(ALIGN_FRAMES, math.ceil(max_frames * MAX_SOURCE_FPS / sk.FPS) + 64)
 
 
-def load_with_report(path: str | Path, fps: float | None = None, rig_map: str | Path | None = None,
-                     max_frames: int | None = None, strategy: RetargetStrategy | None = None,
-                     asf: str | Path | None = None) -> tuple[Motion, RetargetReport]:  # fmt: skip
+def load_with_report(
+    path: str | Path,
+    fps: float | None = None,
+    rig_map: str | Path | None = None,
+    max_frames: int | None = None,
+    strategy: RetargetStrategy | None = None,
+    asf: str | Path | None = None,
+) -> tuple[Motion, RetargetReport]:
     """:func:`load_motion` plus the :class:`RetargetReport`. With ``max_frames``, only the
     source frames those canonical frames need are kept (at least :data:`ALIGN_FRAMES`,
     which the rest-pose alignment averages over); every row is still checked, and the

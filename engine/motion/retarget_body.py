@@ -51,7 +51,9 @@ FADE_DEG = 30.0
 THUMB_PALM_DEG = 75.0
 #: Canonical joints whose rotation the body rules define.
 BODY_JOINTS = tuple(f"{s}{j}" for s in "lr" for j in ("hip", "knee", "ankle", "toe", "shoulder", "elbow", "wrist")) + (
-    "lowerneck", "upperneck")  # fmt: skip
+    "lowerneck",
+    "upperneck",
+)
 #: The documented rules for rigs without the defining points: (rule name, the points
 #: that stand in (:func:`engine.motion.retarget_rotations.rule_points`), the joints they define).
 RULES = (
@@ -110,8 +112,9 @@ def rule_joints(points: dict) -> dict[str, str]:
     return {j: name for name, need, joints in RULES if all(k in points for k in need) for j in joints}
 
 
-def body_frames(pts: dict[str, np.ndarray], arm_straight: dict[str, np.ndarray] | None = None,
-                canonical: bool = False) -> dict[str, np.ndarray]:  # fmt: skip
+def body_frames(
+    pts: dict[str, np.ndarray], arm_straight: dict[str, np.ndarray] | None = None, canonical: bool = False
+) -> dict[str, np.ndarray]:
     """World bone frames ``(F, 4)`` of the :data:`BODY_JOINTS` the points define.
 
     Parameters
@@ -132,10 +135,18 @@ def body_frames(pts: dict[str, np.ndarray], arm_straight: dict[str, np.ndarray] 
         hip, knee, ankle, toe = (f"{s}{j}" for j in ("hip", "knee", "ankle", "toe"))
         foot_end = _first(pts, (toe, f"{s}_toe_tip"))
         for a, b, c, straight in (
-            (hip, knee, ankle, None if foot_end is None or ankle not in pts
-             else np.cross(pts[foot_end] - pts[ankle], pts[knee] - pts[hip]) if hip in pts and knee in pts else None),
+            (
+                hip,
+                knee,
+                ankle,
+                None
+                if foot_end is None or ankle not in pts
+                else np.cross(pts[foot_end] - pts[ankle], pts[knee] - pts[hip])
+                if hip in pts and knee in pts
+                else None,
+            ),
             (f"{s}shoulder", f"{s}elbow", f"{s}wrist", arm_straight.get(f"{s}shoulder")),
-        ):  # fmt: skip
+        ):
             if canonical:
                 for j, child in ((a, b), (b, c)):
                     if j in pts and child in pts:
@@ -187,11 +198,14 @@ def canonical_body_frames(offsets: np.ndarray = sk.REST_OFFSETS, sole: bool = Fa
     return {j: q[0] for j, q in body_frames(pts, canonical=True).items()}
 
 
-def body_rotations(pts: dict[str, np.ndarray], arm_straight: dict[str, np.ndarray] | None = None,
-                   sole_toe_tips: bool = False) -> dict[str, np.ndarray]:  # fmt: skip
+def body_rotations(
+    pts: dict[str, np.ndarray], arm_straight: dict[str, np.ndarray] | None = None, sole_toe_tips: bool = False
+) -> dict[str, np.ndarray]:
     """Canonical world rotations ``G = B(t) B0^-1`` ``(F, 4)`` of the joints the body defines.
 
     With ``sole_toe_tips`` (a :class:`~engine.motion.retarget_strategy.RetargetStrategy`
     choice) the rest frames ``B0`` take the toe tips on the sole's line (:func:`sole_tip`)."""
     canon = canonical_body_frames(sole=sole_toe_tips)
-    return {j: Q.mul(b, np.broadcast_to(Q.conjugate(canon[j]), b.shape)) for j, b in body_frames(pts, arm_straight).items()}
+    return {
+        j: Q.mul(b, np.broadcast_to(Q.conjugate(canon[j]), b.shape)) for j, b in body_frames(pts, arm_straight).items()
+    }

@@ -31,8 +31,10 @@ def models_strategy(path: Path = MODELS_DATA) -> RetargetStrategy:
         return CURRENT
     version = read_toml(path, "model data card").get("retarget_version", CURRENT.version)
     if version not in STRATEGIES:
-        raise UserError(f"{path}: retarget_version must be one of {', '.join(map(str, STRATEGIES))} "
-                        f"(the definitions this program produces), got {shown(version)}")  # fmt: skip
+        raise UserError(
+            f"{path}: retarget_version must be one of {', '.join(map(str, STRATEGIES))} "
+            f"(the definitions this program produces), got {shown(version)}"
+        )
     return STRATEGIES[version]
 
 

@@ -30,7 +30,9 @@ def rigid_hands(raw: RawBVH, prof: RigProfile) -> set[str]:
     for s in ("l", "r"):
         wrist = prof.joints.get(f"{s}wrist")
         knuckles = [prof.landmarks.get(f"{s}_{f}", "") for f in ("index", "pinky")]
-        if wrist and all(k in raw.names and raw.parents[raw.names.index(k)] == raw.names.index(wrist) for k in knuckles):
+        if wrist and all(
+            k in raw.names and raw.parents[raw.names.index(k)] == raw.names.index(wrist) for k in knuckles
+        ):
             out.add(s)
     return out
 
@@ -46,8 +48,9 @@ def _chain_tip(raw: RawBVH, j: int, wpos: np.ndarray, wrot: np.ndarray, ends: di
     return tip
 
 
-def tip_points(raw: RawBVH, prof: RigProfile, wpos: np.ndarray, wrot: np.ndarray, ends: dict,
-               hands: set[str]) -> dict[str, np.ndarray]:  # fmt: skip
+def tip_points(
+    raw: RawBVH, prof: RigProfile, wpos: np.ndarray, wrot: np.ndarray, ends: dict, hands: set[str]
+) -> dict[str, np.ndarray]:
     """World points ``(F, 3)`` (canonical axes, metres) the rules for rigs without knuckles
     or eyes need: the thumb's tip ``{s}_thumb_tip`` on the sides whose knuckles are not
     rigid with the hand (not in ``hands``), and the head's top ``head_top``.
@@ -68,8 +71,11 @@ def tip_points(raw: RawBVH, prof: RigProfile, wpos: np.ndarray, wrot: np.ndarray
                 below.add(j)
                 depth[j] = depth[raw.parents[j]] + 1
         named = prof.landmarks.get(f"{s}_thumb")
-        cands = [raw.names.index(named)] if named in raw.names else sorted(
-            (j for j in below if "thumb" in raw.names[j].lower()), key=lambda j: depth[j])  # fmt: skip
+        cands = (
+            [raw.names.index(named)]
+            if named in raw.names
+            else sorted((j for j in below if "thumb" in raw.names[j].lower()), key=lambda j: depth[j])
+        )
         if cands:
             out[f"{s}_thumb_tip"] = _chain_tip(raw, cands[0], wpos, wrot, ends, prof.units_to_m)
     head = prof.joints.get("upperneck")
@@ -113,8 +119,11 @@ def rule_points(pts: dict, aligned: dict, wrot, idx, prof: RigProfile, hands: se
     torso = next((j for j in ("chest", "upperback", "lowerback", "root") if j in aligned), None)
     if "l_eye" not in pts and "r_eye" not in pts and "upperneck" in pts and torso:
         shape = pts["upperneck"].shape
-        up = pts["head_top"] - pts["upperneck"] if "head_top" in pts else (
-            Q.rotate(aligned["upperneck"], np.broadcast_to(sk.END_SITES["upperneck"], shape)))  # fmt: skip
+        up = (
+            pts["head_top"] - pts["upperneck"]
+            if "head_top" in pts
+            else (Q.rotate(aligned["upperneck"], np.broadcast_to(sk.END_SITES["upperneck"], shape)))
+        )
         left = Q.rotate(aligned[torso], np.broadcast_to([1.0, 0.0, 0.0], shape))
         rest, _ = RF.frame(sk.END_SITES["upperneck"], np.array([1.0, 0.0, 0.0]))
         head = Q.mul(RF.frame(up, left)[0], np.broadcast_to(Q.conjugate(rest), shape[:-1] + (4,)))
@@ -131,8 +140,15 @@ def _untwisted(q: np.ndarray, axis: np.ndarray) -> np.ndarray:
     return Q.normalize(Q.mul(q, Q.conjugate(twist)))
 
 
-def world_rotations(prof: RigProfile, pts, wrot, idx, cq, strategy: RetargetStrategy, hands: set[str],
-                     ) -> tuple[np.ndarray, list, list, dict]:  # fmt: skip
+def world_rotations(
+    prof: RigProfile,
+    pts,
+    wrot,
+    idx,
+    cq,
+    strategy: RetargetStrategy,
+    hands: set[str],
+) -> tuple[np.ndarray, list, list, dict]:
     """Canonical world rotations (F, 22, 4), the per-joint constant alignment ``R`` with
     ``G_c ~ G_s R`` (None for joints the rig lacks), the joints whose rotation the body
     defines (:mod:`engine.motion.retarget_body`, with the strategy's ``body_twist``) and,
@@ -157,15 +173,21 @@ def world_rotations(prof: RigProfile, pts, wrot, idx, cq, strategy: RetargetStra
     body: dict[str, np.ndarray] = {}
     body_twist = prof.align and strategy.body_twist
     if body_twist:
-        straight: dict[str, np.ndarray] = {j: Q.rotate(Q.mul(aligned[j], np.broadcast_to(_BODY_FRAMES[j], aligned[j].shape)),
-                                np.broadcast_to([0.0, 1.0, 0.0], (n, 3)))
-                    for j in ("lshoulder", "rshoulder") if j in aligned}  # fmt: skip
+        straight: dict[str, np.ndarray] = {
+            j: Q.rotate(
+                Q.mul(aligned[j], np.broadcast_to(_BODY_FRAMES[j], aligned[j].shape)),
+                np.broadcast_to([0.0, 1.0, 0.0], (n, 3)),
+            )
+            for j in ("lshoulder", "rshoulder")
+            if j in aligned
+        }
         loose = {f"{s}_{k}" for s in "lr" if s not in hands for k in ("index", "pinky", "hand_mid")}
         body_pts = {k: v for k, v in pts.items() if k not in loose}
         extra = rule_points(pts, aligned, wrot, idx, prof, hands)
         body_pts.update(extra)
-        body = {j: q for j, q in RB.body_rotations(body_pts, straight, strategy.sole_toe_tips).items()
-                if j in prof.joints}  # fmt: skip
+        body = {
+            j: q for j, q in RB.body_rotations(body_pts, straight, strategy.sole_toe_tips).items() if j in prof.joints
+        }
         rules = {j: r for j, r in RB.rule_joints(extra).items() if j in body}
     else:
         rules = {}
@@ -176,8 +198,10 @@ def world_rotations(prof: RigProfile, pts, wrot, idx, cq, strategy: RetargetStra
             glob[:, j] = body[name]
             align[j] = RF.mean_rotation(Q.mul(Q.conjugate(g), body[name]), np.ones(n))
         elif body_twist and name in ("lwrist", "rwrist") and name in aligned:
-            body[name] = glob[:, j] = Q.mul(glob[:, sk.PARENTS[j]], _untwisted(
-                Q.mul(Q.conjugate(glob[:, sk.PARENTS[j]]), aligned[name]), sk.END_SITES[name]))  # fmt: skip
+            body[name] = glob[:, j] = Q.mul(
+                glob[:, sk.PARENTS[j]],
+                _untwisted(Q.mul(Q.conjugate(glob[:, sk.PARENTS[j]]), aligned[name]), sk.END_SITES[name]),
+            )
             g = wrot[:, idx[prof.joints[name]]]
             align[j] = RF.mean_rotation(Q.mul(Q.conjugate(g), glob[:, j]), np.ones(n))
             rules[name] = "no twist"
@@ -188,8 +212,12 @@ def world_rotations(prof: RigProfile, pts, wrot, idx, cq, strategy: RetargetStra
     return glob, align, [j for j in RB.BODY_JOINTS if j in body], rules
 
 
-def straightened_offsets(raw: RawBVH, prof: RigProfile, elbows: bool = True, knees: bool = False,
-                         ) -> tuple[np.ndarray, dict]:  # fmt: skip
+def straightened_offsets(
+    raw: RawBVH,
+    prof: RigProfile,
+    elbows: bool = True,
+    knees: bool = False,
+) -> tuple[np.ndarray, dict]:
     """The source's OFFSETs ``(J, 3)`` and end sites with each elbow (``elbows``) and knee
     (``knees``) straight in the zero pose, for a rig whose zero pose stands for a T-pose with
     straight limbs (``straight_elbows``, ``straight_knees``).

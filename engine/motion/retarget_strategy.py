@@ -40,8 +40,7 @@ class RetargetStrategy:
 
 
 #: The definition the shipped models learnt from and every command retargets with.
-CURRENT = RetargetStrategy(version=4, body_twist=True, straight_elbows=True, straight_knees=False,
-                           sole_toe_tips=False)  # fmt: skip
+CURRENT = RetargetStrategy(version=4, body_twist=True, straight_elbows=True, straight_knees=False, sole_toe_tips=False)
 #: Its number: recorded by ``data prepare`` (a change rebuilds prepared data) and ``info``.
 RETARGET_VERSION = CURRENT.version
 #: The strategies the product produces, by version: what a model card may name.

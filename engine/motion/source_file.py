@@ -55,12 +55,16 @@ def find_skeleton(amc: str | Path, asf: str | Path | None = None) -> Path:
     if not beside:
         raise AsfAmcError(amc, "no ASF skeleton beside this AMC motion; give one with --asf SKELETON.asf")
     names = ", ".join(p.name for p in beside[:6])
-    raise AsfAmcError(amc, f"several ASF skeletons beside this AMC motion ({names}) and none whose name starts "
-                           "the AMC's; choose one with --asf SKELETON.asf")  # fmt: skip
+    raise AsfAmcError(
+        amc,
+        f"several ASF skeletons beside this AMC motion ({names}) and none whose name starts "
+        "the AMC's; choose one with --asf SKELETON.asf",
+    )
 
 
-def load_source(path: str | Path, max_frames: int | None = None, asf: str | Path | None = None,
-                fps: float | None = None) -> RawBVH:  # fmt: skip
+def load_source(
+    path: str | Path, max_frames: int | None = None, asf: str | Path | None = None, fps: float | None = None
+) -> RawBVH:
     """Read a motion file on its own rig (see the module docs).
 
     ``max_frames`` keeps only the first frames (every line is still checked); ``asf`` is
@@ -71,8 +75,11 @@ def load_source(path: str | Path, max_frames: int | None = None, asf: str | Path
         rate = fps or manifest_fps(Path(path)) or AMC_DEFAULT_FPS
         return load_amc(path, find_skeleton(path, asf), max_frames, rate)
     if suffix == ".asf":
-        raise BVHError(path, "an ASF file holds a skeleton without motion; open one of its .amc motions "
-                             "(the skeleton is found beside it, or given with --asf)")  # fmt: skip
+        raise BVHError(
+            path,
+            "an ASF file holds a skeleton without motion; open one of its .amc motions "
+            "(the skeleton is found beside it, or given with --asf)",
+        )
     if asf is not None:
         raise UserError(f"--asf applies to .amc motions, not to {Path(path).name}")
     return load_bvh(path, max_frames)

@@ -76,7 +76,7 @@ def source_rig_pose(motion: Motion, raw: RawBVH, report) -> tuple[np.ndarray, np
     n, nj = len(motion), len(raw.names)
     pos_c, glob_c = motion.fk()
     cqi = Q.conjugate(Q.from_matrix(report.basis))
-    src_local = raw.local_quaternions()[report.skip:]
+    src_local = raw.local_quaternions()[report.skip :]
     rest_rot = _mean_local(src_local)
     canon_of = {src: sk.JOINT_INDEX[c] for c, src in prof.joints.items()}
     # every position channel as the source has it at the same time; the one joint that
@@ -136,8 +136,10 @@ def save_on_source_rig(path: str | Path, motion: Motion, raw: RawBVH, report, fp
     for name, chans in zip(raw.names, raw.channels):
         rot = [c for c in chans if c.lower().endswith("rotation")]
         if len(rot) != 3 or len(chans) not in (3, 6):
-            raise UserError(f"{raw.path}: joint {name} has channels {' '.join(chans)}; "
-                            "only 3 rotations or 3 positions + 3 rotations can be written back")  # fmt: skip
+            raise UserError(
+                f"{raw.path}: joint {name} has channels {' '.join(chans)}; "
+                "only 3 rotations or 3 positions + 3 rotations can be written back"
+            )
     from engine.motion.retarget import resample_motion
 
     fps = float(fps or report.source_fps or motion.fps)

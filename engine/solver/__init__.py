@@ -24,12 +24,25 @@ from typing import Any
 #: reading the settings (``engine.solver.settings``, e.g. to build the command line)
 #: does not import torch.
 _WHERE = {
-    "FrameContext": "frame", "LatentDecoder": "frame", "Solution": "frame", "SolveTimings": "frame",
-    "PoseOptimizer": "optimizer", "RootAnchor": "pose", "RootFrame": "pose", "RootOverride": "pose",
-    "world_root": "pose", "FULL_SET": "settings", "MODES": "settings", "OPTIMIZERS": "settings",
-    "PRIORS": "settings", "OptimizerSettings": "settings", "PoseState": "engine.kinematics.pose_state",
-    "LatentPredictor": "temporal", "TemporalSchedule": "temporal", "LatentUpdate": "update",
-}  # fmt: skip
+    "FrameContext": "frame",
+    "LatentDecoder": "frame",
+    "Solution": "frame",
+    "SolveTimings": "frame",
+    "PoseOptimizer": "optimizer",
+    "RootAnchor": "pose",
+    "RootFrame": "pose",
+    "RootOverride": "pose",
+    "world_root": "pose",
+    "FULL_SET": "settings",
+    "MODES": "settings",
+    "OPTIMIZERS": "settings",
+    "PRIORS": "settings",
+    "OptimizerSettings": "settings",
+    "PoseState": "engine.kinematics.pose_state",
+    "LatentPredictor": "temporal",
+    "TemporalSchedule": "temporal",
+    "LatentUpdate": "update",
+}
 
 
 def __getattr__(name: str) -> Any:
@@ -43,7 +56,22 @@ def __getattr__(name: str) -> Any:
 
 
 __all__ = [
-    "FULL_SET", "MODES", "OPTIMIZERS", "PRIORS", "FrameContext", "LatentDecoder", "LatentPredictor", "LatentUpdate",
-    "OptimizerSettings", "PoseOptimizer", "PoseState", "RootAnchor", "RootFrame", "RootOverride", "Solution",
-    "SolveTimings", "TemporalSchedule", "world_root",
-]  # fmt: skip
+    "FULL_SET",
+    "MODES",
+    "OPTIMIZERS",
+    "PRIORS",
+    "FrameContext",
+    "LatentDecoder",
+    "LatentPredictor",
+    "LatentUpdate",
+    "OptimizerSettings",
+    "PoseOptimizer",
+    "PoseState",
+    "RootAnchor",
+    "RootFrame",
+    "RootOverride",
+    "Solution",
+    "SolveTimings",
+    "TemporalSchedule",
+    "world_root",
+]

@@ -82,7 +82,10 @@ class Prefilter:
         # [c, |c|^2] per block: |c - u_q|^2 = [c, |c|^2] . [-2 u_q, 1] + |u_q|^2, one product
         self.blocks = torch.from_numpy(np.column_stack((centres, (centres * centres).sum(1))).astype(np.float32))
         radii = np.maximum.reduceat(spread, starts) * (1.0 + 1e-6)
-        self.radii, self.radii2 = torch.from_numpy(radii.astype(np.float32)), torch.from_numpy((radii * radii).astype(np.float32))
+        self.radii, self.radii2 = (
+            torch.from_numpy(radii.astype(np.float32)),
+            torch.from_numpy((radii * radii).astype(np.float32)),
+        )
         # the rows block by block (B, GROUP, rank + 2); padding rows have a bound no test passes
         pad = np.zeros((-n % GROUP, self.rows.shape[1]), dtype=np.float32)
         pad[:, -1] = 1e30
@@ -98,7 +101,6 @@ class Prefilter:
         rq = np.sqrt(max(qq - float(pq @ pq), 0.0))
         w = torch.from_numpy(np.concatenate((-2.0 * pq, [-2.0 * rq, 1.0])).astype(np.float32))
         return self.rows @ w, qq, MARGIN * (1.0 + self.largest + qq)
-
 
     def query(self, q: np.ndarray) -> tuple[np.ndarray, float]:
         """``(u_q (rank + 1,) float64, |q|^2)`` of the query ``q (D_c,)`` (float32 values)."""
@@ -138,8 +140,15 @@ def distances(table: torch.Tensor, norms: torch.Tensor, q: torch.Tensor, rows: t
     return norms[rows] - 2.0 * (table.index_select(0, rows_p) @ q)[:m]
 
 
-def nearest(table: torch.Tensor, norms: torch.Tensor, q: torch.Tensor, q_cols: np.ndarray,
-            pre: Prefilter, hint: torch.Tensor | None, k: int) -> torch.Tensor:  # fmt: skip
+def nearest(
+    table: torch.Tensor,
+    norms: torch.Tensor,
+    q: torch.Tensor,
+    q_cols: np.ndarray,
+    pre: Prefilter,
+    hint: torch.Tensor | None,
+    k: int,
+) -> torch.Tensor:
     """Indices ``(k,)`` of the ``k`` rows with the smallest ``norms - 2 table @ q``, in
     increasing order, as ``topk`` over the whole table gives them; ``hint`` (at least
     ``k`` row indices, e.g. the previous frame's neighbours) bounds the search, ``q_cols``

@@ -95,8 +95,9 @@ class BatchObjective:
         The same rotations as quaternions (``w >= 0``), for :meth:`row`.
     """
 
-    def __init__(self, offsets: np.ndarray, terms: list[Term], weights: np.ndarray, root: RootFrames,
-                 root_quat: np.ndarray) -> None:  # fmt: skip
+    def __init__(
+        self, offsets: np.ndarray, terms: list[Term], weights: np.ndarray, root: RootFrames, root_quat: np.ndarray
+    ) -> None:
         self.chain = PoseChain(offsets)
         self.terms, self.weights, self.root, self.root_quat = terms, weights, root, root_quat
         self.names = [n for t in terms for n in t.names]
@@ -105,8 +106,9 @@ class BatchObjective:
         self.pos, self.local = np.zeros((c, n, 3)), np.tile([1.0, 0.0, 0.0, 0.0], (c, n, 1))
         self.values = np.zeros(weights.shape)
 
-    def set_row(self, row: int, frame_terms: list[Term], weights: np.ndarray, root_pos: np.ndarray,
-                root_rot: np.ndarray) -> None:  # fmt: skip
+    def set_row(
+        self, row: int, frame_terms: list[Term], weights: np.ndarray, root_pos: np.ndarray, root_rot: np.ndarray
+    ) -> None:
         """Row ``row`` becomes a frame: its one-frame terms (the same kinds, in order), its
         weights ``(K,)`` and its root (hip tracker position ``(3,)``, rotation ``(4,)``)."""
         from engine.kinematics import quat_np as QN
@@ -159,10 +161,19 @@ class BatchObjective:
         return self.pos[c].copy(), local
 
 
-def solve_streams(decoder: BatchDecoder, objective: BatchObjective, z: np.ndarray, rule: str, lr: float,
-                  max_iterations: int, patience: int, min_improvement: float,
-                  load: Callable[[int], bool], done: Callable[[int, int], None],
-                  fixed_steps: Callable[[int], int | None] | None = None) -> None:  # fmt: skip
+def solve_streams(
+    decoder: BatchDecoder,
+    objective: BatchObjective,
+    z: np.ndarray,
+    rule: str,
+    lr: float,
+    max_iterations: int,
+    patience: int,
+    min_improvement: float,
+    load: Callable[[int], bool],
+    done: Callable[[int, int], None],
+    fixed_steps: Callable[[int], int | None] | None = None,
+) -> None:
     """Solve ``C`` streams of frames, one frame of each at a time, all in the same decoder
     passes. Row ``c`` of ``objective`` and of the latents ``z (C, L)`` float32 hold stream
     ``c``'s current frame; ``load(c)`` puts its next frame into row ``c``

@@ -131,8 +131,9 @@ class GaitPlanner:
             return None
         return 0 if rate > 0 else 1
 
-    def update(self, anchor: np.ndarray | None, previous: np.ndarray | None,
-               hands: np.ndarray | None = None) -> GaitTargets:  # fmt: skip
+    def update(
+        self, anchor: np.ndarray | None, previous: np.ndarray | None, hands: np.ndarray | None = None
+    ) -> GaitTargets:
         """Advance one frame and give its targets.
 
         Parameters

@@ -46,9 +46,15 @@ from engine.kinematics.quat_np import (
 )
 
 #: End joint -> (limb root, middle joint).
-LIMBS = {sk.JOINT_INDEX[c]: (sk.JOINT_INDEX[a], sk.JOINT_INDEX[b])
-         for a, b, c in (("lshoulder", "lelbow", "lwrist"), ("rshoulder", "relbow", "rwrist"),
-                         ("lhip", "lknee", "lankle"), ("rhip", "rknee", "rankle"))}  # fmt: skip
+LIMBS = {
+    sk.JOINT_INDEX[c]: (sk.JOINT_INDEX[a], sk.JOINT_INDEX[b])
+    for a, b, c in (
+        ("lshoulder", "lelbow", "lwrist"),
+        ("rshoulder", "relbow", "rwrist"),
+        ("lhip", "lknee", "lankle"),
+        ("rhip", "rknee", "rankle"),
+    )
+}
 #: The head tracker's joint and the neck joint below it (:func:`share_neck_twist`).
 HEAD, NECK = sk.JOINT_INDEX["upperneck"], sk.JOINT_INDEX["lowerneck"]
 #: The joints between the hips and the head that :func:`reach_head_local` bends, hips first.
@@ -78,8 +84,9 @@ CARRIED = frozenset(j for j in range(sk.NUM_JOINTS) if SPINE[0] in _chain(j))
 # -- the steps ------------------------------------------------------------------------
 
 
-def reach_local(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray,
-                targets: dict[int, np.ndarray]) -> np.ndarray:  # fmt: skip
+def reach_local(
+    local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, targets: dict[int, np.ndarray]
+) -> np.ndarray:
     """The local rotations of :func:`reach` ``(22, 4)``, without the positions."""
     local = np.array(local_rot, dtype=np.float64)
     root_pos = np.asarray(root_pos, dtype=np.float64)
@@ -115,8 +122,9 @@ def reach_local(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray
     return local
 
 
-def reach(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray,
-          targets: dict[int, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+def reach(
+    local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, targets: dict[int, np.ndarray]
+) -> tuple[np.ndarray, np.ndarray]:
     """Move the tracked wrists / ankles onto their targets by their limbs' two bones.
 
     Parameters are those of :func:`adopt_rotations`, except that ``targets`` maps an end
@@ -134,8 +142,9 @@ def reach(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray,
     return local, fk(local, np.asarray(root_pos, dtype=np.float64), offsets)[0]
 
 
-def reach_head_local(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray,
-                     target: np.ndarray) -> np.ndarray:  # fmt: skip
+def reach_head_local(
+    local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, target: np.ndarray
+) -> np.ndarray:
     """Turn the head (``upperneck``) towards ``target (3,)`` by the spine: local rotations
     ``(22, 4)``, changed at :data:`SPINE` only.
 
@@ -187,8 +196,9 @@ def _unit(q: tuple) -> tuple:
     return tuple(x / n for x in q)
 
 
-def adopt_local(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray,
-                targets: dict[int, np.ndarray]) -> np.ndarray:  # fmt: skip
+def adopt_local(
+    local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, targets: dict[int, np.ndarray]
+) -> np.ndarray:
     """The local rotations of :func:`adopt_rotations` ``(22, 4)``, without the positions."""
     local = np.array(local_rot, dtype=np.float64)
     root_pos = np.asarray(root_pos, dtype=np.float64)
@@ -207,8 +217,9 @@ def adopt_local(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray
     return local
 
 
-def share_neck_twist(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, head_target: np.ndarray,
-                     share: float) -> np.ndarray:  # fmt: skip
+def share_neck_twist(
+    local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, head_target: np.ndarray, share: float
+) -> np.ndarray:
     """Give the lower neck ``share`` of the head's rotation correction about the neck.
 
     :func:`adopt_local` turns the head (``upperneck``) onto its tracker alone, so a head
@@ -258,8 +269,9 @@ def share_neck_twist(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.nd
     return local
 
 
-def adopt_rotations(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray,
-                    targets: dict[int, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+def adopt_rotations(
+    local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, targets: dict[int, np.ndarray]
+) -> tuple[np.ndarray, np.ndarray]:
     """Give joints exact world rotations by changing their local rotations only.
 
     Parameters
@@ -283,9 +295,15 @@ def adopt_rotations(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.nda
     return finish(local_rot, root_pos, offsets, {}, targets)
 
 
-def finish(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, reach_targets: dict[int, np.ndarray],
-           rotation_targets: dict[int, np.ndarray], neck_twist_share: float = 0.0,
-           level: tuple[int, ...] = ()) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+def finish(
+    local_rot: np.ndarray,
+    root_pos: np.ndarray,
+    offsets: np.ndarray,
+    reach_targets: dict[int, np.ndarray],
+    rotation_targets: dict[int, np.ndarray],
+    neck_twist_share: float = 0.0,
+    level: tuple[int, ...] = (),
+) -> tuple[np.ndarray, np.ndarray]:
     """:func:`reach_head_local` onto ``reach_targets[HEAD]`` when the head is among them,
     :func:`reach` onto the others (positions), then :func:`share_neck_twist`
     (with a head target and ``neck_twist_share`` > 0) and :func:`adopt_rotations` of

@@ -34,8 +34,9 @@ if TYPE_CHECKING:
     from engine.kinematics.pose_state import PoseState
 
 
-def build_terms(constraints: Sequence["Constraint"], weights: Sequence[float],
-                frame: FrameInputs) -> tuple[list[Term], list[np.ndarray]]:  # fmt: skip
+def build_terms(
+    constraints: Sequence["Constraint"], weights: Sequence[float], frame: FrameInputs
+) -> tuple[list[Term], list[np.ndarray]]:
     """The frame's terms, kind by kind (:meth:`~engine.constraints.base.Constraint.terms`),
     and each term's weights ``(n,)`` in the order of its :attr:`~Term.names`."""
     groups: dict[type[Constraint], list[int]] = {}
@@ -95,8 +96,15 @@ class FastObjective:
 
     fast = True
 
-    def __init__(self, decoder: Any, chain: PoseChain, terms: list[Term], weights: list[np.ndarray],
-                 root: RootFrames, make_state: Callable[[Any, "FastObjective"], "PoseState"]) -> None:  # fmt: skip
+    def __init__(
+        self,
+        decoder: Any,
+        chain: PoseChain,
+        terms: list[Term],
+        weights: list[np.ndarray],
+        root: RootFrames,
+        make_state: Callable[[Any, "FastObjective"], "PoseState"],
+    ) -> None:
         self.decoder, self.chain, self.root, self._make_state = decoder, chain, root, make_state
         self.frame = _Frame(terms, weights)
         self.names, self.weights = self.frame.names, self.frame.flat
@@ -197,7 +205,9 @@ class StoppingRule:
         """Row ``row`` starts a new frame."""
         self.best[row], self.since[row], self.steps[row] = np.inf, 0, 0
 
-    def stop(self, total: np.ndarray, satisfied: Callable[[], np.ndarray], rows: np.ndarray | None = None) -> np.ndarray:
+    def stop(
+        self, total: np.ndarray, satisfied: Callable[[], np.ndarray], rows: np.ndarray | None = None
+    ) -> np.ndarray:
         """Whether each of ``rows`` (default: all) stops at its latest evaluation (``total``,
         ``(A,)``); ``satisfied()`` is asked only when the offline rule needs it."""
         rows = np.arange(len(self.best)) if rows is None else rows
@@ -215,4 +225,3 @@ class StoppingRule:
     def stepped(self, rows: np.ndarray | None = None) -> None:
         """Count one step of ``rows`` (default: all)."""
         self.steps[slice(None) if rows is None else rows] += 1
-

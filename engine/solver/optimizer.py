@@ -104,8 +104,9 @@ class PoseOptimizer:
         autograd reference (tests compare the two).
     """
 
-    def __init__(self, decoder: LatentDecoder, offsets: np.ndarray, settings: OptimizerSettings | None = None,
-                 fast: bool = True) -> None:  # fmt: skip
+    def __init__(
+        self, decoder: LatentDecoder, offsets: np.ndarray, settings: OptimizerSettings | None = None, fast: bool = True
+    ) -> None:
         self.decoder = decoder
         if isinstance(decoder, torch.nn.Module):  # frozen: no gradients for its weights
             decoder.eval().requires_grad_(False)
@@ -136,16 +137,26 @@ class PoseOptimizer:
     def objective(self, constraints: Sequence["Constraint"], weights: Sequence[float], ctx: FrameContext) -> Objective:
         """The frame's objective over ``constraints`` with these ``weights`` (module doc)."""
         prev, pred = ctx.previous_positions, ctx.prediction
-        inputs = FrameInputs(None if prev is None else prev.detach().double().numpy(), ctx.frame,
-                             None if pred is None else pred.detach().double().numpy())  # fmt: skip
+        inputs = FrameInputs(
+            None if prev is None else prev.detach().double().numpy(),
+            ctx.frame,
+            None if pred is None else pred.detach().double().numpy(),
+        )
         terms, term_weights = build_terms(constraints, weights, inputs)
         if self._fast is None:
             return ReferenceObjective(lambda z: self.decode(z, ctx), terms, term_weights)
-        return FastObjective(self._fast.decoder, self._fast.chain, terms, term_weights, _root_frames(ctx),
-                             lambda latent, obj: _fast_state(latent, obj, ctx))  # fmt: skip
+        return FastObjective(
+            self._fast.decoder,
+            self._fast.chain,
+            terms,
+            term_weights,
+            _root_frames(ctx),
+            lambda latent, obj: _fast_state(latent, obj, ctx),
+        )
 
-    def update_rule(self, terms: Sequence["Constraint"], deadline: bool = False,
-                    settings: OptimizerSettings | None = None) -> str:  # fmt: skip
+    def update_rule(
+        self, terms: Sequence["Constraint"], deadline: bool = False, settings: OptimizerSettings | None = None
+    ) -> str:
         """The rule ``solve`` uses with these enabled ``terms``: ``auto`` is Adam with
         carried moments with at least :data:`FULL_SET` sensors, plain gradient steps with
         fewer. Under a ``deadline`` (live) ``auto`` takes Adam with fresh moments instead:
@@ -164,8 +175,13 @@ class PoseOptimizer:
         return LatentUpdate(rule, s.lr, state=self._carry if rule == "adam-carry" else None)
 
     # -- solving ---------------------------------------------------------------------
-    def solve(self, start: torch.Tensor, constraints: Sequence["Constraint"], ctx: FrameContext,
-              settings: OptimizerSettings | None = None) -> Solution:  # fmt: skip
+    def solve(
+        self,
+        start: torch.Tensor,
+        constraints: Sequence["Constraint"],
+        ctx: FrameContext,
+        settings: OptimizerSettings | None = None,
+    ) -> Solution:
         """Optimise from latent ``start (L,)`` against the enabled ``constraints``, each
         weighted by its ``weight`` times its :meth:`~Constraint.activity` at ``ctx.frame``,
         under ``settings`` (default: the optimizer's)."""
@@ -187,8 +203,16 @@ class PoseOptimizer:
                 obj = self.objective(active, weights, ctx)
             return self._run(obj, z0, active, s, ctx, warnings, timings)
 
-    def _run(self, obj: Objective, z0: np.ndarray, active: list, s: OptimizerSettings, ctx: FrameContext,
-             warnings: list[str], timings: SolveTimings) -> Solution:  # fmt: skip
+    def _run(
+        self,
+        obj: Objective,
+        z0: np.ndarray,
+        active: list,
+        s: OptimizerSettings,
+        ctx: FrameContext,
+        warnings: list[str],
+        timings: SolveTimings,
+    ) -> Solution:
         """The solve loop: evaluate, record, stop or step (module doc)."""
         clock = time.perf_counter
         rule = self.update_rule(active, ctx.deadline is not None, s)
@@ -228,11 +252,20 @@ class PoseOptimizer:
         # a different problem: start them afresh
         self._carry = upd.state if rule == "adam-carry" else {}
         latent = torch.from_numpy(z.copy())
-        return Solution(latent, obj.state(latent), losses, steps, warnings, timings=timings, cut=cut,
-                        path=np.stack(path))  # fmt: skip
+        return Solution(
+            latent, obj.state(latent), losses, steps, warnings, timings=timings, cut=cut, path=np.stack(path)
+        )
 
-    def _fall_back(self, z0: np.ndarray, ctx: FrameContext, losses: list[dict[str, float]], steps: int,
-                   warnings: list[str], why: str, timings: SolveTimings) -> Solution:  # fmt: skip
+    def _fall_back(
+        self,
+        z0: np.ndarray,
+        ctx: FrameContext,
+        losses: list[dict[str, float]],
+        steps: int,
+        warnings: list[str],
+        why: str,
+        timings: SolveTimings,
+    ) -> Solution:
         warnings.append(f"{why}; frame kept its starting latent")
         z = torch.from_numpy(z0.copy())
         with torch.no_grad():
@@ -263,8 +296,9 @@ def _fast_state(latent: torch.Tensor, obj: FastObjective, ctx: FrameContext) -> 
     else:
         local[0] = QN.mul(Q.heading(ctx.previous_root.rotation.detach().double().numpy()), local[0])
     f = lambda a: torch.as_tensor(a, dtype=torch.float32)  # noqa: E731
-    return PoseState(f(obj.P[0]), None, f(local), latent, ctx.previous_positions, ctx.frame, ctx.prediction,
-                     f(obj.W[0]))  # fmt: skip
+    return PoseState(
+        f(obj.P[0]), None, f(local), latent, ctx.previous_positions, ctx.frame, ctx.prediction, f(obj.W[0])
+    )
 
 
 def _past(deadline: float, t_loop: float, steps: int) -> bool:

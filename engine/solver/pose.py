@@ -82,8 +82,9 @@ class RootAnchor:
         return positions + (self.position - positions[..., self.joint, :])[..., None, :]
 
 
-def world_root(rot0: torch.Tensor, disp: torch.Tensor, prev: RootFrame,
-               override: RootOverride | None = None) -> tuple[torch.Tensor, torch.Tensor]:  # fmt: skip
+def world_root(
+    rot0: torch.Tensor, disp: torch.Tensor, prev: RootFrame, override: RootOverride | None = None
+) -> tuple[torch.Tensor, torch.Tensor]:
     """World root rotation ``(..., 4)`` and position ``(..., 3)`` (see the module doc).
 
     Parameters
@@ -105,7 +106,6 @@ def world_root(rot0: torch.Tensor, disp: torch.Tensor, prev: RootFrame,
     return rotation, position
 
 
-
 #: ``heading = anchor``: the reference heading stays within this many degrees of the
 #: anchor (head) tracker's heading. A head turns about 60-80 degrees against the hips at
 #: most; a reference beyond that is drift, or the start of a flip, and is pulled back.
@@ -115,7 +115,9 @@ HEADING_LIMIT_DEG = 60.0
 _MIN_FORWARD = 0.3
 
 
-def clamp_heading(previous: np.ndarray, anchor_rotation: np.ndarray, limit_deg: float = HEADING_LIMIT_DEG) -> np.ndarray:
+def clamp_heading(
+    previous: np.ndarray, anchor_rotation: np.ndarray, limit_deg: float = HEADING_LIMIT_DEG
+) -> np.ndarray:
     """The previous root rotation ``(4,)`` turned about +Z just enough that its heading
     is within ``limit_deg`` of the heading of ``anchor_rotation (4,)`` (both world,
     (w, x, y, z)); unchanged when it already is, or when the anchor's forward axis is
@@ -175,8 +177,9 @@ def _facing_left(lateral: np.ndarray) -> np.ndarray:
 HEAD_LATERAL_M = 0.5
 
 
-def head_hands_facing(head_rotation: np.ndarray, points: dict[str, np.ndarray],
-                      head_lateral_m: float = HEAD_LATERAL_M) -> np.ndarray | None:  # fmt: skip
+def head_hands_facing(
+    head_rotation: np.ndarray, points: dict[str, np.ndarray], head_lateral_m: float = HEAD_LATERAL_M
+) -> np.ndarray | None:
     """Heading rotation ``(4,)`` (about +Z) of the body from a head tracker's world
     rotation ``head_rotation (4,)`` and the hands' positions in ``points`` (joint name ->
     world position ``(3,)``, metres; ``lwrist`` and ``rwrist``): the sum of the hands'

@@ -30,8 +30,19 @@ from engine.solver.settings import FULL_SET, OptimizerSettings, check_values
 
 #: Settings a profile may supply (each profile gives all of them; a value it leaves out is
 #: the :class:`OptimizerSettings` default).
-TUNED = ("future_window", "temporal_weight", "step_size", "lr", "smooth_weight", "ground_weight",
-         "sensor_rotation_weight", "prior", "tracker_prior_weight", "head_reach", "level_feet")
+TUNED = (
+    "future_window",
+    "temporal_weight",
+    "step_size",
+    "lr",
+    "smooth_weight",
+    "ground_weight",
+    "sensor_rotation_weight",
+    "prior",
+    "tracker_prior_weight",
+    "head_reach",
+    "level_feet",
+)
 
 
 @dataclass(frozen=True)
@@ -64,8 +75,21 @@ PROFILES: dict[str, Profile] = {
     # the spine (limb_ik.reach_head_local), realtime, Pos cm / Rot deg / Vel cm/s: 9 validation
     # files (150 frames) 0.82 / 7.14 / 10.2 -> 0.75 / 7.12 / 7.6; hdm05/ (whole) 1.49 / 13.4 /
     # 10.3 -> 1.30 / 13.4 / 8.8; dragposer/ (whole) 2.06 / 14.86 / 21.0 -> 1.97 / 14.91 / 18.2
-    "full": Profile("full", dict(future_window=1, temporal_weight=0.01, step_size=0.3, lr=0.05, smooth_weight=5.0,
-                    ground_weight=0.0, sensor_rotation_weight=0.01, prior="trackers", tracker_prior_weight=0.05, head_reach=True)),
+    "full": Profile(
+        "full",
+        dict(
+            future_window=1,
+            temporal_weight=0.01,
+            step_size=0.3,
+            lr=0.05,
+            smooth_weight=5.0,
+            ground_weight=0.0,
+            sensor_rotation_weight=0.01,
+            prior="trackers",
+            tracker_prior_weight=0.05,
+            head_reach=True,
+        ),
+    ),
     # positions only: the smoothing term made 6x3dof worse (3 validation files, 150
     # frames: 3.97 -> 3.69 cm, 30.5 -> 28.2 deg without it), and without rotations the
     # predictor's longer look-ahead helps (retarget 3, 9 validation files: 4.06 -> 3.59 cm,
@@ -78,19 +102,54 @@ PROFILES: dict[str, Profile] = {
     # hdm05/ 5.29 / 27.8 -> 5.02 / 27.4, dragposer/ 3.98 / 22.8 -> 3.79 / 22.7, 9 validation
     # files 3.39 / 17.7 -> 3.34 / 18.2 (docs/accuracy.md, "What the remaining `dragposer/`
     # gaps are made of")
-    "full3": Profile("full3", dict(future_window=16, temporal_weight=0.03, step_size=0.3, lr=0.05, smooth_weight=0.0,
-                     ground_weight=0.0, sensor_rotation_weight=0.03, head_reach=True, level_feet=True)),
+    "full3": Profile(
+        "full3",
+        dict(
+            future_window=16,
+            temporal_weight=0.03,
+            step_size=0.3,
+            lr=0.05,
+            smooth_weight=0.0,
+            ground_weight=0.0,
+            sensor_rotation_weight=0.03,
+            head_reach=True,
+            level_feet=True,
+        ),
+    ),
     # smoothing 5 on the sparse sets: jitter 20.4 / 20.7 / 19.7 -> 18.2 / 18.5 /
     # 16.4 (truth 13.0) for presets 4 / 3-hip-hands / 3-head-hands, Pos 4.99 / 5.02 / 7.67 ->
     # 4.97 / 5.03 / 7.71 cm; 10 and 20 smooth more but cost velocity error (docs/optimizer.md)
     # the spine turned so the head meets its tracker after the solve (limb_ik.reach_head_local):
     # preset 4, whole clips: hdm05/ 7.78 -> 6.91 cm, dragposer/ 7.66 -> 6.66, validation files
     # (300 frames) 5.31 -> 4.69 (docs/accuracy.md, "Other labs' performers: the head, not the legs")
-    "hip": Profile("hip", dict(future_window=16, temporal_weight=0.01, step_size=0.3, lr=0.05, smooth_weight=5.0,
-                   ground_weight=10.0, sensor_rotation_weight=0.1, prior="trackers", head_reach=True)),
-    "head": Profile("head", dict(future_window=16, temporal_weight=0.01, step_size=0.3, lr=0.05, smooth_weight=5.0,
-                    ground_weight=10.0, sensor_rotation_weight=0.1, prior="trackers")),
-}  # fmt: skip
+    "hip": Profile(
+        "hip",
+        dict(
+            future_window=16,
+            temporal_weight=0.01,
+            step_size=0.3,
+            lr=0.05,
+            smooth_weight=5.0,
+            ground_weight=10.0,
+            sensor_rotation_weight=0.1,
+            prior="trackers",
+            head_reach=True,
+        ),
+    ),
+    "head": Profile(
+        "head",
+        dict(
+            future_window=16,
+            temporal_weight=0.01,
+            step_size=0.3,
+            lr=0.05,
+            smooth_weight=5.0,
+            ground_weight=10.0,
+            sensor_rotation_weight=0.1,
+            prior="trackers",
+        ),
+    ),
+}
 
 
 def profile_for(connected: Collection[str], hip_rotation: bool = True) -> Profile:
@@ -103,8 +162,9 @@ def profile_for(connected: Collection[str], hip_rotation: bool = True) -> Profil
     return PROFILES["head"]
 
 
-def effective(settings: OptimizerSettings, connected: Collection[str], explicit: Collection[str],
-              hip_rotation: bool = True) -> OptimizerSettings:  # fmt: skip
+def effective(
+    settings: OptimizerSettings, connected: Collection[str], explicit: Collection[str], hip_rotation: bool = True
+) -> OptimizerSettings:
     """``settings`` with the profile's values for the tuned fields not in ``explicit``
     (a new object; ``settings`` itself is unchanged). With ``tuning == "off"`` it is
     ``settings`` itself."""

@@ -48,8 +48,9 @@ import torch
 class LatentPredictor(Protocol):
     """What the optimizer needs from the temporal predictor."""
 
-    def predict(self, past_latents: torch.Tensor, past_cond: torch.Tensor, first: torch.Tensor,
-                steps: int) -> torch.Tensor:  # fmt: skip
+    def predict(
+        self, past_latents: torch.Tensor, past_cond: torch.Tensor, first: torch.Tensor, steps: int
+    ) -> torch.Tensor:
         """``past_latents (B, W_p, L)``, ``past_cond (B, W_p, C)``, ``first (B, L)`` ->
         the next ``steps`` latents ``(B, steps, L)``."""
         ...
@@ -76,8 +77,9 @@ def _join(*warnings: str) -> str:
 class _Run:
     """One predictor run (a block of ``steps`` latents from ``first_step``), in pieces."""
 
-    def __init__(self, predictor: LatentPredictor, inputs: tuple, first_step: int, steps: int,
-                 memory: torch.Tensor | None = None) -> None:  # fmt: skip
+    def __init__(
+        self, predictor: LatentPredictor, inputs: tuple, first_step: int, steps: int, memory: torch.Tensor | None = None
+    ) -> None:
         self.predictor, self.inputs, self.first_step, self.steps = predictor, inputs, first_step, steps
         self.stepped = predictor if isinstance(predictor, SteppedPredictor) else None
         self.split = self.stepped is not None
@@ -184,8 +186,9 @@ class TemporalSchedule:
         """Whether a block is still (partly) to be run."""
         return self.run is not None and not self.run.finished
 
-    def prediction(self, frame: int, predictor: LatentPredictor | None, future: int,
-                   defer: bool = False) -> tuple[torch.Tensor | None, str]:  # fmt: skip
+    def prediction(
+        self, frame: int, predictor: LatentPredictor | None, future: int, defer: bool = False
+    ) -> tuple[torch.Tensor | None, str]:
         """Latent guiding ``frame`` and a warning ('' if none); runs the predictor if due.
 
         Call once per frame, before solving it and after recording the previous frame.
@@ -221,8 +224,12 @@ class TemporalSchedule:
         if self.pending:
             assert self.run is not None
             self.pending_warning = _join(self.pending_warning, self.run.piece(self.cache))
-        elif (isinstance(self.predictor, SteppedPredictor) and self.history
-              and self.last is not None and (self.memory is None or self.memory[0] != self.version)):  # fmt: skip
+        elif (
+            isinstance(self.predictor, SteppedPredictor)
+            and self.history
+            and self.last is not None
+            and (self.memory is None or self.memory[0] != self.version)
+        ):
             past, cond, _ = self._inputs()
             try:
                 with torch.no_grad():

@@ -154,8 +154,11 @@ class PoseBank:
 
     def __post_init__(self) -> None:
         n = len(self.latents)
-        shapes = {"positions": (n, len(BANK_JOINTS), 3), "rotations": (n, len(BANK_JOINTS), 4),
-                  "prev_anchor": (n, len(ANCHORS), 3)}  # fmt: skip
+        shapes = {
+            "positions": (n, len(BANK_JOINTS), 3),
+            "rotations": (n, len(BANK_JOINTS), 4),
+            "prev_anchor": (n, len(ANCHORS), 3),
+        }
         for name, shape in shapes.items():
             if getattr(self, name).shape != shape:
                 raise ValueError(f"pose bank: {name} has shape {getattr(self, name).shape}, expected {shape}")
@@ -181,8 +184,12 @@ class PoseBank:
         tab = self._tables.get(anchor)
         if tab is None:
             a = BANK_JOINTS.index(anchor)
-            x = features(self.positions.astype(np.float64), self.rotations.astype(np.float64), a,
-                         self.prev_anchor[:, ANCHORS.index(anchor)].astype(np.float64))  # fmt: skip
+            x = features(
+                self.positions.astype(np.float64),
+                self.rotations.astype(np.float64),
+                a,
+                self.prev_anchor[:, ANCHORS.index(anchor)].astype(np.float64),
+            )
             mean, std = x.mean(0), x.std(0) + 1e-6
             table = torch.as_tensor((x - mean) / std, dtype=torch.float32)
             t64 = table.double().numpy()
@@ -198,8 +205,9 @@ class PoseBank:
             full = len(cols) == tab.table.shape[1] and bool((cols == np.arange(len(cols))).all())
             sub = tab.table if full else tab.table[:, torch.from_numpy(cols)]
             pre = Prefilter(sub, gram=tab.gram[np.ix_(cols, cols)])
-            idx = self._indexes[joints] = _Index(tab, cols, (sub * sub).sum(1), full, pre, tab.mean[cols],
-                                                 tab.std[cols], torch.from_numpy(cols))  # fmt: skip
+            idx = self._indexes[joints] = _Index(
+                tab, cols, (sub * sub).sum(1), full, pre, tab.mean[cols], tab.std[cols], torch.from_numpy(cols)
+            )
             self.index_builds += 1
         return idx
 
@@ -255,11 +263,15 @@ class PoseBank:
         from engine.atomic import atomic_path
 
         with atomic_path(path, suffix=".npz") as tmp:
-            np.savez_compressed(tmp, positions=self.positions.astype(np.float16),
-                                rotations=self.rotations.astype(np.float16),
-                                prev_anchor=self.prev_anchor.astype(np.float16),
-                                latents=self.latents.astype(np.float16), vae_sha256=np.array(self.vae_sha256),
-                                k=np.array(self.k))  # fmt: skip
+            np.savez_compressed(
+                tmp,
+                positions=self.positions.astype(np.float16),
+                rotations=self.rotations.astype(np.float16),
+                prev_anchor=self.prev_anchor.astype(np.float16),
+                latents=self.latents.astype(np.float16),
+                vae_sha256=np.array(self.vae_sha256),
+                k=np.array(self.k),
+            )
 
     @classmethod
     def load(cls, path: str | Path) -> "PoseBank":
@@ -268,9 +280,14 @@ class PoseBank:
 
         try:
             with np.load(Path(path), allow_pickle=False) as d:
-                return cls(d["positions"].astype(np.float64), d["rotations"].astype(np.float64),
-                           d["prev_anchor"].astype(np.float64), d["latents"].astype(np.float32),
-                           str(d["vae_sha256"]), int(d["k"]))  # fmt: skip
+                return cls(
+                    d["positions"].astype(np.float64),
+                    d["rotations"].astype(np.float64),
+                    d["prev_anchor"].astype(np.float64),
+                    d["latents"].astype(np.float32),
+                    str(d["vae_sha256"]),
+                    int(d["k"]),
+                )
         except (OSError, KeyError, ValueError) as exc:
             raise UserError(f"{path}: not a pose bank ({exc})") from exc
 
@@ -313,7 +330,6 @@ def _anchor(joints: Sequence[str]) -> int:
         if a in joints:
             return list(joints).index(a)
     raise ValueError(f"no anchor ({' or '.join(ANCHORS)}) among {joints}")
-
 
 
 class TrackerHistory:

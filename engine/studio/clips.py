@@ -50,8 +50,14 @@ def load_clip(path: str | Path, rig_map: str | Path | None = None, own_rate: boo
         raise UserError(f"{path}: cannot read ({type(exc).__name__}: {exc})") from exc
 
 
-def tracked_position(joint: str, frame: int, snap: Snapshot | None, source: SensorSource | None,
-                     motion: Motion | None, sensor: Sensor | None) -> np.ndarray:  # fmt: skip
+def tracked_position(
+    joint: str,
+    frame: int,
+    snap: Snapshot | None,
+    source: SensorSource | None,
+    motion: Motion | None,
+    sensor: Sensor | None,
+) -> np.ndarray:
     """Where ``joint``'s tracker is at ``frame`` before any drag offset, (3,) metres.
 
     Read from ``snap`` (the engine's newest snapshot) when it shows ``frame``, with no

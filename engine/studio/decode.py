@@ -15,8 +15,9 @@ from engine import skeleton as sk
 from engine.methods.base import DecodesLatents
 
 
-def decoded_on_pose(method: DecodesLatents, latent: np.ndarray, shown: np.ndarray | None,
-                    pose: np.ndarray | None) -> np.ndarray:  # fmt: skip
+def decoded_on_pose(
+    method: DecodesLatents, latent: np.ndarray, shown: np.ndarray | None, pose: np.ndarray | None
+) -> np.ndarray:
     """World joints (22, 3) m of ``latent`` (L,) relative to the frame on screen, whose
     latent is ``shown`` (L,) and pose ``pose`` (22, 3) m; the bare decoded pose when
     ``shown`` or ``pose`` is missing or ``shown`` of another size."""
@@ -27,8 +28,9 @@ def decoded_on_pose(method: DecodesLatents, latent: np.ndarray, shown: np.ndarra
     return out + (np.asarray(pose, float) - base)
 
 
-def decode_request(method: object, name: str, latent: np.ndarray, shown: np.ndarray | None,
-                   pose: np.ndarray | None) -> tuple[np.ndarray | None, str]:  # fmt: skip
+def decode_request(
+    method: object, name: str, latent: np.ndarray, shown: np.ndarray | None, pose: np.ndarray | None
+) -> tuple[np.ndarray | None, str]:
     """A studio request to decode ``latent``: the pose (:func:`decoded_on_pose`, exact on
     screen) and an empty message, or None and the error to report (a method without a
     latent, or a decode that failed)."""

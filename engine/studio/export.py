@@ -33,9 +33,15 @@ if TYPE_CHECKING:
     from engine.studio.session import Session
 
 
-def reconstruct_clip(motion: Motion, sensors: tuple[Sensor, ...], constraints: tuple[Constraint, ...],
-                     settings: Mapping[str, Any], method_name: str, factory: Callable[[str], Method] | None = None,
-                     progress: Callable[[int], bool | None] | None = None) -> Motion:  # fmt: skip
+def reconstruct_clip(
+    motion: Motion,
+    sensors: tuple[Sensor, ...],
+    constraints: tuple[Constraint, ...],
+    settings: Mapping[str, Any],
+    method_name: str,
+    factory: Callable[[str], Method] | None = None,
+    progress: Callable[[int], bool | None] | None = None,
+) -> Motion:
     """Run a fresh method over every frame of ``motion`` with the studio's sensor edits.
 
     ``motion`` is the ground truth of a method that needs one (the autoencoder).
@@ -56,9 +62,14 @@ def reconstruct_clip(motion: Motion, sensors: tuple[Sensor, ...], constraints: t
     return Motion(np.array(rots), np.array(roots), motion.skeleton, motion.fps, f"{motion.name} ({method_name})")
 
 
-def solve_frames(motion: Motion, sensors: tuple[Sensor, ...], constraints: tuple[Constraint, ...],
-                 settings: Mapping[str, Any], method_name: str,
-                 factory: Callable[[str], Method] | None = None) -> Iterator[tuple[np.ndarray, np.ndarray]]:  # fmt: skip
+def solve_frames(
+    motion: Motion,
+    sensors: tuple[Sensor, ...],
+    constraints: tuple[Constraint, ...],
+    settings: Mapping[str, Any],
+    method_name: str,
+    factory: Callable[[str], Method] | None = None,
+) -> Iterator[tuple[np.ndarray, np.ndarray]]:
     """Solve ``motion``'s frames one by one with a fresh method (as :func:`reconstruct_clip`),
     yielding each frame's local rotations ``(J, 4)`` and root position ``(3,)`` as soon as
     it is solved (a consumer may draw frame f while f + 1 is solved)."""
@@ -66,15 +77,27 @@ def solve_frames(motion: Motion, sensors: tuple[Sensor, ...], constraints: tuple
     source.set_sensors(tuple(sensors))
     constraints = copy.deepcopy(tuple(constraints))  # a separate run: its own pin captures
     method = (factory or make_method)(method_name)
-    driver.start(method, motion.skeleton, motion.fps, reference=motion, settings=settings,
-                 constraints=constraints, sensors=source.sensors)  # fmt: skip
+    driver.start(
+        method,
+        motion.skeleton,
+        motion.fps,
+        reference=motion,
+        settings=settings,
+        constraints=constraints,
+        sensors=source.sensors,
+    )
     for f in range(len(motion)):
         res = driver.step(method, source.frame(f))
         yield np.asarray(res.local_rot, float), np.asarray(res.root_pos, float)
 
 
-def write_reconstruction(path: str | Path, rec: Motion, on_rig: tuple[RawBVH, Any] | None = None,
-                         fps: float | None = None, contents: GltfContents | None = None) -> None:  # fmt: skip
+def write_reconstruction(
+    path: str | Path,
+    rec: Motion,
+    on_rig: tuple[RawBVH, Any] | None = None,
+    fps: float | None = None,
+    contents: GltfContents | None = None,
+) -> None:
     """Write ``rec`` to ``path`` atomically, as BVH or glTF by its extension
     (:func:`engine.motion.formats.save_motion`, docs/export.md): on the canonical
     skeleton, or with ``on_rig = (raw, report)`` onto the hierarchy of the source file it
@@ -144,12 +167,23 @@ class ExportJob:
             raise UserError("open a motion first")
         if on_source_rig and session.path is None:
             raise UserError("this clip was not opened from a BVH file")
-        return cls(session.motion, tuple(session.sensors.values()), tuple(session.constraints), session.settings,
-                   session.method, Path(path), session.path if on_source_rig else None,
-                   session.rig_map if on_source_rig else None)  # fmt: skip
+        return cls(
+            session.motion,
+            tuple(session.sensors.values()),
+            tuple(session.constraints),
+            session.settings,
+            session.method,
+            Path(path),
+            session.path if on_source_rig else None,
+            session.rig_map if on_source_rig else None,
+        )
 
-    def run(self, factory: Callable[[str], Method] | None = None, progress: Callable[[int], None] | None = None,
-            cancelled: Callable[[], bool] | None = None) -> Motion | None:  # fmt: skip
+    def run(
+        self,
+        factory: Callable[[str], Method] | None = None,
+        progress: Callable[[int], None] | None = None,
+        cancelled: Callable[[], bool] | None = None,
+    ) -> Motion | None:
         """Solve and write; returns the reconstruction, or None when ``cancelled()``
         became true (checked after every frame and before writing: nothing is written).
 
@@ -162,8 +196,9 @@ class ExportJob:
                 progress(frame)
             return cancelled is not None and cancelled()
 
-        rec = reconstruct_clip(self.motion, self.sensors, self.constraints, self.settings, self.method,
-                               factory=factory, progress=after)  # fmt: skip
+        rec = reconstruct_clip(
+            self.motion, self.sensors, self.constraints, self.settings, self.method, factory=factory, progress=after
+        )
         if cancelled is not None and cancelled():
             return None
         write_reconstruction(self.path, rec, source_rig(self.source, self.rig_map) if self.source else None)

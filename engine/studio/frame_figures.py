@@ -23,8 +23,10 @@ def losses_of(res: FrameResult | None, sf: SensorFrame) -> tuple[dict[str, float
         return ()
     if res.losses:
         return tuple(dict(d) for d in res.losses)
-    errs = {f"pos:{j}": float(np.sum((res.positions[sk.JOINT_INDEX[j]] - r.position) ** 2))
-            for j, r in sf.connected().items()}  # fmt: skip
+    errs = {
+        f"pos:{j}": float(np.sum((res.positions[sk.JOINT_INDEX[j]] - r.position) ** 2))
+        for j, r in sf.connected().items()
+    }
     errs["total"] = float(sum(errs.values()))
     return (errs,)
 
@@ -46,8 +48,9 @@ def timing_of(res: FrameResult | None, ms: float, latency_ms: float | None = Non
     return out
 
 
-def gizmos_of(constraints: Iterable[Any], positions: np.ndarray,
-              report: Callable[[str], None]) -> tuple[tuple[str, Gizmo], ...]:  # fmt: skip
+def gizmos_of(
+    constraints: Iterable[Any], positions: np.ndarray, report: Callable[[str], None]
+) -> tuple[tuple[str, Gizmo], ...]:
     """``(name, shape)`` of the enabled constraints that draw one, posed on
     ``positions`` (22, 3), metres (distance, balance and look-at draw lines between
     current joints). A constraint whose ``gizmo`` raises is left out and ``report`` ed,

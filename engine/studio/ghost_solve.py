@@ -77,8 +77,9 @@ class GhostSolves:
         self.solved = 0  # frames [0, solved) are in
         ctx = mp.get_context("spawn")
         self._queue = ctx.Queue()
-        self._proc = ctx.Process(target=_solve, args=(motion, tuple(sensors), self.methods, self._queue),
-                                 daemon=True, name="ghost-solves")  # fmt: skip
+        self._proc = ctx.Process(
+            target=_solve, args=(motion, tuple(sensors), self.methods, self._queue), daemon=True, name="ghost-solves"
+        )
         self._proc.start()
 
     def positions(self, frame: int) -> dict[str, np.ndarray]:
@@ -94,8 +95,10 @@ class GhostSolves:
                 kind, start, payload = self._queue.get(timeout=1.0 if self._proc.is_alive() else 0.1)
             except queue.Empty:
                 if not self._proc.is_alive() and self._queue.empty():
-                    raise UserError(f"ghosts {', '.join(self.methods)}: the solving process ended "
-                                    f"(exit code {self._proc.exitcode}) at frame {self.solved}") from None  # fmt: skip
+                    raise UserError(
+                        f"ghosts {', '.join(self.methods)}: the solving process ended "
+                        f"(exit code {self._proc.exitcode}) at frame {self.solved}"
+                    ) from None
                 continue
             if kind == "error":
                 raise UserError(f"ghosts {', '.join(self.methods)}: {payload}")

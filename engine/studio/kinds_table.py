@@ -32,18 +32,25 @@ def _first_sentence(doc: str | None) -> str:
 
 def kinds_table() -> str:
     """Markdown table: kind, who builds it, parameters, summary and residual."""
-    rows = ["| kind | added by | parameters | what it asks | residual (loss = its squared norm) |",
-            "|---|---|---|---|---|"]  # fmt: skip
+    rows = [
+        "| kind | added by | parameters | what it asks | residual (loss = its squared norm) |",
+        "|---|---|---|---|---|",
+    ]
     for kind, cls in sorted(REGISTRY.items()):
         spec = describe(cls)
-        params = [f"`{f.name}`" + (f" ({f.unit})" if f.unit else "") for f in spec.fields
-                  if f.name not in COMMON_FIELDS and f.name not in FRAME_FIELDS]  # fmt: skip
+        params = [
+            f"`{f.name}`" + (f" ({f.unit})" if f.unit else "")
+            for f in spec.fields
+            if f.name not in COMMON_FIELDS and f.name not in FRAME_FIELDS
+        ]
         example = cls.examples(_rest())[0]
         term = type(example).terms([example], FrameInputs())[0]
         who = "the user" if cls.user_facing else "the method"
         cell = lambda s: s.replace("|", "\\|")  # noqa: E731
-        rows.append(f"| `{kind}` | {who} | {', '.join(params) or 'none'} | {cell(_first_sentence(spec.summary))} | "
-                    f"{cell(_first_sentence(type(term).__doc__))} |")  # fmt: skip
+        rows.append(
+            f"| `{kind}` | {who} | {', '.join(params) or 'none'} | {cell(_first_sentence(spec.summary))} | "
+            f"{cell(_first_sentence(type(term).__doc__))} |"
+        )
     return "\n".join(rows) + "\n"
 
 

@@ -53,12 +53,23 @@ class LatentDebug:
             return None
         probe = self._get_probe()
         if probe is None or np.size(latent) != probe.map.latent_dim:
-            self.note = self._probe_failed or f"latent of size {np.size(latent)}: the latent map is {probe.map.latent_dim}-D"
+            self.note = (
+                self._probe_failed or f"latent of size {np.size(latent)}: the latent map is {probe.map.latent_dim}-D"
+            )
             return None
         p = probe.after_step(method, frame, latent)
         self.note = ""
-        self.view = LatentView(frame, np.asarray(p.latent, float), np.asarray(p.xy, float), p.path_xy, p.start,
-                               p.nearest, p.norm, p.predictor, p.flagged)  # fmt: skip
+        self.view = LatentView(
+            frame,
+            np.asarray(p.latent, float),
+            np.asarray(p.xy, float),
+            p.path_xy,
+            p.start,
+            p.nearest,
+            p.norm,
+            p.predictor,
+            p.flagged,
+        )
         return self.view
 
     def inspect(self, method: Any, joint: str = "") -> str:
@@ -79,6 +90,15 @@ class LatentDebug:
         assert f.plane is not None  # projected on probe.map
         sweep = dimension_sweep(method.optimizer, rec.context, self.view.latent, probe.map.sigma)
         influence = joint_influence(method.optimizer, rec.context, self.view.latent, joint) if joint else None
-        self.detail = LatentDetail(self.view.frame, f.names, f.forces, f.plane, sweep.poses, sweep.motion, joint,
-                                   influence, 1000.0 * (time.perf_counter() - t0))  # fmt: skip
+        self.detail = LatentDetail(
+            self.view.frame,
+            f.names,
+            f.forces,
+            f.plane,
+            sweep.poses,
+            sweep.motion,
+            joint,
+            influence,
+            1000.0 * (time.perf_counter() - t0),
+        )
         return ""

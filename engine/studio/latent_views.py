@@ -48,8 +48,14 @@ class LatentView:
 
     def readouts(self) -> dict[str, float]:
         """What a history entry keeps: ``x, y, nearest, norm, predictor, flagged`` (0/1)."""
-        return {"x": float(self.xy[0]), "y": float(self.xy[1]), "nearest": self.nearest, "norm": self.norm,
-                "predictor": self.predictor, "flagged": float(self.flagged)}  # fmt: skip
+        return {
+            "x": float(self.xy[0]),
+            "y": float(self.xy[1]),
+            "nearest": self.nearest,
+            "norm": self.norm,
+            "predictor": self.predictor,
+            "flagged": float(self.flagged),
+        }
 
 
 @dataclass(frozen=True)

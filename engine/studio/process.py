@@ -55,14 +55,19 @@ class EngineProcess:
         selection of it then finds its models loaded. "" builds nothing ahead.
     """
 
-    def __init__(self, method_factory: Callable[[str], Any] | None = None, threads: int | None = None,
-                 prepare: str = "") -> None:  # fmt: skip
+    def __init__(
+        self, method_factory: Callable[[str], Any] | None = None, threads: int | None = None, prepare: str = ""
+    ) -> None:
         ctx = mp.get_context("spawn")
         self._commands = ctx.Queue()
         self._receive, send = ctx.Pipe(duplex=False)
         n = threads if threads is not None else max(1, (os.cpu_count() or 2) - 1)
-        self._process = ctx.Process(target=_child_main, args=(self._commands, send, method_factory, n, os.getpid(), prepare),
-                                    name="dragposer-engine", daemon=True)  # fmt: skip
+        self._process = ctx.Process(
+            target=_child_main,
+            args=(self._commands, send, method_factory, n, os.getpid(), prepare),
+            name="dragposer-engine",
+            daemon=True,
+        )
         self._send_end = send
         self._receiver = threading.Thread(target=self._receive_loop, name="dragposer-engine-receiver", daemon=True)
         self.latest: Any = None

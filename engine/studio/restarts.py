@@ -23,8 +23,9 @@ WINDOW_S = 60.0
 class RestartPolicy:
     """Counts engine deaths; ``clock`` gives seconds (monotonic by default)."""
 
-    def __init__(self, limit: int = LIMIT, window_s: float = WINDOW_S,
-                 clock: Callable[[], float] = time.monotonic) -> None:  # fmt: skip
+    def __init__(
+        self, limit: int = LIMIT, window_s: float = WINDOW_S, clock: Callable[[], float] = time.monotonic
+    ) -> None:
         self.limit, self.window_s, self._clock = limit, window_s, clock
         self._deaths: deque[float] = deque()
         self.stopped = ""  # why restarting stopped; "" while it goes on
@@ -37,6 +38,8 @@ class RestartPolicy:
         while self._deaths and now - self._deaths[0] > self.window_s:
             self._deaths.popleft()
         if not self.stopped and len(self._deaths) >= self.limit:
-            self.stopped = (f"the solver process stopped {len(self._deaths)} times within {self.window_s:.0f} s, "
-                            "so it is not restarted again")  # fmt: skip
+            self.stopped = (
+                f"the solver process stopped {len(self._deaths)} times within {self.window_s:.0f} s, "
+                "so it is not restarted again"
+            )
         return not self.stopped

@@ -36,18 +36,26 @@ def default_settings() -> SettingsEdit:
     return SettingsEdit({name: getattr(d, name) for name in SESSION_SETTINGS})
 
 
-
-def scene_to_dict(path: Path | None, method: str, preset: str, sensors: Iterable[Sensor],
-                  constraints: Iterable[Constraint], settings: Mapping[str, Any], frame: int) -> dict[str, Any]:  # fmt: skip
+def scene_to_dict(
+    path: Path | None,
+    method: str,
+    preset: str,
+    sensors: Iterable[Sensor],
+    constraints: Iterable[Constraint],
+    settings: Mapping[str, Any],
+    frame: int,
+) -> dict[str, Any]:
     """Plain-JSON description of a session's scene (the clip by path)."""
     doc = optimizer_scene.scene_to_dict(constraints, dict(settings))
-    doc.update({
-        "clip": str(path) if path else None,
-        "method": method,
-        "preset": preset,
-        "sensors": [s.to_dict() for s in sensors],
-        "frame": int(frame),
-    })  # fmt: skip
+    doc.update(
+        {
+            "clip": str(path) if path else None,
+            "method": method,
+            "preset": preset,
+            "sensors": [s.to_dict() for s in sensors],
+            "frame": int(frame),
+        }
+    )
     return doc
 
 
@@ -69,11 +77,15 @@ def scene_from_dict(scene: Any, where: str = "scene") -> dict[str, Any]:
     frame = scene.get("frame")
     if frame is not None and (isinstance(frame, bool) or not isinstance(frame, int) or frame < 0):
         raise UserError(f"{where}: field 'frame' must be a whole number of 0 or more, got {shown(frame)}")
-    return {"method": str(scene.get("method") or ""),
-            "preset": None if scene.get("preset") is None else str(scene["preset"]),
-            "sensors": sensors, "constraints": constraints,
-            "settings": SettingsEdit({k: getattr(settings, k) for k in given}, where), "frame": frame,
-            "keys": len(authored.keys)}  # fmt: skip
+    return {
+        "method": str(scene.get("method") or ""),
+        "preset": None if scene.get("preset") is None else str(scene["preset"]),
+        "sensors": sensors,
+        "constraints": constraints,
+        "settings": SettingsEdit({k: getattr(settings, k) for k in given}, where),
+        "frame": frame,
+        "keys": len(authored.keys),
+    }
 
 
 def describe_load(parsed: Mapping[str, Any]) -> str:
@@ -84,7 +96,9 @@ def describe_load(parsed: Mapping[str, Any]) -> str:
     replaced = [f"the constraints ({n})" if n else "the constraints (none in the scene)"]
     given = list(parsed["settings"])
     if given:
-        replaced.append(f"settings ({', '.join(given)})" if len(given) <= 3 else f"the optimizer settings ({len(given)})")
+        replaced.append(
+            f"settings ({', '.join(given)})" if len(given) <= 3 else f"the optimizer settings ({len(given)})"
+        )
     if parsed["sensors"] is not None:
         replaced.append(f"the sensors ({len(parsed['sensors'])})")
     kept = [] if parsed["sensors"] is not None else ["the sensors and preset (the scene has none)"]

@@ -98,8 +98,12 @@ class Session:
         self.plays = 0
 
     # -- engine ------------------------------------------------------------------------
-    def start_engine(self, method_factory: Callable[[str], Any] | None = None, process: bool = False,
-                     started: EngineProcess | None = None) -> EngineThread | EngineProcess:  # fmt: skip
+    def start_engine(
+        self,
+        method_factory: Callable[[str], Any] | None = None,
+        process: bool = False,
+        started: EngineProcess | None = None,
+    ) -> EngineThread | EngineProcess:
         """Start the engine and send it the whole session: a thread of this process, or
         with ``process`` a child process (:mod:`engine.studio.process`; the solver and
         the window then never wait for each other's interpreter lock). ``started`` is an
@@ -225,7 +229,9 @@ class Session:
     @property
     def num_frames(self) -> int:
         """Frames of the sensor source or the clip (0 without either)."""
-        return int(self.source.num_frames) if self.source is not None else 0 if self.motion is None else len(self.motion)
+        return (
+            int(self.source.num_frames) if self.source is not None else 0 if self.motion is None else len(self.motion)
+        )
 
     def open(self, path: str | Path, rig_map: str | Path | None = None) -> None:
         """Load a BVH (with the joint mapping file ``rig_map`` if given); on failure raise
@@ -295,6 +301,7 @@ class Session:
     def live_source(self) -> LiveSource | None:
         """The live tracker stream sensors come from, if they do."""
         from engine.tracker_io.live_source import LiveSource
+
         return self.source if isinstance(self.source, LiveSource) else None
 
     def _close_source(self) -> None:
@@ -408,8 +415,15 @@ class Session:
     # -- scenes ----------------------------------------------------------------------
     def to_scene(self) -> dict[str, Any]:
         """Plain-JSON description of the sensors, constraints and settings."""
-        return scene_to_dict(self.path, self.method, self.preset, tuple(self.sensors.values()),
-                             self.constraints, self.settings, self.frame)  # fmt: skip
+        return scene_to_dict(
+            self.path,
+            self.method,
+            self.preset,
+            tuple(self.sensors.values()),
+            self.constraints,
+            self.settings,
+            self.frame,
+        )
 
     def apply_scene(self, scene: dict[str, Any], where: str = "scene") -> str:
         """Restore :meth:`to_scene` output (:func:`engine.studio.scenes.apply_scene`)."""

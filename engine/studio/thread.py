@@ -267,8 +267,14 @@ class EngineThread(threading.Thread):
     def _republish(self) -> None:
         """Publish the last solved frame again with the current playback state and debug pose."""
         if self._source is not None and self._last_solved >= 0:
-            self._publish(self._last_solved, self._source.frame(self._last_solved), self._last_result,
-                          self._last_ms, self._pending_error, self._last_ghosts)  # fmt: skip
+            self._publish(
+                self._last_solved,
+                self._source.frame(self._last_solved),
+                self._last_result,
+                self._last_ms,
+                self._pending_error,
+                self._last_ghosts,
+            )
 
     def _clamp(self, frame: int) -> int:
         n = self._source.num_frames if self._source is not None else 0
@@ -375,8 +381,9 @@ class EngineThread(threading.Thread):
         else:
             self._decoded = decoded
 
-    def _publish(self, frame: int, sf: SensorFrame, res: FrameResult | None, ms: float,
-                 error: str, ghosts: dict[str, np.ndarray]) -> None:  # fmt: skip
+    def _publish(
+        self, frame: int, sf: SensorFrame, res: FrameResult | None, ms: float, error: str, ghosts: dict[str, np.ndarray]
+    ) -> None:
         src = self._loaded()
         joints = tuple(sf.readings)
         readings = [sf.readings[j] for j in joints]
@@ -384,8 +391,11 @@ class EngineThread(threading.Thread):
         self._seq += 1
         method = self._methods.method
         snap = Snapshot(
-            seq=self._seq, frame=frame, num_frames=src.num_frames,
-            positions=readonly(self._last_pose), ground_truth=readonly(src.ground_truth(frame)),
+            seq=self._seq,
+            frame=frame,
+            num_frames=src.num_frames,
+            positions=readonly(self._last_pose),
+            ground_truth=readonly(src.ground_truth(frame)),
             ghosts={k: readonly(v) for k, v in ghosts.items()},
             target_joints=joints,
             target_positions=readonly(np.array([r.position for r in readings]).reshape(-1, 3)),
@@ -394,16 +404,29 @@ class EngineThread(threading.Thread):
             gizmos=gizmos_of(self._methods.constraints, self._last_pose, self._report_error),
             losses=losses_of(res, sf),
             latent=readonly(last.latent) if last is not None and last.latent is not None else None,
-            iterations=res.iterations if res else 0, ms=ms,
-            warnings=self._warnings, messages=tuple(res.warnings) if res else (), error=error,
-            method_error=self._method_error, engine_fps=self._fps, playing=self._playing,
+            iterations=res.iterations if res else 0,
+            ms=ms,
+            warnings=self._warnings,
+            messages=tuple(res.warnings) if res else (),
+            error=error,
+            method_error=self._method_error,
+            engine_fps=self._fps,
+            playing=self._playing,
             method=method.name if method is not None else self._methods.name,
             can_decode=isinstance(method, DecodesLatents),
             decoded=readonly(self._decoded) if self._decoded is not None else None,
-            history=tuple(self._history), history_run=self._history_run, solved=self._solved, frames_skipped=self._skipped, pace=self._clock.pace,
-            timing=timing_of(res, ms, self._latency_ms), recent_errors=tuple(self._recent_errors), plays=self._plays,
-            latent_view=self._latent.view, latent_detail=self._latent.detail, latent_note=self._latent.note,
-        )  # fmt: skip
+            history=tuple(self._history),
+            history_run=self._history_run,
+            solved=self._solved,
+            frames_skipped=self._skipped,
+            pace=self._clock.pace,
+            timing=timing_of(res, ms, self._latency_ms),
+            recent_errors=tuple(self._recent_errors),
+            plays=self._plays,
+            latent_view=self._latent.view,
+            latent_detail=self._latent.detail,
+            latent_note=self._latent.note,
+        )
         self._method_error = ""
         self.latest = snap
         for cb in list(self.listeners):

@@ -79,7 +79,9 @@ class Calibration:
     offsets: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
     frames: int = 0
 
-    def apply(self, joint: str, position: np.ndarray, rotation: np.ndarray, dof: int = 6) -> tuple[np.ndarray, np.ndarray]:
+    def apply(
+        self, joint: str, position: np.ndarray, rotation: np.ndarray, dof: int = 6
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Joint pose from a tracker pose (unchanged for 3-DoF or uncalibrated joints)."""
         off = self.offsets.get(joint)
         if off is None or dof != 6:
@@ -89,15 +91,23 @@ class Calibration:
 
     def to_json(self) -> dict:
         return {
-            "pose": self.pose, "scale": self.scale, "arm_scale": self.arm_scale,
-            "height_m": self.height_m, "arm_span_m": self.arm_span_m, "frames": self.frames,
-            "offsets": {j: {"pos": o.round(5).tolist(), "quat": r.round(6).tolist()} for j, (o, r) in self.offsets.items()},
-        }  # fmt: skip
+            "pose": self.pose,
+            "scale": self.scale,
+            "arm_scale": self.arm_scale,
+            "height_m": self.height_m,
+            "arm_span_m": self.arm_span_m,
+            "frames": self.frames,
+            "offsets": {
+                j: {"pos": o.round(5).tolist(), "quat": r.round(6).tolist()} for j, (o, r) in self.offsets.items()
+            },
+        }
 
     def summary(self) -> str:
         span = f", arm span {self.arm_span_m:.3f} m" if self.arm_span_m else ""
-        return (f"calibrated ({self.pose}, {self.frames} frames): height {self.height_m:.3f} m "
-                f"(scale {self.scale:.3f}, arms {self.arm_scale:.3f}){span}; offsets for {', '.join(self.offsets) or 'none'}")  # fmt: skip
+        return (
+            f"calibrated ({self.pose}, {self.frames} frames): height {self.height_m:.3f} m "
+            f"(scale {self.scale:.3f}, arms {self.arm_scale:.3f}){span}; offsets for {', '.join(self.offsets) or 'none'}"
+        )
 
 
 def scaled_skeleton(scale: float, arm_scale: float | None = None) -> sk.Skeleton:
@@ -168,8 +178,10 @@ def calibrate(frames: Sequence[SensorFrame], pose: str = "auto") -> Calibration:
         raise UserError("calibration needs a head or a hip tracker")
     if not 0.5 <= scale <= 1.5:
         height = (mean["upperneck"] if "upperneck" in mean else mean["root"])[0][2]
-        raise UserError(f"calibration: the head is at {height:.2f} m, "
-                        f"an implausible size (scale {scale:.2f}); is the floor at z = 0 and the wearer standing?")  # fmt: skip
+        raise UserError(
+            f"calibration: the head is at {height:.2f} m, "
+            f"an implausible size (scale {scale:.2f}); is the floor at z = 0 and the wearer standing?"
+        )
 
     hands = all(h in mean for h in _HAND_SLOTS)
     span = float(np.linalg.norm(mean["lwrist"][0] - mean["rwrist"][0])) if hands else None
@@ -188,8 +200,9 @@ def calibrate(frames: Sequence[SensorFrame], pose: str = "auto") -> Calibration:
     arm = _arm_scale(scale, span) if pose == "tpose" and span is not None else scale
     skel = scaled_skeleton(scale, arm)
     offsets = _offsets(mean, skel, pose)
-    return Calibration(skel, float(scale), float(arm), skel.height(), span if pose == "tpose" else None,
-                       pose, offsets, len(frames))  # fmt: skip
+    return Calibration(
+        skel, float(scale), float(arm), skel.height(), span if pose == "tpose" else None, pose, offsets, len(frames)
+    )
 
 
 def _arm_scale(scale: float, span: float) -> float:

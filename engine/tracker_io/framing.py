@@ -168,8 +168,13 @@ class FrameAssembler:
                 self._place(*self._pending, "last", out)
                 self._pending = None
         f = self._frame
-        if self.timed is False and f is not None and f.t is not None and not f.closed \
-                and now - f.last_wire >= self.silence():  # fmt: skip
+        if (
+            self.timed is False
+            and f is not None
+            and f.t is not None
+            and not f.closed
+            and now - f.last_wire >= self.silence()
+        ):
             f.closed = True
             out.append(Piece(f.t, [], f.last_arrival, True))
         return out

@@ -103,8 +103,16 @@ class LiveRun:
         (module doc); 0: none, every frame gets all its iterations.
     """
 
-    def __init__(self, receiver: VMCReceiver, method: Method, skeleton: sk.Skeleton, fps: float = sk.FPS,
-                 calibrate_s: float = 0.0, calibration_pose: str = "auto", budget_ms: float = 0.0) -> None:  # fmt: skip
+    def __init__(
+        self,
+        receiver: VMCReceiver,
+        method: Method,
+        skeleton: sk.Skeleton,
+        fps: float = sk.FPS,
+        calibrate_s: float = 0.0,
+        calibration_pose: str = "auto",
+        budget_ms: float = 0.0,
+    ) -> None:
         self.receiver = receiver
         self.method = method
         self.skeleton = skeleton
@@ -115,8 +123,12 @@ class LiveRun:
         self.stop_event = threading.Event()
         self.result = LiveResult()  # filled while running, so an interrupt keeps it
 
-    def run(self, duration_s: float | None = None, idle_timeout_s: float | None = None,
-            on_frame: Callable[[LiveResult], None] | None = None) -> LiveResult:  # fmt: skip
+    def run(
+        self,
+        duration_s: float | None = None,
+        idle_timeout_s: float | None = None,
+        on_frame: Callable[[LiveResult], None] | None = None,
+    ) -> LiveResult:
         """Run until ``duration_s`` (wall clock from the call), until no frame came for
         ``idle_timeout_s`` after the stream started, or until :attr:`stop_event` is set."""
         out = self.result = LiveResult()
@@ -136,8 +148,14 @@ class LiveRun:
                 gc.enable()
         return out
 
-    def _loop(self, out: LiveResult, start: float, duration_s: float | None, idle_timeout_s: float | None,
-              on_frame: Callable[[LiveResult], None] | None) -> None:  # fmt: skip
+    def _loop(
+        self,
+        out: LiveResult,
+        start: float,
+        duration_s: float | None,
+        idle_timeout_s: float | None,
+        on_frame: Callable[[LiveResult], None] | None,
+    ) -> None:
         window: list[SensorFrame] = []
         cal_t0: float | None = None
         calibrating = self.calibrate_s > 0
@@ -195,8 +213,13 @@ def calibration_window(times: Sequence[float] | np.ndarray, seconds: float) -> i
     return min(int(np.searchsorted(t - t[0], seconds, side="left")) + 1, t.size)
 
 
-def to_motion(times: Sequence[float] | np.ndarray, results: Sequence[FrameResult], skeleton: sk.Skeleton,
-              fps: float, name: str = "") -> Motion:  # fmt: skip
+def to_motion(
+    times: Sequence[float] | np.ndarray,
+    results: Sequence[FrameResult],
+    skeleton: sk.Skeleton,
+    fps: float,
+    name: str = "",
+) -> Motion:
     """The solved frames on a regular timeline at ``fps`` from the first to the last
     solved time; a frame that was not solved holds the pose solved before it."""
     if not results:
@@ -212,7 +235,9 @@ def to_motion(times: Sequence[float] | np.ndarray, results: Sequence[FrameResult
     return Motion(local, root, skeleton, fps, name)
 
 
-def reference_error(times: Sequence[float] | np.ndarray, results: Sequence[FrameResult], reference: Motion | None) -> dict:
+def reference_error(
+    times: Sequence[float] | np.ndarray, results: Sequence[FrameResult], reference: Motion | None
+) -> dict:
     """Mean joint position error (22 joints, cm) of solved frames against the clip
     frame at the same time (``round(t * fps)``), or a note that there is no ground truth."""
     if reference is None:
@@ -254,8 +279,12 @@ def iteration_summary(iterations: Sequence[int]) -> dict:
     if not iterations:
         return {"median": None, "mean": None, "p5": None, "min": None}
     a = np.asarray(iterations, float)
-    return {"median": float(np.median(a)), "mean": float(a.mean()), "p5": float(np.percentile(a, 5)),
-            "min": int(a.min())}  # fmt: skip
+    return {
+        "median": float(np.median(a)),
+        "mean": float(a.mean()),
+        "p5": float(np.percentile(a, 5)),
+        "min": int(a.min()),
+    }
 
 
 def completeness_summary(fresh: Sequence[int], devices: Sequence[int]) -> dict:
@@ -263,14 +292,27 @@ def completeness_summary(fresh: Sequence[int], devices: Sequence[int]) -> dict:
     sent a sample for them, the mean and minimum of fresh devices per frame, and how many
     frames had each count (``by_fresh``)."""
     if not fresh:
-        return {"frames": 0, "complete": 0, "complete_fraction": None, "fresh_mean": None, "fresh_min": None,
-                "devices": 0, "by_fresh": {}}  # fmt: skip
+        return {
+            "frames": 0,
+            "complete": 0,
+            "complete_fraction": None,
+            "fresh_mean": None,
+            "fresh_min": None,
+            "devices": 0,
+            "by_fresh": {},
+        }
     f, d = np.asarray(fresh, int), np.asarray(devices, int)
     complete = int(np.sum(f >= d))
     counts = np.bincount(f)
-    return {"frames": int(f.size), "complete": complete, "complete_fraction": complete / f.size,
-            "fresh_mean": float(f.mean()), "fresh_min": int(f.min()), "devices": int(d.max()),
-            "by_fresh": {str(k): int(n) for k, n in enumerate(counts) if n}}  # fmt: skip
+    return {
+        "frames": int(f.size),
+        "complete": complete,
+        "complete_fraction": complete / f.size,
+        "fresh_mean": float(f.mean()),
+        "fresh_min": int(f.min()),
+        "devices": int(d.max()),
+        "by_fresh": {str(k): int(n) for k, n in enumerate(counts) if n},
+    }
 
 
 def latency_summary(latency_ms: Sequence[float]) -> dict:

@@ -81,9 +81,16 @@ class LiveSource(SensorSource):
 
     live = True
 
-    def __init__(self, host: str = "0.0.0.0", port: int = 39539, mapping: TrackerMapping | None = None,
-                 convention: str = "unity", fps: float = sk.FPS, timeout_s: float = DEFAULT_TIMEOUT_S,
-                 history_s: float = 600.0) -> None:  # fmt: skip
+    def __init__(
+        self,
+        host: str = "0.0.0.0",
+        port: int = 39539,
+        mapping: TrackerMapping | None = None,
+        convention: str = "unity",
+        fps: float = sk.FPS,
+        timeout_s: float = DEFAULT_TIMEOUT_S,
+        history_s: float = 600.0,
+    ) -> None:
         self.mapping = mapping or TrackerMapping()
         self.receiver = VMCReceiver(host, port, self.mapping, convention, timeout_s, on_frame=self._on_frame)
         self._fps = float(fps)
@@ -141,7 +148,9 @@ class LiveSource(SensorSource):
     def start_recording(self, path: str | Path) -> None:
         """Record every sample from now on (atomically: the file appears on stop)."""
         self.stop_recording()
-        rec = RecordingWriter(path, header(self._fps, self.mapping, f"vmc udp {self.receiver.host}:{self.receiver.port}"))
+        rec = RecordingWriter(
+            path, header(self._fps, self.mapping, f"vmc udp {self.receiver.host}:{self.receiver.port}")
+        )
         self._recorder = rec
         self.receiver.recorder = rec
 
@@ -159,8 +168,14 @@ class LiveSource(SensorSource):
         """Count down ``countdown_s`` seconds (time to get into the pose), then average
         ``window_s`` seconds of frames and calibrate (:func:`calibrate`)."""
         with self._lock:
-            self._cal = {"phase": "countdown", "until": time.perf_counter() + countdown_s, "window": window_s,
-                         "pose": pose, "frames": [], "note": ""}  # fmt: skip
+            self._cal = {
+                "phase": "countdown",
+                "until": time.perf_counter() + countdown_s,
+                "window": window_s,
+                "pose": pose,
+                "frames": [],
+                "note": "",
+            }
 
     def _on_frame(self, f: LiveFrame) -> None:
         with self._lock:
@@ -204,7 +219,17 @@ class LiveSource(SensorSource):
             left = max(0.0, cal["until"] - time.perf_counter()) if cal["phase"] in ("countdown", "capturing") else 0.0
             phase, note = cal["phase"], cal["note"]
         rec = self._recorder
-        return LiveStatus(f"{self.receiver.host}:{self.receiver.port}", s.packets, s.frames,
-                          s.malformed_packets + s.malformed_messages, s.duplicates, s.late, s.packet_rate_hz,
-                          None if last is None else time.perf_counter() - last,
-                          str(rec.path) if rec is not None else None, phase, left, note)  # fmt: skip
+        return LiveStatus(
+            f"{self.receiver.host}:{self.receiver.port}",
+            s.packets,
+            s.frames,
+            s.malformed_packets + s.malformed_messages,
+            s.duplicates,
+            s.late,
+            s.packet_rate_hz,
+            None if last is None else time.perf_counter() - last,
+            str(rec.path) if rec is not None else None,
+            phase,
+            left,
+            note,
+        )

@@ -136,11 +136,17 @@ class VMCReceiver:
         Silence that closes a frame sent as separate messages (:mod:`~engine.tracker_io.framing`).
     """
 
-    def __init__(self, host: str = "127.0.0.1", port: int = DEFAULT_PORT, mapping: TrackerMapping | None = None,
-                 convention: str = "unity", timeout_s: float = DEFAULT_TIMEOUT_S,
-                 recorder: RecordingWriter | None = None,
-                 on_frame: Callable[[LiveFrame], None] | None = None,
-                 frame_gap_s: float = FRAME_GAP_S) -> None:  # fmt: skip
+    def __init__(
+        self,
+        host: str = "127.0.0.1",
+        port: int = DEFAULT_PORT,
+        mapping: TrackerMapping | None = None,
+        convention: str = "unity",
+        timeout_s: float = DEFAULT_TIMEOUT_S,
+        recorder: RecordingWriter | None = None,
+        on_frame: Callable[[LiveFrame], None] | None = None,
+        frame_gap_s: float = FRAME_GAP_S,
+    ) -> None:
         if convention not in CONVENTIONS:
             raise UserError(f"unknown coordinate convention {convention!r}; known: {', '.join(CONVENTIONS)}")
         self.state = TrackerState(mapping, timeout_s)
@@ -339,8 +345,9 @@ class VMCReceiver:
         if self._max_t is None or t > self._max_t:
             self._max_t = t
             self.stats.frames += 1
-            self._frame = LiveFrame(self.stats.frames, t, arrival, self.state.frame(self.stats.frames, t), fresh,
-                                    len(mapped))  # fmt: skip
+            self._frame = LiveFrame(
+                self.stats.frames, t, arrival, self.state.frame(self.stats.frames, t), fresh, len(mapped)
+            )
             self._lock.notify_all()
             if self.on_frame is not None:
                 self.on_frame(self._frame)

@@ -86,8 +86,16 @@ class Recording:
 
 def header(fps: float, mapping: TrackerMapping, source: str, **extra: Any) -> dict:
     """The header object our writer puts on line 1."""
-    return {"format": FORMAT, "version": VERSION, "convention": "project", "units": "m",
-            "fps": float(fps), "mapping": mapping.to_json(), "source": source, **extra}  # fmt: skip
+    return {
+        "format": FORMAT,
+        "version": VERSION,
+        "convention": "project",
+        "units": "m",
+        "fps": float(fps),
+        "mapping": mapping.to_json(),
+        "source": source,
+        **extra,
+    }
 
 
 def sample_line(s: TrackerSample, slot: str | None = None) -> str:
@@ -157,8 +165,13 @@ class RecordingWriter:
             self.abort()
 
 
-def write_recording(path: str | Path, samples: Iterable[TrackerSample], fps: float,
-                    mapping: TrackerMapping | None = None, source: str = "") -> None:  # fmt: skip
+def write_recording(
+    path: str | Path,
+    samples: Iterable[TrackerSample],
+    fps: float,
+    mapping: TrackerMapping | None = None,
+    source: str = "",
+) -> None:
     """Write a whole recording at once (atomically)."""
     mapping = mapping or TrackerMapping()
     with RecordingWriter(path, header(fps, mapping, source)) as w:
@@ -168,7 +181,11 @@ def write_recording(path: str | Path, samples: Iterable[TrackerSample], fps: flo
 
 def _numbers(obj: dict, key: str, n: int, where: str) -> np.ndarray:
     v = obj.get(key)
-    if not isinstance(v, list) or len(v) != n or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v):
+    if (
+        not isinstance(v, list)
+        or len(v) != n
+        or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v)
+    ):
         raise UserError(f"{where}: field {key!r} must be a list of {n} numbers")
     a = np.array(v, float)
     if not np.all(np.isfinite(a)):
@@ -225,8 +242,9 @@ def read_recording(path: str | Path) -> Recording:
     if "mapping" in head:
         try:
             m = head["mapping"]
-            mapping = TrackerMapping({str(k): str(v) for k, v in m["slots"].items()},
-                                     {str(k): int(v) for k, v in m.get("dof", {}).items()})  # fmt: skip
+            mapping = TrackerMapping(
+                {str(k): str(v) for k, v in m["slots"].items()}, {str(k): int(v) for k, v in m.get("dof", {}).items()}
+            )
         except (KeyError, TypeError, ValueError, AttributeError, UserError) as exc:
             raise UserError(f"{path}:1: field 'mapping': {exc}") from None
     return Recording(samples, mapping, float(head.get("fps", sk.FPS)), head, path)
@@ -273,8 +291,13 @@ def _parse_sample(line: str, where: str, conv: str) -> TrackerSample:
     return TrackerSample(float(t), name, pos, quat, valid)
 
 
-def replay(samples: Iterable[TrackerSample], mapping: TrackerMapping, calibration: Calibration | None = None,
-           timeout_s: float = DEFAULT_TIMEOUT_S, fps: float = sk.FPS) -> tuple[Tracking, np.ndarray]:  # fmt: skip
+def replay(
+    samples: Iterable[TrackerSample],
+    mapping: TrackerMapping,
+    calibration: Calibration | None = None,
+    timeout_s: float = DEFAULT_TIMEOUT_S,
+    fps: float = sk.FPS,
+) -> tuple[Tracking, np.ndarray]:
     """Feed samples through :class:`TrackerState` frame by frame, as the live receiver
     does, and collect the readings as a :class:`~engine.tracking.simulate.Tracking`.
 
@@ -305,8 +328,10 @@ def replay(samples: Iterable[TrackerSample], mapping: TrackerMapping, calibratio
         times.append(t)
     joints = tuple(j for j in sk.JOINT_NAMES if any(j in f.readings for f in frames))
     if not joints:
-        raise UserError("the recording has no valid sample of a mapped tracker "
-                        f"(mapping: {', '.join(f'{k}={v}' for k, v in mapping.slots.items())})")  # fmt: skip
+        raise UserError(
+            "the recording has no valid sample of a mapped tracker "
+            f"(mapping: {', '.join(f'{k}={v}' for k, v in mapping.slots.items())})"
+        )
     n, s = len(frames), len(joints)
     pos = np.zeros((n, s, 3))
     rot = np.tile(np.array([1.0, 0.0, 0.0, 0.0]), (n, s, 1))

@@ -35,7 +35,9 @@ class RecordingSource(SensorSource):
         if calibrate_s > 0:
             n = calibration_window(self.times, calibrate_s)
             self.calibration = calibrate([tracking.frame(i) for i in range(n)])
-            tracking, _ = replay(self.recording.samples, self.recording.mapping, self.calibration, fps=self.recording.fps)
+            tracking, _ = replay(
+                self.recording.samples, self.recording.mapping, self.calibration, fps=self.recording.fps
+            )
             self.skeleton = self.calibration.skeleton
         self.tracking = tracking
 

@@ -61,8 +61,13 @@ def with_tpose(motion: Motion, seconds: float) -> Motion:
     local[:, 0] = Q.heading(motion.local_rot[0, 0])
     root = np.tile(motion.root_pos[0], (n, 1))
     root[:, 2] = standing_root_height(motion.skeleton)
-    return Motion(np.concatenate([local, motion.local_rot]), np.concatenate([root, motion.root_pos]),
-                  motion.skeleton, motion.fps, motion.name)  # fmt: skip
+    return Motion(
+        np.concatenate([local, motion.local_rot]),
+        np.concatenate([root, motion.root_pos]),
+        motion.skeleton,
+        motion.fps,
+        motion.name,
+    )
 
 
 @dataclass
@@ -97,12 +102,24 @@ def scaled_motion(motion: Motion, factor: float) -> Motion:
     """The same motion by a subject ``factor`` times the size (bones and root path)."""
     if factor == 1.0:
         return motion
-    return Motion(motion.local_rot, motion.root_pos * factor, sk.Skeleton(motion.skeleton.offsets * factor),
-                  motion.fps, motion.name)  # fmt: skip
+    return Motion(
+        motion.local_rot,
+        motion.root_pos * factor,
+        sk.Skeleton(motion.skeleton.offsets * factor),
+        motion.fps,
+        motion.name,
+    )
 
 
-def plan_stream(motion: Motion, sensors: str = "6", noise_pos_m: float = 0.0, seed: int = 0,
-                tpose_s: float = 0.0, hardware_offsets: bool = False, fps: float | None = None) -> StreamPlan:  # fmt: skip
+def plan_stream(
+    motion: Motion,
+    sensors: str = "6",
+    noise_pos_m: float = 0.0,
+    seed: int = 0,
+    tpose_s: float = 0.0,
+    hardware_offsets: bool = False,
+    fps: float | None = None,
+) -> StreamPlan:
     """Simulate the trackers of ``motion`` for sending (see module docs).
 
     ``fps`` (default: the clip's) is the sending rate; frames are then picked nearest in
@@ -155,10 +172,19 @@ def parse_target(text: str) -> tuple[str, int]:
     return host, p
 
 
-def send_stream(plan: StreamPlan, host: str, port: int, fps: float, drop: float = 0.0, seed: int = 0,
-                convention: str = "unity", realtime: bool = True,
-                on_frame: Callable[[int], None] | None = None, shape: str = "bundle",
-                chatter: bool = False) -> SendStats:  # fmt: skip
+def send_stream(
+    plan: StreamPlan,
+    host: str,
+    port: int,
+    fps: float,
+    drop: float = 0.0,
+    seed: int = 0,
+    convention: str = "unity",
+    realtime: bool = True,
+    on_frame: Callable[[int], None] | None = None,
+    shape: str = "bundle",
+    chatter: bool = False,
+) -> SendStats:
     """Send the plan to ``host:port``, one frame at ``fps``.
 
     Parameters

@@ -87,8 +87,9 @@ class TrackerMapping:
         joints = list(self.slots.values())
         for name, joint in self.slots.items():
             if joint not in sk.JOINT_INDEX:
-                raise UserError(f"tracker mapping: {name!r} -> unknown joint {joint!r}; "
-                                f"valid joints: {', '.join(sk.JOINT_NAMES)}")  # fmt: skip
+                raise UserError(
+                    f"tracker mapping: {name!r} -> unknown joint {joint!r}; valid joints: {', '.join(sk.JOINT_NAMES)}"
+                )
             if joints.count(joint) > 1:
                 raise UserError(f"tracker mapping: joint {joint!r} is driven by more than one tracker")
         for name, d in self.dof.items():
@@ -135,8 +136,10 @@ class TrackerMapping:
             slots = {str(k): str(v) for k, v in data["slots"].items()}
             dof = {str(k): int(v) for k, v in data.get("dof", {}).items()}
         except (ValueError, KeyError, TypeError, AttributeError) as exc:
-            raise UserError(f"{path}: not a tracker mapping ({type(exc).__name__}: {exc}); "
-                            'expected {"slots": {"head": "upperneck", ...}, "dof": {...}}') from exc  # fmt: skip
+            raise UserError(
+                f"{path}: not a tracker mapping ({type(exc).__name__}: {exc}); "
+                'expected {"slots": {"head": "upperneck", ...}, "dof": {...}}'
+            ) from exc
         try:
             return cls(slots, dof)
         except UserError as exc:
@@ -159,8 +162,12 @@ class TrackerState:
         :mod:`engine.tracker_io.calibration`).
     """
 
-    def __init__(self, mapping: TrackerMapping | None = None, timeout_s: float = DEFAULT_TIMEOUT_S,
-                 calibration: Calibration | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        mapping: TrackerMapping | None = None,
+        timeout_s: float = DEFAULT_TIMEOUT_S,
+        calibration: Calibration | None = None,
+    ) -> None:
         self.mapping = mapping or TrackerMapping()
         self.timeout_s = float(timeout_s)
         self.calibration = calibration
@@ -197,7 +204,7 @@ class TrackerState:
             if self.calibration is not None:
                 pos, rot = self.calibration.apply(joint, pos, rot, dof)
             connected = bool(self.valid.get(name, False)) and (t - s.t) <= self.timeout_s
-            readings[joint] = Sensor(joint, np.array(pos, float),
-                                     np.array(rot if dof == 6 else (1.0, 0.0, 0.0, 0.0), float),
-                                     dof, connected)  # fmt: skip
+            readings[joint] = Sensor(
+                joint, np.array(pos, float), np.array(rot if dof == 6 else (1.0, 0.0, 0.0, 0.0), float), dof, connected
+            )
         return SensorFrame(index, readings)

@@ -46,8 +46,14 @@ POSE_ADDRESSES = frozenset({HMD, CONTROLLER, TRACKER, HMD + "/Local", CONTROLLER
 #: Address our sender uses per tracker name (others go out as ``/VMC/Ext/Tra/Pos``).
 SEND_ADDRESS = {"head": HMD, "left_hand": CONTROLLER, "right_hand": CONTROLLER}
 #: Humanoid bone our sender names in ``/VMC/Ext/Bone/Pos`` chatter, per tracker name.
-CHATTER_BONE = {"head": "Head", "left_hand": "LeftHand", "right_hand": "RightHand", "hips": "Hips",
-                "left_foot": "LeftFoot", "right_foot": "RightFoot"}  # fmt: skip
+CHATTER_BONE = {
+    "head": "Head",
+    "left_hand": "LeftHand",
+    "right_hand": "RightHand",
+    "hips": "Hips",
+    "left_foot": "LeftFoot",
+    "right_foot": "RightFoot",
+}
 
 #: How a frame goes on the wire: one bundle, or one message per datagram with the time
 #: before the devices, after them, or not at all.
@@ -88,8 +94,9 @@ class Packet:
     other: int = 0
 
 
-def encode_frame(t: float, poses: Sequence[tuple[str, np.ndarray, np.ndarray]], convention: str = "unity",
-                 chatter: bool = False) -> bytes:  # fmt: skip
+def encode_frame(
+    t: float, poses: Sequence[tuple[str, np.ndarray, np.ndarray]], convention: str = "unity", chatter: bool = False
+) -> bytes:
     """One OSC bundle with the frame's time and every tracker's pose.
 
     Parameters
@@ -109,8 +116,13 @@ def encode_frame(t: float, poses: Sequence[tuple[str, np.ndarray, np.ndarray]], 
     return bundle.build().dgram
 
 
-def encode_packets(t: float, poses: Sequence[tuple[str, np.ndarray, np.ndarray]], convention: str = "unity",
-                   shape: str = "bundle", chatter: bool = False) -> list[bytes]:  # fmt: skip
+def encode_packets(
+    t: float,
+    poses: Sequence[tuple[str, np.ndarray, np.ndarray]],
+    convention: str = "unity",
+    shape: str = "bundle",
+    chatter: bool = False,
+) -> list[bytes]:
     """The datagrams of one frame in ``shape`` (:data:`SHAPES`): one bundle
     (:func:`encode_frame`), or one message per datagram with ``/VMC/Ext/T`` first, last or
     left out. ``chatter`` adds ``/VMC/Ext/OK``, ``/VMC/Ext/Root/Pos`` and one
@@ -123,8 +135,9 @@ def encode_packets(t: float, poses: Sequence[tuple[str, np.ndarray, np.ndarray]]
     return [m.dgram for m in _messages(t, poses, convention, shape, chatter)]
 
 
-def _messages(t: float, poses: Sequence[tuple[str, np.ndarray, np.ndarray]], convention: str, shape: str,
-              chatter: bool) -> list[OscMessage]:  # fmt: skip
+def _messages(
+    t: float, poses: Sequence[tuple[str, np.ndarray, np.ndarray]], convention: str, shape: str, chatter: bool
+) -> list[OscMessage]:
     time_msg = OscMessageBuilder(TIME)
     time_msg.add_arg(float(t), "f")
     out = [time_msg.build()] if shape == "time-first" else []

@@ -112,8 +112,9 @@ def _specs(sensors: str | Sequence[str | Sensor]) -> tuple[Sensor, ...]:
     return parse_sensors(",".join(f"{s.joint}:{s.dof}" for s in out))
 
 
-def faulty_mask(num_frames: int, num_sensors: int, prob: float, rng: np.random.Generator,
-                down_frames: int = FAULTY_DOWN_FRAMES) -> np.ndarray:
+def faulty_mask(
+    num_frames: int, num_sensors: int, prob: float, rng: np.random.Generator, down_frames: int = FAULTY_DOWN_FRAMES
+) -> np.ndarray:
     """Connected mask ``(F, S)`` of the faulty-sensor model (DragPoser sec. 5.2).
 
     Each frame, with probability ``prob``, one uniformly chosen connected sensor

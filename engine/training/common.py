@@ -35,8 +35,9 @@ def start_from(model: PoseVAE | TemporalPredictor | SparsePoser | RPM, path: str
     ``model`` for fine-tuning; the two architectures (``config.to_dict()``) must match."""
     init, _ = loader(Path(path))
     if init.config.to_dict() != model.config.to_dict():
-        raise UserError(f"init {path}: architecture {init.config.to_dict()} differs from the "
-                        f"settings' {model.config.to_dict()}")  # fmt: skip
+        raise UserError(
+            f"init {path}: architecture {init.config.to_dict()} differs from the settings' {model.config.to_dict()}"
+        )
     model.load_state_dict(init.state_dict())
 
 

@@ -91,8 +91,12 @@ def run_epochs(
             break
         model.train()
         sums: dict[str, float] = {}
-        bar = tqdm(range(sched.steps_per_epoch), desc=f"{name} epoch {epoch + 1}/{sched.epochs}",
-                   disable=not (progress and ddp.main), leave=False)  # fmt: skip
+        bar = tqdm(
+            range(sched.steps_per_epoch),
+            desc=f"{name} epoch {epoch + 1}/{sched.epochs}",
+            disable=not (progress and ddp.main),
+            leave=False,
+        )
         done = 0
         for i in bar:
             minutes = minutes_before + (time.monotonic() - t0) / 60
@@ -119,16 +123,27 @@ def run_epochs(
             log.append(row)
             if progress:
                 tqdm.write(" ".join(f"{k}={v:.4g}" for k, v in row.items()))
-            meta.update({k: v for k, v in row.items() if k.startswith("val_")}, epochs=epoch + 1,
-                        minutes=round(minutes, 2))  # fmt: skip
+            meta.update(
+                {k: v for k, v in row.items() if k.startswith("val_")}, epochs=epoch + 1, minutes=round(minutes, 2)
+            )
             if row[best_key] < best:
                 best = row[best_key]
                 meta["best_epoch"] = epoch + 1
                 save_checkpoint(out_dir / "best.pt", payload(dict(meta)))
-            save_checkpoint(out_dir / "last.pt", {
-                "state_dict": model.state_dict(), "optimizers": [o.state_dict() for o in optimizers],
-                "epoch": epoch + 1, "minutes": minutes, "best": best, "step": step_total,
-                "curve": log.rows, "gen": gen.get_state(), "meta": meta})  # fmt: skip
+            save_checkpoint(
+                out_dir / "last.pt",
+                {
+                    "state_dict": model.state_dict(),
+                    "optimizers": [o.state_dict() for o in optimizers],
+                    "epoch": epoch + 1,
+                    "minutes": minutes,
+                    "best": best,
+                    "step": step_total,
+                    "curve": log.rows,
+                    "gen": gen.get_state(),
+                    "meta": meta,
+                },
+            )
         ddp.barrier()
     if ddp.main:
         meta["finished"], meta["steps"] = True, step_total

@@ -36,8 +36,12 @@ from engine.models.vae import PoseVAE
 from engine.training.common import CurveLog, Distributed, config_dict, save_checkpoint, seed_everything, start_from
 from engine.training.data import PoseData, load_split
 
-LIMBS = (("lhip", "lknee", "lankle", "ltoe"), ("rhip", "rknee", "rankle", "rtoe"),
-         ("lclavicle", "lshoulder", "lelbow", "lwrist"), ("rclavicle", "rshoulder", "relbow", "rwrist"))  # fmt: skip
+LIMBS = (
+    ("lhip", "lknee", "lankle", "ltoe"),
+    ("rhip", "rknee", "rankle", "rtoe"),
+    ("lclavicle", "lshoulder", "lelbow", "lwrist"),
+    ("rclavicle", "rshoulder", "relbow", "rwrist"),
+)
 
 
 @dataclass
@@ -73,9 +77,17 @@ class PredictorTrainConfig:
     init: str = ""
 
     def model_config(self) -> PredictorConfig:
-        return PredictorConfig(d_model=self.d_model, heads=self.heads, encoder_layers=self.encoder_layers,
-                               decoder_layers=self.decoder_layers, feedforward=self.feedforward,
-                               dropout=self.dropout, past=self.past, future=self.future, stride=self.stride)  # fmt: skip
+        return PredictorConfig(
+            d_model=self.d_model,
+            heads=self.heads,
+            encoder_layers=self.encoder_layers,
+            decoder_layers=self.decoder_layers,
+            feedforward=self.feedforward,
+            dropout=self.dropout,
+            past=self.past,
+            future=self.future,
+            stride=self.stride,
+        )
 
 
 @torch.no_grad()
@@ -136,6 +148,7 @@ def make_batch(t, z, zc, cond, noisy, flags, cfg, gen):
     past_idx = t[:, None] + n * torch.arange(-wp, 0)[None]
     tok_idx = t[:, None] + n * torch.arange(0, wf)[None]
     tgt_idx = tok_idx + n
+
     def inputs(idx):
         clean = z[idx]
         if noisy is None:
@@ -143,6 +156,7 @@ def make_batch(t, z, zc, cond, noisy, flags, cfg, gen):
         k = torch.randint(noisy.shape[0], idx.shape, generator=gen)
         use = flags[k, idx]
         return torch.where(use[..., None], noisy[k, idx], clean)
+
     return inputs(past_idx), cond[past_idx], inputs(tok_idx), z[tgt_idx]
 
 
@@ -150,8 +164,15 @@ def _lr(cfg: PredictorTrainConfig, frac: float) -> float:
     return cfg.lr_final + (cfg.lr - cfg.lr_final) * 0.5 * (1 + math.cos(math.pi * min(1.0, frac)))
 
 
-def train_predictor(data_dir: Path, vae_path: Path, out_dir: Path, cfg: PredictorTrainConfig,
-                    resume: bool = False, progress: bool = True, device: str = "auto") -> dict:  # fmt: skip
+def train_predictor(
+    data_dir: Path,
+    vae_path: Path,
+    out_dir: Path,
+    cfg: PredictorTrainConfig,
+    resume: bool = False,
+    progress: bool = True,
+    device: str = "auto",
+) -> dict:
     """Train (or resume) the predictor; writes ``predictor.pt``, ``best.pt``, ``last.pt``, losses.
 
     ``device`` as :func:`engine.training.vae.train_vae`'s: the latents are made on the CPU,
@@ -188,13 +209,21 @@ def train_predictor(data_dir: Path, vae_path: Path, out_dir: Path, cfg: Predicto
         gen.set_state(ck["gen"])
     total = cfg.epochs * cfg.steps_per_epoch
     t0 = time.monotonic()
-    meta = {"vae": str(vae_path), "vae_data_hash": vae_meta.get("data_hash"), "train_anchors": len(a_tr),
-            "device": str(ddp.device)}  # fmt: skip
+    meta = {
+        "vae": str(vae_path),
+        "vae_data_hash": vae_meta.get("data_hash"),
+        "train_anchors": len(a_tr),
+        "device": str(ddp.device),
+    }
     for epoch in range(start, cfg.epochs):
         model.train()
         run = 0.0
-        bar = tqdm(range(cfg.steps_per_epoch), desc=f"predictor epoch {epoch + 1}/{cfg.epochs}",
-                   disable=not (progress and ddp.main), leave=False)  # fmt: skip
+        bar = tqdm(
+            range(cfg.steps_per_epoch),
+            desc=f"predictor epoch {epoch + 1}/{cfg.epochs}",
+            disable=not (progress and ddp.main),
+            leave=False,
+        )
         for step in bar:
             minutes = minutes_before + (time.monotonic() - t0) / 60
             frac = max(step_total / total, minutes / cfg.minutes if cfg.minutes else 0.0)
@@ -202,7 +231,9 @@ def train_predictor(data_dir: Path, vae_path: Path, out_dir: Path, cfg: Predicto
                 g["lr"] = _lr(cfg, frac)
             pick = torch.randint(len(a_tr), (cfg.batch_size * ddp.world,), generator=gen)
             t = a_tr[pick[ddp.rank :: ddp.world]]
-            past, cond, tokens, target = (x.to(ddp.device) for x in make_batch(t, z_tr, None, c_tr, noisy, flags, cfg, gen))
+            past, cond, tokens, target = (
+                x.to(ddp.device) for x in make_batch(t, z_tr, None, c_tr, noisy, flags, cfg, gen)
+            )
             memory = model.encode_past(past, cond)
             if cfg.self_feed > 0:
                 tokens = self_fed(model, tokens, memory, cfg.self_feed, gen)
@@ -227,14 +258,28 @@ def train_predictor(data_dir: Path, vae_path: Path, out_dir: Path, cfg: Predicto
             log.append(row)
             if progress:
                 tqdm.write(" ".join(f"{k}={v:.4g}" for k, v in row.items()))
-            meta.update(epochs=epoch + 1, minutes=round(minutes, 2), val_mse=row["val_mse"],
-                        val_rollout_mse=row["val_rollout_mse"])  # fmt: skip
+            meta.update(
+                epochs=epoch + 1,
+                minutes=round(minutes, 2),
+                val_mse=row["val_mse"],
+                val_rollout_mse=row["val_rollout_mse"],
+            )
             if row[cfg.select] < best:
                 best = row[cfg.select]
                 save_checkpoint(out_dir / "best.pt", payload(model, cfg, dict(meta)))
-            save_checkpoint(out_dir / "last.pt", {"state_dict": model.state_dict(), "optimizer": opt.state_dict(),
-                                                  "epoch": epoch + 1, "minutes": minutes, "best": best, "step": step_total,
-                                                  "curve": log.rows, "gen": gen.get_state()})  # fmt: skip
+            save_checkpoint(
+                out_dir / "last.pt",
+                {
+                    "state_dict": model.state_dict(),
+                    "optimizer": opt.state_dict(),
+                    "epoch": epoch + 1,
+                    "minutes": minutes,
+                    "best": best,
+                    "step": step_total,
+                    "curve": log.rows,
+                    "gen": gen.get_state(),
+                },
+            )
         ddp.barrier()
         if cfg.minutes and minutes >= cfg.minutes:
             break
@@ -245,8 +290,9 @@ def train_predictor(data_dir: Path, vae_path: Path, out_dir: Path, cfg: Predicto
     return meta
 
 
-def self_fed(model: TemporalPredictor, tokens: torch.Tensor, memory: torch.Tensor, p: float,
-             gen: torch.Generator) -> torch.Tensor:  # fmt: skip
+def self_fed(
+    model: TemporalPredictor, tokens: torch.Tensor, memory: torch.Tensor, p: float, gen: torch.Generator
+) -> torch.Tensor:
     """``tokens (B, T, L)`` with each token after the first replaced, with probability
     ``p``, by the model's own (gradient-free, teacher-forced) prediction of it."""
     with torch.no_grad():
@@ -272,6 +318,11 @@ def validate(model: TemporalPredictor, z, cond, anchors_, cfg, limit: int = 2048
 
 
 def payload(model: TemporalPredictor, cfg: PredictorTrainConfig, meta: dict) -> dict:
-    return {"format_version": FORMAT_VERSION, "kind": "predictor", "config": model.config.to_dict(),
-            "state_dict": {k: v.detach().cpu() for k, v in model.state_dict().items()},
-            "train_config": config_dict(cfg), "meta": meta}  # fmt: skip
+    return {
+        "format_version": FORMAT_VERSION,
+        "kind": "predictor",
+        "config": model.config.to_dict(),
+        "state_dict": {k: v.detach().cpu() for k, v in model.state_dict().items()},
+        "train_config": config_dict(cfg),
+        "meta": meta,
+    }

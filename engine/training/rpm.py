@@ -135,15 +135,31 @@ def pose_losses(pred6: torch.Tensor, true6: torch.Tensor, h: torch.Tensor, offse
     off = offsets[:, None].expand(-1, p.shape[1], -1, -1)
     pp, tp = fk_root_space(p, off) * 10.0, fk_root_space(t, off) * 10.0
     d = lambda x: x[:, 1:] - x[:, :-1]  # noqa: E731
-    out = {"ori": (p[:, :, 0] - t[:, :, 0]).abs().mean(), "rot": (p[:, :, 1:] - t[:, :, 1:]).abs().mean(),
-           "pos": (pp - tp).abs().mean()}  # fmt: skip
-    out.update({"v_ori": (d(p[:, :, 0]) - d(t[:, :, 0])).abs().mean(), "v_rot": (d(p[:, :, 1:]) - d(t[:, :, 1:])).abs().mean(),
-                "v_pos": (d(pp) - d(tp)).abs().mean()})  # fmt: skip
+    out = {
+        "ori": (p[:, :, 0] - t[:, :, 0]).abs().mean(),
+        "rot": (p[:, :, 1:] - t[:, :, 1:]).abs().mean(),
+        "pos": (pp - tp).abs().mean(),
+    }
+    out.update(
+        {
+            "v_ori": (d(p[:, :, 0]) - d(t[:, :, 0])).abs().mean(),
+            "v_rot": (d(p[:, :, 1:]) - d(t[:, :, 1:])).abs().mean(),
+            "v_pos": (d(pp) - d(tp)).abs().mean(),
+        }
+    )
     return out
 
 
-def free_run(model: RPM, fr: Frames, t: torch.Tensor, steps: int, flags: torch.Tensor, cold: torch.Tensor,
-             cfg: RPMTrainConfig, grad_last: bool = True):  # fmt: skip
+def free_run(
+    model: RPM,
+    fr: Frames,
+    t: torch.Tensor,
+    steps: int,
+    flags: torch.Tensor,
+    cold: torch.Tensor,
+    cfg: RPMTrainConfig,
+    grad_last: bool = True,
+):
     """Run ``steps`` rolling steps from anchors ``t`` (no gradients) and one more; returns
     the last prediction window ``(B, W, 22, 3, 2)`` and its frame ``tau``. ``flags (B, S, 3)``
     cover frames t-I .. t+steps; ``cold (B,)`` starts from blank poses."""
@@ -206,13 +222,32 @@ def train_rpm(data_dir: Path, out_dir: Path, cfg: RPMTrainConfig, resume: bool =
         return validate_rpm(model, val, a_va, val_flags, cfg)
 
     def payload(meta: dict) -> dict:
-        return {"format_version": FORMAT_VERSION, "kind": "rpm", "config": model.config.to_dict(),
-                "state_dict": {k: v.detach().cpu() for k, v in model.state_dict().items()},
-                "train_config": config_dict(cfg), "meta": meta}  # fmt: skip
+        return {
+            "format_version": FORMAT_VERSION,
+            "kind": "rpm",
+            "config": model.config.to_dict(),
+            "state_dict": {k: v.detach().cpu() for k, v in model.state_dict().items()},
+            "train_config": config_dict(cfg),
+            "meta": meta,
+        }
 
     meta = {"data_hash": manifest.get("hash"), "train_anchors": len(a_tr)}
-    return run_epochs("rpm", model, [opt], step, validate, payload, cfg.schedule(), out_dir, ddp, gen,
-                      "val_pos_cm", resume, progress, meta)  # fmt: skip
+    return run_epochs(
+        "rpm",
+        model,
+        [opt],
+        step,
+        validate,
+        payload,
+        cfg.schedule(),
+        out_dir,
+        ddp,
+        gen,
+        "val_pos_cm",
+        resume,
+        progress,
+        meta,
+    )
 
 
 @torch.no_grad()
@@ -238,4 +273,3 @@ def validate_rpm(model: RPM, fr: Frames, starts: torch.Tensor, flags: torch.Tens
     e, lo = torch.stack(errs), torch.stack(lost)
     lost_err = float(e[lo].mean()) if lo.any() else float("nan")
     return {"val_pos_cm": 100.0 * float(e.mean()), "val_lost_pos_cm": 100.0 * lost_err}
-

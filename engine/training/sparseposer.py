@@ -58,8 +58,9 @@ class SparsePoserTrainConfig:
     init: str = ""
 
     def model_config(self) -> SparsePoserConfig:
-        return SparsePoserConfig(window=self.window, channels=self.channels, kernel=self.kernel,
-                                 ik_hidden=self.ik_hidden)  # fmt: skip
+        return SparsePoserConfig(
+            window=self.window, channels=self.channels, kernel=self.kernel, ik_hidden=self.ik_hidden
+        )
 
     def schedule(self) -> Schedule:
         return Schedule(self.epochs, self.steps_per_epoch, self.minutes, self.lr, self.lr_final)
@@ -72,8 +73,9 @@ def window_starts(data: PoseData, window: int) -> torch.Tensor:
     return t[data.clip[t] == data.clip[t + window - 1]]
 
 
-def gen_loss(model: SparsePoser, dq: torch.Tensor, offsets: torch.Tensor, last_weight: float,
-             frames: int) -> tuple[torch.Tensor, torch.Tensor]:  # fmt: skip
+def gen_loss(
+    model: SparsePoser, dq: torch.Tensor, offsets: torch.Tensor, last_weight: float, frames: int
+) -> tuple[torch.Tensor, torch.Tensor]:
     """L_DQ over the last ``frames`` frames of windows ``dq (B, T, 22, 8)`` (raw), the
     last frame weighted up; also returns the generator output ``(B, frames, 22, 8)``."""
     out = model.generate(dq, offsets, tail=frames)
@@ -104,8 +106,9 @@ def _true_local(model: SparsePoser, dq: torch.Tensor) -> torch.Tensor:
     return model.local_from_output(model.normalise(dq))
 
 
-def train_sparseposer(data_dir: Path, out_dir: Path, cfg: SparsePoserTrainConfig,
-                      resume: bool = False, progress: bool = True) -> dict:  # fmt: skip
+def train_sparseposer(
+    data_dir: Path, out_dir: Path, cfg: SparsePoserTrainConfig, resume: bool = False, progress: bool = True
+) -> dict:
     """Train (or resume) SparsePoser; writes ``sparseposer.pt``, ``best.pt``, ``last.pt``, losses."""
     from engine.training.data import read_manifest
 
@@ -164,19 +167,39 @@ def train_sparseposer(data_dir: Path, out_dir: Path, cfg: SparsePoserTrainConfig
         return validate_sparseposer(model, val, s_va, cfg.window)
 
     def payload(meta: dict) -> dict:
-        return {"format_version": FORMAT_VERSION, "kind": "sparseposer", "config": model.config.to_dict(),
-                "state_dict": {k: v.detach().cpu() for k, v in model.state_dict().items()},
-                "train_config": config_dict(cfg), "meta": meta}  # fmt: skip
+        return {
+            "format_version": FORMAT_VERSION,
+            "kind": "sparseposer",
+            "config": model.config.to_dict(),
+            "state_dict": {k: v.detach().cpu() for k, v in model.state_dict().items()},
+            "train_config": config_dict(cfg),
+            "meta": meta,
+        }
 
     meta = {"data_hash": manifest.get("hash"), "train_windows": len(s_tr)}
     optimizers, train_step = ([opt_g, opt_ik], step) if cfg.train_generator else ([opt_ik], ik_step)
-    return run_epochs("sparseposer", model, optimizers, train_step, validate, payload, cfg.schedule(),
-                      out_dir, ddp, gen, "val_pos_cm", resume, progress, meta)  # fmt: skip
+    return run_epochs(
+        "sparseposer",
+        model,
+        optimizers,
+        train_step,
+        validate,
+        payload,
+        cfg.schedule(),
+        out_dir,
+        ddp,
+        gen,
+        "val_pos_cm",
+        resume,
+        progress,
+        meta,
+    )
 
 
 @torch.no_grad()
-def validate_sparseposer(model: SparsePoser, data: PoseData, starts: torch.Tensor, window: int,
-                         batch: int = 256) -> dict[str, float]:  # fmt: skip
+def validate_sparseposer(
+    model: SparsePoser, data: PoseData, starts: torch.Tensor, window: int, batch: int = 256
+) -> dict[str, float]:
     """Realtime figures on the last frame of each validation window (root space, cm):
     mean joint position error after the learned IK and of the generator alone, and the
     end effectors' error after the IK."""

@@ -66,6 +66,7 @@ def load_init(model: SparsePoser, path: str) -> None:
     from engine.models.loading import load_sparseposer
 
     if not path:
-        raise UserError("train_generator = false needs init = a SparsePoser weights file "
-                        "(e.g. assets/models/sparseposer.pt)")  # fmt: skip
+        raise UserError(
+            "train_generator = false needs init = a SparsePoser weights file (e.g. assets/models/sparseposer.pt)"
+        )
     start_from(model, path, load_sparseposer)

@@ -30,7 +30,7 @@ from engine.training.common import (
     on_device,
     save_checkpoint,
     seed_everything,
-    start_from,  # fmt: skip
+    start_from,
 )
 from engine.training.data import PoseData, load_split, read_manifest
 
@@ -113,9 +113,14 @@ class VAEObjective(nn.Module):
 LIMBS: tuple[tuple[int, ...], ...] = ((1, 2, 3, 4), (5, 6, 7, 8), (14, 15, 16, 17), (18, 19, 20, 21))
 
 
-def batch_of(data: PoseData, idx: torch.Tensor, limb_mix: float = 0.0,
-             generator: torch.Generator | None = None, pairs: torch.Tensor | None = None,
-             bone_scale: float = 0.0) -> dict[str, torch.Tensor]:  # fmt: skip
+def batch_of(
+    data: PoseData,
+    idx: torch.Tensor,
+    limb_mix: float = 0.0,
+    generator: torch.Generator | None = None,
+    pairs: torch.Tensor | None = None,
+    bone_scale: float = 0.0,
+) -> dict[str, torch.Tensor]:
     """Training batch of frames ``idx`` and their successors.
 
     With ``limb_mix > 0`` each pose, with that probability, takes one limb's local
@@ -125,9 +130,14 @@ def batch_of(data: PoseData, idx: torch.Tensor, limb_mix: float = 0.0,
     of an augmented batch are recomputed once, by one FK pass, after both."""
     nxt = idx + 1
     b = {
-        "dq": data.dq[idx], "rot": data.rot[idx], "disp": data.disp[idx], "pos": data.pos[idx],
-        "offsets": data.offsets[idx], "rot_next": data.rot[nxt], "disp_next": data.disp[nxt],
-    }  # fmt: skip
+        "dq": data.dq[idx],
+        "rot": data.rot[idx],
+        "disp": data.disp[idx],
+        "pos": data.pos[idx],
+        "offsets": data.offsets[idx],
+        "rot_next": data.rot[nxt],
+        "disp_next": data.disp[nxt],
+    }
     mixed = limb_mix > 0 and pairs is not None and _mix_limbs(b, data, limb_mix, generator, pairs)
     if bone_scale > 0:
         b["offsets"] = b["offsets"] * _bone_factors(b["offsets"], bone_scale, generator)[..., None]
@@ -136,8 +146,9 @@ def batch_of(data: PoseData, idx: torch.Tensor, limb_mix: float = 0.0,
     return b
 
 
-def _mix_limbs(b: dict[str, torch.Tensor], data: PoseData, limb_mix: float, generator: torch.Generator | None,
-               pairs: torch.Tensor) -> bool:  # fmt: skip
+def _mix_limbs(
+    b: dict[str, torch.Tensor], data: PoseData, limb_mix: float, generator: torch.Generator | None, pairs: torch.Tensor
+) -> bool:
     """Swap one limb's rotations of a ``limb_mix`` share of the poses of ``b`` (in place);
     False when no pose was drawn."""
     n = b["rot"].shape[0]
@@ -167,8 +178,11 @@ def _bone_factors(offsets: torch.Tensor, spread: float, generator: torch.Generat
     return draw[:, pair]
 
 
-def scale_bones(b: dict[str, torch.Tensor], spread: float, generator: torch.Generator | None = None,
-                ) -> dict[str, torch.Tensor]:  # fmt: skip
+def scale_bones(
+    b: dict[str, torch.Tensor],
+    spread: float,
+    generator: torch.Generator | None = None,
+) -> dict[str, torch.Tensor]:
     """The batch ``b`` with every pose's bone offsets (B, 22, 3) scaled by one factor per
     bone in ``1 +- spread`` (left and right copies alike), and the encoder input and
     target positions recomputed for the new proportions."""
@@ -230,8 +244,14 @@ def weights_payload(vae: PoseVAE, cfg: VAETrainConfig, meta: dict) -> dict:
     }
 
 
-def train_vae(data_dir: Path, out_dir: Path, cfg: VAETrainConfig, resume: bool = False, progress: bool = True,
-              device: str = "auto") -> dict:  # fmt: skip
+def train_vae(
+    data_dir: Path,
+    out_dir: Path,
+    cfg: VAETrainConfig,
+    resume: bool = False,
+    progress: bool = True,
+    device: str = "auto",
+) -> dict:
     """Train (or resume) a VAE; writes ``last.pt``, ``best.pt``, ``vae.pt``, ``losses.csv/png``.
 
     ``device``: a :data:`engine.training.common.DEVICES` name (``auto``: CUDA when torch
@@ -269,15 +289,23 @@ def train_vae(data_dir: Path, out_dir: Path, cfg: VAETrainConfig, resume: bool =
         log = CurveLog(out_dir, ck["curve"])
         torch.set_rng_state(ck["rng"])
     t0 = time.monotonic()
-    meta: dict = {"data_hash": manifest.get("hash"), "train_frames": len(train), "val_frames": len(val),
-                  "device": str(ddp.device)}  # fmt: skip
+    meta: dict = {
+        "data_hash": manifest.get("hash"),
+        "train_frames": len(train),
+        "val_frames": len(val),
+        "device": str(ddp.device),
+    }
     for epoch in range(start_epoch, cfg.epochs):
         vae.train()
         gen = torch.Generator().manual_seed(cfg.seed * 1000 + epoch)
         perm = pairs[torch.randperm(len(pairs), generator=gen)]
         sums_t: torch.Tensor | None = None
-        bar = tqdm(range(steps_per_epoch), desc=f"vae epoch {epoch + 1}/{cfg.epochs}", disable=not (progress and ddp.main),
-                   leave=False)  # fmt: skip
+        bar = tqdm(
+            range(steps_per_epoch),
+            desc=f"vae epoch {epoch + 1}/{cfg.epochs}",
+            disable=not (progress and ddp.main),
+            leave=False,
+        )
         for step in bar:
             lo = (step * ddp.world + ddp.rank) * cfg.batch_size
             idx = perm[lo : lo + cfg.batch_size]
@@ -305,22 +333,37 @@ def train_vae(data_dir: Path, out_dir: Path, cfg: VAETrainConfig, resume: bool =
             log.append(row)
             if progress:
                 tqdm.write(" ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}" for k, v in row.items()))
-            meta.update(epochs=epoch + 1, minutes=round(minutes, 2), val_pos_cm=row["val_pos_cm"],
-                        val_rot_deg=row["val_rot_deg"])  # fmt: skip
+            meta.update(
+                epochs=epoch + 1,
+                minutes=round(minutes, 2),
+                val_pos_cm=row["val_pos_cm"],
+                val_rot_deg=row["val_rot_deg"],
+            )
             if row["val_pos_cm"] < best:
                 best, best_epoch = row["val_pos_cm"], epoch + 1
                 meta["best_epoch"] = best_epoch
                 save_checkpoint(out_dir / "best.pt", weights_payload(vae, cfg, dict(meta)))
-            save_checkpoint(last, {
-                "state_dict": vae.state_dict(), "optimizer": opt.state_dict(), "step": global_step,
-                "epoch": epoch + 1, "minutes": minutes, "best": best, "best_epoch": best_epoch, "curve": log.rows,
-                "rng": torch.get_rng_state(),
-            })  # fmt: skip
+            save_checkpoint(
+                last,
+                {
+                    "state_dict": vae.state_dict(),
+                    "optimizer": opt.state_dict(),
+                    "step": global_step,
+                    "epoch": epoch + 1,
+                    "minutes": minutes,
+                    "best": best,
+                    "best_epoch": best_epoch,
+                    "curve": log.rows,
+                    "rng": torch.get_rng_state(),
+                },
+            )
         ddp.barrier()
         if cfg.patience and epoch + 1 - best_epoch >= cfg.patience:
             stalled = True
             if ddp.main and progress:
-                tqdm.write(f"validation has not improved for {cfg.patience} epochs (best: epoch {best_epoch}): stopping")
+                tqdm.write(
+                    f"validation has not improved for {cfg.patience} epochs (best: epoch {best_epoch}): stopping"
+                )
             break
         if cfg.stop_after and epoch + 1 - start_epoch >= cfg.stop_after and epoch + 1 < cfg.epochs:
             return meta

@@ -59,8 +59,10 @@ def main(state: str, clip: str, out: str, end: str) -> int:
     # write already under way, so wait for a write made from the state that is dumped below
     written: list[str] = []
     auto.saved.connect(lambda _path: written.append(json.dumps(s.to_scene(), sort_keys=True)))
-    _wait(app, lambda: bool(written) and not auto.timer.isActive()
-          and written[-1] == json.dumps(s.to_scene(), sort_keys=True))
+    _wait(
+        app,
+        lambda: bool(written) and not auto.timer.isActive() and written[-1] == json.dumps(s.to_scene(), sort_keys=True),
+    )
     Path(out + ".json").write_text(json.dumps(s.to_scene()))
     np.savez(out + ".npz", local_rot=s.motion.local_rot, root_pos=s.motion.root_pos)
     if end == "kill":

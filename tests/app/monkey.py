@@ -48,13 +48,36 @@ POPUP_MS = 300
 #: Menu entries that end a window (the run would lose its windows) or leave the process.
 LEAVING = ("Quit", "Close")
 #: Keys a user presses in these windows (with the modifiers that make them edits).
-KEYS = [(k, Qt.KeyboardModifier.NoModifier) for k in (
-    Qt.Key.Key_1, Qt.Key.Key_3, Qt.Key.Key_7, Qt.Key.Key_Home, Qt.Key.Key_F, Qt.Key.Key_S, Qt.Key.Key_B,
-    Qt.Key.Key_G, Qt.Key.Key_H, Qt.Key.Key_K, Qt.Key.Key_L, Qt.Key.Key_Space, Qt.Key.Key_Left, Qt.Key.Key_Right,
-    Qt.Key.Key_Escape, Qt.Key.Key_W, Qt.Key.Key_R, Qt.Key.Key_Q, Qt.Key.Key_E, Qt.Key.Key_P, Qt.Key.Key_J,
-)] + [(Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier),
-      (Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier | Qt.KeyboardModifier.ShiftModifier),
-      (Qt.Key.Key_Return, Qt.KeyboardModifier.ControlModifier)]  # fmt: skip
+KEYS = [
+    (k, Qt.KeyboardModifier.NoModifier)
+    for k in (
+        Qt.Key.Key_1,
+        Qt.Key.Key_3,
+        Qt.Key.Key_7,
+        Qt.Key.Key_Home,
+        Qt.Key.Key_F,
+        Qt.Key.Key_S,
+        Qt.Key.Key_B,
+        Qt.Key.Key_G,
+        Qt.Key.Key_H,
+        Qt.Key.Key_K,
+        Qt.Key.Key_L,
+        Qt.Key.Key_Space,
+        Qt.Key.Key_Left,
+        Qt.Key.Key_Right,
+        Qt.Key.Key_Escape,
+        Qt.Key.Key_W,
+        Qt.Key.Key_R,
+        Qt.Key.Key_Q,
+        Qt.Key.Key_E,
+        Qt.Key.Key_P,
+        Qt.Key.Key_J,
+    )
+] + [
+    (Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier),
+    (Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier | Qt.KeyboardModifier.ShiftModifier),
+    (Qt.Key.Key_Return, Qt.KeyboardModifier.ControlModifier),
+]
 
 
 def answer_every_dialog_cancel() -> None:
@@ -102,8 +125,9 @@ class Monkey:
     def step(self) -> str:
         """One random event; what it was (kind, window and detail)."""
         w = self.windows[int(self.rng.integers(len(self.windows)))]
-        kind = str(self.rng.choice(["drag", "drag", "click", "wheel", "key", "key", "menu", "widget", "widget",
-                                    "strip"]))  # fmt: skip
+        kind = str(
+            self.rng.choice(["drag", "drag", "click", "wheel", "key", "key", "menu", "widget", "widget", "strip"])
+        )
         detail = getattr(self, f"_{kind}")(w)
         self.counts[kind] += 1
         return f"{kind} {type(w).__name__}" + (f" {detail}" if detail else "")
@@ -120,8 +144,9 @@ class Monkey:
     def _drag(self, w) -> None:
         x, y = self._point(w)
         dx, dy = self.rng.normal(0, 40, 2)
-        mouse_drag(w.viewport, (x, y), (x + dx, y + dy), ctrl=bool(self.rng.random() < 0.3),
-                   steps=int(self.rng.integers(1, 8)))  # fmt: skip
+        mouse_drag(
+            w.viewport, (x, y), (x + dx, y + dy), ctrl=bool(self.rng.random() < 0.3), steps=int(self.rng.integers(1, 8))
+        )
 
     def _click(self, w) -> None:
         x, y = self._point(w)
@@ -131,8 +156,16 @@ class Monkey:
         p = w.viewport.plotter
         pos = QPointF(self.rng.uniform(0, p.width()), self.rng.uniform(0, p.height()))
         delta = QPoint(0, int(self.rng.choice([-120, 120])))
-        event = QWheelEvent(pos, p.mapToGlobal(pos), QPoint(), delta, Qt.MouseButton.NoButton,
-                            Qt.KeyboardModifier.NoModifier, Qt.ScrollPhase.NoScrollPhase, False)  # fmt: skip
+        event = QWheelEvent(
+            pos,
+            p.mapToGlobal(pos),
+            QPoint(),
+            delta,
+            Qt.MouseButton.NoButton,
+            Qt.KeyboardModifier.NoModifier,
+            Qt.ScrollPhase.NoScrollPhase,
+            False,
+        )
         QApplication.sendEvent(p, event)
 
     def _key(self, w) -> str:
@@ -152,8 +185,11 @@ class Monkey:
 
     def _widget(self, w) -> str:
         kinds = (QAbstractButton, QAbstractSpinBox, QComboBox, QSlider)
-        found = [c for c in w.findChildren(QWidget) if isinstance(c, kinds) and c.isVisible() and c.isEnabled()
-                 and c.window() is w]  # fmt: skip
+        found = [
+            c
+            for c in w.findChildren(QWidget)
+            if isinstance(c, kinds) and c.isVisible() and c.isEnabled() and c.window() is w
+        ]
         if not found:
             return ""
         c = found[int(self.rng.integers(len(found)))]
@@ -169,16 +205,20 @@ class Monkey:
         elif isinstance(c, QComboBox) and c.count():
             c.setCurrentIndex(int(self.rng.integers(c.count())))
         elif isinstance(c, QSlider):
-            QTest.mouseClick(c, Qt.MouseButton.LeftButton, pos=QPoint(int(self.rng.uniform(0, c.width())),
-                                                                        c.height() // 2))  # fmt: skip
+            QTest.mouseClick(
+                c, Qt.MouseButton.LeftButton, pos=QPoint(int(self.rng.uniform(0, c.width())), c.height() // 2)
+            )
 
     def _strip(self, w) -> None:
         """A drag along the pose window's key timeline, or a click on the studio's."""
         strip = getattr(getattr(w, "keys", None), "strip", None)
         if strip is None:
             slider = w.timeline.slider
-            QTest.mouseClick(slider, Qt.MouseButton.LeftButton,
-                             pos=QPoint(int(self.rng.uniform(0, slider.width())), slider.height() // 2))  # fmt: skip
+            QTest.mouseClick(
+                slider,
+                Qt.MouseButton.LeftButton,
+                pos=QPoint(int(self.rng.uniform(0, slider.width())), slider.height() // 2),
+            )
             return
         from tests.widgets.test_authoring_widgets import drag_on
 
@@ -242,8 +282,11 @@ def run(seed: int, events: int, step_timeout: float) -> int:
     studio.close()
     app.processEvents()
     counts = " ".join(f"{k}={v}" for k, v in sorted(monkey.counts.items()))
-    print(f"monkey seed={seed} events={done} seconds={time.monotonic() - start:.0f} "
-          f"slowest={monkey.slowest[0]:.2f}s ({monkey.slowest[1]}) errors={len(errors)} {counts}", flush=True)  # fmt: skip
+    print(
+        f"monkey seed={seed} events={done} seconds={time.monotonic() - start:.0f} "
+        f"slowest={monkey.slowest[0]:.2f}s ({monkey.slowest[1]}) errors={len(errors)} {counts}",
+        flush=True,
+    )
     for e in errors[:1]:
         print(e, file=sys.stderr)
     return 1 if errors else 0

@@ -83,9 +83,22 @@ def test_a_saved_pose_window_has_no_autosave(pose_window, qtbot, tmp_path):
 
 def run_child(tmp_path, clip, end: str) -> subprocess.CompletedProcess:
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")])}
-    return subprocess.run([sys.executable, "-m", "tests.app.autosave_child", str(tmp_path / "state"), str(clip),
-                           str(tmp_path / "expected"), end], env=env, cwd=REPO, timeout=300, capture_output=True,
-                          text=True)  # fmt: skip
+    return subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "tests.app.autosave_child",
+            str(tmp_path / "state"),
+            str(clip),
+            str(tmp_path / "expected"),
+            end,
+        ],
+        env=env,
+        cwd=REPO,
+        timeout=300,
+        capture_output=True,
+        text=True,
+    )
 
 
 @pytest.fixture
@@ -116,7 +129,9 @@ def test_a_killed_studio_is_recovered_exactly_at_the_next_start(studio, qtbot, t
     next(b for b in box.buttons() if b.text() == "Recover last session").click()
     s = studio.session
     assert s.to_scene() == expected and s.frame == 20
-    assert np.array_equal(s.motion.local_rot, arrays["local_rot"]) and np.array_equal(s.motion.root_pos, arrays["root_pos"])
+    assert np.array_equal(s.motion.local_rot, arrays["local_rot"]) and np.array_equal(
+        s.motion.root_pos, arrays["root_pos"]
+    )
     assert clip_edited(studio) and not studio.undo.stack.isClean()
     assert not any(p.exists() for p in left.documents.values())  # taken over by this session
     assert files.path("studio").is_file() and files.path("studio", ".npz").is_file()

@@ -23,8 +23,13 @@ def _activate(studio, qtbot, pointer_on):
 def test_camera_keys_work_whatever_panel_widget_has_the_focus(studio, qtbot):
     row = next(iter(studio.sensor_panel.rows.values()))
     _activate(studio, qtbot, studio.sensor_panel)  # the pointer away from the 3D view
-    targets = {"window": studio, "3D view": studio.viewport.plotter, "timeline slider": studio.timeline.slider,
-               "preset": studio.sensor_panel.preset, "sensor toggle": row["enabled"]}  # fmt: skip
+    targets = {
+        "window": studio,
+        "3D view": studio.viewport.plotter,
+        "timeline slider": studio.timeline.slider,
+        "preset": studio.sensor_panel.preset,
+        "sensor toggle": row["enabled"],
+    }
     failed = []
     for name, widget in targets.items():
         widget.setFocus()
@@ -40,8 +45,10 @@ def test_camera_keys_work_whatever_panel_widget_has_the_focus(studio, qtbot):
 @pytest.mark.parametrize("field", ["fail frames", "iterations"])
 def test_a_number_field_keeps_its_digits_even_with_the_pointer_over_the_view(studio, qtbot, field):
     _activate(studio, qtbot, studio.viewport)
-    widget = {"fail frames": studio.sensor_panel.fail_frames,
-              "iterations": studio.optimizer_panel.editors["iterations"]}[field]  # fmt: skip
+    widget = {
+        "fail frames": studio.sensor_panel.fail_frames,
+        "iterations": studio.optimizer_panel.editors["iterations"],
+    }[field]
     widget.setFocus()
     QApplication.processEvents()
     widget.selectAll()

@@ -24,8 +24,21 @@ def test_gui_collects_no_cycles_while_starting_and_collects_again_after(monkeypa
 
     monkeypatch.setitem(sys.modules, "app.main", types.SimpleNamespace(run=fake_run))
     args = argparse.Namespace(
-        measure=None, old_pace=None, ghosts="", after_frames=1, method="ik", engine="thread", file=None,
-        sensors=None, screenshot=None, json="m.json", pace=None, view="stick", rig_map=None, scene=None)  # fmt: skip
+        measure=None,
+        old_pace=None,
+        ghosts="",
+        after_frames=1,
+        method="ik",
+        engine="thread",
+        file=None,
+        sensors=None,
+        screenshot=None,
+        json="m.json",
+        pace=None,
+        view="stick",
+        rig_map=None,
+        scene=None,
+    )
     assert gc.isenabled()
     try:
         assert cli.run(args) == 0
@@ -43,8 +56,17 @@ def test_the_window_process_does_not_import_torch():
 
     from tests.conftest import REPO
 
-    code = ("import sys\nimport app.main_window, app.main, engine.constraints, engine.motion.bvh\n"
-            "print('torch' in sys.modules, 'engine.constraints.look_at' in sys.modules)")  # fmt: skip
-    out = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True, check=True,
-                         timeout=300, env={**os.environ, "QT_QPA_PLATFORM": "offscreen"})  # fmt: skip
+    code = (
+        "import sys\nimport app.main_window, app.main, engine.constraints, engine.motion.bvh\n"
+        "print('torch' in sys.modules, 'engine.constraints.look_at' in sys.modules)"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=300,
+        env={**os.environ, "QT_QPA_PLATFORM": "offscreen"},
+    )
     assert out.stdout.split() == ["False", "True"], out.stderr[-2000:]

@@ -81,8 +81,7 @@ def test_a_ctrl_dragged_pin_is_limited_to_a_range_on_the_paused_studio_and_undon
     assert slider.span() is None and cyan_columns(slider, 0, 4).size == 0
 
 
-def test_the_pose_window_edits_a_constraint_range_shows_it_on_the_key_strip_and_undoes(pose_window, qtbot,
-                                                                                      monkeypatch):  # fmt: skip
+def test_the_pose_window_edits_a_constraint_range_shows_it_on_the_key_strip_and_undoes(pose_window, qtbot, monkeypatch):
     monkeypatch.setattr("engine.authoring.history.MERGE_S", 0.0)  # a user's edits come seconds apart
     w = pose_window
     panel = w.constraints.panel

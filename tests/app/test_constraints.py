@@ -84,7 +84,6 @@ def test_ctrl_dragging_a_joint_without_sensor_pins_it(studio, qtbot):
     assert moved.name == pin.name and np.allclose(moved.position, [0.5, 0, 1.3])
 
 
-
 @pytest.mark.parametrize("kind", ["bounds", "look_at", "end_effector"])
 def test_a_new_constraint_starts_next_to_the_character(studio, qtbot, kind):
     """Defaults were fixed numbers: a box at the origin, a look-at target at (0, -2, 1.6)."""

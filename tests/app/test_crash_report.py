@@ -37,8 +37,9 @@ CRASHING = textwrap.dedent("""
 
 def test_a_segfault_leaves_a_report_that_the_next_start_offers_once(tmp_path, qtbot):
     env = {**os.environ, "QT_QPA_PLATFORM": "offscreen", "PYTHONPATH": str(REPO)}
-    run = subprocess.run([sys.executable, "-c", CRASHING, str(tmp_path)], env=env, capture_output=True, text=True,
-                         timeout=120)  # fmt: skip
+    run = subprocess.run(
+        [sys.executable, "-c", CRASHING, str(tmp_path)], env=env, capture_output=True, text=True, timeout=120
+    )
     assert run.returncode != 0
     (log,) = tmp_path.glob("crash-*.log")
     text = log.read_text()

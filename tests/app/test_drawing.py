@@ -14,14 +14,24 @@ def test_status_shows_the_solver_breakdown_and_leaves_unchanged_labels_alone(qtb
     bar = QStatusBar()
     qtbot.addWidget(bar)
     labels = {n: QLabel() for n in ("status_engine", "status_gui", "status_warnings")}
-    window = SimpleNamespace(plots=SimpleNamespace(update_iterations=None, update_cost=None, update_history=None),
-                             latent=SimpleNamespace(update_snapshot=None), method_errors=SimpleNamespace(update_snapshot=None),
-                             ghost_status=SimpleNamespace(on_snapshot=lambda snap: None, is_ghost_problem=lambda m: False),
-                             statusBar=lambda: bar, **labels)  # fmt: skip
+    window = SimpleNamespace(
+        plots=SimpleNamespace(update_iterations=None, update_cost=None, update_history=None),
+        latent=SimpleNamespace(update_snapshot=None),
+        method_errors=SimpleNamespace(update_snapshot=None),
+        ghost_status=SimpleNamespace(on_snapshot=lambda snap: None, is_ghost_problem=lambda m: False),
+        statusBar=lambda: bar,
+        **labels,
+    )
     d = DrawScheduler(window)
     snap = FakeSnapshot()
-    snap.timing = {"ms_per_frame": 12.0, "ms_per_iteration": 1.2, "decoder": 0.3, "fk_losses": 0.6,
-                   "backward": 0.2, "step": 0.1}  # fmt: skip
+    snap.timing = {
+        "ms_per_frame": 12.0,
+        "ms_per_iteration": 1.2,
+        "decoder": 0.3,
+        "fk_losses": 0.6,
+        "backward": 0.2,
+        "step": 0.1,
+    }
     snap.frames_skipped, snap.pace, snap.recent_errors = 0, "every_frame", ("ik ignores constraints",)
     d._update_status(snap)
     text, tip = labels["status_engine"].text(), labels["status_engine"].toolTip()

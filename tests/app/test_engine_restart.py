@@ -26,8 +26,7 @@ def process_studio(qtbot, tmp_path, synthetic_motion, monkeypatch):
     errors: list[str] = []
     monkeypatch.setattr(QMessageBox, "critical", lambda *a, **k: errors.append(f"{a[1]}: {a[2]}"))
     threads_before = threading.active_count()
-    window = MainWindow(settings=QSettings(str(tmp_path / "studio.ini"), QSettings.Format.IniFormat),
-                        engine="process")  # fmt: skip
+    window = MainWindow(settings=QSettings(str(tmp_path / "studio.ini"), QSettings.Format.IniFormat), engine="process")
     window.errors = errors
     window.session.set_motion(synthetic_motion)
     window.show()
@@ -58,8 +57,9 @@ def test_a_killed_solver_is_restarted_with_the_same_session_and_the_third_death_
     kill(first)
     qtbot.waitUntil(lambda: w.engine is not first, timeout=10000)
     line = w.statusBar().currentMessage()
-    assert line.startswith("The solver stopped (the engine process stopped unexpectedly (exit code -9)); "
-                           "restarted it on frame 25"), line  # fmt: skip
+    assert line.startswith(
+        "The solver stopped (the engine process stopped unexpectedly (exit code -9)); restarted it on frame 25"
+    ), line
     assert "\n" not in line and not w.errors
     s.seek(27)  # an edit while the new engine starts
     second = w.engine
@@ -79,5 +79,6 @@ def test_a_killed_solver_is_restarted_with_the_same_session_and_the_third_death_
     assert w.errors == [
         "The engine stopped: The solver stopped (the engine process stopped unexpectedly (exit code -9)): the "
         "solver process stopped 3 times within 60 s, so it is not restarted again.\n\nYour edits are kept: save "
-        "the scene (File > Save scene) and start the studio again."]  # fmt: skip
+        "the scene (File > Save scene) and start the studio again."
+    ]
     assert w.statusBar().currentMessage().endswith("so it is not restarted again")

@@ -24,8 +24,16 @@ def test_the_dialog_gives_render_options(qtbot):
     dialog.truth.setChecked(True)
     dialog.timecode.setChecked(True)
     dialog.title.setText("  walk  ")
-    assert dialog.options() == RenderOptions(size=(1280, 720), sensors="6", ghosts=("ik",), view="body",
-                                             layout="side", truth=True, title="walk", timecode=True)  # fmt: skip
+    assert dialog.options() == RenderOptions(
+        size=(1280, 720),
+        sensors="6",
+        ghosts=("ik",),
+        view="body",
+        layout="side",
+        truth=True,
+        title="walk",
+        timecode=True,
+    )
     no_trackers = ExportVideoDialog(None, None, ("ik",))
     qtbot.addWidget(no_trackers)
     assert not no_trackers.ghosts.isEnabled()  # ghosts are solved from trackers
@@ -57,15 +65,23 @@ def _click_box(dialog: ExportVideoDialog, name: str) -> None:
     """Click the check box of ghost ``name`` in the list, where a user clicks it."""
     from PyQt6.QtTest import QTest
 
-    item = next(dialog.ghosts.item(i) for i in range(dialog.ghosts.count())
-                if dialog.ghosts.item(i).data(Qt.ItemDataRole.UserRole) == name)  # fmt: skip
+    item = next(
+        dialog.ghosts.item(i)
+        for i in range(dialog.ghosts.count())
+        if dialog.ghosts.item(i).data(Qt.ItemDataRole.UserRole) == name
+    )
     rect = dialog.ghosts.visualItemRect(item)
-    QTest.mouseClick(dialog.ghosts.viewport(), Qt.MouseButton.LeftButton, pos=QPoint(rect.left() + 10, rect.center().y()))
+    QTest.mouseClick(
+        dialog.ghosts.viewport(), Qt.MouseButton.LeftButton, pos=QPoint(rect.left() + 10, rect.center().y())
+    )
 
 
 def _checked(dialog: ExportVideoDialog) -> list[str]:
-    return [dialog.ghosts.item(i).data(Qt.ItemDataRole.UserRole) for i in range(dialog.ghosts.count())
-            if dialog.ghosts.item(i).checkState() == Qt.CheckState.Checked]  # fmt: skip
+    return [
+        dialog.ghosts.item(i).data(Qt.ItemDataRole.UserRole)
+        for i in range(dialog.ghosts.count())
+        if dialog.ghosts.item(i).checkState() == Qt.CheckState.Checked
+    ]
 
 
 def _ok(dialog: ExportVideoDialog) -> None:
@@ -86,10 +102,19 @@ def test_a_ghost_that_cannot_run_from_the_trackers_is_greyed_out_and_says_why(st
         dialog.show()
         _click_box(dialog, "rpm")
         _click_box(dialog, "ik")
-        seen.update(checked=_checked(dialog), note=dialog.note.text(), visible=dialog.note.isVisible(),
-                    rpm_enabled=bool(next(dialog.ghosts.item(i) for i in range(dialog.ghosts.count())
-                                          if dialog.ghosts.item(i).data(Qt.ItemDataRole.UserRole) == "rpm").flags()
-                                     & Qt.ItemFlag.ItemIsEnabled))  # fmt: skip
+        seen.update(
+            checked=_checked(dialog),
+            note=dialog.note.text(),
+            visible=dialog.note.isVisible(),
+            rpm_enabled=bool(
+                next(
+                    dialog.ghosts.item(i)
+                    for i in range(dialog.ghosts.count())
+                    if dialog.ghosts.item(i).data(Qt.ItemDataRole.UserRole) == "rpm"
+                ).flags()
+                & Qt.ItemFlag.ItemIsEnabled
+            ),
+        )
         dialog.reject()
         return dialog.result()
 
@@ -126,9 +151,15 @@ def test_the_dialog_remembers_the_last_choices(studio, monkeypatch):
 
     def choose(dialog: ExportVideoDialog) -> int:
         dialog.show()
-        shown.append({"size": dialog.size_box.currentText(), "view": dialog.view.currentText(),
-                      "timecode": dialog.timecode.isChecked(), "title": dialog.title.text(),
-                      "ghosts": _checked(dialog)})  # fmt: skip
+        shown.append(
+            {
+                "size": dialog.size_box.currentText(),
+                "view": dialog.view.currentText(),
+                "timecode": dialog.timecode.isChecked(),
+                "title": dialog.title.text(),
+                "ghosts": _checked(dialog),
+            }
+        )
         if len(shown) == 1:
             dialog.size_box.setCurrentText("640x360")
             dialog.view.setCurrentText("sticks")

@@ -53,17 +53,38 @@ def test_screenshot_with_a_scene_plays_exactly_the_frames_asked(tmp_path, scene_
     clip, scene = scene_file
     out = tmp_path / "shot.png"
     scene_out = tmp_path / "after.json"
-    code = ("import sys; from engine.cli.main import main; import app.main as m; orig = m.MainWindow.close\n"
-            "def close(self):\n"
-            f"    open({str(scene_out)!r}, 'w').write(str(self.session.latest.frame) + ' ' + str(self.session.latest.solved))\n"
-            "    return orig(self)\n"
-            "m.MainWindow.close = close\n"
-            "sys.exit(main(sys.argv[1:]))\n")  # fmt: skip
+    code = (
+        "import sys; from engine.cli.main import main; import app.main as m; orig = m.MainWindow.close\n"
+        "def close(self):\n"
+        f"    open({str(scene_out)!r}, 'w').write(str(self.session.latest.frame) + ' ' + str(self.session.latest.solved))\n"
+        "    return orig(self)\n"
+        "m.MainWindow.close = close\n"
+        "sys.exit(main(sys.argv[1:]))\n"
+    )
     env = {**os.environ, "XDG_CONFIG_HOME": str(tmp_path / "config"), "OMP_NUM_THREADS": "1"}
     env.pop("QT_QPA_PLATFORM", None)
-    done = subprocess.run([sys.executable, "-c", code, "gui", str(clip), "--method", "ik", "--scene", str(scene),
-                           "--screenshot", str(out), "--after-frames", "1"],
-                          cwd=REPO, env=env, capture_output=True, text=True, timeout=300)  # fmt: skip
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            code,
+            "gui",
+            str(clip),
+            "--method",
+            "ik",
+            "--scene",
+            str(scene),
+            "--screenshot",
+            str(out),
+            "--after-frames",
+            "1",
+        ],
+        cwd=REPO,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert done.returncode == 0, done.stderr[-2000:]
     assert out.is_file()
     frame, _ = scene_out.read_text().split()

@@ -42,8 +42,14 @@ def test_map_clicks_decode_and_seek_with_dragposer(studio, qtbot):
     s = studio.session
     s.set_method("dragposer")
     s.play()
-    qtbot.waitUntil(lambda: s.latest is not None and s.latest.latent_view is not None
-                    and len([r for r in s.latest.history if r.readouts]) >= 10, timeout=90000)  # fmt: skip
+    qtbot.waitUntil(
+        lambda: (
+            s.latest is not None
+            and s.latest.latent_view is not None
+            and len([r for r in s.latest.history if r.readouts]) >= 10
+        ),
+        timeout=90000,
+    )
     s.pause()
     views = _show_map(studio)
     qtbot.waitUntil(lambda: len(views.map.xy) >= 10, timeout=10000)
@@ -77,8 +83,9 @@ def test_map_clicks_decode_and_seek_with_dragposer(studio, qtbot):
     studio.latent.stored["b"] = studio.latent.stored["a"] + 0.5
     views.tabs.setCurrentIndex(0)
     s.step(1)
-    qtbot.waitUntil(lambda: views.map.blend.getData()[0] is not None and len(views.map.blend.getData()[0]) == 2,
-                    timeout=10000)  # fmt: skip
+    qtbot.waitUntil(
+        lambda: views.map.blend.getData()[0] is not None and len(views.map.blend.getData()[0]) == 2, timeout=10000
+    )
 
 
 def test_the_dock_in_front_is_remembered(studio, qtbot):

@@ -33,8 +33,9 @@ def test_connect_record_and_calibrate_a_live_stream(studio, qtbot, synthetic_mot
     sender = threading.Thread(target=send_stream, args=(plan, "127.0.0.1", src.receiver.port, 60.0))
     sender.start()
     try:
-        qtbot.waitUntil(lambda: (s := studio.session.latest) is not None and s.frame > 30 and bool(s.target_joints),
-                        timeout=15000)  # fmt: skip
+        qtbot.waitUntil(
+            lambda: (s := studio.session.latest) is not None and s.frame > 30 and bool(s.target_joints), timeout=15000
+        )
         qtbot.waitUntil(lambda: LIGHT["ok"] in studio.live.panel.light.styleSheet(), timeout=5000)
         assert "packets/s" in studio.live.panel.figures.text()
         qtbot.waitUntil(lambda: src.skeleton_version == 1, timeout=15000)
@@ -60,8 +61,9 @@ def test_a_tracker_recording_opens_like_a_clip(studio, qtbot, synthetic_motion, 
     assert studio.live.open_recording(path)
     studio.session.seek(20)
     snap = studio.session.latest
-    qtbot.waitUntil(lambda: (s := studio.session.latest) is not None and s.frame == 20 and s.num_frames == 40,
-                    timeout=10000)  # fmt: skip
+    qtbot.waitUntil(
+        lambda: (s := studio.session.latest) is not None and s.frame == 20 and s.num_frames == 40, timeout=10000
+    )
     snap = studio.session.latest
     assert np.isnan(snap.ground_truth).all() and len(snap.target_joints) == 6
     assert studio.timeline.slider.maximum() == 39 and "rec.jsonl" in studio.windowTitle()

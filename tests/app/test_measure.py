@@ -18,8 +18,21 @@ def test_measure_plays_the_clip_and_writes_plausible_figures(tmp_path):
     out = tmp_path / "measure.json"
     env = {**os.environ, "XDG_CONFIG_HOME": str(tmp_path / "config"), "OMP_NUM_THREADS": "1"}
     env.pop("QT_QPA_PLATFORM", None)  # the real window on the test's X display
-    cmd = [sys.executable, "-m", "engine.cli.main", "gui", str(REPO / "assets" / "clips" / "example.bvh"),
-           "--method", "ik", "--sensors", "6", "--measure", "3", "--json", str(out)]  # fmt: skip
+    cmd = [
+        sys.executable,
+        "-m",
+        "engine.cli.main",
+        "gui",
+        str(REPO / "assets" / "clips" / "example.bvh"),
+        "--method",
+        "ik",
+        "--sensors",
+        "6",
+        "--measure",
+        "3",
+        "--json",
+        str(out),
+    ]
     done = subprocess.run(cmd, cwd=REPO, env=env, capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr[-2000:]
     m = json.loads(out.read_text())

@@ -94,8 +94,13 @@ def test_every_action_of_the_studio_menus_is_alive(studio, no_dialogs, qtbot):
 def test_every_action_of_the_pose_window_menus_is_alive(pose_window, no_dialogs, qtbot):
     w = pose_window
     paths = [n for n, _ in menu_actions(w)]
-    for expected in ("Edit > Settle pose", "View > Camera > Front", "View > Camera > Top",
-                     "View > Draw character as > Shaded body", "Help > Keyboard and mouse..."):  # fmt: skip
+    for expected in (
+        "Edit > Settle pose",
+        "View > Camera > Front",
+        "View > Camera > Top",
+        "View > Draw character as > Shaded body",
+        "Help > Keyboard and mouse...",
+    ):
         assert expected in paths
     for name, act in menu_actions(w):
         if not name.startswith("Edit > Undo") and not name.startswith("Edit > Redo"):
@@ -145,9 +150,23 @@ def test_clear_all_puts_the_starting_pose_back(pose_window):
 
 #: Keys VTK's interactor style or pyvista bind by default: stereo, wireframe, surface,
 #: camera reset, fly-to, joystick, picking modes, isometric view, zoom, point size, quit.
-VTK_KEYS = (Qt.Key.Key_3, Qt.Key.Key_W, Qt.Key.Key_S, Qt.Key.Key_R, Qt.Key.Key_F, Qt.Key.Key_J, Qt.Key.Key_P,
-            Qt.Key.Key_B, Qt.Key.Key_C, Qt.Key.Key_V, Qt.Key.Key_Up, Qt.Key.Key_Plus, Qt.Key.Key_U, Qt.Key.Key_E,
-            Qt.Key.Key_Q)  # fmt: skip
+VTK_KEYS = (
+    Qt.Key.Key_3,
+    Qt.Key.Key_W,
+    Qt.Key.Key_S,
+    Qt.Key.Key_R,
+    Qt.Key.Key_F,
+    Qt.Key.Key_J,
+    Qt.Key.Key_P,
+    Qt.Key.Key_B,
+    Qt.Key.Key_C,
+    Qt.Key.Key_V,
+    Qt.Key.Key_Up,
+    Qt.Key.Key_Plus,
+    Qt.Key.Key_U,
+    Qt.Key.Key_E,
+    Qt.Key.Key_Q,
+)
 
 
 def representations(plotter) -> list[int]:

@@ -27,7 +27,9 @@ def test_choosing_a_method_and_a_ghost_builds_each_once(studio, qtbot):
     panel = studio.optimizer_panel
     assert panel.method.currentText() == "ik"
     panel.method.setCurrentText("dragposer")
-    qtbot.waitUntil(lambda: studio.session.latest.method == "dragposer" and bool(studio.session.latest.losses), timeout=30000)
+    qtbot.waitUntil(
+        lambda: studio.session.latest.method == "dragposer" and bool(studio.session.latest.losses), timeout=30000
+    )
     assert built == {"dragposer": 1}
 
     seq = studio.session.latest.seq

@@ -18,9 +18,14 @@ REPO = Path(__file__).resolve().parents[2]
 @pytest.mark.parametrize("seed", [1])
 def test_the_monkey_finds_no_crash_traceback_or_frozen_loop(seed):
     env = {**os.environ, "PYTHONPATH": str(REPO)}
-    run = subprocess.run([sys.executable, "-m", "tests.app.monkey", "--seed", str(seed), "--events", "300",
-                          "--step-timeout", "60"], cwd=REPO, env=env, capture_output=True, text=True,
-                         timeout=900)  # fmt: skip
+    run = subprocess.run(
+        [sys.executable, "-m", "tests.app.monkey", "--seed", str(seed), "--events", "300", "--step-timeout", "60"],
+        cwd=REPO,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
     last = [line for line in run.stdout.splitlines() if line.startswith("monkey ")]
     assert run.returncode == 0, f"exit {run.returncode}\n{run.stdout[-3000:]}\n{run.stderr[-6000:]}"
     assert last and f"seed={seed} events=300 " in last[-1] and "errors=0" in last[-1]

@@ -21,11 +21,18 @@ def window(pose_window):
 
 
 def state(w):
-    return ({j: (t.position.round(9).tolist(), t.weight, t.enabled, t.rotation is not None)
-             for j, t in w.mode.targets.items()},
-            [(k.frame, sorted(k.targets)) for k in w.scene.keys], w.scene.animation.frames, w.scene.animation.fps,
-            w.scene.animation.interpolation, w.keys.interpolation.currentText(),
-            w.mode.pose.positions.round(9).tolist())  # fmt: skip
+    return (
+        {
+            j: (t.position.round(9).tolist(), t.weight, t.enabled, t.rotation is not None)
+            for j, t in w.mode.targets.items()
+        },
+        [(k.frame, sorted(k.targets)) for k in w.scene.keys],
+        w.scene.animation.frames,
+        w.scene.animation.fps,
+        w.scene.animation.interpolation,
+        w.keys.interpolation.currentText(),
+        w.mode.pose.positions.round(9).tolist(),
+    )
 
 
 def key_the_wrist(w, *keys: tuple, length: int) -> np.ndarray:
@@ -65,7 +72,9 @@ def test_alt_drag_turns_the_joint_by_the_angle_swept_about_it(window, monkeypatc
     from engine.kinematics import quat_np as QN
     from engine.kinematics.fk import fk
 
-    monkeypatch.setattr(pw.QApplication, "queryKeyboardModifiers", staticmethod(lambda: Qt.KeyboardModifier.AltModifier))
+    monkeypatch.setattr(
+        pw.QApplication, "queryKeyboardModifiers", staticmethod(lambda: Qt.KeyboardModifier.AltModifier)
+    )
     w = window
     pose = w.mode.pose
     start = fk(pose.local_rot, pose.root_pos, w.mode.character.skeleton.offsets)[1][LW]
@@ -91,7 +100,9 @@ def test_a_slow_solve_does_not_split_an_alt_drag(window, monkeypatch):
     import app.pose_window as pw
     from engine.authoring.turns import TURN_GESTURE_S
 
-    monkeypatch.setattr(pw.QApplication, "queryKeyboardModifiers", staticmethod(lambda: Qt.KeyboardModifier.AltModifier))
+    monkeypatch.setattr(
+        pw.QApplication, "queryKeyboardModifiers", staticmethod(lambda: Qt.KeyboardModifier.AltModifier)
+    )
     w = window
     turn = w.session.turn_joint
 
@@ -178,7 +189,9 @@ def test_preview_plays_the_bake_and_going_to_a_key_poses_it(window, qtbot):
 def test_closing_with_unsaved_edits_asks_and_cancel_keeps_the_window(window, monkeypatch):
     window.add_key(0)
     asked = []
-    monkeypatch.setattr(QMessageBox, "question", lambda *a, **k: asked.append(a[1]) or QMessageBox.StandardButton.Cancel)
+    monkeypatch.setattr(
+        QMessageBox, "question", lambda *a, **k: asked.append(a[1]) or QMessageBox.StandardButton.Cancel
+    )
     assert not window.close() and window.isVisible() and asked == ["Unsaved changes"]
     monkeypatch.setattr(QMessageBox, "question", lambda *a, **k: QMessageBox.StandardButton.Discard)
     assert window.close()
@@ -203,7 +216,9 @@ def test_the_screenshot_shows_the_window_with_the_character(window, tmp_path):
     img = QImage(str(tmp_path / "s.png"))
     assert img.width() >= window.width() - 2 and img.height() >= window.height() - 2
     vp = window.viewport.mapTo(window, window.viewport.rect().center())
-    colours = {img.pixelColor(x, y).name() for x in range(vp.x() - 60, vp.x() + 60, 3) for y in range(0, img.height(), 3)}
+    colours = {
+        img.pixelColor(x, y).name() for x in range(vp.x() - 60, vp.x() + 60, 3) for y in range(0, img.height(), 3)
+    }
     assert any(int(c[1:3], 16) > 180 and int(c[5:7], 16) < 90 for c in colours)  # the orange figure is drawn
 
 
@@ -366,15 +381,21 @@ def test_a_saved_scene_opens_again_in_a_pose_window(window, tmp_path, vae, monke
     try:
         other.drag_joint("lwrist", other.mode.pose.positions[LW] + [0, 0, 0.1])  # an unsaved edit
         asked = []
-        monkeypatch.setattr(QMessageBox, "question", lambda *a, **k: asked.append(a[1]) or QMessageBox.StandardButton.Discard)
+        monkeypatch.setattr(
+            QMessageBox, "question", lambda *a, **k: asked.append(a[1]) or QMessageBox.StandardButton.Discard
+        )
         from PyQt6.QtWidgets import QFileDialog
 
-        monkeypatch.setattr(QFileDialog, "getOpenFileName", staticmethod(lambda *a, **k: (str(tmp_path / "s.json"), "")))
+        monkeypatch.setattr(
+            QFileDialog, "getOpenFileName", staticmethod(lambda *a, **k: (str(tmp_path / "s.json"), ""))
+        )
         other.actions_by_name["open"].trigger()
         assert asked == ["Unsaved changes"]
         assert other.mode.character.height == pytest.approx(1.75)
         assert [k.frame for k in other.scene.keys] == [0, 20] and other.scene.animation.frames == 25
-        assert [c.name for c in other.mode.constraints] == [c.name for c in load_authoring(tmp_path / "s.json").constraints]
+        assert [c.name for c in other.mode.constraints] == [
+            c.name for c in load_authoring(tmp_path / "s.json").constraints
+        ]
         assert other.mode.constraints is other.scene.constraints
         assert other.frame == 0 and other.undo.count() == 0 and not other.dirty
         assert "Opened s.json: 2 keys, 1 constraint(s)" in other.statusBar().currentMessage()
@@ -383,7 +404,9 @@ def test_a_saved_scene_opens_again_in_a_pose_window(window, tmp_path, vae, monke
         (tmp_path / "bad.json").write_text('{"format": "dragposer-scene", "version": 2, "animation": {"fps": "fast"}}')
         shown = []
         monkeypatch.setattr(QMessageBox, "warning", lambda *a, **k: shown.append(a[2]))
-        monkeypatch.setattr(QFileDialog, "getOpenFileName", staticmethod(lambda *a, **k: (str(tmp_path / "bad.json"), "")))
+        monkeypatch.setattr(
+            QFileDialog, "getOpenFileName", staticmethod(lambda *a, **k: (str(tmp_path / "bad.json"), ""))
+        )
         other.actions_by_name["open"].trigger()
         assert len(shown) == 1 and shown[0].count("bad.json") == 1 and "fps" in shown[0]
         assert [k.frame for k in other.scene.keys] == [0, 20]  # a bad file changes nothing

@@ -95,8 +95,25 @@ def test_the_video_has_the_frame_count_size_and_time_base_and_shows_the_skeleton
 
 def test_another_rate_gives_its_own_frame_count_and_time_base(short_clip, tmp_path):
     out = tmp_path / "v.mp4"
-    assert main([str(short_clip), "--out", str(out), "--size", "96x64", "--fps", "30", "--camera", "side",
-                 "--view", "body", "--no-progress"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                str(short_clip),
+                "--out",
+                str(out),
+                "--size",
+                "96x64",
+                "--fps",
+                "30",
+                "--camera",
+                "side",
+                "--view",
+                "body",
+                "--no-progress",
+            ]
+        )
+        == 0
+    )
     from engine.motion.retarget import resample_motion
 
     n = len(resample_motion(load_clip(short_clip), 30.0))
@@ -121,14 +138,39 @@ def render_layout(clip: Path, out: Path, layout: str) -> tuple[list[np.ndarray],
     scene built in this process (its legend rows give where the text must be)."""
     from app.render_scene import FrameRenderer, RenderOptions
 
-    args = ["--size", "480x270", "--view", "body", "--sensors", "6", "--ghosts", "ik", "--truth",
-            "--layout", layout, "--title", "Test", "--timecode", "--no-progress"]  # fmt: skip
+    args = [
+        "--size",
+        "480x270",
+        "--view",
+        "body",
+        "--sensors",
+        "6",
+        "--ghosts",
+        "ik",
+        "--truth",
+        "--layout",
+        layout,
+        "--title",
+        "Test",
+        "--timecode",
+        "--no-progress",
+    ]
     assert main([str(clip), "--out", str(out), *args]) == 0
     size, frames = decode(out)
     assert size == (480, 270) and len(frames) == 24
-    scene = FrameRenderer(load_clip(clip), RenderOptions(size=(480, 270), sensors="6", ghosts=("ik",),
-                                                         view="body", truth=True, layout=layout, title="Test",
-                                                         timecode=True))  # fmt: skip
+    scene = FrameRenderer(
+        load_clip(clip),
+        RenderOptions(
+            size=(480, 270),
+            sensors="6",
+            ghosts=("ik",),
+            view="body",
+            truth=True,
+            layout=layout,
+            title="Test",
+            timecode=True,
+        ),
+    )
     return frames, scene
 
 

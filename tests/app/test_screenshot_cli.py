@@ -19,8 +19,18 @@ def test_gui_screenshot_plays_saves_the_window_and_exits_0(tmp_path):
     out = tmp_path / "studio.png"
     env = {**os.environ, "XDG_CONFIG_HOME": str(tmp_path / "config"), "OMP_NUM_THREADS": "1"}
     env.pop("QT_QPA_PLATFORM", None)  # the real window on the test's X display
-    cmd = [sys.executable, "-m", "engine.cli.main", "gui", "--method", "ik", "--screenshot", str(out),
-           "--after-frames", "10"]  # fmt: skip
+    cmd = [
+        sys.executable,
+        "-m",
+        "engine.cli.main",
+        "gui",
+        "--method",
+        "ik",
+        "--screenshot",
+        str(out),
+        "--after-frames",
+        "10",
+    ]
     done = subprocess.run(cmd, cwd=REPO, env=env, capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr[-2000:]
     from PyQt6.QtGui import QImage

@@ -13,14 +13,24 @@ from app.shell import StudioShell, ViewWindow
 APP = Path(__file__).resolve().parents[2] / "app"
 
 #: The helpers typed against :class:`StudioShell`, and the names they call the window by.
-HELPERS = ("clip_saving.py", "drawing.py", "failures.py", "ghost_status.py", "latent_views.py", "measure.py",
-           "range_actions.py", "authoring_actions.py")
+HELPERS = (
+    "clip_saving.py",
+    "drawing.py",
+    "failures.py",
+    "ghost_status.py",
+    "latent_views.py",
+    "measure.py",
+    "range_actions.py",
+    "authoring_actions.py",
+)
 WINDOW_NAMES = {"window", "w"}
 
 
 def _members(protocol: type) -> set[str]:
     """Attributes and methods a protocol declares (its annotations are strings, unresolved)."""
-    return set(protocol.__annotations__) | {n for n, v in vars(protocol).items() if callable(v) and not n.startswith("_")}
+    return set(protocol.__annotations__) | {
+        n for n, v in vars(protocol).items() if callable(v) and not n.startswith("_")
+    }
 
 
 def _window_uses(path: Path) -> set[str]:
@@ -32,8 +42,12 @@ def _window_uses(path: Path) -> set[str]:
         base = node.value
         if isinstance(base, ast.Name) and base.id in WINDOW_NAMES:
             used.add(node.attr)
-        elif (isinstance(base, ast.Attribute) and base.attr == "w"
-              and isinstance(base.value, ast.Name) and base.value.id == "self"):  # fmt: skip
+        elif (
+            isinstance(base, ast.Attribute)
+            and base.attr == "w"
+            and isinstance(base.value, ast.Name)
+            and base.value.id == "self"
+        ):
             used.add(node.attr)
     return used
 

@@ -10,8 +10,10 @@ from PyQt6.QtWidgets import QApplication, QWidget
 
 pytestmark = pytest.mark.gui
 
-LONG = ("Loaded pose.json: replaced the constraints (1) and the optimizer settings (32); kept the sensors and "
-        "preset (the scene has none)")  # fmt: skip
+LONG = (
+    "Loaded pose.json: replaced the constraints (1) and the optimizer settings (32); kept the sensors and "
+    "preset (the scene has none)"
+)
 
 
 def _settle(qtbot) -> None:
@@ -43,8 +45,11 @@ def test_a_long_status_message_in_the_studio_is_not_cut_off_by_the_solver_readou
     bar.showMessage(LONG, 15000)
     _settle(qtbot)
     text_end = bar.fontMetrics().horizontalAdvance(LONG) + 8  # Qt's left margin
-    covering = [(type(c).__name__, c.geometry().x()) for c in bar.findChildren(QWidget)
-                if c.parent() is bar and c.isVisible() and c.geometry().x() < text_end]  # fmt: skip
+    covering = [
+        (type(c).__name__, c.geometry().x())
+        for c in bar.findChildren(QWidget)
+        if c.parent() is bar and c.isVisible() and c.geometry().x() < text_end
+    ]
     assert not covering, f"the message ends at x={text_end}; over it: {covering}"
     bar.clearMessage()
     _settle(qtbot)

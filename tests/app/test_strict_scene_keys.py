@@ -21,9 +21,17 @@ MEANT = "unknown field 'keyz' (did you mean 'keys'?)"
 @pytest.fixture
 def misspelt(tmp_path):
     path = tmp_path / "keyz.json"
-    path.write_text(json.dumps({"format": "dragposer-scene", "version": 2, "animation": {"frames": 61},
-                                "constraints": [{"kind": "floor", "name": "floor"}],
-                                "keyz": [{"frame": 0, "targets": {"lwrist": [0.3, -0.2, 1.2]}}]}))  # fmt: skip
+    path.write_text(
+        json.dumps(
+            {
+                "format": "dragposer-scene",
+                "version": 2,
+                "animation": {"frames": 61},
+                "constraints": [{"kind": "floor", "name": "floor"}],
+                "keyz": [{"frame": 0, "targets": {"lwrist": [0.3, -0.2, 1.2]}}],
+            }
+        )
+    )
     return path
 
 
@@ -33,8 +41,9 @@ def _press(window, key, mods=Qt.KeyboardModifier.NoModifier):
     QTest.keyClick(window, key, mods)
 
 
-def test_load_scene_in_the_studio_shows_the_misspelt_key_in_a_dialog_and_changes_nothing(studio, misspelt,
-                                                                                         monkeypatch, qtbot):  # fmt: skip
+def test_load_scene_in_the_studio_shows_the_misspelt_key_in_a_dialog_and_changes_nothing(
+    studio, misspelt, monkeypatch, qtbot
+):
     shown = []
     monkeypatch.setattr(QMessageBox, "critical", lambda *a, **k: shown.append(a[2]))
     monkeypatch.setattr(QFileDialog, "getOpenFileName", lambda *a, **k: (str(misspelt), ""))
@@ -46,8 +55,9 @@ def test_load_scene_in_the_studio_shows_the_misspelt_key_in_a_dialog_and_changes
     assert [c.to_dict() for c in studio.session.constraints] == before and studio.undo.stack.count() == steps
 
 
-def test_open_scene_in_the_pose_window_shows_the_misspelt_key_and_keeps_the_keys(pose_window, misspelt,
-                                                                                  monkeypatch, qtbot):  # fmt: skip
+def test_open_scene_in_the_pose_window_shows_the_misspelt_key_and_keeps_the_keys(
+    pose_window, misspelt, monkeypatch, qtbot
+):
     w = pose_window
     w.add_key(0)
     w.session.history.set_clean()
@@ -62,7 +72,9 @@ def test_open_scene_in_the_pose_window_shows_the_misspelt_key_and_keeps_the_keys
 
 def test_gui_scene_with_a_misspelt_key_is_one_line_and_exit_2(tmp_path, scene_file, misspelt):  # noqa: F811
     clip, _ = scene_file
-    done = _gui(tmp_path, str(clip), "--method", "ik", "--scene", str(misspelt), "--screenshot", str(tmp_path / "x.png"))
+    done = _gui(
+        tmp_path, str(clip), "--method", "ik", "--scene", str(misspelt), "--screenshot", str(tmp_path / "x.png")
+    )
     assert done.returncode == 2, done.stderr[-2000:]
     lines = [ln for ln in done.stderr.splitlines() if ln.strip()]
     assert len(lines) == 1 and "keyz.json" in lines[0] and MEANT in lines[0], done.stderr

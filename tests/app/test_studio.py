@@ -43,7 +43,9 @@ def test_dragging_a_target_moves_the_pose_and_the_offset_stays_until_reset(studi
     # later frames keep the offset from the recorded motion...
     studio.session.seek(before.frame + 30)
     later = studio.session.tracked_position(joint, before.frame + 30)
-    snap_after(studio, qtbot, lambda s: s.frame == before.frame + 30 and np.allclose(s.target_positions[i], later + lift))
+    snap_after(
+        studio, qtbot, lambda s: s.frame == before.frame + 30 and np.allclose(s.target_positions[i], later + lift)
+    )
     # ...until the panel's Reset puts the target back on the recording
     studio.sensor_panel.rows[joint]["reset"].click()
     snap_after(studio, qtbot, lambda s: np.allclose(s.target_positions[i], later, atol=1e-6))

@@ -56,7 +56,9 @@ def test_a_temporal_weight_typed_while_playing_is_applied_once_as_typed(playing,
 def test_a_distance_typed_while_playing_is_applied_once_as_typed(playing, qtbot):
     studio = playing
     name = studio.session.constraints.add("distance", joint_a="lwrist", joint_b="rwrist", distance=0.5)
-    qtbot.waitUntil(lambda: studio.constraint_panel.current_name() == name and studio.constraint_panel.editor is not None)
+    qtbot.waitUntil(
+        lambda: studio.constraint_panel.current_name() == name and studio.constraint_panel.editor is not None
+    )
     edits = []
     studio.session.events.constraints.connect(lambda e: edits.append(studio.session.constraints.named(name).distance))
     spin = studio.constraint_panel.editor.inputs["distance"]

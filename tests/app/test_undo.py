@@ -85,7 +85,9 @@ def test_a_ctrl_drag_pin_is_undone_in_one_step_from_the_keyboard(studio, qtbot):
     qtbot.waitUntil(lambda: QApplication.activeWindow() is studio)
     QTest.keyClick(studio.viewport, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
     assert list(s.constraints) == []
-    QTest.keyClick(studio.viewport, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier | Qt.KeyboardModifier.ShiftModifier)
+    QTest.keyClick(
+        studio.viewport, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier | Qt.KeyboardModifier.ShiftModifier
+    )
     assert [c.name for c in s.constraints] == [pin.name] and np.allclose(s.constraints[0].position, [0.5, 0, 1.3])
     # the engine receives undone state like any other edit
     qtbot.waitUntil(lambda: any(n == pin.name for n, _ in studio.session.latest.gizmos), timeout=5000)
@@ -111,7 +113,11 @@ def test_the_starting_preset_is_not_an_undo_step_and_later_edits_are(studio, qtb
     studio.constraint_panel.add_button.click()
     joint = next(iter(studio.sensor_panel.rows))
     studio.sensor_panel.rows[joint]["enabled"].setChecked(False)
-    assert [stack.text(i) for i in range(stack.count())] == ["Sensor preset 6", "Add look_at", f"Edit {joint} sensor (enabled)"]
+    assert [stack.text(i) for i in range(stack.count())] == [
+        "Sensor preset 6",
+        "Add look_at",
+        f"Edit {joint} sensor (enabled)",
+    ]
 
 
 def test_optimizer_settings_edits_are_undone_and_redone(studio, qtbot):

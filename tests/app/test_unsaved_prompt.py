@@ -55,8 +55,9 @@ def test_quit_save_writes_the_scene(studio, answer, monkeypatch, tmp_path):
     assert [c["kind"] for c in json.loads((tmp_path / "s.json").read_text())["constraints"]] == ["floor"]
 
 
-def test_opening_a_clip_after_a_range_resolve_asks_cancel_keeps_save_writes_both(studio, answer, monkeypatch,
-                                                                                  tmp_path, synthetic_motion, qtbot):  # fmt: skip
+def test_opening_a_clip_after_a_range_resolve_asks_cancel_keeps_save_writes_both(
+    studio, answer, monkeypatch, tmp_path, synthetic_motion, qtbot
+):
     from app.range_actions import resolve_range
     from engine.motion.bvh import save_motion_bvh
     from engine.studio.clips import load_clip
@@ -71,6 +72,7 @@ def test_opening_a_clip_after_a_range_resolve_asks_cancel_keeps_save_writes_both
     answer.next = "Save"
     assert studio.files.open_path(other)
     assert studio.session.path == other and studio.undo.stack.isClean()
+
     def rel(m):  # loading re-floors the clip: compare poses about the first root
         p = m.positions()
         return p - p[:1, :1]
@@ -182,8 +184,11 @@ def test_quit_while_a_pose_window_bakes_cancels_it_and_leaves_no_message_behind(
         shown = []
         monkeypatch.setattr(QMessageBox, "warning", lambda *a, **k: shown.append(a[2]))
         quit_during_bake = QTimer(interval=10)
-        quit_during_bake.timeout.connect(lambda: pose.jobs.running and pose.jobs.done >= 3 and (
-            quit_during_bake.stop(), _quit_action(studio).trigger()))  # fmt: skip
+        quit_during_bake.timeout.connect(
+            lambda: (
+                pose.jobs.running and pose.jobs.done >= 3 and (quit_during_bake.stop(), _quit_action(studio).trigger())
+            )
+        )
         quit_during_bake.start()
         pose.go_to(75)  # between the keys: waits on the bake, during which the studio quits
         quit_during_bake.stop()

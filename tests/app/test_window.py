@@ -217,5 +217,7 @@ def test_only_the_3d_view_and_its_ancestors_are_native_windows(studio):
     while w is not None:
         allowed.add(id(w))
         w = w.parentWidget()
-    native = [type(c).__name__ for c in studio.findChildren(QWidget) if c.windowHandle() is not None and id(c) not in allowed]
+    native = [
+        type(c).__name__ for c in studio.findChildren(QWidget) if c.windowHandle() is not None and id(c) not in allowed
+    ]
     assert not native

@@ -107,9 +107,20 @@ def quat_xyzw_matrix(q: np.ndarray) -> np.ndarray:
     """Rotation matrices ``(N, 3, 3)`` of quaternions ``(N, 4)`` in glTF's (x, y, z, w) order."""
     q = q / np.linalg.norm(q, axis=-1, keepdims=True)
     x, y, z, w = q.T
-    return np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),
-                     2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
-                     2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1).reshape(-1, 3, 3)  # fmt: skip
+    return np.stack(
+        [
+            1 - 2 * (y * y + z * z),
+            2 * (x * y - w * z),
+            2 * (x * z + w * y),
+            2 * (x * y + w * z),
+            1 - 2 * (x * x + z * z),
+            2 * (y * z - w * x),
+            2 * (x * z - w * y),
+            2 * (y * z + w * x),
+            1 - 2 * (x * x + y * y),
+        ],
+        -1,
+    ).reshape(-1, 3, 3)
 
 
 def read_gltf(path: str | Path) -> Read:

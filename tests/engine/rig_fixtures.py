@@ -32,12 +32,21 @@ from . import rig_headers
 
 # Adult proportions, Y-up, facing +Z, metres (T-pose): bone -> offset from its parent.
 _BONES = {
-    "hipL": (0.09, -0.07, 0.0), "knee": (0.0, -0.43, 0.0), "ankle": (0.0, -0.42, 0.0),
-    "toe": (0.0, -0.07, 0.13), "toe_end": (0.0, 0.0, 0.06),
-    "spine": (0.0, 0.11, -0.01), "neck": (0.0, 0.16, 0.0), "head": (0.0, 0.10, 0.02), "head_end": (0.0, 0.18, 0.0),
-    "clav": (0.04, 0.11, 0.0), "clav_side": (0.16, 0.0, 0.0), "upper": (0.28, 0.0, 0.0), "fore": (0.26, 0.0, 0.0),
+    "hipL": (0.09, -0.07, 0.0),
+    "knee": (0.0, -0.43, 0.0),
+    "ankle": (0.0, -0.42, 0.0),
+    "toe": (0.0, -0.07, 0.13),
+    "toe_end": (0.0, 0.0, 0.06),
+    "spine": (0.0, 0.11, -0.01),
+    "neck": (0.0, 0.16, 0.0),
+    "head": (0.0, 0.10, 0.02),
+    "head_end": (0.0, 0.18, 0.0),
+    "clav": (0.04, 0.11, 0.0),
+    "clav_side": (0.16, 0.0, 0.0),
+    "upper": (0.28, 0.0, 0.0),
+    "fore": (0.26, 0.0, 0.0),
     "hand_end": (0.09, 0.0, 0.0),
-}  # fmt: skip
+}
 _CMU = "cmu_asf"
 
 
@@ -93,9 +102,19 @@ def _table(prefix: str, left: str, right: str, pattern: dict) -> dict:
     return out
 
 
-_MB = {"root": "Hips", "neck": "Neck", "head": "Head", "clav": "{s}Shoulder", "upper": "{s}Arm",
-       "fore": "{s}ForeArm", "hand": "{s}Hand", "thigh": "{s}UpLeg", "shin": "{s}Leg", "foot": "{s}Foot",
-       "toe": "{s}ToeBase"}  # fmt: skip
+_MB = {
+    "root": "Hips",
+    "neck": "Neck",
+    "head": "Head",
+    "clav": "{s}Shoulder",
+    "upper": "{s}Arm",
+    "fore": "{s}ForeArm",
+    "hand": "{s}Hand",
+    "thigh": "{s}UpLeg",
+    "shin": "{s}Leg",
+    "foot": "{s}Foot",
+    "toe": "{s}ToeBase",
+}
 
 
 def _spine(names: list[str], scale: float):
@@ -106,28 +125,73 @@ def cmu_rows():
     """The 31-joint CMU conversion rig (``Hips``, ``LHipJoint``, ``LeftUpLeg``...), ASF units."""
     r = [("Hips", None, (0, 0, 0))]
     for s, sg, hip, leg, foot, toe, _end in (
-        ("Left", "L", (1.85590, -1.73949, 0.84976), (2.36836, -6.50702, 0), (2.53268, -6.95849, 0),
-         (0.15935, -0.43781, 1.94506), (0, 0, 1.00661)),
-        ("Right", "R", (-1.68297, -1.73949, 0.84976), (-2.44709, -6.72334, 0), (-2.43843, -6.69953, 0),
-         (-0.20854, -0.57295, 2.02172), (0, 0, 1.05594)),
-    ):  # fmt: skip
-        r += [(f"{sg}HipJoint", "Hips", (0, 0, 0)), (f"{s}UpLeg", f"{sg}HipJoint", hip), (f"{s}Leg", f"{s}UpLeg", leg),
-              (f"{s}Foot", f"{s}Leg", foot), (f"{s}ToeBase", f"{s}Foot", toe)]  # fmt: skip
+        (
+            "Left",
+            "L",
+            (1.85590, -1.73949, 0.84976),
+            (2.36836, -6.50702, 0),
+            (2.53268, -6.95849, 0),
+            (0.15935, -0.43781, 1.94506),
+            (0, 0, 1.00661),
+        ),
+        (
+            "Right",
+            "R",
+            (-1.68297, -1.73949, 0.84976),
+            (-2.44709, -6.72334, 0),
+            (-2.43843, -6.69953, 0),
+            (-0.20854, -0.57295, 2.02172),
+            (0, 0, 1.05594),
+        ),
+    ):
+        r += [
+            (f"{sg}HipJoint", "Hips", (0, 0, 0)),
+            (f"{s}UpLeg", f"{sg}HipJoint", hip),
+            (f"{s}Leg", f"{s}UpLeg", leg),
+            (f"{s}Foot", f"{s}Leg", foot),
+            (f"{s}ToeBase", f"{s}Foot", toe),
+        ]
     ends = {"LeftToeBase": (0, 0, 1.00661), "RightToeBase": (0, 0, 1.05594)}
-    r += [("LowerBack", "Hips", (0, 0, 0)), ("Spine", "LowerBack", (-0.01560, 2.23971, -0.03712)),
-          ("Spine1", "Spine", (0.05490, 2.19225, -0.19086)), ("Neck", "Spine1", (0, 0, 0)),
-          ("Neck1", "Neck", (-0.12403, 1.43168, 0.27585)), ("Head", "Neck1", (0.17855, 1.46173, -0.32578))]  # fmt: skip
+    r += [
+        ("LowerBack", "Hips", (0, 0, 0)),
+        ("Spine", "LowerBack", (-0.01560, 2.23971, -0.03712)),
+        ("Spine1", "Spine", (0.05490, 2.19225, -0.19086)),
+        ("Neck", "Spine1", (0, 0, 0)),
+        ("Neck1", "Neck", (-0.12403, 1.43168, 0.27585)),
+        ("Head", "Neck1", (0.17855, 1.46173, -0.32578)),
+    ]
     ends["Head"] = (0.07217, 1.51590, -0.14537)
     for s, sg, arm, fore, hand, idx, idx_end, th_end in (
-        ("Left", "L", (3.27650, 0.85634, 0.05396), (4.96755, 0, 0), (3.35751, 0, 0), (0.79697, 0, 0),
-         (0.64254, 0, 0), (0.65235, 0, 0.65235)),
-        ("Right", "R", (-3.24434, 1.02034, 0.34688), (-5.21859, 0, 0), (-3.36504, 0, 0), (-0.62044, 0, 0),
-         (-0.50022, 0, 0), (-0.50786, 0, 0.50786)),
-    ):  # fmt: skip
-        r += [(f"{s}Shoulder", "Spine1", (0, 0, 0)), (f"{s}Arm", f"{s}Shoulder", arm),
-              (f"{s}ForeArm", f"{s}Arm", fore), (f"{s}Hand", f"{s}ForeArm", hand),
-              (f"{s}FingerBase", f"{s}Hand", (0, 0, 0)), (f"{s}HandIndex1", f"{s}FingerBase", idx),
-              (f"{sg}Thumb", f"{s}Hand", (0, 0, 0))]  # fmt: skip
+        (
+            "Left",
+            "L",
+            (3.27650, 0.85634, 0.05396),
+            (4.96755, 0, 0),
+            (3.35751, 0, 0),
+            (0.79697, 0, 0),
+            (0.64254, 0, 0),
+            (0.65235, 0, 0.65235),
+        ),
+        (
+            "Right",
+            "R",
+            (-3.24434, 1.02034, 0.34688),
+            (-5.21859, 0, 0),
+            (-3.36504, 0, 0),
+            (-0.62044, 0, 0),
+            (-0.50022, 0, 0),
+            (-0.50786, 0, 0.50786),
+        ),
+    ):
+        r += [
+            (f"{s}Shoulder", "Spine1", (0, 0, 0)),
+            (f"{s}Arm", f"{s}Shoulder", arm),
+            (f"{s}ForeArm", f"{s}Arm", fore),
+            (f"{s}Hand", f"{s}ForeArm", hand),
+            (f"{s}FingerBase", f"{s}Hand", (0, 0, 0)),
+            (f"{s}HandIndex1", f"{s}FingerBase", idx),
+            (f"{sg}Thumb", f"{s}Hand", (0, 0, 0)),
+        ]
         ends[f"{s}HandIndex1"] = idx_end
         ends[f"{sg}Thumb"] = th_end
     return r, ends
@@ -143,9 +207,19 @@ def family_rows(family: str):
     if family == "lafan":  # the LAFAN1 header (LeftToe, Spine2), cm, bone frames along x
         return (*rig_headers.parse(rig_headers.LAFAN1), 0.01, "y")
     if family == "smpl":  # SMPL/AMASS joint names, metres
-        pat = {"root": "pelvis", "neck": "neck", "head": "head", "clav": "{s}_collar", "upper": "{s}_shoulder",
-               "fore": "{s}_elbow", "hand": "{s}_wrist", "thigh": "{s}_hip", "shin": "{s}_knee",
-               "foot": "{s}_ankle", "toe": "{s}_foot"}  # fmt: skip
+        pat = {
+            "root": "pelvis",
+            "neck": "neck",
+            "head": "head",
+            "clav": "{s}_collar",
+            "upper": "{s}_shoulder",
+            "fore": "{s}_elbow",
+            "hand": "{s}_wrist",
+            "thigh": "{s}_hip",
+            "shin": "{s}_knee",
+            "foot": "{s}_ankle",
+            "toe": "{s}_foot",
+        }
         n = _table("", "left", "right", pat)
         return (*_humanoid(n, _spine(["spine1", "spine2", "spine3"], 1.0), 1.0), 1.0, "y")
     if family == "joint_root":  # the Bandai Namco dataset's 22-joint rig under joint_Root, cm
@@ -153,19 +227,41 @@ def family_rows(family: str):
     if family == "daz":  # the cgspeed Daz-friendly header (hip, lButtock, lThigh...), cm
         return (*rig_headers.parse(rig_headers.DAZ), 0.01, "y")
     if family == "iclone":  # Character Creator CC_Base_ names with twist bones, cm
-        pat = {"root": "Hip", "neck": "NeckTwist01", "head": "Head", "clav": "{s}_Clavicle", "upper": "{s}_Upperarm",
-               "fore": "{s}_Forearm", "hand": "{s}_Hand", "thigh": "{s}_Thigh", "shin": "{s}_Calf",
-               "foot": "{s}_Foot", "toe": "{s}_ToeBase"}  # fmt: skip
+        pat = {
+            "root": "Hip",
+            "neck": "NeckTwist01",
+            "head": "Head",
+            "clav": "{s}_Clavicle",
+            "upper": "{s}_Upperarm",
+            "fore": "{s}_Forearm",
+            "hand": "{s}_Hand",
+            "thigh": "{s}_Thigh",
+            "shin": "{s}_Calf",
+            "foot": "{s}_Foot",
+            "toe": "{s}_ToeBase",
+        }
         n = _table("CC_Base_", "L", "R", pat)
         rows, ends = _humanoid(n, _spine(["CC_Base_Waist", "CC_Base_Spine01", "CC_Base_Spine02"], 100.0), 100.0)
         for s in ("L", "R"):
             rows.append((f"CC_Base_{s}_ThighTwist01", f"CC_Base_{s}_Thigh", (0.0, -20.0, 0.0)))
-            rows.append((f"CC_Base_{s}_UpperarmTwist01", f"CC_Base_{s}_Upperarm", ((1 if s == "L" else -1) * 12.0, 0, 0)))
+            rows.append(
+                (f"CC_Base_{s}_UpperarmTwist01", f"CC_Base_{s}_Upperarm", ((1 if s == "L" else -1) * 12.0, 0, 0))
+            )
         return rows, ends, 0.01, "y"
     if family == "unreal":  # UE mannequin names (pelvis, thigh_l, calf_l...), Z-up cm
-        pat = {"root": "pelvis", "neck": "neck_01", "head": "head", "clav": "clavicle_{s}", "upper": "upperarm_{s}",
-               "fore": "lowerarm_{s}", "hand": "hand_{s}", "thigh": "thigh_{s}", "shin": "calf_{s}",
-               "foot": "foot_{s}", "toe": "ball_{s}"}  # fmt: skip
+        pat = {
+            "root": "pelvis",
+            "neck": "neck_01",
+            "head": "head",
+            "clav": "clavicle_{s}",
+            "upper": "upperarm_{s}",
+            "fore": "lowerarm_{s}",
+            "hand": "hand_{s}",
+            "thigh": "thigh_{s}",
+            "shin": "calf_{s}",
+            "foot": "foot_{s}",
+            "toe": "ball_{s}",
+        }
         n = _table("", "l", "r", pat)
         rows, ends = _humanoid(n, _spine(["spine_01", "spine_02", "spine_03"], 100.0), 100.0, root_name="root")
         return rows, ends, 0.01, "z"
@@ -174,9 +270,19 @@ def family_rows(family: str):
         n = _table("", "Left", "Right", pat)
         return (*_humanoid(n, _spine(["Spine1", "Spine2", "Spine3", "Spine4"], 100.0), 100.0), 0.01, "y")
     if family == "xsens":  # Xsens MVN names (Pelvis, L5, L3, T12, T8, RightUpperLeg...), cm
-        pat = {"root": "Pelvis", "neck": "Neck", "head": "Head", "clav": "{s}Shoulder", "upper": "{s}UpperArm",
-               "fore": "{s}ForeArm", "hand": "{s}Hand", "thigh": "{s}UpperLeg", "shin": "{s}LowerLeg",
-               "foot": "{s}Foot", "toe": "{s}Toe"}  # fmt: skip
+        pat = {
+            "root": "Pelvis",
+            "neck": "Neck",
+            "head": "Head",
+            "clav": "{s}Shoulder",
+            "upper": "{s}UpperArm",
+            "fore": "{s}ForeArm",
+            "hand": "{s}Hand",
+            "thigh": "{s}UpperLeg",
+            "shin": "{s}LowerLeg",
+            "foot": "{s}Foot",
+            "toe": "{s}Toe",
+        }
         n = _table("", "Left", "Right", pat)
         return (*_humanoid(n, _spine(["L5", "L3", "T12", "T8"], 100.0), 100.0), 0.01, "y")
     raise KeyError(family)
@@ -186,21 +292,43 @@ FAMILIES = ("cmu", "mixamo", "lafan", "smpl", "joint_root", "daz", "iclone", "un
 
 #: Expected source joint of a few canonical joints, per family.
 EXPECTED = {
-    "cmu": {"root": "Hips", "lhip": "LeftUpLeg", "lknee": "LeftLeg", "lclavicle": "LeftShoulder",
-            "lshoulder": "LeftArm", "chest": "Spine1", "lowerneck": "Neck1", "upperneck": "Head"},
-    "mixamo": {"root": "mixamorig7:Hips", "lhip": "mixamorig7:LeftUpLeg", "ltoe": "mixamorig7:LeftToeBase",
-               "lshoulder": "mixamorig7:LeftArm", "chest": "mixamorig7:Spine2", "upperback": "mixamorig7:Spine1",
-               "upperneck": "mixamorig7:Head"},
+    "cmu": {
+        "root": "Hips",
+        "lhip": "LeftUpLeg",
+        "lknee": "LeftLeg",
+        "lclavicle": "LeftShoulder",
+        "lshoulder": "LeftArm",
+        "chest": "Spine1",
+        "lowerneck": "Neck1",
+        "upperneck": "Head",
+    },
+    "mixamo": {
+        "root": "mixamorig7:Hips",
+        "lhip": "mixamorig7:LeftUpLeg",
+        "ltoe": "mixamorig7:LeftToeBase",
+        "lshoulder": "mixamorig7:LeftArm",
+        "chest": "mixamorig7:Spine2",
+        "upperback": "mixamorig7:Spine1",
+        "upperneck": "mixamorig7:Head",
+    },
     "lafan": {"ltoe": "LeftToe", "chest": "Spine2", "lelbow": "LeftForeArm"},
-    "smpl": {"root": "pelvis", "lhip": "left_hip", "lknee": "left_knee", "lankle": "left_ankle",
-             "ltoe": "left_foot", "lclavicle": "left_collar", "lshoulder": "left_shoulder", "chest": "spine3"},
+    "smpl": {
+        "root": "pelvis",
+        "lhip": "left_hip",
+        "lknee": "left_knee",
+        "lankle": "left_ankle",
+        "ltoe": "left_foot",
+        "lclavicle": "left_collar",
+        "lshoulder": "left_shoulder",
+        "chest": "spine3",
+    },
     "joint_root": {"root": "Hips", "lhip": "UpperLeg_L", "rwrist": "Hand_R", "chest": "Chest"},
     "daz": {"root": "hip", "lhip": "lThigh", "lshoulder": "lShldr", "chest": "chest"},
     "iclone": {"root": "CC_Base_Hip", "lhip": "CC_Base_L_Thigh", "lowerneck": "CC_Base_NeckTwist01"},
     "unreal": {"root": "pelvis", "lhip": "thigh_l", "lknee": "calf_l", "lshoulder": "upperarm_l", "ltoe": "ball_l"},
     "rokoko": {"lhip": "LeftThigh", "lknee": "LeftShin", "chest": "Spine4"},
     "xsens": {"root": "Pelvis", "rhip": "RightUpperLeg", "chest": "T8", "lowerback": "L5", "upperback": "T12"},
-}  # fmt: skip
+}
 
 
 def _motion(rows, frames: int, fps: float, up: str, units: float, seed: int) -> np.ndarray:

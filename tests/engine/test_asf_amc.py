@@ -88,8 +88,9 @@ def arm(tmp_path: Path) -> Path:
 def test_rest_and_rotated_positions_follow_the_asf_axes(arm: Path):
     """Frame 1 is the rest pose; in frame 2 the upper bone's rx turns about its own x axis,
     which its ``axis 0 0 90`` puts along world y: the bone (along world x) swings to -z."""
-    (arm / "m.amc").write_text(_amc("root 1 2 3 0 0 0\nupper 0 0 0\nlower 0",
-                                    "root 1 2 3 0 0 0\nupper 90 0 0\nlower 0"))  # fmt: skip
+    (arm / "m.amc").write_text(
+        _amc("root 1 2 3 0 0 0\nupper 0 0 0\nlower 0", "root 1 2 3 0 0 0\nupper 90 0 0\nlower 0")
+    )
     raw = load_amc(arm / "m.amc", arm / "arm.asf", fps=30)
     assert raw.names == ("Hips", "upper", "lower") and raw.parents == (-1, 0, 1)
     assert raw.fps == pytest.approx(30)
@@ -197,7 +198,11 @@ def test_info_reads_an_amc_file_from_the_command_line(shared_mocap: Path):
     amc = shared_mocap / "hdm05" / "HDM_bd_squat1Reps_001_120.amc"
     if not amc.is_file():
         pytest.skip(f"{amc} is not in the shared data")
-    out = subprocess.run([sys.executable, "-m", "engine.cli.main", "info", str(amc), "--json"], capture_output=True,
-                         text=True, timeout=120)  # fmt: skip
+    out = subprocess.run(
+        [sys.executable, "-m", "engine.cli.main", "info", str(amc), "--json"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert out.returncode == 0, out.stderr
     assert '"source_fps": 120' in out.stdout and '"source_joints": 31' in out.stdout

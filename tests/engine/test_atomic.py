@@ -93,8 +93,12 @@ def test_sigterm_and_sigint_during_a_write_leave_no_temp_file(tmp_path):
     repo = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     for sig in (signal.SIGTERM, signal.SIGINT):
         target = tmp_path / f"out{int(sig)}.bvh"
-        proc = subprocess.Popen([sys.executable, "-c", script, str(target)], stdout=subprocess.PIPE,
-                                stderr=subprocess.DEVNULL, env={**os.environ, "PYTHONPATH": repo})  # fmt: skip
+        proc = subprocess.Popen(
+            [sys.executable, "-c", script, str(target)],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.DEVNULL,
+            env={**os.environ, "PYTHONPATH": repo},
+        )
         assert proc.stdout.readline().strip() == b"writing"
         assert any(p.name.startswith(f".{target.name}.tmp-") for p in tmp_path.iterdir())
         t0 = time.monotonic()
@@ -121,8 +125,12 @@ def _writer(target):
     import sys
 
     repo = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-    proc = subprocess.Popen([sys.executable, "-c", _WRITER, str(target)], stdout=subprocess.PIPE,
-                            stderr=subprocess.DEVNULL, env={**os.environ, "PYTHONPATH": repo})  # fmt: skip
+    proc = subprocess.Popen(
+        [sys.executable, "-c", _WRITER, str(target)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,
+        env={**os.environ, "PYTHONPATH": repo},
+    )
     assert proc.stdout.readline().strip() == b"writing"
     return proc
 
@@ -163,9 +171,16 @@ def test_a_locked_temp_file_is_kept_even_when_its_pid_is_not_visible(tmp_path):
     target = tmp_path / "out.bvh"
     other = tmp_path / f"{temp_prefix(target)}{_dead_pid()}-abc.tmp"
     other.write_bytes(b"y")
-    holder = subprocess.Popen([sys.executable, "-c", "import fcntl, sys, time\nf = open(sys.argv[1], 'rb')\n"
-                               "fcntl.flock(f, fcntl.LOCK_EX)\nprint('locked', flush=True)\ntime.sleep(120)\n",
-                               str(other)], stdout=subprocess.PIPE)  # fmt: skip
+    holder = subprocess.Popen(
+        [
+            sys.executable,
+            "-c",
+            "import fcntl, sys, time\nf = open(sys.argv[1], 'rb')\n"
+            "fcntl.flock(f, fcntl.LOCK_EX)\nprint('locked', flush=True)\ntime.sleep(120)\n",
+            str(other),
+        ],
+        stdout=subprocess.PIPE,
+    )
     try:
         assert holder.stdout.readline().strip() == b"locked"
         write_text(target, "new")

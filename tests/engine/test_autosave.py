@@ -52,8 +52,10 @@ def test_the_clip_is_dropped_when_the_document_no_longer_has_one(tmp_path, synth
 
 
 def test_a_killed_program_leaves_its_session_for_the_next_start(tmp_path):
-    code = ("import os, signal, sys; from engine.autosave import AutosaveSession; "
-            "AutosaveSession(sys.argv[1]).write('studio', {'frame': 7}); os.kill(os.getpid(), signal.SIGKILL)")  # fmt: skip
+    code = (
+        "import os, signal, sys; from engine.autosave import AutosaveSession; "
+        "AutosaveSession(sys.argv[1]).write('studio', {'frame': 7}); os.kill(os.getpid(), signal.SIGKILL)"
+    )
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([os.getcwd(), os.environ.get("PYTHONPATH", "")])}
     proc = subprocess.run([sys.executable, "-c", code, str(tmp_path)], env=env, timeout=120)
     assert proc.returncode == -signal.SIGKILL

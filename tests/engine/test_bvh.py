@@ -156,9 +156,40 @@ def test_missing_file_is_a_bvh_error(tmp_path):
 
 # --- fuzzing: mutated files may fail, but only ever with BVHError -------------------------
 
-_JUNK = ["{", "}", "nan", "inf", "-inf", "abc", "1e400", "0", "-1", "3", "6", "1e9", "JOINT", "ROOT",
-         "End", "Site", "MOTION", "Frames:", "Frame Time:", "CHANNELS", "OFFSET", "Xrotation",
-         "Yposition", "HIERARCHY", "\x00", "é", "", "1.5.2", "0x10", "--1", "+", "."]  # fmt: skip
+_JUNK = [
+    "{",
+    "}",
+    "nan",
+    "inf",
+    "-inf",
+    "abc",
+    "1e400",
+    "0",
+    "-1",
+    "3",
+    "6",
+    "1e9",
+    "JOINT",
+    "ROOT",
+    "End",
+    "Site",
+    "MOTION",
+    "Frames:",
+    "Frame Time:",
+    "CHANNELS",
+    "OFFSET",
+    "Xrotation",
+    "Yposition",
+    "HIERARCHY",
+    "\x00",
+    "é",
+    "",
+    "1.5.2",
+    "0x10",
+    "--1",
+    "+",
+    ".",
+]
 
 _mutation = st.one_of(
     st.tuples(st.just("del_line"), st.integers(0, 40)),

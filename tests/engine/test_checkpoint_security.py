@@ -57,8 +57,13 @@ def test_real_checkpoints_still_load(tmp_path):
 
     from engine.training.common import save_checkpoint
 
-    payload = {"state_dict": {"w": torch.zeros(2)}, "optimizer": {"param_groups": [{"lr": 0.1, "fused": None}]},
-               "epoch": 3, "curve": [{"epoch": 1, "loss": np.float64(0.5)}], "rng": torch.get_rng_state()}
+    payload = {
+        "state_dict": {"w": torch.zeros(2)},
+        "optimizer": {"param_groups": [{"lr": 0.1, "fused": None}]},
+        "epoch": 3,
+        "curve": [{"epoch": 1, "loss": np.float64(0.5)}],
+        "rng": torch.get_rng_state(),
+    }
     save_checkpoint(tmp_path / "last.pt", payload)
     back = load_checkpoint(tmp_path / "last.pt", "checkpoint")
     assert back["epoch"] == 3 and float(back["curve"][0]["loss"]) == 0.5

@@ -25,11 +25,14 @@ def test_the_engine_command_line_does_not_import_the_app():
     assert out.stdout.strip() == "False"
 
 
-@pytest.mark.parametrize("body, message", [
-    (None, "No module named 'cli_broken_sub'"),  # the module is missing
-    ("import no_such_dependency_xyz\n", "no_such_dependency_xyz"),  # it imports something missing
-    ("raise ValueError('bad constant')\n", "ValueError: bad constant"),  # it raises on import
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "body, message",
+    [
+        (None, "No module named 'cli_broken_sub'"),  # the module is missing
+        ("import no_such_dependency_xyz\n", "no_such_dependency_xyz"),  # it imports something missing
+        ("raise ValueError('bad constant')\n", "ValueError: bad constant"),  # it raises on import
+    ],
+)
 def test_a_subcommand_that_fails_to_import_is_an_error_not_a_gap(monkeypatch, tmp_path, capsys, body, message):
     if body is not None:
         (tmp_path / "cli_broken_sub.py").write_text(body)

@@ -13,8 +13,14 @@ from tests.conftest import REPO
 
 def _modules_after(code: str) -> set[str]:
     """The modules a fresh interpreter holds after running ``code`` in the repository."""
-    out = subprocess.run([sys.executable, "-c", f"{code}\nimport sys\nprint(' '.join(sys.modules))"], cwd=REPO,
-                         capture_output=True, text=True, check=True, timeout=300)  # fmt: skip
+    out = subprocess.run(
+        [sys.executable, "-c", f"{code}\nimport sys\nprint(' '.join(sys.modules))"],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=300,
+    )
     return set(out.stdout.split())
 
 
@@ -65,4 +71,3 @@ def test_a_started_engine_process_is_adopted_with_the_whole_session(synthetic_mo
     assert started.starts == 0 and session.engine is started
     kinds = [type(c).__name__ for c in started.commands]
     assert kinds[0] == "SetMethod" and "SetMotion" in kinds and "SetSensors" in kinds
-

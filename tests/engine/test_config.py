@@ -26,7 +26,9 @@ def test_plain_numbers_and_lists_are_typed_by_the_field():
     assert parse_overrides(_Settings, ["lr=2."]) == {"lr": 2.0}
 
 
-@pytest.mark.parametrize("item", ["lr=٣", "lr=1_0", "iterations=1_0", "iterations=３", "iterations=2.0", "lr=0x10", "lr="])
+@pytest.mark.parametrize(
+    "item", ["lr=٣", "lr=1_0", "iterations=1_0", "iterations=３", "iterations=2.0", "lr=0x10", "lr="]
+)
 def test_numbers_python_would_also_read_are_refused(item):
     key, raw = item.split("=", 1)
     with pytest.raises(UserError, match=f"--set {key}={raw}: not a valid"):

@@ -62,8 +62,11 @@ def test_bad_ranges_are_named(extra, field):
 
 
 def test_a_scene_carries_the_range_and_names_a_bad_one():
-    doc = {"format": "dragposer-scene", "version": 1,
-           "constraints": [{"kind": "floor", "name": "f", "frames": [2, 8], "blend_in": 1}]}  # fmt: skip
+    doc = {
+        "format": "dragposer-scene",
+        "version": 1,
+        "constraints": [{"kind": "floor", "name": "f", "frames": [2, 8], "blend_in": 1}],
+    }
     (c,), _ = scene_from_dict(doc, "s.json")
     assert c.frames == (2, 8) and c.activity(1) > 0 and c.activity(0) == 0
     doc["constraints"][0]["frames"] = [8, 2]
@@ -90,8 +93,9 @@ def test_dragposer_weighs_a_range_by_the_clip_frame_it_solves_not_by_its_solve_c
     torch.manual_seed(0)
     m = DragPoserMethod(MLPDecoder(), CountingPredictor(), iterations=3, max_iterations=20)
     m.reset(clip.skeleton)
-    m.set_constraints([PinConstraint(name="held", joint="lelbow", position=np.array([0.2, -0.3, 1.2]),
-                                     frames=(10, 20))])  # fmt: skip
+    m.set_constraints(
+        [PinConstraint(name="held", joint="lelbow", position=np.array([0.2, -0.3, 1.2]), frames=(10, 20))]
+    )
     assert "held" in m.step(tracking.frame(15)).losses[-1]  # the first solve after a reset, inside the range
     m.reset(clip.skeleton)
     first = [m.step(tracking.frame(i)).losses[-1] for i in (2, 3)]

@@ -47,8 +47,13 @@ def test_a_kind_lacking_parts_is_refused_naming_them(registry):
             return state.positions.sum() * 0
 
     missing = missing_parts(Half)
-    assert missing == ["term()", "acts_on()", "examples()", "placement()",
-                       "editor metadata on field 'joint' (engine.constraints.base.param)"]  # fmt: skip
+    assert missing == [
+        "term()",
+        "acts_on()",
+        "examples()",
+        "placement()",
+        "editor metadata on field 'joint' (engine.constraints.base.param)",
+    ]
     with pytest.raises(TypeError, match="test_half.*acts_on"):
         Half.check_complete()
     with pytest.raises(TypeError, match="editor metadata"):
@@ -93,8 +98,12 @@ def test_editor_tags_come_from_field_metadata_not_names(registry):
 
     spec = describe(Named)
     tags = {f.name: (f.tag, f.choices, f.unit) for f in spec.fields if f.name not in FRAME_FIELDS}
-    assert tags == {"joint_count": ("int", (), ""), "end_joint_label": ("str", (), ""), "which": ("choice", ("a", "b"), ""),
-                    "spread": ("float", (), "m")}  # fmt: skip
+    assert tags == {
+        "joint_count": ("int", (), ""),
+        "end_joint_label": ("str", (), ""),
+        "which": ("choice", ("a", "b"), ""),
+        "spread": ("float", (), "m"),
+    }
     assert {f.name: f.tag for f in constraint_catalog()["floor"].fields}["joints"] == "joints"
 
 

@@ -42,15 +42,17 @@ def state_of(local: torch.Tensor, root: torch.Tensor, latent=None, prediction=No
 
 
 def rest_state(root=STAND, **kw) -> PoseState:
-    return state_of(Q.identity((22,), like=torch.zeros(1, dtype=torch.float64)),
-                    torch.as_tensor(root, dtype=torch.float64), **kw)  # fmt: skip
+    return state_of(
+        Q.identity((22,), like=torch.zeros(1, dtype=torch.float64)), torch.as_tensor(root, dtype=torch.float64), **kw
+    )
 
 
 def descend(constraint, steps: int = 40, lr: float = 0.02, previous=None):
     """Adam on local rotations and root position; returns the loss before and after."""
     torch.manual_seed(0)
-    local = (Q.identity((22,), like=torch.zeros(1, dtype=torch.float64))
-             + 0.05 * torch.randn(22, 4, dtype=torch.float64)).requires_grad_(True)  # fmt: skip
+    local = (
+        Q.identity((22,), like=torch.zeros(1, dtype=torch.float64)) + 0.05 * torch.randn(22, 4, dtype=torch.float64)
+    ).requires_grad_(True)
     root = torch.tensor(STAND, dtype=torch.float64, requires_grad=True)
     opt = torch.optim.Adam([local, root], lr=lr)
     first = None
@@ -64,12 +66,19 @@ def descend(constraint, steps: int = 40, lr: float = 0.02, previous=None):
 
 
 CASES = [
-    SensorConstraint(joint="lwrist", position=REST[J["lwrist"]] + STAND + [0.1, -0.2, 0.1],
-                     rotation=Q.from_axis_angle(np.array([0.0, 0.0, 1.0]), 0.6)),
+    SensorConstraint(
+        joint="lwrist",
+        position=REST[J["lwrist"]] + STAND + [0.1, -0.2, 0.1],
+        rotation=Q.from_axis_angle(np.array([0.0, 0.0, 1.0]), 0.6),
+    ),
     SensorConstraint(joint="rankle", dof=3, position=REST[J["rankle"]] + STAND + [0.0, -0.15, 0.1]),
     EndEffectorConstraint(joint="rwrist", position=REST[J["rwrist"]] + STAND + [0.1, -0.25, 0.0]),
-    EndEffectorConstraint(joint="lwrist", position=REST[J["lwrist"]] + STAND, use_rotation=True,
-                          rotation=Q.from_axis_angle(np.array([1.0, 0.0, 0.0]), 0.5)),
+    EndEffectorConstraint(
+        joint="lwrist",
+        position=REST[J["lwrist"]] + STAND,
+        use_rotation=True,
+        rotation=Q.from_axis_angle(np.array([1.0, 0.0, 0.0]), 0.5),
+    ),
     LookAtConstraint(target=np.array([1.5, -1.0, 1.2])),
     FloorConstraint(clearance=0.1),
     BalanceConstraint(tolerance=0.0),
@@ -77,7 +86,7 @@ CASES = [
     DistanceConstraint(distance=0.5),
     BoundsConstraint(joint="lwrist", box_min=np.array([-0.2, -0.5, 1.0]), box_max=np.array([0.5, 0.5, 1.2])),
     PinConstraint(joint="rwrist", position=REST[J["rwrist"]] + STAND + [0.0, -0.1, -0.1]),
-]  # fmt: skip
+]
 
 
 @pytest.mark.parametrize("c", CASES, ids=lambda c: c.kind)
@@ -102,8 +111,9 @@ def test_hand_built_satisfied_and_unsatisfied_states():
     assert SensorConstraint(joint="lwrist", position=wrist).satisfied(s)
     far = SensorConstraint(joint="lwrist", position=wrist + [0.0, 0.0, 0.1])
     assert float(far.loss(s)) == pytest.approx(0.01) and not far.satisfied(s)
-    turned = SensorConstraint(joint="lwrist", position=wrist,
-                              rotation=Q.from_axis_angle(np.array([0.0, 0.0, 1.0]), math.radians(60)))
+    turned = SensorConstraint(
+        joint="lwrist", position=wrist, rotation=Q.from_axis_angle(np.array([0.0, 0.0, 1.0]), math.radians(60))
+    )
     assert float(turned.loss(s)) == pytest.approx(0.1 * math.sin(math.radians(30)) ** 2)
     assert not turned.satisfied(s)
     assert float(SensorConstraint(joint="lwrist", connected=False, position=wrist + 1).loss(s)) == 0.0
@@ -119,9 +129,13 @@ def test_hand_built_satisfied_and_unsatisfied_states():
         assert SensorConstraint(joint="lwrist", position=wrist + [0, 0, deg / 500]).satisfied(s) == ok, deg  # 1 cm
     assert float(FloorConstraint().loss(s)) == 0.0  # toes above the floor
     assert float(FloorConstraint().loss(rest_state(root=[0, 0, 0.9]))) > 0
-    assert float(BoundsConstraint(joint="root", box_min=np.array([-1, -1, 0.5]), box_max=np.array([1, 1, 1.5])).loss(s)) == 0
-    assert float(BoundsConstraint(joint="root", box_min=np.array([-1, -1, 1.1]), box_max=np.array([1, 1, 1.5])).loss(s)) \
-        == pytest.approx(0.01)  # fmt: skip
+    assert (
+        float(BoundsConstraint(joint="root", box_min=np.array([-1, -1, 0.5]), box_max=np.array([1, 1, 1.5])).loss(s))
+        == 0
+    )
+    assert float(
+        BoundsConstraint(joint="root", box_min=np.array([-1, -1, 1.1]), box_max=np.array([1, 1, 1.5])).loss(s)
+    ) == pytest.approx(0.01)
     span = float(np.linalg.norm(REST[J["lwrist"]] - REST[J["rwrist"]]))
     assert float(DistanceConstraint(distance=span).loss(s)) < 1e-12
     assert float(DistanceConstraint(distance=span - 0.1).loss(s)) == pytest.approx(0.01)
@@ -223,7 +237,9 @@ def test_unknown_kind_lists_the_known_ones():
 
 def test_nan_targets_give_non_finite_losses_not_exceptions():
     s = rest_state()
-    for c in (SensorConstraint(joint="lwrist", position=np.full(3, np.nan)),
-              EndEffectorConstraint(position=np.array([np.inf, 0, 0])),
-              LookAtConstraint(target=np.full(3, np.nan))):  # fmt: skip
+    for c in (
+        SensorConstraint(joint="lwrist", position=np.full(3, np.nan)),
+        EndEffectorConstraint(position=np.array([np.inf, 0, 0])),
+        LookAtConstraint(target=np.full(3, np.nan)),
+    ):
         assert not torch.isfinite(c.loss(s))

@@ -75,6 +75,8 @@ def test_reused_shards_take_the_current_split_and_the_hash_follows_it(shared_moc
     assert res.reused == 2 and res.written == 0
     assert [e["split"] for e in again["files"]] == ["train", "train"] and again["hash"] == first["hash"]
     # the same shards with another split are other training data: another hash
-    monkeypatch.setattr(prep, "assign_splits", lambda rels, *a, **k: {r: "val" if r.endswith("007_02.bvh") else "train" for r in rels})
+    monkeypatch.setattr(
+        prep, "assign_splits", lambda rels, *a, **k: {r: "val" if r.endswith("007_02.bvh") else "train" for r in rels}
+    )
     prepare([root], out, progress=False, mirror=False)
     assert json.loads(man_path.read_text())["hash"] != first["hash"]

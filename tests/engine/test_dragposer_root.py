@@ -36,7 +36,9 @@ def _sensors(head_yaw: float, hands_yaw: float, apart: float = 0.6) -> dict[str,
     out = {}
     head = SensorConstraint(name="sensor:upperneck", joint="upperneck", dof=6)
     # the head pitched down 30 deg as well: its heading is still head_yaw
-    head.set_target(np.array([0.3, -0.2, 1.6]), QN.mul(_about_z(head_yaw), np.array([math.cos(0.26), math.sin(0.26), 0, 0])))
+    head.set_target(
+        np.array([0.3, -0.2, 1.6]), QN.mul(_about_z(head_yaw), np.array([math.cos(0.26), math.sin(0.26), 0, 0]))
+    )
     out["upperneck"] = head
     for j, p in _hands(hands_yaw, apart).items():
         c = SensorConstraint(name=f"sensor:{j}", joint=j, dof=6)
@@ -68,7 +70,9 @@ def test_reference_heading_stays_with_the_head_and_hands_facing():
     past the head. The head's 60-deg bound alone keeps that pelvis (it then ended about 97
     deg from the truth's heading); bounded by the head and hands' facing it comes back."""
     sensors = _sensors(head_yaw=120.0, hands_yaw=80.0)
-    body = _yaw(head_hands_facing(sensors["upperneck"].rotation, {j: sensors[j].position for j in ("lwrist", "rwrist")}))
+    body = _yaw(
+        head_hands_facing(sensors["upperneck"].rotation, {j: sensors[j].position for j in ("lwrist", "rwrist")})
+    )
     assert 80.0 < body < 120.0
     old = reference_root(_previous(165.0), sensors, OptimizerSettings(hands_heading_limit=180.0), None, None)
     assert _yaw(old.rotation.double().numpy()) == pytest.approx(165.0, abs=1e-4)  # the head's bound alone

@@ -11,8 +11,17 @@ from engine.cli.evaluate import evaluate_clip, find_clips
 from engine.cli.main import main
 from engine.methods import get_method
 
-METRIC_KEYS = {"frames", "pos_cm", "rot_deg", "vel_cms", "ee_cm", "jitter", "gt_jitter",
-               "iterations_mean", "ms_per_frame"}
+METRIC_KEYS = {
+    "frames",
+    "pos_cm",
+    "rot_deg",
+    "vel_cms",
+    "ee_cm",
+    "jitter",
+    "gt_jitter",
+    "iterations_mean",
+    "ms_per_frame",
+}
 
 
 def test_evaluate_clip_without_files(synthetic_motion):
@@ -49,9 +58,28 @@ def clip_dir(tmp_path, synthetic_motion):
 
 def test_cli_writes_table_and_json(clip_dir, tmp_path, capsys):
     out = tmp_path / "res" / "eval.json"
-    code = main(["evaluate", str(clip_dir), "--method", "ik", "--sensors", "6", "--gaps",
-                 "--mode", "offline", "--iterations", "3", "--max-frames", "100", "--seed", "2",
-                 "--json", str(out), "--no-progress"])
+    code = main(
+        [
+            "evaluate",
+            str(clip_dir),
+            "--method",
+            "ik",
+            "--sensors",
+            "6",
+            "--gaps",
+            "--mode",
+            "offline",
+            "--iterations",
+            "3",
+            "--max-frames",
+            "100",
+            "--seed",
+            "2",
+            "--json",
+            str(out),
+            "--no-progress",
+        ]
+    )
     assert code == 0
     text = capsys.readouterr().out
     assert "walk.bvh" in text and "short.BVH" in text and "total" in text and "PJ" in text
@@ -82,16 +110,19 @@ def test_cli_matches_the_function_underneath(clip_dir, tmp_path):
         assert got[k] == pytest.approx(ref[k], rel=1e-9)
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["--method", "nope"], "unknown method"),
-    (["--sensors", "7"], "valid presets"),
-    (["--faulty", "2"], "--faulty"),
-    (["--set", "lr=0.1"], "no optimizer settings"),
-    (["--method", "dragposer", "--predictor", "p.pt"], "needs the VAE"),
-    (["--method", "autoencoder", "--vae", "missing.pt"], "missing.pt"),
-    (["--set", "warp=9"], "--set warp: unknown setting"),
-    (["--set", "iterations=many"], "--set iterations=many: not a valid int"),
-])
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--method", "nope"], "unknown method"),
+        (["--sensors", "7"], "valid presets"),
+        (["--faulty", "2"], "--faulty"),
+        (["--set", "lr=0.1"], "no optimizer settings"),
+        (["--method", "dragposer", "--predictor", "p.pt"], "needs the VAE"),
+        (["--method", "autoencoder", "--vae", "missing.pt"], "missing.pt"),
+        (["--set", "warp=9"], "--set warp: unknown setting"),
+        (["--set", "iterations=many"], "--set iterations=many: not a valid int"),
+    ],
+)
 def test_cli_user_errors(clip_dir, capsys, argv, message):
     assert main(["evaluate", str(clip_dir), "--no-progress", *argv]) == 2
     assert message in capsys.readouterr().err
@@ -141,14 +172,40 @@ def test_several_methods_in_one_pass(clip_dir, tmp_path, capsys):
 
     torch.manual_seed(0)
     weights, sp_weights = tmp_path / "rpm.pt", tmp_path / "sp.pt"
-    for path, kind, model in ((weights, "rpm", RPM(RPMConfig(past_inputs=2, past_poses=2, window=3, hidden=16, blocks=1))),
-                              (sp_weights, "sparseposer", SparsePoser(SparsePoserConfig(window=8, channels=(4, 4, 4))))):
-        torch.save({"format_version": FORMAT_VERSION, "kind": kind, "config": model.config.to_dict(),
-                    "state_dict": model.state_dict(), "meta": {}}, path)  # fmt: skip
+    for path, kind, model in (
+        (weights, "rpm", RPM(RPMConfig(past_inputs=2, past_poses=2, window=3, hidden=16, blocks=1))),
+        (sp_weights, "sparseposer", SparsePoser(SparsePoserConfig(window=8, channels=(4, 4, 4)))),
+    ):
+        torch.save(
+            {
+                "format_version": FORMAT_VERSION,
+                "kind": kind,
+                "config": model.config.to_dict(),
+                "state_dict": model.state_dict(),
+                "meta": {},
+            },
+            path,
+        )
     walk = next(clip_dir.rglob("walk.bvh"))
     out, md = tmp_path / "multi.json", tmp_path / "table.md"
-    args = ["evaluate", str(walk), "--sensors", "3-head-hands", "--gaps", "--max-frames", "90", "--no-progress",
-            "--rpm-model", str(weights), "--sparseposer-model", str(sp_weights), "--json", str(out), "--markdown", str(md)]
+    args = [
+        "evaluate",
+        str(walk),
+        "--sensors",
+        "3-head-hands",
+        "--gaps",
+        "--max-frames",
+        "90",
+        "--no-progress",
+        "--rpm-model",
+        str(weights),
+        "--sparseposer-model",
+        str(sp_weights),
+        "--json",
+        str(out),
+        "--markdown",
+        str(md),
+    ]
     assert main([*args, "--method", "ik,rpm,sparseposer"]) == 0
     text = capsys.readouterr().out
     assert text.splitlines()[0].startswith("method") and "sparseposer: not evaluated" in text and "'6'" in text
@@ -156,7 +213,9 @@ def test_several_methods_in_one_pass(clip_dir, tmp_path, capsys):
     assert set(doc) == {"ik", "rpm", "sparseposer"} and "error" in doc["sparseposer"]
     single = tmp_path / "ik.json"
     assert main([*args[:-6], "--method", "ik", "--json", str(single)]) == 0
-    assert doc["ik"]["total"] == json.loads(single.read_text())["total"] | {"ms_per_frame": doc["ik"]["total"]["ms_per_frame"]}
+    assert doc["ik"]["total"] == json.loads(single.read_text())["total"] | {
+        "ms_per_frame": doc["ik"]["total"]["ms_per_frame"]
+    }
     assert {"pj", "auj"} <= set(doc["rpm"]["total"]) and doc["rpm"]["files"]
     lines = md.read_text().splitlines()
     assert lines[0].startswith("| method |") and "PJ" in lines[0] and len(lines) == 5

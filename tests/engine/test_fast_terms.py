@@ -78,10 +78,12 @@ def _scene(kinds, head):
         "pin": lambda: PinConstraint(name="pin", joint="lelbow"),
         "distance": lambda: DistanceConstraint(name="hands", distance=0.25),
         "balance": lambda: BalanceConstraint(name="balance", tolerance=0.02),
-        "bounds": lambda: BoundsConstraint(name="box", joint="rwrist", box_min=np.array([-5.0, -5.0, 1.2]),
-                                           box_max=np.array([5.0, 5.0, 3.0])),  # fmt: skip
-        "end_effector": lambda: EndEffectorConstraint(name="reach", joint="lwrist", position=head + [0.3, -0.4, -0.2],
-                                                      use_rotation=True),  # fmt: skip
+        "bounds": lambda: BoundsConstraint(
+            name="box", joint="rwrist", box_min=np.array([-5.0, -5.0, 1.2]), box_max=np.array([5.0, 5.0, 3.0])
+        ),
+        "end_effector": lambda: EndEffectorConstraint(
+            name="reach", joint="lwrist", position=head + [0.3, -0.4, -0.2], use_rotation=True
+        ),
     }
     return [made[k]() for k in kinds]
 
@@ -162,5 +164,8 @@ def test_both_paths_weigh_a_constraint_by_its_activity_on_the_frame(models):
         assert blended.losses[0]["total"] == pytest.approx(2.0 * a * blended.losses[0]["look"])
         outside = opt.solve(z, [ranged], FrameContext(root, frame=0))
         assert "look" not in outside.losses[0] and np.array_equal(outside.latent.numpy(), z.numpy())
-    np.testing.assert_allclose(fast.solve(z, [ranged], FrameContext(root, frame=3)).latent.numpy(),
-                               ref.solve(z, [ranged], FrameContext(root, frame=3)).latent.numpy(), atol=1e-5)  # fmt: skip
+    np.testing.assert_allclose(
+        fast.solve(z, [ranged], FrameContext(root, frame=3)).latent.numpy(),
+        ref.solve(z, [ranged], FrameContext(root, frame=3)).latent.numpy(),
+        atol=1e-5,
+    )

@@ -269,8 +269,10 @@ def test_live_run_gives_the_method_its_deadline_and_time_between_frames():
 
     class Stream:  # three frames, then nothing
         def __init__(self):
-            self.frames = [LiveFrame(k + 1, k / 60.0, 100.0 + k, SensorFrame(k, {"root": Sensor("root", np.zeros(3))}))
-                           for k in range(3)]  # fmt: skip
+            self.frames = [
+                LiveFrame(k + 1, k / 60.0, 100.0 + k, SensorFrame(k, {"root": Sensor("root", np.zeros(3))}))
+                for k in range(3)
+            ]
             self.last_arrival = None
 
         def wait_frame(self, after, timeout):
@@ -312,5 +314,11 @@ def test_live_run_gives_the_method_its_deadline_and_time_between_frames():
     # no automatic full collection while streaming (they stalled frames by 220-240 ms); back on after
     assert gc_during[-3:] == [False, False, False] and gc.isenabled()
     assert out.frames_solved == 3 and out.iterations == [3, 3, 3]
-    assert probe.calls == [("step", pytest.approx(100.012)), ("between", None), ("step", pytest.approx(101.012)),
-                           ("between", None), ("step", pytest.approx(102.012)), ("between", None)]  # fmt: skip
+    assert probe.calls == [
+        ("step", pytest.approx(100.012)),
+        ("between", None),
+        ("step", pytest.approx(101.012)),
+        ("between", None),
+        ("step", pytest.approx(102.012)),
+        ("between", None),
+    ]

@@ -38,8 +38,26 @@ def test_convert_writes_the_same_motion_as_glb_and_bvh(clip_path, tmp_path):
 
 def test_reconstruct_adds_ghosts_and_tracker_nodes(standin_dragposer, clip_path, tmp_path, capsys):  # noqa: F811
     out = tmp_path / "r.glb"
-    assert main(["reconstruct", str(clip_path), "--out", str(out), "--iterations", "2", "--max-frames", "12",
-                 "--ghosts", "ik", "--tracker-nodes", "--on-source-rig", "--no-progress"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "reconstruct",
+                str(clip_path),
+                "--out",
+                str(out),
+                "--iterations",
+                "2",
+                "--max-frames",
+                "12",
+                "--ghosts",
+                "ik",
+                "--tracker-nodes",
+                "--on-source-rig",
+                "--no-progress",
+            ]
+        )
+        == 0
+    )
     assert "wrote" in capsys.readouterr().out
     doc = read_gltf(out).doc
     names = [n.name for n in doc.nodes]
@@ -49,8 +67,23 @@ def test_reconstruct_adds_ghosts_and_tracker_nodes(standin_dragposer, clip_path,
     assert len(doc.meshes) == 3  # two bodies and the trackers' box
     times = read_gltf(out).channels()[(names.index("root"), "rotation")][0]
     assert len(times) == 12
-    assert main(["reconstruct", str(clip_path), "--out", str(tmp_path / "n.gltf"), "--iterations", "2",
-                 "--max-frames", "6", "--no-mesh", "--no-progress"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "reconstruct",
+                str(clip_path),
+                "--out",
+                str(tmp_path / "n.gltf"),
+                "--iterations",
+                "2",
+                "--max-frames",
+                "6",
+                "--no-mesh",
+                "--no-progress",
+            ]
+        )
+        == 0
+    )
     assert not read_gltf(tmp_path / "n.gltf").doc.meshes
     if validator_command() is not None:
         for r in validate([out, tmp_path / "n.gltf"]):
@@ -58,19 +91,44 @@ def test_reconstruct_adds_ghosts_and_tracker_nodes(standin_dragposer, clip_path,
 
 
 def test_out_dir_takes_the_out_format(standin_dragposer, clip_path, tmp_path):  # noqa: F811
-    assert main(["reconstruct", str(clip_path), "--out-dir", str(tmp_path / "d"), "--out-format", "glb",
-                 "--iterations", "1", "--max-frames", "4", "--no-progress"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "reconstruct",
+                str(clip_path),
+                "--out-dir",
+                str(tmp_path / "d"),
+                "--out-format",
+                "glb",
+                "--iterations",
+                "1",
+                "--max-frames",
+                "4",
+                "--no-progress",
+            ]
+        )
+        == 0
+    )
     assert [p.name for p in (tmp_path / "d").iterdir()] == ["walk.glb"]
 
 
-@pytest.mark.parametrize("flags, message", [
-    (["--out", "{tmp}/o.txt"], "'.txt' is not a motion format this program writes; known: .bvh"),
-    (["--out", "{tmp}/o.bvh", "--no-mesh"], "--no-mesh applies to glTF output"),
-    (["--out", "{tmp}/o.bvh", "--ghosts", "ik", "--tracker-nodes"], "--tracker-nodes and --ghosts apply"),
-    (["--out", "{tmp}/o.glb", "--ghosts", "nosuch"], "--ghosts: unknown method 'nosuch'; available:"),
-])  # fmt: skip
-def test_reconstruct_refuses_bad_outputs_before_any_work(standin_dragposer, clip_path, tmp_path, capsys,  # noqa: F811
-                                                         flags, message):  # fmt: skip
+@pytest.mark.parametrize(
+    "flags, message",
+    [
+        (["--out", "{tmp}/o.txt"], "'.txt' is not a motion format this program writes; known: .bvh"),
+        (["--out", "{tmp}/o.bvh", "--no-mesh"], "--no-mesh applies to glTF output"),
+        (["--out", "{tmp}/o.bvh", "--ghosts", "ik", "--tracker-nodes"], "--tracker-nodes and --ghosts apply"),
+        (["--out", "{tmp}/o.glb", "--ghosts", "nosuch"], "--ghosts: unknown method 'nosuch'; available:"),
+    ],
+)
+def test_reconstruct_refuses_bad_outputs_before_any_work(
+    standin_dragposer,  # noqa: F811
+    clip_path,
+    tmp_path,
+    capsys,  # noqa: F811
+    flags,
+    message,
+):
     flags = [f.replace("{tmp}", str(tmp_path)) for f in flags]
     assert main(["reconstruct", str(clip_path), *flags, "--no-progress"]) == 2
     assert message in capsys.readouterr().err

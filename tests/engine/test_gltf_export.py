@@ -20,7 +20,7 @@ from tests.engine.gltf_reading import (
     read_gltf,
     skinned_points,
     validate,
-    validator_command,  # fmt: skip
+    validator_command,
     vtk_points_at,
 )
 
@@ -181,8 +181,13 @@ def test_the_format_follows_the_extension_and_an_unknown_one_lists_the_known(tmp
 
 
 #: One file of each rig family of the shared data (docs/skeleton.md).
-SOURCE_RIGS = ("dragposer/example.bvh", "cmu_mb/01_01.bvh", "cmu_daz/indian", "cmu_iclone/001_01.bvh",
-               "cmu_daz_cgspeed")  # fmt: skip
+SOURCE_RIGS = (
+    "dragposer/example.bvh",
+    "cmu_mb/01_01.bvh",
+    "cmu_daz/indian",
+    "cmu_iclone/001_01.bvh",
+    "cmu_daz_cgspeed",
+)
 
 
 def _first_bvh(mocap, rel: str):
@@ -207,8 +212,9 @@ def source_rig_files(shared_mocap, tmp_path_factory):
         stem = rel.split("/")[0]
         bvh, glb = folder / f"{stem}.bvh", folder / f"{stem}.glb"
         save_motion(bvh, motion, (raw, rep))
-        save_motion(glb, motion, (raw, rep), contents=GltfContents(ghosts=(("ik", ghost),),
-                                                                    tracking=simulate(motion, "6")))  # fmt: skip
+        save_motion(
+            glb, motion, (raw, rep), contents=GltfContents(ghosts=(("ik", ghost),), tracking=simulate(motion, "6"))
+        )
         out[stem] = (raw, rep, bvh, glb)
     return out
 

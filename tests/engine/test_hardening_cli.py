@@ -46,6 +46,7 @@ def _with_frame_time(value: str):
     def edit(lines, m):
         lines[m + 2] = f"Frame Time: {value}"
         return lines
+
     return edit
 
 
@@ -56,6 +57,7 @@ def _offsets(fn):
             hit = re.match(r"(\s*OFFSET)\s+(\S+)\s+(\S+)\s+(\S+)", line)
             out.append(hit.group(1) + " " + " ".join(fn(float(v)) for v in hit.groups()[1:]) if hit else line)
         return out + lines[m:]
+
     return edit
 
 
@@ -74,8 +76,22 @@ def no_solve(monkeypatch):
 
 
 def test_reconstruct_with_only_3dof_sensors_runs(tmp_path, capsys):
-    rc, out, err = run(["reconstruct", EX, "--out", tmp_path / "o.bvh", "--sensors", "6x3dof",
-                        "--max-frames", "2", "--iterations", "2", "--no-progress"], capsys)  # fmt: skip
+    rc, out, err = run(
+        [
+            "reconstruct",
+            EX,
+            "--out",
+            tmp_path / "o.bvh",
+            "--sensors",
+            "6x3dof",
+            "--max-frames",
+            "2",
+            "--iterations",
+            "2",
+            "--no-progress",
+        ],
+        capsys,
+    )
     assert rc == 0, err
     assert (tmp_path / "o.bvh").is_file()
 
@@ -115,26 +131,32 @@ def test_canonical_frame_count_is_limited_before_resampling(tmp_path, capsys, mo
     assert_one_line_error(rc, err, "example.bvh: at 1 frames/s", f"frames at 60 fps = {canonical}")
 
 
-@pytest.mark.parametrize("args, needles", [
-    (["--set", "threads=100000"], ("threads = 100000", "[0, 64]")),
-    (["--set", "threads=5000"], ("threads = 5000",)),
-    (["--set", "past_window=1000000000"], ("past_window", "[1, 1024]")),
-    (["--iterations", "1000000000"], ("--iterations", "[1, 10000]")),
-    (["--seed", "-1"], ("--seed", "[0, 4294967295]")),
-    (["--max-frames", "0"], ("--max-frames",)),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "args, needles",
+    [
+        (["--set", "threads=100000"], ("threads = 100000", "[0, 64]")),
+        (["--set", "threads=5000"], ("threads = 5000",)),
+        (["--set", "past_window=1000000000"], ("past_window", "[1, 1024]")),
+        (["--iterations", "1000000000"], ("--iterations", "[1, 10000]")),
+        (["--seed", "-1"], ("--seed", "[0, 4294967295]")),
+        (["--max-frames", "0"], ("--max-frames",)),
+    ],
+)
 def test_reconstruct_numbers_are_range_checked_before_the_solve(tmp_path, capsys, no_solve, args, needles):
     rc, _, err = run(["reconstruct", EX, "--out", tmp_path / "o.bvh", "--no-progress", *args], capsys)
     assert_one_line_error(rc, err, *needles)
 
 
-@pytest.mark.parametrize("args, flag", [
-    (["--faulty", "nan"], "--faulty"),
-    (["--noise-pos", "nan"], "--noise-pos"),
-    (["--noise-pos", "-1"], "--noise-pos"),
-    (["--noise-rot", "inf"], "--noise-rot"),
-    (["--seed", "-1"], "--seed"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "args, flag",
+    [
+        (["--faulty", "nan"], "--faulty"),
+        (["--noise-pos", "nan"], "--noise-pos"),
+        (["--noise-pos", "-1"], "--noise-pos"),
+        (["--noise-rot", "inf"], "--noise-rot"),
+        (["--seed", "-1"], "--seed"),
+    ],
+)
 def test_evaluate_numbers_are_range_checked(capsys, no_solve, args, flag):
     rc, _, err = run(["evaluate", EX, "--no-progress", *args], capsys)
     assert_one_line_error(rc, err, flag, "allowed:")
@@ -157,8 +179,11 @@ def test_fifo_dev_zero_and_symlink_loop_fail_at_once(tmp_path, capsys, no_solve)
     (tmp_path / "zero.bvh").symlink_to("/dev/zero")  # reading it would never end
     (tmp_path / "a.bvh").symlink_to(tmp_path / "b.bvh")
     (tmp_path / "b.bvh").symlink_to(tmp_path / "a.bvh")
-    for name, reason in (("x.bvh", "not a regular file"), ("zero.bvh", "not a regular file"),
-                         ("a.bvh", "symbolic links")):  # fmt: skip
+    for name, reason in (
+        ("x.bvh", "not a regular file"),
+        ("zero.bvh", "not a regular file"),
+        ("a.bvh", "symbolic links"),
+    ):
         rc, _, err = run(["info", tmp_path / name], capsys)
         assert_one_line_error(rc, err, name, reason)
         rc, _, err = run(["reconstruct", tmp_path / name, "--out", tmp_path / "o.bvh"], capsys)
@@ -168,16 +193,19 @@ def test_fifo_dev_zero_and_symlink_loop_fail_at_once(tmp_path, capsys, no_solve)
 # -- 6: scene files ------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("content, needle", [
-    (b'{"constraints": ' + b"[" * 100_000 + b"]" * 100_000 + b"}", "nested"),
-    (b'{"settings": {"iterations": ' + b"9" * 5001 + b"}}", "too many digits"),
-    (b'{"settings": {"root_anchor": "caf\xe9"}}', "not UTF-8"),
-    (b'{"constraints": [{"kind": ["look_at"]}]}', "unknown constraint kind"),
-    (b'{"constraints": [{"kind": "sensor", "joint": "lwrist", "dof": 6.5}]}', "'dof' must be a whole number"),
-    (b'{"settings": {"threads": 5000}}', "threads = 5000"),
-    (b'{"settings": {"past_window": 1000000000}}', "past_window"),
-    (b'{"constraints": [{"kind": "pin", "joint": "lwrist", "position": [1e400, 0, 0]}]}', "too large"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "content, needle",
+    [
+        (b'{"constraints": ' + b"[" * 100_000 + b"]" * 100_000 + b"}", "nested"),
+        (b'{"settings": {"iterations": ' + b"9" * 5001 + b"}}", "too many digits"),
+        (b'{"settings": {"root_anchor": "caf\xe9"}}', "not UTF-8"),
+        (b'{"constraints": [{"kind": ["look_at"]}]}', "unknown constraint kind"),
+        (b'{"constraints": [{"kind": "sensor", "joint": "lwrist", "dof": 6.5}]}', "'dof' must be a whole number"),
+        (b'{"settings": {"threads": 5000}}', "threads = 5000"),
+        (b'{"settings": {"past_window": 1000000000}}', "past_window"),
+        (b'{"constraints": [{"kind": "pin", "joint": "lwrist", "position": [1e400, 0, 0]}]}', "too large"),
+    ],
+)
 def test_bad_scenes_are_one_line(tmp_path, capsys, no_solve, content, needle):
     scene = tmp_path / "scene.json"
     scene.write_bytes(content)
@@ -188,14 +216,17 @@ def test_bad_scenes_are_one_line(tmp_path, capsys, no_solve, content, needle):
 # -- 7: manifest.json beside a clip ---------------------------------------------------------
 
 
-@pytest.mark.parametrize("manifest, needle", [
-    ("[]", "a manifest is a JSON object"),
-    ('{"files": 3}', "'files' must be a list"),
-    ('{"files": [{"path": "a.bvh", "fps": "abc"}]}', "fps = 'abc' is not a number"),
-    ('{"files": [{"path": "a.bvh", "fps": NaN}]}', "NaN"),
-    ('{"files": [{"path": "a.bvh", "fps": 0.01}]}', "fps = 0.01 is out of range"),
-    ('{"files": ["a.bvh"]}', "files[0] must be an object"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "manifest, needle",
+    [
+        ("[]", "a manifest is a JSON object"),
+        ('{"files": 3}', "'files' must be a list"),
+        ('{"files": [{"path": "a.bvh", "fps": "abc"}]}', "fps = 'abc' is not a number"),
+        ('{"files": [{"path": "a.bvh", "fps": NaN}]}', "NaN"),
+        ('{"files": [{"path": "a.bvh", "fps": 0.01}]}', "fps = 0.01 is out of range"),
+        ('{"files": ["a.bvh"]}', "files[0] must be an object"),
+    ],
+)
 def test_bad_manifest_is_one_line(tmp_path, capsys, manifest, needle):
     (tmp_path / "a.bvh").write_bytes(EX.read_bytes())
     (tmp_path / "manifest.json").write_text(manifest)
@@ -306,7 +337,21 @@ def test_info_and_reconstruct_keep_only_the_start_of_a_long_file(tmp_path, capsy
     assert rc == 0, err
     assert "3000 frames at 60 fps" in out
     assert kept[-1] == (1000, 3000)
-    rc, out, err = run(["reconstruct", clip, "--out", tmp_path / "o.bvh", "--max-frames", "2", "--iterations", "1",
-                        "--method", "ik", "--no-progress"], capsys)  # fmt: skip
+    rc, out, err = run(
+        [
+            "reconstruct",
+            clip,
+            "--out",
+            tmp_path / "o.bvh",
+            "--max-frames",
+            "2",
+            "--iterations",
+            "1",
+            "--method",
+            "ik",
+            "--no-progress",
+        ],
+        capsys,
+    )
     assert rc == 0, err
     assert kept[-1] == (1000, 3000)

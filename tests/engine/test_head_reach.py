@@ -98,7 +98,9 @@ def _run(clip, **kw):
     chords = np.array([r.positions[HEAD] - r.positions[BASE] for r in out])
     wanted = head - np.array([r.positions[BASE] for r in out])
     cos = (chords * wanted).sum(-1) / np.linalg.norm(chords, axis=-1) / np.linalg.norm(wanted, axis=-1)
-    return np.degrees(np.arccos(np.clip(cos, -1, 1))), np.linalg.norm(np.array([r.positions[HEAD] for r in out]) - head, axis=-1)
+    return np.degrees(np.arccos(np.clip(cos, -1, 1))), np.linalg.norm(
+        np.array([r.positions[HEAD] for r in out]) - head, axis=-1
+    )
 
 
 def test_with_a_hip_tracker_the_head_points_at_its_tracker_and_a_held_upper_body_is_left_alone(clip):
@@ -116,8 +118,10 @@ def test_with_a_hip_tracker_the_head_points_at_its_tracker_and_a_held_upper_body
         assert (HEAD in m.plan(tr.frame(1)).reach) is reached, f"a user's constraint on {joint}"
 
 
-@pytest.mark.parametrize(("preset", "expected"), [("4", True), ("3-hip-hands", True), ("6x3dof", True),
-                                                  ("6", True), ("3-head-hands", False), ("5", False)])
+@pytest.mark.parametrize(
+    ("preset", "expected"),
+    [("4", True), ("3-hip-hands", True), ("6x3dof", True), ("6", True), ("3-head-hands", False), ("5", False)],
+)
 def test_every_profile_with_a_hip_tracker_reaches_the_head_by_the_spine(preset, expected):
     from engine.solver import OptimizerSettings
     from engine.solver.profiles import effective
@@ -126,8 +130,12 @@ def test_every_profile_with_a_hip_tracker_reaches_the_head_by_the_spine(preset, 
     joints = [s.joint for s in PRESET_SENSORS[preset]]
     hip = all(s.dof == 6 for s in PRESET_SENSORS[preset] if s.joint == "root")
     assert effective(OptimizerSettings(), joints, explicit=(), hip_rotation=hip).head_reach is expected
-    assert effective(OptimizerSettings(head_reach=not expected), joints, explicit=("head_reach",),
-                     hip_rotation=hip).head_reach is not expected  # fmt: skip
+    assert (
+        effective(
+            OptimizerSettings(head_reach=not expected), joints, explicit=("head_reach",), hip_rotation=hip
+        ).head_reach
+        is not expected
+    )
 
 
 def test_the_reach_is_as_smooth_as_its_input_however_many_passes(monkeypatch):

@@ -30,22 +30,43 @@ def test_evaluate_jobs_matches_serial_run(two_clips, tmp_path):
     out = {}
     for jobs in (1, 2):
         out[jobs] = tmp_path / f"eval{jobs}.json"
-        args = ["evaluate", *map(str, two_clips), "--method", "dragposer", "--max-frames", "12",
-                "--no-progress", "--jobs", str(jobs), "--json", str(out[jobs])]  # fmt: skip
+        args = [
+            "evaluate",
+            *map(str, two_clips),
+            "--method",
+            "dragposer",
+            "--max-frames",
+            "12",
+            "--no-progress",
+            "--jobs",
+            str(jobs),
+            "--json",
+            str(out[jobs]),
+        ]
         assert main(args) == 0
     serial, doc1 = _metrics(out[1])
     parallel, doc2 = _metrics(out[2])
     assert list(parallel) == [str(p) for p in two_clips]
     assert parallel == serial  # bit-identical metrics
-    assert {k: v for k, v in doc1["total"].items() if k not in TIMING} == \
-        {k: v for k, v in doc2["total"].items() if k not in TIMING}
+    assert {k: v for k, v in doc1["total"].items() if k not in TIMING} == {
+        k: v for k, v in doc2["total"].items() if k not in TIMING
+    }
 
 
 @pytest.mark.slow
 def test_reconstruct_several_inputs_in_workers_writes_what_a_serial_run_writes(two_clips, tmp_path, capsys):
     for jobs in (1, 2):
-        args = ["reconstruct", *map(str, two_clips), "--out-dir", str(tmp_path / f"out{jobs}"), "--max-frames", "10",
-                "--no-progress", "--jobs", str(jobs)]  # fmt: skip
+        args = [
+            "reconstruct",
+            *map(str, two_clips),
+            "--out-dir",
+            str(tmp_path / f"out{jobs}"),
+            "--max-frames",
+            "10",
+            "--no-progress",
+            "--jobs",
+            str(jobs),
+        ]
         assert main(args) == 0
     text = capsys.readouterr().out
     assert text.index("b_first") < text.index("a_second")  # summaries in file order

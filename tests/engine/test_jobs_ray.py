@@ -21,8 +21,10 @@ def local_ray():
 
 
 def _without_timing(doc: dict) -> dict:
-    return {"files": {f: {k: v for k, v in m.items() if k not in TIMING} for f, m in doc["files"].items()},
-            "total": {k: v for k, v in doc["total"].items() if k not in TIMING}}  # fmt: skip
+    return {
+        "files": {f: {k: v for k, v in m.items() if k not in TIMING} for f, m in doc["files"].items()},
+        "total": {k: v for k, v in doc["total"].items() if k not in TIMING},
+    }
 
 
 @pytest.mark.slow
@@ -30,16 +32,34 @@ def test_evaluate_and_reconstruct_on_ray_match_the_local_jobs(local_ray, two_cli
     docs = {}
     for how in (["--jobs", "1"], ["--executor", "ray"]):
         out = tmp_path / f"{how[-1]}.json"
-        args = ["evaluate", *map(str, two_clips), "--method", "dragposer", "--max-frames", "8", "--no-progress",
-                *how, "--json", str(out)]  # fmt: skip
+        args = [
+            "evaluate",
+            *map(str, two_clips),
+            "--method",
+            "dragposer",
+            "--max-frames",
+            "8",
+            "--no-progress",
+            *how,
+            "--json",
+            str(out),
+        ]
         assert main(args) == 0
         docs[how[-1]] = json.loads(out.read_text())
     assert list(docs["ray"]["files"]) == [str(p) for p in two_clips]
     assert _without_timing(docs["ray"]) == _without_timing(docs["1"])
     capsys.readouterr()
     for how in (["--jobs", "1"], ["--executor", "ray"]):
-        args = ["reconstruct", *map(str, two_clips), "--out-dir", str(tmp_path / how[-1]), "--max-frames", "6",
-                "--no-progress", *how]  # fmt: skip
+        args = [
+            "reconstruct",
+            *map(str, two_clips),
+            "--out-dir",
+            str(tmp_path / how[-1]),
+            "--max-frames",
+            "6",
+            "--no-progress",
+            *how,
+        ]
         assert main(args) == 0
     text = capsys.readouterr().out
     assert text.rindex("b_first") < text.rindex("a_second")  # summaries in file order

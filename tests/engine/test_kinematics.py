@@ -62,7 +62,9 @@ def test_fk_matches_pymotion_numpy_and_torch():
     np.testing.assert_allclose(ours, theirs, atol=1e-6)
     ours_t, _ = fk(torch.tensor(rot), torch.tensor(root), sk.REST_OFFSETS)
     np.testing.assert_allclose(ours_t.numpy(), ours, atol=1e-12)
-    np.testing.assert_allclose(local_from_global(grot), rot * np.sign(rot[..., :1] * local_from_global(grot)[..., :1]), atol=1e-9)
+    np.testing.assert_allclose(
+        local_from_global(grot), rot * np.sign(rot[..., :1] * local_from_global(grot)[..., :1]), atol=1e-9
+    )
 
 
 def test_fk_joints_equals_the_rows_of_full_fk():
@@ -102,7 +104,9 @@ def test_encoder_input_matches_pymotion_root_dual_quat():
     np.testing.assert_allclose(np.abs((r0 * Q.canonicalize(rot[:, 0])).sum(-1)), 1.0, atol=1e-9)
     np.testing.assert_allclose(t0, disp, atol=1e-9)
     assert (dq[..., 0] >= 0).all()
-    np.testing.assert_allclose(Fe.encoder_input(torch.tensor(rot), torch.tensor(disp), sk.REST_OFFSETS).numpy(), dq, atol=1e-9)
+    np.testing.assert_allclose(
+        Fe.encoder_input(torch.tensor(rot), torch.tensor(disp), sk.REST_OFFSETS).numpy(), dq, atol=1e-9
+    )
 
 
 def test_pose_round_trip_recovers_motion(synthetic_motion):
@@ -155,8 +159,9 @@ def test_fk_by_levels_matches_a_joint_by_joint_loop():
     for j in range(1, sk.NUM_JOINTS):  # independent: world = parent world * local
         p = sk.PARENTS[j]
         np.testing.assert_allclose(rot[:, j], pm_q.mul(rot[:, p], q[:, j]), atol=1e-12)
-        np.testing.assert_allclose(pos[:, j], pos[:, p] + pm_q.mul_vec(rot[:, p], np.broadcast_to(
-            sk.REST_OFFSETS[j], (4, 3))), atol=1e-12)
+        np.testing.assert_allclose(
+            pos[:, j], pos[:, p] + pm_q.mul_vec(rot[:, p], np.broadcast_to(sk.REST_OFFSETS[j], (4, 3))), atol=1e-12
+        )
 
 
 def test_the_root_displacement_alone_has_the_bits_of_the_root_increments():

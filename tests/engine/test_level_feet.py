@@ -46,8 +46,9 @@ def test_a_levelled_ankle_takes_the_root_s_yaw_and_no_joint_above_it_moves(seed)
 
 def test_position_only_feet_are_levelled_unless_a_user_constraint_holds_the_foot(clip):  # noqa: F811
     tr = simulate(clip, "6x3dof")
-    m = DragPoserMethod(MLPDecoder(), CountingPredictor(), iterations=3, max_iterations=20, level_feet=True,
-                        tuning="off")  # fmt: skip
+    m = DragPoserMethod(
+        MLPDecoder(), CountingPredictor(), iterations=3, max_iterations=20, level_feet=True, tuning="off"
+    )
     m.reset(clip.skeleton)
     res = m.step(tr.frame(0))
     _, rots = fk_joints(res.local_rot, res.root_pos, clip.skeleton.offsets, list(ANKLES))
@@ -56,23 +57,26 @@ def test_position_only_feet_are_levelled_unless_a_user_constraint_holds_the_foot
         assert min(np.abs(r - want).max(), np.abs(r + want).max()) < 1e-5
     assert set(m.plan(tr.frame(1)).level) == set(ANKLES)
     for joint, kept in (("ltoe", {J["rankle"]}), ("rankle", {J["lankle"]}), ("lwrist", set(ANKLES))):
-        m = DragPoserMethod(MLPDecoder(), CountingPredictor(), iterations=3, max_iterations=20, level_feet=True,
-                            tuning="off")  # fmt: skip
+        m = DragPoserMethod(
+            MLPDecoder(), CountingPredictor(), iterations=3, max_iterations=20, level_feet=True, tuning="off"
+        )
         m.add_constraint(PinConstraint(name="pin", joint=joint))
         m.reset(clip.skeleton)
         m.step(tr.frame(0))
         assert set(m.plan(tr.frame(1)).level) == kept, f"a user's constraint on {joint}"
     # 6-DoF feet give their own rotation: nothing to level
-    m = DragPoserMethod(MLPDecoder(), CountingPredictor(), iterations=3, max_iterations=20, level_feet=True,
-                        tuning="off")  # fmt: skip
+    m = DragPoserMethod(
+        MLPDecoder(), CountingPredictor(), iterations=3, max_iterations=20, level_feet=True, tuning="off"
+    )
     m.reset(clip.skeleton)
     six = simulate(clip, "6")
     m.step(six.frame(0))
     assert m.plan(six.frame(1)).level == ()
 
 
-@pytest.mark.parametrize(("preset", "expected"), [("6x3dof", True), ("6", False), ("4", False),
-                                                  ("3-head-hands", False)])
+@pytest.mark.parametrize(
+    ("preset", "expected"), [("6x3dof", True), ("6", False), ("4", False), ("3-head-hands", False)]
+)
 def test_only_the_position_only_profile_levels_the_feet(preset, expected):
     from engine.solver import OptimizerSettings
     from engine.solver.profiles import effective

@@ -67,8 +67,9 @@ def test_a_tilt_without_twist_leaves_the_lower_neck_alone_and_share_zero_is_the_
     np.testing.assert_array_equal(limb_ik.share_neck_twist(local, root, off, turned, 0.0), local)
     # without a head target nothing is shared
     hand = {sk.JOINT_INDEX["lwrist"]: turned}
-    np.testing.assert_array_equal(limb_ik.finish(local, root, off, {}, hand, 0.5)[0],
-                                  limb_ik.finish(local, root, off, {}, hand)[0])  # fmt: skip
+    np.testing.assert_array_equal(
+        limb_ik.finish(local, root, off, {}, hand, 0.5)[0], limb_ik.finish(local, root, off, {}, hand)[0]
+    )
 
 
 @pytest.mark.parametrize("bad", [-0.1, 1.5, float("nan")])

@@ -8,8 +8,10 @@ from engine.methods.presets import REQUIRED_PRESET, preset_problem
 from engine.tracking import PRESET_SENSORS
 
 
-@pytest.mark.parametrize("method, module, joints", [("sparseposer", "engine.models.sparseposer", "SPARSE_JOINTS"),
-                                                     ("rpm", "engine.models.rpm", "RPM_JOINTS")])  # fmt: skip
+@pytest.mark.parametrize(
+    "method, module, joints",
+    [("sparseposer", "engine.models.sparseposer", "SPARSE_JOINTS"), ("rpm", "engine.models.rpm", "RPM_JOINTS")],
+)
 def test_the_required_preset_holds_exactly_the_joints_the_method_checks(method, module, joints):
     import importlib
 

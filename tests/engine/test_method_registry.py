@@ -15,15 +15,22 @@ FOLDER = Path(M.__file__).parent
 MODULES = M.method_modules(FOLDER)
 
 #: Each capability's members: a method offers all of them or none (the driver sees whole capabilities).
-CAPABILITIES = {Configurable: ("configure",), Constrainable: ("set_constraints", "add_constraint"),
-                SensorWeighted: ("set_sensor_weight",), DecodesLatents: ("decode_latent",),
-                SolvesClips: ("solve_clip",)}  # fmt: skip
+CAPABILITIES = {
+    Configurable: ("configure",),
+    Constrainable: ("set_constraints", "add_constraint"),
+    SensorWeighted: ("set_sensor_weight",),
+    DecodesLatents: ("decode_latent",),
+    SolvesClips: ("solve_clip",),
+}
 
 
 def _method_classes(module: str) -> list[type[Method]]:
     mod = importlib.import_module(f"engine.methods.{module}")
-    return [c for c in vars(mod).values() if isinstance(c, type) and issubclass(c, Method)
-            and c.__module__ == mod.__name__ and not inspect.isabstract(c)]  # fmt: skip
+    return [
+        c
+        for c in vars(mod).values()
+        if isinstance(c, type) and issubclass(c, Method) and c.__module__ == mod.__name__ and not inspect.isabstract(c)
+    ]
 
 
 def test_the_shipped_methods_are_found():

@@ -26,8 +26,15 @@ def _batch(motion, n=16):
     rot, disp = pose_from_motion(lr, rp)
     pos, _ = root_space_fk(rot, off)
     dq = encoder_input(rot, disp, off)
-    return {"dq": dq[:n], "rot": rot[:n], "disp": disp[:n], "pos": pos[:n], "offsets": off[:n],
-            "rot_next": rot[1:], "disp_next": disp[1:]}  # fmt: skip
+    return {
+        "dq": dq[:n],
+        "rot": rot[:n],
+        "disp": disp[:n],
+        "pos": pos[:n],
+        "offsets": off[:n],
+        "rot_next": rot[1:],
+        "disp_next": disp[1:],
+    }
 
 
 def test_skeletal_mask_keeps_far_joints_out():
@@ -143,8 +150,9 @@ def test_autoencoder_method_reconstructs_through_the_vae(synthetic_motion):
 
     vae = PoseVAE(TINY).eval()
     method = get_method("autoencoder", vae=vae)
-    motion, results = run_method(method, simulate(synthetic_motion, "6"), synthetic_motion.skeleton,
-                                 progress=False, reference=synthetic_motion)  # fmt: skip
+    motion, results = run_method(
+        method, simulate(synthetic_motion, "6"), synthetic_motion.skeleton, progress=False, reference=synthetic_motion
+    )
     assert len(motion) == len(synthetic_motion)
     np.testing.assert_allclose(motion.root_pos, synthetic_motion.root_pos)
     assert results[0].latent.shape == (24,)

@@ -33,13 +33,24 @@ def ctx(**kw) -> FrameContext:
     return FrameContext(root, **kw)
 
 
-def targets_from(opt: PoseOptimizer, z: torch.Tensor, c: FrameContext, joints=("root", "upperneck", "lwrist",
-                 "rwrist", "lankle", "rankle")) -> list[SensorConstraint]:  # fmt: skip
+def targets_from(
+    opt: PoseOptimizer,
+    z: torch.Tensor,
+    c: FrameContext,
+    joints=("root", "upperneck", "lwrist", "rwrist", "lankle", "rankle"),
+) -> list[SensorConstraint]:
     """Sensors placed on the decoded pose of ``z``: a reachable target set."""
     with torch.no_grad():
         s = opt.decode(z, c)
-    return [SensorConstraint(name=f"sensor:{j}", joint=j, position=s.positions[J[j]].double().numpy(),
-                             rotation=s.world_rotations()[J[j]].double().numpy()) for j in joints]  # fmt: skip
+    return [
+        SensorConstraint(
+            name=f"sensor:{j}",
+            joint=j,
+            position=s.positions[J[j]].double().numpy(),
+            rotation=s.world_rotations()[J[j]].double().numpy(),
+        )
+        for j in joints
+    ]
 
 
 def test_root_follows_a_hip_sensor_or_integrates_the_decoded_displacement():
@@ -213,9 +224,18 @@ def test_temporal_prior_pulls_towards_the_prediction():
     assert (sol.latent - pred).norm() < 0.5 * pred.norm()
 
 
-@pytest.mark.parametrize("field, value", [("mode", "turbo"), ("iterations", 0), ("lr", -1.0), ("lr", math.nan),
-                                          ("max_iterations", 2.5), ("optimizer", "lbfgs"),
-                                          ("root_anchor", "tail")])  # fmt: skip
+@pytest.mark.parametrize(
+    "field, value",
+    [
+        ("mode", "turbo"),
+        ("iterations", 0),
+        ("lr", -1.0),
+        ("lr", math.nan),
+        ("max_iterations", 2.5),
+        ("optimizer", "lbfgs"),
+        ("root_anchor", "tail"),
+    ],
+)
 def test_bad_settings_name_the_field(field, value):
     with pytest.raises(UserError, match=field):
         OptimizerSettings(**{field: value})

@@ -47,7 +47,8 @@ class CountingPredictor:
     def __init__(self) -> None:
         self.calls: list[tuple[tuple[int, ...], tuple[int, ...], int]] = []
 
-    def predict(self, past_latents: torch.Tensor, past_cond: torch.Tensor, first: torch.Tensor,
-                steps: int) -> torch.Tensor:  # fmt: skip
+    def predict(
+        self, past_latents: torch.Tensor, past_cond: torch.Tensor, first: torch.Tensor, steps: int
+    ) -> torch.Tensor:
         self.calls.append((tuple(past_latents.shape), tuple(past_cond.shape), steps))
         return first[:, None].expand(first.shape[0], steps, first.shape[1]).clone()

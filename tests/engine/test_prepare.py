@@ -11,8 +11,13 @@ import pytest
 from engine.cli.main import main
 from engine.data.prepare import assign_splits, prepare
 
-FILES = ["cmu_iclone/007_02.bvh", "cmu_iclone/007_03.bvh", "cmu_iclone/002_03.bvh", "cmu_daz/salsa/07.bvh",
-         "dragposer/example_3.bvh"]  # fmt: skip
+FILES = [
+    "cmu_iclone/007_02.bvh",
+    "cmu_iclone/007_03.bvh",
+    "cmu_iclone/002_03.bvh",
+    "cmu_daz/salsa/07.bvh",
+    "dragposer/example_3.bvh",
+]
 
 
 @pytest.fixture(scope="module")
@@ -31,8 +36,11 @@ def test_split_rule_is_deterministic_and_keeps_eval_only_out():
     s1, s2 = assign_splits(rels, ["dragposer/*"]), assign_splits(list(reversed(rels)), ["dragposer/*"])
     assert s1 == s2
     assert s1["mocap/dragposer/a.bvh"] == "test"
-    assert [r for r in rels if s1[r] == "val"] == ["mocap/cmu_iclone/003.bvh", "mocap/cmu_iclone/011.bvh",
-                                                   "mocap/cmu_iclone/019.bvh"]  # fmt: skip
+    assert [r for r in rels if s1[r] == "val"] == [
+        "mocap/cmu_iclone/003.bvh",
+        "mocap/cmu_iclone/011.bvh",
+        "mocap/cmu_iclone/019.bvh",
+    ]
 
 
 def test_prepare_writes_shards_stats_and_reports_failures(small_corpus, tmp_path):
@@ -67,11 +75,23 @@ def test_prepare_writes_shards_stats_and_reports_failures(small_corpus, tmp_path
 
 
 def test_info_json_on_each_rig(shared_mocap, capsys):
-    for rel, rig, fps in [("cmu_daz/salsa/01.bvh", "cmu_daz", 60.0), ("cmu_iclone/002_01.bvh", "cmu_iclone", 60.0),
-                          ("dragposer/example_2.bvh", "dragposer", 120.0)]:  # fmt: skip
+    for rel, rig, fps in [
+        ("cmu_daz/salsa/01.bvh", "cmu_daz", 60.0),
+        ("cmu_iclone/002_01.bvh", "cmu_iclone", 60.0),
+        ("dragposer/example_2.bvh", "dragposer", 120.0),
+    ]:
         assert main(["info", str(shared_mocap / rel), "--json"]) == 0
         out = json.loads(capsys.readouterr().out)
-        assert set(out) >= {"rig", "source_joints", "source_frames", "source_fps", "frames", "fps", "joints", "height_m"}
+        assert set(out) >= {
+            "rig",
+            "source_joints",
+            "source_frames",
+            "source_fps",
+            "frames",
+            "fps",
+            "joints",
+            "height_m",
+        }
         assert out["rig"] == rig and out["source_fps"] == fps and out["fps"] == 60 and out["joints"] == 22
         assert 1.4 < out["height_m"] < 2.4
 
@@ -80,8 +100,10 @@ def test_info_fps_override_and_errors(shared_mocap, tmp_path, capsys):
     assert main(["info", str(shared_mocap / "cmu_daz/salsa/01.bvh"), "--fps", "120", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["source_fps"] == 120
     bad = tmp_path / "bad.bvh"
-    bad.write_text("HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 0\n  CHANNELS 6 Xposition Yposition Zposition "
-                   "Zrotation Xrotation Yrotation\n}\nMOTION\nFrames: 1\nFrame Time: 0.1\n0 0 0 0 0 0\n")
+    bad.write_text(
+        "HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 0\n  CHANNELS 6 Xposition Yposition Zposition "
+        "Zrotation Xrotation Yrotation\n}\nMOTION\nFrames: 1\nFrame Time: 0.1\n0 0 0 0 0 0\n"
+    )
     assert main(["info", str(bad)]) == 2
     err = capsys.readouterr().err
     assert "bad.bvh" in err and "cannot map this skeleton" in err and "Traceback" not in err

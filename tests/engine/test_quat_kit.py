@@ -58,8 +58,9 @@ def test_product_conjugate_and_rotation_match_pymotion():
 def test_axis_angle_matches_rodrigues():
     for _ in range(30):
         axis, angle = _unit(3), float(RNG.uniform(-math.pi, math.pi))
-        np.testing.assert_allclose(QN.to_matrix(np.array(QN.qaxis_angle(axis, angle))), _rodrigues(axis, angle),
-                                   atol=1e-14)  # fmt: skip
+        np.testing.assert_allclose(
+            QN.to_matrix(np.array(QN.qaxis_angle(axis, angle))), _rodrigues(axis, angle), atol=1e-14
+        )
         _same_rotation(QN.qabout(7.0 * axis, angle), QN.qaxis_angle(axis, angle))
     assert QN.qabout((0.0, 0.0, 0.0), 1.0) == QN.IDENTITY
     assert QN.qabout((1.0, 0.0, 0.0), 1e-13) == QN.IDENTITY
@@ -136,7 +137,8 @@ def test_one_matrix_formula_for_numpy_and_torch_and_any_length():
     axis, angle = _unit(3), 1.2
     q = np.array(QN.qaxis_angle(axis, angle))
     np.testing.assert_allclose(Q.to_matrix(torch.tensor(q)).numpy(), _rodrigues(axis, angle), atol=1e-12)
-    np.testing.assert_allclose(Q.to_matrix(torch.tensor(q, dtype=torch.float32)).numpy(), _rodrigues(axis, angle),
-                               atol=1e-6)  # fmt: skip
+    np.testing.assert_allclose(
+        Q.to_matrix(torch.tensor(q, dtype=torch.float32)).numpy(), _rodrigues(axis, angle), atol=1e-6
+    )
     np.testing.assert_allclose(QN.unit_to_matrix(3.0 * q), _rodrigues(axis, angle), atol=1e-12)
     np.testing.assert_array_equal(QN.unit_to_matrix(np.zeros((2, 4))), np.broadcast_to(np.eye(3), (2, 3, 3)))

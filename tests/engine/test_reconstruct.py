@@ -44,8 +44,23 @@ def clip_path(synthetic_motion, tmp_path):
 
 def test_reconstruct_writes_a_bvh_and_a_summary(standin_dragposer, clip_path, tmp_path, capsys):
     out = tmp_path / "out.bvh"
-    code = main(["reconstruct", str(clip_path), "--out", str(out), "--sensors", "6", "--iterations", "2",
-                 "--max-frames", "12", "--faulty", "0.05", "--no-progress"])  # fmt: skip
+    code = main(
+        [
+            "reconstruct",
+            str(clip_path),
+            "--out",
+            str(out),
+            "--sensors",
+            "6",
+            "--iterations",
+            "2",
+            "--max-frames",
+            "12",
+            "--faulty",
+            "0.05",
+            "--no-progress",
+        ]
+    )
     assert code == 0
     rec = load_motion(out)
     assert len(rec) == 12 and np.isfinite(rec.root_pos).all()
@@ -56,13 +71,33 @@ def test_reconstruct_writes_a_bvh_and_a_summary(standin_dragposer, clip_path, tm
 
 def test_scene_adds_constraints_and_settings_but_flags_win(standin_dragposer, clip_path, tmp_path):
     scene = tmp_path / "scene.json"
-    scene.write_text(json.dumps({
-        "settings": {"mode": "offline", "max_iterations": 7, "lr": 0.02},
-        "constraints": [{"kind": "look_at", "name": "look", "target": [0, -3, 1.6]}],
-    }))  # fmt: skip
+    scene.write_text(
+        json.dumps(
+            {
+                "settings": {"mode": "offline", "max_iterations": 7, "lr": 0.02},
+                "constraints": [{"kind": "look_at", "name": "look", "target": [0, -3, 1.6]}],
+            }
+        )
+    )
     out = tmp_path / "out.bvh"
-    assert main(["reconstruct", str(clip_path), "--out", str(out), "--scene", str(scene), "--lr", "0.03",
-                 "--max-frames", "5", "--no-progress"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "reconstruct",
+                str(clip_path),
+                "--out",
+                str(out),
+                "--scene",
+                str(scene),
+                "--lr",
+                "0.03",
+                "--max-frames",
+                "5",
+                "--no-progress",
+            ]
+        )
+        == 0
+    )
     m = standin_dragposer[0]
     assert m.settings.mode == "offline" and m.settings.max_iterations == 7 and m.settings.lr == 0.03
     assert m.get_constraint("look").kind == "look_at"
@@ -72,17 +107,36 @@ def test_scene_constraints_for_a_method_without_constraints_are_a_user_error(cli
     scene = tmp_path / "scene.json"
     scene.write_text(json.dumps({"constraints": [{"kind": "look_at", "name": "look", "target": [0, -3, 1.6]}]}))
     out = tmp_path / "out.bvh"
-    assert main(["reconstruct", str(clip_path), "--out", str(out), "--scene", str(scene), "--method", "ik",
-                 "--max-frames", "5", "--no-progress"]) == 2  # fmt: skip
+    assert (
+        main(
+            [
+                "reconstruct",
+                str(clip_path),
+                "--out",
+                str(out),
+                "--scene",
+                str(scene),
+                "--method",
+                "ik",
+                "--max-frames",
+                "5",
+                "--no-progress",
+            ]
+        )
+        == 2
+    )
     assert "'ik' takes no constraints" in capsys.readouterr().err and not out.exists()
 
 
-@pytest.mark.parametrize("flags, message", [
-    (["--sensors", "tail"], "tail"),
-    (["--faulty", "2"], "faulty"),
-    (["--iterations", "0"], "iterations"),
-    (["--set", "optimizer=lbfgs"], "optimizer"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "flags, message",
+    [
+        (["--sensors", "tail"], "tail"),
+        (["--faulty", "2"], "faulty"),
+        (["--iterations", "0"], "iterations"),
+        (["--set", "optimizer=lbfgs"], "optimizer"),
+    ],
+)
 def test_bad_options_are_user_errors(standin_dragposer, clip_path, tmp_path, capsys, flags, message):
     assert main(["reconstruct", str(clip_path), "--out", str(tmp_path / "o.bvh"), *flags]) == 2
     assert message in capsys.readouterr().err
@@ -99,8 +153,19 @@ def test_bad_scene_names_the_file(standin_dragposer, clip_path, tmp_path, capsys
 
 def test_set_flags_reach_the_optimizer(standin_dragposer, clip_path, tmp_path):
     out = tmp_path / "o.bvh"
-    argv = ["reconstruct", str(clip_path), "--out", str(out), "--max-frames", "6", "--no-progress",
-            "--set", "optimizer=adam-carry", "--set", "root_anchor=none"]
+    argv = [
+        "reconstruct",
+        str(clip_path),
+        "--out",
+        str(out),
+        "--max-frames",
+        "6",
+        "--no-progress",
+        "--set",
+        "optimizer=adam-carry",
+        "--set",
+        "root_anchor=none",
+    ]
     assert main(argv) == 0 and out.is_file()
     s = standin_dragposer[0].settings
     assert (s.optimizer, s.root_anchor) == ("adam-carry", "none")

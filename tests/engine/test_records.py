@@ -26,12 +26,23 @@ def test_light_run_gives_the_same_motion_and_figures(synthetic_motion):
 
 def test_records_keep_latent_final_loss_timings_and_warnings():
     rec = ResultArrays(3)
-    pose = dict(local_rot=np.tile([1.0, 0, 0, 0], (sk.NUM_JOINTS, 1)), root_pos=np.ones(3),
-                positions=np.zeros((sk.NUM_JOINTS, 3)))  # fmt: skip
-    rec.store(0, FrameResult(**pose, iterations=10, losses=[{"a": 2.0, "total": 2.0}, {"a": 1.0, "total": 1.0}],
-                             latent=np.arange(24.0), ms=3.0, warnings=["lost lwrist"],
-                             timings={"ms_per_iteration": 0.4, "decoder": 0.1, "fk_losses": 0.1, "backward": 0.15,
-                                      "step": 0.05}))  # fmt: skip
+    pose = dict(
+        local_rot=np.tile([1.0, 0, 0, 0], (sk.NUM_JOINTS, 1)),
+        root_pos=np.ones(3),
+        positions=np.zeros((sk.NUM_JOINTS, 3)),
+    )
+    rec.store(
+        0,
+        FrameResult(
+            **pose,
+            iterations=10,
+            losses=[{"a": 2.0, "total": 2.0}, {"a": 1.0, "total": 1.0}],
+            latent=np.arange(24.0),
+            ms=3.0,
+            warnings=["lost lwrist"],
+            timings={"ms_per_iteration": 0.4, "decoder": 0.1, "fk_losses": 0.1, "backward": 0.15, "step": 0.05},
+        ),
+    )
     rec.store(1, FrameResult(**pose, ms=1.0))
     assert len(rec) == 2  # frame 2 not stored yet
     first, second = rec

@@ -21,8 +21,16 @@ RIG_FILES = {
     "cmu_daz": ("cmu_daz/salsa/01.bvh", 60.0),  # header lies: 120
 }
 WALKS = ("cmu_iclone", "cmu_iclone_101")
-BONES = [("lhip", "lknee"), ("lknee", "lankle"), ("rknee", "rankle"), ("lshoulder", "lelbow"),
-         ("lelbow", "lwrist"), ("rshoulder", "relbow"), ("relbow", "rwrist"), ("lowerneck", "upperneck")]  # fmt: skip
+BONES = [
+    ("lhip", "lknee"),
+    ("lknee", "lankle"),
+    ("rknee", "rankle"),
+    ("lshoulder", "lelbow"),
+    ("lelbow", "lwrist"),
+    ("rshoulder", "relbow"),
+    ("relbow", "rwrist"),
+    ("lowerneck", "upperneck"),
+]
 
 
 def _source_positions(path, prof):

@@ -17,14 +17,39 @@ from engine.kinematics import quaternion as Q
 from engine.motion.retarget_frames import CANON_LANDMARKS
 from engine.motion.retarget_strategy import CURRENT
 
-NAMES = {"root": "Hips", "lhip": "LeftUpLeg", "lknee": "LeftLeg", "lankle": "LeftFoot", "ltoe": "LeftToeBase",
-         "rhip": "RightUpLeg", "rknee": "RightLeg", "rankle": "RightFoot", "rtoe": "RightToeBase",
-         "lowerback": "Spine", "upperback": "Spine1", "chest": "Spine2", "lowerneck": "Neck", "upperneck": "Head",
-         "lclavicle": "LeftShoulder", "lshoulder": "LeftArm", "lelbow": "LeftForeArm", "lwrist": "LeftHand",
-         "rclavicle": "RightShoulder", "rshoulder": "RightArm", "relbow": "RightForeArm", "rwrist": "RightHand"}  # fmt: skip
+NAMES = {
+    "root": "Hips",
+    "lhip": "LeftUpLeg",
+    "lknee": "LeftLeg",
+    "lankle": "LeftFoot",
+    "ltoe": "LeftToeBase",
+    "rhip": "RightUpLeg",
+    "rknee": "RightLeg",
+    "rankle": "RightFoot",
+    "rtoe": "RightToeBase",
+    "lowerback": "Spine",
+    "upperback": "Spine1",
+    "chest": "Spine2",
+    "lowerneck": "Neck",
+    "upperneck": "Head",
+    "lclavicle": "LeftShoulder",
+    "lshoulder": "LeftArm",
+    "lelbow": "LeftForeArm",
+    "lwrist": "LeftHand",
+    "rclavicle": "RightShoulder",
+    "rshoulder": "RightArm",
+    "relbow": "RightForeArm",
+    "rwrist": "RightHand",
+}
 # landmark joints (children of their anchor, so they move rigidly with it)
-EXTRA = {"LeftEye": "l_eye", "RightEye": "r_eye", "LeftHandIndex1": "l_index", "LeftHandPinky1": "l_pinky",
-         "RightHandIndex1": "r_index", "RightHandPinky1": "r_pinky"}  # fmt: skip
+EXTRA = {
+    "LeftEye": "l_eye",
+    "RightEye": "r_eye",
+    "LeftHandIndex1": "l_index",
+    "LeftHandPinky1": "l_pinky",
+    "RightHandIndex1": "r_index",
+    "RightHandPinky1": "r_pinky",
+}
 
 
 def _axis_angle(axis, deg):
@@ -138,15 +163,18 @@ def write_rig(path, local, root, frames_c=None, twist=None, landmarks=True, rest
         lines.append(f"{pad}{'ROOT' if r[1] < 0 else 'JOINT'} {r[0]}")
         lines.append(f"{pad}{{")
         lines.append(f"{pad}  OFFSET {off[0]:.6f} {off[1]:.6f} {off[2]:.6f}")
-        lines.append(f"{pad}  CHANNELS {'6 Xposition Yposition Zposition ' if r[1] < 0 or hub else '3 '}"
-                     "Zrotation Yrotation Xrotation")  # fmt: skip
+        lines.append(
+            f"{pad}  CHANNELS {'6 Xposition Yposition Zposition ' if r[1] < 0 or hub else '3 '}"
+            "Zrotation Yrotation Xrotation"
+        )
         kids = [k for k, q in enumerate(rows) if q[1] == i]
         for k in kids:
             emit(k, depth + 1)
         if not kids or r[3] is not None:
             e = Q.rotate(Q.conjugate(c[i]), r[3] if r[3] is not None else np.array([0.0, 0.0, 0.05]))
-            lines.extend([f"{pad}  End Site", f"{pad}  {{", f"{pad}    OFFSET {e[0]:.6f} {e[1]:.6f} {e[2]:.6f}",
-                          f"{pad}  }}"])
+            lines.extend(
+                [f"{pad}  End Site", f"{pad}  {{", f"{pad}    OFFSET {e[0]:.6f} {e[1]:.6f} {e[2]:.6f}", f"{pad}  }}"]
+            )
         lines.append(f"{pad}}}")
 
     emit(0, 0)
@@ -164,7 +192,9 @@ def write_rig(path, local, root, frames_c=None, twist=None, landmarks=True, rest
         vals = [] if hub else [*root[t]]
         for i in order:
             if hub:
-                vals += list(root[t] if i == 1 else Q.rotate(Q.conjugate(c[rows[i][1]]), rows[i][2]) if i else np.zeros(3))
+                vals += list(
+                    root[t] if i == 1 else Q.rotate(Q.conjugate(c[rows[i][1]]), rows[i][2]) if i else np.zeros(3)
+                )
             vals += list(euler[t, i])
         lines.append(" ".join(f"{v:.6f}" for v in vals))
     path.write_text("\n".join(lines) + "\n")
@@ -226,8 +256,17 @@ def _diff(a, b) -> np.ndarray:
     return np.degrees(Q.angle(a.local_rot, b.local_rot)).max(0)
 
 
-@pytest.mark.parametrize("variant", ["random_axes", "half_turn_twist_axes", "apose", "bone_axes_along_x",
-                                     "bone_axes_along_x_mirrored", "child_undoes_twist"])  # fmt: skip
+@pytest.mark.parametrize(
+    "variant",
+    [
+        "random_axes",
+        "half_turn_twist_axes",
+        "apose",
+        "bone_axes_along_x",
+        "bone_axes_along_x_mirrored",
+        "child_undoes_twist",
+    ],
+)
 def test_rest_conventions_do_not_change_the_canonical_rotations(rigs, variant):
     ref, rep = rigs["body_twist", "tpose"]
     other, rep2 = rigs["body_twist", variant]
@@ -253,8 +292,12 @@ def test_a_rig_without_face_or_fingers_uses_the_rules_and_says_so(rigs, tmp_path
     text = write_rig(tmp_path / "bare.bvh", local, root, landmarks=False)
     rep = retarget(load_bvh(text), strategy=CURRENT)[1]
     assert rep.source_twist_joints == []
-    assert rep.twist_rules == {"lwrist": "no twist", "rwrist": "no twist", "lowerneck": "head frame",
-                               "upperneck": "head frame"}  # fmt: skip
+    assert rep.twist_rules == {
+        "lwrist": "no twist",
+        "rwrist": "no twist",
+        "lowerneck": "head frame",
+        "upperneck": "head frame",
+    }
 
 
 def test_models_strategy_comes_from_the_model_card(tmp_path):
@@ -268,7 +311,9 @@ def test_models_strategy_comes_from_the_model_card(tmp_path):
     assert models_strategy(tmp_path / "absent.toml") is CURRENT
     for version in (3, 9):
         (tmp_path / "bad.toml").write_text(f"retarget_version = {version}\n")
-        with pytest.raises(UserError, match=f"bad.toml: retarget_version must be one of {CURRENT.version} .*got {version}"):
+        with pytest.raises(
+            UserError, match=f"bad.toml: retarget_version must be one of {CURRENT.version} .*got {version}"
+        ):
             models_strategy(tmp_path / "bad.toml")
 
 

@@ -8,9 +8,17 @@ import shutil
 import pytest
 
 #: The validation files of the split the shipped models were trained with (model card).
-TODAYS_VAL = ["cmu_daz/indian/14.bvh", "cmu_daz/salsa/07.bvh", "cmu_iclone/002_01.bvh", "cmu_iclone/002_09.bvh",
-              "cmu_iclone/005_05.bvh", "cmu_iclone/005_13.bvh", "cmu_iclone/006_02.bvh", "cmu_iclone/006_10.bvh",
-              "cmu_iclone/007_05.bvh"]  # fmt: skip
+TODAYS_VAL = [
+    "cmu_daz/indian/14.bvh",
+    "cmu_daz/salsa/07.bvh",
+    "cmu_iclone/002_01.bvh",
+    "cmu_iclone/002_09.bvh",
+    "cmu_iclone/005_05.bvh",
+    "cmu_iclone/005_13.bvh",
+    "cmu_iclone/006_02.bvh",
+    "cmu_iclone/006_10.bvh",
+    "cmu_iclone/007_05.bvh",
+]
 
 
 @pytest.mark.shared_data

@@ -40,8 +40,14 @@ def _cmu_hands(rows):
         along = RB.canonical_body_frames()[f"{side}wrist"]
         prefix = hand[: -len("Hand")]
         rows.append([f"{prefix}FingerBase", w, np.zeros(3), None])
-        rows.append([f"{prefix}HandIndex1", len(rows) - 1, 0.08 * Q.rotate(along, np.array([1.0, 0, 0])),
-                     np.array([0.0, 0.0, 0.0])])  # fmt: skip
+        rows.append(
+            [
+                f"{prefix}HandIndex1",
+                len(rows) - 1,
+                0.08 * Q.rotate(along, np.array([1.0, 0, 0])),
+                np.array([0.0, 0.0, 0.0]),
+            ]
+        )
         rows.append([f"{prefix}Thumb", w, np.zeros(3), _thumb_tip(side)])
     return rows
 
@@ -133,8 +139,12 @@ def test_info_names_the_rule_each_joint_used(tmp_path, capsys):
     local, root = canonical_walk(30)
     path = write_rig(tmp_path / "cmu_like.bvh", local, root, landmarks=False, rest=_cmu_hands)
     out = describe(path, None, None)
-    assert out["twist_rule"] == {"lwrist": "thumb", "rwrist": "thumb", "lowerneck": "head frame",
-                                 "upperneck": "head frame"}  # fmt: skip
+    assert out["twist_rule"] == {
+        "lwrist": "thumb",
+        "rwrist": "thumb",
+        "lowerneck": "head frame",
+        "upperneck": "head frame",
+    }
     assert out["source_twist"] == [] and out["rotations_copied"] is False
     assert main(["info", str(path)]) == 0
     assert "twist rule    lwrist (thumb), rwrist (thumb), lowerneck (head frame)" in capsys.readouterr().out
@@ -166,10 +176,17 @@ def test_a_hand_without_fingers_keeps_its_swing_and_no_twist(tmp_path, hand_axes
 
     local, root = canonical_walk(90)
     truth = retarget(load_bvh(write_rig(tmp_path / "k.bvh", local, root)), strategy=CURRENT)[0]
-    half = {n: _axis_angle(sk.END_SITES[j] / np.linalg.norm(sk.END_SITES[j]), 180.0)  # about the hand's direction
-            for n, j in (("LeftHand", "lwrist"), ("RightHand", "rwrist"))} if hand_axes == "half_turn" else {}  # fmt: skip
-    motion, rep = retarget(load_bvh(write_rig(tmp_path / "bare.bvh", local, root, landmarks=False, frames_c=half)),
-                           strategy=CURRENT)  # fmt: skip
+    half = (
+        {
+            n: _axis_angle(sk.END_SITES[j] / np.linalg.norm(sk.END_SITES[j]), 180.0)  # about the hand's direction
+            for n, j in (("LeftHand", "lwrist"), ("RightHand", "rwrist"))
+        }
+        if hand_axes == "half_turn"
+        else {}
+    )
+    motion, rep = retarget(
+        load_bvh(write_rig(tmp_path / "bare.bvh", local, root, landmarks=False, frames_c=half)), strategy=CURRENT
+    )
     assert rep.twist_rules["lwrist"] == rep.twist_rules["rwrist"] == "no twist"
     for joint in ("lwrist", "rwrist"):
         k, axis = sk.JOINT_INDEX[joint], sk.END_SITES[joint]

@@ -23,8 +23,14 @@ from engine.motion.retarget_frames import CANON_HINGE, LIMBS
 
 pytestmark = pytest.mark.shared_data
 
-CLIPS = ("cmu_daz/martial/03.bvh", "cmu_daz/indian/04.bvh", "cmu_daz/salsa/01.bvh", "cmu_iclone/007_02.bvh",
-         "cmu_iclone/002_01.bvh", "cmu_iclone/005_06.bvh")  # fmt: skip
+CLIPS = (
+    "cmu_daz/martial/03.bvh",
+    "cmu_daz/indian/04.bvh",
+    "cmu_daz/salsa/01.bvh",
+    "cmu_iclone/007_02.bvh",
+    "cmu_iclone/002_01.bvh",
+    "cmu_iclone/005_06.bvh",
+)
 
 
 def _load(mocap, rel):
@@ -82,9 +88,16 @@ def test_limbs_rotate_like_the_canonical_clips(shared_mocap, rel):
 # about the hips; the canonical skeleton holds that offset fixed, so its clip is up to
 # 1.7 cm off the source there (the write-back itself adds nothing: it lands every mapped
 # joint on the canonical clip's).
-@pytest.mark.parametrize("rel, tol_cm", [("cmu_iclone/007_02.bvh", 1.0), ("cmu_iclone/002_01.bvh", 1.0),
-                                         ("cmu_daz/salsa/01.bvh", 1.0), ("cmu_daz_cgspeed/07_03.bvh", 1.0),
-                                         ("cmu_mb/07_03.bvh", 2.0)])  # fmt: skip
+@pytest.mark.parametrize(
+    "rel, tol_cm",
+    [
+        ("cmu_iclone/007_02.bvh", 1.0),
+        ("cmu_iclone/002_01.bvh", 1.0),
+        ("cmu_daz/salsa/01.bvh", 1.0),
+        ("cmu_daz_cgspeed/07_03.bvh", 1.0),
+        ("cmu_mb/07_03.bvh", 2.0),
+    ],
+)
 def test_written_back_onto_the_source_rig_within_1cm(shared_mocap, tmp_path, rel, tol_cm):
     """Each rig family (iClone, its 101-joint variant, Daz at 60 and 120 fps, the CMU rig at
     120 fps): source -> canonical -> source over the whole clip. Written at 60 fps, the
@@ -172,7 +185,10 @@ def test_every_shared_clip_rotates_like_the_canonical_clips(every_shared_clip, f
     for knee in ("lknee", "rknee"):  # the hinge of every clip, with DragPoser's few degrees of twist
         row = table[knee][family]
         assert row["hinge_alignment_min"] > 0.9 and -25 < row["twist_median"][0] <= row["twist_median"][1] < 15, (
-            family, knee, row)  # fmt: skip
+            family,
+            knee,
+            row,
+        )
     for elbow in ("lelbow", "relbow"):  # per family; the left elbows of iClone 007_* differ (docs)
         row = table[elbow][family]
         assert row["hinge_alignment_median"] > 0.9 and max(map(abs, row["twist_median"])) < 25, (family, elbow, row)

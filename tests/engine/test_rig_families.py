@@ -69,8 +69,12 @@ def test_height_is_the_subjects(family):
     assert abs(report.height_m / report.source_height_m - 1) < 0.03
     # per-bone proportions are the subject's: thigh, shin, upper arm, forearm lengths
     prof = report.profile
-    for bone, (a, b) in {"lknee": ("lhip", "lknee"), "lankle": ("lknee", "lankle"),
-                         "relbow": ("rshoulder", "relbow"), "rwrist": ("relbow", "rwrist")}.items():  # fmt: skip
+    for bone, (a, b) in {
+        "lknee": ("lhip", "lknee"),
+        "lankle": ("lknee", "lankle"),
+        "relbow": ("rshoulder", "relbow"),
+        "rwrist": ("relbow", "rwrist"),
+    }.items():
         i, j = raw.names.index(prof.joints[a]), raw.names.index(prof.joints[b])
         chain, k = 0.0, j
         while k != i:
@@ -84,8 +88,14 @@ def test_bone_vectors_follow_the_source(family):
     prof = report.profile
     src = _world(raw, prof.root_channels_relative_to_offset) @ report.basis.T * prof.units_to_m
     ours = motion.positions()
-    for a, b in (("lhip", "lknee"), ("lknee", "lankle"), ("rshoulder", "relbow"), ("relbow", "rwrist"),
-                 ("root", "lhip"), ("chest", "lclavicle")):  # fmt: skip
+    for a, b in (
+        ("lhip", "lknee"),
+        ("lknee", "lankle"),
+        ("rshoulder", "relbow"),
+        ("relbow", "rwrist"),
+        ("root", "lhip"),
+        ("chest", "lclavicle"),
+    ):
         s = src[:, raw.names.index(prof.joints[b])] - src[:, raw.names.index(prof.joints[a])]
         c = ours[:, sk.JOINT_INDEX[b]] - ours[:, sk.JOINT_INDEX[a]]
         assert np.linalg.norm(s - c, axis=-1).max() < 0.01, (name, a, b)
@@ -118,11 +128,19 @@ def test_knees_hinge_about_local_x_with_little_twist(family):
 
 @pytest.mark.parametrize(
     ("name", "side", "core"),
-    [("mixamorig:LeftUpLeg", "l", "upleg"), ("CC_Base_R_Thigh", "r", "ccbasethigh"), ("thigh_l", "l", "thigh"),
-     ("lShldr", "l", "shldr"), ("RHipJoint", "r", "hipjoint"), ("left_knee", "l", "knee"),
-     ("Bip01 R Foot", "r", "bip01foot"), ("Spine2", None, "spine2"), ("rankle", "r", "ankle"),
-     ("UpperArm_R", "r", "upperarm")],
-)  # fmt: skip
+    [
+        ("mixamorig:LeftUpLeg", "l", "upleg"),
+        ("CC_Base_R_Thigh", "r", "ccbasethigh"),
+        ("thigh_l", "l", "thigh"),
+        ("lShldr", "l", "shldr"),
+        ("RHipJoint", "r", "hipjoint"),
+        ("left_knee", "l", "knee"),
+        ("Bip01 R Foot", "r", "bip01foot"),
+        ("Spine2", None, "spine2"),
+        ("rankle", "r", "ankle"),
+        ("UpperArm_R", "r", "upperarm"),
+    ],
+)
 def test_names_split_into_side_and_core(name, side, core):
     assert split_name(name) == (side, core)
 

@@ -18,8 +18,19 @@ from engine.training.data import load_split
 from engine.training.rpm import Frames, RPMTrainConfig, free_run, gap_flags, pose_losses, train_rpm
 from tests.engine.test_training import tiny_data  # noqa: F401  (fixture: a tiny prepared folder)
 
-TINY = ["past_inputs=3", "past_poses=3", "window=4", "hidden=32", "blocks=1", "free_run=4", "batch_size=4",
-        "steps_per_epoch=3", "val_segments=2", "val_frames=70", "minutes=0.0"]  # fmt: skip
+TINY = [
+    "past_inputs=3",
+    "past_poses=3",
+    "window=4",
+    "hidden=32",
+    "blocks=1",
+    "free_run=4",
+    "batch_size=4",
+    "steps_per_epoch=3",
+    "val_segments=2",
+    "val_frames=70",
+    "minutes=0.0",
+]
 
 
 def _tiny_model() -> RPM:
@@ -92,14 +103,22 @@ def test_training_writes_weights_that_load(tiny_data, tmp_path):  # noqa: F811
     model, _ = load_rpm(tmp_path / "run" / "rpm.pt")
     assert model.config.window == 4 and float(model.pose_std.min()) > 0
     frozen = dict(epochs=1, lr=0.0, lr_final=0.0, weight_decay=0.0, seed=7)
-    train_rpm(tiny_data, tmp_path / "ft", load_config(RPMTrainConfig, None, TINY, init=str(tmp_path / "run" / "rpm.pt"),
-                                                      **frozen), progress=False)  # fmt: skip
+    train_rpm(
+        tiny_data,
+        tmp_path / "ft",
+        load_config(RPMTrainConfig, None, TINY, init=str(tmp_path / "run" / "rpm.pt"), **frozen),
+        progress=False,
+    )
     tuned, _ = load_rpm(tmp_path / "ft" / "rpm.pt")
     a, b = model.state_dict(), tuned.state_dict()
     assert all(torch.equal(a[k], b[k]) for k in a), "init with no learning gives the init weights back"
     with pytest.raises(UserError, match="init .*architecture"):
-        train_rpm(tiny_data, tmp_path / "x", load_config(RPMTrainConfig, None, TINY, init=str(tmp_path / "run" / "rpm.pt"),
-                                                         hidden=8, **frozen), progress=False)  # fmt: skip
+        train_rpm(
+            tiny_data,
+            tmp_path / "x",
+            load_config(RPMTrainConfig, None, TINY, init=str(tmp_path / "run" / "rpm.pt"), hidden=8, **frozen),
+            progress=False,
+        )
 
 
 def test_method_puts_the_head_on_its_tracker_through_a_gap(synthetic_motion):

@@ -24,8 +24,9 @@ def _declared_sources() -> list[tuple[str, str]]:
     found = []
     for path in sorted(ENGINE.rglob("*.py")):
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
-            if isinstance(node, ast.ClassDef) and any(getattr(b, "id", getattr(b, "attr", "")) == "SensorSource"
-                                                      for b in node.bases):  # fmt: skip
+            if isinstance(node, ast.ClassDef) and any(
+                getattr(b, "id", getattr(b, "attr", "")) == "SensorSource" for b in node.bases
+            ):
                 module = ".".join(path.relative_to(ENGINE.parent).with_suffix("").parts)
                 found.append((module, node.name))
     return found
@@ -63,8 +64,12 @@ def _raw() -> dict[str, Sensor]:
 
 def test_apply_edits_drops_disabled_offsets_strips_and_fails():
     raw = _raw()
-    sensors = (Sensor("root", weight=2.0), Sensor("lwrist", dof=3, offset=(0.0, 0.0, 0.5), failures=((3, 5),)),
-               Sensor("rwrist", enabled=False), Sensor("upperneck"))  # fmt: skip
+    sensors = (
+        Sensor("root", weight=2.0),
+        Sensor("lwrist", dof=3, offset=(0.0, 0.0, 0.5), failures=((3, 5),)),
+        Sensor("rwrist", enabled=False),
+        Sensor("upperneck"),
+    )
     at2, at4 = apply_edits(raw, sensors, 2), apply_edits(raw, sensors, 4)
     assert set(at2.readings) == {"root", "lwrist"}  # disabled and unread sensors are dropped
     lw = at2.readings["lwrist"]
@@ -86,8 +91,11 @@ def test_a_recording_takes_the_studio_edits_of_a_clip_failures_included(syntheti
     samples = [TrackerSample(float(plan.times[i]), n, p, r) for i in range(len(plan)) for n, p, r in plan.frame(i)]
     write_recording(tmp_path / "rec.jsonl", samples, 60.0)
     rec = RecordingSource(tmp_path / "rec.jsonl")
-    sensors = (Sensor("root"), Sensor("lwrist", dof=3, offset=(0.0, 0.1, 0.0), failures=((1, 3),)),
-               Sensor("rwrist", enabled=False))  # fmt: skip
+    sensors = (
+        Sensor("root"),
+        Sensor("lwrist", dof=3, offset=(0.0, 0.1, 0.0), failures=((1, 3),)),
+        Sensor("rwrist", enabled=False),
+    )
     rec.set_sensors(sensors)
     assert set(rec.frame(0).readings) == {"root", "lwrist"}
     assert [rec.frame(f).readings["lwrist"].connected for f in range(4)] == [True, False, False, True]

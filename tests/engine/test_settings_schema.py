@@ -130,9 +130,11 @@ def test_the_session_refuses_a_bad_setting_before_it_reaches_the_engine(syntheti
     commands = []
     session.attach(commands.append)
     commands.clear()
-    for name, value, message in (("lr", 11.0, r"lr = 11.0 is out of range; allowed: a number in \(0, 10\]"),
-                                 ("mode", "fast", "mode = 'fast' is not allowed"),
-                                 ("itterations", 3, "unknown setting")):  # fmt: skip
+    for name, value, message in (
+        ("lr", 11.0, r"lr = 11.0 is out of range; allowed: a number in \(0, 10\]"),
+        ("mode", "fast", "mode = 'fast' is not allowed"),
+        ("itterations", 3, "unknown setting"),
+    ):
         with pytest.raises(UserError, match=message):
             session.set_setting(name, value)
     assert commands == [] and session.settings["lr"] == OptimizerSettings().lr

@@ -73,8 +73,7 @@ def test_one_segment_under_the_stopping_rule_is_the_frame_by_frame_solve(clip, f
 
 
 @pytest.mark.parametrize("preset, rule", [("6", "adam-carry"), ("4", "sgd")])
-def test_one_segment_with_fixed_steps_is_the_frame_by_frame_solve_at_that_many_steps(clip, preset, rule,
-                                                                                      monkeypatch):  # fmt: skip
+def test_one_segment_with_fixed_steps_is_the_frame_by_frame_solve_at_that_many_steps(clip, preset, rule, monkeypatch):
     from engine.tracking import simulate
 
     tr = simulate(clip, preset)
@@ -187,8 +186,12 @@ def test_the_batched_gradient_is_the_derivative_of_the_batched_loss(clip):
         smooth = SmoothTerm("smooth", target if on else None)
         weights = r["weights"].copy()
         weights[-1] = 10.0  # the ground band, strong
-        objective.set_row(c, [r["sensor_term"], PriorTerm("temporal_prior", r["prior"]), smooth,
-                              m.ground.term(FrameInputs())], weights, *r["root"])  # fmt: skip
+        objective.set_row(
+            c,
+            [r["sensor_term"], PriorTerm("temporal_prior", r["prior"]), smooth, m.ground.term(FrameInputs())],
+            weights,
+            *r["root"],
+        )
     dec = B.BatchDecoder(m.optimizer.fast_parts.decoder)
     z = np.array([r["prior"] for r in read]) + rng.normal(scale=0.3, size=(5, 24))  # float64: exact differences
     idx = np.array([0, 1, 3, 4])

@@ -47,8 +47,13 @@ def test_dense_decoder_equals_the_model_and_its_gradient_equals_autograd(models)
         x = vae.act(vae.dec[1](torch.matmul(vae.unpool1, x)))
         x = vae.act(vae.dec[2](torch.matmul(vae.unpool0, x)))
         x = vae.act(vae.dec[3](x))
-        raw = torch.cat(((vae.to_rot(x) + torch.tensor([1.0, 0, 0, 0])).flatten(1),
-                         vae.to_disp(x[:, 0]) * vae.disp_std + vae.disp_mean), dim=1)  # fmt: skip
+        raw = torch.cat(
+            (
+                (vae.to_rot(x) + torch.tensor([1.0, 0, 0, 0])).flatten(1),
+                vae.to_disp(x[:, 0]) * vae.disp_std + vae.disp_mean,
+            ),
+            dim=1,
+        )
         (raw[0] @ g).backward()
         assert torch.allclose(torch.as_tensor(out), raw[0].detach(), atol=2e-6)
         np.testing.assert_allclose(dense.backward(g.numpy()), zz.grad.numpy(), rtol=1e-4, atol=1e-5)
@@ -102,8 +107,9 @@ def test_solvers_on_one_model_keep_their_own_activations(models):
 def test_latent_update_matches_torch_optimizers(rule):
     gen = torch.Generator().manual_seed(2)
     z = torch.randn(24, generator=gen).requires_grad_(True)
-    opt = (torch.optim.Adam([z], lr=0.05) if rule == "adam"
-           else torch.optim.SGD([z], lr=0.3, momentum=0.5, nesterov=True))  # fmt: skip
+    opt = (
+        torch.optim.Adam([z], lr=0.05) if rule == "adam" else torch.optim.SGD([z], lr=0.3, momentum=0.5, nesterov=True)
+    )
     ours = LatentUpdate(rule, 0.05 if rule == "adam" else 0.3, momentum=0.0 if rule == "adam" else 0.5)
     mine = z.detach().numpy().copy()
     for _ in range(6):

@@ -41,8 +41,15 @@ def test_pose_terms_fast_path_equals_reference(models, preset, ground):
     tracking = simulate(motion, preset)
     # weights of the profiles' order (much stiffer ones make plain steps oscillate, and
     # the two paths' float32 round-off then grows into different trajectories)
-    fast = DragPoserMethod(models.vae, models.predictor, fast=True, iterations=10, max_iterations=20,
-                           smooth_weight=5.0, ground_weight=ground)  # fmt: skip
+    fast = DragPoserMethod(
+        models.vae,
+        models.predictor,
+        fast=True,
+        iterations=10,
+        max_iterations=20,
+        smooth_weight=5.0,
+        ground_weight=ground,
+    )
     fast.reset(motion.skeleton, motion.fps)
     fast.ground.low, fast.ground.high = 0.2, 0.25  # the clip's feet are below: the term is active
     seen = seen_ground = False
@@ -50,7 +57,9 @@ def test_pose_terms_fast_path_equals_reference(models, preset, ground):
         ref = copy.deepcopy(fast)
         ref.optimizer._fast = None
         a, b = fast.step(tracking.frame(i)), ref.step(tracking.frame(i))
-        np.testing.assert_allclose(a.positions, b.positions, atol=1e-4)  # stiff weights amplify float32 round-off; exactness: the gradient test below
+        np.testing.assert_allclose(
+            a.positions, b.positions, atol=1e-4
+        )  # stiff weights amplify float32 round-off; exactness: the gradient test below
         assert a.losses[-1]["smooth"] == pytest.approx(b.losses[-1]["smooth"], rel=1e-3, abs=1e-9)
         seen |= a.losses[0]["smooth"] > 0
         if ground:
@@ -64,7 +73,9 @@ def test_pose_terms_fast_path_equals_reference(models, preset, ground):
 
 def test_profiles_follow_the_connected_set_and_keep_explicit_settings():
     assert profile_for(["root", "upperneck", "lwrist", "rwrist", "lankle", "rankle"]).name == "full"
-    assert profile_for(["root", "upperneck", "lwrist", "rwrist", "lankle", "rankle"], hip_rotation=False).name == "full3"
+    assert (
+        profile_for(["root", "upperneck", "lwrist", "rwrist", "lankle", "rankle"], hip_rotation=False).name == "full3"
+    )
     assert profile_for(["root", "lwrist", "rwrist"]).name == "hip"
     assert profile_for(["upperneck", "lwrist", "rwrist"]).name == "head"
     s = OptimizerSettings(temporal_weight=0.123)
@@ -129,16 +140,24 @@ def test_pose_term_gradients_equal_autograd(models, anchor):
     rng = np.random.default_rng(3)
     offsets = sk.Skeleton.canonical().offsets
     rest = sk.Skeleton.canonical().rest_positions() + np.array([0.0, 0.0, 0.95])
-    sensors = [SensorConstraint(name=f"sensor:{j}", joint=j, position=rest[sk.JOINT_INDEX[j]] + rng.normal(0, 0.05, 3),
-                                rotation=_unit(rng.normal(size=4))) for j in ("upperneck", "lwrist", "rwrist")]  # fmt: skip
+    sensors = [
+        SensorConstraint(
+            name=f"sensor:{j}",
+            joint=j,
+            position=rest[sk.JOINT_INDEX[j]] + rng.normal(0, 0.05, 3),
+            rotation=_unit(rng.normal(size=4)),
+        )
+        for j in ("upperneck", "lwrist", "rwrist")
+    ]
     smooth = SmoothConstraint(weight=30.0)
     smooth.set_history(rest + rng.normal(0, 0.03, rest.shape), rest)
     ground = GroundConstraint(weight=80.0, low=0.3, high=0.35)
     terms = [*sensors, smooth, ground]
     head = sk.JOINT_INDEX["upperneck"]
-    ctx = FrameContext(RootFrame(torch.tensor([1.0, 0, 0, 0]), torch.tensor([0.0, 0.0, 0.95])),
-                       root_anchor=RootAnchor(head, torch.as_tensor(sensors[0].position, dtype=torch.float32))
-                       if anchor else None)  # fmt: skip
+    ctx = FrameContext(
+        RootFrame(torch.tensor([1.0, 0, 0, 0]), torch.tensor([0.0, 0.0, 0.95])),
+        root_anchor=RootAnchor(head, torch.as_tensor(sensors[0].position, dtype=torch.float32)) if anchor else None,
+    )
     settings = OptimizerSettings(iterations=1, optimizer="sgd", step_size=1.0)
     fast = PoseOptimizer(models.vae, offsets, settings)
     ref = PoseOptimizer(models.vae, offsets, settings, fast=False)
@@ -165,8 +184,10 @@ def test_reach_puts_the_end_joint_on_a_reachable_target_and_keeps_its_rotation()
     wrist, ankle = sk.JOINT_INDEX["lwrist"], sk.JOINT_INDEX["rankle"]
     shoulder, hip = sk.JOINT_INDEX["lshoulder"], sk.JOINT_INDEX["rhip"]
     # pulled towards the limb root (so within reach) and sideways
-    targets = {wrist: pos[wrist] + 0.2 * (pos[shoulder] - pos[wrist]) + [0.0, 0.03, 0.0],
-               ankle: pos[ankle] + 0.15 * (pos[hip] - pos[ankle]) + [0.03, 0.0, 0.0]}  # fmt: skip
+    targets = {
+        wrist: pos[wrist] + 0.2 * (pos[shoulder] - pos[wrist]) + [0.0, 0.03, 0.0],
+        ankle: pos[ankle] + 0.15 * (pos[hip] - pos[ankle]) + [0.03, 0.0, 0.0],
+    }
     new, new_pos = reach(local, root, skel.offsets, targets)
     _, new_world = fk(new, root, skel.offsets)
     for j, t in targets.items():

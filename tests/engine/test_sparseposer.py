@@ -17,8 +17,17 @@ from engine.tracking import simulate
 from engine.training.sparseposer import SparsePoserTrainConfig, gen_loss, ik_losses, train_sparseposer
 from tests.engine.test_training import tiny_data  # noqa: F401  (fixture: a tiny prepared folder)
 
-TINY = ["window=16", "channels=[4, 6, 8]", "ik_hidden=16", "batch_size=4", "steps_per_epoch=3",
-        "loss_frames=8", "ik_frames=2", "val_windows=8", "minutes=0.0"]  # fmt: skip
+TINY = [
+    "window=16",
+    "channels=[4, 6, 8]",
+    "ik_hidden=16",
+    "batch_size=4",
+    "steps_per_epoch=3",
+    "loss_frames=8",
+    "ik_frames=2",
+    "val_windows=8",
+    "minutes=0.0",
+]
 
 
 def _tiny_model(window: int = 16) -> SparsePoser:

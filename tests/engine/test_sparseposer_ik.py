@@ -34,8 +34,9 @@ def test_realtime_outputs_are_the_last_frame_of_each_window_with_the_first_frame
 
 def test_limb_networks_alone_start_from_init_and_leave_the_generator(tiny_data, tmp_path):  # noqa: F811
     tiny = [s for s in TINY if not s.startswith("window")] + ["window=32"]
-    meta = train_sparseposer(tiny_data, tmp_path / "joint", load_config(SparsePoserTrainConfig, None, tiny, epochs=1),
-                             progress=False)  # fmt: skip
+    meta = train_sparseposer(
+        tiny_data, tmp_path / "joint", load_config(SparsePoserTrainConfig, None, tiny, epochs=1), progress=False
+    )
     assert meta["finished"]
     init = tmp_path / "joint" / "sparseposer.pt"
     cfg = load_config(SparsePoserTrainConfig, None, tiny + ["train_generator=false", f"init={init}"], epochs=2)

@@ -122,8 +122,13 @@ def test_the_child_exits_when_its_parent_dies(tmp_path):
         "from engine.studio.process import EngineProcess\n"
         "e = EngineProcess(); e.start(); print(e._process.pid, flush=True); time.sleep(60)\n"
     )
-    parent = subprocess.Popen([sys.executable, "-c", script], cwd=REPO, stdout=subprocess.PIPE, text=True,
-                              env={**os.environ, "PYTHONPATH": str(REPO)})  # fmt: skip
+    parent = subprocess.Popen(
+        [sys.executable, "-c", script],
+        cwd=REPO,
+        stdout=subprocess.PIPE,
+        text=True,
+        env={**os.environ, "PYTHONPATH": str(REPO)},
+    )
     child = int(parent.stdout.readline())
     assert alive(child)
     parent.kill()

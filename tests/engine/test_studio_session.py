@@ -266,11 +266,15 @@ def test_a_pose_window_scene_keeps_the_sensors_and_says_what_it_replaced(session
     assert session.sensors == before and session.preset == preset and session.frame == 17
     assert [x.name for x in session.constraints] == ["floor"]
     n = len(_pose_window_scene()["settings"])
-    assert said == (f"replaced the constraints (1) and the optimizer settings ({n}); kept the sensors and preset (the scene has none); "
-                    "its 2 keys are for the pose window and bake")  # fmt: skip
+    assert said == (
+        f"replaced the constraints (1) and the optimizer settings ({n}); kept the sensors and preset (the scene has none); "
+        "its 2 keys are for the pose window and bake"
+    )
     scene = {**session.to_scene(), "sensors": []}
     said = session.apply_scene(scene)
-    assert said == f"replaced the constraints (1), the optimizer settings ({len(scene['settings'])}) and the sensors (0)"
+    assert (
+        said == f"replaced the constraints (1), the optimizer settings ({len(scene['settings'])}) and the sensors (0)"
+    )
     assert session.sensors == {}
 
 

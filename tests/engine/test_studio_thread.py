@@ -69,8 +69,13 @@ def test_dragging_the_hip_target_moves_the_pose(engine):
     snap = newest(worker)
     seq, before = snap.seq, snap.positions.copy()
     session.drag_target("root", session.tracked_position("root", 0) + [0.0, 0.0, 0.3])
-    wait_for(lambda: worker.latest.seq > seq and worker.latest.target_positions.size and
-             abs(worker.latest.positions[0, 2] - before[0, 2] - 0.3) < 0.05)
+    wait_for(
+        lambda: (
+            worker.latest.seq > seq
+            and worker.latest.target_positions.size
+            and abs(worker.latest.positions[0, 2] - before[0, 2] - 0.3) < 0.05
+        )
+    )
 
 
 def w_presets():
@@ -323,8 +328,8 @@ def test_looping_does_not_skip_the_start_of_the_clip(synthetic_motion, pace):
         worker.submit(w.Play(1.0, True, pace))
         wait_for(lambda: 0 < worker.latest.frame < n - 5 and worker.latest.frame >= 6, timeout=20)
         worker.submit(w.Pause())
-        tail = method.frames[method.frames.index(n - 5):]
-        after_loop = tail[tail.index(0):]
+        tail = method.frames[method.frames.index(n - 5) :]
+        after_loop = tail[tail.index(0) :]
         assert after_loop[:6] == [0, 1, 2, 3, 4, 5], after_loop[:10]
 
 

@@ -33,7 +33,9 @@ def random_pose(seed: int) -> tuple[np.ndarray, np.ndarray]:
     rng = np.random.default_rng(seed)
     local = np.tile([1.0, 0.0, 0.0, 0.0], (22, 1)) + rng.normal(0, 0.3, (22, 4))
     local /= np.linalg.norm(local, axis=-1, keepdims=True)
-    pos, mats = fk_matrices(Q.to_matrix(torch.as_tensor(local)), torch.as_tensor(STAND), torch.as_tensor(sk.REST_OFFSETS))
+    pos, mats = fk_matrices(
+        Q.to_matrix(torch.as_tensor(local)), torch.as_tensor(STAND), torch.as_tensor(sk.REST_OFFSETS)
+    )
     return pos.numpy(), mats.numpy()
 
 
@@ -136,9 +138,16 @@ def test_solving_never_changes_a_constraint(kind, index):
     pos, mats, z, frame = _inputs(6)
     c = _example(kind, index)
     before = copy.deepcopy(c.to_dict())
-    state = PoseState(torch.as_tensor(pos), None, torch.zeros(22, 4, dtype=torch.float64), torch.as_tensor(z),
-                      torch.as_tensor(frame.previous_positions), 3, torch.as_tensor(frame.prediction),
-                      torch.as_tensor(mats))  # fmt: skip
+    state = PoseState(
+        torch.as_tensor(pos),
+        None,
+        torch.zeros(22, 4, dtype=torch.float64),
+        torch.as_tensor(z),
+        torch.as_tensor(frame.previous_positions),
+        3,
+        torch.as_tensor(frame.prediction),
+        torch.as_tensor(mats),
+    )
     c.loss(state), c.satisfied(state), c.gizmo(pos)
     for t in type(c).terms([c], frame):
         res = t.residual(NUMPY, pos[None], mats[None], z[None], jac=True)
@@ -178,9 +187,16 @@ def test_the_constraint_loss_is_the_term_on_the_state():
     pos, mats, z, frame = _inputs(7)
     for cls in REGISTRY.values():
         for c in cls.examples(random_pose(0)[0]):
-            state = PoseState(torch.as_tensor(pos), None, torch.zeros(22, 4, dtype=torch.float64), torch.as_tensor(z),
-                              torch.as_tensor(frame.previous_positions), 3, torch.as_tensor(frame.prediction),
-                              torch.as_tensor(mats))  # fmt: skip
+            state = PoseState(
+                torch.as_tensor(pos),
+                None,
+                torch.zeros(22, 4, dtype=torch.float64),
+                torch.as_tensor(z),
+                torch.as_tensor(frame.previous_positions),
+                3,
+                torch.as_tensor(frame.prediction),
+                torch.as_tensor(mats),
+            )
             (t,) = cls.terms([c], frame)
             P, W, Z = (a.numpy() for a in state_arrays(state))
             assert float(c.loss(state)) == pytest.approx(float(t.losses(t.residual(NUMPY, P, W, Z))[0, 0]), rel=1e-12)

@@ -153,8 +153,15 @@ def test_the_neighbour_count_can_be_chosen_per_lookup():
     assert not torch.allclose(one, bank.latent(joints, pos, rot))  # 0 / default: the bank's k = 3
 
 
-@pytest.mark.parametrize("joints", [("root", "upperneck", "lwrist", "rwrist"), ("upperneck", "lwrist", "rankle"),
-                                    ("rwrist", "root", "lankle"), BANK_JOINTS])  # fmt: skip
+@pytest.mark.parametrize(
+    "joints",
+    [
+        ("root", "upperneck", "lwrist", "rwrist"),
+        ("upperneck", "lwrist", "rankle"),
+        ("rwrist", "root", "lankle"),
+        BANK_JOINTS,
+    ],
+)
 def test_a_combination_looks_up_what_a_table_of_its_own_features_finds(joints):
     rng = np.random.default_rng(5)
     bank = _bank(rng, n=300, k=4)
@@ -214,8 +221,9 @@ def test_many_frames_at_once_find_what_one_frame_at_a_time_finds():
     assert bank.latent_frames(joints, pos[:0], rot[:0]).shape == (0, 24)
 
 
-@pytest.mark.parametrize("joints", [BANK_JOINTS, ("root", "upperneck", "lwrist", "rwrist"),
-                                    ("upperneck", "lwrist", "rwrist")])  # fmt: skip
+@pytest.mark.parametrize(
+    "joints", [BANK_JOINTS, ("root", "upperneck", "lwrist", "rwrist"), ("upperneck", "lwrist", "rwrist")]
+)
 def test_the_shipped_bank_finds_for_a_run_of_frames_the_bits_one_frame_at_a_time_finds(joints):
     bank = default_bank()
     if bank is None:

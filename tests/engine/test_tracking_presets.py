@@ -32,7 +32,9 @@ def test_issue_presets():
 def test_parse_custom_lists():
     assert P.parse_sensors("4") == P.PRESET_SENSORS["4"]
     assert P.parse_sensors(" root, lwrist:3 ,rwrist:6") == (
-        P.Sensor("root", dof=6), P.Sensor("lwrist", dof=3), P.Sensor("rwrist", dof=6)
+        P.Sensor("root", dof=6),
+        P.Sensor("lwrist", dof=3),
+        P.Sensor("rwrist", dof=6),
     )
 
 

@@ -120,8 +120,19 @@ def test_resume_never_runs_code_from_a_planted_checkpoint(tiny_data, run_a, tmp_
         if model == "vae":
             train_vae(tiny_data, out, _cfg(epochs=1, seed=3), resume=True, progress=False)
         else:
-            cfg = PredictorTrainConfig(d_model=16, heads=2, encoder_layers=1, decoder_layers=1, feedforward=32,
-                                       past=4, future=4, stride=2, batch_size=8, steps_per_epoch=1, epochs=1)  # fmt: skip
+            cfg = PredictorTrainConfig(
+                d_model=16,
+                heads=2,
+                encoder_layers=1,
+                decoder_layers=1,
+                feedforward=32,
+                past=4,
+                future=4,
+                stride=2,
+                batch_size=8,
+                steps_per_epoch=1,
+                epochs=1,
+            )
             train_predictor(tiny_data, run_a[0] / "vae.pt", out, cfg, resume=True, progress=False)
     assert not marker.exists(), "resuming ran code from the checkpoint"
 
@@ -142,8 +153,20 @@ def test_predictor_trains_on_vae_latents(tiny_data, run_a, tmp_path):
     from engine.models.loading import load_predictor
     from engine.training.predictor import PredictorTrainConfig, train_predictor
 
-    cfg = PredictorTrainConfig(d_model=16, heads=2, encoder_layers=1, decoder_layers=1, feedforward=32,
-                               past=4, future=4, stride=2, batch_size=8, steps_per_epoch=5, epochs=2, minutes=0.0)  # fmt: skip
+    cfg = PredictorTrainConfig(
+        d_model=16,
+        heads=2,
+        encoder_layers=1,
+        decoder_layers=1,
+        feedforward=32,
+        past=4,
+        future=4,
+        stride=2,
+        batch_size=8,
+        steps_per_epoch=5,
+        epochs=2,
+        minutes=0.0,
+    )
     meta = train_predictor(tiny_data, run_a[0] / "vae.pt", tmp_path / "pred", cfg, progress=False)
     assert meta["epochs"] == 2 and np.isfinite(meta["val_mse"]) and np.isfinite(meta["val_rollout_mse"])
     model, pmeta = load_predictor(tmp_path / "pred/predictor.pt")
@@ -154,29 +177,68 @@ def test_predictor_init_starts_from_a_predictor_file(tiny_data, run_a, tmp_path)
     from engine.models.loading import load_predictor
     from engine.training.predictor import PredictorTrainConfig, train_predictor
 
-    small = dict(d_model=16, heads=2, encoder_layers=1, decoder_layers=1, feedforward=32, past=4, future=4,
-                 stride=2, batch_size=8, steps_per_epoch=3, epochs=1, minutes=0.0)  # fmt: skip
+    small = dict(
+        d_model=16,
+        heads=2,
+        encoder_layers=1,
+        decoder_layers=1,
+        feedforward=32,
+        past=4,
+        future=4,
+        stride=2,
+        batch_size=8,
+        steps_per_epoch=3,
+        epochs=1,
+        minutes=0.0,
+    )
     train_predictor(tiny_data, run_a[0] / "vae.pt", tmp_path / "a", PredictorTrainConfig(**small), progress=False)
     frozen = dict(small, lr=0.0, lr_final=0.0, weight_decay=0.0, seed=7)
     init = str(tmp_path / "a/predictor.pt")
-    train_predictor(tiny_data, run_a[0] / "vae.pt", tmp_path / "i", PredictorTrainConfig(**frozen, init=init), progress=False)
-    a, b = load_predictor(tmp_path / "a/predictor.pt")[0].state_dict(), load_predictor(tmp_path / "i/predictor.pt")[0].state_dict()
-    assert all(torch.equal(a[k], b[k]) for k in a), "no learning: the init weights (and the same latents' stats) come out unchanged"
+    train_predictor(
+        tiny_data, run_a[0] / "vae.pt", tmp_path / "i", PredictorTrainConfig(**frozen, init=init), progress=False
+    )
+    a, b = (
+        load_predictor(tmp_path / "a/predictor.pt")[0].state_dict(),
+        load_predictor(tmp_path / "i/predictor.pt")[0].state_dict(),
+    )
+    assert all(torch.equal(a[k], b[k]) for k in a), (
+        "no learning: the init weights (and the same latents' stats) come out unchanged"
+    )
     train_predictor(tiny_data, run_a[0] / "vae.pt", tmp_path / "n", PredictorTrainConfig(**frozen), progress=False)
     c = load_predictor(tmp_path / "n/predictor.pt")[0].state_dict()
     assert not all(torch.equal(a[k], c[k]) for k in a), "without init the start is random"
     with pytest.raises(UserError, match="init .*architecture"):
-        train_predictor(tiny_data, run_a[0] / "vae.pt", tmp_path / "x",
-                        PredictorTrainConfig(**dict(frozen, d_model=8), init=init), progress=False)  # fmt: skip
+        train_predictor(
+            tiny_data,
+            run_a[0] / "vae.pt",
+            tmp_path / "x",
+            PredictorTrainConfig(**dict(frozen, d_model=8), init=init),
+            progress=False,
+        )
 
 
 @pytest.mark.slow
 def test_two_process_ddp_ranks_agree(tiny_data, tmp_path):
     out = tmp_path / "ddp"
     env = {**os.environ, "OMP_NUM_THREADS": "1"}
-    cmd = [sys.executable, "-m", "torch.distributed.run", "--standalone", "--nproc_per_node=2",
-           "-m", "engine.cli.main", "train", "vae", "--data", str(tiny_data), "--out", str(out),
-           "--epochs", "1", "--quiet"] + [a for s in TINY_VAE for a in ("--set", s)]  # fmt: skip
+    cmd = [
+        sys.executable,
+        "-m",
+        "torch.distributed.run",
+        "--standalone",
+        "--nproc_per_node=2",
+        "-m",
+        "engine.cli.main",
+        "train",
+        "vae",
+        "--data",
+        str(tiny_data),
+        "--out",
+        str(out),
+        "--epochs",
+        "1",
+        "--quiet",
+    ] + [a for s in TINY_VAE for a in ("--set", s)]
     proc = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=240)
     assert proc.returncode == 0, proc.stderr[-2000:]
     h0 = (out / "weights_rank0.sha256").read_text()

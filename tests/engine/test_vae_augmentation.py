@@ -29,8 +29,10 @@ def test_bones_scale_within_the_spread_alike_on_both_sides():
     assert ratio.min() >= 0.85 - 1e-9 and ratio.max() <= 1.15 + 1e-9
     assert ratio.std() > 0.05  # the factors do vary
     for a, c in sk.MIRROR_PAIRS:
-        torch.testing.assert_close(out["offsets"].norm(dim=-1)[:, sk.JOINT_INDEX[a]] / length[:, sk.JOINT_INDEX[a]],
-                                   out["offsets"].norm(dim=-1)[:, sk.JOINT_INDEX[c]] / length[:, sk.JOINT_INDEX[c]])
+        torch.testing.assert_close(
+            out["offsets"].norm(dim=-1)[:, sk.JOINT_INDEX[a]] / length[:, sk.JOINT_INDEX[a]],
+            out["offsets"].norm(dim=-1)[:, sk.JOINT_INDEX[c]] / length[:, sk.JOINT_INDEX[c]],
+        )
 
 
 def test_targets_and_encoder_input_follow_the_new_build():

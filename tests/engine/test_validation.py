@@ -15,25 +15,28 @@ from engine.validation import (
     ValidationError,
     check_fields,
     check_input_file,
-    check_output_path,  # fmt: skip
+    check_output_path,
     check_value,
     one_line,
 )
 
 
-@pytest.mark.parametrize("spec, value, reason", [
-    (CLI["seed"], -1, "out of range"),
-    (CLI["fps"], float("nan"), "not finite"),
-    (CLI["fps"], float("inf"), "not finite"),
-    (CLI["fps"], 1e-300, "out of range"),
-    (CLI["noise_pos"], -1.0, "out of range"),
-    (SETTINGS["threads"], 100_000, "out of range"),
-    (SETTINGS["past_window"], 1_000_000_000, "out of range"),
-    (Num(3, 6, integer=True), 6.5, "not a whole number"),
-    (CLI["lr"], 0.0, "out of range"),
-    (CLI["lr"], "abc", "not a number"),
-    (CLI["lr"], True, "not a number"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "spec, value, reason",
+    [
+        (CLI["seed"], -1, "out of range"),
+        (CLI["fps"], float("nan"), "not finite"),
+        (CLI["fps"], float("inf"), "not finite"),
+        (CLI["fps"], 1e-300, "out of range"),
+        (CLI["noise_pos"], -1.0, "out of range"),
+        (SETTINGS["threads"], 100_000, "out of range"),
+        (SETTINGS["past_window"], 1_000_000_000, "out of range"),
+        (Num(3, 6, integer=True), 6.5, "not a whole number"),
+        (CLI["lr"], 0.0, "out of range"),
+        (CLI["lr"], "abc", "not a number"),
+        (CLI["lr"], True, "not a number"),
+    ],
+)
 def test_numbers_outside_their_schema_are_one_line_naming_field_and_range(spec, value, reason):
     with pytest.raises(ValidationError) as err:
         check_value(spec, value, "somewhere.json", "field_x")
@@ -61,8 +64,13 @@ def test_fifo_device_symlink_loop_folder_and_size_are_refused_before_reading(tmp
     (tmp_path / "b.bvh").symlink_to(tmp_path / "a.bvh")
     big = tmp_path / "big.bvh"
     big.write_bytes(b"x" * 101)
-    cases = {fifo: "not a regular file", zero: "not a regular file", tmp_path / "a.bvh": "symbolic links",
-             tmp_path: "is a folder", tmp_path / "none.bvh": "cannot read BVH file: not found"}
+    cases = {
+        fifo: "not a regular file",
+        zero: "not a regular file",
+        tmp_path / "a.bvh": "symbolic links",
+        tmp_path: "is a folder",
+        tmp_path / "none.bvh": "cannot read BVH file: not found",
+    }
     for path, reason in cases.items():
         with pytest.raises(ValidationError, match=reason):
             check_input_file(path)  # returns at once: nothing is opened
@@ -84,11 +92,14 @@ def test_output_paths_are_checked_without_writing(tmp_path):
 
 
 # deep nesting, 5001-digit numbers and Latin-1 bytes: tests/engine/test_hardening_cli.py (scenes)
-@pytest.mark.parametrize("content, reason", [
-    (b'{"a": NaN}', "NaN is not a JSON number"),
-    (b'{"a": 1,}', ":1: invalid JSON"),
-    (b"{}" + b" " * 200, "larger than the limit of 100 bytes"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "content, reason",
+    [
+        (b'{"a": NaN}', "NaN is not a JSON number"),
+        (b'{"a": 1,}', ":1: invalid JSON"),
+        (b"{}" + b" " * 200, "larger than the limit of 100 bytes"),
+    ],
+)
 def test_read_json_turns_every_bad_document_into_one_line(tmp_path, content, reason, monkeypatch):
     from engine import validation
 

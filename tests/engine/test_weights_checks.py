@@ -40,13 +40,16 @@ def _cli(*argv: object, limit_bytes: int | None = None) -> subprocess.CompletedP
         pre = f"import resource; resource.setrlimit(resource.RLIMIT_AS, ({limit_bytes}, {limit_bytes}))\n"
     # The peak is read from VmHWM, which exec resets: ru_maxrss would carry the pytest
     # parent's resident size over the fork into the child's figure.
-    code = pre + ("import re, sys\nfrom engine.cli.main import main\ntry:\n    rc = main(sys.argv[1:])\n"
-                  "finally:\n    hwm = re.search(r'VmHWM:\\s+(\\d+)', open('/proc/self/status').read()).group(1)\n"
-                  "    print('maxrss_kb', hwm)\n"
-                  "sys.exit(rc)\n")  # fmt: skip
+    code = pre + (
+        "import re, sys\nfrom engine.cli.main import main\ntry:\n    rc = main(sys.argv[1:])\n"
+        "finally:\n    hwm = re.search(r'VmHWM:\\s+(\\d+)', open('/proc/self/status').read()).group(1)\n"
+        "    print('maxrss_kb', hwm)\n"
+        "sys.exit(rc)\n"
+    )
     env = {**os.environ, "PYTHONPATH": str(REPO)}
-    return subprocess.run([sys.executable, "-c", code, *map(str, argv)], capture_output=True, text=True, env=env,
-                          timeout=600)  # fmt: skip
+    return subprocess.run(
+        [sys.executable, "-c", code, *map(str, argv)], capture_output=True, text=True, env=env, timeout=600
+    )
 
 
 def _one_line(proc: subprocess.CompletedProcess, *needles: str) -> str:
@@ -97,12 +100,26 @@ def test_a_zip_with_a_newer_pickle_protocol_warns_nothing(tmp_path):
 def test_a_huge_config_in_a_tiny_file_allocates_nothing(tmp_path):
     """16 billion values described in 1 kB: refused with the config named, in the memory of
     an idle process (under a 4 GB address-space cap that the unchecked loader hits)."""
-    payload = {"kind": "vae", "format_version": 1, "state_dict": {}, "meta": {},
-               "config": {"latent": 24, "channels": [4000, 4000, 4000, 4000]}}  # fmt: skip
+    payload = {
+        "kind": "vae",
+        "format_version": 1,
+        "state_dict": {},
+        "meta": {},
+        "config": {"latent": 24, "channels": [4000, 4000, 4000, 4000]},
+    }
     torch.save(payload, tmp_path / "big.pt")
     assert (tmp_path / "big.pt").stat().st_size < 2000
-    proc = _cli("reconstruct", EX, "--out", tmp_path / "o.bvh", "--max-frames", "2", "--vae", tmp_path / "big.pt",
-                limit_bytes=4 << 30)  # fmt: skip
+    proc = _cli(
+        "reconstruct",
+        EX,
+        "--out",
+        tmp_path / "o.bvh",
+        "--max-frames",
+        "2",
+        "--vae",
+        tmp_path / "big.pt",
+        limit_bytes=4 << 30,
+    )
     _one_line(proc, "big.pt", "channels = [4000, 4000, 4000, 4000]", "do not fit")
     maxrss_mb = int(proc.stdout.split("maxrss_kb")[1].split()[0]) / 1024
     assert maxrss_mb < 1000, maxrss_mb  # importing torch and the CLI takes about 250 MB
@@ -155,10 +172,12 @@ def test_bad_configs_name_the_field(tmp_path, kind, change, words):
 def test_state_dict_entries_must_match_in_name_shape_and_dtype(tmp_path):
     payload = _payload("predictor")
     key = next(iter(payload["state_dict"]))
-    cases = [({key: payload["state_dict"][key].double()}, f"state_dict['{key}'] is torch.float64"),
-             ({key: "text"}, f"state_dict['{key}'] is a str, expected a tensor"),
-             ({key: torch.zeros(3)}, f"size mismatch for {key}"),
-             ({"extra.weight": torch.zeros(1)}, "Unexpected key(s) in state_dict: \"extra.weight\"")]  # fmt: skip
+    cases = [
+        ({key: payload["state_dict"][key].double()}, f"state_dict['{key}'] is torch.float64"),
+        ({key: "text"}, f"state_dict['{key}'] is a str, expected a tensor"),
+        ({key: torch.zeros(3)}, f"size mismatch for {key}"),
+        ({"extra.weight": torch.zeros(1)}, 'Unexpected key(s) in state_dict: "extra.weight"'),
+    ]
     for change, words in cases:
         bad = {**payload, "state_dict": {**payload["state_dict"], **change}}
         torch.save(bad, tmp_path / "p.pt")

@@ -20,8 +20,13 @@ def test_the_bank_latent_is_averaged_and_restarts_after_a_gap():
 
     f = ema.averaged(latent, 0.5)
     src = Source()
-    got = [f(src, 1, None, "bank"), f(src, 2, None, "bank"), f(src, 3, None, None), f(src, 4, None, "bank"),
-           f(src, 5, None, "bank")]  # fmt: skip
+    got = [
+        f(src, 1, None, "bank"),
+        f(src, 2, None, "bank"),
+        f(src, 3, None, None),
+        f(src, 4, None, "bank"),
+        f(src, 5, None, "bank"),
+    ]
     assert got[0][0].item() == 1.0 and got[1][0].item() == 2.0  # 0.5 * 1 + 0.5 * 3
     assert got[2][0] is None  # the predictor's turn: nothing averaged
     assert got[3][0].item() == 5.0 and got[4][0].item() == 6.0  # restarted after the gap

@@ -11,8 +11,7 @@ from .script_loader import load_script
 
 def test_frames_are_binned_by_their_coverage_distance():
     cc = load_script("ceiling_coverage")
-    rows = [{"err_cm": [1.0, 3.0, 10.0], "cover_cm": [1.0, 2.0, 20.0]},
-            {"err_cm": [5.0], "cover_cm": [7.0]}]
+    rows = [{"err_cm": [1.0, 3.0, 10.0], "cover_cm": [1.0, 2.0, 20.0]}, {"err_cm": [5.0], "cover_cm": [7.0]}]
     bins = cc.binned(rows)
     assert len(bins) == len(cc.BINS) - 1
     share, mean, n = zip(*bins)
@@ -23,10 +22,13 @@ def test_frames_are_binned_by_their_coverage_distance():
     assert np.isnan(bins[1][1])  # an empty bin has no mean
 
 
-@pytest.mark.parametrize("name, motion", [
-    ("HDM_bd_depositFloorR_001_120.amc", "depositFloorR"),
-    ("HDM_tr_elbowToKnee1RepsLelbowStart_002_120.amc", "elbowToKnee1RepsLelbowStart"),
-    ("other.bvh", "other"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "name, motion",
+    [
+        ("HDM_bd_depositFloorR_001_120.amc", "depositFloorR"),
+        ("HDM_tr_elbowToKnee1RepsLelbowStart_002_120.amc", "elbowToKnee1RepsLelbowStart"),
+        ("other.bvh", "other"),
+    ],
+)
 def test_hdm05_names_give_their_motion_class(name, motion):
     assert load_script("ceiling_coverage").hdm05_class(f"/data/hdm05/{name}") == motion

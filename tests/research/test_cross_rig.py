@@ -39,8 +39,15 @@ def every_pair(shared_mocap):
         clips = {p: load_motion(shared_mocap / p, strategy=CURRENT, max_frames=MAX_FRAMES) for p in paths}
         for a, b in itertools.combinations(paths, 2):
             aligned = align_clips(clips[a], clips[b])  # once for both: it costs as much as the rest
-            rows.append((take, a.split("/")[0], b.split("/")[0], difference(aligned),
-                         offset_ablation(clips[a], clips[b], aligned)))  # fmt: skip
+            rows.append(
+                (
+                    take,
+                    a.split("/")[0],
+                    b.split("/")[0],
+                    difference(aligned),
+                    offset_ablation(clips[a], clips[b], aligned),
+                )
+            )
     return rows
 
 
@@ -79,7 +86,9 @@ def test_knees_bend_alike_on_nine_takes_in_ten(cross_rig):
     pose and its copies bend them 7-9 degrees more in version 4, which leaves them as drawn
     (version 5 reads them straight: test_version_5_knees_bend_alike_on_the_daz_rig_too)."""
     for knee in ("lknee", "rknee"):
-        for pair in sorted({(a, b) for _, a, b, _ in cross_rig} - {(a, b) for _, a, b, _ in cross_rig if "daz" in a + b}):
+        for pair in sorted(
+            {(a, b) for _, a, b, _ in cross_rig} - {(a, b) for _, a, b, _ in cross_rig if "daz" in a + b}
+        ):
             v = _joint([r for r in cross_rig if (r[1], r[2]) == pair], knee)
             assert np.percentile(v, 90) <= 8.0 and np.median(v) <= 3.5, (knee, pair, np.round(np.sort(v)[-5:], 1))
 
@@ -111,7 +120,10 @@ def test_version_5_knees_bend_alike_on_the_daz_rig_too(daz_legs_v5):
     assert len(daz_legs_v5) == 2
     for pair, v in daz_legs_v5.items():
         knees, thighs = v[:, [1, 3]], v[:, [0, 2]]
-        assert np.percentile(knees, 90) <= 8.0 and np.median(knees) <= 3.5, (pair, np.round(np.sort(knees.ravel())[-5:], 1))
+        assert np.percentile(knees, 90) <= 8.0 and np.median(knees) <= 3.5, (
+            pair,
+            np.round(np.sort(knees.ravel())[-5:], 1),
+        )
         assert np.median(thighs) <= 6.0, (pair, round(float(np.median(thighs)), 1))
 
 
@@ -124,16 +136,23 @@ def test_version_5_toes_agree_on_the_daz_rig(daz_legs_v5):
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason=(
-    "most of the difference is a constant offset per joint (removed: 2.6-3.7 deg mean per pair of rigs, "
-    "test_what_varies_over_the_clip_is_small): hand direction and knuckle line (wrists 29-41 deg on the "
-    "Daz pairs), the Daz rig's missing toe (21-27), eye height (head 15-31), the head-frame rule (lower "
-    "neck 20-24); the Daz copies of 009_10 and 007_12 are other conversions (thighs 30-69 deg, 12-28 cm)"))
+@pytest.mark.xfail(
+    strict=True,
+    reason=(
+        "most of the difference is a constant offset per joint (removed: 2.6-3.7 deg mean per pair of rigs, "
+        "test_what_varies_over_the_clip_is_small): hand direction and knuckle line (wrists 29-41 deg on the "
+        "Daz pairs), the Daz rig's missing toe (21-27), eye height (head 15-31), the head-frame rule (lower "
+        "neck 20-24); the Daz copies of 009_10 and 007_12 are other conversions (thighs 30-69 deg, 12-28 cm)"
+    ),
+)
 def test_every_take_meets_the_cross_rig_targets(cross_rig):
     """Issue targets: mean local-rotation difference <= 3 deg, no joint's mean > 8 deg, and
     root-relative positions (one skeleton, one height) within 1.5 cm."""
-    bad = [(t, a, b, round(d.rot_mean, 1), d.rot_worst, round(d.pos_mean, 2)) for t, a, b, d in cross_rig
-           if d.rot_mean > 3 or d.rot_worst[1] > 8 or d.pos_mean > 1.5]  # fmt: skip
+    bad = [
+        (t, a, b, round(d.rot_mean, 1), d.rot_worst, round(d.pos_mean, 2))
+        for t, a, b, d in cross_rig
+        if d.rot_mean > 3 or d.rot_worst[1] > 8 or d.pos_mean > 1.5
+    ]
     assert not bad, f"{len(bad)} of {len(cross_rig)} pairs miss: {bad[:5]}"
 
 
@@ -163,14 +182,16 @@ def test_alignment_finds_the_offset_and_heading_of_a_copy():
     turn = Q.from_axis_angle(np.array([0.0, 0.0, 1.0]), np.radians(40.0))
     rot = clip.local_rot[7:].copy()
     rot[:, 0] = Q.mul(np.broadcast_to(turn, rot[:, 0].shape), rot[:, 0])
-    copy = Motion(rot, Q.rotate(np.broadcast_to(turn, clip.root_pos[7:].shape[:-1] + (4,)), clip.root_pos[7:]),
-                  fps=120.0)  # fmt: skip
+    copy = Motion(
+        rot, Q.rotate(np.broadcast_to(turn, clip.root_pos[7:].shape[:-1] + (4,)), clip.root_pos[7:]), fps=120.0
+    )
     d = compare_clips(clip, copy)
     assert d.shift == -7 and abs(d.heading_deg - 40.0) < 0.5
     assert d.rot_deg.max() < 0.1 and d.pos_cm.max() < 0.05
     bent = copy.local_rot.copy()
-    bent[:, sk.JOINT_INDEX["lelbow"]] = Q.mul(bent[:, sk.JOINT_INDEX["lelbow"]], Q.from_axis_angle(
-        np.array([0.0, 0.0, 1.0]), np.radians(10.0)))  # fmt: skip
+    bent[:, sk.JOINT_INDEX["lelbow"]] = Q.mul(
+        bent[:, sk.JOINT_INDEX["lelbow"]], Q.from_axis_angle(np.array([0.0, 0.0, 1.0]), np.radians(10.0))
+    )
     assert abs(compare_clips(clip, Motion(bent, copy.root_pos, fps=120.0)).rot_deg[sk.JOINT_INDEX["lelbow"]] - 10) < 0.5
 
 
@@ -220,8 +241,10 @@ def test_one_alignment_shared_by_the_difference_and_the_ablation_gives_their_own
     rot[:, knee] = Q.mul(rot[:, knee], Q.from_axis_angle(np.array([1.0, 0.0, 0.0]), np.radians(-8.0)))
     copy = Motion(rot, clip.root_pos[5:], fps=120.0)
     aligned = align_clips(clip, copy)
-    for shared, own in ((difference(aligned), compare_clips(clip, copy)),
-                        (offset_ablation(clip, copy, aligned), offset_ablation(clip, copy))):  # fmt: skip
+    for shared, own in (
+        (difference(aligned), compare_clips(clip, copy)),
+        (offset_ablation(clip, copy, aligned), offset_ablation(clip, copy)),
+    ):
         for f in dataclasses.fields(own):
             assert np.array_equal(getattr(shared, f.name), getattr(own, f.name)), f.name
     assert difference(aligned).rot_deg[knee] > 7.0  # the pair differs: the check above can fail
@@ -237,8 +260,12 @@ def test_daz_legs_drawn_bent_read_straight(shared_mocap, daz, other):
 
     ref = load_motion(shared_mocap / other, strategy=VERSION_5, max_frames=300)
     legs = [sk.JOINT_INDEX[j] for j in ("lhip", "lknee", "rhip", "rknee")]
-    diff = {v: compare_clips(load_motion(shared_mocap / f"cmu_daz_cgspeed/{daz}.bvh", strategy=VERSIONS[v], max_frames=300), ref)
-            for v in (4, 5)}  # fmt: skip
+    diff = {
+        v: compare_clips(
+            load_motion(shared_mocap / f"cmu_daz_cgspeed/{daz}.bvh", strategy=VERSIONS[v], max_frames=300), ref
+        )
+        for v in (4, 5)
+    }
     assert diff[4].rot_deg[legs].mean() > 6.0, np.round(diff[4].rot_deg[legs], 1)
     assert diff[5].rot_deg[legs].mean() < 4.0, np.round(diff[5].rot_deg[legs], 1)
     assert diff[5].pos_mean <= diff[4].pos_mean + 0.1
@@ -253,10 +280,19 @@ def test_toe_tips_on_the_sole_line_make_the_daz_toes_agree(shared_mocap):
     from research.retarget_compare import compare_clips
 
     toes = [sk.JOINT_INDEX["ltoe"], sk.JOINT_INDEX["rtoe"]]
-    clips = {(rig, v): load_motion(shared_mocap / path, strategy=VERSIONS[v], max_frames=300)
-             for rig, path in (("daz", "cmu_daz_cgspeed/07_03.bvh"), ("iclone", "cmu_iclone/007_03.bvh"),
-                               ("mb", "cmu_mb/07_03.bvh")) for v in (4, 5)}  # fmt: skip
+    clips = {
+        (rig, v): load_motion(shared_mocap / path, strategy=VERSIONS[v], max_frames=300)
+        for rig, path in (
+            ("daz", "cmu_daz_cgspeed/07_03.bvh"),
+            ("iclone", "cmu_iclone/007_03.bvh"),
+            ("mb", "cmu_mb/07_03.bvh"),
+        )
+        for v in (4, 5)
+    }
     daz = {v: compare_clips(clips["daz", v], clips["iclone", v]).rot_deg[toes] for v in (4, 5)}
-    assert daz[4].min() > 15.0 and (daz[5] < daz[4] / 2).all() and daz[5].mean() < 9.0, (daz[4].round(1), daz[5].round(1))
+    assert daz[4].min() > 15.0 and (daz[5] < daz[4] / 2).all() and daz[5].mean() < 9.0, (
+        daz[4].round(1),
+        daz[5].round(1),
+    )
     same = {v: compare_clips(clips["iclone", v], clips["mb", v]).rot_deg[toes] for v in (4, 5)}
     assert np.abs(same[5] - same[4]).max() < 1.5, (same[4].round(1), same[5].round(1))

@@ -8,8 +8,11 @@ from research.retarget_identity import differing
 
 
 def test_one_changed_bit_a_new_shape_and_a_missing_array_are_differences():
-    a = {"x|4|local_rot": np.array([[1.0, np.nan]]), "x|4|joints": np.array(["lhip", "|"]),
-         "x|4|offsets": np.zeros((2, 3))}  # fmt: skip
+    a = {
+        "x|4|local_rot": np.array([[1.0, np.nan]]),
+        "x|4|joints": np.array(["lhip", "|"]),
+        "x|4|offsets": np.zeros((2, 3)),
+    }
     same = {k: v.copy() for k, v in a.items()}
     assert differing(a, same) == []  # NaN equals NaN
     bit = dict(same, **{"x|4|local_rot": np.array([[np.nextafter(1.0, 2.0), np.nan]])})

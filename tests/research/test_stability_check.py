@@ -22,8 +22,7 @@ def _about(axis: int, deg: float) -> np.ndarray:
 def test_pelvis_angle_sees_a_flip_and_ignores_the_quaternion_sign():
     sc = _script()
     q = np.tile([1.0, 0.0, 0.0, 0.0], (3, 1))
-    turned = np.stack([[1.0, 0.0, 0.0, 0.0],
-                       _about(2, 30.0), _about(0, 175.0)])  # fmt: skip
+    turned = np.stack([[1.0, 0.0, 0.0, 0.0], _about(2, 30.0), _about(0, 175.0)])
     turned[0] *= -1.0  # the same rotation
     angle = sc.pelvis_angle_deg(q, turned)
     np.testing.assert_allclose(angle, [0.0, 30.0, 175.0], atol=1e-6)
@@ -38,8 +37,14 @@ def test_heading_ignores_lean_and_sees_a_turn_about_the_vertical():
     sc = _script()
     turn = lambda deg: Q.from_axis_angle(np.array([0.0, 0.0, 1.0]), np.radians(deg))  # noqa: E731
     lean = lambda axis, deg: Q.from_axis_angle(np.eye(3)[axis], np.radians(deg))  # noqa: E731
-    truth = np.stack([Q.mul(turn(30.0), lean(0, 65.0)), Q.mul(turn(30.0), lean(1, 65.0)), turn(30.0),
-                      Q.mul(turn(30.0), lean(0, 65.0))])  # fmt: skip
+    truth = np.stack(
+        [
+            Q.mul(turn(30.0), lean(0, 65.0)),
+            Q.mul(turn(30.0), lean(1, 65.0)),
+            turn(30.0),
+            Q.mul(turn(30.0), lean(0, 65.0)),
+        ]
+    )
     rec = np.stack([turn(30.0), turn(30.0), turn(-145.0), Q.mul(turn(100.0), lean(0, 10.0))])
     np.testing.assert_allclose(sc.pelvis_angle_deg(truth, rec)[:3], [65.0, 65.0, 175.0], atol=1e-6)
     heading = sc.heading_angle_deg(truth, rec)
@@ -73,9 +78,26 @@ def test_settings_reach_the_method():
 def test_main_on_an_explicit_file_writes_the_tables(tmp_path, monkeypatch, capsys):
     sc = _script()
     md, js = tmp_path / "t.md", tmp_path / "t.json"
-    monkeypatch.setattr(sys, "argv", ["stability_check.py", str(ROOT / "assets" / "clips" / "example.bvh"),
-                                      "--modes", "realtime", "--max-frames", "6", "--seeds", "1",
-                                      "--set", "iterations=2", "--markdown", str(md), "--json", str(js)])  # fmt: skip
+    monkeypatch.setattr(
+        sys,
+        "argv",
+        [
+            "stability_check.py",
+            str(ROOT / "assets" / "clips" / "example.bvh"),
+            "--modes",
+            "realtime",
+            "--max-frames",
+            "6",
+            "--seeds",
+            "1",
+            "--set",
+            "iterations=2",
+            "--markdown",
+            str(md),
+            "--json",
+            str(js),
+        ],
+    )
     code = sc.main()
     out = capsys.readouterr().out
     assert "clips/example" in out and code in (0, 1)

@@ -17,7 +17,9 @@ def test_target_list_rows_emit_their_edits_and_set_targets_is_silent(qtbot):
     t.clearAllRequested.connect(lambda: seen.append(("all",)))
     t.set_targets({"lwrist": (True, 1.0, False), "upperneck": (False, 4.0, True)})
     assert seen == [] and list(t.rows) == ["lwrist", "upperneck"]
-    assert t.rows["upperneck"]["label"].text() == "upperneck (+rotation)" and t.rows["upperneck"]["weight"].value() == 4.0
+    assert (
+        t.rows["upperneck"]["label"].text() == "upperneck (+rotation)" and t.rows["upperneck"]["weight"].value() == 4.0
+    )
     t.rows["lwrist"]["enabled"].setChecked(False)
     t.rows["lwrist"]["weight"].setValue(7.5)
     assert t.rows["upperneck"]["turn"].isChecked()
@@ -37,8 +39,15 @@ def test_key_strip_add_move_delete_length_rate_preview(qtbot):
     k.resize(600, 80)
     k.show()
     seen = []
-    for sig in (k.frameChanged, k.addRequested, k.deleteRequested, k.moveRequested, k.lengthChanged, k.fpsChanged,
-                k.interpolationChanged):  # fmt: skip
+    for sig in (
+        k.frameChanged,
+        k.addRequested,
+        k.deleteRequested,
+        k.moveRequested,
+        k.lengthChanged,
+        k.fpsChanged,
+        k.interpolationChanged,
+    ):
         sig.connect(lambda *a, s=sig: seen.append(a))
     k.previewRequested.connect(lambda: seen.append("preview"))
     k.set_state(61, 30.0, (0, 60), 0)
@@ -75,8 +84,9 @@ def _mouse(widget, kind, x, buttons):
     left = Qt.MouseButton.LeftButton
     button = left if kind != QMouseEvent.Type.MouseMove else Qt.MouseButton.NoButton
     y = widget.height() / 2
-    event = QMouseEvent(kind, QPointF(x, y), widget.mapToGlobal(QPointF(x, y)), button, buttons,
-                        Qt.KeyboardModifier.NoModifier)  # fmt: skip
+    event = QMouseEvent(
+        kind, QPointF(x, y), widget.mapToGlobal(QPointF(x, y)), button, buttons, Qt.KeyboardModifier.NoModifier
+    )
     QApplication.sendEvent(widget, event)
 
 

@@ -6,9 +6,15 @@ import subprocess
 import sys
 
 WIDGET_MODULES = (
-    "widgets.viewport", "widgets.timeline", "widgets.sensor_panel", "widgets.constraint_panel",
-    "widgets.plots", "widgets.latent_inspector", "widgets.optimizer_panel", "widgets.live_panel",
-)  # fmt: skip
+    "widgets.viewport",
+    "widgets.timeline",
+    "widgets.sensor_panel",
+    "widgets.constraint_panel",
+    "widgets.plots",
+    "widgets.latent_inspector",
+    "widgets.optimizer_panel",
+    "widgets.live_panel",
+)
 
 
 def _loaded_after(imports: tuple[str, ...], banned: tuple[str, ...]) -> list[str]:

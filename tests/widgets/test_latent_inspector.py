@@ -80,7 +80,9 @@ def test_strip_image_copies_even_a_contiguous_float_history():
     assert (image == 0).all() and lim > 0
 
 
-@pytest.mark.parametrize("x, m", [(0.0, 1e-6), (0.3, 0.5), (0.5, 0.5), (0.51, 1.0), (1.0, 1.0), (1.7, 2.0), (3.0, 5.0), (12.0, 20.0)])
+@pytest.mark.parametrize(
+    "x, m", [(0.0, 1e-6), (0.3, 0.5), (0.5, 0.5), (0.51, 1.0), (1.0, 1.0), (1.7, 2.0), (3.0, 5.0), (12.0, 20.0)]
+)
 def test_nice_ceil(x, m):
     assert nice_ceil(x) == pytest.approx(m)
 

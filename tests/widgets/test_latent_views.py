@@ -35,20 +35,34 @@ class Snap:
     extra: dict = field(default_factory=dict)
 
 
-def _snap(n: int = 40, flagged: tuple[int, ...] = (), seq: int = 1, frame: int | None = None,
-          ms: float = 2.0) -> Snap:  # fmt: skip
+def _snap(n: int = 40, flagged: tuple[int, ...] = (), seq: int = 1, frame: int | None = None, ms: float = 2.0) -> Snap:
     """Frames 0..n-1 on a line across the map, frame ``frame`` (default last) on screen,
     each solved in ``ms`` (a solve's wall time tells its entry from an earlier solve's)."""
     xs = np.linspace(-2.0, 2.0, n)
-    hist = tuple(HistoryEntry(f, 5, ms, {"total": 1.0}, np.full(24, 0.1 * f),
-                              {"x": xs[f], "y": 0.5 * xs[f], "nearest": 1.0 + 0.01 * f, "norm": 3.0,
-                               "predictor": 0.4, "flagged": float(f in flagged)})
-                 for f in range(n))  # fmt: skip
+    hist = tuple(
+        HistoryEntry(
+            f,
+            5,
+            ms,
+            {"total": 1.0},
+            np.full(24, 0.1 * f),
+            {
+                "x": xs[f],
+                "y": 0.5 * xs[f],
+                "nearest": 1.0 + 0.01 * f,
+                "norm": 3.0,
+                "predictor": 0.4,
+                "flagged": float(f in flagged),
+            },
+        )
+        for f in range(n)
+    )
     f = n - 1 if frame is None else frame
     r = hist[f].readouts
     path = np.array([[r["x"] - 0.6, r["y"] - 0.9], [r["x"] - 0.2, r["y"] - 0.3], [r["x"], r["y"]]])
-    view = LatentView(f, np.full(24, 0.1 * f), np.array([r["x"], r["y"]]), path, "predictor", r["nearest"], 3.0, 0.4,
-                      f in flagged)  # fmt: skip
+    view = LatentView(
+        f, np.full(24, 0.1 * f), np.array([r["x"], r["y"]]), path, "predictor", r["nearest"], 3.0, 0.4, f in flagged
+    )
     return Snap(seq, f, hist, view)
 
 
@@ -141,8 +155,17 @@ def _detail(influence: bool = True) -> LatentDetail:
     sweep = np.stack([np.stack([rest + [0, 0, 0.1 * o] for o in (-1, 0, 1)]) for _ in range(24)])
     motion = np.zeros((24, 22))
     motion[:, sk.JOINT_INDEX["lwrist"]] = 0.2
-    return LatentDetail(7, ("sensor:lwrist", "look_at", "temporal_prior"), forces, forces[..., :2], sweep, motion,
-                        "lwrist" if influence else "", np.arange(24.0) if influence else None, 800.0)  # fmt: skip
+    return LatentDetail(
+        7,
+        ("sensor:lwrist", "look_at", "temporal_prior"),
+        forces,
+        forces[..., :2],
+        sweep,
+        motion,
+        "lwrist" if influence else "",
+        np.arange(24.0) if influence else None,
+        800.0,
+    )
 
 
 def test_forces_bars_in_the_loss_plots_colours(qtbot):

@@ -52,9 +52,15 @@ def plots(qtbot):
 
 def _losses(n: int = 11) -> tuple[dict, ...]:
     """A frame like the screenshot's: total ~0.04, prior ~0.02, trackers ~0.003-0.006."""
-    return tuple({"total": 0.045 - 0.0015 * i, "temporal_prior": 0.022 - 0.0006 * i,
-                  "sensor:upperneck": 0.006 - 0.0001 * i, "sensor:lwrist": 0.0035}
-                 for i in range(n))  # fmt: skip
+    return tuple(
+        {
+            "total": 0.045 - 0.0015 * i,
+            "temporal_prior": 0.022 - 0.0006 * i,
+            "sensor:upperneck": 0.006 - 0.0001 * i,
+            "sensor:lwrist": 0.0035,
+        }
+        for i in range(n)
+    )
 
 
 def assert_readable(plot, at_least: int) -> list[str]:

@@ -21,8 +21,11 @@ def test_one_curve_per_method_restarting_when_playback_jumps(qtbot, fake_snapsho
     gt = base.ground_truth
     for f in range(5):
         ghosts = {"ik": gt + [0.01 * f, 0, 0], "rpm": gt + [0, 0.05, 0]}
-        p.update_snapshot(fake_snapshot(seq=f + 1, frame=f, positions=gt + [0.02, 0, 0], ghosts=ghosts,
-                                        ground_truth=gt, method="dragposer"))  # fmt: skip
+        p.update_snapshot(
+            fake_snapshot(
+                seq=f + 1, frame=f, positions=gt + [0.02, 0, 0], ghosts=ghosts, ground_truth=gt, method="dragposer"
+            )
+        )
     assert set(p.curves) == {"dragposer", "ik", "rpm"}
     x, y = p.curves["ik"].getData()
     np.testing.assert_allclose(x, range(5))
@@ -41,8 +44,9 @@ def test_curves_restart_when_the_engine_history_restarts_unseen(qtbot, fake_snap
     qtbot.addWidget(p)
     gt = fake_snapshot().ground_truth
     for seq, frame in ((1, 0), (2, 1)):
-        p.update_snapshot(fake_snapshot(seq=seq, frame=frame, positions=gt, ground_truth=gt, method="dragposer",
-                                        history_run=1))  # fmt: skip
+        p.update_snapshot(
+            fake_snapshot(seq=seq, frame=frame, positions=gt, ground_truth=gt, method="dragposer", history_run=1)
+        )
     p.update_snapshot(fake_snapshot(seq=5, frame=10, positions=gt, ground_truth=gt, method="dragposer", history_run=2))
     assert sorted(p.data["dragposer"]) == [10]
     p.update_snapshot(fake_snapshot(seq=6, frame=11, positions=gt, ground_truth=gt, method="dragposer", history_run=2))

@@ -53,8 +53,19 @@ def test_constraint_panel_builds_editors_from_the_schema(qtbot):
         p.kinds.setCurrentText("pin")
         p.add_button.click()
     assert sig.args == ["pin"]
-    p.set_constraints([{"kind": "pin", "name": "pin1", "weight": 1.0, "enabled": True,
-                        "joint": "lwrist", "target": [0.0, 0.0, 1.0], "radius": 0.1}])  # fmt: skip
+    p.set_constraints(
+        [
+            {
+                "kind": "pin",
+                "name": "pin1",
+                "weight": 1.0,
+                "enabled": True,
+                "joint": "lwrist",
+                "target": [0.0, 0.0, 1.0],
+                "radius": 0.1,
+            }
+        ]
+    )
     editor = p.editor
     assert editor is not None and editor.inputs["joint"].currentText() == "lwrist"
     with qtbot.waitSignal(p.changed) as sig:
@@ -126,14 +137,16 @@ def test_latent_debugger_needs_a_decoder(qtbot, fake_snapshot, can_decode):
 def _fields():
     from widgets.optimizer_panel import SettingField
 
-    return (SettingField("mode", "Mode", "choice", "realtime", choices=("realtime", "offline")),
-            SettingField("iterations", "Iterations", "int", 10, lo=1, hi=10_000),
-            SettingField("optimizer", "Update", "choice", "auto", choices=("sgd", "adam", "adam-carry")),
-            SettingField("lr", "Learning rate", "float", 0.05, lo=0, hi=10, open_lo=True, step=0.005),
-            SettingField("prior", "Prior", "choice", "predictor", choices=("predictor", "trackers")),
-            SettingField("root_anchor", "Anchor", "choice", "upperneck", choices=("upperneck", "none")),
-            SettingField("sensor_blend", "Blend", "float", 0.0, lo=0, hi=1e6, step=0.1, unit="s"),
-            SettingField("reach", "Reach", "bool", True))  # fmt: skip
+    return (
+        SettingField("mode", "Mode", "choice", "realtime", choices=("realtime", "offline")),
+        SettingField("iterations", "Iterations", "int", 10, lo=1, hi=10_000),
+        SettingField("optimizer", "Update", "choice", "auto", choices=("sgd", "adam", "adam-carry")),
+        SettingField("lr", "Learning rate", "float", 0.05, lo=0, hi=10, open_lo=True, step=0.005),
+        SettingField("prior", "Prior", "choice", "predictor", choices=("predictor", "trackers")),
+        SettingField("root_anchor", "Anchor", "choice", "upperneck", choices=("upperneck", "none")),
+        SettingField("sensor_blend", "Blend", "float", 0.0, lo=0, hi=1e6, step=0.1, unit="s"),
+        SettingField("reach", "Reach", "bool", True),
+    )
 
 
 def test_optimizer_panel_offers_the_engine_choices_and_emits_edits(qtbot):
@@ -154,8 +167,13 @@ def test_optimizer_panel_offers_the_engine_choices_and_emits_edits(qtbot):
     p.editors["lr"].setValue(0.2)
     p.editors["prior"].setCurrentText("trackers")
     p.editors["reach"].setChecked(True)
-    assert seen == [("optimizer", "adam-carry"), ("root_anchor", "none"), ("lr", pytest.approx(0.2)),
-                    ("prior", "trackers"), ("reach", True)]  # fmt: skip
+    assert seen == [
+        ("optimizer", "adam-carry"),
+        ("root_anchor", "none"),
+        ("lr", pytest.approx(0.2)),
+        ("prior", "trackers"),
+        ("reach", True),
+    ]
 
 
 def test_optimizer_panel_shows_the_given_fields_with_their_ranges_and_units(qtbot):
@@ -192,6 +210,7 @@ def test_a_zero_loss_term_leaves_a_gap_instead_of_stretching_the_log_axis(qtbot,
     losses = ({"total": 1.0, "pos:root": 0.0}, {"total": 0.1, "pos:root": 0.0})
     p.update_snapshot(fake_snapshot(losses=losses))
     p.grab()  # painting all-NaN curves on log axes must not warn (warnings are errors here)
+
     def drawn(curve) -> bool:
         return curve.yData is not None and bool(np.isfinite(np.asarray(curve.yData, float)).any())
 
@@ -304,15 +323,26 @@ def test_choice_and_joint_list_fields_are_edited_with_pickers(qtbot):
 
     schema = constraint_schema()
     p = _panel_in_window(qtbot, schema)
-    p.set_constraints([{"kind": "balance", "name": "b", "weight": 1.0, "enabled": True,
-                        "mode": "head_over_hip", "tolerance": 0.05}])  # fmt: skip
+    p.set_constraints(
+        [{"kind": "balance", "name": "b", "weight": 1.0, "enabled": True, "mode": "head_over_hip", "tolerance": 0.05}]
+    )
     mode = p.editor.inputs["mode"]
     assert [mode.itemText(i) for i in range(mode.count())] == ["head_over_hip", "com_over_feet"]
     with qtbot.waitSignal(p.changed) as sig:
         mode.setCurrentText("com_over_feet")
     assert sig.args == ["b", {"mode": "com_over_feet"}]
-    p.set_constraints([{"kind": "floor", "name": "f", "weight": 1.0, "enabled": True,
-                        "joints": ["lankle", "rankle"], "floor_height": 0.0}])  # fmt: skip
+    p.set_constraints(
+        [
+            {
+                "kind": "floor",
+                "name": "f",
+                "weight": 1.0,
+                "enabled": True,
+                "joints": ["lankle", "rankle"],
+                "floor_height": 0.0,
+            }
+        ]
+    )
     joints = p.editor.inputs["joints"]
     assert joints.joints() == ("lankle", "rankle")
     with qtbot.waitSignal(p.changed) as sig:
@@ -322,8 +352,15 @@ def test_choice_and_joint_list_fields_are_edited_with_pickers(qtbot):
 
 def test_the_editor_follows_edits_made_elsewhere_and_add_selects_the_new_constraint(qtbot):
     p = _panel_in_window(qtbot, SCHEMA)
-    pin = {"kind": "pin", "name": "pin1", "weight": 1.0, "enabled": True, "joint": "lwrist",
-           "target": [0.0, 0.0, 1.0], "radius": 0.1}  # fmt: skip
+    pin = {
+        "kind": "pin",
+        "name": "pin1",
+        "weight": 1.0,
+        "enabled": True,
+        "joint": "lwrist",
+        "target": [0.0, 0.0, 1.0],
+        "radius": 0.1,
+    }
     p.set_constraints([pin])
     seen = []
     p.changed.connect(lambda n, ch: seen.append((n, ch)))

@@ -73,9 +73,11 @@ def test_a_press_off_every_target_leaves_the_camera_to_the_user(viewport, fake_s
 
 
 def test_gizmos_follow_constraints(viewport, fake_snapshot):
-    gizmos = (("pin", PointGizmo([0, 0, 1], edit="target")),
-              ("bounds", BoxGizmo([-1, -1, 0], [1, 1, 2])),
-              ("look", LineGizmo([[0, 0, 1.6], [0, -2, 1.6]])))  # fmt: skip
+    gizmos = (
+        ("pin", PointGizmo([0, 0, 1], edit="target")),
+        ("bounds", BoxGizmo([-1, -1, 0], [1, 1, 2])),
+        ("look", LineGizmo([[0, 0, 1.6], [0, -2, 1.6]])),
+    )
     viewport.show_snapshot(fake_snapshot(gizmos=gizmos))
     assert set(viewport.gizmos.items) == {"pin", "bounds", "look"}
     viewport.show_snapshot(fake_snapshot(seq=2, gizmos=gizmos[1:]))
@@ -203,8 +205,9 @@ def test_ghost_legend_names_each_ghost_in_its_colour(viewport, fake_snapshot):
     assert [labels[n].GetInput() for n in ghosts] == ["- sparseposer", "- rpm"]
     for name in ghosts:
         assert labels[name].GetVisibility()
-        assert np.allclose(labels[name].GetTextProperty().GetColor(),
-                           viewport.ghosts.items[name].actors[0].GetProperty().GetColor())
+        assert np.allclose(
+            labels[name].GetTextProperty().GetColor(), viewport.ghosts.items[name].actors[0].GetProperty().GetColor()
+        )
     assert labels["sparseposer"].GetPosition()[1] > labels["rpm"].GetPosition()[1]  # listed top down
     viewport.show_snapshot(fake_snapshot(seq=3, ghosts={"rpm": ghosts["rpm"]}))
     assert not labels["sparseposer"].GetVisibility() and labels["rpm"].GetVisibility()
@@ -349,12 +352,18 @@ def test_a_bvh_dropped_on_the_3d_view_is_offered_to_the_window(viewport, qtbot, 
     mime = QMimeData()
     mime.setUrls([QUrl.fromLocalFile(str(path))])
     target = viewport.plotter  # the VTK widget fills the view: it is what a drop lands on
-    enter = QDragEnterEvent(target.rect().center(), Qt.DropAction.CopyAction, mime,
-                            Qt.MouseButton.NoButton, Qt.KeyboardModifier.NoModifier)
+    enter = QDragEnterEvent(
+        target.rect().center(), Qt.DropAction.CopyAction, mime, Qt.MouseButton.NoButton, Qt.KeyboardModifier.NoModifier
+    )
     QApplication.sendEvent(target, enter)
     assert enter.isAccepted()
-    drop = QDropEvent(QPointF(target.rect().center()), Qt.DropAction.CopyAction, mime,
-                      Qt.MouseButton.NoButton, Qt.KeyboardModifier.NoModifier)
+    drop = QDropEvent(
+        QPointF(target.rect().center()),
+        Qt.DropAction.CopyAction,
+        mime,
+        Qt.MouseButton.NoButton,
+        Qt.KeyboardModifier.NoModifier,
+    )
     with qtbot.waitSignal(viewport.filesDropped, timeout=1000) as sig:
         QApplication.sendEvent(target, drop)
     assert sig.args[0] == [str(path)]

@@ -15,8 +15,9 @@ import pyvista as pv
 import vtk
 
 
-def direct_colour_actor(plotter: Any, mesh: pv.PolyData, array: str, cells: bool = False,
-                        name: str | None = None, **props: float) -> vtk.vtkActor:  # fmt: skip
+def direct_colour_actor(
+    plotter: Any, mesh: pv.PolyData, array: str, cells: bool = False, name: str | None = None, **props: float
+) -> vtk.vtkActor:
     """Add ``mesh`` coloured by its uint8 ``array`` (RGB or RGBA per point, or per cell
     with ``cells``); ``props`` are ``vtkProperty`` setters (``line_width=3`` calls
     ``SetLineWidth(3)``, ``lighting=False`` calls ``SetLighting(False)``). Normals, when

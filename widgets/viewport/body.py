@@ -29,8 +29,14 @@ def _unit_capsule() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     lat = np.concatenate([np.linspace(-np.pi / 2, 0, CAP_RINGS + 1)[1:], np.linspace(0, np.pi / 2, CAP_RINGS + 1)[:-1]])
     along = np.repeat(np.r_[np.zeros(CAP_RINGS), np.ones(CAP_RINGS)], RING)
     lon = np.linspace(0, 2 * np.pi, RING, endpoint=False)
-    ring = np.stack([np.outer(np.cos(lat), np.cos(lon)), np.outer(np.cos(lat), np.sin(lon)),
-                     np.repeat(np.sin(lat)[:, None], RING, 1)], -1).reshape(-1, 3)  # fmt: skip
+    ring = np.stack(
+        [
+            np.outer(np.cos(lat), np.cos(lon)),
+            np.outer(np.cos(lat), np.sin(lon)),
+            np.repeat(np.sin(lat)[:, None], RING, 1),
+        ],
+        -1,
+    ).reshape(-1, 3)
     dirs = np.vstack([ring, [[0, 0, -1.0]], [[0, 0, 1.0]]])
     along = np.r_[along, 0.0, 1.0]
     bottom, top = len(ring), len(ring) + 1
@@ -81,8 +87,16 @@ class BodyActor:
         self.mesh = pv.PolyData(self._points(rest)[0], faces=faces)
         self.mesh.point_data["Normals"] = self._points(rest)[1]
         self.mesh.point_data.active_normals_name = "Normals"
-        self.actor = plotter.add_mesh(self.mesh, color=color, opacity=opacity, smooth_shading=False,
-                                      specular=0.25, pickable=False, reset_camera=False, name=f"{name}-mesh")  # fmt: skip
+        self.actor = plotter.add_mesh(
+            self.mesh,
+            color=color,
+            opacity=opacity,
+            smooth_shading=False,
+            specular=0.25,
+            pickable=False,
+            reset_camera=False,
+            name=f"{name}-mesh",
+        )
         self.shadow_mesh = self._shadow_disc()
         self.shadow = direct_colour_actor(plotter, self.shadow_mesh, "rgba", name=f"{name}-shadow", lighting=False)
         self.visible = True
@@ -150,4 +164,3 @@ class BodyActor:
             self.visible = visible
             self.actor.SetVisibility(visible)
             self.shadow.SetVisibility(visible)
-

@@ -24,5 +24,6 @@ class FloorGrid:
         pts = np.array(segs, float)
         lines = np.hstack([[2, i, i + 1] for i in range(0, len(pts), 2)])
         self.mesh = pv.PolyData(pts, lines=lines)
-        self.grid = plotter.add_mesh(self.mesh, color=style.FLOOR, line_width=1,
-                                     pickable=False, reset_camera=False, name="floor-grid")  # fmt: skip
+        self.grid = plotter.add_mesh(
+            self.mesh, color=style.FLOOR, line_width=1, pickable=False, reset_camera=False, name="floor-grid"
+        )

@@ -87,8 +87,7 @@ class GhostLayer:
         ``color_of(method name, index) -> hex colour``; methods keep their colour.
     """
 
-    def __init__(self, plotter: pv.Plotter,
-                 color_of: Callable[[str, int], str] = style.ghost_color) -> None:  # fmt: skip
+    def __init__(self, plotter: pv.Plotter, color_of: Callable[[str, int], str] = style.ghost_color) -> None:
         self.color_of = color_of
         self.renderer = vtk.vtkRenderer()
         window = plotter.render_window

@@ -92,9 +92,14 @@ class GizmoAdapter:
                 self.on_edit(self.name, {field: np.asarray(c, float)})
 
         self.widget = self.plotter.add_sphere_widget(
-            moved, center=tuple(center), radius=_HANDLE_RADIUS, color=style.GIZMO,
-            interaction_event="always", test_callback=False, style="wireframe",
-        )  # fmt: skip
+            moved,
+            center=tuple(center),
+            radius=_HANDLE_RADIUS,
+            color=style.GIZMO,
+            interaction_event="always",
+            test_callback=False,
+            style="wireframe",
+        )
         set_priority(self.widget, HANDLE_PRIORITY)
         self.widget.AddObserver("StartInteractionEvent", lambda *_: setattr(self, "dragging", True))
         self.widget.AddObserver("EndInteractionEvent", lambda *_: setattr(self, "dragging", False))
@@ -149,8 +154,13 @@ class PointAdapter(GizmoAdapter):
 
     def fits(self, gizmo: Gizmo) -> bool:
         old = self.gizmo
-        return (super().fits(gizmo) and isinstance(gizmo, PointGizmo) and isinstance(old, PointGizmo)
-                and gizmo.label == old.label and (gizmo.anchor is None) == (old.anchor is None))  # fmt: skip
+        return (
+            super().fits(gizmo)
+            and isinstance(gizmo, PointGizmo)
+            and isinstance(old, PointGizmo)
+            and gizmo.label == old.label
+            and (gizmo.anchor is None) == (old.anchor is None)
+        )
 
     def update(self, gizmo: PointGizmo) -> None:
         self.gizmo = gizmo
@@ -201,9 +211,13 @@ class BoxAdapter(GizmoAdapter):
         self._add_mesh(self.mesh, line_width=2)
         if gizmo.edit:
             self.widget = plotter.add_box_widget(
-                self._box_moved, bounds=self._bounds, factor=1.0,
-                rotation_enabled=False, color=style.GIZMO, interaction_event="end",
-            )  # fmt: skip
+                self._box_moved,
+                bounds=self._bounds,
+                factor=1.0,
+                rotation_enabled=False,
+                color=style.GIZMO,
+                interaction_event="end",
+            )
             set_priority(self.widget, BOX_PRIORITY)
 
     def _box_moved(self, box: pv.PolyData) -> None:
@@ -224,6 +238,4 @@ class BoxAdapter(GizmoAdapter):
 
 
 #: The adapter of each gizmo shape class (looked up along the shape's class hierarchy).
-GIZMO_ADAPTERS: dict[type[Gizmo], type[GizmoAdapter]] = {
-    a.shape: a for a in (PointAdapter, LineAdapter, BoxAdapter)
-}
+GIZMO_ADAPTERS: dict[type[Gizmo], type[GizmoAdapter]] = {a.shape: a for a in (PointAdapter, LineAdapter, BoxAdapter)}

@@ -33,9 +33,14 @@ class JointDragger:
     a target of ``sensors`` (:class:`widgets.viewport.sensors.SensorMarkers`), when given,
     is dragged through its own ``begin_drag``/``drag``/``end_drag``."""
 
-    def __init__(self, plotter: pv.Plotter, on_drag: Callable[[str, np.ndarray], None],
-                 sensors: Any = None, rings: Any = None,
-                 on_turn: Callable[[int, float, bool], None] | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        plotter: pv.Plotter,
+        on_drag: Callable[[str, np.ndarray], None],
+        sensors: Any = None,
+        rings: Any = None,
+        on_turn: Callable[[int, float, bool], None] | None = None,
+    ) -> None:
         self._plotter = plotter
         self._on_drag = on_drag
         self._sensors = sensors
@@ -92,8 +97,9 @@ class JointDragger:
                 self.move(x, y)
             else:
                 self._style.OnMouseMove()
-        elif event == "LeftButtonReleaseEvent" and (self.ring is not None or self.joint is not None
-                                                    or self.target is not None):  # fmt: skip
+        elif event == "LeftButtonReleaseEvent" and (
+            self.ring is not None or self.joint is not None or self.target is not None
+        ):
             self.release()
             self._take(event)
 

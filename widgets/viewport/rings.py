@@ -66,18 +66,27 @@ class RotationRings:
         for k in range(3):
             pts = circle(self.center, AXES[k], self.radius)
             mesh = pv.PolyData(pts, lines=np.r_[RING_POINTS + 1, np.arange(RING_POINTS), 0])
-            actor = plotter.add_mesh(mesh, color=COLOURS[k], style="wireframe", line_width=4,
-                                     render_lines_as_tubes=True, pickable=False, reset_camera=False,
-                                     name=f"ring-{k}")  # fmt: skip
+            actor = plotter.add_mesh(
+                mesh,
+                color=COLOURS[k],
+                style="wireframe",
+                line_width=4,
+                render_lines_as_tubes=True,
+                pickable=False,
+                reset_camera=False,
+                name=f"ring-{k}",
+            )
             actor.SetVisibility(False)
             self.meshes.append(mesh)
             self.actors.append(actor)
         # a cone pointing along -Y (the canonical front) from the origin, moved onto the head
-        self._arrow_mesh = pv.Cone(center=(0, -ARROW_AT - 0.05, 0), direction=(0, -1, 0), height=0.1, radius=0.03,
-                                   resolution=16)  # fmt: skip
+        self._arrow_mesh = pv.Cone(
+            center=(0, -ARROW_AT - 0.05, 0), direction=(0, -1, 0), height=0.1, radius=0.03, resolution=16
+        )
         self._arrow_rest = self._arrow_mesh.points.copy()
-        self.arrow = plotter.add_mesh(self._arrow_mesh, color="#f2f4f8", pickable=False, reset_camera=False,
-                                      name="facing")  # fmt: skip
+        self.arrow = plotter.add_mesh(
+            self._arrow_mesh, color="#f2f4f8", pickable=False, reset_camera=False, name="facing"
+        )
         self.arrow.SetVisibility(False)
         # a drag: the axis grabbed, the world point of the press on its plane
         self.axis: int | None = None

@@ -40,8 +40,7 @@ class SensorMarkers:
         Sphere radius, metres.
     """
 
-    def __init__(self, plotter: pv.Plotter, on_drag: Callable[[str, np.ndarray], None],
-                 radius: float = 0.045) -> None:  # fmt: skip
+    def __init__(self, plotter: pv.Plotter, on_drag: Callable[[str, np.ndarray], None], radius: float = 0.045) -> None:
         self._plotter = plotter
         self._on_drag = on_drag
         self.radius = radius
@@ -73,15 +72,22 @@ class SensorMarkers:
         lines = np.hstack([[2, i, i + 1] for i in range(0, len(pts), 2)])
         self._axes_mesh = pv.PolyData(pts, lines=lines)
         self._axes_mesh.cell_data["rgb"] = np.tile(_AXIS_RGB, (max(n, 1), 1))
-        self._axes_actor = direct_colour_actor(self._plotter, self._axes_mesh, "rgb", cells=True,
-                                               name="sensor-axes", line_width=3)  # fmt: skip
+        self._axes_actor = direct_colour_actor(
+            self._plotter, self._axes_mesh, "rgb", cells=True, name="sensor-axes", line_width=3
+        )
         self.joints, self._states = joints, ()
         self.positions = np.zeros((n, 3))
         if self.dragging not in joints:
             self.dragging = None
 
-    def update(self, joints: tuple[str, ...], positions: np.ndarray, rotations: np.ndarray,
-               connected: np.ndarray, show_axes: tuple[bool, ...] | None = None) -> None:  # fmt: skip
+    def update(
+        self,
+        joints: tuple[str, ...],
+        positions: np.ndarray,
+        rotations: np.ndarray,
+        connected: np.ndarray,
+        show_axes: tuple[bool, ...] | None = None,
+    ) -> None:
         """Place the targets: ``positions`` (S, 3) m, ``rotations`` (S, 4), ``connected`` (S,)."""
         if tuple(joints) != self.joints or self.mesh is None:
             self._rebuild(tuple(joints))
@@ -92,8 +98,9 @@ class SensorMarkers:
             i = self.joints.index(self.dragging)
             positions[i] = self.positions[i]
         self.positions = positions
-        self._set_states(tuple("dragged" if j == self.dragging else "connected" if c else "lost"
-                               for j, c in zip(joints, connected)))  # fmt: skip
+        self._set_states(
+            tuple("dragged" if j == self.dragging else "connected" if c else "lost" for j, c in zip(joints, connected))
+        )
         self._place()
         axes = np.eye(3) * AXIS_LENGTH
         tips = rotate(rotations[:, None, :], axes[None]) + positions[:, None, :]  # (S, 3, 3)

@@ -31,14 +31,33 @@ class SkeletonActor:
         Pixels (tubes and spheres are screen-space impostors).
     """
 
-    def __init__(self, plotter: pv.Plotter, color: str, opacity: float = 1.0,
-                 bone_width: float = 7.0, joint_size: float = 12.0, name: str = "skeleton") -> None:  # fmt: skip
+    def __init__(
+        self,
+        plotter: pv.Plotter,
+        color: str,
+        opacity: float = 1.0,
+        bone_width: float = 7.0,
+        joint_size: float = 12.0,
+        name: str = "skeleton",
+    ) -> None:
         self.mesh = _bones_polydata(sk.Skeleton.canonical().rest_positions())
         common = dict(color=color, opacity=opacity, pickable=False, reset_camera=False, lighting=True)
-        self.bones = plotter.add_mesh(self.mesh, style="wireframe", line_width=bone_width,
-                                      render_lines_as_tubes=True, name=f"{name}-bones", **common)  # fmt: skip
-        self.joints = plotter.add_mesh(self.mesh, style="points", point_size=joint_size,
-                                       render_points_as_spheres=True, name=f"{name}-joints", **common)  # fmt: skip
+        self.bones = plotter.add_mesh(
+            self.mesh,
+            style="wireframe",
+            line_width=bone_width,
+            render_lines_as_tubes=True,
+            name=f"{name}-bones",
+            **common,
+        )
+        self.joints = plotter.add_mesh(
+            self.mesh,
+            style="points",
+            point_size=joint_size,
+            render_points_as_spheres=True,
+            name=f"{name}-joints",
+            **common,
+        )
         self.visible = True
 
     def update(self, positions: np.ndarray | None) -> None:

@@ -82,8 +82,7 @@ class Viewport(QWidget):
         p.set_background(style.BACKGROUND_TOP)
         keep_key_lights(p.renderer)
         self.floor = FloorGrid(p)
-        self.ground_truth = SkeletonActor(p, style.GROUND_TRUTH, bone_width=4,
-                                          joint_size=8, name="ground-truth")  # fmt: skip
+        self.ground_truth = SkeletonActor(p, style.GROUND_TRUTH, bone_width=4, joint_size=8, name="ground-truth")
         self.reconstruction = SkeletonActor(p, style.RECONSTRUCTION, name="reconstruction")
         self.body = BodyActor(p, style.RECONSTRUCTION, name="body")
         self.body.set_visible(False)
@@ -93,8 +92,13 @@ class Viewport(QWidget):
         self.ghosts = GhostLayer(p)
         self.sensors = SensorMarkers(p, lambda j, pos: self.targetDragged.emit(j, pos))
         self.rings = RotationRings(p)
-        self.joints = JointDragger(p, lambda j, pos: self.jointDragged.emit(j, pos), self.sensors, self.rings,
-                                   lambda axis, angle, first: self.ringTurned.emit(axis, angle, first))  # fmt: skip
+        self.joints = JointDragger(
+            p,
+            lambda j, pos: self.jointDragged.emit(j, pos),
+            self.sensors,
+            self.rings,
+            lambda axis, angle, first: self.ringTurned.emit(axis, angle, first),
+        )
         self.gizmos = ConstraintGizmos(p, lambda n, changes: self.gizmoEdited.emit(n, changes))
         self._label = p.add_text("", position="upper_left", font_size=9, color="#d0d4dc")
         self._notice = p.add_text("", position="lower_edge", font_size=12, color="#ffe14d")
@@ -186,12 +190,17 @@ class Viewport(QWidget):
         self.decoded.update(snap.decoded)
         # a 3-DoF tracker has no orientation: axes on it would show a made-up one
         axes = None if self.oriented is None else tuple(j in self.oriented for j in snap.target_joints)
-        self.sensors.update(snap.target_joints, snap.target_positions, snap.target_rotations,
-                            snap.target_connected, axes)  # fmt: skip
+        self.sensors.update(
+            snap.target_joints, snap.target_positions, snap.target_rotations, snap.target_connected, axes
+        )
         self.gizmos.update(snap.gizmos)
         # ghosts are listed below this line by the ghost layer, each in its own colour
         has_gt = bool(np.all(np.isfinite(snap.ground_truth)))
-        gt = ("   ground truth (green)" if has_gt else "   no ground truth (tracker input)") if self.show_ground_truth else ""
+        gt = (
+            ("   ground truth (green)" if has_gt else "   no ground truth (tracker input)")
+            if self.show_ground_truth
+            else ""
+        )
         caption = f"{snap.method or 'method'} (orange){gt}"
         if caption != self._caption:  # a text change re-renders its glyphs: only on change
             self._caption = caption

@@ -66,8 +66,10 @@ class RigProfile:
 _TEXT_FIELDS = ("name", "description", "up", "forward")
 _BOOL_FIELDS = ("align", "root_channels_relative_to_offset", "straight_elbows", "straight_knees")
 _TABLE_FIELDS = ("joints", "landmarks")
-_NUMBERS = {"units_to_m": Num(1e-6, 1e3, open_lo=True, unit="metres per file unit"),
-            "skip_frames": Num(0, 1_000_000, integer=True)}  # fmt: skip
+_NUMBERS = {
+    "units_to_m": Num(1e-6, 1e3, open_lo=True, unit="metres per file unit"),
+    "skip_frames": Num(0, 1_000_000, integer=True),
+}
 
 
 def _read_toml(path: Path, what: str) -> dict:
@@ -77,8 +79,10 @@ def _read_toml(path: Path, what: str) -> dict:
     known = set(_TEXT_FIELDS) | set(_BOOL_FIELDS) | set(_TABLE_FIELDS) | set(_NUMBERS)
     unknown = sorted(set(data) - known)
     if unknown:
-        raise UserError(f"{path}: {what}: unknown field(s) {', '.join(shown(u) for u in unknown)}; "
-                        f"known: {', '.join(sorted(known))}")  # fmt: skip
+        raise UserError(
+            f"{path}: {what}: unknown field(s) {', '.join(shown(u) for u in unknown)}; "
+            f"known: {', '.join(sorted(known))}"
+        )
     for key in _TEXT_FIELDS:
         if key in data and not isinstance(data[key], str):
             raise UserError(f"{path}: {what}: field {key!r} must be a string, got {shown(data[key])}")
@@ -90,11 +94,12 @@ def _read_toml(path: Path, what: str) -> dict:
             data[key] = check_value(spec, data[key], f"{path}: {what}", key)
     for table in _TABLE_FIELDS:
         if table in data and not isinstance(data[table], dict):
-            raise UserError(f"{path}: {what}: [{table}] must be a table of names (canonical = \"source\")")
+            raise UserError(f'{path}: {what}: [{table}] must be a table of names (canonical = "source")')
         for k, v in data.get(table, {}).items():
             if not isinstance(v, str) or not v:
-                raise UserError(f"{path}: {what}: field '{table}.{k}' must be a joint name (a non-empty string), "
-                                f"got {shown(v)}")  # fmt: skip
+                raise UserError(
+                    f"{path}: {what}: field '{table}.{k}' must be a joint name (a non-empty string), got {shown(v)}"
+                )
     return data
 
 
@@ -155,9 +160,10 @@ def detect_rig(joint_names: list[str], source: str = "", profiles: list[RigProfi
     if closest is not None:
         missing = sorted(closest.required_names() - present)
         hint = f"; closest known rig {closest.name} lacks {', '.join(missing[:4])}{'...' if len(missing) > 4 else ''}"
-    raise RigError(f"{source or 'BVH'}: unknown skeleton ({len(joint_names)} joints, first: {first}){hint}; "
-                   f"known rigs: {', '.join(p.name for p in profiles)} (see docs/bvh.md)")
-
+    raise RigError(
+        f"{source or 'BVH'}: unknown skeleton ({len(joint_names)} joints, first: {first}){hint}; "
+        f"known rigs: {', '.join(p.name for p in profiles)} (see docs/bvh.md)"
+    )
 
 
 def resolve_rig(raw, rig_map: str | Path | None = None, profiles: list[RigProfile] | None = None) -> RigProfile:
@@ -174,8 +180,13 @@ def resolve_rig(raw, rig_map: str | Path | None = None, profiles: list[RigProfil
         if matches:
             return max(matches, key=lambda p: len(p.required_names()))
         auto = automap(names, raw.parents, raw.offsets, raw.end_sites, raw.path)
-        return _complete({"name": "auto", "joints": auto.joints, "landmarks": auto.landmarks}, raw,
-                         str(raw.path), auto.reasons, auto.folded)  # fmt: skip
+        return _complete(
+            {"name": "auto", "joints": auto.joints, "landmarks": auto.landmarks},
+            raw,
+            str(raw.path),
+            auto.reasons,
+            auto.folded,
+        )
     data = _read_toml(Path(rig_map), "rig mapping")
     if "joints" not in data or not isinstance(data["joints"], dict):
         raise UserError(f"{rig_map}: rig mapping lacks a [joints] table (canonical joint = source joint)")
@@ -197,8 +208,10 @@ def _complete(data: dict, raw, path: str, reasons: dict, folded: dict) -> RigPro
     joints = data["joints"]
     need = {"root", "lhip", "lknee", "lankle", "rhip", "rankle", "upperneck"}
     if not need <= set(joints) and not {"units_to_m", "up", "forward"} <= set(data):
-        raise RigError(f"{path}: cannot infer unit and up axis without {', '.join(sorted(need - set(joints)))} "
-                       "in [joints]; give units_to_m, up and forward")  # fmt: skip
+        raise RigError(
+            f"{path}: cannot infer unit and up axis without {', '.join(sorted(need - set(joints)))} "
+            "in [joints]; give units_to_m, up and forward"
+        )
     if "units_to_m" not in data:
         data["units_to_m"], reasons["units_to_m"] = infer_units(_leg_length(raw, joints))
     if "up" not in data or "forward" not in data:

@@ -41,8 +41,10 @@ from engine.errors import RigError
 _HELPER = re.compile(r"twist|roll|share|helper|nub|end$|top|dummy|^ik|pole|target", re.IGNORECASE)
 _FINGER = re.compile(r"thumb|index|middle|mid\d|ring|pinky|little|finger|carpal|palm", re.IGNORECASE)
 # all-lower-case names with a one-letter side prefix (``lhip``, ``rankle``)
-_LOWER_SIDE = re.compile(r"^([lr])(?=(hip|knee|ankle|foot|toe|thigh|shin|leg|upleg|clavicle|collar|shoulder|shldr|"
-                         r"arm|upperarm|forearm|elbow|wrist|hand)$)")
+_LOWER_SIDE = re.compile(
+    r"^([lr])(?=(hip|knee|ankle|foot|toe|thigh|shin|leg|upleg|clavicle|collar|shoulder|shldr|"
+    r"arm|upperarm|forearm|elbow|wrist|hand)$)"
+)
 _SIDE_TOKEN = {"l": "l", "left": "l", "r": "r", "right": "r"}
 
 
@@ -73,15 +75,17 @@ def split_name(name: str) -> tuple[str | None, str]:
         kept.append(t)
     word = "".join(kept)
     if side is None:
-        m = re.match(r"^(Left|Right|left|right|LEFT|RIGHT)(?=[A-Z_0-9]|$)", word) or re.match(r"^([lLrR])(?=[A-Z])", word)
+        m = re.match(r"^(Left|Right|left|right|LEFT|RIGHT)(?=[A-Z_0-9]|$)", word) or re.match(
+            r"^([lLrR])(?=[A-Z])", word
+        )
         if m:
             side = m.group(1)[0].lower()
-            word = word[m.end():]
+            word = word[m.end() :]
         else:
             m = re.search(r"(?<=[a-z0-9])(Left|Right|L|R)$", word) or re.match(_LOWER_SIDE, word)
             if m:
                 side = m.group(1)[0].lower()
-                word = word[: m.start()] + word[m.end(1):] if m.start() == 0 else word[: m.start()]
+                word = word[: m.start()] + word[m.end(1) :] if m.start() == 0 else word[: m.start()]
     return side, word.lower()
 
 
@@ -111,8 +115,11 @@ class _Tree:
         return [k for k, p in enumerate(self.parents) if p == j]
 
     def find(self, side: str | None, pred) -> list[int]:
-        hits = [j for j, (s, core) in enumerate(self.split)
-                if s == side and pred(core) and not self.is_helper(j) and not _FINGER.search(core)]  # fmt: skip
+        hits = [
+            j
+            for j, (s, core) in enumerate(self.split)
+            if s == side and pred(core) and not self.is_helper(j) and not _FINGER.search(core)
+        ]
         # keep the hit nearest the root (SMPL: left_ankle above left_foot)
         return [j for j in hits if not any(a in hits for a in self.ancestors(j))]
 
@@ -136,7 +143,9 @@ class _Tree:
         return None
 
 
-def automap(names, parents, offsets, end_sites: dict[int, np.ndarray] | None = None, source: str = "BVH") -> AutoMapping:
+def automap(
+    names, parents, offsets, end_sites: dict[int, np.ndarray] | None = None, source: str = "BVH"
+) -> AutoMapping:
     """Map a rig's joints onto the canonical skeleton (see the module docs).
 
     Raises :class:`RigError` naming the canonical joints it could not find and the
@@ -228,8 +237,11 @@ def automap(names, parents, offsets, end_sites: dict[int, np.ndarray] | None = N
         if len(eyes) == 1:
             m.landmarks[f"{s}_eye"] = t.names[eyes[0]]
         for lm, pat in (("index", r"index\D*1$|index$"), ("pinky", r"(pinky|little)\D*1$|(pinky|little)$")):
-            hits = [j for j, (side, core) in enumerate(t.split)
-                    if side == s and re.search(pat, core) and arms[s] in t.ancestors(j)]  # fmt: skip
+            hits = [
+                j
+                for j, (side, core) in enumerate(t.split)
+                if side == s and re.search(pat, core) and arms[s] in t.ancestors(j)
+            ]
             hits = [j for j in hits if not any(a in hits for a in t.ancestors(j))]
             if len(hits) == 1:
                 m.landmarks[f"{s}_{lm}"] = t.names[hits[0]]

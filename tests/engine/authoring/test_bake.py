@@ -42,8 +42,10 @@ def test_the_command_bakes_61_frames_at_30_fps_the_bytes_the_studio_exports(bake
 
 def test_bad_scenes_exit_2_naming_the_file_and_field(tmp_path, capsys):
     bad = tmp_path / "bad.json"
-    bad.write_text('{"format": "dragposer-scene", "version": 2, "animation": {"fps": 30, "frames": 10},'
-                   ' "keys": [{"frame": 12, "targets": {}}]}')  # fmt: skip
+    bad.write_text(
+        '{"format": "dragposer-scene", "version": 2, "animation": {"fps": 30, "frames": 10},'
+        ' "keys": [{"frame": 12, "targets": {}}]}'
+    )
     assert main(["bake", str(bad), "--out", str(tmp_path / "o.bvh"), "--no-progress"]) == 2
     err = capsys.readouterr().err
     assert "bad.json" in err and "keys[0]" in err and "frame" in err
@@ -110,8 +112,16 @@ def test_the_command_bakes_to_gltf_with_the_bvh_s_joints(baked, example_scene, t
 def test_bake_refuses_a_misspelt_key_naming_it_and_exits_non_zero(tmp_path, capsys):
     """``keys`` misspelt ``keyz`` read as absent would bake the animation without its keys and exit 0."""
     scene = tmp_path / "s.json"
-    scene.write_text(json.dumps({"format": "dragposer-scene", "version": 2, "animation": {"frames": 61},
-                                 "keyz": [{"frame": 0, "targets": {"lwrist": [0.3, -0.2, 1.2]}}]}))  # fmt: skip
+    scene.write_text(
+        json.dumps(
+            {
+                "format": "dragposer-scene",
+                "version": 2,
+                "animation": {"frames": 61},
+                "keyz": [{"frame": 0, "targets": {"lwrist": [0.3, -0.2, 1.2]}}],
+            }
+        )
+    )
     out = tmp_path / "o.bvh"
     assert main(["bake", str(scene), "--out", str(out), "--no-progress"]) == 2
     err = capsys.readouterr().err

@@ -100,16 +100,21 @@ def test_a_keyed_latent_bakes_as_the_pose_window_shows_that_key(vae):
 
 def test_pose_options_round_trip_and_bad_ones_name_the_file_and_field():
     base = {"format": "dragposer-scene", "version": 2, "animation": {"frames": 1}}
-    scene = authoring_from_dict({**base, "pose_options": {"crouch_share": 0.3, "reach_rounds": 2.0,
-                                                          "keep_trunk": True}}, "s.json")  # fmt: skip
+    scene = authoring_from_dict(
+        {**base, "pose_options": {"crouch_share": 0.3, "reach_rounds": 2.0, "keep_trunk": True}}, "s.json"
+    )
     assert scene.pose_options == PoseOptions(crouch_share=0.3, reach_rounds=2, keep_trunk=True)
     doc = authoring_to_dict(scene)
     assert doc["pose_options"] == {"crouch_share": 0.3, "reach_rounds": 2, "keep_trunk": True}
     assert authoring_from_dict(json.loads(json.dumps(doc))).pose_options == scene.pose_options
     assert "pose_options" not in authoring_to_dict(authoring_from_dict(base))  # defaults are not written
-    for bad, words in [({"crouch_share": 2}, ["crouch_share", "0-1"]), ({"plant_feet": 1}, ["plant_feet", "true"]),
-                       ({"reach_rounds": 1.5}, ["reach_rounds", "whole"]), ({"nope": 1}, ["nope"]),
-                       ([1], ["object"])]:  # fmt: skip
+    for bad, words in [
+        ({"crouch_share": 2}, ["crouch_share", "0-1"]),
+        ({"plant_feet": 1}, ["plant_feet", "true"]),
+        ({"reach_rounds": 1.5}, ["reach_rounds", "whole"]),
+        ({"nope": 1}, ["nope"]),
+        ([1], ["object"]),
+    ]:
         with pytest.raises(UserError) as err:
             authoring_from_dict({**base, "pose_options": bad}, "s.json")
         assert all(w in str(err.value) for w in ["s.json", "pose_options", *words]), str(err.value)

@@ -14,9 +14,23 @@ from engine.constraints import FloorConstraint, PinConstraint
 from engine.errors import UserError
 from engine.scene import save_scene, scene_from_dict
 
-V1 = {"format": "dragposer-scene", "version": 1, "settings": {"mode": "offline"},
-      "constraints": [{"kind": "pin", "name": "p", "weight": 2.0, "enabled": True, "joint": "lankle",
-                       "position": [0, 0, 0.1], "follow_previous": False, "tolerance": 0.01}]}  # fmt: skip
+V1 = {
+    "format": "dragposer-scene",
+    "version": 1,
+    "settings": {"mode": "offline"},
+    "constraints": [
+        {
+            "kind": "pin",
+            "name": "p",
+            "weight": 2.0,
+            "enabled": True,
+            "joint": "lankle",
+            "position": [0, 0, 0.1],
+            "follow_previous": False,
+            "tolerance": 0.01,
+        }
+    ],
+}
 
 
 def test_a_version_1_scene_still_loads_everywhere(tmp_path):
@@ -48,11 +62,18 @@ def test_an_authoring_scene_round_trips(tmp_path):
     scene = AuthoringScene(
         [FloorConstraint(name="floor", frames=(3, 9), blend_in=2)],
         animation=Animation(24.0, 40, "spherical"),
-        keys=[Key(30, {"rwrist": JointTarget("rwrist", [0.1, 0.2, 1.3], [0, 0, 0, 1], 4.0, False)},
-                  np.arange(24, dtype=np.float32), np.array([0.5, -1.0]), 90.0),
-              Key(2, {"lankle": JointTarget("lankle", [0, 0, 0.1])})],
+        keys=[
+            Key(
+                30,
+                {"rwrist": JointTarget("rwrist", [0.1, 0.2, 1.3], [0, 0, 0, 1], 4.0, False)},
+                np.arange(24, dtype=np.float32),
+                np.array([0.5, -1.0]),
+                90.0,
+            ),
+            Key(2, {"lankle": JointTarget("lankle", [0, 0, 0.1])}),
+        ],
         height=1.6,
-    )  # fmt: skip
+    )
     save_authoring(tmp_path / "a.json", scene)
     back = load_authoring(tmp_path / "a.json")
     assert [k.frame for k in back.keys] == [2, 30] and back.height == 1.6

@@ -52,8 +52,15 @@ def test_a_t_pose_standing_is_balanced_upright_and_within_every_limit():
     assert c.com[2] == pytest.approx(1.07, abs=0.05)  # about 57 % of the 1.87-m height
 
 
-@pytest.mark.parametrize("limb, upper, end", [("lknee", "lhip", "lankle"), ("rknee", "rhip", "rankle"),
-                                              ("lelbow", "lshoulder", "lwrist"), ("relbow", "rshoulder", "rwrist")])  # fmt: skip
+@pytest.mark.parametrize(
+    "limb, upper, end",
+    [
+        ("lknee", "lhip", "lankle"),
+        ("rknee", "rhip", "rankle"),
+        ("lelbow", "lshoulder", "lwrist"),
+        ("relbow", "rshoulder", "rwrist"),
+    ],
+)
 def test_a_knee_or_elbow_bent_backwards_is_flagged_and_bent_forwards_is_not(limb, upper, end):
     rest = M.flexion_deg(t_pose(), OFFSETS)[limb]
     for deg, flagged in ((-30.0, True), (-5.0, False), (60.0, False)):
@@ -133,8 +140,10 @@ def test_the_spread_is_each_pose_to_the_nearest_pose_of_another_take():
     assert ref.spread_summary()["p95_cm"] >= ref.spread_summary()["median_cm"] > 1.0
 
 
-needs_data = pytest.mark.skipif(not (MOCAP / R.VALIDATION_FILES[0]).is_file(),
-                                reason=f"needs the validation files in {MOCAP} (set DRAGPOSER_SHARED_DATA)")  # fmt: skip
+needs_data = pytest.mark.skipif(
+    not (MOCAP / R.VALIDATION_FILES[0]).is_file(),
+    reason=f"needs the validation files in {MOCAP} (set DRAGPOSER_SHARED_DATA)",
+)
 
 
 @needs_data
@@ -260,8 +269,23 @@ def test_bench_pose_tasks_prints_the_table_and_writes_json(vae, tmp_path, capsys
 
     monkeypatch.chdir(tmp_path)  # no ./prepared: the shipped validation poses are the reference
     out = tmp_path / "tasks.json"
-    assert main(["bench", "--pose-tasks", "--task", "head_turn", "--events", "4", "--reference-stride", "16",
-                 "--json", str(out)]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "bench",
+                "--pose-tasks",
+                "--task",
+                "head_turn",
+                "--events",
+                "4",
+                "--reference-stride",
+                "16",
+                "--json",
+                str(out),
+            ]
+        )
+        == 0
+    )
     text = capsys.readouterr().out
     assert "head_turn" in text and "pose-mode" in text and "9 validation files (shipped)" in text
     data = json.loads(out.read_text())
@@ -296,8 +320,25 @@ def test_bench_pose_tasks_bakes_the_task_s_scene_and_reports_pose_mode_s_pose(va
 
     monkeypatch.chdir(tmp_path)
     out = tmp_path / "tasks.json"
-    assert main(["bench", "--pose-tasks", "--task", "squat", "--method", "pose-mode", "--method", "bake",
-                 "--reference-stride", "16", "--json", str(out)]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "bench",
+                "--pose-tasks",
+                "--task",
+                "squat",
+                "--method",
+                "pose-mode",
+                "--method",
+                "bake",
+                "--reference-stride",
+                "16",
+                "--json",
+                str(out),
+            ]
+        )
+        == 0
+    )
     assert "knee" in capsys.readouterr().out
     mode, baked = json.loads(out.read_text())["tasks"]
     assert (mode["poser"], baked["poser"]) == ("pose-mode", "bake")

@@ -58,8 +58,9 @@ def test_keep_trunk_turns_a_leaned_back_spine_forward_and_keeps_the_wrists(vae):
     offsets = mode.character.skeleton.offsets
     start = mode.pose
     local = start.local_rot.copy()
-    local[J["lowerback"]] = QN.mul(QN.from_axis_angle(np.array([1.0, 0.0, 0.0]), np.radians(-25.0)),
-                                   local[J["lowerback"]])  # fmt: skip
+    local[J["lowerback"]] = QN.mul(
+        QN.from_axis_angle(np.array([1.0, 0.0, 0.0]), np.radians(-25.0)), local[J["lowerback"]]
+    )
     positions = fk(local, start.root_pos, offsets)[0]
     leaned = Pose(start.latent, local, start.root_pos.copy(), positions)
     assert _neck_forward(positions) < _neck_forward(start.positions) - 0.1

@@ -63,8 +63,14 @@ def test_floor_contact_stops_the_sliding_foot_and_the_rest_is_bit_identical(vae,
 def test_a_raised_hand_target_is_met_on_the_range(vae, sliding_clip):
     f0, f1 = 67, 73  # the body walks: a fixed point stays within reach for a few frames
     goal = sliding_clip.positions()[70, LWRIST] + [0.0, 0.0, 0.2]
-    edit = edit_range(vae, sliding_clip, f0, f1, [EndEffectorConstraint(name="hand", joint="lwrist",
-                                                                        position=goal, weight=10.0)], blend=5)  # fmt: skip
+    edit = edit_range(
+        vae,
+        sliding_clip,
+        f0,
+        f1,
+        [EndEffectorConstraint(name="hand", joint="lwrist", position=goal, weight=10.0)],
+        blend=5,
+    )
     pos = edit.motion.positions()
     assert np.linalg.norm(pos[f0 : f1 + 1, LWRIST] - goal, axis=-1).max() < 0.01
     assert np.array_equal(edit.motion.local_rot[: f0 - 5], sliding_clip.local_rot[: f0 - 5])
@@ -77,7 +83,9 @@ def test_bad_ranges_are_errors(vae, sliding_clip):
         edit_range(vae, sliding_clip, 0, len(sliding_clip), [])
 
 
-def contact_slide(before: Motion, after: Motion, joint: int, frames: range, floor: FloorConstraint) -> tuple[float, float]:
+def contact_slide(
+    before: Motion, after: Motion, joint: int, frames: range, floor: FloorConstraint
+) -> tuple[float, float]:
     """Mean horizontal step (m/frame) of ``joint`` before and after an edit, over the
     steps of ``frames`` where the clip has it down on both frames."""
     a, b = before.positions(), after.positions()
@@ -90,8 +98,9 @@ def contact_slide(before: Motion, after: Motion, joint: int, frames: range, floo
 
 @pytest.mark.shared_data
 @pytest.mark.parametrize("clip, start, end", [("cmu_iclone/005_04.bvh", 300, 360), ("cmu_mb/05_04.bvh", 530, 599)])
-def test_a_floor_contact_resolve_of_a_cmu_clip_pops_no_joint_and_slides_no_foot_more(vae, shared_mocap, clip, start,
-                                                                                        end):  # fmt: skip
+def test_a_floor_contact_resolve_of_a_cmu_clip_pops_no_joint_and_slides_no_foot_more(
+    vae, shared_mocap, clip, start, end
+):
     """A re-solve with floor contact made a joint jump 10-34 cm in a frame where
     the clip moves 5 cm, and planted toes slide 0.2 -> 2.5 cm/frame."""
     from engine.motion.retarget import load_motion

@@ -21,7 +21,8 @@ def same(a, b) -> bool:
     """Equal in every part but the constraint objects' identity (compared by value)."""
     d = differences(a, b)
     planted = [j for j, _ in a.planted] == [j for j, _ in b.planted] and all(
-        np.array_equal(p, q) for (_, p), (_, q) in zip(a.planted, b.planted))
+        np.array_equal(p, q) for (_, p), (_, q) in zip(a.planted, b.planted)
+    )
     constraints = [c.to_dict() for c in a.constraints] == [c.to_dict() for c in b.constraints]
     return not (d.joints or d.keys or d.pose or d.animation) and planted and constraints
 

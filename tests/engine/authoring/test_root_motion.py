@@ -31,9 +31,11 @@ def test_a_moved_and_turned_pose_is_the_same_pose_placed_elsewhere(vae):
 def test_a_bake_interpolates_the_keys_root_and_heading(vae):
     c = Character(vae, 1.75)
     z = c.mean_latent()
-    keys = [Key(0, latent=z, root=np.array([0.0, 0.0]), heading=0.0),
-            Key(20, latent=z, root=np.array([0.8, -0.4]), heading=170.0),
-            Key(40, latent=z, root=np.array([1.6, -0.4]), heading=-170.0)]  # fmt: skip
+    keys = [
+        Key(0, latent=z, root=np.array([0.0, 0.0]), heading=0.0),
+        Key(20, latent=z, root=np.array([0.8, -0.4]), heading=170.0),
+        Key(40, latent=z, root=np.array([1.6, -0.4]), heading=-170.0),
+    ]
     motion = bake(AuthoringScene(animation=Animation(30.0, 41, "cubic"), keys=keys, height=1.75), vae).motion
     root = motion.root_pos
     assert np.allclose(root[[0, 20, 40], :2], [[0, 0], [0.8, -0.4], [1.6, -0.4]], atol=1e-6)

@@ -45,7 +45,8 @@ def same(a, b) -> bool:
     """Two model states equal in every part (planted feet and pose arrays too)."""
     d = differences(a, b)
     planted = [j for j, _ in a.planted] == [j for j, _ in b.planted] and all(
-        np.array_equal(p, q) for (_, p), (_, q) in zip(a.planted, b.planted))
+        np.array_equal(p, q) for (_, p), (_, q) in zip(a.planted, b.planted)
+    )
     return not (d.joints or d.keys or d.pose or d.animation or d.constraints) and planted
 
 

@@ -13,8 +13,23 @@ from engine.cli.main import main
 def test_report_of_a_shared_clip(shared_mocap, tmp_path, capsys):
     clip = shared_mocap / "cmu_iclone" / "002_09.bvh"  # a validation file the models never saw
     out, js = tmp_path / "report.png", tmp_path / "report.json"
-    code = main(["latent", str(clip), "--sensors", "4", "--scene", "assets/scenes/look_floor_pin_distance.json",
-                 "--out", str(out), "--json", str(js), "--max-frames", "24", "--no-progress"])  # fmt: skip
+    code = main(
+        [
+            "latent",
+            str(clip),
+            "--sensors",
+            "4",
+            "--scene",
+            "assets/scenes/look_floor_pin_distance.json",
+            "--out",
+            str(out),
+            "--json",
+            str(js),
+            "--max-frames",
+            "24",
+            "--no-progress",
+        ]
+    )
     assert code == 0
     from matplotlib.image import imread
 
@@ -44,8 +59,9 @@ def test_a_method_without_a_latent_is_refused(tmp_path, capsys):
     assert not out.exists()
 
 
-@pytest.mark.parametrize(("flags", "message"), [(["--out", "r.jpg"], "PNG"),
-                                                (["--out", "r.png", "--vae", "x.pt"], "latent map belongs")])
+@pytest.mark.parametrize(
+    ("flags", "message"), [(["--out", "r.jpg"], "PNG"), (["--out", "r.png", "--vae", "x.pt"], "latent map belongs")]
+)
 def test_bad_options_are_user_errors(tmp_path, capsys, flags, message, monkeypatch):
     monkeypatch.chdir(tmp_path)
     from pathlib import Path

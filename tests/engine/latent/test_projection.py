@@ -51,7 +51,9 @@ def test_density_rows_are_y_and_columns_x():
     z, _ = _cloud()
     m = fit_map(z)
     xy = m.project(z)
-    inside = (xy[:, 0] >= m.extent[0]) & (xy[:, 0] <= m.extent[1]) & (xy[:, 1] >= m.extent[2]) & (xy[:, 1] <= m.extent[3])
+    inside = (
+        (xy[:, 0] >= m.extent[0]) & (xy[:, 0] <= m.extent[1]) & (xy[:, 1] >= m.extent[2]) & (xy[:, 1] <= m.extent[3])
+    )
     cols, _ = np.histogram(xy[inside, 0], bins=GRID, range=m.extent[:2])
     rows, _ = np.histogram(xy[inside, 1], bins=GRID, range=m.extent[2:])
     assert m.density.sum(0) == pytest.approx(cols)

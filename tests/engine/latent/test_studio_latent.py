@@ -28,8 +28,14 @@ def test_views_readouts_and_detail(clip):
     try:
         wait_for(lambda: worker.latest is not None and worker.latest.latent_view is not None, timeout=60)
         session.step(3)
-        wait_for(lambda: worker.latest.frame == 3 and worker.latest.latent_view is not None
-                 and worker.latest.latent_view.frame == 3, timeout=60)  # fmt: skip
+        wait_for(
+            lambda: (
+                worker.latest.frame == 3
+                and worker.latest.latent_view is not None
+                and worker.latest.latent_view.frame == 3
+            ),
+            timeout=60,
+        )
         snap = worker.latest
         v = snap.latent_view
         assert v.xy.shape == (2,) and v.path_xy is not None and v.path_xy.shape[1] == 2

@@ -16,8 +16,9 @@ from engine.tracker_io.trackers import TrackerMapping, TrackerSample
 
 
 def _frames_of(plan, start=0, stop=None, calibration=None):
-    samples = [TrackerSample(float(plan.times[i]), n, p, r)
-               for i in range(len(plan))[start:stop] for n, p, r in plan.frame(i)]  # fmt: skip
+    samples = [
+        TrackerSample(float(plan.times[i]), n, p, r) for i in range(len(plan))[start:stop] for n, p, r in plan.frame(i)
+    ]
     tracking, _ = replay(samples, TrackerMapping(), calibration)
     return tracking
 

@@ -67,7 +67,9 @@ def test_a_sender_without_time_gets_a_frame_per_burst(fps):
     asm, frames, fresh = _assemble(_stream("no-time", fps, 20))
     assert asm.shape == "no-time" and asm.untimed == 0
     times = np.array(list(frames))
-    np.testing.assert_allclose(times, np.arange(20) / fps + 2 * SPACING, atol=1e-9)  # first device's wire time (after OK, root)
+    np.testing.assert_allclose(
+        times, np.arange(20) / fps + 2 * SPACING, atol=1e-9
+    )  # first device's wire time (after OK, root)
     for i, got in enumerate(frames.values()):
         assert got == {n: i for n in NAMES}
     assert all(v == 6 for v in list(fresh.values())[2:])
@@ -171,7 +173,10 @@ def test_bundles_with_devices_waiting_and_split_bundles():
     p = [(head, np.zeros(3), IDENTITY), (hand, np.ones(3), IDENTITY)]
     split = encode_packets(1.0, p[:1], shape="bundle") + encode_packets(1.0, p[1:], shape="bundle")
     pieces = [pc for k, d in enumerate(split) for pc in asm.feed(decode_packet(d), T0 + k * 1e-4)]
-    assert [(pc.t, [x.tracker for x in pc.poses], pc.close) for pc in pieces] == [(1.0, [head], True), (1.0, [hand], True)]
+    assert [(pc.t, [x.tracker for x in pc.poses], pc.close) for pc in pieces] == [
+        (1.0, [head], True),
+        (1.0, [hand], True),
+    ]
     assert asm.shape == "bundle"
 
 
@@ -188,8 +193,10 @@ def test_a_device_on_pos_and_pos_local_is_not_a_repeat():
     frames = {}
     for i in range(5):
         w = T0 + i / 60.0
-        stream = [msg("/VMC/Ext/T", i / 60.0)] + [msg(a, "HMD", float(i), 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)
-                                                  for a in ("/VMC/Ext/Hmd/Pos", "/VMC/Ext/Hmd/Pos/Local")]  # fmt: skip
+        stream = [msg("/VMC/Ext/T", i / 60.0)] + [
+            msg(a, "HMD", float(i), 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)
+            for a in ("/VMC/Ext/Hmd/Pos", "/VMC/Ext/Hmd/Pos/Local")
+        ]
         for j, p in enumerate(stream):
             for pc in asm.feed(p, w + j * SPACING, w + j * SPACING):
                 frames.setdefault(round(pc.t * 60), []).extend(x.address for x in pc.poses)

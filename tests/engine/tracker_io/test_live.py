@@ -59,18 +59,47 @@ def test_cli_send_live_and_reconstruct_with_drops_and_noise(synthetic_motion, tm
     save_motion_bvh(clip, synthetic_motion)
     port = _free_port()
     stats, rec, out = tmp_path / "stats.json", tmp_path / "rec.jsonl", tmp_path / "live.bvh"
-    live, code = _run_live(["--listen", f"127.0.0.1:{port}", "--method", "ik", "--record", str(rec), "--out", str(out),
-                            "--json", str(stats), "--reference", str(clip), "--idle-stop", "0.7", "--duration", "30"])  # fmt: skip
+    live, code = _run_live(
+        [
+            "--listen",
+            f"127.0.0.1:{port}",
+            "--method",
+            "ik",
+            "--record",
+            str(rec),
+            "--out",
+            str(out),
+            "--json",
+            str(stats),
+            "--reference",
+            str(clip),
+            "--idle-stop",
+            "0.7",
+            "--duration",
+            "30",
+        ]
+    )
     import time
 
     time.sleep(1.5)  # the receiver binds before the method warms up; packets before that are lost anyway
-    assert main(["send", str(clip), "--to", f"127.0.0.1:{port}", "--drop", "0.05", "--noise-pos", "0.02",
-                 "--no-progress"]) == 0  # fmt: skip
+    assert (
+        main(["send", str(clip), "--to", f"127.0.0.1:{port}", "--drop", "0.05", "--noise-pos", "0.02", "--no-progress"])
+        == 0
+    )
     live.join(timeout=60)
     assert not live.is_alive() and code == [0]
     s = json.loads(stats.read_text())
-    for key in ("packets", "malformed_packets", "frames_received", "frames_solved", "frames_skipped",
-                "solved_fraction", "latency_ms", "tracker_error_cm", "reference"):  # fmt: skip
+    for key in (
+        "packets",
+        "malformed_packets",
+        "frames_received",
+        "frames_solved",
+        "frames_skipped",
+        "solved_fraction",
+        "latency_ms",
+        "tracker_error_cm",
+        "reference",
+    ):
         assert key in s
     assert 100 <= s["packets"] < 120 and s["frames_solved"] > 0 and s["latency_ms"]["p95"] > 0
     assert s["reference"]["pos_cm"] is not None and np.isfinite(s["reference"]["pos_cm"])
@@ -78,8 +107,25 @@ def test_cli_send_live_and_reconstruct_with_drops_and_noise(synthetic_motion, tm
     capsys.readouterr()
 
     off, offj = tmp_path / "off.bvh", tmp_path / "off.json"
-    assert main(["reconstruct", "--trackers", str(rec), "--out", str(off), "--method", "ik", "--reference",
-                 str(clip), "--json", str(offj), "--no-progress"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "reconstruct",
+                "--trackers",
+                str(rec),
+                "--out",
+                str(off),
+                "--method",
+                "ik",
+                "--reference",
+                str(clip),
+                "--json",
+                str(offj),
+                "--no-progress",
+            ]
+        )
+        == 0
+    )
     o = json.loads(offj.read_text())
     assert o["frames_solved"] == s["frames_received"]  # offline solves every received frame
     assert abs(o["reference"]["pos_cm"] - s["reference"]["pos_cm"]) < 3.0
@@ -92,13 +138,48 @@ def test_cli_live_on_separate_messages_solves_the_sent_frames(shape, fps, synthe
     save_motion_bvh(clip, synthetic_motion)
     port = _free_port()
     stats, rec = tmp_path / "stats.json", tmp_path / "rec.jsonl"
-    live, code = _run_live(["--listen", f"127.0.0.1:{port}", "--method", "ik", "--record", str(rec), "--fps", str(fps),
-                            "--json", str(stats), "--reference", str(clip), "--idle-stop", "0.7", "--duration", "30"])  # fmt: skip
+    live, code = _run_live(
+        [
+            "--listen",
+            f"127.0.0.1:{port}",
+            "--method",
+            "ik",
+            "--record",
+            str(rec),
+            "--fps",
+            str(fps),
+            "--json",
+            str(stats),
+            "--reference",
+            str(clip),
+            "--idle-stop",
+            "0.7",
+            "--duration",
+            "30",
+        ]
+    )
     import time
 
     time.sleep(1.5)
-    assert main(["send", str(clip), "--to", f"127.0.0.1:{port}", "--packets", shape, "--chatter", "--fps", str(fps),
-                 "--max-frames", "60", "--no-progress"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "send",
+                str(clip),
+                "--to",
+                f"127.0.0.1:{port}",
+                "--packets",
+                shape,
+                "--chatter",
+                "--fps",
+                str(fps),
+                "--max-frames",
+                "60",
+                "--no-progress",
+            ]
+        )
+        == 0
+    )
     live.join(timeout=60)
     assert code == [0]
     s = json.loads(stats.read_text())
@@ -111,8 +192,23 @@ def test_cli_live_on_separate_messages_solves_the_sent_frames(shape, fps, synthe
     out = capsys.readouterr().out
     assert "complete frames" in out and f"({shape})" in out
     offj = tmp_path / "off.json"
-    assert main(["reconstruct", "--trackers", str(rec), "--out", str(tmp_path / "off.bvh"), "--method", "ik",
-                 "--json", str(offj), "--no-progress"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "reconstruct",
+                "--trackers",
+                str(rec),
+                "--out",
+                str(tmp_path / "off.bvh"),
+                "--method",
+                "ik",
+                "--json",
+                str(offj),
+                "--no-progress",
+            ]
+        )
+        == 0
+    )
     assert json.loads(offj.read_text())["frames_solved"] == sent  # the recording holds the same frames
 
 
@@ -121,13 +217,42 @@ def test_cli_calibrates_a_scaled_wearer(synthetic_motion, tmp_path, capsys):
     save_motion_bvh(clip, synthetic_motion.slice(0, 30))
     port = _free_port()
     stats = tmp_path / "stats.json"
-    live, code = _run_live(["--listen", f"127.0.0.1:{port}", "--method", "ik", "--calibrate", "1",
-                            "--json", str(stats), "--idle-stop", "0.7", "--duration", "30"])  # fmt: skip
+    live, code = _run_live(
+        [
+            "--listen",
+            f"127.0.0.1:{port}",
+            "--method",
+            "ik",
+            "--calibrate",
+            "1",
+            "--json",
+            str(stats),
+            "--idle-stop",
+            "0.7",
+            "--duration",
+            "30",
+        ]
+    )
     import time
 
     time.sleep(1.5)
-    assert main(["send", str(clip), "--to", f"127.0.0.1:{port}", "--tpose", "1.2", "--scale", "1.1",
-                 "--hardware-offsets", "--no-progress"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "send",
+                str(clip),
+                "--to",
+                f"127.0.0.1:{port}",
+                "--tpose",
+                "1.2",
+                "--scale",
+                "1.1",
+                "--hardware-offsets",
+                "--no-progress",
+            ]
+        )
+        == 0
+    )
     live.join(timeout=60)
     assert code == [0]
     s = json.loads(stats.read_text())
@@ -138,15 +263,18 @@ def test_cli_calibrates_a_scaled_wearer(synthetic_motion, tmp_path, capsys):
     assert "calibrated (tpose" in capsys.readouterr().out
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["live", "--listen", "x"], "expected PORT or HOST:PORT"),
-    (["live", "--duration", "-1"], "--duration must be a positive"),
-    (["live", "--calibrate", "nan"], "--calibrate must be seconds"),
-    (["live", "--out", "take.fbx"], "'.fbx' is not a motion format this program writes; known: .bvh"),
-    (["send", "missing.bvh", "--to", "localhost"], "expected HOST:PORT"),
-    (["send", "missing.bvh", "--to", "127.0.0.1:9", "--drop", "2"], "--drop must be in"),
-    (["reconstruct", "--out", "x.bvh"], "give IN.bvh or --trackers"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["live", "--listen", "x"], "expected PORT or HOST:PORT"),
+        (["live", "--duration", "-1"], "--duration must be a positive"),
+        (["live", "--calibrate", "nan"], "--calibrate must be seconds"),
+        (["live", "--out", "take.fbx"], "'.fbx' is not a motion format this program writes; known: .bvh"),
+        (["send", "missing.bvh", "--to", "localhost"], "expected HOST:PORT"),
+        (["send", "missing.bvh", "--to", "127.0.0.1:9", "--drop", "2"], "--drop must be in"),
+        (["reconstruct", "--out", "x.bvh"], "give IN.bvh or --trackers"),
+    ],
+)
 def test_cli_argument_errors(argv, message, capsys):
     assert main(argv) == 2
     assert message in capsys.readouterr().err

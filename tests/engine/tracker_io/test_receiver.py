@@ -137,8 +137,9 @@ def test_listen_address_parsing():
 
 @pytest.mark.parametrize("fps", [60.0, 90.0])
 @pytest.mark.parametrize("shape", ["time-first", "time-last", "no-time"])
-def test_separate_messages_make_the_sent_frames_and_the_recording_replays_to_them(shape, fps, synthetic_motion,
-                                                                                  tmp_path):  # fmt: skip
+def test_separate_messages_make_the_sent_frames_and_the_recording_replays_to_them(
+    shape, fps, synthetic_motion, tmp_path
+):
     """One message per datagram in real time, with /VMC/Ext/OK, root and bone chatter mixed in."""
     plan = plan_stream(synthetic_motion.slice(0, 24), "6", fps=fps)
     path = tmp_path / "rec.jsonl"
@@ -186,8 +187,9 @@ def test_completeness_shows_a_sender_that_leaves_a_device_out(receiver, sock):
 def test_send_drops_single_datagrams_of_separate_messages(sock, synthetic_motion):
     sock.bind(("127.0.0.1", 0))
     plan = plan_stream(synthetic_motion.slice(0, 40), "6")
-    st = send_stream(plan, "127.0.0.1", sock.getsockname()[1], fps=1000.0, drop=0.1, seed=2, shape="time-last",
-                     realtime=False)  # fmt: skip
+    st = send_stream(
+        plan, "127.0.0.1", sock.getsockname()[1], fps=1000.0, drop=0.1, seed=2, shape="time-last", realtime=False
+    )
     assert st.packets + st.packets_dropped == 40 * 7 and 0 < st.packets_dropped < 60
     assert st.sent + st.dropped == 40 and st.dropped <= st.packets_dropped
     with pytest.raises(UserError, match="--packets must be one of"):

@@ -21,8 +21,11 @@ def _samples(n: int = 5) -> list[TrackerSample]:
     for i in range(n):
         t = i / 60
         out.append(TrackerSample(t, "head", np.array([0.1 * i, 0.0, 1.6]), IDENT))
-        out.append(TrackerSample(t, "left_hand", np.array([0.3, -0.2, 1.0 + 0.01 * i]),
-                                 np.array([0.7071068, 0.0, 0.0, 0.7071068])))  # fmt: skip
+        out.append(
+            TrackerSample(
+                t, "left_hand", np.array([0.3, -0.2, 1.0 + 0.01 * i]), np.array([0.7071068, 0.0, 0.0, 0.7071068])
+            )
+        )
     return out
 
 
@@ -56,14 +59,17 @@ def test_streaming_writer_is_atomic(tmp_path):
     assert len(read_recording(path).samples) == 1 and len(list(tmp_path.iterdir())) == 1
 
 
-@pytest.mark.parametrize("line, message", [
-    ("not json", r":3: not JSON"),
-    ('{"t": "a", "tracker": "head", "pos": [0,0,0], "quat": [1,0,0,0]}', r":3: field 't'"),
-    ('{"t": 1, "tracker": "", "pos": [0,0,0], "quat": [1,0,0,0]}', r":3: field 'tracker'"),
-    ('{"t": 1, "tracker": "head", "pos": [0,0], "quat": [1,0,0,0]}', r":3: field 'pos' must be a list of 3"),
-    ('{"t": 1, "tracker": "head", "pos": [0,0,0], "quat": [0,0,0,0]}', r":3: field 'quat' is zero"),
-    ('{"t": 1, "tracker": "head", "pos": [0,0,0], "quat": [1,0,0,0], "valid": 1}', r":3: field 'valid'"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "line, message",
+    [
+        ("not json", r":3: not JSON"),
+        ('{"t": "a", "tracker": "head", "pos": [0,0,0], "quat": [1,0,0,0]}', r":3: field 't'"),
+        ('{"t": 1, "tracker": "", "pos": [0,0,0], "quat": [1,0,0,0]}', r":3: field 'tracker'"),
+        ('{"t": 1, "tracker": "head", "pos": [0,0], "quat": [1,0,0,0]}', r":3: field 'pos' must be a list of 3"),
+        ('{"t": 1, "tracker": "head", "pos": [0,0,0], "quat": [0,0,0,0]}', r":3: field 'quat' is zero"),
+        ('{"t": 1, "tracker": "head", "pos": [0,0,0], "quat": [1,0,0,0], "valid": 1}', r":3: field 'valid'"),
+    ],
+)
 def test_bad_lines_name_file_line_and_field(tmp_path, line, message):
     path = tmp_path / "bad.jsonl"
     good = json.dumps({"t": 0, "tracker": "head", "pos": [0, 0, 1], "quat": [1, 0, 0, 0]})
@@ -93,8 +99,12 @@ def test_a_unity_recording_is_converted_on_reading(tmp_path):
     pu, qu = from_project(p, q, "unity")
     head = {**header(60, TrackerMapping(), "x"), "convention": "unity"}
     path = tmp_path / "u.jsonl"
-    path.write_text(json.dumps(head) + "\n" + json.dumps({"t": 0, "tracker": "head", "pos": pu.tolist(),
-                                                          "quat": qu.tolist()}) + "\n")  # fmt: skip
+    path.write_text(
+        json.dumps(head)
+        + "\n"
+        + json.dumps({"t": 0, "tracker": "head", "pos": pu.tolist(), "quat": qu.tolist()})
+        + "\n"
+    )
     s = read_recording(path).samples[0]
     np.testing.assert_allclose(s.position, p, atol=1e-9)
     np.testing.assert_allclose(s.rotation, q, atol=1e-9)
@@ -156,16 +166,24 @@ def test_bad_files_are_refused_through_the_validation_layer(tmp_path, monkeypatc
     cases = {
         "cut.jsonl": (text[: len(text) - 20].encode(), r"cut.jsonl:4: not JSON"),
         "bin.jsonl": (text.encode()[:80] + b"\0\x01\x02" + text.encode()[80:], r"bin.jsonl:1: binary data"),
-        "latin.jsonl": (text.encode() + '{"tracker": "tête"}\n'.encode("latin-1"), r"latin.jsonl:5: not UTF-8 text \(byte 0xea\)"),
-        "long.jsonl": (text.encode() + b"[" * (validation.MAX_LINE_BYTES + 10), r"long.jsonl:5: line longer than 65,536 bytes"),
-    }  # fmt: skip
+        "latin.jsonl": (
+            text.encode() + '{"tracker": "tête"}\n'.encode("latin-1"),
+            r"latin.jsonl:5: not UTF-8 text \(byte 0xea\)",
+        ),
+        "long.jsonl": (
+            text.encode() + b"[" * (validation.MAX_LINE_BYTES + 10),
+            r"long.jsonl:5: line longer than 65,536 bytes",
+        ),
+    }
     for name, (data, message) in cases.items():
         (tmp_path / name).write_bytes(data)
         with pytest.raises(UserError, match=message):
             read_recording(tmp_path / name)
     monkeypatch.setitem(validation.MAX_BYTES, "tracker recording", 100)
     (tmp_path / "big.jsonl").write_text(text)
-    with pytest.raises(UserError, match=r"big.jsonl: cannot read tracker recording: \d+ bytes is larger than the limit of 100"):
+    with pytest.raises(
+        UserError, match=r"big.jsonl: cannot read tracker recording: \d+ bytes is larger than the limit of 100"
+    ):
         read_recording(tmp_path / "big.jsonl")
     with pytest.raises(UserError, match=r": cannot read tracker recording: is a folder"):
         read_recording(tmp_path)

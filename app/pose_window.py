@@ -87,6 +87,8 @@ class PoseWindow(QMainWindow):
         # the hips move on an upright plane: up and down the screen lowers or raises the
         # pelvis (a squat), sideways moves the body (AuthoringSession.drag_hips)
         self.viewport.joints.upright = frozenset({"root"})
+        # ... from the body's place, which a balanced crouch leaves in front of the pelvis
+        self.viewport.joints.drag_origin = lambda name: self.session.hips_handle() if name == "root" else None
         self.targets = TargetList()
         self.targets.enabledChanged.connect(lambda j, on: self.edit_target(j, enabled=on))
         self.targets.weightChanged.connect(lambda j, w: self.edit_target(j, weight=w))

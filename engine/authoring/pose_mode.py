@@ -190,12 +190,18 @@ class PoseMode:
         :data:`LOWEST_ROOT` of :attr:`standing_root` and :attr:`standing_root`. A pelvis
         dragged back up to standing height loses the target; one less than
         :data:`SQUAT_FROM` below it gets none, so the jitter of a level drag does not
-        crouch. The targets are solved from there."""
+        crouch. The targets are solved from there.
+
+        While crouching, the target's level part is where the body stands (the hips'
+        handle) and the pelvis balances around it (``PoseOptions.crouch_balance``): a
+        pelvis that the balance moved back keeps its offset from the handle, so a
+        straight-down drag does not pull it forward again."""
         p = np.asarray(position, float)
-        level = np.array([p[0] - self.pose.root_pos[0], p[1] - self.pose.root_pos[1], 0.0])
+        held = self.targets.get("root")
+        handle = self.hips_handle()
+        level = np.array([p[0] - handle[0], p[1] - handle[1], 0.0])
         standing = self._standing_root
         z = float(np.clip(p[2], LOWEST_ROOT * standing, standing))
-        held = self.targets.get("root")
         if np.any(level):
             solved, anchor = self.pose is self._solved, self.anchor
             self.pose = self.pose.moved(level)
@@ -205,10 +211,17 @@ class PoseMode:
         if held is not None and z >= standing:
             self.remove_target("root")
         elif held is not None or standing - z > SQUAT_FROM:
-            self.set_target("root", np.array([*self.pose.root_pos[:2], z]))
+            self.set_target("root", np.array([handle[0] + level[0], handle[1] + level[1], z]))
         if self.targets:
             self.solve()
         return self.pose
+
+    def hips_handle(self) -> np.ndarray:
+        """Where a drag of the hips starts (3,) metres, the point :meth:`drag_hips` moves:
+        the target on ``root`` while crouching (the body's level place at the pelvis's
+        height; the balanced pelvis sits behind it), else the pelvis."""
+        held = self.targets.get("root")
+        return np.asarray(held.position if held is not None else self.pose.root_pos, float).copy()
 
     # -- solving -------------------------------------------------------------------
     def _moved_feet(self) -> set[str]:
@@ -247,14 +260,19 @@ class PoseMode:
 
     def _where(self, adjust: bool = True) -> np.ndarray:
         """Where the root is held during the solve (3,) metres: a target on the root puts
-        it there; else, with ``adjust``, the crouch and balance steps move it (see
+        it there (while crouching, only at its height: the pelvis keeps its level place
+        and, with ``adjust``, takes the crouch's balance step from it); else, with ``adjust``, the crouch and balance steps move it (see
         :class:`PoseOptions`), which a solve without latent steps does not do, so that it
         only puts the limbs on their targets."""
         root = self.targets.get("root")
-        if root is not None and root.active:
-            return np.asarray(root.position, float).copy()
-        where = self.pose.root_pos.copy()
         o = self.options
+        if root is not None and root.active:
+            where = np.asarray(root.position, float).copy()
+            if o.crouch_balance and where[2] < self._standing_root - SQUAT_FROM:
+                # a crouching pelvis keeps its own level place, balanced from there
+                where[:2] = self.pose.root_pos[:2] + (self._balance_step(o.crouch_tolerance) if adjust else 0.0)
+            return where
+        where = self.pose.root_pos.copy()
         if not adjust:
             return where
         user = [t for t in self.targets.values() if t.active and t.joint != "root" and t.joint not in _FOOT_OF]
@@ -269,13 +287,22 @@ class PoseMode:
             )
             standing = self._standing_root
             where[2] = float(np.clip(where[2] + o.crouch_share * drop, LOWEST_ROOT * standing, standing))
-        if o.balance and o.plant_feet and not self._moved_feet():
-            feet = np.mean([p[:2] for p in self.planted.values()], axis=0)
-            off = feet - centre_of_mass(self.pose.positions)[:2]
-            dist = float(np.linalg.norm(off))
-            if dist > o.balance_tolerance:
-                where[:2] += o.balance_gain * off * (1.0 - o.balance_tolerance / dist)
+        where[:2] += self._balance_step(o.balance_tolerance)
         return where
+
+    def _balance_step(self, tolerance: float) -> np.ndarray:
+        """The level move (2,) metres of the pelvis that one solve makes towards balance
+        (see ``PoseOptions.balance``): none while a foot is dragged or the centre of mass
+        lies within ``tolerance`` metres of the middle of the planted feet."""
+        o = self.options
+        if not (o.balance and o.plant_feet) or self._moved_feet():
+            return np.zeros(2)
+        feet = np.mean([p[:2] for p in self.planted.values()], axis=0)
+        off = feet - centre_of_mass(self.pose.positions)[:2]
+        dist = float(np.linalg.norm(off))
+        if dist <= tolerance:
+            return np.zeros(2)
+        return o.balance_gain * off * (1.0 - tolerance / dist)
 
     def _arm_low_points(self) -> dict[int, float]:
         """Per wrist, the lowest height (metres) it reaches from its shoulder in the

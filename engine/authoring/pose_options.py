@@ -58,6 +58,16 @@ class PoseOptions:
         Distance (metres) from the middle of the feet within which the centre of mass is
         left where it is (well inside a standing support polygon), so a reach forward is
         not pulled back.
+    crouch_balance : bool
+        A pelvis lowered by a target on ``root`` (a squat) balances as a standing one
+        does: each solve moves it level by the balance step above, away from the level
+        place of its target, so the hips go back over the planted feet as they go down
+        and the shins stay steep, instead of sinking straight down with the knees far
+        ahead of the feet and the weight in front of the toes.
+    crouch_tolerance : float
+        The balance tolerance (metres) of a crouch: tighter than ``balance_tolerance``,
+        which leaves a reach forward alone, because a crouching body whose weight is
+        ahead of the middle of its feet stands on its toes.
     crouch_share : float
         Share of a dragged joint's downward distance to its target that the pelvis takes
         at the start of each solve (the planted legs bend under it), so a low reach
@@ -115,6 +125,8 @@ class PoseOptions:
     balance: bool = True
     balance_gain: float = _option(0.5, 0.0, 1.0)
     balance_tolerance: float = _option(0.10, 0.0, 1.0)
+    crouch_balance: bool = True
+    crouch_tolerance: float = _option(0.03, 0.0, 1.0)
     crouch_share: float = _option(0.5, 0.0, 1.0)
     crouch_below_reach: bool = True
     free_height: bool = False

@@ -133,7 +133,11 @@ def drag(poser, goal: Goal, offsets: np.ndarray, events: int = EVENTS, solve: di
 
 
 def goal_errors(pose, goals: list[Goal], offsets: np.ndarray) -> list[dict]:
-    """Each goal's error: ``{"joint", "kind": "position" | "turn", "error"}`` (cm or degrees)."""
+    """Each goal's error: ``{"joint", "kind": "position" | "turn", "error"}`` (cm or degrees).
+
+    A goal on the hips (``root``) is a height: the level place of a crouching body is
+    where its planted feet stand, and pose mode moves the pelvis level to balance over
+    them (``PoseOptions.crouch_balance``)."""
     world_rot = fk(pose.local_rot, pose.root_pos, offsets)[1]
     out = []
     for g in goals:
@@ -141,7 +145,8 @@ def goal_errors(pose, goals: list[Goal], offsets: np.ndarray) -> list[dict]:
             err = float(np.degrees(QN.angle(world_rot[J[g.joint]], g.rotation)))
             out.append({"joint": g.joint, "kind": "turn", "error": err})
         else:
-            err = 100.0 * float(np.linalg.norm(pose.positions[J[g.joint]] - g.position))
+            gap = pose.positions[J[g.joint]] - g.position
+            err = 100.0 * float(abs(gap[2]) if g.joint == "root" else np.linalg.norm(gap))
             out.append({"joint": g.joint, "kind": "position", "error": err})
     return out
 

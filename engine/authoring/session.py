@@ -182,6 +182,10 @@ class AuthoringSession:
         """The current pose's world rotation ``(4,)`` of ``joint``."""
         return world_rotation(self.mode.pose, self.mode.character.skeleton.offsets, joint)
 
+    def hips_handle(self) -> np.ndarray:
+        """Where a drag of the hips starts (:meth:`PoseMode.hips_handle`)."""
+        return self.mode.hips_handle()
+
     def drag_joint(self, joint: str, position: np.ndarray) -> None:
         """Create or move the target on ``joint`` to ``position (3,)`` metres and solve;
         the hips (``root``) move the whole body and the pelvis's height instead

@@ -39,24 +39,26 @@ def test_a_press_on_a_target_inside_its_rings_drags_the_target(pose_window):
 
 def test_dragging_the_hips_down_squats_over_the_planted_feet(pose_window):
     """Two real drags of the hips straight down the screen, 15 cm each (the second
-    starts on the hips inside their own ring): the pelvis goes 30 cm down, the
-    ankles stay where they stand, the knees bend, the body does not travel."""
+    starts on the hips, which the crouch's balance moved back, inside their own ring):
+    the pelvis goes 30 cm down, the ankles stay where they stand, the knees bend, the
+    body's place does not travel."""
     w = pose_window
     view = w.viewport
     feet = [sk.JOINT_INDEX[j] for j in ("lankle", "rankle")]
     knee, hip, ankle = (sk.JOINT_INDEX[j] for j in ("lknee", "lhip", "lankle"))
     before = w.mode.pose.positions.copy()
-    for k in (1, 2):
+    for _ in range(2):
         view.plotter.render()
         hips = w.mode.pose.positions[0]
         start = pixel_of(view, hips)
-        end = pixel_of(view, before[0] - [0.0, 0.0, 0.15 * k])
+        end = pixel_of(view, hips - [0.0, 0.0, 0.15])
         assert abs(end[0] - start[0]) < 1.0, "straight down the screen"
         mouse_drag(view, start, end, steps=6)
         assert w.selected == "root" and view.joints.ring is None
     after = w.mode.pose.positions
     assert before[0, 2] - after[0, 2] == pytest.approx(0.30, abs=0.015)
-    assert np.linalg.norm(after[0, :2] - before[0, :2]) < 0.01, "the body stays where it stands"
+    place = w.mode.targets["root"].position
+    assert np.linalg.norm(place[:2] - before[0, :2]) < 0.01, "the body stays where it stands"
     assert np.abs(after[feet] - before[feet]).max() < 0.005, "the ankles stay planted"
     u, v = after[hip] - after[knee], after[ankle] - after[knee]
     assert np.degrees(np.arccos(u @ v / np.linalg.norm(u) / np.linalg.norm(v))) < 120, "the knee bends"

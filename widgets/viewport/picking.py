@@ -60,7 +60,15 @@ class JointDragger:
         #: moves them straight up or down (the pose window's hips: a squat) while a
         #: sideways move stays level (see :meth:`drag_normal`).
         self.upright: frozenset[str] = frozenset()
-        self._origin = np.zeros(3)
+        #: Where a drag of the named joint starts when that is not the joint itself:
+        #: ``drag_origin(name)`` gives it (3,) metres, or None for the joint (the pose
+        #: window's hips move the body's place, its handle, which a balanced crouch
+        #: leaves in front of the pelvis). A drag sends that point moved by the cursor's
+        #: way on the drag plane.
+        self.drag_origin: Callable[[str], np.ndarray | None] | None = None
+        self._origin = np.zeros(3)  # the grabbed thing's place: the drag plane goes through it
+        self._base = np.zeros(3)  # what the drag moves: sent as _base + (hit - _grab)
+        self._grab = np.zeros(3)  # the cursor's point on the drag plane at the press
         iren = plotter.iren.interactor
         self._style = iren.GetInteractorStyle()
         # The press is watched on the interactor between the gizmos' widgets (see
@@ -133,7 +141,27 @@ class JointDragger:
         if dist[j] > PICK_RADIUS_PX:
             return False
         self.joint, self._origin = j, self.positions[j].copy()
+        base = None if self.drag_origin is None else self.drag_origin(JOINT_NAMES[j])
+        self._start(x, y, self._origin if base is None else np.asarray(base, float))
         return True
+
+    def _start(self, x: float, y: float, base: np.ndarray) -> None:
+        """Remember what the drag moves and where the cursor met the drag plane at the press,
+        so the grabbed thing moves with the cursor from where it is (no jump by the few
+        pixels between the press and the joint's centre)."""
+        self._base = base.copy()
+        hit = self._hit(x, y)
+        self._grab = self._origin.copy() if hit is None else hit
+
+    def _hit(self, x: float, y: float) -> np.ndarray | None:
+        """The point (3,) where the mouse ray at display pixel (x, y) meets the drag plane
+        (through :attr:`_origin`, normal :meth:`drag_normal`); None when parallel."""
+        start, direction = self.ray(x, y)
+        normal = self.drag_normal()
+        denom = float(direction @ normal)
+        if abs(denom) < 1e-12:
+            return None
+        return start + float((self._origin - start) @ normal) / denom * direction
 
     def press_target(self, x: float, y: float) -> bool:
         """Grab the tracker target whose sphere covers display pixel (x, y); True on a hit."""
@@ -141,6 +169,7 @@ class JointDragger:
         if hit is None:
             return False
         self.target, self._origin = hit
+        self._start(x, y, self._origin)
         self._sensors.begin_drag(self.target)
         return True
 
@@ -183,14 +212,12 @@ class JointDragger:
         """Drag the grabbed joint or target to display pixel (x, y)."""
         if self.joint is None and self.target is None:
             return
-        start, direction = self.ray(x, y)
-        normal = self.drag_normal()
-        denom = float(direction @ normal)
-        if abs(denom) < 1e-12:
+        hit = self._hit(x, y)
+        if hit is None:
             return
-        t = float((self._origin - start) @ normal) / denom
+        to = self._base + (hit - self._grab)
         if self.target is not None:
-            self._sensors.drag(self.target, start + t * direction)
+            self._sensors.drag(self.target, to)
             self._plotter.render()  # the sphere follows the mouse at once, as a widget's did
         else:
-            self._on_drag(JOINT_NAMES[self.joint], start + t * direction)
+            self._on_drag(JOINT_NAMES[self.joint], to)

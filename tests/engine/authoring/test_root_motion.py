@@ -65,12 +65,40 @@ def test_dragging_the_hips_down_squats_sideways_moves_and_back_up_stands(vae):
         m.drag_hips(start[0] - [0.0, 0.0, 0.03 * k])
     assert standing - m.pose.root_pos[2] == pytest.approx(0.30, abs=0.015)
     assert np.abs(m.pose.positions[ankles] - start[ankles]).max() < 1e-3  # the planted feet stay
-    assert np.allclose(m.pose.root_pos[:2], start[0, :2], atol=1e-6)
-    m.drag_hips(m.pose.root_pos + [0.2, 0.0, 0.0])  # sideways while squatting: the body travels, still low
+    assert np.allclose(m.hips_handle()[:2], start[0, :2], atol=1e-6)  # the body's place stays
+    m.drag_hips(m.hips_handle() + [0.2, 0.0, 0.0])  # sideways while squatting: the body travels, still low
     assert m.targets["root"].position[0] == pytest.approx(start[0, 0] + 0.2)
     assert np.allclose(m.pose.positions[ankles, 0] - start[ankles, 0], 0.2, atol=1e-3)
     assert standing - m.pose.root_pos[2] > 0.25
-    m.drag_hips(m.pose.root_pos - [0.0, 0.0, 5.0])  # no lower than a deep squat
+    m.drag_hips(m.hips_handle() - [0.0, 0.0, 5.0])  # no lower than a deep squat
     assert m.targets["root"].position[2] == pytest.approx(LOWEST_ROOT * standing)
-    m.drag_hips(m.pose.root_pos + [0.0, 0.0, 5.0])  # back up: standing, the target gone
+    m.drag_hips(m.hips_handle() + [0.0, 0.0, 5.0])  # back up: standing, the target gone
     assert "root" not in m.targets
+
+
+def test_a_squat_keeps_the_weight_over_the_feet_and_a_second_drag_does_not_move_them(vae):
+    """Hips dragged straight down 40 cm: the pelvis goes back as it goes down so the centre
+    of mass stays over the middle of the planted feet (without the crouch balance it ends
+    17 cm ahead of it, in front of the toes: a body on its toes); a second straight-down
+    drag from the hips' handle leaves the feet where they are."""
+    from engine import skeleton as sk
+    from engine.authoring.pose_mode import PoseMode, PoseOptions, centre_of_mass
+
+    ankles = [sk.JOINT_INDEX["lankle"], sk.JOINT_INDEX["rankle"]]
+
+    def squat(options):
+        m = PoseMode(vae, options=options)
+        feet = np.mean([p[:2] for p in m.planted.values()], axis=0)
+        start = m.hips_handle()
+        for k in range(1, 21):
+            m.drag_hips(start - [0.0, 0.0, 0.02 * k])
+        return m, float(np.linalg.norm(centre_of_mass(m.pose.positions)[:2] - feet))
+
+    m, off = squat(PoseOptions())
+    assert off < 0.05
+    assert squat(PoseOptions(crouch_balance=False))[1] > 0.12
+    ankles_before = m.pose.positions[ankles].copy()
+    start = m.hips_handle()
+    for k in range(1, 6):
+        m.drag_hips(start - [0.0, 0.0, 0.01 * k])
+    assert np.abs(m.pose.positions[ankles] - ankles_before).max() < 1e-3

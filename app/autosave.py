@@ -114,7 +114,7 @@ class StudioAutosave(QObject):
         self.studio = DocumentAutosave(files, "studio", self._studio_document, self, interval_ms)
         self.studio.failed.connect(lambda text: window.statusBar().showMessage(text, 8000))
         # every edit, undo and redo; a save (clean) removes the file
-        self.studio.watch(window.undo.stack.indexChanged, window.undo.stack.cleanChanged, window.session.events.frame)
+        self.studio.watch(window.undo.changed, window.session.events.frame)
         self.poses: list[DocumentAutosave] = []
         self._count = 0
 
@@ -126,7 +126,7 @@ class StudioAutosave(QObject):
         from app.clip_saving import clip_edited
 
         w = self.window
-        if w.undo.stack.isClean():
+        if w.undo.is_clean():
             return None
         return w.session.to_scene(), w.session.motion if clip_edited(w) else None
 
@@ -185,7 +185,6 @@ def recover(window: StudioShell, left: LeftSession) -> list[str]:
 
 
 def _recover_studio(window: StudioShell, scene: dict[str, Any], edited: Motion | None, where: str) -> None:
-    from app.undo import StateCommand
     from engine.studio.scenes import scene_from_dict
 
     session = window.session
@@ -195,9 +194,7 @@ def _recover_studio(window: StudioShell, scene: dict[str, Any], edited: Motion |
         if not window.files.open_path(str(clip), window.files.rig_map_of(clip), ask=False):
             raise UserError(f"{where}: cannot open its clip {clip}")
     session.pause()  # the recovered frame stays on screen (gui starts playing the clip)
-    stack = window.undo.stack
-    stack.beginMacro("Recover last session")  # one undo step puts back the session as started
-    try:
+    with window.undo.group("Recover last session"):  # one undo step puts back the session as started
         if edited is not None:
             original, path = session.motion, session.path
 
@@ -206,10 +203,8 @@ def _recover_studio(window: StudioShell, scene: dict[str, Any], edited: Motion |
                     session.set_motion(motion, path)
 
             show(edited)
-            stack.push(StateCommand("recovered re-solved clip", show, original, edited))
+            window.undo.record("recovered re-solved clip", show, original, edited)
         session.apply_scene(scene, where)
-    finally:
-        stack.endMacro()
 
 
 def recover_pose(window: StudioShell | None, scene: dict[str, Any], where: str) -> PoseWindow:

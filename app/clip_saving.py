@@ -5,7 +5,7 @@ edited clip writes it as it is now, on the canonical skeleton or onto the rig of
 the file it was opened from (:func:`engine.motion.write_back.save_on_source_rig`),
 atomically, with no solver run (the reconstruction saves re-solve the clip instead).
 
-The window's undo stack says what is unsaved: any edit since the clip was opened or the
+The window's undo history says what is unsaved: any edit since the clip was opened or the
 scene saved or loaded (range re-solves, constraint and sensor edits) leaves it unclean,
 and quitting or opening another clip or scene then asks Save / Discard / Cancel. Save
 writes the scene and, when the clip was re-solved, the edited clip.
@@ -74,14 +74,14 @@ def save_edits(window: StudioShell) -> bool:
         return False
     if not window.files.save_scene():
         return False
-    window.undo.stack.setClean()
+    window.undo.set_clean()
     return True
 
 
 def confirm_discard(window: StudioShell, doing: str) -> bool:
     """Before ``doing`` (``"quitting"``, ``"opening another clip"``...): True when there
     is nothing unsaved, or the user saved or discarded it; False to stay (Cancel)."""
-    if window.undo.stack.isClean():
+    if window.undo.is_clean():
         return True
     buttons = QMessageBox.StandardButton
     what = "the re-solved clip and the scene" if clip_edited(window) else "the scene"

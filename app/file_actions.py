@@ -241,7 +241,7 @@ class FileActions:
             self.show_error("Cannot save scene", f"{path}: {exc}")
             return False
         if not clip_edited(self.w):  # a re-solved clip is saved apart (app.clip_saving)
-            self.w.undo.stack.setClean()
+            self.w.undo.set_clean()
         return True
 
     def load_scene(self, path: str | None = None) -> bool:
@@ -251,23 +251,19 @@ class FileActions:
             path, _ = QFileDialog.getOpenFileName(self.w, "Load scene", "", "Studio scene (*.json)")
             if not path:
                 return False
-        stack = self.w.undo.stack
         try:
             scene = read_json(path, "scene")  # size, UTF-8, depth; errors name the file and line
             clip = scene.get("clip") if isinstance(scene, dict) else None
             if clip and (self.session.path is None or Path(clip) != self.session.path):
                 self.session.open(clip, self.rig_map_of(clip))
             scene_from_dict(scene, str(path))  # a scene that fails changes nothing, leaves no undo step
-            stack.beginMacro(f"Load scene {Path(path).name}")  # one undo step puts back all it replaced
-            try:
+            with self.w.undo.group(f"Load scene {Path(path).name}"):  # one undo step puts back all it replaced
                 done = self.session.apply_scene(scene, str(path))
-            finally:
-                stack.endMacro()
         except (OSError, ValueError, UserError) as exc:
             text = str(exc)
             self.show_error("Cannot load scene", text if str(path) in text else f"{path}: {text}")
             return False
-        stack.setClean()  # the scene as loaded is what is saved
+        self.w.undo.set_clean()  # the scene as loaded is what is saved
         self.w.statusBar().showMessage(f"Loaded {Path(path).name}: {done}", 15000)
         return True
 

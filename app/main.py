@@ -195,7 +195,7 @@ def _run(
     if pace is not None:
         window.session.set_playback(pace=pace)
     window.actions_by_name[f"display-{view}"].setChecked(True)
-    window.undo.stack.setClean()  # what the command line set up is the start, nothing to save
+    window.undo.set_clean()  # what the command line set up is the start, nothing to save
     if screenshot is not None:
         window.resize(1600, 980)  # a reproducible layout, whatever geometry was saved
     if measure is not None:

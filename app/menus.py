@@ -14,6 +14,7 @@ from PyQt6.QtWidgets import QMainWindow
 
 from app import authoring_actions, clip_saving, range_actions
 from app.menu_parts import action, add_view_entries, show_help, toggle
+from app.undo import undo_actions
 
 
 def build_menus(w: QMainWindow) -> None:
@@ -37,9 +38,8 @@ def build_menus(w: QMainWindow) -> None:
     file_menu.addSeparator()
     action(w, file_menu, "&Quit", w.close, QKeySequence.StandardKey.Quit)
     edit = w.menuBar().addMenu("&Edit")
-    undo = w.undo.stack.createUndoAction(w, "&Undo")
+    undo, redo = undo_actions(w, w.undo)
     undo.setShortcut(QKeySequence.StandardKey.Undo)
-    redo = w.undo.stack.createRedoAction(w, "&Redo")
     redo.setShortcuts([QKeySequence("Ctrl+Shift+Z"), QKeySequence("Ctrl+Y")])
     for act in (undo, redo):
         act.setShortcutContext(Qt.ShortcutContext.WindowShortcut)

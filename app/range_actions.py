@@ -21,7 +21,6 @@ from PyQt6.QtGui import QAction
 from PyQt6.QtWidgets import QCheckBox, QDialog, QDialogButtonBox, QFormLayout, QMenu, QMessageBox, QSpinBox, QWidget
 
 from app.job_runner import JobRunner
-from app.undo import StateCommand
 from engine.errors import UserError
 
 if TYPE_CHECKING:
@@ -96,7 +95,7 @@ def resolve_range(
             session.seek(min(frame, len(motion) - 1))
 
         show(edit.motion)
-        window.undo.stack.push(StateCommand(f"re-solve frames {job.start}-{job.end}", show, original, edit.motion))
+        window.undo.record(f"re-solve frames {job.start}-{job.end}", show, original, edit.motion)
 
     runner = range_runner(window)
     runner.start(job, apply)

@@ -1,6 +1,7 @@
-"""Undo and redo of scene edits (Ctrl+Z / Ctrl+Shift+Z) on a QUndoStack.
+"""Undo and redo of the studio's scene edits (Ctrl+Z / Ctrl+Shift+Z), on the history the
+pose window uses too (:class:`engine.authoring.history.History`).
 
-The stack listens to the session's typed events, so every edit is recorded however it
+The history listens to the session's typed events, so every edit is recorded however it
 was made (panel, 3D drag, Ctrl-drag pin, scene load) and no widget has to know about
 undo. A record holds the sensor set, the constraint list or the optimizer settings set
 explicitly, before and after the edit: small tuples and dicts of immutable objects (the
@@ -9,60 +10,22 @@ undoing is one session call (``set_sensors`` / ``set_constraints`` /
 ``replace_settings``) that fires its event and reaches the engine like any other edit.
 
 A drag sends an edit per mouse move; consecutive edits of the same thing (one tracker's
-offset, one constraint's fields) within :data:`MERGE_S` merge into one step, and the
-move of a pin merges into the step that created it.
+offset, one constraint's fields) within :data:`engine.authoring.history.MERGE_S` merge
+into one step, and the move of a pin merges into the step that created it. The Edit
+menu's actions follow :attr:`SceneUndo.changed` (:func:`undo_actions`).
 """
 
 from __future__ import annotations
 
 import contextlib
-import time
 from collections.abc import Callable, Iterator
 from typing import Any
 
 import numpy as np
-from PyQt6.QtGui import QUndoCommand, QUndoStack
+from PyQt6.QtCore import QObject, pyqtSignal
+from PyQt6.QtGui import QAction
 
-#: Edits of the same target closer together than this (seconds) are one undo step.
-MERGE_S = 0.6
-_MERGE_ID = 1201
-
-
-class StateCommand(QUndoCommand):
-    """Switch between two states of a part of the scene with ``apply(state)``.
-
-    ``key`` says what was edited (``("sensor", joint, fields)`` or
-    ``("constraint", name, fields)``); None never merges.
-    """
-
-    def __init__(
-        self, text: str, apply: Callable[[Any], None], before: Any, after: Any, key: tuple | None = None
-    ) -> None:
-        super().__init__(text)
-        self.apply, self.before, self.after, self.key = apply, before, after, key
-        self.stamp = time.monotonic()
-        self._pushed = False
-
-    def id(self) -> int:
-        return _MERGE_ID if self.key is not None else -1
-
-    def mergeWith(self, other: QUndoCommand) -> bool:  # noqa: N802 (Qt's name)
-        if not isinstance(other, StateCommand) or other.key is None or self.key is None:
-            return False
-        same_target = other.key[:2] == self.key[:2]
-        fields_ok = other.key[2] == self.key[2] or self.key[2] == "added"
-        if not (same_target and fields_ok and other.stamp - self.stamp < MERGE_S):
-            return False
-        self.after, self.stamp = other.after, other.stamp
-        return True
-
-    def redo(self) -> None:
-        if self._pushed:  # QUndoStack.push calls redo; the edit has already happened
-            self.apply(self.after)
-        self._pushed = True
-
-    def undo(self) -> None:
-        self.apply(self.before)
+from engine.authoring.history import Edit, History
 
 
 def _changed_fields(old: Any, new: Any) -> tuple[str, ...]:
@@ -81,12 +44,18 @@ def _changed_fields(old: Any, new: Any) -> tuple[str, ...]:
     return tuple(out)
 
 
-class SceneUndo:
-    """Records sensor and constraint edits of ``session`` on :attr:`stack`."""
+class SceneUndo(QObject):
+    """Records sensor, constraint, settings and clip edits of ``session`` on :attr:`history`.
+
+    ``changed`` is emitted after every change of the history (an edit, undo, redo, a
+    save marking it clean)."""
+
+    changed = pyqtSignal()
 
     def __init__(self, session: Any, parent: Any = None) -> None:
+        super().__init__(parent)
         self.session = session
-        self.stack = QUndoStack(parent)
+        self.history = History(session, self.changed.emit)
         self._sensors = (tuple(session.sensors.values()), session.preset)
         self._constraints = tuple(session.constraints)
         self._settings = dict(session.settings)
@@ -130,7 +99,22 @@ class SceneUndo:
     def _on_motion(self, e: Any) -> None:
         """A new clip starts a new history (offsets and failures were made for the old one)."""
         if not self.editing_clip:
-            self.stack.clear()
+            self.history.clear()
+
+    def record(self, text: str, put: Callable[[Any], None], before: Any, after: Any, key: tuple | None = None) -> None:
+        """Record an edit already made: ``put(before)`` undoes it, ``put(after)`` redoes it."""
+        self.history.push(Edit(text, before, after, key, put=put))
+
+    def group(self, text: str) -> contextlib.AbstractContextManager[None]:
+        """The edits recorded inside are one undo step named ``text``."""
+        return self.history.group(text)
+
+    def is_clean(self) -> bool:
+        """Whether nothing changed since :meth:`set_clean` (the last save or open)."""
+        return self.history.is_clean()
+
+    def set_clean(self) -> None:
+        self.history.set_clean()
 
     # -- recording ------------------------------------------------------------------
     def _on_sensors(self, e: Any) -> None:
@@ -148,7 +132,7 @@ class SceneUndo:
             text = f"{'Add' if e.old is None else 'Remove'} {e.joint} sensor"
         else:
             text = f"Sensor preset {e.preset}" if e.preset else "Change sensors"
-        self.stack.push(StateCommand(text, self._apply_sensors, before, after, key))
+        self.record(text, self._apply_sensors, before, after, key)
 
     def _on_constraints(self, e: Any) -> None:
         before, after = self._constraints, tuple(e.constraints)
@@ -167,7 +151,7 @@ class SceneUndo:
             text = f"Remove {e.name}"
         else:
             text = "Replace constraints"
-        self.stack.push(StateCommand(text, self._apply_constraints, before, after, key))
+        self.record(text, self._apply_constraints, before, after, key)
 
     def _on_settings(self, e: Any) -> None:
         before, after = self._settings, dict(self.session.settings)
@@ -177,7 +161,7 @@ class SceneUndo:
         names = tuple(sorted(k for k in set(before) | set(after) if before.get(k) != after.get(k)))
         text = f"Set {', '.join(names)}" if len(names) <= 3 else f"Set {len(names)} optimizer settings"
         key = ("setting", names, "value") if len(names) == 1 else None  # a spin box's steps merge
-        self.stack.push(StateCommand(text, self._apply_settings, before, after, key))
+        self.record(text, self._apply_settings, before, after, key)
 
     # -- applying ---------------------------------------------------------------------
     def _apply_settings(self, state: dict) -> None:
@@ -200,3 +184,22 @@ class SceneUndo:
             self.session.set_constraints(list(state))
         finally:
             self._applying = False
+
+
+def undo_actions(parent: Any, undo: SceneUndo) -> tuple[QAction, QAction]:
+    """The Edit menu's Undo and Redo for ``undo``'s history: named after the step they
+    undo or redo, disabled when there is none."""
+    h = undo.history
+    undo_act, redo_act = QAction("&Undo", parent), QAction("&Redo", parent)
+    undo_act.triggered.connect(h.undo)
+    redo_act.triggered.connect(h.redo)
+
+    def update() -> None:
+        undo_act.setEnabled(h.can_undo())
+        undo_act.setText(f"&Undo {h.undo_text()}".rstrip())
+        redo_act.setEnabled(h.can_redo())
+        redo_act.setText(f"&Redo {h.redo_text()}".rstrip())
+
+    undo.changed.connect(update)
+    update()
+    return undo_act, redo_act

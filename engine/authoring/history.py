@@ -1,4 +1,5 @@
-"""The authoring model's undo history: edits as commands on a stack, merged while a drag goes on.
+"""The undo history of the studio and the pose window: edits as commands on a stack,
+merged while a drag goes on.
 
 A command has ``text`` (what the Edit menu says), ``apply(session)`` and
 ``undo(session)`` and may merge a later command into itself (:meth:`Edit.merge`). The
@@ -9,13 +10,20 @@ clean index (where the scene was last saved), and reports every change through
 Consecutive edits of the same thing (one target's position, one constraint's fields)
 less than :data:`MERGE_S` apart are one step, so a drag of a hundred mouse moves undoes
 in one Ctrl+Z; an edit keyed ``(kind, name, "added")`` takes the next edits of the same
-thing into it.
+thing into it. Edits pushed inside :meth:`History.group` are one step (loading a scene
+replaces the sensors, the constraints and the settings: one Ctrl+Z puts all back).
+
+The pose window's model (:class:`engine.authoring.session.AuthoringSession`) records
+:class:`Edit` s of its whole state; the studio (``app.undo``) records edits of one part
+each (the sensors, the constraints, the settings, the clip), given the function that
+puts that part back (``Edit.put``).
 """
 
 from __future__ import annotations
 
+import contextlib
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
@@ -45,7 +53,8 @@ class Edit:
 
     ``key`` says what was edited, ``(kind, name, fields)`` such as
     ``("target", "lwrist", "position")``; None never merges. ``stamp``: seconds on the
-    history's clock when it was made.
+    history's clock when it was made. ``put(state)`` makes ``state`` the model's; None:
+    ``session.restore_state(state)``.
     """
 
     text: str
@@ -53,12 +62,19 @@ class Edit:
     after: Any
     key: tuple | None = None
     stamp: float = field(default_factory=time.monotonic)
+    put: Callable[[Any], None] | None = None
+
+    def _put(self, session: Any, state: Any) -> None:
+        if self.put is None:
+            session.restore_state(state)
+        else:
+            self.put(state)
 
     def apply(self, session: Any) -> None:
-        session.restore_state(self.after)
+        self._put(session, self.after)
 
     def undo(self, session: Any) -> None:
-        session.restore_state(self.before)
+        self._put(session, self.before)
 
     def merge(self, other: Command) -> bool:
         if not isinstance(other, Edit) or other.key is None or self.key is None:
@@ -68,6 +84,25 @@ class Edit:
             return False
         self.after, self.stamp = other.after, other.stamp
         return True
+
+
+@dataclass
+class Group:
+    """Several commands as one step: applied in order, undone in reverse; never merges."""
+
+    text: str
+    commands: list[Command] = field(default_factory=list)
+
+    def apply(self, session: Any) -> None:
+        for c in self.commands:
+            c.apply(session)
+
+    def undo(self, session: Any) -> None:
+        for c in reversed(self.commands):
+            c.undo(session)
+
+    def merge(self, other: Command) -> bool:
+        return False
 
 
 class History:
@@ -87,10 +122,31 @@ class History:
         self._commands: list[Command] = []
         self._index = 0
         self._clean: int | None = 0  # None: the saved state can no longer be reached
+        self._group: Group | None = None
+
+    @contextlib.contextmanager
+    def group(self, text: str) -> Iterator[None]:
+        """The commands pushed inside are one step named ``text`` (none when none was
+        pushed); nested groups join the outer one."""
+        if self._group is not None:
+            yield
+            return
+        self._group = Group(text)
+        try:
+            yield
+        finally:
+            g, self._group = self._group, None
+            if g.commands:
+                self.push(g)
 
     def push(self, command: Command) -> None:
         """Record ``command``, already applied (merged into the last step when it can be,
         unless that step is where the scene was saved); steps undone before are dropped."""
+        if self._group is not None:
+            top = self._group.commands[-1] if self._group.commands else None
+            if top is None or not top.merge(command):
+                self._group.commands.append(command)
+            return
         del self._commands[self._index :]
         if self._clean is not None and self._clean > self._index:
             self._clean = None
@@ -121,6 +177,10 @@ class History:
     def count(self) -> int:
         """Steps recorded (done and undone)."""
         return len(self._commands)
+
+    def texts(self) -> list[str]:
+        """The names of the recorded steps, oldest first (done and undone)."""
+        return [c.text for c in self._commands]
 
     def can_undo(self) -> bool:
         return self._index > 0

@@ -30,7 +30,7 @@ def studio(qtbot, tmp_path, synthetic_motion, monkeypatch):
     window.show()
     qtbot.waitUntil(lambda: window.session.latest is not None, timeout=10000)
     yield window
-    window.undo.stack.setClean()  # edits are discarded unasked (tests of the prompt answer it themselves)
+    window.undo.set_clean()  # edits are discarded unasked (tests of the prompt answer it themselves)
     window.close()
     assert not unexpected, f"unexpected message boxes: {unexpected}"
     QApplication.processEvents()

@@ -278,7 +278,7 @@ def run(seed: int, events: int, step_timeout: float) -> int:
         if hasattr(w, "session") and hasattr(w.session, "history"):
             w.session.history.set_clean()
     pose.close()
-    studio.undo.stack.setClean()
+    studio.undo.set_clean()
     studio.close()
     app.processEvents()
     counts = " ".join(f"{k}={v}" for k, v in sorted(monkey.counts.items()))

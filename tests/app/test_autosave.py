@@ -132,12 +132,12 @@ def test_a_killed_studio_is_recovered_exactly_at_the_next_start(studio, qtbot, t
     assert np.array_equal(s.motion.local_rot, arrays["local_rot"]) and np.array_equal(
         s.motion.root_pos, arrays["root_pos"]
     )
-    assert clip_edited(studio) and not studio.undo.stack.isClean()
+    assert clip_edited(studio) and not studio.undo.is_clean()
     assert not any(p.exists() for p in left.documents.values())  # taken over by this session
     assert files.path("studio").is_file() and files.path("studio", ".npz").is_file()
-    studio.undo.stack.undo()  # one step back to the session as it started
+    studio.undo.history.undo()  # one step back to the session as it started
     assert not clip_edited(studio) and s.to_scene() != expected
-    studio.undo.stack.setClean()
+    studio.undo.set_clean()
     files.close()
 
 
@@ -159,7 +159,7 @@ def test_discard_removes_what_was_left(studio, tmp_path):
     box = autosave.offer(studio, left_sessions(tmp_path))
     next(b for b in box.buttons() if b.text() == "Discard").click()
     assert left_sessions(tmp_path) == [] and not list(tmp_path.glob("autosave-*"))
-    assert studio.undo.stack.isClean()
+    assert studio.undo.is_clean()
     assert autosave.offer(studio, []) is None
 
 

@@ -37,7 +37,7 @@ def cyan_columns(widget, top: int, bottom: int) -> np.ndarray:
 
 
 def test_a_ctrl_dragged_pin_is_limited_to_a_range_on_the_paused_studio_and_undone(studio, qtbot, monkeypatch):
-    monkeypatch.setattr("app.undo.MERGE_S", 0.0)  # a user's edits come seconds apart: none merge
+    monkeypatch.setattr("engine.authoring.history.MERGE_S", 0.0)  # a user's edits come seconds apart: none merge
     view, s, panel = studio.viewport, studio.session, studio.constraint_panel
     s.seek(50)
     s.pause()
@@ -57,7 +57,7 @@ def test_a_ctrl_dragged_pin_is_limited_to_a_range_on_the_paused_studio_and_undon
     assert rng.isVisible() and not rng.limited.isChecked() and not rng.start.isEnabled()
     assert studio.timeline.slider.span() is None
 
-    steps = studio.undo.stack.count()
+    steps = studio.undo.history.count()
     QTest.mouseClick(rng.limited, Qt.MouseButton.LeftButton, pos=rng.limited.rect().center())
     assert s.constraints[0].frames == (20, 80)  # 30 frames either side of the paused frame
     type_number(panel.editor.range.start, 40)
@@ -66,7 +66,7 @@ def test_a_ctrl_dragged_pin_is_limited_to_a_range_on_the_paused_studio_and_undon
     c = s.constraints[0]
     assert (c.frames, c.blend_in, c.blend_out) == ((40, 70), 0, 6)
     assert c.activity(39) == 0.0 and c.activity(55) == 1.0 and 0 < c.activity(73) < 1 and c.activity(77) == 0.0
-    assert studio.undo.stack.count() == steps + 4  # each edit one undo step
+    assert studio.undo.history.count() == steps + 4  # each edit one undo step
 
     slider = studio.timeline.slider
     assert slider.span() == (40, 70, 0, 6)
@@ -75,7 +75,7 @@ def test_a_ctrl_dragged_pin_is_limited_to_a_range_on_the_paused_studio_and_undon
     assert cols.size and abs(cols.min() - x40) <= 2 and x70 <= cols.max() <= x76 + 2, (cols.min(), cols.max())
 
     for _ in range(4):
-        studio.undo.stack.undo()
+        studio.undo.history.undo()
     assert s.constraints[0].frames is None and s.constraints[0].blend_out == 0
     qtbot.waitUntil(lambda: not panel.editor.range.limited.isChecked())
     assert slider.span() is None and cyan_columns(slider, 0, 4).size == 0

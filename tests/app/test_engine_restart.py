@@ -32,7 +32,7 @@ def process_studio(qtbot, tmp_path, synthetic_motion, monkeypatch):
     window.show()
     qtbot.waitUntil(lambda: window.session.latest is not None, timeout=START_MS)
     yield window
-    window.undo.stack.setClean()
+    window.undo.set_clean()
     window.close()
     QApplication.processEvents()
     assert not window.engine.is_alive(), "the engine outlived the window"

@@ -23,7 +23,7 @@ def test_a_failure_happens_once_with_a_countdown_and_reset_follows_it(studio, qt
     panel.fail_frames.setValue(20)
     s.seek(30)
     qtbot.waitUntil(lambda: s.latest.frame == 30, timeout=5000)
-    stack_before = studio.undo.stack.count()
+    stack_before = studio.undo.history.count()
     row["fail"].click()
     assert row["reset"].isEnabled()
     s.set_playback(loop=True)
@@ -33,7 +33,7 @@ def test_a_failure_happens_once_with_a_countdown_and_reset_follows_it(studio, qt
     assert any(t.startswith("Lost ") for t in texts), texts
     qtbot.waitUntil(lambda: not s.sensors[joint].failures, timeout=5000)
     assert row["fail"].text() == "Fail" and not row["reset"].isEnabled()
-    assert studio.undo.stack.count() == stack_before + 1, "running out is not an undo step"
+    assert studio.undo.history.count() == stack_before + 1, "running out is not an undo step"
     first = list(lost)
     assert first and min(first) >= 30 and max(first) < 50
     qtbot.waitUntil(lambda: s.latest.frame < 20, timeout=20000)  # looped

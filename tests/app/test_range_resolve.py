@@ -20,10 +20,10 @@ def test_resolving_a_range_replaces_it_and_undo_redo_round_trip(studio, qtbot):
     assert np.array_equal(session.motion.local_rot[: edit.first], before[: edit.first])
     assert np.array_equal(session.motion.local_rot[edit.last + 1 :], before[edit.last + 1 :])
     assert not np.array_equal(session.motion.local_rot[30:51], before[30:51])
-    assert "resolve_range" in studio.actions_by_name and studio.undo.stack.count() == 1
-    studio.undo.stack.undo()
+    assert "resolve_range" in studio.actions_by_name and studio.undo.history.count() == 1
+    studio.undo.history.undo()
     assert session.motion is original and np.array_equal(session.motion.local_rot, before)
-    studio.undo.stack.redo()
+    studio.undo.history.redo()
     assert session.motion is edit.motion
     qtbot.waitUntil(lambda: session.latest is not None, timeout=10000)
 
@@ -58,5 +58,5 @@ def test_a_range_resolve_runs_off_the_gui_thread_and_cancel_leaves_the_clip(stud
         runner.dialog.findChild(QPushButton).click()  # the dialog's Cancel button
     timer.stop()
     assert done.args == [False, "cancelled"] and runner.result is None and not worker.is_alive()
-    assert session.motion is original and studio.undo.stack.count() == 0
+    assert session.motion is original and studio.undo.history.count() == 0
     assert "cancelled" in studio.statusBar().currentMessage()

@@ -48,11 +48,11 @@ def test_load_scene_in_the_studio_shows_the_misspelt_key_in_a_dialog_and_changes
     monkeypatch.setattr(QMessageBox, "critical", lambda *a, **k: shown.append(a[2]))
     monkeypatch.setattr(QFileDialog, "getOpenFileName", lambda *a, **k: (str(misspelt), ""))
     before = [c.to_dict() for c in studio.session.constraints]
-    steps = studio.undo.stack.count()
+    steps = studio.undo.history.count()
     _press(studio, Qt.Key.Key_L, Qt.KeyboardModifier.ControlModifier)  # File > Load scene
     qtbot.waitUntil(lambda: bool(shown), timeout=5000)
     assert len(shown) == 1 and str(misspelt) in shown[0] and MEANT in shown[0], shown
-    assert [c.to_dict() for c in studio.session.constraints] == before and studio.undo.stack.count() == steps
+    assert [c.to_dict() for c in studio.session.constraints] == before and studio.undo.history.count() == steps
 
 
 def test_open_scene_in_the_pose_window_shows_the_misspelt_key_and_keeps_the_keys(

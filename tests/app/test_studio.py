@@ -273,7 +273,7 @@ def test_loading_a_pose_window_scene_keeps_the_sensors_and_one_undo_puts_everyth
 
     s = studio.session
     s.constraints.add("distance", joint_a="lwrist", joint_b="rwrist", distance=0.4)
-    studio.undo.stack.setClean()  # saved: loading does not ask
+    studio.undo.set_clean()  # saved: loading does not ask
     sensors, preset, constraints = dict(s.sensors), s.preset, list(s.constraints)
     scene = authoring_to_dict(AuthoringScene([from_dict({"kind": "floor", "name": "floor"})], keys=[Key(0)]))
     path = tmp_path / "pose.json"
@@ -283,12 +283,12 @@ def test_loading_a_pose_window_scene_keeps_the_sensors_and_one_undo_puts_everyth
     message = studio.statusBar().currentMessage()
     assert "kept the sensors and preset" in message and "pose.json" in message
     path.write_text(json.dumps({**scene, "sensors": []}))
-    studio.undo.stack.setClean()
+    studio.undo.set_clean()
     assert studio.files.load_scene(str(path)) and s.sensors == {}
-    assert studio.undo.stack.undoText() == "Load scene pose.json"
-    studio.undo.stack.undo()
+    assert studio.undo.history.undo_text() == "Load scene pose.json"
+    studio.undo.history.undo()
     assert s.sensors == sensors and [c.name for c in s.constraints] == ["floor"]
-    studio.undo.stack.undo()
+    studio.undo.history.undo()
     assert s.sensors == sensors and list(s.constraints) == constraints
 
 
@@ -297,7 +297,7 @@ def test_a_scene_the_studio_refuses_names_its_file_once(studio, tmp_path, monkey
     monkeypatch.setattr(QMessageBox, "critical", lambda *a, **k: shown.append(a[2]))
     path = tmp_path / "fast.json"
     path.write_text(json.dumps({"format": "dragposer-scene", "version": 2, "animation": {"fps": "fast"}}))
-    steps = studio.undo.stack.count()
+    steps = studio.undo.history.count()
     assert not studio.files.load_scene(str(path))
     assert len(shown) == 1 and shown[0].count(str(path)) == 1 and "animation: field 'fps'" in shown[0]
-    assert studio.undo.stack.count() == steps
+    assert studio.undo.history.count() == steps

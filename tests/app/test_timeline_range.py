@@ -57,7 +57,7 @@ def test_the_range_dialog_starts_on_the_selection_and_the_resolve_is_unsaved(stu
 
     from app.range_actions import resolve_range_dialog
 
-    assert studio.undo.stack.isClean()
+    assert studio.undo.is_clean()
     studio.timeline.set_selection(24, 44)
     seen = {}
 
@@ -73,8 +73,8 @@ def test_the_range_dialog_starts_on_the_selection_and_the_resolve_is_unsaved(stu
     studio.range_jobs.wait()  # the re-solve runs on a worker
     assert seen["range"] == (24, 44)
     assert studio.session.motion is not original
-    assert not studio.undo.stack.isClean()  # the re-solve is an unsaved edit
+    assert not studio.undo.is_clean()  # the re-solve is an unsaved edit
     assert studio.timeline.selection() == (24, 44)  # the edited clip keeps its selection
-    studio.undo.stack.undo()
-    assert studio.session.motion is original and studio.undo.stack.isClean()
+    studio.undo.history.undo()
+    assert studio.session.motion is original and studio.undo.is_clean()
     qtbot.waitUntil(lambda: studio.session.latest is not None, timeout=10000)

@@ -11,7 +11,7 @@ pytestmark = pytest.mark.gui
 
 
 def test_sensor_toggle_and_preset_are_undone_and_redone(studio):
-    s, stack = studio.session, studio.undo.stack
+    s, stack = studio.session, studio.undo.history
     stack.clear()
     joint = next(iter(s.sensors))
     studio.sensor_panel.rows[joint]["enabled"].setChecked(False)
@@ -28,7 +28,7 @@ def test_sensor_toggle_and_preset_are_undone_and_redone(studio):
 
 
 def test_a_target_drag_is_one_step(studio):
-    s, stack = studio.session, studio.undo.stack
+    s, stack = studio.session, studio.undo.history
     stack.clear()
     joint = next(iter(s.sensors))
     base = s.tracked_position(joint, s.frame)
@@ -41,22 +41,17 @@ def test_a_target_drag_is_one_step(studio):
     assert np.allclose(s.sensors[joint].offset, [0.3, 0, 0])
 
 
-def test_constraint_add_edit_drag_and_remove_undo_in_order(studio, qtbot):
-    from app import undo as undo_module
-
-    s, stack, panel = studio.session, studio.undo.stack, studio.constraint_panel
+def test_constraint_add_edit_drag_and_remove_undo_in_order(studio, qtbot, monkeypatch):
+    s, stack, panel = studio.session, studio.undo.history, studio.constraint_panel
     stack.clear()
     panel.kinds.setCurrentText("end_effector")
     panel.add_button.click()
     (c,) = s.constraints
     name, placed = c.name, c.position.copy()
-    undo_module.MERGE_S = 0.0  # each edit below is its own step (no merging by time)
-    try:
-        panel.editor.inputs["weight"].setValue(4.0)
-        studio.viewport.gizmoEdited.emit(name, {"position": placed + [0.2, 0, 0]})
-        panel.remove_button.click()
-    finally:
-        undo_module.MERGE_S = 0.6
+    monkeypatch.setattr("engine.authoring.history.MERGE_S", 0.0)  # each edit below its own step
+    panel.editor.inputs["weight"].setValue(4.0)
+    studio.viewport.gizmoEdited.emit(name, {"position": placed + [0.2, 0, 0]})
+    panel.remove_button.click()
     assert list(s.constraints) == [] and stack.count() == 4
     stack.undo()  # the removal
     assert [k.name for k in s.constraints] == [name] and np.allclose(s.constraints[0].position, placed + [0.2, 0, 0])
@@ -75,7 +70,7 @@ def test_constraint_add_edit_drag_and_remove_undo_in_order(studio, qtbot):
 def test_a_ctrl_drag_pin_is_undone_in_one_step_from_the_keyboard(studio, qtbot):
     from PyQt6.QtTest import QTest
 
-    s, stack = studio.session, studio.undo.stack
+    s, stack = studio.session, studio.undo.history
     stack.clear()
     for x in (0.40, 0.45, 0.50):
         studio.viewport.jointDragged.emit("lelbow", np.array([x, 0.0, 1.3]))
@@ -96,9 +91,9 @@ def test_a_ctrl_drag_pin_is_undone_in_one_step_from_the_keyboard(studio, qtbot):
 def test_a_new_clip_starts_a_new_history(studio, synthetic_motion):
     joint = next(iter(studio.session.sensors))
     studio.session.sensors.edit(joint, weight=2.0)
-    assert studio.undo.stack.count() >= 1
+    assert studio.undo.history.count() >= 1
     studio.session.set_motion(synthetic_motion.slice(0, 30))
-    assert studio.undo.stack.count() == 0
+    assert studio.undo.history.count() == 0
 
 
 def test_the_starting_preset_is_not_an_undo_step_and_later_edits_are(studio, qtbot):
@@ -106,14 +101,14 @@ def test_the_starting_preset_is_not_an_undo_step_and_later_edits_are(studio, qtb
 
     studio.settings.setValue("last_preset", "3-head-hands")
     open_initial(studio, None, None)
-    stack = studio.undo.stack
+    stack = studio.undo.history
     assert studio.session.preset == "3-head-hands" and stack.count() == 0
     studio.sensor_panel.preset.setCurrentText("6")
     studio.constraint_panel.kinds.setCurrentText("look_at")
     studio.constraint_panel.add_button.click()
     joint = next(iter(studio.sensor_panel.rows))
     studio.sensor_panel.rows[joint]["enabled"].setChecked(False)
-    assert [stack.text(i) for i in range(stack.count())] == [
+    assert stack.texts() == [
         "Sensor preset 6",
         "Add look_at",
         f"Edit {joint} sensor (enabled)",
@@ -125,14 +120,14 @@ def test_optimizer_settings_edits_are_undone_and_redone(studio, qtbot):
     puts back the value it had, or leaves it unset again for the method's profile."""
     from PyQt6.QtTest import QTest
 
-    s, stack, panel = studio.session, studio.undo.stack, studio.optimizer_panel
+    s, stack, panel = studio.session, studio.undo.history, studio.optimizer_panel
     stack.clear()
     before = dict(s.settings)
     lr = panel.editors["lr"]
     lr.setFocus()
     for _ in range(3):
         QTest.keyClick(lr, Qt.Key.Key_Up)
-    assert s.settings["lr"] != before["lr"] and stack.count() == 1 and stack.undoText() == "Set lr"
+    assert s.settings["lr"] != before["lr"] and stack.count() == 1 and stack.undo_text() == "Set lr"
     unset = next(n for n in panel.editors if n not in s.settings and hasattr(panel.editors[n], "stepBy"))
     qtbot.wait(700)  # beyond the merge window
     panel.editors[unset].stepBy(1)

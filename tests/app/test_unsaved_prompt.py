@@ -71,7 +71,7 @@ def test_opening_a_clip_after_a_range_resolve_asks_cancel_keeps_save_writes_both
     _save_to(monkeypatch, [tmp_path / "edited.bvh", tmp_path / "scene.json"])
     answer.next = "Save"
     assert studio.files.open_path(other)
-    assert studio.session.path == other and studio.undo.stack.isClean()
+    assert studio.session.path == other and studio.undo.is_clean()
 
     def rel(m):  # loading re-floors the clip: compare poses about the first root
         p = m.positions()
@@ -92,7 +92,7 @@ def test_loading_a_scene_after_an_edit_asks_and_discard_loads_it(studio, answer,
     assert not studio.files.load_scene(str(scene)) and len(studio.session.constraints) == 1
     answer.next = "Discard"
     assert studio.files.load_scene(str(scene)) and list(studio.session.constraints) == []
-    assert studio.undo.stack.isClean() and "loading another scene" in answer.asked[-1]
+    assert studio.undo.is_clean() and "loading another scene" in answer.asked[-1]
 
 
 def test_opening_a_tracker_recording_after_an_edit_asks_first(studio, answer, monkeypatch):

@@ -29,12 +29,12 @@ def test_a_plain_drag_in_empty_space_orbits_after_a_pin_was_made(studio, qtbot):
     placed = pin.position.copy()
     qtbot.waitUntil(lambda: any(n == pin.name for n, _ in s.latest.gizmos), timeout=5000)
     view.show_snapshot(s.latest)  # the pin's gizmo is on screen now
-    steps = studio.undo.stack.count()
+    steps = studio.undo.history.count()
     camera = np.array(view.plotter.camera.position)
     w, h = view.plotter.width(), view.plotter.height()
     mouse_drag(view, (w - 30, h - 30), (w - 150, h - 60))  # empty sky, top right
     assert np.allclose(s.constraints[0].position, placed)
-    assert studio.undo.stack.count() == steps
+    assert studio.undo.history.count() == steps
     assert np.linalg.norm(np.array(view.plotter.camera.position) - camera) > 1e-3
     s.constraints.remove(pin.name)
     mouse_drag(view, (w - 30, h - 30), (w - 150, h - 60))

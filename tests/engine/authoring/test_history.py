@@ -1,0 +1,56 @@
+"""The undo history both windows use: edits with their own ``put``, groups as one step."""
+
+from __future__ import annotations
+
+from engine.authoring.history import Edit, History
+
+
+class Model:
+    def __init__(self) -> None:
+        self.parts = {"a": 0, "b": 0}
+
+    def setter(self, name):
+        return lambda value: self.parts.__setitem__(name, value)
+
+
+def test_edits_put_their_own_part_back_and_merge_while_a_drag_goes_on():
+    m, changes = Model(), []
+    h = History(m, lambda: changes.append(1))
+    for v in (1, 2, 3):  # a drag: one step
+        before, m.parts["a"] = m.parts["a"], v
+        h.push(Edit("move a", before, v, ("part", "a", "value"), put=m.setter("a")))
+    m.parts["b"] = 5
+    h.push(Edit("set b", 0, 5, None, put=m.setter("b")))
+    assert h.texts() == ["move a", "set b"] and len(changes) == 4
+    h.undo()
+    h.undo()
+    assert m.parts == {"a": 0, "b": 0}
+    h.redo()
+    assert m.parts == {"a": 3, "b": 0} and h.undo_text() == "move a" and h.redo_text() == "set b"
+
+
+def test_a_group_is_one_step_undone_in_reverse_and_an_empty_group_is_none():
+    m, order = Model(), []
+
+    def put(name):
+        def f(value):
+            order.append((name, value))
+            m.parts[name] = value
+
+        return f
+
+    h = History(m)
+    with h.group("load scene"):
+        m.parts["a"] = 1
+        h.push(Edit("set a", 0, 1, None, put=put("a")))
+        with h.group("inner"):  # joins the outer group
+            m.parts["b"] = 2
+            h.push(Edit("set b", 0, 2, None, put=put("b")))
+    with h.group("nothing"):
+        pass
+    assert h.texts() == ["load scene"] and h.can_undo()
+    h.undo()
+    assert m.parts == {"a": 0, "b": 0} and order == [("b", 0), ("a", 0)]
+    h.redo()
+    assert m.parts == {"a": 1, "b": 2} and order[2:] == [("a", 1), ("b", 2)]
+    assert not h.can_redo()

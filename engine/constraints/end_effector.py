@@ -91,14 +91,16 @@ class EndEffectorTerm(Term):
     def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:
         a = P.shape[0]
         r = P[:, self.j[0]] - kit.const(self.target, P)
-        d_pos = np.broadcast_to(np.eye(3)[None, :, None, :], (a, 3, 1, 3)) if jac else None
         if self.rot is None:
-            return Residuals(r, self.j, d_pos)
+            if not jac:
+                return Residuals(r)
+            return Residuals(r, entry_joint=np.repeat(self.j, 3), d_pos_entry=np.broadcast_to(np.eye(3), (a, 3, 3)))
         scale = np.broadcast_to(self.scale, (a, 1))
         rot, d_rot = rotation_residual(kit, W[:, self.j], kit.const(self.rot, P), kit.const(scale, P), jac)
         r = kit.cat([r, rot], -1)
         if not jac:
             return Residuals(r)
-        assert d_pos is not None and d_rot is not None  # asked for with jac
-        d_pos = np.concatenate((d_pos, np.zeros((a, 9, 1, 3))), axis=1)
-        return Residuals(r, self.j, d_pos, self.j, np.concatenate((np.zeros((a, 3, 1, 3)), d_rot), axis=1))
+        assert d_rot is not None  # asked for with jac
+        d_pos = np.concatenate((np.broadcast_to(np.eye(3), (a, 3, 3)), np.zeros((a, 9, 3))), axis=1)
+        d_rot = np.concatenate((np.zeros((a, 3, 3)), d_rot), axis=1)
+        return Residuals(r, entry_joint=np.repeat(self.j, 12), d_pos_entry=d_pos, d_rot_entry=d_rot)

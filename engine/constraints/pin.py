@@ -100,4 +100,6 @@ class PinTerm(FrameRows, Term):
         sel = self.select(P, rows)
         on = self.on[sel]
         r = (P[:, self.j[0]] - kit.const(self.target[sel], P)) * kit.const(on, P)[:, None]
-        return Residuals(r, self.j, np.eye(3)[None, :, None, :] * on[:, None, None, None] if jac else None)
+        if not jac:
+            return Residuals(r)
+        return Residuals(r, entry_joint=np.repeat(self.j, 3), d_pos_entry=np.eye(3)[None] * on[:, None, None])

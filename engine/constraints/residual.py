@@ -14,7 +14,11 @@ built once per solve from its constraint's parameters frozen for the frame(s)
 blocks: ``d_pos (A, m, k, 3)`` w.r.t. the positions of ``pos_joints (k,)``, ``d_rot (A,
 m, k', 3)`` w.r.t. a small world-frame turn ``a`` of the rotations of ``rot_joints
 (k',)`` (``W_j -> exp([a]x) W_j``; the joint's position and its children left alone),
-and ``d_latent (A, m, L)``. Everything else is derived from that one definition:
+and ``d_latent (A, m, L)``. A term whose entries each read one joint (trackers, pins, end
+effectors, smoothing) gives its Jacobian per entry instead: ``entry_joint (m,)``, the joint
+entry ``i`` reads, with ``d_pos_entry (A, m, 3)`` and ``d_rot_entry (A, m, 3)``, the rows
+of the blocks above that are not structurally zero (``m x 3`` numbers instead of ``m x k x
+3``, and one product to scatter them). Everything else is derived from that one definition:
 
 * the loss of each constraint: ``|r|^2`` over its entries (:meth:`Term.losses`);
 * the solver's fast path: ``2 w J^T r``, accumulated into position, rotation and latent
@@ -126,6 +130,9 @@ class Residuals:
     rot_joints: np.ndarray | None = None
     d_rot: np.ndarray | None = None
     d_latent: np.ndarray | None = None
+    entry_joint: np.ndarray | None = None
+    d_pos_entry: np.ndarray | None = None
+    d_rot_entry: np.ndarray | None = None
 
 
 def owners(sizes: list[int]) -> np.ndarray:
@@ -237,6 +244,13 @@ class Term:
             _scatter(g_rot, res.rot_joints, _times(rw, res.d_rot))
         if res.d_latent is not None and g_z is not None:
             g_z += (rw @ res.d_latent)[:, 0]
+        if res.entry_joint is not None:  # per entry: one product with the entries' one-hot joints
+            spread = _one_hot(res.entry_joint, g_pos.shape[1])  # (22, m)
+            rw_entry = rw[:, 0, :, None]  # (A, m, 1)
+            if res.d_pos_entry is not None:
+                g_pos += spread @ (rw_entry * res.d_pos_entry)
+            if res.d_rot_entry is not None:
+                g_rot += spread @ (rw_entry * res.d_rot_entry)
 
 
 class FrameRows:
@@ -290,10 +304,31 @@ def _scatter(out: np.ndarray, joints: np.ndarray, g: np.ndarray) -> None:
         np.add.at(out, (slice(None), joints), g)  # type: ignore[arg-type]  # numpy's stubs refuse a tuple index
 
 
+_ONE_HOT: dict[tuple[bytes, int], np.ndarray] = {}  # entry joints seen -> their one-hot (terms reuse theirs)
+
+
+def _one_hot(joints: np.ndarray, count: int) -> np.ndarray:
+    """``(count, m)``: 1 at ``[joints[i], i]``, so ``_one_hot(joints) @ x`` sums the rows
+    ``x (A, m, c)`` of each joint (cached: a term's entry joints never change)."""
+    key = (joints.tobytes(), count)
+    out = _ONE_HOT.get(key)
+    if out is None:
+        if len(_ONE_HOT) > 4096:
+            _ONE_HOT.clear()
+        out = _ONE_HOT[key] = np.zeros((count, len(joints)))
+        out[joints, np.arange(len(joints))] = 1.0
+    return out
+
+
 #: Levi-Civita symbol: ``(a x v)_i = EPS3[i, k, l] a_k v_l``.
 EPS3 = np.zeros((3, 3, 3))
 EPS3[0, 1, 2] = EPS3[1, 2, 0] = EPS3[2, 0, 1] = 1.0
 EPS3[0, 2, 1] = EPS3[2, 1, 0] = EPS3[1, 0, 2] = -1.0
+
+
+#: ``W.reshape(9) @ _TURN`` is ``d (W - T)_ij / d a_k = ([e_k]x W)_ij = EPS3[i, k, l] W_lj``
+#: as ``(i, j, k)`` flattened: the per-entry Jacobian of a rotation residual.
+_TURN = np.einsum("ikl,jm->lmijk", EPS3, np.eye(3)).reshape(9, 27)
 
 
 def rotation_residual(kit: Kit, W: Any, T: Any, scale: Any, jac: bool) -> tuple[Any, np.ndarray | None]:
@@ -303,13 +338,12 @@ def rotation_residual(kit: Kit, W: Any, T: Any, scale: Any, jac: bool) -> tuple[
     Its squared norm is ``scale^2 * |W - T|_F^2 = scale^2 * 2 (3 - trace(T^T W))``, so with
     ``scale = sqrt(weight / 8)`` it is ``weight * sin^2(angle / 2)``, the sign-invariant
     rotation distance of quaternions ``1 - <q, q_t>^2``. The Jacobian w.r.t. a world turn
-    ``a`` of each joint is ``scale * [e_k]x W``: ``(A, s * 9, s, 3)`` block-diagonal.
+    ``a`` of each entry's joint is ``scale * [e_k]x W``, per entry: ``(A, s * 9, 3)`` (entry
+    ``9 t + 3 i + j`` reads joint ``t``).
     """
     a, s = W.shape[0], W.shape[1]
     r = (scale[..., None, None] * (W - T)).reshape(a, s * 9)
     if not jac:
         return r, None
-    block = np.einsum("ikl,aslj->asijk", EPS3, W) * np.asarray(scale)[..., None, None, None]  # (A, s, 3, 3, 3)
-    d = np.zeros((a, s, 9, s, 3))
-    d[:, np.arange(s), :, np.arange(s)] = block.reshape(a, s, 9, 3).transpose(1, 0, 2, 3)
-    return r, d.reshape(a, s * 9, s, 3)
+    d = (W.reshape(a, s, 9) @ _TURN) * np.asarray(scale)[..., None]  # (A, s, 27)
+    return r, d.reshape(a, s * 9, 3)

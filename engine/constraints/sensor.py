@@ -137,8 +137,9 @@ class SensorTerm(FrameRows, Term):
         s = len(items)
         # groups: each tracker's position (3 entries), then each 6-DoF one's rotation (9)
         self.check_group = np.concatenate([np.repeat(np.arange(s), 3), s + np.repeat(np.arange(len(self.six)), 9)])
-        self._d_pos = np.zeros((3 * s, s, 3))
-        self._d_pos[np.arange(3 * s), np.repeat(np.arange(s), 3), np.tile(np.arange(3), s)] = 1.0
+        # per entry: the joint each reads, and the position entries' unit directions
+        self.entry_joint = np.concatenate([np.repeat(self.joints, 3), np.repeat(self.joints6, 9)]).astype(np.intp)
+        self._unit = np.tile(np.eye(3), (s, 1))  # (3 s, 3)
 
     def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:
         sel = self.select(P, rows)
@@ -155,11 +156,12 @@ class SensorTerm(FrameRows, Term):
         r = kit.cat(parts, -1) if len(parts) > 1 else parts[0]
         if not jac:
             return Residuals(r)
-        d_pos = self._d_pos[None] * np.repeat(self.on[sel], 3, axis=1)[:, :, None, None]
+        m, p = len(self.entry_joint), 3 * len(self.joints)
+        d_pos = np.zeros((a, m, 3))
+        d_pos[:, :p] = self._unit * np.repeat(self.on[sel], 3, axis=1)[:, :, None]
         if d_rot is not None:
-            d_pos = np.concatenate((d_pos, np.zeros((a, d_rot.shape[1]) + d_pos.shape[2:])), axis=1)
-            d_rot = np.concatenate((np.zeros((a, 3 * len(self.joints)) + d_rot.shape[2:]), d_rot), axis=1)
-        return Residuals(r, self.joints, d_pos, self.joints6 if d_rot is not None else None, d_rot)
+            d_rot = np.concatenate((np.zeros((a, p, 3)), d_rot), axis=1)
+        return Residuals(r, entry_joint=self.entry_joint, d_pos_entry=d_pos, d_rot_entry=d_rot)
 
     def check_limits(self, sel: Any) -> np.ndarray:
         """Position: the squared tolerance. Rotation: ``|r|^2 = scale^2 |W - T|_F^2 = 8 scale^2

@@ -84,7 +84,8 @@ class SmoothTerm(FrameRows, Term):
         self.names, self.owner = (name,), np.zeros(3 * n, dtype=np.intp)
         self.on = np.array([0.0 if target is None else 1.0])
         self.target = np.zeros((1, n, 3)) if target is None else np.asarray(target, dtype=np.float64).reshape(1, n, 3)
-        self._d_pos = np.eye(3 * n).reshape(3 * n, n, 3) / math.sqrt(n)
+        self.entry_joint = np.repeat(np.arange(n), 3)
+        self._unit = np.tile(np.eye(3), (n, 1)) / math.sqrt(n)  # (3 n, 3): entry 3 j + c reads P_j along c
 
     def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:
         sel = self.select(P, rows)
@@ -93,4 +94,4 @@ class SmoothTerm(FrameRows, Term):
         r = ((P - kit.const(self.target[sel], P)) * kit.const(on / math.sqrt(n), P)[:, None, None]).reshape(a, 3 * n)
         if not jac:
             return Residuals(r)
-        return Residuals(r, np.arange(n), self._d_pos[None] * on[:, None, None, None])
+        return Residuals(r, entry_joint=self.entry_joint, d_pos_entry=self._unit[None] * on[:, None, None])

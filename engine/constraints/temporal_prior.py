@@ -56,4 +56,9 @@ class PriorTerm(FrameRows, Term):
             return Residuals(kit.zeros((a, 1), z))
         s = 1.0 / math.sqrt(n)
         r = (z - kit.const(self.prediction[self.select(z, rows)], z)) * s
-        return Residuals(r, d_latent=np.broadcast_to(np.eye(n) * s, (a, n, n)) if jac else None)
+        if not jac:
+            return Residuals(r)
+        d = getattr(self, "_d_latent", None)
+        if d is None or d.shape[:2] != (a, n):  # the same for every evaluation: made once
+            d = self._d_latent = np.broadcast_to(np.eye(n) * s, (a, n, n))
+        return Residuals(r, d_latent=d)

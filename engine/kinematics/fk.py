@@ -238,31 +238,61 @@ def _forward(local_mat, root_pos, offsets, parents, local_quat=None):
 def _forward_numpy(
     local_mat: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, lv: Levels, local_quat: np.ndarray | None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-    """:func:`_forward` for numpy: the same levels written in place into level-ordered
-    arrays, then every position at once from the world bone vectors (no autograd to
-    keep, and numpy's per-call overhead, not arithmetic, is what one pose costs)."""
-    order, prow, chain = lv.order, lv.prow, lv.chain
-    shape = np.broadcast_shapes(local_mat.shape[:-3], root_pos.shape[:-1], offsets.shape[:-2])
-    n = len(order)
-    mats = local_mat[..., order, :, :]
-    world = np.empty(shape + (n, 3, 3))
-    world[..., 0, :, :] = mats[..., 0, :, :]
+    """:func:`_forward` for numpy: :func:`fk_level_order` on the joints gathered into level
+    order, then gathered back."""
+    order = lv.order
     quats = None
     if local_quat is not None:
         lq = local_quat[..., order, :]
-        quats = np.empty(shape + (n, 4))
+        quats = np.empty(lq.shape)
         quats[..., 0, :] = lq[..., 0, :]
+        start = 1
+        for rows in lv.parent_rows:
+            end = start + len(rows)
+            quats[..., start:end, :] = Q.mul(quats[..., rows, :], lq[..., start:end, :])
+            start = end
+    pos, world = fk_level_order(local_mat[..., order, :, :], root_pos, offsets[..., order[1:], :, None], lv)
+    back = lv.unorder
+    return pos[..., back, :], world[..., back, :, :], None if quats is None else quats[..., back, :]
+
+
+def fk_level_order(
+    local_mat: np.ndarray, root_pos: np.ndarray, bone_offsets: np.ndarray, lv: Levels
+) -> tuple[np.ndarray, np.ndarray]:
+    """The numpy FK pass on joints stored in level order (:attr:`Levels.order`): each
+    level's world rotations are one product written in place, then every position at once
+    from the world bone vectors (numpy's per-call overhead, not arithmetic, is what one
+    pose costs, hence few, larger calls). The solver's chain keeps its poses in this order.
+
+    Parameters
+    ----------
+    local_mat : ndarray (..., J, 3, 3)
+        Local rotations in level order (row 0: the root's world rotation).
+    root_pos : ndarray (..., 3)
+        World root position, metres.
+    bone_offsets : ndarray (..., J - 1, 3, 1)
+        The offsets of rows ``1 ..`` (``offsets[..., order[1:], :, None]``), metres.
+    lv : Levels
+
+    Returns
+    -------
+    positions : ndarray (..., J, 3)
+        World positions, level order, metres.
+    rotations : ndarray (..., J, 3, 3)
+        World rotation matrices, level order.
+    """
+    shape = np.broadcast_shapes(local_mat.shape[:-3], root_pos.shape[:-1], bone_offsets.shape[:-3])
+    world = np.empty(shape + local_mat.shape[-3:])
+    world[..., 0, :, :] = local_mat[..., 0, :, :]
     start = 1
     for rows in lv.parent_rows:
         end = start + len(rows)
-        np.matmul(world[..., rows, :, :], mats[..., start:end, :, :], out=world[..., start:end, :, :])
-        if quats is not None:
-            quats[..., start:end, :] = Q.mul(quats[..., rows, :], lq[..., start:end, :])
+        np.matmul(world.take(rows, axis=-3), local_mat[..., start:end, :, :], out=world[..., start:end, :, :])
         start = end
-    bones = np.matmul(world[..., prow[1:], :, :], offsets[..., order[1:], :, None])[..., 0]
-    pos = np.matmul(chain, bones) + root_pos[..., None, :]
-    back = lv.unorder
-    return pos[..., back, :], world[..., back, :, :], None if quats is None else quats[..., back, :]
+    bones = np.matmul(world.take(lv.prow[1:], axis=-3), bone_offsets)[..., 0]
+    pos = np.matmul(lv.chain, bones)
+    pos += root_pos[..., None, :]
+    return pos, world
 
 
 def local_from_global(global_rot, parents=sk.PARENTS):

@@ -329,3 +329,5 @@ def qfrom_bases(u0: Floats, w0: Floats, u1: Floats, w1: Floats) -> Quat:
 _MUL, _MAT = _product_tensors()
 #: ``(16, 9)``: coefficient of ``q_j q_k`` (row ``4 j + k``) in ``R(q)[r, c]`` (column ``3 r + c``).
 MATRIX_TABLE = _MAT
+#: ``(16, 4)``: coefficient of ``a_j b_k`` (row ``4 j + k``) in the product ``a * b``.
+MUL_TABLE = _MUL

@@ -14,9 +14,13 @@ weights (twice: forward and backward), so each matrix is stored as a few dense
 rectangles: consecutive output nodes are grouped into *runs*, each run keeps only the
 contiguous range of input columns its nodes read, and a run is one BLAS product on
 slices (no gather, no copy). The grouping minimises ``entries stored + CALL_COST per
-run`` by dynamic programming over the node order (:func:`plan_runs`), once for the
-forward layout and once for the transposed (backward) layout. Entries outside every
-rectangle are exactly zero in the dense matrix, so the products are the same sums.
+run`` by dynamic programming over the node order (:func:`plan_runs`). Entries outside
+every rectangle are exactly zero in the dense matrix, so the products are the same sums.
+
+The backward pass reads the same rectangles transposed (``g[r0:r1] @ w``, added into the
+input gradient's columns ``c0:c1``): one copy of the weights, 3.6 MB, serves both passes,
+which keeps them in a core's L2 cache between the forward and the backward (two copies,
+7.3 MB, spilled to L3: see docs/performance.md).
 
 The last stage folds in the quaternion identity bias and the displacement's
 de-normalisation, so its output is ``(q_raw (22*4), disp (3))`` in metres.
@@ -119,8 +123,8 @@ class DenseDecoder:
     weights : list of ndarray (out, in), float32
         The dense stage matrices (the exact reference; not used per iteration).
     biases : list of ndarray (out,), float32
-    forward_runs, backward_runs : list of list of Run
-        Per stage, the rectangles of the matrix and of its transpose.
+    forward_runs : list of list of Run
+        Per stage, the rectangles of the matrix (both passes read them).
     slope : float
         LeakyReLU negative slope (after every stage but the last).
     """
@@ -164,9 +168,6 @@ class DenseDecoder:
                 self.weights.append(np.ascontiguousarray(w.numpy(), dtype=np.float32))
                 self.biases.append(bias.numpy().astype(np.float32))
         self.forward_runs = [plan_runs(w, parts[i + 1], parts[i], call_cost) for i, w in enumerate(self.weights)]
-        self.backward_runs = [
-            plan_runs(np.ascontiguousarray(w.T), parts[i], parts[i + 1], call_cost) for i, w in enumerate(self.weights)
-        ]
         self.slope = float(m.config.negative_slope)
         self.latent = int(m.config.latent)
         self._allocate()
@@ -183,7 +184,7 @@ class DenseDecoder:
         self._grad = [np.empty(w.shape[1], f32) for w in self.weights]  # ... and at its input
         inputs = [self._z] + self._act
         self._fwd = [_bind(runs, inputs[i], self._pre[i]) for i, runs in enumerate(self.forward_runs)]
-        self._bwd = [_bind(runs, self._gin[i], self._grad[i]) for i, runs in enumerate(self.backward_runs)]
+        self._bwd = [_bind_transposed(runs, self._gin[i], self._grad[i]) for i, runs in enumerate(self.forward_runs)]
 
     def with_own_buffers(self) -> "DenseDecoder":
         """A decoder that shares this one's matrices and runs (read only) and has scratch
@@ -201,12 +202,9 @@ class DenseDecoder:
         :mod:`engine.studio.method_state`, shares it like the network it came from)."""
         return self
 
-    def stored_entries(self) -> tuple[int, int]:
-        """Weight entries read per forward and per backward pass (dense: all of them)."""
-        return (
-            sum(r.w.size for runs in self.forward_runs for r in runs),
-            sum(r.w.size for runs in self.backward_runs for r in runs),
-        )
+    def stored_entries(self) -> int:
+        """Weight entries read per pass, forward or backward (dense: all of them)."""
+        return sum(r.w.size for runs in self.forward_runs for r in runs)
 
     def forward(self, z: np.ndarray) -> np.ndarray:
         """``z (L,)`` float32 -> ``(q_raw (88,), disp (3,))`` concatenated, float32 (a new
@@ -241,11 +239,14 @@ class DenseDecoder:
         for i in range(last, -1, -1):
             if i < last:
                 np.multiply(self._grad[i + 1], self._gate[i], out=self._gin[i])
-            products, empty = self._bwd[i]
-            for w, x, y in products:
-                dot(w, x, out=y)
-            for y in empty:
+            writes, adds, zero = self._bwd[i]
+            for y in zero:
                 y[:] = 0.0
+            for g, w, y in writes:
+                dot(g, w, out=y)
+            for g, w, y, tmp in adds:
+                dot(g, w, out=tmp)
+                y += tmp
         return self._grad[0].copy()
 
 
@@ -254,3 +255,27 @@ def _bind(runs: list[Run], x: np.ndarray, out: np.ndarray) -> tuple[list[tuple],
     output views of runs that read nothing (zero)."""
     products = [(r.w, x[r.c0 : r.c1], out[r.r0 : r.r1]) for r in runs if r.c1 > r.c0]
     return products, [out[r.r0 : r.r1] for r in runs if r.c1 <= r.c0]
+
+
+def _bind_transposed(
+    runs: list[Run], g: np.ndarray, out: np.ndarray
+) -> tuple[list[tuple], list[tuple], list[np.ndarray]]:
+    """The products of ``out = W^T @ g`` over the rectangles of ``W``: ``(g view, w, out
+    view)`` for a run whose columns no earlier run reads (written directly), ``(g view, w,
+    out view, scratch)`` for one that shares columns with an earlier run (added; every
+    such run comes after the run it shares with, so it adds to a written value), and the
+    views of the columns no direct run writes (zeroed first)."""
+    written = np.zeros(len(out), dtype=bool)
+    touched = np.zeros(len(out), dtype=bool)
+    writes, adds = [], []
+    for r in runs:
+        if r.c1 <= r.c0:
+            continue
+        if not touched[r.c0 : r.c1].any():
+            writes.append((g[r.r0 : r.r1], r.w, out[r.c0 : r.c1]))
+            written[r.c0 : r.c1] = True
+        else:
+            adds.append((g[r.r0 : r.r1], r.w, out[r.c0 : r.c1], np.empty(r.c1 - r.c0, out.dtype)))
+        touched[r.c0 : r.c1] = True
+    edges = np.flatnonzero(np.diff(np.r_[False, ~written, False].astype(np.int8)))
+    return writes, adds, [out[a:b] for a, b in zip(edges[::2], edges[1::2])]

@@ -67,9 +67,9 @@ class BatchDecoder:
             if i < len(d.weights) - 1:
                 g = g * self._gates[i]
             y = np.zeros((d.weights[i].shape[1], g.shape[1]), np.float32)
-            for r in d.backward_runs[i]:
+            for r in d.forward_runs[i]:  # the forward rectangles, transposed
                 if r.c1 > r.c0:
-                    np.dot(r.w, g[r.c0 : r.c1], out=y[r.r0 : r.r1])
+                    y[r.c0 : r.c1] += r.w.T @ g[r.r0 : r.r1]
             g = y
         return g
 

@@ -29,11 +29,16 @@ import numpy as np
 from engine import skeleton as sk
 from engine.constraints.residual import EPS3
 from engine.kinematics import quat_np as QN
-from engine.kinematics.fk import fk_matrices
+from engine.kinematics.fk import fk_level_order, levels
 
 _EPS = 1e-8  # quaternion normalisation floor, as in engine.kinematics.quaternion.normalize
 #: ``cross(a, b) = (a outer b).reshape(9) @ _CROSS``: one matmul instead of a dozen small ops.
 _CROSS = EPS3.transpose(1, 2, 0).reshape(9, 3)
+
+
+#: ``(0, s) * u = (s outer u).reshape(12) @ _PURE_MUL``: the Hamilton product of a pure
+#: quaternion (rows of the product table whose first factor has no scalar part).
+_PURE_MUL = QN.MUL_TABLE[4:]
 
 
 def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -70,6 +75,12 @@ class RootFrames:
 class PoseChain:
     """Forward and reverse pass of decoder output -> root -> FK for ``A`` frames (module doc).
 
+    The pose is kept in level order (:func:`~engine.kinematics.fk.levels`: root, then
+    depth 1, 2, ...), so FK is :func:`~engine.kinematics.fk.fk_level_order` and the
+    reverse pass reads it without reordering; the gathers between the decoder's joint
+    order and level order are index arrays made here once, and the two arrays the terms
+    read (positions and rotations in joint order) are gathered back once per forward.
+
     Parameters
     ----------
     offsets : ndarray (22, 3)
@@ -79,22 +90,19 @@ class PoseChain:
     def __init__(self, offsets: np.ndarray) -> None:
         n = self.n = sk.NUM_JOINTS
         self.offsets = np.asarray(offsets, dtype=np.float64)
-        self.parent = np.array([0, *sk.PARENTS[1:]], dtype=np.intp)
-        # subtree[j, d]: 1 when joint d is j or below it
-        self.subtree = np.eye(n)
-        for d in range(1, n):
-            a = int(self.parent[d])
-            while True:
-                self.subtree[a, d] = 1.0
-                if a == 0:
-                    break
-                a = int(self.parent[a])
+        lv = self.levels = levels(sk.PARENTS)
+        self.order, self.unorder, self.prow = lv.order, lv.unorder, lv.prow
+        self.bone_offsets = self.offsets[lv.order[1:], :, None]  # (21, 3, 1)
+        self.q_index = (4 * lv.order[:, None] + np.arange(4)).reshape(-1)  # decoder output -> level order
+        # subtree[r, d]: 1 when row d is row r or below it (bone r - 1 ends at row r)
+        self.subtree = np.ones((n, n))
+        self.subtree[1:] = lv.chain.T
 
     def forward(self, out: np.ndarray, root: RootFrames) -> tuple[np.ndarray, np.ndarray]:
-        """World positions ``(A, 22, 3)`` and rotations ``(A, 22, 3, 3)`` of decoder outputs
-        ``out (A, 91)``; keeps what :meth:`backward` needs."""
+        """World positions ``(A, 22, 3)`` and rotations ``(A, 22, 3, 3)`` (joint order) of
+        decoder outputs ``out (A, 91)``; keeps what :meth:`backward` needs."""
         n, a = self.n, len(out)
-        q = out[:, : 4 * n].astype(np.float64).reshape(a, n, 4)
+        q = out[:, self.q_index].astype(np.float64).reshape(a, n, 4)
         norm = np.sqrt(np.einsum("aij,aij->ai", q, q))
         np.maximum(norm, _EPS, out=norm)
         u = q / norm[..., None]
@@ -104,38 +112,40 @@ class PoseChain:
             base = root.position
         else:
             base = root.previous + np.einsum("aij,aj->ai", root.heading, out[:, 4 * n :].astype(np.float64))
-        pos, world = fk_matrices(local, base, self.offsets)
-        self.anchor = root.anchor if root.position is None else None
+        pos, world = fk_level_order(local, base, self.bone_offsets, self.levels)
+        self.anchor = None if root.anchor is None or root.position is not None else int(self.unorder[root.anchor])
         if self.anchor is not None:
-            pos = pos + (root.anchor_position - pos[:, self.anchor])[:, None]
+            pos += (root.anchor_position - pos[:, self.anchor])[:, None]
         self.root, self.norm, self.u, self.pos, self.world = root, norm, u, pos, world
-        return pos, world
+        back = self.unorder
+        return pos[:, back], world[:, back]
 
     def backward(self, g_pos: np.ndarray, g_rot: np.ndarray | None) -> np.ndarray:
         """Gradient w.r.t. the decoder outputs ``(A, 91)`` float32 of a loss whose gradients
         are ``g_pos (A, 22, 3)`` w.r.t. the positions and ``g_rot (A, 22, 3)`` w.r.t. world
-        turns of the rotations (None: zero), at the last :meth:`forward`."""
+        turns of the rotations (None: zero), joint order, at the last :meth:`forward`."""
         n, root, pos = self.n, self.root, self.pos
+        g = g_pos[:, self.order]
         if self.anchor is not None:  # the anchor moves the whole body against the others' pull
-            g_pos = g_pos.copy()
-            g_pos[:, self.anchor] -= g_pos.sum(1)
-        tau = self.subtree @ cross(pos, g_pos) - cross(pos, self.subtree @ g_pos)
+            g[:, self.anchor] -= g.sum(1)
+        tau = self.subtree @ cross(pos, g) - cross(pos, self.subtree @ g)
         if g_rot is not None:
-            tau += self.subtree @ g_rot  # turning a joint turns every joint of its subtree
-        frame = self.world[:, self.parent]
+            tau += self.subtree @ g_rot[:, self.order]  # turning a joint turns every joint of its subtree
+        frame = self.world[:, self.prow]
         frame[:, 0] = root.heading
-        sigma = np.einsum("ajk,ajkl->ajl", tau, frame)  # W_parent^T tau
-        g_q = QN.mul(np.concatenate((np.zeros(sigma.shape[:-1] + (1,)), sigma), axis=-1), self.u)
+        sigma = np.matmul(tau[..., None, :], frame)[..., 0, :]  # W_parent^T tau
+        g_q = (sigma[..., :, None] * self.u[..., None, :]).reshape(sigma.shape[:-1] + (12,)) @ _PURE_MUL
         g_q *= (2.0 / self.norm)[..., None]
         if root.rotation is not None:
             g_q[:, 0] = 0.0
         out = np.zeros((len(pos), 4 * n + 3), np.float32)
-        out[:, : 4 * n] = g_q.reshape(len(pos), -1)
+        out[:, self.q_index] = g_q.reshape(len(pos), -1)
         if root.position is None:
-            out[:, 4 * n :] = np.einsum("aji,aj->ai", root.heading, g_pos.sum(1))
+            out[:, 4 * n :] = np.einsum("aji,aj->ai", root.heading, g.sum(1))
         return out
 
     def local(self) -> np.ndarray:
-        """Local rotations ``(A, 22, 4)`` of the last :meth:`forward`: unit quaternions with
-        ``w >= 0``, row 0 before the heading (the decoder's own)."""
-        return self.u * np.where(self.u[..., :1] < 0, -1.0, 1.0)
+        """Local rotations ``(A, 22, 4)`` (joint order) of the last :meth:`forward`: unit
+        quaternions with ``w >= 0``, row 0 before the heading (the decoder's own)."""
+        u = self.u[:, self.unorder]
+        return u * np.where(u[..., :1] < 0, -1.0, 1.0)

@@ -60,8 +60,10 @@ class Objective(Protocol):
     weights: np.ndarray
     fast: bool
 
-    def evaluate(self, z: np.ndarray, timings: SolveTimings) -> np.ndarray:
-        """Every constraint's loss ``(K,)`` at latent ``z (L,)`` float32."""
+    def evaluate(self, z: np.ndarray, timings: SolveTimings, gradient: bool = True) -> np.ndarray:
+        """Every constraint's loss ``(K,)`` at latent ``z (L,)`` float32; ``gradient=False``
+        says no :meth:`gradient` is expected at this point (its Jacobians may be skipped;
+        :meth:`gradient` still works, at the cost of making them then)."""
         ...
 
     def gradient(self) -> np.ndarray:
@@ -109,19 +111,23 @@ class FastObjective:
         self.frame = _Frame(terms, weights)
         self.names, self.weights = self.frame.names, self.frame.flat
 
-    def evaluate(self, z: np.ndarray, timings: SolveTimings) -> np.ndarray:
+    def evaluate(self, z: np.ndarray, timings: SolveTimings, gradient: bool = True) -> np.ndarray:
         t0 = time.perf_counter()
         out = self.decoder.forward(z)
         t1 = time.perf_counter()
         self.P, self.W = self.chain.forward(out[None], self.root)
         self.z = z[None].astype(np.float64)
-        self.res = [t.residual(NUMPY, self.P, self.W, self.z, jac=True) for t in self.frame.terms]
+        self.jac = gradient
+        self.res = [t.residual(NUMPY, self.P, self.W, self.z, jac=gradient) for t in self.frame.terms]
         values = [t.losses(r)[0] for t, r in zip(self.frame.terms, self.res)]
         timings.decoder += t1 - t0
         timings.fk_losses += time.perf_counter() - t1
         return np.concatenate(values) if values else np.zeros(0)
 
     def gradient(self) -> np.ndarray:
+        if not self.jac:  # evaluated without Jacobians: make them now
+            self.res = [t.residual(NUMPY, self.P, self.W, self.z, jac=True) for t in self.frame.terms]
+            self.jac = True
         g_pos, g_rot, g_z = np.zeros_like(self.P), np.zeros_like(self.P), np.zeros_like(self.z)
         for t, r, w in zip(self.frame.terms, self.res, self.frame.weights):
             t.accumulate(r, w[None], g_pos, g_rot, g_z)
@@ -145,7 +151,7 @@ class ReferenceObjective:
         self.frame = _Frame(terms, weights)
         self.names, self.weights = self.frame.names, self.frame.flat
 
-    def evaluate(self, z: np.ndarray, timings: SolveTimings) -> np.ndarray:
+    def evaluate(self, z: np.ndarray, timings: SolveTimings, gradient: bool = True) -> np.ndarray:
         import torch
 
         from engine.constraints.base import state_arrays
@@ -221,6 +227,12 @@ class StoppingRule:
             out = out | (self.since[rows] >= self.patience) | satisfied()
         fixed = self.fixed[rows]
         return np.where(fixed >= 0, steps >= fixed, out)
+
+    def last(self, steps: int, row: int = 0) -> bool:
+        """Whether row ``row``'s frame stops for certain once it has taken ``steps`` steps
+        (at its cap or its fixed count), whatever its losses: no gradient follows."""
+        fixed = int(self.fixed[row])
+        return steps >= (fixed if fixed >= 0 else self.cap)
 
     def stepped(self, rows: np.ndarray | None = None) -> None:
         """Count one step of ``rows`` (default: all)."""

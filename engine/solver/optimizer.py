@@ -201,7 +201,7 @@ class PoseOptimizer:
                 keep = [i for i, c in enumerate(active) if c.name not in bad]
                 active, weights = [active[i] for i in keep], [weights[i] for i in keep]
                 obj = self.objective(active, weights, ctx)
-            return self._run(obj, z0, active, s, ctx, warnings, timings)
+            return self._run(obj, z0, active, s, ctx, warnings, timings, None if bad else values)
 
     def _run(
         self,
@@ -212,8 +212,10 @@ class PoseOptimizer:
         ctx: FrameContext,
         warnings: list[str],
         timings: SolveTimings,
+        first: np.ndarray | None = None,
     ) -> Solution:
-        """The solve loop: evaluate, record, stop or step (module doc)."""
+        """The solve loop: evaluate, record, stop or step (module doc). ``first``: the
+        losses ``obj`` has just evaluated at ``z0`` (the loop starts from that evaluation)."""
         clock = time.perf_counter
         rule = self.update_rule(active, ctx.deadline is not None, s)
         upd = self._update(rule, s)
@@ -221,9 +223,13 @@ class PoseOptimizer:
         timings.fast = obj.fast
         z, losses, path = z0.copy(), [], []
         deadline, cut, t_loop, steps = ctx.deadline, False, clock(), 0
-        timings.decoder = timings.fk_losses = 0.0  # the first evaluation is repeated in the loop
+        if first is None:
+            timings.decoder = timings.fk_losses = 0.0  # an evaluation of another objective
         while True:
-            values = obj.evaluate(z, timings)
+            if first is not None:
+                values, first = first, None
+            else:
+                values = obj.evaluate(z, timings, not stopping.last(steps))
             total = float(obj.weights @ values)
             path.append(z)
             losses.append({**dict(zip(obj.names, values.tolist())), "total": total})

@@ -7,6 +7,8 @@ overhead, and shared by the solver's fast and reference paths.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 
@@ -79,6 +81,10 @@ class LatentUpdate:
     def _move(self, n: np.ndarray, m: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Adam's step for step counts ``n`` (one per row) and moments ``m``, ``v``."""
         b1, b2 = self.BETAS
+        if np.ndim(n) == 0:  # one latent: the same float64 factors as scalars (fewer numpy calls)
+            k = float(n)
+            root = np.float32(math.sqrt(1 - b2**k))
+            return np.float32(self.lr / (1 - b1**k)) * (m / (np.sqrt(v) / root + np.float32(self.EPS)))
         n = np.asarray(n, dtype=np.float64)[..., None]
         size = (self.lr / (1 - b1**n)).astype(np.float32)
         denom = np.sqrt(v) / np.sqrt(1 - b2**n).astype(np.float32) + np.float32(self.EPS)

@@ -123,7 +123,7 @@ def test_a_batch_of_frames_is_each_frame_alone(kind, index):
     for a, (t, f) in enumerate(zip(alone, frames)):
         one = t.residual(NUMPY, f[0][None], f[1][None], f[2][None], jac=True)
         np.testing.assert_allclose(together.r[a], one.r[0], rtol=1e-12, atol=1e-15)
-        for name in ("d_pos", "d_rot", "d_latent"):
+        for name in ("d_pos", "d_rot", "d_latent", "d_pos_entry", "d_rot_entry"):
             x, y = getattr(together, name), getattr(one, name)
             assert (x is None) == (y is None), name
             if x is not None:

@@ -241,7 +241,9 @@ def live(a: argparse.Namespace) -> int:
     _warm_up(method, skeleton, args.fps)
     receiver = VMCReceiver("127.0.0.1", port, TrackerMapping.parse(args.map), args.convention, args.timeout, None)
     budget = default_budget_ms(args.fps) if args.frame_budget is None else args.frame_budget
-    run = LiveRun(receiver, method, skeleton, args.fps, 0.0, "auto", budget if method.takes_deadline else 0.0)
+    run = LiveRun(
+        receiver, method, skeleton, args.fps, 0.0, "auto", budget if method.takes_deadline else 0.0, keep_frames=False
+    )
     seconds = a.minutes * a.minute_s
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")])}
     sender = subprocess.Popen(

@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))  # this checkout's packages, not an installed copy
 EXAMPLE = REPO / "assets" / "clips" / "example.bvh"
 PROBE_MS = 10
 #: The issue's targets: RSS growth at most 5 %, rates and p99 within 10 % of the first minute.

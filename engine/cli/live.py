@@ -114,7 +114,6 @@ def _live(args: argparse.Namespace) -> int:
         latency_summary,
         reference_error,
         to_motion,
-        tracker_error_cm,
     )
     from engine.tracker_io.receiver import VMCReceiver, parse_listen
     from engine.tracker_io.recording import RecordingWriter, header
@@ -141,6 +140,7 @@ def _live(args: argparse.Namespace) -> int:
         args.calibrate,
         args.calibration_pose,
         budget if method.takes_deadline else 0.0,
+        keep_frames=args.out is not None or reference is not None,  # else only the figures: an hour stays small
     )
     status = _Status(receiver, disabled=args.no_progress)
     print(f"listening on {receiver.host}:{receiver.port} (method {args.method})", file=sys.stderr, flush=True)
@@ -175,10 +175,10 @@ def _live(args: argparse.Namespace) -> int:
         "calibration_frames": result.calibration_frames,
         "completeness": completeness_summary(result.fresh, result.devices),
         "latency_ms": latency_summary(result.latency_ms),
-        "ms_per_frame_median": float(np.median([r.ms for r in result.results])) if result.results else None,
+        "ms_per_frame_median": float(np.median(result.solve_ms)) if result.solve_ms else None,
         "frame_budget_ms": run.budget_s * 1000.0 if method.takes_deadline else None,
         "iterations": iteration_summary(result.iterations),
-        "tracker_error_cm": tracker_error_cm(result.results, result.sensors),
+        "tracker_error_cm": result.tracker_error_cm(),
         "reference": reference_error(result.times, result.results, reference),
         "calibration": result.calibration.to_json() if result.calibration else None,
         "skeleton_height_m": skeleton.height(),

@@ -18,8 +18,10 @@ def _send(widget, kind, x, y, button, buttons, mods):
     QApplication.sendEvent(widget, event)
 
 
-def mouse_drag(view, start, end, ctrl: bool = False, steps: int = 6) -> None:
-    """Left-drag on the 3D view from ``start`` to ``end`` (VTK display pixels, y up)."""
+def mouse_drag(view, start, end, ctrl: bool = False, steps: int = 6, on_move=None) -> None:
+    """Left-drag on the 3D view from ``start`` to ``end`` (VTK display pixels, y up);
+    ``on_move()``, when given, is called after each move's events were processed (what
+    the window holds in the middle of the drag: scripts/kill_test.py records it)."""
     widget = view.plotter
     h = widget.height()
     mods = Qt.KeyboardModifier.ControlModifier if ctrl else Qt.KeyboardModifier.NoModifier
@@ -29,8 +31,12 @@ def mouse_drag(view, start, end, ctrl: bool = False, steps: int = 6) -> None:
         x, y = x0 + t * (x1 - x0), y0 + t * (y1 - y0)
         _send(widget, QMouseEvent.Type.MouseMove, x, h - 1 - y, NONE, LEFT, mods)
         QApplication.processEvents()
+        if on_move is not None:
+            on_move()
     _send(widget, QMouseEvent.Type.MouseButtonRelease, x1, h - 1 - y1, LEFT, NONE, mods)
     QApplication.processEvents()
+    if on_move is not None:
+        on_move()
 
 
 def pixel_of(view, point) -> tuple[float, float]:

@@ -16,7 +16,7 @@ from engine.cli.main import main
 from engine.methods import get_method
 from engine.motion.bvh import save_motion_bvh
 from engine.motion.retarget import load_motion
-from engine.tracker_io.live import LiveRun, reference_error, to_motion
+from engine.tracker_io.live import LiveRun, reference_error, to_motion, tracker_error_cm
 from engine.tracker_io.receiver import VMCReceiver
 from engine.tracker_io.sender import plan_stream, send_stream
 
@@ -45,6 +45,22 @@ def test_live_run_solves_the_stream_like_simulated_sensors(synthetic_motion):
     rec = to_motion(out.times, out.results, motion.skeleton, 60.0)
     assert len(rec) == round((out.times[-1] - out.times[0]) * 60) + 1
     assert reference_error(out.times, out.results, None)["pos_cm"] is None
+    assert out.tracker_error_cm() == pytest.approx(tracker_error_cm(out.results, out.sensors))
+
+
+def test_a_live_run_that_keeps_no_frames_keeps_the_figures_only(synthetic_motion):
+    """`live` without --out or --reference: an hour's stream must not hold every pose."""
+    motion = synthetic_motion.slice(0, 30)
+    with VMCReceiver("127.0.0.1", 0) as rx:
+        run = LiveRun(rx, get_method("ik"), motion.skeleton, 60.0, keep_frames=False)
+        sender = threading.Thread(target=send_stream, args=(plan_stream(motion, "6"), "127.0.0.1", rx.port, 60.0))
+        sender.start()
+        out = run.run(duration_s=20.0, idle_timeout_s=0.5)
+        sender.join()
+    assert out.results == [] and out.sensors == []
+    assert out.frames_solved >= 5 and out.frames_solved == len(out.latency_ms) == len(out.solve_ms)
+    assert out.frames_solved + out.frames_skipped == 30
+    assert 0.0 < out.tracker_error_cm() < 20.0
 
 
 def _run_live(args: list[str]) -> tuple[threading.Thread, list]:

@@ -36,7 +36,20 @@ def pytest_configure(config):
     torch.set_num_threads(1)
 
 
+def pytest_addoption(parser):
+    parser.addoption(
+        "--soak",
+        action="store_true",
+        help="also run the reliability runs marked soak (kill and recover; docs/reliability.md)",
+    )
+
+
 def pytest_collection_modifyitems(config, items):
+    if not config.getoption("--soak"):
+        later = pytest.mark.skip(reason="a reliability run (minutes): run before closing with --soak")
+        for item in items:
+            if "soak" in item.keywords:
+                item.add_marker(later)
     if os.environ.get("DISPLAY") and os.environ.get("QT_QPA_PLATFORM") != "offscreen":
         return
     skip = pytest.mark.skip(reason="VTK viewport needs a display: install xvfb (pytest-xvfb starts it)")

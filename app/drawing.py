@@ -65,7 +65,7 @@ class DrawScheduler:
         self.panels = [
             # while playing: a plot's repaint (Qt paints it after the update) costs
             # 10-25 ms on software rendering, so each plot changes once or twice a second
-            Panel("timeline", lambda s: w.session.note_frame(s.frame), 0.1),
+            Panel("timeline", self._follow_playback, 0.1),
             Panel("plot:iterations", w.plots.update_iterations, 0.5),
             Panel("plot:cost", w.plots.update_cost, 1.0),
             Panel("plot:history", w.plots.update_history, 1.0),
@@ -102,6 +102,14 @@ class DrawScheduler:
             self.w.method_errors.record(snap)  # a point per drawn frame; the plot redraws 4/s
             self.w.snapshotDrawn.emit(snap.frame)
         self._update_one_panel(snap, now, spent_ms=(time.perf_counter() - t0) * 1000.0)
+
+    def _follow_playback(self, snap: Any) -> None:
+        """The timeline follows the engine's frame while this play run goes on; paused, the
+        session's own frame (a seek) stands, and a snapshot solved before it cannot move it
+        back."""
+        s = self.w.session
+        if s.playing and snap.playing and snap.plays == s.plays:
+            s.note_frame(snap.frame)
 
     def _mirror_engine(self, snap: Any) -> None:
         """Cheap state the session must know at once: the end of playback, a refused method."""

@@ -43,3 +43,24 @@ def test_status_shows_the_solver_breakdown_and_leaves_unchanged_labels_alone(qtb
     labels["status_engine"].setText = lambda t: changed.append(t)  # type: ignore[method-assign]
     d._update_status(snap)
     assert changed == [], "an unchanged label must not be set again"
+
+
+def test_a_snapshot_solved_before_a_seek_does_not_move_the_paused_frame_back(studio, qtbot):
+    """Paused and seeked to frame 20, a snapshot of frame 0 that the engine solved before
+    the seek (drawn after it) leaves the timeline at 20; while playing it follows the engine."""
+    from dataclasses import replace
+
+    s = studio.session
+    qtbot.waitUntil(lambda: s.latest is not None, timeout=30000)
+    s.pause()
+    s.seek(20)
+    stale = replace(s.latest, frame=0, playing=False, seq=s.latest.seq + 1000)
+    for panel in studio.drawing.panels:
+        if panel.name == "timeline":
+            panel.update(stale)
+    assert s.frame == 20
+    s.play()
+    for panel in studio.drawing.panels:
+        if panel.name == "timeline":
+            panel.update(replace(stale, frame=33, playing=True, plays=s.plays))
+    assert s.frame == 33

@@ -2,12 +2,17 @@
 
 A "Latent map" dock, tabbed beside the Latent dock, holds three tabs: *Map* (the latent
 map over the prior readouts), *Forces* (term forces of the frame on screen) and
-*Gallery* (the dimension sweep). Requests go to the session: a click on a trajectory
+*Gallery* (the dimension sweep). The map and the readouts read one store of every
+frame solved since the clip or method was opened
+(:class:`engine.latent.solved_frames.SolvedFrames`): a seek that restarts the engine's
+history keeps the trajectory, and another clip or method empties it, ignoring the
+snapshots still in flight from before. Requests go to the session: a click on a trajectory
 point seeks its frame; a click elsewhere pauses and decodes the point as the white debug
 pose; hovering decodes too while paused; *Inspect this frame* asks the engine for the
 forces and the sweep; *Next flagged frame* seeks. Flagged frames are marked on the
-timeline. The panels are drawn from snapshots by the window's draw scheduler, and only
-while their tab is visible. Whether the dock or the Latent dock was in front is kept in
+timeline. The panels are drawn from snapshots by the window's draw scheduler, only
+while their tab is visible, and again from the newest snapshot when a tab comes into view
+(a paused engine sends no other). Whether the dock or the Latent dock was in front is kept in
 the window's settings (``latent_map_raised``) for the next start.
 
 The tabs are built when the dock is first shown: behind the Latent dock (where it starts)
@@ -26,6 +31,7 @@ from PyQt6.QtWidgets import QDockWidget, QSplitter, QTabWidget, QWidget
 from app.drawing import Panel
 from app.shell import StudioShell
 from engine.latent.projection import default_map
+from engine.latent.solved_frames import SolvedFrames
 from widgets.latent_forces import LatentForces
 from widgets.latent_gallery import LatentGallery
 from widgets.latent_map import LatentMapPlot
@@ -51,7 +57,10 @@ class LatentViews:
         self.w = window
         self.session = window.session
         self.latent_map = default_map()
-        self.readouts = LatentReadouts()
+        self.solved = SolvedFrames()
+        #: Snapshots of this history run or older belong to the clip or method before.
+        self._stale_run = -1
+        self.readouts = LatentReadouts(solved=self.solved)
         if self.latent_map is not None:
             self.readouts.set_thresholds(self.latent_map.nn_threshold, self.latent_map.norm_threshold)
         #: Built with the tabs when the dock is first shown (:meth:`build`); None until then.
@@ -63,7 +72,7 @@ class LatentViews:
         self.dock = QDockWidget("Latent map", window)
         self.dock.setObjectName("Latent map")
         self.dock.setWidget(QWidget())
-        self.dock.visibilityChanged.connect(lambda shown: self.build() if shown else None)
+        self.dock.visibilityChanged.connect(self._dock_shown)
         window.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, self.dock)
         latent = window.findChild(QDockWidget, "Latent")
         if latent is not None:
@@ -93,7 +102,7 @@ class LatentViews:
         """The dock's tabs (Map with the readouts under it, Forces, Gallery), once."""
         if self.tabs is not None:
             return
-        self.map = LatentMapPlot()
+        self.map = LatentMapPlot(solved=self.solved)
         self.forces = LatentForces(self.w.plots.colours)
         self.gallery = LatentGallery()
         if self.latent_map is not None:
@@ -110,6 +119,7 @@ class LatentViews:
         self.tabs.addTab(self.forces, "Forces")
         self.tabs.addTab(self.gallery, "Gallery")
         self.dock.setWidget(self.tabs)
+        self.tabs.currentChanged.connect(lambda _: self._redraw_soon())
         self.map.frameClicked.connect(self.seek)
         self.map.pointClicked.connect(self._click_point)
         self.map.pointHovered.connect(lambda x, y: self._queue_hover(("point", (x, y))))
@@ -121,10 +131,34 @@ class LatentViews:
             self.gallery.set_detail(self._detail)
             self._draw_forces()
 
+    def _dock_shown(self, shown: bool) -> None:
+        if shown:
+            self.build()
+            self._redraw_soon()
+
+    def _redraw_soon(self) -> None:
+        """Draw the newest snapshot once the tab or dock now in front is laid out: the
+        draw scheduler hands each snapshot over once, and a hidden tab skipped it."""
+        QTimer.singleShot(0, self._redraw)
+
+    def _redraw(self) -> None:
+        snap = self.session.latest
+        if snap is None:
+            return
+        if self.map is not None:
+            self.map._drawn = (-1, -1)
+        self.readouts._drawn = (-1, -1)
+        self._update_map(snap)
+        self._update_detail(snap)
+
     # -- snapshots -> views ------------------------------------------------------------
     def _update_map(self, snap: Any) -> None:
         """The map and the readouts while they are in view; the flag verdicts always (they
         mark the timeline)."""
+        if snap.method_error:  # the engine kept its method: its frames stand
+            self._stale_run = -1
+        if snap.history_run <= self._stale_run:
+            return
         if self.map is not None and _on_screen(self.map):
             self.map.update_snapshot(snap)
             self._draw_blend()
@@ -134,6 +168,8 @@ class LatentViews:
             self.readouts.note_verdicts(snap)
 
     def _update_detail(self, snap: Any) -> None:
+        if snap.history_run <= self._stale_run:
+            return
         d = snap.latent_detail
         self._detail = d
         if self.forces is None or self.gallery is None:
@@ -168,7 +204,16 @@ class LatentViews:
         self.map.set_forces(view.path_xy[k], d.plane[k], [self.forces.colour(n) for n in d.names])
 
     def _forget(self, event: Any = None) -> None:
+        """Another clip or method: empty every view until its first solve arrives."""
+        latest = self.session.latest
+        self._stale_run = latest.history_run if latest is not None else -1
         self.readouts.clear()
+        self._detail = None
+        if self.map is not None:
+            self.map.clear()
+        if self.forces is not None and self.gallery is not None:
+            self.forces.set_detail(None)
+            self.gallery.set_detail(None)
 
     # -- requests ------------------------------------------------------------------------
     def seek(self, frame: int) -> None:

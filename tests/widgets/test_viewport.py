@@ -221,11 +221,11 @@ def test_follow_camera_glides_with_the_hips_and_holds_still_when_off(viewport, f
     moved = snap.positions + [2.0, 0, 0]
     focus_x = viewport.plotter.camera.focal_point[0]
     now[0] += 0.005
-    viewport.show_snapshot(fake_snapshot(seq=2, positions=moved))  # ~no time passed: barely moves
+    viewport.show_snapshot(fake_snapshot(seq=2, positions=moved, playing=True))  # ~no time passed: barely moves
     assert viewport.plotter.camera.focal_point[0] - focus_x < 0.5
     for seq in range(3, 6):
         now[0] += 0.5  # half a second per redraw
-        viewport.show_snapshot(fake_snapshot(seq=seq, positions=moved))
+        viewport.show_snapshot(fake_snapshot(seq=seq, positions=moved, playing=True))
     cam = viewport.plotter.camera
     assert cam.focal_point[0] == pytest.approx(moved[0, 0], abs=0.01)
     offset = np.subtract(cam.position, cam.focal_point)
@@ -234,6 +234,21 @@ def test_follow_camera_glides_with_the_hips_and_holds_still_when_off(viewport, f
     viewport.show_snapshot(fake_snapshot(seq=9, positions=moved + [3.0, 0, 0]))
     assert cam.focal_point[0] == pytest.approx(moved[0, 0], abs=0.01)
     assert np.allclose(np.subtract(cam.position, cam.focal_point), offset)  # the user's angle is kept
+
+
+def test_a_paused_frame_is_followed_all_the_way_at_once(viewport, fake_snapshot):
+    """Paused, no later redraw would finish a glide: a seek's frame is centred at once."""
+    now = [100.0]
+    viewport.clock = lambda: now[0]  # no time passes at all
+    viewport._followed_at = now[0]
+    moved = fake_snapshot().positions + [2.0, -1.5, 0]
+    viewport.show_snapshot(fake_snapshot(seq=2, positions=moved, playing=False))
+    cam = viewport.plotter.camera
+    assert cam.focal_point[:2] == pytest.approx(tuple(moved[0, :2]), abs=1e-6)
+    img = viewport.plotter.screenshot(return_img=True)
+    orange = (img[..., 0] > 200) & (img[..., 1] > 80) & (img[..., 1] < 170) & (img[..., 2] < 80)
+    cols = np.nonzero(orange.any(axis=0))[0]
+    assert abs(0.5 * (cols.min() + cols.max()) - img.shape[1] / 2) < 0.1 * img.shape[1]  # centred
 
 
 def test_a_frame_renders_once_queries_the_bounds_once_and_runs_no_python_filter(viewport, fake_snapshot):

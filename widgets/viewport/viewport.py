@@ -163,13 +163,16 @@ class Viewport(QWidget):
         self.plotter.reset_camera_clipping_range()
         self.plotter.render()
 
-    def _follow(self, root: np.ndarray) -> None:
-        """Slide camera and focus horizontally with the hips, keeping the user's angle."""
+    def _follow(self, root: np.ndarray, glide: bool = True) -> None:
+        """Slide camera and focus horizontally with the hips, keeping the user's angle;
+        ``glide`` False goes all the way at once (a paused frame: no later redraw would
+        finish a glide, and the view would stay part way, off the character)."""
         now = self.clock()
         dt, self._followed_at = now - self._followed_at, now
         goal = np.array([root[0], root[1], self._focus[2]])
         # time-based smoothing: the same glide at 60 or 5 redraws per second
-        delta = (1.0 - np.exp(-dt / FOLLOW_TIME_S)) * (goal - self._focus)
+        share = 1.0 - np.exp(-dt / FOLLOW_TIME_S) if glide else 1.0
+        delta = share * (goal - self._focus)
         if np.linalg.norm(delta) < 1e-5:
             return
         cam = self.plotter.camera
@@ -206,7 +209,7 @@ class Viewport(QWidget):
             self._caption = caption
             self._label.SetText(2, caption)
         if self.follow and np.all(np.isfinite(snap.positions[0])):
-            self._follow(snap.positions[0])
+            self._follow(snap.positions[0], glide=bool(snap.playing))
         self.plotter.render()
 
     def show_clip_frame(self, positions: np.ndarray) -> None:

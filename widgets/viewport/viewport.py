@@ -22,6 +22,7 @@ from widgets.viewport.picking import JointDragger
 from widgets.viewport.rings import RotationRings
 from widgets.viewport.sensors import SensorMarkers
 from widgets.viewport.skeleton import SkeletonActor
+from widgets.viewport.wheel_zoom import WheelZoom
 
 HOME_FOCUS_HEIGHT = 0.9
 FOLLOW_TIME_S = 0.25  # camera-follow time constant, seconds
@@ -100,6 +101,7 @@ class Viewport(QWidget):
             lambda axis, angle, first: self.ringTurned.emit(axis, angle, first),
         )
         self.gizmos = ConstraintGizmos(p, lambda n, changes: self.gizmoEdited.emit(n, changes))
+        self.wheel_zoom = WheelZoom(p)
         self._label = p.add_text("", position="upper_left", font_size=9, color="#d0d4dc")
         self._notice = p.add_text("", position="lower_edge", font_size=12, color="#ffe14d")
         self.notice = ""
@@ -237,9 +239,14 @@ class Viewport(QWidget):
         every key from it: VTK's interactor style and pyvista bind plain letters to
         stereo (3), wireframe (w), a camera reset (r), picking modes (b, p, C) and
         closing the render window (q, e), none of which the menus show, and the
-        window's shortcuts have already taken the keys they bind."""
+        window's shortcuts have already taken the keys they bind. The wheel zooms
+        toward the mouse (:mod:`widgets.viewport.wheel_zoom`), not VTK's centre."""
         if event is not None and event.type() in (QEvent.Type.KeyPress, QEvent.Type.KeyRelease):
             event.ignore()
+            return True
+        if event is not None and event.type() == QEvent.Type.Wheel:
+            self.wheel_zoom.wheel(event)
+            event.accept()
             return True
         if event is not None and event.type() in (QEvent.Type.DragEnter, QEvent.Type.DragMove, QEvent.Type.Drop):
             paths = [u.toLocalFile() for u in event.mimeData().urls() if u.isLocalFile()]

@@ -136,7 +136,8 @@ class LatentMapPlot(QWidget):
         view = snap.latent_view
         self.set_note(snap.latent_note if view is None else "")
         s = self.solved
-        self.frames, self.xy = s.frames, s.xy
+        placed = np.isfinite(s.xy).all(axis=1)  # a record without map coordinates is not drawn
+        self.frames, self.xy = s.frames[placed], s.xy[placed]
         if len(self.frames):
             t = (self.frames - self.frames.min()) / max(int(np.ptp(self.frames)), 1)
             steps = np.rint(t * (TIME_STEPS - 1)).astype(int)
@@ -145,7 +146,7 @@ class LatentMapPlot(QWidget):
         else:
             self.points.setData([], [])
             self.line.setData([], [])
-        flagged = s.flagged
+        flagged = s.flagged[placed]
         self.flags.setData(self.xy[flagged, 0], self.xy[flagged, 1])
         if view is None:
             self._show_frame(None)

@@ -150,6 +150,7 @@ class LatentReadouts(QWidget):
         on = s.flagged
         # the cross sits on the readout that crossed its threshold
         y = np.where(near > self.limits["nearest"], near, norm)
+        on &= np.isfinite(y)
         self.flags.setData(x[on], y[on])
         self.cursor.setValue(float(snap.frame))
         self.label.setText(self.describe(snap))

@@ -6,7 +6,7 @@ map over the prior readouts), *Forces* (term forces of the frame on screen) and
 frame solved since the clip or method was opened
 (:class:`engine.latent.solved_frames.SolvedFrames`): a seek that restarts the engine's
 history keeps the trajectory, and another clip or method empties it, ignoring the
-snapshots still in flight from before. Requests go to the session: a click on a trajectory
+snapshots of what was open before (``Snapshot.opened``). Requests go to the session: a click on a trajectory
 point seeks its frame; a click elsewhere pauses and decodes the point as the white debug
 pose; hovering decodes too while paused; *Inspect this frame* asks the engine for the
 forces and the sweep; *Next flagged frame* seeks. Flagged frames are marked on the
@@ -39,6 +39,9 @@ from widgets.latent_readouts import LatentReadouts
 
 #: Hover decodes are sent at most this often, ms (a mouse sends ~100 moves a second).
 HOVER_MS = 40
+#: A view brought to the front is drawn once it is on screen: looked for this many times,
+#: this many ms apart.
+REDRAW_TRIES, REDRAW_RETRY_MS = 10, 50
 #: The settings key that remembers the dock in front of the Latent dock.
 RAISED = "latent_map_raised"
 NO_MAP = "No latent map: assets/models/latent_map.npz is missing or belongs to another VAE."
@@ -56,10 +59,11 @@ class LatentViews:
     def __init__(self, window: StudioShell) -> None:
         self.w = window
         self.session = window.session
+        self._redraw_timer = QTimer(window, singleShot=True)  # owned: it dies with the window
+        self._redraw_timer.timeout.connect(self._redraw)
+        self._redraw_left = 0
         self.latent_map = default_map()
         self.solved = SolvedFrames()
-        #: Snapshots of this history run or older belong to the clip or method before.
-        self._stale_run = -1
         self.readouts = LatentReadouts(solved=self.solved)
         if self.latent_map is not None:
             self.readouts.set_thresholds(self.latent_map.nn_threshold, self.latent_map.norm_threshold)
@@ -139,11 +143,18 @@ class LatentViews:
     def _redraw_soon(self) -> None:
         """Draw the newest snapshot once the tab or dock now in front is laid out: the
         draw scheduler hands each snapshot over once, and a hidden tab skipped it."""
-        QTimer.singleShot(0, self._redraw)
+        self._redraw_left = REDRAW_TRIES
+        self._redraw_timer.start(0)
 
     def _redraw(self) -> None:
         snap = self.session.latest
         if snap is None:
+            return
+        if self.map is not None and not _on_screen(self.map) and not _on_screen(self.forces) and self._redraw_left:
+            # the dock or tab brought to the front is laid out in a later pass (later still
+            # on a busy machine): look again shortly
+            self._redraw_left -= 1
+            self._redraw_timer.start(REDRAW_RETRY_MS)
             return
         if self.map is not None:
             self.map._drawn = (-1, -1)
@@ -155,9 +166,7 @@ class LatentViews:
     def _update_map(self, snap: Any) -> None:
         """The map and the readouts while they are in view; the flag verdicts always (they
         mark the timeline)."""
-        if snap.method_error:  # the engine kept its method: its frames stand
-            self._stale_run = -1
-        if snap.history_run <= self._stale_run:
+        if snap.opened != self.session.opened:  # of the clip or method before
             return
         if self.map is not None and _on_screen(self.map):
             self.map.update_snapshot(snap)
@@ -168,7 +177,7 @@ class LatentViews:
             self.readouts.note_verdicts(snap)
 
     def _update_detail(self, snap: Any) -> None:
-        if snap.history_run <= self._stale_run:
+        if snap.opened != self.session.opened:
             return
         d = snap.latent_detail
         self._detail = d
@@ -205,8 +214,6 @@ class LatentViews:
 
     def _forget(self, event: Any = None) -> None:
         """Another clip or method: empty every view until its first solve arrives."""
-        latest = self.session.latest
-        self._stale_run = latest.history_run if latest is not None else -1
         self.readouts.clear()
         self._detail = None
         if self.map is not None:

@@ -132,9 +132,7 @@ def test_the_tabs_are_built_when_the_dock_is_first_shown_and_flags_reach_the_tim
         return SimpleNamespace(frame=frame, ms=1.0, iterations=1, readouts={"flagged": float(flagged)})
 
     views._update_map(
-        SimpleNamespace(
-            seq=10**6, frame=3, history=(entry(2, True), entry(3, False)), history_run=10**6, method_error=""
-        )
+        SimpleNamespace(seq=10**6, frame=3, history=(entry(2, True), entry(3, False)), opened=studio.session.opened)
     )
     assert studio.timeline.slider.marks() == (2,)
     assert views.tabs is None

@@ -2,12 +2,17 @@
 
 A "Latent map" dock, tabbed beside the Latent dock, holds three tabs: *Map* (the latent
 map over the prior readouts), *Forces* (term forces of the frame on screen) and
-*Gallery* (the dimension sweep). Requests go to the session: a click on a trajectory
+*Gallery* (the dimension sweep). The map and the readouts read one store of every
+frame solved since the clip or method was opened
+(:class:`engine.latent.solved_frames.SolvedFrames`): a seek that restarts the engine's
+history keeps the trajectory, and another clip or method empties it, ignoring the
+snapshots of what was open before (``Snapshot.opened``). Requests go to the session: a click on a trajectory
 point seeks its frame; a click elsewhere pauses and decodes the point as the white debug
 pose; hovering decodes too while paused; *Inspect this frame* asks the engine for the
 forces and the sweep; *Next flagged frame* seeks. Flagged frames are marked on the
-timeline. The panels are drawn from snapshots by the window's draw scheduler, and only
-while their tab is visible. Whether the dock or the Latent dock was in front is kept in
+timeline. The panels are drawn from snapshots by the window's draw scheduler, only
+while their tab is visible, and again from the newest snapshot when a tab comes into view
+(a paused engine sends no other). Whether the dock or the Latent dock was in front is kept in
 the window's settings (``latent_map_raised``) for the next start.
 
 The tabs are built when the dock is first shown: behind the Latent dock (where it starts)
@@ -26,6 +31,7 @@ from PyQt6.QtWidgets import QDockWidget, QSplitter, QTabWidget, QWidget
 from app.drawing import Panel
 from app.shell import StudioShell
 from engine.latent.projection import default_map
+from engine.latent.solved_frames import SolvedFrames
 from widgets.latent_forces import LatentForces
 from widgets.latent_gallery import LatentGallery
 from widgets.latent_map import LatentMapPlot
@@ -33,6 +39,9 @@ from widgets.latent_readouts import LatentReadouts
 
 #: Hover decodes are sent at most this often, ms (a mouse sends ~100 moves a second).
 HOVER_MS = 40
+#: A view brought to the front is drawn once it is on screen: looked for this many times,
+#: this many ms apart.
+REDRAW_TRIES, REDRAW_RETRY_MS = 10, 50
 #: The settings key that remembers the dock in front of the Latent dock.
 RAISED = "latent_map_raised"
 NO_MAP = "No latent map: assets/models/latent_map.npz is missing or belongs to another VAE."
@@ -50,8 +59,12 @@ class LatentViews:
     def __init__(self, window: StudioShell) -> None:
         self.w = window
         self.session = window.session
+        self._redraw_timer = QTimer(window, singleShot=True)  # owned: it dies with the window
+        self._redraw_timer.timeout.connect(self._redraw)
+        self._redraw_left = 0
         self.latent_map = default_map()
-        self.readouts = LatentReadouts()
+        self.solved = SolvedFrames()
+        self.readouts = LatentReadouts(solved=self.solved)
         if self.latent_map is not None:
             self.readouts.set_thresholds(self.latent_map.nn_threshold, self.latent_map.norm_threshold)
         #: Built with the tabs when the dock is first shown (:meth:`build`); None until then.
@@ -63,7 +76,7 @@ class LatentViews:
         self.dock = QDockWidget("Latent map", window)
         self.dock.setObjectName("Latent map")
         self.dock.setWidget(QWidget())
-        self.dock.visibilityChanged.connect(lambda shown: self.build() if shown else None)
+        self.dock.visibilityChanged.connect(self._dock_shown)
         window.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, self.dock)
         latent = window.findChild(QDockWidget, "Latent")
         if latent is not None:
@@ -93,7 +106,7 @@ class LatentViews:
         """The dock's tabs (Map with the readouts under it, Forces, Gallery), once."""
         if self.tabs is not None:
             return
-        self.map = LatentMapPlot()
+        self.map = LatentMapPlot(solved=self.solved)
         self.forces = LatentForces(self.w.plots.colours)
         self.gallery = LatentGallery()
         if self.latent_map is not None:
@@ -110,6 +123,7 @@ class LatentViews:
         self.tabs.addTab(self.forces, "Forces")
         self.tabs.addTab(self.gallery, "Gallery")
         self.dock.setWidget(self.tabs)
+        self.tabs.currentChanged.connect(lambda _: self._redraw_soon())
         self.map.frameClicked.connect(self.seek)
         self.map.pointClicked.connect(self._click_point)
         self.map.pointHovered.connect(lambda x, y: self._queue_hover(("point", (x, y))))
@@ -121,10 +135,39 @@ class LatentViews:
             self.gallery.set_detail(self._detail)
             self._draw_forces()
 
+    def _dock_shown(self, shown: bool) -> None:
+        if shown:
+            self.build()
+            self._redraw_soon()
+
+    def _redraw_soon(self) -> None:
+        """Draw the newest snapshot once the tab or dock now in front is laid out: the
+        draw scheduler hands each snapshot over once, and a hidden tab skipped it."""
+        self._redraw_left = REDRAW_TRIES
+        self._redraw_timer.start(0)
+
+    def _redraw(self) -> None:
+        snap = self.session.latest
+        if snap is None:
+            return
+        if self.map is not None and not _on_screen(self.map) and not _on_screen(self.forces) and self._redraw_left:
+            # the dock or tab brought to the front is laid out in a later pass (later still
+            # on a busy machine): look again shortly
+            self._redraw_left -= 1
+            self._redraw_timer.start(REDRAW_RETRY_MS)
+            return
+        if self.map is not None:
+            self.map._drawn = (-1, -1)
+        self.readouts._drawn = (-1, -1)
+        self._update_map(snap)
+        self._update_detail(snap)
+
     # -- snapshots -> views ------------------------------------------------------------
     def _update_map(self, snap: Any) -> None:
         """The map and the readouts while they are in view; the flag verdicts always (they
         mark the timeline)."""
+        if snap.opened != self.session.opened:  # of the clip or method before
+            return
         if self.map is not None and _on_screen(self.map):
             self.map.update_snapshot(snap)
             self._draw_blend()
@@ -134,6 +177,8 @@ class LatentViews:
             self.readouts.note_verdicts(snap)
 
     def _update_detail(self, snap: Any) -> None:
+        if snap.opened != self.session.opened:
+            return
         d = snap.latent_detail
         self._detail = d
         if self.forces is None or self.gallery is None:
@@ -168,7 +213,14 @@ class LatentViews:
         self.map.set_forces(view.path_xy[k], d.plane[k], [self.forces.colour(n) for n in d.names])
 
     def _forget(self, event: Any = None) -> None:
+        """Another clip or method: empty every view until its first solve arrives."""
         self.readouts.clear()
+        self._detail = None
+        if self.map is not None:
+            self.map.clear()
+        if self.forces is not None and self.gallery is not None:
+            self.forces.set_detail(None)
+            self.gallery.set_detail(None)
 
     # -- requests ------------------------------------------------------------------------
     def seek(self, frame: int) -> None:

@@ -185,7 +185,11 @@ class PoseWindow(QMainWindow):
                 (QMessageBox.warning if warn else QMessageBox.information)(self, title, str(exc))
 
     def _edit(self, action: Callable[[], Any]) -> None:
-        """A model edit from a gesture: playing stops first; a refused edit says why."""
+        """A model edit from a gesture: playing stops first; a refused edit says why.
+        While a job on the worker reads the pose (a settle), edits wait for it."""
+        if self.jobs.running:
+            self.statusBar().showMessage("Settling the pose: edits wait until it is done", 3000)
+            return
         self.playback.stop()
         self._guard("Pose", action, warn=True)
 
@@ -226,14 +230,25 @@ class PoseWindow(QMainWindow):
     def clear_all(self) -> None:
         self._edit(self.session.clear_all)
 
-    def settle(self) -> None:
-        """An offline solve of the current targets (one undo step); a wait cursor while it
-        runs (seconds with constraints on a loaded machine)."""
-        QApplication.setOverrideCursor(Qt.CursorShape.WaitCursor)
-        try:
-            self._edit(self.session.settle)
-        finally:
-            QApplication.restoreOverrideCursor()
+    def settle(self) -> JobRunner:
+        """An offline solve of the current targets (one undo step), on a worker: it takes
+        seconds with constraints on a loaded machine, and the window keeps drawing and
+        answering meanwhile (a window-modal progress dialog with Cancel keeps edits out);
+        the result is applied here, on the GUI thread. Returns the runner (``wait()``
+        waits for the result with the event loop running)."""
+        if self.jobs.running:
+            return self.jobs
+        self.playback.stop()
+        job = self.session.settle_job()
+
+        def done(ok: bool, message: str) -> None:
+            self.jobs.finished.disconnect(done)
+            if not ok and message != "cancelled" and self.isVisible():
+                QMessageBox.warning(self, "Settle pose", message)
+
+        self.jobs.finished.connect(done)
+        self.jobs.start(job, lambda settled: self.session.take_settle(job, settled), modal=True)
+        return self.jobs
 
     # -- keys ----------------------------------------------------------------------
     def add_key(self, frame: int) -> None:

@@ -5,7 +5,8 @@ detail: each term's force on the latent (minus the gradient of its weighted loss
 every iteration of its solve (docs/latent.md). The top chart shows each term's force
 norm at the chosen iteration, in the term's colour from the loss plots; the bottom one
 the chosen term's force per latent dimension (or, with a joint chosen, each dimension's
-influence on that joint). Terms whose forces point against each other are named.
+influence on that joint). It starts on the first term with a force (a term can push
+nothing, e.g. a sensor already met), and says "no force" rather than stay blank. Terms whose forces point against each other are named.
 """
 
 from __future__ import annotations
@@ -33,6 +34,12 @@ def conflicts(forces: np.ndarray, names: tuple[str, ...], limit: float = -0.5) -
             if n[i] > 1e-12 and n[j] > 1e-12 and forces[i] @ forces[j] / (n[i] * n[j]) < limit:
                 out.append(f"{names[i]} vs {names[j]}")
     return out
+
+
+def first_with_force(forces: np.ndarray) -> int:
+    """The first term whose force ``(K, T, L)`` is not zero at some iteration (0 if none)."""
+    moving = np.flatnonzero(np.any(np.asarray(forces) != 0, axis=(0, 2)))
+    return int(moving[0]) if moving.size else 0
 
 
 class LatentForces(QWidget):
@@ -97,6 +104,8 @@ class LatentForces(QWidget):
             if detail.influence is not None:
                 self.term.addItem(f"{INFLUENCE} {detail.joint}", INFLUENCE)
                 self.term.setCurrentIndex(self.term.count() - 1)
+            else:
+                self.term.setCurrentIndex(first_with_force(detail.forces))
         self.term.blockSignals(False)
         self.iteration.blockSignals(True)
         self.iteration.setMaximum(max(0, len(detail.forces) - 1) if detail is not None else 0)
@@ -123,7 +132,8 @@ class LatentForces(QWidget):
         elif chosen in d.names:
             t = d.names.index(chosen)
             self.dim_bars.setOpts(x=np.arange(f.shape[1]), height=f[t], brush=self.colour(chosen))
-            self.dim_plot.setTitle(f"force of {chosen}, iteration {k}", size="9pt")
+            none = "" if np.any(f[t] != 0) else ": no force"
+            self.dim_plot.setTitle(f"force of {chosen}, iteration {k}{none}", size="9pt")
         against = conflicts(f, d.names)
         self.info.setText(
             f"frame {d.frame}, {len(d.forces)} iterations, {d.ms:.0f} ms"

@@ -5,7 +5,7 @@ at -2 sigma (blue), unchanged (grey) and +2 sigma (orange), drawn as small front
 side by side (six per row, each turned so its hips lie across the view),
 with the three joints that move most marked (red) and the first named under the cell. With a joint
 chosen, the five dimensions that move that joint most right here (the Jacobian's
-largest norms) have their labels in yellow.
+largest norms) have their labels in yellow. A legend above the cells says so.
 """
 
 from __future__ import annotations
@@ -14,8 +14,9 @@ from typing import Any
 
 import numpy as np
 import pyqtgraph as pg
+from PyQt6.QtCore import Qt
 from PyQt6.QtGui import QFont
-from PyQt6.QtWidgets import QVBoxLayout, QWidget
+from PyQt6.QtWidgets import QLabel, QVBoxLayout, QWidget
 
 import widgets.plots  # noqa: F401 (applies the shared pyqtgraph look)
 from engine import skeleton as sk
@@ -25,6 +26,23 @@ COLUMNS = 6
 CELL_W, CELL_H = 1.6, 2.4
 OFFSET_COLOURS = ("#4da3ff", "#8a93a6", "#ff8a1f")
 INFLUENCE_COLOUR = "#ffd60a"
+MARK_COLOUR = "#ff3b30"
+
+
+def legend_html() -> str:
+    """The gallery's legend: what each colour stands for (rich text)."""
+
+    def c(colour: str, text: str) -> str:
+        return f"<span style='color:{colour}'><b>{text}</b></span>"
+
+    minus, zero, plus = OFFSET_COLOURS
+    return (
+        f"Each dimension d at {c(minus, '-2 sigma')}, {c(zero, 'unchanged')} and {c(plus, '+2 sigma')}; "
+        f"{c(MARK_COLOUR, 'dots')}: the 3 joints it moves most (the first named under it); "
+        f"{c(INFLUENCE_COLOUR, 'yellow name')}: among the 5 that move the chosen joint most"
+    )
+
+
 _BONES = [(j, p) for j, p in enumerate(sk.PARENTS) if p >= 0]
 
 
@@ -59,11 +77,15 @@ class LatentGallery(QWidget):
             "under each: the joints it moves most"
         )
         self.lines = [self.plot.plot(pen=pg.mkPen(c, width=1.2), connect="pairs") for c in OFFSET_COLOURS]
-        self.marks = pg.ScatterPlotItem(size=6, pen=None, brush="#ff3b30")
+        self.marks = pg.ScatterPlotItem(size=6, pen=None, brush=MARK_COLOUR)
         self.plot.addItem(self.marks)
         self.labels: list[pg.TextItem] = []
         self._font = QFont()
         self._font.setPointSize(7)
+        self.legend = QLabel(legend_html())
+        self.legend.setTextFormat(Qt.TextFormat.RichText)
+        self.legend.setWordWrap(True)
+        layout.addWidget(self.legend)
         layout.addWidget(self.plot, 1)
         self.detail: Any = None
         self.influential: list[int] = []

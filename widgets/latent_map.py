@@ -1,9 +1,10 @@
 """The latent map: the clip's latents on a fixed 2D view of the latent space.
 
 Drawn on the shipped projection (engine/latent/projection.py, handed in with
-:meth:`LatentMapPlot.set_map`): the training latents as a grey density, the solved frames
-as a trajectory coloured by frame (dark blue oldest, yellow newest), flagged frames as red
-crosses, the frame on screen as a white ring, and its solve's iterations as an orange path
+:meth:`LatentMapPlot.set_map`): the training latents as a grey density, every frame solved
+since the clip was opened (a :class:`engine.latent.solved_frames.SolvedFrames`, so a seek
+that restarts the engine's history keeps the trajectory) coloured by frame (dark blue
+first, yellow last), flagged frames as red crosses, the frame on screen as a white ring, and its solve's iterations as an orange path
 from its start, labelled by where the solve started; after an inspection, each term's
 force in the map plane as a line in its loss-plot colour (:meth:`LatentMapPlot.set_forces`),
 and the Latent panel's stored A and B with the A to B blend's path (dashed).
@@ -23,6 +24,8 @@ from PyQt6.QtCore import QPointF, QRectF, Qt, pyqtSignal
 from PyQt6.QtWidgets import QCheckBox, QLabel, QVBoxLayout, QWidget
 
 import widgets.plots  # noqa: F401 (applies the shared pyqtgraph look)
+from engine.latent.solved_frames import SolvedFrames
+from widgets.latent_readouts import consecutive
 
 #: A trajectory point within this many pixels of the mouse is the one pointed at.
 PICK_PX = 8.0
@@ -36,15 +39,18 @@ HOVER_COLOUR = "#00e5ff"
 
 
 class LatentMapPlot(QWidget):
-    """See the module doc. Feed it snapshots with :meth:`update_snapshot`."""
+    """See the module doc. Feed it snapshots with :meth:`update_snapshot`; ``solved``
+    is the store of solved frames it reads and feeds (the window shares one with the
+    readouts)."""
 
     pointHovered = pyqtSignal(float, float)
     frameHovered = pyqtSignal(int)
     pointClicked = pyqtSignal(float, float)
     frameClicked = pyqtSignal(int)
 
-    def __init__(self, parent: QWidget | None = None) -> None:
+    def __init__(self, parent: QWidget | None = None, solved: SolvedFrames | None = None) -> None:
         super().__init__(parent)
+        self.solved = solved if solved is not None else SolvedFrames()
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         self.note = QLabel("")
@@ -90,7 +96,7 @@ class LatentMapPlot(QWidget):
         ]
         self.frames = np.zeros(0, int)
         self.xy = np.zeros((0, 2))
-        self._seq = -1
+        self._drawn = (-1, -1)  # (snapshot seq, store version) drawn
         self._explained: tuple[float, float] | None = None
         self._extent = (-1.0, 1.0, -1.0, 1.0)
         self._path = np.zeros((0, 2))
@@ -121,29 +127,49 @@ class LatentMapPlot(QWidget):
         self.note.setVisible(bool(text))
 
     def update_snapshot(self, snap: Any) -> None:
-        """Draw the solved frames of ``snap.history`` and the frame on screen."""
-        if snap.seq == self._seq:
+        """Draw every solved frame (``snap.history`` read into :attr:`solved` first) and
+        the frame on screen."""
+        self.solved.note(snap.history)
+        if (snap.seq, self.solved.version) == self._drawn:
             return
-        self._seq = snap.seq
+        self._drawn = (snap.seq, self.solved.version)
         view = snap.latent_view
         self.set_note(snap.latent_note if view is None else "")
-        rows = [r for r in snap.history if r.readouts]
-        self.frames = np.array([r.frame for r in rows], int)
-        self.xy = np.array([[r.readouts["x"], r.readouts["y"]] for r in rows], float).reshape(-1, 2)
-        flagged = np.array([r.readouts.get("flagged", 0.0) > 0 for r in rows], bool)
-        if len(rows):
+        s = self.solved
+        placed = np.isfinite(s.xy).all(axis=1)  # a record without map coordinates is not drawn
+        self.frames, self.xy = s.frames[placed], s.xy[placed]
+        if len(self.frames):
             t = (self.frames - self.frames.min()) / max(int(np.ptp(self.frames)), 1)
             steps = np.rint(t * (TIME_STEPS - 1)).astype(int)
             self.points.setData(self.xy[:, 0], self.xy[:, 1], brush=[self._brushes[i] for i in steps])
-            self.line.setData(self.xy[:, 0], self.xy[:, 1])
+            self.line.setData(self.xy[:, 0], self.xy[:, 1], connect=consecutive(self.frames))
         else:
             self.points.setData([], [])
             self.line.setData([], [])
+        flagged = s.flagged[placed]
         self.flags.setData(self.xy[flagged, 0], self.xy[flagged, 1])
+        if view is None:
+            self._show_frame(None)
+            return
+        self._show_frame(view)
+
+    def clear(self) -> None:
+        """Nothing solved yet (another clip or method): no trajectory, no frame on screen."""
+        self.solved.clear()
+        self._drawn = (-1, -1)
+        self.frames, self.xy = np.zeros(0, int), np.zeros((0, 2))
+        for item in (self.points, self.line, self.flags):
+            item.setData([], [])
+        self._show_frame(None)
+        self.set_forces(None)
+
+    def _show_frame(self, view: Any) -> None:
+        """The frame on screen's ring and its solve's path (None hides them)."""
         if view is None:
             self.current.setData([], [])
             self.path.setData([], [])
             self.start_label.setText("")
+            self._path = np.zeros((0, 2))
             return
         self.current.setData([view.xy[0]], [view.xy[1]])
         self._path = np.asarray(view.path_xy if view.path_xy is not None else view.xy[None], float).reshape(-1, 2)

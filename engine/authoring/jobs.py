@@ -1,10 +1,12 @@
-"""Long authoring work as jobs that run on any thread: the bake of keys, a range re-solve.
+"""Long authoring work as jobs that run on any thread: the bake of keys, a range re-solve,
+a settle of the pose.
 
 A job is a copy of what the work reads, taken on the model's thread when it starts, and
 ``run(progress, cancelled)``, which computes on a worker without touching any model and
 returns the result (or raises :class:`engine.authoring.progress.Cancelled`). The model's
 thread then applies the result as one command: the authoring model's
-:meth:`~engine.authoring.session.AuthoringSession.take_bake`, or the studio's clip
+:meth:`~engine.authoring.session.AuthoringSession.take_bake` or
+:meth:`~engine.authoring.session.AuthoringSession.take_settle`, or the studio's clip
 replaced as one undo step (:mod:`app.range_actions`). ``title`` and ``label`` say what a
 progress dialog shows.
 """
@@ -12,7 +14,7 @@ progress dialog shows.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from engine.authoring.bake import Baked, bake
 from engine.authoring.document import AuthoringScene
@@ -21,6 +23,10 @@ from engine.authoring.range_edit import RangeEdit, edit_range
 from engine.constraints.base import Constraint
 from engine.errors import UserError
 from engine.motion.clip import Motion
+
+if TYPE_CHECKING:
+    from engine.authoring.pose_mode import PoseMode
+    from engine.authoring.state import AuthoringState
 
 
 @dataclass
@@ -40,6 +46,23 @@ class BakeJob:
 
     def run(self, progress: Progress | None = None, cancelled: CancelCheck | None = None) -> Baked:
         return bake(self.scene, self.vae, progress=progress, cancelled=cancelled)
+
+
+@dataclass
+class SettleJob:
+    """A settle (:meth:`engine.authoring.pose_mode.PoseMode.settle`) of ``mode``, a
+    detached copy of the model's pose mode (:meth:`PoseMode.detached`); ``before`` is the
+    model's state when it was made, so a pose changed meanwhile is not overwritten."""
+
+    mode: "PoseMode"
+    before: "AuthoringState"
+    title: str = "Settle pose"
+    label: str = "Settling the pose (an offline solve of the targets)..."
+
+    def run(self, progress: Progress | None = None, cancelled: CancelCheck | None = None) -> "PoseMode":
+        """Settle the copy and return it (the model takes its pose, feet and anchor)."""
+        self.mode.settle()
+        return self.mode
 
 
 @dataclass

@@ -413,6 +413,23 @@ class PoseMode:
         ]
         return float(max(gaps, default=0.0))
 
+    def detached(self) -> "PoseMode":
+        """A copy to settle or solve on another thread: its own targets, planted feet and
+        constraint list (constraints copied), the character and its networks shared (they
+        are only read)."""
+        other = copy.copy(self)
+        other.targets = copy.deepcopy(self.targets)
+        other.planted = {j: p.copy() for j, p in self.planted.items()}
+        other.constraints = copy.deepcopy(self.constraints)
+        return other
+
+    def adopt(self, other: "PoseMode") -> None:
+        """Take the pose, planted feet and drag anchor of ``other``, a :meth:`detached`
+        copy of this mode that was settled or solved (its targets are this mode's)."""
+        self.pose, self.anchor, self._anchor_joint = other.pose, other.anchor, other._anchor_joint
+        self.planted = {j: p.copy() for j, p in other.planted.items()}
+        self._solved = other._solved
+
     def settle(self) -> Pose:
         """An offline, grounded solve from the current pose (when a drag ends), then up to
         ``options.settle_rounds`` grounded rounds of the drag's plain steps while a dragged

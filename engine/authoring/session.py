@@ -32,7 +32,7 @@ from engine.authoring import events as ev
 from engine.authoring.bake import Baked
 from engine.authoring.document import MAX_FRAMES, AuthoringScene
 from engine.authoring.history import Edit, History
-from engine.authoring.jobs import BakeJob
+from engine.authoring.jobs import BakeJob, SettleJob
 from engine.authoring.keys import SCHEMES, Animation, Key
 from engine.authoring.pose_mode import PoseMode
 from engine.authoring.progress import CancelCheck, Progress
@@ -276,6 +276,24 @@ class AuthoringSession:
     def settle(self) -> None:
         """An offline, grounded solve of the current targets (one undo step)."""
         self.edit("settle pose", self.mode.settle)
+
+    def settle_job(self) -> SettleJob:
+        """The settle of the pose as it stands, to run on any thread (:meth:`take_settle`)."""
+        return SettleJob(self.mode.detached(), self.state())
+
+    def take_settle(self, job: SettleJob, settled: PoseMode) -> None:
+        """Apply ``job``'s result as the one undo step "settle pose".
+
+        Raises
+        ------
+        UserError
+            When the pose, targets, keys or constraints changed since the job was made
+            (the settle would undo that change): nothing is applied.
+        """
+        d = differences(job.before, self.state())
+        if d.joints or d.pose or d.keys or d.constraints or d.animation:
+            raise UserError("the pose changed while it settled: nothing was applied (settle again)")
+        self.edit("settle pose", lambda: self.mode.adopt(settled))
 
     # -- constraints ---------------------------------------------------------------
     constraint_catalog = staticmethod(ConstraintList.catalog)  # the kinds users may add, with their fields

@@ -32,7 +32,12 @@ class Command:
 
 @dataclass(frozen=True)
 class SetMotion(Command):
+    """Solve ``motion``; ``opened`` numbers this clip, source or method among those the
+    session opened, and the snapshots carry the newest number the engine took
+    (``Snapshot.opened``), so views can tell a snapshot of what came before."""
+
     motion: Motion
+    opened: int = 0
 
 
 @dataclass(frozen=True)
@@ -60,6 +65,7 @@ class SetSettings(Command):
 class SetMethod(Command):
     name: str
     ghosts: tuple[str, ...] = ()
+    opened: int = 0  # as SetMotion's
 
 
 @dataclass(frozen=True)
@@ -117,6 +123,7 @@ class SetSource(Command):
     instead of the clip; the session's sensor settings still apply."""
 
     source: SensorSource
+    opened: int = 0  # as SetMotion's
 
 
 #: The engine thread's handler of each command class, ``handler(thread, command,

@@ -84,6 +84,8 @@ class Session:
         self.constraints.events.changed.connect(self._constraints_changed)
         self.settings: SettingsEdit = default_settings()
         self.method = method
+        #: Clips, sources and methods opened so far (``opened`` of their commands).
+        self.opened = 0
         self.ghosts: tuple[str, ...] = ()
         self.frame = 0
         self.playing = False
@@ -162,13 +164,13 @@ class Session:
         self._sink = sink
         if sink is None:
             return
-        sink(cmd.SetMethod(self.method, self.ghosts))
+        sink(cmd.SetMethod(self.method, self.ghosts, self.opened))
         sink(cmd.SetSettings(self.settings))
         sink(cmd.SetSensors(tuple(self.sensors.values())))
         if self.motion is not None:
-            sink(cmd.SetMotion(self.motion))
+            sink(cmd.SetMotion(self.motion, self.opened))
         elif self.source is not None:
-            sink(cmd.SetSource(self.source))
+            sink(cmd.SetSource(self.source, self.opened))
         sink(cmd.SetConstraints(tuple(self.constraints)))
         sink(cmd.Seek(self.frame))
         self.plays = 0  # a new engine has seen none
@@ -245,7 +247,8 @@ class Session:
         if path is None:
             self.rig_map = None
         self.motion, self.path, self.frame = motion, path, 0
-        self._send(cmd.SetMotion(motion))
+        self.opened += 1
+        self._send(cmd.SetMotion(motion, self.opened))
         self.events.motion.emit(ev.MotionChanged(motion, path))
         self._from_start()
 
@@ -257,7 +260,8 @@ class Session:
         self._close_source()
         self.motion, self.path, self.frame = None, None, 0
         self.source = source
-        command = cmd.SetSource(source)
+        self.opened += 1
+        command = cmd.SetSource(source, self.opened)
         if isinstance(self.engine, EngineProcess) and not self.engine.can_send(command):
             self._engine_in_thread()  # sends the source with the rest of the session
         else:
@@ -335,7 +339,8 @@ class Session:
         self.method = name
         if ghosts is not None:
             self.ghosts = tuple(g for g in ghosts if g != name)
-        self._send(cmd.SetMethod(name, self.ghosts))
+        self.opened += 1
+        self._send(cmd.SetMethod(name, self.ghosts, self.opened))
         self.events.method.emit(ev.MethodChanged(name, self.ghosts, old, old_ghosts))
 
     @staticmethod

@@ -113,6 +113,10 @@ class Snapshot:
         How many times ``history`` has been cleared. A reader that keeps its own series
         per frame starts it again when this changes: it may never have drawn the frame
         before a jump, so the frames it saw cannot tell it that one happened.
+    opened : int
+        The ``opened`` number of the newest clip, source or method the engine took
+        (:class:`engine.studio.commands.SetMotion`): a snapshot whose number is below the
+        session's ``opened`` shows what was open before.
     latent_view : LatentView or None
         The solved frame on the latent map, with its readouts (latent-space methods).
     latent_detail : LatentDetail or None
@@ -147,6 +151,7 @@ class Snapshot:
     decoded: np.ndarray | None = None
     history: tuple[HistoryEntry, ...] = ()
     history_run: int = 0
+    opened: int = 0
     solved: int = 0
     frames_skipped: int = 0
     pace: str = "every_frame"

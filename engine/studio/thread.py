@@ -99,6 +99,7 @@ class EngineThread(threading.Thread):
         self._stopping = False
         self._latency_ms: float | None = None  # a live frame's arrival to its solve, ms
         self._latent = LatentDebug()
+        self._opened = 0  # the ``opened`` of the newest SetMotion, SetSource or SetMethod
 
     # -- public API (any thread) --------------------------------------------------------
     def prepare(self, method: str) -> None:
@@ -181,6 +182,7 @@ class EngineThread(threading.Thread):
 
     @cmd.handles(cmd.SetMotion, cmd.SetSource)
     def _on_set_source(self, c: cmd.SetMotion | cmd.SetSource, was_dirty: bool) -> None:
+        self._opened = c.opened
         source = ClipSource(c.motion) if isinstance(c, cmd.SetMotion) else c.source
         try:
             source.set_sensors(self._methods.sensors)
@@ -212,6 +214,7 @@ class EngineThread(threading.Thread):
 
     @cmd.handles(cmd.SetMethod)
     def _on_set_method(self, c: cmd.SetMethod, was_dirty: bool) -> None:
+        self._opened = c.opened
         self._ghost_errors.clear()
         built = self._methods.select(c.name, c.ghosts)
         mark(f"engine: method {c.name} ready")
@@ -417,6 +420,7 @@ class EngineThread(threading.Thread):
             decoded=readonly(self._decoded) if self._decoded is not None else None,
             history=tuple(self._history),
             history_run=self._history_run,
+            opened=self._opened,
             solved=self._solved,
             frames_skipped=self._skipped,
             pace=self._clock.pace,

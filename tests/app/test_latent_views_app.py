@@ -7,6 +7,7 @@ from __future__ import annotations
 import time
 
 import numpy as np
+import pytest
 from PyQt6.QtCore import Qt
 from PyQt6.QtWidgets import QApplication, QDockWidget
 
@@ -63,11 +64,15 @@ def test_map_clicks_decode_and_seek_with_dragposer(studio, qtbot):
     decode_ms = 1000 * (time.perf_counter() - t0)
     print(f"map click to decoded pose: {decode_ms:.0f} ms")
     assert not np.allclose(s.latest.decoded, s.latest.positions, atol=1e-3)
-    # a click on a trajectory point goes to its frame
+    # a click on a trajectory point goes to its frame, and the trajectory stays (the seek
+    # back restarts the engine's history)
+    solved = len(views.map.xy)
     frame = int(views.map.frames[3])
     _click(views, *views.map.xy[3])
     qtbot.waitUntil(lambda: s.frame == frame, timeout=5000)
     qtbot.waitUntil(lambda: s.latest.frame == frame and s.latest.latent_view is not None, timeout=30000)
+    qtbot.waitUntil(lambda: views.map._drawn[0] == s.latest.seq, timeout=10000)
+    assert len(s.latest.history) == 1 and len(views.map.xy) == solved
     # Inspect this frame: the forces arrive and are drawn
     views.tabs.setCurrentIndex(1)
     qtbot.mouseClick(views.forces.inspect_button, Qt.MouseButton.LeftButton)
@@ -104,15 +109,15 @@ def test_the_dock_in_front_is_remembered(studio, qtbot):
 
 def test_a_map_behind_the_latent_dock_is_not_redrawn(studio, qtbot):
     views = _show_map(studio)
-    qtbot.waitUntil(lambda: views.map._seq == studio.session.latest.seq, timeout=10000)
+    qtbot.waitUntil(lambda: views.map._drawn[0] == studio.session.latest.seq, timeout=10000)
     studio.findChild(QDockWidget, "Latent").raise_()
     QApplication.processEvents()
     seq = studio.session.latest.seq
-    drawn = views.map._seq
+    drawn = views.map._drawn[0]
     studio.session.step(1)
     qtbot.waitUntil(lambda: studio.session.latest.seq > seq, timeout=10000)
     qtbot.wait(1200)  # more than the panel's interval
-    assert views.map._seq == drawn
+    assert views.map._drawn[0] == drawn
 
 
 def test_the_tabs_are_built_when_the_dock_is_first_shown_and_flags_reach_the_timeline_before(studio, qtbot):
@@ -126,10 +131,39 @@ def test_the_tabs_are_built_when_the_dock_is_first_shown_and_flags_reach_the_tim
     def entry(frame, flagged):
         return SimpleNamespace(frame=frame, ms=1.0, iterations=1, readouts={"flagged": float(flagged)})
 
-    views._update_map(SimpleNamespace(seq=10**6, frame=3, history=(entry(2, True), entry(3, False))))
+    views._update_map(
+        SimpleNamespace(seq=10**6, frame=3, history=(entry(2, True), entry(3, False)), opened=studio.session.opened)
+    )
     assert studio.timeline.slider.marks() == (2,)
     assert views.tabs is None
     views = _show_map(studio)
     assert views.tabs is not None and views.map.isVisible() and views.readouts.isVisible()
     assert views.tabs.count() == 3 and views.readouts.next_flagged() == 2
-    qtbot.waitUntil(lambda: views.map._seq == studio.session.latest.seq, timeout=10000)  # drawn once shown
+    qtbot.waitUntil(lambda: views.map._drawn[0] == studio.session.latest.seq, timeout=10000)  # drawn once shown
+
+
+def test_another_clip_empties_the_map_even_while_its_tab_is_hidden(studio, qtbot, synthetic_motion):
+    """Opened while the Gallery tab is in front, another clip's first frame is what the
+    Map tab shows when clicked, not the previous clip's frame and trajectory."""
+    s = studio.session
+    s.set_method("dragposer")
+    s.play()
+    qtbot.waitUntil(
+        lambda: s.latest.latent_view is not None and len([r for r in s.latest.history if r.readouts]) >= 8,
+        timeout=90000,
+    )
+    s.pause()
+    views = _show_map(studio)
+    qtbot.waitUntil(lambda: len(views.map.xy) >= 8, timeout=10000)
+    bar = views.tabs.tabBar()
+    qtbot.mouseClick(bar, Qt.MouseButton.LeftButton, pos=bar.tabRect(2).center())  # Gallery
+    assert views.tabs.currentIndex() == 2
+    s.set_motion(synthetic_motion.slice(40, 70))
+    qtbot.waitUntil(lambda: s.latest.num_frames == 30 and s.latest.latent_view is not None, timeout=60000)
+    qtbot.wait(700)  # the draw scheduler has handed the snapshot over (to the hidden tab)
+    qtbot.mouseClick(bar, Qt.MouseButton.LeftButton, pos=bar.tabRect(0).center())  # Map
+    qtbot.waitUntil(lambda: views.map._drawn[0] == s.latest.seq, timeout=5000)
+    x, y = views.map.current.getData()
+    assert (x[0], y[0]) == pytest.approx(tuple(s.latest.latent_view.xy))
+    assert list(views.map.frames) == sorted({r.frame for r in s.latest.history if r.readouts})
+    assert f"frame {s.latest.frame}:" in views.readouts.label.text()

@@ -51,7 +51,7 @@ def test_a_floor_added_in_the_pose_window_holds_the_shoulder_up(qtbot, monkeypat
         assert w.scene.constraints is w.mode.constraints and w.mode.constraints[0].joints == ("lshoulder",)
         assert panel.list.count() == 1  # the panel shows it
         _reach_down(w.drag_joint, start)
-        w.settle()
+        w.settle().wait()
         held = float(w.mode.pose.positions[LSH][2])
         bent = float(free.pose.positions[LSH][2])
         assert held > bent + 0.3, (held, bent)  # measured 1.22 m against 0.53 m

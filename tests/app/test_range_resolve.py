@@ -60,3 +60,32 @@ def test_a_range_resolve_runs_off_the_gui_thread_and_cancel_leaves_the_clip(stud
     assert done.args == [False, "cancelled"] and runner.result is None and not worker.is_alive()
     assert session.motion is original and studio.undo.history.count() == 0
     assert "cancelled" in studio.statusBar().currentMessage()
+
+
+def test_a_range_resolve_keeps_the_camera_on_the_frame_on_screen(studio, qtbot):
+    """The re-solved clip is the same clip: the camera the user set stays, centred on the
+    frame on screen (not moved to frame 0's hips, which left the character near and
+    off-centre on a paused frame)."""
+    from PyQt6.QtCore import Qt
+    from PyQt6.QtTest import QTest
+    from PyQt6.QtWidgets import QApplication
+
+    from app.range_actions import resolve_range
+
+    session, view = studio.session, studio.viewport
+    session.seek(100)
+    qtbot.waitUntil(lambda: session.latest.frame == 100, timeout=30000)
+    studio.windowHandle().requestActivate()
+    qtbot.waitUntil(lambda: QApplication.activeWindow() is studio)
+    studio.timeline.slider.setFocus()
+    QTest.keyClick(QApplication.focusWidget(), Qt.Key.Key_3)  # the side view, as a user sets it
+    assert view.camera_preset == "side"
+    cam = view.plotter.camera
+    offset = np.subtract(cam.position, cam.focal_point)
+    seq = session.latest.seq
+    resolve_range(studio, 90, 110, blend=4).wait()
+    qtbot.waitUntil(lambda: session.latest.seq > seq and session.latest.frame == 100, timeout=30000)
+    qtbot.waitUntil(lambda: studio.drawing._drawn_seq == session.latest.seq, timeout=10000)
+    assert np.allclose(np.subtract(cam.position, cam.focal_point), offset, atol=1e-6)
+    hips = session.latest.positions[0]
+    assert np.allclose(cam.focal_point[:2], hips[:2], atol=0.05)

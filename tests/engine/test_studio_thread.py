@@ -408,3 +408,22 @@ def test_deferred_method_work_runs_after_each_frame_is_published(synthetic_motio
     assert all(seq >= 1 for _, seq in method.calls), "called after a snapshot was out"
     assert [steps for steps, _ in method.calls] == sorted(steps for steps, _ in method.calls)
     assert method.calls[-1][0] == method.steps  # once per solved frame, after its step
+
+
+def test_snapshots_say_which_clip_or_method_they_are_of(engine, synthetic_motion):
+    """``opened`` numbers what the session opened; a view tells a snapshot of what was
+    open before by it, even one published after the session asked for the change, and
+    a restarted engine is sent the current number."""
+    session, worker = engine
+    wait_for(lambda: worker.latest is not None and worker.latest.opened == session.opened)
+    before = session.opened
+    session.set_motion(synthetic_motion.slice(0, 30))
+    assert session.opened == before + 1
+    wait_for(lambda: worker.latest.opened == session.opened and worker.latest.num_frames == 30)
+    session.set_method(session.method)  # a method change numbers it too
+    wait_for(lambda: worker.latest.opened == session.opened)
+    new = session.restart_engine()
+    try:
+        wait_for(lambda: new.latest is not None and new.latest.opened == session.opened)
+    finally:
+        new.stop()

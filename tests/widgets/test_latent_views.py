@@ -268,6 +268,107 @@ def test_verdicts_read_only_new_entries_of_unpickled_snapshots(qtbot):
     snap = _snap(n=600, flagged=(7,))
     w.note_verdicts(snap)
     copy = pickle.loads(pickle.dumps(snap))  # as an engine process delivers it: new objects
-    w.verdicts.clear()  # were every entry read again, frame 7 would come back
-    w.note_verdicts(copy)
-    assert w.verdicts == {}
+    version = w.solved.version
+    w.note_verdicts(copy)  # were every entry read again, the store would change
+    assert w.solved.version == version
+
+
+def _restarted(frame: int, seq: int, readouts: dict, ms: float = 9.0) -> Snap:
+    """The snapshot after a seek to ``frame``: the engine's history restarted with that
+    one solve, whose ``readouts`` (x, y, nearest, norm, flagged) differ from playback's."""
+    r = {"predictor": 0.4, **readouts}
+    entry = HistoryEntry(frame, 5, ms, {"total": 1.0}, np.full(24, 0.1), r)
+    view = LatentView(
+        frame,
+        np.full(24, 0.1),
+        np.array([r["x"], r["y"]]),
+        None,
+        "previous frame",
+        r["nearest"],
+        r["norm"],
+        0.4,
+        bool(r["flagged"]),
+    )
+    return Snap(seq, frame, (entry,), view)
+
+
+def test_a_click_on_a_trajectory_point_keeps_the_trajectory(latent_map, qtbot):
+    """The seek restarts the engine's history: the map still shows every frame solved."""
+    latent_map.update_snapshot(_snap())
+    frames = []
+    latent_map.frameClicked.connect(frames.append)
+    qtbot.mouseClick(latent_map.plot.viewport(), Qt.MouseButton.LeftButton, pos=_at(latent_map, *latent_map.xy[12]))
+    assert frames == [12]
+    x, y = latent_map.xy[12]
+    latent_map.update_snapshot(_restarted(12, 2, {"x": x, "y": y, "nearest": 1.1, "norm": 3.0, "flagged": 0.0}))
+    assert len(latent_map.points.data) == 40 and len(latent_map.xy) == 40
+    cx, cy = latent_map.current.getData()
+    assert (cx[0], cy[0]) == pytest.approx((x, y))
+    latent_map.clear()  # another clip
+    assert len(latent_map.points.data) == 0 and len(latent_map.current.getData()[0]) == 0
+
+
+def test_next_flagged_frame_and_the_readouts_tell_one_story(qtbot):
+    """The jump lands on a frame flagged in playback; solved again from here it reads
+    below both thresholds: the line says both, against the thresholds."""
+    w = shown(qtbot, LatentReadouts(), 620, 260)
+    w.set_thresholds(3.20, 6.39)
+    snap = _snap(n=40, flagged=(30,), frame=10)
+    snap.history[30].readouts.update(nearest=3.45)
+    w.update_snapshot(snap)
+    seeks = []
+    w.seekRequested.connect(seeks.append)
+    qtbot.mouseClick(w.next_button, Qt.MouseButton.LeftButton)
+    assert seeks == [30]
+    r = snap.history[30].readouts
+    w.update_snapshot(_restarted(30, 2, {"x": r["x"], "y": r["y"], "nearest": 3.08, "norm": 3.91, "flagged": 0.0}))
+    text = w.label.text()
+    assert "nearest 3.08 &le; 3.20" in text and "norm 3.91 &le; 6.39" in text
+    assert "flagged when solved before (nearest 3.45 &gt; 3.20" in text
+    assert w.next_flagged() is None  # the newest solve of frame 30 is not flagged
+
+
+def test_a_cross_sits_on_the_readout_that_crossed(qtbot):
+    w = shown(qtbot, LatentReadouts(), 420, 250)
+    w.set_thresholds(3.2, 2.5)  # every frame's norm (3.0) is above this one
+    w.update_snapshot(_snap(n=10, flagged=(4,), frame=9))
+    xs, ys = w.flags.getData()
+    assert list(xs) == [4.0] and list(ys) == pytest.approx([3.0])  # on the norm curve
+    assert w.thresholds["norm"].pen.color().name() == "#c77dff"  # dashed in its curve's colour
+
+
+def test_the_lower_force_chart_starts_on_a_term_with_force(qtbot):
+    w = shown(qtbot, LatentForces(), 420, 400)
+    d = _detail(influence=False)
+    forces = d.forces.copy()
+    forces[:, 0] = 0.0  # the first term (a met sensor) pushes nothing
+    import dataclasses
+
+    w.set_detail(dataclasses.replace(d, forces=forces, plane=forces[..., :2]))
+    assert w.term.currentData() == "look_at"
+    assert w.dim_bars.opts["height"][0] == pytest.approx(-2.0)
+    w.term.setCurrentIndex(0)
+    assert "no force" in w.dim_plot.getPlotItem().titleLabel.text
+
+
+def test_the_gallery_explains_its_colours(qtbot):
+    w = shown(qtbot, LatentGallery(), 500, 400)
+    assert w.legend.isVisible()
+    text = w.legend.text()
+    for colour in ("#4da3ff", "#8a93a6", "#ff8a1f", "#ff3b30", "#ffd60a"):
+        assert colour in text
+    assert "-2 sigma" in text and "+2 sigma" in text
+
+
+def test_the_store_shared_with_the_map_still_marks_and_enables_the_jump(qtbot):
+    """The window hands each snapshot to the map first: it reads the new solves into the
+    shared store, and the readouts must still announce the flagged frames."""
+    map_ = shown(qtbot, LatentMapPlot(), 300, 300)
+    w = shown(qtbot, LatentReadouts(solved=map_.solved), 420, 250)
+    marks = []
+    w.flagsChanged.connect(marks.append)
+    snap = _snap(n=20, flagged=(7,), frame=3)
+    map_.update_snapshot(snap)
+    w.update_snapshot(snap)
+    assert marks == [[7]] and w.next_button.isEnabled()
+    qtbot.mouseClick(w.next_button, Qt.MouseButton.LeftButton)

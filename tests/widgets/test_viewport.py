@@ -221,11 +221,11 @@ def test_follow_camera_glides_with_the_hips_and_holds_still_when_off(viewport, f
     moved = snap.positions + [2.0, 0, 0]
     focus_x = viewport.plotter.camera.focal_point[0]
     now[0] += 0.005
-    viewport.show_snapshot(fake_snapshot(seq=2, positions=moved))  # ~no time passed: barely moves
+    viewport.show_snapshot(fake_snapshot(seq=2, positions=moved, playing=True))  # ~no time passed: barely moves
     assert viewport.plotter.camera.focal_point[0] - focus_x < 0.5
     for seq in range(3, 6):
         now[0] += 0.5  # half a second per redraw
-        viewport.show_snapshot(fake_snapshot(seq=seq, positions=moved))
+        viewport.show_snapshot(fake_snapshot(seq=seq, positions=moved, playing=True))
     cam = viewport.plotter.camera
     assert cam.focal_point[0] == pytest.approx(moved[0, 0], abs=0.01)
     offset = np.subtract(cam.position, cam.focal_point)
@@ -234,6 +234,21 @@ def test_follow_camera_glides_with_the_hips_and_holds_still_when_off(viewport, f
     viewport.show_snapshot(fake_snapshot(seq=9, positions=moved + [3.0, 0, 0]))
     assert cam.focal_point[0] == pytest.approx(moved[0, 0], abs=0.01)
     assert np.allclose(np.subtract(cam.position, cam.focal_point), offset)  # the user's angle is kept
+
+
+def test_a_paused_frame_is_followed_all_the_way_at_once(viewport, fake_snapshot):
+    """Paused, no later redraw would finish a glide: a seek's frame is centred at once."""
+    now = [100.0]
+    viewport.clock = lambda: now[0]  # no time passes at all
+    viewport._followed_at = now[0]
+    moved = fake_snapshot().positions + [2.0, -1.5, 0]
+    viewport.show_snapshot(fake_snapshot(seq=2, positions=moved, playing=False))
+    cam = viewport.plotter.camera
+    assert cam.focal_point[:2] == pytest.approx(tuple(moved[0, :2]), abs=1e-6)
+    img = viewport.plotter.screenshot(return_img=True)
+    orange = (img[..., 0] > 200) & (img[..., 1] > 80) & (img[..., 1] < 170) & (img[..., 2] < 80)
+    cols = np.nonzero(orange.any(axis=0))[0]
+    assert abs(0.5 * (cols.min() + cols.max()) - img.shape[1] / 2) < 0.1 * img.shape[1]  # centred
 
 
 def test_a_frame_renders_once_queries_the_bounds_once_and_runs_no_python_filter(viewport, fake_snapshot):
@@ -393,3 +408,51 @@ def test_the_view_lights_with_the_headlight_and_the_key_light_only(viewport):
     on = [lights.GetItemAsObject(i) for i in range(lights.GetNumberOfItems()) if lights.GetItemAsObject(i).GetSwitch()]
     assert len(on) == 2 and sum(light.LightTypeIsHeadlight() for light in on) == 1
     assert max(light.GetIntensity() for light in on) >= 0.5  # the key light
+
+
+def _wheel(widget, x: float, y: float, notches: float) -> None:
+    """A mouse wheel turned ``notches`` at widget pixel ``(x, y)``, as Qt delivers it."""
+    from PyQt6.QtCore import QPoint, QPointF, Qt
+    from PyQt6.QtGui import QWheelEvent
+    from PyQt6.QtWidgets import QApplication
+
+    pos = QPointF(x, y)
+    event = QWheelEvent(
+        pos,
+        QPointF(widget.mapToGlobal(pos)),
+        QPoint(0, 0),
+        QPoint(0, int(120 * notches)),
+        Qt.MouseButton.NoButton,
+        Qt.KeyboardModifier.NoModifier,
+        Qt.ScrollPhase.NoScrollPhase,
+        False,
+    )
+    QApplication.sendEvent(widget, event)
+
+
+def test_the_wheel_zooms_toward_the_point_under_the_mouse(viewport, fake_snapshot):
+    """As Blender's "zoom to mouse position": the point under the mouse stays under it,
+    the distance shrinks by a notch's factor; turned back, the camera is where it was."""
+    viewport.show_snapshot(fake_snapshot())
+    ren, cam, widget = viewport.plotter.renderer, viewport.plotter.camera, viewport.plotter
+    before = (np.array(cam.position), np.array(cam.focal_point))
+    # a world point on the focal plane, right of and above the centre of the view
+    forward = np.subtract(cam.focal_point, cam.position)
+    up = np.array(cam.up) - forward * (np.dot(cam.up, forward) / np.dot(forward, forward))
+    right = np.cross(forward, up)
+    point = np.array(cam.focal_point) + 0.6 * right / np.linalg.norm(right) + 0.4 * up / np.linalg.norm(up)
+
+    def display(p):
+        ren.SetWorldPoint(*p, 1.0)
+        ren.WorldToDisplay()
+        return np.array(ren.GetDisplayPoint()[:2])
+
+    x, y = display(point)
+    ratio = widget.devicePixelRatioF()
+    assert 40 < x < widget.width() * ratio - 40 and 40 < y < widget.height() * ratio - 40
+    distance = cam.distance
+    _wheel(widget, x / ratio, widget.height() - 1 - y / ratio, 1)
+    assert cam.distance == pytest.approx(distance / 1.21, rel=1e-6)
+    assert np.allclose(display(point), (x, y), atol=1.5)  # still under the mouse
+    _wheel(widget, x / ratio, widget.height() - 1 - y / ratio, -1)
+    assert np.allclose(cam.position, before[0], atol=1e-3) and np.allclose(cam.focal_point, before[1], atol=1e-3)

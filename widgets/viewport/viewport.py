@@ -22,6 +22,7 @@ from widgets.viewport.picking import JointDragger
 from widgets.viewport.rings import RotationRings
 from widgets.viewport.sensors import SensorMarkers
 from widgets.viewport.skeleton import SkeletonActor
+from widgets.viewport.wheel_zoom import WheelZoom
 
 HOME_FOCUS_HEIGHT = 0.9
 FOLLOW_TIME_S = 0.25  # camera-follow time constant, seconds
@@ -100,6 +101,7 @@ class Viewport(QWidget):
             lambda axis, angle, first: self.ringTurned.emit(axis, angle, first),
         )
         self.gizmos = ConstraintGizmos(p, lambda n, changes: self.gizmoEdited.emit(n, changes))
+        self.wheel_zoom = WheelZoom(p)
         self._label = p.add_text("", position="upper_left", font_size=9, color="#d0d4dc")
         self._notice = p.add_text("", position="lower_edge", font_size=12, color="#ffe14d")
         self.notice = ""
@@ -163,13 +165,16 @@ class Viewport(QWidget):
         self.plotter.reset_camera_clipping_range()
         self.plotter.render()
 
-    def _follow(self, root: np.ndarray) -> None:
-        """Slide camera and focus horizontally with the hips, keeping the user's angle."""
+    def _follow(self, root: np.ndarray, glide: bool = True) -> None:
+        """Slide camera and focus horizontally with the hips, keeping the user's angle;
+        ``glide`` False goes all the way at once (a paused frame: no later redraw would
+        finish a glide, and the view would stay part way, off the character)."""
         now = self.clock()
         dt, self._followed_at = now - self._followed_at, now
         goal = np.array([root[0], root[1], self._focus[2]])
         # time-based smoothing: the same glide at 60 or 5 redraws per second
-        delta = (1.0 - np.exp(-dt / FOLLOW_TIME_S)) * (goal - self._focus)
+        share = 1.0 - np.exp(-dt / FOLLOW_TIME_S) if glide else 1.0
+        delta = share * (goal - self._focus)
         if np.linalg.norm(delta) < 1e-5:
             return
         cam = self.plotter.camera
@@ -206,7 +211,7 @@ class Viewport(QWidget):
             self._caption = caption
             self._label.SetText(2, caption)
         if self.follow and np.all(np.isfinite(snap.positions[0])):
-            self._follow(snap.positions[0])
+            self._follow(snap.positions[0], glide=bool(snap.playing))
         self.plotter.render()
 
     def show_clip_frame(self, positions: np.ndarray) -> None:
@@ -234,9 +239,14 @@ class Viewport(QWidget):
         every key from it: VTK's interactor style and pyvista bind plain letters to
         stereo (3), wireframe (w), a camera reset (r), picking modes (b, p, C) and
         closing the render window (q, e), none of which the menus show, and the
-        window's shortcuts have already taken the keys they bind."""
+        window's shortcuts have already taken the keys they bind. The wheel zooms
+        toward the mouse (:mod:`widgets.viewport.wheel_zoom`), not VTK's centre."""
         if event is not None and event.type() in (QEvent.Type.KeyPress, QEvent.Type.KeyRelease):
             event.ignore()
+            return True
+        if event is not None and event.type() == QEvent.Type.Wheel:
+            self.wheel_zoom.wheel(event)
+            event.accept()
             return True
         if event is not None and event.type() in (QEvent.Type.DragEnter, QEvent.Type.DragMove, QEvent.Type.Drop):
             paths = [u.toLocalFile() for u in event.mimeData().urls() if u.isLocalFile()]

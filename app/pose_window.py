@@ -40,6 +40,7 @@ from PyQt6.QtWidgets import (
 
 from app.camera_keys import CameraKeys
 from app.job_runner import JobRunner
+from app.motion_path_view import MotionPathView
 from app.pose_constraints import PoseConstraints
 from app.pose_files import PoseFiles
 from app.pose_menus import build_pose_menus
@@ -47,10 +48,13 @@ from app.pose_timeline import KeyPlayback
 from app.pose_turns import JointTurns
 from engine.authoring import events as ev
 from engine.authoring.document import AuthoringScene
+from engine.authoring.drag_reach import limb_reach, on_reach
 from engine.authoring.history import History
+from engine.authoring.motion_paths import authored_paths
 from engine.authoring.pose_mode import PoseMode
 from engine.authoring.session import AuthoringSession
 from engine.errors import UserError
+from engine.studio.frame_figures import gizmos_of
 from widgets.key_strip import KeyStrip
 from widgets.target_list import TargetList
 from widgets.viewport.viewport import Viewport
@@ -79,8 +83,14 @@ class PoseWindow(QMainWindow):
         self.selected: str | None = None  # the joint whose rotation rings are shown
         self.turns = JointTurns(self)
         self.viewport.ringTurned.connect(self.turns.by_ring)
+        self.viewport.jointSelected.connect(self.select)
         self.viewport.jointDragged.connect(self.drag_joint)
         self.viewport.targetDragged.connect(self.drag_joint)
+        self.viewport.gizmoEdited.connect(lambda name, changes: self.constraints.update(name, changes))
+        # a dragged wrist or ankle takes the depth its limb's stretch asks for
+        # (engine.authoring.drag_reach): the limb as it was at the press
+        self._reach: tuple[str, tuple[np.ndarray, float]] | None = None
+        self.viewport.joints.place = self._placed
         # in pose mode a plain press grabs a joint too (the studio's view needs Ctrl, where
         # a plain press on the body turns the camera); off every joint the camera turns
         self.viewport.joints.plain_press_grabs_joints = True
@@ -119,6 +129,8 @@ class PoseWindow(QMainWindow):
         # and its arrival would push the 3D view and the key timeline up under the mouse
         self.statusBar().setSizeGripEnabled(False)
         self.files = PoseFiles(self)
+        self.paths = MotionPathView(self.viewport.paths, self.settings, self._render_soon)
+        self._paths_pending = False
         build_pose_menus(self)
         self.camera_keys = CameraKeys(self.viewport, self)
         QApplication.instance().installEventFilter(self.camera_keys)
@@ -133,10 +145,14 @@ class PoseWindow(QMainWindow):
             (session.events.frame, self._on_keys),
             (session.events.constraints, self._on_constraints),
             (session.events.history, self._on_history),
+            (session.events.keys, self._paths_due),
+            (session.events.animation, self._paths_due),
+            (session.events.bake, self._paths_due),
         ):
             signal.connect(slot)
             self._subscriptions.append((signal, slot))
         self.refresh()
+        self._update_paths()
 
     # -- the model's parts, as the rest of the app reads them ----------------------
     @property
@@ -188,13 +204,35 @@ class PoseWindow(QMainWindow):
         self._guard("Pose", action, warn=True)
 
     # -- targets and the body ------------------------------------------------------
+    def select(self, joint: str) -> None:
+        """Select ``joint`` (a press or click on it, or on its target): its rotation rings
+        and its motion path show."""
+        self.selected = joint
+        limb = limb_reach(self.mode.pose.positions, joint)
+        self._reach = None if limb is None else (joint, limb)
+        self.turns.show_handles()
+        self.paths.select(joint)
+        self._render_soon()
+
+    def _placed(self, joint: str, point: np.ndarray, pressed: np.ndarray, *ray_and_normal: np.ndarray) -> np.ndarray:
+        """Where a drag of ``joint`` pressed at ``pressed`` to ``point`` on its drag plane
+        puts it (:func:`engine.authoring.drag_reach.on_reach` for a wrist or an ankle)."""
+        if self._reach is None or self._reach[0] != joint or self._alt_held():
+            return point  # an Alt-drag turns the joint by the mouse's direction on the plane
+        return on_reach(point, pressed, *ray_and_normal, *self._reach[1])
+
+    @staticmethod
+    def _alt_held() -> bool:
+        # the keys held now: the drag arrives through VTK's callback, and Qt's cached
+        # modifiers lag until its next input event (an Alt pressed before the drag read as none)
+        return bool(QApplication.queryKeyboardModifiers() & Qt.KeyboardModifier.AltModifier)
+
     def drag_joint(self, joint: str, position: np.ndarray) -> None:
         """Create or move the target on ``joint`` to ``position (3,)`` metres and solve;
         with Alt held, turn it instead (:meth:`app.pose_turns.JointTurns.alt_drag`)."""
         self.selected = joint
-        # the keys held now: the drag arrives through VTK's callback, and Qt's cached
-        # modifiers lag until its next input event (an Alt pressed before the drag read as none)
-        if QApplication.queryKeyboardModifiers() & Qt.KeyboardModifier.AltModifier:
+        self.paths.select(joint)
+        if self._alt_held():
             self.turns.alt_drag(joint, position)
             return
         self.turns.gesture = None
@@ -203,9 +241,10 @@ class PoseWindow(QMainWindow):
         self._render_soon()
 
     def deselect(self) -> None:
-        """Hide the rotation rings."""
+        """Hide the rotation rings (and the selected joint's motion path)."""
         self.selected = None
         self.turns.show_handles()
+        self.paths.select(None)
         self._render_soon()
 
     def move_body(self, delta: np.ndarray) -> None:
@@ -283,6 +322,7 @@ class PoseWindow(QMainWindow):
         vp = self.viewport
         (vp.body if vp.display == "body" else vp.reconstruction).update(positions)
         self.viewport.joints.positions = positions
+        self.paths.mark_pose(positions)
         self.viewport.plotter.render()
 
     def _render_soon(self) -> None:
@@ -313,7 +353,28 @@ class PoseWindow(QMainWindow):
         self.facing.setValue((self.mode.heading + 180.0) % 360.0 - 180.0)
         self.facing.blockSignals(False)
         self.turns.show_handles()
+        self._show_gizmos()
         self.show_positions(self.mode.pose.positions)
+
+    def _show_gizmos(self) -> None:
+        """The constraints' gizmos on the pose, as the studio draws them."""
+        self.viewport.gizmos.update(
+            gizmos_of(self.mode.constraints, self.mode.pose.positions, lambda m: self.statusBar().showMessage(m, 5000))
+        )
+
+    def _paths_due(self, e: Any = None) -> None:
+        """The keys, the animation or the bake changed: the paths are computed again once
+        the edit's events are all out."""
+        if not self._paths_pending:
+            self._paths_pending = True
+            QTimer.singleShot(0, self._update_paths)
+
+    def _update_paths(self) -> None:
+        self._paths_pending = False
+        s = self.session
+        self.paths.set_source(
+            lambda: authored_paths(s.mode.character, s.scene.keys, s.scene.animation.interpolation, s.baked)
+        )
 
     def _on_keys(self, e: Any = None) -> None:
         a = self.scene.animation
@@ -322,6 +383,8 @@ class PoseWindow(QMainWindow):
 
     def _on_constraints(self, e: Any = None) -> None:
         self.constraints.refresh()
+        self._show_gizmos()
+        self._render_soon()
 
     def _on_history(self, e: ev.HistoryChanged) -> None:
         undo, redo = self.actions_by_name["undo"], self.actions_by_name["redo"]

@@ -18,6 +18,7 @@ from widgets.viewport.floor import FloorGrid
 from widgets.viewport.ghosts import GhostLayer
 from widgets.viewport.gizmos import ConstraintGizmos
 from widgets.viewport.native import make_plotter
+from widgets.viewport.paths import MotionPathLayer
 from widgets.viewport.picking import JointDragger
 from widgets.viewport.rings import RotationRings
 from widgets.viewport.sensors import SensorMarkers
@@ -59,6 +60,8 @@ class Viewport(QWidget):
     ringTurned(int, float, bool)
         A rotation ring (:attr:`rings`, shown by its owner) is dragged: its axis (0, 1,
         2: world X, Y, Z), the radians swept since the press, and whether this is the press.
+    jointSelected(str)
+        A joint (or a target, by its joint) was grabbed or clicked: its name.
     """
 
     targetDragged = pyqtSignal(str, object)
@@ -66,6 +69,7 @@ class Viewport(QWidget):
     gizmoEdited = pyqtSignal(str, object)
     filesDropped = pyqtSignal(list)
     ringTurned = pyqtSignal(int, float, bool)
+    jointSelected = pyqtSignal(str)
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -98,7 +102,9 @@ class Viewport(QWidget):
             self.sensors,
             self.rings,
             lambda axis, angle, first: self.ringTurned.emit(axis, angle, first),
+            self.jointSelected.emit,
         )
+        self.paths = MotionPathLayer(p)
         self.gizmos = ConstraintGizmos(p, lambda n, changes: self.gizmoEdited.emit(n, changes))
         self._label = p.add_text("", position="upper_left", font_size=9, color="#d0d4dc")
         self._notice = p.add_text("", position="lower_edge", font_size=12, color="#ffe14d")
@@ -194,6 +200,8 @@ class Viewport(QWidget):
             snap.target_joints, snap.target_positions, snap.target_rotations, snap.target_connected, axes
         )
         self.gizmos.update(snap.gizmos)
+        if self.paths.shown:
+            self.paths.at_frame(snap.frame)
         # ghosts are listed below this line by the ghost layer, each in its own colour
         has_gt = bool(np.all(np.isfinite(snap.ground_truth)))
         gt = (
@@ -255,6 +263,7 @@ class Viewport(QWidget):
         self.sensors.clear()
         self.rings.clear()
         self.gizmos.clear()
+        self.paths.clear()
         self.ghosts.close()
         self.plotter.close()
         return super().close()

@@ -99,7 +99,9 @@ class MainWindow(QMainWindow):
         self.failures = FailureCountdown(self)
         self.snapshotDrawn.connect(self.failures.on_frame)
         self.ghost_status = GhostStatus(self)
-        self.motion_paths = MotionPathView(self.viewport.paths, self.settings, self.viewport.plotter.render)
+        self.motion_paths = MotionPathView(
+            self.viewport.paths, self.settings, self.viewport.plotter.render, lambda: self.session.frame
+        )
         build_menus(self)
         # the follow camera beside the play controls, where a walking character's user looks
         self.follow_button = self.timeline.add_action(self.actions_by_name["follow"])

@@ -41,12 +41,22 @@ class MotionPathView:
         Where the toggles are remembered.
     render : callable
         Asks the view to draw again.
+    frame : callable or None
+        The frame on screen, where newly drawn paths put their current-frame dot (the
+        studio's; the pose window marks its pose instead, :meth:`mark_pose`).
     """
 
-    def __init__(self, layer: MotionPathLayer, settings: QSettings, render: Callable[[], None]) -> None:
+    def __init__(
+        self,
+        layer: MotionPathLayer,
+        settings: QSettings,
+        render: Callable[[], None],
+        frame: Callable[[], int] | None = None,
+    ) -> None:
         self.layer = layer
         self.settings = settings
         self.render = render
+        self.frame = frame
         self.on = bool(settings.value(SHOW_KEY, True, type=bool))
         self.feet = bool(settings.value(FEET_KEY, False, type=bool))
         self.selected: str | None = None
@@ -107,6 +117,8 @@ class MotionPathView:
             self.layer.show(p.first, {j: p.line(j) for j in joints}, colours, p.marks)
             if self._pose is not None:  # the joints drawn may have changed
                 self.mark_pose(self._pose)
+            elif self.frame is not None:
+                self.layer.at_frame(self.frame())
         self.render()
 
     def at_frame(self, frame: int) -> None:

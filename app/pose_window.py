@@ -221,11 +221,15 @@ class PoseWindow(QMainWindow):
             return point  # an Alt-drag turns the joint by the mouse's direction on the plane
         return on_reach(point, pressed, *ray_and_normal, *self._reach[1])
 
-    @staticmethod
-    def _alt_held() -> bool:
-        # the keys held now: the drag arrives through VTK's callback, and Qt's cached
-        # modifiers lag until its next input event (an Alt pressed before the drag read as none)
-        return bool(QApplication.queryKeyboardModifiers() & Qt.KeyboardModifier.AltModifier)
+    def _alt_held(self) -> bool:
+        """Whether Alt is held with the drag: the keys of the mouse event that moved it
+        (:attr:`widgets.viewport.viewport.Viewport.drag_modifiers`), else (a drag not made
+        by the mouse) the keys held now, asked of the system: Qt's cached modifiers lag
+        until its next input event (an Alt pressed before the drag read as none)."""
+        held = self.viewport.drag_modifiers
+        if held is None:
+            held = QApplication.queryKeyboardModifiers()
+        return bool(held & Qt.KeyboardModifier.AltModifier)
 
     def drag_joint(self, joint: str, position: np.ndarray) -> None:
         """Create or move the target on ``joint`` to ``position (3,)`` metres and solve;

@@ -18,11 +18,14 @@ def _send(widget, kind, x, y, button, buttons, mods):
     QApplication.sendEvent(widget, event)
 
 
-def mouse_drag(view, start, end, ctrl: bool = False, steps: int = 6) -> None:
-    """Left-drag on the 3D view from ``start`` to ``end`` (VTK display pixels, y up)."""
+def mouse_drag(view, start, end, ctrl: bool = False, steps: int = 6, alt: bool = False) -> None:
+    """Left-drag on the 3D view from ``start`` to ``end`` (VTK display pixels, y up),
+    with Ctrl or Alt held."""
     widget = view.plotter
     h = widget.height()
     mods = Qt.KeyboardModifier.ControlModifier if ctrl else Qt.KeyboardModifier.NoModifier
+    if alt:
+        mods |= Qt.KeyboardModifier.AltModifier
     (x0, y0), (x1, y1) = start, end
     _send(widget, QMouseEvent.Type.MouseButtonPress, x0, h - 1 - y0, LEFT, LEFT, mods)
     for t in np.linspace(0, 1, steps + 1)[1:]:

@@ -134,6 +134,7 @@ def test_the_studio_draws_the_clicked_joints_path_over_the_clip_and_after_a_reso
     click(view, *pixel_of(view, s.latest.positions[LE]))  # a click: the camera does not turn
     assert studio.motion_paths.selected == "lelbow" and layer.shown
     clip = s.motion.positions()[:, LE]
+    np.testing.assert_allclose(layer.current.points, clip[[s.frame]], atol=1e-9)  # paused: the dot at once
     np.testing.assert_allclose(layer.paths["lelbow"], clip, atol=1e-9)
     assert layer.marks.n_points == 2  # a dot each second: frames 0 and 60 of 120
     s.seek(30)

@@ -45,25 +45,25 @@ def test_a_click_on_a_joint_selects_it_and_its_rings_turn_it(pose_window):
 
 def test_a_straight_alt_drag_leaves_no_target(pose_window, monkeypatch):
     """Alt + a drag straight away from the wrist asks for no turn: no '+rotation'
-    target, no undo step; a drag that sweeps round the wrist turns it."""
+    target, no undo step; a drag that sweeps round the wrist turns it. Alt is read from
+    the mouse events (the system's keys now may already be released: a busy machine
+    handles them late)."""
     import app.pose_window as pw
 
-    monkeypatch.setattr(
-        pw.QApplication, "queryKeyboardModifiers", staticmethod(lambda: Qt.KeyboardModifier.AltModifier)
-    )
+    monkeypatch.setattr(pw.QApplication, "queryKeyboardModifiers", staticmethod(lambda: Qt.KeyboardModifier.NoModifier))
     w = pose_window
     view = w.viewport
     view.plotter.render()
     x, y = pixel_of(view, w.mode.pose.positions[LW])
-    mouse_drag(view, (x, y), (x + 80, y), steps=8)
+    mouse_drag(view, (x, y), (x + 80, y), steps=8, alt=True)
     assert w.selected == "lwrist"
     assert "lwrist" not in w.mode.targets and w.undo.count() == 0
     assert "lwrist" not in w.targets.rows
     # sweeping round it does turn it (one step, shown as +rotation)
     view.plotter.render()
     x, y = pixel_of(view, w.mode.pose.positions[LW])
-    mouse_drag(view, (x, y), (x + 60, y), steps=4)
-    mouse_drag(view, (x, y), (x + 5, y + 60), steps=2)  # no pause: the same gesture goes on
+    mouse_drag(view, (x, y), (x + 60, y), steps=4, alt=True)
+    mouse_drag(view, (x, y), (x + 5, y + 60), steps=2, alt=True)  # no pause: the same gesture goes on
     assert w.mode.targets["lwrist"].rotation is not None
     assert "+rotation" in w.targets.rows["lwrist"]["label"].text()
 

@@ -7,7 +7,7 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-from PyQt6.QtCore import QEvent, QObject, pyqtSignal
+from PyQt6.QtCore import QEvent, QObject, Qt, pyqtSignal
 from PyQt6.QtGui import QImage
 from PyQt6.QtWidgets import QVBoxLayout, QWidget
 
@@ -28,6 +28,7 @@ HOME_FOCUS_HEIGHT = 0.9
 FOLLOW_TIME_S = 0.25  # camera-follow time constant, seconds
 #: How the reconstruction is drawn: a stick figure, or a shaded capsule mannequin.
 DISPLAY_MODES = ("stick", "body")
+_BUTTON_HELD = (QEvent.Type.MouseButtonPress, QEvent.Type.MouseMove)
 
 
 def keep_key_lights(renderer: Any) -> None:
@@ -112,6 +113,11 @@ class Viewport(QWidget):
         self._caption = ""
         self.follow = True
         self.show_ground_truth = True
+        #: The keyboard modifiers of the mouse press or move being handled, while a button
+        #: is held (None otherwise): a drag signal emitted from that event can ask which
+        #: keys were held then (a live query answers for the time the event is handled,
+        #: which, with the event queue behind on a busy machine, can be after a key's release).
+        self.drag_modifiers: Qt.KeyboardModifier | None = None
         self.camera_preset = "home"
         #: Joints whose tracker has an orientation (6-DoF); None draws axes on every target.
         self.oriented: frozenset[str] | None = None
@@ -246,6 +252,11 @@ class Viewport(QWidget):
         if event is not None and event.type() in (QEvent.Type.KeyPress, QEvent.Type.KeyRelease):
             event.ignore()
             return True
+        if event is not None and event.type() in _BUTTON_HELD:
+            # the keys held with this press or move, as the X server saw them then
+            self.drag_modifiers = event.modifiers()  # type: ignore[attr-defined]
+        elif event is not None and event.type() == QEvent.Type.MouseButtonRelease:
+            self.drag_modifiers = None
         if event is not None and event.type() in (QEvent.Type.DragEnter, QEvent.Type.DragMove, QEvent.Type.Drop):
             paths = [u.toLocalFile() for u in event.mimeData().urls() if u.isLocalFile()]
             if paths:

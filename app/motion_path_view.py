@@ -13,7 +13,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-from PyQt6.QtCore import QObject, QSettings
+from PyQt6.QtCore import QObject, QSettings, QTimer
 from PyQt6.QtGui import QAction
 from PyQt6.QtWidgets import QMenu
 
@@ -63,6 +63,8 @@ class MotionPathView:
         self.paths: MotionPaths | None = None
         self._source: Callable[[], MotionPaths | None] | None = None
         self._pose: np.ndarray | None = None  # the pose last marked (mark_pose)
+        self._pending = False  # a source_changed waits for the event loop
+        self._next: Callable[[], MotionPaths | None] | None = None
         self.actions: dict[str, QAction] = {}
 
     def add_menu_entries(self, window: QObject, view: QMenu) -> dict[str, QAction]:
@@ -101,6 +103,18 @@ class MotionPathView:
         self._source = source
         self.paths = None
         self.refresh()
+
+    def source_changed(self, source: Callable[[], MotionPaths | None]) -> None:
+        """:meth:`set_source` once the events of the edit going on are all out (an edit
+        that changes the keys and the bake asks once)."""
+        self._next = source
+        if not self._pending:
+            self._pending = True
+            QTimer.singleShot(0, self._take_next)
+
+    def _take_next(self) -> None:
+        self._pending = False
+        self.set_source(self._next)
 
     def refresh(self) -> None:
         """Draw the paths of :attr:`joints` (computing them first when they are due)."""

@@ -3,9 +3,11 @@
 The window is a view of an :class:`engine.authoring.session.AuthoringSession`, the
 Qt-free model that owns the pose, the targets, the keys, the constraints and the undo
 history: every gesture calls one model method (one undo step) and the window redraws
-what the model's events say changed. A drag on a joint creates a target there and moves
-it and selects the joint (its rotation rings show: a ring dragged turns it about that
-world axis); a drag on a target's sphere moves it; a drag on the hips moves the whole
+what the model's events say changed. A click on a joint selects it (its rotation rings
+show: a ring dragged turns it about that world axis; its motion path shows,
+:mod:`app.motion_path_view`); a drag on a joint creates a target there and moves it and
+selects the joint (a wrist or an ankle at the depth :mod:`engine.authoring.drag_reach`
+gives); a drag on a target's sphere moves it; a drag on the hips moves the whole
 body sideways and lowers or raises the pelvis up and down the screen, over the planted
 feet (a squat), and their ring turns it (root motion). Every move solves the pose again (the
 continuous solve, on the GUI thread: a few milliseconds with targets only). The target
@@ -13,7 +15,8 @@ list enables, weights and clears targets; the key timeline (:mod:`app.pose_timel
 adds the current pose as a key at the current frame, drags and deletes keys, scrubs
 through the baked in-betweens and plays them; the bake runs on a worker thread behind a
 progress dialog with Cancel (:mod:`app.job_runner`). The Constraints dock adds any
-constraint kind to the pose (:mod:`app.pose_constraints`). Ctrl+Z / Ctrl+Shift+Z undo
+constraint kind to the pose (:mod:`app.pose_constraints`); their gizmos are drawn and
+dragged as in the studio. Ctrl+Z / Ctrl+Shift+Z undo
 and redo through the model; closing with unsaved edits asks first. Files:
 :mod:`app.pose_files`.
 """
@@ -130,7 +133,6 @@ class PoseWindow(QMainWindow):
         self.statusBar().setSizeGripEnabled(False)
         self.files = PoseFiles(self)
         self.paths = MotionPathView(self.viewport.paths, self.settings, self._render_soon)
-        self._paths_pending = False
         build_pose_menus(self)
         self.camera_keys = CameraKeys(self.viewport, self)
         QApplication.instance().installEventFilter(self.camera_keys)
@@ -152,7 +154,7 @@ class PoseWindow(QMainWindow):
             signal.connect(slot)
             self._subscriptions.append((signal, slot))
         self.refresh()
-        self._update_paths()
+        self._paths_due()
 
     # -- the model's parts, as the rest of the app reads them ----------------------
     @property
@@ -367,16 +369,9 @@ class PoseWindow(QMainWindow):
         )
 
     def _paths_due(self, e: Any = None) -> None:
-        """The keys, the animation or the bake changed: the paths are computed again once
-        the edit's events are all out."""
-        if not self._paths_pending:
-            self._paths_pending = True
-            QTimer.singleShot(0, self._update_paths)
-
-    def _update_paths(self) -> None:
-        self._paths_pending = False
+        """The keys, the animation or the bake changed: the paths are computed again."""
         s = self.session
-        self.paths.set_source(
+        self.paths.source_changed(
             lambda: authored_paths(s.mode.character, s.scene.keys, s.scene.animation.interpolation, s.baked)
         )
 

@@ -23,17 +23,18 @@ Three sources:
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from engine import skeleton as sk
-from engine.authoring.bake import Baked, interpolated_targets
-from engine.authoring.character import Character
 from engine.authoring.keys import Key, interpolate
-from engine.authoring.targets import solve_inputs
 from engine.kinematics.fk import fk_positions
 from engine.motion.clip import Motion
-from engine.solver.limb_ik import LIMBS, finish
+
+if TYPE_CHECKING:  # the studio's window draws clip paths without torch, which these bring
+    from engine.authoring.bake import Baked
+    from engine.authoring.character import Character
 
 #: The joints drawn as the feet's paths.
 FEET = ("lankle", "rankle")
@@ -129,6 +130,9 @@ def baked_paths(baked: Baked, keys: list[Key]) -> MotionPaths | None:
 def key_poses(character: Character, keys: list[Key]) -> tuple[np.ndarray, np.ndarray]:
     """The decoded positions ``(K, 22, 3)`` of keys with a latent and their exact ones
     (the active targets taken by the limbs and turned joints, as a key is posed), metres."""
+    from engine.authoring.targets import solve_inputs
+    from engine.solver.limb_ik import LIMBS, finish
+
     latents = [np.asarray(k.latent, np.float32) for k in keys if k.latent is not None]
     if len(latents) != len(keys):
         raise ValueError("key_poses: every key needs a latent")
@@ -147,6 +151,10 @@ def key_poses(character: Character, keys: list[Key]) -> tuple[np.ndarray, np.nda
 def keyed_paths(character: Character, keys: list[Key], scheme: str) -> MotionPaths | None:
     """A preview of the bake's paths over the keyed range from the keys that have a
     latent (see the module doc); None when no key has one."""
+    from engine.authoring.bake import interpolated_targets
+    from engine.authoring.targets import solve_inputs
+    from engine.solver.limb_ik import LIMBS, finish
+
     posed = sorted((k for k in keys if k.latent is not None), key=lambda k: k.frame)
     if not posed:
         return None

@@ -73,8 +73,9 @@ def on_reach(
     length: float,
 ) -> np.ndarray:
     """Where a limb end pressed at ``pressed (3,)`` and dragged to ``point (3,)`` on its
-    drag plane (normal ``normal (3,)``) goes: the point ``(3,)`` metres of the mouse ray
-    ``origin + t * direction`` at the depth :func:`dragged_depth` gives, for a limb of
+    drag plane (normal ``normal (3,)``) goes: the point ``(3,)`` metres of the line
+    ``origin + t * direction`` (the mouse ray, or its parallel through ``point``: what
+    stays under the cursor) at the depth :func:`dragged_depth` gives, for a limb of
     ``length`` metres from ``root (3,)``."""
     n = np.asarray(normal, float)
     n = n / max(float(np.linalg.norm(n)), 1e-12)

@@ -52,3 +52,7 @@ def test_paths_are_redrawn_in_place(viewport):
     assert not layer.shown
     assert (layer.lines, layer.marks, layer.current) == meshes
     assert renderer.GetActors().GetNumberOfItems() == actors, "no actor made or lost"
+    layer.clear()  # the view closed: a late redraw (a queued recompute) draws nothing
+    layer.show(10, {"lwrist": wrist}, {"lwrist": "#ffd24d"}, [10])
+    layer.at_frame(20)
+    assert not layer.shown

@@ -103,7 +103,9 @@ class MotionPathLayer:
     ) -> None:
         """Draw ``paths`` (name -> ``(n, 3)`` metres, row ``i`` on frame ``first + i``)
         each in its colour, with a dot on each frame of ``marks`` along every path.
-        Empty ``paths`` hide everything."""
+        Empty ``paths`` hide everything; after :meth:`clear` nothing is drawn."""
+        if not self.actors:
+            return
         self.paths = {name: np.asarray(p, float).reshape(-1, 3) for name, p in paths.items()}
         self.first = int(first)
         points, cells, owner = polylines(list(self.paths.values()))
@@ -137,6 +139,8 @@ class MotionPathLayer:
         self._mark(np.asarray(points, float).reshape(-1, 3))
 
     def _mark(self, points: np.ndarray) -> None:
+        if not self.actors:
+            return
         self._set_points(self.current, points)
         self.actors[2].SetVisibility(self.shown and len(points) > 0)
 

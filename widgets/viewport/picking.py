@@ -57,8 +57,9 @@ class JointDragger:
         self._on_drag = on_drag
         self._on_select = on_select
         #: Where a dragged joint or target goes: ``place(name, point on the drag plane,
-        #: point pressed, ray origin, ray direction, plane normal) -> point (3,)`` (the
-        #: pose window picks a wrist's depth by its arm's stretch); None: the plane's point.
+        #: point pressed, a point of the line it may move along and that line's direction
+        #: (the mouse ray's), plane normal) -> point (3,)`` (the pose window picks a
+        #: wrist's depth by the drag's length); None: the plane's point.
         self.place: Callable[..., np.ndarray] | None = None
         self._click: tuple[float, float] | None = None  # a press the camera took, until its release
         self._sensors = sensors
@@ -244,12 +245,18 @@ class JointDragger:
         if abs(denom) < 1e-12:
             return
         t = float((self._origin - start) @ normal) / denom
-        point = start + t * direction
-        name = self._held()
-        if self.place is not None and name is not None:
-            point = np.asarray(self.place(name, point, self._origin, start, direction, normal), float)
+        point = self._placed(start + t * direction, self._origin, direction, normal)
         if self.target is not None:
             self._sensors.drag(self.target, point)
             self._plotter.render()  # the sphere follows the mouse at once, as a widget's did
-        elif name is not None:
-            self._on_drag(name, point)
+        else:
+            self._on_drag(JOINT_NAMES[self.joint], point)
+
+    def _placed(self, point: np.ndarray, pressed: np.ndarray, direction: np.ndarray, normal: np.ndarray) -> np.ndarray:
+        """Where the held thing goes for ``point (3,)`` on its drag plane: :attr:`place`'s
+        answer (on the line through ``point`` along the mouse ray's ``direction``, which
+        keeps it under the cursor), or ``point``; ``pressed``: where the drag began."""
+        name = self._held()
+        if self.place is None or name is None:
+            return point
+        return np.asarray(self.place(name, point, pressed, point, direction, normal), float)

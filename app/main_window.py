@@ -38,8 +38,10 @@ from app.ghost_status import GhostStatus
 from app.latent_views import LatentViews
 from app.live_actions import LiveActions
 from app.menus import build_menus
+from app.motion_path_view import MotionPathView
 from app.schema import constraint_schema, optimizer_fields
 from app.undo import SceneUndo
+from engine.authoring.motion_paths import clip_paths
 from engine.errors import UserError
 from engine.motion.source_file import is_source_file
 from engine.studio import events as ev
@@ -97,6 +99,9 @@ class MainWindow(QMainWindow):
         self.failures = FailureCountdown(self)
         self.snapshotDrawn.connect(self.failures.on_frame)
         self.ghost_status = GhostStatus(self)
+        self.motion_paths = MotionPathView(
+            self.viewport.paths, self.settings, self.viewport.plotter.render, lambda: self.session.frame
+        )
         build_menus(self)
         # the follow camera beside the play controls, where a walking character's user looks
         self.follow_button = self.timeline.add_action(self.actions_by_name["follow"])
@@ -218,6 +223,7 @@ class MainWindow(QMainWindow):
         op.ghostsChanged.connect(s.set_ghosts)
         self.viewport.targetDragged.connect(self._guard(s.drag_target))
         self.viewport.jointDragged.connect(self._guard(self._drag_joint))
+        self.viewport.jointSelected.connect(self._select_joint)
         self.viewport.gizmoEdited.connect(self._guard(lambda n, ch: s.constraints.edit(n, **ch)))
         self.latent.decodeRequested.connect(s.decode_latent)
         self.latent.debugToggled.connect(self._latent_debug)
@@ -284,6 +290,7 @@ class MainWindow(QMainWindow):
             # off-centre and near until something moved the camera again
             return
         self.viewport.reset_camera(event.motion.root_pos[0])
+        self.motion_paths.set_source(lambda m=event.motion: clip_paths(m))  # computed when drawn
         # the clip at once, the solve behind it (the first solved frame takes seconds)
         self.viewport.show_clip_frame(event.motion.slice(0, 1).positions()[0])
 
@@ -338,6 +345,12 @@ class MainWindow(QMainWindow):
             self.session.drag_target(joint, position)
         else:
             self.session.constraints.pin(joint, position)
+
+    def _select_joint(self, joint: str) -> None:
+        """A joint clicked (or dragged) in the 3D view: its motion path over the clip shows."""
+        self.motion_paths.select(joint)
+        if self.motion_paths.on:
+            self.statusBar().showMessage(f"{joint}: its motion path over the clip (View > Motion paths, P)", 4000)
 
     def _latent_debug(self, on: bool) -> None:
         """Debug on pauses playback; off solves the frame again, which drops the decoded pose."""

@@ -58,6 +58,7 @@ def build_menus(w: QMainWindow) -> None:
     view.addSeparator()
     toggle(w, view, "Ground truth", True, lambda v: setattr(vp, "show_ground_truth", v), "G")
     toggle(w, view, "Ghosts", True, lambda v: setattr(vp, "show_ghosts", v), "H")
+    named.update(w.motion_paths.add_menu_entries(w, view))
     help_menu = w.menuBar().addMenu("&Help")
     named["help"] = action(
         w, help_menu, "&Keyboard and mouse...", lambda: show_help(w), QKeySequence.StandardKey.HelpContents

@@ -57,6 +57,7 @@ def build_pose_menus(w: QMainWindow) -> None:
     # F frames the character (as in Maya): a camera that followed every edit would move
     # under a drag, and the drag plane with it
     named["frame"] = action(w, camera, "F&rame the character", lambda: vp.frame(w.hips()), "F")
+    named.update(w.paths.add_menu_entries(w, view))
     help_menu = w.menuBar().addMenu("&Help")
     named["help"] = action(
         w, help_menu, "&Keyboard and mouse...", lambda: show_help(w), QKeySequence.StandardKey.HelpContents

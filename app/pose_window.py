@@ -3,9 +3,11 @@
 The window is a view of an :class:`engine.authoring.session.AuthoringSession`, the
 Qt-free model that owns the pose, the targets, the keys, the constraints and the undo
 history: every gesture calls one model method (one undo step) and the window redraws
-what the model's events say changed. A drag on a joint creates a target there and moves
-it and selects the joint (its rotation rings show: a ring dragged turns it about that
-world axis); a drag on a target's sphere moves it; a drag on the hips moves the whole
+what the model's events say changed. A click on a joint selects it (its rotation rings
+show: a ring dragged turns it about that world axis; its motion path shows,
+:mod:`app.motion_path_view`); a drag on a joint creates a target there and moves it and
+selects the joint (a wrist or an ankle at the depth :mod:`engine.authoring.drag_reach`
+gives); a drag on a target's sphere moves it; a drag on the hips moves the whole
 body sideways and lowers or raises the pelvis up and down the screen, over the planted
 feet (a squat), and their ring turns it (root motion). Every move solves the pose again (the
 continuous solve, on the GUI thread: a few milliseconds with targets only). The target
@@ -13,7 +15,8 @@ list enables, weights and clears targets; the key timeline (:mod:`app.pose_timel
 adds the current pose as a key at the current frame, drags and deletes keys, scrubs
 through the baked in-betweens and plays them; the bake runs on a worker thread behind a
 progress dialog with Cancel (:mod:`app.job_runner`). The Constraints dock adds any
-constraint kind to the pose (:mod:`app.pose_constraints`). Ctrl+Z / Ctrl+Shift+Z undo
+constraint kind to the pose (:mod:`app.pose_constraints`); their gizmos are drawn and
+dragged as in the studio. Ctrl+Z / Ctrl+Shift+Z undo
 and redo through the model; closing with unsaved edits asks first. Files:
 :mod:`app.pose_files`.
 """
@@ -40,6 +43,7 @@ from PyQt6.QtWidgets import (
 
 from app.camera_keys import CameraKeys
 from app.job_runner import JobRunner
+from app.motion_path_view import MotionPathView
 from app.pose_constraints import PoseConstraints
 from app.pose_files import PoseFiles
 from app.pose_menus import build_pose_menus
@@ -47,10 +51,13 @@ from app.pose_timeline import KeyPlayback
 from app.pose_turns import JointTurns
 from engine.authoring import events as ev
 from engine.authoring.document import AuthoringScene
+from engine.authoring.drag_reach import limb_reach, on_reach
 from engine.authoring.history import History
+from engine.authoring.motion_paths import authored_paths
 from engine.authoring.pose_mode import PoseMode
 from engine.authoring.session import AuthoringSession
 from engine.errors import UserError
+from engine.studio.frame_figures import gizmos_of
 from widgets.key_strip import KeyStrip
 from widgets.target_list import TargetList
 from widgets.viewport.viewport import Viewport
@@ -79,8 +86,14 @@ class PoseWindow(QMainWindow):
         self.selected: str | None = None  # the joint whose rotation rings are shown
         self.turns = JointTurns(self)
         self.viewport.ringTurned.connect(self.turns.by_ring)
+        self.viewport.jointSelected.connect(self.select)
         self.viewport.jointDragged.connect(self.drag_joint)
         self.viewport.targetDragged.connect(self.drag_joint)
+        self.viewport.gizmoEdited.connect(lambda name, changes: self.constraints.update(name, changes))
+        # a dragged wrist or ankle takes the depth its limb's stretch asks for
+        # (engine.authoring.drag_reach): the limb as it was at the press
+        self._reach: tuple[str, tuple[np.ndarray, float]] | None = None
+        self.viewport.joints.place = self._placed
         # in pose mode a plain press grabs a joint too (the studio's view needs Ctrl, where
         # a plain press on the body turns the camera); off every joint the camera turns
         self.viewport.joints.plain_press_grabs_joints = True
@@ -121,6 +134,7 @@ class PoseWindow(QMainWindow):
         # and its arrival would push the 3D view and the key timeline up under the mouse
         self.statusBar().setSizeGripEnabled(False)
         self.files = PoseFiles(self)
+        self.paths = MotionPathView(self.viewport.paths, self.settings, self._render_soon)
         build_pose_menus(self)
         self.camera_keys = CameraKeys(self.viewport, self)
         QApplication.instance().installEventFilter(self.camera_keys)
@@ -135,10 +149,14 @@ class PoseWindow(QMainWindow):
             (session.events.frame, self._on_keys),
             (session.events.constraints, self._on_constraints),
             (session.events.history, self._on_history),
+            (session.events.keys, self._paths_due),
+            (session.events.animation, self._paths_due),
+            (session.events.bake, self._paths_due),
         ):
             signal.connect(slot)
             self._subscriptions.append((signal, slot))
         self.refresh()
+        self._paths_due()
 
     # -- the model's parts, as the rest of the app reads them ----------------------
     @property
@@ -194,13 +212,39 @@ class PoseWindow(QMainWindow):
         self._guard("Pose", action, warn=True)
 
     # -- targets and the body ------------------------------------------------------
+    def select(self, joint: str) -> None:
+        """Select ``joint`` (a press or click on it, or on its target): its rotation rings
+        and its motion path show."""
+        self.selected = joint
+        limb = limb_reach(self.mode.pose.positions, joint)
+        self._reach = None if limb is None else (joint, limb)
+        self.turns.show_handles()
+        self.paths.select(joint)
+        self._render_soon()
+
+    def _placed(self, joint: str, point: np.ndarray, pressed: np.ndarray, *ray_and_normal: np.ndarray) -> np.ndarray:
+        """Where a drag of ``joint`` pressed at ``pressed`` to ``point`` on its drag plane
+        puts it (:func:`engine.authoring.drag_reach.on_reach` for a wrist or an ankle)."""
+        if self._reach is None or self._reach[0] != joint or self._alt_held():
+            return point  # an Alt-drag turns the joint by the mouse's direction on the plane
+        return on_reach(point, pressed, *ray_and_normal, *self._reach[1])
+
+    def _alt_held(self) -> bool:
+        """Whether Alt is held with the drag: the keys of the mouse event that moved it
+        (:attr:`widgets.viewport.viewport.Viewport.drag_modifiers`), else (a drag not made
+        by the mouse) the keys held now, asked of the system: Qt's cached modifiers lag
+        until its next input event (an Alt pressed before the drag read as none)."""
+        held = self.viewport.drag_modifiers
+        if held is None:
+            held = QApplication.queryKeyboardModifiers()
+        return bool(held & Qt.KeyboardModifier.AltModifier)
+
     def drag_joint(self, joint: str, position: np.ndarray) -> None:
         """Create or move the target on ``joint`` to ``position (3,)`` metres and solve;
         with Alt held, turn it instead (:meth:`app.pose_turns.JointTurns.alt_drag`)."""
         self.selected = joint
-        # the keys held now: the drag arrives through VTK's callback, and Qt's cached
-        # modifiers lag until its next input event (an Alt pressed before the drag read as none)
-        if QApplication.queryKeyboardModifiers() & Qt.KeyboardModifier.AltModifier:
+        self.paths.select(joint)
+        if self._alt_held():
             self.turns.alt_drag(joint, position)
             return
         self.turns.gesture = None
@@ -209,9 +253,10 @@ class PoseWindow(QMainWindow):
         self._render_soon()
 
     def deselect(self) -> None:
-        """Hide the rotation rings."""
+        """Hide the rotation rings (and the selected joint's motion path)."""
         self.selected = None
         self.turns.show_handles()
+        self.paths.select(None)
         self._render_soon()
 
     def move_body(self, delta: np.ndarray) -> None:
@@ -300,6 +345,7 @@ class PoseWindow(QMainWindow):
         vp = self.viewport
         (vp.body if vp.display == "body" else vp.reconstruction).update(positions)
         self.viewport.joints.positions = positions
+        self.paths.mark_pose(positions)
         self.viewport.plotter.render()
 
     def _render_soon(self) -> None:
@@ -330,7 +376,21 @@ class PoseWindow(QMainWindow):
         self.facing.setValue((self.mode.heading + 180.0) % 360.0 - 180.0)
         self.facing.blockSignals(False)
         self.turns.show_handles()
+        self._show_gizmos()
         self.show_positions(self.mode.pose.positions)
+
+    def _show_gizmos(self) -> None:
+        """The constraints' gizmos on the pose, as the studio draws them."""
+        self.viewport.gizmos.update(
+            gizmos_of(self.mode.constraints, self.mode.pose.positions, lambda m: self.statusBar().showMessage(m, 5000))
+        )
+
+    def _paths_due(self, e: Any = None) -> None:
+        """The keys, the animation or the bake changed: the paths are computed again."""
+        s = self.session
+        self.paths.source_changed(
+            lambda: authored_paths(s.mode.character, s.scene.keys, s.scene.animation.interpolation, s.baked)
+        )
 
     def _on_keys(self, e: Any = None) -> None:
         a = self.scene.animation
@@ -339,6 +399,8 @@ class PoseWindow(QMainWindow):
 
     def _on_constraints(self, e: Any = None) -> None:
         self.constraints.refresh()
+        self._show_gizmos()
+        self._render_soon()
 
     def _on_history(self, e: ev.HistoryChanged) -> None:
         undo, redo = self.actions_by_name["undo"], self.actions_by_name["redo"]

@@ -32,7 +32,8 @@ from engine.constraints.base import Constraint
 from engine.constraints.temporal_prior import TemporalPriorConstraint
 from engine.errors import UserError
 from engine.kinematics import quat_np as QN
-from engine.kinematics.fk import fk
+from engine.kinematics.fk import fk, fk_positions
+from engine.kinematics.root import integrate_root
 from engine.solver import FrameContext, OptimizerSettings, PoseOptimizer, RootFrame, RootOverride
 from engine.solver.limb_ik import LIMBS, finish
 
@@ -222,6 +223,46 @@ class Character:
         with torch.no_grad():
             state = self._grounded.decode(torch.as_tensor(np.asarray(latent), dtype=torch.float32), ctx)
         return self._pose(np.asarray(latent, np.float32), state, 0, ctx)
+
+    def decode_many(
+        self, latents: np.ndarray, xy: np.ndarray, headings_deg: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The grounded poses of many latents at once, without any solve: what
+        :meth:`decode` gives for each row with ``grounded(xy[i], headings_deg[i])``, in one
+        decoder call (a 60-frame preview costs ~10 ms where 60 :meth:`decode` calls cost ~900).
+
+        Parameters
+        ----------
+        latents : ndarray (B, L)
+        xy : ndarray (B, 2)
+            Root's horizontal world positions, metres.
+        headings_deg : ndarray (B,)
+            Facing, degrees about +Z from the canonical -Y.
+
+        Returns
+        -------
+        local_rot : ndarray (B, 22, 4)
+            Unit local rotations, row 0 the root's world rotation.
+        root_pos : ndarray (B, 3)
+            Metres.
+        positions : ndarray (B, 22, 3)
+            World joint positions, metres, the lowest foot on the floor.
+        """
+        z = torch.as_tensor(np.asarray(latents, np.float32).reshape(-1, self.latent_dim))
+        b = z.shape[0]
+        headings = np.asarray(headings_deg, float).reshape(b)
+        with torch.no_grad():
+            rot, disp = self._grounded.decoder.decode(z)
+            h = _f(np.stack([yaw_quaternion(a) for a in headings]) if b else np.zeros((0, 4)))
+            root_rot, _ = integrate_root(h, torch.zeros(b, 3), rot[:, 0], disp)
+        local = torch.cat((root_rot[:, None], rot[:, 1:]), dim=1).double().numpy()
+        local = local / np.linalg.norm(local, axis=-1, keepdims=True)
+        positions = fk_positions(local, np.zeros((b, 3)), self.skeleton.offsets)
+        # Ground.apply: the root over xy, the lowest foot joint at its flat height
+        lift = (positions[:, list(FOOT_JOINTS), 2] - self.foot_heights.double().numpy()).min(axis=1)
+        shift = np.concatenate((np.asarray(xy, float).reshape(b, 2) - positions[:, 0, :2], -lift[:, None]), axis=1)
+        positions = positions + shift[:, None, :]
+        return local, positions[:, 0].copy(), positions
 
     def solve(
         self,

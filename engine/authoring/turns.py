@@ -25,6 +25,10 @@ from engine.kinematics.fk import fk
 TURN_START_M = 0.02
 #: A pause longer than this (seconds) between Alt-drag moves starts a new turn.
 TURN_GESTURE_S = 0.5
+#: An Alt-drag turns nothing until the mouse's direction from the joint has swept this
+#: many degrees (a drag straight away from the joint asks for no turn, and a rotation
+#: target equal to the joint's own would show "+rotation" and change nothing).
+TURN_MIN_DEG = 2.0
 
 
 def world_rotation(pose: Pose, offsets: np.ndarray, joint: str) -> np.ndarray:
@@ -48,6 +52,7 @@ class SweptTurn:
     start: np.ndarray
     last: float
     direction: np.ndarray | None = None
+    turned: bool = False  # the sweep has reached TURN_MIN_DEG once
 
     @classmethod
     def follow(cls, gesture: SweptTurn | None, joint: str, start: np.ndarray, now: float) -> SweptTurn:
@@ -61,11 +66,17 @@ class SweptTurn:
 
     def rotation(self, offset: np.ndarray) -> np.ndarray | None:
         """The joint's turned rotation ``(4,)`` for the mouse at ``offset (3,)`` metres from
-        the joint (on the drag plane); None while the gesture has no direction yet."""
+        the joint (on the drag plane); None while the gesture has no direction yet or
+        has not turned :data:`TURN_MIN_DEG` yet."""
         v = np.asarray(offset, float)
         if self.direction is None:
             if np.linalg.norm(v) >= TURN_START_M:
                 self.direction = v
             return None
+        if not self.turned:
+            cos = float(self.direction @ v) / max(float(np.linalg.norm(self.direction) * np.linalg.norm(v)), 1e-12)
+            if np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))) < TURN_MIN_DEG:
+                return None
+            self.turned = True
         q = QN.mul(Q.from_to(self.direction, v), self.start)
         return q / np.linalg.norm(q)

@@ -1,11 +1,17 @@
 """Dragging in the 3D view: Ctrl + left-drag on a joint of the reconstruction (a pin),
-plain left-drag on a tracker's target sphere (its offset).
+plain left-drag on a tracker's target sphere (its offset); selecting a joint.
 
 The press is tested against the joints' screen positions (within ``PICK_RADIUS_PX``) or
 against the targets' on-screen spheres (:meth:`SensorMarkers.pick`); on a hit the camera
 interaction is suspended until release, and every mouse move is turned into a world
 position: the mouse ray intersected with the plane through the grabbed point that faces
-the camera. Off every joint and target, the camera behaves as usual.
+the camera (in a view that looks along a world axis, within :data:`AXIS_SNAP_DEG`, the
+plane normal to that axis: the front view moves a joint at its own depth exactly). Off
+every joint and target, the camera behaves as usual.
+
+A press that grabs a joint or a target selects it (``on_select``); so does a click (a
+press and a release :data:`CLICK_PX` apart at most) on a joint where a press turns the
+camera (the studio without Ctrl).
 """
 
 from __future__ import annotations
@@ -26,6 +32,11 @@ PRESS_PRIORITY = 0.55
 #: An upright joint (:attr:`JointDragger.upright`) moves on a level-normal plane while
 #: the view's direction is within asin(0.87) = 60 degrees of level.
 UPRIGHT_STEEPEST = 0.87
+#: A view direction within this many degrees of a world axis drags on the plane normal
+#: to that axis (the camera presets look along an axis but from a little above).
+AXIS_SNAP_DEG = 8.0
+#: A press and a release at most this far apart (pixels) are a click.
+CLICK_PX = 3.0
 
 
 class JointDragger:
@@ -40,9 +51,17 @@ class JointDragger:
         sensors: Any = None,
         rings: Any = None,
         on_turn: Callable[[int, float, bool], None] | None = None,
+        on_select: Callable[[str], None] | None = None,
     ) -> None:
         self._plotter = plotter
         self._on_drag = on_drag
+        self._on_select = on_select
+        #: Where a dragged joint or target goes: ``place(name, point on the drag plane,
+        #: point pressed, a point of the line it may move along and that line's direction
+        #: (the mouse ray's), plane normal) -> point (3,)`` (the pose window picks a
+        #: wrist's depth by the drag's length); None: the plane's point.
+        self.place: Callable[..., np.ndarray] | None = None
+        self._click: tuple[float, float] | None = None  # a press the camera took, until its release
         self._sensors = sensors
         #: Rotation rings (:class:`widgets.viewport.rings.RotationRings`), grabbed before
         #: anything else; ``on_turn(axis, radians swept, first)`` while one is dragged.
@@ -88,6 +107,10 @@ class JointDragger:
         # would then leave the joint held, so every later mouse move dragged the pin.
         tag = iren.AddObserver("LeftButtonReleaseEvent", self._handle, 100.0)
         self._commands["LeftButtonReleaseEvent"] = iren.GetCommand(tag)
+        # A press the camera took: the style grabs the interactor's focus until the
+        # release, which then reaches the style alone; watched there (and passed on, as
+        # the mouse moves are) to tell a click from a turn of the camera.
+        self._style.AddObserver("LeftButtonReleaseEvent", self._camera_release, 10.0)
 
     def _take(self, event: str) -> None:
         self._commands[event].SetAbortFlag(1)
@@ -96,8 +119,14 @@ class JointDragger:
         iren = self._plotter.iren.interactor
         x, y = iren.GetEventPosition()
         if event == "LeftButtonPressEvent":
-            if self.press_ring(x, y) or (self.press(x, y) if iren.GetControlKey() else self.press_plain(x, y)):
+            self._click = None
+            if self.press_ring(x, y):
                 self._take(event)
+            elif self.press(x, y) if iren.GetControlKey() else self.press_plain(x, y):
+                self._take(event)
+                self._select(self.target if self.target is not None else JOINT_NAMES[self.joint])
+            else:
+                self._click = (x, y)
         elif event == "MouseMoveEvent":
             if self.ring is not None:
                 self._on_turn(self.ring, self._rings.angle(self.ray(x, y)), False)
@@ -110,6 +139,20 @@ class JointDragger:
         ):
             self.release()
             self._take(event)
+
+    def _camera_release(self, obj: object, event: str) -> None:
+        """The release of a press the camera took: a click on a joint selects it."""
+        x, y = self._plotter.iren.interactor.GetEventPosition()
+        click, self._click = self._click, None
+        self._style.OnLeftButtonUp()
+        if click is not None and np.hypot(x - click[0], y - click[1]) <= CLICK_PX:
+            j = self.joint_at(x, y)
+            if j is not None:
+                self._select(JOINT_NAMES[j])
+
+    def _select(self, name: str | None) -> None:
+        if name is not None and self._on_select is not None:
+            self._on_select(name)
 
     def press_ring(self, x: float, y: float) -> bool:
         """Grab the rotation ring under display pixel (x, y); True on a hit."""
@@ -132,13 +175,18 @@ class JointDragger:
             out.append(ren.GetDisplayPoint()[:2])
         return np.array(out)
 
-    def press(self, x: float, y: float) -> bool:
-        """Grab the joint under display pixel (x, y); True on a hit."""
+    def joint_at(self, x: float, y: float) -> int | None:
+        """The joint drawn nearest display pixel (x, y), within :data:`PICK_RADIUS_PX`."""
         if self.positions is None:
-            return False
+            return None
         dist = np.linalg.norm(self._to_display(self.positions) - [x, y], axis=1)
         j = int(np.argmin(dist))
-        if dist[j] > PICK_RADIUS_PX:
+        return None if dist[j] > PICK_RADIUS_PX else j
+
+    def press(self, x: float, y: float) -> bool:
+        """Grab the joint under display pixel (x, y); True on a hit."""
+        j = self.joint_at(x, y)
+        if j is None or self.positions is None:
             return False
         self.joint, self._origin = j, self.positions[j].copy()
         base = None if self.drag_origin is None else self.drag_origin(JOINT_NAMES[j])
@@ -203,10 +251,18 @@ class JointDragger:
         above, a level plane is all the mouse can reach)."""
         cam = self._plotter.camera
         normal = np.asarray(cam.focal_point, float) - np.asarray(cam.position, float)
-        name = self.target if self.target is not None else None if self.joint is None else JOINT_NAMES[self.joint]
+        name = self._held()
         if name in self.upright and abs(normal[2]) < UPRIGHT_STEEPEST * np.linalg.norm(normal):
             normal[2] = 0.0
+        unit = normal / max(float(np.linalg.norm(normal)), 1e-12)
+        axis = int(np.argmax(np.abs(unit)))
+        if abs(unit[axis]) >= np.cos(np.radians(AXIS_SNAP_DEG)):
+            return np.eye(3)[axis] * np.sign(unit[axis])
         return normal
+
+    def _held(self) -> str | None:
+        """The name of the target or joint held (None: neither)."""
+        return self.target if self.target is not None else None if self.joint is None else JOINT_NAMES[self.joint]
 
     def move(self, x: float, y: float) -> None:
         """Drag the grabbed joint or target to display pixel (x, y)."""
@@ -216,8 +272,18 @@ class JointDragger:
         if hit is None:
             return
         to = self._base + (hit - self._grab)
+        to = self._placed(to, self._base, self.ray(x, y)[1], self.drag_normal())
         if self.target is not None:
             self._sensors.drag(self.target, to)
             self._plotter.render()  # the sphere follows the mouse at once, as a widget's did
         else:
             self._on_drag(JOINT_NAMES[self.joint], to)
+
+    def _placed(self, point: np.ndarray, pressed: np.ndarray, direction: np.ndarray, normal: np.ndarray) -> np.ndarray:
+        """Where the held thing goes for ``point (3,)`` on its drag plane: :attr:`place`'s
+        answer (on the line through ``point`` along the mouse ray's ``direction``, which
+        keeps it under the cursor), or ``point``; ``pressed``: where the drag began."""
+        name = self._held()
+        if self.place is None or name is None:
+            return point
+        return np.asarray(self.place(name, point, pressed, point, direction, normal), float)

@@ -7,7 +7,7 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-from PyQt6.QtCore import QEvent, QObject, pyqtSignal
+from PyQt6.QtCore import QEvent, QObject, Qt, pyqtSignal
 from PyQt6.QtGui import QImage
 from PyQt6.QtWidgets import QVBoxLayout, QWidget
 
@@ -18,6 +18,7 @@ from widgets.viewport.floor import FloorGrid
 from widgets.viewport.ghosts import GhostLayer
 from widgets.viewport.gizmos import ConstraintGizmos
 from widgets.viewport.native import make_plotter
+from widgets.viewport.paths import MotionPathLayer
 from widgets.viewport.picking import JointDragger
 from widgets.viewport.rings import RotationRings
 from widgets.viewport.sensors import SensorMarkers
@@ -28,6 +29,7 @@ HOME_FOCUS_HEIGHT = 0.9
 FOLLOW_TIME_S = 0.25  # camera-follow time constant, seconds
 #: How the reconstruction is drawn: a stick figure, or a shaded capsule mannequin.
 DISPLAY_MODES = ("stick", "body")
+_BUTTON_HELD = (QEvent.Type.MouseButtonPress, QEvent.Type.MouseMove)
 
 
 def keep_key_lights(renderer: Any) -> None:
@@ -60,6 +62,8 @@ class Viewport(QWidget):
     ringTurned(int, float, bool)
         A rotation ring (:attr:`rings`, shown by its owner) is dragged: its axis (0, 1,
         2: world X, Y, Z), the radians swept since the press, and whether this is the press.
+    jointSelected(str)
+        A joint (or a target, by its joint) was grabbed or clicked: its name.
     """
 
     targetDragged = pyqtSignal(str, object)
@@ -67,6 +71,7 @@ class Viewport(QWidget):
     gizmoEdited = pyqtSignal(str, object)
     filesDropped = pyqtSignal(list)
     ringTurned = pyqtSignal(int, float, bool)
+    jointSelected = pyqtSignal(str)
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -99,7 +104,9 @@ class Viewport(QWidget):
             self.sensors,
             self.rings,
             lambda axis, angle, first: self.ringTurned.emit(axis, angle, first),
+            self.jointSelected.emit,
         )
+        self.paths = MotionPathLayer(p)
         self.gizmos = ConstraintGizmos(p, lambda n, changes: self.gizmoEdited.emit(n, changes))
         self.wheel_zoom = WheelZoom(p)
         self._label = p.add_text("", position="upper_left", font_size=9, color="#d0d4dc")
@@ -108,6 +115,11 @@ class Viewport(QWidget):
         self._caption = ""
         self.follow = True
         self.show_ground_truth = True
+        #: The keyboard modifiers of the mouse press or move being handled, while a button
+        #: is held (None otherwise): a drag signal emitted from that event can ask which
+        #: keys were held then (a live query answers for the time the event is handled,
+        #: which, with the event queue behind on a busy machine, can be after a key's release).
+        self.drag_modifiers: Qt.KeyboardModifier | None = None
         self.camera_preset = "home"
         #: Joints whose tracker has an orientation (6-DoF); None draws axes on every target.
         self.oriented: frozenset[str] | None = None
@@ -199,6 +211,8 @@ class Viewport(QWidget):
             snap.target_joints, snap.target_positions, snap.target_rotations, snap.target_connected, axes
         )
         self.gizmos.update(snap.gizmos)
+        if self.paths.shown:
+            self.paths.at_frame(snap.frame)
         # ghosts are listed below this line by the ghost layer, each in its own colour
         has_gt = bool(np.all(np.isfinite(snap.ground_truth)))
         gt = (
@@ -244,6 +258,11 @@ class Viewport(QWidget):
         if event is not None and event.type() in (QEvent.Type.KeyPress, QEvent.Type.KeyRelease):
             event.ignore()
             return True
+        if event is not None and event.type() in _BUTTON_HELD:
+            # the keys held with this press or move, as the X server saw them then
+            self.drag_modifiers = event.modifiers()  # type: ignore[attr-defined]
+        elif event is not None and event.type() == QEvent.Type.MouseButtonRelease:
+            self.drag_modifiers = None
         if event is not None and event.type() == QEvent.Type.Wheel:
             self.wheel_zoom.wheel(event)
             event.accept()
@@ -265,6 +284,7 @@ class Viewport(QWidget):
         self.sensors.clear()
         self.rings.clear()
         self.gizmos.clear()
+        self.paths.clear()
         self.ghosts.close()
         self.plotter.close()
         return super().close()

@@ -284,13 +284,13 @@ class MainWindow(QMainWindow):
         self.constraint_panel.frames_changed()
         self.plots.clear()
         self.method_errors.clear()
+        self.motion_paths.set_source(lambda m=event.motion: clip_paths(m))  # computed when drawn
         if self.undo.editing_clip:
             # the same clip edited (a range re-solve, its undo): the frame on screen and
             # the camera the user set stay; frame 0's placement would show the character
             # off-centre and near until something moved the camera again
             return
         self.viewport.reset_camera(event.motion.root_pos[0])
-        self.motion_paths.set_source(lambda m=event.motion: clip_paths(m))  # computed when drawn
         # the clip at once, the solve behind it (the first solved frame takes seconds)
         self.viewport.show_clip_frame(event.motion.slice(0, 1).positions()[0])
 

@@ -88,9 +88,10 @@ def test_hover_over_empty_map_and_over_a_frame(latent_map, qtbot):
     latent_map.pointHovered.connect(lambda x, y: points.append((x, y)))
     latent_map.frameHovered.connect(frames.append)
     qtbot.mouseMove(latent_map.plot.viewport(), _at(latent_map, 1.0, -2.5))
-    qtbot.waitUntil(lambda: bool(points), timeout=2000)
     px, py = latent_map.plot.getPlotItem().getViewBox().viewPixelSize()
-    assert points[-1] == pytest.approx((1.0, -2.5), abs=2 * max(px, py))
+    near = pytest.approx((1.0, -2.5), abs=2 * max(px, py))
+    # a hover of where the pointer rested before the move may arrive first on a busy display
+    qtbot.waitUntil(lambda: bool(points) and points[-1] == near, timeout=2000)
     target = latent_map.xy[10]
     qtbot.wait(100)  # under Xvfb the first move's events are still arriving
     qtbot.mouseMove(latent_map.plot.viewport(), _at(latent_map, *target))

@@ -96,14 +96,10 @@ SEGMENT = 16
 #: Frames before its first that a segment solves first (at most :data:`SEGMENT`). They are
 #: the previous segment's last frames, and the two solutions are cross-faded over them.
 WARMUP = 8
-#: Cross-fade the overlap's last :data:`FADE` frames (the previous segment's solution to
-#: this segment's warm-up solution, by slerp of the local rotations) instead of cutting at
-#: the segment's start. The warm-up's first frames, started cold, are not blended in.
-CROSSFADE = True
+#: The overlap's last frames cross-faded (:func:`_crossfade`: the previous segment's solution
+#: to this segment's warm-up solution, by slerp of the local rotations) instead of cutting
+#: at the segment's start. The warm-up's first frames, started cold, are not blended in.
 FADE = 2
-#: A segment after the first starts from the pose bank's latent of its first warm-up frame
-#: (the clip's first frame starts from the mean latent, as frame by frame).
-PRIOR_START = True
 #: Steps per kept frame, by update rule (module doc, *Steps*). The frame-by-frame stopping
 #: rule applies instead when the user set ``max_iterations``, ``patience`` or
 #: ``min_improvement``, and always to the clip's first frame (it starts from the mean latent).
@@ -154,10 +150,7 @@ def _solve_clip(m: DragPoserMethod, frames: Sequence[SensorFrame]) -> list[Frame
     c_all = len(keep_from)
     at = [f - 1 for f in first]  # each segment's current frame
     hist: list[list[np.ndarray]] = [[] for _ in range(c_all)]  # its last two finished poses
-    z = np.zeros((c_all, m.latent_dim), np.float32)  # the clip's first frame starts from the mean latent
-    if PRIOR_START:
-        for c in range(1, c_all):
-            z[c] = read[first[c]]["prior"]
+    z = _starts(read, first, m.latent_dim)
     objective = _objective(m, read[0], c_all)
     results: list[FrameResult | None] = [None] * n
     overlap: dict[int, np.ndarray] = {}  # frame -> the next segment's warm-up local rotations
@@ -183,7 +176,7 @@ def _solve_clip(m: DragPoserMethod, frames: Sequence[SensorFrame]) -> list[Frame
         f = at[c]
         local, pos = _finished(m, read[f], *objective.row(c)[::-1])
         hist[c] = [*hist[c][-1:], pos]
-        if f < keep_from[c] and CROSSFADE:
+        if f < keep_from[c]:
             overlap[f] = local
         if f >= keep_from[c]:
             values = objective.values[c]
@@ -221,6 +214,16 @@ def _solve_clip(m: DragPoserMethod, frames: Sequence[SensorFrame]) -> list[Frame
     for res in out:
         res.ms = ms  # the clip's solve time shared by its frames
     return out
+
+
+def _starts(read: list[dict], first: list[int], latent_dim: int) -> np.ndarray:
+    """Each segment's starting latent ``(C, L)`` float32: the clip's first frame starts from
+    the mean latent (zeros, as frame by frame), a later segment from the pose bank's latent
+    of its first warm-up frame (``first[c]``)."""
+    z = np.zeros((len(first), latent_dim), np.float32)
+    for c in range(1, len(first)):
+        z[c] = read[first[c]]["prior"]
+    return z
 
 
 def _crossfade(own: Sequence[FrameResult | None], warm: list[np.ndarray], offsets: np.ndarray) -> None:

@@ -234,8 +234,9 @@ def test_segment_starts_step_less_with_the_cross_fade(clip, monkeypatch):
     monkeypatch.setattr(DB, "SEGMENT", 8)
     monkeypatch.setattr(DB, "WARMUP", 6)
     steps = {}
+    shipped = DB._crossfade
     for fade in (False, True):
-        monkeypatch.setattr(DB, "CROSSFADE", fade)
+        monkeypatch.setattr(DB, "_crossfade", shipped if fade else lambda own, warm, offsets: None)
         rec, _ = run_method(_offline(), tr, clip.skeleton, progress=False)
         p = rec.positions()
         # a step shows as acceleration (what jitter measures) at the frames either side of it:
@@ -251,7 +252,8 @@ def test_later_segments_start_from_the_bank_latent_of_their_first_warm_up_frame(
 
     tr = simulate(clip, "6")
     monkeypatch.setattr(DB, "SEGMENT", 8)
-    monkeypatch.setattr(DB, "PRIOR_START", prior_start)
+    if not prior_start:  # the ablation of research/offline_steps.py
+        monkeypatch.setattr(DB, "_starts", lambda read, first, dim: np.zeros((len(first), dim), np.float32))
     starts = []
     solve = DB.solve_streams
 

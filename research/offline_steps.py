@@ -138,7 +138,7 @@ def _timed_parts(db) -> dict[str, float]:
     wrap(SB.BatchObjective, "gradient", "FK and losses reverse")
     wrap(db, "_finished", "after-solve steps")
     wrap(TP.PoseBank, "latent_frames", "bank lookups")
-    wrap(db, "_read", "reading frames")
+    wrap(db, "_plan", "reading frames")
     return spent
 
 

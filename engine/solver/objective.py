@@ -34,6 +34,14 @@ if TYPE_CHECKING:
     from engine.kinematics.pose_state import PoseState
 
 
+def active_weights(constraints: Sequence["Constraint"], frame: int) -> tuple[list["Constraint"], list[float]]:
+    """The constraints a frame is solved against and their weights: each enabled one's
+    ``weight`` times its :meth:`~Constraint.activity` at ``frame``, those of weight 0
+    left out (they would add nothing but a loss to report and a stop to wait for)."""
+    weighted = [(c, c.weight * c.activity(frame)) for c in constraints if c.enabled]
+    return [c for c, w in weighted if w > 0], [w for c, w in weighted if w > 0]
+
+
 def build_terms(
     constraints: Sequence["Constraint"], weights: Sequence[float], frame: FrameInputs
 ) -> tuple[list[Term], list[np.ndarray]]:

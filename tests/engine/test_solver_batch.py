@@ -170,30 +170,22 @@ def test_clips_it_cannot_batch_are_solved_frame_by_frame(clip):
 
 
 def test_the_batched_gradient_is_the_derivative_of_the_batched_loss(clip):
-    from engine.constraints.residual import FrameInputs
-    from engine.constraints.smooth import SmoothTerm
-    from engine.constraints.temporal_prior import PriorTerm
     from engine.tracking import simulate
 
     m = _offline()
     tr = simulate(clip, "4")
     read = DB._read_all(m, [tr.frame(i) for i in range(5)])
-    assert all(read[0]["kept"]), "preset 4: trackers, prior, smoothing and the ground band all act"
+    assert len(read[0].own) == 3, "preset 4: trackers, prior, smoothing and the ground band all act"
     objective = DB._objective(m, read[0], 5)
     rng = np.random.default_rng(0)
     for c, (r, on) in enumerate(zip(read, [False, True, True, False, True])):
         target = rng.normal(scale=0.3, size=(22, 3)) + np.array([0, 0, 1.0])
-        smooth = SmoothTerm("smooth", target if on else None)
-        weights = r["weights"].copy()
+        weights = r.weights.copy()
         weights[-1] = 10.0  # the ground band, strong
-        objective.set_row(
-            c,
-            [r["sensor_term"], PriorTerm("temporal_prior", r["prior"]), smooth, m.ground.term(FrameInputs())],
-            weights,
-            *r["root"],
-        )
+        # two equal poses: the smoothing target is that pose
+        objective.set_row(c, r.terms((target, target) if on else (None, None), m), weights, *r.plan.hip)
     dec = B.BatchDecoder(m.optimizer.fast_parts.decoder)
-    z = np.array([r["prior"] for r in read]) + rng.normal(scale=0.3, size=(5, 24))  # float64: exact differences
+    z = np.array([r.prior for r in read]) + rng.normal(scale=0.3, size=(5, 24))  # float64: exact differences
     idx = np.array([0, 1, 3, 4])
     w = objective.weights[idx]
 
@@ -269,7 +261,7 @@ def test_later_segments_start_from_the_bank_latent_of_their_first_warm_up_frame(
     z0 = starts[0]
     assert not z0[0].any()  # the clip's first frame: the mean latent, as frame by frame
     for c in range(1, 5):
-        want = read[8 * c - w]["prior"] if prior_start else np.zeros_like(z0[c])
+        want = read[8 * c - w].prior if prior_start else np.zeros_like(z0[c])
         assert np.allclose(z0[c], want, atol=1e-6)
 
 

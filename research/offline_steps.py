@@ -114,8 +114,9 @@ def main() -> int:
 def _timed_parts(db) -> dict[str, float]:
     """Wrap the parts of the batched solve in CPU timers; returns the dict they add to
     (seconds per part, and ``columns``: decoder columns)."""
-    import engine.solver.batch as SB
     import engine.solver.tracker_prior as TP
+    from engine.models.fused import DenseDecoder
+    from engine.solver.objective import FastObjective
 
     spent: dict[str, float] = {}
 
@@ -127,15 +128,16 @@ def _timed_parts(db) -> dict[str, float]:
             out = orig(*args, **kw)
             spent[label] = spent.get(label, 0.0) + time.thread_time() - t
             if columns:
-                spent["columns"] = spent.get("columns", 0.0) + args[1].shape[1]
+                z = args[1]
+                spent["columns"] = spent.get("columns", 0.0) + (z.shape[1] if z.ndim == 2 else 1)
             return out
 
         setattr(owner, name, timed)
 
-    wrap(SB.BatchDecoder, "forward", "decoder forward", columns=True)
-    wrap(SB.BatchDecoder, "backward", "decoder reverse")
-    wrap(SB.BatchObjective, "evaluate", "FK and losses")
-    wrap(SB.BatchObjective, "gradient", "FK and losses reverse")
+    wrap(DenseDecoder, "forward", "decoder forward", columns=True)
+    wrap(DenseDecoder, "backward", "decoder reverse")
+    wrap(FastObjective, "evaluate_rows", "FK and losses")
+    wrap(FastObjective, "pose_gradient", "FK and losses reverse")
     wrap(db, "_finished", "after-solve steps")
     wrap(TP.PoseBank, "latent_frames", "bank lookups")
     wrap(db, "_plan", "reading frames")

@@ -55,7 +55,7 @@ from engine.kinematics.fk import fk
 from engine.methods.base import FrameResult
 from engine.methods.dragposer_parts import FramePlan, smoothing_history
 from engine.sensors import SensorFrame
-from engine.solver.batch import BatchDecoder, BatchObjective, solve_streams
+from engine.solver.batch import BatchObjective, solve_streams
 from engine.solver.chain import RootFrames
 from engine.solver.limb_ik import finish
 from engine.solver.objective import active_weights
@@ -226,7 +226,6 @@ def _solve_clip(m: DragPoserMethod, frames: Sequence[SensorFrame]) -> list[Frame
                 timings={},
             )
 
-    decoder = BatchDecoder(fast.decoder)
     lr = s.step_size if rule == "sgd" else s.lr
     last_z = z.copy()
 
@@ -236,7 +235,7 @@ def _solve_clip(m: DragPoserMethod, frames: Sequence[SensorFrame]) -> list[Frame
             return None
         return FIRST_STEPS if f == first[c] else WARMUP_STEPS if f < keep_from[c] else fixed
 
-    solve_streams(decoder, objective, z, rule, lr, s.max_iterations, s.patience, s.min_improvement, load, done, steps)
+    solve_streams(objective, z, rule, lr, s.max_iterations, s.patience, s.min_improvement, load, done, steps)
     ms = 1000.0 * (time.perf_counter() - t0) / n
     for a, b in zip(first[1:], keep_from[1:]):
         a = max(a, b - FADE)
@@ -355,6 +354,7 @@ def _objective(m: DragPoserMethod, r: BatchFrame, rows: int) -> BatchObjective:
         rotation=QN.to_matrix(q),
     )
     return BatchObjective(
+        m.optimizer.fast_parts.decoder,
         m.skeleton.offsets,
         terms,
         np.tile(r.weights, (rows, 1)),

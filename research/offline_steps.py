@@ -7,7 +7,9 @@ A variant is ``fbf`` (the frame-by-frame offline solve: ``solve_clip`` switched 
 ``batch`` (the batched solve as shipped) or ``batch`` followed by ``+NAME=VALUE`` items
 that set module constants of :mod:`engine.methods.dragposer_batch` for that variant (a
 Python expression each, e.g. ``batch+STEPS={}`` for the stopping rule,
-``batch+STEPS={'adam-carry':40}+WARMUP_STEPS=10``). Per variant it prints each file's
+``batch+STEPS={'adam-carry':40}+WARMUP_STEPS=10``), or one of the ablations of
+:data:`ABLATIONS` (``batch+cut``: no cross-fade at segment starts; ``batch+mean_start``:
+later segments start from the mean latent instead of the pose bank's). Per variant it prints each file's
 Pos and Rot, then the CPU milliseconds per frame (``time.thread_time`` around
 ``evaluate_clip``, one torch and one BLAS thread) and the means of the metrics over the
 files; with ``--parts``, also each part's share of the variant's CPU time (the decoder
@@ -38,6 +40,12 @@ VAL = [
     "cmu_iclone/006_10.bvh",
     "cmu_iclone/007_05.bvh",
 ]
+#: Ablations of the shipped batched solve: the name of a ``+NAME`` item, the function of
+#: :mod:`engine.methods.dragposer_batch` it replaces, and its stand-in.
+ABLATIONS = {
+    "cut": ("_crossfade", lambda own, warm, offsets: None),
+    "mean_start": ("_starts", lambda read, first, latent_dim: np.zeros((len(first), latent_dim), np.float32)),
+}
 KEYS = ("pos_cm", "rot_deg", "ee_cm", "jitter", "vel_cms", "iterations_mean")
 
 
@@ -57,6 +65,7 @@ def main() -> int:
     from engine.motion.retarget import load_motion
 
     shipped = {k: getattr(DB, k) for k in dir(DB) if k.isupper()}
+    shipped.update({f: getattr(DB, f) for f, _ in ABLATIONS.values()})
 
     def method(variant: str):
         for k, v in shipped.items():
@@ -65,8 +74,11 @@ def main() -> int:
         if variant == "fbf":
             m.solve_clip = lambda frames: None  # the caller steps frame by frame
         for item in variant.split("+")[1:]:
+            if item in ABLATIONS:
+                setattr(DB, *ABLATIONS[item])
+                continue
             name, value = item.split("=", 1)
-            if name not in shipped:
+            if name not in shipped or not name.isupper():
                 raise SystemExit(f"{name}: not a constant of engine.methods.dragposer_batch")
             setattr(DB, name, eval(value))  # noqa: S307 - the user's own expression
         return m
@@ -102,8 +114,9 @@ def main() -> int:
 def _timed_parts(db) -> dict[str, float]:
     """Wrap the parts of the batched solve in CPU timers; returns the dict they add to
     (seconds per part, and ``columns``: decoder columns)."""
-    import engine.solver.batch as SB
     import engine.solver.tracker_prior as TP
+    from engine.models.fused import DenseDecoder
+    from engine.solver.objective import FastObjective
 
     spent: dict[str, float] = {}
 
@@ -115,18 +128,19 @@ def _timed_parts(db) -> dict[str, float]:
             out = orig(*args, **kw)
             spent[label] = spent.get(label, 0.0) + time.thread_time() - t
             if columns:
-                spent["columns"] = spent.get("columns", 0.0) + args[1].shape[1]
+                z = args[1]
+                spent["columns"] = spent.get("columns", 0.0) + (z.shape[1] if z.ndim == 2 else 1)
             return out
 
         setattr(owner, name, timed)
 
-    wrap(SB.BatchDecoder, "forward", "decoder forward", columns=True)
-    wrap(SB.BatchDecoder, "backward", "decoder reverse")
-    wrap(SB.BatchObjective, "evaluate", "FK and losses")
-    wrap(SB.BatchObjective, "gradient", "FK and losses reverse")
+    wrap(DenseDecoder, "forward", "decoder forward", columns=True)
+    wrap(DenseDecoder, "backward", "decoder reverse")
+    wrap(FastObjective, "evaluate_rows", "FK and losses")
+    wrap(FastObjective, "pose_gradient", "FK and losses reverse")
     wrap(db, "_finished", "after-solve steps")
     wrap(TP.PoseBank, "latent_frames", "bank lookups")
-    wrap(db, "_read", "reading frames")
+    wrap(db, "_plan", "reading frames")
     return spent
 
 

@@ -82,6 +82,19 @@ def levels(parents: tuple[int, ...]) -> Levels:
     )
 
 
+def ancestors(parents, j: int) -> list[int]:
+    """``j``, its parent, and so on up to the root (whose parent is -1 or itself)."""
+    out = [int(j)]
+    while 0 <= parents[out[-1]] != out[-1]:
+        out.append(int(parents[out[-1]]))
+    return out
+
+
+def children(parents, j: int) -> list[int]:
+    """The joints whose parent is ``j``, in order."""
+    return [k for k, p in enumerate(parents) if p == j and k != j]
+
+
 def _ops(x):
     torch = torch_of(x)
     if torch is not None:

@@ -33,7 +33,7 @@ from engine.kinematics import quaternion as Q
 from engine.methods import dragposer_root as roots
 from engine.methods.base import FrameResult, Method
 from engine.methods.dragposer_edits import FrameSettings
-from engine.methods.dragposer_parts import FramePlan, PriorSource, TrackerTerms, UserConstraints
+from engine.methods.dragposer_parts import FramePlan, PriorSource, TrackerTerms, UserConstraints, smoothing_history
 from engine.methods.solve_record import SolveRecord, record_of
 from engine.motion.clip import Motion
 from engine.sensors import SensorFrame
@@ -204,9 +204,7 @@ class DragPoserMethod(Method):
         start = prediction if prediction is not None and s.init_from_prediction else self._latent
         self.prior.weight = prior_weight
         self.smooth.weight, self.ground.weight = plan.smooth_weight, plan.ground_weight
-        # frame 0 is solved offline from the mean latent, so the step from it to frame 1 is
-        # not a velocity: extrapolating it threw frames 2-4 of a head-and-hands clip 36 cm off
-        self.smooth.set_history(self._pos64, self._before64 if self._frame >= 3 else None)
+        self.smooth.set_history(*smoothing_history(self._frame, self._pos64, self._before64))
         anchor = roots.root_anchor(self.sensors, self.settings) if override is None else None
         if override is None and anchor is None and s.root_anchor != "none" and self._frame > 0:
             override = roots.held_root(self._root, self.trackers.points, self.trackers.last_points)

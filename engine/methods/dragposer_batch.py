@@ -43,20 +43,22 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any, Protocol
 
 import numpy as np
 
-from engine.constraints.residual import FrameInputs, FrameRows
-from engine.constraints.smooth import SmoothTerm
-from engine.constraints.temporal_prior import PriorTerm
+from engine.constraints.base import Constraint
+from engine.constraints.residual import FrameInputs, FrameRows, Term
 from engine.kinematics import quat_np as QN
 from engine.kinematics.fk import fk
 from engine.methods.base import FrameResult
+from engine.methods.dragposer_parts import FramePlan, smoothing_history
 from engine.sensors import SensorFrame
-from engine.solver.batch import BatchDecoder, BatchObjective, solve_streams
+from engine.solver.batch import BatchObjective, solve_streams
 from engine.solver.chain import RootFrames
 from engine.solver.limb_ik import finish
+from engine.solver.objective import active_weights
 from engine.solver.threads import one_blas_thread
 
 
@@ -83,7 +85,7 @@ class DragPoserMethod(Protocol):
     @property
     def sensors(self) -> dict[str, Any]: ...
 
-    def plan(self, frame: SensorFrame) -> Any: ...
+    def plan(self, frame: SensorFrame) -> FramePlan: ...
 
     def reset(self, skeleton: Any, fps: float = ...) -> None: ...
 
@@ -96,14 +98,10 @@ SEGMENT = 16
 #: Frames before its first that a segment solves first (at most :data:`SEGMENT`). They are
 #: the previous segment's last frames, and the two solutions are cross-faded over them.
 WARMUP = 8
-#: Cross-fade the overlap's last :data:`FADE` frames (the previous segment's solution to
-#: this segment's warm-up solution, by slerp of the local rotations) instead of cutting at
-#: the segment's start. The warm-up's first frames, started cold, are not blended in.
-CROSSFADE = True
+#: The overlap's last frames cross-faded (:func:`_crossfade`: the previous segment's solution
+#: to this segment's warm-up solution, by slerp of the local rotations) instead of cutting
+#: at the segment's start. The warm-up's first frames, started cold, are not blended in.
 FADE = 2
-#: A segment after the first starts from the pose bank's latent of its first warm-up frame
-#: (the clip's first frame starts from the mean latent, as frame by frame).
-PRIOR_START = True
 #: Steps per kept frame, by update rule (module doc, *Steps*). The frame-by-frame stopping
 #: rule applies instead when the user set ``max_iterations``, ``patience`` or
 #: ``min_improvement``, and always to the clip's first frame (it starts from the mean latent).
@@ -119,6 +117,38 @@ FIRST_STEPS = 100
 EXTRAPOLATE = {"adam-carry": 0.5, "adam": 0.5, "sgd": 0.0}
 #: Settings that ask for the frame-by-frame stopping rule.
 RULE_SETTINGS = frozenset({"max_iterations", "patience", "min_improvement"})
+
+
+@dataclass(frozen=True)
+class BatchFrame:
+    """One frame of the batched solve, read before any frame is solved.
+
+    Attributes
+    ----------
+    plan : FramePlan
+        What the frame is solved against (:meth:`DragPoserMethod.plan`), with a 6-DoF hip
+        tracker (``plan.hip``) and the pose bank's lookup input (``plan.bank_readings``).
+    own : tuple of Constraint
+        The method's own constraints (temporal prior, smoothing, ground band) this frame
+        keeps, by the frame-by-frame solve's rule (:func:`active_weights`), in that order.
+    weights : ndarray (K,)
+        The weights of the frame's terms: the trackers' (``plan.weights``), then ``own``'s.
+    prior : ndarray (L,)
+        The pose bank's latent for the frame: the temporal prior's target, and the start
+        of a segment that begins here.
+    """
+
+    plan: FramePlan
+    own: tuple[Constraint, ...]
+    weights: np.ndarray
+    prior: np.ndarray
+
+    def terms(self, smooth_history: tuple[np.ndarray | None, np.ndarray | None], m: DragPoserMethod) -> list[Term]:
+        """The frame's terms (trackers, then ``own``'s), the smoothing target from the
+        stream's last two solved poses ``smooth_history`` (:func:`smoothing_history`)."""
+        m.smooth.set_history(*smooth_history)
+        inputs = FrameInputs(prediction=self.prior)
+        return [self.plan.trackers, *(c.term(inputs) for c in self.own)]
 
 
 def solve_clip(m: DragPoserMethod, frames: Sequence[SensorFrame]) -> list[FrameResult] | None:
@@ -139,7 +169,7 @@ def _solve_clip(m: DragPoserMethod, frames: Sequence[SensorFrame]) -> list[Frame
     if read is None:
         m.reset(m.skeleton, m.fps)
         return None
-    s = read[0]["settings"]
+    s = read[0].plan.settings
     rule = m.optimizer.update_rule([c for c in m.sensors.values() if c.enabled], settings=s)
     if rule not in ("sgd", "adam", "adam-carry") or (rule == "sgd" and s.momentum > 0):
         m.reset(m.skeleton, m.fps)
@@ -154,14 +184,10 @@ def _solve_clip(m: DragPoserMethod, frames: Sequence[SensorFrame]) -> list[Frame
     c_all = len(keep_from)
     at = [f - 1 for f in first]  # each segment's current frame
     hist: list[list[np.ndarray]] = [[] for _ in range(c_all)]  # its last two finished poses
-    z = np.zeros((c_all, m.latent_dim), np.float32)  # the clip's first frame starts from the mean latent
-    if PRIOR_START:
-        for c in range(1, c_all):
-            z[c] = read[first[c]]["prior"]
+    z = _starts(read, first, m.latent_dim)
     objective = _objective(m, read[0], c_all)
     results: list[FrameResult | None] = [None] * n
     overlap: dict[int, np.ndarray] = {}  # frame -> the next segment's warm-up local rotations
-    decoder = BatchDecoder(fast.decoder)
 
     def load(c: int) -> bool:
         at[c] += 1
@@ -172,18 +198,18 @@ def _solve_clip(m: DragPoserMethod, frames: Sequence[SensorFrame]) -> list[Frame
         if f > first[c] + 1 and ahead:  # the stream's last two latents give a velocity
             z[c] += ahead * (solved - last_z[c])
         last_z[c] = solved
-        on = f >= 3 and len(hist[c]) == 2  # as the frame-by-frame solve's smoothing history
+        h = hist[c]
         r = read[f]
-        smooth = m.smooth.term(FrameInputs()) if not on else SmoothTerm(m.smooth.name, 2.0 * hist[c][1] - hist[c][0])
-        frame_terms = [r["sensor_term"], PriorTerm(m.prior.name, r["prior"]), smooth, m.ground.term(FrameInputs())]
-        objective.set_row(c, [t for t, keep in zip(frame_terms, r["kept"]) if keep], r["weights"], *r["root"])
+        assert r.plan.hip is not None  # a batched frame has a 6-DoF hip tracker
+        history = smoothing_history(f, h[-1] if h else None, h[-2] if len(h) == 2 else None)
+        objective.set_row(c, r.terms(history, m), r.weights, *r.plan.hip)
         return True
 
     def done(c: int, iterations: int) -> None:
         f = at[c]
         local, pos = _finished(m, read[f], *objective.row(c)[::-1])
         hist[c] = [*hist[c][-1:], pos]
-        if f < keep_from[c] and CROSSFADE:
+        if f < keep_from[c]:
             overlap[f] = local
         if f >= keep_from[c]:
             values = objective.values[c]
@@ -196,7 +222,7 @@ def _solve_clip(m: DragPoserMethod, frames: Sequence[SensorFrame]) -> list[Frame
                 losses=[losses],
                 latent=z[c].astype(np.float64),
                 ms=0.0,
-                warnings=read[f]["warnings"],
+                warnings=read[f].plan.warnings,
                 timings={},
             )
 
@@ -209,7 +235,7 @@ def _solve_clip(m: DragPoserMethod, frames: Sequence[SensorFrame]) -> list[Frame
             return None
         return FIRST_STEPS if f == first[c] else WARMUP_STEPS if f < keep_from[c] else fixed
 
-    solve_streams(decoder, objective, z, rule, lr, s.max_iterations, s.patience, s.min_improvement, load, done, steps)
+    solve_streams(objective, z, rule, lr, s.max_iterations, s.patience, s.min_improvement, load, done, steps)
     ms = 1000.0 * (time.perf_counter() - t0) / n
     for a, b in zip(first[1:], keep_from[1:]):
         a = max(a, b - FADE)
@@ -221,6 +247,16 @@ def _solve_clip(m: DragPoserMethod, frames: Sequence[SensorFrame]) -> list[Frame
     for res in out:
         res.ms = ms  # the clip's solve time shared by its frames
     return out
+
+
+def _starts(read: list[BatchFrame], first: list[int], latent_dim: int) -> np.ndarray:
+    """Each segment's starting latent ``(C, L)`` float32: the clip's first frame starts from
+    the mean latent (zeros, as frame by frame), a later segment from the pose bank's latent
+    of its first warm-up frame (``first[c]``)."""
+    z = np.zeros((len(first), latent_dim), np.float32)
+    for c in range(1, len(first)):
+        z[c] = read[first[c]].prior
+    return z
 
 
 def _crossfade(own: Sequence[FrameResult | None], warm: list[np.ndarray], offsets: np.ndarray) -> None:
@@ -242,12 +278,11 @@ def _crossfade(own: Sequence[FrameResult | None], warm: list[np.ndarray], offset
         r.local_rot, r.positions, r.root_pos = q, p, p[0].copy()
 
 
-def _finished(m: DragPoserMethod, r: dict, local: np.ndarray, pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _finished(m: DragPoserMethod, r: BatchFrame, local: np.ndarray, pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """A solved frame after the limb and tracker-rotation steps of a frame-by-frame solve."""
-    if r["reach"] or r["turn"] or r["level"]:
-        return finish(
-            local, pos[0], m.skeleton.offsets, r["reach"], r["turn"], r["settings"].neck_twist_share, r["level"]
-        )
+    p = r.plan
+    if p.reach or p.turn or p.level:
+        return finish(local, pos[0], m.skeleton.offsets, p.reach, p.turn, p.settings.neck_twist_share, p.level)
     return local, pos
 
 
@@ -262,63 +297,67 @@ def _same_hip_set(frames: Sequence[SensorFrame]) -> bool:
     return True
 
 
-def _read_all(m: DragPoserMethod, frames: Sequence[SensorFrame]) -> list[dict] | None:
-    """Every frame's :func:`_read` record with its prior latent (``prior``), or None when a
-    frame cannot be batched or the frames do not share their trackers."""
-    found = [_read(m, f) for f in frames]
-    read = [r for r in found if r is not None]
-    if len(read) != len(found) or len({(r["names"], r["bank"][0]) for r in read}) != 1:
+def _read_all(m: DragPoserMethod, frames: Sequence[SensorFrame]) -> list[BatchFrame] | None:
+    """Every frame's :class:`BatchFrame`, or None when a frame cannot be batched
+    (:func:`_plan`) or the frames do not share their trackers and terms."""
+    found = [_plan(m, f) for f in frames]
+    plans = [p for p in found if p is not None]
+    if len(plans) != len(found):
         return None
-    joints = read[0]["bank"][0]  # all frames' priors in one call, as frame by frame finds them
-    pos, rot = np.array([r["bank"][1] for r in read]), np.array([r["bank"][2] for r in read])
-    priors = m.bank.latent_frames(joints, pos, rot, k=read[0]["settings"].tracker_prior_neighbours)
-    for r, z in zip(read, priors.numpy().astype(np.float64)):
-        r["prior"] = z
-    return read
+    own = [_own(m, p, f.frame) for p, f in zip(plans, frames)]
+    banks = [p.bank_readings for p in plans if p.bank_readings is not None]  # all of them (_plan)
+    if len({(p.names, b[0], tuple(c.name for c, _ in o)) for p, b, o in zip(plans, banks, own)}) != 1:
+        return None
+    joints = banks[0][0]  # all frames' priors in one call, as frame by frame finds them
+    pos, rot = np.array([b[1] for b in banks]), np.array([b[2] for b in banks])
+    priors = m.bank.latent_frames(joints, pos, rot, k=plans[0].settings.tracker_prior_neighbours)
+    return [
+        BatchFrame(
+            plan=p,
+            own=tuple(c for c, _ in o),
+            weights=np.concatenate([np.asarray(p.weights, dtype=np.float64), [w for _, w in o]]),
+            prior=z,
+        )
+        for p, o, z in zip(plans, own, priors.numpy().astype(np.float64))
+    ]
 
 
-def _read(m: DragPoserMethod, frame: SensorFrame) -> dict | None:
-    """One frame's terms as ``m.step`` would set them up (:meth:`DragPoserMethod.plan`), or
-    None when the frame cannot be batched (its prior is not the pose bank's, no 6-DoF hip
-    tracker, or a reading is not finite)."""
+def _plan(m: DragPoserMethod, frame: SensorFrame) -> FramePlan | None:
+    """The frame's :class:`FramePlan` (as ``m.step`` would make it), or None when the frame
+    cannot be batched (its prior is not the pose bank's, no 6-DoF hip tracker, or a
+    reading is not finite)."""
     plan = m.plan(frame)
-    s = plan.settings
     if plan.bank_readings is None or plan.hip is None or plan.warnings:
         return None
-    weights = [plan.weights, [s.tracker_prior_weight], [plan.smooth_weight], [plan.ground_weight]]
-    kept = [True] + [w[0] > 0 for w in weights[1:]]  # as the solver drops zero weights
-    return {
-        "settings": s,
-        "warnings": plan.warnings,
-        "names": plan.names,
-        "sensor_term": plan.trackers,
-        "kept": kept,
-        "weights": np.concatenate([np.asarray(w, dtype=np.float64) for w, k in zip(weights, kept) if k]),
-        "root": plan.hip,
-        "bank": plan.bank_readings,  # the pose bank's lookup, made for all frames at once
-        "reach": plan.reach,
-        "turn": plan.turn,
-        "level": plan.level,
-    }
+    return plan
 
 
-def _objective(m: DragPoserMethod, r: dict, rows: int) -> BatchObjective:
-    """The batched objective with ``rows`` rows, each the frame of record ``r`` (:func:`_read`)
-    until :meth:`~engine.solver.batch.BatchObjective.set_row` gives it its own."""
-    frame_terms = [
-        r["sensor_term"],
-        PriorTerm(m.prior.name, r["prior"]),
-        m.smooth.term(FrameInputs()),
-        m.ground.term(FrameInputs()),
-    ]
-    terms = [t.rows(rows) if isinstance(t, FrameRows) else t for t, keep in zip(frame_terms, r["kept"]) if keep]
-    q = np.tile(r["root"][1], (rows, 1))
+def _own(m: DragPoserMethod, plan: FramePlan, frame: int) -> list[tuple[Constraint, float]]:
+    """The method's own constraints a frame keeps and their weights, weighted as the
+    frame-by-frame step weights them with the pose bank's prior."""
+    m.prior.weight = plan.settings.tracker_prior_weight
+    m.smooth.weight, m.ground.weight = plan.smooth_weight, plan.ground_weight
+    return list(zip(*active_weights([m.prior, m.smooth, m.ground], frame)))
+
+
+def _objective(m: DragPoserMethod, r: BatchFrame, rows: int) -> BatchObjective:
+    """The batched objective with ``rows`` rows, each the frame ``r`` (without smoothing
+    target) until :meth:`~engine.solver.batch.BatchObjective.set_row` gives it its own."""
+    assert r.plan.hip is not None
+    terms = [t.rows(rows) if isinstance(t, FrameRows) else t for t in r.terms((None, None), m)]
+    position, rotation = r.plan.hip
+    q = np.tile(rotation, (rows, 1))
     root = RootFrames(
         heading=np.tile(np.eye(3), (rows, 1, 1)),
         previous=np.zeros((rows, 3)),
-        position=np.tile(r["root"][0], (rows, 1)),
+        position=np.tile(position, (rows, 1)),
         rotation=QN.to_matrix(q),
     )
     return BatchObjective(
-        m.skeleton.offsets, terms, np.tile(r["weights"], (rows, 1)), root, q * np.where(q[:, :1] < 0, -1.0, 1.0)
+        m.optimizer.fast_parts.decoder,
+        m.skeleton.offsets,
+        terms,
+        np.tile(r.weights, (rows, 1)),
+        root,
+        q * np.where(q[:, :1] < 0, -1.0, 1.0),
     )

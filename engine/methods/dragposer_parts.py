@@ -93,6 +93,17 @@ class FramePlan:
         return 0.0 if self.feet else float(self.settings.gait_weight)
 
 
+def smoothing_history(
+    frame: int, previous: np.ndarray | None, before: np.ndarray | None
+) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """The two solved poses ``(22, 3)`` the smoothing term of solve number ``frame`` (since
+    the start or a reset) extrapolates from (:meth:`SmoothConstraint.set_history`; None:
+    no target). Frame 0 is solved offline from the mean latent, so the step from it to
+    frame 1 is not a velocity: extrapolating it threw frames 2-4 of a head-and-hands clip
+    36 cm off. The target starts at frame 3."""
+    return previous, before if frame >= 3 else None
+
+
 class TrackerTerms:
     """The trackers of a clip as ``sensor`` constraints (module doc).
 

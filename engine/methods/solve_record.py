@@ -12,6 +12,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+from engine.solver.objective import active_weights
+
 if TYPE_CHECKING:
     from engine.constraints.base import Constraint
     from engine.solver.frame import FrameContext, Solution
@@ -50,9 +52,9 @@ def record_of(
     """The :class:`SolveRecord` of a solve over ``terms`` (their weights taken now: the next
     frame changes them) that started from the frame's prior latent (``predicted``; from the
     pose bank when ``bank``) or else from the previous frame's latent (zero on frame 0)."""
-    weighted = ((c, c.weight * c.activity(context.frame)) for c in terms if c.enabled)
+    active, weights = active_weights(terms, context.frame)
     if predicted:
         start = "pose bank" if bank else "predictor"
     else:
         start = "previous frame" if context.frame else "zero latent"
-    return SolveRecord(solution, context, tuple((c, w) for c, w in weighted if w > 0), start)
+    return SolveRecord(solution, context, tuple(zip(active, weights)), start)

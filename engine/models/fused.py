@@ -22,6 +22,10 @@ input gradient's columns ``c0:c1``): one copy of the weights, 3.6 MB, serves bot
 which keeps them in a core's L2 cache between the forward and the backward (two copies,
 7.3 MB, spilled to L3: see docs/performance.md).
 
+The same products take many latents at once as columns (:meth:`DenseDecoder.columns`: the
+batched offline solve, :mod:`engine.solver.batch`): each rectangle is then one
+matrix-matrix product, the weights read once for all the columns.
+
 The last stage folds in the quaternion identity bias and the displacement's
 de-normalisation, so its output is ``(q_raw (22*4), disp (3))`` in metres.
 """
@@ -110,8 +114,9 @@ def _nodes(count: int, width: int, start: int = 0) -> list[tuple[int, int]]:
 
 
 class DenseDecoder:
-    """Gradient-aware copy of a :class:`PoseVAE` decoder (numpy, one latent at a time),
-    its matrices stored block-sparse (module doc).
+    """Gradient-aware copy of a :class:`PoseVAE` decoder (numpy, one latent at a time, or
+    a fixed number of them as columns: :meth:`columns`), its matrices stored block-sparse
+    (module doc).
 
     Parameters
     ----------
@@ -172,16 +177,21 @@ class DenseDecoder:
         self.latent = int(m.config.latent)
         self._allocate()
 
-    def _allocate(self) -> None:
+    def _allocate(self, width: int | None = None) -> None:
         # Fixed buffers, and every product's operands as views into them, made once: a
         # product is then one BLAS call with no slicing or allocation per iteration.
+        # ``width`` latents as columns: every buffer gets that many columns.
         f32 = np.float32
-        self._z = np.empty(self.latent, f32)
-        self._pre = [np.empty(w.shape[0], f32) for w in self.weights]  # pre-activations
-        self._act = [np.empty(w.shape[0], f32) for w in self.weights[:-1]]
-        self._gate = [np.empty(w.shape[0], f32) for w in self.weights[:-1]]  # LeakyReLU slopes
-        self._gin = [np.empty(w.shape[0], f32) for w in self.weights]  # gradient at a stage's output
-        self._grad = [np.empty(w.shape[1], f32) for w in self.weights]  # ... and at its input
+        cols = () if width is None else (width,)
+        self.width: int | None = width
+        self._twin: DenseDecoder | None = None
+        self._z = np.empty((self.latent, *cols), f32)
+        self._bias = [b if width is None else b[:, None] for b in self.biases]
+        self._pre = [np.empty((w.shape[0], *cols), f32) for w in self.weights]  # pre-activations
+        self._act = [np.empty((w.shape[0], *cols), f32) for w in self.weights[:-1]]
+        self._gate = [np.empty((w.shape[0], *cols), f32) for w in self.weights[:-1]]  # LeakyReLU slopes
+        self._gin = [np.empty((w.shape[0], *cols), f32) for w in self.weights]  # gradient at a stage's output
+        self._grad = [np.empty((w.shape[1], *cols), f32) for w in self.weights]  # ... and at its input
         inputs = [self._z] + self._act
         self._fwd = [_bind(runs, inputs[i], self._pre[i]) for i, runs in enumerate(self.forward_runs)]
         self._bwd = [_bind_transposed(runs, self._gin[i], self._grad[i]) for i, runs in enumerate(self.forward_runs)]
@@ -193,7 +203,19 @@ class DenseDecoder:
         on one model (the pose window and a bake on a worker thread, two methods built
         from the same loaded models) must not share them."""
         twin = copy.copy(self)
-        twin._allocate()
+        twin._allocate(self.width)
+        return twin
+
+    def columns(self, width: int) -> "DenseDecoder":
+        """A decoder sharing this one's matrices whose :meth:`forward` takes ``width``
+        latents as the columns of ``z (L, width)`` and returns ``(91, width)``, and whose
+        :meth:`backward` takes and returns gradients of the same shapes. Its buffers are
+        made on the first call with a width and kept until a call with another."""
+        twin = self._twin
+        if twin is None or twin.width != width:
+            twin = copy.copy(self)
+            twin._allocate(width)
+            self._twin = twin
         return twin
 
     def __deepcopy__(self, memo: dict) -> "DenseDecoder":
@@ -208,7 +230,8 @@ class DenseDecoder:
 
     def forward(self, z: np.ndarray) -> np.ndarray:
         """``z (L,)`` float32 -> ``(q_raw (88,), disp (3,))`` concatenated, float32 (a new
-        array). Remembers the activation slopes for the next :meth:`backward`."""
+        array); with :meth:`columns`, ``z (L, width)`` -> ``(91, width)``. Remembers the
+        activation slopes for the next :meth:`backward`."""
         self._z[:] = z
         dot, last, slope = np.dot, len(self.weights) - 1, np.float32(self.slope)
         for i, (products, empty) in enumerate(self._fwd):
@@ -217,7 +240,7 @@ class DenseDecoder:
             for y in empty:
                 y[:] = 0.0
             y = self._pre[i]
-            y += self.biases[i]
+            y += self._bias[i]
             if i < last:
                 gate = self._gate[i]
                 np.copyto(gate, slope)
@@ -233,7 +256,8 @@ class DenseDecoder:
 
     def backward(self, grad_out: np.ndarray) -> np.ndarray:
         """Gradient w.r.t. the latent ``(L,)`` of a loss whose gradient w.r.t. the last
-        :meth:`forward` output is ``grad_out (91,)`` (a new array)."""
+        :meth:`forward` output is ``grad_out (91,)`` (a new array); with :meth:`columns`,
+        ``(91, width)`` -> ``(L, width)``."""
         dot, last = np.dot, len(self.weights) - 1
         self._gin[last][:] = grad_out
         for i in range(last, -1, -1):
@@ -242,10 +266,10 @@ class DenseDecoder:
             writes, adds, zero = self._bwd[i]
             for y in zero:
                 y[:] = 0.0
-            for g, w, y in writes:
-                dot(g, w, out=y)
-            for g, w, y, tmp in adds:
-                dot(g, w, out=tmp)
+            for a, b, y in writes:
+                dot(a, b, out=y)
+            for a, b, y, tmp in adds:
+                dot(a, b, out=tmp)
                 y += tmp
         return self._grad[0].copy()
 
@@ -260,22 +284,24 @@ def _bind(runs: list[Run], x: np.ndarray, out: np.ndarray) -> tuple[list[tuple],
 def _bind_transposed(
     runs: list[Run], g: np.ndarray, out: np.ndarray
 ) -> tuple[list[tuple], list[tuple], list[np.ndarray]]:
-    """The products of ``out = W^T @ g`` over the rectangles of ``W``: ``(g view, w, out
-    view)`` for a run whose columns no earlier run reads (written directly), ``(g view, w,
-    out view, scratch)`` for one that shares columns with an earlier run (added; every
-    such run comes after the run it shares with, so it adds to a written value), and the
-    views of the columns no direct run writes (zeroed first)."""
+    """The products of ``out = W^T @ g`` over the rectangles of ``W``, each as the operands
+    of one ``dot(a, b, out=...)`` (``g view, w`` for one latent, ``w.T, g view`` for
+    columns): ``(a, b, out view)`` for a run whose columns no earlier run reads (written
+    directly), ``(a, b, out view, scratch)`` for one that shares columns with an earlier
+    run (added; every such run comes after the run it shares with, so it adds to a
+    written value), and the views of the columns no direct run writes (zeroed first)."""
     written = np.zeros(len(out), dtype=bool)
     touched = np.zeros(len(out), dtype=bool)
     writes, adds = [], []
     for r in runs:
         if r.c1 <= r.c0:
             continue
+        a, b = (g[r.r0 : r.r1], r.w) if g.ndim == 1 else (r.w.T, g[r.r0 : r.r1])
         if not touched[r.c0 : r.c1].any():
-            writes.append((g[r.r0 : r.r1], r.w, out[r.c0 : r.c1]))
+            writes.append((a, b, out[r.c0 : r.c1]))
             written[r.c0 : r.c1] = True
         else:
-            adds.append((g[r.r0 : r.r1], r.w, out[r.c0 : r.c1], np.empty(r.c1 - r.c0, out.dtype)))
+            adds.append((a, b, out[r.c0 : r.c1], np.empty(out[r.c0 : r.c1].shape, out.dtype)))
         touched[r.c0 : r.c1] = True
     edges = np.flatnonzero(np.diff(np.r_[False, ~written, False].astype(np.int8)))
     return writes, adds, [out[a:b] for a, b in zip(edges[::2], edges[1::2])]

@@ -34,6 +34,7 @@ import torch
 from torch import nn
 
 from engine import skeleton as sk
+from engine.kinematics.fk import fk_matrices
 from engine.models.config import ModelConfig
 
 #: Tracked joints (preset ``3-head-hands``), in input order.
@@ -162,15 +163,10 @@ def track_features(
 
 def fk_root_space(pose6: torch.Tensor, offsets: torch.Tensor) -> torch.Tensor:
     """Joint positions ``(..., 22, 3)`` of poses ``(..., 22, 3, 2)`` with the root at
-    the origin (slot 0's rotation applied); ``offsets (..., 22, 3)`` metres."""
-    mats = o6.to_matrix(pose6)
-    g = [mats[..., 0, :, :]]
-    p = [torch.zeros(pose6.shape[:-3] + (3,), dtype=pose6.dtype, device=pose6.device)]
-    for j in range(1, sk.NUM_JOINTS):
-        par = sk.PARENTS[j]
-        g.append(torch.matmul(g[par], mats[..., j, :, :]))
-        p.append(p[par] + torch.matmul(g[par], offsets[..., j, :, None])[..., 0])
-    return torch.stack(p, dim=-2)
+    the origin (slot 0's rotation applied); ``offsets (..., 22, 3)`` metres. The
+    skeleton's one FK pass (:func:`engine.kinematics.fk.fk_matrices`)."""
+    origin = torch.zeros(pose6.shape[:-3] + (3,), dtype=pose6.dtype, device=pose6.device)
+    return fk_matrices(o6.to_matrix(pose6), origin, offsets)[0]
 
 
 def rolling_step(

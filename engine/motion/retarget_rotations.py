@@ -13,6 +13,7 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
+from engine.kinematics.fk import ancestors, children
 from engine.motion import retarget_body as RB
 from engine.motion import retarget_frames as RF
 from engine.motion.bvh import RawBVH
@@ -40,7 +41,7 @@ def rigid_hands(raw: RawBVH, prof: RigProfile) -> set[str]:
 def _chain_tip(raw: RawBVH, j: int, wpos: np.ndarray, wrot: np.ndarray, ends: dict, units: float) -> np.ndarray:
     """World point ``(F, 3)`` at the end of joint ``j``'s first-child chain (its end site
     when there is one)."""
-    while kids := [k for k in range(len(raw.names)) if raw.parents[k] == j]:
+    while kids := children(raw.parents, j):
         j = kids[0]
     tip = wpos[:, j]
     if j in ends:
@@ -65,11 +66,9 @@ def tip_points(
         if s in hands or not wrist:
             continue
         w = raw.names.index(wrist)
-        below, depth = {w}, {w: 0}
-        for j in range(w + 1, len(raw.names)):  # BVH order: descendants follow their parent
-            if raw.parents[j] in below:
-                below.add(j)
-                depth[j] = depth[raw.parents[j]] + 1
+        chains = {j: ancestors(raw.parents, j) for j in range(len(raw.names))}
+        depth = {j: c.index(w) for j, c in chains.items() if w in c}  # the wrist's descendants
+        below = set(depth)
         named = prof.landmarks.get(f"{s}_thumb")
         cands = (
             [raw.names.index(named)]

@@ -26,7 +26,7 @@ from engine import skeleton as sk
 from engine.atomic import atomic_path
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
-from engine.kinematics.fk import fk
+from engine.kinematics.fk import ancestors, children, fk
 from engine.motion.bvh import RawBVH
 from engine.motion.clip import Motion
 
@@ -42,17 +42,13 @@ def trajectory_joint(raw: RawBVH, root: int) -> int:
     """The joint whose position channels carry the trajectory of source joint ``root``:
     ``root`` itself when it has position channels (a ``Hips`` with 6 channels under a static
     ``joint_Root``), else its nearest ancestor that has them (the file's ROOT)."""
-    j = root
-    while len(raw.channels[j]) != 6 and raw.parents[j] >= 0:
-        j = raw.parents[j]
-    return j
+    chain = ancestors(raw.parents, root)
+    return next((j for j in chain if len(raw.channels[j]) == 6), chain[-1])
 
 
 def _below(raw: RawBVH, j: int, root: int) -> bool:
     """Whether joint ``j`` is ``root`` or one of its descendants."""
-    while j >= 0 and j != root:
-        j = raw.parents[j]
-    return j == root
+    return root in ancestors(raw.parents, j)
 
 
 def _local_offsets(raw: RawBVH, positions: np.ndarray) -> np.ndarray:
@@ -101,7 +97,7 @@ def source_rig_pose(motion: Motion, raw: RawBVH, report) -> tuple[np.ndarray, np
             glob[:, j] = Q.mul(cqi, Q.mul(glob_c[:, k], Q.conjugate(report.align[k])))
         else:
             glob[:, j] = rest_rot[j] if p < 0 else Q.mul(glob[:, p], np.broadcast_to(rest_rot[j], (n, 4)))
-            kids = [c for c in range(j + 1, nj) if raw.parents[c] == j]
+            kids = children(raw.parents, j)
             if len(kids) == 1 and raw.names[kids[0]] in canon_of and _below(raw, j, root_src):
                 # a joint folded into a canonical bone (LowerBack, Neck): swung so that the next
                 # mapped joint lands where the canonical one is, its own twist kept from the rest

@@ -28,59 +28,23 @@ from collections.abc import Callable
 
 import numpy as np
 
-from engine.constraints.residual import NUMPY, FrameRows, Term
+from engine.constraints.residual import FrameRows, Term
 from engine.models.fused import DenseDecoder
 from engine.solver.chain import PoseChain, RootFrames
-from engine.solver.objective import StoppingRule
+from engine.solver.objective import FastObjective, StoppingRule
 from engine.solver.update import LatentUpdate
 
 
-class BatchDecoder:
-    """:class:`DenseDecoder`'s block-sparse products on ``T`` latents at once (columns)."""
-
-    def __init__(self, dense: DenseDecoder) -> None:
-        self.dense = dense
-        self._gates: list[np.ndarray] = []
-
-    def forward(self, z: np.ndarray) -> np.ndarray:
-        """``z (L, T)`` float32 -> decoder outputs ``(91, T)`` (quaternions, displacement)."""
-        d, slope = self.dense, np.float32(self.dense.slope)
-        x, last, self._gates = np.ascontiguousarray(z, dtype=np.float32), len(d.weights) - 1, []
-        for i, runs in enumerate(d.forward_runs):
-            y = np.zeros((d.weights[i].shape[0], x.shape[1]), np.float32)
-            for r in runs:
-                if r.c1 > r.c0:
-                    np.dot(r.w, x[r.c0 : r.c1], out=y[r.r0 : r.r1])
-            y += d.biases[i][:, None]
-            if i < last:
-                gate = np.where(y > 0, np.float32(1.0), slope)
-                self._gates.append(gate)
-                y *= gate
-            x = y
-        return x
-
-    def backward(self, grad_out: np.ndarray) -> np.ndarray:
-        """Gradients ``(L, T)`` w.r.t. the latents, for output gradients ``(91, T)``."""
-        d = self.dense
-        g = np.ascontiguousarray(grad_out, dtype=np.float32)
-        for i in range(len(d.weights) - 1, -1, -1):
-            if i < len(d.weights) - 1:
-                g = g * self._gates[i]
-            y = np.zeros((d.weights[i].shape[1], g.shape[1]), np.float32)
-            for r in d.forward_runs[i]:  # the forward rectangles, transposed
-                if r.c1 > r.c0:
-                    y[r.c0 : r.c1] += r.w.T @ g[r.r0 : r.r1]
-            g = y
-        return g
-
-
-class BatchObjective:
+class BatchObjective(FastObjective):
     """The terms of ``C`` rows of frames (one frame per row at a time) as a function of
-    their latents: the frame-by-frame :class:`~engine.solver.objective.FastObjective` with
-    a frame axis.
+    their latents: the frame-by-frame :class:`~engine.solver.objective.FastObjective`'s
+    rows (the same maths), with a weight per row and frame, each row's frame set by
+    :meth:`set_row`, and each row's last pose kept.
 
     Parameters
     ----------
+    decoder : DenseDecoder
+        The fused decoder; its :meth:`~DenseDecoder.columns` take the rows' latents.
     offsets : ndarray (22, 3)
         Bone offsets, metres.
     terms : list of Term
@@ -96,12 +60,18 @@ class BatchObjective:
     """
 
     def __init__(
-        self, offsets: np.ndarray, terms: list[Term], weights: np.ndarray, root: RootFrames, root_quat: np.ndarray
+        self,
+        decoder: DenseDecoder,
+        offsets: np.ndarray,
+        terms: list[Term],
+        weights: np.ndarray,
+        root: RootFrames,
+        root_quat: np.ndarray,
     ) -> None:
-        self.chain = PoseChain(offsets)
-        self.terms, self.weights, self.root, self.root_quat = terms, weights, root, root_quat
-        self.names = [n for t in terms for n in t.names]
         self.spans = np.cumsum([0] + [len(t.names) for t in terms])
+        split = [weights[0, a:b] for a, b in zip(self.spans[:-1], self.spans[1:])]
+        super().__init__(decoder, PoseChain(offsets), terms, split, root)
+        self.weights, self.root_quat = weights, root_quat
         c, n = len(weights), self.chain.n
         self.pos, self.local = np.zeros((c, n, 3)), np.tile([1.0, 0.0, 0.0, 0.0], (c, n, 1))
         self.values = np.zeros(weights.shape)
@@ -113,7 +83,7 @@ class BatchObjective:
         weights ``(K,)`` and its root (hip tracker position ``(3,)``, rotation ``(4,)``)."""
         from engine.kinematics import quat_np as QN
 
-        for t, f in zip(self.terms, frame_terms):
+        for t, f in zip(self.frame.terms, frame_terms):
             if isinstance(t, FrameRows):
                 t.set_row(row, f)
         self.weights[row] = weights
@@ -122,36 +92,25 @@ class BatchObjective:
         r.position[row], r.rotation[row] = root_pos, QN.to_matrix(root_rot)
         self.root_quat[row] = root_rot if root_rot[0] >= 0 else -root_rot
 
-    def evaluate(self, z: np.ndarray, out: np.ndarray, idx: np.ndarray) -> np.ndarray:
-        """Losses ``(A, K)`` of the rows ``idx (A,)`` at latents ``z (A, L)`` with decoder
-        outputs ``out (91, A)``; keeps what :meth:`gradient` needs."""
+    def evaluate_streams(self, z: np.ndarray, idx: np.ndarray) -> np.ndarray:
+        """Losses ``(A, K)`` of the rows ``idx (A,)`` at latents ``z (A, L)`` float32 (one
+        decoder pass for all of them); keeps what :meth:`gradient_streams` needs."""
         r = self.root
         assert r.position is not None and r.rotation is not None
         sub = RootFrames(r.heading[idx], r.previous[idx], r.position[idx], r.rotation[idx])
-        P, W = self.chain.forward(out.T, sub)
-        z64 = z.astype(np.float64)
-        self.idx, self.P, self.W, self.z = idx, P, W, z64
-        self.res = [t.residual(NUMPY, P, W, z64, jac=True, rows=idx) for t in self.terms]
-        values = np.concatenate([t.losses(res) for t, res in zip(self.terms, self.res)], axis=1)
-        self.pos[idx], self.local[idx] = P, self.chain.local()
+        out = self.decoder.columns(len(idx)).forward(z.T)
+        values = self.evaluate_rows(out.T, z.astype(np.float64), sub, idx, True)
+        self.pos[idx], self.local[idx] = self.P, self.chain.local()
         self.values[idx] = values
         return values
 
-    def gradient(self) -> tuple[np.ndarray, np.ndarray]:
-        """Gradients of each row's weighted total w.r.t. its decoder outputs ``(91, A)``
-        float32 and w.r.t. its latent directly ``(A, L)`` (terms on the latent)."""
-        g_pos, g_rot, g_z = np.zeros_like(self.P), np.zeros_like(self.P), np.zeros_like(self.z)
-        w = self.weights[self.idx]
-        for k, (t, res) in enumerate(zip(self.terms, self.res)):
-            t.accumulate(res, w[:, self.spans[k] : self.spans[k + 1]], g_pos, g_rot, g_z)
-        return self.chain.backward(g_pos, g_rot).T, g_z
-
-    def satisfied(self) -> np.ndarray:
-        """Per evaluated row ``(A,)``: every constraint lets its frame stop."""
-        ok = np.ones(len(self.idx), dtype=bool)
-        for t, res in zip(self.terms, self.res):
-            ok &= t.satisfied_by(res, rows=self.idx).all(1)
-        return ok
+    def gradient_streams(self) -> np.ndarray:
+        """The gradients ``(A, L)`` float32 of each evaluated row's weighted total w.r.t.
+        its latent."""
+        assert self.rows is not None
+        w = self.weights[self.rows]
+        g_out, g_z = self.pose_gradient([w[:, a:b] for a, b in zip(self.spans[:-1], self.spans[1:])])
+        return self.decoder.columns(len(self.rows)).backward(g_out.T).T + g_z.astype(np.float32)
 
     def row(self, c: int) -> tuple[np.ndarray, np.ndarray]:
         """Row ``c``'s last evaluated pose: world positions ``(22, 3)`` and local rotations
@@ -162,7 +121,6 @@ class BatchObjective:
 
 
 def solve_streams(
-    decoder: BatchDecoder,
     objective: BatchObjective,
     z: np.ndarray,
     rule: str,
@@ -199,12 +157,11 @@ def solve_streams(
     live = [c for c in range(c_all) if next_frame(c)]
     while live:
         idx = np.array(live, dtype=np.intp)
-        values = objective.evaluate(z[idx], decoder.forward(z[idx].T), idx)
+        values = objective.evaluate_streams(z[idx], idx)
         total = (objective.weights[idx] * values).sum(1)
-        stop = stopping.stop(total, objective.satisfied, idx)
+        stop = stopping.stop(total, objective.satisfied_rows, idx)
         if not stop.all():
-            g_out, g_z = objective.gradient()
-            grad = decoder.backward(g_out).T + g_z.astype(np.float32)
+            grad = objective.gradient_streams()
             keep = ~stop
             update.step_rows(z, grad[keep], idx[keep])
             stopping.stepped(idx[keep])

@@ -30,7 +30,7 @@ import math
 import numpy as np
 
 from engine import skeleton as sk
-from engine.kinematics.fk import fk, fk_joints, fk_positions
+from engine.kinematics.fk import ancestors, fk, fk_joints, fk_positions
 from engine.kinematics.quat_np import (
     heading,
     qaxis_angle,
@@ -67,18 +67,9 @@ SPINE_PASSES = 3
 _SLACK = 1e-3
 
 
-def _chain(j: int) -> list[int]:
-    """``j`` and its ancestors."""
-    out = [j]
-    while j > 0:
-        j = sk.PARENTS[j]
-        out.append(j)
-    return out
-
-
 #: The joints :func:`reach_head_local` moves or turns: the lower back and all above it (the
 #: spine, neck, head, clavicles and arms).
-CARRIED = frozenset(j for j in range(sk.NUM_JOINTS) if SPINE[0] in _chain(j))
+CARRIED = frozenset(j for j in range(sk.NUM_JOINTS) if SPINE[0] in ancestors(sk.PARENTS, j))
 
 
 # -- the steps ------------------------------------------------------------------------
@@ -206,7 +197,7 @@ def adopt_local(
     parents = [sk.PARENTS[j] for j in order]
     # one placement serves all unless a target lies above another's parent (then parents
     # come before children: the lower target sees the new rotation of the upper)
-    nested = any(a in targets for p in parents for a in _chain(p))
+    nested = any(a in targets for p in parents for a in ancestors(sk.PARENTS, p))
     world = None if nested else fk_joints(local, root_pos, offsets, parents)[1].tolist()
     for k, j in enumerate(order):
         parent_rot = fk_joints(local, root_pos, offsets, [parents[k]])[1][0] if world is None else world[k]

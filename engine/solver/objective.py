@@ -34,6 +34,14 @@ if TYPE_CHECKING:
     from engine.kinematics.pose_state import PoseState
 
 
+def active_weights(constraints: Sequence["Constraint"], frame: int) -> tuple[list["Constraint"], list[float]]:
+    """The constraints a frame is solved against and their weights: each enabled one's
+    ``weight`` times its :meth:`~Constraint.activity` at ``frame``, those of weight 0
+    left out (they would add nothing but a loss to report and a stop to wait for)."""
+    weighted = [(c, c.weight * c.activity(frame)) for c in constraints if c.enabled]
+    return [c for c, w in weighted if w > 0], [w for c, w in weighted if w > 0]
+
+
 def build_terms(
     constraints: Sequence["Constraint"], weights: Sequence[float], frame: FrameInputs
 ) -> tuple[list[Term], list[np.ndarray]]:
@@ -94,7 +102,13 @@ class _Frame:
 
 
 class FastObjective:
-    """numpy objective: fused decoder, :class:`PoseChain`, terms with their Jacobians."""
+    """numpy objective: fused decoder, :class:`PoseChain`, terms with their Jacobians.
+
+    The maths works on ``A`` rows of frames at once (:meth:`evaluate_rows`,
+    :meth:`pose_gradient`, :meth:`satisfied_rows`); a frame-by-frame solve is one row
+    (:meth:`evaluate`, :meth:`gradient`, :meth:`satisfied`), the batched offline solve
+    (:class:`engine.solver.batch.BatchObjective`) many.
+    """
 
     fast = True
 
@@ -105,39 +119,64 @@ class FastObjective:
         terms: list[Term],
         weights: list[np.ndarray],
         root: RootFrames,
-        make_state: Callable[[Any, "FastObjective"], "PoseState"],
+        make_state: Callable[[Any, "FastObjective"], "PoseState"] | None = None,
     ) -> None:
         self.decoder, self.chain, self.root, self._make_state = decoder, chain, root, make_state
         self.frame = _Frame(terms, weights)
         self.names, self.weights = self.frame.names, self.frame.flat
+        self._row_weights = [w[None] for w in weights]
+
+    def evaluate_rows(
+        self, out: np.ndarray, z: np.ndarray, root: RootFrames, rows: np.ndarray | None, gradient: bool
+    ) -> np.ndarray:
+        """Losses ``(A, K)`` of ``A`` rows from their decoder outputs ``out (A, 91)``, latents
+        ``z (A, L)`` float64 and roots; ``rows`` are the rows of the terms' per-frame
+        parameters (None: the first ``A``). Keeps what :meth:`pose_gradient` needs (its
+        Jacobians only with ``gradient``)."""
+        self.P, self.W = self.chain.forward(out, root)
+        self.z, self.rows, self.jac = z, rows, gradient
+        self.res = [t.residual(NUMPY, self.P, self.W, z, jac=gradient, rows=rows) for t in self.frame.terms]
+        values = [t.losses(r) for t, r in zip(self.frame.terms, self.res)]
+        return np.concatenate(values, axis=1) if values else np.zeros((len(out), 0))
+
+    def pose_gradient(self, weights: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+        """Gradients of each row's weighted total (``weights``: each term's ``(A, n)``) at
+        the last :meth:`evaluate_rows` w.r.t. its decoder outputs ``(A, 91)`` and w.r.t.
+        its latent directly ``(A, L)`` float64 (terms on the latent)."""
+        if not self.jac:  # evaluated without Jacobians: make them now
+            self.res = [t.residual(NUMPY, self.P, self.W, self.z, jac=True, rows=self.rows) for t in self.frame.terms]
+            self.jac = True
+        g_pos, g_rot, g_z = np.zeros_like(self.P), np.zeros_like(self.P), np.zeros_like(self.z)
+        for t, r, w in zip(self.frame.terms, self.res, weights):
+            t.accumulate(r, w, g_pos, g_rot, g_z)
+        return self.chain.backward(g_pos, g_rot), g_z
+
+    def satisfied_rows(self) -> np.ndarray:
+        """Per row of the last :meth:`evaluate_rows` ``(A,)``: every constraint lets its
+        frame stop."""
+        ok = np.ones(len(self.P), dtype=bool)
+        for t, r in zip(self.frame.terms, self.res):
+            ok &= t.satisfied_by(r, rows=self.rows).all(1)
+        return ok
 
     def evaluate(self, z: np.ndarray, timings: SolveTimings, gradient: bool = True) -> np.ndarray:
         t0 = time.perf_counter()
         out = self.decoder.forward(z)
         t1 = time.perf_counter()
-        self.P, self.W = self.chain.forward(out[None], self.root)
-        self.z = z[None].astype(np.float64)
-        self.jac = gradient
-        self.res = [t.residual(NUMPY, self.P, self.W, self.z, jac=gradient) for t in self.frame.terms]
-        values = [t.losses(r)[0] for t, r in zip(self.frame.terms, self.res)]
+        values = self.evaluate_rows(out[None], z[None].astype(np.float64), self.root, None, gradient)
         timings.decoder += t1 - t0
         timings.fk_losses += time.perf_counter() - t1
-        return np.concatenate(values) if values else np.zeros(0)
+        return values[0]
 
     def gradient(self) -> np.ndarray:
-        if not self.jac:  # evaluated without Jacobians: make them now
-            self.res = [t.residual(NUMPY, self.P, self.W, self.z, jac=True) for t in self.frame.terms]
-            self.jac = True
-        g_pos, g_rot, g_z = np.zeros_like(self.P), np.zeros_like(self.P), np.zeros_like(self.z)
-        for t, r, w in zip(self.frame.terms, self.res, self.frame.weights):
-            t.accumulate(r, w[None], g_pos, g_rot, g_z)
-        g = self.decoder.backward(self.chain.backward(g_pos, g_rot)[0])
-        return g + g_z[0].astype(np.float32)
+        g_out, g_z = self.pose_gradient(self._row_weights)
+        return self.decoder.backward(g_out[0]) + g_z[0].astype(np.float32)
 
     def satisfied(self) -> bool:
-        return all(t.satisfied_by(r).all() for t, r in zip(self.frame.terms, self.res))
+        return bool(self.satisfied_rows()[0])
 
     def state(self, latent: Any) -> "PoseState":
+        assert self._make_state is not None, "an objective of rows has no single state"
         return self._make_state(latent, self)
 
 

@@ -57,7 +57,14 @@ from engine.models.fused import DenseDecoder
 from engine.models.vae import PoseVAE
 from engine.solver.chain import PoseChain, RootFrames
 from engine.solver.frame import FrameContext, LatentDecoder, Solution, SolveTimings
-from engine.solver.objective import FastObjective, Objective, ReferenceObjective, StoppingRule, build_terms
+from engine.solver.objective import (
+    FastObjective,
+    Objective,
+    ReferenceObjective,
+    StoppingRule,
+    active_weights,
+    build_terms,
+)
 from engine.solver.pose import world_root
 from engine.solver.settings import FULL_SET, OptimizerSettings
 from engine.solver.threads import one_blas_thread
@@ -186,9 +193,7 @@ class PoseOptimizer:
         weighted by its ``weight`` times its :meth:`~Constraint.activity` at ``ctx.frame``,
         under ``settings`` (default: the optimizer's)."""
         s = settings or self.settings
-        weighted = [(c, c.weight * c.activity(ctx.frame)) for c in constraints if c.enabled]
-        active = [c for c, w in weighted if w > 0]
-        weights = [w for _, w in weighted if w > 0]
+        active, weights = active_weights(constraints, ctx.frame)
         warnings: list[str] = []
         timings = SolveTimings()
         z0 = start.detach().numpy().astype(np.float32)

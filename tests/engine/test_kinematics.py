@@ -183,3 +183,13 @@ def test_root_integration_round_trips_numpy_and_torch():
     np.testing.assert_allclose(Q.canonicalize(back_rot), Q.canonicalize(rot), atol=1e-12)
     t_rot, t_pos = integrate_root(*(torch.tensor(x) for x in (prev_rot, prev_pos, rot0, disp)))
     np.testing.assert_allclose(t_pos.numpy(), pos, atol=1e-12)
+
+
+def test_ancestors_and_children_follow_the_parent_list():
+    from engine.kinematics.fk import ancestors, children
+
+    parents = (-1, 0, 1, 1, 3, 0)
+    assert ancestors(parents, 4) == [4, 3, 1, 0] and ancestors(parents, 0) == [0]
+    assert ancestors((0, 0, 1), 2) == [2, 1, 0]  # a root listed as its own parent
+    assert children(parents, 1) == [2, 3] and children(parents, 2) == [] and children((0, 0, 1), 0) == [1]
+    assert ancestors(sk.PARENTS, sk.JOINT_INDEX["lwrist"])[-1] == 0

@@ -70,6 +70,25 @@ def test_yaw_matrix_agrees_with_heading_and_frames_round_trip():
     assert torch.allclose(back, pose, atol=1e-5)
 
 
+def test_fk_root_space_places_each_joint_from_its_parent_with_the_root_at_the_origin():
+    import pymotion.rotations.ortho6d_torch as o6
+
+    from engine.models.rpm import fk_root_space
+
+    g = torch.Generator().manual_seed(0)
+    q = torch.nn.functional.normalize(torch.randn(2, 3, sk.NUM_JOINTS, 4, generator=g, dtype=torch.float64), dim=-1)
+    mats = Q.to_matrix(q)
+    pose6 = mats[..., :2]  # the 6D form: the matrix's first two columns
+    offsets = torch.randn(2, 1, sk.NUM_JOINTS, 3, generator=g, dtype=torch.float64)
+    assert torch.allclose(o6.to_matrix(pose6), mats)
+    world, pos = [mats[..., 0, :, :]], [torch.zeros(2, 3, 3, dtype=torch.float64)]
+    for j in range(1, sk.NUM_JOINTS):  # joint by joint, every parent before its child
+        p = sk.PARENTS[j]
+        world.append(world[p] @ mats[..., j, :, :])
+        pos.append(pos[p] + (world[p] @ offsets[..., j, :, None])[..., 0])
+    assert torch.allclose(fk_root_space(pose6, offsets), torch.stack(pos, dim=-2), atol=1e-12)
+
+
 def test_gap_flags_only_drop_hands_for_half_to_two_seconds():
     flags = gap_flags(200, 300, 1.0, torch.Generator().manual_seed(0))
     assert flags[:, :, 0].all()

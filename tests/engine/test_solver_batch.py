@@ -10,7 +10,7 @@ import pytest
 
 from engine.methods import dragposer_batch as DB
 from engine.methods import get_method, run_method
-from engine.solver import batch as B
+from engine.models.fused import DenseDecoder
 
 CLIP = Path(__file__).resolve().parents[2] / "assets" / "clips" / "example.bvh"
 
@@ -99,7 +99,7 @@ def test_each_frame_starts_from_its_stream_s_last_latent_moved_on_by_its_last_ch
     starts, loads = [], []
     solve = DB.solve_streams
 
-    def record(dec, objective, z, rule, lr, mx, pat, mi, load, done, fixed):
+    def record(objective, z, rule, lr, mx, pat, mi, load, done, fixed):
         def load_and_keep(c):
             ok = load(c)
             starts.append(z[c].copy())
@@ -109,7 +109,7 @@ def test_each_frame_starts_from_its_stream_s_last_latent_moved_on_by_its_last_ch
             loads.append(z[c].copy())
             done(c, it)
 
-        return solve(dec, objective, z, rule, lr, mx, pat, mi, load_and_keep, done_and_keep, fixed)
+        return solve(objective, z, rule, lr, mx, pat, mi, load_and_keep, done_and_keep, fixed)
 
     monkeypatch.setattr(DB, "solve_streams", record)
     assert _offline().solve_clip([tr.frame(i) for i in range(6)]) is not None
@@ -146,10 +146,10 @@ def test_segments_are_solved_side_by_side_and_stay_close_to_the_frame_by_frame_s
     tr = simulate(clip, "6")
     monkeypatch.setattr(DB, "SEGMENT", 8)
     widths = []
-    forward = B.BatchDecoder.forward
-    monkeypatch.setattr(B.BatchDecoder, "forward", lambda self, z: widths.append(z.shape[1]) or forward(self, z))
+    forward = DenseDecoder.forward
+    monkeypatch.setattr(DenseDecoder, "forward", lambda self, z: widths.append(z.shape[1:]) or forward(self, z))
     batched, res = run_method(_offline(), tr, clip.skeleton, progress=False)
-    assert len(res) == len(tr) and max(widths) == 5  # 40 frames: five segments of eight
+    assert len(res) == len(tr) and max(widths) == (5,)  # 40 frames: five segments of eight
     seq, _ = frame_by_frame("6")
     gap = np.linalg.norm(batched.positions() - seq.positions(), axis=-1)
     assert np.median(gap) < 0.005 and gap.max() < 0.05  # only the segments' starts differ
@@ -170,40 +170,30 @@ def test_clips_it_cannot_batch_are_solved_frame_by_frame(clip):
 
 
 def test_the_batched_gradient_is_the_derivative_of_the_batched_loss(clip):
-    from engine.constraints.residual import FrameInputs
-    from engine.constraints.smooth import SmoothTerm
-    from engine.constraints.temporal_prior import PriorTerm
     from engine.tracking import simulate
 
     m = _offline()
     tr = simulate(clip, "4")
     read = DB._read_all(m, [tr.frame(i) for i in range(5)])
-    assert all(read[0]["kept"]), "preset 4: trackers, prior, smoothing and the ground band all act"
+    assert len(read[0].own) == 3, "preset 4: trackers, prior, smoothing and the ground band all act"
     objective = DB._objective(m, read[0], 5)
     rng = np.random.default_rng(0)
     for c, (r, on) in enumerate(zip(read, [False, True, True, False, True])):
         target = rng.normal(scale=0.3, size=(22, 3)) + np.array([0, 0, 1.0])
-        smooth = SmoothTerm("smooth", target if on else None)
-        weights = r["weights"].copy()
+        weights = r.weights.copy()
         weights[-1] = 10.0  # the ground band, strong
-        objective.set_row(
-            c,
-            [r["sensor_term"], PriorTerm("temporal_prior", r["prior"]), smooth, m.ground.term(FrameInputs())],
-            weights,
-            *r["root"],
-        )
-    dec = B.BatchDecoder(m.optimizer.fast_parts.decoder)
-    z = np.array([r["prior"] for r in read]) + rng.normal(scale=0.3, size=(5, 24))  # float64: exact differences
+        # two equal poses: the smoothing target is that pose
+        objective.set_row(c, r.terms((target, target) if on else (None, None), m), weights, *r.plan.hip)
+    z = np.array([r.prior for r in read]) + rng.normal(scale=0.3, size=(5, 24))  # float64: exact differences
     idx = np.array([0, 1, 3, 4])
     w = objective.weights[idx]
 
     def total(zz):
         z32 = zz[idx].astype(np.float32)
-        return float((w * objective.evaluate(z32, dec.forward(z32.T), idx)).sum())
+        return float((w * objective.evaluate_streams(z32, idx)).sum())
 
     total(z)
-    g_out, g_z = objective.gradient()
-    grad = dec.backward(g_out).T + g_z
+    grad = objective.gradient_streams()
     for a, f in enumerate(idx):
         for d in (0, 7, 19):
             up, down = z.copy(), z.copy()
@@ -234,8 +224,9 @@ def test_segment_starts_step_less_with_the_cross_fade(clip, monkeypatch):
     monkeypatch.setattr(DB, "SEGMENT", 8)
     monkeypatch.setattr(DB, "WARMUP", 6)
     steps = {}
+    shipped = DB._crossfade
     for fade in (False, True):
-        monkeypatch.setattr(DB, "CROSSFADE", fade)
+        monkeypatch.setattr(DB, "_crossfade", shipped if fade else lambda own, warm, offsets: None)
         rec, _ = run_method(_offline(), tr, clip.skeleton, progress=False)
         p = rec.positions()
         # a step shows as acceleration (what jitter measures) at the frames either side of it:
@@ -251,13 +242,14 @@ def test_later_segments_start_from_the_bank_latent_of_their_first_warm_up_frame(
 
     tr = simulate(clip, "6")
     monkeypatch.setattr(DB, "SEGMENT", 8)
-    monkeypatch.setattr(DB, "PRIOR_START", prior_start)
+    if not prior_start:  # the ablation of research/offline_steps.py
+        monkeypatch.setattr(DB, "_starts", lambda read, first, dim: np.zeros((len(first), dim), np.float32))
     starts = []
     solve = DB.solve_streams
 
-    def record(dec, objective, z, *rest):
+    def record(objective, z, *rest):
         starts.append(z.copy())
-        return solve(dec, objective, z, *rest)
+        return solve(objective, z, *rest)
 
     monkeypatch.setattr(DB, "solve_streams", record)
     frames = [tr.frame(i) for i in range(len(tr))]
@@ -267,7 +259,7 @@ def test_later_segments_start_from_the_bank_latent_of_their_first_warm_up_frame(
     z0 = starts[0]
     assert not z0[0].any()  # the clip's first frame: the mean latent, as frame by frame
     for c in range(1, 5):
-        want = read[8 * c - w]["prior"] if prior_start else np.zeros_like(z0[c])
+        want = read[8 * c - w].prior if prior_start else np.zeros_like(z0[c])
         assert np.allclose(z0[c], want, atol=1e-6)
 
 

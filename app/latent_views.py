@@ -157,8 +157,8 @@ class LatentViews:
             self._redraw_timer.start(REDRAW_RETRY_MS)
             return
         if self.map is not None:
-            self.map._drawn = (-1, -1)
-        self.readouts._drawn = (-1, -1)
+            self.map.mark_stale()
+        self.readouts.mark_stale()
         self._update_map(snap)
         self._update_detail(snap)
 

@@ -152,7 +152,7 @@ class FrameRenderer:
         p, o = self.plotter, self.options
         p.subplot(0, panel)
         renderer = p.renderer
-        renderer.SetBackground(*(c / 255 for c in style.hex_to_rgb(style.BACKGROUND_TOP)))
+        renderer.SetBackground(*style.hex_to_unit_rgb(style.BACKGROUND_TOP))
         renderer.SetUseOIT(False)
         keep_key_lights(renderer)
         renderer.SetActiveCamera(self.camera)
@@ -297,7 +297,7 @@ class _Texts:
         actor = vtk.vtkTextActor()
         actor.SetInput(text)
         prop = actor.GetTextProperty()
-        prop.SetColor(*(c / 255 for c in style.hex_to_rgb(colour)))
+        prop.SetColor(*style.hex_to_unit_rgb(colour))
         prop.SetFontSize(size)
         prop.BoldOn()
         if mono:
@@ -326,7 +326,7 @@ class _Texts:
         mapper.SetInputData(poly)
         actor = vtk.vtkActor2D()
         actor.SetMapper(mapper)
-        actor.GetProperty().SetColor(*(c / 255 for c in style.hex_to_rgb(style.BACKGROUND_BOTTOM)))
+        actor.GetProperty().SetColor(*style.hex_to_unit_rgb(style.BACKGROUND_BOTTOM))
         actor.GetProperty().SetLineWidth(3)
         self.renderer.AddViewProp(actor)
 

@@ -153,10 +153,15 @@ class LatentMapPlot(QWidget):
             return
         self._show_frame(view)
 
+    def mark_stale(self) -> None:
+        """Draw the next snapshot even if it is the one drawn last (a view brought back
+        into sight after it skipped snapshots)."""
+        self._drawn = (-1, -1)
+
     def clear(self) -> None:
         """Nothing solved yet (another clip or method): no trajectory, no frame on screen."""
         self.solved.clear()
-        self._drawn = (-1, -1)
+        self.mark_stale()
         self.frames, self.xy = np.zeros(0, int), np.zeros((0, 2))
         for item in (self.points, self.line, self.flags):
             item.setData([], [])

@@ -102,6 +102,11 @@ class LatentReadouts(QWidget):
         self._version = -1  # the store's version whose flags were announced
         self._drawn = (-1, -1)  # (snapshot seq, store version) drawn
 
+    def mark_stale(self) -> None:
+        """Draw the next snapshot even if it is the one drawn last (a view brought back
+        into sight after it skipped snapshots)."""
+        self._drawn = (-1, -1)
+
     def clear(self) -> None:
         """Forget the solved frames (another clip or method)."""
         self.solved.clear()

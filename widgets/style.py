@@ -44,3 +44,9 @@ def ghost_color(name: str, index: int = 0) -> str:
 def hex_to_rgb(color: str) -> tuple[int, int, int]:
     c = color.lstrip("#")
     return int(c[0:2], 16), int(c[2:4], 16), int(c[4:6], 16)
+
+
+def hex_to_unit_rgb(color: str) -> tuple[float, float, float]:
+    """``color`` as VTK takes it: red, green, blue in 0-1."""
+    r, g, b = hex_to_rgb(color)
+    return r / 255.0, g / 255.0, b / 255.0

@@ -215,8 +215,12 @@ class Character:
 
     def ground_shift(self, positions: np.ndarray) -> float:
         """Metres to add to z so the lowest foot of ``positions (22, 3)`` stands on the floor."""
-        feet = np.asarray(positions, float)[list(FOOT_JOINTS), 2] - self.foot_heights.double().numpy()
-        return float(-feet.min())
+        return float(self.ground_shifts(np.asarray(positions)[None])[0])
+
+    def ground_shifts(self, positions: np.ndarray) -> np.ndarray:
+        """:meth:`ground_shift` of each pose of ``positions (B, 22, 3)``: ``(B,)`` metres."""
+        feet = np.asarray(positions, float)[:, list(FOOT_JOINTS), 2] - self.foot_heights.double().numpy()
+        return -feet.min(axis=1)
 
     def decode(self, latent: np.ndarray, ctx: FrameContext) -> Pose:
         """The grounded pose of ``latent (L,)`` without any solve."""
@@ -258,9 +262,9 @@ class Character:
         local = torch.cat((root_rot[:, None], rot[:, 1:]), dim=1).double().numpy()
         local = local / np.linalg.norm(local, axis=-1, keepdims=True)
         positions = fk_positions(local, np.zeros((b, 3)), self.skeleton.offsets)
-        # Ground.apply: the root over xy, the lowest foot joint at its flat height
-        lift = (positions[:, list(FOOT_JOINTS), 2] - self.foot_heights.double().numpy()).min(axis=1)
-        shift = np.concatenate((np.asarray(xy, float).reshape(b, 2) - positions[:, 0, :2], -lift[:, None]), axis=1)
+        # as Ground.apply: the root over xy, the lowest foot joint at its flat height
+        lift = self.ground_shifts(positions)
+        shift = np.concatenate((np.asarray(xy, float).reshape(b, 2) - positions[:, 0, :2], lift[:, None]), axis=1)
         positions = positions + shift[:, None, :]
         return local, positions[:, 0].copy(), positions
 

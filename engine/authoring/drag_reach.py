@@ -2,10 +2,10 @@
 
 A drag moves a joint on a plane through it that faces the camera: the mouse gives two
 coordinates on screen, the plane the third, the depth. The mean pose's wrists hang about
-20 cm in front of the shoulders, so a wrist dragged out sideways in the front view kept
-that depth, and a T-pose made there ended with the arms 20-45 degrees forward: the
-wrist sat under the mouse, but at the depth it had hung at, which the front view does
-not show (and the elbow bent towards the camera looks straight from there).
+20 cm in front of the shoulders, so a wrist dragged out sideways in the front view at the
+depth it hangs at makes a T-pose with the arms 20-45 degrees forward: the wrist is under
+the mouse, but at a depth the front view does not show (and the elbow bent towards the
+camera looks straight from there).
 
 :func:`on_reach` keeps what the user sees (a point on the same mouse ray) and lets the
 depth follow the drag's length. Measured from the limb's root (shoulder, hip) along the

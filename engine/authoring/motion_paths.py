@@ -120,19 +120,27 @@ def baked_paths(baked: Baked, keys: list[Key]) -> MotionPaths | None:
     span = keyed_range(keys)
     if span is None:
         return None
-    m = baked.motion
-    last = min(span[1], len(m) - 1)
-    first = min(span[0], last)
-    positions = fk_positions(m.local_rot[first : last + 1], m.root_pos[first : last + 1], m.skeleton.offsets)
-    return MotionPaths(first, positions, tuple(k.frame for k in keys))
+    clip = clip_paths(baked.motion, span[0], span[1])
+    return MotionPaths(clip.first, clip.positions, tuple(k.frame for k in keys))
+
+
+def _taken(character: Character, local: np.ndarray, root: np.ndarray, targets: list) -> np.ndarray | None:
+    """The positions ``(22, 3)`` of the pose ``local (22, 4)``, ``root (3,)`` with the
+    active ``targets`` (JointTargets) taken by the limbs and turned joints, as a key or a
+    bake's in-between is posed; None when no target moves a limb or turns a joint."""
+    from engine.authoring.targets import solve_inputs
+    from engine.solver.limb_ik import LIMBS, finish
+
+    _, reach, rotations = solve_inputs(targets)
+    limbs = {j: np.asarray(p, float) for j, p in reach.items() if j in LIMBS}
+    if not (limbs or rotations):
+        return None
+    return finish(local, root, character.skeleton.offsets, limbs, dict(rotations))[1]
 
 
 def key_poses(character: Character, keys: list[Key]) -> tuple[np.ndarray, np.ndarray]:
     """The decoded positions ``(K, 22, 3)`` of keys with a latent and their exact ones
     (the active targets taken by the limbs and turned joints, as a key is posed), metres."""
-    from engine.authoring.targets import solve_inputs
-    from engine.solver.limb_ik import LIMBS, finish
-
     latents = [np.asarray(k.latent, np.float32) for k in keys if k.latent is not None]
     if len(latents) != len(keys):
         raise ValueError("key_poses: every key needs a latent")
@@ -141,10 +149,9 @@ def key_poses(character: Character, keys: list[Key]) -> tuple[np.ndarray, np.nda
     )
     exact = decoded.copy()
     for i, k in enumerate(keys):
-        _, reach, rotations = solve_inputs(list(k.targets.values()))
-        limbs = {j: np.asarray(p, float) for j, p in reach.items() if j in LIMBS}
-        if limbs or rotations:
-            exact[i] = finish(local[i], root[i], character.skeleton.offsets, limbs, dict(rotations))[1]
+        taken = _taken(character, local[i], root[i], list(k.targets.values()))
+        if taken is not None:
+            exact[i] = taken
     return decoded, exact
 
 
@@ -152,8 +159,6 @@ def keyed_paths(character: Character, keys: list[Key], scheme: str) -> MotionPat
     """A preview of the bake's paths over the keyed range from the keys that have a
     latent (see the module doc); None when no key has one."""
     from engine.authoring.bake import interpolated_targets
-    from engine.authoring.targets import solve_inputs
-    from engine.solver.limb_ik import LIMBS, finish
 
     posed = sorted((k for k in keys if k.latent is not None), key=lambda k: k.frame)
     if not posed:
@@ -172,10 +177,8 @@ def keyed_paths(character: Character, keys: list[Key], scheme: str) -> MotionPat
     out = positions + np.stack([interpolate(times, gaps, f, scheme) for f in frames]).reshape(positions.shape)
     for i, f in enumerate(frames):
         # the bake's in-betweens put the limbs on the interpolated targets exactly
-        _, reach, rotations = solve_inputs(interpolated_targets(posed, times, f, scheme))
-        limbs = {j: np.asarray(p, float) for j, p in reach.items() if j in LIMBS}
-        if limbs or rotations:
-            taken = finish(local[i], root[i], character.skeleton.offsets, limbs, dict(rotations))[1]
+        taken = _taken(character, local[i], root[i], interpolated_targets(posed, times, f, scheme))
+        if taken is not None:
             moved = np.abs(taken - positions[i]).max(axis=1) > 1e-9
             out[i, moved] = taken[moved]
     return MotionPaths(first, out, tuple(k.frame for k in keys), exact=False)

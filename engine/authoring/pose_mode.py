@@ -261,9 +261,10 @@ class PoseMode:
     def _where(self, adjust: bool = True) -> np.ndarray:
         """Where the root is held during the solve (3,) metres: a target on the root puts
         it there (while crouching, only at its height: the pelvis keeps its level place
-        and, with ``adjust``, takes the crouch's balance step from it); else, with ``adjust``, the crouch and balance steps move it (see
-        :class:`PoseOptions`), which a solve without latent steps does not do, so that it
-        only puts the limbs on their targets."""
+        and, with ``adjust``, takes the crouch's balance step from it); else, with
+        ``adjust``, the crouch and balance steps move it (see :class:`PoseOptions`), which a
+        solve without latent steps does not do, so that it only puts the limbs on their
+        targets."""
         root = self.targets.get("root")
         o = self.options
         if root is not None and root.active:

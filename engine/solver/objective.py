@@ -134,8 +134,8 @@ class FastObjective:
         parameters (None: the first ``A``). Keeps what :meth:`pose_gradient` needs (its
         Jacobians only with ``gradient``)."""
         self.P, self.W = self.chain.forward(out, root)
-        self.z, self.rows, self.jac = z, rows, gradient
-        self.res = [t.residual(NUMPY, self.P, self.W, z, jac=gradient, rows=rows) for t in self.frame.terms]
+        self.z, self.rows = z, rows
+        self._residuals(gradient)
         values = [t.losses(r) for t, r in zip(self.frame.terms, self.res)]
         return np.concatenate(values, axis=1) if values else np.zeros((len(out), 0))
 
@@ -144,12 +144,16 @@ class FastObjective:
         the last :meth:`evaluate_rows` w.r.t. its decoder outputs ``(A, 91)`` and w.r.t.
         its latent directly ``(A, L)`` float64 (terms on the latent)."""
         if not self.jac:  # evaluated without Jacobians: make them now
-            self.res = [t.residual(NUMPY, self.P, self.W, self.z, jac=True, rows=self.rows) for t in self.frame.terms]
-            self.jac = True
+            self._residuals(True)
         g_pos, g_rot, g_z = np.zeros_like(self.P), np.zeros_like(self.P), np.zeros_like(self.z)
         for t, r, w in zip(self.frame.terms, self.res, weights):
             t.accumulate(r, w, g_pos, g_rot, g_z)
         return self.chain.backward(g_pos, g_rot), g_z
+
+    def _residuals(self, jac: bool) -> None:
+        """Each term's residuals (with their Jacobians when ``jac``) at the kept poses."""
+        self.res = [t.residual(NUMPY, self.P, self.W, self.z, jac=jac, rows=self.rows) for t in self.frame.terms]
+        self.jac = jac
 
     def satisfied_rows(self) -> np.ndarray:
         """Per row of the last :meth:`evaluate_rows` ``(A,)``: every constraint lets its

@@ -23,10 +23,6 @@ GHOST_JOINT_SIZE = 5.0
 LEGEND_ROW = 20  # pixels between legend lines
 
 
-def _hex(color: str) -> tuple[float, float, float]:
-    return tuple(c / 255.0 for c in style.hex_to_rgb(color))  # type: ignore[return-value]
-
-
 class GhostSkeleton:
     """One method's pose as a translucent stick figure in ``renderer`` (moved in place)."""
 
@@ -42,7 +38,7 @@ class GhostSkeleton:
             actor.SetMapper(mapper)
             actor.PickableOff()
             prop = actor.GetProperty()
-            prop.SetColor(*_hex(color))
+            prop.SetColor(*style.hex_to_unit_rgb(color))
             prop.SetOpacity(opacity)
             if points:
                 prop.SetRepresentationToPoints()
@@ -124,7 +120,7 @@ class GhostLayer:
         actor = vtk.vtkTextActor()
         actor.SetInput(f"- {name}")
         prop = actor.GetTextProperty()
-        prop.SetColor(*_hex(color))
+        prop.SetColor(*style.hex_to_unit_rgb(color))
         prop.SetFontSize(15)
         prop.BoldOn()
         actor.PickableOff()

@@ -146,7 +146,7 @@ class PointAdapter(GizmoAdapter):
         self.label.SetPosition(*(p + _LABEL_LIFT))
         prop = self.label.GetTextProperty()
         prop.SetFontSize(14)
-        prop.SetColor(*(c / 255 for c in style.hex_to_rgb(style.GIZMO)))
+        prop.SetColor(*style.hex_to_unit_rgb(style.GIZMO))
         prop.SetJustificationToCentered()
         self.label.PickableOff()
         self.plotter.add_actor(self.label, reset_camera=False, render=False)

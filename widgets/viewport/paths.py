@@ -26,11 +26,6 @@ MARK_COLOUR = "#f2f4f8"
 CURRENT_COLOUR = "#ff4dd2"
 
 
-def _rgb(colour: str) -> tuple[float, float, float]:
-    r, g, b = style.hex_to_rgb(colour)
-    return r / 255.0, g / 255.0, b / 255.0
-
-
 def polylines(lines: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Points ``(N, 3)``, VTK line cells and each point's line index ``(N,)`` of
     ``lines`` (each ``(n, 3)`` metres); a non-finite point breaks its line there."""
@@ -84,7 +79,7 @@ class MotionPathLayer:
                 prop.SetRepresentationToPoints()
                 prop.RenderPointsAsSpheresOn()
                 prop.SetPointSize(MARK_SIZE if kind == "marks" else CURRENT_SIZE)
-                prop.SetColor(*_rgb(MARK_COLOUR if kind == "marks" else CURRENT_COLOUR))
+                prop.SetColor(*style.hex_to_unit_rgb(MARK_COLOUR if kind == "marks" else CURRENT_COLOUR))
             actor.SetVisibility(False)
             plotter.renderer.AddActor(actor)
             self.actors.append(actor)

@@ -199,17 +199,18 @@ class JointDragger:
         pixels between the press and the joint's centre)."""
         self._base = base.copy()
         hit = self._hit(x, y)
-        self._grab = self._origin.copy() if hit is None else hit
+        self._grab = self._origin.copy() if hit is None else hit[0]
 
-    def _hit(self, x: float, y: float) -> np.ndarray | None:
+    def _hit(self, x: float, y: float) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """The point (3,) where the mouse ray at display pixel (x, y) meets the drag plane
-        (through :attr:`_origin`, normal :meth:`drag_normal`); None when parallel."""
+        (through :attr:`_origin`, normal :meth:`drag_normal`), with the ray's direction and
+        the plane's normal; None when they are parallel."""
         start, direction = self.ray(x, y)
         normal = self.drag_normal()
         denom = float(direction @ normal)
         if abs(denom) < 1e-12:
             return None
-        return start + float((self._origin - start) @ normal) / denom * direction
+        return start + float((self._origin - start) @ normal) / denom * direction, direction, normal
 
     def press_target(self, x: float, y: float) -> bool:
         """Grab the tracker target whose sphere covers display pixel (x, y); True on a hit."""
@@ -271,8 +272,8 @@ class JointDragger:
         hit = self._hit(x, y)
         if hit is None:
             return
-        to = self._base + (hit - self._grab)
-        to = self._placed(to, self._base, self.ray(x, y)[1], self.drag_normal())
+        point, direction, normal = hit
+        to = self._placed(self._base + (point - self._grab), self._base, direction, normal)
         if self.target is not None:
             self._sensors.drag(self.target, to)
             self._plotter.render()  # the sphere follows the mouse at once, as a widget's did

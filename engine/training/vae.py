@@ -19,6 +19,7 @@ import torch
 from torch import nn
 from tqdm import tqdm
 
+from engine.errors import UserError
 from engine.kinematics import quaternion as Q
 from engine.kinematics.features import root_space_features, root_space_fk
 from engine.models.loading import load_checkpoint, load_vae
@@ -75,6 +76,11 @@ class VAETrainConfig:
     #: after a retargeting change); its architecture must match the settings'. The
     #: prepared data's normalisation statistics replace the file's.
     init: str = ""
+    #: False: keep the encoder of ``init`` fixed and train only the decoder. Every real
+    #: pose then keeps the latent the shipped encoder gives it, so a temporal predictor,
+    #: pose bank and latent map trained on those latents stay valid; only what the
+    #: decoder draws from each latent improves.
+    train_encoder: bool = True
 
     def model_config(self) -> VAEConfig:
         return VAEConfig(latent=self.latent, channels=(*self.channels,))  # a tuple (a JSON config gives a list)
@@ -89,8 +95,13 @@ class VAEObjective(nn.Module):
 
     def forward(self, b: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
         vae, cfg = self.vae, self.cfg
-        mu, logvar = vae.encode(b["dq"])
-        z = mu + torch.randn_like(mu) * torch.exp(0.5 * logvar)
+        if cfg.train_encoder:
+            mu, logvar = vae.encode(b["dq"])
+            z = mu + torch.randn_like(mu) * torch.exp(0.5 * logvar)
+        else:  # a fixed encoder: its latents are data, and the continuity term's gradient needs a leaf
+            with torch.no_grad():
+                mu, logvar = vae.encode(b["dq"])
+            z = (mu + torch.randn_like(mu) * torch.exp(0.5 * logvar)).requires_grad_(True)
         rot, disp = vae.decode(z)
         l_rot = pose_distance(rot, disp, b["rot"], b["disp"], vae.disp_std).mean()
         pos, _ = root_space_fk(rot, b["offsets"])
@@ -268,11 +279,17 @@ def train_vae(
     if cfg.init:  # a resumed run then loads its own last.pt over it
         start_from(vae, cfg.init, load_vae)
         vae.set_stats(manifest["stats"])
+    if not cfg.train_encoder:
+        if not cfg.init:
+            raise UserError("train_encoder = false needs init = a VAE weights file whose encoder is kept")
+        for module in (*vae.enc, vae.to_mu, vae.to_logvar):
+            module.requires_grad_(False)
     objective: nn.Module = VAEObjective(vae, cfg)
     if ddp.world > 1:
         objective = nn.parallel.DistributedDataParallel(objective)
     # the fused kernel: one pass over all parameters instead of a dozen tensor ops per tensor
-    opt = torch.optim.AdamW(vae.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay, fused=True)
+    trained = [p for p in vae.parameters() if p.requires_grad]
+    opt = torch.optim.AdamW(trained, lr=cfg.lr, weight_decay=cfg.weight_decay, fused=True)
     pairs = torch.nonzero(train.has_next).squeeze(1)
     steps_per_epoch = max(1, len(pairs) // (cfg.batch_size * ddp.world))
     total_steps = steps_per_epoch * cfg.epochs

@@ -107,6 +107,19 @@ def test_init_starts_from_a_vae_file_and_checks_its_architecture(tiny_data, run_
         train_vae(tiny_data, tmp_path / "x", _cfg(init=str(run_a[0] / "vae.pt"), latent=5, **frozen), progress=False)
 
 
+def test_a_fixed_encoder_keeps_every_latent_and_trains_the_decoder(tiny_data, run_a, tmp_path):
+    init = run_a[0] / "vae.pt"
+    train_vae(tiny_data, tmp_path / "d", _cfg(init=str(init), epochs=1, seed=5, train_encoder=False), progress=False)
+    before, after = _weights(init), _weights(tmp_path / "d/vae.pt")
+    encoder = [k for k in before if k.startswith(("enc.", "to_mu.", "to_logvar."))]
+    decoder = [k for k in before if k.startswith(("dec.", "from_latent.", "to_rot.", "to_disp."))]
+    assert encoder and decoder
+    assert all(torch.equal(before[k], after[k]) for k in encoder), "the encoder must not move"
+    assert not all(torch.equal(before[k], after[k]) for k in decoder), "the decoder must learn"
+    with pytest.raises(UserError, match="train_encoder = false needs init"):
+        train_vae(tiny_data, tmp_path / "e", _cfg(epochs=1, train_encoder=False), progress=False)
+
+
 @pytest.mark.parametrize("model", ["vae", "predictor"])
 def test_resume_never_runs_code_from_a_planted_checkpoint(tiny_data, run_a, tmp_path, model):
     from engine.errors import ModelFileError

@@ -32,8 +32,9 @@ from engine.constraints.base import Constraint
 from engine.constraints.temporal_prior import TemporalPriorConstraint
 from engine.errors import UserError
 from engine.kinematics import quat_np as QN
+from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk, fk_positions
-from engine.kinematics.root import integrate_root
+from engine.kinematics.root import place_root
 from engine.solver import FrameContext, OptimizerSettings, PoseOptimizer, RootFrame, RootOverride
 from engine.solver.limb_ik import LIMBS, finish
 
@@ -258,7 +259,7 @@ class Character:
         with torch.no_grad():
             rot, disp = self._grounded.decoder.decode(z)
             h = _f(np.stack([yaw_quaternion(a) for a in headings]) if b else np.zeros((0, 4)))
-            root_rot, _ = integrate_root(h, torch.zeros(b, 3), rot[:, 0], disp)
+            root_rot, _ = place_root(Q.heading(h), rot[:, 0])
         local = torch.cat((root_rot[:, None], rot[:, 1:]), dim=1).double().numpy()
         local = local / np.linalg.norm(local, axis=-1, keepdims=True)
         positions = fk_positions(local, np.zeros((b, 3)), self.skeleton.offsets)

@@ -28,7 +28,7 @@ import torch
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk
-from engine.kinematics.root import integrate_root, root_increment
+from engine.kinematics.root import place_root, root_increment
 
 
 def _cat(xs, dim):
@@ -81,7 +81,7 @@ def motion_from_pose(rot, disp, start_root_rot=None, start_pos=None):
     prev_pos = start_pos if start_pos is not None else (torch.zeros(3, dtype=rot.dtype) if is_t else np.zeros(3))
     roots, poss = [], []
     for t in range(rot.shape[0]):
-        prev_rot, prev_pos = integrate_root(prev_rot, prev_pos, rot[t, 0], disp[t])
+        prev_rot, prev_pos = place_root(Q.heading(prev_rot), rot[t, 0], prev_pos, disp[t])
         roots.append(prev_rot)
         poss.append(prev_pos)
     if is_t:

@@ -32,7 +32,6 @@ _WHERE = {
     "RootAnchor": "pose",
     "RootFrame": "pose",
     "RootOverride": "pose",
-    "world_root": "pose",
     "FULL_SET": "settings",
     "MODES": "settings",
     "OPTIMIZERS": "settings",
@@ -73,5 +72,4 @@ __all__ = [
     "Solution",
     "SolveTimings",
     "TemporalSchedule",
-    "world_root",
 ]

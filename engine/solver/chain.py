@@ -4,7 +4,7 @@ Per frame (``A`` frames at once; ``A = 1`` frame by frame)::
 
     out  = decoder(z)                          q_raw (22, 4), disp (3,)
     u    = q_raw / |q_raw|                     local rotations
-    R0   = H R(u0) (or the hip tracker's),  p0 = p_prev + H disp (or the hip tracker's)
+    R0, p0 = place_root(H, R(u0), p_prev, disp)   the root rule (or the hip tracker's root)
     P, W = fk_matrices(...)                    (22, 3), (22, 3, 3)  (engine.kinematics.fk)
     P'   = P + (head_target - P[head])         when the head anchors the body
 
@@ -30,6 +30,7 @@ from engine import skeleton as sk
 from engine.constraints.residual import EPS3
 from engine.kinematics import quat_np as QN
 from engine.kinematics.fk import fk_level_order, levels
+from engine.kinematics.root import place_root
 
 _EPS = 1e-8  # quaternion normalisation floor, as in engine.kinematics.quaternion.normalize
 #: ``cross(a, b) = (a outer b).reshape(9) @ _CROSS``: one matmul instead of a dozen small ops.
@@ -107,11 +108,9 @@ class PoseChain:
         np.maximum(norm, _EPS, out=norm)
         u = q / norm[..., None]
         local = QN.to_matrix(u)  # R(u) = R(-u): the canonical sign does not matter here
-        local[:, 0] = root.rotation if root.rotation is not None else root.heading @ local[:, 0]
-        if root.position is not None:
-            base = root.position
-        else:
-            base = root.previous + np.einsum("aij,aj->ai", root.heading, out[:, 4 * n :].astype(np.float64))
+        local[:, 0], base = place_root(
+            root.heading, local[:, 0], root.previous, out[:, 4 * n :], rotation=root.rotation, position=root.position
+        )
         pos, world = fk_level_order(local, base, self.bone_offsets, self.levels)
         self.anchor = None if root.anchor is None or root.position is not None else int(self.unorder[root.anchor])
         if self.anchor is not None:

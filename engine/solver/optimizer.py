@@ -53,6 +53,7 @@ from engine.kinematics import quat_np as QN
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk_matrices
 from engine.kinematics.pose_state import PoseState
+from engine.kinematics.root import place_root
 from engine.models.fused import DenseDecoder
 from engine.models.vae import PoseVAE
 from engine.solver.chain import PoseChain, RootFrames
@@ -65,7 +66,6 @@ from engine.solver.objective import (
     active_weights,
     build_terms,
 )
-from engine.solver.pose import world_root
 from engine.solver.settings import FULL_SET, OptimizerSettings
 from engine.solver.threads import one_blas_thread
 from engine.solver.update import LatentUpdate
@@ -133,7 +133,15 @@ class PoseOptimizer:
     def decode(self, z: torch.Tensor, ctx: FrameContext) -> PoseState:
         """World pose of latent ``z (L,)`` in the context of a frame (differentiable)."""
         rot, disp = self.decoder.decode(z[None])
-        root_rot, root_pos = world_root(rot[0][0], disp[0], ctx.previous_root, ctx.root_override)
+        ov = ctx.root_override
+        root_rot, root_pos = place_root(
+            ctx.previous_root.heading(),
+            rot[0][0],
+            ctx.previous_root.position,
+            disp[0],
+            rotation=None if ov is None else ov.rotation,
+            position=None if ov is None else ov.position,
+        )
         local = torch.cat((root_rot[None], rot[0][1:]), dim=0)
         pos, mats = fk_matrices(Q.to_matrix(local), root_pos, self.offsets)
         if ctx.root_anchor is not None and ctx.root_override is None:
@@ -301,11 +309,10 @@ def _root_frames(ctx: FrameContext) -> RootFrames:
 def _fast_state(latent: torch.Tensor, obj: FastObjective, ctx: FrameContext) -> PoseState:
     """The fast objective's last evaluated pose as a (detached, float32) :class:`PoseState`."""
     local = obj.chain.local()[0].copy()
+    n = lambda t: t.detach().double().numpy()  # noqa: E731
     ov = ctx.root_override
-    if ov is not None and ov.rotation is not None:
-        local[0] = ov.rotation.detach().double().numpy()
-    else:
-        local[0] = QN.mul(Q.heading(ctx.previous_root.rotation.detach().double().numpy()), local[0])
+    rotation = None if ov is None or ov.rotation is None else n(ov.rotation)
+    local[0], _ = place_root(Q.heading(n(ctx.previous_root.rotation)), local[0], rotation=rotation)
     f = lambda a: torch.as_tensor(a, dtype=torch.float32)  # noqa: E731
     return PoseState(
         f(obj.P[0]), None, f(local), latent, ctx.previous_positions, ctx.frame, ctx.prediction, f(obj.W[0])

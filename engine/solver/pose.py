@@ -31,7 +31,6 @@ import torch
 
 from engine.kinematics import quat_np as QN
 from engine.kinematics import quaternion as Q
-from engine.kinematics.root import integrate_root
 
 
 @dataclass
@@ -80,30 +79,6 @@ class RootAnchor:
     def apply(self, positions: torch.Tensor) -> torch.Tensor:
         """``positions (..., J, 3)`` shifted so row ``joint`` equals ``position``."""
         return positions + (self.position - positions[..., self.joint, :])[..., None, :]
-
-
-def world_root(
-    rot0: torch.Tensor, disp: torch.Tensor, prev: RootFrame, override: RootOverride | None = None
-) -> tuple[torch.Tensor, torch.Tensor]:
-    """World root rotation ``(..., 4)`` and position ``(..., 3)`` (see the module doc).
-
-    Parameters
-    ----------
-    rot0 : Tensor (..., 4)
-        Decoded slot-0 rotation (root rotation in the previous heading frame).
-    disp : Tensor (..., 3)
-        Decoded root displacement in the previous heading frame, metres.
-    prev : RootFrame
-        The previous frame's solved root.
-    override : RootOverride, optional
-        Hip sensor reading that takes precedence.
-    """
-    rotation, position = integrate_root(prev.rotation.expand_as(rot0), prev.position, rot0, disp)
-    if override is not None and override.rotation is not None:
-        rotation = override.rotation.expand_as(rot0)
-    if override is not None:
-        position = override.position.expand_as(disp)
-    return rotation, position
 
 
 #: ``heading = anchor``: the reference heading stays within this many degrees of the

@@ -15,7 +15,7 @@ from engine import skeleton as sk
 from engine.kinematics import features as Fe
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk, fk_joints, fk_matrices, local_from_global
-from engine.kinematics.root import integrate_root, root_displacement, root_increment
+from engine.kinematics.root import place_root, root_displacement, root_increment
 
 RNG = np.random.default_rng(3)
 PARENTS_PM = np.array([0] + list(sk.PARENTS[1:]))
@@ -178,11 +178,31 @@ def test_root_integration_round_trips_numpy_and_torch():
     prev_rot, rot = _random_quats(5), _random_quats(5)
     prev_pos, pos = RNG.normal(size=(5, 3)), RNG.normal(size=(5, 3))
     rot0, disp = root_increment(prev_rot, prev_pos, rot, pos)
-    back_rot, back_pos = integrate_root(prev_rot, prev_pos, rot0, disp)
+    back_rot, back_pos = place_root(Q.heading(prev_rot), rot0, prev_pos, disp)
     np.testing.assert_allclose(back_pos, pos, atol=1e-12)
     np.testing.assert_allclose(Q.canonicalize(back_rot), Q.canonicalize(rot), atol=1e-12)
-    t_rot, t_pos = integrate_root(*(torch.tensor(x) for x in (prev_rot, prev_pos, rot0, disp)))
+    t = [torch.tensor(x) for x in (prev_rot, prev_pos, rot0, disp)]
+    t_rot, t_pos = place_root(Q.heading(t[0]), t[2], t[1], t[3])
     np.testing.assert_allclose(t_pos.numpy(), pos, atol=1e-12)
+
+
+def test_the_root_rule_is_the_same_on_matrices_and_with_a_hip_tracker():
+    """The solver's chain places the root with matrices, the reference with quaternions:
+    one rule; a hip tracker's rotation and position replace each part on its own."""
+    prev_rot, rot0 = _random_quats(4), _random_quats(4)
+    prev_pos, disp = RNG.normal(size=(4, 3)), RNG.normal(size=(4, 3))
+    h = Q.heading(prev_rot)
+    q_rot, q_pos = place_root(h, rot0, prev_pos, disp)
+    m_rot, m_pos = place_root(Q.to_matrix(h), Q.to_matrix(rot0), prev_pos, disp)
+    np.testing.assert_allclose(m_rot, Q.to_matrix(q_rot), atol=1e-12)
+    np.testing.assert_allclose(m_pos, q_pos, atol=1e-12)
+    hip_rot, hip_pos = _random_quats(4), RNG.normal(size=(4, 3))
+    r, p = place_root(h, rot0, prev_pos, disp, rotation=hip_rot)
+    assert (r == hip_rot).all() and (p == q_pos).all()
+    r, p = place_root(h, rot0, prev_pos, disp, position=hip_pos)
+    assert (r == q_rot).all() and (p == hip_pos).all()
+    r, p = place_root(h, rot0)  # the rotation alone
+    assert (r == q_rot).all() and p is None
 
 
 def test_ancestors_and_children_follow_the_parent_list():

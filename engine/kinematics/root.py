@@ -4,7 +4,8 @@ A pose stores the root's rotation and displacement relative to the previous fram
 *heading frame* ``H`` (the yaw-only part of the previous root rotation, see
 :func:`engine.kinematics.quaternion.heading`): ``R(t) = H * rot0`` and
 ``p(t) = p(t-1) + H * disp``. :func:`place_root` applies it (and lets a hip tracker's
-rotation or position take precedence), :func:`root_increment` inverts it. Both work on
+rotation or position take precedence), :func:`root_increment` inverts it, and
+:func:`anchor_body` places a body by one joint instead (the head without a hip tracker). Both work on
 numpy arrays and torch tensors, batched over leading axes.
 """
 
@@ -57,6 +58,13 @@ def place_root(heading, rot0, prev_pos=None, disp=None, *, rotation=None, positi
         else:
             position = prev_pos + Q.rotate(heading, disp)
     return rotation, position
+
+
+def anchor_body(positions, joint, target):
+    """``positions (..., J, 3)`` translated so that row ``joint`` lands on ``target (..., 3)``
+    (metres): without a hip tracker, the head's tracker places the body and the decoded
+    torso decides how far below it the hips are."""
+    return positions + (target - positions[..., joint, :])[..., None, :]
 
 
 def root_increment(prev_rot, prev_pos, rot, pos):

@@ -359,5 +359,5 @@ def _objective(m: DragPoserMethod, r: BatchFrame, rows: int) -> BatchObjective:
         terms,
         np.tile(r.weights, (rows, 1)),
         root,
-        q * np.where(q[:, :1] < 0, -1.0, 1.0),
+        QN.canonicalize(q),
     )

@@ -99,16 +99,6 @@ def plan_runs(
     return runs[::-1]
 
 
-def _matvec(runs: list[Run], x: np.ndarray, out: np.ndarray) -> np.ndarray:
-    """``out = W @ x`` for a matrix stored as :func:`plan_runs` rectangles."""
-    for r in runs:
-        if r.c1 > r.c0:
-            np.dot(r.w, x[r.c0 : r.c1], out=out[r.r0 : r.r1])
-        else:
-            out[r.r0 : r.r1] = 0.0
-    return out
-
-
 def _nodes(count: int, width: int, start: int = 0) -> list[tuple[int, int]]:
     return [(start + i * width, start + (i + 1) * width) for i in range(count)]
 

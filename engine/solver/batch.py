@@ -90,7 +90,7 @@ class BatchObjective(FastObjective):
         r = self.root
         assert r.position is not None and r.rotation is not None  # a batch's rows have the hip's root
         r.position[row], r.rotation[row] = root_pos, QN.to_matrix(root_rot)
-        self.root_quat[row] = root_rot if root_rot[0] >= 0 else -root_rot
+        self.root_quat[row] = QN.canonicalize(root_rot)
 
     def evaluate_streams(self, z: np.ndarray, idx: np.ndarray) -> np.ndarray:
         """Losses ``(A, K)`` of the rows ``idx (A,)`` at latents ``z (A, L)`` float32 (one

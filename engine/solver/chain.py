@@ -30,7 +30,7 @@ from engine import skeleton as sk
 from engine.constraints.residual import EPS3
 from engine.kinematics import quat_np as QN
 from engine.kinematics.fk import fk_level_order, levels
-from engine.kinematics.root import place_root
+from engine.kinematics.root import anchor_body, place_root
 
 _EPS = 1e-8  # quaternion normalisation floor, as in engine.kinematics.quaternion.normalize
 #: ``cross(a, b) = (a outer b).reshape(9) @ _CROSS``: one matmul instead of a dozen small ops.
@@ -114,7 +114,7 @@ class PoseChain:
         pos, world = fk_level_order(local, base, self.bone_offsets, self.levels)
         self.anchor = None if root.anchor is None or root.position is not None else int(self.unorder[root.anchor])
         if self.anchor is not None:
-            pos += (root.anchor_position - pos[:, self.anchor])[:, None]
+            pos = anchor_body(pos, self.anchor, root.anchor_position)
         self.root, self.norm, self.u, self.pos, self.world = root, norm, u, pos, world
         back = self.unorder
         return pos[:, back], world[:, back]
@@ -146,5 +146,4 @@ class PoseChain:
     def local(self) -> np.ndarray:
         """Local rotations ``(A, 22, 4)`` (joint order) of the last :meth:`forward`: unit
         quaternions with ``w >= 0``, row 0 before the heading (the decoder's own)."""
-        u = self.u[:, self.unorder]
-        return u * np.where(u[..., :1] < 0, -1.0, 1.0)
+        return QN.canonicalize(self.u[:, self.unorder])

@@ -63,7 +63,8 @@ class RootOverride:
 
 @dataclass
 class RootAnchor:
-    """Without a hip tracker: translate the body so ``joint`` sits at ``position``.
+    """Without a hip tracker: translate the body so ``joint`` sits at ``position``
+    (:func:`~engine.kinematics.root.anchor_body`).
 
     Attributes
     ----------
@@ -75,10 +76,6 @@ class RootAnchor:
 
     joint: int
     position: torch.Tensor
-
-    def apply(self, positions: torch.Tensor) -> torch.Tensor:
-        """``positions (..., J, 3)`` shifted so row ``joint`` equals ``position``."""
-        return positions + (self.position - positions[..., self.joint, :])[..., None, :]
 
 
 #: ``heading = anchor``: the reference heading stays within this many degrees of the

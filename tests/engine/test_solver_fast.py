@@ -13,7 +13,7 @@ import torch
 from engine.kinematics import quaternion as Q
 from engine.methods.dragposer import DragPoserMethod
 from engine.models import load_default_models
-from engine.models.fused import DenseDecoder, _matvec, plan_runs
+from engine.models.fused import DenseDecoder, Run, plan_runs
 from engine.models.skeletal import level_sizes
 from engine.motion.retarget import load_motion
 from engine.solver import LatentUpdate
@@ -67,20 +67,35 @@ def test_run_planner_keeps_only_the_blocks_worth_a_call():
     assert [(r.r0, r.r1, r.c0, r.c1) for r in runs] == [(0, 2, 0, 2), (2, 4, 2, 4), (4, 6, 4, 6)]
     one = plan_runs(w, nodes, nodes, call_cost=1e9)
     assert [(r.r0, r.r1, r.c0, r.c1) for r in one] == [(0, 6, 0, 6)]
-    x = np.arange(6, dtype=np.float32)
     for plan in (runs, one):
-        np.testing.assert_array_equal(_matvec(plan, x, np.empty(6, np.float32)), w @ x)
+        np.testing.assert_array_equal(_rectangles(plan, w.shape), w)
+
+
+def _rectangles(runs: list[Run], shape: tuple[int, int]) -> np.ndarray:
+    """The matrix that ``runs`` store: their rectangles, zeros elsewhere (rows covered once)."""
+    out, rows = np.zeros(shape, np.float32), np.zeros(shape[0], int)
+    for r in runs:
+        out[r.r0 : r.r1, r.c0 : r.c1] = r.w
+        rows[r.r0 : r.r1] += 1
+    assert (rows == 1).all()
+    return out
 
 
 def test_block_sparse_decoder_reads_less_and_equals_the_dense_products(models):
     dense = DenseDecoder(models.vae)
     total = sum(w.size for w in dense.weights)
     assert dense.stored_entries() < 0.6 * total  # 1.77 M entries, 0.64 M of them not zero
-    gen = np.random.default_rng(3)
-    dense.forward(gen.standard_normal(24).astype(np.float32))
     for w, fr in zip(dense.weights, dense.forward_runs):
-        x = gen.standard_normal(w.shape[1]).astype(np.float32)
-        np.testing.assert_allclose(_matvec(fr, x, np.empty(w.shape[0], np.float32)), w @ x, rtol=1e-5, atol=1e-5)
+        np.testing.assert_array_equal(_rectangles(fr, w.shape), w)  # every non-zero entry is stored
+    # the forward pass: the dense chain's products
+    gen = np.random.default_rng(3)
+    z = gen.standard_normal(24).astype(np.float32)
+    x = z.astype(np.float64)
+    for i, (w, b) in enumerate(zip(dense.weights, dense.biases)):
+        x = w.astype(np.float64) @ x + b
+        if i < len(dense.weights) - 1:
+            x = np.where(x > 0, x, dense.slope * x)
+    np.testing.assert_allclose(dense.forward(z), x, rtol=1e-4, atol=1e-5)
     # the backward pass reads the same rectangles transposed: the dense chain's gradient
     g = gen.standard_normal(91).astype(np.float32)
     expected = g.astype(np.float64)

@@ -135,11 +135,6 @@ class Residuals:
     d_rot_entry: np.ndarray | None = None
 
 
-def owners(sizes: list[int]) -> np.ndarray:
-    """``owner`` of a term whose constraints have ``sizes`` residual entries each, in order."""
-    return np.repeat(np.arange(len(sizes)), sizes).astype(np.intp)
-
-
 class Term:
     """Base of every kind's term: subclasses set :attr:`names` and :attr:`owner` and define
     :meth:`residual`; a term the offline stopping rule should wait for also sets

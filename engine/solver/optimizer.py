@@ -53,7 +53,7 @@ from engine.kinematics import quat_np as QN
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk_matrices
 from engine.kinematics.pose_state import PoseState
-from engine.kinematics.root import anchor_body, place_root
+from engine.kinematics.root import place_root
 from engine.models.fused import DenseDecoder
 from engine.models.vae import PoseVAE
 from engine.solver.chain import PoseChain, RootFrames
@@ -145,7 +145,7 @@ class PoseOptimizer:
         local = torch.cat((root_rot[None], rot[0][1:]), dim=0)
         pos, mats = fk_matrices(Q.to_matrix(local), root_pos, self.offsets)
         if ctx.root_anchor is not None and ctx.root_override is None:
-            pos = anchor_body(pos, ctx.root_anchor.joint, ctx.root_anchor.position)
+            pos = ctx.root_anchor.apply(pos)
         return PoseState(pos, None, local, z, ctx.previous_positions, ctx.frame, ctx.prediction, mats)
 
     # -- the objective -------------------------------------------------------------------

@@ -31,6 +31,7 @@ import torch
 
 from engine.kinematics import quat_np as QN
 from engine.kinematics import quaternion as Q
+from engine.kinematics.root import anchor_body
 
 
 @dataclass
@@ -63,8 +64,7 @@ class RootOverride:
 
 @dataclass
 class RootAnchor:
-    """Without a hip tracker: translate the body so ``joint`` sits at ``position``
-    (:func:`~engine.kinematics.root.anchor_body`).
+    """Without a hip tracker: translate the body so ``joint`` sits at ``position``.
 
     Attributes
     ----------
@@ -76,6 +76,11 @@ class RootAnchor:
 
     joint: int
     position: torch.Tensor
+
+    def apply(self, positions: torch.Tensor) -> torch.Tensor:
+        """``positions (..., J, 3)`` shifted so row ``joint`` equals ``position`` (an
+        anchor's hook: the authoring's ``Ground`` places a pose by other rules)."""
+        return anchor_body(positions, self.joint, self.position)
 
 
 #: ``heading = anchor``: the reference heading stays within this many degrees of the

@@ -28,6 +28,13 @@ class EngineWatch:
         self.restarts = 0
         self.line = ""  # the last thing said about the engine
         self._handled: Any = None  # the dead engine last dealt with
+        self._given_up: Any = None  # the dead engine not restarted
+
+    @property
+    def stopped(self) -> bool:
+        """The session's engine died and was not restarted: what it last published is
+        stale, and the status bar keeps saying why it stopped."""
+        return self._given_up is not None and self._given_up is self.w.session.engine
 
     def check(self) -> None:
         """Deal with a dead engine once (cheap when it runs)."""
@@ -47,6 +54,7 @@ class EngineWatch:
             self.w.busy.begin(session.method, -1, "Restarting")
             self.w.statusBar().showMessage(self.line, SHOWN_MS)
             return
+        self._given_up = engine
         self.line = f"The solver stopped ({failure}): {self.policy.stopped}"
         self.w.statusBar().showMessage(self.line)
         self.w.show_error(

@@ -398,4 +398,12 @@ class MainWindow(QMainWindow):
         self.session.shutdown()
         self.files.shutdown()
         self.viewport.close()
+        # the plot views drop their items now, while their plots exist: an item Qt deletes
+        # with the window must not stay in a Python dict of theirs (docs/reliability.md)
+        for view in (self.plots, self.latent, self.method_errors):
+            view.close()
+        # what __init__ froze, this window included, goes back to the collector: a frozen
+        # object is never collected, so a closed window (its widgets' wrappers, its curves)
+        # would stay in memory for the rest of the process
+        gc.unfreeze()
         super().closeEvent(event)

@@ -13,9 +13,10 @@ from typing import Any
 import numpy as np
 import pyqtgraph as pg
 from PyQt6.QtCore import QRectF, Qt, pyqtSignal
+from PyQt6.QtGui import QCloseEvent
 from PyQt6.QtWidgets import QCheckBox, QGridLayout, QLabel, QPushButton, QSlider, QSpinBox, QVBoxLayout, QWidget
 
-from widgets.plots import settle  # also applies the shared pyqtgraph look
+from widgets.plots import release, settle  # also applies the shared pyqtgraph look
 
 HISTORY = 300
 #: the smallest half range of the bars' y axis and of the strip's colour levels
@@ -90,6 +91,13 @@ class LatentInspector(QWidget):
         self.stored: dict[str, np.ndarray] = {}
         self._seq = -1
         self._bars_range = 0.0
+
+    def closeEvent(self, event: QCloseEvent | None) -> None:  # noqa: N802 (Qt's name)
+        """Take the bars and the strip out of their plots and drop the strip's image: a
+        closed view holds no plot item (:func:`widgets.plots.release`)."""
+        release(self.bars_plot, self.strip_plot)
+        self.strip.clear()
+        super().closeEvent(event)
 
     def _show_plots(self, on: bool) -> None:
         self.placeholder.setVisible(not on)

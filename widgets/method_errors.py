@@ -14,10 +14,11 @@ from typing import Any
 
 import numpy as np
 import pyqtgraph as pg
+from PyQt6.QtGui import QCloseEvent
 from PyQt6.QtWidgets import QHBoxLayout, QLabel, QVBoxLayout, QWidget
 
 from widgets import style
-from widgets.plots import fit_frames, settle
+from widgets.plots import fit_frames, release, settle
 
 #: Frames kept per curve (older ones scroll out).
 KEEP = 3000
@@ -59,6 +60,12 @@ class MethodErrorPlot(QWidget):
 
     def colour(self, name: str, index: int, main: bool) -> str:
         return style.RECONSTRUCTION if main else style.ghost_color(name, index)
+
+    def closeEvent(self, event: QCloseEvent | None) -> None:  # noqa: N802 (Qt's name)
+        """Drop every curve: a closed view holds no plot item (:func:`widgets.plots.release`)."""
+        self.clear()
+        release(self.plot)
+        super().closeEvent(event)
 
     def clear(self) -> None:
         for c in self.curves.values():

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 import pyqtgraph as pg
+from PyQt6.QtGui import QCloseEvent
 from PyQt6.QtWidgets import QHBoxLayout, QWidget
 
 from widgets import style
@@ -67,6 +68,18 @@ def settle(plot: pg.PlotWidget) -> None:
     """
     if plot.isVisible():  # a hidden plot has no geometry to fit (and paints nothing)
         plot.getPlotItem().getViewBox().prepareForPaint()
+
+
+def release(*plots: pg.PlotWidget) -> None:
+    """Take every item out of ``plots`` (a closing view's teardown, as pyvistaqt's views
+    drop their actors in ``close()``).
+
+    A removed item belongs to Python again and dies with its last reference; one left in
+    a plot is deleted with the window while a Python dict of ours may still hold it, and a
+    Python wrapper over a deleted item is a crash waiting for a call (docs/reliability.md).
+    """
+    for plot in plots:
+        plot.getPlotItem().clear()
 
 
 def _plot(title: str, log_y: bool, x_label: str) -> pg.PlotWidget:
@@ -164,6 +177,12 @@ class LossPlots(QWidget):
     def _set_visible(self, name: str, on: bool) -> None:
         self.iter_curves.set_visible(name, on)
         self.history_curves.set_visible(name, on)
+
+    def closeEvent(self, event: QCloseEvent | None) -> None:  # noqa: N802 (Qt's name)
+        """Drop every curve: a closed view holds no plot item (:func:`release`)."""
+        self.iter_curves.items, self.history_curves.items = {}, {}
+        release(self.iteration_plot, self.cost_plot, self.history_plot)
+        super().closeEvent(event)
 
     def clear(self) -> None:
         self.ms_curve.setData([], [])

@@ -64,3 +64,40 @@ def test_a_snapshot_solved_before_a_seek_does_not_move_the_paused_frame_back(stu
         if panel.name == "timeline":
             panel.update(replace(stale, frame=33, playing=True, plays=s.plays))
     assert s.frame == 33
+
+
+def test_a_stopped_solvers_last_snapshot_does_not_replace_the_line_that_says_why(qtbot):
+    """The solver died for good (no restart): its last snapshot, whose error a status panel
+    had not shown yet, is drawn after the death; the status bar keeps the reason."""
+    from PyQt6.QtWidgets import QLabel, QStatusBar
+
+    from app.drawing import DrawScheduler
+    from engine.studio.restarts import RestartPolicy
+    from tests.widgets.conftest import FakeSnapshot
+
+    bar = QStatusBar()
+    qtbot.addWidget(bar)
+    errors: list[str] = []
+    window = SimpleNamespace(
+        plots=SimpleNamespace(update_iterations=None, update_cost=None, update_history=None),
+        latent=SimpleNamespace(update_snapshot=None),
+        method_errors=SimpleNamespace(update_snapshot=None),
+        ghost_status=SimpleNamespace(on_snapshot=lambda snap: None, is_ghost_problem=lambda m: False),
+        statusBar=lambda: bar,
+        session=SimpleNamespace(engine=SimpleNamespace(failure="the engine process stopped unexpectedly")),
+        show_error=lambda title, text: errors.append(title),
+        **{n: QLabel() for n in ("status_engine", "status_gui", "status_warnings")},
+    )
+    d = DrawScheduler(window)
+    d.engine_watch.policy = RestartPolicy(limit=1)  # this death is the one not restarted
+    d.engine_watch.check()
+    assert errors == ["The engine stopped"]
+    snap = FakeSnapshot(error="ik ignores constraints")
+    snap.timing, snap.frames_skipped, snap.pace, snap.recent_errors = {}, 0, "every_frame", ()
+    d._update_status(snap)
+    assert bar.currentMessage().endswith("so it is not restarted again")
+    assert d.engine_watch.stopped
+    window.session.engine = SimpleNamespace(failure="")  # a new engine: its errors show again
+    assert not d.engine_watch.stopped
+    d._update_status(snap)
+    assert bar.currentMessage() == "ik ignores constraints"

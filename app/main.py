@@ -185,9 +185,11 @@ def _run(
             if sensors:
                 window.session.sensors.set_text(sensors)
             if explicit_method and method != window.session.method:
-                window.session.set_method(method)
+                with window.undo.unrecorded():  # the command line's choice: the start, not an edit
+                    window.session.set_method(method)
         if ghosts:  # comparing methods: show their errors rather than the optimizer's losses
-            window.session.set_method(window.session.method, ghosts)
+            with window.undo.unrecorded():
+                window.session.set_method(window.session.method, ghosts)
             window.method_errors_dock.raise_()
     except UserError:
         window.close()

@@ -38,7 +38,7 @@ class PoseConstraints:
             lambda: window.frame,
             lambda: window.scene.animation.frames,
         )
-        window._dock("Constraints", self.panel, Qt.DockWidgetArea.RightDockWidgetArea)
+        self.dock = window._dock("Constraints", self.panel, Qt.DockWidgetArea.RightDockWidgetArea)
 
     def add(self, kind: str, **params: Any) -> None:
         """Add a ``kind`` constraint placed on the current pose (``params`` override)."""

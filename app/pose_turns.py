@@ -19,6 +19,19 @@ from engine import skeleton as sk
 from engine.authoring.turns import SweptTurn, ring_turn
 from engine.kinematics import quat_np as QN
 
+#: How the status bar names a ring while it is dragged (world X, Y, Z).
+RING_NAMES = ("X (red ring)", "Y (green ring)", "Z (blue ring)")
+#: How long a turn's readout stays after the last mouse move, milliseconds.
+READOUT_MS = 4000
+
+
+def turn_readout(joint: str, axis: int, angle_deg: float) -> str:
+    """The status bar's line while ``joint``'s ring about world ``axis`` is dragged by
+    ``angle_deg`` degrees since the press: what a user reads to turn a head 60 degrees.
+    About Z, a positive angle turns a body facing the front view to its left."""
+    side = " (to its left)" if axis == 2 and angle_deg > 0 else " (to its right)" if axis == 2 and angle_deg < 0 else ""
+    return f"Turn {joint} about {RING_NAMES[axis]}: {angle_deg:+.0f} deg{side}"
+
 
 class JointTurns:
     """The turning of joints of the pose window ``w`` (see the module doc)."""
@@ -43,6 +56,8 @@ class JointTurns:
             return
         if self._ring_start is None:
             return
+        shown = "the body" if joint == "root" else joint
+        self.w.statusBar().showMessage(turn_readout(shown, axis, float(np.degrees(angle))), READOUT_MS)
         if joint == "root":
             if axis == 2:
                 self.w.turn_body(self._ring_start[0] + np.degrees(angle))

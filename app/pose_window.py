@@ -108,8 +108,11 @@ class PoseWindow(QMainWindow):
         self.targets.turnHeld.connect(self.turns.hold)
         self.targets.clearRequested.connect(self.clear_target)
         self.targets.clearAllRequested.connect(self.clear_all)
-        self._dock("Targets", self.targets, Qt.DockWidgetArea.RightDockWidgetArea)
+        targets_dock = self._dock("Targets", self.targets, Qt.DockWidgetArea.RightDockWidgetArea)
         self.constraints = PoseConstraints(self)
+        # the right column halved: left to their size hints, the constraints' list took
+        # two thirds of it and the Targets panel scrolled from its second target on
+        self.resizeDocks([targets_dock, self.constraints.dock], [1, 1], Qt.Orientation.Vertical)
         self.keys = KeyStrip()
         self.keys.frameChanged.connect(self.go_to)
         self.keys.addRequested.connect(self.add_key)
@@ -176,7 +179,7 @@ class PoseWindow(QMainWindow):
         return self.session.dirty
 
     # -- layout --------------------------------------------------------------------
-    def _dock(self, title: str, widget: QWidget, area: Qt.DockWidgetArea) -> None:
+    def _dock(self, title: str, widget: QWidget, area: Qt.DockWidgetArea) -> QDockWidget:
         dock = QDockWidget(title, self)
         if area == Qt.DockWidgetArea.RightDockWidgetArea:
             # a side panel scrolls instead of widening: rows and long joint names that
@@ -191,6 +194,7 @@ class PoseWindow(QMainWindow):
         dock.setWidget(widget)
         dock.setFeatures(QDockWidget.DockWidgetFeature.NoDockWidgetFeatures)
         self.addDockWidget(area, dock)
+        return dock
 
     def _guard(self, title: str, action: Callable[[], Any], warn: bool = False) -> None:
         """Run ``action()``; a UserError becomes a message box titled ``title``, unless the

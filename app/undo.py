@@ -8,6 +8,9 @@ explicitly, before and after the edit: small tuples and dicts of immutable objec
 session replaces a constraint object on every edit, never changes it in place), so
 undoing is one session call (``set_sensors`` / ``set_constraints`` /
 ``replace_settings``) that fires its event and reaches the engine like any other edit.
+A switch of the reconstruction method or of its ghosts is a step too (``set_method``):
+the sensors, constraints and settings are the session's, not the method's, so undoing
+the switch brings the previous method back on the scene as it is.
 
 A drag sends an edit per mouse move; consecutive edits of the same thing (one tracker's
 offset, one constraint's fields) within :data:`engine.authoring.history.MERGE_S` merge
@@ -59,17 +62,20 @@ class SceneUndo(QObject):
         self._sensors = (tuple(session.sensors.values()), session.preset)
         self._constraints = tuple(session.constraints)
         self._settings = dict(session.settings)
+        self._method = (session.method, tuple(session.ghosts))
         self._applying = False
         self._same_clip = False
         session.events.sensors.connect(self._on_sensors)
         session.events.constraints.connect(self._on_constraints)
         session.events.settings.connect(self._on_settings)
+        session.events.method.connect(self._on_method)
         session.events.motion.connect(self._on_motion)
 
     def close(self) -> None:
         self.session.events.sensors.disconnect(self._on_sensors)
         self.session.events.constraints.disconnect(self._on_constraints)
         self.session.events.settings.disconnect(self._on_settings)
+        self.session.events.method.disconnect(self._on_method)
         self.session.events.motion.disconnect(self._on_motion)
 
     @contextlib.contextmanager
@@ -163,7 +169,27 @@ class SceneUndo(QObject):
         key = ("setting", names, "value") if len(names) == 1 else None  # a spin box's steps merge
         self.record(text, self._apply_settings, before, after, key)
 
+    def _on_method(self, e: Any) -> None:
+        before, after = self._method, (e.method, tuple(e.ghosts))
+        self._method = after
+        if self._applying or before == after:
+            return
+        if before[0] != after[0]:
+            text = f"Method {after[0]}"
+        else:
+            text = f"Ghosts {', '.join(after[1])}" if after[1] else "No ghosts"
+        self.record(text, self._apply_method, before, after)
+
     # -- applying ---------------------------------------------------------------------
+    def _apply_method(self, state: tuple) -> None:
+        if (self.session.method, tuple(self.session.ghosts)) == state:
+            return  # the engine refused the switch: it runs this method already
+        self._applying = True
+        try:
+            self.session.set_method(state[0], state[1])
+        finally:
+            self._applying = False
+
     def _apply_settings(self, state: dict) -> None:
         self._applying = True
         try:

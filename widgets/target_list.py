@@ -47,14 +47,18 @@ class TargetList(QWidget):
             "The hips move the whole body (dragged down: a squat); their ring turns it."
         )
         self.hint.setWordWrap(True)
+        # the hint shows while there is no target; then its lines go to the rows (it
+        # stays the panel's tooltip), and Clear all sits above the rows: the three
+        # targets of a T-pose with a turned head fit the panel without scrolling
+        self.setToolTip(self.hint.text())
         outer.addWidget(self.hint)
+        self.clear_all = QPushButton("Clear all")
+        self.clear_all.clicked.connect(self.clearAllRequested.emit)
+        outer.addWidget(self.clear_all)
         self.grid_host = QWidget()
         self.grid = QGridLayout(self.grid_host)
         self.grid.setColumnStretch(4, 1)  # spare width goes right of the controls
         outer.addWidget(self.grid_host)
-        self.clear_all = QPushButton("Clear all")
-        self.clear_all.clicked.connect(self.clearAllRequested.emit)
-        outer.addWidget(self.clear_all)
         outer.addStretch(1)
         self.rows: dict[str, dict[str, QWidget]] = {}
 
@@ -73,6 +77,7 @@ class TargetList(QWidget):
             for w in (row["enabled"], row["weight"], row["turn"]):
                 w.blockSignals(False)
         self.clear_all.setEnabled(bool(targets))
+        self.hint.setVisible(not targets)
 
     def _rebuild(self, joints: tuple[str, ...]) -> None:
         for row in self.rows.values():

@@ -402,8 +402,4 @@ class MainWindow(QMainWindow):
         # with the window must not stay in a Python dict of theirs (docs/reliability.md)
         for view in (self.plots, self.latent, self.method_errors):
             view.close()
-        # what __init__ froze, this window included, goes back to the collector: a frozen
-        # object is never collected, so a closed window (its widgets' wrappers, its curves)
-        # would stay in memory for the rest of the process
-        gc.unfreeze()
         super().closeEvent(event)

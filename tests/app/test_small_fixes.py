@@ -134,6 +134,7 @@ def test_a_new_clip_shows_at_once_while_the_method_loads(studio, qtbot, tmp_path
     studio.engine._factory = lambda name: SlowToLoad() if name == "slow" else inner(name)
     studio.session.set_method("slow")
     qtbot.waitUntil(lambda: studio.session.latest.method == "slow", timeout=10000)
+    studio.undo.set_clean()  # the switch is a scene edit (a scene stores its method): saved, no prompt
     far = dataclasses.replace(synthetic_motion, root_pos=synthetic_motion.root_pos + [6.0, 0.0, 0.0])
     clip = tmp_path / "far.bvh"
     save_motion_bvh(clip, far.slice(0, 30))

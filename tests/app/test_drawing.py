@@ -3,25 +3,34 @@
 from __future__ import annotations
 
 from types import SimpleNamespace
+from typing import Any
+
+
+def status_window(bar: Any, **extra: Any) -> SimpleNamespace:
+    """A stand-in for the studio window with the parts the draw scheduler's status update
+    reads: the status bar ``bar``, three status labels and plot views that take nothing."""
+    from PyQt6.QtWidgets import QLabel
+
+    return SimpleNamespace(
+        plots=SimpleNamespace(update_iterations=None, update_cost=None, update_history=None),
+        latent=SimpleNamespace(update_snapshot=None),
+        method_errors=SimpleNamespace(update_snapshot=None),
+        ghost_status=SimpleNamespace(on_snapshot=lambda snap: None, is_ghost_problem=lambda m: False),
+        statusBar=lambda: bar,
+        **{n: QLabel() for n in ("status_engine", "status_gui", "status_warnings")},
+        **extra,
+    )
 
 
 def test_status_shows_the_solver_breakdown_and_leaves_unchanged_labels_alone(qtbot):
-    from PyQt6.QtWidgets import QLabel, QStatusBar
+    from PyQt6.QtWidgets import QStatusBar
 
     from app.drawing import DrawScheduler
     from tests.widgets.conftest import FakeSnapshot
 
     bar = QStatusBar()
     qtbot.addWidget(bar)
-    labels = {n: QLabel() for n in ("status_engine", "status_gui", "status_warnings")}
-    window = SimpleNamespace(
-        plots=SimpleNamespace(update_iterations=None, update_cost=None, update_history=None),
-        latent=SimpleNamespace(update_snapshot=None),
-        method_errors=SimpleNamespace(update_snapshot=None),
-        ghost_status=SimpleNamespace(on_snapshot=lambda snap: None, is_ghost_problem=lambda m: False),
-        statusBar=lambda: bar,
-        **labels,
-    )
+    window = status_window(bar)
     d = DrawScheduler(window)
     snap = FakeSnapshot()
     snap.timing = {
@@ -34,13 +43,13 @@ def test_status_shows_the_solver_breakdown_and_leaves_unchanged_labels_alone(qtb
     }
     snap.frames_skipped, snap.pace, snap.recent_errors = 0, "every_frame", ("ik ignores constraints",)
     d._update_status(snap)
-    text, tip = labels["status_engine"].text(), labels["status_engine"].toolTip()
+    text, tip = window.status_engine.text(), window.status_engine.toolTip()
     assert "1.20 ms/it" in text and "decoder" not in text  # short enough for the bar
     assert "decoder 0.30 ms" in tip and "fk+loss 0.60 ms" in tip  # the breakdown is in the tooltip
     assert "skipped" not in text  # counted in real-time mode only
-    assert labels["status_warnings"].toolTip() == "ik ignores constraints"
+    assert window.status_warnings.toolTip() == "ik ignores constraints"
     changed = []
-    labels["status_engine"].setText = lambda t: changed.append(t)  # type: ignore[method-assign]
+    window.status_engine.setText = lambda t: changed.append(t)  # type: ignore[method-assign]
     d._update_status(snap)
     assert changed == [], "an unchanged label must not be set again"
 
@@ -69,7 +78,7 @@ def test_a_snapshot_solved_before_a_seek_does_not_move_the_paused_frame_back(stu
 def test_a_stopped_solvers_last_snapshot_does_not_replace_the_line_that_says_why(qtbot):
     """The solver died for good (no restart): its last snapshot, whose error a status panel
     had not shown yet, is drawn after the death; the status bar keeps the reason."""
-    from PyQt6.QtWidgets import QLabel, QStatusBar
+    from PyQt6.QtWidgets import QStatusBar
 
     from app.drawing import DrawScheduler
     from engine.studio.restarts import RestartPolicy
@@ -78,15 +87,10 @@ def test_a_stopped_solvers_last_snapshot_does_not_replace_the_line_that_says_why
     bar = QStatusBar()
     qtbot.addWidget(bar)
     errors: list[str] = []
-    window = SimpleNamespace(
-        plots=SimpleNamespace(update_iterations=None, update_cost=None, update_history=None),
-        latent=SimpleNamespace(update_snapshot=None),
-        method_errors=SimpleNamespace(update_snapshot=None),
-        ghost_status=SimpleNamespace(on_snapshot=lambda snap: None, is_ghost_problem=lambda m: False),
-        statusBar=lambda: bar,
+    window = status_window(
+        bar,
         session=SimpleNamespace(engine=SimpleNamespace(failure="the engine process stopped unexpectedly")),
         show_error=lambda title, text: errors.append(title),
-        **{n: QLabel() for n in ("status_engine", "status_gui", "status_warnings")},
     )
     d = DrawScheduler(window)
     d.engine_watch.policy = RestartPolicy(limit=1)  # this death is the one not restarted

@@ -398,7 +398,7 @@ class MainWindow(QMainWindow):
         self.session.shutdown()
         self.files.shutdown()
         self.viewport.close()
-        # the plot views drop their items now, while their plots exist: an item Qt deletes
+        # the plot views drop their items here, while their plots exist: an item Qt deletes
         # with the window must not stay in a Python dict of theirs (docs/reliability.md)
         for view in (self.plots, self.latent, self.method_errors):
             view.close()

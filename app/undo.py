@@ -184,32 +184,20 @@ class SceneUndo(QObject):
     def _apply_method(self, state: tuple) -> None:
         if (self.session.method, tuple(self.session.ghosts)) == state:
             return  # the engine refused the switch: it runs this method already
-        self._applying = True
-        try:
+        with self.unrecorded():
             self.session.set_method(state[0], state[1])
-        finally:
-            self._applying = False
 
     def _apply_settings(self, state: dict) -> None:
-        self._applying = True
-        try:
+        with self.unrecorded():
             self.session.replace_settings(state)
-        finally:
-            self._applying = False
 
     def _apply_sensors(self, state: tuple) -> None:
-        self._applying = True
-        try:
+        with self.unrecorded():
             self.session.set_sensors(state[0], state[1])
-        finally:
-            self._applying = False
 
     def _apply_constraints(self, state: tuple) -> None:
-        self._applying = True
-        try:
+        with self.unrecorded():
             self.session.set_constraints(list(state))
-        finally:
-            self._applying = False
 
 
 def undo_actions(parent: Any, undo: SceneUndo) -> tuple[QAction, QAction]:

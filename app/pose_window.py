@@ -110,8 +110,8 @@ class PoseWindow(QMainWindow):
         self.targets.clearAllRequested.connect(self.clear_all)
         targets_dock = self._dock("Targets", self.targets, Qt.DockWidgetArea.RightDockWidgetArea)
         self.constraints = PoseConstraints(self)
-        # the right column halved: left to their size hints, the constraints' list took
-        # two thirds of it and the Targets panel scrolled from its second target on
+        # the right column shared equally: left to their size hints, the constraints' list
+        # takes two thirds of it and the Targets panel scrolls from its second target on
         self.resizeDocks([targets_dock, self.constraints.dock], [1, 1], Qt.Orientation.Vertical)
         self.keys = KeyStrip()
         self.keys.frameChanged.connect(self.go_to)

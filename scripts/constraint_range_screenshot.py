@@ -48,6 +48,6 @@ seq = s.latest.seq
 settle(app, lambda: w.timeline.slider.span() == (100, 160, 10, 10) and s.latest.seq > seq + 1, 180)
 settle(app, lambda: False, 3.0)  # the plots and their legend update a few times a second
 ok = w.files.export_screenshot(sys.argv[1] if len(sys.argv) > 1 else "constraint_range.png")
-w.undo.stack.setClean()
+w.undo.set_clean()
 w.close()
 sys.exit(0 if ok else 1)

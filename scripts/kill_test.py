@@ -78,7 +78,7 @@ class Author:
     def state(self) -> tuple[str, str]:
         from engine.authoring.recovery import document
 
-        studio = CLEAN if self.w.undo.stack.isClean() else digest(self.w.session.to_scene())
+        studio = CLEAN if self.w.undo.is_clean() else digest(self.w.session.to_scene())
         pose = digest(document(self.pose.session)) if self.pose.session.dirty else CLEAN
         return studio, pose
 
@@ -255,7 +255,7 @@ def session_main(a: argparse.Namespace) -> int:
     # as `gui` starts: the clip, its start is not an edit, the autosave, then the offer
     if not w.files.open_path(a.clip, ask=False):
         raise SystemExit(f"cannot open {a.clip}")
-    w.undo.stack.setClean()
+    w.undo.set_clean()
     w.resize(1400, 900)
     w.show()
     files = start_autosave(w, state)

@@ -108,7 +108,7 @@ def main() -> int:
         app.processEvents()
         time.sleep(0.02)
     w.files.export_screenshot(str(args.out / "latent-map-forces.png"))
-    w.undo.stack.setClean()
+    w.undo.set_clean()
     w.close()
     return 0
 

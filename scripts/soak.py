@@ -123,7 +123,7 @@ def studio(a: argparse.Namespace) -> int:
     )
     if not w.files.open_path(str(a.clip), ask=False):
         raise SystemExit(f"cannot open {a.clip}")
-    w.undo.stack.setClean()
+    w.undo.set_clean()
     w.resize(1600, 1000)
     w.show()
     s = w.session
@@ -172,7 +172,7 @@ def studio(a: argparse.Namespace) -> int:
             "solved_per_s": round((solved() - (0 if restarted else mark["solved"])) / dt, 2),
             "event_loop_ms": percentiles(late),
             "python_objects": len(gc.get_objects()),
-            "undo_steps": w.undo.stack.count(),
+            "undo_steps": w.undo.history.count(),
             "playing": bool(s.playing),
             "engine_restarted": restarted,
         }

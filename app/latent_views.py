@@ -102,6 +102,15 @@ class LatentViews:
             Panel("latent detail", self._update_detail, 0.5),
         ]
 
+    def close(self) -> None:
+        """Close the dock's views while their plots exist (the window's close calls this):
+        each takes its items out of its plots (:func:`widgets.plots.release`)."""
+        self._redraw_timer.stop()
+        self._hover_timer.stop()
+        for view in (self.readouts, self.map, self.forces, self.gallery):
+            if view is not None:
+                view.close()
+
     def build(self) -> None:
         """The dock's tabs (Map with the readouts under it, Forces, Gallery), once."""
         if self.tabs is not None:

@@ -402,4 +402,5 @@ class MainWindow(QMainWindow):
         # with the window must not stay in a Python dict of theirs (docs/reliability.md)
         for view in (self.plots, self.latent, self.method_errors):
             view.close()
+        self.latent_views.close()
         super().closeEvent(event)

@@ -26,6 +26,12 @@ while [[ $# -gt 0 ]]; do
     esac
 done
 REPO=$(realpath "$(dirname "$0")/..")
+if [[ -n "$VENV_DIR" ]]; then
+    # A clone's bootstrap reinstalls the project when its pyproject.toml differs from the
+    # one the shared environment was installed from, pointing that environment at the
+    # clone in /tmp; point it back at this checkout however the runs end.
+    trap '"$VENV_DIR/bin/python" -m pip install -q --no-deps -e "$REPO" >/dev/null' EXIT
+fi
 passed=0
 for run in $(seq 1 "$RUNS"); do
     dir=$(mktemp -d /tmp/fresh-clone-XXXXXX)

@@ -16,11 +16,12 @@ from typing import Any
 import numpy as np
 import pyqtgraph as pg
 from PyQt6.QtCore import pyqtSignal
+from PyQt6.QtGui import QCloseEvent
 from PyQt6.QtWidgets import QComboBox, QGridLayout, QLabel, QPushButton, QSpinBox, QVBoxLayout, QWidget
 
 from engine import skeleton as sk
 from widgets import style
-from widgets.plots import settle
+from widgets.plots import release, settle
 
 INFLUENCE = "influence on the joint"
 
@@ -86,6 +87,11 @@ class LatentForces(QWidget):
         layout.addWidget(self.norm_plot, 1)
         layout.addWidget(self.dim_plot, 1)
         self.detail: Any = None
+
+    def closeEvent(self, event: QCloseEvent | None) -> None:  # noqa: N802 (Qt's name)
+        """A closed view holds no plot item (:func:`widgets.plots.release`)."""
+        release(self.norm_plot, self.dim_plot)
+        super().closeEvent(event)
 
     def colour(self, name: str) -> str:
         """A term's colour, as the loss plots give it (assigned here first if new)."""

@@ -15,11 +15,11 @@ from typing import Any
 import numpy as np
 import pyqtgraph as pg
 from PyQt6.QtCore import Qt
-from PyQt6.QtGui import QFont
+from PyQt6.QtGui import QCloseEvent, QFont
 from PyQt6.QtWidgets import QLabel, QVBoxLayout, QWidget
 
-import widgets.plots  # noqa: F401 (applies the shared pyqtgraph look)
 from engine import skeleton as sk
+from widgets.plots import release
 
 COLUMNS = 6
 #: Cell size in metres (a body is ~1.8 m tall).
@@ -89,6 +89,12 @@ class LatentGallery(QWidget):
         layout.addWidget(self.plot, 1)
         self.detail: Any = None
         self.influential: list[int] = []
+
+    def closeEvent(self, event: QCloseEvent | None) -> None:  # noqa: N802 (Qt's name)
+        """A closed view holds no plot item (:func:`widgets.plots.release`)."""
+        self.labels = []
+        release(self.plot)
+        super().closeEvent(event)
 
     def set_detail(self, detail: Any) -> None:
         """Draw a :class:`~engine.studio.latent_views.LatentDetail` (None clears)."""

@@ -21,11 +21,12 @@ from typing import Any
 import numpy as np
 import pyqtgraph as pg
 from PyQt6.QtCore import QPointF, QRectF, Qt, pyqtSignal
+from PyQt6.QtGui import QCloseEvent
 from PyQt6.QtWidgets import QCheckBox, QLabel, QVBoxLayout, QWidget
 
-import widgets.plots  # noqa: F401 (applies the shared pyqtgraph look)
 from engine.latent.solved_frames import SolvedFrames
 from widgets.latent_readouts import consecutive
+from widgets.plots import release
 
 #: A trajectory point within this many pixels of the mouse is the one pointed at.
 PICK_PX = 8.0
@@ -106,6 +107,12 @@ class LatentMapPlot(QWidget):
         scene.sigMouseClicked.connect(self._clicked)
 
     # -- data ---------------------------------------------------------------------------
+    def closeEvent(self, event: QCloseEvent | None) -> None:  # noqa: N802 (Qt's name)
+        """A closed view holds no plot item (:func:`widgets.plots.release`)."""
+        self.force_lines = []
+        release(self.plot)
+        super().closeEvent(event)
+
     def set_map(self, density: np.ndarray, extent: np.ndarray, explained: np.ndarray) -> None:
         """The training density ``(G, G)`` (rows y, columns x) over ``extent`` (x0, x1, y0,
         y1) and the axes' explained variance fractions ``(2,)``."""

@@ -21,10 +21,11 @@ from typing import Any
 import numpy as np
 import pyqtgraph as pg
 from PyQt6.QtCore import Qt, pyqtSignal
+from PyQt6.QtGui import QCloseEvent
 from PyQt6.QtWidgets import QHBoxLayout, QLabel, QPushButton, QVBoxLayout, QWidget
 
 from engine.latent.solved_frames import SolvedFrames
-from widgets.plots import fit_frames, settle
+from widgets.plots import fit_frames, release, settle
 
 #: Readouts drawn, with their colours and legend names.
 CURVES = (
@@ -101,6 +102,11 @@ class LatentReadouts(QWidget):
         self._flagged: list[int] = []
         self._version = -1  # the store's version whose flags were announced
         self._drawn = (-1, -1)  # (snapshot seq, store version) drawn
+
+    def closeEvent(self, event: QCloseEvent | None) -> None:  # noqa: N802 (Qt's name)
+        """A closed view holds no plot item (:func:`widgets.plots.release`)."""
+        release(self.plot)
+        super().closeEvent(event)
 
     def mark_stale(self) -> None:
         """Draw the next snapshot even if it is the one drawn last (a view brought back

@@ -11,7 +11,11 @@ from PyQt6 import sip
 from PyQt6.QtCore import QObject
 
 from tests.widgets.conftest import FakeRecord, shown
+from widgets.latent_forces import LatentForces
+from widgets.latent_gallery import LatentGallery
 from widgets.latent_inspector import LatentInspector
+from widgets.latent_map import LatentMapPlot
+from widgets.latent_readouts import LatentReadouts
 from widgets.method_errors import MethodErrorPlot
 from widgets.plots import LossPlots
 
@@ -40,3 +44,14 @@ def test_closing_a_plot_view_takes_every_item_out_of_its_plots(qtbot, fake_snaps
     held += [vars(v).get("items") for v in held if not isinstance(v, QObject) and hasattr(v, "__dict__")]
     curves = [c for d in held if isinstance(d, dict) for c in d.values() if isinstance(c, pg.PlotDataItem)]
     assert not curves, "a curve dict survived the close"
+
+
+@pytest.mark.parametrize("make", [LatentMapPlot, LatentReadouts, LatentForces, LatentGallery], ids=lambda c: c.__name__)
+def test_closing_a_latent_map_view_takes_every_item_out_of_its_plots(qtbot, make):
+    view = shown(qtbot, make(), 640, 300)
+    items = [item for plot in _plots(view) for item in plot.getPlotItem().items]
+    assert items, "the view has no plot item to release"
+    view.close()
+    view.close()
+    assert all(plot.getPlotItem().items == [] for plot in _plots(view))
+    assert not any(sip.isdeleted(item) or item.scene() is not None for item in items)

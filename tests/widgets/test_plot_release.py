@@ -28,17 +28,23 @@ def _plots(view) -> list[pg.PlotWidget]:
     return [w for w in vars(view).values() if isinstance(w, pg.PlotWidget)]
 
 
+def _close_and_check_released(view) -> None:
+    """Close ``view`` twice (as a window's close and the test's teardown may): its plots
+    are empty and none of the items they held was deleted or left in a scene."""
+    items = [item for plot in _plots(view) for item in plot.getPlotItem().items]
+    assert items, "the view has no plot item to release"
+    view.close()
+    view.close()
+    assert all(plot.getPlotItem().items == [] for plot in _plots(view))
+    assert not any(sip.isdeleted(item) or item.scene() is not None for item in items)
+
+
 @pytest.mark.parametrize("make", [LossPlots, LatentInspector, MethodErrorPlot], ids=lambda c: c.__name__)
 def test_closing_a_plot_view_takes_every_item_out_of_its_plots(qtbot, fake_snapshot, make):
     view = shown(qtbot, make(), 640, 300)
     history = _records(5)
     view.update_snapshot(fake_snapshot(seq=2, frame=4, latent=history[-1].latent, history=history))
-    items = [item for plot in _plots(view) for item in plot.getPlotItem().items]
-    assert items, "the view drew nothing"
-    view.close()
-    view.close()  # twice, as a window's close and the test's teardown may
-    assert all(plot.getPlotItem().items == [] for plot in _plots(view))
-    assert not any(sip.isdeleted(item) or item.scene() is not None for item in items)
+    _close_and_check_released(view)
     # the view's own dicts and those of its plain helpers (the term -> curve dicts)
     held = list(vars(view).values())
     held += [vars(v).get("items") for v in held if not isinstance(v, QObject) and hasattr(v, "__dict__")]
@@ -48,10 +54,4 @@ def test_closing_a_plot_view_takes_every_item_out_of_its_plots(qtbot, fake_snaps
 
 @pytest.mark.parametrize("make", [LatentMapPlot, LatentReadouts, LatentForces, LatentGallery], ids=lambda c: c.__name__)
 def test_closing_a_latent_map_view_takes_every_item_out_of_its_plots(qtbot, make):
-    view = shown(qtbot, make(), 640, 300)
-    items = [item for plot in _plots(view) for item in plot.getPlotItem().items]
-    assert items, "the view has no plot item to release"
-    view.close()
-    view.close()
-    assert all(plot.getPlotItem().items == [] for plot in _plots(view))
-    assert not any(sip.isdeleted(item) or item.scene() is not None for item in items)
+    _close_and_check_released(shown(qtbot, make(), 640, 300))

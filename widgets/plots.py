@@ -30,14 +30,20 @@ MS_COLOUR, ITERATIONS_COLOUR = "#ff8a1f", "#4da3ff"
 AXIS_LABELS = ("0.0000", "5·10⁻¹²")
 
 
-def _loggable(value: float) -> float:
-    """``value``, or NaN (a gap) when a log axis cannot show it.
+#: Losses at or below this are a zero with float rounding (a squared error of a
+#: micrometre): the hip sensor's position while the hip tracker sets the root comes out
+#: of forward kinematics at about 1e-16, not exactly 0.
+LOSS_FLOOR = 1e-12
 
-    A term that is exactly zero (the hip sensor's position while the hip tracker sets
-    the root) drawn at a tiny floor instead would stretch the axis over ten decades and
-    squash every other curve into one line.
+
+def _loggable(value: float, floor: float = 0.0) -> float:
+    """``value``, or NaN (a gap) when it is not above ``floor`` (a log axis cannot show 0).
+
+    A term that is zero (the hip sensor's position while the hip tracker sets the root)
+    drawn at its rounding error or a tiny floor instead would stretch the axis over ten
+    decades and squash every other curve into one line.
     """
-    return value if value > 0 else np.nan
+    return value if value > floor else np.nan
 
 
 def _set_curve(item: pg.PlotDataItem, x: np.ndarray, y: np.ndarray) -> None:
@@ -227,7 +233,7 @@ class LossPlots(QWidget):
         if losses:
             its = np.arange(1, len(losses) + 1)
             for name in names:
-                vals = np.array([_loggable(float(d.get(name, np.nan))) for d in losses])
+                vals = np.array([_loggable(float(d.get(name, np.nan)), LOSS_FLOOR) for d in losses])
                 _set_curve(self.iter_curves.get(name, symbols=True), its, vals)
             settle(self.iteration_plot)
 
@@ -246,7 +252,7 @@ class LossPlots(QWidget):
         history = snap.history
         x = np.array([r.frame for r in history], float)
         for name in names:
-            y = np.array([_loggable(float(r.losses.get(name, np.nan))) for r in history])
+            y = np.array([_loggable(float(r.losses.get(name, np.nan)), LOSS_FLOOR) for r in history])
             _set_curve(self.history_curves.get(name), x, y)
         fit_frames(self.history_plot, x)
         settle(self.history_plot)

@@ -203,11 +203,14 @@ def test_unticking_a_legend_term_hides_it_in_every_plot_and_a_restart_keeps_it_h
     assert p.legend.findItems("pos:root", Qt.MatchFlag.MatchExactly)[0].checkState() == Qt.CheckState.Unchecked
 
 
-def test_a_zero_loss_term_leaves_a_gap_instead_of_stretching_the_log_axis(qtbot, fake_snapshot):
+@pytest.mark.parametrize("zero", [0.0, 3e-16])
+def test_a_zero_loss_term_leaves_a_gap_instead_of_stretching_the_log_axis(qtbot, fake_snapshot, zero):
+    """Exactly 0, and the float rounding of 0 that the hip sensor's term has while the hip
+    tracker sets the root (drawn, it pulled the log axis down to 1e-16)."""
     p = LossPlots()
     qtbot.addWidget(p)
     p.show()
-    losses = ({"total": 1.0, "pos:root": 0.0}, {"total": 0.1, "pos:root": 0.0})
+    losses = ({"total": 1.0, "pos:root": zero}, {"total": 0.1, "pos:root": zero})
     p.update_snapshot(fake_snapshot(losses=losses))
     p.grab()  # painting all-NaN curves on log axes must not warn (warnings are errors here)
 

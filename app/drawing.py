@@ -120,7 +120,8 @@ class DrawScheduler:
             s.note_frame(snap.frame)
             s.note_stopped()  # reached the end without looping
         if snap.method_error and snap.seq != self._drawn_seq:  # the engine kept its method
-            with self.w.undo.unrecorded():  # the switch's step stays: undoing it is a no-op
+            self.w.undo.refused(snap.opened)  # the switch changed nothing: no undo step
+            with self.w.undo.unrecorded():
                 s.note_method(snap.method)
             self.w.show_error("Cannot switch method", snap.method_error)
 

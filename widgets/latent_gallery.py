@@ -43,6 +43,12 @@ def legend_html() -> str:
     )
 
 
+#: What the gallery says while it has nothing to draw.
+EMPTY_HINT = (
+    "Empty until <b>Inspect this frame</b> (Forces tab): the dimensions are drawn for the frame "
+    "inspected, until the next solve (an edit, another frame)."
+)
+
 _BONES = [(j, p) for j, p in enumerate(sk.PARENTS) if p >= 0]
 
 
@@ -85,7 +91,11 @@ class LatentGallery(QWidget):
         self.legend = QLabel(legend_html())
         self.legend.setTextFormat(Qt.TextFormat.RichText)
         self.legend.setWordWrap(True)
+        # without an inspection the cells are empty: a black plot would look broken
+        self.hint = QLabel(EMPTY_HINT)
+        self.hint.setWordWrap(True)
         layout.addWidget(self.legend)
+        layout.addWidget(self.hint)
         layout.addWidget(self.plot, 1)
         self.detail: Any = None
         self.influential: list[int] = []
@@ -101,6 +111,7 @@ class LatentGallery(QWidget):
         if detail is self.detail:
             return
         self.detail = detail
+        self.hint.setVisible(detail is None)
         for t in self.labels:
             self.plot.removeItem(t)
         self.labels = []

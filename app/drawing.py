@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from PyQt6.QtCore import QTimer
 
 from app.engine_watch import EngineWatch
 from app.shell import StudioShell
@@ -123,7 +124,9 @@ class DrawScheduler:
             self.w.undo.refused(snap.opened)  # the switch changed nothing: no undo step
             with self.w.undo.unrecorded():
                 s.note_method(snap.method)
-            self.w.show_error("Cannot switch method", snap.method_error)
+            # after this tick: a modal box opened inside it would stop the drawing behind it
+            error = snap.method_error
+            QTimer.singleShot(0, lambda: self.w.show_error("Cannot switch method", error))
 
     def _update_one_panel(self, snap: Any, now: float, spent_ms: float) -> None:
         """Update the most overdue panel that has a newer snapshot than it showed.

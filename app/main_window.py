@@ -268,7 +268,7 @@ class MainWindow(QMainWindow):
         return -1 if snap is None else snap.seq
 
     def _announce_method(self, event: ev.MethodChanged) -> None:
-        if event.method != event.old_method:
+        if event.method != event.old_method and not event.refused:  # a refusal switches nothing
             self.busy.begin(event.method, self._seq(), "Switching to")
 
     def _announce_motion(self, event: ev.MotionChanged) -> None:

@@ -4,6 +4,8 @@ Ctrl+Shift+Z switches again; ghosts likewise."""
 
 from __future__ import annotations
 
+import traceback
+
 import numpy as np
 import pytest
 from PyQt6.QtCore import Qt
@@ -58,12 +60,24 @@ def _refused_switch(studio, qtbot, monkeypatch, method: str) -> list[tuple]:
     from PyQt6.QtWidgets import QMessageBox
 
     said: list[tuple] = []
-    monkeypatch.setattr(QMessageBox, "critical", lambda *a, **k: said.append(a[1:3]))
+
+    def critical(*a, **k):
+        # a modal box opened inside the drawing tick would stop the drawing behind it
+        inside = [f.name for f in traceback.extract_stack() if f.name == "tick" and f.filename.endswith("drawing.py")]
+        said.append((*a[1:3], inside))
+
+    monkeypatch.setattr(QMessageBox, "critical", critical)
+    notices: list[tuple] = []
+    begin = studio.busy.begin
+    monkeypatch.setattr(studio.busy, "begin", lambda m, seq, what="": (notices.append((m, what)), begin(m, seq, what)))
     s, panel = studio.session, studio.optimizer_panel
     studio.undo.set_clean()
     assert s.method == "ik" and panel.method.currentText() == "ik"
     panel.method.setCurrentIndex(panel.method.findText(method))  # the user's choice in the combo box
     qtbot.waitUntil(lambda: bool(said), timeout=30000)
+    assert said[0][2] == [], "the error box is opened after the drawing tick"
+    assert notices == [(method, "Switching to")], "the refusal announces no switch back"
+    assert not studio.busy.active and "Switching" not in studio.statusBar().currentMessage()
     return said
 
 

@@ -24,6 +24,9 @@ from widgets.plots import release
 COLUMNS = 6
 #: Cell size in metres (a body is ~1.8 m tall).
 CELL_W, CELL_H = 1.6, 2.4
+#: Height kept under the top of a cell's label for its two lines, metres (the view's range
+#: is set with it: pyqtgraph fits the range to the lines only, and cut the last row's names).
+LABEL_ROOM = 1.0
 OFFSET_COLOURS = ("#4da3ff", "#8a93a6", "#ff8a1f")
 INFLUENCE_COLOUR = "#ffd60a"
 MARK_COLOUR = "#ff3b30"
@@ -144,3 +147,10 @@ class LatentGallery(QWidget):
             self.lines[k].setData(pts[:, 0], pts[:, 1], connect="pairs")
         m = np.concatenate(marks)
         self.marks.setData(m[:, 0], m[:, 1])
+        lowest_label = min(t.pos().y() for t in self.labels)
+        everything = np.concatenate([np.concatenate(segs[k]) for k in range(3)])
+        self.plot.setRange(
+            xRange=(float(everything[:, 0].min()), float(everything[:, 0].max())),
+            yRange=(lowest_label - LABEL_ROOM, float(everything[:, 1].max())),
+            padding=0.02,
+        )

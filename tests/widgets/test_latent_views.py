@@ -361,6 +361,19 @@ def test_the_gallery_explains_its_colours(qtbot):
     assert "-2 sigma" in text and "+2 sigma" in text
 
 
+@pytest.mark.parametrize("size", [(500, 400), (900, 700)])
+def test_every_cell_label_of_the_gallery_is_inside_its_view(qtbot, size):
+    w = shown(qtbot, LatentGallery(), *size)
+    w.set_detail(_detail())
+    for _ in range(3):
+        QApplication.processEvents()
+    view = w.plot.getPlotItem().getViewBox().sceneBoundingRect()
+    cut = [t.textItem.toPlainText().split()[0] for t in w.labels if not view.contains(t.sceneBoundingRect())]
+    assert not cut, f"labels cut off at the view's edge: {cut}"
+    top = max(float(np.nanmax(line.getData()[1])) for line in w.lines)
+    assert w.plot.getPlotItem().getViewBox().viewRange()[1][1] >= top, "the top row's heads are in the view"
+
+
 def test_the_empty_gallery_says_how_to_fill_it_and_the_hint_goes_while_it_draws(qtbot):
     w = shown(qtbot, LatentGallery(), 500, 400)
     hint = [

@@ -122,6 +122,7 @@ class DrawScheduler:
             s.note_stopped()  # reached the end without looping
         if snap.method_error and snap.seq != self._drawn_seq:  # the engine kept its method
             self.w.undo.refused(snap.opened)  # the switch changed nothing: no undo step
+            self.w.busy.end()  # nothing loads
             with self.w.undo.unrecorded():
                 s.note_method(snap.method)
             # after this tick: a modal box opened inside it would stop the drawing behind it

@@ -47,7 +47,13 @@ class BusyNotice:
         if self.method is None or snap is None or snap.seq <= self.after_seq:
             return
         if snap.method == self.method or getattr(snap, "method_error", ""):
-            self.method = None
-            self.viewport.set_notice("")
-            if self.status.currentMessage() == self.text.replace("\n", " "):
-                self.status.clearMessage()
+            self.end()
+
+    def end(self) -> None:
+        """Take the notice down: what it waited for came, or will never come (the engine
+        refused the method, maybe in a snapshot published before :meth:`begin` read its
+        ``after_seq``)."""
+        self.method = None
+        self.viewport.set_notice("")
+        if self.status.currentMessage() == self.text.replace("\n", " "):
+            self.status.clearMessage()

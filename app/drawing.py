@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from PyQt6.QtCore import QTimer
 
 from app.engine_watch import EngineWatch
 from app.shell import StudioShell
@@ -120,9 +121,13 @@ class DrawScheduler:
             s.note_frame(snap.frame)
             s.note_stopped()  # reached the end without looping
         if snap.method_error and snap.seq != self._drawn_seq:  # the engine kept its method
-            with self.w.undo.unrecorded():  # the switch's step stays: undoing it is a no-op
+            self.w.undo.refused(snap.opened)  # the switch changed nothing: no undo step
+            self.w.busy.end()  # nothing loads
+            with self.w.undo.unrecorded():
                 s.note_method(snap.method)
-            self.w.show_error("Cannot switch method", snap.method_error)
+            # after this tick: a modal box opened inside it would stop the drawing behind it
+            error = snap.method_error
+            QTimer.singleShot(0, lambda: self.w.show_error("Cannot switch method", error))
 
     def _update_one_panel(self, snap: Any, now: float, spent_ms: float) -> None:
         """Update the most overdue panel that has a newer snapshot than it showed.

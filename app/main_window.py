@@ -40,6 +40,7 @@ from app.live_actions import LiveActions
 from app.menus import build_menus
 from app.motion_path_view import MotionPathView
 from app.schema import constraint_schema, optimizer_fields
+from app.status_bar import StatusBar
 from app.undo import SceneUndo
 from engine.authoring.motion_paths import clip_paths
 from engine.errors import UserError
@@ -78,6 +79,7 @@ class MainWindow(QMainWindow):
         self, method: str = "ik", settings: QSettings | None = None, engine: str = "process", started: Any = None
     ) -> None:
         super().__init__()
+        self.setStatusBar(StatusBar())  # before any message: the readouts give way to every one
         self.setWindowTitle("DragPoser Studio")
         self.setAcceptDrops(True)
         self.settings = settings or QSettings("dragposer-studio", "studio")
@@ -177,7 +179,7 @@ class MainWindow(QMainWindow):
         self.status_warnings = QLabel()
         # fixed widths that hold the longest texts (app/drawing.py sets short texts, details
         # in tooltips): a text change must not relayout the window every frame. The solver
-        # and view readouts are the status bar's normal widgets, which Qt hides while a
+        # and view readouts are the status bar's normal widgets, which it hides while a
         # message shows, so a message gets the bar's width (permanent ones would keep
         # half of it and cut the message off).
         for w, longest, permanent in (
@@ -266,7 +268,7 @@ class MainWindow(QMainWindow):
         return -1 if snap is None else snap.seq
 
     def _announce_method(self, event: ev.MethodChanged) -> None:
-        if event.method != event.old_method:
+        if event.method != event.old_method and not event.refused:  # a refusal switches nothing
             self.busy.begin(event.method, self._seq(), "Switching to")
 
     def _announce_motion(self, event: ev.MotionChanged) -> None:

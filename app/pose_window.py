@@ -49,6 +49,7 @@ from app.pose_files import PoseFiles
 from app.pose_menus import build_pose_menus
 from app.pose_timeline import KeyPlayback
 from app.pose_turns import JointTurns
+from app.status_bar import StatusBar
 from engine.authoring import events as ev
 from engine.authoring.document import AuthoringScene
 from engine.authoring.drag_reach import limb_reach, on_reach
@@ -135,6 +136,7 @@ class PoseWindow(QMainWindow):
         self.playback = KeyPlayback(self)
         # the status bar from the start: QMainWindow would make it on the first message,
         # and its arrival would push the 3D view and the key timeline up under the mouse
+        self.setStatusBar(StatusBar())
         self.statusBar().setSizeGripEnabled(False)
         self.files = PoseFiles(self)
         self.paths = MotionPathView(self.viewport.paths, self.settings, self._render_soon)

@@ -10,7 +10,9 @@ undoing is one session call (``set_sensors`` / ``set_constraints`` /
 ``replace_settings``) that fires its event and reaches the engine like any other edit.
 A switch of the reconstruction method or of its ghosts is a step too (``set_method``):
 the sensors, constraints and settings are the session's, not the method's, so undoing
-the switch brings the previous method back on the scene as it is.
+the switch brings the previous method back on the scene as it is. A switch the engine
+refuses (a method that cannot be built, or cannot run from the sensors) is no step: the
+engine's answer names it (:meth:`SceneUndo.refused`) and it leaves the history.
 
 A drag sends an edit per mouse move; consecutive edits of the same thing (one tracker's
 offset, one constraint's fields) within :data:`engine.authoring.history.MERGE_S` merge
@@ -63,6 +65,7 @@ class SceneUndo(QObject):
         self._constraints = tuple(session.constraints)
         self._settings = dict(session.settings)
         self._method = (session.method, tuple(session.ghosts))
+        self._switches: dict[int, Edit] = {}  # recent method switches by their ``opened``
         self._applying = False
         self._same_clip = False
         session.events.sensors.connect(self._on_sensors)
@@ -178,7 +181,24 @@ class SceneUndo(QObject):
             text = f"Method {after[0]}"
         else:
             text = f"Ghosts {', '.join(after[1])}" if after[1] else "No ghosts"
-        self.record(text, self._apply_method, before, after)
+        edit = Edit(text, before, after, None, put=self._apply_method)
+        # the engine answers a switch later, naming it by this number (a snapshot's ``opened``)
+        self._remember_switch(edit)
+        self.history.push(edit)
+
+    def _remember_switch(self, edit: Edit) -> None:
+        """Name ``edit`` by the switch just sent, so the engine's refusal finds it (the
+        last few: the engine answers within a frame or two)."""
+        now = self.session.opened
+        self._switches = {k: v for k, v in self._switches.items() if k > now - 8}
+        self._switches[now] = edit
+
+    def refused(self, opened: int) -> None:
+        """The engine kept its method at the switch numbered ``opened`` (``Session.opened``
+        when it was sent): that switch changed nothing, so it is no undo step."""
+        edit = self._switches.pop(opened, None)
+        if edit is not None:
+            self.history.discard(edit)
 
     # -- applying ---------------------------------------------------------------------
     def _apply_method(self, state: tuple) -> None:
@@ -186,6 +206,10 @@ class SceneUndo(QObject):
             return  # the engine refused the switch: it runs this method already
         with self.unrecorded():
             self.session.set_method(state[0], state[1])
+        # an undo or redo the engine refuses is no step either
+        edit = next((e for e in self._switches.values() if state is e.before or state is e.after), None)
+        if edit is not None:
+            self._remember_switch(edit)
 
     def _apply_settings(self, state: dict) -> None:
         with self.unrecorded():

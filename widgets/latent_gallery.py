@@ -24,6 +24,9 @@ from widgets.plots import release
 COLUMNS = 6
 #: Cell size in metres (a body is ~1.8 m tall).
 CELL_W, CELL_H = 1.6, 2.4
+#: Height kept under the top of a cell's label for its two lines, metres (the view's range
+#: is set with it: pyqtgraph fits the range to the lines only, and cut the last row's names).
+LABEL_ROOM = 1.0
 OFFSET_COLOURS = ("#4da3ff", "#8a93a6", "#ff8a1f")
 INFLUENCE_COLOUR = "#ffd60a"
 MARK_COLOUR = "#ff3b30"
@@ -42,6 +45,12 @@ def legend_html() -> str:
         f"{c(INFLUENCE_COLOUR, 'yellow name')}: among the 5 that move the chosen joint most"
     )
 
+
+#: What the gallery says while it has nothing to draw.
+EMPTY_HINT = (
+    "Empty until <b>Inspect this frame</b> (Forces tab): the dimensions are drawn for the frame "
+    "inspected, until the next solve (an edit, another frame)."
+)
 
 _BONES = [(j, p) for j, p in enumerate(sk.PARENTS) if p >= 0]
 
@@ -85,7 +94,11 @@ class LatentGallery(QWidget):
         self.legend = QLabel(legend_html())
         self.legend.setTextFormat(Qt.TextFormat.RichText)
         self.legend.setWordWrap(True)
+        # without an inspection the cells are empty: a black plot would look broken
+        self.hint = QLabel(EMPTY_HINT)
+        self.hint.setWordWrap(True)
         layout.addWidget(self.legend)
+        layout.addWidget(self.hint)
         layout.addWidget(self.plot, 1)
         self.detail: Any = None
         self.influential: list[int] = []
@@ -101,6 +114,7 @@ class LatentGallery(QWidget):
         if detail is self.detail:
             return
         self.detail = detail
+        self.hint.setVisible(detail is None)
         for t in self.labels:
             self.plot.removeItem(t)
         self.labels = []
@@ -133,3 +147,10 @@ class LatentGallery(QWidget):
             self.lines[k].setData(pts[:, 0], pts[:, 1], connect="pairs")
         m = np.concatenate(marks)
         self.marks.setData(m[:, 0], m[:, 1])
+        lowest_label = min(t.pos().y() for t in self.labels)
+        everything = np.concatenate([np.concatenate(segs[k]) for k in range(3)])
+        self.plot.setRange(
+            xRange=(float(everything[:, 0].min()), float(everything[:, 0].max())),
+            yRange=(lowest_label - LABEL_ROOM, float(everything[:, 1].max())),
+            padding=0.02,
+        )

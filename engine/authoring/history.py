@@ -174,6 +174,27 @@ class History:
         self._index += 1
         self.on_change()
 
+    def discard(self, command: Command) -> bool:
+        """Forget ``command``, a step whose change did not happen (a method switch the
+        engine refused), wherever it is in the history or in a group of it; whether it
+        was there. The other steps stay as they are, in order; a group left empty goes."""
+        for i, c in enumerate(self._commands):
+            if isinstance(c, Group) and any(sub is command for sub in c.commands):
+                c.commands = [sub for sub in c.commands if sub is not command]
+                if c.commands:
+                    self.on_change()
+                    return True
+            elif c is not command:
+                continue
+            del self._commands[i]
+            if i < self._index:
+                self._index -= 1
+            if self._clean is not None and self._clean > i:
+                self._clean -= 1  # the step changed nothing: the saved state is one step nearer
+            self.on_change()
+            return True
+        return False
+
     def count(self) -> int:
         """Steps recorded (done and undone)."""
         return len(self._commands)

@@ -8,6 +8,9 @@ is what :func:`preset_problem` prevents: callers ask it before any work starts.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
+from engine.sensors import Sensor
 from engine.tracking import PRESET_SENSORS
 
 #: method -> the only tracker preset it runs with; a method not listed takes any trackers.
@@ -27,3 +30,19 @@ def preset_problem(method: str, preset: str | None) -> str | None:
     if have is not None and sorted((s.joint, s.dof) for s in have) == sorted((s.joint, s.dof) for s in want):
         return None
     return f"{method} runs only with tracker preset {needed!r} (these trackers: {preset!r})"
+
+
+def sensors_problem(method: str, sensors: Iterable[Sensor]) -> str | None:
+    """Why ``method`` cannot reconstruct from the enabled ``sensors`` (their joints and
+    DoF, whatever preset they came from), or None when it can: what the studio's engine
+    asks before it switches methods, so that a switch the method would fail on every
+    frame is refused and the running method stays."""
+    needed = REQUIRED_PRESET.get(method)
+    if needed is None:
+        return None
+    have = sorted((s.joint, s.dof) for s in sensors if s.enabled)
+    want = sorted((s.joint, s.dof) for s in PRESET_SENSORS[needed])
+    if have == want:
+        return None
+    listed = ", ".join(f"{j} {d}-DoF" for j, d in have) or "none"
+    return f"{method} runs only with tracker preset {needed!r} ({', '.join(j for j, _ in want)}); enabled: {listed}"

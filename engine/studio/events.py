@@ -65,12 +65,14 @@ class SettingsChanged:
 
 @dataclass(frozen=True)
 class MethodChanged:
-    """The reconstruction method or its ghosts changed."""
+    """The reconstruction method or its ghosts changed. ``refused``: the engine kept
+    ``method`` when asked for ``old_method`` (the session mirrors it; nothing switches)."""
 
     method: str
     ghosts: tuple[str, ...]
     old_method: str = ""
     old_ghosts: tuple[str, ...] = ()
+    refused: bool = False
 
 
 @dataclass(frozen=True)

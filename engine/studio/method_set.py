@@ -14,6 +14,7 @@ from typing import Any
 
 from engine.methods import driver
 from engine.methods.base import FrameResult, Method
+from engine.methods.presets import sensors_problem
 from engine.sensor_source import SensorSource
 from engine.sensors import Sensor, SensorFrame
 from engine.solver.settings import SettingsEdit
@@ -96,10 +97,16 @@ class MethodSet:
         ghosts that stay are kept. Every method is built once per selection: building
         one loads its models, seconds for DragPoser.
 
-        Returns False, changing nothing, when ``name`` cannot be built while another
-        method runs: a broken weights file leaves the session as it was.
+        Returns False, changing nothing, when ``name`` cannot be built or cannot run from
+        the sensors while another method runs: a broken weights file, or RPM asked for
+        on six trackers, leaves the session as it was.
         """
         keep = name == self.name and self.method is not None
+        if name and not keep and self.method is not None and self.sensors:
+            why = sensors_problem(name, self.sensors)
+            if why is not None:  # it would fail on every frame: the running method stays
+                self._report(f"method {name!r}: {why}")
+                return False
         new = self.method if keep else self.build(name) if name else None
         if name and new is None and self.method is not None:
             return False

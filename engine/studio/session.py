@@ -356,7 +356,7 @@ class Session:
         if name != self.method:
             old = self.method
             self.method = name
-            self.events.method.emit(ev.MethodChanged(name, self.ghosts, old, self.ghosts))
+            self.events.method.emit(ev.MethodChanged(name, self.ghosts, old, self.ghosts, refused=True))
 
     # -- playback --------------------------------------------------------------------
     def seek(self, frame: int) -> None:

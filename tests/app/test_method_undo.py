@@ -4,6 +4,8 @@ Ctrl+Shift+Z switches again; ghosts likewise."""
 
 from __future__ import annotations
 
+import traceback
+
 import numpy as np
 import pytest
 from PyQt6.QtCore import Qt
@@ -51,3 +53,59 @@ def test_a_method_switch_is_undone_and_redone_from_the_keyboard_with_the_scene_i
     assert s.ghosts == ("ik",) and stack.undo_text() == "Ghosts ik"
     stack.undo()
     assert s.ghosts == () and s.method == "dragposer" and not panel.ghost_boxes["ik"].isChecked()
+
+
+def _refused_switch(studio, qtbot, monkeypatch, method: str) -> list[tuple]:
+    """Choose ``method`` in the Optimizer tab's selector; the engine's refusal is awaited."""
+    from PyQt6.QtWidgets import QMessageBox
+
+    said: list[tuple] = []
+
+    def critical(*a, **k):
+        # a modal box opened inside the drawing tick would stop the drawing behind it
+        inside = [f.name for f in traceback.extract_stack() if f.name == "tick" and f.filename.endswith("drawing.py")]
+        said.append((*a[1:3], inside))
+
+    monkeypatch.setattr(QMessageBox, "critical", critical)
+    notices: list[tuple] = []
+    begin = studio.busy.begin
+    monkeypatch.setattr(studio.busy, "begin", lambda m, seq, what="": (notices.append((m, what)), begin(m, seq, what)))
+    s, panel = studio.session, studio.optimizer_panel
+    studio.undo.set_clean()
+    assert s.method == "ik" and panel.method.currentText() == "ik"
+    panel.method.setCurrentIndex(panel.method.findText(method))  # the user's choice in the combo box
+    qtbot.waitUntil(lambda: bool(said), timeout=30000)
+    assert said[0][2] == [], "the error box is opened after the drawing tick"
+    assert notices == [(method, "Switching to")], "the refusal announces no switch back"
+    assert not studio.busy.active and "Switching" not in studio.statusBar().currentMessage()
+    return said
+
+
+def _assert_nothing_switched(studio) -> None:
+    s, stack, panel = studio.session, studio.undo.history, studio.optimizer_panel
+    assert s.method == "ik" and panel.method.currentText() == "ik", "the selector shows the method running"
+    assert stack.count() == 0 and not stack.can_undo() and studio.undo.is_clean()
+    undo = next(a for a in studio.findChildren(type(studio.menuBar().actions()[0])) if a.text().startswith("&Undo"))
+    assert not undo.isEnabled() and undo.text() == "&Undo"
+    assert s.latest.method == "ik"
+
+
+def test_a_method_that_cannot_run_from_the_trackers_is_refused_and_leaves_no_undo_step(studio, qtbot, monkeypatch):
+    assert studio.session.preset == "6"  # RPM learnt head and hands only
+    said = _refused_switch(studio, qtbot, monkeypatch, "rpm")
+    assert said[0][0] == "Cannot switch method" and "'3-head-hands'" in said[0][1]
+    _assert_nothing_switched(studio)
+
+
+def test_a_method_whose_model_cannot_be_loaded_leaves_no_undo_step(studio, qtbot, monkeypatch):
+    factory = studio.engine._factory
+
+    def broken(name):
+        if name == "dragposer":
+            raise ValueError("assets/models/vae.pt: not a weights file")
+        return factory(name)
+
+    studio.engine._factory = broken  # looked up at each build
+    said = _refused_switch(studio, qtbot, monkeypatch, "dragposer")
+    assert "vae.pt" in said[0][1]
+    _assert_nothing_switched(studio)

@@ -192,6 +192,36 @@ def test_a_method_that_cannot_be_built_leaves_the_old_one_and_says_why(synthetic
         worker.stop()
 
 
+def test_a_method_that_cannot_run_from_the_sensors_is_refused_at_the_switch(synthetic_motion):
+    from engine.tracking import PRESET_SENSORS
+
+    built = []
+
+    def factory(name):
+        built.append(name)
+        method = Counting()
+        method.name = name
+        return method
+
+    worker = EngineThread(method_factory=factory)
+    worker.start()
+    try:
+        worker.submit(w.SetMethod("counting"))
+        worker.submit(w.SetSensors(PRESET_SENSORS["6"]))
+        worker.submit(w.SetMotion(synthetic_motion))
+        first = newest(worker)
+        worker.submit(w.SetMethod("rpm"))
+        snap = newest(worker, first.seq)
+        assert "'3-head-hands'" in snap.method_error and snap.method == "counting"
+        assert "rpm" not in built, "refused before its models are loaded"
+        worker.submit(w.SetSensors(PRESET_SENSORS["3-head-hands"]))
+        worker.submit(w.SetMethod("rpm"))
+        wait_for(lambda: worker.latest.method == "rpm")
+        assert worker.latest.method_error == "" and built[-1] == "rpm"
+    finally:
+        worker.stop()
+
+
 @contextlib.contextmanager
 def running(method, motion):
     """An engine thread whose every method is ``method``, loaded with ``motion``."""

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pytest
 from PyQt6.QtCore import QPoint, Qt
-from PyQt6.QtWidgets import QApplication
+from PyQt6.QtWidgets import QApplication, QLabel
 
 from engine import skeleton as sk
 from engine.latent.projection import default_map
@@ -359,6 +359,31 @@ def test_the_gallery_explains_its_colours(qtbot):
     for colour in ("#4da3ff", "#8a93a6", "#ff8a1f", "#ff3b30", "#ffd60a"):
         assert colour in text
     assert "-2 sigma" in text and "+2 sigma" in text
+
+
+@pytest.mark.parametrize("size", [(500, 400), (900, 700)])
+def test_every_cell_label_of_the_gallery_is_inside_its_view(qtbot, size):
+    w = shown(qtbot, LatentGallery(), *size)
+    w.set_detail(_detail())
+    for _ in range(3):
+        QApplication.processEvents()
+    view = w.plot.getPlotItem().getViewBox().sceneBoundingRect()
+    cut = [t.textItem.toPlainText().split()[0] for t in w.labels if not view.contains(t.sceneBoundingRect())]
+    assert not cut, f"labels cut off at the view's edge: {cut}"
+    top = max(float(np.nanmax(line.getData()[1])) for line in w.lines)
+    assert w.plot.getPlotItem().getViewBox().viewRange()[1][1] >= top, "the top row's heads are in the view"
+
+
+def test_the_empty_gallery_says_how_to_fill_it_and_the_hint_goes_while_it_draws(qtbot):
+    w = shown(qtbot, LatentGallery(), 500, 400)
+    hint = [
+        c for c in w.findChildren(QLabel) if c is not w.legend and c.isVisible() and "Inspect this frame" in c.text()
+    ]
+    assert hint, "an empty gallery says what fills it"
+    w.set_detail(_detail())
+    assert not hint[0].isVisible()
+    w.set_detail(None)
+    assert hint[0].isVisible()
 
 
 def test_the_store_shared_with_the_map_still_marks_and_enables_the_jump(qtbot):

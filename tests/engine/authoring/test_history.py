@@ -54,3 +54,40 @@ def test_a_group_is_one_step_undone_in_reverse_and_an_empty_group_is_none():
     h.redo()
     assert m.parts == {"a": 1, "b": 2} and order[2:] == [("a", 1), ("b", 2)]
     assert not h.can_redo()
+
+
+def test_a_step_that_did_not_happen_is_discarded_and_the_saved_state_is_clean_again():
+    m = Model()
+    h = History(m)
+    m.parts["a"] = 1
+    h.push(Edit("set a", 0, 1, None, put=m.setter("a")))
+    h.set_clean()
+    refused = Edit("switch b", 0, 7, None, put=m.setter("b"))  # recorded, then refused
+    h.push(refused)
+    m.parts["a"] = 2
+    h.push(Edit("set a again", 1, 2, None, put=m.setter("a")))
+    assert not h.is_clean()
+    assert h.discard(refused) and not h.discard(refused)
+    assert h.texts() == ["set a", "set a again"] and h.undo_text() == "set a again"
+    h.undo()
+    assert h.is_clean() and m.parts == {"a": 1, "b": 0}
+    h.undo()
+    assert m.parts == {"a": 0, "b": 0} and not h.can_undo()
+
+
+def test_a_step_discarded_from_a_group_leaves_the_rest_of_the_group_and_an_emptied_group_goes():
+    m = Model()
+    h = History(m)
+    refused = Edit("switch b", 0, 7, None, put=m.setter("b"))
+    with h.group("load scene"):
+        m.parts["a"] = 1
+        h.push(Edit("set a", 0, 1, None, put=m.setter("a")))
+        h.push(refused)
+    assert h.discard(refused) and h.texts() == ["load scene"]
+    h.undo()
+    assert m.parts == {"a": 0, "b": 0}
+    alone = Edit("switch b", 0, 7, None, put=m.setter("b"))
+    with h.group("only a switch"):
+        h.push(alone)
+    assert h.texts() == ["only a switch"]  # the undone "load scene" is dropped by the new step
+    assert h.discard(alone) and h.texts() == [] and h.is_clean()

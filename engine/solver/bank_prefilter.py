@@ -118,7 +118,8 @@ def nearest(
     n = len(table)
     if hint is not None and len(hint) >= k:
         d_hint = distances(table, norms, q, hint)
-        worst = float(d_hint.topk(k, largest=False).values[-1])
+        # the k-th smallest of k values is their largest (a hint is the last k neighbours)
+        worst = float(d_hint.max() if len(hint) == k else d_hint.topk(k, largest=False).values[-1])
         # computed d = |t - q|^2 - |q|^2 (+ rounding) and bound = b + |q|^2, so a row can be
         # nearer than the k-th known one only when b + |q|^2 - margin <= worst + |q|^2 + margin
         keep = pre.candidates(q_cols, worst)

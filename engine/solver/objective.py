@@ -260,8 +260,7 @@ class StoppingRule:
         """Whether each of ``rows`` (default: all) stops at its latest evaluation (``total``,
         ``(A,)``); ``satisfied()`` is asked only when the offline rule needs it."""
         if rows is None and not self.offline and len(self.steps) == 1:  # one realtime frame: scalars
-            steps, fixed = int(self.steps[0]), int(self.fixed[0])
-            return np.array([steps >= (fixed if fixed >= 0 else self.cap)])
+            return np.array([self.last(int(self.steps[0]))])
         rows = np.arange(len(self.best)) if rows is None else rows
         steps = self.steps[rows]
         out = steps >= self.cap

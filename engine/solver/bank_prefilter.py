@@ -17,10 +17,10 @@ The bound is evaluated in float32 and the distances carry float32 rounding, so t
 test keeps a margin (:data:`MARGIN` times the largest magnitudes involved) that is far
 above both rounding errors: a row is dropped only when it is certainly farther.
 
-The bound of every row is one float32 product over the ``(N, rank + 2)`` table (a third of
-the full table's bytes); grouping consecutive rows in blocks with a centre and a radius
-was tried and dropped: on the shipped bank the block bound rules out about half the
-rows, and gathering the other half cost more than reading them all (docs/performance.md).
+The bound of every row is one float32 product with the ``(rank + 2, N)`` table (a third
+of the full table's bytes). Blocks of consecutive rows with a centre and a radius do not
+pay here: on the shipped bank a block bound rules out about half the rows, and gathering
+the other half costs more than reading them all (docs/performance.md).
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 (for a busy machine: compare the two, don't read absolute figures).
 
     PYTHONPATH=. python research/bench_ab.py [--baseline REV] [--method dragposer] [--frames 200]
-                                            [--sensors 6] [--iterations 10] [--mode realtime]
+                                            [--sensors 6] [--iterations 10] [--mode realtime] [--bank]
 
 ``--baseline REV`` loads ``engine/`` as it was at git revision REV (``git archive``
 into a temporary folder, imported under its own module objects) next to the working
@@ -10,7 +10,9 @@ tree's; without it the fast and the reference solver paths of the working tree a
 compared. Both versions run on the same frames of the bundled clip, alternating which
 goes first; the table gives per-frame medians and minimums, wall clock and the thread's
 CPU time (on a loaded machine the CPU time leaves out the time the process waited for a
-core), and for dragposer the per-iteration breakdown (wall clock).
+core), and for dragposer the per-iteration breakdown (wall clock). DragPoser runs without
+the pose bank (the temporal predictor gives the prior) unless ``--bank`` gives it the
+shipped bank as ``dragposer-studio bench`` and the studio do (each version its own copy).
 """
 
 from __future__ import annotations
@@ -42,6 +44,10 @@ def _build(v: EngineVersion, method: str, a: argparse.Namespace, motion, **kw):
             models = load_default_models()
             if a.mode != "realtime":
                 kw["mode"] = a.mode
+            if a.bank:
+                from engine.solver.tracker_prior import default_bank
+
+                kw["bank"] = default_bank()
             m = DragPoserMethod(models.vae, models.predictor, iterations=a.iterations, **kw)
         m.reset(motion.skeleton, motion.fps)
     return m
@@ -55,6 +61,7 @@ def main() -> None:
     ap.add_argument("--sensors", default="6")
     ap.add_argument("--iterations", type=int, default=10)
     ap.add_argument("--mode", default="realtime", choices=("realtime", "offline"))
+    ap.add_argument("--bank", action="store_true", help="dragposer with the shipped pose bank (the product's prior)")
     a = ap.parse_args()
     torch.set_num_threads(1)
     with tempfile.TemporaryDirectory() as tmp:

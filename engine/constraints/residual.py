@@ -214,9 +214,7 @@ class Term:
     def _membership(self) -> np.ndarray:
         m = getattr(self, "_member", None)
         if m is None or m.shape[0] != len(self.owner):
-            m = np.zeros((len(self.owner), len(self.names)))
-            m[np.arange(len(self.owner)), self.owner] = 1.0
-            self._member = m
+            m = self._member = _members(self.owner, len(self.names))
         return m
 
     def losses(self, res: Residuals, kit: Kit = NUMPY) -> Any:
@@ -297,6 +295,22 @@ def _scatter(out: np.ndarray, joints: np.ndarray, g: np.ndarray) -> None:
         out[:, joints] += g
     else:
         np.add.at(out, (slice(None), joints), g)  # type: ignore[arg-type]  # numpy's stubs refuse a tuple index
+
+
+_MEMBERS: dict[tuple[bytes, int], np.ndarray] = {}  # entry owners seen -> their membership (shared)
+
+
+def _members(owner: np.ndarray, count: int) -> np.ndarray:
+    """``(m, count)``: 1 at ``[i, owner[i]]``, so ``r2 @ _members(owner)`` sums each
+    constraint's squared entries (cached: the terms of a frame after frame share theirs)."""
+    key = (owner.tobytes(), count)
+    out = _MEMBERS.get(key)
+    if out is None:
+        if len(_MEMBERS) > 4096:
+            _MEMBERS.clear()
+        out = _MEMBERS[key] = np.zeros((len(owner), count))
+        out[np.arange(len(owner)), owner] = 1.0
+    return out
 
 
 _ONE_HOT: dict[tuple[bytes, int], np.ndarray] = {}  # entry joints seen -> their one-hot (terms reuse theirs)

@@ -10,6 +10,7 @@ the batched offline solve gives a frame axis.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -123,23 +124,17 @@ class SensorTerm(FrameRows, Term):
 
     def __init__(self, items: list[SensorConstraint]) -> None:
         self.names = tuple(c.name for c in items)
-        self.joints = np.array([joint_index(c.joint, "joint", c.kind) for c in items], dtype=np.intp)
-        self.six = np.array([k for k, c in enumerate(items) if c.dof == 6], dtype=np.intp)
-        self.joints6 = self.joints[self.six]
+        (self.joints, self.six, self.joints6, self.owner, self.check_group, self.entry_joint, self._unit) = _layout(
+            tuple((c.joint, c.dof, c.kind) for c in items)
+        )
+        six = self.six.tolist()
         self.target = np.array([c.position for c in items], dtype=np.float64).reshape(1, -1, 3)
         self.on = np.array([[float(c.connected) for c in items]]).reshape(1, -1)
-        rot = np.array([unit_rotation(items[k].rotation) for k in self.six]).reshape(-1, 4)
+        rot = np.array([unit_rotation(items[k].rotation) for k in six]).reshape(-1, 4)
         self.rot_target = QN.unit_to_matrix(rot).reshape(1, -1, 3, 3)
-        self.scale = np.array([[math.sqrt(items[k].rotation_weight / 8.0) for k in self.six]]).reshape(1, -1)
+        self.scale = np.array([[math.sqrt(items[k].rotation_weight / 8.0) for k in six]]).reshape(1, -1)
         self.pos_tol2 = np.array([c.position_tolerance**2 for c in items])
-        self.rot_tol = np.array([math.sin(math.radians(items[k].rotation_tolerance) / 2) ** 2 for k in self.six])
-        self.owner = np.concatenate([np.repeat(np.arange(len(items)), 3), np.repeat(self.six, 9)]).astype(np.intp)
-        s = len(items)
-        # groups: each tracker's position (3 entries), then each 6-DoF one's rotation (9)
-        self.check_group = np.concatenate([np.repeat(np.arange(s), 3), s + np.repeat(np.arange(len(self.six)), 9)])
-        # per entry: the joint each reads, and the position entries' unit directions
-        self.entry_joint = np.concatenate([np.repeat(self.joints, 3), np.repeat(self.joints6, 9)]).astype(np.intp)
-        self._unit = np.tile(np.eye(3), (s, 1))  # (3 s, 3)
+        self.rot_tol = np.array([math.sin(math.radians(items[k].rotation_tolerance) / 2) ** 2 for k in six])
 
     def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:
         sel = self.select(P, rows)
@@ -171,3 +166,22 @@ class SensorTerm(FrameRows, Term):
         scale = self.scale[sel]
         rot = 8.0 * scale * scale * self.rot_tol
         return np.concatenate([np.broadcast_to(self.pos_tol2, (len(scale), len(self.pos_tol2))), rot], axis=1)
+
+
+@functools.lru_cache(maxsize=64)
+def _layout(trackers: tuple[tuple[str, int, str], ...]) -> tuple[np.ndarray, ...]:
+    """The index arrays of a :class:`SensorTerm` over trackers ``(joint, dof, kind)``, which
+    depend on nothing else: built once per tracker set, shared by its terms (read only).
+
+    Returns ``(joints, six, joints6, owner, check_group, entry_joint, unit)``: each tracker's
+    joint, the 6-DoF trackers' places and joints, each residual entry's tracker, its
+    satisfaction group (each tracker's position, 3 entries, then each 6-DoF one's rotation,
+    9), the joint it reads, and the position entries' unit directions ``(3 S, 3)``."""
+    joints = np.array([joint_index(j, "joint", kind) for j, _, kind in trackers], dtype=np.intp)
+    six = np.array([k for k, (_, dof, _) in enumerate(trackers) if dof == 6], dtype=np.intp)
+    joints6 = joints[six]
+    s = len(trackers)
+    owner = np.concatenate([np.repeat(np.arange(s), 3), np.repeat(six, 9)]).astype(np.intp)
+    check_group = np.concatenate([np.repeat(np.arange(s), 3), s + np.repeat(np.arange(len(six)), 9)])
+    entry_joint = np.concatenate([np.repeat(joints, 3), np.repeat(joints6, 9)]).astype(np.intp)
+    return joints, six, joints6, owner, check_group, entry_joint, np.tile(np.eye(3), (s, 1))

@@ -79,13 +79,17 @@ class SmoothTerm(FrameRows, Term):
 
     PER_FRAME = ("target", "on")
 
+    #: The same for every frame (shared, read only): each entry's constraint and joint, and
+    #: ``(3 n, 3)`` the direction entry ``3 j + c`` reads ``P_j`` along, over ``sqrt(n)``.
+    owner = np.zeros(3 * sk.NUM_JOINTS, dtype=np.intp)
+    entry_joint = np.repeat(np.arange(sk.NUM_JOINTS), 3)
+    _unit = np.tile(np.eye(3), (sk.NUM_JOINTS, 1)) / math.sqrt(sk.NUM_JOINTS)
+
     def __init__(self, name: str, target: np.ndarray | None) -> None:
         n = sk.NUM_JOINTS
-        self.names, self.owner = (name,), np.zeros(3 * n, dtype=np.intp)
+        self.names = (name,)
         self.on = np.array([0.0 if target is None else 1.0])
         self.target = np.zeros((1, n, 3)) if target is None else np.asarray(target, dtype=np.float64).reshape(1, n, 3)
-        self.entry_joint = np.repeat(np.arange(n), 3)
-        self._unit = np.tile(np.eye(3), (n, 1)) / math.sqrt(n)  # (3 n, 3): entry 3 j + c reads P_j along c
 
     def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:
         sel = self.select(P, rows)

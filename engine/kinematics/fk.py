@@ -294,7 +294,10 @@ def fk_level_order(
     rotations : ndarray (..., J, 3, 3)
         World rotation matrices, level order.
     """
-    shape = np.broadcast_shapes(local_mat.shape[:-3], root_pos.shape[:-1], bone_offsets.shape[:-3])
+    lead, root_lead, bone_lead = local_mat.shape[:-3], root_pos.shape[:-1], bone_offsets.shape[:-3]
+    # the solver's case first (offsets shared or per pose, one root per pose): no broadcast_shapes call
+    shared = root_lead == lead and bone_lead in (lead, ())
+    shape = lead if shared else np.broadcast_shapes(lead, root_lead, bone_lead)
     world = np.empty(shape + local_mat.shape[-3:])
     world[..., 0, :, :] = local_mat[..., 0, :, :]
     start = 1

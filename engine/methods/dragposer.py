@@ -146,10 +146,12 @@ class DragPoserMethod(Method):
         finally:
             torch.set_num_threads(threads)
 
-    def plan(self, frame: SensorFrame) -> FramePlan:
+    def plan(self, frame: SensorFrame, term: bool = True) -> FramePlan:
         """Take a frame's readings and say what it will be solved against (the trackers'
         term, the settings, the pose bank's lookup input, the after-solve targets); the
-        next :meth:`step` or the batched offline solve solves it."""
+        next :meth:`step` or the batched offline solve solves it. ``term`` False leaves
+        the trackers' term out (:attr:`FramePlan.trackers` None): :meth:`step` solves
+        against the sensor constraints and would build it for nothing."""
         warnings = self.trackers.update(frame, self.settings, self.fps, self._pos64)
         live = tuple(j for j, c in self.sensors.items() if c.enabled)
         hip = self.sensors.get("root")
@@ -157,7 +159,7 @@ class DragPoserMethod(Method):
         base = self.settings.sensor_rotation_weight
         if s.sensor_rotation_weight != base and base > 0:  # the profile's rotation weight (blend kept)
             self.trackers.scale_rotation_weights(s.sensor_rotation_weight / base)
-        term, names, weights = self.trackers.term()
+        trackers, names, weights = self.trackers.term(build=term)
         hip_pose = None
         if hip is not None and hip.enabled and hip.dof == 6:
             hip_pose = (np.array(hip.position, dtype=np.float64), unit_rotation(hip.rotation))
@@ -165,7 +167,7 @@ class DragPoserMethod(Method):
         return FramePlan(
             settings=s,
             warnings=warnings,
-            trackers=term,
+            trackers=trackers,
             names=names,
             weights=weights,
             bank_readings=self.priors.readings(s, self.trackers.history),
@@ -194,7 +196,7 @@ class DragPoserMethod(Method):
 
     def _step(self, sensors: SensorFrame, deadline: float | None = None) -> FrameResult:
         t0 = time.perf_counter()
-        plan = self.plan(sensors)
+        plan = self.plan(sensors, term=False)
         warnings, s = plan.warnings, plan.settings
         override = roots.root_override(self.sensors)
         if self._root is None:

@@ -148,6 +148,7 @@ class BatchFrame:
         stream's last two solved poses ``smooth_history`` (:func:`smoothing_history`)."""
         m.smooth.set_history(*smooth_history)
         inputs = FrameInputs(prediction=self.prior)
+        assert self.plan.trackers is not None  # a batched frame's plan holds its term (_plan)
         return [self.plan.trackers, *(c.term(inputs) for c in self.own)]
 
 

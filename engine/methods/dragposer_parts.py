@@ -45,8 +45,10 @@ class FramePlan:
         The caller's settings completed by the connected sensor set's profile.
     warnings : list of str
         Readings ignored (not finite) and the like.
-    trackers : SensorTerm
-        The connected trackers' term, their readings frozen for this frame.
+    trackers : SensorTerm or None
+        The connected trackers' term, their readings frozen for this frame (what the
+        batched solve solves against); None in a plan made without it (the frame-by-frame
+        step, which solves against the sensor constraints themselves).
     names : tuple of str
         Their constraint names (``sensor:<joint>``).
     weights : ndarray (S,)
@@ -67,7 +69,7 @@ class FramePlan:
 
     settings: OptimizerSettings
     warnings: list[str]
-    trackers: SensorTerm
+    trackers: SensorTerm | None
     names: tuple[str, ...]
     weights: np.ndarray
     bank_readings: tuple | None
@@ -237,11 +239,14 @@ class TrackerTerms:
             if c.enabled and c.connected and c.dof == 6 and j != "root"
         }
 
-    def term(self) -> tuple[SensorTerm, tuple[str, ...], np.ndarray]:
-        """The live trackers' term with their readings frozen now, names and weights."""
+    def term(self, build: bool = True) -> tuple[SensorTerm | None, tuple[str, ...], np.ndarray]:
+        """The live trackers' term with their readings frozen now (None unless ``build``),
+        names and weights."""
         live = self.live()
-        terms = SensorConstraint.terms(live, FrameInputs())
-        term = terms[0] if terms else SensorTerm([])
+        term = None
+        if build:
+            terms = SensorConstraint.terms(live, FrameInputs())
+            term = terms[0] if terms else SensorTerm([])
         return term, tuple(c.name for c in live), np.array([c.weight for c in live], dtype=np.float64)
 
 

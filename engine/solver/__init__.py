@@ -6,7 +6,7 @@ Public surface:
   ``decode(z, ctx) -> PoseState``; fast and reference paths (see :mod:`.optimizer`).
 * :class:`OptimizerSettings` (validated), :data:`MODES`, :data:`OPTIMIZERS`, :data:`PRIORS`, :data:`FULL_SET`.
 * :class:`FrameContext`, :class:`RootFrame`, :class:`RootOverride`, :class:`RootAnchor`
-  — what a frame's pose depends on besides the latent.
+  (protocols :class:`BodyAnchor`, :class:`JointAnchor`) — what a frame's pose depends on besides the latent.
 * :class:`Solution`, :class:`SolveTimings` — the result and where its time went
   (these and :class:`FrameContext`, :class:`LatentDecoder`: :mod:`.frame`).
 * :class:`PoseState` — the pose constraints judge.
@@ -18,7 +18,16 @@ Public surface:
 from __future__ import annotations
 
 import importlib
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # the real types for the checker; at run time each is imported on first use
+    from engine.kinematics.pose_state import PoseState
+    from engine.solver.frame import FrameContext, LatentDecoder, Solution, SolveTimings
+    from engine.solver.optimizer import PoseOptimizer
+    from engine.solver.pose import BodyAnchor, JointAnchor, RootAnchor, RootFrame, RootOverride
+    from engine.solver.settings import FULL_SET, MODES, OPTIMIZERS, PRIORS, OptimizerSettings
+    from engine.solver.temporal import LatentPredictor, TemporalSchedule
+    from engine.solver.update import LatentUpdate
 
 #: Public name -> the module defining it. Imported on first use (PEP 562), so that
 #: reading the settings (``engine.solver.settings``, e.g. to build the command line)
@@ -29,6 +38,8 @@ _WHERE = {
     "Solution": "frame",
     "SolveTimings": "frame",
     "PoseOptimizer": "optimizer",
+    "BodyAnchor": "pose",
+    "JointAnchor": "pose",
     "RootAnchor": "pose",
     "RootFrame": "pose",
     "RootOverride": "pose",
@@ -59,7 +70,9 @@ __all__ = [
     "MODES",
     "OPTIMIZERS",
     "PRIORS",
+    "BodyAnchor",
     "FrameContext",
+    "JointAnchor",
     "LatentDecoder",
     "LatentPredictor",
     "LatentUpdate",

@@ -19,7 +19,7 @@ import numpy as np
 import torch
 
 from engine.kinematics.pose_state import PoseState
-from engine.solver.pose import RootAnchor, RootFrame, RootOverride
+from engine.solver.pose import BodyAnchor, RootFrame, RootOverride
 
 
 class LatentDecoder(Protocol):
@@ -40,8 +40,10 @@ class FrameContext:
         The previous frame's solved root (heading and position reference).
     root_override : RootOverride or None
         Connected hip sensor, which dictates the root.
-    root_anchor : RootAnchor or None
-        Without a hip sensor: the joint (head) whose tracker places the body.
+    root_anchor : BodyAnchor or None
+        Without a hip sensor: what places the body (a :class:`~engine.solver.pose.RootAnchor`:
+        the joint, the head, whose tracker does; the fast objective takes only a
+        :class:`~engine.solver.pose.JointAnchor`).
     previous_positions : Tensor (22, 3) or None
         Previous frame's solved joint positions, metres.
     prediction : Tensor (L,) or None
@@ -55,7 +57,7 @@ class FrameContext:
 
     previous_root: RootFrame
     root_override: RootOverride | None = None
-    root_anchor: RootAnchor | None = None
+    root_anchor: BodyAnchor | None = None
     previous_positions: torch.Tensor | None = None
     prediction: torch.Tensor | None = None
     frame: int = 0

@@ -259,6 +259,8 @@ class StoppingRule:
     ) -> np.ndarray:
         """Whether each of ``rows`` (default: all) stops at its latest evaluation (``total``,
         ``(A,)``); ``satisfied()`` is asked only when the offline rule needs it."""
+        if rows is None and not self.offline and len(self.steps) == 1:  # one realtime frame: scalars
+            return np.array([self.last(int(self.steps[0]))])
         rows = np.arange(len(self.best)) if rows is None else rows
         steps = self.steps[rows]
         out = steps >= self.cap
@@ -279,4 +281,7 @@ class StoppingRule:
 
     def stepped(self, rows: np.ndarray | None = None) -> None:
         """Count one step of ``rows`` (default: all)."""
-        self.steps[slice(None) if rows is None else rows] += 1
+        if rows is None:
+            self.steps += 1
+        else:
+            self.steps[rows] += 1

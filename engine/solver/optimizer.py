@@ -66,6 +66,7 @@ from engine.solver.objective import (
     active_weights,
     build_terms,
 )
+from engine.solver.pose import JointAnchor, RootAnchor
 from engine.solver.settings import FULL_SET, OptimizerSettings
 from engine.solver.threads import one_blas_thread
 from engine.solver.update import LatentUpdate
@@ -296,6 +297,12 @@ def _root_frames(ctx: FrameContext) -> RootFrames:
     """The chain's root for one frame (:class:`RootFrames` with ``A = 1``)."""
     n = lambda t: t.detach().double().numpy()  # noqa: E731
     ov, anchor = ctx.root_override, ctx.root_anchor
+    # the exact type first: the protocol's isinstance costs ~10 us a frame
+    if anchor is not None and not (type(anchor) is RootAnchor or isinstance(anchor, JointAnchor)):
+        raise TypeError(
+            f"FrameContext.root_anchor: the fast objective places the body by a joint anchor "
+            f"(joint, position), not by {type(anchor).__name__}; solve it with PoseOptimizer(fast=False)"
+        )
     return RootFrames(
         heading=QN.to_matrix(Q.heading(n(ctx.previous_root.rotation)))[None],
         previous=n(ctx.previous_root.position)[None],

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 import torch
@@ -60,6 +61,27 @@ class RootOverride:
 
     position: torch.Tensor
     rotation: torch.Tensor | None = None
+
+
+@runtime_checkable
+class BodyAnchor(Protocol):
+    """What places a decoded body without a hip tracker (:attr:`FrameContext.root_anchor
+    <engine.solver.frame.FrameContext>`): the autograd decode shifts the positions by
+    :meth:`apply`. :class:`RootAnchor` pins a joint; the authoring's ``Ground`` stands
+    the lowest foot on the floor."""
+
+    def apply(self, positions: torch.Tensor) -> torch.Tensor:
+        """``positions (..., J, 3)`` metres, shifted as the anchor places the body."""
+        ...
+
+
+@runtime_checkable
+class JointAnchor(BodyAnchor, Protocol):
+    """A :class:`BodyAnchor` that places the body by one joint, which is all the fast
+    objective's chain knows (:func:`engine.solver.optimizer._root_frames` reads these two)."""
+
+    joint: int  # joint index
+    position: torch.Tensor  # (3,) the joint's world target, metres
 
 
 @dataclass

@@ -63,7 +63,7 @@ def test_a_lookup_with_any_hint_finds_the_whole_tables_neighbours_in_its_order()
     assert pruned > 0.5 * 30 * len(table)  # the prefilter spares most rows
 
 
-def test_the_block_search_keeps_every_row_the_bound_cannot_rule_out():
+def test_the_candidates_are_every_row_the_bound_cannot_rule_out():
     rng = np.random.default_rng(3)
     # consecutive rows close together, as consecutive frames of the bank's clips are
     walk = np.cumsum(rng.normal(scale=0.05, size=(6000, 10)), axis=0) @ rng.normal(size=(10, 55))
@@ -76,7 +76,9 @@ def test_the_block_search_keeps_every_row_the_bound_cannot_rule_out():
         q32 = (x[rng.integers(len(x))] + rng.normal(scale=0.05, size=55)).astype(np.float32)
         d = (norms - 2.0 * (table @ torch.from_numpy(q32))).double().numpy()
         worst = float(np.sort(d)[7])
-        uq, qq = pre.query(q32)
+        q64 = q32.astype(np.float64)
+        pq, qq = q64 @ pre.basis, float(q64 @ q64)
+        uq = np.append(pq, np.sqrt(max(qq - float(pq @ pq), 0.0)))
         proj = x @ pre.basis
         u = np.column_stack((proj, np.sqrt(np.maximum((x * x).sum(1) - (proj * proj).sum(1), 0.0))))
         exact = ((u - uq) ** 2).sum(1) - qq  # each row's bound, float64

@@ -282,3 +282,22 @@ def test_the_batched_solve_gives_every_frame_the_prior_a_lookup_of_that_frame_al
     assert batched is not None and len(batched) == len(looked_up) == len(frames)
     for a, b in zip(batched, looked_up):
         assert np.array_equal(a.positions, b.positions) and np.array_equal(a.local_rot, b.local_rot)
+
+
+@pytest.mark.parametrize("fixed", [None, 0, 2, 5])
+def test_the_one_frame_stopping_rule_answers_as_the_rows_rule(fixed):
+    """A realtime frame's stop (scalars) against the same rule asked for row 0 (arrays)."""
+    from engine.solver.objective import StoppingRule
+
+    one, rows = (StoppingRule(cap=4, offline=False, patience=3, min_improvement=1e-3) for _ in range(2))
+    one.fix(0, fixed)
+    rows.fix(0, fixed)
+    never = lambda: np.array([False])  # noqa: E731
+    answers = []
+    for _ in range(7):
+        a, b = one.stop(np.array([1.0]), never), rows.stop(np.array([1.0]), never, np.array([0]))
+        assert a.dtype == b.dtype == bool and a.tolist() == b.tolist()
+        answers.append(bool(a[0]))
+        one.stepped()
+        rows.stepped(np.array([0]))
+    assert answers.index(True) == (4 if fixed is None else fixed)

@@ -254,3 +254,27 @@ def test_root_is_held_when_nothing_places_the_body(models):
     drift = np.linalg.norm(res[-1].root_pos[:2] - m.root_pos[-1, :2])
     assert drift < 0.15, f"root {drift:.2f} m from the truth after 60 frames without hips or head"
     assert abs(res[-1].root_pos[2] - res[9].root_pos[2]) < 1e-4  # height held
+
+
+def test_the_fast_path_takes_a_joint_anchor_and_names_any_other(models):
+    """``FrameContext.root_anchor`` is any :class:`BodyAnchor`: the autograd decode applies
+    the authoring's ``Ground``; the fast objective, which places a body by one joint
+    only, refuses it by name instead of failing on a missing attribute."""
+    from engine.authoring.character import Ground
+    from engine.solver.pose import BodyAnchor, JointAnchor
+
+    ground = Ground(torch.tensor([0.4, -0.2]), torch.zeros(4))
+    head = RootAnchor(sk.JOINT_INDEX["upperneck"], torch.tensor([0.0, 0.0, 1.6]))
+    assert isinstance(ground, BodyAnchor) and not isinstance(ground, JointAnchor)
+    assert isinstance(head, JointAnchor)
+    root = RootFrame(torch.tensor([1.0, 0.0, 0.0, 0.0]), torch.zeros(3))
+    z0 = torch.zeros(models.vae.config.latent)
+    wrist = SensorConstraint(name="sensor:lwrist", joint="lwrist", dof=3, position=np.array([0.3, 0.0, 1.0]))
+    fast = PoseOptimizer(models.vae, sk.REST_OFFSETS, OptimizerSettings(iterations=2))
+    held = fast.solve(z0, [wrist], FrameContext(root, root_anchor=head))
+    assert torch.allclose(held.state.positions[sk.JOINT_INDEX["upperneck"]], head.position, atol=1e-5)
+    with pytest.raises(TypeError, match="root_anchor.*Ground"):
+        fast.solve(z0, [wrist], FrameContext(root, root_anchor=ground))
+    reference = PoseOptimizer(models.vae, sk.REST_OFFSETS, OptimizerSettings(iterations=2), fast=False)
+    placed = reference.solve(z0, [wrist], FrameContext(root, root_anchor=ground))
+    assert torch.allclose(placed.state.positions[0, :2], ground.xy, atol=1e-6)

@@ -108,10 +108,7 @@ def _live(args: argparse.Namespace) -> int:
     from engine.motion.formats import save_motion
     from engine.tracker_io.live import (
         LiveRun,
-        completeness_summary,
         default_budget_ms,
-        iteration_summary,
-        latency_summary,
         reference_error,
         to_motion,
     )
@@ -173,11 +170,11 @@ def _live(args: argparse.Namespace) -> int:
         "frames_skipped_first_solve": result.frames_skipped_first_solve,
         "solved_fraction": result.frames_solved / result.frames_received if result.frames_received else None,
         "calibration_frames": result.calibration_frames,
-        "completeness": completeness_summary(result.fresh, result.devices),
-        "latency_ms": latency_summary(result.latency_ms),
-        "ms_per_frame_median": float(np.median(result.solve_ms)) if result.solve_ms else None,
+        "completeness": result.figures.completeness_summary(),
+        "latency_ms": result.figures.latency_summary(),
+        "ms_per_frame_median": result.figures.solve_median_ms(),
         "frame_budget_ms": run.budget_s * 1000.0 if method.takes_deadline else None,
-        "iterations": iteration_summary(result.iterations),
+        "iterations": result.figures.iteration_summary(),
         "tracker_error_cm": result.tracker_error_cm(),
         "reference": reference_error(result.times, result.results, reference),
         "calibration": result.calibration.to_json() if result.calibration else None,
@@ -226,8 +223,9 @@ class _Status:
         if now - self._last >= 0.5:
             self._last = now
             s = self.receiver.snapshot_stats()
-            lat = sorted(result.latency_ms[-120:])
-            fresh, devices = result.fresh[-120:], result.devices[-120:]
+            recent = result.figures  # the last two seconds of its newest frames
+            lat = sorted(list(recent.latency_ms)[-120:])
+            fresh, devices = list(recent.fresh)[-120:], list(recent.devices)[-120:]
             complete = sum(f >= d for f, d in zip(fresh, devices)) / len(fresh)
             self.bar.set_postfix_str(
                 f"{s.packet_rate_hz:.0f} pkt/s, skipped {result.frames_skipped}, "

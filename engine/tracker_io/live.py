@@ -30,6 +30,7 @@ from engine import skeleton as sk
 from engine.methods import FrameResult, Method, SensorFrame, driver
 from engine.motion.clip import Motion
 from engine.tracker_io.calibration import Calibration, calibrate
+from engine.tracker_io.live_figures import FrameFigures
 from engine.tracker_io.receiver import VMCReceiver
 
 
@@ -43,16 +44,16 @@ class LiveResult:
         Stream time of every solved frame, seconds.
     results : list of FrameResult
     sensors : list of SensorFrame
-        The readings each solved frame was given. Both are kept only when the run keeps
-        frames (:class:`LiveRun`'s ``keep_frames``: to write the motion or compare it with
-        a reference); a stream of an hour would otherwise hold 200,000 poses.
-    solve_ms : list of float
-        The method's own time of every solved frame, milliseconds.
+        The readings each solved frame was given. The three are kept only when the run
+        keeps frames (:class:`LiveRun`'s ``keep_frames``: to write the motion or compare
+        it with a reference); a stream of an hour would otherwise hold 200,000 poses.
+    figures : FrameFigures
+        Latency (packet arrival to solved pose), the method's time, iterations and
+        fresh devices of the newest frames, and their summaries over the whole run, in
+        memory that does not grow with the run (:mod:`engine.tracker_io.live_figures`).
     tracker_error_sum_m, tracker_error_count : float, int
         Sum and count of the distances from each connected tracker to its joint in the
         solved pose, metres (:meth:`tracker_error_cm`), kept as the frames are solved.
-    latency_ms : list of float
-        Packet arrival to solved pose, per solved frame, milliseconds.
     frames_received : int
         Frames that arrived after calibration (the ones the solver was offered).
     frames_skipped : int
@@ -60,11 +61,6 @@ class LiveResult:
     frames_skipped_first_solve : int
         Of those, frames that arrived during the first solve (DragPoser solves its first
         frame in offline mode, to convergence: a start-up cost, not a steady one).
-    iterations : list of int
-        Optimizer iterations of every solved frame (what the budget allowed).
-    fresh, devices : list of int
-        Per solved frame, the mapped devices that sent a sample for it, of those seen
-        (:class:`~engine.tracker_io.receiver.LiveFrame`).
     calibration : Calibration or None
     calibration_frames : int
         Frames spent calibrating.
@@ -73,22 +69,18 @@ class LiveResult:
     times: list[float] = field(default_factory=list)
     results: list[FrameResult] = field(default_factory=list)
     sensors: list[SensorFrame] = field(default_factory=list)
-    latency_ms: list[float] = field(default_factory=list)
+    figures: FrameFigures = field(default_factory=FrameFigures)
     frames_received: int = 0
     frames_skipped: int = 0
     frames_skipped_first_solve: int = 0
-    iterations: list[int] = field(default_factory=list)
-    fresh: list[int] = field(default_factory=list)
-    devices: list[int] = field(default_factory=list)
     calibration: Calibration | None = None
     calibration_frames: int = 0
-    solve_ms: list[float] = field(default_factory=list)
     tracker_error_sum_m: float = 0.0
     tracker_error_count: int = 0
 
     @property
     def frames_solved(self) -> int:
-        return len(self.latency_ms)
+        return self.figures.frames
 
     def tracker_error_cm(self) -> float | None:
         """Mean distance, cm, from each connected tracker to its joint in the solved
@@ -216,16 +208,13 @@ class LiveRun:
             if out.frames_solved == 1:
                 out.frames_skipped_first_solve = missed
             res = driver.step(self.method, f.sensors, f.arrival + self.budget_s if self.budget_s > 0 else None)
-            out.latency_ms.append(1000.0 * (time.perf_counter() - f.arrival))
-            out.times.append(f.t)
-            out.solve_ms.append(res.ms)
+            latency_ms = 1000.0 * (time.perf_counter() - f.arrival)
+            out.figures.add(latency_ms, res.ms, res.iterations, f.fresh, f.devices)
             out.add_tracker_error(res, f.sensors)
             if self.keep_frames:
+                out.times.append(f.t)
                 out.results.append(res)
                 out.sensors.append(f.sensors)
-            out.iterations.append(res.iterations)
-            out.fresh.append(f.fresh)
-            out.devices.append(f.devices)
             if on_frame is not None:
                 on_frame(out)
             self.method.between_frames()  # the pose is out: deferred work now
@@ -300,51 +289,3 @@ def default_budget_ms(fps: float) -> float:
     (docs/trackers.md: idle, 10 ms gave 97.8 % solved, p95 14.3 ms, error equal to
     offline; 13.3 ms gave 96.8 %, p95 23.7 ms)."""
     return 0.6 * 1000.0 / fps
-
-
-def iteration_summary(iterations: Sequence[int]) -> dict:
-    """Median, mean, 5th percentile and minimum of the iterations per solved frame."""
-    if not iterations:
-        return {"median": None, "mean": None, "p5": None, "min": None}
-    a = np.asarray(iterations, float)
-    return {
-        "median": float(np.median(a)),
-        "mean": float(a.mean()),
-        "p5": float(np.percentile(a, 5)),
-        "min": int(a.min()),
-    }
-
-
-def completeness_summary(fresh: Sequence[int], devices: Sequence[int]) -> dict:
-    """How complete the solved frames were: frames whose every mapped device seen so far
-    sent a sample for them, the mean and minimum of fresh devices per frame, and how many
-    frames had each count (``by_fresh``)."""
-    if not fresh:
-        return {
-            "frames": 0,
-            "complete": 0,
-            "complete_fraction": None,
-            "fresh_mean": None,
-            "fresh_min": None,
-            "devices": 0,
-            "by_fresh": {},
-        }
-    f, d = np.asarray(fresh, int), np.asarray(devices, int)
-    complete = int(np.sum(f >= d))
-    counts = np.bincount(f)
-    return {
-        "frames": int(f.size),
-        "complete": complete,
-        "complete_fraction": complete / f.size,
-        "fresh_mean": float(f.mean()),
-        "fresh_min": int(f.min()),
-        "devices": int(d.max()),
-        "by_fresh": {str(k): int(n) for k, n in enumerate(counts) if n},
-    }
-
-
-def latency_summary(latency_ms: Sequence[float]) -> dict:
-    if not latency_ms:
-        return {"p50": None, "p95": None, "max": None}
-    a = np.asarray(latency_ms, float)
-    return {"p50": float(np.percentile(a, 50)), "p95": float(np.percentile(a, 95)), "max": float(a.max())}

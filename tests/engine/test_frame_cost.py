@@ -313,7 +313,7 @@ def test_live_run_gives_the_method_its_deadline_and_time_between_frames():
     out = LiveRun(Stream(), probe, sk.Skeleton.canonical(), 60.0, budget_ms=12.0).run(idle_timeout_s=1.0)
     # no automatic full collection while streaming (they stalled frames by 220-240 ms); back on after
     assert gc_during[-3:] == [False, False, False] and gc.isenabled()
-    assert out.frames_solved == 3 and out.iterations == [3, 3, 3]
+    assert out.frames_solved == 3 and list(out.figures.iterations) == [3, 3, 3]
     assert probe.calls == [
         ("step", pytest.approx(100.012)),
         ("between", None),

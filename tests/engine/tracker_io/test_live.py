@@ -38,8 +38,8 @@ def test_live_run_solves_the_stream_like_simulated_sensors(synthetic_motion):
         out = run.run(duration_s=20.0, idle_timeout_s=0.5)
         sender.join()
     assert out.frames_received == 60 and out.frames_solved + out.frames_skipped == 60
-    assert out.frames_solved >= 5 and len(out.latency_ms) == out.frames_solved
-    assert all(lat > 0 for lat in out.latency_ms)
+    assert out.frames_solved >= 5 and len(out.figures.latency_ms) == out.frames_solved
+    assert all(lat > 0 for lat in out.figures.latency_ms)
     err = reference_error(out.times, out.results, motion)
     assert err["frames_compared"] == out.frames_solved and err["pos_cm"] < 10.0
     rec = to_motion(out.times, out.results, motion.skeleton, 60.0)
@@ -57,8 +57,8 @@ def test_a_live_run_that_keeps_no_frames_keeps_the_figures_only(synthetic_motion
         sender.start()
         out = run.run(duration_s=20.0, idle_timeout_s=0.5)
         sender.join()
-    assert out.results == [] and out.sensors == []
-    assert out.frames_solved >= 5 and out.frames_solved == len(out.latency_ms) == len(out.solve_ms)
+    assert out.results == [] and out.sensors == [] and out.times == []
+    assert out.frames_solved >= 5 and out.frames_solved == len(out.figures.latency_ms) == len(out.figures.solve_ms)
     assert out.frames_solved + out.frames_skipped == 30
     assert 0.0 < out.tracker_error_cm() < 20.0
 
@@ -294,13 +294,3 @@ def test_cli_calibrates_a_scaled_wearer(synthetic_motion, tmp_path, capsys):
 def test_cli_argument_errors(argv, message, capsys):
     assert main(argv) == 2
     assert message in capsys.readouterr().err
-
-
-def test_completeness_summary_counts_frames_by_fresh_devices():
-    from engine.tracker_io.live import completeness_summary
-
-    c = completeness_summary([6, 5, 6, 6, 3], [6, 6, 6, 6, 6])
-    assert (c["frames"], c["complete"], c["fresh_min"], c["devices"]) == (5, 3, 3, 6)
-    assert c["complete_fraction"] == pytest.approx(0.6) and c["fresh_mean"] == pytest.approx(5.2)
-    assert c["by_fresh"] == {"3": 1, "5": 1, "6": 3}
-    assert completeness_summary([], [])["complete_fraction"] is None

@@ -148,7 +148,7 @@ class MainWindow(QMainWindow):
         self.sensor_panel = SensorPanel(SensorSet.presets())
         self.constraint_panel = ConstraintPanel(constraint_schema())
         fields = optimizer_fields()
-        self._optimizer_defaults = {f.name: f.default for f in fields}
+        self.optimizer_defaults = {f.name: f.default for f in fields}
         self.optimizer_panel = OptimizerPanel(method_names(self.session.method), fields)
         tabs = QTabWidget()
         tabs.addTab(self.sensor_panel, "Sensors")

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from app.shell import StudioShell
 from engine.authoring.motion_paths import clip_paths
 from engine.studio import events as ev
 
@@ -16,7 +17,7 @@ from engine.studio import events as ev
 class StudioRedraw:
     """The updates of the studio window ``w`` from its session's events (see the module doc)."""
 
-    def __init__(self, w: Any) -> None:
+    def __init__(self, w: StudioShell) -> None:
         self.w = w
         # each event updates only the widget showing what changed (a sensor drag touches
         # the sensor panel alone; the 3D view follows the engine's snapshots)
@@ -105,5 +106,5 @@ class StudioRedraw:
     def _show_optimizer(self, event: Any = None) -> None:
         s = self.w.session
         # settings the session has not set yet show the engine's defaults
-        self.w.optimizer_panel.set_state(s.method, s.ghosts, {**self.w._optimizer_defaults, **s.settings})
+        self.w.optimizer_panel.set_state(s.method, s.ghosts, {**self.w.optimizer_defaults, **s.settings})
         self.w.ghost_status.apply()  # a ghost that cannot run stays disabled

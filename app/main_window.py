@@ -41,11 +41,10 @@ from app.menus import build_menus
 from app.motion_path_view import MotionPathView
 from app.schema import constraint_schema, optimizer_fields
 from app.status_bar import StatusBar
+from app.studio_redraw import StudioRedraw
 from app.undo import SceneUndo
-from engine.authoring.motion_paths import clip_paths
 from engine.errors import UserError
 from engine.motion.source_file import is_source_file
-from engine.studio import events as ev
 from engine.studio.session import Session
 from engine.studio.session_sensors import SensorSet
 from widgets.constraint_panel import ConstraintPanel
@@ -109,10 +108,8 @@ class MainWindow(QMainWindow):
         self.follow_button = self.timeline.add_action(self.actions_by_name["follow"])
         self.camera_keys = CameraKeys(self.viewport, self)
         QApplication.instance().installEventFilter(self.camera_keys)
-        self._connect_session()
-        self._show_sensors(None)
-        self._show_constraints(None)
-        self._show_optimizer(None)
+        self.redraw = StudioRedraw(self)
+        self.redraw.refresh()
         self.drawing = DrawScheduler(self)
         self.latent_views = LatentViews(self)  # the latent map dock, drawn by the scheduler's panels
         self.timer = QTimer(self, interval=self.drawing.interval_ms)
@@ -151,7 +148,7 @@ class MainWindow(QMainWindow):
         self.sensor_panel = SensorPanel(SensorSet.presets())
         self.constraint_panel = ConstraintPanel(constraint_schema())
         fields = optimizer_fields()
-        self._optimizer_defaults = {f.name: f.default for f in fields}
+        self.optimizer_defaults = {f.name: f.default for f in fields}
         self.optimizer_panel = OptimizerPanel(method_names(self.session.method), fields)
         tabs = QTabWidget()
         tabs.addTab(self.sensor_panel, "Sensors")
@@ -231,91 +228,6 @@ class MainWindow(QMainWindow):
         self.latent.debugToggled.connect(self._latent_debug)
         self.viewport.filesDropped.connect(self._open_dropped)
 
-    # -- session -> widgets -------------------------------------------------------------
-    def _connect_session(self) -> None:
-        """Each event updates only the widget showing what changed (a sensor drag touches
-        the sensor panel alone; the 3D view follows the engine's snapshots)."""
-        e = self.session.events
-        e.frame.connect(self.timeline.set_frame)
-        e.playback.connect(self._show_playback)
-        e.motion.connect(self._show_motion)
-        e.sensors.connect(self._show_sensors)
-        e.sensors.connect(self.ghost_status.sensors_changed)
-        e.constraints.connect(self._show_constraints)
-        e.settings.connect(self._show_optimizer)
-        e.method.connect(self._show_optimizer)
-        e.method.connect(self._announce_method)
-        e.motion.connect(self._announce_motion)
-
-    def _disconnect_session(self) -> None:
-        e = self.session.events
-        for signal, slot in (
-            (e.frame, self.timeline.set_frame),
-            (e.playback, self._show_playback),
-            (e.motion, self._show_motion),
-            (e.sensors, self._show_sensors),
-            (e.sensors, self.ghost_status.sensors_changed),
-            (e.constraints, self._show_constraints),
-            (e.settings, self._show_optimizer),
-            (e.method, self._show_optimizer),
-            (e.method, self._announce_method),
-            (e.motion, self._announce_motion),
-        ):
-            signal.disconnect(slot)
-
-    def _seq(self) -> int:
-        snap = self.session.latest
-        return -1 if snap is None else snap.seq
-
-    def _announce_method(self, event: ev.MethodChanged) -> None:
-        if event.method != event.old_method and not event.refused:  # a refusal switches nothing
-            self.busy.begin(event.method, self._seq(), "Switching to")
-
-    def _announce_motion(self, event: ev.MotionChanged) -> None:
-        self.busy.begin(self.session.method, self._seq(), "Opening the clip with")
-
-    def _show_playback(self, event: ev.PlaybackChanged) -> None:
-        self.timeline.set_playing(event.playing)
-        self.timeline.set_pace(event.pace)
-
-    def _show_motion(self, event: ev.MotionChanged) -> None:
-        if not self.undo.editing_clip:  # another clip: its frames are not the selected ones
-            self.timeline.set_selection(None)
-            self.opened_motion = event.motion  # what clip_saving compares against
-        self.timeline.set_range(self.session.num_frames, event.motion.fps)
-        self.constraint_panel.frames_changed()
-        self.plots.clear()
-        self.method_errors.clear()
-        self.motion_paths.set_source(lambda m=event.motion: clip_paths(m))  # computed when drawn
-        if self.undo.editing_clip:
-            # the same clip edited (a range re-solve, its undo): the frame on screen and
-            # the camera the user set stay; frame 0's placement would show the character
-            # off-centre and near until something moved the camera again
-            return
-        self.viewport.reset_camera(event.motion.root_pos[0])
-        # the clip at once, the solve behind it (the first solved frame takes seconds)
-        self.viewport.show_clip_frame(event.motion.slice(0, 1).positions()[0])
-
-    def _show_sensors(self, event: ev.SensorsChanged | None) -> None:
-        s = self.session
-        if event is not None and event.old is not None and event.new is not None:
-            # one tracker edited (a target drag sends one per mouse move): its row only
-            if event.old.dof != event.new.dof:
-                self.viewport.oriented = frozenset(j for j, c in s.sensors.items() if c.dof == 6)
-            self.sensor_panel.set_sensor(event.joint, event.new)
-            return
-        self.viewport.oriented = frozenset(j for j, c in s.sensors.items() if c.dof == 6)
-        self.sensor_panel.set_sensors(s.preset, s.sensors)
-
-    def _show_constraints(self, event: ev.ConstraintsChanged | None) -> None:
-        self.constraint_panel.set_constraints([c.to_dict() for c in self.session.constraints])
-
-    def _show_optimizer(self, event: Any = None) -> None:
-        s = self.session
-        # settings the session has not set yet show the engine's defaults
-        self.optimizer_panel.set_state(s.method, s.ghosts, {**self._optimizer_defaults, **s.settings})
-        self.ghost_status.apply()  # a ghost that cannot run stays disabled
-
     def _guard(self, fn: Any) -> Any:
         """Wrap a request so a user error shows a dialog instead of escaping into Qt."""
 
@@ -394,7 +306,7 @@ class MainWindow(QMainWindow):
         self.timer.stop()
         QApplication.instance().removeEventFilter(self.camera_keys)
         self.settings.setValue("geometry", self.saveGeometry())
-        self._disconnect_session()
+        self.redraw.close()
         self.live.close()
         self.undo.close()
         self.session.shutdown()

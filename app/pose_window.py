@@ -3,7 +3,7 @@
 The window is a view of an :class:`engine.authoring.session.AuthoringSession`, the
 Qt-free model that owns the pose, the targets, the keys, the constraints and the undo
 history: every gesture calls one model method (one undo step) and the window redraws
-what the model's events say changed. A click on a joint selects it (its rotation rings
+what the model's events say changed (:mod:`app.pose_redraw`). A click on a joint selects it (its rotation rings
 show: a ring dragged turns it about that world axis; its motion path shows,
 :mod:`app.motion_path_view`); a drag on a joint creates a target there and moves it and
 selects the joint (a wrist or an ankle at the depth :mod:`engine.authoring.drag_reach`
@@ -47,18 +47,16 @@ from app.motion_path_view import MotionPathView
 from app.pose_constraints import PoseConstraints
 from app.pose_files import PoseFiles
 from app.pose_menus import build_pose_menus
+from app.pose_redraw import PoseRedraw
 from app.pose_timeline import KeyPlayback
 from app.pose_turns import JointTurns
 from app.status_bar import StatusBar
-from engine.authoring import events as ev
 from engine.authoring.document import AuthoringScene
 from engine.authoring.drag_reach import limb_reach, on_reach
 from engine.authoring.history import History
-from engine.authoring.motion_paths import authored_paths
 from engine.authoring.pose_mode import PoseMode
 from engine.authoring.session import AuthoringSession
 from engine.errors import UserError
-from engine.studio.frame_figures import gizmos_of
 from widgets.key_strip import KeyStrip
 from widgets.target_list import TargetList
 from widgets.viewport.viewport import Viewport
@@ -145,23 +143,9 @@ class PoseWindow(QMainWindow):
         QApplication.instance().installEventFilter(self.camera_keys)
         self._render_pending = False
         self._asked_to_close = False  # the studio's quit asked already (close_unasked)
-        self._subscriptions: list[tuple[Any, Callable]] = []
-        for signal, slot in (
-            (session.events.targets, self._on_targets),
-            (session.events.pose, self._on_pose),
-            (session.events.keys, self._on_keys),
-            (session.events.animation, self._on_keys),
-            (session.events.frame, self._on_keys),
-            (session.events.constraints, self._on_constraints),
-            (session.events.history, self._on_history),
-            (session.events.keys, self._paths_due),
-            (session.events.animation, self._paths_due),
-            (session.events.bake, self._paths_due),
-        ):
-            signal.connect(slot)
-            self._subscriptions.append((signal, slot))
-        self.refresh()
-        self._paths_due()
+        self.redraw = PoseRedraw(self)
+        self.redraw.refresh()
+        self.redraw.paths_due()
 
     # -- the model's parts, as the rest of the app reads them ----------------------
     @property
@@ -365,73 +349,6 @@ class PoseWindow(QMainWindow):
         if not getattr(self.viewport.plotter, "_closed", False):
             self.viewport.plotter.render()
 
-    def _on_targets(self, e: ev.TargetsChanged | None = None) -> None:
-        t = self.mode.targets
-        self.viewport.sensors.update(
-            tuple(t),
-            np.array([x.position for x in t.values()]).reshape(-1, 3),
-            np.array([x.rotation if x.rotation is not None else [1.0, 0, 0, 0] for x in t.values()]).reshape(-1, 4),
-            np.array([x.active for x in t.values()], bool),
-            tuple(x.rotation is not None for x in t.values()),
-        )
-        self.targets.set_targets({j: (x.enabled, x.weight, x.rotation is not None) for j, x in t.items()})
-        self._render_soon()
-
-    def _on_pose(self, e: ev.PoseChanged | None = None) -> None:
-        self.facing.blockSignals(True)
-        self.facing.setValue((self.mode.heading + 180.0) % 360.0 - 180.0)
-        self.facing.blockSignals(False)
-        self.turns.show_handles()
-        self._show_gizmos()
-        self.show_positions(self.mode.pose.positions)
-
-    def _show_gizmos(self) -> None:
-        """The constraints' gizmos on the pose, as the studio draws them."""
-        self.viewport.gizmos.update(
-            gizmos_of(self.mode.constraints, self.mode.pose.positions, lambda m: self.statusBar().showMessage(m, 5000))
-        )
-
-    def _paths_due(self, e: Any = None) -> None:
-        """The keys, the animation or the bake changed: the paths are computed again."""
-        s = self.session
-        self.paths.source_changed(
-            lambda: authored_paths(s.mode.character, s.scene.keys, s.scene.animation.interpolation, s.baked)
-        )
-
-    def _on_keys(self, e: Any = None) -> None:
-        a = self.scene.animation
-        self.keys.set_state(a.frames, a.fps, tuple(k.frame for k in self.scene.keys), self.frame, a.interpolation)
-        self.constraints.panel.frames_changed()
-
-    def _on_constraints(self, e: Any = None) -> None:
-        self.constraints.refresh()
-        self._show_gizmos()
-        self._render_soon()
-
-    def _on_history(self, e: ev.HistoryChanged) -> None:
-        undo, redo = self.actions_by_name["undo"], self.actions_by_name["redo"]
-        undo.setEnabled(e.can_undo)
-        undo.setText(f"&Undo {e.undo_text}".rstrip())
-        redo.setEnabled(e.can_redo)
-        redo.setText(f"&Redo {e.redo_text}".rstrip())
-
-    def refresh(self) -> None:
-        """Show the whole model: the pose, its targets, the key strip, the constraints."""
-        self._on_targets()
-        self._on_keys()
-        self._on_constraints()
-        self._on_history(
-            ev.HistoryChanged(
-                self.undo.can_undo(),
-                self.undo.can_redo(),
-                self.undo.undo_text(),
-                self.undo.redo_text(),
-                self.undo.is_clean(),
-                self.undo.count(),
-            )
-        )
-        self._on_pose()
-
     # -- closing -------------------------------------------------------------------
     def close_unasked(self) -> bool:
         """Close without the unsaved-work prompt: the studio's quit has asked it already
@@ -449,9 +366,7 @@ class PoseWindow(QMainWindow):
             self.autosave.discard()
         self.jobs.shutdown()
         self.playback.timer.stop()
-        for signal, slot in self._subscriptions:
-            signal.disconnect(slot)
-        self._subscriptions.clear()
+        self.redraw.close()
         QApplication.instance().removeEventFilter(self.camera_keys)
         if not getattr(self.viewport.plotter, "_closed", False):  # a second close would free VTK twice
             self.viewport.close()

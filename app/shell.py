@@ -1,7 +1,7 @@
 """What the app's helpers may use of the window they serve, as typed protocols.
 
 The studio's helpers (saving, drawing, failure countdowns, ghost status, measuring,
-range re-solves, the authoring entries) take
+range re-solves, the authoring entries, the redraw from session events) take
 the main window as a :class:`StudioShell`: the session, the widgets and the few window
 services they call, and nothing else. The menu parts shared with the pose window take a
 :class:`ViewWindow`. Both are ``runtime_checkable``; a test checks that
@@ -9,13 +9,15 @@ services they call, and nothing else. The menu parts shared with the pose window
 something the window lacks, or a window that drops something a helper uses, fails there.
 
 The helpers' own objects the window holds (its scene files, ghost status, draw
-scheduler) appear as the small protocols below, not as their classes: those modules
-take a shell themselves, and naming their classes here would make an import loop.
+scheduler, motion paths) appear as the small protocols below, not as their classes:
+those modules import this one (the motion paths through the shared menu parts), and
+naming their classes here would make an import loop.
 """
 
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
@@ -29,6 +31,7 @@ if TYPE_CHECKING:
     from app.undo import SceneUndo
     from engine.motion.clip import Motion
     from engine.studio.session import Session
+    from widgets.constraint_panel import ConstraintPanel
     from widgets.latent_inspector import LatentInspector
     from widgets.method_errors import MethodErrorPlot
     from widgets.optimizer_panel import OptimizerPanel
@@ -47,11 +50,23 @@ class SceneFiles(Protocol):
 
 
 class GhostProblems(Protocol):
-    """The window's ghost status (:class:`app.ghost_status.GhostStatus`), as drawing uses it."""
+    """The window's ghost status (:class:`app.ghost_status.GhostStatus`), as drawing and
+    the redraw from session events use it."""
 
     def is_ghost_problem(self, message: str) -> bool: ...
 
     def on_snapshot(self, snap: Any) -> None: ...
+
+    def apply(self) -> None: ...
+
+    def sensors_changed(self, event: Any = None) -> None: ...
+
+
+class PathSource(Protocol):
+    """The window's motion paths (:class:`app.motion_path_view.MotionPathView`), as the
+    redraw from session events uses them: where the paths of a new clip come from."""
+
+    def set_source(self, source: Callable[[], Any] | None) -> None: ...
 
 
 class TimedPanel(Protocol):
@@ -111,6 +126,11 @@ class StudioShell(Protocol):
         The pose windows opened from File ▸ New pose (:mod:`app.authoring_actions`).
     autosave : StudioAutosave or None
         The autosave of the window and its pose windows (:mod:`app.autosave`), when on.
+    motion_paths : PathSource
+        The motion paths in the 3D view (:mod:`app.motion_path_view`).
+    optimizer_defaults : dict
+        Each optimizer setting's default, by name: what the optimizer panel shows for a
+        setting the session has not set.
     """
 
     session: Session
@@ -120,6 +140,9 @@ class StudioShell(Protocol):
     latent: LatentInspector
     method_errors: MethodErrorPlot
     optimizer_panel: OptimizerPanel
+    optimizer_defaults: dict[str, Any]
+    constraint_panel: ConstraintPanel
+    motion_paths: PathSource
     sensor_panel: SensorPanel
     undo: SceneUndo
     busy: BusyNotice

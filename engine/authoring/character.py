@@ -33,8 +33,10 @@ from engine.constraints.temporal_prior import TemporalPriorConstraint
 from engine.errors import UserError
 from engine.kinematics import quat_np as QN
 from engine.kinematics import quaternion as Q
+from engine.kinematics.features import encoder_input, pose_from_motion
 from engine.kinematics.fk import fk, fk_positions
 from engine.kinematics.root import place_root
+from engine.motion.clip import Motion
 from engine.solver import FrameContext, OptimizerSettings, PoseOptimizer, RootFrame, RootOverride
 from engine.solver.limb_ik import LIMBS, finish
 
@@ -48,6 +50,24 @@ def yaw_quaternion(yaw_deg: float) -> np.ndarray:
     """Rotation ``(4,)`` (w, x, y, z) by ``yaw_deg`` degrees about +Z."""
     h = np.radians(float(yaw_deg)) / 2.0
     return np.array([np.cos(h), 0.0, 0.0, np.sin(h)])
+
+
+def encode_frames(vae, motion: Motion, frames: list[int]) -> np.ndarray:
+    """The VAE encoder's mean latents ``(len(frames), L)`` of some frames of ``motion``."""
+    local = torch.as_tensor(motion.local_rot, dtype=torch.float64)
+    root = torch.as_tensor(motion.root_pos, dtype=torch.float64)
+    rot, disp = pose_from_motion(local, root)
+    idx = list(frames)
+    offsets = torch.as_tensor(motion.skeleton.offsets, dtype=torch.float64).expand(len(idx), -1, -1)
+    with torch.no_grad():
+        mu, _ = vae.encode(encoder_input(rot[idx], disp[idx], offsets).float())
+    return mu.numpy().astype(np.float32)
+
+
+def heading_deg(rotation: np.ndarray) -> float:
+    """Yaw of a world rotation ``(4,)`` about +Z, degrees."""
+    h = QN.heading(np.asarray(rotation, float))
+    return float(np.degrees(2.0 * np.arctan2(h[3], h[0])))
 
 
 @dataclass

@@ -27,21 +27,20 @@ from __future__ import annotations
 import copy
 
 import numpy as np
-import torch
 
 from engine import skeleton as sk
-from engine.authoring.character import Character, Pose, yaw_quaternion
+from engine.authoring.character import Character, Pose, encode_frames, heading_deg, yaw_quaternion
 from engine.authoring.keys import Key
 from engine.authoring.pose_drag import EVENTS, drag
-from engine.authoring.pose_metrics import centre_of_mass
+from engine.authoring.pose_hold import held_joints, hold_terms
 from engine.authoring.pose_options import LOWEST_ROOT, SQUAT_FROM, PoseOptions
+from engine.authoring.pose_root import FOOT_OF, arm_low_points, moved_feet, root_where
 from engine.authoring.pose_trunk import LEGS, TRUNK, keep_trunk
 from engine.authoring.progress import CancelCheck
 from engine.authoring.targets import JointTarget, solve_inputs
 from engine.constraints.base import Constraint
 from engine.errors import UserError
 from engine.kinematics import quat_np as QN
-from engine.kinematics.features import encoder_input, pose_from_motion
 from engine.motion.clip import Motion
 from engine.solver.limb_ik import LIMBS
 
@@ -60,27 +59,8 @@ STEP_SIZE = 1.5
 OVERSHOOT = 0.05
 
 
-def encode_frames(vae, motion: Motion, frames: list[int]) -> np.ndarray:
-    """The VAE encoder's mean latents ``(len(frames), L)`` of some frames of ``motion``."""
-    local = torch.as_tensor(motion.local_rot, dtype=torch.float64)
-    root = torch.as_tensor(motion.root_pos, dtype=torch.float64)
-    rot, disp = pose_from_motion(local, root)
-    idx = list(frames)
-    offsets = torch.as_tensor(motion.skeleton.offsets, dtype=torch.float64).expand(len(idx), -1, -1)
-    with torch.no_grad():
-        mu, _ = vae.encode(encoder_input(rot[idx], disp[idx], offsets).float())
-    return mu.numpy().astype(np.float32)
-
-
-def heading_deg(rotation: np.ndarray) -> float:
-    """Yaw of a world rotation ``(4,)`` about +Z, degrees."""
-    h = QN.heading(np.asarray(rotation, float))
-    return float(np.degrees(2.0 * np.arctan2(h[3], h[0])))
-
-
 #: Foot joints that stay planted where they stand until the user drags that foot.
 PLANTED = ("lankle", "ltoe", "rankle", "rtoe")
-_FOOT_OF = {"lankle": "l", "ltoe": "l", "rankle": "r", "rtoe": "r"}
 
 
 class PoseMode:
@@ -121,7 +101,7 @@ class PoseMode:
         self.frame = 0
         self.pose: Pose = self.character.decode(self.base_latent, self.character.grounded(root_xy, self.heading))
         self._standing_root = float(self.pose.root_pos[2])
-        self._lowest_reach = self._arm_low_points()
+        self._lowest_reach = arm_low_points(self.pose.positions)
         #: Where each untargeted foot joint stays (world, metres), see :class:`PoseOptions`.
         self.planted: dict[str, np.ndarray] = {}
         #: The pose the current drag began from (None: the next solve's starting pose),
@@ -224,20 +204,16 @@ class PoseMode:
         return np.asarray(held.position if held is not None else self.pose.root_pos, float).copy()
 
     # -- solving -------------------------------------------------------------------
-    def _moved_feet(self) -> set[str]:
-        """The feet (``"l"``, ``"r"``) that an active user target moves."""
-        return {_FOOT_OF[t.joint] for t in self.targets.values() if t.joint in _FOOT_OF and t.active}
-
     def _inputs(self) -> tuple[list[Constraint], dict, dict]:
         """The solve's terms: the user's targets, the planted feet that no target moves, the
         scene's constraints; and the exact limb and rotation steps after it."""
         targets = list(self.targets.values())
         if self.options.plant_feet:
-            moved = self._moved_feet()
+            moved = moved_feet(self.targets)
             targets += [
                 JointTarget(j, p, weight=self.options.plant_weight)
                 for j, p in self.planted.items()
-                if _FOOT_OF[j] not in moved and j not in self.targets
+                if FOOT_OF[j] not in moved and j not in self.targets
             ]
         terms, reach, rotations = solve_inputs(targets)
         for t in terms:
@@ -253,74 +229,16 @@ class PoseMode:
 
     def _replant(self) -> None:
         """A foot the user moves is planted where it is left."""
-        moved = self._moved_feet()
+        moved = moved_feet(self.targets)
         for j in PLANTED:
-            if _FOOT_OF[j] in moved:
+            if FOOT_OF[j] in moved:
                 self.planted[j] = self.pose.positions[sk.JOINT_INDEX[j]].copy()
 
     def _where(self, adjust: bool = True) -> np.ndarray:
-        """Where the root is held during the solve (3,) metres: a target on the root puts
-        it there (while crouching, only at its height: the pelvis keeps its level place
-        and, with ``adjust``, takes the crouch's balance step from it); else, with
-        ``adjust``, the crouch and balance steps move it (see :class:`PoseOptions`), which a
-        solve without latent steps does not do, so that it only puts the limbs on their
-        targets."""
-        root = self.targets.get("root")
-        o = self.options
-        if root is not None and root.active:
-            where = np.asarray(root.position, float).copy()
-            if o.crouch_balance and where[2] < self._standing_root - SQUAT_FROM:
-                # a crouching pelvis keeps its own level place, balanced from there
-                where[:2] = self.pose.root_pos[:2] + (self._balance_step(o.crouch_tolerance) if adjust else 0.0)
-            return where
-        where = self.pose.root_pos.copy()
-        if not adjust:
-            return where
-        user = [t for t in self.targets.values() if t.active and t.joint != "root" and t.joint not in _FOOT_OF]
-        if o.crouch_share > 0 and user:
-            # the part of the way from the joint down to its target that lies below where it crouches from
-            low = {t.index: self._crouch_from(t.index) for t in user}
-            drop = min(
-                0.0,
-                min(
-                    min(t.position[2], low[t.index]) - min(self.pose.positions[t.index, 2], low[t.index]) for t in user
-                ),
-            )
-            standing = self._standing_root
-            where[2] = float(np.clip(where[2] + o.crouch_share * drop, LOWEST_ROOT * standing, standing))
-        where[:2] += self._balance_step(o.balance_tolerance)
-        return where
-
-    def _balance_step(self, tolerance: float) -> np.ndarray:
-        """The level move (2,) metres of the pelvis that one solve makes towards balance
-        (see ``PoseOptions.balance``): none while a foot is dragged or the centre of mass
-        lies within ``tolerance`` metres of the middle of the planted feet."""
-        o = self.options
-        if not (o.balance and o.plant_feet) or self._moved_feet():
-            return np.zeros(2)
-        feet = np.mean([p[:2] for p in self.planted.values()], axis=0)
-        off = feet - centre_of_mass(self.pose.positions)[:2]
-        dist = float(np.linalg.norm(off))
-        if dist <= tolerance:
-            return np.zeros(2)
-        return o.balance_gain * off * (1.0 - tolerance / dist)
-
-    def _arm_low_points(self) -> dict[int, float]:
-        """Per wrist, the lowest height (metres) it reaches from its shoulder in the
-        starting pose, the arm hanging straight down."""
-        p, out = self.pose.positions, {}
-        for c, (a, b) in LIMBS.items():
-            if sk.JOINT_NAMES[c] not in _FOOT_OF:
-                out[c] = float(p[a, 2] - np.linalg.norm(p[b] - p[a]) - np.linalg.norm(p[c] - p[b]))
-        return out
-
-    def _crouch_from(self, joint: int) -> float:
-        """Height (metres) below which a dragged ``joint``'s target lowers the pelvis: a
-        wrist's low point when ``options.crouch_below_reach`` (a target the standing arm
-        reaches bends no knee), else no limit."""
-        if self.options.crouch_below_reach and joint in self._lowest_reach:
-            return self._lowest_reach[joint]
-        return np.inf
+        """Where the root is held during the solve (3,) metres (:func:`engine.authoring.pose_root.root_where`)."""
+        return root_where(
+            self.pose, self.targets, self.planted, self.options, self._standing_root, self._lowest_reach, adjust
+        )
 
     def solve(self, iterations: int = ITERATIONS) -> Pose:
         """One continuous solve from the current pose (a drag event): a round of
@@ -377,31 +295,17 @@ class PoseMode:
         return keep_trunk(pose, self.anchor, forward, self.character.skeleton.offsets, limbs, dict(rotations), pelvis)
 
     def held(self) -> list[int]:
-        """Joints the hold pulls towards the anchor (see ``PoseOptions.hold_weight``):
-        every joint but the root, the joints with a target, the planted feet, and the
-        knee or elbow and toe of a targeted limb (the limb step places those)."""
-        free = {0} | {t.index for t in self.targets.values() if t.active}
-        for t in self.targets.values():
-            if t.active and t.index in LIMBS:
-                free.add(LIMBS[t.index][1])
-                if t.joint in _FOOT_OF:
-                    free.add(sk.JOINT_INDEX[_FOOT_OF[t.joint] + "toe"])
-        if self.options.plant_feet:
-            moved = self._moved_feet()
-            free |= {sk.JOINT_INDEX[j] for j in self.planted if _FOOT_OF[j] not in moved}
-        return [j for j in range(len(sk.JOINT_NAMES)) if j not in free]
+        """Joints the hold pulls towards the anchor (see ``PoseOptions.hold_weight`` and
+        :func:`engine.authoring.pose_hold.held_joints`)."""
+        return held_joints(self.targets, self.planted, self.options.plant_feet)
 
     def _hold_terms(self, where: np.ndarray) -> list[Constraint]:
-        """The hold's terms for a solve with the root at ``where (3,)`` metres: each held
-        joint's anchor position relative to the anchor's root, from ``where``."""
+        """The hold's terms for a solve with the root at ``where (3,)`` metres
+        (:func:`engine.authoring.pose_hold.hold_terms`)."""
         w = self.options.hold_weight
         if w <= 0 or self.anchor is None:
             return []
-        a = self.anchor
-        return [
-            JointTarget(sk.JOINT_NAMES[j], a.positions[j] - a.root_pos + where, weight=w).constraint()
-            for j in self.held()
-        ]
+        return hold_terms(self.anchor, self.held(), where, w)
 
     def shortfall(self) -> float:
         """Largest distance (metres) of a targeted wrist or ankle from its target in the

@@ -32,8 +32,7 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.authoring.bake import active_constraints
-from engine.authoring.character import Character
-from engine.authoring.pose_mode import encode_frames
+from engine.authoring.character import Character, encode_frames
 from engine.authoring.progress import CancelCheck, check
 from engine.constraints.base import Constraint
 from engine.constraints.end_effector import EndEffectorConstraint

@@ -229,7 +229,7 @@ def test_dragging_the_hips_moves_the_whole_body_live_and_keys_carry_root_and_fac
     from PyQt6.QtCore import Qt
     from PyQt6.QtTest import QTest
 
-    from engine.authoring.pose_mode import heading_deg
+    from engine.authoring.character import heading_deg
     from tests.app.gui_helpers import mouse_drag, pixel_of
 
     w = window

@@ -22,6 +22,7 @@ HELPERS = (
     "measure.py",
     "range_actions.py",
     "authoring_actions.py",
+    "studio_redraw.py",
 )
 WINDOW_NAMES = {"window", "w"}
 

@@ -7,10 +7,9 @@ import numpy as np
 import pytest
 
 from engine.authoring.bake import bake
-from engine.authoring.character import Character
+from engine.authoring.character import Character, heading_deg
 from engine.authoring.document import AuthoringScene
 from engine.authoring.keys import Animation, Key, interpolate
-from engine.authoring.pose_mode import heading_deg
 from engine.kinematics.fk import fk
 
 
@@ -82,7 +81,8 @@ def test_a_squat_keeps_the_weight_over_the_feet_and_a_second_drag_does_not_move_
     17 cm ahead of it, in front of the toes: a body on its toes); a second straight-down
     drag from the hips' handle leaves the feet where they are."""
     from engine import skeleton as sk
-    from engine.authoring.pose_mode import PoseMode, PoseOptions, centre_of_mass
+    from engine.authoring.pose_metrics import centre_of_mass
+    from engine.authoring.pose_mode import PoseMode, PoseOptions
 
     ankles = [sk.JOINT_INDEX["lankle"], sk.JOINT_INDEX["rankle"]]
 

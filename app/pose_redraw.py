@@ -1,0 +1,115 @@
+"""The pose window's redraw: it listens to its authoring model's events
+(:class:`engine.authoring.events.AuthoringEvents`) and redraws what each says changed:
+the targets (spheres and the target list), the pose (figure, facing, rotation rings,
+constraint gizmos), the key strip, the constraints' panel, the undo and redo entries and
+the motion paths. :meth:`PoseRedraw.refresh` shows the whole model; :meth:`PoseRedraw.close`
+stops listening.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from engine.authoring import events as ev
+from engine.authoring.motion_paths import authored_paths
+from engine.studio.frame_figures import gizmos_of
+
+
+class PoseRedraw:
+    """The redraw of the pose window ``w`` from its model's events (see the module doc)."""
+
+    def __init__(self, w: Any) -> None:
+        self.w = w
+        self._subscriptions: list[tuple[Any, Callable]] = []
+        for signal, slot in (
+            (w.session.events.targets, self._on_targets),
+            (w.session.events.pose, self._on_pose),
+            (w.session.events.keys, self._on_keys),
+            (w.session.events.animation, self._on_keys),
+            (w.session.events.frame, self._on_keys),
+            (w.session.events.constraints, self._on_constraints),
+            (w.session.events.history, self._on_history),
+            (w.session.events.keys, self.paths_due),
+            (w.session.events.animation, self.paths_due),
+            (w.session.events.bake, self.paths_due),
+        ):
+            signal.connect(slot)
+            self._subscriptions.append((signal, slot))
+
+    def close(self) -> None:
+        """Stop listening to the model (the window closes)."""
+        for signal, slot in self._subscriptions:
+            signal.disconnect(slot)
+        self._subscriptions.clear()
+
+    def _on_targets(self, e: ev.TargetsChanged | None = None) -> None:
+        t = self.w.mode.targets
+        self.w.viewport.sensors.update(
+            tuple(t),
+            np.array([x.position for x in t.values()]).reshape(-1, 3),
+            np.array([x.rotation if x.rotation is not None else [1.0, 0, 0, 0] for x in t.values()]).reshape(-1, 4),
+            np.array([x.active for x in t.values()], bool),
+            tuple(x.rotation is not None for x in t.values()),
+        )
+        self.w.targets.set_targets({j: (x.enabled, x.weight, x.rotation is not None) for j, x in t.items()})
+        self.w._render_soon()
+
+    def _on_pose(self, e: ev.PoseChanged | None = None) -> None:
+        self.w.facing.blockSignals(True)
+        self.w.facing.setValue((self.w.mode.heading + 180.0) % 360.0 - 180.0)
+        self.w.facing.blockSignals(False)
+        self.w.turns.show_handles()
+        self._show_gizmos()
+        self.w.show_positions(self.w.mode.pose.positions)
+
+    def _show_gizmos(self) -> None:
+        """The constraints' gizmos on the pose, as the studio draws them."""
+        self.w.viewport.gizmos.update(
+            gizmos_of(
+                self.w.mode.constraints, self.w.mode.pose.positions, lambda m: self.w.statusBar().showMessage(m, 5000)
+            )
+        )
+
+    def paths_due(self, e: Any = None) -> None:
+        """The keys, the animation or the bake changed: the paths are computed again."""
+        s = self.w.session
+        self.w.paths.source_changed(
+            lambda: authored_paths(s.mode.character, s.scene.keys, s.scene.animation.interpolation, s.baked)
+        )
+
+    def _on_keys(self, e: Any = None) -> None:
+        a = self.w.scene.animation
+        self.w.keys.set_state(a.frames, a.fps, tuple(k.frame for k in self.w.scene.keys), self.w.frame, a.interpolation)
+        self.w.constraints.panel.frames_changed()
+
+    def _on_constraints(self, e: Any = None) -> None:
+        self.w.constraints.refresh()
+        self._show_gizmos()
+        self.w._render_soon()
+
+    def _on_history(self, e: ev.HistoryChanged) -> None:
+        undo, redo = self.w.actions_by_name["undo"], self.w.actions_by_name["redo"]
+        undo.setEnabled(e.can_undo)
+        undo.setText(f"&Undo {e.undo_text}".rstrip())
+        redo.setEnabled(e.can_redo)
+        redo.setText(f"&Redo {e.redo_text}".rstrip())
+
+    def refresh(self) -> None:
+        """Show the whole model: the pose, its targets, the key strip, the constraints."""
+        self._on_targets()
+        self._on_keys()
+        self._on_constraints()
+        self._on_history(
+            ev.HistoryChanged(
+                self.w.undo.can_undo(),
+                self.w.undo.can_redo(),
+                self.w.undo.undo_text(),
+                self.w.undo.redo_text(),
+                self.w.undo.is_clean(),
+                self.w.undo.count(),
+            )
+        )
+        self._on_pose()

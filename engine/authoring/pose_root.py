@@ -1,0 +1,113 @@
+"""Where pose mode holds the pelvis during a solve (:class:`engine.authoring.pose_mode.PoseMode`).
+
+A target on the root puts the pelvis there; else it crouches towards a wrist target
+below the hanging arm's reach (``PoseOptions.crouch_share``, :func:`crouch_from`) and
+takes a balance step that keeps the centre of mass over the planted feet
+(``PoseOptions.balance``, :func:`balance_step`). :func:`root_where` is that rule;
+:data:`FOOT_OF` and :func:`moved_feet` say which feet a target moves.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+
+from engine import skeleton as sk
+from engine.authoring.character import Pose
+from engine.authoring.pose_metrics import centre_of_mass
+from engine.authoring.pose_options import LOWEST_ROOT, SQUAT_FROM, PoseOptions
+from engine.authoring.targets import JointTarget
+from engine.solver.limb_ik import LIMBS
+
+#: The foot (``"l"``, ``"r"``) of each foot joint.
+FOOT_OF = {"lankle": "l", "ltoe": "l", "rankle": "r", "rtoe": "r"}
+
+
+def moved_feet(targets: Mapping[str, JointTarget]) -> set[str]:
+    """The feet (``"l"``, ``"r"``) that an active target of ``targets`` moves."""
+    return {FOOT_OF[t.joint] for t in targets.values() if t.joint in FOOT_OF and t.active}
+
+
+def arm_low_points(positions: np.ndarray) -> dict[int, float]:
+    """Per wrist, the lowest height (metres) it reaches from its shoulder in the pose
+    with joint ``positions (22, 3)`` metres, the arm hanging straight down."""
+    p, out = positions, {}
+    for c, (a, b) in LIMBS.items():
+        if sk.JOINT_NAMES[c] not in FOOT_OF:
+            out[c] = float(p[a, 2] - np.linalg.norm(p[b] - p[a]) - np.linalg.norm(p[c] - p[b]))
+    return out
+
+
+def crouch_from(joint: int, low_points: Mapping[int, float], options: PoseOptions) -> float:
+    """Height (metres) below which a dragged ``joint``'s target lowers the pelvis: a
+    wrist's low point (``low_points``, :func:`arm_low_points` of the starting pose) when
+    ``options.crouch_below_reach`` (a target the standing arm reaches bends no knee),
+    else no limit."""
+    if options.crouch_below_reach and joint in low_points:
+        return low_points[joint]
+    return np.inf
+
+
+def balance_step(
+    pose: Pose,
+    targets: Mapping[str, JointTarget],
+    planted: Mapping[str, np.ndarray],
+    options: PoseOptions,
+    tolerance: float,
+) -> np.ndarray:
+    """The level move (2,) metres of the pelvis that one solve makes towards balance
+    (see ``PoseOptions.balance``): none while a foot is dragged or the centre of mass
+    lies within ``tolerance`` metres of the middle of the ``planted`` feet (3,) metres."""
+    o = options
+    if not (o.balance and o.plant_feet) or moved_feet(targets):
+        return np.zeros(2)
+    feet = np.mean([p[:2] for p in planted.values()], axis=0)
+    off = feet - centre_of_mass(pose.positions)[:2]
+    dist = float(np.linalg.norm(off))
+    if dist <= tolerance:
+        return np.zeros(2)
+    return o.balance_gain * off * (1.0 - tolerance / dist)
+
+
+def root_where(
+    pose: Pose,
+    targets: Mapping[str, JointTarget],
+    planted: Mapping[str, np.ndarray],
+    options: PoseOptions,
+    standing_root: float,
+    low_points: Mapping[int, float],
+    adjust: bool = True,
+) -> np.ndarray:
+    """Where the root is held during a solve from ``pose`` (3,) metres.
+
+    A target on the root puts it there (while crouching, only at its height: the pelvis
+    keeps its level place and, with ``adjust``, takes the crouch's balance step from
+    it); else, with ``adjust``, the crouch and balance steps move it (see
+    :class:`PoseOptions`), which a solve without latent steps does not do, so that it
+    only puts the limbs on their targets. ``standing_root`` is the pelvis's standing
+    height, metres; ``low_points`` the wrists' (:func:`crouch_from`).
+    """
+    root = targets.get("root")
+    o = options
+    if root is not None and root.active:
+        where = np.asarray(root.position, float).copy()
+        if o.crouch_balance and where[2] < standing_root - SQUAT_FROM:
+            # a crouching pelvis keeps its own level place, balanced from there
+            step = balance_step(pose, targets, planted, o, o.crouch_tolerance) if adjust else 0.0
+            where[:2] = pose.root_pos[:2] + step
+        return where
+    where = pose.root_pos.copy()
+    if not adjust:
+        return where
+    user = [t for t in targets.values() if t.active and t.joint != "root" and t.joint not in FOOT_OF]
+    if o.crouch_share > 0 and user:
+        # the part of the way from the joint down to its target that lies below where it crouches from
+        low = {t.index: crouch_from(t.index, low_points, o) for t in user}
+        drop = min(
+            0.0,
+            min(min(t.position[2], low[t.index]) - min(pose.positions[t.index, 2], low[t.index]) for t in user),
+        )
+        where[2] = float(np.clip(where[2] + o.crouch_share * drop, LOWEST_ROOT * standing_root, standing_root))
+    where[:2] += balance_step(pose, targets, planted, o, o.balance_tolerance)
+    return where

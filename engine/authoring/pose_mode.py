@@ -34,7 +34,7 @@ from engine.authoring.keys import Key
 from engine.authoring.pose_drag import EVENTS, drag
 from engine.authoring.pose_hold import held_joints, hold_terms
 from engine.authoring.pose_options import LOWEST_ROOT, SQUAT_FROM, PoseOptions
-from engine.authoring.pose_root import FOOT_OF, arm_low_points, moved_feet, root_where
+from engine.authoring.pose_root import FOOT_OF, Stance, arm_low_points, moved_feet, root_where
 from engine.authoring.pose_trunk import LEGS, TRUNK, keep_trunk
 from engine.authoring.progress import CancelCheck
 from engine.authoring.targets import JointTarget, solve_inputs
@@ -236,9 +236,8 @@ class PoseMode:
 
     def _where(self, adjust: bool = True) -> np.ndarray:
         """Where the root is held during the solve (3,) metres (:func:`engine.authoring.pose_root.root_where`)."""
-        return root_where(
-            self.pose, self.targets, self.planted, self.options, self._standing_root, self._lowest_reach, adjust
-        )
+        stance = Stance(self.pose, self.targets, self.planted, self.options)
+        return root_where(stance, self._standing_root, self._lowest_reach, adjust)
 
     def solve(self, iterations: int = ITERATIONS) -> Pose:
         """One continuous solve from the current pose (a drag event): a round of

@@ -10,6 +10,7 @@ takes a balance step that keeps the centre of mass over the planted feet
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import NamedTuple
 
 import numpy as np
 
@@ -49,17 +50,22 @@ def crouch_from(joint: int, low_points: Mapping[int, float], options: PoseOption
     return np.inf
 
 
-def balance_step(
-    pose: Pose,
-    targets: Mapping[str, JointTarget],
-    planted: Mapping[str, np.ndarray],
-    options: PoseOptions,
-    tolerance: float,
-) -> np.ndarray:
+class Stance(NamedTuple):
+    """What the pelvis rule reads of a pose-mode state: the current ``pose``, the user's
+    ``targets`` by joint name, the ``planted`` foot joints' positions (3,) metres and the
+    ``options``."""
+
+    pose: Pose
+    targets: Mapping[str, JointTarget]
+    planted: Mapping[str, np.ndarray]
+    options: PoseOptions
+
+
+def balance_step(stance: Stance, tolerance: float) -> np.ndarray:
     """The level move (2,) metres of the pelvis that one solve makes towards balance
     (see ``PoseOptions.balance``): none while a foot is dragged or the centre of mass
-    lies within ``tolerance`` metres of the middle of the ``planted`` feet (3,) metres."""
-    o = options
+    lies within ``tolerance`` metres of the middle of the planted feet."""
+    pose, targets, planted, o = stance
     if not (o.balance and o.plant_feet) or moved_feet(targets):
         return np.zeros(2)
     feet = np.mean([p[:2] for p in planted.values()], axis=0)
@@ -71,15 +77,9 @@ def balance_step(
 
 
 def root_where(
-    pose: Pose,
-    targets: Mapping[str, JointTarget],
-    planted: Mapping[str, np.ndarray],
-    options: PoseOptions,
-    standing_root: float,
-    low_points: Mapping[int, float],
-    adjust: bool = True,
+    stance: Stance, standing_root: float, low_points: Mapping[int, float], adjust: bool = True
 ) -> np.ndarray:
-    """Where the root is held during a solve from ``pose`` (3,) metres.
+    """Where the root is held during a solve from ``stance.pose`` (3,) metres.
 
     A target on the root puts it there (while crouching, only at its height: the pelvis
     keeps its level place and, with ``adjust``, takes the crouch's balance step from
@@ -88,13 +88,13 @@ def root_where(
     only puts the limbs on their targets. ``standing_root`` is the pelvis's standing
     height, metres; ``low_points`` the wrists' (:func:`crouch_from`).
     """
+    pose, targets, _, o = stance
     root = targets.get("root")
-    o = options
     if root is not None and root.active:
         where = np.asarray(root.position, float).copy()
         if o.crouch_balance and where[2] < standing_root - SQUAT_FROM:
             # a crouching pelvis keeps its own level place, balanced from there
-            step = balance_step(pose, targets, planted, o, o.crouch_tolerance) if adjust else 0.0
+            step = balance_step(stance, o.crouch_tolerance) if adjust else 0.0
             where[:2] = pose.root_pos[:2] + step
         return where
     where = pose.root_pos.copy()
@@ -109,5 +109,5 @@ def root_where(
             min(min(t.position[2], low[t.index]) - min(pose.positions[t.index, 2], low[t.index]) for t in user),
         )
         where[2] = float(np.clip(where[2] + o.crouch_share * drop, LOWEST_ROOT * standing_root, standing_root))
-    where[:2] += balance_step(pose, targets, planted, o, o.balance_tolerance)
+    where[:2] += balance_step(stance, o.balance_tolerance)
     return where

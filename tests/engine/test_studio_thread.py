@@ -123,11 +123,11 @@ def test_a_failing_method_never_kills_the_thread(synthetic_motion):
 
 
 def test_stop_joins_and_leaves_no_thread():
-    before = threading.active_count()
+    before = set(threading.enumerate())
     worker = EngineThread()
     worker.start()
     worker.stop()
-    assert not worker.is_alive() and threading.active_count() == before
+    assert not worker.is_alive() and [t for t in threading.enumerate() if t not in before] == []
 
 
 def test_playback_skipping_a_few_frames_keeps_the_methods_temporal_state():

@@ -297,36 +297,37 @@ def _scatter(out: np.ndarray, joints: np.ndarray, g: np.ndarray) -> None:
         np.add.at(out, (slice(None), joints), g)  # type: ignore[arg-type]  # numpy's stubs refuse a tuple index
 
 
-_MEMBERS: dict[tuple[bytes, int], np.ndarray] = {}  # entry owners seen -> their membership (shared)
+_INDICATORS: dict[tuple[bytes, int, bool], np.ndarray] = {}  # index arrays seen -> their 0/1 matrix (shared)
+
+
+def _indicator(index: np.ndarray, count: int, by_entry: bool) -> np.ndarray:
+    """The 0/1 matrix of ``index (m,)`` over ``count`` classes: ``(m, count)`` with 1 at
+    ``[i, index[i]]`` when ``by_entry``, else its transpose ``(count, m)`` (C order either
+    way). Cached: a term's index arrays never change, and frame after frame share theirs."""
+    key = (index.tobytes(), count, by_entry)
+    out = _INDICATORS.get(key)
+    if out is None:
+        if len(_INDICATORS) > 4096:
+            _INDICATORS.clear()
+        m = np.arange(len(index))
+        if by_entry:
+            out = np.zeros((len(index), count))
+            out[m, index] = 1.0
+        else:
+            out = np.zeros((count, len(index)))
+            out[index, m] = 1.0
+        _INDICATORS[key] = out
+    return out
 
 
 def _members(owner: np.ndarray, count: int) -> np.ndarray:
-    """``(m, count)``: 1 at ``[i, owner[i]]``, so ``r2 @ _members(owner)`` sums each
-    constraint's squared entries (cached: the terms of a frame after frame share theirs)."""
-    key = (owner.tobytes(), count)
-    out = _MEMBERS.get(key)
-    if out is None:
-        if len(_MEMBERS) > 4096:
-            _MEMBERS.clear()
-        out = _MEMBERS[key] = np.zeros((len(owner), count))
-        out[np.arange(len(owner)), owner] = 1.0
-    return out
-
-
-_ONE_HOT: dict[tuple[bytes, int], np.ndarray] = {}  # entry joints seen -> their one-hot (terms reuse theirs)
+    """``(m, count)``: ``r2 @ _members(owner)`` sums each constraint's squared entries."""
+    return _indicator(owner, count, by_entry=True)
 
 
 def _one_hot(joints: np.ndarray, count: int) -> np.ndarray:
-    """``(count, m)``: 1 at ``[joints[i], i]``, so ``_one_hot(joints) @ x`` sums the rows
-    ``x (A, m, c)`` of each joint (cached: a term's entry joints never change)."""
-    key = (joints.tobytes(), count)
-    out = _ONE_HOT.get(key)
-    if out is None:
-        if len(_ONE_HOT) > 4096:
-            _ONE_HOT.clear()
-        out = _ONE_HOT[key] = np.zeros((count, len(joints)))
-        out[joints, np.arange(len(joints))] = 1.0
-    return out
+    """``(count, m)``: ``_one_hot(joints) @ x`` sums the rows ``x (A, m, c)`` of each joint."""
+    return _indicator(joints, count, by_entry=False)
 
 
 #: Levi-Civita symbol: ``(a x v)_i = EPS3[i, k, l] a_k v_l``.

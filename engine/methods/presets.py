@@ -17,6 +17,11 @@ from engine.tracking import PRESET_SENSORS
 REQUIRED_PRESET = {"sparseposer": "6", "rpm": "3-head-hands"}
 
 
+def _layout(sensors: Iterable[Sensor]) -> list[tuple[str, int]]:
+    """The trackers' joints and DoF, in one order: what decides whether a method runs."""
+    return sorted((s.joint, s.dof) for s in sensors)
+
+
 def preset_problem(method: str, preset: str | None) -> str | None:
     """Why ``method`` cannot reconstruct from the trackers of ``preset`` (a preset name;
     None: no trackers), or None when it can."""
@@ -27,7 +32,7 @@ def preset_problem(method: str, preset: str | None) -> str | None:
         return None
     have = PRESET_SENSORS.get(preset)
     want = PRESET_SENSORS[needed]
-    if have is not None and sorted((s.joint, s.dof) for s in have) == sorted((s.joint, s.dof) for s in want):
+    if have is not None and _layout(have) == _layout(want):
         return None
     return f"{method} runs only with tracker preset {needed!r} (these trackers: {preset!r})"
 
@@ -40,8 +45,8 @@ def sensors_problem(method: str, sensors: Iterable[Sensor]) -> str | None:
     needed = REQUIRED_PRESET.get(method)
     if needed is None:
         return None
-    have = sorted((s.joint, s.dof) for s in sensors if s.enabled)
-    want = sorted((s.joint, s.dof) for s in PRESET_SENSORS[needed])
+    have = _layout(s for s in sensors if s.enabled)
+    want = _layout(PRESET_SENSORS[needed])
     if have == want:
         return None
     listed = ", ".join(f"{j} {d}-DoF" for j, d in have) or "none"

@@ -105,7 +105,7 @@ class MethodSet:
         if name and not keep and self.method is not None and self.sensors:
             why = sensors_problem(name, self.sensors)
             if why is not None:  # it would fail on every frame: the running method stays
-                self._report(f"method {name!r}: {why}")
+                self._report(why)  # it names the method
                 return False
         new = self.method if keep else self.build(name) if name else None
         if name and new is None and self.method is not None:

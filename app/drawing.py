@@ -58,6 +58,12 @@ class DrawScheduler:
         self.view_costs: deque = deque(maxlen=2000)
         self.draws = 0  # view draws since start (``gui --measure`` reads it)
         self._drawn_seq = -1
+        # a refused method switch is said by one snapshot, which a newer one can replace in
+        # ``session.latest`` before a tick reads it: the engine's listeners (every snapshot,
+        # on its own thread) keep it here until the tick acts on it, once
+        self._refusal: Any = None
+        self._refused_seq = -1
+        self._listened: Any = None  # the engine whose listeners hold :meth:`_note_refusal`
         self._rate_draws, self._draw_rate, self._rate_t0 = 0, 0.0, time.monotonic()
         self._next_view_at = 0.0  # perf_counter() time before which the view rests
         self._status_text: dict[str, str] = {}
@@ -86,6 +92,7 @@ class DrawScheduler:
         if now - self._rate_t0 >= 1.0:
             self._draw_rate, self._rate_draws, self._rate_t0 = self._rate_draws / (now - self._rate_t0), 0, now
         self.engine_watch.check()  # a dead solver process: restarted, or why not
+        self._listen()
         snap = self.w.session.latest
         if snap is None:
             return
@@ -120,14 +127,30 @@ class DrawScheduler:
         if s.playing and not snap.playing and snap.seq == self._drawn_seq and snap.plays == s.plays:
             s.note_frame(snap.frame)
             s.note_stopped()  # reached the end without looping
-        if snap.method_error and snap.seq != self._drawn_seq:  # the engine kept its method
-            self.w.undo.refused(snap.opened)  # the switch changed nothing: no undo step
+        refusal, self._refusal = self._refusal, None
+        if refusal is None and snap.method_error:
+            refusal = snap
+        if refusal is not None and refusal.seq != self._refused_seq:  # the engine kept its method
+            self._refused_seq = refusal.seq
+            self.w.undo.refused(refusal.opened)  # the switch changed nothing: no undo step
             self.w.busy.end()  # nothing loads
             with self.w.undo.unrecorded():
-                s.note_method(snap.method)
+                s.note_method(refusal.method)
             # after this tick: a modal box opened inside it would stop the drawing behind it
-            error = snap.method_error
+            error = refusal.method_error
             QTimer.singleShot(0, lambda: self.w.show_error("Cannot switch method", error))
+
+    def _listen(self) -> None:
+        """Hear every snapshot of the session's engine (a restarted engine is a new one)."""
+        engine = self.w.session.engine
+        if engine is not None and engine is not self._listened:
+            engine.listeners.append(self._note_refusal)
+            self._listened = engine
+
+    def _note_refusal(self, snap: Any) -> None:
+        """On the engine's thread: keep a snapshot that says a switch was refused."""
+        if snap.method_error:
+            self._refusal = snap
 
     def _update_one_panel(self, snap: Any, now: float, spent_ms: float) -> None:
         """Update the most overdue panel that has a newer snapshot than it showed.

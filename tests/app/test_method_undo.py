@@ -109,3 +109,22 @@ def test_a_method_whose_model_cannot_be_loaded_leaves_no_undo_step(studio, qtbot
     said = _refused_switch(studio, qtbot, monkeypatch, "dragposer")
     assert "vae.pt" in said[0][1]
     _assert_nothing_switched(studio)
+
+
+def test_a_refusal_replaced_by_a_newer_snapshot_before_the_tick_is_still_shown(studio, qtbot, monkeypatch):
+    """The engine says a refusal in one snapshot; when it publishes faster than the window
+    draws (the default solver process), a newer snapshot takes ``latest`` before the tick
+    reads it. The refusal must still put the selector back and open the error box."""
+    import dataclasses
+
+    engine = studio.engine
+
+    def newer_at_once(snap):  # the next snapshot, published before the window's tick
+        if snap.method_error:
+            engine.latest = dataclasses.replace(snap, method_error="", seq=snap.seq + 1)
+
+    qtbot.waitUntil(lambda: studio.drawing._listened is engine)  # the window hears the engine
+    engine.listeners.append(newer_at_once)
+    said = _refused_switch(studio, qtbot, monkeypatch, "rpm")
+    assert said[0][0] == "Cannot switch method" and "'3-head-hands'" in said[0][1]
+    _assert_nothing_switched(studio)

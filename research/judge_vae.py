@@ -108,7 +108,9 @@ def pose_tasks(out: Path) -> dict[str, tuple[float, float, int]]:
                 continue
             err = max([g["error"] for g in t["goal_errors"] if g["kind"] == "position"], default=0.0)
             acc.setdefault(t["task"], []).append((err, t["naturalness_cm"], not t["within_spread"]))
-    return {k: (sum(r[0] for r in v) / len(v), sum(r[1] for r in v) / len(v), sum(r[2] for r in v)) for k, v in acc.items()}
+    return {
+        k: (sum(r[0] for r in v) / len(v), sum(r[1] for r in v) / len(v), sum(r[2] for r in v)) for k, v in acc.items()
+    }
 
 
 def judge(base: Path, cand: Path, own: tuple[float, float] | None) -> bool:
@@ -136,7 +138,9 @@ def judge(base: Path, cand: Path, own: tuple[float, float] | None) -> bool:
             print(f"   {name:3s} {p:13s} Pos {b['pos_cm']:.2f} -> {c['pos_cm']:.2f} ({100 * changes[-1]:+.1f} %)")
     mean = sum(changes) / len(changes)
     verdicts.append(max(changes) <= TRACKING and mean <= 0)
-    print(f"3. other labs, worst {100 * max(changes):+.1f} %, mean {100 * mean:+.1f} %: {'holds' if verdicts[-1] else 'fails'}")
+    print(
+        f"3. other labs, worst {100 * max(changes):+.1f} %, mean {100 * mean:+.1f} %: {'holds' if verdicts[-1] else 'fails'}"
+    )
     tb, tc = pose_tasks(base), pose_tasks(cand)
     ok = True
     for task, (be, bn, bo) in tb.items():
@@ -144,7 +148,9 @@ def judge(base: Path, cand: Path, own: tuple[float, float] | None) -> bool:
         fine = ce <= be + GOAL_CM and cn <= bn * (1 + NATURAL) and co <= bo
         ok &= fine
         change = 100 * (cn / bn - 1)
-        print(f"   {task:15s} err {be:.2f} -> {ce:.2f} cm  natural {bn:.2f} -> {cn:.2f} ({change:+.1f} %)  out {bo} -> {co}")
+        print(
+            f"   {task:15s} err {be:.2f} -> {ce:.2f} cm  natural {bn:.2f} -> {cn:.2f} ({change:+.1f} %)  out {bo} -> {co}"
+        )
     tests = json.loads((cand / "authoring_tests.json").read_text())["exit_status"]
     ok &= tests == 0
     verdicts.append(ok)

@@ -217,6 +217,21 @@ class Term:
             m = self._member = _members(self.owner, len(self.names))
         return m
 
+    def _entry_weights(self, weights: np.ndarray) -> np.ndarray:
+        """``2 weights[:, owner]`` ``(A, m)``: kept while the solve passes the same weights
+        array (a frame-by-frame solve passes one array at every iteration)."""
+        kept = getattr(self, "_entry_w", None)
+        if kept is None or kept[0] is not weights:
+            kept = self._entry_w = (weights, 2.0 * weights[:, self.owner])
+        return kept[1]
+
+    def _spread(self, joints: np.ndarray, count: int) -> np.ndarray:
+        """:func:`_one_hot` of ``joints``, kept while the term passes the same array."""
+        kept = getattr(self, "_spread_kept", None)
+        if kept is None or kept[0] is not joints or kept[1].shape[0] != count:
+            kept = self._spread_kept = (joints, _one_hot(joints, count))
+        return kept[1]
+
     def losses(self, res: Residuals, kit: Kit = NUMPY) -> Any:
         """Each constraint's loss ``(A, n)``: the squared norm of its residual entries."""
         member = self._membership()
@@ -228,7 +243,7 @@ class Term:
     ) -> None:
         """Add the gradient of ``sum_n weights[:, n] * loss_n`` to ``g_pos (A, 22, 3)``,
         ``g_rot (A, 22, 3)`` and ``g_z (A, L)`` in place (``weights (A, n)``)."""
-        rw = ((2.0 * weights[:, self.owner]) * res.r)[:, None, :]  # (A, 1, m)
+        rw = (self._entry_weights(weights) * res.r)[:, None, :]  # (A, 1, m)
         if res.d_pos is not None:
             assert res.pos_joints is not None  # a Jacobian block comes with its joints
             _scatter(g_pos, res.pos_joints, _times(rw, res.d_pos))
@@ -238,7 +253,7 @@ class Term:
         if res.d_latent is not None and g_z is not None:
             g_z += (rw @ res.d_latent)[:, 0]
         if res.entry_joint is not None:  # per entry: one product with the entries' one-hot joints
-            spread = _one_hot(res.entry_joint, g_pos.shape[1])  # (22, m)
+            spread = self._spread(res.entry_joint, g_pos.shape[1])  # (22, m)
             rw_entry = rw[:, 0, :, None]  # (A, m, 1)
             if res.d_pos_entry is not None:
                 g_pos += spread @ (rw_entry * res.d_pos_entry)

@@ -273,6 +273,13 @@ class StoppingRule:
         fixed = self.fixed[rows]
         return np.where(fixed >= 0, steps >= fixed, out)
 
+    def stop_one(self, total: float, satisfied: Callable[[], bool], steps: int) -> bool:
+        """:meth:`stop` for a rule of one row that has taken ``steps`` steps; a realtime
+        frame answers from its step count alone (no arrays)."""
+        if not self.offline and len(self.steps) == 1:
+            return self.last(steps)
+        return bool(self.stop(np.array([total]), lambda: np.array([satisfied()]))[0])
+
     def last(self, steps: int, row: int = 0) -> bool:
         """Whether row ``row``'s frame stops for certain once it has taken ``steps`` steps
         (at its cap or its fixed count), whatever its losses: no gradient follows."""

@@ -254,7 +254,7 @@ class PoseOptimizer:
             elif deadline is not None and steps < stopping.cap and _past(deadline, t_loop, steps):
                 cut = True
                 break
-            if stopping.stop(np.array([total]), lambda: np.array([obj.satisfied()]))[0]:
+            if stopping.stop_one(total, obj.satisfied, steps):
                 break
             t0 = clock()
             grad = obj.gradient()

@@ -40,6 +40,7 @@ on the inputs its :meth:`~engine.constraints.base.Constraint.examples` declares.
 from __future__ import annotations
 
 import copy
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -277,12 +278,29 @@ class FrameRows:
         out = copy.copy(self)
         for name in self.PER_FRAME:
             setattr(out, name, np.repeat(getattr(self, name)[:1], count, axis=0))
+        out._kept_blocks = {}
         return out
 
     def set_row(self, row: int, frame: Any) -> None:
         """Row ``row`` takes the parameters of ``frame`` (a one-frame term of the same shape)."""
         for name in self.PER_FRAME:
             getattr(self, name)[row] = getattr(frame, name)[0]
+        self._kept_blocks = {}
+
+    def kept(self, name: str, sel: Any, make: Callable[[], Any]) -> Any:
+        """``make()``, a value that depends only on the per-frame parameters of the rows
+        ``sel`` (a Jacobian block that is constant within a frame): made once and returned
+        at every evaluation while the parameters stand (read only) when ``sel`` is a slice
+        (the first rows, as a solve of one frame reads them); made anew for an index array.
+        :meth:`rows` and :meth:`set_row` forget what was kept."""
+        if not isinstance(sel, slice):
+            return make()
+        kept = self.__dict__.setdefault("_kept_blocks", {})
+        key = (name, sel.start, sel.stop)
+        value = kept.get(key)
+        if value is None:
+            value = kept[key] = make()
+        return value
 
     def select(self, like: Any, rows: Any) -> Any:
         """The row selection for ``A = len(like)`` frames: ``rows``, or the first ``A``."""

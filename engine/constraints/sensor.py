@@ -135,7 +135,6 @@ class SensorTerm(FrameRows, Term):
         self.scale = np.array([[math.sqrt(items[k].rotation_weight / 8.0) for k in six]]).reshape(1, -1)
         self.pos_tol2 = np.array([c.position_tolerance**2 for c in items])
         self.rot_tol = np.array([math.sin(math.radians(items[k].rotation_tolerance) / 2) ** 2 for k in six])
-        self._blocks: tuple[np.ndarray, np.ndarray] | None = None
 
     def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:
         sel = self.select(P, rows)
@@ -152,39 +151,22 @@ class SensorTerm(FrameRows, Term):
         r = kit.cat(parts, -1) if len(parts) > 1 else parts[0]
         if not jac:
             return Residuals(r)
-        d_pos, d_rot_all = self._jacobian_blocks(a, sel)
+        p = 3 * len(self.joints)
+        d_pos = self.kept("d_pos", sel, lambda: self._position_jacobian(sel))
         if d_rot is not None:
-            d_rot_all[:, 3 * len(self.joints) :] = d_rot
-        return Residuals(
-            r, entry_joint=self.entry_joint, d_pos_entry=d_pos, d_rot_entry=None if d_rot is None else d_rot_all
-        )
+            # the rotation rows of a block whose position rows stay zero (written in place)
+            block = self.kept("d_rot", sel, lambda: np.zeros(d_pos.shape))
+            block[:, p:] = d_rot
+            d_rot = block
+        return Residuals(r, entry_joint=self.entry_joint, d_pos_entry=d_pos, d_rot_entry=d_rot)
 
-    def _jacobian_blocks(self, a: int, sel: Any) -> tuple[np.ndarray, np.ndarray]:
-        """The per-entry position Jacobian ``(A, m, 3)`` of frames ``sel`` and the rotation
-        block ``(A, m, 3)`` whose position rows are zero (the solve writes its rotation rows
-        at every evaluation). The position Jacobian is ``on`` times the entries' unit
-        directions, constant while the term's readings are: a one-frame term (``sel`` a
-        slice) makes both once and returns them at every evaluation (read only); a row
-        selection gets new ones."""
-        cached = self._blocks if isinstance(sel, slice) else None
-        if cached is not None and len(cached[0]) == a:
-            return cached
-        m, p = len(self.entry_joint), 3 * len(self.joints)
-        d_pos = np.zeros((a, m, 3))
-        d_pos[:, :p] = self._unit * np.repeat(self.on[sel], 3, axis=1)[:, :, None]
-        blocks = d_pos, np.zeros((a, m, 3))
-        if isinstance(sel, slice):
-            self._blocks = blocks
-        return blocks
-
-    def rows(self, count: int) -> "SensorTerm":
-        out = super().rows(count)
-        out._blocks = None  # per-frame readings of its own
-        return out
-
-    def set_row(self, row: int, frame: Any) -> None:
-        super().set_row(row, frame)
-        self._blocks = None  # ``on`` changed
+    def _position_jacobian(self, sel: Any) -> np.ndarray:
+        """``(A, m, 3)``: ``on`` times each position entry's unit direction, zero rows for
+        the rotation entries (constant within a frame)."""
+        on = self.on[sel]
+        d_pos = np.zeros((len(on), len(self.entry_joint), 3))
+        d_pos[:, : 3 * len(self.joints)] = self._unit * np.repeat(on, 3, axis=1)[:, :, None]
+        return d_pos
 
     def check_limits(self, sel: Any) -> np.ndarray:
         """Position: the squared tolerance. Rotation: ``|r|^2 = scale^2 |W - T|_F^2 = 8 scale^2

@@ -226,12 +226,13 @@ class Term:
             kept = self._entry_w = (weights, 2.0 * weights[:, self.owner])
         return kept[1]
 
-    def _spread(self, joints: np.ndarray, count: int) -> np.ndarray:
-        """:func:`_one_hot` of ``joints``, kept while the term passes the same array."""
+    def _spread(self, joints: np.ndarray, count: int, rows: np.ndarray | None) -> np.ndarray:
+        """:func:`_one_hot` of the rows of ``joints`` (``rows[joints]``, or ``joints``), kept
+        while the term passes the same arrays."""
         kept = getattr(self, "_spread_kept", None)
-        if kept is None or kept[0] is not joints or kept[1].shape[0] != count:
-            kept = self._spread_kept = (joints, _one_hot(joints, count))
-        return kept[1]
+        if kept is None or kept[0] is not joints or kept[1] is not rows or kept[2].shape[0] != count:
+            kept = self._spread_kept = (joints, rows, _one_hot(_rows(joints, rows), count))
+        return kept[2]
 
     def losses(self, res: Residuals, kit: Kit = NUMPY) -> Any:
         """Each constraint's loss ``(A, n)``: the squared norm of its residual entries."""
@@ -240,21 +241,30 @@ class Term:
         return r2 @ (member if kit.is_numpy else kit.const(member, r2))
 
     def accumulate(
-        self, res: Residuals, weights: np.ndarray, g_pos: np.ndarray, g_rot: np.ndarray, g_z: np.ndarray | None
+        self,
+        res: Residuals,
+        weights: np.ndarray,
+        g_pos: np.ndarray,
+        g_rot: np.ndarray,
+        g_z: np.ndarray | None,
+        rows: np.ndarray | None = None,
     ) -> None:
         """Add the gradient of ``sum_n weights[:, n] * loss_n`` to ``g_pos (A, 22, 3)``,
-        ``g_rot (A, 22, 3)`` and ``g_z (A, L)`` in place (``weights (A, n)``)."""
+        ``g_rot (A, 22, 3)`` and ``g_z (A, L)`` in place (``weights (A, n)``, not changed
+        in place between calls). ``rows (22,)``: the row of ``g_pos`` and ``g_rot`` that
+        joint ``j``'s gradient goes to (the solver's chain keeps its joints in level
+        order); None: row ``j``."""
         rw = (self._entry_weights(weights) * res.r)[:, None, :]  # (A, 1, m)
         if res.d_pos is not None:
             assert res.pos_joints is not None  # a Jacobian block comes with its joints
-            _scatter(g_pos, res.pos_joints, _times(rw, res.d_pos))
+            _scatter(g_pos, _rows(res.pos_joints, rows), _times(rw, res.d_pos))
         if res.d_rot is not None:
             assert res.rot_joints is not None
-            _scatter(g_rot, res.rot_joints, _times(rw, res.d_rot))
+            _scatter(g_rot, _rows(res.rot_joints, rows), _times(rw, res.d_rot))
         if res.d_latent is not None and g_z is not None:
             g_z += (rw @ res.d_latent)[:, 0]
         if res.entry_joint is not None:  # per entry: one product with the entries' one-hot joints
-            spread = self._spread(res.entry_joint, g_pos.shape[1])  # (22, m)
+            spread = self._spread(res.entry_joint, g_pos.shape[1], rows)  # (22, m)
             rw_entry = rw[:, 0, :, None]  # (A, m, 1)
             if res.d_pos_entry is not None:
                 g_pos += spread @ (rw_entry * res.d_pos_entry)
@@ -305,6 +315,11 @@ class FrameRows:
     def select(self, like: Any, rows: Any) -> Any:
         """The row selection for ``A = len(like)`` frames: ``rows``, or the first ``A``."""
         return slice(0, len(like)) if rows is None else rows
+
+
+def _rows(joints: np.ndarray, rows: np.ndarray | None) -> np.ndarray:
+    """The rows ``rows[joints]`` of a gradient array (``joints`` itself without ``rows``)."""
+    return joints if rows is None else rows[joints]
 
 
 def _times(rw: np.ndarray, d: np.ndarray) -> np.ndarray:

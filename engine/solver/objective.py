@@ -146,9 +146,10 @@ class FastObjective:
         if not self.jac:  # evaluated without Jacobians: make them now
             self._residuals(True)
         g_pos, g_rot, g_z = np.zeros_like(self.P), np.zeros_like(self.P), np.zeros_like(self.z)
+        rows = self.chain.unorder  # the gradients in the chain's level order: no gathers
         for t, r, w in zip(self.frame.terms, self.res, weights):
-            t.accumulate(r, w, g_pos, g_rot, g_z)
-        return self.chain.backward(g_pos, g_rot), g_z
+            t.accumulate(r, w, g_pos, g_rot, g_z, rows)
+        return self.chain.backward(g_pos, g_rot, level_order=True), g_z
 
     def _residuals(self, jac: bool) -> None:
         """Each term's residuals (with their Jacobians when ``jac``) at the kept poses."""

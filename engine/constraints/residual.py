@@ -213,10 +213,10 @@ class Term:
         return cached[1], cached[2], cached[3]
 
     def _membership(self) -> np.ndarray:
-        m = getattr(self, "_member", None)
-        if m is None or m.shape[0] != len(self.owner):
-            m = self._member = _members(self.owner, len(self.names))
-        return m
+        kept = self.__dict__.get("_member")
+        if kept is None or kept[0] is not self.owner:
+            kept = self._member = (self.owner, _members(self.owner, len(self.names)))
+        return kept[1]
 
     def _entry_weights(self, weights: np.ndarray) -> np.ndarray:
         """``2 weights[:, owner]`` ``(A, m)``: kept while the solve passes the same weights

@@ -145,7 +145,8 @@ class FastObjective:
         its latent directly ``(A, L)`` float64 (terms on the latent)."""
         if not self.jac:  # evaluated without Jacobians: make them now
             self._residuals(True)
-        g_pos, g_rot, g_z = np.zeros_like(self.P), np.zeros_like(self.P), np.zeros_like(self.z)
+        # np.zeros, not zeros_like: the Python wrapper costs more than the arrays (float64 all)
+        g_pos, g_rot, g_z = np.zeros(self.P.shape), np.zeros(self.P.shape), np.zeros(self.z.shape)
         rows = self.chain.unorder  # the gradients in the chain's level order: no gathers
         for t, r, w in zip(self.frame.terms, self.res, weights):
             t.accumulate(r, w, g_pos, g_rot, g_z, rows)
@@ -275,10 +276,12 @@ class StoppingRule:
         return np.where(fixed >= 0, steps >= fixed, out)
 
     def stop_one(self, total: float, satisfied: Callable[[], bool], steps: int) -> bool:
-        """:meth:`stop` for a rule of one row that has taken ``steps`` steps; a realtime
-        frame answers from its step count alone (no arrays)."""
-        if not self.offline and len(self.steps) == 1:
+        """:meth:`stop` for a rule of one row whose frame has taken ``steps`` steps (the
+        caller counts them: no :meth:`stepped`); a realtime frame answers from the count
+        alone (no arrays)."""
+        if not self.offline:
             return self.last(steps)
+        self.steps[0] = steps
         return bool(self.stop(np.array([total]), lambda: np.array([satisfied()]))[0])
 
     def last(self, steps: int, row: int = 0) -> bool:

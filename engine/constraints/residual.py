@@ -234,6 +234,21 @@ class Term:
             kept = self._spread_kept = (joints, rows, _one_hot(_rows(joints, rows), count))
         return kept[2]
 
+    def kept(self, name: str, sel: Any, make: Callable[[], Any]) -> Any:
+        """``make()``, a value that depends only on the term's parameters of the frames
+        ``sel`` (a Jacobian block constant within a frame): made once and returned at every
+        evaluation while the parameters stand (read only) when ``sel`` is a slice (the
+        first rows, as a solve of one frame reads them); made anew for an index array.
+        :meth:`FrameRows.rows` and :meth:`FrameRows.set_row` forget what was kept."""
+        if not isinstance(sel, slice):
+            return make()
+        kept = self.__dict__.setdefault("_kept_blocks", {})
+        key = (name, sel.start, sel.stop)
+        value = kept.get(key)
+        if value is None:
+            value = kept[key] = make()
+        return value
+
     def losses(self, res: Residuals, kit: Kit = NUMPY) -> Any:
         """Each constraint's loss ``(A, n)``: the squared norm of its residual entries."""
         member = self._membership()
@@ -295,22 +310,7 @@ class FrameRows:
         """Row ``row`` takes the parameters of ``frame`` (a one-frame term of the same shape)."""
         for name in self.PER_FRAME:
             getattr(self, name)[row] = getattr(frame, name)[0]
-        self._kept_blocks = {}
-
-    def kept(self, name: str, sel: Any, make: Callable[[], Any]) -> Any:
-        """``make()``, a value that depends only on the per-frame parameters of the rows
-        ``sel`` (a Jacobian block that is constant within a frame): made once and returned
-        at every evaluation while the parameters stand (read only) when ``sel`` is a slice
-        (the first rows, as a solve of one frame reads them); made anew for an index array.
-        :meth:`rows` and :meth:`set_row` forget what was kept."""
-        if not isinstance(sel, slice):
-            return make()
-        kept = self.__dict__.setdefault("_kept_blocks", {})
-        key = (name, sel.start, sel.stop)
-        value = kept.get(key)
-        if value is None:
-            value = kept[key] = make()
-        return value
+        self._kept_blocks: dict[tuple, Any] = {}
 
     def select(self, like: Any, rows: Any) -> Any:
         """The row selection for ``A = len(like)`` frames: ``rows``, or the first ``A``."""
@@ -389,7 +389,9 @@ EPS3[0, 2, 1] = EPS3[2, 1, 0] = EPS3[1, 0, 2] = -1.0
 _TURN = np.einsum("ikl,jm->lmijk", EPS3, np.eye(3)).reshape(9, 27)
 
 
-def rotation_residual(kit: Kit, W: Any, T: Any, scale: Any, jac: bool) -> tuple[Any, np.ndarray | None]:
+def rotation_residual(
+    kit: Kit, W: Any, T: Any, scale: Any, jac: bool, out: np.ndarray | None = None
+) -> tuple[Any, np.ndarray | None]:
     """The rotation part of a tracker or end-effector term: ``scale (A, s) * (W - T)``,
     flattened to ``(A, s * 9)``, for world rotations ``W (A, s, 3, 3)`` and targets ``T``.
 
@@ -397,11 +399,22 @@ def rotation_residual(kit: Kit, W: Any, T: Any, scale: Any, jac: bool) -> tuple[
     ``scale = sqrt(weight / 8)`` it is ``weight * sin^2(angle / 2)``, the sign-invariant
     rotation distance of quaternions ``1 - <q, q_t>^2``. The Jacobian w.r.t. a world turn
     ``a`` of each entry's joint is ``scale * [e_k]x W``, per entry: ``(A, s * 9, 3)`` (entry
-    ``9 t + 3 i + j`` reads joint ``t``).
+    ``9 t + 3 i + j`` reads joint ``t``); written into ``out (A, s, 27)`` when given (a view
+    of a caller's block).
     """
     a, s = W.shape[0], W.shape[1]
     r = (scale[..., None, None] * (W - T)).reshape(a, s * 9)
     if not jac:
         return r, None
-    d = (W.reshape(a, s, 9) @ _TURN) * np.asarray(scale)[..., None]  # (A, s, 27)
+    d = np.multiply(W.reshape(a, s, 9) @ _TURN, np.asarray(scale)[..., None], out=out)  # (A, s, 27)
     return r, d.reshape(a, s * 9, 3)
+
+
+def entry_block(shape: tuple[int, int, int], start: int) -> tuple[np.ndarray, np.ndarray]:
+    """A zero per-entry Jacobian block ``shape (A, m, 3)`` and a view of its entries from
+    ``start`` on as ``(A, (m - start) / 9, 27)``, the shape :func:`rotation_residual` writes:
+    the rows before ``start`` stay zero, the rotation rows are written at each evaluation."""
+    block = np.zeros(shape)
+    view = block[:, start:].reshape(shape[0], -1, 27)
+    assert np.shares_memory(view, block)  # a view, not a copy
+    return block, view

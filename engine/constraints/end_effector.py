@@ -15,7 +15,7 @@ import numpy as np
 
 from engine.constraints.base import Constraint, OnOneJoint, joint_index, param
 from engine.constraints.placement import REACH, facing, joint_at
-from engine.constraints.residual import FrameInputs, Kit, Residuals, Term, rotation_residual
+from engine.constraints.residual import FrameInputs, Kit, Residuals, Term, entry_block, rotation_residual
 from engine.gizmos import PointGizmo
 from engine.kinematics import quat_np as QN
 
@@ -91,16 +91,23 @@ class EndEffectorTerm(Term):
     def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:
         a = P.shape[0]
         r = P[:, self.j[0]] - kit.const(self.target, P)
-        if self.rot is None:
-            if not jac:
-                return Residuals(r)
-            return Residuals(r, entry_joint=np.repeat(self.j, 3), d_pos_entry=np.broadcast_to(np.eye(3), (a, 3, 3)))
-        scale = np.broadcast_to(self.scale, (a, 1))
-        rot, d_rot = rotation_residual(kit, W[:, self.j], kit.const(self.rot, P), kit.const(scale, P), jac)
-        r = kit.cat([r, rot], -1)
+        every, m = slice(0, a), len(self.owner)  # the term's parameters are the same for every frame
+        d_rot = rot_rows = None
+        if self.rot is not None:
+            scale = np.broadcast_to(self.scale, (a, 1))
+            if jac:  # a block whose position rows stay zero; its rotation rows are written in place
+                d_rot, rot_rows = self.kept("d_rot", every, lambda: entry_block((a, m, 3), 3))
+            rot, _ = rotation_residual(kit, W[:, self.j], kit.const(self.rot, P), kit.const(scale, P), jac, rot_rows)
+            r = kit.cat([r, rot], -1)
         if not jac:
             return Residuals(r)
-        assert d_rot is not None  # asked for with jac
-        d_pos = np.concatenate((np.broadcast_to(np.eye(3), (a, 3, 3)), np.zeros((a, 9, 3))), axis=1)
-        d_rot = np.concatenate((np.zeros((a, 3, 3)), d_rot), axis=1)
-        return Residuals(r, entry_joint=np.repeat(self.j, 12), d_pos_entry=d_pos, d_rot_entry=d_rot)
+        joints = self.kept("joints", every, lambda: np.repeat(self.j, m))
+        d_pos = self.kept("d_pos", every, lambda: _position_jacobian(a, m))
+        return Residuals(r, entry_joint=joints, d_pos_entry=d_pos, d_rot_entry=d_rot)
+
+
+def _position_jacobian(a: int, m: int) -> np.ndarray:
+    """``(A, m, 3)``: the identity for the 3 position entries, zero for the rotation ones."""
+    d_pos = np.zeros((a, m, 3))
+    d_pos[:, :3] = np.eye(3)
+    return d_pos

@@ -102,4 +102,5 @@ class PinTerm(FrameRows, Term):
         r = (P[:, self.j[0]] - kit.const(self.target[sel], P)) * kit.const(on, P)[:, None]
         if not jac:
             return Residuals(r)
-        return Residuals(r, entry_joint=np.repeat(self.j, 3), d_pos_entry=np.eye(3)[None] * on[:, None, None])
+        d_pos = self.kept("d_pos", sel, lambda: np.eye(3)[None] * on[:, None, None])
+        return Residuals(r, entry_joint=self.kept("joints", sel, lambda: np.repeat(self.j, 3)), d_pos_entry=d_pos)

@@ -40,6 +40,7 @@ on the inputs its :meth:`~engine.constraints.base.Constraint.examples` declares.
 from __future__ import annotations
 
 import copy
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -212,10 +213,41 @@ class Term:
         return cached[1], cached[2], cached[3]
 
     def _membership(self) -> np.ndarray:
-        m = getattr(self, "_member", None)
-        if m is None or m.shape[0] != len(self.owner):
-            m = self._member = _members(self.owner, len(self.names))
-        return m
+        kept = self.__dict__.get("_member")
+        if kept is None or kept[0] is not self.owner:
+            kept = self._member = (self.owner, _members(self.owner, len(self.names)))
+        return kept[1]
+
+    def _entry_weights(self, weights: np.ndarray) -> np.ndarray:
+        """``2 weights[:, owner]`` ``(A, m)``: kept while the solve passes the same weights
+        array (a frame-by-frame solve passes one array at every iteration)."""
+        kept = getattr(self, "_entry_w", None)
+        if kept is None or kept[0] is not weights:
+            kept = self._entry_w = (weights, 2.0 * weights[:, self.owner])
+        return kept[1]
+
+    def _spread(self, joints: np.ndarray, count: int, rows: np.ndarray | None) -> np.ndarray:
+        """:func:`_one_hot` of the rows of ``joints`` (``rows[joints]``, or ``joints``), kept
+        while the term passes the same arrays."""
+        kept = getattr(self, "_spread_kept", None)
+        if kept is None or kept[0] is not joints or kept[1] is not rows or kept[2].shape[0] != count:
+            kept = self._spread_kept = (joints, rows, _one_hot(_rows(joints, rows), count))
+        return kept[2]
+
+    def kept(self, name: str, sel: Any, make: Callable[[], Any]) -> Any:
+        """``make()``, a value that depends only on the term's parameters of the frames
+        ``sel`` (a Jacobian block constant within a frame): made once and returned at every
+        evaluation while the parameters stand (read only) when ``sel`` is a slice (the
+        first rows, as a solve of one frame reads them); made anew for an index array.
+        :meth:`FrameRows.rows` and :meth:`FrameRows.set_row` forget what was kept."""
+        if not isinstance(sel, slice):
+            return make()
+        kept = self.__dict__.setdefault("_kept_blocks", {})
+        key = (name, sel.start, sel.stop)
+        value = kept.get(key)
+        if value is None:
+            value = kept[key] = make()
+        return value
 
     def losses(self, res: Residuals, kit: Kit = NUMPY) -> Any:
         """Each constraint's loss ``(A, n)``: the squared norm of its residual entries."""
@@ -224,21 +256,30 @@ class Term:
         return r2 @ (member if kit.is_numpy else kit.const(member, r2))
 
     def accumulate(
-        self, res: Residuals, weights: np.ndarray, g_pos: np.ndarray, g_rot: np.ndarray, g_z: np.ndarray | None
+        self,
+        res: Residuals,
+        weights: np.ndarray,
+        g_pos: np.ndarray,
+        g_rot: np.ndarray,
+        g_z: np.ndarray | None,
+        rows: np.ndarray | None = None,
     ) -> None:
         """Add the gradient of ``sum_n weights[:, n] * loss_n`` to ``g_pos (A, 22, 3)``,
-        ``g_rot (A, 22, 3)`` and ``g_z (A, L)`` in place (``weights (A, n)``)."""
-        rw = ((2.0 * weights[:, self.owner]) * res.r)[:, None, :]  # (A, 1, m)
+        ``g_rot (A, 22, 3)`` and ``g_z (A, L)`` in place (``weights (A, n)``, not changed
+        in place between calls). ``rows (22,)``: the row of ``g_pos`` and ``g_rot`` that
+        joint ``j``'s gradient goes to (the solver's chain keeps its joints in level
+        order); None: row ``j``."""
+        rw = (self._entry_weights(weights) * res.r)[:, None, :]  # (A, 1, m)
         if res.d_pos is not None:
             assert res.pos_joints is not None  # a Jacobian block comes with its joints
-            _scatter(g_pos, res.pos_joints, _times(rw, res.d_pos))
+            _scatter(g_pos, _rows(res.pos_joints, rows), _times(rw, res.d_pos))
         if res.d_rot is not None:
             assert res.rot_joints is not None
-            _scatter(g_rot, res.rot_joints, _times(rw, res.d_rot))
+            _scatter(g_rot, _rows(res.rot_joints, rows), _times(rw, res.d_rot))
         if res.d_latent is not None and g_z is not None:
             g_z += (rw @ res.d_latent)[:, 0]
         if res.entry_joint is not None:  # per entry: one product with the entries' one-hot joints
-            spread = _one_hot(res.entry_joint, g_pos.shape[1])  # (22, m)
+            spread = self._spread(res.entry_joint, g_pos.shape[1], rows)  # (22, m)
             rw_entry = rw[:, 0, :, None]  # (A, m, 1)
             if res.d_pos_entry is not None:
                 g_pos += spread @ (rw_entry * res.d_pos_entry)
@@ -262,16 +303,23 @@ class FrameRows:
         out = copy.copy(self)
         for name in self.PER_FRAME:
             setattr(out, name, np.repeat(getattr(self, name)[:1], count, axis=0))
+        out._kept_blocks = {}
         return out
 
     def set_row(self, row: int, frame: Any) -> None:
         """Row ``row`` takes the parameters of ``frame`` (a one-frame term of the same shape)."""
         for name in self.PER_FRAME:
             getattr(self, name)[row] = getattr(frame, name)[0]
+        self._kept_blocks: dict[tuple, Any] = {}
 
     def select(self, like: Any, rows: Any) -> Any:
         """The row selection for ``A = len(like)`` frames: ``rows``, or the first ``A``."""
         return slice(0, len(like)) if rows is None else rows
+
+
+def _rows(joints: np.ndarray, rows: np.ndarray | None) -> np.ndarray:
+    """The rows ``rows[joints]`` of a gradient array (``joints`` itself without ``rows``)."""
+    return joints if rows is None else rows[joints]
 
 
 def _times(rw: np.ndarray, d: np.ndarray) -> np.ndarray:
@@ -341,7 +389,9 @@ EPS3[0, 2, 1] = EPS3[2, 1, 0] = EPS3[1, 0, 2] = -1.0
 _TURN = np.einsum("ikl,jm->lmijk", EPS3, np.eye(3)).reshape(9, 27)
 
 
-def rotation_residual(kit: Kit, W: Any, T: Any, scale: Any, jac: bool) -> tuple[Any, np.ndarray | None]:
+def rotation_residual(
+    kit: Kit, W: Any, T: Any, scale: Any, jac: bool, out: np.ndarray | None = None
+) -> tuple[Any, np.ndarray | None]:
     """The rotation part of a tracker or end-effector term: ``scale (A, s) * (W - T)``,
     flattened to ``(A, s * 9)``, for world rotations ``W (A, s, 3, 3)`` and targets ``T``.
 
@@ -349,11 +399,22 @@ def rotation_residual(kit: Kit, W: Any, T: Any, scale: Any, jac: bool) -> tuple[
     ``scale = sqrt(weight / 8)`` it is ``weight * sin^2(angle / 2)``, the sign-invariant
     rotation distance of quaternions ``1 - <q, q_t>^2``. The Jacobian w.r.t. a world turn
     ``a`` of each entry's joint is ``scale * [e_k]x W``, per entry: ``(A, s * 9, 3)`` (entry
-    ``9 t + 3 i + j`` reads joint ``t``).
+    ``9 t + 3 i + j`` reads joint ``t``); written into ``out (A, s, 27)`` when given (a view
+    of a caller's block).
     """
     a, s = W.shape[0], W.shape[1]
     r = (scale[..., None, None] * (W - T)).reshape(a, s * 9)
     if not jac:
         return r, None
-    d = (W.reshape(a, s, 9) @ _TURN) * np.asarray(scale)[..., None]  # (A, s, 27)
+    d = np.multiply(W.reshape(a, s, 9) @ _TURN, np.asarray(scale)[..., None], out=out)  # (A, s, 27)
     return r, d.reshape(a, s * 9, 3)
+
+
+def entry_block(shape: tuple[int, int, int], start: int) -> tuple[np.ndarray, np.ndarray]:
+    """A zero per-entry Jacobian block ``shape (A, m, 3)`` and a view of its entries from
+    ``start`` on as ``(A, (m - start) / 9, 27)``, the shape :func:`rotation_residual` writes:
+    the rows before ``start`` stay zero, the rotation rows are written at each evaluation."""
+    block = np.zeros(shape)
+    view = block[:, start:].reshape(shape[0], -1, 27)
+    assert np.shares_memory(view, block)  # a view, not a copy
+    return block, view

@@ -18,7 +18,15 @@ from typing import Any, ClassVar
 import numpy as np
 
 from engine.constraints.base import Constraint, OnOneJoint, joint_index, param
-from engine.constraints.residual import FrameInputs, FrameRows, Kit, Residuals, Term, rotation_residual
+from engine.constraints.residual import (
+    FrameInputs,
+    FrameRows,
+    Kit,
+    Residuals,
+    Term,
+    entry_block,
+    rotation_residual,
+)
 from engine.errors import UserError
 from engine.gizmos import PointGizmo
 from engine.kinematics import quat_np as QN
@@ -141,22 +149,28 @@ class SensorTerm(FrameRows, Term):
         on = kit.const(self.on[sel], P)
         a = P.shape[0]
         err = (P[:, self.joints] - kit.const(self.target[sel], P)) * on[..., None]
-        parts, d_rot = [err.reshape(a, -1)], None
+        parts, d_rot, rows6 = [err.reshape(a, -1)], None, None
         if len(self.six):
-            scale = self.scale[sel] * self.on[sel][:, self.six]
-            rot, d_rot = rotation_residual(
-                kit, W[:, self.joints6], kit.const(self.rot_target[sel], P), kit.const(scale, P), jac
-            )
-            parts.append(rot)
+            scale = self.kept("scale", sel, lambda: self.scale[sel] * self.on[sel][:, self.six])
+            if jac:  # a block whose position rows stay zero; its rotation rows are written in place
+                d_rot, rows6 = self.kept(
+                    "d_rot", sel, lambda: entry_block((a, len(self.owner), 3), 3 * len(self.joints))
+                )
+            W6, T6 = W[:, self.joints6], kit.const(self.rot_target[sel], P)
+            parts.append(rotation_residual(kit, W6, T6, kit.const(scale, P), jac, rows6)[0])
         r = kit.cat(parts, -1) if len(parts) > 1 else parts[0]
         if not jac:
             return Residuals(r)
-        m, p = len(self.entry_joint), 3 * len(self.joints)
-        d_pos = np.zeros((a, m, 3))
-        d_pos[:, :p] = self._unit * np.repeat(self.on[sel], 3, axis=1)[:, :, None]
-        if d_rot is not None:
-            d_rot = np.concatenate((np.zeros((a, p, 3)), d_rot), axis=1)
+        d_pos = self.kept("d_pos", sel, lambda: self._position_jacobian(sel))
         return Residuals(r, entry_joint=self.entry_joint, d_pos_entry=d_pos, d_rot_entry=d_rot)
+
+    def _position_jacobian(self, sel: Any) -> np.ndarray:
+        """``(A, m, 3)``: ``on`` times each position entry's unit direction, zero rows for
+        the rotation entries (constant within a frame)."""
+        on = self.on[sel]
+        d_pos = np.zeros((len(on), len(self.entry_joint), 3))
+        d_pos[:, : 3 * len(self.joints)] = self._unit * np.repeat(on, 3, axis=1)[:, :, None]
+        return d_pos
 
     def check_limits(self, sel: Any) -> np.ndarray:
         """Position: the squared tolerance. Rotation: ``|r|^2 = scale^2 |W - T|_F^2 = 8 scale^2

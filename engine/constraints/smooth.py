@@ -98,4 +98,5 @@ class SmoothTerm(FrameRows, Term):
         r = ((P - kit.const(self.target[sel], P)) * kit.const(on / math.sqrt(n), P)[:, None, None]).reshape(a, 3 * n)
         if not jac:
             return Residuals(r)
-        return Residuals(r, entry_joint=self.entry_joint, d_pos_entry=self._unit[None] * on[:, None, None])
+        d_pos = self.kept("d_pos", sel, lambda: self._unit[None] * on[:, None, None])
+        return Residuals(r, entry_joint=self.entry_joint, d_pos_entry=d_pos)

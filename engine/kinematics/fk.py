@@ -42,6 +42,10 @@ class Levels:
     chain : ndarray (J, J - 1)
         1 where the bone into row ``b + 1`` lies on the path from the root to row ``r``: a
         joint's position is the root's plus the world bone vectors on its path.
+    parent_slices : tuple of (slice or None)
+        Per level, its parents' rows as a slice when they are consecutive rows (one row
+        per joint) or one row for all (broadcast): a view instead of a gather. None: a
+        gather of :attr:`parent_rows`.
     """
 
     joints: tuple[np.ndarray, ...]
@@ -50,6 +54,7 @@ class Levels:
     order: np.ndarray
     prow: np.ndarray
     chain: np.ndarray
+    parent_slices: tuple[slice | None, ...] = ()
 
 
 @lru_cache(maxsize=32)
@@ -72,14 +77,27 @@ def levels(parents: tuple[int, ...]) -> Levels:
         while a != 0:
             chain[r, a - 1] = 1.0
             a = prow[a]
+    parent_rows = tuple(np.array([row[parents[j]] for j in level]) for level in lv)
     return Levels(
         tuple(np.array(level) for level in lv),
-        tuple(np.array([row[parents[j]] for j in level]) for level in lv),
+        parent_rows,
         np.array([row[j] for j in range(len(parents))]),
         np.array(order, dtype=np.intp),
         prow,
         chain,
+        tuple(_as_slice(rows) for rows in parent_rows),
     )
+
+
+def _as_slice(rows: np.ndarray) -> slice | None:
+    """``rows`` as a slice of level-ordered storage: consecutive rows, or one row that a
+    product broadcasts over the level; None when neither."""
+    first = int(rows[0])
+    if (rows == first).all():
+        return slice(first, first + 1)
+    if (np.diff(rows) == 1).all():
+        return slice(first, first + len(rows))
+    return None
 
 
 def ancestors(parents, j: int) -> list[int]:
@@ -301,9 +319,10 @@ def fk_level_order(
     world = np.empty(shape + local_mat.shape[-3:])
     world[..., 0, :, :] = local_mat[..., 0, :, :]
     start = 1
-    for rows in lv.parent_rows:
+    for rows, view in zip(lv.parent_rows, lv.parent_slices):
         end = start + len(rows)
-        np.matmul(world.take(rows, axis=-3), local_mat[..., start:end, :, :], out=world[..., start:end, :, :])
+        parent = world.take(rows, axis=-3) if view is None else world[..., view, :, :]
+        np.matmul(parent, local_mat[..., start:end, :, :], out=world[..., start:end, :, :])
         start = end
     bones = np.matmul(world.take(lv.prow[1:], axis=-3), bone_offsets)[..., 0]
     pos = np.matmul(lv.chain, bones)

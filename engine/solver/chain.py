@@ -119,17 +119,23 @@ class PoseChain:
         back = self.unorder
         return pos[:, back], world[:, back]
 
-    def backward(self, g_pos: np.ndarray, g_rot: np.ndarray | None) -> np.ndarray:
+    def backward(self, g_pos: np.ndarray, g_rot: np.ndarray | None, level_order: bool = False) -> np.ndarray:
         """Gradient w.r.t. the decoder outputs ``(A, 91)`` float32 of a loss whose gradients
         are ``g_pos (A, 22, 3)`` w.r.t. the positions and ``g_rot (A, 22, 3)`` w.r.t. world
-        turns of the rotations (None: zero), joint order, at the last :meth:`forward`."""
+        turns of the rotations (None: zero), at the last :meth:`forward`: in joint order, or
+        in the chain's level order (row ``unorder[j]`` for joint ``j``) with
+        ``level_order``, which saves gathering them (:meth:`Term.accumulate
+        <engine.constraints.residual.Term.accumulate>` writes that order when given
+        :attr:`unorder`)."""
         n, root, pos = self.n, self.root, self.pos
-        g = g_pos[:, self.order]
+        g = g_pos if level_order else g_pos[:, self.order]
         if self.anchor is not None:  # the anchor moves the whole body against the others' pull
+            if level_order:
+                g = g.copy()  # the caller's array stays as given
             g[:, self.anchor] -= g.sum(1)
         tau = self.subtree @ cross(pos, g) - cross(pos, self.subtree @ g)
-        if g_rot is not None:
-            tau += self.subtree @ g_rot[:, self.order]  # turning a joint turns every joint of its subtree
+        if g_rot is not None:  # turning a joint turns every joint of its subtree
+            tau += self.subtree @ (g_rot if level_order else g_rot[:, self.order])
         frame = self.world[:, self.prow]
         frame[:, 0] = root.heading
         sigma = np.matmul(tau[..., None, :], frame)[..., 0, :]  # W_parent^T tau

@@ -145,10 +145,12 @@ class FastObjective:
         its latent directly ``(A, L)`` float64 (terms on the latent)."""
         if not self.jac:  # evaluated without Jacobians: make them now
             self._residuals(True)
-        g_pos, g_rot, g_z = np.zeros_like(self.P), np.zeros_like(self.P), np.zeros_like(self.z)
+        # np.zeros, not zeros_like: the Python wrapper costs more than the arrays (float64 all)
+        g_pos, g_rot, g_z = np.zeros(self.P.shape), np.zeros(self.P.shape), np.zeros(self.z.shape)
+        rows = self.chain.unorder  # the gradients in the chain's level order: no gathers
         for t, r, w in zip(self.frame.terms, self.res, weights):
-            t.accumulate(r, w, g_pos, g_rot, g_z)
-        return self.chain.backward(g_pos, g_rot), g_z
+            t.accumulate(r, w, g_pos, g_rot, g_z, rows)
+        return self.chain.backward(g_pos, g_rot, level_order=True), g_z
 
     def _residuals(self, jac: bool) -> None:
         """Each term's residuals (with their Jacobians when ``jac``) at the kept poses."""
@@ -272,6 +274,15 @@ class StoppingRule:
             out = out | (self.since[rows] >= self.patience) | satisfied()
         fixed = self.fixed[rows]
         return np.where(fixed >= 0, steps >= fixed, out)
+
+    def stop_one(self, total: float, satisfied: Callable[[], bool], steps: int) -> bool:
+        """:meth:`stop` for a rule of one row whose frame has taken ``steps`` steps (the
+        caller counts them: no :meth:`stepped`); a realtime frame answers from the count
+        alone (no arrays)."""
+        if not self.offline:
+            return self.last(steps)
+        self.steps[0] = steps
+        return bool(self.stop(np.array([total]), lambda: np.array([satisfied()]))[0])
 
     def last(self, steps: int, row: int = 0) -> bool:
         """Whether row ``row``'s frame stops for certain once it has taken ``steps`` steps

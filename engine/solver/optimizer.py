@@ -246,7 +246,9 @@ class PoseOptimizer:
                 values = obj.evaluate(z, timings, not stopping.last(steps))
             total = float(obj.weights @ values)
             path.append(z)
-            losses.append({**dict(zip(obj.names, values.tolist())), "total": total})
+            record = dict(zip(obj.names, values.tolist()))
+            record["total"] = total
+            losses.append(record)
             if not math.isfinite(total) or not np.isfinite(z).all():
                 return self._fall_back(z0, ctx, losses, steps, warnings, "loss became non-finite", timings)
             if steps == 0:
@@ -254,7 +256,7 @@ class PoseOptimizer:
             elif deadline is not None and steps < stopping.cap and _past(deadline, t_loop, steps):
                 cut = True
                 break
-            if stopping.stop(np.array([total]), lambda: np.array([obj.satisfied()]))[0]:
+            if stopping.stop_one(total, obj.satisfied, steps):
                 break
             t0 = clock()
             grad = obj.gradient()
@@ -262,7 +264,6 @@ class PoseOptimizer:
             z = upd.step(z, grad)
             timings.backward += t1 - t0
             timings.step += clock() - t1
-            stopping.stepped()
             steps += 1
         timings.iterations = steps
         _to_ms(timings)

@@ -35,6 +35,8 @@ class LatentUpdate:
     def __init__(self, rule: str, lr: float, momentum: float = 0.0, state: dict | None = None) -> None:
         self.rule, self.lr, self.momentum = rule, float(lr), float(momentum)
         self.state = {k: (v.copy() if isinstance(v, np.ndarray) else v) for k, v in (state or {}).items()}
+        b1, b2 = self.BETAS
+        self._factors = (np.float32(1 - b1), np.float32(b2), np.float32(1 - b2), np.float32(self.EPS))
 
     def step(self, z: np.ndarray, grad: np.ndarray) -> np.ndarray:
         """The next latents (new array, float32) of ``z`` with gradients ``grad``, same shape."""
@@ -49,9 +51,34 @@ class LatentUpdate:
         s = self.state
         if not s:
             s.update(step=np.zeros(z.shape[:-1]), exp_avg=np.zeros_like(z), exp_avg_sq=np.zeros_like(z))
+        if z.ndim == 1:
+            return z - self._adam_one(grad)
         n, m, v = self._adam(s["step"] + 1, s["exp_avg"], s["exp_avg_sq"], grad)
         s["step"], s["exp_avg"], s["exp_avg_sq"] = n, m, v
         return z - self._move(n, m, v)
+
+    def _adam_one(self, grad: np.ndarray) -> np.ndarray:
+        """Adam's step ``(L,)`` for one latent: :meth:`_adam` and :meth:`_move`, operation
+        for operation (the same rounding), on the state's moments in place and with the
+        float32 factors made once (a dozen numpy calls instead of twice as many)."""
+        s, (c1, c2, c3, eps) = self.state, self._factors
+        k = float(s["step"]) + 1.0
+        s["step"] = k
+        m, v = s["exp_avg"], s["exp_avg_sq"]
+        t = grad - m
+        t *= c1
+        m += t  # m + (1 - b1) (g - m)
+        v *= c2
+        np.multiply(c3, grad, out=t)
+        t *= grad
+        v += t  # b2 v + (1 - b2) g g
+        b1, b2 = self.BETAS
+        d = np.sqrt(v)
+        d /= np.float32(math.sqrt(1 - b2**k))
+        d += eps
+        np.divide(m, d, out=d)
+        d *= np.float32(self.lr / (1 - b1**k))
+        return d
 
     def step_rows(self, z: np.ndarray, grad: np.ndarray, rows: np.ndarray) -> None:
         """Step rows ``rows`` of ``z (C, L)`` in place with their gradients ``grad (len(rows), L)``;

@@ -6,103 +6,81 @@ receiving a looping 60 Hz VMC stream, for ``--minutes``, with one line of figure
 
 ``studio``: the studio window (its solver in its own process, as ``gui`` runs it) opens
 ``--clip`` and plays it on loop. Each minute: the resident memory (RSS) of the window's
-process and of the solver's, view draws and solved frames per second, and the lateness
-of a 10 ms timer on the GUI thread (p50 / p99 / max: how long the window could not
-answer), plus what could grow (Python objects, the undo stack).
+process and of the solver's, view draws and solved frames per second, the lateness of a
+10 ms timer on the GUI thread (p50 / p99 / max: how long the window could not answer),
+the CPU time per draw (the window's process) and per solve (the solver's), plus what
+could grow (Python objects, the undo stack).
 
 ``live``: a sender process streams ``--clip``'s simulated trackers as VMC bundles at
 ``--fps`` (60), looping the clip with the stream time running on; this process receives
 and solves them as ``dragposer-studio live`` does (its receiver, method and loop). Each
-minute: RSS, packets and solved frames per second, frames skipped, and the loop's
-lateness: packet arrival to solved pose (p50 / p99 / max), the live loop having no
-other event loop.
+minute: RSS, packets and solved frames per second, frames skipped, the loop's lateness
+(packet arrival to solved pose, p50 / p99 / max; the live loop has no other event
+loop), and the CPU time per solve and per optimizer iteration.
 
-The last lines compare the last minute with the first against the issue's targets (RSS
-growth at most 5 %, rates and p99 within 10 %) and the exit status says whether they
-were met; ``--json`` writes every minute and the verdict. On a busy machine the rates
-and the lateness follow the other load: read them from an idle machine.
+Every row also holds the machine's load average and the cores the soak kept busy. The
+last lines compare the last minute with the first (scripts/soak_figures.py: RSS and the
+CPU time a minute for the same work always; the wall rates and p99 only when the load
+the soak did not make stayed about the same) and the exit status says whether the
+targets were met;
+``--json`` writes every minute and the verdict. Every thread's stack goes to stderr on
+a fatal signal, on SIGUSR1, when ``--watchdog-s`` pass without progress, and when the
+finished run has not exited within 30 s.
 """
 
 from __future__ import annotations
 
 import argparse
+import faulthandler
 import gc
 import json
+import multiprocessing
 import os
+import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))  # this checkout's packages, not an installed copy
+
+from scripts.soak_figures import cpu_s, finish, load_avg, per_unit_ms, percentiles, rss_mb  # noqa: E402
+from scripts.soak_figures import verdict as verdict  # noqa: E402  (the verdict, for callers of this script)
+
 EXAMPLE = REPO / "assets" / "clips" / "example.bvh"
 PROBE_MS = 10
-#: The issue's targets: RSS growth at most 5 %, rates and p99 within 10 % of the first minute.
-RSS_GROWTH, RATE_CHANGE = 0.05, 0.10
+#: Seconds without progress (start-up, the model's load included) before every thread's stack is dumped.
+WATCHDOG_S = 300.0
+#: Seconds a finished run may take to exit before every thread's stack is dumped.
+EXIT_WATCHDOG_S = 30.0
 
 
-def rss_mb(pid: int | None = None) -> float:
-    """Resident memory of process ``pid`` (this one by default), MiB; 0 when it is gone."""
-    try:
-        status = Path(f"/proc/{pid or 'self'}/status").read_text()
-    except OSError:
-        return 0.0
-    kb = next(line.split()[1] for line in status.splitlines() if line.startswith("VmRSS:"))
-    return int(kb) / 1024.0
+def watchdog(seconds: float) -> None:
+    """Dump every thread's stack to stderr if ``seconds`` pass before the next call (and
+    every ``seconds`` after), so a run that hangs leaves where it hung in its log."""
+    faulthandler.dump_traceback_later(seconds, repeat=True)
 
 
-def percentiles(values: list[float]) -> dict[str, float]:
-    a = np.asarray(values or [0.0], float)
-    return {
-        "p50": round(float(np.percentile(a, 50)), 2),
-        "p99": round(float(np.percentile(a, 99)), 2),
-        "max": round(float(a.max()), 2),
-    }
+def arm_faulthandler(seconds: float) -> None:
+    """Stacks of every thread on a fatal signal, on SIGUSR1 and at the :func:`watchdog`."""
+    faulthandler.enable(all_threads=True)
+    faulthandler.register(signal.SIGUSR1, all_threads=True)
+    watchdog(seconds)
 
 
-def verdict(minutes: list[dict[str, Any]], rates: tuple[str, ...], lateness: str) -> tuple[bool, list[str]]:
-    """Whether the last minute is within the targets of the first; one line per figure."""
-    if len(minutes) < 2:
-        return True, ["fewer than two minutes: nothing to compare"]
-    first, last = minutes[0], minutes[-1]
-    lines, ok = [], True
-    for key in ("rss_mb", "engine_rss_mb"):
-        if first.get(key):
-            growth = last[key] / first[key] - 1.0
-            good = growth <= RSS_GROWTH
-            ok &= good
-            lines.append(
-                f"{key}: {first[key]:.0f} -> {last[key]:.0f} MiB ({100 * growth:+.1f} %, target <= +5 %)"
-                f" {'ok' if good else 'OVER'}"
-            )
-    for key in (*rates, lateness):
-        a = first[key]["p99"] if key == lateness else first[key]
-        b = last[key]["p99"] if key == lateness else last[key]
-        change = (b / a - 1.0) if a else 0.0
-        good = abs(change) <= RATE_CHANGE if key != lateness else change <= RATE_CHANGE
-        ok &= good
-        name = f"{key} p99" if key == lateness else key
-        lines.append(
-            f"{name}: {a:.2f} -> {b:.2f} ({100 * change:+.1f} %, target within 10 %) {'ok' if good else 'OFF'}"
-        )
-    return ok, lines
-
-
-def finish(kind: str, minutes: list[dict], rates: tuple[str, ...], lateness: str, out: Path | None) -> int:
-    ok, lines = verdict(minutes, rates, lateness)
-    print(f"soak {kind}: {len(minutes)} minutes, {'within' if ok else 'NOT within'} the targets")
-    for line in lines:
-        print(f"  {line}")
-    if out is not None:
-        tmp = out.with_name(out.name + ".tmp")
-        tmp.write_text(json.dumps({"kind": kind, "minutes": minutes, "ok": ok, "verdict": lines}, indent=1) + "\n")
-        tmp.replace(out)
-    return 0 if ok else 1
+def exit_watch() -> None:
+    """Before exiting: name what could keep the process alive (threads that are not
+    daemons, child processes) and dump the stacks if it is still here in
+    :data:`EXIT_WATCHDOG_S`."""
+    threads = [t.name for t in threading.enumerate() if t is not threading.main_thread() and not t.daemon]
+    children = [p.pid for p in multiprocessing.active_children()]
+    if threads or children:
+        print(f"soak: at exit, threads still running {threads}, child processes {children}", file=sys.stderr)
+    watchdog(EXIT_WATCHDOG_S)
 
 
 # -- the studio --------------------------------------------------------------------------
@@ -147,13 +125,27 @@ def studio(a: argparse.Namespace) -> int:
         snap = s.latest
         return 0 if snap is None else int(snap.solved)
 
+    def engine_pid() -> int | None:
+        process = getattr(w.engine, "_process", None)
+        return None if process is None else int(process.pid)
+
+    def marks() -> dict[str, Any]:
+        pid = engine_pid()
+        return {
+            "draws": w.drawing.draws,
+            "solved": solved(),
+            "engine": w.engine,
+            "cpu": cpu_s(),
+            "engine_cpu": cpu_s(pid) if pid is not None else 0.0,
+        }
+
     def begin() -> None:
         """Once playback solves (the model's load is not measured)."""
         snap = s.latest
         if snap is None or not snap.playing or snap.solved < 2:
             QTimer.singleShot(200, begin)
             return
-        mark.update(t=time.monotonic(), draws=w.drawing.draws, solved=solved(), engine=w.engine)
+        mark.update(t=time.monotonic(), **marks())
         late.clear()
         last["t"] = time.perf_counter()
         probe.start()
@@ -163,14 +155,26 @@ def studio(a: argparse.Namespace) -> int:
         now = time.monotonic()
         dt = now - mark["t"]
         restarted = w.engine is not mark["engine"]  # the solver's counters began again
-        process = getattr(w.engine, "_process", None)
+        pid = engine_pid()
+        draws = w.drawing.draws - mark["draws"]
+        solves = solved() - (0 if restarted else mark["solved"])
+        cpu = cpu_s() - mark["cpu"]
+        engine_cpu = (cpu_s(pid) if pid is not None else 0.0) - (0.0 if restarted else mark["engine_cpu"])
         row = {
             "minute": len(minutes) + 1,
             "rss_mb": round(rss_mb(), 1),
-            "engine_rss_mb": round(rss_mb(process.pid), 1) if process is not None else None,
-            "draws_per_s": round((w.drawing.draws - mark["draws"]) / dt, 2),
-            "solved_per_s": round((solved() - (0 if restarted else mark["solved"])) / dt, 2),
+            "engine_rss_mb": round(rss_mb(pid), 1) if pid is not None else None,
+            "draws_per_s": round(draws / dt, 2),
+            "solved_per_s": round(solves / dt, 2),
             "event_loop_ms": percentiles(late),
+            "cpu_s": round(cpu, 3),
+            "draws": draws,
+            "engine_cpu_s": round(engine_cpu, 3),
+            "solves": solves,
+            "cpu_ms_per_draw": per_unit_ms(cpu, draws),
+            "engine_cpu_ms_per_solve": per_unit_ms(engine_cpu, solves),
+            "own_cores": round((cpu + engine_cpu) / dt, 3),
+            "load_avg": load_avg(),
             "python_objects": len(gc.get_objects()),
             "undo_steps": w.undo.history.count(),
             "playing": bool(s.playing),
@@ -178,8 +182,9 @@ def studio(a: argparse.Namespace) -> int:
         }
         minutes.append(row)
         print(json.dumps(row), flush=True)
-        mark.update(t=now, draws=w.drawing.draws, solved=solved(), engine=w.engine)
+        mark.update(t=now, **marks())
         late.clear()
+        watchdog(a.watchdog_s)
         if len(minutes) >= a.minutes:
             probe.stop()
             w.close()
@@ -189,7 +194,8 @@ def studio(a: argparse.Namespace) -> int:
 
     QTimer.singleShot(300, begin)
     app.exec()
-    return finish("studio", minutes, ("draws_per_s", "solved_per_s"), "event_loop_ms", a.json)
+    rates, cpu = ("draws_per_s", "solved_per_s"), (("cpu_s", ("draws",)), ("engine_cpu_s", ("solves",)))
+    return finish("studio", minutes, rates, "event_loop_ms", cpu, a.json)
 
 
 # -- live --------------------------------------------------------------------------------
@@ -217,6 +223,8 @@ def send(a: argparse.Namespace) -> int:
         for dgram in encode_packets(t, plan.frame(k)):
             sock.sendto(dgram, (host, int(port)))
         i += 1
+        if i % max(1, int(a.fps)) == 0:  # a second of stream sent: the sender is alive
+            watchdog(a.watchdog_s)
     sock.close()
     return 0
 
@@ -260,6 +268,8 @@ def live(a: argparse.Namespace) -> int:
             str(args.fps),
             "--seconds",
             str(seconds + 30),
+            "--watchdog-s",
+            str(a.watchdog_s),
         ],
         env=env,
         cwd=REPO,
@@ -267,10 +277,12 @@ def live(a: argparse.Namespace) -> int:
     minutes: list[dict[str, Any]] = []
     mark: dict[str, Any] = {}
     late: list[float] = []  # this minute's latencies, ms
+    iterations = [0]  # this minute's optimizer iterations
 
     def on_frame(result: Any) -> None:
         now = time.monotonic()
         late.append(result.figures.latency_ms[-1])
+        iterations[0] += int(result.figures.iterations[-1])
         if not mark:
             mark.update(
                 t=now,
@@ -278,21 +290,34 @@ def live(a: argparse.Namespace) -> int:
                 received=result.frames_received,
                 skipped=result.frames_skipped,
                 packets=receiver.snapshot_stats().packets,
+                cpu=cpu_s(),
+                sender_cpu=cpu_s(sender.pid),
             )
             late.clear()
+            iterations[0] = 0
             return
         if now - mark["t"] < a.minute_s:
             return
         dt = now - mark["t"]
         packets = receiver.snapshot_stats().packets
+        solves = result.frames_solved - mark["solved"]
+        cpu, sender_cpu = cpu_s(), cpu_s(sender.pid)
         row = {
             "minute": len(minutes) + 1,
             "rss_mb": round(rss_mb(), 1),
             "packets_per_s": round((packets - mark["packets"]) / dt, 2),
-            "solved_per_s": round((result.frames_solved - mark["solved"]) / dt, 2),
+            "solved_per_s": round(solves / dt, 2),
             "frames_received": result.frames_received - mark["received"],
             "frames_skipped": result.frames_skipped - mark["skipped"],
             "latency_ms": percentiles(late),
+            "cpu_s": round(cpu - mark["cpu"], 3),
+            "solves": solves,
+            "iterations": iterations[0],
+            "cpu_ms_per_solve": per_unit_ms(cpu - mark["cpu"], solves),
+            "iterations_per_solve": round(iterations[0] / solves, 2) if solves else None,
+            "cpu_ms_per_iteration": per_unit_ms(cpu - mark["cpu"], iterations[0]),
+            "own_cores": round((cpu - mark["cpu"] + sender_cpu - mark["sender_cpu"]) / dt, 3),
+            "load_avg": load_avg(),
             "python_objects": len(gc.get_objects()),
             "kept_results": len(result.results),
         }
@@ -304,8 +329,12 @@ def live(a: argparse.Namespace) -> int:
             received=result.frames_received,
             skipped=result.frames_skipped,
             packets=packets,
+            cpu=cpu,
+            sender_cpu=sender_cpu,
         )
         late.clear()
+        iterations[0] = 0
+        watchdog(a.watchdog_s)
         if len(minutes) >= a.minutes:
             run.stop_event.set()
 
@@ -316,7 +345,8 @@ def live(a: argparse.Namespace) -> int:
     finally:
         sender.terminate()
         sender.wait()
-    return finish("live", minutes, ("packets_per_s", "solved_per_s"), "latency_ms", a.json)
+    cpu = (("cpu_s", ("solves", "iterations")),)  # the receiver's part is in the fit's constant
+    return finish("live", minutes, ("packets_per_s", "solved_per_s"), "latency_ms", cpu, a.json)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -339,9 +369,20 @@ def main(argv: list[str] | None = None) -> int:
     q.add_argument("--fps", type=float, default=60.0)
     q.add_argument("--sensors", default="6")
     q.add_argument("--seconds", type=float, required=True)
+    for q in sub.choices.values():
+        q.add_argument(
+            "--watchdog-s",
+            type=float,
+            default=WATCHDOG_S,
+            help=f"dump every thread's stack to stderr when the run makes no progress (a minute's row;"
+            f" the sender: a second of stream) for this long, seconds (default: {WATCHDOG_S:.0f})",
+        )
     a = p.parse_args(argv)
+    arm_faulthandler(a.watchdog_s)
     return {"studio": studio, "live": live, "send": send}[a.what](a)
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    status = main()
+    exit_watch()
+    sys.exit(status)

@@ -19,6 +19,7 @@ import argparse
 import faulthandler
 import sys
 import tempfile
+import threading
 import time
 import traceback
 from collections import Counter
@@ -357,6 +358,12 @@ def run(seed: int, events: int, step_timeout: float, method: str = "ik", minutes
     studio.undo.set_clean()
     studio.close()
     app.processEvents()
+    left = [t for t in threading.enumerate() if t is not threading.main_thread() and t.is_alive()]
+    if left:  # one still in torch when the interpreter ends aborts the process (std::terminate)
+        frames = sys._current_frames()
+        for t in left:
+            stack = "".join(traceback.format_stack(frames[t.ident])) if t.ident in frames else ""
+            errors.append(f"thread {t.name!r} still running after both windows closed:\n{stack}")
     counts = " ".join(f"{k}={v}" for k, v in sorted(monkey.counts.items()))
     print(
         f"monkey seed={seed} events={done} seconds={time.monotonic() - start:.0f} "

@@ -6,6 +6,10 @@ side by side (six per row, each turned so its hips lie across the view),
 with the three joints that move most marked (red) and the first named under the cell. With a joint
 chosen, the five dimensions that move that joint most right here (the Jacobian's
 largest norms) have their labels in yellow. A legend above the cells says so.
+
+The labels keep their size in pixels while the cells shrink with the view: where a
+label no longer fits between its neighbours and the row below, it is shortened to its
+dimension (``d7``; its tooltip gives the whole), and hidden where even that does not fit.
 """
 
 from __future__ import annotations
@@ -22,14 +26,19 @@ from engine import skeleton as sk
 from widgets.plots import release
 
 COLUMNS = 6
-#: Cell size in metres (a body is ~1.8 m tall).
-CELL_W, CELL_H = 1.6, 2.4
+#: Cell size in metres (a body is ~1.8 m tall; under its feet, room for a one-line label
+#: at the Latent map dock's size, ~470 x 330 pixels).
+CELL_W, CELL_H = 1.6, 2.9
 #: Height kept under the top of a cell's label for its two lines, metres (the view's range
 #: is set with it: pyqtgraph fits the range to the lines only, and cut the last row's names).
 LABEL_ROOM = 1.0
 OFFSET_COLOURS = ("#4da3ff", "#8a93a6", "#ff8a1f")
 INFLUENCE_COLOUR = "#ffd60a"
 MARK_COLOUR = "#ff3b30"
+#: Pixels kept clear between neighbouring labels and between a label and the row below.
+LABEL_GAP_PX = 3.0
+#: Where a cell's label starts, below the cell's origin (the root), metres.
+LABEL_DROP = 1.05
 
 
 def legend_html() -> str:
@@ -41,7 +50,8 @@ def legend_html() -> str:
     minus, zero, plus = OFFSET_COLOURS
     return (
         f"Each dimension d at {c(minus, '-2 sigma')}, {c(zero, 'unchanged')} and {c(plus, '+2 sigma')}; "
-        f"{c(MARK_COLOUR, 'dots')}: the 3 joints it moves most (the first named under it); "
+        f"{c(MARK_COLOUR, 'dots')}: the 3 joints it moves most (the first named under it; "
+        f"where the cells are small, in the tooltip of its number); "
         f"{c(INFLUENCE_COLOUR, 'yellow name')}: among the 5 that move the chosen joint most"
     )
 
@@ -102,6 +112,12 @@ class LatentGallery(QWidget):
         layout.addWidget(self.plot, 1)
         self.detail: Any = None
         self.influential: list[int] = []
+        #: Each label's full and short text, and the metres between a label's top and the
+        #: highest point of the row below (set with the cells).
+        self._texts: list[tuple[str, str]] = []
+        self._room_below = CELL_H
+        self.plot.getPlotItem().getViewBox().sigResized.connect(lambda *_: self._fit_labels())
+        self.plot.getPlotItem().getViewBox().sigRangeChanged.connect(lambda *_: self._fit_labels())
 
     def closeEvent(self, event: QCloseEvent | None) -> None:  # noqa: N802 (Qt's name)
         """A closed view holds no plot item (:func:`widgets.plots.release`)."""
@@ -118,6 +134,7 @@ class LatentGallery(QWidget):
         for t in self.labels:
             self.plot.removeItem(t)
         self.labels = []
+        self._texts = []
         if detail is None:
             for line in self.lines:
                 line.setData([], [])
@@ -137,11 +154,16 @@ class LatentGallery(QWidget):
             top = np.argsort(detail.motion[d])[::-1][:3]
             marks.append(v[2][top])
             colour = INFLUENCE_COLOUR if d in self.influential else "#c8ccd4"
-            text = pg.TextItem(f"d{d}\n{sk.JOINT_NAMES[top[0]]}", color=colour, anchor=(0.5, 0))
+            full = f"d{d}\n{sk.JOINT_NAMES[top[0]]}"
+            text = pg.TextItem(full, color=colour, anchor=(0.5, 0))
             text.setFont(self._font)
-            text.setPos(ox, oy - 1.05)  # under the feet (the root sits at the cell origin)
+            text.setToolTip(full.replace("\n", ": moves "))  # the whole label where it is shortened
+            text.setPos(ox, oy - LABEL_DROP)  # under the feet (the root sits at the cell origin)
             self.plot.addItem(text)
             self.labels.append(text)
+            self._texts.append((full, f"d{d}"))
+        highest = max(float(front_view(sweep[d])[..., 1].max()) for d in range(L))
+        self._room_below = CELL_H - LABEL_DROP - highest
         for k in range(3):
             pts = np.concatenate(segs[k])
             self.lines[k].setData(pts[:, 0], pts[:, 1], connect="pairs")
@@ -154,3 +176,23 @@ class LatentGallery(QWidget):
             yRange=(lowest_label - LABEL_ROOM, float(everything[:, 1].max())),
             padding=0.02,
         )
+        self._fit_labels()
+
+    def _fit_labels(self) -> None:
+        """Each label in full where it fits its cell's width and the room above the row
+        below at the view's present scale, else its dimension alone, else hidden."""
+        if not self.labels:
+            return
+        px, py = self.plot.getPlotItem().getViewBox().viewPixelSize()  # metres per pixel
+        if not (px > 0 and py > 0):
+            return
+        wide, tall = CELL_W / px - LABEL_GAP_PX, self._room_below / py - LABEL_GAP_PX
+        for label, texts in zip(self.labels, self._texts, strict=True):
+            for text in texts:
+                label.setText(text)
+                box = label.textItem.boundingRect()
+                if box.width() <= wide and box.height() <= tall:
+                    label.setVisible(True)
+                    break
+            else:
+                label.setVisible(False)

@@ -1,9 +1,10 @@
 """A monkey for the studio and the pose window: seeded random, valid UI events (mouse
 drags and clicks on the 3D views, wheel turns, keys, menu entries, clicks and value
 changes of the panels' widgets, drags along the timelines), in the real windows under
-a display (Xvfb).
+a display (Xvfb); and on the studio's latent map dock (brought to the front, a tab picked,
+clicks, hovers and wheel turns on the map, a trajectory point clicked, the tabs' widgets).
 
-    PYTHONPATH=. xvfb-run -a python -m tests.app.monkey --seed 3 --events 3000
+    PYTHONPATH=. xvfb-run -a python -m tests.app.monkey --seed 3 --events 3000 [--method dragposer] [--minutes 20]
 
 Exit status 0 when every event ran; 1 when an exception escaped a slot (its traceback
 on stderr) or one event did not return within ``--step-timeout`` seconds (a frozen
@@ -18,6 +19,7 @@ import argparse
 import faulthandler
 import sys
 import tempfile
+import threading
 import time
 import traceback
 from collections import Counter
@@ -38,6 +40,7 @@ from PyQt6.QtWidgets import (
     QMenu,
     QMessageBox,
     QSlider,
+    QTabBar,
     QWidget,
 )
 
@@ -99,6 +102,12 @@ def close_popups() -> None:
             widget.close()
 
 
+def on_screen(widget: QWidget) -> bool:
+    """Whether a user could see ``widget``: a dock tabbed behind another keeps its children
+    ``isVisible()`` (its title bar's buttons too) but shows none of them."""
+    return not widget.visibleRegion().isEmpty()
+
+
 def menu_actions(window: QWidget) -> list:
     out = []
 
@@ -126,8 +135,12 @@ class Monkey:
         """One random event; what it was (kind, window and detail)."""
         w = self.windows[int(self.rng.integers(len(self.windows)))]
         kind = str(
-            self.rng.choice(["drag", "drag", "click", "wheel", "key", "key", "menu", "widget", "widget", "strip"])
+            self.rng.choice(
+                ["drag", "drag", "click", "wheel", "key", "key", "menu", "widget", "widget", "strip", "latent"]
+            )
         )
+        if kind == "latent":  # the studio's dock: the pose window has no latent map
+            w = self.windows[0]
         detail = getattr(self, f"_{kind}")(w)
         self.counts[kind] += 1
         return f"{kind} {type(w).__name__}" + (f" {detail}" if detail else "")
@@ -188,7 +201,7 @@ class Monkey:
         found = [
             c
             for c in w.findChildren(QWidget)
-            if isinstance(c, kinds) and c.isVisible() and c.isEnabled() and c.window() is w
+            if isinstance(c, kinds) and c.isVisible() and c.isEnabled() and c.window() is w and on_screen(c)
         ]
         if not found:
             return ""
@@ -209,6 +222,64 @@ class Monkey:
                 c, Qt.MouseButton.LeftButton, pos=QPoint(int(self.rng.uniform(0, c.width())), c.height() // 2)
             )
 
+    def _latent(self, w) -> str:
+        """The latent map dock in front, a random tab, and on it: a click, a hover or a wheel
+        turn on the map (a trajectory point a third of the time: a seek), or a widget's act."""
+        views = w.latent_views
+        bar = next(
+            (b for b in w.findChildren(QTabBar) if "Latent map" in [b.tabText(i) for i in range(b.count())]), None
+        )
+        if bar is not None and bar.isVisible():  # tabbed beside the Latent dock: its tab, as a user would
+            index = [bar.tabText(i) for i in range(bar.count())].index("Latent map")
+            QTest.mouseClick(bar, Qt.MouseButton.LeftButton, pos=bar.tabRect(index).center())
+        else:  # floated, or alone in its area
+            views.dock.raise_()
+        QApplication.processEvents()  # its first showing builds the tabs
+        if views.tabs is None:
+            return "raised"
+        bar = views.tabs.tabBar()
+        tab = int(self.rng.integers(views.tabs.count()))
+        QTest.mouseClick(bar, Qt.MouseButton.LeftButton, pos=bar.tabRect(tab).center())
+        QApplication.processEvents()
+        if tab != 0 or self.rng.random() < 0.2:
+            found = [
+                c
+                for c in views.tabs.currentWidget().findChildren(QWidget)
+                if isinstance(c, (QAbstractButton, QAbstractSpinBox, QComboBox))
+                and c.isVisible()
+                and c.isEnabled()
+                and on_screen(c)
+            ]
+            if not found:
+                return f"tab {tab}"
+            c = found[int(self.rng.integers(len(found)))]
+            self._widget_act(c)
+            return f"tab {tab} {type(c).__name__}({getattr(c, 'text', lambda: '')() or c.objectName()})"
+        plot = views.map.plot.viewport()
+        if len(views.map.xy) and self.rng.random() < 0.33:
+            x, y = views.map.xy[int(self.rng.integers(len(views.map.xy)))]
+            pos = views.map.to_widget(float(x), float(y)).toPoint()
+        else:
+            pos = QPoint(int(self.rng.uniform(0, plot.width())), int(self.rng.uniform(0, plot.height())))
+        act = str(self.rng.choice(["click", "hover", "wheel"]))
+        if act == "click":
+            QTest.mouseClick(plot, Qt.MouseButton.LeftButton, pos=pos)
+        elif act == "hover":
+            QTest.mouseMove(plot, pos)
+        else:
+            event = QWheelEvent(
+                QPointF(pos),
+                QPointF(plot.mapToGlobal(pos)),
+                QPoint(),
+                QPoint(0, int(self.rng.choice([-120, 120]))),
+                Qt.MouseButton.NoButton,
+                Qt.KeyboardModifier.NoModifier,
+                Qt.ScrollPhase.NoScrollPhase,
+                False,
+            )
+            QApplication.sendEvent(plot, event)
+        return f"map {act}"
+
     def _strip(self, w) -> None:
         """A drag along the pose window's key timeline, or a click on the studio's."""
         strip = getattr(getattr(w, "keys", None), "strip", None)
@@ -226,8 +297,10 @@ class Monkey:
         drag_on(strip, x0, x0 + float(self.rng.normal(0, 60)), steps=int(self.rng.integers(1, 5)))
 
 
-def run(seed: int, events: int, step_timeout: float) -> int:
-    """Build the studio and a pose window, run ``events`` random events; the exit status."""
+def run(seed: int, events: int, step_timeout: float, method: str = "ik", minutes: float = 0.0) -> int:
+    """Build the studio (solving with ``method``) and a pose window, run ``events`` random
+    events (or fewer: as many as ``minutes`` of wall time allow, when positive); the exit
+    status."""
     from app.authoring_actions import open_pose_window
     from app.demo import demo_walk
     from app.main_window import MainWindow
@@ -243,7 +316,9 @@ def run(seed: int, events: int, step_timeout: float) -> int:
 
     sys.excepthook = hook
     folder = Path(tempfile.mkdtemp(prefix="monkey-"))
-    studio = MainWindow(settings=QSettings(str(folder / "studio.ini"), QSettings.Format.IniFormat), engine="thread")
+    studio = MainWindow(
+        method=method, settings=QSettings(str(folder / "studio.ini"), QSettings.Format.IniFormat), engine="thread"
+    )
     studio.session.set_motion(demo_walk(4.0))
     studio.resize(1400, 900)
     studio.show()
@@ -274,6 +349,8 @@ def run(seed: int, events: int, step_timeout: float) -> int:
         if not pose.isVisible():  # a window may only close through the entries left out
             errors.append(f"the pose window closed at event {done} ({what})")
             break
+        if minutes > 0 and time.monotonic() - start > 60.0 * minutes:
+            break
     for w in (pose, studio):
         if hasattr(w, "session") and hasattr(w.session, "history"):
             w.session.history.set_clean()
@@ -281,6 +358,12 @@ def run(seed: int, events: int, step_timeout: float) -> int:
     studio.undo.set_clean()
     studio.close()
     app.processEvents()
+    left = [t for t in threading.enumerate() if t is not threading.main_thread() and t.is_alive()]
+    if left:  # one still in torch when the interpreter ends aborts the process (std::terminate)
+        frames = sys._current_frames()
+        for t in left:
+            stack = "".join(traceback.format_stack(frames[t.ident])) if t.ident in frames else ""
+            errors.append(f"thread {t.name!r} still running after both windows closed:\n{stack}")
     counts = " ".join(f"{k}={v}" for k, v in sorted(monkey.counts.items()))
     print(
         f"monkey seed={seed} events={done} seconds={time.monotonic() - start:.0f} "
@@ -297,9 +380,11 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--events", type=int, default=2000)
     p.add_argument("--step-timeout", type=float, default=60.0, help="seconds one event may take (frozen beyond)")
+    p.add_argument("--method", default="ik", help="the studio's method at the start (dragposer fills the latent map)")
+    p.add_argument("--minutes", type=float, default=0.0, help="stop after this much wall time (0: run every event)")
     a = p.parse_args(argv)
     faulthandler.enable(all_threads=True)
-    return run(a.seed, a.events, a.step_timeout)
+    return run(a.seed, a.events, a.step_timeout, a.method, a.minutes)
 
 
 if __name__ == "__main__":

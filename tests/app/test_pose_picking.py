@@ -63,3 +63,26 @@ def test_dragging_the_hips_down_squats_over_the_planted_feet(pose_window):
     u, v = after[hip] - after[knee], after[ankle] - after[knee]
     assert np.degrees(np.arccos(u @ v / np.linalg.norm(u) / np.linalg.norm(v))) < 120, "the knee bends"
     assert w.undo.undo_text() == "move body" and w.mode.targets["root"].position[2] < before[0, 2] - 0.25
+
+
+def test_the_hips_dragged_up_beside_a_wrist_s_rings_move_the_body_not_the_wrist(pose_window):
+    """A hand on the opposite knee, standing (docs/authoring.md): from the front view the
+    left wrist is dragged to the right knee (the body crouches with it), then the hips are
+    dragged up. The wrist stays selected, and its rings (12 cm) pass over the hips: a
+    press on the hips' centre moves the body, it does not turn the wrist."""
+    w = pose_window
+    view = w.viewport
+    view.set_camera("front", w.hips())
+    view.plotter.render()
+    standing = w.mode.pose.positions.copy()
+    mouse_drag(view, pixel_of(view, standing[LW]), pixel_of(view, standing[sk.JOINT_INDEX["rknee"]]), steps=10)
+    crouched = w.mode.pose.positions.copy()
+    assert w.selected == "lwrist" and crouched[0, 2] < standing[0, 2] - 0.2, "the reach bends the knees"
+    view.plotter.render()
+    start = pixel_of(view, crouched[0])
+    assert view.rings.pick(view.joints._to_display, *start) is not None, "a ring of the wrist crosses the hips"
+    mouse_drag(view, start, pixel_of(view, crouched[0] + [0.0, 0.0, 0.15]), steps=8)
+    assert w.mode.targets["lwrist"].rotation is None, "the wrist was not turned"
+    assert w.undo.undo_text() == "move body" and w.selected == "root"
+    assert w.mode.targets["root"].position[2] == pytest.approx(crouched[0, 2] + 0.15, abs=0.01)
+    assert w.mode.pose.positions[0, 2] > crouched[0, 2] + 0.1, "the pelvis went up"

@@ -192,7 +192,7 @@ def test_forces_bars_in_the_loss_plots_colours(qtbot):
 def test_gallery_draws_every_dimension(qtbot):
     w = shown(qtbot, LatentGallery(), 500, 400)
     w.set_detail(_detail())
-    assert len(w.labels) == 24 and w.labels[0].textItem.toPlainText() == "d0\nlwrist"
+    assert len(w.labels) == 24 and w.labels[0].toolTip() == "d0: moves lwrist"  # shown shortened at this size
     x, _ = w.lines[0].getData()
     assert len(x) == 24 * 2 * (sk.NUM_JOINTS - 1)
     assert w.influential == [23, 22, 21, 20, 19]

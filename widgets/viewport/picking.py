@@ -155,12 +155,21 @@ class JointDragger:
             self._on_select(name)
 
     def press_ring(self, x: float, y: float) -> bool:
-        """Grab the rotation ring under display pixel (x, y); True on a hit."""
+        """Grab the rotation ring under display pixel (x, y); True on a hit. A press
+        nearer a joint's centre than the ring's circle is left to that joint where a press
+        grabs joints: a wrist's rings (12 cm) brought down beside the hips cross them, and
+        the hips dragged back up turned the wrist instead."""
         if self._rings is None or self._on_turn is None:
             return False
         axis = self._rings.pick(self._to_display, x, y)
         if axis is None:
             return False
+        grabs_joints = self.plain_press_grabs_joints or self._plotter.iren.interactor.GetControlKey()
+        j = self.joint_at(x, y) if grabs_joints else None
+        if j is not None and self.positions is not None:
+            joint_px = float(np.linalg.norm(self._to_display(self.positions[[j]])[0] - [x, y]))
+            if joint_px < self._rings.distance(self._to_display, axis, x, y):
+                return False
         self.ring = axis
         self._rings.begin(axis, self.ray(x, y))
         self._on_turn(axis, 0.0, True)

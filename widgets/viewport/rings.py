@@ -4,7 +4,8 @@ facing arrow, for turning a joint by dragging a ring rather than by a modifier k
 A press within :data:`RING_PICK_PX` of a ring's drawn circle grabs it, unless it lands on
 the hub (the joint or target sphere the rings surround, :data:`HUB_RADIUS`): a ring seen
 edge-on is a line through its centre, and a press on the sphere there is meant for the
-sphere. Every mouse move
+sphere (the dragger also leaves a press to any other joint nearer than the circle:
+:meth:`widgets.viewport.picking.JointDragger.press_ring`). Every mouse move
 then gives the angle swept about the ring's axis since the press (the mouse ray meets
 the ring's plane; radians, right-handed about the axis), which the dragger reports to
 its owner. The ring about +Z turns a joint the way a head turns to look left or right.
@@ -152,6 +153,11 @@ class RotationRings:
             if d + RING_PICK_PX * edge_on < best:
                 best, hit = d + RING_PICK_PX * edge_on, k
         return hit
+
+    def distance(self, to_display: Callable[[np.ndarray], np.ndarray], axis: int, x: float, y: float) -> float:
+        """How far display pixel (x, y) is from ring ``axis``'s drawn circle, pixels."""
+        screen = to_display(np.asarray(self.meshes[axis].points))
+        return float(np.linalg.norm(screen - [x, y], axis=1).min())
 
     def on_hub(self, to_display: Callable[[np.ndarray], np.ndarray], x: float, y: float) -> bool:
         """Whether display pixel (x, y) is on the rings' hub (see :data:`HUB_RADIUS`)."""

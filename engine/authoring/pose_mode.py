@@ -34,7 +34,7 @@ from engine.authoring.keys import Key
 from engine.authoring.pose_drag import EVENTS, drag
 from engine.authoring.pose_hold import held_joints, hold_terms
 from engine.authoring.pose_options import LOWEST_ROOT, SQUAT_FROM, PoseOptions
-from engine.authoring.pose_root import FOOT_OF, Stance, arm_low_points, moved_feet, root_where
+from engine.authoring.pose_root import FOOT_OF, Stance, arm_low_points, moved_feet, reach_crouches, root_where
 from engine.authoring.pose_trunk import LEGS, TRUNK, keep_trunk
 from engine.authoring.progress import CancelCheck
 from engine.authoring.targets import JointTarget, solve_inputs
@@ -168,7 +168,9 @@ class PoseMode:
         motion: the whole body and its feet move. The height lowers the pelvis over the
         planted feet, so the knees bend: a target on ``root``, kept between
         :data:`LOWEST_ROOT` of :attr:`standing_root` and :attr:`standing_root`. A pelvis
-        dragged back up to standing height loses the target; one less than
+        dragged back up to standing height loses the target, unless a wrist target below
+        the hanging arm's reach would crouch the body again (a hand on the opposite knee):
+        then it is held at standing height and the trunk bends instead; one less than
         :data:`SQUAT_FROM` below it gets none, so the jitter of a level drag does not
         crouch. The targets are solved from there.
 
@@ -188,7 +190,7 @@ class PoseMode:
             self.plant_where_standing()
             if solved:  # root motion keeps the body's pose (the anchor is root-relative): the drag goes on
                 self._solved, self.anchor = self.pose, anchor
-        if held is not None and z >= standing:
+        if held is not None and z >= standing and not reach_crouches(self.targets, self._lowest_reach, self.options):
             self.remove_target("root")
         elif held is not None or standing - z > SQUAT_FROM:
             self.set_target("root", np.array([handle[0] + level[0], handle[1] + level[1], z]))

@@ -50,6 +50,20 @@ def crouch_from(joint: int, low_points: Mapping[int, float], options: PoseOption
     return np.inf
 
 
+def reach_crouches(targets: Mapping[str, JointTarget], low_points: Mapping[int, float], options: PoseOptions) -> bool:
+    """Whether an active user target of ``targets`` lies below where it lowers the pelvis
+    (:func:`crouch_from`), so that a solve without a target on the root crouches for it."""
+    if options.crouch_share <= 0:
+        return False
+    return any(
+        t.active
+        and t.joint != "root"
+        and t.joint not in FOOT_OF
+        and t.position[2] < crouch_from(t.index, low_points, options)
+        for t in targets.values()
+    )
+
+
 class Stance(NamedTuple):
     """What the pelvis rule reads of a pose-mode state: the current ``pose``, the user's
     ``targets`` by joint name, the ``planted`` foot joints' positions (3,) metres and the

@@ -102,3 +102,41 @@ def test_a_squat_keeps_the_weight_over_the_feet_and_a_second_drag_does_not_move_
     for k in range(1, 6):
         m.drag_hips(start - [0.0, 0.0, 0.01 * k])
     assert np.abs(m.pose.positions[ankles] - ankles_before).max() < 1e-3
+
+
+def test_hips_dragged_up_past_standing_after_a_hand_to_the_knee_stay_standing(vae):
+    """A wrist put on the opposite knee crouches the body; the hips dragged back up to (and
+    past) standing height hold the pelvis there, so the trunk bends over straight legs,
+    instead of losing the target and crouching again for the reach (the docs' recipe)."""
+    from engine import skeleton as sk
+    from engine.authoring.pose_drag import drag
+    from engine.authoring.pose_mode import PoseMode
+
+    m = PoseMode(vae, 1.75)
+    standing = m.standing_root
+    knee = m.pose.positions[sk.JOINT_INDEX["lknee"]] + [0.0, -0.08, 0.0]
+    drag(m, "rwrist", m.character.skeleton.offsets, position=knee, events=20)
+    assert standing - m.pose.root_pos[2] > 0.05  # the reach crouched the body
+    start = m.hips_handle()
+    for k in range(1, 11):  # up to 10 cm past standing height in ten drag events
+        m.drag_hips(start + [0.0, 0.0, (standing + 0.1 - start[2]) * k / 10])
+    for _ in range(5):  # the drag goes on solving (as on the next mouse moves)
+        m.solve()
+    assert m.targets["root"].position[2] == pytest.approx(standing)
+    assert m.pose.root_pos[2] == pytest.approx(standing, abs=0.01)
+
+
+def test_hips_dragged_up_to_standing_with_a_reach_the_arm_makes_lose_their_target(vae):
+    """A wrist target the standing arm reaches (30 cm forward) crouches nothing, so hips
+    squatted and dragged back up release the pelvis as before."""
+    from engine import skeleton as sk
+    from engine.authoring.pose_mode import PoseMode
+
+    m = PoseMode(vae, 1.75)
+    start = m.pose.root_pos.copy()
+    m.set_target("lwrist", m.pose.positions[sk.JOINT_INDEX["lwrist"]] + [0.0, -0.3, 0.0])
+    for k in range(1, 6):
+        m.drag_hips(start - [0.0, 0.0, 0.04 * k])
+    assert "root" in m.targets
+    m.drag_hips(m.hips_handle() + [0.0, 0.0, 1.0])
+    assert "root" not in m.targets

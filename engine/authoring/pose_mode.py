@@ -34,7 +34,15 @@ from engine.authoring.keys import Key
 from engine.authoring.pose_drag import EVENTS, drag
 from engine.authoring.pose_hold import held_joints, hold_terms
 from engine.authoring.pose_options import LOWEST_ROOT, SQUAT_FROM, PoseOptions
-from engine.authoring.pose_root import FOOT_OF, Stance, arm_low_points, moved_feet, reach_crouches, root_where
+from engine.authoring.pose_root import (
+    FOOT_OF,
+    Stance,
+    arm_low_points,
+    moved_feet,
+    reach_crouches,
+    root_where,
+    shortfall,
+)
 from engine.authoring.pose_trunk import LEGS, TRUNK, keep_trunk
 from engine.authoring.progress import CancelCheck
 from engine.authoring.targets import JointTarget, solve_inputs
@@ -309,15 +317,8 @@ class PoseMode:
         return hold_terms(self.anchor, self.held(), where, w)
 
     def shortfall(self) -> float:
-        """Largest distance (metres) of a targeted wrist or ankle from its target in the
-        current pose (0 without such targets): after the exact limb step, how far the
-        target lies beyond the limb's reach."""
-        gaps = [
-            np.linalg.norm(self.pose.positions[t.index] - t.position)
-            for t in self.targets.values()
-            if t.active and t.index in LIMBS
-        ]
-        return float(max(gaps, default=0.0))
+        """How far the solve is from its targets, metres (:func:`engine.authoring.pose_root.shortfall`)."""
+        return shortfall(Stance(self.pose, self.targets, self.planted, self.options))
 
     def detached(self) -> "PoseMode":
         """A copy to settle or solve on another thread: its own targets, planted feet and

@@ -91,7 +91,9 @@ class PoseOptions:
         where the last ended, the crouch and balance steps redone first) while a dragged
         joint is more than ``reach_tolerance`` from its target after the exact limb step:
         a reach beyond the arm bends the body further within the same event, and a drag
-        that is reached costs one round.
+        that is reached costs one round. While the pelvis crouches (a target on ``root``),
+        also while it is off its height or a planted foot off its place, so a fast squat
+        drag reaches its depth with the feet flat.
     reach_tolerance : float
         Distance (metres) of a dragged joint from its target below which no further
         round runs.

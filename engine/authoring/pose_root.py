@@ -75,6 +75,29 @@ class Stance(NamedTuple):
     options: PoseOptions
 
 
+def shortfall(stance: Stance) -> float:
+    """Largest distance (metres) of a targeted wrist or ankle from its target in
+    ``stance.pose`` (after the exact limb step, how far the target lies beyond the limb's
+    reach), and while the pelvis has a target (a crouch), of the pelvis from its height and
+    of a planted foot joint from its place: a fast drag sends few events, and one round
+    left a squat high with the feet rolled onto the heels. 0 without such targets."""
+    pose, targets, planted, options = stance
+    gaps = [
+        np.linalg.norm(pose.positions[t.index] - t.position) for t in targets.values() if t.active and t.index in LIMBS
+    ]
+    root = targets.get("root")
+    if root is not None and root.active:
+        gaps.append(abs(pose.root_pos[2] - root.position[2]))
+        if options.plant_feet:
+            moved = moved_feet(targets)
+            gaps += [
+                np.linalg.norm(pose.positions[sk.JOINT_INDEX[j]] - p)
+                for j, p in planted.items()
+                if FOOT_OF[j] not in moved
+            ]
+    return float(max(gaps, default=0.0))
+
+
 def balance_step(stance: Stance, tolerance: float) -> np.ndarray:
     """The level move (2,) metres of the pelvis that one solve makes towards balance
     (see ``PoseOptions.balance``): none while a foot is dragged or the centre of mass

@@ -140,3 +140,20 @@ def test_hips_dragged_up_to_standing_with_a_reach_the_arm_makes_lose_their_targe
     assert "root" in m.targets
     m.drag_hips(m.hips_handle() + [0.0, 0.0, 1.0])
     assert "root" not in m.targets
+
+
+def test_a_fast_squat_drag_reaches_its_depth_with_the_feet_flat(vae):
+    """The hips dragged 30 cm down in one mouse move (a fast drag sends few events): the
+    drag event's solve goes on for further rounds until the pelvis is at its height and
+    the planted feet are back in place, so the toes stay down (one round left the left
+    toe 4 cm up and the pelvis 4 cm high, the foot rolled back on its heel)."""
+    from engine import skeleton as sk
+    from engine.authoring.pose_mode import PoseMode
+
+    m = PoseMode(vae, 1.87)
+    start = m.pose.positions.copy()
+    goal = m.hips_handle() - [0.0, 0.0, 0.30]
+    m.drag_hips(goal)
+    toes = [sk.JOINT_INDEX["ltoe"], sk.JOINT_INDEX["rtoe"]]
+    assert m.pose.root_pos[2] == pytest.approx(goal[2], abs=0.01)
+    assert np.abs(m.pose.positions[toes, 2] - start[toes, 2]).max() < 0.01

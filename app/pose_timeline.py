@@ -64,6 +64,11 @@ class KeyPlayback(QObject):
         self.frame = 0 if self.w.frame >= last else self.w.frame
         self.timer.start(int(1000 / self.w.scene.animation.fps))
         self.w.keys.set_playing(True)
+        # the targets and rings belong to the pose being edited, not to the played frames
+        vp = self.w.viewport
+        vp.sensors.set_shown(False)
+        vp.rings.hide()
+        vp.rings.show_facing(None)
 
     def stop(self) -> None:
         """Stop playing; the frame reached becomes the current one."""
@@ -71,7 +76,10 @@ class KeyPlayback(QObject):
             return
         self.timer.stop()
         self.w.keys.set_playing(False)
+        self.w.viewport.sensors.set_shown(True)
         self.w.go_to(self.frame)
+        self.w.turns.show_handles()
+        self.w.viewport.plotter.render()
 
     def seek(self, frame: int) -> None:
         """While playing: go on from ``frame``."""

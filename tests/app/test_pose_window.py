@@ -449,3 +449,24 @@ def test_the_bake_runs_on_a_worker_with_a_dialog_whose_cancel_changes_nothing(wi
     assert shown == ["the bake did not finish: cancelled"]
     assert w.frame == 0 and w.playback.baked is None and w.undo.count() == steps and state(w) == state_before
     assert not w.jobs.running and w.jobs.dialog is None
+
+
+def test_the_targets_and_rings_hide_while_the_bake_plays_and_come_back_on_stop(window, qtbot):
+    """The target spheres and the selected joint's rings belong to the pose being edited:
+    they stayed where the key put them while the played wrist waved elsewhere."""
+    w = window
+    key_the_wrist(w, (0, [0.0, -0.1, 0.1]), (20, [0.1, -0.2, 0.5]), length=31)
+    w.go_to(0)
+    w.selected = "lwrist"
+    w.turns.show_handles()
+    vp = w.viewport
+    assert vp.sensors._actor.GetVisibility() and vp.rings.visible
+    w.playback.toggle()
+    assert w.playback.playing
+    qtbot.waitUntil(lambda: w.playback.frame >= 5, timeout=10000)
+    assert not vp.sensors._actor.GetVisibility() and not vp.sensors._axes_actor.GetVisibility()
+    assert not vp.rings.visible and not vp.rings.arrow.GetVisibility()
+    w.playback.toggle()
+    assert not w.playback.playing
+    assert vp.sensors._actor.GetVisibility() and vp.rings.visible
+    assert np.allclose(vp.sensors.positions[0], w.mode.targets["lwrist"].position)

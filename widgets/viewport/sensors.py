@@ -53,6 +53,16 @@ class SensorMarkers:
         self._actor = None
         self._axes_mesh: pv.PolyData | None = None
         self._axes_actor = None
+        #: False while another view of the character is drawn (a played bake): targets hidden.
+        self.shown = True
+
+    def set_shown(self, shown: bool) -> None:
+        """Show or hide every target sphere and axis (not drawn until the next render)."""
+        self.shown = bool(shown)
+        if self._actor is not None:
+            self._actor.SetVisibility(self.shown and len(self.joints) > 0)
+        if self._axes_actor is not None:
+            self._axes_actor.SetVisibility(self.shown)
 
     def _rebuild(self, joints: tuple[str, ...]) -> None:
         """New meshes for a new set of targets (a preset change), drawn in place after."""
@@ -67,7 +77,7 @@ class SensorMarkers:
         self.mesh.point_data.active_normals_name = "Normals"  # translation keeps them
         self.mesh.point_data["rgb"] = np.zeros((self.mesh.n_points, 3), np.uint8)
         self._actor = direct_colour_actor(self._plotter, self.mesh, "rgb", name="sensor-targets")
-        self._actor.SetVisibility(n > 0)
+        self._actor.SetVisibility(n > 0 and self.shown)
         pts = np.zeros((max(n, 1) * 6, 3))
         lines = np.hstack([[2, i, i + 1] for i in range(0, len(pts), 2)])
         self._axes_mesh = pv.PolyData(pts, lines=lines)
@@ -75,6 +85,7 @@ class SensorMarkers:
         self._axes_actor = direct_colour_actor(
             self._plotter, self._axes_mesh, "rgb", cells=True, name="sensor-axes", line_width=3
         )
+        self._axes_actor.SetVisibility(self.shown)
         self.joints, self._states = joints, ()
         self.positions = np.zeros((n, 3))
         if self.dragging not in joints:

@@ -52,7 +52,7 @@ from app.pose_timeline import KeyPlayback
 from app.pose_turns import JointTurns
 from app.status_bar import StatusBar
 from engine.authoring.document import AuthoringScene
-from engine.authoring.drag_reach import limb_reach, on_reach
+from engine.authoring.drag_reach import limb_reach, on_reach, onto_body
 from engine.authoring.history import History
 from engine.authoring.pose_mode import PoseMode
 from engine.authoring.session import AuthoringSession
@@ -217,7 +217,9 @@ class PoseWindow(QMainWindow):
         puts it (:func:`engine.authoring.drag_reach.on_reach` for a wrist or an ankle)."""
         if self._reach is None or self._reach[0] != joint or self._alt_held():
             return point  # an Alt-drag turns the joint by the mouse's direction on the plane
-        return on_reach(point, pressed, *ray_and_normal, *self._reach[1])
+        placed = on_reach(point, pressed, *ray_and_normal, *self._reach[1])
+        touched = onto_body(placed, ray_and_normal[1], self.mode.pose.positions, joint)
+        return placed if touched is None else touched
 
     def _alt_held(self) -> bool:
         """Whether Alt is held with the drag: the keys of the mouse event that moved it

@@ -33,6 +33,10 @@ from engine.solver.limb_ik import LIMBS
 #: of it; one stopped at 0.8 of the straight arm's reach, where the arm bent towards the
 #: camera already looks straight from the front, 0.75).
 FADE = 0.75
+#: How near (metres) the mouse ray must pass another joint of the body for a dragged
+#: wrist or ankle to take that joint's depth (:func:`onto_body`): about a joint's drawn
+#: sphere and the bone around it.
+TOUCH = 0.06
 #: Bisection rounds that find the point of the mouse ray at the depth its own distance
 #: across the plane asks for (2^-40 of the way from the press's depth to the root's).
 ROUNDS = 40
@@ -115,3 +119,31 @@ def on_reach(
         else:
             lo = mid
     return at_depth(0.5 * (lo + hi))
+
+
+def onto_body(
+    point: np.ndarray, direction: np.ndarray, positions: np.ndarray, joint: str, radius: float = TOUCH
+) -> np.ndarray | None:
+    """A dragged wrist or ankle put onto the body: where the line through ``point (3,)``
+    along ``direction (3,)`` (the mouse ray: what stays under the cursor) passes nearest
+    a joint of ``positions (22, 3)`` metres within ``radius`` metres, the point of that
+    line level with the joint in depth (its closest approach); None when it passes none.
+
+    The joints of the dragged limb (its root, middle joint and end) are left out. A hand
+    dragged onto the opposite knee in the front view lands on the knee, not in the plane
+    it hung in 10-15 cm in front of it, which the front view cannot show."""
+    c = sk.JOINT_INDEX.get(joint)
+    if c not in LIMBS:
+        return None
+    d = np.asarray(direction, float)
+    d = d / max(float(np.linalg.norm(d)), 1e-12)
+    p0 = np.asarray(point, float)
+    skip = {c, *LIMBS[c]}
+    v = np.asarray(positions, float) - p0
+    t = v @ d
+    gap = np.linalg.norm(v - t[:, None] * d, axis=1)
+    gap[list(skip)] = np.inf
+    k = int(np.argmin(gap))
+    if gap[k] > radius:
+        return None
+    return p0 + t[k] * d

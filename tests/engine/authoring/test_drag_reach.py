@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from engine import skeleton as sk
-from engine.authoring.drag_reach import dragged_depth, limb_reach, on_reach
+from engine.authoring.drag_reach import dragged_depth, limb_reach, on_reach, onto_body
 
 ROOT = np.array([0.2, 0.0, 1.4])  # a shoulder
 ARM = 0.51
@@ -67,3 +67,16 @@ def test_only_wrists_and_ankles_end_a_limb():
     assert np.allclose(root, pos[sk.JOINT_INDEX["lshoulder"]]) and 0.4 < length < 0.7
     assert limb_reach(pos, "rankle") is not None
     assert limb_reach(pos, "lelbow") is None and limb_reach(pos, "root") is None
+
+
+def test_a_wrist_whose_mouse_ray_passes_a_joint_of_the_body_takes_its_depth():
+    p = sk.Skeleton.canonical().rest_positions()
+    knee = p[sk.JOINT_INDEX["rknee"]]
+    ray = np.array([0.0, 1.0, 0.0])  # the front view looks along +y
+    near = knee + [0.03, -0.25, 0.01]  # under the cursor 3 cm beside the knee, 25 cm in front of it
+    on = onto_body(near, ray, p, "lwrist")
+    assert np.allclose(on, knee + [0.03, 0.0, 0.01])  # same ray, the knee's depth
+    assert onto_body(knee + [0.10, -0.25, 0.0], ray, p, "lwrist") is None  # passes 10 cm from every joint
+    elbow = p[sk.JOINT_INDEX["lelbow"]]
+    assert onto_body(elbow + [0.0, -0.25, 0.0], ray, p, "lwrist") is None  # the dragged arm's own joints
+    assert onto_body(knee + [0.0, -0.25, 0.0], ray, p, "upperneck") is None  # only wrists and ankles

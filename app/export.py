@@ -16,14 +16,13 @@ from PyQt6.QtCore import QObject, QTimer, pyqtSignal
 from PyQt6.QtWidgets import QProgressDialog, QWidget
 
 from app.job_runner import cancellable_progress
+from engine.joining import join_saying
 
 if TYPE_CHECKING:
     from engine.methods.base import Method
     from engine.studio.export import ExportJob
 
 POLL_MS = 100
-#: How long quitting waits for a cancelled export to finish its current frame, seconds.
-SHUTDOWN_WAIT_S = 3.0
 
 
 class ReconstructionExport(QObject):
@@ -111,10 +110,10 @@ class ReconstructionExport(QObject):
             self.dialog = None
 
     def shutdown(self) -> None:
-        """Cancel a running export and wait (briefly) for it: quitting never hangs on it."""
+        """Cancel a running export and wait for the frame in hand (bounded, :func:`engine.joining.join_saying`)."""
         self._poll.stop()
         if self.thread is not None:
             self._cancel.set()
-            self.thread.join(timeout=SHUTDOWN_WAIT_S)
+            join_saying(self.thread, lambda: "Save reconstruction, cancelled")
             self.thread = None
         self._close_dialog()

@@ -24,13 +24,12 @@ from PyQt6.QtWidgets import QApplication, QProgressDialog, QWidget
 
 from engine.authoring.progress import Cancelled
 from engine.errors import UserError
+from engine.joining import join_saying
 
 #: How often the GUI thread reads the job's progress, milliseconds.
 POLL_MS = 50
 #: A job shorter than this shows no dialog, milliseconds (no flash for a quick bake).
 SHOW_AFTER_MS = 300
-#: How long closing waits for a cancelled job to finish its frame, seconds.
-SHUTDOWN_WAIT_S = 3.0
 
 
 class JobRunner(QObject):
@@ -50,6 +49,7 @@ class JobRunner(QObject):
         self.message = ""  # why the last job gave no result ("cancelled", an error)
         self._outcome: tuple[bool, str, Any] | None = None
         self._on_done: Callable[[Any], None] | None = None
+        self._title = ""  # the running job's, for a close that waits for it
         self._cancel = threading.Event()
         self._window: QWidget | None = None
         self._active: QWidget | None = None  # closing it cancels the job (cancel_on_close)
@@ -68,6 +68,7 @@ class JobRunner(QObject):
             raise UserError(f"{job.title}: another job is running; wait for it or cancel it")
         self.done, self.total, self.result, self._outcome = 0, 0, None, None
         self._on_done = on_done
+        self._title = job.title
         self._active = QApplication.activeWindow()  # gets the keyboard back from the dialog
         self._cancel.clear()
         dialog = cancellable_progress(self._parent, job.title, job.label, 0, self.cancel, modal, SHOW_AFTER_MS)
@@ -140,10 +141,13 @@ class JobRunner(QObject):
                 self._active.activateWindow()
 
     def shutdown(self) -> None:
-        """Cancel a running job and wait (briefly) for it: closing never hangs on it."""
+        """Cancel a running job and wait for the frame or round in hand (bounded, said on
+        stderr when it takes long, :func:`engine.joining.join_saying`): a worker left in
+        torch when the process exits aborts it."""
         if self.thread is not None:
             self._cancel.set()
-            self.thread.join(timeout=SHUTDOWN_WAIT_S)
+            title = self._title
+            join_saying(self.thread, lambda: f"{title}, cancelled")
             self._check()  # ends a wait() and reports the cancel
         self._poll.stop()
         self._close_dialog()

@@ -60,8 +60,9 @@ class SettleJob:
     label: str = "Settling the pose (an offline solve of the targets)..."
 
     def run(self, progress: Progress | None = None, cancelled: CancelCheck | None = None) -> "PoseMode":
-        """Settle the copy and return it (the model takes its pose, feet and anchor)."""
-        self.mode.settle()
+        """Settle the copy and return it (the model takes its pose, feet and anchor);
+        ``cancelled`` is asked between the settle's rounds."""
+        self.mode.settle(cancelled)
         return self.mode
 
 

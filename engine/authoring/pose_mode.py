@@ -44,7 +44,7 @@ from engine.authoring.pose_root import (
     shortfall,
 )
 from engine.authoring.pose_trunk import LEGS, TRUNK, keep_trunk
-from engine.authoring.progress import CancelCheck
+from engine.authoring.progress import CancelCheck, check
 from engine.authoring.targets import JointTarget, solve_inputs
 from engine.constraints.base import Constraint
 from engine.errors import UserError
@@ -337,12 +337,13 @@ class PoseMode:
         self.planted = {j: p.copy() for j, p in other.planted.items()}
         self._solved = other._solved
 
-    def settle(self) -> Pose:
+    def settle(self, cancelled: CancelCheck | None = None) -> Pose:
         """An offline, grounded solve from the current pose (when a drag ends), then up to
         ``options.settle_rounds`` grounded rounds of the drag's plain steps while a dragged
         wrist or ankle is short of its target: the offline solve's adaptive steps can stop
         at once from a pose that is already close, where the plain steps still close
-        the gap."""
+        the gap. ``cancelled()`` is asked before each round (a worker's settle stops
+        within a round; raises :class:`~engine.authoring.progress.Cancelled`)."""
         terms, reach, rotations = self._inputs()
         c, o = self.character, self.options
         if self.anchor is None:
@@ -356,6 +357,7 @@ class PoseMode:
         for _ in range(max(0, o.settle_rounds)):
             if self.shortfall() <= o.reach_tolerance:
                 break
+            check(cancelled)
             where = self._where()
             ctx = c.grounded(where[:2], self.heading, self.frame, prior=self.base_latent)
             solved = c.solve(

@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from engine import skeleton as sk
+from engine.joining import STOP_WAIT_S, join_saying
 from engine.methods.base import DecodesLatents, FrameResult, Method
 from engine.sensor_source import SensorSource
 from engine.sensors import SensorFrame
@@ -97,6 +98,7 @@ class EngineThread(threading.Thread):
         self._recent_errors: deque[str] = deque(maxlen=RECENT_ERRORS)
         self._ghost_errors: dict[str, str] = {}  # ghost -> the failure last reported
         self._stopping = False
+        self.doing = ""  # the command or frame in hand, said by a stop that waits for it
         self._latency_ms: float | None = None  # a live frame's arrival to its solve, ms
         self._latent = LatentDebug()
         self._opened = 0  # the ``opened`` of the newest SetMotion, SetSource or SetMethod
@@ -118,11 +120,13 @@ class EngineThread(threading.Thread):
         cmd.check_command(command)
         self._queue.put(command)
 
-    def stop(self, timeout: float = 5.0) -> None:
-        """Ask the loop to finish and join it."""
-        self._queue.put(cmd.Stop())
-        if self.is_alive():
-            self.join(timeout)
+    def stop(self, timeout: float = STOP_WAIT_S) -> None:
+        """Finish the loop after the command or frame in hand (commands queued behind it
+        are dropped) and join it for at most ``timeout`` seconds, saying on stderr what it
+        waits for (:func:`engine.joining.join_saying`)."""
+        self._stopping = True  # read between commands: a queue of inspections is not worked through
+        self._queue.put(cmd.Stop())  # wakes a loop blocked on the queue
+        join_saying(self, lambda: self.doing or "idle", timeout)
 
     # -- loop -----------------------------------------------------------------------
     def run(self) -> None:
@@ -141,7 +145,9 @@ class EngineThread(threading.Thread):
             target = self._playback_frame() if self._playing else self._frame
             if target != self._last_solved or self._dirty:
                 self._dirty = False
+                self.doing = f"solving frame {target}"
                 self._solve(target)
+                self.doing = ""
             elif was_playing and not self._playing:
                 self._republish()  # the end was reached on a solved frame: say playback stopped
 
@@ -162,6 +168,8 @@ class EngineThread(threading.Thread):
             return
         while True:
             self._apply(c)
+            if self._stopping:
+                return
             try:
                 c = self._queue.get_nowait()
             except queue.Empty:
@@ -173,7 +181,9 @@ class EngineThread(threading.Thread):
             self._report_error(f"engine: no handler for command {type(c).__name__}")
             return
         was_dirty, self._dirty = self._dirty, True
+        self.doing = type(c).__name__
         handler(self, c, was_dirty)
+        self.doing = ""
 
     # -- command handlers: each takes the command and whether a solve was due before it
     @cmd.handles(cmd.Stop)

@@ -50,18 +50,18 @@ def crouch_from(joint: int, low_points: Mapping[int, float], options: PoseOption
     return np.inf
 
 
+def reaching(targets: Mapping[str, JointTarget]) -> list[JointTarget]:
+    """The active targets of ``targets`` that may crouch the pelvis: neither the root's
+    nor a foot joint's."""
+    return [t for t in targets.values() if t.active and t.joint != "root" and t.joint not in FOOT_OF]
+
+
 def reach_crouches(targets: Mapping[str, JointTarget], low_points: Mapping[int, float], options: PoseOptions) -> bool:
-    """Whether an active user target of ``targets`` lies below where it lowers the pelvis
+    """Whether a :func:`reaching` target of ``targets`` lies below where it lowers the pelvis
     (:func:`crouch_from`), so that a solve without a target on the root crouches for it."""
     if options.crouch_share <= 0:
         return False
-    return any(
-        t.active
-        and t.joint != "root"
-        and t.joint not in FOOT_OF
-        and t.position[2] < crouch_from(t.index, low_points, options)
-        for t in targets.values()
-    )
+    return any(t.position[2] < crouch_from(t.index, low_points, options) for t in reaching(targets))
 
 
 class Stance(NamedTuple):
@@ -137,7 +137,7 @@ def root_where(
     where = pose.root_pos.copy()
     if not adjust:
         return where
-    user = [t for t in targets.values() if t.active and t.joint != "root" and t.joint not in FOOT_OF]
+    user = reaching(targets)
     if o.crouch_share > 0 and user:
         # the part of the way from the joint down to its target that lies below where it crouches from
         low = {t.index: crouch_from(t.index, low_points, o) for t in user}

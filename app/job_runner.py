@@ -22,9 +22,9 @@ from typing import Any
 from PyQt6.QtCore import QEvent, QEventLoop, QObject, Qt, QTimer, pyqtSignal
 from PyQt6.QtWidgets import QApplication, QProgressDialog, QWidget
 
-from engine.authoring.progress import Cancelled
 from engine.errors import UserError
 from engine.joining import join_saying
+from engine.progress import Cancelled
 
 #: How often the GUI thread reads the job's progress, milliseconds.
 POLL_MS = 50

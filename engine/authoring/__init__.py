@@ -16,5 +16,5 @@
   joint turns (:mod:`~engine.authoring.turns`).
 * :mod:`engine.authoring.range_edit`: re-solve a frame range of a clip.
 * :mod:`engine.authoring.jobs`: the bake and range re-solves as jobs a worker thread runs,
-  with progress and cancel (:mod:`~engine.authoring.progress`).
+  with progress and cancel (:mod:`~engine.progress`).
 """

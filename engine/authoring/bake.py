@@ -36,12 +36,12 @@ from engine.authoring.character import Character, Pose
 from engine.authoring.document import AuthoringScene
 from engine.authoring.keys import Key, eased, interpolate, slerp_quaternion
 from engine.authoring.pose_mode import PoseMode
-from engine.authoring.progress import CancelCheck, check
 from engine.authoring.targets import JointTarget, solve_inputs
 from engine.constraints.base import Constraint
 from engine.constraints.smooth import SmoothConstraint
 from engine.errors import UserError
 from engine.motion.clip import Motion
+from engine.progress import CancelCheck, check
 
 #: Latent steps per in-between frame (each starts next to its answer).
 IN_BETWEEN_ITERATIONS = 12
@@ -116,7 +116,7 @@ def bake(
 
     ``progress(done, total)`` is called after every key and frame; ``cancelled()`` is
     asked before each, and a True answer raises
-    :class:`engine.authoring.progress.Cancelled` (``scene`` is only read).
+    :class:`engine.progress.Cancelled` (``scene`` is only read).
     """
     character = Character(vae, scene.height)
     n, rate, ratio = output_frames(scene, fps)

@@ -3,7 +3,7 @@ a settle of the pose.
 
 A job is a copy of what the work reads, taken on the model's thread when it starts, and
 ``run(progress, cancelled)``, which computes on a worker without touching any model and
-returns the result (or raises :class:`engine.authoring.progress.Cancelled`). The model's
+returns the result (or raises :class:`engine.progress.Cancelled`). The model's
 thread then applies the result as one command: the authoring model's
 :meth:`~engine.authoring.session.AuthoringSession.take_bake` or
 :meth:`~engine.authoring.session.AuthoringSession.take_settle`, or the studio's clip
@@ -18,11 +18,11 @@ from typing import TYPE_CHECKING, Any
 
 from engine.authoring.bake import Baked, bake
 from engine.authoring.document import AuthoringScene
-from engine.authoring.progress import CancelCheck, Progress
 from engine.authoring.range_edit import RangeEdit, edit_range
 from engine.constraints.base import Constraint
 from engine.errors import UserError
 from engine.motion.clip import Motion
+from engine.progress import CancelCheck, Progress
 
 if TYPE_CHECKING:
     from engine.authoring.pose_mode import PoseMode

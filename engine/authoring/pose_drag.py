@@ -13,9 +13,9 @@ from __future__ import annotations
 import numpy as np
 
 from engine import skeleton as sk
-from engine.authoring.progress import CancelCheck, check
 from engine.kinematics import quat_np as QN
 from engine.kinematics.fk import fk
+from engine.progress import CancelCheck, check
 
 #: Drag events (mouse moves, each a solve) per drag: what the benchmark and the bake use.
 EVENTS = 20
@@ -39,7 +39,7 @@ def drag(
 
     ``offsets (22, 3)`` is the poser's skeleton; ``weight`` the target's weight (None: as
     it is, 1 for a new target); ``cancelled()`` is asked before each step (a True answer
-    raises :class:`engine.authoring.progress.Cancelled`).
+    raises :class:`engine.progress.Cancelled`).
     """
     kwargs = solve or {}
     weighed = {} if weight is None else {"weight": weight}

@@ -44,12 +44,12 @@ from engine.authoring.pose_root import (
     shortfall,
 )
 from engine.authoring.pose_trunk import LEGS, TRUNK, keep_trunk
-from engine.authoring.progress import CancelCheck, check
 from engine.authoring.targets import JointTarget, solve_inputs
 from engine.constraints.base import Constraint
 from engine.errors import UserError
 from engine.kinematics import quat_np as QN
 from engine.motion.clip import Motion
+from engine.progress import CancelCheck, check
 from engine.solver.limb_ik import LIMBS
 
 #: Latent steps of one continuous solve (one drag event).
@@ -343,7 +343,7 @@ class PoseMode:
         wrist or ankle is short of its target: the offline solve's adaptive steps can stop
         at once from a pose that is already close, where the plain steps still close
         the gap. ``cancelled()`` is asked before each round (a worker's settle stops
-        within a round; raises :class:`~engine.authoring.progress.Cancelled`)."""
+        within a round; raises :class:`~engine.progress.Cancelled`)."""
         terms, reach, rotations = self._inputs()
         c, o = self.character, self.options
         if self.anchor is None:

@@ -33,7 +33,6 @@ import numpy as np
 from engine import skeleton as sk
 from engine.authoring.bake import active_constraints
 from engine.authoring.character import Character, encode_frames
-from engine.authoring.progress import CancelCheck, check
 from engine.constraints.base import Constraint
 from engine.constraints.end_effector import EndEffectorConstraint
 from engine.constraints.floor import FloorConstraint
@@ -44,6 +43,7 @@ from engine.kinematics import quat_np as QN
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk, fk_positions
 from engine.motion.clip import Motion
+from engine.progress import CancelCheck, check
 from engine.solver.limb_ik import LIMBS, reach_local
 
 #: Latent steps per frame and their plain gradient step. With the shipped VAE, steps of
@@ -98,7 +98,7 @@ def edit_range(
 
     ``progress(done, total)`` is called after each solved frame (``total``: the range
     with its blends); ``cancelled()`` is asked before each and a True answer raises
-    :class:`engine.authoring.progress.Cancelled`. ``motion`` and ``constraints`` are
+    :class:`engine.progress.Cancelled`. ``motion`` and ``constraints`` are
     only read: the result is a new clip."""
     n = len(motion)
     if not (0 <= start <= end < n):

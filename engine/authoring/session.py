@@ -35,13 +35,13 @@ from engine.authoring.history import Edit, History
 from engine.authoring.jobs import BakeJob, SettleJob
 from engine.authoring.keys import SCHEMES, Animation, Key
 from engine.authoring.pose_mode import PoseMode
-from engine.authoring.progress import CancelCheck, Progress
 from engine.authoring.session_constraints import constraints_event
 from engine.authoring.state import AuthoringState, capture, differences, pose_between, pose_on_key, put
 from engine.authoring.turns import world_rotation
 from engine.editing.constraint_list import ConstraintList
 from engine.errors import UserError
 from engine.motion.clip import Motion
+from engine.progress import CancelCheck, Progress
 
 
 class AuthoringSession:

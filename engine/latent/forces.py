@@ -24,6 +24,7 @@ import numpy as np
 import torch
 
 from engine.latent.projection import LatentMap
+from engine.progress import CancelCheck, check
 from engine.solver.threads import one_blas_thread
 
 if TYPE_CHECKING:
@@ -88,6 +89,7 @@ def term_forces(
     terms: Sequence[tuple["Constraint", float]],
     path: np.ndarray,
     latent_map: LatentMap | None = None,
+    cancelled: CancelCheck | None = None,
 ) -> TermForces:
     """Each term's force at each latent of ``path``.
 
@@ -103,12 +105,15 @@ def term_forces(
         Latents visited by the solve, start first.
     latent_map : LatentMap, optional
         Projects the forces on the map's plane.
+    cancelled : callable, optional
+        Asked before each latent of the path; True raises :class:`engine.progress.Cancelled`.
     """
     path = np.asarray(path, dtype=np.float32).reshape(-1, np.shape(path)[-1])
     K, L, T = len(path), path.shape[1], len(terms)
     losses, forces = np.zeros((K, T)), np.zeros((K, T, L))
     with torch.enable_grad(), single_thread():
         for k in range(K):
+            check(cancelled)
             z = torch.from_numpy(path[k].copy()).requires_grad_(True)
             state = optimizer.decode(z, ctx)
             values = [w * c.loss(state).reshape(()) for c, w in terms]
@@ -146,11 +151,14 @@ def _minus_gradients(values: list[torch.Tensor], z: torch.Tensor) -> np.ndarray:
 
 
 def record_forces(
-    method_optimizer: "PoseOptimizer", record: "SolveRecord", latent_map: LatentMap | None = None
+    method_optimizer: "PoseOptimizer",
+    record: "SolveRecord",
+    latent_map: LatentMap | None = None,
+    cancelled: CancelCheck | None = None,
 ) -> TermForces:
     """:func:`term_forces` of a method's last :class:`~engine.methods.solve_record.SolveRecord`
     (its path; the final latent alone when the solver recorded none)."""
     path = getattr(record.solution, "path", None)
     if path is None:
         path = record.solution.latent.detach().numpy()[None]
-    return term_forces(method_optimizer, record.context, record.terms, path, latent_map)
+    return term_forces(method_optimizer, record.context, record.terms, path, latent_map, cancelled)

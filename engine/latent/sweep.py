@@ -18,6 +18,7 @@ import torch
 
 from engine import skeleton as sk
 from engine.latent.forces import single_thread
+from engine.progress import CancelCheck, check
 
 if TYPE_CHECKING:
     from engine.solver.frame import FrameContext
@@ -58,6 +59,7 @@ def dimension_sweep(
     latent: np.ndarray,
     sigma: np.ndarray,
     offsets: tuple[float, ...] = OFFSETS,
+    cancelled: CancelCheck | None = None,
 ) -> Sweep:
     """Decode ``latent (L,)`` with each dimension at ``offsets`` times ``sigma (L,)``.
 
@@ -70,6 +72,8 @@ def dimension_sweep(
     sigma : ndarray (L,)
         Each dimension's spread (standard deviation over the training latents).
     offsets : tuple of float
+    cancelled : callable, optional
+        Asked before each dimension; True raises :class:`engine.progress.Cancelled`.
     """
     z0 = np.asarray(latent, dtype=np.float32).ravel()
     sig = np.asarray(sigma, dtype=np.float32).ravel()
@@ -78,6 +82,7 @@ def dimension_sweep(
     cache: dict[float, np.ndarray] = {}
     with torch.no_grad(), single_thread():
         for d in range(L):
+            check(cancelled)
             for i, o in enumerate(offsets):
                 if o == 0.0 and 0.0 in cache:
                     poses[d, i] = cache[0.0]

@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from engine.progress import CancelCheck, Cancelled
 from engine.studio.latent_views import LatentDetail, LatentView
 
 #: The note when the map file cannot be used (the studio shows it in the map panel).
@@ -72,9 +73,11 @@ class LatentDebug:
         )
         return self.view
 
-    def inspect(self, method: Any, joint: str = "") -> str:
+    def inspect(self, method: Any, joint: str = "", cancelled: CancelCheck | None = None) -> str:
         """Compute the :class:`LatentDetail` of the last solved frame; returns an error
-        message ("" when done)."""
+        message ("" when done). ``cancelled()`` is asked between the forces' steps and the
+        sweep's dimensions: True stops the work (about a second, several on a busy machine)
+        and leaves the detail as it was."""
         from engine.latent.forces import record_forces
         from engine.latent.probe import NO_LATENT, SolvesInLatent
         from engine.latent.sweep import dimension_sweep, joint_influence
@@ -86,9 +89,14 @@ class LatentDebug:
             return self._probe_failed or "no solved frame to inspect yet"
         t0 = time.perf_counter()
         rec = method.last_solve
-        f = record_forces(method.optimizer, rec, probe.map)
+        try:
+            f = record_forces(method.optimizer, rec, probe.map, cancelled)
+            sweep = dimension_sweep(
+                method.optimizer, rec.context, self.view.latent, probe.map.sigma, cancelled=cancelled
+            )
+        except Cancelled:
+            return "cancelled"
         assert f.plane is not None  # projected on probe.map
-        sweep = dimension_sweep(method.optimizer, rec.context, self.view.latent, probe.map.sigma)
         influence = joint_influence(method.optimizer, rec.context, self.view.latent, joint) if joint else None
         self.detail = LatentDetail(
             self.view.frame,

@@ -264,8 +264,8 @@ class EngineThread(threading.Thread):
     def _on_inspect_latent(self, c: cmd.InspectLatent, was_dirty: bool) -> None:
         # the frame on screen, not solved again
         self._dirty = False
-        error = self._latent.inspect(self._methods.method, c.joint)
-        if error:
+        error = self._latent.inspect(self._methods.method, c.joint, lambda: self._stopping)
+        if error and not self._stopping:
             self._report_error(f"inspect latent: {error}")
         self._republish()
 

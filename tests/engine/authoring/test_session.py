@@ -10,10 +10,10 @@ import pytest
 from engine import skeleton as sk
 from engine.authoring import events as ev
 from engine.authoring.pose_mode import PoseMode
-from engine.authoring.progress import Cancelled
 from engine.authoring.session import AuthoringSession
 from engine.authoring.state import differences
 from engine.errors import UserError
+from engine.progress import Cancelled
 
 LW, RW = sk.JOINT_INDEX["lwrist"], sk.JOINT_INDEX["rwrist"]
 

@@ -61,6 +61,19 @@ def test_views_readouts_and_detail(clip):
         worker.stop()
 
 
+def test_stopping_cancels_an_inspection_in_hand(clip):
+    session, worker = _engine(clip, "dragposer")
+    try:
+        wait_for(lambda: worker.latest is not None and worker.latest.latent_view is not None, timeout=60)
+        session.inspect_latent("lwrist")
+        wait_for(lambda: worker.doing == "InspectLatent", timeout=60)
+    finally:
+        worker.stop(timeout=60)
+    assert not worker.is_alive()
+    # the inspection stopped between two of its steps: no detail made, no error said
+    assert worker.latest.latent_detail is None and "inspect latent" not in worker.latest.error
+
+
 def test_a_method_without_a_latent_says_so(clip):
     session, worker = _engine(clip, "ik")
     try:

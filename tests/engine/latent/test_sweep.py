@@ -47,3 +47,27 @@ def test_joint_influence_matches_finite_differences(dragposer_run):
     assert most_influential(inf, 3) == list(np.argsort(inf)[::-1][:3])
     with pytest.raises(KeyError):
         joint_influence(method.optimizer, rec.context, z, "tail")
+
+
+def test_a_cancelled_sweep_and_forces_stop_between_steps(dragposer_run):
+    from engine.latent.forces import record_forces
+    from engine.progress import Cancelled
+
+    method, results = dragposer_run
+    rec = method.last_solve
+    asked = []
+
+    def after(n):
+        def cancelled():
+            asked.append(1)
+            return len(asked) > n
+
+        return cancelled
+
+    with pytest.raises(Cancelled):
+        dimension_sweep(method.optimizer, rec.context, results[-1].latent, default_map().sigma, cancelled=after(3))
+    assert len(asked) == 4  # asked before each dimension, stopped at the fourth
+    asked.clear()
+    with pytest.raises(Cancelled):
+        record_forces(method.optimizer, rec, default_map(), after(2))
+    assert len(asked) == 3

@@ -1,4 +1,5 @@
-"""Progress and cancelling of long authoring work (bakes, range re-solves).
+"""Progress and cancelling of long work: bakes and range re-solves, the pose window's settle,
+the studio's latent inspection.
 
 A long solve takes two callables: ``progress(done, total)`` after every frame and
 ``cancelled() -> bool``, asked between frames. When ``cancelled()`` answers True the
@@ -18,7 +19,7 @@ CancelCheck = Callable[[], bool]
 
 
 class Cancelled(Exception):
-    """Raised by a long solve between two frames when its caller cancelled it."""
+    """Raised by long work between two of its steps when its caller cancelled it."""
 
 
 def check(cancelled: CancelCheck | None) -> None:

@@ -33,6 +33,8 @@ MOCAP = ROOT.parent / "shared" / "data" / "mocap"
 VAL_PRESETS = ("6", "4", "3-head-hands", "6x3dof")
 OTHER_PRESETS = ("4", "3-head-hands")
 EVENTS = (10, 20, 30, 40)
+#: ``measure --parts``: the validation files, the other labs' clips, the pose tasks and tests.
+PARTS = ("val", "other", "tasks")
 AUTHORING_TESTS = ("tests/engine/authoring", "tests/engine/test_solver_batch.py")
 #: The rule's bounds: tracking at most 3 % worse, a task's goal error at most 0.5 cm more,
 #: its distance to real poses at most 10 % more.
@@ -78,14 +80,19 @@ def measure(a: argparse.Namespace) -> None:
     out.mkdir(parents=True, exist_ok=True)
     hdm = sorted(str(p) for p in (MOCAP / "hdm05").glob("*.amc"))[::12]
     dp = sorted(str(p) for p in (MOCAP / "dragposer").glob("*.bvh"))
-    sets = [("val", _val_files(tree, Path(a.data)), VAL_PRESETS, ["--max-frames", "150"])]
-    sets += [("hdm", hdm, OTHER_PRESETS, []), ("dp", dp, OTHER_PRESETS, ["--max-frames", "600"])]
+    sets = []
+    if "val" in a.parts:
+        sets += [("val", _val_files(tree, Path(a.data)), VAL_PRESETS, ["--max-frames", "150"])]
+    if "other" in a.parts:
+        sets += [("hdm", hdm, OTHER_PRESETS, []), ("dp", dp, OTHER_PRESETS, ["--max-frames", "600"])]
     ev = ["-m", "engine.cli.main", "evaluate"]
     for name, files, presets, extra in sets:
         for p in presets:
             stem = out / f"{name}_{p}"
             args = [*ev, *files, "--method", "dragposer", "--sensors", p, *extra, "--no-progress"]
             _run(tree, [*args, "--json", f"{stem}.json"], Path(f"{stem}.log"))
+    if "tasks" not in a.parts:
+        return
     for e in EVENTS:
         stem = out / f"tasks_e{e}"
         args = ["-m", "engine.cli.main", "bench", "--pose-tasks", "--method", "pose-mode", "--events", str(e)]
@@ -171,6 +178,13 @@ def main() -> None:
     m.add_argument("tree", type=Path)
     m.add_argument("out", type=Path)
     m.add_argument("--data", type=Path, default=ROOT / "prepared")
+    m.add_argument(
+        "--parts",
+        nargs="+",
+        choices=PARTS,
+        default=list(PARTS),
+        help="what to measure (two processes with different parts fill two cores; same OUT)",
+    )
     j = sub.add_parser("judge", help="the four criteria from two measure folders")
     j.add_argument("base", type=Path)
     j.add_argument("cand", type=Path)

@@ -34,6 +34,7 @@ from engine.training.common import (
     start_from,
 )
 from engine.training.data import PoseData, load_split, read_manifest
+from engine.training.vae_anchor import DecoderAnchor
 
 FORMAT_VERSION = 1
 
@@ -81,6 +82,13 @@ class VAETrainConfig:
     #: pose bank and latent map trained on those latents stay valid; only what the
     #: decoder draws from each latent improves.
     train_encoder: bool = True
+    #: Weight of the decoder anchor (engine/training/vae_anchor.py; 0: off): latents drawn
+    #: ``anchor_low``-``anchor_high`` standard units around each pose's encoder latent
+    #: decode as the ``anchor`` VAE (empty: ``init``) decodes them.
+    w_anchor: float = 0.0
+    anchor: str = ""
+    anchor_low: float = 0.5
+    anchor_high: float = 1.5
 
     def model_config(self) -> VAEConfig:
         return VAEConfig(latent=self.latent, channels=(*self.channels,))  # a tuple (a JSON config gives a list)
@@ -89,9 +97,9 @@ class VAETrainConfig:
 class VAEObjective(nn.Module):
     """Wraps the VAE; ``forward`` returns the weighted total and each term."""
 
-    def __init__(self, vae: PoseVAE, cfg: VAETrainConfig):
+    def __init__(self, vae: PoseVAE, cfg: VAETrainConfig, anchor: DecoderAnchor | None = None):
         super().__init__()
-        self.vae, self.cfg = vae, cfg
+        self.vae, self.cfg, self.anchor = vae, cfg, anchor
 
     def forward(self, b: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
         vae, cfg = self.vae, self.cfg
@@ -109,6 +117,9 @@ class VAEObjective(nn.Module):
         l_kl = (-0.5 * (1 + logvar - mu**2 - logvar.exp()).sum(-1)).mean()
         out = {"rot": l_rot, "fk": l_fk, "kl": l_kl}
         total = cfg.w_rot * l_rot + cfg.w_fk * l_fk + cfg.w_kl * l_kl
+        if self.anchor is not None:
+            out["anchor"] = self.anchor(vae, mu, b["offsets"])
+            total = total + cfg.w_anchor * out["anchor"]
         if cfg.w_cont > 0:
             inner = pose_distance(rot, disp, b["rot_next"], b["disp_next"], vae.disp_std).sum()
             (grad,) = torch.autograd.grad(inner, z, create_graph=True)
@@ -284,7 +295,14 @@ def train_vae(
             raise UserError("train_encoder = false needs init = a VAE weights file whose encoder is kept")
         for module in (*vae.enc, vae.to_mu, vae.to_logvar):
             module.requires_grad_(False)
-    objective: nn.Module = VAEObjective(vae, cfg)
+    anchor = None
+    if cfg.w_anchor > 0:
+        if not (cfg.anchor or cfg.init):
+            raise UserError("w_anchor > 0 needs anchor (or init) = the VAE weights file to anchor the decoder to")
+        anchor = DecoderAnchor.from_file(
+            cfg.anchor or cfg.init, cfg.anchor_low, cfg.anchor_high, cfg.w_rot, cfg.w_fk
+        ).to(ddp.device)
+    objective: nn.Module = VAEObjective(vae, cfg, anchor)
     if ddp.world > 1:
         objective = nn.parallel.DistributedDataParallel(objective)
     # the fused kernel: one pass over all parameters instead of a dozen tensor ops per tensor

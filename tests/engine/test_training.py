@@ -120,6 +120,36 @@ def test_a_fixed_encoder_keeps_every_latent_and_trains_the_decoder(tiny_data, ru
         train_vae(tiny_data, tmp_path / "e", _cfg(epochs=1, train_encoder=False), progress=False)
 
 
+def test_the_decoder_anchor_holds_the_latents_no_pose_encodes_to(tiny_data, run_a, tmp_path):
+    """A decoder fine-tune with the anchor on stays closer to the reference decoder away
+    from the encoder's latents than the same run without it; the anchor of a decoder to
+    itself is zero, and an anchor with no reference file is refused."""
+    from engine.models.loading import load_vae
+    from engine.training.vae_anchor import DecoderAnchor
+
+    init = run_a[0] / "vae.pt"
+    reference, _ = load_vae(init)
+    for name, weight in (("free", 0.0), ("held", 50.0)):
+        cfg = _cfg(init=str(init), epochs=1, seed=5, train_encoder=False, lr=3e-3, w_anchor=weight)
+        train_vae(tiny_data, tmp_path / name, cfg, progress=False)
+    z = 2.0 * torch.randn(256, reference.config.latent, generator=torch.Generator().manual_seed(0))
+    with torch.no_grad():
+        ref_rot = reference.decode(z)[0]
+        drift = {
+            n: (load_vae(tmp_path / n / "vae.pt")[0].decode(z)[0] - ref_rot).abs().mean().item()
+            for n in ("free", "held")
+        }
+    assert drift["held"] < 0.5 * drift["free"], drift
+    offsets = torch.as_tensor(sk.Skeleton.canonical().offsets, dtype=torch.float32).expand(4, -1, -1)
+    with torch.no_grad():
+        own = DecoderAnchor(reference, 0.5, 1.5, 1.0, 100.0)(
+            reference, torch.zeros(4, reference.config.latent), offsets
+        )
+    assert own.item() == pytest.approx(0.0, abs=1e-10)
+    with pytest.raises(UserError, match="w_anchor > 0 needs anchor"):
+        train_vae(tiny_data, tmp_path / "e", _cfg(epochs=1, w_anchor=1.0), progress=False)
+
+
 @pytest.mark.parametrize("model", ["vae", "predictor"])
 def test_resume_never_runs_code_from_a_planted_checkpoint(tiny_data, run_a, tmp_path, model):
     from engine.errors import ModelFileError

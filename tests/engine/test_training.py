@@ -296,7 +296,7 @@ def test_two_process_ddp_ranks_agree(tiny_data, tmp_path):
 def test_limb_mix_swaps_one_limb_and_recomputes_the_features(tiny_data):
     from engine.kinematics.features import encoder_input, root_space_fk
     from engine.training.data import load_split
-    from engine.training.vae import LIMBS, batch_of
+    from engine.training.vae_batches import LIMBS, batch_of
 
     data = load_split(tiny_data, "train")
     pairs = torch.nonzero(data.has_next).squeeze(1)

@@ -8,7 +8,7 @@ import torch
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
 from engine.kinematics.features import encoder_input, root_space_fk
-from engine.training.vae import scale_bones
+from engine.training.vae_batches import scale_bones
 
 
 def _batch(n: int = 64) -> dict:

@@ -257,6 +257,7 @@ class PoseMode:
         c, o = self.character, self.options
         if self.anchor is None:
             self.anchor = self.pose
+        best: tuple[float, Pose | None] = (np.inf, None)
         for round_ in range(1 + (max(0, o.reach_rounds) if iterations > 0 else 0)):
             gap = self.shortfall()
             if round_ and gap <= o.reach_tolerance:
@@ -279,10 +280,16 @@ class PoseMode:
                 step_size=STEP_SIZE,
             )
             self.pose = self._kept_trunk(solved, reach, rotations)
-            if round_ and self.shortfall() > gap + OVERSHOOT:
+            short = self.shortfall()
+            if round_ and short > gap + OVERSHOOT:
                 # the plain steps overshot (a folded body near the floor): keep the round before
                 self.pose = before
                 break
+            if short < best[0]:
+                best = (short, self.pose)
+        if best[1] is not None and self.shortfall() > best[0]:
+            # rounds near the floor can circle their target: the event ends on its closest one
+            self.pose = best[1]
         self._replant()
         self._solved = self.pose
         return self.pose

@@ -93,7 +93,9 @@ class PoseOptions:
         a reach beyond the arm bends the body further within the same event, and a drag
         that is reached costs one round. While the pelvis crouches (a target on ``root``),
         also while it is off its height or a planted foot off its place, so a fast squat
-        drag reaches its depth with the feet flat.
+        drag reaches its depth with the feet flat. The pick-up task's reach is
+        sensitive to the last bits of the decoder's float32 sums: four rounds leave it
+        1.3-2.1 cm short depending on the CPU, eight 1.2 cm (docs/authoring.md).
     reach_tolerance : float
         Distance (metres) of a dragged joint from its target below which no further
         round runs.
@@ -133,7 +135,7 @@ class PoseOptions:
     crouch_below_reach: bool = True
     free_height: bool = False
     prior_weight: float = _option(PRIOR_WEIGHT, 0.0, 10.0)
-    reach_rounds: int = _option(4, 0, 50)
+    reach_rounds: int = _option(8, 0, 50)
     reach_tolerance: float = _option(0.005, 0.0, 1.0)
     settle_rounds: int = _option(12, 0, 100)
     hold_weight: float = _option(0.0, 0.0, 10.0)

@@ -54,6 +54,10 @@ from engine.kinematics import quat_np as QN
 from engine.kinematics.fk import fk
 
 J = sk.JOINT_INDEX
+# Goals are placed from the decoded neutral pose, whose last float32 bits differ between
+# CPUs (their kernels sum in other orders); rounded, a task's goals and the scenes written
+# from them are the same numbers on every machine.
+GOAL_DECIMALS = 4
 #: A task is reached when every position goal is within this (centimetres) ...
 REACH_CM = 2.0
 #: ... and every turn within this (degrees).
@@ -111,18 +115,20 @@ class TaskResult:
 
 
 def resolve_goals(task: Task, pose, offsets: np.ndarray, heading_deg: float = 0.0) -> list[Goal]:
-    """World goals of ``task``'s drags, placed from ``pose`` (a starting :class:`Pose`)."""
+    """World goals of ``task``'s drags, placed from ``pose`` (a starting :class:`Pose`),
+    positions to 0.1 mm and rotations to 1e-6 (:data:`GOAL_DECIMALS`)."""
     yaw = yaw_quaternion(heading_deg)
     world_rot = fk(pose.local_rot, pose.root_pos, offsets)[1]
     goals = []
     for d in task.drags:
         if d.turn_deg is not None:
-            goals.append(Goal(d.joint, rotation=QN.mul(yaw_quaternion(d.turn_deg), world_rot[J[d.joint]])))
+            q = np.round(QN.mul(yaw_quaternion(d.turn_deg), world_rot[J[d.joint]]), GOAL_DECIMALS + 2)
+            goals.append(Goal(d.joint, rotation=q / np.linalg.norm(q)))
             continue
         p = pose.positions[J[d.anchor or d.joint]] + QN.rotate(yaw, np.asarray(d.offset, float))
         if d.height is not None:
             p[2] = d.height
-        goals.append(Goal(d.joint, position=p))
+        goals.append(Goal(d.joint, position=np.round(p, GOAL_DECIMALS)))
     return goals
 
 

@@ -287,7 +287,7 @@ class PoseMode:
                 break
             if short < best[0]:
                 best = (short, self.pose)
-        if best[1] is not None and self.shortfall() > best[0]:
+        if best[1] is not None:
             # rounds near the floor can circle their target: the event ends on its closest one
             self.pose = best[1]
         self._replant()

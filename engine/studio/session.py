@@ -31,7 +31,7 @@ from engine.methods import available_methods
 from engine.motion.clip import Motion
 from engine.sensor_source import SensorSource
 from engine.sensors import Sensor
-from engine.solver.settings import SettingsEdit
+from engine.solver.settings_edit import SettingsEdit
 from engine.studio import commands as cmd
 from engine.studio import events as ev
 from engine.studio.clips import load_clip, sensor_presets, tracked_position

@@ -126,7 +126,8 @@ def align_clips(a: Motion, b: Motion) -> AlignedPair:
     """Resample both clips to :data:`COMPARE_FPS`, find the time offset whose pose
     signatures agree best (within :data:`MAX_SHIFT_S`) and the heading (one rotation about
     +Z) that maps ``a``'s root-relative positions onto ``b``'s, and apply both to ``a``."""
-    from engine.motion.retarget import clip_height, resample_motion
+    from engine.motion.retarget import resample_motion
+    from engine.motion.retarget_measures import clip_height
 
     ha, hb = clip_height(a), clip_height(b)  # standing heights, as ``info`` prints them
     a, b = resample_motion(a, COMPARE_FPS), resample_motion(b, COMPARE_FPS)

@@ -2,7 +2,7 @@
 
 Residual: ``P_j - t`` and, with a rotation, the trackers' rotation residual, whose squared
 norm is ``rotation_weight * sin^2(angle / 2)``
-(:func:`engine.constraints.residual.rotation_residual`).
+(:func:`engine.constraints.rotation_residual.rotation_residual`).
 """
 
 from __future__ import annotations
@@ -15,7 +15,8 @@ import numpy as np
 
 from engine.constraints.base import Constraint, OnOneJoint, joint_index, param
 from engine.constraints.placement import REACH, facing, joint_at
-from engine.constraints.residual import FrameInputs, Kit, Residuals, Term, entry_block, rotation_residual
+from engine.constraints.residual import FrameInputs, Kit, Residuals, Term
+from engine.constraints.rotation_residual import entry_block, rotation_residual
 from engine.gizmos import PointGizmo
 from engine.kinematics import quat_np as QN
 

@@ -20,7 +20,8 @@ import numpy as np
 
 from engine.constraints.base import Constraint, OnOneJoint, joint_index, param
 from engine.constraints.placement import LOOK_DISTANCE, facing, joint_at
-from engine.constraints.residual import EPS3, FrameInputs, Kit, Residuals, Term
+from engine.constraints.residual import FrameInputs, Kit, Residuals, Term
+from engine.constraints.rotation_residual import EPS3
 from engine.errors import UserError
 from engine.gizmos import LineGizmo, PointGizmo
 

@@ -46,6 +46,8 @@ from typing import Any
 
 import numpy as np
 
+from engine.constraints.gradient_scatter import entry_sum, gradient_rows, members, one_hot, scatter_add
+
 
 @dataclass(frozen=True)
 class FrameInputs:
@@ -215,7 +217,7 @@ class Term:
     def _membership(self) -> np.ndarray:
         kept = self.__dict__.get("_member")
         if kept is None or kept[0] is not self.owner:
-            kept = self._member = (self.owner, _members(self.owner, len(self.names)))
+            kept = self._member = (self.owner, members(self.owner, len(self.names)))
         return kept[1]
 
     def _entry_weights(self, weights: np.ndarray) -> np.ndarray:
@@ -227,11 +229,11 @@ class Term:
         return kept[1]
 
     def _spread(self, joints: np.ndarray, count: int, rows: np.ndarray | None) -> np.ndarray:
-        """:func:`_one_hot` of the rows of ``joints`` (``rows[joints]``, or ``joints``), kept
-        while the term passes the same arrays."""
+        """:func:`~engine.constraints.gradient_scatter.one_hot` of the rows of ``joints``
+        (``rows[joints]``, or ``joints``), kept while the term passes the same arrays."""
         kept = getattr(self, "_spread_kept", None)
         if kept is None or kept[0] is not joints or kept[1] is not rows or kept[2].shape[0] != count:
-            kept = self._spread_kept = (joints, rows, _one_hot(_rows(joints, rows), count))
+            kept = self._spread_kept = (joints, rows, one_hot(gradient_rows(joints, rows), count))
         return kept[2]
 
     def kept(self, name: str, sel: Any, make: Callable[[], Any]) -> Any:
@@ -272,10 +274,10 @@ class Term:
         rw = (self._entry_weights(weights) * res.r)[:, None, :]  # (A, 1, m)
         if res.d_pos is not None:
             assert res.pos_joints is not None  # a Jacobian block comes with its joints
-            _scatter(g_pos, _rows(res.pos_joints, rows), _times(rw, res.d_pos))
+            scatter_add(g_pos, gradient_rows(res.pos_joints, rows), entry_sum(rw, res.d_pos))
         if res.d_rot is not None:
             assert res.rot_joints is not None
-            _scatter(g_rot, _rows(res.rot_joints, rows), _times(rw, res.d_rot))
+            scatter_add(g_rot, gradient_rows(res.rot_joints, rows), entry_sum(rw, res.d_rot))
         if res.d_latent is not None and g_z is not None:
             g_z += (rw @ res.d_latent)[:, 0]
         if res.entry_joint is not None:  # per entry: one product with the entries' one-hot joints
@@ -315,106 +317,3 @@ class FrameRows:
     def select(self, like: Any, rows: Any) -> Any:
         """The row selection for ``A = len(like)`` frames: ``rows``, or the first ``A``."""
         return slice(0, len(like)) if rows is None else rows
-
-
-def _rows(joints: np.ndarray, rows: np.ndarray | None) -> np.ndarray:
-    """The rows ``rows[joints]`` of a gradient array (``joints`` itself without ``rows``)."""
-    return joints if rows is None else rows[joints]
-
-
-def _times(rw: np.ndarray, d: np.ndarray) -> np.ndarray:
-    """``sum_m rw[a, 0, m] d[a, m, k, c]`` as one matrix product: ``(A, k, 3)``."""
-    a, m, k, _ = d.shape
-    return (rw @ d.reshape(a, m, 3 * k)).reshape(a, k, 3)
-
-
-_DISTINCT: dict[bytes, bool] = {}  # joint lists seen -> whether no joint repeats (terms reuse theirs)
-
-
-def _scatter(out: np.ndarray, joints: np.ndarray, g: np.ndarray) -> None:
-    """``out[:, joints] += g``, counting a joint listed twice twice."""
-    key = joints.tobytes()
-    distinct = _DISTINCT.get(key)
-    if distinct is None:
-        if len(_DISTINCT) > 4096:
-            _DISTINCT.clear()
-        distinct = _DISTINCT[key] = len(np.unique(joints)) == len(joints)
-    if distinct:
-        out[:, joints] += g
-    else:
-        np.add.at(out, (slice(None), joints), g)  # type: ignore[arg-type]  # numpy's stubs refuse a tuple index
-
-
-_INDICATORS: dict[tuple[bytes, int, bool], np.ndarray] = {}  # index arrays seen -> their 0/1 matrix (shared)
-
-
-def _indicator(index: np.ndarray, count: int, by_entry: bool) -> np.ndarray:
-    """The 0/1 matrix of ``index (m,)`` over ``count`` classes: ``(m, count)`` with 1 at
-    ``[i, index[i]]`` when ``by_entry``, else its transpose ``(count, m)`` (C order either
-    way). Cached: a term's index arrays never change, and frame after frame share theirs."""
-    key = (index.tobytes(), count, by_entry)
-    out = _INDICATORS.get(key)
-    if out is None:
-        if len(_INDICATORS) > 4096:
-            _INDICATORS.clear()
-        m = np.arange(len(index))
-        if by_entry:
-            out = np.zeros((len(index), count))
-            out[m, index] = 1.0
-        else:
-            out = np.zeros((count, len(index)))
-            out[index, m] = 1.0
-        _INDICATORS[key] = out
-    return out
-
-
-def _members(owner: np.ndarray, count: int) -> np.ndarray:
-    """``(m, count)``: ``r2 @ _members(owner)`` sums each constraint's squared entries."""
-    return _indicator(owner, count, by_entry=True)
-
-
-def _one_hot(joints: np.ndarray, count: int) -> np.ndarray:
-    """``(count, m)``: ``_one_hot(joints) @ x`` sums the rows ``x (A, m, c)`` of each joint."""
-    return _indicator(joints, count, by_entry=False)
-
-
-#: Levi-Civita symbol: ``(a x v)_i = EPS3[i, k, l] a_k v_l``.
-EPS3 = np.zeros((3, 3, 3))
-EPS3[0, 1, 2] = EPS3[1, 2, 0] = EPS3[2, 0, 1] = 1.0
-EPS3[0, 2, 1] = EPS3[2, 1, 0] = EPS3[1, 0, 2] = -1.0
-
-
-#: ``W.reshape(9) @ _TURN`` is ``d (W - T)_ij / d a_k = ([e_k]x W)_ij = EPS3[i, k, l] W_lj``
-#: as ``(i, j, k)`` flattened: the per-entry Jacobian of a rotation residual.
-_TURN = np.einsum("ikl,jm->lmijk", EPS3, np.eye(3)).reshape(9, 27)
-
-
-def rotation_residual(
-    kit: Kit, W: Any, T: Any, scale: Any, jac: bool, out: np.ndarray | None = None
-) -> tuple[Any, np.ndarray | None]:
-    """The rotation part of a tracker or end-effector term: ``scale (A, s) * (W - T)``,
-    flattened to ``(A, s * 9)``, for world rotations ``W (A, s, 3, 3)`` and targets ``T``.
-
-    Its squared norm is ``scale^2 * |W - T|_F^2 = scale^2 * 2 (3 - trace(T^T W))``, so with
-    ``scale = sqrt(weight / 8)`` it is ``weight * sin^2(angle / 2)``, the sign-invariant
-    rotation distance of quaternions ``1 - <q, q_t>^2``. The Jacobian w.r.t. a world turn
-    ``a`` of each entry's joint is ``scale * [e_k]x W``, per entry: ``(A, s * 9, 3)`` (entry
-    ``9 t + 3 i + j`` reads joint ``t``); written into ``out (A, s, 27)`` when given (a view
-    of a caller's block).
-    """
-    a, s = W.shape[0], W.shape[1]
-    r = (scale[..., None, None] * (W - T)).reshape(a, s * 9)
-    if not jac:
-        return r, None
-    d = np.multiply(W.reshape(a, s, 9) @ _TURN, np.asarray(scale)[..., None], out=out)  # (A, s, 27)
-    return r, d.reshape(a, s * 9, 3)
-
-
-def entry_block(shape: tuple[int, int, int], start: int) -> tuple[np.ndarray, np.ndarray]:
-    """A zero per-entry Jacobian block ``shape (A, m, 3)`` and a view of its entries from
-    ``start`` on as ``(A, (m - start) / 9, 27)``, the shape :func:`rotation_residual` writes:
-    the rows before ``start`` stay zero, the rotation rows are written at each evaluation."""
-    block = np.zeros(shape)
-    view = block[:, start:].reshape(shape[0], -1, 27)
-    assert np.shares_memory(view, block)  # a view, not a copy
-    return block, view

@@ -18,15 +18,8 @@ from typing import Any, ClassVar
 import numpy as np
 
 from engine.constraints.base import Constraint, OnOneJoint, joint_index, param
-from engine.constraints.residual import (
-    FrameInputs,
-    FrameRows,
-    Kit,
-    Residuals,
-    Term,
-    entry_block,
-    rotation_residual,
-)
+from engine.constraints.residual import FrameInputs, FrameRows, Kit, Residuals, Term
+from engine.constraints.rotation_residual import entry_block, rotation_residual
 from engine.errors import UserError
 from engine.gizmos import PointGizmo
 from engine.kinematics import quat_np as QN
@@ -119,7 +112,7 @@ def unit_rotation(q: Any) -> np.ndarray:
 class SensorTerm(FrameRows, Term):
     """The residual of the trackers ``items`` over ``A`` frames: per tracker
     ``on * (P_j - t)`` (3 entries) and, for a 6-DoF one, ``on * sqrt(rotation_weight / 8)
-    * (W_j - T)`` (9 entries: :func:`~engine.constraints.residual.rotation_residual`), so
+    * (W_j - T)`` (9 entries: :func:`~engine.constraints.rotation_residual.rotation_residual`), so
     its loss is the squared position error plus ``rotation_weight * sin^2(angle / 2)``.
 
     The targets carry a frame axis (``target (A, S, 3)``, ``rot_target (A, S6, 3, 3)``,

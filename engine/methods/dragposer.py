@@ -6,10 +6,10 @@ the temporal predictor proposes a latent (:mod:`engine.solver.temporal`), and
 :class:`engine.solver.PoseOptimizer` moves the latent until the sensors, the
 temporal prior and the user's constraints agree. This module holds the per-frame
 step (a :class:`~engine.methods.dragposer_parts.FramePlan` read from the frame, the
-solve, the exact after-solve steps, the frame's history), the edits between frames, and
-the registry factory :func:`create`. Its collaborators, one job each: the trackers as
-terms, the user's constraints and the prior's source
-(:mod:`engine.methods.dragposer_parts`), the settings a frame runs with
+solve, the exact after-solve steps, the frame's history) and the registry factory
+:func:`create`. Its collaborators, one job each: the trackers as terms, the user's
+constraints and the prior's source (:mod:`engine.methods.dragposer_parts`), the caller's
+edits between frames and the settings a frame runs with
 (:mod:`engine.methods.dragposer_edits`), where the body is and which way it faces
 (:mod:`engine.methods.dragposer_root`).
 """
@@ -32,7 +32,7 @@ from engine.errors import UserError
 from engine.kinematics import quaternion as Q
 from engine.methods import dragposer_root as roots
 from engine.methods.base import FrameResult, Method
-from engine.methods.dragposer_edits import FrameSettings
+from engine.methods.dragposer_edits import CallerEdits, FrameSettings
 from engine.methods.dragposer_parts import FramePlan, PriorSource, TrackerTerms, UserConstraints, smoothing_history
 from engine.methods.solve_record import SolveRecord, record_of
 from engine.motion.clip import Motion
@@ -44,7 +44,7 @@ from engine.solver.tracker_prior import PoseBank, combination, default_bank
 from engine.startup_trace import mark
 
 
-class DragPoserMethod(Method):
+class DragPoserMethod(CallerEdits, Method):
     """Latent-space pose optimisation guided by a temporal predictor.
 
     Parameters
@@ -92,16 +92,6 @@ class DragPoserMethod(Method):
         self._bank_later: tuple[tuple[str, ...], ...] = ()
         self.configure(**overrides)
         self.reset(sk.Skeleton.canonical())
-
-    @property
-    def explicit(self) -> set[str]:
-        """Settings fields the caller chose (kept against the sensor-set profiles)."""
-        return self._settings.explicit
-
-    @property
-    def constraints(self) -> list[Constraint]:
-        """The user's constraints, as the solver takes them (captured copies included)."""
-        return self._user.items
 
     @property
     def sensors(self) -> dict[str, SensorConstraint]:
@@ -269,40 +259,6 @@ class DragPoserMethod(Method):
             self._bank_later = self.priors.bank_later
         finally:
             torch.set_num_threads(threads)
-
-    # -- edits between frames ----------------------------------------------------------
-    def configure(self, **values: Any) -> None:
-        """Change settings by name (:meth:`FrameSettings.configure`); from the next frame."""
-        self._settings.configure(**values)
-
-    def add_constraint(self, constraint: Constraint) -> None:
-        self._user.add(constraint)
-
-    def remove_constraint(self, name: str) -> None:
-        self._user.remove(name)
-
-    def get_constraint(self, name: str) -> Constraint:
-        return self._user.get(name)
-
-    def set_constraints(self, constraints: Iterable[Constraint]) -> None:
-        """Replace all user constraints (names must be unique)."""
-        self._user.replace_all(constraints)
-
-    def settle_constraints(self, previous_positions: Any) -> None:
-        """Let each constraint capture what it takes from the previous solved pose."""
-        self._user.settle(previous_positions)
-
-    def set_weight(self, name: str, weight: float) -> None:
-        if not weight >= 0:
-            raise UserError(f"constraint {name!r}: weight must be >= 0, got {weight!r}")
-        self._user.edit(name, weight=float(weight))
-
-    def set_enabled(self, name: str, enabled: bool) -> None:
-        self._user.edit(name, enabled=bool(enabled))
-
-    def set_sensor_weight(self, joint: str, weight: float) -> None:
-        """Weight of the tracker on ``joint`` (applies to its ``sensor`` constraint)."""
-        self.trackers.set_weight(joint, weight)
 
     def decode_latent(self, latent: np.ndarray) -> np.ndarray:
         """World joint positions ``(22, 3)`` of ``latent (L,)``, placed at the current root."""

@@ -1,6 +1,7 @@
-"""The settings a DragPoser frame runs with: the caller's, completed by the sensor set's profile.
+"""The caller's edits to a DragPoser method, and the settings a frame runs with.
 
-:class:`FrameSettings` holds the caller's :class:`~engine.solver.OptimizerSettings` (edited
+:class:`CallerEdits` takes the caller's edits between frames (settings by name, user
+constraints, tracker weights). :class:`FrameSettings` holds the caller's :class:`~engine.solver.OptimizerSettings` (edited
 by name with :meth:`~FrameSettings.configure`, applied from the next frame) and which
 fields the caller chose; each frame then runs with those completed by the connected
 sensor set's profile (:func:`engine.solver.profiles.effective`) for the fields the caller
@@ -10,9 +11,12 @@ left alone.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Iterable
 from typing import Any
 
+from engine.constraints import Constraint
 from engine.errors import UserError
+from engine.methods.dragposer_parts import TrackerTerms, UserConstraints
 from engine.solver import OptimizerSettings
 from engine.solver.profiles import effective
 
@@ -67,3 +71,59 @@ class FrameSettings:
     def forget(self) -> None:
         """Drop the per-clip cache (a new clip)."""
         self._cache.clear()
+
+
+class CallerEdits:
+    """What the caller edits on a DragPoser method between frames: its settings by name,
+    its user constraints and its trackers' weights, each applied from the next frame.
+
+    A base of :class:`engine.methods.dragposer.DragPoserMethod`, which holds the three
+    objects edited: the caller's settings, the user's constraints and the trackers' terms.
+    """
+
+    _settings: FrameSettings
+    _user: UserConstraints
+    trackers: TrackerTerms
+
+    @property
+    def explicit(self) -> set[str]:
+        """Settings fields the caller chose (kept against the sensor-set profiles)."""
+        return self._settings.explicit
+
+    @property
+    def constraints(self) -> list[Constraint]:
+        """The user's constraints, as the solver takes them (captured copies included)."""
+        return self._user.items
+
+    def configure(self, **values: Any) -> None:
+        """Change settings by name (:meth:`FrameSettings.configure`); from the next frame."""
+        self._settings.configure(**values)
+
+    def add_constraint(self, constraint: Constraint) -> None:
+        self._user.add(constraint)
+
+    def remove_constraint(self, name: str) -> None:
+        self._user.remove(name)
+
+    def get_constraint(self, name: str) -> Constraint:
+        return self._user.get(name)
+
+    def set_constraints(self, constraints: Iterable[Constraint]) -> None:
+        """Replace all user constraints (names must be unique)."""
+        self._user.replace_all(constraints)
+
+    def settle_constraints(self, previous_positions: Any) -> None:
+        """Let each constraint capture what it takes from the previous solved pose."""
+        self._user.settle(previous_positions)
+
+    def set_weight(self, name: str, weight: float) -> None:
+        if not weight >= 0:
+            raise UserError(f"constraint {name!r}: weight must be >= 0, got {weight!r}")
+        self._user.edit(name, weight=float(weight))
+
+    def set_enabled(self, name: str, enabled: bool) -> None:
+        self._user.edit(name, enabled=bool(enabled))
+
+    def set_sensor_weight(self, joint: str, weight: float) -> None:
+        """Weight of the tracker on ``joint`` (applies to its ``sensor`` constraint)."""
+        self.trackers.set_weight(joint, weight)

@@ -14,8 +14,9 @@ How it works (details and figures in ``docs/skeleton.md``)
    (``G_c = G_s R``, :mod:`engine.motion.retarget_frames`). Canonical joints a rig lacks get
    identity local rotations.
 4. **True proportions.** Bone offsets are measured per clip along the source chain
-   (:func:`measure_offsets`), so mapped joints land where the source's are and the clip's
-   height is the subject's (:func:`standing_height`); the root keeps the source trajectory.
+   (:func:`~engine.motion.retarget_measures.measure_offsets`), so mapped joints land where
+   the source's are and the clip's height is the subject's
+   (:func:`~engine.motion.retarget_measures.standing_height`); the root keeps the source trajectory.
 5. The clip is resampled to 60 fps (slerp for rotations, linear for the root) and
    re-floored (the 2nd-percentile lowest toe sits at the canonical toe height).
 
@@ -49,6 +50,7 @@ from engine.motion.retarget_inputs import (  # noqa: F401 - re-exported: callers
     models_strategy,
     rest_frame_count,
 )
+from engine.motion.retarget_measures import clip_height, measure_offsets, refloor, standing_height, toe_tips
 from engine.motion.retarget_rotations import rigid_hands, straightened_offsets, tip_points, world_rotations
 from engine.motion.retarget_strategy import CURRENT, RETARGET_VERSION, STRATEGIES, RetargetStrategy  # noqa: F401 - re-exported: callers import them from here
 from engine.motion.rigs import RigProfile, resolve_rig
@@ -61,7 +63,6 @@ _AXIS = {"x": 0, "y": 1, "z": 2}
 ALIGN_FRAMES = 8192
 #: Highest source frame rate accepted (engine.validation.BVH_HEADER / MANIFEST / --fps).
 MAX_SOURCE_FPS = 1000
-_TOE_HEIGHT = 0.045  # canonical toe joint height above the floor when standing (metres)
 _LEG = [sk.JOINT_INDEX[n] for n in ("lknee", "lankle")]
 
 
@@ -160,47 +161,6 @@ def _points(
     return pts
 
 
-def measure_offsets(pts: dict[str, np.ndarray], glob: np.ndarray, leg_scale: float) -> np.ndarray:
-    """Per-clip bone offsets (22, 3), metres, measured along the source chain.
-
-    A mapped joint's offset is the mean, over the clip, of the vector from its nearest
-    mapped ancestor, expressed in that ancestor's canonical frame; canonical joints
-    the rig lacks between two mapped ones share that vector in proportion to their
-    canonical lengths (they have identity local rotations, so they share the frame);
-    a missing leaf (toes) gets the canonical offset times ``leg_scale``."""
-    off = sk.REST_OFFSETS * leg_scale
-    for j in range(1, sk.NUM_JOINTS):
-        name = sk.JOINT_NAMES[j]
-        if name not in pts:
-            continue
-        chain = [j]
-        a = sk.PARENTS[j]
-        while sk.JOINT_NAMES[a] not in pts:
-            chain.append(a)
-            a = sk.PARENTS[a]
-        v = pts[name] - pts[sk.JOINT_NAMES[a]]
-        local = Q.rotate(Q.conjugate(glob[:, a]), v).mean(0)
-        lengths = np.linalg.norm(sk.REST_OFFSETS[chain], axis=-1)
-        for k, length in zip(chain, lengths):
-            off[k] = local * (length / lengths.sum())
-    for side in ("l", "r"):  # no toe joint but a toe tip: the toe sits on the way to it
-        toe, tip, ankle = f"{side}toe", f"{side}_toe_tip", sk.JOINT_INDEX[f"{side}ankle"]
-        if toe not in pts and tip in pts and f"{side}ankle" in pts:
-            k = sk.JOINT_INDEX[toe]
-            v = Q.rotate(Q.conjugate(glob[:, ankle]), pts[tip] - pts[f"{side}ankle"]).mean(0)
-            toe_len, tip_len = np.linalg.norm(sk.REST_OFFSETS[k]), np.linalg.norm(sk.END_SITES[toe])
-            off[k] = v * toe_len / (toe_len + tip_len)
-    off[0] = 0.0
-    return off
-
-
-def standing_height(head: np.ndarray, lowest: np.ndarray, skeleton: sk.Skeleton) -> float:
-    """Height (m) of the subject: 95th percentile over frames of the head joint above the
-    lowest foot point, plus the skeleton's head top (the head's end site). Measured the
-    same way on the source and on the canonical clip, so the two compare like for like."""
-    return float(np.percentile(head - lowest, 95)) + float(sk.END_SITES["upperneck"][2] * skeleton.scale)
-
-
 def _resampled_count(n: int, fps: float, target: float = sk.FPS) -> int:
     """Frames :func:`_resample` makes of ``n`` frames at ``fps``."""
     if abs(fps - target) < 1e-6 or n < 2:
@@ -297,11 +257,11 @@ def retarget(
     root = pts["root"]
     feet = [pts[k][:, 2] for k in ("lankle", "rankle", "ltoe", "rtoe", "l_toe_tip", "r_toe_tip") if k in pts]
     src_height = standing_height(pts["upperneck"][:, 2], np.min(feet, axis=0), skel)
-    tips = _toe_tips(pts, local, root, skel)
+    tips = toe_tips(pts, local, root, skel)
 
     local, root = _resample(local, root, src_fps)
     motion = Motion(local, root, skel, sk.FPS, Path(raw.path).stem)
-    shift = _refloor(motion)
+    shift = refloor(motion)
     report = RetargetReport(
         prof.name,
         len(raw.names),
@@ -324,33 +284,6 @@ def retarget(
     return motion, report
 
 
-def _toe_tips(pts, local, root, skel) -> dict[str, np.ndarray]:
-    """The source's toe tips in the canonical toe frames (mean over the clip)."""
-    pos, rot = fk(local, root, skel.offsets)
-    out = {}
-    for side in ("l", "r"):
-        if f"{side}_toe_tip" in pts:
-            k = sk.JOINT_INDEX[f"{side}toe"]
-            out[f"{side}toe"] = Q.rotate(Q.conjugate(rot[:, k]), pts[f"{side}_toe_tip"] - pos[:, k]).mean(0)
-    return out
-
-
-def clip_height(motion: Motion, toe_tips: dict[str, np.ndarray] | None = None) -> float:
-    """:func:`standing_height` of a canonical clip.
-
-    The foot points are the ankles, the toes and the toe tips: ``toe_tips`` (offsets in
-    the toe frames, as :func:`retarget` measures the source's) or, by default, the
-    skeleton's end sites."""
-    pos, rot = motion.fk()
-    low = [pos[:, sk.JOINT_INDEX[j], 2] for j in ("lankle", "rankle", "ltoe", "rtoe")]
-    if toe_tips is None:
-        toe_tips = {j: sk.END_SITES[j] * motion.skeleton.scale for j in ("ltoe", "rtoe")}
-    for j, off in toe_tips.items():
-        k = sk.JOINT_INDEX[j]
-        low.append((pos[:, k] + Q.rotate(rot[:, k], np.broadcast_to(off, pos[:, k].shape)))[:, 2])
-    return standing_height(pos[:, sk.JOINT_INDEX["upperneck"], 2], np.min(low, axis=0), motion.skeleton)
-
-
 def resample_motion(motion: Motion, fps: float) -> Motion:
     """The same motion at another frame rate (slerp for rotations, linear for the root)."""
     rot, root = _resample(motion.local_rot, motion.root_pos, motion.fps, fps)
@@ -369,16 +302,6 @@ def _check_root(path: str, root: np.ndarray, units_to_m: float) -> None:
     with np.errstate(over="ignore", invalid="ignore"):
         worst = float(np.abs(root).max()) * units_to_m if root.size else 0.0
     check_value(SKELETON["root position"], worst, f"{path}: motion", "largest root coordinate")
-
-
-def _refloor(motion: Motion) -> float:
-    """Shift the clip vertically so its feet stand on z = 0; returns the shift (metres)."""
-    pos = motion.positions()
-    toes = pos[:, [sk.JOINT_INDEX["ltoe"], sk.JOINT_INDEX["rtoe"]], 2].min(axis=1)
-    ground = np.percentile(toes, 2.0)
-    shift = float(_TOE_HEIGHT * motion.skeleton.scale - ground)
-    motion.root_pos[:, 2] += shift
-    return shift
 
 
 def load_motion(

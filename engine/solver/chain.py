@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from engine import skeleton as sk
-from engine.constraints.residual import EPS3
+from engine.constraints.rotation_residual import EPS3
 from engine.kinematics import quat_np as QN
 from engine.kinematics.fk import fk_level_order, levels
 from engine.kinematics.root import anchor_body, place_root

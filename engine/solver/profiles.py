@@ -26,7 +26,8 @@ from collections.abc import Collection, Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from engine.solver.settings import FULL_SET, OptimizerSettings, check_values
+from engine.solver.settings import FULL_SET, OptimizerSettings
+from engine.solver.settings_edit import check_values
 
 #: Settings a profile may supply (each profile gives all of them; a value it leaves out is
 #: the :class:`OptimizerSettings` default).

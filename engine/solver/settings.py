@@ -14,11 +14,10 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
-from typing import Any
 
 from engine import skeleton as sk
-from engine.errors import UserError
-from engine.validation import Choice, Flag, Num, Spec, check_value, shown
+from engine.solver.setting_schema import META, Setting, setting
+from engine.validation import Choice, Flag, Num, Spec, check_value
 
 MODES = ("realtime", "offline")
 #: Latent update rules: plain gradient steps (DragPoser eq. in sec. 4.4), Adam restarted every
@@ -32,41 +31,6 @@ HEADINGS = ("previous", "anchor")
 PRIORS = ("predictor", "trackers")
 #: Connected sensors from which ``auto`` uses Adam (and the predictor looks one step ahead).
 FULL_SET = 6
-#: Key of a field's :class:`Setting` in its ``dataclasses.field`` metadata.
-META = "setting"
-
-
-@dataclass(frozen=True)
-class Setting:
-    """What one optimizer setting is, for every place that shows or checks it.
-
-    Attributes
-    ----------
-    label : str
-        Short name for a form ("Adam learning rate").
-    help : str
-        One or two sentences: what it does, in which units (also the panel's tooltip).
-    spec : Num, Choice or Flag
-        The allowed values (:mod:`engine.validation`); a number's unit is ``spec.unit``.
-    panel : bool
-        Shown in the studio's optimizer panel.
-    step : float
-        The panel's spin-box step (numbers only).
-    offered : tuple of str
-        Values the panel's list offers when not all of ``spec.options`` (a joint name).
-    """
-
-    label: str
-    help: str
-    spec: Spec
-    panel: bool = False
-    step: float = 0.0
-    offered: tuple[str, ...] = ()
-
-
-def setting(default: Any, label: str, help: str, spec: Spec, **kw: Any) -> Any:
-    """A dataclass field with ``default`` and its :class:`Setting` as metadata."""
-    return dataclasses.field(default=default, metadata={META: Setting(label, help, spec, **kw)})
 
 
 def _int(lo: int, hi: int) -> Num:
@@ -359,53 +323,6 @@ def fields(cls: type = OptimizerSettings) -> Iterator[tuple[dataclasses.Field, S
 
 #: The settings' validation schema, by field (from the fields' metadata).
 SETTINGS: Mapping[str, Spec] = {f.name: info.spec for f, info in fields()}
-
-
-def check_values(values: Mapping[str, Any], where: str = "optimizer settings") -> dict[str, Any]:
-    """Some settings by name, each checked and converted by its :class:`Setting` (for a
-    partial edit; a whole :class:`OptimizerSettings` checks itself).
-
-    Raises
-    ------
-    UserError
-        One line naming ``where`` and the unknown or bad field (with its range).
-    """
-    unknown = sorted(set(values) - set(SETTINGS))
-    if unknown:
-        raise UserError(f"{where}: unknown setting(s) {', '.join(map(shown, unknown))}; known: {', '.join(SETTINGS)}")
-    return {k: check_value(SETTINGS[k], v, where, k) for k, v in values.items()}
-
-
-class SettingsEdit(Mapping[str, Any]):
-    """Some optimizer settings by name, checked when made and never changed after: what
-    the studio sets explicitly (the others stay to the method's profile) and publishes to
-    the engine. ``a | b`` is ``a`` with ``b``'s values; ``dict(edit)`` the plain form.
-
-    Raises
-    ------
-    UserError
-        On construction, naming ``where`` and the unknown or bad field (one line).
-    """
-
-    def __init__(self, values: Mapping[str, Any] | None = None, where: str = "optimizer settings") -> None:
-        self._values = check_values(dict(values or {}), where)
-
-    def __getitem__(self, name: str) -> Any:
-        return self._values[name]
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(self._values)
-
-    def __len__(self) -> int:
-        return len(self._values)
-
-    def __or__(self, other: Mapping[str, Any]) -> SettingsEdit:
-        merged = SettingsEdit()
-        merged._values = {**self._values, **(other._values if isinstance(other, SettingsEdit) else check_values(other))}
-        return merged
-
-    def __repr__(self) -> str:
-        return f"SettingsEdit({self._values!r})"
 
 
 def choices() -> dict[str, tuple[str, ...]]:

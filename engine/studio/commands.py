@@ -22,7 +22,7 @@ import numpy as np
 from engine.motion.clip import Motion
 from engine.sensor_source import SensorSource
 from engine.sensors import Sensor
-from engine.solver.settings import SettingsEdit
+from engine.solver.settings_edit import SettingsEdit
 
 
 @dataclass(frozen=True)

@@ -129,7 +129,7 @@ class ExportJob:
     sensors : tuple of Sensor
     constraints : tuple of Constraint
     settings : Mapping
-        Optimizer settings by name (the session's :class:`~engine.solver.settings.SettingsEdit`).
+        Optimizer settings by name (the session's :class:`~engine.solver.settings_edit.SettingsEdit`).
     method : str
         Registered method name.
     path : Path

@@ -17,7 +17,7 @@ from engine.methods.base import FrameResult, Method
 from engine.methods.presets import sensors_problem
 from engine.sensor_source import SensorSource
 from engine.sensors import Sensor, SensorFrame
-from engine.solver.settings import SettingsEdit
+from engine.solver.settings_edit import SettingsEdit
 from engine.studio.method_edits import apply_constraints, apply_sensor_weights, apply_settings
 from engine.studio.method_state import copy_state
 

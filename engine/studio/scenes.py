@@ -22,7 +22,7 @@ from engine.constraints.base import Constraint
 from engine.errors import UserError
 from engine.sensors import Sensor
 from engine.solver import OptimizerSettings
-from engine.solver.settings import SettingsEdit
+from engine.solver.settings_edit import SettingsEdit
 from engine.validation import shown
 
 #: Settings a session sets from the start (at the optimizer's defaults); the others stay

@@ -13,40 +13,39 @@ The window never builds engine objects: it calls :meth:`Session.start_engine`, r
 constraint list are sub-models with their own events, ``session.sensors``
 (:mod:`engine.studio.session_sensors`) and ``session.constraints``
 (:mod:`engine.editing.constraint_list`); the session sends each of their changes to
-the engine and re-emits it as ``events.sensors`` or ``events.constraints``.
+the engine and re-emits it as ``events.sensors`` or ``events.constraints``. The session's
+state, its engine and the sending of changes are the base's
+(:class:`~engine.studio.engine_link.EngineLink`); this module adds the edits.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from engine.constraints.base import Constraint
-from engine.editing.constraint_list import ConstraintList
 from engine.errors import UserError
 from engine.methods import available_methods
 from engine.motion.clip import Motion
 from engine.sensor_source import SensorSource
 from engine.sensors import Sensor
-from engine.solver.settings import SettingsEdit
+from engine.solver.settings_edit import SettingsEdit
 from engine.studio import commands as cmd
 from engine.studio import events as ev
 from engine.studio.clips import load_clip, sensor_presets, tracked_position
+from engine.studio.engine_link import EngineLink
 from engine.studio.process import EngineProcess
-from engine.studio.scenes import apply_scene, default_settings, scene_to_dict
-from engine.studio.session_sensors import SensorSet
-from engine.studio.snapshot import Snapshot
-from engine.studio.thread import EngineThread
+from engine.studio.scenes import apply_scene, scene_to_dict
 
 if TYPE_CHECKING:
     from engine.tracker_io.live_source import LiveSource
     from engine.tracker_io.recording_source import RecordingSource
 
 
-class Session:
+class Session(EngineLink):
     """Everything the studio shows and edits; see the module docstring.
 
     Attributes
@@ -72,123 +71,6 @@ class Session:
         Playback state; ``pace`` is ``"every_frame"`` or ``"real_time"``.
     """
 
-    def __init__(self, method: str = "ik") -> None:
-        self.events = ev.SessionEvents()
-        self.motion: Motion | None = None
-        self.path: Path | None = None
-        self.rig_map: Path | None = None  # the joint mapping file ``path`` was opened with
-        self.source: SensorSource | None = None  # a tracker recording or live stream instead of a clip
-        self.sensors = SensorSet()
-        self.constraints = ConstraintList()
-        self.sensors.events.changed.connect(self._sensors_changed)
-        self.constraints.events.changed.connect(self._constraints_changed)
-        self.settings: SettingsEdit = default_settings()
-        self.method = method
-        #: Clips, sources and methods opened so far (``opened`` of their commands).
-        self.opened = 0
-        self.ghosts: tuple[str, ...] = ()
-        self.frame = 0
-        self.playing = False
-        self.speed = 1.0
-        self.loop = True
-        self.pace = "every_frame"
-        self.engine: EngineThread | EngineProcess | None = None
-        self._sink: Callable[[Any], None] | None = None
-        self._factory: Callable[[str], Any] | None = None
-        #: Play commands sent to the engine; a snapshot saying "stopped" counts only when
-        #: its ``plays`` is this (an older one predates the latest play request).
-        self.plays = 0
-
-    # -- engine ------------------------------------------------------------------------
-    def start_engine(
-        self,
-        method_factory: Callable[[str], Any] | None = None,
-        process: bool = False,
-        started: EngineProcess | None = None,
-    ) -> EngineThread | EngineProcess:
-        """Start the engine and send it the whole session: a thread of this process, or
-        with ``process`` a child process (:mod:`engine.studio.process`; the solver and
-        the window then never wait for each other's interpreter lock). ``started`` is an
-        engine process already running (started before the window's imports, so that its
-        own imports and model loading run beside them), taken as it is."""
-        self._factory = method_factory
-        if started is not None:
-            self.engine = started
-        else:
-            self.engine = EngineProcess(method_factory) if process else EngineThread(method_factory)
-            self.engine.start()
-        self.attach(self.engine.submit)
-        return self.engine
-
-    def _engine_in_thread(self) -> None:
-        """Move the engine from its process into a thread of this one (for a source that
-        cannot leave this process, such as a live tracker stream); the whole session is
-        sent to the new engine."""
-        old = self.engine
-        self.engine = EngineThread(self._factory)
-        self.engine.start()
-        if old is not None:
-            old.stop()
-        self.attach(self.engine.submit)
-
-    def restart_engine(self) -> EngineThread | EngineProcess:
-        """Replace an engine that died by a new one of the same kind (a process, or a
-        thread) and send it the whole session: clip or source, method and ghosts,
-        settings, sensors, constraints, frame and playback, so no edit made meanwhile is
-        lost (:mod:`engine.studio.restarts` decides whether to)."""
-        old = self.engine
-        process = isinstance(old, EngineProcess)
-        if process and self.source is not None and not EngineProcess.can_send(cmd.SetSource(self.source)):
-            process = False  # a live source stays in this process
-        self.engine = EngineProcess(self._factory) if process else EngineThread(self._factory)
-        self.engine.start()
-        if old is not None:
-            old.stop(timeout=0.5)  # already dead: frees its pipe and queue
-        self.attach(self.engine.submit)
-        return self.engine
-
-    def shutdown(self) -> None:
-        """Stop the engine thread (if any) and wait for it; close a live source."""
-        if self.engine is not None:
-            self.engine.stop()
-        self._sink = None
-        self._close_source()
-
-    @property
-    def latest(self) -> Snapshot | None:
-        """The engine's newest snapshot (None before the first solve or without engine)."""
-        return None if self.engine is None else self.engine.latest
-
-    def attach(self, sink: Callable[[Any], None] | None) -> None:
-        """Send every change to ``sink`` (an engine's ``submit``) and sync it now."""
-        self._sink = sink
-        if sink is None:
-            return
-        sink(cmd.SetMethod(self.method, self.ghosts, self.opened))
-        sink(cmd.SetSettings(self.settings))
-        sink(cmd.SetSensors(tuple(self.sensors.values())))
-        if self.motion is not None:
-            sink(cmd.SetMotion(self.motion, self.opened))
-        elif self.source is not None:
-            sink(cmd.SetSource(self.source, self.opened))
-        sink(cmd.SetConstraints(tuple(self.constraints)))
-        sink(cmd.Seek(self.frame))
-        self.plays = 0  # a new engine has seen none
-        if self.playing:
-            self._send_play()
-
-    def _send(self, command: Any) -> None:
-        if self._sink is not None:
-            self._sink(command)
-
-    def decode_latent(self, latent: np.ndarray) -> None:
-        """Show the pose the method's decoder makes of ``latent`` (L,) (debug mode)."""
-        self._send(cmd.DecodeLatent(np.asarray(latent, float).copy()))
-
-    def inspect_latent(self, joint: str = "") -> None:
-        """Ask for the frame's term forces, dimension sweep and ``joint``'s influences (snapshot ``latent_detail``)."""
-        self._send(cmd.InspectLatent(str(joint)))
-
     # -- sensors and constraints -----------------------------------------------------
     @property
     def preset(self) -> str:
@@ -202,14 +84,6 @@ class Session:
     def set_constraints(self, constraints: Sequence[Constraint]) -> None:
         """Replace the whole constraint list (:meth:`ConstraintList.set_all`)."""
         self.constraints.set_all(constraints)
-
-    def _sensors_changed(self, e: ev.SensorsChanged) -> None:
-        self._send(cmd.SetSensors(e.sensors))
-        self.events.sensors.emit(e)
-
-    def _constraints_changed(self, e: ev.ConstraintsChanged) -> None:
-        self._send(cmd.SetConstraints(e.constraints))
-        self.events.constraints.emit(e)
 
     def drag_target(self, joint: str, world_pos: np.ndarray) -> None:
         """Move a tracker's target to ``world_pos`` (metres) by setting its drag offset."""
@@ -308,11 +182,6 @@ class Session:
 
         return self.source if isinstance(self.source, LiveSource) else None
 
-    def _close_source(self) -> None:
-        source, self.source = self.source, None
-        if source is not None:
-            source.close()
-
     # -- optimizer, method ---------------------------------------------------------
     def set_setting(self, name: str, value: Any) -> None:
         self.set_settings({name: value})
@@ -390,10 +259,6 @@ class Session:
         else:
             self._send(cmd.Pause())
         self._playback_changed()
-
-    def _send_play(self) -> None:
-        self.plays += 1
-        self._send(cmd.Play(self.speed, self.loop, self.pace))
 
     def note_stopped(self) -> None:
         """Mirror the engine stopping at the clip's end (no command is sent back)."""

@@ -11,7 +11,9 @@ import pytest
 
 from engine.errors import UserError
 from engine.solver import settings as schema
-from engine.solver.settings import SETTINGS, OptimizerSettings, Setting
+from engine.solver.setting_schema import META, Setting, setting
+from engine.solver.settings import SETTINGS, OptimizerSettings
+from engine.solver.settings_edit import SettingsEdit, check_values
 from engine.validation import Choice, Flag, Num, ValidationError
 
 DOC = Path(__file__).resolve().parents[2] / "docs" / "optimizer.md"
@@ -19,7 +21,7 @@ DOC = Path(__file__).resolve().parents[2] / "docs" / "optimizer.md"
 
 def test_every_field_has_its_metadata():
     for f in dataclasses.fields(OptimizerSettings):
-        info = f.metadata.get(schema.META)
+        info = f.metadata.get(META)
         assert isinstance(info, Setting), f"{f.name}: declare it with setting(...)"
         assert info.label.strip() and info.help.strip(), f.name
         assert isinstance(info.spec, (Num, Choice, Flag)), f.name
@@ -32,7 +34,7 @@ def test_every_field_has_its_metadata():
 def test_a_field_declared_without_its_metadata_is_refused():
     @dataclasses.dataclass
     class Partly:
-        fine: int = schema.setting(1, "Fine", "Declared.", Num(0, 2, integer=True))
+        fine: int = setting(1, "Fine", "Declared.", Num(0, 2, integer=True))
         bare: float = 0.5
 
     with pytest.raises(TypeError, match=r"Partly.bare: declare it with setting"):
@@ -85,11 +87,11 @@ def test_choice_lists_come_from_the_schema():
 
 
 def test_a_partial_edit_is_checked_by_name():
-    assert schema.check_values({"iterations": 3.0, "lr": 1}) == {"iterations": 3, "lr": 1.0}
+    assert check_values({"iterations": 3.0, "lr": 1}) == {"iterations": 3, "lr": 1.0}
     with pytest.raises(UserError, match="unknown setting.*'itterations'; known: mode, iterations"):
-        schema.check_values({"itterations": 3})
+        check_values({"itterations": 3})
     with pytest.raises(UserError, match=r"optimizer settings: lr = 11 is out of range; allowed: a number in \(0, 10\]"):
-        schema.check_values({"lr": 11})
+        check_values({"lr": 11})
 
 
 def test_the_class_documents_every_field():
@@ -109,7 +111,7 @@ def test_the_settings_table_of_the_optimizer_guide_is_the_generated_one():
 def test_a_settings_edit_is_checked_immutable_and_merges():
     import pickle
 
-    edit = schema.SettingsEdit({"iterations": 4.0, "mode": "offline"})
+    edit = SettingsEdit({"iterations": 4.0, "mode": "offline"})
     assert dict(edit) == {"iterations": 4, "mode": "offline"} and edit == {"iterations": 4, "mode": "offline"}
     merged = edit | {"iterations": 7, "lr": 0.1}
     assert dict(merged) == {"iterations": 7, "mode": "offline", "lr": 0.1} and edit["iterations"] == 4
@@ -117,7 +119,7 @@ def test_a_settings_edit_is_checked_immutable_and_merges():
     with pytest.raises(TypeError):
         edit["lr"] = 0.2  # type: ignore[index]
     with pytest.raises(UserError, match="scene.json: iterations = 0 is out of range"):
-        schema.SettingsEdit({"iterations": 0}, "scene.json")
+        SettingsEdit({"iterations": 0}, "scene.json")
     with pytest.raises(UserError, match="unknown setting"):
         edit | {"itterations": 1}
 
@@ -139,4 +141,4 @@ def test_the_session_refuses_a_bad_setting_before_it_reaches_the_engine(syntheti
             session.set_setting(name, value)
     assert commands == [] and session.settings["lr"] == OptimizerSettings().lr
     session.set_setting("iterations", 5.0)
-    assert commands[-1].values == {"iterations": 5} and isinstance(commands[-1].values, schema.SettingsEdit)
+    assert commands[-1].values == {"iterations": 5} and isinstance(commands[-1].values, SettingsEdit)

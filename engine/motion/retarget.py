@@ -44,11 +44,11 @@ from engine.motion.bvh import RawBVH
 from engine.motion.clip import Motion
 from engine.motion.retarget_inputs import (  # noqa: F401 - re-exported: callers import them from here
     MODELS_DATA,
-    _snap_fps,
     manifest_entry,
     manifest_fps,
     models_strategy,
     rest_frame_count,
+    snap_fps,
 )
 from engine.motion.retarget_measures import clip_height, measure_offsets, refloor, standing_height, toe_tips
 from engine.motion.retarget_rotations import rigid_hands, straightened_offsets, tip_points, world_rotations
@@ -210,7 +210,7 @@ def retarget(
     """
     strategy = models_strategy() if strategy is None else strategy
     prof = profile or resolve_rig(raw, rig_map)
-    src_fps = float(fps) if fps else _snap_fps(raw.fps)
+    src_fps = float(fps) if fps else snap_fps(raw.fps)
     if src_fps <= 0:
         raise UserError(f"{raw.path}: frame rate must be positive, got {src_fps}")
     skip = prof.skip_frames or rest_frame_count(raw)

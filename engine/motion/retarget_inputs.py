@@ -56,7 +56,7 @@ def rest_frame_count(raw: RawBVH) -> int:
     return n
 
 
-def _snap_fps(fps: float) -> float:
+def snap_fps(fps: float) -> float:
     """Headers store a rounded frame time (0.008333 s); snap to the whole rate it means."""
     return float(round(fps)) if abs(fps - round(fps)) < 1e-3 * fps else fps
 

@@ -105,7 +105,7 @@ def test_the_settings_table_of_the_optimizer_guide_is_the_generated_one():
     begin, end = "<!-- settings table: generated -->\n", "<!-- end of settings table -->"
     assert begin in text and end in text, "docs/optimizer.md lost its settings-table markers"
     table = text.split(begin, 1)[1].split(end, 1)[0]
-    assert table == schema.markdown_table(), "run: python -m engine.solver.settings > table; see docs/architecture.md"
+    assert table == schema.markdown_table(), "run: PYTHONPATH=. python scripts/settings_table.py"
 
 
 def test_a_settings_edit_is_checked_immutable_and_merges():

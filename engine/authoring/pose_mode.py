@@ -25,12 +25,14 @@ one machinery for the pose window and the baked keys.
 from __future__ import annotations
 
 import copy
+from dataclasses import replace
 
 import numpy as np
 
 from engine import skeleton as sk
 from engine.authoring.character import Character, Pose, encode_frames, heading_deg, yaw_quaternion
-from engine.authoring.keys import Key
+from engine.authoring.keys import PLANTED, Key
+from engine.authoring.pelvis_drag import pelvis_pose, within_legs
 from engine.authoring.pose_drag import EVENTS, drag
 from engine.authoring.pose_hold import held_joints, hold_terms
 from engine.authoring.pose_options import LOWEST_ROOT, SQUAT_FROM, PoseOptions
@@ -65,10 +67,6 @@ STEP_SIZE = 1.5
 #: its target than the round before overshot (the plain steps diverge in a body folded
 #: near the floor: 5 cm short became 25 cm in one round); it is dropped.
 OVERSHOOT = 0.05
-
-
-#: Foot joints that stay planted where they stand until the user drags that foot.
-PLANTED = ("lankle", "ltoe", "rankle", "rtoe")
 
 
 class PoseMode:
@@ -138,10 +136,16 @@ class PoseMode:
 
     # -- targets -------------------------------------------------------------------
     def set_target(
-        self, joint: str, position=None, rotation=None, weight: float | None = None, enabled: bool | None = None
+        self,
+        joint: str,
+        position=None,
+        rotation=None,
+        weight: float | None = None,
+        enabled: bool | None = None,
+        pelvis_only: bool | None = None,
     ) -> JointTarget:
         """Create or change the target on ``joint``; arguments left None keep their value
-        (a new target starts at the joint's current position, weight 1)."""
+        (a new target starts at the joint's current position, weight 1, not pelvis-only)."""
         old = self.targets.get(joint)
         if joint not in sk.JOINT_INDEX:
             raise UserError(f"unknown joint {joint!r}")
@@ -155,6 +159,7 @@ class PoseMode:
             rotation if rotation is not None else (old.rotation if old else None),
             weight if weight is not None else (old.weight if old else 1.0),
             enabled if enabled is not None else (old.enabled if old else True),
+            pelvis_only if pelvis_only is not None else (old.pelvis_only if old else False),
         )
         self.targets[joint] = t
         return t
@@ -201,10 +206,53 @@ class PoseMode:
         if held is not None and z >= standing and not reach_crouches(self.targets, self._lowest_reach, self.options):
             self.remove_target("root")
         elif held is not None or standing - z > SQUAT_FROM:
-            self.set_target("root", np.array([handle[0] + level[0], handle[1] + level[1], z]))
+            self.set_target("root", np.array([handle[0] + level[0], handle[1] + level[1], z]), pelvis_only=False)
         if self.targets:
             self.solve()
         return self.pose
+
+    def drag_pelvis(self, position: np.ndarray) -> Pose:
+        """Only the pelvis dragged to ``position (3,)`` metres (Shift + drag on the hips,
+        :mod:`engine.authoring.pelvis_drag`): the feet stay planted exactly where they are
+        (flat), the legs bend by their two bones, the upper body keeps its pose relative
+        to the pelvis and targeted wrists stay on their targets where the arms reach. The
+        root gets a ``pelvis_only`` target there, kept above :data:`LOWEST_ROOT` of
+        :attr:`standing_root` and within the planted legs' reach; no latent solve runs."""
+        if self.pelvis_target() is None:  # the drag begins: the feet stay where they are now
+            moved = moved_feet(self.targets)
+            for j in PLANTED:
+                if FOOT_OF[j] not in moved:
+                    self.planted[j] = self.pose.positions[sk.JOINT_INDEX[j]].copy()
+        p = np.asarray(position, float).copy()
+        p[2] = max(p[2], LOWEST_ROOT * self._standing_root)
+        self.set_target("root", within_legs(self.pose, p, self.planted), pelvis_only=True)
+        self.pose = self._solved = self.pelvis_step(self.pose)
+        return self.pose
+
+    def pelvis_target(self) -> JointTarget | None:
+        """The root's target when it is active and moves the pelvis only, else None."""
+        t = self.targets.get("root")
+        return t if t is not None and t.active and t.pelvis_only else None
+
+    def pelvis_step(self, pose: Pose) -> Pose:
+        """``pose`` with the pelvis on its pelvis-only target, the feet on their planted
+        places and targeted wrists and ankles on their targets
+        (:func:`engine.authoring.pelvis_drag.pelvis_pose`); ``pose`` itself without one."""
+        t = self.pelvis_target()
+        if t is None:
+            return pose
+        limbs = {x.index: x.position for x in self.targets.values() if x.active and x.index in LIMBS}
+        legs = self.character.decode(pose.latent, self.character.grounded()).local_rot
+        return pelvis_pose(pose, t.position, self.planted, self.character.skeleton.offsets, limbs, legs)
+
+    def standing_place(self) -> np.ndarray:
+        """Where the body stands (2,) metres, what a key keeps as its ``root``: the
+        pelvis's level place, or under a pelvis-only target that of the body the latent
+        describes (the pelvis before it was dragged, :mod:`engine.authoring.pelvis_drag`)."""
+        pose = self.pose
+        return (pose.decoded if self.pelvis_target() is not None and pose.decoded is not None else pose.positions)[
+            0, :2
+        ].copy()
 
     def hips_handle(self) -> np.ndarray:
         """Where a drag of the hips starts (3,) metres, the point :meth:`drag_hips` moves:
@@ -217,12 +265,19 @@ class PoseMode:
     def _inputs(self) -> tuple[list[Constraint], dict, dict]:
         """The solve's terms: the user's targets, the planted feet that no target moves, the
         scene's constraints; and the exact limb and rotation steps after it."""
-        targets = list(self.targets.values())
+        targets, planted = list(self.targets.values()), self.planted
+        pelvis = self.pelvis_target()
+        if pelvis is not None and self.pose.decoded is not None:
+            # the latent solves the body standing where it stood; the pelvis step follows
+            decoded = self.pose.decoded
+            shift = decoded[0] - pelvis.position
+            targets = [replace(t, position=t.position + shift) for t in targets if t.joint != "root"]
+            planted = {j: decoded[sk.JOINT_INDEX[j]].copy() for j in planted}
         if self.options.plant_feet:
             moved = moved_feet(self.targets)
             targets += [
                 JointTarget(j, p, weight=self.options.plant_weight)
-                for j, p in self.planted.items()
+                for j, p in planted.items()
                 if FOOT_OF[j] not in moved and j not in self.targets
             ]
         terms, reach, rotations = solve_inputs(targets)
@@ -246,6 +301,8 @@ class PoseMode:
 
     def _where(self, adjust: bool = True) -> np.ndarray:
         """Where the root is held during the solve (3,) metres (:func:`engine.authoring.pose_root.root_where`)."""
+        if self.pelvis_target() is not None and self.pose.decoded is not None:
+            return self.pose.decoded[0].copy()  # the standing body's root (see _inputs)
         stance = Stance(self.pose, self.targets, self.planted, self.options)
         return root_where(stance, self._standing_root, self._lowest_reach, adjust)
 
@@ -279,7 +336,7 @@ class PoseMode:
                 rule="sgd",
                 step_size=STEP_SIZE,
             )
-            self.pose = self._kept_trunk(solved, reach, rotations)
+            self.pose = self.pelvis_step(self._kept_trunk(solved, reach, rotations))
             short = self.shortfall()
             if round_ and short > gap + OVERSHOOT:
                 # the plain steps overshot (a folded body near the floor): keep the round before
@@ -360,7 +417,7 @@ class PoseMode:
         solved = c.solve(
             self.pose.latent, terms + self._hold_terms(where), ctx, reach, rotations, prior_weight=o.prior_weight
         )
-        self.pose = self._kept_trunk(solved, reach, rotations)
+        self.pose = self.pelvis_step(self._kept_trunk(solved, reach, rotations))
         for _ in range(max(0, o.settle_rounds)):
             if self.shortfall() <= o.reach_tolerance:
                 break
@@ -378,7 +435,7 @@ class PoseMode:
                 rule="sgd",
                 step_size=STEP_SIZE,
             )
-            self.pose = self._kept_trunk(solved, reach, rotations)
+            self.pose = self.pelvis_step(self._kept_trunk(solved, reach, rotations))
         self._replant()
         self._solved = self.pose
         return self.pose
@@ -388,8 +445,9 @@ class PoseMode:
         pose window shows on a key).
 
         A key with a latent (one the window keyed): that pose where the key stands and
-        faces, the feet planted there, its targets taken exactly by the limbs and turned
-        joints (``solve(0)``). A key with targets only (a scene written by hand): from the
+        faces, the feet planted there (or at the key's ``feet``), its targets taken exactly
+        by the limbs and turned joints, a pelvis-only target's pelvis moved alone
+        (``solve(0)``). A key with targets only (a scene written by hand): from the
         current pose, each active target dragged from where its joint is to its place in
         ``events`` drag events, then turned to its rotation in as many, in the key's order,
         each event one :meth:`solve`, as a user drags it in the pose window
@@ -402,10 +460,17 @@ class PoseMode:
             self.heading = key.heading
             self.pose = self.character.decode(key.latent, self.character.grounded(key.root, key.heading))
             self.plant_where_standing()
+            self.planted.update({j: np.asarray(p, float).copy() for j, p in key.feet.items()})
             return self.solve(0)
         offsets = self.character.skeleton.offsets
         for t in key.targets.values():
             here = self.pose.positions[t.index]
+            if t.pelvis_only and t.active:
+                start = self.hips_handle()
+                for k in range(1, events + 1):
+                    check(cancelled)
+                    self.drag_pelvis(start + (t.position - start) * k / events)
+                continue
             if not t.active or np.linalg.norm(here - t.position) < 1e-3:
                 self.set_target(t.joint, t.position, None, t.weight, t.enabled)
             else:

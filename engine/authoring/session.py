@@ -198,6 +198,13 @@ class AuthoringSession:
             f"move target {joint}", lambda: self.mode.set_target(joint, p), ("target", joint, "position"), solve=True
         )
 
+    def drag_pelvis(self, position: np.ndarray) -> None:
+        """Move only the pelvis to ``position (3,)`` metres, the feet planted and the upper
+        body carried (:meth:`engine.authoring.pose_mode.PoseMode.drag_pelvis`); a drag's
+        moves are one undo step."""
+        p = np.asarray(position, float)
+        self.edit("move pelvis", lambda: self.mode.drag_pelvis(p), ("body", "root", "pelvis"))
+
     def turn_joint(self, joint: str, rotation: np.ndarray) -> None:
         """Give ``joint`` the world rotation ``rotation (4,)`` as a target and solve."""
         q = np.asarray(rotation, float)
@@ -323,7 +330,9 @@ class AuthoringSession:
         p, m = self.mode.pose, self.mode
 
         def change() -> None:
-            key = Key(int(frame), copy.deepcopy(m.targets), p.latent.copy(), p.root_pos[:2].copy(), m.heading)
+            key = Key(int(frame), copy.deepcopy(m.targets), p.latent.copy(), m.standing_place(), m.heading)
+            if m.pelvis_target() is not None:  # the legs reach where the feet were planted
+                key.feet = {j: f.copy() for j, f in m.planted.items()}
             self.scene.keys = sorted([*(k for k in self.scene.keys if k.frame != frame), key], key=lambda k: k.frame)
 
         self.edit(f"key frame {frame}", change)

@@ -15,27 +15,11 @@ from engine.authoring.session import AuthoringSession
 from engine.authoring.targets import JointTarget
 from engine.errors import UserError
 from engine.kinematics.fk import fk
+from engine.solver.limb_ik import CARRIED
 
 J = sk.JOINT_INDEX
 FEET = [J[j] for j in ("lankle", "ltoe", "rankle", "rtoe")]
-UPPER = [
-    J[j]
-    for j in (
-        "lowerback",
-        "upperback",
-        "chest",
-        "lowerneck",
-        "upperneck",
-        "lclavicle",
-        "lshoulder",
-        "lelbow",
-        "lwrist",
-        "rclavicle",
-        "rshoulder",
-        "relbow",
-        "rwrist",
-    )
-]
+UPPER = sorted(CARRIED)  # the lower back and all above it: what the pelvis carries
 FORWARD = np.array([0.0, -1.0, 0.0])  # heading 0 faces -Y
 
 

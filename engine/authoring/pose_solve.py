@@ -31,6 +31,7 @@ from engine.authoring.targets import JointTarget, solve_inputs
 from engine.constraints.base import Constraint
 from engine.kinematics import quat_np as QN
 from engine.progress import CancelCheck, check
+from engine.solver import FrameContext
 from engine.solver.limb_ik import LIMBS
 
 #: Latent steps of one continuous solve (one drag event).
@@ -139,17 +140,7 @@ class PoseSolving:
             else:
                 ctx = c.placed(where, self.heading, self.frame, prior=self.base_latent)
             before = self.pose
-            solved = c.solve(
-                self.pose.latent,
-                terms + self._hold_terms(where),
-                ctx,
-                reach,
-                rotations,
-                iterations=iterations,
-                prior_weight=o.prior_weight,
-                rule="sgd",
-                step_size=STEP_SIZE,
-            )
+            solved = self._plain_steps(terms, ctx, where, reach, rotations, iterations)
             self.pose = self.pelvis_step(self._kept_trunk(solved, reach, rotations))
             short = self.shortfall()
             if round_ and short > gap + OVERSHOOT:
@@ -164,6 +155,31 @@ class PoseSolving:
         self._replant()
         self._solved = self.pose
         return self.pose
+
+    def _plain_steps(
+        self,
+        terms: list[Constraint],
+        ctx: FrameContext,
+        where: np.ndarray,
+        reach: dict,
+        rotations: dict,
+        iterations: int,
+    ) -> Pose:
+        """One round of a drag's solve: ``iterations`` plain gradient steps of
+        :data:`STEP_SIZE` from the current latent against ``terms``, the hold (for the root
+        at ``where``) and the prior, in the context ``ctx``, then the exact limb and
+        rotation steps."""
+        return self.character.solve(
+            self.pose.latent,
+            terms + self._hold_terms(where),
+            ctx,
+            reach,
+            rotations,
+            iterations=iterations,
+            prior_weight=self.options.prior_weight,
+            rule="sgd",
+            step_size=STEP_SIZE,
+        )
 
     def _kept_trunk(self, pose: Pose, reach: dict, rotations: dict) -> Pose:
         """``pose`` with ``options.keep_trunk``'s rule (:mod:`engine.authoring.pose_trunk`)
@@ -221,17 +237,7 @@ class PoseSolving:
             check(cancelled)
             where = self._where()
             ctx = c.grounded(where[:2], self.heading, self.frame, prior=self.base_latent)
-            solved = c.solve(
-                self.pose.latent,
-                terms + self._hold_terms(where),
-                ctx,
-                reach,
-                rotations,
-                iterations=ITERATIONS,
-                prior_weight=o.prior_weight,
-                rule="sgd",
-                step_size=STEP_SIZE,
-            )
+            solved = self._plain_steps(terms, ctx, where, reach, rotations, ITERATIONS)
             self.pose = self.pelvis_step(self._kept_trunk(solved, reach, rotations))
         self._replant()
         self._solved = self.pose

@@ -198,7 +198,7 @@ def _in_between(
         rule="sgd",
     )
     i, s = segment(times, f)
-    if not any(_pelvis_only(k) for k in keys[i : i + 2] if s > 0.0):
+    if not any(_pelvis_only(k) for k in keys[i : i + 1 + (s > 0.0)]):  # after the last key: the last
         return pose
     feet = {
         j: interpolate(times, [k.feet.get(j, p.positions[sk.JOINT_INDEX[j]]) for k, p in zip(keys, poses)], f, scheme)

@@ -150,13 +150,14 @@ def test_a_pelvis_dragged_past_the_legs_reach_stops_with_them_nearly_straight(se
 def test_in_betweens_next_to_a_pelvis_only_key_keep_the_feet_planted(session):
     """Between a standing key and a pelvis-only squat the pelvis goes down smoothly over
     the planted feet (the in-betweens stood at full height and snapped onto the squat)."""
-    session.set_length(21)
+    session.set_length(26)
     feet = session.pose.positions[FEET].copy()
     session.add_key(0)
     squat(session, 0.35, back=0.1)
     session.add_key(20)
     motion = session.bake_now().motion
-    positions = np.stack([fk(motion.local_rot[f], motion.root_pos[f], motion.skeleton.offsets)[0] for f in range(21)])
+    positions = np.stack([fk(motion.local_rot[f], motion.root_pos[f], motion.skeleton.offsets)[0] for f in range(26)])
     assert np.abs(positions[:, FEET] - feet).max() < 1e-3
     assert np.all(np.diff(motion.root_pos[:, 2]) < 1e-9) and motion.root_pos[10, 2] < motion.root_pos[0, 2] - 0.1
+    assert np.abs(positions[21:] - positions[20]).max() < 0.01  # after the last key the squat is held
     assert np.linalg.norm(np.diff(positions, axis=0), axis=2).max() < 0.04  # no snap onto the key

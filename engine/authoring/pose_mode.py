@@ -3,12 +3,12 @@
 A :class:`PoseMode` holds the character, its current pose and the user's targets and
 constraints; its solves are :class:`engine.authoring.pose_solve.PoseSolving`'s.
 :meth:`PoseMode.solve` is one short solve from the current pose (call it on every drag
-event, :data:`~engine.authoring.pose_solve.ITERATIONS` plain gradient steps with the root held where it
-stands, then the feet grounded and targeted wrists / ankles put exactly on their
-targets; while a targeted wrist or ankle is still beyond its limb's reach, up to
-``PoseOptions.reach_rounds`` further rounds of those steps, so a low reach bends the
-body within the drag; a round that overshoots is dropped); with targets only it runs on
-the solver's fast path. :meth:`PoseMode.settle` is a full offline solve (grounded, so the
+event, :data:`~engine.authoring.pose_solve.ITERATIONS` plain gradient steps with the
+root held where it stands, then the feet grounded and targeted wrists / ankles put
+exactly on their targets; while a targeted wrist or ankle is still beyond its limb's
+reach, up to ``PoseOptions.reach_rounds`` further rounds of those steps, so a low reach
+bends the body within the drag; a round that overshoots is dropped); with targets only
+it runs on the solver's fast path. :meth:`PoseMode.settle` is a full offline solve (grounded, so the
 body may crouch), for when the drag ends. Bone lengths are those of the skeleton by
 construction (forward kinematics of fixed offsets), and the lowest foot stands on the
 floor after every solve.
@@ -214,9 +214,8 @@ class PoseMode(PoseSolving):
         pelvis's level place, or under a pelvis-only target that of the body the latent
         describes (the pelvis before it was dragged, :mod:`engine.authoring.pelvis_drag`)."""
         pose = self.pose
-        return (pose.decoded if self.pelvis_target() is not None and pose.decoded is not None else pose.positions)[
-            0, :2
-        ].copy()
+        body = pose.decoded if self.pelvis_target() is not None and pose.decoded is not None else pose.positions
+        return body[0, :2].copy()
 
     def hips_handle(self) -> np.ndarray:
         """Where a drag of the hips starts (3,) metres, the point :meth:`drag_hips` moves:

@@ -9,7 +9,8 @@ show: a ring dragged turns it about that world axis; its motion path shows,
 selects the joint (a wrist or an ankle at the depth :mod:`engine.authoring.drag_reach`
 gives); a drag on a target's sphere moves it; a drag on the hips moves the whole
 body sideways and lowers or raises the pelvis up and down the screen, over the planted
-feet (a squat), and their ring turns it (root motion). Every move solves the pose again (the
+feet (a squat), and their ring turns it (root motion); Shift + drag on the hips moves the
+pelvis alone, the feet planted flat and the upper body carried. Every move solves the pose again (the
 continuous solve, on the GUI thread: a few milliseconds with targets only). The target
 list enables, weights and clears targets; the key timeline (:mod:`app.pose_timeline`)
 adds the current pose as a key at the current frame, drags and deletes keys, scrubs
@@ -101,6 +102,8 @@ class PoseWindow(QMainWindow):
         self.viewport.joints.upright = frozenset({"root"})
         # ... from the body's place, which a balanced crouch leaves in front of the pelvis
         self.viewport.joints.drag_origin = lambda name: self.session.hips_handle() if name == "root" else None
+        # Shift + drag near the hips moves the pelvis alone (AuthoringSession.drag_pelvis)
+        self.viewport.joints.shift_grabs = "root"
         self.targets = TargetList()
         self.targets.enabledChanged.connect(lambda j, on: self.edit_target(j, enabled=on))
         self.targets.weightChanged.connect(lambda j, w: self.edit_target(j, weight=w))
@@ -222,14 +225,19 @@ class PoseWindow(QMainWindow):
         return placed if touched is None else touched
 
     def _alt_held(self) -> bool:
-        """Whether Alt is held with the drag: the keys of the mouse event that moved it
-        (:attr:`widgets.viewport.viewport.Viewport.drag_modifiers`), else (a drag not made
-        by the mouse) the keys held now, asked of the system: Qt's cached modifiers lag
-        until its next input event (an Alt pressed before the drag read as none)."""
+        """Whether Alt is held with the drag (:meth:`_held_with_drag`)."""
+        return self._held_with_drag(Qt.KeyboardModifier.AltModifier)
+
+    def _held_with_drag(self, key: Qt.KeyboardModifier) -> bool:
+        """Whether modifier ``key`` is held with the drag: the keys of the mouse event that
+        moved it (:attr:`widgets.viewport.viewport.Viewport.drag_modifiers`), else (a drag
+        not made by the mouse) the keys held now, asked of the system: Qt's cached
+        modifiers lag until its next input event (an Alt pressed before the drag read as
+        none)."""
         held = self.viewport.drag_modifiers
         if held is None:
             held = QApplication.queryKeyboardModifiers()
-        return bool(held & Qt.KeyboardModifier.AltModifier)
+        return bool(held & key)
 
     def drag_joint(self, joint: str, position: np.ndarray) -> None:
         """Create or move the target on ``joint`` to ``position (3,)`` metres and solve;
@@ -240,7 +248,11 @@ class PoseWindow(QMainWindow):
             self.turns.alt_drag(joint, position)
             return
         self.turns.gesture = None
-        self._edit(lambda: self.session.drag_joint(joint, np.asarray(position, float)))
+        if joint == "root" and self._held_with_drag(Qt.KeyboardModifier.ShiftModifier):
+            self.statusBar().showMessage("Pelvis only: feet planted", 2000)
+            self._edit(lambda: self.session.drag_pelvis(np.asarray(position, float)))
+        else:
+            self._edit(lambda: self.session.drag_joint(joint, np.asarray(position, float)))
         self.turns.show_handles()  # the grabbed joint is selected even when nothing moved
         self._render_soon()
 

@@ -11,6 +11,7 @@ MOUSE = (
     ("Middle drag", "Pan"),
     ("Drag a yellow sphere", "Move that sensor's target (kept until Reset)"),
     ("Ctrl + drag a joint", "Pin the joint there (a sensor's joint moves its target)"),
+    ("Shift + drag the hips", "Pose window: move only the pelvis, the feet planted flat (a squat)"),
     ("Click a joint", "Select it: its motion path (View > Motion paths); in the pose window its rotation rings"),
     ("Drag a cyan handle", "Edit a constraint (point, box, look-at target)"),
     ("Drop a .bvh file", "Open it"),

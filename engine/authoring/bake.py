@@ -18,7 +18,11 @@
    latent solve aims each target plus the offset the keys' own latents leave from their
    targets (interpolated too): the exact limb step closes that gap on the keys, and
    without the offset the in-betweens next to a key would pull the latent elsewhere and
-   the motion would snap on the key.
+   the motion would snap on the key. Next to a key whose pelvis was moved alone (a
+   ``pelvis_only`` target on ``root``), the in-between's pelvis then goes on the
+   interpolated root and its legs reach the feet interpolated between the keys' (each
+   key's ``feet``, else where its pose has them), as the key's own legs do
+   (:func:`engine.authoring.pelvis_drag.pelvis_pose`).
 
 Deterministic: the same scene gives the same motion, so the studio's export and the
 ``bake`` command write the same bytes.
@@ -32,9 +36,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from engine import skeleton as sk
 from engine.authoring.character import Character, Pose
 from engine.authoring.document import AuthoringScene
-from engine.authoring.keys import Key, eased, interpolate, slerp_quaternion
+from engine.authoring.keys import PLANTED, Key, eased, interpolate, segment, slerp_quaternion
+from engine.authoring.pelvis_drag import pelvis_pose
 from engine.authoring.pose_mode import PoseMode
 from engine.authoring.targets import JointTarget, solve_inputs
 from engine.constraints.base import Constraint
@@ -181,7 +187,7 @@ def _in_between(
     smooth.set_history(previous, done[-2].positions if len(done) > 1 else None)
     rules = active_constraints(scene.constraints, int(round(scene_frame)))
     ctx = character.placed(root, heading, f, previous=previous, prior=z)
-    return character.solve(
+    pose = character.solve(
         z,
         [*terms, smooth, *rules],
         ctx,
@@ -191,6 +197,19 @@ def _in_between(
         prior_weight=IN_BETWEEN_PRIOR,
         rule="sgd",
     )
+    i, s = segment(times, f)
+    if not any(_pelvis_only(k) for k in keys[i : i + 1 + (s > 0.0)]):  # after the last key: the last
+        return pose
+    feet = {
+        j: interpolate(times, [k.feet.get(j, p.positions[sk.JOINT_INDEX[j]]) for k, p in zip(keys, poses)], f, scheme)
+        for j in PLANTED
+    }
+    return pelvis_pose(pose, root, feet, character.skeleton.offsets, reach)
+
+
+def _pelvis_only(key: Key) -> bool:
+    root = key.targets.get("root")
+    return root is not None and root.active and root.pelvis_only
 
 
 def interpolated_heading(keys: list[Key], times: list[float], t: float, scheme: str) -> float:

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from engine.atomic import write_text
-from engine.authoring.keys import SCHEMES, Animation, Key
+from engine.authoring.keys import PLANTED, SCHEMES, Animation, Key
 from engine.authoring.pose_options import PoseOptions, options_from_dict, options_to_dict
 from engine.authoring.targets import target_from_json
 from engine.constraints.base import Constraint
@@ -159,7 +159,7 @@ def _animation(value: Any, where: str) -> Animation:
 
 
 def _key(value: Any, where: str, frames: int) -> Key:
-    value = _object(value, where, {"frame", "targets", "latent", "root", "heading"})
+    value = _object(value, where, {"frame", "targets", "latent", "root", "heading", "feet"})
     if "frame" not in value:
         raise UserError(f"{where}: field 'frame' is missing")
     key = Key(_whole(value["frame"], f"{where}: field 'frame'", 0, frames - 1))
@@ -173,6 +173,9 @@ def _key(value: Any, where: str, frames: int) -> Key:
         key.root = _vector(value["root"], f"{where}: field 'root'", 2)
     if "heading" in value:
         key.heading = _number(value["heading"], f"{where}: field 'heading'", -360.0, 360.0)
+    if value.get("feet") is not None:
+        feet = _object(value["feet"], f"{where}: field 'feet'", set(PLANTED))
+        key.feet = {j: _vector(p, f"{where}: feet: field {j!r}", 3) for j, p in feet.items()}
     return key
 
 

@@ -24,6 +24,8 @@ import numpy as np
 from engine.authoring.targets import JointTarget
 
 SCHEMES = ("linear", "spherical", "cubic")
+#: Foot joints that stay planted where they stand until the user drags that foot.
+PLANTED = ("lankle", "ltoe", "rankle", "rtoe")
 
 
 @dataclass
@@ -60,6 +62,10 @@ class Key:
         Root's horizontal position, metres.
     heading : float
         Facing, degrees about +Z from the canonical -Y.
+    feet : dict joint -> ndarray (3,)
+        Where the :data:`PLANTED` foot joints stand, metres, for a key whose pelvis was
+        dragged alone (a ``pelvis_only`` target on ``root``): its legs reach them when it
+        is posed; empty otherwise (the feet stand where the latent puts them).
     """
 
     frame: int
@@ -67,6 +73,7 @@ class Key:
     latent: np.ndarray | None = None
     root: np.ndarray = field(default_factory=lambda: np.zeros(2))
     heading: float = 0.0
+    feet: dict[str, np.ndarray] = field(default_factory=dict)
 
     def to_dict(self) -> dict:
         """Scene JSON of the key (a plain position target as ``[x, y, z]``)."""
@@ -81,6 +88,8 @@ class Key:
             out["root"] = [float(x) for x in self.root]
         if self.heading:
             out["heading"] = float(self.heading)
+        if self.feet:
+            out["feet"] = {j: [float(x) for x in p] for j, p in self.feet.items()}
         return out
 
 

@@ -1,13 +1,14 @@
 """Pose mode: the character without a clip, posed continuously by dragged joint targets.
 
 A :class:`PoseMode` holds the character, its current pose and the user's targets and
-constraints. :meth:`PoseMode.solve` is one short solve from the current pose (call it on
-every drag event, :data:`ITERATIONS` plain gradient steps with the root held where it
-stands, then the feet grounded and targeted wrists / ankles put exactly on their
-targets; while a targeted wrist or ankle is still beyond its limb's reach, up to
-``PoseOptions.reach_rounds`` further rounds of those steps, so a low reach bends the
-body within the drag; a round that overshoots is dropped); with targets only it runs on
-the solver's fast path. :meth:`PoseMode.settle` is a full offline solve (grounded, so the
+constraints; its solves are :class:`engine.authoring.pose_solve.PoseSolving`'s.
+:meth:`PoseMode.solve` is one short solve from the current pose (call it on every drag
+event, :data:`~engine.authoring.pose_solve.ITERATIONS` plain gradient steps with the
+root held where it stands, then the feet grounded and targeted wrists / ankles put
+exactly on their targets; while a targeted wrist or ankle is still beyond its limb's
+reach, up to ``PoseOptions.reach_rounds`` further rounds of those steps, so a low reach
+bends the body within the drag; a round that overshoots is dropped); with targets only
+it runs on the solver's fast path. :meth:`PoseMode.settle` is a full offline solve (grounded, so the
 body may crouch), for when the drag ends. Bone lengths are those of the skeleton by
 construction (forward kinematics of fixed offsets), and the lowest foot stands on the
 floor after every solve.
@@ -29,49 +30,26 @@ import copy
 import numpy as np
 
 from engine import skeleton as sk
-from engine.authoring.character import Character, Pose, encode_frames, heading_deg, yaw_quaternion
-from engine.authoring.keys import Key
+from engine.authoring.character import Character, Pose, encode_frames, heading_deg
+from engine.authoring.keys import PLANTED, Key
+from engine.authoring.pelvis_drag import within_legs
 from engine.authoring.pose_drag import EVENTS, drag
-from engine.authoring.pose_hold import held_joints, hold_terms
 from engine.authoring.pose_options import LOWEST_ROOT, SQUAT_FROM, PoseOptions
 from engine.authoring.pose_root import (
     FOOT_OF,
-    Stance,
     arm_low_points,
     moved_feet,
     reach_crouches,
-    root_where,
-    shortfall,
 )
-from engine.authoring.pose_trunk import LEGS, TRUNK, keep_trunk
-from engine.authoring.targets import JointTarget, solve_inputs
+from engine.authoring.pose_solve import PoseSolving
+from engine.authoring.targets import JointTarget
 from engine.constraints.base import Constraint
 from engine.errors import UserError
-from engine.kinematics import quat_np as QN
 from engine.motion.clip import Motion
 from engine.progress import CancelCheck, check
-from engine.solver.limb_ik import LIMBS
-
-#: Latent steps of one continuous solve (one drag event).
-ITERATIONS = 16
-#: Plain gradient step of the continuous solve. Dragging a wrist 30 cm in 30 events
-#: (mean pose, 1.75 m) in five directions with the shipped VAE, the decoded wrist's
-#: largest lag was 1.9 cm at 1.5 x 16 steps, 2.4 cm at 2 x 8, 3.6 cm at 1 x 8; from a
-#: step of 2.5 the solve starts to overshoot (2.8 cm at 2.5 x 12, 9.4 cm at 3 x 8), so
-#: the step keeps a margin below that. Plain steps move only the constrained latent
-#: directions (Adam moved the free arm more).
-STEP_SIZE = 1.5
-#: A reach round that leaves the dragged wrist or ankle this much further (metres) from
-#: its target than the round before overshot (the plain steps diverge in a body folded
-#: near the floor: 5 cm short became 25 cm in one round); it is dropped.
-OVERSHOOT = 0.05
 
 
-#: Foot joints that stay planted where they stand until the user drags that foot.
-PLANTED = ("lankle", "ltoe", "rankle", "rtoe")
-
-
-class PoseMode:
+class PoseMode(PoseSolving):
     """A posing session (see the module doc).
 
     Parameters
@@ -138,10 +116,16 @@ class PoseMode:
 
     # -- targets -------------------------------------------------------------------
     def set_target(
-        self, joint: str, position=None, rotation=None, weight: float | None = None, enabled: bool | None = None
+        self,
+        joint: str,
+        position=None,
+        rotation=None,
+        weight: float | None = None,
+        enabled: bool | None = None,
+        pelvis_only: bool | None = None,
     ) -> JointTarget:
         """Create or change the target on ``joint``; arguments left None keep their value
-        (a new target starts at the joint's current position, weight 1)."""
+        (a new target starts at the joint's current position, weight 1, not pelvis-only)."""
         old = self.targets.get(joint)
         if joint not in sk.JOINT_INDEX:
             raise UserError(f"unknown joint {joint!r}")
@@ -155,6 +139,7 @@ class PoseMode:
             rotation if rotation is not None else (old.rotation if old else None),
             weight if weight is not None else (old.weight if old else 1.0),
             enabled if enabled is not None else (old.enabled if old else True),
+            pelvis_only if pelvis_only is not None else (old.pelvis_only if old else False),
         )
         self.targets[joint] = t
         return t
@@ -201,10 +186,36 @@ class PoseMode:
         if held is not None and z >= standing and not reach_crouches(self.targets, self._lowest_reach, self.options):
             self.remove_target("root")
         elif held is not None or standing - z > SQUAT_FROM:
-            self.set_target("root", np.array([handle[0] + level[0], handle[1] + level[1], z]))
+            self.set_target("root", np.array([handle[0] + level[0], handle[1] + level[1], z]), pelvis_only=False)
         if self.targets:
             self.solve()
         return self.pose
+
+    def drag_pelvis(self, position: np.ndarray) -> Pose:
+        """Only the pelvis dragged to ``position (3,)`` metres (Shift + drag on the hips,
+        :mod:`engine.authoring.pelvis_drag`): the feet stay planted exactly where they are
+        (flat), the legs bend by their two bones, the upper body keeps its pose relative
+        to the pelvis and targeted wrists stay on their targets where the arms reach. The
+        root gets a ``pelvis_only`` target there, kept above :data:`LOWEST_ROOT` of
+        :attr:`standing_root` and within the planted legs' reach; no latent solve runs."""
+        if self.pelvis_target() is None:  # the drag begins: the feet stay where they are now
+            moved = moved_feet(self.targets)
+            for j in PLANTED:
+                if FOOT_OF[j] not in moved:
+                    self.planted[j] = self.pose.positions[sk.JOINT_INDEX[j]].copy()
+        p = np.asarray(position, float).copy()
+        p[2] = max(p[2], LOWEST_ROOT * self._standing_root)
+        self.set_target("root", within_legs(self.pose, p, self.planted), pelvis_only=True)
+        self.pose = self._solved = self.pelvis_step(self.pose)
+        return self.pose
+
+    def standing_place(self) -> np.ndarray:
+        """Where the body stands (2,) metres, what a key keeps as its ``root``: the
+        pelvis's level place, or under a pelvis-only target that of the body the latent
+        describes (the pelvis before it was dragged, :mod:`engine.authoring.pelvis_drag`)."""
+        pose = self.pose
+        body = pose.decoded if self.pelvis_target() is not None and pose.decoded is not None else pose.positions
+        return body[0, :2].copy()
 
     def hips_handle(self) -> np.ndarray:
         """Where a drag of the hips starts (3,) metres, the point :meth:`drag_hips` moves:
@@ -213,119 +224,11 @@ class PoseMode:
         held = self.targets.get("root")
         return np.asarray(held.position if held is not None else self.pose.root_pos, float).copy()
 
-    # -- solving -------------------------------------------------------------------
-    def _inputs(self) -> tuple[list[Constraint], dict, dict]:
-        """The solve's terms: the user's targets, the planted feet that no target moves, the
-        scene's constraints; and the exact limb and rotation steps after it."""
-        targets = list(self.targets.values())
-        if self.options.plant_feet:
-            moved = moved_feet(self.targets)
-            targets += [
-                JointTarget(j, p, weight=self.options.plant_weight)
-                for j, p in self.planted.items()
-                if FOOT_OF[j] not in moved and j not in self.targets
-            ]
-        terms, reach, rotations = solve_inputs(targets)
-        for t in terms:
-            if t.dof == 6:
-                t.rotation_weight *= self.options.turn_weight
-        return terms + list(self.constraints), reach, rotations
-
     def plant_where_standing(self) -> None:
         """Plant the feet where the current pose has them (after the pose was set from a
         key, or the whole body was moved or turned)."""
         self.planted = {j: self.pose.positions[sk.JOINT_INDEX[j]].copy() for j in PLANTED}
         self.anchor = None
-
-    def _replant(self) -> None:
-        """A foot the user moves is planted where it is left."""
-        moved = moved_feet(self.targets)
-        for j in PLANTED:
-            if FOOT_OF[j] in moved:
-                self.planted[j] = self.pose.positions[sk.JOINT_INDEX[j]].copy()
-
-    def _where(self, adjust: bool = True) -> np.ndarray:
-        """Where the root is held during the solve (3,) metres (:func:`engine.authoring.pose_root.root_where`)."""
-        stance = Stance(self.pose, self.targets, self.planted, self.options)
-        return root_where(stance, self._standing_root, self._lowest_reach, adjust)
-
-    def solve(self, iterations: int = ITERATIONS) -> Pose:
-        """One continuous solve from the current pose (a drag event): a round of
-        ``iterations`` steps, and up to ``options.reach_rounds`` more while a dragged
-        joint is short of its target."""
-        terms, reach, rotations = self._inputs()
-        c, o = self.character, self.options
-        if self.anchor is None:
-            self.anchor = self.pose
-        best: tuple[float, Pose | None] = (np.inf, None)
-        for round_ in range(1 + (max(0, o.reach_rounds) if iterations > 0 else 0)):
-            gap = self.shortfall()
-            if round_ and gap <= o.reach_tolerance:
-                break
-            where = self._where(o.free_height or iterations > 0)
-            if o.free_height:
-                ctx = c.grounded(where[:2], self.heading, self.frame, prior=self.base_latent)
-            else:
-                ctx = c.placed(where, self.heading, self.frame, prior=self.base_latent)
-            before = self.pose
-            solved = c.solve(
-                self.pose.latent,
-                terms + self._hold_terms(where),
-                ctx,
-                reach,
-                rotations,
-                iterations=iterations,
-                prior_weight=o.prior_weight,
-                rule="sgd",
-                step_size=STEP_SIZE,
-            )
-            self.pose = self._kept_trunk(solved, reach, rotations)
-            short = self.shortfall()
-            if round_ and short > gap + OVERSHOOT:
-                # the plain steps overshot (a folded body near the floor): keep the round before
-                self.pose = before
-                break
-            if short < best[0]:
-                best = (short, self.pose)
-        if best[1] is not None:
-            # rounds near the floor can circle their target: the event ends on its closest one
-            self.pose = best[1]
-        self._replant()
-        self._solved = self.pose
-        return self.pose
-
-    def _kept_trunk(self, pose: Pose, reach: dict, rotations: dict) -> Pose:
-        """``pose`` with ``options.keep_trunk``'s rule (:mod:`engine.authoring.pose_trunk`)
-        applied against :attr:`anchor`, while no trunk or leg joint has a target; the
-        pelvis is kept only while it stands on both planted feet."""
-        o = self.options
-        if (
-            not o.keep_trunk
-            or self.anchor is None
-            or any(t.active and t.index in TRUNK + LEGS for t in self.targets.values())
-        ):
-            return pose
-        forward = QN.rotate(yaw_quaternion(self.heading), sk.FORWARD)
-        limbs = {j: np.asarray(p, float) for j, p in reach.items() if j in LIMBS}
-        pelvis = o.plant_feet and pose.root_pos[2] >= self._standing_root - SQUAT_FROM
-        return keep_trunk(pose, self.anchor, forward, self.character.skeleton.offsets, limbs, dict(rotations), pelvis)
-
-    def held(self) -> list[int]:
-        """Joints the hold pulls towards the anchor (see ``PoseOptions.hold_weight`` and
-        :func:`engine.authoring.pose_hold.held_joints`)."""
-        return held_joints(self.targets, self.planted, self.options.plant_feet)
-
-    def _hold_terms(self, where: np.ndarray) -> list[Constraint]:
-        """The hold's terms for a solve with the root at ``where (3,)`` metres
-        (:func:`engine.authoring.pose_hold.hold_terms`)."""
-        w = self.options.hold_weight
-        if w <= 0 or self.anchor is None:
-            return []
-        return hold_terms(self.anchor, self.held(), where, w)
-
-    def shortfall(self) -> float:
-        """How far the solve is from its targets, metres (:func:`engine.authoring.pose_root.shortfall`)."""
-        return shortfall(Stance(self.pose, self.targets, self.planted, self.options))
 
     def detached(self) -> "PoseMode":
         """A copy to settle or solve on another thread: its own targets, planted feet and
@@ -344,52 +247,14 @@ class PoseMode:
         self.planted = {j: p.copy() for j, p in other.planted.items()}
         self._solved = other._solved
 
-    def settle(self, cancelled: CancelCheck | None = None) -> Pose:
-        """An offline, grounded solve from the current pose (when a drag ends), then up to
-        ``options.settle_rounds`` grounded rounds of the drag's plain steps while a dragged
-        wrist or ankle is short of its target: the offline solve's adaptive steps can stop
-        at once from a pose that is already close, where the plain steps still close
-        the gap. ``cancelled()`` is asked before each round (a worker's settle stops
-        within a round; raises :class:`~engine.progress.Cancelled`)."""
-        terms, reach, rotations = self._inputs()
-        c, o = self.character, self.options
-        if self.anchor is None:
-            self.anchor = self.pose
-        where = self._where()
-        ctx = c.grounded(where[:2], self.heading, self.frame, prior=self.base_latent)
-        solved = c.solve(
-            self.pose.latent, terms + self._hold_terms(where), ctx, reach, rotations, prior_weight=o.prior_weight
-        )
-        self.pose = self._kept_trunk(solved, reach, rotations)
-        for _ in range(max(0, o.settle_rounds)):
-            if self.shortfall() <= o.reach_tolerance:
-                break
-            check(cancelled)
-            where = self._where()
-            ctx = c.grounded(where[:2], self.heading, self.frame, prior=self.base_latent)
-            solved = c.solve(
-                self.pose.latent,
-                terms + self._hold_terms(where),
-                ctx,
-                reach,
-                rotations,
-                iterations=ITERATIONS,
-                prior_weight=o.prior_weight,
-                rule="sgd",
-                step_size=STEP_SIZE,
-            )
-            self.pose = self._kept_trunk(solved, reach, rotations)
-        self._replant()
-        self._solved = self.pose
-        return self.pose
-
     def pose_key(self, key: Key, events: int = EVENTS, cancelled: CancelCheck | None = None) -> Pose:
         """Pose as ``key`` (what a baked key is, :mod:`engine.authoring.bake`, and what the
         pose window shows on a key).
 
         A key with a latent (one the window keyed): that pose where the key stands and
-        faces, the feet planted there, its targets taken exactly by the limbs and turned
-        joints (``solve(0)``). A key with targets only (a scene written by hand): from the
+        faces, the feet planted there (or at the key's ``feet``), its targets taken exactly
+        by the limbs and turned joints, a pelvis-only target's pelvis moved alone
+        (``solve(0)``). A key with targets only (a scene written by hand): from the
         current pose, each active target dragged from where its joint is to its place in
         ``events`` drag events, then turned to its rotation in as many, in the key's order,
         each event one :meth:`solve`, as a user drags it in the pose window
@@ -402,10 +267,17 @@ class PoseMode:
             self.heading = key.heading
             self.pose = self.character.decode(key.latent, self.character.grounded(key.root, key.heading))
             self.plant_where_standing()
+            self.planted.update({j: np.asarray(p, float).copy() for j, p in key.feet.items()})
             return self.solve(0)
         offsets = self.character.skeleton.offsets
         for t in key.targets.values():
             here = self.pose.positions[t.index]
+            if t.pelvis_only and t.active:
+                start = self.hips_handle()
+                for k in range(1, events + 1):
+                    check(cancelled)
+                    self.drag_pelvis(start + (t.position - start) * k / events)
+                continue
             if not t.active or np.linalg.norm(here - t.position) < 1e-3:
                 self.set_target(t.joint, t.position, None, t.weight, t.enabled)
             else:

@@ -87,7 +87,7 @@ class PoseOptions:
         Pull towards the starting latent (the character's neutral pose for a new pose),
         which keeps the parts no target constrains as they were.
     reach_rounds : int
-        Most further rounds of a drag event's solve (each :data:`engine.authoring.pose_mode.ITERATIONS` steps from
+        Most further rounds of a drag event's solve (each :data:`engine.authoring.pose_solve.ITERATIONS` steps from
         where the last ended, the crouch and balance steps redone first) while a dragged
         joint is more than ``reach_tolerance`` from its target after the exact limb step:
         a reach beyond the arm bends the body further within the same event, and a drag

@@ -12,7 +12,9 @@ exactly: the command holds the state it touched before and after, see
 changed. A change that fails (a :class:`~engine.errors.UserError`) leaves the model as
 it was and records nothing.
 
-The bake (keys solved and in-betweens, seconds for a long animation) is long work:
+The keys, the animation and the bake are the session's
+:class:`~engine.authoring.session_keys.KeyEditing` part. The bake (keys solved and
+in-betweens, seconds for a long animation) is long work:
 :meth:`AuthoringSession.bake_job` takes a copy of the scene for a worker thread, which
 computes while the model stays untouched; :meth:`AuthoringSession.take_bake` then
 applies the result on the model's own thread, unless an edit made it stale meanwhile.
@@ -20,7 +22,6 @@ applies the result on the model's own thread, unless an edit made it stale meanw
 
 from __future__ import annotations
 
-import copy
 import time
 from collections.abc import Callable
 from typing import Any
@@ -30,21 +31,21 @@ import numpy as np
 from engine import skeleton as sk
 from engine.authoring import events as ev
 from engine.authoring.bake import Baked
-from engine.authoring.document import MAX_FRAMES, AuthoringScene
+from engine.authoring.document import AuthoringScene
 from engine.authoring.history import Edit, History
-from engine.authoring.jobs import BakeJob, SettleJob
-from engine.authoring.keys import SCHEMES, Animation, Key
+from engine.authoring.jobs import SettleJob
+from engine.authoring.keys import Animation, Key
 from engine.authoring.pose_mode import PoseMode
 from engine.authoring.session_constraints import constraints_event
-from engine.authoring.state import AuthoringState, capture, differences, pose_between, pose_on_key, put
+from engine.authoring.session_keys import KeyEditing
+from engine.authoring.state import AuthoringState, capture, differences, put
 from engine.authoring.turns import world_rotation
 from engine.editing.constraint_list import ConstraintList
 from engine.errors import UserError
 from engine.motion.clip import Motion
-from engine.progress import CancelCheck, Progress
 
 
-class AuthoringSession:
+class AuthoringSession(KeyEditing):
     """See the module doc.
 
     Parameters
@@ -165,6 +166,11 @@ class AuthoringSession:
         if d.pose:
             self.events.pose.emit(ev.PoseChanged(after.pose, after.heading, before.heading))
 
+    def _stale(self) -> None:
+        if self.baked is not None:
+            self.baked = None
+            self.events.bake.emit(ev.BakeChanged(None))
+
     def _history_changed(self) -> None:
         h = self.history
         self.events.history.emit(
@@ -197,6 +203,13 @@ class AuthoringSession:
         self.edit(
             f"move target {joint}", lambda: self.mode.set_target(joint, p), ("target", joint, "position"), solve=True
         )
+
+    def drag_pelvis(self, position: np.ndarray) -> None:
+        """Move only the pelvis to ``position (3,)`` metres, the feet planted and the upper
+        body carried (:meth:`engine.authoring.pose_mode.PoseMode.drag_pelvis`); a drag's
+        moves are one undo step."""
+        p = np.asarray(position, float)
+        self.edit("move pelvis", lambda: self.mode.drag_pelvis(p), ("body", "root", "pelvis"))
 
     def turn_joint(self, joint: str, rotation: np.ndarray) -> None:
         """Give ``joint`` the world rotation ``rotation (4,)`` as a target and solve."""
@@ -314,117 +327,6 @@ class AuthoringSession:
             solve=True,
         )
 
-    # -- keys and the animation ----------------------------------------------------
-    def key_at(self, frame: int) -> Key | None:
-        return next((k for k in self.scene.keys if k.frame == frame), None)
-
-    def add_key(self, frame: int) -> None:
-        """The current pose (latent, targets, where it stands, facing) as the key at ``frame``."""
-        p, m = self.mode.pose, self.mode
-
-        def change() -> None:
-            key = Key(int(frame), copy.deepcopy(m.targets), p.latent.copy(), p.root_pos[:2].copy(), m.heading)
-            self.scene.keys = sorted([*(k for k in self.scene.keys if k.frame != frame), key], key=lambda k: k.frame)
-
-        self.edit(f"key frame {frame}", change)
-
-    def delete_key(self, frame: int) -> None:
-        """Delete the key at ``frame`` (nothing when there is none)."""
-        if self.key_at(frame) is not None:
-            self.edit(
-                f"delete key {frame}",
-                lambda: setattr(self.scene, "keys", [k for k in self.scene.keys if k.frame != frame]),
-            )
-
-    def move_key(self, frame: int, to: int) -> None:
-        """Move the key at ``frame`` to ``to`` (replacing a key there) and go there."""
-        key = self.key_at(frame)
-        if key is None or frame == to or not 0 <= to < self.scene.animation.frames:
-            return
-
-        def change() -> None:
-            moved = copy.deepcopy(key)
-            moved.frame = int(to)
-            kept = [k for k in self.scene.keys if k.frame not in (frame, to)]
-            self.scene.keys = sorted([*kept, moved], key=lambda k: k.frame)
-            self.frame = int(to)
-            self._pose_at(self.frame)  # inside the step: undo and redo give back the pose shown
-
-        self.edit(f"move key {frame} -> {to}", change)
-
-    def set_length(self, frames: int) -> None:
-        """The animation's length, frames."""
-        if not 1 <= int(frames) <= MAX_FRAMES:
-            raise UserError(f"length must be 1-{MAX_FRAMES} frames, got {frames}")
-        self.edit("length", lambda: setattr(self.scene.animation, "frames", int(frames)))
-
-    def set_fps(self, fps: float) -> None:
-        """The animation's rate, frames per second."""
-        if not 1.0 <= float(fps) <= 240.0:
-            raise UserError(f"rate must be 1-240 frames per second, got {fps}")
-        self.edit("rate", lambda: setattr(self.scene.animation, "fps", float(fps)))
-
-    def set_interpolation(self, scheme: str) -> None:
-        """How in-betweens are made: one of :data:`engine.authoring.keys.SCHEMES`."""
-        if scheme not in SCHEMES:
-            raise UserError(f"in-betweens: {scheme!r} is not one of {', '.join(SCHEMES)}")
-        self.edit("in-betweens", lambda: setattr(self.scene.animation, "interpolation", scheme))
-
-    # -- frames and the bake -------------------------------------------------------
-    def go_to(self, frame: int) -> None:
-        """Make ``frame`` current: on a key the character takes the key's pose; between
-        keys the baked in-between (its latent, place, facing and interpolated targets),
-        so a key added there keeps the motion as it was. Not an undo step. Bakes first
-        when the bake is stale (on this thread: a view runs :meth:`bake_job` off its
-        thread beforehand)."""
-        before, old = self.state(), self.frame
-        self.frame = int(frame)
-        self._pose_at(self.frame)
-        self._changed(before, old)
-
-    def _pose_at(self, frame: int) -> None:
-        key = self.key_at(frame)
-        if key is not None:
-            pose_on_key(self.mode, key)
-        elif self.scene.keys:
-            pose_between(self.mode, self.bake_now(), self.scene.keys, self.animation.interpolation, frame)
-
-    def _stale(self) -> None:
-        if self.baked is not None:
-            self.baked = None
-            self.events.bake.emit(ev.BakeChanged(None))
-
-    def bake_job(self) -> BakeJob:
-        """The bake of the keys as it stands, to run on any thread (:meth:`take_bake`)."""
-        if not self.scene.keys:
-            raise UserError("add at least one key first")
-        scene = AuthoringScene(
-            list(self.scene.constraints),
-            self.scene.settings,
-            copy.copy(self.scene.animation),
-            [copy.deepcopy(k) for k in self.scene.keys],
-            self.scene.height,
-            pose_options=copy.copy(self.scene.pose_options),
-        )
-        return BakeJob(scene, self.vae, self._generation)
-
-    def take_bake(self, job: BakeJob, baked: Baked) -> bool:
-        """Make ``baked`` (``job``'s result) the bake, unless the scene changed since the
-        job was made; whether it was taken."""
-        if job.generation != self._generation:
-            return False
-        self.baked = baked
-        self.events.bake.emit(ev.BakeChanged(baked))
-        return True
-
-    def bake_now(self, progress: Progress | None = None, cancelled: CancelCheck | None = None) -> Baked:
-        """The bake, baked on this thread when it is stale (raises Cancelled when ``cancelled()``)."""
-        if self.baked is None:
-            job = self.bake_job()
-            self.take_bake(job, job.run(progress, cancelled))
-        assert self.baked is not None
-        return self.baked
-
     # -- documents -----------------------------------------------------------------
     def open_scene(self, loaded: AuthoringScene) -> None:
         """Make ``loaded`` the document: its keys, animation, constraints and settings (and
@@ -447,6 +349,6 @@ class AuthoringSession:
         m.plant_where_standing()
         self._stale()
         self.frame = loaded.keys[0].frame if loaded.keys else 0
-        self._pose_at(self.frame)
+        self.pose_at(self.frame)
         self._changed(before, old)
         self.history.clear()

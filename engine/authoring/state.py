@@ -64,7 +64,13 @@ def same_target(a: JointTarget | None, b: JointTarget | None) -> bool:
     rot = (a.rotation is None and b.rotation is None) or (
         a.rotation is not None and b.rotation is not None and np.array_equal(a.rotation, b.rotation)
     )
-    return rot and np.array_equal(a.position, b.position) and a.weight == b.weight and a.enabled == b.enabled
+    return (
+        rot
+        and np.array_equal(a.position, b.position)
+        and a.weight == b.weight
+        and a.enabled == b.enabled
+        and a.pelvis_only == b.pelvis_only
+    )
 
 
 def same_key(a: Key, b: Key) -> bool:
@@ -72,7 +78,9 @@ def same_key(a: Key, b: Key) -> bool:
     la, lb = a.latent, b.latent
     latent = (la is None and lb is None) or (la is not None and lb is not None and np.array_equal(la, lb))
     targets = set(a.targets) == set(b.targets) and all(same_target(a.targets[j], b.targets[j]) for j in a.targets)
-    return a.frame == b.frame and latent and targets and np.array_equal(a.root, b.root) and a.heading == b.heading
+    feet = set(a.feet) == set(b.feet) and all(np.array_equal(a.feet[j], b.feet[j]) for j in a.feet)
+    same = a.frame == b.frame and latent and targets and feet
+    return same and np.array_equal(a.root, b.root) and a.heading == b.heading
 
 
 def same_pose(a: Pose, b: Pose) -> bool:

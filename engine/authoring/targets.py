@@ -39,6 +39,9 @@ class JointTarget:
     weight : float
         In :data:`WEIGHT_RANGE`; 0 switches the target off without removing it.
     enabled : bool
+    pelvis_only : bool
+        On the root's target only: the pelvis alone goes there, the feet stay planted and
+        the upper body keeps its pose relative to it (:mod:`engine.authoring.pelvis_drag`).
     """
 
     joint: str
@@ -46,10 +49,15 @@ class JointTarget:
     rotation: np.ndarray | None = None
     weight: float = 1.0
     enabled: bool = True
+    pelvis_only: bool = False
 
     def __post_init__(self) -> None:
         if self.joint not in sk.JOINT_INDEX:
             raise UserError(f"target: unknown joint {shown(self.joint)}")
+        if not isinstance(self.pelvis_only, bool):
+            raise UserError(f"target {self.joint}: field 'pelvis_only' must be true or false")
+        if self.pelvis_only and self.joint != "root":
+            raise UserError(f"target {self.joint}: field 'pelvis_only' is for the root's target only")
         self.position = _numbers(self.position, 3, f"target {self.joint}: position")
         if self.rotation is not None:
             q = _numbers(self.rotation, 4, f"target {self.joint}: rotation")
@@ -95,21 +103,26 @@ class JointTarget:
             out["weight"] = self.weight
         if not self.enabled:
             out["enabled"] = False
+        if self.pelvis_only:
+            out["pelvis_only"] = True
         return out
 
 
 def target_from_json(joint: str, value, where: str) -> JointTarget:
     """A target from scene JSON: ``[x, y, z]`` or ``{"position": [...], "rotation": [...],
-    "weight": w, "enabled": b}``; errors are prefixed with ``where``."""
+    "weight": w, "enabled": b, "pelvis_only": b}``; errors are prefixed with ``where``."""
     try:
         if isinstance(value, dict):
-            check_known_fields(value, ("position", "rotation", "weight", "enabled"), "target")
+            check_known_fields(value, ("position", "rotation", "weight", "enabled", "pelvis_only"), "target")
             if "position" not in value:
                 raise UserError("field 'position' is missing")
             enabled = value.get("enabled", True)
             if not isinstance(enabled, bool):
                 raise UserError("field 'enabled' must be true or false")
-            return JointTarget(joint, value["position"], value.get("rotation"), value.get("weight", 1.0), enabled)
+            pelvis_only = value.get("pelvis_only", False)
+            return JointTarget(
+                joint, value["position"], value.get("rotation"), value.get("weight", 1.0), enabled, pelvis_only
+            )
         return JointTarget(joint, value)
     except UserError as exc:
         raise UserError(f"{where}: {exc}") from None

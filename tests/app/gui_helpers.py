@@ -18,9 +18,11 @@ def _send(widget, kind, x, y, button, buttons, mods):
     QApplication.sendEvent(widget, event)
 
 
-def mouse_drag(view, start, end, ctrl: bool = False, steps: int = 6, alt: bool = False, on_move=None) -> None:
+def mouse_drag(
+    view, start, end, ctrl: bool = False, steps: int = 6, alt: bool = False, on_move=None, shift: bool = False
+) -> None:
     """Left-drag on the 3D view from ``start`` to ``end`` (VTK display pixels, y up),
-    with Ctrl or Alt held; ``on_move()``, when given, is called after each move's events
+    with Ctrl, Alt or Shift held; ``on_move()``, when given, is called after each move's events
     were processed (what the window holds in the middle of the drag: scripts/kill_test.py
     records it)."""
     widget = view.plotter
@@ -28,6 +30,8 @@ def mouse_drag(view, start, end, ctrl: bool = False, steps: int = 6, alt: bool =
     mods = Qt.KeyboardModifier.ControlModifier if ctrl else Qt.KeyboardModifier.NoModifier
     if alt:
         mods |= Qt.KeyboardModifier.AltModifier
+    if shift:
+        mods |= Qt.KeyboardModifier.ShiftModifier
     (x0, y0), (x1, y1) = start, end
     _send(widget, QMouseEvent.Type.MouseButtonPress, x0, h - 1 - y0, LEFT, LEFT, mods)
     for t in np.linspace(0, 1, steps + 1)[1:]:

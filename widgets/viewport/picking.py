@@ -25,6 +25,9 @@ import pyvista as pv
 from engine.skeleton import JOINT_NAMES
 
 PICK_RADIUS_PX = 14.0
+#: A Shift press this near (pixels) :attr:`JointDragger.shift_grabs` grabs it before
+#: anything else: the hips sit among the hip and back joints, a few pixels apart.
+SHIFT_PICK_RADIUS_PX = 28.0
 #: Priority of the dragger's press observer on the interactor: below the gizmos' point
 #: handles (:data:`widgets.viewport.gizmo_adapters.HANDLE_PRIORITY`), so a pin's handle
 #: on a joint is its own, above their boxes (``BOX_PRIORITY``) and the camera style.
@@ -85,6 +88,10 @@ class JointDragger:
         #: leaves in front of the pelvis). A drag sends that point moved by the cursor's
         #: way on the drag plane.
         self.drag_origin: Callable[[str], np.ndarray | None] | None = None
+        #: A joint that a press with Shift grabs from up to :data:`SHIFT_PICK_RADIUS_PX`
+        #: away, before rings, targets and nearer joints (the pose window's hips: Shift +
+        #: drag moves the pelvis alone); None: Shift picks as a plain press.
+        self.shift_grabs: str | None = None
         self._origin = np.zeros(3)  # the grabbed thing's place: the drag plane goes through it
         self._base = np.zeros(3)  # what the drag moves: sent as _base + (hit - _grab)
         self._grab = np.zeros(3)  # the cursor's point on the drag plane at the press
@@ -120,7 +127,10 @@ class JointDragger:
         x, y = iren.GetEventPosition()
         if event == "LeftButtonPressEvent":
             self._click = None
-            if self.press_ring(x, y):
+            if iren.GetShiftKey() and self.press_shifted(x, y):
+                self._take(event)
+                self._select(self.shift_grabs)
+            elif self.press_ring(x, y):
                 self._take(event)
             elif self.press(x, y) if iren.GetControlKey() else self.press_plain(x, y):
                 self._take(event)
@@ -197,10 +207,26 @@ class JointDragger:
         j = self.joint_at(x, y)
         if j is None or self.positions is None:
             return False
+        self._grab_joint(j, x, y)
+        return True
+
+    def press_shifted(self, x: float, y: float) -> bool:
+        """Grab :attr:`shift_grabs` when display pixel (x, y) lies within
+        :data:`SHIFT_PICK_RADIUS_PX` of it; True on a hit."""
+        if self.shift_grabs is None or self.positions is None:
+            return False
+        j = JOINT_NAMES.index(self.shift_grabs)
+        if float(np.linalg.norm(self._to_display(self.positions[[j]])[0] - [x, y])) > SHIFT_PICK_RADIUS_PX:
+            return False
+        self._grab_joint(j, x, y)
+        return True
+
+    def _grab_joint(self, j: int, x: float, y: float) -> None:
+        """Hold joint ``j`` from a press at display pixel (x, y)."""
+        assert self.positions is not None
         self.joint, self._origin = j, self.positions[j].copy()
         base = None if self.drag_origin is None else self.drag_origin(JOINT_NAMES[j])
         self._start(x, y, self._origin if base is None else np.asarray(base, float))
-        return True
 
     def _start(self, x: float, y: float, base: np.ndarray) -> None:
         """Remember what the drag moves and where the cursor met the drag plane at the press,

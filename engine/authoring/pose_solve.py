@@ -1,0 +1,244 @@
+"""How a pose mode solves its pose (:class:`PoseSolving`, a base of
+:class:`engine.authoring.pose_mode.PoseMode`).
+
+:meth:`PoseSolving.solve` is one short solve from the current pose (a drag event):
+:data:`ITERATIONS` plain gradient steps with the root held where
+:func:`engine.authoring.pose_root.root_where` puts it, then the feet grounded and
+targeted wrists / ankles put exactly on their targets; while a targeted wrist or ankle is
+still beyond its limb's reach, up to ``PoseOptions.reach_rounds`` further rounds, a round
+that overshoots dropped. :meth:`PoseSolving.settle` is the offline, grounded solve for
+when a drag ends. The solve's terms are the user's targets, the planted feet no target
+moves and the scene's constraints; the hold (``PoseOptions.hold_weight``), the trunk rule
+(``keep_trunk``) and a pelvis-only target's step
+(:mod:`engine.authoring.pelvis_drag`) act on every solve.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from engine import skeleton as sk
+from engine.authoring.character import Character, Pose, yaw_quaternion
+from engine.authoring.keys import PLANTED
+from engine.authoring.pelvis_drag import pelvis_pose
+from engine.authoring.pose_hold import held_joints, hold_terms
+from engine.authoring.pose_options import SQUAT_FROM, PoseOptions
+from engine.authoring.pose_root import FOOT_OF, Stance, moved_feet, root_where, shortfall
+from engine.authoring.pose_trunk import LEGS, TRUNK, keep_trunk
+from engine.authoring.targets import JointTarget, solve_inputs
+from engine.constraints.base import Constraint
+from engine.kinematics import quat_np as QN
+from engine.progress import CancelCheck, check
+from engine.solver import FrameContext
+from engine.solver.limb_ik import LIMBS
+
+#: Latent steps of one continuous solve (one drag event).
+ITERATIONS = 16
+#: Plain gradient step of the continuous solve. Dragging a wrist 30 cm in 30 events
+#: (mean pose, 1.75 m) in five directions with the shipped VAE, the decoded wrist's
+#: largest lag was 1.9 cm at 1.5 x 16 steps, 2.4 cm at 2 x 8, 3.6 cm at 1 x 8; from a
+#: step of 2.5 the solve starts to overshoot (2.8 cm at 2.5 x 12, 9.4 cm at 3 x 8), so
+#: the step keeps a margin below that. Plain steps move only the constrained latent
+#: directions (Adam moved the free arm more).
+STEP_SIZE = 1.5
+#: A reach round that leaves the dragged wrist or ankle this much further (metres) from
+#: its target than the round before overshot (the plain steps diverge in a body folded
+#: near the floor: 5 cm short became 25 cm in one round); it is dropped.
+OVERSHOOT = 0.05
+
+
+class PoseSolving:
+    """The solves of a pose mode (see the module doc); :class:`PoseMode` holds the state
+    they read and write, declared here."""
+
+    character: Character
+    options: PoseOptions
+    pose: Pose
+    base_latent: np.ndarray
+    heading: float
+    frame: int
+    targets: dict[str, JointTarget]
+    constraints: list[Constraint]
+    planted: dict[str, np.ndarray]
+    anchor: Pose | None
+    _standing_root: float
+    _lowest_reach: dict[int, float]
+    _solved: Pose | None
+
+    def pelvis_target(self) -> JointTarget | None:
+        """The root's target when it is active and moves the pelvis only, else None."""
+        t = self.targets.get("root")
+        return t if t is not None and t.active and t.pelvis_only else None
+
+    def pelvis_step(self, pose: Pose) -> Pose:
+        """``pose`` with the pelvis on its pelvis-only target, the feet on their planted
+        places and targeted wrists and ankles on their targets
+        (:func:`engine.authoring.pelvis_drag.pelvis_pose`); ``pose`` itself without one."""
+        t = self.pelvis_target()
+        if t is None:
+            return pose
+        limbs = {x.index: x.position for x in self.targets.values() if x.active and x.index in LIMBS}
+        legs = self.character.decode(pose.latent, self.character.grounded()).local_rot
+        return pelvis_pose(pose, t.position, self.planted, self.character.skeleton.offsets, limbs, legs)
+
+    def _inputs(self) -> tuple[list[Constraint], dict, dict]:
+        """The solve's terms: the user's targets, the planted feet that no target moves, the
+        scene's constraints; and the exact limb and rotation steps after it."""
+        targets, planted = list(self.targets.values()), self.planted
+        pelvis = self.pelvis_target()
+        if pelvis is not None and self.pose.decoded is not None:
+            # the latent solves the body standing where it stood; the pelvis step follows
+            decoded = self.pose.decoded
+            shift = decoded[0] - pelvis.position
+            targets = [replace(t, position=t.position + shift) for t in targets if t.joint != "root"]
+            planted = {j: decoded[sk.JOINT_INDEX[j]].copy() for j in planted}
+        if self.options.plant_feet:
+            moved = moved_feet(self.targets)
+            targets += [
+                JointTarget(j, p, weight=self.options.plant_weight)
+                for j, p in planted.items()
+                if FOOT_OF[j] not in moved and j not in self.targets
+            ]
+        terms, reach, rotations = solve_inputs(targets)
+        for t in terms:
+            if t.dof == 6:
+                t.rotation_weight *= self.options.turn_weight
+        return terms + list(self.constraints), reach, rotations
+
+    def _replant(self) -> None:
+        """A foot the user moves is planted where it is left."""
+        moved = moved_feet(self.targets)
+        for j in PLANTED:
+            if FOOT_OF[j] in moved:
+                self.planted[j] = self.pose.positions[sk.JOINT_INDEX[j]].copy()
+
+    def _where(self, adjust: bool = True) -> np.ndarray:
+        """Where the root is held during the solve (3,) metres (:func:`engine.authoring.pose_root.root_where`)."""
+        if self.pelvis_target() is not None and self.pose.decoded is not None:
+            return self.pose.decoded[0].copy()  # the standing body's root (see _inputs)
+        stance = Stance(self.pose, self.targets, self.planted, self.options)
+        return root_where(stance, self._standing_root, self._lowest_reach, adjust)
+
+    def solve(self, iterations: int = ITERATIONS) -> Pose:
+        """One continuous solve from the current pose (a drag event): a round of
+        ``iterations`` steps, and up to ``options.reach_rounds`` more while a dragged
+        joint is short of its target."""
+        terms, reach, rotations = self._inputs()
+        c, o = self.character, self.options
+        if self.anchor is None:
+            self.anchor = self.pose
+        best: tuple[float, Pose | None] = (np.inf, None)
+        for round_ in range(1 + (max(0, o.reach_rounds) if iterations > 0 else 0)):
+            gap = self.shortfall()
+            if round_ and gap <= o.reach_tolerance:
+                break
+            where = self._where(o.free_height or iterations > 0)
+            if o.free_height:
+                ctx = c.grounded(where[:2], self.heading, self.frame, prior=self.base_latent)
+            else:
+                ctx = c.placed(where, self.heading, self.frame, prior=self.base_latent)
+            before = self.pose
+            solved = self._plain_steps(terms, ctx, where, reach, rotations, iterations)
+            self.pose = self.pelvis_step(self._kept_trunk(solved, reach, rotations))
+            short = self.shortfall()
+            if round_ and short > gap + OVERSHOOT:
+                # the plain steps overshot (a folded body near the floor): keep the round before
+                self.pose = before
+                break
+            if short < best[0]:
+                best = (short, self.pose)
+        if best[1] is not None:
+            # rounds near the floor can circle their target: the event ends on its closest one
+            self.pose = best[1]
+        self._replant()
+        self._solved = self.pose
+        return self.pose
+
+    def _plain_steps(
+        self,
+        terms: list[Constraint],
+        ctx: FrameContext,
+        where: np.ndarray,
+        reach: dict,
+        rotations: dict,
+        iterations: int,
+    ) -> Pose:
+        """One round of a drag's solve: ``iterations`` plain gradient steps of
+        :data:`STEP_SIZE` from the current latent against ``terms``, the hold (for the root
+        at ``where``) and the prior, in the context ``ctx``, then the exact limb and
+        rotation steps."""
+        return self.character.solve(
+            self.pose.latent,
+            terms + self._hold_terms(where),
+            ctx,
+            reach,
+            rotations,
+            iterations=iterations,
+            prior_weight=self.options.prior_weight,
+            rule="sgd",
+            step_size=STEP_SIZE,
+        )
+
+    def _kept_trunk(self, pose: Pose, reach: dict, rotations: dict) -> Pose:
+        """``pose`` with ``options.keep_trunk``'s rule (:mod:`engine.authoring.pose_trunk`)
+        applied against :attr:`anchor`, while no trunk or leg joint has a target; the
+        pelvis is kept only while it stands on both planted feet."""
+        o = self.options
+        if (
+            not o.keep_trunk
+            or self.anchor is None
+            or any(t.active and t.index in TRUNK + LEGS for t in self.targets.values())
+        ):
+            return pose
+        forward = QN.rotate(yaw_quaternion(self.heading), sk.FORWARD)
+        limbs = {j: np.asarray(p, float) for j, p in reach.items() if j in LIMBS}
+        pelvis = o.plant_feet and pose.root_pos[2] >= self._standing_root - SQUAT_FROM
+        return keep_trunk(pose, self.anchor, forward, self.character.skeleton.offsets, limbs, dict(rotations), pelvis)
+
+    def held(self) -> list[int]:
+        """Joints the hold pulls towards the anchor (see ``PoseOptions.hold_weight`` and
+        :func:`engine.authoring.pose_hold.held_joints`)."""
+        return held_joints(self.targets, self.planted, self.options.plant_feet)
+
+    def _hold_terms(self, where: np.ndarray) -> list[Constraint]:
+        """The hold's terms for a solve with the root at ``where (3,)`` metres
+        (:func:`engine.authoring.pose_hold.hold_terms`)."""
+        w = self.options.hold_weight
+        if w <= 0 or self.anchor is None:
+            return []
+        return hold_terms(self.anchor, self.held(), where, w)
+
+    def shortfall(self) -> float:
+        """How far the solve is from its targets, metres (:func:`engine.authoring.pose_root.shortfall`)."""
+        return shortfall(Stance(self.pose, self.targets, self.planted, self.options))
+
+    def settle(self, cancelled: CancelCheck | None = None) -> Pose:
+        """An offline, grounded solve from the current pose (when a drag ends), then up to
+        ``options.settle_rounds`` grounded rounds of the drag's plain steps while a dragged
+        wrist or ankle is short of its target: the offline solve's adaptive steps can stop
+        at once from a pose that is already close, where the plain steps still close
+        the gap. ``cancelled()`` is asked before each round (a worker's settle stops
+        within a round; raises :class:`~engine.progress.Cancelled`)."""
+        terms, reach, rotations = self._inputs()
+        c, o = self.character, self.options
+        if self.anchor is None:
+            self.anchor = self.pose
+        where = self._where()
+        ctx = c.grounded(where[:2], self.heading, self.frame, prior=self.base_latent)
+        solved = c.solve(
+            self.pose.latent, terms + self._hold_terms(where), ctx, reach, rotations, prior_weight=o.prior_weight
+        )
+        self.pose = self.pelvis_step(self._kept_trunk(solved, reach, rotations))
+        for _ in range(max(0, o.settle_rounds)):
+            if self.shortfall() <= o.reach_tolerance:
+                break
+            check(cancelled)
+            where = self._where()
+            ctx = c.grounded(where[:2], self.heading, self.frame, prior=self.base_latent)
+            solved = self._plain_steps(terms, ctx, where, reach, rotations, ITERATIONS)
+            self.pose = self.pelvis_step(self._kept_trunk(solved, reach, rotations))
+        self._replant()
+        self._solved = self.pose
+        return self.pose

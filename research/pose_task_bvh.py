@@ -4,8 +4,9 @@ mode), against the task's goals, with the benchmark's measures and reference.
 
     PYTHONPATH=. python research/pose_task_bvh.py TASK=FILE.bvh ... [--reference-data PREPARED]
 
-(the reference as ``bench --pose-tasks`` picks it: ``--reference-data``, else the 9
-validation files of ../shared/data/mocap, every 4th frame).
+(the reference: ``--reference-data``, a prepared folder's val split, else the shipped
+poses of the 9 validation files, every 4th frame, as ``bench --pose-tasks`` without a
+prepared folder).
 """
 
 from __future__ import annotations
@@ -33,19 +34,17 @@ def main(argv: list[str]) -> int:
     rows = []
     for item in args.files:
         name, path = item.split("=", 1)
-        mode, goals, feet = T._start(tasks[name], vae, {})
+        mode, goals, feet = T.task_start(tasks[name], vae, {})
         offsets = mode.character.skeleton.offsets
         if not rows:
             ref = (
-                R.load_prepared(args.reference_data, offsets, 4)
-                if args.reference_data
-                else R.load_files(R.validation_files(), offsets, 4)
+                R.load_prepared(args.reference_data, offsets, 4) if args.reference_data else R.load_shipped(offsets, 4)
             )
         raw = load_bvh(path)  # baked on this character's skeleton: its rotations as written
         assert list(raw.names) == list(sk.JOINT_NAMES), path
         local, root = raw.local_quaternions()[0], raw.positions[0, 0]
         pose = Pose(mode.pose.latent, local, root, fk(local, root, offsets)[0])
-        rows.append(T._measured(tasks[name], "bvh", pose, goals, offsets, ref, feet, 0.0))
+        rows.append(T.measure_pose(tasks[name], "bvh", pose, goals, offsets, ref, feet, 0.0))
     p95 = ref.spread_summary()["p95_cm"]
     print(f"reference: {ref.description}; p95 {p95:.1f} cm")
     print(

@@ -230,7 +230,7 @@ def run_task(
     if events < 1:
         raise UserError(f"drag events must be at least 1, got {events}")
     init, solve, settle = split_options(options or [])
-    mode, goals, feet = _start(task, vae, init)
+    mode, goals, feet = task_start(task, vae, init)
     offsets = mode.character.skeleton.offsets
     poser = mode if poser_name == "pose-mode" else IKPoser(mode.pose, offsets)
     t0 = time.perf_counter()
@@ -239,10 +239,10 @@ def run_task(
         if release == "settle":
             poser.settle(**(settle if poser is mode else {}))
     seconds = time.perf_counter() - t0
-    return _measured(task, poser_name, poser.pose, goals, offsets, reference, feet, seconds)
+    return measure_pose(task, poser_name, poser.pose, goals, offsets, reference, feet, seconds)
 
 
-def _measured(
+def measure_pose(
     task: Task,
     poser_name: str,
     pose: Pose,
@@ -275,7 +275,7 @@ def _measured(
     )
 
 
-def _start(task: Task, vae, init: dict) -> tuple[PoseMode, list[Goal], dict[str, np.ndarray]]:
+def task_start(task: Task, vae, init: dict) -> tuple[PoseMode, list[Goal], dict[str, np.ndarray]]:
     """The starting pose mode, the task's goals and the undragged ankles' places."""
     mode = PoseMode(vae, **init)
     goals = resolve_goals(task, mode.pose, mode.character.skeleton.offsets, mode.heading)
@@ -287,7 +287,7 @@ def task_scene(task: Task, vae) -> AuthoringScene:
     """``task`` as a one-key scene (what :data:`TASK_SCENES` holds): one frame, its goals as
     the key's targets in drag order (a turn: the joint's rotation goal, its position where
     the joint stands), the default character and pose options."""
-    mode, goals, _ = _start(task, vae, {})
+    mode, goals, _ = task_start(task, vae, {})
     targets = {}
     for g in goals:
         here = mode.pose.positions[J[g.joint]]
@@ -309,13 +309,13 @@ def run_bake(task: Task, vae, reference: ReferenceSet, options: PoseOptions | No
     scene = load_authoring(task_scene_path(task))
     if options is not None:
         scene.pose_options = options
-    mode, goals, feet = _start(task, vae, {"height": scene.height})
+    mode, goals, feet = task_start(task, vae, {"height": scene.height})
     t0 = time.perf_counter()
     baked = bake(scene, vae)
     seconds = time.perf_counter() - t0
     m = baked.motion
     pose = Pose(baked.latents[0], m.local_rot[0], m.root_pos[0], m.positions()[0])
-    return _measured(task, BAKE, pose, goals, mode.character.skeleton.offsets, reference, feet, seconds)
+    return measure_pose(task, BAKE, pose, goals, mode.character.skeleton.offsets, reference, feet, seconds)
 
 
 def select_tasks(names: list[str] | None) -> list[Task]:

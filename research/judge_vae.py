@@ -12,8 +12,9 @@ rebuilds the pose bank, the latent map and the pose-task scenes for it there. ``
 writes into OUT what the rule reads: DragPoser on the validation files (first 150 frames;
 presets 6, 4, 3-head-hands, 6x3dof), every 12th ``hdm05/`` clip whole and the first 600
 frames of the ``dragposer/`` clips (presets 4 and 3-head-hands), and ``bench --pose-tasks``
-at 10, 20, 30 and 40 drag events, plus the authoring tests' outcome. It takes about an hour
-of one core; measure the baseline (a checkout of the same commit with the shipped files)
+at 10, 20, 30 and 40 drag events, plus the authoring tests' outcome. With ``--parts val``
+in one process and ``--parts other tasks`` in another it took 3 minutes on the 2-core
+machine; measure the baseline (a checkout of the same commit with the shipped files)
 the same way. ``judge`` compares two OUT folders: criteria 2-4 from them, criterion 1 from
 ``--own`` (the runs' validation errors, ``val_pos_cm`` of their ``losses.csv``).
 """

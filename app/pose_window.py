@@ -127,7 +127,7 @@ class PoseWindow(QMainWindow):
         self._dock("Keys", self.keys, Qt.DockWidgetArea.BottomDockWidgetArea)
         body = self.addToolBar("Body")
         body.setMovable(False)
-        body.addWidget(QLabel(" Body: drag the hips to move it (down: squat); facing "))
+        body.addWidget(QLabel(" Body: drag the hips to move it (down: squat; Shift: pelvis only); facing "))
         self.facing = QDoubleSpinBox(
             minimum=-180.0, maximum=180.0, decimals=1, singleStep=15.0, suffix=" deg", wrapping=True
         )

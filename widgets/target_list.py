@@ -44,7 +44,8 @@ class TargetList(QWidget):
         outer = QVBoxLayout(self)
         self.hint = QLabel(
             "Drag a joint to add a target; drag its sphere to move it; drag a ring to turn it. "
-            "The hips move the whole body (dragged down: a squat); their ring turns it."
+            "The hips move the whole body (dragged down: a squat); their ring turns it. "
+            "Shift + drag the hips: the pelvis alone, the feet planted flat."
         )
         self.hint.setWordWrap(True)
         # the hint shows while there is no target; then its lines go to the rows (it

@@ -67,7 +67,7 @@ def _files(args: argparse.Namespace) -> list[Path]:
 
 
 def _run(args: argparse.Namespace, files: list[Path], preset: str, gaps: bool, variant: str) -> dict[str, Any]:
-    from engine.cli.evaluate import _safe_doc, run_method_on_clips
+    from engine.cli.evaluate import json_safe_doc, run_method_on_clips
     from engine.motion.retarget import load_motion
 
     name = variant.split("+")[0]
@@ -92,7 +92,7 @@ def _run(args: argparse.Namespace, files: list[Path], preset: str, gaps: bool, v
     for f in files:
         m = load_motion(f, rig_map=rig_map_path(args), asf=asf_path(args))
         motions.append((f, m.slice(0, args.max_frames) if args.max_frames else m))
-    doc = _safe_doc(run_method_on_clips(ns, name, motions))
+    doc = json_safe_doc(run_method_on_clips(ns, name, motions))
     doc.update(variant=variant, gaps=gaps, max_frames=args.max_frames, blend_s=blend)
     return doc
 

@@ -259,7 +259,8 @@ def _evaluate_file(job: tuple[Path, argparse.Namespace, list[str], bool]) -> dic
     return out
 
 
-def _safe_doc(doc: dict[str, Any]) -> dict[str, Any]:
+def json_safe_doc(doc: dict[str, Any]) -> dict[str, Any]:
+    """A copy of one method's evaluation ``doc`` whose totals and per-file figures JSON can write."""
     out = dict(doc)
     if "total" in out:
         out["total"] = _json_safe(out["total"])
@@ -308,7 +309,7 @@ def _evaluate(args: argparse.Namespace) -> int:
         doc = docs[names[0]]
         print(format_table(doc["files"], doc["total"], lossy))
         table_md = format_markdown({**{Path(k).name: v for k, v in doc["files"].items()}, "total": doc["total"]}, lossy)
-        out: dict[str, Any] = _safe_doc(doc)
+        out: dict[str, Any] = json_safe_doc(doc)
     else:
         totals = {n: d.get("total", {}) for n, d in docs.items()}
         print(format_table(totals, {}, lossy).rsplit("\n", 1)[0].replace("clip", "method", 1))
@@ -316,7 +317,7 @@ def _evaluate(args: argparse.Namespace) -> int:
             if "error" in d:
                 print(f"{n}: not evaluated: {d['error']}")
         table_md = format_markdown(totals, lossy, first="method")
-        out = {n: _safe_doc(d) for n, d in docs.items()}
+        out = {n: json_safe_doc(d) for n, d in docs.items()}
     if args.markdown:
         write_text(args.markdown, table_md)
         print(f"wrote {args.markdown}")

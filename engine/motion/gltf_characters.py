@@ -66,7 +66,7 @@ def character_on_source_rig(
     names, OFFSETs, rotations, position channels, frame rate ``fps`` or the source's),
     brought into the studio's axes and metres with the rig's change of axes and unit."""
     from engine.motion.retarget import resample_motion
-    from engine.motion.write_back import _local_offsets, source_rig_pose
+    from engine.motion.write_back import frame_local_offsets, source_rig_pose
 
     fps = float(fps or report.source_fps or motion.fps)
     if abs(fps - motion.fps) > 1e-6:
@@ -85,7 +85,7 @@ def character_on_source_rig(
         joints=tuple(raw.names),
         parents=tuple(raw.parents),
         rest=raw.offsets @ basis.T * unit,
-        translations=_local_offsets(raw, positions) @ basis.T * unit,
+        translations=frame_local_offsets(raw, positions) @ basis.T * unit,
         rotations=Q.normalize(Q.mul(Q.mul(b, local), Q.conjugate(b))),
         fps=fps,
         ends={j: off @ basis.T * unit for j, off in raw.end_sites.items()},

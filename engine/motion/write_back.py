@@ -51,7 +51,7 @@ def _below(raw: RawBVH, j: int, root: int) -> bool:
     return root in ancestors(raw.parents, j)
 
 
-def _local_offsets(raw: RawBVH, positions: np.ndarray) -> np.ndarray:
+def frame_local_offsets(raw: RawBVH, positions: np.ndarray) -> np.ndarray:
     """Per-frame local positions ``(F, J, 3)``: position channels where a joint has them
     (``positions``), its OFFSET elsewhere."""
     moving = np.array([len(c) == 6 for c in raw.channels])
@@ -81,7 +81,7 @@ def source_rig_pose(motion: Motion, raw: RawBVH, report) -> tuple[np.ndarray, np
     positions = raw.positions[np.clip(src_frame, 0, len(raw.positions) - 1)].copy()
     if prof.root_channels_relative_to_offset:
         positions[:, 0] += raw.offsets[0]
-    local_off = _local_offsets(raw, positions)
+    local_off = frame_local_offsets(raw, positions)
     root_src = raw.names.index(prof.joints["root"])
     # canonical joint positions relative to the canonical root, in source axes and units
     want = (pos_c - pos_c[:, :1]) @ report.basis / prof.units_to_m

@@ -42,7 +42,7 @@ from engine.authoring.document import AuthoringScene
 from engine.authoring.keys import PLANTED, Key, eased, interpolate, segment, slerp_quaternion
 from engine.authoring.pelvis_drag import pelvis_pose
 from engine.authoring.pose_mode import PoseMode
-from engine.authoring.targets import JointTarget, solve_inputs
+from engine.authoring.targets import JointTarget, pelvis_only_target, solve_inputs
 from engine.constraints.base import Constraint
 from engine.constraints.smooth import SmoothConstraint
 from engine.errors import UserError
@@ -198,18 +198,13 @@ def _in_between(
         rule="sgd",
     )
     i, s = segment(times, f)
-    if not any(_pelvis_only(k) for k in keys[i : i + 1 + (s > 0.0)]):  # after the last key: the last
+    if not any(pelvis_only_target(k.targets) for k in keys[i : i + 1 + (s > 0.0)]):  # after the last key: the last
         return pose
     feet = {
         j: interpolate(times, [k.feet.get(j, p.positions[sk.JOINT_INDEX[j]]) for k, p in zip(keys, poses)], f, scheme)
         for j in PLANTED
     }
     return pelvis_pose(pose, root, feet, character.skeleton.offsets, reach)
-
-
-def _pelvis_only(key: Key) -> bool:
-    root = key.targets.get("root")
-    return root is not None and root.active and root.pelvis_only
 
 
 def interpolated_heading(keys: list[Key], times: list[float], t: float, scheme: str) -> float:

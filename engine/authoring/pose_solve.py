@@ -27,7 +27,7 @@ from engine.authoring.pose_hold import held_joints, hold_terms
 from engine.authoring.pose_options import SQUAT_FROM, PoseOptions
 from engine.authoring.pose_root import FOOT_OF, Stance, moved_feet, root_where, shortfall
 from engine.authoring.pose_trunk import LEGS, TRUNK, keep_trunk
-from engine.authoring.targets import JointTarget, solve_inputs
+from engine.authoring.targets import JointTarget, pelvis_only_target, solve_inputs
 from engine.constraints.base import Constraint
 from engine.kinematics import quat_np as QN
 from engine.progress import CancelCheck, check
@@ -69,8 +69,7 @@ class PoseSolving:
 
     def pelvis_target(self) -> JointTarget | None:
         """The root's target when it is active and moves the pelvis only, else None."""
-        t = self.targets.get("root")
-        return t if t is not None and t.active and t.pelvis_only else None
+        return pelvis_only_target(self.targets)
 
     def pelvis_step(self, pose: Pose) -> Pose:
         """``pose`` with the pelvis on its pelvis-only target, the feet on their planted

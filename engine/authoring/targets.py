@@ -8,6 +8,7 @@ path evaluates itself, so a pose with only targets solves there.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -106,6 +107,13 @@ class JointTarget:
         if self.pelvis_only:
             out["pelvis_only"] = True
         return out
+
+
+def pelvis_only_target(targets: Mapping[str, JointTarget]) -> JointTarget | None:
+    """The root's target in ``targets`` when it is active and moves the pelvis alone
+    (``pelvis_only``), else None."""
+    t = targets.get("root")
+    return t if t is not None and t.active and t.pelvis_only else None
 
 
 def target_from_json(joint: str, value, where: str) -> JointTarget:

@@ -2,16 +2,16 @@
 
 A frame's terms are summed as one :class:`TermStack`: their residuals side by side
 (``r (A, M)``, ``M`` entries over all terms), each constraint's loss one sum over its
-entries, and ``2 w J^T r`` one product per kind of Jacobian block (positions, world
-turns, the latent) over every term's blocks, whatever the number of terms: a per-call
-cost that grows with the terms' entries, not with their count. A block row is a *pair*
+entries, and ``2 w J^T r`` one sum for the position and world-turn blocks of every term
+and one product for the latent's, whatever the number of terms: a per-call cost that
+grows with the terms' entries, not with their count. A block row is a *pair*
 (a residual entry, a joint, its 3 partial derivatives): a per-entry block
 (``entry_joint``) has a pair per entry, a block over ``k`` joints (``pos_joints``,
 ``rot_joints``) ``k`` pairs per entry (:mod:`engine.constraints.residual`).
 
-Helpers: a joint's row of a gradient array (:func:`gradient_rows`) and the 0/1 matrices
-that sum entries by constraint (:func:`members`) or pairs by joint (:func:`one_hot`),
-cached because a term's index arrays never change.
+Helpers: a joint's row of a gradient array (:func:`gradient_rows`) and the 0/1 matrix
+that sums one term's entries by constraint (:func:`members`, for :meth:`Term.losses
+<engine.constraints.residual.Term.losses>` on numpy or torch arrays).
 """
 
 from __future__ import annotations
@@ -30,37 +30,22 @@ def gradient_rows(joints: np.ndarray, rows: np.ndarray | None) -> np.ndarray:
     return joints if rows is None else rows[joints]
 
 
-_INDICATORS: dict[tuple[bytes, int, bool], np.ndarray] = {}  # index arrays seen -> their 0/1 matrix (shared)
-
-
-def _indicator(index: np.ndarray, count: int, by_entry: bool) -> np.ndarray:
-    """The 0/1 matrix of ``index (m,)`` over ``count`` classes: ``(m, count)`` with 1 at
-    ``[i, index[i]]`` when ``by_entry``, else its transpose ``(count, m)`` (C order either
-    way). Cached: a term's index arrays never change, and frame after frame share theirs."""
-    key = (index.tobytes(), count, by_entry)
-    out = _INDICATORS.get(key)
-    if out is None:
-        if len(_INDICATORS) > 4096:
-            _INDICATORS.clear()
-        m = np.arange(len(index))
-        if by_entry:
-            out = np.zeros((len(index), count))
-            out[m, index] = 1.0
-        else:
-            out = np.zeros((count, len(index)))
-            out[index, m] = 1.0
-        _INDICATORS[key] = out
-    return out
+_MEMBERS: dict[tuple[bytes, int], np.ndarray] = {}  # owner arrays seen -> their 0/1 matrix (shared)
 
 
 def members(owner: np.ndarray, count: int) -> np.ndarray:
-    """``(m, count)``: ``r2 @ members(owner)`` sums each constraint's squared entries."""
-    return _indicator(owner, count, by_entry=True)
-
-
-def one_hot(joints: np.ndarray, count: int) -> np.ndarray:
-    """``(count, m)``: ``one_hot(joints) @ x`` sums the rows ``x (A, m, c)`` of each joint."""
-    return _indicator(joints, count, by_entry=False)
+    """``(m, count)``, 1 at ``[i, owner[i]]``: ``r2 @ members(owner)`` sums each
+    constraint's squared entries. Cached: a term's owners never change, and frame after
+    frame share theirs."""
+    key = (owner.tobytes(), count)
+    out = _MEMBERS.get(key)
+    if out is None:
+        if len(_MEMBERS) > 4096:
+            _MEMBERS.clear()
+        out = np.zeros((len(owner), count))
+        out[np.arange(len(owner)), owner] = 1.0
+        _MEMBERS[key] = out
+    return out
 
 
 def _blocks(res: "Residuals", a: int) -> Iterator[tuple[bool, np.ndarray, np.ndarray | None, int]]:
@@ -117,6 +102,7 @@ class TermStack:
         self._layout: tuple[np.ndarray | slice, np.ndarray, np.ndarray | slice] | None = None
         self._layout_rows: np.ndarray | None = None
         self._weights: tuple[np.ndarray, np.ndarray] | None = None
+        self._row_bins: tuple[np.ndarray, np.ndarray] | None = None
 
     def stack(self, res: Sequence["Residuals"]) -> np.ndarray:
         """The terms' residuals ``r`` side by side: ``(A, M)``; ``res``: one per term, on ``A``
@@ -149,17 +135,19 @@ class TermStack:
         (22,)``: the row of the position and turn gradients that joint ``j``'s goes to (the
         solver's chain keeps its joints in level order); None: row ``j``.
 
-        The position and turn blocks of all terms are one product: their pairs scattered
-        by one one-hot matrix into ``(A, 44, 3)``, positions in rows ``0 .. 21``, turns in
-        ``22 .. 43`` (the two gradients are views of it)."""
+        The position and turn blocks of all terms are one sum: each pair's ``2 w r d``
+        binned (``np.bincount``) into ``(A, 44, 3)``, positions in rows ``0 .. 21``, turns
+        in ``22 .. 43`` (the two gradients are views of it); a one-hot product would do
+        twice the work of two, most of it on zeros."""
         a, n = len(r), self.joints
         blocks = [block for one in res for _, block, _, _ in _blocks(one, a)]
         latents = [one.d_latent for one in res if one.d_latent is not None]
-        entries, spread, latent_entries = self._pairs(res, rows)
+        entries, bins, latent_entries = self._pairs(res, rows)
         rw = self._entry_weights(weights) * r  # (A, M): 2 w r per entry
         if blocks:
             d = blocks[0] if len(blocks) == 1 else np.concatenate(blocks, axis=1)  # (A, P, 3)
-            g = spread @ (rw[:, entries, None] * d)
+            x = rw[:, entries, None] * d
+            g = np.bincount(self._bins(bins, a), weights=x.reshape(-1), minlength=a * 6 * n).reshape(a, 2 * n, 3)
         else:
             g = np.zeros((a, 2 * n, 3))
         if latents:
@@ -177,12 +165,21 @@ class TermStack:
             kept = self._weights = (weights, 2.0 * weights[:, self.owner])
         return kept[1]
 
+    def _bins(self, bins: np.ndarray, a: int) -> np.ndarray:
+        """The bins ``(A P 3,)`` of ``A`` frames' pairs: frame ``f``'s are ``bins + 6 * 22 f``."""
+        kept = self._row_bins
+        if kept is None or kept[0] is not bins or len(kept[1]) != a * len(bins):
+            offsets = 6 * self.joints * np.arange(a)
+            kept = self._row_bins = (bins, (offsets[:, None] + bins).reshape(-1))
+        return kept[1]
+
     def _pairs(
         self, res: Sequence["Residuals"], rows: np.ndarray | None
     ) -> tuple[np.ndarray | slice, np.ndarray, np.ndarray | slice]:
         """The stacked entry each position or turn pair multiplies ``(P,)`` (or a slice), the
-        one-hot ``(44, P)`` of the gradient row it adds to, and the entries of the latent
-        blocks (made at the first call, again only for other ``rows``)."""
+        bins ``(P 3,)`` of its three partial derivatives in a frame's ``(44, 3)`` gradient,
+        and the entries of the latent blocks (made at the first call, again only for other
+        ``rows``)."""
         if self._layout is not None and self._layout_rows is rows:
             return self._layout
         entries, joints, latent = [np.zeros(0, np.intp)], [np.zeros(0, np.intp)], [np.zeros(0, np.intp)]
@@ -198,7 +195,7 @@ class TermStack:
                 joints.append(gradient_rows(np.asarray(block_joints), rows) + (self.joints if turn else 0))
             if one.d_latent is not None:
                 latent.append(start + np.arange(m))
-        spread = one_hot(np.concatenate(joints), 2 * self.joints)
-        self._layout = (_span(np.concatenate(entries)), spread, _span(np.concatenate(latent)))
+        bins = (3 * np.concatenate(joints)[:, None] + np.arange(3)).reshape(-1)
+        self._layout = (_span(np.concatenate(entries)), bins, _span(np.concatenate(latent)))
         self._layout_rows = rows
         return self._layout

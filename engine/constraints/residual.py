@@ -23,7 +23,7 @@ of the blocks above that are not structurally zero (``m x 3`` numbers instead of
 * the loss of each constraint: ``|r|^2`` over its entries (:meth:`Term.losses`);
 * the solver's fast path: ``2 w J^T r``, accumulated into position, rotation and latent
   gradients over all of a frame's terms at once
-  (:class:`~engine.constraints.gradient_scatter.TermStack`; one term: :meth:`Term.accumulate`), which :mod:`engine.solver.chain` carries through
+  (:class:`~engine.constraints.term_stack.TermStack`), which :mod:`engine.solver.chain` carries through
   FK and the decoder in closed form; ``A = 1`` is the frame-by-frame solve and ``A > 1``
   the batched offline solve (:mod:`engine.solver.batch`);
 * the torch reference: the same residual evaluated on tensors (:data:`TORCH`), through
@@ -47,7 +47,7 @@ from typing import Any
 
 import numpy as np
 
-from engine.constraints.gradient_scatter import TermStack, members
+from engine.constraints.gradient_scatter import members
 
 
 @dataclass(frozen=True)
@@ -241,29 +241,6 @@ class Term:
         member = self._membership()
         r2 = res.r * res.r
         return r2 @ (member if kit.is_numpy else kit.const(member, r2))
-
-    def accumulate(
-        self,
-        res: Residuals,
-        weights: np.ndarray,
-        g_pos: np.ndarray,
-        g_rot: np.ndarray,
-        g_z: np.ndarray | None,
-        rows: np.ndarray | None = None,
-    ) -> None:
-        """Add the gradient of ``sum_n weights[:, n] * loss_n`` to ``g_pos (A, 22, 3)``,
-        ``g_rot (A, 22, 3)`` and ``g_z (A, L)`` in place (``weights (A, n)``). ``rows
-        (22,)``: the row of ``g_pos`` and ``g_rot`` that joint ``j``'s gradient goes to (the
-        solver's chain keeps its joints in level order); None: row ``j``. The term alone
-        as a :class:`~engine.constraints.gradient_scatter.TermStack`, which the solver
-        builds over all of a frame's terms."""
-        stack = TermStack([self], g_pos.shape[1])
-        latent = 0 if g_z is None else g_z.shape[1]
-        pos, rot, z = stack.gradients([res], stack.stack([res]), weights, latent, rows)
-        g_pos += pos
-        g_rot += rot
-        if g_z is not None:
-            g_z += z
 
 
 class FrameRows:

@@ -25,8 +25,8 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
-from engine.constraints.gradient_scatter import TermStack
 from engine.constraints.residual import NUMPY, FrameInputs, Term, torch_kit
+from engine.constraints.term_stack import TermStack
 from engine.solver.chain import PoseChain, RootFrames
 from engine.solver.frame import SolveTimings
 

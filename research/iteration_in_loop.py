@@ -20,15 +20,12 @@ import numpy as np
 import torch
 from threadpoolctl import threadpool_limits
 
-import engine.constraints.residual as residual
+import engine.constraints.term_stack as term_stack
 import engine.models.fused as fused
 import engine.solver.chain as chain
 import engine.solver.objective as objective
 import engine.solver.optimizer as optimizer
 import engine.solver.update as update
-from engine.constraints.sensor import SensorTerm
-from engine.constraints.smooth import SmoothTerm
-from engine.constraints.temporal_prior import PriorTerm
 
 SPENT: dict[str, list[int]] = collections.defaultdict(list)
 
@@ -53,15 +50,14 @@ def main() -> None:
         (chain.PoseChain, "forward", "chain forward"),
         (chain.PoseChain, "backward", "chain backward"),
         (objective.FastObjective, "_residuals", "terms' residuals"),
-        (residual.Term, "losses", "a term's losses"),
+        (term_stack.TermStack, "losses", "the terms' losses"),
+        (term_stack.TermStack, "gradients", "the terms' gradients"),
         (objective.FastObjective, "evaluate", "evaluate (all)"),
         (objective.FastObjective, "gradient", "gradient (all)"),
         (update.LatentUpdate, "step", "update step"),
         (optimizer.PoseOptimizer, "_run", "solve loop"),
     ):
         _wrap(cls, name, label)
-    for term in (SensorTerm, PriorTerm, SmoothTerm):
-        _wrap(term, "accumulate", f"{term.__name__}.accumulate")
 
     from engine.methods.dragposer import DragPoserMethod
     from engine.models import load_default_models

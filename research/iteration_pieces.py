@@ -23,6 +23,7 @@ from threadpoolctl import threadpool_limits
 
 import engine.solver.optimizer as opt
 from engine.constraints.residual import NUMPY
+from engine.constraints.term_stack import TermStack
 from engine.methods.dragposer import DragPoserMethod
 from engine.models import load_default_models
 from engine.motion.retarget import load_motion
@@ -74,10 +75,8 @@ def main() -> None:
         for t in obj.frame.terms:
             t.residual(NUMPY, obj.P, obj.W, obj.z, jac=jac)
 
-    def accumulate() -> None:
-        g_pos, g_rot, g_z = np.zeros_like(obj.P), np.zeros_like(obj.P), np.zeros_like(obj.z)
-        for t, r, w in zip(obj.frame.terms, obj.res, obj.frame.weights):
-            t.accumulate(r, w[None], g_pos, g_rot, g_z)
+    def gradients() -> None:
+        obj.stack.gradients(obj.res, obj.r, obj.weights[None], obj.z.shape[1], obj.chain.unorder)
 
     pieces = {
         "decoder fwd": lambda: obj.decoder.forward(z),
@@ -85,7 +84,7 @@ def main() -> None:
         "terms jac": lambda: terms(True),
         "terms nojac": lambda: terms(False),
         "evaluate": lambda: obj.evaluate(z, timings),
-        "accumulate": accumulate,
+        "gradients": gradients,
         "chain bwd": lambda: obj.chain.backward(gp, gr),
         "decoder bwd": lambda: obj.decoder.backward(g_out[0]),
         "gradient": obj.gradient,
@@ -98,14 +97,15 @@ def main() -> None:
                 spent[k].append(_timed(f))
         for k, v in spent.items():
             print(f"{k:14s} min {np.min(v) / 1e3:7.1f} med {np.median(v) / 1e3:7.1f} us")
-        print("each term alone, tight loop (min us): residual with Jacobians, accumulate, losses")
+        print("each term alone, tight loop (min us): residual with Jacobians, gradients, losses")
         for t, w in zip(obj.frame.terms, obj.frame.weights):
             jac, acc, loss = [], [], []
+            one = TermStack([t])
             for _ in range(repeats):
                 res = t.residual(NUMPY, obj.P, obj.W, obj.z, jac=True)
                 jac.append(_timed(lambda t=t: t.residual(NUMPY, obj.P, obj.W, obj.z, jac=True)))
-                g = np.zeros_like(obj.P), np.zeros_like(obj.P), np.zeros_like(obj.z)
-                acc.append(_timed(lambda t=t, w=w, res=res, g=g: t.accumulate(res, w[None], *g)))
+                r = one.stack([res])
+                acc.append(_timed(lambda one=one, w=w, res=res, r=r: one.gradients([res], r, w[None], obj.z.shape[1])))
                 loss.append(_timed(lambda t=t, res=res: t.losses(res)))
             print(
                 f"  {type(t).__name__:12s} {np.min(jac) / 1e3:6.1f} {np.min(acc) / 1e3:6.1f} {np.min(loss) / 1e3:6.1f}"

@@ -8,7 +8,8 @@ prints the largest difference of each array and exits 1 when any differs by more
 
 The cases cover the root rules (6-DoF hip, 3-DoF hip, head anchor, integrated root), the
 numpy and the autograd objectives, realtime, offline frame by frame, the batched offline
-solve, a user constraint, IK and the after-solve limb steps (``level_feet``).
+solve, a user constraint, a scene's four (look-at, floor, pin, distance; realtime and
+offline), IK and the after-solve limb steps (``level_feet``).
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ import torch
 
 ROOT = Path(__file__).resolve().parents[1]
 CLIP = ROOT / "assets" / "clips" / "example.bvh"
+SCENE = ROOT / "assets" / "scenes" / "look_floor_pin_distance.json"  # look-at, floor, pin, distance
 
 
 def _dragposer(motion, tracking, frames: int, constraints=(), **kw) -> dict[str, np.ndarray]:
@@ -51,6 +53,7 @@ def save(path: Path, frames: int) -> None:
     from engine.methods.dragposer import create
     from engine.methods.ik import IKMethod
     from engine.motion.retarget import load_motion
+    from engine.scene import load_scene
     from engine.tracking import simulate
 
     torch.set_num_threads(1)
@@ -74,6 +77,9 @@ def save(path: Path, frames: int) -> None:
     pin = PinConstraint(name="pin", joint="lknee", position=np.array([0.1, -0.1, 0.5]))
     put("pin-6", _dragposer(motion, tracking, frames, [pin], iterations=10))
     put("offline-4", _dragposer(motion, simulate(motion, "4"), frames // 2, mode="offline"))
+    scene = load_scene(SCENE)[0]
+    put("scene-6", _dragposer(motion, tracking, frames, scene, iterations=10))
+    put("scene-offline-6", _dragposer(motion, tracking, frames // 2, load_scene(SCENE)[0], mode="offline"))
     m = create(mode="offline", prepare_bank=False)
     m.reset(motion.skeleton, motion.fps)
     batched = m.solve_clip([tracking.frame(i) for i in range(frames)])

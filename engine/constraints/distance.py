@@ -17,6 +17,7 @@ from engine.constraints.residual import FrameInputs, Kit, Residuals, Term
 from engine.errors import UserError
 from engine.gizmos import LineGizmo
 
+_SIGNS = np.array([[1.0], [-1.0]])  # the unit vector at joint a, its negative at joint b
 _MIN_SQUARED = 1e-12  # m^2: the length is clamped so its gradient stays finite when the joints coincide
 
 
@@ -85,14 +86,12 @@ class DistanceTerm(Term):
         self.check_group, self.check_limit2 = np.zeros(1, dtype=np.intp), np.array([c.tolerance**2])
         self.joints = np.array(c._pair(), dtype=np.intp)
 
-    def _length(self, kit: Kit, P: Any) -> tuple[Any, Any]:
-        d = P[:, self.joints[0]] - P[:, self.joints[1]]
-        return d, kit.sqrt(kit.clamp_min((d * d).sum(-1), _MIN_SQUARED))
-
     def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:
-        d, length = self._length(kit, P)
+        d = P[:, self.joints[0]] - P[:, self.joints[1]]
+        squared = (d * d).sum(-1)
+        length = kit.sqrt(kit.clamp_min(squared, _MIN_SQUARED))
         r = (length - self.distance)[:, None]
         if not jac:
             return Residuals(r)
-        u = d / length[:, None] * ((d * d).sum(-1) > _MIN_SQUARED)[:, None]  # within the clamp: constant
-        return Residuals(r, self.joints, np.stack((u, -u), axis=1)[:, None])
+        u = d / length[:, None] * (squared > _MIN_SQUARED)[:, None]  # within the clamp: constant
+        return Residuals(r, self.joints, u[:, None, None, :] * _SIGNS)

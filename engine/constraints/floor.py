@@ -110,6 +110,7 @@ class FloorTerm(FrameRows, Term):
             contact = prev[:, 2].astype(np.float32) < np.float32(c.floor_height + c.contact_height)
             self.prev[0], self.slide[0] = prev[:, :2], np.sqrt(c.slide_weight * contact.astype(np.float64))
         self.owner = np.zeros(3 * k if self.sliding else k, dtype=np.intp)
+        self.entry_joint = np.r_[self.idx, np.repeat(self.idx, 2)] if self.sliding else self.idx
         self.check_group = np.r_[np.arange(k), np.full(len(self.owner) - k, -1)]  # each joint's depth, not sliding
         self.check_limit2 = np.full(k, _SLACK**2)
 
@@ -125,9 +126,17 @@ class FloorTerm(FrameRows, Term):
             r = kit.cat([under, moved.reshape(a, 2 * k)], -1)
         if not jac:
             return Residuals(r)
-        d = np.zeros((a, len(self.owner), k, 3))
-        d[:, np.arange(k), np.arange(k), 2] = -(under > 0.0).astype(float)
+        # every entry reads one joint: a per-entry block, whose sliding rows are constant
+        # within the frame and whose depth rows are written at each evaluation
+        d, depth = self.kept("d_pos", sel, lambda: self._position_jacobian(slide))
+        np.multiply(under > 0.0, -1.0, out=depth)
+        return Residuals(r, entry_joint=self.entry_joint, d_pos_entry=d)
+
+    def _position_jacobian(self, slide: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The per-entry position block ``(A, m, 3)`` with its sliding rows (``slide`` along x
+        and y, ``slide (A, k)``), and a view of its depth rows' z column ``(A, k)``."""
+        k = len(self.idx)
+        d = np.zeros((len(slide), len(self.owner), 3))
         if self.sliding:
-            at = k + np.arange(2 * k)
-            d[:, at, np.repeat(np.arange(k), 2), np.tile([0, 1], k)] = np.repeat(slide, 2, axis=1)
-        return Residuals(r, self.idx, d)
+            d[:, k:, :2] = np.repeat(slide, 2, axis=1)[:, :, None] * np.tile(np.eye(2), (k, 1))
+        return d, d[:, :k, 2]

@@ -27,6 +27,9 @@ from engine.gizmos import LineGizmo, PointGizmo
 
 _MIN_DISTANCE = 1e-6  # metres: the direction to a target this close is not defined
 _HALF = math.sqrt(0.5)
+_EYE = np.eye(3)
+#: ``f @ _TURN`` is ``d r_i / d a_k = -[f]x_ik / sqrt(2) = EPS3[i, k, l] f_l / sqrt(2)`` as ``(3 i + k)``.
+_TURN = np.ascontiguousarray(EPS3.transpose(2, 0, 1).reshape(3, 9)) * _HALF
 
 
 @dataclass
@@ -88,6 +91,7 @@ class LookAtTerm(Term):
     def __init__(self, c: LookAtConstraint) -> None:
         self.names, self.owner = (c.name,), np.zeros(3, dtype=np.intp)
         self.j = np.array([joint_index(c.joint, "joint", c.kind)], dtype=np.intp)
+        self.entries = np.repeat(self.j, 3)  # each entry reads the joint: per-entry blocks
         self.axis = np.asarray(c.axis, dtype=np.float64) / np.linalg.norm(c.axis)
         self.target = np.asarray(c.target, dtype=np.float64)
         # |r|^2 = 1 - cos(angle) (unit f and u), so the angle is within the tolerance when
@@ -103,7 +107,7 @@ class LookAtTerm(Term):
         r = (f - u) * _HALF
         if not jac:
             return Residuals(r)
-        free = (n > _MIN_DISTANCE)[:, None, None]  # below it |t| is a constant
-        d_pos = (np.eye(3) - free * u[:, :, None] * u[:, None, :]) / n[:, None, None] * _HALF
-        d_rot = np.einsum("ikl,al->aik", EPS3, f) * _HALF  # turning by a moves f by a x f
-        return Residuals(r, self.j, d_pos[:, :, None], self.j, d_rot[:, :, None])
+        u_free = u * (n > _MIN_DISTANCE)[:, None]  # below it |t| is a constant
+        d_pos = (_EYE - u[:, :, None] * u_free[:, None, :]) / n[:, None, None] * _HALF
+        d_rot = (f @ _TURN).reshape(-1, 3, 3)  # turning by a moves f by a x f
+        return Residuals(r, entry_joint=self.entries, d_pos_entry=d_pos, d_rot_entry=d_rot)

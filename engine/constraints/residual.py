@@ -22,7 +22,8 @@ of the blocks above that are not structurally zero (``m x 3`` numbers instead of
 
 * the loss of each constraint: ``|r|^2`` over its entries (:meth:`Term.losses`);
 * the solver's fast path: ``2 w J^T r``, accumulated into position, rotation and latent
-  gradients (:meth:`Term.accumulate`), which :mod:`engine.solver.chain` carries through
+  gradients over all of a frame's terms at once
+  (:class:`~engine.constraints.term_stack.TermStack`), which :mod:`engine.solver.chain` carries through
   FK and the decoder in closed form; ``A = 1`` is the frame-by-frame solve and ``A > 1``
   the batched offline solve (:mod:`engine.solver.batch`);
 * the torch reference: the same residual evaluated on tensors (:data:`TORCH`), through
@@ -46,7 +47,7 @@ from typing import Any
 
 import numpy as np
 
-from engine.constraints.gradient_scatter import entry_sum, gradient_rows, members, one_hot, scatter_add
+from engine.constraints.gradient_scatter import members
 
 
 @dataclass(frozen=True)
@@ -220,22 +221,6 @@ class Term:
             kept = self._member = (self.owner, members(self.owner, len(self.names)))
         return kept[1]
 
-    def _entry_weights(self, weights: np.ndarray) -> np.ndarray:
-        """``2 weights[:, owner]`` ``(A, m)``: kept while the solve passes the same weights
-        array (a frame-by-frame solve passes one array at every iteration)."""
-        kept = getattr(self, "_entry_w", None)
-        if kept is None or kept[0] is not weights:
-            kept = self._entry_w = (weights, 2.0 * weights[:, self.owner])
-        return kept[1]
-
-    def _spread(self, joints: np.ndarray, count: int, rows: np.ndarray | None) -> np.ndarray:
-        """:func:`~engine.constraints.gradient_scatter.one_hot` of the rows of ``joints``
-        (``rows[joints]``, or ``joints``), kept while the term passes the same arrays."""
-        kept = getattr(self, "_spread_kept", None)
-        if kept is None or kept[0] is not joints or kept[1] is not rows or kept[2].shape[0] != count:
-            kept = self._spread_kept = (joints, rows, one_hot(gradient_rows(joints, rows), count))
-        return kept[2]
-
     def kept(self, name: str, sel: Any, make: Callable[[], Any]) -> Any:
         """``make()``, a value that depends only on the term's parameters of the frames
         ``sel`` (a Jacobian block constant within a frame): made once and returned at every
@@ -256,37 +241,6 @@ class Term:
         member = self._membership()
         r2 = res.r * res.r
         return r2 @ (member if kit.is_numpy else kit.const(member, r2))
-
-    def accumulate(
-        self,
-        res: Residuals,
-        weights: np.ndarray,
-        g_pos: np.ndarray,
-        g_rot: np.ndarray,
-        g_z: np.ndarray | None,
-        rows: np.ndarray | None = None,
-    ) -> None:
-        """Add the gradient of ``sum_n weights[:, n] * loss_n`` to ``g_pos (A, 22, 3)``,
-        ``g_rot (A, 22, 3)`` and ``g_z (A, L)`` in place (``weights (A, n)``, not changed
-        in place between calls). ``rows (22,)``: the row of ``g_pos`` and ``g_rot`` that
-        joint ``j``'s gradient goes to (the solver's chain keeps its joints in level
-        order); None: row ``j``."""
-        rw = (self._entry_weights(weights) * res.r)[:, None, :]  # (A, 1, m)
-        if res.d_pos is not None:
-            assert res.pos_joints is not None  # a Jacobian block comes with its joints
-            scatter_add(g_pos, gradient_rows(res.pos_joints, rows), entry_sum(rw, res.d_pos))
-        if res.d_rot is not None:
-            assert res.rot_joints is not None
-            scatter_add(g_rot, gradient_rows(res.rot_joints, rows), entry_sum(rw, res.d_rot))
-        if res.d_latent is not None and g_z is not None:
-            g_z += (rw @ res.d_latent)[:, 0]
-        if res.entry_joint is not None:  # per entry: one product with the entries' one-hot joints
-            spread = self._spread(res.entry_joint, g_pos.shape[1], rows)  # (22, m)
-            rw_entry = rw[:, 0, :, None]  # (A, m, 1)
-            if res.d_pos_entry is not None:
-                g_pos += spread @ (rw_entry * res.d_pos_entry)
-            if res.d_rot_entry is not None:
-                g_rot += spread @ (rw_entry * res.d_rot_entry)
 
 
 class FrameRows:

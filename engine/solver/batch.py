@@ -108,8 +108,7 @@ class BatchObjective(FastObjective):
         """The gradients ``(A, L)`` float32 of each evaluated row's weighted total w.r.t.
         its latent."""
         assert self.rows is not None
-        w = self.weights[self.rows]
-        g_out, g_z = self.pose_gradient([w[:, a:b] for a, b in zip(self.spans[:-1], self.spans[1:])])
+        g_out, g_z = self.pose_gradient(self.weights[self.rows])
         return self.decoder.columns(len(self.rows)).backward(g_out.T).T + g_z.astype(np.float32)
 
     def row(self, c: int) -> tuple[np.ndarray, np.ndarray]:

@@ -9,7 +9,7 @@ Per frame (``A`` frames at once; ``A = 1`` frame by frame)::
     P'   = P + (head_target - P[head])         when the head anchors the body
 
 :meth:`PoseChain.backward` turns the gradients of any loss w.r.t. ``P'`` and world turns
-of ``W`` (what :meth:`engine.constraints.residual.Term.accumulate` gives) into the
+of ``W`` (what :meth:`engine.constraints.term_stack.TermStack.gradients` gives) into the
 gradient w.r.t. the decoder output, in closed form: turning joint ``j`` by a small
 world-frame angle ``a`` moves every descendant ``d`` by ``a x (P_d - P_j)`` and turns its
 world rotation by ``a``, so the gradient w.r.t. that angle is ``tau_j = sum_{d in
@@ -124,8 +124,8 @@ class PoseChain:
         are ``g_pos (A, 22, 3)`` w.r.t. the positions and ``g_rot (A, 22, 3)`` w.r.t. world
         turns of the rotations (None: zero), at the last :meth:`forward`: in joint order, or
         in the chain's level order (row ``unorder[j]`` for joint ``j``) with
-        ``level_order``, which saves gathering them (:meth:`Term.accumulate
-        <engine.constraints.residual.Term.accumulate>` writes that order when given
+        ``level_order``, which saves gathering them (:meth:`TermStack.gradients
+        <engine.constraints.term_stack.TermStack.gradients>` writes that order when given
         :attr:`unorder`)."""
         n, root, pos = self.n, self.root, self.pos
         g = g_pos if level_order else g_pos[:, self.order]

@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 
 from engine.constraints.residual import NUMPY, FrameInputs, Term, torch_kit
+from engine.constraints.term_stack import TermStack
 from engine.solver.chain import PoseChain, RootFrames
 from engine.solver.frame import SolveTimings
 
@@ -124,7 +125,8 @@ class FastObjective:
         self.decoder, self.chain, self.root, self._make_state = decoder, chain, root, make_state
         self.frame = _Frame(terms, weights)
         self.names, self.weights = self.frame.names, self.frame.flat
-        self._row_weights = [w[None] for w in weights]
+        self.stack = TermStack(terms, chain.n)
+        self._row_weights = self.weights[None]
 
     def evaluate_rows(
         self, out: np.ndarray, z: np.ndarray, root: RootFrames, rows: np.ndarray | None, gradient: bool
@@ -136,25 +138,23 @@ class FastObjective:
         self.P, self.W = self.chain.forward(out, root)
         self.z, self.rows = z, rows
         self._residuals(gradient)
-        values = [t.losses(r) for t, r in zip(self.frame.terms, self.res)]
-        return np.concatenate(values, axis=1) if values else np.zeros((len(out), 0))
+        return self.stack.losses(self.r)
 
-    def pose_gradient(self, weights: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-        """Gradients of each row's weighted total (``weights``: each term's ``(A, n)``) at
+    def pose_gradient(self, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Gradients of each row's weighted total (``weights (A, K)``, not changed in place
+        between calls) at
         the last :meth:`evaluate_rows` w.r.t. its decoder outputs ``(A, 91)`` and w.r.t.
         its latent directly ``(A, L)`` float64 (terms on the latent)."""
         if not self.jac:  # evaluated without Jacobians: make them now
             self._residuals(True)
-        # np.zeros, not zeros_like: the Python wrapper costs more than the arrays (float64 all)
-        g_pos, g_rot, g_z = np.zeros(self.P.shape), np.zeros(self.P.shape), np.zeros(self.z.shape)
-        rows = self.chain.unorder  # the gradients in the chain's level order: no gathers
-        for t, r, w in zip(self.frame.terms, self.res, weights):
-            t.accumulate(r, w, g_pos, g_rot, g_z, rows)
+        # the gradients in the chain's level order: no gathers
+        g_pos, g_rot, g_z = self.stack.gradients(self.res, self.r, weights, self.z.shape[1], self.chain.unorder)
         return self.chain.backward(g_pos, g_rot, level_order=True), g_z
 
     def _residuals(self, jac: bool) -> None:
         """Each term's residuals (with their Jacobians when ``jac``) at the kept poses."""
         self.res = [t.residual(NUMPY, self.P, self.W, self.z, jac=jac, rows=self.rows) for t in self.frame.terms]
+        self.r = self.stack.stack(self.res) if self.res else np.zeros((len(self.P), 0))
         self.jac = jac
 
     def satisfied_rows(self) -> np.ndarray:

@@ -15,7 +15,7 @@ from engine import skeleton as sk
 from engine.constraints import SensorConstraint
 from engine.constraints.residual import NUMPY
 from engine.kinematics.fk import fk_level_order, levels
-from tests.engine.test_terms import EXAMPLES, L, _example, _inputs, random_pose
+from tests.engine.test_terms import EXAMPLES, _example, _inputs, random_pose, term_gradients
 
 _FIELDS = ("r", "d_pos", "d_rot", "d_latent", "d_pos_entry", "d_rot_entry")
 
@@ -60,7 +60,7 @@ def test_kept_blocks_are_forgotten_when_a_row_takes_new_readings():
 
 @pytest.mark.parametrize("kind, index", EXAMPLES)
 def test_gradients_accumulated_in_level_order_are_the_joint_order_ones_reordered(kind, index):
-    """``accumulate(..., rows=unorder)`` writes joint ``j``'s gradient to row
+    """``gradients(..., rows=unorder)`` writes joint ``j``'s gradient to row
     ``unorder[j]``: the same numbers, to the bit, as joint order gathered into level order."""
     pos, mats, z, frame = _inputs(14)
     c = _example(kind, index)
@@ -68,10 +68,8 @@ def test_gradients_accumulated_in_level_order_are_the_joint_order_ones_reordered
     for t in type(c).terms([c], frame):
         res = t.residual(NUMPY, pos[None], mats[None], z[None], jac=True)
         w = np.arange(1.0, len(t.names) + 1.0)[None]
-        joint = [np.zeros((1, 22, 3)), np.zeros((1, 22, 3)), np.zeros((1, L))]
-        level = [np.zeros((1, 22, 3)), np.zeros((1, 22, 3)), np.zeros((1, L))]
-        t.accumulate(res, w, *joint)
-        t.accumulate(res, w, *level, lv.unorder)
+        joint = term_gradients(t, res, w)
+        level = term_gradients(t, res, w, lv.unorder)
         np.testing.assert_array_equal(level[0], joint[0][:, lv.order])
         np.testing.assert_array_equal(level[1], joint[1][:, lv.order])
         np.testing.assert_array_equal(level[2], joint[2])

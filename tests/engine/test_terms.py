@@ -19,6 +19,7 @@ from engine import skeleton as sk
 from engine.constraints import REGISTRY
 from engine.constraints.base import state_arrays
 from engine.constraints.residual import NUMPY, FrameInputs, FrameRows, torch_kit
+from engine.constraints.term_stack import TermStack
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk_matrices
 from engine.kinematics.pose_state import PoseState
@@ -57,6 +58,13 @@ def _inputs(seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, FrameInputs]
     prev = pos + rng.normal(0, 0.02, pos.shape)
     z = rng.normal(0, 1, L)
     return pos, mats, z, FrameInputs(prev, 3, rng.normal(0, 1, L))
+
+
+def term_gradients(term, res, weights: np.ndarray, rows: np.ndarray | None = None) -> tuple[np.ndarray, ...]:
+    """The position, turn and latent gradients ``(A, 22, 3)``, ``(A, 22, 3)``, ``(A, L)`` of
+    one term's weighted losses (``weights (A, n)``): the term alone as a :class:`TermStack`."""
+    stack = TermStack([term])
+    return stack.gradients([res], stack.stack([res]), weights, L, rows)
 
 
 def _example(kind: str, index: int):
@@ -99,8 +107,7 @@ def test_gradients_from_the_jacobian_equal_autograd(kind, index, seed):
 
     res = term.residual(NUMPY, pos[None], mats[None], z[None], jac=True)
     np.testing.assert_allclose(term.losses(res)[0], loss.detach().numpy(), rtol=1e-10, atol=1e-14)
-    got_pos, got_rot, got_z = np.zeros((1, 22, 3)), np.zeros((1, 22, 3)), np.zeros((1, L))
-    term.accumulate(res, weights[None], got_pos, got_rot, got_z)
+    got_pos, got_rot, got_z = term_gradients(term, res, weights[None])
     np.testing.assert_allclose(got_pos[0], g_p, rtol=1e-9, atol=1e-11)
     np.testing.assert_allclose(got_rot[0], want_rot, rtol=1e-9, atol=1e-11)
     np.testing.assert_allclose(got_z[0], g_z, rtol=1e-9, atol=1e-11)
@@ -151,7 +158,7 @@ def test_solving_never_changes_a_constraint(kind, index):
     c.loss(state), c.satisfied(state), c.gizmo(pos)
     for t in type(c).terms([c], frame):
         res = t.residual(NUMPY, pos[None], mats[None], z[None], jac=True)
-        t.accumulate(res, np.ones((1, len(t.names))), np.zeros((1, 22, 3)), np.zeros((1, 22, 3)), np.zeros((1, L)))
+        term_gradients(t, res, np.ones((1, len(t.names))))
         t.satisfied(pos[None], mats[None], z[None])
     after = c.to_dict()
     assert before.keys() == after.keys()

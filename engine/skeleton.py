@@ -128,6 +128,9 @@ MIRROR_INDEX: tuple[int, ...] = tuple(
     JOINT_INDEX[dict(MIRROR_PAIRS + tuple((b, a) for a, b in MIRROR_PAIRS)).get(n, n)] for n in JOINT_NAMES
 )
 
+#: Each foot's ankle and toe joint, by side.
+FEET: dict[str, tuple[str, str]] = {"left": ("lankle", "ltoe"), "right": ("rankle", "rtoe")}
+
 #: End effectors in the field's sense (head, hands, feet); feet are the ankles as in DragPoser.
 END_EFFECTORS: tuple[str, ...] = ("upperneck", "lwrist", "rwrist", "lankle", "rankle")
 

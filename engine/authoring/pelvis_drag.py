@@ -27,8 +27,6 @@ from engine.kinematics.fk import fk
 from engine.kinematics.quat_np import qbetween, qconj, qmul
 from engine.solver.limb_ik import LIMBS, reach_local
 
-#: Ankle -> toe of each foot.
-FEET = {"lankle": "ltoe", "rankle": "rtoe"}
 #: The joints of both legs whose local rotations the legs bend from.
 LEG_JOINTS = tuple(sk.JOINT_INDEX[s + n] for s in "lr" for n in ("hip", "knee", "ankle"))
 #: A planted leg is kept this far (metres) short of fully straight, so its knee still bends.
@@ -41,7 +39,7 @@ def legs_reach(pose: Pose, pelvis: np.ndarray, feet: Mapping[str, np.ndarray]) -
     """Whether every planted leg of ``pose`` (its ankle at ``feet[ankle]`` (3,) metres)
     reaches its ankle with the pelvis moved to ``pelvis (3,)`` metres, turned as it is."""
     shift = np.asarray(pelvis, float) - pose.root_pos
-    for ankle in FEET:
+    for ankle, _ in sk.FEET.values():
         if ankle not in feet:
             continue
         hip, knee = LIMBS[sk.JOINT_INDEX[ankle]]
@@ -102,14 +100,14 @@ def pelvis_pose(
         The latent and ``decoded`` positions of ``pose``; the root at ``pelvis``.
     """
     root = np.asarray(pelvis, float).copy()
-    ankles = {sk.JOINT_INDEX[a]: np.asarray(feet[a], float) for a in FEET if a in feet}
+    ankles = {sk.JOINT_INDEX[a]: np.asarray(feet[a], float) for a, _ in sk.FEET.values() if a in feet}
     reach = {**ankles, **{j: np.asarray(p, float) for j, p in limbs.items() if j in LIMBS}}
     local = np.array(pose.local_rot, float)
     if legs is not None:
         local[list(LEG_JOINTS)] = np.asarray(legs, float)[list(LEG_JOINTS)]
     local = reach_local(local, root, offsets, reach)
     positions, world = fk(local, root, offsets)
-    for ankle, toe in FEET.items():
+    for ankle, toe in sk.FEET.values():
         a, t = sk.JOINT_INDEX[ankle], sk.JOINT_INDEX[toe]
         if toe not in feet or a in limbs:
             continue

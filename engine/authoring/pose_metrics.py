@@ -74,7 +74,6 @@ TRUNK_BONES = (
     ("chest", "rclavicle"),
     ("rclavicle", "rshoulder"),
 )
-FEET = {"left": ("lankle", "ltoe"), "right": ("rankle", "rtoe")}
 
 
 @dataclass
@@ -153,7 +152,7 @@ def feet_down(positions: np.ndarray, offsets: np.ndarray, tolerance: float = FOO
     flat = standing_heights(offsets)
     return {
         side: bool(all(abs(positions[J[j], 2] - flat[J[j]]) <= tolerance for j in joints))
-        for side, joints in FEET.items()
+        for side, joints in sk.FEET.items()
     }
 
 
@@ -202,7 +201,7 @@ def support_polygon(positions: np.ndarray, rotations: np.ndarray, offsets: np.nd
     scale = sk.Skeleton(np.asarray(offsets, float)).scale
     pts = []
     for side in sides:
-        ankle, toe = FEET[side]
+        ankle, toe = sk.FEET[side]
         tip = positions[J[toe]] + QN.rotate(rotations[J[toe]], sk.END_SITES[toe] * scale)
         pts += [positions[J[ankle], :2], positions[J[toe], :2], tip[:2]]
     return convex_hull(np.array(pts))
@@ -223,5 +222,5 @@ def check_pose(local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray)
     down = feet_down(positions, offsets)
     margin = None
     if all(down.values()):
-        margin = 100.0 * polygon_margin(com[:2], support_polygon(positions, rotations, offsets, FEET))
+        margin = 100.0 * polygon_margin(com[:2], support_polygon(positions, rotations, offsets, sk.FEET))
     return PoseCheck(flex, hyperextensions(flex), [float(x) for x in com], down, margin, trunk_tilt_deg(positions))

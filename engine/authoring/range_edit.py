@@ -55,8 +55,6 @@ STEP_SIZE = 0.15
 #: Pull towards the original frame's latent.
 PRIOR_WEIGHT = 0.1
 SMOOTH_WEIGHT = 1.0
-#: Foot joints held in contact: toe -> its ankle (the joint whose limb reaches).
-FEET = {"ltoe": "lankle", "rtoe": "rankle"}
 #: Half-width of the window (frames) that smooths the solve's change over time: at 60 fps
 #: on CMU clips, 0 left steps of 10-25 cm in the range where the clip moved 5-17 cm.
 SMOOTH_FRAMES = 4
@@ -207,7 +205,7 @@ def _exact_steps(
     the module doc); ``end``: the range's last frame (after it a hold fades with ``weight``)."""
     offsets = motion.skeleton.offsets
     floors = [c for c in constraints if isinstance(c, FloorConstraint) and c.enabled]
-    feet = [Foot(sk.JOINT_INDEX[t], sk.JOINT_INDEX[a]) for t, a in FEET.items()]
+    feet = [Foot(sk.JOINT_INDEX[t], sk.JOINT_INDEX[a]) for a, t in sk.FEET.values()]
     for i, f in enumerate(frames):
         pos = fk_positions(local[f], motion.root_pos[f], offsets)
         was = fk_positions(motion.local_rot[f], motion.root_pos[f], offsets)  # contact is read off the clip

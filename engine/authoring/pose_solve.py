@@ -129,8 +129,8 @@ class PoseSolving:
         if self.anchor is None:
             self.anchor = self.pose
         best: tuple[float, Pose | None] = (np.inf, None)
+        gap = self.shortfall()
         for round_ in range(1 + (max(0, o.reach_rounds) if iterations > 0 else 0)):
-            gap = self.shortfall()
             if round_ and gap <= o.reach_tolerance:
                 break
             where = self._where(o.free_height or iterations > 0)
@@ -148,6 +148,7 @@ class PoseSolving:
                 break
             if short < best[0]:
                 best = (short, self.pose)
+            gap = short  # the next round starts from this pose, with the same targets
         if best[1] is not None:
             # rounds near the floor can circle their target: the event ends on its closest one
             self.pose = best[1]

@@ -104,6 +104,8 @@ class PoseWindow(QMainWindow):
         self.viewport.joints.drag_origin = lambda name: self.session.hips_handle() if name == "root" else None
         # Shift + drag near the hips moves the pelvis alone (AuthoringSession.drag_pelvis)
         self.viewport.joints.shift_grabs = "root"
+        # the hip joints move only with the pelvis: a press on them grabs the hips
+        self.viewport.joints.stand_ins = {"lhip": "root", "rhip": "root"}
         self.targets = TargetList()
         self.targets.enabledChanged.connect(lambda j, on: self.edit_target(j, enabled=on))
         self.targets.weightChanged.connect(lambda j, w: self.edit_target(j, weight=w))

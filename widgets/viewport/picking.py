@@ -25,6 +25,10 @@ import pyvista as pv
 from engine.skeleton import JOINT_NAMES
 
 PICK_RADIUS_PX = 14.0
+#: Joints whose centres lie this near a press (pixels: the radius of the balls the
+#: skeleton draws, ``widgets.viewport.skeleton``'s 12-pixel points) are all under the
+#: cursor; the press grabs the one drawn in front.
+DRAWN_RADIUS_PX = 6.0
 #: A Shift press this near (pixels) :attr:`JointDragger.shift_grabs` grabs it before
 #: anything else: the hips sit among the hip and back joints, a few pixels apart.
 SHIFT_PICK_RADIUS_PX = 28.0
@@ -198,12 +202,16 @@ class JointDragger:
         return np.array(out)
 
     def _nearest(self, x: float, y: float) -> tuple[int, float] | None:
-        """The joint drawn nearest display pixel (x, y) and its distance, pixels, within
-        :data:`PICK_RADIUS_PX`; None if none."""
+        """The joint drawn nearest display pixel (x, y) (of several under it, the one in
+        front) and its distance, pixels, within :data:`PICK_RADIUS_PX`; None if none."""
         if self.positions is None:
             return None
         dist = np.linalg.norm(self._to_display(self.positions) - [x, y], axis=1)
         j = int(np.argmin(dist))
+        under = np.flatnonzero(dist <= DRAWN_RADIUS_PX)
+        if len(under) > 1:  # seen edge-on (the side view's elbows and knees): the one in front
+            eye = np.asarray(self._plotter.camera.position, float)
+            j = int(under[np.argmin(np.linalg.norm(self.positions[under] - eye, axis=1))])
         return None if dist[j] > PICK_RADIUS_PX else (j, float(dist[j]))
 
     def joint_at(self, x: float, y: float) -> int | None:

@@ -48,6 +48,7 @@ from engine.motion.source_file import is_source_file
 from engine.studio.session import Session
 from engine.studio.session_sensors import SensorSet
 from widgets.constraint_panel import ConstraintPanel
+from widgets.help_dialog import MOUSE
 from widgets.latent_inspector import LatentInspector
 from widgets.method_errors import MethodErrorPlot
 from widgets.optimizer_panel import OptimizerPanel
@@ -71,6 +72,8 @@ class MainWindow(QMainWindow):
     reach the engine's internals). ``started``: an engine process already started
     (``gui`` starts it before importing Qt: :func:`app.cli.run`), used instead of a new one.
     """
+
+    mouse_help = MOUSE
 
     snapshotDrawn = pyqtSignal(int)
 

@@ -58,6 +58,7 @@ from engine.authoring.history import History
 from engine.authoring.pose_mode import PoseMode
 from engine.authoring.session import AuthoringSession
 from engine.errors import UserError
+from widgets.help_dialog import POSE_MOUSE
 from widgets.key_strip import KeyStrip
 from widgets.target_list import TargetList
 from widgets.viewport.viewport import Viewport
@@ -69,6 +70,8 @@ SIDE_PANEL_PX = 330
 class PoseWindow(QMainWindow):
     """See the module doc. ``session``: the authoring model the window shows and edits;
     ``settings``: where dialogs remember their choices (default: the studio's)."""
+
+    mouse_help = POSE_MOUSE
 
     def __init__(
         self, session: AuthoringSession, parent: QWidget | None = None, settings: QSettings | None = None

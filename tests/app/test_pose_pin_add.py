@@ -1,0 +1,45 @@
+"""A pin added in the pose window where its joint is leaves the pose as it is (real
+clicks on the Constraints dock's kind list and Add button). The pin's weight is 30, and
+the pose window's plain gradient steps overshot on it: a pin on a stepped ankle, 6 mm
+from where the latent puts that ankle, sent the loss from 0.03 to 4.8 in one step and
+the head 36 cm away, a free arm up over the head (found with xdotool under Xvfb)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from PyQt6.QtCore import Qt
+from PyQt6.QtTest import QTest
+
+from engine import skeleton as sk
+from tests.app.gui_helpers import mouse_drag, pixel_of
+
+pytestmark = pytest.mark.gui
+
+J = sk.JOINT_INDEX
+
+
+def test_a_pin_added_on_a_stepped_foot_moves_nothing(pose_window):
+    w = pose_window
+    v = w.viewport
+    v.set_camera("front", w.hips())
+    v.plotter.render()
+    p = w.mode.pose.positions.copy()
+    mouse_drag(v, pixel_of(v, p[J["rwrist"]]), pixel_of(v, p[J["rshoulder"]] + [-0.1, 0.0, 0.35]), steps=8)
+    w.add_key(0)  # a raised hand keyed at 0 ...
+    w.session.set_length(200)
+    w.go_to(191)  # ... held after it: a step made there
+    v.set_camera("side", w.hips())
+    v.plotter.render()
+    p = w.mode.pose.positions.copy()
+    mouse_drag(v, pixel_of(v, p[J["lankle"]]), pixel_of(v, p[J["lankle"]] + [0.0, -0.3, 0.0]), steps=8)
+    w.add_key(191)
+    before = w.mode.pose.positions.copy()
+    panel = w.constraints.panel
+    panel.kinds.setCurrentText("pin")
+    QTest.mouseClick(panel.add_button, Qt.MouseButton.LeftButton)
+    (pin,) = w.mode.constraints
+    assert pin.kind == "pin" and pin.joint == "lankle"
+    moved = np.linalg.norm(w.mode.pose.positions - before, axis=1)
+    assert moved.max() < 0.03, f"{sk.JOINT_NAMES[int(moved.argmax())]} moved {moved.max():.3f} m"
+    assert np.linalg.norm(w.mode.pose.positions[J["lankle"]] - pin.position) < 0.01

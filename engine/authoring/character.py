@@ -45,10 +45,10 @@ FOOT_JOINTS = tuple(sk.JOINT_INDEX[j] for j in ("lankle", "rankle", "ltoe", "rto
 #: Height range accepted for a character, metres.
 HEIGHT_RANGE = (0.5, 2.5)
 #: Plain gradient steps have a fixed size, set for targets of weight about 1; on a term
-#: weighted far above them (a pin's default 30) the first steps overshoot: the total went
-#: from 0.03 to 4.8 in one step and the latent wandered off, moving joints no term holds
-#: by 20-40 cm. A plain-step solve whose total rose above this multiple of its start is
-#: solved again with half the step, at most :data:`HALVINGS` times.
+#: weighted far above them (a pin's default 30) the first steps overshoot (a pin 6 mm off:
+#: the total 0.03 -> 4.8 in one step) and the latent wanders off, moving joints no term
+#: holds by 20-40 cm. A plain-step solve whose total rises above this multiple of its
+#: start is solved again with half the step, at most :data:`HALVINGS` times.
 TOTAL_RISE = 1.5
 HALVINGS = 6
 

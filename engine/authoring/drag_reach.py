@@ -40,7 +40,7 @@ TOUCH = 0.06
 #: Joints a dragged ankle never lands on (:func:`onto_body`), besides its own leg: its toe,
 #: which moves with it, and the other foot, which it cannot stand on. In the side view
 #: the feet are drawn over each other, and a foot stepped forward along the floor passes
-#: over the other foot's toe: it took that toe's depth and the feet crossed.
+#: over the other foot's toe: taking that toe's depth would cross the feet.
 NOT_TOUCHED = {
     "lankle": ("ltoe", "rankle", "rtoe"),
     "rankle": ("rtoe", "lankle", "ltoe"),

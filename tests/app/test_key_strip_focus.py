@@ -1,7 +1,6 @@
 """A click on the pose window's key timeline takes the keyboard focus, so the camera keys
-work after a number was typed into a field beside it: with the focus left in the length
-field, pressing 3 for the side view typed 3 there and made the animation 3 frames long
-(found with xdotool under Xvfb)."""
+work after a number was typed into a field beside it: left in the length field, the
+focus would take a 3 pressed for the side view and make the animation 3 frames long."""
 
 from __future__ import annotations
 

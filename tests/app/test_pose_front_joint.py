@@ -1,7 +1,7 @@
 """A real press where two joints are drawn on top of each other (the side view of the
 pose window: the elbows 1 pixel apart, the knees 5) grabs the one drawn in front, the
-one the user sees, not whichever centre happens to be a pixel nearer (found with xdotool
-under Xvfb: a press on the near ankle dragged the far one)."""
+one the user sees, not whichever centre happens to be a pixel nearer (a press on the
+near ankle must not drag the far one)."""
 
 from __future__ import annotations
 

@@ -1,7 +1,6 @@
-"""F1 in the pose window lists the pose window's mouse, not the studio's: a new user read
-there that a left drag turns the camera, that Ctrl + drag pins a joint and that yellow
-spheres are sensors, none of which is so in the pose window (found reading Help under
-Xvfb). The rows come from the dialog the Help menu's F1 entry opens."""
+"""F1 in the pose window lists the pose window's mouse, not the studio's: a left drag on
+the body makes a target there, Ctrl + drag pins nothing and the yellow spheres are
+targets, not sensors. The rows come from the dialog the Help menu's F1 entry opens."""
 
 from __future__ import annotations
 

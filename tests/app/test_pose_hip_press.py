@@ -1,8 +1,7 @@
 """Real presses on the hips in the side view of the pose window, where the two hip joints
 are drawn on top of each other just below the pelvis, where the legs start: a press on
 either hip joint takes the pelvis (a squat, the body raised), never a target on the hip
-joint, which folded the legs under the body (found driving the window under Xvfb with
-xdotool)."""
+joint, which folds the legs under the body."""
 
 from __future__ import annotations
 

@@ -1,8 +1,8 @@
 """A pin added in the pose window where its joint is leaves the pose as it is (real
-clicks on the Constraints dock's kind list and Add button). The pin's weight is 30, and
-the pose window's plain gradient steps overshot on it: a pin on a stepped ankle, 6 mm
-from where the latent puts that ankle, sent the loss from 0.03 to 4.8 in one step and
-the head 36 cm away, a free arm up over the head (found with xdotool under Xvfb)."""
+clicks on the Constraints dock's kind list and Add button). The pin's weight is 30, on
+which fixed plain gradient steps overshoot: a pin on a stepped ankle, 6 mm from where
+the latent puts that ankle, sends the loss from 0.03 to 4.8 in one step, the head 36 cm
+away and a free arm up over the head unless the step is halved."""
 
 from __future__ import annotations
 

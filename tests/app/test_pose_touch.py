@@ -31,7 +31,7 @@ def test_a_hand_dragged_onto_the_opposite_knee_from_the_front_lands_on_it(pose_w
 @pytest.mark.parametrize("ankle, other", [("lankle", "rankle"), ("rankle", "lankle")])
 def test_a_foot_stepped_forward_in_the_side_view_stays_in_its_lane(pose_window, ankle, other):
     """A short step along the floor in the side view passes over the other foot's toe,
-    drawn there; the foot landed on it, the feet crossed (found with xdotool under Xvfb)."""
+    drawn there; landing on it would cross the feet."""
     w = pose_window
     v = w.viewport
     v.set_camera("side", w.hips())

@@ -99,7 +99,7 @@ class JointDragger:
         #: Joints whose press grabs another joint instead: ``{pressed: grabbed}`` (the pose
         #: window's hip joints stand for the pelvis: they move only with it, and in the side
         #: view they are the balls where the legs meet the body, which a user takes for
-        #: the hips; a target on one folded the legs under the body).
+        #: the hips; a target on one folds the legs under the body).
         self.stand_ins: dict[str, str] = {}
         self._origin = np.zeros(3)  # the grabbed thing's place: the drag plane goes through it
         self._base = np.zeros(3)  # what the drag moves: sent as _base + (hit - _grab)

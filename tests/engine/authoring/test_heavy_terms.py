@@ -1,7 +1,7 @@
 """A heavy term (a pin's default weight, 30) in the pose mode's plain gradient steps: the
-solve takes it without overshooting, so joints no term holds stay put. Before the step
-was halved on an overshoot, a pin 3 cm from the elbow sent the total from 0.03 to 4.8 in
-one step and moved the other wrist by 20 cm."""
+solve takes it without overshooting, so joints no term holds stay put. Without halving
+the step on an overshoot, a pin 3 cm from the elbow sends the total from 0.03 to 4.8 in
+one step and moves the other wrist by 20 cm."""
 
 from __future__ import annotations
 

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from PyQt6.QtCore import Qt
 from PyQt6.QtTest import QTest
+from PyQt6.QtWidgets import QComboBox
 
 from engine import skeleton as sk
 from tests.app.gui_helpers import mouse_drag, pixel_of
@@ -43,3 +44,23 @@ def test_a_pin_added_on_a_stepped_foot_moves_nothing(pose_window):
     moved = np.linalg.norm(w.mode.pose.positions - before, axis=1)
     assert moved.max() < 0.03, f"{sk.JOINT_NAMES[int(moved.argmax())]} moved {moved.max():.3f} m"
     assert np.linalg.norm(w.mode.pose.positions[J["lankle"]] - pin.position) < 0.01
+
+
+def test_a_pin_put_on_another_joint_in_its_editor_pins_that_joint_where_it_is(pose_window):
+    """A pin is added on the ankle (its default joint); choosing the wrist in its editor
+    pins the wrist where the wrist is. Left at the ankle's place, the pin pulls the wrist
+    down to the floor and folds the body over."""
+    w = pose_window
+    before = w.mode.pose.positions.copy()
+    panel = w.constraints.panel
+    panel.kinds.setCurrentText("pin")
+    QTest.mouseClick(panel.add_button, Qt.MouseButton.LeftButton)
+    (joint_box,) = [b for b in panel.editor.findChildren(QComboBox) if b.currentText() == "lankle"]
+    joint_box.setCurrentText("lwrist")
+    (pin,) = w.mode.constraints
+    assert pin.joint == "lwrist"
+    assert np.linalg.norm(pin.position - before[J["lwrist"]]) < 1e-6
+    moved = np.linalg.norm(w.mode.pose.positions - before, axis=1)
+    assert moved.max() < 0.02, f"{sk.JOINT_NAMES[int(moved.argmax())]} moved {moved.max():.3f} m"
+    w.undo.undo()  # one step: the joint and the place together
+    assert w.mode.constraints[0].joint == "lankle"

@@ -7,6 +7,7 @@ pose on screen, so the user starts from something visible and already (nearly) s
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import numpy as np
@@ -14,7 +15,7 @@ import numpy as np
 from engine.constraints import REGISTRY
 from engine.constraints.placement import facing
 
-__all__ = ["facing", "placed_params"]
+__all__ = ["facing", "moved_params", "placed_params"]
 
 
 def placed_params(kind: str, defaults: dict[str, Any], positions: np.ndarray | None) -> dict[str, Any]:
@@ -28,3 +29,21 @@ def placed_params(kind: str, defaults: dict[str, Any], positions: np.ndarray | N
         return {}
     out = cls.placement(dict(defaults), np.asarray(positions, float))
     return {k: v for k, v in out.items() if k in defaults}
+
+
+def moved_params(constraint: Any, changes: dict[str, Any], positions: np.ndarray | None) -> dict[str, Any]:
+    """``changes`` to ``constraint`` (a :class:`engine.constraints.base.Constraint`) plus,
+    when they put it on other joints (a ``joint`` or ``joints`` field) and set none of the
+    fields its placement gives, those fields placed on the pose ``positions`` (22, 3) m
+    for the new joints: a pin moved from the ankle to the elbow is pinned where the elbow
+    is, not left at the ankle's place, where it pulls the elbow down to the floor."""
+    cls = REGISTRY.get(constraint.kind)
+    editors = {f.name: f.metadata.get("editor") for f in dataclasses.fields(constraint)}
+    moved = any(editors.get(k) in ("joint", "joints") for k in changes)
+    if cls is None or not moved or positions is None or not np.all(np.isfinite(positions)):
+        return changes
+    params = {k: getattr(constraint, k) for k in editors} | changes
+    placed = cls.placement(params, np.asarray(positions, float))
+    if any(k in changes for k in placed):
+        return changes
+    return changes | {k: v for k, v in placed.items() if k in editors}

@@ -29,7 +29,7 @@ from PyQt6.QtWidgets import (
 from app import authoring_actions, clip_saving
 from app.busy import BusyNotice
 from app.camera_keys import CameraKeys
-from app.constraint_placement import placed_params
+from app.constraint_placement import moved_params, placed_params
 from app.constraint_ranges import link_ranges
 from app.drawing import DrawScheduler
 from app.failures import FailureCountdown
@@ -48,6 +48,7 @@ from engine.motion.source_file import is_source_file
 from engine.studio.session import Session
 from engine.studio.session_sensors import SensorSet
 from widgets.constraint_panel import ConstraintPanel
+from widgets.help_dialog import MOUSE
 from widgets.latent_inspector import LatentInspector
 from widgets.method_errors import MethodErrorPlot
 from widgets.optimizer_panel import OptimizerPanel
@@ -71,6 +72,8 @@ class MainWindow(QMainWindow):
     reach the engine's internals). ``started``: an engine process already started
     (``gui`` starts it before importing Qt: :func:`app.cli.run`), used instead of a new one.
     """
+
+    mouse_help = MOUSE
 
     snapshotDrawn = pyqtSignal(int)
 
@@ -212,7 +215,7 @@ class MainWindow(QMainWindow):
         cp = self.constraint_panel
         cp.addRequested.connect(self._guard(self._add_constraint))
         cp.removeRequested.connect(self._guard(s.constraints.remove))
-        cp.changed.connect(self._guard(lambda n, ch: s.constraints.edit(n, **ch)))
+        cp.changed.connect(self._guard(self._edit_constraint))
         link_ranges(
             cp, self.timeline.set_constraint_span, lambda: s.frame, lambda: s.num_frames, self.timeline.selection
         )
@@ -252,6 +255,13 @@ class MainWindow(QMainWindow):
         snap = self.session.latest
         defaults = {} if spec is None else {f.name: f.default for f in spec.fields}
         self.session.constraints.add(kind, **placed_params(kind, defaults, None if snap is None else snap.positions))
+
+    def _edit_constraint(self, name: str, changes: dict) -> None:
+        """An editor's change; a constraint put on other joints is placed on them as the
+        character stands now (:func:`app.constraint_placement.moved_params`)."""
+        snap = self.session.latest
+        current = self.session.constraints.named(name)
+        self.session.constraints.edit(name, **moved_params(current, changes, None if snap is None else snap.positions))
 
     def _drag_joint(self, joint: str, position: Any) -> None:
         """Ctrl-drag on a joint: move its sensor target, else pin the joint there."""

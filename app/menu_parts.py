@@ -87,7 +87,7 @@ def show_help(w: ViewWindow) -> HelpDialog:
     second window, and every one stayed, hidden behind, until the window closed)."""
     dialog = getattr(w, "help_dialog", None)
     if dialog is None or sip.isdeleted(dialog):
-        dialog = HelpDialog(shortcut_rows(w), w)
+        dialog = HelpDialog(shortcut_rows(w), w, w.mouse_help)
         dialog.setModal(False)
         dialog.setAttribute(Qt.WidgetAttribute.WA_DeleteOnClose)
         w.help_dialog = dialog

@@ -16,7 +16,7 @@ from typing import Any
 
 from PyQt6.QtCore import Qt
 
-from app.constraint_placement import placed_params
+from app.constraint_placement import moved_params, placed_params
 from app.constraint_ranges import link_ranges
 from app.schema import constraint_schema
 from widgets.constraint_panel import ConstraintPanel
@@ -45,14 +45,20 @@ class PoseConstraints:
         session = self.w.session
         spec = session.constraint_catalog().get(kind)
         defaults = {} if spec is None else {f.name: f.default for f in spec.fields}
-        placed = placed_params(kind, defaults, session.pose.positions) | params
+        placed = placed_params(kind, defaults | params, session.pose.positions) | params
         self.w._edit(lambda: session.add_constraint(kind, **placed))
 
     def remove(self, name: str) -> None:
         self.w._edit(lambda: self.w.session.remove_constraint(name))
 
     def update(self, name: str, changes: dict) -> None:
-        self.w._edit(lambda: self.w.session.update_constraint(name, changes))
+        """Edit the constraint ``name``; one put on other joints is placed on them
+        (:func:`app.constraint_placement.moved_params`)."""
+        session = self.w.session
+        current = next((c for c in session.mode.constraints if c.name == name), None)
+        if current is not None:
+            changes = moved_params(current, changes, session.pose.positions)
+        self.w._edit(lambda: session.update_constraint(name, changes))
 
     def refresh(self) -> None:
         self.panel.set_constraints([c.to_dict() for c in self.w.session.mode.constraints])

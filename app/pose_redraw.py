@@ -66,11 +66,14 @@ class PoseRedraw:
         self.w.show_positions(self.w.mode.pose.positions)
 
     def _show_gizmos(self) -> None:
-        """The constraints' gizmos on the pose, as the studio draws them."""
+        self.show_gizmos(self.w.mode.pose.positions)
+
+    def show_gizmos(self, positions: np.ndarray) -> None:
+        """The constraints' gizmos on the character at ``positions (22, 3)`` metres (the
+        pose, or a played frame: a pin's tether runs to its joint where it is drawn), as
+        the studio draws them."""
         self.w.viewport.gizmos.update(
-            gizmos_of(
-                self.w.mode.constraints, self.w.mode.pose.positions, lambda m: self.w.statusBar().showMessage(m, 5000)
-            )
+            gizmos_of(self.w.mode.constraints, positions, lambda m: self.w.statusBar().showMessage(m, 5000))
         )
 
     def paths_due(self, e: Any = None) -> None:

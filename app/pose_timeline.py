@@ -107,6 +107,8 @@ class KeyPlayback(QObject):
             return
         motion = baked.motion
         f = min(frame, len(motion) - 1)
-        self.w.show_positions(fk_positions(motion.local_rot[f], motion.root_pos[f], motion.skeleton.offsets))
+        positions = fk_positions(motion.local_rot[f], motion.root_pos[f], motion.skeleton.offsets)
+        self.w.redraw.show_gizmos(positions)
+        self.w.show_positions(positions)
         a = self.w.scene.animation
         self.w.keys.set_state(a.frames, a.fps, tuple(k.frame for k in self.w.scene.keys), f)

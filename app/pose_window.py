@@ -58,6 +58,7 @@ from engine.authoring.history import History
 from engine.authoring.pose_mode import PoseMode
 from engine.authoring.session import AuthoringSession
 from engine.errors import UserError
+from widgets.help_dialog import POSE_MOUSE
 from widgets.key_strip import KeyStrip
 from widgets.target_list import TargetList
 from widgets.viewport.viewport import Viewport
@@ -69,6 +70,8 @@ SIDE_PANEL_PX = 330
 class PoseWindow(QMainWindow):
     """See the module doc. ``session``: the authoring model the window shows and edits;
     ``settings``: where dialogs remember their choices (default: the studio's)."""
+
+    mouse_help = POSE_MOUSE
 
     def __init__(
         self, session: AuthoringSession, parent: QWidget | None = None, settings: QSettings | None = None
@@ -104,6 +107,8 @@ class PoseWindow(QMainWindow):
         self.viewport.joints.drag_origin = lambda name: self.session.hips_handle() if name == "root" else None
         # Shift + drag near the hips moves the pelvis alone (AuthoringSession.drag_pelvis)
         self.viewport.joints.shift_grabs = "root"
+        # the hip joints move only with the pelvis: a press on them grabs the hips
+        self.viewport.joints.stand_ins = {"lhip": "root", "rhip": "root"}
         self.targets = TargetList()
         self.targets.enabledChanged.connect(lambda j, on: self.edit_target(j, enabled=on))
         self.targets.weightChanged.connect(lambda j, w: self.edit_target(j, weight=w))

@@ -92,6 +92,8 @@ class ViewWindow(Protocol):
     use it: its viewport, the point the camera presets look at, its menu bar."""
 
     viewport: Viewport
+    #: What the mouse does in its 3D view, ``(gesture, what)`` rows for Help (F1).
+    mouse_help: tuple[tuple[str, str], ...]
 
     def hips(self) -> np.ndarray | None: ...
 

@@ -55,6 +55,9 @@ class _Strip(QWidget):
         self.setMinimumHeight(RULER_PX + 28)
         self.setCursor(Qt.CursorShape.PointingHandCursor)
         self.setToolTip("Click or drag to scrub (in-betweens are shown); drag a key to move it")
+        # a click here leaves the number field typed into beside it: the keys pressed next
+        # (3 for the side view) are the window's, not digits of the animation's length
+        self.setFocusPolicy(Qt.FocusPolicy.ClickFocus)
         self.frames, self.keys, self.current = 61, (), 0
         self.dragging: int | None = None  # the key held
         self.drop = 0  # where it would land

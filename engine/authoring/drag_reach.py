@@ -37,6 +37,14 @@ FADE = 0.75
 #: wrist or ankle to take that joint's depth (:func:`onto_body`): about a joint's drawn
 #: sphere and the bone around it.
 TOUCH = 0.06
+#: Joints a dragged ankle never lands on (:func:`onto_body`), besides its own leg: its toe,
+#: which moves with it, and the other foot, which it cannot stand on. In the side view
+#: the feet are drawn over each other, and a foot stepped forward along the floor passes
+#: over the other foot's toe: taking that toe's depth would cross the feet.
+NOT_TOUCHED = {
+    "lankle": ("ltoe", "rankle", "rtoe"),
+    "rankle": ("rtoe", "lankle", "ltoe"),
+}
 #: Bisection rounds that find the point of the mouse ray at the depth its own distance
 #: across the plane asks for (2^-40 of the way from the press's depth to the root's).
 ROUNDS = 40
@@ -129,16 +137,17 @@ def onto_body(
     a joint of ``positions (22, 3)`` metres within ``radius`` metres, the point of that
     line level with the joint in depth (its closest approach); None when it passes none.
 
-    The joints of the dragged limb (its root, middle joint and end) are left out. A hand
-    dragged onto the opposite knee in the front view lands on the knee, not in the plane
-    it hung in 10-15 cm in front of it, which the front view cannot show."""
+    The joints of the dragged limb (its root, middle joint and end) are left out, and for
+    an ankle its toe and the other foot (:data:`NOT_TOUCHED`). A hand dragged onto the
+    opposite knee in the front view lands on the knee, not in the plane it hung in 10-15
+    cm in front of it, which the front view cannot show."""
     c = sk.JOINT_INDEX.get(joint)
     if c not in LIMBS:
         return None
     d = np.asarray(direction, float)
     d = d / max(float(np.linalg.norm(d)), 1e-12)
     p0 = np.asarray(point, float)
-    skip = {c, *LIMBS[c]}
+    skip = {c, *LIMBS[c], *(sk.JOINT_INDEX[j] for j in NOT_TOUCHED.get(joint, ()))}
     v = np.asarray(positions, float) - p0
     t = v @ d
     gap = np.linalg.norm(v - t[:, None] * d, axis=1)

@@ -104,3 +104,21 @@ def test_a_new_constraint_starts_next_to_the_character(studio, qtbot, kind):
         assert np.isclose(c.target[2], head[2])
     else:
         assert np.linalg.norm(c.position - pose[sk.JOINT_INDEX[c.joint]]) < 0.3
+
+
+def test_a_pin_put_on_another_joint_in_its_editor_is_placed_on_that_joint(studio, qtbot):
+    """Added on the ankle, then the wrist chosen in the editor: the pin goes where the
+    wrist is, not left at the ankle's place, where it drags the wrist to the floor."""
+    from PyQt6.QtWidgets import QComboBox
+
+    studio.session.seek(100)
+    qtbot.waitUntil(lambda: studio.session.latest.frame == 100)
+    pose = studio.session.latest.positions.copy()
+    panel = studio.constraint_panel
+    panel.kinds.setCurrentText("pin")
+    panel.add_button.click()
+    (joint_box,) = [b for b in panel.editor.findChildren(QComboBox) if b.currentText() == "lankle"]
+    joint_box.setCurrentText("lwrist")
+    (c,) = studio.session.constraints
+    assert c.joint == "lwrist"
+    assert np.linalg.norm(c.position - pose[sk.JOINT_INDEX["lwrist"]]) < 0.05

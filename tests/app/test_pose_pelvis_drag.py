@@ -45,4 +45,4 @@ def test_the_help_lists_the_pelvis_drag(pose_window):
     from app.menu_parts import show_help
 
     rows = show_help(pose_window).rows()
-    assert ("Shift + drag the hips", "Pose window: move only the pelvis, the feet planted flat (a squat)") in rows
+    assert ("Shift + drag the hips", "Move only the pelvis, the feet planted flat (a squat)") in rows

@@ -25,6 +25,10 @@ import pyvista as pv
 from engine.skeleton import JOINT_NAMES
 
 PICK_RADIUS_PX = 14.0
+#: Joints whose centres lie this near a press (pixels: the radius of the balls the
+#: skeleton draws, ``widgets.viewport.skeleton``'s 12-pixel points) are all under the
+#: cursor; the press grabs the one drawn in front.
+DRAWN_RADIUS_PX = 6.0
 #: A Shift press this near (pixels) :attr:`JointDragger.shift_grabs` grabs it before
 #: anything else: the hips sit among the hip and back joints, a few pixels apart.
 SHIFT_PICK_RADIUS_PX = 28.0
@@ -92,6 +96,11 @@ class JointDragger:
         #: away, before rings, targets and nearer joints (the pose window's hips: Shift +
         #: drag moves the pelvis alone); None: Shift picks as a plain press.
         self.shift_grabs: str | None = None
+        #: Joints whose press grabs another joint instead: ``{pressed: grabbed}`` (the pose
+        #: window's hip joints stand for the pelvis: they move only with it, and in the side
+        #: view they are the balls where the legs meet the body, which a user takes for
+        #: the hips; a target on one folds the legs under the body).
+        self.stand_ins: dict[str, str] = {}
         self._origin = np.zeros(3)  # the grabbed thing's place: the drag plane goes through it
         self._base = np.zeros(3)  # what the drag moves: sent as _base + (hit - _grab)
         self._grab = np.zeros(3)  # the cursor's point on the drag plane at the press
@@ -175,11 +184,9 @@ class JointDragger:
         if axis is None:
             return False
         grabs_joints = self.plain_press_grabs_joints or self._plotter.iren.interactor.GetControlKey()
-        j = self.joint_at(x, y) if grabs_joints else None
-        if j is not None and self.positions is not None:
-            joint_px = float(np.linalg.norm(self._to_display(self.positions[[j]])[0] - [x, y]))
-            if joint_px < self._rings.distance(self._to_display, axis, x, y):
-                return False
+        near = self._nearest(x, y) if grabs_joints else None
+        if near is not None and near[1] < self._rings.distance(self._to_display, axis, x, y):
+            return False
         self.ring = axis
         self._rings.begin(axis, self.ray(x, y))
         self._on_turn(axis, 0.0, True)
@@ -194,13 +201,27 @@ class JointDragger:
             out.append(ren.GetDisplayPoint()[:2])
         return np.array(out)
 
-    def joint_at(self, x: float, y: float) -> int | None:
-        """The joint drawn nearest display pixel (x, y), within :data:`PICK_RADIUS_PX`."""
+    def _nearest(self, x: float, y: float) -> tuple[int, float] | None:
+        """The joint drawn nearest display pixel (x, y) (of several under it, the one in
+        front) and its distance, pixels, within :data:`PICK_RADIUS_PX`; None if none."""
         if self.positions is None:
             return None
         dist = np.linalg.norm(self._to_display(self.positions) - [x, y], axis=1)
         j = int(np.argmin(dist))
-        return None if dist[j] > PICK_RADIUS_PX else j
+        under = np.flatnonzero(dist <= DRAWN_RADIUS_PX)
+        if len(under) > 1:  # seen edge-on (the side view's elbows and knees): the one in front
+            eye = np.asarray(self._plotter.camera.position, float)
+            j = int(under[np.argmin(np.linalg.norm(self.positions[under] - eye, axis=1))])
+        return None if dist[j] > PICK_RADIUS_PX else (j, float(dist[j]))
+
+    def joint_at(self, x: float, y: float) -> int | None:
+        """The joint a press at display pixel (x, y) grabs: the one drawn nearest, within
+        :data:`PICK_RADIUS_PX`, or the joint it stands in for (:attr:`stand_ins`)."""
+        near = self._nearest(x, y)
+        if near is None:
+            return None
+        grabbed = self.stand_ins.get(JOINT_NAMES[near[0]])
+        return near[0] if grabbed is None else JOINT_NAMES.index(grabbed)
 
     def press(self, x: float, y: float) -> bool:
         """Grab the joint under display pixel (x, y); True on a hit."""

@@ -80,3 +80,17 @@ def test_a_wrist_whose_mouse_ray_passes_a_joint_of_the_body_takes_its_depth():
     elbow = p[sk.JOINT_INDEX["lelbow"]]
     assert onto_body(elbow + [0.0, -0.25, 0.0], ray, p, "lwrist") is None  # the dragged arm's own joints
     assert onto_body(knee + [0.0, -0.25, 0.0], ray, p, "upperneck") is None  # only wrists and ankles
+
+
+def test_an_ankle_lands_on_no_foot_but_on_the_other_knee():
+    """Seen from the side (rays along -x) the feet are drawn over each other: a foot moved
+    across the other's toe or ankle keeps its own depth; the other knee (a foot on a knee,
+    as in the tree pose) is still a touch."""
+    p = sk.Skeleton.canonical().rest_positions()
+    ray = np.array([-1.0, 0.0, 0.0])
+    for foot in ("rtoe", "rankle", "ltoe"):
+        over = p[sk.JOINT_INDEX[foot]] + [0.3, 0.0, 0.01]
+        assert onto_body(over, ray, p, "lankle") is None, foot
+    knee = p[sk.JOINT_INDEX["rknee"]]
+    assert np.allclose(onto_body(knee + [0.3, 0.0, 0.01], ray, p, "lankle"), knee + [0.0, 0.0, 0.01])
+    assert onto_body(p[sk.JOINT_INDEX["rtoe"]] + [0.3, 0.0, 0.01], ray, p, "lwrist") is not None, "a hand still does"

@@ -1,0 +1,30 @@
+"""A click on the pose window's key timeline takes the keyboard focus, so the camera keys
+work after a number was typed into a field beside it: left in the length field, the
+focus would take a 3 pressed for the side view and make the animation 3 frames long."""
+
+from __future__ import annotations
+
+import pytest
+from PyQt6.QtCore import QPoint, Qt
+from PyQt6.QtTest import QTest
+from PyQt6.QtWidgets import QApplication
+
+pytestmark = pytest.mark.gui
+
+
+def test_a_camera_key_after_typing_a_length_and_clicking_the_timeline_turns_the_camera(pose_window, qtbot):
+    w = pose_window
+    w.activateWindow()
+    qtbot.waitUntil(lambda: QApplication.activeWindow() is w)
+    field = w.keys.length
+    QTest.mouseClick(field, Qt.MouseButton.LeftButton)
+    field.lineEdit().selectAll()
+    QTest.keyClicks(field, "200")
+    QTest.keyClick(field, Qt.Key.Key_Return)
+    assert w.scene.animation.frames == 200 and QApplication.focusWidget() is field
+    strip = w.keys.strip
+    QTest.mouseClick(strip, Qt.MouseButton.LeftButton, pos=QPoint(round(strip.x_of(150)), strip.height() // 2))
+    assert w.frame == 150
+    QTest.keyClick(QApplication.focusWidget(), Qt.Key.Key_3)
+    assert w.scene.animation.frames == 200, "the 3 went into the length field"
+    assert w.viewport.camera_preset == "side"

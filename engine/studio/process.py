@@ -174,7 +174,7 @@ def _freeze(a: Any) -> None:
         a.flags.writeable = False
 
 
-class _HistorySender:
+class HistorySender:
     """The child's snapshot listener: sends each snapshot with only its new history."""
 
     def __init__(self, conn: Any) -> None:
@@ -192,7 +192,12 @@ class _HistorySender:
         reset = start is None
         new = history if reset else history[start:]
         self._last = history[-1] if history else None
-        self.conn.send((dataclasses.replace(snap, history=()), tuple(new), reset))
+        try:
+            self.conn.send((dataclasses.replace(snap, history=()), tuple(new), reset))
+        except (BrokenPipeError, ConnectionResetError):
+            # the window's end of the pipe is closed (its process was killed or is
+            # quitting): nobody reads this solver's frames, so it ends without a traceback
+            os._exit(0)
 
 
 def _watch_parent(parent: int) -> None:
@@ -222,7 +227,7 @@ def _child_main(commands: Any, conn: Any, method_factory: Any, threads: int, par
     from engine.studio.thread import EngineThread
 
     engine = EngineThread(method_factory, commands=commands)
-    engine.listeners.append(_HistorySender(conn))
+    engine.listeners.append(HistorySender(conn))
     if prepare:
         engine.prepare(prepare)
     gc.freeze()

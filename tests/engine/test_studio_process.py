@@ -3,6 +3,8 @@ process boundary, shutdown without orphans, and failures reported instead of hid
 
 from __future__ import annotations
 
+import dataclasses
+import multiprocessing as mp
 import os
 import signal
 import subprocess
@@ -13,7 +15,7 @@ import numpy as np
 import pytest
 
 from engine.studio import commands as cmd
-from engine.studio.process import EngineProcess
+from engine.studio.process import EngineProcess, HistorySender
 from engine.studio.session import Session
 from engine.studio.thread import EngineThread
 from tests.conftest import REPO
@@ -134,6 +136,27 @@ def test_the_child_exits_when_its_parent_dies(tmp_path):
     parent.kill()
     parent.wait()
     wait_for(lambda: not alive(child), 15)
+
+
+@dataclasses.dataclass(frozen=True)
+class _Snap:
+    history: tuple = ()
+
+
+def _send_after_the_window_closed_its_end() -> None:
+    reader, writer = mp.Pipe(duplex=False)
+    reader.close()
+    HistorySender(writer)(_Snap())
+    raise AssertionError("the snapshot went to a closed pipe without a word")
+
+
+def test_a_solver_whose_window_is_gone_ends_quietly():
+    """A killed window closes its end of the pipe; the solver's next snapshot must end
+    the solver's process cleanly (exit 0, nothing on stderr), not with a traceback."""
+    child = mp.get_context("fork").Process(target=_send_after_the_window_closed_its_end)
+    child.start()
+    child.join(30)
+    assert child.exitcode == 0
 
 
 def test_a_source_that_cannot_cross_moves_the_engine_into_a_thread(synthetic_motion):

@@ -14,8 +14,9 @@ construction (forward kinematics of fixed offsets), and the lowest foot stands o
 floor after every solve.
 
 What no target asks for stays as the user left it (:class:`PoseOptions`): a turn is
-taken exactly by its joint after the solve and moves no other joint, the pelvis crouches
-only for a wrist target below the hanging arm's reach, ``hold_weight`` pulls the
+taken exactly by its joint after the solve and moves no other joint, a low wrist target
+bends the trunk and crouches the pelvis only for what the stooping trunk does not reach
+(:mod:`engine.authoring.pose_root`), ``hold_weight`` pulls the
 joints no target holds towards :attr:`PoseMode.anchor`, the pose the drag began from,
 and ``keep_trunk`` keeps any trunk bone from leaning further back than it did then.
 
@@ -87,7 +88,7 @@ class PoseMode(PoseSolving):
         self.frame = 0
         self.pose: Pose = self.character.decode(self.base_latent, self.character.grounded(root_xy, self.heading))
         self._standing_root = float(self.pose.root_pos[2])
-        self._lowest_reach = arm_low_points(self.pose.positions)
+        self._lowest_reach = arm_low_points(self.pose.positions, self.options.stoop_deg)
         #: Where each untargeted foot joint stays (world, metres), see :class:`PoseOptions`.
         self.planted: dict[str, np.ndarray] = {}
         #: The pose the current drag began from (None: the next solve's starting pose),
@@ -162,7 +163,7 @@ class PoseMode(PoseSolving):
         planted feet, so the knees bend: a target on ``root``, kept between
         :data:`LOWEST_ROOT` of :attr:`standing_root` and :attr:`standing_root`. A pelvis
         dragged back up to standing height loses the target, unless a wrist target below
-        the hanging arm's reach would crouch the body again (a hand on the opposite knee):
+        what the stooping trunk reaches would crouch the body again (a hand on the shin):
         then it is held at standing height and the trunk bends instead; one less than
         :data:`SQUAT_FROM` below it gets none, so the jitter of a level drag does not
         crouch. The targets are solved from there.

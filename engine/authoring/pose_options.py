@@ -30,6 +30,10 @@ def _option(default: Any, lo: float | None = None, hi: float | None = None) -> A
 #: Lowest pelvis height the crouch moves it to, as a share of its standing height (a deep
 #: squat; the two-bone legs cannot fold much further).
 LOWEST_ROOT = 0.45
+#: Of an arm's length, the distance from its shoulder beyond which a wrist target within
+#: the stooping reach pulls the shoulder (``PoseOptions.stoop_deg``): the arm's two-bone
+#: step puts the wrist on its target from there with the elbow still bent a little.
+STOOP_REACH = 0.95
 #: A dragged pelvis crouches once it is this far below its standing height, metres: less
 #: is the jitter of a level drag of the hips.
 SQUAT_FROM = 0.02
@@ -70,13 +74,23 @@ class PoseOptions:
         ahead of the middle of its feet stands on its toes.
     crouch_share : float
         Share of a dragged joint's downward distance to its target that the pelvis takes
-        at the start of each solve (the planted legs bend under it), so a low reach
-        bends the knees as well as the trunk; the pelvis stays between
+        at the start of each solve (the planted legs bend under it), so a reach below
+        what the trunk bends to bends the knees; the pelvis stays between
         :data:`LOWEST_ROOT` of its standing height and its standing height.
     crouch_below_reach : bool
         A dragged wrist's target crouches only for the part of its way below the
-        lowest point the arm reaches in the starting pose (the arm hanging straight from
-        its shoulder): a hand put on the hips or the belly bends no knee.
+        lowest point the arm reaches from the standing body with the trunk bent forward
+        by ``stoop_deg`` (the arm hanging straight from the bent trunk's shoulder): a
+        hand put on the hips, the belly or a knee bends the trunk, not the knees; a hand
+        to the floor crouches.
+    stoop_deg : float
+        How far (degrees) the trunk bends forward at the hips before a low reach
+        crouches (``crouch_below_reach``), as a person reaching to a knee stoops with the
+        legs nearly straight. While a wrist target lies within that reach and beyond
+        :data:`STOOP_REACH` of its arm's length from the shoulder, the latent solve also
+        pulls that shoulder to within that distance of the target (weight: the wrist
+        target's), so the trunk bends and turns to it instead of stopping short. 0: the
+        arm hangs from the standing shoulder and nothing pulls it.
     free_height : bool
         Drags solve with the lowest foot on the floor (the root's height is part of the
         pose, so reaching low bends the knees instead of folding the trunk) instead of
@@ -131,8 +145,9 @@ class PoseOptions:
     balance_tolerance: float = _option(0.10, 0.0, 1.0)
     crouch_balance: bool = True
     crouch_tolerance: float = _option(0.03, 0.0, 1.0)
-    crouch_share: float = _option(0.5, 0.0, 1.0)
+    crouch_share: float = _option(0.9, 0.0, 1.0)
     crouch_below_reach: bool = True
+    stoop_deg: float = _option(65.0, 0.0, 90.0)
     free_height: bool = False
     prior_weight: float = _option(PRIOR_WEIGHT, 0.0, 10.0)
     reach_rounds: int = _option(8, 0, 50)

@@ -1,10 +1,15 @@
-"""Where pose mode holds the pelvis during a solve (:class:`engine.authoring.pose_mode.PoseMode`).
+"""Where pose mode holds the pelvis during a solve (:class:`engine.authoring.pose_mode.PoseMode`),
+and how a low reach splits between the trunk and the legs.
 
 A target on the root puts the pelvis there; else it crouches towards a wrist target
-below the hanging arm's reach (``PoseOptions.crouch_share``, :func:`crouch_from`) and
-takes a balance step that keeps the centre of mass over the planted feet
-(``PoseOptions.balance``, :func:`balance_step`). :func:`root_where` is that rule;
-:data:`FOOT_OF` and :func:`moved_feet` say which feet a target moves.
+below what the arm reaches from a trunk bent forward by ``PoseOptions.stoop_deg``
+(``PoseOptions.crouch_share``, :func:`crouch_from`, :func:`arm_low_points`) and takes a
+balance step that keeps the centre of mass over the planted feet
+(``PoseOptions.balance``, :func:`balance_step`). :func:`root_where` is that rule. A
+wrist target above that low point is the trunk's: :func:`stoop_targets` pulls the
+shoulder towards it in the latent solve, so a person's reach to a knee stoops with the
+legs nearly straight and a reach to the floor crouches. :data:`FOOT_OF` and
+:func:`moved_feet` say which feet a target moves.
 """
 
 from __future__ import annotations
@@ -17,7 +22,7 @@ import numpy as np
 from engine import skeleton as sk
 from engine.authoring.character import Pose
 from engine.authoring.pose_metrics import centre_of_mass
-from engine.authoring.pose_options import LOWEST_ROOT, SQUAT_FROM, PoseOptions
+from engine.authoring.pose_options import LOWEST_ROOT, SQUAT_FROM, STOOP_REACH, PoseOptions
 from engine.authoring.targets import JointTarget
 from engine.solver.limb_ik import LIMBS
 
@@ -30,21 +35,46 @@ def moved_feet(targets: Mapping[str, JointTarget]) -> set[str]:
     return {FOOT_OF[t.joint] for t in targets.values() if t.joint in FOOT_OF and t.active}
 
 
-def arm_low_points(positions: np.ndarray) -> dict[int, float]:
-    """Per wrist, the lowest height (metres) it reaches from its shoulder in the pose
-    with joint ``positions (22, 3)`` metres, the arm hanging straight down."""
-    p, out = positions, {}
-    for c, (a, b) in LIMBS.items():
-        if sk.JOINT_NAMES[c] not in FOOT_OF:
-            out[c] = float(p[a, 2] - np.linalg.norm(p[b] - p[a]) - np.linalg.norm(p[c] - p[b]))
+def arm_length(positions: np.ndarray, wrist: int) -> float:
+    """Length (metres) of the arm that ``wrist`` ends in ``positions (22, 3)``: its two bones."""
+    a, b = LIMBS[wrist]
+    return float(np.linalg.norm(positions[b] - positions[a]) + np.linalg.norm(positions[wrist] - positions[b]))
+
+
+def stooped_shoulder_heights(positions: np.ndarray, stoop_deg: float) -> dict[int, float]:
+    """Per wrist, the height (metres) of its shoulder above the hip joints' midpoint in
+    the pose with joint ``positions (22, 3)`` metres, with the trunk turned forward by
+    ``stoop_deg`` degrees about the hip line (Rodrigues' rotation of the shoulder about
+    the axis from the right hip to the left: positive turns the top forward)."""
+    p = np.asarray(positions, float)
+    hips = 0.5 * (p[sk.JOINT_INDEX["lhip"]] + p[sk.JOINT_INDEX["rhip"]])
+    axis = p[sk.JOINT_INDEX["lhip"]] - p[sk.JOINT_INDEX["rhip"]]
+    axis[2] = 0.0
+    axis /= max(float(np.linalg.norm(axis)), 1e-12)
+    c, s = np.cos(np.radians(stoop_deg)), np.sin(np.radians(stoop_deg))
+    out = {}
+    for w, (a, _) in LIMBS.items():
+        if sk.JOINT_NAMES[w] not in FOOT_OF:
+            v = p[a] - hips
+            out[w] = float(v[2] * c + np.cross(axis, v)[2] * s)  # the axis is level: no (1 - c) term
     return out
+
+
+def arm_low_points(positions: np.ndarray, stoop_deg: float = 0.0) -> dict[int, float]:
+    """Per wrist, the lowest height (metres) it reaches from its shoulder in the pose
+    with joint ``positions (22, 3)`` metres with the trunk bent forward by ``stoop_deg``
+    degrees at the hips (:func:`stooped_shoulder_heights`), the arm hanging straight
+    down from there."""
+    p = np.asarray(positions, float)
+    hips = 0.5 * (p[sk.JOINT_INDEX["lhip"], 2] + p[sk.JOINT_INDEX["rhip"], 2])
+    return {w: hips + h - arm_length(p, w) for w, h in stooped_shoulder_heights(p, stoop_deg).items()}
 
 
 def crouch_from(joint: int, low_points: Mapping[int, float], options: PoseOptions) -> float:
     """Height (metres) below which a dragged ``joint``'s target lowers the pelvis: a
-    wrist's low point (``low_points``, :func:`arm_low_points` of the starting pose) when
-    ``options.crouch_below_reach`` (a target the standing arm reaches bends no knee),
-    else no limit."""
+    wrist's low point (``low_points``, :func:`arm_low_points` of the starting pose with
+    the trunk bent by ``options.stoop_deg``) when ``options.crouch_below_reach`` (a
+    target the stooping body reaches bends no knee), else no limit."""
     if options.crouch_below_reach and joint in low_points:
         return low_points[joint]
     return np.inf
@@ -62,6 +92,30 @@ def reach_crouches(targets: Mapping[str, JointTarget], low_points: Mapping[int, 
     if options.crouch_share <= 0:
         return False
     return any(t.position[2] < crouch_from(t.index, low_points, options) for t in reaching(targets))
+
+
+def stoop_targets(stance: "Stance", where: np.ndarray, low_points: Mapping[int, float]) -> list[JointTarget]:
+    """Targets on the shoulders that bend the trunk to the wrist targets a stoop reaches
+    (``PoseOptions.stoop_deg``), for a solve from ``stance.pose`` with the root at
+    ``where (3,)`` metres: for each :func:`reaching` wrist target at or above its low
+    point (``low_points``, :func:`arm_low_points` with the stoop) that lies more than
+    :data:`STOOP_REACH` of the arm's length from its shoulder, a target on that shoulder
+    at that distance from the wrist target, on the line to where the shoulder is, with the
+    wrist target's weight. A reach below the low point crouches instead (:func:`root_where`)."""
+    pose, targets, _, o = stance
+    if o.stoop_deg <= 0:
+        return []
+    p, out = pose.positions, []
+    for t in reaching(targets):
+        if t.index not in low_points or t.position[2] < low_points[t.index]:
+            continue
+        shoulder = LIMBS[t.index][0]
+        reach = STOOP_REACH * arm_length(p, t.index)
+        away = p[shoulder] - p[0] + np.asarray(where, float) - t.position
+        dist = float(np.linalg.norm(away))
+        if dist > reach:
+            out.append(JointTarget(sk.JOINT_NAMES[shoulder], t.position + away * (reach / dist), weight=t.weight))
+    return out
 
 
 class Stance(NamedTuple):

@@ -25,7 +25,7 @@ from engine.authoring.keys import PLANTED
 from engine.authoring.pelvis_drag import pelvis_pose
 from engine.authoring.pose_hold import held_joints, hold_terms
 from engine.authoring.pose_options import SQUAT_FROM, PoseOptions
-from engine.authoring.pose_root import FOOT_OF, Stance, moved_feet, root_where, shortfall
+from engine.authoring.pose_root import FOOT_OF, Stance, moved_feet, root_where, shortfall, stoop_targets
 from engine.authoring.pose_trunk import LEGS, TRUNK, keep_trunk
 from engine.authoring.targets import JointTarget, pelvis_only_target, solve_inputs
 from engine.constraints.base import Constraint
@@ -171,7 +171,7 @@ class PoseSolving:
         rotation steps."""
         return self.character.solve(
             self.pose.latent,
-            terms + self._hold_terms(where),
+            terms + self._hold_terms(where) + self._stoop_terms(where),
             ctx,
             reach,
             rotations,
@@ -210,6 +210,16 @@ class PoseSolving:
             return []
         return hold_terms(self.anchor, self.held(), where, w)
 
+    def _stoop_terms(self, where: np.ndarray) -> list[Constraint]:
+        """The trunk's pull towards wrist targets a stoop reaches, for a solve with the root
+        at ``where (3,)`` metres (:func:`engine.authoring.pose_root.stoop_targets`). None
+        under a pelvis-only target: its latent solves the body where it stood, with
+        targets moved by the pelvis's offset (:meth:`_inputs`)."""
+        if self.pelvis_target() is not None:
+            return []
+        stance = Stance(self.pose, self.targets, self.planted, self.options)
+        return [t.constraint() for t in stoop_targets(stance, where, self._lowest_reach)]
+
     def shortfall(self) -> float:
         """How far the solve is from its targets, metres (:func:`engine.authoring.pose_root.shortfall`)."""
         return shortfall(Stance(self.pose, self.targets, self.planted, self.options))
@@ -227,9 +237,8 @@ class PoseSolving:
             self.anchor = self.pose
         where = self._where()
         ctx = c.grounded(where[:2], self.heading, self.frame, prior=self.base_latent)
-        solved = c.solve(
-            self.pose.latent, terms + self._hold_terms(where), ctx, reach, rotations, prior_weight=o.prior_weight
-        )
+        extra = self._hold_terms(where) + self._stoop_terms(where)
+        solved = c.solve(self.pose.latent, terms + extra, ctx, reach, rotations, prior_weight=o.prior_weight)
         self.pose = self.pelvis_step(self._kept_trunk(solved, reach, rotations))
         for _ in range(max(0, o.settle_rounds)):
             if self.shortfall() <= o.reach_tolerance:

@@ -1,6 +1,6 @@
 """Pose mode keeps what the user did not drag: a head turn leaves the body, a hand put on
-the hips bends no knee, a low reach still crouches, and the optional hold keeps the free
-arm. Drags are the pose-mode benchmark's own (``pose_tasks.drag`` on its task goals)."""
+the hips bends no knee, a hand on a knee stoops standing, a reach to the floor crouches,
+and the optional hold keeps the free arm. Drags are the pose-mode benchmark's own (``pose_tasks.drag`` on its task goals)."""
 
 from __future__ import annotations
 
@@ -56,14 +56,56 @@ def test_hands_on_the_hips_bend_no_knee(vae):
     assert start[0, 2] - always.pose.root_pos[2] > 0.05
 
 
-def test_a_reach_below_the_arm_still_crouches(vae):
-    """The right hand to the left knee lies below the hanging arm's reach: the knees bend
-    (the pelvis 10 cm or more lower) and the hand arrives within 2 cm."""
+def test_a_hand_on_the_opposite_knee_stoops_standing(vae):
+    """The right hand dragged to the left knee in one drag: the trunk bends forward over
+    nearly straight legs, as a person reaches to a knee (the pelvis at most 12 cm lower,
+    the trunk more than 55 deg from vertical), the hand arrives within 2 cm and both feet
+    stay planted; a crouch for every reach below the hanging arm (``stoop_deg=0``) drops
+    the pelvis more than 20 cm."""
+    from engine.authoring.pose_metrics import check_pose
+
     mode = PoseMode(vae)
     start = _do(mode, "hand_to_knee")
-    assert start[0, 2] - mode.pose.root_pos[2] > 0.10
     goal = start[J["lknee"]] + np.array([0.0, -0.08, 0.0])
     assert np.linalg.norm(mode.pose.positions[J["rwrist"]] - goal) < 0.02
+    assert start[0, 2] - mode.pose.root_pos[2] < 0.12
+    check = check_pose(mode.pose.local_rot, mode.pose.root_pos, mode.character.skeleton.offsets)
+    assert check.trunk_tilt_deg > 55.0 and all(check.feet_down.values())
+    ankles = [J["lankle"], J["rankle"]]
+    assert np.linalg.norm(mode.pose.positions[ankles] - start[ankles], axis=-1).max() < 0.01
+    crouched = PoseMode(vae, options=PoseOptions(stoop_deg=0.0, crouch_share=0.5))
+    start = _do(crouched, "hand_to_knee")
+    assert start[0, 2] - crouched.pose.root_pos[2] > 0.20
+
+
+def test_a_reach_to_the_floor_still_crouches(vae):
+    """The right hand to 10 cm above the floor in front of the toes lies below what the
+    stooping trunk reaches: the knees bend (the pelvis more than 30 cm lower) and the hand
+    arrives within 2 cm."""
+    mode = PoseMode(vae)
+    start = _do(mode, "pick_up")
+    goal = resolve_goals(TASK["pick_up"], PoseMode(vae).pose, mode.character.skeleton.offsets)[0].position
+    assert start[0, 2] - mode.pose.root_pos[2] > 0.30
+    assert np.linalg.norm(mode.pose.positions[J["rwrist"]] - goal) < 0.02
+
+
+def test_the_stooping_reach_lies_below_the_hanging_arm():
+    """``arm_low_points``: without a stoop the arm hangs from the standing shoulder; a
+    vertical trunk bent 90 deg puts the shoulder level with the hips, and the low point
+    is continuous and falls as the stoop grows."""
+    from engine.authoring.pose_root import arm_length, arm_low_points
+
+    p = np.zeros((len(sk.JOINT_NAMES), 3))
+    p[J["lhip"]], p[J["rhip"]] = [0.1, 0.0, 0.9], [-0.1, 0.0, 0.9]
+    for s, x in (("l", 0.2), ("r", -0.2)):
+        p[J[f"{s}shoulder"]], p[J[f"{s}elbow"]], p[J[f"{s}wrist"]] = [x, 0, 1.4], [x, 0, 1.1], [x, 0, 0.85]
+    w = J["rwrist"]
+    assert arm_length(p, w) == pytest.approx(0.55)
+    lows = [arm_low_points(p, deg)[w] for deg in (0.0, 30.0, 60.0, 90.0)]
+    assert lows[0] == pytest.approx(1.4 - 0.55)
+    assert lows[3] == pytest.approx(0.9 - 0.55)
+    assert lows[1] == pytest.approx(0.9 + 0.5 * np.cos(np.radians(30.0)) - 0.55)
+    assert lows == sorted(lows, reverse=True)
 
 
 @pytest.mark.parametrize("weight", [0.3])

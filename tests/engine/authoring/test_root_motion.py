@@ -104,26 +104,33 @@ def test_a_squat_keeps_the_weight_over_the_feet_and_a_second_drag_does_not_move_
     assert np.abs(m.pose.positions[ankles] - ankles_before).max() < 1e-3
 
 
-def test_hips_dragged_up_past_standing_after_a_hand_to_the_knee_stay_standing(vae):
-    """A wrist put on the opposite knee crouches the body; the hips dragged back up to (and
-    past) standing height hold the pelvis there, so the trunk bends over straight legs,
-    instead of losing the target and crouching again for the reach (the docs' recipe)."""
+def test_hips_dragged_up_past_standing_after_a_reach_to_the_shin_stay_standing(vae):
+    """A wrist put on the opposite shin (below what the stooping trunk reaches) crouches
+    the body; the hips dragged back up to (and past) standing height hold the pelvis
+    there, so the trunk bends over straight legs, instead of losing the target and
+    crouching again for the reach. A hand on the knee stoops without a crouch, so there
+    the hips dragged up lose their target and the hand stays on the knee."""
     from engine import skeleton as sk
     from engine.authoring.pose_drag import drag
     from engine.authoring.pose_mode import PoseMode
 
-    m = PoseMode(vae, 1.75)
-    standing = m.standing_root
-    knee = m.pose.positions[sk.JOINT_INDEX["lknee"]] + [0.0, -0.08, 0.0]
-    drag(m, "rwrist", m.character.skeleton.offsets, position=knee, events=20)
-    assert standing - m.pose.root_pos[2] > 0.05  # the reach crouched the body
-    start = m.hips_handle()
-    for k in range(1, 11):  # up to 10 cm past standing height in ten drag events
-        m.drag_hips(start + [0.0, 0.0, (standing + 0.1 - start[2]) * k / 10])
-    for _ in range(5):  # the drag goes on solving (as on the next mouse moves)
-        m.solve()
-    assert m.targets["root"].position[2] == pytest.approx(standing)
-    assert m.pose.root_pos[2] == pytest.approx(standing, abs=0.01)
+    for below_knee, crouches in ((0.2, True), (0.0, False)):
+        m = PoseMode(vae, 1.75)
+        standing = m.standing_root
+        goal = m.pose.positions[sk.JOINT_INDEX["lknee"]] + [0.0, -0.08, -below_knee]
+        drag(m, "rwrist", m.character.skeleton.offsets, position=goal, events=20)
+        assert (standing - m.pose.root_pos[2] > 0.15) == crouches
+        start = m.hips_handle()
+        for k in range(1, 11):  # up to 10 cm past standing height in ten drag events
+            m.drag_hips(start + [0.0, 0.0, (standing + 0.1 - start[2]) * k / 10])
+        for _ in range(5):  # the drag goes on solving (as on the next mouse moves)
+            m.solve()
+        if crouches:
+            assert m.targets["root"].position[2] == pytest.approx(standing)
+            assert m.pose.root_pos[2] == pytest.approx(standing, abs=0.02)
+        else:
+            assert "root" not in m.targets
+            assert np.linalg.norm(m.pose.positions[sk.JOINT_INDEX["rwrist"]] - goal) < 0.02
 
 
 def test_hips_dragged_up_to_standing_with_a_reach_the_arm_makes_lose_their_target(vae):

@@ -101,9 +101,12 @@ def stoop_targets(stance: "Stance", where: np.ndarray, low_points: Mapping[int, 
     point (``low_points``, :func:`arm_low_points` with the stoop) that lies more than
     :data:`STOOP_REACH` of the arm's length from its shoulder, a target on that shoulder
     at that distance from the wrist target, on the line to where the shoulder is, with the
-    wrist target's weight. A reach below the low point crouches instead (:func:`root_where`)."""
+    wrist target's weight. A reach below the low point crouches instead (:func:`root_where`).
+    None while the root has an active target: the user has set the pelvis (a squat, the
+    hips held up), and the latent bends the body to the reach from there as it finds."""
     pose, targets, _, o = stance
-    if o.stoop_deg <= 0:
+    root = targets.get("root")
+    if o.stoop_deg <= 0 or (root is not None and root.active):
         return []
     p, out = pose.positions, []
     for t in reaching(targets):

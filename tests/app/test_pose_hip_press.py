@@ -40,13 +40,14 @@ def test_a_press_on_a_hip_joint_in_the_side_view_squats_the_body(pose_window, hi
 
 
 def test_a_hip_joint_dragged_up_after_a_low_reach_stands_the_body_up(pose_window):
-    """The hand-to-knee flow of the docs: a wrist brought to the opposite knee crouches;
-    the hips are then dragged back up in the side view, from a press on a hip joint."""
+    """A wrist brought to the opposite shin (below what the stooping trunk reaches)
+    crouches; the hips are then dragged back up in the side view, from a press on a hip
+    joint."""
     w = pose_window
     view = w.viewport
     standing = w.mode.pose.positions[0, 2]
     knee = w.mode.pose.positions[J["lknee"]].copy()
-    w.drag_joint("rwrist", knee + [0.0, -0.08, 0.0])
+    w.drag_joint("rwrist", knee + [0.0, -0.08, -0.20])
     crouched = w.mode.pose.positions.copy()
     assert standing - crouched[0, 2] > 0.05, "the low reach crouched the body"
     _side_view(w)

@@ -65,12 +65,33 @@ def test_dragging_the_hips_down_squats_over_the_planted_feet(pose_window):
     assert w.undo.undo_text() == "move body" and w.mode.targets["root"].position[2] < before[0, 2] - 0.25
 
 
-def test_the_hips_dragged_up_beside_a_wrist_s_rings_move_the_body_not_the_wrist(pose_window):
-    """A hand on the opposite knee, standing (docs/authoring.md): from the front view the
-    left wrist is dragged to the right knee (the body crouches with it), then the hips are
-    dragged up. The wrist stays selected, and its rings (12 cm) pass over the hips: a
-    press on the hips' centre moves the body, it does not turn the wrist."""
-    w = pose_window
+@pytest.fixture
+def crouching_window(qtbot, vae, monkeypatch):
+    """A pose window whose pose mode crouches for every wrist reach below the arm hanging
+    from the standing shoulder (``stoop_deg=0``): a hand on the knee crouches the body, so
+    the hand comes down beside the hips."""
+    from PyQt6.QtWidgets import QMessageBox
+
+    from app.pose_window import PoseWindow
+    from engine.authoring.pose_mode import PoseMode, PoseOptions
+    from engine.authoring.session import AuthoringSession
+    from tests.app.gui_helpers import close_now
+
+    monkeypatch.setattr(QMessageBox, "question", lambda *a, **k: QMessageBox.StandardButton.Discard)
+    options = PoseOptions(stoop_deg=0.0, crouch_share=0.5)
+    w = PoseWindow(AuthoringSession(PoseMode(vae, 1.75, options=options)))
+    w.resize(1000, 700)
+    w.show()
+    yield w
+    close_now(w)
+
+
+def test_the_hips_dragged_up_beside_a_wrist_s_rings_move_the_body_not_the_wrist(crouching_window):
+    """From the front view the left wrist is dragged to the right knee (the body crouches
+    with it, :func:`crouching_window`), then the hips are dragged up. The wrist stays
+    selected, and its rings (12 cm) pass over the hips: a press on the hips' centre moves
+    the body, it does not turn the wrist."""
+    w = crouching_window
     view = w.viewport
     view.set_camera("front", w.hips())
     view.plotter.render()

@@ -148,7 +148,16 @@ def test_separate_messages_make_the_sent_frames_and_the_recording_replays_to_the
     with VMCReceiver("127.0.0.1", 0, recorder=writer, on_frame=published.append) as rx:
         st = send_stream(plan, "127.0.0.1", rx.port, fps=fps, shape=shape, chatter=True)
         assert st.packets == len(plan) * (2 + 2 * 6 + (shape != "no-time"))
-        _wait(lambda: rx.snapshot_stats().frames >= len(plan) and not rx._assembler.deadline(), timeout=3.0)
+        # every datagram read, not only every frame made: chatter sent after a frame's last
+        # bone can still be in the socket when that frame is published
+        _wait(
+            lambda: (
+                (s := rx.snapshot_stats()).frames >= len(plan)
+                and s.packets >= st.packets
+                and not rx._assembler.deadline()
+            ),
+            timeout=3.0,
+        )
         s = rx.snapshot_stats()
     writer.close()
     assert s.packet_shape == shape and s.other_messages == len(plan) * 8 and s.unmapped == 0

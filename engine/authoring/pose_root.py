@@ -42,8 +42,8 @@ def arm_length(positions: np.ndarray, wrist: int) -> float:
 
 
 def stooped_shoulder_heights(positions: np.ndarray, stoop_deg: float) -> dict[int, float]:
-    """Per wrist, the height (metres) of its shoulder above the hip joints' midpoint in
-    the pose with joint ``positions (22, 3)`` metres, with the trunk turned forward by
+    """Per wrist, the height (metres) of its shoulder in the pose with joint
+    ``positions (22, 3)`` metres, with the trunk turned forward by
     ``stoop_deg`` degrees about the hip line (Rodrigues' rotation of the shoulder about
     the axis from the right hip to the left: positive turns the top forward)."""
     p = np.asarray(positions, float)
@@ -56,7 +56,7 @@ def stooped_shoulder_heights(positions: np.ndarray, stoop_deg: float) -> dict[in
     for w, (a, _) in LIMBS.items():
         if sk.JOINT_NAMES[w] not in FOOT_OF:
             v = p[a] - hips
-            out[w] = float(v[2] * c + np.cross(axis, v)[2] * s)  # the axis is level: no (1 - c) term
+            out[w] = float(hips[2] + (v[2] * c + np.cross(axis, v)[2] * s))  # the axis is level: no (1 - c) term
     return out
 
 
@@ -66,8 +66,7 @@ def arm_low_points(positions: np.ndarray, stoop_deg: float = 0.0) -> dict[int, f
     degrees at the hips (:func:`stooped_shoulder_heights`), the arm hanging straight
     down from there."""
     p = np.asarray(positions, float)
-    hips = 0.5 * (p[sk.JOINT_INDEX["lhip"], 2] + p[sk.JOINT_INDEX["rhip"], 2])
-    return {w: hips + h - arm_length(p, w) for w, h in stooped_shoulder_heights(p, stoop_deg).items()}
+    return {w: h - arm_length(p, w) for w, h in stooped_shoulder_heights(p, stoop_deg).items()}
 
 
 def crouch_from(joint: int, low_points: Mapping[int, float], options: PoseOptions) -> float:

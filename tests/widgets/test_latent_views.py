@@ -90,13 +90,13 @@ def test_hover_over_empty_map_and_over_a_frame(latent_map, qtbot):
     qtbot.mouseMove(latent_map.plot.viewport(), _at(latent_map, 1.0, -2.5))
     px, py = latent_map.plot.getPlotItem().getViewBox().viewPixelSize()
     near = pytest.approx((1.0, -2.5), abs=2 * max(px, py))
-    # a hover of where the pointer rested before the move may arrive first on a busy display
-    qtbot.waitUntil(lambda: bool(points) and points[-1] == near, timeout=2000)
+    # under Xvfb the display's own pointer also sends moves (where it rested, or where the
+    # window appeared under it), before or after the test's move: the test's point must be among them
+    qtbot.waitUntil(lambda: any(p == near for p in points), timeout=2000)
     target = latent_map.xy[10]
     qtbot.wait(100)  # under Xvfb the first move's events are still arriving
     qtbot.mouseMove(latent_map.plot.viewport(), _at(latent_map, *target))
-    qtbot.waitUntil(lambda: bool(frames), timeout=2000)
-    assert frames[-1] == 10
+    qtbot.waitUntil(lambda: 10 in frames, timeout=2000)
 
 
 def test_clicks_seek_a_frame_or_pick_a_point(latent_map, qtbot):

@@ -1,4 +1,4 @@
-"""``dragposer-studio train vae|predictor|sparseposer|rpm``: train the models on prepared data.
+"""``dragposer-studio train vae|predictor|sparseposer|rpm|stance``: train the models on prepared data.
 
 Settings come from the dataclass defaults, then ``--config FILE.toml``, then
 ``--set key=value`` (repeatable), then the common flags. Runs unchanged under
@@ -48,6 +48,18 @@ def register(sub: argparse._SubParsersAction) -> None:
     r = tsub.add_parser("rpm", help="train the Rolling Prediction Model (preset 3-head-hands)", description=__doc__)
     _common(r, "runs/rpm")
     r.set_defaults(func=_train_rpm)
+    t = tsub.add_parser(
+        "stance",
+        help="train the gait planner's stance classifier (which foot stands, from head and hands)",
+        description="Train the stance classifier (engine/models/stance.py) on the train split of prepared "
+        "data and print its accuracy and the arm-swing rule's on the validation split.",
+    )
+    t.add_argument("--data", type=Path, default=Path("prepared"), help="output of `data prepare` (default: prepared)")
+    t.add_argument("--out", type=Path, default=Path("runs/stance.npz"), help="model file (default: runs/stance.npz)")
+    t.add_argument("--hidden", type=int, default=128, help="width of the two hidden layers (default 128)")
+    t.add_argument("--epochs", type=int, default=10, help="passes over the samples (default 10)")
+    t.add_argument("--seed", type=int, default=0, help="random seed")
+    t.set_defaults(func=_train_stance)
     p.set_defaults(func=lambda args: p.print_help() or 0)
 
 
@@ -115,4 +127,26 @@ def _train_rpm(args: argparse.Namespace) -> int:
             f"{args.out}/rpm.pt: {meta.get('epochs')} epochs, {meta.get('minutes')} min, "
             f"val {meta.get('val_pos_cm', float('nan')):.2f} cm"
         )
+    return 0
+
+
+def _train_stance(args: argparse.Namespace) -> int:
+    from engine.errors import UserError
+    from engine.training.stance import accuracy, load_samples, train_stance
+    from engine.validation import check_args
+
+    check_args(args)
+    if not 1 <= args.hidden <= 4096:
+        raise UserError(f"--hidden: {args.hidden} is not a layer width from 1 to 4096")
+    train = load_samples(args.data, "train")
+    val = load_samples(args.data, "val")
+    model = train_stance(train, hidden=args.hidden, epochs=args.epochs, seed=args.seed)
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    model.save(args.out)
+    a = accuracy(model, val)
+    print(
+        f"{args.out}: {len(train.y)} training samples; validation ({int(a['samples'])} samples): "
+        f"stance right {100 * a['model']:.1f} %, the arm-swing rule {100 * a['arms']:.1f} % "
+        f"(it answers {100 * a['arms_coverage']:.0f} % of them)"
+    )
     return 0

@@ -35,6 +35,7 @@ from engine.methods.base import FrameResult, Method
 from engine.methods.dragposer_edits import CallerEdits, FrameSettings
 from engine.methods.dragposer_parts import FramePlan, PriorSource, TrackerTerms, UserConstraints, smoothing_history
 from engine.methods.solve_record import SolveRecord, record_of
+from engine.models.stance import default_stance_model
 from engine.motion.clip import Motion
 from engine.sensors import SensorFrame
 from engine.solver import FrameContext, LatentDecoder, LatentPredictor, OptimizerSettings, PoseOptimizer, RootFrame
@@ -111,7 +112,9 @@ class DragPoserMethod(CallerEdits, Method):
         self.smooth = SmoothConstraint(name="smooth")
         self.ground = GroundConstraint(name="ground")
         self.gait = GaitConstraint(name="gait")
-        self.gait_planner = GaitPlanner(fps)  # the gait term's targets (engine/solver/gait.py)
+        self.gait_planner = GaitPlanner(
+            fps, stance=default_stance_model()
+        )  # the gait term's targets (engine/solver/gait.py)
         self._settings.forget()
         self._frame = 0
         self._latent = torch.zeros(self.latent_dim)
@@ -281,8 +284,9 @@ class DragPoserMethod(CallerEdits, Method):
             (c.position for j in ("root", "upperneck") if (c := self.sensors.get(j)) is not None and c.enabled), None
         )
         hands = [c.position for j in ("lwrist", "rwrist") if (c := self.sensors.get(j)) is not None and c.enabled]
+        head = c.position if (c := self.sensors.get("upperneck")) is not None and c.enabled else None
         self.gait.set_targets(
-            self.gait_planner.update(anchor, self._pos64, np.array(hands) if len(hands) == 2 else None)
+            self.gait_planner.update(anchor, self._pos64, np.array(hands) if len(hands) == 2 else None, head)
         )
         self.gait.weight = weight
         return [self.gait]

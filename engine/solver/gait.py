@@ -46,6 +46,7 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.constraints.gait import ANKLES, GaitTargets
+from engine.models.stance import StanceModel, stance_features, window_frames
 
 #: The hips the ankles (:data:`~engine.constraints.gait.ANKLES`) hang from, left, right.
 HIPS = (sk.JOINT_INDEX["lhip"], sk.JOINT_INDEX["rhip"])
@@ -61,7 +62,9 @@ class GaitParams:
     shares of ``gait_weight``; ``arm_lag_s`` / ``arm_speed``: the window and the least
     fore-aft speed of the hands' difference that count as an arm swing; ``min_step_s``:
     the shortest step; ``lead_s``: how far (in travel time) ahead of its hip a foot lands;
-    ``lateral_share``: where between the pelvis (0) and the hip joint (1) it lands.
+    ``lateral_share``: where between the pelvis (0) and the hip joint (1) it lands;
+    ``stance_confidence``: the least probability of the stance classifier's answer that
+    counts (below it the classifier says nothing).
     """
 
     window_s: float = 0.25
@@ -75,6 +78,7 @@ class GaitParams:
     min_step_s: float = 0.2
     lead_s: float = 0.3
     lateral_share: float = 0.3
+    stance_confidence: float = 0.75
 
     def step_time(self, speed: float) -> float:
         """Seconds per step at ``speed`` m/s: 0.55 s at 0.7 m/s, 0.49 s at 1.3, 0.3 s
@@ -97,15 +101,17 @@ class GaitPlanner:
     params : GaitParams, optional
     """
 
-    def __init__(self, fps: float, params: GaitParams | None = None) -> None:
+    def __init__(self, fps: float, params: GaitParams | None = None, stance: StanceModel | None = None) -> None:
         self.fps = float(fps)
         self.params = params or GaitParams()
+        self.stance = stance
         self.reset()
 
     def reset(self) -> None:
         n = max(2, round(self.params.window_s * self.fps) + 1)
         self._anchor: deque[np.ndarray] = deque(maxlen=n)
         self._hands: deque[np.ndarray] = deque(maxlen=max(2, round(self.params.arm_lag_s * self.fps) + 1))
+        self._window: deque[np.ndarray] = deque(maxlen=window_frames(self.fps))
         self._stance: int | None = None
         self._planted = np.zeros(3)
         self._lift = np.zeros(3)
@@ -131,8 +137,26 @@ class GaitPlanner:
             return None
         return 0 if rate > 0 else 1
 
+    def learned_stance(self) -> int | None:
+        """The stance foot the classifier (:mod:`engine.models.stance`) names from the head's
+        and hands' last half second (0 left, 1 right), or None: no classifier, not a full
+        window yet, or an answer below :attr:`GaitParams.stance_confidence`."""
+        if self.stance is None or len(self._window) < (self._window.maxlen or 0):
+            return None
+        w = np.array(self._window)  # (K, 3, 3): head, left hand, right hand
+        x = stance_features(w[:, 0], w[:, 1:], self.fps)
+        if x is None:
+            return None
+        p = float(self.stance.left_stance(x))
+        c = self.params.stance_confidence
+        return 0 if p >= c else 1 if p <= 1.0 - c else None
+
     def update(
-        self, anchor: np.ndarray | None, previous: np.ndarray | None, hands: np.ndarray | None = None
+        self,
+        anchor: np.ndarray | None,
+        previous: np.ndarray | None,
+        hands: np.ndarray | None = None,
+        head: np.ndarray | None = None,
     ) -> GaitTargets:
         """Advance one frame and give its targets.
 
@@ -146,6 +170,9 @@ class GaitPlanner:
         hands : ndarray (2, 3) or None
             The left and right hand trackers' positions (None: not both connected; the
             steps then follow the step time alone).
+        head : ndarray (3,) or None
+            The head tracker's position (None: not connected); with the hands it feeds
+            the stance classifier, whose confident answer goes before the arms' swing.
         """
         if anchor is None or previous is None or not np.all(np.isfinite(anchor)):
             self.reset()
@@ -155,6 +182,10 @@ class GaitPlanner:
             self._hands.clear()
         else:
             self._hands.append(np.asarray(hands[0, :2] - hands[1, :2], dtype=np.float64))
+        if hands is None or head is None or not (np.all(np.isfinite(hands)) and np.all(np.isfinite(head))):
+            self._window.clear()
+        else:
+            self._window.append(np.vstack([np.asarray(head, dtype=np.float64)[None], hands]))
         p = self.params
         v = self.velocity()
         speed = float(np.linalg.norm(v))
@@ -167,7 +198,8 @@ class GaitPlanner:
         # inside their hips (touch-downs of 9 walking clips)
         root = previous[sk.JOINT_INDEX["root"]]
         hips = root + p.lateral_share * (previous[list(HIPS)] - root)
-        arms = self.arm_stance(v)
+        learned = self.learned_stance()
+        arms = self.arm_stance(v) if learned is None else learned
         if self._stance is None:  # starting: as the arms say, else the lower foot stands
             stance = int(np.argmin(ankles[:, 2])) if arms is None else arms
             self._start(stance, ankles[stance], ankles[1 - stance])

@@ -1,0 +1,125 @@
+"""Which foot stands, from the head's and hands' last half second: a small learned classifier.
+
+With head and hands only, the gait planner (:mod:`engine.solver.gait`) must know which foot
+is in stance to plant it. The arms' swing says it on a steady walk, but not on a sneak, a
+jog or a styled walk. The head also sways towards the stance foot and bobs once per step,
+and the hands' swing has a shape as well as a sign; this classifier reads all of it. It is
+a multilayer perceptron trained on the CMU training takes (``dragposer-studio train stance``,
+:mod:`engine.training.stance`), evaluated in numpy here so that the solver needs no torch
+for it.
+
+The features (:func:`stance_features`) are written once and used by both training and the
+solver: :data:`SAMPLES` samples over the last :data:`WINDOW_S` seconds of the head position
+(relative to its current one) and of each hand relative to the head, in the frame of the
+head's travel (x forward, y to the left, z up), and the travel speed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+#: Seconds of history the classifier reads.
+WINDOW_S = 0.5
+#: Samples over that window (evenly spaced, the last one the current frame).
+SAMPLES = 11
+#: Feature count: head (3) and two hands (6) per sample, and the speed.
+N_FEATURES = SAMPLES * 9 + 1
+
+
+def window_frames(fps: float) -> int:
+    """Frames of history the features need at ``fps``."""
+    return max(SAMPLES, round(WINDOW_S * fps) + 1)
+
+
+def stance_features(head: np.ndarray, hands: np.ndarray, fps: float) -> np.ndarray | None:
+    """Features ``(..., N_FEATURES)`` of windows of head ``(..., K, 3)`` and hands
+    ``(..., K, 2, 3)`` positions (metres, z up, K = :func:`window_frames`, oldest first);
+    None for a single window whose head did not travel. Batched windows of a still head
+    get zero features."""
+    head = np.asarray(head, dtype=np.float64)
+    hands = np.asarray(hands, dtype=np.float64)
+    idx = np.linspace(0, head.shape[-2] - 1, SAMPLES).round().astype(int)
+    h = head[..., idx, :]
+    w = hands[..., idx, :, :]
+    d = h[..., -1, :2] - h[..., 0, :2]
+    n = np.linalg.norm(d, axis=-1, keepdims=True)
+    if head.ndim == 2 and float(n[0]) < 1e-6:
+        return None
+    f = d / np.maximum(n, 1e-9)
+    rot = np.stack([f, np.stack([-f[..., 1], f[..., 0]], axis=-1)], axis=-2)  # (..., 2, 2)
+
+    def local(v: np.ndarray) -> np.ndarray:
+        """``v (..., SAMPLES, 3)`` turned into the travel's frame."""
+        return np.concatenate([np.einsum("...ij,...sj->...si", rot, v[..., :2]), v[..., 2:]], axis=-1)
+
+    head_rel = local(h - h[..., -1:, :])
+    left = local(w[..., 0, :] - h)
+    right = local(w[..., 1, :] - h)
+    seconds = (head.shape[-2] - 1) / fps
+    speed = n / seconds
+    feats = np.concatenate([head_rel, left, right], axis=-1).reshape(*head.shape[:-2], SAMPLES * 9)
+    out = np.concatenate([feats, speed], axis=-1)
+    return out
+
+
+@dataclass(frozen=True)
+class StanceModel:
+    """The trained classifier: feature normalisation and the perceptron's layers."""
+
+    mean: np.ndarray
+    std: np.ndarray
+    weights: tuple[np.ndarray, ...]
+    biases: tuple[np.ndarray, ...]
+
+    def left_stance(self, features: np.ndarray) -> np.ndarray:
+        """Probability that the left foot stands, ``(...)``, from features ``(..., N_FEATURES)``."""
+        x = (np.asarray(features, dtype=np.float64) - self.mean) / self.std
+        for i, (w, b) in enumerate(zip(self.weights, self.biases, strict=True)):
+            x = x @ w + b
+            if i < len(self.weights) - 1:
+                x = np.maximum(x, 0.0)
+        return 1.0 / (1.0 + np.exp(-x[..., 0]))
+
+    def save(self, path: Path) -> None:
+        """Write the model as an ``.npz``, atomically."""
+        arrays = {"mean": self.mean, "std": self.std}
+        for i, (w, b) in enumerate(zip(self.weights, self.biases, strict=True)):
+            arrays[f"w{i}"] = w.astype(np.float32)
+            arrays[f"b{i}"] = b.astype(np.float32)
+        from engine.atomic import atomic_path
+
+        with atomic_path(path, suffix=".npz") as tmp:
+            np.savez(tmp, **arrays)  # type: ignore[arg-type]  # numpy's stubs: **arrays could name allow_pickle
+
+    @classmethod
+    def load(cls, path: Path) -> StanceModel:
+        """Read a model written by :meth:`save`; a file that is not one names what is missing."""
+        with np.load(path) as z:
+            missing = [k for k in ("mean", "std", "w0", "b0") if k not in z.files]
+            if missing:
+                raise ValueError(f"{path}: not a stance model (no {', '.join(missing)})")
+            n = sum(1 for k in z.files if k.startswith("w"))
+            if z["mean"].shape != (N_FEATURES,) or z["w0"].shape[0] != N_FEATURES:
+                raise ValueError(f"{path}: a stance model for {z['mean'].shape[0]} features, not {N_FEATURES}")
+            return cls(
+                z["mean"].astype(np.float64),
+                z["std"].astype(np.float64),
+                tuple(z[f"w{i}"].astype(np.float64) for i in range(n)),
+                tuple(z[f"b{i}"].astype(np.float64) for i in range(n)),
+            )
+
+
+#: The shipped classifier (``assets/models/stance.npz``, model card: "Stance classifier").
+DEFAULT_STANCE = Path(__file__).resolve().parents[2] / "assets" / "models" / "stance.npz"
+_DEFAULT: list[StanceModel | None] = []
+
+
+def default_stance_model() -> StanceModel | None:
+    """The shipped classifier, read once; None when the file is absent (the gait planner
+    then goes by the arms' swing)."""
+    if not _DEFAULT:
+        _DEFAULT.append(StanceModel.load(DEFAULT_STANCE) if DEFAULT_STANCE.exists() else None)
+    return _DEFAULT[0]

@@ -1,0 +1,142 @@
+"""Training the stance classifier (:mod:`engine.models.stance`) on prepared shards.
+
+Every frame of a training take where the head travels (faster than the gait planner's
+``on_speed``) and one ankle is clearly slower than the other is a sample: the features of
+the head's and hands' last half second, and whether the left foot is the slower one (the
+stance foot). Mirrored shards give the left-right swapped samples.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from engine import skeleton as sk
+from engine.errors import UserError
+from engine.kinematics.fk import fk_positions
+from engine.models.stance import N_FEATURES, StanceModel, stance_features, window_frames
+
+HEAD = sk.JOINT_INDEX["upperneck"]
+HANDS = (sk.JOINT_INDEX["lwrist"], sk.JOINT_INDEX["rwrist"])
+ANKLES = (sk.JOINT_INDEX["lankle"], sk.JOINT_INDEX["rankle"])
+#: Least head speed (m/s) of a sample: the gait planner's ``on_speed``.
+MIN_SPEED = 0.35
+#: Least difference of the two ankles' horizontal speeds (m/s) for a clear stance label.
+MIN_GAP = 0.15
+
+
+@dataclass(frozen=True)
+class StanceSamples:
+    """Features ``(N, N_FEATURES)``, labels ``(N,)`` (1: the left foot stands) and, per
+    sample, the arm-swing rule's answer (1 left, 0 right, -1 no swing) for comparison."""
+
+    x: np.ndarray
+    y: np.ndarray
+    arms: np.ndarray
+
+
+def _speed(p: np.ndarray, fps: float) -> np.ndarray:
+    """Horizontal speed ``(F, ...)`` of positions ``(F, ..., 3)``, central differences."""
+    v = np.zeros(p.shape[:-1])
+    if len(p) >= 3:
+        v[1:-1] = np.linalg.norm(p[2:, ..., :2] - p[:-2, ..., :2], axis=-1) * fps / 2.0
+        v[0], v[-1] = v[1], v[-2]
+    return v
+
+
+def clip_samples(pos: np.ndarray, fps: float, arm_lag_s: float = 0.1, arm_speed: float = 0.1) -> StanceSamples:
+    """Samples of one clip's joint positions ``(F, 22, 3)`` (metres, z up)."""
+    k = window_frames(fps)
+    n = len(pos) - k + 1
+    if n <= 0:
+        return StanceSamples(np.zeros((0, N_FEATURES)), np.zeros(0), np.zeros(0))
+    head = np.lib.stride_tricks.sliding_window_view(pos[:, HEAD], k, axis=0).transpose(0, 2, 1)
+    hands = np.lib.stride_tricks.sliding_window_view(pos[:, list(HANDS)], k, axis=0).transpose(0, 3, 1, 2)
+    ankles = _speed(pos[:, list(ANKLES)], fps)[k - 1 :]
+    travel = np.linalg.norm(head[:, -1, :2] - head[:, 0, :2], axis=-1) * fps / (k - 1)
+    keep = (travel > MIN_SPEED) & (np.abs(ankles[:, 0] - ankles[:, 1]) > MIN_GAP)
+    x = stance_features(head[keep], hands[keep], fps)
+    assert x is not None
+    y = (ankles[keep, 0] < ankles[keep, 1]).astype(np.float64)
+    # the arm-swing rule of the gait planner, over the same frames
+    lag = max(1, round(arm_lag_s * fps))
+    diff = pos[:, HANDS[0], :2] - pos[:, HANDS[1], :2]
+    fwd = head[:, -1, :2] - head[:, 0, :2]
+    fwd /= np.maximum(np.linalg.norm(fwd, axis=-1, keepdims=True), 1e-9)
+    t = np.arange(k - 1, len(pos))
+    rate = np.einsum("ij,ij->i", diff[t] - diff[np.maximum(t - lag, 0)], fwd) * fps / lag
+    arms = np.where(np.abs(rate) < arm_speed, -1, (rate > 0).astype(int))[keep]
+    return StanceSamples(x, y, arms.astype(np.float64))
+
+
+def load_samples(data: Path, split: str, mirrored: bool = True) -> StanceSamples:
+    """Samples of every shard of ``split`` in a prepared folder (its ``manifest.json``)."""
+    path = data / "manifest.json"
+    if not path.is_file():
+        raise UserError(f"{path}: no prepared data here (make it with `dragposer-studio data prepare --out {data}`)")
+    manifest = json.loads(path.read_text())
+    parts = []
+    for e in manifest["files"]:
+        if e["split"] != split or (e["mirrored"] and not mirrored):
+            continue
+        with np.load(data / e["shard"]) as z:
+            pos = fk_positions(z["local_rot"], z["root_pos"], z["offsets"])
+        parts.append(clip_samples(pos, float(manifest["fps"])))
+    if not parts:
+        raise UserError(f"{path}: no {split} shards")
+    return StanceSamples(*(np.concatenate([getattr(p, f) for p in parts]) for f in ("x", "y", "arms")))
+
+
+def train_stance(
+    train: StanceSamples, hidden: int = 64, epochs: int = 30, lr: float = 2e-3, seed: int = 0
+) -> StanceModel:
+    """Fit the perceptron (two hidden layers of ``hidden``) with logistic loss, Adam."""
+    import torch
+
+    torch.manual_seed(seed)
+    mean = train.x.mean(0)
+    std = train.x.std(0) + 1e-6
+    x = torch.as_tensor((train.x - mean) / std, dtype=torch.float32)
+    y = torch.as_tensor(train.y, dtype=torch.float32)
+    net = torch.nn.Sequential(
+        torch.nn.Linear(N_FEATURES, hidden),
+        torch.nn.ReLU(),
+        torch.nn.Linear(hidden, hidden),
+        torch.nn.ReLU(),
+        torch.nn.Linear(hidden, 1),
+    )
+    opt = torch.optim.Adam(net.parameters(), lr=lr, weight_decay=1e-4)
+    gen = torch.Generator().manual_seed(seed)
+    for _ in range(epochs):
+        order = torch.randperm(len(x), generator=gen)
+        for i in range(0, len(x), 512):
+            b = order[i : i + 512]
+            loss = torch.nn.functional.binary_cross_entropy_with_logits(net(x[b])[:, 0], y[b])
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+    layers = [m for m in net if isinstance(m, torch.nn.Linear)]
+    return StanceModel(
+        mean,
+        std,
+        tuple(m.weight.detach().double().numpy().T.copy() for m in layers),
+        tuple(m.bias.detach().double().numpy().copy() for m in layers),
+    )
+
+
+def accuracy(model: StanceModel, s: StanceSamples) -> dict[str, float]:
+    """The classifier's and the arm rule's share of samples with the right stance foot
+    (the arm rule's frames without a swing count as wrong; ``arms_coverage`` says how many
+    it answers)."""
+    p = model.left_stance(s.x)
+    answered = s.arms >= 0
+    return {
+        "samples": float(len(s.y)),
+        "model": float(((p > 0.5) == (s.y > 0.5)).mean()),
+        "arms": float(((s.arms == s.y) & answered).mean()),
+        "arms_coverage": float(answered.mean()),
+        "arms_when_answering": float((s.arms[answered] == s.y[answered]).mean()) if answered.any() else float("nan"),
+    }

@@ -335,7 +335,11 @@ class PoseWindow(QMainWindow):
         def go() -> None:
             if self.session.key_at(int(frame)) is None and self.scene.keys:
                 self.playback.baked_scene()
-            self.session.go_to(frame)
+            left = self.session.go_to(frame)
+            if left is not None:
+                self.statusBar().showMessage(
+                    f"The edit of frame {left} was not keyed and is not kept here: Ctrl+Z goes back to it", 10000
+                )
 
         self._guard("Keys", go, warn=True)
 

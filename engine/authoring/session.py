@@ -67,6 +67,7 @@ class AuthoringSession(KeyEditing):
         self.history = History(self, self._history_changed)
         self._clock = clock
         self._generation = 0  # counts changes: a bake of an older scene is stale
+        self._shown = (self.frame, self.state())
 
     @property
     def frame(self) -> int:
@@ -350,5 +351,6 @@ class AuthoringSession(KeyEditing):
         self._stale()
         self.frame = loaded.keys[0].frame if loaded.keys else 0
         self.pose_at(self.frame)
+        self._shown = (self.frame, self.state())
         self._changed(before, old)
         self.history.clear()

@@ -153,6 +153,22 @@ def put(mode: PoseMode, scene: AuthoringScene, state: AuthoringState) -> None:
     mode.constraints[:] = list(state.constraints)
 
 
+def holds_key(mode: PoseMode, key: Key) -> bool:
+    """Whether ``mode`` is posed as :func:`pose_on_key` poses it on ``key`` and as
+    ``add_key`` keys it: the key's targets and, for a key with a latent, its latent, its
+    place and its facing."""
+    targets = set(mode.targets) == set(key.targets) and all(
+        same_target(mode.targets[j], t) for j, t in key.targets.items()
+    )
+    if key.latent is None or not targets:
+        return targets
+    return (
+        np.array_equal(mode.pose.latent, key.latent)
+        and np.array_equal(mode.standing_place(), key.root)
+        and mode.heading == key.heading
+    )
+
+
 def pose_on_key(mode: PoseMode, key: Key) -> None:
     """Pose ``mode`` as ``key``: when it has a latent, its pose as the bake poses it
     (:meth:`~engine.authoring.pose_mode.PoseMode.pose_key`); else its targets on the

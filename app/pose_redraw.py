@@ -40,6 +40,7 @@ class PoseRedraw:
             (w.session.events.pose, self._on_edited),
             (w.session.events.keys, self._on_edited),
             (w.session.events.frame, self._on_edited),
+            (w.session.events.selection, self._on_selection),
         ):
             signal.connect(slot)
             self._subscriptions.append((signal, slot))
@@ -92,6 +93,12 @@ class PoseRedraw:
         a = self.w.scene.animation
         self.w.keys.set_state(a.frames, a.fps, tuple(k.frame for k in self.w.scene.keys), self.w.frame, a.interpolation)
         self.w.constraints.panel.frames_changed()
+
+    def _on_selection(self, e: ev.SelectionChanged) -> None:
+        """Undo or redo gave back another selected joint: its rings, where it is now."""
+        self.w.turns.show_handles()
+        self.w.paths.select(e.selected)
+        self.w._render_soon()
 
     def _on_edited(self, e: Any = None) -> None:
         self.w.keys.set_edited(self.w.frame if self.w.session.unkeyed_edit() else None)

@@ -218,6 +218,12 @@ class PoseWindow(QMainWindow):
         self.playback.stop()
         self._guard("Pose", action, warn=True)
 
+    def undo_step(self, redo: bool = False) -> None:
+        """Undo (or redo) the last step through the model."""
+        # a message about the step (a dropped edit's "Ctrl+Z goes back to it") no longer holds
+        self.statusBar().clearMessage()
+        self._edit(self.session.redo if redo else self.session.undo)
+
     # -- targets and the body ------------------------------------------------------
     def select(self, joint: str) -> None:
         """Select ``joint`` (a press or click on it, or on its target): its rotation rings

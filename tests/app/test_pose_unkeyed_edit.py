@@ -67,6 +67,7 @@ def test_an_edit_between_keys_is_said_unkeyed_and_comes_back_with_ctrl_z(keyed):
     assert w.undo.count() == steps + 1 and "frame 20" in w.actions_by_name["undo"].text()
     shortcut(w, Qt.Key.Key_Z)
     assert w.frame == 20 and w.keys.strip.current == 20
+    assert "Ctrl+Z" not in w.statusBar().currentMessage(), "the message of the step undone is gone"
     back = w.session.state()
     np.testing.assert_array_equal(back.pose.positions, edited.pose.positions)
     np.testing.assert_array_equal(back.pose.latent, edited.pose.latent)

@@ -30,8 +30,8 @@ def build_pose_menus(w: QMainWindow) -> None:
     named["close"] = action(w, file_menu, "&Close", w.close, QKeySequence.StandardKey.Close)
     edit = w.menuBar().addMenu("&Edit")
     # undo and redo go through the model; the window names the step on its history event
-    undo = action(w, edit, "&Undo", lambda: w._edit(w.session.undo), QKeySequence.StandardKey.Undo)
-    redo = action(w, edit, "&Redo", lambda: w._edit(w.session.redo))
+    undo = action(w, edit, "&Undo", w.undo_step, QKeySequence.StandardKey.Undo)
+    redo = action(w, edit, "&Redo", lambda: w.undo_step(redo=True))
     redo.setShortcuts([QKeySequence("Ctrl+Shift+Z"), QKeySequence("Ctrl+Y")])
     named["undo"], named["redo"] = undo, redo
     edit.addSeparator()

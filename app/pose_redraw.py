@@ -35,6 +35,12 @@ class PoseRedraw:
             (w.session.events.keys, self.paths_due),
             (w.session.events.animation, self.paths_due),
             (w.session.events.bake, self.paths_due),
+            # after the key strip's own update: whether the pose holds an edit not keyed
+            (w.session.events.targets, self._on_edited),
+            (w.session.events.pose, self._on_edited),
+            (w.session.events.keys, self._on_edited),
+            (w.session.events.frame, self._on_edited),
+            (w.session.events.selection, self._on_selection),
         ):
             signal.connect(slot)
             self._subscriptions.append((signal, slot))
@@ -88,6 +94,15 @@ class PoseRedraw:
         self.w.keys.set_state(a.frames, a.fps, tuple(k.frame for k in self.w.scene.keys), self.w.frame, a.interpolation)
         self.w.constraints.panel.frames_changed()
 
+    def _on_selection(self, e: ev.SelectionChanged) -> None:
+        """Undo or redo gave back another selected joint: its rings, where it is now."""
+        self.w.turns.show_handles()
+        self.w.paths.select(e.selected)
+        self.w._render_soon()
+
+    def _on_edited(self, e: Any = None) -> None:
+        self.w.keys.set_edited(self.w.frame if self.w.session.unkeyed_edit() else None)
+
     def _on_constraints(self, e: Any = None) -> None:
         self.w.constraints.refresh()
         self._show_gizmos()
@@ -104,6 +119,7 @@ class PoseRedraw:
         """Show the whole model: the pose, its targets, the key strip, the constraints."""
         self._on_targets()
         self._on_keys()
+        self._on_edited()
         self._on_constraints()
         self._on_history(
             ev.HistoryChanged(

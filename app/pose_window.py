@@ -86,10 +86,10 @@ class PoseWindow(QMainWindow):
         self.viewport = Viewport(self)
         self.viewport.ground_truth.update(None)
         self.setCentralWidget(self.viewport)
-        self.selected: str | None = None  # the joint whose rotation rings are shown
         self.turns = JointTurns(self)
         self.viewport.ringTurned.connect(self.turns.by_ring)
         self.viewport.jointSelected.connect(self.select)
+        self.viewport.mouseReleased.connect(self.session.release)
         self.viewport.jointDragged.connect(self.drag_joint)
         self.viewport.targetDragged.connect(self.drag_joint)
         self.viewport.gizmoEdited.connect(lambda name, changes: self.constraints.update(name, changes))
@@ -172,6 +172,15 @@ class PoseWindow(QMainWindow):
     def dirty(self) -> bool:
         return self.session.dirty
 
+    @property
+    def selected(self) -> str | None:
+        """The joint whose rotation rings are shown: the model's, so undo gives it back."""
+        return self.session.selected
+
+    @selected.setter
+    def selected(self, joint: str | None) -> None:
+        self.session.select(joint)
+
     # -- layout --------------------------------------------------------------------
     def _dock(self, title: str, widget: QWidget, area: Qt.DockWidgetArea) -> QDockWidget:
         dock = QDockWidget(title, self)
@@ -209,11 +218,17 @@ class PoseWindow(QMainWindow):
         self.playback.stop()
         self._guard("Pose", action, warn=True)
 
+    def undo_step(self, redo: bool = False) -> None:
+        """Undo (or redo) the last step through the model."""
+        # a message about the step (a dropped edit's "Ctrl+Z goes back to it") no longer holds
+        self.statusBar().clearMessage()
+        self._edit(self.session.redo if redo else self.session.undo)
+
     # -- targets and the body ------------------------------------------------------
     def select(self, joint: str) -> None:
         """Select ``joint`` (a press or click on it, or on its target): its rotation rings
         and its motion path show."""
-        self.selected = joint
+        self.session.select(joint, pressed=self.viewport.mouse_held)
         limb = limb_reach(self.mode.pose.positions, joint)
         self._reach = None if limb is None else (joint, limb)
         self.turns.show_handles()
@@ -335,7 +350,11 @@ class PoseWindow(QMainWindow):
         def go() -> None:
             if self.session.key_at(int(frame)) is None and self.scene.keys:
                 self.playback.baked_scene()
-            self.session.go_to(frame)
+            left = self.session.go_to(frame)
+            if left is not None:
+                self.statusBar().showMessage(
+                    f"The edit of frame {left} was not keyed and is not kept here: Ctrl+Z goes back to it", 10000
+                )
 
         self._guard("Keys", go, warn=True)
 

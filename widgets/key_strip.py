@@ -39,6 +39,9 @@ KEY_GRAB_PX = 6
 LABEL_PX = 40
 #: In-between rules (``engine.authoring.keys.SCHEMES``; widgets do not import the engine's solver).
 SCHEMES = ("cubic", "linear", "spherical")
+#: The label's words for a pose edited and not keyed (on a key, and elsewhere).
+EDITED_ON_KEY = " \N{MIDDLE DOT} key edited, not keyed \N{EM DASH} K to key"
+EDITED = " \N{MIDDLE DOT} edited, not keyed \N{EM DASH} K to key"
 
 
 class _Strip(QWidget):
@@ -205,6 +208,7 @@ class KeyStrip(QWidget):
         self.preview.clicked.connect(self.previewRequested.emit)
         self.loop = QCheckBox("Loop")
         self.loop.setToolTip("Play again from the first frame at the end")
+        self.edited: int | None = None  # the frame whose pose holds an edit not keyed
         self.label.setMinimumWidth(self.label.fontMetrics().horizontalAdvance("frame 00000 / 00000, 000 keys (key)"))
         for w in (
             self.label,
@@ -243,11 +247,34 @@ class KeyStrip(QWidget):
         on_key = s.current in s.keys
         self.delete.setEnabled(on_key)
         self.move.setEnabled(on_key)
-        where = (
-            " (key)" if on_key else " (in-between)" if len(s.keys) > 1 and s.keys[0] < s.current < s.keys[-1] else ""
-        )
-        self.label.setText(f"frame {s.current} / {frames - 1}, {len(s.keys)} key{'s' * (len(s.keys) != 1)}{where}")
+        self._show_label()
         s.update()
+
+    def set_edited(self, frame: int | None) -> None:
+        """Say that the pose at ``frame`` holds an edit it does not keep (None: no such edit)."""
+        if frame != self.edited:
+            self.edited = frame
+            self._show_label()
+
+    def _show_label(self) -> None:
+        s = self.strip
+        on_key = s.current in s.keys
+        edited = s.current == self.edited
+        self.label.setStyleSheet(f"color: {style.RECONSTRUCTION}" if edited else "")
+        self.label.setToolTip(
+            "This pose is not keyed: K keys it; another frame does not keep it (Ctrl+Z there brings it back)"
+            if edited
+            else ""
+        )
+        if edited:
+            # leaving drops the edit: the label says so before, not the status bar after (no
+            # longer than an in-between's line, so the row and the 3D view keep their size)
+            self.label.setText(f"frame {s.current}{EDITED_ON_KEY if on_key else EDITED}")
+            return
+        inside = len(s.keys) > 1 and s.keys[0] < s.current < s.keys[-1]
+        where = " (key)" if on_key else " (in-between)" if inside else ""
+        n = len(s.keys)
+        self.label.setText(f"frame {s.current} / {s.frames - 1}, {n} key{'s' * (n != 1)}{where}")
 
     def set_constraint_span(self, span: Span | None) -> None:
         """Show the selected constraint's frame range ``(start, end, blend_in, blend_out)``

@@ -34,6 +34,7 @@ __all__ = [
     "HistoryChanged",
     "KeysChanged",
     "PoseChanged",
+    "SelectionChanged",
     "TargetsChanged",
 ]
 
@@ -99,6 +100,14 @@ class HistoryChanged:
 
 
 @dataclass(frozen=True)
+class SelectionChanged:
+    """Undo or redo gave back another selected joint (None: none)."""
+
+    selected: str | None
+    old: str | None
+
+
+@dataclass(frozen=True)
 class BakeChanged:
     """The bake of the keys: a new one, or None when an edit made it stale."""
 
@@ -116,3 +125,4 @@ class AuthoringEvents(SignalGroup):
     frame = Signal(FrameChanged)
     history = Signal(HistoryChanged)
     bake = Signal(BakeChanged)
+    selection = Signal(SelectionChanged)

@@ -22,6 +22,7 @@ applies the result on the model's own thread, unless an edit made it stale meanw
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Callable
 from typing import Any
@@ -67,6 +68,10 @@ class AuthoringSession(KeyEditing):
         self.history = History(self, self._history_changed)
         self._clock = clock
         self._generation = 0  # counts changes: a bake of an older scene is stale
+        self.selected: str | None = None  # the joint whose rotation rings a view shows
+        # the selection before the press that selected the joint held: a drag's step gives it back
+        self._before_press: tuple[str | None] | None = None
+        self._shown = (self.frame, self.state())
 
     @property
     def frame(self) -> int:
@@ -116,10 +121,28 @@ class AuthoringSession(KeyEditing):
     # -- state, commands and events ------------------------------------------------
     def state(self) -> AuthoringState:
         """The model now, as immutable copies (what a command records)."""
-        return capture(self.mode, self.scene)
+        return capture(self.mode, self.scene, self.selected)
 
     def _put(self, state: AuthoringState) -> None:
         put(self.mode, self.scene, state)
+        self.selected = state.selected
+
+    def select(self, joint: str | None, pressed: bool = False) -> None:
+        """Select ``joint`` (None: none). No undo step of its own: every step records the
+        selection, so undo and redo give it back. ``pressed``: a mouse press selected it,
+        and the drag it may start is edited next; that drag's step records the selection
+        before the press, so undoing the drag leaves the rings where they were before it
+        (:meth:`release` when the button is up)."""
+        if pressed:
+            self._before_press = (self.selected,)
+        elif joint != self.selected:
+            self._before_press = None
+        self.selected = joint
+
+    def release(self) -> None:
+        """The mouse button of the last :meth:`select` press is up: edits from now on are
+        not its drag."""
+        self._before_press = None
 
     def restore_state(self, state: AuthoringState) -> None:
         """Make ``state`` the model's and announce what that changed (undo and redo)."""
@@ -140,7 +163,11 @@ class AuthoringSession(KeyEditing):
             self._put(before)
             self.frame = frame
             raise
-        self.history.push(Edit(text, before, self.state(), key, self._clock()))
+        recorded = before
+        if self._before_press is not None:
+            recorded = dataclasses.replace(before, selected=self._before_press[0])
+            self._before_press = None
+        self.history.push(Edit(text, recorded, self.state(), key, self._clock()))
         self._changed(before, frame)
 
     def _changed(self, before: AuthoringState, frame: int | None = None) -> None:
@@ -165,6 +192,8 @@ class AuthoringSession(KeyEditing):
             self.events.animation.emit(ev.AnimationChanged(frames, fps, interpolation, before.animation))
         if d.pose:
             self.events.pose.emit(ev.PoseChanged(after.pose, after.heading, before.heading))
+        if d.selection:
+            self.events.selection.emit(ev.SelectionChanged(after.selected, before.selected))
 
     def _stale(self) -> None:
         if self.baked is not None:
@@ -350,5 +379,6 @@ class AuthoringSession(KeyEditing):
         self._stale()
         self.frame = loaded.keys[0].frame if loaded.keys else 0
         self.pose_at(self.frame)
+        self._shown = (self.frame, self.state())
         self._changed(before, old)
         self.history.clear()

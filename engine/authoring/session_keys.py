@@ -17,10 +17,11 @@ from typing import TYPE_CHECKING, Any
 from engine.authoring import events as ev
 from engine.authoring.bake import Baked
 from engine.authoring.document import MAX_FRAMES, AuthoringScene
+from engine.authoring.history import Edit, History
 from engine.authoring.jobs import BakeJob
 from engine.authoring.keys import SCHEMES, Animation, Key
 from engine.authoring.pose_mode import PoseMode
-from engine.authoring.state import AuthoringState, pose_between, pose_on_key
+from engine.authoring.state import AuthoringState, holds_key, pose_between, pose_on_key, same_pose, same_target
 from engine.errors import UserError
 from engine.progress import CancelCheck, Progress
 
@@ -36,7 +37,11 @@ class KeyEditing:
     scene: AuthoringScene
     baked: Baked | None
     events: ev.AuthoringEvents
+    history: History
     _generation: int
+    #: The frame last entered and the state it showed then: what an edit of an in-between
+    #: is told from (:meth:`unkeyed_edit`).
+    _shown: tuple[int, AuthoringState]
 
     if TYPE_CHECKING:
         frame: int
@@ -52,6 +57,8 @@ class KeyEditing:
         def edit(self, text: str, change: Callable[[], Any], key: tuple | None = None, solve: bool = False) -> None: ...
 
         def _changed(self, before: AuthoringState, frame: int | None = None) -> None: ...
+
+        def _put(self, state: AuthoringState) -> None: ...
 
     # -- keys and the animation ----------------------------------------------------
     def key_at(self, frame: int) -> Key | None:
@@ -112,15 +119,56 @@ class KeyEditing:
         self.edit("in-betweens", lambda: setattr(self.scene.animation, "interpolation", scheme))
 
     # -- frames and the bake -------------------------------------------------------
-    def go_to(self, frame: int) -> None:
+    def unkeyed_edit(self) -> bool:
+        """Whether the pose on screen holds an edit that no key keeps, so going to another
+        frame would drop it: on a key, a pose, targets, place or facing other than the
+        key's; between keys, other than the in-between shown when the frame was entered.
+        Without keys nothing is dropped (every frame keeps the pose)."""
+        if not self.scene.keys or any(holds_key(self.mode, k) for k in self.scene.keys):
+            return False
+        if self.key_at(self.frame) is not None:
+            return True
+        frame, shown = self._shown
+        if frame != self.frame:
+            return False  # not entered by go_to (a key moved away, a recovered session): nothing to tell it from
+        targets = self.mode.targets
+        same_targets = {t.joint for t in shown.targets} == set(targets) and all(
+            same_target(t, targets[t.joint]) for t in shown.targets
+        )
+        return not (same_targets and same_pose(shown.pose, self.mode.pose) and shown.heading == self.mode.heading)
+
+    def go_to(self, frame: int) -> int | None:
         """Make ``frame`` current: on a key the character takes the key's pose; between
         keys the baked in-between (its latent, place, facing and interpolated targets),
-        so a key added there keeps the motion as it was. Not an undo step. Bakes first
-        when the bake is stale (on this thread: a view runs :meth:`bake_job` off its
-        thread beforehand)."""
+        so a key added there keeps the motion as it was. Bakes first when the bake is
+        stale (on this thread: a view runs :meth:`bake_job` off its thread beforehand).
+
+        Going to a frame is no undo step, unless it drops an :meth:`unkeyed_edit`: then
+        it is one (Ctrl+Z goes back to the frame left, its edit as it was), and the frame
+        left is returned (None otherwise). Going to the current frame keeps its edit."""
+        frame = int(frame)
+        dropped = self.unkeyed_edit()
+        if dropped and frame == self.frame:
+            return None
+        before, old, shown = self.state(), self.frame, self._shown
+        self.frame = frame
+        self.pose_at(frame)
+        after = self.state()
+        self._shown = (frame, after)
+        if dropped:
+            # the frame is part of this step: undone, the edit is back on the frame it was made on
+            text = f"drop unkeyed edit of frame {old}"
+            self.history.push(Edit(text, (old, before, shown), (frame, after, self._shown), put=self._put_framed))
+        self._changed(before, old)
+        return old if dropped else None
+
+    def _put_framed(self, framed: tuple[int, AuthoringState, tuple[int, AuthoringState]]) -> None:
+        """Undo or redo of a step that changed the frame: the frame, the state and what
+        the frame showed when entered, as they were."""
+        frame, state, shown = framed
         before, old = self.state(), self.frame
-        self.frame = int(frame)
-        self.pose_at(self.frame)
+        self._put(state)
+        self.frame, self._shown = frame, shown
         self._changed(before, old)
 
     def pose_at(self, frame: int) -> None:

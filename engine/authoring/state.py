@@ -42,6 +42,9 @@ class AuthoringState:
     animation : (frames, fps, interpolation)
     constraints : tuple of Constraint
         Constraint objects are replaced on every edit, never changed, so they are shared.
+    selected : str or None
+        The selected joint (its rotation rings shown): no edit in itself, kept with the
+        edits so that undo and redo give the rings back to the joint they were on.
     """
 
     targets: tuple[JointTarget, ...]
@@ -51,6 +54,7 @@ class AuthoringState:
     keys: tuple[Key, ...]
     animation: tuple[int, float, str]
     constraints: tuple[Constraint, ...]
+    selected: str | None = None
 
     def animation_object(self) -> Animation:
         frames, fps, interpolation = self.animation
@@ -94,7 +98,8 @@ def same_pose(a: Pose, b: Pose) -> bool:
 @dataclass(frozen=True)
 class Differences:
     """What differs between two states: target joints, key frames (added, removed,
-    changed), and whether the pose, the animation and the constraints do."""
+    changed), and whether the pose, the animation, the constraints and the selected
+    joint do."""
 
     joints: tuple[str, ...]
     keys_added: tuple[int, ...]
@@ -103,6 +108,7 @@ class Differences:
     pose: bool
     animation: bool
     constraints: bool
+    selection: bool = False
 
     @property
     def keys(self) -> bool:
@@ -123,12 +129,13 @@ def differences(old: AuthoringState, new: AuthoringState) -> Differences:
     constraints = len(old.constraints) != len(new.constraints) or any(
         a is not b for a, b in zip(old.constraints, new.constraints)
     )
-    return Differences(joints, added, removed, changed, pose, old.animation != new.animation, constraints)
+    animation = old.animation != new.animation
+    return Differences(joints, added, removed, changed, pose, animation, constraints, old.selected != new.selected)
 
 
-def capture(mode: PoseMode, scene: AuthoringScene) -> AuthoringState:
+def capture(mode: PoseMode, scene: AuthoringScene, selected: str | None = None) -> AuthoringState:
     """The state of ``mode`` (targets, planted feet, pose, facing) and ``scene`` (keys,
-    animation, constraints), as copies."""
+    animation, constraints), as copies, with the ``selected`` joint."""
     a = scene.animation
     return AuthoringState(
         tuple(copy.deepcopy(t) for t in mode.targets.values()),
@@ -138,6 +145,7 @@ def capture(mode: PoseMode, scene: AuthoringScene) -> AuthoringState:
         tuple(copy.deepcopy(k) for k in scene.keys),
         (a.frames, a.fps, a.interpolation),
         tuple(mode.constraints),
+        selected,
     )
 
 
@@ -151,6 +159,22 @@ def put(mode: PoseMode, scene: AuthoringScene, state: AuthoringState) -> None:
     a = scene.animation
     a.frames, a.fps, a.interpolation = state.animation
     mode.constraints[:] = list(state.constraints)
+
+
+def holds_key(mode: PoseMode, key: Key) -> bool:
+    """Whether ``mode`` is posed as :func:`pose_on_key` poses it on ``key`` and as
+    ``add_key`` keys it: the key's targets and, for a key with a latent, its latent, its
+    place and its facing."""
+    targets = set(mode.targets) == set(key.targets) and all(
+        same_target(mode.targets[j], t) for j, t in key.targets.items()
+    )
+    if key.latent is None or not targets:
+        return targets
+    return (
+        np.array_equal(mode.pose.latent, key.latent)
+        and np.array_equal(mode.standing_place(), key.root)
+        and mode.heading == key.heading
+    )
 
 
 def pose_on_key(mode: PoseMode, key: Key) -> None:

@@ -64,6 +64,8 @@ class Viewport(QWidget):
         2: world X, Y, Z), the radians swept since the press, and whether this is the press.
     jointSelected(str)
         A joint (or a target, by its joint) was grabbed or clicked: its name.
+    mouseReleased()
+        A mouse button pressed on the view is up (before the view handles the release).
     """
 
     targetDragged = pyqtSignal(str, object)
@@ -72,6 +74,7 @@ class Viewport(QWidget):
     filesDropped = pyqtSignal(list)
     ringTurned = pyqtSignal(int, float, bool)
     jointSelected = pyqtSignal(str)
+    mouseReleased = pyqtSignal()
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -120,6 +123,9 @@ class Viewport(QWidget):
         #: keys were held then (a live query answers for the time the event is handled,
         #: which, with the event queue behind on a busy machine, can be after a key's release).
         self.drag_modifiers: Qt.KeyboardModifier | None = None
+        #: Whether a mouse button pressed on the view is still held: a selection made by
+        #: the press belongs to the drag that may follow, not to a click.
+        self.mouse_held = False
         self.camera_preset = "home"
         #: Joints whose tracker has an orientation (6-DoF); None draws axes on every target.
         self.oriented: frozenset[str] | None = None
@@ -263,6 +269,10 @@ class Viewport(QWidget):
             self.drag_modifiers = event.modifiers()  # type: ignore[attr-defined]
         elif event is not None and event.type() == QEvent.Type.MouseButtonRelease:
             self.drag_modifiers = None
+            self.mouse_held = False
+            self.mouseReleased.emit()
+        if event is not None and event.type() == QEvent.Type.MouseButtonPress:
+            self.mouse_held = True
         if event is not None and event.type() == QEvent.Type.Wheel:
             self.wheel_zoom.wheel(event)
             event.accept()

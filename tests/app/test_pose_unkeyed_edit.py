@@ -1,0 +1,103 @@
+"""An edit of the pose on a frame that does not keep it, with real mouse events on the
+view and the key timeline: the label says the edit is not keyed, leaving the frame says
+that it was not kept, and Ctrl+Z brings it back exactly, on its frame."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from PyQt6.QtCore import QPoint, Qt
+from PyQt6.QtTest import QTest
+from PyQt6.QtWidgets import QApplication
+
+from engine import skeleton as sk
+from tests.app.gui_helpers import mouse_drag, pixel_of
+
+pytestmark = pytest.mark.gui
+LW = sk.JOINT_INDEX["lwrist"]
+
+
+def scrub(w, frame: int) -> None:
+    """A click on the key timeline at ``frame``."""
+    strip = w.keys.strip
+    QTest.mouseClick(strip, Qt.MouseButton.LeftButton, pos=QPoint(round(strip.x_of(frame)), strip.height() // 2))
+    QApplication.processEvents()
+
+
+def drag_wrist(w) -> None:
+    view = w.viewport
+    view.plotter.render()
+    x, y = pixel_of(view, w.mode.pose.positions[LW])
+    mouse_drag(view, (x, y), (x + 50, y + 90), steps=6)
+
+
+def shortcut(w, key: Qt.Key, mods=Qt.KeyboardModifier.ControlModifier) -> None:
+    QTest.keyClick(QApplication.focusWidget() or w, key, mods)
+    QApplication.processEvents()
+
+
+@pytest.fixture
+def keyed(pose_window, qtbot):
+    """The pose window with keys at frames 0 and 40 (the wrist raised at 40)."""
+    w = pose_window
+    w.activateWindow()
+    qtbot.waitUntil(lambda: QApplication.activeWindow() is w)
+    w.actions_by_name["camera-front"].trigger()
+    w.keys.add.click()
+    scrub(w, 40)
+    drag_wrist(w)
+    w.keys.add.click()
+    assert [k.frame for k in w.scene.keys] == [0, 40]
+    return w
+
+
+def test_an_edit_between_keys_is_said_unkeyed_and_comes_back_with_ctrl_z(keyed):
+    w = keyed
+    scrub(w, 20)
+    assert w.frame == 20 and w.keys.label.text().endswith("(in-between)")
+    drag_wrist(w)
+    label = w.keys.label.text()
+    assert "edited, not keyed" in label and "K to key" in label, label
+    edited = w.session.state()
+    steps = w.undo.count()
+    scrub(w, 30)
+    assert w.frame == 30
+    assert "edited" not in w.keys.label.text()
+    assert "frame 20" in w.statusBar().currentMessage() and "Ctrl+Z" in w.statusBar().currentMessage()
+    assert w.undo.count() == steps + 1 and "frame 20" in w.actions_by_name["undo"].text()
+    shortcut(w, Qt.Key.Key_Z)
+    assert w.frame == 20 and w.keys.strip.current == 20
+    assert "Ctrl+Z" not in w.statusBar().currentMessage(), "the message of the step undone is gone"
+    back = w.session.state()
+    np.testing.assert_array_equal(back.pose.positions, edited.pose.positions)
+    np.testing.assert_array_equal(back.pose.latent, edited.pose.latent)
+    assert [t.joint for t in back.targets] == [t.joint for t in edited.targets]
+    for a, b in zip(back.targets, edited.targets):
+        np.testing.assert_array_equal(a.position, b.position)
+    assert "edited, not keyed" in w.keys.label.text()
+    np.testing.assert_allclose(w.viewport.joints.positions, edited.pose.positions)  # drawn too
+    # keyed now, it stays: the in-between at 20 is the edit
+    w.keys.add.click()
+    assert "edited" not in w.keys.label.text() and w.keys.label.text().endswith("(key)")
+    scrub(w, 30)
+    scrub(w, 20)
+    np.testing.assert_allclose(w.mode.pose.positions[LW], edited.pose.positions[LW], atol=1e-6)
+
+
+def test_an_edit_of_a_key_not_keyed_again_is_said_and_undone_exactly(keyed):
+    w = keyed
+    scrub(w, 0)
+    assert w.keys.label.text().endswith("(key)")
+    drag_wrist(w)
+    assert "key edited, not keyed" in w.keys.label.text()
+    edited = w.session.state()
+    scrub(w, 0)  # a click on the frame shown keeps the edit
+    assert w.frame == 0 and w.session.state().pose is edited.pose
+    scrub(w, 10)
+    assert w.frame == 10 and not np.array_equal(w.mode.pose.positions, edited.pose.positions)
+    assert "frame 0" in w.statusBar().currentMessage()
+    shortcut(w, Qt.Key.Key_Z)
+    assert w.frame == 0 and w.session.state().pose is edited.pose
+    assert "key edited, not keyed" in w.keys.label.text()
+    shortcut(w, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier | Qt.KeyboardModifier.ShiftModifier)
+    assert w.frame == 10 and "edited" not in w.keys.label.text()

@@ -53,8 +53,11 @@ class Edit:
 
     ``key`` says what was edited, ``(kind, name, fields)`` such as
     ``("target", "lwrist", "position")``; None never merges. ``stamp``: seconds on the
-    history's clock when it was made. ``put(state)`` makes ``state`` the model's; None:
-    ``session.restore_state(state)``.
+    history's clock when it was made; ``began``: when its work began (None: at ``stamp``).
+    An edit merges into the last one when the pause between them, from the last one's
+    ``stamp`` to this one's ``began``, is under :data:`MERGE_S`: a drag whose solves take
+    longer than that on a loaded machine is still one step. ``put(state)`` makes ``state``
+    the model's; None: ``session.restore_state(state)``.
     """
 
     text: str
@@ -63,6 +66,7 @@ class Edit:
     key: tuple | None = None
     stamp: float = field(default_factory=time.monotonic)
     put: Callable[[Any], None] | None = None
+    began: float | None = None
 
     def _put(self, session: Any, state: Any) -> None:
         if self.put is None:
@@ -80,7 +84,8 @@ class Edit:
         if not isinstance(other, Edit) or other.key is None or self.key is None:
             return False
         same = other.key[:2] == self.key[:2] and (other.key[2] == self.key[2] or self.key[2] == "added")
-        if not (same and other.stamp - self.stamp < MERGE_S):
+        began = other.stamp if other.began is None else other.began
+        if not (same and began - self.stamp < MERGE_S):
             return False
         self.after, self.stamp = other.after, other.stamp
         return True

@@ -154,7 +154,7 @@ class AuthoringSession(KeyEditing):
         """Run ``change()`` (then a solve of the pose, with ``solve``) as one undo step
         named ``text``; ``key`` (see :class:`engine.authoring.history.Edit`) merges a drag's
         moves into one step. On a UserError the model is put back and it is raised."""
-        before, frame = self.state(), self.frame
+        before, frame, began = self.state(), self.frame, self._clock()
         try:
             change()
             if solve:
@@ -167,7 +167,7 @@ class AuthoringSession(KeyEditing):
         if self._before_press is not None:
             recorded = dataclasses.replace(before, selected=self._before_press[0])
             self._before_press = None
-        self.history.push(Edit(text, recorded, self.state(), key, self._clock()))
+        self.history.push(Edit(text, recorded, self.state(), key, self._clock(), began=began))
         self._changed(before, frame)
 
     def _changed(self, before: AuthoringState, frame: int | None = None) -> None:

@@ -105,6 +105,29 @@ def test_a_drag_merges_into_one_step_and_a_pause_starts_another(vae):
     assert np.allclose(s.targets["lwrist"].position, start + [0.0, -0.1, 0.0]) and "rwrist" not in s.targets
 
 
+class SlowSolveClock:
+    """Each edit's work takes 2 s (a loaded machine) and the next starts 0.05 s after it ends:
+    reads alternate between the start of an edit and its end."""
+
+    def __init__(self) -> None:
+        self.now, self.reads = 0.0, 0
+
+    def __call__(self) -> float:
+        self.reads += 1
+        self.now += 2.0 if self.reads % 2 == 0 else 0.05
+        return self.now
+
+
+def test_a_drag_whose_solves_outlast_the_merge_window_is_still_one_step(vae):
+    s = AuthoringSession(PoseMode(vae, 1.75), clock=SlowSolveClock())
+    start = s.pose.positions[LW].copy()
+    for k in range(1, 5):
+        s.drag_joint("lwrist", start + [0.0, -0.02 * k, 0.0])
+    assert s.history.count() == 1
+    s.undo()
+    assert "lwrist" not in s.targets
+
+
 def test_events_say_what_changed(session):
     s = session
     seen = record(s)

@@ -123,6 +123,13 @@ class PoseOptions:
         towards where it was, relative to the root, when the drag began (see
         :meth:`engine.authoring.pose_mode.PoseMode.held`): a drag moves what its targets, the planted feet and the
         prior need and leaves the rest of the body where the user left it. 0: off.
+    free_arm_weight : float
+        Weight (as a user target's) of the free-arm hold: while only arm or head joints
+        are dragged and no wrist target lies far down the body, the elbow and wrist of an
+        arm no target holds stay where they hung from their shoulder when the drag began
+        (:func:`engine.authoring.pose_hold.free_arms`): the prior would otherwise swing
+        the arm the user left (8-18 cm for a wrist dragged out or up). The arm keeps its
+        world direction and goes with its shoulder when the body moves. 0: off.
     turn_weight : float
         Share of a rotation target's weight in the latent solve. The exact step after
         the solve turns the joint onto its target whatever this is, so it sets only how
@@ -155,6 +162,7 @@ class PoseOptions:
     settle_rounds: int = _option(12, 0, 100)
     hold_weight: float = _option(0.0, 0.0, 10.0)
     turn_weight: float = _option(0.0, 0.0, 10.0)
+    free_arm_weight: float = _option(1.0, 0.0, 10.0)
     keep_trunk: bool = False
 
 

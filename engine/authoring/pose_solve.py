@@ -8,7 +8,8 @@ targeted wrists / ankles put exactly on their targets; while a targeted wrist or
 still beyond its limb's reach, up to ``PoseOptions.reach_rounds`` further rounds, a round
 that overshoots dropped. :meth:`PoseSolving.settle` is the offline, grounded solve for
 when a drag ends. The solve's terms are the user's targets, the planted feet no target
-moves and the scene's constraints; the hold (``PoseOptions.hold_weight``), the trunk rule
+moves and the scene's constraints; the holds (``PoseOptions.hold_weight``,
+``free_arm_weight``), the trunk rule
 (``keep_trunk``) and a pelvis-only target's step
 (:mod:`engine.authoring.pelvis_drag`) act on every solve.
 """
@@ -23,7 +24,7 @@ from engine import skeleton as sk
 from engine.authoring.character import Character, Pose, yaw_quaternion
 from engine.authoring.keys import PLANTED
 from engine.authoring.pelvis_drag import pelvis_pose
-from engine.authoring.pose_hold import held_joints, hold_terms
+from engine.authoring.pose_hold import free_arm_terms, free_arms, held_joints, hold_terms
 from engine.authoring.pose_options import SQUAT_FROM, PoseOptions
 from engine.authoring.pose_root import FOOT_OF, Stance, moved_feet, root_where, shortfall, stoop_targets
 from engine.authoring.pose_trunk import LEGS, TRUNK, keep_trunk
@@ -65,6 +66,7 @@ class PoseSolving:
     anchor: Pose | None
     _standing_root: float
     _lowest_reach: dict[int, float]
+    _hanging_reach: dict[int, float]
     _solved: Pose | None
 
     def pelvis_target(self) -> JointTarget | None:
@@ -171,7 +173,7 @@ class PoseSolving:
         rotation steps."""
         return self.character.solve(
             self.pose.latent,
-            terms + self._hold_terms(where) + self._stoop_terms(where),
+            terms + self._hold_terms(where) + self._stoop_terms(where) + self._free_arm_terms(where),
             ctx,
             reach,
             rotations,
@@ -210,6 +212,15 @@ class PoseSolving:
             return []
         return hold_terms(self.anchor, self.held(), where, w)
 
+    def _free_arm_terms(self, where: np.ndarray) -> list[Constraint]:
+        """The free-arm hold's terms (``PoseOptions.free_arm_weight``) for a solve with the
+        root at ``where (3,)`` metres (:func:`engine.authoring.pose_hold.free_arm_terms`)."""
+        w = self.options.free_arm_weight
+        if w <= 0 or self.anchor is None or self.pelvis_target() is not None:
+            return []
+        arms = free_arms(self.targets, self._hanging_reach, self.options.plant_feet)
+        return free_arm_terms(self.anchor, self.pose, arms, where, w)
+
     def _stoop_terms(self, where: np.ndarray) -> list[Constraint]:
         """The trunk's pull towards wrist targets a stoop reaches, for a solve with the root
         at ``where (3,)`` metres (:func:`engine.authoring.pose_root.stoop_targets`). None
@@ -237,7 +248,7 @@ class PoseSolving:
             self.anchor = self.pose
         where = self._where()
         ctx = c.grounded(where[:2], self.heading, self.frame, prior=self.base_latent)
-        extra = self._hold_terms(where) + self._stoop_terms(where)
+        extra = self._hold_terms(where) + self._stoop_terms(where) + self._free_arm_terms(where)
         solved = c.solve(self.pose.latent, terms + extra, ctx, reach, rotations, prior_weight=o.prior_weight)
         self.pose = self.pelvis_step(self._kept_trunk(solved, reach, rotations))
         for _ in range(max(0, o.settle_rounds)):

@@ -210,6 +210,9 @@ class PoseMode(PoseSolving):
         p[2] = max(p[2], LOWEST_ROOT * self._standing_root)
         self.set_target("root", within_legs(self.pose, p, self.planted), pelvis_only=True)
         self.pose = self._solved = self.pelvis_step(self.pose)
+        if self.shortfall() > self.options.reach_tolerance:
+            # a pinned hand the carried arm no longer reaches: the trunk leans to it
+            self.solve()
         return self.pose
 
     def standing_place(self) -> np.ndarray:

@@ -67,7 +67,9 @@ class PoseOptions:
         does: each solve moves it level by the balance step above, away from the level
         place of its target, so the hips go back over the planted feet as they go down
         and the shins stay steep, instead of sinking straight down with the knees far
-        ahead of the feet and the weight in front of the toes.
+        ahead of the feet and the weight in front of the toes. The step stops short of
+        taking the shoulder of a wrist target above the stooping reach's low point out
+        of reach of its target: a pinned hand holds the body.
     crouch_tolerance : float
         The balance tolerance (metres) of a crouch: tighter than ``balance_tolerance``,
         which leaves a reach forward alone, because a crouching body whose weight is
@@ -89,8 +91,10 @@ class PoseOptions:
         legs nearly straight. While a wrist target lies within that reach and beyond
         :data:`STOOP_REACH` of its arm's length from the shoulder, the latent solve also
         pulls that shoulder to within that distance of the target (weight: the wrist
-        target's), so the trunk bends and turns to it instead of stopping short. 0: the
-        arm hangs from the standing shoulder and nothing pulls it.
+        target's), so the trunk bends and turns to it instead of stopping short. While the
+        root has a target (the user set the pelvis) no crouch takes a reach, and the pull
+        acts on every wrist target beyond that distance, low or not. 0: the arm hangs
+        from the standing shoulder and nothing pulls it.
     free_height : bool
         Drags solve with the lowest foot on the floor (the root's height is part of the
         pose, so reaching low bends the knees instead of folding the trunk) instead of

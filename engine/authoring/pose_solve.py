@@ -223,12 +223,18 @@ class PoseSolving:
 
     def _stoop_terms(self, where: np.ndarray) -> list[Constraint]:
         """The trunk's pull towards wrist targets a stoop reaches, for a solve with the root
-        at ``where (3,)`` metres (:func:`engine.authoring.pose_root.stoop_targets`). None
-        under a pelvis-only target: its latent solves the body where it stood, with
-        targets moved by the pelvis's offset (:meth:`_inputs`)."""
-        if self.pelvis_target() is not None:
-            return []
-        stance = Stance(self.pose, self.targets, self.planted, self.options)
+        at ``where (3,)`` metres (:func:`engine.authoring.pose_root.stoop_targets`). Under
+        a pelvis-only target the latent solves the body where it stood, with the targets
+        moved by the pelvis's offset (:meth:`_inputs`): the pull is that body's."""
+        pose, targets = self.pose, self.targets
+        pelvis = self.pelvis_target()
+        if pelvis is not None:
+            if pose.decoded is None:
+                return []
+            shift = pose.decoded[0] - pelvis.position
+            targets = {j: replace(t, position=t.position + shift) for j, t in targets.items()}
+            pose = replace(pose, positions=pose.decoded, root_pos=pose.decoded[0].copy())
+        stance = Stance(pose, targets, self.planted, self.options)
         return [t.constraint() for t in stoop_targets(stance, where, self._lowest_reach)]
 
     def shortfall(self) -> float:

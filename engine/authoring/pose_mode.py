@@ -200,7 +200,9 @@ class PoseMode(PoseSolving):
         (flat), the legs bend by their two bones, the upper body keeps its pose relative
         to the pelvis and targeted wrists stay on their targets where the arms reach. The
         root gets a ``pelvis_only`` target there, kept above :data:`LOWEST_ROOT` of
-        :attr:`standing_root` and within the planted legs' reach; no latent solve runs."""
+        :attr:`standing_root` and within the planted legs' reach. No latent solve runs
+        unless a targeted wrist or ankle is then short of its target: the event then
+        solves the body (:meth:`solve`), so the trunk leans to a pinned hand."""
         if self.pelvis_target() is None:  # the drag begins: the feet stay where they are now
             moved = moved_feet(self.targets)
             for j in PLANTED:

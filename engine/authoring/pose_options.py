@@ -91,10 +91,11 @@ class PoseOptions:
         legs nearly straight. While a wrist target lies within that reach and beyond
         :data:`STOOP_REACH` of its arm's length from the shoulder, the latent solve also
         pulls that shoulder to within that distance of the target (weight: the wrist
-        target's), so the trunk bends and turns to it instead of stopping short. While the
-        root has a target (the user set the pelvis) no crouch takes a reach, and the pull
-        acts on every wrist target beyond that distance, low or not. 0: the arm hangs
-        from the standing shoulder and nothing pulls it.
+        target's), so the trunk bends and turns to it instead of stopping short. Under a
+        pelvis-only target on the root (the pelvis dragged alone) no crouch takes a
+        reach, and the pull acts on every wrist target beyond that distance, low or not;
+        under another target on the root none acts. 0: the arm hangs from the standing
+        shoulder and nothing pulls it.
     free_height : bool
         Drags solve with the lowest foot on the floor (the root's height is part of the
         pose, so reaching low bends the knees instead of folding the trunk) instead of

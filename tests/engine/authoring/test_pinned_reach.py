@@ -53,3 +53,27 @@ def test_a_hand_the_deep_pelvis_takes_out_of_reach_ends_as_near_as_the_trunk_lea
     mode, goal, _ = _pinned_then_lowered(vae, how, 0.40)
     gap = np.linalg.norm(mode.pose.positions[J["rwrist"]] - goal)
     assert gap < 0.08, f"the hand is {100 * gap:.1f} cm off its target"
+
+
+def test_the_shoulder_is_pulled_to_a_hand_out_of_reach_under_a_pelvis_only_target(vae):
+    """The stoop pull (``stoop_deg``) under a target on the root: a pelvis dragged alone
+    25 cm down leaves the pinned hand beyond the carried arm, and the latent solve (in the
+    standing body's frame) gets a pull on the right shoulder to within reach of the hand;
+    a crouch target on the root (the plain hips drag) gets none."""
+    mode = PoseMode(vae, 1.75)
+    hand = mode.pose.positions[J["rwrist"]] + REACH
+    mode.set_target("rwrist", hand)
+    lowered = mode.pose.root_pos - np.array([0.0, 0.0, 0.25])
+    mode.set_target("root", lowered, pelvis_only=True)
+    mode.pose = mode.pelvis_step(mode.pose)
+    where = mode.pose.decoded[0].copy()
+    pulls = mode._stoop_terms(where)
+    assert [t.joint for t in pulls] == ["rshoulder"]
+    reach = 0.95 * (
+        np.linalg.norm(mode.pose.positions[J["relbow"]] - mode.pose.positions[J["rshoulder"]])
+        + np.linalg.norm(mode.pose.positions[J["rwrist"]] - mode.pose.positions[J["relbow"]])
+    )
+    shift = mode.pose.decoded[0] - lowered  # the standing body's frame, where the latent solves
+    assert np.linalg.norm(pulls[0].position - (hand + shift)) == pytest.approx(reach, abs=1e-6)
+    mode.set_target("root", lowered, pelvis_only=False)
+    assert mode._stoop_terms(mode.pose.root_pos) == []

@@ -106,15 +106,30 @@ def pelvis_pose(
     if legs is not None:
         local[list(LEG_JOINTS)] = np.asarray(legs, float)[list(LEG_JOINTS)]
     local = reach_local(local, root, offsets, reach)
+    local, positions = toes_on(local, root, offsets, {j: p for j, p in feet.items() if j.endswith("toe")}, limbs)
+    decoded = None if pose.decoded is None else pose.decoded.copy()
+    return Pose(pose.latent.copy(), local, root, positions, pose.iterations, decoded)
+
+
+def toes_on(
+    local: np.ndarray,
+    root: np.ndarray,
+    offsets: np.ndarray,
+    toes: Mapping[str, np.ndarray],
+    limbs: Mapping[int, np.ndarray] | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Local rotations ``local (22, 4)`` with each ankle turned (the shortest turn) so its
+    toe joint is on its place in ``toes`` (toe joint name -> (3,) metres; a foot whose
+    ankle has a target in ``limbs``, joint index -> place, is left as it is), and the
+    world positions ``(22, 3)`` of the result: a planted foot stays flat where it stood."""
+    local = np.array(local, float)
     positions, world = fk(local, root, offsets)
     for ankle, toe in sk.FEET.values():
         a, t = sk.JOINT_INDEX[ankle], sk.JOINT_INDEX[toe]
-        if toe not in feet or a in limbs:
+        if toe not in toes or a in (limbs or {}):
             continue
-        have, want = positions[t] - positions[a], np.asarray(feet[toe], float) - positions[a]
+        have, want = positions[t] - positions[a], np.asarray(toes[toe], float) - positions[a]
         turned = qmul(qbetween(tuple(have), tuple(want)), tuple(world[a]))
         local[a] = qmul(qconj(tuple(world[sk.PARENTS[a]])), turned)
     local *= np.where(local[:, :1] < 0, -1.0, 1.0)
-    positions = fk(local, root, offsets)[0]
-    decoded = None if pose.decoded is None else pose.decoded.copy()
-    return Pose(pose.latent.copy(), local, root, positions, pose.iterations, decoded)
+    return local, fk(local, root, offsets)[0]

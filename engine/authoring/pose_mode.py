@@ -16,7 +16,8 @@ floor after every solve.
 What no target asks for stays as the user left it (:class:`PoseOptions`): a turn is
 taken exactly by its joint after the solve and moves no other joint, a low wrist target
 bends the trunk and crouches the pelvis only for what the stooping trunk does not reach
-(:mod:`engine.authoring.pose_root`), ``hold_weight`` pulls the
+(:mod:`engine.authoring.pose_root`), an arm no target holds keeps hanging as it hung
+from its shoulder while the other is dragged (``free_arm_weight``), ``hold_weight`` pulls the
 joints no target holds towards :attr:`PoseMode.anchor`, the pose the drag began from,
 and ``keep_trunk`` keeps any trunk bone from leaning further back than it did then.
 
@@ -89,6 +90,7 @@ class PoseMode(PoseSolving):
         self.pose: Pose = self.character.decode(self.base_latent, self.character.grounded(root_xy, self.heading))
         self._standing_root = float(self.pose.root_pos[2])
         self._lowest_reach = arm_low_points(self.pose.positions, self.options.stoop_deg)
+        self._hanging_reach = arm_low_points(self.pose.positions)
         #: Where each untargeted foot joint stays (world, metres), see :class:`PoseOptions`.
         self.planted: dict[str, np.ndarray] = {}
         #: The pose the current drag began from (None: the next solve's starting pose),
@@ -198,7 +200,9 @@ class PoseMode(PoseSolving):
         (flat), the legs bend by their two bones, the upper body keeps its pose relative
         to the pelvis and targeted wrists stay on their targets where the arms reach. The
         root gets a ``pelvis_only`` target there, kept above :data:`LOWEST_ROOT` of
-        :attr:`standing_root` and within the planted legs' reach; no latent solve runs."""
+        :attr:`standing_root` and within the planted legs' reach. No latent solve runs
+        unless a targeted wrist or ankle is then short of its target: the event then
+        solves the body (:meth:`solve`), so the trunk leans to a pinned hand."""
         if self.pelvis_target() is None:  # the drag begins: the feet stay where they are now
             moved = moved_feet(self.targets)
             for j in PLANTED:
@@ -208,6 +212,9 @@ class PoseMode(PoseSolving):
         p[2] = max(p[2], LOWEST_ROOT * self._standing_root)
         self.set_target("root", within_legs(self.pose, p, self.planted), pelvis_only=True)
         self.pose = self._solved = self.pelvis_step(self.pose)
+        if self.shortfall() > self.options.reach_tolerance:
+            # a pinned hand the carried arm no longer reaches: the trunk leans to it
+            self.solve()
         return self.pose
 
     def standing_place(self) -> np.ndarray:

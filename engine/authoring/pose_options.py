@@ -67,7 +67,9 @@ class PoseOptions:
         does: each solve moves it level by the balance step above, away from the level
         place of its target, so the hips go back over the planted feet as they go down
         and the shins stay steep, instead of sinking straight down with the knees far
-        ahead of the feet and the weight in front of the toes.
+        ahead of the feet and the weight in front of the toes. The step stops short of
+        taking the shoulder of a wrist target above the stooping reach's low point out
+        of reach of its target: a pinned hand holds the body.
     crouch_tolerance : float
         The balance tolerance (metres) of a crouch: tighter than ``balance_tolerance``,
         which leaves a reach forward alone, because a crouching body whose weight is
@@ -89,8 +91,11 @@ class PoseOptions:
         legs nearly straight. While a wrist target lies within that reach and beyond
         :data:`STOOP_REACH` of its arm's length from the shoulder, the latent solve also
         pulls that shoulder to within that distance of the target (weight: the wrist
-        target's), so the trunk bends and turns to it instead of stopping short. 0: the
-        arm hangs from the standing shoulder and nothing pulls it.
+        target's), so the trunk bends and turns to it instead of stopping short. Under a
+        pelvis-only target on the root (the pelvis dragged alone) no crouch takes a
+        reach, and the pull acts on every wrist target beyond that distance, low or not;
+        under another target on the root none acts. 0: the arm hangs from the standing
+        shoulder and nothing pulls it.
     free_height : bool
         Drags solve with the lowest foot on the floor (the root's height is part of the
         pose, so reaching low bends the knees instead of folding the trunk) instead of
@@ -123,6 +128,13 @@ class PoseOptions:
         towards where it was, relative to the root, when the drag began (see
         :meth:`engine.authoring.pose_mode.PoseMode.held`): a drag moves what its targets, the planted feet and the
         prior need and leaves the rest of the body where the user left it. 0: off.
+    free_arm_weight : float
+        Weight (as a user target's) of the free-arm hold: while only arm or head joints
+        are dragged and no wrist target lies far down the body, the elbow and wrist of an
+        arm no target holds stay where they hung from their shoulder when the drag began
+        (:func:`engine.authoring.pose_hold.free_arms`): the prior would otherwise swing
+        the arm the user left (8-18 cm for a wrist dragged out or up). The arm keeps its
+        world direction and goes with its shoulder when the body moves. 0: off.
     turn_weight : float
         Share of a rotation target's weight in the latent solve. The exact step after
         the solve turns the joint onto its target whatever this is, so it sets only how
@@ -155,6 +167,7 @@ class PoseOptions:
     settle_rounds: int = _option(12, 0, 100)
     hold_weight: float = _option(0.0, 0.0, 10.0)
     turn_weight: float = _option(0.0, 0.0, 10.0)
+    free_arm_weight: float = _option(1.0, 0.0, 10.0)
     keep_trunk: bool = False
 
 

@@ -101,15 +101,21 @@ def stoop_targets(stance: "Stance", where: np.ndarray, low_points: Mapping[int, 
     :data:`STOOP_REACH` of the arm's length from its shoulder, a target on that shoulder
     at that distance from the wrist target, on the line to where the shoulder is, with the
     wrist target's weight. A reach below the low point crouches instead (:func:`root_where`).
-    None while the root has an active target: the user has set the pelvis (a squat, the
-    hips held up), and the latent bends the body to the reach from there as it finds."""
+    Under a pelvis-only target (the pelvis dragged alone) nothing crouches for a reach,
+    and the shoulder is pulled towards every wrist target beyond that distance, low or
+    not: the trunk leans to a hand the lowered pelvis took out of the carried arm's
+    reach. None under another active target on the root (a squat, the hips held up): the
+    latent bends the body to the reach from there as it finds, and a pull there moved
+    the knees under a hand being dragged onto them and lowered hips held at standing
+    height."""
     pose, targets, _, o = stance
     root = targets.get("root")
-    if o.stoop_deg <= 0 or (root is not None and root.active):
+    held = root is not None and root.active
+    if o.stoop_deg <= 0 or (root is not None and root.active and not root.pelvis_only):
         return []
     p, out = pose.positions, []
     for t in reaching(targets):
-        if t.index not in low_points or t.position[2] < low_points[t.index]:
+        if t.index not in low_points or (not held and t.position[2] < low_points[t.index]):
             continue
         shoulder = LIMBS[t.index][0]
         reach = STOOP_REACH * arm_length(p, t.index)
@@ -169,6 +175,35 @@ def balance_step(stance: Stance, tolerance: float) -> np.ndarray:
     return o.balance_gain * off * (1.0 - tolerance / dist)
 
 
+#: Shares of a balance step tried, largest first, by :func:`within_arms`.
+STEP_SHARES = np.linspace(1.0, 0.0, 11)
+
+
+def within_arms(stance: Stance, step: np.ndarray, low_points: Mapping[int, float]) -> float:
+    """The largest share of the level pelvis move ``step (2,)`` metres (of
+    :data:`STEP_SHARES`) that takes no shoulder of a targeted wrist further than
+    :data:`STOOP_REACH` of its arm's length from that target, or further than it is
+    already: a hand the user pinned holds the body (a crouch holding a rail), and the
+    balance must not pull it off. Only wrist targets at or above their low point
+    (``low_points``, :func:`arm_low_points` with the stoop) count: a reach below it (a
+    hand to the shin) is the crouch's, which balances as it goes."""
+    pose, targets = stance.pose, stance.targets
+    p = pose.positions
+    wrists = [t for t in reaching(targets) if t.index in low_points and t.position[2] >= low_points[t.index]]
+    if not wrists or not np.any(step):
+        return 1.0
+    move = np.array([step[0], step[1], 0.0])
+    shoulders = np.array([p[LIMBS[t.index][0]] for t in wrists])
+    goals = np.array([t.position for t in wrists])
+    limit = np.maximum(
+        [STOOP_REACH * arm_length(p, t.index) for t in wrists], np.linalg.norm(shoulders - goals, axis=1)
+    )
+    for share in STEP_SHARES:
+        if np.all(np.linalg.norm(shoulders + share * move - goals, axis=1) <= limit):
+            return float(share)
+    return 0.0
+
+
 def root_where(
     stance: Stance, standing_root: float, low_points: Mapping[int, float], adjust: bool = True
 ) -> np.ndarray:
@@ -187,8 +222,8 @@ def root_where(
         where = np.asarray(root.position, float).copy()
         if o.crouch_balance and where[2] < standing_root - SQUAT_FROM:
             # a crouching pelvis keeps its own level place, balanced from there
-            step = balance_step(stance, o.crouch_tolerance) if adjust else 0.0
-            where[:2] = pose.root_pos[:2] + step
+            step = balance_step(stance, o.crouch_tolerance) if adjust else np.zeros(2)
+            where[:2] = pose.root_pos[:2] + step * within_arms(stance, step, low_points)
         return where
     where = pose.root_pos.copy()
     if not adjust:

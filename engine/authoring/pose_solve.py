@@ -8,7 +8,8 @@ targeted wrists / ankles put exactly on their targets; while a targeted wrist or
 still beyond its limb's reach, up to ``PoseOptions.reach_rounds`` further rounds, a round
 that overshoots dropped. :meth:`PoseSolving.settle` is the offline, grounded solve for
 when a drag ends. The solve's terms are the user's targets, the planted feet no target
-moves and the scene's constraints; the hold (``PoseOptions.hold_weight``), the trunk rule
+moves and the scene's constraints; the holds (``PoseOptions.hold_weight``,
+``free_arm_weight``), the trunk rule
 (``keep_trunk``) and a pelvis-only target's step
 (:mod:`engine.authoring.pelvis_drag`) act on every solve.
 """
@@ -22,8 +23,8 @@ import numpy as np
 from engine import skeleton as sk
 from engine.authoring.character import Character, Pose, yaw_quaternion
 from engine.authoring.keys import PLANTED
-from engine.authoring.pelvis_drag import pelvis_pose
-from engine.authoring.pose_hold import held_joints, hold_terms
+from engine.authoring.pelvis_drag import pelvis_pose, toes_on
+from engine.authoring.pose_hold import free_arm_terms, free_arms, held_joints, hold_terms
 from engine.authoring.pose_options import SQUAT_FROM, PoseOptions
 from engine.authoring.pose_root import FOOT_OF, Stance, moved_feet, root_where, shortfall, stoop_targets
 from engine.authoring.pose_trunk import LEGS, TRUNK, keep_trunk
@@ -65,6 +66,7 @@ class PoseSolving:
     anchor: Pose | None
     _standing_root: float
     _lowest_reach: dict[int, float]
+    _hanging_reach: dict[int, float]
     _solved: Pose | None
 
     def pelvis_target(self) -> JointTarget | None:
@@ -81,6 +83,27 @@ class PoseSolving:
         limbs = {x.index: x.position for x in self.targets.values() if x.active and x.index in LIMBS}
         legs = self.character.decode(pose.latent, self.character.grounded()).local_rot
         return pelvis_pose(pose, t.position, self.planted, self.character.skeleton.offsets, limbs, legs)
+
+    def _planted(self, pose: Pose) -> Pose:
+        """``pose`` after a settle's latent and limb steps, with its feet put where they
+        are planted: under a pelvis-only target :meth:`pelvis_step`; else, with
+        ``options.plant_feet``, each planted foot's ankle turned so its toe joint is on its
+        place (the ankle is already, by the leg's two bones). The toe is a target of the
+        latent solve as the ankle is, but a soft one, and the settle's grounded solve
+        moves the root freely: it left a toe 4.2 cm off in the hand-to-knee reach, the
+        foot rolled on its planted ankle. The drag's events leave the toes to the latent
+        (within 1.5 cm there): turned on every event, the reach to the knee ended 0.3 cm
+        further from its goal and from a real pose."""
+        if self.pelvis_target() is not None:
+            return self.pelvis_step(pose)
+        if not self.options.plant_feet:
+            return pose
+        moved = moved_feet(self.targets)
+        toes = {j: p for j, p in self.planted.items() if j.endswith("toe") and FOOT_OF[j] not in moved}
+        if not toes:
+            return pose
+        local, positions = toes_on(pose.local_rot, pose.root_pos, self.character.skeleton.offsets, toes)
+        return Pose(pose.latent, local, pose.root_pos, positions, pose.iterations, pose.decoded)
 
     def _inputs(self) -> tuple[list[Constraint], dict, dict]:
         """The solve's terms: the user's targets, the planted feet that no target moves, the
@@ -171,7 +194,7 @@ class PoseSolving:
         rotation steps."""
         return self.character.solve(
             self.pose.latent,
-            terms + self._hold_terms(where) + self._stoop_terms(where),
+            terms + self._hold_terms(where) + self._stoop_terms(where) + self._free_arm_terms(where),
             ctx,
             reach,
             rotations,
@@ -210,14 +233,29 @@ class PoseSolving:
             return []
         return hold_terms(self.anchor, self.held(), where, w)
 
+    def _free_arm_terms(self, where: np.ndarray) -> list[Constraint]:
+        """The free-arm hold's terms (``PoseOptions.free_arm_weight``) for a solve with the
+        root at ``where (3,)`` metres (:func:`engine.authoring.pose_hold.free_arm_terms`)."""
+        w = self.options.free_arm_weight
+        if w <= 0 or self.anchor is None or self.pelvis_target() is not None:
+            return []
+        arms = free_arms(self.targets, self._hanging_reach, self.options.plant_feet)
+        return free_arm_terms(self.anchor, self.pose, arms, where, w)
+
     def _stoop_terms(self, where: np.ndarray) -> list[Constraint]:
         """The trunk's pull towards wrist targets a stoop reaches, for a solve with the root
-        at ``where (3,)`` metres (:func:`engine.authoring.pose_root.stoop_targets`). None
-        under a pelvis-only target: its latent solves the body where it stood, with
-        targets moved by the pelvis's offset (:meth:`_inputs`)."""
-        if self.pelvis_target() is not None:
-            return []
-        stance = Stance(self.pose, self.targets, self.planted, self.options)
+        at ``where (3,)`` metres (:func:`engine.authoring.pose_root.stoop_targets`). Under
+        a pelvis-only target the latent solves the body where it stood, with the targets
+        moved by the pelvis's offset (:meth:`_inputs`): the pull is that body's."""
+        pose, targets = self.pose, self.targets
+        pelvis = self.pelvis_target()
+        if pelvis is not None:
+            if pose.decoded is None:
+                return []
+            shift = pose.decoded[0] - pelvis.position
+            targets = {j: replace(t, position=t.position + shift) for j, t in targets.items()}
+            pose = replace(pose, positions=pose.decoded, root_pos=pose.decoded[0].copy())
+        stance = Stance(pose, targets, self.planted, self.options)
         return [t.constraint() for t in stoop_targets(stance, where, self._lowest_reach)]
 
     def shortfall(self) -> float:
@@ -237,9 +275,9 @@ class PoseSolving:
             self.anchor = self.pose
         where = self._where()
         ctx = c.grounded(where[:2], self.heading, self.frame, prior=self.base_latent)
-        extra = self._hold_terms(where) + self._stoop_terms(where)
+        extra = self._hold_terms(where) + self._stoop_terms(where) + self._free_arm_terms(where)
         solved = c.solve(self.pose.latent, terms + extra, ctx, reach, rotations, prior_weight=o.prior_weight)
-        self.pose = self.pelvis_step(self._kept_trunk(solved, reach, rotations))
+        self.pose = self._planted(self._kept_trunk(solved, reach, rotations))
         for _ in range(max(0, o.settle_rounds)):
             if self.shortfall() <= o.reach_tolerance:
                 break
@@ -247,7 +285,7 @@ class PoseSolving:
             where = self._where()
             ctx = c.grounded(where[:2], self.heading, self.frame, prior=self.base_latent)
             solved = self._plain_steps(terms, ctx, where, reach, rotations, ITERATIONS)
-            self.pose = self.pelvis_step(self._kept_trunk(solved, reach, rotations))
+            self.pose = self._planted(self._kept_trunk(solved, reach, rotations))
         self._replant()
         self._solved = self.pose
         return self.pose

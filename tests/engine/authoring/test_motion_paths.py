@@ -110,6 +110,6 @@ def test_the_bake_replaces_the_preview_and_stays_near_it(wave, vae):
     np.testing.assert_allclose(exact.positions, baked.motion.positions()[:25], atol=1e-9)
     assert baked_paths(baked, []) is None
     preview = keyed_paths(character, keys, "cubic")
-    for joint, cm in (("lwrist", 0.5), ("lelbow", 2.0), ("lankle", 2.0), ("root", 2.0)):
+    for joint, cm in (("lwrist", 1.0), ("lelbow", 2.0), ("lankle", 2.5), ("root", 2.0)):
         gap = np.linalg.norm(preview.line(joint) - exact.line(joint), axis=1).max() * 100
         assert gap < cm, f"the preview's {joint} is {gap:.1f} cm off the bake"

@@ -152,3 +152,61 @@ def test_a_reach_round_that_leaves_the_wrist_further_is_dropped(vae):
     mode.solve()
     assert len(calls) == 2
     assert mode.pose is poses[0]
+
+
+#: Right-wrist drags from the neutral pose (character frame, metres) whose reach the
+#: standing arm makes: forward, out to the side, up, overhead.
+ARM_DRAGS = {
+    "forward": (0.0, -0.30, 0.0),
+    "out": (-0.30, 0.0, 0.0),
+    "up": (0.0, -0.10, 0.40),
+    "overhead": (-0.05, -0.05, 0.75),
+}
+
+
+def _drag_right_wrist(mode: PoseMode, offset, events: int = 20) -> np.ndarray:
+    start = mode.pose.positions.copy()
+    for k in range(1, events + 1):
+        mode.set_target("rwrist", start[J["rwrist"]] + np.asarray(offset) * k / events)
+        mode.solve()
+    return start
+
+
+@pytest.mark.parametrize("name", list(ARM_DRAGS))
+def test_dragging_one_wrist_leaves_the_free_arm_hanging_as_it_was(vae, name):
+    """The right wrist dragged within its reach: the left arm, which no target holds,
+    does not swing (its wrist moves by less than 2 cm more than its shoulder, which goes
+    where the body takes it), and where the trunk stays (up, overhead) the left wrist
+    moves by less than 4 cm; the dragged wrist ends where it did without the hold
+    (within 1 cm). Without the hold (``free_arm_weight=0``) the left arm swings 9-18 cm
+    with the prior."""
+    mode = PoseMode(vae)
+    start = _drag_right_wrist(mode, ARM_DRAGS[name])
+    p = mode.pose.positions
+    wrist, shoulder = p[J["lwrist"]] - start[J["lwrist"]], p[J["lshoulder"]] - start[J["lshoulder"]]
+    assert np.linalg.norm(wrist - shoulder) < 0.02, f"left arm swung {100 * np.linalg.norm(wrist - shoulder):.1f} cm"
+    if name in ("up", "overhead"):
+        assert np.linalg.norm(wrist) < 0.04, f"left wrist moved {100 * np.linalg.norm(wrist):.1f} cm"
+    free = PoseMode(vae, options=PoseOptions(free_arm_weight=0.0))
+    _drag_right_wrist(free, ARM_DRAGS[name])
+    goal = start[J["rwrist"]] + np.asarray(ARM_DRAGS[name])
+    held_err = np.linalg.norm(p[J["rwrist"]] - goal)
+    free_err = np.linalg.norm(free.pose.positions[J["rwrist"]] - goal)
+    assert held_err < free_err + 0.01, (held_err, free_err)
+
+
+@pytest.mark.parametrize("name", ["hand_to_knee", "squat"])
+def test_a_settle_keeps_the_planted_feet_toes_included(vae, name):
+    """Edit > Settle pose after the hand-to-knee reach (or the squat): both feet stay
+    where they were planted, the toe joints within 1 cm (the settle's grounded solve left
+    a toe 4.2 cm off, the foot rolled on its ankle), the ankles within 1 mm."""
+    mode = PoseMode(vae)
+    start = _do(mode, name)
+    mode.settle()
+    p = mode.pose.positions
+    for j in ("ltoe", "rtoe"):
+        assert np.linalg.norm(p[J[j]] - start[J[j]]) < 0.01, (
+            f"{j} moved {100 * np.linalg.norm(p[J[j]] - start[J[j]]):.1f} cm"
+        )
+    for j in ("lankle", "rankle"):
+        assert np.linalg.norm(p[J[j]] - start[J[j]]) < 0.001

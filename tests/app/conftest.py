@@ -1,6 +1,7 @@
 """The ``studio`` fixture: a main window on a synthetic clip that must clean up after itself
 (no thread, VTK interactor or visible window may outlive a test); ``pose_window``: a pose
-and key window on a 1.75 m character (``vae``: the shipped pose VAE, loaded once)."""
+and key window on a 1.75 m character (``vae``: the shipped pose VAE, loaded once);
+``keyed``: that window with keys at frames 0 and 40 made by real clicks and a drag."""
 
 from __future__ import annotations
 
@@ -67,3 +68,23 @@ def pose_window(qtbot, vae, monkeypatch):
     w.show()
     yield w
     close_now(w)
+
+
+@pytest.fixture
+def keyed(pose_window, qtbot):
+    """The pose window with keys at frames 0 (no target) and 40 (the left wrist raised by a
+    drag: a target only that key has), in the front view, at frame 40."""
+    from PyQt6.QtWidgets import QApplication
+
+    from tests.app.gui_helpers import drag_wrist, scrub
+
+    w = pose_window
+    w.activateWindow()
+    qtbot.waitUntil(lambda: QApplication.activeWindow() is w)
+    w.actions_by_name["camera-front"].trigger()
+    w.keys.add.click()
+    scrub(w, 40)
+    drag_wrist(w)
+    w.keys.add.click()
+    assert [k.frame for k in w.scene.keys] == [0, 40]
+    return w

@@ -1,12 +1,13 @@
 """Helpers of GUI tests: real input (Qt mouse events on the 3D view's native widget, as a
-user's hand would send them; VTK display pixels, y up, converted to Qt's y down) and
-closing a window at once."""
+user's hand would send them; VTK display pixels, y up, converted to Qt's y down; clicks on
+the pose window's key timeline; shortcuts) and closing a window at once."""
 
 from __future__ import annotations
 
 import numpy as np
-from PyQt6.QtCore import QPointF, Qt
+from PyQt6.QtCore import QPoint, QPointF, Qt
 from PyQt6.QtGui import QMouseEvent
+from PyQt6.QtTest import QTest
 from PyQt6.QtWidgets import QApplication
 
 LEFT = Qt.MouseButton.LeftButton
@@ -60,3 +61,38 @@ def close_now(w) -> None:
     w.close()
     w.deleteLater()
     QApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete.value)
+
+
+def scrub(w, frame: int) -> None:
+    """A click on the pose window ``w``'s key timeline at ``frame``."""
+    strip = w.keys.strip
+    QTest.mouseClick(strip, LEFT, pos=QPoint(round(strip.x_of(frame)), strip.height() // 2))
+    QApplication.processEvents()
+
+
+def drag_on_strip(w, frame: int, to: int) -> None:
+    """A left-drag along the pose window ``w``'s key timeline from ``frame`` to ``to``."""
+    strip = w.keys.strip
+    y = strip.height() // 2
+    QTest.mousePress(strip, LEFT, pos=QPoint(round(strip.x_of(frame)), y))
+    for t in np.linspace(0, 1, 5)[1:]:
+        x = round(strip.x_of(frame) + t * (strip.x_of(to) - strip.x_of(frame)))
+        _send(strip, QMouseEvent.Type.MouseMove, x, y, NONE, LEFT, Qt.KeyboardModifier.NoModifier)
+    QTest.mouseRelease(strip, LEFT, pos=QPoint(round(strip.x_of(to)), y))
+    QApplication.processEvents()
+
+
+def drag_wrist(w) -> None:
+    """A drag of the pose window ``w``'s left wrist up and to the side."""
+    from engine import skeleton as sk
+
+    view = w.viewport
+    view.plotter.render()
+    x, y = pixel_of(view, w.mode.pose.positions[sk.JOINT_INDEX["lwrist"]])
+    mouse_drag(view, (x, y), (x + 50, y + 90), steps=6)
+
+
+def shortcut(w, key: Qt.Key, mods=Qt.KeyboardModifier.ControlModifier) -> None:
+    """``key`` with ``mods`` pressed where the keyboard focus is (else on ``w``)."""
+    QTest.keyClick(QApplication.focusWidget() or w, key, mods)
+    QApplication.processEvents()

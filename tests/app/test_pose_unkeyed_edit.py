@@ -6,49 +6,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from PyQt6.QtCore import QPoint, Qt
-from PyQt6.QtTest import QTest
-from PyQt6.QtWidgets import QApplication
+from PyQt6.QtCore import Qt
 
 from engine import skeleton as sk
-from tests.app.gui_helpers import mouse_drag, pixel_of
+from tests.app.gui_helpers import drag_wrist, scrub, shortcut
 
 pytestmark = pytest.mark.gui
 LW = sk.JOINT_INDEX["lwrist"]
-
-
-def scrub(w, frame: int) -> None:
-    """A click on the key timeline at ``frame``."""
-    strip = w.keys.strip
-    QTest.mouseClick(strip, Qt.MouseButton.LeftButton, pos=QPoint(round(strip.x_of(frame)), strip.height() // 2))
-    QApplication.processEvents()
-
-
-def drag_wrist(w) -> None:
-    view = w.viewport
-    view.plotter.render()
-    x, y = pixel_of(view, w.mode.pose.positions[LW])
-    mouse_drag(view, (x, y), (x + 50, y + 90), steps=6)
-
-
-def shortcut(w, key: Qt.Key, mods=Qt.KeyboardModifier.ControlModifier) -> None:
-    QTest.keyClick(QApplication.focusWidget() or w, key, mods)
-    QApplication.processEvents()
-
-
-@pytest.fixture
-def keyed(pose_window, qtbot):
-    """The pose window with keys at frames 0 and 40 (the wrist raised at 40)."""
-    w = pose_window
-    w.activateWindow()
-    qtbot.waitUntil(lambda: QApplication.activeWindow() is w)
-    w.actions_by_name["camera-front"].trigger()
-    w.keys.add.click()
-    scrub(w, 40)
-    drag_wrist(w)
-    w.keys.add.click()
-    assert [k.frame for k in w.scene.keys] == [0, 40]
-    return w
 
 
 def test_an_edit_between_keys_is_said_unkeyed_and_comes_back_with_ctrl_z(keyed):

@@ -39,9 +39,26 @@ KEY_GRAB_PX = 6
 LABEL_PX = 40
 #: In-between rules (``engine.authoring.keys.SCHEMES``; widgets do not import the engine's solver).
 SCHEMES = ("cubic", "linear", "spherical")
-#: The label's words for a pose edited and not keyed (on a key, and elsewhere).
-EDITED_ON_KEY = " \N{MIDDLE DOT} key edited, not keyed \N{EM DASH} K to key"
-EDITED = " \N{MIDDLE DOT} edited, not keyed \N{EM DASH} K to key"
+#: The label's words after "frame N" (or "key N") for a pose edited and not keyed: short
+#: enough for the label's fixed width with three-digit frames.
+EDITED = " \N{MIDDLE DOT} unkeyed edit \N{EM DASH} K to key"
+#: The label's fixed width holds this text (longer ones are elided, whole in the tooltip).
+LABEL_WIDEST = "frame 00000 / 00000, 000 keys (key)"
+
+
+class _FixedLabel(QLabel):
+    """A one-line label whose width is set, not taken from its text: a text that does not
+    fit is elided (``text()`` is whole), so a new text never moves the widgets beside it."""
+
+    def paintEvent(self, event: QPaintEvent | None) -> None:  # noqa: N802 (Qt's name)
+        rect = self.contentsRect()
+        shown = self.fontMetrics().elidedText(self.text(), Qt.TextElideMode.ElideRight, rect.width())
+        p = QPainter(self)
+        style = self.style()
+        if style is not None:
+            flags = int(self.alignment().value) | Qt.TextFlag.TextSingleLine.value
+            style.drawItemText(p, rect, flags, self.palette(), self.isEnabled(), shown, self.foregroundRole())
+        p.end()
 
 
 class _Strip(QWidget):
@@ -187,7 +204,7 @@ class KeyStrip(QWidget):
         outer.addWidget(self.strip)
         row = QHBoxLayout()
         outer.addLayout(row)
-        self.label = QLabel()
+        self.label = _FixedLabel()
         self.add = QPushButton("Add key")
         self.add.clicked.connect(lambda: self.addRequested.emit(self.strip.current))
         self.delete = QPushButton("Delete key")
@@ -209,7 +226,10 @@ class KeyStrip(QWidget):
         self.loop = QCheckBox("Loop")
         self.loop.setToolTip("Play again from the first frame at the end")
         self.edited: int | None = None  # the frame whose pose holds an edit not keyed
-        self.label.setMinimumWidth(self.label.fontMetrics().horizontalAdvance("frame 00000 / 00000, 000 keys (key)"))
+        # a width of its own: a label sized by its text moved every button after it when the
+        # text changed (17 px for the unkeyed-edit text in a 1500 px window); no wider than
+        # the row's least width allows, so neither the window nor the 3D view grows
+        self.label.setFixedWidth(self.label.fontMetrics().horizontalAdvance(LABEL_WIDEST))
         for w in (
             self.label,
             self.add,
@@ -261,20 +281,20 @@ class KeyStrip(QWidget):
         on_key = s.current in s.keys
         edited = s.current == self.edited
         self.label.setStyleSheet(f"color: {style.RECONSTRUCTION}" if edited else "")
-        self.label.setToolTip(
-            "This pose is not keyed: K keys it; another frame does not keep it (Ctrl+Z there brings it back)"
-            if edited
-            else ""
-        )
         if edited:
-            # leaving drops the edit: the label says so before, not the status bar after (no
-            # longer than an in-between's line, so the row and the 3D view keep their size)
-            self.label.setText(f"frame {s.current}{EDITED_ON_KEY if on_key else EDITED}")
+            # leaving drops the edit: the label says so before, not the status bar after
+            text = f"{'key' if on_key else 'frame'} {s.current}{EDITED}"
+            self.label.setText(text)
+            what = f"The key at frame {s.current} holds another pose" if on_key else "The pose shown here is edited"
+            self.label.setToolTip(
+                f"{text}\n{what}: K keys this pose; another frame does not keep it (Ctrl+Z there brings it back)"
+            )
             return
         inside = len(s.keys) > 1 and s.keys[0] < s.current < s.keys[-1]
         where = " (key)" if on_key else " (in-between)" if inside else ""
         n = len(s.keys)
         self.label.setText(f"frame {s.current} / {s.frames - 1}, {n} key{'s' * (n != 1)}{where}")
+        self.label.setToolTip(self.label.text())
 
     def set_constraint_span(self, span: Span | None) -> None:
         """Show the selected constraint's frame range ``(start, end, blend_in, blend_out)``

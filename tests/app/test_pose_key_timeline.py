@@ -1,0 +1,54 @@
+"""The pose window's key timeline and what goes with it, with real clicks, drags and
+shortcuts on the real widgets (keys at frames 0 and 40, a wrist target on 40 only):
+the row under the timeline keeps its layout whatever its label says."""
+
+from __future__ import annotations
+
+import pytest
+from PyQt6.QtCore import Qt
+from PyQt6.QtWidgets import QApplication
+
+from tests.app.gui_helpers import drag_wrist, scrub, shortcut
+
+pytestmark = pytest.mark.gui
+
+
+def _row(w) -> list:
+    """Where each widget right of the label is, and the 3D view."""
+    k = w.keys
+    widgets = (k.add, k.delete, k.move_to, k.move, k.length, k.fps, k.interpolation, k.preview, k.loop)
+    return [x.geometry() for x in widgets] + [k.label.geometry(), w.viewport.geometry()]
+
+
+@pytest.mark.parametrize("width", [1000, 1500])
+def test_the_row_under_the_timeline_keeps_its_layout_whatever_the_label_says(keyed, qtbot, width):
+    w = keyed
+    w.resize(width, 700)
+    qtbot.waitUntil(lambda: w.width() == width)
+    QApplication.processEvents()
+    label = w.keys.label
+    scrub(w, 20)
+    first = _row(w)
+    seen = {label.text(): first}
+    for gesture in (
+        lambda: scrub(w, 40),  # on a key
+        lambda: scrub(w, 50),  # after the last key
+        lambda: scrub(w, 20),
+        lambda: drag_wrist(w),  # an in-between edited
+        lambda: scrub(w, 0),  # the edit dropped: one undo step
+        lambda: drag_wrist(w),  # a key edited
+        lambda: shortcut(w, Qt.Key.Key_Z),  # the key as it was
+        lambda: scrub(w, 20),
+    ):
+        gesture()
+        QApplication.processEvents()
+        seen[label.text()] = _row(w)
+    for text, row in seen.items():
+        assert row == first, f"{text!r} moved the row at {width} px"
+    assert w.width() == width, "the window did not widen"
+    texts = list(seen)
+    assert any(t.startswith("frame 20 · unkeyed edit") for t in texts), texts
+    assert any(t.startswith("key 0 · unkeyed edit") for t in texts), texts
+    assert any(t.endswith("(in-between)") for t in texts) and any(t.endswith("(key)") for t in texts), texts
+    for text in texts:  # every text the label showed here is whole
+        assert label.fontMetrics().horizontalAdvance(text) <= label.contentsRect().width(), text

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from engine.authoring import events as ev
+from engine.authoring.bake import one_key_targets
 from engine.authoring.motion_paths import authored_paths
 from engine.studio.frame_figures import gizmos_of
 
@@ -40,6 +41,9 @@ class PoseRedraw:
             (w.session.events.pose, self._on_edited),
             (w.session.events.keys, self._on_edited),
             (w.session.events.frame, self._on_edited),
+            (w.session.events.targets, self._on_key_only),
+            (w.session.events.keys, self._on_key_only),
+            (w.session.events.frame, self._on_key_only),
             (w.session.events.selection, self._on_selection),
         ):
             signal.connect(slot)
@@ -100,6 +104,12 @@ class PoseRedraw:
         self.w.paths.select(e.selected)
         self.w._render_soon()
 
+    def _on_key_only(self, e: Any = None) -> None:
+        """The targets of one key around an in-between, which do not act on it: the list
+        says so, rather than showing no target where a key has one."""
+        key_only = one_key_targets(self.w.scene.keys, self.w.frame)
+        self.w.targets.set_key_only({j: f for j, f in key_only.items() if j not in self.w.mode.targets})
+
     def _on_edited(self, e: Any = None) -> None:
         self.w.keys.set_edited(self.w.frame if self.w.session.unkeyed_edit() else None)
 
@@ -120,6 +130,7 @@ class PoseRedraw:
         self._on_targets()
         self._on_keys()
         self._on_edited()
+        self._on_key_only()
         self._on_constraints()
         self._on_history(
             ev.HistoryChanged(

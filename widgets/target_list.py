@@ -1,4 +1,6 @@
-"""The pose mode's joint target list: one row per target with enable, weight and clear."""
+"""The pose mode's joint target list: one row per target with enable, weight and clear,
+and under them, on an in-between, the targets of one of its two keys only, which do not
+act there."""
 
 from __future__ import annotations
 
@@ -60,6 +62,11 @@ class TargetList(QWidget):
         self.grid = QGridLayout(self.grid_host)
         self.grid.setColumnStretch(4, 1)  # spare width goes right of the controls
         outer.addWidget(self.grid_host)
+        self.key_only = QLabel()
+        self.key_only.setWordWrap(True)
+        self.key_only.setStyleSheet("color: #8a93a6;")  # a note, as the latent views' notes
+        self.key_only.hide()
+        outer.addWidget(self.key_only)
         outer.addStretch(1)
         self.rows: dict[str, dict[str, QWidget]] = {}
 
@@ -79,6 +86,18 @@ class TargetList(QWidget):
                 w.blockSignals(False)
         self.clear_all.setEnabled(bool(targets))
         self.hint.setVisible(not targets)
+
+    def set_key_only(self, joints: dict[str, int]) -> None:
+        """Show ``joint -> key frame``: the targets of one of the two keys around the frame
+        shown, which the in-between does not take (none: hidden)."""
+        names = ", ".join(f"{j} (key {f})" for j, f in sorted(joints.items(), key=lambda jf: (jf[1], jf[0])))
+        self.key_only.setText(
+            f"Not acting on this frame, on one key only: {names}. "
+            "An in-between takes the targets both keys around it have; drag the joint to target it here."
+            if joints
+            else ""
+        )
+        self.key_only.setVisible(bool(joints))
 
     def _rebuild(self, joints: tuple[str, ...]) -> None:
         for row in self.rows.values():

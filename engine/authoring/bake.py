@@ -214,6 +214,23 @@ def interpolated_heading(keys: list[Key], times: list[float], t: float, scheme: 
     return float(interpolate(times, [np.array([h]) for h in headings], t, scheme)[0])
 
 
+def one_key_targets(keys: list[Key], t: float) -> dict[str, int]:
+    """The joints that one of the two keys around time ``t`` targets and the other does
+    not, and that key's frame: :func:`interpolated_targets` leaves them out, so they do
+    not act on the in-between (the key's latent carries them into it). Empty on a key,
+    before the first and after the last, where one key gives every target."""
+    times = [float(k.frame) for k in keys]
+    if not keys:
+        return {}
+    i, s = segment(times, t)
+    if s == 0.0:
+        return {}
+    a, b = keys[i], keys[i + 1]
+    out = {j: a.frame for j in a.targets if j not in b.targets}
+    out.update({j: b.frame for j in b.targets if j not in a.targets})
+    return out
+
+
 def interpolated_targets(keys: list[Key], times: list[float], t: float, scheme: str) -> list[JointTarget]:
     """The targets at time ``t``: every joint targeted by both neighbouring keys (by the
     one key on a key, before the first or after the last), its position interpolated

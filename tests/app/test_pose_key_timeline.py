@@ -1,6 +1,7 @@
 """The pose window's key timeline and what goes with it, with real clicks, drags and
 shortcuts on the real widgets (keys at frames 0 and 40, a wrist target on 40 only):
-the row under the timeline keeps its layout whatever its label says."""
+the row under the timeline keeps its layout whatever its label says; on an in-between
+the Targets list says which key's targets do not act there."""
 
 from __future__ import annotations
 
@@ -52,3 +53,21 @@ def test_the_row_under_the_timeline_keeps_its_layout_whatever_the_label_says(key
     assert any(t.endswith("(in-between)") for t in texts) and any(t.endswith("(key)") for t in texts), texts
     for text in texts:  # every text the label showed here is whole
         assert label.fontMetrics().horizontalAdvance(text) <= label.contentsRect().width(), text
+
+
+def test_an_in_between_lists_the_targets_of_one_key_that_do_not_act_there(keyed):
+    w = keyed
+    t = w.targets
+    assert list(t.rows) == ["lwrist"] and not t.key_only.isVisible()  # on key 40
+    scrub(w, 20)
+    assert w.frame == 20 and not w.mode.targets, "an in-between takes the targets both keys have"
+    assert not t.rows and t.key_only.isVisible()
+    assert "lwrist (key 40)" in t.key_only.text() and "not acting on this frame" in t.key_only.text().lower()
+    scrub(w, 30)  # another in-between of the same keys
+    assert t.key_only.isVisible() and "lwrist (key 40)" in t.key_only.text()
+    drag_wrist(w)  # a target here: a row, no longer a note
+    assert list(t.rows) == ["lwrist"] and not t.key_only.isVisible()
+    shortcut(w, Qt.Key.Key_Z)
+    assert not t.rows and t.key_only.isVisible()
+    scrub(w, 50)  # after the last key, its targets act
+    assert list(t.rows) == ["lwrist"] and not t.key_only.isVisible()

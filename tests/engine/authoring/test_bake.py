@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from engine import skeleton as sk
-from engine.authoring.bake import bake, interpolated_targets
+from engine.authoring.bake import bake, interpolated_targets, one_key_targets
 from engine.authoring.document import load_authoring
 from engine.authoring.export import bake_to_file
 from engine.authoring.keys import Key
@@ -93,6 +93,9 @@ def test_a_joint_targeted_by_both_keys_follows_an_eased_straight_path():
     early = interpolated_targets([a, b], [0.0, 10.0], 1.0, "cubic")[0].position[0]
     late = interpolated_targets([a, b], [0.0, 10.0], 1.0, "linear")[0].position[0]
     assert 0 < early < late == pytest.approx(0.1)  # cubic eases out of the key
+    # what the pose window's Targets list says of the upperneck between them
+    assert one_key_targets([a, b], 5.0) == {"upperneck": 10}
+    assert one_key_targets([a, b], 10.0) == {} == one_key_targets([a, b], 12.0) == one_key_targets([a, b], 0.0)
 
 
 def test_the_command_bakes_to_gltf_with_the_bvh_s_joints(baked, example_scene, tmp_path):

@@ -327,7 +327,12 @@ class PoseWindow(QMainWindow):
         self._edit(lambda: self.session.delete_key(frame))
 
     def move_key(self, frame: int, to: int) -> None:
-        self._edit(lambda: self.session.move_key(frame, to))
+        def move() -> None:
+            if frame != self.frame and self.session.key_at(frame) is not None:
+                self.go_to(frame)  # the move starts on its key: the status bar says if an edit is dropped
+            self.session.move_key(frame, to)
+
+        self._edit(move)
 
     def step(self, by: int) -> None:
         """Go ``by`` frames on (or back), within the animation."""

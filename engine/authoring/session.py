@@ -150,24 +150,45 @@ class AuthoringSession(KeyEditing):
         self._put(state)
         self._changed(before)
 
-    def edit(self, text: str, change: Callable[[], Any], key: tuple | None = None, solve: bool = False) -> None:
+    def edit(
+        self,
+        text: str,
+        change: Callable[[], Any],
+        key: tuple | None = None,
+        solve: bool = False,
+        framed: bool = False,
+    ) -> None:
         """Run ``change()`` (then a solve of the pose, with ``solve``) as one undo step
         named ``text``; ``key`` (see :class:`engine.authoring.history.Edit`) merges a drag's
-        moves into one step. On a UserError the model is put back and it is raised."""
-        before, frame, began = self.state(), self.frame, self._clock()
+        moves into one step. ``framed``: the frame is part of the step, so its undo and
+        redo show the frame they leave the model on (an edit of the keys: the key's frame).
+        On a UserError the model is put back and it is raised."""
+        before, frame, began, shown = self.state(), self.frame, self._clock(), self._shown
         try:
             change()
             if solve:
                 self.mode.solve()
         except UserError:
             self._put(before)
-            self.frame = frame
+            self.frame, self._shown = frame, shown
             raise
         recorded = before
         if self._before_press is not None:
             recorded = dataclasses.replace(before, selected=self._before_press[0])
             self._before_press = None
-        self.history.push(Edit(text, recorded, self.state(), key, self._clock(), began=began))
+        if framed:
+            edit = Edit(
+                text,
+                (frame, recorded, shown),
+                (self.frame, self.state(), self._shown),
+                key,
+                self._clock(),
+                put=self._put_framed,
+                began=began,
+            )
+        else:
+            edit = Edit(text, recorded, self.state(), key, self._clock(), began=began)
+        self.history.push(edit)
         self._changed(before, frame)
 
     def _changed(self, before: AuthoringState, frame: int | None = None) -> None:

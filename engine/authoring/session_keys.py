@@ -2,7 +2,8 @@
 :class:`engine.authoring.session.AuthoringSession`).
 
 Adding, moving and deleting keys and setting the animation's length, rate and in-between
-rule are edits like any other (one undo step each, through the session's ``edit``).
+rule are edits like any other (one undo step each, through the session's ``edit``); the
+frame is part of a key's step, so its undo and redo show the frame the key is at.
 Going to a frame poses the character on it: a key's pose, or between keys the baked
 in-between. The bake is long work: :meth:`KeyEditing.bake_job` copies the scene for a
 worker thread and :meth:`KeyEditing.take_bake` takes the result unless an edit made it
@@ -54,7 +55,14 @@ class KeyEditing:
 
         def state(self) -> AuthoringState: ...
 
-        def edit(self, text: str, change: Callable[[], Any], key: tuple | None = None, solve: bool = False) -> None: ...
+        def edit(
+            self,
+            text: str,
+            change: Callable[[], Any],
+            key: tuple | None = None,
+            solve: bool = False,
+            framed: bool = False,
+        ) -> None: ...
 
         def _changed(self, before: AuthoringState, frame: int | None = None) -> None: ...
 
@@ -74,7 +82,7 @@ class KeyEditing:
                 key.feet = {j: f.copy() for j, f in m.planted.items()}
             self.scene.keys = sorted([*(k for k in self.scene.keys if k.frame != frame), key], key=lambda k: k.frame)
 
-        self.edit(f"key frame {frame}", change)
+        self.edit(f"key frame {frame}", change, framed=True)
 
     def delete_key(self, frame: int) -> None:
         """Delete the key at ``frame`` (nothing when there is none)."""
@@ -82,10 +90,13 @@ class KeyEditing:
             self.edit(
                 f"delete key {frame}",
                 lambda: setattr(self.scene, "keys", [k for k in self.scene.keys if k.frame != frame]),
+                framed=True,
             )
 
     def move_key(self, frame: int, to: int) -> None:
-        """Move the key at ``frame`` to ``to`` (replacing a key there) and go there."""
+        """Move the key at ``frame`` to ``to`` (replacing a key there) and go there; undone,
+        the frame it was made from is shown again (a view goes to the key first, so that is
+        the key's)."""
         key = self.key_at(frame)
         if key is None or frame == to or not 0 <= to < self.scene.animation.frames:
             return
@@ -97,8 +108,9 @@ class KeyEditing:
             self.scene.keys = sorted([*kept, moved], key=lambda k: k.frame)
             self.frame = int(to)
             self.pose_at(self.frame)  # inside the step: undo and redo give back the pose shown
+            self._shown = (self.frame, self.state())
 
-        self.edit(f"move key {frame} -> {to}", change)
+        self.edit(f"move key {frame} -> {to}", change, framed=True)
 
     def set_length(self, frames: int) -> None:
         """The animation's length, frames."""
@@ -130,7 +142,7 @@ class KeyEditing:
             return True
         frame, shown = self._shown
         if frame != self.frame:
-            return False  # not entered by go_to (a key moved away, a recovered session): nothing to tell it from
+            return False  # not entered by go_to (a recovered session): nothing to tell it from
         targets = self.mode.targets
         same_targets = {t.joint for t in shown.targets} == set(targets) and all(
             same_target(t, targets[t.joint]) for t in shown.targets

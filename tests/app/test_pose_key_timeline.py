@@ -1,17 +1,20 @@
 """The pose window's key timeline and what goes with it, with real clicks, drags and
 shortcuts on the real widgets (keys at frames 0 and 40, a wrist target on 40 only):
 the row under the timeline keeps its layout whatever its label says; on an in-between
-the Targets list says which key's targets do not act there."""
+the Targets list says which key's targets do not act there; undo and redo of a key
+added, moved or deleted show the frame the key is at."""
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 from PyQt6.QtCore import Qt
 from PyQt6.QtWidgets import QApplication
 
-from tests.app.gui_helpers import drag_wrist, scrub, shortcut
+from tests.app.gui_helpers import drag_on_strip, drag_wrist, scrub, shortcut
 
 pytestmark = pytest.mark.gui
+REDO = Qt.KeyboardModifier.ControlModifier | Qt.KeyboardModifier.ShiftModifier
 
 
 def _row(w) -> list:
@@ -71,3 +74,67 @@ def test_an_in_between_lists_the_targets_of_one_key_that_do_not_act_there(keyed)
     assert not t.rows and t.key_only.isVisible()
     scrub(w, 50)  # after the last key, its targets act
     assert list(t.rows) == ["lwrist"] and not t.key_only.isVisible()
+
+
+def _at_key(w, frame: int) -> None:
+    assert w.frame == frame and w.keys.strip.current == frame
+    assert w.keys.label.text().startswith(f"frame {frame} /") and w.keys.label.text().endswith("(key)")
+    key = w.session.key_at(frame)
+    np.testing.assert_array_equal(w.mode.pose.latent, key.latent)
+    np.testing.assert_allclose(w.viewport.joints.positions, w.mode.pose.positions)  # drawn
+
+
+def test_undo_and_redo_of_a_key_moved_by_its_box_show_the_key(keyed):
+    w = keyed
+    w.keys.move_to.setValue(50)
+    w.keys.move.click()
+    assert [k.frame for k in w.scene.keys] == [0, 50] and w.frame == 50
+    scrub(w, 10)
+    shortcut(w, Qt.Key.Key_Z)
+    assert [k.frame for k in w.scene.keys] == [0, 40]
+    _at_key(w, 40)
+    scrub(w, 10)
+    shortcut(w, Qt.Key.Key_Z, REDO)
+    assert [k.frame for k in w.scene.keys] == [0, 50]
+    _at_key(w, 50)
+
+
+def test_undo_and_redo_of_a_key_dragged_from_another_frame_show_the_key(keyed):
+    w = keyed
+    scrub(w, 20)
+    drag_on_strip(w, 40, 30)
+    assert [k.frame for k in w.scene.keys] == [0, 30] and w.frame == 30
+    scrub(w, 10)
+    shortcut(w, Qt.Key.Key_Z)
+    assert [k.frame for k in w.scene.keys] == [0, 40] and "move key" in w.actions_by_name["redo"].text()
+    _at_key(w, 40)
+    shortcut(w, Qt.Key.Key_Z, REDO)
+    _at_key(w, 30)
+
+
+def test_undo_and_redo_of_a_key_added_or_deleted_show_its_frame(keyed):
+    w = keyed
+    scrub(w, 20)
+    drag_wrist(w)
+    edited = w.mode.pose.latent.copy()
+    shortcut(w, Qt.Key.Key_K, Qt.KeyboardModifier.NoModifier)
+    assert [k.frame for k in w.scene.keys] == [0, 20, 40]
+    scrub(w, 50)
+    shortcut(w, Qt.Key.Key_Z)  # the key gone: frame 20 with its edit, said unkeyed again
+    assert [k.frame for k in w.scene.keys] == [0, 40] and w.frame == 20 and w.keys.strip.current == 20
+    np.testing.assert_array_equal(w.mode.pose.latent, edited)
+    assert w.keys.label.text().startswith("frame 20 · unkeyed edit")
+    shortcut(w, Qt.Key.Key_Z, REDO)
+    _at_key(w, 20)
+    w.keys.delete.click()  # the pose stays, kept by no key now
+    assert [k.frame for k in w.scene.keys] == [0, 40]
+    assert w.keys.label.text().startswith("frame 20 · unkeyed edit")
+    scrub(w, 50)
+    shortcut(w, Qt.Key.Key_Z)  # the pose dropped by leaving, back
+    assert w.frame == 20 and w.keys.label.text().startswith("frame 20 · unkeyed edit")
+    shortcut(w, Qt.Key.Key_Z)
+    assert [k.frame for k in w.scene.keys] == [0, 20, 40]
+    _at_key(w, 20)
+    scrub(w, 50)
+    shortcut(w, Qt.Key.Key_Z, REDO)
+    assert [k.frame for k in w.scene.keys] == [0, 40] and w.frame == 20 and w.keys.strip.current == 20

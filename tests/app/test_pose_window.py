@@ -141,19 +141,26 @@ def test_every_edit_kind_undoes_and_redoes(window, qtbot):
         lambda: w.delete_key(0),
         lambda: w.clear_all(),
     ]
-    states = [state(w)]
-    for edit in edits:
+    # a key is moved from its frame: the window goes there first (no undo step: no edit is
+    # dropped), so the move's undo shows the key where it was
+    went = {7: 20}
+    before, after = [], [state(w)]  # each edit's, for its undo and its redo
+    for i, edit in enumerate(edits):
         qtbot.wait(700)  # beyond the merge window: each edit is its own step
+        if i in went:
+            w.go_to(went[i])
+            assert w.frame == went[i]
+        before.append(state(w))
         edit()
-        states.append(state(w))
-        assert states[-1] != states[-2], edit
+        after.append(state(w))
+        assert after[-1] != before[-1], edit
     assert w.undo.count() == len(edits) and w.dirty
     for i in range(len(edits), 0, -1):
         w.undo.undo()
-        assert state(w) == states[i - 1], i
+        assert state(w) == before[i - 1], i
     for i in range(1, len(edits) + 1):
         w.undo.redo()
-        assert state(w) == states[i], i
+        assert state(w) == after[i], i
 
 
 def test_the_window_exports_what_bake_writes_from_its_saved_scene(window, tmp_path):

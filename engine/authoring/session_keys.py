@@ -131,6 +131,16 @@ class KeyEditing:
         self.edit("in-betweens", lambda: setattr(self.scene.animation, "interpolation", scheme))
 
     # -- frames and the bake -------------------------------------------------------
+    @property
+    def shown(self) -> tuple[int, AuthoringState]:
+        """The frame last entered and the state it showed then (:meth:`unkeyed_edit`); a
+        recovery sets it, so an edit not keyed before a crash is said after it too."""
+        return self._shown
+
+    @shown.setter
+    def shown(self, value: tuple[int, AuthoringState]) -> None:
+        self._shown = value
+
     def unkeyed_edit(self) -> bool:
         """Whether the pose on screen holds an edit that no key keeps, so going to another
         frame would drop it: on a key, a pose, targets, place or facing other than the
@@ -142,7 +152,7 @@ class KeyEditing:
             return True
         frame, shown = self._shown
         if frame != self.frame:
-            return False  # not entered by go_to (a recovered session): nothing to tell it from
+            return False  # not entered by go_to (an autosave without it): nothing to tell it from
         targets = self.mode.targets
         same_targets = {t.joint for t in shown.targets} == set(targets) and all(
             same_target(t, targets[t.joint]) for t in shown.targets

@@ -16,7 +16,7 @@ import pytest
 
 from engine import skeleton as sk
 from engine.autosave import AutosaveSession, left_sessions
-from tests.app.gui_helpers import close_now
+from tests.app.gui_helpers import close_now, scrub
 from tests.conftest import REPO
 from tests.engine.authoring.test_recovery import same
 
@@ -60,6 +60,13 @@ def test_pose_window_edits_are_recovered_exactly_after_a_crash(pose_window, qtbo
         assert back.dirty and back.mode.character.height == pytest.approx(w.mode.character.height)
         assert [k.frame for k in back.scene.keys] == [0, 30] and back.scene.animation.frames == 60
         assert back.keys.length.value() == 60 and list(back.targets.rows) == list(w.targets.rows)
+        label = back.keys.label.text()  # the edit is said not keyed, as before the crash
+        assert label == w.keys.label.text() and label.startswith("frame 12 · unkeyed edit"), label
+        scrub(back, 20)  # leaving drops it, one undo step
+        assert back.frame == 20 and "frame 12" in back.statusBar().currentMessage()
+        back.actions_by_name["undo"].trigger()
+        assert back.frame == 12 and same(written, back.session.state())
+        assert back.keys.label.text().startswith("frame 12 · unkeyed edit")
     finally:
         close_now(back)
     w.close()  # a close on purpose (the fixture answers Discard) removes the file

@@ -55,6 +55,28 @@ def test_the_document_gives_back_the_exact_state_as_one_unsaved_step(vae):
     assert [k.frame for k in back.keys] == [0, 40] and "rankle" not in back.mode.targets
 
 
+def test_an_edit_of_an_in_between_is_recovered_as_not_keyed(vae):
+    s = AuthoringSession(PoseMode(vae, 1.6), clock=Clock(1.0))
+    s.add_key(0)
+    s.drag_joint("lwrist", s.pose.positions[sk.JOINT_INDEX["lwrist"]] + [0.05, -0.1, 0.15])
+    s.add_key(20)
+    s.go_to(10)
+    assert not s.unkeyed_edit()
+    doc = json.loads(json.dumps(document(s)))
+    back = AuthoringSession(PoseMode(vae, 1.6), clock=Clock(1.0))
+    recover(back, doc, "a.json")
+    assert back.frame == 10 and not back.unkeyed_edit(), "the in-between as entered"
+    s.drag_joint("rwrist", s.pose.positions[sk.JOINT_INDEX["rwrist"]] + [0.0, 0.0, 0.1])
+    assert s.unkeyed_edit()
+    doc = json.loads(json.dumps(document(s)))
+    back = AuthoringSession(PoseMode(vae, 1.6), clock=Clock(1.0))
+    recover(back, doc, "a.json")
+    assert back.frame == 10 and back.unkeyed_edit() and same(s.state(), back.state())
+    assert back.go_to(12) == 10, "leaving drops it, one undo step"
+    back.undo()
+    assert back.frame == 10 and back.unkeyed_edit() and same(s.state(), back.state())
+
+
 def test_a_broken_document_names_the_file_and_field_and_changes_nothing(vae):
     s = edited(vae)
     doc = json.loads(json.dumps(document(s)))

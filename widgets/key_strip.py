@@ -226,9 +226,9 @@ class KeyStrip(QWidget):
         self.loop = QCheckBox("Loop")
         self.loop.setToolTip("Play again from the first frame at the end")
         self.edited: int | None = None  # the frame whose pose holds an edit not keyed
-        # a width of its own: a label sized by its text moved every button after it when the
-        # text changed (17 px for the unkeyed-edit text in a 1500 px window); no wider than
-        # the row's least width allows, so neither the window nor the 3D view grows
+        # a width of its own: a label sized by its text would move every button after it
+        # whenever the text changes (17 px for the unkeyed-edit text in a 1500 px window);
+        # no wider than the row's least width allows, so neither the window nor the 3D view grows
         self.label.setFixedWidth(self.label.fontMetrics().horizontalAdvance(LABEL_WIDEST))
         for w in (
             self.label,

@@ -68,7 +68,7 @@ def test_an_in_between_lists_the_targets_of_one_key_that_do_not_act_there(keyed)
     assert "lwrist (key 40)" in t.key_only.text() and "not acting on this frame" in t.key_only.text().lower()
     scrub(w, 30)  # another in-between of the same keys
     assert t.key_only.isVisible() and "lwrist (key 40)" in t.key_only.text()
-    drag_wrist(w)  # a target here: a row, no longer a note
+    drag_wrist(w)  # a target here: a row, not the note
     assert list(t.rows) == ["lwrist"] and not t.key_only.isVisible()
     shortcut(w, Qt.Key.Key_Z)
     assert not t.rows and t.key_only.isVisible()
@@ -126,7 +126,7 @@ def test_undo_and_redo_of_a_key_added_or_deleted_show_its_frame(keyed):
     assert w.keys.label.text().startswith("frame 20 · unkeyed edit")
     shortcut(w, Qt.Key.Key_Z, REDO)
     _at_key(w, 20)
-    w.keys.delete.click()  # the pose stays, kept by no key now
+    w.keys.delete.click()  # the pose stays, kept by no key
     assert [k.frame for k in w.scene.keys] == [0, 40]
     assert w.keys.label.text().startswith("frame 20 · unkeyed edit")
     scrub(w, 50)

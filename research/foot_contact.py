@@ -21,7 +21,12 @@ Run::
     PYTHONPATH=. OMP_NUM_THREADS=1 python research/foot_contact.py scan FILE...
     PYTHONPATH=. OMP_NUM_THREADS=1 python research/foot_contact.py run FILE... \
         [--methods dragposer,ik] [--sensors 3-head-hands] [--max-frames 600] [--set KEY=VALUE] \
-        [--gait KEY=VALUE] [--json OUT]
+        [--gait KEY=VALUE] [--stance model|arms|truth] [--json OUT]
+
+``--stance`` picks the gait planner's cue for the standing foot: ``model`` (the shipped
+stance classifier, as the product runs), ``arms`` (the arm-swing rule alone, no
+classifier) or ``truth`` (the truth's slower ankle each frame: the ceiling of a perfect
+cue).
 """
 
 from __future__ import annotations
@@ -131,6 +136,41 @@ def gait_params(items: list[str]) -> None:
     gait.GaitPlanner.__init__ = lambda self, fps, p=None: init(self, fps, p or params)  # type: ignore[method-assign]
 
 
+class _TruthStance:
+    """Makes every gait planner name the truth's slower ankle as the standing foot, frame by
+    frame of the clip being reconstructed (set :attr:`stance` per clip)."""
+
+    def __init__(self) -> None:
+        from engine.solver import gait
+
+        self.stance = np.zeros(0, dtype=int)
+        self.frame = 0
+        update = gait.GaitPlanner.update
+
+        def counted(planner, *args, **kwargs):
+            out = update(planner, *args, **kwargs)
+            self.frame += 1
+            return out
+
+        gait.GaitPlanner.update = counted  # type: ignore[method-assign]
+        gait.GaitPlanner.learned_stance = lambda planner: int(self.stance[min(self.frame, len(self.stance) - 1)])  # type: ignore[method-assign]
+
+    def start(self, gt_pos: np.ndarray, fps: float) -> None:
+        self.stance = np.argmin(horizontal_speed(gt_pos[:, list(FEET)], fps), axis=1)
+        self.frame = 0
+
+
+def stance_cue(kind: str) -> _TruthStance | None:
+    """Set the gait planner's standing-foot cue (see the module doc)."""
+    if kind == "truth":
+        return _TruthStance()
+    if kind == "arms":
+        from engine.models import stance
+
+        stance._DEFAULT[:] = [None]
+    return None
+
+
 def run(
     files: list[Path],
     methods: list[str],
@@ -139,6 +179,7 @@ def run(
     settings: list[str],
     json_out: Path | None,
     gait: list[str] = (),
+    stance: str = "model",
 ) -> dict:
     from engine.cli.method_options import apply_settings
     from engine.methods import get_method, run_method
@@ -146,18 +187,28 @@ def run(
     from engine.tracking import simulate
 
     gait_params(list(gait))
+    truth_cue = stance_cue(stance)
     built = {}
     for name in methods:
         built[name] = get_method(name, **({"mode": "realtime"} if name == "dragposer" else {}))
         if name == "dragposer" and settings:
             apply_settings(built[name], name, settings)
-    out: dict = {"sensors": sensors, "max_frames": max_frames, "set": settings, "gait": list(gait), "files": {}}
+    out: dict = {
+        "sensors": sensors,
+        "max_frames": max_frames,
+        "set": settings,
+        "gait": list(gait),
+        "stance": stance,
+        "files": {},
+    }
     for f in files:
         motion = _load(f, max_frames)
         gt_pos, _ = motion.fk()
         tracking = simulate(motion, sensors, seed=0)
         row = {"truth": truth_metrics(gt_pos, motion.fps)}
         for name, method in built.items():
+            if truth_cue is not None:
+                truth_cue.start(gt_pos, motion.fps)
             rec, _ = run_method(method, tracking, motion.skeleton, progress=False, reference=motion, light=True)
             rec_pos, _ = rec.fk()
             row[name] = {"pos_cm": evaluate_motion(motion, rec)["pos_cm"], **foot_metrics(gt_pos, rec_pos, motion.fps)}
@@ -191,12 +242,13 @@ def main(argv: list[str] | None = None) -> None:
         metavar="KEY=VALUE",
         help="a constant of engine.solver.gait.GaitParams, e.g. lead_s=0.2",
     )
+    p.add_argument("--stance", choices=("model", "arms", "truth"), default="model", help="the standing-foot cue")
     p.add_argument("--json", type=Path)
     a = p.parse_args(argv)
     if a.what == "scan":
         scan(a.files, a.max_frames)
     else:
-        run(a.files, a.methods.split(","), a.sensors, a.max_frames, a.set, a.json, a.gait)
+        run(a.files, a.methods.split(","), a.sensors, a.max_frames, a.set, a.json, a.gait, a.stance)
 
 
 if __name__ == "__main__":

@@ -64,7 +64,10 @@ class GaitParams:
     the shortest step; ``lead_s``: how far (in travel time) ahead of its hip a foot lands;
     ``lateral_share``: where between the pelvis (0) and the hip joint (1) it lands;
     ``stance_confidence``: the least probability of the stance classifier's answer that
-    counts (below it the classifier says nothing).
+    counts (below it the classifier says nothing); ``run_speed`` / ``stop_speed``: where the
+    planner starts to fade out and is off again, at a run (a run has a flight phase, and
+    planting a foot for a whole stance at 3 m/s tore the pose: CMU runs went from 5-7 to
+    19-27 cm of Pos with the term on).
     """
 
     window_s: float = 0.25
@@ -79,6 +82,8 @@ class GaitParams:
     lead_s: float = 0.3
     lateral_share: float = 0.3
     stance_confidence: float = 0.75
+    run_speed: float = 1.8
+    stop_speed: float = 2.2
 
     def step_time(self, speed: float) -> float:
         """Seconds per step at ``speed`` m/s: 0.55 s at 0.7 m/s, 0.49 s at 1.3, 0.3 s
@@ -86,9 +91,14 @@ class GaitParams:
         return float(np.clip(0.62 - 0.1 * speed, 0.3, 0.6))
 
     def activity(self, speed: float) -> float:
-        """0 below :attr:`on_speed`, 1 above :attr:`full_speed`, a smoothstep between."""
-        t = float(np.clip((speed - self.on_speed) / (self.full_speed - self.on_speed), 0.0, 1.0))
-        return t * t * (3.0 - 2.0 * t)
+        """0 below :attr:`on_speed` and above :attr:`stop_speed`, 1 from :attr:`full_speed`
+        to :attr:`run_speed`, smoothsteps between."""
+
+        def rise(lo: float, hi: float) -> float:
+            t = float(np.clip((speed - lo) / (hi - lo), 0.0, 1.0))
+            return t * t * (3.0 - 2.0 * t)
+
+        return rise(self.on_speed, self.full_speed) * (1.0 - rise(self.run_speed, self.stop_speed))
 
 
 class GaitPlanner:

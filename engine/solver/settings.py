@@ -224,8 +224,9 @@ class OptimizerSettings:
         "Weight of the gait term while no foot tracker is "
         "connected: when the hips or head travel faster than 0.35 m/s, the stance ankle "
         "stays planted and the swing ankle moves to a landing spot ahead of its hip "
-        "(engine/solver/gait.py); 0 (default) turns it off. 3 plants the feet (less skating) at the "
-        "cost of Pos on some clips (docs/optimizer.md, 'Legs that step').",
+        "(engine/solver/gait.py), the standing foot named by the stance classifier; off at a run "
+        "(above 2.2 m/s) and at 0. The head profile (no hip tracker) sets 3, the others 0 "
+        "(docs/optimizer.md, 'Legs that step').",
         Num(0, 1e6),
     )
     tuning: str = setting(

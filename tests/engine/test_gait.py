@@ -73,6 +73,15 @@ def test_a_still_head_leaves_the_term_off():
     assert not any(t.active for t in slow)
 
 
+def test_a_run_leaves_the_term_off_and_a_fast_walk_on():
+    params = GaitParams()
+    run = walk(GaitPlanner(FPS), 120, 1.1 * params.stop_speed, arms=True)
+    assert not any(t.active for t in run)
+    brisk = walk(GaitPlanner(FPS), 120, 0.95 * params.run_speed, arms=True)
+    assert all(t.active for t in brisk[60:])
+    assert params.activity(0.5 * (params.run_speed + params.stop_speed)) == pytest.approx(0.5)
+
+
 def test_no_anchor_or_first_frame_is_off():
     p = GaitPlanner(FPS)
     assert not p.update(None, np.zeros((22, 3))).active
@@ -107,3 +116,14 @@ def test_gait_weight_zero_turns_the_term_off():
     m.reset(clip.skeleton)
     out = [m.step(tr.frame(i)) for i in range(len(clip))]
     assert "gait" not in out[-1].losses[0] and not m.gait.targets.active
+
+
+@pytest.mark.parametrize("preset, on", [("3-head-hands", True), ("4", False)])
+def test_the_head_profile_plants_the_feet_and_the_hip_profile_does_not(preset, on):
+    clip = _clip(1.2, 60)
+    tr = simulate(clip, preset)
+    torch.manual_seed(0)
+    m = DragPoserMethod(MLPDecoder(), CountingPredictor(), iterations=2, max_iterations=5)
+    m.reset(clip.skeleton)
+    out = [m.step(tr.frame(i)) for i in range(len(clip))]
+    assert ("gait" in out[-1].losses[0]) == on and m.gait.targets.active == on

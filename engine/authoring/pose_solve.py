@@ -161,11 +161,11 @@ class PoseSolving:
             if o.free_height:
                 ctx = c.grounded(where[:2], self.heading, self.frame, prior=self.base_latent)
             else:
-                ctx = c.placed(where, self.heading, self.frame, prior=self.base_latent, ground=not stands)
+                ctx = c.placed(where, self.heading, self.frame, prior=self.base_latent)
             before = self.pose
             solved = self._plain_steps(terms, ctx, where, reach, rotations, iterations)
             if stands:
-                solved = self._lowered_onto_floor(solved, reach, rotations)
+                solved = self._standing_height(solved, where, reach, rotations)
             self.pose = self.pelvis_step(self._kept_trunk(solved, reach, rotations))
             short = self.shortfall()
             if round_ and short > gap + OVERSHOOT:
@@ -188,11 +188,11 @@ class PoseSolving:
         arm's or the head's reach (:func:`engine.authoring.pose_hold.arm_reach`: a low
         reach bends the knees as the latent finds), and the pelvis stands (within
         :data:`~engine.authoring.pose_options.SQUAT_FROM` of :attr:`_standing_root`) and
-        is not being lowered by a crouch. The legs' exact two-bone step then puts the
-        ankles on their places from that height. The solve's ground step reads the
-        decoded feet, which the latent leaves a few millimetres above their planted
-        places when it bends the knees for a reach: grounded on them, each event lowered
-        the body by that much, 3-4 cm over a 30-cm reach."""
+        is not being lowered by a crouch. The legs' exact two-bone step puts the ankles on
+        their places from that height (:meth:`_standing_height`). The solve's ground step
+        reads the decoded feet, which the latent leaves a few millimetres above their
+        planted places when it bends the knees for a reach: grounded on them alone, each
+        event lowered the body by that much, 3-4 cm over a 30-cm reach."""
         return bool(
             self.options.plant_feet
             and not self.options.free_height
@@ -202,20 +202,27 @@ class PoseSolving:
             and where[2] >= self._standing_root - SQUAT_FROM
         )
 
-    def _lowered_onto_floor(self, pose: Pose, reach: dict, rotations: dict) -> Pose:
-        """``pose``, solved with the pelvis held (:meth:`_stands`), lowered by as much as
-        a planted ankle stands above its place (one the legs could not reach from the held
-        pelvis), its targeted limbs put back on their targets from there; a pose whose
-        legs reach both ankles' places is left where it is. The toes do not count: the
-        legs' step turns each foot with its shin, which lifts a toe a few millimetres, and
-        grounding on it lowered the body by that much every event."""
+    def _standing_height(self, pose: Pose, where: np.ndarray, reach: dict, rotations: dict) -> Pose:
+        """``pose``, solved with the root at ``where (3,)`` metres on both planted feet
+        (:meth:`_stands`), at the height the legs hold it: no lower than ``where`` (the
+        ground step may lift it), then lowered by as much as a planted ankle stands above
+        its place (one the legs cannot reach from there). The toes do not count: the legs'
+        step turns each foot with its shin, which lifts a toe a few millimetres."""
+        up = float(where[2] - pose.root_pos[2])
+        if up > 0.0:
+            pose = self._shifted(pose, up, reach, rotations)
         gap = max(pose.positions[sk.JOINT_INDEX[j], 2] - self.planted[j][2] for j in ("lankle", "rankle"))
-        if gap <= 0.0:
-            return pose
-        low = pose.moved([0.0, 0.0, -gap])
+        if gap > 0.0:
+            pose = self._shifted(pose, -gap, reach, rotations)
+        return pose
+
+    def _shifted(self, pose: Pose, dz: float, reach: dict, rotations: dict) -> Pose:
+        """``pose`` moved up by ``dz`` metres, its targeted limbs put back on their targets."""
+        moved = pose.moved([0.0, 0.0, dz])
         limbs = {j: np.asarray(p, float) for j, p in reach.items() if j in LIMBS}
-        local, positions = finish(low.local_rot, low.root_pos, self.character.skeleton.offsets, limbs, dict(rotations))
-        return Pose(low.latent, local, low.root_pos, positions, low.iterations, low.decoded)
+        offsets = self.character.skeleton.offsets
+        local, positions = finish(moved.local_rot, moved.root_pos, offsets, limbs, dict(rotations))
+        return Pose(moved.latent, local, moved.root_pos, positions, moved.iterations, moved.decoded)
 
     def _plain_steps(
         self,

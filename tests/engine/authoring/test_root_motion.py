@@ -77,20 +77,18 @@ def test_dragging_the_hips_down_squats_sideways_moves_and_back_up_stands(vae):
 
 def test_a_squat_keeps_the_weight_over_the_feet_and_a_second_drag_does_not_move_them(vae):
     """Hips dragged straight down 40 cm: the pelvis goes back as it goes down so the centre
-    of mass stays over the middle of the planted feet's support (without the crouch
-    balance it ends 17 cm ahead of the mean of the ankle and toe joints, over 9 cm ahead
-    of that middle: a body on its toes); a second straight-down
+    of mass stays over the middle of the planted feet (without the crouch balance it ends
+    17 cm ahead of it, in front of the toes: a body on its toes); a second straight-down
     drag from the hips' handle leaves the feet where they are."""
     from engine import skeleton as sk
     from engine.authoring.pose_metrics import centre_of_mass
     from engine.authoring.pose_mode import PoseMode, PoseOptions
-    from engine.authoring.pose_root import support_middle
 
     ankles = [sk.JOINT_INDEX["lankle"], sk.JOINT_INDEX["rankle"]]
 
     def squat(options):
         m = PoseMode(vae, options=options)
-        feet = support_middle(m.planted)
+        feet = np.mean([p[:2] for p in m.planted.values()], axis=0)
         start = m.hips_handle()
         for k in range(1, 21):
             m.drag_hips(start - [0.0, 0.0, 0.02 * k])
@@ -98,7 +96,7 @@ def test_a_squat_keeps_the_weight_over_the_feet_and_a_second_drag_does_not_move_
 
     m, off = squat(PoseOptions())
     assert off < 0.05
-    assert squat(PoseOptions(crouch_balance=False))[1] > 0.09
+    assert squat(PoseOptions(crouch_balance=False))[1] > 0.12
     ankles_before = m.pose.positions[ankles].copy()
     start = m.hips_handle()
     for k in range(1, 6):

@@ -113,9 +113,9 @@ def pinned_targets(
     A pinned joint's target goes from the key's place towards the pin's by the pin's
     activity there (all the way inside its range, along its blends outside), and that
     pin acts through the target only. Kept as a term against a key's target, a pin (weight
-    30) pulled the latent's joint to its place while the exact limb step put the joint
-    back on the key's: the latent bent the trunk by 50-80 degrees for a wrist that never
-    moved."""
+    30) pulls the latent's joint to its place while the exact limb step puts the joint
+    back on the key's: the latent bends the trunk by 60-75 degrees for a wrist that does
+    not move."""
     pins = held_pins(constraints, frame)
     out, won = [], set()
     for t in targets:

@@ -200,9 +200,9 @@ def balance_step(stance: Stance, tolerance: float, crouch: bool = False) -> np.n
     (:func:`support_middle`; a trunk leaning more than :data:`STOOP_TILT` balances
     within the tighter of ``tolerance`` and ``crouch_tolerance``). A ``crouch`` (a pelvis
     lowered by its target, ``PoseOptions.crouch_balance``) balances over the mean of the
-    planted joints instead, 6.5 cm behind that middle: the squat's figures were measured
+    planted joints instead, 6.5 cm behind that middle: the squat's figures are measured
     against it (docs/authoring.md, *A squat on the whole foot*), and balanced over the
-    support's middle the squat's trunk leaned 3 degrees further (14) and its pelvis ended
+    support's middle the squat's trunk leans 3 degrees further (14) and its pelvis ends
     0.2 cm further from its height, for a balance margin 1.3 cm larger."""
     pose, targets, planted, o = stance
     if not (o.balance and o.plant_feet) or moved_feet(targets) or not planted:

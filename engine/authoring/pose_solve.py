@@ -192,7 +192,7 @@ class PoseSolving:
         their places from that height (:meth:`_standing_height`). The solve's ground step
         reads the decoded feet, which the latent leaves a few millimetres above their
         planted places when it bends the knees for a reach: grounded on them alone, each
-        event lowered the body by that much, 3-4 cm over a 30-cm reach."""
+        event would lower the body by that much, 3-4 cm over a 30-cm reach."""
         return bool(
             self.options.plant_feet
             and not self.options.free_height

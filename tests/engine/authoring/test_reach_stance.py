@@ -1,6 +1,6 @@
 """An arm's reach leaves the feet and the pelvis where they stand (issue 50b, defect 1:
-a 30-cm wrist reach moved the pelvis 5-8 cm back and sank it 3-4 cm); a reach that
-stoops still takes the pelvis back over the feet."""
+whole-body drift on arm reaches); a reach that stoops still takes the pelvis back over
+the feet."""
 
 from __future__ import annotations
 

@@ -48,11 +48,21 @@ def test_an_arm_reach_leaves_the_pelvis_where_it_stands(vae, offset):
         assert np.linalg.norm(p[J[j]] - start[J[j]]) < 0.015
 
 
-def test_a_stooping_reach_still_balances(vae):
-    """30 cm forward and 20 cm down bends the trunk some 40 degrees: the pelvis goes
-    back, as a person's does."""
-    m, start = drag_right_wrist(vae, (0.0, -0.30, -0.20))
-    back = m.pose.positions[0, 1] - start[0, 1]  # the character faces -Y
-    assert back > 0.03
+@pytest.mark.parametrize(
+    "offset",
+    [(0.0, -0.30, -0.20), (0.0, -0.50, 0.0), (-0.50, 0.0, 0.0)],
+    ids=["forward-down", "far forward", "far out"],
+)
+def test_a_stooping_reach_still_balances(vae, offset):
+    """A reach the trunk leans 35-55 degrees for (30 cm forward and 20 down, 50 cm
+    forward or out) takes the pelvis back over the feet, as a person's goes, and the
+    centre of mass stays well inside them."""
+    from engine.authoring.pose_metrics import check_pose
+
+    m, start = drag_right_wrist(vae, offset)
+    away = -np.asarray(offset[:2]) / np.linalg.norm(offset[:2])
+    assert (m.pose.positions[0, :2] - start[0, :2]) @ away > 0.03
     com = centre_of_mass(m.pose.positions)[:2]
     assert np.linalg.norm(com - support_middle(m.planted)) < m.options.balance_tolerance
+    check = check_pose(m.pose.local_rot, m.pose.root_pos, m.character.skeleton.offsets)
+    assert check.balance_margin_cm is not None and check.balance_margin_cm > 5.0

@@ -44,6 +44,7 @@ from engine.authoring.pelvis_drag import pelvis_pose
 from engine.authoring.pose_mode import PoseMode
 from engine.authoring.targets import JointTarget, pelvis_only_target, solve_inputs
 from engine.constraints.base import Constraint
+from engine.constraints.pin import PinConstraint
 from engine.constraints.smooth import SmoothConstraint
 from engine.errors import UserError
 from engine.motion.clip import Motion
@@ -89,16 +90,62 @@ def active_constraints(constraints: list[Constraint], frame: int) -> list[Constr
     return out
 
 
+def held_pins(constraints: list[Constraint], frame: int) -> dict[str, tuple[np.ndarray, float]]:
+    """Per joint, where the enabled pins with a set place that act on ``frame`` hold it
+    and how much (the largest :meth:`~engine.constraints.base.Constraint.activity` of
+    them there, the place of that pin)."""
+    out: dict[str, tuple[np.ndarray, float]] = {}
+    for c in constraints:
+        if not isinstance(c, PinConstraint) or not c.enabled or c.follow_previous:
+            continue
+        a = c.activity(frame)
+        if a > 0 and np.all(np.isfinite(c.position)) and a > out.get(c.joint, (None, 0.0))[1]:
+            out[c.joint] = (np.asarray(c.position, float), a)
+    return out
+
+
+def pinned_targets(
+    targets: list[JointTarget], constraints: list[Constraint], frame: int
+) -> tuple[list[JointTarget], list[Constraint]]:
+    """``targets`` with a pin on the same joint winning on ``frame``, and the constraints
+    left to act there as terms (:func:`active_constraints`).
+
+    A pinned joint's target goes from the key's place towards the pin's by the pin's
+    activity there (all the way inside its range, along its blends outside), and that
+    pin acts through the target only. Kept as a term against a key's target, a pin (weight
+    30) pulls the latent's joint to its place while the exact limb step puts the joint
+    back on the key's: the latent bends the trunk by 60-75 degrees for a wrist that does
+    not move."""
+    pins = held_pins(constraints, frame)
+    out, won = [], set()
+    for t in targets:
+        if t.joint in pins and t.active:
+            place, a = pins[t.joint]
+            t = dataclasses.replace(t, position=(1.0 - a) * np.asarray(t.position, float) + a * place)
+            won.add(t.joint)
+        out.append(t)
+    rest = [c for c in constraints if not (isinstance(c, PinConstraint) and c.joint in won and c.joint in pins)]
+    return out, active_constraints(rest, frame)
+
+
+def pinned_key(key: Key, constraints: list[Constraint]) -> Key:
+    """``key`` with its targets as the pins acting on its frame leave them
+    (:func:`pinned_targets`)."""
+    targets, _ = pinned_targets(list(key.targets.values()), constraints, key.frame)
+    return dataclasses.replace(key, targets={t.joint: t for t in targets})
+
+
 def solve_key(scene: AuthoringScene, vae, key: Key, cancelled: CancelCheck | None = None) -> Pose:
-    """The pose of one key (see the module doc)."""
+    """The pose of one key (see the module doc), a pin on a targeted joint winning over
+    the key's target (:func:`pinned_targets`)."""
     if key.latent is not None and key.latent.shape != (int(vae.config.latent),):
         raise UserError(
             f"key at frame {key.frame}: latent has {key.latent.size} numbers, "
             f"the pose model takes {int(vae.config.latent)}"
         )
     mode = PoseMode(vae, scene.height, root_xy=key.root, heading=key.heading, options=scene.pose_options)
-    mode.constraints = active_constraints(scene.constraints, key.frame)
-    return mode.pose_key(key, cancelled=cancelled)
+    targets, mode.constraints = pinned_targets(list(key.targets.values()), scene.constraints, key.frame)
+    return mode.pose_key(dataclasses.replace(key, targets={t.joint: t for t in targets}), cancelled=cancelled)
 
 
 def output_frames(scene: AuthoringScene, fps: float | None) -> tuple[int, float, float]:
@@ -126,7 +173,7 @@ def bake(
     """
     character = Character(vae, scene.height)
     n, rate, ratio = output_frames(scene, fps)
-    keys = scene.keys
+    keys = [pinned_key(k, scene.constraints) for k in scene.keys]
     times = [k.frame / ratio for k in keys]
     key_at = {int(round(t)): i for i, t in enumerate(times) if abs(t - round(t)) < 1e-9}
     poses: list[Pose] = []
@@ -170,7 +217,8 @@ def _in_between(
     z = interpolate(times, [p.latent for p in poses], f, scheme).astype(np.float32)
     root = interpolate(times, [p.root_pos for p in poses], f, scheme)
     heading = interpolated_heading(keys, times, f, scheme)
-    targets = interpolated_targets(keys, times, f, scheme)
+    frame = int(round(scene_frame))
+    targets, rules = pinned_targets(interpolated_targets(keys, times, f, scheme), scene.constraints, frame)
     _, reach, rotations = solve_inputs(targets)
     aims = []
     decoded = [p.positions if p.decoded is None else p.decoded for p in poses]  # as Pose fills it in
@@ -185,7 +233,6 @@ def _in_between(
     terms, _, _ = solve_inputs(aims)
     previous = done[-1].positions if done else None
     smooth.set_history(previous, done[-2].positions if len(done) > 1 else None)
-    rules = active_constraints(scene.constraints, int(round(scene_frame)))
     ctx = character.placed(root, heading, f, previous=previous, prior=z)
     pose = character.solve(
         z,

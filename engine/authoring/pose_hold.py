@@ -66,6 +66,17 @@ ARM_DRAGS = frozenset(j for arm in ARMS.values() for j in arm) | {
 FREE_ARM_LOW = 0.20
 
 
+def arm_reach(targets: Mapping[str, JointTarget], hanging: Mapping[int, float]) -> bool:
+    """Whether every active target of ``targets`` is on an arm or the head
+    (:data:`ARM_DRAGS`) and no wrist target lies lower than :data:`FREE_ARM_LOW` above
+    ``hanging`` (per wrist, the lowest height its arm reaches hanging from the standing
+    shoulder): a reach the arms make, which leaves the legs and the pelvis as they stand."""
+    active = [t for t in targets.values() if t.active]
+    if any(t.index not in ARM_DRAGS for t in active):
+        return False
+    return not any(t.index in hanging and t.position[2] < hanging[t.index] + FREE_ARM_LOW for t in active)
+
+
 def free_arms(
     targets: Mapping[str, JointTarget], hanging: Mapping[int, float], plant_feet: bool
 ) -> list[tuple[int, ...]]:
@@ -75,12 +86,9 @@ def free_arms(
     :data:`FREE_ARM_LOW` above ``hanging`` (per wrist, the lowest height its arm reaches
     hanging from the standing shoulder). None otherwise: the trunk moves, and the free
     arms move with it as the prior has them."""
-    active = [t for t in targets.values() if t.active]
-    if not plant_feet or any(t.index not in ARM_DRAGS for t in active):
+    if not plant_feet or not arm_reach(targets, hanging):
         return []
-    if any(t.index in hanging and t.position[2] < hanging[t.index] + FREE_ARM_LOW for t in active):
-        return []
-    busy = {t.index for t in active}
+    busy = {t.index for t in targets.values() if t.active}
     return [arm for arm in ARMS.values() if not busy & set(arm)]
 
 

@@ -24,7 +24,7 @@ from engine import skeleton as sk
 from engine.authoring.character import Character, Pose, yaw_quaternion
 from engine.authoring.keys import PLANTED
 from engine.authoring.pelvis_drag import pelvis_pose, toes_on
-from engine.authoring.pose_hold import free_arm_terms, free_arms, held_joints, hold_terms
+from engine.authoring.pose_hold import arm_reach, free_arm_terms, free_arms, held_joints, hold_terms
 from engine.authoring.pose_options import SQUAT_FROM, PoseOptions
 from engine.authoring.pose_root import FOOT_OF, Stance, moved_feet, root_where, shortfall, stoop_targets
 from engine.authoring.pose_trunk import LEGS, TRUNK, keep_trunk
@@ -33,7 +33,7 @@ from engine.constraints.base import Constraint
 from engine.kinematics import quat_np as QN
 from engine.progress import CancelCheck, check
 from engine.solver import FrameContext
-from engine.solver.limb_ik import LIMBS
+from engine.solver.limb_ik import LIMBS, finish
 
 #: Latent steps of one continuous solve (one drag event).
 ITERATIONS = 16
@@ -157,12 +157,15 @@ class PoseSolving:
             if round_ and gap <= o.reach_tolerance:
                 break
             where = self._where(o.free_height or iterations > 0)
+            stands = self._stands(where)
             if o.free_height:
                 ctx = c.grounded(where[:2], self.heading, self.frame, prior=self.base_latent)
             else:
                 ctx = c.placed(where, self.heading, self.frame, prior=self.base_latent)
             before = self.pose
             solved = self._plain_steps(terms, ctx, where, reach, rotations, iterations)
+            if stands:
+                solved = self._standing_height(solved, where, reach, rotations)
             self.pose = self.pelvis_step(self._kept_trunk(solved, reach, rotations))
             short = self.shortfall()
             if round_ and short > gap + OVERSHOOT:
@@ -178,6 +181,48 @@ class PoseSolving:
         self._replant()
         self._solved = self.pose
         return self.pose
+
+    def _stands(self, where: np.ndarray) -> bool:
+        """Whether a drag event's solve with the root at ``where (3,)`` metres holds the
+        pelvis at its height on both planted feet: they are planted, the targets are an
+        arm's or the head's reach (:func:`engine.authoring.pose_hold.arm_reach`: a low
+        reach bends the knees as the latent finds), and the pelvis stands (within
+        :data:`~engine.authoring.pose_options.SQUAT_FROM` of :attr:`_standing_root`) and
+        is not being lowered by a crouch. The legs' exact two-bone step puts the ankles on
+        their places from that height (:meth:`_standing_height`). The solve's ground step
+        reads the decoded feet, which the latent leaves a few millimetres above their
+        planted places when it bends the knees for a reach: grounded on them alone, each
+        event would lower the body by that much, 3-4 cm over a 30-cm reach."""
+        return bool(
+            self.options.plant_feet
+            and not self.options.free_height
+            and all(f"{s}ankle" in self.planted for s in "lr")
+            and arm_reach(self.targets, self._hanging_reach)
+            and where[2] >= self.pose.root_pos[2]
+            and where[2] >= self._standing_root - SQUAT_FROM
+        )
+
+    def _standing_height(self, pose: Pose, where: np.ndarray, reach: dict, rotations: dict) -> Pose:
+        """``pose``, solved with the root at ``where (3,)`` metres on both planted feet
+        (:meth:`_stands`), at the height the legs hold it: no lower than ``where`` (the
+        ground step may lift it), then lowered by as much as a planted ankle stands above
+        its place (one the legs cannot reach from there). The toes do not count: the legs'
+        step turns each foot with its shin, which lifts a toe a few millimetres."""
+        up = float(where[2] - pose.root_pos[2])
+        if up > 0.0:
+            pose = self._shifted(pose, up, reach, rotations)
+        gap = max(pose.positions[sk.JOINT_INDEX[j], 2] - self.planted[j][2] for j in ("lankle", "rankle"))
+        if gap > 0.0:
+            pose = self._shifted(pose, -gap, reach, rotations)
+        return pose
+
+    def _shifted(self, pose: Pose, dz: float, reach: dict, rotations: dict) -> Pose:
+        """``pose`` moved up by ``dz`` metres, its targeted limbs put back on their targets."""
+        moved = pose.moved([0.0, 0.0, dz])
+        limbs = {j: np.asarray(p, float) for j, p in reach.items() if j in LIMBS}
+        offsets = self.character.skeleton.offsets
+        local, positions = finish(moved.local_rot, moved.root_pos, offsets, limbs, dict(rotations))
+        return Pose(moved.latent, local, moved.root_pos, positions, moved.iterations, moved.decoded)
 
     def _plain_steps(
         self,

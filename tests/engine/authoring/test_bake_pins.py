@@ -1,0 +1,60 @@
+"""A pin that contradicts a key's target (issue 50b, defect 2): on the pin's frames the
+pin wins, blended in and out over its blends, and the trunk does not fold (a pin kept as
+a term against the key's exact target bends the in-betweens' trunk by 60-75 degrees)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from engine import skeleton as sk
+from engine.authoring.bake import bake
+from engine.authoring.document import Animation, AuthoringScene
+from engine.authoring.keys import Key
+from engine.authoring.pose_metrics import trunk_tilt_deg
+from engine.authoring.targets import JointTarget
+from engine.constraints.pin import PinConstraint
+from engine.kinematics.fk import fk
+
+J = sk.JOINT_INDEX
+KEYS = [
+    Key(0, targets={"lwrist": JointTarget("lwrist", np.array([0.25, -0.35, 1.10]))}),
+    Key(60, targets={"lwrist": JointTarget("lwrist", np.array([0.45, -0.10, 1.75]))}),
+]
+
+
+def baked_positions(vae, constraints) -> np.ndarray:
+    scene = AuthoringScene(constraints=constraints, animation=Animation(fps=30, frames=61), keys=KEYS)
+    m = bake(scene, vae).motion
+    return fk(m.local_rot, m.root_pos, m.skeleton.offsets)[0]
+
+
+@pytest.fixture(scope="module")
+def unpinned(vae):
+    return baked_positions(vae, [])
+
+
+@pytest.mark.parametrize("place", [(0.33, -0.35, 1.0), (0.35, -0.45, 0.95)], ids=["within reach", "beyond the arm"])
+def test_a_pin_against_a_key_wins_on_its_frames_without_folding_the_trunk(vae, unpinned, place):
+    place = np.array(place)
+    pin = PinConstraint(name="pin", joint="lwrist", position=place, frames=(20, 40), blend_in=8, blend_out=8)
+    p = baked_positions(vae, [pin])
+    tilt = np.array([trunk_tilt_deg(x) for x in p])
+    assert tilt.max() < max(trunk_tilt_deg(x) for x in unpinned) + 10.0
+    assert np.abs(np.diff(tilt)).max() < 3.0
+    gap = np.linalg.norm(p[20:41, J["lwrist"]] - place, axis=1)
+    assert gap.max() < (0.01 if place[2] >= 1.0 else 0.08)
+    # before the pin's blend nothing changes; over it the wrist goes smoothly
+    np.testing.assert_allclose(p[:12], unpinned[:12], atol=1e-9)
+    assert np.all(np.linalg.norm(p[12:20, J["lwrist"]] - place, axis=1)[1:] <= gap.max() + 0.30)
+    assert np.linalg.norm(np.diff(p[:, J["lwrist"]], axis=0), axis=1).max() < 0.15
+
+
+def test_a_pin_on_a_key_frame_moves_that_key_target(vae):
+    """A key inside the pin's range is posed with the pin's place: the in-betweens on
+    either side aim at it, not at the key's own target."""
+    place = np.array([0.33, -0.35, 1.0])
+    pin = PinConstraint(name="pin", joint="lwrist", position=place, frames=(0, 10), blend_out=5)
+    p = baked_positions(vae, [pin])
+    assert np.linalg.norm(p[0, J["lwrist"]] - place) < 0.01
+    assert max(trunk_tilt_deg(x) for x in p) < 30.0

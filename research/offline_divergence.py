@@ -52,6 +52,8 @@ def record(motion, preset: str, mode: str, noise: float, seed: int) -> dict:
                 },
                 # the smoothing target moves with the history: keep this frame's
                 "smooth": (method.smooth.weight, method.smooth.target.copy()),
+                # so do the gait term's targets (planned from the travel so far), when it is in the solve
+                "gait": (method.gait.weight, method.gait.targets) if any(c is method.gait for c in terms) else None,
             }
         )
         return real(start, terms, ctx, settings)
@@ -77,6 +79,10 @@ def resolve(method, inputs: dict, start=None, ctx=None, targets=None, **settings
         if rotation is not None:
             c.rotation = rotation
     method.smooth.weight, method.smooth.target = inputs["smooth"][0], inputs["smooth"][1].copy()
+    if inputs["gait"] is not None:
+        method.gait.weight = inputs["gait"][0]
+        method.gait.set_targets(inputs["gait"][1])
+        terms.append(method.gait)
     sol = type(opt).solve(
         opt,
         inputs["start"] if start is None else start,

@@ -48,12 +48,14 @@ def test_a_range_resolve_runs_off_the_gui_thread_and_cancel_leaves_the_clip(stud
     runner = resolve_range(studio, 0, len(original) - 1, blend=0)
     worker = runner.thread
     assert worker is not None and worker is not threading.main_thread() and worker.is_alive()
-    # frames solved while the loop ran, and long enough for the timer to show it (the
-    # shipped models may already be loaded, so the first frames can come within 50 ms)
-    qtbot.waitUntil(lambda: runner.done >= 3 and len(ticks) > 10, timeout=60000)
+    # frames solved while the loop ran; then the timer's ticks while the worker solves (the
+    # start, where the worker may load the models, is not the claim)
+    qtbot.waitUntil(lambda: runner.done >= 3, timeout=60000)
+    solving = len(ticks)
+    qtbot.waitUntil(lambda: len(ticks) > solving + 30, timeout=60000)
     assert runner.running and runner.dialog is not None and runner.dialog.maximum() == len(original)
-    gaps = np.diff(ticks) * 1000.0
-    assert len(ticks) > 10 and np.percentile(gaps, 99) < 250.0, (len(ticks), np.percentile(gaps, 99))
+    gaps = np.diff(ticks[solving:]) * 1000.0
+    assert np.percentile(gaps, 99) < 250.0, (len(gaps), np.percentile(gaps, 99))
     with qtbot.waitSignal(runner.finished, timeout=30000) as done:
         runner.dialog.findChild(QPushButton).click()  # the dialog's Cancel button
     timer.stop()

@@ -27,6 +27,7 @@ class PoseRedraw:
         self._subscriptions: list[tuple[Any, Callable]] = []
         for signal, slot in (
             (w.session.events.targets, self._on_targets),
+            (w.session.events.frame, self._on_targets),  # a pin's activity is the frame's
             (w.session.events.pose, self._on_pose),
             (w.session.events.keys, self._on_keys),
             (w.session.events.animation, self._on_keys),
@@ -55,8 +56,11 @@ class PoseRedraw:
             signal.disconnect(slot)
         self._subscriptions.clear()
 
-    def _on_targets(self, e: ev.TargetsChanged | None = None) -> None:
-        t = self.w.mode.targets
+    def _on_targets(self, e: Any = None) -> None:
+        """The target spheres where the solves aim on the frame shown
+        (:attr:`engine.authoring.pose_solve.PoseSolving.aimed`: a pin acting there wins
+        over its joint's target, as in the bake), and the target list."""
+        t = self.w.mode.aimed
         self.w.viewport.sensors.update(
             tuple(t),
             np.array([x.position for x in t.values()]).reshape(-1, 3),
@@ -115,6 +119,7 @@ class PoseRedraw:
 
     def _on_constraints(self, e: Any = None) -> None:
         self.w.constraints.refresh()
+        self._on_targets()  # a pin moved, added or removed moves its joint's target
         self._show_gizmos()
         self.w._render_soon()
 

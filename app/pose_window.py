@@ -260,7 +260,8 @@ class PoseWindow(QMainWindow):
         return bool(held & key)
 
     def drag_joint(self, joint: str, position: np.ndarray) -> None:
-        """Create or move the target on ``joint`` to ``position (3,)`` metres and solve;
+        """Create or move the target on ``joint`` to ``position (3,)`` metres and solve (a
+        pin holding the joint on this frame moves with it, and the status bar names it);
         with Alt held, turn it instead (:meth:`app.pose_turns.JointTurns.alt_drag`)."""
         self.selected = joint
         self.paths.select(joint)
@@ -272,6 +273,9 @@ class PoseWindow(QMainWindow):
             self.statusBar().showMessage("Pelvis only: feet planted", 2000)
             self._edit(lambda: self.session.drag_pelvis(np.asarray(position, float)))
         else:
+            pin = self.session.holding_pin(joint)
+            if pin is not None:
+                self.statusBar().showMessage(f"{joint} is held by pin {pin.name!r} here: the drag moves the pin", 3000)
             self._edit(lambda: self.session.drag_joint(joint, np.asarray(position, float)))
         self.turns.show_handles()  # the grabbed joint is selected even when nothing moved
         self._render_soon()

@@ -36,11 +36,13 @@ from engine.authoring.document import AuthoringScene
 from engine.authoring.history import Edit, History
 from engine.authoring.jobs import SettleJob
 from engine.authoring.keys import Animation, Key
+from engine.authoring.pins import holding_pins
 from engine.authoring.pose_mode import PoseMode
 from engine.authoring.session_constraints import constraints_event
 from engine.authoring.session_keys import KeyEditing
 from engine.authoring.state import AuthoringState, capture, differences, put
 from engine.authoring.turns import world_rotation
+from engine.constraints.pin import PinConstraint
 from engine.editing.constraint_list import ConstraintList
 from engine.errors import UserError
 from engine.motion.clip import Motion
@@ -243,16 +245,30 @@ class AuthoringSession(KeyEditing):
         return self.mode.hips_handle()
 
     def drag_joint(self, joint: str, position: np.ndarray) -> None:
-        """Create or move the target on ``joint`` to ``position (3,)`` metres and solve;
+        """Create or move the target on ``joint`` to ``position (3,)`` metres and solve (a
+        pin holding the joint on this frame is moved there too, :meth:`holding_pin`);
         the hips (``root``) move the whole body and the pelvis's height instead
         (:meth:`engine.authoring.pose_mode.PoseMode.drag_hips`)."""
         p = np.asarray(position, float)
         if joint == "root":
             self.edit("move body", lambda: self.mode.drag_hips(p), ("body", "root", "position"))
             return
-        self.edit(
-            f"move target {joint}", lambda: self.mode.set_target(joint, p), ("target", joint, "position"), solve=True
-        )
+        pin = self.holding_pin(joint)
+
+        def change() -> None:
+            self.mode.set_target(joint, p)
+            if pin is not None:
+                ConstraintList(self.mode.constraints).edit(pin.name, position=p.copy())
+
+        self.edit(f"move target {joint}", change, ("target", joint, "position"), solve=True)
+
+    def holding_pin(self, joint: str) -> PinConstraint | None:
+        """The pin that holds ``joint`` on the current frame, if any
+        (:func:`engine.authoring.pins.holding_pins`). On that frame the pin wins over the
+        joint's target, as in the bake, so a drag of the joint moves the pin's place with
+        its target (:meth:`drag_joint`): the joint goes where it is dragged and stays
+        pinned there over the pin's frames."""
+        return holding_pins(self.mode.constraints, self.frame).get(joint)
 
     def drag_pelvis(self, position: np.ndarray) -> None:
         """Move only the pelvis to ``position (3,)`` metres, the feet planted and the upper

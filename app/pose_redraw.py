@@ -37,6 +37,7 @@ class PoseRedraw:
             (w.session.events.keys, self.paths_due),
             (w.session.events.animation, self.paths_due),
             (w.session.events.bake, self.paths_due),
+            (w.session.events.constraints, self.paths_due),  # a pin moves the keys' limbs
             # after the key strip's own update: whether the pose holds an edit not keyed
             (w.session.events.targets, self._on_edited),
             (w.session.events.pose, self._on_edited),
@@ -91,10 +92,13 @@ class PoseRedraw:
         )
 
     def paths_due(self, e: Any = None) -> None:
-        """The keys, the animation or the bake changed: the paths are computed again."""
+        """The keys, the animation, the constraints or the bake changed: the paths are
+        computed again."""
         s = self.w.session
         self.w.paths.source_changed(
-            lambda: authored_paths(s.mode.character, s.scene.keys, s.scene.animation.interpolation, s.baked)
+            lambda: authored_paths(
+                s.mode.character, s.scene.keys, s.scene.animation.interpolation, s.baked, list(s.scene.constraints)
+            )
         )
 
     def _on_keys(self, e: Any = None) -> None:

@@ -9,9 +9,11 @@ from __future__ import annotations
 import numpy as np
 
 from engine import skeleton as sk
+from engine.authoring.motion_paths import keyed_paths
 from engine.authoring.pose_metrics import trunk_tilt_deg
 from engine.authoring.pose_mode import PoseMode
 from engine.authoring.session import AuthoringSession
+from engine.kinematics.fk import fk
 
 J = sk.JOINT_INDEX
 
@@ -62,3 +64,25 @@ def test_a_pin_outside_the_frame_leaves_a_drag_alone(vae):
     s.add_constraint("pin", joint="lwrist", position=wrist, frames=(20, 30), blend_in=5)
     drag(s, "lwrist", wrist + [0.0, -0.2, 0.2])
     np.testing.assert_allclose(s.mode.constraints[0].position, wrist)
+
+
+def test_the_path_before_the_bake_takes_the_pins_as_the_bake_does(vae):
+    """The motion path drawn before the bake (the keys' latents interpolated, the limbs
+    on the targets) puts the wrist where the bake will: on the pin over its frames, and
+    the key inside its range holding the pin's place, not the key's target."""
+    s = AuthoringSession(PoseMode(vae, 1.75))
+    wrist = s.mode.pose.positions[J["lwrist"]].copy()
+    drag(s, "lwrist", wrist + [0.03, 0.0, 0.05])
+    s.add_key(0)
+    s.frame = 40
+    drag(s, "lwrist", wrist + [0.13, 0.0, 0.35])
+    s.add_key(40)
+    place = s.mode.pose.positions[J["lwrist"]] + [-0.1, -0.1, -0.2]
+    s.add_constraint("pin", joint="lwrist", position=place, frames=(30, 40), blend_in=10)
+    paths = keyed_paths(s.mode.character, s.keys, s.animation.interpolation, s.scene.constraints)
+    assert paths is not None
+    np.testing.assert_allclose(paths.at("lwrist", 40), place, atol=1e-6)
+    np.testing.assert_allclose(paths.at("lwrist", 35), place, atol=1e-6)
+    baked = s.bake_now().motion
+    bake_wrist = fk(baked.local_rot, baked.root_pos, baked.skeleton.offsets)[0][:41, J["lwrist"]]
+    assert np.linalg.norm(paths.line("lwrist") - bake_wrist, axis=1).max() < 0.01

@@ -27,6 +27,7 @@ class PoseRedraw:
         self._subscriptions: list[tuple[Any, Callable]] = []
         for signal, slot in (
             (w.session.events.targets, self._on_targets),
+            (w.session.events.frame, self._on_targets),  # a pin's activity is the frame's
             (w.session.events.pose, self._on_pose),
             (w.session.events.keys, self._on_keys),
             (w.session.events.animation, self._on_keys),
@@ -36,6 +37,7 @@ class PoseRedraw:
             (w.session.events.keys, self.paths_due),
             (w.session.events.animation, self.paths_due),
             (w.session.events.bake, self.paths_due),
+            (w.session.events.constraints, self.paths_due),  # a pin moves the keys' limbs
             # after the key strip's own update: whether the pose holds an edit not keyed
             (w.session.events.targets, self._on_edited),
             (w.session.events.pose, self._on_edited),
@@ -55,8 +57,11 @@ class PoseRedraw:
             signal.disconnect(slot)
         self._subscriptions.clear()
 
-    def _on_targets(self, e: ev.TargetsChanged | None = None) -> None:
-        t = self.w.mode.targets
+    def _on_targets(self, e: Any = None) -> None:
+        """The target spheres where the solves aim on the frame shown
+        (:attr:`engine.authoring.pose_solve.PoseSolving.aimed`: a pin acting there wins
+        over its joint's target, as in the bake), and the target list."""
+        t = self.w.mode.aimed
         self.w.viewport.sensors.update(
             tuple(t),
             np.array([x.position for x in t.values()]).reshape(-1, 3),
@@ -87,10 +92,13 @@ class PoseRedraw:
         )
 
     def paths_due(self, e: Any = None) -> None:
-        """The keys, the animation or the bake changed: the paths are computed again."""
+        """The keys, the animation, the constraints or the bake changed: the paths are
+        computed again."""
         s = self.w.session
         self.w.paths.source_changed(
-            lambda: authored_paths(s.mode.character, s.scene.keys, s.scene.animation.interpolation, s.baked)
+            lambda: authored_paths(
+                s.mode.character, s.scene.keys, s.scene.animation.interpolation, s.baked, list(s.scene.constraints)
+            )
         )
 
     def _on_keys(self, e: Any = None) -> None:
@@ -115,6 +123,7 @@ class PoseRedraw:
 
     def _on_constraints(self, e: Any = None) -> None:
         self.w.constraints.refresh()
+        self._on_targets()  # a pin moved, added or removed moves its joint's target
         self._show_gizmos()
         self.w._render_soon()
 

@@ -3,7 +3,8 @@
 The window is a view of an :class:`engine.authoring.session.AuthoringSession`, the
 Qt-free model that owns the pose, the targets, the keys, the constraints and the undo
 history: every gesture calls one model method (one undo step) and the window redraws
-what the model's events say changed (:mod:`app.pose_redraw`). A click on a joint selects it (its rotation rings
+what the model's events say changed (:mod:`app.pose_redraw`); the gestures on the body live
+in :mod:`app.pose_gestures`. A click on a joint selects it (its rotation rings
 show: a ring dragged turns it about that world axis; its motion path shows,
 :mod:`app.motion_path_view`); a drag on a joint creates a target there and moves it and
 selects the joint (a wrist or an ankle at the depth :mod:`engine.authoring.drag_reach`
@@ -47,13 +48,13 @@ from app.job_runner import JobRunner
 from app.motion_path_view import MotionPathView
 from app.pose_constraints import PoseConstraints
 from app.pose_files import PoseFiles
+from app.pose_gestures import PoseGestures
 from app.pose_menus import build_pose_menus
 from app.pose_redraw import PoseRedraw
 from app.pose_timeline import KeyPlayback
 from app.pose_turns import JointTurns
 from app.status_bar import StatusBar
 from engine.authoring.document import AuthoringScene
-from engine.authoring.drag_reach import limb_reach, on_reach, onto_body
 from engine.authoring.history import History
 from engine.authoring.pose_mode import PoseMode
 from engine.authoring.session import AuthoringSession
@@ -67,7 +68,7 @@ from widgets.viewport.viewport import Viewport
 SIDE_PANEL_PX = 330
 
 
-class PoseWindow(QMainWindow):
+class PoseWindow(PoseGestures, QMainWindow):
     """See the module doc. ``session``: the authoring model the window shows and edits;
     ``settings``: where dialogs remember their choices (default: the studio's)."""
 
@@ -93,9 +94,7 @@ class PoseWindow(QMainWindow):
         self.viewport.jointDragged.connect(self.drag_joint)
         self.viewport.targetDragged.connect(self.drag_joint)
         self.viewport.gizmoEdited.connect(lambda name, changes: self.constraints.update(name, changes))
-        # a dragged wrist or ankle takes the depth its limb's stretch asks for
-        # (engine.authoring.drag_reach): the limb as it was at the press
-        self._reach: tuple[str, tuple[np.ndarray, float]] | None = None
+        self._reach = None  # the limb of the joint pressed (PoseGestures)
         self.viewport.joints.place = self._placed
         # in pose mode a plain press grabs a joint too (the studio's view needs Ctrl, where
         # a plain press on the body turns the camera); off every joint the camera turns
@@ -223,101 +222,6 @@ class PoseWindow(QMainWindow):
         # a message about the step (a dropped edit's "Ctrl+Z goes back to it") no longer holds
         self.statusBar().clearMessage()
         self._edit(self.session.redo if redo else self.session.undo)
-
-    # -- targets and the body ------------------------------------------------------
-    def select(self, joint: str) -> None:
-        """Select ``joint`` (a press or click on it, or on its target): its rotation rings
-        and its motion path show."""
-        self.session.select(joint, pressed=self.viewport.mouse_held)
-        limb = limb_reach(self.mode.pose.positions, joint)
-        self._reach = None if limb is None else (joint, limb)
-        self.turns.show_handles()
-        self.paths.select(joint)
-        self._render_soon()
-
-    def _placed(self, joint: str, point: np.ndarray, pressed: np.ndarray, *ray_and_normal: np.ndarray) -> np.ndarray:
-        """Where a drag of ``joint`` pressed at ``pressed`` to ``point`` on its drag plane
-        puts it (:func:`engine.authoring.drag_reach.on_reach` for a wrist or an ankle)."""
-        if self._reach is None or self._reach[0] != joint or self._alt_held():
-            return point  # an Alt-drag turns the joint by the mouse's direction on the plane
-        placed = on_reach(point, pressed, *ray_and_normal, *self._reach[1])
-        touched = onto_body(placed, ray_and_normal[1], self.mode.pose.positions, joint)
-        return placed if touched is None else touched
-
-    def _alt_held(self) -> bool:
-        """Whether Alt is held with the drag (:meth:`_held_with_drag`)."""
-        return self._held_with_drag(Qt.KeyboardModifier.AltModifier)
-
-    def _held_with_drag(self, key: Qt.KeyboardModifier) -> bool:
-        """Whether modifier ``key`` is held with the drag: the keys of the mouse event that
-        moved it (:attr:`widgets.viewport.viewport.Viewport.drag_modifiers`), else (a drag
-        not made by the mouse) the keys held now, asked of the system: Qt's cached
-        modifiers lag until its next input event (an Alt pressed before the drag read as
-        none)."""
-        held = self.viewport.drag_modifiers
-        if held is None:
-            held = QApplication.queryKeyboardModifiers()
-        return bool(held & key)
-
-    def drag_joint(self, joint: str, position: np.ndarray) -> None:
-        """Create or move the target on ``joint`` to ``position (3,)`` metres and solve;
-        with Alt held, turn it instead (:meth:`app.pose_turns.JointTurns.alt_drag`)."""
-        self.selected = joint
-        self.paths.select(joint)
-        if self._alt_held():
-            self.turns.alt_drag(joint, position)
-            return
-        self.turns.gesture = None
-        if joint == "root" and self._held_with_drag(Qt.KeyboardModifier.ShiftModifier):
-            self.statusBar().showMessage("Pelvis only: feet planted", 2000)
-            self._edit(lambda: self.session.drag_pelvis(np.asarray(position, float)))
-        else:
-            self._edit(lambda: self.session.drag_joint(joint, np.asarray(position, float)))
-        self.turns.show_handles()  # the grabbed joint is selected even when nothing moved
-        self._render_soon()
-
-    def deselect(self) -> None:
-        """Hide the rotation rings (and the selected joint's motion path)."""
-        self.selected = None
-        self.turns.show_handles()
-        self.paths.select(None)
-        self._render_soon()
-
-    def move_body(self, delta: np.ndarray) -> None:
-        self._edit(lambda: self.session.move_body(delta))
-
-    def turn_body(self, heading: float) -> None:
-        self._edit(lambda: self.session.turn_body(heading))
-
-    def edit_target(self, joint: str, **fields: Any) -> None:
-        """Change a target's ``enabled`` or ``weight`` and solve."""
-        self._edit(lambda: self.session.edit_target(joint, **fields))
-
-    def clear_target(self, joint: str) -> None:
-        self._edit(lambda: self.session.clear_target(joint))
-
-    def clear_all(self) -> None:
-        self._edit(self.session.clear_all)
-
-    def settle(self) -> JobRunner:
-        """An offline solve of the current targets (one undo step), on a worker: it takes
-        seconds with constraints on a loaded machine, and the window keeps drawing and
-        answering meanwhile (a window-modal progress dialog with Cancel keeps edits out);
-        the result is applied here, on the GUI thread. Returns the runner (``wait()``
-        waits for the result with the event loop running)."""
-        if self.jobs.running:
-            return self.jobs
-        self.playback.stop()
-        job = self.session.settle_job()
-
-        def done(ok: bool, message: str) -> None:
-            self.jobs.finished.disconnect(done)
-            if not ok and message != "cancelled" and self.isVisible():
-                QMessageBox.warning(self, "Settle pose", message)
-
-        self.jobs.finished.connect(done)
-        self.jobs.start(job, lambda settled: self.session.take_settle(job, settled), modal=True)
-        return self.jobs
 
     # -- keys ----------------------------------------------------------------------
     def add_key(self, frame: int) -> None:

@@ -41,10 +41,10 @@ from engine.authoring.character import Character, Pose
 from engine.authoring.document import AuthoringScene
 from engine.authoring.keys import PLANTED, Key, eased, interpolate, segment, slerp_quaternion
 from engine.authoring.pelvis_drag import pelvis_pose
+from engine.authoring.pins import pinned_targets
 from engine.authoring.pose_mode import PoseMode
 from engine.authoring.targets import JointTarget, pelvis_only_target, solve_inputs
 from engine.constraints.base import Constraint
-from engine.constraints.pin import PinConstraint
 from engine.constraints.smooth import SmoothConstraint
 from engine.errors import UserError
 from engine.motion.clip import Motion
@@ -78,66 +78,16 @@ class Baked:
     key_frames: list[int]
 
 
-def active_constraints(constraints: list[Constraint], frame: int) -> list[Constraint]:
-    """Copies of the enabled ``constraints`` acting on ``frame``, each weight times its
-    :meth:`~engine.constraints.base.Constraint.activity` there and without a range (so a
-    solver that honours ranges itself does not apply it twice)."""
-    out = []
-    for c in constraints:
-        a = c.activity(frame) if c.enabled else 0.0
-        if a > 0:
-            out.append(dataclasses.replace(c, weight=c.weight * a, frames=None, blend_in=0, blend_out=0))
-    return out
-
-
-def held_pins(constraints: list[Constraint], frame: int) -> dict[str, tuple[np.ndarray, float]]:
-    """Per joint, where the enabled pins with a set place that act on ``frame`` hold it
-    and how much (the largest :meth:`~engine.constraints.base.Constraint.activity` of
-    them there, the place of that pin)."""
-    out: dict[str, tuple[np.ndarray, float]] = {}
-    for c in constraints:
-        if not isinstance(c, PinConstraint) or not c.enabled or c.follow_previous:
-            continue
-        a = c.activity(frame)
-        if a > 0 and np.all(np.isfinite(c.position)) and a > out.get(c.joint, (None, 0.0))[1]:
-            out[c.joint] = (np.asarray(c.position, float), a)
-    return out
-
-
-def pinned_targets(
-    targets: list[JointTarget], constraints: list[Constraint], frame: int
-) -> tuple[list[JointTarget], list[Constraint]]:
-    """``targets`` with a pin on the same joint winning on ``frame``, and the constraints
-    left to act there as terms (:func:`active_constraints`).
-
-    A pinned joint's target goes from the key's place towards the pin's by the pin's
-    activity there (all the way inside its range, along its blends outside), and that
-    pin acts through the target only. Kept as a term against a key's target, a pin (weight
-    30) pulls the latent's joint to its place while the exact limb step puts the joint
-    back on the key's: the latent bends the trunk by 60-75 degrees for a wrist that does
-    not move."""
-    pins = held_pins(constraints, frame)
-    out, won = [], set()
-    for t in targets:
-        if t.joint in pins and t.active:
-            place, a = pins[t.joint]
-            t = dataclasses.replace(t, position=(1.0 - a) * np.asarray(t.position, float) + a * place)
-            won.add(t.joint)
-        out.append(t)
-    rest = [c for c in constraints if not (isinstance(c, PinConstraint) and c.joint in won and c.joint in pins)]
-    return out, active_constraints(rest, frame)
-
-
 def pinned_key(key: Key, constraints: list[Constraint]) -> Key:
     """``key`` with its targets as the pins acting on its frame leave them
-    (:func:`pinned_targets`)."""
+    (:func:`engine.authoring.pins.pinned_targets`)."""
     targets, _ = pinned_targets(list(key.targets.values()), constraints, key.frame)
     return dataclasses.replace(key, targets={t.joint: t for t in targets})
 
 
 def solve_key(scene: AuthoringScene, vae, key: Key, cancelled: CancelCheck | None = None) -> Pose:
     """The pose of one key (see the module doc), a pin on a targeted joint winning over
-    the key's target (:func:`pinned_targets`)."""
+    the key's target (:func:`engine.authoring.pins.pinned_targets`)."""
     if key.latent is not None and key.latent.shape != (int(vae.config.latent),):
         raise UserError(
             f"key at frame {key.frame}: latent has {key.latent.size} numbers, "

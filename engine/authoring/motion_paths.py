@@ -17,11 +17,14 @@ Three sources:
   by the limbs), so the path passes through every key and changes with no solve
   (tens of milliseconds for a few seconds of animation, where the bake takes seconds).
   The bake then refines the in-betweens; keys without a latent (a scene written by
-  hand) are posed only by the bake, so this preview leaves them out.
+  hand) are posed only by the bake, so this preview leaves them out. A pin against a
+  target wins as in the bake (:func:`engine.authoring.pins.pinned_targets`): on the
+  keys and on the in-betweens the limbs reach the targets the pins leave.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -29,12 +32,14 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.authoring.keys import Key, interpolate
+from engine.authoring.pins import pinned_targets
 from engine.kinematics.fk import fk_positions
 from engine.motion.clip import Motion
 
 if TYPE_CHECKING:  # the studio's window draws clip paths without torch, which these bring
     from engine.authoring.bake import Baked
     from engine.authoring.character import Character
+    from engine.constraints.base import Constraint
 
 #: The joints drawn as the feet's paths.
 FEET = ("lankle", "rankle")
@@ -155,12 +160,16 @@ def key_poses(character: Character, keys: list[Key]) -> tuple[np.ndarray, np.nda
     return decoded, exact
 
 
-def keyed_paths(character: Character, keys: list[Key], scheme: str) -> MotionPaths | None:
+def keyed_paths(
+    character: Character, keys: list[Key], scheme: str, constraints: Sequence[Constraint] = ()
+) -> MotionPaths | None:
     """A preview of the bake's paths over the keyed range from the keys that have a
-    latent (see the module doc); None when no key has one."""
-    from engine.authoring.bake import interpolated_targets
+    latent, with the scene's ``constraints`` (its pins) as the bake has them (see the
+    module doc); None when no key has one."""
+    from engine.authoring.bake import interpolated_targets, pinned_key
 
-    posed = sorted((k for k in keys if k.latent is not None), key=lambda k: k.frame)
+    rules = list(constraints)
+    posed = sorted((pinned_key(k, rules) for k in keys if k.latent is not None), key=lambda k: k.frame)
     if not posed:
         return None
     decoded, exact = key_poses(character, posed)
@@ -177,15 +186,23 @@ def keyed_paths(character: Character, keys: list[Key], scheme: str) -> MotionPat
     out = positions + np.stack([interpolate(times, gaps, f, scheme) for f in frames]).reshape(positions.shape)
     for i, f in enumerate(frames):
         # the bake's in-betweens put the limbs on the interpolated targets exactly
-        taken = _taken(character, local[i], root[i], interpolated_targets(posed, times, f, scheme))
+        targets, _ = pinned_targets(interpolated_targets(posed, times, f, scheme), rules, int(f))
+        taken = _taken(character, local[i], root[i], targets)
         if taken is not None:
             moved = np.abs(taken - positions[i]).max(axis=1) > 1e-9
             out[i, moved] = taken[moved]
     return MotionPaths(first, out, tuple(k.frame for k in keys), exact=False)
 
 
-def authored_paths(character: Character, keys: list[Key], scheme: str, baked: Baked | None) -> MotionPaths | None:
-    """The paths of an authored animation: the bake's when there is one, else the preview."""
+def authored_paths(
+    character: Character,
+    keys: list[Key],
+    scheme: str,
+    baked: Baked | None,
+    constraints: Sequence[Constraint] = (),
+) -> MotionPaths | None:
+    """The paths of an authored animation: the bake's when there is one, else the
+    preview (:func:`keyed_paths`, with the scene's ``constraints``)."""
     if baked is not None:
         return baked_paths(baked, keys)
-    return keyed_paths(character, keys, scheme)
+    return keyed_paths(character, keys, scheme, constraints)

@@ -24,6 +24,7 @@ from engine import skeleton as sk
 from engine.authoring.character import Character, Pose, yaw_quaternion
 from engine.authoring.keys import PLANTED
 from engine.authoring.pelvis_drag import pelvis_pose, toes_on
+from engine.authoring.pins import pinned_targets
 from engine.authoring.pose_hold import arm_reach, free_arm_terms, free_arms, held_joints, hold_terms
 from engine.authoring.pose_options import SQUAT_FROM, PoseOptions
 from engine.authoring.pose_root import FOOT_OF, Stance, moved_feet, root_where, shortfall, stoop_targets
@@ -69,9 +70,17 @@ class PoseSolving:
     _hanging_reach: dict[int, float]
     _solved: Pose | None
 
+    @property
+    def aimed(self) -> dict[str, JointTarget]:
+        """The targets the solves aim at, by joint: the user's, a pin acting on
+        :attr:`frame` winning on its joint as the bake's does
+        (:func:`engine.authoring.pins.pinned_targets`)."""
+        aimed, _ = pinned_targets(list(self.targets.values()), self.constraints, self.frame)
+        return {t.joint: t for t in aimed}
+
     def pelvis_target(self) -> JointTarget | None:
         """The root's target when it is active and moves the pelvis only, else None."""
-        return pelvis_only_target(self.targets)
+        return pelvis_only_target(self.aimed)
 
     def pelvis_step(self, pose: Pose) -> Pose:
         """``pose`` with the pelvis on its pelvis-only target, the feet on their planted
@@ -80,7 +89,7 @@ class PoseSolving:
         t = self.pelvis_target()
         if t is None:
             return pose
-        limbs = {x.index: x.position for x in self.targets.values() if x.active and x.index in LIMBS}
+        limbs = {x.index: x.position for x in self.aimed.values() if x.active and x.index in LIMBS}
         legs = self.character.decode(pose.latent, self.character.grounded()).local_rot
         return pelvis_pose(pose, t.position, self.planted, self.character.skeleton.offsets, limbs, legs)
 
@@ -98,7 +107,7 @@ class PoseSolving:
             return self.pelvis_step(pose)
         if not self.options.plant_feet:
             return pose
-        moved = moved_feet(self.targets)
+        moved = moved_feet(self.aimed)
         toes = {j: p for j, p in self.planted.items() if j.endswith("toe") and FOOT_OF[j] not in moved}
         if not toes:
             return pose
@@ -108,7 +117,8 @@ class PoseSolving:
     def _inputs(self) -> tuple[list[Constraint], dict, dict]:
         """The solve's terms: the user's targets, the planted feet that no target moves, the
         scene's constraints; and the exact limb and rotation steps after it."""
-        targets, planted = list(self.targets.values()), self.planted
+        targets, rules = pinned_targets(list(self.targets.values()), self.constraints, self.frame)
+        planted = self.planted
         pelvis = self.pelvis_target()
         if pelvis is not None and self.pose.decoded is not None:
             # the latent solves the body standing where it stood; the pelvis step follows
@@ -117,21 +127,21 @@ class PoseSolving:
             targets = [replace(t, position=t.position + shift) for t in targets if t.joint != "root"]
             planted = {j: decoded[sk.JOINT_INDEX[j]].copy() for j in planted}
         if self.options.plant_feet:
-            moved = moved_feet(self.targets)
+            moved = moved_feet(self.aimed)
             targets += [
                 JointTarget(j, p, weight=self.options.plant_weight)
                 for j, p in planted.items()
-                if FOOT_OF[j] not in moved and j not in self.targets
+                if FOOT_OF[j] not in moved and j not in self.aimed
             ]
         terms, reach, rotations = solve_inputs(targets)
         for t in terms:
             if t.dof == 6:
                 t.rotation_weight *= self.options.turn_weight
-        return terms + list(self.constraints), reach, rotations
+        return terms + rules, reach, rotations
 
     def _replant(self) -> None:
         """A foot the user moves is planted where it is left."""
-        moved = moved_feet(self.targets)
+        moved = moved_feet(self.aimed)
         for j in PLANTED:
             if FOOT_OF[j] in moved:
                 self.planted[j] = self.pose.positions[sk.JOINT_INDEX[j]].copy()
@@ -140,7 +150,7 @@ class PoseSolving:
         """Where the root is held during the solve (3,) metres (:func:`engine.authoring.pose_root.root_where`)."""
         if self.pelvis_target() is not None and self.pose.decoded is not None:
             return self.pose.decoded[0].copy()  # the standing body's root (see _inputs)
-        stance = Stance(self.pose, self.targets, self.planted, self.options)
+        stance = Stance(self.pose, self.aimed, self.planted, self.options)
         return root_where(stance, self._standing_root, self._lowest_reach, adjust)
 
     def solve(self, iterations: int = ITERATIONS) -> Pose:
@@ -197,7 +207,7 @@ class PoseSolving:
             self.options.plant_feet
             and not self.options.free_height
             and all(f"{s}ankle" in self.planted for s in "lr")
-            and arm_reach(self.targets, self._hanging_reach)
+            and arm_reach(self.aimed, self._hanging_reach)
             and where[2] >= self.pose.root_pos[2]
             and where[2] >= self._standing_root - SQUAT_FROM
         )
@@ -257,7 +267,7 @@ class PoseSolving:
         if (
             not o.keep_trunk
             or self.anchor is None
-            or any(t.active and t.index in TRUNK + LEGS for t in self.targets.values())
+            or any(t.active and t.index in TRUNK + LEGS for t in self.aimed.values())
         ):
             return pose
         forward = QN.rotate(yaw_quaternion(self.heading), sk.FORWARD)
@@ -268,7 +278,7 @@ class PoseSolving:
     def held(self) -> list[int]:
         """Joints the hold pulls towards the anchor (see ``PoseOptions.hold_weight`` and
         :func:`engine.authoring.pose_hold.held_joints`)."""
-        return held_joints(self.targets, self.planted, self.options.plant_feet)
+        return held_joints(self.aimed, self.planted, self.options.plant_feet)
 
     def _hold_terms(self, where: np.ndarray) -> list[Constraint]:
         """The hold's terms for a solve with the root at ``where (3,)`` metres
@@ -284,7 +294,7 @@ class PoseSolving:
         w = self.options.free_arm_weight
         if w <= 0 or self.anchor is None or self.pelvis_target() is not None:
             return []
-        arms = free_arms(self.targets, self._hanging_reach, self.options.plant_feet)
+        arms = free_arms(self.aimed, self._hanging_reach, self.options.plant_feet)
         return free_arm_terms(self.anchor, self.pose, arms, where, w)
 
     def _stoop_terms(self, where: np.ndarray) -> list[Constraint]:
@@ -292,7 +302,7 @@ class PoseSolving:
         at ``where (3,)`` metres (:func:`engine.authoring.pose_root.stoop_targets`). Under
         a pelvis-only target the latent solves the body where it stood, with the targets
         moved by the pelvis's offset (:meth:`_inputs`): the pull is that body's."""
-        pose, targets = self.pose, self.targets
+        pose, targets = self.pose, self.aimed
         pelvis = self.pelvis_target()
         if pelvis is not None:
             if pose.decoded is None:
@@ -305,7 +315,7 @@ class PoseSolving:
 
     def shortfall(self) -> float:
         """How far the solve is from its targets, metres (:func:`engine.authoring.pose_root.shortfall`)."""
-        return shortfall(Stance(self.pose, self.targets, self.planted, self.options))
+        return shortfall(Stance(self.pose, self.aimed, self.planted, self.options))
 
     def settle(self, cancelled: CancelCheck | None = None) -> Pose:
         """An offline, grounded solve from the current pose (when a drag ends), then up to

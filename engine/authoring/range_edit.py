@@ -31,8 +31,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from engine import skeleton as sk
-from engine.authoring.bake import active_constraints
 from engine.authoring.character import Character, encode_frames
+from engine.authoring.pins import active_constraints
 from engine.constraints.base import Constraint
 from engine.constraints.end_effector import EndEffectorConstraint
 from engine.constraints.floor import FloorConstraint

@@ -12,7 +12,9 @@ exactly: the command holds the state it touched before and after, see
 changed. A change that fails (a :class:`~engine.errors.UserError`) leaves the model as
 it was and records nothing.
 
-The keys, the animation and the bake are the session's
+The pose's gestures (joints dragged and turned, the body moved, targets edited, the
+settle) are the session's :class:`~engine.authoring.session_pose.PoseEditing` part; the
+keys, the animation and the bake its
 :class:`~engine.authoring.session_keys.KeyEditing` part. The bake (keys solved and
 in-betweens, seconds for a long animation) is long work:
 :meth:`AuthoringSession.bake_job` takes a copy of the scene for a worker thread, which
@@ -27,26 +29,22 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-import numpy as np
-
-from engine import skeleton as sk
 from engine.authoring import events as ev
 from engine.authoring.bake import Baked
 from engine.authoring.document import AuthoringScene
 from engine.authoring.history import Edit, History
-from engine.authoring.jobs import SettleJob
 from engine.authoring.keys import Animation, Key
 from engine.authoring.pose_mode import PoseMode
 from engine.authoring.session_constraints import constraints_event
 from engine.authoring.session_keys import KeyEditing
+from engine.authoring.session_pose import PoseEditing
 from engine.authoring.state import AuthoringState, capture, differences, put
-from engine.authoring.turns import world_rotation
 from engine.editing.constraint_list import ConstraintList
 from engine.errors import UserError
 from engine.motion.clip import Motion
 
 
-class AuthoringSession(KeyEditing):
+class AuthoringSession(PoseEditing, KeyEditing):
     """See the module doc.
 
     Parameters
@@ -232,131 +230,6 @@ class AuthoringSession(KeyEditing):
 
     def redo(self) -> None:
         self.history.redo()
-
-    # -- targets and the body ------------------------------------------------------
-    def world_rotation(self, joint: str) -> np.ndarray:
-        """The current pose's world rotation ``(4,)`` of ``joint``."""
-        return world_rotation(self.mode.pose, self.mode.character.skeleton.offsets, joint)
-
-    def hips_handle(self) -> np.ndarray:
-        """Where a drag of the hips starts (:meth:`PoseMode.hips_handle`)."""
-        return self.mode.hips_handle()
-
-    def drag_joint(self, joint: str, position: np.ndarray) -> None:
-        """Create or move the target on ``joint`` to ``position (3,)`` metres and solve;
-        the hips (``root``) move the whole body and the pelvis's height instead
-        (:meth:`engine.authoring.pose_mode.PoseMode.drag_hips`)."""
-        p = np.asarray(position, float)
-        if joint == "root":
-            self.edit("move body", lambda: self.mode.drag_hips(p), ("body", "root", "position"))
-            return
-        self.edit(
-            f"move target {joint}", lambda: self.mode.set_target(joint, p), ("target", joint, "position"), solve=True
-        )
-
-    def drag_pelvis(self, position: np.ndarray) -> None:
-        """Move only the pelvis to ``position (3,)`` metres, the feet planted and the upper
-        body carried (:meth:`engine.authoring.pose_mode.PoseMode.drag_pelvis`); a drag's
-        moves are one undo step."""
-        p = np.asarray(position, float)
-        self.edit("move pelvis", lambda: self.mode.drag_pelvis(p), ("body", "root", "pelvis"))
-
-    def turn_joint(self, joint: str, rotation: np.ndarray) -> None:
-        """Give ``joint`` the world rotation ``rotation (4,)`` as a target and solve."""
-        q = np.asarray(rotation, float)
-        self.edit(
-            f"turn {joint}",
-            lambda: self.mode.set_target(joint, rotation=q / np.linalg.norm(q)),
-            ("target", joint, "rotation"),
-            solve=True,
-        )
-
-    def hold_turn(self, joint: str, on: bool) -> None:
-        """Give the target on ``joint`` the joint's current world rotation (``on``) or make
-        it a position target again."""
-
-        def change() -> None:
-            if on:
-                self.mode.set_target(joint, rotation=self.world_rotation(joint))
-            else:
-                self.mode.clear_rotation(joint)
-
-        self.edit(f"{'hold' if on else 'free'} turn {joint}", change, solve=True)
-
-    def edit_target(self, joint: str, enabled: bool | None = None, weight: float | None = None) -> None:
-        """Switch the target on ``joint`` on or off or change its weight, and solve."""
-        self.edit(
-            f"edit target {joint}", lambda: self.mode.set_target(joint, enabled=enabled, weight=weight), solve=True
-        )
-
-    def clear_target(self, joint: str) -> None:
-        self.edit(f"clear target {joint}", lambda: self.mode.remove_target(joint), solve=True)
-
-    def clear_all(self) -> None:
-        """Remove every target and put the character back in its starting pose, on the
-        feet where it stands now (one undo step)."""
-
-        def change() -> None:
-            m = self.mode
-            m.clear_targets()
-            feet = np.mean([p[:2] for p in m.planted.values()], axis=0)
-            pose = m.character.decode(m.base_latent, m.character.grounded(m.pose.root_pos[:2], m.heading))
-            shift = feet - np.mean([pose.positions[sk.JOINT_INDEX[j], :2] for j in m.planted], axis=0)
-            m.pose = m.character.decode(m.base_latent, m.character.grounded(pose.root_pos[:2] + shift, m.heading))
-            m.plant_where_standing()
-
-        self.edit("clear all targets", change)
-
-    def move_body(self, delta: np.ndarray) -> None:
-        """Root motion: translate the whole body horizontally by ``delta (3,)`` metres
-        (its height is the floor's business), then solve the targets from there."""
-        d = np.array([delta[0], delta[1], 0.0], float)
-
-        def change() -> None:
-            self.mode.pose = self.mode.pose.moved(d)
-            self.mode.plant_where_standing()
-            if self.mode.targets:
-                self.mode.solve()
-
-        self.edit("move body", change, ("body", "root", "position"))
-
-    def turn_body(self, heading: float) -> None:
-        """Root motion: face ``heading`` degrees about +Z (0 faces -Y), the whole body
-        turned about its root, then the targets solved from there."""
-        turn = float(heading) - self.mode.heading
-        if abs(turn) < 1e-9:
-            return
-
-        def change() -> None:
-            self.mode.heading = float(heading)
-            self.mode.pose = self.mode.pose.turned(turn)
-            self.mode.plant_where_standing()
-            if self.mode.targets:
-                self.mode.solve()
-
-        self.edit("turn body", change, ("body", "root", "heading"))
-
-    def settle(self) -> None:
-        """An offline, grounded solve of the current targets (one undo step)."""
-        self.edit("settle pose", self.mode.settle)
-
-    def settle_job(self) -> SettleJob:
-        """The settle of the pose as it stands, to run on any thread (:meth:`take_settle`)."""
-        return SettleJob(self.mode.detached(), self.state())
-
-    def take_settle(self, job: SettleJob, settled: PoseMode) -> None:
-        """Apply ``job``'s result as the one undo step "settle pose".
-
-        Raises
-        ------
-        UserError
-            When the pose, targets, keys or constraints changed since the job was made
-            (the settle would undo that change): nothing is applied.
-        """
-        d = differences(job.before, self.state())
-        if d.joints or d.pose or d.keys or d.constraints or d.animation:
-            raise UserError("the pose changed while it settled: nothing was applied (settle again)")
-        self.edit("settle pose", lambda: self.mode.adopt(settled))
 
     # -- constraints ---------------------------------------------------------------
     constraint_catalog = staticmethod(ConstraintList.catalog)  # the kinds users may add, with their fields

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from engine.authoring.bake import Baked, interpolated_heading, interpolated_targets
+from engine.authoring.bake import Baked, interpolated_heading, interpolated_targets, pinned_key
 from engine.authoring.character import Pose
 from engine.authoring.document import AuthoringScene
 from engine.authoring.keys import Animation, Key
@@ -189,11 +189,16 @@ def pose_on_key(mode: PoseMode, key: Key) -> None:
 
 def pose_between(mode: PoseMode, baked: Baked, keys: list[Key], scheme: str, frame: int) -> None:
     """Pose ``mode`` as the baked in-between at ``frame``: its latent and pose, the facing
-    and targets interpolated there (so a key added on it keeps the motion)."""
+    and targets interpolated there (so a key added on it keeps the motion). The targets
+    are interpolated between the keys as the pins on their frames leave them, as the
+    bake interpolates them (:func:`engine.authoring.bake.pinned_key`); a pin acting on
+    ``frame`` itself wins in every solve of ``mode``
+    (:attr:`engine.authoring.pose_solve.PoseSolving.aimed`)."""
     motion = baked.motion
     f = min(int(frame), len(motion) - 1)
     local, root = motion.local_rot[f].copy(), motion.root_pos[f].copy()
     mode.pose = Pose(baked.latents[f].copy(), local, root, fk_positions(local, root, motion.skeleton.offsets))
     times = [float(k.frame) for k in keys]
     mode.heading = interpolated_heading(keys, times, f, scheme)
-    mode.targets = {t.joint: copy.deepcopy(t) for t in interpolated_targets(keys, times, f, scheme)}
+    pinned = [pinned_key(k, mode.constraints) for k in keys]
+    mode.targets = {t.joint: copy.deepcopy(t) for t in interpolated_targets(pinned, times, f, scheme)}

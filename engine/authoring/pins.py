@@ -1,0 +1,75 @@
+"""Constraints on a frame, and pins against targets: one rule for the bake and the pose window.
+
+:func:`active_constraints` is what acts on a frame (each weight times its activity
+there). :func:`pinned_targets` settles a pin on a joint that a target also holds: the
+target goes from its place to the pin's by the pin's activity on that frame, and the pin
+acts through that target only. The bake (:mod:`engine.authoring.bake`) poses its keys
+and in-betweens with it, and every solve of the pose window
+(:class:`engine.authoring.pose_solve.PoseSolving`) aims at the targets it gives, so a
+frame shows what the bake gives there.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from engine.authoring.targets import JointTarget
+from engine.constraints.base import Constraint
+from engine.constraints.pin import PinConstraint
+
+
+def active_constraints(constraints: list[Constraint], frame: int) -> list[Constraint]:
+    """Copies of the enabled ``constraints`` acting on ``frame``, each weight times its
+    :meth:`~engine.constraints.base.Constraint.activity` there and without a range (so a
+    solver that honours ranges itself does not apply it twice)."""
+    out = []
+    for c in constraints:
+        a = c.activity(frame) if c.enabled else 0.0
+        if a > 0:
+            out.append(dataclasses.replace(c, weight=c.weight * a, frames=None, blend_in=0, blend_out=0))
+    return out
+
+
+def holding_pins(constraints: list[Constraint], frame: int) -> dict[str, PinConstraint]:
+    """Per joint, the enabled pin with a set place that holds it most on ``frame`` (the
+    largest :meth:`~engine.constraints.base.Constraint.activity` there)."""
+    out: dict[str, PinConstraint] = {}
+    for c in constraints:
+        if not isinstance(c, PinConstraint) or not c.enabled or c.follow_previous:
+            continue
+        a = c.activity(frame)
+        if a > 0 and np.all(np.isfinite(c.position)) and (c.joint not in out or a > out[c.joint].activity(frame)):
+            out[c.joint] = c
+    return out
+
+
+def held_pins(constraints: list[Constraint], frame: int) -> dict[str, tuple[np.ndarray, float]]:
+    """Per joint, where the pins acting on ``frame`` hold it and how much
+    (:func:`holding_pins`: that pin's place and activity there)."""
+    return {j: (np.asarray(c.position, float), c.activity(frame)) for j, c in holding_pins(constraints, frame).items()}
+
+
+def pinned_targets(
+    targets: list[JointTarget], constraints: list[Constraint], frame: int
+) -> tuple[list[JointTarget], list[Constraint]]:
+    """``targets`` with a pin on the same joint winning on ``frame``, and the constraints
+    left to act there as terms (:func:`active_constraints`).
+
+    A pinned joint's target goes from its own place towards the pin's by the pin's
+    activity there (all the way inside its range, along its blends outside), and that
+    pin acts through the target only. Kept as a term against a target, a pin (weight 30)
+    pulls the latent's joint to its place while the exact limb step puts the joint back
+    on the target: the latent bends the trunk by 60-75 degrees for a wrist that does not
+    move."""
+    pins = held_pins(constraints, frame)
+    out, won = [], set()
+    for t in targets:
+        if t.joint in pins and t.active:
+            place, a = pins[t.joint]
+            t = dataclasses.replace(t, position=(1.0 - a) * np.asarray(t.position, float) + a * place)
+            won.add(t.joint)
+        out.append(t)
+    rest = [c for c in constraints if not (isinstance(c, PinConstraint) and c.joint in won and c.joint in pins)]
+    return out, active_constraints(rest, frame)

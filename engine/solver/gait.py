@@ -26,11 +26,11 @@ anchor tracker (the hips' when connected, else the head's) and gives the ``gait`
   (under its hip, :attr:`GaitParams.lead_s` of travel ahead), fixed for the whole stance,
   so it does not skate while the body moves on.
 * **Swaps without jumps.** The arms or the classifier often swap the feet before the swing
-  target has reached its landing spot, so the landed foot's target glides there from where
-  the swing target was over :attr:`GaitParams.settle_s`, and the two ankles' weights trade
-  places over :attr:`GaitParams.ramp_s` (a step in the targets or the weights is a jerk in
-  the solved legs: with both at once the walks' mean joint jerk was 30 % above the term's
-  absence, with both eased 9 %).
+  target has reached its landing spot, so the landed foot's target glides there from the
+  swing target's last position over :attr:`GaitParams.settle_s`, and the two ankles'
+  weights trade places over :attr:`GaitParams.ramp_s` (a step in the targets or the weights
+  is a jerk in the solved legs: with both stepped the walks' mean joint jerk is 30 % above
+  the term's absence, with both eased 8 %; docs/optimizer.md, *Swaps without jumps*).
 * **Swing foot on its way.** Its target moves, along a quintic ease of the phase (zero
   velocity and acceleration at both ends), from where it lifted off to its landing spot: under its own hip (previous solved pose) carried
   ahead by the velocity over the rest of the step and :attr:`GaitParams.lead_s` more
@@ -74,7 +74,7 @@ class GaitParams:
     planner starts to fade out and is off again, at a run (a run has a flight phase, and
     planting a foot for a whole stance at 3 m/s tore the pose: CMU runs went from 5-7 to
     19-27 cm of Pos with the term on); ``settle_s``: how long a landed foot's target takes
-    to glide from where the swing target was to the landing spot; ``ramp_s``: how long the
+    to glide from the swing target's last position to the landing spot; ``ramp_s``: how long the
     two ankles' weights take to trade places after a swap (0: at once).
     """
 
@@ -249,8 +249,8 @@ class GaitPlanner:
         landing = hips[w, :2] + v * (remaining + p.lead_s)
         target = np.zeros((2, 3))
         target[s] = self._planted
-        # a landed foot's target glides from where the swing target was, so it does not jump
-        # when the swap comes before the swing has reached its landing spot
+        # a landed foot's target glides from the swing target's last position, so it does not
+        # jump when the swap comes before the swing has reached its landing spot
         settle = self._ease(self._elapsed, p.settle_s)
         if settle < 1.0:
             target[s, :2] = self._settle_from + (self._planted[:2] - self._settle_from) * settle

@@ -71,7 +71,7 @@ def test_walking_head_makes_the_feet_alternate_and_plant(arms):
 @pytest.mark.parametrize("speed", [0.8, 1.2, 1.6])
 def test_the_targets_and_weights_do_not_jump_when_the_feet_swap(arms, speed):
     """The arms swap the feet before the swing target reaches its landing spot: the landed
-    foot's target glides on from where the swing target was, and the weights trade places
+    foot's target glides on from the swing target's last position, and the weights trade places
     over a few frames, so neither steps at a swap (a step is a jerk in the solved legs)."""
     targets = walk(GaitPlanner(FPS), 240, speed, arms)
     stance = np.array([-1 if not t.active else t.stance for t in targets])

@@ -5,6 +5,8 @@ walking clip they may glide instead of stepping. This script reconstructs clips 
 simulated trackers (as ``evaluate`` does) and reports, per method and clip:
 
 * ``pos_cm``: ``evaluate``'s Pos (world joint positions);
+* ``jitter``: ``evaluate``'s jitter (mean joint jerk, 10^2 m/s^3) and ``ankle_jitter``, the
+  same over the two ankles alone (the truth's rows give the truth's own);
 * ``f1``: agreement of the per-frame contact label of each foot with the truth's (F1 of
   "in contact", averaged over the two feet) and ``acc`` (share of frames whose label agrees);
 * ``skate_cms``: mean horizontal speed of a foot, cm/s, over the frames where the *truth*
@@ -133,7 +135,7 @@ def gait_params(items: list[str]) -> None:
 
     params = dataclasses.replace(gait.GaitParams(), **{k: float(v) for k, v in (i.split("=", 1) for i in items)})
     init = gait.GaitPlanner.__init__
-    gait.GaitPlanner.__init__ = lambda self, fps, p=None: init(self, fps, p or params)  # type: ignore[method-assign]
+    gait.GaitPlanner.__init__ = lambda self, fps, p=None, stance=None: init(self, fps, p or params, stance)  # type: ignore[method-assign]
 
 
 class _TruthStance:
@@ -183,7 +185,7 @@ def run(
 ) -> dict:
     from engine.cli.method_options import apply_settings
     from engine.methods import get_method, run_method
-    from engine.metrics import evaluate_motion
+    from engine.metrics import evaluate_motion, jerk_curve
     from engine.tracking import simulate
 
     gait_params(list(gait))
@@ -205,21 +207,34 @@ def run(
         motion = _load(f, max_frames)
         gt_pos, _ = motion.fk()
         tracking = simulate(motion, sensors, seed=0)
-        row = {"truth": truth_metrics(gt_pos, motion.fps)}
+        row = {
+            "truth": {
+                **truth_metrics(gt_pos, motion.fps),
+                "jitter": float(np.nanmean(jerk_curve(gt_pos, motion.fps))),
+                "ankle_jitter": float(np.nanmean(jerk_curve(gt_pos[:, list(FEET)], motion.fps))),
+            }
+        }
         for name, method in built.items():
             if truth_cue is not None:
                 truth_cue.start(gt_pos, motion.fps)
             rec, _ = run_method(method, tracking, motion.skeleton, progress=False, reference=motion, light=True)
             rec_pos, _ = rec.fk()
-            row[name] = {"pos_cm": evaluate_motion(motion, rec)["pos_cm"], **foot_metrics(gt_pos, rec_pos, motion.fps)}
+            ev = evaluate_motion(motion, rec)
+            row[name] = {
+                "pos_cm": ev["pos_cm"],
+                "jitter": ev["jitter"],
+                "ankle_jitter": float(np.nanmean(jerk_curve(rec_pos[:, list(FEET)], motion.fps))),
+                **foot_metrics(gt_pos, rec_pos, motion.fps),
+            }
         out["files"][str(f)] = row
         print(f.name, json.dumps({k: {a: round(b, 3) for a, b in v.items()} for k, v in row.items()}), flush=True)
-    keys = ("pos_cm", "f1", "acc", "skate_cms", "steps")
+    keys = ("pos_cm", "jitter", "ankle_jitter", "f1", "acc", "skate_cms", "steps")
     out["mean"] = {
         name: {k: float(np.mean([r[name][k] for r in out["files"].values()])) for k in keys} for name in methods
     }
     out["mean"]["truth"] = {
-        k: float(np.mean([r["truth"][k] for r in out["files"].values()])) for k in ("skate_cms", "steps", "head_speed")
+        k: float(np.mean([r["truth"][k] for r in out["files"].values()]))
+        for k in ("skate_cms", "steps", "head_speed", "jitter", "ankle_jitter")
     }
     print("mean", json.dumps({k: {a: round(b, 3) for a, b in v.items()} for k, v in out["mean"].items()}))
     if json_out:

@@ -53,10 +53,11 @@ def test_walking_head_makes_the_feet_alternate_and_plant(arms):
     # the stance foot's target stays put for its whole stance; the swing foot's moves ahead (-Y)
     runs = np.split(np.arange(on.sum()), changes + 1)
     onf = np.flatnonzero(on)
+    settled = int(np.ceil(GaitParams().settle_s * FPS))  # frames a landed foot's target glides
     for run in runs[1:-1]:
         frames = onf[run]
         k = stance[frames[0]]
-        planted = np.array([targets[f].target[k] for f in frames])
+        planted = np.array([targets[f].target[k] for f in frames[settled:]])
         assert np.ptp(planted, axis=0).max() < 1e-12
         swing = np.array([targets[f].target[1 - k, 1] for f in frames])
         assert swing[-1] < swing[0] - 0.2
@@ -64,6 +65,30 @@ def test_walking_head_makes_the_feet_alternate_and_plant(arms):
         rate = np.cos(2.0 * np.pi * np.arange(240) / FPS)  # d/dt of the left-minus-right forward offset
         agree = np.mean((stance[on] == 0) == (rate[on] > 0))
         assert agree > 0.8
+
+
+@pytest.mark.parametrize("arms", [True, False])
+@pytest.mark.parametrize("speed", [0.8, 1.2, 1.6])
+def test_the_targets_and_weights_do_not_jump_when_the_feet_swap(arms, speed):
+    """The arms swap the feet before the swing target reaches its landing spot: the landed
+    foot's target glides on from the swing target's last position, and the weights trade places
+    over a few frames, so neither steps at a swap (a step is a jerk in the solved legs)."""
+    targets = walk(GaitPlanner(FPS), 240, speed, arms)
+    stance = np.array([-1 if not t.active else t.stance for t in targets])
+    swaps = [i for i in range(61, 240) if stance[i - 1] >= 0 and stance[i] >= 0 and stance[i] != stance[i - 1]]
+    assert len(swaps) >= 4
+    p = GaitParams()
+    for i in swaps:
+        jump = np.linalg.norm(targets[i].target[:, :2] - targets[i - 1].target[:, :2], axis=-1)
+        assert jump.max() < 0.02, (i, jump)  # the body travels 1.3-2.7 cm a frame
+        weight = targets[i].scale[:, 0] ** 2
+        before = targets[i - 1].scale[:, 0] ** 2
+        assert np.abs(weight - before).max() < 0.5 * (p.stance_weight - p.swing_weight)
+    # the landed foot reaches its landing spot and stays there for the rest of its stance
+    i = swaps[1]
+    k = stance[i]
+    later = [targets[f].target[k] for f in range(i + int(np.ceil(p.settle_s * FPS)), swaps[2])]
+    assert np.ptp(np.array(later), axis=0).max() < 1e-12
 
 
 def test_a_still_head_leaves_the_term_off():

@@ -22,15 +22,16 @@ from engine.authoring.history import Edit, History
 from engine.authoring.jobs import BakeJob
 from engine.authoring.keys import SCHEMES, Animation, Key
 from engine.authoring.pose_mode import PoseMode
+from engine.authoring.session_core import SessionCore
 from engine.authoring.state import AuthoringState, holds_key, pose_between, pose_on_key, same_pose, same_target
 from engine.errors import UserError
 from engine.progress import CancelCheck, Progress
 
 if TYPE_CHECKING:
-    from collections.abc import Callable
+    pass
 
 
-class KeyEditing:
+class KeyEditing(SessionCore):
     """Keys, the animation and the bake of an authoring session (see the module doc);
     the session holds the state they read and write and the edit machinery, declared here."""
 
@@ -45,24 +46,12 @@ class KeyEditing:
     _shown: tuple[int, AuthoringState]
 
     if TYPE_CHECKING:
-        frame: int
 
         @property
         def vae(self) -> Any: ...
 
         @property
         def animation(self) -> Animation: ...
-
-        def state(self) -> AuthoringState: ...
-
-        def edit(
-            self,
-            text: str,
-            change: Callable[[], Any],
-            key: tuple | None = None,
-            solve: bool = False,
-            framed: bool = False,
-        ) -> None: ...
 
         def _changed(self, before: AuthoringState, frame: int | None = None) -> None: ...
 

@@ -10,43 +10,25 @@ thread and applied as one undo step. Each gesture is one edit through the sessio
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
-
 import numpy as np
 
 from engine import skeleton as sk
 from engine.authoring.jobs import SettleJob
 from engine.authoring.pins import holding_pins
 from engine.authoring.pose_mode import PoseMode
-from engine.authoring.state import AuthoringState, differences
+from engine.authoring.session_core import SessionCore
+from engine.authoring.state import differences
 from engine.authoring.turns import world_rotation
 from engine.constraints.pin import PinConstraint
 from engine.editing.constraint_list import ConstraintList
 from engine.errors import UserError
 
-if TYPE_CHECKING:
-    from collections.abc import Callable
 
-
-class PoseEditing:
+class PoseEditing(SessionCore):
     """The pose, its targets and the body of an authoring session (see the module doc);
     the session holds the state they read and write and the edit machinery, declared here."""
 
     mode: PoseMode
-
-    if TYPE_CHECKING:
-        frame: int
-
-        def state(self) -> AuthoringState: ...
-
-        def edit(
-            self,
-            text: str,
-            change: Callable[[], Any],
-            key: tuple | None = None,
-            solve: bool = False,
-            framed: bool = False,
-        ) -> None: ...
 
     def world_rotation(self, joint: str) -> np.ndarray:
         """The current pose's world rotation ``(4,)`` of ``joint``."""

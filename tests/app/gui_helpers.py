@@ -8,7 +8,7 @@ import numpy as np
 from PyQt6.QtCore import QPoint, QPointF, Qt
 from PyQt6.QtGui import QMouseEvent
 from PyQt6.QtTest import QTest
-from PyQt6.QtWidgets import QApplication
+from PyQt6.QtWidgets import QApplication, QComboBox
 
 LEFT = Qt.MouseButton.LeftButton
 NONE = Qt.MouseButton.NoButton
@@ -96,3 +96,16 @@ def shortcut(w, key: Qt.Key, mods=Qt.KeyboardModifier.ControlModifier) -> None:
     """``key`` with ``mods`` pressed where the keyboard focus is (else on ``w``)."""
     QTest.keyClick(QApplication.focusWidget() or w, key, mods)
     QApplication.processEvents()
+
+
+def add_wrist_pin(w):
+    """A pin added with the pose window's Constraints dock (on the ankle, its default
+    joint) and put on the left wrist in its editor."""
+    panel = w.constraints.panel
+    panel.kinds.setCurrentText("pin")
+    QTest.mouseClick(panel.add_button, Qt.MouseButton.LeftButton)
+    (joint_box,) = [b for b in panel.editor.findChildren(QComboBox) if b.currentText() == "lankle"]
+    joint_box.setCurrentText("lwrist")
+    (pin,) = w.mode.constraints
+    assert pin.joint == "lwrist"
+    return pin

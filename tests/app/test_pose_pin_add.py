@@ -10,10 +10,9 @@ import numpy as np
 import pytest
 from PyQt6.QtCore import Qt
 from PyQt6.QtTest import QTest
-from PyQt6.QtWidgets import QComboBox
 
 from engine import skeleton as sk
-from tests.app.gui_helpers import mouse_drag, pixel_of
+from tests.app.gui_helpers import add_wrist_pin, mouse_drag, pixel_of
 
 pytestmark = pytest.mark.gui
 
@@ -52,13 +51,7 @@ def test_a_pin_put_on_another_joint_in_its_editor_pins_that_joint_where_it_is(po
     down to the floor and folds the body over."""
     w = pose_window
     before = w.mode.pose.positions.copy()
-    panel = w.constraints.panel
-    panel.kinds.setCurrentText("pin")
-    QTest.mouseClick(panel.add_button, Qt.MouseButton.LeftButton)
-    (joint_box,) = [b for b in panel.editor.findChildren(QComboBox) if b.currentText() == "lankle"]
-    joint_box.setCurrentText("lwrist")
-    (pin,) = w.mode.constraints
-    assert pin.joint == "lwrist"
+    pin = add_wrist_pin(w)
     assert np.linalg.norm(pin.position - before[J["lwrist"]]) < 1e-6
     moved = np.linalg.norm(w.mode.pose.positions - before, axis=1)
     assert moved.max() < 0.02, f"{sk.JOINT_NAMES[int(moved.argmax())]} moved {moved.max():.3f} m"

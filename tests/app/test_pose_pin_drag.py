@@ -10,29 +10,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from PyQt6.QtCore import Qt
-from PyQt6.QtTest import QTest
-from PyQt6.QtWidgets import QComboBox
 
 from engine import skeleton as sk
 from engine.kinematics.fk import fk
-from tests.app.gui_helpers import mouse_drag, pixel_of, scrub
+from tests.app.gui_helpers import add_wrist_pin, mouse_drag, pixel_of, scrub
 
 pytestmark = pytest.mark.gui
 
 J = sk.JOINT_INDEX
-
-
-def add_wrist_pin(w):
-    """A pin added with the Constraints dock and put on the left wrist in its editor."""
-    panel = w.constraints.panel
-    panel.kinds.setCurrentText("pin")
-    QTest.mouseClick(panel.add_button, Qt.MouseButton.LeftButton)
-    (joint_box,) = [b for b in panel.editor.findChildren(QComboBox) if b.currentText() == "lankle"]
-    joint_box.setCurrentText("lwrist")
-    (pin,) = w.mode.constraints
-    assert pin.joint == "lwrist"
-    return pin
 
 
 def sphere_of(w, joint: str) -> np.ndarray:

@@ -128,11 +128,15 @@ class PoseSolving:
             planted = {j: decoded[sk.JOINT_INDEX[j]].copy() for j in planted}
         if self.options.plant_feet:
             moved = moved_feet(self.aimed)
-            targets += [
+            feet = [
                 JointTarget(j, p, weight=self.options.plant_weight)
                 for j, p in planted.items()
                 if FOOT_OF[j] not in moved and j not in self.aimed
             ]
+            # a pin on a planted joint wins over its planting as over a target: the exact limb
+            # step would otherwise put the joint back where it was planted, away from the pin
+            feet, rules = pinned_targets(feet, rules, self.frame)
+            targets += feet
         terms, reach, rotations = solve_inputs(targets)
         for t in terms:
             if t.dof == 6:

@@ -86,3 +86,15 @@ def test_the_path_before_the_bake_takes_the_pins_as_the_bake_does(vae):
     baked = s.bake_now().motion
     bake_wrist = fk(baked.local_rot, baked.root_pos, baked.skeleton.offsets)[0][:41, J["lwrist"]]
     assert np.linalg.norm(paths.line("lwrist") - bake_wrist, axis=1).max() < 0.01
+
+
+def test_a_pin_on_a_planted_ankle_holds_it_where_the_pin_is_moved(vae):
+    """A planted foot's ankle is held where it stood; a pin put on it and moved wins there
+    too (as a pin wins over a target), so the ankle goes where the pin handle is dragged."""
+    s = AuthoringSession(PoseMode(vae, 1.75))
+    ankle = s.mode.pose.positions[J["lankle"]].copy()
+    s.add_constraint("pin", joint="lankle", position=ankle)
+    (pin,) = s.mode.constraints
+    place = ankle + [0.0, -0.06, 0.0]  # 6 cm forward along the floor
+    s.update_constraint(pin.name, {"position": place})
+    assert np.linalg.norm(s.mode.pose.positions[J["lankle"]] - place) < 0.01

@@ -107,3 +107,25 @@ def test_the_hips_dragged_up_beside_a_wrist_s_rings_move_the_body_not_the_wrist(
     assert w.undo.undo_text() == "move body" and w.selected == "root"
     assert w.mode.targets["root"].position[2] == pytest.approx(crouched[0, 2] + 0.15, abs=0.01)
     assert w.mode.pose.positions[0, 2] > crouched[0, 2] + 0.1, "the pelvis went up"
+
+
+def test_a_target_that_goes_away_during_its_drag_ends_the_drag(pose_window):
+    """A target sphere is being dragged when the target is cleared (Clear all, an undo or a
+    key change from the keyboard while the button is held): the rest of the drag moves
+    nothing and raises nothing (the GUI monkey met a ValueError here)."""
+    w = pose_window
+    view = w.viewport
+    view.plotter.render()
+    x, y = pixel_of(view, w.mode.pose.positions[LW])
+    mouse_drag(view, (x, y), (x - 30, y), steps=4)  # a target on the wrist
+    view.plotter.render()
+    x, y = pixel_of(view, w.mode.targets["lwrist"].position)
+    moves = []
+
+    def clear_on_second_move() -> None:
+        moves.append(1)
+        if len(moves) == 2:
+            w.clear_all()
+
+    mouse_drag(view, (x, y), (x, y + 40), steps=6, on_move=clear_on_second_move)
+    assert "lwrist" not in w.mode.targets and view.joints.target is None

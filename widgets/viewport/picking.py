@@ -331,7 +331,9 @@ class JointDragger:
         point, direction, normal = hit
         to = self._placed(self._base + (point - self._grab), self._base, direction, normal)
         if self.target is not None:
-            self._sensors.drag(self.target, to)
+            if not self._sensors.drag(self.target, to):
+                self.target = None  # the target went away: the rest of the drag moves nothing
+                return
             self._plotter.render()  # the sphere follows the mouse at once, as a widget's did
         else:
             self._on_drag(JOINT_NAMES[self.joint], to)

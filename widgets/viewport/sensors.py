@@ -165,12 +165,17 @@ class SensorMarkers:
         self.dragging = joint
         self._set_states(tuple("dragged" if j == joint else s for j, s in zip(self.joints, self._states)))
 
-    def drag(self, joint: str, position: np.ndarray) -> None:
-        """Move the dragged target's sphere to ``position`` and report it."""
+    def drag(self, joint: str, position: np.ndarray) -> bool:
+        """Move the dragged target's sphere to ``position`` and report it; False (nothing
+        moved) when the target went away during its drag (cleared, undone, another frame)."""
+        if joint not in self.joints:
+            self.dragging = None
+            return False
         i = self.joints.index(joint)
         self.positions[i] = position
         self._place()
         self._on_drag(joint, np.asarray(position, float))
+        return True
 
     def end_drag(self) -> None:
         self.dragging = None  # the next snapshot recolours it

@@ -37,8 +37,8 @@ def window_frames(fps: float) -> int:
 def stance_features(head: np.ndarray, hands: np.ndarray, fps: float) -> np.ndarray | None:
     """Features ``(..., N_FEATURES)`` of windows of head ``(..., K, 3)`` and hands
     ``(..., K, 2, 3)`` positions (metres, z up, K = :func:`window_frames`, oldest first);
-    None for a single window whose head did not travel. Batched windows of a still head
-    get zero features."""
+    None for a single window whose head did not travel (batched windows of a still head
+    keep only their heights and the speed 0: there is no travel to turn into)."""
     head = np.asarray(head, dtype=np.float64)
     hands = np.asarray(hands, dtype=np.float64)
     idx = np.linspace(0, head.shape[-2] - 1, SAMPLES).round().astype(int)
@@ -61,8 +61,7 @@ def stance_features(head: np.ndarray, hands: np.ndarray, fps: float) -> np.ndarr
     seconds = (head.shape[-2] - 1) / fps
     speed = n / seconds
     feats = np.concatenate([head_rel, left, right], axis=-1).reshape(*head.shape[:-2], SAMPLES * 9)
-    out = np.concatenate([feats, speed], axis=-1)
-    return out
+    return np.concatenate([feats, speed], axis=-1)
 
 
 @dataclass(frozen=True)

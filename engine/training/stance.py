@@ -15,15 +15,17 @@ from pathlib import Path
 import numpy as np
 
 from engine import skeleton as sk
+from engine.constraints.gait import ANKLES
 from engine.errors import UserError
 from engine.kinematics.fk import fk_positions
 from engine.models.stance import N_FEATURES, StanceModel, stance_features, window_frames
+from engine.solver.gait import GaitParams
 
 HEAD = sk.JOINT_INDEX["upperneck"]
 HANDS = (sk.JOINT_INDEX["lwrist"], sk.JOINT_INDEX["rwrist"])
-ANKLES = (sk.JOINT_INDEX["lankle"], sk.JOINT_INDEX["rankle"])
-#: Least head speed (m/s) of a sample: the gait planner's ``on_speed``.
-MIN_SPEED = 0.35
+#: The gait planner's constants: its ``on_speed`` is a sample's least head speed, its arm
+#: swing window and speed the arm rule's the samples are compared with.
+GAIT = GaitParams()
 #: Least difference of the two ankles' horizontal speeds (m/s) for a clear stance label.
 MIN_GAP = 0.15
 
@@ -47,7 +49,7 @@ def _speed(p: np.ndarray, fps: float) -> np.ndarray:
     return v
 
 
-def clip_samples(pos: np.ndarray, fps: float, arm_lag_s: float = 0.1, arm_speed: float = 0.1) -> StanceSamples:
+def clip_samples(pos: np.ndarray, fps: float) -> StanceSamples:
     """Samples of one clip's joint positions ``(F, 22, 3)`` (metres, z up)."""
     k = window_frames(fps)
     n = len(pos) - k + 1
@@ -57,18 +59,18 @@ def clip_samples(pos: np.ndarray, fps: float, arm_lag_s: float = 0.1, arm_speed:
     hands = np.lib.stride_tricks.sliding_window_view(pos[:, list(HANDS)], k, axis=0).transpose(0, 3, 1, 2)
     ankles = _speed(pos[:, list(ANKLES)], fps)[k - 1 :]
     travel = np.linalg.norm(head[:, -1, :2] - head[:, 0, :2], axis=-1) * fps / (k - 1)
-    keep = (travel > MIN_SPEED) & (np.abs(ankles[:, 0] - ankles[:, 1]) > MIN_GAP)
+    keep = (travel > GAIT.on_speed) & (np.abs(ankles[:, 0] - ankles[:, 1]) > MIN_GAP)
     x = stance_features(head[keep], hands[keep], fps)
     assert x is not None
     y = (ankles[keep, 0] < ankles[keep, 1]).astype(np.float64)
     # the arm-swing rule of the gait planner, over the same frames
-    lag = max(1, round(arm_lag_s * fps))
+    lag = max(1, round(GAIT.arm_lag_s * fps))
     diff = pos[:, HANDS[0], :2] - pos[:, HANDS[1], :2]
     fwd = head[:, -1, :2] - head[:, 0, :2]
     fwd /= np.maximum(np.linalg.norm(fwd, axis=-1, keepdims=True), 1e-9)
     t = np.arange(k - 1, len(pos))
     rate = np.einsum("ij,ij->i", diff[t] - diff[np.maximum(t - lag, 0)], fwd) * fps / lag
-    arms = np.where(np.abs(rate) < arm_speed, -1, (rate > 0).astype(int))[keep]
+    arms = np.where(np.abs(rate) < GAIT.arm_speed, -1, (rate > 0).astype(int))[keep]
     return StanceSamples(x, y, arms.astype(np.float64))
 
 

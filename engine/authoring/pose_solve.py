@@ -117,15 +117,15 @@ class PoseSolving:
     def _inputs(self) -> tuple[list[Constraint], dict, dict]:
         """The solve's terms: the user's targets, the planted feet that no target moves, the
         scene's constraints; and the exact limb and rotation steps after it."""
-        targets, rules = pinned_targets(list(self.targets.values()), self.constraints, self.frame)
-        planted = self.planted
+        user = list(self.targets.values())
+        planted, shift = self.planted, None
         pelvis = self.pelvis_target()
         if pelvis is not None and self.pose.decoded is not None:
             # the latent solves the body standing where it stood; the pelvis step follows
             decoded = self.pose.decoded
             shift = decoded[0] - pelvis.position
-            targets = [replace(t, position=t.position + shift) for t in targets if t.joint != "root"]
             planted = {j: decoded[sk.JOINT_INDEX[j]].copy() for j in planted}
+        feet = []
         if self.options.plant_feet:
             moved = moved_feet(self.aimed)
             feet = [
@@ -133,10 +133,12 @@ class PoseSolving:
                 for j, p in planted.items()
                 if FOOT_OF[j] not in moved and j not in self.aimed
             ]
-            # a pin on a planted joint wins over its planting as over a target: the exact limb
-            # step would otherwise put the joint back where it was planted, away from the pin
-            feet, rules = pinned_targets(feet, rules, self.frame)
-            targets += feet
+        # a pin wins over a planted foot as over a target: the exact limb step would otherwise
+        # put a pinned ankle back where it was planted, away from the pin
+        targets, rules = pinned_targets(user + feet, self.constraints, self.frame)
+        if shift is not None:
+            n = len(user)
+            targets = [replace(t, position=t.position + shift) for t in targets[:n] if t.joint != "root"] + targets[n:]
         terms, reach, rotations = solve_inputs(targets)
         for t in terms:
             if t.dof == 6:

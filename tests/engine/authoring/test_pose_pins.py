@@ -98,3 +98,17 @@ def test_a_pin_on_a_planted_ankle_holds_it_where_the_pin_is_moved(vae):
     place = ankle + [0.0, -0.06, 0.0]  # 6 cm forward along the floor
     s.update_constraint(pin.name, {"position": place})
     assert np.linalg.norm(s.mode.pose.positions[J["lankle"]] - place) < 0.01
+
+
+def test_a_blending_pin_on_a_planted_ankle_aims_it_part_way(vae):
+    """On a frame of the pin's blend-in the planted ankle is aimed part of the way to the pin,
+    by the pin's activity there, as a target is (not all the way)."""
+    s = AuthoringSession(PoseMode(vae, 1.75))
+    ankle = s.mode.pose.positions[J["lankle"]].copy()
+    place = ankle + [0.0, -0.06, 0.0]
+    s.add_constraint("pin", joint="lankle", position=place, frames=(4, 30), blend_in=8)
+    (pin,) = s.mode.constraints
+    a = pin.activity(s.mode.frame)
+    assert 0.0 < a < 1.0
+    (foot,) = [t for t in s.mode._inputs()[0] if t.name == "target:lankle"]
+    np.testing.assert_allclose(foot.position, (1.0 - a) * ankle + a * place, atol=1e-9)

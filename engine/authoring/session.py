@@ -38,7 +38,7 @@ from engine.authoring.pose_mode import PoseMode
 from engine.authoring.session_constraints import constraints_event
 from engine.authoring.session_keys import KeyEditing
 from engine.authoring.session_pose import PoseEditing
-from engine.authoring.state import AuthoringState, capture, differences, put
+from engine.authoring.state import AuthoringState, capture, differences, holds_key, pose_on_key, put
 from engine.editing.constraint_list import ConstraintList
 from engine.errors import UserError
 from engine.motion.clip import Motion
@@ -235,20 +235,41 @@ class AuthoringSession(PoseEditing, KeyEditing):
     constraint_catalog = staticmethod(ConstraintList.catalog)  # the kinds users may add, with their fields
 
     def add_constraint(self, kind: str, **params: Any) -> None:
-        """Add a ``kind`` constraint with ``params`` and solve."""
-        self.edit(f"add {kind}", lambda: ConstraintList(self.mode.constraints).add(kind, **params), solve=True)
+        """Add a ``kind`` constraint with ``params`` and solve (:meth:`_constraint_edit`)."""
+        self._constraint_edit(f"add {kind}", lambda: ConstraintList(self.mode.constraints).add(kind, **params))
 
     def remove_constraint(self, name: str) -> None:
-        self.edit(f"remove {name}", lambda: ConstraintList(self.mode.constraints).remove(name), solve=True)
+        self._constraint_edit(f"remove {name}", lambda: ConstraintList(self.mode.constraints).remove(name))
 
     def update_constraint(self, name: str, changes: dict[str, Any]) -> None:
         """Set fields of the constraint ``name`` and solve (a slider's steps merge)."""
-        self.edit(
+        self._constraint_edit(
             f"edit {name}",
             lambda: ConstraintList(self.mode.constraints).edit(name, **changes),
             ("constraint", name, tuple(changes)),
-            solve=True,
         )
+
+    def _constraint_edit(self, text: str, change: Callable[[], Any], key: tuple | None = None) -> None:
+        """Run the constraint list's ``change()`` as the undo step ``text`` (``key`` merges
+        a slider's steps) and pose the character under the new list.
+
+        A constraint is part of the scene, not of a key's pose: on a key that the pose
+        holds (:func:`~engine.authoring.state.holds_key`: no unkeyed edit on it) the
+        key is posed again as the bake poses it on its frame
+        (:func:`~engine.authoring.state.pose_on_key`: its latent, where it stands, its
+        targets, the pins acting there winning over them), so the key stays what it
+        was and the frame shows what the bake gives there. Elsewhere (an in-between, a
+        key with an edit not keyed, no keys) the pose is solved again with the list."""
+        shown = self.key_at(self.frame)
+        if shown is None or shown.latent is None or not holds_key(self.mode, shown):
+            self.edit(text, change, key, solve=True)
+            return
+
+        def posed() -> None:
+            change()
+            pose_on_key(self.mode, shown)
+
+        self.edit(text, posed, key)
 
     # -- documents -----------------------------------------------------------------
     def open_scene(self, loaded: AuthoringScene) -> None:

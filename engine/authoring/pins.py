@@ -6,12 +6,14 @@ target goes from its place to the pin's by the pin's activity on that frame, and
 acts through that target only. The bake (:mod:`engine.authoring.bake`) poses its keys
 and in-betweens with it, and every solve of the pose window
 (:class:`engine.authoring.pose_solve.PoseSolving`) aims at the targets it gives, so a
-frame shows what the bake gives there.
+frame shows what the bake gives there. :func:`pinned_places` is the same rule for the
+planted feet's places.
 """
 
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -52,7 +54,7 @@ def held_pins(constraints: list[Constraint], frame: int) -> dict[str, tuple[np.n
 
 
 def pinned_targets(
-    targets: list[JointTarget], constraints: list[Constraint], frame: int
+    targets: list[JointTarget], constraints: list[Constraint], frame: int, shift: np.ndarray | None = None
 ) -> tuple[list[JointTarget], list[Constraint]]:
     """``targets`` with a pin on the same joint winning on ``frame``, and the constraints
     left to act there as terms (:func:`active_constraints`).
@@ -62,14 +64,36 @@ def pinned_targets(
     pin acts through the target only. Kept as a term against a target, a pin (weight 30)
     pulls the latent's joint to its place while the exact limb step puts the joint back
     on the target: the latent bends the trunk by 60-75 degrees for a wrist that does not
-    move."""
+    move. ``shift (3,)`` metres is added to each pin's place: the targets of a solve of
+    the body where it stood under a pelvis-only target come moved by the pelvis's
+    offset (:meth:`engine.authoring.pose_solve.PoseSolving._inputs`), and a pin's place
+    is moved with them."""
     pins = held_pins(constraints, frame)
     out, won = [], set()
     for t in targets:
         if t.joint in pins and t.active:
             place, a = pins[t.joint]
+            if shift is not None:
+                place = place + np.asarray(shift, float)
             t = dataclasses.replace(t, position=(1.0 - a) * np.asarray(t.position, float) + a * place)
             won.add(t.joint)
         out.append(t)
     rest = [c for c in constraints if not (isinstance(c, PinConstraint) and c.joint in won and c.joint in pins)]
     return out, active_constraints(rest, frame)
+
+
+def pinned_places(
+    places: Mapping[str, np.ndarray], constraints: list[Constraint], frame: int
+) -> tuple[dict[str, np.ndarray], set[str]]:
+    """``places`` (joint -> (3,) metres: where the planted feet stand) with a pin acting
+    on ``frame`` winning on its joint as over a target (:func:`pinned_targets`), and the
+    joints whose pin won."""
+    pins = held_pins(constraints, frame)
+    out = {}
+    for j, p in places.items():
+        p = np.asarray(p, float)
+        if j in pins:
+            place, a = pins[j]
+            p = (1.0 - a) * p + a * place
+        out[j] = p.copy()
+    return out, set(pins) & set(places)

@@ -24,7 +24,7 @@ from engine import skeleton as sk
 from engine.authoring.character import Character, Pose, yaw_quaternion
 from engine.authoring.keys import PLANTED
 from engine.authoring.pelvis_drag import pelvis_pose, toes_on
-from engine.authoring.pins import pinned_targets
+from engine.authoring.pins import pinned_places, pinned_targets
 from engine.authoring.pose_hold import arm_reach, free_arm_terms, free_arms, held_joints, hold_terms
 from engine.authoring.pose_options import SQUAT_FROM, PoseOptions
 from engine.authoring.pose_root import FOOT_OF, Stance, moved_feet, root_where, shortfall, stoop_targets
@@ -90,8 +90,17 @@ class PoseSolving:
         if t is None:
             return pose
         limbs = {x.index: x.position for x in self.aimed.values() if x.active and x.index in LIMBS}
+        feet, pinned = self.feet_places()
+        # a pinned ankle is reached as a target is: its toe goes where the foot's turn takes it
+        limbs.update({sk.JOINT_INDEX[j]: feet[j] for j in pinned if sk.JOINT_INDEX[j] in LIMBS})
         legs = self.character.decode(pose.latent, self.character.grounded()).local_rot
-        return pelvis_pose(pose, t.position, self.planted, self.character.skeleton.offsets, limbs, legs)
+        return pelvis_pose(pose, t.position, feet, self.character.skeleton.offsets, limbs, legs)
+
+    def feet_places(self) -> tuple[dict[str, np.ndarray], set[str]]:
+        """Where the planted foot joints are held on :attr:`frame`, metres: their planted
+        places, a pin acting there winning as over a target
+        (:func:`engine.authoring.pins.pinned_places`); and the joints a pin holds."""
+        return pinned_places(self.planted, self.constraints, self.frame)
 
     def _planted(self, pose: Pose) -> Pose:
         """``pose`` after a settle's latent and limb steps, with its feet put where they
@@ -108,7 +117,9 @@ class PoseSolving:
         if not self.options.plant_feet:
             return pose
         moved = moved_feet(self.aimed)
-        toes = {j: p for j, p in self.planted.items() if j.endswith("toe") and FOOT_OF[j] not in moved}
+        places, pinned = self.feet_places()
+        moved |= {FOOT_OF[j] for j in pinned if j.endswith("ankle")}  # a pinned ankle turns its foot itself
+        toes = {j: p for j, p in places.items() if j.endswith("toe") and FOOT_OF[j] not in moved}
         if not toes:
             return pose
         local, positions = toes_on(pose.local_rot, pose.root_pos, self.character.skeleton.offsets, toes)
@@ -121,10 +132,12 @@ class PoseSolving:
         planted, shift = self.planted, None
         pelvis = self.pelvis_target()
         if pelvis is not None and self.pose.decoded is not None:
-            # the latent solves the body standing where it stood; the pelvis step follows
+            # the latent solves the body standing where it stood, the user's targets and the
+            # pins' places moved by the pelvis's offset; the pelvis step follows
             decoded = self.pose.decoded
             shift = decoded[0] - pelvis.position
             planted = {j: decoded[sk.JOINT_INDEX[j]].copy() for j in planted}
+            user = [replace(t, position=t.position + shift) for t in user if t.joint != "root"]
         feet = []
         if self.options.plant_feet:
             moved = moved_feet(self.aimed)
@@ -135,10 +148,7 @@ class PoseSolving:
             ]
         # a pin wins over a planted foot as over a target: the exact limb step would otherwise
         # put a pinned ankle back where it was planted, away from the pin
-        targets, rules = pinned_targets(user + feet, self.constraints, self.frame)
-        if shift is not None:
-            n = len(user)
-            targets = [replace(t, position=t.position + shift) for t in targets[:n] if t.joint != "root"] + targets[n:]
+        targets, rules = pinned_targets(user + feet, self.constraints, self.frame, shift)
         terms, reach, rotations = solve_inputs(targets)
         for t in terms:
             if t.dof == 6:

@@ -112,3 +112,33 @@ def test_a_blending_pin_on_a_planted_ankle_aims_it_part_way(vae):
     assert 0.0 < a < 1.0
     (foot,) = [t for t in s.mode._inputs()[0] if t.name == "target:lankle"]
     np.testing.assert_allclose(foot.position, (1.0 - a) * ankle + a * place, atol=1e-9)
+
+
+def lower_pelvis_alone(s: AuthoringSession, down: float, events: int = 10) -> None:
+    start = s.hips_handle()
+    for k in range(1, events + 1):
+        s.drag_pelvis(start + [0.0, 0.0, -down * k / events])
+
+
+def test_a_pin_on_a_planted_ankle_holds_it_under_a_pelvis_only_target(vae):
+    """With the pelvis moved alone (Shift + drag on the hips) a pin on a planted ankle
+    wins over its planting as it does standing: the leg reaches the pin, and the latent,
+    which solves the body where it stood, aims the ankle at the pin moved by the pelvis's
+    shift, as it aims the user's targets."""
+    s = AuthoringSession(PoseMode(vae, 1.75))
+    p0 = s.mode.pose.positions.copy()
+    lower_pelvis_alone(s, 0.25)
+    place = p0[J["lankle"]] + [0.0, -0.08, 0.0]  # 8 cm forward along the floor
+    s.add_constraint("pin", joint="lankle", position=place)
+    p = s.mode.pose.positions
+    assert np.linalg.norm(p[J["lankle"]] - place) < 1e-3
+    assert p[0, 2] < p0[0, 2] - 0.2, "the pelvis stays down"
+    assert np.linalg.norm(p[J["rankle"]] - p0[J["rankle"]]) < 1e-6, "the other foot stays planted"
+    assert p[J["ltoe"], 2] < p0[J["ltoe"], 2] + 0.02, "the pinned foot's toe stays down"
+    pelvis = s.mode.pelvis_target()
+    assert pelvis is not None
+    shift = s.mode.pose.decoded[0] - pelvis.position
+    (foot,) = [t for t in s.mode._inputs()[0] if t.name == "target:lankle"]
+    np.testing.assert_allclose(foot.position, place + shift, atol=1e-9)
+    s.settle()
+    assert np.linalg.norm(s.mode.pose.positions[J["lankle"]] - place) < 1e-3

@@ -4,7 +4,8 @@
 :meth:`PoseSolving.solve` is one short solve from the current pose (a drag event):
 :data:`ITERATIONS` plain gradient steps with the root held where
 :func:`engine.authoring.pose_root.root_where` puts it, then the feet grounded and
-targeted wrists / ankles put exactly on their targets; while a targeted wrist or ankle is
+targeted wrists / ankles put exactly on their targets, the planted feet's toes on their
+places; while a targeted wrist or ankle is
 still beyond its limb's reach, up to ``PoseOptions.reach_rounds`` further rounds, a round
 that overshoots dropped. :meth:`PoseSolving.settle` is the offline, grounded solve for
 when a drag ends. The solve's terms are the user's targets, the planted feet no target
@@ -103,15 +104,16 @@ class PoseSolving:
         return pinned_places(self.planted, self.constraints, self.frame)
 
     def _planted(self, pose: Pose) -> Pose:
-        """``pose`` after a settle's latent and limb steps, with its feet put where they
-        are planted: under a pelvis-only target :meth:`pelvis_step`; else, with
-        ``options.plant_feet``, each planted foot's ankle turned so its toe joint is on its
-        place (the ankle is already, by the leg's two bones). The toe is a target of the
-        latent solve as the ankle is, but a soft one, and the settle's grounded solve
-        moves the root freely: it left a toe 4.2 cm off in the hand-to-knee reach, the
-        foot rolled on its planted ankle. The drag's events leave the toes to the latent
-        (within 1.5 cm there): turned on every event, the reach to the knee ended 0.3 cm
-        further from its goal and from a real pose."""
+        """``pose`` after a round of a drag event's or a settle's latent and limb steps,
+        with its feet put where they are planted: under a pelvis-only target
+        :meth:`pelvis_step`; else, with ``options.plant_feet``, each planted foot's ankle
+        turned so its toe joint is on its place (the ankle is already, by the leg's two
+        bones). The toe is a target of the latent solve as the ankle is, but a soft one:
+        left to the latent, a drag of a wrist moved a planted toe up to 2.5 cm (a reach
+        forward and down) and 3.9 cm in the benchmark's pick-up, the foot rolled on its
+        planted ankle, and the settle's grounded solve, which moves the root freely, 4.2
+        cm in the hand-to-knee reach. The turn moves no joint but the toe, and the next
+        round starts from the latent, which it leaves as it is."""
         if self.pelvis_target() is not None:
             return self.pelvis_step(pose)
         if not self.options.plant_feet:
@@ -192,7 +194,7 @@ class PoseSolving:
             solved = self._plain_steps(terms, ctx, where, reach, rotations, iterations)
             if stands:
                 solved = self._standing_height(solved, where, reach, rotations)
-            self.pose = self.pelvis_step(self._kept_trunk(solved, reach, rotations))
+            self.pose = self._planted(self._kept_trunk(solved, reach, rotations))
             short = self.shortfall()
             if round_ and short > gap + OVERSHOOT:
                 # the plain steps overshot (a folded body near the floor): keep the round before

@@ -4,8 +4,8 @@
 :meth:`PoseSolving.solve` is one short solve from the current pose (a drag event):
 :data:`ITERATIONS` plain gradient steps with the root held where
 :func:`engine.authoring.pose_root.root_where` puts it, then the feet grounded and
-targeted wrists / ankles put exactly on their targets, the planted feet's toes on their
-places; while a targeted wrist or ankle is
+targeted wrists / ankles put exactly on their targets, and, unless the root has a target,
+the planted feet's toes on their places; while a targeted wrist or ankle is
 still beyond its limb's reach, up to ``PoseOptions.reach_rounds`` further rounds, a round
 that overshoots dropped. :meth:`PoseSolving.settle` is the offline, grounded solve for
 when a drag ends. The solve's terms are the user's targets, the planted feet no target
@@ -104,19 +104,34 @@ class PoseSolving:
         return pinned_places(self.planted, self.constraints, self.frame)
 
     def _planted(self, pose: Pose) -> Pose:
-        """``pose`` after a round of a drag event's or a settle's latent and limb steps,
-        with its feet put where they are planted: under a pelvis-only target
-        :meth:`pelvis_step`; else, with ``options.plant_feet``, each planted foot's ankle
-        turned so its toe joint is on its place (the ankle is already, by the leg's two
-        bones). The toe is a target of the latent solve as the ankle is, but a soft one:
-        left to the latent, a drag of a wrist moved a planted toe up to 2.5 cm (a reach
-        forward and down) and 3.9 cm in the benchmark's pick-up, the foot rolled on its
-        planted ankle, and the settle's grounded solve, which moves the root freely, 4.2
-        cm in the hand-to-knee reach. The turn moves no joint but the toe, and the next
-        round starts from the latent, which it leaves as it is."""
+        """``pose`` after a round of a settle's latent and limb steps, with its feet put
+        where they are planted: under a pelvis-only target :meth:`pelvis_step`, else
+        :meth:`_toes_planted`."""
         if self.pelvis_target() is not None:
             return self.pelvis_step(pose)
-        if not self.options.plant_feet:
+        return self._toes_planted(pose)
+
+    def _toes_planted(self, pose: Pose) -> Pose:
+        """``pose`` (a drag event's or a settle's, its planted ankles on their places by
+        the legs' two bones) with, under ``options.plant_feet``, each planted foot's ankle
+        turned so its toe joint is on its place; ``pose`` itself under a pelvis-only
+        target (:meth:`pelvis_step` has put the feet). The toe is a target of the latent
+        solve as the ankle is, but a soft one: left to the latent, a drag of a wrist moved
+        a planted toe up to 2.5 cm (a reach forward and down) and 3.7 cm in the
+        benchmark's pick-up, the foot rolled on its planted ankle, and the settle's
+        grounded solve, which moves the root freely, 4.2 cm in the hand-to-knee reach.
+        The turn moves no joint but the toes and leaves the latent as it is.
+
+        A drag event (:meth:`solve`) turns the pose it ends on, after its rounds, while
+        the root has no target: turned on every round, a low reach's hips dragged back up
+        stood 2 cm lower; and while the pelvis crouches under a target on the root (the
+        hips dragged down or held), the turned toes keep the squat's feet from splaying
+        3 cm, which moves its knees 2.5 cm closer together, and a hand then dragged onto a
+        knee in the front view passed it by more than the 6 cm that lands it there, and
+        the hips dragged back up after a reach to the shin stood 2-5 cm short of standing
+        (0.6-3.6 cm without; both with real mouse events). The crouch's toes are left to
+        the latent (within 1.7 cm in the benchmark's squat)."""
+        if self.pelvis_target() is not None or not self.options.plant_feet:
             return pose
         moved = moved_feet(self.aimed)
         places, pinned = self.feet_places()
@@ -194,7 +209,7 @@ class PoseSolving:
             solved = self._plain_steps(terms, ctx, where, reach, rotations, iterations)
             if stands:
                 solved = self._standing_height(solved, where, reach, rotations)
-            self.pose = self._planted(self._kept_trunk(solved, reach, rotations))
+            self.pose = self.pelvis_step(self._kept_trunk(solved, reach, rotations))
             short = self.shortfall()
             if round_ and short > gap + OVERSHOOT:
                 # the plain steps overshot (a folded body near the floor): keep the round before
@@ -206,6 +221,9 @@ class PoseSolving:
         if best[1] is not None:
             # rounds near the floor can circle their target: the event ends on its closest one
             self.pose = best[1]
+        root = self.aimed.get("root")
+        if root is None or not root.active:
+            self.pose = self._toes_planted(self.pose)
         self._replant()
         self._solved = self.pose
         return self.pose

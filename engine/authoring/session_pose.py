@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from engine import skeleton as sk
+from engine.authoring.feet_apart import OTHER_FOOT, kept_apart
 from engine.authoring.jobs import SettleJob
 from engine.authoring.pins import holding_pins
 from engine.authoring.pose_mode import PoseMode
@@ -42,11 +43,17 @@ class PoseEditing(SessionCore):
         """Create or move the target on ``joint`` to ``position (3,)`` metres and solve (a
         pin holding the joint on this frame is moved there too, :meth:`holding_pin`);
         the hips (``root``) move the whole body and the pelvis's height instead
-        (:meth:`engine.authoring.pose_mode.PoseMode.drag_hips`)."""
+        (:meth:`engine.authoring.pose_mode.PoseMode.drag_hips`). An ankle or a toe
+        joint stops beside the other foot rather than crossing into it
+        (:func:`engine.authoring.feet_apart.kept_apart`)."""
         p = np.asarray(position, float)
         if joint == "root":
             self.edit("move body", lambda: self.mode.drag_hips(p), ("body", "root", "position"))
             return
+        if joint in OTHER_FOOT:
+            held = self.mode.targets.get(joint)
+            came = held.position if held is not None else self.mode.pose.positions[sk.JOINT_INDEX[joint]]
+            p = kept_apart(joint, p, self.mode.pose.positions, came)
         pin = self.holding_pin(joint)
 
         def change() -> None:

@@ -55,7 +55,12 @@ class PoseOptions:
         While both feet are planted, each solve starts with the pelvis moved horizontally
         by ``balance_gain`` of the distance from the centre of mass to the middle of the
         feet, so a body that leans or reaches keeps its weight over its feet (the planted
-        feet stay, the legs lean). A pelvis the user drags goes where it is dragged.
+        feet stay, the legs lean). A pelvis the user drags goes where it is dragged. The
+        step is cut short where it would take the shoulder of a reaching wrist's arm out
+        of that arm's reach of its target, as long as the centre of mass stays
+        :data:`engine.authoring.pose_root.REACH_MARGIN` inside the feet's support
+        (:func:`engine.authoring.pose_root.reach_share`): a far reach then leans the
+        trunk rather than pull the hand back from its goal.
     balance_gain : float
         Share of the centre of mass's distance from the feet that one solve corrects.
     balance_tolerance : float

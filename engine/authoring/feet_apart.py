@@ -6,7 +6,7 @@ is low enough to hit that foot and alongside it: within the dragged foot's lengt
 (ankle to toe tip) of the other foot's stretch from its heel to its toe tip. It passes
 freely over the other foot (:data:`CLEAR` above its ankle) and in front of or behind it,
 so a crossing step made round the other foot is still the user's to make; straight
-through it, the toe dragged onto the other foot put the two feet in one place. The pose
+through it, a toe dragged onto the other foot would put the two feet in one place. The pose
 window's drags (:meth:`engine.authoring.session_pose.PoseEditing.drag_joint`) place
 their foot targets with it.
 """

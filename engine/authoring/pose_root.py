@@ -314,8 +314,8 @@ def reach_share(stance: Stance, step: np.ndarray, low_points: Mapping[int, float
     the planted feet's support (:func:`support_hull`), else the least share that keeps
     it there (all of it when none does)."""
     share = within_arms(stance, step, low_points)
-    # taken whole, a reach 50 cm out ended 8.0 cm from its goal (50 cm forward 6.3), the
-    # pelvis 13-14 cm back and the centre of mass 8 cm inside the feet
+    # taken whole, the step leaves a reach 50 cm out 8.0 cm from its goal (50 cm forward
+    # 6.3), the pelvis 13-14 cm back and the centre of mass 8 cm inside the feet
     if share >= 1.0:
         return 1.0
     hull = support_hull(stance.planted)

@@ -116,7 +116,7 @@ class PoseSolving:
         the legs' two bones) with, under ``options.plant_feet``, each planted foot's ankle
         turned so its toe joint is on its place; ``pose`` itself under a pelvis-only
         target (:meth:`pelvis_step` has put the feet). The toe is a target of the latent
-        solve as the ankle is, but a soft one: left to the latent, a drag of a wrist moved
+        solve as the ankle is, but a soft one: left to the latent, a drag of a wrist moves
         a planted toe up to 2.5 cm (a reach forward and down) and 3.7 cm in the
         benchmark's pick-up, the foot rolled on its planted ankle, and the settle's
         grounded solve, which moves the root freely, 4.2 cm in the hand-to-knee reach.
@@ -124,12 +124,12 @@ class PoseSolving:
 
         A drag event (:meth:`solve`) turns the pose it ends on, after its rounds, while
         the root has no target: turned on every round, a low reach's hips dragged back up
-        stood 2 cm lower; and while the pelvis crouches under a target on the root (the
-        hips dragged down or held), the turned toes keep the squat's feet from splaying
-        3 cm, which moves its knees 2.5 cm closer together, and a hand then dragged onto a
-        knee in the front view passed it by more than the 6 cm that lands it there, and
-        the hips dragged back up after a reach to the shin stood 2-5 cm short of standing
-        (0.6-3.6 cm without; both with real mouse events). The crouch's toes are left to
+        stand 2 cm lower; and while the pelvis crouches under a target on the root (the
+        hips dragged down or held), turned toes keep the squat's feet from splaying 3 cm,
+        which moves its knees 2.5 cm closer together: a hand then dragged onto a knee in
+        the front view passes it by more than the 6 cm that lands it there, and the hips
+        dragged back up after a reach to the shin stand 2-5 cm short of standing (0.6-3.6
+        cm with the toes left; both with real mouse events). The crouch's toes are left to
         the latent (within 1.7 cm in the benchmark's squat)."""
         if self.pelvis_target() is not None or not self.options.plant_feet:
             return pose

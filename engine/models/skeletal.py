@@ -13,6 +13,7 @@ import torch
 from torch import nn
 
 from engine import skeleton as sk
+from engine.models import blocks
 
 #: Pooling groups per level: each entry lists the nodes of the level below it merges.
 POOL_GROUPS: tuple[tuple[tuple[int, ...], ...], ...] = (
@@ -49,8 +50,19 @@ def neighbour_mask(num_nodes: int, edges: set[tuple[int, int]], distance: int = 
     return reach
 
 
-#: Batch size from which :class:`SkeletalLinear` multiplies by its dense matrix.
-DENSE_FROM = 64
+#: Batch size from which :class:`SkeletalLinear` multiplies by its block-sparse matrix.
+BLOCKS_FROM = 64
+
+#: Cost of one more rectangle in a layer's block-sparse matrix (:mod:`engine.models.blocks`),
+#: in weight entries: about what one more product's call costs at a training batch.
+BLOCK_CALL_COST = 4000
+
+
+def unpool_source(groups: tuple[tuple[int, ...], ...]) -> tuple[int, ...]:
+    """The node of the coarser level every node copies when unpooling by ``groups``: the
+    rows of :func:`unpool_matrix`'s ones."""
+    owner = {m: g for g, members in enumerate(groups) for m in members}
+    return tuple(owner[m] for m in range(len(owner)))
 
 
 class SkeletalLinear(nn.Module):
@@ -61,38 +73,25 @@ class SkeletalLinear(nn.Module):
 
     # buffers (register_buffer in __init__), declared for the type checker
     gather: torch.Tensor
-    dense_src: torch.Tensor
-    dense_row: torch.Tensor
-    dense_node: torch.Tensor
 
     def __init__(self, node_mask: np.ndarray, c_in: int, c_out: int):
         super().__init__()
         n = node_mask.shape[0]
         self.n, self.c_in, self.c_out = n, c_in, c_out
-        neigh = [np.nonzero(node_mask[i])[0].tolist() for i in range(n)]
-        k = max(len(v) for v in neigh)
+        self.neigh = [np.nonzero(node_mask[i])[0].tolist() for i in range(n)]
+        k = max(len(v) for v in self.neigh)
         # one-hot gather matrix (N*K, N): a matmul's backward is a deterministic product,
         # where indexing's backward accumulates in an order that varies between threads
         gather = torch.zeros(n * k, n)
-        for i, v in enumerate(neigh):
+        for i, v in enumerate(self.neigh):
             for slot, j in enumerate(v):
                 gather[i * k + slot, j] = 1.0
         self.register_buffer("gather", gather, persistent=False)  # structure, rebuilt from the skeleton
         self.k = k
-        # where each used weight row lands in the dense (N*C_in, N, C_out) matrix of a batch pass
-        src: list[int] = []
-        dst: list[int] = []
-        node: list[int] = []
-        for i, v in enumerate(neigh):
-            for slot, j in enumerate(v):
-                src.extend(range((i * k + slot) * c_in, (i * k + slot + 1) * c_in))
-                dst.extend(range(j * c_in, (j + 1) * c_in))
-                node.extend([i] * c_in)
-        for name, values in (("dense_src", src), ("dense_row", dst), ("dense_node", node)):
-            self.register_buffer(name, torch.tensor(values, dtype=torch.long), persistent=False)
+        self._layouts: dict[tuple, tuple[blocks.BlockPlan, torch.Tensor, torch.Tensor]] = {}
         self.weight = nn.Parameter(torch.empty(n, k * c_in, c_out))
         self.bias = nn.Parameter(torch.zeros(n, c_out))
-        for i, v in enumerate(neigh):
+        for i, v in enumerate(self.neigh):
             bound = 1.0 / np.sqrt(len(v) * c_in)
             nn.init.uniform_(self.weight[i], -bound, bound)
             with torch.no_grad():
@@ -103,23 +102,59 @@ class SkeletalLinear(nn.Module):
         state_dict.pop(prefix + "index", None)
         super()._load_from_state_dict(state_dict, prefix, *args, **kwargs)
 
-    def dense_weight(self) -> torch.Tensor:
-        """The layer as one dense matrix ``(N*C_in, N*C_out)``: zeros where the mask
-        cuts a node off, each node's weights in its neighbours' rows."""
-        n, c_in, c_out = self.n, self.c_in, self.c_out
-        used = self.weight.reshape(n * self.k * c_in, c_out).index_select(0, self.dense_src)
-        dense = used.new_zeros(n * c_in, n, c_out).index_put((self.dense_row, self.dense_node), used)
-        return dense.reshape(n * c_in, n * c_out)
+    def layout(
+        self, source: tuple[int, ...] | None, device: torch.device
+    ) -> tuple[blocks.BlockPlan, torch.Tensor, torch.Tensor]:
+        """The layer's block-sparse matrix for input nodes ``source`` (see :meth:`forward`):
+        its plan, and where the weight rows land in the flat rectangles: row ``src[m]`` of
+        ``weight`` viewed ``(N*K*C_in, C_out)`` is added to row ``dst[m]`` of the
+        rectangles viewed ``(size / C_out, C_out)`` (two neighbours copying one coarse
+        node share a row: their weights add up)."""
+        key = (source, str(device))
+        if key not in self._layouts:
+            n, k, c_in, c_out = self.n, self.k, self.c_in, self.c_out
+            of = list(range(n)) if source is None else list(source)
+            reads = [sorted({of[j] for j in v}) for v in self.neigh]
+            nodes = blocks.plan_spans(reads, c_out, c_in, BLOCK_CALL_COST)
+            plan = blocks.BlockPlan.of(
+                [(a * c_out, b * c_out, h0 * c_in, h1 * c_in) for a, b, h0, h1 in nodes],
+                (max(of) + 1) * c_in,
+                n * c_out,
+            )
+            dst: list[np.ndarray] = []
+            src: list[np.ndarray] = []
+            channels = np.arange(c_in)
+            for (a, b, h0, _), (_, _, _, _, offset) in zip(nodes, plan.spans):
+                base, r = offset // c_out, b - a
+                for i in range(a, b):
+                    for slot, j in enumerate(self.neigh[i]):
+                        dst.append(base + ((of[j] - h0) * c_in + channels) * r + (i - a))
+                        src.append((i * k + slot) * c_in + channels)
+            self._layouts[key] = (
+                plan,
+                torch.as_tensor(np.concatenate(dst), device=device),
+                torch.as_tensor(np.concatenate(src), device=device),
+            )
+        return self._layouts[key]
 
-    def forward(self, x: torch.Tensor) -> torch.Tensor:
-        """``(B, N, C_in) -> (B, N, C_out)``. A batch of :data:`DENSE_FROM` poses or more
-        runs as one dense matrix product (a few times the arithmetic of the masked
-        weights, but one large GEMM instead of a per-node batch of small ones: the VAE's
-        training step 1.3x less CPU time); a few poses keep the per-node products."""
+    def forward(self, x: torch.Tensor, source: tuple[int, ...] | None = None) -> torch.Tensor:
+        """``(B, N_in, C_in) -> (B, N, C_out)``. ``source``: node ``j`` of the layer reads
+        input node ``source[j]`` (an unpooling copy, read in place instead of made; the
+        same sums); None: ``x`` has the layer's own nodes.
+
+        A batch of :data:`BLOCKS_FROM` poses or more runs as a few dense products over
+        the rectangles of the masked matrix (:mod:`engine.models.blocks`; an unpooling
+        folded in reads the coarse nodes, fewer of them); a few poses keep the per-node
+        products."""
         b = x.shape[0]
-        if b >= DENSE_FROM:
-            y = torch.addmm(self.bias.reshape(1, -1), x.reshape(b, self.n * self.c_in), self.dense_weight())
+        if b >= BLOCKS_FROM:
+            plan, dst, src = self.layout(source, x.device)
+            rows = self.weight.reshape(-1, self.c_out).index_select(0, src)
+            w = rows.new_zeros(plan.size // self.c_out, self.c_out).index_add_(0, dst, rows)
+            y = blocks.product(x.reshape(b, -1).contiguous(), w.reshape(-1), self.bias.reshape(-1), plan)
             return y.reshape(b, self.n, self.c_out)
+        if source is not None:
+            x = x.index_select(1, torch.as_tensor(source, device=x.device))
         gathered = torch.matmul(self.gather, x).reshape(b, self.n, self.k * self.c_in)  # (B, N, K*C)
         y = torch.bmm(gathered.transpose(0, 1), self.weight).transpose(0, 1)  # (B, N, C_out)
         return y + self.bias

@@ -1,0 +1,243 @@
+"""Block-sparse matrix products for the skeletal layers of a batch pass.
+
+A skeletal layer (:class:`engine.models.skeletal.SkeletalLinear`) maps a batch of node
+features ``x (B, N_in * C_in)`` to ``y (B, N_out * C_out)`` with a matrix that is zero
+wherever a node does not read another. That matrix is stored as a few dense rectangles:
+consecutive output nodes are grouped into *spans*, each span keeps the contiguous range of
+input nodes its nodes read, and a span is one BLAS product on column slices of ``x`` and
+``y`` (strided views: no gather, no copy). The grouping minimises ``entries + call_cost
+per span`` by dynamic programming over the node order (:func:`plan_spans`), as the
+solver's decoder does (:mod:`engine.models.fused`). Entries outside every rectangle are
+zero in the dense matrix, so the products are the same sums, with fewer zero terms.
+
+The three products a layer's gradients need are each other's derivatives, so each is an
+autograd function whose backward calls the other two: the forward product ``y = x S(w)``,
+the transposed product ``g S(w)^T`` (the input gradient) and the weight gradient (``x^T g``
+on the rectangles). A second-order gradient (the VAE's continuity loss) runs through them
+like through ``mm``. A backward computes only the gradients the running pass reads (as
+autograd's own products do), so the continuity loss's inner gradient with respect to the
+latent takes no weight gradients.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+
+@dataclass(frozen=True)
+class BlockPlan:
+    """The rectangles of one block-sparse matrix ``S (n_in, n_out)``, stored flat.
+
+    Attributes
+    ----------
+    spans : tuple of (r0, r1, c0, c1, offset)
+        ``y[:, r0:r1] = x[:, c0:c1] @ w[offset : offset + (c1 - c0) * (r1 - r0)]`` viewed
+        ``(c1 - c0, r1 - r0)``; the row ranges ``r0:r1`` partition the output features.
+    n_in, n_out : int
+        Input and output features.
+    size : int
+        Entries of the flat weight vector.
+    writes : tuple of bool
+        Per span: no earlier span reads its input columns, so the transposed product
+        writes them (the others add to what is there).
+    zero : tuple of (start, stop)
+        The input columns no writing span covers: zeroed before the transposed product.
+    """
+
+    spans: tuple[tuple[int, int, int, int, int], ...]
+    n_in: int
+    n_out: int
+    size: int
+    writes: tuple[bool, ...]
+    zero: tuple[tuple[int, int], ...]
+
+    @classmethod
+    def of(cls, spans: list[tuple[int, int, int, int]], n_in: int, n_out: int) -> BlockPlan:
+        """The plan of rectangles ``(r0, r1, c0, c1)`` (features), stored in that order."""
+        placed, offset = [], 0
+        touched = np.zeros(n_in, dtype=bool)
+        written = np.zeros(n_in, dtype=bool)
+        writes = []
+        for r0, r1, c0, c1 in spans:
+            placed.append((r0, r1, c0, c1, offset))
+            offset += (r1 - r0) * (c1 - c0)
+            writes.append(not touched[c0:c1].any())
+            if writes[-1]:
+                written[c0:c1] = True
+            touched[c0:c1] = True
+        edges = np.flatnonzero(np.diff(np.r_[False, ~written, False].astype(np.int8)))
+        zero = tuple((int(a), int(b)) for a, b in zip(edges[::2], edges[1::2]))
+        return cls(tuple(placed), n_in, n_out, offset, tuple(writes), zero)
+
+
+def plan_spans(
+    reads: list[list[int]], row_width: int, col_width: int, call_cost: float
+) -> list[tuple[int, int, int, int]]:
+    """Group consecutive output nodes into spans, each reading the contiguous range of
+    input nodes its nodes read, at least ``entries + call_cost`` summed over the spans.
+
+    Parameters
+    ----------
+    reads : list of list of int
+        Per output node, the input nodes it reads (not empty).
+    row_width, col_width : int
+        Features per output node and per input node (a rectangle of ``r`` output and ``c``
+        input nodes has ``r * row_width * c * col_width`` entries).
+    call_cost : float
+        Entries one more span must save to be worth its products.
+
+    Returns
+    -------
+    list of (first output node, stop, first input node, stop)
+    """
+    n = len(reads)
+    lo = [min(r) for r in reads]
+    hi = [max(r) + 1 for r in reads]
+    best, start = [0.0] + [np.inf] * n, [0] * (n + 1)
+    for e in range(1, n + 1):
+        c0, c1 = lo[e - 1], hi[e - 1]
+        for s in range(e - 1, -1, -1):
+            c0, c1 = min(c0, lo[s]), max(c1, hi[s])
+            cost = best[s] + (e - s) * row_width * (c1 - c0) * col_width + call_cost
+            if cost < best[e]:
+                best[e], start[e] = cost, s
+    spans, e = [], n
+    while e > 0:
+        s = start[e]
+        spans.append((s, e, min(lo[s:e]), max(hi[s:e])))
+        e = s
+    return spans[::-1]
+
+
+def _views(w: torch.Tensor, plan: BlockPlan):
+    for r0, r1, c0, c1, o in plan.spans:
+        yield r0, r1, c0, c1, w[o : o + (c1 - c0) * (r1 - r0)].view(c1 - c0, r1 - r0)
+
+
+def _product(x: torch.Tensor, w: torch.Tensor, bias: torch.Tensor | None, plan: BlockPlan) -> torch.Tensor:
+    y = x.new_empty(x.shape[0], plan.n_out)
+    for r0, r1, c0, c1, blk in _views(w, plan):
+        if bias is None:
+            torch.mm(x[:, c0:c1], blk, out=y[:, r0:r1])
+        else:
+            torch.addmm(bias[r0:r1], x[:, c0:c1], blk, out=y[:, r0:r1])
+    return y
+
+
+def _transposed(g: torch.Tensor, w: torch.Tensor, plan: BlockPlan) -> torch.Tensor:
+    gx = g.new_empty(g.shape[0], plan.n_in)
+    for a, b in plan.zero:
+        gx[:, a:b] = 0.0
+    for (r0, r1, c0, c1, blk), write in zip(_views(w, plan), plan.writes):
+        if write:
+            torch.mm(g[:, r0:r1], blk.t(), out=gx[:, c0:c1])
+        else:
+            gx[:, c0:c1].addmm_(g[:, r0:r1], blk.t())
+    return gx
+
+
+def _weight_grad(x: torch.Tensor, g: torch.Tensor, plan: BlockPlan) -> torch.Tensor:
+    gw = x.new_empty(plan.size)
+    for r0, r1, c0, c1, blk in _views(gw, plan):
+        torch.mm(x[:, c0:c1].t(), g[:, r0:r1], out=blk)
+    return gw
+
+
+def _wanted(t: torch.Tensor, needed: bool) -> bool:
+    """Whether the running backward pass reads the gradient of input ``t``: autograd's
+    own products skip a gradient no requested input depends on (``autograd.grad`` with
+    respect to the latent takes no weight gradients), and these do the same."""
+    if not needed:
+        return False
+    if t.grad_fn is None:
+        return True
+    try:
+        return bool(torch._C._will_engine_execute_node(t.grad_fn))
+    except RuntimeError:  # not inside a backward pass
+        return True
+
+
+def _rows(t: torch.Tensor) -> torch.Tensor:
+    """``t`` with unit column stride (a gradient may arrive broadcast)."""
+    return t if t.stride(-1) == 1 and t.stride(0) >= t.shape[1] else t.contiguous()
+
+
+class _Product(torch.autograd.Function):
+    @staticmethod
+    def forward(ctx, x, w, bias, plan):
+        ctx.save_for_backward(x, w)
+        ctx.plan = plan
+        return _product(x, w, bias, plan)
+
+    @staticmethod
+    def backward(ctx, gy):
+        x, w = ctx.saved_tensors
+        gy = _rows(gy)
+        need_x, need_w, need_b = ctx.needs_input_grad[:3]
+        gx = transposed(gy, w, ctx.plan) if _wanted(x, need_x) else None
+        gw = weight_grad(x, gy, ctx.plan) if _wanted(w, need_w) else None
+        gb = gy.sum(0) if need_b else None
+        return gx, gw, gb, None
+
+
+class _Transposed(torch.autograd.Function):
+    @staticmethod
+    def forward(ctx, g, w, plan):
+        ctx.save_for_backward(g, w)
+        ctx.plan = plan
+        return _transposed(g, w, plan)
+
+    @staticmethod
+    def backward(ctx, h):
+        g, w = ctx.saved_tensors
+        h = _rows(h)
+        need_g, need_w = ctx.needs_input_grad[:2]
+        gg = product(h, w, None, ctx.plan) if _wanted(g, need_g) else None
+        gw = weight_grad(h, g, ctx.plan) if _wanted(w, need_w) else None
+        return gg, gw, None
+
+
+class _WeightGrad(torch.autograd.Function):
+    @staticmethod
+    def forward(ctx, x, g, plan):
+        ctx.save_for_backward(x, g)
+        ctx.plan = plan
+        return _weight_grad(x, g, plan)
+
+    @staticmethod
+    def backward(ctx, hw):
+        x, g = ctx.saved_tensors
+        need_x, need_g = ctx.needs_input_grad[:2]
+        gx = transposed(g, hw, ctx.plan) if _wanted(x, need_x) else None
+        gg = product(x, hw, None, ctx.plan) if _wanted(g, need_g) else None
+        return gx, gg, None
+
+
+def _tracked(*ts: torch.Tensor | None) -> bool:
+    return torch.is_grad_enabled() and any(t is not None and t.requires_grad for t in ts)
+
+
+def product(x: torch.Tensor, w: torch.Tensor, bias: torch.Tensor | None, plan: BlockPlan) -> torch.Tensor:
+    """``x (B, n_in) @ S(w) + bias`` with ``S(w)`` the block-sparse matrix of ``plan`` and
+    the flat weights ``w (size,)``; ``x`` with unit column stride. ``(B, n_out)``."""
+    if _tracked(x, w, bias):
+        return _Product.apply(x, w, bias, plan)
+    return _product(x, w, bias, plan)
+
+
+def transposed(g: torch.Tensor, w: torch.Tensor, plan: BlockPlan) -> torch.Tensor:
+    """``g (B, n_out) @ S(w)^T``: the input gradient of :func:`product`. ``(B, n_in)``."""
+    if _tracked(g, w):
+        return _Transposed.apply(g, w, plan)
+    return _transposed(g, w, plan)
+
+
+def weight_grad(x: torch.Tensor, g: torch.Tensor, plan: BlockPlan) -> torch.Tensor:
+    """``x^T g`` on the rectangles of ``plan``, flat like the weights: the weight gradient
+    of :func:`product`. ``(size,)``."""
+    if _tracked(x, g):
+        return _WeightGrad.apply(x, g, plan)
+    return _weight_grad(x, g, plan)

@@ -216,6 +216,32 @@ class _WeightGrad(torch.autograd.Function):
         return gx, gg, None
 
 
+class _Scatter(torch.autograd.Function):
+    @staticmethod
+    def forward(ctx, rows, dst, src, back, unused, count):
+        ctx.back, ctx.unused = back, unused
+        return rows.new_zeros(count, rows.shape[1]).index_add_(0, dst, rows.index_select(0, src))
+
+    @staticmethod
+    def backward(ctx, g):
+        grad = g.index_select(0, ctx.back)
+        if ctx.unused.numel():
+            grad.index_fill_(0, ctx.unused, 0.0)
+        return grad, None, None, None, None, None
+
+
+def scatter_rows(
+    rows: torch.Tensor, dst: torch.Tensor, src: torch.Tensor, back: torch.Tensor, unused: torch.Tensor, count: int
+) -> torch.Tensor:
+    """``count`` rows of zeros with row ``src[m]`` of ``rows`` added to row ``dst[m]``
+    (a layer's weights into its rectangles; ``src`` lists each row once at most). Its
+    gradient is a gather, not a scatter: row ``r`` of ``rows`` takes the gradient of row
+    ``back[r]``, and the rows listed in ``unused`` (read by no rectangle) take zero."""
+    if _tracked(rows):
+        return _Scatter.apply(rows, dst, src, back, unused, count)
+    return rows.new_zeros(count, rows.shape[1]).index_add_(0, dst, rows.index_select(0, src))
+
+
 def _tracked(*ts: torch.Tensor | None) -> bool:
     return torch.is_grad_enabled() and any(t is not None and t.requires_grad for t in ts)
 

@@ -8,6 +8,10 @@ left: 22 -> 14 -> 9 -> 6 nodes here (root, two legs, two arms, torso).
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+
 import numpy as np
 import torch
 from torch import nn
@@ -65,6 +69,21 @@ def unpool_source(groups: tuple[tuple[int, ...], ...]) -> tuple[int, ...]:
     return tuple(owner[m] for m in range(len(owner)))
 
 
+@dataclass(frozen=True)
+class Layout:
+    """Where a :class:`SkeletalLinear`'s weights lie in its block-sparse matrix: the
+    plan, and row ``src[m]`` of ``weight`` viewed ``(N*K*C_in, C_out)`` added to row
+    ``dst[m]`` of the rectangles viewed ``(size / C_out, C_out)`` (two neighbours that
+    copy one coarse node share a row: their weights add up); ``back`` the rectangle row
+    of every weight row, ``unused`` the weight rows no rectangle reads (padding slots)."""
+
+    plan: blocks.BlockPlan
+    dst: torch.Tensor
+    src: torch.Tensor
+    back: torch.Tensor
+    unused: torch.Tensor
+
+
 class SkeletalLinear(nn.Module):
     """Linear map on per-node features where node i only reads its graph neighbours.
 
@@ -88,7 +107,8 @@ class SkeletalLinear(nn.Module):
                 gather[i * k + slot, j] = 1.0
         self.register_buffer("gather", gather, persistent=False)  # structure, rebuilt from the skeleton
         self.k = k
-        self._layouts: dict[tuple, tuple[blocks.BlockPlan, torch.Tensor, torch.Tensor]] = {}
+        self._layouts: dict[tuple, Layout] = {}
+        self._reuse: dict[tuple, torch.Tensor] | None = None
         self.weight = nn.Parameter(torch.empty(n, k * c_in, c_out))
         self.bias = nn.Parameter(torch.zeros(n, c_out))
         for i, v in enumerate(self.neigh):
@@ -102,14 +122,8 @@ class SkeletalLinear(nn.Module):
         state_dict.pop(prefix + "index", None)
         super()._load_from_state_dict(state_dict, prefix, *args, **kwargs)
 
-    def layout(
-        self, source: tuple[int, ...] | None, device: torch.device
-    ) -> tuple[blocks.BlockPlan, torch.Tensor, torch.Tensor]:
-        """The layer's block-sparse matrix for input nodes ``source`` (see :meth:`forward`):
-        its plan, and where the weight rows land in the flat rectangles: row ``src[m]`` of
-        ``weight`` viewed ``(N*K*C_in, C_out)`` is added to row ``dst[m]`` of the
-        rectangles viewed ``(size / C_out, C_out)`` (two neighbours copying one coarse
-        node share a row: their weights add up)."""
+    def layout(self, source: tuple[int, ...] | None, device: torch.device) -> Layout:
+        """The layer's block-sparse matrix for input nodes ``source`` (see :meth:`forward`)."""
         key = (source, str(device))
         if key not in self._layouts:
             n, k, c_in, c_out = self.n, self.k, self.c_in, self.c_out
@@ -130,12 +144,30 @@ class SkeletalLinear(nn.Module):
                     for slot, j in enumerate(self.neigh[i]):
                         dst.append(base + ((of[j] - h0) * c_in + channels) * r + (i - a))
                         src.append((i * k + slot) * c_in + channels)
-            self._layouts[key] = (
-                plan,
-                torch.as_tensor(np.concatenate(dst), device=device),
-                torch.as_tensor(np.concatenate(src), device=device),
+            d, s_ = np.concatenate(dst), np.concatenate(src)
+            back = np.zeros(n * k * c_in, dtype=np.int64)
+            back[s_] = d
+            unused = np.setdiff1d(np.arange(n * k * c_in), s_)
+            self._layouts[key] = Layout(
+                plan, *(torch.as_tensor(a, dtype=torch.long, device=device) for a in (d, s_, back, unused))
             )
         return self._layouts[key]
+
+    def rectangles(self, source: tuple[int, ...] | None, device: torch.device) -> tuple[Layout, torch.Tensor]:
+        """The layout for ``source`` and the weights in its rectangles, flat (made once per
+        :func:`reusing_rectangles` block, or per call)."""
+        layout = self.layout(source, device)
+        key = (source, str(device), torch.is_grad_enabled())
+        if self._reuse is not None and key in self._reuse:
+            return layout, self._reuse[key]
+        c_out = self.c_out
+        rows = self.weight.reshape(-1, c_out)
+        w = blocks.scatter_rows(
+            rows, layout.dst, layout.src, layout.back, layout.unused, layout.plan.size // c_out
+        ).reshape(-1)
+        if self._reuse is not None:
+            self._reuse[key] = w
+        return layout, w
 
     def forward(self, x: torch.Tensor, source: tuple[int, ...] | None = None) -> torch.Tensor:
         """``(B, N_in, C_in) -> (B, N, C_out)``. ``source``: node ``j`` of the layer reads
@@ -148,16 +180,30 @@ class SkeletalLinear(nn.Module):
         products."""
         b = x.shape[0]
         if b >= BLOCKS_FROM:
-            plan, dst, src = self.layout(source, x.device)
-            rows = self.weight.reshape(-1, self.c_out).index_select(0, src)
-            w = rows.new_zeros(plan.size // self.c_out, self.c_out).index_add_(0, dst, rows)
-            y = blocks.product(x.reshape(b, -1).contiguous(), w.reshape(-1), self.bias.reshape(-1), plan)
+            layout, w = self.rectangles(source, x.device)
+            y = blocks.product(x.reshape(b, -1).contiguous(), w, self.bias.reshape(-1), layout.plan)
             return y.reshape(b, self.n, self.c_out)
         if source is not None:
             x = x.index_select(1, torch.as_tensor(source, device=x.device))
         gathered = torch.matmul(self.gather, x).reshape(b, self.n, self.k * self.c_in)  # (B, N, K*C)
         y = torch.bmm(gathered.transpose(0, 1), self.weight).transpose(0, 1)  # (B, N, C_out)
         return y + self.bias
+
+
+@contextmanager
+def reusing_rectangles(module: nn.Module) -> Iterator[None]:
+    """Within the block, every :class:`SkeletalLinear` of ``module`` lays out its weights
+    in its rectangles once and reuses them (a decoder run twice per training step, as
+    the VAE's continuity loss does, then makes them, and takes their gradient, once).
+    The weights must not change inside the block."""
+    layers = [m for m in module.modules() if isinstance(m, SkeletalLinear)]
+    for layer in layers:
+        layer._reuse = {}
+    try:
+        yield
+    finally:
+        for layer in layers:
+            layer._reuse = None
 
 
 def pool_matrix(groups: tuple[tuple[int, ...], ...], n_in: int) -> torch.Tensor:

@@ -23,6 +23,7 @@ from engine.errors import UserError
 from engine.kinematics import quaternion as Q
 from engine.kinematics.features import root_space_fk
 from engine.models.loading import load_checkpoint, load_vae
+from engine.models.skeletal import reusing_rectangles
 from engine.models.vae import PoseVAE, VAEConfig, pose_distance
 from engine.training.common import (
     CurveLog,
@@ -103,6 +104,10 @@ class VAEObjective(nn.Module):
         self.vae, self.cfg, self.anchor = vae, cfg, anchor
 
     def forward(self, b: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
+        with reusing_rectangles(self.vae):  # the decoder runs twice: its weights laid out once
+            return self._terms(b)
+
+    def _terms(self, b: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
         vae, cfg = self.vae, self.cfg
         if cfg.train_encoder:
             mu, logvar = vae.encode(b["dq"])

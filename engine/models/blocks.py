@@ -3,11 +3,13 @@
 A skeletal layer (:class:`engine.models.skeletal.SkeletalLinear`) maps a batch of node
 features ``x (B, N_in * C_in)`` to ``y (B, N_out * C_out)`` with a matrix that is zero
 wherever a node does not read another. That matrix is stored as a few dense rectangles:
-consecutive output nodes are grouped into *spans*, each span keeps the contiguous range of
-input nodes its nodes read, and a span is one BLAS product on column slices of ``x`` and
-``y`` (strided views: no gather, no copy). The grouping minimises ``entries + call_cost
-per span`` by dynamic programming over the node order (:func:`plan_spans`), as the
-solver's decoder does (:mod:`engine.models.fused`). Entries outside every rectangle are
+consecutive output nodes are grouped, the input nodes a group reads are covered by one or
+more contiguous ranges, and each (group, range) rectangle is one BLAS product on column
+slices of ``x`` and ``y`` (strided views: no gather, no copy), the first of a group
+setting its columns of ``y`` and the others adding to them. The grouping and the ranges
+minimise ``entries + call_cost per rectangle`` by dynamic programming over the node order
+(:func:`plan_rectangles`), as the solver's decoder groups its runs
+(:mod:`engine.models.fused`). Entries outside every rectangle are
 zero in the dense matrix, so the products are the same sums, with fewer zero terms.
 
 The three products a layer's gradients need are each other's derivatives, so each is an
@@ -34,12 +36,16 @@ class BlockPlan:
     Attributes
     ----------
     spans : tuple of (r0, r1, c0, c1, offset)
-        ``y[:, r0:r1] = x[:, c0:c1] @ w[offset : offset + (c1 - c0) * (r1 - r0)]`` viewed
-        ``(c1 - c0, r1 - r0)``; the row ranges ``r0:r1`` partition the output features.
+        ``y[:, r0:r1] += x[:, c0:c1] @ w[offset : offset + (c1 - c0) * (r1 - r0)]`` viewed
+        ``(c1 - c0, r1 - r0)``; the row ranges cover the output features, and a span's rows
+        are either an earlier span's or no earlier span's.
     n_in, n_out : int
         Input and output features.
     size : int
         Entries of the flat weight vector.
+    sets : tuple of bool
+        Per span: its rows are no earlier span's, so the product sets them (bias
+        included); the others add to them.
     writes : tuple of bool
         Per span: no earlier span reads its input columns, so the transposed product
         writes them (the others add to what is there).
@@ -51,6 +57,7 @@ class BlockPlan:
     n_in: int
     n_out: int
     size: int
+    sets: tuple[bool, ...]
     writes: tuple[bool, ...]
     zero: tuple[tuple[int, int], ...]
 
@@ -58,26 +65,54 @@ class BlockPlan:
     def of(cls, spans: list[tuple[int, int, int, int]], n_in: int, n_out: int) -> BlockPlan:
         """The plan of rectangles ``(r0, r1, c0, c1)`` (features), stored in that order."""
         placed, offset = [], 0
+        rows_seen: set[tuple[int, int]] = set()
+        rows_touched = np.zeros(n_out, dtype=bool)
         touched = np.zeros(n_in, dtype=bool)
         written = np.zeros(n_in, dtype=bool)
-        writes = []
+        sets, writes = [], []
         for r0, r1, c0, c1 in spans:
             placed.append((r0, r1, c0, c1, offset))
             offset += (r1 - r0) * (c1 - c0)
+            sets.append((r0, r1) not in rows_seen)
+            if sets[-1] and rows_touched[r0:r1].any():
+                raise ValueError(f"rows {r0}:{r1} overlap an earlier span's without being its rows")
+            rows_seen.add((r0, r1))
+            rows_touched[r0:r1] = True
             writes.append(not touched[c0:c1].any())
             if writes[-1]:
                 written[c0:c1] = True
             touched[c0:c1] = True
+        if not rows_touched.all():
+            raise ValueError("the spans leave output rows uncovered")
         edges = np.flatnonzero(np.diff(np.r_[False, ~written, False].astype(np.int8)))
         zero = tuple((int(a), int(b)) for a, b in zip(edges[::2], edges[1::2]))
-        return cls(tuple(placed), n_in, n_out, offset, tuple(writes), zero)
+        return cls(tuple(placed), n_in, n_out, offset, tuple(sets), tuple(writes), zero)
 
 
-def plan_spans(
+def _cover(cols: list[int], entries_per_col: int, call_cost: float) -> tuple[float, list[tuple[int, int]]]:
+    """Cover the sorted node indices ``cols`` by ranges ``(first, stop)``, at least
+    ``entries_per_col * width + call_cost`` summed over the ranges."""
+    m = len(cols)
+    best, start = [0.0] + [np.inf] * m, [0] * (m + 1)
+    for t in range(1, m + 1):
+        for u in range(t):
+            cost = best[u] + entries_per_col * (cols[t - 1] - cols[u] + 1) + call_cost
+            if cost < best[t]:
+                best[t], start[t] = cost, u
+    ranges, t = [], m
+    while t > 0:
+        u = start[t]
+        ranges.append((cols[u], cols[t - 1] + 1))
+        t = u
+    return best[m], ranges[::-1]
+
+
+def plan_rectangles(
     reads: list[list[int]], row_width: int, col_width: int, call_cost: float
 ) -> list[tuple[int, int, int, int]]:
-    """Group consecutive output nodes into spans, each reading the contiguous range of
-    input nodes its nodes read, at least ``entries + call_cost`` summed over the spans.
+    """Cover the node blocks that output nodes read by rectangles: consecutive output
+    nodes grouped, and each group's input nodes by one or more ranges, at least
+    ``entries + call_cost`` summed over the rectangles.
 
     Parameters
     ----------
@@ -87,29 +122,30 @@ def plan_spans(
         Features per output node and per input node (a rectangle of ``r`` output and ``c``
         input nodes has ``r * row_width * c * col_width`` entries).
     call_cost : float
-        Entries one more span must save to be worth its products.
+        Entries one more rectangle must save to be worth its products.
 
     Returns
     -------
     list of (first output node, stop, first input node, stop)
+        Grouped by output nodes, in order.
     """
     n = len(reads)
-    lo = [min(r) for r in reads]
-    hi = [max(r) + 1 for r in reads]
-    best, start = [0.0] + [np.inf] * n, [0] * (n + 1)
+    best: list[float] = [0.0] + [np.inf] * n
+    choice: list[tuple[int, list[tuple[int, int]]]] = [(0, [])] * (n + 1)
     for e in range(1, n + 1):
-        c0, c1 = lo[e - 1], hi[e - 1]
+        used: set[int] = set()
         for s in range(e - 1, -1, -1):
-            c0, c1 = min(c0, lo[s]), max(c1, hi[s])
-            cost = best[s] + (e - s) * row_width * (c1 - c0) * col_width + call_cost
-            if cost < best[e]:
-                best[e], start[e] = cost, s
-    spans, e = [], n
+            used.update(reads[s])
+            cost, ranges = _cover(sorted(used), (e - s) * row_width * col_width, call_cost)
+            if best[s] + cost < best[e]:
+                best[e], choice[e] = best[s] + cost, (s, ranges)
+    rects: list[tuple[int, int, int, int]] = []
+    e = n
     while e > 0:
-        s = start[e]
-        spans.append((s, e, min(lo[s:e]), max(hi[s:e])))
+        s, ranges = choice[e]
+        rects[:0] = [(s, e, c0, c1) for c0, c1 in ranges]
         e = s
-    return spans[::-1]
+    return rects
 
 
 def _views(w: torch.Tensor, plan: BlockPlan):
@@ -119,8 +155,10 @@ def _views(w: torch.Tensor, plan: BlockPlan):
 
 def _product(x: torch.Tensor, w: torch.Tensor, bias: torch.Tensor | None, plan: BlockPlan) -> torch.Tensor:
     y = x.new_empty(x.shape[0], plan.n_out)
-    for r0, r1, c0, c1, blk in _views(w, plan):
-        if bias is None:
+    for (r0, r1, c0, c1, blk), first in zip(_views(w, plan), plan.sets):
+        if not first:
+            y[:, r0:r1].addmm_(x[:, c0:c1], blk)
+        elif bias is None:
             torch.mm(x[:, c0:c1], blk, out=y[:, r0:r1])
         else:
             torch.addmm(bias[r0:r1], x[:, c0:c1], blk, out=y[:, r0:r1])

@@ -59,7 +59,7 @@ BLOCKS_FROM = 64
 
 #: Cost of one more rectangle in a layer's block-sparse matrix (:mod:`engine.models.blocks`),
 #: in weight entries: about what one more product's call costs at a training batch.
-BLOCK_CALL_COST = 4000
+BLOCK_CALL_COST = 2000
 
 
 def unpool_source(groups: tuple[tuple[int, ...], ...]) -> tuple[int, ...]:
@@ -129,7 +129,7 @@ class SkeletalLinear(nn.Module):
             n, k, c_in, c_out = self.n, self.k, self.c_in, self.c_out
             of = list(range(n)) if source is None else list(source)
             reads = [sorted({of[j] for j in v}) for v in self.neigh]
-            nodes = blocks.plan_spans(reads, c_out, c_in, BLOCK_CALL_COST)
+            nodes = blocks.plan_rectangles(reads, c_out, c_in, BLOCK_CALL_COST)
             plan = blocks.BlockPlan.of(
                 [(a * c_out, b * c_out, h0 * c_in, h1 * c_in) for a, b, h0, h1 in nodes],
                 (max(of) + 1) * c_in,
@@ -138,12 +138,13 @@ class SkeletalLinear(nn.Module):
             dst: list[np.ndarray] = []
             src: list[np.ndarray] = []
             channels = np.arange(c_in)
-            for (a, b, h0, _), (_, _, _, _, offset) in zip(nodes, plan.spans):
+            for (a, b, h0, h1), (_, _, _, _, offset) in zip(nodes, plan.spans):
                 base, r = offset // c_out, b - a
                 for i in range(a, b):
                     for slot, j in enumerate(self.neigh[i]):
-                        dst.append(base + ((of[j] - h0) * c_in + channels) * r + (i - a))
-                        src.append((i * k + slot) * c_in + channels)
+                        if h0 <= of[j] < h1:
+                            dst.append(base + ((of[j] - h0) * c_in + channels) * r + (i - a))
+                            src.append((i * k + slot) * c_in + channels)
             d, s_ = np.concatenate(dst), np.concatenate(src)
             back = np.zeros(n * k * c_in, dtype=np.int64)
             back[s_] = d

@@ -72,14 +72,18 @@ def test_skeletal_block_batch_pass_equals_the_per_node_pass(level, c_in, c_out):
     assert grads[0][1].abs().sum() > 0
 
 
-@pytest.mark.parametrize("level, unpooled", [(0, False), (0, True), (2, True)])
-def test_skeletal_block_products_first_and_second_order_gradients(monkeypatch, level, unpooled):
+@pytest.mark.parametrize(
+    "level, unpooled, call_cost", [(0, False, 0.0), (0, True, 0.0), (2, True, 0.0), (0, False, 1e9)]
+)
+def test_skeletal_block_products_first_and_second_order_gradients(monkeypatch, level, unpooled, call_cost):
     """The block-sparse products' gradients, and the gradients of those (the continuity
     loss's second order), against finite differences in float64; an unpooling read in
-    place gives what the per-node pass gives on the unpooled input."""
+    place gives what the per-node pass gives on the unpooled input. Call cost 0: a
+    rectangle per node and input range (several add to one node's outputs); 1e9: one."""
     from engine.models import skeletal
 
     monkeypatch.setattr(skeletal, "BLOCKS_FROM", 2)
+    monkeypatch.setattr(skeletal, "BLOCK_CALL_COST", call_cost)
     n = level_sizes()[level]
     source = skeletal.unpool_source(skeletal.POOL_GROUPS[level]) if unpooled else None
     layer = SkeletalLinear(neighbour_mask(n, level_edges()[level], 2), 2, 3).double()
@@ -97,6 +101,8 @@ def test_skeletal_block_products_first_and_second_order_gradients(monkeypatch, l
     unpooled_x = x if source is None else x[:, list(source)]
     per_node = torch.cat([layer(unpooled_x[i : i + 1]) for i in range(3)])
     torch.testing.assert_close(f(x, w, layer.bias), per_node, rtol=1e-12, atol=1e-12)
+    plan = layer.layout(source, x.device).plan
+    assert (len(plan.spans) > n) if call_cost == 0 else (len(plan.spans) == 1)
 
 
 def test_vae_shapes_and_unit_quaternions(synthetic_motion):

@@ -148,14 +148,20 @@ def plan_rectangles(
     return rects
 
 
-def _views(w: torch.Tensor, plan: BlockPlan):
-    for r0, r1, c0, c1, o in plan.spans:
-        yield r0, r1, c0, c1, w[o : o + (c1 - c0) * (r1 - r0)].view(c1 - c0, r1 - r0)
+def _blocks(w: torch.Tensor, plan: BlockPlan, transpose: bool = False) -> list[torch.Tensor]:
+    """The rectangles of the flat weights ``w`` as ``(c1 - c0, r1 - r0)`` views, or
+    transposed (one strided view each)."""
+    if not w.is_contiguous():
+        w = w.contiguous()
+    base = w.storage_offset()
+    if transpose:
+        return [w.as_strided((r1 - r0, c1 - c0), (1, r1 - r0), base + o) for r0, r1, c0, c1, o in plan.spans]
+    return [w.as_strided((c1 - c0, r1 - r0), (r1 - r0, 1), base + o) for r0, r1, c0, c1, o in plan.spans]
 
 
 def _product(x: torch.Tensor, w: torch.Tensor, bias: torch.Tensor | None, plan: BlockPlan) -> torch.Tensor:
     y = x.new_empty(x.shape[0], plan.n_out)
-    for (r0, r1, c0, c1, blk), first in zip(_views(w, plan), plan.sets):
+    for (r0, r1, c0, c1, _), blk, first in zip(plan.spans, _blocks(w, plan), plan.sets):
         if not first:
             y[:, r0:r1].addmm_(x[:, c0:c1], blk)
         elif bias is None:
@@ -169,18 +175,19 @@ def _transposed(g: torch.Tensor, w: torch.Tensor, plan: BlockPlan) -> torch.Tens
     gx = g.new_empty(g.shape[0], plan.n_in)
     for a, b in plan.zero:
         gx[:, a:b] = 0.0
-    for (r0, r1, c0, c1, blk), write in zip(_views(w, plan), plan.writes):
+    for (r0, r1, c0, c1, _), blk, write in zip(plan.spans, _blocks(w, plan, transpose=True), plan.writes):
         if write:
-            torch.mm(g[:, r0:r1], blk.t(), out=gx[:, c0:c1])
+            torch.mm(g[:, r0:r1], blk, out=gx[:, c0:c1])
         else:
-            gx[:, c0:c1].addmm_(g[:, r0:r1], blk.t())
+            gx[:, c0:c1].addmm_(g[:, r0:r1], blk)
     return gx
 
 
 def _weight_grad(x: torch.Tensor, g: torch.Tensor, plan: BlockPlan) -> torch.Tensor:
     gw = x.new_empty(plan.size)
-    for r0, r1, c0, c1, blk in _views(gw, plan):
-        torch.mm(x[:, c0:c1].t(), g[:, r0:r1], out=blk)
+    xt = x.t()
+    for (r0, r1, c0, c1, _), blk in zip(plan.spans, _blocks(gw, plan)):
+        torch.mm(xt[c0:c1], g[:, r0:r1], out=blk)
     return gw
 
 

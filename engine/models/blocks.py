@@ -91,18 +91,25 @@ class BlockPlan:
 
 def _cover(cols: list[int], entries_per_col: int, call_cost: float) -> tuple[float, list[tuple[int, int]]]:
     """Cover the sorted node indices ``cols`` by ranges ``(first, stop)``, at least
-    ``entries_per_col * width + call_cost`` summed over the ranges."""
-    m = len(cols)
+    ``entries_per_col * width + call_cost`` summed over the ranges. A range ends only
+    where ``cols`` has a gap (splitting consecutive nodes saves nothing)."""
+    runs: list[list[int]] = []
+    for c in cols:
+        if runs and c == runs[-1][1]:
+            runs[-1][1] = c + 1
+        else:
+            runs.append([c, c + 1])
+    m = len(runs)
     best, start = [0.0] + [np.inf] * m, [0] * (m + 1)
     for t in range(1, m + 1):
         for u in range(t):
-            cost = best[u] + entries_per_col * (cols[t - 1] - cols[u] + 1) + call_cost
+            cost = best[u] + entries_per_col * (runs[t - 1][1] - runs[u][0]) + call_cost
             if cost < best[t]:
                 best[t], start[t] = cost, u
     ranges, t = [], m
     while t > 0:
         u = start[t]
-        ranges.append((cols[u], cols[t - 1] + 1))
+        ranges.append((runs[u][0], runs[t - 1][1]))
         t = u
     return best[m], ranges[::-1]
 

@@ -268,30 +268,43 @@ class _WeightGrad(torch.autograd.Function):
         return gx, gg, None
 
 
+def _scatter(rows: torch.Tensor, passes: tuple[tuple[torch.Tensor, torch.Tensor], ...], count: int) -> torch.Tensor:
+    out = rows.new_zeros(count, rows.shape[1])
+    for dst, src in passes:
+        out.index_add_(0, dst, rows.index_select(0, src))
+    return out
+
+
 class _Scatter(torch.autograd.Function):
     @staticmethod
-    def forward(ctx, rows, dst, src, back, unused, count):
+    def forward(ctx, rows, passes, back, unused, count):
         ctx.back, ctx.unused = back, unused
-        return rows.new_zeros(count, rows.shape[1]).index_add_(0, dst, rows.index_select(0, src))
+        return _scatter(rows, passes, count)
 
     @staticmethod
     def backward(ctx, g):
         grad = g.index_select(0, ctx.back)
         if ctx.unused.numel():
             grad.index_fill_(0, ctx.unused, 0.0)
-        return grad, None, None, None, None, None
+        return grad, None, None, None, None
 
 
 def scatter_rows(
-    rows: torch.Tensor, dst: torch.Tensor, src: torch.Tensor, back: torch.Tensor, unused: torch.Tensor, count: int
+    rows: torch.Tensor,
+    passes: tuple[tuple[torch.Tensor, torch.Tensor], ...],
+    back: torch.Tensor,
+    unused: torch.Tensor,
+    count: int,
 ) -> torch.Tensor:
-    """``count`` rows of zeros with row ``src[m]`` of ``rows`` added to row ``dst[m]``
-    (a layer's weights into its rectangles; ``src`` lists each row once at most). Its
-    gradient is a gather, not a scatter: row ``r`` of ``rows`` takes the gradient of row
+    """``count`` rows of zeros with row ``src[m]`` of ``rows`` added to row ``dst[m]`` for
+    every ``(dst, src)`` of ``passes`` in turn (a layer's weights into its rectangles). No
+    pass names a row of the result twice, so the sums are made in one order on any
+    device (atomic adds to one row would not be). Every row of ``rows`` is read once at
+    most, so the gradient is a gather: row ``r`` of ``rows`` takes the gradient of row
     ``back[r]``, and the rows listed in ``unused`` (read by no rectangle) take zero."""
     if _tracked(rows):
-        return _Scatter.apply(rows, dst, src, back, unused, count)
-    return rows.new_zeros(count, rows.shape[1]).index_add_(0, dst, rows.index_select(0, src))
+        return _Scatter.apply(rows, passes, back, unused, count)
+    return _scatter(rows, passes, count)
 
 
 def _tracked(*ts: torch.Tensor | None) -> bool:

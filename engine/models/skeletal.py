@@ -72,14 +72,14 @@ def unpool_source(groups: tuple[tuple[int, ...], ...]) -> tuple[int, ...]:
 @dataclass(frozen=True)
 class Layout:
     """Where a :class:`SkeletalLinear`'s weights lie in its block-sparse matrix: the
-    plan, and row ``src[m]`` of ``weight`` viewed ``(N*K*C_in, C_out)`` added to row
-    ``dst[m]`` of the rectangles viewed ``(size / C_out, C_out)`` (two neighbours that
-    copy one coarse node share a row: their weights add up); ``back`` the rectangle row
-    of every weight row, ``unused`` the weight rows no rectangle reads (padding slots)."""
+    plan, and per ``(dst, src)`` of ``passes`` row ``src[m]`` of ``weight`` viewed
+    ``(N*K*C_in, C_out)`` added to row ``dst[m]`` of the rectangles viewed
+    ``(size / C_out, C_out)`` (two neighbours that copy one coarse node share a row: their
+    weights add up, one per pass); ``back`` the rectangle row of every weight row,
+    ``unused`` the weight rows no rectangle reads (padding slots)."""
 
     plan: blocks.BlockPlan
-    dst: torch.Tensor
-    src: torch.Tensor
+    passes: tuple[tuple[torch.Tensor, torch.Tensor], ...]
     back: torch.Tensor
     unused: torch.Tensor
 
@@ -149,9 +149,15 @@ class SkeletalLinear(nn.Module):
             back = np.zeros(n * k * c_in, dtype=np.int64)
             back[s_] = d
             unused = np.setdiff1d(np.arange(n * k * c_in), s_)
-            self._layouts[key] = Layout(
-                plan, *(torch.as_tensor(a, dtype=torch.long, device=device) for a in (d, s_, back, unused))
-            )
+            # pass m adds every rectangle row's m-th weight row: no pass names a row twice
+            rank = np.empty(len(d), dtype=np.int64)
+            seen: dict[int, int] = {}
+            for m, r in enumerate(d.tolist()):
+                rank[m] = seen.get(r, 0)
+                seen[r] = rank[m] + 1
+            ts = lambda a: torch.as_tensor(a, dtype=torch.long, device=device)  # noqa: E731
+            passes = tuple((ts(d[rank == m]), ts(s_[rank == m])) for m in range(int(rank.max()) + 1))
+            self._layouts[key] = Layout(plan, passes, ts(back), ts(unused))
         return self._layouts[key]
 
     def rectangles(self, source: tuple[int, ...] | None, device: torch.device) -> tuple[Layout, torch.Tensor]:
@@ -163,9 +169,7 @@ class SkeletalLinear(nn.Module):
             return layout, self._reuse[key]
         c_out = self.c_out
         rows = self.weight.reshape(-1, c_out)
-        w = blocks.scatter_rows(
-            rows, layout.dst, layout.src, layout.back, layout.unused, layout.plan.size // c_out
-        ).reshape(-1)
+        w = blocks.scatter_rows(rows, layout.passes, layout.back, layout.unused, layout.plan.size // c_out).reshape(-1)
         if self._reuse is not None:
             self._reuse[key] = w
         return layout, w

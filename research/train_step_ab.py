@@ -90,6 +90,7 @@ def main() -> None:
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--split", default="val", help="prepared split to draw batches from (default: %(default)s)")
     args = ap.parse_args()
+    args.data = args.data.resolve()  # each version runs in its own folder
     with tempfile.TemporaryDirectory() as tmp:
         versions = {"baseline": checkout(args.baseline, Path(tmp)), "tree": ROOT}
         rows: dict[str, list[dict]] = {k: [] for k in versions}

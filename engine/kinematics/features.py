@@ -27,7 +27,7 @@ import torch
 
 from engine import skeleton as sk
 from engine.kinematics import quaternion as Q
-from engine.kinematics.fk import fk
+from engine.kinematics.fk import fk, fk_matrices
 from engine.kinematics.root import place_root, root_increment
 
 
@@ -91,10 +91,8 @@ def motion_from_pose(rot, disp, start_root_rot=None, start_pos=None):
     return local, np.stack(poss)
 
 
-def root_space_fk(rot, offsets):
-    """Joint positions and rotations relative to the root joint, ``(..., J, 3)`` and ``(..., J, 4)``.
-
-    Slot 0 of ``rot`` is ignored (the root is the frame of reference)."""
+def _root_frame(rot):
+    """``rot`` with the identity in slot 0, and a zero root position."""
     zero: np.ndarray | torch.Tensor
     if isinstance(rot, torch.Tensor):
         ident = Q.identity(rot.shape[:-2], like=rot)[..., None, :]
@@ -104,7 +102,22 @@ def root_space_fk(rot, offsets):
         r = rot.copy()
         r[..., 0, :] = Q.identity(rot.shape[:-2])
         zero = np.zeros(rot.shape[:-2] + (3,))
+    return r, zero
+
+
+def root_space_fk(rot, offsets):
+    """Joint positions and rotations relative to the root joint, ``(..., J, 3)`` and ``(..., J, 4)``.
+
+    Slot 0 of ``rot`` is ignored (the root is the frame of reference)."""
+    r, zero = _root_frame(rot)
     return fk(r, zero, offsets)
+
+
+def root_space_positions(rot, offsets):
+    """The positions of :func:`root_space_fk` (the same values), without composing the
+    world quaternions (what a position loss reads): ``(..., J, 3)``."""
+    r, zero = _root_frame(rot)
+    return fk_matrices(Q.to_matrix(r), zero, offsets)[0]
 
 
 def encoder_input(rot, disp, offsets):

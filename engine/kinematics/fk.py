@@ -46,6 +46,9 @@ class Levels:
         Per level, its parents' rows as a slice when they are consecutive rows (one row
         per joint) or one row for all (broadcast): a view instead of a gather. None: a
         gather of :attr:`parent_rows`.
+    level_parent_rows : tuple of ndarray
+        Per level, the row of each joint's parent within the level above (the root's
+        level: row 0).
     """
 
     joints: tuple[np.ndarray, ...]
@@ -55,6 +58,7 @@ class Levels:
     prow: np.ndarray
     chain: np.ndarray
     parent_slices: tuple[slice | None, ...] = ()
+    level_parent_rows: tuple[np.ndarray, ...] = ()
 
 
 @lru_cache(maxsize=32)
@@ -86,6 +90,7 @@ def levels(parents: tuple[int, ...]) -> Levels:
         prow,
         chain,
         tuple(_as_slice(rows) for rows in parent_rows),
+        tuple(rows - first for rows, first in zip(parent_rows, np.cumsum([0, 1] + [len(x) for x in lv])[:-1])),
     )
 
 
@@ -252,18 +257,23 @@ def _forward(local_mat, root_pos, offsets, parents, local_quat=None):
         return _forward_numpy(np.asarray(local_mat), np.asarray(root_pos), np.asarray(offsets), lv, local_quat)
     take, cat = _ops(local_mat)
     offsets = _offsets_like(offsets, local_mat)
-    g_rot = local_mat[..., :1, :, :]
-    g_pos = root_pos[..., None, :]
-    g_q = None if local_quat is None else local_quat[..., :1, :]
-    for idx, rows in zip(lv.joints, lv.parent_rows):
-        pr = take(g_rot, rows, -3)
+    # one tensor per level, joined once at the end: a joint's parent is on the level above
+    g_rot = [local_mat[..., :1, :, :]]
+    g_pos = [root_pos[..., None, :]]
+    g_q = None if local_quat is None else [local_quat[..., :1, :]]
+    for idx, rows in zip(lv.joints, lv.level_parent_rows):
+        pr = take(g_rot[-1], rows, -3)
         step = (pr @ take(offsets, idx, -2)[..., None])[..., 0]
-        g_pos = cat((g_pos, take(g_pos, rows, -2) + step), -2)
-        g_rot = cat((g_rot, pr @ take(local_mat, idx, -3)), -3)
+        g_pos.append(take(g_pos[-1], rows, -2) + step)
+        g_rot.append(pr @ take(local_mat, idx, -3))
         if g_q is not None:
-            g_q = cat((g_q, Q.mul(take(g_q, rows, -2), take(local_quat, idx, -2))), -2)
+            g_q.append(Q.mul(take(g_q[-1], rows, -2), take(local_quat, idx, -2)))
     order = lv.unorder
-    return take(g_pos, order, -2), take(g_rot, order, -3), None if g_q is None else take(g_q, order, -2)
+    return (
+        take(cat(g_pos, -2), order, -2),
+        take(cat(g_rot, -3), order, -3),
+        None if g_q is None else take(cat(g_q, -2), order, -2),
+    )
 
 
 def _forward_numpy(

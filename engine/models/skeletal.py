@@ -8,11 +8,16 @@ left: 22 -> 14 -> 9 -> 6 nodes here (root, two legs, two arms, torso).
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+
 import numpy as np
 import torch
 from torch import nn
 
 from engine import skeleton as sk
+from engine.models import blocks
 
 #: Pooling groups per level: each entry lists the nodes of the level below it merges.
 POOL_GROUPS: tuple[tuple[tuple[int, ...], ...], ...] = (
@@ -49,8 +54,34 @@ def neighbour_mask(num_nodes: int, edges: set[tuple[int, int]], distance: int = 
     return reach
 
 
-#: Batch size from which :class:`SkeletalLinear` multiplies by its dense matrix.
-DENSE_FROM = 64
+#: Batch size from which :class:`SkeletalLinear` multiplies by its block-sparse matrix.
+BLOCKS_FROM = 64
+
+#: Cost of one more rectangle in a layer's block-sparse matrix (:mod:`engine.models.blocks`),
+#: in weight entries: about what one more product's call costs at a training batch.
+BLOCK_CALL_COST = 2000
+
+
+def unpool_source(groups: tuple[tuple[int, ...], ...]) -> tuple[int, ...]:
+    """The node of the coarser level every node copies when unpooling by ``groups``: the
+    rows of :func:`unpool_matrix`'s ones."""
+    owner = {m: g for g, members in enumerate(groups) for m in members}
+    return tuple(owner[m] for m in range(len(owner)))
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Where a :class:`SkeletalLinear`'s weights lie in its block-sparse matrix: the
+    plan, and per ``(dst, src)`` of ``passes`` row ``src[m]`` of ``weight`` viewed
+    ``(N*K*C_in, C_out)`` added to row ``dst[m]`` of the rectangles viewed
+    ``(size / C_out, C_out)`` (two neighbours that copy one coarse node share a row: their
+    weights add up, one per pass); ``back`` the rectangle row of every weight row,
+    ``unused`` the weight rows no rectangle reads (padding slots)."""
+
+    plan: blocks.BlockPlan
+    passes: tuple[tuple[torch.Tensor, torch.Tensor], ...]
+    back: torch.Tensor
+    unused: torch.Tensor
 
 
 class SkeletalLinear(nn.Module):
@@ -61,38 +92,26 @@ class SkeletalLinear(nn.Module):
 
     # buffers (register_buffer in __init__), declared for the type checker
     gather: torch.Tensor
-    dense_src: torch.Tensor
-    dense_row: torch.Tensor
-    dense_node: torch.Tensor
 
     def __init__(self, node_mask: np.ndarray, c_in: int, c_out: int):
         super().__init__()
         n = node_mask.shape[0]
         self.n, self.c_in, self.c_out = n, c_in, c_out
-        neigh = [np.nonzero(node_mask[i])[0].tolist() for i in range(n)]
-        k = max(len(v) for v in neigh)
+        self.neigh = [np.nonzero(node_mask[i])[0].tolist() for i in range(n)]
+        k = max(len(v) for v in self.neigh)
         # one-hot gather matrix (N*K, N): a matmul's backward is a deterministic product,
         # where indexing's backward accumulates in an order that varies between threads
         gather = torch.zeros(n * k, n)
-        for i, v in enumerate(neigh):
+        for i, v in enumerate(self.neigh):
             for slot, j in enumerate(v):
                 gather[i * k + slot, j] = 1.0
         self.register_buffer("gather", gather, persistent=False)  # structure, rebuilt from the skeleton
         self.k = k
-        # where each used weight row lands in the dense (N*C_in, N, C_out) matrix of a batch pass
-        src: list[int] = []
-        dst: list[int] = []
-        node: list[int] = []
-        for i, v in enumerate(neigh):
-            for slot, j in enumerate(v):
-                src.extend(range((i * k + slot) * c_in, (i * k + slot + 1) * c_in))
-                dst.extend(range(j * c_in, (j + 1) * c_in))
-                node.extend([i] * c_in)
-        for name, values in (("dense_src", src), ("dense_row", dst), ("dense_node", node)):
-            self.register_buffer(name, torch.tensor(values, dtype=torch.long), persistent=False)
+        self._layouts: dict[tuple, Layout] = {}
+        self._reuse: dict[tuple, torch.Tensor] | None = None
         self.weight = nn.Parameter(torch.empty(n, k * c_in, c_out))
         self.bias = nn.Parameter(torch.zeros(n, c_out))
-        for i, v in enumerate(neigh):
+        for i, v in enumerate(self.neigh):
             bound = 1.0 / np.sqrt(len(v) * c_in)
             nn.init.uniform_(self.weight[i], -bound, bound)
             with torch.no_grad():
@@ -103,26 +122,93 @@ class SkeletalLinear(nn.Module):
         state_dict.pop(prefix + "index", None)
         super()._load_from_state_dict(state_dict, prefix, *args, **kwargs)
 
-    def dense_weight(self) -> torch.Tensor:
-        """The layer as one dense matrix ``(N*C_in, N*C_out)``: zeros where the mask
-        cuts a node off, each node's weights in its neighbours' rows."""
-        n, c_in, c_out = self.n, self.c_in, self.c_out
-        used = self.weight.reshape(n * self.k * c_in, c_out).index_select(0, self.dense_src)
-        dense = used.new_zeros(n * c_in, n, c_out).index_put((self.dense_row, self.dense_node), used)
-        return dense.reshape(n * c_in, n * c_out)
+    def layout(self, source: tuple[int, ...] | None, device: torch.device) -> Layout:
+        """The layer's block-sparse matrix for input nodes ``source`` (see :meth:`forward`)."""
+        key = (source, str(device))
+        if key not in self._layouts:
+            n, k, c_in, c_out = self.n, self.k, self.c_in, self.c_out
+            of = list(range(n)) if source is None else list(source)
+            reads = [sorted({of[j] for j in v}) for v in self.neigh]
+            nodes = blocks.plan_rectangles(reads, c_out, c_in, BLOCK_CALL_COST)
+            plan = blocks.BlockPlan.of(
+                [(a * c_out, b * c_out, h0 * c_in, h1 * c_in) for a, b, h0, h1 in nodes],
+                (max(of) + 1) * c_in,
+                n * c_out,
+            )
+            dst: list[np.ndarray] = []
+            src: list[np.ndarray] = []
+            channels = np.arange(c_in)
+            for (a, b, h0, h1), (_, _, _, _, offset) in zip(nodes, plan.spans):
+                base, r = offset // c_out, b - a
+                for i in range(a, b):
+                    for slot, j in enumerate(self.neigh[i]):
+                        if h0 <= of[j] < h1:
+                            dst.append(base + ((of[j] - h0) * c_in + channels) * r + (i - a))
+                            src.append((i * k + slot) * c_in + channels)
+            d, s_ = np.concatenate(dst), np.concatenate(src)
+            back = np.zeros(n * k * c_in, dtype=np.int64)
+            back[s_] = d
+            unused = np.setdiff1d(np.arange(n * k * c_in), s_)
+            # pass m adds every rectangle row's m-th weight row: no pass names a row twice
+            rank = np.empty(len(d), dtype=np.int64)
+            seen: dict[int, int] = {}
+            for m, r in enumerate(d.tolist()):
+                rank[m] = seen.get(r, 0)
+                seen[r] = rank[m] + 1
+            ts = lambda a: torch.as_tensor(a, dtype=torch.long, device=device)  # noqa: E731
+            passes = tuple((ts(d[rank == m]), ts(s_[rank == m])) for m in range(int(rank.max()) + 1))
+            self._layouts[key] = Layout(plan, passes, ts(back), ts(unused))
+        return self._layouts[key]
 
-    def forward(self, x: torch.Tensor) -> torch.Tensor:
-        """``(B, N, C_in) -> (B, N, C_out)``. A batch of :data:`DENSE_FROM` poses or more
-        runs as one dense matrix product (a few times the arithmetic of the masked
-        weights, but one large GEMM instead of a per-node batch of small ones: the VAE's
-        training step 1.3x less CPU time); a few poses keep the per-node products."""
+    def rectangles(self, source: tuple[int, ...] | None, device: torch.device) -> tuple[Layout, torch.Tensor]:
+        """The layout for ``source`` and the weights in its rectangles, flat (made once per
+        :func:`reusing_rectangles` block, or per call)."""
+        layout = self.layout(source, device)
+        key = (source, str(device), torch.is_grad_enabled())
+        if self._reuse is not None and key in self._reuse:
+            return layout, self._reuse[key]
+        c_out = self.c_out
+        rows = self.weight.reshape(-1, c_out)
+        w = blocks.scatter_rows(rows, layout.passes, layout.back, layout.unused, layout.plan.size // c_out).reshape(-1)
+        if self._reuse is not None:
+            self._reuse[key] = w
+        return layout, w
+
+    def forward(self, x: torch.Tensor, source: tuple[int, ...] | None = None) -> torch.Tensor:
+        """``(B, N_in, C_in) -> (B, N, C_out)``. ``source``: node ``j`` of the layer reads
+        input node ``source[j]`` (an unpooling copy, read in place instead of made; the
+        same sums); None: ``x`` has the layer's own nodes.
+
+        A batch of :data:`BLOCKS_FROM` poses or more runs as a few dense products over
+        the rectangles of the masked matrix (:mod:`engine.models.blocks`; an unpooling
+        folded in reads the coarse nodes, fewer of them); a few poses keep the per-node
+        products."""
         b = x.shape[0]
-        if b >= DENSE_FROM:
-            y = torch.addmm(self.bias.reshape(1, -1), x.reshape(b, self.n * self.c_in), self.dense_weight())
+        if b >= BLOCKS_FROM:
+            layout, w = self.rectangles(source, x.device)
+            y = blocks.product(x.reshape(b, -1).contiguous(), w, self.bias.reshape(-1), layout.plan)
             return y.reshape(b, self.n, self.c_out)
+        if source is not None:
+            x = x.index_select(1, torch.as_tensor(source, device=x.device))
         gathered = torch.matmul(self.gather, x).reshape(b, self.n, self.k * self.c_in)  # (B, N, K*C)
         y = torch.bmm(gathered.transpose(0, 1), self.weight).transpose(0, 1)  # (B, N, C_out)
         return y + self.bias
+
+
+@contextmanager
+def reusing_rectangles(module: nn.Module) -> Iterator[None]:
+    """Within the block, every :class:`SkeletalLinear` of ``module`` lays out its weights
+    in its rectangles once and reuses them (a decoder run twice per training step, as
+    the VAE's continuity loss does, then makes them, and takes their gradient, once).
+    The weights must not change inside the block."""
+    layers = [m for m in module.modules() if isinstance(m, SkeletalLinear)]
+    for layer in layers:
+        layer._reuse = {}
+    try:
+        yield
+    finally:
+        for layer in layers:
+            layer._reuse = None
 
 
 def pool_matrix(groups: tuple[tuple[int, ...], ...], n_in: int) -> torch.Tensor:

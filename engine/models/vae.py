@@ -27,7 +27,11 @@ from engine.models.skeletal import (
     neighbour_mask,
     pool_matrix,
     unpool_matrix,
+    unpool_source,
 )
+
+#: Per pooling step, the coarse node each node of the finer level copies when unpooling.
+UNPOOL_SOURCES = tuple(unpool_source(groups) for groups in POOL_GROUPS)
 
 
 @dataclass
@@ -115,12 +119,10 @@ class PoseVAE(nn.Module):
         """Pose from latent ``z (B, L)``: unit quaternions ``(B, 22, 4)`` (w >= 0) and
         root displacement ``(B, 3)`` in metres."""
         x = self.act(self.from_latent(z)).reshape(z.shape[0], level_sizes()[3], self.config.channels[3])
-        x = torch.matmul(self.unpool2, x)  # 6 -> 9
-        x = self.act(self.dec[0](x))
-        x = torch.matmul(self.unpool1, x)  # 9 -> 14
-        x = self.act(self.dec[1](x))
-        x = torch.matmul(self.unpool0, x)  # 14 -> 22
-        x = self.act(self.dec[2](x))
+        # each unpooling (6 -> 9 -> 14 -> 22 nodes) is read by the next layer in place
+        x = self.act(self.dec[0](x, UNPOOL_SOURCES[2]))
+        x = self.act(self.dec[1](x, UNPOOL_SOURCES[1]))
+        x = self.act(self.dec[2](x, UNPOOL_SOURCES[0]))
         x = self.act(self.dec[3](x))
         q = self.to_rot(x) + torch.tensor([1.0, 0.0, 0.0, 0.0], device=z.device)  # identity-biased
         rot = Q.canonicalize(Q.normalize(q))

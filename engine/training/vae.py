@@ -21,8 +21,9 @@ from tqdm import tqdm
 
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
-from engine.kinematics.features import root_space_fk
+from engine.kinematics.features import root_space_positions
 from engine.models.loading import load_checkpoint, load_vae
+from engine.models.skeletal import reusing_rectangles
 from engine.models.vae import PoseVAE, VAEConfig, pose_distance
 from engine.training.common import (
     CurveLog,
@@ -103,6 +104,10 @@ class VAEObjective(nn.Module):
         self.vae, self.cfg, self.anchor = vae, cfg, anchor
 
     def forward(self, b: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
+        with reusing_rectangles(self.vae):  # the decoder runs twice: its weights laid out once
+            return self._terms(b)
+
+    def _terms(self, b: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
         vae, cfg = self.vae, self.cfg
         if cfg.train_encoder:
             mu, logvar = vae.encode(b["dq"])
@@ -113,7 +118,7 @@ class VAEObjective(nn.Module):
             z = (mu + torch.randn_like(mu) * torch.exp(0.5 * logvar)).requires_grad_(True)
         rot, disp = vae.decode(z)
         l_rot = pose_distance(rot, disp, b["rot"], b["disp"], vae.disp_std).mean()
-        pos, _ = root_space_fk(rot, b["offsets"])
+        pos = root_space_positions(rot, b["offsets"])
         l_fk = ((pos - b["pos"]) ** 2).mean()
         l_kl = (-0.5 * (1 + logvar - mu**2 - logvar.exp()).sum(-1)).mean()
         out = {"rot": l_rot, "fk": l_fk, "kl": l_kl}
@@ -144,7 +149,7 @@ def reconstruction_error(vae: PoseVAE, data: PoseData, max_frames: int | None = 
         idx = torch.arange(s, min(n, s + batch))
         mu, _ = vae.encode(data.dq[idx].to(dev))
         rot, _ = vae.decode(mu)
-        pos, _ = root_space_fk(rot, data.offsets[idx].to(dev))
+        pos = root_space_positions(rot, data.offsets[idx].to(dev))
         pos_err += torch.linalg.vector_norm(pos - data.pos[idx].to(dev), dim=-1).mean(-1).sum().item()
         rot_err += Q.angle(rot[:, 1:], data.rot[idx, 1:].to(dev)).mean(-1).sum().item()
         count += idx.numel()

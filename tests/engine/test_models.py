@@ -50,8 +50,8 @@ def test_skeletal_mask_keeps_far_joints_out():
 
 
 @pytest.mark.parametrize("level, c_in, c_out", [(0, 8, 32), (1, 48, 64), (3, 96, 64)])
-def test_skeletal_dense_batch_pass_equals_the_per_node_pass(level, c_in, c_out):
-    """A batch of DENSE_FROM poses or more runs as one dense product: the same outputs
+def test_skeletal_block_batch_pass_equals_the_per_node_pass(level, c_in, c_out):
+    """A batch of BLOCKS_FROM poses or more runs as block-sparse products: the same outputs
     and the same gradients (weights, bias, input) as the per-node pass a few poses take."""
     from engine.models import skeletal
 
@@ -59,7 +59,7 @@ def test_skeletal_dense_batch_pass_equals_the_per_node_pass(level, c_in, c_out):
     layer = SkeletalLinear(mask, c_in, c_out)
     with torch.no_grad():
         layer.bias.normal_()
-    x = torch.randn(skeletal.DENSE_FROM, layer.n, c_in, requires_grad=True)
+    x = torch.randn(skeletal.BLOCKS_FROM, layer.n, c_in, requires_grad=True)
     grads = []
     for small in (False, True):
         layer.zero_grad()
@@ -67,9 +67,42 @@ def test_skeletal_dense_batch_pass_equals_the_per_node_pass(level, c_in, c_out):
         y = torch.cat([layer(x[i : i + 1]) for i in range(len(x))]) if small else layer(x)
         (y * torch.linspace(-1, 1, y.numel()).reshape(y.shape)).sum().backward()
         grads.append((y.detach(), layer.weight.grad.clone(), layer.bias.grad.clone(), x.grad.clone()))
-    for dense, per_node in zip(*grads):
-        torch.testing.assert_close(dense, per_node, rtol=1e-5, atol=1e-5)
+    for blocked, per_node in zip(*grads):
+        torch.testing.assert_close(blocked, per_node, rtol=1e-5, atol=1e-5)
     assert grads[0][1].abs().sum() > 0
+
+
+@pytest.mark.parametrize(
+    "level, unpooled, call_cost", [(0, False, 0.0), (0, True, 0.0), (2, True, 0.0), (0, False, 1e9)]
+)
+def test_skeletal_block_products_first_and_second_order_gradients(monkeypatch, level, unpooled, call_cost):
+    """The block-sparse products' gradients, and the gradients of those (the continuity
+    loss's second order), against finite differences in float64; an unpooling read in
+    place gives what the per-node pass gives on the unpooled input. Call cost 0: a
+    rectangle per node and input range (several add to one node's outputs); 1e9: one."""
+    from engine.models import skeletal
+
+    monkeypatch.setattr(skeletal, "BLOCKS_FROM", 2)
+    monkeypatch.setattr(skeletal, "BLOCK_CALL_COST", call_cost)
+    n = level_sizes()[level]
+    source = skeletal.unpool_source(skeletal.POOL_GROUPS[level]) if unpooled else None
+    layer = SkeletalLinear(neighbour_mask(n, level_edges()[level], 2), 2, 3).double()
+    gen = torch.Generator().manual_seed(level)
+    x = torch.randn(3, n if source is None else max(source) + 1, 2, dtype=torch.float64, generator=gen)
+    w = layer.weight.detach().clone().requires_grad_(True)
+    b = torch.randn(n, 3, dtype=torch.float64, generator=gen).requires_grad_(True)
+
+    def f(x, w, b):
+        return torch.func.functional_call(layer, {"weight": w, "bias": b}, (x, source))
+
+    x.requires_grad_(True)
+    assert torch.autograd.gradcheck(f, (x, w, b))
+    assert torch.autograd.gradgradcheck(f, (x, w, b))
+    unpooled_x = x if source is None else x[:, list(source)]
+    per_node = torch.cat([layer(unpooled_x[i : i + 1]) for i in range(3)])
+    torch.testing.assert_close(f(x, w, layer.bias), per_node, rtol=1e-12, atol=1e-12)
+    plan = layer.layout(source, x.device).plan
+    assert (len(plan.spans) > n) if call_cost == 0 else (len(plan.spans) == 1)
 
 
 def test_vae_shapes_and_unit_quaternions(synthetic_motion):

@@ -3,8 +3,9 @@
 Built by DragPoser for sensor sets without foot trackers: every frame the method hands it
 the :class:`engine.solver.gait.GaitPlanner`'s targets (:meth:`GaitConstraint.set_targets`):
 the stance ankle's planted position and the swing ankle's point on its way to its landing
-spot, horizontal only, both weighted by how fast the body travels (zero when it does not:
-the term is then off). Loss (metres squared): ``sum_k |scale_k * (P_k - target_k)|^2``
+spot, horizontal only, both weighted by how fast the body travels (zero when it does not),
+and, where the standing-legs pull is on, each ankle under its hip joint while the body
+travels slowly (the term is off when neither acts). Loss (metres squared): ``sum_k |scale_k * (P_k - target_k)|^2``
 over the two ankles, per axis. Residual: ``scale * (P_ankles - target)``, 6 entries.
 """
 

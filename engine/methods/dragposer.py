@@ -275,8 +275,10 @@ class DragPoserMethod(CallerEdits, Method):
 
     def _gait_terms(self, plan: FramePlan) -> list[Constraint]:
         """The gait term with this frame's targets from the hips' (else the head's) tracker
-        travel, or nothing while its weight is 0 (the solve is then as without it)."""
-        weight = plan.gait_weight
+        travel: the planned steps (``gait_weight``) and the standing legs (``stand_weight``),
+        or nothing while both weights are 0 (the solve is then as without it)."""
+        walk, stand = plan.gait_weight, plan.stand_weight
+        weight = walk if walk > 0.0 else stand
         if weight <= 0.0:
             self.gait_planner.reset()
             return []
@@ -286,7 +288,15 @@ class DragPoserMethod(CallerEdits, Method):
         hands = [c.position for j in ("lwrist", "rwrist") if (c := self.sensors.get(j)) is not None and c.enabled]
         head = c.position if (c := self.sensors.get("upperneck")) is not None and c.enabled else None
         self.gait.set_targets(
-            self.gait_planner.update(anchor, self._pos64, np.array(hands) if len(hands) == 2 else None, head)
+            self.gait_planner.update(
+                anchor,
+                self._pos64,
+                np.array(hands) if len(hands) == 2 else None,
+                head,
+                walk=walk > 0.0,
+                stand=stand / weight,
+                distance=self.priors.distance,
+            )
         )
         self.gait.weight = weight
         return [self.gait]

@@ -94,6 +94,11 @@ class FramePlan:
         """The gait term's weight this frame: off while a foot tracker is connected."""
         return 0.0 if self.feet else float(self.settings.gait_weight)
 
+    @property
+    def stand_weight(self) -> float:
+        """The standing-legs pull's weight this frame: off while a foot tracker is connected."""
+        return 0.0 if self.feet else float(self.settings.stand_weight)
+
 
 def smoothing_history(
     frame: int, previous: np.ndarray | None, before: np.ndarray | None
@@ -332,6 +337,7 @@ class PriorSource:
         self.predictor, self.bank = predictor, bank
         self.schedule = TemporalSchedule(settings.predictor_every, settings.past_window)
         self.from_bank = False  # the last frame's prior came from the pose bank
+        self.distance: float | None = None  # how far the last frame's readings were from the bank's
         self.bank_later: tuple[tuple[str, ...], ...] = ()  # combinations between_frames prepares
 
     def readings(self, s: OptimizerSettings, history: TrackerHistory) -> tuple | None:
@@ -346,10 +352,12 @@ class PriorSource:
         runs would be thrown away; a run for later frames waits for :meth:`between_frames`."""
         self.schedule.configure(s.predictor_every, s.past_window)
         self.from_bank = readings is not None
+        self.distance = None
         if readings is not None:
             assert self.bank is not None  # readings come only with a bank (:meth:`readings`)
             joints, pos, rot = readings
-            return self.bank.latent(joints, pos, rot, k=s.tracker_prior_neighbours), s.tracker_prior_weight, []
+            z, self.distance = self.bank.lookup(joints, pos, rot, k=s.tracker_prior_neighbours)
+            return z, s.tracker_prior_weight, []
         prediction, warn = self.schedule.prediction(frame, self.predictor, max(1, s.future_window), defer=True)
         return prediction, s.temporal_weight, [warn] if warn else []
 

@@ -38,6 +38,15 @@ anchor tracker (the hips' when connected, else the head's) and gives the ``gait`
   travel), so the stride grows with speed. "Under its hip" is 30 % of the way from the
   pelvis to the hip joint: feet land nearly under the pelvis.
 
+* **Standing legs** (setting ``stand_weight``, the hip profiles). While the anchor travels
+  slower than :attr:`GaitParams.stand_speed` each ankle is also pulled under its hip
+  joint, fading out by :attr:`GaitParams.stand_off_speed`: a standing or slowly stepping
+  performer's legs hang nearly straight, where the pose bank's guess for motion it does not
+  hold bends or lifts them. Where the bank does hold such motion (its neighbours are near
+  the readings: :attr:`GaitParams.stand_near`, :attr:`GaitParams.stand_far`) its legs are
+  better and the pull stays off. Without a hip tracker the pull moves the guessed pelvis
+  instead, so the head profile leaves it off (docs/optimizer.md, *Standing legs*).
+
 Only the horizontal position is targeted (heights are the ``ground`` term's and the
 decoder's). Everything here is numpy and reads only this frame's and earlier readings and
 solved poses, so it works live.
@@ -75,7 +84,11 @@ class GaitParams:
     planting a foot for a whole stance at 3 m/s tore the pose: CMU runs went from 5-7 to
     19-27 cm of Pos with the term on); ``settle_s``: how long a landed foot's target takes
     to glide from the swing target's last position to the landing spot; ``ramp_s``: how long the
-    two ankles' weights take to trade places after a swap (0: at once).
+    two ankles' weights take to trade places after a swap (0: at once); ``stand_speed`` /
+    ``stand_off_speed``: where the standing-legs pull starts to fade out and is off;
+    ``stand_near`` / ``stand_far``: the pose bank's distance to the readings
+    (:meth:`~engine.solver.tracker_prior.PoseBank.lookup`) up to which the pull is off and
+    from which it is full: where the bank knows motion like this, its legs are better.
     """
 
     window_s: float = 0.25
@@ -94,6 +107,10 @@ class GaitParams:
     stop_speed: float = 2.2
     settle_s: float = 0.1
     ramp_s: float = 0.07
+    stand_speed: float = 0.6
+    stand_off_speed: float = 1.2
+    stand_near: float = 2.0
+    stand_far: float = 3.0
 
     def step_time(self, speed: float) -> float:
         """Seconds per step at ``speed`` m/s: 0.55 s at 0.7 m/s, 0.49 s at 1.3, 0.3 s
@@ -104,11 +121,15 @@ class GaitParams:
         """0 below :attr:`on_speed` and above :attr:`stop_speed`, 1 from :attr:`full_speed`
         to :attr:`run_speed`, smoothsteps between."""
 
-        def rise(lo: float, hi: float) -> float:
-            t = float(np.clip((speed - lo) / (hi - lo), 0.0, 1.0))
-            return t * t * (3.0 - 2.0 * t)
+        return _rise(speed, self.on_speed, self.full_speed) * (1.0 - _rise(speed, self.run_speed, self.stop_speed))
 
-        return rise(self.on_speed, self.full_speed) * (1.0 - rise(self.run_speed, self.stop_speed))
+    def standing(self, speed: float, distance: float | None = None) -> float:
+        """The standing-legs pull's share: 1 up to :attr:`stand_speed`, 0 from
+        :attr:`stand_off_speed`, a smoothstep between; times a smoothstep from 0 at
+        :attr:`stand_near` to 1 at :attr:`stand_far` of the pose bank's ``distance``
+        (None: no bank lookup this frame, no such factor)."""
+        share = 1.0 - _rise(speed, self.stand_speed, self.stand_off_speed)
+        return share if distance is None else share * _rise(distance, self.stand_near, self.stand_far)
 
 
 class GaitPlanner:
@@ -180,6 +201,10 @@ class GaitPlanner:
         previous: np.ndarray | None,
         hands: np.ndarray | None = None,
         head: np.ndarray | None = None,
+        *,
+        walk: bool = True,
+        stand: float = 0.0,
+        distance: float | None = None,
     ) -> GaitTargets:
         """Advance one frame and give its targets.
 
@@ -196,6 +221,16 @@ class GaitPlanner:
         head : ndarray (3,) or None
             The head tracker's position (None: not connected); with the hands it feeds
             the stance classifier, whose confident answer goes before the arms' swing.
+        walk : bool
+            Plan steps (False: the stepping targets stay off).
+        stand : float
+            The standing-legs pull's weight relative to the stepping targets' (0: off):
+            while the anchor travels slowly each ankle is also pulled horizontally under
+            its hip joint (:meth:`GaitParams.standing`); where both act, an ankle's target
+            is their weighted mean and its weight their sum.
+        distance : float or None
+            The pose bank's distance to this frame's readings (None: the bank gave no
+            prior); near ones leave the legs to the bank (:meth:`GaitParams.standing`).
         """
         if anchor is None or previous is None or not np.all(np.isfinite(anchor)):
             self.reset()
@@ -212,10 +247,11 @@ class GaitPlanner:
         p = self.params
         v = self.velocity()
         speed = float(np.linalg.norm(v))
-        a = p.activity(speed)
+        a = p.activity(speed) if walk else 0.0
+        standing = _StandingPull(previous[list(HIPS), :2], stand * p.standing(speed, distance) if stand > 0 else 0.0)
         if a <= 0.0:
             self._stance = None
-            return GaitTargets.off()
+            return standing.apply(GaitTargets.off())
         ankles = previous[list(ANKLES)]
         # feet land nearly under the pelvis: 2 cm outwards of its centre on average, ~5 cm
         # inside their hips (touch-downs of 9 walking clips)
@@ -263,7 +299,7 @@ class GaitPlanner:
         scale = np.zeros((2, 3))
         scale[s, :2] = np.sqrt(a * (p.swing_weight + r * (p.stance_weight - p.swing_weight)))
         scale[w, :2] = np.sqrt(a * (p.stance_weight + r * (p.swing_weight - p.stance_weight)))
-        return GaitTargets(target, scale, s, phase)
+        return standing.apply(GaitTargets(target, scale, s, phase))
 
     def _ease(self, frames: int, seconds: float) -> float:
         """A smoothstep from 0 to 1 over ``seconds`` after a swap, at ``frames`` frames into
@@ -281,6 +317,33 @@ class GaitPlanner:
         self._lift = np.array(lift, dtype=np.float64)
         self._elapsed = 0
         self._swapped = False
+
+
+@dataclass(frozen=True)
+class _StandingPull:
+    """Each ankle pulled horizontally under its hip joint, ``under (2, 2)``, with the
+    relative weight ``weight`` (0: no pull)."""
+
+    under: np.ndarray
+    weight: float
+
+    def apply(self, t: GaitTargets) -> GaitTargets:
+        """``t`` with the pull added: the sum of two quadratic pulls on an axis is one pull
+        towards their weighted mean, weighted by their sum."""
+        if self.weight <= 0.0:
+            return t
+        own = t.scale[:, :2] ** 2
+        total = own + self.weight
+        target, scale = t.target.copy(), t.scale.copy()
+        target[:, :2] = (own * t.target[:, :2] + self.weight * self.under) / total
+        scale[:, :2] = np.sqrt(total)
+        return GaitTargets(target, scale, t.stance, t.phase)
+
+
+def _rise(x: float, lo: float, hi: float) -> float:
+    """A smoothstep of ``x`` from 0 at ``lo`` to 1 at ``hi``."""
+    t = float(np.clip((x - lo) / (hi - lo), 0.0, 1.0))
+    return t * t * (3.0 - 2.0 * t)
 
 
 def _smootherstep(t: float) -> float:

@@ -44,6 +44,7 @@ TUNED = (
     "head_reach",
     "level_feet",
     "gait_weight",
+    "stand_weight",
 )
 
 
@@ -136,6 +137,7 @@ PROFILES: dict[str, Profile] = {
             sensor_rotation_weight=0.1,
             prior="trackers",
             head_reach=True,
+            stand_weight=3.0,
         ),
     ),
     # gait: the stance classifier's planted feet (docs/optimizer.md, "Legs that step"): 3-head-hands,

@@ -229,6 +229,17 @@ class OptimizerSettings:
         "(docs/optimizer.md, 'Legs that step').",
         Num(0, 1e6),
     )
+    stand_weight: float = setting(
+        0.0,
+        "Standing-legs weight",
+        "Weight of the standing-legs pull while no foot tracker is connected: while the hips "
+        "or head travel slower than 0.6 m/s (fading out by 1.2 m/s) each ankle is pulled "
+        "horizontally under its hip joint, the way a standing performer's legs hang, where the "
+        "pose bank holds no motion like the trackers' (engine/solver/gait.py). The hip "
+        "profiles set 3, the others 0: without a hip "
+        "tracker the pull moves the guessed pelvis instead (docs/optimizer.md, 'Standing legs').",
+        Num(0, 1e6),
+    )
     tuning: str = setting(
         "preset",
         "Tuning",

@@ -143,12 +143,98 @@ def test_gait_weight_zero_turns_the_term_off():
     assert "gait" not in out[-1].losses[0] and not m.gait.targets.active
 
 
-@pytest.mark.parametrize("preset, on", [("3-head-hands", True), ("4", False)])
-def test_the_head_profile_plants_the_feet_and_the_hip_profile_does_not(preset, on):
+@pytest.mark.parametrize("preset, steps", [("3-head-hands", True), ("4", False)])
+def test_the_head_profile_plants_the_feet_and_the_hip_profile_does_not(preset, steps):
     clip = _clip(1.2, 60)
     tr = simulate(clip, preset)
     torch.manual_seed(0)
     m = DragPoserMethod(MLPDecoder(), CountingPredictor(), iterations=2, max_iterations=5)
     m.reset(clip.skeleton)
     out = [m.step(tr.frame(i)) for i in range(len(clip))]
-    assert ("gait" in out[-1].losses[0]) == on and m.gait.targets.active == on
+    # the hip profile has the term for its standing legs, which are off at a 1.2 m/s walk
+    assert "gait" in out[-1].losses[0]
+    assert m.gait.targets.active == steps and (m.gait.targets.stance is not None) == steps
+
+
+def _standing_pose() -> np.ndarray:
+    pose = sk.Skeleton.canonical().rest_positions()
+    pose -= pose[ROOT] - [0.0, 0.0, 0.95]
+    pose[list(ANKLES), 0] += [0.12, -0.12]  # feet wide apart: the ankles 12 cm outside their hips
+    return pose
+
+
+def test_standing_legs_pull_each_ankle_under_its_hip_while_the_body_stands():
+    pose = _standing_pose()
+    hips = pose[[sk.JOINT_INDEX["lhip"], sk.JOINT_INDEX["rhip"]]]
+    planner = GaitPlanner(FPS)
+    for _ in range(3):
+        t = planner.update(pose[ROOT], pose, walk=False, stand=2.0)
+    assert t.active and t.stance is None  # a pull, not a step
+    np.testing.assert_allclose(t.target[:, :2], hips[:, :2])
+    np.testing.assert_allclose(t.scale[:, :2], np.sqrt(2.0))
+    assert np.all(t.scale[:, 2] == 0.0)  # heights stay the ground term's
+
+
+@pytest.mark.parametrize("speed, share", [(0.3, 1.0), (0.9, 0.5), (1.5, 0.0)])
+def test_standing_legs_fade_out_with_speed(speed, share):
+    pose = _standing_pose()
+    planner = GaitPlanner(FPS)
+    for i in range(30):
+        t = planner.update(pose[ROOT] + [0.0, -speed * i / FPS, 0.0], pose, walk=False, stand=1.0)
+    assert GaitParams().standing(speed) == pytest.approx(share)
+    np.testing.assert_allclose(t.scale[:, :2] ** 2, share, atol=1e-9)
+
+
+@pytest.mark.parametrize("distance, share", [(None, 1.0), (1.5, 0.0), (2.5, 0.5), (3.5, 1.0)])
+def test_standing_legs_leave_familiar_readings_to_the_pose_bank(distance, share):
+    """Readings near the bank's (CMU-like motion) keep the bank's legs; far ones get the pull."""
+    pose = _standing_pose()
+    planner = GaitPlanner(FPS)
+    for _ in range(3):
+        t = planner.update(pose[ROOT], pose, walk=False, stand=1.0, distance=distance)
+    np.testing.assert_allclose(t.scale[:, :2] ** 2, share, atol=1e-9)
+    assert t.active == (share > 0)
+
+
+def test_standing_legs_and_steps_sum_as_one_pull():
+    """Where the steps and the standing pull both act, an ankle's target is their
+    weighted mean and its weight their sum: the same loss as the two pulls apart."""
+    pose = _standing_pose()
+    hips = pose[[sk.JOINT_INDEX["lhip"], sk.JOINT_INDEX["rhip"]]][:, :2]
+    a, b = GaitPlanner(FPS), GaitPlanner(FPS)
+    for i in range(40):  # 0.8 m/s: steps on (activity 1), standing pull at its fade's middle
+        anchor = pose[ROOT] + [0.0, -0.8 * i / FPS, 0.0]
+        steps = a.update(anchor, pose)
+        both = b.update(anchor, pose, stand=1.0)
+    w = GaitParams().standing(0.8)
+    assert 0.0 < w < 1.0 and steps.active
+    x = np.random.default_rng(0).normal(size=(2, 2))
+    loss_apart = np.sum((steps.scale[:, :2] * (x - steps.target[:, :2])) ** 2) + w * np.sum((x - hips) ** 2)
+    loss_one = np.sum((both.scale[:, :2] * (x - both.target[:, :2])) ** 2)
+    # equal up to a constant in x: compare their gradients
+    g_apart = 2 * steps.scale[:, :2] ** 2 * (x - steps.target[:, :2]) + 2 * w * (x - hips)
+    g_one = 2 * both.scale[:, :2] ** 2 * (x - both.target[:, :2])
+    np.testing.assert_allclose(g_one, g_apart, atol=1e-12)
+    assert loss_one <= loss_apart + 1e-12
+
+
+@pytest.mark.shared_data
+def test_standing_legs_bring_a_standing_performers_legs_nearer_the_truth(shared_mocap):
+    """Frames 240-390 of a DanceDB take, where the performer sways on the spot (hips at
+    0.0-0.4 m/s) and the pose bank's guess lifts and bends the legs 15-20 cm off the truth:
+    preset 4 with the shipped models, the hip profile's standing legs against none."""
+    from engine.kinematics.fk import fk
+    from engine.methods import get_method, run_method
+    from engine.motion.retarget import load_motion
+
+    motion = load_motion(shared_mocap / "dragposer" / "example.bvh", max_frames=390).slice(240)
+    tracking = simulate(motion, "4")
+    truth = fk(motion.local_rot, motion.root_pos, motion.skeleton.offsets)[0]
+    legs = [sk.JOINT_INDEX[n] for n in ("lknee", "lankle", "ltoe", "rknee", "rankle", "rtoe")]
+    err = {}
+    for weight in (3.0, 0.0):
+        rec, _ = run_method(get_method("dragposer", stand_weight=weight), tracking, motion.skeleton, progress=False)
+        off = np.linalg.norm(fk(rec.local_rot, rec.root_pos, rec.skeleton.offsets)[0] - truth, axis=-1)
+        err[weight] = (100 * off.mean(), 100 * off[:, legs].mean())
+    assert err[3.0][1] < 0.85 * err[0.0][1], err  # the legs
+    assert err[3.0][0] < err[0.0][0], err  # and the whole body

@@ -63,6 +63,12 @@ def test_the_latent_is_the_mean_latent_of_the_nearest_training_frames():
     near = np.argsort(d)[:3]
     assert near[0] == i
     np.testing.assert_allclose(z.numpy(), bank.latents[near].mean(0), atol=1e-5)
+    # the lookup's distance: the neighbours' mean standardised distance to the readings
+    z2, far = bank.lookup(joints, pos, rot)
+    assert torch.equal(z2, z)
+    assert far == pytest.approx(np.sqrt(d[near]).mean(), rel=1e-5) and far > 0.0
+    pos[:, 1] += 5.0  # a left hand where no training frame had it is farther from the bank
+    assert bank.lookup(joints, pos, rot)[1] > 2.0 * far
 
 
 def test_a_bank_survives_its_file_and_a_broken_file_is_a_user_error(tmp_path):
@@ -193,8 +199,8 @@ def test_the_first_frame_of_every_preset_finds_its_bank_index_built_when_the_mod
     t = np.arange(f) / 60.0
     clip = Motion(np.tile(np.array([1.0, 0.0, 0.0, 0.0]), (f, 22, 1)), np.stack([0.2 * t, -0.8 * t, 1.0 + 0 * t], -1))
     looked_up = []
-    lookup = m.bank.latent
-    m.bank.latent = lambda *a, **kw: looked_up.append(a[0]) or lookup(*a, **kw)
+    lookup = m.bank.lookup
+    m.bank.lookup = lambda *a, **kw: looked_up.append(a[0]) or lookup(*a, **kw)
     for preset in PRESET_SENSORS:
         m.reset(clip.skeleton)
         m.step(simulate(clip, preset).frame(0))
@@ -255,8 +261,10 @@ def test_a_bank_left_for_later_builds_the_first_frames_lookup_then_the_rest_afte
         m = DragPoserMethod(MLPDecoder(), CountingPredictor(), iterations=2, bank=bank)
         if bank is later:
             m.prepare_bank_later(combos)
-        lookup, seen = bank.latent, priors.setdefault(name, [])
-        bank.latent = lambda *a, _lookup=lookup, _seen=seen, **kw: _seen.append(_lookup(*a, **kw)) or _seen[-1]
+        lookup, seen = bank.lookup, priors.setdefault(name, [])
+        bank.lookup = lambda *a, _lookup=lookup, _seen=seen, **kw: (
+            _seen.append(_lookup(*a, **kw)[0]) or (_seen[-1], 0.0)
+        )
         tr = simulate(clip, "6")
         m.reset(clip.skeleton)
         for i in range(3):

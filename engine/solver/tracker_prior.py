@@ -215,27 +215,9 @@ class PoseBank:
         """Prior latent ``(L,)`` for readings of ``joints`` (a subset of :data:`BANK_JOINTS`
         holding an anchor) over the last ``LAG + 1`` frames: ``pos (LAG+1, S, 3)``, ``rot
         (LAG+1, S, 4)``, oldest first (repeat the first frame at the start of a clip);
-        the mean of ``k`` neighbours (0: the bank's :attr:`k`)."""
-        joints = tuple(joints)
-        idx = self._index(joints)
-        a = _anchor(joints)
-        x = features(pos[-1:], rot[-1:], a, pos[:1, a])[0]
-        q32 = ((x - idx.mean) / idx.std).astype(np.float32)
-        # the previous lookup's neighbours bound the search (any hint gives the same answer)
-        near = self._nearest(idx, q32, self._hints.get(joints), min(k or self.k, len(self)))
-        self._hints[joints] = near
-        return self._latents[near].mean(0)
-
-    def _nearest(self, idx: _Index, q32: np.ndarray, hint: torch.Tensor | None, k: int) -> torch.Tensor:
-        """The ``k`` nearest rows ``(k,)`` of ``idx`` to the standardised query ``q32 (D_c,)``."""
-        tab = idx.table
-        if idx.full:
-            q = torch.from_numpy(q32)
-        else:  # the other columns multiply zeros
-            q = torch.zeros(tab.table.shape[1])
-            q[idx.cols_t] = torch.from_numpy(q32)
-        # |t - q|^2 = |t|^2 - 2 t.q + |q|^2; the last term is the same for every row
-        return nearest(tab.table, idx.norms, q, q32, idx.prefilter, hint, k)
+        the mean of ``k`` neighbours (0: the bank's :attr:`k`). The previous lookup's
+        neighbours bound the search (any hint gives the same answer)."""
+        return self._lookup(joints, pos[None], rot[None], k, keep_hint=True)[0]
 
     def latent_frames(self, joints: Sequence[str], pos: np.ndarray, rot: np.ndarray, k: int = 0) -> torch.Tensor:
         """:meth:`latent` of ``F`` consecutive frames, ``(F, L)``, with the rows and bits
@@ -245,6 +227,13 @@ class PoseBank:
         neighbours (its prefilter then passes a few percent of the bank's rows, where a
         product over the whole bank reads all of them); the realtime lookup's hint is
         left as it was."""
+        return self._lookup(joints, pos, rot, k)
+
+    def _lookup(
+        self, joints: Sequence[str], pos: np.ndarray, rot: np.ndarray, k: int, keep_hint: bool = False
+    ) -> torch.Tensor:
+        """:meth:`latent_frames`; with ``keep_hint`` the last frame's neighbours become the
+        next lookup's hint (:meth:`latent`)."""
         joints = tuple(joints)
         idx, a = self._index(joints), _anchor(joints)
         k = min(k or self.k, len(self))
@@ -256,7 +245,20 @@ class PoseBank:
         for q in q32:
             hint = self._nearest(idx, q, hint, k)
             out.append(hint)
+        if keep_hint:
+            self._hints[joints] = hint
         return self._latents[torch.stack(out)].mean(1)
+
+    def _nearest(self, idx: _Index, q32: np.ndarray, hint: torch.Tensor | None, k: int) -> torch.Tensor:
+        """The ``k`` nearest rows ``(k,)`` of ``idx`` to the standardised query ``q32 (D_c,)``."""
+        tab = idx.table
+        if idx.full:
+            q = torch.from_numpy(q32)
+        else:  # the other columns multiply zeros
+            q = torch.zeros(tab.table.shape[1])
+            q[idx.cols_t] = torch.from_numpy(q32)
+        # |t - q|^2 = |t|^2 - 2 t.q + |q|^2; the last term is the same for every row
+        return nearest(tab.table, idx.norms, q, q32, idx.prefilter, hint, k)
 
     def save(self, path: str | Path) -> None:
         """Write the bank (float16 arrays, compressed) atomically."""

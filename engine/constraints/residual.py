@@ -271,3 +271,41 @@ class FrameRows:
     def select(self, like: Any, rows: Any) -> Any:
         """The row selection for ``A = len(like)`` frames: ``rows``, or the first ``A``."""
         return slice(0, len(like)) if rows is None else rows
+
+
+class PointTerm(FrameRows, Term):
+    """``scale * (P_k - target_k)`` for the joints ``k`` of :attr:`joints`, 3 entries each
+    (joint by joint), every entry reading one joint: the residual of a pin, of the
+    smoothing term and of the gait targets. Per frame ``target (A, k, 3)`` and ``scale (A,
+    k, 3)`` (0: that entry is off).
+
+    Parameters
+    ----------
+    name : str
+        The constraint's name.
+    joints : sequence of int
+        The joints, ``k`` of them.
+    target : ndarray (k, 3)
+        Their targets, metres.
+    scale : float or ndarray broadcasting to (k, 3)
+        Each entry's factor.
+    """
+
+    PER_FRAME = ("target", "scale")
+
+    def __init__(self, name: str, joints: Any, target: np.ndarray, scale: Any) -> None:
+        self.names, self.joints = (name,), np.asarray(joints, dtype=np.intp)
+        k = len(self.joints)
+        self.owner, self.entry_joint = np.zeros(3 * k, dtype=np.intp), np.repeat(self.joints, 3)
+        self.target = np.asarray(target, dtype=np.float64).reshape(1, k, 3)
+        self.scale = np.array(np.broadcast_to(np.asarray(scale, dtype=np.float64), (k, 3))).reshape(1, k, 3)
+
+    def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:
+        sel = self.select(P, rows)
+        scale, a = self.scale[sel], P.shape[0]
+        r = ((P[:, self.joints] - kit.const(self.target[sel], P)) * kit.const(scale, P)).reshape(a, len(self.owner))
+        if not jac:
+            return Residuals(r)
+        # entry 3 k + c reads P_k along axis c: its row is scale times that axis (constant within a frame)
+        d_pos = self.kept("d_pos", sel, lambda: scale.reshape(a, -1, 1) * np.tile(np.eye(3), (len(self.joints), 1)))
+        return Residuals(r, entry_joint=self.entry_joint, d_pos_entry=d_pos)

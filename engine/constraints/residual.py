@@ -47,8 +47,6 @@ from typing import Any
 
 import numpy as np
 
-from engine.constraints.gradient_scatter import members
-
 
 @dataclass(frozen=True)
 class FrameInputs:
@@ -216,9 +214,11 @@ class Term:
         return cached[1], cached[2], cached[3]
 
     def _membership(self) -> np.ndarray:
+        """``(m, n)``, 1 at ``[i, owner[i]]``: ``r2 @ _membership()`` sums each constraint's
+        squared entries (kept while :attr:`owner` stands)."""
         kept = self.__dict__.get("_member")
         if kept is None or kept[0] is not self.owner:
-            kept = self._member = (self.owner, members(self.owner, len(self.names)))
+            kept = self._member = (self.owner, _members(self.owner, len(self.names)))
         return kept[1]
 
     def kept(self, name: str, sel: Any, make: Callable[[], Any]) -> Any:
@@ -241,6 +241,23 @@ class Term:
         member = self._membership()
         r2 = res.r * res.r
         return r2 @ (member if kit.is_numpy else kit.const(member, r2))
+
+
+_MEMBERS: dict[tuple[bytes, int], np.ndarray] = {}  # owner arrays seen -> their 0/1 matrix (shared)
+
+
+def _members(owner: np.ndarray, count: int) -> np.ndarray:
+    """:meth:`Term._membership` of ``owner (m,)`` over ``count`` constraints. Cached: a
+    term's owners never change, and frame after frame share theirs."""
+    key = (owner.tobytes(), count)
+    out = _MEMBERS.get(key)
+    if out is None:
+        if len(_MEMBERS) > 4096:
+            _MEMBERS.clear()
+        out = np.zeros((len(owner), count))
+        out[np.arange(len(owner)), owner] = 1.0
+        _MEMBERS[key] = out
+    return out
 
 
 class FrameRows:

@@ -90,9 +90,6 @@ class Kit:
     def clamp_min(self, x: Any, low: float) -> Any:
         return np.maximum(x, low) if self.is_numpy else x.clamp_min(low)
 
-    def where(self, cond: Any, a: Any, b: Any) -> Any:
-        return self.xp.where(cond, a, b)
-
     def cat(self, parts: list, axis: int = -1) -> Any:
         return np.concatenate(parts, axis=axis) if self.is_numpy else self.xp.cat(parts, dim=axis)
 

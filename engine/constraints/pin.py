@@ -61,7 +61,7 @@ class PinConstraint(OnOneJoint, Constraint):
         """``on * (P_j - target)``: ``on`` 0 while there is no target (module doc)."""
         target = self._target(frame.previous_positions)
         j = joint_index(self.joint, "joint", self.kind)
-        term = PointTerm(self.name, [j], np.zeros(3) if target is None else target, float(target is not None))
+        term = PointTerm(self.name, (j,), np.zeros(3) if target is None else target, float(target is not None))
         term.check_group, term.check_limit2 = np.zeros(3, dtype=np.intp), np.array([self.tolerance**2])  # off: r = 0
         return term
 

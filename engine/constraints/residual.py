@@ -41,6 +41,7 @@ on the inputs its :meth:`~engine.constraints.base.Constraint.examples` declares.
 from __future__ import annotations
 
 import copy
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -307,19 +308,30 @@ class PointTerm(FrameRows, Term):
 
     PER_FRAME = ("target", "scale")
 
-    def __init__(self, name: str, joints: Any, target: np.ndarray, scale: Any) -> None:
-        self.names, self.joints = (name,), np.asarray(joints, dtype=np.intp)
+    def __init__(self, name: str, joints: tuple[int, ...], target: np.ndarray, scale: Any) -> None:
+        self.names = (name,)
+        self.joints, self._take, self.owner, self.entry_joint, self._unit = _point_layout(tuple(joints))
         k = len(self.joints)
-        self.owner, self.entry_joint = np.zeros(3 * k, dtype=np.intp), np.repeat(self.joints, 3)
         self.target = np.asarray(target, dtype=np.float64).reshape(1, k, 3)
-        self.scale = np.array(np.broadcast_to(np.asarray(scale, dtype=np.float64), (k, 3))).reshape(1, k, 3)
+        self.scale = np.full((1, k, 3), scale, dtype=np.float64)
 
     def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:
         sel = self.select(P, rows)
         scale, a = self.scale[sel], P.shape[0]
-        r = ((P[:, self.joints] - kit.const(self.target[sel], P)) * kit.const(scale, P)).reshape(a, len(self.owner))
+        r = ((P[:, self._take] - kit.const(self.target[sel], P)) * kit.const(scale, P)).reshape(a, len(self.owner))
         if not jac:
             return Residuals(r)
         # entry 3 k + c reads P_k along axis c: its row is scale times that axis (constant within a frame)
-        d_pos = self.kept("d_pos", sel, lambda: scale.reshape(a, -1, 1) * np.tile(np.eye(3), (len(self.joints), 1)))
+        d_pos = self.kept("d_pos", sel, lambda: scale.reshape(a, -1, 1) * self._unit)
         return Residuals(r, entry_joint=self.entry_joint, d_pos_entry=d_pos)
+
+
+@functools.lru_cache(maxsize=64)
+def _point_layout(joints: tuple[int, ...]) -> tuple[np.ndarray, Any, np.ndarray, np.ndarray, np.ndarray]:
+    """A :class:`PointTerm`'s index arrays over ``joints`` (shared, read only): the joints,
+    how to take their rows of ``P`` (a slice when consecutive), each entry's constraint and
+    joint, and each entry's axis ``(3 k, 3)``."""
+    j = np.array(joints, dtype=np.intp)
+    k = len(j)
+    take = slice(joints[0], joints[0] + k) if joints == tuple(range(joints[0], joints[0] + k)) else j
+    return j, take, np.zeros(3 * k, dtype=np.intp), np.repeat(j, 3), np.tile(np.eye(3), (k, 1))

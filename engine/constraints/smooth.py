@@ -20,6 +20,8 @@ from engine import skeleton as sk
 from engine.constraints.base import Constraint
 from engine.constraints.residual import FrameInputs, PointTerm
 
+_EVERY = tuple(range(sk.NUM_JOINTS))
+
 
 @dataclass
 class SmoothConstraint(Constraint):
@@ -52,9 +54,8 @@ class SmoothConstraint(Constraint):
     def term(self, frame: FrameInputs) -> PointTerm:
         """``(P - target) / sqrt(22)`` over every joint (66 entries), so the loss is the mean
         squared distance to the constant-velocity target; zero while there is none."""
-        n = sk.NUM_JOINTS
-        on = 1.0 if self.active else 0.0
-        return PointTerm(self.name, np.arange(n), self.target if self.active else np.zeros((n, 3)), on / math.sqrt(n))
+        n, on = sk.NUM_JOINTS, 1.0 if self.active else 0.0
+        return PointTerm(self.name, _EVERY, self.target if self.active else np.zeros((n, 3)), on / math.sqrt(n))
 
     @classmethod
     def examples(cls, positions: np.ndarray) -> list[Constraint]:

@@ -72,7 +72,7 @@ def main() -> None:
     gp, gr = gen.random(obj.P.shape), gen.random(obj.P.shape)
 
     def terms(jac: bool) -> None:
-        for t in obj.frame.terms:
+        for t in obj.terms:
             t.residual(NUMPY, obj.P, obj.W, obj.z, jac=jac)
 
     def gradients() -> None:
@@ -89,7 +89,7 @@ def main() -> None:
         "decoder bwd": lambda: obj.decoder.backward(g_out[0]),
         "gradient": obj.gradient,
     }
-    print("terms:", [type(t).__name__ for t in obj.frame.terms])
+    print("terms:", [type(t).__name__ for t in obj.terms])
     spent: dict[str, list[int]] = {k: [] for k in pieces}
     with threadpool_limits(1):
         for _ in range(repeats):
@@ -98,7 +98,8 @@ def main() -> None:
         for k, v in spent.items():
             print(f"{k:14s} min {np.min(v) / 1e3:7.1f} med {np.median(v) / 1e3:7.1f} us")
         print("each term alone, tight loop (min us): residual with Jacobians, gradients, losses")
-        for t, w in zip(obj.frame.terms, obj.frame.weights):
+        per_term = np.split(obj.weights, np.cumsum([len(t.names) for t in obj.terms])[:-1])
+        for t, w in zip(obj.terms, per_term):
             jac, acc, loss = [], [], []
             one = TermStack([t])
             for _ in range(repeats):

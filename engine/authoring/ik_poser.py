@@ -11,7 +11,7 @@ character rig with IK handles does, from the current pose on every solve:
    passes, as far as that bend can bring it; a position target on the head bends the
    spine the same way to bring the head there.
 3. **Limbs.** Wrists and ankles with targets are put on them by the analytic two-bone
-   step (:func:`engine.solver.limb_ik.reach`: the elbow or knee bends in the limb's
+   step (:func:`engine.solver.limb_ik.reach_local`: the elbow or knee bends in the limb's
    current plane, the limb turns about the shoulder or hip; beyond reach the limb points
    straight at the target). Feet without targets stay where they stood when the poser
    was made, as an IK rig's foot handles do, so moving the pelvis bends the legs.

@@ -12,13 +12,13 @@ over the two ankles, per axis. Residual: ``scale * (P_ankles - target)``, 6 entr
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import numpy as np
 
 from engine import skeleton as sk
 from engine.constraints.base import Constraint
-from engine.constraints.residual import FrameInputs, FrameRows, Kit, Residuals, Term
+from engine.constraints.residual import FrameInputs, PointTerm
 
 #: The ankles the term steers: left, right.
 ANKLES = (sk.JOINT_INDEX["lankle"], sk.JOINT_INDEX["rankle"])
@@ -67,8 +67,9 @@ class GaitConstraint(Constraint):
     def acts_on(self) -> tuple[str, ...]:
         return ("lankle", "rankle")
 
-    def term(self, frame: FrameInputs) -> "GaitTerm":
-        return GaitTerm(self.name, self.targets.target, self.targets.scale)
+    def term(self, frame: FrameInputs) -> PointTerm:
+        """``scale * (P_ankles - target)``, 6 entries (all scales zero: the term is off)."""
+        return PointTerm(self.name, ANKLES, self.targets.target, self.targets.scale)
 
     @classmethod
     def examples(cls, positions: np.ndarray) -> list[Constraint]:
@@ -76,29 +77,3 @@ class GaitConstraint(Constraint):
         target = positions[list(ANKLES)] + [[0.1, -0.05, 0.0], [-0.2, 0.1, 0.0]]
         walking.set_targets(GaitTargets(target, np.array([[1.0, 1.0, 0.0], [0.5, 0.5, 0.0]]), stance=0))
         return [walking, cls(name="standing")]
-
-
-class GaitTerm(FrameRows, Term):
-    """``scale * (P_ankles - target)`` flattened to 6 entries; per frame ``target (A, 2, 3)``
-    and ``scale (A, 2, 3)`` (all zero: the term is off)."""
-
-    PER_FRAME = ("target", "scale")
-
-    def __init__(self, name: str, target: np.ndarray, scale: np.ndarray) -> None:
-        self.names, self.owner = (name,), np.zeros(6, dtype=np.intp)
-        self.target = np.asarray(target, dtype=np.float64).reshape(1, 2, 3)
-        self.scale = np.asarray(scale, dtype=np.float64).reshape(1, 2, 3)
-        self.j = np.array(ANKLES, dtype=np.intp)
-
-    def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:
-        sel = self.select(P, rows)
-        scale = self.scale[sel]
-        a = P.shape[0]
-        r = ((P[:, self.j] - kit.const(self.target[sel], P)) * kit.const(scale, P)).reshape(a, 6)
-        if not jac:
-            return Residuals(r)
-        d = np.zeros((a, 6, 2, 3))
-        for k in range(2):
-            for c in range(3):
-                d[:, 3 * k + c, k, c] = scale[:, k, c]
-        return Residuals(r, self.j, d)

@@ -26,7 +26,7 @@ import numpy as np
 
 from engine.constraints.base import Constraint, OnOneJoint, joint_index, param
 from engine.constraints.placement import joint_at
-from engine.constraints.residual import FrameInputs, FrameRows, Kit, Residuals, Term
+from engine.constraints.residual import FrameInputs, PointTerm
 from engine.gizmos import PointGizmo
 
 
@@ -57,8 +57,13 @@ class PinConstraint(OnOneJoint, Constraint):
         j = joint_index(self.joint, "joint", self.kind)
         return dataclasses.replace(self, position=np.array(previous_positions[j], dtype=np.float64))
 
-    def term(self, frame: FrameInputs) -> "PinTerm":
-        return PinTerm(self, self._target(frame.previous_positions))
+    def term(self, frame: FrameInputs) -> PointTerm:
+        """``on * (P_j - target)``: ``on`` 0 while there is no target (module doc)."""
+        target = self._target(frame.previous_positions)
+        j = joint_index(self.joint, "joint", self.kind)
+        term = PointTerm(self.name, (j,), np.zeros(3) if target is None else target, float(target is not None))
+        term.check_group, term.check_limit2 = np.zeros(3, dtype=np.intp), np.array([self.tolerance**2])  # off: r = 0
+        return term
 
     @classmethod
     def examples(cls, positions: np.ndarray) -> list[Constraint]:
@@ -81,26 +86,3 @@ class PinConstraint(OnOneJoint, Constraint):
         if positions is not None:
             anchor = np.asarray(positions, float)[joint_index(self.joint, "joint", self.kind)]
         return PointGizmo(self.position, edit="position", label=self.joint, anchor=anchor)
-
-
-class PinTerm(FrameRows, Term):
-    """``on * (P_j - target)``: ``on`` 0 while there is no target (module doc); per frame
-    (``target (A, 3)``, ``on (A,)``)."""
-
-    PER_FRAME = ("target", "on")
-
-    def __init__(self, c: PinConstraint, target: np.ndarray | None) -> None:
-        self.names, self.owner = (c.name,), np.zeros(3, dtype=np.intp)
-        self.check_group, self.check_limit2 = np.zeros(3, dtype=np.intp), np.array([c.tolerance**2])  # off: r = 0
-        self.j = np.array([joint_index(c.joint, "joint", c.kind)], dtype=np.intp)
-        self.on = np.array([0.0 if target is None else 1.0])
-        self.target = np.zeros((1, 3)) if target is None else np.asarray(target, dtype=np.float64).reshape(1, 3)
-
-    def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:
-        sel = self.select(P, rows)
-        on = self.on[sel]
-        r = (P[:, self.j[0]] - kit.const(self.target[sel], P)) * kit.const(on, P)[:, None]
-        if not jac:
-            return Residuals(r)
-        d_pos = self.kept("d_pos", sel, lambda: np.eye(3)[None] * on[:, None, None])
-        return Residuals(r, entry_joint=self.kept("joints", sel, lambda: np.repeat(self.j, 3)), d_pos_entry=d_pos)

@@ -41,13 +41,12 @@ on the inputs its :meth:`~engine.constraints.base.Constraint.examples` declares.
 from __future__ import annotations
 
 import copy
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-
-from engine.constraints.gradient_scatter import members
 
 
 @dataclass(frozen=True)
@@ -91,9 +90,6 @@ class Kit:
 
     def clamp_min(self, x: Any, low: float) -> Any:
         return np.maximum(x, low) if self.is_numpy else x.clamp_min(low)
-
-    def where(self, cond: Any, a: Any, b: Any) -> Any:
-        return self.xp.where(cond, a, b)
 
     def cat(self, parts: list, axis: int = -1) -> Any:
         return np.concatenate(parts, axis=axis) if self.is_numpy else self.xp.cat(parts, dim=axis)
@@ -216,9 +212,11 @@ class Term:
         return cached[1], cached[2], cached[3]
 
     def _membership(self) -> np.ndarray:
+        """``(m, n)``, 1 at ``[i, owner[i]]``: ``r2 @ _membership()`` sums each constraint's
+        squared entries (kept while :attr:`owner` stands)."""
         kept = self.__dict__.get("_member")
         if kept is None or kept[0] is not self.owner:
-            kept = self._member = (self.owner, members(self.owner, len(self.names)))
+            kept = self._member = (self.owner, _members(self.owner, len(self.names)))
         return kept[1]
 
     def kept(self, name: str, sel: Any, make: Callable[[], Any]) -> Any:
@@ -241,6 +239,23 @@ class Term:
         member = self._membership()
         r2 = res.r * res.r
         return r2 @ (member if kit.is_numpy else kit.const(member, r2))
+
+
+_MEMBERS: dict[tuple[bytes, int], np.ndarray] = {}  # owner arrays seen -> their 0/1 matrix (shared)
+
+
+def _members(owner: np.ndarray, count: int) -> np.ndarray:
+    """:meth:`Term._membership` of ``owner (m,)`` over ``count`` constraints. Cached: a
+    term's owners never change, and frame after frame share theirs."""
+    key = (owner.tobytes(), count)
+    out = _MEMBERS.get(key)
+    if out is None:
+        if len(_MEMBERS) > 4096:
+            _MEMBERS.clear()
+        out = np.zeros((len(owner), count))
+        out[np.arange(len(owner)), owner] = 1.0
+        _MEMBERS[key] = out
+    return out
 
 
 class FrameRows:
@@ -271,3 +286,52 @@ class FrameRows:
     def select(self, like: Any, rows: Any) -> Any:
         """The row selection for ``A = len(like)`` frames: ``rows``, or the first ``A``."""
         return slice(0, len(like)) if rows is None else rows
+
+
+class PointTerm(FrameRows, Term):
+    """``scale * (P_k - target_k)`` for the joints ``k`` of :attr:`joints`, 3 entries each
+    (joint by joint), every entry reading one joint: the residual of a pin, of the
+    smoothing term and of the gait targets. Per frame ``target (A, k, 3)`` and ``scale (A,
+    k, 3)`` (0: that entry is off).
+
+    Parameters
+    ----------
+    name : str
+        The constraint's name.
+    joints : sequence of int
+        The joints, ``k`` of them.
+    target : ndarray (k, 3)
+        Their targets, metres.
+    scale : float or ndarray broadcasting to (k, 3)
+        Each entry's factor.
+    """
+
+    PER_FRAME = ("target", "scale")
+
+    def __init__(self, name: str, joints: tuple[int, ...], target: np.ndarray, scale: Any) -> None:
+        self.names = (name,)
+        self.joints, self._take, self.owner, self.entry_joint, self._unit = _point_layout(tuple(joints))
+        k = len(self.joints)
+        self.target = np.asarray(target, dtype=np.float64).reshape(1, k, 3)
+        self.scale = np.full((1, k, 3), scale, dtype=np.float64)
+
+    def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:
+        sel = self.select(P, rows)
+        scale, a = self.scale[sel], P.shape[0]
+        r = ((P[:, self._take] - kit.const(self.target[sel], P)) * kit.const(scale, P)).reshape(a, len(self.owner))
+        if not jac:
+            return Residuals(r)
+        # entry 3 k + c reads P_k along axis c: its row is scale times that axis (constant within a frame)
+        d_pos = self.kept("d_pos", sel, lambda: scale.reshape(a, -1, 1) * self._unit)
+        return Residuals(r, entry_joint=self.entry_joint, d_pos_entry=d_pos)
+
+
+@functools.lru_cache(maxsize=64)
+def _point_layout(joints: tuple[int, ...]) -> tuple[np.ndarray, Any, np.ndarray, np.ndarray, np.ndarray]:
+    """A :class:`PointTerm`'s index arrays over ``joints`` (shared, read only): the joints,
+    how to take their rows of ``P`` (a slice when consecutive), each entry's constraint and
+    joint, and each entry's axis ``(3 k, 3)``."""
+    j = np.array(joints, dtype=np.intp)
+    k = len(j)
+    take = slice(joints[0], joints[0] + k) if joints == tuple(range(joints[0], joints[0] + k)) else j
+    return j, take, np.zeros(3 * k, dtype=np.intp), np.repeat(j, 3), np.tile(np.eye(3), (k, 1))

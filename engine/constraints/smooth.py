@@ -12,13 +12,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import numpy as np
 
 from engine import skeleton as sk
 from engine.constraints.base import Constraint
-from engine.constraints.residual import FrameInputs, FrameRows, Kit, Residuals, Term
+from engine.constraints.residual import FrameInputs, PointTerm
+
+_EVERY = tuple(range(sk.NUM_JOINTS))
 
 
 @dataclass
@@ -49,8 +51,11 @@ class SmoothConstraint(Constraint):
     def acts_on(self) -> tuple[str, ...]:
         return tuple(sk.JOINT_NAMES)
 
-    def term(self, frame: FrameInputs) -> "SmoothTerm":
-        return SmoothTerm(self.name, self.target if self.active else None)
+    def term(self, frame: FrameInputs) -> PointTerm:
+        """``(P - target) / sqrt(22)`` over every joint (66 entries), so the loss is the mean
+        squared distance to the constant-velocity target; zero while there is none."""
+        n, on = sk.NUM_JOINTS, 1.0 if self.active else 0.0
+        return PointTerm(self.name, _EVERY, self.target if self.active else np.zeros((n, 3)), on / math.sqrt(n))
 
     @classmethod
     def examples(cls, positions: np.ndarray) -> list[Constraint]:
@@ -61,42 +66,3 @@ class SmoothConstraint(Constraint):
     @property
     def active(self) -> bool:
         return bool(np.isfinite(self.target).all())
-
-
-class SmoothTerm(FrameRows, Term):
-    """``(P - target) / sqrt(22)`` over every joint (66 entries), so the loss is the mean
-    squared distance to the constant-velocity target.
-
-    Parameters
-    ----------
-    name : str
-        Constraint name (loss reporting).
-    target : ndarray (22, 3) or None
-        Constant-velocity extrapolation of the last two poses, metres; None = inactive
-        (residual zero). With a frame axis (``target (A, 22, 3)``, ``on (A,)``) in the
-        batched solve.
-    """
-
-    PER_FRAME = ("target", "on")
-
-    #: The same for every frame (shared, read only): each entry's constraint and joint, and
-    #: ``(3 n, 3)`` the direction entry ``3 j + c`` reads ``P_j`` along, over ``sqrt(n)``.
-    owner = np.zeros(3 * sk.NUM_JOINTS, dtype=np.intp)
-    entry_joint = np.repeat(np.arange(sk.NUM_JOINTS), 3)
-    _unit = np.tile(np.eye(3), (sk.NUM_JOINTS, 1)) / math.sqrt(sk.NUM_JOINTS)
-
-    def __init__(self, name: str, target: np.ndarray | None) -> None:
-        n = sk.NUM_JOINTS
-        self.names = (name,)
-        self.on = np.array([0.0 if target is None else 1.0])
-        self.target = np.zeros((1, n, 3)) if target is None else np.asarray(target, dtype=np.float64).reshape(1, n, 3)
-
-    def residual(self, kit: Kit, P: Any, W: Any, z: Any, jac: bool = False, rows: Any = None) -> Residuals:
-        sel = self.select(P, rows)
-        on = self.on[sel]
-        a, n = P.shape[0], P.shape[1]
-        r = ((P - kit.const(self.target[sel], P)) * kit.const(on / math.sqrt(n), P)[:, None, None]).reshape(a, 3 * n)
-        if not jac:
-            return Residuals(r)
-        d_pos = self.kept("d_pos", sel, lambda: self._unit[None] * on[:, None, None])
-        return Residuals(r, entry_joint=self.entry_joint, d_pos_entry=d_pos)

@@ -17,7 +17,6 @@ from collections.abc import Iterator, Sequence
 
 import numpy as np
 
-from engine.constraints.gradient_scatter import gradient_rows
 from engine.constraints.residual import Residuals, Term
 
 
@@ -166,7 +165,9 @@ class TermStack:
                     block_joints = one.entry_joint
                 else:
                     block_joints = np.tile(block_joints, m)
-                joints.append(gradient_rows(np.asarray(block_joints), rows) + (self.joints if turn else 0))
+                # each pair's row of the gradient array: rows[joint] (the joint itself without rows)
+                block_joints = np.asarray(block_joints) if rows is None else rows[block_joints]
+                joints.append(block_joints + (self.joints if turn else 0))
             if one.d_latent is not None:
                 latent.append(start + np.arange(m))
         bins = (3 * np.concatenate(joints)[:, None] + np.arange(3)).reshape(-1)

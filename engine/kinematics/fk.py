@@ -18,6 +18,7 @@ from functools import lru_cache
 import numpy as np
 
 from engine import skeleton as sk
+from engine.kinematics import quat_np as QN
 from engine.kinematics import quaternion as Q
 from engine.kinematics.backend import torch_of
 
@@ -200,8 +201,8 @@ def fk_joints(
 
     def place(j: int) -> tuple:
         if j not in world:
-            (w0, x0, y0, z0), (px, py, pz) = place(int(parents[j]))
-            w1, x1, y1, z1 = local[j]
+            q0, (px, py, pz) = place(int(parents[j]))
+            w0, x0, y0, z0 = q0
             ox, oy, oz = off[j]
             # p + q o q*, with t = 2 (v x o): o + w t + v x t
             tx, ty, tz = 2.0 * (y0 * oz - z0 * oy), 2.0 * (z0 * ox - x0 * oz), 2.0 * (x0 * oy - y0 * ox)
@@ -210,13 +211,7 @@ def fk_joints(
                 py + oy + w0 * ty + z0 * tx - x0 * tz,
                 pz + oz + w0 * tz + x0 * ty - y0 * tx,
             )
-            rot = (
-                w0 * w1 - x0 * x1 - y0 * y1 - z0 * z1,
-                w0 * x1 + x0 * w1 + y0 * z1 - z0 * y1,
-                w0 * y1 - x0 * z1 + y0 * w1 + z0 * x1,
-                w0 * z1 + x0 * y1 - y0 * x1 + z0 * w1,
-            )
-            world[j] = (rot, pos)
+            world[j] = (QN.qmul(q0, local[j]), pos)
         return world[j]
 
     placed = [place(int(j)) for j in joints]

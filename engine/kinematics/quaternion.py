@@ -21,6 +21,13 @@ if TYPE_CHECKING:  # imported by whoever made a tensor; numpy callers never load
 
 Array = TypeVar("Array", np.ndarray, "torch.Tensor")
 
+#: Operations only numpy arrays take: the numpy kit's own functions.
+from_euler = _np.from_euler
+to_euler = _np.to_euler
+from_to = _np.from_to
+unroll = _np.unroll
+slerp = _np.slerp
+
 
 def mul(q0: Array, q1: Array) -> Array:
     """Hamilton product ``q0 * q1``; shapes broadcast, ``(..., 4)``."""
@@ -100,16 +107,6 @@ def identity(shape: tuple[int, ...] = (), like: np.ndarray | torch.Tensor | None
     return _np.identity(shape)
 
 
-def from_euler(euler_rad: np.ndarray, order: np.ndarray) -> np.ndarray:
-    """Euler angles (radians) ``(..., J, 3)`` with per-joint ``order (..., J, 3)`` of 'x'/'y'/'z'."""
-    return _np.from_euler(euler_rad, order)
-
-
-def to_euler(q: np.ndarray, order: np.ndarray) -> np.ndarray:
-    """Inverse of :func:`from_euler` (radians)."""
-    return _np.to_euler(q, order)
-
-
 def from_axis_angle(axis: Array, angle: Array) -> Array:
     """Rotation of ``angle (...,)`` radians about unit ``axis (..., 3)``."""
     if is_tensor(axis):
@@ -118,11 +115,6 @@ def from_axis_angle(axis: Array, angle: Array) -> Array:
         half = 0.5 * angle
         return torch.cat((torch.cos(half)[..., None], torch.sin(half)[..., None] * axis), dim=-1)
     return _np.from_axis_angle(axis, angle)
-
-
-def from_to(v0: np.ndarray, v1: np.ndarray) -> np.ndarray:
-    """Shortest rotation taking direction ``v0 (..., 3)`` onto ``v1 (..., 3)`` (numpy)."""
-    return _np.from_to(v0, v1)
 
 
 def from_matrix(m: Array) -> Array:
@@ -177,11 +169,6 @@ def heading(q: Array) -> Array:
     return torch.stack((torch.cos(half), z, z, torch.sin(half)), dim=-1)
 
 
-def unroll(q: np.ndarray, axis: int = 0) -> np.ndarray:
-    """Flip signs along ``axis`` (time) so consecutive quaternions stay in one hemisphere."""
-    return _np.unroll(q, axis)
-
-
 def mirror_x(q: Array) -> Array:
     """Conjugate a rotation by the reflection ``x -> -x`` (the left/right mirror)."""
     if is_tensor(q):
@@ -189,8 +176,3 @@ def mirror_x(q: Array) -> Array:
 
         return q * torch.tensor([1.0, 1.0, -1.0, -1.0], dtype=q.dtype, device=q.device)
     return _np.mirror_x(q)
-
-
-def slerp(q0: np.ndarray, q1: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """Spherical interpolation, ``t`` broadcast against ``(...,)``."""
-    return _np.slerp(q0, q1, t)

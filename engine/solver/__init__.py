@@ -29,30 +29,19 @@ if TYPE_CHECKING:  # the real types for the checker; at run time each is importe
     from engine.solver.temporal import LatentPredictor, TemporalSchedule
     from engine.solver.update import LatentUpdate
 
-#: Public name -> the module defining it. Imported on first use (PEP 562), so that
+#: The module defining each public name. Imported on first use (PEP 562), so that
 #: reading the settings (``engine.solver.settings``, e.g. to build the command line)
 #: does not import torch.
-_WHERE = {
-    "FrameContext": "frame",
-    "LatentDecoder": "frame",
-    "Solution": "frame",
-    "SolveTimings": "frame",
-    "PoseOptimizer": "optimizer",
-    "BodyAnchor": "pose",
-    "JointAnchor": "pose",
-    "RootAnchor": "pose",
-    "RootFrame": "pose",
-    "RootOverride": "pose",
-    "FULL_SET": "settings",
-    "MODES": "settings",
-    "OPTIMIZERS": "settings",
-    "PRIORS": "settings",
-    "OptimizerSettings": "settings",
-    "PoseState": "engine.kinematics.pose_state",
-    "LatentPredictor": "temporal",
-    "TemporalSchedule": "temporal",
-    "LatentUpdate": "update",
+_MODULES = {
+    "frame": ("FrameContext", "LatentDecoder", "Solution", "SolveTimings"),
+    "optimizer": ("PoseOptimizer",),
+    "pose": ("BodyAnchor", "JointAnchor", "RootAnchor", "RootFrame", "RootOverride"),
+    "settings": ("FULL_SET", "MODES", "OPTIMIZERS", "PRIORS", "OptimizerSettings"),
+    "engine.kinematics.pose_state": ("PoseState",),
+    "temporal": ("LatentPredictor", "TemporalSchedule"),
+    "update": ("LatentUpdate",),
 }
+_WHERE = {name: module for module, names in _MODULES.items() for name in names}
 
 
 def __getattr__(name: str) -> Any:

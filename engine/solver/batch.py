@@ -83,7 +83,7 @@ class BatchObjective(FastObjective):
         weights ``(K,)`` and its root (hip tracker position ``(3,)``, rotation ``(4,)``)."""
         from engine.kinematics import quat_np as QN
 
-        for t, f in zip(self.frame.terms, frame_terms):
+        for t, f in zip(self.terms, frame_terms):
             if isinstance(t, FrameRows):
                 t.set_row(row, f)
         self.weights[row] = weights

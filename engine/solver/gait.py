@@ -168,18 +168,14 @@ class GaitPlanner:
         return (self._anchor[-1] - self._anchor[0]) * self.fps / (len(self._anchor) - 1)
 
     def arm_stance(self, v: np.ndarray) -> int | None:
-        """The stance foot the arm swing says (0 left, 1 right), or None when the arms do
-        not swing along the travel ``v (2,)``: walkers swing each arm with the opposite
-        leg, so while the left hand moves forward relative to the right one, the right
-        foot swings and the left one stands (on the walking clips the rule names the
-        truth's slower foot in 73-94 % of the travelling frames)."""
+        """The stance foot :func:`arm_swing` says (0 left, 1 right) from the hands' last
+        :attr:`GaitParams.arm_lag_s` along the travel ``v (2,)``, or None when the arms do
+        not swing (or are not tracked)."""
         if len(self._hands) < 2 or not np.all(np.isfinite(self._hands[0])):
             return None
-        fwd = v / max(float(np.linalg.norm(v)), 1e-9)
-        rate = float((self._hands[-1] - self._hands[0]) @ fwd) * self.fps / (len(self._hands) - 1)
-        if abs(rate) < self.params.arm_speed:
-            return None
-        return 0 if rate > 0 else 1
+        change = (self._hands[-1] - self._hands[0])[None]
+        left = int(arm_swing(change, v[None], self.fps, len(self._hands) - 1, self.params.arm_speed)[0])
+        return None if left < 0 else 1 - left
 
     def learned_stance(self) -> int | None:
         """The stance foot the classifier (:mod:`engine.models.stance`) names from the head's
@@ -344,6 +340,21 @@ def _rise(x: float, lo: float, hi: float) -> float:
     """A smoothstep of ``x`` from 0 at ``lo`` to 1 at ``hi``."""
     t = float(np.clip((x - lo) / (hi - lo), 0.0, 1.0))
     return t * t * (3.0 - 2.0 * t)
+
+
+def arm_swing(change: np.ndarray, travel: np.ndarray, fps: float, frames: int, arm_speed: float) -> np.ndarray:
+    """The arm-swing rule, per sample ``(N,)``: 1 when it says the left foot stands, 0 the
+    right, -1 when the arms do not swing (a fore-aft speed below ``arm_speed`` m/s).
+    ``change (N, 2)`` is how the left hand's horizontal position minus the right one's
+    changed over the last ``frames`` frames at ``fps``, ``travel (N, 2)`` the direction of
+    travel (any length). Walkers swing each arm with the opposite leg, so while the left
+    hand moves forward relative to the right one, the right foot swings and the left one
+    stands (on the walking clips the rule names the truth's slower foot in 73-94 % of the
+    travelling frames). The gait planner asks it of one frame, the stance training
+    (:mod:`engine.training.stance`) of every frame of a clip."""
+    fwd = travel / np.maximum(np.linalg.norm(travel, axis=-1, keepdims=True), 1e-9)
+    rate = np.einsum("ij,ij->i", change, fwd) * fps / frames
+    return np.where(np.abs(rate) < arm_speed, -1, (rate > 0).astype(int))
 
 
 def _smootherstep(t: float) -> float:

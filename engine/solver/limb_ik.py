@@ -1,6 +1,6 @@
 """Exact steps after the latent solve (numpy): the head onto its tracker by the spine
-(:func:`reach_head_local`), wrists and ankles onto theirs (:func:`reach`) and tracked
-joints onto their trackers' rotations (:func:`adopt_rotations`,
+(:func:`reach_head_local`), wrists and ankles onto theirs (:func:`reach_local`) and tracked
+joints onto their trackers' rotations (:func:`adopt_local`,
 with the head's turn about the neck shared with the lower neck: :func:`share_neck_twist`).
 
 The decoder brings a tracked hand or foot within a centimetre or two of its tracker; the
@@ -10,7 +10,7 @@ solvers: the middle joint (elbow, knee) bends or straightens about its current b
 until the limb's length from its root joint (shoulder, hip) to the end joint equals the
 distance to the tracker, then the whole limb turns about its root joint onto the
 tracker. The limb keeps its plane and the end joint keeps its world rotation (the
-tracker's, when :func:`adopt_rotations` runs after). Beyond reach the limb points
+tracker's, when :func:`adopt_local` runs after). Beyond reach the limb points
 straight at the tracker.
 
 Both steps run once per solved frame on one pose, so the per-limb arithmetic is on
@@ -78,7 +78,17 @@ CARRIED = frozenset(j for j in range(sk.NUM_JOINTS) if SPINE[0] in ancestors(sk.
 def reach_local(
     local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, targets: dict[int, np.ndarray]
 ) -> np.ndarray:
-    """The local rotations of :func:`reach` ``(22, 4)``, without the positions."""
+    """Move the tracked wrists / ankles onto their targets by their limbs' two bones.
+
+    Parameters are those of :func:`adopt_local`, except that ``targets`` maps an end
+    joint (a key of :data:`LIMBS`) to a world target *position* ``(3,)``, metres.
+
+    Returns
+    -------
+    local_rot : ndarray (22, 4)
+        Changed at each limb's root and middle joint and its end joint (which keeps its
+        world rotation); the rest as given, every row with ``w >= 0``.
+    """
     local = np.array(local_rot, dtype=np.float64)
     root_pos = np.asarray(root_pos, dtype=np.float64)
     # limbs do not share joints, and none holds another's ancestors: one placement serves all
@@ -113,26 +123,6 @@ def reach_local(
     return local
 
 
-def reach(
-    local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, targets: dict[int, np.ndarray]
-) -> tuple[np.ndarray, np.ndarray]:
-    """Move the tracked wrists / ankles onto their targets by their limbs' two bones.
-
-    Parameters are those of :func:`adopt_rotations`, except that ``targets`` maps an end
-    joint (a key of :data:`LIMBS`) to a world target *position* ``(3,)``, metres.
-
-    Returns
-    -------
-    local_rot : ndarray (22, 4)
-        Changed at each limb's root and middle joint and its end joint (which keeps its
-        world rotation); the rest as given, every row with ``w >= 0``.
-    positions : ndarray (22, 3)
-        FK of the result, metres.
-    """
-    local = reach_local(local_rot, root_pos, offsets, targets)
-    return local, fk(local, np.asarray(root_pos, dtype=np.float64), offsets)[0]
-
-
 def reach_head_local(
     local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, target: np.ndarray
 ) -> np.ndarray:
@@ -149,7 +139,7 @@ def reach_head_local(
     chord's length is not a target: the bend changes it (on random poses, 3 mm median
     and under 2 cm for a 10-degree swing), and a target nearer or farther than the head
     stays off along the chord. Arms and head follow the chest and neck (their own local
-    rotations are unchanged), so :func:`reach` of the wrists comes after.
+    rotations are unchanged), so :func:`reach_local` of the wrists comes after.
     """
     local = np.array(local_rot, dtype=np.float64)
     root_pos = np.asarray(root_pos, dtype=np.float64)
@@ -190,7 +180,25 @@ def _unit(q: tuple) -> tuple:
 def adopt_local(
     local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, targets: dict[int, np.ndarray]
 ) -> np.ndarray:
-    """The local rotations of :func:`adopt_rotations` ``(22, 4)``, without the positions."""
+    """Give joints exact world rotations by changing their local rotations only.
+
+    Parameters
+    ----------
+    local_rot : ndarray (22, 4)
+        Local rotations (row 0 the root's world rotation).
+    root_pos : ndarray (3,)
+        Root position, metres.
+    offsets : ndarray (22, 3)
+        Bone offsets, metres.
+    targets : dict
+        Joint index (not the root) -> world rotation ``(4,)`` (w, x, y, z).
+
+    Returns
+    -------
+    local_rot : ndarray (22, 4)
+        ``local[j] = world[parent(j)]^-1 * target_j`` for the target joints, else as given:
+        the target joints keep their positions, their descendants follow.
+    """
     local = np.array(local_rot, dtype=np.float64)
     root_pos = np.asarray(root_pos, dtype=np.float64)
     order = sorted(targets)
@@ -224,7 +232,7 @@ def share_neck_twist(
     Parameters
     ----------
     local_rot, root_pos, offsets
-        The pose, as for :func:`adopt_rotations`.
+        The pose, as for :func:`adopt_local`.
     head_target : ndarray (4,)
         The head tracker's world rotation (w, x, y, z).
     share : float
@@ -260,32 +268,6 @@ def share_neck_twist(
     return local
 
 
-def adopt_rotations(
-    local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, targets: dict[int, np.ndarray]
-) -> tuple[np.ndarray, np.ndarray]:
-    """Give joints exact world rotations by changing their local rotations only.
-
-    Parameters
-    ----------
-    local_rot : ndarray (22, 4)
-        Local rotations (row 0 the root's world rotation).
-    root_pos : ndarray (3,)
-        Root position, metres.
-    offsets : ndarray (22, 3)
-        Bone offsets, metres.
-    targets : dict
-        Joint index (not the root) -> world rotation ``(4,)`` (w, x, y, z).
-
-    Returns
-    -------
-    local_rot : ndarray (22, 4)
-        ``local[j] = world[parent(j)]^-1 * target_j`` for the target joints, else as given.
-    positions : ndarray (22, 3)
-        FK of the result: the target joints keep their positions, their descendants follow.
-    """
-    return finish(local_rot, root_pos, offsets, {}, targets)
-
-
 def finish(
     local_rot: np.ndarray,
     root_pos: np.ndarray,
@@ -296,8 +278,8 @@ def finish(
     level: tuple[int, ...] = (),
 ) -> tuple[np.ndarray, np.ndarray]:
     """:func:`reach_head_local` onto ``reach_targets[HEAD]`` when the head is among them,
-    :func:`reach` onto the others (positions), then :func:`share_neck_twist`
-    (with a head target and ``neck_twist_share`` > 0) and :func:`adopt_rotations` of
+    :func:`reach_local` onto the others (positions), then :func:`share_neck_twist`
+    (with a head target and ``neck_twist_share`` > 0) and :func:`adopt_local` of
     ``rotation_targets`` and of the joints in ``level``, which take the root's heading
     (its yaw alone) as their world rotation; one forward kinematics pass for the positions.
 

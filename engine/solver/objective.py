@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
@@ -88,18 +87,9 @@ class Objective(Protocol):
         ...
 
 
-@dataclass
-class _Frame:
-    """The terms of a frame and their weights, flattened in the objective's order."""
-
-    terms: list[Term]
-    weights: list[np.ndarray]
-    names: list[str] = field(init=False)
-    flat: np.ndarray = field(init=False)
-
-    def __post_init__(self) -> None:
-        self.names = [n for t in self.terms for n in t.names]
-        self.flat = np.concatenate(self.weights) if self.weights else np.zeros(0)
+def _flat(weights: list[np.ndarray]) -> np.ndarray:
+    """The terms' weights ``(n_i,)`` in one array ``(K,)``, the objective's order."""
+    return np.concatenate(weights) if weights else np.zeros(0)
 
 
 class FastObjective:
@@ -123,9 +113,8 @@ class FastObjective:
         make_state: Callable[[Any, "FastObjective"], "PoseState"] | None = None,
     ) -> None:
         self.decoder, self.chain, self.root, self._make_state = decoder, chain, root, make_state
-        self.frame = _Frame(terms, weights)
-        self.names, self.weights = self.frame.names, self.frame.flat
-        self.stack = TermStack(terms, chain.n)
+        self.terms, self.stack, self.weights = terms, TermStack(terms, chain.n), _flat(weights)
+        self.names = self.stack.names
         self._row_weights = self.weights[None]
 
     def evaluate_rows(
@@ -153,7 +142,7 @@ class FastObjective:
 
     def _residuals(self, jac: bool) -> None:
         """Each term's residuals (with their Jacobians when ``jac``) at the kept poses."""
-        self.res = [t.residual(NUMPY, self.P, self.W, self.z, jac=jac, rows=self.rows) for t in self.frame.terms]
+        self.res = [t.residual(NUMPY, self.P, self.W, self.z, jac=jac, rows=self.rows) for t in self.terms]
         self.r = self.stack.stack(self.res) if self.res else np.zeros((len(self.P), 0))
         self.jac = jac
 
@@ -161,7 +150,7 @@ class FastObjective:
         """Per row of the last :meth:`evaluate_rows` ``(A,)``: every constraint lets its
         frame stop."""
         ok = np.ones(len(self.P), dtype=bool)
-        for t, r in zip(self.frame.terms, self.res):
+        for t, r in zip(self.terms, self.res):
             ok &= t.satisfied_by(r, rows=self.rows).all(1)
         return ok
 
@@ -192,9 +181,8 @@ class ReferenceObjective:
     fast = False
 
     def __init__(self, decode: Callable[[Any], "PoseState"], terms: list[Term], weights: list[np.ndarray]) -> None:
-        self.decode = decode
-        self.frame = _Frame(terms, weights)
-        self.names, self.weights = self.frame.names, self.frame.flat
+        self.decode, self.terms, self.weights = decode, terms, _flat(weights)
+        self.names = [n for t in terms for n in t.names]
 
     def evaluate(self, z: np.ndarray, timings: SolveTimings, gradient: bool = True) -> np.ndarray:
         import torch
@@ -206,7 +194,7 @@ class ReferenceObjective:
         self.z = torch.from_numpy(np.array(z, dtype=np.float32)).requires_grad_(True)
         self._state = self.decode(self.z)
         P, W, Z = state_arrays(self._state)
-        parts = [t.losses(t.residual(kit, P, W, Z), kit)[0] for t in self.frame.terms]
+        parts = [t.losses(t.residual(kit, P, W, Z), kit)[0] for t in self.terms]
         values = torch.cat(parts) if parts else P.new_zeros(0)
         self.total = (torch.as_tensor(self.weights, dtype=values.dtype) * values).sum()
         timings.fk_losses += time.perf_counter() - t0
@@ -224,7 +212,7 @@ class ReferenceObjective:
         from engine.constraints.base import state_arrays
 
         P, W, Z = (a.detach().double().numpy() for a in state_arrays(self._state))
-        return all(t.satisfied(P, W, Z).all() for t in self.frame.terms)
+        return all(t.satisfied(P, W, Z).all() for t in self.terms)
 
     def state(self, latent: Any) -> "PoseState":
         out = self._state.detached()

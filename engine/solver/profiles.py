@@ -68,6 +68,12 @@ class Profile:
         return dict(self.given)
 
 
+#: What the sparse sets' profiles (``hip``, ``head``) share. Smoothing 5: jitter 20.4 / 20.7 /
+#: 19.7 -> 18.2 / 18.5 / 16.4 (truth 13.0) for presets 4 / 3-hip-hands / 3-head-hands, Pos
+#: 4.99 / 5.02 / 7.67 -> 4.97 / 5.03 / 7.71 cm; 10 and 20 smooth more but cost velocity
+#: error (docs/optimizer.md)
+SPARSE = dict(future_window=16, smooth_weight=5.0, ground_weight=10.0, sensor_rotation_weight=0.1, prior="trackers")
+
 PROFILES: dict[str, Profile] = {
     # hand and foot rotation weight 0.01: heavier pulls the arms' twist (the decoder turns
     # the upper arm to meet a hand's rotation that its wrist cannot), lighter loses the
@@ -82,11 +88,7 @@ PROFILES: dict[str, Profile] = {
         "full",
         dict(
             future_window=1,
-            temporal_weight=0.01,
-            step_size=0.3,
-            lr=0.05,
             smooth_weight=5.0,
-            ground_weight=0.0,
             sensor_rotation_weight=0.01,
             prior="trackers",
             tracker_prior_weight=0.05,
@@ -110,54 +112,20 @@ PROFILES: dict[str, Profile] = {
         dict(
             future_window=16,
             temporal_weight=0.03,
-            step_size=0.3,
-            lr=0.05,
-            smooth_weight=0.0,
-            ground_weight=0.0,
             sensor_rotation_weight=0.03,
             head_reach=True,
             level_feet=True,
         ),
     ),
-    # smoothing 5 on the sparse sets: jitter 20.4 / 20.7 / 19.7 -> 18.2 / 18.5 /
-    # 16.4 (truth 13.0) for presets 4 / 3-hip-hands / 3-head-hands, Pos 4.99 / 5.02 / 7.67 ->
-    # 4.97 / 5.03 / 7.71 cm; 10 and 20 smooth more but cost velocity error (docs/optimizer.md)
     # the spine turned so the head meets its tracker after the solve (limb_ik.reach_head_local):
     # preset 4, whole clips: hdm05/ 7.78 -> 6.91 cm, dragposer/ 7.66 -> 6.66, validation files
     # (300 frames) 5.31 -> 4.69 (docs/accuracy.md, "Other labs' performers: the head, not the legs")
-    "hip": Profile(
-        "hip",
-        dict(
-            future_window=16,
-            temporal_weight=0.01,
-            step_size=0.3,
-            lr=0.05,
-            smooth_weight=5.0,
-            ground_weight=10.0,
-            sensor_rotation_weight=0.1,
-            prior="trackers",
-            head_reach=True,
-            stand_weight=3.0,
-        ),
-    ),
+    "hip": Profile("hip", {**SPARSE, "head_reach": True, "stand_weight": 3.0}),
     # gait: the stance classifier's planted feet (docs/optimizer.md, "Legs that step"): 3-head-hands,
     # realtime, Pos cm, validation files (600 frames) 6.640 -> 6.605, hdm05/ 12.144 -> 12.122,
     # dragposer/ 7.419 -> 7.378; the six walks' skating 79 -> 52 cm/s. With the hips tracked
     # (preset 4) the bank's legs are better: +1.0 to +1.7 %, so the hip profiles leave it off.
-    "head": Profile(
-        "head",
-        dict(
-            future_window=16,
-            temporal_weight=0.01,
-            step_size=0.3,
-            lr=0.05,
-            smooth_weight=5.0,
-            ground_weight=10.0,
-            sensor_rotation_weight=0.1,
-            prior="trackers",
-            gait_weight=3.0,
-        ),
-    ),
+    "head": Profile("head", {**SPARSE, "gait_weight": 3.0}),
 }
 
 

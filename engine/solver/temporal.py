@@ -178,9 +178,6 @@ class TemporalSchedule:
             self.history.append((latent.detach(), cond.detach() if isinstance(cond, torch.Tensor) else cond))
             self.version += 1
 
-    def step_of(self, frame: int) -> int:
-        return math.ceil(frame / self.every)
-
     @property
     def pending(self) -> bool:
         """Whether a block is still (partly) to be run."""
@@ -199,7 +196,7 @@ class TemporalSchedule:
         self.predictor = predictor
         if predictor is None or not self.history or self.last is None:
             return None, carried
-        j = self.step_of(frame)
+        j = math.ceil(frame / self.every)  # the frame's predictor step (module doc)
         for k in [k for k in self.cache if k < j]:
             del self.cache[k]
         warning = ""

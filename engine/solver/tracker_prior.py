@@ -215,25 +215,58 @@ class PoseBank:
         """Prior latent ``(L,)`` for readings of ``joints`` (a subset of :data:`BANK_JOINTS`
         holding an anchor) over the last ``LAG + 1`` frames: ``pos (LAG+1, S, 3)``, ``rot
         (LAG+1, S, 4)``, oldest first (repeat the first frame at the start of a clip);
-        the mean of ``k`` neighbours (0: the bank's :attr:`k`)."""
+        the mean of ``k`` neighbours (0: the bank's :attr:`k`). The previous lookup's
+        neighbours bound the search (any hint gives the same answer)."""
         return self.lookup(joints, pos, rot, k)[0]
 
     def lookup(self, joints: Sequence[str], pos: np.ndarray, rot: np.ndarray, k: int = 0) -> tuple[torch.Tensor, float]:
         """:meth:`latent` and how far the readings are from the bank's: the neighbours'
         mean distance to the query in standardised feature units. On the CMU validation
-        clips (motion like the bank's) it is 0.5-1.2 with preset ``4``; on other labs'
-        dances 1.6-4.8, where the neighbours' legs are a guess."""
+        clips of everyday motion it is 0.5-1.2 with preset ``4``; on dances, CMU's and other
+        labs', 1.6-4.8."""
+        z, far = self._lookup(joints, pos[None], rot[None], k, keep_hint=True, distance=True)
+        return z[0], far
+
+    def latent_frames(self, joints: Sequence[str], pos: np.ndarray, rot: np.ndarray, k: int = 0) -> torch.Tensor:
+        """:meth:`latent` of ``F`` consecutive frames, ``(F, L)``, with the rows and bits
+        ``F`` calls of it give: ``pos (F, LAG+1, S, 3)``, ``rot (F, LAG+1, S, 4)`` each
+        frame's window as :meth:`latent` takes it. The features are computed for all
+        frames at once and each frame's search is bounded by the previous frame's
+        neighbours (its prefilter then passes a few percent of the bank's rows, where a
+        product over the whole bank reads all of them); the realtime lookup's hint is
+        left as it was."""
+        return self._lookup(joints, pos, rot, k)[0]
+
+    def _lookup(
+        self,
+        joints: Sequence[str],
+        pos: np.ndarray,
+        rot: np.ndarray,
+        k: int,
+        keep_hint: bool = False,
+        distance: bool = False,
+    ) -> tuple[torch.Tensor, float]:
+        """:meth:`latent_frames` and, with ``distance``, the last frame's distance of
+        :meth:`lookup` (else 0); with ``keep_hint`` the last frame's neighbours become the
+        next lookup's hint (:meth:`latent`)."""
         joints = tuple(joints)
-        idx = self._index(joints)
-        a = _anchor(joints)
-        x = features(pos[-1:], rot[-1:], a, pos[:1, a])[0]
+        idx, a = self._index(joints), _anchor(joints)
+        k = min(k or self.k, len(self))
+        if not len(pos):
+            return torch.zeros(0, self._latents.shape[1]), 0.0
+        x = features(pos[:, -1], rot[:, -1], a, pos[:, 0, a])
         q32 = ((x - idx.mean) / idx.std).astype(np.float32)
-        # the previous lookup's neighbours bound the search (any hint gives the same answer)
-        near = self._nearest(idx, q32, self._hints.get(joints), min(k or self.k, len(self)))
-        self._hints[joints] = near
-        rows = idx.table.table[near][:, idx.cols_t].double()
-        far = torch.linalg.vector_norm(rows - torch.from_numpy(q32).double(), dim=1).mean()
-        return self._latents[near].mean(0), float(far)
+        hint, out = self._hints.get(joints), []
+        for q in q32:
+            hint = self._nearest(idx, q, hint, k)
+            out.append(hint)
+        if keep_hint:
+            self._hints[joints] = hint
+        far = 0.0
+        if distance:
+            rows = idx.table.table[out[-1]][:, idx.cols_t].double()
+            far = float(torch.linalg.vector_norm(rows - torch.from_numpy(q32[-1]).double(), dim=1).mean())
+        return self._latents[torch.stack(out)].mean(1), far
 
     def _nearest(self, idx: _Index, q32: np.ndarray, hint: torch.Tensor | None, k: int) -> torch.Tensor:
         """The ``k`` nearest rows ``(k,)`` of ``idx`` to the standardised query ``q32 (D_c,)``."""
@@ -245,27 +278,6 @@ class PoseBank:
             q[idx.cols_t] = torch.from_numpy(q32)
         # |t - q|^2 = |t|^2 - 2 t.q + |q|^2; the last term is the same for every row
         return nearest(tab.table, idx.norms, q, q32, idx.prefilter, hint, k)
-
-    def latent_frames(self, joints: Sequence[str], pos: np.ndarray, rot: np.ndarray, k: int = 0) -> torch.Tensor:
-        """:meth:`latent` of ``F`` consecutive frames, ``(F, L)``, with the rows and bits
-        ``F`` calls of it give: ``pos (F, LAG+1, S, 3)``, ``rot (F, LAG+1, S, 4)`` each
-        frame's window as :meth:`latent` takes it. The features are computed for all
-        frames at once and each frame's search is bounded by the previous frame's
-        neighbours (its prefilter then passes a few percent of the bank's rows, where a
-        product over the whole bank reads all of them); the realtime lookup's hint is
-        left as it was."""
-        joints = tuple(joints)
-        idx, a = self._index(joints), _anchor(joints)
-        k = min(k or self.k, len(self))
-        if not len(pos):
-            return torch.zeros(0, self._latents.shape[1])
-        x = features(pos[:, -1], rot[:, -1], a, pos[:, 0, a])
-        q32 = ((x - idx.mean) / idx.std).astype(np.float32)
-        hint, out = self._hints.get(joints), []
-        for q in q32:
-            hint = self._nearest(idx, q, hint, k)
-            out.append(hint)
-        return self._latents[torch.stack(out)].mean(1)
 
     def save(self, path: str | Path) -> None:
         """Write the bank (float16 arrays, compressed) atomically."""

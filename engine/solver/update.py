@@ -51,34 +51,8 @@ class LatentUpdate:
         s = self.state
         if not s:
             s.update(step=np.zeros(z.shape[:-1]), exp_avg=np.zeros_like(z), exp_avg_sq=np.zeros_like(z))
-        if z.ndim == 1:
-            return z - self._adam_one(grad)
-        n, m, v = self._adam(s["step"] + 1, s["exp_avg"], s["exp_avg_sq"], grad)
-        s["step"], s["exp_avg"], s["exp_avg_sq"] = n, m, v
-        return z - self._move(n, m, v)
-
-    def _adam_one(self, grad: np.ndarray) -> np.ndarray:
-        """Adam's step ``(L,)`` for one latent: :meth:`_adam` and :meth:`_move`, operation
-        for operation (the same rounding), on the state's moments in place and with the
-        float32 factors made once (a dozen numpy calls instead of twice as many)."""
-        s, (c1, c2, c3, eps) = self.state, self._factors
-        k = float(s["step"]) + 1.0
-        s["step"] = k
-        m, v = s["exp_avg"], s["exp_avg_sq"]
-        t = grad - m
-        t *= c1
-        m += t  # m + (1 - b1) (g - m)
-        v *= c2
-        np.multiply(c3, grad, out=t)
-        t *= grad
-        v += t  # b2 v + (1 - b2) g g
-        b1, b2 = self.BETAS
-        d = np.sqrt(v)
-        d /= np.float32(math.sqrt(1 - b2**k))
-        d += eps
-        np.divide(m, d, out=d)
-        d *= np.float32(self.lr / (1 - b1**k))
-        return d
+        s["step"] = s["step"] + 1
+        return z - self._adam(s["exp_avg"], s["exp_avg_sq"], grad, s["step"])
 
     def step_rows(self, z: np.ndarray, grad: np.ndarray, rows: np.ndarray) -> None:
         """Step rows ``rows`` of ``z (C, L)`` in place with their gradients ``grad (len(rows), L)``;
@@ -90,9 +64,10 @@ class LatentUpdate:
         s = self.state
         if not s:
             s.update(step=np.zeros(len(z)), exp_avg=np.zeros_like(z), exp_avg_sq=np.zeros_like(z))
-        n, m, v = self._adam(s["step"][rows] + 1, s["exp_avg"][rows], s["exp_avg_sq"][rows], grad)
-        s["step"][rows], s["exp_avg"][rows], s["exp_avg_sq"][rows] = n, m, v
-        z[rows] -= self._move(n, m, v)
+        s["step"][rows] += 1
+        m, v = s["exp_avg"][rows], s["exp_avg_sq"][rows]
+        z[rows] -= self._adam(m, v, grad, s["step"][rows])
+        s["exp_avg"][rows], s["exp_avg_sq"][rows] = m, v
 
     def restart_row(self, row: int) -> None:
         """Row ``row`` starts with fresh moments (rule ``adam``: a new frame)."""
@@ -101,18 +76,30 @@ class LatentUpdate:
             self.state["exp_avg"][row] = 0.0
             self.state["exp_avg_sq"][row] = 0.0
 
-    def _adam(self, n: np.ndarray, m: np.ndarray, v: np.ndarray, grad: np.ndarray) -> tuple:
+    def _adam(self, m: np.ndarray, v: np.ndarray, grad: np.ndarray, n: float | np.ndarray) -> np.ndarray:
+        """Adam's step for moments ``m``, ``v`` (updated in place with ``grad``) at step
+        counts ``n`` (one, or one per row): in place, with the float32 factors made once
+        (a dozen numpy calls for one latent, which every realtime iteration takes)."""
+        c1, c2, c3, eps = self._factors
+        t = grad - m
+        t *= c1
+        m += t  # m + (1 - b1) (g - m)
+        v *= c2
+        np.multiply(c3, grad, out=t)
+        t *= grad
+        v += t  # b2 v + (1 - b2) g g
         b1, b2 = self.BETAS
-        return n, m + np.float32(1 - b1) * (grad - m), v * np.float32(b2) + np.float32(1 - b2) * grad * grad
-
-    def _move(self, n: np.ndarray, m: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """Adam's step for step counts ``n`` (one per row) and moments ``m``, ``v``."""
-        b1, b2 = self.BETAS
-        if np.ndim(n) == 0:  # one latent: the same float64 factors as scalars (fewer numpy calls)
-            k = float(n)
-            root = np.float32(math.sqrt(1 - b2**k))
-            return np.float32(self.lr / (1 - b1**k)) * (m / (np.sqrt(v) / root + np.float32(self.EPS)))
-        n = np.asarray(n, dtype=np.float64)[..., None]
-        size = (self.lr / (1 - b1**n)).astype(np.float32)
-        denom = np.sqrt(v) / np.sqrt(1 - b2**n).astype(np.float32) + np.float32(self.EPS)
-        return size * (m / denom)
+        root: np.floating | np.ndarray
+        size: np.floating | np.ndarray
+        if isinstance(n, float):  # one latent: the same float64 factors as scalars (fewer numpy calls)
+            one = float(n)
+            root, size = np.float32(math.sqrt(1 - b2**one)), np.float32(self.lr / (1 - b1**one))
+        else:
+            k = np.asarray(n, dtype=np.float64)[..., None]
+            root, size = np.sqrt(1 - b2**k).astype(np.float32), (self.lr / (1 - b1**k)).astype(np.float32)
+        d = np.sqrt(v)
+        d /= root
+        d += eps
+        np.divide(m, d, out=d)
+        d *= size
+        return d

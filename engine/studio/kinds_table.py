@@ -1,8 +1,9 @@
 """The constraint-kinds table of ``docs/optimizer.md``, generated from the registry.
 
 Each row is read off the kind itself: its parameters with units (field metadata), its
-one-line summary (the class docstring) and what its residual is (the docstring of the
-term its first example builds), so the table cannot fall behind the code.
+one-line summary (the class docstring) and what its residual is (the docstring of its
+``term`` method, else of the term its first example builds: kinds that share a term
+class say there what theirs is), so the table cannot fall behind the code.
 ``scripts/settings_table.py`` rewrites it between its markers and
 ``tests/engine/test_terms.py`` fails while the page differs.
 """
@@ -49,7 +50,7 @@ def kinds_table() -> str:
         cell = lambda s: s.replace("|", "\\|")  # noqa: E731
         rows.append(
             f"| `{kind}` | {who} | {', '.join(params) or 'none'} | {cell(_first_sentence(spec.summary))} | "
-            f"{cell(_first_sentence(type(term).__doc__))} |"
+            f"{cell(_first_sentence(cls.term.__doc__ or type(term).__doc__))} |"
         )
     return "\n".join(rows) + "\n"
 

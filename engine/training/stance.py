@@ -19,7 +19,7 @@ from engine.constraints.gait import ANKLES
 from engine.errors import UserError
 from engine.kinematics.fk import fk_positions
 from engine.models.stance import N_FEATURES, StanceModel, stance_features, window_frames
-from engine.solver.gait import GaitParams
+from engine.solver.gait import GaitParams, arm_swing
 
 HEAD = sk.JOINT_INDEX["upperneck"]
 HANDS = (sk.JOINT_INDEX["lwrist"], sk.JOINT_INDEX["rwrist"])
@@ -63,14 +63,12 @@ def clip_samples(pos: np.ndarray, fps: float) -> StanceSamples:
     x = stance_features(head[keep], hands[keep], fps)
     assert x is not None
     y = (ankles[keep, 0] < ankles[keep, 1]).astype(np.float64)
-    # the arm-swing rule of the gait planner, over the same frames
+    # the gait planner's arm-swing rule, over the same frames and the head's travel
     lag = max(1, round(GAIT.arm_lag_s * fps))
     diff = pos[:, HANDS[0], :2] - pos[:, HANDS[1], :2]
-    fwd = head[:, -1, :2] - head[:, 0, :2]
-    fwd /= np.maximum(np.linalg.norm(fwd, axis=-1, keepdims=True), 1e-9)
     t = np.arange(k - 1, len(pos))
-    rate = np.einsum("ij,ij->i", diff[t] - diff[np.maximum(t - lag, 0)], fwd) * fps / lag
-    arms = np.where(np.abs(rate) < GAIT.arm_speed, -1, (rate > 0).astype(int))[keep]
+    change = diff[t] - diff[np.maximum(t - lag, 0)]
+    arms = arm_swing(change, head[:, -1, :2] - head[:, 0, :2], fps, lag, GAIT.arm_speed)[keep]
     return StanceSamples(x, y, arms.astype(np.float64))
 
 

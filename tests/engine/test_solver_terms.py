@@ -19,7 +19,7 @@ from engine.methods.dragposer import DragPoserMethod
 from engine.models import load_default_models
 from engine.motion.retarget import load_motion
 from engine.solver import FrameContext, OptimizerSettings, PoseOptimizer, RootAnchor, RootFrame
-from engine.solver.limb_ik import adopt_rotations
+from engine.solver.limb_ik import finish
 from engine.solver.pose import HEADING_LIMIT_DEG, body_facing, clamp_heading
 from engine.solver.profiles import PROFILES, effective, profile_for
 from engine.tracking import simulate
@@ -125,7 +125,7 @@ def test_adopt_rotations_sets_world_rotation_and_keeps_positions():
     target = rng.normal(size=4)
     target /= np.linalg.norm(target)
     j = sk.JOINT_INDEX["lankle"]
-    new, pos = adopt_rotations(local, root, offsets, {j: target})
+    new, pos = finish(local, root, offsets, {}, {j: target})
     old_pos, _ = fk(local, root, offsets)
     _, world = fk(new, root, offsets)
     assert abs(abs(float(world[j] @ target)) - 1.0) < 1e-9
@@ -173,8 +173,6 @@ def _unit(q):
 
 
 def test_reach_puts_the_end_joint_on_a_reachable_target_and_keeps_its_rotation():
-    from engine.solver.limb_ik import reach
-
     rng = np.random.default_rng(5)
     skel = sk.Skeleton.canonical()
     local = np.tile([1.0, 0, 0, 0], (22, 1)) + rng.normal(0, 0.15, (22, 4))
@@ -188,7 +186,7 @@ def test_reach_puts_the_end_joint_on_a_reachable_target_and_keeps_its_rotation()
         wrist: pos[wrist] + 0.2 * (pos[shoulder] - pos[wrist]) + [0.0, 0.03, 0.0],
         ankle: pos[ankle] + 0.15 * (pos[hip] - pos[ankle]) + [0.03, 0.0, 0.0],
     }
-    new, new_pos = reach(local, root, skel.offsets, targets)
+    new, new_pos = finish(local, root, skel.offsets, targets, {})
     _, new_world = fk(new, root, skel.offsets)
     for j, t in targets.items():
         assert np.linalg.norm(new_pos[j] - t) < 1e-6
@@ -197,7 +195,7 @@ def test_reach_puts_the_end_joint_on_a_reachable_target_and_keeps_its_rotation()
     np.testing.assert_allclose(new_pos[untouched], pos[untouched], atol=1e-12)
     # beyond reach: the limb points straight at the target
     far = {wrist: pos[sk.JOINT_INDEX["lshoulder"]] + [2.0, 0, 0]}
-    _, far_pos = reach(local, root, skel.offsets, far)
+    _, far_pos = finish(local, root, skel.offsets, far, {})
     d = far_pos[wrist] - far_pos[sk.JOINT_INDEX["lshoulder"]]
     assert d[0] / np.linalg.norm(d) > 0.999
 

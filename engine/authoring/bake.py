@@ -30,6 +30,7 @@ Deterministic: the same scene gives the same motion, so the studio's export and 
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -86,16 +87,18 @@ def pinned_key(key: Key, constraints: list[Constraint]) -> Key:
 
 
 def solve_key(scene: AuthoringScene, vae, key: Key, cancelled: CancelCheck | None = None) -> Pose:
-    """The pose of one key (see the module doc), a pin on a targeted joint winning over
-    the key's target (:func:`engine.authoring.pins.pinned_targets`)."""
+    """The pose of one key (see the module doc) as the pose window poses it on the key's
+    frame: the scene's constraints with their frame ranges and the key's own targets, a
+    pin on a targeted joint winning over the target by its activity on that frame in every
+    solve (:attr:`engine.authoring.pose_solve.PoseSolving.aimed`)."""
     if key.latent is not None and key.latent.shape != (int(vae.config.latent),):
         raise UserError(
             f"key at frame {key.frame}: latent has {key.latent.size} numbers, "
             f"the pose model takes {int(vae.config.latent)}"
         )
     mode = PoseMode(vae, scene.height, root_xy=key.root, heading=key.heading, options=scene.pose_options)
-    targets, mode.constraints = pinned_targets(list(key.targets.values()), scene.constraints, key.frame)
-    return mode.pose_key(dataclasses.replace(key, targets={t.joint: t for t in targets}), cancelled=cancelled)
+    mode.constraints, mode.frame = copy.deepcopy(scene.constraints), key.frame
+    return mode.pose_key(key, cancelled=cancelled)
 
 
 def output_frames(scene: AuthoringScene, fps: float | None) -> tuple[int, float, float]:
@@ -123,11 +126,12 @@ def bake(
     """
     character = Character(vae, scene.height)
     n, rate, ratio = output_frames(scene, fps)
+    # the in-betweens interpolate the keys' targets as the pins on the keys' frames leave them
     keys = [pinned_key(k, scene.constraints) for k in scene.keys]
     times = [k.frame / ratio for k in keys]
     key_at = {int(round(t)): i for i, t in enumerate(times) if abs(t - round(t)) < 1e-9}
     poses: list[Pose] = []
-    for key in keys:
+    for key in scene.keys:
         check(cancelled)
         poses.append(solve_key(scene, vae, key, cancelled))
         if progress:

@@ -98,3 +98,27 @@ def test_a_key_on_a_pin_blend_is_baked_with_the_pin_s_activity_there(vae, tmp_pa
     mode.constraints, mode.frame = scene.constraints, key.frame
     pose_on_key(mode, dataclasses.replace(key, latent=None))
     np.testing.assert_allclose(mode.aimed["lwrist"].position, expected, atol=1e-9)
+
+
+def test_a_pin_on_a_joint_no_key_targets_holds_it_still_and_blends_smoothly(vae):
+    """A pin on a joint that neither key targets (the wrist hanging at the first key,
+    raised at the last, pinned where it hung over frames 30-60): the baked wrist stays on
+    the pin over the range, still, and goes to it and back over the blends. Kept as a
+    weight-30 term, the pin jerked the wrist 26 cm in one frame where the blend began,
+    shook it 2-11 cm a frame over the range (up to 8 cm off the pin) and dropped it
+    46 cm in a frame after the blend out."""
+    from engine.authoring.pose_mode import PoseMode
+
+    hang = PoseMode(vae, 1.87).pose.positions[J["lwrist"]].copy()
+    keys = [Key(0), Key(89, targets={"lwrist": JointTarget("lwrist", hang + [0.1, 0.0, 0.75])})]
+    pin = PinConstraint(name="pin", joint="lwrist", position=hang, frames=(30, 60), blend_in=10, blend_out=10)
+    scene = AuthoringScene(height=1.87, constraints=[pin], animation=Animation(fps=30, frames=90), keys=keys)
+    m = bake(scene, vae).motion
+    p = fk(m.local_rot, m.root_pos, m.skeleton.offsets)[0]
+    wrist = p[:, J["lwrist"]]
+    assert np.linalg.norm(wrist[30:61] - hang, axis=1).max() < 0.01
+    step = np.linalg.norm(np.diff(wrist, axis=0), axis=1)
+    assert step[30:60].max() < 0.005
+    # the wrist's speed changes smoothly: no jerk where a blend starts or ends
+    assert np.abs(np.diff(step)).max() < 0.03
+    assert max(trunk_tilt_deg(x) for x in p) < 20.0

@@ -47,3 +47,26 @@ def test_a_camera_key_right_after_return_in_a_number_field_turns_the_camera(pose
     QTest.keyClick(QApplication.focusWidget(), Qt.Key.Key_1)
     assert field.value() == 30
     assert w.viewport.camera_preset == "front"
+
+
+@pytest.mark.parametrize(("field_name", "typed", "value"), [("length", "200", 200), ("fps", "24", 24.0)])
+def test_a_number_typed_into_the_length_or_rate_is_one_edit(pose_window, qtbot, field_name, typed, value):
+    """The number is taken when typing ends (Return), as one undo step: taken digit by
+    digit, 200 typed into the length made the animation 2, then 20, then 200 frames long
+    (three undo steps, found with xdotool), and a key past frame 2 lay outside it while
+    the 0s were typed."""
+    w = pose_window
+    field = getattr(w.keys, field_name)
+    steps = w.undo.count()
+    seen = []
+    signal = w.keys.lengthChanged if field_name == "length" else w.keys.fpsChanged
+    signal.connect(seen.append)
+    QTest.mouseClick(field, Qt.MouseButton.LeftButton)
+    field.lineEdit().selectAll()
+    QTest.keyClicks(field, typed)
+    assert seen == []
+    QTest.keyClick(field, Qt.Key.Key_Return)
+    assert seen == [value]
+    assert w.undo.count() == steps + 1
+    attr = "frames" if field_name == "length" else "fps"
+    assert getattr(w.scene.animation, attr) == value

@@ -261,12 +261,16 @@ class KeyStrip(QWidget):
             self.interpolation.setCurrentText(interpolation)
             self.interpolation.blockSignals(False)
         s = self.strip
+        before = s.current
         s.frames, s.keys, s.current = int(frames), tuple(sorted(keys)), max(0, min(int(current), int(frames) - 1))
         for w, v in ((self.length, int(frames)), (self.fps, float(fps))):
             w.blockSignals(True)
             w.setValue(v)
             w.blockSignals(False)
         self.move_to.setMaximum(max(0, int(frames) - 1))
+        if s.current != before:
+            # the box starts at the frame shown: Move key untouched moves nothing
+            self.move_to.setValue(s.current)
         on_key = s.current in s.keys
         self.delete.setEnabled(on_key)
         self.move.setEnabled(on_key)

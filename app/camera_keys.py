@@ -7,8 +7,8 @@ until the user clicked the 3D view. This filter lets the View ▸ Camera shortcu
 whatever has the focus, unless it is a text or number field: typing 0.3 must give 0.3
 wherever the pointer rests. Escape, a click on the view, and Return or Enter in a
 one-line field (once the field has taken the value) give the keys back: left in a number
-field after Return, the focus took a 1 pressed next for the front view, and a length of
-200 became 1 frame.
+field after Return, the focus would take a 1 pressed next for the front view, and a
+length of 200 would become 1 frame.
 """
 
 from __future__ import annotations

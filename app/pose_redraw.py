@@ -90,8 +90,8 @@ class PoseRedraw:
         pose, or a played frame: a pin's tether runs to its joint where it is drawn), as
         the studio draws them. A constraint that does not act on ``frame`` (outside its
         range and blends) is drawn without a handle, so a press on the joint under it
-        drags the joint: the pin's handle, asked first, took the press on a wrist left on
-        a pin for frames 100-160 at frame 199 and moved the pin instead."""
+        drags the joint: with a handle, asked first, a pin for frames 100-160 would take
+        the press on a wrist left on it at frame 199 and move the pin instead."""
         shown = []
         for c in self.w.mode.constraints:
             for name, g in gizmos_of([c], positions, lambda m: self.w.statusBar().showMessage(m, 5000)):

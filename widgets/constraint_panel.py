@@ -58,7 +58,7 @@ def _spin(value: float, lo: float = -100.0, hi: float = 100.0, step: float = 0.0
 def row_text(c: dict[str, Any]) -> str:
     """A constraint's row in the list (``to_dict`` form): its name, and in brackets its
     kind, the joint it holds and its frames when it has them (*pin [pin: lwrist,
-    100-160]*); the name and kind alone read *pin [pin]* for every pin."""
+    100-160]*); the name and kind alone would read *pin [pin]* for every pin."""
     held = [str(c[k]) for k in ("joint", "joint_a", "joint_b") if isinstance(c.get(k), str)]
     frames = c.get("frames")
     where = held + ([f"{int(frames[0])}-{int(frames[1])}"] if frames is not None else [])

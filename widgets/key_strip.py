@@ -213,8 +213,8 @@ class KeyStrip(QWidget):
         self.move = QPushButton("Move key")
         self.move.clicked.connect(lambda: self.moveRequested.emit(self.strip.current, self.move_to.value()))
         # the length and the rate are taken when typing ends (Return, focus out, the
-        # arrows): taken at every digit, 200 typed made the animation 2, 20 and 200
-        # frames long, three undo steps
+        # arrows): taken at every digit, 200 typed would make the animation 2, 20 and
+        # 200 frames long, three undo steps
         self.length = QSpinBox(minimum=1, maximum=MAX_FRAMES, suffix=" frames", keyboardTracking=False)
         self.length.valueChanged.connect(lambda v: self.lengthChanged.emit(int(v)))
         self.fps = QDoubleSpinBox(minimum=1.0, maximum=240.0, decimals=1, suffix=" fps", keyboardTracking=False)

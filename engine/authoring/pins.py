@@ -77,7 +77,7 @@ def pinned_targets(
     their pins (the bake's in-betweens: the frame solved without those pins). A pin on
     such a joint (other than the root) gets a target there, moved to its place by its
     activity, and acts through it only, as over a target: kept as a term, its weight of
-    30 took the joint to the pin at the first frames of the blend and shook it by up to
+    30 takes the joint to the pin in the first frames of the blend and shakes it by up to
     11 cm a frame over the range."""
     pins = held_pins(constraints, frame)
     out, won = [], set()

@@ -5,12 +5,15 @@ Qt lets the focused widget override a shortcut: a slider takes Home, a combo box
 digits for its keyboard search, so after a click in a panel the camera keys did nothing
 until the user clicked the 3D view. This filter lets the View ▸ Camera shortcuts fire
 whatever has the focus, unless it is a text or number field: typing 0.3 must give 0.3
-wherever the pointer rests (pressing Escape or clicking the view gives the keys back).
+wherever the pointer rests. Escape, a click on the view, and Return or Enter in a
+one-line field (once the field has taken the value) give the keys back: left in a number
+field after Return, the focus would take a 1 pressed next for the front view, and a
+length of 200 would become 1 frame.
 """
 
 from __future__ import annotations
 
-from PyQt6.QtCore import QEvent, QObject, Qt
+from PyQt6.QtCore import QEvent, QObject, Qt, QTimer
 from PyQt6.QtGui import QKeyEvent
 from PyQt6.QtWidgets import QAbstractSpinBox, QApplication, QComboBox, QLineEdit, QPlainTextEdit, QTextEdit, QWidget
 
@@ -46,6 +49,19 @@ class CameraKeys(QObject):
         ):
             self._view.setFocus()  # leave the field: the camera keys are the view's again
             return True
+        if (
+            event is not None
+            and event.type() == QEvent.Type.KeyPress
+            and isinstance(event, QKeyEvent)
+            and event.key() in (Qt.Key.Key_Return, Qt.Key.Key_Enter)
+            and obj is QApplication.focusWidget()
+            and types_text(obj)
+            and not isinstance(obj, (QTextEdit, QPlainTextEdit))
+            and obj.window() is self._view.window()
+        ):
+            # the field takes the Return (its value is set), then the view takes the focus
+            QTimer.singleShot(0, self._view.setFocus)
+            return False
         if event is not None and event.type() == QEvent.Type.ShortcutOverride and isinstance(event, QKeyEvent):
             mods = event.modifiers() & ~Qt.KeyboardModifier.KeypadModifier
             if event.key() in CAMERA_KEYS and mods == Qt.KeyboardModifier.NoModifier:

@@ -108,7 +108,7 @@ class KeyPlayback(QObject):
         motion = baked.motion
         f = min(frame, len(motion) - 1)
         positions = fk_positions(motion.local_rot[f], motion.root_pos[f], motion.skeleton.offsets)
-        self.w.redraw.show_gizmos(positions)
+        self.w.redraw.show_gizmos(positions, f)
         self.w.show_positions(positions)
         a = self.w.scene.animation
         self.w.keys.set_state(a.frames, a.fps, tuple(k.frame for k in self.w.scene.keys), f)

@@ -55,6 +55,16 @@ def _spin(value: float, lo: float = -100.0, hi: float = 100.0, step: float = 0.0
     return w
 
 
+def row_text(c: dict[str, Any]) -> str:
+    """A constraint's row in the list (``to_dict`` form): its name, and in brackets its
+    kind, the joint it holds and its frames when it has them (*pin [pin: lwrist,
+    100-160]*); the name and kind alone would read *pin [pin]* for every pin."""
+    held = [str(c[k]) for k in ("joint", "joint_a", "joint_b") if isinstance(c.get(k), str)]
+    frames = c.get("frames")
+    where = held + ([f"{int(frames[0])}-{int(frames[1])}"] if frames is not None else [])
+    return f"{c['name']}  [{c['kind']}{': ' + ', '.join(where) if where else ''}]"
+
+
 class JointsButton(QToolButton):
     """Pick several joints from a menu of check boxes; ``picked(tuple)`` on every change."""
 
@@ -270,7 +280,7 @@ class ConstraintPanel(QWidget):
             if rebuild:
                 self.list.clear()
                 for c in constraints:
-                    item = QListWidgetItem(f"{c['name']}  [{c['kind']}]")
+                    item = QListWidgetItem(row_text(c))
                     item.setData(Qt.ItemDataRole.UserRole, c["name"])
                     item.setFlags(item.flags() | Qt.ItemFlag.ItemIsUserCheckable)
                     self.list.addItem(item)
@@ -280,7 +290,7 @@ class ConstraintPanel(QWidget):
                 state = Qt.CheckState.Checked if c.get("enabled", True) else Qt.CheckState.Unchecked
                 item = self.list.item(i)
                 item.setCheckState(state)
-                text = f"{c['name']}  [{c['kind']}]"
+                text = row_text(c)
                 if item.text() != text:
                     item.setText(text)
         finally:

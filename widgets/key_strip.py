@@ -212,9 +212,12 @@ class KeyStrip(QWidget):
         self.move_to = QSpinBox(minimum=0, maximum=MAX_FRAMES - 1, prefix="to ")
         self.move = QPushButton("Move key")
         self.move.clicked.connect(lambda: self.moveRequested.emit(self.strip.current, self.move_to.value()))
-        self.length = QSpinBox(minimum=1, maximum=MAX_FRAMES, suffix=" frames")
+        # the length and the rate are taken when typing ends (Return, focus out, the
+        # arrows): taken at every digit, 200 typed would make the animation 2, 20 and
+        # 200 frames long, three undo steps
+        self.length = QSpinBox(minimum=1, maximum=MAX_FRAMES, suffix=" frames", keyboardTracking=False)
         self.length.valueChanged.connect(lambda v: self.lengthChanged.emit(int(v)))
-        self.fps = QDoubleSpinBox(minimum=1.0, maximum=240.0, decimals=1, suffix=" fps")
+        self.fps = QDoubleSpinBox(minimum=1.0, maximum=240.0, decimals=1, suffix=" fps", keyboardTracking=False)
         self.fps.valueChanged.connect(lambda v: self.fpsChanged.emit(float(v)))
         self.interpolation = QComboBox()
         self.interpolation.addItems(SCHEMES)
@@ -258,12 +261,16 @@ class KeyStrip(QWidget):
             self.interpolation.setCurrentText(interpolation)
             self.interpolation.blockSignals(False)
         s = self.strip
+        before = s.current
         s.frames, s.keys, s.current = int(frames), tuple(sorted(keys)), max(0, min(int(current), int(frames) - 1))
         for w, v in ((self.length, int(frames)), (self.fps, float(fps))):
             w.blockSignals(True)
             w.setValue(v)
             w.blockSignals(False)
         self.move_to.setMaximum(max(0, int(frames) - 1))
+        if s.current != before:
+            # the box starts at the frame shown: Move key untouched moves nothing
+            self.move_to.setValue(s.current)
         on_key = s.current in s.keys
         self.delete.setEnabled(on_key)
         self.move.setEnabled(on_key)

@@ -14,7 +14,10 @@
    (the temporal terms of the ``dragposer`` method) and the scene's constraints with
    their frame ranges, the root held on the interpolated trajectory and the feet
    grounded. Joints targeted by both keys follow their targets exactly (wrists and
-   ankles by their limbs), so a pinned effector stays put and nothing jumps. The
+   ankles by their limbs), so a pinned effector stays put and nothing jumps. A pin on a
+   joint that no target holds there acts through a target too: the frame is solved
+   without that pin, and again with the joint's target going from where that solve put
+   it to the pin's place by the pin's activity. The
    latent solve aims each target plus the offset the keys' own latents leave from their
    targets (interpolated too): the exact limb step closes that gap on the keys, and
    without the offset the in-betweens next to a key would pull the latent elsewhere and
@@ -30,6 +33,7 @@ Deterministic: the same scene gives the same motion, so the studio's export and 
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -41,10 +45,11 @@ from engine.authoring.character import Character, Pose
 from engine.authoring.document import AuthoringScene
 from engine.authoring.keys import PLANTED, Key, eased, interpolate, segment, slerp_quaternion
 from engine.authoring.pelvis_drag import pelvis_pose
-from engine.authoring.pins import pinned_targets
+from engine.authoring.pins import holding_pins, pinned_targets
 from engine.authoring.pose_mode import PoseMode
 from engine.authoring.targets import JointTarget, pelvis_only_target, solve_inputs
 from engine.constraints.base import Constraint
+from engine.constraints.pin import PinConstraint
 from engine.constraints.smooth import SmoothConstraint
 from engine.errors import UserError
 from engine.motion.clip import Motion
@@ -86,16 +91,18 @@ def pinned_key(key: Key, constraints: list[Constraint]) -> Key:
 
 
 def solve_key(scene: AuthoringScene, vae, key: Key, cancelled: CancelCheck | None = None) -> Pose:
-    """The pose of one key (see the module doc), a pin on a targeted joint winning over
-    the key's target (:func:`engine.authoring.pins.pinned_targets`)."""
+    """The pose of one key (see the module doc) as the pose window poses it on the key's
+    frame: the scene's constraints with their frame ranges and the key's own targets, a
+    pin on a targeted joint winning over the target by its activity on that frame in every
+    solve (:attr:`engine.authoring.pose_solve.PoseSolving.aimed`)."""
     if key.latent is not None and key.latent.shape != (int(vae.config.latent),):
         raise UserError(
             f"key at frame {key.frame}: latent has {key.latent.size} numbers, "
             f"the pose model takes {int(vae.config.latent)}"
         )
     mode = PoseMode(vae, scene.height, root_xy=key.root, heading=key.heading, options=scene.pose_options)
-    targets, mode.constraints = pinned_targets(list(key.targets.values()), scene.constraints, key.frame)
-    return mode.pose_key(dataclasses.replace(key, targets={t.joint: t for t in targets}), cancelled=cancelled)
+    mode.constraints, mode.frame = copy.deepcopy(scene.constraints), key.frame
+    return mode.pose_key(key, cancelled=cancelled)
 
 
 def output_frames(scene: AuthoringScene, fps: float | None) -> tuple[int, float, float]:
@@ -123,11 +130,12 @@ def bake(
     """
     character = Character(vae, scene.height)
     n, rate, ratio = output_frames(scene, fps)
+    # the in-betweens interpolate the keys' targets as the pins on the keys' frames leave them
     keys = [pinned_key(k, scene.constraints) for k in scene.keys]
     times = [k.frame / ratio for k in keys]
     key_at = {int(round(t)): i for i, t in enumerate(times) if abs(t - round(t)) < 1e-9}
     poses: list[Pose] = []
-    for key in keys:
+    for key in scene.keys:
         check(cancelled)
         poses.append(solve_key(scene, vae, key, cancelled))
         if progress:
@@ -168,32 +176,52 @@ def _in_between(
     root = interpolate(times, [p.root_pos for p in poses], f, scheme)
     heading = interpolated_heading(keys, times, f, scheme)
     frame = int(round(scene_frame))
-    targets, rules = pinned_targets(interpolated_targets(keys, times, f, scheme), scene.constraints, frame)
-    _, reach, rotations = solve_inputs(targets)
-    aims = []
     decoded = [p.positions if p.decoded is None else p.decoded for p in poses]  # as Pose fills it in
-    for t in targets:
-        track = [
-            (tk, d[t.index] - k.targets[t.joint].position)
-            for tk, k, d in zip(times, keys, decoded)
-            if t.joint in k.targets
-        ]
-        gap = interpolate([tk for tk, _ in track], [g for _, g in track], f, scheme)
-        aims.append(dataclasses.replace(t, position=t.position + gap))
-    terms, _, _ = solve_inputs(aims)
     previous = done[-1].positions if done else None
     smooth.set_history(previous, done[-2].positions if len(done) > 1 else None)
     ctx = character.placed(root, heading, f, previous=previous, prior=z)
-    pose = character.solve(
-        z,
-        [*terms, smooth, *rules],
-        ctx,
-        reach,
-        rotations,
-        iterations=IN_BETWEEN_ITERATIONS,
-        prior_weight=IN_BETWEEN_PRIOR,
-        rule="sgd",
-    )
+
+    def solve(targets: list[JointTarget], rules: list[Constraint]) -> Pose:
+        aims = []
+        for t in targets:
+            track = [
+                (tk, d[t.index] - k.targets[t.joint].position)
+                for tk, k, d in zip(times, keys, decoded)
+                if t.joint in k.targets
+            ]
+            if not track:  # a pin's target on a joint no key targets: no gap to carry
+                aims.append(t)
+                continue
+            gap = interpolate([tk for tk, _ in track], [g for _, g in track], f, scheme)
+            aims.append(dataclasses.replace(t, position=t.position + gap))
+        terms, _, _ = solve_inputs(aims)
+        _, reach, rotations = solve_inputs(targets)
+        return character.solve(
+            z,
+            [*terms, smooth, *rules],
+            ctx,
+            reach,
+            rotations,
+            iterations=IN_BETWEEN_ITERATIONS,
+            prior_weight=IN_BETWEEN_PRIOR,
+            rule="sgd",
+        )
+
+    interpolated = interpolated_targets(keys, times, f, scheme)
+    targeted = {t.joint for t in interpolated}
+    held = {j for j in holding_pins(scene.constraints, frame) if j != "root" and j not in targeted}
+    if held:
+        # a pin on a joint no target holds takes it from where the in-between has it without
+        # the pin (solved without it) to the pin's place, through a target
+        # (:func:`engine.authoring.pins.pinned_targets`)
+        unpinned = [c for c in scene.constraints if not (isinstance(c, PinConstraint) and c.joint in held)]
+        first = solve(*pinned_targets(interpolated, unpinned, frame))
+        free = {j: first.positions[sk.JOINT_INDEX[j]].copy() for j in held}
+        targets, rules = pinned_targets(interpolated, scene.constraints, frame, free=free)
+    else:
+        targets, rules = pinned_targets(interpolated, scene.constraints, frame)
+    pose = solve(targets, rules)
+    _, reach, _ = solve_inputs(targets)
     i, s = segment(times, f)
     if not any(pelvis_only_target(k.targets) for k in keys[i : i + 1 + (s > 0.0)]):  # after the last key: the last
         return pose

@@ -54,7 +54,11 @@ def held_pins(constraints: list[Constraint], frame: int) -> dict[str, tuple[np.n
 
 
 def pinned_targets(
-    targets: list[JointTarget], constraints: list[Constraint], frame: int, shift: np.ndarray | None = None
+    targets: list[JointTarget],
+    constraints: list[Constraint],
+    frame: int,
+    shift: np.ndarray | None = None,
+    free: Mapping[str, np.ndarray] | None = None,
 ) -> tuple[list[JointTarget], list[Constraint]]:
     """``targets`` with a pin on the same joint winning on ``frame``, and the constraints
     left to act there as terms (:func:`active_constraints`).
@@ -67,7 +71,14 @@ def pinned_targets(
     move. ``shift (3,)`` metres is added to each pin's place: the targets of a solve of
     the body where it stood under a pelvis-only target come moved by the pelvis's
     offset (:meth:`engine.authoring.pose_solve.PoseSolving._inputs`), and a pin's place
-    is moved with them."""
+    is moved with them.
+
+    ``free`` (joint -> (3,) metres) is where joints that no target holds are without
+    their pins (the bake's in-betweens: the frame solved without those pins). A pin on
+    such a joint (other than the root) gets a target there, moved to its place by its
+    activity, and acts through it only, as over a target: kept as a term, its weight of
+    30 takes the joint to the pin in the first frames of the blend and shakes it by up to
+    11 cm a frame over the range."""
     pins = held_pins(constraints, frame)
     out, won = [], set()
     for t in targets:
@@ -78,6 +89,13 @@ def pinned_targets(
             t = dataclasses.replace(t, position=(1.0 - a) * np.asarray(t.position, float) + a * place)
             won.add(t.joint)
         out.append(t)
+    for j, (place, a) in pins.items():
+        if free is None or j in won or j not in free or j == "root" or any(t.joint == j for t in targets):
+            continue
+        if shift is not None:
+            place = place + np.asarray(shift, float)
+        out.append(JointTarget(j, (1.0 - a) * np.asarray(free[j], float) + a * place))
+        won.add(j)
     rest = [c for c in constraints if not (isinstance(c, PinConstraint) and c.joint in won and c.joint in pins)]
     return out, active_constraints(rest, frame)
 

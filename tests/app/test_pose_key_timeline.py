@@ -138,3 +138,15 @@ def test_undo_and_redo_of_a_key_added_or_deleted_show_its_frame(keyed):
     scrub(w, 50)
     shortcut(w, Qt.Key.Key_Z, REDO)
     assert [k.frame for k in w.scene.keys] == [0, 40] and w.frame == 20 and w.keys.strip.current == 20
+
+
+def test_the_move_box_starts_at_the_key_shown_so_move_key_untouched_moves_nothing(keyed):
+    """On a key the box beside Move key reads that key's frame, and the user types where
+    it goes: the box kept 0 wherever the key timeline was, and Move key pressed on key 40
+    without typing put it on frame 0, over the key there."""
+    w = keyed
+    scrub(w, 10)
+    scrub(w, 40)
+    assert w.keys.move_to.value() == 40
+    w.keys.move.click()
+    assert [k.frame for k in w.scene.keys] == [0, 40]

@@ -57,3 +57,16 @@ def test_a_pin_put_on_another_joint_in_its_editor_pins_that_joint_where_it_is(po
     assert moved.max() < 0.02, f"{sk.JOINT_NAMES[int(moved.argmax())]} moved {moved.max():.3f} m"
     w.undo.undo()  # one step: the joint and the place together
     assert w.mode.constraints[0].joint == "lankle"
+
+
+def test_the_constraint_list_names_a_pin_s_joint_and_frames(pose_window):
+    """Each row of the Constraints list says what its constraint holds and when: a pin
+    added with the dock and put on the left wrist read *pin [pin]* whichever joint it
+    held and whatever its range, so two pins could not be told apart."""
+    w = pose_window
+    w.session.set_length(200)
+    pin = add_wrist_pin(w)
+    rows = w.constraints.panel.list
+    assert "lwrist" in rows.item(0).text()
+    w.session.update_constraint(pin.name, {"frames": (100, 160)})
+    assert "lwrist" in rows.item(0).text() and "100-160" in rows.item(0).text()

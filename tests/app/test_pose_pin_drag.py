@@ -105,3 +105,34 @@ def test_the_in_between_shows_the_target_the_pin_blends_in(pose_window):
         w.session.baked.motion.local_rot, w.session.baked.motion.root_pos, w.session.baked.motion.skeleton.offsets
     )
     assert np.abs(after[0][26] - before[0][26]).max() < 0.02  # as a key added on any in-between
+
+
+def test_a_press_on_a_joint_left_on_its_pin_outside_the_pin_s_frames_drags_the_joint(pose_window):
+    """A pin for frames 20-30 put where the wrist hangs: on frame 50, where it does not
+    act, the wrist sits under the pin's handle, and a drag of the wrist gives the wrist a
+    target and leaves the pin where it was (found with xdotool: the drag moved the pin,
+    which then held the wrist over frames 20-30 where the drag ended). On frame 25 the
+    same press still grabs the pin's handle."""
+    w = pose_window
+    v = w.viewport
+    v.set_camera("front", w.hips())
+    v.plotter.render()
+    scrub(w, 50)
+    pin = add_wrist_pin(w)
+    w.session.update_constraint(pin.name, {"frames": (20, 30)})
+    (pin,) = w.mode.constraints
+    place = pin.position.copy()
+    wrist = w.mode.pose.positions[J["lwrist"]].copy()
+    np.testing.assert_allclose(place, wrist, atol=1e-6)
+    v.plotter.render()
+    x, y = pixel_of(v, wrist)
+    mouse_drag(v, (x, y), (x + 40, y - 60), steps=8)
+    assert w.undo.undo_text() == "move target lwrist"
+    np.testing.assert_allclose(w.mode.constraints[0].position, place, atol=1e-9)
+    assert np.linalg.norm(w.mode.pose.positions[J["lwrist"]] - wrist) > 0.1
+    w.undo_step()
+    scrub(w, 25)
+    v.plotter.render()
+    x, y = pixel_of(v, w.mode.pose.positions[J["lwrist"]])
+    mouse_drag(v, (x, y), (x + 40, y - 60), steps=8)
+    assert np.linalg.norm(w.mode.constraints[0].position - place) > 0.05

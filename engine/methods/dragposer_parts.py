@@ -336,9 +336,13 @@ class PriorSource:
     def __init__(self, predictor: LatentPredictor | None, bank: PoseBank | None, settings: OptimizerSettings) -> None:
         self.predictor, self.bank = predictor, bank
         self.schedule = TemporalSchedule(settings.predictor_every, settings.past_window)
-        self.from_bank = False  # the last frame's prior came from the pose bank
         self.distance: float | None = None  # how far the last frame's readings were from the bank's
         self.bank_later: tuple[tuple[str, ...], ...] = ()  # combinations between_frames prepares
+
+    @property
+    def from_bank(self) -> bool:
+        """Whether the last frame's prior came from the pose bank (it then has a distance)."""
+        return self.distance is not None
 
     def readings(self, s: OptimizerSettings, history: TrackerHistory) -> tuple | None:
         """The bank's lookup input for a frame (None: the predictor gives the prior)."""
@@ -351,7 +355,6 @@ class PriorSource:
         predictor runs only when its latent is the prior: while the bank answers, its
         runs would be thrown away; a run for later frames waits for :meth:`between_frames`."""
         self.schedule.configure(s.predictor_every, s.past_window)
-        self.from_bank = readings is not None
         self.distance = None
         if readings is not None:
             assert self.bank is not None  # readings come only with a bank (:meth:`readings`)

@@ -244,7 +244,7 @@ class GaitPlanner:
         v = self.velocity()
         speed = float(np.linalg.norm(v))
         a = p.activity(speed) if walk else 0.0
-        standing = _StandingPull(previous[list(HIPS), :2], stand * p.standing(speed, distance) if stand > 0 else 0.0)
+        standing = _StandingPull(previous[list(HIPS), :2], stand * p.standing(speed, distance))
         if a <= 0.0:
             self._stance = None
             return standing.apply(GaitTargets.off())
@@ -301,10 +301,7 @@ class GaitPlanner:
         """A smoothstep from 0 to 1 over ``seconds`` after a swap, at ``frames`` frames into
         the stance; 1 when the stance began at the planner's start or ``seconds`` is 0."""
         n = round(seconds * self.fps)
-        if not self._swapped or frames >= n:
-            return 1.0
-        u = frames / n
-        return u * u * (3.0 - 2.0 * u)
+        return 1.0 if not self._swapped or frames >= n else _rise(frames, 0.0, n)
 
     def _start(self, stance: int, planted: np.ndarray, lift: np.ndarray) -> None:
         """``stance`` plants at ``planted (3,)``; the other foot lifts off from ``lift (3,)``."""

@@ -181,7 +181,8 @@ def _in_between(
     smooth.set_history(previous, done[-2].positions if len(done) > 1 else None)
     ctx = character.placed(root, heading, f, previous=previous, prior=z)
 
-    def solve(targets: list[JointTarget], rules: list[Constraint]) -> Pose:
+    def solve(targets: list[JointTarget], rules: list[Constraint]) -> tuple[Pose, dict[int, np.ndarray]]:
+        """The in-between with ``targets`` and ``rules``, and its exact limb targets."""
         aims = []
         for t in targets:
             track = [
@@ -196,7 +197,7 @@ def _in_between(
             aims.append(dataclasses.replace(t, position=t.position + gap))
         terms, _, _ = solve_inputs(aims)
         _, reach, rotations = solve_inputs(targets)
-        return character.solve(
+        pose = character.solve(
             z,
             [*terms, smooth, *rules],
             ctx,
@@ -206,6 +207,7 @@ def _in_between(
             prior_weight=IN_BETWEEN_PRIOR,
             rule="sgd",
         )
+        return pose, reach
 
     interpolated = interpolated_targets(keys, times, f, scheme)
     targeted = {t.joint for t in interpolated}
@@ -215,13 +217,12 @@ def _in_between(
         # the pin (solved without it) to the pin's place, through a target
         # (:func:`engine.authoring.pins.pinned_targets`)
         unpinned = [c for c in scene.constraints if not (isinstance(c, PinConstraint) and c.joint in held)]
-        first = solve(*pinned_targets(interpolated, unpinned, frame))
+        first, _ = solve(*pinned_targets(interpolated, unpinned, frame))
         free = {j: first.positions[sk.JOINT_INDEX[j]].copy() for j in held}
         targets, rules = pinned_targets(interpolated, scene.constraints, frame, free=free)
     else:
         targets, rules = pinned_targets(interpolated, scene.constraints, frame)
-    pose = solve(targets, rules)
-    _, reach, _ = solve_inputs(targets)
+    pose, reach = solve(targets, rules)
     i, s = segment(times, f)
     if not any(pelvis_only_target(k.targets) for k in keys[i : i + 1 + (s > 0.0)]):  # after the last key: the last
         return pose

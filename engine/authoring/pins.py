@@ -80,21 +80,18 @@ def pinned_targets(
     30 takes the joint to the pin in the first frames of the blend and shakes it by up to
     11 cm a frame over the range."""
     pins = held_pins(constraints, frame)
+    if shift is not None:
+        pins = {j: (place + np.asarray(shift, float), a) for j, (place, a) in pins.items()}
     out, won = [], set()
     for t in targets:
         if t.joint in pins and t.active:
-            place, a = pins[t.joint]
-            if shift is not None:
-                place = place + np.asarray(shift, float)
-            t = dataclasses.replace(t, position=(1.0 - a) * np.asarray(t.position, float) + a * place)
+            t = dataclasses.replace(t, position=_toward(t.position, *pins[t.joint]))
             won.add(t.joint)
         out.append(t)
-    for j, (place, a) in pins.items():
-        if free is None or j in won or j not in free or j == "root" or any(t.joint == j for t in targets):
+    for j, pin in pins.items():
+        if free is None or j not in free or j == "root" or any(t.joint == j for t in targets):
             continue
-        if shift is not None:
-            place = place + np.asarray(shift, float)
-        out.append(JointTarget(j, (1.0 - a) * np.asarray(free[j], float) + a * place))
+        out.append(JointTarget(j, _toward(free[j], *pin)))
         won.add(j)
     rest = [c for c in constraints if not (isinstance(c, PinConstraint) and c.joint in won and c.joint in pins)]
     return out, active_constraints(rest, frame)
@@ -107,11 +104,10 @@ def pinned_places(
     on ``frame`` winning on its joint as over a target (:func:`pinned_targets`), and the
     joints whose pin won."""
     pins = held_pins(constraints, frame)
-    out = {}
-    for j, p in places.items():
-        p = np.asarray(p, float)
-        if j in pins:
-            place, a = pins[j]
-            p = (1.0 - a) * p + a * place
-        out[j] = p.copy()
+    out = {j: _toward(p, *pins[j]) if j in pins else np.array(p, float) for j, p in places.items()}
     return out, set(pins) & set(places)
+
+
+def _toward(x: np.ndarray, place: np.ndarray, a: float) -> np.ndarray:
+    """``x (3,)`` moved to a pin's ``place`` by its activity ``a`` (a new array)."""
+    return (1.0 - a) * np.asarray(x, float) + a * place

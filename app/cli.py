@@ -94,7 +94,8 @@ def run(args: argparse.Namespace) -> int:
     started = _start_engine(method) if args.engine == "process" else None
     # no cyclic collections while the start-up imports create their ~4 * 10^5 long-lived
     # objects (a fifth of the imports' time went to collections that freed nothing); the
-    # window freezes them and turns collection back on (app.main.run)
+    # window freezes them, and from then on cycles are collected between events
+    # (app.collector, started by app.main.run)
     gc.disable()
     try:
         from app.main import run as run_app  # Qt loads only when the window opens

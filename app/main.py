@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import gc
 import os
 import sys
 from pathlib import Path
@@ -12,6 +11,7 @@ from PyQt6.QtCore import QTimer
 from PyQt6.QtWidgets import QApplication
 
 from app import autosave
+from app.collector import collected_between_events
 from app.crash_report import CrashLog, left_reports, offer, state_folder
 from app.main_window import MainWindow
 from app.measure import Measurement
@@ -132,26 +132,29 @@ def run(
     crash = CrashLog()
     reports = left_reports(crash.folder) if crash.folder.is_dir() else []
     crash.start()
+    # cycles are collected between events on this thread, never inside a paint or in a
+    # worker thread (app.collector); start-up runs with collection off (app.cli.run)
     try:
-        return _run(
-            app,
-            path,
-            method,
-            sensors,
-            screenshot,
-            after_frames,
-            measure,
-            measure_json,
-            pace,
-            ghosts,
-            view,
-            rig_map,
-            engine,
-            scene,
-            explicit_method,
-            started,
-            reports,
-        )
+        with collected_between_events():
+            return _run(
+                app,
+                path,
+                method,
+                sensors,
+                screenshot,
+                after_frames,
+                measure,
+                measure_json,
+                pace,
+                ghosts,
+                view,
+                rig_map,
+                engine,
+                scene,
+                explicit_method,
+                started,
+                reports,
+            )
     finally:
         crash.close()
 
@@ -176,7 +179,6 @@ def _run(
     reports: list[Path],
 ) -> int:
     window = MainWindow(method=method, engine=engine, started=started)
-    gc.enable()  # what the start-up made is frozen now (MainWindow); app.cli.run turned it off
     mark("window built")
     try:
         open_initial(window, path if path or not scene else None, sensors, rig_map)

@@ -36,6 +36,23 @@ def pytest_configure(config):
     torch.set_num_threads(1)
 
 
+@pytest.fixture(autouse=True)
+def _cycles_collected_between_events(request):
+    """A test of Qt widgets collects garbage as the studio does: from a GUI-thread timer,
+    between events (app.collector). With automatic collection a widget an earlier test
+    dropped, or this test's own window once its function returned, could be deleted by a
+    collection that happened to start inside a paint: a segfault whose test depended on
+    how many objects the tests before it had made."""
+    if "qtbot" not in request.fixturenames:
+        yield
+        return
+    request.getfixturevalue("qapp")  # the collector's timer needs the application
+    from app.collector import collected_between_events
+
+    with collected_between_events():
+        yield
+
+
 def pytest_addoption(parser):
     parser.addoption(
         "--soak",

@@ -441,7 +441,9 @@ def test_the_bake_runs_on_a_worker_with_a_dialog_whose_cancel_changes_nothing(wi
 
     def watch() -> None:
         r = w.jobs
-        if r.running and r.done >= 5 and r.dialog is not None and r.dialog.isVisible():
+        # the dialog takes the worker's count at its next poll (POLL_MS), so wait for the
+        # dialog's own value rather than the worker's count alone
+        if r.running and r.dialog is not None and r.dialog.isVisible() and r.dialog.value() >= 5:
             seen["worker"] = r.thread is not threading.main_thread() and r.thread.is_alive()
             seen["progress"] = (r.done, r.dialog.maximum())
             r.dialog.findChild(QPushButton).click()  # Cancel

@@ -9,7 +9,6 @@ stops listening.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -17,7 +16,6 @@ import numpy as np
 from engine.authoring import events as ev
 from engine.authoring.bake import one_key_targets
 from engine.authoring.motion_paths import authored_paths
-from engine.gizmos import BoxGizmo
 from engine.studio.frame_figures import gizmos_of
 
 
@@ -30,6 +28,7 @@ class PoseRedraw:
         for signal, slot in (
             (w.session.events.targets, self._on_targets),
             (w.session.events.frame, self._on_targets),  # a pin's activity is the frame's
+            (w.session.events.frame, self._on_frame),  # ... and so is whether its gizmo shows
             (w.session.events.pose, self._on_pose),
             (w.session.events.keys, self._on_keys),
             (w.session.events.animation, self._on_keys),
@@ -82,23 +81,24 @@ class PoseRedraw:
         self._show_gizmos()
         self.w.show_positions(self.w.mode.pose.positions)
 
+    def _on_frame(self, e: Any = None) -> None:
+        """Another frame shown: the gizmos of the constraints acting there, even where
+        the pose is the same (a frame with no key, before the first bake)."""
+        self._show_gizmos()
+        self.w._render_soon()
+
     def _show_gizmos(self) -> None:
         self.show_gizmos(self.w.mode.pose.positions, self.w.frame)
 
     def show_gizmos(self, positions: np.ndarray, frame: int) -> None:
-        """The constraints' gizmos on the character at ``positions (22, 3)`` metres (the
-        pose, or a played frame: a pin's tether runs to its joint where it is drawn), as
-        the studio draws them. A constraint that does not act on ``frame`` (outside its
-        range and blends) is drawn without a handle, so a press on the joint under it
-        drags the joint: with a handle, asked first, a pin for frames 100-160 would take
-        the press on a wrist left on it at frame 199 and move the pin instead."""
-        shown = []
-        for c in self.w.mode.constraints:
-            for name, g in gizmos_of([c], positions, lambda m: self.w.statusBar().showMessage(m, 5000)):
-                shown.append(
-                    (name, g if c.activity(frame) > 0 else replace(g, edit=() if isinstance(g, BoxGizmo) else ""))
-                )
-        self.w.viewport.gizmos.update(tuple(shown))
+        """The gizmos of the constraints acting on ``frame`` on the character at
+        ``positions (22, 3)`` metres (the pose, or a played frame: a pin's tether runs to
+        its joint where it is drawn), as the studio draws them. A constraint outside its
+        range and blends on ``frame`` draws nothing: neither seen holding there nor
+        taking a press meant for the joint under it (a pin for frames 100-160 would
+        otherwise take the press on a wrist left on it at frame 199 and move the pin)."""
+        shown = gizmos_of(self.w.mode.constraints, positions, lambda m: self.w.statusBar().showMessage(m, 5000), frame)
+        self.w.viewport.gizmos.update(shown)
 
     def paths_due(self, e: Any = None) -> None:
         """The keys, the animation, the constraints or the bake changed: the paths are

@@ -189,7 +189,7 @@ class EngineFrames(threading.Thread):
             target_positions=readonly(np.array([r.position for r in readings]).reshape(-1, 3)),
             target_rotations=readonly(np.array([r.rotation for r in readings]).reshape(-1, 4)),
             target_connected=readonly(np.array([r.connected for r in readings], bool)),
-            gizmos=gizmos_of(self._methods.constraints, self._last_pose, self._report_error),
+            gizmos=gizmos_of(self._methods.constraints, self._last_pose, self._report_error, frame),
             losses=losses_of(res, sf),
             latent=readonly(last.latent) if last is not None and last.latent is not None else None,
             iterations=res.iterations if res else 0,

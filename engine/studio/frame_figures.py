@@ -49,15 +49,17 @@ def timing_of(res: FrameResult | None, ms: float, latency_ms: float | None = Non
 
 
 def gizmos_of(
-    constraints: Iterable[Any], positions: np.ndarray, report: Callable[[str], None]
+    constraints: Iterable[Any], positions: np.ndarray, report: Callable[[str], None], frame: int | None = None
 ) -> tuple[tuple[str, Gizmo], ...]:
     """``(name, shape)`` of the enabled constraints that draw one, posed on
     ``positions`` (22, 3), metres (distance, balance and look-at draw lines between
-    current joints). A constraint whose ``gizmo`` raises is left out and ``report`` ed,
-    not hidden."""
+    current joints). With ``frame``, a constraint that does not act there (outside its
+    ``frames`` and their blends: ``activity(frame) == 0``) draws nothing, so a pin for
+    frames 100-160 is not seen holding on frame 50. A constraint whose ``gizmo`` raises
+    is left out and ``report`` ed, not hidden."""
     out = []
     for c in constraints:
-        if not c.enabled:
+        if not c.enabled or (frame is not None and c.activity(frame) <= 0.0):
             continue
         try:
             g = c.gizmo(positions)

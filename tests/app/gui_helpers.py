@@ -47,6 +47,19 @@ def mouse_drag(
         on_move()
 
 
+def on_screen(view) -> np.ndarray:
+    """The 3D view's pixels as the X server has them (not a render VTK would make for a
+    screenshot): (h, w, 3) uint8."""
+    from PyQt6.QtGui import QGuiApplication
+
+    view.plotter.render_window.WaitForCompletion()
+    shot = QGuiApplication.primaryScreen().grabWindow(int(view.plotter.winId())).toImage()
+    shot = shot.convertToFormat(shot.Format.Format_RGB888)
+    w, h = shot.width(), shot.height()
+    img = np.frombuffer(shot.constBits().asstring(shot.bytesPerLine() * h), np.uint8)
+    return img.reshape(h, shot.bytesPerLine())[:, : 3 * w].reshape(h, w, 3).copy()
+
+
 def pixel_of(view, point) -> tuple[float, float]:
     x, y = view.joints._to_display(np.asarray(point, float)[None])[0]
     return float(x), float(y)
@@ -95,6 +108,16 @@ def drag_wrist(w) -> None:
 def shortcut(w, key: Qt.Key, mods=Qt.KeyboardModifier.ControlModifier) -> None:
     """``key`` with ``mods`` pressed where the keyboard focus is (else on ``w``)."""
     QTest.keyClick(QApplication.focusWidget() or w, key, mods)
+    QApplication.processEvents()
+
+
+def type_number(spin, value: int) -> None:
+    """Click into a spin box, type ``value`` and commit it with Return, as a user does."""
+    spin.setFocus()
+    QApplication.processEvents()
+    spin.selectAll()
+    QTest.keyClicks(spin, str(value))
+    QTest.keyClick(spin, Qt.Key.Key_Return)
     QApplication.processEvents()
 
 

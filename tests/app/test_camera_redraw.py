@@ -10,20 +10,11 @@ from PyQt6.QtGui import QGuiApplication
 from PyQt6.QtTest import QTest
 from PyQt6.QtWidgets import QApplication
 
+from tests.app.gui_helpers import on_screen
+
 pytestmark = pytest.mark.gui
 
 PRESET = {Qt.Key.Key_1: "front", Qt.Key.Key_3: "side", Qt.Key.Key_7: "top", Qt.Key.Key_Home: "home"}
-
-
-def on_screen(view) -> np.ndarray:
-    """The 3D view's pixels as the X server has them (not a render VTK would make for a
-    screenshot): (h, w, 3) uint8."""
-    view.plotter.render_window.WaitForCompletion()
-    shot = QGuiApplication.primaryScreen().grabWindow(int(view.plotter.winId())).toImage()
-    shot = shot.convertToFormat(shot.Format.Format_RGB888)
-    w, h = shot.width(), shot.height()
-    img = np.frombuffer(shot.constBits().asstring(shot.bytesPerLine() * h), np.uint8)
-    return img.reshape(h, shot.bytesPerLine())[:, : 3 * w].reshape(h, w, 3).copy()
 
 
 def settle(qtbot) -> None:

@@ -10,19 +10,9 @@ from PyQt6.QtTest import QTest
 from PyQt6.QtWidgets import QApplication, QTabWidget
 
 from engine import skeleton as sk
-from tests.app.gui_helpers import mouse_drag, pixel_of
+from tests.app.gui_helpers import mouse_drag, pixel_of, type_number
 
 pytestmark = pytest.mark.gui
-
-
-def type_number(spin, value: int) -> None:
-    """Click into a spin box, type ``value`` and commit it with Return, as a user does."""
-    spin.setFocus()
-    QApplication.processEvents()
-    spin.selectAll()
-    QTest.keyClicks(spin, str(value))
-    QTest.keyClick(spin, Qt.Key.Key_Return)
-    QApplication.processEvents()
 
 
 def cyan_columns(widget, top: int, bottom: int) -> np.ndarray:

@@ -1,7 +1,8 @@
 """While the pose window plays its keys, a constraint's gizmo is drawn on the played frame:
-a pin's tether runs from the pin to where its joint is in that frame. Tied to the pose
-being edited instead, it showed a pin that held its joint as stretched away from it, and
-one outside its frames as holding, so playback could not tell where a pin acts."""
+a pin's tether runs from the pin to where its joint is in that frame (here a frame where
+the pin blends in). Tied to the pose being edited instead, it would show a pin that holds
+its joint as stretched away from it. Off its frames and blends a pin draws nothing
+(tests/app/test_gizmo_ranges.py)."""
 
 from __future__ import annotations
 
@@ -25,7 +26,7 @@ def test_a_pin_s_tether_follows_its_joint_on_the_played_frames(pose_window):
     w.drag_joint("lwrist", p[J["lwrist"]] + [0.35, 0.0, -0.05])
     w.add_key(20)
     edited = w.mode.pose.positions[J["lelbow"]].copy()
-    w.session.add_constraint("pin", joint="lelbow", position=edited + [0.3, 0.0, 0.3], frames=(20, 20))
+    w.session.add_constraint("pin", joint="lelbow", position=edited + [0.3, 0.0, 0.3], frames=(20, 20), blend_in=15)
     w.go_to(0)
     w.playback.toggle()
     try:

@@ -39,16 +39,18 @@ MEAN, CLIP = "a neutral standing pose", "the clip's current frame"
 
 
 class NewPoseDialog(QDialog):
-    """Height (metres) and starting pose."""
+    """Height (metres) and starting pose (the studio's New pose; the pose window's offers
+    only the neutral pose, ``has_clip`` False)."""
 
-    def __init__(self, parent: QWidget | None, has_clip: bool) -> None:
+    def __init__(self, parent: QWidget | None, has_clip: bool, height: float | None = None) -> None:
         super().__init__(parent)
         self.setWindowTitle("New pose")
         form = QFormLayout(self)
-        # the canonical subject's height: a scene that gives none is baked at it too
-        canonical = round(sk.Skeleton.canonical().height(), 2)
+        # offered: ``height`` metres, else the canonical subject's (a scene that gives
+        # none is baked at it too)
+        offered = round(height if height is not None else sk.Skeleton.canonical().height(), 2)
         self.height_m = QDoubleSpinBox(
-            minimum=0.5, maximum=2.5, decimals=2, singleStep=0.05, value=canonical, suffix=" m"
+            minimum=0.5, maximum=2.5, decimals=2, singleStep=0.05, value=offered, suffix=" m"
         )
         self.start = QComboBox()
         self.start.addItems([MEAN, CLIP] if has_clip else [MEAN])

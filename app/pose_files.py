@@ -1,5 +1,9 @@
-"""The pose window's files: open and save the scene, export the bake as BVH or MP4,
-screenshots.
+"""The pose window's files: a new pose, open and save the scene, export the bake as BVH
+or MP4, screenshots.
+
+File ▸ New pose starts an empty document in the same window (its keys, targets and
+constraints dropped, the character standing in the pose model's mean pose, at the height
+asked for), after asking about unsaved edits as closing does.
 
 Opening a scene (File ▸ Open scene) is a new document: it is read and checked as
 ``bake`` reads it, the model takes its keys, animation, constraints and settings (and
@@ -66,6 +70,31 @@ class PoseFiles:
             return False
         self.save(path)
         return True
+
+    def new_dialog(self) -> None:
+        """File ▸ New pose: with unsaved edits ask first, then the character's height
+        (the current one offered) and a new, empty document in this window."""
+        from PyQt6.QtWidgets import QDialog
+
+        from app.authoring_actions import NewPoseDialog
+
+        if not self.confirm_discard("starting a new pose"):
+            return
+        dialog = NewPoseDialog(self.w, has_clip=False, height=self.w.mode.character.height)
+        if dialog.exec() == QDialog.DialogCode.Accepted:
+            self.new(dialog.height_m.value())
+
+    def new(self, height: float) -> None:
+        """A new, empty document on a character ``height`` metres tall, standing in the
+        pose model's mean pose (:meth:`engine.authoring.session.AuthoringSession.new_scene`);
+        the next Save asks for a file name."""
+
+        def new() -> None:
+            self.w.session.new_scene(height)
+            self.path = None
+            self.w.statusBar().showMessage(f"New pose: a {height:.2f} m character, no keys", DONE_MS)
+
+        self.w._edit(new)
 
     def open(self, path: str | Path) -> None:
         """Make the scene at ``path`` the window's (see the module doc)."""

@@ -1,4 +1,4 @@
-"""The pose window's menus: File, Edit (undo, redo, settle, clear), Keys (play, step,
+"""The pose window's menus: File (new pose, scenes, exports), Edit (undo, redo, settle, clear), Keys (play, step,
 add and delete keys), View (display, camera) and Help, built with the studio's helpers so the same keys do the same things in both.
 
 Every entry is a QAction owned by the window (a QAction that only a local variable
@@ -22,6 +22,7 @@ def build_pose_menus(w: QMainWindow) -> None:
     named: dict[str, Any] = {}
     file_menu = w.menuBar().addMenu("&File")
     f = w.files
+    named["new_pose"] = action(w, file_menu, "&New pose...", f.new_dialog, "Ctrl+Shift+N")
     named["open"] = action(w, file_menu, "&Open scene...", f.open_dialog, QKeySequence.StandardKey.Open)
     named["save"] = action(w, file_menu, "&Save scene...", f.save_dialog, QKeySequence.StandardKey.Save)
     named["export_bvh"] = action(w, file_menu, "Export &motion (BVH / glTF)...", f.export_bvh_dialog, "Ctrl+B")

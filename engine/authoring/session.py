@@ -272,17 +272,28 @@ class AuthoringSession(PoseEditing, KeyEditing):
         self.edit(text, posed, key)
 
     # -- documents -----------------------------------------------------------------
-    def open_scene(self, loaded: AuthoringScene) -> None:
+    def new_scene(self, height: float | None = None) -> None:
+        """Make a new, empty document (File ▸ New pose): a character ``height`` metres tall
+        (None: the canonical one) in the pose model's mean pose, whatever pose the window
+        started from, with no keys, targets, constraints or selection, the default
+        animation and settings, and a new undo history."""
+        self.open_scene(AuthoringScene(height=height), fresh=True)
+
+    def open_scene(self, loaded: AuthoringScene, fresh: bool = False) -> None:
         """Make ``loaded`` the document: its keys, animation, constraints and settings (and
-        its character's height), at its first key, with a new undo history."""
+        its character's height), at its first key, with a new undo history. ``fresh``: the
+        character starts from the pose model's mean pose and nothing is selected (a new
+        document, :meth:`new_scene`); else it keeps the pose it was started from."""
         from engine.skeleton import Skeleton
 
         before, old = self.state(), self.frame
         height = loaded.height if loaded.height is not None else Skeleton.canonical().height()
-        if abs(height - self.mode.character.height) > 1e-6:
+        if fresh or abs(height - self.mode.character.height) > 1e-6:
             shared = self.mode.constraints
             self.mode = PoseMode(self.vae, height, options=self.mode.options)
             self.mode.constraints = shared
+        if fresh:
+            self.selected = None
         m = self.mode
         m.options = self.scene.pose_options = loaded.pose_options
         m.constraints[:] = list(loaded.constraints)

@@ -255,6 +255,23 @@ def test_opening_a_scene_replaces_the_document_and_starts_a_new_history(session,
     assert {"keys", "constraints", "targets", "pose", "history"} <= names
 
 
+def test_new_scene_starts_an_empty_document_in_the_mean_pose(vae, example_scene):
+    from engine.authoring.document import load_authoring
+
+    s = AuthoringSession(PoseMode(vae, 1.75), clock=Clock(1.0))
+    s.open_scene(load_authoring(example_scene))
+    s.select("lwrist")
+    s.drag_joint("lwrist", s.pose.positions[LW] + [0.0, -0.1, 0.1])
+    mean = PoseMode(vae, 1.6).pose.positions
+    seen = record(s)
+    s.new_scene(1.6)
+    assert s.keys == [] and s.targets == {} and s.mode.constraints == [] and s.scene.constraints is s.mode.constraints
+    assert s.frame == 0 and s.selected is None and not s.dirty and s.history.count() == 0
+    assert s.mode.character.height == pytest.approx(1.6) and s.scene.height == pytest.approx(1.6)
+    np.testing.assert_allclose(s.pose.positions, mean, atol=1e-5)
+    assert {"keys", "constraints", "targets", "pose", "history"} <= {n for n, _ in seen}
+
+
 def test_turn_maths_ring_and_swept_turns():
     from engine.authoring.turns import TURN_GESTURE_S, TURN_START_M, SweptTurn, ring_turn
     from engine.kinematics import quat_np as QN

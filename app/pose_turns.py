@@ -27,10 +27,11 @@ READOUT_MS = 4000
 
 def turn_readout(joint: str, axis: int, angle_deg: float) -> str:
     """The status bar's line while ``joint``'s ring about world ``axis`` is dragged by
-    ``angle_deg`` degrees since the press: what a user reads to turn a head 60 degrees.
+    ``angle_deg`` degrees since the press (whole degrees, or 5-degree steps with Ctrl:
+    :func:`widgets.viewport.rings.snapped`): what a user reads to turn a head 60 degrees.
     About Z, a positive angle turns a body facing the front view to its left."""
     side = " (to its left)" if axis == 2 and angle_deg > 0 else " (to its right)" if axis == 2 and angle_deg < 0 else ""
-    return f"Turn {joint} about {RING_NAMES[axis]}: {angle_deg:+.0f} deg{side}"
+    return f"Turn {joint} about {RING_NAMES[axis]}: {angle_deg:+.0f} deg{side}; Ctrl: 5-deg steps"
 
 
 class JointTurns:

@@ -24,7 +24,11 @@ POSE_MOUSE = (
     ("Drag the hips", "Move the whole body; down: a squat, the feet planted"),
     ("Shift + drag the hips", "Move only the pelvis, the feet planted flat (a squat)"),
     ("Click a joint", "Select it: its rotation rings and its motion path (View > Motion paths)"),
-    ("Drag a ring", "Turn the selected joint about that axis (red X, green Y, blue Z); the status bar reads the angle"),
+    (
+        "Drag a ring",
+        "Turn the selected joint about that axis (red X, green Y, blue Z) by whole degrees, with Ctrl "
+        "held by 5 degrees; the status bar reads the angle",
+    ),
     ("Alt + drag a joint", "Turn it by the angle the mouse sweeps around it"),
     ("Drag a cyan handle", "Edit a constraint (point, box, look-at target)"),
     ("Left drag off the body", "Rotate the camera"),

@@ -60,6 +60,31 @@ def on_screen(view) -> np.ndarray:
     return img.reshape(h, shot.bytesPerLine())[:, : 3 * w].reshape(h, w, 3).copy()
 
 
+def _mods(ctrl: bool) -> Qt.KeyboardModifier:
+    return Qt.KeyboardModifier.ControlModifier if ctrl else Qt.KeyboardModifier.NoModifier
+
+
+def mouse_press(view, at, ctrl: bool = False) -> None:
+    """Press the left button on the 3D view at ``at`` (VTK display pixels, y up)."""
+    widget = view.plotter
+    _send(widget, QMouseEvent.Type.MouseButtonPress, at[0], widget.height() - 1 - at[1], LEFT, LEFT, _mods(ctrl))
+    QApplication.processEvents()
+
+
+def mouse_move(view, to, ctrl: bool = False) -> None:
+    """Move the mouse, the left button held, to ``to`` (VTK display pixels, y up)."""
+    widget = view.plotter
+    _send(widget, QMouseEvent.Type.MouseMove, to[0], widget.height() - 1 - to[1], NONE, LEFT, _mods(ctrl))
+    QApplication.processEvents()
+
+
+def mouse_release(view, at, ctrl: bool = False) -> None:
+    """Let go of the left button at ``at`` (VTK display pixels, y up)."""
+    widget = view.plotter
+    _send(widget, QMouseEvent.Type.MouseButtonRelease, at[0], widget.height() - 1 - at[1], LEFT, NONE, _mods(ctrl))
+    QApplication.processEvents()
+
+
 def pixel_of(view, point) -> tuple[float, float]:
     x, y = view.joints._to_display(np.asarray(point, float)[None])[0]
     return float(x), float(y)

@@ -148,7 +148,8 @@ class JointDragger:
                 self._click = (x, y)
         elif event == "MouseMoveEvent":
             if self.ring is not None:
-                self._on_turn(self.ring, self._rings.angle(self.ray(x, y)), False)
+                coarse = bool(iren.GetControlKey())  # read from this move's own event
+                self._on_turn(self.ring, self._rings.angle(self.ray(x, y), coarse), False)
             elif self.joint is not None or self.target is not None:
                 self.move(x, y)
             else:

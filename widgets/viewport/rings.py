@@ -7,8 +7,8 @@ edge-on is a line through its centre, and a press on the sphere there is meant f
 sphere (the dragger also leaves a press to any other joint nearer than the circle:
 :meth:`widgets.viewport.picking.JointDragger.press_ring`). Every mouse move
 then gives the angle swept about the ring's axis since the press (the mouse ray meets
-the ring's plane; radians, right-handed about the axis), which the dragger reports to
-its owner. The ring about +Z turns a joint the way a head turns to look left or right.
+the ring's plane; radians, right-handed about the axis), in whole degrees or, with Ctrl
+held, in 5-degree steps, which the dragger reports to its owner. The ring about +Z turns a joint the way a head turns to look left or right.
 """
 
 from __future__ import annotations
@@ -25,6 +25,12 @@ RING_PICK_PX = 8.0
 #: radius) is left to the sphere or joint there.
 HUB_RADIUS = 0.055
 HUB_MIN_PX = 14.0
+#: A ring turns by whole degrees, and by :data:`COARSE_STEP_DEG` with Ctrl held: a
+#: joint's rings seen from above span a few dozen pixels, about 2.5 degrees a pixel, so
+#: the unrounded angle goes from 59.2 to 61.7 in one pixel and a head turned exactly 60
+#: degrees would be luck.
+STEP_DEG = 1.0
+COARSE_STEP_DEG = 5.0
 #: Points per ring (drawn and picked).
 RING_POINTS = 64
 AXES = np.eye(3)
@@ -52,6 +58,13 @@ def swept_angle(center: np.ndarray, axis: np.ndarray, start: np.ndarray, now: np
     a -= (a @ axis) * axis
     b -= (b @ axis) * axis
     return float(np.arctan2(np.cross(a, b) @ axis, a @ b))
+
+
+def snapped(angle: float, coarse: bool = False) -> float:
+    """``angle`` radians rounded to the nearest :data:`STEP_DEG` degrees, or
+    :data:`COARSE_STEP_DEG` when ``coarse``; radians."""
+    step = np.radians(COARSE_STEP_DEG if coarse else STEP_DEG)
+    return float(np.round(angle / step) * step)
 
 
 class RotationRings:
@@ -172,11 +185,13 @@ class RotationRings:
         self.axis = axis
         self._start = self._on_plane(ray)
 
-    def angle(self, ray: tuple[np.ndarray, np.ndarray]) -> float:
-        """Radians swept about the grabbed ring's axis since :meth:`begin`."""
+    def angle(self, ray: tuple[np.ndarray, np.ndarray], coarse: bool = False) -> float:
+        """Radians swept about the grabbed ring's axis since :meth:`begin`, rounded to
+        whole degrees (:data:`STEP_DEG`), or to :data:`COARSE_STEP_DEG` when ``coarse``
+        (Ctrl held)."""
         if self.axis is None:
             return 0.0
-        return swept_angle(self.center, AXES[self.axis], self._start, self._on_plane(ray))
+        return snapped(swept_angle(self.center, AXES[self.axis], self._start, self._on_plane(ray)), coarse)
 
     def end(self) -> None:
         self.axis = None

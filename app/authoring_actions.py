@@ -16,50 +16,14 @@ from typing import TYPE_CHECKING
 
 from PyQt6 import sip
 from PyQt6.QtGui import QAction
-from PyQt6.QtWidgets import (
-    QComboBox,
-    QDialog,
-    QDialogButtonBox,
-    QDoubleSpinBox,
-    QFormLayout,
-    QMenu,
-    QMessageBox,
-    QWidget,
-)
+from PyQt6.QtWidgets import QDialog, QMenu, QMessageBox
 
-from engine import skeleton as sk
+from app.new_pose_dialog import CLIP, NewPoseDialog
 from engine.errors import UserError
 
 if TYPE_CHECKING:
     from app.pose_window import PoseWindow
     from app.shell import StudioShell
-
-#: The starting poses offered: the pose model's average pose (its latent zero) or a clip frame.
-MEAN, CLIP = "a neutral standing pose", "the clip's current frame"
-
-
-class NewPoseDialog(QDialog):
-    """Height (metres) and starting pose (the studio's New pose; the pose window's offers
-    only the neutral pose, ``has_clip`` False)."""
-
-    def __init__(self, parent: QWidget | None, has_clip: bool, height: float | None = None) -> None:
-        super().__init__(parent)
-        self.setWindowTitle("New pose")
-        form = QFormLayout(self)
-        # offered: ``height`` metres, else the canonical subject's (a scene that gives
-        # none is baked at it too)
-        offered = round(height if height is not None else sk.Skeleton.canonical().height(), 2)
-        self.height_m = QDoubleSpinBox(
-            minimum=0.5, maximum=2.5, decimals=2, singleStep=0.05, value=offered, suffix=" m"
-        )
-        self.start = QComboBox()
-        self.start.addItems([MEAN, CLIP] if has_clip else [MEAN])
-        form.addRow("Height", self.height_m)
-        form.addRow("Start from", self.start)
-        box = QDialogButtonBox(QDialogButtonBox.StandardButton.Ok | QDialogButtonBox.StandardButton.Cancel)
-        box.accepted.connect(self.accept)
-        box.rejected.connect(self.reject)
-        form.addRow(box)
 
 
 def open_pose_window(window: StudioShell, height: float, from_clip: bool) -> PoseWindow:

@@ -76,7 +76,7 @@ class PoseFiles:
         (the current one offered) and a new, empty document in this window."""
         from PyQt6.QtWidgets import QDialog
 
-        from app.authoring_actions import NewPoseDialog
+        from app.new_pose_dialog import NewPoseDialog
 
         if not self.confirm_discard("starting a new pose"):
             return

@@ -180,7 +180,7 @@ def test_save_dialogs_avoid_read_only_folders_and_the_studio_assets(studio, monk
 
 
 def test_the_new_pose_dialog_starts_at_the_canonical_height_in_plain_words(studio):
-    from app.authoring_actions import NewPoseDialog
+    from app.new_pose_dialog import NewPoseDialog
     from engine import skeleton as sk
 
     dialog = NewPoseDialog(studio, has_clip=True)

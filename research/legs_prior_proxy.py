@@ -153,7 +153,7 @@ class Variant:
 
     def __init__(self, bank: TP.PoseBank, joints=PRESET4, lags=(), weights=None) -> None:
         self.bank, self.joints, self.lags = bank, joints, tuple(lags)
-        self.a = TP._anchor(joints)
+        self.a = TP.anchor_index(joints)
         x = self._bank_features()
         self.mean, self.std = x.mean(0), x.std(0) + 1e-6
         self.w = torch.ones(x.shape[1]) if weights is None else torch.as_tensor(weights, dtype=torch.float32)

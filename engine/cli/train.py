@@ -1,4 +1,4 @@
-"""``dragposer-studio train vae|predictor|sparseposer|rpm|stance``: train the models on prepared data.
+"""``dragposer-studio train vae|predictor|sparseposer|rpm|stance|tracker-net``: train the models on prepared data.
 
 Settings come from the dataclass defaults, then ``--config FILE.toml``, then
 ``--set key=value`` (repeatable), then the common flags. Runs unchanged under
@@ -60,6 +60,28 @@ def register(sub: argparse._SubParsersAction) -> None:
     t.add_argument("--epochs", type=int, default=10, help="passes over the samples (default 10)")
     t.add_argument("--seed", type=int, default=0, help="random seed")
     t.set_defaults(func=_train_stance)
+    n = tsub.add_parser(
+        "tracker-net",
+        help="train the tracker prior's networks (a latent from the trackers' last half second)",
+        description="Train one network per tracker combination (engine/solver/tracker_net.py) on the train split "
+        "of prepared data, with the latents of the shipped VAE (or --vae), and print each one's latent error on "
+        "the validation split.",
+    )
+    n.add_argument("--data", type=Path, default=Path("prepared"), help="output of `data prepare` (default: prepared)")
+    n.add_argument(
+        "--out", type=Path, default=Path("runs/tracker_nets.npz"), help="networks file (default: runs/tracker_nets.npz)"
+    )
+    n.add_argument("--vae", type=Path, help="VAE weights whose latents the networks learn (default: the shipped one)")
+    n.add_argument(
+        "--presets",
+        default="6,4,3-head-hands,3-hip-hands",
+        help="sensor presets whose 6-DoF tracker combinations get a network (default: 6,4,3-head-hands,3-hip-hands)",
+    )
+    n.add_argument("--hidden", type=int, default=512, help="width of the two hidden layers (default 512)")
+    n.add_argument("--epochs", type=int, default=20, help="passes over the samples (default 20)")
+    n.add_argument("--stride", type=int, default=4, help="every N-th frame of each take is a sample (default 4)")
+    n.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    n.set_defaults(func=_train_tracker_net)
     p.set_defaults(func=lambda args: p.print_help() or 0)
 
 
@@ -149,4 +171,54 @@ def _train_stance(args: argparse.Namespace) -> int:
         f"stance right {100 * a['model']:.1f} %, the arm-swing rule {100 * a['arms']:.1f} % "
         f"(it answers {100 * a['arms_coverage']:.0f} % of them)"
     )
+    return 0
+
+
+def _train_tracker_net(args: argparse.Namespace) -> int:
+    import time
+
+    from tqdm import tqdm
+
+    from engine.errors import UserError
+    from engine.input_files import file_sha256
+    from engine.models import load_default_models, load_models
+    from engine.models.loading import DEFAULT_VAE
+    from engine.solver.tracker_net import TrackerNets
+    from engine.solver.tracker_prior import combination
+    from engine.tracking import parse_sensors
+    from engine.training.tracker_net import latent_mse, load_takes, samples, train_net
+
+    for name, lo, hi in (("hidden", 1, 4096), ("epochs", 1, 10_000), ("stride", 1, 1000)):
+        if not lo <= getattr(args, name) <= hi:
+            raise UserError(f"--{name}: {getattr(args, name)} is not from {lo} to {hi}")
+    combos: list[tuple[str, ...]] = []
+    for preset in args.presets.split(","):
+        c = combination(s.joint for s in parse_sensors(preset.strip()) if s.dof == 6)
+        if c is None:
+            raise UserError(f"--presets: {preset!r} has no hips or head tracker among two or more 6-DoF trackers")
+        if c not in combos:
+            combos.append(c)
+    vae_file = args.vae or DEFAULT_VAE
+    vae = (load_models(args.vae) if args.vae else load_default_models()).vae
+    t0 = time.monotonic()
+    train, val = load_takes(args.data, "train", vae), load_takes(args.data, "val", vae)
+    print(
+        f"{len(train.latents)} training and {len(val.latents)} validation takes encoded, {time.monotonic() - t0:.0f} s"
+    )
+    nets = {}
+    for joints in combos:
+        x, z = samples(train, joints, args.stride)
+        bar = tqdm(total=args.epochs, desc="+".join(joints), unit="epoch")
+
+        def report(epoch: int, mse: float, bar=bar) -> None:
+            bar.set_postfix(mse=f"{mse:.4f}")
+            bar.update()
+
+        nets[joints] = net = train_net(joints, x, z, args.hidden, args.epochs, seed=args.seed, progress=report)
+        bar.close()
+        vx, vz = samples(val, joints, args.stride)
+        print(f"{'+'.join(joints)}: {len(x)} samples, validation latent MSE {latent_mse(net, vx, vz):.4f}")
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    TrackerNets(nets, file_sha256(vae_file)).save(args.out)
+    print(f"{args.out}: {len(nets)} networks, {(time.monotonic() - t0) / 60:.1f} min")
     return 0

@@ -41,6 +41,7 @@ from engine.sensors import SensorFrame
 from engine.solver import FrameContext, LatentDecoder, LatentPredictor, OptimizerSettings, PoseOptimizer, RootFrame
 from engine.solver.gait import GaitPlanner
 from engine.solver.limb_ik import finish
+from engine.solver.tracker_net import TrackerNets, default_tracker_nets
 from engine.solver.tracker_prior import PoseBank, combination, default_bank
 from engine.startup_trace import mark
 
@@ -75,6 +76,7 @@ class DragPoserMethod(CallerEdits, Method):
         latent_dim: int = 24,
         fast: bool = True,
         bank: PoseBank | None = None,
+        nets: TrackerNets | None = None,
         **overrides: Any,
     ) -> None:
         self.decoder = decoder
@@ -84,6 +86,7 @@ class DragPoserMethod(CallerEdits, Method):
             predictor.eval().requires_grad_(False)
         self.predictor = predictor
         self.bank = bank  # the tracker prior's training poses (engine/solver/tracker_prior.py)
+        self.nets = nets  # the tracker prior's networks (engine/solver/tracker_net.py)
         self._settings = FrameSettings(settings)
         self.settings = self._settings.settings
         self.latent_dim = latent_dim
@@ -106,7 +109,7 @@ class DragPoserMethod(CallerEdits, Method):
         self.fps = fps
         self.optimizer = PoseOptimizer(self.decoder, skeleton.offsets, self.settings, fast=self.fast)
         self.trackers = TrackerTerms(self._weights)
-        self.priors = PriorSource(self.predictor, self.bank, self.settings)
+        self.priors = PriorSource(self.predictor, self.bank, self.settings, self.nets)
         self.priors.bank_later = self._bank_later
         self.prior = TemporalPriorConstraint(name="temporal_prior")
         self.smooth = SmoothConstraint(name="smooth")
@@ -377,7 +380,8 @@ def create(
         values["iterations" if mode == "realtime" else "max_iterations"] = iterations
     if lr is not None:
         values["lr"] = lr
-    method = DragPoserMethod(decoder, predictor, latent_dim=decoder.config.latent, bank=bank, **values)
+    nets = default_tracker_nets(vae_path) if bank is not None else None
+    method = DragPoserMethod(decoder, predictor, latent_dim=decoder.config.latent, bank=bank, nets=nets, **values)
     if bank is not None and not prepare_bank:
         method.prepare_bank_later(preset_combinations())
     return method

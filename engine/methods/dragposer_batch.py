@@ -70,7 +70,7 @@ class DragPoserMethod(Protocol):
     skeleton: Any
     fps: float
     latent_dim: int
-    bank: Any
+    priors: Any
     optimizer: Any
     prior: Any
     smooth: Any
@@ -311,7 +311,7 @@ def _read_all(m: DragPoserMethod, frames: Sequence[SensorFrame]) -> list[BatchFr
         return None
     joints = banks[0][0]  # all frames' priors in one call, as frame by frame finds them
     pos, rot = np.array([b[1] for b in banks]), np.array([b[2] for b in banks])
-    priors = m.bank.latent_frames(joints, pos, rot, k=plans[0].settings.tracker_prior_neighbours)
+    priors = m.priors.latent_frames(plans[0].settings, joints, pos, rot)
     return [
         BatchFrame(
             plan=p,
@@ -319,7 +319,7 @@ def _read_all(m: DragPoserMethod, frames: Sequence[SensorFrame]) -> list[BatchFr
             weights=np.concatenate([np.asarray(p.weights, dtype=np.float64), [w for _, w in o]]),
             prior=z,
         )
-        for p, o, z in zip(plans, own, priors.numpy().astype(np.float64))
+        for p, o, z in zip(plans, own, priors)
     ]
 
 

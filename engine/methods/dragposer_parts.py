@@ -32,7 +32,8 @@ from engine.sensors import Sensor, SensorFrame
 from engine.solver import LatentPredictor, OptimizerSettings, TemporalSchedule
 from engine.solver.limb_ik import CARRIED, HEAD, LIMBS
 from engine.solver.pose import body_facing
-from engine.solver.tracker_prior import PoseBank, TrackerHistory
+from engine.solver.tracker_net import WINDOW, TrackerNet, TrackerNets
+from engine.solver.tracker_prior import LAG, PoseBank, TrackerHistory
 
 
 @dataclass
@@ -132,7 +133,7 @@ class TrackerTerms:
         self.weights = weights if weights is not None else {}  # shared: kept across clips
         self.constraints: dict[str, SensorConstraint] = {}
         self.blends: dict[str, SensorBlend] = {}
-        self.history = TrackerHistory()
+        self.history = TrackerHistory(WINDOW)
         self.facing: np.ndarray | None = None
         self.points: dict[str, np.ndarray] = {}
         self.last_points: dict[str, np.ndarray] = {}
@@ -331,10 +332,20 @@ class PriorSource:
     bank : PoseBank or None
     settings : OptimizerSettings
         For the predictor's schedule.
+    nets : TrackerNets or None
+        The tracker networks: with ``tracker_prior = network`` a combination that has one
+        takes its latent from it instead of the bank's neighbours (the bank still says
+        how far the readings are from the training poses).
     """
 
-    def __init__(self, predictor: LatentPredictor | None, bank: PoseBank | None, settings: OptimizerSettings) -> None:
-        self.predictor, self.bank = predictor, bank
+    def __init__(
+        self,
+        predictor: LatentPredictor | None,
+        bank: PoseBank | None,
+        settings: OptimizerSettings,
+        nets: TrackerNets | None = None,
+    ) -> None:
+        self.predictor, self.bank, self.nets = predictor, bank, nets
         self.schedule = TemporalSchedule(settings.predictor_every, settings.past_window)
         self.distance: float | None = None  # how far the last frame's readings were from the bank's
         self.bank_later: tuple[tuple[str, ...], ...] = ()  # combinations between_frames prepares
@@ -345,7 +356,7 @@ class PriorSource:
         return self.distance is not None
 
     def readings(self, s: OptimizerSettings, history: TrackerHistory) -> tuple | None:
-        """The bank's lookup input for a frame (None: the predictor gives the prior)."""
+        """The tracker prior's input for a frame (None: the predictor gives the prior)."""
         return history.arrays() if s.prior == "trackers" and self.bank is not None else None
 
     def latent(
@@ -357,12 +368,34 @@ class PriorSource:
         self.schedule.configure(s.predictor_every, s.past_window)
         self.distance = None
         if readings is not None:
-            assert self.bank is not None  # readings come only with a bank (:meth:`readings`)
             joints, pos, rot = readings
-            z, self.distance = self.bank.lookup(joints, pos, rot, k=s.tracker_prior_neighbours)
+            z, self.distance = self._bank().lookup(
+                joints, pos[-LAG - 1 :], rot[-LAG - 1 :], k=s.tracker_prior_neighbours
+            )
+            net = self._net(s, joints)
+            if net is not None:
+                z = torch.from_numpy(net.latents(pos[None], rot[None])[0])
             return z, s.tracker_prior_weight, []
         prediction, warn = self.schedule.prediction(frame, self.predictor, max(1, s.future_window), defer=True)
         return prediction, s.temporal_weight, [warn] if warn else []
+
+    def latent_frames(
+        self, s: OptimizerSettings, joints: tuple[str, ...], pos: np.ndarray, rot: np.ndarray
+    ) -> np.ndarray:
+        """:meth:`latent`'s tracker latents of ``F`` frames at once, ``(F, L)``, from their
+        readings ``pos (F, W, S, 3)``, ``rot (F, W, S, 4)`` (:meth:`readings` of each)."""
+        net = self._net(s, joints)
+        if net is not None:
+            return net.latents(pos, rot).astype(np.float64)
+        z = self._bank().latent_frames(joints, pos[:, -LAG - 1 :], rot[:, -LAG - 1 :], k=s.tracker_prior_neighbours)
+        return z.numpy().astype(np.float64)
+
+    def _bank(self) -> PoseBank:
+        assert self.bank is not None  # readings come only with a bank (:meth:`readings`)
+        return self.bank
+
+    def _net(self, s: OptimizerSettings, joints: tuple[str, ...]) -> TrackerNet | None:
+        return self.nets.get(joints) if self.nets is not None and s.tracker_prior == "network" else None
 
     def between_frames(self) -> None:
         """The deferred work: the bank's tables left for after the first frame, and one

@@ -29,6 +29,8 @@ TUNINGS = ("preset", "off")
 HEADINGS = ("previous", "anchor")
 #: ``prior``: where the temporal prior's latent comes from (engine/solver/tracker_prior.py).
 PRIORS = ("predictor", "trackers")
+#: ``tracker_prior``: what turns the trackers into the prior's latent (``prior = trackers``).
+TRACKER_PRIORS = ("network", "neighbours")
 #: Connected sensors from which ``auto`` uses Adam (and the predictor looks one step ahead).
 FULL_SET = 6
 
@@ -108,6 +110,15 @@ class OptimizerSettings:
         "this frame's tracker readings (engine/solver/tracker_prior.py), while hips or head "
         "are connected and a pose bank is loaded, else the predictor's.",
         Choice(PRIORS),
+        panel=True,
+    )
+    tracker_prior: str = setting(
+        "network",
+        "Tracker prior from",
+        "network: the tracker network's latent for the trackers' last half second, where one "
+        "is shipped for the connected set (engine/solver/tracker_net.py), else the pose bank's; "
+        "neighbours: always the mean latent of the pose bank's nearest training frames.",
+        Choice(TRACKER_PRIORS),
         panel=True,
     )
     tracker_prior_weight: float = setting(

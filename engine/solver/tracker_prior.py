@@ -250,7 +250,7 @@ class PoseBank:
         :meth:`lookup` (else 0); with ``keep_hint`` the last frame's neighbours become the
         next lookup's hint (:meth:`latent`)."""
         joints = tuple(joints)
-        idx, a = self._index(joints), _anchor(joints)
+        idx, a = self._index(joints), anchor_index(joints)
         k = min(k or self.k, len(self))
         if not len(pos):
             return torch.zeros(0, self._latents.shape[1]), 0.0
@@ -343,10 +343,11 @@ def combination(joints: Iterable[str]) -> tuple[str, ...] | None:
 
 
 def _anchor_of(joints: Sequence[str]) -> str:
-    return joints[_anchor(joints)]
+    return joints[anchor_index(joints)]
 
 
-def _anchor(joints: Sequence[str]) -> int:
+def anchor_index(joints: Sequence[str]) -> int:
+    """Index in ``joints`` of the features' anchor (the first of :data:`ANCHORS` there)."""
     for a in ANCHORS:
         if a in joints:
             return list(joints).index(a)
@@ -354,9 +355,17 @@ def _anchor(joints: Sequence[str]) -> int:
 
 
 class TrackerHistory:
-    """The last ``LAG + 1`` frames of readings of the bank joints, for :meth:`PoseBank.latent`."""
+    """The last frames of readings of the bank joints: :meth:`PoseBank.latent` reads the
+    last ``LAG + 1``, the tracker network (:mod:`engine.solver.tracker_net`) ``size``.
 
-    def __init__(self) -> None:
+    Parameters
+    ----------
+    size : int
+        Frames kept (at least ``LAG + 1``).
+    """
+
+    def __init__(self, size: int = LAG + 1) -> None:
+        self.size = max(size, LAG + 1)
         self.frames: list[dict[str, tuple[np.ndarray, np.ndarray]]] = []
 
     def reset(self) -> None:
@@ -365,18 +374,27 @@ class TrackerHistory:
     def push(self, readings: dict[str, tuple[np.ndarray, np.ndarray]]) -> None:
         """Add one frame: connected bank joints -> (position (3,), rotation (4,))."""
         self.frames.append({j: r for j, r in readings.items() if j in BANK_JOINTS})
-        del self.frames[: -(LAG + 1)]
+        del self.frames[: -self.size]
 
     def arrays(self) -> tuple[tuple[str, ...], np.ndarray, np.ndarray] | None:
-        """``(joints, pos (LAG+1, S, 3), rot (LAG+1, S, 4))`` of the joints connected in
-        every kept frame (the first frame repeated to fill the window), or None without an
-        anchor among them or with fewer than two joints."""
+        """``(joints, pos (size, S, 3), rot (size, S, 4))`` of the joints connected in each
+        of the last ``LAG + 1`` frames, oldest first, or None without an anchor among them
+        or with fewer than two joints. Before a joint's first reading in the window (the
+        clip's start, a tracker connected since) its earliest kept reading stands in, as
+        the first frame does before a clip's start."""
         if not self.frames:
             return None
-        joints = combination(j for j in BANK_JOINTS if all(j in f for f in self.frames))
+        recent = self.frames[-(LAG + 1) :]
+        joints = combination(j for j in BANK_JOINTS if all(j in f for f in recent))
         if joints is None:
             return None
-        frames = [self.frames[0]] * (LAG + 1 - len(self.frames)) + self.frames
-        pos = np.array([[f[j][0] for j in joints] for f in frames], dtype=np.float64)
-        rot = np.array([[f[j][1] for j in joints] for f in frames], dtype=np.float64)
+        pos = np.empty((self.size, len(joints), 3))
+        rot = np.empty((self.size, len(joints), 4))
+        pad = self.size - len(self.frames)
+        for s, j in enumerate(joints):
+            held = self.frames[-1][j]
+            for t in range(len(self.frames) - 1, -1, -1):  # newest first, gaps take the later reading
+                held = self.frames[t].get(j, held)
+                pos[pad + t, s], rot[pad + t, s] = held
+            pos[:pad, s], rot[:pad, s] = held
         return joints, pos, rot

@@ -141,7 +141,7 @@ class SensorTerm(FrameRows, Term):
         sel = self.select(P, rows)
         on = kit.const(self.on[sel], P)
         a = P.shape[0]
-        err = (P[:, self.joints] - kit.const(self.target[sel], P)) * on[..., None]
+        err = (kit.joints(P, self.joints) - kit.const(self.target[sel], P)) * on[..., None]
         parts, d_rot, rows6 = [err.reshape(a, -1)], None, None
         if len(self.six):
             scale = self.kept("scale", sel, lambda: self.scale[sel] * self.on[sel][:, self.six])
@@ -149,7 +149,7 @@ class SensorTerm(FrameRows, Term):
                 d_rot, rows6 = self.kept(
                     "d_rot", sel, lambda: entry_block((a, len(self.owner), 3), 3 * len(self.joints))
                 )
-            W6, T6 = W[:, self.joints6], kit.const(self.rot_target[sel], P)
+            W6, T6 = kit.joints(W, self.joints6), kit.const(self.rot_target[sel], P)
             parts.append(rotation_residual(kit, W6, T6, kit.const(scale, P), jac, rows6)[0])
         r = kit.cat(parts, -1) if len(parts) > 1 else parts[0]
         if not jac:

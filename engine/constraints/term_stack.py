@@ -88,7 +88,7 @@ class TermStack:
         residual ``r (A, M)``."""
         if not len(self.names):
             return np.zeros((len(r), 0))
-        r2 = r[:, self._order]
+        r2 = r.take(self._order, axis=1)  # take: a third of fancy indexing's cost here
         r2 *= r2
         return np.add.reduceat(r2, self._starts, axis=1)
 
@@ -118,7 +118,7 @@ class TermStack:
         rw = self._entry_weights(weights) * r  # (A, M): 2 w r per entry
         if blocks:
             d = blocks[0] if len(blocks) == 1 else np.concatenate(blocks, axis=1)  # (A, P, 3)
-            x = rw[:, entries, None] * d
+            x = (rw[:, entries] if isinstance(entries, slice) else rw.take(entries, axis=1))[:, :, None] * d
             flat: np.ndarray = np.bincount(self._bins(bins, a), weights=x.reshape(-1), minlength=a * 6 * n)
         else:
             flat = np.zeros(a * 6 * n)

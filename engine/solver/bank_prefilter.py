@@ -18,7 +18,9 @@ test keeps a margin (:data:`MARGIN` times the largest magnitudes involved) that 
 above both rounding errors: a row is dropped only when it is certainly farther.
 
 The bound of every row is one float32 product with the ``(rank + 2, N)`` table (a third
-of the full table's bytes). Blocks of consecutive rows with a centre and a radius do not
+of the full table's bytes); a clip's frames take it for :data:`FRAMES` queries at once
+(:meth:`Prefilter.bounds`), one matrix product that reads the table once for all of them.
+Blocks of consecutive rows with a centre and a radius do not
 pay here: on the shipped bank a block bound rules out about half the rows, and gathering
 the other half costs more than reading them all (docs/performance.md).
 """
@@ -38,6 +40,10 @@ MARGIN = 1e-4
 BLOCK = 16
 #: Above this share of the bank surviving, the whole table is compared instead.
 MAX_SHARE = 0.25
+#: Queries whose bounds :meth:`Prefilter.bounds` computes in one product: 16 rows of the
+#: shipped bank's ~1e5 bounds, 6 MB, where each query alone read the 7 MB table (16 and
+#: 32 measured alike, 64 and 128 slower: docs/performance.md).
+FRAMES = 16
 
 
 class Prefilter:
@@ -79,13 +85,32 @@ class Prefilter:
         qq = float(q @ q)
         rq = np.sqrt(max(qq - float(pq @ pq), 0.0))
         w = torch.from_numpy(np.concatenate((-2.0 * pq, [-2.0 * rq, 1.0])).astype(np.float32))
-        return w @ self.columns, qq, MARGIN * (1.0 + self.largest + qq)
+        return w @ self.columns, qq, self.margin(qq)
 
-    def candidates(self, q: np.ndarray, worst: float) -> torch.Tensor:
+    def bounds(self, q: np.ndarray) -> torch.Tensor:
+        """The ``b`` of :meth:`bound` for ``F`` queries ``q (F, D_c)``: ``(F, N)`` float32,
+        one product (each row's sums may round otherwise than :meth:`bound`'s; the
+        margin covers both)."""
+        q = np.asarray(q, dtype=np.float64)
+        pq = q @ self.basis
+        rq = np.sqrt(np.maximum((q * q).sum(1) - (pq * pq).sum(1), 0.0))
+        w = np.concatenate((-2.0 * pq, -2.0 * rq[:, None], np.ones((len(q), 1))), axis=1)
+        return torch.from_numpy(w.astype(np.float32)) @ self.columns
+
+    def margin(self, qq: float) -> float:
+        """The test's margin for a query of squared length ``qq``."""
+        return MARGIN * (1.0 + self.largest + qq)
+
+    def candidates(self, q: np.ndarray, worst: float, b: torch.Tensor | None = None) -> torch.Tensor:
         """Indices (ascending) of the rows that may be nearer than ``worst`` (a computed
         distance ``norms - 2 t.q`` of the query ``q (D_c,)``, float32 values): every row
-        whose float32 bound passes the test of :func:`nearest`."""
-        b, _, margin = self.bound(q)
+        whose float32 bound passes the test of :func:`nearest`; ``b``: the query's row of
+        :meth:`bounds`, if made."""
+        if b is None:
+            b, _, margin = self.bound(q)
+        else:
+            q = np.asarray(q, dtype=np.float64)
+            margin = self.margin(float(q @ q))
         # numpy's nonzero, not torch's: a third of the time on the bank's ~1e5 rows
         return torch.from_numpy(np.flatnonzero(b.numpy() <= worst + 2.0 * margin))
 
@@ -110,11 +135,13 @@ def nearest(
     pre: Prefilter,
     hint: torch.Tensor | None,
     k: int,
+    bound: torch.Tensor | None = None,
 ) -> torch.Tensor:
     """Indices ``(k,)`` of the ``k`` rows with the smallest ``norms - 2 table @ q``, in
     increasing order, as ``topk`` over the whole table gives them; ``hint`` (at least
     ``k`` row indices, e.g. the previous frame's neighbours) bounds the search, ``q_cols``
-    is the query over the combination's columns (float32 values)."""
+    is the query over the combination's columns (float32 values), ``bound`` its row of
+    :meth:`Prefilter.bounds` if made."""
     n = len(table)
     if hint is not None and len(hint) >= k:
         d_hint = distances(table, norms, q, hint)
@@ -122,7 +149,7 @@ def nearest(
         worst = float(d_hint.max() if len(hint) == k else d_hint.topk(k, largest=False).values[-1])
         # computed d = |t - q|^2 - |q|^2 (+ rounding) and bound = b + |q|^2, so a row can be
         # nearer than the k-th known one only when b + |q|^2 - margin <= worst + |q|^2 + margin
-        keep = pre.candidates(q_cols, worst)
+        keep = pre.candidates(q_cols, worst, bound)
         if len(keep) <= MAX_SHARE * n:
             d = distances(table, norms, q, keep)
             return keep[d.topk(k, largest=False).indices]

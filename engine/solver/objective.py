@@ -252,15 +252,17 @@ class StoppingRule:
         if rows is None and not self.offline and len(self.steps) == 1:  # one realtime frame: scalars
             return np.array([self.last(int(self.steps[0]))])
         rows = np.arange(len(self.best)) if rows is None else rows
-        steps = self.steps[rows]
+        steps, fixed = self.steps[rows], self.fixed[rows]
         out = steps >= self.cap
-        if self.offline:
+        # the losses decide only rows with no fixed count that are short of the cap: with
+        # none (the batched solve's fixed steps), neither the improvement record nor
+        # ``satisfied()`` (every term's checks) can change the answer
+        if self.offline and ((fixed < 0) & ~out).any():
             best = self.best[rows]
             better = total < best * (1.0 - self.min_improvement)
             self.best[rows] = np.where(better, total, best)
             self.since[rows] = np.where(better, 0, self.since[rows] + 1)
             out = out | (self.since[rows] >= self.patience) | satisfied()
-        fixed = self.fixed[rows]
         return np.where(fixed >= 0, steps >= fixed, out)
 
     def stop_one(self, total: float, satisfied: Callable[[], bool], steps: int) -> bool:

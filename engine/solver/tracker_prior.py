@@ -35,7 +35,7 @@ import torch
 
 from engine.input_files import file_sha256
 from engine.kinematics import quaternion as Q
-from engine.solver.bank_prefilter import Prefilter, nearest
+from engine.solver.bank_prefilter import FRAMES, Prefilter, nearest
 
 #: Joints whose tracker readings the bank stores, in this order.
 BANK_JOINTS: tuple[str, ...] = ("root", "upperneck", "lwrist", "rwrist", "lankle", "rankle")
@@ -257,9 +257,13 @@ class PoseBank:
         x = features(pos[:, -1], rot[:, -1], a, pos[:, 0, a])
         q32 = ((x - idx.mean) / idx.std).astype(np.float32)
         hint, out = self._hints.get(joints), []
-        for q in q32:
-            hint = self._nearest(idx, q, hint, k)
-            out.append(hint)
+        for start in range(0, len(q32), FRAMES):
+            chunk = q32[start : start + FRAMES]
+            # a clip's bounds, FRAMES queries to one product (one query: its own in nearest)
+            bounds = idx.prefilter.bounds(chunk) if len(chunk) > 1 else [None]
+            for q, bound in zip(chunk, bounds):
+                hint = self._nearest(idx, q, hint, k, bound)
+                out.append(hint)
         if keep_hint:
             self._hints[joints] = hint
         far = 0.0
@@ -268,8 +272,11 @@ class PoseBank:
             far = float(torch.linalg.vector_norm(rows - torch.from_numpy(q32[-1]).double(), dim=1).mean())
         return self._latents[torch.stack(out)].mean(1), far
 
-    def _nearest(self, idx: _Index, q32: np.ndarray, hint: torch.Tensor | None, k: int) -> torch.Tensor:
-        """The ``k`` nearest rows ``(k,)`` of ``idx`` to the standardised query ``q32 (D_c,)``."""
+    def _nearest(
+        self, idx: _Index, q32: np.ndarray, hint: torch.Tensor | None, k: int, bound: torch.Tensor | None = None
+    ) -> torch.Tensor:
+        """The ``k`` nearest rows ``(k,)`` of ``idx`` to the standardised query ``q32 (D_c,)``
+        (``bound``: its prefilter bounds, if made)."""
         tab = idx.table
         if idx.full:
             q = torch.from_numpy(q32)
@@ -277,7 +284,7 @@ class PoseBank:
             q = torch.zeros(tab.table.shape[1])
             q[idx.cols_t] = torch.from_numpy(q32)
         # |t - q|^2 = |t|^2 - 2 t.q + |q|^2; the last term is the same for every row
-        return nearest(tab.table, idx.norms, q, q32, idx.prefilter, hint, k)
+        return nearest(tab.table, idx.norms, q, q32, idx.prefilter, hint, k, bound)
 
     def save(self, path: str | Path) -> None:
         """Write the bank (float16 arrays, compressed) atomically."""

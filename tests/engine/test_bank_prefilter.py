@@ -34,6 +34,25 @@ def test_the_bound_is_below_every_true_distance_and_close_for_near_rows():
         assert (b.double().numpy()[near] + offset).sum() > 0.9 * true[near].sum()
 
 
+def test_the_bounds_of_many_queries_are_each_querys_bound_and_pick_its_candidates():
+    rng = np.random.default_rng(4)
+    rows = _rows(rng)
+    pre = bp.Prefilter(rows)
+    x = rows.double().numpy()
+    qs = (x[rng.integers(len(x), size=9)] + rng.normal(scale=0.1, size=(9, x.shape[1]))).astype(np.float32)
+    many = pre.bounds(qs)
+    assert many.shape == (9, len(x)) and many.dtype == torch.float32
+    for q, b in zip(qs, many):
+        one, _, margin = pre.bound(q)
+        np.testing.assert_allclose(b.numpy(), one.numpy(), rtol=0, atol=0.01 * margin)
+        worst = float(np.quantile(one.numpy(), 0.01))
+        assert torch.equal(pre.candidates(q, worst, b), pre.candidates(q, worst)) or (
+            # a row at the threshold may fall either side of it: only such rows differ
+            set(pre.candidates(q, worst, b).tolist()) ^ set(pre.candidates(q, worst).tolist())
+            <= set(np.flatnonzero(np.abs(one.numpy() - worst - 2 * margin) < 0.01 * margin).tolist())
+        )
+
+
 @pytest.mark.parametrize("m", [1, 5, 16, 47, 333])
 def test_gathered_rows_keep_the_bits_of_the_whole_tables_product(m):
     rng = np.random.default_rng(1)

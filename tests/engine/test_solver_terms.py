@@ -63,9 +63,11 @@ def test_pose_terms_fast_path_equals_reference(models, preset, ground):
         assert a.losses[-1]["smooth"] == pytest.approx(b.losses[-1]["smooth"], rel=1e-3, abs=1e-9)
         seen |= a.losses[0]["smooth"] > 0
         if ground:
-            # the band is one-sided: feet 1e-5 m apart change a 1e-5 loss by a few 1e-8
-            # (4e-8 on frame 2 of 3-head-hands before hands_heading_limit, 6e-8 on frame 1 with it)
-            assert a.losses[-1]["ground"] == pytest.approx(b.losses[-1]["ground"], rel=1e-3, abs=1e-7)
+            # the band is one-sided and quadratic: at a loss of 1.5e-4 (weight 20, a foot 2.7 mm
+            # past the band) d loss / d height is about 0.11, so feet 1e-5 m apart (float32
+            # round-off grown over the frame's steps, BLAS builds differ in it) change the loss
+            # by about 1e-6; 2e-7 is seen on frame 3 of 3-head-hands
+            assert a.losses[-1]["ground"] == pytest.approx(b.losses[-1]["ground"], rel=1e-3, abs=1e-6)
             seen_ground |= a.losses[0]["ground"] > 0
     assert seen and (seen_ground or not ground)  # the terms were active
     assert fast.optimizer._fast is not None

@@ -334,8 +334,8 @@ class PriorSource:
         For the predictor's schedule.
     nets : TrackerNets or None
         The tracker networks: with ``tracker_prior = network`` a combination that has one
-        takes its latent from it instead of the bank's neighbours (the bank still says
-        how far the readings are from the training poses).
+        takes its latent from it instead of the bank's neighbours (``both``: the mean of
+        the two); the bank still says how far the readings are from the training poses.
     """
 
     def __init__(
@@ -374,7 +374,7 @@ class PriorSource:
             )
             net = self._net(s, joints)
             if net is not None:
-                z = torch.from_numpy(net.latents(pos[None], rot[None])[0])
+                z = self._mix(s, torch.from_numpy(net.latents(pos[None], rot[None])[0]), z)
             return z, s.tracker_prior_weight, []
         prediction, warn = self.schedule.prediction(frame, self.predictor, max(1, s.future_window), defer=True)
         return prediction, s.temporal_weight, [warn] if warn else []
@@ -385,9 +385,11 @@ class PriorSource:
         """:meth:`latent`'s tracker latents of ``F`` frames at once, ``(F, L)``, from their
         readings ``pos (F, W, S, 3)``, ``rot (F, W, S, 4)`` (:meth:`readings` of each)."""
         net = self._net(s, joints)
-        if net is not None:
+        if net is not None and s.tracker_prior == "network":  # the bank's latents are not needed
             return net.latents(pos, rot).astype(np.float64)
         z = self._bank().latent_frames(joints, pos[:, -LAG - 1 :], rot[:, -LAG - 1 :], k=s.tracker_prior_neighbours)
+        if net is not None:
+            z = self._mix(s, torch.from_numpy(net.latents(pos, rot)), z)
         return z.numpy().astype(np.float64)
 
     def _bank(self) -> PoseBank:
@@ -395,7 +397,12 @@ class PriorSource:
         return self.bank
 
     def _net(self, s: OptimizerSettings, joints: tuple[str, ...]) -> TrackerNet | None:
-        return self.nets.get(joints) if self.nets is not None and s.tracker_prior == "network" else None
+        return self.nets.get(joints) if self.nets is not None and s.tracker_prior != "neighbours" else None
+
+    @staticmethod
+    def _mix(s: OptimizerSettings, net: torch.Tensor, bank: torch.Tensor) -> torch.Tensor:
+        """The network's latent, or with ``tracker_prior = both`` its mean with the bank's."""
+        return net if s.tracker_prior == "network" else 0.5 * (net + bank)
 
     def between_frames(self) -> None:
         """The deferred work: the bank's tables left for after the first frame, and one

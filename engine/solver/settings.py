@@ -30,7 +30,7 @@ HEADINGS = ("previous", "anchor")
 #: ``prior``: where the temporal prior's latent comes from (engine/solver/tracker_prior.py).
 PRIORS = ("predictor", "trackers")
 #: ``tracker_prior``: what turns the trackers into the prior's latent (``prior = trackers``).
-TRACKER_PRIORS = ("network", "neighbours")
+TRACKER_PRIORS = ("network", "neighbours", "both")
 #: Connected sensors from which ``auto`` uses Adam (and the predictor looks one step ahead).
 FULL_SET = 6
 
@@ -117,7 +117,8 @@ class OptimizerSettings:
         "Tracker prior from",
         "network: the tracker network's latent for the trackers' last half second, where one "
         "is shipped for the connected set (engine/solver/tracker_net.py), else the pose bank's; "
-        "neighbours: always the mean latent of the pose bank's nearest training frames.",
+        "neighbours: always the mean latent of the pose bank's nearest training frames; both: "
+        "the mean of the two latents (the bank's alone where no network is shipped).",
         Choice(TRACKER_PRIORS),
         panel=True,
     )

@@ -130,7 +130,7 @@ def _bank(rng) -> PoseBank:
     return PoseBank(pos, rot, pos[:, :2] + 0.01, np.full((n, 24), -0.5, np.float32), k=4)
 
 
-@pytest.mark.parametrize("setting,expected", [("network", 0.25), ("neighbours", -0.5)])
+@pytest.mark.parametrize("setting,expected", [("network", 0.25), ("neighbours", -0.5), ("both", -0.125)])
 def test_dragposer_takes_the_networks_latent_for_its_combination(setting, expected):
     from engine.motion.clip import Motion
 

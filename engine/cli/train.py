@@ -81,6 +81,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     n.add_argument("--epochs", type=int, default=20, help="passes over the samples (default 20)")
     n.add_argument("--stride", type=int, default=4, help="every N-th frame of each take is a sample (default 4)")
     n.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    n.add_argument(
+        "--pose-weight",
+        type=float,
+        default=0.0,
+        help="weight of the decoded poses' rotation difference beside the latent error (default 0)",
+    )
     n.set_defaults(func=_train_tracker_net)
     p.set_defaults(func=lambda args: p.print_help() or 0)
 
@@ -214,7 +220,17 @@ def _train_tracker_net(args: argparse.Namespace) -> int:
             bar.set_postfix(mse=f"{mse:.4f}")
             bar.update()
 
-        nets[joints] = net = train_net(joints, x, z, args.hidden, args.epochs, seed=args.seed, progress=report)
+        nets[joints] = net = train_net(
+            joints,
+            x,
+            z,
+            args.hidden,
+            args.epochs,
+            seed=args.seed,
+            progress=report,
+            decoder=vae,
+            pose_weight=args.pose_weight,
+        )
         bar.close()
         vx, vz = samples(val, joints, args.stride)
         print(f"{'+'.join(joints)}: {len(x)} samples, validation latent MSE {latent_mse(net, vx, vz):.4f}")

@@ -113,12 +113,12 @@ class OptimizerSettings:
         panel=True,
     )
     tracker_prior: str = setting(
-        "network",
+        "both",
         "Tracker prior from",
-        "network: the tracker network's latent for the trackers' last half second, where one "
-        "is shipped for the connected set (engine/solver/tracker_net.py), else the pose bank's; "
-        "neighbours: always the mean latent of the pose bank's nearest training frames; both: "
-        "the mean of the two latents (the bank's alone where no network is shipped).",
+        "both: the mean of the tracker network's latent (the trackers' last half second, "
+        "engine/solver/tracker_net.py) and the pose bank's; network: the network's alone; "
+        "neighbours: the mean latent of the pose bank's nearest training frames alone. Where no "
+        "network is shipped for the connected trackers, the bank's.",
         Choice(TRACKER_PRIORS),
         panel=True,
     )

@@ -87,9 +87,15 @@ def train_net(
     lr: float = 1e-3,
     seed: int = 0,
     progress=None,
+    decoder=None,
+    pose_weight: float = 0.0,
 ) -> TrackerNet:
     """Fit one combination's network (two hidden layers of ``hidden``, ReLU, dropout 0.1)
-    to latents ``z (N, L)`` from inputs ``x (N, D)``; ``progress(epoch, mse)`` after each epoch."""
+    to latents ``z (N, L)`` from inputs ``x (N, D)``; ``progress(epoch, mse)`` after each epoch.
+    With a ``decoder`` (the VAE, frozen) and ``pose_weight`` > 0 the loss adds the decoded
+    poses' difference: per joint ``1 - cos^2`` of the half angle between the rotations the
+    guessed and the true latent decode to, so latent directions that turn joints more weigh
+    more."""
     import torch
 
     torch.manual_seed(seed)
@@ -112,7 +118,13 @@ def train_net(
         net.train()
         total = 0.0
         for b in torch.randperm(len(xt), generator=gen).split(1024):
-            loss = torch.nn.functional.mse_loss(net(xt[b]), zt[b])
+            guess = net(xt[b])
+            loss = torch.nn.functional.mse_loss(guess, zt[b])
+            if decoder is not None and pose_weight > 0:
+                with torch.no_grad():
+                    true_rot = decoder.decode(zt[b])[0]
+                dot = (decoder.decode(guess)[0] * true_rot).sum(-1)
+                loss = loss + pose_weight * (1.0 - dot * dot).mean()
             opt.zero_grad()
             loss.backward()
             opt.step()

@@ -385,11 +385,14 @@ class PriorSource:
         """:meth:`latent`'s tracker latents of ``F`` frames at once, ``(F, L)``, from their
         readings ``pos (F, W, S, 3)``, ``rot (F, W, S, 4)`` (:meth:`readings` of each)."""
         net = self._net(s, joints)
-        if net is not None and s.tracker_prior == "network":  # the bank's latents are not needed
-            return net.latents(pos, rot).astype(np.float64)
+        # the network row by row: a product of many rows sums in another order than one
+        # frame's, and the frame-by-frame solve's stopping tests see the last bits
+        guess = None if net is None else np.concatenate([net.latents(p[None], r[None]) for p, r in zip(pos, rot)])
+        if guess is not None and s.tracker_prior == "network":  # the bank's latents are not needed
+            return guess.astype(np.float64)
         z = self._bank().latent_frames(joints, pos[:, -LAG - 1 :], rot[:, -LAG - 1 :], k=s.tracker_prior_neighbours)
-        if net is not None:
-            z = self._mix(s, torch.from_numpy(net.latents(pos, rot)), z)
+        if guess is not None:
+            z = self._mix(s, torch.from_numpy(guess), z)
         return z.numpy().astype(np.float64)
 
     def _bank(self) -> PoseBank:

@@ -57,7 +57,9 @@ def test_the_task_scenes_hold_the_tasks_goals(vae):
         got = load_authoring(T.task_scene_path(task)).keys[0].targets
         assert list(got) == list(want), task.name
         for j, t in want.items():
-            assert np.abs(got[j].position - t.position).max() < 1e-12, (task.name, j)
+            # the goals come from float32 decodes: another numpy or BLAS build moves them by
+            # about 1e-7 m (1.3e-7 seen on a fresh install), far below any pose the task tells apart
+            assert np.abs(got[j].position - t.position).max() < 1e-6, (task.name, j)
             assert (got[j].rotation is None) == (t.rotation is None)
             if t.rotation is not None:
                 assert abs(abs(float(got[j].rotation @ t.rotation)) - 1.0) < 1e-12

@@ -157,3 +157,19 @@ def add_wrist_pin(w):
     (pin,) = w.mode.constraints
     assert pin.joint == "lwrist"
     return pin
+
+
+def ctrl_drag_pin(studio, qtbot, frame: int = 50, joint: str = "lelbow"):
+    """Pause the studio on ``frame``, Ctrl-drag ``joint`` 40 px right and 10 down in its
+    viewport (a pin where the drag ends) and return the constraint it made."""
+    from engine import skeleton as sk
+
+    view, s = studio.viewport, studio.session
+    s.seek(frame)
+    s.pause()
+    qtbot.waitUntil(lambda: not s.latest.playing and s.latest.frame == frame, timeout=10000)
+    view.show_snapshot(s.latest)
+    x, y = pixel_of(view, s.latest.positions[sk.JOINT_INDEX[joint]])
+    mouse_drag(view, (x, y), (x + 40, y + 10), ctrl=True)
+    qtbot.waitUntil(lambda: len(s.constraints) == 1, timeout=5000)
+    return s.constraints[0]

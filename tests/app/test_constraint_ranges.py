@@ -9,8 +9,7 @@ from PyQt6.QtCore import Qt
 from PyQt6.QtTest import QTest
 from PyQt6.QtWidgets import QApplication, QTabWidget
 
-from engine import skeleton as sk
-from tests.app.gui_helpers import mouse_drag, pixel_of, type_number
+from tests.app.gui_helpers import ctrl_drag_pin, type_number
 
 pytestmark = pytest.mark.gui
 
@@ -28,15 +27,8 @@ def cyan_columns(widget, top: int, bottom: int) -> np.ndarray:
 
 def test_a_ctrl_dragged_pin_is_limited_to_a_range_on_the_paused_studio_and_undone(studio, qtbot, monkeypatch):
     monkeypatch.setattr("engine.authoring.history.MERGE_S", 0.0)  # a user's edits come seconds apart: none merge
-    view, s, panel = studio.viewport, studio.session, studio.constraint_panel
-    s.seek(50)
-    s.pause()
-    qtbot.waitUntil(lambda: not s.latest.playing and s.latest.frame == 50, timeout=10000)
-    view.show_snapshot(s.latest)
-    x, y = pixel_of(view, s.latest.positions[sk.JOINT_INDEX["lelbow"]])
-    mouse_drag(view, (x, y), (x + 40, y + 10), ctrl=True)
-    qtbot.waitUntil(lambda: len(s.constraints) == 1, timeout=5000)
-    pin = s.constraints[0]
+    s, panel = studio.session, studio.constraint_panel
+    pin = ctrl_drag_pin(studio, qtbot)
     assert pin.kind == "pin" and pin.frames is None
     tabs = panel.parentWidget()
     while not isinstance(tabs, QTabWidget):

@@ -13,8 +13,7 @@ from PyQt6.QtGui import QGuiApplication
 from PyQt6.QtTest import QTest
 from PyQt6.QtWidgets import QApplication, QTabWidget
 
-from engine import skeleton as sk
-from tests.app.gui_helpers import add_wrist_pin, mouse_drag, on_screen, pixel_of, scrub, type_number
+from tests.app.gui_helpers import add_wrist_pin, ctrl_drag_pin, on_screen, scrub, type_number
 
 pytestmark = pytest.mark.gui
 
@@ -58,14 +57,7 @@ def test_the_pose_window_draws_a_range_limited_pin_only_on_its_frames(x11, pose_
 
 def test_the_paused_studio_draws_a_range_limited_pin_only_on_its_frames(x11, studio, qtbot):
     view, s, panel = studio.viewport, studio.session, studio.constraint_panel
-    s.seek(50)
-    s.pause()
-    qtbot.waitUntil(lambda: not s.latest.playing and s.latest.frame == 50, timeout=10000)
-    view.show_snapshot(s.latest)
-    x, y = pixel_of(view, s.latest.positions[sk.JOINT_INDEX["lelbow"]])
-    mouse_drag(view, (x, y), (x + 40, y + 10), ctrl=True)
-    qtbot.waitUntil(lambda: len(s.constraints) == 1, timeout=5000)
-    name = s.constraints[0].name
+    name = ctrl_drag_pin(studio, qtbot).name
     qtbot.waitUntil(lambda: name in view.gizmos.items, timeout=5000)
     assert gizmo_pixels(view) > 10
     tabs = panel.parentWidget()

@@ -207,3 +207,28 @@ def test_the_map_axes_follow_zoom_to_the_clip(studio, qtbot, synthetic_motion):
     assert box.isChecked()
     QApplication.processEvents()
     assert _axes_agree(views)
+
+
+def test_the_forces_tab_says_it_is_empty_after_the_next_solve(studio, qtbot):
+    """An inspection holds until the next solve; after a step the Forces tab names no term
+    or iteration of the frame it left (its bars gone, the titles and term ticks were
+    still there) and says what fills it, as the Gallery does."""
+    from PyQt6.QtWidgets import QToolButton
+
+    s = studio.session
+    s.set_method("dragposer")
+    s.play()
+    qtbot.waitUntil(lambda: s.latest.latent_view is not None and s.frame >= 5, timeout=90000)
+    views = _show_map(studio)
+    views.tabs.setCurrentIndex(1)
+    forces = views.forces
+    qtbot.mouseClick(forces.inspect_button, Qt.MouseButton.LeftButton)
+    qtbot.waitUntil(lambda: forces.detail is not None, timeout=30000)
+    assert forces.dim_plot.getPlotItem().titleLabel.text.startswith("force of ")
+    assert forces.info.text().startswith(f"frame {forces.detail.frame},")
+    step = next(b for b in studio.timeline.findChildren(QToolButton) if b.toolTip().startswith("Next frame"))
+    qtbot.mouseClick(step, Qt.MouseButton.LeftButton)
+    qtbot.waitUntil(lambda: forces.detail is None, timeout=30000)
+    assert forces.dim_plot.getPlotItem().titleLabel.text == "per latent dimension"
+    assert forces.norm_plot.getAxis("bottom")._tickLevels is None  # no term names left
+    assert forces.info.text().startswith("Empty until Inspect this frame")

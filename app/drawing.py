@@ -127,6 +127,8 @@ class DrawScheduler:
         if s.playing and not snap.playing and snap.seq == self._drawn_seq and snap.plays == s.plays:
             s.note_frame(snap.frame)
             s.note_stopped()  # reached the end without looping
+        if s.pause_pending and not snap.playing and snap.plays == s.plays:
+            s.note_paused(snap.frame)  # the frame the view shows once paused
         refusal, self._refusal = self._refusal, None
         if refusal is None and snap.method_error:
             refusal = snap

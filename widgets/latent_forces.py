@@ -24,6 +24,12 @@ from widgets import style
 from widgets.plots import release, settle
 
 INFLUENCE = "influence on the joint"
+DIM_TITLE = "per latent dimension"
+#: What the tab says while it holds no inspection (at the start and after each solve).
+EMPTY = (
+    "Empty until Inspect this frame: the forces are drawn for the frame inspected, "
+    "until the next solve (an edit, another frame)."
+)
 
 
 def conflicts(forces: np.ndarray, names: tuple[str, ...], limit: float = -0.5) -> list[str]:
@@ -67,7 +73,7 @@ class LatentForces(QWidget):
         self.iteration.valueChanged.connect(lambda _: self._draw())
         self.term = QComboBox(toolTip="Whose force to show per latent dimension")
         self.term.currentIndexChanged.connect(lambda _: self._draw())
-        self.info = QLabel("")
+        self.info = QLabel(EMPTY)
         self.info.setWordWrap(True)
         grid.addWidget(self.inspect_button, 0, 0)
         grid.addWidget(self.joint, 0, 1)
@@ -79,7 +85,7 @@ class LatentForces(QWidget):
         self.norm_plot.setMinimumHeight(110)
         self.norm_bars = pg.BarGraphItem(x=[], height=[], width=0.8)
         self.norm_plot.addItem(self.norm_bars)
-        self.dim_plot = pg.PlotWidget(title="per latent dimension")
+        self.dim_plot = pg.PlotWidget(title=DIM_TITLE)
         self.dim_plot.setMinimumHeight(110)
         self.dim_plot.setLabel("bottom", "latent dimension")
         self.dim_bars = pg.BarGraphItem(x=[], height=[], width=0.8)
@@ -122,9 +128,13 @@ class LatentForces(QWidget):
     def _draw(self) -> None:
         d = self.detail
         if d is None:
+            # nothing inspected since the last solve: no term, iteration or frame of an
+            # earlier inspection is named over the empty charts
             self.norm_bars.setOpts(x=[], height=[])
             self.dim_bars.setOpts(x=[], height=[])
-            self.info.setText("")
+            self.norm_plot.getAxis("bottom").setTicks(None)
+            self.dim_plot.setTitle(DIM_TITLE)
+            self.info.setText(EMPTY)
             return
         k = min(self.iteration.value(), len(d.forces) - 1)
         f = np.asarray(d.forces[k])

@@ -204,10 +204,9 @@ class LatentMapPlot(QWidget):
             x0, x1, y0, y1 = self._extent
         else:
             (x0, y0), (x1, y1) = pts.min(0) - ZOOM_MARGIN, pts.max(0) + ZOOM_MARGIN
-        vb = self.plot.getPlotItem().getViewBox()
-        vb.blockSignals(True)  # not a manual change: the box stays ticked
+        # setRange emits the range signals the axes and grid follow, never
+        # sigRangeChangedManually (mouse only), so the box stays ticked
         self.plot.setRange(xRange=(x0, x1), yRange=(y0, y1), padding=0.0)
-        vb.blockSignals(False)
 
     def set_blend(self, a: np.ndarray | None, b: np.ndarray | None) -> None:
         """The Latent panel's stored latents A and B at map points ``a``, ``b`` (2,), and the

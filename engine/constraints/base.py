@@ -20,6 +20,7 @@ falls back to zero (:meth:`Constraint.activity`).
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
@@ -331,9 +332,17 @@ def from_dict(data: dict[str, Any]) -> Constraint:
     """Rebuild a constraint saved with :meth:`Constraint.to_dict`; errors name the field."""
     if not isinstance(data, dict):
         raise UserError(f"constraint: expected an object, got {type(data).__name__}")
-    kind = data.get("kind")
+    kinds = sorted(REGISTRY)
+    if "kind" not in data:
+        # a misspelt "kind" key is named with the key meant, as check_known_fields names others
+        meant = [k for k in data if difflib.get_close_matches(str(k), ["kind"], n=1, cutoff=0.6)]
+        hint = f"; unknown field {shown(meant[0])} (did you mean 'kind'?)" if meant else ""
+        raise UserError(f"no field 'kind'{hint}; kinds: {', '.join(kinds)}")
+    kind = data["kind"]
     if not isinstance(kind, str) or kind not in REGISTRY:
-        raise UserError(f"unknown constraint kind {shown(kind)}; known: {', '.join(sorted(REGISTRY))}")
+        near = difflib.get_close_matches(kind, kinds, n=1, cutoff=0.6) if isinstance(kind, str) else []
+        hint = f" (did you mean {near[0]!r}?)" if near else ""
+        raise UserError(f"unknown constraint kind {shown(kind)}{hint}; known: {', '.join(kinds)}")
     cls = REGISTRY[kind]
     names = {f.name: f for f in dataclasses.fields(cls)}
     check_known_fields(data, ("kind", *names), f"constraint {kind!r}")

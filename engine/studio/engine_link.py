@@ -59,6 +59,10 @@ class EngineLink:
         #: Play commands sent to the engine; a snapshot saying "stopped" counts only when
         #: its ``plays`` is this (an older one predates the latest play request).
         self.plays = 0
+        #: Paused while playing, and the engine's frame not yet taken: the engine solves a
+        #: few frames past the timeline's last update before the pause reaches it, and the
+        #: frame it stops on is the one its snapshot (the 3D view, the readouts) shows.
+        self.pause_pending = False
 
     # -- engine ------------------------------------------------------------------------
     def start_engine(

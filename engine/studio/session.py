@@ -121,6 +121,7 @@ class Session(EngineLink):
         if path is None:
             self.rig_map = None
         self.motion, self.path, self.frame = motion, path, 0
+        self.pause_pending = False
         self.opened += 1
         self._send(cmd.SetMotion(motion, self.opened))
         self.events.motion.emit(ev.MotionChanged(motion, path))
@@ -133,6 +134,7 @@ class Session(EngineLink):
         closes when another clip or source replaces it."""
         self._close_source()
         self.motion, self.path, self.frame = None, None, 0
+        self.pause_pending = False
         self.source = source
         self.opened += 1
         command = cmd.SetSource(source, self.opened)
@@ -231,11 +233,22 @@ class Session(EngineLink):
     def seek(self, frame: int) -> None:
         frame = int(np.clip(frame, 0, max(self.num_frames - 1, 0)))
         self.frame = frame
+        self.pause_pending = False  # the frame asked for stands
         self._send(cmd.Seek(frame))
         self.events.frame.emit(frame)
 
     def note_frame(self, frame: int) -> None:
         """Mirror the engine's frame while playing (no command is sent back)."""
+        if frame != self.frame:
+            self.frame = frame
+            self.events.frame.emit(frame)
+
+    def note_paused(self, frame: int) -> None:
+        """Take the frame the engine stopped on after :meth:`pause` (no command is sent
+        back); once per pause, and not after a seek made since."""
+        if not self.pause_pending:
+            return
+        self.pause_pending = False
         if frame != self.frame:
             self.frame = frame
             self.events.frame.emit(frame)
@@ -253,6 +266,7 @@ class Session(EngineLink):
     def set_playing(self, playing: bool) -> None:
         if bool(playing) == self.playing and not playing:
             return
+        self.pause_pending = not playing
         self.playing = bool(playing)
         if self.playing:
             self._send_play()

@@ -167,3 +167,68 @@ def test_another_clip_empties_the_map_even_while_its_tab_is_hidden(studio, qtbot
     assert (x[0], y[0]) == pytest.approx(tuple(s.latest.latent_view.xy))
     assert list(views.map.frames) == sorted({r.frame for r in s.latest.history if r.readouts})
     assert f"frame {s.latest.frame}:" in views.readouts.label.text()
+
+
+def _axes_agree(views) -> bool:
+    """The map's axes label the range its view box shows (ticks drawn from ``axis.range``)."""
+    plot = views.map.plot.getPlotItem()
+    (x0, x1), (y0, y1) = plot.getViewBox().viewRange()
+    bottom, left = plot.getAxis("bottom").range, plot.getAxis("left").range
+    return np.allclose(bottom, (x0, x1)) and np.allclose(left, (y0, y1))
+
+
+def test_the_map_axes_follow_zoom_to_the_clip(studio, qtbot, synthetic_motion):
+    """Zoom to the clip moves the view onto the trajectory, and the axes' numbers move with
+    it: after another clip's first frame (a view 1.6 units tall) they read that range, not
+    the whole map's -20..20 they read before."""
+    s = studio.session
+    s.set_method("dragposer")
+    s.play()
+    qtbot.waitUntil(
+        lambda: s.latest.latent_view is not None and len([r for r in s.latest.history if r.readouts]) >= 8,
+        timeout=90000,
+    )
+    s.pause()
+    views = _show_map(studio)
+    qtbot.waitUntil(lambda: len(views.map.xy) >= 8, timeout=10000)
+    assert views.map.zoom.isChecked()
+    qtbot.waitUntil(lambda: _axes_agree(views), timeout=3000)
+    s.set_motion(synthetic_motion.slice(40, 70))
+    qtbot.waitUntil(lambda: s.latest.num_frames == 30 and s.latest.latent_view is not None, timeout=60000)
+    qtbot.waitUntil(lambda: views.map._drawn[0] == s.latest.seq, timeout=5000)
+    (_, _), (y0, y1) = views.map.plot.getPlotItem().getViewBox().viewRange()
+    assert y1 - y0 < 3.0  # zoomed onto the one solved frame
+    QApplication.processEvents()
+    assert _axes_agree(views)
+    # unticked and ticked again with the mouse: the view and its axes come back to the clip
+    box = views.map.zoom
+    qtbot.mouseClick(box, Qt.MouseButton.LeftButton, pos=box.rect().center())
+    qtbot.mouseClick(box, Qt.MouseButton.LeftButton, pos=box.rect().center())
+    assert box.isChecked()
+    QApplication.processEvents()
+    assert _axes_agree(views)
+
+
+def test_the_forces_tab_says_it_is_empty_after_the_next_solve(studio, qtbot):
+    """An inspection holds until the next solve; after a step the Forces tab names no term
+    or iteration of the frame it left (its bars gone, the titles and term ticks were
+    still there) and says what fills it, as the Gallery does."""
+    from PyQt6.QtWidgets import QToolButton
+
+    s = studio.session
+    s.set_method("dragposer")
+    s.play()
+    qtbot.waitUntil(lambda: s.latest.latent_view is not None and s.frame >= 5, timeout=90000)
+    views = _show_map(studio)
+    views.tabs.setCurrentIndex(1)
+    forces = views.forces
+    qtbot.mouseClick(forces.inspect_button, Qt.MouseButton.LeftButton)
+    qtbot.waitUntil(lambda: forces.detail is not None, timeout=30000)
+    assert forces.dim_plot.getPlotItem().titleLabel.text.startswith("force of ")
+    assert forces.info.text().startswith(f"frame {forces.detail.frame},")
+    step = next(b for b in studio.timeline.findChildren(QToolButton) if b.toolTip().startswith("Next frame"))
+    qtbot.mouseClick(step, Qt.MouseButton.LeftButton)
+    qtbot.waitUntil(lambda: forces.detail is None, timeout=30000)
+    assert forces.dim_plot.getPlotItem().titleLabel.text == "per latent dimension"
+    assert forces.norm_plot.getAxis("bottom")._tickLevels is None  # no term names left
+    assert forces.info.text().startswith("Empty until Inspect this frame")

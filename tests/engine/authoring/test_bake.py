@@ -130,3 +130,28 @@ def test_bake_refuses_a_misspelt_key_naming_it_and_exits_non_zero(tmp_path, caps
     err = capsys.readouterr().err
     assert "s.json" in err and "unknown field 'keyz' (did you mean 'keys'?)" in err, err
     assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    ("constraint", "said"),
+    [
+        (
+            {"kindd": "pin", "joint": "lwrist"},
+            "constraints[0]: no field 'kind'; unknown field 'kindd' (did you mean 'kind'?)",
+        ),
+        ({"kind": "pinn", "joint": "lwrist"}, "constraints[0]: unknown constraint kind 'pinn' (did you mean 'pin'?)"),
+    ],
+)
+def test_bake_names_a_misspelt_constraint_kind_and_the_nearest_known_one(tmp_path, capsys, constraint, said):
+    """A constraint's ``kind`` key or value misspelt is named with the one meant, as any other key is."""
+    scene = tmp_path / "s.json"
+    scene.write_text(
+        json.dumps(
+            {"format": "dragposer-scene", "version": 2, "animation": {"frames": 61}, "constraints": [constraint]}
+        )
+    )
+    out = tmp_path / "o.bvh"
+    assert main(["bake", str(scene), "--out", str(out), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert said in err, err
+    assert not out.exists()

@@ -1,0 +1,28 @@
+"""A pause stops on one frame that the timeline, the 3D view and the latent readouts all
+name: the engine solves a few frames past the timeline's last update before the pause
+reaches it, and the timeline takes the frame the engine stopped on."""
+
+from __future__ import annotations
+
+import pytest
+from PyQt6.QtCore import Qt
+
+pytestmark = pytest.mark.gui
+
+
+def test_pause_shows_the_frame_the_engine_stopped_on(studio, qtbot):
+    s = studio.session
+    drawn: list[int] = []
+    studio.snapshotDrawn.connect(drawn.append)
+    s.play()
+    qtbot.waitUntil(lambda: s.frame >= 10, timeout=20000)
+    # the engine is ahead of the timeline (it updates the timeline 10 times a second)
+    qtbot.waitUntil(lambda: s.latest.playing and s.latest.frame > s.frame, timeout=20000)
+    button = studio.timeline.play_button
+    qtbot.mouseClick(button, Qt.MouseButton.LeftButton)
+    assert not s.playing
+    qtbot.waitUntil(lambda: not s.latest.playing and bool(drawn) and drawn[-1] == s.latest.frame, timeout=10000)
+    qtbot.wait(300)  # the timeline's panel has had its turns
+    stopped = s.latest.frame
+    assert s.frame == stopped
+    assert studio.timeline.counter.text().startswith(f"{stopped} /")

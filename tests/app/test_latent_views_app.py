@@ -142,9 +142,8 @@ def test_the_tabs_are_built_when_the_dock_is_first_shown_and_flags_reach_the_tim
     qtbot.waitUntil(lambda: views.map._drawn[0] == studio.session.latest.seq, timeout=10000)  # drawn once shown
 
 
-def test_another_clip_empties_the_map_even_while_its_tab_is_hidden(studio, qtbot, synthetic_motion):
-    """Opened while the Gallery tab is in front, another clip's first frame is what the
-    Map tab shows when clicked, not the previous clip's frame and trajectory."""
+def _map_of_eight_solved_frames(studio, qtbot):
+    """Play DragPoser until 8 frames have readouts, pause and show the Map tab (its views)."""
     s = studio.session
     s.set_method("dragposer")
     s.play()
@@ -155,6 +154,14 @@ def test_another_clip_empties_the_map_even_while_its_tab_is_hidden(studio, qtbot
     s.pause()
     views = _show_map(studio)
     qtbot.waitUntil(lambda: len(views.map.xy) >= 8, timeout=10000)
+    return views
+
+
+def test_another_clip_empties_the_map_even_while_its_tab_is_hidden(studio, qtbot, synthetic_motion):
+    """Opened while the Gallery tab is in front, another clip's first frame is what the
+    Map tab shows when clicked, not the previous clip's frame and trajectory."""
+    s = studio.session
+    views = _map_of_eight_solved_frames(studio, qtbot)
     bar = views.tabs.tabBar()
     qtbot.mouseClick(bar, Qt.MouseButton.LeftButton, pos=bar.tabRect(2).center())  # Gallery
     assert views.tabs.currentIndex() == 2
@@ -182,15 +189,7 @@ def test_the_map_axes_follow_zoom_to_the_clip(studio, qtbot, synthetic_motion):
     it: after another clip's first frame (a view 1.6 units tall) they read that range, not
     the whole map's -20..20 they read before."""
     s = studio.session
-    s.set_method("dragposer")
-    s.play()
-    qtbot.waitUntil(
-        lambda: s.latest.latent_view is not None and len([r for r in s.latest.history if r.readouts]) >= 8,
-        timeout=90000,
-    )
-    s.pause()
-    views = _show_map(studio)
-    qtbot.waitUntil(lambda: len(views.map.xy) >= 8, timeout=10000)
+    views = _map_of_eight_solved_frames(studio, qtbot)
     assert views.map.zoom.isChecked()
     qtbot.waitUntil(lambda: _axes_agree(views), timeout=3000)
     s.set_motion(synthetic_motion.slice(40, 70))

@@ -43,9 +43,9 @@ def main() -> int:
     ap.add_argument("--max-frames", type=int)
     args = ap.parse_args()
     from engine.cli.main import main as cli
-    from engine.methods import dragposer_parts
+    from engine.methods import dragposer_prior
 
-    dragposer_parts.PriorSource.latent = averaged(dragposer_parts.PriorSource.latent, args.a)
+    dragposer_prior.PriorSource.latent = averaged(dragposer_prior.PriorSource.latent, args.a)
     argv = ["evaluate", *args.files, "--method", "dragposer", "--sensors", args.sensors, "--jobs", "1", "--no-progress"]
     argv += ["--max-frames", str(args.max_frames)] if args.max_frames else []
     return cli(argv) or 0

@@ -33,7 +33,8 @@ from engine.kinematics import quaternion as Q
 from engine.methods import dragposer_root as roots
 from engine.methods.base import FrameResult, Method
 from engine.methods.dragposer_edits import CallerEdits, FrameSettings
-from engine.methods.dragposer_parts import FramePlan, PriorSource, TrackerTerms, UserConstraints, smoothing_history
+from engine.methods.dragposer_parts import FramePlan, TrackerTerms, UserConstraints, smoothing_history
+from engine.methods.dragposer_prior import PriorSource
 from engine.methods.solve_record import SolveRecord, record_of
 from engine.models.stance import default_stance_model
 from engine.motion.clip import Motion

@@ -9,7 +9,8 @@ import pytest
 import torch
 
 from engine.solver import bank_prefilter as bp
-from engine.solver.tracker_prior import TrackerHistory, default_bank, features
+from engine.solver.tracker_history import TrackerHistory
+from engine.solver.tracker_prior import default_bank, features
 from engine.tracking import simulate
 
 

@@ -315,7 +315,7 @@ def test_the_one_frame_stopping_rule_answers_as_the_rows_rule(fixed):
 def test_the_batched_priors_are_the_frame_by_frame_priors(clip, setting, monkeypatch):
     """The tracker prior's latents the batched solve reads are, bit for bit, those each
     frame's solve reads, whichever source gives them."""
-    from engine.methods import dragposer_parts as DPP
+    from engine.methods import dragposer_prior as DPP
     from engine.tracking import simulate
 
     tr = simulate(clip.slice(0, 12), "6")

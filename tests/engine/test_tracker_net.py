@@ -15,8 +15,9 @@ from engine.cli.main import main
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
 from engine.methods.dragposer import DragPoserMethod
+from engine.solver.tracker_history import TrackerHistory
 from engine.solver.tracker_net import HISTORY, WINDOW, TrackerNet, TrackerNets, default_tracker_nets, window_features
-from engine.solver.tracker_prior import BANK_JOINTS, LAG, PoseBank, TrackerHistory, features
+from engine.solver.tracker_prior import BANK_JOINTS, LAG, PoseBank, features
 from engine.tracking import simulate
 from engine.training.tracker_net import Takes, latent_mse, samples, train_net
 from tests.engine.test_optimizer_standins import CountingPredictor, MLPDecoder

@@ -10,7 +10,8 @@ import torch
 from engine.errors import UserError
 from engine.kinematics import quaternion as Q
 from engine.methods.dragposer import DragPoserMethod
-from engine.solver.tracker_prior import ANCHORS, BANK_JOINTS, LAG, PoseBank, TrackerHistory, default_bank, features
+from engine.solver.tracker_history import TrackerHistory
+from engine.solver.tracker_prior import ANCHORS, BANK_JOINTS, LAG, PoseBank, default_bank, features
 from engine.tracking import simulate
 from tests.engine.test_optimizer_standins import CountingPredictor, MLPDecoder
 

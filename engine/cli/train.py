@@ -33,7 +33,10 @@ def _common(p: argparse.ArgumentParser, out_default: str) -> None:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("train", help="train the pose VAE, the temporal predictor, SparsePoser or RPM")
+    p = sub.add_parser(
+        "train",
+        help="train the pose VAE, the temporal predictor, SparsePoser, RPM, the stance classifier or the tracker networks",
+    )
     tsub = p.add_subparsers(dest="train_command", metavar="MODEL")
     v = tsub.add_parser("vae", help="train the pose VAE", description=__doc__)
     _common(v, "runs/vae")

@@ -22,14 +22,22 @@ class TrackerHistory:
 
     def __init__(self, size: int = LAG + 1) -> None:
         self.size = max(size, LAG + 1)
-        self.frames: list[dict[str, tuple[np.ndarray, np.ndarray]]] = []
+        # per frame: positions (6, 3), rotations (6, 4) and which joints were read (6,), in
+        # BANK_JOINTS order, so a window is a few array operations, not a loop per value
+        self.frames: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
 
     def reset(self) -> None:
         self.frames.clear()
 
     def push(self, readings: dict[str, tuple[np.ndarray, np.ndarray]]) -> None:
         """Add one frame: connected bank joints -> (position (3,), rotation (4,))."""
-        self.frames.append({j: r for j, r in readings.items() if j in BANK_JOINTS})
+        pos, rot = np.zeros((len(BANK_JOINTS), 3)), np.zeros((len(BANK_JOINTS), 4))
+        read = np.zeros(len(BANK_JOINTS), dtype=bool)
+        for j, (p, r) in readings.items():
+            i = _COLUMN.get(j)
+            if i is not None:
+                pos[i], rot[i], read[i] = p, r, True
+        self.frames.append((pos, rot, read))
         del self.frames[: -self.size]
 
     def arrays(self) -> tuple[tuple[str, ...], np.ndarray, np.ndarray] | None:
@@ -40,17 +48,20 @@ class TrackerHistory:
         the first frame does before a clip's start."""
         if not self.frames:
             return None
-        recent = self.frames[-(LAG + 1) :]
-        joints = combination(j for j in BANK_JOINTS if all(j in f for f in recent))
+        read = np.array([f[2] for f in self.frames])  # (n, 6)
+        joints = combination(j for j, ok in zip(BANK_JOINTS, read[-(LAG + 1) :].all(0), strict=True) if ok)
         if joints is None:
             return None
-        pos = np.empty((self.size, len(joints), 3))
-        rot = np.empty((self.size, len(joints), 4))
-        pad = self.size - len(self.frames)
-        for s, j in enumerate(joints):
-            held = self.frames[-1][j]
-            for t in range(len(self.frames) - 1, -1, -1):  # newest first, gaps take the later reading
-                held = self.frames[t].get(j, held)
-                pos[pad + t, s], rot[pad + t, s] = held
-            pos[:pad, s], rot[:pad, s] = held
+        cols = np.array([_COLUMN[j] for j in joints])
+        n = len(self.frames)
+        # each frame's own reading of a joint, else the next later one (the last frames have it)
+        later = np.where(read[:, cols], np.arange(n)[:, None], n)
+        rows = np.minimum.accumulate(later[::-1], axis=0)[::-1]
+        rows = np.concatenate([np.repeat(rows[:1], self.size - n, axis=0), rows])  # the start repeated
+        pos = np.array([f[0] for f in self.frames])[rows, cols]
+        rot = np.array([f[1] for f in self.frames])[rows, cols]
         return joints, pos, rot
+
+
+#: Column of each bank joint in a frame's arrays.
+_COLUMN = {j: i for i, j in enumerate(BANK_JOINTS)}

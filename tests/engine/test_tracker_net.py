@@ -210,3 +210,22 @@ def test_train_tracker_net_writes_the_presets_networks_for_the_shipped_vae(tmp_p
     assert set(nets.nets) == {("root", "upperneck", "lwrist", "rwrist"), ("upperneck", "lwrist", "rwrist")}
     assert main([*args, "--presets", "6x3dof"]) != 0
     assert "--presets: '6x3dof' has no hips or head" in capsys.readouterr().err
+
+
+def test_a_window_with_gaps_takes_each_frames_reading_else_the_next_one():
+    rng = np.random.default_rng(5)
+    h = TrackerHistory(WINDOW)
+    pushed = []
+    for _ in range(WINDOW - 3):  # fewer frames than the window: the start is repeated
+        rd = {j: (rng.normal(size=3), rng.normal(size=4)) for j in BANK_JOINTS if rng.random() < 0.7}
+        rd.update({j: (rng.normal(size=3), rng.normal(size=4)) for j in ("root", "lwrist")})
+        pushed.append(rd)
+        h.push(rd)
+    joints, pos, rot = h.arrays()
+    pad = WINDOW - len(pushed)
+    for s, j in enumerate(joints):
+        for t in range(len(pushed)):
+            src = next(f for f in pushed[t:] if j in f)  # this frame's reading, else the next one's
+            np.testing.assert_array_equal(pos[pad + t, s], src[j][0])
+            np.testing.assert_array_equal(rot[pad + t, s], src[j][1])
+        np.testing.assert_array_equal(pos[:pad, s], np.repeat(pos[pad : pad + 1, s], pad, axis=0))

@@ -49,7 +49,8 @@ class TrackerHistory:
         if not self.frames:
             return None
         read = np.array([f[2] for f in self.frames])  # (n, 6)
-        joints = combination(j for j, ok in zip(BANK_JOINTS, read[-(LAG + 1) :].all(0), strict=True) if ok)
+        kept = np.asarray(read[-(LAG + 1) :].all(axis=0))  # read in each of the last LAG + 1 frames
+        joints = combination(j for j, ok in zip(BANK_JOINTS, kept, strict=True) if ok)
         if joints is None:
             return None
         cols = np.array([_COLUMN[j] for j in joints])

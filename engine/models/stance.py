@@ -21,6 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
+from engine.models.perceptron import relu_layers
+
 #: Seconds of history the classifier reads.
 WINDOW_S = 0.5
 #: Samples over that window (evenly spaced, the last one the current frame).
@@ -75,11 +77,7 @@ class StanceModel:
 
     def left_stance(self, features: np.ndarray) -> np.ndarray:
         """Probability that the left foot stands, ``(...)``, from features ``(..., N_FEATURES)``."""
-        x = (np.asarray(features, dtype=np.float64) - self.mean) / self.std
-        for i, (w, b) in enumerate(zip(self.weights, self.biases, strict=True)):
-            x = x @ w + b
-            if i < len(self.weights) - 1:
-                x = np.maximum(x, 0.0)
+        x = relu_layers((np.asarray(features, dtype=np.float64) - self.mean) / self.std, self.weights, self.biases)
         return 1.0 / (1.0 + np.exp(-x[..., 0]))
 
     def save(self, path: Path) -> None:

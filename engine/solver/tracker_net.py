@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from engine.input_files import file_sha256
+from engine.models.perceptron import relu_layers
 from engine.solver.tracker_prior import LAG, anchor_index, features
 
 #: Instants of readings one latent reads, :data:`LAG` frames apart, the current one first.
@@ -77,12 +78,7 @@ class TrackerNet:
 
     def forward(self, x: np.ndarray) -> np.ndarray:
         """Latents ``(F, L)`` of inputs ``(F, D)`` (:func:`window_features`)."""
-        h = ((x - self.mean) / self.std).astype(np.float32)
-        for i, (w, b) in enumerate(zip(self.weights, self.biases, strict=True)):
-            h = h @ w + b
-            if i < len(self.weights) - 1:
-                np.maximum(h, 0.0, out=h)
-        return h
+        return relu_layers(((x - self.mean) / self.std).astype(np.float32), self.weights, self.biases)
 
 
 @dataclass(frozen=True)

@@ -10,7 +10,6 @@ fitted per combination with a mean squared error, AdamW and a cosine learning ra
 
 from __future__ import annotations
 
-import json
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -39,12 +38,10 @@ def load_takes(data: Path, split: str, vae) -> Takes:
 
     from engine.kinematics.features import encoder_input, pose_from_motion
     from engine.kinematics.fk import fk
+    from engine.training.data import read_manifest
     from engine.training.predictor import encode_all
 
-    path = data / "manifest.json"
-    if not path.is_file():
-        raise UserError(f"{path}: no prepared data here (make it with `dragposer-studio data prepare --out {data}`)")
-    manifest = json.loads(path.read_text())
+    manifest = read_manifest(data)
     cols = [sk.JOINT_INDEX[j] for j in BANK_JOINTS]
     out = Takes([], [], [])
     for e in manifest["files"]:
@@ -61,7 +58,7 @@ def load_takes(data: Path, split: str, vae) -> Takes:
         out.rotations.append(r[:, cols])
         out.latents.append(encode_all(vae, encoder_input(rot, disp, offs).float()).numpy())
     if not out.latents:
-        raise UserError(f"{path}: no {split} shards")
+        raise UserError(f"{data}: no '{split}' shards in manifest.json")
     return out
 
 

@@ -8,7 +8,8 @@ checkouts the same way, and print each criterion with its verdict.
 
 ``install`` makes TREE a detached checkout of HEAD (unless it exists) holding the candidate
 ``vae.pt`` (and ``predictor.pt`` when given: a VAE whose encoder moved needs its own), then
-rebuilds the pose bank, the latent map and the pose-task scenes for it there. ``measure``
+rebuilds the pose bank, the latent map, the tracker networks (about 4 minutes) and the
+pose-task scenes for it there. ``measure``
 writes into OUT what the rule reads: DragPoser on the validation files (first 150 frames;
 presets 6, 4, 3-head-hands, 6x3dof), every 12th ``hdm05/`` clip whole and the first 600
 frames of the ``dragposer/`` clips (presets 4 and 3-head-hands), and ``bench --pose-tasks``
@@ -60,9 +61,11 @@ def install(a: argparse.Namespace) -> None:
     shutil.copyfile(a.vae, models / "vae.pt")
     if a.predictor:
         shutil.copyfile(a.predictor, models / "predictor.pt")
+    nets = "assets/models/tracker_nets.npz"
     steps = [
         ["scripts/build_pose_bank.py", "--data", str(a.data), "--out", "assets/models/pose_bank.npz", "--stride", "4"],
         ["scripts/build_latent_map.py", "--out", "assets/models/latent_map.npz"],
+        ["-m", "engine.cli.main", "train", "tracker-net", "--data", str(a.data), "--out", nets],
         ["scripts/pose_task_scenes.py"],
     ]
     for step in steps:

@@ -41,7 +41,7 @@ from engine.motion.clip import Motion
 from engine.sensors import SensorFrame
 from engine.solver import FrameContext, LatentDecoder, LatentPredictor, OptimizerSettings, PoseOptimizer, RootFrame
 from engine.solver.gait import GaitPlanner
-from engine.solver.limb_ik import finish
+from engine.solver.limb_ik import CLAVICLES, finish
 from engine.solver.tracker_net import TrackerNets, default_tracker_nets
 from engine.solver.tracker_prior import PoseBank, combination, default_bank
 from engine.startup_trace import mark
@@ -181,6 +181,7 @@ class DragPoserMethod(CallerEdits, Method):
             if s.sensor_rotations
             else {},
             level=self.trackers.level_ankles(held) if s.level_feet else (),
+            shoulder_deg=0.0 if held & CLAVICLES else float(s.shoulder_reach),
         )
 
     def solve_clip(self, frames: Sequence[SensorFrame]) -> list[FrameResult] | None:
@@ -232,7 +233,14 @@ class DragPoserMethod(CallerEdits, Method):
         reach_to, turn_to = plan.reach, plan.turn
         if reach_to or turn_to or plan.level:  # one FK for every step (engine/solver/limb_ik.py)
             local_rot, positions = finish(
-                local_rot, positions[0], self.skeleton.offsets, reach_to, turn_to, s.neck_twist_share, plan.level
+                local_rot,
+                positions[0],
+                self.skeleton.offsets,
+                reach_to,
+                turn_to,
+                s.neck_twist_share,
+                plan.level,
+                plan.shoulder_deg,
             )
         self._advance(sol.latent, root, local_rot[0], positions)
         result = FrameResult(

@@ -283,7 +283,8 @@ def _finished(m: DragPoserMethod, r: BatchFrame, local: np.ndarray, pos: np.ndar
     """A solved frame after the limb and tracker-rotation steps of a frame-by-frame solve."""
     p = r.plan
     if p.reach or p.turn or p.level:
-        return finish(local, pos[0], m.skeleton.offsets, p.reach, p.turn, p.settings.neck_twist_share, p.level)
+        offsets, share = m.skeleton.offsets, p.settings.neck_twist_share
+        return finish(local, pos[0], offsets, p.reach, p.turn, share, p.level, p.shoulder_deg)
     return local, pos
 
 

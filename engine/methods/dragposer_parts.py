@@ -63,6 +63,9 @@ class FramePlan:
         trackers, tracker rotations.
     level : tuple of int
         Ankles that take the pelvis's heading after the solve (setting ``level_feet``).
+    shoulder_deg : float
+        How far a clavicle may turn to bring a wrist's tracker within the arm's reach
+        (setting ``shoulder_reach``; 0 while a user constraint acts on a clavicle).
     """
 
     settings: OptimizerSettings
@@ -76,6 +79,7 @@ class FramePlan:
     reach: dict[int, np.ndarray] = field(default_factory=dict)
     turn: dict[int, np.ndarray] = field(default_factory=dict)
     level: tuple[int, ...] = ()
+    shoulder_deg: float = 0.0
 
     @property
     def smooth_weight(self) -> float:

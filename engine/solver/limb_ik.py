@@ -67,6 +67,10 @@ SPINE_PASSES = 3
 _SLACK = 1e-3
 
 
+#: The clavicles, which :func:`reach_local` may turn when a wrist target is beyond the arm.
+CLAVICLES = frozenset(sk.JOINT_INDEX[n] for n in ("lclavicle", "rclavicle"))
+
+
 #: The joints :func:`reach_head_local` moves or turns: the lower back and all above it (the
 #: spine, neck, head, clavicles and arms).
 CARRIED = frozenset(j for j in range(sk.NUM_JOINTS) if SPINE[0] in ancestors(sk.PARENTS, j))
@@ -76,12 +80,19 @@ CARRIED = frozenset(j for j in range(sk.NUM_JOINTS) if SPINE[0] in ancestors(sk.
 
 
 def reach_local(
-    local_rot: np.ndarray, root_pos: np.ndarray, offsets: np.ndarray, targets: dict[int, np.ndarray]
+    local_rot: np.ndarray,
+    root_pos: np.ndarray,
+    offsets: np.ndarray,
+    targets: dict[int, np.ndarray],
+    shoulder_deg: float = 0.0,
 ) -> np.ndarray:
     """Move the tracked wrists / ankles onto their targets by their limbs' two bones.
 
     Parameters are those of :func:`adopt_local`, except that ``targets`` maps an end
-    joint (a key of :data:`LIMBS`) to a world target *position* ``(3,)``, metres.
+    joint (a key of :data:`LIMBS`) to a world target *position* ``(3,)``, metres, and
+    ``shoulder_deg``: when a wrist's target is beyond the straight arm, the clavicle
+    first turns the shoulder towards it (:func:`_shoulder_turn`), by at most this many
+    degrees (0: never), as a person shrugs or reaches forward with the shoulder.
 
     Returns
     -------
@@ -94,13 +105,24 @@ def reach_local(
     # limbs do not share joints, and none holds another's ancestors: one placement serves all
     pos_all, rot_all = fk(local, root_pos, offsets)
     pos_l, rot_l = pos_all.tolist(), rot_all.tolist()
-    placed = {j: (tuple(pos_l[j]), tuple(rot_l[j])) for c in targets for j in (sk.PARENTS[LIMBS[c][0]], *LIMBS[c], c)}
+    # each limb's joints, its root's parent (a clavicle turns) and that one's parent
+    limb_joints = {j for c in targets for j in (*_above(LIMBS[c][0]), *LIMBS[c], c)}
+    placed = {j: (tuple(pos_l[j]), tuple(rot_l[j])) for j in limb_joints}
     for c, target in targets.items():
         a, b = LIMBS[c]
         parent = sk.PARENTS[a]
         (pa, wa0), (pb, wb0), (pc, wc0) = placed[a], placed[b], placed[c]
         t = tuple(float(x) for x in target)
         l1, l2 = vnorm(vsub(pb, pa)), vnorm(vsub(pc, pb))
+        if shoulder_deg > 0.0 and parent in CLAVICLES:
+            pk, wk = placed[parent]
+            turn_k = _shoulder_turn(pk, pa, t, l1 + l2 - _SLACK, math.radians(shoulder_deg))
+            if turn_k is not None:
+                pa, pb, pc = (_turned(turn_k, pk, x) for x in (pa, pb, pc))
+                wa0, wb0 = qmul(turn_k, wa0), qmul(turn_k, wb0)
+                wk = qmul(turn_k, wk)
+                local[parent] = qmul(qconj(placed[sk.PARENTS[parent]][1]), wk)
+                placed[parent] = (pk, wk)
         ta = vsub(t, pa)
         d = min(max(vnorm(ta), abs(l1 - l2) + _SLACK), l1 + l2 - _SLACK)
         u, v = vsub(pa, pb), vsub(pc, pb)
@@ -121,6 +143,44 @@ def reach_local(
         local[c] = qmul(qconj(wb), wc0)  # the end joint keeps its world rotation
     local *= np.where(local[:, :1] < 0, -1.0, 1.0)
     return local
+
+
+def _above(joint: int) -> tuple[int, ...]:
+    """The parent and grandparent of ``joint`` (those that exist)."""
+    parent = sk.PARENTS[joint]
+    return (parent,) if parent <= 0 else (parent, sk.PARENTS[parent])
+
+
+def _turned(q: tuple, pivot: tuple, p: tuple) -> tuple:
+    """Point ``p`` turned by the world rotation ``q`` about ``pivot``."""
+    return tuple(a + b for a, b in zip(pivot, qrotate(q, vsub(p, pivot))))
+
+
+def _shoulder_turn(clavicle: tuple, shoulder: tuple, target: tuple, reach: float, most: float) -> tuple | None:
+    """The world rotation about the clavicle joint that brings the shoulder within
+    ``reach`` (metres) of ``target``, turning no further than ``most`` radians; None
+    when the target is within reach already (or no turn brings it nearer).
+
+    The shoulder moves on the sphere about the clavicle joint; its distance to the target
+    is ``sqrt(c^2 + D^2 - 2 c D cos(phi))`` with ``c`` the clavicle's length, ``D`` the
+    target's distance from the clavicle joint and ``phi`` the angle between the two, so
+    the turn in the plane of the three points that takes ``phi`` to the angle giving
+    ``reach`` is the smallest that does it.
+    """
+    cs, ct = vsub(shoulder, clavicle), vsub(target, clavicle)
+    c, d = vnorm(cs), vnorm(ct)
+    if c < 1e-9 or d < 1e-9 or vnorm(vsub(target, shoulder)) <= reach:
+        return None
+    axis = vcross(cs, ct)
+    sin_phi = vnorm(axis)
+    if sin_phi < 1e-9:
+        return None
+    phi = math.atan2(sin_phi, vdot(cs, ct))
+    cos_want = (c * c + d * d - reach * reach) / (2.0 * c * d)
+    angle = phi - math.acos(cos_want) if cos_want < 1.0 else phi
+    if angle <= 0.0:
+        return None
+    return qaxis_angle(vscale(axis, 1.0 / sin_phi), min(angle, most))
 
 
 def reach_head_local(
@@ -276,9 +336,11 @@ def finish(
     rotation_targets: dict[int, np.ndarray],
     neck_twist_share: float = 0.0,
     level: tuple[int, ...] = (),
+    shoulder_deg: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """:func:`reach_head_local` onto ``reach_targets[HEAD]`` when the head is among them,
-    :func:`reach_local` onto the others (positions), then :func:`share_neck_twist`
+    :func:`reach_local` onto the others (positions; the clavicles turning by up to
+    ``shoulder_deg`` for a wrist beyond reach), then :func:`share_neck_twist`
     (with a head target and ``neck_twist_share`` > 0) and :func:`adopt_local` of
     ``rotation_targets`` and of the joints in ``level``, which take the root's heading
     (its yaw alone) as their world rotation; one forward kinematics pass for the positions.
@@ -293,7 +355,7 @@ def finish(
     if HEAD in reach_targets:
         local = reach_head_local(local, root_pos, offsets, reach_targets[HEAD])
         reach_targets = {j: t for j, t in reach_targets.items() if j != HEAD}
-    local = reach_local(local, root_pos, offsets, reach_targets) if reach_targets else local
+    local = reach_local(local, root_pos, offsets, reach_targets, shoulder_deg) if reach_targets else local
     if level:
         flat = heading(np.asarray(local[0], dtype=np.float64))
         rotation_targets = {**{j: flat for j in level}, **rotation_targets}

@@ -283,6 +283,15 @@ class OptimizerSettings:
         "tracker by its limb's two bones (the decoder alone leaves them 1-2 cm off).",
         Flag(),
     )
+    shoulder_reach: float = setting(
+        20.0,
+        "Shoulder reach",
+        "With reach, when a wrist's tracker is beyond the straight arm, "
+        "the clavicle turns the shoulder towards it by at most this many degrees first "
+        "(0 = never): the arm alone leaves such a wrist short of its tracker.",
+        Num(0, 45, unit="degrees"),
+        step=5.0,
+    )
     level_feet: bool = setting(
         False,
         "Level feet",

@@ -24,7 +24,7 @@ from engine.methods import dragposer as D
 from engine.methods import dragposer_root as R
 from engine.models import load_default_models
 from engine.motion.retarget import load_motion
-from engine.solver import limb_ik
+from engine.solver import OptimizerSettings, limb_ik
 from engine.solver.temporal import TemporalSchedule
 from engine.tracking import simulate
 
@@ -111,8 +111,10 @@ def test_reach_and_rotations_equal_the_previous_code_on_real_frames(models, moti
     calls = []
     new_finish = limb_ik.finish
 
-    def spy(local, root, offsets, reach_to, turn_to, neck_twist_share=0.0, level=()):
+    def spy(local, root, offsets, reach_to, turn_to, neck_twist_share=0.0, level=(), shoulder_deg=0.0):
         assert level == ()  # 6-DoF feet, or none: nothing to level (tests/engine/test_level_feet.py)
+        # the clavicles' turn is a step the previous code had not (tests/engine/test_shoulder_reach.py)
+        assert shoulder_deg == OptimizerSettings().shoulder_reach
         got = new_finish(local, root, offsets, reach_to, turn_to, neck_twist_share)
         want_local, want_pos = local, None
         limbs = {j: t for j, t in reach_to.items() if j != limb_ik.HEAD}
@@ -127,7 +129,7 @@ def test_reach_and_rotations_equal_the_previous_code_on_real_frames(models, moti
         calls.append((len(reach_to), len(turn_to)))
         np.testing.assert_allclose(got[0], want_local, atol=1e-9, rtol=0)
         np.testing.assert_allclose(got[1], want_pos, atol=1e-9, rtol=0)
-        return got
+        return new_finish(local, root, offsets, reach_to, turn_to, neck_twist_share, level, shoulder_deg)
 
     monkeypatch.setattr(D, "finish", spy)
     m = D.DragPoserMethod(models.vae, models.predictor)

@@ -1,4 +1,4 @@
-"""Where a method's position error sits: mean error per joint (cm) of one or more methods
+"""Where a method's error sits: mean position (cm) and local rotation (degrees) error per joint of one or more methods
 on the same clips and tracker preset, side by side, realtime.
 
     PYTHONPATH=. python research/per_joint_error.py ../shared/data/mocap/dragposer/*.bvh \
@@ -20,6 +20,7 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.cli.method_options import apply_settings
+from engine.kinematics import quaternion as Q
 from engine.methods import get_method, run_method
 from engine.motion.retarget import load_motion
 from engine.tracking import simulate
@@ -35,6 +36,7 @@ def main() -> None:
     a = ap.parse_args()
     names = a.methods.split(",")
     errors: dict[str, list[np.ndarray]] = {n: [] for n in names}
+    angles: dict[str, list[np.ndarray]] = {n: [] for n in names}
     for path in a.files:
         motion = load_motion(path)
         if a.max_frames:
@@ -48,11 +50,15 @@ def main() -> None:
             rec, _ = run_method(method, tracking, motion.skeleton, progress=False, reference=motion, light=True)
             pos, _ = rec.fk()
             errors[name].append(100 * np.linalg.norm(pos - truth, axis=-1))
+            angles[name].append(np.degrees(Q.angle(Q.normalize(motion.local_rot), Q.normalize(rec.local_rot))))
     per = {n: np.concatenate(e).mean(axis=0) for n, e in errors.items()}
-    print(f"{'joint':16s}" + "".join(f"{n:>12s}" for n in names))
+    rot = {n: np.concatenate(e).mean(axis=0) for n, e in angles.items()}
+    print(f"{'joint':16s}" + "".join(f"{n + ' cm':>14s}" for n in names) + "".join(f"{n + ' deg':>14s}" for n in names))
     for j, joint in enumerate(sk.JOINT_NAMES):
-        print(f"{joint:16s}" + "".join(f"{per[n][j]:12.2f}" for n in names))
-    print(f"{'mean':16s}" + "".join(f"{per[n].mean():12.2f}" for n in names))
+        cells = [f"{per[n][j]:14.2f}" for n in names] + [f"{rot[n][j]:14.2f}" for n in names]
+        print(f"{joint:16s}" + "".join(cells))
+    means = [f"{per[n].mean():14.2f}" for n in names] + [f"{rot[n].mean():14.2f}" for n in names]
+    print(f"{'mean':16s}" + "".join(means))
 
 
 if __name__ == "__main__":

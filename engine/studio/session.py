@@ -254,8 +254,14 @@ class Session(EngineLink):
             self.events.frame.emit(frame)
 
     def step(self, delta: int = 1) -> None:
+        """Pause and go ``delta`` frames from the frame on screen: while playing that is
+        the engine's newest frame of this play run, which runs ahead of :attr:`frame`
+        (the timeline takes it 10 times a second)."""
+        base, snap = self.frame, self.latest
+        if self.playing and snap is not None and snap.playing and snap.plays == self.plays:
+            base = int(snap.frame)
         self.set_playing(False)
-        self.seek(self.frame + delta)
+        self.seek(base + delta)
 
     def play(self) -> None:
         self.set_playing(True)

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import pytest
 from PyQt6.QtCore import Qt
+from PyQt6.QtGui import QAction
 
 pytestmark = pytest.mark.gui
 
@@ -26,3 +27,19 @@ def test_pause_shows_the_frame_the_engine_stopped_on(studio, qtbot):
     stopped = s.latest.frame
     assert s.frame == stopped
     assert studio.timeline.counter.text().startswith(f"{stopped} /")
+
+
+@pytest.mark.parametrize("delta", [1, -1])
+def test_step_while_playing_steps_from_the_frame_on_screen(studio, qtbot, delta):
+    s = studio.session
+    s.play()
+    qtbot.waitUntil(lambda: s.frame >= 10, timeout=20000)
+    qtbot.waitUntil(lambda: s.latest.playing and s.latest.frame > s.frame + 1, timeout=20000)
+    shown = s.latest.frame
+    name = "Next frame" if delta > 0 else "Previous frame"
+    (entry,) = [a for a in studio.findChildren(QAction) if a.text().replace("&", "") == name]
+    entry.trigger()  # Playback > Next / Previous frame (Right / Left)
+    assert not s.playing
+    assert s.frame in (shown + delta, shown + 1 + delta), "the engine may have drawn one more frame meanwhile"
+    qtbot.waitUntil(lambda: not s.latest.playing and s.latest.frame == s.frame, timeout=10000)
+    assert studio.timeline.counter.text().startswith(f"{s.frame} /")

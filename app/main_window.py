@@ -149,7 +149,11 @@ class MainWindow(QMainWindow):
         col.addWidget(self.timeline)
         self.setCentralWidget(central)
         self.sensor_panel = SensorPanel(SensorSet.presets())
-        self.constraint_panel = ConstraintPanel(constraint_schema())
+        self.constraint_panel = ConstraintPanel(
+            constraint_schema(),
+            empty_hint="No constraints yet: pick a kind above and press Add (it is placed near the "
+            "character), or Ctrl-drag a joint in the 3D view to pin it where you drop it.",
+        )
         fields = optimizer_fields()
         self.optimizer_defaults = {f.name: f.default for f in fields}
         self.optimizer_panel = OptimizerPanel(method_names(self.session.method), fields)

@@ -27,7 +27,11 @@ class PoseConstraints:
 
     def __init__(self, window: Any) -> None:
         self.w = window
-        self.panel = ConstraintPanel(constraint_schema())
+        self.panel = ConstraintPanel(
+            constraint_schema(),
+            empty_hint="No constraints yet: pick a kind above (floor, look-at, pin, distance...) and "
+            "press Add; it is placed where the body stands and every solve of the pose honours it.",
+        )
         self.panel.addRequested.connect(self.add)
         self.panel.removeRequested.connect(self.remove)
         self.panel.changed.connect(self.update)

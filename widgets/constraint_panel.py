@@ -215,7 +215,7 @@ class ConstraintPanel(QWidget):
     #: The constraint whose editor shows changed, or its fields did ("" for none).
     selected = pyqtSignal(str)
 
-    def __init__(self, schema: Schema, parent: QWidget | None = None) -> None:
+    def __init__(self, schema: Schema, parent: QWidget | None = None, empty_hint: str = "") -> None:
         super().__init__(parent)
         self.schema = schema
         outer = QVBoxLayout(self)
@@ -244,6 +244,14 @@ class ConstraintPanel(QWidget):
         self.scroll.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
         self.scroll.setMinimumHeight(60)
         outer.addWidget(self.scroll, 1)
+        # what the empty editor area says: how to get a constraint, or how to edit one
+        self.hint = QLabel(wordWrap=True, margin=8)
+        self.hint.setAlignment(Qt.AlignmentFlag.AlignTop | Qt.AlignmentFlag.AlignLeft)
+        self.hint.setStyleSheet("color: palette(mid);")
+        #: What the editor area says while there is no constraint.
+        self.empty_hint = empty_hint or "No constraints yet: pick a kind above and press Add."
+        self.scroll.setWidget(self.hint)
+        self.hint.setText(self.empty_hint)
         self.editor: ConstraintEditor | None = None
         self.constraints: list[dict[str, Any]] = []
         self._updating = False
@@ -316,7 +324,16 @@ class ConstraintPanel(QWidget):
             self.editor = None
         name = self.current_name()
         data = next((c for c in self.constraints if c["name"] == name), None)
-        if data is not None:
+        if data is None:
+            self.hint.setText(self.empty_hint if not self.constraints else "Select a constraint above to edit it.")
+            if self.scroll.widget() is not self.hint:
+                self.scroll.setWidget(self.hint)
+                self.hint.show()
+        else:
+            if self.scroll.widget() is self.hint:  # kept for the next empty list (setWidget deletes)
+                self.scroll.takeWidget()
+                self.hint.setParent(self)
+                self.hint.hide()
             self.editor = ConstraintEditor(self.schema.get(data["kind"], []), data)
             self.editor.changed.connect(lambda changes, n=name: self.changed.emit(n, changes))
             if self.editor.range is not None:

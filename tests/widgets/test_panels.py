@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from PyQt6.QtCore import QPointF, Qt
+from PyQt6.QtWidgets import QApplication
 
 from engine.sensors import Sensor
 from widgets.constraint_panel import ConstraintPanel
@@ -44,6 +45,23 @@ SCHEMA = {
     "pin": [("joint", "joint", "lwrist"), ("target", "vec3", np.zeros(3)), ("radius", "float", 0.1)],
     "floor": [("margin", "float", 0.0)],
 }
+
+
+def test_an_empty_constraint_panel_says_how_to_add_one_and_the_hint_survives_editors(qtbot):
+    p = ConstraintPanel(SCHEMA, empty_hint="Press Add.")
+    qtbot.addWidget(p)
+    p.show()
+    assert p.scroll.widget() is p.hint and p.hint.isVisible() and p.hint.text() == "Press Add."
+    pin = {"kind": "pin", "name": "pin1", "weight": 1.0, "enabled": True, "joint": "lwrist"}
+    pin |= {"target": [0.0, 0.0, 1.0], "radius": 0.1}
+    p.set_constraints([pin])
+    assert p.scroll.widget() is p.editor and not p.hint.isVisible()
+    p.list.setCurrentRow(-1)
+    assert p.scroll.widget() is p.hint and p.hint.isVisible() and "Select a constraint" in p.hint.text()
+    p.list.setCurrentRow(0)
+    p.set_constraints([])  # the editor's widget replaced the hint, which was kept, not deleted
+    assert p.scroll.widget() is p.hint and p.hint.isVisible() and p.hint.text() == "Press Add."
+    assert [w for w in QApplication.topLevelWidgets() if w is p.hint] == []
 
 
 def test_constraint_panel_builds_editors_from_the_schema(qtbot):

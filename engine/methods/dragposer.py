@@ -41,7 +41,7 @@ from engine.motion.clip import Motion
 from engine.sensors import SensorFrame
 from engine.solver import FrameContext, LatentDecoder, LatentPredictor, OptimizerSettings, PoseOptimizer, RootFrame
 from engine.solver.gait import GaitPlanner
-from engine.solver.limb_ik import CLAVICLES, finish
+from engine.solver.limb_ik import CLAVICLES
 from engine.solver.tracker_net import TrackerNets, default_tracker_nets
 from engine.solver.tracker_prior import PoseBank, combination, default_bank
 from engine.startup_trace import mark
@@ -230,18 +230,7 @@ class DragPoserMethod(CallerEdits, Method):
             warnings.append("decoded pose is not finite; previous pose repeated")
             return self._repeat_last(warnings, sol.losses, sol.iterations, t0)
         local_rot, positions = state.local_rot.double().numpy(), state.positions.double().numpy()
-        reach_to, turn_to = plan.reach, plan.turn
-        if reach_to or turn_to or plan.level:  # one FK for every step (engine/solver/limb_ik.py)
-            local_rot, positions = finish(
-                local_rot,
-                positions[0],
-                self.skeleton.offsets,
-                reach_to,
-                turn_to,
-                s.neck_twist_share,
-                plan.level,
-                plan.shoulder_deg,
-            )
+        local_rot, positions = plan.finished(local_rot, positions, self.skeleton.offsets)
         self._advance(sol.latent, root, local_rot[0], positions)
         result = FrameResult(
             local_rot=local_rot,

@@ -57,7 +57,6 @@ from engine.methods.dragposer_parts import FramePlan, smoothing_history
 from engine.sensors import SensorFrame
 from engine.solver.batch import BatchObjective, solve_streams
 from engine.solver.chain import RootFrames
-from engine.solver.limb_ik import finish
 from engine.solver.objective import active_weights
 from engine.solver.threads import one_blas_thread
 
@@ -281,11 +280,7 @@ def _crossfade(own: Sequence[FrameResult | None], warm: list[np.ndarray], offset
 
 def _finished(m: DragPoserMethod, r: BatchFrame, local: np.ndarray, pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """A solved frame after the limb and tracker-rotation steps of a frame-by-frame solve."""
-    p = r.plan
-    if p.reach or p.turn or p.level:
-        offsets, share = m.skeleton.offsets, p.settings.neck_twist_share
-        return finish(local, pos[0], offsets, p.reach, p.turn, share, p.level, p.shoulder_deg)
-    return local, pos
+    return r.plan.finished(local, pos, m.skeleton.offsets)
 
 
 def _same_hip_set(frames: Sequence[SensorFrame]) -> bool:

@@ -27,7 +27,7 @@ from engine.errors import UserError
 from engine.methods.sensor_blend import SensorBlend
 from engine.sensors import Sensor, SensorFrame
 from engine.solver import OptimizerSettings
-from engine.solver.limb_ik import CARRIED, HEAD, LIMBS
+from engine.solver.limb_ik import CARRIED, HEAD, LIMBS, finish
 from engine.solver.pose import body_facing
 from engine.solver.tracker_history import TrackerHistory
 from engine.solver.tracker_net import WINDOW
@@ -80,6 +80,17 @@ class FramePlan:
     turn: dict[int, np.ndarray] = field(default_factory=dict)
     level: tuple[int, ...] = ()
     shoulder_deg: float = 0.0
+
+    def finished(
+        self, local_rot: np.ndarray, positions: np.ndarray, offsets: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """A solved pose ``(22, 4)`` local rotations and ``(22, 3)`` positions after this
+        frame's after-solve steps (:func:`engine.solver.limb_ik.finish`: one forward
+        kinematics pass for all of them); as given when it has none."""
+        if not (self.reach or self.turn or self.level):
+            return local_rot, positions
+        share = self.settings.neck_twist_share
+        return finish(local_rot, positions[0], offsets, self.reach, self.turn, share, self.level, self.shoulder_deg)
 
     @property
     def smooth_weight(self) -> float:

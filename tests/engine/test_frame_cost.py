@@ -21,6 +21,7 @@ from engine.kinematics import quat_np as QN
 from engine.kinematics import quaternion as Q
 from engine.kinematics.fk import fk
 from engine.methods import dragposer as D
+from engine.methods import dragposer_parts
 from engine.methods import dragposer_root as R
 from engine.models import load_default_models
 from engine.motion.retarget import load_motion
@@ -131,7 +132,7 @@ def test_reach_and_rotations_equal_the_previous_code_on_real_frames(models, moti
         np.testing.assert_allclose(got[1], want_pos, atol=1e-9, rtol=0)
         return new_finish(local, root, offsets, reach_to, turn_to, neck_twist_share, level, shoulder_deg)
 
-    monkeypatch.setattr(D, "finish", spy)
+    monkeypatch.setattr(dragposer_parts, "finish", spy)  # what FramePlan.finished calls
     m = D.DragPoserMethod(models.vae, models.predictor)
     m.reset(motion.skeleton, motion.fps)
     tr = simulate(motion, sensors)

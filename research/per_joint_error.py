@@ -37,16 +37,16 @@ def main() -> None:
     names = a.methods.split(",")
     errors: dict[str, list[np.ndarray]] = {n: [] for n in names}
     angles: dict[str, list[np.ndarray]] = {n: [] for n in names}
+    methods = {n: get_method(n, mode="realtime") for n in names}  # run_method resets each per clip
+    if "dragposer" in methods:
+        apply_settings(methods["dragposer"], "dragposer", a.set)
     for path in a.files:
         motion = load_motion(path)
         if a.max_frames:
             motion = motion.slice(0, a.max_frames)
         truth, _ = motion.fk()
         tracking = simulate(motion, a.sensors)
-        for name in names:
-            method = get_method(name, mode="realtime")
-            if name == "dragposer":
-                apply_settings(method, name, a.set)
+        for name, method in methods.items():
             rec, _ = run_method(method, tracking, motion.skeleton, progress=False, reference=motion, light=True)
             pos, _ = rec.fk()
             errors[name].append(100 * np.linalg.norm(pos - truth, axis=-1))

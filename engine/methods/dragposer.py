@@ -208,7 +208,7 @@ class DragPoserMethod(CallerEdits, Method):
         anchor = roots.root_anchor(self.sensors, self.settings) if override is None else None
         if override is None and anchor is None and s.root_anchor != "none" and self._frame > 0:
             override = roots.held_root(self._root, self.trackers.points, self.trackers.last_points)
-        root = roots.reference_root(self._root, self.sensors, s, override, self.trackers.facing)
+        root = roots.reference_root(self._root, self.sensors, s, override, self.trackers.facing, self.fps)
         # the clip's frame, not the count of solves since the reset: a constraint limited
         # to frames acts by the clip's frame numbers (the studio resets on a seek)
         ctx = FrameContext(root, override, anchor, self._positions, prediction, sensors.frame, deadline)

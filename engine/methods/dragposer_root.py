@@ -19,7 +19,13 @@ from engine.constraints import SensorConstraint
 from engine.kinematics import quaternion as Q
 from engine.kinematics.root import root_displacement
 from engine.solver import OptimizerSettings, RootAnchor, RootFrame, RootOverride
-from engine.solver.pose import BODY_HEADING_LIMIT_DEG, clamp_heading, head_hands_facing
+from engine.solver.pose import (
+    BODY_HEADING_LIMIT_DEG,
+    clamp_heading,
+    follow_fraction,
+    follow_heading,
+    head_hands_facing,
+)
 
 Sensors = dict[str, SensorConstraint]
 _HEIGHT_IDX = [sk.JOINT_INDEX[j] for j in sk.HEIGHT_JOINTS]
@@ -41,6 +47,7 @@ def reference_root(
     s: OptimizerSettings,
     override: RootOverride | None,
     facing: np.ndarray | None,
+    fps: float = sk.FPS,
 ) -> RootFrame:
     """The root the decoded root pose is relative to: the previous solved root
     ``previous``, whose heading (setting ``heading = anchor``) is kept, when there is no
@@ -49,7 +56,8 @@ def reference_root(
     tracker and the hands (:func:`engine.solver.pose.head_hands_facing`); and within
     :data:`~engine.solver.pose.BODY_HEADING_LIMIT_DEG` of the body heading ``facing
     (4,)`` of the feet and hands (:func:`engine.solver.pose.body_facing`) when the hip
-    tracker gives no rotation."""
+    tracker gives no rotation, and turned towards it with the time constant
+    ``body_heading_follow`` (seconds, at ``fps`` frames per second)."""
     hip = sensors.get("root")
     if (
         override is not None
@@ -60,6 +68,7 @@ def reference_root(
         and hip.enabled
     ):
         rot = clamp_heading(previous.rotation.double().numpy(), facing, BODY_HEADING_LIMIT_DEG)
+        rot = follow_heading(rot, facing, follow_fraction(s.body_heading_follow, fps))
         return RootFrame(torch.as_tensor(rot, dtype=torch.float32), previous.position)
     if override is not None or s.heading != "anchor" or s.root_anchor == "none":
         return previous

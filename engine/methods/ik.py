@@ -51,8 +51,6 @@ LEGS = ((J["lhip"], J["lknee"], J["lankle"]), (J["rhip"], J["rknee"], J["rankle"
 #: back), knees forward (-Y).
 ARM_POLE = np.array([0.0, 0.5, -1.0]) / math.sqrt(1.25)
 LEG_POLE = np.array([0.0, -1.0, 0.0])
-#: IK's heading without a hip or head rotation: feet and hands count alike.
-_IK_LATERAL = (("lankle", "rankle", 1.0), ("lwrist", "rwrist", 1.0))
 SPINE_PASSES = 4
 #: Largest clavicle turn used to bring an out-of-reach hand target closer, radians.
 CLAVICLE_MAX = math.radians(30.0)
@@ -139,9 +137,7 @@ class IKMethod(Method):
         head = s.get("upperneck")
         if head is not None and head.dof == 6 and head.rotation is not None:
             return Q.heading(head.rotation)
-        facing = body_facing(
-            {j: r.position for j, r in s.items() if r.position is not None}, _IK_LATERAL, min_length=1e-3
-        )
+        facing = body_facing({j: r.position for j, r in s.items() if r.position is not None}, min_length=1e-3)
         return self._heading if facing is None else facing
 
     def _solve_root(self, s: dict[str, Sensor]) -> tuple[np.ndarray, np.ndarray]:

@@ -315,6 +315,14 @@ class OptimizerSettings:
         "(the root_anchor joint's 6-DoF tracker heading, so nothing accumulates).",
         Choice(HEADINGS),
     )
+    body_heading_follow: float = setting(
+        0.25,
+        "Body heading follow",
+        "With a hip tracker that gives no rotation, the reference heading turns towards "
+        "the body facing read off the feet and hands with this time constant "
+        "(within the 45-degree bound either way); 0 = bounded only.",
+        Num(0, 10, unit="seconds"),
+    )
     hands_heading_limit: float = setting(
         10.0,
         "Hands heading limit",

@@ -104,3 +104,73 @@ def test_hands_heading_limit_is_validated():
         OptimizerSettings(hands_heading_limit=-1.0)
     with pytest.raises(UserError, match="hands_heading_limit"):
         OptimizerSettings(hands_heading_limit=200.0)
+
+
+def _hip_3dof() -> dict[str, SensorConstraint]:
+    hip = SensorConstraint(name="sensor:root", joint="root", dof=3)
+    hip.set_target(np.array([0.3, -0.2, 0.95]), None)
+    hip.enabled = True
+    return {"root": hip}
+
+
+def test_3dof_hip_heading_follows_the_body_facing_with_its_time_constant():
+    """A hip tracker without rotation: the reference heading is bounded by the body facing
+    and then turns towards it by one frame's share of ``body_heading_follow``."""
+    from engine.methods.dragposer_root import root_override
+
+    sensors = _hip_3dof()
+    override = root_override(sensors)
+    assert override is not None and override.rotation is None
+    facing = _about_z(30.0)
+    s = OptimizerSettings(body_heading_follow=0.25)
+    share = 1.0 - math.exp(-1.0 / (60.0 * 0.25))
+    out = reference_root(_previous(50.0), sensors, s, override, facing, 60.0)
+    assert _yaw(out.rotation.double().numpy()) == pytest.approx(50.0 - share * 20.0, abs=1e-3)
+    # across the +-180 seam it turns the short way
+    out = reference_root(_previous(170.0), sensors, s, override, _about_z(-170.0), 60.0)
+    assert _yaw(out.rotation.double().numpy()) == pytest.approx(170.0 + share * 20.0, abs=1e-3)
+    # a longer time constant or a higher frame rate turns less per frame
+    slow = reference_root(_previous(50.0), sensors, OptimizerSettings(body_heading_follow=1.0), override, facing, 60.0)
+    fast_fps = reference_root(_previous(50.0), sensors, s, override, facing, 120.0)
+    assert 0.0 < 50.0 - _yaw(slow.rotation.double().numpy()) < share * 20.0
+    assert 0.0 < 50.0 - _yaw(fast_fps.rotation.double().numpy()) < share * 20.0
+    # 0: bounded only (45 degrees), nothing within the bound moves
+    off = OptimizerSettings(body_heading_follow=0.0)
+    assert _yaw(reference_root(_previous(50.0), sensors, off, override, facing, 60.0).rotation.double().numpy()) == (
+        pytest.approx(50.0, abs=1e-4)
+    )
+    far = reference_root(_previous(120.0), sensors, off, override, facing, 60.0)
+    assert _yaw(far.rotation.double().numpy()) == pytest.approx(75.0, abs=1e-3)
+    # the bound first, then the follow
+    far = reference_root(_previous(120.0), sensors, s, override, facing, 60.0)
+    assert _yaw(far.rotation.double().numpy()) == pytest.approx(75.0 - share * 45.0, abs=1e-3)
+    # a 6-DoF hip's rotation is not touched here
+    assert torch.equal(
+        reference_root(_previous(50.0), sensors, s, None, facing, 60.0).rotation, _previous(50.0).rotation
+    )
+
+
+def test_follow_heading_keeps_pitch_and_roll():
+    from engine.solver.pose import follow_fraction, follow_heading
+
+    tilted = QN.mul(_about_z(40.0), np.array([math.cos(0.2), math.sin(0.2), 0.0, 0.0]))
+    out = follow_heading(tilted, _about_z(0.0), 0.5)
+    assert _yaw(out) == pytest.approx(20.0, abs=1e-6)
+    # the same tilt about the body's own axis: only a turn about the world vertical was added
+    assert QN.mul(_about_z(-20.0), out) == pytest.approx(QN.mul(_about_z(-40.0), tilted), abs=1e-9)
+    assert follow_fraction(0.0, 60.0) == 0.0
+    assert follow_fraction(1.0 / 60.0, 60.0) == pytest.approx(1.0 - math.exp(-1.0))
+    # a target looking straight down has no heading: unchanged
+    down = np.array([math.cos(math.pi / 4), math.sin(math.pi / 4), 0.0, 0.0])
+    assert np.array_equal(follow_heading(tilted, down, 0.5), tilted)
+
+
+def test_ik_and_dragposer_read_the_body_facing_alike():
+    """The IK baseline and DragPoser's 3-DoF hip rule read one facing (feet and hands alike)."""
+    from engine.solver.pose import LATERAL_PAIRS, body_facing
+
+    pts = {"lankle": np.array([0.1, 0.0, 0.0]), "rankle": np.array([-0.1, 0.0, 0.0])}
+    pts |= {"lwrist": np.array([0.0, 0.3, 1.0]), "rwrist": np.array([0.0, -0.3, 1.0])}
+    # feet 0.2 m along +X, hands 0.6 m along +Y: the summed left axis points 71.6 deg from +X
+    assert {w for *_, w in LATERAL_PAIRS} == {1.0}
+    assert _yaw(body_facing(pts)) == pytest.approx(math.degrees(math.atan2(0.6, 0.2)), abs=1e-9)

@@ -7,7 +7,8 @@ the facings read off the trackers and the reconstructed pelvis of IK and DragPos
 Per clip and overall, the mean (and 90th percentile) angle in degrees about the vertical between
 the truth's pelvis facing and: the body facing of the feet and hands (:func:`engine.solver.pose.body_facing`,
 feet and hands alike, as both methods read it), the same with the hands at half weight (DragPoser's
-until 2026-12-07), and the pelvis each method reconstructs (realtime).
+until 2026-12-07), the shipped heading network's (:mod:`engine.models.heading`, on the trackers' last
+half second), and the pelvis each method reconstructs (realtime; ``--methods ""`` for none).
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from stability_check import heading_angle_deg  # noqa: E402
 from engine import skeleton as sk  # noqa: E402
 from engine.cli.method_options import apply_settings  # noqa: E402
 from engine.methods import get_method, run_method  # noqa: E402
+from engine.models.heading import JOINTS, default_heading_model, window_frames  # noqa: E402
 from engine.motion.retarget import load_motion  # noqa: E402
 from engine.solver.pose import LATERAL_PAIRS, body_facing  # noqa: E402
 from engine.tracking import simulate  # noqa: E402
@@ -41,6 +43,17 @@ def facings(tracking, pairs) -> np.ndarray:
     return np.array(out)
 
 
+def network_error(net, tracking, truth: np.ndarray) -> np.ndarray:
+    """Per frame, degrees between the truth's pelvis heading ``truth (F, 4)`` and the heading
+    network's on the simulated trackers (all six connected)."""
+    k = window_frames(tracking.fps)
+    pos = tracking.positions[:, [tracking.joints.index(j) for j in JOINTS]]
+    padded = np.concatenate([np.repeat(pos[:1], k - 1, axis=0), pos])
+    windows = np.lib.stride_tricks.sliding_window_view(padded, k, axis=0).transpose(0, 3, 1, 2)
+    yaw = net.yaw(windows)
+    return heading_angle_deg(truth, np.stack([np.cos(yaw / 2), 0 * yaw, 0 * yaw, np.sin(yaw / 2)], axis=-1))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("files", nargs="+", type=Path)
@@ -49,11 +62,13 @@ def main() -> None:
     ap.add_argument("--max-frames", type=int, default=600)
     ap.add_argument("--set", action="append", default=[], help="optimizer setting for dragposer, key=value")
     a = ap.parse_args()
-    names = a.methods.split(",")
+    names = [n for n in a.methods.split(",") if n]
+    net = default_heading_model()
+    assert net is not None, "assets/models/heading.npz is missing"
     methods = {n: get_method(n, mode="realtime") for n in names}
     if "dragposer" in methods:
         apply_settings(methods["dragposer"], "dragposer", a.set)
-    cols = ["facing", "facing hands/2", *names]
+    cols = ["facing", "facing hands/2", "network", *names]
     allv: dict[str, list[np.ndarray]] = {c: [] for c in cols}
     print(f"{'clip':28s}" + "".join(f"{c:>16s}" for c in cols))
     for path in a.files:
@@ -66,6 +81,7 @@ def main() -> None:
         v = {
             "facing": heading_angle_deg(truth, facings(tracking, LATERAL_PAIRS)),
             "facing hands/2": heading_angle_deg(truth, facings(tracking, half)),
+            "network": network_error(net, tracking, truth),
         }
         for n, m in methods.items():
             rec, _ = run_method(m, tracking, motion.skeleton, progress=False, reference=motion, light=True)

@@ -1,4 +1,4 @@
-"""``dragposer-studio train vae|predictor|sparseposer|rpm|stance|tracker-net``: train the models on prepared data.
+"""``dragposer-studio train vae|predictor|sparseposer|rpm|stance|heading|tracker-net``: train the models on prepared data.
 
 Settings come from the dataclass defaults, then ``--config FILE.toml``, then
 ``--set key=value`` (repeatable), then the common flags. Runs unchanged under
@@ -35,7 +35,8 @@ def _common(p: argparse.ArgumentParser, out_default: str) -> None:
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "train",
-        help="train the pose VAE, the temporal predictor, SparsePoser, RPM, the stance classifier or the tracker networks",
+        help="train the pose VAE, the temporal predictor, SparsePoser, RPM, the stance classifier, the heading "
+        "network or the tracker networks",
     )
     tsub = p.add_subparsers(dest="train_command", metavar="MODEL")
     v = tsub.add_parser("vae", help="train the pose VAE", description=__doc__)
@@ -63,6 +64,19 @@ def register(sub: argparse._SubParsersAction) -> None:
     t.add_argument("--epochs", type=int, default=10, help="passes over the samples (default 10)")
     t.add_argument("--seed", type=int, default=0, help="random seed")
     t.set_defaults(func=_train_stance)
+    h = tsub.add_parser(
+        "heading",
+        help="train the heading network (the pelvis heading from six position-only trackers)",
+        description="Train the heading network (engine/models/heading.py) on the train split of prepared data "
+        "and print its mean heading error and the feet-and-hands facing's on the validation split.",
+    )
+    h.add_argument("--data", type=Path, default=Path("prepared"), help="output of `data prepare` (default: prepared)")
+    h.add_argument("--out", type=Path, default=Path("runs/heading.npz"), help="model file (default: runs/heading.npz)")
+    h.add_argument("--hidden", type=int, default=256, help="width of the two hidden layers (default 256)")
+    h.add_argument("--epochs", type=int, default=10, help="passes over the samples (default 10)")
+    h.add_argument("--stride", type=int, default=4, help="every this many frames of a take is a sample (default 4)")
+    h.add_argument("--seed", type=int, default=0, help="random seed")
+    h.set_defaults(func=_train_heading)
     n = tsub.add_parser(
         "tracker-net",
         help="train the tracker prior's networks (a latent from the trackers' last half second)",
@@ -179,6 +193,27 @@ def _train_stance(args: argparse.Namespace) -> int:
         f"{args.out}: {len(train.y)} training samples; validation ({int(a['samples'])} samples): "
         f"stance right {100 * a['model']:.1f} %, the arm-swing rule {100 * a['arms']:.1f} % "
         f"(it answers {100 * a['arms_coverage']:.0f} % of them)"
+    )
+    return 0
+
+
+def _train_heading(args: argparse.Namespace) -> int:
+    from engine.errors import UserError
+    from engine.training.heading import angle_error_deg, load_samples, train_heading
+    from engine.validation import check_args
+
+    check_args(args)
+    for name, lo, hi in (("hidden", 1, 4096), ("epochs", 1, 10_000), ("stride", 1, 1000)):
+        if not lo <= getattr(args, name) <= hi:
+            raise UserError(f"--{name}: {getattr(args, name)} is not a whole number from {lo} to {hi}")
+    train = load_samples(args.data, "train", stride=args.stride)
+    val = load_samples(args.data, "val", mirrored=False)
+    model = train_heading(train, hidden=args.hidden, epochs=args.epochs, seed=args.seed)
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    model.save(args.out)
+    print(
+        f"{args.out}: {len(train.x)} training samples; validation ({len(val.x)} frames): mean heading error "
+        f"{angle_error_deg(model, val).mean():.2f} deg, the feet-and-hands facing {angle_error_deg(None, val).mean():.2f}"
     )
     return 0
 

@@ -36,6 +36,7 @@ from engine.methods.dragposer_edits import CallerEdits, FrameSettings
 from engine.methods.dragposer_parts import FramePlan, TrackerTerms, UserConstraints, smoothing_history
 from engine.methods.dragposer_prior import PriorSource
 from engine.methods.solve_record import SolveRecord, record_of
+from engine.models.heading import default_heading_model
 from engine.models.stance import default_stance_model
 from engine.motion.clip import Motion
 from engine.sensors import SensorFrame
@@ -109,7 +110,7 @@ class DragPoserMethod(CallerEdits, Method):
         self.skeleton = skeleton
         self.fps = fps
         self.optimizer = PoseOptimizer(self.decoder, skeleton.offsets, self.settings, fast=self.fast)
-        self.trackers = TrackerTerms(self._weights)
+        self.trackers = TrackerTerms(self._weights, heading=default_heading_model())
         self.priors = PriorSource(self.predictor, self.bank, self.settings, self.nets)
         self.priors.bank_later = self._bank_later
         self.prior = TemporalPriorConstraint(name="temporal_prior")
@@ -208,7 +209,9 @@ class DragPoserMethod(CallerEdits, Method):
         anchor = roots.root_anchor(self.sensors, self.settings) if override is None else None
         if override is None and anchor is None and s.root_anchor != "none" and self._frame > 0:
             override = roots.held_root(self._root, self.trackers.points, self.trackers.last_points)
-        root = roots.reference_root(self._root, self.sensors, s, override, self.trackers.facing, self.fps)
+        root = roots.reference_root(
+            self._root, self.sensors, s, override, self.trackers.facing, self.fps, self.trackers.learned_facing
+        )
         # the clip's frame, not the count of solves since the reset: a constraint limited
         # to frames acts by the clip's frame numbers (the studio resets on a seek)
         ctx = FrameContext(root, override, anchor, self._positions, prediction, sensors.frame, deadline)

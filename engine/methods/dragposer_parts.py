@@ -25,6 +25,7 @@ from engine.constraints.residual import FrameInputs
 from engine.constraints.sensor import SensorTerm
 from engine.errors import UserError
 from engine.methods.sensor_blend import SensorBlend
+from engine.models import heading as hd
 from engine.sensors import Sensor, SensorFrame
 from engine.solver import OptimizerSettings
 from engine.solver.limb_ik import CARRIED, HEAD, LIMBS, finish
@@ -136,13 +137,21 @@ class TrackerTerms:
     history : TrackerHistory
         Recent 6-DoF readings (the pose bank's lookup).
     facing : ndarray (4,) or None
-        This frame's body heading from its trackers.
+        This frame's body heading from its trackers: the heading network's
+        (:mod:`engine.models.heading`, setting ``heading_network``) while the hip tracker
+        gives no rotation and all of the network's trackers are connected, else the
+        feet's and hands' left-right lines (:func:`engine.solver.pose.body_facing`).
+    learned_facing : bool
+        Whether :attr:`facing` came from the heading network this frame.
     points, last_points : dict of str to ndarray (3,)
         Connected trackers' positions, this frame and the previous one.
     """
 
-    def __init__(self, weights: dict[str, float] | None = None) -> None:
+    def __init__(self, weights: dict[str, float] | None = None, heading: hd.HeadingModel | None = None) -> None:
         self.weights = weights if weights is not None else {}  # shared: kept across clips
+        self.heading = heading
+        self._heading_window: list[np.ndarray] = []  # the network's joints' positions, oldest first
+        self.learned_facing = False
         self.constraints: dict[str, SensorConstraint] = {}
         self.blends: dict[str, SensorBlend] = {}
         self.history = TrackerHistory(WINDOW)
@@ -185,9 +194,32 @@ class TrackerTerms:
             }
         )
         points = {j: np.array(c.position, dtype=np.float64) for j, c in self.constraints.items() if c.enabled}
-        self.facing = body_facing(points)
+        self.facing = self._facing(points, s, fps)
         self.last_points, self.points = self.points, points
         return warnings
+
+    def _facing(self, points: dict[str, np.ndarray], s: OptimizerSettings, fps: float) -> np.ndarray | None:
+        """:attr:`facing` of this frame's connected trackers' ``points``; the network's
+        window restarts (its first frame repeated) whenever one of its trackers is lost."""
+        hip = self.constraints.get("root")
+        if (
+            self.heading is None
+            or not s.heading_network
+            or hip is None
+            or hip.dof != 3
+            or any(j not in points for j in hd.JOINTS)
+        ):
+            self._heading_window.clear()
+            self.learned_facing = False
+            return body_facing(points)
+        now = np.stack([points[j] for j in hd.JOINTS])
+        k = hd.window_frames(fps)
+        if not self._heading_window:
+            self._heading_window = [now] * (k - 1)
+        self._heading_window = [*self._heading_window[-(k - 1) :], now]
+        yaw = float(self.heading.yaw(np.stack(self._heading_window)))
+        self.learned_facing = True
+        return np.array([math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)])
 
     def set_weight(self, joint: str, weight: float) -> None:
         """The user's weight of the tracker on ``joint``."""

@@ -48,6 +48,7 @@ def reference_root(
     override: RootOverride | None,
     facing: np.ndarray | None,
     fps: float = sk.FPS,
+    learned: bool = False,
 ) -> RootFrame:
     """The root the decoded root pose is relative to: the previous solved root
     ``previous``, whose heading (setting ``heading = anchor``) is kept, when there is no
@@ -57,7 +58,8 @@ def reference_root(
     :data:`~engine.solver.pose.BODY_HEADING_LIMIT_DEG` of the body heading ``facing
     (4,)`` of the feet and hands (:func:`engine.solver.pose.body_facing`) when the hip
     tracker gives no rotation, and turned towards it with the time constant
-    ``body_heading_follow`` (seconds, at ``fps`` frames per second)."""
+    ``body_heading_follow`` when ``learned`` (the heading network's facing), else
+    ``lines_heading_follow`` (seconds, at ``fps`` frames per second)."""
     hip = sensors.get("root")
     if (
         override is not None
@@ -68,7 +70,8 @@ def reference_root(
         and hip.enabled
     ):
         rot = clamp_heading(previous.rotation.double().numpy(), facing, BODY_HEADING_LIMIT_DEG)
-        rot = follow_heading(rot, facing, follow_fraction(s.body_heading_follow, fps))
+        tau = s.body_heading_follow if learned else s.lines_heading_follow
+        rot = follow_heading(rot, facing, follow_fraction(tau, fps))
         return RootFrame(torch.as_tensor(rot, dtype=torch.float32), previous.position)
     if override is not None or s.heading != "anchor" or s.root_anchor == "none":
         return previous

@@ -316,12 +316,29 @@ class OptimizerSettings:
         Choice(HEADINGS),
     )
     body_heading_follow: float = setting(
-        0.25,
+        0.05,
         "Body heading follow",
         "With a hip tracker that gives no rotation, the reference heading turns towards "
-        "the body facing read off the feet and hands with this time constant "
-        "(within the 45-degree bound either way); 0 = bounded only.",
+        "the heading network's body facing with this time constant (within the "
+        "45-degree bound either way); 0 = bounded only.",
         Num(0, 10, unit="seconds"),
+    )
+    lines_heading_follow: float = setting(
+        0.25,
+        "Lines heading follow",
+        "The same while the facing is read off the feet's and hands' left-right lines "
+        "(heading network off, or a tracker it reads lost): they swing with every stride, "
+        "so they are followed more slowly; 0 = bounded only.",
+        Num(0, 10, unit="seconds"),
+    )
+    heading_network: bool = setting(
+        True,
+        "Heading network",
+        "With a hip tracker that gives no rotation and 3-DoF trackers on the hips, head, "
+        "hands and feet, the body facing comes from the heading network "
+        "(assets/models/heading.npz), which reads their last half second, instead of the "
+        "feet's and hands' left-right lines.",
+        Flag(),
     )
     hands_heading_limit: float = setting(
         10.0,

@@ -122,7 +122,7 @@ def test_3dof_hip_heading_follows_the_body_facing_with_its_time_constant():
     override = root_override(sensors)
     assert override is not None and override.rotation is None
     facing = _about_z(30.0)
-    s = OptimizerSettings(body_heading_follow=0.25)
+    s = OptimizerSettings(lines_heading_follow=0.25, body_heading_follow=0.05)
     share = 1.0 - math.exp(-1.0 / (60.0 * 0.25))
     out = reference_root(_previous(50.0), sensors, s, override, facing, 60.0)
     assert _yaw(out.rotation.double().numpy()) == pytest.approx(50.0 - share * 20.0, abs=1e-3)
@@ -130,12 +130,12 @@ def test_3dof_hip_heading_follows_the_body_facing_with_its_time_constant():
     out = reference_root(_previous(170.0), sensors, s, override, _about_z(-170.0), 60.0)
     assert _yaw(out.rotation.double().numpy()) == pytest.approx(170.0 + share * 20.0, abs=1e-3)
     # a longer time constant or a higher frame rate turns less per frame
-    slow = reference_root(_previous(50.0), sensors, OptimizerSettings(body_heading_follow=1.0), override, facing, 60.0)
+    slow = reference_root(_previous(50.0), sensors, OptimizerSettings(lines_heading_follow=1.0), override, facing, 60.0)
     fast_fps = reference_root(_previous(50.0), sensors, s, override, facing, 120.0)
     assert 0.0 < 50.0 - _yaw(slow.rotation.double().numpy()) < share * 20.0
     assert 0.0 < 50.0 - _yaw(fast_fps.rotation.double().numpy()) < share * 20.0
     # 0: bounded only (45 degrees), nothing within the bound moves
-    off = OptimizerSettings(body_heading_follow=0.0)
+    off = OptimizerSettings(lines_heading_follow=0.0)
     assert _yaw(reference_root(_previous(50.0), sensors, off, override, facing, 60.0).rotation.double().numpy()) == (
         pytest.approx(50.0, abs=1e-4)
     )
@@ -144,6 +144,10 @@ def test_3dof_hip_heading_follows_the_body_facing_with_its_time_constant():
     # the bound first, then the follow
     far = reference_root(_previous(120.0), sensors, s, override, facing, 60.0)
     assert _yaw(far.rotation.double().numpy()) == pytest.approx(75.0 - share * 45.0, abs=1e-3)
+    # the heading network's facing is followed with its own, shorter time constant
+    learned = reference_root(_previous(50.0), sensors, s, override, facing, 60.0, learned=True)
+    quick = 1.0 - math.exp(-1.0 / (60.0 * 0.05))
+    assert _yaw(learned.rotation.double().numpy()) == pytest.approx(50.0 - quick * 20.0, abs=1e-3)
     # a 6-DoF hip's rotation is not touched here
     assert torch.equal(
         reference_root(_previous(50.0), sensors, s, None, facing, 60.0).rotation, _previous(50.0).rotation

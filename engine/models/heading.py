@@ -18,12 +18,12 @@ solver.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 
-from engine.models.perceptron import relu_layers
+from engine.models.perceptron import Perceptron
 
 #: The tracked joints the network reads, in this order (the trackers of preset ``6x3dof``).
 JOINTS: tuple[str, ...] = ("root", "upperneck", "lwrist", "rwrist", "lankle", "rankle")
@@ -68,19 +68,18 @@ def heading_features(window: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return turned.reshape(*window.shape[:-3], N_FEATURES), yaw
 
 
-@dataclass(frozen=True)
-class HeadingModel:
-    """The trained regressor: feature normalisation and the perceptron's layers."""
+class HeadingModel(Perceptron):
+    """The trained regressor: feature normalisation and the perceptron's layers (two
+    outputs, the correction's cosine and sine)."""
 
-    mean: np.ndarray
-    std: np.ndarray
-    weights: tuple[np.ndarray, ...]
-    biases: tuple[np.ndarray, ...]
+    KIND: ClassVar[str] = "heading"
+    N_IN: ClassVar[int] = N_FEATURES
+    N_OUT: ClassVar[int] = 2
 
     def correction(self, features: np.ndarray) -> np.ndarray:
         """Angle (radians) from the rough facing to the pelvis heading, ``(...)``, of
         features ``(..., N_FEATURES)``."""
-        x = relu_layers((np.asarray(features, dtype=np.float64) - self.mean) / self.std, self.weights, self.biases)
+        x = self.forward(features)
         return np.arctan2(x[..., 1], x[..., 0])
 
     def yaw(self, window: np.ndarray) -> np.ndarray:
@@ -88,39 +87,6 @@ class HeadingModel:
         (:func:`heading_features`)."""
         x, rough = heading_features(window)
         return rough + self.correction(x)
-
-    def save(self, path: Path) -> None:
-        """Write the model as an ``.npz``, atomically."""
-        from engine.atomic import atomic_path
-
-        arrays = {"mean": self.mean, "std": self.std}
-        for i, (w, b) in enumerate(zip(self.weights, self.biases, strict=True)):
-            arrays[f"w{i}"] = w.astype(np.float32)
-            arrays[f"b{i}"] = b.astype(np.float32)
-        with atomic_path(path, suffix=".npz") as tmp:
-            np.savez(tmp, **arrays)  # type: ignore[arg-type]  # numpy's stubs: **arrays could name allow_pickle
-
-    @classmethod
-    def load(cls, path: Path) -> HeadingModel:
-        """Read a model written by :meth:`save`; a file that is not one names what is missing."""
-        from engine.errors import UserError
-
-        try:
-            with np.load(path, allow_pickle=False) as z:
-                missing = [k for k in ("mean", "std", "w0", "b0") if k not in z.files]
-                if missing:
-                    raise UserError(f"{path}: not a heading model (no {', '.join(missing)})")
-                n = sum(1 for k in z.files if k.startswith("w"))
-                if z["mean"].shape != (N_FEATURES,) or z["w0"].shape[0] != N_FEATURES or z[f"w{n - 1}"].shape[1] != 2:
-                    raise UserError(f"{path}: not a heading model for {N_FEATURES} features and 2 outputs")
-                return cls(
-                    z["mean"].astype(np.float64),
-                    z["std"].astype(np.float64),
-                    tuple(z[f"w{i}"].astype(np.float64) for i in range(n)),
-                    tuple(z[f"b{i}"].astype(np.float64) for i in range(n)),
-                )
-        except (OSError, ValueError, KeyError) as exc:
-            raise UserError(f"{path}: not a heading model ({exc})") from exc
 
 
 #: The shipped model (``assets/models/heading.npz``, model card: "Heading network").

@@ -16,12 +16,12 @@ head's travel (x forward, y to the left, z up), and the travel speed.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 
-from engine.models.perceptron import relu_layers
+from engine.models.perceptron import Perceptron
 
 #: Seconds of history the classifier reads.
 WINDOW_S = 0.5
@@ -66,47 +66,17 @@ def stance_features(head: np.ndarray, hands: np.ndarray, fps: float) -> np.ndarr
     return np.concatenate([feats, speed], axis=-1)
 
 
-@dataclass(frozen=True)
-class StanceModel:
-    """The trained classifier: feature normalisation and the perceptron's layers."""
+class StanceModel(Perceptron):
+    """The trained classifier: feature normalisation and the perceptron's layers (one
+    logistic output)."""
 
-    mean: np.ndarray
-    std: np.ndarray
-    weights: tuple[np.ndarray, ...]
-    biases: tuple[np.ndarray, ...]
+    KIND: ClassVar[str] = "stance"
+    N_IN: ClassVar[int] = N_FEATURES
+    N_OUT: ClassVar[int] = 1
 
     def left_stance(self, features: np.ndarray) -> np.ndarray:
         """Probability that the left foot stands, ``(...)``, from features ``(..., N_FEATURES)``."""
-        x = relu_layers((np.asarray(features, dtype=np.float64) - self.mean) / self.std, self.weights, self.biases)
-        return 1.0 / (1.0 + np.exp(-x[..., 0]))
-
-    def save(self, path: Path) -> None:
-        """Write the model as an ``.npz``, atomically."""
-        arrays = {"mean": self.mean, "std": self.std}
-        for i, (w, b) in enumerate(zip(self.weights, self.biases, strict=True)):
-            arrays[f"w{i}"] = w.astype(np.float32)
-            arrays[f"b{i}"] = b.astype(np.float32)
-        from engine.atomic import atomic_path
-
-        with atomic_path(path, suffix=".npz") as tmp:
-            np.savez(tmp, **arrays)  # type: ignore[arg-type]  # numpy's stubs: **arrays could name allow_pickle
-
-    @classmethod
-    def load(cls, path: Path) -> StanceModel:
-        """Read a model written by :meth:`save`; a file that is not one names what is missing."""
-        with np.load(path) as z:
-            missing = [k for k in ("mean", "std", "w0", "b0") if k not in z.files]
-            if missing:
-                raise ValueError(f"{path}: not a stance model (no {', '.join(missing)})")
-            n = sum(1 for k in z.files if k.startswith("w"))
-            if z["mean"].shape != (N_FEATURES,) or z["w0"].shape[0] != N_FEATURES:
-                raise ValueError(f"{path}: a stance model for {z['mean'].shape[0]} features, not {N_FEATURES}")
-            return cls(
-                z["mean"].astype(np.float64),
-                z["std"].astype(np.float64),
-                tuple(z[f"w{i}"].astype(np.float64) for i in range(n)),
-                tuple(z[f"b{i}"].astype(np.float64) for i in range(n)),
-            )
+        return 1.0 / (1.0 + np.exp(-self.forward(features)[..., 0]))
 
 
 #: The shipped classifier (``assets/models/stance.npz``, model card: "Stance classifier").

@@ -7,6 +7,7 @@ indexing: the corpus (~100 k frames) fits in memory comfortably.
 from __future__ import annotations
 
 import json
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -54,6 +55,36 @@ def read_manifest(data_dir: Path) -> dict:
         return json.loads(path.read_text())
     except json.JSONDecodeError as exc:
         raise UserError(f"{path}: not valid JSON ({exc})") from exc
+
+
+@dataclass(frozen=True)
+class ShardMotion:
+    """One prepared shard's motion: local rotations ``(F, 22, 4)``, root positions
+    ``(F, 3)`` and joint positions ``(F, 22, 3)`` (metres, z up), at ``fps``."""
+
+    local_rot: np.ndarray
+    root_pos: np.ndarray
+    positions: np.ndarray
+    fps: float
+
+
+def shard_motions(data_dir: Path, split: str, mirrored: bool = True) -> Iterator[ShardMotion]:
+    """Every shard of ``split`` in a prepared folder (its mirrored copies unless
+    ``mirrored`` is False) with its forward kinematics; a folder without prepared data, or
+    without a shard of ``split``, is named (:class:`UserError`)."""
+    from engine.kinematics.fk import fk_positions
+
+    manifest = read_manifest(data_dir)
+    fps, found = float(manifest["fps"]), False
+    for e in manifest["files"]:
+        if e["split"] != split or (e["mirrored"] and not mirrored):
+            continue
+        with np.load(Path(data_dir) / e["shard"]) as z:
+            local, root, offsets = z["local_rot"], z["root_pos"], z["offsets"]
+        found = True
+        yield ShardMotion(local, root, fk_positions(local, root, offsets), fps)
+    if not found:
+        raise UserError(f"{Path(data_dir) / 'manifest.json'}: no {split} shards")
 
 
 def load_split(data_dir: Path, split: str, max_clips: int | None = None) -> PoseData:

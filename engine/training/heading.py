@@ -8,16 +8,15 @@ left-right swapped samples.
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from engine import skeleton as sk
-from engine.errors import UserError
-from engine.kinematics.fk import fk_positions
-from engine.models.heading import JOINTS, N_FEATURES, HeadingModel, heading_features, window_frames
+from engine.models.heading import JOINTS, HeadingModel, heading_features, window_frames
+from engine.training.data import shard_motions
+from engine.training.perceptron import fit_perceptron
 
 _IDX = [sk.JOINT_INDEX[j] for j in JOINTS]
 
@@ -60,20 +59,10 @@ def clip_samples(pos: np.ndarray, root_rot: np.ndarray, fps: float, stride: int 
 
 def load_samples(data: Path, split: str, stride: int = 1, mirrored: bool = True) -> HeadingSamples:
     """Samples of every shard of ``split`` in a prepared folder (its ``manifest.json``)."""
-    path = data / "manifest.json"
-    if not path.is_file():
-        raise UserError(f"{path}: no prepared data here (make it with `dragposer-studio data prepare --out {data}`)")
-    manifest = json.loads(path.read_text())
-    parts = []
-    for e in manifest["files"]:
-        if e["split"] != split or (e["mirrored"] and not mirrored):
-            continue
-        with np.load(data / e["shard"]) as z:
-            pos = fk_positions(z["local_rot"], z["root_pos"], z["offsets"])
-            root = np.asarray(z["local_rot"][:, 0], dtype=np.float64)
-        parts.append(clip_samples(pos, root, float(manifest["fps"]), stride))
-    if not parts:
-        raise UserError(f"{path}: no {split} shards")
+    parts = [
+        clip_samples(m.positions, np.asarray(m.local_rot[:, 0], dtype=np.float64), m.fps, stride)
+        for m in shard_motions(data, split, mirrored)
+    ]
     return HeadingSamples(*(np.concatenate([getattr(p, f) for p in parts]) for f in ("x", "rough", "truth")))
 
 
@@ -84,38 +73,10 @@ def train_heading(
     correction angle (mean squared error), Adam with a cosine-annealed rate."""
     import torch
 
-    torch.manual_seed(seed)
-    mean = train.x.mean(0, dtype=np.float64)
-    std = train.x.std(0, dtype=np.float64) + 1e-6
-    x = torch.as_tensor(((train.x - mean) / std).astype(np.float32))
     t = train.target
-    y = torch.as_tensor(np.stack([np.cos(t), np.sin(t)], axis=-1), dtype=torch.float32)
-    net = torch.nn.Sequential(
-        torch.nn.Linear(N_FEATURES, hidden),
-        torch.nn.ReLU(),
-        torch.nn.Linear(hidden, hidden),
-        torch.nn.ReLU(),
-        torch.nn.Linear(hidden, 2),
-    )
-    opt = torch.optim.Adam(net.parameters(), lr=lr, weight_decay=1e-4)
-    batches = -(-len(x) // 512)
-    sched = torch.optim.lr_scheduler.CosineAnnealingLR(opt, epochs * batches)
-    gen = torch.Generator().manual_seed(seed)
-    for _ in range(epochs):
-        order = torch.randperm(len(x), generator=gen)
-        for i in range(0, len(x), 512):
-            b = order[i : i + 512]
-            loss = torch.nn.functional.mse_loss(net(x[b]), y[b])
-            opt.zero_grad()
-            loss.backward()
-            opt.step()
-            sched.step()
-    layers = [m for m in net if isinstance(m, torch.nn.Linear)]
+    y = np.stack([np.cos(t), np.sin(t)], axis=-1)
     return HeadingModel(
-        mean,
-        std,
-        tuple(m.weight.detach().double().numpy().T.copy() for m in layers),
-        tuple(m.bias.detach().double().numpy().copy() for m in layers),
+        *fit_perceptron(train.x, y, torch.nn.functional.mse_loss, hidden, epochs, lr, seed, cosine=True)
     )
 
 

@@ -8,7 +8,6 @@ stance foot). Mirrored shards give the left-right swapped samples.
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -16,10 +15,10 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.constraints.gait import ANKLES
-from engine.errors import UserError
-from engine.kinematics.fk import fk_positions
 from engine.models.stance import N_FEATURES, StanceModel, stance_features, window_frames
 from engine.solver.gait import GaitParams, arm_swing
+from engine.training.data import shard_motions
+from engine.training.perceptron import fit_perceptron
 
 HEAD = sk.JOINT_INDEX["upperneck"]
 HANDS = (sk.JOINT_INDEX["lwrist"], sk.JOINT_INDEX["rwrist"])
@@ -74,19 +73,7 @@ def clip_samples(pos: np.ndarray, fps: float) -> StanceSamples:
 
 def load_samples(data: Path, split: str, mirrored: bool = True) -> StanceSamples:
     """Samples of every shard of ``split`` in a prepared folder (its ``manifest.json``)."""
-    path = data / "manifest.json"
-    if not path.is_file():
-        raise UserError(f"{path}: no prepared data here (make it with `dragposer-studio data prepare --out {data}`)")
-    manifest = json.loads(path.read_text())
-    parts = []
-    for e in manifest["files"]:
-        if e["split"] != split or (e["mirrored"] and not mirrored):
-            continue
-        with np.load(data / e["shard"]) as z:
-            pos = fk_positions(z["local_rot"], z["root_pos"], z["offsets"])
-        parts.append(clip_samples(pos, float(manifest["fps"])))
-    if not parts:
-        raise UserError(f"{path}: no {split} shards")
+    parts = [clip_samples(m.positions, m.fps) for m in shard_motions(data, split, mirrored)]
     return StanceSamples(*(np.concatenate([getattr(p, f) for p in parts]) for f in ("x", "y", "arms")))
 
 
@@ -96,35 +83,10 @@ def train_stance(
     """Fit the perceptron (two hidden layers of ``hidden``) with logistic loss, Adam."""
     import torch
 
-    torch.manual_seed(seed)
-    mean = train.x.mean(0)
-    std = train.x.std(0) + 1e-6
-    x = torch.as_tensor((train.x - mean) / std, dtype=torch.float32)
-    y = torch.as_tensor(train.y, dtype=torch.float32)
-    net = torch.nn.Sequential(
-        torch.nn.Linear(N_FEATURES, hidden),
-        torch.nn.ReLU(),
-        torch.nn.Linear(hidden, hidden),
-        torch.nn.ReLU(),
-        torch.nn.Linear(hidden, 1),
-    )
-    opt = torch.optim.Adam(net.parameters(), lr=lr, weight_decay=1e-4)
-    gen = torch.Generator().manual_seed(seed)
-    for _ in range(epochs):
-        order = torch.randperm(len(x), generator=gen)
-        for i in range(0, len(x), 512):
-            b = order[i : i + 512]
-            loss = torch.nn.functional.binary_cross_entropy_with_logits(net(x[b])[:, 0], y[b])
-            opt.zero_grad()
-            loss.backward()
-            opt.step()
-    layers = [m for m in net if isinstance(m, torch.nn.Linear)]
-    return StanceModel(
-        mean,
-        std,
-        tuple(m.weight.detach().double().numpy().T.copy() for m in layers),
-        tuple(m.bias.detach().double().numpy().copy() for m in layers),
-    )
+    def loss(out, y):
+        return torch.nn.functional.binary_cross_entropy_with_logits(out[:, 0], y)
+
+    return StanceModel(*fit_perceptron(train.x, train.y, loss, hidden, epochs, lr, seed))
 
 
 def accuracy(model: StanceModel, s: StanceSamples) -> dict[str, float]:

@@ -144,7 +144,7 @@ def test_train_heading_writes_a_model_and_reports_against_the_facing(tmp_path, c
     HeadingModel.load(out)
     assert main([*args, "--stride", "0"]) != 0
     assert "--stride: 0 is not a whole number from 1 to 1000" in capsys.readouterr().err
-    with pytest.raises(UserError, match="manifest.json: no prepared data here"):
+    with pytest.raises(UserError, match="manifest.json not found"):
         load_samples(tmp_path, "train")
 
 

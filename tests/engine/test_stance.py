@@ -89,7 +89,7 @@ def test_the_model_file_round_trips_and_a_wrong_file_is_named(tmp_path):
     np.testing.assert_allclose(back.left_stance(x), model.left_stance(x), atol=1e-5)
     other = tmp_path / "other.npz"
     np.savez(other, a=np.zeros(2))
-    with pytest.raises(ValueError, match="other.npz: not a stance model"):
+    with pytest.raises(UserError, match="other.npz: not a stance model"):
         StanceModel.load(other)
 
 
@@ -147,5 +147,5 @@ def test_train_stance_writes_a_model_and_reports_against_the_arm_rule(tmp_path, 
 
 
 def test_train_stance_names_a_folder_without_prepared_data(tmp_path):
-    with pytest.raises(UserError, match="manifest.json: no prepared data here"):
+    with pytest.raises(UserError, match="manifest.json not found"):
         load_samples(tmp_path, "train")

@@ -32,6 +32,19 @@ def _common(p: argparse.ArgumentParser, out_default: str) -> None:
     )
 
 
+def _perceptron_parser(
+    tsub: argparse._SubParsersAction, name: str, help: str, description: str, hidden: int
+) -> argparse.ArgumentParser:
+    """The subcommand of one small perceptron (engine/training/perceptron.py) and its options."""
+    p = tsub.add_parser(name, help=help, description=description)
+    p.add_argument("--data", type=Path, default=Path("prepared"), help="output of `data prepare` (default: prepared)")
+    p.add_argument("--out", type=Path, default=Path(f"runs/{name}.npz"), help=f"model file (default: runs/{name}.npz)")
+    p.add_argument("--hidden", type=int, default=hidden, help=f"width of the two hidden layers (default {hidden})")
+    p.add_argument("--epochs", type=int, default=10, help="passes over the samples (default 10)")
+    p.add_argument("--seed", type=int, default=0, help="random seed")
+    return p
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "train",
@@ -52,30 +65,24 @@ def register(sub: argparse._SubParsersAction) -> None:
     r = tsub.add_parser("rpm", help="train the Rolling Prediction Model (preset 3-head-hands)", description=__doc__)
     _common(r, "runs/rpm")
     r.set_defaults(func=_train_rpm)
-    t = tsub.add_parser(
+    t = _perceptron_parser(
+        tsub,
         "stance",
-        help="train the gait planner's stance classifier (which foot stands, from head and hands)",
-        description="Train the stance classifier (engine/models/stance.py) on the train split of prepared "
+        "train the gait planner's stance classifier (which foot stands, from head and hands)",
+        "Train the stance classifier (engine/models/stance.py) on the train split of prepared "
         "data and print its accuracy and the arm-swing rule's on the validation split.",
+        hidden=128,
     )
-    t.add_argument("--data", type=Path, default=Path("prepared"), help="output of `data prepare` (default: prepared)")
-    t.add_argument("--out", type=Path, default=Path("runs/stance.npz"), help="model file (default: runs/stance.npz)")
-    t.add_argument("--hidden", type=int, default=128, help="width of the two hidden layers (default 128)")
-    t.add_argument("--epochs", type=int, default=10, help="passes over the samples (default 10)")
-    t.add_argument("--seed", type=int, default=0, help="random seed")
     t.set_defaults(func=_train_stance)
-    h = tsub.add_parser(
+    h = _perceptron_parser(
+        tsub,
         "heading",
-        help="train the heading network (the pelvis heading from six position-only trackers)",
-        description="Train the heading network (engine/models/heading.py) on the train split of prepared data "
+        "train the heading network (the pelvis heading from six position-only trackers)",
+        "Train the heading network (engine/models/heading.py) on the train split of prepared data "
         "and print its mean heading error and the feet-and-hands facing's on the validation split.",
+        hidden=256,
     )
-    h.add_argument("--data", type=Path, default=Path("prepared"), help="output of `data prepare` (default: prepared)")
-    h.add_argument("--out", type=Path, default=Path("runs/heading.npz"), help="model file (default: runs/heading.npz)")
-    h.add_argument("--hidden", type=int, default=256, help="width of the two hidden layers (default 256)")
-    h.add_argument("--epochs", type=int, default=10, help="passes over the samples (default 10)")
     h.add_argument("--stride", type=int, default=4, help="every this many frames of a take is a sample (default 4)")
-    h.add_argument("--seed", type=int, default=0, help="random seed")
     h.set_defaults(func=_train_heading)
     n = tsub.add_parser(
         "tracker-net",

@@ -101,10 +101,10 @@ def test_the_dock_in_front_is_remembered(studio, qtbot):
     bar = next(b for b in studio.findChildren(QTabBar) if "Latent map" in [b.tabText(i) for i in range(b.count())])
     index = [bar.tabText(i) for i in range(bar.count())].index("Latent map")
     qtbot.mouseClick(bar, Qt.MouseButton.LeftButton, pos=bar.tabRect(index).center())
-    qtbot.waitUntil(lambda: studio.settings.value(RAISED, False, type=bool), timeout=3000)
+    qtbot.waitUntil(lambda: studio.settings.value(RAISED, False, type=bool), timeout=10_000)
     latent = [bar.tabText(i) for i in range(bar.count())].index("Latent")
     qtbot.mouseClick(bar, Qt.MouseButton.LeftButton, pos=bar.tabRect(latent).center())
-    qtbot.waitUntil(lambda: not studio.settings.value(RAISED, True, type=bool), timeout=3000)
+    qtbot.waitUntil(lambda: not studio.settings.value(RAISED, True, type=bool), timeout=10_000)
 
 
 def test_a_map_behind_the_latent_dock_is_not_redrawn(studio, qtbot):
@@ -191,7 +191,7 @@ def test_the_map_axes_follow_zoom_to_the_clip(studio, qtbot, synthetic_motion):
     s = studio.session
     views = _map_of_eight_solved_frames(studio, qtbot)
     assert views.map.zoom.isChecked()
-    qtbot.waitUntil(lambda: _axes_agree(views), timeout=3000)
+    qtbot.waitUntil(lambda: _axes_agree(views), timeout=10_000)
     s.set_motion(synthetic_motion.slice(40, 70))
     qtbot.waitUntil(lambda: s.latest.num_frames == 30 and s.latest.latent_view is not None, timeout=60000)
     qtbot.waitUntil(lambda: views.map._drawn[0] == s.latest.seq, timeout=5000)

@@ -16,7 +16,7 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 
 from engine import skeleton as sk
-from engine.solver.setting_schema import META, Setting, setting
+from engine.solver.setting_schema import Setting, attributes_doc, setting, settings_of, settings_table
 from engine.validation import Choice, Flag, Num, Spec, check_value
 
 MODES = ("realtime", "offline")
@@ -365,18 +365,8 @@ class OptimizerSettings:
 
 def fields(cls: type = OptimizerSettings) -> Iterator[tuple[dataclasses.Field, Setting]]:
     """Every field of :class:`OptimizerSettings` (or another settings dataclass ``cls``)
-    with its :class:`Setting`, in order.
-
-    Raises
-    ------
-    TypeError
-        For a field declared without :func:`setting` (so nothing could check or show it).
-    """
-    for f in dataclasses.fields(cls):
-        info = f.metadata.get(META)
-        if not isinstance(info, Setting):
-            raise TypeError(f"{cls.__name__}.{f.name}: declare it with setting(default, label, help, spec)")
-        yield f, info
+    with its :class:`Setting`, in order (:func:`engine.solver.setting_schema.settings_of`)."""
+    return settings_of(cls)
 
 
 #: The settings' validation schema, by field (from the fields' metadata).
@@ -388,33 +378,9 @@ def choices() -> dict[str, tuple[str, ...]]:
     return {f.name: info.spec.options for f, info in fields() if isinstance(info.spec, Choice)}
 
 
-def _default_text(f: dataclasses.Field) -> str:
-    d = f.default
-    return str(d).lower() if isinstance(d, bool) else f"{d:g}" if isinstance(d, float) else str(d)
-
-
-def _allowed_text(info: Setting) -> str:
-    spec = info.spec
-    if isinstance(spec, Choice) and not spec.summary:
-        return ", ".join(f"`{v}`" for v in spec.options)
-    return spec.describe()
-
-
 def markdown_table() -> str:
     """The settings table of ``docs/optimizer.md`` (name, default, allowed, meaning)."""
-    rows = ["| name | default | allowed | meaning |", "|---|---|---|---|"]
-    rows += [f"| `{f.name}` | {_default_text(f)} | {_allowed_text(info)} | {info.help} |" for f, info in fields()]
-    return "\n".join(rows) + "\n"
+    return settings_table(OptimizerSettings)
 
 
-def _attributes_doc() -> str:
-    lines = ["", "    Attributes", "    ----------"]
-    for f, info in fields():
-        lines += [
-            f"    {f.name} : {f.type}",
-            f"        {info.help} Default {_default_text(f)}; {info.spec.describe()}.",
-        ]
-    return "\n".join(lines) + "\n"
-
-
-OptimizerSettings.__doc__ = (OptimizerSettings.__doc__ or "") + _attributes_doc()
+OptimizerSettings.__doc__ = (OptimizerSettings.__doc__ or "") + attributes_doc(OptimizerSettings)

@@ -8,7 +8,7 @@ replaces the half-typed text (``0.`` of ``0.02``) and the keys that follow are l
 
 from __future__ import annotations
 
-from PyQt6.QtWidgets import QAbstractSpinBox, QApplication, QComboBox, QWidget
+from PyQt6.QtWidgets import QAbstractButton, QAbstractSpinBox, QApplication, QComboBox, QWidget
 
 
 def commit_only(spin: QAbstractSpinBox) -> QAbstractSpinBox:
@@ -19,7 +19,11 @@ def commit_only(spin: QAbstractSpinBox) -> QAbstractSpinBox:
 
 def is_editing(w: QWidget) -> bool:
     """The user is in ``w``: it or one of its children (a spin box's line edit, one of a
-    vector's spin boxes) has the keyboard focus, or its drop-down list is open."""
+    vector's spin boxes) has the keyboard focus, or its drop-down list is open. A check box
+    or button never is: its click is sent at once and nothing half-done waits in it, so an
+    undo or a scene load must show there even while it keeps the focus."""
+    if isinstance(w, QAbstractButton):
+        return False
     focus = QApplication.focusWidget()
     if focus is not None and (focus is w or w.isAncestorOf(focus)):
         return True

@@ -339,6 +339,7 @@ class OptimizerSettings:
         "(assets/models/heading.npz), which reads their last half second, instead of the "
         "feet's and hands' left-right lines.",
         Flag(),
+        panel=True,
     )
     hands_heading_limit: float = setting(
         10.0,

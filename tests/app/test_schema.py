@@ -9,7 +9,7 @@ import pytest
 from app.schema import optimizer_fields
 from engine import solver
 from engine.solver.settings import SETTINGS, OptimizerSettings
-from engine.validation import Choice, Num
+from engine.validation import Choice, Flag, Num
 
 
 def test_optimizer_fields_are_the_engines_including_the_prior_source():
@@ -33,6 +33,13 @@ def test_the_panels_ranges_are_the_validations(qtbot):
         spec, w = SETTINGS[f.name], panel.editors[f.name]
         if isinstance(spec, Choice):
             assert set(w.itemText(i) for i in range(w.count())) <= set(spec.options), f.name
+            continue
+        if isinstance(spec, Flag):  # a check box: it shows the session's value and sends a toggle
+            panel.set_state("ik", (), {f.name: True})
+            assert w.isChecked(), f.name
+            with qtbot.waitSignal(panel.settingChanged) as sent:
+                w.setChecked(False)
+            assert sent.args == [f.name, False]
             continue
         assert isinstance(spec, Num)
         smallest = (1 if spec.integer else 10.0**-DECIMALS) if spec.open_lo else 0

@@ -24,8 +24,11 @@ import time
 def _sections(run) -> None:
     """Wrap the parts of the step with CPU timers, ``run()`` the frames, print the table."""
     import engine.methods.dragposer as dp
+    import engine.methods.dragposer_parts as parts
+    import engine.methods.dragposer_prior as prior
     import engine.methods.dragposer_root as roots
     import engine.solver.optimizer as opt
+    import engine.solver.tracker_history as th
     import engine.solver.tracker_prior as tp
 
     spent: dict[str, float] = collections.defaultdict(float)
@@ -46,8 +49,9 @@ def _sections(run) -> None:
     wrap(dp.DragPoserMethod, "_step", "step")
     wrap(opt.PoseOptimizer, "solve", "solve (iterations and their set-up)")
     wrap(tp.PoseBank, "latent", "pose-bank lookup")
-    wrap(tp.TrackerHistory, "arrays", "tracker history")
-    wrap(dp, "finish", "after-solve steps (limb_ik.finish)")
+    wrap(th.TrackerHistory, "arrays", "tracker history")
+    wrap(parts.FramePlan, "finished", "after-solve steps (FramePlan.finished)")
+    wrap(prior.PriorSource, "latent", "prior latent (bank and networks)")
     wrap(dp.DragPoserMethod, "_advance", "next frame's history (_advance)")
     wrap(dp.DragPoserMethod, "plan", "reading the frame (plan)")
     for name in ("root_override", "reference_root", "root_anchor", "initial_root", "held_root"):

@@ -130,7 +130,14 @@ class ReferenceSet:
 
     def nearest(self, positions: np.ndarray) -> float:
         """Distance (metres) from world positions ``(22, 3)`` to the nearest reference pose."""
-        return float(pose_distances(aligned(positions)[None], self.poses).min())
+        return self.closest(positions)[0]
+
+    def closest(self, positions: np.ndarray) -> tuple[float, str]:
+        """Distance (metres) from world positions ``(22, 3)`` to the nearest reference pose,
+        and the name of the take that pose comes from."""
+        d = pose_distances(aligned(positions)[None], self.poses)[0]
+        i = int(d.argmin())
+        return float(d[i]), self.names[int(self.takes[i])]
 
     def spread(self) -> np.ndarray:
         """Per reference pose, its distance (metres) to the nearest pose of another take
@@ -192,13 +199,16 @@ def load_shipped(offsets: np.ndarray, stride: int = STRIDE, path: Path = SHIPPED
     )
 
 
-def load_files(paths: list[Path], offsets: np.ndarray, stride: int = STRIDE) -> ReferenceSet:
-    """A reference set of motion files (any format :func:`load_motion` reads), one take each."""
+def load_files(
+    paths: list[Path], offsets: np.ndarray, stride: int = STRIDE, kind: str = "validation files"
+) -> ReferenceSet:
+    """A reference set of motion files (any format :func:`load_motion` reads), one take each;
+    ``kind`` names them in the description (e.g. "validation files", "files")."""
     from engine.motion.retarget import load_motion
 
     clips = [(str(p), load_motion(p).local_rot) for p in paths]
     return ReferenceSet.from_rotations(
-        clips, offsets, stride, True, f"{len(paths)} validation files, every {stride}th frame, mirrored"
+        clips, offsets, stride, True, f"{len(paths)} {kind}, every {stride}th frame, mirrored"
     )
 
 

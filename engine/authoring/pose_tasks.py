@@ -96,6 +96,7 @@ class TaskResult:
     feet_moved_cm: dict[str, float] = field(default_factory=dict)
     positions: list[list[float]] = field(default_factory=list)
     knee_height_cm: float | None = None
+    nearest_take: str = ""
 
     @property
     def max_position_error_cm(self) -> float | None:
@@ -256,7 +257,8 @@ def measure_pose(
     starting place, ``(2,)`` metres)."""
     errors = goal_errors(pose, goals, offsets)
     reached = all(e["error"] <= (REACH_CM if e["kind"] == "position" else TURN_DEG) for e in errors)
-    natural = 100.0 * reference.nearest(pose.positions)
+    nearest, take = reference.closest(pose.positions)
+    natural = 100.0 * nearest
     moved = {j: 100.0 * float(np.linalg.norm(pose.positions[J[j], :2] - xy)) for j, xy in feet.items()}
     return TaskResult(
         task.name,
@@ -272,6 +274,7 @@ def measure_pose(
         moved,
         [[round(float(x), 4) for x in p] for p in pose.positions],
         100.0 * float(min(pose.positions[J[k], 2] for k in KNEES)),
+        take,
     )
 
 

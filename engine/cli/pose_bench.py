@@ -54,6 +54,14 @@ def add_options(p: argparse.ArgumentParser) -> None:
         help="naturalness against the val split of this prepared folder (default: ./prepared when it "
         "has a manifest, else the validation files' poses shipped in assets/reference/)",
     )
+    ref.add_argument(
+        "--reference-files",
+        type=Path,
+        nargs="+",
+        metavar="FILE",
+        help="naturalness against these motion files instead (BVH or ASF/AMC, one take each, e.g. "
+        "another lab's clips that hold the poses a task asks for)",
+    )
     g.add_argument(
         "--reference-stride",
         type=int,
@@ -159,6 +167,13 @@ def _reference(args: argparse.Namespace, offsets):
         except UserError as exc:
             raise UserError(f"--reference {args.reference}: {exc}") from None
         return R.load_files(files, offsets, args.reference_stride)
+    if args.reference_files:
+        missing = [str(p) for p in args.reference_files if not Path(p).is_file()]
+        if missing:
+            raise UserError(f"--reference-files: no such file: {', '.join(missing)}")
+        if len(args.reference_files) < 2:
+            raise UserError("--reference-files: give at least two takes (the spread of real poses compares takes)")
+        return R.load_files(args.reference_files, offsets, args.reference_stride, "files")
     data = args.reference_data
     if data is None and (Path("prepared") / "manifest.json").is_file():
         data = Path("prepared")
@@ -170,7 +185,7 @@ def _reference(args: argparse.Namespace, offsets):
 def _table(rows) -> str:
     head = (
         f"{'task':<15} {'poser':<9} {'drags':>5} {'err cm':>7} {'turn':>5} {'reach':>5} {'natural':>7} "
-        f"{'spread':>6} {'limits':>6} {'feet':>5} {'balance':>7} {'tilt':>5} {'slide':>5} {'knee':>5} {'s':>5}"
+        f"{'spread':>6} {'limits':>6} {'feet':>5} {'balance':>7} {'tilt':>5} {'slide':>5} {'knee':>5} {'s':>5}  nearest take"
     )
     lines = [head]
     for r in rows:
@@ -182,14 +197,15 @@ def _table(rows) -> str:
             f"{r.task:<15} {r.poser:<9} {r.drags:>2}/{r.allowed:<2} {_num(err, 7, 1)} {_num(turn, 5, 0)} "
             f"{'yes' if r.reached else 'no':>5} {r.naturalness_cm:>7.1f} {'in' if r.within_spread else 'out':>6} "
             f"{len(c.violations):>6d} {feet:>5} {_num(c.balance_margin_cm, 7, 1)} {c.trunk_tilt_deg:>5.0f} "
-            f"{_num(slide, 5, 0)} {_num(r.knee_height_cm, 5, 0)} {r.seconds:>5.1f}"
+            f"{_num(slide, 5, 0)} {_num(r.knee_height_cm, 5, 0)} {r.seconds:>5.1f}  {Path(r.nearest_take).name}"
         )
     lines.append(
         "err cm: largest position error; turn: deg; natural: cm to the nearest real pose (spread: within "
         "the real poses' 95th percentile); limits: knees/elbows hyperextended; feet: L/R down; balance: cm "
         "inside the support polygon (both feet down); tilt: trunk from vertical, deg; slide: cm an undragged "
         "ankle slid; knee: cm from the floor to the lower knee joint; s: seconds of posing (bake: of the "
-        "bake); bake: the task's one-key scene (assets/scenes/pose_tasks) baked as `bake` bakes it"
+        "bake); nearest take: the reference take the nearest real pose comes from; bake: the task's one-key "
+        "scene (assets/scenes/pose_tasks) baked as `bake` bakes it"
     )
     return "\n".join(lines)
 

@@ -140,6 +140,16 @@ def test_the_spread_is_each_pose_to_the_nearest_pose_of_another_take():
     assert ref.spread_summary()["p95_cm"] >= ref.spread_summary()["median_cm"] > 1.0
 
 
+def test_the_closest_reference_pose_names_its_take():
+    a, b = wobble(6, 1), wobble(6, 2)
+    ref = R.ReferenceSet.from_rotations([("a.bvh", a), ("b.bvh", b)], OFFSETS, stride=1)
+    for clip, name in ((a, "a.bvh"), (b, "b.bvh")):
+        d, take = ref.closest(fk(clip[3], np.array([0.4, 0.1, 0.9]), OFFSETS)[0])
+        assert take == name and d == pytest.approx(0.0, abs=1e-6)
+    d, take = ref.closest(fk(wobble(1, 9)[0], np.zeros(3), OFFSETS)[0])
+    assert d == pytest.approx(ref.nearest(fk(wobble(1, 9)[0], np.zeros(3), OFFSETS)[0])) and d > 0.02
+
+
 needs_data = pytest.mark.skipif(
     not (MOCAP / R.VALIDATION_FILES[0]).is_file(),
     reason=f"needs the validation files in {MOCAP} (set DRAGPOSER_SHARED_DATA)",
@@ -312,6 +322,48 @@ def test_bench_pose_tasks_refuses_a_clip_an_unknown_poser_and_a_bad_option(tmp_p
     err = capsys.readouterr().err
     assert f"--reference {tmp_path}: validation file(s) not found" in err and R.VALIDATION_FILES[0] in err
     assert Path(tmp_path).is_dir()
+
+
+def test_bench_pose_tasks_measures_naturalness_against_the_files_given(vae, tmp_path, capsys):
+    """``--reference-files``: any motion files are the real poses, each file one take; the
+    report names the take of the nearest one."""
+    from engine.cli.main import main
+    from engine.motion.bvh import save_motion_bvh
+    from engine.motion.clip import Motion
+
+    files = []
+    for seed in (3, 4):
+        path = tmp_path / f"take{seed}.bvh"
+        root = np.tile([0.0, 0.0, STAND], (12, 1))
+        save_motion_bvh(path, Motion(wobble(12, seed, 0.2), root, sk.Skeleton.canonical(), 60.0, path.stem))
+        files.append(str(path))
+    out = tmp_path / "tasks.json"
+    args = [
+        "bench",
+        "--pose-tasks",
+        "--task",
+        "head_turn",
+        "--method",
+        "ik",
+        "--events",
+        "4",
+        "--reference-stride",
+        "4",
+    ]
+    assert main([*args, "--reference-files", *files, "--json", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "naturalness reference: 2 files, every 4th frame, mirrored, 12 poses" in text
+    data = json.loads(out.read_text())
+    (row,) = data["tasks"]
+    assert row["nearest_take"] in files and Path(row["nearest_take"]).name in text
+    assert data["reference"]["poses"] == 12 and row["naturalness_cm"] > 0
+    assert main([*args, "--reference-files", files[0], str(tmp_path / "gone.bvh")]) == 2
+    assert f"--reference-files: no such file: {tmp_path / 'gone.bvh'}" in capsys.readouterr().err
+    assert main([*args, "--reference-files", files[0]]) == 2
+    assert "at least two takes" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main([*args, "--reference-files", *files, "--reference", str(tmp_path)])
+    assert "not allowed with argument --reference-files" in capsys.readouterr().err
 
 
 @needs_data

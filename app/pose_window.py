@@ -50,6 +50,7 @@ from app.pose_constraints import PoseConstraints
 from app.pose_files import PoseFiles
 from app.pose_gestures import PoseGestures
 from app.pose_menus import build_pose_menus
+from app.pose_naturalness import NaturalnessReadout
 from app.pose_redraw import PoseRedraw
 from app.pose_timeline import KeyPlayback
 from app.pose_turns import JointTurns
@@ -143,6 +144,8 @@ class PoseWindow(PoseGestures, QMainWindow):
         # and its arrival would push the 3D view and the key timeline up under the mouse
         self.setStatusBar(StatusBar())
         self.statusBar().setSizeGripEnabled(False)
+        self.naturalness = NaturalnessReadout()
+        self.statusBar().addPermanentWidget(self.naturalness)
         self.files = PoseFiles(self)
         self.paths = MotionPathView(self.viewport.paths, self.settings, self._render_soon)
         build_pose_menus(self)
@@ -283,6 +286,7 @@ class PoseWindow(PoseGestures, QMainWindow):
         (vp.body if vp.display == "body" else vp.reconstruction).update(positions)
         self.viewport.joints.positions = positions
         self.paths.mark_pose(positions)
+        self.naturalness.show_pose(positions, self.mode.character.skeleton.offsets)
         self.viewport.plotter.render()
 
     def _render_soon(self) -> None:
@@ -312,6 +316,7 @@ class PoseWindow(PoseGestures, QMainWindow):
         if self.autosave is not None:  # closed on purpose: saved, or discarded when asked
             self.autosave.discard()
         self.jobs.shutdown()
+        self.naturalness.stop()
         self.playback.timer.stop()
         self.redraw.close()
         QApplication.instance().removeEventFilter(self.camera_keys)

@@ -32,6 +32,7 @@ from engine import skeleton as sk
 from engine.errors import UserError
 from engine.kinematics import quat_np as QN
 from engine.kinematics.fk import fk
+from engine.progress import CancelCheck, check
 
 #: The 9 validation files of every release (assets/models/README.md), relative to a mocap folder.
 VALIDATION_FILES = (
@@ -139,24 +140,31 @@ class ReferenceSet:
         i = int(d.argmin())
         return float(d[i]), self.names[int(self.takes[i])]
 
-    def spread(self) -> np.ndarray:
+    def spread(self, cancelled: CancelCheck | None = None) -> np.ndarray:
         """Per reference pose, its distance (metres) to the nearest pose of another take
-        ``(N,)`` (computed once)."""
+        ``(N,)`` (computed once; about a second for the shipped poses: ``cancelled`` is
+        asked between blocks and raises :class:`~engine.progress.Cancelled`)."""
         if self._spread is None:
             if len(self.names) < 2:
                 raise UserError("the spread of real poses needs at least two takes")
             out = np.empty(len(self.poses))
             for i in range(0, len(self.poses), _BLOCK):
+                check(cancelled)
                 d = pose_distances(self.poses[i : i + _BLOCK], self.poses)
                 d[self.takes[i : i + _BLOCK, None] == self.takes[None, :]] = np.inf
                 out[i : i + _BLOCK] = d.min(1)
             self._spread = out
         return self._spread
 
-    def spread_summary(self) -> dict:
+    def spread_summary(self, cancelled: CancelCheck | None = None) -> dict:
         """Median and 95th percentile of :meth:`spread`, centimetres."""
-        s = 100.0 * self.spread()
+        s = 100.0 * self.spread(cancelled)
         return {"median_cm": float(np.median(s)), "p95_cm": float(np.percentile(s, 95))}
+
+
+def take_label(name: str) -> str:
+    """A reference take's name for a report: its file and folder (``salsa/07.bvh``)."""
+    return "/".join(Path(name).parts[-2:])
 
 
 def validation_files(mocap: Path) -> list[Path]:

@@ -183,6 +183,8 @@ def _reference(args: argparse.Namespace, offsets):
 
 
 def _table(rows) -> str:
+    from engine.authoring.pose_reference import take_label
+
     head = (
         f"{'task':<15} {'poser':<9} {'drags':>5} {'err cm':>7} {'turn':>5} {'reach':>5} {'natural':>7} "
         f"{'spread':>6} {'limits':>6} {'feet':>5} {'balance':>7} {'tilt':>5} {'slide':>5} {'knee':>5} {'s':>5}  nearest take"
@@ -197,7 +199,7 @@ def _table(rows) -> str:
             f"{r.task:<15} {r.poser:<9} {r.drags:>2}/{r.allowed:<2} {_num(err, 7, 1)} {_num(turn, 5, 0)} "
             f"{'yes' if r.reached else 'no':>5} {r.naturalness_cm:>7.1f} {'in' if r.within_spread else 'out':>6} "
             f"{len(c.violations):>6d} {feet:>5} {_num(c.balance_margin_cm, 7, 1)} {c.trunk_tilt_deg:>5.0f} "
-            f"{_num(slide, 5, 0)} {_num(r.knee_height_cm, 5, 0)} {r.seconds:>5.1f}  {Path(r.nearest_take).name}"
+            f"{_num(slide, 5, 0)} {_num(r.knee_height_cm, 5, 0)} {r.seconds:>5.1f}  {take_label(r.nearest_take)}"
         )
     lines.append(
         "err cm: largest position error; turn: deg; natural: cm to the nearest real pose (spread: within "

@@ -355,7 +355,8 @@ def test_bench_pose_tasks_measures_naturalness_against_the_files_given(vae, tmp_
     assert "naturalness reference: 2 files, every 4th frame, mirrored, 12 poses" in text
     data = json.loads(out.read_text())
     (row,) = data["tasks"]
-    assert row["nearest_take"] in files and Path(row["nearest_take"]).name in text
+    assert row["nearest_take"] in files and R.take_label(row["nearest_take"]) in text
+    assert R.take_label(row["nearest_take"]) == f"{tmp_path.name}/{Path(row['nearest_take']).name}"
     assert data["reference"]["poses"] == 12 and row["naturalness_cm"] > 0
     assert main([*args, "--reference-files", files[0], str(tmp_path / "gone.bvh")]) == 2
     assert f"--reference-files: no such file: {tmp_path / 'gone.bvh'}" in capsys.readouterr().err

@@ -1,0 +1,66 @@
+"""The pose window's naturalness readout (app/pose_naturalness.py): the benchmark's distance
+to the nearest real pose for the pose shown, the spread's verdict once its worker is done,
+and a worker that never outlives the window."""
+
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+import pytest
+
+from engine import skeleton as sk
+from engine.authoring import pose_reference as R
+from engine.kinematics import quat_np as QN
+from engine.kinematics.fk import fk
+
+pytestmark = pytest.mark.gui
+LW = sk.JOINT_INDEX["lwrist"]
+
+
+def spread_workers() -> list[threading.Thread]:
+    return [t for t in threading.enumerate() if t.name == "naturalness-spread" and t.is_alive()]
+
+
+def test_the_readout_measures_the_pose_shown_and_says_when_it_is_within_real_poses(pose_window, qtbot):
+    w = pose_window
+    readout = w.naturalness
+    offsets = w.mode.character.skeleton.offsets
+    reference = R.load_shipped(offsets)
+    assert readout.distance_cm == pytest.approx(100 * reference.nearest(w.mode.pose.positions), abs=1e-6)
+    assert readout.text().startswith(f"Natural: {readout.distance_cm:.1f} cm")
+    qtbot.waitUntil(lambda: readout.within is not None, timeout=60000)  # the spread's worker, ~1 s idle
+    p95 = reference.spread_summary()["p95_cm"]
+    assert readout.spread[1] == pytest.approx(p95)
+    assert readout.within and readout.text().endswith("within real poses")  # the standing start pose
+    assert "validation files" in readout.toolTip() and f"{p95:.1f} cm" in readout.toolTip()
+    assert f"the nearest is from {R.take_label(readout.take)}." in readout.toolTip() and "/" in R.take_label(
+        readout.take
+    )
+
+    before = readout.distance_cm
+    start = w.mode.pose.positions[LW].copy()
+    w.drag_joint("lwrist", start + [0.0, 0.0, 0.5])  # the hand raised: another pose, another distance
+    assert readout.distance_cm != pytest.approx(before)
+    assert readout.distance_cm == pytest.approx(100 * reference.nearest(w.mode.pose.positions), abs=1e-6)
+
+    rng = np.random.default_rng(3)  # every joint turned at random: no real pose is near it
+    aa = rng.normal(0.0, 1.2, (sk.NUM_JOINTS, 3))
+    angle = np.linalg.norm(aa, axis=-1)
+    contorted = fk(QN.from_axis_angle(aa / angle[:, None], angle), np.zeros(3), offsets)[0]
+    w.show_positions(contorted)
+    assert readout.within is False and readout.text().endswith("beyond real poses")
+    assert readout.distance_cm > p95
+
+
+def test_closing_the_window_stops_the_spread_worker(vae, qtbot):
+    from app.pose_window import PoseWindow
+    from engine.authoring.pose_mode import PoseMode
+    from engine.authoring.session import AuthoringSession
+    from tests.app.gui_helpers import close_now
+
+    w = PoseWindow(AuthoringSession(PoseMode(vae, 1.6)))
+    w.show()
+    assert w.naturalness.worker is not None  # started for this skeleton on the first pose shown
+    close_now(w)
+    assert not spread_workers() and w.naturalness.worker is None

@@ -28,7 +28,9 @@ def main() -> None:
     ap.add_argument("--walks", default="", help="comma-separated name parts of the walking clips")
     a = ap.parse_args()
     walks = [w for w in a.walks.split(",") if w]
-    print(f"{'file':28s} {'preset':13s} {'subset':7s} {'frames':>6s}  {'DP Pos/Rot':>13s}  {'IK Pos/Rot':>13s}  lead Pos / Rot")
+    print(
+        f"{'file':28s} {'preset':13s} {'subset':7s} {'frames':>6s}  {'DP Pos/Rot':>13s}  {'IK Pos/Rot':>13s}  lead Pos / Rot"
+    )
     for path in a.files:
         d = json.loads(path.read_text())
         preset = d["dragposer"]["preset"]

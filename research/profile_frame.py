@@ -48,7 +48,7 @@ def _sections(run) -> None:
 
     wrap(dp.DragPoserMethod, "_step", "step")
     wrap(opt.PoseOptimizer, "solve", "solve (iterations and their set-up)")
-    wrap(tp.PoseBank, "latent", "pose-bank lookup")
+    wrap(tp.PoseBank, "lookup", "pose-bank lookup")
     wrap(th.TrackerHistory, "arrays", "tracker history")
     wrap(parts.FramePlan, "finished", "after-solve steps (FramePlan.finished)")
     wrap(prior.PriorSource, "latent", "prior latent (bank and networks)")

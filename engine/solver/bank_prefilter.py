@@ -23,6 +23,15 @@ of the full table's bytes); a clip's frames take it for :data:`FRAMES` queries a
 Blocks of consecutive rows with a centre and a radius do not
 pay here: on the shipped bank a block bound rules out about half the rows, and gathering
 the other half costs more than reading them all (docs/performance.md).
+
+A realtime lookup reads the bounds of every row only now and then (:class:`Neighbourhood`).
+The bound is a squared distance between two points of a ``rank + 1``-dimensional space,
+``u(t) = [Pt, |Rt|]`` and ``u(q)``, so once every row's distance to one query's point is
+known, the triangle inequality bounds every row's distance to any later query from below
+by that distance less how far the queries' points are apart. A live query moves about a
+tenth of the search radius per frame; the rows within the radius plus :data:`SLACK` of
+the query that read the whole table serve the next few frames, each of which computes the
+bounds of the few thousand of them that may still pass.
 """
 
 from __future__ import annotations
@@ -44,6 +53,10 @@ MAX_SHARE = 0.25
 #: shipped bank's ~1e5 bounds, 6 MB, where each query alone read the 7 MB table (16 and
 #: 32 measured alike, 64 and 128 slower: docs/performance.md).
 FRAMES = 16
+#: How far beyond a lookup's search radius (standardised feature units, where a live
+#: query's point moves ~0.4 a frame and the radius is ~4) a :class:`Neighbourhood` keeps
+#: rows: about 7 % of the shipped bank, whose bounds then serve ~3.5 frames on average.
+SLACK = 1.0
 
 
 class Prefilter:
@@ -75,6 +88,7 @@ class Prefilter:
         # columns, ~1.6x faster than N dot products of length rank + 2 on one core
         self.columns = torch.from_numpy(np.vstack((proj.T, res, pn + res * res)).astype(np.float32))
         self.largest = float(sq.max())  # the largest squared row length, for the margin
+        self._by_row: torch.Tensor | None = None  # columns.T, made by the first bound_rows
 
     def bound(self, q: np.ndarray) -> tuple[torch.Tensor, float, float]:
         """``(b (N,) float32, offset, margin)`` for the query ``q (D_c,)`` (the float32
@@ -97,6 +111,26 @@ class Prefilter:
         w = np.concatenate((-2.0 * pq, -2.0 * rq[:, None], np.ones((len(q), 1))), axis=1)
         return torch.from_numpy(w.astype(np.float32)) @ self.columns
 
+    def point(self, q: np.ndarray) -> np.ndarray:
+        """``u(q) = [Pq, |Rq|]`` ``(rank + 1,)`` float64 of the query ``q (D_c,)``: the
+        bound is ``|u(t) - u(q)|^2 - |q|^2`` for the rows' points ``u(t)``."""
+        q = np.asarray(q, dtype=np.float64)
+        pq = q @ self.basis
+        return np.append(pq, np.sqrt(max(float(q @ q) - float(pq @ pq), 0.0)))
+
+    def bound_rows(self, q: np.ndarray, rows: torch.Tensor) -> torch.Tensor:
+        """The ``b`` of :meth:`bound` for ``rows`` only ``(len(rows),)`` (rounded as a
+        product of their own; the margin covers it). Gathers from a row-major copy of the
+        columns (a gather across the columns' rows takes 5x longer), made on first use:
+        only live lookups call this."""
+        if self._by_row is None:
+            self._by_row = self.columns.T.contiguous()
+        q = np.asarray(q, dtype=np.float64)
+        pq = q @ self.basis
+        rq = np.sqrt(max(float(q @ q) - float(pq @ pq), 0.0))
+        w = torch.from_numpy(np.concatenate((-2.0 * pq, [-2.0 * rq, 1.0])).astype(np.float32))
+        return self._by_row.index_select(0, rows) @ w
+
     def margin(self, qq: float) -> float:
         """The test's margin for a query of squared length ``qq``."""
         return MARGIN * (1.0 + self.largest + qq)
@@ -113,6 +147,49 @@ class Prefilter:
             margin = self.margin(float(q @ q))
         # numpy's nonzero, not torch's: a third of the time on the bank's ~1e5 rows
         return torch.from_numpy(np.flatnonzero(b.numpy() <= worst + 2.0 * margin))
+
+
+class Neighbourhood:
+    """The rows near one query, which bound the candidates of the queries after it.
+
+    :meth:`candidates` gives what :meth:`Prefilter.candidates` gives (every row whose
+    bound may pass), reading the whole table's bounds only when the query's search ball
+    has left the ball :meth:`candidates` last kept the rows of (see the module doc).
+    Which rows it returns beyond the ones that must be there depends on the history,
+    never the neighbours :func:`nearest` finds among them.
+    """
+
+    def __init__(self) -> None:
+        self.centre: np.ndarray | None = None  # u(q) of the query that read the whole table
+        self.reach = -1.0  # the radius of the ball whose rows are kept
+        self.rows = torch.zeros(0, dtype=torch.int64)  # (M,) ascending
+        self.low = np.zeros(0)  # (M,) float64: below each kept row's distance to centre
+        self.refreshed = 0  # how often the whole table was read
+
+    def candidates(self, pre: Prefilter, q: np.ndarray, worst: float) -> torch.Tensor:
+        """Indices (ascending) of the rows that may be nearer than ``worst`` to ``q
+        (D_c,)`` (as :meth:`Prefilter.candidates`)."""
+        q64 = np.asarray(q, dtype=np.float64)
+        qq = float(q64 @ q64)
+        margin = pre.margin(qq)
+        # a row passes the test only if |u(t) - u(q)|^2 <= worst + |q|^2 + 3 margin
+        radius = float(np.sqrt(max(worst + qq + 3.0 * margin, 0.0)))
+        u = pre.point(q64)
+        moved = float(np.linalg.norm(u - self.centre)) if self.centre is not None else np.inf
+        if radius + moved > self.reach:  # the kept ball no longer holds the search ball
+            bb = pre.bound(q64)[0].numpy()
+            self.centre, self.reach = u, radius + SLACK
+            # low = sqrt(b + |q|^2 - margin) is below |u(t) - centre|; a row left out has
+            # low > reach (the extra margin covers the float32 comparison)
+            kept = np.flatnonzero(bb <= self.reach**2 - qq + 2.0 * margin)
+            low = np.sqrt(np.maximum(bb[kept].astype(np.float64) + (qq - margin), 0.0))
+            self.rows, self.low = torch.from_numpy(kept), low
+            self.refreshed += 1
+            return torch.from_numpy(np.flatnonzero(bb <= worst + 2.0 * margin))
+        # |u(t) - u(q)| >= |u(t) - centre| - moved >= low - moved; 1e-9 for the float64 sums
+        near = self.rows[torch.from_numpy(self.low - moved <= radius + 1e-9)]
+        b = pre.bound_rows(q64, near).numpy()
+        return near[torch.from_numpy(b <= worst + 2.0 * margin)]
 
 
 def distances(table: torch.Tensor, norms: torch.Tensor, q: torch.Tensor, rows: torch.Tensor) -> torch.Tensor:
@@ -136,12 +213,14 @@ def nearest(
     hint: torch.Tensor | None,
     k: int,
     bound: torch.Tensor | None = None,
+    near: Neighbourhood | None = None,
 ) -> torch.Tensor:
     """Indices ``(k,)`` of the ``k`` rows with the smallest ``norms - 2 table @ q``, in
     increasing order, as ``topk`` over the whole table gives them; ``hint`` (at least
     ``k`` row indices, e.g. the previous frame's neighbours) bounds the search, ``q_cols``
     is the query over the combination's columns (float32 values), ``bound`` its row of
-    :meth:`Prefilter.bounds` if made."""
+    :meth:`Prefilter.bounds` if made, ``near`` the rows near the combination's last
+    queries (a realtime lookup's, updated here; used when ``bound`` is not given)."""
     n = len(table)
     if hint is not None and len(hint) >= k:
         d_hint = distances(table, norms, q, hint)
@@ -149,7 +228,10 @@ def nearest(
         worst = float(d_hint.max() if len(hint) == k else d_hint.topk(k, largest=False).values[-1])
         # computed d = |t - q|^2 - |q|^2 (+ rounding) and bound = b + |q|^2, so a row can be
         # nearer than the k-th known one only when b + |q|^2 - margin <= worst + |q|^2 + margin
-        keep = pre.candidates(q_cols, worst, bound)
+        if near is not None and bound is None:
+            keep = near.candidates(pre, q_cols, worst)
+        else:
+            keep = pre.candidates(q_cols, worst, bound)
         if len(keep) <= MAX_SHARE * n:
             d = distances(table, norms, q, keep)
             return keep[d.topk(k, largest=False).indices]

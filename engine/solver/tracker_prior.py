@@ -35,7 +35,7 @@ import torch
 
 from engine.input_files import file_sha256
 from engine.kinematics import quaternion as Q
-from engine.solver.bank_prefilter import FRAMES, Prefilter, nearest
+from engine.solver.bank_prefilter import FRAMES, Neighbourhood, Prefilter, nearest
 
 #: Joints whose tracker readings the bank stores, in this order.
 BANK_JOINTS: tuple[str, ...] = ("root", "upperneck", "lwrist", "rwrist", "lankle", "rankle")
@@ -148,6 +148,7 @@ class PoseBank:
     _indexes: dict = field(default_factory=dict, repr=False)
     _tables: dict = field(default_factory=dict, repr=False)
     _hints: dict = field(default_factory=dict, repr=False)  # combination -> last neighbours
+    _near: dict = field(default_factory=dict, repr=False)  # combination -> its live queries' rows
     #: Index work done so far: anchor tables built plus combinations derived from them
     #: (a live frame must find its combination ready: :meth:`prepare`).
     index_builds: int = field(default=0, repr=False)
@@ -257,12 +258,14 @@ class PoseBank:
         x = features(pos[:, -1], rot[:, -1], a, pos[:, 0, a])
         q32 = ((x - idx.mean) / idx.std).astype(np.float32)
         hint, out = self._hints.get(joints), []
+        # a live lookup's rows near its last queries (the batch's own bounds serve a clip)
+        near = self._near.setdefault(joints, Neighbourhood()) if keep_hint else None
         for start in range(0, len(q32), FRAMES):
             chunk = q32[start : start + FRAMES]
             # a clip's bounds, FRAMES queries to one product (one query: its own in nearest)
             bounds = idx.prefilter.bounds(chunk) if len(chunk) > 1 else [None]
             for q, bound in zip(chunk, bounds):
-                hint = self._nearest(idx, q, hint, k, bound)
+                hint = self._nearest(idx, q, hint, k, bound, near)
                 out.append(hint)
         if keep_hint:
             self._hints[joints] = hint
@@ -273,10 +276,16 @@ class PoseBank:
         return self._latents[torch.stack(out)].mean(1), far
 
     def _nearest(
-        self, idx: _Index, q32: np.ndarray, hint: torch.Tensor | None, k: int, bound: torch.Tensor | None = None
+        self,
+        idx: _Index,
+        q32: np.ndarray,
+        hint: torch.Tensor | None,
+        k: int,
+        bound: torch.Tensor | None = None,
+        near: Neighbourhood | None = None,
     ) -> torch.Tensor:
         """The ``k`` nearest rows ``(k,)`` of ``idx`` to the standardised query ``q32 (D_c,)``
-        (``bound``: its prefilter bounds, if made)."""
+        (``bound``: its prefilter bounds, if made; ``near``: see :func:`nearest`)."""
         tab = idx.table
         if idx.full:
             q = torch.from_numpy(q32)
@@ -284,7 +293,7 @@ class PoseBank:
             q = torch.zeros(tab.table.shape[1])
             q[idx.cols_t] = torch.from_numpy(q32)
         # |t - q|^2 = |t|^2 - 2 t.q + |q|^2; the last term is the same for every row
-        return nearest(tab.table, idx.norms, q, q32, idx.prefilter, hint, k, bound)
+        return nearest(tab.table, idx.norms, q, q32, idx.prefilter, hint, k, bound, near)
 
     def save(self, path: str | Path) -> None:
         """Write the bank (float16 arrays, compressed) atomically."""

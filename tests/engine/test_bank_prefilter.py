@@ -1,6 +1,7 @@
 """The pose bank's exact prefilter (engine/solver/bank_prefilter.py): its bound is below
 every true distance, gathered rows keep their bits, and lookups through it find exactly
-what the whole table finds."""
+what the whole table finds, with or without the rows kept near a live query's last
+queries."""
 
 from __future__ import annotations
 
@@ -85,9 +86,7 @@ def test_a_lookup_with_any_hint_finds_the_whole_tables_neighbours_in_its_order()
 
 def test_the_candidates_are_every_row_the_bound_cannot_rule_out():
     rng = np.random.default_rng(3)
-    # consecutive rows close together, as consecutive frames of the bank's clips are
-    walk = np.cumsum(rng.normal(scale=0.05, size=(6000, 10)), axis=0) @ rng.normal(size=(10, 55))
-    table = torch.from_numpy((walk + rng.normal(scale=0.02, size=walk.shape)).astype(np.float32))
+    table = _walk_table(rng)
     norms = (table * table).sum(1)
     pre = bp.Prefilter(table)
     x = table.double().numpy()
@@ -108,6 +107,52 @@ def test_the_candidates_are_every_row_the_bound_cannot_rule_out():
     assert searched < 0.25 * 40 * len(x)  # most rows are ruled out
 
 
+def _walk_table(rng, n: int = 6000, step: float = 0.05) -> torch.Tensor:
+    # consecutive rows close together, as consecutive frames of the bank's clips are
+    walk = np.cumsum(rng.normal(scale=step, size=(n, 10)), axis=0) @ rng.normal(size=(10, 55))
+    return torch.from_numpy((walk + rng.normal(scale=0.02, size=walk.shape)).astype(np.float32))
+
+
+def test_a_neighbourhood_kept_between_queries_finds_the_whole_tables_neighbours():
+    rng = np.random.default_rng(5)
+    # rows ~0.25 apart, a tenth of the search radius, as the bank's frames are
+    table = _walk_table(rng, step=0.01)
+    norms = (table * table).sum(1)
+    pre = bp.Prefilter(table)
+    near, hint = bp.Neighbourhood(), None
+    x = table.numpy()
+    # a query gliding along the table's rows, as a live performer's features do, then a jump
+    path = [x[1000 + i] + rng.normal(scale=0.01, size=55) for i in range(60)] + [x[5000]]
+    for q in path:
+        q32 = q.astype(np.float32)
+        qt = torch.from_numpy(q32)
+        want = (norms - 2.0 * (table @ qt)).topk(8, largest=False).indices
+        hint = bp.nearest(table, norms, qt, q32, pre, hint, 8, near=near)
+        assert torch.equal(hint, want)
+    # not vacuous: most queries were answered from the kept rows, the jump read the table
+    assert 1 < near.refreshed < len(path) // 2
+
+
+def test_a_neighbourhoods_candidates_hold_every_row_the_bound_cannot_rule_out():
+    rng = np.random.default_rng(6)
+    table = _walk_table(rng, step=0.01)
+    pre = bp.Prefilter(table)
+    norms = (table * table).sum(1)
+    near = bp.Neighbourhood()
+    x = table.double().numpy()
+    proj = x @ pre.basis
+    u = np.column_stack((proj, np.sqrt(np.maximum((x * x).sum(1) - (proj * proj).sum(1), 0.0))))
+    for i in range(40):
+        q32 = (x[2000 + i] + rng.normal(scale=0.01, size=55)).astype(np.float32)
+        d = (norms - 2.0 * (table @ torch.from_numpy(q32))).double().numpy()
+        worst = float(np.sort(d)[7])
+        q64 = q32.astype(np.float64)
+        exact = ((u - pre.point(q64)) ** 2).sum(1) - float(q64 @ q64)  # each row's bound, float64
+        got = set(near.candidates(pre, q32, worst).tolist())
+        assert set(np.flatnonzero(exact <= worst).tolist()) <= got
+    assert near.refreshed < 20
+
+
 @pytest.fixture
 def clip():
     from engine.cli.bench import DEFAULT_CLIP
@@ -124,6 +169,7 @@ def test_real_bank_lookups_over_a_clip_are_those_of_the_whole_table(clip):
     for preset in ("6", "4"):
         hist = TrackerHistory()
         tr = simulate(clip, preset)
+        reads = {j: n.refreshed for j, n in bank._near.items()}
         for i in range(min(len(clip), 120)):
             fr = tr.frame(i)
             hist.push({j: (r.position, r.rotation) for j, r in fr.readings.items() if r.connected and r.dof == 6})
@@ -138,4 +184,6 @@ def test_real_bank_lookups_over_a_clip_are_those_of_the_whole_table(clip):
             assert torch.equal(bank.latent(joints, pos, rot), bank._latents[want].mean(0))
             assert torch.equal(bank._hints[joints], want)
             looked += 1
+        # most frames were answered from the rows kept near the last queries
+        assert bank._near[joints].refreshed - reads.get(joints, 0) < min(len(clip), 120) / 2
     assert looked == 2 * min(len(clip), 120)

@@ -1,5 +1,6 @@
 """The pose window's menus: File (new pose, scenes, exports), Edit (undo, redo, settle, clear), Keys (play, step,
-add and delete keys), View (display, camera) and Help, built with the studio's helpers so the same keys do the same things in both.
+add and delete keys), View (display, camera, naturalness reference) and Help, built with the studio's helpers so
+the same keys do the same things in both.
 
 Every entry is a QAction owned by the window (a QAction that only a local variable
 holds is deleted by PyQt and drops out of its menu), kept on ``w.actions_by_name`` for
@@ -15,6 +16,7 @@ from PyQt6.QtGui import QKeySequence
 from PyQt6.QtWidgets import QMainWindow
 
 from app.menu_parts import action, add_view_entries, show_help, toggle
+from app.pose_naturalness import ReferenceMenu
 
 
 def build_pose_menus(w: QMainWindow) -> None:
@@ -59,6 +61,8 @@ def build_pose_menus(w: QMainWindow) -> None:
     # under a drag, and the drag plane with it
     named["frame"] = action(w, camera, "F&rame the character", lambda: vp.frame(w.hips()), "F")
     named.update(w.paths.add_menu_entries(w, view))
+    w.reference_menu = ReferenceMenu(w, view)
+    named["reference_shipped"], named["reference_files"] = w.reference_menu.shipped, w.reference_menu.files
     help_menu = w.menuBar().addMenu("&Help")
     named["help"] = action(
         w, help_menu, "&Keyboard and mouse...", lambda: show_help(w), QKeySequence.StandardKey.HelpContents

@@ -140,25 +140,34 @@ class ReferenceSet:
         i = int(d.argmin())
         return float(d[i]), self.names[int(self.takes[i])]
 
-    def spread(self, cancelled: CancelCheck | None = None) -> np.ndarray:
+    def spread(self, cancelled: CancelCheck | None = None, sample: int | None = None) -> np.ndarray:
         """Per reference pose, its distance (metres) to the nearest pose of another take
         ``(N,)`` (computed once; about a second for the shipped poses: ``cancelled`` is
-        asked between blocks and raises :class:`~engine.progress.Cancelled`)."""
-        if self._spread is None:
-            if len(self.names) < 2:
-                raise UserError("the spread of real poses needs at least two takes")
-            out = np.empty(len(self.poses))
-            for i in range(0, len(self.poses), _BLOCK):
-                check(cancelled)
-                d = pose_distances(self.poses[i : i + _BLOCK], self.poses)
-                d[self.takes[i : i + _BLOCK, None] == self.takes[None, :]] = np.inf
-                out[i : i + _BLOCK] = d.min(1)
+        asked between blocks and raises :class:`~engine.progress.Cancelled`). With
+        ``sample`` and more poses than that, only every ``ceil(N / sample)``-th pose's
+        distance (to all the others), ``(ceil(N / step),)``: the work grows as ``N``
+        times the sample instead of ``N^2`` (not kept)."""
+        if len(self.names) < 2:
+            raise UserError("the spread of real poses needs at least two takes")
+        step = -(-len(self.poses) // sample) if sample else 1
+        if step == 1 and self._spread is not None:
+            return self._spread
+        rows = np.arange(0, len(self.poses), step)
+        out = np.empty(len(rows))
+        for i in range(0, len(rows), _BLOCK):
+            check(cancelled)
+            block = rows[i : i + _BLOCK]
+            d = pose_distances(self.poses[block], self.poses)
+            d[self.takes[block, None] == self.takes[None, :]] = np.inf
+            out[i : i + _BLOCK] = d.min(1)
+        if step == 1:
             self._spread = out
-        return self._spread
+        return out
 
-    def spread_summary(self, cancelled: CancelCheck | None = None) -> dict:
-        """Median and 95th percentile of :meth:`spread`, centimetres."""
-        s = 100.0 * self.spread(cancelled)
+    def spread_summary(self, cancelled: CancelCheck | None = None, sample: int | None = None) -> dict:
+        """Median and 95th percentile of :meth:`spread` (of ``sample`` poses, if given),
+        centimetres."""
+        s = 100.0 * self.spread(cancelled, sample)
         return {"median_cm": float(np.median(s)), "p95_cm": float(np.percentile(s, 95))}
 
 
@@ -208,13 +217,27 @@ def load_shipped(offsets: np.ndarray, stride: int = STRIDE, path: Path = SHIPPED
 
 
 def load_files(
-    paths: list[Path], offsets: np.ndarray, stride: int = STRIDE, kind: str = "validation files"
+    paths: list[Path],
+    offsets: np.ndarray,
+    stride: int = STRIDE,
+    kind: str = "validation files",
+    max_poses: int | None = None,
+    cancelled: CancelCheck | None = None,
 ) -> ReferenceSet:
     """A reference set of motion files (any format :func:`load_motion` reads), one take each;
-    ``kind`` names them in the description (e.g. "validation files", "files")."""
+    ``kind`` names them in the description (e.g. "validation files", "files"). With
+    ``max_poses``, the stride grows (from ``stride``) until the set, mirror images
+    included, holds at most that many poses. ``cancelled`` is asked before each file."""
     from engine.motion.retarget import load_motion
 
-    clips = [(str(p), load_motion(p).local_rot) for p in paths]
+    clips = []
+    for p in paths:
+        check(cancelled)
+        clips.append((str(p), load_motion(p).local_rot))
+    if max_poses:
+        frames = sum(len(rot) for _, rot in clips)
+        while 2 * sum(-(-len(rot) // stride) for _, rot in clips) > max_poses and stride < frames:
+            stride += 1
     return ReferenceSet.from_rotations(
         clips, offsets, stride, True, f"{len(paths)} {kind}, every {stride}th frame, mirrored"
     )

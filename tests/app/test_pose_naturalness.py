@@ -64,3 +64,73 @@ def test_closing_the_window_stops_the_spread_worker(vae, qtbot):
     assert w.naturalness.worker is not None  # started for this skeleton on the first pose shown
     close_now(w)
     assert not spread_workers() and w.naturalness.worker is None
+
+
+def _takes(tmp_path, offsets) -> list:
+    """Two short BVH takes on the pose window's skeleton: one standing still, one with an
+    arm raised (synthetic, so the test needs no shared data)."""
+    from engine.motion.bvh import save_motion_bvh
+    from engine.motion.clip import Motion
+
+    skeleton = sk.Skeleton(offsets.copy())
+    files = []
+    for name, lift in (("still", 0.0), ("arm_up", 2.5)):
+        rot = np.tile([1.0, 0.0, 0.0, 0.0], (8, sk.NUM_JOINTS, 1))
+        rot[:, sk.JOINT_INDEX["lshoulder"]] = QN.from_axis_angle(np.array([0.0, 1.0, 0.0]), lift)
+        path = tmp_path / f"{name}.bvh"
+        save_motion_bvh(path, Motion(rot, np.tile([0.0, 0.0, 1.0], (8, 1)), skeleton, 30.0, name))
+        files.append(path)
+    return files
+
+
+def test_motion_files_chosen_in_the_view_menu_become_the_real_poses(pose_window, qtbot, monkeypatch, tmp_path):
+    from PyQt6.QtWidgets import QFileDialog
+
+    w = pose_window
+    readout, acts = w.naturalness, w.actions_by_name
+    offsets = w.mode.character.skeleton.offsets
+    files = _takes(tmp_path, offsets)
+    assert acts["reference_shipped"].isChecked() and not acts["reference_files"].isChecked()
+    monkeypatch.setattr(QFileDialog, "getOpenFileNames", lambda *a, **k: ([str(f) for f in files], ""))
+    acts["reference_files"].trigger()
+    qtbot.waitUntil(lambda: readout.within is not None, timeout=30000)
+    want = R.load_files(files, offsets, kind="files")
+    assert readout.distance_cm == pytest.approx(100 * want.nearest(w.mode.pose.positions), abs=1e-6)
+    assert readout.take in [str(f) for f in files] and "2 files" in readout.toolTip()
+    assert readout.spread[1] == pytest.approx(want.spread_summary()["p95_cm"])
+    assert acts["reference_files"].isChecked() and "2 in use" in acts["reference_files"].text()
+    # a drag is measured against the files too
+    w.drag_joint("lwrist", w.mode.pose.positions[LW] + [0.0, 0.0, 0.4])
+    assert readout.distance_cm == pytest.approx(100 * want.nearest(w.mode.pose.positions), abs=1e-6)
+    acts["reference_shipped"].trigger()  # back to the shipped poses, at once
+    shipped = R.load_shipped(offsets)
+    assert readout.files is None and "validation files" in readout.toolTip()
+    assert readout.distance_cm == pytest.approx(100 * shipped.nearest(w.mode.pose.positions), abs=1e-6)
+
+
+def test_a_single_file_or_an_unreadable_one_leaves_the_shipped_poses_and_says_why(
+    pose_window, qtbot, monkeypatch, tmp_path
+):
+    from PyQt6.QtWidgets import QFileDialog, QMessageBox
+
+    w = pose_window
+    readout, acts = w.naturalness, w.actions_by_name
+    files = _takes(tmp_path, w.mode.character.skeleton.offsets)
+    warnings = []
+    monkeypatch.setattr(QMessageBox, "warning", lambda _parent, _title, text, *a: warnings.append(text))
+    monkeypatch.setattr(QFileDialog, "getOpenFileNames", lambda *a, **k: ([str(files[0])], ""))
+    acts["reference_files"].trigger()
+    assert "at least two motion files" in warnings[-1]
+    assert acts["reference_shipped"].isChecked() and readout.files is None
+    broken = tmp_path / "broken.bvh"
+    broken.write_text("HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0\n")
+    monkeypatch.setattr(QFileDialog, "getOpenFileNames", lambda *a, **k: ([str(files[0]), str(broken)], ""))
+    acts["reference_files"].trigger()
+    qtbot.waitUntil(lambda: len(warnings) == 2, timeout=30000)
+    assert str(broken) in warnings[-1] and "shipped validation poses" in warnings[-1]
+    assert acts["reference_shipped"].isChecked() and readout.files is None
+    qtbot.waitUntil(lambda: readout.within is not None, timeout=60000)
+    assert "validation files" in readout.toolTip()
+    monkeypatch.setattr(QFileDialog, "getOpenFileNames", lambda *a, **k: ([], ""))  # a cancelled dialog
+    acts["reference_files"].trigger()
+    assert acts["reference_shipped"].isChecked() and len(warnings) == 2

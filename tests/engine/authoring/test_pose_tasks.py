@@ -140,6 +140,38 @@ def test_the_spread_is_each_pose_to_the_nearest_pose_of_another_take():
     assert ref.spread_summary()["p95_cm"] >= ref.spread_summary()["median_cm"] > 1.0
 
 
+def test_a_sampled_spread_is_the_spread_of_every_kth_pose():
+    a, b, c = wobble(40, 5, 0.2), wobble(40, 6, 0.4), wobble(40, 7, 0.3)
+    ref = R.ReferenceSet.from_rotations([("a", a), ("b", b), ("c", c)], OFFSETS, stride=1, mirror=False)
+    full = ref.spread()
+    sampled = ref.spread(sample=25)  # 120 poses: every 5th
+    assert len(sampled) == 24 and sampled == pytest.approx(full[::5], rel=1e-6)
+    assert ref.spread(sample=500) is full  # no fewer poses than asked: the whole (kept) spread
+    s = ref.spread_summary(sample=25)
+    assert s["median_cm"] == pytest.approx(100 * np.median(full[::5]))
+
+
+def test_reference_files_keep_to_a_pose_count_and_can_be_cancelled(tmp_path):
+    from engine.motion.bvh import save_motion_bvh
+    from engine.motion.clip import Motion
+    from engine.progress import Cancelled
+
+    files = []
+    for seed, n in ((3, 60), (4, 100)):
+        path = tmp_path / f"take{seed}.bvh"
+        root = np.tile([0.0, 0.0, STAND], (n, 1))
+        save_motion_bvh(path, Motion(wobble(n, seed, 0.2), root, sk.Skeleton.canonical(), 60.0, path.stem))
+        files.append(path)
+    assert len(R.load_files(files, OFFSETS, stride=4, kind="files")) == 2 * (15 + 25)
+    capped = R.load_files(files, OFFSETS, stride=4, kind="files", max_poses=30)
+    # the smallest stride from 4 whose poses, mirrored, number 30 or fewer: 12 (5 + 9 frames)
+    assert len(capped) == 28 and "every 12th frame" in capped.description
+    calls = []
+    with pytest.raises(Cancelled):
+        R.load_files(files, OFFSETS, cancelled=lambda: calls.append(1) or len(calls) > 1)
+    assert len(calls) == 2  # asked before each file: the second file was never read
+
+
 def test_the_closest_reference_pose_names_its_take():
     a, b = wobble(6, 1), wobble(6, 2)
     ref = R.ReferenceSet.from_rotations([("a.bvh", a), ("b.bvh", b)], OFFSETS, stride=1)

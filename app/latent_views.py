@@ -32,6 +32,7 @@ from app.drawing import Panel
 from app.shell import StudioShell
 from engine.latent.projection import default_map
 from engine.latent.solved_frames import SolvedFrames
+from engine.studio import events as ev
 from widgets.latent_forces import LatentForces
 from widgets.latent_gallery import LatentGallery
 from widgets.latent_map import LatentMapPlot
@@ -222,7 +223,10 @@ class LatentViews:
         self.map.set_forces(view.path_xy[k], d.plane[k], [self.forces.colour(n) for n in d.names])
 
     def _forget(self, event: Any = None) -> None:
-        """Another clip or method: empty every view until its first solve arrives."""
+        """Another clip or method: empty every view until its first solve arrives (other
+        ghosts change no latent)."""
+        if isinstance(event, ev.MethodChanged) and event.method == event.old_method:
+            return
         self.readouts.clear()
         self._detail = None
         if self.map is not None:

@@ -182,8 +182,10 @@ class SceneUndo(QObject):
         else:
             text = f"Ghosts {', '.join(after[1])}" if after[1] else "No ghosts"
         edit = Edit(text, before, after, None, put=self._apply_method)
-        # the engine answers a switch later, naming it by this number (a snapshot's ``opened``)
-        self._remember_switch(edit)
+        if before[0] != after[0]:
+            # the engine answers a switch later, naming it by this number (a snapshot's
+            # ``opened``); ghosts alone are no switch and are never refused
+            self._remember_switch(edit)
         self.history.push(edit)
 
     def _remember_switch(self, edit: Edit) -> None:

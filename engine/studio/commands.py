@@ -69,6 +69,13 @@ class SetMethod(Command):
 
 
 @dataclass(frozen=True)
+class SetGhosts(Command):
+    """Other methods drawn beside the shown one; the shown method and its state stay."""
+
+    ghosts: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
 class Seek(Command):
     frame: int
 

@@ -116,6 +116,31 @@ class MethodSet:
         self._selected = not keep
         return True
 
+    def set_ghosts(self, ghosts: tuple[str, ...], source: SensorSource | None) -> None:
+        """Draw ``ghosts`` beside the shown method, which keeps its state: ghosts that stay
+        keep theirs, new ones are built, reset for ``source`` and given the studio's edits
+        (a ghost that fails is reported and left out)."""
+        self.ghost_names = tuple(g for g in ghosts if g != self.name)
+        self.ghosts = {g: m for g, m in self.ghosts.items() if g in self.ghost_names}
+        for g in self.ghost_names:
+            if g in self.ghosts or (m := self.build(g)) is None:
+                continue
+            try:
+                if source is not None:
+                    driver.reset(m, source.skeleton, source.fps, reference=source.motion)
+            except Exception as exc:
+                self._report(f"{g}.reset: {exc}")
+                continue
+            for problem in [
+                *apply_settings(m, self.settings),
+                *apply_constraints(m, self.constraints),
+                *apply_sensor_weights(m, self.sensors),
+            ]:
+                self._report(problem)
+            self.ghosts[g] = m
+            if self._kept is not None:  # a paused frame solved again restores it too
+                self._kept[g] = copy_state(m)
+
     def reset(self, source: SensorSource | None) -> None:
         """Reset every method for ``source``'s clip or skeleton, then configure them.
 

@@ -206,6 +206,11 @@ class Session(EngineLink):
         self.events.settings.emit(ev.SettingsChanged({k: edit.get(k) for k in names}, old))
 
     def set_method(self, name: str, ghosts: tuple[str, ...] | None = None) -> None:
+        """Show method ``name`` (and ``ghosts`` beside it if given). The same method with
+        other ghosts is :meth:`set_ghosts`: the shown method keeps its state."""
+        if name == self.method and ghosts is not None:
+            self.set_ghosts(ghosts)
+            return
         old, old_ghosts = self.method, self.ghosts
         self.method = name
         if ghosts is not None:
@@ -220,7 +225,14 @@ class Session(EngineLink):
         return list(available_methods())
 
     def set_ghosts(self, ghosts: tuple[str, ...]) -> None:
-        self.set_method(self.method, ghosts)
+        """Draw ``ghosts`` beside the shown method; the shown method, its state and the
+        solved frames' history stay (not a switch: no new ``opened``)."""
+        old = self.ghosts
+        self.ghosts = tuple(g for g in ghosts if g != self.method)
+        if self.ghosts == old:
+            return
+        self._send(cmd.SetGhosts(self.ghosts))
+        self.events.method.emit(ev.MethodChanged(self.method, self.ghosts, self.method, old))
 
     def note_method(self, name: str) -> None:
         """Mirror the engine's method when it refused a change (no command is sent)."""

@@ -190,6 +190,11 @@ class EngineThread(EngineFrames):
             return
         self._reset_methods()
 
+    @cmd.handles(cmd.SetGhosts)
+    def _on_set_ghosts(self, c: cmd.SetGhosts, was_dirty: bool) -> None:
+        self._ghost_errors.clear()
+        self._methods.set_ghosts(c.ghosts, self._source)
+
     @cmd.handles(cmd.Seek)
     def _on_seek(self, c: cmd.Seek, was_dirty: bool) -> None:
         self._frame = self._clamp(c.frame)

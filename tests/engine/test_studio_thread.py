@@ -457,3 +457,58 @@ def test_snapshots_say_which_clip_or_method_they_are_of(engine, synthetic_motion
         wait_for(lambda: new.latest is not None and new.latest.opened == session.opened)
     finally:
         new.stop()
+
+
+class Resetting(Counting):
+    """:class:`Counting` that also counts its resets."""
+
+    def __init__(self, name):
+        super().__init__()
+        self.name, self.resets = name, 0
+
+    def reset(self, skeleton, fps=60.0, **kw):
+        self.resets += 1
+
+
+def test_ghosts_come_and_go_without_resetting_the_shown_method(synthetic_motion):
+    built: dict[str, list] = {}
+
+    def factory(name):
+        method = Resetting(name)
+        built.setdefault(name, []).append(method)
+        return method
+
+    worker = EngineThread(method_factory=factory)
+    worker.start()
+    try:
+        worker.submit(w.SetMethod("shown", opened=1))
+        worker.submit(w.SetMotion(synthetic_motion, opened=2))
+        worker.submit(w.Seek(10))
+        wait_for(lambda: worker.latest is not None and worker.latest.frame == 10)
+        (shown,) = built["shown"]
+        resets, steps, opened = shown.resets, shown.steps, worker.latest.opened
+        worker.submit(w.SetGhosts(("ik",)))
+        wait_for(lambda: "ik" in worker.latest.ghosts)
+        (ghost,) = built["ik"]
+        assert ghost.resets == 1 and ghost.steps >= 1  # built, reset for the clip, solved the frame
+        assert shown.resets == resets and shown.steps > steps  # the shown method solved on, not reset
+        assert built["shown"] == [shown] and worker.latest.opened == opened  # no switch
+        worker.submit(w.SetGhosts(()))
+        wait_for(lambda: not worker.latest.ghosts)
+        assert shown.resets == resets and len(built["ik"]) == 1
+    finally:
+        worker.stop()
+
+
+def test_a_ghost_toggled_in_the_session_keeps_the_solved_frames(engine):
+    session, worker = engine
+    session.seek(30)
+    wait_for(lambda: worker.latest is not None and worker.latest.frame == 30)
+    opened, run, shown = session.opened, worker.latest.history_run, session.method
+    session.set_ghosts(("autoencoder",))
+    wait_for(lambda: "autoencoder" in worker.latest.ghosts, timeout=60.0)
+    assert session.opened == opened and worker.latest.history_run == run
+    assert session.ghosts == ("autoencoder",) and session.method == shown
+    session.set_method(shown, ())  # an undo of the ghost takes the same path
+    wait_for(lambda: not worker.latest.ghosts)
+    assert session.opened == opened and worker.latest.history_run == run

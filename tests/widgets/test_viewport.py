@@ -456,3 +456,29 @@ def test_the_wheel_zooms_toward_the_point_under_the_mouse(viewport, fake_snapsho
     assert np.allclose(display(point), (x, y), atol=1.5)  # still under the mouse
     _wheel(widget, x / ratio, widget.height() - 1 - y / ratio, -1)
     assert np.allclose(cam.position, before[0], atol=1e-3) and np.allclose(cam.focal_point, before[1], atol=1e-3)
+
+
+def green_fraction(img: np.ndarray) -> float:
+    """Share of pixels with the ground truth's green."""
+    r, g, b = (img[..., i].astype(int) for i in range(3))
+    return float(np.mean((g > 120) & (g > r + 40) & (g > b + 40)))
+
+
+def test_view_options_redraw_a_paused_frame_at_once(viewport, fake_snapshot):
+    """Nothing else redraws a paused studio: hiding the ground truth, the ghosts or
+    switching to the body must change the picture without another snapshot."""
+    snap = fake_snapshot()
+    viewport.show_snapshot(fake_snapshot(seq=2, ghosts={"ik": snap.positions + [0.6, 0, 0]}))
+    before = viewport.plotter.screenshot(return_img=True)
+    assert green_fraction(before) > 0.0005 and blue_fraction(before) > 0.0005
+    viewport.show_ground_truth = False
+    hidden = viewport.plotter.screenshot(return_img=True)
+    assert green_fraction(hidden) < 0.2 * green_fraction(before)
+    assert "ground truth" not in viewport._caption
+    viewport.show_ghosts = False
+    assert blue_fraction(viewport.plotter.screenshot(return_img=True)) < 0.2 * blue_fraction(before)
+    sticks = orange_fraction(viewport.plotter.screenshot(return_img=True))
+    viewport.set_display("body")
+    assert viewport.body.visible and orange_fraction(viewport.plotter.screenshot(return_img=True)) > 2 * sticks
+    viewport.show_ground_truth = True
+    assert green_fraction(viewport.plotter.screenshot(return_img=True)) > 0.5 * green_fraction(before)

@@ -117,7 +117,8 @@ class Viewport(QWidget):
         self.notice = ""
         self._caption = ""
         self.follow = True
-        self.show_ground_truth = True
+        self._show_ground_truth = True
+        self._last_snap: Any = None  # the snapshot drawn last, drawn again when a view option changes
         #: The keyboard modifiers of the mouse press or move being handled, while a button
         #: is held (None otherwise): a drag signal emitted from that event can ask which
         #: keys were held then (a live query answers for the time the event is handled,
@@ -143,6 +144,24 @@ class Viewport(QWidget):
     @show_ghosts.setter
     def show_ghosts(self, on: bool) -> None:
         self.ghosts.visible = bool(on)
+        self._redraw()
+
+    @property
+    def show_ground_truth(self) -> bool:
+        return self._show_ground_truth
+
+    @show_ground_truth.setter
+    def show_ground_truth(self, on: bool) -> None:
+        self._show_ground_truth = bool(on)
+        self._redraw()
+
+    def _redraw(self) -> None:
+        """Draw the last snapshot again (a view option changed): a paused studio draws
+        nothing else until the next edit or frame."""
+        if self._last_snap is not None:
+            self.show_snapshot(self._last_snap)
+        else:
+            self.plotter.render()
 
     def reset_camera(self, focus: np.ndarray | None = None) -> None:
         """Look at ``focus`` (default: the current hips) from the front-left."""
@@ -172,6 +191,7 @@ class Viewport(QWidget):
             self.body.set_visible(False)
         else:
             self.reconstruction.set_visible(False)
+        self._redraw()
 
     def frame(self, point: np.ndarray) -> None:
         """Centre the view on ``point (3,)`` metres, keeping the camera's angle and distance."""
@@ -206,6 +226,7 @@ class Viewport(QWidget):
     # -- drawing --------------------------------------------------------------------
     def show_snapshot(self, snap: Any) -> None:
         """Draw an engine snapshot (typed against ``engine.studio.snapshot.Snapshot``)."""
+        self._last_snap = snap
         (self.body if self.display == "body" else self.reconstruction).update(snap.positions)
         self.joints.positions = np.asarray(snap.positions)
         self.ground_truth.update(snap.ground_truth if self.show_ground_truth else None)

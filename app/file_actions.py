@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 
 from PyQt6.QtCore import QPoint, QSettings
 from PyQt6.QtGui import QImage, QPainter, QPixmap
-from PyQt6.QtWidgets import QFileDialog, QMainWindow, QMenu
+from PyQt6.QtWidgets import QFileDialog, QMainWindow, QMenu, QMessageBox, QWidget
 
 from app import rig_maps
 from app.clip_saving import clip_edited
@@ -85,6 +85,9 @@ class FileActions:
         #: ``confirm_discard(doing) -> bool`` before another file replaces the edits (the
         #: window's unsaved-changes prompt; True goes ahead)
         self.confirm_discard: Callable[[str], bool] = lambda doing: True
+        #: ``ask_constraints(parent, names, clip) -> "remove" | "keep" | "cancel"``: what
+        #: becomes of the constraints placed for the clip ``clip`` when another one opens
+        self.ask_constraints: Callable[[QWidget, tuple[str, ...], str], str] = ask_constraints
 
     # -- opening ------------------------------------------------------------------------
     def open_dialog(self) -> None:
@@ -93,21 +96,33 @@ class FileActions:
         if path:
             self.open_path(path)
 
-    def open_path(self, path: str | Path, rig_map: str | Path | None = None, ask: bool = True) -> bool:
+    def open_path(
+        self, path: str | Path, rig_map: str | Path | None = None, ask: bool = True, constraints: str = "keep"
+    ) -> bool:
         """Load ``path`` (with the joint mapping file ``rig_map``, else the one remembered
         for it); on error show a dialog and keep the current clip. A rig that cannot be
         mapped leads to :meth:`_unmapped`. With ``ask``, unsaved edits are offered for
-        saving first (:attr:`confirm_discard`)."""
-        if ask and not self.confirm_discard("opening another clip"):
-            return False
+        saving first (:attr:`confirm_discard`) and constraints placed for the clip open
+        now are removed or kept as the user says (:attr:`ask_constraints`; without
+        ``ask``, as ``constraints`` says). Removing them is one undo step."""
+        if ask:
+            if not self.confirm_discard("opening another clip"):
+                return False
+            constraints = self._constraints_choice()
+            if constraints == "cancel":
+                return False
         rig_map = rig_map or self.rig_maps.get(path)
         try:
             self.session.open(path, rig_map)
         except RigError as exc:
-            return self._unmapped(path, exc)
+            return self._unmapped(path, exc, constraints)
         except UserError as exc:
             self.show_error("Cannot open motion", str(exc))
             return False
+        if constraints == "remove" and len(self.session.constraints):
+            count = len(self.session.constraints)
+            with self.w.undo.group(f"Remove the previous clip's {count} constraint{'s' * (count > 1)}"):
+                self.session.set_constraints([])
         if rig_map:
             self.rig_maps.remember(path, rig_map)
         self.add_recent(str(path))
@@ -116,12 +131,22 @@ class FileActions:
         self.w.statusBar().showMessage(f"Loaded {path}{shown} ({self.session.num_frames} frames)", 5000)
         return True
 
-    def _unmapped(self, path: str | Path, exc: RigError) -> bool:
+    def _constraints_choice(self) -> str:
+        """``"remove"``, ``"keep"`` or ``"cancel"`` for the constraints of the clip open
+        now ("keep" when there are none: nothing to ask)."""
+        names = self.session.constraints.names
+        if not names:
+            return "keep"
+        motion = self.session.motion
+        clip = Path(self.session.path).name if self.session.path else motion.name if motion else "the open clip"
+        return self.ask_constraints(self.w, names, clip)
+
+    def _unmapped(self, path: str | Path, exc: RigError, constraints: str = "keep") -> bool:
         """Offer a mapping file for a rig that is not recognised, or write a suggestion."""
         choice = self.ask_unmapped(self.w, str(path), str(exc))
         if choice == "pick":
             chosen = self.pick_rig_map(self.w, str(Path(path).parent))
-            return self.open_path(path, chosen, ask=False) if chosen else False
+            return self.open_path(path, chosen, ask=False, constraints=constraints) if chosen else False
         if choice == "suggest":
             from engine.cli.rig import write_suggestion
 
@@ -296,3 +321,25 @@ class FileActions:
             self.show_error("Cannot export screenshot", str(exc))
             return False
         return True
+
+
+def ask_constraints(parent: QWidget, names: tuple[str, ...], clip: str) -> str:
+    """Ask whether the constraints placed for ``clip`` go or stay when another clip opens:
+    ``"remove"`` (the default), ``"keep"`` or ``"cancel"`` (stay on this clip)."""
+    shown = ", ".join(names[:6]) + (f" and {len(names) - 6} more" if len(names) > 6 else "")
+    box = QMessageBox(
+        QMessageBox.Icon.Question,
+        "Constraints of the open clip",
+        f"The scene holds {len(names)} constraint{'s' * (len(names) > 1)} placed for {clip}: {shown}.",
+        QMessageBox.StandardButton.Cancel,
+        parent,
+    )
+    box.setInformativeText(
+        "They stay where they are in the world, and the new clip's performer moves elsewhere. "
+        "Remove them (Edit > Undo brings them back) or keep them?"
+    )
+    remove = box.addButton("Remove", QMessageBox.ButtonRole.AcceptRole)
+    keep = box.addButton("Keep", QMessageBox.ButtonRole.ActionRole)
+    box.setDefaultButton(remove)
+    box.exec()
+    return {remove: "remove", keep: "keep"}.get(box.clickedButton(), "cancel")

@@ -26,6 +26,7 @@ def studio(qtbot, tmp_path, synthetic_motion, monkeypatch):
     threads_before = set(threading.enumerate())
     settings = QSettings(str(tmp_path / "studio.ini"), QSettings.Format.IniFormat)
     window = MainWindow(settings=settings, engine="thread")  # tests reach into the engine
+    window.files.ask_constraints = lambda _w, names, clip: unexpected.append(f"constraints: {names}") or "keep"
     window.session.set_motion(synthetic_motion)
     window.resize(1280, 800)
     window.show()

@@ -301,3 +301,40 @@ def test_a_scene_the_studio_refuses_names_its_file_once(studio, tmp_path, monkey
     assert not studio.files.load_scene(str(path))
     assert len(shown) == 1 and shown[0].count(str(path)) == 1 and "animation: field 'fps'" in shown[0]
     assert studio.undo.history.count() == steps
+
+
+def test_opening_another_clip_asks_what_becomes_of_the_constraints(studio, qtbot, tmp_path, synthetic_motion):
+    """Constraints sit in the world where the old clip's performer was: opening another
+    clip asks; Remove is one undo step, Keep keeps them, Cancel stays on the clip."""
+    from engine.motion.bvh import save_motion_bvh
+
+    other = tmp_path / "other.bvh"
+    save_motion_bvh(other, synthetic_motion)
+    s = studio.session
+    s.constraints.add("pin", name="pin_a", joint="lwrist", position=(0.3, 0.0, 1.0))
+    s.constraints.add("floor", name="floor_b")
+    asked = []
+
+    def answer(choice):
+        def ask(_window, names, clip):
+            asked.append((names, clip))
+            return choice
+
+        return ask
+
+    motion = s.motion
+    studio.files.confirm_discard = lambda doing: True  # the unsaved-edits prompt has tests of its own
+    studio.files.ask_constraints = answer("cancel")
+    assert studio.files.open_path(other) is False and s.motion is motion and len(s.constraints) == 2
+    assert asked[-1] == (("pin_a", "floor_b"), "synthetic")
+    studio.files.ask_constraints = answer("keep")
+    assert studio.files.open_path(other) and s.motion is not motion
+    assert s.constraints.names == ("pin_a", "floor_b")
+    studio.files.ask_constraints = answer("remove")
+    assert studio.files.open_path(other) and len(s.constraints) == 0 and asked[-1][1] == "other.bvh"
+    assert studio.undo.history.undo_text() == "Remove the previous clip's 2 constraints"
+    studio.undo.history.undo()
+    assert s.constraints.names == ("pin_a", "floor_b")
+    s.set_constraints([])
+    asked.clear()
+    assert studio.files.open_path(other) and not asked  # nothing placed: nothing to ask

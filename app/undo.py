@@ -31,6 +31,7 @@ from PyQt6.QtCore import QObject, pyqtSignal
 from PyQt6.QtGui import QAction
 
 from engine.authoring.history import Edit, History
+from widgets.sensor_panel import LABELS
 
 
 def _changed_fields(old: Any, new: Any) -> tuple[str, ...]:
@@ -132,13 +133,18 @@ class SceneUndo(QObject):
         if self._applying or not before[0]:  # the first sensor set is the start, not an edit
             return
         key = None
+        tracker = f"{LABELS.get(e.joint, e.joint)} tracker"  # the sensor panel's name for it
         if e.joint is not None and e.old is not None and e.new is not None:
             fields = _changed_fields(e.old, e.new)
             key = ("sensor", e.joint, fields)
-            what = "Move" if fields == ("offset",) else "Edit"
-            text = f"{what} {e.joint} sensor" + ("" if what == "Move" else f" ({', '.join(fields)})")
+            if fields == ("offset",):
+                text = f"Move {tracker}"
+            elif fields == ("enabled",):
+                text = f"Turn {'on' if e.new.enabled else 'off'} {tracker}"
+            else:
+                text = f"Edit {tracker} ({', '.join(fields)})"
         elif e.joint is not None:
-            text = f"{'Add' if e.old is None else 'Remove'} {e.joint} sensor"
+            text = f"{'Add' if e.old is None else 'Remove'} {tracker}"
         else:
             text = f"Sensor preset {e.preset}" if e.preset else "Change sensors"
         self.record(text, self._apply_sensors, before, after, key)

@@ -107,12 +107,11 @@ def test_the_starting_preset_is_not_an_undo_step_and_later_edits_are(studio, qtb
     studio.sensor_panel.preset.setCurrentText("6")
     studio.constraint_panel.kinds.setCurrentText("look_at")
     studio.constraint_panel.add_button.click()
-    joint = next(iter(studio.sensor_panel.rows))
-    studio.sensor_panel.rows[joint]["enabled"].setChecked(False)
+    studio.sensor_panel.rows["upperneck"]["enabled"].setChecked(False)
     assert stack.texts() == [
         "Sensor preset 6",
         "Add look_at",
-        f"Edit {joint} sensor (enabled)",
+        "Turn off head tracker",  # the panel's name for the tracker, and what the step does
     ]
 
 

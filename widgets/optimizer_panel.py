@@ -14,7 +14,16 @@ from dataclasses import dataclass
 from typing import Any
 
 from PyQt6.QtCore import pyqtSignal
-from PyQt6.QtWidgets import QCheckBox, QComboBox, QDoubleSpinBox, QFormLayout, QHBoxLayout, QSpinBox, QWidget
+from PyQt6.QtWidgets import (
+    QCheckBox,
+    QComboBox,
+    QDoubleSpinBox,
+    QFormLayout,
+    QHBoxLayout,
+    QLabel,
+    QSpinBox,
+    QWidget,
+)
 
 from widgets.field_editing import commit_only, is_editing
 
@@ -112,6 +121,10 @@ class OptimizerPanel(QWidget):
         holder = QWidget()
         holder.setLayout(ghosts)
         form.addRow("Ghosts", holder)
+        #: Says why the settings are greyed out (:meth:`set_settings_enabled`).
+        self.settings_note = QLabel(wordWrap=True)
+        self.settings_note.setVisible(False)
+        form.addRow(self.settings_note)
         self.fields = {f.name: f for f in fields if f.kind != "choice" or f.choices}
         self.editors: dict[str, QWidget] = {}
         for name, f in self.fields.items():
@@ -134,6 +147,17 @@ class OptimizerPanel(QWidget):
     def _ghosts_edited(self) -> None:
         if not self._updating:
             self.ghostsChanged.emit(tuple(m for m, b in self.ghost_boxes.items() if b.isChecked()))
+
+    def set_settings_enabled(self, on: bool, method: str) -> None:
+        """Grey out the settings (with a line saying why) when the shown ``method`` takes
+        none: they stay in the scene for the methods that do."""
+        note = "" if on else f"{method} takes no optimizer settings: they apply to the latent-space methods."
+        if note == self.settings_note.text():  # called on every drawn snapshot: only changes
+            return
+        for w in self.editors.values():
+            w.setEnabled(on)
+        self.settings_note.setText(note)
+        self.settings_note.setVisible(not on)
 
     def set_state(self, method: str, ghosts: tuple[str, ...], settings: dict[str, Any]) -> None:
         """Show the session's method, ghosts and settings without emitting; a field the

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from engine import skeleton as sk
-from engine.methods.base import DecodesLatents, FrameResult, Method
+from engine.methods.base import Configurable, DecodesLatents, FrameResult, Method
 from engine.sensor_source import SensorSource
 from engine.sensors import SensorFrame
 from engine.startup_trace import mark
@@ -202,6 +202,7 @@ class EngineFrames(threading.Thread):
             playing=self._playing,
             method=method.name if method is not None else self._methods.name,
             can_decode=isinstance(method, DecodesLatents),
+            configurable=method is None or isinstance(method, Configurable),
             decoded=readonly(self._decoded) if self._decoded is not None else None,
             history=tuple(self._history),
             history_run=self._history_run,

@@ -89,6 +89,9 @@ class Snapshot:
         method it had, which ``method`` names.
     engine_fps : float
         Solved frames per second (moving average).
+    configurable : bool
+        Whether the shown method takes optimizer settings (the studio greys them out
+        otherwise).
     decoded : ndarray (22, 3) or None
         Pose decoded from a latent sent with :class:`DecodeLatent` (debug mode).
     solved : int
@@ -148,6 +151,7 @@ class Snapshot:
     playing: bool = False
     method: str = ""
     can_decode: bool = False
+    configurable: bool = True
     decoded: np.ndarray | None = None
     history: tuple[HistoryEntry, ...] = ()
     history_run: int = 0

@@ -48,6 +48,7 @@ class FakeSnapshot:
     playing: bool = False
     method: str = "fake"
     can_decode: bool = False
+    configurable: bool = True
     decoded: np.ndarray | None = None
     history: tuple | None = None  # None: just this frame's record
     history_run: int = 0

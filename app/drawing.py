@@ -203,7 +203,7 @@ class DrawScheduler:
         self._set_text(w.status_warnings, f"warnings {snap.warnings}")
         self._set_tip(w.status_warnings, "\n".join(snap.recent_errors + tuple(snap.messages)))
         w.ghost_status.on_snapshot(snap)
-        w.optimizer_panel.set_settings_enabled(snap.configurable, snap.method)
+        w.optimizer_panel.set_settings_apply(snap.configurable, snap.method)
         # a ghost's error shows in its row; a stopped solver's last snapshot, drawn after
         # it died, must not replace the line that says why it stopped
         if snap.error and not w.ghost_status.is_ghost_problem(snap.error) and not self.engine_watch.stopped:

@@ -18,9 +18,11 @@ from PyQt6.QtCore import QSettings, Qt, QTimer, pyqtSignal
 from PyQt6.QtWidgets import (
     QApplication,
     QDockWidget,
+    QFrame,
     QLabel,
     QMainWindow,
     QMessageBox,
+    QScrollArea,
     QTabWidget,
     QVBoxLayout,
     QWidget,
@@ -160,7 +162,11 @@ class MainWindow(QMainWindow):
         tabs = QTabWidget()
         tabs.addTab(self.sensor_panel, "Sensors")
         tabs.addTab(self.constraint_panel, "Constraints")
-        tabs.addTab(self.optimizer_panel, "Optimizer")
+        # the settings scroll: their full height made the dock, and the window, taller than
+        # a laptop screen
+        settings = QScrollArea(widgetResizable=True, frameShape=QFrame.Shape.NoFrame)
+        settings.setWidget(self.optimizer_panel)
+        tabs.addTab(settings, "Optimizer")
         self.latent = LatentInspector()
         self.plots = LossPlots()
         scene = self._dock("Scene", tabs, Qt.DockWidgetArea.RightDockWidgetArea)

@@ -19,7 +19,7 @@ from PyQt6.QtWidgets import (
     QComboBox,
     QDoubleSpinBox,
     QFormLayout,
-    QHBoxLayout,
+    QGridLayout,
     QLabel,
     QSpinBox,
     QWidget,
@@ -27,6 +27,8 @@ from PyQt6.QtWidgets import (
 
 from widgets.field_editing import commit_only, is_editing
 
+#: Ghost check boxes per row.
+GHOSTS_PER_ROW = 3
 #: Decimals of a number field; an open lower bound shows as its smallest step above it.
 DECIMALS = 4
 
@@ -111,17 +113,20 @@ class OptimizerPanel(QWidget):
         self.method.addItems(methods)
         self.method.currentTextChanged.connect(lambda m: None if self._updating else self.methodChanged.emit(m))
         form.addRow("Method", self.method)
-        ghosts = QHBoxLayout()
+        # in rows of three: one row of every method made the dock, and with it the window,
+        # too wide for a 1366-pixel screen
+        ghosts = QGridLayout()
+        ghosts.setContentsMargins(0, 0, 0, 0)
         self.ghost_boxes: dict[str, QCheckBox] = {}
-        for m in methods:
+        for i, m in enumerate(methods):
             box = QCheckBox(m, toolTip=f"Also run {m} and draw it as a ghost")
             box.toggled.connect(self._ghosts_edited)
-            ghosts.addWidget(box)
+            ghosts.addWidget(box, i // GHOSTS_PER_ROW, i % GHOSTS_PER_ROW)
             self.ghost_boxes[m] = box
         holder = QWidget()
         holder.setLayout(ghosts)
         form.addRow("Ghosts", holder)
-        #: Says why the settings are greyed out (:meth:`set_settings_enabled`).
+        #: Says when the settings do not apply to the shown method (:meth:`set_settings_apply`).
         self.settings_note = QLabel(wordWrap=True)
         self.settings_note.setVisible(False)
         form.addRow(self.settings_note)
@@ -148,16 +153,16 @@ class OptimizerPanel(QWidget):
         if not self._updating:
             self.ghostsChanged.emit(tuple(m for m, b in self.ghost_boxes.items() if b.isChecked()))
 
-    def set_settings_enabled(self, on: bool, method: str) -> None:
-        """Grey out the settings (with a line saying why) when the shown ``method`` takes
-        none: they stay in the scene for the methods that do."""
-        note = "" if on else f"{method} takes no optimizer settings: they apply to the latent-space methods."
-        if note == self.settings_note.text():  # called on every drawn snapshot: only changes
-            return
-        for w in self.editors.values():
-            w.setEnabled(on)
-        self.settings_note.setText(note)
-        self.settings_note.setVisible(not on)
+    def set_settings_apply(self, applies: bool, method: str) -> None:
+        """Say under the ghosts, while the shown ``method`` takes no optimizer settings,
+        that they wait for a method that does (they belong to the scene and stay
+        editable, to be set before switching)."""
+        note = (
+            "" if applies else f"{method} takes no optimizer settings: they apply when a latent-space method is shown."
+        )
+        if note != self.settings_note.text():  # called on every drawn snapshot: only changes
+            self.settings_note.setText(note)
+            self.settings_note.setVisible(not applies)
 
     def set_state(self, method: str, ghosts: tuple[str, ...], settings: dict[str, Any]) -> None:
         """Show the session's method, ghosts and settings without emitting; a field the

@@ -16,7 +16,7 @@ def status_window(bar: Any, **extra: Any) -> SimpleNamespace:
         latent=SimpleNamespace(update_snapshot=None),
         method_errors=SimpleNamespace(update_snapshot=None),
         ghost_status=SimpleNamespace(on_snapshot=lambda snap: None, is_ghost_problem=lambda m: False),
-        optimizer_panel=SimpleNamespace(set_settings_enabled=lambda on, method: None),
+        optimizer_panel=SimpleNamespace(set_settings_apply=lambda on, method: None),
         statusBar=lambda: bar,
         **{n: QLabel() for n in ("status_engine", "status_gui", "status_warnings")},
         **extra,

@@ -201,7 +201,8 @@ class DrawScheduler:
         self._set_tip(w.status_engine, "\n".join(tip))
         self._set_text(w.status_gui, f"view {self._draw_rate:3.0f} draws/s")
         self._set_text(w.status_warnings, f"warnings {snap.warnings}")
-        self._set_tip(w.status_warnings, "\n".join(snap.recent_errors + tuple(snap.messages)))
+        # a warning both recent and of this frame is listed once
+        self._set_tip(w.status_warnings, "\n".join(dict.fromkeys(snap.recent_errors + tuple(snap.messages))))
         w.ghost_status.on_snapshot(snap)
         w.optimizer_panel.set_settings_apply(snap.configurable, snap.method)
         # a ghost's error shows in its row; a stopped solver's last snapshot, drawn after

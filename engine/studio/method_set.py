@@ -131,11 +131,12 @@ class MethodSet:
             except Exception as exc:
                 self._report(f"{g}.reset: {exc}")
                 continue
-            for problem in [
+            problems = [
                 *apply_settings(m, self.settings),
                 *apply_constraints(m, self.constraints),
                 *apply_sensor_weights(m, self.sensors),
-            ]:
+            ]
+            for problem in problems if self._can_run(g) else ():
                 self._report(problem)
             self.ghosts[g] = m
             if self._kept is not None:  # a paused frame solved again restores it too
@@ -210,7 +211,7 @@ class MethodSet:
         """Push the studio's edits into the methods: ``settings``, ``constraints``,
         ``sensors`` or ``all``. Only the changed aspect is re-applied, so a problem (such
         as a method that ignores constraints) is reported once per edit."""
-        for _, m in self.running():
+        for name, m in self.running():
             problems = []
             if what in ("all", "settings"):
                 problems += apply_settings(m, self.settings)
@@ -218,8 +219,14 @@ class MethodSet:
                 problems += apply_constraints(m, self.constraints)
             if what in ("all", "sensors"):
                 problems += apply_sensor_weights(m, self.sensors)
-            for problem in problems if report else ():
+            # a method that cannot run from these trackers says that instead, once per frame
+            for problem in problems if report and self._can_run(name) else ():
                 self._report(problem)
+
+    def _can_run(self, name: str) -> bool:
+        """Whether method ``name`` can reconstruct from the sensors (an edit problem of a
+        ghost that cannot would only hide why it shows nothing)."""
+        return not self.sensors or sensors_problem(name, self.sensors) is None
 
     @staticmethod
     def step(method: Method, sf: SensorFrame) -> FrameResult:

@@ -70,3 +70,21 @@ def test_a_failing_prepare_is_reported_by_the_selection_that_builds_again(synthe
     assert built == {"broken": 1} and not problems  # nothing asked for it yet
     assert methods.select("broken", ())
     assert built == {"broken": 2} and len(problems) == 1 and "vae.pt" in problems[0]
+
+
+def test_a_ghost_that_cannot_run_from_the_trackers_reports_no_edit_problems(synthetic_motion):
+    """SparsePoser needs preset 6: under 3-head-hands its 'ignores constraints' would hide,
+    in the status bar, why it draws nothing (its row in the Optimizer tab says that)."""
+    from engine.editing.constraint_list import ConstraintList
+    from engine.tracking import PRESET_SENSORS
+
+    methods, built, problems = _counting_set()
+    scene = ConstraintList()
+    scene.add("floor", name="floor")
+    methods.set_sensors(PRESET_SENSORS["3-head-hands"])
+    methods.set_constraints(tuple(scene))
+    assert methods.select("dragposer", ())
+    methods.set_ghosts(("sparseposer", "autoencoder"), ClipSource(synthetic_motion))
+    assert set(methods.ghosts) == {"sparseposer", "autoencoder"} and built["dragposer"] == 1
+    # the stand-in takes no constraints: said once, for the ghost that can run
+    assert problems == [f"{methods.ghosts['autoencoder'].name} ignores constraints"]

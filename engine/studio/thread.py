@@ -188,6 +188,7 @@ class EngineThread(EngineFrames):
             # session as it was; the window shows why
             self._method_error = self._pending_error
             return
+        self._fps = 0.0  # the rate of this method's solves, not an average with the last one's
         self._reset_methods()
 
     @cmd.handles(cmd.SetGhosts)

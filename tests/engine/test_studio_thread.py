@@ -512,3 +512,27 @@ def test_a_ghost_toggled_in_the_session_keeps_the_solved_frames(engine):
     session.set_method(shown, ())  # an undo of the ghost takes the same path
     wait_for(lambda: not worker.latest.ghosts)
     assert session.opened == opened and worker.latest.history_run == run
+
+
+def test_a_method_switch_starts_the_solve_rate_afresh(synthetic_motion):
+    class Slow(Counting):
+        name = "slow"
+
+        def step(self, sensors):
+            time.sleep(0.02)
+            return super().step(sensors)
+
+    worker = EngineThread(method_factory=lambda name: Slow() if name == "slow" else Counting())
+    worker.start()
+    try:
+        worker.submit(w.SetMethod("counting", opened=1))
+        worker.submit(w.SetMotion(synthetic_motion, opened=2))
+        worker.submit(w.Play(1.0, True, "every_frame"))
+        wait_for(lambda: worker.latest is not None and worker.latest.engine_fps > 200)
+        worker.submit(w.SetMethod("slow", opened=3))
+        wait_for(lambda: worker.latest.method == "slow" and worker.latest.solved > 0)
+        seq = worker.latest.seq
+        wait_for(lambda: worker.latest.seq > seq)
+        assert worker.latest.engine_fps < 60  # 20 ms a frame, not the fast method's average
+    finally:
+        worker.stop()

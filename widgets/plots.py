@@ -179,6 +179,7 @@ class LossPlots(QWidget):
         layout.addLayout(plots, 1)
         layout.addWidget(self.legend)
         self._seq = -1
+        self._titles: dict[int, str] = {}
 
     def _set_visible(self, name: str, on: bool) -> None:
         self.iter_curves.set_visible(name, on)
@@ -226,10 +227,24 @@ class LossPlots(QWidget):
             self.legend.set_terms(tuple(names), self.colours)
         return names
 
+    def _title(self, plot: pg.PlotWidget, title: str, why: str = "") -> None:
+        """Set ``plot``'s (short) title and tooltip when they change: an empty plot says
+        why it is empty instead of looking broken."""
+        if self._titles.get(id(plot)) != title:
+            self._titles[id(plot)] = title
+            plot.setTitle(title, size="9pt")
+            plot.setToolTip(why)
+
     def update_iterations(self, snap: Any) -> None:
         """This frame's loss per iteration, every term."""
         names = self._terms(snap)
         losses = snap.losses
+        method = getattr(snap, "method", "") or "this method"
+        self._title(
+            self.iteration_plot,
+            "Loss per iteration" + ("" if losses or not snap.history else ": none"),
+            "" if losses else f"{method} does not iterate: it reports no loss per iteration.",
+        )
         if losses:
             its = np.arange(1, len(losses) + 1)
             for name in names:
@@ -251,8 +266,18 @@ class LossPlots(QWidget):
         names = self._terms(snap)
         history = snap.history
         x = np.array([r.frame for r in history], float)
+        shown = False
         for name in names:
             y = np.array([_loggable(float(r.losses.get(name, np.nan)), LOSS_FLOOR) for r in history])
             _set_curve(self.history_curves.get(name), x, y)
+            shown = shown or bool(np.isfinite(y).any())
+        zero = bool(names) and not shown
+        self._title(
+            self.history_plot,
+            "Loss history" + (": all 0" if zero else ""),
+            "Every term is 0 on these frames (the method meets each tracker exactly): a log axis has nothing to draw."
+            if zero
+            else "",
+        )
         fit_frames(self.history_plot, x)
         settle(self.history_plot)

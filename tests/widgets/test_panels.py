@@ -240,6 +240,24 @@ def test_a_zero_loss_term_leaves_a_gap_instead_of_stretching_the_log_axis(qtbot,
     assert p.legend.terms == ("total", "pos:root")  # the term stays in the legend
 
 
+def test_empty_loss_plots_say_why_in_their_titles(qtbot, fake_snapshot):
+    """IK meets its trackers exactly and does not iterate: its plots say so instead of
+    looking broken; a method with losses gets the plain titles back."""
+    from tests.widgets.conftest import FakeRecord
+
+    p = LossPlots()
+    qtbot.addWidget(p)
+    zero = {"total": 0.0, "pos:root": 0.0}
+    snap = fake_snapshot(seq=1, losses=(), method="ik", history=(FakeRecord(0, 0, 1.0, zero, None),))
+    p.update_snapshot(snap)
+    assert p.iteration_plot.getPlotItem().titleLabel.text == "Loss per iteration: none"
+    assert "ik does not iterate" in p.iteration_plot.toolTip()
+    assert p.history_plot.getPlotItem().titleLabel.text == "Loss history: all 0"
+    p.update_snapshot(fake_snapshot(seq=2))
+    assert p.iteration_plot.getPlotItem().titleLabel.text == "Loss per iteration"
+    assert p.history_plot.getPlotItem().titleLabel.text == "Loss history" and not p.history_plot.toolTip()
+
+
 def _terms(joints):
     return {"total": 1.0, **{f"{k}:{j}": 0.1 for j in joints for k in ("pos", "rot")}, "temporal_prior": 0.01}
 

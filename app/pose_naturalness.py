@@ -50,13 +50,14 @@ class NaturalnessReadout(QLabel):
     #: Chosen files that could not be read: (the skeleton they were for, the message).
     referenceFailed = pyqtSignal(bytes, str)
     #: The chosen files could not be read (the message names the file); the readout has gone
-    #: back to the shipped poses.
+    #: back to the reference it used before.
     failed = pyqtSignal(str)
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self.reference: ReferenceSet | None = None
         self.files: list[Path] | None = None  # the chosen reference files (None: the shipped poses)
+        self._previous: list[Path] | None = None  # the reference before the last choice
         self.distance_cm: float | None = None
         self.take = ""
         self.spread: tuple[float, float] | None = None  # median, p95 cm of the current skeleton
@@ -85,6 +86,7 @@ class NaturalnessReadout(QLabel):
             raise UserError(
                 "choose at least two motion files: the spread of real poses compares each take with the others"
             )
+        self._previous = self.files  # what a failed read goes back to
         self.files = None if files is None else [Path(f) for f in files]
         self._skeleton = None
         if self._last is not None:
@@ -161,7 +163,7 @@ class NaturalnessReadout(QLabel):
     def _on_failed(self, key: bytes, message: str) -> None:
         if key != self._skeleton:
             return
-        self.files = None  # back to the shipped poses, which the next pose shown is measured against
+        self.files = self._previous  # back to the reference in use before the choice
         self._skeleton = None
         if self._last is not None:
             self.show_pose(*self._last)
@@ -210,8 +212,8 @@ REFERENCE_FILTER = "Motion files (*.bvh *.amc);;BVH motion (*.bvh);;ASF/AMC moti
 class ReferenceMenu:
     """View > Naturalness reference of the pose window ``w`` (which holds the readout as
     ``w.naturalness``): the shipped validation poses, or motion files chosen in a dialog.
-    A choice that is cancelled, too small or unreadable leaves (or puts) the shipped poses
-    checked and says why."""
+    A choice that is cancelled, too small or unreadable leaves the reference in use before
+    it (the shipped poses or the files chosen earlier) and says why."""
 
     def __init__(self, w: QMainWindow, view: QMenu) -> None:
         self.w, self.readout = w, w.naturalness
@@ -247,8 +249,8 @@ class ReferenceMenu:
         self.files.setText(f"&Motion files... ({len(names)} in use)")
 
     def _failed(self, message: str) -> None:
-        self.shipped.setChecked(True)
-        self.files.setText("&Motion files...")
-        QMessageBox.warning(
-            self.w, "Naturalness reference", f"{message}\n\nPoses are judged against the shipped validation poses."
-        )
+        kept = self.readout.files
+        (self.files if kept else self.shipped).setChecked(True)
+        self.files.setText(f"&Motion files... ({len(kept)} in use)" if kept else "&Motion files...")
+        now = f"the {len(kept)} files chosen before" if kept else "the shipped validation poses"
+        QMessageBox.warning(self.w, "Naturalness reference", f"{message}\n\nPoses are judged against {now}.")

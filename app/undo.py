@@ -74,6 +74,7 @@ class SceneUndo(QObject):
         session.events.settings.connect(self._on_settings)
         session.events.method.connect(self._on_method)
         session.events.motion.connect(self._on_motion)
+        session.events.source.connect(self._on_source)
 
     def close(self) -> None:
         self.session.events.sensors.disconnect(self._on_sensors)
@@ -81,6 +82,7 @@ class SceneUndo(QObject):
         self.session.events.settings.disconnect(self._on_settings)
         self.session.events.method.disconnect(self._on_method)
         self.session.events.motion.disconnect(self._on_motion)
+        self.session.events.source.disconnect(self._on_source)
 
     @contextlib.contextmanager
     def unrecorded(self) -> Iterator[None]:
@@ -110,6 +112,11 @@ class SceneUndo(QObject):
         """A new clip starts a new history (offsets and failures were made for the old one)."""
         if not self.editing_clip:
             self.history.clear()
+
+    def _on_source(self, e: Any) -> None:
+        """A tracker recording or live stream replaces the clip: a new history too (the
+        edits were offered for saving before it opened)."""
+        self.history.clear()
 
     def record(self, text: str, put: Callable[[Any], None], before: Any, after: Any, key: tuple | None = None) -> None:
         """Record an edit already made: ``put(before)`` undoes it, ``put(after)`` redoes it."""

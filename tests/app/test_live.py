@@ -58,7 +58,10 @@ def test_a_tracker_recording_opens_like_a_clip(studio, qtbot, synthetic_motion, 
     samples = [TrackerSample(float(plan.times[i]), n, p, r) for i in range(len(plan)) for n, p, r in plan.frame(i)]
     path = tmp_path / "rec.jsonl"
     write_recording(path, samples, 60.0)
+    studio.session.constraints.add("floor")  # an edit, discarded by opening the recording
+    assert not studio.undo.is_clean()
     assert studio.live.open_recording(path)
+    assert studio.undo.is_clean()  # a new history: opening something else asks nothing more
     studio.session.seek(20)
     snap = studio.session.latest
     qtbot.waitUntil(

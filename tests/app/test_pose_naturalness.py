@@ -134,3 +134,13 @@ def test_a_single_file_or_an_unreadable_one_leaves_the_shipped_poses_and_says_wh
     monkeypatch.setattr(QFileDialog, "getOpenFileNames", lambda *a, **k: ([], ""))  # a cancelled dialog
     acts["reference_files"].trigger()
     assert acts["reference_shipped"].isChecked() and len(warnings) == 2
+    # with files in use, an unreadable choice goes back to them, not to the shipped poses
+    monkeypatch.setattr(QFileDialog, "getOpenFileNames", lambda *a, **k: ([str(f) for f in files], ""))
+    acts["reference_files"].trigger()
+    qtbot.waitUntil(lambda: readout.within is not None and "2 files" in readout.toolTip(), timeout=30000)
+    monkeypatch.setattr(QFileDialog, "getOpenFileNames", lambda *a, **k: ([str(files[0]), str(broken)], ""))
+    acts["reference_files"].trigger()
+    qtbot.waitUntil(lambda: len(warnings) == 3, timeout=30000)
+    assert "the 2 files chosen before" in warnings[-1] and acts["reference_files"].isChecked()
+    assert readout.files == files
+    qtbot.waitUntil(lambda: readout.within is not None and "2 files" in readout.toolTip(), timeout=30000)

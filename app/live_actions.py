@@ -148,9 +148,7 @@ class LiveActions:
             self.panel.set_recording(False)
             return
         if not on:
-            path = src.stop_recording()
-            if path is not None:
-                self.w.statusBar().showMessage(f"Wrote {path}", 8000)
+            self._finish_recording(src)
             return
         path, _ = QFileDialog.getSaveFileName(
             self.w, "Record trackers to", "trackers.jsonl", "Tracker recording (*.jsonl)"
@@ -169,13 +167,20 @@ class LiveActions:
         if src is not None:
             src.start_calibration(countdown_s, window_s)
 
+    def _finish_recording(self, src: LiveSource) -> None:
+        """Stop ``src``'s recording and say what became of it."""
+        recording = src.recording
+        path = src.stop_recording()
+        if path is not None:
+            self.w.statusBar().showMessage(f"Wrote {path}", 8000)
+        elif recording:
+            self.w.statusBar().showMessage("No tracker sample arrived while recording: no file was written", 8000)
+
     def disconnect(self) -> None:
         """Stop listening (the received frames stay on the timeline)."""
         src = self.live
         if src is not None:
-            path = src.stop_recording()
+            self._finish_recording(src)
             src.close()
-            if path is not None:
-                self.w.statusBar().showMessage(f"Wrote {path}", 8000)
         self.panel.set_recording(False)
         self.refresh()

@@ -154,10 +154,20 @@ class LiveSource(SensorSource):
         self._recorder = rec
         self.receiver.recorder = rec
 
+    @property
+    def recording(self) -> bool:
+        """Whether a recording is in progress."""
+        return self._recorder is not None
+
     def stop_recording(self) -> Path | None:
+        """Finish the recording in progress and return its file; None without one, or when
+        no sample arrived (then no file is written: it could not be opened again)."""
         rec, self._recorder = self._recorder, None
         self.receiver.recorder = None
         if rec is None:
+            return None
+        if rec.samples == 0:
+            rec.abort()
             return None
         rec.close()
         return rec.path

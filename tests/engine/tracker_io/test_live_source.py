@@ -88,3 +88,15 @@ def test_a_recording_opens_like_a_clip(synthetic_motion, tmp_path):
     assert abs(src.skeleton.height() - true_h) / true_h < 0.02
     src.set_sensors((Sensor("lwrist"),))
     assert set(src.frame(70).readings) == {"lwrist"}
+
+
+def test_a_recording_that_received_nothing_writes_no_file(tmp_path):
+    """A header-only file could not be opened again ("no valid sample"): none is written."""
+    src = LiveSource("127.0.0.1", 0).start()
+    try:
+        src.start_recording(tmp_path / "empty.jsonl")
+        assert src.recording
+        assert src.stop_recording() is None and not src.recording
+    finally:
+        src.close()
+    assert list(tmp_path.iterdir()) == []

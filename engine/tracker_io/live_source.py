@@ -64,6 +64,10 @@ class LiveStatus:
     calibration: str
 
 
+#: Seconds past the end of a calibration's capture window after which, no frame having
+#: finished it, it fails (the stream stopped or never started).
+CALIBRATION_STALL_S = 1.0
+
 class LiveSource(SensorSource):
     """Receive VMC on ``host:port`` and serve the frames to the studio.
 
@@ -177,15 +181,29 @@ class LiveSource(SensorSource):
     def start_calibration(self, countdown_s: float = 3.0, window_s: float = 2.0, pose: str = "auto") -> None:
         """Count down ``countdown_s`` seconds (time to get into the pose), then average
         ``window_s`` seconds of frames and calibrate (:func:`calibrate`)."""
+        now = time.perf_counter()
         with self._lock:
             self._cal = {
                 "phase": "countdown",
-                "until": time.perf_counter() + countdown_s,
+                "until": now + countdown_s,
                 "window": window_s,
+                # frames move the calibration on; without them it fails at this time
+                "deadline": now + countdown_s + window_s + CALIBRATION_STALL_S,
                 "pose": pose,
                 "frames": [],
                 "note": "",
             }
+
+    def _expired(self, now: float) -> bool:
+        """With the lock held: fail a calibration whose frames stopped coming (or never
+        came) before its capture ended, so that a later stream does not finish it unasked."""
+        cal = self._cal
+        if cal["phase"] not in ("countdown", "capturing") or now < cal.get("deadline", float("inf")):
+            return False
+        got = len(cal["frames"])
+        why = "no tracker frame arrived" if not got else f"the trackers stopped after {got} frames"
+        cal.update(phase="done", note=f"calibration failed: {why}; calibrate again", frames=[])
+        return True
 
     def _on_frame(self, f: LiveFrame) -> None:
         with self._lock:
@@ -196,6 +214,8 @@ class LiveSource(SensorSource):
                 self._offset += drop
             cal = self._cal
             now = time.perf_counter()
+            if self._expired(now):
+                return
             if cal["phase"] == "countdown" and now >= cal["until"]:
                 cal.update(phase="capturing", until=now + cal["window"])
             if cal["phase"] != "capturing":
@@ -226,6 +246,7 @@ class LiveSource(SensorSource):
         last = self.receiver.last_arrival
         with self._lock:
             cal = self._cal
+            self._expired(time.perf_counter())
             left = max(0.0, cal["until"] - time.perf_counter()) if cal["phase"] in ("countdown", "capturing") else 0.0
             phase, note = cal["phase"], cal["note"]
         rec = self._recorder

@@ -100,3 +100,21 @@ def test_a_recording_that_received_nothing_writes_no_file(tmp_path):
     finally:
         src.close()
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_calibration_with_no_frames_fails_and_a_later_stream_does_not_finish_it(synthetic_motion):
+    from engine.tracker_io import live_source
+
+    src = LiveSource("127.0.0.1", 0).start()
+    try:
+        src.start_calibration(countdown_s=0.05, window_s=0.05)
+        assert src.status().calibration_phase == "countdown"
+        time.sleep(0.1 + live_source.CALIBRATION_STALL_S)
+        status = src.status()
+        assert status.calibration_phase == "done" and "no tracker frame arrived" in status.calibration
+        plan = plan_stream(synthetic_motion.slice(0, 20), "6")
+        st = send_stream(plan, "127.0.0.1", src.receiver.port, fps=120.0)
+        assert _wait(lambda: src.status().frames == st.sent)
+        assert src.skeleton_version == 0 and src.calibration is None  # not calibrated unasked
+    finally:
+        src.close()

@@ -90,6 +90,7 @@ class LatentInspector(QWidget):
         self.latent: np.ndarray | None = None
         self.stored: dict[str, np.ndarray] = {}
         self._seq = -1
+        self._frame: int | None = None  # the frame of the latent shown (an edit belongs to it)
         self._bars_range = 0.0
 
     def closeEvent(self, event: QCloseEvent | None) -> None:  # noqa: N802 (Qt's name)
@@ -122,8 +123,11 @@ class LatentInspector(QWidget):
             return
         z = np.asarray(snap.latent, float).ravel()
         # in debug mode too: after a seek, "Store as B" must store the new frame's latent
-        # (it stored A's again); the engine's latent is unchanged by decoding requests
+        # (it stored A's again); the engine's latent is unchanged by decoding requests, and
+        # an edit made on another frame is dropped
         self.latent = z
+        if snap.frame != self._frame:
+            self._frame, self.edited = snap.frame, None
         self._draw_bars(z if self.edited is None or self.edited.size != z.size else self.edited)
         # the engine's record covers frames this view never drew (it draws the newest only)
         recorded = [r for r in snap.history[-HISTORY:] if r.latent is not None and np.size(r.latent) == z.size]
@@ -185,8 +189,11 @@ class LatentInspector(QWidget):
             self._decode(z)
 
     def _store(self, slot: str) -> None:
-        if self.latent is not None:
-            self.stored[slot] = self.latent.copy()
+        """Store the latent shown: the one being edited (scrubbed or blended), else the
+        frame's solved latent."""
+        z = self.edited if self.edited is not None else self.latent
+        if z is not None:
+            self.stored[slot] = z.copy()
 
     def _interpolate(self, v: int) -> None:
         if self.debug.isChecked() and {"a", "b"} <= set(self.stored):

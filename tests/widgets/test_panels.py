@@ -431,6 +431,24 @@ def test_store_as_b_after_a_seek_in_debug_mode_stores_the_new_frames_latent(qtbo
     assert np.allclose(sig.args[0], 0.5 * (a + b))
 
 
+def test_store_keeps_the_scrubbed_latent_so_a_to_b_blends_two_edits(qtbot, fake_snapshot):
+    w = LatentInspector()
+    qtbot.addWidget(w)
+    z = np.linspace(-1, 1, 24)
+    w.update_snapshot(fake_snapshot(seq=1, frame=5, latent=z, can_decode=True))
+    w.debug.setChecked(True)
+    w.dim.setValue(3)
+    w.value.setValue(150)  # dimension 3 scrubbed to 1.5
+    w.capture_a.click()
+    w.value.setValue(-150)
+    w.capture_b.click()
+    assert w.stored["a"][3] == pytest.approx(1.5) and w.stored["b"][3] == pytest.approx(-1.5)
+    assert np.allclose(np.delete(w.stored["a"], 3), np.delete(z, 3))
+    with qtbot.waitSignal(w.decodeRequested) as sig:
+        w.mix.setValue(25)
+    assert sig.args[0][3] == pytest.approx(0.75)
+
+
 def test_a_plot_update_that_changes_the_range_paints_once(qtbot, fake_snapshot, monkeypatch):
     """pyqtgraph fits an auto range in the paint, which then asked for a second paint of
     the whole plot (each 5-35 ms under software rendering): the update settles it first."""

@@ -173,7 +173,9 @@ class LivePanel(QWidget):
             "figures",
             f"{status.packet_rate_hz:.0f} packets/s, {status.frames} frames, latency {lat}\n"
             f"malformed {status.malformed}, duplicate {status.duplicates}, late {status.late}"
-            + (f"\nrecording to {status.recording}" if status.recording else ""),
+            # always three lines: a third one appearing moved the Record button under the
+            # pointer, and the click that should stop the recording missed it
+            + (f"\nrecording to {status.recording}" if status.recording else "\nnot recording"),
         )
         if status.calibration_phase == "countdown":
             cal = f"get into the pose: {status.calibration_left_s:.0f} s"

@@ -58,3 +58,19 @@ def test_connect_dialog_values(qtbot):
     qtbot.addWidget(dlg)
     dlg.host.setText("127.0.0.1")
     assert dlg.values() == {"host": "127.0.0.1", "port": 40000, "mapping": DEFAULT_MAPPING, "convention": "unity"}
+
+
+def test_the_record_button_stays_put_when_recording_starts(qtbot):
+    """Recording added a line above the buttons, moving Stop away from the pointer."""
+    panel = LivePanel()
+    qtbot.addWidget(panel)
+    panel.resize(360, 300)
+    panel.show()
+    qtbot.waitExposed(panel)
+    panel.show_status(Status())
+    qtbot.wait(20)
+    before = panel.record.mapTo(panel, panel.record.rect().topLeft())
+    panel.show_status(Status(recording="/tmp/trackers.jsonl"))
+    qtbot.wait(20)
+    assert "recording to /tmp/trackers.jsonl" in panel.figures.text()
+    assert panel.record.mapTo(panel, panel.record.rect().topLeft()) == before

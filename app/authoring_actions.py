@@ -95,6 +95,7 @@ def export_video(window: StudioShell) -> str | None:
         tuple(window.session.available_methods()),
         window.files.suggested_name("mp4", "video"),
         window.settings,
+        window.session.method,
     )
 
 

@@ -57,10 +57,18 @@ class ExportVideoDialog(QDialog):
         Methods offered as ghosts.
     settings : QSettings or None
         Where the choices are remembered (None: not remembered).
+    shown : str
+        The method on screen, ticked as a ghost the first time (nothing remembered yet):
+        a video of what the user sees.
     """
 
     def __init__(
-        self, parent: Any, sensors: str | None, methods: tuple[str, ...] = (), settings: QSettings | None = None
+        self,
+        parent: Any,
+        sensors: str | None,
+        methods: tuple[str, ...] = (),
+        settings: QSettings | None = None,
+        shown: str = "",
     ) -> None:
         from engine.methods.presets import preset_problem
 
@@ -68,6 +76,7 @@ class ExportVideoDialog(QDialog):
         self.setWindowTitle("Export video")
         self.sensors = sensors
         self.settings = settings
+        self.shown = shown  # the method on screen: the first export's ghost
         form = QFormLayout(self)
         self.size_box = QComboBox()
         self.size_box.addItems(SIZES)
@@ -130,6 +139,7 @@ class ExportVideoDialog(QDialog):
     def _restore(self) -> None:
         """The choices of the last export (those still possible)."""
         if self.settings is None:
+            self._tick((self.shown,))
             return
         get = lambda key, default: self.settings.value(f"{GROUP}/{key}", default)  # noqa: E731
         for combo, key in (
@@ -145,7 +155,12 @@ class ExportVideoDialog(QDialog):
         self.truth.setChecked(truthy(get("truth", False)))
         self.timecode.setChecked(truthy(get("timecode", False)))
         self.title.setText(str(get("title", "")))
-        ghosts = str(get("ghosts", "")).split(",")
+        # the first export draws the method on screen (a video of what the user sees),
+        # later ones what was chosen last
+        self._tick(tuple(str(get("ghosts", self.shown)).split(",")))
+
+    def _tick(self, ghosts: tuple[str, ...]) -> None:
+        """Tick the ghosts named in ``ghosts`` that can run."""
         for i in range(self.ghosts.count()):
             item = self.ghosts.item(i)
             if item.flags() & Qt.ItemFlag.ItemIsEnabled and item.data(Qt.ItemDataRole.UserRole) in ghosts:
@@ -230,11 +245,12 @@ def export_video(
     methods: tuple[str, ...] = (),
     suggested: str = "",
     settings: QSettings | None = None,
+    shown: str = "",
 ) -> str | None:
     """Ask for the options (remembered in ``settings``) and the file (``suggested`` is
     the name the save dialog offers), render, and say so; None when cancelled. Errors
     (a failed method or ffmpeg) are shown, not raised."""
-    dialog = ExportVideoDialog(parent, sensors, methods, settings)
+    dialog = ExportVideoDialog(parent, sensors, methods, settings, shown)
     if dialog.exec() != QDialog.DialogCode.Accepted:
         return None
     path, _ = QFileDialog.getSaveFileName(parent, "Export video", suggested, "MP4 video (*.mp4)")

@@ -201,13 +201,15 @@ class FileActions:
         from engine.studio.export import ExportJob
 
         s = self.session
-        if s.source is not None:
-            return self.show_error(
+        if s.source is not None:  # not an error: a pointer to what does it (an information box)
+            QMessageBox.information(
+                self.w,
                 "Not for tracker input",
                 "Saving re-solves a clip. For trackers use "
                 "`dragposer-studio reconstruct --trackers REC.jsonl --out OUT.bvh` on a "
                 "recording (Live trackers > Record), or `live --out` (docs/trackers.md).",
             )
+            return None
         if self.export.running:
             return self.w.statusBar().showMessage("An export is already running", 3000)
         try:  # checked before a file is asked for

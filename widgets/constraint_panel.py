@@ -228,6 +228,7 @@ class ConstraintPanel(QWidget):
         self.remove_button.clicked.connect(self._remove_selected)
         for w in (self.kinds, self.add_button, self.remove_button):
             top.addWidget(w)
+        self.remove_button.setEnabled(False)  # until there is a constraint
         outer.addLayout(top)
         if not schema:
             self.kinds.addItem("(no constraint kinds available yet)")
@@ -303,6 +304,7 @@ class ConstraintPanel(QWidget):
                     item.setText(text)
         finally:
             self._updating = False
+        self.remove_button.setEnabled(bool(constraints))  # nothing to remove in an empty list
         if rebuild:
             self._show_editor()
         else:

@@ -52,15 +52,17 @@ def test_an_empty_constraint_panel_says_how_to_add_one_and_the_hint_survives_edi
     qtbot.addWidget(p)
     p.show()
     assert p.scroll.widget() is p.hint and p.hint.isVisible() and p.hint.text() == "Press Add."
+    assert not p.remove_button.isEnabled()  # nothing to remove
     pin = {"kind": "pin", "name": "pin1", "weight": 1.0, "enabled": True, "joint": "lwrist"}
     pin |= {"target": [0.0, 0.0, 1.0], "radius": 0.1}
     p.set_constraints([pin])
-    assert p.scroll.widget() is p.editor and not p.hint.isVisible()
+    assert p.scroll.widget() is p.editor and not p.hint.isVisible() and p.remove_button.isEnabled()
     p.list.setCurrentRow(-1)
     assert p.scroll.widget() is p.hint and p.hint.isVisible() and "Select a constraint" in p.hint.text()
     p.list.setCurrentRow(0)
     p.set_constraints([])  # the editor's widget replaced the hint, which was kept, not deleted
     assert p.scroll.widget() is p.hint and p.hint.isVisible() and p.hint.text() == "Press Add."
+    assert not p.remove_button.isEnabled()
     assert [w for w in QApplication.topLevelWidgets() if w is p.hint] == []
 
 

@@ -146,7 +146,9 @@ class Timeline(QWidget):
         self._updating = True
         self.slider.setValue(frame)
         self._updating = False
-        self._show_counter(frame)
+        # the slider's frame: a live stream's newest frame can run ahead of the range the
+        # timeline was last given ("1557 / 1555")
+        self._show_counter(self.slider.value())
 
     def set_playing(self, playing: bool) -> None:
         if playing == self.play_button.isChecked():

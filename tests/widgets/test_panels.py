@@ -28,6 +28,16 @@ def test_timeline_scrub_emits_and_engine_frames_do_not(qtbot):
     assert sig.args == [80] and t.counter.text().startswith("80 / 119")
 
 
+def test_the_counter_never_shows_a_frame_past_the_range(qtbot):
+    from widgets.timeline import Timeline
+
+    t = Timeline()
+    qtbot.addWidget(t)
+    t.set_range(1556, 60.0)
+    t.set_frame(1557)  # a live stream ahead of the range last given
+    assert t.counter.text().startswith("1555 / 1555")
+
+
 def test_sensor_panel_toggle_and_dof(qtbot):
     p = SensorPanel({"two": ("root", "lwrist")})
     qtbot.addWidget(p)

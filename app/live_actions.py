@@ -14,7 +14,7 @@ from PyQt6.QtWidgets import QDialog, QDockWidget, QFileDialog, QMainWindow
 
 from engine.errors import UserError
 from engine.studio import events as ev
-from widgets.live_panel import ConnectDialog, LivePanel
+from widgets.live_panel import DEFAULT_MAPPING, ConnectDialog, LivePanel
 
 if TYPE_CHECKING:
     from engine.studio.session import Session
@@ -86,7 +86,14 @@ class LiveActions:
     def connect_dialog(self) -> None:
         if not self.w.files.confirm_discard("connecting a live source"):
             return
-        dlg = ConnectDialog(self.w, port=int(self.settings.value("live_port", 39539)))
+        get = self.settings.value
+        dlg = ConnectDialog(
+            self.w,
+            port=int(get("live_port", 39539)),
+            mapping=str(get("live_mapping", DEFAULT_MAPPING)),
+            host=str(get("live_host", "0.0.0.0")),
+            convention=str(get("live_convention", "unity")),
+        )
         if dlg.exec() != QDialog.DialogCode.Accepted:
             return
         v = dlg.values()
@@ -99,7 +106,14 @@ class LiveActions:
         except UserError as exc:
             self.show_error("Cannot connect live source", str(exc))
             return False
-        self.settings.setValue("live_port", port)
+        remembered = {
+            "live_port": port,
+            "live_host": host,
+            "live_mapping": mapping or DEFAULT_MAPPING,
+            "live_convention": convention,
+        }
+        for key, value in remembered.items():
+            self.settings.setValue(key, value)  # offered again by the next Connect
         self.session.play()
         return True
 

@@ -35,17 +35,27 @@ LIGHT = {"ok": "#4cd964", "stale": "#ffd60a", "silent": "#ff3b30", "off": "#5a60
 class ConnectDialog(QDialog):
     """Asks for the address to listen on, the tracker mapping and the axes convention."""
 
-    def __init__(self, parent: QWidget | None = None, port: int = 39539, mapping: str = DEFAULT_MAPPING) -> None:
+    def __init__(
+        self,
+        parent: QWidget | None = None,
+        port: int = 39539,
+        mapping: str = DEFAULT_MAPPING,
+        host: str = "0.0.0.0",
+        convention: str = "unity",
+    ) -> None:
         super().__init__(parent)
         self.setWindowTitle("Connect live source (VMC over UDP)")
         form = QFormLayout(self)
-        self.host = QLineEdit("0.0.0.0")
+        self.host = QLineEdit(host)
         self.host.setToolTip("0.0.0.0 listens on every network interface; 127.0.0.1 on this machine only")
         self.port = QSpinBox(minimum=1, maximum=65535, value=port)
         self.mapping = QLineEdit(mapping)
         self.mapping.setToolTip("tracker name = joint, comma separated; :3 after the joint = position only")
+        # the whole default mapping readable without scrolling the field
+        self.mapping.setMinimumWidth(self.mapping.fontMetrics().horizontalAdvance(DEFAULT_MAPPING) + 24)
         self.convention = QComboBox()
         self.convention.addItems(["unity", "openxr", "project"])
+        self.convention.setCurrentText(convention)
         self.convention.setToolTip("axes of the incoming poses; VMC senders use unity (see docs/trackers.md)")
         form.addRow("Listen on", self.host)
         form.addRow("Port", self.port)

@@ -13,13 +13,16 @@ from PyQt6.QtWidgets import QFileDialog
 from engine.tracker_io.recording import read_recording, write_recording
 from engine.tracker_io.sender import plan_stream, scaled_motion, send_stream
 from engine.tracker_io.trackers import TrackerSample
-from widgets.live_panel import LIGHT
+from widgets.live_panel import DEFAULT_MAPPING, LIGHT
 
 pytestmark = pytest.mark.gui
 
 
 def test_connect_record_and_calibrate_a_live_stream(studio, qtbot, synthetic_motion, tmp_path, monkeypatch):
     assert studio.live.connect("127.0.0.1", 0)
+    # the next Connect dialog offers what was used (no mapping given: the default one)
+    get = studio.settings.value
+    assert (get("live_host"), get("live_mapping"), get("live_convention")) == ("127.0.0.1", DEFAULT_MAPPING, "unity")
     src = studio.session.source
     assert src.live and studio.session.motion is None
     subject = scaled_motion(synthetic_motion.slice(0, 90), 1.1)

@@ -58,6 +58,11 @@ def test_connect_dialog_values(qtbot):
     qtbot.addWidget(dlg)
     dlg.host.setText("127.0.0.1")
     assert dlg.values() == {"host": "127.0.0.1", "port": 40000, "mapping": DEFAULT_MAPPING, "convention": "unity"}
+    again = ConnectDialog(port=40000, mapping="Head=upperneck", host="127.0.0.1", convention="openxr")
+    qtbot.addWidget(again)
+    assert again.values() == {"host": "127.0.0.1", "port": 40000, "mapping": "Head=upperneck", "convention": "openxr"}
+    # the default mapping is readable whole
+    assert dlg.mapping.width() >= dlg.mapping.fontMetrics().horizontalAdvance(DEFAULT_MAPPING)
 
 
 def test_the_record_button_stays_put_when_recording_starts(qtbot):

@@ -162,8 +162,8 @@ class MainWindow(QMainWindow):
         tabs = QTabWidget()
         tabs.addTab(self.sensor_panel, "Sensors")
         tabs.addTab(self.constraint_panel, "Constraints")
-        # the settings scroll: their full height made the dock, and the window, taller than
-        # a laptop screen
+        # the settings scroll: at their full height the dock, and the window, would be taller
+        # than a laptop screen
         settings = QScrollArea(widgetResizable=True, frameShape=QFrame.Shape.NoFrame)
         settings.setWidget(self.optimizer_panel)
         tabs.addTab(settings, "Optimizer")

@@ -122,9 +122,9 @@ class LatentInspector(QWidget):
         if snap.latent is None:
             return
         z = np.asarray(snap.latent, float).ravel()
-        # in debug mode too: after a seek, "Store as B" must store the new frame's latent
-        # (it stored A's again); the engine's latent is unchanged by decoding requests, and
-        # an edit made on another frame is dropped
+        # in debug mode too: after a seek, "Store as B" stores the new frame's latent; the
+        # engine's latent is unchanged by decoding requests, and an edit made on another
+        # frame is dropped
         self.latent = z
         if snap.frame != self._frame:
             self._frame, self.edited = snap.frame, None

@@ -183,8 +183,8 @@ class LivePanel(QWidget):
             "figures",
             f"{status.packet_rate_hz:.0f} packets/s, {status.frames} frames, latency {lat}\n"
             f"malformed {status.malformed}, duplicate {status.duplicates}, late {status.late}"
-            # always three lines: a third one appearing moved the Record button under the
-            # pointer, and the click that should stop the recording missed it
+            # always three lines, so that the Record button stays under the pointer when a
+            # recording starts and the click that stops it lands
             + (f"\nrecording to {status.recording}" if status.recording else "\nnot recording"),
         )
         if status.calibration_phase == "countdown":

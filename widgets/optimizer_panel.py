@@ -113,8 +113,8 @@ class OptimizerPanel(QWidget):
         self.method.addItems(methods)
         self.method.currentTextChanged.connect(lambda m: None if self._updating else self.methodChanged.emit(m))
         form.addRow("Method", self.method)
-        # in rows of three: one row of every method made the dock, and with it the window,
-        # too wide for a 1366-pixel screen
+        # in rows of three: one row of every method would widen the dock, and with it the
+        # window, past a 1366-pixel screen
         ghosts = QGridLayout()
         ghosts.setContentsMargins(0, 0, 0, 0)
         self.ghost_boxes: dict[str, QCheckBox] = {}

@@ -68,6 +68,7 @@ class LiveStatus:
 #: finished it, it fails (the stream stopped or never started).
 CALIBRATION_STALL_S = 1.0
 
+
 class LiveSource(SensorSource):
     """Receive VMC on ``host:port`` and serve the frames to the studio.
 
@@ -165,7 +166,7 @@ class LiveSource(SensorSource):
 
     def stop_recording(self) -> Path | None:
         """Finish the recording in progress and return its file; None without one, or when
-        no sample arrived (then no file is written: it could not be opened again)."""
+        no sample arrived (then no file is written: it cannot be opened again)."""
         rec, self._recorder = self._recorder, None
         self.receiver.recorder = None
         if rec is None:

@@ -66,7 +66,7 @@ def test_connect_dialog_values(qtbot):
 
 
 def test_the_record_button_stays_put_when_recording_starts(qtbot):
-    """Recording added a line above the buttons, moving Stop away from the pointer."""
+    """A line added above the buttons while recording would move Stop from under the pointer."""
     panel = LivePanel()
     qtbot.addWidget(panel)
     panel.resize(360, 300)

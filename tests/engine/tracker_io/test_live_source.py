@@ -91,7 +91,7 @@ def test_a_recording_opens_like_a_clip(synthetic_motion, tmp_path):
 
 
 def test_a_recording_that_received_nothing_writes_no_file(tmp_path):
-    """A header-only file could not be opened again ("no valid sample"): none is written."""
+    """A header-only file cannot be opened again ("no valid sample"): none is written."""
     src = LiveSource("127.0.0.1", 0).start()
     try:
         src.start_recording(tmp_path / "empty.jsonl")

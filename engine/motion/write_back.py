@@ -11,10 +11,7 @@ undoes the re-flooring, the change of axes and the unit. The result has the sour
 own hierarchy, OFFSETs, channel layout and Euler orders, so it opens on the user's
 character in Blender or any BVH tool. The trajectory goes on whichever joint carries it in
 the source (:func:`trajectory_joint`), the other position channels keep the source's
-values, and the frame rate is the source's unless another is asked for. Written at the
-source's rate, the file keeps the source's timing: the frames the loader skipped at the
-start (a rig profile's rest pose, ``skip_frames``) are written back as the source has them,
-so frame ``i`` of the result is frame ``i`` of the source.
+values, and the frame rate is the source's unless another is asked for.
 """
 
 from __future__ import annotations
@@ -148,14 +145,6 @@ def save_on_source_rig(path: str | Path, motion: Motion, raw: RawBVH, report, fp
     order = np.asarray(raw.rot_order)
     euler = np.degrees(Q.to_euler(local, np.broadcast_to(order, local.shape[:-1] + (3,))))
     euler = (euler + 180.0) % 360.0 - 180.0
-    skipped = report.skip if abs(fps - report.source_fps) < 1e-6 else 0
-    if skipped:  # the source's own rest frames first: the source's timing is kept
-        euler = np.concatenate([raw.rotations_deg[:skipped], euler])
-        positions = np.concatenate([raw.positions[:skipped], positions])
-    if abs(fps - report.source_fps) < 1e-6 and len(euler) == raw.total_frames - 1:
-        # an even count of source frames at twice the canonical rate ends between two
-        # canonical frames: the last pose is held for that frame, so the length is the source's
-        euler, positions = np.concatenate([euler, euler[-1:]]), np.concatenate([positions, positions[-1:]])
     ends = sorted(raw.end_sites.items())
     writer = _PymotionBVH()
     writer.data = {

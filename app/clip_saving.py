@@ -31,9 +31,10 @@ def clip_edited(window: StudioShell) -> bool:
     return session.motion is not None and opened is not None and session.motion is not opened
 
 
-def save_clip(window: StudioShell, path: str | Path, on_source_rig: bool = False) -> None:
+def save_clip(window: StudioShell, path: str | Path, on_source_rig: bool = False) -> str:
     """Write the loaded clip as it is now to ``path`` (BVH or glTF by the extension, atomically): on the canonical
-    skeleton, or with ``on_source_rig`` onto the hierarchy of the file it was opened from.
+    skeleton, or with ``on_source_rig`` onto the hierarchy of the file it was opened from. Returns what the
+    file lacks of the source, for the message that says it was written (:func:`engine.studio.export.skipped_note`).
 
     Raises
     ------
@@ -41,7 +42,7 @@ def save_clip(window: StudioShell, path: str | Path, on_source_rig: bool = False
         With no clip, or ``on_source_rig`` for a clip not opened from a file (or a rig
         whose channels cannot be written back).
     """
-    from engine.studio.export import source_rig, write_reconstruction
+    from engine.studio.export import skipped_note, source_rig, write_reconstruction
 
     session = window.session
     if session.motion is None or session.source is not None:
@@ -50,6 +51,7 @@ def save_clip(window: StudioShell, path: str | Path, on_source_rig: bool = False
         raise UserError("this clip was not opened from a BVH file")
     on_rig = source_rig(session.path, session.rig_map) if on_source_rig else None
     write_reconstruction(path, session.motion, on_rig)
+    return skipped_note(on_rig[1]) if on_rig is not None else ""
 
 
 def save_clip_dialog(window: StudioShell, on_source_rig: bool = False) -> bool:
@@ -59,11 +61,11 @@ def save_clip_dialog(window: StudioShell, on_source_rig: bool = False) -> bool:
     if not path:
         return False
     try:
-        save_clip(window, path, on_source_rig)
+        note = save_clip(window, path, on_source_rig)
     except (UserError, OSError) as exc:
         window.show_error("Cannot save the clip", str(exc))
         return False
-    window.statusBar().showMessage(f"Saved the clip to {path}", 8000)
+    window.statusBar().showMessage(f"Saved the clip to {path}{note}", 15000)
     return True
 
 

@@ -117,6 +117,19 @@ def source_rig(source: str | Path, rig_map: str | Path | None = None) -> tuple[R
     return raw, retarget(raw, manifest_fps(Path(source)), rig_map=rig_map)[1]
 
 
+def skipped_note(report: Any) -> str:
+    """What a file written onto the source rig lacks of the source (for the message that
+    says it was written): the first frames the rig's profile skips on loading, a rest pose
+    (``report.skip``); "" when none."""
+    skip = int(getattr(report, "skip", 0) or 0)
+    if not skip:
+        return ""
+    return (
+        f" (without the source's first {skip} frame{'s' * (skip > 1)}, its rest pose, skipped on "
+        f"loading: frame i here is the source's frame i + {skip})"
+    )
+
+
 @dataclass(frozen=True)
 class ExportJob:
     """A studio export: solve ``motion`` with ``method`` and the studio's edits, then

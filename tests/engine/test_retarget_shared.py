@@ -194,3 +194,15 @@ def test_every_shared_clip_rotates_like_the_canonical_clips(every_shared_clip, f
         assert row["hinge_alignment_median"] > 0.9 and max(map(abs, row["twist_median"])) < 25, (family, elbow, row)
     for thigh in ("lhip", "rhip"):  # no large twist the shin undoes (not +114/+61 degrees)
         assert max(map(abs, table[thigh][family]["twist_median"])) < 35, (family, thigh, table[thigh][family])
+
+
+def test_the_save_message_names_the_rest_frames_a_source_rig_file_lacks(shared_mocap):
+    """A Daz clip's profile skips its 10-frame rest pose on loading: written back onto its
+    rig, the file lacks those frames, and the message that says it was written says so."""
+    from engine.studio.export import skipped_note, source_rig
+
+    _, report = source_rig(shared_mocap / "cmu_daz/salsa/01.bvh")
+    assert report.skip == 10
+    assert "first 10 frames" in skipped_note(report) and "frame i + 10" in skipped_note(report)
+    _, iclone = source_rig(shared_mocap / "cmu_iclone/002_01.bvh")
+    assert iclone.skip == 0 and skipped_note(iclone) == ""

@@ -88,18 +88,15 @@ class Prefilter:
         # columns, ~1.6x faster than N dot products of length rank + 2 on one core
         self.columns = torch.from_numpy(np.vstack((proj.T, res, pn + res * res)).astype(np.float32))
         self.largest = float(sq.max())  # the largest squared row length, for the margin
-        self._by_row: torch.Tensor | None = None  # columns.T, made by the first bound_rows
+        self._by_row: torch.Tensor | None = None  # columns.T, made by the first bound_at of rows
 
     def bound(self, q: np.ndarray) -> tuple[torch.Tensor, float, float]:
         """``(b (N,) float32, offset, margin)`` for the query ``q (D_c,)`` (the float32
         query's values), in squared standardised units: ``b + offset - margin`` is below
         every row's true squared distance to ``q``."""
         q = np.asarray(q, dtype=np.float64)
-        pq = q @ self.basis
         qq = float(q @ q)
-        rq = np.sqrt(max(qq - float(pq @ pq), 0.0))
-        w = torch.from_numpy(np.concatenate((-2.0 * pq, [-2.0 * rq, 1.0])).astype(np.float32))
-        return w @ self.columns, qq, self.margin(qq)
+        return self.bound_at(self.point(q)), qq, self.margin(qq)
 
     def bounds(self, q: np.ndarray) -> torch.Tensor:
         """The ``b`` of :meth:`bound` for ``F`` queries ``q (F, D_c)``: ``(F, N)`` float32,
@@ -118,17 +115,18 @@ class Prefilter:
         pq = q @ self.basis
         return np.append(pq, np.sqrt(max(float(q @ q) - float(pq @ pq), 0.0)))
 
-    def bound_rows(self, q: np.ndarray, rows: torch.Tensor) -> torch.Tensor:
-        """The ``b`` of :meth:`bound` for ``rows`` only ``(len(rows),)`` (rounded as a
-        product of their own; the margin covers it). Gathers from a row-major copy of the
+    def bound_at(self, u: np.ndarray, rows: torch.Tensor | None = None) -> torch.Tensor:
+        """The ``b`` of :meth:`bound` for the query whose :meth:`point` is ``u``, of every
+        row ``(N,)`` or of ``rows`` only ``(len(rows),)`` (rounded as a product of their
+        own; the margin covers it). ``rows`` are gathered from a row-major copy of the
         columns (a gather across the columns' rows takes 5x longer), made on first use:
-        only live lookups call this."""
+        only live lookups ask for rows."""
+        # [Pt, |Rt|, |Pt|^2 + |Rt|^2] . [-2Pq, -2|Rq|, 1]
+        w = torch.from_numpy(np.append(-2.0 * u, 1.0).astype(np.float32))
+        if rows is None:
+            return w @ self.columns
         if self._by_row is None:
             self._by_row = self.columns.T.contiguous()
-        q = np.asarray(q, dtype=np.float64)
-        pq = q @ self.basis
-        rq = np.sqrt(max(float(q @ q) - float(pq @ pq), 0.0))
-        w = torch.from_numpy(np.concatenate((-2.0 * pq, [-2.0 * rq, 1.0])).astype(np.float32))
         return self._by_row.index_select(0, rows) @ w
 
     def margin(self, qq: float) -> float:
@@ -177,7 +175,7 @@ class Neighbourhood:
         u = pre.point(q64)
         moved = float(np.linalg.norm(u - self.centre)) if self.centre is not None else np.inf
         if radius + moved > self.reach:  # the kept ball no longer holds the search ball
-            bb = pre.bound(q64)[0].numpy()
+            bb = pre.bound_at(u).numpy()
             self.centre, self.reach = u, radius + SLACK
             # low = sqrt(b + |q|^2 - margin) is below |u(t) - centre|; a row left out has
             # low > reach (the extra margin covers the float32 comparison)
@@ -188,7 +186,7 @@ class Neighbourhood:
             return torch.from_numpy(np.flatnonzero(bb <= worst + 2.0 * margin))
         # |u(t) - u(q)| >= |u(t) - centre| - moved >= low - moved; 1e-9 for the float64 sums
         near = self.rows[torch.from_numpy(self.low - moved <= radius + 1e-9)]
-        b = pre.bound_rows(q64, near).numpy()
+        b = pre.bound_at(u, near).numpy()
         return near[torch.from_numpy(b <= worst + 2.0 * margin)]
 
 

@@ -131,13 +131,7 @@ class MethodSet:
             except Exception as exc:
                 self._report(f"{g}.reset: {exc}")
                 continue
-            problems = [
-                *apply_settings(m, self.settings),
-                *apply_constraints(m, self.constraints),
-                *apply_sensor_weights(m, self.sensors),
-            ]
-            for problem in problems if self._can_run(g) else ():
-                self._report(problem)
+            self._apply(g, m)
             self.ghosts[g] = m
             if self._kept is not None:  # a paused frame solved again restores it too
                 self._kept[g] = copy_state(m)
@@ -212,16 +206,20 @@ class MethodSet:
         ``sensors`` or ``all``. Only the changed aspect is re-applied, so a problem (such
         as a method that ignores constraints) is reported once per edit."""
         for name, m in self.running():
-            problems = []
-            if what in ("all", "settings"):
-                problems += apply_settings(m, self.settings)
-            if what in ("all", "constraints"):
-                problems += apply_constraints(m, self.constraints)
-            if what in ("all", "sensors"):
-                problems += apply_sensor_weights(m, self.sensors)
-            # a method that cannot run from these trackers says that instead, once per frame
-            for problem in problems if report and self._can_run(name) else ():
-                self._report(problem)
+            self._apply(name, m, what, report)
+
+    def _apply(self, name: str, m: Method, what: str = "all", report: bool = True) -> None:
+        """:meth:`configure` of the one method ``m`` named ``name``."""
+        problems = []
+        if what in ("all", "settings"):
+            problems += apply_settings(m, self.settings)
+        if what in ("all", "constraints"):
+            problems += apply_constraints(m, self.constraints)
+        if what in ("all", "sensors"):
+            problems += apply_sensor_weights(m, self.sensors)
+        # a method that cannot run from these trackers says that instead, once per frame
+        for problem in problems if report and self._can_run(name) else ():
+            self._report(problem)
 
     def _can_run(self, name: str) -> bool:
         """Whether method ``name`` can reconstruct from the sensors (an edit problem of a

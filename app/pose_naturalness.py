@@ -26,6 +26,7 @@ from PyQt6.QtCore import pyqtSignal
 from PyQt6.QtGui import QAction, QActionGroup
 from PyQt6.QtWidgets import QFileDialog, QLabel, QMainWindow, QMenu, QMessageBox, QWidget
 
+from app.file_actions import OPEN_FILTER  # the formats the studio opens
 from engine.authoring.pose_reference import ReferenceSet, load_files, load_shipped, take_label
 from engine.errors import UserError
 from engine.progress import Cancelled
@@ -205,10 +206,6 @@ class NaturalnessReadout(QLabel):
         self.setToolTip(tip)
 
 
-#: What the reference file dialog offers (any format the studio opens).
-REFERENCE_FILTER = "Motion files (*.bvh *.amc);;BVH motion (*.bvh);;ASF/AMC motion (*.amc)"
-
-
 class ReferenceMenu:
     """View > Naturalness reference of the pose window ``w`` (which holds the readout as
     ``w.naturalness``): the shipped validation poses, or motion files chosen in a dialog.
@@ -230,27 +227,27 @@ class ReferenceMenu:
 
     def use_shipped(self) -> None:
         self.readout.use_files(None)
-        self.shipped.setChecked(True)
+        self._show_choice()
 
     def choose_files(self) -> None:
         """Ask for the files (two or more) and judge poses against them."""
         start = str(self.readout.files[0].parent) if self.readout.files else ""
-        names, _ = QFileDialog.getOpenFileNames(self.w, "Naturalness reference: motion files", start, REFERENCE_FILTER)
-        if not names:  # cancelled: keep what was in use
-            (self.files if self.readout.files else self.shipped).setChecked(True)
-            return
+        names, _ = QFileDialog.getOpenFileNames(self.w, "Naturalness reference: motion files", start, OPEN_FILTER)
         try:
-            self.readout.use_files([Path(n) for n in names])
+            if names:  # cancelled: the reference in use stays
+                self.readout.use_files([Path(n) for n in names])
         except UserError as exc:
             QMessageBox.warning(self.w, "Naturalness reference", str(exc))
-            (self.files if self.readout.files else self.shipped).setChecked(True)
-            return
-        self.files.setChecked(True)
-        self.files.setText(f"&Motion files... ({len(names)} in use)")
+        self._show_choice()
 
-    def _failed(self, message: str) -> None:
+    def _show_choice(self) -> None:
+        """Check the entry of the reference in use and say how many files it holds."""
         kept = self.readout.files
         (self.files if kept else self.shipped).setChecked(True)
         self.files.setText(f"&Motion files... ({len(kept)} in use)" if kept else "&Motion files...")
+
+    def _failed(self, message: str) -> None:
+        self._show_choice()
+        kept = self.readout.files
         now = f"the {len(kept)} files chosen before" if kept else "the shipped validation poses"
         QMessageBox.warning(self.w, "Naturalness reference", f"{message}\n\nPoses are judged against {now}.")

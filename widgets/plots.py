@@ -179,7 +179,7 @@ class LossPlots(QWidget):
         layout.addLayout(plots, 1)
         layout.addWidget(self.legend)
         self._seq = -1
-        self._titles: dict[int, str] = {}
+        self._titles: dict[int, tuple[str, str]] = {}  # plot -> its title and tooltip
 
     def _set_visible(self, name: str, on: bool) -> None:
         self.iter_curves.set_visible(name, on)
@@ -230,8 +230,8 @@ class LossPlots(QWidget):
     def _title(self, plot: pg.PlotWidget, title: str, why: str = "") -> None:
         """Set ``plot``'s (short) title and tooltip when they change: an empty plot says
         why it is empty instead of looking broken."""
-        if self._titles.get(id(plot)) != title:
-            self._titles[id(plot)] = title
+        if self._titles.get(id(plot)) != (title, why):  # another method may be empty for its own reason
+            self._titles[id(plot)] = (title, why)
             plot.setTitle(title, size="9pt")
             plot.setToolTip(why)
 

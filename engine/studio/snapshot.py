@@ -90,8 +90,8 @@ class Snapshot:
     engine_fps : float
         Solved frames per second (moving average).
     configurable : bool
-        Whether the shown method takes optimizer settings (the studio greys them out
-        otherwise).
+        Whether the shown method takes optimizer settings (the studio says so when it
+        takes none).
     decoded : ndarray (22, 3) or None
         Pose decoded from a latent sent with :class:`DecodeLatent` (debug mode).
     solved : int

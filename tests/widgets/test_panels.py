@@ -264,8 +264,10 @@ def test_empty_loss_plots_say_why_in_their_titles(qtbot, fake_snapshot):
     p.update_snapshot(snap)
     assert p.iteration_plot.getPlotItem().titleLabel.text == "Loss per iteration: none"
     assert "ik does not iterate" in p.iteration_plot.toolTip()
+    p.update_snapshot(fake_snapshot(seq=2, losses=(), method="autoencoder", history=snap.history))
+    assert "autoencoder does not iterate" in p.iteration_plot.toolTip()  # the same title, its own reason
     assert p.history_plot.getPlotItem().titleLabel.text == "Loss history: all 0"
-    p.update_snapshot(fake_snapshot(seq=2))
+    p.update_snapshot(fake_snapshot(seq=3))
     assert p.iteration_plot.getPlotItem().titleLabel.text == "Loss per iteration"
     assert p.history_plot.getPlotItem().titleLabel.text == "Loss history" and not p.history_plot.toolTip()
 

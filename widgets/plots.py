@@ -235,22 +235,31 @@ class LossPlots(QWidget):
             plot.setTitle(title, size="9pt")
             plot.setToolTip(why)
 
+    def _all_zero(self, plot: pg.PlotWidget, title: str, zero: bool) -> None:
+        """``plot``'s own ``title``, or with ``zero`` (every term 0: nothing a log axis can
+        draw) the title and a tooltip saying so."""
+        why = "Every term is 0 (the method meets each tracker exactly): a log axis has nothing to draw."
+        self._title(plot, title + (": all 0" if zero else ""), why if zero else "")
+
     def update_iterations(self, snap: Any) -> None:
         """This frame's loss per iteration, every term."""
         names = self._terms(snap)
         losses = snap.losses
-        method = getattr(snap, "method", "") or "this method"
-        self._title(
-            self.iteration_plot,
-            "Loss per iteration" + ("" if losses or not snap.history else ": none"),
-            "" if losses else f"{method} does not iterate: it reports no loss per iteration.",
-        )
+        drawn = False
         if losses:
             its = np.arange(1, len(losses) + 1)
             for name in names:
                 vals = np.array([_loggable(float(d.get(name, np.nan)), LOSS_FLOOR) for d in losses])
                 _set_curve(self.iter_curves.get(name, symbols=True), its, vals)
+                drawn = drawn or bool(np.isfinite(vals).any())
             settle(self.iteration_plot)
+        if not losses and snap.history:
+            method = getattr(snap, "method", "") or "this method"
+            self._title(
+                self.iteration_plot, "Loss per iteration: none", f"{method} does not iterate: it reports no loss."
+            )
+        else:
+            self._all_zero(self.iteration_plot, "Loss per iteration", bool(names) and bool(losses) and not drawn)
 
     def update_cost(self, snap: Any) -> None:
         """Milliseconds and iterations of the engine's recent solved frames."""
@@ -271,13 +280,6 @@ class LossPlots(QWidget):
             y = np.array([_loggable(float(r.losses.get(name, np.nan)), LOSS_FLOOR) for r in history])
             _set_curve(self.history_curves.get(name), x, y)
             shown = shown or bool(np.isfinite(y).any())
-        zero = bool(names) and not shown
-        self._title(
-            self.history_plot,
-            "Loss history" + (": all 0" if zero else ""),
-            "Every term is 0 on these frames (the method meets each tracker exactly): a log axis has nothing to draw."
-            if zero
-            else "",
-        )
+        self._all_zero(self.history_plot, "Loss history", bool(names) and not shown)
         fit_frames(self.history_plot, x)
         settle(self.history_plot)

@@ -267,7 +267,11 @@ def test_empty_loss_plots_say_why_in_their_titles(qtbot, fake_snapshot):
     p.update_snapshot(fake_snapshot(seq=2, losses=(), method="autoencoder", history=snap.history))
     assert "autoencoder does not iterate" in p.iteration_plot.toolTip()  # the same title, its own reason
     assert p.history_plot.getPlotItem().titleLabel.text == "Loss history: all 0"
-    p.update_snapshot(fake_snapshot(seq=3))
+    # a method whose one reported iteration is all zeros (ik in the studio): said on both plots
+    p.update_snapshot(fake_snapshot(seq=3, losses=(zero,), method="ik", history=snap.history))
+    assert p.iteration_plot.getPlotItem().titleLabel.text == "Loss per iteration: all 0"
+    assert "every term is 0" in p.iteration_plot.toolTip().lower()
+    p.update_snapshot(fake_snapshot(seq=4))
     assert p.iteration_plot.getPlotItem().titleLabel.text == "Loss per iteration"
     assert p.history_plot.getPlotItem().titleLabel.text == "Loss history" and not p.history_plot.toolTip()
 

@@ -95,6 +95,21 @@ class Distributed:
     def main(self) -> bool:
         return self.rank == 0
 
+    def own_stream(self, shared: torch.Generator, seed: int) -> torch.Generator:
+        """The random stream of this rank's augmentation and noise.
+
+        Every rank draws the same permutation from ``shared`` (so together they cover the
+        epoch once); what each then draws for its own poses must differ, or the two halves
+        of a step would take the same donor limbs, bone scales and latent noise. Rank 0
+        keeps ``shared`` (a single process draws exactly what it always drew); another
+        rank gets a generator of its own, seeded from ``seed`` and its rank, and reseeds the
+        global stream (the encoder's sampling noise) the same way."""
+        if self.rank == 0:
+            return shared
+        own = seed * 7919 + self.rank
+        torch.manual_seed(own)
+        return torch.Generator().manual_seed(own)
+
     def barrier(self) -> None:
         if self.world > 1:
             dist.barrier()

@@ -257,6 +257,7 @@ def train_vae(
         vae.train()
         gen = torch.Generator().manual_seed(cfg.seed * 1000 + epoch)
         perm = pairs[torch.randperm(len(pairs), generator=gen)]
+        gen = ddp.own_stream(gen, cfg.seed * 1000 + epoch)
         sums_t: torch.Tensor | None = None
         bar = tqdm(
             range(steps_per_epoch),

@@ -339,3 +339,30 @@ def test_the_device_auto_is_the_cpu_here_with_the_same_weights_and_cuda_is_refus
         pick_device("cuda")
     with pytest.raises(UserError, match="--device must be one of auto, cpu, cuda"):
         pick_device("tpu")
+
+
+def test_each_rank_draws_its_own_augmentation_after_the_shared_permutation(tiny_data):
+    """Ranks share the epoch's permutation, but a rank drawing the same stream as rank 0
+    would give its half of the batch rank 0's donor limbs and bone scales."""
+    from engine.training.common import Distributed
+    from engine.training.data import load_split
+    from engine.training.vae_batches import batch_of
+
+    data = load_split(tiny_data, "train")
+    idx = torch.nonzero(data.has_next).squeeze(1)[:64]
+    ddp = Distributed("cpu")
+    shared = torch.Generator().manual_seed(3)
+    assert ddp.own_stream(shared, 3) is shared  # a single process draws what it always drew
+    with torch.random.fork_rng():
+        torch.manual_seed(0)
+        before = torch.rand(4)
+        ddp.rank = 1
+        own = ddp.own_stream(torch.Generator().manual_seed(3), 3)
+        torch.manual_seed(0)
+        ddp.own_stream(torch.Generator().manual_seed(3), 3)
+        assert not torch.equal(torch.rand(4), before)  # the encoder's noise too
+    pairs = torch.nonzero(data.has_next).squeeze(1)
+    rank0 = batch_of(data, idx, 1.0, torch.Generator().manual_seed(3), pairs, 0.15)
+    rank1 = batch_of(data, idx, 1.0, own, pairs, 0.15)
+    assert not torch.allclose(rank0["offsets"], rank1["offsets"])
+    assert not torch.allclose(rank0["rot"], rank1["rot"])

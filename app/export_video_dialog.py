@@ -4,7 +4,7 @@ The studio window (the loaded clip, its tracker preset) and the pose window (the
 bake) both export through :func:`export_video`: the dialog asks for the size, view,
 layout, camera, ghost methods, whether the motion is the ground truth, a title and a
 time code (the options of ``dragposer-studio render``, :class:`app.render_scene.RenderOptions`),
-then the file name; :func:`write_video` renders it with a progress dialog and says
+then the file name (in the folder last saved into: :mod:`app.save_folder`); :func:`write_video` renders it with a progress dialog and says
 where the file was written (status bar and a message).
 
 What cannot run is not offered: a ghost method that cannot reconstruct from the
@@ -26,7 +26,6 @@ from PyQt6.QtWidgets import (
     QComboBox,
     QDialog,
     QDialogButtonBox,
-    QFileDialog,
     QFormLayout,
     QLabel,
     QLineEdit,
@@ -37,6 +36,7 @@ from PyQt6.QtWidgets import (
 )
 
 from app.render_scene import CAMERAS, LAYOUTS, VIEWS, RenderOptions
+from app.save_folder import ask_save_path, check_writable
 from engine.errors import UserError
 
 SIZES = ("640x360", "960x540", "1280x720", "1920x1080")
@@ -253,10 +253,11 @@ def export_video(
     dialog = ExportVideoDialog(parent, sensors, methods, settings, shown)
     if dialog.exec() != QDialog.DialogCode.Accepted:
         return None
-    path, _ = QFileDialog.getSaveFileName(parent, "Export video", suggested, "MP4 video (*.mp4)")
+    path, _ = ask_save_path(parent, "Export video", suggested, "MP4 video (*.mp4)", settings)
     if not path:
         return None
     try:
+        check_writable(path)
         done = write_video(parent, motion, path, dialog.options())
     except (UserError, OSError) as exc:
         QMessageBox.warning(parent, "Export video", str(exc))

@@ -187,9 +187,11 @@ class ExportVideoDialog(QDialog):
         for widget in (self.first, QLabel("to"), self.last, self.whole):
             lay.addWidget(widget)
         lay.addStretch(1)
+        self.selection = None  # the timeline's, as offered
         if selection is not None:
             lo, hi = sorted(selection)
-            self.set_frames(max(0, lo), min(last, hi))
+            self.selection = (max(0, lo), min(last, hi))
+            self.set_frames(*self.selection)
         self._frames_changed()
         return row
 
@@ -208,7 +210,12 @@ class ExportVideoDialog(QDialog):
         n = self.last.value() - self.first.value() + 1
         whole = n == self.num_frames
         self.whole.setEnabled(not whole)
-        what = "the whole clip" if whole else f"of frames 0-{self.num_frames - 1}"
+        if whole:
+            what = "the whole clip"
+        elif (self.first.value(), self.last.value()) == self.selection:
+            what = f"the timeline's selection, of frames 0-{self.num_frames - 1}"
+        else:
+            what = f"of frames 0-{self.num_frames - 1}"
         self.frames_note.setText(f"{n} frame{'s' * (n != 1)}, {n / self.fps:.2f} s: {what}")
 
     def _restore(self) -> None:

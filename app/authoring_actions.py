@@ -81,7 +81,8 @@ def new_pose(window: StudioShell) -> None:
 
 def export_video(window: StudioShell) -> str | None:
     """File ▸ Export video...: the loaded clip with the current tracker preset, through
-    the video options dialog (:mod:`app.export_video_dialog`)."""
+    the video options dialog (:mod:`app.export_video_dialog`); the frames start as the
+    timeline's selection, when there is one."""
     from app.export_video_dialog import export_video as export
 
     motion = window.session.motion
@@ -96,6 +97,7 @@ def export_video(window: StudioShell) -> str | None:
         window.files.suggested_name("mp4", "video"),
         window.settings,
         window.session.method,
+        window.timeline.selection(),
     )
 
 

@@ -57,7 +57,7 @@ def save_clip(window: StudioShell, path: str | Path, on_source_rig: bool = False
 def save_clip_dialog(window: StudioShell, on_source_rig: bool = False) -> bool:
     """Ask for a file and save the clip there; False when cancelled or failed."""
     title = "Save edited clip" + (" onto the source rig" if on_source_rig else "")
-    path = ask_motion_path(window, title, window.files.suggested_name("bvh", "edited"))
+    path = ask_motion_path(window, title, window.files.suggested_name("bvh", "edited"), window.settings)
     if not path:
         return False
     try:

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -21,6 +20,7 @@ from app import rig_maps
 from app.clip_saving import clip_edited
 from app.export import ReconstructionExport
 from app.motion_files import ask_motion_path
+from app.save_folder import ask_save_path, check_writable, save_folder
 from engine.atomic import atomic_path, write_text
 from engine.errors import OutputError, RigError, UserError
 from engine.input_files import read_json
@@ -32,8 +32,6 @@ if TYPE_CHECKING:
     from widgets.viewport import Viewport
 
 MAX_RECENT = 8
-#: The studio's bundled files (the example clip): save dialogs do not offer this folder.
-APP_ASSETS = Path(__file__).resolve().parents[1] / "assets"
 
 
 #: File types of the Open dialog: an AMC motion's ASF skeleton is found beside it
@@ -218,12 +216,13 @@ class FileActions:
             text = str(exc)
             return self.show_error("Nothing to save", f"{text[:1].upper()}{text[1:]}.")
         if path is None:
-            path = ask_motion_path(self.w, "Save reconstruction", self.suggested_name("bvh"))
+            path = ask_motion_path(self.w, "Save reconstruction", self.suggested_name("bvh"), self.settings)
             if not path:
                 return None
             job = dataclasses.replace(job, path=Path(path))
-        try:  # an extension no writer knows: said before the solve, not after it
+        try:  # an extension no writer knows, a folder that cannot be written: said before the solve
             motion_format(path, "file")
+            check_writable(path)
         except UserError as exc:
             return self.show_error("Cannot save reconstruction", str(exc))
         self.export.start(job)
@@ -242,23 +241,19 @@ class FileActions:
 
     def suggested_name(self, ext: str, what: str | None = None) -> str:
         """A file name the save dialogs offer, named after the open clip and the method
-        (``walk_dragposer.bvh``) or after ``what`` (``walk_scene.json``): beside the clip
-        when that folder is the user's to write in, else in the home folder (a shared
-        data folder is read-only, and the studio's own ``assets`` are not a place for
-        the user's files)."""
+        (``walk_dragposer.bvh``) or after ``what`` (``walk_scene.json``), in the folder
+        last saved into, else beside the clip when the user may write there, else in the
+        home folder (:func:`app.save_folder.save_folder`)."""
         clip = self.session.path
         stem = Path(clip).stem if clip else "studio"
         name = f"{stem}_{what or self.session.method}.{ext}"
-        folder = Path(clip).resolve().parent if clip else Path.home()
-        if not os.access(folder, os.W_OK) or folder.is_relative_to(APP_ASSETS):
-            folder = Path.home()
-        return str(folder / name)
+        return str(save_folder(self.settings, clip) / name)
 
     # -- scenes ---------------------------------------------------------------------
     def save_scene(self, path: str | None = None) -> bool:
         if path is None:
-            path, _ = QFileDialog.getSaveFileName(
-                self.w, "Save scene", self.suggested_name("json", "scene"), "Studio scene (*.json)"
+            path, _ = ask_save_path(
+                self.w, "Save scene", self.suggested_name("json", "scene"), "Studio scene (*.json)", self.settings
             )
             if not path:
                 return False
@@ -309,8 +304,8 @@ class FileActions:
 
     def export_screenshot(self, path: str | None = None) -> bool:
         if path is None:
-            path, _ = QFileDialog.getSaveFileName(
-                self.w, "Export screenshot", self.suggested_name("png", "studio"), "PNG image (*.png)"
+            path, _ = ask_save_path(
+                self.w, "Export screenshot", self.suggested_name("png", "studio"), "PNG image (*.png)", self.settings
             )
             if not path:
                 return False

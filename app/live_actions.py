@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 from PyQt6.QtCore import QSettings, Qt, QTimer
 from PyQt6.QtWidgets import QDialog, QDockWidget, QFileDialog, QMainWindow
 
+from app.save_folder import ask_save_path, save_folder
 from engine.errors import UserError
 from engine.studio import events as ev
 from widgets.live_panel import DEFAULT_MAPPING, ConnectDialog, LivePanel
@@ -164,9 +165,8 @@ class LiveActions:
         if not on:
             self._finish_recording(src)
             return
-        path, _ = QFileDialog.getSaveFileName(
-            self.w, "Record trackers to", "trackers.jsonl", "Tracker recording (*.jsonl)"
-        )
+        suggested = save_folder(self.settings) / "trackers.jsonl"
+        path, _ = ask_save_path(self.w, "Record trackers to", suggested, "Tracker recording (*.jsonl)", self.settings)
         if not path:
             self.panel.set_recording(False)
             return

@@ -6,8 +6,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from PyQt6.QtWidgets import QFileDialog, QWidget
+from PyQt6.QtCore import QSettings
+from PyQt6.QtWidgets import QWidget
 
+from app.save_folder import ask_save_path
 from engine.motion.formats import MOTION_FORMATS
 
 #: The dialog's filters, BVH first: ``"BVH motion (*.bvh);;glTF 2.0 binary (*.glb);;..."``.
@@ -22,8 +24,9 @@ def with_filter_suffix(path: str, chosen: str) -> str:
     return path + ext
 
 
-def ask_motion_path(parent: QWidget, title: str, suggested: str) -> str | None:
-    """A motion file name from the save dialog, or None when cancelled. The format is the
+def ask_motion_path(parent: QWidget, title: str, suggested: str, settings: QSettings | None) -> str | None:
+    """A motion file name from the save dialog (:func:`app.save_folder.ask_save_path`,
+    whose folder is remembered in ``settings``), or None when cancelled. The format is the
     extension's (an unknown one is refused when writing, listing the known ones)."""
-    path, chosen = QFileDialog.getSaveFileName(parent, title, suggested, MOTION_FILTERS)
+    path, chosen = ask_save_path(parent, title, suggested, MOTION_FILTERS, settings)
     return with_filter_suffix(path, chosen) if path else None

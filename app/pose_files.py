@@ -11,9 +11,11 @@ its character's height), goes to its first key and starts a new undo history
 (:meth:`engine.authoring.session.AuthoringSession.open_scene`); what
 only the studio uses (sensors, clip) is left and the status bar says so. Unsaved edits
 are offered for saving first, as on closing. Exports bake the keys first, off the GUI
-thread with a Cancel (:mod:`app.pose_timeline`). Every dialog starts in the folder of
-the last file the window wrote (else the user's home) with a name (``pose.json``, ``pose.bvh``, ``pose.mp4``, or the saved scene's name
-with the export's suffix); a finished export says so in the status bar with its path.
+thread with a Cancel (:mod:`app.pose_timeline`). Every save dialog starts in the folder
+last saved into (by this window or the studio), else the opened scene's folder when it
+is writable, else the user's home (:func:`app.save_folder.save_folder`), with a name
+(``pose.json``, ``pose.bvh``, ``pose.mp4``, or the saved scene's name with the export's
+suffix); a finished export says so in the status bar with its path.
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ from typing import Any
 from PyQt6.QtWidgets import QFileDialog, QMessageBox
 
 from app.motion_files import ask_motion_path
+from app.save_folder import ask_save_path, remember_save_folder, save_folder
 from engine.authoring.document import authoring_from_dict, save_authoring
 from engine.errors import UserError
 from engine.motion.formats import motion_format, save_motion
@@ -39,15 +42,16 @@ class PoseFiles:
     def __init__(self, w: Any) -> None:
         self.w = w
         self.path: Path | None = None  # the scene as last saved
-        self.folder = Path.home()
+        self.folder = Path.home()  # of the scene last opened or written: where Open starts
 
     def suggested(self, suffix: str) -> str:
-        """Where a dialog for a ``suffix`` file starts (see the module doc)."""
+        """Where a save dialog for a ``suffix`` file starts (see the module doc)."""
         stem = self.path.stem if self.path is not None else "pose"
-        return str(self.folder / f"{stem}{suffix}")
+        return str(save_folder(self.w.settings, self.folder) / f"{stem}{suffix}")
 
     def _wrote(self, path: str | Path, what: str) -> None:
         self.folder = Path(path).resolve().parent
+        remember_save_folder(self.w.settings, path)  # also a save without a dialog (Ctrl+S)
         self.w.statusBar().showMessage(f"{what} written to {path}", DONE_MS)
 
     def confirm_discard(self, doing: str) -> bool:
@@ -137,16 +141,17 @@ class PoseFiles:
         self._wrote(path, "BVH" if kind == ".bvh" else "glTF")
 
     def export_video(self, path: str | Path, size: tuple[int, int] = (960, 540)) -> None:
-        """Render the bake to ``path`` (MP4, stick figure) and say so."""
+        """Render the bake to ``path`` (MP4, stick figure) and say so (a cancelled video
+        says so itself: :func:`app.export_video_dialog.write_video`)."""
         from app.export_video_dialog import write_video
         from app.render_scene import RenderOptions
 
-        write_video(self.w, self.w.playback.baked_scene().motion, path, RenderOptions(size=size))
-        self._wrote(path, "Video")
+        if write_video(self.w, self.w.playback.baked_scene().motion, path, RenderOptions(size=size)) is not None:
+            self._wrote(path, "Video")
 
     def ask_path(self, title: str, pattern: str, suffix: str) -> str:
         """A path from a save dialog ("" when cancelled)."""
-        path, _ = QFileDialog.getSaveFileName(self.w, title, self.suggested(suffix), pattern)
+        path, _ = ask_save_path(self.w, title, self.suggested(suffix), pattern, self.w.settings)
         return path
 
     def _dialog(self, title: str, pattern: str, suffix: str, action: Callable[[str], None]) -> None:
@@ -161,7 +166,7 @@ class PoseFiles:
         self._dialog("Save scene", "Scenes (*.json)", ".json", self.save)
 
     def export_bvh_dialog(self) -> None:
-        path = ask_motion_path(self.w, "Export motion", self.suggested(".bvh"))
+        path = ask_motion_path(self.w, "Export motion", self.suggested(".bvh"), self.w.settings)
         if path:
             try:
                 self.export_bvh(path)

@@ -14,11 +14,21 @@ draws the trackers of preset P on the motion; ``--ghosts ik,...`` reconstructs t
 motion from those trackers with each method, solved ahead in a process of its own
 (:mod:`engine.studio.ghost_solve`), and draws the results over it (``--layout overlay``)
 or beside it (``--layout side``). The legend names every figure in its colour.
+
+``--start F --end F`` render a part of the clip: frames counted from 0 as the studio's
+timeline shows them (the studio opens a clip at 60 fps; at another video rate, a
+120 fps file rendered at its own rate or ``--fps``, the part is the same stretch of
+time). The part is cut before anything is solved: a ghost starts solving at its first
+frame, as on a clip that begins there (a method that follows the motion over time,
+such as dragposer, starts afresh; the poses can differ from those of the whole clip at
+the same frame). The time code still shows the clip's time and frame numbers.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import math
 import os
 import sys
 import time
@@ -26,6 +36,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from app.render_scene import CAMERAS, LAYOUTS, VIEWS, RenderOptions
+from engine import skeleton as sk
 from engine.errors import UserError
 
 
@@ -61,6 +72,19 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--title", default="", metavar="TEXT", help="a title line above the legend")
     p.add_argument("--timecode", action="store_true", help="show the time and frame number (bottom right)")
+    p.add_argument(
+        "--start",
+        type=int,
+        metavar="F",
+        help="first frame to render, counted from 0 as the studio's timeline counts (default 0); "
+        "ghosts start solving there",
+    )
+    p.add_argument(
+        "--end",
+        type=int,
+        metavar="F",
+        help="last frame to render, included, as the timeline counts (default: the last)",
+    )
     p.add_argument(
         "--msaa",
         type=int,
@@ -136,15 +160,26 @@ def run(args: argparse.Namespace) -> int:
     options = options_from_args(args)
     check_input_file(args.input, "scene" if args.input.suffix.lower() == ".json" else "BVH file")
     check_output_path(args.out)
+    if args.fps and not 1.0 <= args.fps <= 240.0:
+        raise UserError(f"--fps must be within 1-240, got {args.fps}")
+    for flag, value in (("--start", args.start), ("--end", args.end)):
+        if value is not None and value < 0:
+            raise UserError(f"{flag} {value}: frames are counted from 0")
+    if args.start is not None and args.end is not None and args.end < args.start:
+        raise UserError(f"--end {args.end} is before --start {args.start}")
     motion = load_input(args.input)
+    # the frames the studio's timeline numbers: a clip's at 60 fps (as the studio opens
+    # it), a scene's at its bake's rate
+    timeline_fps = motion.fps if args.input.suffix.lower() == ".json" else float(sk.FPS)
     if args.fps:
-        if not 1.0 <= args.fps <= 240.0:
-            raise UserError(f"--fps must be within 1-240, got {args.fps}")
         from engine.motion.retarget import resample_motion
 
         motion = resample_motion(motion, float(args.fps))
+    frames = timeline_range(args.start, args.end, motion, timeline_fps)
+    options = dataclasses.replace(options, frames=frames)
+    total = len(motion) if frames is None else frames[1] - frames[0] + 1
     bar = tqdm(
-        total=len(motion),
+        total=total,
         unit="frame",
         desc="render",
         disable=args.no_progress,
@@ -156,8 +191,55 @@ def run(args: argparse.Namespace) -> int:
     finally:
         bar.close()
     w, h = options.size
-    print(f"{args.out}: {len(motion)} frames, {w}x{h} at {motion.fps:g} fps")
+    part = f" (frames {frames[0]}-{frames[1]} of {len(motion)})" if frames is not None else ""
+    print(f"{args.out}: {total} frames{part}, {w}x{h} at {motion.fps:g} fps")
     return 0
+
+
+def timeline_range(start: int | None, end: int | None, motion, timeline_fps: float) -> tuple[int, int] | None:
+    """The frames of ``motion`` (first, last, inclusive) showing the timeline's frames
+    ``start``-``end`` (None: the first, the last), where the timeline counts frames from
+    0 at ``timeline_fps``; None for the whole motion. At the timeline's rate the
+    numbers are the same; at another the part is the same stretch of time.
+
+    Raises
+    ------
+    UserError
+        A frame outside the clip (the message names the option and the frames there
+        are) or ``--end`` before ``--start``.
+    """
+    if start is None and end is None:
+        return None
+    fps, n = float(motion.fps), len(motion)
+    same = abs(fps - timeline_fps) < 1e-6
+    last = n - 1 if same or n < 2 else int(math.floor((n - 1) / fps * timeline_fps + 1e-9))
+    first_tl = 0 if start is None else start
+    last_tl = last if end is None else end
+    for flag, value in (("--start", first_tl), ("--end", last_tl)):
+        if not 0 <= value <= last:
+            raise UserError(f"{flag} {value}: the clip's frames are 0-{last} (as the studio's timeline counts them)")
+    if last_tl < first_tl:
+        raise UserError(f"--end {last_tl} is before --start {first_tl}")
+    if same:
+        return first_tl, last_tl
+    nearest = lambda frame: min(n - 1, math.floor(frame * fps / timeline_fps + 0.5))  # noqa: E731
+    return nearest(first_tl), max(nearest(first_tl), nearest(last_tl))
+
+
+def check_frames(frames: tuple[int, int] | None, n: int) -> tuple[int, int]:
+    """``frames`` (first, last, inclusive) of an ``n``-frame motion, checked; None: all.
+
+    Raises
+    ------
+    UserError
+        A frame outside 0..n-1, or the last before the first.
+    """
+    if frames is None:
+        return 0, n - 1
+    first, last = frames
+    if not 0 <= first <= last <= n - 1:
+        raise UserError(f"frames {first}-{last}: the motion's frames are 0-{n - 1}")
+    return first, last
 
 
 def load_input(path: Path):
@@ -179,16 +261,28 @@ def render_video(
     options: RenderOptions = RenderOptions(),
     progress: Callable[[int], None] | None = None,
     timings: dict[str, float] | None = None,
+    cancelled: Callable[[], bool] | None = None,
 ) -> None:
-    """Draw every frame of ``motion`` off-screen and write ``out`` (H.264 MP4) atomically.
+    """Draw the frames ``options.frames`` of ``motion`` (every frame when None)
+    off-screen and write ``out`` (H.264 MP4) atomically.
 
-    The ghosts' solve (a process), the drawing (this thread and Mesa's) and the
-    encoding (ffmpeg, fed by a thread) run at once; ``progress(f)`` is called as frame
-    ``f`` is handed to the encoder. ``timings``, when given, sums the seconds spent in
-    each step of the loop (``research/bench_render.py`` prints them per frame)."""
+    The part is cut first: the ghosts solve it alone, from its first frame, and the
+    time code shows the clip's frame numbers. The ghosts' solve (a process), the
+    drawing (this thread and Mesa's) and the encoding (ffmpeg, fed by a thread) run at
+    once; ``progress(i)`` is called as the part's frame ``i`` (from 0) is handed to the
+    encoder. ``cancelled()``, asked after every frame and while waiting for the ghosts,
+    stops the video when it answers True (:class:`engine.progress.Cancelled`, nothing
+    written). ``timings``, when given, sums the seconds spent in each step of the loop
+    (``research/bench_render.py`` prints them per frame)."""
     from app.render_scene import FrameRenderer
     from app.video_encoder import VideoEncoder
     from engine.atomic import atomic_path
+    from engine.progress import check
+
+    first, last = check_frames(options.frames, len(motion))
+    clip_frames = len(motion)
+    if (first, last) != (0, clip_frames - 1):
+        motion = motion.slice(first, last + 1)
 
     # llvmpipe's rasteriser threads: one, since ffmpeg and the ghosts' solve have the
     # other core (set before the first GL context; the studio does the same)
@@ -196,14 +290,14 @@ def render_video(
     clock = _Stopwatch(timings)
     ghosts = _start_ghosts(motion, options)
     try:
-        scene = FrameRenderer(motion, options)
+        scene = FrameRenderer(motion, options, first, clip_frames)
         try:
             with atomic_path(out, suffix=".mp4") as tmp:
                 encoder = VideoEncoder(tmp, options.size, motion.fps)
                 clock.lap("setup")
                 try:
                     for f in range(len(motion)):
-                        posed = ghosts.positions(f) if ghosts is not None else None
+                        posed = ghosts.positions(f, cancelled) if ghosts is not None else None
                         clock.lap("ghost wait")
                         scene.pose(f, posed)
                         clock.lap("pose")
@@ -216,6 +310,7 @@ def render_video(
                         encoder.submit(buf)
                         if progress:
                             progress(f)
+                        check(cancelled)
                         clock.lap("progress")
                 except BaseException:
                     encoder.abort()

@@ -56,6 +56,10 @@ class RenderOptions:
     timecode: bool = False
     #: Multisampling (anti-aliasing) samples; 0 is fastest on software GL.
     msaa: int = 0
+    #: First and last frame of the motion drawn (inclusive, counted from 0 as the
+    #: studio's timeline counts them); None: every frame. The ghosts solve that part
+    #: alone, starting at its first frame (:func:`app.render.render_video`).
+    frames: tuple[int, int] | None = None
 
 
 @dataclass
@@ -94,10 +98,18 @@ class FrameRenderer:
     motion : engine.motion.clip.Motion
         The input motion (the first figure).
     options : RenderOptions
-        Layout, view, camera, trackers, texts.
+        Layout, view, camera, trackers, texts (``options.frames`` is not read here: the
+        caller hands over the part to draw, see :func:`app.render.render_video`).
+    first_frame : int
+        The clip's frame number of ``motion``'s first frame (a part of a clip): the time
+        code shows the clip's time and frame numbers.
+    clip_frames : int or None
+        Frames in the whole clip, for the time code's "frame f/last" (None: ``motion``'s).
     """
 
-    def __init__(self, motion: Any, options: RenderOptions) -> None:
+    def __init__(
+        self, motion: Any, options: RenderOptions, first_frame: int = 0, clip_frames: int | None = None
+    ) -> None:
         import pyvista as pv
         import vtk
 
@@ -107,6 +119,8 @@ class FrameRenderer:
         self.options = o = options
         self.fps = float(motion.fps)
         self.num_frames = len(motion)
+        self.first_frame = first_frame
+        self.clip_frames = clip_frames if clip_frames is not None else first_frame + len(motion)
         self.positions = motion.positions()
         main = (style.GROUND_TRUTH, "ground truth") if o.truth else (style.RECONSTRUCTION, motion.name or "motion")
         self.figures = [Figure(main[1], main[0])]
@@ -191,7 +205,7 @@ class FrameRenderer:
         self.camera.SetPosition(*(focus + offset))
         self.camera.SetViewUp(*up)
         self.camera.SetClippingRange(*CLIPPING)
-        self.texts.set_time(f, self.num_frames, self.fps)
+        self.texts.set_time(self.first_frame + f, self.clip_frames, self.fps)
 
     def read_into(self, buf: np.ndarray) -> None:
         """Copy the rendered frame into ``buf`` ``(H, W, 3 or 4)`` uint8, rows bottom-up."""
@@ -331,6 +345,8 @@ class _Texts:
         self.renderer.AddViewProp(actor)
 
     def set_time(self, f: int, n: int, fps: float) -> None:
+        """Show the time of frame ``f`` of an ``n``-frame clip and its number as the
+        studio's timeline shows it: counted from 0, over the last frame's."""
         if self.time is not None:
             t = f / fps
-            self.time.SetInput(f"{int(t // 60):02d}:{t % 60:05.2f}  frame {f + 1}/{n}")
+            self.time.SetInput(f"{int(t // 60):02d}:{t % 60:05.2f}  frame {f}/{n - 1}")

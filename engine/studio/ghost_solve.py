@@ -21,6 +21,7 @@ import numpy as np
 
 from engine import skeleton as sk
 from engine.errors import UserError
+from engine.progress import CancelCheck, check
 
 #: Frames per message from the solving process (one message costs ~0.1 ms; a chunk of
 #: 12 frames of one method is ~6 kB).
@@ -82,17 +83,22 @@ class GhostSolves:
         )
         self._proc.start()
 
-    def positions(self, frame: int) -> dict[str, np.ndarray]:
-        """``{method: joint positions (J, 3)}`` at ``frame``, waiting until it is solved.
+    def positions(self, frame: int, cancelled: CancelCheck | None = None) -> dict[str, np.ndarray]:
+        """``{method: joint positions (J, 3)}`` at ``frame``, waiting until it is solved;
+        ``cancelled()`` is asked every 0.1 s of that wait.
 
         Raises
         ------
         UserError
             A method failed (the message names them) or the solving process died.
+        Cancelled
+            ``cancelled()`` answered True while waiting.
         """
         while self.solved <= frame:
+            check(cancelled)
+            wait = 0.1 if cancelled is not None or not self._proc.is_alive() else 1.0
             try:
-                kind, start, payload = self._queue.get(timeout=1.0 if self._proc.is_alive() else 0.1)
+                kind, start, payload = self._queue.get(timeout=wait)
             except queue.Empty:
                 if not self._proc.is_alive() and self._queue.empty():
                     raise UserError(

@@ -55,7 +55,8 @@ def vae():
 
 
 @pytest.fixture
-def pose_window(qtbot, vae, monkeypatch):
+def pose_window(qtbot, vae, monkeypatch, tmp_path):
+    from PyQt6.QtCore import QSettings
     from PyQt6.QtWidgets import QMessageBox
 
     from app.pose_window import PoseWindow
@@ -64,7 +65,9 @@ def pose_window(qtbot, vae, monkeypatch):
     from tests.app.gui_helpers import close_now
 
     monkeypatch.setattr(QMessageBox, "question", lambda *a, **k: QMessageBox.StandardButton.Discard)
-    w = PoseWindow(AuthoringSession(PoseMode(vae, 1.75)))
+    # the window's own settings: what one test remembers (a save folder) is not the next one's
+    settings = QSettings(str(tmp_path / "pose.ini"), QSettings.Format.IniFormat)
+    w = PoseWindow(AuthoringSession(PoseMode(vae, 1.75)), settings=settings)
     w.resize(1000, 700)
     w.show()
     yield w

@@ -162,10 +162,10 @@ def test_save_dialogs_avoid_read_only_folders_and_the_studio_assets(studio, monk
     shared = tmp_path / "shared"
     shared.mkdir()
     save_motion_bvh(shared / "run.bvh", synthetic_motion.slice(0, 30))
-    import app.file_actions as fa
+    import app.save_folder as sf
 
     # the tests run as root, who may write anywhere: the folder reads as read-only to the studio
-    monkeypatch.setattr(fa.os, "access", lambda p, mode: Path(p) != shared)
+    monkeypatch.setattr(sf.os, "access", lambda p, mode: Path(p) != shared)
     assert studio.files.open_path(str(shared / "run.bvh"))
     from PyQt6.QtWidgets import QDialog
 

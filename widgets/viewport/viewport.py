@@ -255,6 +255,25 @@ class Viewport(QWidget):
             self._follow(snap.positions[0], glide=bool(snap.playing))
         self.plotter.render()
 
+    def clear_pose(self, caption: str = "") -> None:
+        """Take down every pose the last snapshot drew (reconstruction, ground truth,
+        ghosts, decoded latent, targets, gizmos) and say ``caption`` instead: another clip
+        or sensor source opened, and nothing of it is solved yet. A live stream that has
+        sent no frame yet must not show the previous source's character as if it were its own."""
+        self._last_snap = None
+        self.reconstruction.update(None)
+        self.body.update(None)
+        self.ground_truth.update(None)
+        self.decoded.update(None)
+        self.ghosts.update({})
+        self.sensors.update((), np.zeros((0, 3)), np.zeros((0, 4)), np.zeros(0, bool))
+        self.gizmos.update(())
+        self.joints.positions = None  # nothing to pick
+        if caption != self._caption:
+            self._caption = caption
+            self._label.SetText(2, caption)
+        self.plotter.render()
+
     def show_clip_frame(self, positions: np.ndarray) -> None:
         """Draw a newly opened clip's frame (22, 3) m as the ground truth at once, before
         the engine has solved anything (loading a model and the first solve take seconds)."""

@@ -260,11 +260,15 @@ class MainWindow(QMainWindow):
         self.settings.setValue("last_preset", name)
 
     def _add_constraint(self, kind: str) -> None:
-        """Add ``kind`` placed next to the character as it stands now (not at the origin)."""
+        """Add ``kind`` placed next to the character as it stands now (not at the origin),
+        on the joint clicked in the 3D view, or one no ``kind`` constraint holds yet."""
         spec = self.session.constraints.catalog().get(kind)
         snap = self.session.latest
         defaults = {} if spec is None else {f.name: f.default for f in spec.fields}
-        self.session.constraints.add(kind, **placed_params(kind, defaults, None if snap is None else snap.positions))
+        taken = {j for c in self.session.constraints if c.kind == kind for j in c.acts_on()}
+        positions = None if snap is None else snap.positions
+        params = placed_params(kind, defaults, positions, self.motion_paths.selected, taken)
+        self.session.constraints.add(kind, **params)
 
     def _edit_constraint(self, name: str, changes: dict) -> None:
         """An editor's change; a constraint put on other joints is placed on them as the

@@ -8,26 +8,45 @@ pose on screen, so the user starts from something visible and already (nearly) s
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Collection
 from typing import Any
 
 import numpy as np
 
 from engine.constraints import REGISTRY
-from engine.constraints.placement import facing
+from engine.constraints.base import OnOneJoint
+from engine.constraints.placement import facing, new_joint
 
 __all__ = ["facing", "moved_params", "placed_params"]
 
 
-def placed_params(kind: str, defaults: dict[str, Any], positions: np.ndarray | None) -> dict[str, Any]:
+def placed_params(
+    kind: str,
+    defaults: dict[str, Any],
+    positions: np.ndarray | None,
+    selected: str | None = None,
+    taken: Collection[str] = (),
+) -> dict[str, Any]:
     """Parameters of a new ``kind`` constraint placed on the pose ``positions`` (22, 3) m.
 
-    Only fields the kind has are returned; with no (finite) pose, or an unknown kind,
-    nothing is changed.
+    A kind on one joint (a pin, an end-effector target...) goes on the joint
+    ``selected`` in the view, else on a joint no constraint of its kind holds yet
+    (``taken``; :func:`engine.constraints.placement.new_joint`), so pins added one
+    after another do not pile up on the default ankle. Only fields the kind has are
+    returned; with no (finite) pose, or an unknown kind, nothing is placed.
     """
     cls = REGISTRY.get(kind)
-    if cls is None or positions is None or not np.all(np.isfinite(positions)):
+    if cls is None:
         return {}
-    out = cls.placement(dict(defaults), np.asarray(positions, float))
+    params = dict(defaults)
+    chosen: dict[str, Any] = {}
+    if issubclass(cls, OnOneJoint) and "joint" in params:
+        joint = new_joint(str(params["joint"]), taken, selected)
+        if joint != params["joint"]:
+            params["joint"] = chosen["joint"] = joint
+    if positions is None or not np.all(np.isfinite(positions)):
+        return chosen
+    out = chosen | cls.placement(params, np.asarray(positions, float))
     return {k: v for k, v in out.items() if k in defaults}
 
 

@@ -97,6 +97,10 @@ class DrawScheduler:
         if snap is None:
             return
         self._mirror_engine(snap)
+        if snap.opened < self.w.session.clip_opened:
+            # solved on the clip or source open before (a solve in flight when it was
+            # replaced): the view, cleared for the new one, must not draw it again
+            return
         if snap.seq != self._drawn_seq and t0 >= self._next_view_at:
             self._drawn_seq = snap.seq
             self.w.viewport.show_snapshot(snap)

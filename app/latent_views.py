@@ -97,6 +97,7 @@ class LatentViews:
         self.readouts.seekRequested.connect(self.seek)
         self.readouts.flagsChanged.connect(window.timeline.set_marks)
         window.session.events.motion.connect(self._forget)
+        window.session.events.source.connect(self._forget)  # a recording or live stream: another clip
         window.session.events.method.connect(self._forget)
         window.drawing.panels += [
             Panel("latent map", self._update_map, 0.5),
@@ -108,6 +109,9 @@ class LatentViews:
         each takes its items out of its plots (:func:`widgets.plots.release`)."""
         self._redraw_timer.stop()
         self._hover_timer.stop()
+        e = self.session.events
+        for signal in (e.motion, e.source, e.method):
+            signal.disconnect(self._forget)
         for view in (self.readouts, self.map, self.forces, self.gallery):
             if view is not None:
                 view.close()

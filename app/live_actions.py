@@ -196,5 +196,7 @@ class LiveActions:
         if src is not None:
             self._finish_recording(src)
             src.close()
+            if src.num_frames == 0:  # the view said it waits for frames: none will come
+                self.w.viewport.clear_pose("disconnected before any tracker frame arrived")
         self.panel.set_recording(False)
         self.refresh()

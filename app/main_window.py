@@ -101,6 +101,8 @@ class MainWindow(QMainWindow):
         self.files = FileActions(self, self.session, self.settings, self.viewport, self.show_error)
         self.live = LiveActions(self, self.session, self.timeline, self.plots, self.settings, self.show_error)
         self.undo = SceneUndo(self.session, self)
+        self._preset_chosen = False  # a preset chosen in the panel: remembered once kept
+        self.undo.kept.connect(self._remember_preset)
         self.files.confirm_discard = lambda doing: clip_saving.confirm_discard(self, doing)
         self.failures = FailureCountdown(self)
         self.snapshotDrawn.connect(self.failures.on_frame)
@@ -257,14 +259,26 @@ class MainWindow(QMainWindow):
 
     def _set_preset(self, name: str) -> None:
         self.session.sensors.set_preset(name)
-        self.settings.setValue("last_preset", name)
+        self._preset_chosen = True
+
+    def _remember_preset(self) -> None:
+        """Offer the preset chosen in the panel at the next start once the scene is kept
+        (:attr:`SceneUndo.kept`: saved, or when asked before quitting or opening another
+        clip). Written on the choice itself, a preset then undone, or discarded when
+        asked, came back with the next session."""
+        if self._preset_chosen and self.session.preset:
+            self.settings.setValue("last_preset", self.session.preset)
 
     def _add_constraint(self, kind: str) -> None:
-        """Add ``kind`` placed next to the character as it stands now (not at the origin)."""
+        """Add ``kind`` placed next to the character as it stands now (not at the origin),
+        on the joint clicked in the 3D view, or one no ``kind`` constraint holds yet."""
         spec = self.session.constraints.catalog().get(kind)
         snap = self.session.latest
         defaults = {} if spec is None else {f.name: f.default for f in spec.fields}
-        self.session.constraints.add(kind, **placed_params(kind, defaults, None if snap is None else snap.positions))
+        taken = {j for c in self.session.constraints if c.kind == kind for j in c.acts_on()}
+        positions = None if snap is None else snap.positions
+        params = placed_params(kind, defaults, positions, self.motion_paths.selected, taken)
+        self.session.constraints.add(kind, **params)
 
     def _edit_constraint(self, name: str, changes: dict) -> None:
         """An editor's change; a constraint put on other joints is placed on them as the
@@ -324,6 +338,7 @@ class MainWindow(QMainWindow):
         if self.autosave is not None:  # closed on purpose: saved, or discarded when asked
             self.autosave.studio_closed()
         self.timer.stop()
+        self.undo.kept.disconnect(self._remember_preset)
         QApplication.instance().removeEventFilter(self.camera_keys)
         self.settings.setValue("geometry", self.saveGeometry())
         self.redraw.close()

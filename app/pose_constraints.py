@@ -45,11 +45,13 @@ class PoseConstraints:
         self.dock = window._dock("Constraints", self.panel, Qt.DockWidgetArea.RightDockWidgetArea)
 
     def add(self, kind: str, **params: Any) -> None:
-        """Add a ``kind`` constraint placed on the current pose (``params`` override)."""
+        """Add a ``kind`` constraint placed on the current pose (``params`` override); one
+        on a single joint goes on the selected joint, or on one no ``kind`` constraint holds."""
         session = self.w.session
         spec = session.constraint_catalog().get(kind)
         defaults = {} if spec is None else {f.name: f.default for f in spec.fields}
-        placed = placed_params(kind, defaults | params, session.pose.positions) | params
+        taken = {j for c in session.mode.constraints if c.kind == kind for j in c.acts_on()}
+        placed = placed_params(kind, defaults | params, session.pose.positions, self.w.selected, taken) | params
         self.w._edit(lambda: session.add_constraint(kind, **placed))
 
     def remove(self, name: str) -> None:

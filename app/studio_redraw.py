@@ -25,6 +25,7 @@ class StudioRedraw:
         e.frame.connect(self.w.timeline.set_frame)
         e.playback.connect(self._show_playback)
         e.motion.connect(self._show_motion)
+        e.source.connect(self._show_source)
         e.sensors.connect(self._show_sensors)
         e.sensors.connect(self.w.ghost_status.sensors_changed)
         e.constraints.connect(self._show_constraints)
@@ -46,6 +47,7 @@ class StudioRedraw:
             (e.frame, self.w.timeline.set_frame),
             (e.playback, self._show_playback),
             (e.motion, self._show_motion),
+            (e.source, self._show_source),
             (e.sensors, self._show_sensors),
             (e.sensors, self.w.ghost_status.sensors_changed),
             (e.constraints, self._show_constraints),
@@ -86,8 +88,16 @@ class StudioRedraw:
             # off-centre and near until something moved the camera again
             return
         self.w.viewport.reset_camera(event.motion.root_pos[0])
-        # the clip at once, the solve behind it (the first solved frame takes seconds)
+        # the clip at once, the solve behind it (the first solved frame takes seconds);
+        # nothing of the clip or source before stays beside it
+        self.w.viewport.clear_pose()
         self.w.viewport.show_clip_frame(event.motion.slice(0, 1).positions()[0])
+
+    def _show_source(self, event: ev.SourceChanged) -> None:
+        """Another sensor source: the previous clip's or stream's character goes at once
+        (a live stream may send its first frame much later, or never)."""
+        waiting = event.live and event.source.num_frames == 0
+        self.w.viewport.clear_pose(f"waiting for tracker frames ({event.name})" if waiting else "")
 
     def _show_sensors(self, event: ev.SensorsChanged | None) -> None:
         s = self.w.session

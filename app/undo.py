@@ -57,6 +57,9 @@ class SceneUndo(QObject):
     save marking it clean)."""
 
     changed = pyqtSignal()
+    #: The edits were kept (:meth:`set_clean`: a save, a scene loaded, the start set up),
+    #: not a history merely cleared for another clip or undone back to a clean state.
+    kept = pyqtSignal()
 
     def __init__(self, session: Any, parent: Any = None) -> None:
         super().__init__(parent)
@@ -132,6 +135,7 @@ class SceneUndo(QObject):
 
     def set_clean(self) -> None:
         self.history.set_clean()
+        self.kept.emit()
 
     # -- recording ------------------------------------------------------------------
     def _on_sensors(self, e: Any) -> None:

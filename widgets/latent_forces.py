@@ -152,7 +152,8 @@ class LatentForces(QWidget):
             self.dim_plot.setTitle(f"force of {chosen}, iteration {k}{none}", size="9pt")
         against = conflicts(f, d.names)
         self.info.setText(
-            f"frame {d.frame}, {len(d.forces)} iterations, {d.ms:.0f} ms"
+            # forces at the start and after each step: one more than the solver's iterations
+            f"frame {d.frame}, {len(d.forces) - 1} iterations, {d.ms:.0f} ms"
             + (f"; pulling against each other: {', '.join(against)}" if against else "")
         )
         settle(self.norm_plot)

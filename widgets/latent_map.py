@@ -84,7 +84,9 @@ class LatentMapPlot(QWidget):
         self.current = pg.ScatterPlotItem(size=13, pen=pg.mkPen("w", width=2), brush=None)
         self.hover = pg.ScatterPlotItem(size=11, symbol="+", pen=pg.mkPen(HOVER_COLOUR, width=2))
         self.blend = self.plot.plot(pen=pg.mkPen("#ffffff", width=1, style=Qt.PenStyle.DashLine))
-        self.blend_labels = (pg.TextItem("A", color="#ffffff"), pg.TextItem("B", color="#ffffff"))
+        # named by set_blend: an "A" and a "B" made with their text sat on the map's origin
+        # until the Latent panel stored anything
+        self.blend_labels = (pg.TextItem("", color="#ffffff"), pg.TextItem("", color="#ffffff"))
         for item in (self.points, self.flags, self.current, self.hover, self.start_label, *self.blend_labels):
             self.plot.addItem(item)
         layout.addWidget(self.note)

@@ -54,13 +54,32 @@ def _set_curve(item: pg.PlotDataItem, x: np.ndarray, y: np.ndarray) -> None:
         item.setData([], [])
 
 
-def fit_frames(plot: pg.PlotWidget, x: np.ndarray) -> None:
+class CountAxis(pg.AxisItem):
+    """A bottom axis that counts (frames, iterations): whole-number ticks only. Over a
+    range of a unit or two pyqtgraph ticked 0.2, 0.4..., iterations and frames that do
+    not exist."""
+
+    def tickValues(self, minVal: float, maxVal: float, size: float) -> list:  # noqa: N802 (pyqtgraph's name)
+        levels = []
+        for spacing, values in super().tickValues(minVal, maxVal, size):
+            if spacing < 1.0:  # finer than a unit: one tick per whole number, once
+                spacing, values = 1.0, list(np.arange(np.ceil(minVal), np.floor(maxVal) + 1.0))
+            whole = [v for v in values if float(v).is_integer()]
+            if whole and all(spacing != s for s, _ in levels):
+                levels.append((spacing, whole))
+        return levels
+
+
+def fit_frames(plot: pg.PlotWidget, x: np.ndarray, drawn: bool = True) -> None:
     """A frame axis over a few frames at least: with one solved frame the auto range
-    spread frames -80 to 80 around it."""
+    spread frames -80 to 80 around it. With nothing ``drawn`` (every value 0 on a log
+    axis) the axis still spans the frames ``x``: pyqtgraph's range for no data is 0..1."""
     vb = plot.getPlotItem().getViewBox()
-    if len(x) and float(np.max(x) - np.min(x)) < 4.0:
-        mid = 0.5 * float(np.max(x) + np.min(x))
-        vb.setXRange(mid - 2.0, mid + 2.0, padding=0.0)  # turns the x auto range off
+    if len(x) and (not drawn or float(np.max(x) - np.min(x)) < 4.0):
+        lo, hi = float(np.min(x)), float(np.max(x))
+        if hi - lo < 4.0:
+            lo, hi = 0.5 * (lo + hi) - 2.0, 0.5 * (lo + hi) + 2.0
+        vb.setXRange(lo, hi, padding=0.0)  # turns the x auto range off
     elif not vb.autoRangeEnabled()[0]:
         vb.enableAutoRange(x=True)
 
@@ -91,7 +110,7 @@ def release(*plots: pg.PlotWidget) -> None:
 def _plot(title: str, log_y: bool, x_label: str) -> pg.PlotWidget:
     # pyqtgraph's own log axis labels every 1..9 multiple on a range of a decade or two,
     # one label over the other: LogAxis labels only what fits (decades, 1-2-5, ...)
-    w = pg.PlotWidget(axisItems={"left": LogAxis("left")})
+    w = pg.PlotWidget(axisItems={"left": LogAxis("left"), "bottom": CountAxis("bottom")})
     # short titles in a small font: a title wider than the plot kept the plot item from
     # shrinking, and the plots beside it cut it off
     w.setTitle(title, size="9pt")
@@ -237,9 +256,13 @@ class LossPlots(QWidget):
 
     def _all_zero(self, plot: pg.PlotWidget, title: str, zero: bool) -> None:
         """``plot``'s own ``title``, or with ``zero`` (every term 0: nothing a log axis can
-        draw) the title and a tooltip saying so."""
+        draw) the title and a tooltip saying so, and no loss values on the y axis (they
+        would be the last drawn curves' or pyqtgraph's 1..10 for no data)."""
         why = "Every term is 0 (the method meets each tracker exactly): a log axis has nothing to draw."
         self._title(plot, title + (": all 0" if zero else ""), why if zero else "")
+        left = plot.getAxis("left")
+        if left.style["showValues"] == zero:
+            left.setStyle(showValues=not zero)
 
     def update_iterations(self, snap: Any) -> None:
         """This frame's loss per iteration, every term."""
@@ -252,6 +275,11 @@ class LossPlots(QWidget):
                 vals = np.array([_loggable(float(d.get(name, np.nan)), LOSS_FLOOR) for d in losses])
                 _set_curve(self.iter_curves.get(name, symbols=True), its, vals)
                 drawn = drawn or bool(np.isfinite(vals).any())
+            vb = self.iteration_plot.getPlotItem().getViewBox()
+            if not drawn:  # all 0: the iterations run, not pyqtgraph's 0..1 for no data
+                vb.setXRange(0.5, len(losses) + 0.5, padding=0.0)
+            elif not vb.autoRangeEnabled()[0]:
+                vb.enableAutoRange(x=True)
             settle(self.iteration_plot)
         if not losses and snap.history:
             method = getattr(snap, "method", "") or "this method"
@@ -281,5 +309,5 @@ class LossPlots(QWidget):
             _set_curve(self.history_curves.get(name), x, y)
             shown = shown or bool(np.isfinite(y).any())
         self._all_zero(self.history_plot, "Loss history", bool(names) and not shown)
-        fit_frames(self.history_plot, x)
+        fit_frames(self.history_plot, x, drawn=shown)
         settle(self.history_plot)

@@ -9,6 +9,7 @@ viewport (framed on the hips) shows them.
 
 from __future__ import annotations
 
+from collections.abc import Collection
 from typing import Any
 
 import numpy as np
@@ -36,3 +37,17 @@ def facing(positions: np.ndarray) -> np.ndarray:
 def joint_at(positions: np.ndarray, name: Any, fallback: str) -> np.ndarray:
     """Position ``(3,)`` of joint ``name`` (``fallback`` when it is not a joint name), a copy."""
     return np.array(positions[sk.JOINT_INDEX.get(str(name), sk.JOINT_INDEX[fallback])], dtype=np.float64)
+
+
+def new_joint(default: str, taken: Collection[str] = (), selected: str | None = None) -> str:
+    """The joint a new one-joint constraint (a pin, an end-effector target...) goes on.
+
+    The joint selected in the view (a click on it) when there is one, else the kind's
+    ``default``, else its mirror (the right ankle after the left one), else the first in
+    skeleton order, skipping joints in ``taken``: those a constraint of the same kind
+    already holds, where a second one would only duplicate the first. Every joint taken:
+    ``default``.
+    """
+    mirror = dict(sk.MIRROR_PAIRS + tuple((b, a) for a, b in sk.MIRROR_PAIRS))
+    order = ([selected] if selected in sk.JOINT_INDEX else []) + [default, mirror.get(default, default)]
+    return next((j for j in (*order, *sk.JOINT_NAMES) if j not in taken), default)

@@ -227,7 +227,8 @@ class DragPoserMethod(CallerEdits, Method):
         # frame 0 has no history to start from: it is solved offline
         sol = self.optimizer.solve(start, terms, ctx, dataclasses.replace(s, mode="offline") if self._frame == 0 else s)
         warnings += sol.warnings
-        self.last_solve = record_of(sol, ctx, terms, start is prediction, self.priors.from_bank)
+        previous = None if self._frame == 0 or self.last_solve is None else self.last_solve.context.frame
+        self.last_solve = record_of(sol, ctx, terms, start is prediction, self.priors.from_bank, previous)
         state = sol.state
         if not (torch.isfinite(state.positions).all() and torch.isfinite(state.local_rot).all()):
             warnings.append("decoded pose is not finite; previous pose repeated")

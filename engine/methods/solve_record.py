@@ -18,7 +18,8 @@ if TYPE_CHECKING:
     from engine.constraints.base import Constraint
     from engine.solver.frame import FrameContext, Solution
 
-#: Where a frame's solve can start, as :attr:`SolveRecord.start` names it.
+#: Where a frame's solve can start, as :attr:`SolveRecord.start` names it (or "solved
+#: frame N": the latent of clip frame N, solved last, e.g. before a seek).
 STARTS = ("predictor", "pose bank", "previous frame", "zero latent")
 
 
@@ -47,14 +48,31 @@ class SolveRecord:
 
 
 def record_of(
-    solution: "Solution", context: "FrameContext", terms: "list[Constraint]", predicted: bool, bank: bool
+    solution: "Solution",
+    context: "FrameContext",
+    terms: "list[Constraint]",
+    predicted: bool,
+    bank: bool,
+    previous: int | None = -1,
 ) -> SolveRecord:
     """The :class:`SolveRecord` of a solve over ``terms`` (their weights taken now: the next
     frame changes them) that started from the frame's prior latent (``predicted``; from the
-    pose bank when ``bank``) or else from the previous frame's latent (zero on frame 0)."""
+    pose bank when ``bank``) or else from the latent of the clip frame the method solved
+    before, ``previous``: None when it solved none since its reset (the zero latent); -1
+    (the default) for the frame before this one, or none on frame 0.
+
+    A seek within two seconds ahead keeps the method's state, so its first solve starts
+    from the frame solved before the seek, not the one before it: said as "solved frame N".
+    """
     active, weights = active_weights(terms, context.frame)
+    if previous == -1:
+        previous = context.frame - 1 if context.frame else None
     if predicted:
         start = "pose bank" if bank else "predictor"
+    elif previous is None:
+        start = "zero latent"
+    elif previous == context.frame - 1:
+        start = "previous frame"
     else:
-        start = "previous frame" if context.frame else "zero latent"
+        start = f"solved frame {previous}"
     return SolveRecord(solution, context, tuple(zip(active, weights)), start)

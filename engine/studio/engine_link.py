@@ -47,6 +47,10 @@ class EngineLink:
         self.method = method
         #: Clips, sources and methods opened so far (``opened`` of their commands).
         self.opened = 0
+        #: The ``opened`` of the clip or source now open: a snapshot below it was solved
+        #: on the one before (a method switch does not count: its view stays until the
+        #: new method's first solve).
+        self.clip_opened = 0
         self.ghosts: tuple[str, ...] = ()
         self.frame = 0
         self.playing = False

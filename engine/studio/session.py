@@ -123,6 +123,7 @@ class Session(EngineLink):
         self.motion, self.path, self.frame = motion, path, 0
         self.pause_pending = False
         self.opened += 1
+        self.clip_opened = self.opened
         self._send(cmd.SetMotion(motion, self.opened))
         self.events.motion.emit(ev.MotionChanged(motion, path))
         self._from_start()
@@ -137,6 +138,7 @@ class Session(EngineLink):
         self.pause_pending = False
         self.source = source
         self.opened += 1
+        self.clip_opened = self.opened
         command = cmd.SetSource(source, self.opened)
         if isinstance(self.engine, EngineProcess) and not self.engine.can_send(command):
             self._engine_in_thread()  # sends the source with the rest of the session

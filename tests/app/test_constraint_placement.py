@@ -72,3 +72,21 @@ def test_a_new_constraint_is_drawn_in_view_of_every_camera_preset(kind, yaw):
             ray = (np.asarray(p, float) - eye) / np.linalg.norm(np.asarray(p, float) - eye)
             angle = np.degrees(np.arccos(np.clip(ray @ axis, -1.0, 1.0)))
             assert angle < VIEW_ANGLE_DEG / 2, f"{kind}: a point {angle:.0f} deg off the {preset} view's axis"
+
+
+def test_pins_added_one_after_another_go_on_different_joints():
+    """Every pin added from the panel went on the left ankle (the kind's default), on top
+    of the one before: a new one-joint constraint takes a joint its kind does not hold."""
+    pose, defaults = _pose(0), {"joint": "lankle", "position": np.full(3, np.nan)}
+    first = placed_params("pin", defaults, pose)
+    assert "joint" not in first and np.allclose(first["position"], pose[sk.JOINT_INDEX["lankle"]])
+    second = placed_params("pin", defaults, pose, taken={"lankle"})
+    assert second["joint"] == "rankle" and np.allclose(second["position"], pose[sk.JOINT_INDEX["rankle"]])
+    third = placed_params("pin", defaults, pose, taken={"lankle", "rankle"})
+    assert third["joint"] not in ("lankle", "rankle")
+    # the joint selected in the view wins, and its place is where that joint is
+    on_elbow = placed_params("pin", defaults, pose, selected="relbow", taken={"lankle"})
+    assert on_elbow["joint"] == "relbow" and np.allclose(on_elbow["position"], pose[sk.JOINT_INDEX["relbow"]])
+    # without a pose the joint is still chosen; kinds on several joints are left alone
+    assert placed_params("pin", defaults, None, taken={"lankle"}) == {"joint": "rankle"}
+    assert "joint_a" not in placed_params("distance", {"joint_a": "lwrist", "joint_b": "rwrist"}, pose, "relbow")

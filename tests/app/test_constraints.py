@@ -122,3 +122,29 @@ def test_a_pin_put_on_another_joint_in_its_editor_is_placed_on_that_joint(studio
     (c,) = studio.session.constraints
     assert c.joint == "lwrist"
     assert np.linalg.norm(c.position - pose[sk.JOINT_INDEX["lwrist"]]) < 0.05
+
+
+def test_pins_added_from_the_panel_take_the_clicked_joint_or_a_free_one(studio, qtbot):
+    """Seen under Xvfb: Add pressed twice with *pin* chosen gave two pins on the left
+    ankle. The second goes on the right ankle; after a click on the left elbow in the 3D
+    view, the next one goes on the elbow, where the elbow is."""
+    from PyQt6.QtCore import Qt
+    from PyQt6.QtTest import QTest
+
+    from tests.app.gui_helpers import pixel_of
+    from tests.app.test_pose_selection import click
+
+    s, view, panel = studio.session, studio.viewport, studio.constraint_panel
+    s.pause()
+    qtbot.waitUntil(lambda: not s.latest.playing, timeout=10000)
+    panel.kinds.setCurrentText("pin")
+    QTest.mouseClick(panel.add_button, Qt.MouseButton.LeftButton)
+    QTest.mouseClick(panel.add_button, Qt.MouseButton.LeftButton)
+    assert [c.joint for c in s.constraints] == ["lankle", "rankle"]
+    view.show_snapshot(s.latest)
+    elbow = s.latest.positions[sk.JOINT_INDEX["lelbow"]]
+    click(view, *pixel_of(view, elbow))
+    assert studio.motion_paths.selected == "lelbow"
+    QTest.mouseClick(panel.add_button, Qt.MouseButton.LeftButton)
+    pin = s.constraints[-1]
+    assert pin.joint == "lelbow" and np.linalg.norm(pin.position - elbow) < 1e-6

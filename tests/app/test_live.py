@@ -76,3 +76,26 @@ def test_a_tracker_recording_opens_like_a_clip(studio, qtbot, synthetic_motion, 
     # the reconstruction follows the recorded trackers
     i = list(snap.target_joints).index("upperneck")
     assert np.linalg.norm(snap.positions[13] - snap.target_positions[i]) < 0.1
+
+
+def test_connecting_clears_the_previous_character_from_the_view(studio, qtbot, synthetic_motion):
+    """Connect before any tracker frame arrived: the clip's character (and its green ground
+    truth) went on being drawn as if the stream were showing it; the view is empty and says
+    it waits. Opening the clip again shows the clip."""
+    from tests.widgets.test_viewport import orange_fraction
+
+    view = studio.viewport
+    qtbot.waitUntil(lambda: studio.drawing.draws > 0 and view.reconstruction.visible, timeout=10000)
+    assert orange_fraction(view.plotter.screenshot(return_img=True)) > 0.002
+    assert studio.live.connect("127.0.0.1", 0)
+    qtbot.wait(300)  # display ticks: none may draw the clip's last snapshot again
+    assert not view.reconstruction.visible and not view.ground_truth.visible
+    assert view.sensors.joints == () and view.joints.positions is None
+    assert "waiting for tracker frames" in view._caption
+    assert orange_fraction(view.plotter.screenshot(return_img=True)) == 0.0
+    studio.live.disconnect()
+    qtbot.wait(100)
+    assert not view.reconstruction.visible and "disconnected" in view._caption
+    studio.session.set_motion(synthetic_motion)
+    assert view.ground_truth.visible  # the clip's first frame at once
+    qtbot.waitUntil(lambda: view.reconstruction.visible, timeout=10000)

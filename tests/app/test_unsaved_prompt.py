@@ -198,3 +198,35 @@ def test_quit_while_a_pose_window_bakes_cancels_it_and_leaves_no_message_behind(
     finally:
         if pose.isVisible():
             close_now(pose)
+
+
+def test_a_discarded_preset_does_not_come_back_at_the_next_start(studio, answer, tmp_path, synthetic_motion):
+    """Seen under Xvfb: a preset chosen in the sensor panel was remembered at once, so
+    one undone, or discarded when asked, was the next session's preset. It is
+    remembered when the scene is kept (saved)."""
+    from PyQt6.QtCore import QSettings
+
+    from app.main import open_initial
+    from engine.motion.bvh import save_motion_bvh
+
+    studio.settings.setValue("last_preset", "6")
+    open_initial(studio, None, None)
+    panel = studio.sensor_panel.preset
+    panel.setCurrentText("3-head-hands")
+    assert studio.session.preset == "3-head-hands"
+    studio.undo.history.undo()
+    assert studio.session.preset == "6" and studio.undo.is_clean()
+    assert studio.settings.value("last_preset") == "6"  # undone: not remembered
+    panel.setCurrentText("4")
+    other = tmp_path / "other.bvh"
+    save_motion_bvh(other, synthetic_motion.slice(0, 30))
+    answer.next = "Discard"
+    assert studio.files.open_path(other)  # discarded before another clip: not remembered
+    assert studio.settings.value("last_preset") == "6"
+    panel.setCurrentText("5")
+    assert studio.files.save_scene(str(tmp_path / "s.json"))  # kept: remembered
+    assert studio.settings.value("last_preset") == "5"
+    panel.setCurrentText("4")
+    assert studio.close()  # discarded when quitting: the saved one stays
+    studio.settings.sync()
+    assert QSettings(studio.settings.fileName(), QSettings.Format.IniFormat).value("last_preset") == "5"

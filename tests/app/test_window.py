@@ -162,7 +162,8 @@ def test_dropped_bvh_opens_is_remembered_and_the_preset_comes_back(studio, qtbot
     assert studio.settings.value("recent_files")[0] == str(clip)
 
     chosen = "3-head-hands"
-    studio.sensor_panel.preset.setCurrentText(chosen)  # the user's choice is stored...
+    studio.sensor_panel.preset.setCurrentText(chosen)  # the user's choice, once kept (saved)...
+    studio.undo.set_clean()
     assert studio.settings.value("last_preset") == chosen
     studio.session.sensors.set_preset("6")
     open_initial(studio, str(clip), None)  # ...and restored when the studio opens next time

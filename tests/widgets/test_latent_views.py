@@ -408,3 +408,19 @@ def test_the_store_shared_with_the_map_still_marks_and_enables_the_jump(qtbot):
     w.update_snapshot(snap)
     assert marks == [[7]] and w.next_button.isEnabled()
     qtbot.mouseClick(w.next_button, Qt.MouseButton.LeftButton)
+
+
+def test_the_forces_readout_counts_the_solvers_iterations(qtbot):
+    """Seen under Xvfb: "11 iterations" for a solve of 10 (the status bar's "10 it"): the
+    forces are taken at the start and after each step, one more than the steps."""
+    w = shown(qtbot, LatentForces({}), 420, 400)
+    w.set_detail(_detail())  # forces at 3 points of the path: 2 iterations
+    assert "frame 7, 2 iterations" in w.info.text()
+    assert w.iteration.maximum() == 2  # iteration 0 is the start
+
+
+def test_no_stray_a_and_b_on_a_fresh_map(latent_map):
+    """An "A" and a "B" sat on the map's origin until the Latent panel stored a latent."""
+    assert [t.textItem.toPlainText() for t in latent_map.blend_labels] == ["", ""]
+    latent_map.set_blend(np.array([0.0, 1.0]), np.array([2.0, -1.0]))
+    assert [t.textItem.toPlainText() for t in latent_map.blend_labels] == ["A", "B"]

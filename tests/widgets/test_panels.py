@@ -488,3 +488,32 @@ def test_a_plot_update_that_changes_the_range_paints_once(qtbot, fake_snapshot, 
         p.update_iterations(fake_snapshot(seq=2, losses=losses))
         qtbot.wait(150)
         assert paints.count(p.iteration_plot) == 1, f"{paints.count(p.iteration_plot)} paints for one update"
+
+
+def test_all_zero_loss_plots_span_the_iterations_and_frames_with_whole_ticks(qtbot, fake_snapshot):
+    """Seen under Xvfb with ik: "Loss per iteration: all 0" over an x axis reading 0.2 to
+    0.8 (pyqtgraph's range for no data) and y ticks of no loss. The axis spans the
+    iterations run (ticks on whole numbers only) and the frames solved; the y axis shows
+    no values; a method with losses gets its auto range and values back."""
+    from tests.widgets.conftest import FakeRecord
+
+    p = LossPlots()
+    qtbot.addWidget(p)
+    p.resize(1200, 260)
+    p.show()
+    qtbot.waitExposed(p)
+    zero = {"total": 0.0, "pos:root": 0.0}
+    history = tuple(FakeRecord(f, 1, 1.0, zero) for f in range(20, 40))
+    p.update_snapshot(fake_snapshot(seq=1, losses=(zero,), method="ik", history=history))
+    p.grab()
+    it, hist = p.iteration_plot.getPlotItem(), p.history_plot.getPlotItem()
+    assert it.titleLabel.text == "Loss per iteration: all 0" and hist.titleLabel.text == "Loss history: all 0"
+    assert it.getViewBox().viewRange()[0] == pytest.approx([0.5, 1.5])
+    assert hist.getViewBox().viewRange()[0] == pytest.approx([20.0, 39.0])
+    axis = it.getAxis("bottom")
+    ticks = [v for _s, values in axis.tickValues(0.5, 1.5, axis.width()) for v in values]
+    assert ticks == [1.0]  # iteration 1, not 0.6, 0.8, 1.0...
+    assert not it.getAxis("left").style["showValues"] and not hist.getAxis("left").style["showValues"]
+    p.update_snapshot(fake_snapshot(seq=2))  # losses again
+    assert it.getViewBox().autoRangeEnabled()[0] and it.getAxis("left").style["showValues"]
+    assert hist.getAxis("left").style["showValues"]

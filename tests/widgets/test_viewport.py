@@ -482,3 +482,22 @@ def test_view_options_redraw_a_paused_frame_at_once(viewport, fake_snapshot):
     assert viewport.body.visible and orange_fraction(viewport.plotter.screenshot(return_img=True)) > 2 * sticks
     viewport.show_ground_truth = True
     assert green_fraction(viewport.plotter.screenshot(return_img=True)) > 0.5 * green_fraction(before)
+
+
+def _caption_height(viewport) -> int:
+    """Pixel rows of the caption's glyphs (light grey on the dark sky, top left)."""
+    img = np.asarray(viewport.plotter.screenshot(return_img=True)).astype(int)
+    top = img[: img.shape[0] // 6, : img.shape[1] * 3 // 4]
+    rows = np.where(((top > 150).all(axis=2)).any(axis=1))[0]
+    return int(rows.max() - rows.min() + 1) if len(rows) else 0
+
+
+def test_the_caption_keeps_one_font_size_whatever_it_says(viewport, fake_snapshot):
+    """Seen under Xvfb: "ik (orange)   ground truth (green)" was drawn larger than "ik
+    (orange)   no ground truth (tracker input)": VTK's corner text shrank a longer line
+    to fit. One size for every frame and method."""
+    viewport.show_snapshot(fake_snapshot(method="ik"))
+    short = _caption_height(viewport)
+    viewport.show_snapshot(fake_snapshot(seq=2, method="sparseposer", ground_truth=np.full((22, 3), np.nan)))
+    assert "no ground truth" in viewport._caption
+    assert short > 8 and _caption_height(viewport) == short

@@ -7,6 +7,7 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
+import vtk
 from PyQt6.QtCore import QEvent, QObject, Qt, pyqtSignal
 from PyQt6.QtGui import QImage
 from PyQt6.QtWidgets import QVBoxLayout, QWidget
@@ -26,6 +27,11 @@ from widgets.viewport.skeleton import SkeletonActor
 from widgets.viewport.wheel_zoom import WheelZoom
 
 HOME_FOCUS_HEIGHT = 0.9
+#: The caption's font size, pixels, for every caption and window size: VTK's corner text
+#: (pyvista's ``add_text`` at a corner) scales with the window and shrinks a longer line
+#: to fit, so "no ground truth (tracker input)" was drawn smaller than "ground truth
+#: (green)". A plain text actor keeps its size (the ghost legend below it is 15 too).
+CAPTION_FONT_PX = 15
 FOLLOW_TIME_S = 0.25  # camera-follow time constant, seconds
 #: How the reconstruction is drawn: a stick figure, or a shaded capsule mannequin.
 DISPLAY_MODES = ("stick", "body")
@@ -44,6 +50,22 @@ def keep_key_lights(renderer: Any) -> None:
     for light in others:
         if light is not key:
             light.SwitchOff()
+
+
+def caption_actor(renderer: Any) -> vtk.vtkTextActor:
+    """The caption line at the view's top left, :data:`CAPTION_FONT_PX` high whatever it
+    says and whatever the window's size."""
+    actor = vtk.vtkTextActor()
+    prop = actor.GetTextProperty()
+    prop.SetFontSize(CAPTION_FONT_PX)
+    prop.SetColor(*style.hex_to_unit_rgb("#d0d4dc"))
+    prop.SetVerticalJustificationToTop()
+    where = actor.GetPositionCoordinate()
+    where.SetCoordinateSystemToNormalizedViewport()
+    where.SetValue(0.004, 0.992)
+    actor.PickableOff()
+    renderer.AddViewProp(actor)
+    return actor
 
 
 class Viewport(QWidget):
@@ -112,7 +134,7 @@ class Viewport(QWidget):
         self.paths = MotionPathLayer(p)
         self.gizmos = ConstraintGizmos(p, lambda n, changes: self.gizmoEdited.emit(n, changes))
         self.wheel_zoom = WheelZoom(p)
-        self._label = p.add_text("", position="upper_left", font_size=9, color="#d0d4dc")
+        self._label = caption_actor(p.renderer)
         self._notice = p.add_text("", position="lower_edge", font_size=12, color="#ffe14d")
         self.notice = ""
         self._caption = ""
@@ -250,9 +272,28 @@ class Viewport(QWidget):
         caption = f"{snap.method or 'method'} (orange){gt}"
         if caption != self._caption:  # a text change re-renders its glyphs: only on change
             self._caption = caption
-            self._label.SetText(2, caption)
+            self._label.SetInput(caption)
         if self.follow and np.all(np.isfinite(snap.positions[0])):
             self._follow(snap.positions[0], glide=bool(snap.playing))
+        self.plotter.render()
+
+    def clear_pose(self, caption: str = "") -> None:
+        """Take down every pose the last snapshot drew (reconstruction, ground truth,
+        ghosts, decoded latent, targets, gizmos) and say ``caption`` instead: another clip
+        or sensor source opened, and nothing of it is solved yet. A live stream that has
+        sent no frame yet must not show the previous source's character as if it were its own."""
+        self._last_snap = None
+        self.reconstruction.update(None)
+        self.body.update(None)
+        self.ground_truth.update(None)
+        self.decoded.update(None)
+        self.ghosts.update({})
+        self.sensors.update((), np.zeros((0, 3)), np.zeros((0, 4)), np.zeros(0, bool))
+        self.gizmos.update(())
+        self.joints.positions = None  # nothing to pick
+        if caption != self._caption:
+            self._caption = caption
+            self._label.SetInput(caption)
         self.plotter.render()
 
     def show_clip_frame(self, positions: np.ndarray) -> None:

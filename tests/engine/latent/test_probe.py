@@ -63,3 +63,6 @@ def test_record_keeps_the_frame_weights_and_names_the_start():
     assert record_of("sol", ctx, terms, predicted=True, bank=True).start == "pose bank"
     assert record_of("sol", ctx, terms, predicted=False, bank=False).start == "previous frame"
     assert record_of("sol", FrameContext(None, frame=0), terms, False, False).start == "zero latent"
+    # after a seek: the method reset (nothing solved since), or the frame solved before it
+    assert record_of("sol", ctx, terms, False, False, previous=None).start == "zero latent"
+    assert record_of("sol", ctx, terms, False, False, previous=0).start == "solved frame 0"

@@ -39,7 +39,7 @@ def test_views_readouts_and_detail(clip):
         snap = worker.latest
         v = snap.latent_view
         assert v.xy.shape == (2,) and v.path_xy is not None and v.path_xy.shape[1] == 2
-        assert v.start in ("predictor", "pose bank", "previous frame", "zero latent")
+        assert v.start in ("predictor", "pose bank", "solved frame 0")  # stepped 3 ahead of frame 0
         assert snap.latent_note == ""
         entry = snap.history[-1]
         assert entry.frame == 3 and entry.readouts["nearest"] == pytest.approx(v.nearest)
@@ -86,5 +86,27 @@ def test_a_method_without_a_latent_says_so(clip):
         session.inspect_latent()
         wait_for(lambda: worker.latest.seq > seq, timeout=30)
         assert "no latent space" in worker.latest.error
+    finally:
+        worker.stop()
+
+
+def test_the_solve_after_a_seek_says_where_it_started(clip):
+    """Seen under Xvfb: the map labelled the first solve after a seek "start: previous
+    frame". A seek ahead starts from the frame solved before it; one back resets the
+    method, which starts from the zero latent."""
+    session, worker = _engine(clip, "dragposer")
+    try:
+        session.set_setting("init_from_prediction", False)  # start from the last latent
+        wait_for(lambda: worker.latest is not None and worker.latest.latent_view is not None, timeout=60)
+        assert worker.latest.frame == 0
+        session.seek(20)
+        wait_for(lambda: (v := worker.latest.latent_view) is not None and v.frame == 20, timeout=60)
+        assert worker.latest.latent_view.start == "solved frame 0"
+        session.step(1)
+        wait_for(lambda: (v := worker.latest.latent_view) is not None and v.frame == 21, timeout=60)
+        assert worker.latest.latent_view.start == "previous frame"
+        session.seek(10)  # back: a jump, the method starts again
+        wait_for(lambda: (v := worker.latest.latent_view) is not None and v.frame == 10, timeout=60)
+        assert worker.latest.latent_view.start == "zero latent"
     finally:
         worker.stop()

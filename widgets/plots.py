@@ -173,7 +173,7 @@ class LossPlots(QWidget):
         colours: dict[str, str] = {"total": "#ffffff"}
         self.colours = colours
         self.legend = TermLegend()
-        self.iteration_plot = _plot("Loss per iteration", True, "iteration")
+        self.iteration_plot = _plot("Loss per iteration", True, "iteration (0: start)")
         # log y: the first frame of a clip is solved offline (seconds) and would flatten
         # the steady per-frame cost (tens of ms) on a linear axis
         self.cost_plot = _plot(
@@ -270,14 +270,16 @@ class LossPlots(QWidget):
         losses = snap.losses
         drawn = False
         if losses:
-            its = np.arange(1, len(losses) + 1)
+            # the loss at the start latent, then after each step: x 0..N for N iterations,
+            # as the status bar and the latent map count them
+            its = np.arange(len(losses))
             for name in names:
                 vals = np.array([_loggable(float(d.get(name, np.nan)), LOSS_FLOOR) for d in losses])
                 _set_curve(self.iter_curves.get(name, symbols=True), its, vals)
                 drawn = drawn or bool(np.isfinite(vals).any())
             vb = self.iteration_plot.getPlotItem().getViewBox()
             if not drawn:  # all 0: the iterations run, not pyqtgraph's 0..1 for no data
-                vb.setXRange(0.5, len(losses) + 0.5, padding=0.0)
+                vb.setXRange(-0.5, len(losses) - 0.5, padding=0.0)
             elif not vb.autoRangeEnabled()[0]:
                 vb.enableAutoRange(x=True)
             settle(self.iteration_plot)

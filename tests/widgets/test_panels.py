@@ -121,7 +121,8 @@ def test_plots_draw_the_engines_history_and_restart_with_it(qtbot, fake_snapshot
     for i in range(5):
         p.update_snapshot(fake_snapshot(seq=i + 1, frame=i, history=_records(range(i + 1))))
     total = p.iter_curves.items["total"]  # xData/yData: before the log-axis transform
-    assert list(total.xData) == [1, 2] and np.allclose(total.yData, [1.0, 0.1])
+    # the start latent's loss at 0, then one point per step: N iterations end at x = N
+    assert list(total.xData) == [0, 1] and np.allclose(total.yData, [1.0, 0.1])
     root = p.history_curves.items["pos:root"]
     assert list(root.xData) == [0, 1, 2, 3, 4] and np.allclose(root.yData, [0.05, 0.1, 0.15, 0.2, 0.25])
     assert list(p.ms_curve.yData) == [3.0, 4.0, 5.0, 6.0, 7.0]
@@ -508,11 +509,11 @@ def test_all_zero_loss_plots_span_the_iterations_and_frames_with_whole_ticks(qtb
     p.grab()
     it, hist = p.iteration_plot.getPlotItem(), p.history_plot.getPlotItem()
     assert it.titleLabel.text == "Loss per iteration: all 0" and hist.titleLabel.text == "Loss history: all 0"
-    assert it.getViewBox().viewRange()[0] == pytest.approx([0.5, 1.5])
+    assert it.getViewBox().viewRange()[0] == pytest.approx([-0.5, 0.5])
     assert hist.getViewBox().viewRange()[0] == pytest.approx([20.0, 39.0])
     axis = it.getAxis("bottom")
-    ticks = [v for _s, values in axis.tickValues(0.5, 1.5, axis.width()) for v in values]
-    assert ticks == [1.0]  # iteration 1, not 0.6, 0.8, 1.0...
+    ticks = [v for _s, values in axis.tickValues(-0.5, 0.5, axis.width()) for v in values]
+    assert ticks == [0.0]  # the start, not -0.4, -0.2, 0.0...
     assert not it.getAxis("left").style["showValues"] and not hist.getAxis("left").style["showValues"]
     p.update_snapshot(fake_snapshot(seq=2))  # losses again
     assert it.getViewBox().autoRangeEnabled()[0] and it.getAxis("left").style["showValues"]

@@ -152,6 +152,14 @@ def heights(local_rot, root_pos, offsets, joints=sk.HEIGHT_JOINTS):
     return pos[..., idx, 2]
 
 
+def heights_from_root_space(root_rot, root_pos, positions, joints=sk.HEIGHT_JOINTS):
+    """:func:`heights` from the root-space positions of :func:`root_space_fk` of the same
+    pose (``(..., J, 3)``), the root's world rotation ``(..., 4)`` and position
+    ``(..., 3)``: the same values without a second FK pass (loading a training split)."""
+    idx = [sk.JOINT_INDEX[j] for j in joints]
+    return root_pos[..., None, 2] + Q.rotate(root_rot[..., None, :], positions[..., idx, :])[..., 2]
+
+
 def mirror_motion(local_rot, root_pos, offsets):
     """Left/right mirror (reflection x -> -x) of a canonical motion.
 

@@ -109,6 +109,18 @@ def test_encoder_input_matches_pymotion_root_dual_quat():
     )
 
 
+def test_heights_from_root_space_positions_are_those_of_a_world_fk(synthetic_motion):
+    m = synthetic_motion
+    rot, disp = Fe.pose_from_motion(m.local_rot, m.root_pos)
+    for kit in (np.asarray, torch.tensor):
+        lr, rp = kit(m.local_rot), kit(m.root_pos)
+        pos, _ = Fe.root_space_fk(kit(rot), sk.REST_OFFSETS)
+        want = np.asarray(Fe.heights(lr, rp, sk.REST_OFFSETS))
+        got = np.asarray(Fe.heights_from_root_space(lr[:, 0], rp, pos))
+        assert got.shape == want.shape and np.ptp(want) > 0.1
+        np.testing.assert_allclose(got, want, atol=1e-12)
+
+
 def test_pose_round_trip_recovers_motion(synthetic_motion):
     m = synthetic_motion
     rot, disp = Fe.pose_from_motion(m.local_rot, m.root_pos)

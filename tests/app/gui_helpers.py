@@ -147,12 +147,13 @@ def type_number(spin, value: int) -> None:
 
 
 def add_wrist_pin(w):
-    """A pin added with the pose window's Constraints dock (on the ankle, its default
-    joint) and put on the left wrist in its editor."""
+    """A pin added with the pose window's Constraints dock (on the joint last clicked, or
+    its default joint) and put on the left wrist in its editor."""
     panel = w.constraints.panel
     panel.kinds.setCurrentText("pin")
     QTest.mouseClick(panel.add_button, Qt.MouseButton.LeftButton)
-    (joint_box,) = [b for b in panel.editor.findChildren(QComboBox) if b.currentText() == "lankle"]
+    (added,) = w.mode.constraints
+    (joint_box,) = [b for b in panel.editor.findChildren(QComboBox) if b.currentText() == added.joint]
     joint_box.setCurrentText("lwrist")
     (pin,) = w.mode.constraints
     assert pin.joint == "lwrist"

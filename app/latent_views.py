@@ -198,7 +198,8 @@ class LatentViews:
         if self.forces is None or self.gallery is None:
             return
         changed = d is not self.forces.detail
-        self.forces.set_detail(d)
+        # no detail: the tab says why (not inspected yet, or a method without a latent)
+        self.forces.set_detail(d, str(snap.latent_note))
         self.gallery.set_detail(d)
         if changed:
             self._draw_forces()

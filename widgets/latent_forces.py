@@ -7,6 +7,11 @@ norm at the chosen iteration, in the term's colour from the loss plots; the bott
 the chosen term's force per latent dimension (or, with a joint chosen, each dimension's
 influence on that joint). It starts on the first term with a force (a term can push
 nothing, e.g. a sensor already met), and says "no force" rather than stay blank. Terms whose forces point against each other are named.
+
+The norms are horizontal bars with the terms named on the left: names under vertical
+bars ran into each other ("rankletemporal_prior") in the dock's ~460 px. Until a frame
+is inspected (or with a method that has no latent) both charts say so in their titles
+and tooltips and show no axis values (:func:`widgets.plots.show_empty`).
 """
 
 from __future__ import annotations
@@ -16,14 +21,15 @@ from typing import Any
 import numpy as np
 import pyqtgraph as pg
 from PyQt6.QtCore import pyqtSignal
-from PyQt6.QtGui import QCloseEvent
+from PyQt6.QtGui import QCloseEvent, QFont, QFontMetricsF
 from PyQt6.QtWidgets import QComboBox, QGridLayout, QLabel, QPushButton, QSpinBox, QVBoxLayout, QWidget
 
 from engine import skeleton as sk
 from widgets import style
-from widgets.plots import release, settle
+from widgets.plots import CountAxis, release, settle, show_empty
 
 INFLUENCE = "influence on the joint"
+NORM_TITLE = "force norm per term"
 DIM_TITLE = "per latent dimension"
 #: What the tab says while it holds no inspection (at the start and after each solve).
 EMPTY = (
@@ -47,6 +53,39 @@ def first_with_force(forces: np.ndarray) -> int:
     """The first term whose force ``(K, T, L)`` is not zero at some iteration (0 if none)."""
     moving = np.flatnonzero(np.any(np.asarray(forces) != 0, axis=(0, 2)))
     return int(moving[0]) if moving.size else 0
+
+
+def short_name(term: str) -> str:
+    """A term's name in the chart: a sensor's term is its joint (the tooltip has it whole)."""
+    return term.removeprefix("sensor:")
+
+
+class TermAxis(pg.AxisItem):
+    """The left axis of horizontal bars: one term name per bar, right-aligned.
+
+    The names are handed over as three tick levels (every fourth, the others of every
+    second, the rest): pyqtgraph draws a level only while its text fits, so a short
+    panel names every second or fourth bar instead of printing names over each other.
+    The axis is as wide as the widest name (pyqtgraph sized it from all but the last
+    level and dropped the names that did not fit).
+    """
+
+    def __init__(self, orientation: str = "left", **kwargs: Any) -> None:
+        super().__init__(orientation, **kwargs)
+        self.setStyle(maxTextLevel=2, textFillLimits=[(0, 0.9)])
+        self.names: tuple[str, ...] = ()
+
+    def set_names(self, names: tuple[str, ...]) -> None:
+        """Name the bars at y = 0, 1, ... (top to bottom in an inverted view)."""
+        if names == self.names:
+            return
+        self.names = names
+        rows = list(enumerate(names))
+        self.setTicks([rows[::4], rows[2::4], rows[1::2]])
+        if names:
+            metrics = QFontMetricsF(self.style["tickFont"] or QFont())
+            widest = max(metrics.horizontalAdvance(n) for n in names)
+            self.setWidth(int(widest + max(0, self.style["tickLength"]) + self.style["tickTextOffset"][0] + 2))
 
 
 class LatentForces(QWidget):
@@ -81,11 +120,14 @@ class LatentForces(QWidget):
         grid.addWidget(self.term, 1, 1)
         layout.addLayout(grid)
         layout.addWidget(self.info)
-        self.norm_plot = pg.PlotWidget(title="force norm per term")
+        self.term_axis = TermAxis()
+        self.norm_plot = pg.PlotWidget(axisItems={"left": self.term_axis})
         self.norm_plot.setMinimumHeight(110)
-        self.norm_bars = pg.BarGraphItem(x=[], height=[], width=0.8)
+        self.norm_plot.getPlotItem().getViewBox().invertY(True)  # the first term on top
+        self.norm_plot.getAxis("bottom").enableAutoSIPrefix(False)
+        self.norm_bars = pg.BarGraphItem(x0=0.0, y=[], height=0.8, width=[])
         self.norm_plot.addItem(self.norm_bars)
-        self.dim_plot = pg.PlotWidget(title=DIM_TITLE)
+        self.dim_plot = pg.PlotWidget(axisItems={"bottom": CountAxis("bottom")})
         self.dim_plot.setMinimumHeight(110)
         self.dim_plot.setLabel("bottom", "latent dimension")
         self.dim_bars = pg.BarGraphItem(x=[], height=[], width=0.8)
@@ -93,6 +135,8 @@ class LatentForces(QWidget):
         layout.addWidget(self.norm_plot, 1)
         layout.addWidget(self.dim_plot, 1)
         self.detail: Any = None
+        self.note = ""
+        self._draw()
 
     def closeEvent(self, event: QCloseEvent | None) -> None:  # noqa: N802 (Qt's name)
         """A closed view holds no plot item (:func:`widgets.plots.release`)."""
@@ -103,11 +147,12 @@ class LatentForces(QWidget):
         """A term's colour, as the loss plots give it (assigned here first if new)."""
         return self.colours.setdefault(name, style.term_colour(len(self.colours) - 1))
 
-    def set_detail(self, detail: Any) -> None:
-        """Show a :class:`~engine.studio.latent_views.LatentDetail` (None clears)."""
-        if detail is self.detail:
+    def set_detail(self, detail: Any, note: str = "") -> None:
+        """Show a :class:`~engine.studio.latent_views.LatentDetail`; None clears, and
+        ``note`` then says why there is none (e.g. a method without a latent space)."""
+        if detail is self.detail and note == self.note:
             return
-        self.detail = detail
+        self.detail, self.note = detail, note
         self.term.blockSignals(True)
         self.term.clear()
         if detail is not None:
@@ -130,26 +175,31 @@ class LatentForces(QWidget):
         if d is None:
             # nothing inspected since the last solve: no term, iteration or frame of an
             # earlier inspection is named over the empty charts
-            self.norm_bars.setOpts(x=[], height=[])
+            why = self.note or EMPTY
+            self.norm_bars.setOpts(y=[], width=[])
             self.dim_bars.setOpts(x=[], height=[])
-            self.norm_plot.getAxis("bottom").setTicks(None)
-            self.dim_plot.setTitle(DIM_TITLE)
-            self.info.setText(EMPTY)
+            self.term_axis.set_names(())
+            show_empty(self.norm_plot, f"{NORM_TITLE}: none", why, sides=("left", "bottom"))
+            show_empty(self.dim_plot, f"{DIM_TITLE}: none", why, sides=("left", "bottom"))
+            self.info.setText(why)
             return
         k = min(self.iteration.value(), len(d.forces) - 1)
         f = np.asarray(d.forces[k])
         norms = np.linalg.norm(f, axis=1)
-        self.norm_bars.setOpts(x=np.arange(len(d.names)), height=norms, brushes=[self.colour(n) for n in d.names])
-        self.norm_plot.getAxis("bottom").setTicks([[(i, n.replace("sensor:", "")) for i, n in enumerate(d.names)]])
+        self.norm_bars.setOpts(y=np.arange(len(d.names)), width=norms, brushes=[self.colour(n) for n in d.names])
+        self.term_axis.set_names(tuple(short_name(n) for n in d.names))
+        show_empty(self.norm_plot, NORM_TITLE, sides=("left", "bottom"))
+        # every name whole with its norm, also those a short panel leaves unlabelled
+        self.norm_plot.setToolTip("<br>".join(f"{n}: {v:.3g}" for n, v in zip(d.names, norms)))
         chosen = self.term.currentData()
         if chosen == INFLUENCE and d.influence is not None:
             self.dim_bars.setOpts(x=np.arange(len(d.influence)), height=d.influence, brush=style.SENSOR)
-            self.dim_plot.setTitle(f"|d {d.joint} / d z| (m per latent unit)", size="9pt")
+            show_empty(self.dim_plot, f"|d {d.joint} / d z| (m per latent unit)", sides=("left", "bottom"))
         elif chosen in d.names:
             t = d.names.index(chosen)
             self.dim_bars.setOpts(x=np.arange(f.shape[1]), height=f[t], brush=self.colour(chosen))
             none = "" if np.any(f[t] != 0) else ": no force"
-            self.dim_plot.setTitle(f"force of {chosen}, iteration {k}{none}", size="9pt")
+            show_empty(self.dim_plot, f"force of {chosen}, iteration {k}{none}", sides=("left", "bottom"))
         against = conflicts(f, d.names)
         self.info.setText(
             # forces at the start and after each step: one more than the solver's iterations

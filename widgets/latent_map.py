@@ -59,7 +59,8 @@ class LatentMapPlot(QWidget):
         self.note.setStyleSheet("color: #8a93a6;")
         self.note.setVisible(False)
         self.plot = pg.PlotWidget()
-        self.plot.setMinimumSize(200, 200)
+        # 100 px high at least, not 200: the readouts under the map share the dock with it
+        self.plot.setMinimumSize(200, 100)
         self.setToolTip(
             "Latent map: hover or click to decode a point as a ghost pose; click a trajectory point to go to its frame"
         )

@@ -21,11 +21,11 @@ from typing import Any
 import numpy as np
 import pyqtgraph as pg
 from PyQt6.QtCore import Qt, pyqtSignal
-from PyQt6.QtGui import QCloseEvent
+from PyQt6.QtGui import QCloseEvent, QResizeEvent
 from PyQt6.QtWidgets import QHBoxLayout, QLabel, QPushButton, QVBoxLayout, QWidget
 
 from engine.latent.solved_frames import SolvedFrames
-from widgets.plots import fit_frames, release, settle
+from widgets.plots import CountAxis, fit_frames, release, settle
 
 #: Readouts drawn, with their colours and legend names.
 CURVES = (
@@ -74,10 +74,13 @@ class LatentReadouts(QWidget):
         row.addWidget(self.label, 1)
         row.addWidget(self.next_button)
         layout.addLayout(row)
-        self.plot = pg.PlotWidget()
+        self.plot = pg.PlotWidget(axisItems={"bottom": CountAxis("bottom")})
         self.plot.setMinimumHeight(120)
         self.plot.setLabel("bottom", "frame")
-        self.plot.getAxis("bottom").enableAutoSIPrefix(False)
+        # distances and the norm are all lengths in the VAE's latent space (docs/latent.md)
+        self.plot.setLabel("left", "latent units")
+        for side in ("bottom", "left"):
+            self.plot.getAxis(side).enableAutoSIPrefix(False)
         self.plot.addLegend(offset=(4, 4), labelTextSize="7pt")
         self.curves = {k: self.plot.plot(pen=pg.mkPen(c, width=1), name=label) for k, c, label in CURVES}
         self.thresholds = {
@@ -108,6 +111,20 @@ class LatentReadouts(QWidget):
         release(self.plot)
         super().closeEvent(event)
 
+    def resizeEvent(self, event: QResizeEvent | None) -> None:  # noqa: N802 (Qt's name)
+        super().resizeEvent(event)
+        self._fit_label()
+
+    def _fit_label(self) -> None:
+        """Ask for the readout line's wrapped height: a splitter or dock reads only minimum
+        sizes, not a wrapped label's height for its width, so two or three lines pushed the
+        chart (its "frame" label first) past the bottom of the dock."""
+        width = self.label.width()
+        if width > 0:
+            need = self.label.heightForWidth(width)
+            if need > 0 and need != self.label.minimumHeight():
+                self.label.setMinimumHeight(need)
+
     def mark_stale(self) -> None:
         """Draw the next snapshot even if it is the one drawn last (a view brought back
         into sight after it skipped snapshots)."""
@@ -123,6 +140,7 @@ class LatentReadouts(QWidget):
             curve.setData([], [])
         self.flags.setData([], [])
         self.label.setText("")
+        self._fit_label()
 
     def set_thresholds(self, nearest: float, norm: float) -> None:
         """The flag rule's thresholds, drawn dashed."""
@@ -165,6 +183,7 @@ class LatentReadouts(QWidget):
         self.flags.setData(x[on], y[on])
         self.cursor.setValue(float(snap.frame))
         self.label.setText(self.describe(snap))
+        self._fit_label()
         fit_frames(self.plot, x)
         settle(self.plot)
 

@@ -18,7 +18,7 @@ from PyQt6.QtGui import QCloseEvent
 from PyQt6.QtWidgets import QHBoxLayout, QLabel, QVBoxLayout, QWidget
 
 from widgets import style
-from widgets.plots import fit_frames, release, settle
+from widgets.plots import CountAxis, fit_frames, release, settle
 
 #: Frames kept per curve (older ones scroll out).
 KEEP = 3000
@@ -37,7 +37,10 @@ class MethodErrorPlot(QWidget):
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
-        self.plot = pg.PlotWidget(title="Error against the ground truth (cm, mean over joints)")
+        # frames are whole: over a few frames pyqtgraph ticked 0.5, 1.5...
+        self.plot = pg.PlotWidget(
+            title="Error against the ground truth (cm, mean over joints)", axisItems={"bottom": CountAxis("bottom")}
+        )
         self.plot.showGrid(x=True, y=True, alpha=0.2)
         self.plot.setLabel("bottom", "frame")
         for side in ("bottom", "left"):

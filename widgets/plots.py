@@ -70,6 +70,27 @@ class CountAxis(pg.AxisItem):
         return levels
 
 
+def set_title(plot: pg.PlotWidget, title: str, why: str = "") -> None:
+    """Set ``plot``'s (short, 9 pt) title and its tooltip ``why``, only when they change:
+    a new title relayouts the plot and paints it a second time."""
+    if plot.getPlotItem().titleLabel.text != title or plot.toolTip() != why:
+        plot.setTitle(title, size="9pt")
+        plot.setToolTip(why)
+
+
+def show_empty(plot: pg.PlotWidget, title: str, why: str = "", sides: tuple[str, ...] = ("left",)) -> None:
+    """Title ``plot``; with ``why`` (it draws nothing, and why not) say so in its tooltip
+    and hide the values of its ``sides`` axes: they would be the last drawn data's, or
+    pyqtgraph's 0..1 for no data (0.2, 0.4 ... of nothing), and an empty plot looked
+    broken. Without ``why`` the values come back.
+    """
+    set_title(plot, title, why)
+    for side in sides:
+        axis = plot.getAxis(side)
+        if axis.style["showValues"] == bool(why):
+            axis.setStyle(showValues=not why)
+
+
 def fit_frames(plot: pg.PlotWidget, x: np.ndarray, drawn: bool = True) -> None:
     """A frame axis over a few frames at least: with one solved frame the auto range
     spread frames -80 to 80 around it. With nothing ``drawn`` (every value 0 on a log
@@ -198,7 +219,6 @@ class LossPlots(QWidget):
         layout.addLayout(plots, 1)
         layout.addWidget(self.legend)
         self._seq = -1
-        self._titles: dict[int, tuple[str, str]] = {}  # plot -> its title and tooltip
 
     def _set_visible(self, name: str, on: bool) -> None:
         self.iter_curves.set_visible(name, on)
@@ -246,23 +266,11 @@ class LossPlots(QWidget):
             self.legend.set_terms(tuple(names), self.colours)
         return names
 
-    def _title(self, plot: pg.PlotWidget, title: str, why: str = "") -> None:
-        """Set ``plot``'s (short) title and tooltip when they change: an empty plot says
-        why it is empty instead of looking broken."""
-        if self._titles.get(id(plot)) != (title, why):  # another method may be empty for its own reason
-            self._titles[id(plot)] = (title, why)
-            plot.setTitle(title, size="9pt")
-            plot.setToolTip(why)
-
     def _all_zero(self, plot: pg.PlotWidget, title: str, zero: bool) -> None:
         """``plot``'s own ``title``, or with ``zero`` (every term 0: nothing a log axis can
-        draw) the title and a tooltip saying so, and no loss values on the y axis (they
-        would be the last drawn curves' or pyqtgraph's 1..10 for no data)."""
+        draw) the title and a tooltip saying so, and no loss values on the y axis."""
         why = "Every term is 0 (the method meets each tracker exactly): a log axis has nothing to draw."
-        self._title(plot, title + (": all 0" if zero else ""), why if zero else "")
-        left = plot.getAxis("left")
-        if left.style["showValues"] == zero:
-            left.setStyle(showValues=not zero)
+        show_empty(plot, title + (": all 0" if zero else ""), why if zero else "")
 
     def update_iterations(self, snap: Any) -> None:
         """This frame's loss per iteration, every term."""
@@ -285,7 +293,7 @@ class LossPlots(QWidget):
             settle(self.iteration_plot)
         if not losses and snap.history:
             method = getattr(snap, "method", "") or "this method"
-            self._title(
+            show_empty(
                 self.iteration_plot, "Loss per iteration: none", f"{method} does not iterate: it reports no loss."
             )
         else:

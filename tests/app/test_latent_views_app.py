@@ -79,7 +79,7 @@ def test_map_clicks_decode_and_seek_with_dragposer(studio, qtbot):
     qtbot.waitUntil(lambda: s.latest.latent_detail is not None, timeout=30000)
     qtbot.waitUntil(lambda: views.forces.detail is not None, timeout=10000)
     d = views.forces.detail
-    assert d.frame == frame and len(views.forces.norm_bars.opts["height"]) == len(d.names)
+    assert d.frame == frame and len(views.forces.norm_bars.opts["width"]) == len(d.names)
     assert any(n.startswith("sensor:") for n in d.names)
     qtbot.waitUntil(lambda: len(views.map.force_lines) == len(d.names), timeout=5000)  # drawn on the map too
     # the Latent panel's A and B: their blend's path appears on the map
@@ -228,6 +228,39 @@ def test_the_forces_tab_says_it_is_empty_after_the_next_solve(studio, qtbot):
     step = next(b for b in studio.timeline.findChildren(QToolButton) if b.toolTip().startswith("Next frame"))
     qtbot.mouseClick(step, Qt.MouseButton.LeftButton)
     qtbot.waitUntil(lambda: forces.detail is None, timeout=30000)
-    assert forces.dim_plot.getPlotItem().titleLabel.text == "per latent dimension"
-    assert forces.norm_plot.getAxis("bottom")._tickLevels is None  # no term names left
+    assert forces.dim_plot.getPlotItem().titleLabel.text == "per latent dimension: none"
+    assert forces.term_axis.names == ()  # no term names left
     assert forces.info.text().startswith("Empty until Inspect this frame")
+
+
+@pytest.mark.parametrize("size", ["1600x980", "minimum"])
+def test_the_readouts_frame_label_is_inside_the_dock(studio, qtbot, size):
+    """Seen under Xvfb at 1600 x 1000 (a 1600 x 980 window): the readouts' "frame" label
+    was cut in half by the bottom of the dock, and the y axis had no label. The Map tab
+    asked for 427 px (the map alone 245); a readout line of two or three lines pushed the
+    plot past the dock's edge. The tab fits the dock at the default and the minimum size,
+    the x label inside it, and the y axis says its units."""
+    from PyQt6.QtCore import QPoint
+
+    s = studio.session
+    s.pause()
+    views = _show_map(studio)
+    r = views.readouts
+    # the longest line the readouts show: a frame flagged when solved before (three lines)
+    r.label.setText(
+        "frame 149: nearest 0.96 &le; 3.20, norm 2.34 &le; 6.39, prior 0.89<br><span>flagged when solved"
+        " before (nearest 3.41 &gt; 3.20, norm 2.34 &le; 6.39); solved again from here it is not</span>"
+    )
+    studio.resize(*((1600, 980) if size == "1600x980" else (1, 1)))  # (1, 1): the minimum size
+    qtbot.waitUntil(lambda: r.plot.isVisible() and r.plot.height() > 0, timeout=5000)
+    for _ in range(5):
+        QApplication.processEvents()
+    dock = views.dock
+    plot_bottom = r.plot.mapTo(dock, QPoint(0, r.plot.height())).y()
+    assert plot_bottom <= dock.height(), (
+        f"the plot runs {plot_bottom - dock.height()} px past the dock at {studio.size()}"
+    )
+    axis = r.plot.getAxis("bottom")
+    label = axis.label.mapRectToScene(axis.label.boundingRect())
+    assert label.bottom() - 5 <= r.plot.height()  # pyqtgraph nudges the label's box 5 px down
+    assert "latent units" in r.plot.getAxis("left").labelText

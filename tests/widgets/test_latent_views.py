@@ -188,8 +188,8 @@ def test_forces_bars_in_the_loss_plots_colours(qtbot):
     qtbot.mouseClick(w.inspect_button, Qt.MouseButton.LeftButton)
     assert asked == ["lwrist"]
     w.set_detail(_detail())
-    heights = w.norm_bars.opts["height"]
-    assert list(heights) == pytest.approx([1.0, 2.0, 0.5])
+    norms = w.norm_bars.opts["width"]  # horizontal bars: a norm is a bar's length
+    assert list(norms) == pytest.approx([1.0, 2.0, 0.5])
     assert w.norm_bars.opts["brushes"][0] == "#123456"  # the shared colour
     assert "look_at" in colours  # a new term gets its colour in the shared dict
     assert "sensor:lwrist vs look_at" in w.info.text()
@@ -360,6 +360,83 @@ def test_the_lower_force_chart_starts_on_a_term_with_force(qtbot):
     assert w.dim_bars.opts["height"][0] == pytest.approx(-2.0)
     w.term.setCurrentIndex(0)
     assert "no force" in w.dim_plot.getPlotItem().titleLabel.text
+
+
+#: The terms of the default six trackers, as the Forces tab showed them
+SIX_TERMS = tuple(f"sensor:{j}" for j in ("root", "upperneck", "lwrist", "rwrist", "lankle", "rankle")) + (
+    "temporal_prior",
+    "smooth",
+)
+
+
+def _drawn_names(w: LatentForces) -> list:
+    """The tick labels the force-norm chart draws: (text, rect in scene coordinates)."""
+    from PyQt6.QtGui import QImage, QPainter
+
+    out = []
+    image = QImage(8, 8, QImage.Format.Format_ARGB32)
+    for side in ("left", "bottom"):
+        axis = w.norm_plot.getAxis(side)
+        painter = QPainter(image)
+        try:
+            _axis, _ticks, texts = axis.generateDrawSpecs(painter)
+        finally:
+            painter.end()
+        out += [(text, axis.mapRectToScene(rect)) for rect, _flags, text in texts]
+    return out
+
+
+@pytest.mark.parametrize("size", [(460, 430), (460, 300)])
+def test_the_term_names_of_the_force_chart_do_not_run_into_each_other(qtbot, size):
+    """Seen in the Forces tab (460 px wide): the names under the bars ran into each other
+    ("rankletemporal_prior"). Each name drawn has its own room, and at the panel's size
+    every term is named (a short panel may name every other one; the tooltip has all)."""
+    w = shown(qtbot, LatentForces(), *size)
+    t, latent = len(SIX_TERMS), 24
+    forces = np.random.default_rng(0).normal(size=(2, t, latent))
+    import dataclasses
+
+    w.set_detail(dataclasses.replace(_detail(False), names=SIX_TERMS, forces=forces, plane=forces[..., :2]))
+    for _ in range(3):  # the charts laid out at the panel's size
+        QApplication.processEvents()
+    drawn = _drawn_names(w)
+    rects = [r for _text, r in drawn]
+    crowded = [(a[0], b[0]) for i, a in enumerate(drawn) for b in drawn[i + 1 :] if a[1].intersects(b[1])]
+    assert not crowded, f"names drawn over each other: {crowded}"
+    names = {text for text, _r in drawn}
+    short = {n.removeprefix("sensor:") for n in SIX_TERMS}
+    if size[1] >= 430:  # the tab at 1600 x 1000
+        assert short <= names, f"unnamed: {short - names}"
+    else:
+        assert len(names & short) >= len(short) // 2
+    view = w.norm_plot.sceneRect()
+    assert all(view.contains(r) for r in rects)
+    for n in SIX_TERMS:
+        assert n in w.norm_plot.toolTip()
+
+
+def test_empty_force_charts_say_why_and_show_no_axis_values(qtbot):
+    """Seen before any inspection and with IK: the charts read 0.2 ... 0.8 on both axes
+    with nothing drawn. They say why in their titles and tooltips and hide their values,
+    which come back with a detail."""
+    w = shown(qtbot, LatentForces(), 460, 430)
+    plots = (w.norm_plot, w.dim_plot)
+
+    def values_shown() -> list:
+        return [p.getAxis(side).style["showValues"] for p in plots for side in ("left", "bottom")]
+
+    for p in plots:
+        assert p.getPlotItem().titleLabel.text.endswith(": none")
+        assert "Inspect this frame" in p.toolTip()
+    assert not any(values_shown())
+    w.set_detail(None, "ik has no latent space: latent debugging needs DragPoser")
+    assert all("ik has no latent space" in p.toolTip() for p in plots)
+    assert "ik has no latent space" in w.info.text()
+    w.set_detail(_detail())
+    assert all(values_shown())
+    assert not any(p.getPlotItem().titleLabel.text.endswith(": none") for p in plots)
+    w.set_detail(None)
+    assert not any(values_shown()) and "Inspect this frame" in w.norm_plot.toolTip()
 
 
 def test_the_gallery_explains_its_colours(qtbot):

@@ -51,3 +51,19 @@ def test_curves_restart_when_the_engine_history_restarts_unseen(qtbot, fake_snap
     assert sorted(p.data["dragposer"]) == [10]
     p.update_snapshot(fake_snapshot(seq=6, frame=11, positions=gt, ground_truth=gt, method="dragposer", history_run=2))
     assert sorted(p.data["dragposer"]) == [10, 11]
+
+
+def test_the_frame_axis_ticks_whole_frames(qtbot, fake_snapshot):
+    """Seen in the Method errors tab: after a frame or two the axis read 0.5, 1.5 ...
+    frames that do not exist. Its ticks are whole numbers (widgets.plots.CountAxis)."""
+    from tests.widgets.conftest import shown
+
+    p = shown(qtbot, MethodErrorPlot(), 900, 220)
+    gt = fake_snapshot().ground_truth
+    for f in range(2):
+        p.update_snapshot(fake_snapshot(seq=f + 1, frame=f, positions=gt + [0.01, 0, 0], ground_truth=gt))
+    p.grab()
+    axis = p.plot.getAxis("bottom")
+    lo, hi = p.plot.getPlotItem().getViewBox().viewRange()[0]
+    ticks = [v for _s, values in axis.tickValues(lo, hi, axis.width()) for v in values]
+    assert ticks and all(float(v).is_integer() for v in ticks), ticks

@@ -98,6 +98,11 @@ class StudioRedraw:
         (a live stream may send its first frame much later, or never)."""
         waiting = event.live and event.source.num_frames == 0
         self.w.viewport.clear_pose(f"waiting for tracker frames ({event.name})" if waiting else "")
+        # the clip's errors against its ground truth and its joints' paths: a source of
+        # trackers has neither
+        self.w.plots.clear()
+        self.w.method_errors.clear()
+        self.w.motion_paths.set_source(None)
 
     def _show_sensors(self, event: ev.SensorsChanged | None) -> None:
         s = self.w.session

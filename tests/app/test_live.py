@@ -99,3 +99,19 @@ def test_connecting_clears_the_previous_character_from_the_view(studio, qtbot, s
     studio.session.set_motion(synthetic_motion)
     assert view.ground_truth.visible  # the clip's first frame at once
     qtbot.waitUntil(lambda: view.reconstruction.visible, timeout=10000)
+
+
+def test_connecting_drops_the_clips_errors_and_motion_paths(studio, qtbot):
+    """Seen under Xvfb: after Connect the Method errors plot kept the clip's curve and
+    legend, and the 3D view the selected joint's motion path of the clip: a stream of
+    trackers has no ground truth and no path yet."""
+    with qtbot.waitSignal(studio.snapshotDrawn, timeout=10000, check_params_cb=lambda f: f == 10):
+        studio.session.seek(10)
+    assert studio.method_errors.data  # the clip's error on the frame drawn
+    studio.motion_paths.select("relbow")
+    assert studio.motion_paths.layer.paths  # the clip's path of the elbow, drawn
+    assert studio.live.connect("127.0.0.1", 0)
+    qtbot.wait(300)
+    assert not studio.method_errors.data and not studio.method_errors.legend.text()
+    assert not studio.motion_paths.layer.paths
+    studio.live.disconnect()

@@ -59,7 +59,8 @@ def reconstruct_clip(
         roots.append(root)
         if progress is not None and progress(f):
             break
-    return Motion(np.array(rots), np.array(roots), motion.skeleton, motion.fps, f"{motion.name} ({method_name})")
+    name = f"{motion.name} ({method_name})"
+    return Motion(np.array(rots), np.array(roots), motion.skeleton, motion.fps, name, motion.start)
 
 
 def solve_frames(

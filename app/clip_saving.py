@@ -1,6 +1,7 @@
 """Saving the studio's authoring edits: the edited clip as BVH or glTF, and the unsaved-changes prompt.
 
-A range re-solve (Edit ▸ Re-solve range) replaces the loaded clip in memory; File ▸ Save
+A range re-solve (Edit ▸ Re-solve range) or a trim (Edit ▸ Trim clip to selection)
+replaces the loaded clip in memory; File ▸ Save
 edited clip writes it as it is now, on the canonical skeleton or onto the rig of
 the file it was opened from (:func:`engine.motion.write_back.save_on_source_rig`),
 atomically, with no solver run (the reconstruction saves re-solve the clip instead).
@@ -25,10 +26,18 @@ from engine.errors import UserError
 
 
 def clip_edited(window: StudioShell) -> bool:
-    """Whether the loaded clip differs from the one opened (a range re-solve not undone)."""
+    """Whether the loaded clip differs from the one opened (a range re-solve or a trim not undone)."""
     session = window.session
     opened = window.opened_motion
     return session.motion is not None and opened is not None and session.motion is not opened
+
+
+def edit_kind(window: StudioShell) -> str:
+    """How the loaded clip was edited, for the prompt: ``trimmed`` (fewer frames than
+    opened, re-solved or not) or ``re-solved``."""
+    opened, motion = window.opened_motion, window.session.motion
+    trimmed = opened is not None and motion is not None and len(motion) != len(opened)
+    return "trimmed" if trimmed else "re-solved"
 
 
 def save_clip(window: StudioShell, path: str | Path, on_source_rig: bool = False) -> str:
@@ -51,7 +60,7 @@ def save_clip(window: StudioShell, path: str | Path, on_source_rig: bool = False
         raise UserError("this clip was not opened from a BVH file")
     on_rig = source_rig(session.path, session.rig_map) if on_source_rig else None
     write_reconstruction(path, session.motion, on_rig)
-    return skipped_note(on_rig[1]) if on_rig is not None else ""
+    return skipped_note(on_rig[1], session.motion.start / session.motion.fps) if on_rig is not None else ""
 
 
 def save_clip_dialog(window: StudioShell, on_source_rig: bool = False) -> bool:
@@ -86,7 +95,7 @@ def confirm_discard(window: StudioShell, doing: str) -> bool:
     if window.undo.is_clean():
         return True
     buttons = QMessageBox.StandardButton
-    what = "the re-solved clip and the scene" if clip_edited(window) else "the scene"
+    what = f"the {edit_kind(window)} clip and the scene" if clip_edited(window) else "the scene"
     answer = QMessageBox.question(
         window,
         "Unsaved changes",

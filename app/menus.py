@@ -1,4 +1,4 @@
-"""The studio's menus: File, Edit (undo, redo), Playback, View (display, camera) and Help.
+"""The studio's menus: File, Edit (undo, redo, re-solve range, trim clip), Playback, View (display, camera) and Help.
 
 Every entry is a QAction owned by the window, so its shortcut works anywhere in the
 window and the help dialog can list it (:func:`app.menu_parts.shortcut_rows`).
@@ -12,7 +12,7 @@ from PyQt6.QtCore import Qt
 from PyQt6.QtGui import QKeySequence
 from PyQt6.QtWidgets import QMainWindow
 
-from app import authoring_actions, clip_saving, range_actions
+from app import authoring_actions, clip_saving, clip_trim, range_actions
 from app.menu_parts import action, add_view_entries, show_help, toggle
 from app.undo import undo_actions
 
@@ -46,6 +46,7 @@ def build_menus(w: QMainWindow) -> None:
         edit.addAction(act)
     named["undo"], named["redo"] = undo, redo
     named.update(range_actions.add_edit_entries(w, edit, action))
+    named.update(clip_trim.add_edit_entries(w, edit, action))
     play = w.menuBar().addMenu("&Playback")
     action(w, play, "Play / pause", w.toggle_play, "Space")
     action(w, play, "Next frame", lambda: w.session.step(1), "Right")

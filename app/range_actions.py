@@ -9,12 +9,14 @@ thread behind a progress dialog with Cancel (:class:`app.job_runner.JobRunner`):
 studio keeps playing and drawing meanwhile. When it ends, the GUI thread replaces the
 clip by the result (same path, the frame shown then) as one step on the window's undo
 stack, so Ctrl+Z restores the original clip; a cancelled re-solve changes nothing, and
-one whose clip was replaced meanwhile is dropped with a message.
+one whose clip was replaced meanwhile is dropped with a message. That replacement
+(:func:`replace_clip`) is shared with Edit ▸ Trim clip (:mod:`app.clip_trim`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from PyQt6.QtGui import QAction
@@ -26,7 +28,9 @@ from engine.errors import UserError
 if TYPE_CHECKING:
     from app.shell import StudioShell
     from engine.authoring.range_edit import RangeEdit
+    from engine.constraints.base import Constraint
     from engine.motion.clip import Motion
+    from engine.sensors import Sensor
 
 
 class RangeDialog(QDialog):
@@ -60,6 +64,60 @@ class RangeDialog(QDialog):
         form.addRow(box)
 
 
+@dataclass(frozen=True)
+class ClipState:
+    """What an edit of the loaded clip puts on screen, and its undo puts back.
+
+    Attributes
+    ----------
+    motion : Motion
+        The clip (the session's path stays: it is the same clip edited).
+    frame : int
+        The frame shown (clamped into the clip).
+    constraints, sensors : tuple or None
+        The scene's constraints and trackers, where the edit moved their frame ranges (a
+        trim); None leaves the session's as they are. ``preset`` goes with ``sensors``.
+    selection : (int, int), None or KEEP_SELECTION
+        The timeline's selection; :data:`KEEP_SELECTION` leaves it (a re-solve keeps its frames).
+    """
+
+    motion: Motion
+    frame: int
+    constraints: tuple[Constraint, ...] | None = None
+    sensors: tuple[Sensor, ...] | None = None
+    preset: str = ""
+    selection: tuple[int, int] | None | str = "keep"
+
+
+#: :attr:`ClipState.selection` for an edit that keeps the clip's frames where they are.
+KEEP_SELECTION = "keep"
+
+
+def replace_clip(window: StudioShell, text: str, before: ClipState, after: ClipState) -> None:
+    """Show ``after`` and record one undo step named ``text`` that puts ``before`` back.
+
+    The motion is set as the same clip edited (:meth:`app.undo.SceneUndo.same_clip`: the
+    history, the camera and the opened clip stay; the engine restarts on it as on a new
+    clip, so no ghost, loss or latent of the old frames stays); constraints and sensors
+    are part of the same step, not steps of their own."""
+    session, path = window.session, window.session.path
+
+    def put(state: ClipState) -> None:
+        with window.undo.same_clip():
+            session.set_motion(state.motion, path)
+        with window.undo.unrecorded():
+            if state.sensors is not None:
+                session.set_sensors(state.sensors, state.preset)
+            if state.constraints is not None:
+                session.set_constraints(state.constraints)
+        if state.selection != KEEP_SELECTION:
+            window.timeline.set_selection(*(state.selection or (None,)))
+        session.seek(min(state.frame, len(state.motion) - 1))
+
+    put(after)
+    window.undo.record(text, put, before, after)
+
+
 def range_runner(window: StudioShell) -> JobRunner:
     """The window's runner of range re-solves (made on first use; it cancels its job
     when the window closes)."""
@@ -81,21 +139,16 @@ def resolve_range(
     from engine.authoring.jobs import range_job
 
     session = window.session
-    original, path = session.motion, session.path
+    original = session.motion
     job = range_job(original, list(session.constraints) if scene else [], start, end, blend, floor)
 
     def apply(edit: RangeEdit) -> None:
         if session.motion is not original:
             raise UserError("another clip was opened while the range was re-solved: nothing was replaced")
         frame = session.frame
-
-        def show(motion: Motion) -> None:
-            with window.undo.same_clip():
-                session.set_motion(motion, path)
-            session.seek(min(frame, len(motion) - 1))
-
-        show(edit.motion)
-        window.undo.record(f"re-solve frames {job.start}-{job.end}", show, original, edit.motion)
+        replace_clip(
+            window, f"re-solve frames {job.start}-{job.end}", ClipState(original, frame), ClipState(edit.motion, frame)
+        )
 
     runner = range_runner(window)
     runner.start(job, apply)

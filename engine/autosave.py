@@ -242,6 +242,7 @@ def save_clip(path: str | Path, motion: Motion) -> None:
             offsets=motion.skeleton.offsets,
             fps=np.float64(motion.fps),
             name=np.array(motion.name),
+            start=np.int64(motion.start),
         )
 
 
@@ -255,6 +256,7 @@ def load_clip(path: str | Path) -> Motion:
                 sk.Skeleton(offsets=np.array(d["offsets"], float)),
                 float(d["fps"]),
                 str(d["name"]),
+                int(d["start"]) if "start" in d else 0,  # files autosaved before trimming had none
             )
     except (OSError, ValueError, KeyError) as exc:
         raise UserError(f"{path}: cannot read the autosaved clip ({exc})") from None

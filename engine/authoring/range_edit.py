@@ -150,7 +150,7 @@ def edit_range(
             near = np.arange(lo, hi + 1)
             reach = np.minimum(np.abs(near - t), np.abs(near - t - 1))
             weight = weight * np.where(reach <= SMOOTH_FRAMES, 0.5 + 0.5 * reach / (SMOOTH_FRAMES + 1), 1.0)
-    result = Motion(out_local, motion.root_pos.copy(), motion.skeleton, motion.fps, motion.name)
+    result = Motion(out_local, motion.root_pos.copy(), motion.skeleton, motion.fps, motion.name, motion.start)
     return RangeEdit(result, lo, hi)
 
 

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from engine import skeleton as sk
+from engine.errors import UserError
 from engine.kinematics.fk import fk
 
 
@@ -26,6 +27,9 @@ class Motion:
         Frames per second (60 after retargeting).
     name : str
         Human-readable origin (usually the source file stem).
+    start : int
+        Frame of the clip as loaded from its file that this clip's frame 0 is (0 unless
+        trimmed, :meth:`trim`); writing back onto the source rig maps frames with it.
     """
 
     local_rot: np.ndarray
@@ -33,6 +37,7 @@ class Motion:
     skeleton: sk.Skeleton = field(default_factory=sk.Skeleton.canonical)
     fps: float = sk.FPS
     name: str = ""
+    start: int = 0
 
     def __post_init__(self) -> None:
         self.local_rot = np.asarray(self.local_rot, dtype=np.float64)
@@ -66,4 +71,28 @@ class Motion:
             self.skeleton,
             self.fps,
             self.name,
+        )
+
+    def trim(self, first: int, last: int) -> "Motion":
+        """Frames ``first..last`` (inclusive, 0-based) as a new clip (copies); its
+        :attr:`start` counts from the clip as loaded, so a trimmed clip trimmed again
+        still knows which frames of its file it holds.
+
+        Raises
+        ------
+        UserError
+            A range that is empty or outside the clip's ``len(self)`` frames.
+        """
+        first, last = int(first), int(last)
+        if not 0 <= first <= last < len(self):
+            raise UserError(
+                f"cannot trim {self.name or 'the clip'} to frames {first}-{last}: it has frames 0-{len(self) - 1}"
+            )
+        return Motion(
+            self.local_rot[first : last + 1].copy(),
+            self.root_pos[first : last + 1].copy(),
+            self.skeleton,
+            self.fps,
+            self.name,
+            self.start + first,
         )

@@ -69,9 +69,10 @@ def character_on_source_rig(
     from engine.motion.write_back import frame_local_offsets, source_rig_pose
 
     fps = float(fps or report.source_fps or motion.fps)
+    start_s = motion.start / motion.fps  # a trimmed clip: the source frames it holds
     if abs(fps - motion.fps) > 1e-6:
         motion = resample_motion(motion, fps)
-    local, positions = source_rig_pose(motion, raw, report)
+    local, positions = source_rig_pose(motion, raw, report, start_s)
     prof = report.profile
     if prof.root_channels_relative_to_offset:
         positions = positions.copy()

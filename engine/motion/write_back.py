@@ -58,14 +58,15 @@ def frame_local_offsets(raw: RawBVH, positions: np.ndarray) -> np.ndarray:
     return np.where(moving[None, :, None], positions, raw.offsets[None])
 
 
-def source_rig_pose(motion: Motion, raw: RawBVH, report) -> tuple[np.ndarray, np.ndarray]:
+def source_rig_pose(motion: Motion, raw: RawBVH, report, start_s: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """Local rotations ``(F, J, 4)`` and local positions ``(F, J, 3)`` of the source rig.
 
     Positions are in the file's units, as the file writes them: the position channels of
     every joint that has them (the source's values at the same time), except that the
     joint carrying the trajectory (:func:`trajectory_joint`) takes the reconstruction's;
     joints without position channels hold their OFFSET. ``motion`` is at the frame rate
-    to be written."""
+    to be written; frame i of it is at ``i / fps + start_s`` seconds into the clip as
+    loaded (``start_s`` > 0 for a trimmed clip, :meth:`Motion.trim`)."""
     prof = report.profile
     if prof is None or report.align is None or report.basis is None:
         raise UserError(f"{raw.path}: this motion carries no retargeting record; load it with engine.motion.retarget")
@@ -77,7 +78,7 @@ def source_rig_pose(motion: Motion, raw: RawBVH, report) -> tuple[np.ndarray, np
     canon_of = {src: sk.JOINT_INDEX[c] for c, src in prof.joints.items()}
     # every position channel as the source has it at the same time; the one joint that
     # carries the trajectory is moved at the end so that the mapped root lands on the canonical one
-    src_frame = np.rint(np.arange(n) / motion.fps * report.source_fps).astype(int) + report.skip
+    src_frame = np.rint((np.arange(n) / motion.fps + start_s) * report.source_fps).astype(int) + report.skip
     positions = raw.positions[np.clip(src_frame, 0, len(raw.positions) - 1)].copy()
     if prof.root_channels_relative_to_offset:
         positions[:, 0] += raw.offsets[0]
@@ -121,7 +122,9 @@ def save_on_source_rig(path: str | Path, motion: Motion, raw: RawBVH, report, fp
     """Write ``motion`` onto ``raw``'s hierarchy as a BVH file, atomically (see module docs).
 
     ``fps`` is the frame rate written (default: the source's, ``report.source_fps``);
-    the motion is resampled to it (slerp).
+    the motion is resampled to it (slerp). A trimmed clip (``motion.start`` > 0) is
+    written as the source's frames it holds: the other position channels are those of
+    the same source frames.
 
     Raises
     ------
@@ -139,9 +142,10 @@ def save_on_source_rig(path: str | Path, motion: Motion, raw: RawBVH, report, fp
     from engine.motion.retarget import resample_motion
 
     fps = float(fps or report.source_fps or motion.fps)
+    start_s = motion.start / motion.fps  # before resampling: the start counts the clip's frames
     if abs(fps - motion.fps) > 1e-6:
         motion = resample_motion(motion, fps)
-    local, positions = source_rig_pose(motion, raw, report)
+    local, positions = source_rig_pose(motion, raw, report, start_s)
     order = np.asarray(raw.rot_order)
     euler = np.degrees(Q.to_euler(local, np.broadcast_to(order, local.shape[:-1] + (3,))))
     euler = (euler + 180.0) % 360.0 - 180.0

@@ -59,7 +59,8 @@ def reconstruct_clip(
         roots.append(root)
         if progress is not None and progress(f):
             break
-    return Motion(np.array(rots), np.array(roots), motion.skeleton, motion.fps, f"{motion.name} ({method_name})")
+    name = f"{motion.name} ({method_name})"
+    return Motion(np.array(rots), np.array(roots), motion.skeleton, motion.fps, name, motion.start)
 
 
 def solve_frames(
@@ -117,17 +118,20 @@ def source_rig(source: str | Path, rig_map: str | Path | None = None) -> tuple[R
     return raw, retarget(raw, manifest_fps(Path(source)), rig_map=rig_map)[1]
 
 
-def skipped_note(report: Any) -> str:
+def skipped_note(report: Any, start_s: float = 0.0) -> str:
     """What a file written onto the source rig lacks of the source (for the message that
     says it was written): the first frames the rig's profile skips on loading, a rest pose
-    (``report.skip``); "" when none."""
+    (``report.skip``), and for a trimmed clip the frames before its ``start_s`` seconds;
+    "" when none."""
     skip = int(getattr(report, "skip", 0) or 0)
-    if not skip:
+    cut = int(round(start_s * float(getattr(report, "source_fps", 0) or 0)))
+    if not skip and not cut:
         return ""
-    return (
-        f" (without the source's first {skip} frame{'s' * (skip > 1)}, its rest pose, skipped on "
-        f"loading: frame i here is the source's frame i + {skip})"
-    )
+    parts = [f"without the source's first {skip} frame{'s' * (skip > 1)}, its rest pose, skipped on loading"]
+    parts = parts if skip else []
+    if cut:
+        parts.append(f"trimmed: the {cut} source frame{'s' * (cut > 1)} after it left out" if skip else "trimmed")
+    return f" ({'; '.join(parts)}: frame i here is the source's frame i + {skip + cut})"
 
 
 @dataclass(frozen=True)

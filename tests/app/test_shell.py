@@ -15,6 +15,7 @@ APP = Path(__file__).resolve().parents[2] / "app"
 #: The helpers typed against :class:`StudioShell`, and the names they call the window by.
 HELPERS = (
     "clip_saving.py",
+    "clip_trim.py",
     "drawing.py",
     "failures.py",
     "ghost_status.py",

@@ -37,7 +37,7 @@ class MethodErrorPlot(QWidget):
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
-        # frames are whole: over a few frames pyqtgraph ticked 0.5, 1.5...
+        # frames are whole: over a few frames pyqtgraph's own axis ticks 0.5, 1.5...
         self.plot = pg.PlotWidget(
             title="Error against the ground truth (cm, mean over joints)", axisItems={"bottom": CountAxis("bottom")}
         )

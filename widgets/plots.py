@@ -56,7 +56,7 @@ def _set_curve(item: pg.PlotDataItem, x: np.ndarray, y: np.ndarray) -> None:
 
 class CountAxis(pg.AxisItem):
     """A bottom axis that counts (frames, iterations): whole-number ticks only. Over a
-    range of a unit or two pyqtgraph ticked 0.2, 0.4..., iterations and frames that do
+    range of a unit or two pyqtgraph's own axis ticks 0.2, 0.4..., iterations and frames that do
     not exist."""
 
     def tickValues(self, minVal: float, maxVal: float, size: float) -> list:  # noqa: N802 (pyqtgraph's name)

@@ -125,9 +125,9 @@ def test_a_pin_put_on_another_joint_in_its_editor_is_placed_on_that_joint(studio
 
 
 def test_pins_added_from_the_panel_take_the_clicked_joint_or_a_free_one(studio, qtbot):
-    """Seen under Xvfb: Add pressed twice with *pin* chosen gave two pins on the left
-    ankle. The second goes on the right ankle; after a click on the left elbow in the 3D
-    view, the next one goes on the elbow, where the elbow is."""
+    """Add pressed twice with *pin* chosen puts the pins on two joints: the left ankle,
+    then the right; after a click on the left elbow in the 3D view, the next one goes on
+    the elbow, where the elbow is."""
     from PyQt6.QtCore import Qt
     from PyQt6.QtTest import QTest
 

@@ -235,11 +235,10 @@ def test_the_forces_tab_says_it_is_empty_after_the_next_solve(studio, qtbot):
 
 @pytest.mark.parametrize("size", ["1600x980", "minimum"])
 def test_the_readouts_frame_label_is_inside_the_dock(studio, qtbot, size):
-    """Seen under Xvfb at 1600 x 1000 (a 1600 x 980 window): the readouts' "frame" label
-    was cut in half by the bottom of the dock, and the y axis had no label. The Map tab
-    asked for 427 px (the map alone 245); a readout line of two or three lines pushed the
-    plot past the dock's edge. The tab fits the dock at the default and the minimum size,
-    the x label inside it, and the y axis says its units."""
+    """The Map tab fits its dock at the default window (1600 x 980) and at the minimum
+    size, with a readout line wrapped to three lines: the readouts' "frame" label lies
+    inside the dock (a wrapped line asks for its height, the map gives way), and the y
+    axis says its units."""
     from PyQt6.QtCore import QPoint
 
     s = studio.session

@@ -102,9 +102,9 @@ def test_connecting_clears_the_previous_character_from_the_view(studio, qtbot, s
 
 
 def test_connecting_drops_the_clips_errors_and_motion_paths(studio, qtbot):
-    """Seen under Xvfb: after Connect the Method errors plot kept the clip's curve and
-    legend, and the 3D view the selected joint's motion path of the clip: a stream of
-    trackers has no ground truth and no path yet."""
+    """After Connect the Method errors plot holds no curve or legend of the clip, and the
+    3D view no motion path of it: a stream of trackers has no ground truth and no path
+    yet."""
     with qtbot.waitSignal(studio.snapshotDrawn, timeout=10000, check_params_cb=lambda f: f == 10):
         studio.session.seek(10)
     assert studio.method_errors.data  # the clip's error on the frame drawn

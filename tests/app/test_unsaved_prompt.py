@@ -201,9 +201,8 @@ def test_quit_while_a_pose_window_bakes_cancels_it_and_leaves_no_message_behind(
 
 
 def test_a_discarded_preset_does_not_come_back_at_the_next_start(studio, answer, tmp_path, synthetic_motion):
-    """Seen under Xvfb: a preset chosen in the sensor panel was remembered at once, so
-    one undone, or discarded when asked, was the next session's preset. It is
-    remembered when the scene is kept (saved)."""
+    """A preset chosen in the sensor panel is remembered for the next session only when
+    the scene is kept (saved): one undone, or discarded when asked, is not."""
     from PyQt6.QtCore import QSettings
 
     from app.main import open_initial

@@ -416,9 +416,9 @@ def test_the_term_names_of_the_force_chart_do_not_run_into_each_other(qtbot, siz
 
 
 def test_empty_force_charts_say_why_and_show_no_axis_values(qtbot):
-    """Seen before any inspection and with IK: the charts read 0.2 ... 0.8 on both axes
-    with nothing drawn. They say why in their titles and tooltips and hide their values,
-    which come back with a detail."""
+    """Before any inspection, and with IK, the charts have nothing to draw: they say why
+    in their titles and tooltips and hide their axis values (pyqtgraph's 0.2 ... 0.8 of
+    an empty plot), which come back with a detail."""
     w = shown(qtbot, LatentForces(), 460, 430)
     plots = (w.norm_plot, w.dim_plot)
 

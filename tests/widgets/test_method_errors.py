@@ -54,8 +54,8 @@ def test_curves_restart_when_the_engine_history_restarts_unseen(qtbot, fake_snap
 
 
 def test_the_frame_axis_ticks_whole_frames(qtbot, fake_snapshot):
-    """Seen in the Method errors tab: after a frame or two the axis read 0.5, 1.5 ...
-    frames that do not exist. Its ticks are whole numbers (widgets.plots.CountAxis)."""
+    """Over a frame or two the frame axis ticks whole numbers only
+    (widgets.plots.CountAxis), never 0.5, 1.5 ..., frames that do not exist."""
     from tests.widgets.conftest import shown
 
     p = shown(qtbot, MethodErrorPlot(), 900, 220)

@@ -492,10 +492,10 @@ def test_a_plot_update_that_changes_the_range_paints_once(qtbot, fake_snapshot, 
 
 
 def test_all_zero_loss_plots_span_the_iterations_and_frames_with_whole_ticks(qtbot, fake_snapshot):
-    """Seen under Xvfb with ik: "Loss per iteration: all 0" over an x axis reading 0.2 to
-    0.8 (pyqtgraph's range for no data) and y ticks of no loss. The axis spans the
-    iterations run (ticks on whole numbers only) and the frames solved; the y axis shows
-    no values; a method with losses gets its auto range and values back."""
+    """With ik, "Loss per iteration: all 0": the x axis spans the iterations run (whole
+    numbers only, not pyqtgraph's 0.2 to 0.8 of an empty plot) and the history the frames
+    solved; the y axis shows no values; a method with losses gets its auto range and
+    values back."""
     from tests.widgets.conftest import FakeRecord
 
     p = LossPlots()

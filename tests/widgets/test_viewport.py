@@ -493,9 +493,9 @@ def _caption_height(viewport) -> int:
 
 
 def test_the_caption_keeps_one_font_size_whatever_it_says(viewport, fake_snapshot):
-    """Seen under Xvfb: "ik (orange)   ground truth (green)" was drawn larger than "ik
-    (orange)   no ground truth (tracker input)": VTK's corner text shrank a longer line
-    to fit. One size for every frame and method."""
+    """The caption keeps one size whatever it says: "ik (orange)   ground truth (green)"
+    and the longer "ik (orange)   no ground truth (tracker input)" (VTK's corner text
+    would shrink the longer line to fit)."""
     viewport.show_snapshot(fake_snapshot(method="ik"))
     short = _caption_height(viewport)
     viewport.show_snapshot(fake_snapshot(seq=2, method="sparseposer", ground_truth=np.full((22, 3), np.nan)))

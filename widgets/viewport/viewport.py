@@ -29,7 +29,7 @@ from widgets.viewport.wheel_zoom import WheelZoom
 HOME_FOCUS_HEIGHT = 0.9
 #: The caption's font size, pixels, for every caption and window size: VTK's corner text
 #: (pyvista's ``add_text`` at a corner) scales with the window and shrinks a longer line
-#: to fit, so "no ground truth (tracker input)" was drawn smaller than "ground truth
+#: to fit, which would draw "no ground truth (tracker input)" smaller than "ground truth
 #: (green)". A plain text actor keeps its size (the ghost legend below it is 15 too).
 CAPTION_FONT_PX = 15
 FOLLOW_TIME_S = 0.25  # camera-follow time constant, seconds

@@ -91,9 +91,9 @@ def test_a_method_without_a_latent_says_so(clip):
 
 
 def test_the_solve_after_a_seek_says_where_it_started(clip):
-    """Seen under Xvfb: the map labelled the first solve after a seek "start: previous
-    frame". A seek ahead starts from the frame solved before it; one back resets the
-    method, which starts from the zero latent."""
+    """The map names where the first solve after a seek starts: a seek ahead starts from
+    the frame solved before it; one back resets the method, which starts from the zero
+    latent."""
     session, worker = _engine(clip, "dragposer")
     try:
         session.set_setting("init_from_prediction", False)  # start from the last latent

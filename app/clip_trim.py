@@ -123,14 +123,30 @@ def update_entry(window: StudioShell, act: QAction) -> None:
     act.setToolTip(f"Keep frames {first}-{last} ({last - first + 1} frames) only; Ctrl+Z gives the whole clip back")
 
 
+class TrimEntry:
+    """Edit ▸ Trim clip to selection, kept in step with the timeline's selection and the
+    loaded clip or source; :meth:`close` drops its subscriptions to the session's events
+    (the window closes it with its other views)."""
+
+    def __init__(self, window: StudioShell, edit_menu: QMenu, action: Callable[..., QAction]) -> None:
+        self.window = window
+        self.act = action(window, edit_menu, ENTRY, lambda: trim_to_selection(window))
+        edit_menu.setToolTipsVisible(True)  # the reason it is off
+        window.timeline.selectionChanged.connect(self.refresh)
+        window.session.events.motion.connect(self.refresh)
+        window.session.events.source.connect(self.refresh)
+        self.refresh()
+
+    def refresh(self, *_: object) -> None:
+        update_entry(self.window, self.act)
+
+    def close(self) -> None:
+        self.window.session.events.motion.disconnect(self.refresh)
+        self.window.session.events.source.disconnect(self.refresh)
+
+
 def add_edit_entries(window: StudioShell, edit_menu: QMenu, action: Callable[..., QAction]) -> dict[str, QAction]:
-    """Add Trim clip to selection to ``edit_menu``, kept in step with the timeline's
-    selection and the loaded clip or source."""
-    act = action(window, edit_menu, ENTRY, lambda: trim_to_selection(window))
-    edit_menu.setToolTipsVisible(True)  # the reason it is off
-    refresh = lambda *_: update_entry(window, act)  # noqa: E731
-    window.timeline.selectionChanged.connect(refresh)
-    window.session.events.motion.connect(refresh)
-    window.session.events.source.connect(refresh)
-    refresh()
-    return {"trim_clip": act}
+    """Add Trim clip to selection to ``edit_menu`` (``window.trim_entry``, closed with the
+    window)."""
+    window.trim_entry = TrimEntry(window, edit_menu, action)
+    return {"trim_clip": window.trim_entry.act}

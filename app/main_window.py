@@ -343,6 +343,7 @@ class MainWindow(QMainWindow):
         self.settings.setValue("geometry", self.saveGeometry())
         self.redraw.close()
         self.live.close()
+        self.trim_entry.close()
         self.undo.close()
         self.session.shutdown()
         self.files.shutdown()

@@ -133,6 +133,8 @@ class StudioShell(Protocol):
     optimizer_defaults : dict
         Each optimizer setting's default, by name: what the optimizer panel shows for a
         setting the session has not set.
+    trim_entry : TrimEntry
+        Edit ▸ Trim clip to selection (:mod:`app.clip_trim`), closed with the window.
     """
 
     session: Session
@@ -162,6 +164,7 @@ class StudioShell(Protocol):
     range_dialog: QDialog | None
     pose_windows: list[QMainWindow]
     autosave: Any
+    trim_entry: Any
 
     def show_error(self, title: str, message: str) -> None: ...
 

@@ -118,3 +118,26 @@ def test_the_trimmed_clip_is_saved_with_its_frames_canonical_and_on_the_source_r
     assert np.allclose(load_clip(on_rig).positions(), whole[40:72], atol=1e-3)
     assert "frame i + 40" in note
     qtbot.waitUntil(lambda: studio.session.latest is not None, timeout=10000)
+
+
+def test_a_closed_studio_leaves_no_trim_entry_subscribed_to_its_session(studio):
+    """The entry follows the session's clip and source events while the window is open,
+    and the window's close drops them, as its other views do."""
+    session, entry = studio.session, studio.trim_entry
+
+    def subscribed() -> bool:
+        return any(
+            getattr(cb, "__self__", None) is entry or getattr(getattr(cb, "__func__", None), "__self__", None) is entry
+            for signal in (session.events.motion, session.events.source)
+            for cb in _callbacks(signal)
+        )
+
+    assert subscribed()
+    studio.undo.set_clean()
+    studio.close()
+    assert not subscribed()
+
+
+def _callbacks(signal):
+    """The callables a psygnal signal instance would call now."""
+    return [slot.dereference() for slot in signal._slots]

@@ -287,6 +287,7 @@ def render_video(
     # llvmpipe's rasteriser threads: one, since ffmpeg and the ghosts' solve have the
     # other core (set before the first GL context; the studio does the same)
     os.environ.setdefault("LP_NUM_THREADS", str(max(1, (os.cpu_count() or 2) - 1)))
+    headless_gl()
     clock = _Stopwatch(timings)
     ghosts = _start_ghosts(motion, options)
     try:
@@ -322,6 +323,19 @@ def render_video(
     finally:
         if ghosts is not None:
             ghosts.close()
+
+
+def headless_gl() -> None:
+    """Without a display, ask VTK for an EGL window at once (libEGL is one of the system
+    libraries ``make`` installs): VTK would try an X window first and print a warning
+    ("bad X server connection") before it falls back. Left to VTK when a display is set,
+    when the choice is already made, or when no libEGL is found (its own fall-backs)."""
+    import ctypes.util
+
+    if os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"):
+        return
+    if ctypes.util.find_library("EGL"):
+        os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
 
 
 class _Stopwatch:

@@ -312,3 +312,27 @@ def test_a_30_fps_bvh_renders_at_30_fps(tmp_path):
     frames = imageio_ffmpeg.read_frames(str(out))
     meta = next(frames)
     assert meta["fps"] == pytest.approx(30.0) and sum(1 for _ in frames) == 30
+
+
+def test_without_a_display_the_video_is_drawn_without_an_x_warning(short_clip, tmp_path):
+    """A headless machine (no DISPLAY): the render draws the skeleton and stderr holds no
+    VTK warning about an X server it never needed."""
+    import os
+    import subprocess
+    import sys
+
+    out = tmp_path / "h.mp4"
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY", "VTK_DEFAULT_OPENGL_WINDOW")}
+    env["PYTHONPATH"] = str(Path(__file__).resolve().parents[2])
+    args = [str(short_clip), "--out", str(out), "--size", "160x120", "--no-progress"]
+    run = subprocess.run(
+        [sys.executable, "-c", f"from app.render import main; raise SystemExit(main({args!r}))"],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert "X server" not in run.stderr and "WARN" not in run.stderr, run.stderr[-2000:]
+    _size, frames = decode(out)
+    assert len(frames) == 24 and hue_mask(frames[12], style.RECONSTRUCTION).sum() > 50

@@ -65,18 +65,20 @@ class Motion:
         return self.fk()[0]
 
     def slice(self, start: int = 0, stop: int | None = None) -> "Motion":
+        """Frames ``start:stop`` (``start`` >= 0) as a new clip (copies); its :attr:`start`
+        counts on from this clip's, so a part still knows which frames of its file it holds."""
         return Motion(
             self.local_rot[start:stop].copy(),
             self.root_pos[start:stop].copy(),
             self.skeleton,
             self.fps,
             self.name,
+            self.start + start,
         )
 
     def trim(self, first: int, last: int) -> "Motion":
-        """Frames ``first..last`` (inclusive, 0-based) as a new clip (copies); its
-        :attr:`start` counts from the clip as loaded, so a trimmed clip trimmed again
-        still knows which frames of its file it holds.
+        """Frames ``first..last`` (inclusive, 0-based): :meth:`slice`, with the range
+        checked.
 
         Raises
         ------
@@ -88,11 +90,4 @@ class Motion:
             raise UserError(
                 f"cannot trim {self.name or 'the clip'} to frames {first}-{last}: it has frames 0-{len(self) - 1}"
             )
-        return Motion(
-            self.local_rot[first : last + 1].copy(),
-            self.root_pos[first : last + 1].copy(),
-            self.skeleton,
-            self.fps,
-            self.name,
-            self.start + first,
-        )
+        return self.slice(first, last + 1)

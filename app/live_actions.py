@@ -15,7 +15,14 @@ from PyQt6.QtWidgets import QDialog, QDockWidget, QFileDialog, QMainWindow
 from app.save_folder import ask_save_path, save_folder
 from engine.errors import UserError
 from engine.studio import events as ev
-from widgets.live_panel import DEFAULT_MAPPING, ConnectDialog, LivePanel
+from widgets.live_panel import (
+    DEFAULT_CONVENTION,
+    DEFAULT_HOST,
+    DEFAULT_MAPPING,
+    DEFAULT_PORT,
+    ConnectDialog,
+    LivePanel,
+)
 
 if TYPE_CHECKING:
     from engine.studio.session import Session
@@ -90,17 +97,17 @@ class LiveActions:
         get = self.settings.value
         dlg = ConnectDialog(
             self.w,
-            port=int(get("live_port", 39539)),
+            port=int(get("live_port", DEFAULT_PORT)),
             mapping=str(get("live_mapping", DEFAULT_MAPPING)),
-            host=str(get("live_host", "0.0.0.0")),
-            convention=str(get("live_convention", "unity")),
+            host=str(get("live_host", DEFAULT_HOST)),
+            convention=str(get("live_convention", DEFAULT_CONVENTION)),
         )
         if dlg.exec() != QDialog.DialogCode.Accepted:
             return
         v = dlg.values()
         self.connect(v["host"], v["port"], v["mapping"], v["convention"])
 
-    def connect(self, host: str, port: int, mapping: str = "", convention: str = "unity") -> bool:
+    def connect(self, host: str, port: int, mapping: str = "", convention: str = DEFAULT_CONVENTION) -> bool:
         """Listen on ``host:port`` and play the stream live; errors show a dialog."""
         try:
             self.session.connect_live(host, port, mapping, convention)

@@ -27,6 +27,9 @@ from PyQt6.QtWidgets import (
 
 #: The sender's tracker names -> joints (``engine.tracker_io.trackers.DEFAULT_SLOTS``).
 DEFAULT_MAPPING = "head=upperneck, left_hand=lwrist, right_hand=rwrist, hips=root, left_foot=lankle, right_foot=rankle"
+#: What Connect offers first: every interface, the VMC port (``engine.tracker_io.receiver.DEFAULT_PORT``)
+#: and the axes VMC senders use.
+DEFAULT_HOST, DEFAULT_PORT, DEFAULT_CONVENTION = "0.0.0.0", 39539, "unity"
 
 #: Status-light colours: receiving, stale (nothing for a moment), silent, not connected.
 LIGHT = {"ok": "#4cd964", "stale": "#ffd60a", "silent": "#ff3b30", "off": "#5a6070"}
@@ -38,10 +41,10 @@ class ConnectDialog(QDialog):
     def __init__(
         self,
         parent: QWidget | None = None,
-        port: int = 39539,
+        port: int = DEFAULT_PORT,
         mapping: str = DEFAULT_MAPPING,
-        host: str = "0.0.0.0",
-        convention: str = "unity",
+        host: str = DEFAULT_HOST,
+        convention: str = DEFAULT_CONVENTION,
     ) -> None:
         super().__init__(parent)
         self.setWindowTitle("Connect live source (VMC over UDP)")
@@ -68,7 +71,7 @@ class ConnectDialog(QDialog):
 
     def values(self) -> dict[str, Any]:
         return {
-            "host": self.host.text().strip() or "0.0.0.0",
+            "host": self.host.text().strip() or DEFAULT_HOST,
             "port": self.port.value(),
             "mapping": self.mapping.text(),
             "convention": self.convention.currentText(),

@@ -64,6 +64,10 @@ class RangeDialog(QDialog):
         form.addRow(box)
 
 
+#: :attr:`ClipState.selection` for an edit that keeps the clip's frames where they are.
+KEEP_SELECTION = "keep"
+
+
 @dataclass(frozen=True)
 class ClipState:
     """What an edit of the loaded clip puts on screen, and its undo puts back.
@@ -86,11 +90,7 @@ class ClipState:
     constraints: tuple[Constraint, ...] | None = None
     sensors: tuple[Sensor, ...] | None = None
     preset: str = ""
-    selection: tuple[int, int] | None | str = "keep"
-
-
-#: :attr:`ClipState.selection` for an edit that keeps the clip's frames where they are.
-KEEP_SELECTION = "keep"
+    selection: tuple[int, int] | None | str = KEEP_SELECTION
 
 
 def replace_clip(window: StudioShell, text: str, before: ClipState, after: ClipState) -> None:

@@ -127,8 +127,9 @@ def skipped_note(report: Any, start_s: float = 0.0) -> str:
     cut = int(round(start_s * float(getattr(report, "source_fps", 0) or 0)))
     if not skip and not cut:
         return ""
-    parts = [f"without the source's first {skip} frame{'s' * (skip > 1)}, its rest pose, skipped on loading"]
-    parts = parts if skip else []
+    parts = []
+    if skip:
+        parts.append(f"without the source's first {skip} frame{'s' * (skip > 1)}, its rest pose, skipped on loading")
     if cut:
         parts.append(f"trimmed: the {cut} source frame{'s' * (cut > 1)} after it left out" if skip else "trimmed")
     return f" ({'; '.join(parts)}: frame i here is the source's frame i + {skip + cut})"
